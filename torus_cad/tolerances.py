@@ -3,8 +3,9 @@
 #: Curvature |T'(s)| / |C'(s)| below which the Frenet normal counts as undefined (1/mm).
 FRENET_MIN_CURVATURE = 1e-6
 
-#: Number of samples used to scan a quartic or a curve for sign changes / vanishing curvature.
-SCAN_SAMPLES = 2001
+#: Samples on s in [0, 1] used to scan the centerline for vanishing curvature, flips of N,
+#: and to step the rotation-minimising frame.
+FRAME_SCAN_SAMPLES = 401
 
 #: Fine grid of the arc-length table (spec §5.2: n_fine, default 1000).
 ARC_LENGTH_FINE_SAMPLES = 1000
@@ -12,12 +13,32 @@ ARC_LENGTH_FINE_SAMPLES = 1000
 #: Absolute tolerance of the adaptive quadrature of |f'(t)| (chord units).
 ARC_LENGTH_QUAD_ABS = 1e-10
 
-#: Tolerance (mm) for fitting B-spline wires through section points.
-WIRE_FIT_TOLERANCE = 1e-4
 
-#: Tolerance (mm) of the STEP / B-rep validity and read-back comparisons.
-MODEL_TOLERANCE = 1e-6
+#: Relative tolerance of read-back comparisons (a STEP file read back keeps its volume to this).
+READ_BACK_RELATIVE_TOLERANCE = 1e-6
 
 #: Default STL linear deflection (mm) and angular deflection (rad).
 STL_LINEAR_DEFLECTION = 0.05
 STL_ANGULAR_DEFLECTION = 0.2
+
+#: Largest allowed deviation of a section's B-spline from its sampled points, as a fraction
+#: of the section's chord. Interior knots are doubled until every section meets it.
+WIRE_FIT_RELATIVE_TOLERANCE = 2e-4
+
+#: Interior knots of the first section fit; doubled while the fit is too coarse (at most the maximum).
+WIRE_FIT_INITIAL_KNOTS = 24
+WIRE_FIT_MAXIMUM_KNOTS = 384
+
+#: Precision of the loft (BRepOffsetAPI_ThruSections pres3d), mm.
+LOFT_PRECISION = 1e-6
+
+#: Relative precision of OpenCascade's adaptive volume / inertia integration (BRepGProp eps).
+#: cadquery's Shape.Volume() integrates without it and is off by ~2 % on lofted blades.
+MASS_PROPERTIES_RELATIVE_PRECISION = 1e-7
+
+#: Relative precision of the volume sanity check after the fuse (hub < fused <= hub + n blades);
+#: the blades' overlap with the hub keeps the bounds far apart, so a coarse, fast integral suffices.
+VOLUME_CHECK_RELATIVE_PRECISION = 1e-3
+
+#: Analytic surface points must lie on the B-rep within this fraction of the local chord.
+SURFACE_ACCURACY_RELATIVE = 1e-3

@@ -1,0 +1,89 @@
+"""Blade centerline (spec §3): control points in the hub's frame L, then a cubic clamped NURBS.
+
+Frame L (spec §3.1, units as in the configuration): x_L is the angle around the hub axis in
+degrees, y_L runs along the axis pointing down (mm, toward -z), z_L runs radially outward (mm).
+Its origin P1 sits at cylindrical (r, theta, z) = (R - R/8, theta_blade, L/2 - 1).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from geomdl import BSpline
+from numpy.typing import ArrayLike, NDArray
+
+from torus_cad.geometry.parameters import PropellerParameters
+
+#: Clamped cubic knot vector with a single span (spec §3.4).
+KNOT_VECTOR = (0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0)
+
+
+def local_control_points(params: PropellerParameters) -> NDArray[np.float64]:
+    """P1..P4 in frame L, ``(4, 3)`` float: [x_L deg, y_L mm, z_L mm]."""
+    line = params.centerline
+    return np.array([(0.0, 0.0, 0.0), line.p2, line.p3, (*line.p4, 0.0)], dtype=float)
+
+
+def local_to_cylindrical(local: ArrayLike, hub_radius: float, hub_length: float,
+                         blade_angle_deg: float) -> NDArray[np.float64]:
+    """Frame L -> global cylindrical (r mm, theta deg, z mm), ``(k, 3)`` (spec §3.3: M . P_L + P1_C)."""
+    local = np.atleast_2d(np.asarray(local, dtype=float))
+    change_of_basis = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
+    origin = np.array([hub_radius - hub_radius / 8.0, blade_angle_deg, hub_length / 2.0 - 1.0])
+    return local @ change_of_basis.T + origin
+
+
+def cylindrical_to_cartesian(cylindrical: ArrayLike) -> NDArray[np.float64]:
+    """(r, theta deg, z) -> (x, y, z), ``(k, 3)`` mm."""
+    r, theta_deg, z = np.moveaxis(np.atleast_2d(np.asarray(cylindrical, dtype=float)), -1, 0)
+    theta = np.radians(theta_deg)
+    return np.stack([r * np.cos(theta), r * np.sin(theta), z], axis=-1)
+
+
+def blade_angle_deg(params: PropellerParameters, blade_index: int) -> float:
+    """theta_i = theta_0 + 360 i / n (spec §6.1), degrees."""
+    return params.phase_deg + 360.0 * blade_index / params.blades
+
+
+def control_points(params: PropellerParameters, blade_index: int = 0) -> NDArray[np.float64]:
+    """Cartesian control points of blade ``blade_index``, ``(4, 3)`` mm."""
+    cylindrical = local_to_cylindrical(local_control_points(params), params.hub.radius, params.hub.length,
+                                       blade_angle_deg(params, blade_index))
+    return cylindrical_to_cartesian(cylindrical)
+
+
+class Centerline:
+    """The cubic clamped B-spline C(s), s in [0, 1] (all weights 1, so the NURBS is polynomial).
+
+    Built with geomdl from Cartesian control points; evaluation returns numpy arrays in mm.
+    """
+
+    def __init__(self, cartesian_control_points: ArrayLike) -> None:
+        points = np.asarray(cartesian_control_points, dtype=float)
+        if points.shape != (4, 3):
+            raise ValueError(f"a cubic centerline needs (4, 3) control points, got {points.shape}")
+        self.control_points = points
+        curve = BSpline.Curve()
+        curve.degree = 3
+        curve.ctrlpts = points.tolist()
+        curve.knotvector = list(KNOT_VECTOR)
+        self.curve = curve
+
+    @classmethod
+    def for_blade(cls, params: PropellerParameters, blade_index: int = 0) -> "Centerline":
+        """The centerline of blade ``blade_index`` of a propeller."""
+        return cls(control_points(params, blade_index))
+
+    def derivatives(self, s: ArrayLike, order: int = 3) -> NDArray[np.float64]:
+        """C and its derivatives d^k C / ds^k, k = 0..order: ``(len(s), order + 1, 3)`` mm."""
+        s = np.atleast_1d(np.asarray(s, dtype=float))
+        return np.array([self.curve.derivatives(float(value), order=order) for value in s])
+
+    def points(self, s: ArrayLike) -> NDArray[np.float64]:
+        """C(s), ``(len(s), 3)`` mm."""
+        s = np.atleast_1d(np.asarray(s, dtype=float))
+        return np.array(self.curve.evaluate_list(s.tolist()))
+
+    def length(self, samples: int = 2001) -> float:
+        """Arc length of the centerline (mm), from a dense polyline."""
+        points = self.points(np.linspace(0.0, 1.0, samples))
+        return float(np.linalg.norm(np.diff(points, axis=0), axis=1).sum())

@@ -1,0 +1,118 @@
+"""Section wires: each sampled section becomes one closed cubic B-spline edge (arrays in, wire out).
+
+Every section is fitted by least squares with the *same* knot vector and the same parameter
+values, so all section curves are compatible and the loft needs no knot insertion (which
+keeps the blade surface light and the boolean fast). Each curve starts and ends exactly at
+the sharp trailing edge: the corner is the curve's end point, a C0 joint, so the spline
+never has to turn through it and cannot overshoot or self-intersect there.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge, BRepBuilderAPI_MakeWire
+from OCP.Geom import Geom_BSplineCurve
+from OCP.gp import gp_Pnt
+from OCP.TColgp import TColgp_Array1OfPnt
+from OCP.TColStd import TColStd_Array1OfInteger, TColStd_Array1OfReal
+from scipy.interpolate import BSpline, make_lsq_spline
+
+import cadquery as cq
+
+from torus_cad.errors import KernelError
+from torus_cad.tolerances import (WIRE_FIT_INITIAL_KNOTS, WIRE_FIT_MAXIMUM_KNOTS,
+                                  WIRE_FIT_RELATIVE_TOLERANCE)
+
+DEGREE = 3
+
+
+@dataclass(frozen=True)
+class SectionCurves:
+    """Compatible cubic B-splines of all sections, kept as plain arrays.
+
+    Attributes:
+        poles: ``(sections, m, 3)`` float, mm; pole 0 and pole m-1 are the trailing edge.
+        knots: ``(m + 4,)`` float, clamped knot vector on [0, 1] shared by every section.
+        fit_error: largest distance (mm) from a sampled point to its section's curve.
+    """
+
+    poles: NDArray[np.float64]
+    knots: NDArray[np.float64]
+    fit_error: float
+
+    def wires(self) -> list[cq.Wire]:
+        """One closed wire (a single edge) per section."""
+        return [bspline_wire(poles, self.knots) for poles in self.poles]
+
+
+def _closed_from_trailing_edge(section_points: NDArray[np.float64], trailing_edge_index: int) -> NDArray[np.float64]:
+    """Reorder ``(sections, p, 3)`` rings to start at the trailing edge and repeat it at the end."""
+    rolled = np.roll(section_points, -trailing_edge_index, axis=1)
+    return np.concatenate([rolled, rolled[:, :1]], axis=1)
+
+
+def _fit(points: NDArray[np.float64], parameters: NDArray[np.float64], interior_knots: int
+         ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    inner = np.quantile(parameters[1:-1], np.linspace(0.0, 1.0, interior_knots + 2)[1:-1])
+    knots = np.concatenate([np.zeros(DEGREE + 1), inner, np.ones(DEGREE + 1)])
+    weights = np.ones(len(parameters))
+    weights[[0, -1]] = 1e4  # pull the ends onto the trailing edge; they are then set exactly
+    poles = np.stack([make_lsq_spline(parameters, ring, knots, k=DEGREE, w=weights).c for ring in points])
+    poles[:, 0], poles[:, -1] = points[:, 0], points[:, -1]
+    fitted = np.stack([_evaluate(ring_poles, knots, parameters) for ring_poles in poles])
+    return poles, knots, np.linalg.norm(fitted - points, axis=-1)
+
+
+def _evaluate(poles: NDArray[np.float64], knots: NDArray[np.float64], parameters: NDArray[np.float64]) -> NDArray:
+    return BSpline(knots, poles, DEGREE)(parameters)
+
+
+def fit_section_curves(section_points: NDArray[np.float64], trailing_edge_index: int,
+                       chord_lengths: NDArray[np.float64]) -> SectionCurves:
+    """Fit compatible closed B-splines to sampled sections.
+
+    Args:
+        section_points: ``(sections, p, 3)`` float, mm; closed rings (last point != first).
+        trailing_edge_index: column of the sharp trailing edge in every ring.
+        chord_lengths: ``(sections,)`` mm, the local chords that scale the fit tolerance.
+
+    The parameter of each point is the mean normalised chord-length position over all
+    sections (identical for all sections, so corresponding points match in the loft).
+    Interior knots start at WIRE_FIT_INITIAL_KNOTS and double until every point lies
+    within WIRE_FIT_RELATIVE_TOLERANCE x chord of its curve.
+    """
+    points = _closed_from_trailing_edge(section_points, trailing_edge_index)
+    steps = np.linalg.norm(np.diff(points, axis=1), axis=-1)
+    cumulative = np.concatenate([np.zeros((len(points), 1)), np.cumsum(steps, axis=1)], axis=1)
+    parameters = (cumulative / cumulative[:, -1:]).mean(axis=0)
+    allowed = WIRE_FIT_RELATIVE_TOLERANCE * np.asarray(chord_lengths)[:, None]
+    interior = min(WIRE_FIT_INITIAL_KNOTS, len(parameters) - DEGREE - 2)
+    while True:
+        poles, knots, error = _fit(points, parameters, interior)
+        if np.all(error <= allowed) or interior >= min(WIRE_FIT_MAXIMUM_KNOTS, len(parameters) - DEGREE - 2):
+            return SectionCurves(poles, knots, float(error.max()))
+        interior = min(2 * interior, WIRE_FIT_MAXIMUM_KNOTS, len(parameters) - DEGREE - 2)
+
+
+def bspline_wire(poles: NDArray[np.float64], knots: NDArray[np.float64]) -> cq.Wire:
+    """A wire of one non-rational B-spline edge from ``(m, 3)`` poles and a full knot vector."""
+    distinct, multiplicities = np.unique(knots, return_counts=True)
+    pole_array = TColgp_Array1OfPnt(1, len(poles))
+    for index, (x, y, z) in enumerate(poles, start=1):
+        pole_array.SetValue(index, gp_Pnt(float(x), float(y), float(z)))
+    knot_array = TColStd_Array1OfReal(1, len(distinct))
+    multiplicity_array = TColStd_Array1OfInteger(1, len(distinct))
+    for index, (knot, multiplicity) in enumerate(zip(distinct, multiplicities), start=1):
+        knot_array.SetValue(index, float(knot))
+        multiplicity_array.SetValue(index, int(multiplicity))
+    curve = Geom_BSplineCurve(pole_array, knot_array, multiplicity_array, DEGREE)
+    edge = BRepBuilderAPI_MakeEdge(curve)
+    if not edge.IsDone():
+        raise KernelError("OpenCascade could not make a section edge from its B-spline")
+    wire = BRepBuilderAPI_MakeWire(edge.Edge())
+    if not wire.IsDone():
+        raise KernelError("OpenCascade could not make a closed section wire")
+    return cq.Wire(wire.Wire())

@@ -1,0 +1,172 @@
+"""Parameters in, propeller out: the pipeline that joins the geometry layer and the kernel.
+
+This is the package's Python API::
+
+    from torus_cad import PropellerParameters, build_propeller
+    propeller = build_propeller(PropellerParameters())     # or build_propeller("design.toml")
+    propeller.solid          # cq.Solid, the fused propeller (mm)
+    propeller.workplane()    # cq.Workplane holding it, for further CadQuery work
+    propeller.hub, propeller.blades
+    propeller.write("step_out")  # <name>.step, .stl, .json
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+import cadquery as cq
+
+from torus_cad.errors import KernelError
+from torus_cad.geometry.centerline import Centerline, blade_angle_deg
+from torus_cad.geometry.feasibility import check_feasible
+from torus_cad.geometry.parameters import PropellerParameters
+from torus_cad.geometry.surface import BladeSurface, blade_surface
+from torus_cad.kernel.checks import MassProperties, mass_properties, precise_volume, single_valid_solid
+from torus_cad.kernel.export import atomic_path, write_step, write_stl
+from torus_cad.kernel.fuse import fuse_all, pattern_blades
+from torus_cad.kernel.hub import hub_solid
+from torus_cad.kernel.loft import loft_solid
+from torus_cad.kernel.wires import SectionCurves, fit_section_curves
+from torus_cad.tolerances import VOLUME_CHECK_RELATIVE_PRECISION
+
+#: Default density for mass: PLA, a common printing plastic (g/cm^3).
+DEFAULT_DENSITY_G_CM3 = 1.24
+
+
+class StageTimer:
+    """Wall-clock seconds per named stage, in the order the stages ran."""
+
+    def __init__(self) -> None:
+        self.seconds: dict[str, float] = {}
+
+    @contextmanager
+    def stage(self, name: str) -> Iterator[None]:
+        start = time.perf_counter()
+        try:
+            yield
+        finally:
+            self.seconds[name] = self.seconds.get(name, 0.0) + time.perf_counter() - start
+
+
+@dataclass
+class Propeller:
+    """A built propeller: the fused solid, its parts and how long each stage took.
+
+    Attributes:
+        parameters: the design.
+        solid: the fused propeller, one valid closed solid (mm).
+        hub: the hub cylinder alone.
+        blades: every blade alone, blade i at theta_0 + 360 i / n.
+        surface: blade 0's sampled surface from the geometry layer.
+        section_curves: blade 0's section B-splines (plain arrays).
+        stage_seconds: seconds per stage (section math, wires, loft, fuse, check, ...).
+    """
+
+    parameters: PropellerParameters
+    solid: cq.Solid
+    hub: cq.Solid
+    blades: list[cq.Solid]
+    surface: BladeSurface
+    section_curves: SectionCurves
+    stage_seconds: dict[str, float] = field(default_factory=dict)
+
+    def workplane(self) -> cq.Workplane:
+        """A cq.Workplane holding the fused solid."""
+        return cq.Workplane("XY").add(self.solid)
+
+    def mass_properties(self, density_g_cm3: float = DEFAULT_DENSITY_G_CM3) -> MassProperties:
+        """Volume, area, centroid, spin-axis inertia and mass (OpenCascade, adaptive precision)."""
+        return mass_properties(self.solid, density_g_cm3)
+
+    def write(self, out_dir: str | Path, density_g_cm3: float = DEFAULT_DENSITY_G_CM3,
+              stl: bool = True) -> dict[str, Path]:
+        """Write ``<name>.step``, ``<name>.stl`` (unless ``stl`` is False) and ``<name>.json`` into ``out_dir``."""
+        return write_outputs(self, Path(out_dir), density_g_cm3, stl)
+
+
+def _section_chords(surface: BladeSurface) -> np.ndarray:
+    trailing_edge = surface.trailing_edge_index or 0
+    return np.linalg.norm(surface.points[:, trailing_edge] - surface.points[:, 0], axis=-1)
+
+
+def build_propeller(design: PropellerParameters | str | Path | None = None) -> Propeller:
+    """Build the fused propeller of ``design`` (parameters, a TOML path, or None for the default).
+
+    Raises ParameterError for bad parameters, GeometryError for designs that cannot make a
+    sound propeller (refused before the kernel runs), KernelError when OpenCascade fails.
+    """
+    timer = StageTimer()
+    with timer.stage("parameters"):
+        if design is None:
+            params = PropellerParameters()
+        elif isinstance(design, PropellerParameters):
+            params = design
+        else:
+            params = PropellerParameters.from_toml(design)
+    with timer.stage("section_math"):
+        surface = blade_surface(params)
+        check_feasible(params, surface, Centerline.for_blade(params))
+    with timer.stage("wires"):
+        curves = fit_section_curves(surface.points, surface.trailing_edge_index, _section_chords(surface))
+        wires = curves.wires()
+    with timer.stage("loft"):
+        blade = loft_solid(wires)
+        hub = hub_solid(params.hub.radius, params.hub.length)
+        blades = pattern_blades(blade, [blade_angle_deg(params, i) for i in range(params.blades)])
+    with timer.stage("fuse"):
+        fused = fuse_all(hub, blades)
+    with timer.stage("check"):
+        solid = single_valid_solid(fused, "fusing the blades with the hub")
+        _check_volume(solid, hub, blade, params.blades)
+    return Propeller(params, solid, hub, blades, surface, curves, timer.seconds)
+
+
+def _check_volume(solid: cq.Solid, hub: cq.Solid, blade: cq.Solid, blades: int) -> None:
+    """hub < fused <= hub + n x blade: a fuse that lost or doubled material is an error."""
+    volume, hub_volume, blade_volume = (precise_volume(shape, VOLUME_CHECK_RELATIVE_PRECISION)
+                                        for shape in (solid, hub, blade))
+    if not hub_volume < volume <= (hub_volume + blades * blade_volume) * (1 + 10 * VOLUME_CHECK_RELATIVE_PRECISION):
+        raise KernelError(f"the fused volume {volume:.3f} mm^3 is outside (hub {hub_volume:.3f}, "
+                          f"hub + {blades} blades {hub_volume + blades * blade_volume:.3f}] mm^3")
+
+
+def build_report(propeller: Propeller, density_g_cm3: float) -> dict:
+    """The JSON report: parameters, mass properties, validity and stage times."""
+    properties = propeller.mass_properties(density_g_cm3)
+    return {
+        "name": propeller.parameters.name,
+        "parameters": propeller.parameters.to_dict(),
+        "valid": True,
+        "solids": 1,
+        **properties.to_dict(),
+        "section_fit_error_mm": propeller.section_curves.fit_error,
+        "stage_seconds": dict(propeller.stage_seconds),
+    }
+
+
+def write_outputs(propeller: Propeller, out_dir: Path, density_g_cm3: float = DEFAULT_DENSITY_G_CM3,
+                  stl: bool = True) -> dict[str, Path]:
+    """Write STEP, STL and the JSON report atomically; return the paths by kind."""
+    params = propeller.parameters
+    timer = StageTimer()
+    paths: dict[str, Path] = {}
+    with timer.stage("step_write"):
+        paths["step"] = write_step(propeller.solid, out_dir / f"{params.name}.step", params.name,
+                                   params.export.step_schema)
+    if stl:
+        with timer.stage("stl_write"):
+            paths["stl"] = write_stl(propeller.solid, out_dir / f"{params.name}.stl",
+                                     params.export.stl_linear_deflection, params.export.stl_angular_deflection)
+    propeller.stage_seconds.update(timer.seconds)
+    report = build_report(propeller, density_g_cm3)
+    paths["json"] = out_dir / f"{params.name}.json"
+    with atomic_path(paths["json"]) as temp:
+        temp.write_text(json.dumps(report, indent=2) + "\n")
+    return paths
