@@ -155,26 +155,32 @@ class PropellerParameters:
             table = data
             for part in parents:
                 if not isinstance(table.get(part), dict):
-                    raise ParameterError(f"unknown key {dotted!r}{_suggest(part, table)}")
+                    raise ParameterError(f"unknown key {dotted!r}{_suggest(part, table, _prefix_of(dotted, part))}")
                 table = table[part]
             if leaf not in table:
-                raise ParameterError(f"unknown key {dotted!r}{_suggest(leaf, table)}")
+                raise ParameterError(f"unknown key {dotted!r}{_suggest(leaf, table, _prefix_of(dotted, leaf))}")
             table[leaf] = value
         return type(self).from_dict(data)
 
 
 # -- building from mappings ------------------------------------------------------------
 
-def _suggest(key: str, known: Mapping[str, Any] | list[str]) -> str:
+def _suggest(key: str, known: Mapping[str, Any] | list[str], prefix: str = "") -> str:
     close = difflib.get_close_matches(key, list(known), n=1, cutoff=0.5)
-    return f"; did you mean {close[0]!r}?" if close else f"; known keys: {', '.join(sorted(known))}"
+    if close:
+        return f"; did you mean {prefix + close[0]!r}?"
+    return f"; known keys: {', '.join(prefix + name for name in sorted(known))}"
+
+
+def _prefix_of(dotted: str, part: str) -> str:
+    return dotted[: dotted.rindex(part)] if part in dotted else ""
 
 
 def _build(cls: type, data: Mapping[str, Any], prefix: str) -> Any:
     fields = {f.name: f for f in dataclasses.fields(cls)}
     for key in data:
         if key not in fields:
-            raise ParameterError(f"unknown key {prefix + str(key)!r}{_suggest(str(key), list(fields))}")
+            raise ParameterError(f"unknown key {prefix + str(key)!r}{_suggest(str(key), list(fields), prefix)}")
     values: dict[str, Any] = {}
     for name, spec in fields.items():
         if name not in data:

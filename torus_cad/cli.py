@@ -1,0 +1,154 @@
+"""Command line: ``torus-cad build | defaults | ...``. Thin: parse, call the package, map errors to exit codes.
+
+Exit codes: 0 success; 2 bad input (a one-line message naming the field, no traceback, no
+file written); 1 the kernel or the file system failed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import tomllib
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+from torus_cad.errors import GeometryError, ParameterError, TorusCadError
+from torus_cad.geometry.parameters import PropellerParameters
+
+EXIT_OK, EXIT_KERNEL_FAILURE, EXIT_BAD_INPUT = 0, 1, 2
+
+DESCRIPTION = """\
+torus_cad turns a few design parameters into a toroidal propeller: NACA 4-digit sections
+swept along a cubic NURBS centerline, lofted into blades, patterned around a cylindrical hub
+and fused in OpenCascade. It writes a STEP solid (for CAD/CAM), a binary STL (for printing
+and meshing) and a JSON report (volume, area, mass properties, stage times).
+"""
+
+EPILOG = """\
+examples:
+  torus-cad build                          default propeller into step_out/
+  torus-cad defaults > my_prop.toml        start a design from the commented defaults
+  torus-cad build my_prop.toml --out parts/
+  torus-cad build my_prop.toml --set blades=4 --set hub.radius=12
+
+units: mm and degrees. Control points are in the hub frame L: [x_L degrees around the axis,
+y_L mm down the axis from 1 mm below the top face, z_L mm radially out from R - R/8].
+"""
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse whose usage errors are one line and exit 2, like every other bad input."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        self.exit(EXIT_BAD_INPUT, f"torus-cad: error: {message} (see {self.prog} --help)\n")
+
+
+def _parse_override(text: str) -> tuple[str, Any]:
+    if "=" not in text:
+        raise ParameterError(f"--set {text!r} must look like key=value, e.g. hub.radius=12")
+    key, raw = text.split("=", 1)
+    try:
+        value = tomllib.loads(f"value = {raw}")["value"]
+    except tomllib.TOMLDecodeError:
+        value = raw  # a bare word: treat as a string (e.g. name=my_prop)
+    return key.strip(), value
+
+
+def load_parameters(config: str | None, overrides: Sequence[str] = ()) -> PropellerParameters:
+    """Parameters from a TOML file (or the defaults) with ``key=value`` overrides applied."""
+    params = PropellerParameters.from_toml(config) if config else PropellerParameters()
+    if overrides:
+        params = params.with_values(dict(_parse_override(item) for item in overrides))
+    return params
+
+
+def _add_design_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("config", nargs="?", help="TOML design file (default: the built-in propeller; "
+                        "see 'torus-cad defaults')")
+    parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                        help="override one parameter, dotted keys, TOML values (repeatable): "
+                             "--set hub.radius=12 --set centerline.p2=[20,3,25]")
+
+
+def _command_build(args: argparse.Namespace) -> int:
+    from torus_cad.propeller import build_propeller
+
+    params = load_parameters(args.config, args.overrides)
+    propeller = build_propeller(params)
+    paths = propeller.write(Path(args.out), density_g_cm3=args.density, stl=not args.no_stl)
+    report = json.loads(paths["json"].read_text())
+    if not args.quiet:
+        for kind, path in paths.items():
+            print(f"wrote {path}")
+        print(f"volume {report['volume_mm3']:.3f} mm^3, area {report['surface_area_mm2']:.3f} mm^2, "
+              f"mass {report['mass_g']:.3f} g at {args.density:g} g/cm^3")
+    if args.verbose:
+        print(f"centroid {tuple(round(c, 6) for c in report['centroid_mm'])} mm, "
+              f"spin-axis inertia {report['spin_axis_inertia_g_mm2']:.4f} g mm^2")
+        for stage, seconds in report["stage_seconds"].items():
+            print(f"  {stage:<13} {seconds * 1000:8.1f} ms")
+    return EXIT_OK
+
+
+def _command_defaults(args: argparse.Namespace) -> int:
+    sys.stdout.write("# torus_cad design file: every key is optional and defaults to the value below.\n")
+    sys.stdout.write(PropellerParameters().to_toml(comments=True))
+    return EXIT_OK
+
+
+def _positive_density(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--density must be a number in g/cm^3, got {text!r}") from None
+    if not 0.0 < value <= 25.0:
+        raise argparse.ArgumentTypeError(f"--density = {value:g} is out of range; allowed (0, 25] g/cm^3")
+    return value
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser with every subcommand."""
+    parser = _Parser(prog="torus-cad", description=DESCRIPTION, epilog=EPILOG,
+                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=_Parser)
+
+    build = commands.add_parser("build", help="build a propeller: STEP + STL + JSON report",
+                                description="Build the propeller of CONFIG (or the default) and write "
+                                "<name>.step, <name>.stl and <name>.json into --out.", epilog=EPILOG,
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    _add_design_arguments(build)
+    build.add_argument("--out", default="step_out", help="output folder (default: step_out)")
+    build.add_argument("--density", type=_positive_density, default=1.24,
+                       help="material density for the mass, g/cm^3 (default 1.24, PLA)")
+    build.add_argument("--no-stl", action="store_true", help="write STEP and JSON only")
+    build.add_argument("-v", "--verbose", action="store_true", help="print mass properties and stage times")
+    build.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
+    build.set_defaults(handler=_command_build)
+
+    defaults = commands.add_parser("defaults", help="print the default design as commented TOML",
+                                   description="Print the default design as a commented TOML file to start from.")
+    defaults.set_defaults(handler=_command_defaults)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of ``torus-cad``; returns the exit code."""
+    args = build_parser().parse_args(argv)
+    handler: Callable[[argparse.Namespace], int] = args.handler
+    try:
+        return handler(args)
+    except (ParameterError, GeometryError) as error:
+        print(f"torus-cad: error: {error}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except TorusCadError as error:
+        print(f"torus-cad: kernel failure: {error}", file=sys.stderr)
+        return EXIT_KERNEL_FAILURE
+    except OSError as error:
+        print(f"torus-cad: cannot write output: {error}", file=sys.stderr)
+        return EXIT_KERNEL_FAILURE
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
