@@ -42,3 +42,7 @@ VOLUME_CHECK_RELATIVE_PRECISION = 1e-3
 
 #: Analytic surface points must lie on the B-rep within this fraction of the local chord.
 SURFACE_ACCURACY_RELATIVE = 1e-3
+
+#: Largest allowed y_t * kappa_c of a cambered section (1 = the lower surface folds over);
+#: kept below 1 so the surface keeps a usable radius of curvature.
+FOLD_RATIO_LIMIT = 0.9

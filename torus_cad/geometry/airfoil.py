@@ -67,6 +67,21 @@ class NacaAirfoil:
         a0, a1, a2, a3, a4 = THICKNESS_COEFFICIENTS
         return 5 * self.thickness * (a0 * np.sqrt(t) + t * (a1 + t * (a2 + t * (a3 + t * a4))))
 
+    def fold_ratio(self, samples: int = 2001) -> tuple[float, float]:
+        """Largest y_t(t) * kappa_c(t) on the chord and where: ``(ratio, t)``.
+
+        With the thickness normal to the camber line, the lower surface is an offset of the
+        camber line; where the offset y_t exceeds the camber line's radius of curvature
+        1 / kappa_c (ratio >= 1) that surface folds over itself (a swallowtail).
+        """
+        if not self.camber_normal or self.max_camber == 0.0:
+            return 0.0, 0.0
+        t = np.linspace(0.0, 1.0, samples)
+        kappa = np.abs(self.camber_curvature(t)) / (1 + self.camber_slope(t) ** 2) ** 1.5
+        ratio = self.half_thickness(t) * kappa
+        worst = int(np.argmax(ratio))
+        return float(ratio[worst]), float(t[worst])
+
     def surfaces(self, chord_position: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Upper and lower surface points at chord positions ``t``, each ``(len(t), 2)`` (spec §1.2)."""
         t = np.asarray(chord_position, dtype=float)

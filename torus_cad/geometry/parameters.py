@@ -25,7 +25,8 @@ from typing import Any, Mapping
 import numpy as np
 
 from torus_cad.errors import ParameterError
-from torus_cad.tolerances import STL_ANGULAR_DEFLECTION, STL_LINEAR_DEFLECTION
+from torus_cad.geometry.airfoil import NacaAirfoil
+from torus_cad.tolerances import FOLD_RATIO_LIMIT, STL_ANGULAR_DEFLECTION, STL_LINEAR_DEFLECTION
 
 Quartic = tuple[float, float, float, float, float]
 
@@ -283,6 +284,14 @@ def _validate(params: PropellerParameters) -> None:
         _check_range("airfoil.camber_position", airfoil.camber_position, 0.0, 1.0, high_open=True)
     _check_range("airfoil.thickness", airfoil.thickness, 0.0, 1.0, low_open=True)
     _check_range("airfoil.pivot", airfoil.pivot, 0.0, 1.0)
+    ratio, where = NacaAirfoil(airfoil.max_camber, airfoil.camber_position, airfoil.thickness,
+                               airfoil.camber_normal).fold_ratio()
+    if ratio >= FOLD_RATIO_LIMIT:
+        raise ParameterError(
+            f"airfoil.thickness = {airfoil.thickness:g} is too thick for max_camber = {airfoil.max_camber:g} at "
+            f"camber_position = {airfoil.camber_position:g}: the lower surface folds over itself near chord "
+            f"{where:.2f} (thickness exceeds the camber line's radius of curvature); reduce the thickness or "
+            "the camber, move camber_position toward 0.5, or set camber_normal = false")
 
     centerline = params.centerline
     for key in ("p2", "p3", "p4"):

@@ -1,0 +1,43 @@
+"""Shared fixtures: the default design, a light design for fast kernel tests, and built propellers."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from torus_cad.geometry.parameters import PropellerParameters
+
+
+def read_binary_stl(path: Path) -> np.ndarray:
+    """Triangles of a binary STL file: ``(f, 3, 3)`` float32, mm."""
+    data = path.read_bytes()
+    count = int(np.frombuffer(data, dtype="<u4", count=1, offset=80)[0])
+    assert len(data) == 84 + 50 * count, "binary STL length does not match its triangle count"
+    records = np.frombuffer(data, dtype=np.dtype([("normal", "<f4", 3), ("vertices", "<f4", (3, 3)),
+                                                  ("attribute", "<u2")]), count=count, offset=84)
+    return records["vertices"].copy()
+
+
+@pytest.fixture(scope="session")
+def default_params() -> PropellerParameters:
+    return PropellerParameters()
+
+
+@pytest.fixture(scope="session")
+def light_params() -> PropellerParameters:
+    """A coarser default, for kernel tests that need a real solid but not the full resolution."""
+    return PropellerParameters().with_values({"resolution.sections": 12, "resolution.points": 48,
+                                              "name": "light"})
+
+
+@pytest.fixture(scope="session")
+def default_propeller(default_params):
+    from torus_cad.propeller import build_propeller
+    return build_propeller(default_params)
+
+
+@pytest.fixture(scope="session")
+def default_files(default_propeller, tmp_path_factory) -> dict[str, Path]:
+    return default_propeller.write(tmp_path_factory.mktemp("default_build"))

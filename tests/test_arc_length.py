@@ -1,0 +1,59 @@
+"""Equal arc-length resampling (spec §5)."""
+
+import numpy as np
+import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
+
+from torus_cad.geometry.airfoil import NacaAirfoil, airfoil_points
+from torus_cad.geometry.arc_length import equal_arc_length_section, spacing_deviation
+from torus_cad.tolerances import FOLD_RATIO_LIMIT
+
+
+def dense_perimeter(airfoil: NacaAirfoil, samples: int = 400001) -> float:
+    u = np.linspace(0.0, 1.0, samples)  # t = u^2 resolves the leading edge
+    upper, lower = airfoil.surfaces(u * u)
+    return sum(float(np.linalg.norm(np.diff(side, axis=0), axis=1).sum()) for side in (upper, lower))
+
+
+def test_perimeter_matches_a_dense_polyline():
+    airfoil = NacaAirfoil()
+    assert equal_arc_length_section(airfoil, 200).perimeter == pytest.approx(dense_perimeter(airfoil), rel=1e-8)
+
+
+def arc_gaps(airfoil: NacaAirfoil, t: np.ndarray) -> np.ndarray:
+    """Arc length between consecutive parameters (closed), measured on a fine polyline."""
+    closed = np.append(t, 2.0)
+    gaps = []
+    for start, stop in zip(closed[:-1], closed[1:]):
+        fine = airfoil_points(airfoil, np.linspace(start, stop, 400))
+        gaps.append(np.linalg.norm(np.diff(fine, axis=0), axis=1).sum())
+    return np.array(gaps)
+
+
+def test_spec_procedure_spaces_points_equally_in_arc_length():
+    airfoil = NacaAirfoil()
+    sampling = equal_arc_length_section(airfoil, 200, anchor_trailing_edge=False)
+    gaps = arc_gaps(airfoil, sampling.t)
+    assert np.abs(gaps / gaps.mean() - 1).max() < 2e-3
+
+
+def test_anchored_sampling_keeps_the_trailing_edge_and_near_equal_spacing():
+    sampling = equal_arc_length_section(NacaAirfoil(), 200)
+    assert sampling.t[sampling.trailing_edge_index] == pytest.approx(1.0)
+    np.testing.assert_allclose(sampling.points[sampling.trailing_edge_index], [1.0, 0.0], atol=1e-12)
+    assert spacing_deviation(sampling.points) < 1.0 / 200
+
+
+@settings(max_examples=25, deadline=None)
+@given(m=st.floats(0.0, 0.09), p=st.floats(0.1, 0.9), thickness=st.floats(0.02, 0.6),
+       camber_normal=st.booleans(), count=st.integers(40, 400))
+def test_spacing_is_equal_on_each_surface_for_any_section(m, p, thickness, camber_normal, count):
+    airfoil = NacaAirfoil(m, p, thickness, camber_normal)
+    assume(airfoil.fold_ratio()[0] < FOLD_RATIO_LIMIT)  # folded sections are refused by the parameters
+    sampling = equal_arc_length_section(airfoil, count)
+    te = sampling.trailing_edge_index
+    gaps = arc_gaps(airfoil, sampling.t)
+    for side in (gaps[:te], gaps[te:]):
+        assert np.abs(side / side.mean() - 1).max() < 2e-3
+    assert sampling.points.shape == (count, 2)
