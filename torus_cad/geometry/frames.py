@@ -99,7 +99,10 @@ def rotation_minimizing_frames(centerline: Centerline, s: ArrayLike,
     s = np.atleast_1d(np.asarray(s, dtype=float))
     if np.any(np.diff(s) < 0):
         raise ValueError("s must be increasing")
-    grid = np.union1d(np.linspace(0.0, 1.0, substeps), s)
+    dense = np.linspace(0.0, 1.0, substeps)
+    # Drop dense points that nearly coincide with a requested s: a near-zero step breaks the reflection.
+    distance = np.abs(dense[:, None] - s[None, :]).min(axis=1)
+    grid = np.union1d(dense[distance > 1e-9], s)
     derivatives = centerline.derivatives(grid, order=2)
     points, tangents = derivatives[:, 0], _unit(derivatives[:, 1])
     normal = _initial_normal(tangents[0], derivatives[0, 2])
