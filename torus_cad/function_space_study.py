@@ -340,7 +340,9 @@ def sinusoid_values(parameters: FloatArray, s: FloatArray) -> FloatArray:
     return a * np.sin(b * s + c) + d
 
 
-def _sinusoid_linear_solve(s: FloatArray, values: FloatArray, angular_frequency: FloatArray) -> tuple[FloatArray, FloatArray]:
+def _sinusoid_linear_solve(
+    s: FloatArray, values: FloatArray, angular_frequency: FloatArray
+) -> tuple[FloatArray, FloatArray]:
     """For fixed B per sample, solve A, C, D by linear least squares.
 
     ``values`` (N, n), ``angular_frequency`` (N, K) trial values of B.  Returns parameters
@@ -529,7 +531,7 @@ class StudyResult:
 
         ``generator`` restricts to the samples of one generator (``None``: all samples).
         """
-        mask = self._generator_mask(generator)
+        mask = self.generator_mask(generator)
         rows = []
         for column, candidate in enumerate(CANDIDATES):
             mse = self.mse[mask, column]
@@ -561,7 +563,7 @@ class StudyResult:
         A faithful ``curve_fit`` port raises on the fits that do not converge and so leaves
         them out; this shows what that does to the sinusoid row.
         """
-        mask = self._generator_mask(generator) & self.sinusoid.converged
+        mask = self.generator_mask(generator) & self.sinusoid.converged
         column = CANDIDATE_NAMES.index("sinusoid")
         return {
             "generator": generator or "all",
@@ -572,7 +574,8 @@ class StudyResult:
             "median_range_normalised_sse": _median_or_nan(self.range_normalised_sse[mask, column]),
         }
 
-    def _generator_mask(self, generator: str | None) -> BoolArray:
+    def generator_mask(self, generator: str | None) -> BoolArray:
+        """Boolean mask (N,) of the samples of ``generator`` (``None``: all samples)."""
         if generator is None:
             return np.ones(len(self.mse), dtype=np.bool_)
         _check_choice("generator", generator, GENERATOR_NAMES)
@@ -673,17 +676,23 @@ def _format_number(value: float) -> str:
 
 
 def _render_table(headers: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
+    """Left-align the first column, right-align the others; header, rule, one line per row."""
     widths = [max(len(headers[i]), *(len(row[i]) for row in rows)) for i in range(len(headers))]
-    line = "  ".join(header.ljust(width) if i == 0 else header.rjust(width) for i, (header, width) in enumerate(zip(headers, widths)))
-    out = [line, "  ".join("-" * width for width in widths)]
-    for row in rows:
-        out.append("  ".join(cell.ljust(width) if i == 0 else cell.rjust(width) for i, (cell, width) in enumerate(zip(row, widths))))
-    return "\n".join(out)
+
+    def render(cells: Sequence[str]) -> str:
+        return "  ".join(
+            cell.ljust(width) if i == 0 else cell.rjust(width) for i, (cell, width) in enumerate(zip(cells, widths))
+        )
+
+    return "\n".join([render(headers), "  ".join("-" * width for width in widths), *(render(row) for row in rows)])
 
 
 def format_overall_table(result: StudyResult) -> str:
     """Text table: per candidate, parameters, mean (± standard error) and median of both errors, spec value."""
-    headers = ["candidate", "params", "mean MSE ± s.e.", "median MSE", "mean norm-SSE ± s.e.", "median norm-SSE", "spec Table 1"]
+    headers = [
+        "candidate", "params", "mean MSE ± s.e.", "median MSE",
+        "mean norm-SSE ± s.e.", "median norm-SSE", "spec Table 1",
+    ]
     rows = [
         [
             row["label"],
@@ -713,7 +722,10 @@ def format_overall_table(result: StudyResult) -> str:
 
 def format_generator_table(result: StudyResult) -> str:
     """Text table: the overall table broken down by generator."""
-    headers = ["generator / candidate", "N", "params", "mean MSE", "median MSE", "mean norm-SSE", "median norm-SSE", "not conv."]
+    headers = [
+        "generator / candidate", "N", "params", "mean MSE", "median MSE",
+        "mean norm-SSE", "median norm-SSE", "not conv.",
+    ]
     rows = []
     for generator in GENERATOR_NAMES:
         for row in result.summary_rows(generator):
@@ -786,7 +798,9 @@ def write_fits_csv(result: StudyResult, path: str | Path) -> Path:
                         repr(float(result.mse[sample, column])),
                         repr(float(result.range_normalised_sse[sample, column])),
                         converged,
-                        ";".join(f"{name}={value!r}" for name, value in zip(candidate.parameter_names, fitted.tolist())),
+                        ";".join(
+                            f"{name}={value!r}" for name, value in zip(candidate.parameter_names, fitted.tolist())
+                        ),
                     ]
                 )
     return path
@@ -829,7 +843,7 @@ def plot_errors(result: StudyResult, path: str | Path) -> Path:
         for column, candidate in enumerate(CANDIDATES):
             data, positions, means = [], [], []
             for group_index, group in enumerate(groups):
-                mask = result._generator_mask(None if group == "all" else group)
+                mask = result.generator_mask(None if group == "all" else group)
                 if not np.any(mask):
                     continue
                 selected = errors[mask, column]
@@ -868,11 +882,15 @@ def plot_errors(result: StudyResult, path: str | Path) -> Path:
     figure.legend(handles, labels, loc="lower center", ncol=len(labels), fontsize=8, frameon=False)
     counts = [int(np.count_nonzero(result.functions.generator_index == i)) for i in range(len(GENERATOR_NAMES))]
     axes[1].set_xticks(range(len(groups)))
-    axes[1].set_xticklabels([f"{name}\n(N={count})" for name, count in zip(groups, [*counts, result.config.samples])])
+    axes[1].set_xticklabels(
+        [f"{name}\n(N={count})" for name, count in zip(groups, [*counts, result.config.samples])]
+    )
     figure.suptitle(
-        f"Function-space study: N = {result.config.samples}, n = {result.config.points}, seed = {result.config.seed}, "
-        f"sinusoid start = {result.config.sinusoid_start} ({result.sinusoid_not_converged} not converged)\n"
-        f"boxes: quartiles, whiskers: 5-95 %, diamonds: means; values < {PLOT_ERROR_FLOOR:g} drawn at {PLOT_ERROR_FLOOR:g}",
+        f"Function-space study: N = {result.config.samples}, n = {result.config.points}, "
+        f"seed = {result.config.seed}, sinusoid start = {result.config.sinusoid_start} "
+        f"({result.sinusoid_not_converged} not converged)\n"
+        f"boxes: quartiles, whiskers: 5-95 %, diamonds: means; "
+        f"values < {PLOT_ERROR_FLOOR:g} drawn at {PLOT_ERROR_FLOOR:g}",
         fontsize=10,
     )
     figure.tight_layout(rect=(0.0, 0.035, 1.0, 1.0))
