@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import json
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -43,11 +43,14 @@ DEFAULT_DENSITY_G_CM3 = 1.24
 class StageTimer:
     """Wall-clock seconds per named stage, in the order the stages ran."""
 
-    def __init__(self) -> None:
+    def __init__(self, on_start: Callable[[str], None] | None = None) -> None:
         self.seconds: dict[str, float] = {}
+        self.on_start = on_start  # called with each stage's name as it starts (progress display)
 
     @contextmanager
     def stage(self, name: str) -> Iterator[None]:
+        if self.on_start is not None:
+            self.on_start(name)
         start = time.perf_counter()
         try:
             yield
@@ -96,13 +99,17 @@ def _section_chords(surface: BladeSurface) -> np.ndarray:
     return np.linalg.norm(surface.points[:, trailing_edge] - surface.points[:, 0], axis=-1)
 
 
-def build_propeller(design: PropellerParameters | str | Path | None = None) -> Propeller:
+def build_propeller(design: PropellerParameters | str | Path | None = None,
+                    progress: Callable[[str], None] | None = None) -> Propeller:
     """Build the fused propeller of ``design`` (parameters, a TOML path, or None for the default).
+
+    ``progress``, if given, is called with each stage's name (``section_math``, ``wires``,
+    ``loft``, ``fuse``, ``check``, ...) as the stage starts.
 
     Raises ParameterError for bad parameters, GeometryError for designs that cannot make a
     sound propeller (refused before the kernel runs), KernelError when OpenCascade fails.
     """
-    timer = StageTimer()
+    timer = StageTimer(progress)
     with timer.stage("parameters"):
         if design is None:
             params = PropellerParameters()
