@@ -15,7 +15,12 @@ from pathlib import Path
 from OCP.BRepMesh import BRepMesh_IncrementalMesh
 from OCP.IFSelect import IFSelect_RetDone
 from OCP.Interface import Interface_Static
-from OCP.STEPControl import STEPControl_AsIs, STEPControl_Reader, STEPControl_Writer
+from OCP.STEPCAFControl import STEPCAFControl_Writer
+from OCP.STEPControl import STEPControl_AsIs, STEPControl_Reader
+from OCP.TCollection import TCollection_ExtendedString
+from OCP.TDataStd import TDataStd_Name
+from OCP.TDocStd import TDocStd_Document
+from OCP.XCAFDoc import XCAFDoc_DocumentTool
 from OCP.StlAPI import StlAPI_Writer
 
 import cadquery as cq
@@ -50,14 +55,21 @@ def _current_umask() -> int:
 
 
 def write_step(shape: cq.Shape, path: str | Path, product_name: str, schema: str = "AP214") -> Path:
-    """Write ``shape`` as STEP (``schema`` 'AP214' or 'AP242', millimetres, product named ``product_name``)."""
+    """Write ``shape`` as STEP (``schema`` 'AP214' or 'AP242', millimetres, product named ``product_name``).
+
+    The shape goes through an XCAF document so that the STEP PRODUCT carries exactly the
+    design's name (the plain writer appends a counter to it).
+    """
     if schema not in _STEP_SCHEMAS:
         raise KernelError(f"unknown STEP schema {schema!r}; choose AP214 or AP242")
-    Interface_Static.SetCVal_s("write.step.schema", _STEP_SCHEMAS[schema])
-    Interface_Static.SetCVal_s("write.step.unit", "MM")
-    Interface_Static.SetCVal_s("write.step.product.name", product_name)
-    writer = STEPControl_Writer()
-    if writer.Transfer(shape.wrapped, STEPControl_AsIs) != IFSelect_RetDone:
+    document = TDocStd_Document(TCollection_ExtendedString("torus_cad"))
+    label = XCAFDoc_DocumentTool.ShapeTool_s(document.Main()).AddShape(shape.wrapped, False)
+    TDataStd_Name.Set_s(label, TCollection_ExtendedString(product_name))
+    writer = STEPCAFControl_Writer()  # creating the writer initialises the statics; set them after
+    for key, value in (("write.step.schema", _STEP_SCHEMAS[schema]), ("write.step.unit", "MM")):
+        if not Interface_Static.SetCVal_s(key, value):
+            raise KernelError(f"OpenCascade refused the STEP setting {key} = {value!r}")
+    if not writer.Transfer(document, STEPControl_AsIs):
         raise KernelError("OpenCascade could not translate the solid to STEP")
     path = Path(path)
     with atomic_path(path) as temp:
