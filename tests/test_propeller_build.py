@@ -81,7 +81,7 @@ def test_ap242_is_available(light_params, tmp_path):
     assert is_valid_closed_solid(read_step(path))
 
 
-@pytest.mark.parametrize("blades", [1, 2, 5])
+@pytest.mark.parametrize("blades", [1, 2, 4])
 def test_any_blade_count_fuses_into_one_solid(light_params, blades):
     sweep = min(1.0, 3.0 / blades)  # narrow the blade's angular sweep so that neighbours stay clear
     propeller = build_propeller(light_params.with_values({"blades": blades, "centerline.p2": [25 * sweep, 3.0, 22.0],
