@@ -1,0 +1,87 @@
+"""The torus-cad command: files written, exit codes, one-line errors, nothing left behind on bad input."""
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from torus_cad.cli import main
+from torus_cad.geometry.parameters import PropellerParameters
+
+
+def test_build_writes_step_stl_and_report(tmp_path, capsys):
+    assert main(["build", "--set", "resolution.sections=12", "--set", "resolution.points=48",
+                 "--out", str(tmp_path)]) == 0
+    names = sorted(path.name for path in tmp_path.iterdir())
+    assert names == ["torus_propeller.json", "torus_propeller.step", "torus_propeller.stl"]
+    report = json.loads((tmp_path / "torus_propeller.json").read_text())
+    assert report["valid"] is True and report["solids"] == 1
+    assert report["volume_mm3"] > 0 and report["surface_area_mm2"] > 0
+    assert len(report["bounding_box_mm"]) == 2
+    assert {"section_math", "wires", "loft", "fuse", "check", "step_write", "stl_write"} <= set(report["stage_seconds"])
+    assert PropellerParameters.from_dict(report["parameters"]).resolution.sections == 12
+    assert "wrote" in capsys.readouterr().out
+
+
+def test_defaults_prints_a_config_that_reads_back_as_the_defaults(tmp_path, capsys):
+    assert main(["defaults"]) == 0
+    path = tmp_path / "defaults.toml"
+    path.write_text(capsys.readouterr().out)
+    assert PropellerParameters.from_toml(path) == PropellerParameters()
+
+
+@pytest.mark.parametrize("config, fragment", [
+    ("[hub]\nradius = -5.0\n", "hub.radius = -5 is out of range"),
+    ("blades = 0\n", "blades = 0 is out of range"),
+    ("blades = \"three\"\n", "blades must be a whole number"),
+    ("[hub]\nradius = nan\n", "hub.radius = nan must be a finite number"),
+    ("[hub]\nradius = inf\n", "hub.radius = inf must be a finite number"),
+    ("[airfoil]\nthicknes = 0.2\n", "did you mean 'airfoil.thickness'"),
+    ("", "is empty"),
+    ("[transforms]\nscale_x = [0.0, 0.0, 40.0, -40.0, 9.9]\n", "transforms.scale_x must stay positive"),
+    ("[centerline]\np2 = [25.0, 3.0]\n", "centerline.p2 must be a list of 3 numbers"),
+])
+def test_bad_configuration_exits_2_with_one_line_and_writes_nothing(tmp_path, capsys, config, fragment):
+    path = tmp_path / "design.toml"
+    path.write_text(config)
+    out = tmp_path / "out"
+    assert main(["build", str(path), "--out", str(out)]) == 2
+    error = capsys.readouterr().err
+    assert fragment in error
+    assert error.count("\n") == 1 and "Traceback" not in error
+    assert not out.exists()
+
+
+def test_binary_file_and_missing_file_exit_2(tmp_path, capsys):
+    binary = tmp_path / "design.toml"
+    binary.write_bytes(bytes(range(256)))
+    assert main(["build", str(binary), "--out", str(tmp_path / "out")]) == 2
+    assert main(["build", str(tmp_path / "missing.toml"), "--out", str(tmp_path / "out")]) == 2
+    assert not (tmp_path / "out").exists()
+    assert "cannot read configuration" in capsys.readouterr().err
+
+
+def test_refused_design_exits_2_before_the_kernel(tmp_path, capsys):
+    # A root section far larger than the hub cannot be hidden by the fuse.
+    assert main(["build", "--set", "transforms.scale_x=[0, 0, 0, 0, 40.0]", "--out", str(tmp_path / "out")]) == 2
+    assert "leaves the hub's inset" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+
+
+def test_usage_errors_exit_2_and_help_exits_0():
+    for argv in (["build", "--bogus"], ["nonsense"], ["build", "--density", "-1"]):
+        with pytest.raises(SystemExit) as raised:
+            main(argv)
+        assert raised.value.code == 2
+    with pytest.raises(SystemExit) as raised:
+        main(["build", "--help"])
+    assert raised.value.code == 0
+
+
+def test_console_script_prints_no_traceback_on_bad_input(tmp_path):
+    result = subprocess.run([sys.executable, "-m", "torus_cad.cli", "build", "--set", "hub.length=-3",
+                             "--out", str(tmp_path / "out")], capture_output=True, text=True)
+    assert result.returncode == 2
+    assert result.stderr.strip().splitlines() == [result.stderr.strip()]
+    assert "hub.length" in result.stderr and "Traceback" not in result.stderr
