@@ -108,6 +108,26 @@ def _positive_density(text: str) -> float:
     return value
 
 
+def _command_sweep(args: argparse.Namespace) -> int:
+    from torus_cad.sweep import SweepError, SweepInterrupted, load_sweep, run_sweep
+
+    spec = load_sweep(args.sweep)  # a bad sweep file raises ParameterError: exit 2
+    out = Path(args.out) if args.out else Path("sweep_out") / Path(args.sweep).stem
+    try:
+        result = run_sweep(spec, out, workers=args.workers, scheduler=args.scheduler,
+                           stl=False if args.no_stl else None, density_g_cm3=args.density, rebuild=args.rebuild,
+                           progress=False if args.quiet else None)
+    except SweepInterrupted as interrupt:
+        print(interrupt.result.summary(), file=sys.stderr)
+        return 130
+    except SweepError as error:
+        print(f"torus-cad: sweep failed: {error}", file=sys.stderr)
+        return EXIT_KERNEL_FAILURE
+    if not args.quiet:
+        print(result.summary())
+    return EXIT_OK
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with every subcommand."""
     parser = _Parser(prog="torus-cad", description=DESCRIPTION, epilog=EPILOG,
@@ -130,6 +150,25 @@ def build_parser() -> argparse.ArgumentParser:
     defaults = commands.add_parser("defaults", help="print the default design as commented TOML",
                                    description="Print the default design as a commented TOML file to start from.")
     defaults.set_defaults(handler=_command_defaults)
+
+    sweep = commands.add_parser("sweep", help="build many variants of a design in parallel (local or Dask)",
+                                description="Build every design of a sweep file (a base design plus the "
+                                "parameters to vary: lists, grid ranges, or random / Latin-hypercube bounds) "
+                                "into OUT/designs/<id>/ and tabulate them in OUT/results.csv. Rerunning "
+                                "resumes: designs already done are skipped.")
+    sweep.add_argument("sweep", metavar="SWEEP.toml", help="sweep file (see examples/sweep_example.toml)")
+    sweep.add_argument("--out", help="output folder (default: sweep_out/<sweep file name>)")
+    sweep.add_argument("--workers", type=int, metavar="N",
+                       help="local worker processes (default: one per CPU)")
+    sweep.add_argument("--scheduler", metavar="ADDRESS",
+                       help="run on a Dask distributed cluster, e.g. tcp://host:8786 ('local': a LocalCluster "
+                            "of --workers processes); OUT must be on a file system the workers share")
+    sweep.add_argument("--density", type=_positive_density, default=None,
+                       help="material density for the mass, g/cm^3 (default: the sweep file's, else 1.24)")
+    sweep.add_argument("--no-stl", action="store_true", help="write STEP and JSON only")
+    sweep.add_argument("--rebuild", action="store_true", help="build every design again, even those already done")
+    sweep.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary")
+    sweep.set_defaults(handler=_command_sweep)
     return parser
 
 

@@ -1,0 +1,99 @@
+"""Benchmark (not a test): designs per minute of a sweep with 1 and 2 local workers and a 2-worker Dask LocalCluster.
+
+    python scripts/bench_sweep.py                       # the built-in 12-design sweep, full resolution, STEP + STL
+    python scripts/bench_sweep.py --sweep examples/sweep_example.toml
+
+Each configuration runs the whole sweep from scratch into its own folder under bench_out/sweep/
+and is timed from the call to the last table write, worker start-up included (spawning the
+pool's processes, or starting the LocalCluster, and importing cadquery in each worker). The
+figures and the machine's load go to bench_out/sweep_bench.json.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import shutil
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+from torus_cad.sweep import load_sweep, run_sweep
+
+# 12 designs at the default resolution (25 sections x 80 points): 3 blade counts x 4 cambers.
+BENCH_SWEEP = """\
+# written by scripts/bench_sweep.py
+[sweep]
+mode = "grid"
+stl = true
+
+[vary]
+blades = [2, 3, 4]
+"airfoil.max_camber" = [0.0, 0.02, 0.03, 0.04]
+"""
+
+
+def run_configuration(label: str, sweep_path: Path, out: Path, **kwargs: Any) -> dict[str, Any]:
+    """Run the sweep from scratch with ``kwargs`` for :func:`run_sweep`; return its figures."""
+    shutil.rmtree(out, ignore_errors=True)
+    spec = load_sweep(sweep_path)
+    start = time.perf_counter()
+    result = run_sweep(spec, out, progress=False, **kwargs)
+    seconds = time.perf_counter() - start
+    counts = result.counts()
+    figures = {"configuration": label, "designs": len(result.designs), "built": result.built, "ok": counts["ok"],
+               "refused": counts["refused"], "failed": counts["failed"] + counts["error"],
+               "wall_s": round(seconds, 2), "designs_per_minute": round(60.0 * result.built / seconds, 2),
+               "backend": result.backend}
+    print(f"{label:<28} {result.built:3d} designs in {seconds:7.1f} s  ->  "
+          f"{figures['designs_per_minute']:6.1f} designs/min   ({counts['ok']} ok)", flush=True)
+    return figures
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--sweep", type=Path, help="sweep file (default: a built-in 12-design sweep)")
+    parser.add_argument("--out", type=Path, default=Path("bench_out"), help="output folder (default bench_out)")
+    parser.add_argument("--skip-dask", action="store_true", help="local pool only")
+    args = parser.parse_args(argv)
+
+    work = args.out / "sweep"
+    work.mkdir(parents=True, exist_ok=True)
+    sweep_path = args.sweep
+    if sweep_path is None:
+        sweep_path = work / "bench_sweep.toml"
+        sweep_path.write_text(BENCH_SWEEP)
+    load_before = os.getloadavg()
+    print(f"sweep {sweep_path}; {os.cpu_count()} CPUs; load average {load_before[0]:.2f} (1 min)", flush=True)
+
+    runs = [run_configuration("local pool, 1 worker", sweep_path, work / "local1", workers=1),
+            run_configuration("local pool, 2 workers", sweep_path, work / "local2", workers=2)]
+    if not args.skip_dask:
+        from dask.distributed import Client, LocalCluster
+
+        start = time.perf_counter()
+        with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
+                Client(cluster) as client:
+            startup = time.perf_counter() - start
+            figures = run_configuration("Dask LocalCluster, 2 workers", sweep_path, work / "dask2", client=client)
+        figures["cluster_startup_s"] = round(startup, 2)
+        figures["designs_per_minute_with_cluster_startup"] = round(
+            60.0 * figures["built"] / (figures["wall_s"] + startup), 2)
+        print(f"{'':<28} (cluster start-up {startup:.1f} s more: "
+              f"{figures['designs_per_minute_with_cluster_startup']:.1f} designs/min with it)")
+        runs.append(figures)
+
+    report = {"sweep": str(sweep_path), "cpus": os.cpu_count(), "python": sys.version.split()[0],
+              "platform": platform.platform(), "load_average_before": load_before,
+              "load_average_after": os.getloadavg(), "runs": runs}
+    path = args.out / "sweep_bench.json"
+    path.write_text(json.dumps(report, indent=2) + "\n")
+    print(f"wrote {path}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,360 @@
+"""Design sweeps (torus_cad.sweep): the sweep file, design ids, the local pool and Dask, resuming, failures."""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import shutil
+import textwrap
+from pathlib import Path
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from torus_cad.cli import main
+from torus_cad.errors import KernelError, ParameterError
+from torus_cad.sweep import (
+    DESIGNS_DIR, FAILURE_FILE, REFUSAL_FILE, DesignTask, Progress, SweepError, _drive, design_id, generate_designs,
+    load_sweep, parse_sweep, run_design, run_sweep,
+)
+
+LIGHT = {"resolution": {"sections": 8, "points": 24}}
+
+# 6 designs that all build at the light resolution, 2 blade counts x 3 cambers.
+SMALL_SWEEP = """
+[base.resolution]
+sections = 8
+points = 24
+
+[sweep]
+mode = "grid"
+stl = false
+
+[vary]
+blades = {start = 2, stop = 3, step = 1}
+"airfoil.max_camber" = [0.0, 0.02, 0.04]
+"""
+
+
+def write(path: Path, text: str) -> Path:
+    path.write_text(textwrap.dedent(text))
+    return path
+
+
+def read_table(path: Path, drop_times: bool = True) -> list[dict[str, str]]:
+    with path.open(newline="") as handle:
+        rows = list(csv.DictReader(handle))
+    if drop_times:  # wall times differ from run to run
+        rows = [{key: value for key, value in row.items() if not key.startswith("time_")} for row in rows]
+    return rows
+
+
+# -- the sweep file ------------------------------------------------------------------------------
+
+def test_grid_lists_and_inclusive_ranges():
+    spec = parse_sweep({"base": LIGHT, "vary": {"blades": {"start": 2, "stop": 4, "step": 1},
+                                                "hub.radius": [9, 10.5]}})
+    designs = generate_designs(spec)
+    assert [tuple(d.varied.values()) for d in designs] == [(2, 9.0), (2, 10.5), (3, 9.0), (3, 10.5),
+                                                          (4, 9.0), (4, 10.5)]
+    assert all(isinstance(d.varied["blades"], int) and isinstance(d.varied["hub.radius"], float) for d in designs)
+    assert designs[3].parameters["blades"] == 3 and designs[3].parameters["hub"]["radius"] == 10.5
+    assert designs[0].parameters["resolution"] == {"sections": 8, "points": 24}
+    assert all(d.parameters["name"] == d.design_id for d in designs)
+    float_range = parse_sweep({"vary": {"airfoil.max_camber": {"start": 0.0, "stop": 0.03, "step": 0.01}}})
+    assert float_range.axes[0].values == (0.0, 0.01, 0.02, 0.03)
+    linspace = parse_sweep({"vary": {"hub.length": {"start": 20, "stop": 30, "num": 3}}})
+    assert linspace.axes[0].values == (20.0, 25.0, 30.0)
+
+
+def test_vector_elements_whole_vectors_and_nested_keys():
+    spec = parse_sweep({"vary": {"centerline.p2[2]": [20.0, 24], "centerline": {"p3": [[70, 15, 22],
+                                                                                        [80, 15, 22]]}}})
+    designs = generate_designs(spec)
+    assert len(designs) == 4
+    assert designs[0].parameters["centerline"]["p2"] == [25.0, 3.0, 20.0]
+    assert designs[3].parameters["centerline"]["p2"] == [25.0, 3.0, 24.0]
+    assert designs[3].parameters["centerline"]["p3"] == [80.0, 15.0, 22.0]
+
+
+@pytest.mark.parametrize("mode", ["random", "latin_hypercube"])
+def test_sampling_is_seeded_within_bounds_and_keeps_ints(mode):
+    data = {"sweep": {"mode": mode, "samples": 20, "seed": 7},
+            "vary": {"hub.radius": {"low": 8, "high": 12}, "blades": {"low": 2, "high": 4},
+                     "centerline.frame": ["frenet", "rotation_minimizing"]}}
+    designs = generate_designs(parse_sweep(data))
+    again = generate_designs(parse_sweep(data))
+    other_seed = generate_designs(parse_sweep({**data, "sweep": {**data["sweep"], "seed": 8}}))
+    assert [d.design_id for d in designs] == [d.design_id for d in again]
+    assert [d.design_id for d in designs] != [d.design_id for d in other_seed]
+    radii = [d.varied["hub.radius"] for d in designs]
+    assert all(isinstance(r, float) and 8.0 <= r < 12.0 for r in radii)
+    assert {d.varied["blades"] for d in designs} == {2, 3, 4}
+    assert all(isinstance(d.varied["blades"], int) for d in designs)
+    assert {d.varied["centerline.frame"] for d in designs} == {"frenet", "rotation_minimizing"}
+    if mode == "latin_hypercube":  # one sample in each of the 20 equal strata of the radius
+        assert sorted(int((r - 8.0) / 4.0 * 20) for r in radii) == list(range(20))
+
+
+@settings(max_examples=40, deadline=None)
+@given(low=st.floats(0.6, 50.0), width=st.floats(0.01, 50.0), int_low=st.integers(1, 10),
+       int_width=st.integers(0, 5), seed=st.integers(0, 2**32), mode=st.sampled_from(["random", "latin_hypercube"]))
+def test_samples_stay_within_their_bounds(low, width, int_low, int_width, seed, mode):
+    spec = parse_sweep({"sweep": {"mode": mode, "samples": 7, "seed": seed},
+                        "vary": {"hub.radius": {"low": low, "high": low + width},
+                                 "resolution.sections": {"low": int_low, "high": int_low + int_width + 1}}})
+    for design in generate_designs(spec):
+        assert low <= design.varied["hub.radius"] < low + width
+        sections = design.varied["resolution.sections"]
+        assert isinstance(sections, int) and int_low <= sections <= int_low + int_width + 1
+
+
+def test_design_id_is_a_stable_hash_of_the_parameters_without_the_name():
+    params = {"blades": 3, "hub": {"radius": 10.0, "length": 20.0}, "name": "a"}
+    same = {"hub": {"length": 20.0, "radius": 10.0}, "name": "b", "blades": 3}
+    assert design_id(params) == design_id(same)
+    assert len(design_id(params)) == 12 and int(design_id(params), 16) >= 0
+    assert design_id({**params, "blades": 4}) != design_id(params)
+    first = generate_designs(parse_sweep({"vary": {"blades": [2, 3]}}))
+    second = generate_designs(parse_sweep({"base": {"name": "other"}, "vary": {"blades": [3, 2]}}))
+    assert {d.design_id for d in first} == {d.design_id for d in second}
+
+
+def test_duplicate_designs_are_merged():
+    designs = generate_designs(parse_sweep({"vary": {"blades": [3, 3, 2]}}))
+    assert [d.varied["blades"] for d in designs] == [3, 2]
+    assert [d.index for d in designs] == [0, 1]
+
+
+def test_base_config_is_relative_to_the_sweep_file_and_inline_values_override_it(tmp_path):
+    (tmp_path / "configs").mkdir()
+    write(tmp_path / "configs" / "prop.toml", "blades = 4\n[hub]\nradius = 12.0\n")
+    sweep = write(tmp_path / "s.toml", """
+        [base]
+        config = "configs/prop.toml"
+        [base.hub]
+        length = 24.0
+        [vary]
+        "airfoil.thickness" = [0.4, 0.5]
+        """)
+    spec = load_sweep(sweep)
+    assert (spec.base.blades, spec.base.hub.radius, spec.base.hub.length) == (4, 12.0, 24.0)
+    assert spec.name == "s" and len(generate_designs(spec)) == 2
+
+
+@pytest.mark.parametrize("data, message", [
+    ({"vary": {"hub.radiu": [1.0]}}, "'hub.radiu'; did you mean 'hub.radius'"),
+    ({"vary": {"blade": [2]}}, "did you mean 'blades'"),
+    ({"vary": {"hub.radius": {"low": 8.0, "high": 12.0}}}, "need sweep.mode = 'random'"),
+    ({"sweep": {"mode": "sobol"}}, "sweep.mode = 'sobol' is not allowed"),
+    ({"sweep": {"mode": "random"}, "vary": {"blades": [2]}}, "sweep.samples must be a whole number"),
+    ({"sweep": {"samples": 3}}, "sweep.samples applies to mode"),
+    ({"sweep": {"sed": 3}}, "did you mean 'sweep.seed'"),
+    ({"varry": {}}, "unknown table [varry]"),
+    ({"vary": {"blades": [2.5]}}, "'blades' item 0 must be a whole number"),
+    ({"vary": {"hub.radius": ["big"]}}, "'hub.radius' item 0 must be a number"),
+    ({"vary": {"blades": {"low": 2.0, "high": 4.0}}, "sweep": {"mode": "random", "samples": 2}},
+     "'blades' low must be a whole number"),
+    ({"vary": {"centerline.p2[3]": [1.0]}}, "index 3 is out of range"),
+    ({"vary": {"hub.radius[0]": [1.0]}}, "not a vector"),
+    ({"vary": {"centerline.p2": [1.0]}}, "must be a list of 3 numbers"),
+    ({"vary": {"centerline.p2": [[1, 2, 3]], "centerline.p2[1]": [1.0]}}, "set the same parameter"),
+    ({"vary": {"hub.radius": {"start": 9.0, "stop": 8.0, "step": 1.0}}}, "must not be below start"),
+    ({"vary": {"hub.radius": {"start": 9.0, "step": 1.0}}}, "use {start, stop, step}"),
+    ({"vary": {"hub.radius": {"low": 9.0, "high": 9.0}}, "sweep": {"mode": "random", "samples": 2}},
+     "must be below high"),
+    ({"vary": {"name": ["a", "b"]}}, "the name cannot be varied"),
+    ({"vary": {"hub": [1.0]}}, "is a table"),
+    ({"vary": {"blades": []}}, "empty list"),
+    ({"base": {"hub": {"radius": -1.0}}}, "[base] hub.radius = -1 is out of range"),
+    ({"base": {"config": "missing.toml"}}, "base.config: cannot read configuration"),
+])
+def test_bad_sweep_files_raise_one_line_parameter_errors_naming_the_key(data, message):
+    with pytest.raises(ParameterError) as caught:
+        parse_sweep(data, source="sweep file 'x.toml'")
+    text = str(caught.value)
+    assert message in text and "\n" not in text and text.startswith("sweep file 'x.toml': ")
+
+
+def test_cli_refuses_a_bad_sweep_file_with_exit_2(tmp_path, capsys):
+    sweep = write(tmp_path / "bad.toml", '[vary]\n"hub.radiu" = [9.0]\n')
+    assert main(["sweep", str(sweep), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "did you mean 'hub.radius'" in err and "\n" not in err
+    assert not (tmp_path / "out").exists()
+    assert main(["sweep", str(tmp_path / "missing.toml")]) == 2
+    write(tmp_path / "ok.toml", "[vary]\nblades = [2]\n")
+    assert main(["sweep", str(tmp_path / "ok.toml"), "--workers", "0", "--out", str(tmp_path / "o")]) == 2
+
+
+# -- one design, in this process ---------------------------------------------------------------------
+
+def _task(tmp_path: Path, **changes) -> DesignTask:
+    design = generate_designs(parse_sweep({"base": LIGHT, "vary": {key: [value] for key, value in changes.items()}}))[0]
+    return DesignTask(design.design_id, design.parameters, str(tmp_path / design.design_id), stl=False)
+
+
+def test_run_design_records_a_refusal_and_never_raises(tmp_path):
+    task = _task(tmp_path, **{"hub.radius": 3.0})  # the blade's root sticks out of the hub: GeometryError
+    outcome = run_design(task)
+    assert outcome["status"] == "refused" and "hub" in outcome["reason"]
+    record = json.loads((Path(task.folder) / REFUSAL_FILE).read_text())
+    assert record["status"] == "refused" and record["error"] == "GeometryError"
+    out_of_range = _task(tmp_path, **{"airfoil.thickness": 1.5})  # ParameterError inside the worker
+    assert run_design(out_of_range)["status"] == "refused"
+    assert "airfoil.thickness = 1.5 is out of range" in run_design(out_of_range)["reason"]
+
+
+@pytest.mark.parametrize("error, status", [(KernelError("the loft failed"), "failed"),
+                                           (MemoryError("no memory"), "error"),
+                                           (RuntimeError("boom"), "error")])
+def test_run_design_records_kernel_failures_and_unexpected_errors(tmp_path, monkeypatch, error, status):
+    import torus_cad.propeller
+
+    def broken(params):
+        raise error
+
+    monkeypatch.setattr(torus_cad.propeller, "build_propeller", broken)
+    task = _task(tmp_path, blades=3)
+    outcome = run_design(task)
+    assert outcome["status"] == status and str(error) in outcome["reason"]
+    assert json.loads((Path(task.folder) / FAILURE_FILE).read_text())["status"] == status
+
+
+def test_progress_bar_draws_only_on_a_terminal(tmp_path):
+    import io
+
+    class Terminal(io.StringIO):
+        def isatty(self) -> bool:
+            return True
+
+    quiet, terminal = io.StringIO(), Terminal()
+    for stream in (quiet, terminal):
+        bar = Progress(4, already_done=1, stream=stream)
+        for status in ("ok", "refused", "failed"):
+            bar.update(status)
+        bar.close()
+    assert quiet.getvalue() == ""
+    last = terminal.getvalue().rstrip("\n").split("\r")[-1]
+    assert "4/4 done" in last and "ok 1" in last and "refused 1" in last and "failed 1" in last and "/min" in last
+
+
+# -- whole sweeps: local pool, Dask, resume ------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def small_sweep(tmp_path_factory) -> Path:
+    return write(tmp_path_factory.mktemp("sweep_file") / "small.toml", SMALL_SWEEP)
+
+
+@pytest.fixture(scope="module")
+def local_run(small_sweep, tmp_path_factory):
+    out = tmp_path_factory.mktemp("local")
+    return run_sweep(load_sweep(small_sweep), out, workers=2, progress=False)
+
+
+def test_local_sweep_builds_every_design_into_its_folder(local_run):
+    assert [row["status"] for row in local_run.rows] == ["ok"] * 6 and local_run.built == 6
+    for design, row in zip(local_run.designs, local_run.rows):
+        folder = local_run.out_dir / DESIGNS_DIR / design.design_id
+        assert sorted(path.name for path in folder.iterdir()) == [f"{design.design_id}.json",
+                                                                   f"{design.design_id}.step"]
+        report = json.loads((folder / f"{design.design_id}.json").read_text())
+        assert report["parameters"] == design.parameters
+        assert row["volume_mm3"] == report["volume_mm3"] > 0 and row["valid"] is True
+        assert row["time_fuse_s"] > 0 and row["time_stl_write_s"] is None
+    table = read_table(local_run.out_dir / "results.csv", drop_times=False)
+    assert [row["id"] for row in table] == [d.design_id for d in local_run.designs]
+    assert {"blades", "airfoil.max_camber", "volume_mm3", "surface_area_mm2", "spin_axis_inertia_g_mm2",
+            "time_fuse_s", "time_total_s", "reason", "valid"} <= set(table[0])
+    assert [(row["blades"], row["airfoil.max_camber"]) for row in table][:2] == [("2", "0.0"), ("2", "0.02")]
+    manifest = json.loads((local_run.out_dir / "sweep.json").read_text())
+    assert [d["id"] for d in manifest["designs"]] == [d.design_id for d in local_run.designs]
+
+
+def test_the_table_is_also_written_as_parquet_when_pyarrow_is_installed(local_run):
+    parquet = pytest.importorskip("pyarrow.parquet")
+    table = parquet.read_table(local_run.tables["parquet"]).to_pylist()
+    assert [row["id"] for row in table] == [d.design_id for d in local_run.designs]
+    assert [row["volume_mm3"] for row in table] == [row["volume_mm3"] for row in local_run.rows]
+    assert all(isinstance(row["blades"], int) and row["valid"] is True for row in table)
+
+
+def test_dask_local_cluster_gives_the_same_table_as_the_local_pool(local_run, small_sweep, tmp_path):
+    distributed = pytest.importorskip("dask.distributed")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
+                                  dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+        result = run_sweep(load_sweep(small_sweep), tmp_path / "dask", client=client, progress=False)
+    assert result.backend.startswith("dask") and result.built == 6
+    assert read_table(tmp_path / "dask" / "results.csv") == read_table(local_run.out_dir / "results.csv")
+
+
+def test_resuming_rebuilds_only_the_designs_whose_files_are_gone(local_run, small_sweep, tmp_path):
+    out = tmp_path / "resume"
+    shutil.copytree(local_run.out_dir, out)
+    designs = local_run.designs
+    shutil.rmtree(out / DESIGNS_DIR / designs[4].design_id)  # one design's folder gone
+    (out / DESIGNS_DIR / designs[1].design_id / f"{designs[1].design_id}.step").unlink()  # another's STEP
+    kept = out / DESIGNS_DIR / designs[0].design_id / f"{designs[0].design_id}.json"
+    before = kept.stat().st_mtime_ns
+    result = run_sweep(load_sweep(small_sweep), out, workers=2, progress=False)
+    assert (result.skipped, result.built) == (4, 2)
+    assert kept.stat().st_mtime_ns == before
+    assert read_table(out / "results.csv") == read_table(local_run.out_dir / "results.csv")
+    again = run_sweep(load_sweep(small_sweep), out, workers=2, progress=False)  # nothing left to do
+    assert (again.skipped, again.built, again.backend) == (6, 0, "nothing to run")
+
+
+def test_cli_sweep_with_an_impossible_design_records_the_refusal_and_finishes_the_others(tmp_path, capsys):
+    sweep = write(tmp_path / "mixed.toml", """
+        [base.resolution]
+        sections = 8
+        points = 24
+        [vary]
+        "hub.radius" = [10.0, 3.0]   # the blade's root does not fit in a 3 mm hub
+        """)
+    out = tmp_path / "out"
+    assert main(["sweep", str(sweep), "--out", str(out), "--workers", "2", "--no-stl"]) == 0
+    summary = capsys.readouterr().out
+    assert "1 ok, 1 refused, 0 failed" in summary and "refused" in summary.splitlines()[-1]
+    table = read_table(out / "results.csv")
+    assert [(row["hub.radius"], row["status"], row["valid"]) for row in table] == [("10.0", "ok", "True"),
+                                                                                 ("3.0", "refused", "False")]
+    assert "hub" in table[1]["reason"] and table[1]["volume_mm3"] == ""
+    refused = out / DESIGNS_DIR / table[1]["id"]
+    assert [path.name for path in refused.iterdir()] == [REFUSAL_FILE]
+    # a rerun retries nothing: the refusal is recorded, the other design is done
+    assert main(["sweep", str(sweep), "--out", str(out), "--no-stl", "-q"]) == 0
+    assert capsys.readouterr().out == ""
+
+
+# -- a worker process that dies --------------------------------------------------------------------
+
+def crash_on_four_or_six_blades(task: DesignTask) -> dict:
+    """Kills its worker process for 4 and 6 blades, like a segfault in OpenCascade would."""
+    if task.parameters["blades"] in (4, 6):
+        os._exit(1)
+    return {"id": task.design_id, "status": "ok", "reason": "", "seconds": 0.0}
+
+
+def test_a_worker_crash_is_recorded_for_its_design_and_the_pool_is_replaced(tmp_path):
+    from torus_cad.sweep import _local_pool
+
+    designs = generate_designs(parse_sweep({"vary": {"blades": [2, 3, 4, 5, 6, 7, 8]}}))
+    tasks = [DesignTask(d.design_id, d.parameters, str(tmp_path / d.design_id), stl=False) for d in designs]
+    outcomes: dict[str, dict] = {}
+    _drive(lambda: _local_pool(2), tasks, 2, lambda task, outcome: outcomes.__setitem__(task.parameters["blades"],
+                                                                                         outcome),
+           Progress(len(tasks), enabled=False), check_files=False, function=crash_on_four_or_six_blades)
+    assert {blades: outcome["status"] for blades, outcome in outcomes.items()} == {
+        2: "ok", 3: "ok", 4: "error", 5: "ok", 6: "error", 7: "ok", 8: "ok"}
+    assert "worker process died" in outcomes[4]["reason"]
+    assert json.loads((tmp_path / tasks[2].design_id / FAILURE_FILE).read_text())["status"] == "error"
+
+
+def test_an_unreachable_scheduler_is_a_sweep_error(tmp_path, small_sweep, monkeypatch):
+    pytest.importorskip("dask.distributed")
+    monkeypatch.setattr("torus_cad.sweep.CONNECT_TIMEOUT_S", 1.0)
+    with pytest.raises(SweepError, match="cannot connect to the Dask scheduler"):
+        run_sweep(load_sweep(small_sweep), tmp_path / "out", scheduler="tcp://127.0.0.1:1", progress=False)
