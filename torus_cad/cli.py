@@ -32,6 +32,7 @@ examples:
   torus-cad defaults > my_prop.toml        start a design from the commented defaults
   torus-cad build my_prop.toml --out parts/
   torus-cad build my_prop.toml --set blades=4 --set hub.radius=12
+  torus-cad preview my_prop.toml --out prop.png --size 1600x800
 
 units: mm and degrees. Control points are in the hub frame L: [x_L degrees around the axis,
 y_L mm down the axis from 1 mm below the top face, z_L mm radially out from R - R/8].
@@ -73,11 +74,20 @@ def _add_design_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _command_build(args: argparse.Namespace) -> int:
+    from torus_cad.progress import Progress
     from torus_cad.propeller import build_propeller
 
     params = load_parameters(args.config, args.overrides)
-    propeller = build_propeller(params)
+    size = _preview_size(args.preview_size, "--preview-size") if args.preview else None
+    progress = Progress.for_terminal(quiet=args.quiet)  # stderr, only on a terminal
+    propeller = build_propeller(params, progress=progress)
+    progress("write")
     paths = propeller.write(Path(args.out), density_g_cm3=args.density, stl=not args.no_stl)
+    if size is not None:
+        from torus_cad.preview import write_preview
+
+        paths["png"] = write_preview(propeller, Path(args.out) / f"{params.name}.png", size, progress=progress)
+    progress.finish()
     report = json.loads(paths["json"].read_text())
     if not args.quiet:
         for kind, path in paths.items():
@@ -89,6 +99,29 @@ def _command_build(args: argparse.Namespace) -> int:
               f"spin-axis inertia {report['spin_axis_inertia_g_mm2']:.4f} g mm^2")
         for stage, seconds in report["stage_seconds"].items():
             print(f"  {stage:<13} {seconds * 1000:8.1f} ms")
+    return EXIT_OK
+
+
+def _preview_size(text: str, option: str) -> tuple[int, int]:
+    from torus_cad.preview import parse_size  # raises ParameterError (exit 2) for a bad WxH
+
+    return parse_size(text, option)
+
+
+def _command_preview(args: argparse.Namespace) -> int:
+    from torus_cad.preview import write_preview
+    from torus_cad.progress import Progress
+    from torus_cad.propeller import build_propeller
+
+    params = load_parameters(args.config, args.overrides)
+    size = _preview_size(args.size, "--size")
+    out = Path(args.out) if args.out else Path("step_out") / f"{params.name}.png"
+    progress = Progress.for_terminal(quiet=args.quiet)
+    propeller = build_propeller(params, progress=progress)
+    path = write_preview(propeller, out, size, progress=progress)
+    progress.finish()
+    if not args.quiet:
+        print(f"wrote {path} ({size[0]}x{size[1]} px)")
     return EXIT_OK
 
 
@@ -145,7 +178,21 @@ def build_parser() -> argparse.ArgumentParser:
     build.add_argument("--no-stl", action="store_true", help="write STEP and JSON only")
     build.add_argument("-v", "--verbose", action="store_true", help="print mass properties and stage times")
     build.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
+    build.add_argument("--preview", action="store_true", help="also render <name>.png (see 'torus-cad preview')")
+    build.add_argument("--preview-size", default="1200x600", metavar="WxH",
+                       help="size of the --preview picture in pixels (default 1200x600)")
     build.set_defaults(handler=_command_build)
+
+    preview = commands.add_parser("preview", help="render a PNG picture: isometric view and view along the axis",
+                                  description="Build the propeller of CONFIG (or the default) and render a shaded "
+                                  "picture of it off-screen: an isometric view and a view along the spin axis, "
+                                  "each blade in its own colour.")
+    _add_design_arguments(preview)
+    preview.add_argument("--out", metavar="FILE.png", help="picture to write (default: step_out/<name>.png)")
+    preview.add_argument("--size", default="1200x600", metavar="WxH",
+                         help="picture size in pixels, each side 64..8000 (default 1200x600)")
+    preview.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
+    preview.set_defaults(handler=_command_preview)
 
     defaults = commands.add_parser("defaults", help="print the default design as commented TOML",
                                    description="Print the default design as a commented TOML file to start from.")
