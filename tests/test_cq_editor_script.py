@@ -112,9 +112,9 @@ def test_parameters_sit_at_the_top_and_default_to_the_built_in_design():
 def test_edited_parameters_change_the_shown_propeller(tmp_path, monkeypatch):
     # Edit the script the way a user would (in place) and run it like cq-editor does.
     monkeypatch.chdir(tmp_path)
-    text = SCRIPT.read_text().replace("BLADES = 3 ", "BLADES = 2 ").replace("SECTIONS = 25 ", "SECTIONS = 8 ")
-    text = text.replace("POINTS = 80 ", "POINTS = 32 ")
-    assert "BLADES = 2 " in text and "SECTIONS = 8 " in text and "POINTS = 32 " in text
+    text = SCRIPT.read_text().replace("BLADES = 3 ", "BLADES = 2 ").replace("SECTIONS = 25 ", "SECTIONS = 12 ")
+    text = text.replace("POINTS = 80 ", "POINTS = 40 ")
+    assert "BLADES = 2 " in text and "SECTIONS = 12 " in text and "POINTS = 40 " in text
     recorder = ShowObjectRecorder()
     namespace: dict = {"show_object": recorder, "__name__": "temp"}
     exec(compile(text, "<string>", "exec"), namespace)

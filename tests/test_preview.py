@@ -80,7 +80,7 @@ def test_the_two_views_both_show_the_propeller(objects):
 
 
 def test_a_four_blade_design_shows_four_colours(tmp_path):
-    four = propeller_objects(overrides={"resolution.sections": 8, "resolution.points": 32, "blades": 4})
+    four = propeller_objects(overrides={"resolution.sections": 12, "resolution.points": 40, "blades": 4})
     rgb = _read_png(write_preview(four, tmp_path / "four.png", size=(800, 400)))
     _assert_a_real_picture(rgb, 4)
 

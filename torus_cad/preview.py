@@ -130,13 +130,14 @@ def preview_mesh(solid: cq.Shape, hub: cq.Shape, blades: Sequence[cq.Shape],
     all_parts: list[NDArray[np.int64]] = []
     offset = 0
     shape.mesh(tolerance, angular_tolerance)
+    boxes = [_box(part) for part in parts]
     for face in shape.Faces():
         points, triangles = face.tessellate(tolerance, angular_tolerance)  # reuses the solid's mesh
         if not triangles:
             continue
         vertices = np.array([point.toTuple() for point in points], dtype=float)
         indices = np.asarray(triangles, dtype=np.int64)
-        part = _face_part(vertices, indices, parts)
+        part = _face_part(vertices, indices, parts, boxes, 10.0 * tolerance)
         vertices, indices = split_long_edges(vertices, indices, max_edge)
         all_vertices.append(vertices)
         all_triangles.append(indices + offset)
@@ -183,12 +184,26 @@ def split_long_edges(vertices: NDArray[np.float64], triangles: NDArray[np.int64]
     return vertices, triangles
 
 
-def _face_part(vertices: NDArray[np.float64], triangles: NDArray[np.int64], parts: Sequence[cq.Shape]) -> int:
-    """-1 for the hub, i for blade i: the part whose boundary passes nearest a few of the face's facets."""
+def _face_part(vertices: NDArray[np.float64], triangles: NDArray[np.int64], parts: Sequence[cq.Shape],
+               boxes: Sequence[tuple[NDArray[np.float64], NDArray[np.float64]]], slack: float) -> int:
+    """-1 for the hub, i for blade i: the part whose boundary passes nearest a few of the face's facets.
+
+    Parts whose bounding box (grown by ``slack`` mm) does not hold the samples are ruled out first;
+    OpenCascade measures distances only when more than one part is left.
+    """
     centroids = vertices[triangles].mean(axis=1)
     samples = centroids[np.linspace(0, len(centroids) - 1, min(5, len(centroids))).astype(int)]
-    medians = [float(np.median(distances_to_shape(part, samples))) for part in parts]
-    return int(np.argmin(medians)) - 1  # parts[0] is the hub
+    candidates = [index for index, (low, high) in enumerate(boxes)
+                  if np.all(samples >= low - slack) and np.all(samples <= high + slack)] or list(range(len(parts)))
+    if len(candidates) == 1:
+        return candidates[0] - 1  # parts[0] is the hub
+    medians = [float(np.median(distances_to_shape(parts[index], samples))) for index in candidates]
+    return candidates[int(np.argmin(medians))] - 1
+
+
+def _box(shape: cq.Shape) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    box = shape.BoundingBox()
+    return np.array([box.xmin, box.ymin, box.zmin]), np.array([box.xmax, box.ymax, box.zmax])
 
 
 def _view_vectors(elevation: float, azimuth: float) -> tuple[NDArray[np.float64], ...]:
@@ -268,12 +283,15 @@ def render_preview(propeller: _HasParts, size: Sequence[int] = DEFAULT_SIZE, tit
     if progress:
         progress("tessellate")
     blades = len(propeller.blades)
-    mesh = preview_mesh(propeller.solid, propeller.hub, propeller.blades)
+    # Tessellate about as finely as the picture can show: the chordal deviation is ~1/5 px of a view.
+    diagonal = propeller.solid.BoundingBox().DiagonalLength
+    mesh = preview_mesh(propeller.solid, propeller.hub, propeller.blades,
+                        tolerance=max(diagonal / (2.5 * min(width / 2.0, height) * 2.0), 1e-3))
     normals, vertex_normals = mesh.normals(), mesh.vertex_normals()
     if title is None:
-        volume = precise_volume(propeller.solid)
+        volume = precise_volume(propeller.solid, 1e-5)  # shown to 4-5 digits: a coarser integral will do
         title = (f"{propeller.parameters.name}: {blades} blade{'s' if blades != 1 else ''}, "
-                 f"volume {volume:,.1f} mm³")
+                 f"volume {volume:,.0f} mm³")
     if progress:
         progress("render")
     from matplotlib.backends.backend_agg import FigureCanvasAgg
