@@ -1,23 +1,65 @@
 """Checks, before the kernel runs, that valid parameters describe a sound propeller.
 
-Each failed check raises GeometryError with the reason, so the CLI can refuse the design
-(exit 2) instead of handing OpenCascade something it would fail on or, worse, fuse wrongly.
+Each failed check raises GeometryError with a one-line reason, so the CLI can refuse the
+design (exit 2) instead of handing OpenCascade something it would fail on, hang on or,
+worse, fuse wrongly. The checks, in the order :func:`check_feasible` runs them:
+
+1. the blade's end sections lie inside the hub (the fuse hides them);
+2. the centerline leaves the hub through its side, not through an end face;
+3. the blade does not fold over itself where the centerline bends: a section may not reach
+   past the centre of curvature (kappa . offset < 1 on the whole surface);
+4. the sections are dense enough for the loft: between neighbours the blade may bend, twist
+   or taper only a little (OpenCascade lofts sparse sections of a strongly changing blade
+   inside out, and the fuse then fails or hangs);
+5. the blade leaves the hub at all;
+6. the blade does not run into itself (parts far apart along the blade overlap);
+7. the blades do not run into each other outside the hub.
+
+Checks 3 and 5-7 sample the analytic surface on their own grid, independent of
+``resolution``; check 4 is about ``resolution.sections`` itself.
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
 
 from torus_cad.errors import GeometryError
+from torus_cad.geometry.airfoil import airfoil_points
 from torus_cad.geometry.centerline import Centerline
 from torus_cad.geometry.parameters import PropellerParameters
-from torus_cad.geometry.surface import BladeSurface
+from torus_cad.geometry.surface import BladeSurface, airfoil_of, blade_frames
+from torus_cad.geometry.transforms import evaluate_quartic, transform_sections
+
+#: A section may reach at most this fraction of the way to the centre of curvature (check 3).
+FOLD_LIMIT = 1.0
+
+#: Sections along s and points around each section of the grid the analytic checks sample.
+CHECK_SECTIONS = 160
+CHECK_POINTS = 48
+
+#: Check 4: half-way between neighbouring sections the analytic surface may sag from the straight
+#: line joining them by at most this fraction of the local chord. Calibrated with scripts/fuzz.py:
+#: kernel failures and hangs came from sparse sections (nearly all built with 30 sections); with
+#: 6-14 sections every one sagged 5.5 % or more, and with 10-30 sections the three left sagged
+#: 2.9-4.2 %. The default design sags 0.5 %.
+RESOLUTION_DEVIATION_LIMIT = 0.025
+
+#: Check 5: parts of one blade closer than this many grid steps along s are neighbours, not overlaps.
+SELF_NEIGHBOUR_STEPS = 2
 
 
 def _radius(points: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.hypot(points[..., 0], points[..., 1])
 
+
+def _outside_hub(params: PropellerParameters, points: NDArray[np.float64]) -> NDArray[np.bool_]:
+    return (_radius(points) > params.hub.radius) | (np.abs(points[..., 2]) > params.hub.length / 2.0)
+
+
+# -- 1, 2: ends and centerline ----------------------------------------------------------------
 
 def check_ends_inside_hub(params: PropellerParameters, surface: BladeSurface) -> None:
     """The first and last sections must lie inside the hub (r < R, |z| < L/2) so the fuse hides them."""
@@ -45,33 +87,273 @@ def check_centerline_leaves_through_side(params: PropellerParameters, centerline
             "the hub's side (keep y_L of the control points near the ends between 0 and L - 2)")
 
 
-def check_blades_clear(params: PropellerParameters, surface: BladeSurface) -> None:
-    """Blades must not intersect each other outside the hub.
+# -- the analytic tube the remaining checks sample ----------------------------------------------
 
-    Blade i is blade 0 rotated by 360 i / n. The part of blade 0 outside the hub occupies
-    an angular interval around the axis at every radius; neighbours collide when that
-    interval, measured over the points outside the hub, spans 360 / n degrees or more.
+@dataclass(frozen=True)
+class Tube:
+    """The blade surface sampled on a check grid, with its frames and in-plane coordinates.
+
+    Attributes:
+        s: ``(m,)`` parameters of the grid's sections.
+        origin, tangent, normal, binormal: ``(m, 3)`` the frames (unit vectors).
+        planar: ``(m, p, 2)`` section coordinates (X along N, Y along B), mm.
+        points: ``(m, p, 3)`` surface points, mm.
+        curvature: ``(m, 3)`` curvature vectors of the centerline (kappa times the Frenet normal), 1/mm.
+        arc_length: ``(m,)`` centerline arc length from s = 0, mm.
+    """
+
+    s: NDArray[np.float64]
+    origin: NDArray[np.float64]
+    tangent: NDArray[np.float64]
+    normal: NDArray[np.float64]
+    binormal: NDArray[np.float64]
+    planar: NDArray[np.float64]
+    points: NDArray[np.float64]
+    curvature: NDArray[np.float64]
+    arc_length: NDArray[np.float64]
+
+    @property
+    def section_radius(self) -> NDArray[np.float64]:
+        """``(m,)`` largest distance of a section's points from the centerline, mm."""
+        return np.linalg.norm(self.planar, axis=-1).max(axis=1)
+
+
+def _bezier_derivatives(control_points: NDArray[np.float64], s: NDArray[np.float64]
+                        ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """C'(s) and C''(s) of the single-span cubic (clamped knots 0,0,0,0,1,1,1,1 make it a Bezier curve)."""
+    p0, p1, p2, p3 = control_points
+    u = s[:, None]
+    first = 3 * ((1 - u) ** 2 * (p1 - p0) + 2 * u * (1 - u) * (p2 - p1) + u**2 * (p3 - p2))
+    second = 6 * ((1 - u) * (p2 - 2 * p1 + p0) + u * (p3 - 2 * p2 + p1))
+    return first, second
+
+
+def tube_grid(sections: int, at_least: int = CHECK_SECTIONS) -> tuple[NDArray[np.float64], int]:
+    """A uniform s grid that holds every section's s and every midpoint between sections, and its step.
+
+    Returns ``(s, k)``: section i sits at ``s[k i]``, the midpoint after it at ``s[k i + k / 2]``.
+    """
+    k = 2 * max(1, int(np.ceil(at_least / (2.0 * (sections - 1)))))
+    return np.linspace(0.0, 1.0, k * (sections - 1) + 1), k
+
+
+def sample_tube(params: PropellerParameters, centerline: Centerline, s: NDArray[np.float64],
+                t: NDArray[np.float64]) -> Tube:
+    """Blade 0's analytic surface at every (s, t) of the grid, with frames and curvature."""
+    frames = blade_frames(params, s)
+    transforms = params.transforms
+    planar = transform_sections(airfoil_points(airfoil_of(params), t), evaluate_quartic(transforms.angle_of_attack, s),
+                                evaluate_quartic(transforms.scale_x, s), evaluate_quartic(transforms.scale_y, s),
+                                params.airfoil.pivot)
+    surface = (frames.origin[:, None, :] + planar[..., 0:1] * frames.normal[:, None, :]
+               + planar[..., 1:2] * frames.binormal[:, None, :])
+    first, second = _bezier_derivatives(centerline.control_points, s)
+    speed = np.linalg.norm(first, axis=-1)
+    tangent = first / speed[:, None]
+    curvature = (second - np.sum(second * tangent, axis=-1, keepdims=True) * tangent) / speed[:, None] ** 2
+    steps = np.linalg.norm(np.diff(frames.origin, axis=0), axis=-1)
+    arc_length = np.concatenate([[0.0], np.cumsum(steps)])
+    return Tube(s, frames.origin, frames.tangent, frames.normal, frames.binormal, planar, surface, curvature,
+                arc_length)
+
+
+def coarsen(tube: Tube, sections: int = CHECK_SECTIONS, points: int = CHECK_POINTS) -> Tube:
+    """Every j-th section (the last kept) and every i-th point, for the overlap tests."""
+    m, p, _ = tube.points.shape
+    rows = np.unique(np.concatenate([np.arange(0, m, max(1, m // sections)), [m - 1]]))
+    columns = np.arange(0, p, max(1, int(np.ceil(p / points))))
+    return Tube(tube.s[rows], tube.origin[rows], tube.tangent[rows], tube.normal[rows], tube.binormal[rows],
+                tube.planar[rows][:, columns], tube.points[rows][:, columns], tube.curvature[rows],
+                tube.arc_length[rows])
+
+
+# -- 3: folding where the centerline bends -----------------------------------------------------
+
+def fold_ratio(tube: Tube) -> tuple[float, float]:
+    """Largest kappa . offset over the surface (>= 1: the section reaches the centre of curvature) and its s.
+
+    The sweep C(s) + X N + Y B moves a point at offset o along T at the rate |C'| (1 - k . o),
+    where k is the curvature vector: where k . o reaches 1 neighbouring sections cross and
+    the surface folds over itself.
+    """
+    offsets = tube.points - tube.origin[:, None, :]
+    ratio = np.einsum("mpk,mk->mp", offsets, tube.curvature).max(axis=1)
+    worst = int(np.argmax(ratio))
+    return float(ratio[worst]), float(tube.s[worst])
+
+
+def check_no_fold(tube: Tube, limit: float = FOLD_LIMIT) -> None:
+    """Refuse sections that reach (nearly) past the centerline's centre of curvature."""
+    ratio, where = fold_ratio(tube)
+    if ratio >= limit:
+        index = int(np.argmin(np.abs(tube.s - where)))
+        bend_radius = 1.0 / max(float(np.linalg.norm(tube.curvature[index])), 1e-300)
+        raise GeometryError(
+            f"the blade folds over itself near s = {where:.3f}: its section reaches {ratio:.2f} x the "
+            f"centerline's bend radius ({bend_radius:.3g} mm) on the inside of the bend (limit {limit:g}); "
+            "make transforms.scale_x / scale_y smaller there or bend the centerline less")
+
+
+# -- 4: sections dense enough for the loft ------------------------------------------------------
+
+def resolution_deviation(surface: BladeSurface, fine: Tube, step: int) -> tuple[float, float]:
+    """Largest sag between neighbouring sections, as a fraction of the local chord; and its s.
+
+    The sag is the distance from the analytic surface half-way between two sections to the
+    midpoint of the straight segment joining their corresponding points (``fine`` holds the
+    half-way sections at rows ``step / 2 + step i``, see :func:`tube_grid`). It measures how
+    much the blade bends, twists or tapers between sections: OpenCascade's loft through
+    sparse sections of a strongly changing blade misses the design badly, can come out
+    inside out, and the fuse then fails or hangs (found by ``scripts/fuzz.py``).
+    """
+    middle = fine.s[step // 2::step]
+    exact = fine.points[step // 2::step]
+    straight = 0.5 * (surface.points[:-1] + surface.points[1:])
+    sag = np.linalg.norm(straight - exact, axis=-1).max(axis=1)
+    chord = 2.0 * np.linalg.norm(fine.planar[step // 2::step], axis=-1).max(axis=1)
+    relative = sag / np.maximum(chord, 1e-12)
+    worst = int(np.argmax(relative))
+    return float(relative[worst]), float(middle[worst])
+
+
+def check_sections_resolved(params: PropellerParameters, surface: BladeSurface, fine: Tube, step: int,
+                            limit: float = RESOLUTION_DEVIATION_LIMIT) -> None:
+    """Refuse a blade whose sections are too sparse for how fast it bends, twists or tapers."""
+    relative, where = resolution_deviation(surface, fine, step)
+    if relative > limit:
+        sections = params.resolution.sections
+        # The sag falls like the square of the spacing: estimate the sections that meet the limit.
+        needed = int(np.ceil((sections - 1) * np.sqrt(relative / limit) * 1.05)) + 1
+        raise GeometryError(
+            f"resolution.sections = {sections} is too few for this blade: between sections near s = {where:.3f} "
+            f"it bends, twists or tapers by {relative:.1%} of the chord (limit {limit:.0%}); use "
+            f"resolution.sections >= {min(needed, 400)} or make the blade change more gently")
+
+
+# -- 5, 6, 7: leaving the hub, overlaps --------------------------------------------------------------------------------
+
+def _points_inside(tube: Tube, query: NDArray[np.float64], allowed: NDArray[np.bool_] | None = None
+                   ) -> tuple[NDArray[np.bool_], NDArray[np.int64]]:
+    """Which ``(q, 3)`` points lie inside the tube, and in which slab (section k to k + 1) each does.
+
+    A point is inside slab k when it lies on the forward side of section k's plane and the
+    backward side of section k + 1's, and inside the section interpolated to its position.
+    ``allowed`` ``(q, m - 1)`` masks the slabs tested per point (e.g. to skip a point's neighbours).
+    """
+    heights = query @ tube.tangent.T - np.sum(tube.origin * tube.tangent, axis=-1)  # (q, m)
+    in_slab = (heights[:, :-1] >= 0.0) & (heights[:, 1:] < 0.0)
+    if allowed is not None:
+        in_slab &= allowed
+    point_index, slab = np.nonzero(in_slab)
+    inside = np.zeros(len(query), dtype=bool)
+    where = np.full(len(query), -1, dtype=np.int64)
+    # A point inside slab k lies within the larger section radius (plus the slab's length) of C_k.
+    radius = tube.section_radius
+    reach = np.maximum(radius[:-1], radius[1:]) + np.linalg.norm(np.diff(tube.origin, axis=0), axis=-1)
+    near = np.linalg.norm(query[point_index] - tube.origin[slab], axis=-1) <= reach[slab]
+    point_index, slab = point_index[near], slab[near]
+    if point_index.size == 0:
+        return inside, where
+    h0, h1 = heights[point_index, slab], heights[point_index, slab + 1]
+    weight = (h0 / (h0 - h1))[:, None]
+    polygon = (1.0 - weight[:, :, None]) * tube.planar[slab] + weight[:, :, None] * tube.planar[slab + 1]
+    relative0 = query[point_index] - tube.origin[slab]
+    relative1 = query[point_index] - tube.origin[slab + 1]
+    x = (1.0 - weight[:, 0]) * np.sum(relative0 * tube.normal[slab], -1) + weight[:, 0] * np.sum(
+        relative1 * tube.normal[slab + 1], -1)
+    y = (1.0 - weight[:, 0]) * np.sum(relative0 * tube.binormal[slab], -1) + weight[:, 0] * np.sum(
+        relative1 * tube.binormal[slab + 1], -1)
+    hit = _in_polygons(polygon, x, y)
+    inside[point_index[hit]] = True
+    where[point_index[hit]] = slab[hit]
+    return inside, where
+
+
+def _in_polygons(polygons: NDArray[np.float64], x: NDArray[np.float64], y: NDArray[np.float64]) -> NDArray[np.bool_]:
+    """Even-odd test of points (x[i], y[i]) against closed polygons ``(i, p, 2)``."""
+    start = polygons
+    end = np.roll(polygons, -1, axis=1)
+    x0, y0, x1, y1 = start[..., 0], start[..., 1], end[..., 0], end[..., 1]
+    px, py = x[:, None], y[:, None]
+    straddles = (y0 > py) != (y1 > py)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        crossing_x = x0 + (py - y0) * (x1 - x0) / (y1 - y0)
+    crossings = straddles & (px < crossing_x)
+    return (np.count_nonzero(crossings, axis=1) % 2) == 1
+
+
+def check_no_self_intersection(params: PropellerParameters, tube: Tube) -> None:
+    """Refuse a blade whose surface enters its own volume away from the neighbouring sections."""
+    m, p, _ = tube.points.shape
+    query = tube.points.reshape(-1, 3)
+    section_of_point = np.repeat(np.arange(m), p)
+    slabs = np.arange(m - 1)
+    # Slab k spans sections k..k+1; a point of section i is a neighbour of slabs i-w-1 .. i+w.
+    allowed = np.abs(slabs[None, :] + 0.5 - section_of_point[:, None]) > SELF_NEIGHBOUR_STEPS + 0.5
+    inside, slab = _points_inside(tube, query, allowed)
+    if np.any(inside):
+        first = int(np.argmax(inside))
+        s_point = tube.s[section_of_point[first]]
+        s_slab = 0.5 * (tube.s[slab[first]] + tube.s[slab[first] + 1])
+        place = "outside" if _outside_hub(params, query[first]) else "inside"
+        low, high = sorted((s_point, s_slab))
+        raise GeometryError(
+            f"the blade intersects itself: its part near s = {low:.3f} runs into its part near s = {high:.3f} "
+            f"({place} the hub); move the centerline's control points apart or make the sections smaller")
+
+
+def check_leaves_hub(params: PropellerParameters, tube: Tube) -> None:
+    """Refuse a blade that never leaves the hub: the fuse would swallow it (a propeller without blades)."""
+    if not np.any(_outside_hub(params, tube.points)):
+        raise GeometryError(
+            "the blade never leaves the hub (all of it lies within r < R and |z| < L/2); raise the centerline's "
+            "control points (z_L of p2 / p3) or make the hub smaller")
+
+
+def check_blades_clear(params: PropellerParameters, tube: Tube) -> None:
+    """Refuse blades that run into each other outside the hub (inside, the hub absorbs them).
+
+    Blade i is blade 0 rotated by 360 i / n about the axis: blade 0's surface points are
+    rotated to every other blade and tested against blade 0's volume, which covers every
+    pair of blades in both directions.
     """
     if params.blades == 1:
         return
-    points = surface.points.reshape(-1, 3)
-    outside = _radius(points) > params.hub.radius
+    m, p, _ = tube.points.shape
+    points = tube.points.reshape(-1, 3)
+    outside = _outside_hub(params, points)
     if not np.any(outside):
         return
-    middle = surface.frames.origin[len(surface.frames.origin) // 2]
-    reference = np.arctan2(middle[1], middle[0])
-    relative = np.angle(np.exp(1j * (np.arctan2(points[outside, 1], points[outside, 0]) - reference)))
-    span_deg = float(np.degrees(relative.max() - relative.min()))
-    pitch_deg = 360.0 / params.blades
-    if span_deg >= pitch_deg:
-        raise GeometryError(
-            f"the blades would intersect each other: one blade spans {span_deg:.1f} degrees around the axis "
-            f"outside the hub, more than the {pitch_deg:.1f} degrees between blades; reduce centerline x_L "
-            "or the number of blades")
+    candidates = points[outside]
+    section_of_point = np.repeat(np.arange(m), p)[outside]
+    for blade in range(1, params.blades):
+        angle = 2.0 * np.pi * blade / params.blades
+        cos, sin = np.cos(angle), np.sin(angle)
+        rotated = candidates @ np.array([[cos, sin, 0.0], [-sin, cos, 0.0], [0.0, 0.0, 1.0]])
+        inside, slab = _points_inside(tube, rotated)
+        if np.any(inside):
+            first = int(np.argmax(inside))
+            s_other = tube.s[section_of_point[first]]
+            s_here = 0.5 * (tube.s[slab[first]] + tube.s[slab[first] + 1])
+            gap = min(blade, params.blades - blade)
+            raise GeometryError(
+                f"the blades would intersect each other outside the hub: blade 1's part near s = {s_here:.3f} "
+                f"meets blade {1 + blade}'s part near s = {s_other:.3f} ({gap} blade pitch{'es' if gap > 1 else ''}"
+                f" = {360.0 * gap / params.blades:.1f} degrees apart); reduce the centerline's angular span x_L, "
+                "the section sizes or the number of blades")
 
+
+# -- all checks --------------------------------------------------------------------------------------
 
 def check_feasible(params: PropellerParameters, surface: BladeSurface, centerline: Centerline) -> None:
     """Run every pre-kernel check on blade 0 (the others are its rotations)."""
     check_ends_inside_hub(params, surface)
     check_centerline_leaves_through_side(params, centerline)
-    check_blades_clear(params, surface)
+    s, step = tube_grid(len(surface.s))
+    fine = sample_tube(params, centerline, s, surface.t)
+    check_no_fold(fine)
+    check_sections_resolved(params, surface, fine, step)
+    check_leaves_hub(params, fine)
+    tube = coarsen(fine)
+    check_no_self_intersection(params, tube)
+    check_blades_clear(params, tube)

@@ -1,0 +1,139 @@
+"""Malformed configuration files: each is refused with exit 2, one line naming the problem, no file written.
+
+Every key of a design file is optional (a missing key takes its default, as ``torus-cad
+defaults`` documents), so "missing" here means a key without a value, a list missing an
+element, or a table header without its table's keys being valid.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from torus_cad.cli import main
+
+# (case id, file content, words that must appear in the message)
+TEXT_CASES = [
+    ("blades_string", 'blades = "three"\n', ["blades"]),
+    ("blades_float", "blades = 3.5\n", ["blades"]),
+    ("radius_string", '[hub]\nradius = "ten"\n', ["hub.radius"]),
+    ("radius_bool", "[hub]\nradius = true\n", ["hub.radius"]),
+    ("hub_not_table", "hub = 10\n", ["hub"]),
+    ("point_wrong_length", "[centerline]\np2 = [25.0, 3.0]\n", ["centerline.p2"]),
+    ("point_not_list", "[centerline]\np3 = 75.0\n", ["centerline.p3"]),
+    ("quartic_short", "[transforms]\nscale_x = [1.0, 2.0]\n", ["transforms.scale_x"]),
+    ("point_string_item", '[centerline]\np2 = [25.0, "x", 22.0]\n', ["centerline.p2[1]"]),
+    ("missing_value", "[hub]\nradius =\n", ["not valid TOML"]),
+    ("unknown_top_key", "bladez = 3\n", ["bladez", "blades"]),
+    ("unknown_nested_key", "[hub]\nradiuss = 3\n", ["hub.radiuss", "hub.radius"]),
+    ("unknown_table", "[propeller]\nblades = 3\n", ["propeller"]),
+    ("nan_radius", "[hub]\nradius = nan\n", ["hub.radius", "finite"]),
+    ("inf_length", "[hub]\nlength = inf\n", ["hub.length", "finite"]),
+    ("minus_inf_phase", "phase_deg = -inf\n", ["phase_deg", "finite"]),
+    ("nan_in_list", "[centerline]\np2 = [25.0, nan, 22.0]\n", ["centerline.p2[1]", "finite"]),
+    ("nan_quartic", "[transforms]\nangle_of_attack = [0.0, 0.0, 0.0, 0.0, nan]\n", ["angle_of_attack", "finite"]),
+    ("negative_radius", "[hub]\nradius = -5.0\n", ["hub.radius"]),
+    ("negative_length", "[hub]\nlength = -20.0\n", ["hub.length"]),
+    ("zero_radius", "[hub]\nradius = 0.0\n", ["hub.radius"]),
+    ("negative_thickness", "[airfoil]\nthickness = -0.1\n", ["airfoil.thickness"]),
+    ("negative_sections", "[resolution]\nsections = -3\n", ["resolution.sections"]),
+    ("negative_scale", "[transforms]\nscale_x = [0.0, 0.0, 0.0, 0.0, -6.0]\n", ["transforms.scale_x", "positive"]),
+    ("scale_crossing_zero", "[transforms]\nscale_y = [0.0, 0.0, 0.0, -4.0, 2.0]\n", ["transforms.scale_y"]),
+    ("negative_deflection", "[export]\nstl_linear_deflection = -0.1\n", ["export.stl_linear_deflection"]),
+    ("zero_blades", "blades = 0\n", ["blades"]),
+    ("negative_blades", "blades = -2\n", ["blades"]),
+    ("too_many_blades", "blades = 1000\n", ["blades"]),
+    ("bad_frame", '[centerline]\nframe = "bishop"\n', ["centerline.frame"]),
+    ("bad_name", 'name = "../../etc/passwd"\n', ["name"]),
+    ("empty_file", "", ["empty"]),
+    ("whitespace_file", "  \n\n\t\n", ["empty"]),
+    ("not_toml", "this is not a design file\n", ["not valid TOML"]),
+    ("json_file", '{"blades": 3}\n', ["not valid TOML"]),
+    ("duplicate_key", "blades = 3\nblades = 4\n", ["not valid TOML"]),
+]
+
+BINARY_CASES = [
+    ("nul_bytes", b"\x00" * 64),
+    ("png_header", b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR" + bytes(range(256))),
+    ("random_bytes", bytes((i * 197 + 13) % 256 for i in range(4096))),
+    ("latin1_text", "blades = 3 # caf\xe9\n".encode("latin-1")),
+]
+
+
+def _run_cli(capsys, config: Path, out_dir: Path) -> tuple[int, str, str]:
+    code = main(["build", str(config), "--out", str(out_dir)])
+    captured = capsys.readouterr()
+    return code, captured.out, captured.err
+
+
+def _assert_refused(code: int, out: str, err: str, out_dir: Path, words: list[str]) -> None:
+    assert code == 2, f"exit code {code}, stderr {err!r}"
+    lines = err.strip().splitlines()
+    assert len(lines) == 1, f"expected one line on stderr, got {err!r}"
+    assert lines[0].startswith("torus-cad: error: ")
+    assert "Traceback" not in err and "Traceback" not in out
+    for word in words:
+        assert word in lines[0], f"{word!r} not named in {lines[0]!r}"
+    assert not out_dir.exists() or not any(out_dir.iterdir()), "a refused design wrote files"
+
+
+@pytest.mark.parametrize("case, content, words", TEXT_CASES, ids=[case[0] for case in TEXT_CASES])
+def test_malformed_text_config(tmp_path, capsys, case, content, words):
+    config = tmp_path / f"{case}.toml"
+    config.write_text(content)
+    out_dir = tmp_path / "out"
+    _assert_refused(*_run_cli(capsys, config, out_dir), out_dir, words)
+
+
+@pytest.mark.parametrize("case, content", BINARY_CASES, ids=[case[0] for case in BINARY_CASES])
+def test_binary_config(tmp_path, capsys, case, content):
+    config = tmp_path / f"{case}.toml"
+    config.write_bytes(content)
+    out_dir = tmp_path / "out"
+    code, out, err = _run_cli(capsys, config, out_dir)
+    # NUL bytes decode as UTF-8 but are not TOML; the others are not UTF-8 at all.
+    _assert_refused(code, out, err, out_dir, [str(config.name)])
+
+
+def test_missing_file(tmp_path, capsys):
+    out_dir = tmp_path / "out"
+    _assert_refused(*_run_cli(capsys, tmp_path / "nowhere.toml", out_dir), out_dir, ["nowhere.toml"])
+
+
+def test_directory_as_config(tmp_path, capsys):
+    folder = tmp_path / "a_folder.toml"
+    folder.mkdir()
+    out_dir = tmp_path / "out"
+    _assert_refused(*_run_cli(capsys, folder, out_dir), out_dir, ["a_folder.toml"])
+
+
+@pytest.mark.parametrize("override, words", [
+    ("hub.radius=nan", ["hub.radius"]),
+    ("blades=0", ["blades"]),
+    ("hub.radiuss=3", ["hub.radiuss"]),
+    ("hub.radius", ["key=value"]),
+    ("centerline.p2=[1,2]", ["centerline.p2"]),
+], ids=["nan", "zero_blades", "unknown", "no_value", "short_list"])
+def test_malformed_override(tmp_path, capsys, override, words):
+    out_dir = tmp_path / "out"
+    code = main(["build", "--set", override, "--out", str(out_dir)])
+    captured = capsys.readouterr()
+    _assert_refused(code, captured.out, captured.err, out_dir, words)
+
+
+@pytest.mark.parametrize("content", [b"\xff\xfe\x00garbage\x00", b"[hub]\nradius = nan\n", b"blades = 0\n"],
+                         ids=["binary", "nan", "zero_blades"])
+def test_command_line_prints_no_traceback(tmp_path, content):
+    """The real entry point, in a new process: exit 2, one line, no traceback, nothing written."""
+    config = tmp_path / "design.toml"
+    config.write_bytes(content)
+    out_dir = tmp_path / "out"
+    result = subprocess.run([sys.executable, "-m", "torus_cad.cli", "build", str(config), "--out", str(out_dir)],
+                            capture_output=True, text=True, timeout=120)
+    assert result.returncode == 2, result.stderr
+    assert "Traceback" not in result.stderr + result.stdout
+    assert len(result.stderr.strip().splitlines()) == 1, result.stderr
+    assert not out_dir.exists() or not any(out_dir.iterdir())
