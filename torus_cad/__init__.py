@@ -8,13 +8,16 @@ that joins them is :func:`build_propeller`.
 from torus_cad.errors import GeometryError, KernelError, ParameterError, TorusCadError
 from torus_cad.geometry.parameters import PropellerParameters
 
-__all__ = ["GeometryError", "KernelError", "ParameterError", "PropellerParameters", "Propeller",
-           "TorusCadError", "build_propeller"]
+__all__ = ["GeometryError", "KernelError", "ParameterError", "Propeller", "PropellerObjects",
+           "PropellerParameters", "TorusCadError", "build_propeller", "propeller_objects"]
+
+# The kernel (cadquery / OCP) loads only when one of these is asked for, so the geometry layer stays light.
+_LAZY = {"build_propeller": "torus_cad.propeller", "Propeller": "torus_cad.propeller",
+         "propeller_objects": "torus_cad.cadquery_api", "PropellerObjects": "torus_cad.cadquery_api"}
 
 
 def __getattr__(name: str):
-    # The kernel (cadquery / OCP) loads only when asked for, so the geometry layer stays light.
-    if name in ("build_propeller", "Propeller"):
-        from torus_cad import propeller
-        return getattr(propeller, name)
+    if name in _LAZY:
+        import importlib
+        return getattr(importlib.import_module(_LAZY[name]), name)
     raise AttributeError(f"module 'torus_cad' has no attribute {name!r}")
