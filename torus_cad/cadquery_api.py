@@ -26,7 +26,7 @@ from typing import Any
 
 import cadquery as cq
 
-from torus_cad.geometry.parameters import PropellerParameters
+from torus_cad.geometry.parameters import PropellerParameters, resolve_parameters
 from torus_cad.kernel.checks import MassProperties, mass_properties
 from torus_cad.propeller import DEFAULT_DENSITY_G_CM3, Propeller, build_propeller
 
@@ -99,19 +99,6 @@ class PropellerObjects:
               stl: bool = True) -> dict[str, Path]:
         """Write ``<name>.step``, ``<name>.stl`` (unless ``stl`` is False) and ``<name>.json`` into ``out_dir``."""
         return self.propeller.write(out_dir, density_g_cm3, stl)
-
-
-def resolve_parameters(design: PropellerParameters | str | Path | None = None,
-                       overrides: Mapping[str, Any] | None = None) -> PropellerParameters:
-    """The parameters of ``design`` (parameters, a TOML path, or None for the default) with
-    dotted-key ``overrides`` applied, e.g. ``{"blades": 4, "hub.radius": 12.0}`` (validated)."""
-    if design is None:
-        params = PropellerParameters()
-    elif isinstance(design, PropellerParameters):
-        params = design
-    else:
-        params = PropellerParameters.from_toml(design)
-    return params.with_values(dict(overrides)) if overrides else params
 
 
 def propeller_objects(design: PropellerParameters | str | Path | None = None,

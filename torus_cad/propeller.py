@@ -26,7 +26,7 @@ import cadquery as cq
 from torus_cad.errors import KernelError
 from torus_cad.geometry.centerline import Centerline, blade_angle_deg
 from torus_cad.geometry.feasibility import check_feasible
-from torus_cad.geometry.parameters import PropellerParameters
+from torus_cad.geometry.parameters import PropellerParameters, resolve_parameters
 from torus_cad.geometry.surface import BladeSurface, blade_surface
 from torus_cad.kernel.checks import MassProperties, mass_properties, precise_volume, single_valid_solid
 from torus_cad.kernel.export import atomic_path, write_step, write_stl
@@ -111,12 +111,7 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
     """
     timer = StageTimer(progress)
     with timer.stage("parameters"):
-        if design is None:
-            params = PropellerParameters()
-        elif isinstance(design, PropellerParameters):
-            params = design
-        else:
-            params = PropellerParameters.from_toml(design)
+        params = resolve_parameters(design)
     with timer.stage("section_math"):
         surface = blade_surface(params)
         check_feasible(params, surface, Centerline.for_blade(params))

@@ -164,6 +164,19 @@ class PropellerParameters:
         return type(self).from_dict(data)
 
 
+def resolve_parameters(design: "PropellerParameters | str | Path | None" = None,
+                       overrides: Mapping[str, Any] | None = None) -> PropellerParameters:
+    """The parameters of ``design`` (parameters, a TOML path, or None for the default) with
+    dotted-key ``overrides`` applied, e.g. ``{"blades": 4, "hub.radius": 12.0}`` (validated)."""
+    if design is None:
+        params = PropellerParameters()
+    elif isinstance(design, PropellerParameters):
+        params = design
+    else:
+        params = PropellerParameters.from_toml(design)
+    return params.with_values(dict(overrides)) if overrides else params
+
+
 # -- building from mappings ------------------------------------------------------------
 
 def _suggest(key: str, known: Mapping[str, Any] | list[str], prefix: str = "") -> str:
