@@ -106,8 +106,12 @@ def design_dict_from_unit(u: Sequence[float], name: str = "fuzz",
         return value * math.exp(wild * _lerp(take(), -1.0, 1.0) * math.log(factor))
 
     def shift(value: float, spread: float) -> float:
-        """``value`` plus up to +-wild * spread."""
-        return value + wild * _lerp(take(), -1.0, 1.0) * spread
+        """``value`` plus up to +-wild * spread (offsets below 1e-9 of the spread snap to 0)."""
+        offset = wild * _lerp(take(), -1.0, 1.0) * spread
+        # Subnormal coefficients (hypothesis finds them) break np.roots in quartic_minimum; that bug
+        # has its own regression test in tests/test_malformed_config.py; here they would only mask
+        # the geometry this sampler is for.
+        return value + (offset if abs(offset) > 1e-9 * spread else 0.0)
 
     blades = 1 + min(7, int(take() * 8))
     radius = float(np.clip(vary(10.0, 2.5), 4.0, 25.0))
@@ -275,6 +279,20 @@ def _die_with_parent() -> None:
         pass
 
 
+#: A design dict holding this key makes the worker hang ("hang") or die ("crash") instead of
+#: building: the supervisor's own test uses it to check that both are counted, not fatal.
+TEST_ACTION_KEY = "__fuzz_self_test__"
+
+
+def _test_action(action: str) -> None:
+    import signal
+
+    if action == "hang":
+        time.sleep(3600)
+    elif action == "crash":
+        os.kill(os.getpid(), signal.SIGKILL)
+
+
 def _worker(connection: Connection, write: bool, stl: bool) -> None:
     """Worker loop: receive (index, design dict), build, send (index, Outcome); None stops it."""
     _die_with_parent()
@@ -286,6 +304,8 @@ def _worker(connection: Connection, write: bool, stl: bool) -> None:
         if task is None:
             return
         index, design = task
+        if isinstance(design, Mapping) and TEST_ACTION_KEY in design:  # self-test of the supervisor
+            _test_action(design[TEST_ACTION_KEY])
         scratch = Path(tempfile.mkdtemp(prefix="torus_fuzz_")) if write else None
         try:
             outcome = run_design(design, scratch, stl)

@@ -1,0 +1,258 @@
+"""Robustness: random in-range designs, refusals before the kernel, and interrupted exports.
+
+Kept fast: low resolution, few hypothesis examples, no deadline. The same sampler drives
+``scripts/fuzz.py`` (N = 1000 there).
+"""
+
+from __future__ import annotations
+
+import faulthandler
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from torus_cad.cli import main
+from torus_cad.errors import GeometryError, ParameterError
+from torus_cad.fuzzing import (TEST_ACTION_KEY, UNIT_DIMENSION, SupervisedPool, design_from_unit,
+                               random_design_dict, run_design)
+from torus_cad.geometry import feasibility
+from torus_cad.geometry.centerline import Centerline
+from torus_cad.geometry.parameters import PropellerParameters
+from torus_cad.geometry.surface import blade_surface
+
+LOW = {"sections": (24, 32), "points": (24, 32)}  # low points; sections near the default
+unit_vectors = st.lists(st.floats(0.0, 1.0), min_size=UNIT_DIMENSION, max_size=UNIT_DIMENSION)
+
+
+class _Watchdog:
+    """Kill the test process (with a traceback dump) if one design hangs: a hang must fail, not stall CI."""
+
+    def __init__(self, seconds: float) -> None:
+        self.seconds = seconds
+
+    def __enter__(self) -> None:
+        faulthandler.dump_traceback_later(self.seconds, exit=True)
+
+    def __exit__(self, *exc) -> None:
+        faulthandler.cancel_dump_traceback_later()
+
+
+# -- properties over random designs ------------------------------------------------------------
+
+@settings(max_examples=10, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
+@given(unit_vectors)
+def test_every_design_is_a_valid_solid_or_a_clear_refusal(u):
+    try:
+        params = design_from_unit(u, **LOW)
+    except ParameterError as error:  # a rule tying fields together refused it: also a clear refusal
+        assert "\n" not in str(error)
+        return
+    with _Watchdog(120):
+        outcome = run_design(params)
+    assert outcome.kind in ("valid", "refused"), f"{outcome.kind}: {outcome.message}\n{outcome.detail}"
+    if outcome.kind == "refused":
+        assert outcome.message and "\n" not in outcome.message
+
+
+@settings(max_examples=3, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow,
+                                                                                   HealthCheck.function_scoped_fixture])
+@given(unit_vectors)
+def test_cli_gives_files_or_exit_2_never_a_traceback(tmp_path_factory, u):
+    folder = tmp_path_factory.mktemp("cli")
+    try:
+        params = design_from_unit(u, **LOW)
+    except ParameterError:
+        return
+    config = folder / "design.toml"
+    config.write_text(params.to_toml())
+    out_dir = folder / "out"
+    import contextlib
+    import io
+
+    err = io.StringIO()
+    with _Watchdog(120), contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+        code = main(["build", str(config), "--out", str(out_dir), "--no-stl"])
+    assert code in (0, 2), err.getvalue()
+    if code == 2:
+        assert len(err.getvalue().strip().splitlines()) == 1
+        assert not out_dir.exists() or not any(out_dir.iterdir())
+    else:
+        from torus_cad.kernel.checks import is_valid_closed_solid
+        from torus_cad.kernel.export import read_step
+
+        assert is_valid_closed_solid(read_step(out_dir / f"{params.name}.step"))
+
+
+def test_sampler_stays_in_range_and_is_reproducible():
+    for seed in range(200):
+        design = random_design_dict(seed)
+        assert design == random_design_dict(seed)
+        try:
+            PropellerParameters.from_dict(design)
+        except ParameterError as error:  # only rules that tie fields together may refuse
+            assert "is out of range" not in str(error) and "must be" not in str(error), str(error)
+
+
+def test_supervised_pool_counts_a_hang_and_a_crash():
+    """The fuzz runner survives a design that never finishes and a worker that dies, and goes on."""
+    pool = SupervisedPool(workers=1, time_limit=6.0, write=False)
+    good = PropellerParameters().with_values({"resolution.points": 24}).to_dict()
+    outcomes = pool.run([{TEST_ACTION_KEY: "hang"}, {TEST_ACTION_KEY: "crash"}, {"name": "bad", "blades": "x"}, good])
+    assert [o.kind for o in outcomes] == ["timeout", "crash", "refused", "valid"]
+
+
+# -- refusals before the kernel, each with its reason -------------------------------------------
+
+REFUSALS = {
+    "fold": ({"transforms.scale_x": [0.0, 0.0, -32.0, 32.0, 6.0]}, "folds over itself"),
+    "root_outside_inset": ({"transforms.scale_x": [0.0, 0.0, -16.0, 16.0, 20.0]}, "root (s = 0) section leaves"),
+    "end_face": ({"centerline.p2": [25.0, -15.0, 2.0]}, "leaves the hub through an end face"),
+    "sparse_sections": ({"resolution.sections": 6}, "resolution.sections = 6 is too few"),
+    "twist_between_sections": ({"resolution.sections": 12, "transforms.angle_of_attack": [0.0, 0.0, 0.0, 400.0, 20.0]},
+                               "too few"),
+}
+
+
+@pytest.mark.parametrize("name", list(REFUSALS))
+def test_unsound_design_is_refused_before_the_kernel(name):
+    changes, reason = REFUSALS[name]
+    params = PropellerParameters().with_values(changes)
+    stages: list[str] = []
+    from torus_cad.propeller import build_propeller
+
+    with pytest.raises(GeometryError) as caught:
+        build_propeller(params, progress=stages.append)
+    message = str(caught.value)
+    assert reason in message
+    assert "\n" not in message
+    assert "wires" not in stages and "loft" not in stages and "fuse" not in stages
+
+
+def test_refused_design_exits_2_with_one_line_and_no_files(tmp_path, capsys):
+    out_dir = tmp_path / "out"
+    code = main(["build", "--set", "transforms.scale_x=[0,0,-32,32,6]", "--out", str(out_dir)])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert len(err.strip().splitlines()) == 1 and "folds over itself" in err
+    assert not out_dir.exists() or not any(out_dir.iterdir())
+
+
+def test_default_design_passes_every_check_with_margin():
+    params = PropellerParameters()
+    surface = blade_surface(params)
+    feasibility.check_feasible(params, surface, Centerline.for_blade(params))
+    grid, step = feasibility.tube_grid(len(surface.s))
+    fine = feasibility.sample_tube(params, Centerline.for_blade(params), grid, surface.t)
+    assert feasibility.fold_ratio(fine)[0] < 0.95
+    assert feasibility.resolution_deviation(surface, fine, step)[0] < feasibility.RESOLUTION_DEVIATION_LIMIT / 3
+
+
+def test_interleaved_blades_are_not_refused():
+    """Toroidal blades nest: six default blades clear each other although each spans 100 > 60 degrees."""
+    params = PropellerParameters().with_values({"blades": 6})
+    feasibility.check_feasible(params, blade_surface(params), Centerline.for_blade(params))
+
+
+def _circle_tube(centers: np.ndarray, radius: float, points: int = 24) -> feasibility.Tube:
+    """A tube of circular sections around a polyline (frames by finite differences)."""
+    tangent = np.gradient(centers, axis=0)
+    tangent /= np.linalg.norm(tangent, axis=1, keepdims=True)
+    helper = np.where(np.abs(tangent[:, 2:3]) < 0.9, [[0.0, 0.0, 1.0]], [[1.0, 0.0, 0.0]])
+    normal = np.cross(helper, tangent)
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    binormal = np.cross(tangent, normal)
+    angle = np.linspace(0.0, 2 * np.pi, points, endpoint=False)
+    planar = np.broadcast_to(np.stack([radius * np.cos(angle), radius * np.sin(angle)], -1),
+                             (len(centers), points, 2)).copy()
+    surface = centers[:, None] + planar[..., :1] * normal[:, None] + planar[..., 1:] * binormal[:, None]
+    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(centers, axis=0), axis=1))])
+    return feasibility.Tube(np.linspace(0, 1, len(centers)), centers, tangent, normal, binormal, planar, surface,
+                            np.zeros_like(centers), arc)
+
+
+def test_self_intersection_is_found():
+    turns = np.linspace(0.0, 2.5 * np.pi, 160)  # a helix that climbs less than its tube's width per turn
+    helix = np.stack([30 * np.cos(turns), 30 * np.sin(turns), 0.5 * turns], -1)
+    with pytest.raises(GeometryError, match="intersects itself"):
+        feasibility.check_no_self_intersection(PropellerParameters(), _circle_tube(helix, 3.0))
+    apart = np.stack([30 * np.cos(turns), 30 * np.sin(turns), 8.0 * turns], -1)  # well apart per turn
+    feasibility.check_no_self_intersection(PropellerParameters(), _circle_tube(apart, 3.0))
+
+
+def test_blades_running_into_each_other_are_found():
+    rod = np.stack([np.linspace(12.0, 30.0, 40), np.zeros(40), np.zeros(40)], -1)  # radial rods, 8 mm thick
+    crowded = PropellerParameters().with_values({"blades": 12})  # 30 degrees apart: axes 6.2 mm apart at r = 12
+    with pytest.raises(GeometryError, match="intersect each other"):
+        feasibility.check_blades_clear(crowded, _circle_tube(rod, 4.0))
+    feasibility.check_blades_clear(PropellerParameters().with_values({"blades": 3}), _circle_tube(rod, 4.0))
+
+
+# -- an interrupted export leaves no partial file -------------------------------------------------
+
+_WRITER = textwrap.dedent("""
+    import sys
+    from pathlib import Path
+    from torus_cad.geometry.parameters import PropellerParameters
+    from torus_cad.propeller import build_propeller
+    from torus_cad.kernel.export import write_step, write_stl
+    kind, out = sys.argv[1], Path(sys.argv[2])
+    params = PropellerParameters().with_values({"resolution.points": 40})
+    solid = build_propeller(params).solid
+    print("built", flush=True)
+    for _ in range(1000):  # write again and again until killed
+        if kind == "stl":
+            write_stl(solid, out, 0.005, 0.1)  # ~50 000 triangles: 2.6 MB per write
+        else:
+            write_step(solid, out, "killed")
+""")
+
+
+@pytest.mark.parametrize("kind", ["stl", "step"])
+def test_killed_mid_write_leaves_no_partial_file(tmp_path, kind):
+    target = tmp_path / f"propeller.{kind}"
+    script = tmp_path / "writer.py"
+    script.write_text(_WRITER)
+    process = subprocess.Popen([sys.executable, str(script), kind, str(target)], stdout=subprocess.PIPE, text=True)
+    try:
+        assert process.stdout.readline().strip() == "built"
+        deadline = time.monotonic() + 120
+        caught_mid_write = False
+        while time.monotonic() < deadline:
+            temps = list(tmp_path.glob(f".{target.name}.tmp-*"))
+            if temps and not target.exists() and any(t.exists() and t.stat().st_size > 0 for t in temps):
+                caught_mid_write = True
+                break
+            if target.exists():  # a write finished: remove it and catch the next one in flight
+                target.unlink()
+            time.sleep(0.0005)
+        os.kill(process.pid, signal.SIGKILL)
+        process.wait(30)
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait(30)
+    assert process.returncode == -signal.SIGKILL
+    assert caught_mid_write, "never saw a write in flight"
+    # Between our check and the kill a write may have completed and renamed; such a file is whole.
+    if target.exists():
+        if kind == "stl":
+            data = target.read_bytes()
+            assert len(data) == 84 + 50 * int.from_bytes(data[80:84], "little")
+        else:
+            assert target.read_text(errors="replace").rstrip().endswith("END-ISO-10303-21;")
+    # The next export removes the stale temp file and leaves exactly the final file.
+    from torus_cad.kernel.export import atomic_path
+
+    with atomic_path(target) as temp:
+        temp.write_text("ok")
+    assert target.read_text() == "ok"
+    assert not list(tmp_path.glob(f".{target.name}.tmp-*"))
