@@ -4,9 +4,10 @@
     python scripts/bench_sweep.py --sweep examples/sweep_example.toml
 
 Each configuration runs the whole sweep from scratch into its own folder under bench_out/sweep/
-and is timed from the call to the last table write, worker start-up included (spawning the
-pool's processes, or starting the LocalCluster, and importing cadquery in each worker). The
-figures and the machine's load go to bench_out/sweep_bench.json.
+and is timed from the call to the last table write, worker start-up included (starting the
+pool's processes and importing cadquery, or the LocalCluster's workers). Each line also gives
+how many CPUs the whole machine kept busy meanwhile: above the sweep's worker count, other
+programs were competing. The figures go to bench_out/sweep_bench.json.
 """
 
 from __future__ import annotations
@@ -40,17 +41,30 @@ def run_configuration(label: str, sweep_path: Path, out: Path, **kwargs: Any) ->
     """Run the sweep from scratch with ``kwargs`` for :func:`run_sweep`; return its figures."""
     shutil.rmtree(out, ignore_errors=True)
     spec = load_sweep(sweep_path)
+    cpu_before = _cpu_seconds()
     start = time.perf_counter()
     result = run_sweep(spec, out, progress=False, **kwargs)
     seconds = time.perf_counter() - start
+    busy = (_cpu_seconds() - cpu_before) / seconds  # CPUs busy on the whole machine, any process
     counts = result.counts()
     figures = {"configuration": label, "designs": len(result.designs), "built": result.built, "ok": counts["ok"],
                "refused": counts["refused"], "failed": counts["failed"] + counts["error"],
                "wall_s": round(seconds, 2), "designs_per_minute": round(60.0 * result.built / seconds, 2),
-               "backend": result.backend}
+               "machine_cpus_busy": round(busy, 2), "backend": result.backend}
     print(f"{label:<28} {result.built:3d} designs in {seconds:7.1f} s  ->  "
-          f"{figures['designs_per_minute']:6.1f} designs/min   ({counts['ok']} ok)", flush=True)
+          f"{figures['designs_per_minute']:6.1f} designs/min   ({counts['ok']} ok; "
+          f"machine busy {busy:.2f} of {os.cpu_count()} CPUs)", flush=True)
     return figures
+
+
+def _cpu_seconds() -> float:
+    """CPU time used by every process on the machine so far, s (Linux /proc/stat; 0 elsewhere)."""
+    try:
+        fields = Path("/proc/stat").read_text().splitlines()[0].split()[1:]
+    except OSError:
+        return 0.0
+    user, nice, system = (int(value) for value in fields[:3])
+    return (user + nice + system) / os.sysconf("SC_CLK_TCK")
 
 
 def main(argv: list[str] | None = None) -> int:

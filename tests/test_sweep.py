@@ -20,13 +20,13 @@ from torus_cad.sweep import (
     load_sweep, parse_sweep, run_design, run_sweep,
 )
 
-LIGHT = {"resolution": {"sections": 8, "points": 24}}
+LIGHT = {"resolution": {"sections": 16, "points": 32}}
 
 # 6 designs that all build at the light resolution, 2 blade counts x 3 cambers.
 SMALL_SWEEP = """
 [base.resolution]
-sections = 8
-points = 24
+sections = 16
+points = 32
 
 [sweep]
 mode = "grid"
@@ -61,7 +61,7 @@ def test_grid_lists_and_inclusive_ranges():
                                                           (4, 9.0), (4, 10.5)]
     assert all(isinstance(d.varied["blades"], int) and isinstance(d.varied["hub.radius"], float) for d in designs)
     assert designs[3].parameters["blades"] == 3 and designs[3].parameters["hub"]["radius"] == 10.5
-    assert designs[0].parameters["resolution"] == {"sections": 8, "points": 24}
+    assert designs[0].parameters["resolution"] == {"sections": 16, "points": 32}
     assert all(d.parameters["name"] == d.design_id for d in designs)
     float_range = parse_sweep({"vary": {"airfoil.max_camber": {"start": 0.0, "stop": 0.03, "step": 0.01}}})
     assert float_range.axes[0].values == (0.0, 0.01, 0.02, 0.03)
@@ -309,8 +309,8 @@ def test_resuming_rebuilds_only_the_designs_whose_files_are_gone(local_run, smal
 def test_cli_sweep_with_an_impossible_design_records_the_refusal_and_finishes_the_others(tmp_path, capsys):
     sweep = write(tmp_path / "mixed.toml", """
         [base.resolution]
-        sections = 8
-        points = 24
+        sections = 16
+        points = 32
         [vary]
         "hub.radius" = [10.0, 3.0]   # the blade's root does not fit in a 3 mm hub
         """)
