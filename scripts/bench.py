@@ -160,11 +160,16 @@ def child_scaling(payload: dict[str, Any]) -> dict[str, Any]:
     """Child: build twice (the second is timed), write STEP + STL; report stage times and memory."""
     import torus_cad.propeller  # noqa: F401 - imports before the memory baseline
 
+    from torus_cad.errors import TorusCadError
+
     baseline = _rss_mb()
-    params = _params(payload["changes"])
-    with tempfile.TemporaryDirectory() as folder:
-        timed_build_and_write(params, Path(folder))
-        seconds = timed_build_and_write(params, Path(folder))
+    try:
+        params = _params(payload["changes"])
+        with tempfile.TemporaryDirectory() as folder:
+            timed_build_and_write(params, Path(folder))
+            seconds = timed_build_and_write(params, Path(folder))
+    except TorusCadError as error:
+        return {"status": f"{type(error).__name__}: {error}"}
     return {"status": "ok", "seconds": seconds, "baseline_rss_mb": baseline, "peak_rss_mb": _maxrss_mb()}
 
 
@@ -397,7 +402,7 @@ def print_report(report: dict[str, Any]) -> None:
         for axis, block in report["scaling"].items():
             for row in block["rows"]:
                 if row.get("status") != "ok":
-                    print(f"  {axis:<9}{row['value']:>6}  {row.get('status')}")
+                    print(f"  {axis:<9}{row['value']:>6}  {str(row.get('status'))[:110]}")
                     continue
                 s = row["seconds"]
                 cells = "".join(f"{s[stage]:9.3f}" for stage in ("section_math", "wires", "loft", "fuse", "check",

@@ -56,6 +56,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--no-write", action="store_true", help="build only; do not write and re-read the files")
     parser.add_argument("--no-stl", action="store_true", help="write STEP and JSON only")
     parser.add_argument("--replay", nargs="+", type=Path, metavar="TOML", help="run these saved designs instead")
+    parser.add_argument("--sections", type=int, nargs=2, default=(16, 36), metavar=("LOW", "HIGH"),
+                        help="range of resolution.sections to sample (default 16 36)")
+    parser.add_argument("--points", type=int, nargs=2, default=(24, 48), metavar=("LOW", "HIGH"),
+                        help="range of resolution.points to sample (default 24 48: low, for speed)")
     parser.add_argument("--record", type=Path, metavar="JSONL", help="append every outcome to this JSON-lines file")
     parser.add_argument("-v", "--verbose", action="store_true", help="print every design's outcome")
     args = parser.parse_args(argv)
@@ -63,7 +67,8 @@ def main(argv: list[str] | None = None) -> int:
     if args.replay:
         designs = [PropellerParameters.from_toml(path).to_dict() for path in args.replay]
     else:
-        designs = [random_design_dict(seed) for seed in range(args.seed, args.seed + args.count)]
+        designs = [random_design_dict(seed, sections=tuple(args.sections), points=tuple(args.points))
+                   for seed in range(args.seed, args.seed + args.count)]
 
     pool = SupervisedPool(workers=args.workers, time_limit=args.time_limit, write=not args.no_write,
                           stl=not args.no_stl)
@@ -112,7 +117,8 @@ def main(argv: list[str] | None = None) -> int:
             print(f"  {count:5d}  {reason}")
     if not args.replay:
         args.out.mkdir(parents=True, exist_ok=True)
-        summary = {"count": len(outcomes), "first_seed": args.seed, "seconds": elapsed, "workers": args.workers,
+        summary = {"count": len(outcomes), "first_seed": args.seed, "sections": list(args.sections),
+                   "points": list(args.points), "seconds": elapsed, "workers": args.workers,
                    "write": not args.no_write, "tally": counts, "anything_else": anything_else,
                    "refusal_reasons": dict(reasons.most_common()),
                    "failures": [{"name": n, "kind": o.kind, "message": o.message} for n, o in failures]}

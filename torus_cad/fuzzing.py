@@ -75,7 +75,7 @@ def _positive_quartic(ends: tuple[float, float], bulge: float, wiggle: float, fl
 
 
 def design_dict_from_unit(u: Sequence[float], name: str = "fuzz",
-                          sections: tuple[int, int] = (10, 30), points: tuple[int, int] = (24, 48)
+                          sections: tuple[int, int] = (16, 36), points: tuple[int, int] = (24, 48)
                           ) -> dict[str, Any]:
     """Map ``u`` in [0, 1]^UNIT_DIMENSION to a design as a nested dict (the TOML layout).
 

@@ -29,6 +29,7 @@ from numpy.typing import NDArray
 from torus_cad.errors import GeometryError
 from torus_cad.geometry.airfoil import airfoil_points
 from torus_cad.geometry.centerline import Centerline
+from torus_cad.geometry.frames import Frames
 from torus_cad.geometry.parameters import PropellerParameters
 from torus_cad.geometry.surface import BladeSurface, airfoil_of, blade_frames
 from torus_cad.geometry.transforms import evaluate_quartic, transform_sections
@@ -37,7 +38,7 @@ from torus_cad.geometry.transforms import evaluate_quartic, transform_sections
 FOLD_LIMIT = 1.0
 
 #: Sections along s and points around each section of the grid the analytic checks sample.
-CHECK_SECTIONS = 160
+CHECK_SECTIONS = 96
 CHECK_POINTS = 48
 
 #: Check 4: half-way between neighbouring sections the analytic surface may sag from the straight
@@ -128,6 +129,13 @@ def _bezier_derivatives(control_points: NDArray[np.float64], s: NDArray[np.float
     return first, second
 
 
+def _bezier_points(control_points: NDArray[np.float64], s: NDArray[np.float64]) -> NDArray[np.float64]:
+    """C(s) of the single-span cubic."""
+    p0, p1, p2, p3 = control_points
+    u = s[:, None]
+    return (1 - u) ** 3 * p0 + 3 * u * (1 - u) ** 2 * p1 + 3 * u**2 * (1 - u) * p2 + u**3 * p3
+
+
 def tube_grid(sections: int, at_least: int = CHECK_SECTIONS) -> tuple[NDArray[np.float64], int]:
     """A uniform s grid that holds every section's s and every midpoint between sections, and its step.
 
@@ -139,18 +147,29 @@ def tube_grid(sections: int, at_least: int = CHECK_SECTIONS) -> tuple[NDArray[np
 
 def sample_tube(params: PropellerParameters, centerline: Centerline, s: NDArray[np.float64],
                 t: NDArray[np.float64]) -> Tube:
-    """Blade 0's analytic surface at every (s, t) of the grid, with frames and curvature."""
-    frames = blade_frames(params, s)
+    """Blade 0's analytic surface at every (s, t) of the grid, with frames and curvature.
+
+    Frenet frames are evaluated here in closed form (the centerline is one cubic Bezier span,
+    the same curve geomdl evaluates); the caller has already checked with
+    :func:`torus_cad.geometry.frames.check_frenet_defined` (inside ``blade_surface``) that they
+    exist. Other frame kinds come from :func:`blade_frames`.
+    """
+    first, second = _bezier_derivatives(centerline.control_points, s)
+    speed = np.linalg.norm(first, axis=-1)
+    tangent = first / speed[:, None]
+    curvature = (second - np.sum(second * tangent, axis=-1, keepdims=True) * tangent) / speed[:, None] ** 2
+    if params.centerline.frame == "frenet":
+        origin = _bezier_points(centerline.control_points, s)
+        normal = curvature / np.linalg.norm(curvature, axis=-1, keepdims=True)
+        frames = Frames(s, origin, tangent, normal, np.cross(tangent, normal))
+    else:
+        frames = blade_frames(params, s)
     transforms = params.transforms
     planar = transform_sections(airfoil_points(airfoil_of(params), t), evaluate_quartic(transforms.angle_of_attack, s),
                                 evaluate_quartic(transforms.scale_x, s), evaluate_quartic(transforms.scale_y, s),
                                 params.airfoil.pivot)
     surface = (frames.origin[:, None, :] + planar[..., 0:1] * frames.normal[:, None, :]
                + planar[..., 1:2] * frames.binormal[:, None, :])
-    first, second = _bezier_derivatives(centerline.control_points, s)
-    speed = np.linalg.norm(first, axis=-1)
-    tangent = first / speed[:, None]
-    curvature = (second - np.sum(second * tangent, axis=-1, keepdims=True) * tangent) / speed[:, None] ** 2
     steps = np.linalg.norm(np.diff(frames.origin, axis=0), axis=-1)
     arc_length = np.concatenate([[0.0], np.cumsum(steps)])
     return Tube(s, frames.origin, frames.tangent, frames.normal, frames.binormal, planar, surface, curvature,
@@ -182,8 +201,9 @@ def fold_ratio(tube: Tube) -> tuple[float, float]:
     return float(ratio[worst]), float(tube.s[worst])
 
 
-def check_no_fold(tube: Tube, limit: float = FOLD_LIMIT) -> None:
-    """Refuse sections that reach (nearly) past the centerline's centre of curvature."""
+def check_no_fold(tube: Tube, limit: float | None = None) -> None:
+    """Refuse sections that reach past the centerline's centre of curvature (default limit FOLD_LIMIT)."""
+    limit = FOLD_LIMIT if limit is None else limit
     ratio, where = fold_ratio(tube)
     if ratio >= limit:
         index = int(np.argmin(np.abs(tube.s - where)))
@@ -217,8 +237,12 @@ def resolution_deviation(surface: BladeSurface, fine: Tube, step: int) -> tuple[
 
 
 def check_sections_resolved(params: PropellerParameters, surface: BladeSurface, fine: Tube, step: int,
-                            limit: float = RESOLUTION_DEVIATION_LIMIT) -> None:
-    """Refuse a blade whose sections are too sparse for how fast it bends, twists or tapers."""
+                            limit: float | None = None) -> None:
+    """Refuse a blade whose sections are too sparse for how fast it bends, twists or tapers.
+
+    The default limit is RESOLUTION_DEVIATION_LIMIT (read at call time).
+    """
+    limit = RESOLUTION_DEVIATION_LIMIT if limit is None else limit
     relative, where = resolution_deviation(surface, fine, step)
     if relative > limit:
         sections = params.resolution.sections
