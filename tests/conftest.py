@@ -28,7 +28,7 @@ def default_params() -> PropellerParameters:
 @pytest.fixture(scope="session")
 def light_params() -> PropellerParameters:
     """A coarser default, for kernel tests that need a real solid but not the full resolution."""
-    return PropellerParameters().with_values({"resolution.sections": 12, "resolution.points": 48,
+    return PropellerParameters().with_values({"resolution.sections": 16, "resolution.points": 48,
                                               "name": "light"})
 
 

@@ -16,7 +16,7 @@ from torus_cad.geometry.parameters import PropellerParameters
 from torus_cad.kernel.checks import is_valid_closed_solid, precise_volume
 from torus_cad.progress import Progress
 
-FAST = {"resolution.sections": 10, "resolution.points": 40}
+FAST = {"resolution.sections": 16, "resolution.points": 40}
 
 
 @pytest.fixture(scope="module")

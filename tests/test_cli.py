@@ -11,7 +11,7 @@ from torus_cad.geometry.parameters import PropellerParameters
 
 
 def test_build_writes_step_stl_and_report(tmp_path, capsys):
-    assert main(["build", "--set", "resolution.sections=12", "--set", "resolution.points=48",
+    assert main(["build", "--set", "resolution.sections=16", "--set", "resolution.points=48",
                  "--out", str(tmp_path)]) == 0
     names = sorted(path.name for path in tmp_path.iterdir())
     assert names == ["torus_propeller.json", "torus_propeller.step", "torus_propeller.stl"]
@@ -20,7 +20,7 @@ def test_build_writes_step_stl_and_report(tmp_path, capsys):
     assert report["volume_mm3"] > 0 and report["surface_area_mm2"] > 0
     assert len(report["bounding_box_mm"]) == 2
     assert {"section_math", "wires", "loft", "fuse", "check", "step_write", "stl_write"} <= set(report["stage_seconds"])
-    assert PropellerParameters.from_dict(report["parameters"]).resolution.sections == 12
+    assert PropellerParameters.from_dict(report["parameters"]).resolution.sections == 16
     assert "wrote" in capsys.readouterr().out
 
 

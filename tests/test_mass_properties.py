@@ -16,12 +16,12 @@ from torus_cad.kernel.hub import hub_solid
 from torus_cad.propeller import DEFAULT_DENSITY_G_CM3
 from torus_cad.tolerances import READ_BACK_RELATIVE_TOLERANCE
 
-FAST = ["--set", "resolution.sections=10", "--set", "resolution.points=40"]
+FAST = ["--set", "resolution.sections=16", "--set", "resolution.points=40"]
 
 
 @pytest.fixture(scope="module")
 def objects():
-    return propeller_objects(overrides={"resolution.sections": 10, "resolution.points": 40, "name": "mass_fast"})
+    return propeller_objects(overrides={"resolution.sections": 16, "resolution.points": 40, "name": "mass_fast"})
 
 
 @pytest.fixture(scope="module")

@@ -17,7 +17,7 @@ from torus_cad.errors import ParameterError
 from torus_cad.kernel.checks import mass_properties
 from torus_cad.preview import parse_size, preview_mesh, render_preview, split_long_edges, write_preview
 
-FAST = ["--set", "resolution.sections=10", "--set", "resolution.points=40"]
+FAST = ["--set", "resolution.sections=16", "--set", "resolution.points=40"]
 
 #: Floor of the standard deviation of the grey levels (0..1): a blank or flat picture is far below.
 PIXEL_STD_FLOOR = 0.08
@@ -25,7 +25,7 @@ PIXEL_STD_FLOOR = 0.08
 
 @pytest.fixture(scope="module")
 def objects():
-    return propeller_objects(overrides={"resolution.sections": 10, "resolution.points": 40, "name": "preview_fast"})
+    return propeller_objects(overrides={"resolution.sections": 16, "resolution.points": 40, "name": "preview_fast"})
 
 
 def _read_png(path) -> np.ndarray:

@@ -83,10 +83,13 @@ def test_ap242_is_available(light_params, tmp_path):
 
 @pytest.mark.parametrize("blades", [1, 2, 4])
 def test_any_blade_count_fuses_into_one_solid(light_params, blades):
-    sweep = min(1.0, 3.0 / blades)  # narrow the blade's angular sweep so that neighbours stay clear
+    # Narrow the angular sweep so that neighbours stay clear, and the chord so that the tighter
+    # loop does not fold over (both are refused before the kernel otherwise).
+    sweep = min(1.0, 3.0 / blades)
     propeller = build_propeller(light_params.with_values({"blades": blades, "centerline.p2": [25 * sweep, 3.0, 22.0],
                                                           "centerline.p3": [75 * sweep, 15.0, 22.0],
-                                                          "centerline.p4": [100 * sweep, 18.0]}))
+                                                          "centerline.p4": [100 * sweep, 18.0],
+                                                          "transforms.scale_x": [0.0, 0.0, -8.0, 8.0, 5.0]}))
     assert is_valid_closed_solid(propeller.solid)
     assert len(propeller.blades) == blades
     assert precise_volume(propeller.solid) > precise_volume(propeller.hub)
