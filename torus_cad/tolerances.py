@@ -36,7 +36,7 @@ LOFT_PRECISION = 1e-6
 
 #: Relative precision of OpenCascade's adaptive volume / inertia integration (BRepGProp eps).
 #: cadquery's Shape.Volume() integrates without it and is off by ~2 % on lofted blades.
-MASS_PROPERTIES_RELATIVE_PRECISION = 1e-7
+MASS_PROPERTIES_RELATIVE_PRECISION = 1e-6
 
 #: Relative precision of the volume sanity check after the fuse (hub < fused <= hub + n blades);
 #: the blades' overlap with the hub keeps the bounds far apart, so a coarse, fast integral suffices.
