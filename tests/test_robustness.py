@@ -116,9 +116,10 @@ REFUSALS = {
     "fold": ({"transforms.scale_x": [0.0, 0.0, -32.0, 32.0, 6.0]}, "folds over itself"),
     "root_outside_inset": ({"transforms.scale_x": [0.0, 0.0, -16.0, 16.0, 20.0]}, "root (s = 0) section leaves"),
     "end_face": ({"centerline.p2": [25.0, -15.0, 2.0]}, "leaves the hub through an end face"),
-    "sparse_sections": ({"resolution.sections": 6}, "resolution.sections = 6 is too few"),
-    "twist_between_sections": ({"resolution.sections": 12, "transforms.angle_of_attack": [0.0, 0.0, 0.0, 400.0, 20.0]},
-                               "too few"),
+    "sparse_sections": ({"resolution.sections": 4}, "resolution.sections = 4 is too few"),
+    # alpha = 20 + 1600 s^2 (1 - s)^2 degrees: 100 degrees of twist at mid-span, ends unchanged
+    "twist_between_sections": ({"resolution.sections": 8,
+                                "transforms.angle_of_attack": [1600.0, -3200.0, 1600.0, 0.0, 20.0]}, "too few"),
 }
 
 
@@ -194,6 +195,24 @@ def test_blades_running_into_each_other_are_found():
     with pytest.raises(GeometryError, match="intersect each other"):
         feasibility.check_blades_clear(crowded, _circle_tube(rod, 4.0))
     feasibility.check_blades_clear(PropellerParameters().with_values({"blades": 3}), _circle_tube(rod, 4.0))
+
+
+def test_hooked_trailing_edge_with_too_few_points_is_refused():
+    """Camber far aft on a thin, flattened section: 25 points leave its curve crossing itself at the
+    trailing edge (scripts/fuzz.py design fuzz_334, which failed in the fuse); 48 points build."""
+    design = {"name": "hooked", "blades": 4, "phase_deg": -66.88, "hub": {"radius": 6.9435, "length": 17.2294},
+              "airfoil": {"max_camber": 0.0553, "camber_position": 0.8961, "thickness": 0.2224,
+                          "camber_normal": False, "pivot": 0.2828},
+              "centerline": {"p2": [6.6187, 6.5621, 11.7937], "p3": [60.9186, 17.2106, 13.0448],
+                             "p4": [70.0547, 11.1791], "frame": "rotation_minimizing"},
+              "transforms": {"angle_of_attack": [-13.8302, 16.3106, 20.0189, 0.0671, 47.4585],
+                             "scale_x": [6.2055, -12.411, -0.8573, 6.5329, 1.9422],
+                             "scale_y": [-2.5747, 5.1495, -6.3959, 4.1085, 0.3264]},
+              "resolution": {"sections": 40, "points": 25}}
+    from torus_cad.propeller import build_propeller
+
+    with pytest.raises(GeometryError, match="resolution.points = 25 is too few"):
+        build_propeller(PropellerParameters.from_dict(design))
 
 
 # -- an interrupted export leaves no partial file -------------------------------------------------

@@ -22,7 +22,7 @@ from scipy.interpolate import BSpline, make_lsq_spline
 
 import cadquery as cq
 
-from torus_cad.errors import KernelError
+from torus_cad.errors import GeometryError, KernelError
 from torus_cad.tolerances import (WIRE_FIT_INITIAL_KNOTS, WIRE_FIT_MAXIMUM_KNOTS,
                                   WIRE_FIT_RELATIVE_TOLERANCE)
 
@@ -93,8 +93,43 @@ def fit_section_curves(section_points: NDArray[np.float64], trailing_edge_index:
     while True:
         poles, knots, error = _fit(points, parameters, interior)
         if np.all(error <= allowed) or interior >= min(WIRE_FIT_MAXIMUM_KNOTS, len(parameters) - DEGREE - 2):
+            _check_trailing_edge_resolved(poles, knots, len(parameters) - 1)
             return SectionCurves(poles, knots, float(error.max()))
         interior = min(2 * interior, WIRE_FIT_MAXIMUM_KNOTS, len(parameters) - DEGREE - 2)
+
+
+def _check_trailing_edge_resolved(poles: NDArray[np.float64], knots: NDArray[np.float64], points: int,
+                                  samples: int = 150) -> None:
+    """Refuse sections whose curve crosses itself next to the sharp trailing edge.
+
+    With few points around a thin, strongly hooked trailing edge (camber far aft) the cubic
+    through the samples overshoots there and the curve's first and last spans cross; the
+    loft and the fuse then fail (found by scripts/fuzz.py). Tests, in each section's plane,
+    the first tenth of the curve against the last tenth.
+    """
+    u = np.linspace(0.0, 0.1, samples)
+    for ring in poles[:: max(1, len(poles) // 4)]:  # the sections are affine images of one airfoil
+        curve = BSpline(knots, ring, DEGREE)
+        start, end = curve(u), curve(1.0 - u)[::-1]
+        centre = ring.mean(axis=0)
+        basis = np.linalg.svd(ring - centre, full_matrices=False)[2][:2]
+        a, b = (start - centre) @ basis.T, (end - centre) @ basis.T
+        if _polylines_cross(a[1:], b[:-1]):  # skip the shared trailing-edge point itself
+            raise GeometryError(
+                f"resolution.points = {points} is too few for this airfoil's trailing edge: the section curve "
+                "crosses itself there (a thin, hooked trailing edge); raise resolution.points "
+                f"(e.g. to {max(2 * points, 48)}), the thickness, or move camber_position forward")
+
+
+def _polylines_cross(first: NDArray[np.float64], second: NDArray[np.float64]) -> bool:
+    """Whether two 2D polylines ``(n, 2)`` and ``(m, 2)`` have a proper segment crossing."""
+    p, q = first[:-1, None, :], first[1:, None, :]
+    r, t = second[None, :-1, :], second[None, 1:, :]
+
+    def orient(a, b, c):
+        return np.sign((b[..., 0] - a[..., 0]) * (c[..., 1] - a[..., 1]) - (b[..., 1] - a[..., 1]) * (c[..., 0] - a[..., 0]))
+
+    return bool(np.any((orient(p, q, r) * orient(p, q, t) < 0) & (orient(r, t, p) * orient(r, t, q) < 0)))
 
 
 def bspline_wire(poles: NDArray[np.float64], knots: NDArray[np.float64]) -> cq.Wire:
