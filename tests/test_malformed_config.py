@@ -139,10 +139,6 @@ def test_command_line_prints_no_traceback(tmp_path, content):
     assert not out_dir.exists() or not any(out_dir.iterdir())
 
 
-@pytest.mark.xfail(strict=True, reason="quartic_minimum (torus_cad/geometry/parameters.py) calls np.roots on a "
-                   "derivative whose leading coefficient is subnormal; np.roots divides by it, overflows and raises "
-                   "numpy.linalg.LinAlgError (a traceback at the CLI). Fix: drop leading derivative coefficients "
-                   "below ~1e-12 x the largest before np.roots. Remove this marker once fixed.")
 def test_subnormal_quartic_coefficient_is_not_a_traceback(tmp_path, capsys):
     out_dir = tmp_path / "out"
     code = main(["build", "--set", "transforms.scale_x=[1e-310, 1.0, 0.0, 0.0, 5.0]", "--out", str(out_dir),
