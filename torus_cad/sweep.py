@@ -37,10 +37,12 @@ and failed designs are tried again. ``OUT/results.csv`` (and ``OUT/results.parqu
 pyarrow is installed) is rebuilt from those per-design files at the end of every run, also
 after an interruption, so nothing that finished is ever lost.
 
-Designs run in a :class:`concurrent.futures.ProcessPoolExecutor` (spawned processes, one
-per CPU by default) or, with a scheduler address, on a Dask distributed cluster through
-the same loop (``Client.get_executor``). On a cluster, ``OUT`` must be on a file system
-every worker can write and the client can read, and the workers need torus_cad installed.
+Designs run in a :class:`concurrent.futures.ProcessPoolExecutor` (one process per CPU by
+default, started from multiprocessing's fork server, which imports the kernel once) or, with
+a scheduler address, on a Dask distributed cluster through the same loop
+(``Client.get_executor``). On a cluster, ``OUT`` must be on a file system every worker can
+write and the client can read, and the workers need torus_cad installed. A script that calls
+:func:`run_sweep` needs an ``if __name__ == "__main__":`` guard: the workers re-import it.
 
 Units: lengths mm, areas mm^2, volumes mm^3, mass g, inertia g mm^2 (and mm^5 for the pure
 geometric integral), times s, density g/cm^3, rates designs per minute.
@@ -961,8 +963,8 @@ def _drive(make_executor: Callable[[], Executor], tasks: Sequence[DesignTask], w
                     if not finished_any and lone_crashes >= 2:
                         raise SweepError(
                             "the worker processes die before finishing any design; they may fail to start "
-                            "(where multiprocessing spawns them, a script that calls run_sweep needs an "
-                            "`if __name__ == \"__main__\":` guard)")
+                            "(a script that calls run_sweep needs an `if __name__ == \"__main__\":` guard, "
+                            "as the workers re-import it)")
                     on_outcome(alone, _write_failure_here(
                         alone, STATUS_ERROR, "the worker process died while building this design "
                         "(a crash inside OpenCascade?)"))
