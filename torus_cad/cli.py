@@ -234,6 +234,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     except OSError as error:
         print(f"torus-cad: cannot write output: {error}", file=sys.stderr)
         return EXIT_KERNEL_FAILURE
+    except KeyboardInterrupt:
+        print("torus-cad: interrupted; no partial file was left behind", file=sys.stderr)
+        return 130
+    except Exception as error:  # noqa: BLE001 - the command line never shows a traceback
+        print(f"torus-cad: internal error ({type(error).__name__}): {error}; please report it with the design file",
+              file=sys.stderr)
+        return EXIT_KERNEL_FAILURE
 
 
 if __name__ == "__main__":  # pragma: no cover
