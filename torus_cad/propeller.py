@@ -119,7 +119,7 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
         curves = fit_section_curves(surface.points, surface.trailing_edge_index, _section_chords(surface))
         wires = curves.wires()
     with timer.stage("loft"):
-        blade = loft_solid(wires)
+        blade = loft_solid(wires, surface.s)
         hub = hub_solid(params.hub.radius, params.hub.length)
         blades = pattern_blades(blade, [blade_angle_deg(params, i) for i in range(params.blades)])
     with timer.stage("fuse"):
