@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from torus_cad.errors import GeometryError, ParameterError, TorusCadError
-from torus_cad.geometry.parameters import PropellerParameters
+from torus_cad.geometry.parameters import PropellerParameters, resolve_parameters
 
 EXIT_OK, EXIT_KERNEL_FAILURE, EXIT_BAD_INPUT = 0, 1, 2
 
@@ -59,10 +59,7 @@ def _parse_override(text: str) -> tuple[str, Any]:
 
 def load_parameters(config: str | None, overrides: Sequence[str] = ()) -> PropellerParameters:
     """Parameters from a TOML file (or the defaults) with ``key=value`` overrides applied."""
-    params = PropellerParameters.from_toml(config) if config else PropellerParameters()
-    if overrides:
-        params = params.with_values(dict(_parse_override(item) for item in overrides))
-    return params
+    return resolve_parameters(config or None, dict(_parse_override(item) for item in overrides))
 
 
 def _add_design_arguments(parser: argparse.ArgumentParser) -> None:
