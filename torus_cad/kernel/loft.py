@@ -13,7 +13,6 @@ from OCP.Geom import Geom_BSplineCurve, Geom_BSplineSurface
 from OCP.gp import gp_Pnt
 from OCP.ShapeFix import ShapeFix_Solid
 from OCP.TColgp import TColgp_Array2OfPnt
-from OCP.TColStd import TColStd_Array1OfInteger, TColStd_Array1OfReal
 from OCP.TopAbs import TopAbs_SHELL
 from OCP.TopoDS import TopoDS
 from scipy.interpolate import make_interp_spline
@@ -21,6 +20,7 @@ from scipy.interpolate import make_interp_spline
 import cadquery as cq
 
 from torus_cad.errors import KernelError
+from torus_cad.kernel.wires import knot_arrays
 from torus_cad.tolerances import LOFT_PRECISION
 
 #: Sewing tolerance of the blade's side face and end caps (mm); their shared edges are the same
@@ -61,16 +61,6 @@ def _bspline_of(wire: cq.Wire) -> Geom_BSplineCurve:
     return curve
 
 
-def _knot_arrays(knots: np.ndarray) -> tuple[TColStd_Array1OfReal, TColStd_Array1OfInteger]:
-    distinct, multiplicities = np.unique(knots, return_counts=True)
-    knot_array = TColStd_Array1OfReal(1, len(distinct))
-    multiplicity_array = TColStd_Array1OfInteger(1, len(distinct))
-    for index, (knot, multiplicity) in enumerate(zip(distinct, multiplicities), start=1):
-        knot_array.SetValue(index, float(knot))
-        multiplicity_array.SetValue(index, int(multiplicity))
-    return knot_array, multiplicity_array
-
-
 def _loft_through_poles(wires: Sequence[cq.Wire], parameters: Sequence[float] | None) -> cq.Solid:
     curves = [_bspline_of(wire) for wire in wires]
     first = curves[0]
@@ -87,8 +77,8 @@ def _loft_through_poles(wires: Sequence[cq.Wire], parameters: Sequence[float] | 
     for j, column in enumerate(along.c, start=1):
         for i, (x, y, z) in enumerate(column, start=1):
             surface_poles.SetValue(i, j, gp_Pnt(float(x), float(y), float(z)))
-    u_knots, u_multiplicities = _knot_arrays(knots)
-    v_knots, v_multiplicities = _knot_arrays(along.t)
+    u_knots, u_multiplicities = knot_arrays(knots)
+    v_knots, v_multiplicities = knot_arrays(along.t)
     surface = Geom_BSplineSurface(surface_poles, u_knots, v_knots, u_multiplicities, v_multiplicities, degree, 3)
     face = BRepBuilderAPI_MakeFace(surface, LOFT_PRECISION)
     if not face.IsDone():

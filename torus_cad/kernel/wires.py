@@ -132,17 +132,23 @@ def _polylines_cross(first: NDArray[np.float64], second: NDArray[np.float64]) ->
     return bool(np.any((orient(p, q, r) * orient(p, q, t) < 0) & (orient(r, t, p) * orient(r, t, q) < 0)))
 
 
-def bspline_wire(poles: NDArray[np.float64], knots: NDArray[np.float64]) -> cq.Wire:
-    """A wire of one non-rational B-spline edge from ``(m, 3)`` poles and a full knot vector."""
+def knot_arrays(knots: NDArray[np.float64]) -> tuple[TColStd_Array1OfReal, TColStd_Array1OfInteger]:
+    """OpenCascade's distinct knots and multiplicities from a full (repeated) knot vector."""
     distinct, multiplicities = np.unique(knots, return_counts=True)
-    pole_array = TColgp_Array1OfPnt(1, len(poles))
-    for index, (x, y, z) in enumerate(poles, start=1):
-        pole_array.SetValue(index, gp_Pnt(float(x), float(y), float(z)))
     knot_array = TColStd_Array1OfReal(1, len(distinct))
     multiplicity_array = TColStd_Array1OfInteger(1, len(distinct))
     for index, (knot, multiplicity) in enumerate(zip(distinct, multiplicities), start=1):
         knot_array.SetValue(index, float(knot))
         multiplicity_array.SetValue(index, int(multiplicity))
+    return knot_array, multiplicity_array
+
+
+def bspline_wire(poles: NDArray[np.float64], knots: NDArray[np.float64]) -> cq.Wire:
+    """A wire of one non-rational B-spline edge from ``(m, 3)`` poles and a full knot vector."""
+    pole_array = TColgp_Array1OfPnt(1, len(poles))
+    for index, (x, y, z) in enumerate(poles, start=1):
+        pole_array.SetValue(index, gp_Pnt(float(x), float(y), float(z)))
+    knot_array, multiplicity_array = knot_arrays(knots)
     curve = Geom_BSplineCurve(pole_array, knot_array, multiplicity_array, DEGREE)
     edge = BRepBuilderAPI_MakeEdge(curve)
     if not edge.IsDone():
