@@ -45,7 +45,7 @@ class Progress:
     def __init__(self, enabled: bool | None = None, stream: TextIO | None = None,
                  prefix: str = "torus-cad") -> None:
         self.stream = stream if stream is not None else sys.stderr
-        self.enabled = _is_terminal(self.stream) if enabled is None else bool(enabled)
+        self.enabled = is_terminal(self.stream) if enabled is None else bool(enabled)
         self.prefix = prefix
         self.start = time.perf_counter()
         self.stages: list[str] = []
@@ -54,7 +54,7 @@ class Progress:
     def for_terminal(cls, quiet: bool = False, stream: TextIO | None = None) -> "Progress":
         """Enabled when ``stream`` (default stderr) is a terminal and ``quiet`` is False."""
         stream = stream if stream is not None else sys.stderr
-        return cls(enabled=not quiet and _is_terminal(stream), stream=stream)
+        return cls(enabled=not quiet and is_terminal(stream), stream=stream)
 
     @property
     def elapsed(self) -> float:
@@ -77,7 +77,8 @@ class Progress:
         self.stream.flush()
 
 
-def _is_terminal(stream: TextIO) -> bool:
+def is_terminal(stream: TextIO) -> bool:
+    """Whether ``stream`` is an interactive terminal (False for pipes, files and closed streams)."""
     try:
         return bool(stream.isatty())
     except (AttributeError, ValueError):  # no isatty, or a closed stream

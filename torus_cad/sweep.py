@@ -76,6 +76,7 @@ import numpy as np
 
 from torus_cad.errors import GeometryError, KernelError, ParameterError, TorusCadError
 from torus_cad.geometry.parameters import PropellerParameters
+from torus_cad.progress import is_terminal
 
 __all__ = [
     "MODES", "Design", "DesignTask", "Progress", "SweepError", "SweepInterrupted", "SweepResult", "SweepSpec",
@@ -626,7 +627,7 @@ class Progress:
     def __init__(self, total: int, already_done: int = 0, stream: TextIO | None = None,
                  enabled: bool | None = None, width: int = 24) -> None:
         self.stream = sys.stderr if stream is None else stream
-        self.enabled = _isatty(self.stream) if enabled is None else enabled
+        self.enabled = is_terminal(self.stream) if enabled is None else enabled
         self.total, self.already_done, self.width = total, already_done, width
         self.counts = {STATUS_OK: 0, STATUS_REFUSED: 0, STATUS_FAILED: 0, STATUS_ERROR: 0}
         self.start = time.perf_counter()
@@ -681,13 +682,6 @@ class Progress:
             self.stream.write("\n")
             self.stream.flush()
             self._drawn = False
-
-
-def _isatty(stream: TextIO) -> bool:
-    try:
-        return stream.isatty()
-    except (AttributeError, ValueError):
-        return False
 
 
 def _duration(seconds: float) -> str:

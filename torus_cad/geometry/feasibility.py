@@ -28,10 +28,10 @@ from numpy.typing import NDArray
 from torus_cad.errors import GeometryError
 from torus_cad.geometry.airfoil import airfoil_points
 from torus_cad.geometry.centerline import Centerline
-from torus_cad.geometry.frames import Frames
+from torus_cad.geometry.frames import Frames, frenet_from_derivatives
 from torus_cad.geometry.parameters import PropellerParameters
-from torus_cad.geometry.surface import BladeSurface, airfoil_of, blade_frames
-from torus_cad.geometry.transforms import evaluate_quartic, transform_sections
+from torus_cad.geometry.surface import (BladeSurface, airfoil_of, blade_frames, place_on_frames,
+                                       section_coordinates)
 
 #: A section may reach at most this fraction of the way to the centre of curvature (check 3).
 FOLD_LIMIT = 1.0
@@ -160,17 +160,11 @@ def sample_tube(params: PropellerParameters, centerline: Centerline, s: NDArray[
     tangent = first / speed[:, None]
     curvature = (second - np.sum(second * tangent, axis=-1, keepdims=True) * tangent) / speed[:, None] ** 2
     if params.centerline.frame == "frenet":
-        origin = _bezier_points(centerline.control_points, s)
-        normal = curvature / np.linalg.norm(curvature, axis=-1, keepdims=True)
-        frames = Frames(s, origin, tangent, normal, np.cross(tangent, normal))
+        frames = Frames(s, _bezier_points(centerline.control_points, s), *frenet_from_derivatives(first, second))
     else:
         frames = blade_frames(params, s)
-    transforms = params.transforms
-    planar = transform_sections(airfoil_points(airfoil_of(params), t), evaluate_quartic(transforms.angle_of_attack, s),
-                                evaluate_quartic(transforms.scale_x, s), evaluate_quartic(transforms.scale_y, s),
-                                params.airfoil.pivot)
-    surface = (frames.origin[:, None, :] + planar[..., 0:1] * frames.normal[:, None, :]
-               + planar[..., 1:2] * frames.binormal[:, None, :])
+    planar = section_coordinates(params, s, airfoil_points(airfoil_of(params), t))
+    surface = place_on_frames(frames, planar)
     steps = np.linalg.norm(np.diff(frames.origin, axis=0), axis=-1)
     arc_length = np.concatenate([[0.0], np.cumsum(steps)])
     return Tube(s, frames.origin, frames.tangent, frames.normal, frames.binormal, planar, surface, curvature,

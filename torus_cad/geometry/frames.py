@@ -47,8 +47,9 @@ def curvature(first: NDArray[np.float64], second: NDArray[np.float64]) -> NDArra
     return np.linalg.norm(np.cross(first, second), axis=-1) / np.linalg.norm(first, axis=-1) ** 3
 
 
-def _frenet_from_derivatives(derivatives: NDArray[np.float64]) -> tuple[NDArray, NDArray, NDArray]:
-    first, second = derivatives[:, 1], derivatives[:, 2]
+def frenet_from_derivatives(first: NDArray[np.float64], second: NDArray[np.float64]
+                            ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """Unit T, N, B ``(k, 3)`` from C' and C'' ``(k, 3)`` (spec §4.1)."""
     tangent = _unit(first)
     # T' is parallel to the part of C'' normal to T; B = T x N.
     along = np.sum(second * tangent, axis=-1, keepdims=True)
@@ -70,7 +71,7 @@ def check_frenet_defined(centerline: Centerline, samples: int = FRAME_SCAN_SAMPL
             f"the Frenet frame is undefined: the centerline's curvature vanishes near s = {s[weakest]:.3f} "
             f"(kappa = {kappa[weakest]:.2e} 1/mm); bend the centerline or set centerline.frame = "
             "'rotation_minimizing'")
-    _, normal, _ = _frenet_from_derivatives(derivatives)
+    _, normal, _ = frenet_from_derivatives(derivatives[:, 1], derivatives[:, 2])
     flips = np.nonzero(np.sum(normal[:-1] * normal[1:], axis=-1) < 0.0)[0]
     if flips.size:
         where = 0.5 * (s[flips[0]] + s[flips[0] + 1])
@@ -84,7 +85,7 @@ def frenet_frames(centerline: Centerline, s: ArrayLike) -> Frames:
     check_frenet_defined(centerline)
     s = np.atleast_1d(np.asarray(s, dtype=float))
     derivatives = centerline.derivatives(s, order=2)
-    tangent, normal, binormal = _frenet_from_derivatives(derivatives)
+    tangent, normal, binormal = frenet_from_derivatives(derivatives[:, 1], derivatives[:, 2])
     return Frames(s, derivatives[:, 0], tangent, normal, binormal)
 
 

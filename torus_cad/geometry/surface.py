@@ -45,14 +45,24 @@ def airfoil_of(params: PropellerParameters) -> NacaAirfoil:
     return NacaAirfoil(a.max_camber, a.camber_position, a.thickness, a.camber_normal)
 
 
-def place_sections(params: PropellerParameters, frames: Frames, section: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Transform a chord-unit section ``(p, 2)`` for every frame and place it: ``(k, p, 3)`` mm."""
+def section_coordinates(params: PropellerParameters, s: NDArray[np.float64], section: NDArray[np.float64]
+                        ) -> NDArray[np.float64]:
+    """A chord-unit section ``(p, 2)`` rotated and scaled for every s (spec §2.3): ``(k, p, 2)`` mm."""
     transforms = params.transforms
-    planar = transform_sections(section, evaluate_quartic(transforms.angle_of_attack, frames.s),
-                                evaluate_quartic(transforms.scale_x, frames.s),
-                                evaluate_quartic(transforms.scale_y, frames.s), params.airfoil.pivot)
+    return transform_sections(section, evaluate_quartic(transforms.angle_of_attack, s),
+                              evaluate_quartic(transforms.scale_x, s), evaluate_quartic(transforms.scale_y, s),
+                              params.airfoil.pivot)
+
+
+def place_on_frames(frames: Frames, planar: NDArray[np.float64]) -> NDArray[np.float64]:
+    """X along N, Y along B (spec §4.2): ``(k, p, 2)`` section coordinates -> ``(k, p, 3)`` mm."""
     return (frames.origin[:, None, :] + planar[..., 0:1] * frames.normal[:, None, :]
             + planar[..., 1:2] * frames.binormal[:, None, :])
+
+
+def place_sections(params: PropellerParameters, frames: Frames, section: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Transform a chord-unit section ``(p, 2)`` for every frame and place it: ``(k, p, 3)`` mm."""
+    return place_on_frames(frames, section_coordinates(params, frames.s, section))
 
 
 def blade_frames(params: PropellerParameters, s: ArrayLike, blade_index: int = 0) -> Frames:
