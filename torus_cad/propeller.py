@@ -30,11 +30,15 @@ from torus_cad.geometry.parameters import PropellerParameters, resolve_parameter
 from torus_cad.geometry.surface import BladeSurface, blade_surface
 from torus_cad.kernel.checks import MassProperties, mass_properties, precise_volume, single_valid_solid
 from torus_cad.kernel.export import atomic_path, write_step, write_stl
-from torus_cad.kernel.fuse import fuse_all, pattern_blades
+from torus_cad.geometry.hub import seam_angle_deg
+from torus_cad.kernel.fuse import fuse_all, fuse_pattern, pattern_blades
 from torus_cad.kernel.hub import hub_solid
 from torus_cad.kernel.loft import loft_solid
 from torus_cad.kernel.wires import SectionCurves, fit_section_curves
 from torus_cad.tolerances import VOLUME_CHECK_RELATIVE_PRECISION
+
+#: The two ways the blades are joined to the hub (see torus_cad.kernel.fuse).
+FUSE_ROUTES = ("shared intersection", "one fuse")
 
 #: Default density for mass: PLA, a common printing plastic (g/cm^3).
 DEFAULT_DENSITY_G_CM3 = 1.24
@@ -70,6 +74,9 @@ class Propeller:
         surface: blade 0's sampled surface from the geometry layer.
         section_curves: blade 0's section B-splines (plain arrays).
         stage_seconds: seconds per stage (section math, wires, loft, fuse, check, ...).
+        fuse_route: how the blades were joined to the hub: ``"shared intersection"``
+            (one blade-hub intersection reused for every blade, the usual route) or
+            ``"one fuse"`` (a general boolean of the hub and all blades, the fallback).
     """
 
     parameters: PropellerParameters
@@ -79,6 +86,7 @@ class Propeller:
     surface: BladeSurface
     section_curves: SectionCurves
     stage_seconds: dict[str, float] = field(default_factory=dict)
+    fuse_route: str = FUSE_ROUTES[0]
 
     def workplane(self) -> cq.Workplane:
         """A cq.Workplane holding the fused solid."""
@@ -115,19 +123,41 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
     with timer.stage("section_math"):
         surface = blade_surface(params)
         check_feasible(params, surface, Centerline.for_blade(params))
+        seam_deg = seam_angle_deg(surface.points, params.hub.radius, params.blades)
     with timer.stage("wires"):
         curves = fit_section_curves(surface.points, surface.trailing_edge_index, _section_chords(surface))
         wires = curves.wires()
     with timer.stage("loft"):
         blade = loft_solid(wires, surface.s)
-        hub = hub_solid(params.hub.radius, params.hub.length)
-        blades = pattern_blades(blade, [blade_angle_deg(params, i) for i in range(params.blades)])
+        hub = hub_solid(params.hub.radius, params.hub.length, 0.0 if seam_deg is None else seam_deg)
+        angles_deg = [blade_angle_deg(params, i) for i in range(params.blades)]
+        blades = pattern_blades(blade, angles_deg)
+    solid, route = _join_blades_to_hub(hub, blade, blades, angles_deg, seam_deg is not None, timer)
+    return Propeller(params, solid, hub, blades, surface, curves, timer.seconds, route)
+
+
+def _join_blades_to_hub(hub: cq.Solid, blade: cq.Solid, blades: list[cq.Solid], angles_deg: list[float],
+                        shared: bool, timer: StageTimer) -> tuple[cq.Solid, str]:
+    """The fused, checked propeller and the route that made it (one of FUSE_ROUTES).
+
+    The shared-intersection route needs the hub's seam beside every blade footprint
+    (``shared``); its result is checked for validity and for the faces it must have. Where it
+    does not apply or fails, one general fuse is used and its volume is checked as well.
+    """
+    if shared:
+        try:
+            with timer.stage("fuse"):
+                fused = fuse_pattern(hub, blade, angles_deg)
+            with timer.stage("check"):
+                return single_valid_solid(fused, "gluing the blades to the hub"), FUSE_ROUTES[0]
+        except KernelError:
+            pass  # the general fuse below decides
     with timer.stage("fuse"):
         fused = fuse_all(hub, blades)
     with timer.stage("check"):
         solid = single_valid_solid(fused, "fusing the blades with the hub")
-        _check_volume(solid, hub, blade, params.blades)
-    return Propeller(params, solid, hub, blades, surface, curves, timer.seconds)
+        _check_volume(solid, hub, blade, len(blades))
+    return solid, FUSE_ROUTES[1]
 
 
 def _check_volume(solid: cq.Solid, hub: cq.Solid, blade: cq.Solid, blades: int) -> None:
@@ -150,6 +180,7 @@ def build_report(propeller: Propeller, density_g_cm3: float) -> dict:
         **properties.to_dict(),
         "section_fit_error_mm": propeller.section_curves.fit_error,
         "stage_seconds": dict(propeller.stage_seconds),
+        "fuse_route": propeller.fuse_route,
     }
 
 

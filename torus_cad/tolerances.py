@@ -48,3 +48,11 @@ SURFACE_ACCURACY_RELATIVE = 1e-3
 #: Largest allowed y_t * kappa_c of a cambered section (1 = the lower surface folds over);
 #: kept below 1 so the surface keeps a usable radius of curvature.
 FOLD_RATIO_LIMIT = 0.9
+
+#: Sections whose nearest point is within this fraction of the hub radius count as meeting
+#: the hub when the kernel looks for a place for the hub's seam (geometry.hub).
+HUB_FOOTPRINT_NEAR_RELATIVE = 0.02
+
+#: Angular margin (degrees) added at each side of a blade's footprint on the hub before the
+#: seam is placed beside it.
+HUB_FOOTPRINT_MARGIN_DEG = 1.0

@@ -1,15 +1,37 @@
-"""Pattern and fuse: n blades around the axis, joined with the hub in one boolean call."""
+"""Pattern and fuse: n blades around the axis, joined with the hub.
+
+Two routes give the same solid:
+
+* :func:`fuse_pattern` intersects one blade with the hub, once, and reuses that intersection
+  for every blade: the blade's part outside the hub is cut free, rotated to each blade angle,
+  and glued to the hub. Its cost barely grows with the blade count.
+* :func:`fuse_all` fuses the hub and all n blades in one general boolean; the fallback when
+  the first route does not apply (a blade footprint across the hub's seam, for example).
+"""
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
-from OCP.BRepAlgoAPI import BRepAlgoAPI_Fuse
+from OCP.BOPAlgo import BOPAlgo_GlueShift
+from OCP.BRep import BRep_Builder, BRep_Tool
+from OCP.BRepAlgoAPI import BRepAlgoAPI_BooleanOperation, BRepAlgoAPI_Cut, BRepAlgoAPI_Fuse
+from OCP.BRepTools import BRepTools
+from OCP.GeomAbs import GeomAbs_Cylinder
+from OCP.BRepAdaptor import BRepAdaptor_Surface
+from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt, gp_Trsf, gp_Vec2d
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE
+from OCP.TopExp import TopExp_Explorer
+from OCP.TopLoc import TopLoc_Location
+from OCP.TopoDS import TopoDS, TopoDS_Edge, TopoDS_Face, TopoDS_Shape
 from OCP.TopTools import TopTools_ListOfShape
 
 import cadquery as cq
 
 from torus_cad.errors import KernelError
+
+_FULL_TURN = 2.0 * math.pi
 
 
 def pattern_blades(blade: cq.Solid, angles_deg: Sequence[float]) -> list[cq.Solid]:
@@ -25,16 +47,120 @@ def pattern_blades(blade: cq.Solid, angles_deg: Sequence[float]) -> list[cq.Soli
 
 def fuse_all(hub: cq.Solid, blades: Sequence[cq.Solid]) -> cq.Shape:
     """Hub and all blades fused in one BRepAlgoAPI_Fuse call (parallel, oriented bounding boxes)."""
-    arguments, tools = TopTools_ListOfShape(), TopTools_ListOfShape()
-    arguments.Append(hub.wrapped)
-    for blade in blades:
-        tools.Append(blade.wrapped)
-    fuse = BRepAlgoAPI_Fuse()
-    fuse.SetArguments(arguments)
-    fuse.SetTools(tools)
-    fuse.SetRunParallel(True)
-    fuse.SetUseOBB(True)
-    fuse.Build()
-    if not fuse.IsDone() or fuse.Shape().IsNull():
-        raise KernelError("OpenCascade could not fuse the blades with the hub (BRepAlgoAPI_Fuse reported errors)")
-    return cq.Shape.cast(fuse.Shape())
+    fuse = _boolean(BRepAlgoAPI_Fuse(), [hub.wrapped], [blade.wrapped for blade in blades])
+    return cq.Shape.cast(_result(fuse, "fuse the blades with the hub"))
+
+
+def fuse_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float]) -> cq.Shape:
+    """Hub and copies of ``blade`` at every angle, with one blade-hub intersection for all of them.
+
+    1. Cut the blade (built at ``angles_deg[0]``) by the hub: its part outside the hub, whose
+       faces on the hub's lateral cylinder ("patches") are bounded by the intersection curves.
+    2. Rotate that part to every angle. A rotation about the axis maps the hub's cylinder onto
+       itself with u shifted by the angle, so each copy's curves on the cylinder are blade 0's
+       shifted in u; they are attached to the hub's lateral face as such, instead of being
+       projected again.
+    3. Glue the copies to the hub (a fuse with BOPAlgo_GlueShift: the shapes only touch along
+       faces of the same cylinder, so no surface-surface intersection is needed).
+
+    The hub's seam must lie outside every blade's footprint (see
+    :func:`torus_cad.geometry.hub.seam_angle_deg`); otherwise, or when the result does not
+    have the faces it must have, KernelError is raised and the caller falls back to
+    :func:`fuse_all`.
+    """
+    lateral = _lateral_face(hub)
+    cut = _boolean(BRepAlgoAPI_Cut(), [blade.wrapped], [hub.wrapped])
+    outside = _result(cut, "cut the blade free of the hub")
+    patches = _modified_faces(cut, lateral)
+    if not patches:
+        raise KernelError("the blade does not meet the hub's lateral face")
+    blade_faces = _count(outside, TopAbs_FACE) - len(_modified_faces_of_shape(cut, hub.wrapped))
+    copies = [_rotated_with_hub_curves(outside, patches, lateral, math.radians(angle - angles_deg[0]))
+              for angle in angles_deg]
+    glue = BRepAlgoAPI_Fuse()
+    glue.SetGlue(BOPAlgo_GlueShift)
+    fused = _result(_boolean(glue, [hub.wrapped], copies), "glue the blades to the hub")
+    expected = _count(hub.wrapped, TopAbs_FACE) + len(angles_deg) * blade_faces
+    if _count(fused, TopAbs_FACE) != expected:
+        raise KernelError(f"gluing the blades to the hub gave {_count(fused, TopAbs_FACE)} faces "
+                          f"instead of {expected}")
+    return cq.Shape.cast(fused)
+
+
+def _rotated_with_hub_curves(outside: TopoDS_Shape, patches: list[TopoDS_Face], lateral: TopoDS_Face,
+                             angle_rad: float) -> TopoDS_Shape:
+    """``outside`` rotated by ``angle_rad`` about +z, its patch edges given curves on ``lateral``."""
+    rotation = gp_Trsf()
+    rotation.SetRotation(gp_Ax1(gp_Pnt(0.0, 0.0, 0.0), gp_Dir(0.0, 0.0, 1.0)), angle_rad)
+    location = TopLoc_Location(rotation)
+    builder = BRep_Builder()
+    for patch in patches:
+        u_min, u_max, _, _ = BRepTools.UVBounds_s(patch)
+        shift = angle_rad - _FULL_TURN * math.floor((u_min + angle_rad) / _FULL_TURN)
+        if u_max + shift > _FULL_TURN:
+            raise KernelError("a blade's footprint on the hub crosses the hub's seam")
+        for edge in _edges(patch):
+            curve = BRep_Tool.CurveOnSurface_s(edge, patch, 0.0, 0.0)
+            if curve is None:
+                raise KernelError("an intersection edge has no curve on the hub")
+            moved = TopoDS.Edge_s(edge.Moved(location))
+            builder.UpdateEdge(moved, curve.Translated(gp_Vec2d(shift, 0.0)), lateral, BRep_Tool.Tolerance_s(edge))
+    return outside.Moved(location)
+
+
+def _lateral_face(hub: cq.Solid) -> TopoDS_Face:
+    for face in hub.Faces():
+        if BRepAdaptor_Surface(face.wrapped).GetType() == GeomAbs_Cylinder:
+            return face.wrapped
+    raise KernelError("the hub has no cylindrical face")
+
+
+def _modified_faces(operation: BRepAlgoAPI_BooleanOperation, face: TopoDS_Face) -> list[TopoDS_Face]:
+    """The pieces of an argument's ``face`` that bound the result (from the operation's history)."""
+    return [TopoDS.Face_s(piece) for piece in operation.Modified(face)]
+
+
+def _modified_faces_of_shape(operation: BRepAlgoAPI_BooleanOperation, shape: TopoDS_Shape) -> list[TopoDS_Face]:
+    return [piece for face in _faces(shape) for piece in _modified_faces(operation, face)]
+
+
+def _boolean(operation: BRepAlgoAPI_BooleanOperation, arguments: Sequence[TopoDS_Shape],
+             tools: Sequence[TopoDS_Shape]) -> BRepAlgoAPI_BooleanOperation:
+    """Run ``operation`` on ``arguments`` and ``tools`` (parallel, oriented bounding boxes)."""
+    argument_list, tool_list = TopTools_ListOfShape(), TopTools_ListOfShape()
+    for shape in arguments:
+        argument_list.Append(shape)
+    for shape in tools:
+        tool_list.Append(shape)
+    operation.SetArguments(argument_list)
+    operation.SetTools(tool_list)
+    operation.SetRunParallel(True)
+    operation.SetUseOBB(True)
+    operation.Build()
+    return operation
+
+
+def _result(operation: BRepAlgoAPI_BooleanOperation, what: str) -> TopoDS_Shape:
+    if not operation.IsDone() or operation.Shape().IsNull():
+        raise KernelError(f"OpenCascade could not {what} (the boolean operation reported errors)")
+    return operation.Shape()
+
+
+def _explore(shape: TopoDS_Shape, kind) -> list[TopoDS_Shape]:
+    found, explorer = [], TopExp_Explorer(shape, kind)
+    while explorer.More():
+        found.append(explorer.Current())
+        explorer.Next()
+    return found
+
+
+def _faces(shape: TopoDS_Shape) -> list[TopoDS_Face]:
+    return [TopoDS.Face_s(face) for face in _explore(shape, TopAbs_FACE)]
+
+
+def _edges(shape: TopoDS_Shape) -> list[TopoDS_Edge]:
+    return [TopoDS.Edge_s(edge) for edge in _explore(shape, TopAbs_EDGE)]
+
+
+def _count(shape: TopoDS_Shape, kind) -> int:
+    return len(_explore(shape, kind))
