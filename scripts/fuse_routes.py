@@ -65,7 +65,9 @@ def main(argv: list[str] | None = None) -> int:
     shared = [row for row in valid if row["route"] == "shared intersection"]
     print(f"{args.count} designs: {len(valid)} built, {sum(r['outcome'] == 'refused' for r in rows)} refused, "
           f"{sum(r['outcome'] == 'error' for r in rows)} errors ({time.perf_counter() - started:.0f} s)")
-    print(f"route: shared intersection {len(shared)}, one fuse {len(valid) - len(shared)}")
+    fallbacks = [row["seed"] for row in valid if row["route"] != "shared intersection"]
+    print(f"route: shared intersection {len(shared)}, one fuse {len(fallbacks)}"
+          + (f" (seeds {', '.join(map(str, fallbacks))})" if fallbacks else ""))
     bad = [row for row in valid if row["relative_volume_difference"] > args.tolerance or
            row["faces"][0] != row["faces"][1]]
     if valid:

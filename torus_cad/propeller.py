@@ -123,6 +123,7 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
     with timer.stage("section_math"):
         surface = blade_surface(params)
         check_feasible(params, surface, Centerline.for_blade(params))
+        # The hub is symmetric about its axis; its seam goes where it crosses no blade root.
         seam_deg = seam_angle_deg(surface.points, params.hub.radius, params.blades)
     with timer.stage("wires"):
         curves = fit_section_curves(surface.points, surface.trailing_edge_index, _section_chords(surface))
@@ -132,26 +133,25 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
         hub = hub_solid(params.hub.radius, params.hub.length, 0.0 if seam_deg is None else seam_deg)
         angles_deg = [blade_angle_deg(params, i) for i in range(params.blades)]
         blades = pattern_blades(blade, angles_deg)
-    solid, route = _join_blades_to_hub(hub, blade, blades, angles_deg, seam_deg is not None, timer)
+    solid, route = _join_blades_to_hub(hub, blade, blades, angles_deg, timer)
     return Propeller(params, solid, hub, blades, surface, curves, timer.seconds, route)
 
 
 def _join_blades_to_hub(hub: cq.Solid, blade: cq.Solid, blades: list[cq.Solid], angles_deg: list[float],
-                        shared: bool, timer: StageTimer) -> tuple[cq.Solid, str]:
+                        timer: StageTimer) -> tuple[cq.Solid, str]:
     """The fused, checked propeller and the route that made it (one of FUSE_ROUTES).
 
-    The shared-intersection route needs the hub's seam beside every blade footprint
-    (``shared``); its result is checked for validity and for the faces it must have. Where it
-    does not apply or fails, one general fuse is used and its volume is checked as well.
+    The shared-intersection route's result is checked for validity (which includes every
+    edge's curve on the hub against its 3D curve) and for the faces it must have. Where that
+    route fails, one general fuse is used and its volume is checked as well.
     """
-    if shared:
-        try:
-            with timer.stage("fuse"):
-                fused = fuse_pattern(hub, blade, angles_deg)
-            with timer.stage("check"):
-                return single_valid_solid(fused, "gluing the blades to the hub"), FUSE_ROUTES[0]
-        except KernelError:
-            pass  # the general fuse below decides
+    try:
+        with timer.stage("fuse"):
+            fused = fuse_pattern(hub, blade, angles_deg)
+        with timer.stage("check"):
+            return single_valid_solid(fused, "gluing the blades to the hub"), FUSE_ROUTES[0]
+    except KernelError:
+        pass  # the general fuse below decides
     with timer.stage("fuse"):
         fused = fuse_all(hub, blades)
     with timer.stage("check"):

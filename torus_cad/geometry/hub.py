@@ -2,9 +2,9 @@
 
 A B-rep cylinder has a seam: the line u = 0 of its lateral face, at some angle about the
 axis. The hub is rotationally symmetric, so that angle is free, and the kernel puts it where
-no blade meets the hub. The holes the blades cut into the lateral face then never straddle
-the seam, and blade i's hole is exactly blade 0's shifted by 360 i / n degrees in u, which
-lets the kernel intersect one blade with the hub and reuse the result for every blade.
+no blade meets the hub: the holes the blades cut into the lateral face then never straddle
+the seam, so no seam edge runs through a blade root in the STEP file, and blade i's hole is
+blade 0's shifted by 360 i / n degrees in u, in one piece.
 """
 
 from __future__ import annotations

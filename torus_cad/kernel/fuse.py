@@ -63,10 +63,11 @@ def fuse_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float]) ->
     3. Glue the copies to the hub (a fuse with BOPAlgo_GlueShift: the shapes only touch along
        faces of the same cylinder, so no surface-surface intersection is needed).
 
-    The hub's seam must lie outside every blade's footprint (see
-    :func:`torus_cad.geometry.hub.seam_angle_deg`); otherwise, or when the result does not
-    have the faces it must have, KernelError is raised and the caller falls back to
-    :func:`fuse_all`.
+    The result is checked for the faces it must have (the hub's, and each copy's blade
+    faces); KernelError otherwise, and the caller falls back to :func:`fuse_all`. The copies'
+    patches may straddle the hub's seam (each piece is shifted on its own), but the
+    propeller's B-rep is cleaner with the seam beside every footprint, see
+    :func:`torus_cad.geometry.hub.seam_angle_deg`.
     """
     lateral = _lateral_face(hub)
     cut = _boolean(BRepAlgoAPI_Cut(), [blade.wrapped], [hub.wrapped])
