@@ -15,6 +15,7 @@ median times; designs whose volumes differ by more than ``--tolerance`` are list
 from __future__ import annotations
 
 import argparse
+import collections
 import statistics
 import sys
 import time
@@ -62,12 +63,14 @@ def main(argv: list[str] | None = None) -> int:
     with ProcessPoolExecutor(args.workers) as pool:
         rows = list(pool.map(compare, range(args.seed, args.seed + args.count)))
     valid = [row for row in rows if row["outcome"] == "valid"]
-    shared = [row for row in valid if row["route"] == "shared intersection"]
+    shared = [row for row in valid if row["route"] != "one fuse"]
     print(f"{args.count} designs: {len(valid)} built, {sum(r['outcome'] == 'refused' for r in rows)} refused, "
           f"{sum(r['outcome'] == 'error' for r in rows)} errors ({time.perf_counter() - started:.0f} s)")
-    fallbacks = [row["seed"] for row in valid if row["route"] != "shared intersection"]
-    print(f"route: shared intersection {len(shared)}, one fuse {len(fallbacks)}"
-          + (f" (seeds {', '.join(map(str, fallbacks))})" if fallbacks else ""))
+    routes = collections.Counter(row["route"] for row in valid)
+    print("routes: " + ", ".join(f"{route} {count}" for route, count in sorted(routes.items())))
+    for route in sorted(routes):
+        if route != "shared intersection, assembled":
+            print(f"  {route}: seeds {', '.join(str(row['seed']) for row in valid if row['route'] == route)}")
     bad = [row for row in valid if row["relative_volume_difference"] > args.tolerance or
            row["faces"][0] != row["faces"][1]]
     if valid:

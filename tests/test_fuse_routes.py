@@ -101,22 +101,28 @@ def test_hub_seam_angle_moves_the_seam_not_the_solid():
 
 
 def test_default_takes_the_shared_route_and_equals_the_general_fuse(default_propeller):
-    assert default_propeller.fuse_route == FUSE_ROUTES[0]
+    assert default_propeller.fuse_route == "shared intersection, assembled"
     general = _general_fuse(default_propeller)
     assert precise_volume(default_propeller.solid, VOLUME_PRECISION) == pytest.approx(
         precise_volume(general, VOLUME_PRECISION), rel=ROUTE_VOLUME_TOLERANCE)
     assert len(default_propeller.solid.Faces()) == len(general.Faces())
 
 
-@pytest.mark.parametrize("seam_deg", [0.0, 20.0, 90.0])
-def test_any_seam_angle_gives_the_same_solid(default_propeller, seam_deg):
-    # Seams through a blade root, too: each piece of a split patch is shifted on its own.
+@pytest.mark.parametrize("seam_deg, join", [(20.0, "glued"), (90.0, "glued"), (None, "assembled")])
+def test_any_seam_angle_gives_the_same_solid(default_propeller, seam_deg, join):
+    # A seam through a blade root splits that root's patch; the split pieces are shifted on
+    # their own and glued. The seam the pipeline picks (None here) lets the shell be assembled.
     params = default_propeller.parameters
+    if seam_deg is None:
+        seam_deg = seam_angle_deg(default_propeller.surface.points, params.hub.radius, params.blades)
     hub = hub_solid(params.hub.radius, params.hub.length, seam_deg)
     angles = [360.0 * index / params.blades for index in range(params.blades)]
-    solid = single_valid_solid(fuse_pattern(hub, default_propeller.blades[0], angles), "the shared route")
+    shape, used = fuse_pattern(hub, default_propeller.blades[0], angles)
+    solid = single_valid_solid(shape, "the shared route")
+    assert used == join
     assert precise_volume(solid, VOLUME_PRECISION) == pytest.approx(
         precise_volume(default_propeller.solid, VOLUME_PRECISION), rel=ROUTE_VOLUME_TOLERANCE)
+    assert len(solid.Faces()) == len(default_propeller.solid.Faces())
 
 
 def test_when_the_shared_route_fails_the_general_fuse_builds_it(light_params, monkeypatch):
@@ -127,7 +133,7 @@ def test_when_the_shared_route_fails_the_general_fuse_builds_it(light_params, mo
 
     monkeypatch.setattr(pipeline, "fuse_pattern", failing)
     fallback = build_propeller(light_params)
-    assert (shared.fuse_route, fallback.fuse_route) == FUSE_ROUTES
+    assert (shared.fuse_route, fallback.fuse_route) == (FUSE_ROUTES[0], FUSE_ROUTES[-1])
     assert is_valid_closed_solid(fallback.solid)
     assert precise_volume(fallback.solid, VOLUME_PRECISION) == pytest.approx(
         precise_volume(shared.solid, VOLUME_PRECISION), rel=ROUTE_VOLUME_TOLERANCE)
@@ -141,5 +147,5 @@ def test_a_wrong_curve_on_the_hub_is_caught_not_shipped(light_params, monkeypatc
     real_vector = fuse.gp_Vec2d
     monkeypatch.setattr(fuse, "gp_Vec2d", lambda du, dv: real_vector(du + 0.05 if du else du, dv))
     propeller = build_propeller(light_params)
-    assert propeller.fuse_route == FUSE_ROUTES[1]
+    assert propeller.fuse_route == FUSE_ROUTES[-1]
     assert is_valid_closed_solid(propeller.solid)

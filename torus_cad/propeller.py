@@ -37,8 +37,10 @@ from torus_cad.kernel.loft import loft_solid
 from torus_cad.kernel.wires import SectionCurves, fit_section_curves
 from torus_cad.tolerances import VOLUME_CHECK_RELATIVE_PRECISION
 
-#: The two ways the blades are joined to the hub (see torus_cad.kernel.fuse).
-FUSE_ROUTES = ("shared intersection", "one fuse")
+#: The ways the blades are joined to the hub (see torus_cad.kernel.fuse): one blade-hub
+#: intersection shared by all blades, then the shell assembled or the parts glued; or, as
+#: the fallback, one general fuse of the hub and all blades.
+FUSE_ROUTES = ("shared intersection, assembled", "shared intersection, glued", "one fuse")
 
 #: Default density for mass: PLA, a common printing plastic (g/cm^3).
 DEFAULT_DENSITY_G_CM3 = 1.24
@@ -74,9 +76,9 @@ class Propeller:
         surface: blade 0's sampled surface from the geometry layer.
         section_curves: blade 0's section B-splines (plain arrays).
         stage_seconds: seconds per stage (section math, wires, loft, fuse, check, ...).
-        fuse_route: how the blades were joined to the hub: ``"shared intersection"``
-            (one blade-hub intersection reused for every blade, the usual route) or
-            ``"one fuse"`` (a general boolean of the hub and all blades, the fallback).
+        fuse_route: how the blades were joined to the hub, one of FUSE_ROUTES: one
+            blade-hub intersection reused for every blade (the usual route), or
+            ``"one fuse"``, a general boolean of the hub and all blades (the fallback).
     """
 
     parameters: PropellerParameters
@@ -147,9 +149,9 @@ def _join_blades_to_hub(hub: cq.Solid, blade: cq.Solid, blades: list[cq.Solid], 
     """
     try:
         with timer.stage("fuse"):
-            fused = fuse_pattern(hub, blade, angles_deg)
+            fused, join = fuse_pattern(hub, blade, angles_deg)
         with timer.stage("check"):
-            return single_valid_solid(fused, "gluing the blades to the hub"), FUSE_ROUTES[0]
+            return single_valid_solid(fused, "joining the blades to the hub"), f"shared intersection, {join}"
     except KernelError:
         pass  # the general fuse below decides
     with timer.stage("fuse"):
@@ -157,7 +159,7 @@ def _join_blades_to_hub(hub: cq.Solid, blade: cq.Solid, blades: list[cq.Solid], 
     with timer.stage("check"):
         solid = single_valid_solid(fused, "fusing the blades with the hub")
         _check_volume(solid, hub, blade, len(blades))
-    return solid, FUSE_ROUTES[1]
+    return solid, FUSE_ROUTES[-1]
 
 
 def _check_volume(solid: cq.Solid, hub: cq.Solid, blade: cq.Solid, blades: int) -> None:

@@ -4,7 +4,7 @@ Two routes give the same solid:
 
 * :func:`fuse_pattern` intersects one blade with the hub, once, and reuses that intersection
   for every blade: the blade's part outside the hub is cut free, rotated to each blade angle,
-  and glued to the hub. Its cost barely grows with the blade count.
+  and joined to the hub. Its cost barely grows with the blade count.
 * :func:`fuse_all` fuses the hub and all n blades in one general boolean; the fallback when
   the first route does not apply (a blade footprint across the hub's seam, for example).
 """
@@ -17,14 +17,15 @@ from collections.abc import Sequence
 from OCP.BOPAlgo import BOPAlgo_GlueShift
 from OCP.BRep import BRep_Builder, BRep_Tool
 from OCP.BRepAlgoAPI import BRepAlgoAPI_BooleanOperation, BRepAlgoAPI_Cut, BRepAlgoAPI_Fuse
+from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
 from OCP.BRepTools import BRepTools
 from OCP.GeomAbs import GeomAbs_Cylinder
 from OCP.BRepAdaptor import BRepAdaptor_Surface
 from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt, gp_Trsf, gp_Vec2d
-from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_WIRE
 from OCP.TopExp import TopExp_Explorer
 from OCP.TopLoc import TopLoc_Location
-from OCP.TopoDS import TopoDS, TopoDS_Edge, TopoDS_Face, TopoDS_Shape
+from OCP.TopoDS import TopoDS, TopoDS_Edge, TopoDS_Face, TopoDS_Shape, TopoDS_Shell, TopoDS_Solid
 from OCP.TopTools import TopTools_ListOfShape
 
 import cadquery as cq
@@ -51,7 +52,11 @@ def fuse_all(hub: cq.Solid, blades: Sequence[cq.Solid]) -> cq.Shape:
     return cq.Shape.cast(_result(fuse, "fuse the blades with the hub"))
 
 
-def fuse_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float]) -> cq.Shape:
+#: How :func:`fuse_pattern` joined the copies to the hub.
+JOINS = ("assembled", "glued")
+
+
+def fuse_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float]) -> tuple[cq.Shape, str]:
     """Hub and copies of ``blade`` at every angle, with one blade-hub intersection for all of them.
 
     1. Cut the blade (built at ``angles_deg[0]``) by the hub: its part outside the hub, whose
@@ -60,13 +65,14 @@ def fuse_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float]) ->
        itself with u shifted by the angle, so each copy's curves on the cylinder are blade 0's
        shifted in u; they are attached to the hub's lateral face as such, instead of being
        projected again.
-    3. Glue the copies to the hub (a fuse with BOPAlgo_GlueShift: the shapes only touch along
-       faces of the same cylinder, so no surface-surface intersection is needed).
+    3. Join the copies to the hub. Usually the hub only loses one hole per patch, and the
+       shell is put together from known faces (:func:`_assemble`). When a blade also cuts an
+       end face, or a patch straddles the hub's seam, the copies are glued to the hub with a
+       fuse that needs no surface-surface intersection (:func:`_glue`).
 
-    The result is checked for the faces it must have (the hub's, and each copy's blade
-    faces); KernelError otherwise, and the caller falls back to :func:`fuse_all`. The copies'
-    patches may straddle the hub's seam (each piece is shifted on its own), but the
-    propeller's B-rep is cleaner with the seam beside every footprint, see
+    Returns the shape and how it was joined (one of :data:`JOINS`). The caller checks the result (validity covers each edge's curve on the hub against its 3D
+    curve) and falls back to :func:`fuse_all` on a KernelError or an invalid solid. The
+    propeller's hub has its seam beside every footprint, see
     :func:`torus_cad.geometry.hub.seam_angle_deg`.
     """
     lateral = _lateral_face(hub)
@@ -75,17 +81,61 @@ def fuse_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float]) ->
     patches = _modified_faces(cut, lateral)
     if not patches:
         raise KernelError("the blade does not meet the hub's lateral face")
-    blade_faces = _count(outside, TopAbs_FACE) - len(_modified_faces_of_shape(cut, hub.wrapped))
+    hub_pieces = _modified_faces_of_shape(cut, hub.wrapped)
     copies = [_rotated_with_hub_curves(outside, patches, lateral, math.radians(angle - angles_deg[0]))
               for angle in angles_deg]
+    whole_patches = len(hub_pieces) == len(patches) and not any(
+        BRep_Tool.IsClosed_s(edge, patch) for patch in patches for edge in _edges(patch))
+    if whole_patches:
+        return cq.Shape.cast(_assemble(hub, lateral, copies, patches)), JOINS[0]
+    blade_faces = _count(outside, TopAbs_FACE) - len(hub_pieces)
+    glued = _glue(hub, copies, _count(hub.wrapped, TopAbs_FACE) + len(copies) * blade_faces)
+    return cq.Shape.cast(glued), JOINS[1]
+
+
+def _assemble(hub: cq.Solid, lateral: TopoDS_Face, copies: Sequence[TopoDS_Shape],
+              patches: Sequence[TopoDS_Face]) -> TopoDS_Solid:
+    """The propeller's solid put together from known faces, with no boolean.
+
+    Its shell: the hub's end faces, a new lateral face (the hub's surface and outer wire) with
+    each copy's patch boundaries as holes, and each copy's faces off the hub. A patch lies on
+    the hub's cylinder with its normal flipped (its material is outside the hub), and the hole
+    keeps the material on the other side of the same curve; the two flips cancel, so the
+    patch's wires, oriented as the patch uses them, are the holes as the lateral face uses them.
+    """
+    lateral_with_holes = BRepBuilderAPI_MakeFace(BRep_Tool.Surface_s(lateral), BRepTools.OuterWire_s(lateral), True)
+    builder = BRep_Builder()
+    shell = TopoDS_Shell()
+    builder.MakeShell(shell)
+    for copy in copies:
+        for face in _faces(copy):
+            if any(face.IsPartner(patch) for patch in patches):
+                for wire in _explore(face, TopAbs_WIRE):
+                    lateral_with_holes.Add(TopoDS.Wire_s(wire))
+            else:
+                builder.Add(shell, face)
+    if not lateral_with_holes.IsDone():
+        raise KernelError("OpenCascade could not cut the blade roots out of the hub's lateral face")
+    builder.Add(shell, lateral_with_holes.Face())
+    for face in _faces(hub.wrapped):
+        if not face.IsSame(lateral):
+            builder.Add(shell, face)
+    shell.Closed(BRep_Tool.IsClosed_s(shell))
+    solid = TopoDS_Solid()
+    builder.MakeSolid(solid)
+    builder.Add(solid, shell)
+    return solid
+
+
+def _glue(hub: cq.Solid, copies: Sequence[TopoDS_Shape], expected_faces: int) -> TopoDS_Shape:
+    """Hub and copies fused with BOPAlgo_GlueShift: they only touch along faces of the hub's surfaces."""
     glue = BRepAlgoAPI_Fuse()
     glue.SetGlue(BOPAlgo_GlueShift)
     fused = _result(_boolean(glue, [hub.wrapped], copies), "glue the blades to the hub")
-    expected = _count(hub.wrapped, TopAbs_FACE) + len(angles_deg) * blade_faces
-    if _count(fused, TopAbs_FACE) != expected:
+    if _count(fused, TopAbs_FACE) != expected_faces:
         raise KernelError(f"gluing the blades to the hub gave {_count(fused, TopAbs_FACE)} faces "
-                          f"instead of {expected}")
-    return cq.Shape.cast(fused)
+                          f"instead of {expected_faces}")
+    return fused
 
 
 def _rotated_with_hub_curves(outside: TopoDS_Shape, patches: list[TopoDS_Face], lateral: TopoDS_Face,
