@@ -423,7 +423,7 @@ def print_report(report: dict[str, Any]) -> None:
         print(f"  {'route':<40}{'time s':>8}{'B-rep faster':>13}{'closed':>8}{'open edges':>11}"
               f"{'max dist mm':>12}{'mean dist mm':>13}")
         brep = route["brep"]
-        print(f"  {'B-rep (loft + one OCCT fuse), valid solid':<40}{brep['total_s']:8.3f}{'':>13}{'yes':>8}{0:>11}"
+        print(f"  {'B-rep (loft, shared-intersection fuse)':<40}{brep['total_s']:8.3f}{'':>13}{'yes':>8}{0:>11}"
               f"{brep['distance_max_mm']:12.5f}{brep['distance_mean_mm']:13.5f}")
         labels = {"pyvista_spec": "PyVista, spec as written (Cylinder hub)",
                   "pyvista_grid": "PyVista, structured hub grid (§6.2)",
