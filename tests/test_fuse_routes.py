@@ -7,6 +7,7 @@ same faces. ``scripts/fuse_routes.py N`` makes the same comparison on N random d
 
 from __future__ import annotations
 
+import cadquery as cq
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -26,7 +27,7 @@ ROUTE_VOLUME_TOLERANCE = 1e-7
 VOLUME_PRECISION = 1e-8
 
 
-def _general_fuse(propeller) -> "cq.Solid":  # noqa: F821 - cadquery type, imported by the package
+def _general_fuse(propeller) -> cq.Solid:
     return single_valid_solid(fuse_all(propeller.hub, propeller.blades), "the general fuse")
 
 

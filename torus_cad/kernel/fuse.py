@@ -5,8 +5,8 @@ Two routes give the same solid:
 * :func:`fuse_pattern` intersects one blade with the hub, once, and reuses that intersection
   for every blade: the blade's part outside the hub is cut free, rotated to each blade angle,
   and joined to the hub. Its cost barely grows with the blade count.
-* :func:`fuse_all` fuses the hub and all n blades in one general boolean; the fallback when
-  the first route does not apply (a blade footprint across the hub's seam, for example).
+* :func:`fuse_all` fuses the hub and all n blades in one general boolean: the fallback for
+  whenever the first route raises or its result fails the checks.
 """
 
 from __future__ import annotations
@@ -16,11 +16,11 @@ from collections.abc import Sequence
 
 from OCP.BOPAlgo import BOPAlgo_GlueShift
 from OCP.BRep import BRep_Builder, BRep_Tool
+from OCP.BRepAdaptor import BRepAdaptor_Surface
 from OCP.BRepAlgoAPI import BRepAlgoAPI_BooleanOperation, BRepAlgoAPI_Cut, BRepAlgoAPI_Fuse
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
 from OCP.BRepTools import BRepTools
 from OCP.GeomAbs import GeomAbs_Cylinder
-from OCP.BRepAdaptor import BRepAdaptor_Surface
 from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt, gp_Trsf, gp_Vec2d
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_WIRE
 from OCP.TopExp import TopExp_Explorer
@@ -140,7 +140,11 @@ def _glue(hub: cq.Solid, copies: Sequence[TopoDS_Shape], expected_faces: int) ->
 
 def _rotated_with_hub_curves(outside: TopoDS_Shape, patches: list[TopoDS_Face], lateral: TopoDS_Face,
                              angle_rad: float) -> TopoDS_Shape:
-    """``outside`` rotated by ``angle_rad`` about +z, its patch edges given curves on ``lateral``."""
+    """``outside`` rotated by ``angle_rad`` about +z, its patch edges given curves on ``lateral``.
+
+    The copy shares its edges with ``outside`` (only the location differs); each edge keeps one
+    curve on ``lateral`` per location, so the copies' curves do not disturb each other.
+    """
     rotation = gp_Trsf()
     rotation.SetRotation(gp_Ax1(gp_Pnt(0.0, 0.0, 0.0), gp_Dir(0.0, 0.0, 1.0)), angle_rad)
     location = TopLoc_Location(rotation)
