@@ -102,7 +102,7 @@ def test_hub_seam_angle_moves_the_seam_not_the_solid():
 
 
 def test_default_takes_the_shared_route_and_equals_the_general_fuse(default_propeller):
-    assert default_propeller.fuse_route == "shared intersection, assembled"
+    assert default_propeller.fuse_route == FUSE_ROUTES[0]  # shared intersection, assembled
     general = _general_fuse(default_propeller)
     assert precise_volume(default_propeller.solid, VOLUME_PRECISION) == pytest.approx(
         precise_volume(general, VOLUME_PRECISION), rel=ROUTE_VOLUME_TOLERANCE)

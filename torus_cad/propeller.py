@@ -26,12 +26,12 @@ import cadquery as cq
 from torus_cad.errors import KernelError
 from torus_cad.geometry.centerline import Centerline, blade_angle_deg
 from torus_cad.geometry.feasibility import check_feasible
+from torus_cad.geometry.hub import seam_angle_deg
 from torus_cad.geometry.parameters import PropellerParameters, resolve_parameters
 from torus_cad.geometry.surface import BladeSurface, blade_surface
 from torus_cad.kernel.checks import MassProperties, mass_properties, precise_volume, single_valid_solid
 from torus_cad.kernel.export import atomic_path, write_step, write_stl
-from torus_cad.geometry.hub import seam_angle_deg
-from torus_cad.kernel.fuse import fuse_all, fuse_pattern, pattern_blades
+from torus_cad.kernel.fuse import JOINS, fuse_all, fuse_pattern, pattern_blades
 from torus_cad.kernel.hub import hub_solid
 from torus_cad.kernel.loft import loft_solid
 from torus_cad.kernel.wires import SectionCurves, fit_section_curves
@@ -40,7 +40,7 @@ from torus_cad.tolerances import VOLUME_CHECK_RELATIVE_PRECISION
 #: The ways the blades are joined to the hub (see torus_cad.kernel.fuse): one blade-hub
 #: intersection shared by all blades, then the shell assembled or the parts glued; or, as
 #: the fallback, one general fuse of the hub and all blades.
-FUSE_ROUTES = ("shared intersection, assembled", "shared intersection, glued", "one fuse")
+FUSE_ROUTES = (*(f"shared intersection, {join}" for join in JOINS), "one fuse")
 
 #: Default density for mass: PLA, a common printing plastic (g/cm^3).
 DEFAULT_DENSITY_G_CM3 = 1.24
@@ -143,15 +143,15 @@ def _join_blades_to_hub(hub: cq.Solid, blade: cq.Solid, blades: list[cq.Solid], 
                         timer: StageTimer) -> tuple[cq.Solid, str]:
     """The fused, checked propeller and the route that made it (one of FUSE_ROUTES).
 
-    The shared-intersection route's result is checked for validity (which includes every
-    edge's curve on the hub against its 3D curve) and for the faces it must have. Where that
-    route fails, one general fuse is used and its volume is checked as well.
+    The shared-intersection route's result is checked for validity, which includes every
+    edge's curve on the hub against its 3D curve. Where that route fails, one general fuse
+    is used and its volume is checked as well.
     """
     try:
         with timer.stage("fuse"):
             fused, join = fuse_pattern(hub, blade, angles_deg)
         with timer.stage("check"):
-            return single_valid_solid(fused, "joining the blades to the hub"), f"shared intersection, {join}"
+            return single_valid_solid(fused, "joining the blades to the hub"), FUSE_ROUTES[JOINS.index(join)]
     except KernelError:
         pass  # the general fuse below decides
     with timer.stage("fuse"):
