@@ -7,28 +7,20 @@ same faces. ``scripts/fuse_routes.py N`` makes the same comparison on N random d
 
 from __future__ import annotations
 
-import cadquery as cq
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from conftest import ROUTE_VOLUME_TOLERANCE, VOLUME_PRECISION, assert_same_volume_as_general_fuse
 import torus_cad.propeller as pipeline
 from torus_cad.errors import KernelError
 from torus_cad.geometry.hub import footprint_arcs_deg, seam_angle_deg
 from torus_cad.kernel.checks import is_valid_closed_solid, precise_volume, single_valid_solid
-from torus_cad.kernel.fuse import fuse_all, fuse_pattern
+from torus_cad.kernel.fuse import fuse_pattern
 from torus_cad.kernel.hub import hub_solid
 from torus_cad.propeller import FUSE_ROUTES, build_propeller
 from torus_cad.tolerances import HUB_FOOTPRINT_MARGIN_DEG
-
-#: Both routes integrate the same surfaces; their volumes agree far below this (measured ~1e-9).
-ROUTE_VOLUME_TOLERANCE = 1e-7
-VOLUME_PRECISION = 1e-8
-
-
-def _general_fuse(propeller) -> cq.Solid:
-    return single_valid_solid(fuse_all(propeller.hub, propeller.blades), "the general fuse")
 
 
 def _synthetic_blade(root_deg: float, tip_deg: float, width_deg: float, hub_radius: float = 10.0) -> np.ndarray:
@@ -103,10 +95,7 @@ def test_hub_seam_angle_moves_the_seam_not_the_solid():
 
 def test_default_takes_the_shared_route_and_equals_the_general_fuse(default_propeller):
     assert default_propeller.fuse_route == FUSE_ROUTES[0]  # shared intersection, assembled
-    general = _general_fuse(default_propeller)
-    assert precise_volume(default_propeller.solid, VOLUME_PRECISION) == pytest.approx(
-        precise_volume(general, VOLUME_PRECISION), rel=ROUTE_VOLUME_TOLERANCE)
-    assert len(default_propeller.solid.Faces()) == len(general.Faces())
+    assert_same_volume_as_general_fuse(default_propeller)
 
 
 @pytest.mark.parametrize("seam_deg, join", [(20.0, "glued"), (90.0, "glued"), (None, "assembled")])

@@ -5,11 +5,10 @@ import re
 import numpy as np
 import pytest
 
-from conftest import read_binary_stl
+from conftest import assert_same_volume_as_general_fuse, read_binary_stl
 from torus_cad.geometry.surface import surface_points
-from torus_cad.kernel.checks import distances_to_shape, is_valid_closed_solid, precise_volume, single_valid_solid
+from torus_cad.kernel.checks import distances_to_shape, is_valid_closed_solid, precise_volume
 from torus_cad.kernel.export import read_step
-from torus_cad.kernel.fuse import fuse_all
 from torus_cad.propeller import FUSE_ROUTES, build_propeller
 from torus_cad.tolerances import READ_BACK_RELATIVE_TOLERANCE, SURFACE_ACCURACY_RELATIVE
 
@@ -96,5 +95,4 @@ def test_any_blade_count_fuses_into_one_solid(light_params, blades):
     assert precise_volume(propeller.solid) > precise_volume(propeller.hub)
     # One blade-hub intersection serves every blade, and gives what one general fuse gives.
     assert propeller.fuse_route != FUSE_ROUTES[-1]
-    general = single_valid_solid(fuse_all(propeller.hub, propeller.blades), "the general fuse")
-    assert precise_volume(propeller.solid, 1e-8) == pytest.approx(precise_volume(general, 1e-8), rel=1e-7)
+    assert_same_volume_as_general_fuse(propeller)

@@ -132,9 +132,9 @@ def _glue(hub: cq.Solid, copies: Sequence[TopoDS_Shape], expected_faces: int) ->
     glue = BRepAlgoAPI_Fuse()
     glue.SetGlue(BOPAlgo_GlueShift)
     fused = _result(_boolean(glue, [hub.wrapped], copies), "glue the blades to the hub")
-    if _count(fused, TopAbs_FACE) != expected_faces:
-        raise KernelError(f"gluing the blades to the hub gave {_count(fused, TopAbs_FACE)} faces "
-                          f"instead of {expected_faces}")
+    faces = _count(fused, TopAbs_FACE)
+    if faces != expected_faces:
+        raise KernelError(f"gluing the blades to the hub gave {faces} faces instead of {expected_faces}")
     return fused
 
 
