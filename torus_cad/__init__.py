@@ -6,13 +6,13 @@ that joins them is :func:`build_propeller`.
 """
 
 from torus_cad.errors import GeometryError, KernelError, ParameterError, TorusCadError
-from torus_cad.geometry.parameters import PropellerParameters
 
 __all__ = ["GeometryError", "KernelError", "ParameterError", "Propeller", "PropellerObjects",
            "PropellerParameters", "TorusCadError", "build_propeller", "propeller_objects"]
 
 # The kernel (cadquery / OCP) loads only when one of these is asked for, so the geometry layer stays light.
-_LAZY = {"build_propeller": "torus_cad.propeller", "Propeller": "torus_cad.propeller",
+# PropellerParameters too: the command line installs its signal handlers before numpy loads.
+_LAZY = {"PropellerParameters": "torus_cad.geometry.parameters", "build_propeller": "torus_cad.propeller", "Propeller": "torus_cad.propeller",
          "propeller_objects": "torus_cad.cadquery_api", "PropellerObjects": "torus_cad.cadquery_api"}
 
 

@@ -12,7 +12,6 @@ This is the package's Python API::
 
 from __future__ import annotations
 
-import json
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -30,7 +29,6 @@ from torus_cad.geometry.hub import seam_angle_deg
 from torus_cad.geometry.parameters import PropellerParameters, resolve_parameters
 from torus_cad.geometry.surface import BladeSurface, blade_surface
 from torus_cad.kernel.checks import MassProperties, mass_properties, precise_volume, single_valid_solid
-from torus_cad.kernel.export import atomic_path, write_step, write_stl
 from torus_cad.kernel.fuse import JOINS, fuse_all, fuse_pattern, pattern_blades
 from torus_cad.kernel.hub import hub_solid
 from torus_cad.kernel.loft import loft_solid
@@ -188,20 +186,7 @@ def build_report(propeller: Propeller, density_g_cm3: float) -> dict:
 
 def write_outputs(propeller: Propeller, out_dir: Path, density_g_cm3: float = DEFAULT_DENSITY_G_CM3,
                   stl: bool = True) -> dict[str, Path]:
-    """Write STEP, STL and the JSON report atomically; return the paths by kind."""
-    params = propeller.parameters
-    timer = StageTimer()
-    paths: dict[str, Path] = {}
-    with timer.stage("step_write"):
-        paths["step"] = write_step(propeller.solid, out_dir / f"{params.name}.step", params.name,
-                                   params.export.step_schema)
-    if stl:
-        with timer.stage("stl_write"):
-            paths["stl"] = write_stl(propeller.solid, out_dir / f"{params.name}.stl",
-                                     params.export.stl_linear_deflection, params.export.stl_angular_deflection)
-    propeller.stage_seconds.update(timer.seconds)
-    report = build_report(propeller, density_g_cm3)
-    paths["json"] = out_dir / f"{params.name}.json"
-    with atomic_path(paths["json"]) as temp:
-        temp.write_text(json.dumps(report, indent=2) + "\n")
-    return paths
+    """Write STEP, STL and the JSON report as one output set (torus_cad.outputs); return the paths by kind."""
+    from torus_cad.outputs import write_output_set
+
+    return write_output_set(propeller, out_dir, density_g_cm3, stl)

@@ -1,7 +1,11 @@
-"""STEP and STL export (and STEP import), written atomically: a temp file, then a rename.
+"""STEP and STL export (and STEP import). Writers write the file they are given, atomically.
 
-A crash or a kill during a write leaves at most a hidden ``.<name>.tmp-*`` file that is
-removed on any Python-level failure, never a partial file under the final name.
+Each writer writes a hidden temp file ``.<name>.tmp-<host>-<pid>-*`` beside the path and renames
+it onto the path, then checks the file is whole (a STEP file's end marker, an STL's size from its
+triangle count). A failure or a signal removes the temp file; one of a killed process is removed
+by the next write to that folder (only if that process is gone: concurrent writers of the same
+name never delete each other's files). A whole build's files are published together by
+torus_cad.outputs.
 """
 
 from __future__ import annotations
@@ -12,22 +16,33 @@ import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
+import cadquery as cq
 from OCP.BRepMesh import BRepMesh_IncrementalMesh
 from OCP.IFSelect import IFSelect_RetDone
 from OCP.Interface import Interface_Static
 from OCP.STEPCAFControl import STEPCAFControl_Writer
 from OCP.STEPControl import STEPControl_AsIs, STEPControl_Reader
+from OCP.StlAPI import StlAPI_Writer
 from OCP.TCollection import TCollection_ExtendedString
 from OCP.TDataStd import TDataStd_Name
 from OCP.TDocStd import TDocStd_Document
 from OCP.XCAFDoc import XCAFDoc_DocumentTool
-from OCP.StlAPI import StlAPI_Writer
-
-import cadquery as cq
 
 from torus_cad.errors import KernelError
+from torus_cad.interrupts import removed_on_interrupt
+from torus_cad.ownership import glob_escape, left_by_dead_process, owner_tag
 
 _STEP_SCHEMAS = {"AP214": "AP214IS", "AP242": "AP242DIS"}
+_STEP_END_MARKER = b"END-ISO-10303-21;"
+_STL_HEADER_BYTES, _STL_TRIANGLE_BYTES = 84, 50
+
+
+def _remove_stale_temps(path: Path) -> None:
+    """Remove temp files of ``path`` left by dead processes of this host (killed mid-write)."""
+    prefix = f".{path.name}.tmp-"
+    for stale in path.parent.glob(f"{glob_escape(prefix)}*"):
+        if left_by_dead_process(stale.name, prefix):
+            stale.unlink(missing_ok=True)
 
 
 @contextlib.contextmanager
@@ -35,17 +50,17 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
     """Yield a temp path beside ``path``; on success rename it onto ``path``, on failure delete it."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    for stale in path.parent.glob(f".{path.name}.tmp-*"):  # left by a process killed mid-write
-        stale.unlink(missing_ok=True)
-    handle, temp_name = tempfile.mkstemp(prefix=f".{path.name}.tmp-", dir=path.parent)
+    _remove_stale_temps(path)
+    handle, temp_name = tempfile.mkstemp(prefix=f".{path.name}.tmp-{owner_tag()}", dir=path.parent)
     os.close(handle)
     temp = Path(temp_name)
-    try:
-        yield temp
-        os.chmod(temp, 0o666 & ~_current_umask())  # mkstemp makes 0600; give the file normal permissions
-        os.replace(temp, path)
-    finally:
-        temp.unlink(missing_ok=True)
+    with removed_on_interrupt(temp):
+        try:
+            yield temp
+            os.chmod(temp, 0o666 & ~_current_umask())  # mkstemp makes 0600; give the file normal permissions
+            os.replace(temp, path)
+        finally:
+            temp.unlink(missing_ok=True)
 
 
 def _current_umask() -> int:
@@ -75,7 +90,26 @@ def write_step(shape: cq.Shape, path: str | Path, product_name: str, schema: str
     with atomic_path(path) as temp:
         if writer.Write(str(temp)) != IFSelect_RetDone:
             raise KernelError(f"OpenCascade could not write STEP file {str(path)!r}")
+        _check_step_whole(temp, path)
     return path
+
+
+def _check_step_whole(temp: Path, path: Path) -> None:
+    """KernelError unless ``temp`` ends with the STEP end marker (a writer that lost its tail)."""
+    with open(temp, "rb") as handle:
+        handle.seek(max(0, temp.stat().st_size - 256))
+        if _STEP_END_MARKER not in handle.read():
+            raise KernelError(f"OpenCascade wrote an incomplete STEP file {str(path)!r} (no end marker)")
+
+
+def _check_stl_whole(temp: Path, path: Path) -> None:
+    """KernelError unless ``temp``'s size is a binary STL's: 84 bytes + 50 per triangle it declares."""
+    size = temp.stat().st_size
+    with open(temp, "rb") as handle:
+        header = handle.read(_STL_HEADER_BYTES)
+    triangles = int.from_bytes(header[80:84], "little") if len(header) == _STL_HEADER_BYTES else -1
+    if triangles <= 0 or size != _STL_HEADER_BYTES + _STL_TRIANGLE_BYTES * triangles:
+        raise KernelError(f"OpenCascade wrote an incomplete STL file {str(path)!r} ({size:,} bytes)")
 
 
 def read_step(path: str | Path) -> cq.Shape:
@@ -99,4 +133,5 @@ def write_stl(shape: cq.Shape, path: str | Path, linear_deflection: float, angul
     with atomic_path(path) as temp:
         if not writer.Write(shape.wrapped, str(temp)):
             raise KernelError(f"OpenCascade could not write STL file {str(path)!r}")
+        _check_stl_whole(temp, path)
     return path

@@ -1,0 +1,120 @@
+"""Signals: SIGINT, SIGTERM and SIGHUP end a command at any moment with one line and exit 128 + signal.
+
+The command line installs :func:`exit_on_signals` before it imports anything heavy, so a Ctrl-C
+while CadQuery is still loading is as clean as one during the build. The handler does not raise
+into whatever code was running (an exception inside a half-finished import can leave a
+half-initialised extension module behind, which crashed at exit): it removes the files staged for
+publishing (:func:`removed_on_interrupt`), prints one line and leaves with ``os._exit``.
+
+A signal that arrives while an output set is being published (:func:`deferred`) waits until the
+set is complete. Python runs signal handlers between bytecodes, so a signal during one long
+OpenCascade call takes effect when that call returns (the budgets in torus_cad.budgets keep such
+calls short).
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import signal
+import sys
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from types import FrameType
+
+#: The signals that end a command, and their exit codes (128 + the signal number, as shells report).
+EXIT_SIGNALS: dict[int, int] = {signal.SIGINT: 130, signal.SIGTERM: 143, signal.SIGHUP: 129}
+
+_staged: dict[int, Path] = {}  # files and folders to remove on a signal, by a registration id
+_next_id = 0
+_deferred_depth = 0
+_pending: list[int] = []
+_program = "torus-cad"
+
+
+def _remove(path: Path) -> None:
+    try:
+        if path.is_dir() and not path.is_symlink():
+            shutil.rmtree(path, ignore_errors=True)
+        else:
+            path.unlink(missing_ok=True)
+    except OSError:
+        pass  # best effort: a stale staging folder is also removed by the next build
+
+
+def _exit_now(signum: int) -> None:
+    for path in list(_staged.values()):
+        _remove(path)
+    name = signal.Signals(signum).name
+    try:
+        for stream in (sys.stdout, sys.stderr):
+            stream.flush()
+        sys.stderr.write(f"{_program}: interrupted by {name}; staged files removed, "
+                         f"published output sets are complete\n")
+        sys.stderr.flush()
+    except (OSError, ValueError):
+        pass  # a closed or broken stderr must not stop the exit
+    os._exit(EXIT_SIGNALS.get(signum, 128 + signum))
+
+
+def _handler(signum: int, frame: FrameType | None) -> None:
+    if _deferred_depth:
+        _pending.append(signum)
+        return
+    _exit_now(signum)
+
+
+def exit_on_signals(program: str = "torus-cad") -> Callable[[], None]:
+    """Make SIGINT, SIGTERM and SIGHUP end the process cleanly (see the module doc); return a function
+    that restores the previous handlers. Does nothing outside the main thread."""
+    global _program
+    _program = program
+    previous: dict[int, object] = {}
+    try:
+        for signum in EXIT_SIGNALS:
+            previous[signum] = signal.signal(signum, _handler)
+    except ValueError:  # not the main thread: signals are not ours to handle
+        pass
+
+    def restore() -> None:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)  # type: ignore[arg-type]
+
+    return restore
+
+
+def restore_default_interrupts() -> None:
+    """Python's own behaviour again: SIGINT raises KeyboardInterrupt, SIGTERM and SIGHUP end the process."""
+    try:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+        for signum in (signal.SIGTERM, signal.SIGHUP):
+            signal.signal(signum, signal.SIG_DFL)
+    except ValueError:
+        pass
+
+
+@contextmanager
+def removed_on_interrupt(path: str | Path) -> Iterator[Path]:
+    """Within the block, a signal that ends the process removes ``path`` (a file or a folder) first."""
+    global _next_id
+    _next_id += 1
+    key = _next_id
+    _staged[key] = Path(path)
+    try:
+        yield Path(path)
+    finally:
+        _staged.pop(key, None)
+
+
+@contextmanager
+def deferred() -> Iterator[None]:
+    """Signals that arrive within the block take effect when it ends (used while publishing a set)."""
+    global _deferred_depth
+    _deferred_depth += 1
+    try:
+        yield
+    finally:
+        _deferred_depth -= 1
+        if not _deferred_depth and _pending:
+            _exit_now(_pending[0])

@@ -1,0 +1,350 @@
+"""Output sets: the files of one build (STEP, STL, picture, JSON report) appear together or not at all.
+
+A build is a transaction on its output folder ``OUT``:
+
+1. **Stage.** Every file is written into a staging folder of its own,
+   ``OUT/.<name>.staging-<host>-<pid>-<random>/``, that no other build touches. A failed or
+   interrupted build removes it; one of a process that died (SIGKILL) is removed by the next
+   build in that folder.
+2. **Seal.** The JSON report is written last and lists every other file of the set with its
+   size and SHA-256 (``"files"``).
+3. **Publish.** Under an exclusive lock on ``OUT/.<name>.lock`` (``flock``; same-name builds take
+   turns, only for this step) the old report is removed, the files are renamed onto their final
+   names, members of the old set that the new one lacks are removed, and the report is renamed
+   last. Signals wait until this is done.
+
+So at any moment ``OUT/<name>.json`` either is absent or matches the files it lists, except
+after a SIGKILL (or power loss) inside the few renames of step 3, which leaves a set that
+:func:`verify_set` (``torus-cad verify OUT``) reports as incomplete, naming the file. Readers
+that take the lock shared (as ``verify`` does) never see a publish in progress.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import errno
+import fcntl
+import hashlib
+import json
+import os
+import secrets
+import shutil
+import tempfile
+from collections.abc import Callable, Iterator, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Self
+
+from torus_cad.errors import (
+    IncompleteOutputError,
+    KernelError,
+    OutputError,
+    TorusCadError,
+)
+from torus_cad.interrupts import deferred, removed_on_interrupt
+from torus_cad.ownership import glob_escape, left_by_dead_process, owner_tag
+from torus_cad.tolerances import DISK_FULL_FREE_BYTES
+
+if TYPE_CHECKING:
+    from torus_cad.propeller import Propeller
+
+#: Key of the report that lists the set's other files: ``{kind: {"file", "bytes", "sha256"}}``.
+FILES_KEY = "files"
+
+_STAGING_MARK = ".staging-"
+_HASH_CHUNK_BYTES = 1 << 20
+
+#: Writes one file of a set to the path it is given.
+FileWriter = Callable[[Path], Any]
+
+
+def remove_stale_staging(out_dir: Path) -> list[Path]:
+    """Remove staging folders in ``out_dir`` left by dead processes of this host; return them.
+
+    Staging folders of other hosts (a shared file system) and of live processes are left alone.
+    """
+    removed = []
+    with contextlib.suppress(OSError):
+        for entry in os.scandir(out_dir):
+            prefix = entry.name[: entry.name.find(_STAGING_MARK) + len(_STAGING_MARK)]
+            if entry.name.startswith(".") and _STAGING_MARK in entry.name and left_by_dead_process(entry.name, prefix):
+                shutil.rmtree(entry.path, ignore_errors=True)
+                removed.append(Path(entry.path))
+    return removed
+
+
+def describe_os_error(error: OSError, path: Path) -> str:
+    """One line naming the cause and the file the user knows (the final name, not a staged one)."""
+    causes = {errno.ENOSPC: "no space left on device", errno.EDQUOT: "disk quota exceeded",
+              errno.EACCES: "permission denied", errno.EPERM: "permission denied",
+              errno.EROFS: "read-only file system", errno.EFBIG: "file size limit exceeded"}
+    cause = causes.get(error.errno or 0, error.strerror or str(error))
+    return f"{cause} writing {str(path)!r}"
+
+
+def check_writable_folder(out_dir: str | Path) -> None:
+    """OutputError unless files can be created in ``out_dir`` (or, if it does not exist yet, in the
+    nearest folder above it, where it would be made). Checked before building, leaves nothing behind."""
+    out_dir = Path(out_dir)
+    existing = out_dir
+    while not existing.exists() and existing != existing.parent:
+        existing = existing.parent
+    if not existing.is_dir():
+        raise OutputError(f"cannot write to output folder {str(out_dir)!r}: {str(existing)!r} is not a folder")
+    try:
+        probe = tempfile.mkdtemp(prefix=".torus-cad-probe-", dir=existing)
+        os.rmdir(probe)
+    except OSError as error:
+        cause = describe_os_error(error, existing).rsplit(" writing ", 1)[0]
+        raise OutputError(f"cannot write to output folder {str(out_dir)!r}: {cause}") from None
+
+
+def file_entry(path: Path) -> dict[str, Any]:
+    """``{"file", "bytes", "sha256"}`` of one file of a set."""
+    digest = hashlib.sha256()
+    size = 0
+    with open(path, "rb") as handle:
+        while chunk := handle.read(_HASH_CHUNK_BYTES):
+            digest.update(chunk)
+            size += len(chunk)
+    return {"file": path.name, "bytes": size, "sha256": digest.hexdigest()}
+
+
+@contextlib.contextmanager
+def _name_lock(out_dir: Path, name: str, shared: bool = False) -> Iterator[None]:
+    """Hold ``flock`` on ``out_dir/.<name>.lock``; without it (no lock file can be made) go on unlocked."""
+    try:
+        descriptor = os.open(out_dir / f".{name}.lock", os.O_RDWR | os.O_CREAT, 0o666)
+    except OSError:
+        yield  # e.g. verifying a read-only folder: nobody can be publishing into it
+        return
+    try:
+        with contextlib.suppress(OSError):  # a file system without flock: the report's hashes still tell
+            fcntl.flock(descriptor, fcntl.LOCK_SH if shared else fcntl.LOCK_EX)
+        yield
+    finally:
+        os.close(descriptor)  # releases the lock
+
+
+def _read_report(path: Path) -> dict[str, Any] | None:
+    try:
+        report = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    return report if isinstance(report, dict) else None
+
+
+class OutputSet:
+    """The files of one build of ``name`` into ``out_dir``, staged and then published together.
+
+    ::
+
+        with OutputSet(out_dir, "torus_propeller") as output:
+            write_step(solid, output.stage("step"), ...)   # writers write to the path they are given
+            paths = output.publish(report)                 # {kind: final path}, the report last
+
+    Leaving the block without publishing (an error, an interrupt) removes everything staged.
+    """
+
+    def __init__(self, out_dir: str | Path, name: str) -> None:
+        self.out_dir = Path(out_dir)
+        self.name = name
+        self.staging: Path | None = None
+        self._staged: dict[str, Path] = {}
+        self._cleanup: contextlib.ExitStack | None = None
+
+    def __enter__(self) -> Self:
+        try:
+            self.out_dir.mkdir(parents=True, exist_ok=True)
+            remove_stale_staging(self.out_dir)
+            self._cleanup = contextlib.ExitStack()
+            self.staging = self.out_dir / f".{self.name}{_STAGING_MARK}{owner_tag()}{secrets.token_hex(4)}"
+            self._cleanup.enter_context(removed_on_interrupt(self.staging))
+            self.staging.mkdir()
+        except OSError as error:
+            self._discard()
+            raise OutputError(f"cannot write to output folder {str(self.out_dir)!r}: "
+                              f"{describe_os_error(error, self.out_dir).rsplit(' writing ', 1)[0]}") from None
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        self._discard()
+
+    def _discard(self) -> None:
+        if self.staging is not None:
+            shutil.rmtree(self.staging, ignore_errors=True)
+        if self._cleanup is not None:
+            self._cleanup.close()
+        self.staging, self._cleanup = None, None
+
+    def final_path(self, kind: str) -> Path:
+        """Where the file of ``kind`` (its suffix: "step", "stl", "png", ...) is published."""
+        return self.out_dir / f"{self.name}.{kind}"
+
+    def stage(self, kind: str) -> Path:
+        """The staging path to write the file of ``kind`` to."""
+        if self.staging is None:
+            raise RuntimeError("OutputSet.stage() outside its with-block")
+        if kind == "json":
+            raise ValueError("the JSON report is written by publish()")
+        self._staged[kind] = self.staging / f"{self.name}.{kind}"
+        return self._staged[kind]
+
+    def write(self, kind: str, writer: FileWriter) -> Path:
+        """Stage the file of ``kind`` with ``writer(path)``; a failure names the final file and its cause."""
+        path = self.stage(kind)
+        try:
+            writer(path)
+        except OSError as error:
+            raise OutputError(describe_os_error(error, self.final_path(kind))) from None
+        except KernelError as error:
+            raise self._diagnose(kind, error) from None
+        if not path.is_file():
+            raise OutputError(f"{str(self.final_path(kind))!r} was not written")
+        return path
+
+    def _diagnose(self, kind: str, error: KernelError) -> TorusCadError:
+        """A writer that reports only "could not write": say so when the disk is the cause."""
+        assert self.staging is not None
+        with contextlib.suppress(OSError):
+            free = shutil.disk_usage(self.staging).free
+            if free < DISK_FULL_FREE_BYTES:
+                return OutputError(f"no space left on device writing {str(self.final_path(kind))!r} "
+                                   f"({free:,} bytes free)")
+        with contextlib.suppress(OSError, ValueError):
+            import resource
+
+            limit = resource.getrlimit(resource.RLIMIT_FSIZE)[0]
+            written = max((p.stat().st_size for p in self.staging.rglob("*") if p.is_file()), default=0)
+            if limit != resource.RLIM_INFINITY and written >= limit:
+                return OutputError(f"file size limit (ulimit -f, {limit:,} bytes) exceeded writing "
+                                   f"{str(self.final_path(kind))!r}")
+        return error
+
+    def publish(self, report: Mapping[str, Any]) -> dict[str, Path]:
+        """Seal the staged files into ``report`` (as its ``"files"``), write it, publish the set; return
+        ``{kind: final path}`` with ``"json"`` last."""
+        if self.staging is None:
+            raise RuntimeError("OutputSet.publish() outside its with-block")
+        files = {kind: file_entry(path) for kind, path in self._staged.items()}
+        sealed = {**report, FILES_KEY: files}
+        staged_report = self.staging / f"{self.name}.json"
+        try:
+            staged_report.write_text(json.dumps(sealed, indent=2, allow_nan=False) + "\n", encoding="utf-8")
+        except OSError as error:
+            raise OutputError(describe_os_error(error, self.final_path("json"))) from None
+        with deferred(), _name_lock(self.out_dir, self.name):
+            self._swap_in(staged_report)
+        return {**{kind: self.final_path(kind) for kind in self._staged}, "json": self.final_path("json")}
+
+    def _swap_in(self, staged_report: Path) -> None:
+        report_path = self.final_path("json")
+        old = _read_report(report_path)
+        old_files = old.get(FILES_KEY) if old else None
+        try:
+            report_path.unlink(missing_ok=True)  # from here until the last rename the set is visibly incomplete
+            for kind, path in self._staged.items():
+                os.replace(path, self.final_path(kind))
+            if isinstance(old_files, dict):  # the old set's files the new set does not have
+                for kind, entry in old_files.items():
+                    if kind not in self._staged and isinstance(entry, dict) and entry.get("file") == \
+                            self.final_path(kind).name:
+                        self.final_path(kind).unlink(missing_ok=True)
+            os.replace(staged_report, report_path)
+        except OSError as error:
+            raise OutputError(f"publishing the output set {self.name!r} in {str(self.out_dir)!r} failed: "
+                              f"{error.strerror}; 'torus-cad verify' reports what is there") from None
+
+
+
+# -- checking a published set ---------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class VerifiedSet:
+    """A complete output set: its report and the files it lists (final paths, report last)."""
+
+    name: str
+    report: Path
+    files: tuple[Path, ...]
+
+
+def verify_set(out_dir: str | Path, name: str) -> VerifiedSet:
+    """Check that ``out_dir/<name>.json`` and every file it lists are there, whole and of the same build.
+
+    Raises IncompleteOutputError naming the first file that is missing, different or unlisted.
+    """
+    out_dir = Path(out_dir)
+    report_path = out_dir / f"{name}.json"
+    with _name_lock(out_dir, name, shared=True):
+        if not report_path.is_file():
+            orphans = sorted(p.name for p in out_dir.glob(f"{glob_escape(name)}.*") if p.suffix != ".lock")
+            if orphans:
+                raise IncompleteOutputError(f"{name}: incomplete set: {report_path.name} is missing beside "
+                                            f"{', '.join(orphans)}")
+            raise IncompleteOutputError(f"{name}: no output set {report_path.name} in {str(out_dir)!r}")
+        report = _read_report(report_path)
+        if report is None:
+            raise IncompleteOutputError(f"{name}: {report_path.name} is not a readable JSON report")
+        files = report.get(FILES_KEY)
+        if not isinstance(files, dict) or not files:
+            raise IncompleteOutputError(f"{name}: {report_path.name} lists no files (written before "
+                                        f"output sets were sealed?)")
+        checked = [_check_entry(out_dir, name, report_path.name, entry) for entry in files.values()]
+    return VerifiedSet(name, report_path, (*checked, report_path))
+
+
+def _check_entry(out_dir: Path, name: str, report_name: str, entry: Any) -> Path:
+    if not isinstance(entry, dict) or not isinstance(entry.get("file"), str) or "/" in entry["file"]:
+        raise IncompleteOutputError(f"{name}: {report_name} has a malformed file entry {entry!r}")
+    path = out_dir / entry["file"]
+    if not path.is_file():
+        raise IncompleteOutputError(f"{name}: incomplete set: {path.name} is missing")
+    actual = file_entry(path)
+    if actual["bytes"] != entry.get("bytes") or actual["sha256"] != entry.get("sha256"):
+        raise IncompleteOutputError(f"{name}: mixed set: {path.name} is not the file {report_name} was "
+                                    f"written with (size or SHA-256 differs)")
+    return path
+
+
+def set_names(out_dir: str | Path) -> list[str]:
+    """Names of the output sets in ``out_dir``: every sealed ``<name>.json`` report, and every
+    ``<name>.step`` or ``<name>.stl`` (one without its report is an incomplete set)."""
+    names = set()
+    for path in Path(out_dir).iterdir():
+        if path.name.startswith(".") or not path.is_file():
+            continue
+        if path.suffix in (".step", ".stl") or path.suffix == ".json" and FILES_KEY in (_read_report(path) or {}):
+            names.add(path.stem)
+    return sorted(names)
+
+
+# -- the propeller's set --------------------------------------------------------------------------
+
+def write_output_set(propeller: Propeller, out_dir: str | Path, density_g_cm3: float, stl: bool = True,
+                     extra_files: Mapping[str, FileWriter] | None = None) -> dict[str, Path]:
+    """Write ``<name>.step``, ``<name>.stl`` (unless ``stl`` is False), any ``extra_files``
+    (``{suffix: writer(path)}``, e.g. a preview picture) and the sealed ``<name>.json`` report as one
+    output set (see the module doc); return the final paths by kind, the report last.
+
+    The STL's triangle count is checked against its budget before anything is written.
+    """
+    from torus_cad.budgets import check_stl_budget
+    from torus_cad.kernel.export import write_step, write_stl
+    from torus_cad.propeller import StageTimer, build_report
+
+    params = propeller.parameters
+    if stl:
+        check_stl_budget(params, propeller.surface.points)
+    export = params.export
+    timer = StageTimer()
+    with OutputSet(out_dir, params.name) as output:
+        with timer.stage("step_write"):
+            output.write("step", lambda path: write_step(propeller.solid, path, params.name, export.step_schema))
+        if stl:
+            with timer.stage("stl_write"):
+                output.write("stl", lambda path: write_stl(propeller.solid, path, export.stl_linear_deflection,
+                                                           export.stl_angular_deflection))
+        for kind, writer in (extra_files or {}).items():
+            output.write(kind, writer)
+        propeller.stage_seconds.update(timer.seconds)
+        return output.publish(build_report(propeller, density_g_cm3))
