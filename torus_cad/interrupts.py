@@ -15,7 +15,6 @@ calls short).
 from __future__ import annotations
 
 import os
-import shutil
 import signal
 import sys
 from collections.abc import Callable, Iterator
@@ -34,6 +33,8 @@ _program = "torus-cad"
 
 
 def _remove(path: Path) -> None:
+    import shutil  # here: this module loads before anything else on the command line
+
     try:
         if path.is_dir() and not path.is_symlink():
             shutil.rmtree(path, ignore_errors=True)
@@ -73,7 +74,8 @@ def exit_on_signals(program: str = "torus-cad") -> Callable[[], None]:
     previous: dict[int, object] = {}
     try:
         for signum in EXIT_SIGNALS:
-            previous[signum] = signal.signal(signum, _handler)
+            if signal.getsignal(signum) is not signal.SIG_IGN:  # ignored by the caller (nohup, `cmd &`): keep it so
+                previous[signum] = signal.signal(signum, _handler)
     except ValueError:  # not the main thread: signals are not ours to handle
         pass
 
@@ -85,11 +87,13 @@ def exit_on_signals(program: str = "torus-cad") -> Callable[[], None]:
 
 
 def restore_default_interrupts() -> None:
-    """Python's own behaviour again: SIGINT raises KeyboardInterrupt, SIGTERM and SIGHUP end the process."""
+    """Python's own behaviour again where :func:`exit_on_signals` took over: SIGINT raises
+    KeyboardInterrupt, SIGTERM and SIGHUP end the process."""
+    defaults = {signal.SIGINT: signal.default_int_handler, signal.SIGTERM: signal.SIG_DFL, signal.SIGHUP: signal.SIG_DFL}
     try:
-        signal.signal(signal.SIGINT, signal.default_int_handler)
-        for signum in (signal.SIGTERM, signal.SIGHUP):
-            signal.signal(signum, signal.SIG_DFL)
+        for signum, default in defaults.items():
+            if signal.getsignal(signum) is _handler:
+                signal.signal(signum, default)
     except ValueError:
         pass
 
