@@ -22,8 +22,9 @@ DESIGNS = {
     "thin": {"airfoil.thickness": 0.12, "airfoil.max_camber": 0.06},
     "wide chord": {"transforms.scale_x": [0.0, 0.0, -30.0, 30.0, 10.0], "hub.radius": 14.0},
     "twisted": {"transforms.angle_of_attack": [0.0, 0.0, 0.0, 60.0, -10.0], "centerline.frame": "rotation_minimizing"},
+    "fine sampling": {"resolution.sections": 100, "resolution.points": 400},
 }
-SETTINGS = [(linear, angular) for linear in (0.5, 0.1, 0.05, 0.01, 0.002) for angular in (0.5, 0.2, 0.1, 0.05)]
+SETTINGS = [(0.5, 0.5), (0.1, 0.2), (0.05, 0.1), (0.01, 0.2), (0.5, 0.1), (0.002, 0.5), (0.05, 0.05)]
 QUICK_DESIGNS = ("default", "1 blade", "thin")
 QUICK_SETTINGS = [(0.5, 0.5), (0.1, 0.3), (0.05, 0.2), (0.01, 0.2), (0.05, 0.1), (0.002, 0.5)]
 

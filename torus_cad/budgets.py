@@ -7,31 +7,31 @@ resolution ranges): its triangle count is estimated from the blade surface and t
 
 from __future__ import annotations
 
-import numpy as np
-from numpy.typing import NDArray
-
 from torus_cad.errors import BudgetError
 from torus_cad.geometry.parameters import PropellerParameters
+from torus_cad.geometry.surface import BladeSurface, blade_surface
 from torus_cad.geometry.triangle_estimate import estimate_stl_triangles
 from torus_cad.tolerances import STL_TRIANGLE_LIMIT
 
+#: Fewer samples than this (sections, points) do not resolve the blade's curvature for the
+#: estimate; such a surface is sampled again at the default resolution.
+_ESTIMATE_MIN_SAMPLES = (12, 40)
+_ESTIMATE_SAMPLES = (25, 80)
 
-def estimated_stl_triangles(params: PropellerParameters, blade_points: NDArray[np.float64] | None = None) -> int:
-    """The STL triangle estimate of ``params`` (blade 0's sampled surface ``(sections, points, 3)`` mm
-    if already at hand; otherwise it is computed)."""
-    if blade_points is None:
-        from torus_cad.geometry.surface import blade_surface
 
-        blade_points = blade_surface(params).points
+def estimated_stl_triangles(params: PropellerParameters, surface: BladeSurface | None = None) -> int:
+    """The STL triangle estimate of ``params`` (from blade 0's sampled ``surface`` if already at hand)."""
+    if surface is None or any(have < need for have, need in zip(surface.points.shape, _ESTIMATE_MIN_SAMPLES)):
+        surface = blade_surface(params, sections=_ESTIMATE_SAMPLES[0], points=_ESTIMATE_SAMPLES[1])
     export = params.export
-    return estimate_stl_triangles(blade_points, params.blades, params.hub.radius, export.stl_linear_deflection,
-                                  export.stl_angular_deflection)
+    return estimate_stl_triangles(surface.points, surface.trailing_edge_index, params.blades, params.hub.radius,
+                                  export.stl_linear_deflection, export.stl_angular_deflection)
 
 
-def check_stl_budget(params: PropellerParameters, blade_points: NDArray[np.float64] | None = None,
+def check_stl_budget(params: PropellerParameters, surface: BladeSurface | None = None,
                      limit: int = STL_TRIANGLE_LIMIT) -> int:
     """The estimate, or BudgetError (exit 2) naming it, the deflections and the limit when it is over ``limit``."""
-    estimate = estimated_stl_triangles(params, blade_points)
+    estimate = estimated_stl_triangles(params, surface)
     if estimate > limit:
         export = params.export
         raise BudgetError(

@@ -334,7 +334,7 @@ def write_output_set(propeller: Propeller, out_dir: str | Path, density_g_cm3: f
 
     params = propeller.parameters
     if stl:
-        check_stl_budget(params, propeller.surface.points)
+        check_stl_budget(params, propeller.surface)
     export = params.export
     timer = StageTimer()
     with OutputSet(out_dir, params.name) as output:

@@ -1,14 +1,20 @@
 """How many triangles an STL of the propeller will have, estimated before anything is tessellated.
 
-A mesher that keeps every edge within a chordal deviation ``d`` (mm) and within an angular
-deviation ``a`` (radians) of a surface with normal curvature kappa (1/mm) along a direction needs
-edges no longer than min(sqrt(8 d / kappa), a / kappa) there. Summed over a sampled surface this
-gives edges per direction, ``n = max(theta / a, sqrt(theta * length / (8 d)))`` for a piece of
-``length`` mm that turns by ``theta`` radians, and about ``2 n_u n_v`` triangles per patch.
+OpenCascade's mesher (BRepMesh_IncrementalMesh with a linear deflection ``d`` mm and an angular
+deflection ``a`` rad) refines a face's interior until every triangle is within ``d`` of the surface
+and adjacent normals differ by less than ``2 a`` (its AngleInterior), but never below edges of
+``0.1 d`` (its MinSize). Where the surface curves by kappa (1/mm, the larger principal curvature)
+that asks for edges of about
 
-Kernel-free (numpy only) so that work that would blow up is refused before the kernel starts.
-The estimate is calibrated against OpenCascade's BRepMesh (``scripts/stl_budget.py``) to be an
-upper bound of the real count within a small factor; it is a budget, not a prediction.
+    l = max(min(sqrt(8 d / kappa), 2 a / kappa), 0.1 d)
+
+and its Delaunay triangles are close to equilateral, so a patch of area A gets about 2 A / l^2
+triangles. Summed over the blade surface sampled by the geometry layer (the trailing edge is a
+designed crease, not curvature), times the number of blades, plus the hub, times a calibration
+factor, this is an upper estimate of the real count: ``scripts/stl_budget.py`` measures it at 1x to
+4x the count BRepMesh makes over designs and deflections 0.002-0.5 mm, 0.02-0.5 rad.
+
+Kernel-free (numpy only) so that work that would blow up is refused before it starts.
 """
 
 from __future__ import annotations
@@ -18,15 +24,12 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-#: The estimate is multiplied by this: BRepMesh refines a lofted B-spline face beyond the
-#: ideal edge lengths above (measured by scripts/stl_budget.py, see the README).
-BREPMESH_FACTOR = 2.0
+#: BRepMesh's interior angle is twice the angular deflection; its smallest edge a tenth of the linear one.
+ANGLE_INTERIOR_FACTOR = 2.0
+MIN_SIZE_RELATIVE = 0.1
 
-
-def _segments_needed(turn_rad: NDArray[np.float64], length_mm: NDArray[np.float64], linear_deflection: float,
-                     angular_deflection: float) -> NDArray[np.float64]:
-    """Edges a piece of curve of ``length_mm`` that turns by ``turn_rad`` needs (fractional, elementwise)."""
-    return np.maximum(turn_rad / angular_deflection, np.sqrt(turn_rad * length_mm / (8.0 * linear_deflection)))
+#: Multiplies the curvature model so that it stays above BRepMesh's real counts (scripts/stl_budget.py).
+CALIBRATION_FACTOR = 3.0
 
 
 def _turns(points: NDArray[np.float64], closed: bool) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -49,51 +52,65 @@ def _turns(points: NDArray[np.float64], closed: bool) -> tuple[NDArray[np.float6
     return turn, 0.5 * (len_before + len_after)
 
 
-def blade_triangles(points: NDArray[np.float64], linear_deflection: float, angular_deflection: float) -> float:
-    """Triangles of one blade's side surface sampled as ``(sections, points, 3)`` mm (rows closed).
+def edge_length(curvature: NDArray[np.float64], linear_deflection: float, angular_deflection: float
+                ) -> NDArray[np.float64]:
+    """The mesher's edge length (mm) where the surface curves by ``curvature`` (1/mm), elementwise."""
+    curvature = np.maximum(curvature, 1e-12)
+    ideal = np.minimum(np.sqrt(8.0 * linear_deflection / curvature),
+                       ANGLE_INTERIOR_FACTOR * angular_deflection / curvature)
+    return np.maximum(ideal, MIN_SIZE_RELATIVE * linear_deflection)
 
-    The sample grid must resolve the surface (turning angles of a few degrees per step); the
-    two planar end caps are counted with the hub, whose footprints they are.
+
+def blade_triangles(points: NDArray[np.float64], trailing_edge_index: int | None, linear_deflection: float,
+                    angular_deflection: float) -> float:
+    """Triangles of one blade's side surface sampled as ``(sections, points, 3)`` mm (rows: closed
+    sections; ``trailing_edge_index``: the column of the sharp trailing edge, if sampled).
+
+    The two planar end caps are counted with the hub, whose footprints they are.
     """
     turn_around, length_around = _turns(points, closed=True)
-    turn_along, length_along = _turns(np.swapaxes(points, 0, 1), closed=False)
-    turn_along, length_along = turn_along.T, length_along.T
-    n_around = _segments_needed(turn_around, length_around, linear_deflection, angular_deflection)
-    n_along = _segments_needed(turn_along, length_along, linear_deflection, angular_deflection)
-    # A direction without curvature still gets edges: as many as one the other direction needs
-    # over the whole span (the mesher's triangles stay within a bounded aspect ratio there).
-    span_mm = length_along.sum(axis=0, keepdims=True)
-    n_along = np.maximum(n_along, length_along / span_mm * n_around.sum(axis=1, keepdims=True).mean())
-    return float(2.0 * np.sum(n_around * n_along))
+    if trailing_edge_index is not None:  # the crease is a corner of the section, not a curvature
+        neighbours = [(trailing_edge_index + step) % points.shape[1] for step in (-1, 1)]
+        turn_around = turn_around.copy()
+        turn_around[:, trailing_edge_index] = turn_around[:, neighbours].mean(axis=1)
+    turn_along, length_along = (values.T for values in _turns(np.swapaxes(points, 0, 1), closed=False))
+    curvature = np.maximum(turn_around / np.maximum(length_around, 1e-300),
+                           turn_along / np.maximum(length_along, 1e-300))
+    edges = edge_length(curvature, linear_deflection, angular_deflection)
+    return float(np.sum(2.0 * length_around * length_along / edges**2))
 
 
-def section_outline_segments(section: NDArray[np.float64], linear_deflection: float,
-                             angular_deflection: float) -> float:
-    """Edges around one closed section outline ``(points, 3)`` mm."""
+def outline_segments(section: NDArray[np.float64], linear_deflection: float, angular_deflection: float) -> float:
+    """Edges along one closed section outline ``(points, 3)`` mm."""
     turn, length = _turns(section[None], closed=True)
-    return float(_segments_needed(turn, length, linear_deflection, angular_deflection).sum())
+    return float(np.sum(length / edge_length(turn / np.maximum(length, 1e-300), linear_deflection,
+                                             angular_deflection)))
 
 
 def hub_triangles(radius_mm: float, linear_deflection: float, angular_deflection: float) -> float:
-    """Triangles of the bare cylindrical hub: its lateral face in strips and its two end discs."""
-    around = _segments_needed(np.array(2.0 * math.pi), np.array(2.0 * math.pi * radius_mm),
-                              linear_deflection, angular_deflection)
-    return 4.0 * float(max(around, 3.0))
+    """Triangles of the bare cylindrical hub: its lateral face in strips along the axis and its two end discs."""
+    around = 2.0 * math.pi * radius_mm / float(edge_length(np.array(1.0 / radius_mm), linear_deflection,
+                                                           angular_deflection))
+    return 4.0 * max(around, 3.0)
 
 
-def estimate_stl_triangles(blade_points: NDArray[np.float64], blades: int, hub_radius_mm: float,
-                           linear_deflection: float, angular_deflection: float) -> int:
-    """Upper-ish estimate of the STL triangle count of the fused propeller.
+def estimate_stl_triangles(blade_points: NDArray[np.float64], trailing_edge_index: int | None, blades: int,
+                           hub_radius_mm: float, linear_deflection: float, angular_deflection: float) -> int:
+    """Upper estimate of the STL triangle count of the fused propeller.
 
     Args:
-        blade_points: blade 0's side surface, ``(sections, points, 3)`` mm, rows closed sections.
+        blade_points: blade 0's side surface, ``(sections, points, 3)`` mm, rows closed sections;
+            about 12 x 40 samples or more resolve it (the estimate converges from there).
+        trailing_edge_index: the column of the sharp trailing edge (None if not sampled).
         blades: number of blades (every blade is a rotated copy of blade 0).
         hub_radius_mm: the hub's radius.
         linear_deflection: the STL's chordal deviation, mm (> 0).
         angular_deflection: the STL's angular deviation, radians (> 0).
     """
-    blade = blade_triangles(blade_points, linear_deflection, angular_deflection)
+    blade = blade_triangles(blade_points, trailing_edge_index, linear_deflection, angular_deflection)
+    # The mesher starts from the B-spline's own grid (about one node per sample), whatever the deflections.
+    start_grid = 2.0 * blade_points.shape[0] * blade_points.shape[1]
     # Each blade end leaves a hole in the hub bordered by its section outline: a ring of triangles.
-    ends = sum(section_outline_segments(blade_points[i], linear_deflection, angular_deflection) for i in (0, -1))
+    ends = sum(outline_segments(blade_points[i], linear_deflection, angular_deflection) for i in (0, -1))
     hub = hub_triangles(hub_radius_mm, linear_deflection, angular_deflection)
-    return math.ceil(BREPMESH_FACTOR * (blades * (blade + 3.0 * ends) + hub))
+    return math.ceil(CALIBRATION_FACTOR * (blades * (blade + 3.0 * ends) + hub) + blades * start_grid)
