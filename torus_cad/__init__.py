@@ -1,22 +1,28 @@
 """torus_cad: parametric toroidal propellers as OpenCascade solids, STEP and STL.
 
 Two layers: :mod:`torus_cad.geometry` evaluates the spec exactly with numpy / scipy / geomdl;
-:mod:`torus_cad.kernel` turns its arrays into cadquery / OCP shapes and files. The pipeline
-that joins them is :func:`build_propeller`.
+:mod:`torus_cad.kernel` turns its arrays into cadquery / OCP shapes and files. The parameters
+(:mod:`torus_cad.parameters`) are one validated schema; the pipeline that joins the layers is
+:func:`build_propeller`.
 """
+
+from typing import Any
 
 from torus_cad.errors import GeometryError, KernelError, ParameterError, TorusCadError
 
-__all__ = ["GeometryError", "KernelError", "ParameterError", "Propeller", "PropellerObjects",
-           "PropellerParameters", "TorusCadError", "build_propeller", "propeller_objects"]
+__version__ = "0.2.0"
 
-# The kernel (cadquery / OCP) loads only when one of these is asked for, so the geometry layer stays light.
-# PropellerParameters too: the command line installs its signal handlers before numpy loads.
-_LAZY = {"PropellerParameters": "torus_cad.geometry.parameters", "build_propeller": "torus_cad.propeller", "Propeller": "torus_cad.propeller",
-         "propeller_objects": "torus_cad.cadquery_api", "PropellerObjects": "torus_cad.cadquery_api"}
+__all__ = ["GeometryError", "KernelError", "ParameterError", "Propeller", "PropellerParameters", "TorusCadError",
+           "build_propeller", "propeller_objects", "resolve_parameters"]
+
+# Loaded when first asked for: the kernel (cadquery / OCP) so the geometry layer stays light, and the
+# parameters (pydantic, numpy) so the command line can install its signal handlers before they load.
+_LAZY = {"build_propeller": "torus_cad.propeller", "Propeller": "torus_cad.propeller",
+         "propeller_objects": "torus_cad.propeller", "PropellerParameters": "torus_cad.parameters",
+         "resolve_parameters": "torus_cad.parameters"}
 
 
-def __getattr__(name: str):
+def __getattr__(name: str) -> Any:
     if name in _LAZY:
         import importlib
         return getattr(importlib.import_module(_LAZY[name]), name)

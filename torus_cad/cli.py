@@ -30,7 +30,7 @@ from torus_cad.errors import (
 from torus_cad.interrupts import exit_on_signals, restore_default_interrupts
 
 if TYPE_CHECKING:
-    from torus_cad.geometry.parameters import PropellerParameters
+    from torus_cad.parameters import PropellerParameters
 
 EXIT_OK, EXIT_KERNEL_FAILURE, EXIT_BAD_INPUT = 0, 1, 2
 
@@ -74,7 +74,7 @@ def _parse_override(text: str) -> tuple[str, Any]:
 
 def load_parameters(config: str | None, overrides: Sequence[str] = ()) -> PropellerParameters:
     """Parameters from a TOML file (or the defaults) with ``key=value`` overrides applied."""
-    from torus_cad.geometry.parameters import resolve_parameters
+    from torus_cad.parameters import resolve_parameters
 
     return resolve_parameters(config or None, dict(_parse_override(item) for item in overrides))
 
@@ -146,7 +146,7 @@ def _command_preview(args: argparse.Namespace) -> int:
 
 
 def _command_defaults(args: argparse.Namespace) -> int:
-    from torus_cad.geometry.parameters import PropellerParameters
+    from torus_cad.parameters import PropellerParameters
 
     sys.stdout.write("# torus_cad design file: every key is optional and defaults to the value below.\n")
     sys.stdout.write(PropellerParameters().to_toml(comments=True))

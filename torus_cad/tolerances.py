@@ -58,15 +58,15 @@ HUB_FOOTPRINT_NEAR_RELATIVE = 0.02
 HUB_FOOTPRINT_MARGIN_DEG = 1.0
 
 
-# -- limits: work and input sizes refused before they start ---------------------------------------
+# -- limits: inputs and work refused before they start ---------------------------------------------
+
+#: Largest configuration file read (bytes): a design is a few hundred bytes. Only regular files are read.
+CONFIG_FILE_MAX_BYTES = 1 << 20
 
 #: Most triangles an STL may have, by the estimate made before tessellating
 #: (torus_cad.geometry.triangle_estimate). OpenCascade's mesher slows down faster than its
-#: triangle count grows on the lofted blades (1.4 million triangles took 7 minutes, see the README).
+#: triangle count grows on the lofted blades (see the README's "Limits").
 STL_TRIANGLE_LIMIT = 2_000_000
-
-#: Largest configuration file read, bytes; only regular files are read at all.
-CONFIG_FILE_MAX_BYTES = 1 << 20
 
 #: A writer that fails while its file system has less free space than this (bytes) failed for
 #: lack of space: OpenCascade's writers report only that they could not write.
