@@ -52,7 +52,7 @@ def main() -> int:
     parser.add_argument("--max-estimate", type=float, default=400_000, help="skip settings estimated above this")
     args = parser.parse_args()
     from torus_cad.budgets import estimated_stl_triangles
-    from torus_cad.geometry.parameters import PropellerParameters
+    from torus_cad.parameters import PropellerParameters
     from torus_cad.propeller import build_propeller
 
     names = QUICK_DESIGNS if args.quick else tuple(DESIGNS)

@@ -8,9 +8,9 @@ resolution ranges): its triangle count is estimated from the blade surface and t
 from __future__ import annotations
 
 from torus_cad.errors import BudgetError
-from torus_cad.geometry.parameters import PropellerParameters
-from torus_cad.geometry.surface import BladeSurface, blade_surface
+from torus_cad.geometry.surface import BladeSurface
 from torus_cad.geometry.triangle_estimate import estimate_stl_triangles
+from torus_cad.parameters import PropellerParameters
 from torus_cad.tolerances import STL_TRIANGLE_LIMIT
 
 #: Fewer samples than this (sections, points) do not resolve the blade's curvature for the
@@ -22,7 +22,7 @@ _ESTIMATE_SAMPLES = (25, 80)
 def estimated_stl_triangles(params: PropellerParameters, surface: BladeSurface | None = None) -> int:
     """The STL triangle estimate of ``params`` (from blade 0's sampled ``surface`` if already at hand)."""
     if surface is None or any(have < need for have, need in zip(surface.points.shape, _ESTIMATE_MIN_SAMPLES)):
-        surface = blade_surface(params, sections=_ESTIMATE_SAMPLES[0], points=_ESTIMATE_SAMPLES[1])
+        surface = params.blade_surface(sections=_ESTIMATE_SAMPLES[0], points=_ESTIMATE_SAMPLES[1])
     export = params.export
     return estimate_stl_triangles(surface.points, surface.trailing_edge_index, params.blades, params.hub.radius,
                                   export.stl_linear_deflection, export.stl_angular_deflection)

@@ -8,10 +8,10 @@ A build is a transaction on its output folder ``OUT``:
    build in that folder.
 2. **Seal.** The JSON report is written last and lists every other file of the set with its
    size and SHA-256 (``"files"``).
-3. **Publish.** Under an exclusive lock on ``OUT/.<name>.lock`` (``flock``; same-name builds take
-   turns, only for this step) the old report is removed, the files are renamed onto their final
-   names, members of the old set that the new one lacks are removed, and the report is renamed
-   last. Signals wait until this is done.
+3. **Publish.** Under an exclusive ``flock`` on the folder ``OUT`` itself (builds into one folder
+   take turns, only for this step, which takes milliseconds) the old report is removed, the files
+   are renamed onto their final names, members of the old set that the new one lacks are removed,
+   and the report is renamed last. Signals wait until this is done.
 
 So at any moment ``OUT/<name>.json`` either is absent or matches the files it lists, except
 after a SIGKILL (or power loss) inside the few renames of step 3, which leaves a set that
@@ -37,13 +37,10 @@ from typing import TYPE_CHECKING, Any, Self
 
 from torus_cad.errors import (
     IncompleteOutputError,
-    KernelError,
     OutputError,
-    TorusCadError,
 )
 from torus_cad.interrupts import deferred, removed_on_interrupt
 from torus_cad.ownership import glob_escape, left_by_dead_process, owner_tag
-from torus_cad.tolerances import DISK_FULL_FREE_BYTES
 
 if TYPE_CHECKING:
     from torus_cad.propeller import Propeller
@@ -111,15 +108,19 @@ def file_entry(path: Path) -> dict[str, Any]:
 
 
 @contextlib.contextmanager
-def _name_lock(out_dir: Path, name: str, shared: bool = False) -> Iterator[None]:
-    """Hold ``flock`` on ``out_dir/.<name>.lock``; without it (no lock file can be made) go on unlocked."""
+def _folder_lock(out_dir: Path, shared: bool = False) -> Iterator[None]:
+    """Hold ``flock`` on the folder ``out_dir`` itself (no lock file is left behind).
+
+    Where the folder cannot be locked (a file system without flock on folders, e.g. some network
+    file systems) this goes on unlocked: the sealed report still tells a mixed set.
+    """
     try:
-        descriptor = os.open(out_dir / f".{name}.lock", os.O_RDWR | os.O_CREAT, 0o666)
+        descriptor = os.open(out_dir, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0))
     except OSError:
-        yield  # e.g. verifying a read-only folder: nobody can be publishing into it
+        yield
         return
     try:
-        with contextlib.suppress(OSError):  # a file system without flock: the report's hashes still tell
+        with contextlib.suppress(OSError):
             fcntl.flock(descriptor, fcntl.LOCK_SH if shared else fcntl.LOCK_EX)
         yield
     finally:
@@ -191,35 +192,16 @@ class OutputSet:
         return self._staged[kind]
 
     def write(self, kind: str, writer: FileWriter) -> Path:
-        """Stage the file of ``kind`` with ``writer(path)``; a failure names the final file and its cause."""
+        """Stage the file of ``kind`` with ``writer(path)``; an OSError (no space left, permission denied,
+        file size limit) becomes an OutputError naming the final file and the cause."""
         path = self.stage(kind)
         try:
             writer(path)
         except OSError as error:
             raise OutputError(describe_os_error(error, self.final_path(kind))) from None
-        except KernelError as error:
-            raise self._diagnose(kind, error) from None
         if not path.is_file():
             raise OutputError(f"{str(self.final_path(kind))!r} was not written")
         return path
-
-    def _diagnose(self, kind: str, error: KernelError) -> TorusCadError:
-        """A writer that reports only "could not write": say so when the disk is the cause."""
-        assert self.staging is not None
-        with contextlib.suppress(OSError):
-            free = shutil.disk_usage(self.staging).free
-            if free < DISK_FULL_FREE_BYTES:
-                return OutputError(f"no space left on device writing {str(self.final_path(kind))!r} "
-                                   f"({free:,} bytes free)")
-        with contextlib.suppress(OSError, ValueError):
-            import resource
-
-            limit = resource.getrlimit(resource.RLIMIT_FSIZE)[0]
-            written = max((p.stat().st_size for p in self.staging.rglob("*") if p.is_file()), default=0)
-            if limit != resource.RLIM_INFINITY and written >= limit:
-                return OutputError(f"file size limit (ulimit -f, {limit:,} bytes) exceeded writing "
-                                   f"{str(self.final_path(kind))!r}")
-        return error
 
     def publish(self, report: Mapping[str, Any]) -> dict[str, Path]:
         """Seal the staged files into ``report`` (as its ``"files"``), write it, publish the set; return
@@ -233,7 +215,7 @@ class OutputSet:
             staged_report.write_text(json.dumps(sealed, indent=2, allow_nan=False) + "\n", encoding="utf-8")
         except OSError as error:
             raise OutputError(describe_os_error(error, self.final_path("json"))) from None
-        with deferred(), _name_lock(self.out_dir, self.name):
+        with deferred(), _folder_lock(self.out_dir):
             self._swap_in(staged_report)
         return {**{kind: self.final_path(kind) for kind in self._staged}, "json": self.final_path("json")}
 
@@ -275,9 +257,9 @@ def verify_set(out_dir: str | Path, name: str) -> VerifiedSet:
     """
     out_dir = Path(out_dir)
     report_path = out_dir / f"{name}.json"
-    with _name_lock(out_dir, name, shared=True):
+    with _folder_lock(out_dir, shared=True):
         if not report_path.is_file():
-            orphans = sorted(p.name for p in out_dir.glob(f"{glob_escape(name)}.*") if p.suffix != ".lock")
+            orphans = sorted(p.name for p in out_dir.glob(f"{glob_escape(name)}.*"))
             if orphans:
                 raise IncompleteOutputError(f"{name}: incomplete set: {report_path.name} is missing beside "
                                             f"{', '.join(orphans)}")
@@ -330,7 +312,8 @@ def write_output_set(propeller: Propeller, out_dir: str | Path, density_g_cm3: f
     """
     from torus_cad.budgets import check_stl_budget
     from torus_cad.kernel.export import write_step, write_stl
-    from torus_cad.propeller import StageTimer, build_report
+    from torus_cad.propeller import build_report
+    from torus_cad.stages import Stage, StageTimer
 
     params = propeller.parameters
     if stl:
@@ -338,10 +321,10 @@ def write_output_set(propeller: Propeller, out_dir: str | Path, density_g_cm3: f
     export = params.export
     timer = StageTimer()
     with OutputSet(out_dir, params.name) as output:
-        with timer.stage("step_write"):
+        with timer.stage(Stage.STEP_WRITE):
             output.write("step", lambda path: write_step(propeller.solid, path, params.name, export.step_schema))
         if stl:
-            with timer.stage("stl_write"):
+            with timer.stage(Stage.STL_WRITE):
                 output.write("stl", lambda path: write_stl(propeller.solid, path, export.stl_linear_deflection,
                                                            export.stl_angular_deflection))
         for kind, writer in (extra_files or {}).items():

@@ -11,7 +11,9 @@ torus_cad.outputs.
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
+import shutil
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
@@ -31,6 +33,7 @@ from OCP.XCAFDoc import XCAFDoc_DocumentTool
 from torus_cad.errors import KernelError
 from torus_cad.interrupts import removed_on_interrupt
 from torus_cad.ownership import glob_escape, left_by_dead_process, owner_tag
+from torus_cad.tolerances import DISK_FULL_FREE_BYTES
 
 _STEP_SCHEMAS = {"AP214": "AP214IS", "AP242": "AP242DIS"}
 _STEP_END_MARKER = b"END-ISO-10303-21;"
@@ -88,28 +91,43 @@ def write_step(shape: cq.Shape, path: str | Path, product_name: str, schema: str
         raise KernelError("OpenCascade could not translate the solid to STEP")
     path = Path(path)
     with atomic_path(path) as temp:
-        if writer.Write(str(temp)) != IFSelect_RetDone:
-            raise KernelError(f"OpenCascade could not write STEP file {str(path)!r}")
-        _check_step_whole(temp, path)
+        if writer.Write(str(temp)) != IFSelect_RetDone or not _step_whole(temp):
+            raise _write_failure("STEP", path, temp)
     return path
 
 
-def _check_step_whole(temp: Path, path: Path) -> None:
-    """KernelError unless ``temp`` ends with the STEP end marker (a writer that lost its tail)."""
+def _step_whole(temp: Path) -> bool:
+    """Whether ``temp`` ends with the STEP end marker (a writer can lose its tail without saying so)."""
     with open(temp, "rb") as handle:
         handle.seek(max(0, temp.stat().st_size - 256))
-        if _STEP_END_MARKER not in handle.read():
-            raise KernelError(f"OpenCascade wrote an incomplete STEP file {str(path)!r} (no end marker)")
+        return _STEP_END_MARKER in handle.read()
 
 
-def _check_stl_whole(temp: Path, path: Path) -> None:
-    """KernelError unless ``temp``'s size is a binary STL's: 84 bytes + 50 per triangle it declares."""
+def _stl_whole(temp: Path) -> bool:
+    """Whether ``temp``'s size is a binary STL's: 84 bytes + 50 per triangle it declares."""
     size = temp.stat().st_size
     with open(temp, "rb") as handle:
         header = handle.read(_STL_HEADER_BYTES)
     triangles = int.from_bytes(header[80:84], "little") if len(header) == _STL_HEADER_BYTES else -1
-    if triangles <= 0 or size != _STL_HEADER_BYTES + _STL_TRIANGLE_BYTES * triangles:
-        raise KernelError(f"OpenCascade wrote an incomplete STL file {str(path)!r} ({size:,} bytes)")
+    return triangles > 0 and size == _STL_HEADER_BYTES + _STL_TRIANGLE_BYTES * triangles
+
+
+def _write_failure(kind: str, path: Path, temp: Path) -> Exception:
+    """Why OpenCascade, which reports only that it failed, could not write ``temp`` (published as ``path``).
+
+    Looked at while the partial file is still there: a full file system or the process's file size
+    limit (``ulimit -f``) is an OSError naming ``path``; anything else is a KernelError.
+    """
+    with contextlib.suppress(OSError):
+        if shutil.disk_usage(temp.parent).free < DISK_FULL_FREE_BYTES:
+            return OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(path))
+    with contextlib.suppress(OSError, ValueError, ImportError):
+        import resource
+
+        limit = resource.getrlimit(resource.RLIMIT_FSIZE)[0]
+        if limit != resource.RLIM_INFINITY and temp.stat().st_size >= limit:
+            return OSError(errno.EFBIG, os.strerror(errno.EFBIG), str(path))
+    return KernelError(f"OpenCascade could not write {kind} file {str(path)!r}")
 
 
 def read_step(path: str | Path) -> cq.Shape:
@@ -131,7 +149,6 @@ def write_stl(shape: cq.Shape, path: str | Path, linear_deflection: float, angul
     writer.ASCIIMode = False
     path = Path(path)
     with atomic_path(path) as temp:
-        if not writer.Write(shape.wrapped, str(temp)):
-            raise KernelError(f"OpenCascade could not write STL file {str(path)!r}")
-        _check_stl_whole(temp, path)
+        if not writer.Write(shape.wrapped, str(temp)) or not _stl_whole(temp):
+            raise _write_failure("STL", path, temp)
     return path
