@@ -1,7 +1,8 @@
-"""Calibrate the STL triangle estimate against OpenCascade's real triangle counts.
+"""Check the STL triangle estimate against OpenCascade's real triangle counts.
 
-    python scripts/stl_budget.py              # 6 designs x 20 deflection settings, prints a table
+    python scripts/stl_budget.py              # 7 designs x 7 deflection settings, prints a table
     python scripts/stl_budget.py --quick      # 3 designs x 6 settings
+    python scripts/stl_budget.py --design thin --design "1 blade"
 
 For each design and (linear, angular) deflection it prints the estimate that the build checks
 against the limit before tessellating (torus_cad.budgets), the triangles BRepMesh really makes,
@@ -20,7 +21,7 @@ DESIGNS = {
     "1 blade": {"blades": 1},
     "6 blades, hub 16": {"blades": 6, "hub.radius": 16.0},
     "thin": {"airfoil.thickness": 0.12, "airfoil.max_camber": 0.06},
-    "wide chord": {"transforms.scale_x": [0.0, 0.0, -30.0, 30.0, 10.0], "hub.radius": 14.0},
+    "wide chord": {"transforms.scale_x": [0.0, 0.0, -24.0, 24.0, 7.0], "hub.radius": 14.0},
     "twisted": {"transforms.angle_of_attack": [0.0, 0.0, 0.0, 60.0, -10.0], "centerline.frame": "rotation_minimizing"},
     "fine sampling": {"resolution.sections": 100, "resolution.points": 400},
 }
@@ -49,13 +50,14 @@ def real_triangles(solid, linear: float, angular: float) -> tuple[int, float]:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--quick", action="store_true", help="3 designs x 6 settings")
+    parser.add_argument("--design", action="append", choices=list(DESIGNS), help="only these designs (repeatable)")
     parser.add_argument("--max-estimate", type=float, default=400_000, help="skip settings estimated above this")
     args = parser.parse_args()
     from torus_cad.budgets import estimated_stl_triangles
     from torus_cad.parameters import PropellerParameters
     from torus_cad.propeller import build_propeller
 
-    names = QUICK_DESIGNS if args.quick else tuple(DESIGNS)
+    names = args.design or (QUICK_DESIGNS if args.quick else tuple(DESIGNS))
     settings = QUICK_SETTINGS if args.quick else SETTINGS
     print(f"{'design':<18} {'linear':>7} {'angular':>7} {'estimate':>9} {'real':>9} {'ratio':>6} {'mesh s':>7}")
     ratios = []

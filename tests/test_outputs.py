@@ -19,7 +19,13 @@ from pathlib import Path
 import pytest
 
 from torus_cad.errors import IncompleteOutputError, OutputError
-from torus_cad.outputs import FILES_KEY, OutputSet, check_writable_folder, set_names, verify_set
+from torus_cad.outputs import (
+    FILES_KEY,
+    OutputSet,
+    check_writable_folder,
+    set_names,
+    verify_set,
+)
 from torus_cad.ownership import owner_tag
 
 #: Low resolution and a coarse STL keep each build short; the transaction does not depend on them.
@@ -29,7 +35,7 @@ FAST = ["--set", "resolution.sections=16", "--set", "resolution.points=48",
 
 def cli(*args: str, timeout: float = 600, **kwargs) -> subprocess.CompletedProcess:
     """Run ``python -m torus_cad ARGS`` in a new process."""
-    return subprocess.run([sys.executable, "-m", "torus_cad", *args], capture_output=True, text=True,
+    return subprocess.run([sys.executable, "-m", "torus_cad", *args], check=False, capture_output=True, text=True,
                           timeout=timeout, **kwargs)
 
 
@@ -199,7 +205,7 @@ def test_a_signal_between_the_renames_never_leaves_a_silent_mix(tmp_path, signal
     script = tmp_path / "killer.py"
     script.write_text(_KILL_DURING_PUBLISH)
     result = subprocess.run([sys.executable, str(script), signal_name, "build", "--out", str(out), "-q",
-                             "--set", "blades=3", *FAST], capture_output=True, text=True, timeout=600)
+                             "--set", "blades=3", *FAST], check=False, capture_output=True, text=True, timeout=600)
     if signal_name == "SIGKILL":  # nothing can wait for SIGKILL: the set is visibly incomplete
         assert result.returncode == -signal.SIGKILL
         verified = cli("verify", str(out))
@@ -261,7 +267,7 @@ def small_disk(tmp_path):
     mount_point = tmp_path / "disk"
     mount_point.mkdir()
     result = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=1500k", "tmpfs", str(mount_point)],
-                            capture_output=True, text=True)
+                            check=False, capture_output=True, text=True)
     if result.returncode != 0:
         pytest.skip(f"cannot mount a small tmpfs: {result.stderr.strip()}")
     yield mount_point
@@ -321,7 +327,7 @@ def test_permission_denied_on_the_output_folder_is_found_before_building(tmp_pat
     try:
         result = subprocess.run([*prefix, sys.executable, "-m", "torus_cad", "build", "--out", str(locked),
                                  "--set", "transforms.scale_x=[0, 0, 0, 0, 40.0]"],
-                                capture_output=True, text=True, timeout=600)
+                                check=False, capture_output=True, text=True, timeout=600)
     finally:
         locked.chmod(0o755)
     assert result.returncode == 1, result.stderr

@@ -69,14 +69,28 @@ def _parse_override(text: str) -> tuple[str, Any]:
         value = tomllib.loads(f"value = {raw}")["value"]
     except tomllib.TOMLDecodeError:
         value = raw  # a bare word: treat as a string (e.g. name=my_prop)
+    except ValueError as error:  # e.g. an integer of more than 4300 digits
+        raise ParameterError(f"--set {key.strip()}: {_first_clause(error)}") from None
     return key.strip(), value
+
+
+def _first_clause(error: BaseException) -> str:
+    """The error's message up to its first ';', on one line."""
+    return " ".join(str(error).split(";")[0].split())[:200]
 
 
 def load_parameters(config: str | None, overrides: Sequence[str] = ()) -> PropellerParameters:
     """Parameters from a TOML file (or the defaults) with ``key=value`` overrides applied."""
     from torus_cad.parameters import resolve_parameters
 
-    return resolve_parameters(config or None, dict(_parse_override(item) for item in overrides))
+    changes = dict(_parse_override(item) for item in overrides)
+    try:
+        return resolve_parameters(config or None, changes)
+    except ParameterError:
+        raise
+    except (OverflowError, ValueError) as error:  # reading input only: whatever fails here is bad input
+        source = f"configuration {config!r}" if config else "a --set value"
+        raise ParameterError(f"{source} holds a value that cannot be used: {_first_clause(error)}") from None
 
 
 def _add_design_arguments(parser: argparse.ArgumentParser) -> None:
