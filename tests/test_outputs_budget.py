@@ -67,12 +67,19 @@ def test_the_estimate_grows_as_the_deflections_shrink():
         estimated_stl_triangles(_with_deflections(0.05, 0.2, blades=3))
 
 
-def test_the_estimate_does_not_depend_on_the_sampling():
-    """The design's own resolution samples the surface; a coarse one is sampled again."""
-    estimates = [estimated_stl_triangles(_with_deflections(0.05, 0.1, **{"resolution.sections": sections,
-                                                                          "resolution.points": points}))
+def test_the_estimate_does_not_depend_on_how_the_surface_is_sampled():
+    """The surface the build sampled is used as it is; one too coarse to show the curvature is sampled again."""
+    params = _with_deflections(0.05, 0.1)
+    estimates = [estimated_stl_triangles(params, params.blade_surface(sections=sections, points=points), (25, 52))
                  for sections, points in ((4, 16), (25, 80), (60, 200))]
     assert max(estimates) / min(estimates) < 1.1, estimates
+
+
+def test_more_sections_make_a_larger_estimate():
+    """The mesher starts from the B-spline's grid of poles: 3 x 28 000 triangles at 200 x 800 samples."""
+    coarse, fine = (estimated_stl_triangles(_with_deflections(0.5, 0.5, **{"resolution.sections": sections}))
+                    for sections in (25, 200))
+    assert fine > coarse + 3 * 2 * (200 - 25) * 50
 
 
 def _real_triangles(solid, linear: float, angular: float) -> int:

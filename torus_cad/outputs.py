@@ -317,7 +317,7 @@ def write_output_set(propeller: Propeller, out_dir: str | Path, density_g_cm3: f
 
     params = propeller.parameters
     if stl:
-        check_stl_budget(params, propeller.surface)
+        check_stl_budget(params, propeller.surface, propeller.section_curves.poles.shape[:2])
     export = params.export
     timer = StageTimer()
     with OutputSet(out_dir, params.name) as output:

@@ -95,7 +95,8 @@ def hub_triangles(radius_mm: float, linear_deflection: float, angular_deflection
 
 
 def estimate_stl_triangles(blade_points: NDArray[np.float64], trailing_edge_index: int | None, blades: int,
-                           hub_radius_mm: float, linear_deflection: float, angular_deflection: float) -> int:
+                           hub_radius_mm: float, linear_deflection: float, angular_deflection: float,
+                           pole_grid: tuple[int, int]) -> int:
     """Upper estimate of the STL triangle count of the fused propeller.
 
     Args:
@@ -106,10 +107,11 @@ def estimate_stl_triangles(blade_points: NDArray[np.float64], trailing_edge_inde
         hub_radius_mm: the hub's radius.
         linear_deflection: the STL's chordal deviation, mm (> 0).
         angular_deflection: the STL's angular deviation, radians (> 0).
+        pole_grid: (sections, poles around a section) of the blade's B-spline surface: the mesher
+            starts from a grid of about that many nodes, whatever the deflections.
     """
     blade = blade_triangles(blade_points, trailing_edge_index, linear_deflection, angular_deflection)
-    # The mesher starts from the B-spline's own grid (about one node per sample), whatever the deflections.
-    start_grid = 2.0 * blade_points.shape[0] * blade_points.shape[1]
+    start_grid = 2.0 * pole_grid[0] * pole_grid[1]
     # Each blade end leaves a hole in the hub bordered by its section outline: a ring of triangles.
     ends = sum(outline_segments(blade_points[i], linear_deflection, angular_deflection) for i in (0, -1))
     hub = hub_triangles(hub_radius_mm, linear_deflection, angular_deflection)
