@@ -28,7 +28,6 @@ from numpy.typing import NDArray
 from torus_cad.errors import GeometryError
 from torus_cad.geometry.airfoil import airfoil_points
 from torus_cad.geometry.centerline import Centerline
-from torus_cad.geometry.frames import Frames
 from torus_cad.geometry.propeller import HubGeometry, PropellerGeometry
 from torus_cad.geometry.surface import BladeSurface, blade_frames, place_on_frames
 

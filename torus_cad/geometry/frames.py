@@ -17,7 +17,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from torus_cad.errors import GeometryError
 from torus_cad.geometry.centerline import Centerline
-from torus_cad.tolerances import FRENET_MIN_CURVATURE, FRAME_SCAN_SAMPLES
+from torus_cad.tolerances import FRAME_SCAN_SAMPLES, FRENET_MIN_CURVATURE
 
 
 class FrameKind(StrEnum):
@@ -137,7 +137,7 @@ def rotation_minimizing_frames(centerline: Centerline, s: ArrayLike,
 
 def _initial_normal(tangent: NDArray[np.float64], second: NDArray[np.float64]) -> NDArray[np.float64]:
     candidate = second - np.dot(second, tangent) * tangent
-    if np.linalg.norm(candidate) < 1e-9 * max(1.0, np.linalg.norm(second)):
+    if np.linalg.norm(candidate) < 1e-9 * max(1.0, float(np.linalg.norm(second))):
         helper = np.eye(3)[int(np.argmin(np.abs(tangent)))]
         candidate = helper - np.dot(helper, tangent) * tangent
     return candidate / np.linalg.norm(candidate)

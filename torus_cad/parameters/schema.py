@@ -27,12 +27,12 @@ def _list_to_tuple(value: Any) -> Any:
     return tuple(value) if isinstance(value, list) else value
 
 
-def vector(length: int, low: float | None = None, high: float | None = None) -> Any:
-    """The annotation of a fixed-length vector of floats, each in ``[low, high]`` when given.
+#: Put on a vector's annotation: TOML gives lists, the frozen parameters keep tuples.
+AS_TUPLE = BeforeValidator(_list_to_tuple)
 
-    TOML gives lists; they are accepted as tuples (the parameters are frozen)."""
-    element = Annotated[float, Field(ge=low, le=high)] if low is not None or high is not None else float
-    return Annotated[tuple[(element,) * length], BeforeValidator(_list_to_tuple)]  # type: ignore[misc]
+#: Fixed-length vectors of floats (elements unbounded; cross-field validators check them).
+Vector2 = Annotated[tuple[float, float], AS_TUPLE]
+Vector3 = Annotated[tuple[float, float, float], AS_TUPLE]
 
 
 def param(default: Any, *, doc: str, unit: str = "", ge: float | None = None, gt: float | None = None,
