@@ -28,6 +28,7 @@ from numpy.typing import NDArray
 from torus_cad.errors import GeometryError
 from torus_cad.geometry.airfoil import airfoil_points
 from torus_cad.geometry.centerline import Centerline
+from torus_cad.geometry.frames import Frames
 from torus_cad.geometry.propeller import HubGeometry, PropellerGeometry
 from torus_cad.geometry.surface import BladeSurface, blade_frames, place_on_frames
 
@@ -94,23 +95,43 @@ class Tube:
     """The blade surface sampled on a check grid, with its frames and in-plane coordinates.
 
     Attributes:
-        s: ``(m,)`` parameters of the grid's sections.
-        origin, tangent, normal, binormal: ``(m, 3)`` the frames (unit vectors).
+        frames: the ``m`` sections' frames (s, origin, unit tangent, normal, binormal).
         planar: ``(m, p, 2)`` section coordinates (X along N, Y along B), mm.
         points: ``(m, p, 3)`` surface points, mm.
         curvature: ``(m, 3)`` curvature vectors of the centerline (kappa times the Frenet normal), 1/mm.
         arc_length: ``(m,)`` centerline arc length from s = 0, mm.
     """
 
-    s: NDArray[np.float64]
-    origin: NDArray[np.float64]
-    tangent: NDArray[np.float64]
-    normal: NDArray[np.float64]
-    binormal: NDArray[np.float64]
+    frames: Frames
     planar: NDArray[np.float64]
     points: NDArray[np.float64]
     curvature: NDArray[np.float64]
     arc_length: NDArray[np.float64]
+
+    @property
+    def s(self) -> NDArray[np.float64]:
+        """``(m,)`` parameters of the grid's sections."""
+        return self.frames.s
+
+    @property
+    def origin(self) -> NDArray[np.float64]:
+        """``(m, 3)`` centerline points, mm."""
+        return self.frames.origin
+
+    @property
+    def tangent(self) -> NDArray[np.float64]:
+        """``(m, 3)`` unit tangents."""
+        return self.frames.tangent
+
+    @property
+    def normal(self) -> NDArray[np.float64]:
+        """``(m, 3)`` unit section X directions."""
+        return self.frames.normal
+
+    @property
+    def binormal(self) -> NDArray[np.float64]:
+        """``(m, 3)`` unit section Y directions."""
+        return self.frames.binormal
 
     @property
     def section_radius(self) -> NDArray[np.float64]:
@@ -143,8 +164,7 @@ def sample_tube(geometry: PropellerGeometry, centerline: Centerline, s: NDArray[
     surface = place_on_frames(frames, planar)
     steps = np.linalg.norm(np.diff(frames.origin, axis=0), axis=-1)
     arc_length = np.concatenate([[0.0], np.cumsum(steps)])
-    return Tube(s, frames.origin, frames.tangent, frames.normal, frames.binormal, planar, surface, curvature,
-                arc_length)
+    return Tube(frames, planar, surface, curvature, arc_length)
 
 
 def coarsen(tube: Tube, sections: int = CHECK_SECTIONS, points: int = CHECK_POINTS) -> Tube:
@@ -152,8 +172,7 @@ def coarsen(tube: Tube, sections: int = CHECK_SECTIONS, points: int = CHECK_POIN
     m, p, _ = tube.points.shape
     rows = np.unique(np.concatenate([np.arange(0, m, max(1, m // sections)), [m - 1]]))
     columns = np.arange(0, p, max(1, int(np.ceil(p / points))))
-    return Tube(tube.s[rows], tube.origin[rows], tube.tangent[rows], tube.normal[rows], tube.binormal[rows],
-                tube.planar[rows][:, columns], tube.points[rows][:, columns], tube.curvature[rows],
+    return Tube(tube.frames.take(rows), tube.planar[rows][:, columns], tube.points[rows][:, columns], tube.curvature[rows],
                 tube.arc_length[rows])
 
 

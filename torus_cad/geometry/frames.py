@@ -47,6 +47,10 @@ class Frames:
     normal: NDArray[np.float64]
     binormal: NDArray[np.float64]
 
+    def take(self, rows: NDArray[np.int64]) -> Frames:
+        """The frames at the given row indices."""
+        return Frames(self.s[rows], self.origin[rows], self.tangent[rows], self.normal[rows], self.binormal[rows])
+
 
 def _unit(vectors: NDArray[np.float64]) -> NDArray[np.float64]:
     return vectors / np.linalg.norm(vectors, axis=-1, keepdims=True)

@@ -9,6 +9,8 @@ from __future__ import annotations
 from enum import Enum
 from typing import Any
 
+from pydantic import BaseModel
+
 from torus_cad.parameters.design import PropellerParameters
 from torus_cad.parameters.schema import ParameterSpec, iter_parameter_specs
 
@@ -46,9 +48,9 @@ def _row(spec: ParameterSpec) -> str:
     return f"| `{spec.key}` | {_default_text(spec.default)} | {spec.unit or '–'} | {_allowed_text(spec)} | {doc} |"
 
 
-def markdown_table() -> str:
-    """Every parameter as a Markdown table: key, default, unit, allowed values, meaning."""
-    rows = [_row(spec) for spec in iter_parameter_specs(PropellerParameters)]
+def markdown_table(model: type[BaseModel] = PropellerParameters) -> str:
+    """Every parameter of ``model`` as a Markdown table: key, default, unit, allowed values, meaning."""
+    rows = [_row(spec) for spec in iter_parameter_specs(model)]
     header = ["| key | default | unit | allowed | meaning |", "| --- | --- | --- | --- | --- |"]
     return "\n".join([BEGIN, *header, *rows, END])
 

@@ -78,7 +78,7 @@ class Bounds:
 
     def contains(self, value: float) -> bool:
         """Whether ``value`` lies inside (NaN never does)."""
-        if not math.isfinite(value):
+        if isinstance(value, float) and not math.isfinite(value):
             return False
         low_ok = self.low is None or (value > self.low if self.low_open else value >= self.low)
         high_ok = self.high is None or (value < self.high if self.high_open else value <= self.high)
@@ -209,7 +209,10 @@ def _dotted(location: Sequence[Any]) -> str:
 
 
 def _describe(value: Any) -> str:
-    text = repr(value)
+    try:
+        text = repr(value)
+    except ValueError:  # an int too long to print (Python refuses > 4300 digits)
+        text = "a huge number"
     return f"{type(value).__name__} {text if len(text) <= 40 else text[:37] + '...'}"
 
 
