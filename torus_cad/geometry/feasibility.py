@@ -109,31 +109,6 @@ class Tube:
     arc_length: NDArray[np.float64]
 
     @property
-    def s(self) -> NDArray[np.float64]:
-        """``(m,)`` parameters of the grid's sections."""
-        return self.frames.s
-
-    @property
-    def origin(self) -> NDArray[np.float64]:
-        """``(m, 3)`` centerline points, mm."""
-        return self.frames.origin
-
-    @property
-    def tangent(self) -> NDArray[np.float64]:
-        """``(m, 3)`` unit tangents."""
-        return self.frames.tangent
-
-    @property
-    def normal(self) -> NDArray[np.float64]:
-        """``(m, 3)`` unit section X directions."""
-        return self.frames.normal
-
-    @property
-    def binormal(self) -> NDArray[np.float64]:
-        """``(m, 3)`` unit section Y directions."""
-        return self.frames.binormal
-
-    @property
     def section_radius(self) -> NDArray[np.float64]:
         """``(m,)`` largest distance of a section's points from the centerline, mm."""
         return np.linalg.norm(self.planar, axis=-1).max(axis=1)
@@ -185,10 +160,10 @@ def fold_ratio(tube: Tube) -> tuple[float, float]:
     where k is the curvature vector: where k . o reaches 1 neighbouring sections cross and
     the surface folds over itself.
     """
-    offsets = tube.points - tube.origin[:, None, :]
+    offsets = tube.points - tube.frames.origin[:, None, :]
     ratio = np.einsum("mpk,mk->mp", offsets, tube.curvature).max(axis=1)
     worst = int(np.argmax(ratio))
-    return float(ratio[worst]), float(tube.s[worst])
+    return float(ratio[worst]), float(tube.frames.s[worst])
 
 
 def check_no_fold(tube: Tube, limit: float | None = None) -> None:
@@ -196,7 +171,7 @@ def check_no_fold(tube: Tube, limit: float | None = None) -> None:
     limit = FOLD_LIMIT if limit is None else limit
     ratio, where = fold_ratio(tube)
     if ratio >= limit:
-        index = int(np.argmin(np.abs(tube.s - where)))
+        index = int(np.argmin(np.abs(tube.frames.s - where)))
         bend_radius = 1.0 / max(float(np.linalg.norm(tube.curvature[index])), 1e-300)
         raise GeometryError(
             f"the blade folds over itself near s = {where:.3f}: its section reaches {ratio:.2f} x the "
@@ -216,7 +191,7 @@ def resolution_deviation(surface: BladeSurface, fine: Tube, step: int) -> tuple[
     sparse sections of a strongly changing blade misses the design badly, can come out
     inside out, and the fuse then fails or hangs (found by ``scripts/fuzz.py``).
     """
-    middle = fine.s[step // 2::step]
+    middle = fine.frames.s[step // 2::step]
     exact = fine.points[step // 2::step]
     straight = 0.5 * (surface.points[:-1] + surface.points[1:])
     sag = np.linalg.norm(straight - exact, axis=-1).max(axis=1)
@@ -254,7 +229,7 @@ def _points_inside(tube: Tube, query: NDArray[np.float64], allowed: NDArray[np.b
     backward side of section k + 1's, and inside the section interpolated to its position.
     ``allowed`` ``(q, m - 1)`` masks the slabs tested per point (e.g. to skip a point's neighbours).
     """
-    heights = query @ tube.tangent.T - np.sum(tube.origin * tube.tangent, axis=-1)  # (q, m)
+    heights = query @ tube.frames.tangent.T - np.sum(tube.frames.origin * tube.frames.tangent, axis=-1)  # (q, m)
     in_slab = (heights[:, :-1] >= 0.0) & (heights[:, 1:] < 0.0)
     if allowed is not None:
         in_slab &= allowed
@@ -263,20 +238,20 @@ def _points_inside(tube: Tube, query: NDArray[np.float64], allowed: NDArray[np.b
     where = np.full(len(query), -1, dtype=np.int64)
     # A point inside slab k lies within the larger section radius (plus the slab's length) of C_k.
     radius = tube.section_radius
-    reach = np.maximum(radius[:-1], radius[1:]) + np.linalg.norm(np.diff(tube.origin, axis=0), axis=-1)
-    near = np.linalg.norm(query[point_index] - tube.origin[slab], axis=-1) <= reach[slab]
+    reach = np.maximum(radius[:-1], radius[1:]) + np.linalg.norm(np.diff(tube.frames.origin, axis=0), axis=-1)
+    near = np.linalg.norm(query[point_index] - tube.frames.origin[slab], axis=-1) <= reach[slab]
     point_index, slab = point_index[near], slab[near]
     if point_index.size == 0:
         return inside, where
     h0, h1 = heights[point_index, slab], heights[point_index, slab + 1]
     weight = (h0 / (h0 - h1))[:, None]
     polygon = (1.0 - weight[:, :, None]) * tube.planar[slab] + weight[:, :, None] * tube.planar[slab + 1]
-    relative0 = query[point_index] - tube.origin[slab]
-    relative1 = query[point_index] - tube.origin[slab + 1]
-    x = (1.0 - weight[:, 0]) * np.sum(relative0 * tube.normal[slab], -1) + weight[:, 0] * np.sum(
-        relative1 * tube.normal[slab + 1], -1)
-    y = (1.0 - weight[:, 0]) * np.sum(relative0 * tube.binormal[slab], -1) + weight[:, 0] * np.sum(
-        relative1 * tube.binormal[slab + 1], -1)
+    relative0 = query[point_index] - tube.frames.origin[slab]
+    relative1 = query[point_index] - tube.frames.origin[slab + 1]
+    x = (1.0 - weight[:, 0]) * np.sum(relative0 * tube.frames.normal[slab], -1) + weight[:, 0] * np.sum(
+        relative1 * tube.frames.normal[slab + 1], -1)
+    y = (1.0 - weight[:, 0]) * np.sum(relative0 * tube.frames.binormal[slab], -1) + weight[:, 0] * np.sum(
+        relative1 * tube.frames.binormal[slab + 1], -1)
     hit = _in_polygons(polygon, x, y)
     inside[point_index[hit]] = True
     where[point_index[hit]] = slab[hit]
@@ -307,8 +282,8 @@ def check_no_self_intersection(hub: HubGeometry, tube: Tube) -> None:
     inside, slab = _points_inside(tube, query, allowed)
     if np.any(inside):
         first = int(np.argmax(inside))
-        s_point = tube.s[section_of_point[first]]
-        s_slab = 0.5 * (tube.s[slab[first]] + tube.s[slab[first] + 1])
+        s_point = tube.frames.s[section_of_point[first]]
+        s_slab = 0.5 * (tube.frames.s[slab[first]] + tube.frames.s[slab[first] + 1])
         place = "outside" if _outside_hub(hub, query[first]) else "inside"
         low, high = sorted((s_point, s_slab))
         raise GeometryError(
@@ -347,8 +322,8 @@ def check_blades_clear(geometry: PropellerGeometry, tube: Tube) -> None:
         inside, slab = _points_inside(tube, rotated)
         if np.any(inside):
             first = int(np.argmax(inside))
-            s_other = tube.s[section_of_point[first]]
-            s_here = 0.5 * (tube.s[slab[first]] + tube.s[slab[first] + 1])
+            s_other = tube.frames.s[section_of_point[first]]
+            s_here = 0.5 * (tube.frames.s[slab[first]] + tube.frames.s[slab[first] + 1])
             gap = min(blade, geometry.blades - blade)
             raise GeometryError(
                 f"the blades would intersect each other outside the hub: blade 1's part near s = {s_here:.3f} "
