@@ -19,6 +19,7 @@ from pathlib import Path
 import pytest
 
 from torus_cad.errors import IncompleteOutputError, OutputError
+from torus_cad.kernel.files import owner_tag
 from torus_cad.outputs import (
     FILES_KEY,
     OutputSet,
@@ -26,7 +27,6 @@ from torus_cad.outputs import (
     set_names,
     verify_set,
 )
-from torus_cad.ownership import owner_tag
 
 #: Low resolution and a coarse STL keep each build short; the transaction does not depend on them.
 FAST = ["--set", "resolution.sections=16", "--set", "resolution.points=48",

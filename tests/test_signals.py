@@ -87,7 +87,7 @@ def test_an_ignored_sigint_stays_ignored(tmp_path):
         signal.signal(signal.SIGINT, signal.SIG_IGN)
 
     process = subprocess.Popen([sys.executable, "-m", "torus_cad", "build", "--out", str(tmp_path), "-q", *FAST],
-                               stderr=subprocess.PIPE, text=True, preexec_fn=ignore_sigint)  # noqa: PLW1509
+                               stderr=subprocess.PIPE, text=True, preexec_fn=ignore_sigint)
     time.sleep(_startup_seconds() + 0.5)
     process.send_signal(signal.SIGINT)
     assert process.wait(600) == 0, process.stderr.read()

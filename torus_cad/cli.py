@@ -319,7 +319,7 @@ def _run(handler: Callable[[argparse.Namespace], int], args: argparse.Namespace)
         return _error(f"cannot write output{where}: {error.strerror or error}", EXIT_KERNEL_FAILURE)
     except KeyboardInterrupt:  # only where a command asked for KeyboardInterrupt (sweep)
         return _error("interrupted", 130)
-    except Exception as error:  # noqa: BLE001 - the command line never shows a traceback
+    except Exception as error:
         return _error(f"internal error ({type(error).__name__}): {error}; please report it with the design file",
                       EXIT_KERNEL_FAILURE)
 

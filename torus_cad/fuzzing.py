@@ -262,7 +262,7 @@ def run_design(design: PropellerParameters | Mapping[str, Any], out_dir: str | P
         return Outcome("refused", str(error), time.perf_counter() - start)
     except KernelError as error:
         return Outcome("kernel", str(error), time.perf_counter() - start, traceback.format_exc())
-    except Exception as error:  # noqa: BLE001 - the point is to catch everything
+    except Exception as error:
         return Outcome("exception", f"{type(error).__name__}: {error}", time.perf_counter() - start,
                        traceback.format_exc())
     return Outcome("valid", "", time.perf_counter() - start)

@@ -4,7 +4,7 @@ The command line installs :func:`exit_on_signals` before it imports anything hea
 while CadQuery is still loading is as clean as one during the build. The handler does not raise
 into whatever code was running (an exception inside a half-finished import can leave a
 half-initialised extension module behind, which crashed at exit): it removes the files staged for
-publishing (:func:`removed_on_interrupt`), prints one line and leaves with ``os._exit``.
+publishing (torus_cad.kernel.files.removed_on_exit), prints one line and leaves with ``os._exit``.
 
 A signal that arrives while an output set is being published (:func:`deferred`) waits until the
 set is complete. Python runs signal handlers between bytecodes, so a signal during one long
@@ -21,12 +21,15 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from types import FrameType
+from typing import Any
+
+from torus_cad.kernel.files import IN_FLIGHT
+
+_Handler = Callable[[int, FrameType | None], Any] | int | signal.Handlers | None
 
 #: The signals that end a command, and their exit codes (128 + the signal number, as shells report).
 EXIT_SIGNALS: dict[int, int] = {signal.SIGINT: 130, signal.SIGTERM: 143, signal.SIGHUP: 129}
 
-_staged: dict[int, Path] = {}  # files and folders to remove on a signal, by a registration id
-_next_id = 0
 _deferred_depth = 0
 _pending: list[int] = []
 _program = "torus-cad"
@@ -45,7 +48,7 @@ def _remove(path: Path) -> None:
 
 
 def _exit_now(signum: int) -> None:
-    for path in list(_staged.values()):
+    for path in list(IN_FLIGHT.values()):
         _remove(path)
     name = signal.Signals(signum).name
     try:
@@ -71,7 +74,7 @@ def exit_on_signals(program: str = "torus-cad") -> Callable[[], None]:
     that restores the previous handlers. Does nothing outside the main thread."""
     global _program
     _program = program
-    previous: dict[int, object] = {}
+    previous: dict[int, _Handler] = {}
     try:
         for signum in EXIT_SIGNALS:
             if signal.getsignal(signum) is not signal.SIG_IGN:  # ignored by the caller (nohup, `cmd &`): keep it so
@@ -81,7 +84,7 @@ def exit_on_signals(program: str = "torus-cad") -> Callable[[], None]:
 
     def restore() -> None:
         for signum, handler in previous.items():
-            signal.signal(signum, handler)  # type: ignore[arg-type]
+            signal.signal(signum, handler)
 
     return restore
 
@@ -89,26 +92,14 @@ def exit_on_signals(program: str = "torus-cad") -> Callable[[], None]:
 def restore_default_interrupts() -> None:
     """Python's own behaviour again where :func:`exit_on_signals` took over: SIGINT raises
     KeyboardInterrupt, SIGTERM and SIGHUP end the process."""
-    defaults = {signal.SIGINT: signal.default_int_handler, signal.SIGTERM: signal.SIG_DFL, signal.SIGHUP: signal.SIG_DFL}
+    defaults: dict[int, _Handler] = {signal.SIGINT: signal.default_int_handler, signal.SIGTERM: signal.SIG_DFL,
+                                     signal.SIGHUP: signal.SIG_DFL}
     try:
         for signum, default in defaults.items():
             if signal.getsignal(signum) is _handler:
                 signal.signal(signum, default)
     except ValueError:
         pass
-
-
-@contextmanager
-def removed_on_interrupt(path: str | Path) -> Iterator[Path]:
-    """Within the block, a signal that ends the process removes ``path`` (a file or a folder) first."""
-    global _next_id
-    _next_id += 1
-    key = _next_id
-    _staged[key] = Path(path)
-    try:
-        yield Path(path)
-    finally:
-        _staged.pop(key, None)
 
 
 @contextmanager

@@ -39,8 +39,8 @@ from torus_cad.errors import (
     IncompleteOutputError,
     OutputError,
 )
-from torus_cad.interrupts import deferred, removed_on_interrupt
-from torus_cad.ownership import glob_escape, left_by_dead_process, owner_tag
+from torus_cad.interrupts import deferred
+from torus_cad.kernel.files import glob_escape, left_by_dead_process, owner_tag, removed_on_exit
 
 if TYPE_CHECKING:
     from torus_cad.propeller import Propeller
@@ -160,7 +160,7 @@ class OutputSet:
             remove_stale_staging(self.out_dir)
             self._cleanup = contextlib.ExitStack()
             self.staging = self.out_dir / f".{self.name}{_STAGING_MARK}{owner_tag()}{secrets.token_hex(4)}"
-            self._cleanup.enter_context(removed_on_interrupt(self.staging))
+            self._cleanup.enter_context(removed_on_exit(self.staging))
             self.staging.mkdir()
         except OSError as error:
             self._discard()
@@ -295,7 +295,7 @@ def set_names(out_dir: str | Path) -> list[str]:
     for path in Path(out_dir).iterdir():
         if path.name.startswith(".") or not path.is_file():
             continue
-        if path.suffix in (".step", ".stl") or path.suffix == ".json" and FILES_KEY in (_read_report(path) or {}):
+        if path.suffix in (".step", ".stl") or (path.suffix == ".json" and FILES_KEY in (_read_report(path) or {})):
             names.add(path.stem)
     return sorted(names)
 

@@ -20,16 +20,15 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol
 
+import cadquery as cq
 import numpy as np
 from numpy.typing import NDArray
 
-import cadquery as cq
-
 from torus_cad.colors import HUB_COLOR, blade_color
 from torus_cad.errors import ParameterError
-from torus_cad.parameters import PropellerParameters
 from torus_cad.kernel.checks import distances_to_shape, precise_volume
 from torus_cad.kernel.export import atomic_path
+from torus_cad.parameters import PropellerParameters
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure

@@ -545,7 +545,7 @@ def run_design(task: DesignTask) -> dict[str, Any]:
         status, reason, kind = STATUS_REFUSED, str(error), type(error).__name__
     except KernelError as error:
         status, reason, kind = STATUS_FAILED, str(error), type(error).__name__
-    except Exception as error:  # noqa: BLE001 - a sweep records every failure and carries on
+    except Exception as error:
         status, reason, kind = STATUS_ERROR, f"{type(error).__name__}: {error}", type(error).__name__
     seconds = time.perf_counter() - start
     outcome = {"id": task.design_id, "status": status, "reason": reason, "seconds": seconds}
@@ -875,7 +875,7 @@ def _client_label(client: Any) -> str:
         workers = info.get("workers", {})
         threads = sum(worker.get("nthreads", 1) for worker in workers.values())
         return f"{info.get('address', '?')}, {len(workers)} workers, {threads} threads"
-    except Exception:  # noqa: BLE001 - only a label
+    except Exception:
         return "cluster"
 
 

@@ -69,7 +69,7 @@ def surface_arc_length_table(airfoil: NacaAirfoil, upper: bool,
                              fine_samples: int = ARC_LENGTH_FINE_SAMPLES // 2) -> ArcLengthTable:
     """Tabulate the arc length of the upper or lower surface on ``fine_samples`` intervals in u."""
     edges = np.linspace(0.0, 1.0, fine_samples + 1)
-    if 0.0 < airfoil.max_camber and 0.0 < airfoil.camber_position < 1.0:
+    if airfoil.max_camber > 0.0 and 0.0 < airfoil.camber_position < 1.0:
         # The camber line's curvature jumps at p: make sqrt(p) a grid point so that no
         # quadrature interval (and no interpolation interval) straddles the kink.
         kink = np.sqrt(airfoil.camber_position)

@@ -7,22 +7,20 @@ result is checked here and a KernelError says what failed.
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
-
 from typing import Any
 
+import cadquery as cq
 import numpy as np
 from numpy.typing import NDArray
+from OCP.Bnd import Bnd_Box
 from OCP.BRep import BRep_Tool
 from OCP.BRepBndLib import BRepBndLib
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeVertex
 from OCP.BRepCheck import BRepCheck_Analyzer
 from OCP.BRepExtrema import BRepExtrema_DistShapeShape
 from OCP.BRepGProp import BRepGProp
-from OCP.Bnd import Bnd_Box
-from OCP.GProp import GProp_GProps
 from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt
-
-import cadquery as cq
+from OCP.GProp import GProp_GProps
 
 from torus_cad.errors import KernelError
 from torus_cad.tolerances import MASS_PROPERTIES_RELATIVE_PRECISION

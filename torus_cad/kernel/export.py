@@ -1,11 +1,10 @@
 """STEP and STL export (and STEP import). Writers write the file they are given, atomically.
 
-Each writer writes a hidden temp file ``.<name>.tmp-<host>-<pid>-*`` beside the path and renames
-it onto the path, then checks the file is whole (a STEP file's end marker, an STL's size from its
-triangle count). A failure or a signal removes the temp file; one of a killed process is removed
-by the next write to that folder (only if that process is gone: concurrent writers of the same
-name never delete each other's files). A whole build's files are published together by
-torus_cad.outputs.
+Each writer writes a hidden temp file beside the path (torus_cad.kernel.files.atomic_path), checks
+it is whole (a STEP file's end marker, an STL's size from its triangle count) and renames it onto
+the path. A writer that fails says why when it can: a full file system or the file size limit is
+an OSError naming the path, anything else a KernelError. A whole build's files are published
+together by torus_cad.outputs.
 """
 
 from __future__ import annotations
@@ -14,8 +13,6 @@ import contextlib
 import errno
 import os
 import shutil
-import tempfile
-from collections.abc import Iterator
 from pathlib import Path
 
 import cadquery as cq
@@ -31,45 +28,14 @@ from OCP.TDocStd import TDocStd_Document
 from OCP.XCAFDoc import XCAFDoc_DocumentTool
 
 from torus_cad.errors import KernelError
-from torus_cad.interrupts import removed_on_interrupt
-from torus_cad.ownership import glob_escape, left_by_dead_process, owner_tag
+from torus_cad.kernel.files import atomic_path
 from torus_cad.tolerances import DISK_FULL_FREE_BYTES
+
+__all__ = ["atomic_path", "read_step", "write_step", "write_stl"]
 
 _STEP_SCHEMAS = {"AP214": "AP214IS", "AP242": "AP242DIS"}
 _STEP_END_MARKER = b"END-ISO-10303-21;"
 _STL_HEADER_BYTES, _STL_TRIANGLE_BYTES = 84, 50
-
-
-def _remove_stale_temps(path: Path) -> None:
-    """Remove temp files of ``path`` left by dead processes of this host (killed mid-write)."""
-    prefix = f".{path.name}.tmp-"
-    for stale in path.parent.glob(f"{glob_escape(prefix)}*"):
-        if left_by_dead_process(stale.name, prefix):
-            stale.unlink(missing_ok=True)
-
-
-@contextlib.contextmanager
-def atomic_path(path: str | Path) -> Iterator[Path]:
-    """Yield a temp path beside ``path``; on success rename it onto ``path``, on failure delete it."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    _remove_stale_temps(path)
-    handle, temp_name = tempfile.mkstemp(prefix=f".{path.name}.tmp-{owner_tag()}", dir=path.parent)
-    os.close(handle)
-    temp = Path(temp_name)
-    with removed_on_interrupt(temp):
-        try:
-            yield temp
-            os.chmod(temp, 0o666 & ~_current_umask())  # mkstemp makes 0600; give the file normal permissions
-            os.replace(temp, path)
-        finally:
-            temp.unlink(missing_ok=True)
-
-
-def _current_umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
 
 
 def write_step(shape: cq.Shape, path: str | Path, product_name: str, schema: str = "AP214") -> Path:

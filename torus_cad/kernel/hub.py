@@ -4,10 +4,9 @@ from __future__ import annotations
 
 import math
 
+import cadquery as cq
 from OCP.BRepPrimAPI import BRepPrimAPI_MakeCylinder
 from OCP.gp import gp_Ax2, gp_Dir, gp_Pnt
-
-import cadquery as cq
 
 
 def hub_solid(radius: float, length: float, seam_angle_deg: float = 0.0) -> cq.Solid:
