@@ -102,13 +102,17 @@ def _add_design_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _command_build(args: argparse.Namespace) -> int:
+    from torus_cad.budgets import check_stl_budget
     from torus_cad.outputs import check_writable_folder, write_output_set
     from torus_cad.progress import Progress
-    from torus_cad.propeller import build_propeller
 
     params = load_parameters(args.config, args.overrides)
     size = _preview_size(args.preview_size, "--preview-size") if args.preview else None
+    if not args.no_stl:
+        check_stl_budget(params)  # an STL that would blow up is refused before anything is built (~7 ms)
     check_writable_folder(args.out)  # before the build, not after it
+    from torus_cad.propeller import build_propeller  # CadQuery: seconds to load, only once the input is good
+
     progress = Progress.for_terminal(quiet=args.quiet)  # stderr, only on a terminal
     propeller = build_propeller(params, progress=progress)
     progress("write")
