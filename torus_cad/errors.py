@@ -1,7 +1,8 @@
 """The package's exceptions: one base, one subclass per kind of failure.
 
-The CLI maps :class:`ParameterError` to exit code 2 (bad input) and every other
-:class:`TorusCadError` to exit code 1 (the kernel or the file system failed).
+The CLI maps :class:`ParameterError` (with :class:`BudgetError`) and :class:`GeometryError` to
+exit code 2 (bad input), every other :class:`TorusCadError` to exit code 1 (the kernel or the
+file system failed; :class:`IncompleteOutputError` is ``torus-cad verify`` finding a broken set).
 """
 
 

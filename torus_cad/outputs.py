@@ -35,10 +35,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Self
 
-from torus_cad.errors import (
-    IncompleteOutputError,
-    OutputError,
-)
+from torus_cad.errors import IncompleteOutputError, OutputError
 from torus_cad.interrupts import deferred
 from torus_cad.kernel.files import glob_escape, left_by_dead_process, owner_tag, removed_on_exit
 
@@ -238,7 +235,6 @@ class OutputSet:
                               f"{error.strerror}; 'torus-cad verify' reports what is there") from None
 
 
-
 # -- checking a published set ---------------------------------------------------------------------
 
 @dataclass(frozen=True)
@@ -259,7 +255,8 @@ def verify_set(out_dir: str | Path, name: str) -> VerifiedSet:
     report_path = out_dir / f"{name}.json"
     with _folder_lock(out_dir, shared=True):
         if not report_path.is_file():
-            orphans = sorted(p.name for p in out_dir.glob(f"{glob_escape(name)}.*"))
+            orphans = sorted(p.name for p in out_dir.glob(f"{glob_escape(name)}.*")
+                             if "." not in p.name[len(name) + 1:])  # not a set whose name goes on, "a.v2"
             if orphans:
                 raise IncompleteOutputError(f"{name}: incomplete set: {report_path.name} is missing beside "
                                             f"{', '.join(orphans)}")

@@ -19,12 +19,12 @@ _KINDS = ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a named pipe"), (stat.S_I
 
 
 def _kind(mode: int) -> str:
-    return next((name for test, name in _KINDS if test(mode)), "not a regular file")
+    return next((name for test, name in _KINDS if test(mode)), "another kind of file")
 
 
 def _check_regular(path: Path, status: os.stat_result, what: str, max_bytes: int) -> None:
     if not stat.S_ISREG(status.st_mode):
-        raise ParameterError(f"{what} {str(path)!r} is {_kind(status.st_mode)}, not a regular file")
+        raise ParameterError(f"{what} {str(path)!r} is not a regular file ({_kind(status.st_mode)})")
     if status.st_size > max_bytes:
         raise ParameterError(f"{what} {str(path)!r} is {status.st_size:,} bytes, over the limit of "
                              f"{max_bytes:,} bytes for a {what}")
