@@ -248,14 +248,39 @@ DESIGNS = [["--set", "blades=2"], ["--set", "blades=3", "--set", "hub.radius=11"
 
 @pytest.mark.slow
 def test_stress_eight_same_name_builds_of_four_designs_three_times(tmp_path):
-    """8 concurrent builds of one name (4 designs, twice each) into one folder, 3 rounds:
-    every build succeeds and every published set verifies with the STEP its report describes."""
-    for round_index in range(3):
-        processes = [start_cli("build", "--out", str(tmp_path), "-q", *FAST, *DESIGNS[i % 4]) for i in range(8)]
-        results = [(process.wait(900), process.stderr.read()) for process in processes]
-        assert [code for code, _ in results] == [0] * 8, (round_index, results)
-        assert assert_consistent_set(tmp_path) in (2, 3, 4, 5)
-        assert hidden_entries(tmp_path) == []
+    """8 concurrent builds of one name (4 designs, twice each) into one folder, 3 rounds: every build
+    succeeds, a reader verifying the folder all along never sees an incomplete or mixed set, and each
+    round's set has the STEP its report describes."""
+    import threading
+
+    assert cli("build", "--out", str(tmp_path), "-q", *FAST).returncode == 0
+    failures: list[str] = []
+    verified = 0
+    done = threading.Event()
+
+    def reader() -> None:
+        nonlocal verified
+        while not done.is_set():
+            try:
+                verify_set(tmp_path, "torus_propeller")
+                verified += 1
+            except IncompleteOutputError as error:
+                failures.append(str(error))
+            done.wait(0.02)
+
+    thread = threading.Thread(target=reader)
+    thread.start()
+    try:
+        for round_index in range(3):
+            processes = [start_cli("build", "--out", str(tmp_path), "-q", *FAST, *DESIGNS[i % 4]) for i in range(8)]
+            results = [(process.wait(900), process.stderr.read()) for process in processes]
+            assert [code for code, _ in results] == [0] * 8, (round_index, results)
+            assert assert_consistent_set(tmp_path) in (2, 3, 4, 5)
+            assert hidden_entries(tmp_path) == []
+    finally:
+        done.set()
+        thread.join()
+    assert failures == [] and verified > 0
 
 
 # -- the disk and the folder fail -----------------------------------------------------------------
@@ -331,6 +356,6 @@ def test_permission_denied_on_the_output_folder_is_found_before_building(tmp_pat
     finally:
         locked.chmod(0o755)
     assert result.returncode == 1, result.stderr
-    assert result.stderr.strip() == f"torus-cad: cannot write output: cannot write to output folder " \
-                                    f"{str(locked)!r}: permission denied"
+    assert result.stderr.strip() == f"torus-cad: build failed: cannot write to output folder {str(locked)!r}: " \
+                                    f"permission denied"
     assert list(locked.iterdir()) == []

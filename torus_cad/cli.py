@@ -312,7 +312,7 @@ def _run(handler: Callable[[argparse.Namespace], int], args: argparse.Namespace)
     except IncompleteOutputError as error:
         return _error(f"verify: {error}", EXIT_KERNEL_FAILURE)
     except OutputError as error:
-        return _error(f"cannot write output: {error}", EXIT_KERNEL_FAILURE)
+        return _error(f"build failed: {error}", EXIT_KERNEL_FAILURE)
     except TorusCadError as error:
         return _error(f"kernel failure: {error}", EXIT_KERNEL_FAILURE)
     except MemoryError:
