@@ -25,14 +25,18 @@ from torus_cad.colors import HUB_COLOR, blade_color
 from torus_cad.errors import KernelError
 from torus_cad.geometry.feasibility import check_feasible
 from torus_cad.geometry.hub import seam_angle_deg
+from torus_cad.geometry.mounting import HubMounting, place_mounting, set_screw_arc_deg
 from torus_cad.geometry.surface import BladeSurface
 from torus_cad.kernel.checks import MassProperties, mass_properties, precise_volume, single_valid_solid
 from torus_cad.kernel.export import atomic_path, write_step, write_stl
 from torus_cad.kernel.fuse import FuseRoute, fuse_all, fuse_pattern, pattern_blades
+from torus_cad.kernel.fillet import fillet_blade_roots, prepare_blade_for_fillet
 from torus_cad.kernel.hub import hub_solid
+from torus_cad.kernel.mirror import mirrored
 from torus_cad.kernel.loft import loft_solid
 from torus_cad.kernel.wires import SectionCurves, fit_section_curves
 from torus_cad.parameters import PropellerParameters, resolve_parameters
+from torus_cad.parameters.design import Handedness
 from torus_cad.stages import Stage, StageTimer
 from torus_cad.tolerances import VOLUME_CHECK_RELATIVE_PRECISION
 
@@ -54,6 +58,7 @@ class Propeller:
         section_curves: blade 0's section B-splines (plain arrays).
         stage_seconds: seconds per stage (keys: :class:`torus_cad.stages.Stage` values).
         fuse_route: how the blades were joined to the hub.
+        mounting: the hub's bore, flat, set screw and chamfer, with the set screw's direction.
     """
 
     parameters: PropellerParameters
@@ -64,6 +69,7 @@ class Propeller:
     section_curves: SectionCurves
     stage_seconds: dict[str, float] = field(default_factory=dict)
     fuse_route: FuseRoute = FuseRoute.ASSEMBLED
+    mounting: HubMounting = field(default_factory=HubMounting)
 
     @property
     def workplane(self) -> cq.Workplane:
@@ -124,18 +130,47 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
     with timer.stage(Stage.SECTION_MATH):
         surface = params.blade_surface()
         check_feasible(geometry, surface)
-        # The hub is symmetric about its axis; its seam goes where it crosses no blade root.
-        seam_deg = seam_angle_deg(surface.points, geometry.hub.radius_mm, geometry.blades)
+        mounting = _place_mounting(params)
+        # The hub is symmetric about its axis; its seam goes where it crosses no blade root (nor the set screw).
+        screw_arc = set_screw_arc_deg(mounting, geometry.hub.radius_mm)
+        seam_deg = seam_angle_deg(surface.points, geometry.hub.radius_mm, geometry.blades,
+                                  () if screw_arc is None else (screw_arc,))
     with timer.stage(Stage.WIRES):
         curves = fit_section_curves(surface.points, surface.trailing_edge_index, _section_chords(surface))
         wires = curves.wires()
     with timer.stage(Stage.LOFT):
         blade = loft_solid(wires, surface.s)
-        hub = hub_solid(geometry.hub.radius_mm, geometry.hub.length_mm, 0.0 if seam_deg is None else seam_deg)
+        fillet_radius = params.hub.root_fillet_radius
+        if fillet_radius > 0.0:  # faces the fillet can roll across (see torus_cad.kernel.fillet)
+            blade = prepare_blade_for_fillet(blade)
+        hub = hub_solid(geometry.hub.radius_mm, geometry.hub.length_mm, 0.0 if seam_deg is None else seam_deg,
+                        mounting)
         angles_deg = [geometry.blade_angle_deg(i) for i in range(geometry.blades)]
         blades = pattern_blades(blade, angles_deg)
     solid, route = _join_blades_to_hub(hub, blade, blades, angles_deg, timer)
-    return Propeller(params, solid, hub, blades, surface, curves, timer.seconds, route)
+    if fillet_radius > 0.0:
+        with timer.stage(Stage.FILLET):
+            solid = fillet_blade_roots(solid, fillet_radius)
+    if params.handedness == Handedness.CW:
+        with timer.stage(Stage.MIRROR):
+            solid = mirrored(solid)
+            hub, blades = mirrored(hub, check=False), [mirrored(part, check=False) for part in blades]
+    return Propeller(params, solid, hub, blades, surface, curves, timer.seconds, route, mounting)
+
+
+def _place_mounting(params: PropellerParameters) -> HubMounting:
+    """The hub's mounting features checked against the blades (densely sampled), the set screw placed."""
+    mounting = params.hub.mounting()
+    if not mounting.any and mounting.bore_flat_depth_mm == 0.0:
+        return mounting
+    resolution = params.resolution
+    dense = params.blade_surface(sections=max(resolution.sections, _MOUNTING_SECTIONS),
+                                 points=max(resolution.points, _MOUNTING_POINTS))
+    return place_mounting(mounting, dense.points, params.blades, params.hub.radius, params.hub.length)
+
+
+#: Sampling of the blade surface for the mounting checks (the check uses the points as they are).
+_MOUNTING_SECTIONS, _MOUNTING_POINTS = 200, 160
 
 
 #: Another name for :func:`build_propeller`, for people who continue in CadQuery.

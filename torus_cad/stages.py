@@ -22,8 +22,11 @@ class Stage(StrEnum):
     LOFT = "loft"
     FUSE = "fuse"
     CHECK = "check"
+    FILLET = "fillet"
+    MIRROR = "mirror"
     STEP_WRITE = "step_write"
     STL_WRITE = "stl_write"
+    THREE_MF_WRITE = "3mf_write"
 
     @property
     def label(self) -> str:
@@ -38,8 +41,11 @@ _LABELS = {
     Stage.LOFT: "lofting the blade",
     Stage.FUSE: "fusing blades with the hub",
     Stage.CHECK: "checking the solid",
+    Stage.FILLET: "filleting the blade roots",
+    Stage.MIRROR: "mirroring (clockwise)",
     Stage.STEP_WRITE: "writing STEP",
     Stage.STL_WRITE: "writing STL",
+    Stage.THREE_MF_WRITE: "writing 3MF",
 }
 
 

@@ -62,3 +62,10 @@ HUB_FOOTPRINT_MARGIN_DEG = 1.0
 
 #: Largest configuration file read (bytes): a design is a few hundred bytes.
 CONFIG_FILE_MAX_BYTES = 1 << 20
+
+#: Smallest gap (mm) the hub's mounting features (bore, chamfer, set-screw hole) must keep from
+#: any sampled blade point; covers the blade surface between its samples.
+MOUNTING_CLEARANCE_MM = 0.05
+
+#: Seconds the root fillet may take (in its child process) before it counts as failed.
+FILLET_TIME_LIMIT_S = 60.0

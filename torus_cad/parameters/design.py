@@ -22,6 +22,7 @@ from pydantic import AfterValidator, BeforeValidator, Field, model_validator
 from torus_cad.errors import ParameterError
 from torus_cad.geometry.airfoil import NacaAirfoil
 from torus_cad.geometry.frames import FrameKind
+from torus_cad.geometry.mounting import HubMounting
 from torus_cad.geometry.propeller import BladeGeometry, HubGeometry, PropellerGeometry
 from torus_cad.geometry.surface import BladeSurface, blade_surface
 from torus_cad.geometry.transforms import Quartic, SectionLaws, quartic_minimum
@@ -85,6 +86,10 @@ class Hub(Section):
             raise ValueError(f"hub.chamfer = {self.chamfer:g} mm is out of range; allowed "
                              f"[0, {min(self.radius, self.length / 2.0):g}) mm")
         return self
+
+    def mounting(self) -> HubMounting:
+        """The mounting features as geometry (the set screw's direction is chosen later, from the blades)."""
+        return HubMounting(self.bore_diameter, self.bore_flat_depth, self.set_screw_diameter, self.chamfer)
 
 
 class Airfoil(Section):
