@@ -21,22 +21,31 @@ from typing import Any
 import cadquery as cq
 import numpy as np
 
+from torus_cad import __version__
 from torus_cad.colors import HUB_COLOR, blade_color
 from torus_cad.errors import KernelError
 from torus_cad.geometry.feasibility import check_feasible
 from torus_cad.geometry.hub import seam_angle_deg
 from torus_cad.geometry.mounting import HubMounting, place_mounting, set_screw_arc_deg
+from torus_cad.geometry.printability import Printability, printability
 from torus_cad.geometry.surface import BladeSurface
-from torus_cad.kernel.checks import MassProperties, mass_properties, precise_volume, single_valid_solid
+from torus_cad.kernel.checks import (
+    MassProperties,
+    balance,
+    mass_properties,
+    precise_volume,
+    single_valid_solid,
+)
 from torus_cad.kernel.export import atomic_path, write_step, write_stl
-from torus_cad.kernel.fuse import FuseRoute, fuse_all, fuse_pattern, pattern_blades
+from torus_cad.kernel.export_3mf import write_3mf
 from torus_cad.kernel.fillet import fillet_blade_roots, prepare_blade_for_fillet
+from torus_cad.kernel.fuse import FuseRoute, fuse_all, fuse_pattern, pattern_blades
 from torus_cad.kernel.hub import hub_solid
-from torus_cad.kernel.mirror import mirrored
 from torus_cad.kernel.loft import loft_solid
+from torus_cad.kernel.mirror import mirrored
 from torus_cad.kernel.wires import SectionCurves, fit_section_curves
 from torus_cad.parameters import PropellerParameters, resolve_parameters
-from torus_cad.parameters.design import Handedness
+from torus_cad.parameters.design import ExportFormat, Handedness
 from torus_cad.stages import Stage, StageTimer
 from torus_cad.tolerances import VOLUME_CHECK_RELATIVE_PRECISION
 
@@ -90,6 +99,10 @@ class Propeller:
             assembly.add(blade, name=f"blade_{index}", color=cq.Color(*blade_color(index, len(self.blades))))
         return assembly
 
+    def printability(self) -> Printability:
+        """Thinnest blade wall and trailing-edge thickness against ``manufacturing.min_wall`` (from the analytic section)."""
+        return design_printability(self.parameters)
+
     def mass_properties(self, density_g_cm3: float = DEFAULT_DENSITY_G_CM3) -> MassProperties:
         """Volume (mm^3), area (mm^2), centroid (mm), spin-axis inertia and mass (g) for a density in
         g/cm^3 (default 1.24, PLA), by OpenCascade's adaptive integration."""
@@ -99,6 +112,12 @@ class Propeller:
               stl: bool = True) -> dict[str, Path]:
         """Write ``<name>.step``, ``<name>.stl`` (unless ``stl`` is False) and ``<name>.json`` into ``out_dir``."""
         return write_outputs(self, Path(out_dir), density_g_cm3, stl)
+
+
+def design_printability(params: PropellerParameters) -> Printability:
+    """The blade's printability from the analytic section alone (no kernel): see torus_cad.geometry.printability."""
+    blade = params.geometry().blade
+    return printability(blade.airfoil, blade.laws, params.manufacturing.min_wall)
 
 
 def _section_chords(surface: BladeSurface) -> np.ndarray:
@@ -161,12 +180,13 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
 def _place_mounting(params: PropellerParameters) -> HubMounting:
     """The hub's mounting features checked against the blades (densely sampled), the set screw placed."""
     mounting = params.hub.mounting()
-    if not mounting.any and mounting.bore_flat_depth_mm == 0.0:
+    if not mounting.any:
         return mounting
     resolution = params.resolution
     dense = params.blade_surface(sections=max(resolution.sections, _MOUNTING_SECTIONS),
                                  points=max(resolution.points, _MOUNTING_POINTS))
-    return place_mounting(mounting, dense.points, params.blades, params.hub.radius, params.hub.length)
+    return place_mounting(mounting, dense.points, params.blades, params.hub.radius, params.hub.length,
+                          params.hub.root_fillet_radius)
 
 
 #: Sampling of the blade surface for the mounting checks (the check uses the points as they are).
@@ -210,7 +230,7 @@ def _check_volume(solid: cq.Solid, hub: cq.Solid, blade: cq.Solid, blades: int) 
 
 
 def build_report(propeller: Propeller, density_g_cm3: float) -> dict[str, Any]:
-    """The JSON report: parameters, mass properties, validity and stage times."""
+    """The JSON report: parameters, mass properties, balance, printability, validity and stage times."""
     properties = propeller.mass_properties(density_g_cm3)
     return {
         "name": propeller.parameters.name,
@@ -218,6 +238,10 @@ def build_report(propeller: Propeller, density_g_cm3: float) -> dict[str, Any]:
         "valid": True,
         "solids": 1,
         **properties.to_dict(),
+        "balance": balance(propeller.solid, density_g_cm3).to_dict(),
+        "printability": propeller.printability().to_dict(),
+        "handedness": propeller.parameters.handedness.value,
+        "set_screw_angle_deg": propeller.mounting.set_screw_angle_deg if propeller.mounting.set_screw_diameter_mm else None,
         "section_fit_error_mm": propeller.section_curves.fit_error,
         "stage_seconds": dict(propeller.stage_seconds),
         "fuse_route": propeller.fuse_route.value,
@@ -226,17 +250,24 @@ def build_report(propeller: Propeller, density_g_cm3: float) -> dict[str, Any]:
 
 def write_outputs(propeller: Propeller, out_dir: Path, density_g_cm3: float = DEFAULT_DENSITY_G_CM3,
                   stl: bool = True) -> dict[str, Path]:
-    """Write STEP, STL and the JSON report atomically; return the paths by kind."""
+    """Write the files of ``export.formats`` (STEP, STL, 3MF; ``stl=False`` drops the STL) and the
+    JSON report atomically; return the paths by kind."""
     params = propeller.parameters
+    formats = params.export.formats
+    deflections = (params.export.stl_linear_deflection, params.export.stl_angular_deflection)
     timer = StageTimer()
     paths: dict[str, Path] = {}
-    with timer.stage(Stage.STEP_WRITE):
-        paths["step"] = write_step(propeller.solid, out_dir / f"{params.name}.step", params.name,
-                                   params.export.step_schema)
-    if stl:
+    if ExportFormat.STEP in formats:
+        with timer.stage(Stage.STEP_WRITE):
+            paths["step"] = write_step(propeller.solid, out_dir / f"{params.name}.step", params.name,
+                                       params.export.step_schema)
+    if stl and ExportFormat.STL in formats:
         with timer.stage(Stage.STL_WRITE):
-            paths["stl"] = write_stl(propeller.solid, out_dir / f"{params.name}.stl",
-                                     params.export.stl_linear_deflection, params.export.stl_angular_deflection)
+            paths["stl"] = write_stl(propeller.solid, out_dir / f"{params.name}.stl", *deflections)
+    if ExportFormat.THREE_MF in formats:
+        with timer.stage(Stage.THREE_MF_WRITE):
+            paths["3mf"] = write_3mf(propeller.solid, out_dir / f"{params.name}.3mf", params.name, *deflections,
+                                     version=__version__)
     propeller.stage_seconds.update(timer.seconds)
     report = build_report(propeller, density_g_cm3)
     paths["json"] = out_dir / f"{params.name}.json"

@@ -69,3 +69,7 @@ MOUNTING_CLEARANCE_MM = 0.05
 
 #: Seconds the root fillet may take (in its child process) before it counts as failed.
 FILLET_TIME_LIMIT_S = 60.0
+
+#: Relative precision of the integration for the balance report (static imbalance, products of
+#: inertia): coarser than the mass properties', as it integrates the solid a second time.
+BALANCE_RELATIVE_PRECISION = 1e-4

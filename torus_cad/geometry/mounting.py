@@ -67,7 +67,7 @@ class HubMounting:
 
 
 def place_mounting(mounting: HubMounting, blade_points: NDArray[np.float64], blades: int, hub_radius_mm: float,
-                   hub_length_mm: float) -> HubMounting:
+                   hub_length_mm: float, root_fillet_radius_mm: float = 0.0) -> HubMounting:
     """Check ``mounting`` against the blades and return it with the set screw's angle chosen.
 
     ``blade_points`` is blade 0's sampled surface ``(sections, points, 3)`` mm (densely enough
@@ -75,13 +75,14 @@ def place_mounting(mounting: HubMounting, blade_points: NDArray[np.float64], bla
     blade 0 turned by 360 i / ``blades`` degrees about +z.
 
     Raises GeometryError naming the field and its limit when the bore reaches a blade root,
-    a chamfer cuts into a blade, or no direction leaves the set-screw hole clear of the blades.
+    a chamfer cuts into a blade (or into the root fillet, which spreads up to 2 radii over the
+    hub), or no direction leaves the set-screw hole clear of the blades.
     """
     grid = np.asarray(blade_points, dtype=float)
     points = grid.reshape(-1, 3)
     radius = np.hypot(points[:, 0], points[:, 1])
     _check_bore(mounting, float(radius.min()))
-    _check_chamfer(mounting, points, radius, hub_radius_mm, hub_length_mm)
+    _check_chamfer(mounting, points, radius, hub_radius_mm, hub_length_mm, root_fillet_radius_mm)
     if mounting.set_screw_diameter_mm == 0.0 and mounting.bore_flat_depth_mm == 0.0:
         return mounting
     diameter = max(mounting.set_screw_diameter_mm, 1.0)
@@ -117,13 +118,16 @@ def chamfer_limit_mm(points: NDArray[np.float64], radius: NDArray[np.float64], h
 
 
 def _check_chamfer(mounting: HubMounting, points: NDArray[np.float64], radius: NDArray[np.float64],
-                   hub_radius_mm: float, hub_length_mm: float) -> None:
+                   hub_radius_mm: float, hub_length_mm: float, root_fillet_radius_mm: float) -> None:
     if mounting.chamfer_mm == 0.0:
         return
-    limit = chamfer_limit_mm(points, radius, hub_radius_mm, hub_length_mm) - MOUNTING_CLEARANCE_MM
+    fillet_reach = 2.0 * root_fillet_radius_mm
+    limit = chamfer_limit_mm(points, radius, hub_radius_mm, hub_length_mm) - MOUNTING_CLEARANCE_MM - fillet_reach
     if mounting.chamfer_mm >= limit:
+        fillet = (f" with hub.root_fillet_radius = {root_fillet_radius_mm:g} mm (the fillet spreads up to "
+                  f"{fillet_reach:g} mm over the hub)" if root_fillet_radius_mm > 0.0 else "")
         raise GeometryError(
-            f"hub.chamfer = {mounting.chamfer_mm:g} mm cuts into a blade root near the hub's end; "
+            f"hub.chamfer = {mounting.chamfer_mm:g} mm cuts into a blade root near the hub's end{fillet}; "
             f"allowed less than {max(limit, 0.0):.3f} mm")
 
 

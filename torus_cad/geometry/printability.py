@@ -30,10 +30,14 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import minimize_scalar
 
-from torus_cad.geometry.transforms import SectionLaws, evaluate_quartic, rotation_matrices
+from torus_cad.geometry.transforms import (
+    SectionLaws,
+    evaluate_quartic,
+    rotation_matrices,
+)
 
 #: Grid sizes of the search (s, and chord fraction x clustered at both edges).
-_S_SAMPLES, _X_SAMPLES = 401, 801
+_S_SAMPLES, _X_SAMPLES = 201, 401
 
 
 @dataclass(frozen=True)
@@ -97,7 +101,7 @@ def printability(airfoil: Any, laws: SectionLaws, min_wall_mm: float) -> Printab
     wall, x_wall = thickest(s_wall)
     edge = wall_mm(airfoil, laws, s_grid, [1.0])[:, 0]
     s_edge = _polish_minimum(lambda s: float(wall_mm(airfoil, laws, [s], [1.0])[0, 0]), s_grid, edge)
-    edge_thickness = float(wall_mm(airfoil, laws, [s_edge], [1.0])[0, 0])
+    edge_thickness = max(float(wall_mm(airfoil, laws, [s_edge], [1.0])[0, 0]), 0.0)  # no -1e-15 for a sharp edge
     return Printability(wall, s_wall, x_wall, edge_thickness, s_edge, min_wall_mm,
                         bool(wall >= min_wall_mm and edge_thickness >= min_wall_mm))
 

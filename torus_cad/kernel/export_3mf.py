@@ -12,11 +12,10 @@ from __future__ import annotations
 import zipfile
 from pathlib import Path
 
+import cadquery as cq
 import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
-
-import cadquery as cq
 
 from torus_cad.errors import KernelError
 from torus_cad.kernel.export import atomic_path
@@ -93,9 +92,9 @@ def write_3mf(shape: cq.Shape, path: str | Path, name: str, linear_deflection: f
     model = (_MODEL_HEAD.format(name=name, version=version) + "    <vertices>\n" + vertex_lines + "    </vertices>\n"
              + "    <triangles>\n" + triangle_lines + "    </triangles>\n" + _MODEL_TAIL)
     path = Path(path)
-    with atomic_path(path) as temp:
-        with zipfile.ZipFile(temp, "w", compression=zipfile.ZIP_DEFLATED, compresslevel=6) as package:
-            package.writestr("[Content_Types].xml", _CONTENT_TYPES)
-            package.writestr("_rels/.rels", _RELATIONSHIPS)
-            package.writestr("3D/3dmodel.model", model)
+    with atomic_path(path) as temp, zipfile.ZipFile(temp, "w", compression=zipfile.ZIP_DEFLATED,
+                                                    compresslevel=6) as package:
+        package.writestr("[Content_Types].xml", _CONTENT_TYPES)
+        package.writestr("_rels/.rels", _RELATIONSHIPS)
+        package.writestr("3D/3dmodel.model", model)
     return path

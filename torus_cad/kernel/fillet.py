@@ -25,18 +25,21 @@ import select
 import signal
 import time
 
+import cadquery as cq
 from OCP.BRep import BRep_Builder
 from OCP.BRepAdaptor import BRepAdaptor_Surface
 from OCP.BRepFilletAPI import BRepFilletAPI_MakeFillet
 from OCP.BRepTools import BRepTools
-from OCP.GeomAbs import GeomAbs_BezierSurface, GeomAbs_BSplineSurface, GeomAbs_OffsetSurface
+from OCP.GeomAbs import (
+    GeomAbs_BezierSurface,
+    GeomAbs_BSplineSurface,
+    GeomAbs_OffsetSurface,
+)
 from OCP.ShapeUpgrade import ShapeUpgrade_ShapeDivideClosed
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE
 from OCP.TopExp import TopExp
 from OCP.TopoDS import TopoDS, TopoDS_Edge, TopoDS_Shape
 from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape
-
-import cadquery as cq
 
 from torus_cad.errors import KernelError
 from torus_cad.kernel.checks import precise_volume, single_valid_solid

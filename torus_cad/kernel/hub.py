@@ -12,15 +12,22 @@ from __future__ import annotations
 
 import math
 
+import cadquery as cq
 from OCP.BRepAlgoAPI import BRepAlgoAPI_Cut
-from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge, BRepBuilderAPI_MakeFace, BRepBuilderAPI_MakeWire
-from OCP.BRepPrimAPI import BRepPrimAPI_MakeCylinder, BRepPrimAPI_MakePrism, BRepPrimAPI_MakeRevol
+from OCP.BRepBuilderAPI import (
+    BRepBuilderAPI_MakeEdge,
+    BRepBuilderAPI_MakeFace,
+    BRepBuilderAPI_MakeWire,
+)
+from OCP.BRepPrimAPI import (
+    BRepPrimAPI_MakeCylinder,
+    BRepPrimAPI_MakePrism,
+    BRepPrimAPI_MakeRevol,
+)
 from OCP.GC import GC_MakeArcOfCircle
 from OCP.gp import gp_Ax1, gp_Ax2, gp_Dir, gp_Pnt, gp_Vec
-from OCP.TopTools import TopTools_ListOfShape
 from OCP.TopoDS import TopoDS_Shape
-
-import cadquery as cq
+from OCP.TopTools import TopTools_ListOfShape
 
 from torus_cad.errors import KernelError
 from torus_cad.geometry.mounting import SET_SCREW_OVERSHOOT_MM, HubMounting

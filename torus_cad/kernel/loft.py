@@ -4,9 +4,14 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+import cadquery as cq
 import numpy as np
 from OCP.BRep import BRep_Tool
-from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace, BRepBuilderAPI_MakeSolid, BRepBuilderAPI_Sewing
+from OCP.BRepBuilderAPI import (
+    BRepBuilderAPI_MakeFace,
+    BRepBuilderAPI_MakeSolid,
+    BRepBuilderAPI_Sewing,
+)
 from OCP.BRepCheck import BRepCheck_Analyzer
 from OCP.BRepOffsetAPI import BRepOffsetAPI_ThruSections
 from OCP.Geom import Geom_BSplineCurve, Geom_BSplineSurface
@@ -16,8 +21,6 @@ from OCP.TColgp import TColgp_Array2OfPnt
 from OCP.TopAbs import TopAbs_SHELL
 from OCP.TopoDS import TopoDS
 from scipy.interpolate import make_interp_spline
-
-import cadquery as cq
 
 from torus_cad.errors import KernelError
 from torus_cad.kernel.wires import knot_arrays

@@ -2,10 +2,9 @@
 
 from __future__ import annotations
 
+import cadquery as cq
 from OCP.BRepBuilderAPI import BRepBuilderAPI_Transform
 from OCP.gp import gp_Ax2, gp_Dir, gp_Pnt, gp_Trsf
-
-import cadquery as cq
 
 from torus_cad.errors import KernelError
 from torus_cad.kernel.checks import single_valid_solid

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import cadquery as cq
 import numpy as np
 from numpy.typing import NDArray
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge, BRepBuilderAPI_MakeWire
@@ -20,11 +21,12 @@ from OCP.TColgp import TColgp_Array1OfPnt
 from OCP.TColStd import TColStd_Array1OfInteger, TColStd_Array1OfReal
 from scipy.interpolate import BSpline, make_lsq_spline
 
-import cadquery as cq
-
 from torus_cad.errors import GeometryError, KernelError
-from torus_cad.tolerances import (WIRE_FIT_INITIAL_KNOTS, WIRE_FIT_MAXIMUM_KNOTS,
-                                  WIRE_FIT_RELATIVE_TOLERANCE)
+from torus_cad.tolerances import (
+    WIRE_FIT_INITIAL_KNOTS,
+    WIRE_FIT_MAXIMUM_KNOTS,
+    WIRE_FIT_RELATIVE_TOLERANCE,
+)
 
 DEGREE = 3
 

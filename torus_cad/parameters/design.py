@@ -28,7 +28,11 @@ from torus_cad.geometry.surface import BladeSurface, blade_surface
 from torus_cad.geometry.transforms import Quartic, SectionLaws, quartic_minimum
 from torus_cad.parameters.document import Document
 from torus_cad.parameters.schema import Bounds, Section, check_in_bounds, param, vector
-from torus_cad.tolerances import FOLD_RATIO_LIMIT, STL_ANGULAR_DEFLECTION, STL_LINEAR_DEFLECTION
+from torus_cad.tolerances import (
+    FOLD_RATIO_LIMIT,
+    STL_ANGULAR_DEFLECTION,
+    STL_LINEAR_DEFLECTION,
+)
 
 _NAME_PATTERN = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,63}")
 
