@@ -25,6 +25,7 @@ from torus_cad import __version__
 from torus_cad.colors import HUB_COLOR, blade_color
 from torus_cad.errors import KernelError
 from torus_cad.geometry.feasibility import check_feasible
+from torus_cad.geometry.handedness import Spin, spin_to_push_air_down
 from torus_cad.geometry.hub import seam_angle_deg
 from torus_cad.geometry.mounting import HubMounting, place_mounting, set_screw_arc_deg
 from torus_cad.geometry.printability import Printability, printability
@@ -103,6 +104,13 @@ class Propeller:
         """Thinnest blade wall and trailing-edge thickness against ``manufacturing.min_wall`` (from the analytic section)."""
         return design_printability(self.parameters)
 
+    def spin_to_push_air_down(self) -> Spin:
+        """The turn, seen from +z, that pushes air toward -z: a flat-plate estimate (torus_cad.geometry.handedness)."""
+        spin = spin_to_push_air_down(self.surface.points, self.surface.trailing_edge_index or 0)
+        if self.parameters.handedness == Handedness.CCW:  # the surface is the spec's blade, before the mirror
+            return Spin.CLOCKWISE if spin == Spin.COUNTER_CLOCKWISE else Spin.COUNTER_CLOCKWISE
+        return spin
+
     def mass_properties(self, density_g_cm3: float = DEFAULT_DENSITY_G_CM3) -> MassProperties:
         """Volume (mm^3), area (mm^2), centroid (mm), spin-axis inertia and mass (g) for a density in
         g/cm^3 (default 1.24, PLA), by OpenCascade's adaptive integration."""
@@ -170,7 +178,7 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
     if fillet_radius > 0.0:
         with timer.stage(Stage.FILLET):
             solid = fillet_blade_roots(solid, fillet_radius)
-    if params.handedness == Handedness.CW:
+    if params.handedness == Handedness.CCW:  # the spec's blade is 'cw'; 'ccw' is its mirror image
         with timer.stage(Stage.MIRROR):
             solid = mirrored(solid)
             hub, blades = mirrored(hub, check=False), [mirrored(part, check=False) for part in blades]
@@ -241,6 +249,7 @@ def build_report(propeller: Propeller, density_g_cm3: float) -> dict[str, Any]:
         "balance": balance(propeller.solid, density_g_cm3).to_dict(),
         "printability": propeller.printability().to_dict(),
         "handedness": propeller.parameters.handedness.value,
+        "spin_to_push_air_down": propeller.spin_to_push_air_down().value,
         "set_screw_angle_deg": propeller.mounting.set_screw_angle_deg if propeller.mounting.set_screw_diameter_mm else None,
         "section_fit_error_mm": propeller.section_curves.fit_error,
         "stage_seconds": dict(propeller.stage_seconds),

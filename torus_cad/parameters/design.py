@@ -171,10 +171,11 @@ class Manufacturing(Section):
 
 
 class Handedness(StrEnum):
-    """Which way the propeller turns (see the README: cw is the mirror image of ccw)."""
+    """Which way the propeller turns, seen from +z, to push air toward -z: 'cw' is the spec's blade
+    (a ribbon descending as its angle grows, torus_cad.geometry.handedness), 'ccw' its exact mirror image."""
 
-    CCW = "ccw"
     CW = "cw"
+    CCW = "ccw"
 
 
 class ExportFormat(StrEnum):
@@ -219,8 +220,9 @@ class PropellerParameters(Document):
         "torus_propeller", doc="names the output files <name>.step/.stl/.json and the STEP product")
     blades: int = param(3, ge=1, le=12, fuzz=(1, 8), doc="number of blades n; blade i at theta_0 + 360 i / n")
     phase_deg: float = param(0.0, unit="deg", ge=-360.0, le=360.0, doc="theta_0: angle of blade 0 around the axis")
-    handedness: Handedness = param(Handedness.CCW, strict=False,
-                                   doc="'ccw' (the spec's blade) or 'cw': its exact mirror image, for counter-rotating pairs")
+    handedness: Handedness = param(Handedness.CW, strict=False,
+                                   doc="'cw': the spec's blade, which turns clockwise seen from +z to push air toward -z; "
+                                       "'ccw': its exact mirror image, for counter-rotating pairs")
     hub: Hub = Field(default_factory=Hub)
     airfoil: Airfoil = Field(default_factory=Airfoil)
     centerline: Centerline = Field(default_factory=Centerline)
