@@ -93,8 +93,8 @@ def fillet_blade_roots(solid: cq.Solid, radius_mm: float) -> cq.Solid:
         return filleted
     works = next((radius_mm * fraction for fraction in _FALLBACK_FRACTIONS
                   if _fillet_in_child(solid, edges, radius_mm * fraction) is not None), None)
-    hint = (f"; hub.root_fillet_radius = {works:.3g} mm works" if works is not None
-            else f"; {radius_mm * _FALLBACK_FRACTIONS[-1]:.3g} mm fails as well")
+    smallest = radius_mm * min(_FALLBACK_FRACTIONS, default=1.0)
+    hint = f"; hub.root_fillet_radius = {works:.3g} mm works" if works is not None else f"; {smallest:.3g} mm fails as well"
     raise KernelError(f"root fillet failed: OpenCascade could not fillet the blade roots at "
                       f"hub.root_fillet_radius = {radius_mm:g} mm{hint}")
 
