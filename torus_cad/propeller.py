@@ -39,7 +39,7 @@ from torus_cad.kernel.checks import (
 )
 from torus_cad.kernel.export import atomic_path, write_step, write_stl
 from torus_cad.kernel.export_3mf import write_3mf
-from torus_cad.kernel.fillet import fillet_blade_roots, prepare_blade_for_fillet
+from torus_cad.kernel.fillet import fillet_pattern, prepare_blade_for_fillet
 from torus_cad.kernel.fuse import FuseRoute, fuse_all, fuse_pattern, pattern_blades
 from torus_cad.kernel.hub import hub_solid
 from torus_cad.kernel.loft import loft_solid
@@ -174,10 +174,11 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
                         mounting)
         angles_deg = [geometry.blade_angle_deg(i) for i in range(geometry.blades)]
         blades = pattern_blades(blade, angles_deg)
-    solid, route = _join_blades_to_hub(hub, blade, blades, angles_deg, timer)
-    if fillet_radius > 0.0:
+    if fillet_radius > 0.0:  # blade 0 filleted once, then patterned (torus_cad.kernel.fillet)
         with timer.stage(Stage.FILLET):
-            solid = fillet_blade_roots(solid, fillet_radius)
+            solid, route = fillet_pattern(hub, blade, angles_deg, fillet_radius), FuseRoute.ASSEMBLED
+    else:
+        solid, route = _join_blades_to_hub(hub, blade, blades, angles_deg, timer)
     if params.handedness == Handedness.CCW:  # the spec's blade is 'cw'; 'ccw' is its mirror image
         with timer.stage(Stage.MIRROR):
             solid = mirrored(solid)

@@ -26,6 +26,10 @@ _SCREW_ANGLE_SAMPLES = 360
 #: it cuts the hub's lateral face cleanly; blades must clear it there too.
 SET_SCREW_OVERSHOOT_MM = 1.0
 
+#: How far (in fillet radii) the root fillet may spread over the hub beside a blade root: a chamfer
+#: must stay that much farther from the blade roots than it would without a fillet.
+FILLET_REACH_RADII = 1.0
+
 
 @dataclass(frozen=True)
 class HubMounting:
@@ -75,8 +79,8 @@ def place_mounting(mounting: HubMounting, blade_points: NDArray[np.float64], bla
     blade 0 turned by 360 i / ``blades`` degrees about +z.
 
     Raises GeometryError naming the field and its limit when the bore reaches a blade root,
-    a chamfer cuts into a blade (or into the root fillet, which spreads up to 2 radii over the
-    hub), or no direction leaves the set-screw hole clear of the blades.
+    a chamfer cuts into a blade (or into the root fillet, which spreads about FILLET_REACH_RADII
+    radii over the hub), or no direction leaves the set-screw hole clear of the blades.
     """
     grid = np.asarray(blade_points, dtype=float)
     points = grid.reshape(-1, 3)
@@ -121,10 +125,10 @@ def _check_chamfer(mounting: HubMounting, points: NDArray[np.float64], radius: N
                    hub_radius_mm: float, hub_length_mm: float, root_fillet_radius_mm: float) -> None:
     if mounting.chamfer_mm == 0.0:
         return
-    fillet_reach = 2.0 * root_fillet_radius_mm
+    fillet_reach = FILLET_REACH_RADII * root_fillet_radius_mm
     limit = chamfer_limit_mm(points, radius, hub_radius_mm, hub_length_mm) - MOUNTING_CLEARANCE_MM - fillet_reach
     if mounting.chamfer_mm >= limit:
-        fillet = (f" with hub.root_fillet_radius = {root_fillet_radius_mm:g} mm (the fillet spreads up to "
+        fillet = (f" with hub.root_fillet_radius = {root_fillet_radius_mm:g} mm (the fillet spreads about "
                   f"{fillet_reach:g} mm over the hub)" if root_fillet_radius_mm > 0.0 else "")
         raise GeometryError(
             f"hub.chamfer = {mounting.chamfer_mm:g} mm cuts into a blade root near the hub's end{fillet}; "

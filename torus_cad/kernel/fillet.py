@@ -14,35 +14,43 @@ What makes OpenCascade's rolling-ball fillet work on these blades (measured, see
   per cent of random designs), so it runs in a forked child process with a time limit; the
   result comes back as a BRep string.
 
+* The pattern trick of the fuse applies (:func:`fillet_pattern`): blade 0 alone is joined to
+  the hub and filleted, once; its blade and fillet faces are rotated to every blade angle, the
+  fillet's contact curves on the hub's cylinder shifted in u, and the shell is assembled from
+  known faces. The cost is one blade's fillet for any blade count, and one blade's success is
+  every blade's. If that assembly fails its checks, the whole propeller is filleted instead.
+
 When the fillet fails, smaller radii are tried to name one that works in the error message.
 """
 
 from __future__ import annotations
 
 import io
+import math
 import os
 import select
 import signal
 import time
+from collections.abc import Sequence
 
 import cadquery as cq
-from OCP.BRep import BRep_Builder
+from OCP.BRep import BRep_Builder, BRep_Tool
 from OCP.BRepAdaptor import BRepAdaptor_Surface
+from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
 from OCP.BRepFilletAPI import BRepFilletAPI_MakeFillet
 from OCP.BRepTools import BRepTools
-from OCP.GeomAbs import (
-    GeomAbs_BezierSurface,
-    GeomAbs_BSplineSurface,
-    GeomAbs_OffsetSurface,
-)
+from OCP.GeomAbs import GeomAbs_BezierSurface, GeomAbs_BSplineSurface, GeomAbs_Cylinder, GeomAbs_OffsetSurface
+from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt, gp_Trsf, gp_Vec2d
 from OCP.ShapeUpgrade import ShapeUpgrade_ShapeDivideClosed
-from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE
-from OCP.TopExp import TopExp
-from OCP.TopoDS import TopoDS, TopoDS_Edge, TopoDS_Shape
-from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_WIRE
+from OCP.TopExp import TopExp, TopExp_Explorer
+from OCP.TopLoc import TopLoc_Location
+from OCP.TopoDS import TopoDS, TopoDS_Edge, TopoDS_Face, TopoDS_Shape, TopoDS_Shell, TopoDS_Solid, TopoDS_Wire
+from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape, TopTools_IndexedMapOfShape
 
 from torus_cad.errors import KernelError
 from torus_cad.kernel.checks import precise_volume, single_valid_solid
+from torus_cad.kernel.fuse import fuse_pattern
 from torus_cad.tolerances import FILLET_TIME_LIMIT_S, VOLUME_CHECK_RELATIVE_PRECISION
 
 #: Faces of these surface types belong to a blade; every other face (plane, cylinder, cone) to the hub.
@@ -50,6 +58,8 @@ _BLADE_SURFACES = (GeomAbs_BSplineSurface, GeomAbs_BezierSurface, GeomAbs_Offset
 
 #: Pieces the blade's closed side face is split into (see the module docstring).
 _SIDE_FACE_PIECES = 3
+
+_FULL_TURN = 2.0 * math.pi
 
 #: Radii tried, as fractions of the requested one, to suggest a radius that works.
 _FALLBACK_FRACTIONS = (0.5, 0.25, 0.1)
@@ -97,6 +107,106 @@ def fillet_blade_roots(solid: cq.Solid, radius_mm: float) -> cq.Solid:
     hint = f"; hub.root_fillet_radius = {works:.3g} mm works" if works is not None else f"; {smallest:.3g} mm fails as well"
     raise KernelError(f"root fillet failed: OpenCascade could not fillet the blade roots at "
                       f"hub.root_fillet_radius = {radius_mm:g} mm{hint}")
+
+
+def fillet_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], radius_mm: float) -> cq.Solid:
+    """The filleted propeller from one filleted blade: blade 0 joined to ``hub``, filleted, patterned.
+
+    ``blade`` is built at ``angles_deg[0]`` (prepared with :func:`prepare_blade_for_fillet`).
+    Raises KernelError as :func:`fillet_blade_roots` does when the fillet fails; returns a
+    checked single valid solid.
+    """
+    single, _ = fuse_pattern(hub, blade, angles_deg[:1])
+    filleted = fillet_blade_roots(single_valid_solid(single, "joining blade 0 to the hub"), radius_mm)
+    if len(angles_deg) == 1:
+        return filleted
+    try:
+        return single_valid_solid(cq.Shape.cast(_assemble_filleted(filleted.wrapped, angles_deg)),
+                                  "patterning the filleted blade")
+    except KernelError:
+        whole, _ = fuse_pattern(hub, blade, angles_deg)
+        return fillet_blade_roots(single_valid_solid(whole, "joining the blades to the hub"), radius_mm)
+
+
+def _assemble_filleted(filleted: TopoDS_Shape, angles_deg: Sequence[float]) -> TopoDS_Solid:
+    """The shell of the hub with every blade: blade 0's blade and fillet faces rotated to each angle.
+
+    The hub's lateral face keeps its own surface and outer wire, its holes that no blade made
+    (a set-screw hole), and gets, for each copy, blade 0's fillet-contact wires rotated, their
+    curves on the cylinder shifted in u by the copy's angle (as :mod:`torus_cad.kernel.fuse` does
+    for the bare intersection curves).
+    """
+    faces = [TopoDS.Face_s(face) for face in _explore(filleted, TopAbs_FACE)]
+    lateral = _outer_cylinder(faces)
+    blade_faces = [face for face in faces if BRepAdaptor_Surface(face).GetType() in _BLADE_SURFACES]
+    blade_edges = TopTools_IndexedMapOfShape()
+    for face in blade_faces:
+        TopExp.MapShapes_s(face, TopAbs_EDGE, blade_edges)
+    outer_wire = BRepTools.OuterWire_s(lateral)
+    inner_wires = [TopoDS.Wire_s(wire) for wire in _explore(lateral, TopAbs_WIRE) if not wire.IsSame(outer_wire)]
+    blade_holes = [wire for wire in inner_wires if blade_edges.Contains(_explore(wire, TopAbs_EDGE)[0])]
+    lateral_with_holes = BRepBuilderAPI_MakeFace(BRep_Tool.Surface_s(lateral), outer_wire, True)
+    for wire in inner_wires:
+        if not any(wire.IsSame(hole) for hole in blade_holes):
+            lateral_with_holes.Add(wire)
+    builder, shell = BRep_Builder(), TopoDS_Shell()
+    builder.MakeShell(shell)
+    for angle in angles_deg:
+        location = _shift_hole_curves(blade_holes, lateral, math.radians(angle - angles_deg[0]))
+        for wire in blade_holes:
+            lateral_with_holes.Add(TopoDS.Wire_s(wire.Moved(location)))
+        for face in blade_faces:
+            builder.Add(shell, face.Moved(location))
+    if not lateral_with_holes.IsDone():
+        raise KernelError("OpenCascade could not cut the filleted blade roots out of the hub's lateral face")
+    new_lateral = lateral_with_holes.Face()
+    new_lateral.Orientation(lateral.Orientation())
+    builder.Add(shell, new_lateral)
+    for face in faces:
+        if not face.IsSame(lateral) and BRepAdaptor_Surface(face).GetType() not in _BLADE_SURFACES:
+            builder.Add(shell, face)
+    shell.Closed(BRep_Tool.IsClosed_s(shell))
+    solid = TopoDS_Solid()
+    builder.MakeSolid(solid)
+    builder.Add(solid, shell)
+    return solid
+
+
+def _shift_hole_curves(holes: Sequence[TopoDS_Wire], lateral: TopoDS_Face, angle_rad: float) -> TopLoc_Location:
+    """The rotation by ``angle_rad`` about +z; the rotated hole edges get their curves on ``lateral`` shifted in u."""
+    rotation = gp_Trsf()
+    rotation.SetRotation(gp_Ax1(gp_Pnt(0.0, 0.0, 0.0), gp_Dir(0.0, 0.0, 1.0)), angle_rad)
+    location = TopLoc_Location(rotation)  # not the empty location even at 0: every copy gets its curves
+    builder = BRep_Builder()
+    for wire in holes:
+        u_min, u_max, _, _ = BRepTools.UVBounds_s(lateral, wire)
+        shift = angle_rad - _FULL_TURN * math.floor((u_min + angle_rad) / _FULL_TURN)
+        if u_max + shift > _FULL_TURN:
+            raise KernelError("a filleted blade root crosses the hub's seam")
+        for edge in _explore(wire, TopAbs_EDGE):
+            edge = TopoDS.Edge_s(edge)
+            curve = BRep_Tool.CurveOnSurface_s(edge, lateral, 0.0, 0.0)
+            if curve is None:
+                raise KernelError("a fillet contact edge has no curve on the hub")
+            moved = TopoDS.Edge_s(edge.Moved(location))
+            builder.UpdateEdge(moved, curve.Translated(gp_Vec2d(shift, 0.0)), lateral, BRep_Tool.Tolerance_s(edge))
+    return location
+
+
+def _outer_cylinder(faces: Sequence[TopoDS_Face]) -> TopoDS_Face:
+    cylinders = [(BRepAdaptor_Surface(face).Cylinder().Radius(), index, face) for index, face in enumerate(faces)
+                 if BRepAdaptor_Surface(face).GetType() == GeomAbs_Cylinder]
+    if not cylinders:
+        raise KernelError("the filleted hub has no cylindrical face")
+    return max(cylinders, key=lambda item: item[:2])[2]
+
+
+def _explore(shape: TopoDS_Shape, kind) -> list[TopoDS_Shape]:
+    found, explorer = [], TopExp_Explorer(shape, kind)
+    while explorer.More():
+        found.append(explorer.Current())
+        explorer.Next()
+    return found
 
 
 def fillet_edges(solid: cq.Solid, edges: list[TopoDS_Edge], radius_mm: float) -> cq.Solid | None:
