@@ -112,8 +112,8 @@ def test_ccw_is_the_exact_mirror_image_of_cw(plain):
 def test_mirror_turns_the_air_push_around():
     surface = PropellerParameters().blade_surface(sections=100)
     image = surface.points * [1.0, -1.0, 1.0]
-    assert air_push_z(surface.points, surface.trailing_edge_index) == pytest.approx(
-        -air_push_z(image, surface.trailing_edge_index), rel=1e-12)
+    assert air_push_z(surface.points, surface.trailing_edge_column) == pytest.approx(
+        -air_push_z(image, surface.trailing_edge_column), rel=1e-12)
 
 
 def test_wall_is_the_distance_between_the_surfaces_at_a_chord_station():

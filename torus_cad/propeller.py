@@ -20,6 +20,7 @@ from typing import Any
 
 import cadquery as cq
 import numpy as np
+from numpy.typing import NDArray
 
 from torus_cad import __version__
 from torus_cad.colors import HUB_COLOR, blade_color
@@ -106,7 +107,7 @@ class Propeller:
 
     def spin_to_push_air_down(self) -> Spin:
         """The turn, seen from +z, that pushes air toward -z: a flat-plate estimate (torus_cad.geometry.handedness)."""
-        spin = spin_to_push_air_down(self.surface.points, self.surface.trailing_edge_index or 0)
+        spin = spin_to_push_air_down(self.surface.points, self.surface.trailing_edge_column)
         if self.parameters.handedness == Handedness.CCW:  # the surface is the spec's blade, before the mirror
             return Spin.CLOCKWISE if spin == Spin.COUNTER_CLOCKWISE else Spin.COUNTER_CLOCKWISE
         return spin
@@ -128,9 +129,8 @@ def design_printability(params: PropellerParameters) -> Printability:
     return printability(blade.airfoil, blade.laws, params.manufacturing.min_wall)
 
 
-def _section_chords(surface: BladeSurface) -> np.ndarray:
-    trailing_edge = surface.trailing_edge_index or 0
-    return np.linalg.norm(surface.points[:, trailing_edge] - surface.points[:, 0], axis=-1)
+def _section_chords(surface: BladeSurface) -> NDArray[np.float64]:
+    return np.linalg.norm(surface.points[:, surface.trailing_edge_column] - surface.points[:, 0], axis=-1)
 
 
 def build_propeller(design: PropellerParameters | str | Path | None = None,
@@ -163,7 +163,7 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
         seam_deg = seam_angle_deg(surface.points, geometry.hub.radius_mm, geometry.blades,
                                   () if screw_arc is None else (screw_arc,))
     with timer.stage(Stage.WIRES):
-        curves = fit_section_curves(surface.points, surface.trailing_edge_index, _section_chords(surface))
+        curves = fit_section_curves(surface.points, surface.trailing_edge_column, _section_chords(surface))
         wires = curves.wires()
     with timer.stage(Stage.LOFT):
         blade = loft_solid(wires, surface.s)

@@ -8,24 +8,24 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass
 
-import cadquery as cq
+from typing import Any
+
 import numpy as np
 from numpy.typing import NDArray
-from OCP.Bnd import Bnd_Box
 from OCP.BRep import BRep_Tool
 from OCP.BRepBndLib import BRepBndLib
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeVertex
 from OCP.BRepCheck import BRepCheck_Analyzer
 from OCP.BRepExtrema import BRepExtrema_DistShapeShape
 from OCP.BRepGProp import BRepGProp
-from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt
+from OCP.Bnd import Bnd_Box
 from OCP.GProp import GProp_GProps
+from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt
+
+import cadquery as cq
 
 from torus_cad.errors import KernelError
-from torus_cad.tolerances import (
-    BALANCE_RELATIVE_PRECISION,
-    MASS_PROPERTIES_RELATIVE_PRECISION,
-)
+from torus_cad.tolerances import BALANCE_RELATIVE_PRECISION, MASS_PROPERTIES_RELATIVE_PRECISION
 
 
 def single_valid_solid(shape: cq.Shape, what: str) -> cq.Solid:
@@ -77,7 +77,7 @@ class MassProperties:
     spin_axis_inertia_g_mm2: float
     bounding_box_mm: tuple[tuple[float, float, float], tuple[float, float, float]]
 
-    def to_dict(self) -> dict:
+    def to_dict(self) -> dict[str, Any]:
         """JSON-ready dict."""
         return asdict(self)
 
@@ -143,7 +143,7 @@ class Balance:
     centroid_offset_mm: float
     products_of_inertia_g_mm2: dict[str, float]
 
-    def to_dict(self) -> dict:
+    def to_dict(self) -> dict[str, Any]:
         """JSON-ready dict."""
         return asdict(self)
 

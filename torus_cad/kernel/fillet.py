@@ -42,7 +42,7 @@ from OCP.BRepTools import BRepTools
 from OCP.GeomAbs import GeomAbs_BezierSurface, GeomAbs_BSplineSurface, GeomAbs_Cylinder, GeomAbs_OffsetSurface
 from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt, gp_Trsf, gp_Vec2d
 from OCP.ShapeUpgrade import ShapeUpgrade_ShapeDivideClosed
-from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_WIRE
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_ShapeEnum, TopAbs_WIRE
 from OCP.TopExp import TopExp, TopExp_Explorer
 from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS, TopoDS_Edge, TopoDS_Face, TopoDS_Shape, TopoDS_Shell, TopoDS_Solid, TopoDS_Wire
@@ -201,8 +201,9 @@ def _outer_cylinder(faces: Sequence[TopoDS_Face]) -> TopoDS_Face:
     return max(cylinders, key=lambda item: item[:2])[2]
 
 
-def _explore(shape: TopoDS_Shape, kind) -> list[TopoDS_Shape]:
-    found, explorer = [], TopExp_Explorer(shape, kind)
+def _explore(shape: TopoDS_Shape, kind: TopAbs_ShapeEnum) -> list[TopoDS_Shape]:
+    found: list[TopoDS_Shape] = []
+    explorer = TopExp_Explorer(shape, kind)
     while explorer.More():
         found.append(explorer.Current())
         explorer.Next()
@@ -216,7 +217,7 @@ def fillet_edges(solid: cq.Solid, edges: list[TopoDS_Edge], radius_mm: float) ->
         fillet.Add(radius_mm, edge)
     try:
         fillet.Build()
-    except Exception:  # noqa: BLE001 - OCCT raises Standard_Failure subclasses through OCP
+    except Exception:  # OCCT raises Standard_Failure subclasses through OCP
         return None
     if not fillet.IsDone():
         return None
@@ -255,7 +256,8 @@ def _fillet_in_child(solid: cq.Solid, edges: list[TopoDS_Edge], radius_mm: float
 
 def _read_with_limit(descriptor: int, pid: int, limit_s: float) -> bytes | None:
     """Everything the child writes, or None (the child killed) when it takes longer than ``limit_s``."""
-    chunks, deadline = [], time.monotonic() + limit_s
+    chunks: list[bytes] = []
+    deadline = time.monotonic() + limit_s
     with os.fdopen(descriptor, "rb") as pipe:
         while True:
             remaining = deadline - time.monotonic()

@@ -6,12 +6,9 @@ from collections.abc import Sequence
 
 import cadquery as cq
 import numpy as np
+from numpy.typing import NDArray
 from OCP.BRep import BRep_Tool
-from OCP.BRepBuilderAPI import (
-    BRepBuilderAPI_MakeFace,
-    BRepBuilderAPI_MakeSolid,
-    BRepBuilderAPI_Sewing,
-)
+from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace, BRepBuilderAPI_MakeSolid, BRepBuilderAPI_Sewing
 from OCP.BRepCheck import BRepCheck_Analyzer
 from OCP.BRepOffsetAPI import BRepOffsetAPI_ThruSections
 from OCP.Geom import Geom_BSplineCurve, Geom_BSplineSurface
@@ -31,7 +28,7 @@ from torus_cad.tolerances import LOFT_PRECISION
 LOFT_SEWING_TOLERANCE = 1e-6
 
 
-def loft_solid(wires: Sequence[cq.Wire], parameters: Sequence[float] | None = None) -> cq.Solid:
+def loft_solid(wires: Sequence[cq.Wire], parameters: Sequence[float] | NDArray[np.float64] | None = None) -> cq.Solid:
     """A smooth closed solid through ``wires``, capped by planar end faces.
 
     The wires must be compatible single-edge B-splines (same degree, knots and pole count,
@@ -64,7 +61,7 @@ def _bspline_of(wire: cq.Wire) -> Geom_BSplineCurve:
     return curve
 
 
-def _loft_through_poles(wires: Sequence[cq.Wire], parameters: Sequence[float] | None) -> cq.Solid:
+def _loft_through_poles(wires: Sequence[cq.Wire], parameters: Sequence[float] | NDArray[np.float64] | None) -> cq.Solid:
     curves = [_bspline_of(wire) for wire in wires]
     first = curves[0]
     degree, count = first.Degree(), first.NbPoles()
