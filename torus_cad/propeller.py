@@ -12,6 +12,7 @@ This is the package's Python API::
 
 from __future__ import annotations
 
+import functools
 import json
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -42,7 +43,7 @@ from torus_cad.kernel.export import atomic_path, write_step, write_stl
 from torus_cad.kernel.export_3mf import write_3mf
 from torus_cad.kernel.fillet import fillet_pattern, prepare_blade_for_fillet
 from torus_cad.kernel.fuse import FuseRoute, fuse_all, fuse_pattern, pattern_blades
-from torus_cad.kernel.hub import hub_solid
+from torus_cad.kernel.hub import hub_solid, run_out_hub
 from torus_cad.kernel.loft import loft_solid
 from torus_cad.kernel.mirror import mirrored
 from torus_cad.kernel.wires import SectionCurves, fit_section_curves
@@ -176,7 +177,11 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
         blades = pattern_blades(blade, angles_deg)
     if fillet_radius > 0.0:  # blade 0 filleted once, then patterned (torus_cad.kernel.fillet)
         with timer.stage(Stage.FILLET):
-            solid, route = fillet_pattern(hub, blade, angles_deg, fillet_radius), FuseRoute.ASSEMBLED
+            run_out = None if mounting.chamfer_mm > 0.0 else functools.partial(
+                run_out_hub, geometry.hub.radius_mm, geometry.hub.length_mm, 0.0 if seam_deg is None else seam_deg,
+                mounting, reach=geometry.hub.radius_mm + 4.0 * fillet_radius)
+            solid = fillet_pattern(hub, blade, angles_deg, fillet_radius, run_out)
+            route = FuseRoute.ASSEMBLED
     else:
         solid, route = _join_blades_to_hub(hub, blade, blades, angles_deg, timer)
     if params.handedness == Handedness.CCW:  # the spec's blade is 'cw'; 'ccw' is its mirror image
@@ -270,7 +275,7 @@ def write_outputs(propeller: Propeller, out_dir: Path, density_g_cm3: float = DE
     if ExportFormat.STEP in formats:
         with timer.stage(Stage.STEP_WRITE):
             paths["step"] = write_step(propeller.solid, out_dir / f"{params.name}.step", params.name,
-                                       params.export.step_schema)
+                                       params.export.step_schema, program=f"torus_cad {__version__}")
     if stl and ExportFormat.STL in formats:
         with timer.stage(Stage.STL_WRITE):
             paths["stl"] = write_stl(propeller.solid, out_dir / f"{params.name}.stl", *deflections)

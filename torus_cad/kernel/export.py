@@ -55,7 +55,8 @@ def _current_umask() -> int:
     return mask
 
 
-def write_step(shape: cq.Shape, path: str | Path, product_name: str, schema: str = "AP214") -> Path:
+def write_step(shape: cq.Shape, path: str | Path, product_name: str, schema: str = "AP214",
+               program: str = "torus_cad") -> Path:
     """Write ``shape`` as STEP (``schema`` 'AP214' or 'AP242', millimetres, product named ``product_name``).
 
     The shape goes through an XCAF document so that the STEP PRODUCT carries exactly the
@@ -72,7 +73,7 @@ def write_step(shape: cq.Shape, path: str | Path, product_name: str, schema: str
             raise KernelError(f"OpenCascade refused the STEP setting {key} = {value!r}")
     if not writer.Transfer(document, STEPControl_AsIs):
         raise KernelError("OpenCascade could not translate the solid to STEP")
-    _name_the_author(writer, product_name)
+    _name_the_author(writer, product_name, program)
     path = Path(path)
     with atomic_path(path) as temp:
         if writer.Write(str(temp)) != IFSelect_RetDone:
@@ -80,16 +81,13 @@ def write_step(shape: cq.Shape, path: str | Path, product_name: str, schema: str
     return path
 
 
-def _name_the_author(writer: STEPCAFControl_Writer, product_name: str) -> None:
-    """The STEP header's FILE_NAME: the design's name, and torus_cad and its version as author,
-    organisation and originating system, instead of OpenCascade's placeholders."""
-    from torus_cad import __version__
-
+def _name_the_author(writer: STEPCAFControl_Writer, product_name: str, program: str) -> None:
+    """The STEP header's FILE_NAME: the design's name, and ``program`` (torus_cad and its version) as
+    author, organisation and originating system, instead of OpenCascade's placeholders."""
     header = APIHeaderSection_MakeHeader(writer.ChangeWriter().Model())
-    program = f"torus_cad {__version__}"
     header.SetName(TCollection_HAsciiString(product_name))
     header.SetAuthorValue(1, TCollection_HAsciiString(program))
-    header.SetOrganizationValue(1, TCollection_HAsciiString("torus_cad"))
+    header.SetOrganizationValue(1, TCollection_HAsciiString(program.split()[0]))
     header.SetOriginatingSystem(TCollection_HAsciiString(program))
     header.SetAuthorisation(TCollection_HAsciiString(program))
 

@@ -31,12 +31,14 @@ import os
 import select
 import signal
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import cadquery as cq
 from OCP.BRep import BRep_Builder, BRep_Tool
 from OCP.BRepAdaptor import BRepAdaptor_Surface
+from OCP.BRepAlgoAPI import BRepAlgoAPI_Cut
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
+from OCP.BRepExtrema import BRepExtrema_DistShapeShape
 from OCP.BRepFilletAPI import BRepFilletAPI_MakeFillet
 from OCP.BRepTools import BRepTools
 from OCP.GeomAbs import GeomAbs_BezierSurface, GeomAbs_BSplineSurface, GeomAbs_Cylinder, GeomAbs_OffsetSurface
@@ -46,7 +48,7 @@ from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_ShapeEnum, TopAbs_WIRE
 from OCP.TopExp import TopExp, TopExp_Explorer
 from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS, TopoDS_Edge, TopoDS_Face, TopoDS_Shape, TopoDS_Shell, TopoDS_Solid, TopoDS_Wire
-from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape, TopTools_IndexedMapOfShape
+from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape, TopTools_IndexedMapOfShape, TopTools_ListOfShape
 
 from torus_cad.errors import KernelError
 from torus_cad.kernel.checks import precise_volume, single_valid_solid
@@ -89,7 +91,7 @@ def junction_edges(solid: cq.Solid) -> list[TopoDS_Edge]:
     return edges
 
 
-def fillet_blade_roots(solid: cq.Solid, radius_mm: float) -> cq.Solid:
+def fillet_blade_roots(solid: cq.Solid, radius_mm: float, suggest: bool = True) -> cq.Solid:
     """``solid`` with a fillet of ``radius_mm`` along every blade-hub junction; one valid solid.
 
     Raises KernelError ("root fillet failed ...", with a radius that works when one of the
@@ -101,6 +103,8 @@ def fillet_blade_roots(solid: cq.Solid, radius_mm: float) -> cq.Solid:
     filleted = _fillet_in_child(solid, edges, radius_mm)
     if filleted is not None:
         return filleted
+    if not suggest:
+        raise KernelError(f"root fillet failed at hub.root_fillet_radius = {radius_mm:g} mm")
     works = next((radius_mm * fraction for fraction in _FALLBACK_FRACTIONS
                   if _fillet_in_child(solid, edges, radius_mm * fraction) is not None), None)
     smallest = radius_mm * min(_FALLBACK_FRACTIONS, default=1.0)
@@ -109,15 +113,47 @@ def fillet_blade_roots(solid: cq.Solid, radius_mm: float) -> cq.Solid:
                       f"hub.root_fillet_radius = {radius_mm:g} mm{hint}")
 
 
-def fillet_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], radius_mm: float) -> cq.Solid:
+#: Builds the run-out hub for a given extension (mm): a plain hub that much longer at each end,
+#: and the tools that cut it back to the real hub afterwards (see :func:`fillet_pattern`).
+RunOutHub = Callable[[float], tuple[cq.Solid, list[TopoDS_Shape]]]
+
+#: The run-out hub's extension at each end, in fillet radii.
+_RUN_OUT_RADII = 3.0
+
+
+def fillet_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], radius_mm: float,
+                   run_out: RunOutHub | None = None) -> cq.Solid:
     """The filleted propeller from one filleted blade: blade 0 joined to ``hub``, filleted, patterned.
 
     ``blade`` is built at ``angles_deg[0]`` (prepared with :func:`prepare_blade_for_fillet`).
+    Where a blade root comes within about a radius of the hub's end face, the fillet would have
+    to roll over the hub's edge and fails. With ``run_out``, it is then tried on a hub longer at
+    both ends (the fillet runs out past the end), and the result is cut back to the hub's length
+    (the fillet ends in the end face, as it would when a longer filleted hub is faced) with the
+    bore and set-screw hole cut at the same time.
+
     Raises KernelError as :func:`fillet_blade_roots` does when the fillet fails; returns a
     checked single valid solid.
     """
+    try:
+        return _fillet_and_pattern(hub, blade, angles_deg, radius_mm)
+    except KernelError as failure:
+        if run_out is None:
+            raise
+        try:
+            extended, tools = run_out(_RUN_OUT_RADII * radius_mm)
+            if _touches(blade, tools[:2]):  # the blade itself reaches past the hub's ends
+                raise failure
+            filleted = _fillet_and_pattern(extended, blade, angles_deg, radius_mm, suggest=False)
+            return single_valid_solid(cq.Shape.cast(_cut(filleted.wrapped, tools)), "cutting the run-out hub back")
+        except KernelError:
+            raise failure from None
+
+
+def _fillet_and_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], radius_mm: float,
+                        suggest: bool = True) -> cq.Solid:
     single, _ = fuse_pattern(hub, blade, angles_deg[:1])
-    filleted = fillet_blade_roots(single_valid_solid(single, "joining blade 0 to the hub"), radius_mm)
+    filleted = fillet_blade_roots(single_valid_solid(single, "joining blade 0 to the hub"), radius_mm, suggest)
     if len(angles_deg) == 1:
         return filleted
     try:
@@ -125,7 +161,31 @@ def fillet_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], 
                                   "patterning the filleted blade")
     except KernelError:
         whole, _ = fuse_pattern(hub, blade, angles_deg)
-        return fillet_blade_roots(single_valid_solid(whole, "joining the blades to the hub"), radius_mm)
+        return fillet_blade_roots(single_valid_solid(whole, "joining the blades to the hub"), radius_mm, suggest)
+
+
+def _touches(shape: cq.Solid, tools: Sequence[TopoDS_Shape]) -> bool:
+    """Whether ``shape`` comes within 1e-6 mm of any of ``tools``."""
+    for tool in tools:
+        distance = BRepExtrema_DistShapeShape(shape.wrapped, tool)
+        if not distance.IsDone() or distance.Value() < 1e-6:
+            return True
+    return False
+
+
+def _cut(shape: TopoDS_Shape, tools: Sequence[TopoDS_Shape]) -> TopoDS_Shape:
+    arguments, tool_list = TopTools_ListOfShape(), TopTools_ListOfShape()
+    arguments.Append(shape)
+    for tool in tools:
+        tool_list.Append(tool)
+    cut = BRepAlgoAPI_Cut()
+    cut.SetArguments(arguments)
+    cut.SetTools(tool_list)
+    cut.SetRunParallel(True)
+    cut.Build()
+    if not cut.IsDone() or cut.Shape().IsNull():
+        raise KernelError("OpenCascade could not cut the run-out hub back to the hub's length")
+    return cut.Shape()
 
 
 def _assemble_filleted(filleted: TopoDS_Shape, angles_deg: Sequence[float]) -> TopoDS_Solid:

@@ -63,6 +63,28 @@ def hub_solid(radius: float, length: float, seam_angle_deg: float = 0.0,
     return solids[0]
 
 
+def run_out_hub(radius: float, length: float, seam_angle_deg: float, mounting: HubMounting, extension: float,
+                reach: float) -> tuple[cq.Solid, list[TopoDS_Shape]]:
+    """A plain hub ``extension`` mm longer at each end, and the tools that cut it back to the real one.
+
+    The tools: two end slabs (radius ``reach``, beyond |z| = length / 2) first, then the bore and
+    set-screw hole of ``mounting`` (no chamfer: a chamfered hub has no run-out). For the root
+    fillet's run-out (torus_cad.kernel.fillet.fillet_pattern).
+    """
+    if mounting.chamfer_mm > 0.0:
+        raise KernelError("a chamfered hub has no run-out for the root fillet")
+    extended = hub_solid(radius, length + 2.0 * extension, seam_angle_deg)
+    half, depth = length / 2.0, extension + 1.0
+    slabs = [BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(0.0, 0.0, z), _Z), reach, depth).Solid()
+             for z in (half, -half - depth)]
+    tools = list(slabs)
+    if mounting.bore_diameter_mm > 0.0:
+        tools.append(_bore(mounting, length))
+    if mounting.set_screw_diameter_mm > 0.0:
+        tools.append(_set_screw_hole(mounting, radius))
+    return extended, tools
+
+
 def _chamfered_cylinder(radius: float, length: float, chamfer: float, seam_angle_rad: float) -> TopoDS_Shape:
     """The hub's (r, z) profile with 45-degree chamfers, revolved about z starting at the seam angle."""
     half = length / 2.0
