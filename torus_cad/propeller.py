@@ -41,7 +41,7 @@ from torus_cad.kernel.checks import (
 )
 from torus_cad.kernel.export import atomic_path, write_step, write_stl
 from torus_cad.kernel.export_3mf import write_3mf
-from torus_cad.kernel.fillet import fillet_pattern, prepare_blade_for_fillet
+from torus_cad.kernel.fillet import fillet_pattern
 from torus_cad.kernel.fuse import FuseRoute, fuse_all, fuse_pattern, pattern_blades
 from torus_cad.kernel.hub import hub_solid, run_out_hub
 from torus_cad.kernel.loft import loft_solid
@@ -169,8 +169,6 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
     with timer.stage(Stage.LOFT):
         blade = loft_solid(wires, surface.s)
         fillet_radius = params.hub.root_fillet_radius
-        if fillet_radius > 0.0:  # faces the fillet can roll across (see torus_cad.kernel.fillet)
-            blade = prepare_blade_for_fillet(blade)
         hub = hub_solid(geometry.hub.radius_mm, geometry.hub.length_mm, 0.0 if seam_deg is None else seam_deg,
                         mounting)
         angles_deg = [geometry.blade_angle_deg(i) for i in range(geometry.blades)]

@@ -31,7 +31,7 @@ import os
 import select
 import signal
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 
 import cadquery as cq
 from OCP.BRep import BRep_Builder, BRep_Tool
@@ -58,8 +58,9 @@ from torus_cad.tolerances import FILLET_TIME_LIMIT_S, VOLUME_CHECK_RELATIVE_PREC
 #: Faces of these surface types belong to a blade; every other face (plane, cylinder, cone) to the hub.
 _BLADE_SURFACES = (GeomAbs_BSplineSurface, GeomAbs_BezierSurface, GeomAbs_OffsetSurface)
 
-#: Pieces the blade's closed side face is split into (see the module docstring).
-_SIDE_FACE_PIECES = 3
+#: Pieces the blade's closed side face is split into, in the order tried (see the module docstring):
+#: thirds work best; quarters (a split vertex at the leading edge) save some designs thirds do not.
+SIDE_FACE_PIECES = (3, 4)
 
 _FULL_TURN = 2.0 * math.pi
 
@@ -67,10 +68,10 @@ _FULL_TURN = 2.0 * math.pi
 _FALLBACK_FRACTIONS = (0.5, 0.25, 0.1)
 
 
-def prepare_blade_for_fillet(blade: cq.Solid) -> cq.Solid:
-    """The same blade with its closed side face split into thirds in u (the trailing edge becomes an edge)."""
+def prepare_blade_for_fillet(blade: cq.Solid, pieces: int = SIDE_FACE_PIECES[0]) -> cq.Solid:
+    """The same blade with its closed side face split into ``pieces`` equal parts in u (the trailing edge becomes an edge)."""
     divide = ShapeUpgrade_ShapeDivideClosed(blade.wrapped)
-    divide.SetNbSplitPoints(_SIDE_FACE_PIECES - 1)
+    divide.SetNbSplitPoints(pieces - 1)
     divide.Perform()
     solids = cq.Shape.cast(divide.Result()).Solids()
     if len(solids) != 1:
@@ -125,9 +126,10 @@ def fillet_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], 
                    run_out: RunOutHub | None = None) -> cq.Solid:
     """The filleted propeller from one filleted blade: blade 0 joined to ``hub``, filleted, patterned.
 
-    ``blade`` is built at ``angles_deg[0]`` (prepared with :func:`prepare_blade_for_fillet`).
-    Where a blade root comes within about a radius of the hub's end face, the fillet would have
-    to roll over the hub's edge and fails. With ``run_out``, it is then tried on a hub longer at
+    ``blade`` is built at ``angles_deg[0]``; its side face is split as
+    :func:`prepare_blade_for_fillet` does, into each number of :data:`SIDE_FACE_PIECES` in turn
+    until the fillet works. Where a blade root comes within about a radius of the hub's end
+    face, the fillet would have to roll over the hub's edge and fails. With ``run_out``, it is then tried on a hub longer at
     both ends (the fillet runs out past the end), and the result is cut back to the hub's length
     (the fillet ends in the end face, as it would when a longer filleted hub is faced) with the
     bore and set-screw hole cut at the same time.
@@ -135,19 +137,40 @@ def fillet_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], 
     Raises KernelError as :func:`fillet_blade_roots` does when the fillet fails; returns a
     checked single valid solid.
     """
-    try:
-        return _fillet_and_pattern(hub, blade, angles_deg, radius_mm)
-    except KernelError as failure:
-        if run_out is None:
-            raise
+    split = _LazySplits(blade)
+    for candidate in split:
         try:
-            extended, tools = run_out(_RUN_OUT_RADII * radius_mm)
-            if _touches(blade, tools[:2]):  # the blade itself reaches past the hub's ends
-                raise failure
-            filleted = _fillet_and_pattern(extended, blade, angles_deg, radius_mm, suggest=False)
-            return single_valid_solid(cq.Shape.cast(_cut(filleted.wrapped, tools)), "cutting the run-out hub back")
+            return _fillet_and_pattern(hub, candidate, angles_deg, radius_mm, suggest=False)
         except KernelError:
-            raise failure from None
+            pass
+    if run_out is not None:
+        extended, tools = run_out(_RUN_OUT_RADII * radius_mm)
+        if not _touches(blade, tools[:2]):  # else the blade itself reaches past the hub's ends
+            for candidate in split:
+                try:
+                    filleted = _fillet_and_pattern(extended, candidate, angles_deg, radius_mm, suggest=False)
+                    return single_valid_solid(cq.Shape.cast(_cut(filleted.wrapped, tools)),
+                                              "cutting the run-out hub back")
+                except KernelError:
+                    pass
+    return _fillet_and_pattern(hub, split[0], angles_deg, radius_mm)  # raises, suggesting a radius
+
+
+class _LazySplits:
+    """``blade`` split into each number of :data:`SIDE_FACE_PIECES`, made when first asked for."""
+
+    def __init__(self, blade: cq.Solid) -> None:
+        self.blade = blade
+        self.made: dict[int, cq.Solid] = {}
+
+    def __getitem__(self, index: int) -> cq.Solid:
+        pieces = SIDE_FACE_PIECES[index]
+        if pieces not in self.made:
+            self.made[pieces] = prepare_blade_for_fillet(self.blade, pieces)
+        return self.made[pieces]
+
+    def __iter__(self) -> Iterator[cq.Solid]:
+        return (self[index] for index in range(len(SIDE_FACE_PIECES)))
 
 
 def _fillet_and_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], radius_mm: float,
