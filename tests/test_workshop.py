@@ -189,3 +189,34 @@ def test_root_fillet_failure_exits_1_naming_the_fillet_and_writes_nothing(tmp_pa
     error = capsys.readouterr().err
     assert "root fillet failed" in error and "hub.root_fillet_radius" in error
     assert not any(tmp_path.iterdir())
+
+
+#: A fuzz design (seed 14) whose blade root comes within 0.34 mm of the hub's end face: a 0.5 mm
+#: fillet there has to run out past the hub's end (torus_cad.kernel.fillet.fillet_pattern).
+NEAR_THE_END = {
+    "blades": 3, "phase_deg": 50.874293083739275, "hub": {"radius": 13.61708909652224, "length": 34.609812248156054},
+    "airfoil": {"max_camber": 0.07241977514046337, "camber_position": 0.6730515061120323,
+                "thickness": 0.44636836614136105, "camber_normal": False, "pivot": 0.6201814317498328},
+    "centerline": {"p2": [18.453512387913314, 5.707455909130194, 70.82985374762225],
+                   "p3": [45.865531535043466, 16.883183979667987, 20.744098528711426],
+                   "p4": [46.545493345258755, 32.609812248156054]},
+    "transforms": {"angle_of_attack": [162.7123091824475, 21.356635805245872, -32.6307454555129, 69.92340124190818,
+                                       -50.17850102756502],
+                   "scale_x": [-23.79116406298313, 47.58232812596626, -30.583042645355977, 9.526982443481968,
+                               1.0105497873581675],
+                   "scale_y": [4.377315427700926, -8.754630855401851, -4.7154596915318665, 8.717713392790992,
+                               1.3806269760402894]},
+    "resolution": {"sections": 34, "points": 32},
+}
+
+
+@pytest.mark.slow
+def test_root_fillet_runs_out_past_the_hub_end_and_keeps_the_hub_length():
+    params = PropellerParameters.from_dict(NEAR_THE_END)
+    plain = build_propeller(params)
+    filleted = build_propeller(params, overrides={"hub.root_fillet_radius": 0.5})
+    assert is_valid_closed_solid(filleted.solid)
+    assert precise_volume(filleted.solid) > precise_volume(plain.solid)
+    box, plain_box = filleted.solid.BoundingBox(), plain.solid.BoundingBox()  # the hub keeps its length
+    assert box.zmax == pytest.approx(plain_box.zmax, abs=1e-6) and box.zmin == pytest.approx(plain_box.zmin, abs=1e-6)
+    assert any(_principal_curvatures(face)[1] == pytest.approx(1 / 0.5, rel=1e-3) for face in filleted.solid.Faces())

@@ -10,6 +10,10 @@ What makes OpenCascade's rolling-ball fillet work on these blades (measured, see
   fillet fail again, so it is not split in halves.
 * The junction edges are the edges between a blade face (B-spline) and a hub face (the hub is
   made of planes, cylinders and cones only).
+* When that fails, the side face split in quarters is tried; then, where a blade root comes
+  within about a radius of the hub's end face (the blade ends sit 1 mm below it, spec §3.1) so
+  that the fillet would have to roll over the hub's edge, the fillet is made on a hub longer at
+  both ends and the result cut back to the hub's length (see :func:`fillet_pattern`).
 * OpenCascade's fillet can crash the process on some inputs (a segmentation fault in a few
   per cent of random designs), so it runs in a forked child process with a time limit; the
   result comes back as a BRep string.
@@ -25,6 +29,7 @@ When the fillet fails, smaller radii are tried to name one that works in the err
 
 from __future__ import annotations
 
+import faulthandler
 import io
 import math
 import os
@@ -319,6 +324,7 @@ def _fillet_in_child(solid: cq.Solid, edges: list[TopoDS_Edge], radius_mm: float
     read_end, write_end = os.pipe()
     pid = os.fork()
     if pid == 0:  # the child: fillet, send the BRep text, leave without cleanup handlers
+        faulthandler.disable()  # a crash here is an expected outcome, reported by the parent; no dump
         os.close(read_end)
         status = 1
         try:
