@@ -14,7 +14,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from torus_cad import function_space_study as study
+from torus_cad.studies import function_space as study
 from torus_cad.errors import ParameterError
 
 REPO_ROOT = Path(__file__).resolve().parent.parent

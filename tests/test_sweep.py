@@ -1,4 +1,5 @@
-"""Design sweeps (torus_cad.sweep): the sweep file, design ids, the local pool and Dask, resuming, failures."""
+"""Design sweeps (torus_cad.batch): the sweep file, design ids, the local pool and Dask, resuming, failures,
+budgets, exit codes and signals."""
 
 from __future__ import annotations
 
@@ -13,12 +14,15 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from batch_jobs import crash_on_four_or_six_blades
+from torus_cad.batch import (
+    BatchError, DesignTask, LocalPool, Outcome, design_id, generate_designs, load_sweep, parse_sweep, run_design,
+    run_sweep, run_tasks,
+)
+from torus_cad.batch.job import FAILURE_FILE, REFUSAL_FILE
+from torus_cad.batch.table import DESIGNS_DIR
 from torus_cad.cli import main
 from torus_cad.errors import KernelError, ParameterError
-from torus_cad.sweep import (
-    DESIGNS_DIR, FAILURE_FILE, REFUSAL_FILE, DesignTask, Progress, SweepError, _drive, design_id, generate_designs,
-    load_sweep, parse_sweep, run_design, run_sweep,
-)
 
 LIGHT = {"resolution": {"sections": 16, "points": 32}}
 
@@ -154,12 +158,12 @@ def test_base_config_is_relative_to_the_sweep_file_and_inline_values_override_it
     ({"sweep": {"sed": 3}}, "did you mean 'sweep.seed'"),
     ({"varry": {}}, "unknown table [varry]"),
     ({"vary": {"blades": [2.5]}}, "'blades' item 0 must be a whole number"),
-    ({"vary": {"hub.radius": ["big"]}}, "'hub.radius' item 0 must be a number"),
+    ({"vary": {"hub.radius": ["big"]}}, "'hub.radius' item 0 must be a finite number"),
     ({"vary": {"blades": {"low": 2.0, "high": 4.0}}, "sweep": {"mode": "random", "samples": 2}},
      "'blades' low must be a whole number"),
     ({"vary": {"centerline.p2[3]": [1.0]}}, "index 3 is out of range"),
     ({"vary": {"hub.radius[0]": [1.0]}}, "not a vector"),
-    ({"vary": {"centerline.p2": [1.0]}}, "must be a list of 3 numbers"),
+    ({"vary": {"centerline.p2": [1.0]}}, "must be a list of 3 finite numbers"),
     ({"vary": {"centerline.p2": [[1, 2, 3]], "centerline.p2[1]": [1.0]}}, "set the same parameter"),
     ({"vary": {"hub.radius": {"start": 9.0, "stop": 8.0, "step": 1.0}}}, "must not be below start"),
     ({"vary": {"hub.radius": {"start": 9.0, "step": 1.0}}}, "use {start, stop, step}"),
@@ -198,13 +202,13 @@ def _task(tmp_path: Path, **changes) -> DesignTask:
 
 def test_run_design_records_a_refusal_and_never_raises(tmp_path):
     task = _task(tmp_path, **{"hub.radius": 3.0})  # the blade's root sticks out of the hub: GeometryError
-    outcome = run_design(task)
-    assert outcome["status"] == "refused" and "hub" in outcome["reason"]
+    result = run_design(task)
+    assert result.outcome is Outcome.REFUSED and "hub" in result.reason
     record = json.loads((Path(task.folder) / REFUSAL_FILE).read_text())
-    assert record["status"] == "refused" and record["error"] == "GeometryError"
+    assert record["status"] == "refused" and record["error"] == "GeometryError" and record["reason"] == result.reason
     out_of_range = _task(tmp_path, **{"airfoil.thickness": 1.5})  # ParameterError inside the worker
-    assert run_design(out_of_range)["status"] == "refused"
-    assert "airfoil.thickness = 1.5 is out of range" in run_design(out_of_range)["reason"]
+    assert run_design(out_of_range).outcome is Outcome.REFUSED
+    assert "airfoil.thickness = 1.5 is out of range" in run_design(out_of_range).reason
 
 
 @pytest.mark.parametrize("error, status", [(KernelError("the loft failed"), "failed"),
@@ -218,27 +222,9 @@ def test_run_design_records_kernel_failures_and_unexpected_errors(tmp_path, monk
 
     monkeypatch.setattr(torus_cad.propeller, "build_propeller", broken)
     task = _task(tmp_path, blades=3)
-    outcome = run_design(task)
-    assert outcome["status"] == status and str(error) in outcome["reason"]
+    result = run_design(task)
+    assert result.outcome == status and str(error) in result.reason
     assert json.loads((Path(task.folder) / FAILURE_FILE).read_text())["status"] == status
-
-
-def test_progress_bar_draws_only_on_a_terminal(tmp_path):
-    import io
-
-    class Terminal(io.StringIO):
-        def isatty(self) -> bool:
-            return True
-
-    quiet, terminal = io.StringIO(), Terminal()
-    for stream in (quiet, terminal):
-        bar = Progress(4, already_done=1, stream=stream)
-        for status in ("ok", "refused", "failed"):
-            bar.update(status)
-        bar.close()
-    assert quiet.getvalue() == ""
-    last = terminal.getvalue().rstrip("\n").split("\r")[-1]
-    assert "4/4 done" in last and "ok 1" in last and "refused 1" in last and "failed 1" in last and "/min" in last
 
 
 # -- whole sweeps: local pool, Dask, resume ------------------------------------------------------------
@@ -255,7 +241,7 @@ def local_run(small_sweep, tmp_path_factory):
 
 
 def test_local_sweep_builds_every_design_into_its_folder(local_run):
-    assert [row["status"] for row in local_run.rows] == ["ok"] * 6 and local_run.built == 6
+    assert [row["status"] for row in local_run.rows] == ["valid"] * 6 and local_run.built == 6
     for design, row in zip(local_run.designs, local_run.rows):
         folder = local_run.out_dir / DESIGNS_DIR / design.design_id
         assert sorted(path.name for path in folder.iterdir()) == [f"{design.design_id}.json",
@@ -274,7 +260,8 @@ def test_local_sweep_builds_every_design_into_its_folder(local_run):
 
 
 def test_the_table_is_also_written_as_parquet_when_pyarrow_is_installed(local_run):
-    parquet = pytest.importorskip("pyarrow.parquet")
+    import pyarrow.parquet as parquet
+
     table = parquet.read_table(local_run.tables["parquet"]).to_pylist()
     assert [row["id"] for row in table] == [d.design_id for d in local_run.designs]
     assert [row["volume_mm3"] for row in table] == [row["volume_mm3"] for row in local_run.rows]
@@ -315,11 +302,11 @@ def test_cli_sweep_with_an_impossible_design_records_the_refusal_and_finishes_th
         "hub.radius" = [10.0, 3.0]   # the blade's root does not fit in a 3 mm hub
         """)
     out = tmp_path / "out"
-    assert main(["sweep", str(sweep), "--out", str(out), "--workers", "2", "--no-stl"]) == 0
+    assert main(["sweep", str(sweep), "--out", str(out), "--workers", "2", "--no-stl"]) == 0  # refusals alone: 0
     summary = capsys.readouterr().out
-    assert "1 ok, 1 refused, 0 failed" in summary and "refused" in summary.splitlines()[-1]
+    assert "1 valid, 1 refused, 0 failed" in summary and "refused" in summary.splitlines()[-1]
     table = read_table(out / "results.csv")
-    assert [(row["hub.radius"], row["status"], row["valid"]) for row in table] == [("10.0", "ok", "True"),
+    assert [(row["hub.radius"], row["status"], row["valid"]) for row in table] == [("10.0", "valid", "True"),
                                                                                  ("3.0", "refused", "False")]
     assert "hub" in table[1]["reason"] and table[1]["volume_mm3"] == ""
     refused = out / DESIGNS_DIR / table[1]["id"]
@@ -331,30 +318,20 @@ def test_cli_sweep_with_an_impossible_design_records_the_refusal_and_finishes_th
 
 # -- a worker process that dies --------------------------------------------------------------------
 
-def crash_on_four_or_six_blades(task: DesignTask) -> dict:
-    """Kills its worker process for 4 and 6 blades, like a segfault in OpenCascade would."""
-    if task.parameters["blades"] in (4, 6):
-        os._exit(1)
-    return {"id": task.design_id, "status": "ok", "reason": "", "seconds": 0.0}
-
-
-def test_a_worker_crash_is_recorded_for_its_design_and_the_pool_is_replaced(tmp_path):
-    from torus_cad.sweep import _local_pool
-
+def test_a_worker_crash_is_recorded_for_its_design_and_the_others_go_on(tmp_path):
     designs = generate_designs(parse_sweep({"vary": {"blades": [2, 3, 4, 5, 6, 7, 8]}}))
     tasks = [DesignTask(d.design_id, d.parameters, str(tmp_path / d.design_id), stl=False) for d in designs]
-    outcomes: dict[str, dict] = {}
-    _drive(lambda: _local_pool(2), tasks, 2, lambda task, outcome: outcomes.__setitem__(task.parameters["blades"],
-                                                                                         outcome),
-           Progress(len(tasks), enabled=False), check_files=False, function=crash_on_four_or_six_blades)
-    assert {blades: outcome["status"] for blades, outcome in outcomes.items()} == {
-        2: "ok", 3: "ok", 4: "error", 5: "ok", 6: "error", 7: "ok", 8: "ok"}
-    assert "worker process died" in outcomes[4]["reason"]
-    assert json.loads((tmp_path / tasks[2].design_id / FAILURE_FILE).read_text())["status"] == "error"
+    results = {}
+    run_tasks(tasks, lambda task, result: results.__setitem__(task.parameters["blades"], result),
+              lambda: LocalPool(2), window=4, job=crash_on_four_or_six_blades)
+    assert {blades: result.outcome.value for blades, result in results.items()} == {
+        2: "valid", 3: "valid", 4: "crash", 5: "valid", 6: "crash", 7: "valid", 8: "valid"}
+    assert "worker process died" in results[4].reason
+    assert json.loads((tmp_path / tasks[2].design_id / FAILURE_FILE).read_text())["status"] == "crash"
 
 
-def test_an_unreachable_scheduler_is_a_sweep_error(tmp_path, small_sweep, monkeypatch):
+def test_an_unreachable_scheduler_is_a_batch_error(tmp_path, small_sweep, monkeypatch):
     pytest.importorskip("dask.distributed")
-    monkeypatch.setattr("torus_cad.sweep.CONNECT_TIMEOUT_S", 1.0)
-    with pytest.raises(SweepError, match="cannot connect to the Dask scheduler"):
+    monkeypatch.setattr("torus_cad.batch.cluster.CONNECT_TIMEOUT_S", 1.0)
+    with pytest.raises(BatchError, match="cannot connect to the Dask scheduler"):
         run_sweep(load_sweep(small_sweep), tmp_path / "out", scheduler="tcp://127.0.0.1:1", progress=False)

@@ -56,3 +56,8 @@ HUB_FOOTPRINT_NEAR_RELATIVE = 0.02
 #: Angular margin (degrees) added at each side of a blade's footprint on the hub before the
 #: seam is placed beside it.
 HUB_FOOTPRINT_MARGIN_DEG = 1.0
+
+#: Most designs one sweep may hold (grid product or samples), checked from the axis sizes before
+#: any design is generated. Beyond it the design list and table alone take gigabytes, and at
+#: ~2 designs/s per machine the sweep would run for weeks.
+MAX_SWEEP_DESIGNS = 1_000_000
