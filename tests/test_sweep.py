@@ -7,7 +7,11 @@ import csv
 import json
 import os
 import shutil
+import signal
+import subprocess
+import sys
 import textwrap
+import time
 from pathlib import Path
 
 import pytest
@@ -335,3 +339,161 @@ def test_an_unreachable_scheduler_is_a_batch_error(tmp_path, small_sweep, monkey
     monkeypatch.setattr("torus_cad.batch.cluster.CONNECT_TIMEOUT_S", 1.0)
     with pytest.raises(BatchError, match="cannot connect to the Dask scheduler"):
         run_sweep(load_sweep(small_sweep), tmp_path / "out", scheduler="tcp://127.0.0.1:1", progress=False)
+
+
+# -- budgets and numbers that are not numbers (issue 17) ------------------------------------------------
+
+def _sweep_cli(*args: str, timeout: float = 120.0) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "torus_cad", "sweep", *args], capture_output=True, text=True,
+                          timeout=timeout)
+
+
+@pytest.mark.parametrize("vary, mode, expected", [
+    ('"hub.radius" = {start = 9.0, stop = 12.0, num = 100000000}', "", "100,000,000 designs"),
+    ('"hub.radius" = {low = 9.0, high = 12.0}', 'mode = "random"\nsamples = 3000000', "3,000,000 designs"),
+    ('"hub.radius" = {start = 5.0, stop = 15.0, step = 0.002}\n"hub.length" = {start = 10.0, stop = 30.0, step = 0.004}',
+     "", "25,010,001 designs = 5,001 (hub.radius) x 5,001 (hub.length)"),
+    ('"hub.radius" = {start = 9.0, stop = 10.0, step = 5e-324}', "", "more than 1e308 designs"),
+])
+def test_a_sweep_over_the_budget_is_refused_before_any_design_is_made(tmp_path, vary, mode, expected):
+    sweep = write(tmp_path / "huge.toml", f"[sweep]\n{mode}\n[vary]\n{vary}\n")
+    done = _sweep_cli(str(sweep), "--out", str(tmp_path / "out"), timeout=60)
+    assert done.returncode == 2, done.stderr
+    message = done.stderr.strip()
+    assert "\n" not in message and expected in message and "the limit is 1,000,000 designs" in message
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("vary, mode, expected", [
+    ('"hub.radius" = {start = 9.0, stop = nan, step = 0.5}', "", "'hub.radius' stop must be a finite number, got nan"),
+    ('"hub.radius" = {start = 9.0, stop = inf, step = 0.5}', "", "'hub.radius' stop must be a finite number, got inf"),
+    ("blades = {start = 2, stop = nan, step = 1}", "", "'blades' stop must be a whole number, got nan"),
+    ('"hub.radius" = [9.0, nan]', "", "'hub.radius' item 1 must be a finite number, got nan"),
+    ('"hub.radius" = {low = -inf, high = inf}', 'mode = "random"\nsamples = 4',
+     "'hub.radius' low must be a finite number, got -inf"),
+    ('"centerline.p2" = [[25.0, 3.0, inf]]', "", "must be a list of 3 finite numbers"),
+])
+def test_not_a_number_in_a_sweep_is_bad_input(tmp_path, vary, mode, expected):
+    sweep = write(tmp_path / "nan.toml", f"[sweep]\n{mode}\n[vary]\n{vary}\n")
+    done = _sweep_cli(str(sweep), "--out", str(tmp_path / "out"), timeout=60)
+    assert done.returncode == 2, done.stderr
+    assert "\n" not in done.stderr.strip() and expected in done.stderr
+    assert not (tmp_path / "out").exists()
+
+
+def _no_nan(constant: str) -> float:
+    raise AssertionError(f"{constant} in a JSON file")
+
+
+def test_sweep_json_is_strict_json(local_run):
+    manifest = json.loads((local_run.out_dir / "sweep.json").read_text(), parse_constant=_no_nan)
+    assert manifest["vary"]["blades"] == [2, 3] and len(manifest["designs"]) == 6
+
+
+# -- exit codes ------------------------------------------------------------------------------------
+
+def test_a_sweep_whose_designs_error_exits_1(tmp_path):
+    sweep = write(tmp_path / "s.toml", "[base.resolution]\nsections = 16\npoints = 32\n[sweep]\nstl = false\n"
+                                       "[vary]\nblades = [2, 3]\n")
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / DESIGNS_DIR).write_text("a file where the designs' folders should go\n")  # every design errors
+    done = _sweep_cli(str(sweep), "--out", str(out), "--workers", "1")
+    assert done.returncode == 1, done.stdout + done.stderr
+    assert "0 valid, 0 refused, 0 failed, 2 errors" in done.stdout
+    assert [row["status"] for row in read_table(out / "results.csv")] == ["error", "error"]
+
+
+# -- signals ---------------------------------------------------------------------------------------
+
+def _state(pid: int) -> str:
+    """The process's state letter from /proc ('' when it is gone; 'Z' for a zombie)."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except (OSError, IndexError):
+        return ""
+
+
+def _children(pid: int) -> list[int]:
+    kids = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            if int(stat.read_text().rsplit(")", 1)[1].split()[1]) == pid:
+                kids.append(int(stat.parent.name))
+        except (OSError, IndexError, ValueError):
+            continue
+    return kids
+
+
+def _descendants(pid: int) -> list[int]:
+    found, todo = [], [pid]
+    while todo:
+        for child in _children(todo.pop()):
+            found.append(child)
+            todo.append(child)
+    return found
+
+
+def _wait_for(condition, seconds: float, what: str) -> None:
+    deadline = time.monotonic() + seconds
+    while not condition():
+        assert time.monotonic() < deadline, f"timed out waiting for {what}"
+        time.sleep(0.1)
+
+
+_DRIVER = """
+import sys
+sys.path.insert(0, {tests!r})
+from batch_jobs import announce_and_sleep
+from torus_cad.batch import load_sweep, run_sweep
+
+if __name__ == "__main__":
+    run_sweep(load_sweep(sys.argv[1]), sys.argv[2], workers=2, job=announce_and_sleep, progress=False)
+"""
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads /proc")
+def test_sweep_workers_die_with_the_sweep_when_it_is_killed(tmp_path):
+    """SIGKILL to the sweep's process: its fork server and workers (each in a ten-minute design) go too."""
+    driver = write(tmp_path / "driver.py", _DRIVER.format(tests=str(Path(__file__).parent)))
+    sweep = write(tmp_path / "s.toml", "[vary]\nblades = [2, 3, 4, 5]\n")
+    out = tmp_path / "out"
+    process = subprocess.Popen([sys.executable, str(driver), str(sweep), str(out)])
+    try:
+        _wait_for(lambda: len(list((out / DESIGNS_DIR).glob("*.started"))) == 2, 180, "two designs to start")
+        workers = [int(path.read_text()) for path in (out / DESIGNS_DIR).glob("*.started")]
+        helpers = _descendants(process.pid)
+        assert set(workers) <= set(helpers)
+        process.kill()  # and not reaped yet: the workers must not wait for its pid to disappear
+        _wait_for(lambda: all(_state(pid) in ("", "Z") for pid in helpers), 10, "the workers to die")
+        process.wait(30)
+    finally:
+        if process.poll() is None:
+            process.kill()
+        for pid in _descendants(process.pid):
+            os.kill(pid, signal.SIGKILL)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_stops_the_sweep_with_one_line_its_exit_code_and_the_table(tmp_path, signum):
+    sweep = write(tmp_path / "s.toml", "[base.resolution]\nsections = 16\npoints = 32\n[sweep]\nstl = false\n"
+                                       "[vary]\nblades = [2, 3, 4, 5, 6]\n\"airfoil.max_camber\" = [0.0, 0.02]\n")
+    out = tmp_path / "out"
+    process = subprocess.Popen([sys.executable, "-m", "torus_cad", "sweep", str(sweep), "--out", str(out),
+                                "--workers", "1"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        _wait_for(lambda: any((out / DESIGNS_DIR).glob("*/*.json")), 180, "a first design")
+        helpers = _descendants(process.pid)
+        process.send_signal(signum)
+        stdout, stderr = process.communicate(timeout=60)
+    finally:
+        if process.poll() is None:
+            process.kill()
+    assert process.returncode == 128 + signum, stderr
+    name = signal.Signals(signum).name
+    assert stdout == "" and len(stderr.strip().splitlines()) == 1 and f"interrupted by {name}" in stderr
+    statuses = [row["status"] for row in read_table(out / "results.csv")]
+    assert len(statuses) == 10 and "valid" in statuses and "pending" in statuses
+    _wait_for(lambda: all(_state(pid) in ("", "Z") for pid in helpers), 10, "the workers to stop")

@@ -87,39 +87,55 @@ def default_workers() -> int:
 
 # -- worker processes -------------------------------------------------------------------------------
 
-def _worker_started(parent_pid: int) -> None:
-    """Initialiser of every local worker: die with the parent; SIGTERM ends the worker at once.
+def _worker_started(batch_pid: int) -> None:
+    """Initialiser of every local worker: die with the batch's process; SIGTERM ends the worker at once.
 
-    pebble's workers already ignore SIGINT (Ctrl-C goes to the whole terminal's process
-    group; the parent decides). Its graceful SIGTERM handler would wait for OpenCascade to
-    return before running, so the default action is restored: a stopped worker stops now (an
-    export killed mid-write leaves only a temporary file, never a partial file).
+    A worker's parent is the fork server, which lives as long as any worker does (each holds
+    its lifeline), so two guards: the kernel's parent-death signal for when the fork server
+    dies, and a watchdog thread for when the batch's process dies, even by SIGKILL and even
+    if nobody reaps it. pebble's workers already ignore SIGINT (Ctrl-C goes to the whole
+    terminal's process group; the parent decides). Its graceful SIGTERM handler would wait for
+    OpenCascade to return before running, so the default action is restored: a stopped worker
+    stops now (an export killed mid-write leaves only a temporary file, never a partial file).
     """
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
-    try:  # the kernel SIGKILLs this process when its parent (the fork server) dies
+    try:
         ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0)
     except (OSError, AttributeError):  # not Linux: the watchdog below still works
         pass
-    threading.Thread(target=_watch_parent, args=(os.getppid(), parent_pid), name="torus-cad parent watchdog",
-                     daemon=True).start()
+    threading.Thread(target=_watch_parents, args=(os.getppid(), batch_pid, _identity(batch_pid)),
+                     name="torus-cad parent watchdog", daemon=True).start()
 
 
-def _watch_parent(worker_parent: int, batch_pid: int) -> None:
-    """Kill this worker once its parent changed (the fork server died) or the batch's process is gone."""
+def _watch_parents(worker_parent: int, batch_pid: int, batch_identity: str | None) -> None:
+    """SIGKILL this worker once its parent changed or the batch's process is no longer the one it was."""
     while True:
         time.sleep(_WATCHDOG_SECONDS)
-        if os.getppid() != worker_parent or not _alive(batch_pid):
+        if os.getppid() != worker_parent or _identity(batch_pid) != batch_identity:
             os.kill(os.getpid(), signal.SIGKILL)
 
 
-def _alive(pid: int) -> bool:
+def _identity(pid: int) -> str | None:
+    """What tells a live process from a successor with its pid: its start time (Linux /proc).
+
+    None when the process is gone or a zombie (killed, not yet reaped); without /proc, ''
+    for any existing process.
+    """
     try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:  # exists, owned by someone else (a reused pid): the parent check decides
-        return True
-    return True
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    except FileNotFoundError:
+        if Path("/proc/self/stat").exists():
+            return None
+        try:
+            os.kill(pid, 0)
+        except ProcessLookupError:
+            return None
+        except PermissionError:
+            pass
+        return ""
+    except OSError:
+        return None
+    return None if fields[0] in ("Z", "X") else fields[19]
 
 
 class LocalPool:
