@@ -28,7 +28,7 @@ from pathlib import Path
 from torus_cad.batch.job import DesignTask
 from torus_cad.batch.outcome import RUN_OUTCOMES, DesignResult, Outcome, tally
 from torus_cad.batch.runner import LocalPool, default_workers, run_tasks
-from torus_cad.geometry.parameters import PropellerParameters
+from torus_cad.parameters import PropellerParameters
 from torus_cad.progress import BatchProgress
 from torus_cad.studies.fuzz import fuzz_tasks, random_design_dict
 

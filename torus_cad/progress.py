@@ -26,17 +26,15 @@ import time
 from collections.abc import Mapping
 from typing import Any, TextIO
 
+from torus_cad.stages import Stage
+
 __all__ = ["STAGE_LABELS", "BatchProgress", "Progress", "StageProgress", "is_terminal"]
 
-#: Friendlier words for the pipeline's stage names (others are shown with spaces for underscores).
+#: Words for the steps a command shows: the pipeline's stages and the steps around them
+#: (others are shown with spaces for underscores).
 STAGE_LABELS: dict[str, str] = {
     "kernel_import": "loading the CAD kernel (cadquery)",
-    "parameters": "reading parameters",
-    "section_math": "blade sections (geometry)",
-    "wires": "section B-splines",
-    "loft": "lofting blades",
-    "fuse": "fusing blades with the hub",
-    "check": "checking the solid",
+    **{stage.value: stage.label for stage in Stage},
     "write": "writing STEP / STL / JSON",
     "tessellate": "tessellating for the preview",
     "render": "rendering the preview",

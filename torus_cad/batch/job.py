@@ -24,7 +24,7 @@ import numpy as np
 
 from torus_cad.batch.outcome import DesignResult, Outcome
 from torus_cad.errors import GeometryError, ParameterError, TorusCadError
-from torus_cad.geometry.parameters import PropellerParameters
+from torus_cad.parameters import PropellerParameters
 
 __all__ = ["FAILURE_FILE", "REFUSAL_FILE", "DesignTask", "read_design_status", "record_result", "run_design",
            "verify_files"]

@@ -39,7 +39,7 @@ from pathlib import Path
 from typing import Any
 
 from torus_cad.errors import ParameterError
-from torus_cad.geometry.parameters import PropellerParameters
+from torus_cad.parameters import PropellerParameters
 from torus_cad.tolerances import MAX_SWEEP_DESIGNS
 
 __all__ = ["SweepMode", "SweepSpec", "VaryAxis", "estimate_designs", "load_sweep", "parse_sweep"]

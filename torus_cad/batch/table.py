@@ -18,6 +18,7 @@ from typing import Any
 from torus_cad.batch.designs import Design
 from torus_cad.batch.job import read_design_status
 from torus_cad.batch.outcome import DesignResult, Outcome
+from torus_cad.stages import Stage
 
 __all__ = ["DESIGNS_DIR", "STAGES", "TABLE_CSV", "TABLE_PARQUET", "collect_rows", "table_columns", "write_table"]
 
@@ -25,8 +26,8 @@ DESIGNS_DIR = "designs"
 TABLE_CSV = "results.csv"
 TABLE_PARQUET = "results.parquet"
 
-#: Stage columns of the table, in pipeline order (see :class:`torus_cad.propeller.StageTimer`).
-STAGES = ("parameters", "section_math", "wires", "loft", "fuse", "check", "step_write", "stl_write")
+#: Stage columns of the table (``time_<stage>_s``), in pipeline order.
+STAGES = tuple(stage.value for stage in Stage)
 
 _PROPERTY_COLUMNS = ("volume_mm3", "surface_area_mm2", "mass_g", "density_g_cm3", "spin_axis_inertia_g_mm2",
                      "spin_axis_inertia_mm5", "centroid_x_mm", "centroid_y_mm", "centroid_z_mm",
