@@ -107,7 +107,7 @@ def test_sampling_is_seeded_within_bounds_and_keeps_ints(mode):
 
 
 @settings(max_examples=40, deadline=None)
-@given(low=st.floats(0.6, 50.0), width=st.floats(0.01, 50.0), int_low=st.integers(1, 10),
+@given(low=st.floats(0.6, 50.0), width=st.floats(0.01, 50.0), int_low=st.integers(4, 10),
        int_width=st.integers(0, 5), seed=st.integers(0, 2**32), mode=st.sampled_from(["random", "latin_hypercube"]))
 def test_samples_stay_within_their_bounds(low, width, int_low, int_width, seed, mode):
     spec = parse_sweep({"sweep": {"mode": mode, "samples": 7, "seed": seed},
@@ -176,6 +176,15 @@ def test_base_config_is_relative_to_the_sweep_file_and_inline_values_override_it
     ({"vary": {"name": ["a", "b"]}}, "the name cannot be varied"),
     ({"vary": {"hub": [1.0]}}, "is a table"),
     ({"vary": {"blades": []}}, "empty list"),
+    # the schema's ranges and choices, checked before any design is made
+    ({"vary": {"hub.radius": [10.0, 0.1]}}, "vary.'hub.radius' item 1: hub.radius = 0.1 is out of range; "
+                                            "allowed [0.5, 1000] mm"),
+    ({"vary": {"blades": {"start": 0, "stop": 3, "step": 1}}}, "blades = 0 is out of range; allowed [1, 12]"),
+    ({"vary": {"transforms.scale_x[4]": [6.0, 2e4]}}, "transforms.scale_x[4] = 20000 is out of range"),
+    ({"vary": {"centerline.frame": ["frenet", "spiral"]}}, "'spiral' is not allowed; choose one of frenet, "
+                                                          "rotation_minimizing"),
+    ({"vary": {"airfoil.thickness": {"low": 0.0, "high": 0.5}}, "sweep": {"mode": "random", "samples": 2}},
+     "airfoil.thickness = 0 is out of range; allowed (0, 1]"),
     ({"base": {"hub": {"radius": -1.0}}}, "[base] hub.radius = -1 is out of range"),
     ({"base": {"config": "missing.toml"}}, "base.config: cannot read configuration"),
 ])

@@ -39,7 +39,8 @@ from pathlib import Path
 from typing import Any
 
 from torus_cad.errors import ParameterError
-from torus_cad.parameters import PropellerParameters
+from torus_cad.parameters import ParameterSpec, PropellerParameters, parameter_specs
+from torus_cad.parameters.schema import Bounds, check_in_bounds
 from torus_cad.tolerances import MAX_SWEEP_DESIGNS
 
 __all__ = ["SweepMode", "SweepSpec", "VaryAxis", "estimate_designs", "load_sweep", "parse_sweep"]
@@ -179,8 +180,7 @@ def parse_sweep(data: Mapping[str, Any], base_dir: str | Path = ".", name: str =
     vary = data.get("vary", {})
     if not isinstance(vary, Mapping):
         raise fail("[vary] must be a table of parameter keys")
-    base_dict = base.to_dict()
-    axes = tuple(_parse_axis(key, spec, base_dict, mode, fail) for key, spec in _flatten_vary(vary))
+    axes = tuple(_parse_axis(key, spec, mode, fail) for key, spec in _flatten_vary(vary))
     _check_distinct(axes, fail)
     if mode is SweepMode.GRID:
         _check_budget(math.prod(len(axis.values) for axis in axes), [(axis.key, len(axis.values)) for axis in axes],
@@ -296,51 +296,82 @@ def _check_distinct(axes: tuple[VaryAxis, ...], fail: Fail) -> None:
         seen.setdefault(axis.path, []).append(axis)
 
 
-def _resolve_leaf(key: str, base: Mapping[str, Any], fail: Fail) -> tuple[tuple[str, ...], int | None, Any]:
-    """The parameter path, vector index and base value that ``key`` names."""
+@dataclass(frozen=True)
+class _Leaf:
+    """What one axis sets, as the schema declares it: a whole parameter or one element of a vector.
+
+    Attributes:
+        key: the dotted key with the element, e.g. ``"centerline.p2[2]"``, for range messages.
+        kind: ``bool``, ``int``, ``float``, ``str``, an Enum class, or ``tuple`` (a whole vector).
+        length: elements of a whole vector, else 0.
+        bounds: the allowed interval of the value (of each element of a vector).
+        unit: the parameter's unit, for messages.
+        choices: the allowed values of a choice parameter (an Enum's values), else ().
+    """
+
+    key: str
+    kind: Any
+    length: int
+    bounds: Bounds
+    unit: str
+    choices: tuple[str, ...] = ()
+
+    @property
+    def numeric(self) -> bool:
+        """An int or float: ranges and bounds apply."""
+        return self.kind in (int, float)
+
+
+def _specs() -> dict[str, ParameterSpec]:
+    return {spec.key: spec for spec in parameter_specs()}
+
+
+def _resolve_leaf(key: str, fail: Fail) -> tuple[tuple[str, ...], int | None, _Leaf]:
+    """The parameter path, vector index and schema entry that ``key`` names."""
     where = f"vary.{key!r}"
     match = _KEY_PATTERN.match(key)
     if not match:
         raise fail(f"{where} is not a parameter key; write e.g. \"hub.radius\" or \"centerline.p2[2]\"")
-    path = tuple(match["path"].split("."))
+    dotted = match["path"]
     index = None if match["index"] is None else int(match["index"])
-    if path == ("name",):
+    if dotted == "name":
         raise fail(f"{where}: the name cannot be varied; each design is named by its id")
-    leaf: Any = base
-    for depth, part in enumerate(path):
-        if not isinstance(leaf, Mapping) or part not in leaf:
-            known = list(leaf) if isinstance(leaf, Mapping) else []
-            prefix = ".".join(path[:depth]) + "." if depth else ""
-            raise fail(f"{where}: unknown key {prefix + part!r}{_did_you_mean(part, known, prefix)}")
-        leaf = leaf[part]
-    if isinstance(leaf, Mapping):
-        raise fail(f"{where} is a table; vary one of its keys, e.g. {key + '.' + next(iter(leaf))!r}")
-    if index is not None:
-        if not isinstance(leaf, list):
-            raise fail(f"{where}: {match['path']} is not a vector, so [{index}] does not apply")
-        if index >= len(leaf):
-            raise fail(f"{where}: index {index} is out of range; {match['path']} has {len(leaf)} elements")
-        leaf = leaf[index]
-    return path, index, leaf
+    specs = _specs()
+    spec = specs.get(dotted)
+    if spec is None:
+        inside = [known for known in specs if known.startswith(dotted + ".")]
+        if inside:
+            raise fail(f"{where} is a table; vary one of its keys, e.g. {inside[0]!r}")
+        raise fail(f"{where}: unknown key {dotted!r}{_did_you_mean(dotted, specs)}")
+    path = tuple(dotted.split("."))
+    if index is None:  # a choice is one of its Enum's values, as written in a design file
+        choices = tuple(str(choice.value) for choice in spec.choices)
+        return path, index, _Leaf(dotted, str if choices else spec.kind, spec.length, spec.bounds, spec.unit, choices)
+    if spec.kind is not tuple:
+        raise fail(f"{where}: {dotted} is not a vector, so [{index}] does not apply")
+    if index >= spec.length:
+        raise fail(f"{where}: index {index} is out of range; {dotted} has {spec.length} elements")
+    return path, index, _Leaf(key, float, 0, spec.bounds, spec.unit)
 
 
-def _parse_axis(key: str, spec: Any, base: Mapping[str, Any], mode: SweepMode, fail: Fail) -> VaryAxis:
+def _parse_axis(key: str, spec: Any, mode: SweepMode, fail: Fail) -> VaryAxis:
     where = f"vary.{key!r}"
-    path, index, leaf = _resolve_leaf(key, base, fail)
+    path, index, leaf = _resolve_leaf(key, fail)
 
     def value_of(item: Any, what: str) -> Any:
-        return _coerce_value(item, leaf, f"{where} {what}", fail)
+        return _checked_value(item, leaf, f"{where} {what}", fail)
 
+    integer = leaf.kind is int
     if isinstance(spec, list):
         if not spec:
             raise fail(f"{where} is an empty list")
         values = tuple(value_of(item, f"item {i}") for i, item in enumerate(spec))
-        return VaryAxis(key, path, index, values=values, integer=_is_int(leaf))
+        return VaryAxis(key, path, index, values=values, integer=integer)
     if not isinstance(spec, Mapping):
         raise fail(f"{where} must be a list, {{start, stop, step}} / {{start, stop, num}} or {{low, high}}, "
                    f"got {spec!r}")
     keys = set(spec)
-    if not _is_number(leaf):
+    if not leaf.numeric:
         raise fail(f"{where}: ranges and bounds need a number parameter; give a list of values")
     if keys == {"low", "high"}:
         if mode is SweepMode.GRID:
@@ -349,21 +380,20 @@ def _parse_axis(key: str, spec: Any, base: Mapping[str, Any], mode: SweepMode, f
         low, high = value_of(spec["low"], "low"), value_of(spec["high"], "high")
         if not low < high:
             raise fail(f"{where}: low = {low!r} must be below high = {high!r}")
-        if not math.isfinite(high - low):
-            raise fail(f"{where}: the bounds [{low!r}, {high!r}] are too far apart")
-        return VaryAxis(key, path, index, low=low, high=high, integer=_is_int(leaf))
+        return VaryAxis(key, path, index, low=low, high=high, integer=integer)
     if keys in ({"start", "stop", "step"}, {"start", "stop", "num"}):
         start, stop = value_of(spec["start"], "start"), value_of(spec["stop"], "stop")
         return VaryAxis(key, path, index, values=_range_values(spec, start, stop, leaf, where, fail),
-                        integer=_is_int(leaf))
+                        integer=integer)
     raise fail(f"{where} has keys {sorted(keys)}; use {{start, stop, step}}, {{start, stop, num}} or {{low, high}}")
 
 
-def _range_values(spec: Mapping[str, Any], start: Any, stop: Any, leaf: Any, where: str,
+def _range_values(spec: Mapping[str, Any], start: Any, stop: Any, leaf: _Leaf, where: str,
                   fail: Fail) -> tuple[Any, ...]:
     """The values of ``{start, stop, step}`` (stop included when it falls on a step) or ``{start, stop, num}``.
 
-    The number of values is checked against the budget before any value is made.
+    The number of values is checked against the budget before any value is made; ``start``
+    and ``stop`` are in range, so every value between them is.
     """
     if stop < start:
         raise fail(f"{where}: stop = {stop!r} must not be below start = {start!r}")
@@ -371,45 +401,62 @@ def _range_values(spec: Mapping[str, Any], start: Any, stop: Any, leaf: Any, whe
         num = spec["num"]
         if not _is_int(num) or num < 1:
             raise fail(f"{where}: num must be a whole number >= 1, got {num!r}")
-        if _is_int(leaf):
+        if leaf.kind is int:
             raise fail(f"{where}: {{start, stop, num}} is for float parameters; use {{start, stop, step}}")
         _check_budget(num, [], lambda message: fail(f"{where}: {message}"))
         return (start,) if num == 1 else tuple(round(start + (stop - start) * i / (num - 1), _RANGE_DIGITS)
                                                for i in range(num))
-    step = _coerce_value(spec["step"], leaf, f"{where} step", fail)
+    step = _checked_type(spec["step"], leaf, f"{where} step", fail)
     if not step > 0:
         raise fail(f"{where}: step must be positive, got {step!r}")
     spans = (stop - start) / step  # a float even for ints: inf when step is tiny
     _check_budget(spans + 1.0, [], lambda message: fail(f"{where}: {message}"))
-    count = int(math.floor(spans + 1e-9)) + 1
-    return tuple(start + i * step if _is_int(leaf) else round(start + i * step, _RANGE_DIGITS)
+    count = math.floor(spans + 1e-9) + 1
+    return tuple(start + i * step if leaf.kind is int else round(start + i * step, _RANGE_DIGITS)
                  for i in range(count))
 
 
-def _coerce_value(item: Any, leaf: Any, where: str, fail: Fail) -> Any:
-    """Check ``item`` against the base value's type: ints stay ints, ints become floats for float keys."""
-    if isinstance(leaf, bool):
+def _checked_value(item: Any, leaf: _Leaf, where: str, fail: Fail) -> Any:
+    """``item`` of the parameter's type and inside its range (each element of a vector)."""
+    value = _checked_type(item, leaf, where, fail)
+    if leaf.choices:
+        if value not in leaf.choices:
+            raise fail(f"{where} = {value!r} is not allowed; choose one of {', '.join(leaf.choices)}")
+        return value
+    numbers = value if isinstance(value, list) else [value] if leaf.numeric else []
+    for position, number in enumerate(numbers):
+        element = f"{leaf.key}[{position}]" if isinstance(value, list) else leaf.key
+        try:
+            check_in_bounds(element, number, leaf.bounds, leaf.unit)
+        except ValueError as error:
+            raise fail(f"{where}: {error}") from None
+    return value
+
+
+def _checked_type(item: Any, leaf: _Leaf, where: str, fail: Fail) -> Any:
+    """``item`` as the parameter's type: ints stay ints, ints become floats for float keys, no NaN or inf."""
+    if leaf.kind is bool:
         if not isinstance(item, bool):
             raise fail(f"{where} must be true or false, got {item!r}")
         return item
-    if _is_int(leaf):
+    if leaf.kind is int:
         if not _is_int(item):
             raise fail(f"{where} must be a whole number, got {item!r}")
         return item
-    if isinstance(leaf, float):
+    if leaf.kind is float:
         if not _is_number(item) or not math.isfinite(item):
             raise fail(f"{where} must be a finite number, got {item!r}")
         return float(item)
-    if isinstance(leaf, str):
+    if leaf.kind is str:
         if not isinstance(item, str):
             raise fail(f"{where} must be a string, got {item!r}")
         return item
-    if isinstance(leaf, list):
-        if not isinstance(item, list) or len(item) != len(leaf) or not all(
+    if leaf.kind is tuple:
+        if not isinstance(item, list) or len(item) != leaf.length or not all(
                 _is_number(x) and math.isfinite(x) for x in item):
-            raise fail(f"{where} must be a list of {len(leaf)} finite numbers (a whole vector), got {item!r}")
+            raise fail(f"{where} must be a list of {leaf.length} finite numbers (a whole vector), got {item!r}")
         return [float(x) for x in item]
-    raise fail(f"{where}: cannot vary this parameter")  # pragma: no cover - schema has no other leaf types
+    raise fail(f"{where}: cannot vary this parameter")  # pragma: no cover - the schema has no other kinds
 
 
 def _is_int(value: Any) -> bool:
