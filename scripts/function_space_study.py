@@ -21,12 +21,12 @@ from pathlib import Path
 from typing import Any, NoReturn
 
 try:
-    from torus_cad.studies import function_space as study
     from torus_cad.errors import ParameterError
+    from torus_cad.studies import function_space as study
 except ModuleNotFoundError:  # run from a checkout without the package installed
     sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
-    from torus_cad.studies import function_space as study
     from torus_cad.errors import ParameterError
+    from torus_cad.studies import function_space as study
 
 
 class _OneLineErrorParser(argparse.ArgumentParser):

@@ -30,7 +30,7 @@ from torus_cad.batch.outcome import RUN_OUTCOMES, DesignResult, Outcome, tally
 from torus_cad.batch.runner import LocalPool, default_workers, run_tasks
 from torus_cad.parameters import PropellerParameters
 from torus_cad.progress import BatchProgress
-from torus_cad.studies.fuzz import fuzz_tasks, random_design_dict
+from torus_cad.studies.fuzz import fuzz_range, fuzz_tasks, random_design_dict
 
 
 def _save_failure(out_dir: Path, params: PropellerParameters, result: DesignResult) -> Path:
@@ -51,6 +51,11 @@ def _reason(result: DesignResult) -> str:
     return text.strip()[:90]
 
 
+def _whole_range(key: str) -> tuple[int, int]:
+    low, high = fuzz_range(key)
+    return int(low), int(high)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("count", nargs="?", type=int, default=100, help="number of random designs (default 100)")
@@ -61,10 +66,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--no-write", action="store_true", help="build only; do not write and re-read the files")
     parser.add_argument("--no-stl", action="store_true", help="write STEP and JSON only")
     parser.add_argument("--replay", nargs="+", type=Path, metavar="TOML", help="run these saved designs instead")
-    parser.add_argument("--sections", type=int, nargs=2, default=(16, 36), metavar=("LOW", "HIGH"),
-                        help="range of resolution.sections to sample (default 16 36)")
-    parser.add_argument("--points", type=int, nargs=2, default=(24, 48), metavar=("LOW", "HIGH"),
-                        help="range of resolution.points to sample (default 24 48: low, for speed)")
+    parser.add_argument("--sections", type=int, nargs=2, default=_whole_range("resolution.sections"),
+                        metavar=("LOW", "HIGH"), help="range of resolution.sections to sample "
+                        "(default: the schema's fuzz range, %(default)s)")
+    parser.add_argument("--points", type=int, nargs=2, default=_whole_range("resolution.points"),
+                        metavar=("LOW", "HIGH"), help="range of resolution.points to sample "
+                        "(default: the schema's fuzz range, %(default)s: low, for speed)")
     parser.add_argument("--record", type=Path, metavar="JSONL", help="append every outcome to this JSON-lines file")
     parser.add_argument("-v", "--verbose", action="store_true", help="print every design's outcome")
     args = parser.parse_args(argv)

@@ -16,15 +16,14 @@ import time
 
 import numpy as np
 import pytest
+from batch_jobs import FAULT_KEY, faulty
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from batch_jobs import FAULT_KEY, faulty
 from torus_cad.batch import DesignTask, LocalPool, Outcome, run_design, run_tasks
 from torus_cad.cli import main
 from torus_cad.errors import GeometryError, ParameterError
 from torus_cad.geometry import feasibility
-from torus_cad.geometry.centerline import Centerline
 from torus_cad.parameters import PropellerParameters
 from torus_cad.studies.fuzz import UNIT_DIMENSION, design_from_unit, fuzz_tasks, random_design_dict
 

@@ -15,13 +15,22 @@ import time
 from pathlib import Path
 
 import pytest
+from batch_jobs import crash_on_four_or_six_blades
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from batch_jobs import crash_on_four_or_six_blades
 from torus_cad.batch import (
-    BatchError, DesignTask, LocalPool, Outcome, design_id, generate_designs, load_sweep, parse_sweep, run_design,
-    run_sweep, run_tasks,
+    BatchError,
+    DesignTask,
+    LocalPool,
+    Outcome,
+    design_id,
+    generate_designs,
+    load_sweep,
+    parse_sweep,
+    run_design,
+    run_sweep,
+    run_tasks,
 )
 from torus_cad.batch.job import FAILURE_FILE, REFUSAL_FILE
 from torus_cad.batch.table import DESIGNS_DIR
@@ -177,12 +186,12 @@ def test_base_config_is_relative_to_the_sweep_file_and_inline_values_override_it
     ({"vary": {"hub": [1.0]}}, "is a table"),
     ({"vary": {"blades": []}}, "empty list"),
     # the schema's ranges and choices, checked before any design is made
-    ({"vary": {"hub.radius": [10.0, 0.1]}}, "vary.'hub.radius' item 1: hub.radius = 0.1 is out of range; "
-                                            "allowed [0.5, 1000] mm"),
+    ({"vary": {"hub.radius": [10.0, 0.1]}},
+     "vary.'hub.radius' item 1: hub.radius = 0.1 is out of range; allowed [0.5, 1000] mm"),
     ({"vary": {"blades": {"start": 0, "stop": 3, "step": 1}}}, "blades = 0 is out of range; allowed [1, 12]"),
     ({"vary": {"transforms.scale_x[4]": [6.0, 2e4]}}, "transforms.scale_x[4] = 20000 is out of range"),
-    ({"vary": {"centerline.frame": ["frenet", "spiral"]}}, "'spiral' is not allowed; choose one of frenet, "
-                                                          "rotation_minimizing"),
+    ({"vary": {"centerline.frame": ["frenet", "spiral"]}},
+     "'spiral' is not allowed; choose one of frenet, rotation_minimizing"),
     ({"vary": {"airfoil.thickness": {"low": 0.0, "high": 0.5}}, "sweep": {"mode": "random", "samples": 2}},
      "airfoil.thickness = 0 is out of range; allowed (0, 1]"),
     ({"base": {"hub": {"radius": -1.0}}}, "[base] hub.radius = -1 is out of range"),
@@ -273,7 +282,7 @@ def test_local_sweep_builds_every_design_into_its_folder(local_run):
 
 
 def test_the_table_is_also_written_as_parquet_when_pyarrow_is_installed(local_run):
-    import pyarrow.parquet as parquet
+    from pyarrow import parquet
 
     table = parquet.read_table(local_run.tables["parquet"]).to_pylist()
     assert [row["id"] for row in table] == [d.design_id for d in local_run.designs]
@@ -354,7 +363,7 @@ def test_an_unreachable_scheduler_is_a_batch_error(tmp_path, small_sweep, monkey
 
 def _sweep_cli(*args: str, timeout: float = 120.0) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "-m", "torus_cad", "sweep", *args], capture_output=True, text=True,
-                          timeout=timeout)
+                          timeout=timeout, check=False)
 
 
 @pytest.mark.parametrize("vary, mode, expected", [

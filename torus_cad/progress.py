@@ -24,7 +24,7 @@ from __future__ import annotations
 import sys
 import time
 from collections.abc import Mapping
-from typing import Any, TextIO
+from typing import Any, Self, TextIO
 
 from torus_cad.stages import Stage
 
@@ -170,7 +170,7 @@ class BatchProgress:
             self._bar.stop()
             self._bar = None
 
-    def __enter__(self) -> BatchProgress:
+    def __enter__(self) -> Self:
         return self
 
     def __exit__(self, *exc: object) -> None:

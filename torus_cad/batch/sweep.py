@@ -101,8 +101,8 @@ class SweepResult:
                  + (f" (INTERRUPTED by {self.interrupted_by}; rerun the same command to resume)"
                     if self.interrupted_by else ""),
                  f"  {self.counts_text()}",
-                 f"  {self.built} built in {_duration(self.seconds)} ({self.designs_per_minute():.1f} designs/min, "
-                 f"{self.backend}); {self.skipped} already done"]
+                 (f"  {self.built} built in {_duration(self.seconds)} ({self.designs_per_minute():.1f} designs/min, "
+                  f"{self.backend}); {self.skipped} already done")]
         if self.tables:
             lines.append("  table: " + ", ".join(str(path) for path in self.tables.values()))
         problems = [row for row in self.rows if row["status"] not in (Outcome.VALID, Outcome.PENDING)]
@@ -122,7 +122,7 @@ class SweepInterrupted(Interrupted):
 
 
 def _duration(seconds: float) -> str:
-    seconds = max(0, int(round(seconds)))
+    seconds = max(0, round(seconds))
     hours, rest = divmod(seconds, 3600)
     minutes, secs = divmod(rest, 60)
     return f"{hours}h{minutes:02d}m" if hours else f"{minutes}m{secs:02d}s" if minutes else f"{secs}s"

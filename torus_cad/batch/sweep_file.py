@@ -99,9 +99,9 @@ class VaryAxis:
             assert self.low is not None and self.high is not None
             if self.integer:
                 low, high = int(self.low), int(self.high)
-                return min(high, low + int(math.floor(unit * (high - low + 1))))
+                return min(high, low + math.floor(unit * (high - low + 1)))
             return float(self.low + unit * (self.high - self.low))
-        return self.values[min(len(self.values) - 1, int(math.floor(unit * len(self.values))))]
+        return self.values[min(len(self.values) - 1, math.floor(unit * len(self.values)))]
 
     def describe(self) -> Any:
         """The axis for ``sweep.json``: its bounds or its values (plain JSON data)."""

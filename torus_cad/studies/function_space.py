@@ -181,8 +181,8 @@ class StudyConfig:
                 f"points n = {self.points}, evenly spaced on [0, 1]",
                 f"generator draw: {draw}",
                 f"piecewise-linear: {knots}",
-                f"sinusoid fit: Levenberg-Marquardt, start = {self.sinusoid_start}: {start}; "
-                f"budget {self.sinusoid_max_evaluations} evaluations",
+                (f"sinusoid fit: Levenberg-Marquardt, start = {self.sinusoid_start}: {start}; "
+                 f"budget {self.sinusoid_max_evaluations} evaluations"),
             ]
         )
 
@@ -699,8 +699,8 @@ def format_overall_table(result: StudyResult) -> str:
             str(row["parameters"]),
             f"{_format_number(row['mean_mse'])} ± {_format_number(row['standard_error_mse'])}",
             _format_number(row["median_mse"]),
-            f"{_format_number(row['mean_range_normalised_sse'])} ± "
-            f"{_format_number(row['standard_error_range_normalised_sse'])}",
+            (f"{_format_number(row['mean_range_normalised_sse'])} ± "
+             f"{_format_number(row['standard_error_range_normalised_sse'])}"),
             _format_number(row["median_range_normalised_sse"]),
             f"{row['spec_table_1']:.3f}",
         ]

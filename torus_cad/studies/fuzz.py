@@ -16,12 +16,38 @@ from typing import Any
 import numpy as np
 
 from torus_cad.batch.job import DesignTask
-from torus_cad.geometry.frames import FrameKind
 from torus_cad.geometry.transforms import quartic_minimum
-from torus_cad.parameters import PropellerParameters
+from torus_cad.parameters import ParameterSpec, PropellerParameters, parameter_specs
 
 #: Length of the unit vector that :func:`design_from_unit` consumes.
 UNIT_DIMENSION = 39
+
+_SPECS: dict[str, ParameterSpec] = {spec.key: spec for spec in parameter_specs()}
+
+
+def fuzz_range(key: str) -> tuple[float, float]:
+    """The interval the sampler draws parameter ``key`` from: the schema's ``fuzz`` range of the field
+    (its allowed range unless the declaration narrows it with ``param(..., fuzz=(low, high))``)."""
+    bounds = _SPECS[key].fuzz
+    if bounds is None or bounds.low is None or bounds.high is None:
+        raise ValueError(f"{key} has no finite fuzz range; declare one with param(..., fuzz=(low, high))")
+    return float(bounds.low), float(bounds.high)
+
+
+def _default(key: str) -> Any:
+    return _SPECS[key].default
+
+
+def _choice(u: float, key: str) -> str:
+    """One of the choice parameter's values, each with the same chance."""
+    choices = _SPECS[key].choices
+    return str(choices[min(len(choices) - 1, int(u * len(choices)))].value)
+
+
+def _whole(u: float, key: str) -> int:
+    """A whole number in the field's fuzz range, each with the same chance."""
+    low, high = (int(bound) for bound in fuzz_range(key))
+    return low + min(high - low, int(u * (high - low + 1)))
 
 
 # -- sampling --------------------------------------------------------------------------------
@@ -51,22 +77,24 @@ def _positive_quartic(ends: tuple[float, float], bulge: float, wiggle: float, fl
     return tuple(float(value) for value in coefficients)
 
 
-def design_dict_from_unit(u: Sequence[float], name: str = "fuzz",
-                          sections: tuple[int, int] = (16, 36), points: tuple[int, int] = (24, 48)
-                          ) -> dict[str, Any]:
+def design_dict_from_unit(u: Sequence[float], name: str = "fuzz", sections: tuple[int, int] | None = None,
+                          points: tuple[int, int] | None = None) -> dict[str, Any]:
     """Map ``u`` in [0, 1]^UNIT_DIMENSION to a design as a nested dict (the TOML layout).
 
     The first number sets a *wildness* w in [0, 1]: every geometric quantity is the default
     design's (scaled to the sampled hub) perturbed by up to w times its own range, so a run
-    covers near-default propellers (mostly valid) through wild ones (mostly refused). Ranges
-    at w = 1: 1-8 blades; hub radius 4-25 mm, length 8-50 mm; any NACA camber / position,
-    thickness 0.06-1, pivot 0-1; blade span 0.3-1.15 of the blade pitch, control-point heights
-    0.1-6.6 R and y_L from far above to below the hub; both frame kinds; angle of attack
-    +-90 degrees plus quartic terms up to +-250 degrees; chord and thickness scales whose
-    ends, bulge and wiggle vary by factors of 3 (kept positive). Every value lies in its
-    field's range; rules that tie fields together (an airfoil too thick for its camber, ...)
-    may still refuse the design with ParameterError, which counts as a clear refusal.
-    ``sections`` and ``points`` bound the (low) sampling resolution, inclusive.
+    covers near-default propellers (mostly valid) through wild ones (mostly refused).
+
+    Every field drawn directly stays in its fuzz range from the schema (:func:`fuzz_range`:
+    blades, hub radius and length, phase, camber, camber position, thickness, pivot, frame
+    kind, resolution, STL deflections, STEP schema), and starts from its declared default.
+    The centerline's control points and the quartics follow the blade's shape instead: span
+    0.3-1.15 of the blade pitch, control-point heights 0.1-6.6 R and y_L from far above to
+    below the hub; angle of attack +-90 degrees plus quartic terms up to +-250 degrees; chord
+    and thickness scales whose ends, bulge and wiggle vary by factors of 3 (kept positive).
+    Rules that tie fields together (an airfoil too thick for its camber, ...) may still refuse
+    the design with ParameterError, which counts as a clear refusal. ``sections`` and
+    ``points`` narrow the sampling resolution further, inclusive (default: their fuzz ranges).
     """
     u = np.clip(np.asarray(u, dtype=float), 0.0, 1.0)
     if u.shape != (UNIT_DIMENSION,):
@@ -90,18 +118,18 @@ def design_dict_from_unit(u: Sequence[float], name: str = "fuzz",
         # the geometry this sampler is for.
         return value + (offset if abs(offset) > 1e-9 * spread else 0.0)
 
-    blades = 1 + min(7, int(take() * 8))
-    radius = float(np.clip(vary(10.0, 2.5), 4.0, 25.0))
-    length = float(np.clip(vary(20.0, 2.5), 8.0, 50.0))
-    size = radius / 10.0  # the default design is drawn for R = 10 mm
-    phase = _lerp(take(), -180.0, 180.0)
+    blades = _whole(take(), "blades")
+    radius = float(np.clip(vary(_default("hub.radius"), 2.5), *fuzz_range("hub.radius")))
+    length = float(np.clip(vary(_default("hub.length"), 2.5), *fuzz_range("hub.length")))
+    size = radius / _default("hub.radius")  # the default design's shape, scaled to this hub
+    phase = _lerp(take(), *fuzz_range("phase_deg"))
 
     symmetric, camber = take() < 0.2, take()  # one design in five has a symmetric section
-    max_camber = 0.0 if symmetric else _lerp(camber, 0.0, 0.095)
-    camber_position = _lerp(take(), 0.1, 0.9)
-    thickness = float(np.clip(vary(0.5, 8.0), 0.06, 1.0))
+    max_camber = 0.0 if symmetric else _lerp(camber, *fuzz_range("airfoil.max_camber"))
+    camber_position = _lerp(take(), *fuzz_range("airfoil.camber_position"))
+    thickness = float(np.clip(vary(_default("airfoil.thickness"), 8.0), *fuzz_range("airfoil.thickness")))
     camber_normal = take() < 0.5
-    pivot = float(np.clip(wild * take(), 0.0, 1.0))
+    pivot = float(np.clip(wild * take(), *fuzz_range("airfoil.pivot")))
 
     pitch = 360.0 if blades == 1 else 360.0 / blades
     span = pitch * (0.83 if blades > 1 else 100.0 / 360.0) * math.exp(wild * _lerp(take(), -1.0, 0.33))
@@ -117,7 +145,7 @@ def design_dict_from_unit(u: Sequence[float], name: str = "fuzz",
     z2 = max(vary(22.0 * size, 3.0), -0.9 * inset)
     z3 = max(vary(22.0 * size, 3.0), -0.9 * inset)
     x2, x3 = (float(np.clip(x, -359.0, 359.0)) for x in (x2, x3))
-    frame = (FrameKind.FRENET if take() < 0.5 else FrameKind.ROTATION_MINIMIZING).value
+    frame = _choice(take(), "centerline.frame")
 
     alpha = (shift(0.0, 250.0), shift(0.0, 250.0), shift(0.0, 250.0), shift(0.0, 250.0), shift(20.0, 90.0))
     # Sections shrink with the span (a shorter blade bends tighter); ends start at half the default's.
@@ -127,11 +155,11 @@ def design_dict_from_unit(u: Sequence[float], name: str = "fuzz",
     scale_y = _positive_quartic((vary(1.0 * chord, 3.0), vary(1.0 * chord, 3.0)), vary(1.5 * chord, 3.0),
                                 shift(0.0, 1.0 * chord), 0.02 * radius)
 
-    section_count = int(round(_lerp(take(), sections[0], sections[1])))
-    point_count = int(round(_lerp(take(), points[0], points[1])))
-    linear_deflection = _log_lerp(take(), 0.02, 0.5)
-    angular_deflection = _lerp(take(), 0.2, 0.8)
-    schema = "AP214" if take() < 0.5 else "AP242"
+    section_count = round(_lerp(take(), *(sections or fuzz_range("resolution.sections"))))
+    point_count = round(_lerp(take(), *(points or fuzz_range("resolution.points"))))
+    linear_deflection = _log_lerp(take(), *fuzz_range("export.stl_linear_deflection"))
+    angular_deflection = _lerp(take(), *fuzz_range("export.stl_angular_deflection"))
+    schema = _choice(take(), "export.step_schema")
     assert next(it, None) is None, "UNIT_DIMENSION does not match the numbers design_dict_from_unit takes"
 
     return {
