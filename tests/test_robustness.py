@@ -6,6 +6,7 @@ batch runner drive ``scripts/fuzz.py`` (N = 1000 there).
 
 from __future__ import annotations
 
+import dataclasses
 import faulthandler
 import os
 import signal
@@ -25,7 +26,9 @@ from torus_cad.cli import main
 from torus_cad.errors import GeometryError, ParameterError
 from torus_cad.geometry import feasibility
 from torus_cad.parameters import PropellerParameters
-from torus_cad.studies.fuzz import UNIT_DIMENSION, design_from_unit, fuzz_tasks, random_design_dict
+from torus_cad.parameters.schema import Bounds
+from torus_cad.studies import fuzz as fuzz_module
+from torus_cad.studies.fuzz import UNIT_DIMENSION, design_from_unit, fuzz_range, fuzz_tasks, random_design_dict
 
 LOW = {"sections": (24, 32), "points": (24, 32)}  # low points; sections near the default
 unit_vectors = st.lists(st.floats(0.0, 1.0), min_size=UNIT_DIMENSION, max_size=UNIT_DIMENSION)
@@ -98,6 +101,32 @@ def test_sampler_stays_in_range_and_is_reproducible():
             PropellerParameters.from_dict(design)
         except ParameterError as error:  # only rules that tie fields together may refuse
             assert "is out of range" not in str(error) and "must be" not in str(error), str(error)
+
+
+#: The fields the sampler draws directly, each within the schema's fuzz range.
+FUZZED = ("blades", "phase_deg", "hub.radius", "hub.length", "airfoil.max_camber", "airfoil.camber_position",
+          "airfoil.thickness", "airfoil.pivot", "resolution.sections", "resolution.points",
+          "export.stl_linear_deflection", "export.stl_angular_deflection")
+
+
+def _flat(design: dict, prefix: str = "") -> dict:
+    flat = {}
+    for key, value in design.items():
+        flat.update(_flat(value, f"{prefix}{key}.") if isinstance(value, dict) else {prefix + key: value})
+    return flat
+
+
+def test_sampler_ranges_come_from_the_schema(monkeypatch):
+    draws = [_flat(random_design_dict(seed)) for seed in range(300)]
+    for key in FUZZED:
+        low, high = fuzz_range(key)
+        values = [draw[key] for draw in draws]
+        assert low <= min(values) and max(values) <= high, key
+        assert max(values) - min(values) > 0.5 * (high - low), key  # the sampler covers the range
+    # narrowing a field's fuzz range in its declaration narrows what the sampler draws
+    spec = fuzz_module._SPECS["hub.radius"]
+    monkeypatch.setitem(fuzz_module._SPECS, "hub.radius", dataclasses.replace(spec, fuzz=Bounds(11.0, 12.0)))
+    assert {11.0 <= _flat(random_design_dict(seed))["hub.radius"] <= 12.0 for seed in range(50)} == {True}
 
 
 def test_the_runner_counts_a_hang_and_a_crash_and_goes_on():
@@ -223,6 +252,7 @@ _WRITER = textwrap.dedent("""
     import sys
     from pathlib import Path
     from torus_cad.parameters import PropellerParameters
+from torus_cad.parameters.schema import Bounds
     from torus_cad.propeller import build_propeller
     from torus_cad.kernel.export import write_step, write_stl
     kind, out = sys.argv[1], Path(sys.argv[2])
