@@ -160,7 +160,7 @@ def test_generator_draw_and_knot_placement_options() -> None:
     for index, parameters in zip(random_knots.generator_index, random_knots.generator_parameters):
         if study.GENERATOR_NAMES[index] == "piecewise_linear":
             positions = np.asarray(parameters["s_i"])
-            assert np.all(np.diff(positions) >= 0) and np.all((0 <= positions) & (positions <= 1))
+            assert np.all(np.diff(positions) >= 0) and np.all((positions >= 0) & (positions <= 1))
 
 
 # ------------------------------------------------------------------------------------------

@@ -25,6 +25,7 @@ from torus_cad.batch import DesignTask, LocalPool, Outcome, run_design, run_task
 from torus_cad.cli import main
 from torus_cad.errors import GeometryError, ParameterError
 from torus_cad.geometry import feasibility
+from torus_cad.geometry.frames import Frames
 from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.schema import Bounds
 from torus_cad.studies import fuzz as fuzz_module
@@ -207,8 +208,8 @@ def _circle_tube(centers: np.ndarray, radius: float, points: int = 24) -> feasib
                              (len(centers), points, 2)).copy()
     surface = centers[:, None] + planar[..., :1] * normal[:, None] + planar[..., 1:] * binormal[:, None]
     arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(centers, axis=0), axis=1))])
-    return feasibility.Tube(np.linspace(0, 1, len(centers)), centers, tangent, normal, binormal, planar, surface,
-                            np.zeros_like(centers), arc)
+    frames = Frames(np.linspace(0, 1, len(centers)), centers, tangent, normal, binormal)
+    return feasibility.Tube(frames, planar, surface, np.zeros_like(centers), arc)
 
 
 def test_self_intersection_is_found():
@@ -242,7 +243,7 @@ def test_hooked_trailing_edge_with_too_few_points_is_refused():
               "resolution": {"sections": 40, "points": 25}}
     from torus_cad.propeller import build_propeller
 
-    with pytest.raises(GeometryError, match="resolution.points = 25 is too few"):
+    with pytest.raises(GeometryError, match=r"resolution\.points = 25 is too few"):
         build_propeller(PropellerParameters.from_dict(design))
 
 
@@ -252,7 +253,6 @@ _WRITER = textwrap.dedent("""
     import sys
     from pathlib import Path
     from torus_cad.parameters import PropellerParameters
-from torus_cad.parameters.schema import Bounds
     from torus_cad.propeller import build_propeller
     from torus_cad.kernel.export import write_step, write_stl
     kind, out = sys.argv[1], Path(sys.argv[2])

@@ -228,7 +228,9 @@ def test_run_design_records_a_refusal_and_never_raises(tmp_path):
     assert result.outcome is Outcome.REFUSED and "hub" in result.reason
     record = json.loads((Path(task.folder) / REFUSAL_FILE).read_text())
     assert record["status"] == "refused" and record["error"] == "GeometryError" and record["reason"] == result.reason
-    out_of_range = _task(tmp_path, **{"airfoil.thickness": 1.5})  # ParameterError inside the worker
+    parameters = json.loads(json.dumps(task.parameters))
+    parameters["airfoil"]["thickness"] = 1.5  # a sweep file refuses it; a task may still carry it
+    out_of_range = DesignTask("out_of_range", parameters, str(tmp_path / "out_of_range"), stl=False)
     assert run_design(out_of_range).outcome is Outcome.REFUSED
     assert "airfoil.thickness = 1.5 is out of range" in run_design(out_of_range).reason
 

@@ -28,7 +28,7 @@ from typing import Any, Self, TextIO
 
 from torus_cad.stages import Stage
 
-__all__ = ["STAGE_LABELS", "BatchProgress", "Progress", "StageProgress", "is_terminal"]
+__all__ = ["STAGE_LABELS", "BatchProgress", "StageProgress", "is_terminal"]
 
 #: Words for the steps a command shows: the pipeline's stages and the steps around them
 #: (others are shown with spaces for underscores).
@@ -100,10 +100,6 @@ class StageProgress:
         from rich.text import Text
 
         self._console.print(Text.assemble(f"{self.prefix}: ", (f"[{self.elapsed:6.1f} s]", "dim"), f" {text}"))
-
-
-#: The old name (``Progress.for_terminal(...)``) still works.
-Progress = StageProgress
 
 
 class BatchProgress:

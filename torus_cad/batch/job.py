@@ -79,7 +79,7 @@ def run_design(task: DesignTask) -> DesignResult:
     except TorusCadError as error:  # KernelError, or the package's other failures
         outcome, reason, detail, error_type = Outcome.FAILED, _one_line(error), traceback.format_exc(), \
             type(error).__name__
-    except Exception as error:  # noqa: BLE001 - a batch records every failure and carries on
+    except Exception as error:
         outcome, detail, error_type = Outcome.ERROR, traceback.format_exc(), type(error).__name__
         reason = f"{type(error).__name__}: {_one_line(error)}"
     finally:

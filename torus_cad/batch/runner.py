@@ -22,6 +22,7 @@ workers re-import it.
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import multiprocessing
 import os
@@ -75,7 +76,7 @@ class Interrupted(KeyboardInterrupt):
 class Executor(Protocol):
     """What :func:`run_tasks` needs of an executor (concurrent.futures' and Dask's have it)."""
 
-    def submit(self, fn: Callable[..., Any], /, *args: Any) -> Future: ...
+    def submit(self, fn: Callable[..., Any], /, *args: Any) -> Future[Any]: ...
 
     def shutdown(self, wait: bool = True) -> None: ...
 
@@ -99,10 +100,8 @@ def _worker_started(batch_pid: int) -> None:
     stops now (an export killed mid-write leaves only a temporary file, never a partial file).
     """
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
-    try:
+    with contextlib.suppress(OSError, AttributeError):  # not Linux: the watchdog below still works
         ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0)
-    except (OSError, AttributeError):  # not Linux: the watchdog below still works
-        pass
     threading.Thread(target=_watch_parents, args=(os.getppid(), batch_pid, _identity(batch_pid)),
                      name="torus-cad parent watchdog", daemon=True).start()
 
@@ -151,10 +150,10 @@ class LocalPool:
 
         self.workers = workers
         self.time_limit_s = time_limit_s
-        self._pool = pebble.ProcessPool(max_workers=workers, initializer=_worker_started, initargs=(os.getpid(),),
+        self._pool: Any = pebble.ProcessPool(max_workers=workers, initializer=_worker_started, initargs=(os.getpid(),),
                                         context=_worker_context())
 
-    def submit(self, fn: Callable[..., Any], /, *args: Any) -> Future:
+    def submit(self, fn: Callable[..., Any], /, *args: Any) -> Future[Any]:
         """Run ``fn(*args)`` in a worker; its future raises TimeoutError past the limit, ProcessExpired on a crash."""
         try:
             return self._pool.schedule(fn, args=args, timeout=self.time_limit_s)
@@ -210,7 +209,7 @@ def interrupts_raised(signals: Iterable[int] = (signal.SIGINT, signal.SIGTERM)) 
 
 # -- the loop ---------------------------------------------------------------------------------------
 
-def _result_of(future: Future, task: DesignTask, check_visible: bool) -> DesignResult:
+def _result_of(future: Future[Any], task: DesignTask, check_visible: bool) -> DesignResult:
     """The design's result, or the outcome the executor's exception stands for (recorded in its folder)."""
     error = future.exception()
     if error is None:
@@ -255,7 +254,7 @@ def run_tasks(tasks: Sequence[DesignTask], on_result: Callable[[DesignTask, Desi
     """
     job = run_design if job is None else job
     queue: deque[DesignTask] = deque(tasks)
-    in_flight: dict[Future, DesignTask] = {}
+    in_flight: dict[Future[Any], DesignTask] = {}
     executor = make_executor()
     restarts = 0
     try:
@@ -293,7 +292,7 @@ def run_tasks(tasks: Sequence[DesignTask], on_result: Callable[[DesignTask, Desi
     executor.shutdown(wait=True)
 
 
-def _broke(future: Future) -> bool:
+def _broke(future: Future[Any]) -> bool:
     """The future failed because its whole pool broke (not because of its own design)."""
     try:
         return isinstance(future.exception(timeout=0), BrokenProcessPool)

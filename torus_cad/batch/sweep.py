@@ -174,7 +174,7 @@ def run_sweep(spec: SweepSpec, out_dir: str | Path, *, workers: int | None = Non
         results[task.design_id] = design_result
         bar.update(design_result.outcome)
 
-    own_client = None
+    own_client = own_cluster = None
     start = time.perf_counter()
     try:
         with interrupts_raised():
@@ -182,7 +182,8 @@ def run_sweep(spec: SweepSpec, out_dir: str | Path, *, workers: int | None = Non
                 result.backend = "nothing to run"
             elif client is not None or scheduler is not None:
                 if client is None:
-                    own_client = client = cluster.connect(str(scheduler), workers)
+                    own_client, own_cluster = cluster.connect(str(scheduler), workers)
+                    client = own_client
                 executor = client.get_executor(pure=False)
                 result.backend = f"dask: {cluster.client_label(client)}"
                 run_tasks(pending, on_result, lambda: executor, window=None, job=job, check_visible=True)
@@ -199,7 +200,7 @@ def run_sweep(spec: SweepSpec, out_dir: str | Path, *, workers: int | None = Non
         result.built = len(results)
         result.seconds = time.perf_counter() - start
         if own_client is not None:
-            cluster.close_client(own_client)
+            cluster.close_client(own_client, own_cluster)
         keys = [axis.key for axis in spec.axes]
         result.rows = collect_rows(designs, keys, out_dir, stl, results)
         result.tables = write_table(result.rows, out_dir, table_columns(keys))

@@ -36,7 +36,7 @@ from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from enum import StrEnum
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeGuard
 
 from torus_cad.errors import ParameterError
 from torus_cad.parameters import ParameterSpec, PropellerParameters, parameter_specs
@@ -459,7 +459,7 @@ def _checked_type(item: Any, leaf: _Leaf, where: str, fail: Fail) -> Any:
     raise fail(f"{where}: cannot vary this parameter")  # pragma: no cover - the schema has no other kinds
 
 
-def _is_int(value: Any) -> bool:
+def _is_int(value: Any) -> TypeGuard[int]:
     return isinstance(value, int) and not isinstance(value, bool)
 
 

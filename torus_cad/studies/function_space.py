@@ -431,10 +431,7 @@ def fit_sinusoid(
     _check_int("sinusoid_max_evaluations", max_evaluations, 1, MAX_SINUSOID_EVALUATIONS)
     values = np.atleast_2d(np.asarray(values, dtype=np.float64))
     s = np.asarray(s, dtype=np.float64)
-    if start == "fft":
-        starts = fft_start_parameters(s, values)
-    else:
-        starts = np.ones((len(values), 4))
+    starts = fft_start_parameters(s, values) if start == "fft" else np.ones((len(values), 4))
     parameters = np.empty_like(starts)
     converged = np.zeros(len(values), dtype=np.bool_)
     status = np.zeros(len(values), dtype=np.int64)
