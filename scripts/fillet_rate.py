@@ -4,7 +4,7 @@
     python scripts/fillet_rate.py 160                # seeds 0..159, radius 0.5 mm
     python scripts/fillet_rate.py 160 --radius 1.0 --seed 1000
 
-Each design comes from the fuzz sampler (:func:`torus_cad.fuzzing.random_design_dict`, the
+Each design comes from the fuzz sampler (:func:`torus_cad.studies.fuzz.random_design_dict`, the
 designs ``scripts/fuzz.py`` draws) with ``hub.root_fillet_radius`` set. Designs refused before
 the kernel, or whose fuse fails, are not counted; the others either get their fillet (one
 valid solid) or fail with "root fillet failed". The fillet runs in a forked child process,
@@ -21,10 +21,10 @@ from pathlib import Path
 
 import torus_cad.kernel.fillet as fillet
 from torus_cad.errors import GeometryError, KernelError, ParameterError
-from torus_cad.fuzzing import random_design_dict
 from torus_cad.kernel.checks import is_valid_closed_solid
 from torus_cad.parameters import PropellerParameters
 from torus_cad.propeller import build_propeller
+from torus_cad.studies.fuzz import random_design_dict
 
 
 def main() -> int:

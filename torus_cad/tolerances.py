@@ -63,6 +63,11 @@ HUB_FOOTPRINT_MARGIN_DEG = 1.0
 #: Largest configuration file read (bytes): a design is a few hundred bytes.
 CONFIG_FILE_MAX_BYTES = 1 << 20
 
+#: Most designs one sweep may hold (grid product or samples), checked from the axis sizes before
+#: any design is generated. Beyond it the design list and table alone take gigabytes, and at
+#: ~2 designs/s per machine the sweep would run for weeks.
+MAX_SWEEP_DESIGNS = 1_000_000
+
 #: Smallest gap (mm) the hub's mounting features (bore, chamfer, set-screw hole) must keep from
 #: any sampled blade point; covers the blade surface between its samples.
 MOUNTING_CLEARANCE_MM = 0.05
