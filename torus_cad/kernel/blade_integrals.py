@@ -33,6 +33,7 @@ caller integrates with BRepGProp.
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 
@@ -42,9 +43,20 @@ from OCP.BRep import BRep_Tool
 from OCP.BRepAdaptor import BRepAdaptor_Curve, BRepAdaptor_Surface
 from OCP.BRepTools import BRepTools
 from OCP.Geom import Geom_BSplineSurface
-from OCP.GeomAbs import GeomAbs_BSplineSurface, GeomAbs_Circle, GeomAbs_Cylinder, GeomAbs_Plane
+from OCP.GeomAbs import (
+    GeomAbs_BSplineSurface,
+    GeomAbs_Circle,
+    GeomAbs_Cylinder,
+    GeomAbs_Plane,
+)
 from OCP.gp import gp_Pnt, gp_Vec
-from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_REVERSED, TopAbs_SOLID, TopAbs_WIRE
+from OCP.TopAbs import (
+    TopAbs_EDGE,
+    TopAbs_FACE,
+    TopAbs_REVERSED,
+    TopAbs_SOLID,
+    TopAbs_WIRE,
+)
 from OCP.TopExp import TopExp, TopExp_Explorer
 from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Shape
@@ -54,6 +66,25 @@ from scipy.interpolate import BSpline
 #: Gauss-Legendre points per knot span, in u and in v. On the default propeller 4 x 4 is
 #: ~4e-10 relative in volume (as 8 x 8: the rest is the B-rep's own trimming curves), 3 x 3 ~8e-9.
 GAUSS_POINTS_PER_SPAN = 4
+
+#: Adaptive integration over u: an interval's Gauss rules of GAUSS_POINTS_PER_SPAN and one point
+#: less must agree to this fraction of each quantity times the interval's share of the u range,
+#: else the interval is halved, at most U_MAX_HALVINGS times (then BRepGProp takes over).
+U_RELATIVE_TOLERANCE, U_MAX_HALVINGS = 1e-6, 12
+
+#: The same along each v line, relative to the line's own integrals.
+V_RELATIVE_TOLERANCE, V_MAX_HALVINGS = 1e-6, 12
+
+#: Quantities integrated along each v line: volume, x, y, z moments, spin-axis inertia, area,
+#: and the root and tip footprints' line densities.
+_QUANTITIES = 8
+
+#: Box: the copies whose best integration node along a direction comes within this fraction of
+#: the face's extent of the best copy's are refined on the surface (the nodes are far closer).
+BOX_REFINE_MARGIN = 0.02
+
+#: Steps of the ascent that refines a box extreme on the surface.
+ASCENT_ITERATIONS = 100
 
 #: Samples per v knot span when looking for the crossings of r = R along a v line.
 ROOT_SAMPLES_PER_SPAN = 4
@@ -131,7 +162,7 @@ def hub_with_blade_integrals(shape: TopoDS_Shape,
         moment += np.array([cos * moment_x - sin * moment_y, sin * moment_x + cos * moment_y, count * moment_z])
         inertia += count * part.spin_inertia_mm5
         area += count * (part.area_mm2 - part.footprint_area_mm2)
-        box_max = np.maximum(box_max, part.extremes_mm.max(axis=0))
+        box_max = np.maximum(box_max, part.extremes_mm)
     return HubWithBladeIntegrals(volume, moment / volume, inertia, area, -box_max[0::2], box_max[1::2])
 
 
@@ -226,8 +257,8 @@ class FaceIntegrals:
         spin_inertia_mm5: ∫ (x² + y²) dV over it, mm^5.
         area_mm2: the face's area, mm^2.
         footprint_area_mm2: area of the holes the blade leaves in the cylinder, mm^2.
-        extremes_mm: ``(copies, 6)`` largest -x, x, -y, y, -z, z on each rotated copy of the face,
-            mm (its extreme on the cylinder, if that is one, is inside the hub's box anyway).
+        extremes_mm: ``(6,)`` largest -x, x, -y, y, -z, z over the rotated copies of the face, mm
+            (an extreme on the cylinder, if that is one, is inside the hub's box anyway).
         v_range: ``(2,)`` smallest a(u) and largest b(u) over the u Gauss points.
         u_range: ``(2,)`` the surface's u range (the face spans all of it).
     """
@@ -269,28 +300,89 @@ def _face_integrals(geom: Geom_BSplineSurface, reversed_face: bool, radius: floa
     """Integrals of the face on ``geom`` trimmed to r > ``radius``, for copies rotated by
     ``angles`` (radians) about z; None unless every v line crosses r = radius exactly twice."""
     surface = _surface_arrays(geom)
-    u_nodes, u_weights = _gauss_on_spans(surface.u_knots, surface.u_degree, gauss_points)
-    lines = _v_lines(surface, u_nodes)
+    integrated = _integrate_over_u(surface, radius, reversed_face, gauss_points)
+    if integrated is None:
+        return None
+    totals, samples = integrated
+    volume, moment_x, moment_y, moment_z, inertia, area, root_footprint, tip_footprint = totals
+    points = np.concatenate([sample.points for sample in samples])
+    return FaceIntegrals(
+        volume_mm3=float(volume), first_moment_mm4=np.array([moment_x, moment_y, moment_z]),
+        spin_inertia_mm5=float(inertia), area_mm2=float(area),
+        footprint_area_mm2=float(abs(root_footprint) + abs(tip_footprint)),
+        extremes_mm=_extremes(surface, points, np.concatenate([sample.u for sample in samples]),
+                              np.concatenate([sample.v for sample in samples]), radius, angles),
+        v_range=np.array([min(sample.roots[:, 0].min() for sample in samples),
+                          max(sample.roots[:, 1].max() for sample in samples)]),
+        u_range=np.array([surface.u_knots[0], surface.u_knots[-1]]))
+
+
+def _integrate_over_u(surface: _Surface, radius: float, reversed_face: bool, gauss_points: int
+                      ) -> tuple[NDArray[np.float64], list[_LineSamples]] | None:
+    """∫ over u of :func:`_line_densities`, adaptively: on each interval (at first the knot
+    spans) Gauss rules of ``gauss_points`` and one point less; where they differ by more than
+    U_RELATIVE_TOLERANCE the interval is halved. The v integral at fixed u is smooth, but where
+    a crossing curve runs nearly along v (a blade entering the hub at a grazing angle) the
+    domain's edge b(u) is steep, and so is the integral as a function of u."""
+    spans = np.unique(surface.u_knots[surface.u_degree:-surface.u_degree])
+    low, high = spans[:-1], spans[1:]
+    rules = [np.polynomial.legendre.leggauss(points) for points in (gauss_points, gauss_points - 1)]
+    totals, scale, kept = np.zeros(_QUANTITIES), None, []
+    for _ in range(U_MAX_HALVINGS + 1):
+        nodes = [(low[:, None] + (high - low)[:, None] * (x + 1.0) / 2.0).ravel() for x, _ in rules]
+        sample = _line_densities(surface, np.concatenate(nodes), radius, reversed_face, gauss_points)
+        if sample is None:
+            return None
+        kept.append(sample)
+        fine_count = nodes[0].size
+        estimates = [((high - low)[:, None, None] * w[None, :, None] / 2.0
+                      * values.reshape(len(low), len(w), _QUANTITIES)).sum(axis=1)
+                     for (_, w), values in zip(rules, (sample.densities[:fine_count], sample.densities[fine_count:]))]
+        if scale is None:  # the size of each quantity, for relative errors (moments may sum to ~0)
+            scale = np.maximum(np.abs(estimates[0]).sum(axis=0), np.finfo(float).tiny)
+        error = (np.abs(estimates[0] - estimates[1]) / scale).max(axis=1)
+        done = error <= U_RELATIVE_TOLERANCE * (high - low) / (spans[-1] - spans[0])
+        totals += estimates[0][done].sum(axis=0)
+        middle = (low + high)[~done] / 2.0
+        low, high = np.concatenate([low[~done], middle]), np.concatenate([middle, high[~done]])
+        if not len(low):
+            return totals, kept
+    return None
+
+
+@dataclass(frozen=True)
+class _LineSamples:
+    """What the v lines at some u give: per line ``densities`` ``(k, 8)`` (the v integrals of
+    the _QUANTITIES, per unit u) and ``roots`` ``(k, 2)``; the integration nodes' ``points``
+    ``(n, 3)`` and their ``u``, ``v`` ``(n,)`` (kept for the box)."""
+
+    densities: NDArray[np.float64]
+    roots: NDArray[np.float64]
+    points: NDArray[np.float64]
+    u: NDArray[np.float64]
+    v: NDArray[np.float64]
+
+
+def _line_densities(surface: _Surface, u: NDArray[np.float64], radius: float, reversed_face: bool,
+                    gauss_points: int) -> _LineSamples | None:
+    """Along the v line at each ``u``, the integrals over v in [a(u), b(u)] of the volume, the
+    x, y, z moments, the spin inertia and the area densities (see the module), and the two
+    footprints' line densities R z dθ/du at a(u) and b(u). None unless every line crosses
+    r = ``radius`` exactly twice."""
+    lines = _v_lines(surface, u)
     roots = _crossings(lines, surface.v_knots, surface.v_degree, radius)
     if roots is None:
         return None
-    rows, v_nodes, points, d_u, d_v, v_weights = _domain_samples(lines, surface, roots, gauss_points)
-    normal = np.cross(d_u, d_v) * (-1.0 if reversed_face else 1.0)
-    weight = u_weights[rows] * v_weights
-    x, y, z = points.T
-    r2 = x * x + y * y
-    radial = weight * (x * normal[:, 0] + y * normal[:, 1])  # (x, y, 0) . n dA
-    volume_k = 0.5 - radius**2 / (2.0 * r2)
-    moment_k = (1.0 - radius**3 / (r2 * np.sqrt(r2))) / 3.0
-    return FaceIntegrals(
-        volume_mm3=float(radial @ volume_k),
-        first_moment_mm4=np.array([radial @ (x * moment_k), radial @ (y * moment_k), radial @ (z * volume_k)]),
-        spin_inertia_mm5=float(radial @ ((r2 - radius**4 / r2) / 4.0)),
-        area_mm2=float(weight @ np.linalg.norm(normal, axis=1)),
-        footprint_area_mm2=sum(_footprint_area(lines, root, u_weights, surface, radius) for root in roots.T),
-        extremes_mm=_extremes(surface, points, u_nodes[rows], v_nodes, radius, angles),
-        v_range=np.array([roots[:, 0].min(), roots[:, 1].max()]),
-        u_range=np.array([surface.u_knots[0], surface.u_knots[-1]]))
+    sign = -1.0 if reversed_face else 1.0
+    integrals = _v_integrals(lines, surface, roots, lambda *node: _integrands(*node, radius, sign), gauss_points)
+    if integrals is None:
+        return None
+    line_integrals, points, rows, v_nodes = integrals
+    densities = np.zeros((len(u), _QUANTITIES))
+    densities[:, :6] = line_integrals
+    for column, root in enumerate(roots.T):
+        densities[:, 6 + column] = _footprint_density(lines, root, surface, radius)
+    return _LineSamples(densities, roots, points, u[rows], v_nodes)
 
 
 def _bounds_match(face: TopoDS_Face, part: FaceIntegrals) -> bool:
@@ -324,7 +416,7 @@ def _crossings(lines: _Lines, knots: NDArray[np.float64], degree: int, radius: f
     starts and ends inside (r < radius) and crosses exactly twice."""
     spans = np.unique(knots[degree:-degree])
     grid = np.concatenate([np.linspace(low, high, ROOT_SAMPLES_PER_SPAN, endpoint=False)
-                           for low, high in zip(spans[:-1], spans[1:])] + [spans[-1:]])
+                           for low, high in itertools.pairwise(spans)] + [spans[-1:]])
     samples = np.matmul(_basis(grid, knots, degree), lines.poles[..., :2])  # (U, samples, 2)
     excess = (samples**2).sum(axis=-1) - radius**2  # r^2 - R^2
     change = np.signbit(excess[:, :-1]) != np.signbit(excess[:, 1:])
@@ -349,39 +441,88 @@ def _crossings(lines: _Lines, knots: NDArray[np.float64], degree: int, radius: f
     return None
 
 
-def _domain_samples(lines: _Lines, surface: _Surface, roots: NDArray[np.float64], gauss_points: int):
-    """Gauss nodes of the trimmed domain: per v knot span clipped to [a(u), b(u)] on every u line.
+def _integrands(points: NDArray[np.float64], d_u: NDArray[np.float64], d_v: NDArray[np.float64], radius: float,
+                sign: float) -> NDArray[np.float64]:
+    """``(n, 6)``: the volume, x, y, z moment, spin inertia and area integrands per du dv at
+    surface points with these derivatives (``sign`` -1 for a reversed face)."""
+    normal = np.cross(d_u, d_v) * sign
+    x, y, z = points.T
+    r2 = x * x + y * y
+    radial = x * normal[:, 0] + y * normal[:, 1]  # (x, y, 0) . n
+    volume_k = 0.5 - radius**2 / (2.0 * r2)
+    moment_k = (1.0 - radius**3 / (r2 * np.sqrt(r2))) / 3.0
+    return np.column_stack([radial * volume_k, radial * x * moment_k, radial * y * moment_k,
+                            radial * z * volume_k, radial * (r2 - radius**4 / r2) / 4.0,
+                            np.linalg.norm(normal, axis=1)])
 
-    Returns the u line index, v, point, d/du, d/dv and v weight of every node. Whole spans
-    are evaluated as a tensor product (one matrix product per quantity); the spans cut by
-    a(u) or b(u) one node at a time.
+
+def _v_integrals(lines: _Lines, surface: _Surface, roots: NDArray[np.float64], integrands, gauss_points: int):
+    """The integrals over v in [a(u), b(u)] of ``integrands`` on every line, adaptively.
+
+    The pieces are the v knot spans clipped to [a, b] (a smooth integrand on each); each gets
+    Gauss rules of ``gauss_points`` and one point less and is halved where they differ by
+    more than V_RELATIVE_TOLERANCE of the line's total times the piece's share of [a, b]. The
+    first round evaluates the whole spans as a tensor product (one matrix product per
+    quantity, the same v nodes on every line), everything else node by node.
+
+    Returns the ``(U, 6)`` integrals and the nodes' points ``(n, 3)``, line index and v, or
+    None if some piece needs more than V_MAX_HALVINGS halvings.
     """
     knots, degree = surface.v_knots, surface.v_degree
     spans = np.unique(knots[degree:-degree])
-    x, w = np.polynomial.legendre.leggauss(gauss_points)
+    rules = [np.polynomial.legendre.leggauss(points) for points in (gauss_points, gauss_points - 1)]
     low = np.clip(spans[:-1][None, :], roots[:, :1], roots[:, 1:])  # (U, spans)
     high = np.clip(spans[1:][None, :], roots[:, :1], roots[:, 1:])
     whole = (low == spans[:-1]) & (high == spans[1:])
-    cut = (high > low) & ~whole
-    # Whole spans: the same v nodes on every line.
-    full_v = (spans[:-1, None] + np.diff(spans)[:, None] * (x + 1.0) / 2.0).ravel()
-    full_w = (np.diff(spans)[:, None] * w / 2.0).ravel()
-    basis, d_basis = _basis(full_v, knots, degree), _basis(full_v, knots[1:-1], degree - 1)
     lines_whole, spans_whole = np.nonzero(whole)
-    take = (spans_whole[:, None] * gauss_points + np.arange(gauss_points)).ravel()
-    rows_whole = np.repeat(lines_whole, gauss_points)
-    point = np.matmul(basis, lines.poles)[rows_whole, take]
-    d_u = np.matmul(basis, lines.u_derivative_poles)[rows_whole, take]
-    d_v = np.matmul(d_basis, lines.v_derivative_poles)[rows_whole, take]
-    # Cut spans: their own nodes.
-    lines_cut, spans_cut = np.nonzero(cut)
-    start, length = low[lines_cut, spans_cut], (high - low)[lines_cut, spans_cut]
-    cut_v = (start[:, None] + length[:, None] * (x + 1.0) / 2.0).ravel()
-    rows_cut = np.repeat(lines_cut, gauss_points)
-    cut_point, cut_d_u, cut_d_v = _evaluate(lines, rows_cut, cut_v, knots, degree)
-    return (np.concatenate([rows_whole, rows_cut]), np.concatenate([full_v[take], cut_v]),
-            np.concatenate([point, cut_point]), np.concatenate([d_u, cut_d_u]), np.concatenate([d_v, cut_d_v]),
-            np.concatenate([full_w[take], (length[:, None] * w / 2.0).ravel()]))
+    lines_cut, spans_cut = np.nonzero((high > low) & ~whole)
+    row = np.concatenate([lines_whole, lines_cut])
+    start = np.concatenate([spans[spans_whole], low[lines_cut, spans_cut]])
+    length = np.concatenate([np.diff(spans)[spans_whole], (high - low)[lines_cut, spans_cut]])
+    domain = roots[:, 1] - roots[:, 0]
+    totals, scale = np.zeros((len(roots), 6)), None
+    kept: list[tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.float64]]] = []
+    for round_ in range(V_MAX_HALVINGS + 1):
+        estimates = []
+        for x, w in rules:
+            v = (start[:, None] + length[:, None] * (x + 1.0) / 2.0).ravel()
+            rows = np.repeat(row, len(x))
+            if round_ == 0:  # whole spans: a tensor product, the rest node by node
+                split = len(lines_whole) * len(x)
+                point, d_u, d_v = _tensor_evaluate(lines, spans, x, knots, degree, lines_whole, spans_whole)
+                cut = _evaluate(lines, rows[split:], v[split:], knots, degree)
+                point, d_u, d_v = (np.concatenate(pair) for pair in zip((point, d_u, d_v), cut))
+            else:
+                point, d_u, d_v = _evaluate(lines, rows, v, knots, degree)
+            values = integrands(point, d_u, d_v).reshape(len(row), len(x), 6)
+            estimates.append((length[:, None, None] * w[None, :, None] / 2.0 * values).sum(axis=1))
+            if len(x) == gauss_points:
+                kept.append((point, rows, v))
+        if scale is None:  # each line's size of each quantity, for relative errors
+            scale = np.zeros_like(totals)
+            np.add.at(scale, row, np.abs(estimates[0]))
+            scale = np.maximum(scale, np.finfo(float).tiny)
+        error = (np.abs(estimates[0] - estimates[1]) / scale[row]).max(axis=1)
+        done = error <= V_RELATIVE_TOLERANCE * length / domain[row]
+        np.add.at(totals, row[done], estimates[0][done])
+        row, start, length = (np.concatenate([values[~done]] * 2) for values in (row, start, length / 2.0))
+        start[len(start) // 2:] += length[len(start) // 2:]
+        if not len(row):
+            points, rows, v = (np.concatenate(parts) for parts in zip(*kept))
+            return totals, points, rows, v
+    return None
+
+
+def _tensor_evaluate(lines: _Lines, spans: NDArray[np.float64], x: NDArray[np.float64], knots: NDArray[np.float64],
+                     degree: int, line_index: NDArray[np.int64], span_index: NDArray[np.int64]):
+    """Point, d/du, d/dv at the Gauss nodes ``x`` (on [-1, 1]) of the v knot spans ``span_index``
+    of lines ``line_index``: each ``(len(line_index) * len(x), 3)``, node-major per piece."""
+    nodes = (spans[:-1, None] + np.diff(spans)[:, None] * (x + 1.0) / 2.0).ravel()
+    basis, d_basis = _basis(nodes, knots, degree), _basis(nodes, knots[1:-1], degree - 1)
+    take = (span_index[:, None] * len(x) + np.arange(len(x))).ravel()
+    rows = np.repeat(line_index, len(x))
+    return (np.matmul(basis, lines.poles)[rows, take], np.matmul(basis, lines.u_derivative_poles)[rows, take],
+            np.matmul(d_basis, lines.v_derivative_poles)[rows, take])
 
 
 def _evaluate(lines: _Lines, rows: NDArray[np.int64], v: NDArray[np.float64], knots: NDArray[np.float64],
@@ -395,65 +536,99 @@ def _evaluate(lines: _Lines, rows: NDArray[np.int64], v: NDArray[np.float64], kn
     return point, d_u, d_v
 
 
-def _footprint_area(lines: _Lines, root: NDArray[np.float64], u_weights: NDArray[np.float64],
-                    surface: _Surface, radius: float) -> float:
-    """Area of the hole a crossing curve v = root(u) cuts in the cylinder: R |∮ z dθ|.
-
-    Along the curve v'(u) = -∂u(r²)/∂v(r²), and dθ = (x dy - y dx) / r²; the curve is closed
-    (u runs once around the section, both ends at the trailing edge)."""
+def _footprint_density(lines: _Lines, root: NDArray[np.float64], surface: _Surface,
+                       radius: float) -> NDArray[np.float64]:
+    """R z dθ/du along a crossing curve v = root(u): integrated over u, ± the area of the hole
+    the curve cuts in the cylinder (R ∮ z dθ; the curve is closed, u runs once around the
+    section and both ends are at the trailing edge). Along the curve v'(u) = -∂u(r²)/∂v(r²),
+    and dθ = (x dy - y dx) / r²."""
     point, d_u, d_v = _evaluate(lines, np.arange(len(root)), root, surface.v_knots, surface.v_degree)
     x, y, z = point.T
     slope = -(x * d_u[:, 0] + y * d_u[:, 1]) / (x * d_v[:, 0] + y * d_v[:, 1])
     tangent = d_u + d_v * slope[:, None]
-    d_theta = (x * tangent[:, 1] - y * tangent[:, 0]) / (x * x + y * y)
-    return radius * abs(float(u_weights @ (z * d_theta)))
+    return radius * z * (x * tangent[:, 1] - y * tangent[:, 0]) / (x * x + y * y)
 
 
 def _extremes(surface: _Surface, points: NDArray[np.float64], u: NDArray[np.float64], v: NDArray[np.float64],
               radius: float, angles: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``(copies, 6)``: the largest -x, x, -y, y, -z, z of each copy of the face rotated by
-    ``angles``, i.e. the face's support in the directions rotated back: the best integration
-    node, refined by Newton on the surface. A refinement that ends inside r < R is dropped:
-    the face's extreme then lies on its boundary on the cylinder, inside the hub's box."""
-    cos, sin = np.cos(angles), np.sin(angles)
-    extremes = np.empty((len(angles), 6))
-    u_range = (float(surface.u_knots[0]), float(surface.u_knots[-1]))
-    for copy in range(len(angles)):
-        back = np.array([[cos[copy], sin[copy], 0.0], [-sin[copy], cos[copy], 0.0], [0.0, 0.0, 1.0]])
-        directions = _BOX_DIRECTIONS @ back.T  # rotated by -angle
-        values = points @ directions.T
-        best = values.argmax(axis=0)
-        for index, direction in enumerate(directions):
-            start = best[index]
-            refined = _newton_maximum(surface.geom, direction, float(u[start]), float(v[start]), u_range, radius)
-            extremes[copy, index] = max(values[start, index], -np.inf if refined is None else refined)
+    """``(6,)``: the largest -x, x, -y, y, -z, z over the copies of the face rotated by ``angles``.
+
+    A copy's extreme along a direction is the face's support along that direction rotated
+    back: the best integration node, refined on the surface (:func:`_refined_maximum`) for the
+    copies whose best node comes within BOX_REFINE_MARGIN of the best copy's. A refinement that
+    ends inside r < R is dropped: the face's extreme then lies on its boundary on the
+    cylinder, inside the hub's box."""
+    cos, sin = np.cos(angles)[:, None], np.sin(angles)[:, None]
+    x, y, z = _BOX_DIRECTIONS.T
+    directions = np.stack([cos * x + sin * y, -sin * x + cos * y, np.broadcast_to(z, (len(angles), 6))],
+                          axis=-1)  # (copies, 6, 3): each box direction rotated by -angle
+    values = points @ directions.reshape(-1, 3).T  # (nodes, copies * 6)
+    best = values.argmax(axis=0).reshape(len(angles), 6)
+    best_values = values.max(axis=0).reshape(len(angles), 6)
+    margin = BOX_REFINE_MARGIN * (values.max(axis=0) - values.min(axis=0)).max()
+    bounds = ((float(surface.u_knots[0]), float(surface.u_knots[-1])),
+              (float(surface.v_knots[0]), float(surface.v_knots[-1])))
+    extremes = best_values.max(axis=0)
+    for copy, side in zip(*np.nonzero(best_values >= extremes - margin), strict=True):
+        start = best[copy, side]
+        refined = _refined_maximum(surface.geom, directions[copy, side], float(u[start]), float(v[start]), bounds,
+                                   radius)
+        if refined is not None:
+            extremes[side] = max(extremes[side], refined)
     return extremes
 
 
-def _newton_maximum(geom: Geom_BSplineSurface, direction: NDArray[np.float64], u: float, v: float,
-                    u_range: tuple[float, float], radius: float) -> float | None:
-    """Local maximum of direction . S(u, v) near (u, v) by Newton (u kept in its range), if it
-    converges to a point outside the cylinder; else None."""
+def _refined_maximum(geom: Geom_BSplineSurface, direction: NDArray[np.float64], u: float, v: float,
+                     bounds: tuple[tuple[float, float], tuple[float, float]], radius: float) -> float | None:
+    """The local maximum of direction . S(u, v) from (u, v) in the surface's parameter box, if
+    it lies outside the cylinder; else None.
+
+    Projected ascent: a parameter at its bound with the gradient pushing out is held there;
+    the free ones take a Newton step (second derivatives from OpenCascade) where the function
+    is concave in them, else a gradient step of a growing length; every step is halved until
+    the function does not decrease."""
     point, d_u, d_v, d_uu, d_vv, d_uv = gp_Pnt(), gp_Vec(), gp_Vec(), gp_Vec(), gp_Vec(), gp_Vec()
     axis = gp_Vec(*(float(value) for value in direction))
-    for _ in range(30):
-        geom.D2(u, v, point, d_u, d_v, d_uu, d_vv, d_uv)
+    low, high = np.array(bounds).T
+    uv, reach = np.array([u, v]), 1e-2 * float((high - low).min())
+
+    def support(at: NDArray[np.float64]) -> float:
+        geom.D0(float(at[0]), float(at[1]), point)
+        return float(gp_Vec(point.XYZ()).Dot(axis))
+
+    for _ in range(ASCENT_ITERATIONS):
+        geom.D2(float(uv[0]), float(uv[1]), point, d_u, d_v, d_uu, d_vv, d_uv)
+        value = float(gp_Vec(point.XYZ()).Dot(axis))
         gradient = np.array([d_u.Dot(axis), d_v.Dot(axis)])
         hessian = np.array([[d_uu.Dot(axis), d_uv.Dot(axis)], [d_uv.Dot(axis), d_vv.Dot(axis)]])
-        on_edge = (u <= u_range[0] and gradient[0] < 0.0) or (u >= u_range[1] and gradient[0] > 0.0)
-        if on_edge:  # the maximum lies on the trailing edge (u at an end): Newton in v alone
-            if hessian[1, 1] >= 0.0:
-                return None
-            step = np.array([0.0, -gradient[1] / hessian[1, 1]])
-        elif np.linalg.det(hessian) <= 0.0 or hessian[0, 0] >= 0.0:
-            return None  # not locally concave: no clean maximum to converge to
+        free = ~(((uv <= low) & (gradient < 0.0)) | ((uv >= high) & (gradient > 0.0)))
+        if not free.any():
+            break  # a corner of the parameter box
+        step = np.zeros(2)
+        block = hessian[np.ix_(free, free)]
+        if np.all(np.linalg.eigvalsh(block) < 0.0):
+            step[free] = -np.linalg.solve(block, gradient[free])
         else:
-            step = -np.linalg.solve(hessian, gradient)
-        u, v = float(np.clip(u + step[0], *u_range)), v + float(step[1])
-        if np.abs(step).max() < 1e-13:
-            geom.D0(u, v, point)
-            return None if point.X() ** 2 + point.Y() ** 2 < radius**2 else float(gp_Vec(point.XYZ()).Dot(axis))
-    return None
+            step[free] = gradient[free] * reach / np.linalg.norm(gradient[free])
+            reach *= 2.0
+        for _ in range(60):
+            candidate = np.clip(uv + step, low, high)
+            if support(candidate) >= value:
+                break
+            step /= 2.0
+        else:
+            break
+        moved = np.abs(candidate - uv).max()
+        uv = candidate
+        if moved <= 1e-14:
+            break
+    return _support_outside(geom, axis, uv, radius)
+
+
+def _support_outside(geom: Geom_BSplineSurface, axis: gp_Vec, uv: NDArray[np.float64], radius: float) -> float | None:
+    point = gp_Pnt()
+    geom.D0(float(uv[0]), float(uv[1]), point)
+    return None if point.X() ** 2 + point.Y() ** 2 < radius**2 else float(gp_Vec(point.XYZ()).Dot(axis))
 
 
 # -- B-spline helpers -------------------------------------------------------------------------------
