@@ -7,6 +7,7 @@ result is checked here and a KernelError says what failed.
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
+from typing import Any
 
 import cadquery as cq
 import numpy as np
@@ -75,7 +76,7 @@ class MassProperties:
     spin_axis_inertia_g_mm2: float
     bounding_box_mm: tuple[tuple[float, float, float], tuple[float, float, float]]
 
-    def to_dict(self) -> dict:
+    def to_dict(self) -> dict[str, Any]:
         """JSON-ready dict."""
         return asdict(self)
 
