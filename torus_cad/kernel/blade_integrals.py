@@ -35,7 +35,9 @@ from __future__ import annotations
 
 import itertools
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -54,6 +56,7 @@ from OCP.TopAbs import (
     TopAbs_EDGE,
     TopAbs_FACE,
     TopAbs_REVERSED,
+    TopAbs_ShapeEnum,
     TopAbs_SOLID,
     TopAbs_WIRE,
 )
@@ -62,6 +65,11 @@ from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Shape
 from OCP.TopTools import TopTools_IndexedMapOfShape
 from scipy.interpolate import BSpline
+
+_Array = NDArray[np.float64]
+
+#: Integrands at surface points: (points, d/du, d/dv), each (n, 3) -> (n, 6).
+_Integrands = Callable[[_Array, _Array, _Array], _Array]
 
 #: Gauss-Legendre points per knot span, in u and in v. On the default propeller 4 x 4 is
 #: ~4e-10 relative in volume (as 8 x 8: the rest is the B-rep's own trimming curves), 3 x 3 ~8e-9.
@@ -184,8 +192,8 @@ def _recognise(shape: TopoDS_Shape) -> _Hub | None:
     radius = _z_axis_cylinder_radius(cylinders)
     if radius is None:
         return None
-    ends = [_end_disc_z(face, radius) for face in planes]
-    if None in ends:
+    ends = [z for z in (_end_disc_z(face, radius) for face in planes) if z is not None]
+    if len(ends) != 2:
         return None
     z_bottom, z_top = sorted(ends)
     if z_top - z_bottom <= RECOGNITION_TOLERANCE_MM:
@@ -374,7 +382,8 @@ def _line_densities(surface: _Surface, u: NDArray[np.float64], radius: float, re
     if roots is None:
         return None
     sign = -1.0 if reversed_face else 1.0
-    integrals = _v_integrals(lines, surface, roots, lambda *node: _integrands(*node, radius, sign), gauss_points)
+    integrals = _v_integrals(lines, surface, roots, lambda point, d_u, d_v: _integrands(point, d_u, d_v, radius, sign),
+                             gauss_points)
     if integrals is None:
         return None
     line_integrals, points, rows, v_nodes = integrals
@@ -456,7 +465,8 @@ def _integrands(points: NDArray[np.float64], d_u: NDArray[np.float64], d_v: NDAr
                             np.linalg.norm(normal, axis=1)])
 
 
-def _v_integrals(lines: _Lines, surface: _Surface, roots: NDArray[np.float64], integrands, gauss_points: int):
+def _v_integrals(lines: _Lines, surface: _Surface, roots: NDArray[np.float64], integrands: _Integrands,
+                 gauss_points: int) -> tuple[_Array, _Array, NDArray[np.int64], _Array] | None:
     """The integrals over v in [a(u), b(u)] of ``integrands`` on every line, adaptively.
 
     The pieces are the v knot spans clipped to [a, b] (a smooth integrand on each); each gets
@@ -514,7 +524,8 @@ def _v_integrals(lines: _Lines, surface: _Surface, roots: NDArray[np.float64], i
 
 
 def _tensor_evaluate(lines: _Lines, spans: NDArray[np.float64], x: NDArray[np.float64], knots: NDArray[np.float64],
-                     degree: int, line_index: NDArray[np.int64], span_index: NDArray[np.int64]):
+                     degree: int, line_index: NDArray[np.int64], span_index: NDArray[np.int64]
+                     ) -> tuple[_Array, _Array, _Array]:
     """Point, d/du, d/dv at the Gauss nodes ``x`` (on [-1, 1]) of the v knot spans ``span_index``
     of lines ``line_index``: each ``(len(line_index) * len(x), 3)``, node-major per piece."""
     nodes = (spans[:-1, None] + np.diff(spans)[:, None] * (x + 1.0) / 2.0).ravel()
@@ -526,13 +537,14 @@ def _tensor_evaluate(lines: _Lines, spans: NDArray[np.float64], x: NDArray[np.fl
 
 
 def _evaluate(lines: _Lines, rows: NDArray[np.int64], v: NDArray[np.float64], knots: NDArray[np.float64],
-              degree: int, u_derivative: bool = True):
-    """Point, d/du (None unless ``u_derivative``) and d/dv of line ``rows[i]`` at ``v[i]``, each ``(m, 3)``."""
+              degree: int, u_derivative: bool = True) -> tuple[_Array, _Array, _Array]:
+    """Point, d/du (zeros unless ``u_derivative``) and d/dv of line ``rows[i]`` at ``v[i]``, each ``(m, 3)``."""
     columns, values = _local_basis(v, knots, degree)
     d_columns, d_values = _local_basis(v, knots[1:-1], degree - 1)
     point = np.einsum("ml,mlc->mc", values, lines.poles[rows[:, None], columns])
     d_v = np.einsum("ml,mlc->mc", d_values, lines.v_derivative_poles[rows[:, None], d_columns])
-    d_u = np.einsum("ml,mlc->mc", values, lines.u_derivative_poles[rows[:, None], columns]) if u_derivative else None
+    d_u = (np.einsum("ml,mlc->mc", values, lines.u_derivative_poles[rows[:, None], columns]) if u_derivative
+           else np.zeros_like(point))
     return point, d_u, d_v
 
 
@@ -633,7 +645,7 @@ def _support_outside(geom: Geom_BSplineSurface, axis: gp_Vec, uv: NDArray[np.flo
 
 # -- B-spline helpers -------------------------------------------------------------------------------
 
-def _design_matrix(x: NDArray[np.float64], knots: NDArray[np.float64], degree: int):
+def _design_matrix(x: NDArray[np.float64], knots: NDArray[np.float64], degree: int) -> Any:  # scipy sparse array
     return BSpline.design_matrix(np.clip(x, knots[degree], knots[-degree - 1]), knots, degree)
 
 
@@ -669,7 +681,7 @@ def _gauss_on_spans(knots: NDArray[np.float64], degree: int, points: int
     return (low[:, None] + length[:, None] * (x + 1.0) / 2.0).ravel(), (length[:, None] * w / 2.0).ravel()
 
 
-def _explore(shape: TopoDS_Shape, kind) -> list[TopoDS_Shape]:
+def _explore(shape: TopoDS_Shape, kind: TopAbs_ShapeEnum) -> list[TopoDS_Shape]:
     found, explorer = [], TopExp_Explorer(shape, kind)
     while explorer.More():
         found.append(explorer.Current())
@@ -681,5 +693,5 @@ def _faces(shape: TopoDS_Shape) -> list[TopoDS_Face]:
     return [TopoDS.Face_s(face) for face in _explore(shape, TopAbs_FACE)]
 
 
-def _count(shape: TopoDS_Shape, kind) -> int:
+def _count(shape: TopoDS_Shape, kind: TopAbs_ShapeEnum) -> int:
     return len(_explore(shape, kind))

@@ -6,6 +6,7 @@ result is checked here and a KernelError says what failed.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from typing import Any
 
@@ -104,9 +105,9 @@ def mass_properties(shape: cq.Shape, density_g_cm3: float) -> MassProperties:
     integrals = hub_with_blade_integrals(shape.wrapped)
     if integrals is None:
         return occt_mass_properties(shape, density_g_cm3)
-    return _with_density(integrals.volume_mm3, integrals.area_mm2, tuple(integrals.centroid_mm),
+    return _with_density(integrals.volume_mm3, integrals.area_mm2, integrals.centroid_mm.tolist(),
                          integrals.spin_inertia_mm5, density_g_cm3,
-                         (tuple(integrals.box_min_mm), tuple(integrals.box_max_mm)))
+                         (integrals.box_min_mm.tolist(), integrals.box_max_mm.tolist()))
 
 
 def occt_mass_properties(shape: cq.Shape, density_g_cm3: float,
@@ -125,15 +126,15 @@ def occt_mass_properties(shape: cq.Shape, density_g_cm3: float,
                          ((xmin, ymin, zmin), (xmax, ymax, zmax)))
 
 
-def _with_density(volume_mm3: float, area_mm2: float, centroid_mm: tuple, inertia_mm5: float, density_g_cm3: float,
-                  box_mm: tuple) -> MassProperties:
+def _with_density(volume_mm3: float, area_mm2: float, centroid_mm: Sequence[float], inertia_mm5: float,
+                  density_g_cm3: float, box_mm: Sequence[Sequence[float]]) -> MassProperties:
     density_g_mm3 = density_g_cm3 * 1e-3
+    (x, y, z), ((x_min, y_min, z_min), (x_max, y_max, z_max)) = (float(value) for value in centroid_mm), box_mm
     return MassProperties(
-        volume_mm3=float(volume_mm3), surface_area_mm2=float(area_mm2),
-        centroid_mm=tuple(float(value) for value in centroid_mm), spin_axis_inertia_mm5=float(inertia_mm5),
-        density_g_cm3=density_g_cm3, mass_g=float(volume_mm3) * density_g_mm3,
+        volume_mm3=float(volume_mm3), surface_area_mm2=float(area_mm2), centroid_mm=(x, y, z),
+        spin_axis_inertia_mm5=float(inertia_mm5), density_g_cm3=density_g_cm3, mass_g=float(volume_mm3) * density_g_mm3,
         spin_axis_inertia_g_mm2=float(inertia_mm5) * density_g_mm3,
-        bounding_box_mm=tuple(tuple(float(value) for value in corner) for corner in box_mm))
+        bounding_box_mm=((float(x_min), float(y_min), float(z_min)), (float(x_max), float(y_max), float(z_max))))
 
 
 def distances_to_shape(shape: cq.Shape, points: NDArray[np.float64]) -> NDArray[np.float64]:
