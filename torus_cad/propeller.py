@@ -29,7 +29,7 @@ from torus_cad.geometry.hub import seam_angle_deg
 from torus_cad.geometry.surface import BladeSurface
 from torus_cad.kernel.checks import MassProperties, mass_properties, precise_volume, single_valid_solid
 from torus_cad.kernel.export import atomic_path, write_step, write_stl
-from torus_cad.kernel.fuse import FuseRoute, fuse_all, fuse_pattern, pattern_blades
+from torus_cad.kernel.fuse import Fused, FuseRoute, fuse_all, fuse_pattern, pattern_blades
 from torus_cad.kernel.hub import hub_solid
 from torus_cad.kernel.loft import loft_solid
 from torus_cad.kernel.wires import SectionCurves, fit_section_curves
@@ -55,6 +55,8 @@ class Propeller:
         section_curves: blade 0's section B-splines (plain arrays).
         stage_seconds: seconds per stage (keys: :class:`torus_cad.stages.Stage` values).
         fuse_route: how the blades were joined to the hub.
+        face_parts: the part each face of ``solid`` came from, in the order of ``solid.Faces()``:
+            -1 (``torus_cad.kernel.fuse.HUB_PART``) the hub, i blade i.
     """
 
     parameters: PropellerParameters
@@ -65,6 +67,7 @@ class Propeller:
     section_curves: SectionCurves
     stage_seconds: dict[str, float] = field(default_factory=dict)
     fuse_route: FuseRoute = FuseRoute.ASSEMBLED
+    face_parts: tuple[int, ...] = ()
 
     @property
     def workplane(self) -> cq.Workplane:
@@ -87,7 +90,7 @@ class Propeller:
 
     def mass_properties(self, density_g_cm3: float = DEFAULT_DENSITY_G_CM3) -> MassProperties:
         """Volume (mm^3), area (mm^2), centroid (mm), spin-axis inertia and mass (g) for a density in
-        g/cm^3 (default 1.24, PLA), by OpenCascade's adaptive integration."""
+        g/cm^3 (default 1.24, PLA), to 1e-6 relative (see :func:`torus_cad.kernel.checks.mass_properties`)."""
         return mass_properties(self.solid, density_g_cm3)
 
     def write(self, out_dir: str | Path, density_g_cm3: float = DEFAULT_DENSITY_G_CM3,
@@ -134,8 +137,8 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
         hub = hub_solid(geometry.hub.radius_mm, geometry.hub.length_mm, 0.0 if seam_deg is None else seam_deg)
         angles_deg = [geometry.blade_angle_deg(i) for i in range(geometry.blades)]
         blades = pattern_blades(blade, angles_deg)
-    solid, route = _join_blades_to_hub(hub, blade, blades, angles_deg, timer)
-    return Propeller(params, solid, hub, blades, surface, curves, timer.seconds, route)
+    solid, fused = _join_blades_to_hub(hub, blade, blades, angles_deg, timer)
+    return Propeller(params, solid, hub, blades, surface, curves, timer.seconds, fused.route, fused.face_parts)
 
 
 #: Another name for :func:`build_propeller`, for people who continue in CadQuery.
@@ -143,8 +146,8 @@ propeller_objects = build_propeller
 
 
 def _join_blades_to_hub(hub: cq.Solid, blade: cq.Solid, blades: list[cq.Solid], angles_deg: list[float],
-                        timer: StageTimer) -> tuple[cq.Solid, FuseRoute]:
-    """The fused, checked propeller and the route that made it.
+                        timer: StageTimer) -> tuple[cq.Solid, Fused]:
+    """The fused, checked propeller and how it was made (route, each face's part).
 
     The shared-intersection route's result is checked for validity, which includes every
     edge's curve on the hub against its 3D curve. Where that route fails, one general fuse
@@ -152,17 +155,17 @@ def _join_blades_to_hub(hub: cq.Solid, blade: cq.Solid, blades: list[cq.Solid], 
     """
     try:
         with timer.stage(Stage.FUSE):
-            fused, route = fuse_pattern(hub, blade, angles_deg)
+            fused = fuse_pattern(hub, blade, angles_deg)
         with timer.stage(Stage.CHECK):
-            return single_valid_solid(fused, "joining the blades to the hub"), route
+            return single_valid_solid(fused.shape, "joining the blades to the hub"), fused
     except KernelError:
         pass  # the general fuse below decides
     with timer.stage(Stage.FUSE):
         fused = fuse_all(hub, blades)
     with timer.stage(Stage.CHECK):
-        solid = single_valid_solid(fused, "fusing the blades with the hub")
+        solid = single_valid_solid(fused.shape, "fusing the blades with the hub")
         _check_volume(solid, hub, blade, len(blades))
-    return solid, FuseRoute.GENERAL
+    return solid, fused
 
 
 def _check_volume(solid: cq.Solid, hub: cq.Solid, blade: cq.Solid, blades: int) -> None:
