@@ -1,4 +1,5 @@
-"""Off-screen preview pictures (issue 6): exact size, not blank, every blade visible in its colour."""
+"""Off-screen preview pictures (issue 6, issue 12 part 5): exact size, not blank, every blade visible
+in its colour, the depth buffer working, no blade seen edge-on."""
 
 from __future__ import annotations
 
@@ -11,12 +12,25 @@ from OCP.BRep import BRep_Tool
 from OCP.TopLoc import TopLoc_Location
 from PIL import Image
 
-from torus_cad.colors import HUB_COLOR, blade_color
-from torus_cad.propeller import propeller_objects
 from torus_cad.cli import EXIT_BAD_INPUT, EXIT_OK, main
+from torus_cad.colors import HUB_COLOR, blade_color
 from torus_cad.errors import ParameterError
 from torus_cad.kernel.checks import mass_properties
-from torus_cad.preview import parse_size, preview_mesh, render_preview, split_long_edges, write_preview
+from torus_cad.kernel.fuse import HUB_PART
+from torus_cad.preview import (
+    AXIAL_VIEW,
+    ISOMETRIC_ELEVATION_DEG,
+    SceneMesh,
+    View,
+    blade_silhouettes,
+    oblique_view,
+    parse_size,
+    propeller_mesh,
+    render_preview,
+    render_views,
+    write_preview,
+)
+from torus_cad.propeller import propeller_objects
 
 FAST = ["--set", "resolution.sections=16", "--set", "resolution.points=40"]
 
@@ -86,9 +100,12 @@ def test_a_four_blade_design_shows_four_colours(tmp_path):
     _assert_a_real_picture(rgb, 4)
 
 
-def test_preview_mesh_covers_the_solid_and_tags_every_part(objects):
-    mesh = preview_mesh(objects.solid, objects.hub, objects.blades)
-    assert set(np.unique(mesh.parts)) == {-1, 0, 1, 2}
+def test_propeller_mesh_covers_the_solid_and_colours_every_part(objects):
+    mesh = propeller_mesh(objects.solid, objects.face_parts, len(objects.blades), tolerance=0.02)
+    assert set(np.unique(mesh.parts)) == {HUB_PART, 0, 1, 2}
+    assert np.allclose(mesh.colors[mesh.parts == HUB_PART], HUB_COLOR, atol=1e-12)
+    for blade in range(3):
+        assert np.allclose(mesh.colors[mesh.parts == blade], blade_color(blade, 3), atol=1e-12)
     corners = mesh.vertices[mesh.triangles]
     area = 0.5 * np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1).sum()
     assert area == pytest.approx(mass_properties(objects.solid, 1.0).surface_area_mm2, rel=0.01)
@@ -101,20 +118,54 @@ def test_preview_mesh_covers_the_solid_and_tags_every_part(objects):
     assert all(BRep_Tool.Triangulation_s(face.wrapped, location) is None for face in objects.solid.Faces())
 
 
-def test_split_long_edges_bounds_edges_and_keeps_area_and_orientation():
-    vertices = np.array([[0.0, 0.0, 0.0], [10.0, 0.0, 0.0], [0.0, 3.0, 0.0], [10.0, 3.0, 0.0]])
-    triangles = np.array([[0, 1, 2], [1, 3, 2]])
-    new_vertices, new_triangles = split_long_edges(vertices, triangles, max_edge=1.0)
-    corners = new_vertices[new_triangles]
-    edges = np.linalg.norm(corners - np.roll(corners, -1, axis=1), axis=2)
-    assert edges.max() <= 1.0
-    normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-    assert np.all(normals[:, 2] > 0)  # same orientation as the input (+z)
-    assert 0.5 * normals[:, 2].sum() == pytest.approx(30.0, rel=1e-12)
-    # Shared edges get one shared midpoint: no duplicate vertices.
-    assert len(np.unique(new_vertices.round(12), axis=0)) == len(new_vertices)
-    with pytest.raises(ValueError):
-        split_long_edges(vertices, triangles, 0.0)
+def test_propeller_mesh_refuses_parts_that_do_not_match_the_faces(objects):
+    with pytest.raises(ValueError, match="face_parts"):
+        propeller_mesh(objects.solid, objects.face_parts[:-1], len(objects.blades), tolerance=0.05)
+
+
+# -- the renderer: depth order, and the view that shows every blade ------------------------------
+
+def _box(low: tuple[float, float, float], high: tuple[float, float, float]) -> tuple[np.ndarray, np.ndarray]:
+    """An axis-aligned box as 8 vertices and 12 outward (counter-clockwise) triangles."""
+    x, y, z = zip(low, high, strict=True)
+    vertices = np.array([[x[i], y[j], z[k]] for i in (0, 1) for j in (0, 1) for k in (0, 1)], dtype=float)
+    quads = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
+    triangles = np.array([t for a, b, c, d in quads for t in ((a, b, c), (a, c, d))])
+    return vertices, triangles
+
+
+def test_the_near_box_hides_the_far_box_whatever_the_drawing_order():
+    # The near (red) box covers the left half of the far (blue) box, seen along -z. Its triangles
+    # come first, so without a depth test the far box, drawn after it, would paint over it.
+    near_vertices, near_triangles = _box((-1.0, -1.0, 2.0), (0.2, 1.0, 3.0))
+    far_vertices, far_triangles = _box((-1.0, -1.0, -3.0), (1.0, 1.0, -2.0))
+    red, blue = (0.9, 0.1, 0.1), (0.1, 0.1, 0.9)
+    scene = SceneMesh(np.concatenate([near_vertices, far_vertices]),
+                      np.concatenate([near_triangles, far_triangles + len(near_vertices)]),
+                      np.array([red] * len(near_triangles) + [blue] * len(far_triangles)),
+                      np.array([0] * len(near_triangles) + [1] * len(far_triangles)))
+    image = render_views(scene, [View((0.0, 0.0, 1.0), (0.0, 1.0, 0.0), "")], (200, 200)).astype(float)
+    # x in [-1, 1] spans the middle of the 200 px view (the camera frames the scene with a margin).
+    overlap, far_only = image[100, 70, :3], image[100, 150, :3]
+    assert overlap[0] > 2.0 * overlap[2], f"the near red box should cover the far blue one, got {overlap}"
+    assert far_only[2] > 2.0 * far_only[0], f"the far blue box should show beside the near one, got {far_only}"
+
+
+def _worst_blade_fraction(mesh: SceneMesh, direction: np.ndarray, reference: np.ndarray) -> float:
+    return float((blade_silhouettes(mesh, direction[None, :])[:, 0] / reference).min())
+
+
+def test_the_oblique_view_shows_every_blade_of_the_default(default_propeller):
+    mesh = propeller_mesh(default_propeller.solid, default_propeller.face_parts, 3, tolerance=0.1)
+    largest = blade_silhouettes(mesh, np.array([[0.0, 0.0, 1.0]]))[:, 0].max()  # the loops open upward
+    view = oblique_view(mesh)
+    chosen = _worst_blade_fraction(mesh, np.array(view.toward_camera), largest)
+    # The classic isometric corner (elevation 35.26°, azimuth 45°) shows one blade nearly edge-on.
+    e, a = np.radians(ISOMETRIC_ELEVATION_DEG), np.radians(45.0)
+    corner = _worst_blade_fraction(mesh, np.array([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)]), largest)
+    assert chosen > 0.5 and chosen > 1.5 * corner
+    assert view.toward_camera[2] > 0.5  # from above
+    assert AXIAL_VIEW.toward_camera == (0.0, 0.0, 1.0)
 
 
 @pytest.mark.parametrize(("text", "size"), [("1200x600", (1200, 600)), ("64X64", (64, 64)), (" 800 x 300 ", (800, 300))])
