@@ -380,8 +380,8 @@ def _light(renderer: Any) -> None:
 
     kit = vtkLightKit()
     kit.SetKeyLightIntensity(0.85)
-    kit.SetKeyToFillRatio(2.0)
-    kit.SetKeyToHeadRatio(2.5)
+    kit.SetKeyToFillRatio(1.6)
+    kit.SetKeyToHeadRatio(1.7)
     kit.AddLightsToRenderer(renderer)
 
 
