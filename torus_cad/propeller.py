@@ -128,7 +128,8 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
         # The hub is symmetric about its axis; its seam goes where it crosses no blade root.
         seam_deg = seam_angle_deg(surface.points, params.hub.radius, params.blades)
     with timer.stage("wires"):
-        curves = fit_section_curves(surface.points, surface.trailing_edge_index, _section_chords(surface))
+        curves = fit_section_curves(surface.points, surface.trailing_edge_index, _section_chords(surface),
+                                    surface.lower_corner_index)
         wires = curves.wires()
     with timer.stage("loft"):
         blade = loft_solid(wires, surface.s)

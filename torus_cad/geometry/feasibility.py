@@ -26,11 +26,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from torus_cad.errors import GeometryError
-from torus_cad.geometry.airfoil import airfoil_points
 from torus_cad.geometry.centerline import Centerline
 from torus_cad.geometry.frames import Frames, frenet_from_derivatives
 from torus_cad.geometry.parameters import PropellerParameters
-from torus_cad.geometry.surface import (BladeSurface, airfoil_of, blade_frames, place_on_frames,
+from torus_cad.geometry.surface import (BladeSurface, blade_frames, place_on_frames, sections_along, sections_at,
                                        section_coordinates)
 
 #: A section may reach at most this fraction of the way to the centre of curvature (check 3).
@@ -163,7 +162,7 @@ def sample_tube(params: PropellerParameters, centerline: Centerline, s: NDArray[
         frames = Frames(s, _bezier_points(centerline.control_points, s), *frenet_from_derivatives(first, second))
     else:
         frames = blade_frames(params, s)
-    planar = section_coordinates(params, s, airfoil_points(airfoil_of(params), t))
+    planar = section_coordinates(params, s, sections_at(sections_along(params, s), t))
     surface = place_on_frames(frames, planar)
     steps = np.linalg.norm(np.diff(frames.origin, axis=0), axis=-1)
     arc_length = np.concatenate([[0.0], np.cumsum(steps)])

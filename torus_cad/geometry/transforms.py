@@ -32,7 +32,8 @@ def transform_sections(section: NDArray[np.float64], angle_deg: ArrayLike, scale
     """Rotate, then scale, one section for every s (spec §2.3).
 
     Args:
-        section: ``(p, 2)`` float, the airfoil in chord units (x along the chord).
+        section: ``(p, 2)`` float, the airfoil in chord units (x along the chord), or
+            ``(k, p, 2)``, one per s (sections that change along s, e.g. a blunt trailing edge).
         angle_deg: ``(k,)`` alpha(s) in degrees.
         scale_x: ``(k,)`` Sx(s) in mm.
         scale_y: ``(k,)`` Sy(s) in mm.
@@ -41,7 +42,8 @@ def transform_sections(section: NDArray[np.float64], angle_deg: ArrayLike, scale
     Returns:
         ``(k, p, 2)`` float, mm: (X_scaled, Y_scaled) of each section in its own plane.
     """
-    shifted = section - np.array([pivot, 0.0])
-    rotated = np.einsum("kij,pj->kpi", rotation_matrices(angle_deg), shifted)
+    shifted = np.asarray(section, dtype=float) - np.array([pivot, 0.0])
+    pattern = "kij,pj->kpi" if shifted.ndim == 2 else "kij,kpj->kpi"
+    rotated = np.einsum(pattern, rotation_matrices(angle_deg), shifted)
     scales = np.stack([np.asarray(scale_x, float), np.asarray(scale_y, float)], axis=-1)
     return rotated * scales[:, None, :]
