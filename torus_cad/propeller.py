@@ -23,6 +23,7 @@ import numpy as np
 
 import cadquery as cq
 
+from torus_cad.design_targets import DesignTargets, resolve_design_targets, write_sections_table
 from torus_cad.errors import KernelError
 from torus_cad.geometry.centerline import Centerline, blade_angle_deg
 from torus_cad.geometry.feasibility import check_feasible
@@ -79,6 +80,8 @@ class Propeller:
         fuse_route: how the blades were joined to the hub, one of FUSE_ROUTES: one
             blade-hub intersection reused for every blade (the usual route), or
             ``"one fuse"``, a general boolean of the hub and all blades (the fallback).
+        design_targets: what the designer's inputs (airfoil.naca, diameter, pitch) resolved to;
+            ``parameters`` are already the resolved spec parameters.
     """
 
     parameters: PropellerParameters
@@ -89,6 +92,7 @@ class Propeller:
     section_curves: SectionCurves
     stage_seconds: dict[str, float] = field(default_factory=dict)
     fuse_route: str = FUSE_ROUTES[0]
+    design_targets: DesignTargets | None = None
 
     def workplane(self) -> cq.Workplane:
         """A cq.Workplane holding the fused solid."""
@@ -122,6 +126,9 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
     timer = StageTimer(progress)
     with timer.stage("parameters"):
         params = resolve_parameters(design)
+    with timer.stage("design_targets"):
+        targets = resolve_design_targets(params)  # airfoil.naca, diameter, pitch -> the spec's parameters
+        params = targets.parameters
     with timer.stage("section_math"):
         surface = blade_surface(params)
         check_feasible(params, surface, Centerline.for_blade(params))
@@ -137,7 +144,7 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
         angles_deg = [blade_angle_deg(params, i) for i in range(params.blades)]
         blades = pattern_blades(blade, angles_deg)
     solid, route = _join_blades_to_hub(hub, blade, blades, angles_deg, timer)
-    return Propeller(params, solid, hub, blades, surface, curves, timer.seconds, route)
+    return Propeller(params, solid, hub, blades, surface, curves, timer.seconds, route, targets)
 
 
 def _join_blades_to_hub(hub: cq.Solid, blade: cq.Solid, blades: list[cq.Solid], angles_deg: list[float],
@@ -184,6 +191,8 @@ def build_report(propeller: Propeller, density_g_cm3: float) -> dict:
         "section_fit_error_mm": propeller.section_curves.fit_error,
         "stage_seconds": dict(propeller.stage_seconds),
         "fuse_route": propeller.fuse_route,
+        **({"design_targets": propeller.design_targets.to_dict()}
+           if propeller.design_targets is not None and propeller.design_targets.requested else {}),
     }
 
 
@@ -200,6 +209,8 @@ def write_outputs(propeller: Propeller, out_dir: Path, density_g_cm3: float = DE
         with timer.stage("stl_write"):
             paths["stl"] = write_stl(propeller.solid, out_dir / f"{params.name}.stl",
                                      params.export.stl_linear_deflection, params.export.stl_angular_deflection)
+    with timer.stage("sections_table"):
+        paths.update(write_sections_table(propeller.parameters, out_dir))
     propeller.stage_seconds.update(timer.seconds)
     report = build_report(propeller, density_g_cm3)
     paths["json"] = out_dir / f"{params.name}.json"

@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import copy
 import math
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -161,6 +162,21 @@ def _leading_edge_parameter(spline: CubicSpline, sigma: NDArray[np.float64], loo
 
 
 # -- reading -------------------------------------------------------------------------------------
+
+def load_airfoil_file(path: str | Path) -> AirfoilFile:
+    """:func:`read_airfoil_file`, read once per file version (path, size, modification time)."""
+    path = Path(path)
+    try:
+        status = path.stat()
+    except OSError as error:
+        raise ParameterError(f"cannot read airfoil file {str(path)!r}: {error.strerror}") from None
+    return _load_cached(str(path.resolve()), status.st_size, status.st_mtime_ns)
+
+
+@lru_cache(maxsize=32)
+def _load_cached(path: str, size: int, modified_ns: int) -> AirfoilFile:
+    return read_airfoil_file(path)
+
 
 def read_airfoil_file(path: str | Path) -> AirfoilFile:
     """Read a Selig or Lednicer coordinate file; ParameterError naming the file and line if malformed."""

@@ -11,7 +11,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from torus_cad.geometry.airfoil import NacaAirfoil
+from torus_cad.geometry.airfoil import NacaAirfoil, naca_section
+from torus_cad.geometry.airfoil_file import load_airfoil_file
 from torus_cad.geometry.arc_length import equal_arc_length_section
 from torus_cad.geometry.centerline import Centerline
 from torus_cad.geometry.frames import Frames, section_frames
@@ -47,8 +48,13 @@ class BladeSurface:
 
 
 def airfoil_of(params: PropellerParameters) -> Section:
-    """The section described by ``params.airfoil`` (sharp trailing edge; see :func:`sections_along`)."""
+    """The section described by ``params.airfoil``: a coordinate file, a NACA designation, or the
+    spec's NACA numbers (without the blunt trailing edge; see :func:`sections_along`)."""
     a = params.airfoil
+    if getattr(a, "file", ""):
+        return load_airfoil_file(a.file)
+    if getattr(a, "naca", ""):
+        return naca_section(a.naca, a.camber_normal)
     return NacaAirfoil(a.max_camber, a.camber_position, a.thickness, a.camber_normal)
 
 

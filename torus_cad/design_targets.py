@@ -1,0 +1,216 @@
+"""The designer's inputs turned into the spec's parameters: airfoil by name, diameter, pitch.
+
+The spec's parameters stay the truth; these inputs are converted into them before anything
+is built, in this order:
+
+1. ``airfoil.naca`` "MPTT" sets ``max_camber``, ``camber_position`` and ``thickness``
+   (5-digit designations and ``airfoil.file`` have no spec numbers; they stay as they are).
+2. ``diameter`` scales the radial coordinates z_L of ``centerline.p2`` and ``p3`` until the
+   tip diameter is met (:mod:`torus_cad.geometry.diameter`).
+3. ``pitch`` refits ``transforms.angle_of_attack`` (:mod:`torus_cad.geometry.pitch`) on the
+   centerline that step 2 left.
+
+:func:`resolve_design_targets` returns the resolved parameters (the targets removed, so they
+build the same propeller without solving again) and what each step achieved.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from torus_cad.errors import GeometryError, ParameterError
+from torus_cad.geometry.airfoil import naca4_numbers
+from torus_cad.geometry.blade_elements import BladeElements, blade_elements
+from torus_cad.geometry.diameter import radial_scale_for_diameter, tip_radius
+from torus_cad.geometry.pitch import PITCH_FIT_SECTIONS, PitchFit, chord_model, fit_pitch
+from torus_cad.geometry.section import closed_points, parameter_end
+from torus_cad.geometry.centerline import Centerline
+from torus_cad.geometry.frames import Frames, frenet_from_derivatives
+from torus_cad.geometry.surface import (BladeSurface, airfoil_of, blade_frames, blade_surface, place_sections,
+                                       sections_along, sections_at)
+from torus_cad.geometry.trailing_edge import trailing_edge_thickness_mm
+from torus_cad.geometry.transforms import evaluate_quartic
+
+
+@dataclass(frozen=True)
+class DesignTargets:
+    """What the designer's inputs resolved to.
+
+    Attributes:
+        parameters: the resolved spec parameters (targets removed).
+        radial_scale: factor applied to z_L of p2 and p3 (None without a diameter target).
+        tip_diameter_mm: the tip diameter of the resolved design (analytic surface; None when
+            no diameter or pitch was asked for: not computed, to keep the default build fast).
+        pitch_fit: the alpha(s) fit (None without a pitch target).
+        requested: the targets as given (``{"diameter": mm, "pitch": mm, "naca": "2412", ...}``).
+    """
+
+    parameters: Any
+    radial_scale: float | None = None
+    tip_diameter_mm: float | None = None
+    pitch_fit: PitchFit | None = None
+    requested: dict[str, Any] = field(default_factory=dict)
+
+    def to_dict(self) -> dict[str, Any]:
+        """For the JSON report: the targets, what was achieved, and the spec values that resulted."""
+        report: dict[str, Any] = {"requested": dict(self.requested),
+                                  "tip_diameter_mm": self.tip_diameter_mm}
+        if self.radial_scale is not None:
+            report["radial_scale"] = self.radial_scale
+            report["centerline_p2"] = list(self.parameters.centerline.p2)
+            report["centerline_p3"] = list(self.parameters.centerline.p3)
+        if self.pitch_fit is not None:
+            report["pitch_at_75_percent_radius_mm"] = [float(v) for v in self.pitch_fit.pitch_at_75_mm]
+            report["pitch_rms_beta_error_deg"] = self.pitch_fit.rms_beta_error_deg
+            report["angle_of_attack"] = list(self.pitch_fit.angle_of_attack)
+        return report
+
+
+def _value(params: Any, dotted: str, default: Any) -> Any:
+    target = params
+    for part in dotted.split("."):
+        target = getattr(target, part, None)
+        if target is None:
+            return default
+    return target
+
+
+def requested_targets(params: Any) -> dict[str, Any]:
+    """The designer's inputs set in ``params`` (empty when none is)."""
+    requested = {key: _value(params, key, None) for key in ("airfoil.naca", "airfoil.file", "diameter", "pitch")}
+    return {key: value for key, value in requested.items() if value not in (None, "", 0, 0.0)}
+
+
+def _frames_function(params: Any) -> Callable[[NDArray[np.float64]], Frames]:
+    """Frames of blade 0 at any s; Frenet frames in closed form once checked (the search calls this often)."""
+    if params.centerline.frame != "frenet":
+        return lambda s: blade_frames(params, s)
+    blade_frames(params, [0.0])  # checks the Frenet frame exists on the whole centerline (GeometryError)
+    p0, p1, p2, p3 = Centerline.for_blade(params).control_points
+
+    def frames_at(s: NDArray[np.float64]) -> Frames:
+        u = np.asarray(s, dtype=float)[:, None]  # one cubic Bezier span (clamped knots 0,0,0,0,1,1,1,1)
+        point = (1 - u) ** 3 * p0 + 3 * u * (1 - u) ** 2 * p1 + 3 * u**2 * (1 - u) * p2 + u**3 * p3
+        first = 3 * ((1 - u) ** 2 * (p1 - p0) + 2 * u * (1 - u) * (p2 - p1) + u**2 * (p3 - p2))
+        second = 6 * ((1 - u) * (p2 - 2 * p1 + p0) + u * (p3 - 2 * p2 + p1))
+        return Frames(np.asarray(s, dtype=float), point, *frenet_from_derivatives(first, second))
+
+    return frames_at
+
+
+def tip_radius_mm(params: Any) -> float:
+    """Largest distance of blade 0's analytic surface from the spin axis (mm)."""
+    end = parameter_end(sections_along(params, [0.5])[0])
+    frames_at = _frames_function(params)
+
+    def surface_at(s: NDArray[np.float64], t: NDArray[np.float64]) -> NDArray[np.float64]:
+        return place_sections(params, frames_at(s), sections_at(sections_along(params, s), t))
+
+    return tip_radius(surface_at, end)[0]
+
+
+def with_radial_scale(params: Any, scale: float) -> Any:
+    """``params`` with z_L of the free control points p2 and p3 multiplied by ``scale``."""
+    p2, p3 = params.centerline.p2, params.centerline.p3
+    return params.with_values({"centerline.p2": [p2[0], p2[1], p2[2] * scale],
+                               "centerline.p3": [p3[0], p3[1], p3[2] * scale]})
+
+
+def _tip_radius_at_scale(params: Any, scale: float) -> float:
+    try:
+        return tip_radius_mm(with_radial_scale(params, scale))
+    except ParameterError as error:  # a scaled control point out of its range: not reachable
+        raise GeometryError(str(error)) from None
+
+
+def fit_diameter(params: Any, diameter_mm: float) -> tuple[Any, float]:
+    """``params`` scaled radially to the tip diameter ``diameter_mm``, and the scale."""
+    scale = radial_scale_for_diameter(lambda k: _tip_radius_at_scale(params, k), diameter_mm)
+    return with_radial_scale(params, scale), scale
+
+
+def fit_angle_of_attack(params: Any, pitch_mm: float, rotation: int = 1) -> tuple[Any, PitchFit]:
+    """``params`` with alpha(s) refitted so the outer half has geometric pitch ``pitch_mm``."""
+    s = np.linspace(0.0, 1.0, PITCH_FIT_SECTIONS)
+    frames = blade_frames(params, s)
+    section = airfoil_of(params)
+    base = parameter_end(section) == 3.0
+    leading = np.repeat(closed_points(section, [0.0], base), len(s), axis=0)
+    ends = closed_points(section, [1.0, 2.0] if base else [1.0], base)
+    trailing = np.repeat(ends.mean(axis=0, keepdims=True), len(s), axis=0)
+    transforms = params.transforms
+    model = chord_model(frames.origin, frames.normal, frames.binormal, leading, trailing,
+                        evaluate_quartic(transforms.scale_x, s), evaluate_quartic(transforms.scale_y, s),
+                        params.airfoil.pivot)
+    fit = fit_pitch(model, s, transforms.angle_of_attack, pitch_mm, tip_radius_mm(params), rotation)
+    return params.with_values({"transforms.angle_of_attack": list(fit.angle_of_attack)}), fit
+
+
+def _without_targets(params: Any) -> Any:
+    changes: dict[str, Any] = {}
+    for key, empty in (("diameter", 0.0), ("pitch", 0.0)):
+        if _value(params, key, None):
+            changes[key] = empty
+    return params.with_values(changes) if changes else params
+
+
+def resolve_design_targets(params: Any, rotation: int = 1) -> DesignTargets:
+    """Apply ``airfoil.naca`` (4-digit), ``diameter`` and ``pitch`` (module docstring) to ``params``."""
+    requested = requested_targets(params)
+    if not requested:
+        return DesignTargets(params)
+    naca = requested.get("airfoil.naca", "")
+    if naca and len(str(naca).strip()) == 4:
+        m, p, thickness = naca4_numbers(naca)
+        params = params.with_values({"airfoil.naca": "", "airfoil.max_camber": m,
+                                     "airfoil.camber_position": p if m > 0 else params.airfoil.camber_position,
+                                     "airfoil.thickness": thickness})
+    scale = None
+    if requested.get("diameter"):
+        params, scale = fit_diameter(params, float(requested["diameter"]))
+    fit = None
+    if requested.get("pitch"):
+        params, fit = fit_angle_of_attack(params, float(requested["pitch"]), rotation)
+    params = _without_targets(params)
+    diameter = 2.0 * tip_radius_mm(params) if scale is not None or fit is not None else None
+    return DesignTargets(params, scale, diameter, fit, requested)
+
+
+def elements_of(surface: BladeSurface, rotation: int = 1) -> BladeElements:
+    """The blade-element table of a sampled blade surface."""
+    frames = surface.frames
+    return blade_elements(surface.s, surface.points, frames.origin, frames.normal, frames.binormal,
+                          surface.trailing_edge_index or 0, surface.lower_corner_index, rotation)
+
+
+def design_elements(params: Any, points: int = 400, rotation: int = 1) -> BladeElements:
+    """The blade-element table at the design's own sections (``resolution.sections``), finely sampled around."""
+    return elements_of(blade_surface(params, points=points), rotation)
+
+
+def trailing_edge_of(params: Any, s: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Thickness of the trailing edge (mm) of the sections at ``s`` (0 where sharp)."""
+    transforms = params.transforms
+    return trailing_edge_thickness_mm(sections_along(params, s), evaluate_quartic(transforms.angle_of_attack, s),
+                                      evaluate_quartic(transforms.scale_x, s), evaluate_quartic(transforms.scale_y, s))
+
+
+def write_sections_table(params: Any, out_dir: Path, rotation: int = 1) -> dict[str, Path]:
+    """Write ``<name>_sections.csv`` and ``<name>_sections.png`` into ``out_dir`` (atomically); their paths."""
+    from torus_cad.kernel.export import atomic_path
+    from torus_cad.sections_table import write_sections_csv, write_sections_png
+
+    elements = design_elements(params, rotation=rotation)
+    paths = {"sections_csv": out_dir / f"{params.name}_sections.csv",
+             "sections_png": out_dir / f"{params.name}_sections.png"}
+    with atomic_path(paths["sections_csv"]) as temp:
+        write_sections_csv(elements, temp, trailing_edge_of(params, elements.s))
+    with atomic_path(paths["sections_png"]) as temp:
+        write_sections_png(elements, temp, title=f"{params.name}: blade elements")
+    return paths

@@ -1,0 +1,136 @@
+"""Pitch target: fit the alpha(s) quartic so the blade's outer half has a given geometric pitch.
+
+The blade element at s has the geometric pitch P(s) = 2 pi r(s) tan beta(s)
+(:mod:`torus_cad.geometry.blade_elements`). A pitch P asks for beta*(s) = atan(P / (2 pi r(s)))
+at every section in the outer half of the radius (r >= half the tip radius). alpha(s) turns
+each section in its plane, and with it the chord and beta; the spec's alpha stays a quartic
+(§2.4 chose that form), so the quartic is fitted by nonlinear least squares
+(scipy.optimize.least_squares) to
+
+    sum over the outer sections of w_i (beta_i - beta*_i)^2  +  lambda^2 sum over the others of (alpha_i - alpha0_i)^2,
+
+with w_i = 1 - radial_fraction_i^2 (clipped at 0): sections whose chord runs nearly radially,
+where beta says little, barely count; the second term keeps the inner sections, which no target
+constrains, near the design's own alpha. A quartic cannot hold the pitch exactly everywhere:
+the fit reports the pitch it achieves at 75 % of the tip radius, where designers quote it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.optimize import least_squares
+
+from torus_cad.errors import GeometryError
+from torus_cad.geometry.blade_elements import blade_angles
+from torus_cad.geometry.transforms import evaluate_quartic
+
+#: Sections with r >= this fraction of the tip radius take part in the pitch fit.
+PITCH_FIT_RADIUS_FRACTION = 0.5
+
+#: Where the achieved pitch is reported, as a fraction of the tip radius.
+PITCH_REPORT_RADIUS_FRACTION = 0.75
+
+#: Weight of keeping alpha at the inner sections (radians of alpha against radians of beta).
+INNER_ALPHA_WEIGHT = 0.1
+
+#: Sections sampled along s for the fit.
+PITCH_FIT_SECTIONS = 61
+
+
+@dataclass(frozen=True)
+class PitchFit:
+    """The fitted alpha(s) and how well it meets the pitch.
+
+    Attributes:
+        angle_of_attack: the fitted quartic, degrees, highest power first.
+        target_pitch_mm: the pitch asked for.
+        pitch_at_75_mm: achieved geometric pitch where r(s) = 0.75 r_tip, ``(c,)`` one per crossing.
+        rms_beta_error_deg: weighted root-mean-square of beta - beta* over the outer sections.
+        sections_used: how many sections the target constrained.
+    """
+
+    angle_of_attack: tuple[float, float, float, float, float]
+    target_pitch_mm: float
+    pitch_at_75_mm: NDArray[np.float64]
+    rms_beta_error_deg: float
+    sections_used: int
+
+
+ChordModel = Callable[[NDArray[np.float64]], tuple[NDArray[np.float64], NDArray[np.float64]]]
+
+
+def chord_model(origin: NDArray[np.float64], normal: NDArray[np.float64], binormal: NDArray[np.float64],
+                leading: NDArray[np.float64], trailing: NDArray[np.float64], scale_x: ArrayLike,
+                scale_y: ArrayLike, pivot: float = 0.0) -> ChordModel:
+    """A function alpha (k,) degrees -> (chord mid points (k, 3), chord vectors (k, 3)) in mm.
+
+    Args:
+        origin, normal, binormal: ``(k, 3)`` the section frames (fixed: alpha does not move the centerline).
+        leading, trailing: ``(k, 2)`` chord-unit leading edge and trailing edge (middle of a base) per section.
+        scale_x, scale_y: ``(k,)`` Sx(s), Sy(s) in mm; pivot: chord fraction at the centre of alpha.
+    """
+    scales = np.stack([np.asarray(scale_x, float), np.asarray(scale_y, float)], axis=-1)
+    shift = np.array([pivot, 0.0])
+
+    def placed(planar_points: NDArray[np.float64], angle: NDArray[np.float64]) -> NDArray[np.float64]:
+        cos, sin = np.cos(angle), np.sin(angle)
+        x, y = (planar_points - shift).T
+        rotated = np.stack([cos * x - sin * y, sin * x + cos * y], axis=-1) * scales
+        return origin + rotated[:, :1] * normal + rotated[:, 1:] * binormal
+
+    def model(angle_deg: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        angle = np.radians(angle_deg)
+        front, back = placed(leading, angle), placed(trailing, angle)
+        return 0.5 * (front + back), back - front
+
+    return model
+
+
+def fit_pitch(model: ChordModel, s: NDArray[np.float64], initial_quartic: ArrayLike, pitch_mm: float,
+              tip_radius_mm: float, rotation: int = 1) -> PitchFit:
+    """Fit alpha(s) (a quartic) so the outer sections' geometric pitch is ``pitch_mm`` (module docstring)."""
+    initial = np.asarray(initial_quartic, dtype=float)
+    alpha0 = np.radians(evaluate_quartic(initial, s))
+
+    def evaluate(coefficients: NDArray[np.float64]):
+        middle, chord = model(evaluate_quartic(coefficients, s))
+        radius = np.hypot(middle[:, 0], middle[:, 1])
+        beta, radial = blade_angles(middle, chord, rotation)
+        return radius, np.radians(beta), radial
+
+    radius0, _, _ = evaluate(initial)
+    outer = radius0 >= PITCH_FIT_RADIUS_FRACTION * tip_radius_mm
+    if not np.any(outer):
+        raise GeometryError("no section lies in the outer half of the radius; the pitch cannot be fitted")
+
+    def residuals(coefficients: NDArray[np.float64]) -> NDArray[np.float64]:
+        radius, beta, radial = evaluate(coefficients)
+        target = np.arctan2(pitch_mm, 2.0 * np.pi * radius)
+        miss = np.angle(np.exp(1j * (beta - target)))  # wrapped to (-pi, pi]
+        weight = np.sqrt(np.clip(1.0 - radial**2, 0.0, 1.0))
+        alpha = np.radians(evaluate_quartic(coefficients, s))
+        return np.concatenate([(weight * miss)[outer], INNER_ALPHA_WEIGHT * (alpha - alpha0)[~outer]])
+
+    solution = least_squares(residuals, initial, x_scale=np.full(5, 10.0), method="trf", xtol=1e-12, ftol=1e-12,
+                             gtol=1e-12, max_nfev=400)
+    coefficients = solution.x
+    radius, beta, radial = evaluate(coefficients)
+    pitch = 2.0 * np.pi * radius * np.tan(beta)
+    weight = np.clip(1.0 - radial**2, 0.0, 1.0)[outer]
+    miss = np.angle(np.exp(1j * (beta - np.arctan2(pitch_mm, 2.0 * np.pi * radius))))[outer]
+    rms = float(np.degrees(np.sqrt(np.sum(weight * miss**2) / max(np.sum(weight), 1e-300))))
+    at_75 = _values_at_radius(radius, pitch, PITCH_REPORT_RADIUS_FRACTION * tip_radius_mm)
+    return PitchFit(tuple(float(c) for c in coefficients), float(pitch_mm), at_75, rms, int(np.count_nonzero(outer)))
+
+
+def _values_at_radius(radius: NDArray[np.float64], values: NDArray[np.float64], at: float) -> NDArray[np.float64]:
+    """``values`` linearly interpolated where ``radius`` crosses ``at`` (one per crossing)."""
+    found = []
+    for index in np.flatnonzero(np.diff(np.sign(radius - at)) != 0):
+        weight = (at - radius[index]) / (radius[index + 1] - radius[index])
+        found.append(values[index] + weight * (values[index + 1] - values[index]))
+    return np.array(found)
