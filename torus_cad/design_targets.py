@@ -27,13 +27,25 @@ from numpy.typing import NDArray
 from torus_cad.errors import GeometryError, ParameterError
 from torus_cad.geometry.airfoil import naca4_numbers
 from torus_cad.geometry.blade_elements import BladeElements, blade_elements
-from torus_cad.geometry.diameter import radial_scale_for_diameter, tip_radius
-from torus_cad.geometry.pitch import PITCH_FIT_SECTIONS, PitchFit, chord_model, fit_pitch
-from torus_cad.geometry.section import closed_points, parameter_end
 from torus_cad.geometry.centerline import Centerline
+from torus_cad.geometry.diameter import radial_scale_for_diameter, tip_radius
 from torus_cad.geometry.frames import Frames, frenet_from_derivatives
-from torus_cad.geometry.surface import (BladeSurface, airfoil_of, blade_frames, blade_surface, place_sections,
-                                       sections_along, sections_at)
+from torus_cad.geometry.pitch import (
+    PITCH_FIT_SECTIONS,
+    PitchFit,
+    chord_model,
+    fit_pitch,
+)
+from torus_cad.geometry.section import closed_points, parameter_end
+from torus_cad.geometry.surface import (
+    BladeSurface,
+    airfoil_of,
+    blade_frames,
+    blade_surface,
+    place_sections,
+    sections_along,
+    sections_at,
+)
 from torus_cad.geometry.trailing_edge import trailing_edge_thickness_mm
 from torus_cad.geometry.transforms import evaluate_quartic
 
