@@ -207,6 +207,9 @@ def parse_airfoil_text(text: str, source: str = "<text>") -> AirfoilFile:
     if not rows:
         raise ParameterError(f"airfoil file {source!r} line 1: no coordinates found (expected lines of 'x y')")
     _, (first_x, first_y) = rows[0]
+    coordinates = np.array([values for _, values in rows], dtype=float)
+    if np.linalg.norm(np.ptp(coordinates, axis=0)) <= 1e-12 * max(1.0, float(np.abs(coordinates).max())):
+        raise ParameterError(f"airfoil file {source!r} line {rows[0][0]}: the chord is zero (every point is the same)")
     if first_x >= 2.0 and first_y >= 2.0 and first_x.is_integer() and first_y.is_integer():
         loop, lines = _lednicer_loop(rows, source)
     else:
@@ -285,10 +288,12 @@ def _selig_loop(rows: list[tuple[int, tuple[float, float]]], source: str
                              f"surfaces (at least {2 * MINIMUM_POINTS_PER_SURFACE - 1})")
     trailing_middle = 0.5 * (loop[0] + loop[-1])
     leading = int(np.argmax(np.linalg.norm(loop - trailing_middle, axis=1)))
-    if leading < MINIMUM_POINTS_PER_SURFACE - 1 or leading > len(loop) - MINIMUM_POINTS_PER_SURFACE:
+    extent = float(np.linalg.norm(loop.max(axis=0) - loop.min(axis=0)))
+    ends_apart = np.linalg.norm(loop[0] - loop[-1]) > 0.5 * extent  # a loop starts and ends at the trailing edge
+    if ends_apart or leading < MINIMUM_POINTS_PER_SURFACE - 1 or leading > len(loop) - MINIMUM_POINTS_PER_SURFACE:
         raise ParameterError(
-            f"airfoil file {source!r} line {lines[leading]}: only one surface is given (the loop must run from the "
-            "trailing edge over one surface to the leading edge and back over the other; "
+            f"airfoil file {source!r} line {lines[-1]}: only one surface is given (the coordinates end here; a Selig "
+            "loop runs from the trailing edge over one surface to the leading edge and back over the other, "
             f"at least {MINIMUM_POINTS_PER_SURFACE} points on each)")
     return loop, lines
 
