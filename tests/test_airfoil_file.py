@@ -1,5 +1,6 @@
 """Airfoils from coordinate files (issue 14 part 1): layouts, normalisation, accuracy, malformed files."""
 
+from itertools import pairwise
 from pathlib import Path
 
 import numpy as np
@@ -8,10 +9,20 @@ from scipy.spatial import cKDTree
 
 from torus_cad.errors import ParameterError
 from torus_cad.geometry.airfoil import NacaAirfoil
-from torus_cad.geometry.airfoil_file import (INTERPOLATION_ERROR_LIMIT, parse_airfoil_text, read_airfoil_file,
-                                             write_lednicer_file, write_selig_file)
+from torus_cad.geometry.airfoil_file import (
+    INTERPOLATION_ERROR_LIMIT,
+    parse_airfoil_text,
+    read_airfoil_file,
+    write_lednicer_file,
+    write_selig_file,
+)
 from torus_cad.geometry.arc_length import equal_arc_length_section
-from torus_cad.geometry.section import Section, closed_points, has_base, trailing_edge_vector
+from torus_cad.geometry.section import (
+    Section,
+    closed_points,
+    has_base,
+    trailing_edge_vector,
+)
 
 AIRFOILS = Path(__file__).resolve().parent.parent / "examples" / "airfoils"
 U = np.linspace(0.0, 1.0, 2001)
@@ -109,7 +120,7 @@ def test_file_sections_are_resampled_at_equal_arc_length():
     te = sampling.trailing_edge_index
     closed = np.append(sampling.t, 2.0)
     gaps = np.array([np.linalg.norm(np.diff(closed_points(section, np.linspace(a, b, 200)), axis=0), axis=1).sum()
-                     for a, b in zip(closed[:-1], closed[1:])])  # arc length between neighbours
+                     for a, b in pairwise(closed)])  # arc length between neighbours
     for side in (gaps[:te], gaps[te:]):
         assert np.abs(side / side.mean() - 1).max() < 2e-3
 
@@ -134,8 +145,8 @@ MALFORMED = {
                           "only one surface"),
     "one_surface_lednicer": ("foil\n5. 5.\n\n0.0 0.0\n0.25 0.05\n0.5 0.06\n0.75 0.04\n1.0 0.0\n", 8,
                              "only one surface"),
-    "crossing": ("foil\n1.0 0.0\n0.75 -0.04\n0.5 0.06\n0.25 0.05\n0.0 0.0\n0.25 -0.05\n0.5 -0.06\n0.75 0.04\n"
-                 "1.0 0.0\n", 3, "cross"),
+    "crossing": (("foil\n1.0 0.0\n0.75 -0.04\n0.5 0.06\n0.25 0.05\n0.0 0.0\n0.25 -0.05\n0.5 -0.06\n0.75 0.04\n"
+                  "1.0 0.0\n"), 3, "cross"),
     "zero_chord": ("foil\n" + "0.5 0.5\n" * 9, 2, "chord is zero"),
     "not_finite": ("foil\n1.0 nan\n", 2, "finite"),
 }
