@@ -11,8 +11,14 @@ each section in its plane, and with it the chord and beta; the spec's alpha stay
 
 with w_i = 1 - radial_fraction_i^2 (clipped at 0): sections whose chord runs nearly radially,
 where beta says little, barely count; the second term keeps the inner sections, which no target
-constrains, near the design's own alpha. A quartic cannot hold the pitch exactly everywhere:
-the fit reports the pitch it achieves at 75 % of the tip radius, where designers quote it.
+constrains, near the design's own alpha. It is solved in three stages, so it cannot run off
+into whole turns of alpha where a section cannot reach its beta at all (near a loop's tip the
+section plane can be the plane of rotation itself): (1) per section, the alpha within 90
+degrees of the design's that brings beta closest to its target, and how strongly alpha moves
+beta there; (2) a weighted linear least-squares quartic through those angles; (3) a nonlinear
+polish of (2) on beta itself, held near (2). A quartic cannot hold the pitch exactly
+everywhere: the fit reports the pitch it achieves at 75 % of the tip radius, where designers
+quote it, and the weighted rms miss of beta.
 """
 
 from __future__ import annotations
@@ -94,37 +100,63 @@ def fit_pitch(model: ChordModel, s: NDArray[np.float64], initial_quartic: ArrayL
               tip_radius_mm: float, rotation: int = 1) -> PitchFit:
     """Fit alpha(s) (a quartic) so the outer sections' geometric pitch is ``pitch_mm`` (module docstring)."""
     initial = np.asarray(initial_quartic, dtype=float)
-    alpha0 = np.radians(evaluate_quartic(initial, s))
+    alpha0 = evaluate_quartic(initial, s)
 
-    def evaluate(coefficients: NDArray[np.float64]):
-        middle, chord = model(evaluate_quartic(coefficients, s))
+    def evaluate(alpha_deg: NDArray[np.float64]):
+        middle, chord = model(alpha_deg)
         radius = np.hypot(middle[:, 0], middle[:, 1])
         beta, radial = blade_angles(middle, chord, rotation)
-        return radius, np.radians(beta), radial
+        target = np.arctan2(pitch_mm, 2.0 * np.pi * radius)
+        miss = np.angle(np.exp(1j * (np.radians(beta) - target)))  # wrapped to (-pi, pi]
+        return radius, miss, np.sqrt(np.clip(1.0 - radial**2, 0.0, 1.0))
 
-    radius0, _, _ = evaluate(initial)
+    radius0, _, _ = evaluate(alpha0)
     outer = radius0 >= PITCH_FIT_RADIUS_FRACTION * tip_radius_mm
     if not np.any(outer):
         raise GeometryError("no section lies in the outer half of the radius; the pitch cannot be fitted")
+    best_alpha, sensitivity = _best_angles(evaluate, alpha0)
+    # Stage 2: a linear least-squares quartic through the best angles, each weighted by how much
+    # alpha moves beta there; unconstrained (inner, insensitive) sections stay near the design's alpha.
+    weight = np.where(outer, sensitivity, 0.0) + INNER_ALPHA_WEIGHT
+    goal = np.where(outer & (sensitivity > 0.0), best_alpha, alpha0)
+    powers = np.vander(s, 5)
+    coefficients = np.linalg.lstsq(powers * weight[:, None], goal * weight, rcond=None)[0]
 
-    def residuals(coefficients: NDArray[np.float64]) -> NDArray[np.float64]:
-        radius, beta, radial = evaluate(coefficients)
-        target = np.arctan2(pitch_mm, 2.0 * np.pi * radius)
-        miss = np.angle(np.exp(1j * (beta - target)))  # wrapped to (-pi, pi]
-        weight = np.sqrt(np.clip(1.0 - radial**2, 0.0, 1.0))
-        alpha = np.radians(evaluate_quartic(coefficients, s))
-        return np.concatenate([(weight * miss)[outer], INNER_ALPHA_WEIGHT * (alpha - alpha0)[~outer]])
+    def residuals(candidate: NDArray[np.float64]) -> NDArray[np.float64]:
+        alpha = evaluate_quartic(candidate, s)
+        _, miss, tangential = evaluate(alpha)
+        keep = INNER_ALPHA_WEIGHT * np.radians(alpha - evaluate_quartic(coefficients, s))
+        return np.concatenate([(tangential * miss)[outer], keep])
 
-    solution = least_squares(residuals, initial, x_scale=np.full(5, 10.0), method="trf", xtol=1e-12, ftol=1e-12,
-                             gtol=1e-12, max_nfev=400)
-    coefficients = solution.x
-    radius, beta, radial = evaluate(coefficients)
-    pitch = 2.0 * np.pi * radius * np.tan(beta)
-    weight = np.clip(1.0 - radial**2, 0.0, 1.0)[outer]
-    miss = np.angle(np.exp(1j * (beta - np.arctan2(pitch_mm, 2.0 * np.pi * radius))))[outer]
-    rms = float(np.degrees(np.sqrt(np.sum(weight * miss**2) / max(np.sum(weight), 1e-300))))
+    # Stage 3: polish the quartic on beta itself, held near stage 2 so it cannot wander off in turns.
+    solution = least_squares(residuals, coefficients, x_scale=np.full(5, 10.0), method="trf", max_nfev=200)
+    if np.sum(solution.fun**2) < np.sum(residuals(coefficients) ** 2):
+        coefficients = solution.x
+    alpha = evaluate_quartic(coefficients, s)
+    radius, miss, tangential = evaluate(alpha)
+    middle, chord = model(alpha)
+    beta, _ = blade_angles(middle, chord, rotation)
+    pitch = 2.0 * np.pi * radius * np.tan(np.radians(beta))
+    used = tangential[outer] ** 2
+    rms = float(np.degrees(np.sqrt(np.sum(used * miss[outer] ** 2) / max(np.sum(used), 1e-300))))
     at_75 = _values_at_radius(radius, pitch, PITCH_REPORT_RADIUS_FRACTION * tip_radius_mm)
     return PitchFit(tuple(float(c) for c in coefficients), float(pitch_mm), at_75, rms, int(np.count_nonzero(outer)))
+
+
+def _best_angles(evaluate, alpha0: NDArray[np.float64], half_range_deg: float = 90.0, steps: int = 361
+                 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Per section, the alpha within +-half_range of alpha0 that brings beta closest to its target,
+    and |d beta / d alpha| there (0 where alpha cannot move beta)."""
+    offsets = np.linspace(-half_range_deg, half_range_deg, steps)
+    misses = np.array([evaluate(alpha0 + offset)[1] for offset in offsets])  # (steps, k)
+    # Prefer the smallest turn among near-equal misses: add a tiny cost per degree turned.
+    cost = np.abs(misses) + 1e-6 * np.abs(offsets)[:, None]
+    index = np.argmin(cost, axis=0)
+    columns = np.arange(len(alpha0))
+    step = offsets[1] - offsets[0]
+    ahead, behind = np.clip(index + 1, 0, steps - 1), np.clip(index - 1, 0, steps - 1)
+    slope = np.abs(misses[ahead, columns] - misses[behind, columns]) / np.radians((ahead - behind) * step)
+    return alpha0 + offsets[index], np.clip(slope, 0.0, 1.0)
 
 
 def _values_at_radius(radius: NDArray[np.float64], values: NDArray[np.float64], at: float) -> NDArray[np.float64]:
