@@ -16,7 +16,6 @@ build the same propeller without solving again) and what each step achieved.
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -29,19 +28,17 @@ from torus_cad.geometry.airfoil import naca4_numbers
 from torus_cad.geometry.blade_elements import BladeElements, blade_elements
 from torus_cad.geometry.centerline import Centerline
 from torus_cad.geometry.diameter import radial_scale_for_diameter, tip_radius
-from torus_cad.geometry.frames import Frames, frenet_from_derivatives
+from torus_cad.geometry.frames import FrameKind, Frames, frenet_from_derivatives
 from torus_cad.geometry.pitch import (
     PITCH_FIT_SECTIONS,
     PitchFit,
     chord_model,
     fit_pitch,
 )
-from torus_cad.geometry.section import closed_points, parameter_end
+from torus_cad.geometry.section import closed_points, has_base, parameter_end
 from torus_cad.geometry.surface import (
     BladeSurface,
-    airfoil_of,
     blade_frames,
-    blade_surface,
     place_sections,
     sections_along,
     sections_at,
@@ -99,32 +96,27 @@ def requested_targets(params: Any) -> dict[str, Any]:
     return {key: value for key, value in requested.items() if value not in (None, "", 0, 0.0)}
 
 
-def _frames_function(params: Any) -> Callable[[NDArray[np.float64]], Frames]:
-    """Frames of blade 0 at any s; Frenet frames in closed form once checked (the search calls this often)."""
-    if params.centerline.frame != "frenet":
-        return lambda s: blade_frames(params, s)
-    blade_frames(params, [0.0])  # checks the Frenet frame exists on the whole centerline (GeometryError)
-    p0, p1, p2, p3 = Centerline.for_blade(params).control_points
-
-    def frames_at(s: NDArray[np.float64]) -> Frames:
-        u = np.asarray(s, dtype=float)[:, None]  # one cubic Bezier span (clamped knots 0,0,0,0,1,1,1,1)
-        point = (1 - u) ** 3 * p0 + 3 * u * (1 - u) ** 2 * p1 + 3 * u**2 * (1 - u) * p2 + u**3 * p3
-        first = 3 * ((1 - u) ** 2 * (p1 - p0) + 2 * u * (1 - u) * (p2 - p1) + u**2 * (p3 - p2))
-        second = 6 * ((1 - u) * (p2 - 2 * p1 + p0) + u * (p3 - 2 * p2 + p1))
-        return Frames(np.asarray(s, dtype=float), point, *frenet_from_derivatives(first, second))
-
-    return frames_at
-
-
 def tip_radius_mm(params: Any) -> float:
     """Largest distance of blade 0's analytic surface from the spin axis (mm)."""
-    end = parameter_end(sections_along(params, [0.5])[0])
-    frames_at = _frames_function(params)
+    geometry = params.geometry()
+    blade, centerline = geometry.blade, geometry.centerline(0)
+    blade_frames(blade, centerline, [0.0])  # checks once that the frame exists on the whole centerline
+    end = parameter_end(sections_along(blade, [0.5])[0])
 
     def surface_at(s: NDArray[np.float64], t: NDArray[np.float64]) -> NDArray[np.float64]:
-        return place_sections(params, frames_at(s), sections_at(sections_along(params, s), t))
+        frames = section_frames_unchecked(blade, centerline, s)
+        return place_sections(blade, frames, sections_at(sections_along(blade, s), t))
 
     return tip_radius(surface_at, end)[0]
+
+
+def section_frames_unchecked(blade: Any, centerline: Centerline, s: NDArray[np.float64]) -> Frames:
+    """Frames at ``s`` without re-scanning the whole centerline (the caller has checked it once)."""
+    if blade.frame != FrameKind.FRENET:
+        return blade_frames(blade, centerline, s)
+    derivatives = centerline.derivatives(np.asarray(s, dtype=float), order=2)
+    return Frames(np.asarray(s, dtype=float), derivatives[:, 0],
+                  *frenet_from_derivatives(derivatives[:, 1], derivatives[:, 2]))
 
 
 def with_radial_scale(params: Any, scale: float) -> Any:
@@ -149,18 +141,19 @@ def fit_diameter(params: Any, diameter_mm: float) -> tuple[Any, float]:
 
 def fit_angle_of_attack(params: Any, pitch_mm: float, rotation: int = 1) -> tuple[Any, PitchFit]:
     """``params`` with alpha(s) refitted so the outer half has geometric pitch ``pitch_mm``."""
+    geometry = params.geometry()
+    blade = geometry.blade
     s = np.linspace(0.0, 1.0, PITCH_FIT_SECTIONS)
-    frames = blade_frames(params, s)
-    section = airfoil_of(params)
+    frames = blade_frames(blade, geometry.centerline(0), s)
+    section = blade.airfoil
     base = parameter_end(section) == 3.0
     leading = np.repeat(closed_points(section, [0.0], base), len(s), axis=0)
     ends = closed_points(section, [1.0, 2.0] if base else [1.0], base)
-    trailing = np.repeat(ends.mean(axis=0, keepdims=True), len(s), axis=0)
-    transforms = params.transforms
+    trailing = np.repeat(ends.mean(axis=0, keepdims=True), len(s), axis=0)  # the chord line ignores the base's size
+    laws = blade.laws
     model = chord_model(frames.origin, frames.normal, frames.binormal, leading, trailing,
-                        evaluate_quartic(transforms.scale_x, s), evaluate_quartic(transforms.scale_y, s),
-                        params.airfoil.pivot)
-    fit = fit_pitch(model, s, transforms.angle_of_attack, pitch_mm, tip_radius_mm(params), rotation)
+                        evaluate_quartic(laws.scale_x_mm, s), evaluate_quartic(laws.scale_y_mm, s), laws.pivot)
+    fit = fit_pitch(model, s, laws.angle_of_attack_deg, pitch_mm, tip_radius_mm(params), rotation)
     return params.with_values({"transforms.angle_of_attack": list(fit.angle_of_attack)}), fit
 
 
@@ -203,14 +196,18 @@ def elements_of(surface: BladeSurface, rotation: int = 1) -> BladeElements:
 
 def design_elements(params: Any, points: int = 400, rotation: int = 1) -> BladeElements:
     """The blade-element table at the design's own sections (``resolution.sections``), finely sampled around."""
-    return elements_of(blade_surface(params, points=points), rotation)
+    return elements_of(params.blade_surface(points=points), rotation)
 
 
 def trailing_edge_of(params: Any, s: NDArray[np.float64]) -> NDArray[np.float64]:
     """Thickness of the trailing edge (mm) of the sections at ``s`` (0 where sharp)."""
-    transforms = params.transforms
-    return trailing_edge_thickness_mm(sections_along(params, s), evaluate_quartic(transforms.angle_of_attack, s),
-                                      evaluate_quartic(transforms.scale_x, s), evaluate_quartic(transforms.scale_y, s))
+    blade = params.geometry().blade
+    laws = blade.laws
+    sections = sections_along(blade, s)
+    if not any(has_base(section) for section in sections):
+        return np.zeros(len(s))
+    return trailing_edge_thickness_mm(sections, evaluate_quartic(laws.angle_of_attack_deg, s),
+                                      evaluate_quartic(laws.scale_x_mm, s), evaluate_quartic(laws.scale_y_mm, s))
 
 
 def write_sections_table(params: Any, out_dir: Path, rotation: int = 1) -> dict[str, Path]:

@@ -1,7 +1,8 @@
 """The blade surface: sections transformed (spec §2) and placed on the frames (spec §4.2).
 
 X_final(s, t) = C(s) + X_scaled(s, t) N(s) + Y_scaled(s, t) B(s), evaluated exactly at any
-resolution; blade i is built on its own centerline at theta_0 + 360 i / n (spec §6.1).
+resolution; blade i is built on its own centerline at theta_0 + 360 i / n (spec §6.1), which
+:meth:`torus_cad.geometry.propeller.PropellerGeometry.centerline` gives.
 """
 
 from __future__ import annotations
@@ -11,15 +12,13 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from torus_cad.geometry.airfoil import NacaAirfoil, naca_section
-from torus_cad.geometry.airfoil_file import load_airfoil_file
 from torus_cad.geometry.arc_length import equal_arc_length_section
 from torus_cad.geometry.centerline import Centerline
 from torus_cad.geometry.frames import Frames, section_frames
-from torus_cad.geometry.parameters import PropellerParameters
+from torus_cad.geometry.propeller import BladeGeometry
 from torus_cad.geometry.section import Section, closed_points, has_base
 from torus_cad.geometry.trailing_edge import blunt_sections
-from torus_cad.geometry.transforms import evaluate_quartic, transform_sections
+from torus_cad.geometry.transforms import evaluate_quartic
 
 
 @dataclass(frozen=True)
@@ -47,90 +46,64 @@ class BladeSurface:
     lower_corner_index: int | None = None
 
 
-def airfoil_of(params: PropellerParameters) -> Section:
-    """The section described by ``params.airfoil``: a coordinate file, a NACA designation, or the
-    spec's NACA numbers (without the blunt trailing edge; see :func:`sections_along`)."""
-    a = params.airfoil
-    if getattr(a, "file", ""):
-        return load_airfoil_file(a.file)
-    if getattr(a, "naca", ""):
-        return naca_section(a.naca, a.camber_normal)
-    return NacaAirfoil(a.max_camber, a.camber_position, a.thickness, a.camber_normal)
-
-
-def trailing_edge_thickness_of(params: PropellerParameters) -> float:
-    """The blunt trailing edge's thickness in mm (0 = the spec's sharp edge)."""
-    return float(getattr(params.airfoil, "trailing_edge_thickness", 0.0))
-
-
-def sections_along(params: PropellerParameters, s: ArrayLike) -> list[Section]:
-    """The chord-unit section at every s: the airfoil itself, or with a base of the absolute blunt thickness."""
-    s = np.atleast_1d(np.asarray(s, dtype=float))
-    section = airfoil_of(params)
-    thickness = trailing_edge_thickness_of(params)
-    if thickness <= 0.0:
-        return [section] * len(s)
-    transforms = params.transforms
-    return blunt_sections(section, thickness, evaluate_quartic(transforms.angle_of_attack, s),
-                          evaluate_quartic(transforms.scale_x, s), evaluate_quartic(transforms.scale_y, s))
-
-
-def sections_at(sections: list[Section], t: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Every section at the closed parameters ``t``: ``(k, len(t), 2)`` chord units (one evaluation if all are one)."""
-    base = has_base(sections[0])
-    if all(section is sections[0] for section in sections):
-        return np.broadcast_to(closed_points(sections[0], t, base), (len(sections), len(t), 2))
-    return np.stack([closed_points(section, t, base) for section in sections])
-
-
-def section_coordinates(params: PropellerParameters, s: NDArray[np.float64], section: NDArray[np.float64]
-                        ) -> NDArray[np.float64]:
-    """Chord-unit sections ``(p, 2)`` (one for all s) or ``(k, p, 2)`` rotated and scaled for every s
-    (spec §2.3): ``(k, p, 2)`` mm."""
-    transforms = params.transforms
-    return transform_sections(section, evaluate_quartic(transforms.angle_of_attack, s),
-                              evaluate_quartic(transforms.scale_x, s), evaluate_quartic(transforms.scale_y, s),
-                              params.airfoil.pivot)
-
-
 def place_on_frames(frames: Frames, planar: NDArray[np.float64]) -> NDArray[np.float64]:
     """X along N, Y along B (spec §4.2): ``(k, p, 2)`` section coordinates -> ``(k, p, 3)`` mm."""
     return (frames.origin[:, None, :] + planar[..., 0:1] * frames.normal[:, None, :]
             + planar[..., 1:2] * frames.binormal[:, None, :])
 
 
-def place_sections(params: PropellerParameters, frames: Frames, section: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Transform a chord-unit section ``(p, 2)`` for every frame and place it: ``(k, p, 3)`` mm."""
-    return place_on_frames(frames, section_coordinates(params, frames.s, section))
+def sections_along(blade: BladeGeometry, s: ArrayLike) -> list[Section]:
+    """The chord-unit section at every s: the airfoil itself, or, with a blunt trailing edge, the
+    airfoil opened to the blade's absolute trailing-edge thickness there (:mod:`.trailing_edge`)."""
+    s = np.atleast_1d(np.asarray(s, dtype=float))
+    thickness = blade.trailing_edge_thickness_mm
+    if thickness <= 0.0:
+        return [blade.airfoil] * len(s)
+    laws = blade.laws
+    return blunt_sections(blade.airfoil, thickness, evaluate_quartic(laws.angle_of_attack_deg, s),
+                          evaluate_quartic(laws.scale_x_mm, s), evaluate_quartic(laws.scale_y_mm, s))
 
 
-def blade_frames(params: PropellerParameters, s: ArrayLike, blade_index: int = 0) -> Frames:
-    """Frames of the configured kind on blade ``blade_index``'s centerline at ``s``."""
-    return section_frames(Centerline.for_blade(params, blade_index), s, params.centerline.frame)
+def sections_at(sections: list[Section], t: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Every section at the closed parameters ``t``: ``(p, 2)`` if they are all one section, else ``(k, p, 2)``."""
+    base = has_base(sections[0])
+    if all(section is sections[0] for section in sections):
+        return closed_points(sections[0], t, base)
+    return np.stack([closed_points(section, t, base) for section in sections])
 
 
-def surface_points(params: PropellerParameters, s: ArrayLike, t: ArrayLike, blade_index: int = 0) -> NDArray[np.float64]:
+def place_sections(blade: BladeGeometry, frames: Frames, section: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Transform chord-unit sections, ``(p, 2)`` for all frames or ``(k, p, 2)`` one each, and place
+    them: ``(k, p, 3)`` mm."""
+    return place_on_frames(frames, blade.laws.apply(section, frames.s))
+
+
+def blade_frames(blade: BladeGeometry, centerline: Centerline, s: ArrayLike) -> Frames:
+    """Frames of the blade's kind on ``centerline`` at ``s``."""
+    return section_frames(centerline, s, blade.frame)
+
+
+def surface_points(blade: BladeGeometry, centerline: Centerline, s: ArrayLike, t: ArrayLike) -> NDArray[np.float64]:
     """The analytic surface at every (s, t) pair of the grid: ``(len(s), len(t), 3)`` mm."""
-    frames = blade_frames(params, np.atleast_1d(np.asarray(s, dtype=float)), blade_index)
-    return place_sections(params, frames, sections_at(sections_along(params, frames.s), np.asarray(t, float)))
+    frames = blade_frames(blade, centerline, np.atleast_1d(np.asarray(s, dtype=float)))
+    return place_sections(blade, frames, sections_at(sections_along(blade, frames.s), np.asarray(t, dtype=float)))
 
 
-def blade_surface(params: PropellerParameters, blade_index: int = 0, sections: int | None = None,
-                  points: int | None = None, anchor_trailing_edge: bool = True) -> BladeSurface:
-    """Sample blade ``blade_index`` on ``sections`` x ``points`` (defaults: ``params.resolution``).
+def blade_surface(blade: BladeGeometry, centerline: Centerline, sections: int, points: int,
+                  anchor_trailing_edge: bool = True) -> BladeSurface:
+    """Sample the blade on ``centerline`` at ``sections`` x ``points``.
 
     Sections are uniform in s; points are equally spaced in arc length around the airfoil
     (spec §5), with the trailing edge kept as a point unless ``anchor_trailing_edge`` is False.
     With a blunt trailing edge of constant thickness in mm the chord-unit sections differ
     along s: all of them are sampled at the parameters ``t`` of the section in the middle
-    (s = 0.5), spaced equally on it (and nearly so on the others), both corners included.
+    (s = 0.5), which are spaced equally on it (and nearly so on the others), both corners included.
     """
-    sections = params.resolution.sections if sections is None else sections
-    points = params.resolution.points if points is None else points
-    frames = blade_frames(params, np.linspace(0.0, 1.0, sections), blade_index)
-    along = sections_along(params, frames.s)
-    reference = along[0] if all(section is along[0] for section in along) else sections_along(params, [0.5])[0]
+    frames = blade_frames(blade, centerline, np.linspace(0.0, 1.0, sections))
+    along = sections_along(blade, frames.s)
+    shared = all(section is along[0] for section in along)
+    reference = along[0] if shared else sections_along(blade, [0.5])[0]
     sampling = equal_arc_length_section(reference, points, anchor_trailing_edge)
-    planar = sampling.points if reference is along[0] else sections_at(along, sampling.t)
-    return BladeSurface(place_sections(params, frames, planar), frames.s, sampling.t,
+    planar = sampling.points if shared else sections_at(along, sampling.t)
+    return BladeSurface(place_sections(blade, frames, planar), frames.s, sampling.t,
                         sampling.trailing_edge_index, frames, sampling.lower_corner_index)
