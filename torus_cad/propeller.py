@@ -94,9 +94,11 @@ class Propeller:
         return mass_properties(self.solid, density_g_cm3)
 
     def write(self, out_dir: str | Path, density_g_cm3: float = DEFAULT_DENSITY_G_CM3,
-              stl: bool = True) -> dict[str, Path]:
-        """Write ``<name>.step``, ``<name>.stl`` (unless ``stl`` is False) and ``<name>.json`` into ``out_dir``."""
-        return write_outputs(self, Path(out_dir), density_g_cm3, stl)
+              stl: bool = True, sections_table: bool = False) -> dict[str, Path]:
+        """Write ``<name>.step``, ``<name>.stl`` (unless ``stl`` is False), the blade-element table
+        ``<name>_sections.csv`` and ``<name>_sections.png`` (if ``sections_table``) and ``<name>.json``
+        into ``out_dir``."""
+        return write_outputs(self, Path(out_dir), density_g_cm3, stl, sections_table)
 
 
 def _section_chords(surface: BladeSurface) -> np.ndarray:
@@ -200,8 +202,10 @@ def build_report(propeller: Propeller, density_g_cm3: float) -> dict[str, Any]:
 
 
 def write_outputs(propeller: Propeller, out_dir: Path, density_g_cm3: float = DEFAULT_DENSITY_G_CM3,
-                  stl: bool = True) -> dict[str, Path]:
-    """Write STEP, STL and the JSON report atomically; return the paths by kind."""
+                  stl: bool = True, sections_table: bool = False) -> dict[str, Path]:
+    """Write STEP, STL, the blade-element table (``<name>_sections.csv`` and ``.png``, when
+    ``sections_table``; ``torus-cad build`` writes it) and the JSON report atomically; return the
+    paths by kind."""
     params = propeller.parameters
     timer = StageTimer()
     paths: dict[str, Path] = {}
@@ -212,8 +216,9 @@ def write_outputs(propeller: Propeller, out_dir: Path, density_g_cm3: float = DE
         with timer.stage(Stage.STL_WRITE):
             paths["stl"] = write_stl(propeller.solid, out_dir / f"{params.name}.stl",
                                      params.export.stl_linear_deflection, params.export.stl_angular_deflection)
-    with timer.stage(Stage.SECTIONS_TABLE):
-        paths.update(write_sections_table(params, out_dir))
+    if sections_table:
+        with timer.stage(Stage.SECTIONS_TABLE):
+            paths.update(write_sections_table(propeller.surface, params, out_dir))
     propeller.stage_seconds.update(timer.seconds)
     report = build_report(propeller, density_g_cm3)
     paths["json"] = out_dir / f"{params.name}.json"
