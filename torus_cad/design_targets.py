@@ -27,7 +27,7 @@ from torus_cad.errors import GeometryError, ParameterError
 from torus_cad.geometry.airfoil import naca4_numbers
 from torus_cad.geometry.blade_elements import BladeElements, blade_elements
 from torus_cad.geometry.centerline import Centerline
-from torus_cad.geometry.diameter import radial_scale_for_diameter, tip_radius
+from torus_cad.geometry.diameter import DIAMETER_TOLERANCE_MM, radial_scale_for_diameter, tip_radius
 from torus_cad.geometry.frames import FrameKind, Frames, frenet_from_derivatives
 from torus_cad.geometry.pitch import (
     PITCH_FIT_SECTIONS,
@@ -45,6 +45,10 @@ from torus_cad.geometry.surface import (
 )
 from torus_cad.geometry.trailing_edge import trailing_edge_thickness_mm
 from torus_cad.geometry.transforms import evaluate_quartic
+
+
+#: Rounds of (diameter fit, pitch fit) before giving up on both holding together.
+TARGET_ROUNDS = 6
 
 
 @dataclass(frozen=True)
@@ -176,14 +180,24 @@ def resolve_design_targets(params: Any, rotation: int = 1) -> DesignTargets:
         params = params.with_values({"airfoil.naca": "", "airfoil.max_camber": m,
                                      "airfoil.camber_position": p if m > 0 else params.airfoil.camber_position,
                                      "airfoil.thickness": thickness})
-    scale = None
-    if requested.get("diameter"):
-        params, scale = fit_diameter(params, float(requested["diameter"]))
-    fit = None
-    if requested.get("pitch"):
-        params, fit = fit_angle_of_attack(params, float(requested["pitch"]), rotation)
+    diameter_mm, pitch_mm = float(requested.get("diameter", 0.0)), float(requested.get("pitch", 0.0))
+    scale, fit = (1.0 if diameter_mm else None), None
+    # alpha turns the sections, which moves the outermost point, and the radius sets the pitch's
+    # beta targets: alternate the two fits until the diameter holds after the pitch fit.
+    for _ in range(TARGET_ROUNDS):
+        if diameter_mm:
+            params, round_scale = fit_diameter(params, diameter_mm)
+            scale *= round_scale
+        if not pitch_mm:
+            break
+        params, fit = fit_angle_of_attack(params, pitch_mm, rotation)
+        if not diameter_mm or abs(2.0 * tip_radius_mm(params) - diameter_mm) <= 0.1 * DIAMETER_TOLERANCE_MM:
+            break
     params = _without_targets(params)
-    diameter = 2.0 * tip_radius_mm(params) if scale is not None or fit is not None else None
+    diameter = 2.0 * tip_radius_mm(params) if diameter_mm or pitch_mm else None
+    if diameter_mm and abs(diameter - diameter_mm) > DIAMETER_TOLERANCE_MM:
+        raise GeometryError(f"diameter = {diameter_mm:g} mm and pitch = {pitch_mm:g} mm do not settle together: the "
+                            f"tip diameter ends at {diameter:.3f} mm after {TARGET_ROUNDS} rounds; change the design")
     return DesignTargets(params, scale, diameter, fit, requested)
 
 
