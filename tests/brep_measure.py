@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
+import cadquery as cq
 import numpy as np
 from OCP.BRepAlgoAPI import BRepAlgoAPI_Section
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
 from OCP.BRepExtrema import BRepExtrema_DistShapeShape
 from OCP.gp import gp_Ax3, gp_Dir, gp_Pln, gp_Pnt
-
-import cadquery as cq
 
 
 def max_radius_mm(solid: cq.Shape) -> float:

@@ -93,7 +93,7 @@ def test_reflexed_5_digit_mean_line_returns_to_zero_with_reflex():
 
 @pytest.mark.parametrize("bad", ["241", "24123x", "abcd", "2400", "2012", "24000", "23712", "03012", ""])
 def test_malformed_designations_are_parameter_errors(bad):
-    with pytest.raises(ParameterError, match="airfoil.naca"):
+    with pytest.raises(ParameterError, match=r"airfoil\.naca"):
         naca_section(bad)
 
 

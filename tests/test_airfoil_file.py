@@ -167,7 +167,7 @@ def test_malformed_files_are_refused_naming_file_and_line(tmp_path, case):
 def test_binary_and_missing_files_are_refused(tmp_path):
     binary = tmp_path / "binary.dat"
     binary.write_bytes(b"\x00\x01\x02\xff" * 10)
-    with pytest.raises(ParameterError, match="binary.dat"):
+    with pytest.raises(ParameterError, match=r"binary\.dat"):
         read_airfoil_file(binary)
-    with pytest.raises(ParameterError, match="missing.dat"):
+    with pytest.raises(ParameterError, match=r"missing\.dat"):
         read_airfoil_file(tmp_path / "missing.dat")

@@ -6,12 +6,18 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from brep_measure import (
+    contour_through,
+    edge_points,
+    farthest_pair,
+    max_radius_mm,
+    plane_section_edges,
+    straight_edges,
+    vertex_radius_mm,
+)
 
-from brep_measure import (contour_through, edge_points, farthest_pair, max_radius_mm, plane_section_edges,
-                          straight_edges, vertex_radius_mm)
 from torus_cad.cli import main
 from torus_cad.design_targets import elements_of, resolve_design_targets
-from torus_cad.errors import ParameterError
 from torus_cad.geometry.blade_elements import blade_angles
 from torus_cad.geometry.diameter import DIAMETER_TOLERANCE_MM
 from torus_cad.geometry.surface import blade_frames

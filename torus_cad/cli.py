@@ -257,7 +257,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("torus-cad: interrupted; no partial file was left behind", file=sys.stderr)
         return 130
-    except Exception as error:  # noqa: BLE001 - the command line never shows a traceback
+    except Exception as error:
         print(f"torus-cad: internal error ({type(error).__name__}): {error}; please report it with the design file",
               file=sys.stderr)
         return EXIT_KERNEL_FAILURE

@@ -46,7 +46,6 @@ from torus_cad.geometry.surface import (
 from torus_cad.geometry.trailing_edge import trailing_edge_thickness_mm
 from torus_cad.geometry.transforms import evaluate_quartic
 
-
 #: Rounds of (diameter fit, pitch fit) before giving up on both holding together.
 TARGET_ROUNDS = 6
 
@@ -181,7 +180,7 @@ def resolve_design_targets(params: Any, rotation: int = 1) -> DesignTargets:
                                      "airfoil.camber_position": p if m > 0 else params.airfoil.camber_position,
                                      "airfoil.thickness": thickness})
     diameter_mm, pitch_mm = float(requested.get("diameter", 0.0)), float(requested.get("pitch", 0.0))
-    scale, fit = (1.0 if diameter_mm else None), None
+    scale, fit = 1.0, None
     # alpha turns the sections, which moves the outermost point, and the radius sets the pitch's
     # beta targets: alternate the two fits until the diameter holds after the pitch fit.
     for _ in range(TARGET_ROUNDS):
@@ -194,11 +193,13 @@ def resolve_design_targets(params: Any, rotation: int = 1) -> DesignTargets:
         if not diameter_mm or abs(2.0 * tip_radius_mm(params) - diameter_mm) <= 0.1 * DIAMETER_TOLERANCE_MM:
             break
     params = _without_targets(params)
-    diameter = 2.0 * tip_radius_mm(params) if diameter_mm or pitch_mm else None
+    if not (diameter_mm or pitch_mm):
+        return DesignTargets(params, requested=requested)
+    diameter = 2.0 * tip_radius_mm(params)
     if diameter_mm and abs(diameter - diameter_mm) > DIAMETER_TOLERANCE_MM:
         raise GeometryError(f"diameter = {diameter_mm:g} mm and pitch = {pitch_mm:g} mm do not settle together: the "
                             f"tip diameter ends at {diameter:.3f} mm after {TARGET_ROUNDS} rounds; change the design")
-    return DesignTargets(params, scale, diameter, fit, requested)
+    return DesignTargets(params, scale if diameter_mm else None, diameter, fit, requested)
 
 
 def elements_of(surface: BladeSurface, rotation: int = 1) -> BladeElements:

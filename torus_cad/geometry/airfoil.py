@@ -21,11 +21,15 @@ from __future__ import annotations
 import dataclasses
 import re
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Self, cast
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from torus_cad.errors import ParameterError
+
+if TYPE_CHECKING:
+    from torus_cad.geometry.section import Section
 
 #: Coefficients of the NACA thickness polynomial (spec §1.1): sqrt(t), t, t^2, t^3, t^4.
 THICKNESS_COEFFICIENTS = (0.2969, -0.1260, -0.3516, 0.2843, -0.1036)
@@ -58,9 +62,10 @@ class _ThicknessOnCamberLine:
         base = 5 * self.thickness * (a0 * np.sqrt(t) + t * (a1 + t * (a2 + t * (a3 + t * a4))))
         return base + 0.5 * self.trailing_edge_gap * t**4
 
-    def with_trailing_edge_gap(self, gap: float):
+    def with_trailing_edge_gap(self, gap: float) -> Self:
         """The same section with a base of ``gap`` (chord units) at the trailing edge (module docstring)."""
-        return dataclasses.replace(self, trailing_edge_gap=float(gap))
+        changed: Self = dataclasses.replace(cast(Any, self), trailing_edge_gap=float(gap))  # subclasses are dataclasses
+        return changed
 
     def fold_ratio(self, samples: int = 2001) -> tuple[float, float]:
         """Largest y_t(t) * kappa_c(t) on the chord and where: ``(ratio, t)``.
@@ -147,7 +152,7 @@ class NacaAirfoil(_ThicknessOnCamberLine):
     @property
     def kinks(self) -> tuple[float, ...]:
         """u = sqrt(p): the camber line's curvature jumps at p."""
-        if 0.0 < self.max_camber and 0.0 < self.camber_position < 1.0:
+        if self.max_camber > 0.0 and 0.0 < self.camber_position < 1.0:
             return (float(np.sqrt(self.camber_position)),)
         return ()
 
@@ -284,7 +289,7 @@ def naca_section(designation: str, camber_normal: bool = True) -> NacaAirfoil | 
                          "5-digit (e.g. \"23012\") NACA designation")
 
 
-def airfoil_points(airfoil, t: ArrayLike) -> NDArray[np.float64]:
+def airfoil_points(airfoil: Section, t: ArrayLike) -> NDArray[np.float64]:
     """The closed section f(t) of spec §1.3 for t in [0, 2], shape ``(len(t), 2)``.
 
     t in [0, 1]: upper surface at chord t (leading edge -> trailing edge);

@@ -319,7 +319,7 @@ def _first_crossing(polygon: NDArray[np.float64], closed: bool, rows: int = 256)
     end = np.roll(polygon, -1, axis=0) if closed else polygon[1:]
     count = len(start)
 
-    def orientation(a, b, c):
+    def orientation(a: NDArray[np.float64], b: NDArray[np.float64], c: NDArray[np.float64]) -> NDArray[np.float64]:
         return np.sign((b[..., 0] - a[..., 0]) * (c[..., 1] - a[..., 1]) - (b[..., 1] - a[..., 1]) * (c[..., 0] - a[..., 0]))
 
     index = np.arange(count)

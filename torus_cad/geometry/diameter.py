@@ -72,13 +72,14 @@ def radial_scale_for_diameter(tip_radius_of_scale: Callable[[float], float], dia
     if radius_at(1.0) is None:
         raise ParameterError("diameter: the design cannot be evaluated at its own control points; fix the centerline first")
     low, high = _last_sound(radius_at, scale_range[0]), _last_sound(radius_at, scale_range[1])
-    radius_low, radius_high = radius_at(low), radius_at(high)
+    radius_low, radius_high = radius_at.sound(low), radius_at.sound(high)
     if not min(radius_low, radius_high) <= target <= max(radius_low, radius_high):
         raise ParameterError(
             f"diameter = {diameter_mm:g} mm is out of reach for this design: scaling the radial coordinates z_L "
             f"of centerline.p2 and p3 by {low:.3g}..{high:.3g} gives tip diameters {2 * radius_low:.2f}.."
             f"{2 * radius_high:.2f} mm; change the hub radius, the control points or the section sizes")
-    return float(brentq(lambda scale: radius_at(scale) - target, low, high, xtol=1e-12, rtol=1e-12, maxiter=200))
+    return float(brentq(lambda scale: radius_at.sound(scale) - target, low, high, xtol=1e-12, rtol=1e-12,
+                        maxiter=200))
 
 
 class _Memo:
@@ -95,6 +96,13 @@ class _Memo:
             except GeometryError:
                 self.values[scale] = None
         return self.values[scale]
+
+    def sound(self, scale: float) -> float:
+        """The tip radius at a scale known to evaluate (GeometryError if it does not)."""
+        value = self(scale)
+        if value is None:
+            raise GeometryError(f"the design cannot be evaluated at radial scale {scale:g}")
+        return value
 
 
 def _last_sound(radius_at: _Memo, end: float, steps: int = 8) -> float:

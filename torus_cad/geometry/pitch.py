@@ -100,9 +100,9 @@ def fit_pitch(model: ChordModel, s: NDArray[np.float64], initial_quartic: ArrayL
               tip_radius_mm: float, rotation: int = 1) -> PitchFit:
     """Fit alpha(s) (a quartic) so the outer sections' geometric pitch is ``pitch_mm`` (module docstring)."""
     initial = np.asarray(initial_quartic, dtype=float)
-    alpha0 = evaluate_quartic(initial, s)
+    alpha0 = _quartic_at(initial, s)
 
-    def evaluate(alpha_deg: NDArray[np.float64]):
+    def evaluate(alpha_deg: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
         middle, chord = model(alpha_deg)
         radius = np.hypot(middle[:, 0], middle[:, 1])
         beta, radial = blade_angles(middle, chord, rotation)
@@ -120,19 +120,20 @@ def fit_pitch(model: ChordModel, s: NDArray[np.float64], initial_quartic: ArrayL
     weight = np.where(outer, sensitivity, 0.0) + INNER_ALPHA_WEIGHT
     goal = np.where(outer & (sensitivity > 0.0), best_alpha, alpha0)
     powers = np.vander(s, 5)
-    coefficients = np.linalg.lstsq(powers * weight[:, None], goal * weight, rcond=None)[0]
+    coefficients = np.asarray(np.linalg.lstsq(powers * weight[:, None], goal * weight, rcond=None)[0], dtype=float)
+    stage_two = _quartic_at(coefficients, s)
 
     def residuals(candidate: NDArray[np.float64]) -> NDArray[np.float64]:
-        alpha = evaluate_quartic(candidate, s)
+        alpha = _quartic_at(candidate, s)
         _, miss, tangential = evaluate(alpha)
-        keep = INNER_ALPHA_WEIGHT * np.radians(alpha - evaluate_quartic(coefficients, s))
+        keep = INNER_ALPHA_WEIGHT * np.radians(alpha - stage_two)
         return np.concatenate([(tangential * miss)[outer], keep])
 
     # Stage 3: polish the quartic on beta itself, held near stage 2 so it cannot wander off in turns.
     solution = least_squares(residuals, coefficients, x_scale=np.full(5, 10.0), method="trf", max_nfev=200)
     if np.sum(solution.fun**2) < np.sum(residuals(coefficients) ** 2):
-        coefficients = solution.x
-    alpha = evaluate_quartic(coefficients, s)
+        coefficients = np.asarray(solution.x, dtype=float)
+    alpha = _quartic_at(coefficients, s)
     radius, miss, tangential = evaluate(alpha)
     middle, chord = model(alpha)
     beta, _ = blade_angles(middle, chord, rotation)
@@ -140,10 +141,18 @@ def fit_pitch(model: ChordModel, s: NDArray[np.float64], initial_quartic: ArrayL
     used = tangential[outer] ** 2
     rms = float(np.degrees(np.sqrt(np.sum(used * miss[outer] ** 2) / max(np.sum(used), 1e-300))))
     at_75 = _values_at_radius(radius, pitch, PITCH_REPORT_RADIUS_FRACTION * tip_radius_mm)
-    return PitchFit(tuple(float(c) for c in coefficients), float(pitch_mm), at_75, rms, int(np.count_nonzero(outer)))
+    a, b, c, d, e = (float(value) for value in coefficients)
+    return PitchFit((a, b, c, d, e), float(pitch_mm), at_75, rms, int(np.count_nonzero(outer)))
 
 
-def _best_angles(evaluate, alpha0: NDArray[np.float64], half_range_deg: float = 90.0, steps: int = 361
+def _quartic_at(coefficients: NDArray[np.float64], s: NDArray[np.float64]) -> NDArray[np.float64]:
+    return evaluate_quartic([float(value) for value in coefficients], s)
+
+
+Evaluation = Callable[[NDArray[np.float64]], tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]]
+
+
+def _best_angles(evaluate: Evaluation, alpha0: NDArray[np.float64], half_range_deg: float = 90.0, steps: int = 361
                  ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Per section, the alpha within +-half_range of alpha0 that brings beta closest to its target,
     and |d beta / d alpha| there (0 where alpha cannot move beta)."""

@@ -19,6 +19,7 @@ The closed parameter ``t`` of :func:`closed_points` extends the spec's f(t) (§1
 
 from __future__ import annotations
 
+from collections.abc import Hashable
 from typing import Protocol, runtime_checkable
 
 import numpy as np
@@ -29,8 +30,10 @@ SHARP_TRAILING_EDGE_GAP = 1e-9
 
 
 @runtime_checkable
-class Section(Protocol):
-    """A closed 2D section in chord units (see the module docstring for the conventions)."""
+class Section(Hashable, Protocol):
+    """A closed 2D section in chord units (see the module docstring for the conventions).
+
+    Sections are hashable (equal sections share the arc-length sampling cache)."""
 
     def points_on_half(self, root_chord: ArrayLike, upper: bool) -> NDArray[np.float64]:
         """Points of the upper or lower half at u in [0, 1] (0 = leading edge): ``(len(u), 2)``."""

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+import cadquery as cq
 import numpy as np
+from numpy.typing import NDArray
 from OCP.BRep import BRep_Tool
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace, BRepBuilderAPI_MakeSolid, BRepBuilderAPI_Sewing
 from OCP.BRepCheck import BRepCheck_Analyzer
@@ -15,10 +17,8 @@ from OCP.gp import gp_Pnt
 from OCP.ShapeFix import ShapeFix_Solid
 from OCP.TColgp import TColgp_Array2OfPnt
 from OCP.TopAbs import TopAbs_SHELL
-from OCP.TopoDS import TopoDS
+from OCP.TopoDS import TopoDS, TopoDS_Face
 from scipy.interpolate import make_interp_spline
-
-import cadquery as cq
 
 from torus_cad.errors import KernelError
 from torus_cad.kernel.wires import knot_arrays
@@ -29,7 +29,7 @@ from torus_cad.tolerances import LOFT_PRECISION
 LOFT_SEWING_TOLERANCE = 1e-6
 
 
-def loft_solid(wires: Sequence[cq.Wire], parameters: Sequence[float] | None = None) -> cq.Solid:
+def loft_solid(wires: Sequence[cq.Wire], parameters: Sequence[float] | NDArray[np.float64] | None = None) -> cq.Solid:
     """A smooth closed solid through ``wires``, capped by planar end faces.
 
     The wires must be compatible B-splines (same edges, each with the same degree, knots and
@@ -66,7 +66,7 @@ def _bsplines_of(wire: cq.Wire) -> list[Geom_BSplineCurve]:
     return curves
 
 
-def _loft_through_poles(wires: Sequence[cq.Wire], parameters: Sequence[float] | None) -> cq.Solid:
+def _loft_through_poles(wires: Sequence[cq.Wire], parameters: Sequence[float] | NDArray[np.float64] | None) -> cq.Solid:
     """One side face per edge position (one for a sharp trailing edge; base and airfoil for a blunt one)."""
     edges = [_bsplines_of(wire) for wire in wires]
     if len({len(curves) for curves in edges}) != 1:
@@ -76,7 +76,7 @@ def _loft_through_poles(wires: Sequence[cq.Wire], parameters: Sequence[float] | 
     return _closed_solid(faces, wires)
 
 
-def _side_face(curves: Sequence[Geom_BSplineCurve], s: np.ndarray):
+def _side_face(curves: Sequence[Geom_BSplineCurve], s: NDArray[np.float64]) -> TopoDS_Face:
     """A B-spline face through compatible curves: every pole column interpolated by a cubic in s."""
     first = curves[0]
     degree, count = first.Degree(), first.NbPoles()
@@ -100,7 +100,7 @@ def _side_face(curves: Sequence[Geom_BSplineCurve], s: np.ndarray):
     return face.Face()
 
 
-def _closed_solid(faces: Sequence, wires: Sequence[cq.Wire]) -> cq.Solid:
+def _closed_solid(faces: Sequence[TopoDS_Face], wires: Sequence[cq.Wire]) -> cq.Solid:
     """The side faces and planar caps on the first and last wires, sewn into one checked solid."""
     sewing = BRepBuilderAPI_Sewing(LOFT_SEWING_TOLERANCE)
     for face in faces:

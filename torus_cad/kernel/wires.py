@@ -17,6 +17,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import cadquery as cq
 import numpy as np
 from numpy.typing import NDArray
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge, BRepBuilderAPI_MakeWire
@@ -24,13 +25,11 @@ from OCP.Geom import Geom_BSplineCurve
 from OCP.gp import gp_Pnt
 from OCP.TColgp import TColgp_Array1OfPnt
 from OCP.TColStd import TColStd_Array1OfInteger, TColStd_Array1OfReal
+from OCP.TopoDS import TopoDS_Edge
 from scipy.interpolate import BSpline, make_lsq_spline
 
-import cadquery as cq
-
 from torus_cad.errors import GeometryError, KernelError
-from torus_cad.tolerances import (WIRE_FIT_INITIAL_KNOTS, WIRE_FIT_MAXIMUM_KNOTS,
-                                  WIRE_FIT_RELATIVE_TOLERANCE)
+from torus_cad.tolerances import WIRE_FIT_INITIAL_KNOTS, WIRE_FIT_MAXIMUM_KNOTS, WIRE_FIT_RELATIVE_TOLERANCE
 
 DEGREE = 3
 
@@ -88,7 +87,7 @@ def _fit_with_base(points: NDArray[np.float64], parameters: NDArray[np.float64],
     return all_poles, all_knots, np.concatenate([base_error[:, :-1], error], axis=1)
 
 
-def _evaluate(poles: NDArray[np.float64], knots: NDArray[np.float64], parameters: NDArray[np.float64]) -> NDArray:
+def _evaluate(poles: NDArray[np.float64], knots: NDArray[np.float64], parameters: NDArray[np.float64]) -> NDArray[np.float64]:
     return BSpline(knots, poles, DEGREE)(parameters)
 
 
@@ -157,7 +156,7 @@ def _polylines_cross(first: NDArray[np.float64], second: NDArray[np.float64]) ->
     p, q = first[:-1, None, :], first[1:, None, :]
     r, t = second[None, :-1, :], second[None, 1:, :]
 
-    def orient(a, b, c):
+    def orient(a: NDArray[np.float64], b: NDArray[np.float64], c: NDArray[np.float64]) -> NDArray[np.float64]:
         return np.sign((b[..., 0] - a[..., 0]) * (c[..., 1] - a[..., 1]) - (b[..., 1] - a[..., 1]) * (c[..., 0] - a[..., 0]))
 
     return bool(np.any((orient(p, q, r) * orient(p, q, t) < 0) & (orient(r, t, p) * orient(r, t, q) < 0)))
@@ -180,7 +179,7 @@ def _corner_knots(knots: NDArray[np.float64]) -> NDArray[np.float64]:
     return distinct[1:-1][multiplicities[1:-1] >= DEGREE]
 
 
-def _bspline_edge(poles: NDArray[np.float64], knots: NDArray[np.float64]):
+def _bspline_edge(poles: NDArray[np.float64], knots: NDArray[np.float64]) -> TopoDS_Edge:
     pole_array = TColgp_Array1OfPnt(1, len(poles))
     for index, (x, y, z) in enumerate(poles, start=1):
         pole_array.SetValue(index, gp_Pnt(float(x), float(y), float(z)))
