@@ -27,13 +27,15 @@ from torus_cad.errors import GeometryError, ParameterError
 from torus_cad.geometry.airfoil import naca4_numbers
 from torus_cad.geometry.blade_elements import BladeElements, blade_elements
 from torus_cad.geometry.centerline import Centerline
-from torus_cad.geometry.diameter import DIAMETER_TOLERANCE_MM, radial_scale_for_diameter, tip_radius
+from torus_cad.geometry.diameter import radial_scale_for_diameter, tip_radius
 from torus_cad.geometry.frames import FrameKind, Frames, frenet_from_derivatives
 from torus_cad.geometry.pitch import (
     PITCH_FIT_SECTIONS,
+    ChordModel,
     PitchFit,
     chord_model,
     fit_pitch,
+    pitch_report,
 )
 from torus_cad.geometry.section import closed_points, has_base, parameter_end
 from torus_cad.geometry.surface import (
@@ -46,8 +48,8 @@ from torus_cad.geometry.surface import (
 from torus_cad.geometry.trailing_edge import trailing_edge_thickness_mm
 from torus_cad.geometry.transforms import evaluate_quartic
 
-#: Rounds of (diameter fit, pitch fit) before giving up on both holding together.
-TARGET_ROUNDS = 6
+#: At most this many rounds of (pitch fit, diameter fit); they stop when the diameter fit no longer moves.
+TARGET_ROUNDS = 4
 
 
 @dataclass(frozen=True)
@@ -142,8 +144,8 @@ def fit_diameter(params: Any, diameter_mm: float) -> tuple[Any, float]:
     return with_radial_scale(params, scale), scale
 
 
-def fit_angle_of_attack(params: Any, pitch_mm: float, rotation: int = 1) -> tuple[Any, PitchFit]:
-    """``params`` with alpha(s) refitted so the outer half has geometric pitch ``pitch_mm``."""
+def _pitch_model(params: Any) -> tuple[NDArray[np.float64], ChordModel]:
+    """The sections' s and the chord model alpha -> (chord mid points, chord vectors) of blade 0."""
     geometry = params.geometry()
     blade = geometry.blade
     s = np.linspace(0.0, 1.0, PITCH_FIT_SECTIONS)
@@ -154,10 +156,21 @@ def fit_angle_of_attack(params: Any, pitch_mm: float, rotation: int = 1) -> tupl
     ends = closed_points(section, [1.0, 2.0] if base else [1.0], base)
     trailing = np.repeat(ends.mean(axis=0, keepdims=True), len(s), axis=0)  # the chord line ignores the base's size
     laws = blade.laws
-    model = chord_model(frames.origin, frames.normal, frames.binormal, leading, trailing,
-                        evaluate_quartic(laws.scale_x_mm, s), evaluate_quartic(laws.scale_y_mm, s), laws.pivot)
-    fit = fit_pitch(model, s, laws.angle_of_attack_deg, pitch_mm, tip_radius_mm(params), rotation)
+    return s, chord_model(frames.origin, frames.normal, frames.binormal, leading, trailing,
+                          evaluate_quartic(laws.scale_x_mm, s), evaluate_quartic(laws.scale_y_mm, s), laws.pivot)
+
+
+def fit_angle_of_attack(params: Any, pitch_mm: float, rotation: int = 1) -> tuple[Any, PitchFit]:
+    """``params`` with alpha(s) refitted so the outer half has geometric pitch ``pitch_mm``."""
+    s, model = _pitch_model(params)
+    fit = fit_pitch(model, s, params.transforms.angle_of_attack, pitch_mm, tip_radius_mm(params), rotation)
     return params.with_values({"transforms.angle_of_attack": list(fit.angle_of_attack)}), fit
+
+
+def achieved_pitch(params: Any, pitch_mm: float, rotation: int = 1) -> PitchFit:
+    """How well ``params``' own alpha(s) meets ``pitch_mm`` (no fit)."""
+    s, model = _pitch_model(params)
+    return pitch_report(model, s, params.transforms.angle_of_attack, pitch_mm, tip_radius_mm(params), rotation)
 
 
 def _without_targets(params: Any) -> Any:
@@ -180,25 +193,23 @@ def resolve_design_targets(params: Any, rotation: int = 1) -> DesignTargets:
                                      "airfoil.camber_position": p if m > 0 else params.airfoil.camber_position,
                                      "airfoil.thickness": thickness})
     diameter_mm, pitch_mm = float(requested.get("diameter", 0.0)), float(requested.get("pitch", 0.0))
-    scale, fit = 1.0, None
+    if not (diameter_mm or pitch_mm):
+        return DesignTargets(params, requested=requested)
+    scale = 1.0
     # alpha turns the sections, which moves the outermost point, and the radius sets the pitch's
-    # beta targets: alternate the two fits until the diameter holds after the pitch fit.
-    for _ in range(TARGET_ROUNDS):
+    # beta targets: alternate the fits, and end with the diameter (met exactly; the pitch the
+    # last alpha gives is reported on the final geometry).
+    for _ in range(TARGET_ROUNDS if pitch_mm and diameter_mm else 1):
+        if pitch_mm:
+            params, _ = fit_angle_of_attack(params, pitch_mm, rotation)
         if diameter_mm:
             params, round_scale = fit_diameter(params, diameter_mm)
             scale *= round_scale
-        if not pitch_mm:
-            break
-        params, fit = fit_angle_of_attack(params, pitch_mm, rotation)
-        if not diameter_mm or abs(2.0 * tip_radius_mm(params) - diameter_mm) <= 0.1 * DIAMETER_TOLERANCE_MM:
-            break
+            if abs(round_scale - 1.0) < 1e-6:
+                break
     params = _without_targets(params)
-    if not (diameter_mm or pitch_mm):
-        return DesignTargets(params, requested=requested)
+    fit = achieved_pitch(params, pitch_mm, rotation) if pitch_mm else None
     diameter = 2.0 * tip_radius_mm(params)
-    if diameter_mm and abs(diameter - diameter_mm) > DIAMETER_TOLERANCE_MM:
-        raise GeometryError(f"diameter = {diameter_mm:g} mm and pitch = {pitch_mm:g} mm do not settle together: the "
-                            f"tip diameter ends at {diameter:.3f} mm after {TARGET_ROUNDS} rounds; change the design")
     return DesignTargets(params, scale if diameter_mm else None, diameter, fit, requested)
 
 

@@ -133,13 +133,22 @@ def fit_pitch(model: ChordModel, s: NDArray[np.float64], initial_quartic: ArrayL
     solution = least_squares(residuals, coefficients, x_scale=np.full(5, 10.0), method="trf", max_nfev=200)
     if np.sum(solution.fun**2) < np.sum(residuals(coefficients) ** 2):
         coefficients = np.asarray(solution.x, dtype=float)
+    return pitch_report(model, s, coefficients, pitch_mm, tip_radius_mm, rotation)
+
+
+def pitch_report(model: ChordModel, s: NDArray[np.float64], quartic: ArrayLike, pitch_mm: float,
+                 tip_radius_mm: float, rotation: int = 1) -> PitchFit:
+    """How well the alpha(s) ``quartic`` meets ``pitch_mm`` (nothing is fitted): a :class:`PitchFit`."""
+    coefficients = np.asarray(quartic, dtype=float)
     alpha = _quartic_at(coefficients, s)
-    radius, miss, tangential = evaluate(alpha)
     middle, chord = model(alpha)
-    beta, _ = blade_angles(middle, chord, rotation)
+    radius = np.hypot(middle[:, 0], middle[:, 1])
+    beta, radial = blade_angles(middle, chord, rotation)
+    outer = radius >= PITCH_FIT_RADIUS_FRACTION * tip_radius_mm
+    miss = np.angle(np.exp(1j * (np.radians(beta) - np.arctan2(pitch_mm, 2.0 * np.pi * radius))))
+    used = np.clip(1.0 - radial**2, 0.0, 1.0)[outer]
+    rms = float(np.degrees(np.sqrt(np.sum(used * miss[outer] ** 2) / max(float(np.sum(used)), 1e-300))))
     pitch = 2.0 * np.pi * radius * np.tan(np.radians(beta))
-    used = tangential[outer] ** 2
-    rms = float(np.degrees(np.sqrt(np.sum(used * miss[outer] ** 2) / max(np.sum(used), 1e-300))))
     at_75 = _values_at_radius(radius, pitch, PITCH_REPORT_RADIUS_FRACTION * tip_radius_mm)
     a, b, c, d, e = (float(value) for value in coefficients)
     return PitchFit((a, b, c, d, e), float(pitch_mm), at_75, rms, int(np.count_nonzero(outer)))

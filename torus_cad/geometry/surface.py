@@ -7,6 +7,7 @@ resolution; blade i is built on its own centerline at theta_0 + 360 i / n (spec 
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -17,7 +18,7 @@ from torus_cad.geometry.centerline import Centerline
 from torus_cad.geometry.frames import Frames, section_frames
 from torus_cad.geometry.propeller import BladeGeometry
 from torus_cad.geometry.section import Section, closed_points, has_base
-from torus_cad.geometry.trailing_edge import blunt_sections
+from torus_cad.geometry.trailing_edge import BluntSections, blunt_sections
 from torus_cad.geometry.transforms import evaluate_quartic
 
 
@@ -59,7 +60,7 @@ def place_on_frames(frames: Frames, planar: NDArray[np.float64]) -> NDArray[np.f
             + planar[..., 1:2] * frames.binormal[:, None, :])
 
 
-def sections_along(blade: BladeGeometry, s: ArrayLike) -> list[Section]:
+def sections_along(blade: BladeGeometry, s: ArrayLike) -> Sequence[Section]:
     """The chord-unit section at every s: the airfoil itself, or, with a blunt trailing edge, the
     airfoil opened to the blade's absolute trailing-edge thickness there (:mod:`.trailing_edge`)."""
     s = np.atleast_1d(np.asarray(s, dtype=float))
@@ -71,8 +72,10 @@ def sections_along(blade: BladeGeometry, s: ArrayLike) -> list[Section]:
                           evaluate_quartic(laws.scale_x_mm, s), evaluate_quartic(laws.scale_y_mm, s))
 
 
-def sections_at(sections: list[Section], t: NDArray[np.float64]) -> NDArray[np.float64]:
+def sections_at(sections: Sequence[Section], t: NDArray[np.float64]) -> NDArray[np.float64]:
     """Every section at the closed parameters ``t``: ``(p, 2)`` if they are all one section, else ``(k, p, 2)``."""
+    if isinstance(sections, BluntSections):
+        return sections.points_at(t)
     base = has_base(sections[0])
     if all(section is sections[0] for section in sections):
         return closed_points(sections[0], t, base)

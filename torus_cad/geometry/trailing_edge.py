@@ -15,11 +15,14 @@ unit normal at the trailing edge).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import overload
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from torus_cad.errors import ParameterError
-from torus_cad.geometry.section import Section, trailing_edge_vector
+from torus_cad.geometry.section import Section, closed_points, trailing_edge_vector
 from torus_cad.geometry.transforms import rotation_matrices
 
 
@@ -51,14 +54,45 @@ def trailing_edge_gaps(section: Section, thickness_mm: float, angle_deg: ArrayLi
     return (-b + np.sqrt(discriminant)) / (2.0 * a)
 
 
+class BluntSections(Sequence[Section]):
+    """The sections of a blade with a blunt trailing edge: ``section`` opened by ``gaps[i]`` at the i-th s.
+
+    Every section kind opens its trailing edge affinely in the gap (the thickness law changes by
+    g times a fixed shape), so the whole family is evaluated from two sections: see :meth:`points_at`.
+    """
+
+    def __init__(self, section: Section, gaps: NDArray[np.float64]) -> None:
+        self.section = section
+        self.gaps = np.asarray(gaps, dtype=float)
+
+    def __len__(self) -> int:
+        return len(self.gaps)
+
+    @overload
+    def __getitem__(self, index: int) -> Section: ...
+
+    @overload
+    def __getitem__(self, index: slice) -> Sequence[Section]: ...
+
+    def __getitem__(self, index: int | slice) -> Section | Sequence[Section]:
+        if isinstance(index, slice):
+            return BluntSections(self.section, self.gaps[index])
+        return self.section.with_trailing_edge_gap(float(self.gaps[index]))
+
+    def points_at(self, t: ArrayLike) -> NDArray[np.float64]:
+        """Every section at the closed parameters ``t`` (with a base): ``(len(self), len(t), 2)`` chord units."""
+        closed = self.section.with_trailing_edge_gap(0.0), self.section.with_trailing_edge_gap(1.0)
+        start, unit = (closed_points(section, t, base=True) for section in closed)
+        return start[None] + self.gaps[:, None, None] * (unit - start)[None]
+
+
 def blunt_sections(section: Section, thickness_mm: float, angle_deg: ArrayLike, scale_x: ArrayLike,
-                   scale_y: ArrayLike) -> list[Section]:
+                   scale_y: ArrayLike) -> BluntSections:
     """One section per s whose base is ``thickness_mm`` long once transformed (spec §2.3)."""
-    gaps = trailing_edge_gaps(section, thickness_mm, angle_deg, scale_x, scale_y)
-    return [section.with_trailing_edge_gap(float(gap)) for gap in gaps]
+    return BluntSections(section, trailing_edge_gaps(section, thickness_mm, angle_deg, scale_x, scale_y))
 
 
-def trailing_edge_thickness_mm(sections: list[Section], angle_deg: ArrayLike, scale_x: ArrayLike,
+def trailing_edge_thickness_mm(sections: Sequence[Section], angle_deg: ArrayLike, scale_x: ArrayLike,
                                scale_y: ArrayLike) -> NDArray[np.float64]:
     """Length of each transformed section's base (mm): ``(k,)``; 0 for sharp sections."""
     matrices = section_matrices(angle_deg, scale_x, scale_y)
