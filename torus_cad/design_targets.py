@@ -25,7 +25,7 @@ from numpy.typing import NDArray
 
 from torus_cad.errors import GeometryError, ParameterError
 from torus_cad.geometry.airfoil import naca4_numbers
-from torus_cad.geometry.blade_elements import BladeElements, blade_elements
+from torus_cad.geometry.blade_elements import CLOCKWISE, BladeElements, blade_elements
 from torus_cad.geometry.centerline import Centerline
 from torus_cad.geometry.diameter import radial_scale_for_diameter, tip_radius
 from torus_cad.geometry.frames import FrameKind, Frames, frenet_from_derivatives
@@ -160,14 +160,14 @@ def _pitch_model(params: Any) -> tuple[NDArray[np.float64], ChordModel]:
                           evaluate_quartic(laws.scale_x_mm, s), evaluate_quartic(laws.scale_y_mm, s), laws.pivot)
 
 
-def fit_angle_of_attack(params: Any, pitch_mm: float, rotation: int = 1) -> tuple[Any, PitchFit]:
+def fit_angle_of_attack(params: Any, pitch_mm: float, rotation: int = CLOCKWISE) -> tuple[Any, PitchFit]:
     """``params`` with alpha(s) refitted so the outer half has geometric pitch ``pitch_mm``."""
     s, model = _pitch_model(params)
     fit = fit_pitch(model, s, params.transforms.angle_of_attack, pitch_mm, tip_radius_mm(params), rotation)
     return params.with_values({"transforms.angle_of_attack": list(fit.angle_of_attack)}), fit
 
 
-def achieved_pitch(params: Any, pitch_mm: float, rotation: int = 1) -> PitchFit:
+def achieved_pitch(params: Any, pitch_mm: float, rotation: int = CLOCKWISE) -> PitchFit:
     """How well ``params``' own alpha(s) meets ``pitch_mm`` (no fit)."""
     s, model = _pitch_model(params)
     return pitch_report(model, s, params.transforms.angle_of_attack, pitch_mm, tip_radius_mm(params), rotation)
@@ -181,7 +181,7 @@ def _without_targets(params: Any) -> Any:
     return params.with_values(changes) if changes else params
 
 
-def resolve_design_targets(params: Any, rotation: int = 1) -> DesignTargets:
+def resolve_design_targets(params: Any, rotation: int = CLOCKWISE) -> DesignTargets:
     """Apply ``airfoil.naca`` (4-digit), ``diameter`` and ``pitch`` (module docstring) to ``params``."""
     requested = requested_targets(params)
     if not requested:
@@ -213,14 +213,14 @@ def resolve_design_targets(params: Any, rotation: int = 1) -> DesignTargets:
     return DesignTargets(params, scale if diameter_mm else None, diameter, fit, requested)
 
 
-def elements_of(surface: BladeSurface, rotation: int = 1) -> BladeElements:
+def elements_of(surface: BladeSurface, rotation: int = CLOCKWISE) -> BladeElements:
     """The blade-element table of a sampled blade surface."""
     frames = surface.frames
     return blade_elements(surface.s, surface.points, frames.origin, frames.normal, frames.binormal,
                           surface.trailing_edge_index or 0, surface.lower_corner_index, rotation)
 
 
-def design_elements(params: Any, points: int = 400, rotation: int = 1) -> BladeElements:
+def design_elements(params: Any, points: int = 400, rotation: int = CLOCKWISE) -> BladeElements:
     """The blade-element table at the design's own sections (``resolution.sections``), finely sampled around."""
     return elements_of(params.blade_surface(points=points), rotation)
 
@@ -236,7 +236,7 @@ def trailing_edge_of(params: Any, s: NDArray[np.float64]) -> NDArray[np.float64]
                                       evaluate_quartic(laws.scale_x_mm, s), evaluate_quartic(laws.scale_y_mm, s))
 
 
-def write_sections_table(surface: BladeSurface, params: Any, out_dir: Path, rotation: int = 1) -> dict[str, Path]:
+def write_sections_table(surface: BladeSurface, params: Any, out_dir: Path, rotation: int = CLOCKWISE) -> dict[str, Path]:
     """Write ``<name>_sections.csv`` and ``<name>_sections.png`` of the built blade ``surface`` into
     ``out_dir`` (each atomically); their paths by kind (``sections_csv``, ``sections_png``).
 

@@ -1,6 +1,9 @@
 """Blade elements: what a designer reads off each section (radius, chord, thickness, beta, pitch).
 
-Conventions (mm and degrees; the spin axis is z; "ccw" = counter-clockwise seen from +z):
+Conventions (mm and degrees; the spin axis is z; "cw" / "ccw" = clockwise / counter-clockwise
+seen from +z, looking down the axis toward -z). The blade as the spec builds it turns
+clockwise (``rotation = -1``, :data:`CLOCKWISE`), as ``handedness = "cw"`` says; its mirror image
+(``"ccw"``) has the same table with the position angles negated.
 
 * The section's **chord line** runs from its leading edge (the section's point at t = 0) to its
   trailing edge (the sharp edge, or the middle of a blunt edge's base).
@@ -29,6 +32,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+#: The turning direction of the blade as built (seen from +z): clockwise, -1 (counter-clockwise is +1).
+CLOCKWISE = -1
+
 #: Above this |c_r| / h the chord runs more radially than around the axis: beta and the pitch say little.
 NEARLY_RADIAL_FRACTION = float(np.sqrt(0.5))
 
@@ -48,7 +54,7 @@ class BladeElements:
         beta_deg: blade angle (module docstring), in (-180, 180].
         pitch_mm: geometric pitch 2 pi r tan beta.
         radial_fraction: |c_r| / h, how radially the chord runs (> NEARLY_RADIAL_FRACTION: beta says little).
-        rotation: +1 if the propeller turns ccw seen from +z, -1 if cw.
+        rotation: -1 if the propeller turns cw seen from +z (:data:`CLOCKWISE`, the default), +1 if ccw.
     """
 
     s: NDArray[np.float64]
@@ -61,7 +67,7 @@ class BladeElements:
     beta_deg: NDArray[np.float64]
     pitch_mm: NDArray[np.float64]
     radial_fraction: NDArray[np.float64]
-    rotation: int = 1
+    rotation: int = CLOCKWISE
 
     COLUMNS = ("s", "radius_mm", "axial_mm", "chord_mm", "thickness_mm", "thickness_ratio", "beta_deg",
                "pitch_mm", "position_angle_deg", "radial_fraction")
@@ -93,7 +99,7 @@ def chord_lines(points: NDArray[np.float64], trailing_edge_index: int, lower_cor
     return leading, trailing - leading
 
 
-def blade_angles(middle: NDArray[np.float64], chord: NDArray[np.float64], rotation: int = 1
+def blade_angles(middle: NDArray[np.float64], chord: NDArray[np.float64], rotation: int = CLOCKWISE
                  ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """beta (degrees) and the radial fraction |c_r| / h of chords ``(k, 3)`` whose mid points are ``middle``."""
     radial = middle[:, :2] / np.linalg.norm(middle[:, :2], axis=1, keepdims=True)
@@ -142,7 +148,7 @@ def _sorted(x: NDArray[np.float64], y: NDArray[np.float64]) -> tuple[NDArray[np.
 
 def blade_elements(s: NDArray[np.float64], points: NDArray[np.float64], origin: NDArray[np.float64],
                    normal: NDArray[np.float64], binormal: NDArray[np.float64], trailing_edge_index: int,
-                   lower_corner_index: int | None = None, rotation: int = 1) -> BladeElements:
+                   lower_corner_index: int | None = None, rotation: int = CLOCKWISE) -> BladeElements:
     """The blade-element table of sampled sections.
 
     Args:
@@ -150,7 +156,7 @@ def blade_elements(s: NDArray[np.float64], points: NDArray[np.float64], origin: 
         points: ``(k, p, 3)`` mm, closed sections starting at the leading edge, upper surface first.
         origin, normal, binormal: ``(k, 3)`` each section's frame (its plane is spanned by N and B).
         trailing_edge_index, lower_corner_index: columns of the trailing edge (and a blunt edge's lower corner).
-        rotation: +1 for a propeller turning ccw seen from +z, -1 for cw.
+        rotation: -1 for a propeller turning cw seen from +z (the default), +1 for ccw.
     """
     leading, chord = chord_lines(points, trailing_edge_index, lower_corner_index)
     middle = leading + 0.5 * chord

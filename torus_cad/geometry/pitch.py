@@ -31,7 +31,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import least_squares
 
 from torus_cad.errors import GeometryError
-from torus_cad.geometry.blade_elements import blade_angles
+from torus_cad.geometry.blade_elements import CLOCKWISE, blade_angles
 from torus_cad.geometry.transforms import evaluate_quartic
 
 #: Sections with r >= this fraction of the tip radius take part in the pitch fit.
@@ -97,7 +97,7 @@ def chord_model(origin: NDArray[np.float64], normal: NDArray[np.float64], binorm
 
 
 def fit_pitch(model: ChordModel, s: NDArray[np.float64], initial_quartic: ArrayLike, pitch_mm: float,
-              tip_radius_mm: float, rotation: int = 1) -> PitchFit:
+              tip_radius_mm: float, rotation: int = CLOCKWISE) -> PitchFit:
     """Fit alpha(s) (a quartic) so the outer sections' geometric pitch is ``pitch_mm`` (module docstring)."""
     initial = np.asarray(initial_quartic, dtype=float)
     alpha0 = _quartic_at(initial, s)
@@ -137,7 +137,7 @@ def fit_pitch(model: ChordModel, s: NDArray[np.float64], initial_quartic: ArrayL
 
 
 def pitch_report(model: ChordModel, s: NDArray[np.float64], quartic: ArrayLike, pitch_mm: float,
-                 tip_radius_mm: float, rotation: int = 1) -> PitchFit:
+                 tip_radius_mm: float, rotation: int = CLOCKWISE) -> PitchFit:
     """How well the alpha(s) ``quartic`` meets ``pitch_mm`` (nothing is fitted): a :class:`PitchFit`."""
     coefficients = np.asarray(quartic, dtype=float)
     alpha = _quartic_at(coefficients, s)
