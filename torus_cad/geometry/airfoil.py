@@ -10,7 +10,7 @@ Blunt trailing edge (issue 13 part 3): ``trailing_edge_gap`` g (chord units) cha
 thickness law to y_t(t) + (g / 2) t^4, i.e. the last coefficient of the NACA thickness
 polynomial -0.1036 becomes -0.1036 + g / (10 thickness). This is the classical "open
 trailing edge" variant of the four-digit thickness (-0.1015 gives g = 0.0021 x 10 thickness):
-y_t is unchanged at the leading edge with all its derivatives up to the fourth, and changes by
+y_t is unchanged at the leading edge with its derivatives up to the third, and changes by
 g / 2 t^4 elsewhere (the half-thickness by 0.004 g at 30 % of the chord, by g / 2 at the trailing edge),
 so the section keeps its shape and gets a base of thickness g, normal to the camber line at
 the trailing edge (along y when camber_normal is False).
