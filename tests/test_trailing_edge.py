@@ -63,3 +63,13 @@ def test_a_blunt_section_stays_closed_and_simple():
     assert np.max(np.linalg.norm(np.diff(points, axis=0), axis=1)) < 0.01  # no jump: the base joins the corners
     upper, lower = airfoil.surfaces(np.linspace(0.0, 1.0, 1001))
     assert np.all(upper[1:, 1] - lower[1:, 1] > 0.0)  # the surfaces never cross
+
+
+def test_a_trailing_edge_thicker_than_the_sections_is_refused(tmp_path, capsys):
+    from torus_cad.cli import main
+
+    # The default's sections are 1.0-1.6 mm thick (Sy 2-3 mm x thickness 0.5).
+    code = main(["build", "--set", "airfoil.trailing_edge_thickness=1.2", "--out", str(tmp_path / "out")])
+    error = capsys.readouterr().err
+    assert code == 2 and "airfoil.trailing_edge_thickness = 1.2 mm is too thick" in error
+    assert not (tmp_path / "out").exists()

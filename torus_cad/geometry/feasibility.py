@@ -29,7 +29,14 @@ from torus_cad.errors import GeometryError
 from torus_cad.geometry.centerline import Centerline
 from torus_cad.geometry.frames import Frames
 from torus_cad.geometry.propeller import HubGeometry, PropellerGeometry
-from torus_cad.geometry.surface import BladeSurface, blade_frames, place_on_frames, sections_along, sections_at
+from torus_cad.geometry.surface import (
+    BladeSurface,
+    blade_frames,
+    check_trailing_edge,
+    place_on_frames,
+    sections_along,
+    sections_at,
+)
 
 #: A section may reach at most this fraction of the way to the centre of curvature (check 3).
 FOLD_LIMIT = 1.0
@@ -338,6 +345,7 @@ def check_feasible(geometry: PropellerGeometry, surface: BladeSurface) -> None:
     centerline = geometry.centerline(0)
     check_ends_inside_hub(geometry.hub, surface)
     check_centerline_leaves_through_side(geometry.hub, centerline)
+    check_trailing_edge(geometry.blade)
     s, step = tube_grid(len(surface.s))
     fine = sample_tube(geometry, centerline, s, surface.t)
     check_no_fold(fine)

@@ -18,7 +18,12 @@ from torus_cad.geometry.centerline import Centerline
 from torus_cad.geometry.frames import Frames, section_frames
 from torus_cad.geometry.propeller import BladeGeometry
 from torus_cad.geometry.section import Section, closed_points, has_base
-from torus_cad.geometry.trailing_edge import BluntSections, blunt_sections
+from torus_cad.geometry.trailing_edge import (
+    TRAILING_EDGE_CHECK_SECTIONS,
+    BluntSections,
+    blunt_sections,
+    check_trailing_edge_fits,
+)
 from torus_cad.geometry.transforms import evaluate_quartic
 
 
@@ -70,6 +75,16 @@ def sections_along(blade: BladeGeometry, s: ArrayLike) -> Sequence[Section]:
     laws = blade.laws
     return blunt_sections(blade.airfoil, thickness, evaluate_quartic(laws.angle_of_attack_deg, s),
                           evaluate_quartic(laws.scale_x_mm, s), evaluate_quartic(laws.scale_y_mm, s))
+
+
+def check_trailing_edge(blade: BladeGeometry) -> None:
+    """Refuse a blunt trailing edge thicker than the blade's sections (:func:`.trailing_edge.check_trailing_edge_fits`)."""
+    if blade.trailing_edge_thickness_mm <= 0.0:
+        return
+    s = np.linspace(0.0, 1.0, TRAILING_EDGE_CHECK_SECTIONS)
+    laws = blade.laws
+    check_trailing_edge_fits(blade.airfoil, blade.trailing_edge_thickness_mm, evaluate_quartic(laws.angle_of_attack_deg, s),
+                             evaluate_quartic(laws.scale_x_mm, s), evaluate_quartic(laws.scale_y_mm, s), s)
 
 
 def sections_at(sections: Sequence[Section], t: NDArray[np.float64]) -> NDArray[np.float64]:

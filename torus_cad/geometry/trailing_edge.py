@@ -98,3 +98,37 @@ def trailing_edge_thickness_mm(sections: Sequence[Section], angle_deg: ArrayLike
     matrices = section_matrices(angle_deg, scale_x, scale_y)
     vectors = np.array([trailing_edge_vector(section) for section in sections])
     return np.linalg.norm(np.einsum("kij,kj->ki", matrices, vectors), axis=-1)
+
+
+#: A blunt trailing edge may be at most this fraction of the section's own largest thickness
+#: (thicker, the t^4 term would take over the section and the base would be its thickest part).
+TRAILING_EDGE_THICKNESS_LIMIT = 0.9
+
+#: Sections along s at which the trailing edge is checked against the section's thickness.
+TRAILING_EDGE_CHECK_SECTIONS = 41
+
+
+def check_trailing_edge_fits(section: Section, thickness_mm: float, angle_deg: ArrayLike, scale_x: ArrayLike,
+                             scale_y: ArrayLike, s: ArrayLike, points: int = 200) -> None:
+    """Refuse a blunt trailing edge thicker than TRAILING_EDGE_THICKNESS_LIMIT x a section's largest thickness.
+
+    The thickness is the section's own (without the base), measured perpendicular to its chord
+    in mm, at the s given (``angle_deg``, ``scale_x``, ``scale_y`` are the laws there).
+    """
+    if thickness_mm <= 0.0:
+        return
+    from torus_cad.errors import GeometryError
+    from torus_cad.geometry.arc_length import equal_arc_length_section
+    from torus_cad.geometry.blade_elements import section_thickness
+    from torus_cad.geometry.transforms import transform_sections
+
+    sharp = section.with_trailing_edge_gap(0.0)
+    sampling = equal_arc_length_section(sharp, points)
+    planar = transform_sections(sampling.points, angle_deg, scale_x, scale_y)
+    thickest = section_thickness(planar, sampling.trailing_edge_index or 0, sampling.lower_corner_index)
+    worst = int(np.argmin(thickest))
+    if thickness_mm > TRAILING_EDGE_THICKNESS_LIMIT * thickest[worst]:
+        raise GeometryError(
+            f"airfoil.trailing_edge_thickness = {thickness_mm:g} mm is too thick for the blade: near s = "
+            f"{float(np.asarray(s, dtype=float)[worst]):.3f} the section is only {thickest[worst]:.3g} mm thick "
+            f"(limit {TRAILING_EDGE_THICKNESS_LIMIT:g} x that); make the edge thinner or the sections thicker")
