@@ -6,21 +6,18 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from brep_measure import (
+
+from torus_cad.cli import main
+from torus_cad.design_targets import pitch_on_solid, radius_crossings, resolve_design_targets
+from torus_cad.geometry.diameter import DIAMETER_TOLERANCE_MM
+from torus_cad.geometry.surface import blade_frames
+from torus_cad.kernel.measure import (
     contour_through,
-    edge_points,
-    farthest_pair,
     max_radius_mm,
     plane_section_edges,
     straight_edges,
     vertex_radius_mm,
 )
-
-from torus_cad.cli import main
-from torus_cad.design_targets import elements_of, resolve_design_targets
-from torus_cad.geometry.blade_elements import blade_angles
-from torus_cad.geometry.diameter import DIAMETER_TOLERANCE_MM
-from torus_cad.geometry.surface import blade_frames
 from torus_cad.parameters import PropellerParameters
 from torus_cad.propeller import build_propeller
 
@@ -44,39 +41,14 @@ def test_the_solid_has_the_requested_tip_diameter(multirotor):
     assert multirotor.design_targets.tip_diameter_mm == pytest.approx(127.0, abs=1e-3)
 
 
-def _crossings(params, radius_mm):
-    """s and the model's pitch where the blade passes ``radius_mm`` (fine analytic sampling)."""
-    fine = elements_of(params.blade_surface(sections=801, points=48))
-    found = []
-    for i in np.flatnonzero(np.diff(np.sign(fine.radius_mm - radius_mm))):
-        w = (radius_mm - fine.radius_mm[i]) / (fine.radius_mm[i + 1] - fine.radius_mm[i])
-        found.append((fine.s[i] + w * (fine.s[i + 1] - fine.s[i]),
-                      fine.pitch_mm[i] + w * (fine.pitch_mm[i + 1] - fine.pitch_mm[i])))
-    return found
-
-
-def _pitch_on_solid(propeller, s):
-    """Geometric pitch of the solid's section in the plane of section s (symmetric section: chord =
-    the contour's farthest pair of points, the leading edge the one on the centerline)."""
-    geometry = propeller.parameters.geometry()
-    frames = blade_frames(geometry.blade, geometry.centerline(0), [s])
-    origin = frames.origin[0]
-    edges = contour_through(plane_section_edges(propeller.solid, origin, frames.tangent[0], 20.0), origin)
-    a, b = farthest_pair(edge_points(edges, 1000))
-    leading, trailing = (a, b) if np.linalg.norm(a - origin) < np.linalg.norm(b - origin) else (b, a)
-    middle = 0.5 * (leading + trailing)
-    beta, _ = blade_angles(middle[None], (trailing - leading)[None])
-    return 2.0 * np.pi * np.hypot(middle[0], middle[1]) * np.tan(np.radians(beta[0]))
-
-
 @pytest.mark.slow
 def test_the_solid_has_the_requested_pitch_at_75_percent_radius(multirotor):
     fit = multirotor.design_targets.pitch_fit
     radius = 0.75 * multirotor.design_targets.tip_diameter_mm / 2.0
-    crossings = _crossings(multirotor.parameters, radius)
+    crossings = radius_crossings(multirotor.parameters, radius)
     assert len(crossings) == 2 == len(fit.pitch_at_75_mm)  # a loop passes 75 % of the radius twice
     for (s, model_pitch), reported in zip(crossings, fit.pitch_at_75_mm):
-        measured = _pitch_on_solid(multirotor, s)
+        measured = pitch_on_solid(multirotor, s)
         assert measured == pytest.approx(reported, rel=0.01)  # the report tells what the solid has
         assert measured == pytest.approx(114.0, rel=0.03)  # and that is the target, to the quartic's fit
         assert model_pitch == pytest.approx(reported, rel=1e-3)

@@ -25,7 +25,7 @@ from numpy.typing import NDArray
 
 from torus_cad.errors import GeometryError, ParameterError
 from torus_cad.geometry.airfoil import naca4_numbers
-from torus_cad.geometry.blade_elements import CLOCKWISE, BladeElements, blade_elements
+from torus_cad.geometry.blade_elements import CLOCKWISE, BladeElements, blade_angles, blade_elements
 from torus_cad.geometry.centerline import Centerline
 from torus_cad.geometry.diameter import radial_scale_for_diameter, tip_radius
 from torus_cad.geometry.frames import FrameKind, Frames, frenet_from_derivatives
@@ -254,3 +254,37 @@ def write_sections_table(surface: BladeSurface, params: Any, out_dir: Path, rota
     with atomic_path(paths["sections_png"]) as temp:
         write_sections_png(elements, temp, title=f"{params.name}: blade elements")
     return paths
+
+
+# -- checking the targets on a built solid --------------------------------------------------------
+
+def radius_crossings(params: Any, radius_mm: float, sections: int = 801) -> list[tuple[float, float]]:
+    """``(s, geometric pitch mm)`` where blade 0 passes ``radius_mm`` (analytic, ``sections`` samples)."""
+    fine = elements_of(params.blade_surface(sections=sections, points=48))
+    found = []
+    for i in np.flatnonzero(np.diff(np.sign(fine.radius_mm - radius_mm))):
+        w = (radius_mm - fine.radius_mm[i]) / (fine.radius_mm[i + 1] - fine.radius_mm[i])
+        found.append((float(fine.s[i] + w * (fine.s[i + 1] - fine.s[i])),
+                      float(fine.pitch_mm[i] + w * (fine.pitch_mm[i + 1] - fine.pitch_mm[i]))))
+    return found
+
+
+def pitch_on_solid(propeller: Any, s: float, rotation: int = CLOCKWISE) -> float:
+    """Geometric pitch (mm) of the built solid's section in the plane of section ``s``.
+
+    Measured on the B-rep: the plane cuts the solid, the contour through the centerline's point
+    is sampled, its chord is the contour's farthest pair of points (exact for symmetric
+    sections; the leading edge is the end on the centerline, the spec's pivot 0).
+    """
+    from torus_cad.kernel.measure import contour_through, edge_points, farthest_pair, plane_section_edges
+
+    geometry = propeller.parameters.geometry()
+    frames = blade_frames(geometry.blade, geometry.centerline(0), [s])
+    origin = frames.origin[0]
+    reach = 2.0 * float(np.max(evaluate_quartic(geometry.blade.laws.scale_x_mm, [s])))
+    edges = contour_through(plane_section_edges(propeller.solid, origin, frames.tangent[0], reach), origin)
+    a, b = farthest_pair(edge_points(edges, 1000))
+    leading, trailing = (a, b) if np.linalg.norm(a - origin) < np.linalg.norm(b - origin) else (b, a)
+    middle = 0.5 * (leading + trailing)
+    beta, _ = blade_angles(middle[None], (trailing - leading)[None], rotation)
+    return float(2.0 * np.pi * np.hypot(middle[0], middle[1]) * np.tan(np.radians(beta[0])))

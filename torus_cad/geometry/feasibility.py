@@ -345,7 +345,7 @@ def check_feasible(geometry: PropellerGeometry, surface: BladeSurface) -> None:
     centerline = geometry.centerline(0)
     check_ends_inside_hub(geometry.hub, surface)
     check_centerline_leaves_through_side(geometry.hub, centerline)
-    check_trailing_edge(geometry.blade)
+    check_trailing_edge(geometry.blade, centerline, geometry.hub.radius_mm, geometry.hub.length_mm)
     s, step = tube_grid(len(surface.s))
     fine = sample_tube(geometry, centerline, s, surface.t)
     check_no_fold(fine)

@@ -77,12 +77,18 @@ def sections_along(blade: BladeGeometry, s: ArrayLike) -> Sequence[Section]:
                           evaluate_quartic(laws.scale_x_mm, s), evaluate_quartic(laws.scale_y_mm, s))
 
 
-def check_trailing_edge(blade: BladeGeometry) -> None:
-    """Refuse a blunt trailing edge thicker than the blade's sections (:func:`.trailing_edge.check_trailing_edge_fits`)."""
+def check_trailing_edge(blade: BladeGeometry, centerline: Centerline, hub_radius_mm: float, hub_length_mm: float
+                        ) -> None:
+    """Refuse a blunt trailing edge thicker than the blade's sections where the blade is outside the hub
+    (:func:`.trailing_edge.check_trailing_edge_fits`; inside, the hub swallows the sections)."""
     if blade.trailing_edge_thickness_mm <= 0.0:
         return
     s = np.linspace(0.0, 1.0, TRAILING_EDGE_CHECK_SECTIONS)
-    laws = blade.laws
+    points = centerline.points(s)
+    outside = (np.hypot(points[:, 0], points[:, 1]) > hub_radius_mm) | (np.abs(points[:, 2]) > hub_length_mm / 2.0)
+    if not np.any(outside):
+        return
+    s, laws = s[outside], blade.laws
     check_trailing_edge_fits(blade.airfoil, blade.trailing_edge_thickness_mm, evaluate_quartic(laws.angle_of_attack_deg, s),
                              evaluate_quartic(laws.scale_x_mm, s), evaluate_quartic(laws.scale_y_mm, s), s)
 

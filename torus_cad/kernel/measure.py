@@ -1,13 +1,20 @@
-"""Measurements on built B-reps for the designer tests: bounding radius, plane sections, chords."""
+"""Measurements on a built B-rep: its bounding radius about the spin axis, plane sections, chords.
+
+Used to check design targets on the solid itself (tests/test_design_targets.py,
+scripts/measure_targets.py), independently of the geometry layer that made it.
+"""
 
 from __future__ import annotations
 
 import cadquery as cq
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 from OCP.BRepAlgoAPI import BRepAlgoAPI_Section
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
 from OCP.BRepExtrema import BRepExtrema_DistShapeShape
 from OCP.gp import gp_Ax3, gp_Dir, gp_Pln, gp_Pnt
+
+from torus_cad.errors import KernelError
 
 
 def max_radius_mm(solid: cq.Shape) -> float:
@@ -17,8 +24,9 @@ def max_radius_mm(solid: cq.Shape) -> float:
     cylinder = cq.Solid.makeCylinder(outer, box.zlen + 20.0, cq.Vector(0, 0, box.zmin - 10.0))
     lateral = next(face for face in cylinder.Faces() if face.geomType() == "CYLINDER")
     extrema = BRepExtrema_DistShapeShape(solid.wrapped, lateral.wrapped)
-    assert extrema.IsDone()
-    return outer - extrema.Value()
+    if not extrema.IsDone():
+        raise KernelError("BRepExtrema could not measure the solid's distance from a coaxial cylinder")
+    return float(outer - extrema.Value())
 
 
 def vertex_radius_mm(solid: cq.Shape, tolerance: float = 0.05) -> float:
@@ -27,14 +35,17 @@ def vertex_radius_mm(solid: cq.Shape, tolerance: float = 0.05) -> float:
     return max(float(np.hypot(v.x, v.y)) for v in vertices)
 
 
-def plane_section_edges(solid: cq.Shape, origin, normal, half_size: float) -> list[cq.Edge]:
+def plane_section_edges(solid: cq.Shape, origin: ArrayLike, normal: ArrayLike, half_size: float) -> list[cq.Edge]:
     """Edges where the solid meets a square of ``2 half_size`` around ``origin`` normal to ``normal``."""
-    plane = gp_Pln(gp_Ax3(gp_Pnt(*map(float, origin)), gp_Dir(*map(float, normal))))
+    x, y, z = (float(value) for value in np.asarray(origin, dtype=float))
+    u, v, w = (float(value) for value in np.asarray(normal, dtype=float))
+    plane = gp_Pln(gp_Ax3(gp_Pnt(x, y, z), gp_Dir(u, v, w)))
     face = BRepBuilderAPI_MakeFace(plane, -half_size, half_size, -half_size, half_size).Face()
     section = BRepAlgoAPI_Section(solid.wrapped, face)
     section.Build()
-    assert section.IsDone()
-    return cq.Shape.cast(section.Shape()).Edges()
+    if not section.IsDone():
+        raise KernelError("OpenCascade could not cut the solid with a section plane")
+    return list(cq.Shape.cast(section.Shape()).Edges())
 
 
 def straight_edges(edges: list[cq.Edge], relative: float = 1e-6) -> list[cq.Edge]:
@@ -47,7 +58,7 @@ def straight_edges(edges: list[cq.Edge], relative: float = 1e-6) -> list[cq.Edge
     return straight
 
 
-def edge_points(edges: list[cq.Edge], per_edge: int = 2000) -> np.ndarray:
+def edge_points(edges: list[cq.Edge], per_edge: int = 2000) -> NDArray[np.float64]:
     """``(n, 3)`` points along the edges, ``per_edge`` each."""
     points = []
     for edge in edges:
@@ -57,18 +68,19 @@ def edge_points(edges: list[cq.Edge], per_edge: int = 2000) -> np.ndarray:
     return np.array(points)
 
 
-def farthest_pair(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def farthest_pair(points: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """The two points of ``(n, 3)`` farthest apart (the chord of a thin symmetric section)."""
     from scipy.spatial import ConvexHull
 
-    hull = points[ConvexHull(points[:, :2] if np.ptp(points[:, 2]) == 0 else points, qhull_options="QJ").vertices]
+    hull = points[ConvexHull(points, qhull_options="QJ").vertices]
     distance = np.linalg.norm(hull[:, None] - hull[None, :], axis=-1)
     i, j = np.unravel_index(int(np.argmax(distance)), distance.shape)
     return hull[i], hull[j]
 
 
-def contour_through(edges: list[cq.Edge], point, tolerance: float = 1e-3) -> list[cq.Edge]:
+def contour_through(edges: list[cq.Edge], point: ArrayLike, tolerance: float = 1e-3) -> list[cq.Edge]:
     """The edges of the closed contour (wire) among ``edges`` that passes nearest ``point``."""
     wires = cq.Wire.combine(edges, tol=tolerance)
-    target = cq.Vertex.makeVertex(*map(float, point))
-    return min(wires, key=lambda wire: wire.distance(target)).Edges()
+    x, y, z = (float(value) for value in np.asarray(point, dtype=float))
+    target = cq.Vertex.makeVertex(x, y, z)
+    return list(min(wires, key=lambda wire: wire.distance(target)).Edges())
