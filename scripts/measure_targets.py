@@ -41,4 +41,5 @@ def main(paths: list[Path]) -> int:
 
 if __name__ == "__main__":
     arguments = [Path(arg) for arg in sys.argv[1:]]
-    raise SystemExit(main(arguments or sorted(Path("examples").glob("*.toml"))))
+    raise SystemExit(main(arguments or sorted(path for path in Path("examples").glob("*.toml")
+                                              if not path.name.startswith("sweep"))))

@@ -272,19 +272,25 @@ def radius_crossings(params: Any, radius_mm: float, sections: int = 801) -> list
 def pitch_on_solid(propeller: Any, s: float, rotation: int = CLOCKWISE) -> float:
     """Geometric pitch (mm) of the built solid's section in the plane of section ``s``.
 
-    Measured on the B-rep: the plane cuts the solid, the contour through the centerline's point
-    is sampled, its chord is the contour's farthest pair of points (exact for symmetric
-    sections; the leading edge is the end on the centerline, the spec's pivot 0).
+    Measured on the B-rep: the plane cuts the solid and the contour through the centerline's
+    point is sampled. The leading edge is the contour's point on the centerline (the spec's
+    pivot 0 puts it there); the trailing edge is the middle of the contour's straight edge
+    (a blunt base) if it has one, else the contour's point farthest from the leading edge.
     """
-    from torus_cad.kernel.measure import contour_through, edge_points, farthest_pair, plane_section_edges
+    from torus_cad.kernel.measure import contour_through, edge_points, plane_section_edges, straight_edges
 
     geometry = propeller.parameters.geometry()
     frames = blade_frames(geometry.blade, geometry.centerline(0), [s])
     origin = frames.origin[0]
     reach = 2.0 * float(np.max(evaluate_quartic(geometry.blade.laws.scale_x_mm, [s])))
     edges = contour_through(plane_section_edges(propeller.solid, origin, frames.tangent[0], reach), origin)
-    a, b = farthest_pair(edge_points(edges, 1000))
-    leading, trailing = (a, b) if np.linalg.norm(a - origin) < np.linalg.norm(b - origin) else (b, a)
+    points = edge_points(edges, 1000)
+    leading = points[int(np.argmin(np.linalg.norm(points - origin, axis=1)))]
+    bases = straight_edges(edges)
+    if bases:
+        trailing = np.asarray(bases[0].positionAt(0.5).toTuple(), dtype=float)
+    else:
+        trailing = points[int(np.argmax(np.linalg.norm(points - leading, axis=1)))]
     middle = 0.5 * (leading + trailing)
     beta, _ = blade_angles(middle[None], (trailing - leading)[None], rotation)
     return float(2.0 * np.pi * np.hypot(middle[0], middle[1]) * np.tan(np.radians(beta[0])))
