@@ -18,7 +18,7 @@ import numpy as np
 
 from torus_cad.design_targets import elements_of, tip_radius_mm
 from torus_cad.geometry.blade_elements import NEARLY_RADIAL_FRACTION
-from torus_cad.preview import parse_size, render_preview
+from torus_cad.preview import parse_size, render_preview, write_png
 from torus_cad.propeller import build_propeller
 
 EXAMPLES = Path("examples")
@@ -51,7 +51,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("designs", nargs="*", type=Path, help="design files (default: examples/*.toml)")
     parser.add_argument("--out", type=Path, default=Path("docs/images/gallery.png"))
-    parser.add_argument("--tile", default="900x450", help="size of each design's picture, WxH pixels")
+    parser.add_argument("--tile", default="1000x420", help="size of each design's picture, WxH pixels")
     args = parser.parse_args(argv)
     width, height = parse_size(args.tile, "--tile")
     tiles = []
@@ -62,14 +62,12 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{path}: {time.perf_counter() - start:.1f} s", file=sys.stderr)
     columns = 2
     rows = -(-len(tiles) // columns)
-    sheet = np.full((rows * height, columns * width, 4), 255, dtype=np.uint8)
+    sheet = np.full((rows * height, columns * width, tiles[0].shape[2]), 255, dtype=np.uint8)
     for index, tile in enumerate(tiles):
         row, column = divmod(index, columns)
         sheet[row * height:(row + 1) * height, column * width:(column + 1) * width] = tile
-    from matplotlib.image import imsave
-
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    imsave(args.out, sheet, format="png")
+    write_png(sheet, args.out)
     print(f"wrote {args.out} ({sheet.shape[1]}x{sheet.shape[0]} px, {len(tiles)} designs)")
     return 0
 
