@@ -173,9 +173,10 @@ def _command_sweep(args: argparse.Namespace) -> int:
                            time_limit_s=args.time_limit, rebuild=args.rebuild, progress=False if args.quiet else None)
     except SweepInterrupted as interrupt:
         partial = interrupt.result
-        table = partial.tables.get("csv", out / "results.csv")
-        print(f"torus-cad: sweep interrupted by {interrupt.signal_name}: {partial.counts_text()}; "
-              f"table written to {table}; rerun the same command to resume", file=sys.stderr)
+        done = (f"{partial.counts_text()}; table written to {partial.tables['csv']}" if partial.tables
+                else "nothing was built")
+        print(f"torus-cad: sweep interrupted by {interrupt.signal_name}: {done}; rerun the same command to resume",
+              file=sys.stderr)
         return interrupt.exit_code
     except BatchError as error:
         print(f"torus-cad: sweep failed: {error}", file=sys.stderr)
@@ -231,7 +232,10 @@ def build_parser() -> argparse.ArgumentParser:
                                 description="Build every design of a sweep file (a base design plus the "
                                 "parameters to vary: lists, grid ranges, or random / Latin-hypercube bounds) "
                                 "into OUT/designs/<id>/ and tabulate them in OUT/results.csv. Rerunning "
-                                "resumes: designs already done are skipped.")
+                                "resumes: designs already done are skipped. Exit codes: 0 every design valid "
+                                "or refused; 1 a design failed, errored, crashed or timed out; 2 a bad sweep "
+                                "file (or more than 1,000,000 designs); 130 / 143 interrupted by Ctrl-C / SIGTERM "
+                                "(the table of what finished is written).")
     sweep.add_argument("sweep", metavar="SWEEP.toml", help="sweep file (see examples/sweep_example.toml)")
     sweep.add_argument("--out", help="output folder (default: sweep_out/<sweep file name>)")
     sweep.add_argument("--workers", type=int, metavar="N",
