@@ -76,6 +76,13 @@ def _command_build(args: argparse.Namespace) -> int:
     progress = StageProgress.for_terminal(quiet=args.quiet)  # stderr, only on a terminal
     params = load_parameters(args.config, args.overrides)
     size = _preview_size(args.preview_size, "--preview-size") if args.preview else None
+    if args.require_printable:  # decided from the analytic section, before any work or file
+        from torus_cad.geometry.printability import printability
+
+        blade = params.geometry().blade
+        problem = printability(blade.airfoil, blade.laws, params.manufacturing.min_wall).problem()
+        if problem:
+            raise GeometryError(f"not printable (--require-printable): {problem}")
     progress("kernel_import")  # a line on the terminal before the seconds that importing cadquery takes
     from torus_cad.propeller import build_propeller
 
@@ -93,6 +100,9 @@ def _command_build(args: argparse.Namespace) -> int:
             print(f"wrote {path}")
         print(f"volume {report['volume_mm3']:.3f} mm^3, area {report['surface_area_mm2']:.3f} mm^2, "
               f"mass {report['mass_g']:.3f} g at {args.density:g} g/cm^3")
+        if params.blades == 1:
+            print(f"warning: a one-blade propeller is out of balance: static imbalance "
+                  f"{report['balance']['static_imbalance_g_mm']:.3f} g mm; add a counterweight or use 2 or more blades")
     if args.verbose:
         print(f"centroid {tuple(round(c, 6) for c in report['centroid_mm'])} mm, "
               f"spin-axis inertia {report['spin_axis_inertia_g_mm2']:.4f} g mm^2")
@@ -102,7 +112,9 @@ def _command_build(args: argparse.Namespace) -> int:
 
 
 def _preview_size(text: str, option: str) -> tuple[int, int]:
-    from torus_cad.preview import parse_size  # raises ParameterError (exit 2) for a bad WxH
+    from torus_cad.preview import (
+        parse_size,  # raises ParameterError (exit 2) for a bad WxH
+    )
 
     return parse_size(text, option)
 
@@ -201,6 +213,9 @@ def build_parser() -> argparse.ArgumentParser:
     build.add_argument("--density", type=_positive_density, default=1.24,
                        help="material density for the mass, g/cm^3 (default 1.24, PLA)")
     build.add_argument("--no-stl", action="store_true", help="write STEP and JSON only")
+    build.add_argument("--require-printable", action="store_true",
+                       help="exit 2, writing nothing, when the blade is thinner than manufacturing.min_wall "
+                            "(thinnest section or trailing edge; see the JSON's printability)")
     build.add_argument("-v", "--verbose", action="store_true", help="print mass properties and stage times")
     build.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     build.add_argument("--preview", action="store_true", help="also render <name>.png (see 'torus-cad preview')")

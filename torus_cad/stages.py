@@ -23,9 +23,12 @@ class Stage(StrEnum):
     LOFT = "loft"
     FUSE = "fuse"
     CHECK = "check"
+    FILLET = "fillet"
+    MIRROR = "mirror"
     STEP_WRITE = "step_write"
     STL_WRITE = "stl_write"
     SECTIONS_TABLE = "sections_table"
+    THREE_MF_WRITE = "3mf_write"
 
     @property
     def label(self) -> str:
@@ -41,9 +44,12 @@ _LABELS = {
     Stage.LOFT: "lofting the blade",
     Stage.FUSE: "fusing blades with the hub",
     Stage.CHECK: "checking the solid",
+    Stage.FILLET: "filleting the blade roots",
+    Stage.MIRROR: "mirroring (clockwise)",
     Stage.STEP_WRITE: "writing STEP",
     Stage.STL_WRITE: "writing STL",
     Stage.SECTIONS_TABLE: "writing the blade-element table",
+    Stage.THREE_MF_WRITE: "writing 3MF",
 }
 
 

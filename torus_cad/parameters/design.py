@@ -18,12 +18,13 @@ from enum import StrEnum
 from pathlib import Path
 from typing import Annotated, Any, Self
 
-from pydantic import AfterValidator, Field, model_validator
+from pydantic import AfterValidator, BeforeValidator, Field, model_validator
 
 from torus_cad.errors import ParameterError
 from torus_cad.geometry.airfoil import Naca5Airfoil, NacaAirfoil, naca4_numbers, naca_section
 from torus_cad.geometry.airfoil_file import load_airfoil_file
 from torus_cad.geometry.frames import FrameKind
+from torus_cad.geometry.mounting import HubMounting
 from torus_cad.geometry.propeller import BladeGeometry, HubGeometry, PropellerGeometry
 from torus_cad.geometry.section import Section as SectionShape
 from torus_cad.geometry.surface import BladeSurface, blade_surface
@@ -61,6 +62,39 @@ class Hub(Section):
                           doc="R; the blade ends sit at R - R/8 (spec §3.2)")
     length: float = param(20.0, unit="mm", gt=2.0, le=2000.0, fuzz=(8.0, 50.0),
                           doc="L; the hub spans z in [-L/2, L/2]")
+    bore_diameter: float = param(0.0, unit="mm", ge=0.0, le=2000.0,
+                                 doc="coaxial through-bore for a shaft; 0 = solid hub")
+    bore_flat_depth: float = param(0.0, unit="mm", ge=0.0, le=1000.0,
+                                   doc="D-flat for a D-cut shaft: how far the flat reaches into the bore; 0 = round bore")
+    set_screw_diameter: float = param(0.0, unit="mm", ge=0.0, le=100.0,
+                                      doc="radial set-screw hole at mid-length, between blades, onto the flat; 0 = none")
+    chamfer: float = param(0.0, unit="mm", ge=0.0, le=100.0, doc="45-degree chamfer on the hub's outer end edges; 0 = none")
+    root_fillet_radius: float = param(0.0, unit="mm", ge=0.0, le=20.0,
+                                      doc="fillet along every blade-hub junction; 0 = sharp junction (the spec)")
+
+    @model_validator(mode="after")
+    def _mounting_fits(self) -> Self:
+        """Limits that follow from the hub's own size (the blades' limits are checked with the geometry)."""
+        bore_radius = self.bore_diameter / 2.0
+        if self.bore_flat_depth > 0.0 and self.bore_diameter == 0.0:
+            raise ValueError(f"hub.bore_flat_depth = {self.bore_flat_depth:g} mm needs a bore; set hub.bore_diameter")
+        if self.bore_flat_depth >= bore_radius > 0.0:
+            raise ValueError(f"hub.bore_flat_depth = {self.bore_flat_depth:g} mm is out of range; allowed "
+                             f"[0, {bore_radius:g}) mm, less than the bore's radius")
+        if self.set_screw_diameter > 0.0 and self.bore_diameter == 0.0:
+            raise ValueError(f"hub.set_screw_diameter = {self.set_screw_diameter:g} mm needs a bore to reach; "
+                             "set hub.bore_diameter")
+        if self.set_screw_diameter >= self.length - 2.0 * self.chamfer:
+            raise ValueError(f"hub.set_screw_diameter = {self.set_screw_diameter:g} mm is out of range; allowed "
+                             f"[0, {self.length - 2.0 * self.chamfer:g}) mm, the hub's length less its chamfers")
+        if self.chamfer >= min(self.radius, self.length / 2.0):
+            raise ValueError(f"hub.chamfer = {self.chamfer:g} mm is out of range; allowed "
+                             f"[0, {min(self.radius, self.length / 2.0):g}) mm")
+        return self
+
+    def mounting(self) -> HubMounting:
+        """The mounting features as geometry (the set screw's direction is chosen later, from the blades)."""
+        return HubMounting(self.bore_diameter, self.bore_flat_depth, self.set_screw_diameter, self.chamfer)
 
 
 #: The spec's section numbers, which airfoil.naca and airfoil.file replace.
@@ -177,8 +211,48 @@ class Resolution(Section):
                         doc="points around each section, equal arc length (spec §5)")
 
 
+class Manufacturing(Section):
+    """What the workshop can make."""
+
+    min_wall: float = param(0.8, unit="mm", gt=0.0, le=100.0,
+                            doc="thinnest wall a part may have: hub wall, blade thickness (0.8 = two 0.4 mm lines)")
+
+
+class Handedness(StrEnum):
+    """Which way the propeller turns, seen from +z, to push air toward -z: 'cw' is the spec's blade
+    (a ribbon descending as its angle grows, torus_cad.geometry.handedness), 'ccw' its exact mirror image."""
+
+    CW = "cw"
+    CCW = "ccw"
+
+
+class ExportFormat(StrEnum):
+    """A file format the build writes."""
+
+    STEP = "step"
+    STL = "stl"
+    THREE_MF = "3mf"
+
+
+def _formats(value: Any) -> Any:
+    """TOML lists as tuples of formats, each once, in the order given; at least one."""
+    if isinstance(value, list | tuple):
+        if not value:
+            raise ValueError("export.formats must name at least one of step, stl, 3mf")
+        try:
+            formats = tuple(ExportFormat(item) for item in value)
+        except ValueError:
+            raise ValueError(f"export.formats = {list(value)!r} is not allowed; choose from step, stl, 3mf") from None
+        return tuple(dict.fromkeys(formats))
+    return value
+
+
 class Export(Section):
     """File output."""
+
+    formats: Annotated[tuple[ExportFormat, ...], BeforeValidator(_formats)] = param(
+        (ExportFormat.STEP, ExportFormat.STL), strict=False,
+        doc="files to write: any of 'step', 'stl', '3mf' (3MF: one fused mesh object, millimetres)")
 
     stl_linear_deflection: float = param(STL_LINEAR_DEFLECTION, unit="mm", gt=0.0, le=10.0, fuzz=(0.02, 0.5),
                                          doc="STL chordal deviation")
@@ -200,12 +274,29 @@ class PropellerParameters(Document):
     pitch: float = param(0.0, unit="mm", ge=0.0, le=100000.0, fuzz=(0.0, 0.0),
                          doc="geometric pitch of the outer half to reach by refitting transforms.angle_of_attack "
                              "(0 = as the quartic gives)")
+    handedness: Handedness = param(Handedness.CW, strict=False,
+                                   doc="'cw': the spec's blade, which turns clockwise seen from +z to push air toward -z; "
+                                       "'ccw': its exact mirror image, for counter-rotating pairs")
     hub: Hub = Field(default_factory=Hub)
     airfoil: Airfoil = Field(default_factory=Airfoil)
     centerline: Centerline = Field(default_factory=Centerline)
     transforms: Transforms = Field(default_factory=Transforms)
     resolution: Resolution = Field(default_factory=Resolution)
     export: Export = Field(default_factory=Export)
+    manufacturing: Manufacturing = Field(default_factory=Manufacturing)
+
+    @model_validator(mode="after")
+    def _hub_wall(self) -> Self:
+        """The hub's wall around the bore (at the chamfered ends too) must be at least manufacturing.min_wall."""
+        if self.hub.bore_diameter == 0.0:
+            return self
+        wall = self.hub.radius - self.hub.chamfer - self.hub.bore_diameter / 2.0
+        if wall < self.manufacturing.min_wall:
+            limit = 2.0 * (self.hub.radius - self.hub.chamfer - self.manufacturing.min_wall)
+            raise ValueError(f"hub.bore_diameter = {self.hub.bore_diameter:g} mm leaves a hub wall of {wall:.3g} mm, "
+                             f"thinner than manufacturing.min_wall = {self.manufacturing.min_wall:g} mm; "
+                             f"allowed at most {max(limit, 0.0):g} mm")
+        return self
 
     @model_validator(mode="after")
     def _control_points_fit_the_hub(self) -> Self:
@@ -251,5 +342,5 @@ class PropellerParameters(Document):
 
 
 # ParameterError is what every caller catches; keep it importable from here.
-__all__ = ["Airfoil", "Centerline", "Export", "Hub", "ParameterError", "PropellerParameters", "Resolution",
-           "StepSchema", "Transforms"]
+__all__ = ["Airfoil", "Centerline", "Export", "ExportFormat", "Handedness", "Hub", "Manufacturing", "ParameterError",
+           "PropellerParameters", "Resolution", "StepSchema", "Transforms"]
