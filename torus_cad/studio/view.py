@@ -1,0 +1,163 @@
+"""The studio's 3D scene in VTK: one actor per part (hub grey, each blade its own colour) and the
+blades' section curves, rendered off-screen on the server and streamed to the page as images.
+
+Server-side rendering needs no WebGL in the browser (headless browsers often have none) and
+works with any VTK window that renders off-screen: EGL or OSMesa without a display, X otherwise.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from torus_cad.cadquery_api import HUB_COLOR, blade_color
+from torus_cad.studio.scene import HUB_PART, PartMesh
+
+#: Background gradient of the view (bottom, top), RGB 0..1.
+BACKGROUND = ((0.96, 0.97, 0.98), (0.80, 0.84, 0.90))
+
+#: Section curves are drawn darker than their blade's colour, by this factor.
+SECTION_SHADE = 0.45
+
+#: Smooth shading between triangles meeting at less than this angle (degrees); sharper edges stay sharp.
+FEATURE_ANGLE_DEG = 40.0
+
+
+def _prefer_headless_window() -> None:
+    """Without a display, ask VTK for its EGL window first (it would try X and warn)."""
+    if not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY"):
+        os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
+
+
+_prefer_headless_window()
+
+from vtkmodules.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray  # noqa: E402
+from vtkmodules.vtkCommonCore import vtkPoints  # noqa: E402
+from vtkmodules.vtkCommonDataModel import vtkCellArray, vtkPolyData  # noqa: E402
+from vtkmodules.vtkFiltersCore import vtkPolyDataNormals  # noqa: E402
+from vtkmodules.vtkInteractionStyle import vtkInteractorStyleTrackballCamera  # noqa: E402, F401
+from vtkmodules.vtkRenderingCore import (vtkActor, vtkPolyDataMapper, vtkRenderer,  # noqa: E402
+                                         vtkRenderWindow, vtkRenderWindowInteractor)
+import vtkmodules.vtkRenderingOpenGL2  # noqa: E402, F401  (registers the OpenGL render window)
+
+
+def _cells(connectivity: NDArray[np.int64], sizes: NDArray[np.int64]) -> vtkCellArray:
+    offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+    cells = vtkCellArray()
+    cells.SetData(numpy_to_vtkIdTypeArray(offsets, deep=True), numpy_to_vtkIdTypeArray(connectivity, deep=True))
+    return cells
+
+
+def _points(vertices: NDArray[np.float64]) -> vtkPoints:
+    points = vtkPoints()
+    points.SetData(numpy_to_vtk(np.ascontiguousarray(vertices, dtype=float), deep=True))
+    return points
+
+
+def triangle_polydata(vertices: NDArray[np.float64], triangles: NDArray[np.int64]) -> vtkPolyData:
+    """A vtkPolyData of triangles with smooth normals (sharp edges kept)."""
+    polydata = vtkPolyData()
+    polydata.SetPoints(_points(vertices))
+    triangles = np.asarray(triangles, dtype=np.int64)
+    polydata.SetPolys(_cells(triangles.ravel(), np.full(len(triangles), 3)))
+    normals = vtkPolyDataNormals()
+    normals.SetInputData(polydata)
+    normals.SetFeatureAngle(FEATURE_ANGLE_DEG)
+    normals.ConsistencyOff()  # the meshes are already oriented outward
+    normals.AutoOrientNormalsOff()
+    normals.Update()
+    return normals.GetOutput()
+
+
+def polyline_polydata(curves: Sequence[NDArray[np.float64]]) -> vtkPolyData:
+    """Closed polylines, one per ``(p, 3)`` curve."""
+    polydata = vtkPolyData()
+    if not curves:
+        return polydata
+    vertices = np.concatenate(curves)
+    starts = np.cumsum([0] + [len(curve) for curve in curves[:-1]])
+    connectivity = np.concatenate([np.r_[np.arange(len(curve)), 0] + start for curve, start in zip(curves, starts)])
+    polydata.SetPoints(_points(vertices))
+    polydata.SetLines(_cells(connectivity.astype(np.int64), np.array([len(curve) + 1 for curve in curves])))
+    return polydata
+
+
+def part_color(part: int, blades: int) -> tuple[float, float, float]:
+    """RGB 0..1 of a part: the hub grey, blade i its own colour."""
+    return HUB_COLOR if part == HUB_PART else blade_color(part, blades)
+
+
+class PropellerView:
+    """An off-screen render window holding the propeller's parts and section curves."""
+
+    def __init__(self) -> None:
+        self.renderer = vtkRenderer()
+        self.renderer.GradientBackgroundOn()
+        self.renderer.SetBackground(*BACKGROUND[0])
+        self.renderer.SetBackground2(*BACKGROUND[1])
+        self.window = vtkRenderWindow()
+        self.window.SetOffScreenRendering(1)
+        self.window.AddRenderer(self.renderer)
+        self.interactor = vtkRenderWindowInteractor()
+        self.interactor.SetRenderWindow(self.window)
+        self.interactor.GetInteractorStyle().SetCurrentStyleToTrackballCamera()
+        self._part_actors: list[vtkActor] = []
+        self._section_actor = vtkActor()
+        self._section_actor.SetMapper(vtkPolyDataMapper())
+        self._section_actor.GetProperty().SetLineWidth(1.5)
+        self._section_actor.GetProperty().SetLighting(False)
+        self.renderer.AddActor(self._section_actor)
+        self._framed = False
+
+    def show_parts(self, parts: Sequence[PartMesh], blades: int) -> None:
+        """Replace the drawn parts (the hub and every blade)."""
+        for actor in self._part_actors:
+            self.renderer.RemoveActor(actor)
+        self._part_actors = []
+        for mesh in parts:
+            if not len(mesh.triangles):
+                continue
+            mapper = vtkPolyDataMapper()
+            mapper.SetInputData(triangle_polydata(mesh.vertices, mesh.triangles))
+            actor = vtkActor()
+            actor.SetMapper(mapper)
+            surface = actor.GetProperty()
+            surface.SetColor(*part_color(mesh.part, blades))
+            surface.SetSpecular(0.25)
+            surface.SetSpecularPower(30.0)
+            self.renderer.AddActor(actor)
+            self._part_actors.append(actor)
+        if not self._framed:
+            self.reset_camera()
+            self._framed = True
+
+    def show_sections(self, sections: Sequence[NDArray[np.float64]], blades: int) -> None:
+        """Replace the section curves: ``sections[i]`` is blade i's ``(sections, points, 3)`` array."""
+        curves = [ring for blade in sections for ring in blade]
+        polydata = polyline_polydata(curves)
+        counts = [len(blade) for blade in sections]
+        colors = np.concatenate([np.tile(np.array(blade_color(index, blades)) * SECTION_SHADE, (count, 1))
+                                 for index, count in enumerate(counts)]) if counts else np.zeros((0, 3))
+        scalars = numpy_to_vtk((colors * 255).astype(np.uint8), deep=True)
+        scalars.SetName("colors")
+        polydata.GetCellData().SetScalars(scalars)
+        mapper = self._section_actor.GetMapper()
+        mapper.SetInputData(polydata)
+        mapper.SetColorModeToDirectScalars()
+        mapper.SetScalarModeToUseCellData()
+
+    def set_sections_visible(self, visible: bool) -> None:
+        """Show or hide the section curves."""
+        self._section_actor.SetVisibility(bool(visible))
+
+    def reset_camera(self) -> None:
+        """An isometric view of the whole propeller, spin axis up."""
+        camera = self.renderer.GetActiveCamera()
+        camera.SetFocalPoint(0.0, 0.0, 0.0)
+        camera.SetPosition(1.0, -1.0, 0.8)
+        camera.SetViewUp(0.0, 0.0, 1.0)
+        self.renderer.ResetCamera()
+        camera.Zoom(1.15)
