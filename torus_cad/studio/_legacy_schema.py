@@ -1,7 +1,9 @@
 """TEMPORARY (until torus_cad.parameters lands): spec-like records from the old dataclasses."""
 import dataclasses
 from types import SimpleNamespace
+
 from torus_cad.geometry import parameters as old
+
 
 def specs():
     out = []

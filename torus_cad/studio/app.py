@@ -24,8 +24,14 @@ from typing import Any
 
 from torus_cad import PropellerParameters
 from torus_cad.errors import GeometryError, ParameterError
-from torus_cad.studio.panel import (FieldKind, PanelField, PanelGroup, design_from_state, field_of_message,
-                                    schema_groups, state_values)
+from torus_cad.studio.panel import (
+    PanelField,
+    PanelGroup,
+    design_from_state,
+    field_of_message,
+    schema_groups,
+    state_values,
+)
 from torus_cad.studio.scene import PreviewScene, preview_scene
 from torus_cad.studio.worker import BuildRequest, BuildRunner, SolidResult
 
@@ -91,7 +97,7 @@ class Studio:
             "upload_message": "", "upload_error": "", "file_stem": self.design.name,
             "volume_text": "…", "mass_text": "…", "area_text": "…", "tip_text": "…", "valid_text": "…",
             "route_text": "", "stage_rows": [], "preview_ms": 0.0, "exact_ms": 0.0,
-            "preview_stamp": 0, "exact_stamp": 0, "failure": "",
+            "preview_stamp": 0, "preview_detail": "", "exact_stamp": 0, "failure": "",
         })
 
     def _bind(self) -> None:
@@ -137,26 +143,30 @@ class Studio:
         while self._dirty:
             self._dirty = False
             started = self._change_time
+            times = {"wait": time.perf_counter() - started}
             try:
                 params = PropellerParameters.from_dict(design_from_state(self._values(), self.groups))
                 if params == self._displayed and not self.state.refusal:
                     continue
+                times["validate"] = time.perf_counter() - started - sum(times.values())
                 scene = await loop.run_in_executor(self._previewer, preview_scene, params)
+                times["surface + checks"] = time.perf_counter() - started - sum(times.values())
             except (ParameterError, GeometryError) as error:
                 if not self._dirty:  # a newer change would replace the verdict anyway
                     self._refuse(str(error))
                 continue
-            except Exception as error:  # noqa: BLE001 - the page reports it; the server keeps running
+            except Exception as error:
                 LOG.exception("preview failed")
                 self._refuse(f"internal error ({type(error).__name__}): {error}")
                 continue
-            self._show_preview(params, scene, started)
+            self._show_preview(params, scene, started, times)
             if not self._dirty:
                 self._start_build(params, started)
 
     def _refuse(self, message: str) -> None:
         target = field_of_message(message, self.groups)
-        keys = [target[0]] if target is not None else sorted(self._changed) or ["name"]
+        # The reason goes next to the fields just changed and the field it names, if another.
+        keys = sorted(self._changed | ({target[0]} if target is not None else set())) or ["name"]
         element_errors = {f"{target[0]}[{target[1]}]": True} if target is not None and target[1] is not None else {}
         with self.state:
             self.state.field_errors = {key: message for key in keys}
@@ -164,12 +174,14 @@ class Studio:
             self.state.refusal = message
             self.state.status = "refused"
 
-    def _show_preview(self, params: PropellerParameters, scene: PreviewScene, started: float) -> None:
+    def _show_preview(self, params: PropellerParameters, scene: PreviewScene, started: float,
+                      times: dict[str, float]) -> None:
         self.design = self._displayed = params
         self._changed.clear()
         self.view.show_parts(scene.parts, params.blades)
         self.view.show_sections(scene.sections, params.blades)
         self.view.set_sections_visible(self.state.show_sections)
+        times["meshes"] = time.perf_counter() - started - sum(times.values())
         with self.state:
             self.state.field_errors, self.state.element_errors = {}, {}
             self.state.refusal, self.state.failure = "", ""
@@ -177,7 +189,9 @@ class Studio:
             self.state.file_stem = params.name
             self.state.tip_text = f"{scene.tip_diameter_mm:.3f} mm"
             self.ctrl.view_update()
+            times["view update"] = time.perf_counter() - started - sum(times.values())
             self.state.preview_ms = round((time.perf_counter() - started) * 1000.0, 1)
+            self.state.preview_detail = ", ".join(f"{name} {seconds * 1000.0:.0f}" for name, seconds in times.items())
             self.state.preview_stamp += 1
 
     def _start_build(self, params: PropellerParameters, started: float) -> None:
@@ -200,7 +214,7 @@ class Studio:
         try:
             with self.state:
                 getattr(self, f"_on_{kind}")(exact, payload)
-        except Exception:  # noqa: BLE001 - never take the server down for one build
+        except Exception:
             LOG.exception("handling the build's %s message failed", kind)
 
     def _on_solid(self, exact: _Exact, solid: SolidResult) -> None:
@@ -299,7 +313,9 @@ class Studio:
 
     def _read_upload(self, upload: Mapping[str, Any]) -> PropellerParameters:
         """The design of an uploaded TOML file, read exactly as ``torus-cad build FILE`` reads it."""
-        from torus_cad.geometry.parameters import resolve_parameters  # TEMPORARY: torus_cad.parameters after the schema lands
+        from torus_cad.geometry.parameters import (
+            resolve_parameters,  # TEMPORARY: torus_cad.parameters after the schema lands
+        )
 
         content = upload.get("content")
         data = bytes(content) if isinstance(content, (bytes, bytearray, memoryview)) else None

@@ -16,8 +16,8 @@ from numpy.typing import NDArray
 from torus_cad.cadquery_api import HUB_COLOR, blade_color
 from torus_cad.studio.scene import HUB_PART, PartMesh
 
-#: Background gradient of the view (bottom, top), RGB 0..1.
-BACKGROUND = ((0.96, 0.97, 0.98), (0.80, 0.84, 0.90))
+#: Background of the view, RGB 0..1.
+BACKGROUND = (0.90, 0.92, 0.95)
 
 #: Section curves are drawn darker than their blade's colour, by this factor.
 SECTION_SHADE = 0.45
@@ -34,14 +34,20 @@ def _prefer_headless_window() -> None:
 
 _prefer_headless_window()
 
-from vtkmodules.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray  # noqa: E402
-from vtkmodules.vtkCommonCore import vtkPoints  # noqa: E402
-from vtkmodules.vtkCommonDataModel import vtkCellArray, vtkPolyData  # noqa: E402
-from vtkmodules.vtkFiltersCore import vtkPolyDataNormals  # noqa: E402
-from vtkmodules.vtkInteractionStyle import vtkInteractorStyleTrackballCamera  # noqa: E402, F401
-from vtkmodules.vtkRenderingCore import (vtkActor, vtkPolyDataMapper, vtkRenderer,  # noqa: E402
-                                         vtkRenderWindow, vtkRenderWindowInteractor)
-import vtkmodules.vtkRenderingOpenGL2  # noqa: E402, F401  (registers the OpenGL render window)
+import vtkmodules.vtkRenderingOpenGL2  # noqa: F401  (registers the OpenGL render window)
+from vtkmodules.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray
+from vtkmodules.vtkCommonCore import vtkPoints
+from vtkmodules.vtkCommonDataModel import vtkCellArray, vtkPolyData
+from vtkmodules.vtkFiltersCore import vtkPolyDataNormals
+from vtkmodules.vtkInteractionStyle import vtkInteractorStyleTrackballCamera  # noqa: F401
+from vtkmodules.vtkRenderingCore import (
+    vtkActor,
+    vtkLightKit,
+    vtkPolyDataMapper,
+    vtkRenderer,
+    vtkRenderWindow,
+    vtkRenderWindowInteractor,
+)
 
 
 def _cells(connectivity: NDArray[np.int64], sizes: NDArray[np.int64]) -> vtkCellArray:
@@ -95,9 +101,9 @@ class PropellerView:
 
     def __init__(self) -> None:
         self.renderer = vtkRenderer()
-        self.renderer.GradientBackgroundOn()
-        self.renderer.SetBackground(*BACKGROUND[0])
-        self.renderer.SetBackground2(*BACKGROUND[1])
+        self.renderer.SetBackground(*BACKGROUND)
+        lights = vtkLightKit()  # key, fill and back lights: faces seen edge-on stay readable
+        lights.AddLightsToRenderer(self.renderer)
         self.window = vtkRenderWindow()
         self.window.SetOffScreenRendering(1)
         self.window.AddRenderer(self.renderer)
