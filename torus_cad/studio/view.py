@@ -1,17 +1,29 @@
 """The studio's 3D scene in VTK: one actor per part (hub grey, each blade its own colour) and the
-blades' section curves, rendered off-screen on the server and streamed to the page as images.
+blades' section curves.
 
-Server-side rendering needs no WebGL in the browser (headless browsers often have none) and
-works with any VTK window that renders off-screen: EGL or OSMesa without a display, X otherwise.
+The scene is rendered in the browser (trame's VtkLocalView serializes it to vtk.js, WebGL): orbit,
+zoom and pan need no round trip, and the server never renders, so it needs no OpenGL. Rendering
+on the server instead (llvmpipe, no GPU) took 0.3-1.2 s a frame on the 2-core project machine.
 """
 
 from __future__ import annotations
 
-import os
 from collections.abc import Sequence
 
 import numpy as np
+import vtkmodules.vtkRenderingOpenGL2  # noqa: F401  (the render window's implementation)
 from numpy.typing import NDArray
+from vtkmodules.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray
+from vtkmodules.vtkCommonCore import vtkPoints
+from vtkmodules.vtkCommonDataModel import vtkCellArray, vtkPolyData
+from vtkmodules.vtkFiltersCore import vtkPolyDataNormals
+from vtkmodules.vtkRenderingCore import (
+    vtkActor,
+    vtkLightKit,
+    vtkPolyDataMapper,
+    vtkRenderer,
+    vtkRenderWindow,
+)
 
 from torus_cad.cadquery_api import HUB_COLOR, blade_color
 from torus_cad.studio.scene import HUB_PART, PartMesh
@@ -24,30 +36,6 @@ SECTION_SHADE = 0.45
 
 #: Smooth shading between triangles meeting at less than this angle (degrees); sharper edges stay sharp.
 FEATURE_ANGLE_DEG = 40.0
-
-
-def _prefer_headless_window() -> None:
-    """Without a display, ask VTK for its EGL window first (it would try X and warn)."""
-    if not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY"):
-        os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
-
-
-_prefer_headless_window()
-
-import vtkmodules.vtkRenderingOpenGL2  # noqa: F401  (registers the OpenGL render window)
-from vtkmodules.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray
-from vtkmodules.vtkCommonCore import vtkPoints
-from vtkmodules.vtkCommonDataModel import vtkCellArray, vtkPolyData
-from vtkmodules.vtkFiltersCore import vtkPolyDataNormals
-from vtkmodules.vtkInteractionStyle import vtkInteractorStyleTrackballCamera  # noqa: F401
-from vtkmodules.vtkRenderingCore import (
-    vtkActor,
-    vtkLightKit,
-    vtkPolyDataMapper,
-    vtkRenderer,
-    vtkRenderWindow,
-    vtkRenderWindowInteractor,
-)
 
 
 def _cells(connectivity: NDArray[np.int64], sizes: NDArray[np.int64]) -> vtkCellArray:
@@ -97,7 +85,7 @@ def part_color(part: int, blades: int) -> tuple[float, float, float]:
 
 
 class PropellerView:
-    """An off-screen render window holding the propeller's parts and section curves."""
+    """A render window (never rendered on the server) holding the propeller's parts and section curves."""
 
     def __init__(self) -> None:
         self.renderer = vtkRenderer()
@@ -105,11 +93,7 @@ class PropellerView:
         lights = vtkLightKit()  # key, fill and back lights: faces seen edge-on stay readable
         lights.AddLightsToRenderer(self.renderer)
         self.window = vtkRenderWindow()
-        self.window.SetOffScreenRendering(1)
         self.window.AddRenderer(self.renderer)
-        self.interactor = vtkRenderWindowInteractor()
-        self.interactor.SetRenderWindow(self.window)
-        self.interactor.GetInteractorStyle().SetCurrentStyleToTrackballCamera()
         self._part_actors: list[vtkActor] = []
         self._section_actor = vtkActor()
         self._section_actor.SetMapper(vtkPolyDataMapper())
