@@ -56,3 +56,9 @@ HUB_FOOTPRINT_NEAR_RELATIVE = 0.02
 #: Angular margin (degrees) added at each side of a blade's footprint on the hub before the
 #: seam is placed beside it.
 HUB_FOOTPRINT_MARGIN_DEG = 1.0
+
+
+# -- limits on inputs ------------------------------------------------------------------------
+
+#: Largest configuration file read (bytes): a design is a few hundred bytes.
+CONFIG_FILE_MAX_BYTES = 1 << 20

@@ -10,6 +10,7 @@ Wang et al. 2008) is defined on any regular curve; it is beyond the spec and opt
 from __future__ import annotations
 
 from dataclasses import dataclass
+from enum import StrEnum
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -17,6 +18,15 @@ from numpy.typing import ArrayLike, NDArray
 from torus_cad.errors import GeometryError
 from torus_cad.geometry.centerline import Centerline
 from torus_cad.tolerances import FRENET_MIN_CURVATURE, FRAME_SCAN_SAMPLES
+
+
+class FrameKind(StrEnum):
+    """The moving frame the sections sit on."""
+
+    FRENET = "frenet"
+    """Frenet-Serret (spec §4); undefined where the curvature vanishes."""
+    ROTATION_MINIMIZING = "rotation_minimizing"
+    """Double-reflection rotation-minimising frame (beyond the spec); defined on any regular curve."""
 
 
 @dataclass(frozen=True)
@@ -133,10 +143,8 @@ def _initial_normal(tangent: NDArray[np.float64], second: NDArray[np.float64]) -
     return candidate / np.linalg.norm(candidate)
 
 
-def section_frames(centerline: Centerline, s: ArrayLike, frame: str) -> Frames:
-    """Frames of the named kind ('frenet' or 'rotation_minimizing') at ``s``."""
-    if frame == "frenet":
+def section_frames(centerline: Centerline, s: ArrayLike, frame: FrameKind) -> Frames:
+    """Frames of the given kind at ``s``."""
+    if frame is FrameKind.FRENET:
         return frenet_frames(centerline, s)
-    if frame == "rotation_minimizing":
-        return rotation_minimizing_frames(centerline, s)
-    raise ValueError(f"unknown frame {frame!r}")
+    return rotation_minimizing_frames(centerline, s)
