@@ -15,8 +15,14 @@ import pytest
 from torus_cad import PropellerParameters
 from torus_cad.errors import GeometryError, ParameterError
 from torus_cad.geometry.mesh import TriangleMesh
-from torus_cad.studio.panel import (FieldKind, design_from_state, field_of_message, schema_groups, state_name,
-                                    state_values)
+from torus_cad.studio.panel import (
+    FieldKind,
+    design_from_state,
+    field_of_message,
+    schema_groups,
+    state_name,
+    state_values,
+)
 from torus_cad.studio.scene import HUB_PART, cylinder_mesh, preview_scene
 
 
@@ -135,11 +141,16 @@ def test_exact_tessellation_splits_the_solid_into_hub_and_blades(light_propeller
     np.testing.assert_allclose(steps, 90.0, atol=1.0)
 
 
-def test_preview_tip_diameter_matches_the_exact_solid(light_params, light_propeller):
-    from torus_cad.studio.exact import _tip_diameter, tessellate_parts
+def test_tip_diameter_reaches_the_exact_solids_outermost_point(light_params, light_propeller):
+    from torus_cad.studio.exact import tessellate_parts
+    from torus_cad.studio.scene import tip_diameter_mm
 
+    exact_vertices = np.concatenate([part.vertices for part in tessellate_parts(light_propeller)])
+    reach = 2.0 * np.hypot(exact_vertices[:, 0], exact_vertices[:, 1]).max()  # vertices lie on the solid
+    tip = tip_diameter_mm(light_params.with_values({"blades": 4}))
+    assert reach - 1e-3 <= tip <= reach + 0.1  # the display mesh's chords may cut inside by < 0.1 mm
     preview = preview_scene(light_params.with_values({"blades": 4}))
-    assert preview.tip_diameter_mm == pytest.approx(_tip_diameter(tessellate_parts(light_propeller)), abs=0.05)
+    assert tip * (1 - 5e-3) <= preview.tip_diameter_mm <= tip
 
 
 # -- the worker process ------------------------------------------------------------------------------
@@ -207,7 +218,7 @@ def test_a_refused_design_and_a_crashed_build_are_reported_not_raised(light_para
 ])
 def test_studio_refuses_bad_input_before_serving(arguments, expected):
     result = subprocess.run([sys.executable, "-m", "torus_cad", "studio", *arguments], capture_output=True,
-                            text=True, timeout=120)
+                            text=True, timeout=120, check=False)
     assert result.returncode == 2
     assert expected in result.stderr and result.stdout == ""
 

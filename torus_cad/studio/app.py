@@ -22,8 +22,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from torus_cad import PropellerParameters
 from torus_cad.errors import GeometryError, ParameterError
+from torus_cad.parameters import PropellerParameters, resolve_parameters
 from torus_cad.studio.panel import (
     PanelField,
     PanelGroup,
@@ -278,11 +278,6 @@ class Studio:
                 f"density = {value:g} is out of range; allowed ({low:g}, {high:g}] g/cm^3"
         self._update_mass()
 
-    def reset_view(self) -> None:
-        """Back to the isometric view of the whole propeller."""
-        self.view.reset_camera()
-        self.ctrl.view_update()
-
     def _on_sections_toggle(self, show_sections: bool, **_: Any) -> None:
         self.view.set_sections_visible(show_sections)
         self.ctrl.view_update()
@@ -313,10 +308,6 @@ class Studio:
 
     def _read_upload(self, upload: Mapping[str, Any]) -> PropellerParameters:
         """The design of an uploaded TOML file, read exactly as ``torus-cad build FILE`` reads it."""
-        from torus_cad.geometry.parameters import (
-            resolve_parameters,  # TEMPORARY: torus_cad.parameters after the schema lands
-        )
-
         content = upload.get("content")
         data = bytes(content) if isinstance(content, (bytes, bytearray, memoryview)) else None
         if data is None:

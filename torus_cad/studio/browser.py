@@ -24,7 +24,7 @@ import tempfile
 import time
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import Any, Self, TypeVar
 
 CHROMEDRIVER = Path("/usr/bin/chromedriver")
 CHROMIUM = Path("/usr/bin/chromium")
@@ -58,7 +58,7 @@ class StudioProcess:
         self.output: list[str] = []
         self._process: subprocess.Popen[str] | None = None
 
-    def __enter__(self) -> "StudioProcess":
+    def __enter__(self) -> Self:
         command = [sys.executable, "-m", "torus_cad", "studio", *self.arguments, "--port", "0"]
         self._process = subprocess.Popen(command, cwd=self.cwd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                                          text=True, start_new_session=True)
@@ -145,7 +145,10 @@ class StudioPage:
         return self.driver.find_element(By.ID, element_id)
 
     def text(self, element_id: str) -> str:
-        from selenium.common.exceptions import NoSuchElementException, StaleElementReferenceException
+        from selenium.common.exceptions import (
+            NoSuchElementException,
+            StaleElementReferenceException,
+        )
 
         try:
             return self.element(element_id).text.strip()

@@ -23,11 +23,10 @@ from scipy.spatial import cKDTree
 
 from torus_cad import PropellerParameters
 from torus_cad.errors import GeometryError, ParameterError, TorusCadError
-from torus_cad.geometry.centerline import blade_angle_deg
 from torus_cad.kernel.checks import mass_properties
 from torus_cad.kernel.export import write_step, write_stl
 from torus_cad.propeller import Propeller, build_propeller
-from torus_cad.studio.scene import HUB_PART, PartMesh, rotation_about_z
+from torus_cad.studio.scene import HUB_PART, PartMesh, rotation_about_z, tip_diameter_mm
 from torus_cad.studio.worker import BuildRequest, SolidResult
 
 #: Chordal deviation of the exact solid's display mesh, as a fraction of its bounding-box diagonal.
@@ -39,11 +38,11 @@ DISPLAY_ANGULAR_DEFLECTION = 0.3
 def _face_parts(propeller: Propeller, faces: list[Any], face_vertices: list[NDArray[np.float64]]) -> list[int]:
     """Hub (-1) or blade i for each face: the hub's faces are its cylinder and end planes; a blade
     face belongs to the blade whose sampled surface passes nearest its vertices."""
+    geometry = propeller.parameters.geometry()
     blade_points = propeller.surface.points.reshape(-1, 3)
     clouds, labels = [], []
-    for index in range(propeller.parameters.blades):
-        rotation = rotation_about_z(blade_angle_deg(propeller.parameters, index)
-                                    - blade_angle_deg(propeller.parameters, 0))
+    for index in range(geometry.blades):
+        rotation = rotation_about_z(geometry.blade_angle_deg(index) - geometry.blade_angle_deg(0))
         clouds.append(blade_points @ rotation.T)
         labels.append(np.full(len(blade_points), index))
     tree, label = cKDTree(np.concatenate(clouds)), np.concatenate(labels)
@@ -101,11 +100,6 @@ def tessellate_parts(propeller: Propeller) -> list[PartMesh]:
     return meshes
 
 
-def _tip_diameter(parts: list[PartMesh]) -> float:
-    radii = [np.hypot(mesh.vertices[:, 0], mesh.vertices[:, 1]).max() for mesh in parts if len(mesh.vertices)]
-    return 2.0 * float(max(radii))
-
-
 def run_build(request: BuildRequest, connection: multiprocessing.connection.Connection) -> None:
     """Build, tessellate, measure and export ``request``, sending each result as soon as it exists."""
     build_id = request.build_id
@@ -115,7 +109,7 @@ def run_build(request: BuildRequest, connection: multiprocessing.connection.Conn
         start = time.perf_counter()
         parts = tessellate_parts(propeller)
         stages = {**propeller.stage_seconds, "tessellate": time.perf_counter() - start}
-        connection.send(("solid", build_id, SolidResult(parts, stages, propeller.fuse_route, _tip_diameter(parts))))
+        connection.send(("solid", build_id, SolidResult(parts, stages, str(propeller.fuse_route), tip_diameter_mm(params))))
         start = time.perf_counter()
         properties = mass_properties(propeller.solid, 1.0).to_dict()
         properties["seconds"] = time.perf_counter() - start

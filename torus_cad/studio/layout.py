@@ -28,6 +28,10 @@ _CSS = """
 """
 
 
+#: The status chip's colour: red for a refusal or failure, green once the exact solid is shown.
+_STATUS_COLOR = "['refused', 'failed'].includes(status) ? 'error' : (status === 'exact' ? 'success' : 'primary')"
+
+
 def _js_key(text: str) -> str:
     return text.replace("\\", "\\\\").replace("'", "\\'")
 
@@ -53,9 +57,9 @@ def _number_attributes(panel_field: PanelField) -> dict[str, object]:
 
 def _scalar_field(panel_field: PanelField) -> None:
     name = panel_field.state_names[0]
-    common = dict(label=panel_field.label, hint=panel_field.hint, persistent_hint=False,
-                  error_messages=(_error_of(panel_field),), density="compact", variant="outlined",
-                  classes="studio-field", id=_field_id(panel_field.key), hide_details="auto")
+    common = {"label": panel_field.label, "hint": panel_field.hint, "persistent_hint": False,
+              "error_messages": (_error_of(panel_field),), "density": "compact", "variant": "outlined",
+              "classes": "studio-field", "id": _field_id(panel_field.key), "hide_details": "auto"}
     if panel_field.kind is FieldKind.BOOLEAN:
         v3.VSwitch(v_model=(name,), color="primary", label=panel_field.label, hint=panel_field.hint,
                    persistent_hint=True, error_messages=(_error_of(panel_field),), density="compact",
@@ -74,17 +78,16 @@ def _scalar_field(panel_field: PanelField) -> None:
 
 
 def _vector_field(panel_field: PanelField) -> None:
-    unit = f" ({panel_field.unit})" if panel_field.unit else ""
-    html.Div(f"{panel_field.label}{unit}", classes="text-body-2 mt-1", title=panel_field.hint)
-    with v3.VRow(dense=True, no_gutters=False, classes="mb-1"):
-        for index, name in enumerate(panel_field.state_names):
-            element = f"{panel_field.key}[{index}]"
+    key = _js_key(panel_field.key)
+    html.Div(panel_field.label, classes="text-body-2 mt-1", title=panel_field.hint)
+    with v3.VRow(dense=True, classes="mb-1"):
+        for index, (name, unit) in enumerate(zip(panel_field.state_names, panel_field.element_units, strict=True)):
             with v3.VCol():
-                v3.VTextField(v_model=(name,), label=f"[{index}]", density="compact", variant="outlined",
-                              hide_details=True, classes="studio-field", id=_field_id(panel_field.key) + f"-{index}",
-                              error=(f"!!element_errors['{_js_key(element)}']",), title=panel_field.hint,
+                v3.VTextField(v_model=(name,), label=f"[{index}]", suffix=unit, density="compact", variant="outlined",
+                              hide_details=True, classes="studio-field", id=f"{_field_id(panel_field.key)}-{index}",
+                              error=(f"!!element_errors['{key}[{index}]']",), title=panel_field.hint,
                               **_number_attributes(panel_field))
-    html.Div(f"{{{{ field_errors['{_js_key(panel_field.key)}'] }}}}", v_if=(f"field_errors['{_js_key(panel_field.key)}']",),
+    html.Div(f"{{{{ field_errors['{key}'] }}}}", v_if=(f"field_errors['{key}']",),
              classes="text-error text-caption studio-refusal", id=_field_id(panel_field.key) + "-error")
     html.Div(panel_field.hint, classes="text-caption text-medium-emphasis mb-2")
 
@@ -103,8 +106,7 @@ def _group(group: PanelGroup) -> None:
 def _readouts() -> None:
     with v3.VCard(classes="ma-2", elevation=2, id="readouts"):
         v3.VCardTitle("Readouts", classes="text-subtitle-1")
-        with v3.VTable(density="compact", classes="studio-readouts"):
-            with html.Tbody():
+        with v3.VTable(density="compact", classes="studio-readouts"), html.Tbody():
                 for label, variable, element_id in (("volume", "volume_text", "readout-volume"),
                                                     ("mass", "mass_text", "readout-mass"),
                                                     ("area", "area_text", "readout-area"),
@@ -118,9 +120,8 @@ def _readouts() -> None:
                       error_messages=("density_error || []",), hide_details="auto", id="field-density")
         html.Div("{{ route_text }}", classes="text-caption text-medium-emphasis mx-3", id="readout-route")
         v3.VCardSubtitle("stage times (exact build)", classes="mt-2")
-        with v3.VTable(density="compact", classes="studio-readouts"):
-            with html.Tbody():
-                with html.Tr(v_for="row in stage_rows", key="row.stage"):
+        with v3.VTable(density="compact", classes="studio-readouts"), html.Tbody(), \
+                html.Tr(v_for="row in stage_rows", key="row.stage"):
                     html.Td("{{ row.stage }}")
                     html.Td("{{ row.ms }} ms", classes="text-right")
         html.Div("preview {{ preview_ms }} ms after the change, exact solid {{ exact_ms }} ms",
@@ -145,13 +146,26 @@ def _toolbar(studio: Studio, layout: SinglePageWithDrawerLayout) -> None:
     layout.title.set_text("torus_cad studio")
     with layout.toolbar:
         v3.VSpacer()
-        v3.VChip("{{ status }}", id="status", classes="mr-2",
-                 color=("status === 'refused' || status === 'failed' ? 'error' : "
-                        "(status === 'exact' ? 'success' : 'primary')",))
+        v3.VChip("{{ status }}", id="status", classes="mr-2", color=(_STATUS_COLOR,))
         v3.VProgressCircular(v_if=("building",), indeterminate=True, size=20, width=2, classes="mr-2")
         v3.VSwitch(v_model=("show_sections",), label="section curves", hide_details=True, density="compact",
                    color="primary", classes="mx-2 flex-grow-0", id="toggle-sections")
-        v3.VBtn(icon="mdi-crop-free", click=studio.reset_view, variant="text", title="reset the view", id="reset-view")
+        v3.VBtn(icon="mdi-crop-free", click=studio.ctrl.view_reset_camera, variant="text", title="reset the view",
+                id="reset-view")
+
+
+def _view_area(studio: Studio) -> None:
+    with html.Div(style="flex: 1 1 auto; position: relative; min-width: 0;"):
+        v3.VAlert("{{ refusal }}", v_if=("refusal",), type="error", density="compact", variant="tonal",
+                  id="refusal", classes="studio-refusal", title="refused; the last good propeller stays on screen",
+                  style="position: absolute; top: 8px; left: 8px; right: 8px; z-index: 2;")
+        v3.VAlert("{{ failure }}", v_if=("failure",), type="warning", density="compact", variant="tonal",
+                  id="failure", style="position: absolute; bottom: 8px; left: 8px; right: 8px; z-index: 2;")
+        # Rendered in the browser (WebGL): orbit, zoom and pan need no round trip, and the server
+        # renders nothing (rendering on the server, in software, took 0.3-1.2 s a frame here).
+        view = vtk_widgets.VtkLocalView(studio.view.window, id="view")
+        studio.ctrl.view_update = view.update
+        studio.ctrl.view_reset_camera = view.reset_camera
 
 
 def build_layout(studio: Studio) -> None:
@@ -173,20 +187,8 @@ def build_layout(studio: Studio) -> None:
                                                               for group in studio.groups[:3]])):
                 for group in studio.groups:
                     _group(group)
-        with layout.content:
-            with v3.VContainer(fluid=True, classes="fill-height pa-0"):
-                with html.Div(style="display: flex; width: 100%; height: 100%;"):
-                    with html.Div(style="flex: 1 1 auto; position: relative; min-width: 0;"):
-                        v3.VAlert("{{ refusal }}", v_if=("refusal",), type="error", density="compact",
-                                  variant="tonal", id="refusal", classes="studio-refusal",
-                                  style="position: absolute; top: 8px; left: 8px; right: 8px; z-index: 2;",
-                                  title="refused; the last good propeller stays on screen")
-                        v3.VAlert("{{ failure }}", v_if=("failure",), type="warning", density="compact",
-                                  variant="tonal", id="failure",
-                                  style="position: absolute; bottom: 8px; left: 8px; right: 8px; z-index: 2;")
-                        # Rendered in the browser (WebGL): orbit, zoom and pan need no round trip, and
-                        # the server renders nothing (software rendering here took 0.3-1.2 s a frame).
-                        view = vtk_widgets.VtkLocalView(studio.view.window, id="view")
-                        studio.ctrl.view_update = view.update
-                    with html.Div(style="flex: 0 0 300px; overflow-y: auto;"):
-                        _readouts()
+        with layout.content, v3.VContainer(fluid=True, classes="fill-height pa-0"), \
+                html.Div(style="display: flex; width: 100%; height: 100%;"):
+            _view_area(studio)
+            with html.Div(style="flex: 0 0 300px; overflow-y: auto;"):
+                _readouts()

@@ -50,6 +50,7 @@ class PanelField:
         low_open, high_open: whether an end is excluded.
         slider: ``(low, high, step)`` of a slider, or None for a number field only.
         choices: allowed values of a choice.
+        element_units: the unit of each element (a control point's are ``deg, mm, mm``).
     """
 
     key: str
@@ -64,6 +65,7 @@ class PanelField:
     high_open: bool = False
     slider: tuple[float, float, float] | None = None
     choices: tuple[str, ...] = ()
+    element_units: tuple[str, ...] = ()
 
     @property
     def is_vector(self) -> bool:
@@ -141,7 +143,14 @@ def panel_field(spec: Any) -> PanelField:
     slider = _slider(kind, getattr(spec, "fuzz", None) or bounds) if kind in (FieldKind.INTEGER, FieldKind.NUMBER) \
         and not spec.length else None
     return PanelField(spec.key, kind, spec.key.rpartition(".")[2], spec.unit, spec.doc, names,
-                      bounds.low, bounds.high, bounds.low_open, bounds.high_open, slider, choices)
+                      bounds.low, bounds.high, bounds.low_open, bounds.high_open, slider, choices,
+                      _element_units(spec.unit, len(names)))
+
+
+def _element_units(unit: str, count: int) -> tuple[str, ...]:
+    """``"deg, mm, mm"`` names each element's unit; a single unit applies to all."""
+    parts = [part.strip() for part in unit.split(",")]
+    return tuple(parts) if len(parts) == count else (unit,) * count
 
 
 def panel_groups(specs: Iterable[Any], section_docs: Mapping[str, str] | None = None) -> list[PanelGroup]:
@@ -157,12 +166,9 @@ def panel_groups(specs: Iterable[Any], section_docs: Mapping[str, str] | None = 
 
 def schema_groups() -> list[PanelGroup]:
     """The panel's groups of the installed parameter schema."""
-    try:
-        from torus_cad.parameters import PropellerParameters
-        from torus_cad.parameters.schema import iter_parameter_specs, section_docs
-    except ImportError:  # TEMPORARY until the schema lands
-        from torus_cad.studio._legacy_schema import specs
-        return panel_groups(specs(), {})
+    from torus_cad.parameters import PropellerParameters
+    from torus_cad.parameters.schema import iter_parameter_specs, section_docs
+
     return panel_groups(iter_parameter_specs(PropellerParameters), section_docs(PropellerParameters))
 
 

@@ -25,7 +25,7 @@ from vtkmodules.vtkRenderingCore import (
     vtkRenderWindow,
 )
 
-from torus_cad.cadquery_api import HUB_COLOR, blade_color
+from torus_cad.colors import HUB_COLOR, blade_color
 from torus_cad.studio.scene import HUB_PART, PartMesh
 
 #: Background of the view, RGB 0..1.

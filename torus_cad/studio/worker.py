@@ -48,7 +48,8 @@ class SolidResult:
         parts: one mesh per part (the hub first, then blade 0, 1, ...).
         stage_seconds: seconds per pipeline stage, plus ``tessellate``.
         fuse_route: how the blades were joined (torus_cad.propeller.FUSE_ROUTES).
-        tip_diameter_mm: twice the largest distance of the solid from the spin axis, mm.
+        tip_diameter_mm: twice the largest distance of the blade surface from the spin axis, mm
+            (torus_cad.studio.scene.tip_diameter_mm).
         solids: number of solids in the result (1: the build checks it).
     """
 
