@@ -37,6 +37,68 @@ def _closed(mesh) -> bool:
 
 # -- panel -------------------------------------------------------------------------------------------
 
+def test_panel_has_one_field_per_schema_parameter_grouped_by_toml_table(groups):
+    from torus_cad.parameters import parameter_specs
+
+    specs = parameter_specs()
+    assert [field.key for group in groups for field in group.fields] == [spec.key for spec in specs]
+    tables = [key for key, value in PropellerParameters().to_dict().items() if isinstance(value, dict)]
+    assert [group.section for group in groups] == ["", *tables]
+    fields = {field.key: field for group in groups for field in group.fields}
+    radius = fields["hub.radius"]
+    assert (radius.unit, radius.low, radius.high, radius.kind) == ("mm", 0.5, 1000.0, FieldKind.NUMBER)
+    assert radius.range_text == "[0.5, 1000] mm"
+    assert fields["centerline.p2"].element_units == ("deg", "mm", "mm")
+    assert fields["centerline.frame"].choices == ("frenet", "rotation_minimizing")
+    assert fields["airfoil.camber_normal"].kind is FieldKind.BOOLEAN
+
+
+def _bored_schema():
+    """The schema with one more parameter, declared the way torus_cad/parameters/design.py does."""
+    from pydantic import Field
+
+    from torus_cad.parameters.design import Hub
+    from torus_cad.parameters.schema import param
+
+    class BoredHub(Hub):
+        """Cylinder on the z axis, with a bore."""
+
+        bore_diameter: float = param(0.0, unit="mm", ge=0.0, le=500.0, doc="coaxial through-bore; 0 = solid hub")
+
+    class BoredPropeller(PropellerParameters):
+        """A propeller with a bored hub."""
+
+        hub: BoredHub = Field(default_factory=BoredHub)
+
+    return BoredPropeller
+
+
+def test_a_parameter_added_to_the_schema_appears_in_the_panel_by_itself():
+    from trame.app import get_server
+    from trame.ui.vuetify3 import SinglePageLayout
+
+    from torus_cad.parameters.schema import iter_parameter_specs, section_docs
+    from torus_cad.studio.layout import parameter_panel
+    from torus_cad.studio.panel import panel_groups
+
+    model = _bored_schema()
+    groups = panel_groups(iter_parameter_specs(model), section_docs(model))
+    hub = next(group for group in groups if group.section == "hub")
+    bore = next(field for field in hub.fields if field.key == "hub.bore_diameter")
+    assert (bore.unit, bore.low, bore.high, bore.kind) == ("mm", 0.0, 500.0, FieldKind.NUMBER)
+    assert bore.slider == (0.0, 500.0, 5.0)
+    assert "coaxial through-bore" in bore.hint
+
+    values = state_values(model().to_dict(), groups)
+    values[state_name("hub.bore_diameter")] = "6"
+    assert model.from_dict(design_from_state(values, groups)).hub.bore_diameter == 6.0
+
+    server = get_server("studio_panel_test", client_type="vue3")
+    with SinglePageLayout(server) as layout, layout.content:
+        parameter_panel(groups)
+    page = layout.html
+    assert 'id="field-hub-bore-diameter"' in page and 'max="500.0"' in page
+
 def test_state_round_trip_gives_the_same_design(groups):
     design = PropellerParameters().with_values({"blades": 5, "hub.radius": 12.5, "centerline.p2": [20.0, 4.0, 24.0],
                                                 "airfoil.camber_normal": False, "centerline.frame": "rotation_minimizing"})

@@ -26,6 +26,8 @@ from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import Any, Self, TypeVar
 
+from torus_cad.studio.layout import field_id
+
 CHROMEDRIVER = Path("/usr/bin/chromedriver")
 CHROMIUM = Path("/usr/bin/chromium")
 
@@ -41,11 +43,6 @@ START_TIMEOUT_S = 180.0
 T = TypeVar("T")
 
 _URL = re.compile(r"open (http://\S+/)")
-
-
-def field_id(key: str) -> str:
-    """The DOM id of a parameter's input (torus_cad.studio.layout), e.g. ``hub.radius`` -> ``field-hub-radius``."""
-    return "field-" + key.replace(".", "-").replace("_", "-")
 
 
 class StudioProcess:
@@ -158,20 +155,33 @@ class StudioPage:
     def field_value(self, key: str) -> str:
         return self.element(field_id(key)).get_attribute("value") or ""
 
-    def field_message(self, key: str) -> str:
-        """The text under a parameter's input (its error message or hint), or its group's error line."""
+    def stamp(self, element_id: str) -> int:
+        """A hidden counter of the page (``preview-stamp``, ``exact-stamp``)."""
+        return int(self.element(element_id).get_attribute("textContent") or 0)
+
+    def message_of(self, element_id: str) -> str:
+        """The text of the Vuetify input holding ``element_id``: its label and messages (error or hint)."""
+        from selenium.common.exceptions import NoSuchElementException
         from selenium.webdriver.common.by import By
 
-        error_line = self.text(field_id(key) + "-error")
-        if error_line:
-            return error_line
         try:
-            field = self.element(field_id(key))
-        except Exception:  # noqa: BLE001 - a vector: its elements have their own ids
+            container = self.element(element_id).find_element(
+                By.XPATH, "./ancestor::div[contains(concat(' ', normalize-space(@class), ' '), ' v-input ')][1]")
+        except NoSuchElementException:
             return ""
-        container = field.find_element(By.XPATH, "./ancestor::div[contains(concat(' ', normalize-space(@class), ' '), "
-                                                 "' v-input ')][1]")
         return container.text
+
+    def field_message(self, key: str) -> str:
+        """The text under a parameter's input (its error message or hint), or its vector's error line."""
+        return self.text(field_id(key) + "-error") or self.message_of(field_id(key))
+
+    def change(self, key: str, text: str) -> None:
+        """Enter ``text`` into a field and wait until the exact solid of the new design is shown."""
+        if self.field_value(key) == text and self.idle():
+            return
+        before = self.stamp("exact-stamp")
+        self.set_field(key, text)
+        self.wait(lambda: self.stamp("exact-stamp") > before and self.idle(), f"the exact solid after {key} = {text}")
 
     def wait(self, condition: Callable[[], T], what: str, timeout_s: float | None = None) -> T:
         """Poll ``condition`` until it returns something truthy; fail naming ``what`` and the page state."""
@@ -217,6 +227,9 @@ class StudioPage:
                 for key in ("preview", "exact")}
 
     def screenshot(self, path: Path) -> None:
+        """Save the page as PNG, scrolled to the top (clicks may have scrolled it)."""
+        self.driver.execute_script("window.scrollTo(0, 0); for (const element of document.querySelectorAll("
+                                   "'#readouts-column, .v-navigation-drawer__content')) { element.scrollTop = 0; }")
         path.parent.mkdir(parents=True, exist_ok=True)
         self.driver.save_screenshot(str(path))
 

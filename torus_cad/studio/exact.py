@@ -32,8 +32,9 @@ from torus_cad.studio.worker import BuildRequest, SolidResult
 #: Chordal deviation of the exact solid's display mesh, as a fraction of its bounding-box diagonal.
 DISPLAY_RELATIVE_DEFLECTION = 1.0 / 1000.0
 
-#: Angular deviation of the display mesh, radians.
-DISPLAY_ANGULAR_DEFLECTION = 0.3
+#: Angular deviation of the display mesh, radians. It sets the cost: 0.3 meshes the default
+#: 4-blade propeller in twice the time of 0.5 (13k against 5k triangles); the view smooths normals.
+DISPLAY_ANGULAR_DEFLECTION = 0.5
 
 def _face_parts(propeller: Propeller, faces: list[Any], face_vertices: list[NDArray[np.float64]]) -> list[int]:
     """Hub (-1) or blade i for each face: the hub's faces are its cylinder and end planes; a blade

@@ -40,7 +40,8 @@ def _error_of(panel_field: PanelField) -> str:
     return f"field_errors['{_js_key(panel_field.key)}'] || []"
 
 
-def _field_id(key: str) -> str:
+def field_id(key: str) -> str:
+    """The DOM id of a parameter's input, e.g. ``hub.radius`` -> ``field-hub-radius``."""
     return "field-" + key.replace(".", "-").replace("_", "-")
 
 
@@ -59,11 +60,11 @@ def _scalar_field(panel_field: PanelField) -> None:
     name = panel_field.state_names[0]
     common = {"label": panel_field.label, "hint": panel_field.hint, "persistent_hint": False,
               "error_messages": (_error_of(panel_field),), "density": "compact", "variant": "outlined",
-              "classes": "studio-field", "id": _field_id(panel_field.key), "hide_details": "auto"}
+              "classes": "studio-field", "id": field_id(panel_field.key), "hide_details": "auto"}
     if panel_field.kind is FieldKind.BOOLEAN:
         v3.VSwitch(v_model=(name,), color="primary", label=panel_field.label, hint=panel_field.hint,
                    persistent_hint=True, error_messages=(_error_of(panel_field),), density="compact",
-                   id=_field_id(panel_field.key), hide_details="auto")
+                   id=field_id(panel_field.key), hide_details="auto")
     elif panel_field.kind is FieldKind.CHOICE:
         v3.VSelect(v_model=(name,), items=list(panel_field.choices), **common)
     elif panel_field.kind is FieldKind.TEXT:
@@ -74,7 +75,7 @@ def _scalar_field(panel_field: PanelField) -> None:
             low, high, step = panel_field.slider
             v3.VSlider(v_model_number=(name,), min=low, max=high, step=step, density="compact",
                        hide_details=True, color="primary", classes="mt-n2 mb-1 mx-2",
-                       id=_field_id(panel_field.key) + "-slider")
+                       id=field_id(panel_field.key) + "-slider")
 
 
 def _vector_field(panel_field: PanelField) -> None:
@@ -84,23 +85,31 @@ def _vector_field(panel_field: PanelField) -> None:
         for index, (name, unit) in enumerate(zip(panel_field.state_names, panel_field.element_units, strict=True)):
             with v3.VCol():
                 v3.VTextField(v_model=(name,), label=f"[{index}]", suffix=unit, density="compact", variant="outlined",
-                              hide_details=True, classes="studio-field", id=f"{_field_id(panel_field.key)}-{index}",
+                              hide_details=True, classes="studio-field", id=f"{field_id(panel_field.key)}-{index}",
                               error=(f"!!element_errors['{key}[{index}]']",), title=panel_field.hint,
                               **_number_attributes(panel_field))
     html.Div(f"{{{{ field_errors['{key}'] }}}}", v_if=(f"field_errors['{key}']",),
-             classes="text-error text-caption studio-refusal", id=_field_id(panel_field.key) + "-error")
+             classes="text-error text-caption studio-refusal", id=field_id(panel_field.key) + "-error")
     html.Div(panel_field.hint, classes="text-caption text-medium-emphasis mb-2")
 
 
 def _group(group: PanelGroup) -> None:
     with v3.VExpansionPanel(value=group.section or "propeller"):
         v3.VExpansionPanelTitle(group.title, classes="text-subtitle-1 font-weight-medium")
-        with v3.VExpansionPanelText():
+        with v3.VExpansionPanelText(eager=True):  # rendered while collapsed: every input exists
             if group.doc:
                 html.Div(group.doc, classes="text-caption text-medium-emphasis mb-2")
             for panel_field in group.fields:
                 with html.Div(classes="mb-2"):
                     (_vector_field if panel_field.is_vector else _scalar_field)(panel_field)
+
+
+def parameter_panel(groups: list[PanelGroup], open_groups: int = 3) -> None:
+    """One expansion panel per TOML table, a field per parameter; the first ``open_groups`` open."""
+    with v3.VExpansionPanels(multiple=True, variant="accordion",
+                             v_model=("open_groups", [group.section or "propeller" for group in groups[:open_groups]])):
+        for group in groups:
+            _group(group)
 
 
 def _readouts() -> None:
@@ -182,13 +191,9 @@ def build_layout(studio: Studio) -> None:
                               density="compact", variant="outlined", prepend_icon="mdi-folder-open",
                               error_messages=("upload_error || []",), hide_details="auto", id="upload",
                               messages=("upload_message",))
-            with v3.VExpansionPanels(multiple=True, variant="accordion",
-                                     v_model=("open_groups", [group.section or "propeller"
-                                                              for group in studio.groups[:3]])):
-                for group in studio.groups:
-                    _group(group)
+            parameter_panel(studio.groups)
         with layout.content, v3.VContainer(fluid=True, classes="fill-height pa-0"), \
                 html.Div(style="display: flex; width: 100%; height: 100%;"):
             _view_area(studio)
-            with html.Div(style="flex: 0 0 300px; overflow-y: auto;"):
+            with html.Div(style="flex: 0 0 300px; overflow-y: auto;", id="readouts-column"):
                 _readouts()

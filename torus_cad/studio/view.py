@@ -144,10 +144,10 @@ class PropellerView:
         self._section_actor.SetVisibility(bool(visible))
 
     def reset_camera(self) -> None:
-        """An isometric view of the whole propeller, spin axis up."""
+        """A view of the whole propeller from above its side, spin axis up."""
         camera = self.renderer.GetActiveCamera()
         camera.SetFocalPoint(0.0, 0.0, 0.0)
-        camera.SetPosition(1.0, -1.0, 0.8)
+        camera.SetPosition(0.55, -1.0, 1.25)  # from above: the blades behind the hub stay in sight
         camera.SetViewUp(0.0, 0.0, 1.0)
         self.renderer.ResetCamera()
         camera.Zoom(1.15)
