@@ -92,6 +92,23 @@ def test_a_refused_value_shows_the_reason_and_keeps_the_last_good_propeller(page
     assert page.field_message("hub.radius").count(reason) == 0
 
 
+def test_orbiting_turns_the_view_and_a_change_keeps_the_viewpoint(page):
+    page.change("hub.length", "20")
+    time.sleep(1.0)  # the browser draws asynchronously
+    before = page.view_pixels()
+    page.drag_view(150, 60)
+    time.sleep(1.0)
+    orbited = page.view_pixels()
+    assert (np.abs(orbited - before).sum(axis=2) > 30).mean() > 0.05  # the propeller turned
+    page.change("hub.length", "22")
+    time.sleep(1.0)
+    changed = page.view_pixels()
+    page.change("hub.length", "20")
+    differs = (np.abs(changed - orbited).sum(axis=2) > 30).mean()
+    assert differs < (np.abs(changed - before).sum(axis=2) > 30).mean() / 2  # still seen from the new side
+    page.click("reset-view")
+
+
 def test_downloaded_step_is_one_valid_solid_with_the_readout_volume(page, downloads):
     from torus_cad.kernel.checks import is_valid_closed_solid, precise_volume
     from torus_cad.kernel.export import read_step

@@ -278,6 +278,11 @@ class Studio:
                 f"density = {value:g} is out of range; allowed ({low:g}, {high:g}] g/cm^3"
         self._update_mass()
 
+    def reset_view(self) -> None:
+        """Back to the default viewpoint, framing the whole propeller."""
+        self.view.reset_camera()
+        self.ctrl.view_push_camera()
+
     def _on_sections_toggle(self, show_sections: bool, **_: Any) -> None:
         self.view.set_sections_visible(show_sections)
         self.ctrl.view_update()

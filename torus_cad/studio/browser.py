@@ -216,6 +216,27 @@ class StudioPage:
         self.driver.execute_script("arguments[0].scrollIntoView({block: 'center'});", element)
         element.click()
 
+    def view_pixels(self) -> Any:
+        """The 3D view's pixels as an ``(h, w, 3)`` float array, 0..255."""
+        import io
+
+        import numpy as np
+        from PIL import Image
+
+        box = self.element("view").rect
+        image = Image.open(io.BytesIO(self.driver.get_screenshot_as_png())).convert("RGB")
+        return np.asarray(image.crop((int(box["x"]), int(box["y"]), int(box["x"] + box["width"]),
+                                      int(box["y"] + box["height"]))), dtype=float)
+
+    def drag_view(self, dx: int, dy: int, steps: int = 10) -> None:
+        """Drag across the 3D view with the left button (orbit), in ``steps`` moves as a hand would."""
+        from selenium.webdriver.common.action_chains import ActionChains
+
+        chain = ActionChains(self.driver, duration=50).move_to_element(self.element("view")).click_and_hold()
+        for _ in range(steps):
+            chain = chain.move_by_offset(dx // steps, dy // steps)
+        chain.release().perform()
+
     def start_latency_probe(self) -> None:
         self.driver.execute_script(_LATENCY_PROBE)
 

@@ -159,7 +159,7 @@ def _toolbar(studio: Studio, layout: SinglePageWithDrawerLayout) -> None:
         v3.VProgressCircular(v_if=("building",), indeterminate=True, size=20, width=2, classes="mr-2")
         v3.VSwitch(v_model=("show_sections",), label="section curves", hide_details=True, density="compact",
                    color="primary", classes="mx-2 flex-grow-0", id="toggle-sections")
-        v3.VBtn(icon="mdi-crop-free", click=studio.ctrl.view_reset_camera, variant="text", title="reset the view",
+        v3.VBtn(icon="mdi-crop-free", click=studio.reset_view, variant="text", title="reset the view",
                 id="reset-view")
 
 
@@ -172,9 +172,9 @@ def _view_area(studio: Studio) -> None:
                   id="failure", style="position: absolute; bottom: 8px; left: 8px; right: 8px; z-index: 2;")
         # Rendered in the browser (WebGL): orbit, zoom and pan need no round trip, and the server
         # renders nothing (rendering on the server, in software, took 0.3-1.2 s a frame here).
-        view = vtk_widgets.VtkLocalView(studio.view.window, id="view")
+        view = vtk_widgets.VtkLocalView(studio.view.window, id="view", ref="view")
         studio.ctrl.view_update = view.update
-        studio.ctrl.view_reset_camera = view.reset_camera
+        studio.ctrl.view_push_camera = view.push_camera
 
 
 def build_layout(studio: Studio) -> None:

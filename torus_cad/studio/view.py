@@ -150,4 +150,4 @@ class PropellerView:
         camera.SetPosition(0.55, -1.0, 1.25)  # from above: the blades behind the hub stay in sight
         camera.SetViewUp(0.0, 0.0, 1.0)
         self.renderer.ResetCamera()
-        camera.Zoom(1.15)
+        camera.Zoom(1.05)
