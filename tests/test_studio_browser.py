@@ -13,7 +13,14 @@ import numpy as np
 import pytest
 
 from torus_cad.parameters import PropellerParameters, parameter_specs
-from torus_cad.studio.browser import CHROMEDRIVER, CHROMIUM, StudioPage, StudioProcess, chromium, wait_for_download
+from torus_cad.studio.browser import (
+    CHROMEDRIVER,
+    CHROMIUM,
+    StudioPage,
+    StudioProcess,
+    chromium,
+    wait_for_download,
+)
 from torus_cad.studio.layout import field_id
 
 pytestmark = pytest.mark.slow
@@ -70,10 +77,23 @@ def test_four_blades_change_the_volume_readout(page):
     three_blades = page.text("readout-volume")
     page.start_latency_probe()
     page.change("blades", "4")
+    assert page.text("readout-volume") != three_blades
     assert page.text("readout-volume") == _volume_text(PropellerParameters().with_values({"blades": 4}))
     latencies = page.latencies_ms()
     print(f"\nstudio latency in the browser, 3 -> 4 blades: preview {latencies['preview']:.0f} ms, "
           f"exact solid {latencies['exact']:.0f} ms ({page.text('timings')}; {page.text('preview-detail')})")
+
+
+def test_mass_follows_the_density_entered(page):
+    page.change("blades", "4")
+    volume_mm3 = float(page.text("readout-volume").split()[0])
+    page.set_field("density_g_cm3", "7.85")  # steel
+    page.wait(lambda: page.text("readout-mass") == f"{volume_mm3 * 7.85e-3:.3f} g", "the steel mass")
+    page.set_field("density_g_cm3", "0")
+    page.wait(lambda: "density = 0 is out of range; allowed (0, 25] g/cm^3" in page.message_of(field_id("density_g_cm3")),
+              "the density's refusal")
+    page.set_field("density_g_cm3", "1.24")
+    page.wait(lambda: page.text("readout-mass") == f"{volume_mm3 * 1.24e-3:.3f} g", "the PLA mass")
 
 
 @pytest.mark.parametrize(("radius", "reason"), [

@@ -1,4 +1,4 @@
-"""The studio's web page and its server-side logic (trame, Vuetify 3, a server-rendered VTK view).
+"""The studio's web page and its server-side logic (trame, Vuetify 3, a VTK view drawn in the browser).
 
 A change in the panel goes through the same validation as ``torus-cad build``; a valid design
 is drawn at once from the kernel-free preview (torus_cad.studio.scene) and its exact solid is
@@ -130,8 +130,7 @@ class Studio:
         self._schedule_refresh()
 
     def _on_exit(self, **_: Any) -> None:
-        with contextlib.suppress(Exception):
-            self._runner.cancel()
+        self._runner.cancel()
         self._previewer.shutdown(wait=False, cancel_futures=True)
 
     # -- a change: validate, preview, build --------------------------------------------------------
@@ -221,8 +220,9 @@ class Studio:
         exact.solid = solid
         self.view.show_parts(solid.parts, exact.design.blades)
         self.ctrl.view_update()
-        self.state.status = "exact"
-        self.state.valid_text = f"valid: {solid.solids} closed solid" if solid.valid else "invalid"
+        if not self.state.refusal:  # a refused newer value stays the news
+            self.state.status = "exact"
+        self.state.valid_text = "valid: 1 closed solid"  # the build fails on anything else
         self.state.route_text = solid.fuse_route
         self.state.tip_text = f"{solid.tip_diameter_mm:.3f} mm"
         self.state.stage_rows = [{"stage": name, "ms": f"{seconds * 1000.0:.0f}"}

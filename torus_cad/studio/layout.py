@@ -126,7 +126,7 @@ def _readouts() -> None:
                         html.Td(f"{{{{ {variable} }}}}", id=element_id)
         v3.VTextField(v_model=("density_g_cm3",), label="density", suffix="g/cm³", type="number", step="0.01",
                       min=0, max=25, density="compact", variant="outlined", classes="mx-3 mt-2",
-                      error_messages=("density_error || []",), hide_details="auto", id="field-density")
+                      error_messages=("density_error || []",), hide_details="auto", id=field_id("density_g_cm3"))
         html.Div("{{ route_text }}", classes="text-caption text-medium-emphasis mx-3", id="readout-route")
         v3.VCardSubtitle("stage times (exact build)", classes="mt-2")
         with v3.VTable(density="compact", classes="studio-readouts"), html.Tbody(), \

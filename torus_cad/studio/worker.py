@@ -22,13 +22,11 @@ import multiprocessing
 import multiprocessing.connection
 import multiprocessing.forkserver
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from torus_cad.studio.scene import PartMesh
-
-Message = tuple[str, int, Any]
 
 
 @dataclass(frozen=True)
@@ -47,19 +45,17 @@ class SolidResult:
     Attributes:
         parts: one mesh per part (the hub first, then blade 0, 1, ...).
         stage_seconds: seconds per pipeline stage, plus ``tessellate``.
-        fuse_route: how the blades were joined (torus_cad.propeller.FUSE_ROUTES).
+        fuse_route: how the blades were joined (a torus_cad.kernel.fuse.FuseRoute value).
         tip_diameter_mm: twice the largest distance of the blade surface from the spin axis, mm
             (torus_cad.studio.scene.tip_diameter_mm).
-        solids: number of solids in the result (1: the build checks it).
+
+    The solid is valid: a build that is not one valid, closed solid fails instead.
     """
 
     parts: list[PartMesh]
     stage_seconds: dict[str, float]
     fuse_route: str
     tip_diameter_mm: float
-    solids: int = 1
-    valid: bool = True
-    extra: dict[str, Any] = field(default_factory=dict)
 
 
 # -- parent side -----------------------------------------------------------------------------------
@@ -79,13 +75,9 @@ class BuildRunner:
         multiprocessing.forkserver.ensure_running()
         self._process: multiprocessing.process.BaseProcess | None = None
         self._connection: multiprocessing.connection.Connection | None = None
+        self._loop: asyncio.AbstractEventLoop | None = None
         self._build_id = -1
         self._finished = True
-
-    @property
-    def busy(self) -> bool:
-        """Whether a build is running."""
-        return self._process is not None and not self._finished
 
     def submit(self, request: BuildRequest) -> None:
         """Start ``request``, killing any build still running (it is superseded)."""
@@ -98,12 +90,14 @@ class BuildRunner:
         sender.close()  # the child holds the only writer: its death ends our reads with EOF
         self._process, self._connection = process, receiver
         self._build_id, self._finished = request.build_id, False
-        asyncio.get_running_loop().add_reader(receiver.fileno(), self._readable)
+        self._loop = asyncio.get_running_loop()
+        self._loop.add_reader(receiver.fileno(), self._readable)
 
     def cancel(self) -> None:
         """Kill the running build, if any; its messages are dropped."""
         if self._connection is not None:
-            asyncio.get_running_loop().remove_reader(self._connection.fileno())
+            if self._loop is not None and not self._loop.is_closed():
+                self._loop.remove_reader(self._connection.fileno())
             self._connection.close()
             self._connection = None
         if self._process is not None:
