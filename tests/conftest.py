@@ -9,7 +9,6 @@ import pytest
 
 from torus_cad.parameters import PropellerParameters
 
-
 #: The shared-intersection fuse and one general fuse integrate the same surfaces; their volumes,
 #: each integrated to VOLUME_PRECISION, agree far below this (measured ~1e-9).
 ROUTE_VOLUME_TOLERANCE = 1e-7

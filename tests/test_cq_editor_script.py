@@ -7,13 +7,12 @@ import runpy
 import types
 from pathlib import Path
 
+import cadquery as cq
 import pytest
 
-import cadquery as cq
-
-from torus_cad.parameters import PropellerParameters
 from torus_cad.kernel.checks import is_valid_closed_solid, precise_volume
 from torus_cad.kernel.export import read_step
+from torus_cad.parameters import PropellerParameters
 from torus_cad.tolerances import READ_BACK_RELATIVE_TOLERANCE
 
 SCRIPT = Path(__file__).resolve().parent.parent / "scripts" / "cq_editor_propeller.py"

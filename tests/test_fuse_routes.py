@@ -9,10 +9,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import ROUTE_VOLUME_TOLERANCE, VOLUME_PRECISION, assert_same_volume_as_general_fuse
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from conftest import ROUTE_VOLUME_TOLERANCE, VOLUME_PRECISION, assert_same_volume_as_general_fuse
 import torus_cad.propeller as pipeline
 from torus_cad.errors import KernelError
 from torus_cad.geometry.hub import footprint_arcs_deg, seam_angle_deg

@@ -5,18 +5,16 @@ from __future__ import annotations
 import io
 import math
 
+import cadquery as cq
 import numpy as np
 import pytest
 
-import cadquery as cq
-
 from torus_cad.colors import blade_color
-from torus_cad.parameters import resolve_parameters
-from torus_cad.propeller import Propeller, propeller_objects
 from torus_cad.errors import ParameterError
-from torus_cad.parameters import PropellerParameters
 from torus_cad.kernel.checks import is_valid_closed_solid, precise_volume
+from torus_cad.parameters import PropellerParameters, resolve_parameters
 from torus_cad.progress import Progress
+from torus_cad.propeller import Propeller, propeller_objects
 
 FAST = {"resolution.sections": 16, "resolution.points": 40}
 

@@ -25,6 +25,7 @@ from torus_cad.fuzzing import (TEST_ACTION_KEY, UNIT_DIMENSION, SupervisedPool, 
                                random_design_dict, run_design)
 from torus_cad.geometry import feasibility
 from torus_cad.geometry.centerline import Centerline
+from torus_cad.geometry.frames import Frames
 from torus_cad.parameters import PropellerParameters
 
 
@@ -175,8 +176,8 @@ def _circle_tube(centers: np.ndarray, radius: float, points: int = 24) -> feasib
                              (len(centers), points, 2)).copy()
     surface = centers[:, None] + planar[..., :1] * normal[:, None] + planar[..., 1:] * binormal[:, None]
     arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(centers, axis=0), axis=1))])
-    return feasibility.Tube(np.linspace(0, 1, len(centers)), centers, tangent, normal, binormal, planar, surface,
-                            np.zeros_like(centers), arc)
+    frames = Frames(np.linspace(0, 1, len(centers)), centers, tangent, normal, binormal)
+    return feasibility.Tube(frames, planar, surface, np.zeros_like(centers), arc)
 
 
 def test_self_intersection_is_found():

@@ -5,10 +5,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from torus_cad.geometry.centerline import Centerline
 from torus_cad.geometry.mesh import blade_mesh
-from torus_cad.parameters import PropellerParameters
 from torus_cad.geometry.surface import surface_points
+from torus_cad.parameters import PropellerParameters
 
 
 def rotation_about_z(angle_deg: float) -> np.ndarray:

@@ -20,6 +20,7 @@ from typing import Any
 
 import cadquery as cq
 import numpy as np
+from numpy.typing import NDArray
 
 from torus_cad.colors import HUB_COLOR, blade_color
 from torus_cad.errors import KernelError
@@ -95,9 +96,8 @@ class Propeller:
         return write_outputs(self, Path(out_dir), density_g_cm3, stl)
 
 
-def _section_chords(surface: BladeSurface) -> np.ndarray:
-    trailing_edge = surface.trailing_edge_index or 0
-    return np.linalg.norm(surface.points[:, trailing_edge] - surface.points[:, 0], axis=-1)
+def _section_chords(surface: BladeSurface) -> NDArray[np.float64]:
+    return np.linalg.norm(surface.points[:, surface.trailing_edge_column] - surface.points[:, 0], axis=-1)
 
 
 def build_propeller(design: PropellerParameters | str | Path | None = None,
@@ -127,7 +127,7 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
         # The hub is symmetric about its axis; its seam goes where it crosses no blade root.
         seam_deg = seam_angle_deg(surface.points, geometry.hub.radius_mm, geometry.blades)
     with timer.stage(Stage.WIRES):
-        curves = fit_section_curves(surface.points, surface.trailing_edge_index, _section_chords(surface))
+        curves = fit_section_curves(surface.points, surface.trailing_edge_column, _section_chords(surface))
         wires = curves.wires()
     with timer.stage(Stage.LOFT):
         blade = loft_solid(wires, surface.s)

@@ -9,9 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 from geomdl import BSpline
-from scipy.interpolate import BSpline as ScipyBSpline
 from numpy.typing import ArrayLike, NDArray
-
+from scipy.interpolate import BSpline as ScipyBSpline
 
 #: Clamped cubic knot vector with a single span (spec §3.4).
 KNOT_VECTOR = (0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0)

@@ -95,19 +95,14 @@ class Tube:
     """The blade surface sampled on a check grid, with its frames and in-plane coordinates.
 
     Attributes:
-        s: ``(m,)`` parameters of the grid's sections.
-        origin, tangent, normal, binormal: ``(m, 3)`` the frames (unit vectors).
+        frames: the ``m`` sections' frames (s, origin, unit tangent, normal, binormal).
         planar: ``(m, p, 2)`` section coordinates (X along N, Y along B), mm.
         points: ``(m, p, 3)`` surface points, mm.
         curvature: ``(m, 3)`` curvature vectors of the centerline (kappa times the Frenet normal), 1/mm.
         arc_length: ``(m,)`` centerline arc length from s = 0, mm.
     """
 
-    s: NDArray[np.float64]
-    origin: NDArray[np.float64]
-    tangent: NDArray[np.float64]
-    normal: NDArray[np.float64]
-    binormal: NDArray[np.float64]
+    frames: Frames
     planar: NDArray[np.float64]
     points: NDArray[np.float64]
     curvature: NDArray[np.float64]
@@ -144,8 +139,7 @@ def sample_tube(geometry: PropellerGeometry, centerline: Centerline, s: NDArray[
     surface = place_on_frames(frames, planar)
     steps = np.linalg.norm(np.diff(frames.origin, axis=0), axis=-1)
     arc_length = np.concatenate([[0.0], np.cumsum(steps)])
-    return Tube(s, frames.origin, frames.tangent, frames.normal, frames.binormal, planar, surface, curvature,
-                arc_length)
+    return Tube(frames, planar, surface, curvature, arc_length)
 
 
 def coarsen(tube: Tube, sections: int = CHECK_SECTIONS, points: int = CHECK_POINTS) -> Tube:
@@ -153,8 +147,7 @@ def coarsen(tube: Tube, sections: int = CHECK_SECTIONS, points: int = CHECK_POIN
     m, p, _ = tube.points.shape
     rows = np.unique(np.concatenate([np.arange(0, m, max(1, m // sections)), [m - 1]]))
     columns = np.arange(0, p, max(1, int(np.ceil(p / points))))
-    return Tube(tube.s[rows], tube.origin[rows], tube.tangent[rows], tube.normal[rows], tube.binormal[rows],
-                tube.planar[rows][:, columns], tube.points[rows][:, columns], tube.curvature[rows],
+    return Tube(tube.frames.take(rows), tube.planar[rows][:, columns], tube.points[rows][:, columns], tube.curvature[rows],
                 tube.arc_length[rows])
 
 
@@ -167,10 +160,10 @@ def fold_ratio(tube: Tube) -> tuple[float, float]:
     where k is the curvature vector: where k . o reaches 1 neighbouring sections cross and
     the surface folds over itself.
     """
-    offsets = tube.points - tube.origin[:, None, :]
+    offsets = tube.points - tube.frames.origin[:, None, :]
     ratio = np.einsum("mpk,mk->mp", offsets, tube.curvature).max(axis=1)
     worst = int(np.argmax(ratio))
-    return float(ratio[worst]), float(tube.s[worst])
+    return float(ratio[worst]), float(tube.frames.s[worst])
 
 
 def check_no_fold(tube: Tube, limit: float | None = None) -> None:
@@ -178,7 +171,7 @@ def check_no_fold(tube: Tube, limit: float | None = None) -> None:
     limit = FOLD_LIMIT if limit is None else limit
     ratio, where = fold_ratio(tube)
     if ratio >= limit:
-        index = int(np.argmin(np.abs(tube.s - where)))
+        index = int(np.argmin(np.abs(tube.frames.s - where)))
         bend_radius = 1.0 / max(float(np.linalg.norm(tube.curvature[index])), 1e-300)
         raise GeometryError(
             f"the blade folds over itself near s = {where:.3f}: its section reaches {ratio:.2f} x the "
@@ -198,7 +191,7 @@ def resolution_deviation(surface: BladeSurface, fine: Tube, step: int) -> tuple[
     sparse sections of a strongly changing blade misses the design badly, can come out
     inside out, and the fuse then fails or hangs (found by ``scripts/fuzz.py``).
     """
-    middle = fine.s[step // 2::step]
+    middle = fine.frames.s[step // 2::step]
     exact = fine.points[step // 2::step]
     straight = 0.5 * (surface.points[:-1] + surface.points[1:])
     sag = np.linalg.norm(straight - exact, axis=-1).max(axis=1)
@@ -236,7 +229,7 @@ def _points_inside(tube: Tube, query: NDArray[np.float64], allowed: NDArray[np.b
     backward side of section k + 1's, and inside the section interpolated to its position.
     ``allowed`` ``(q, m - 1)`` masks the slabs tested per point (e.g. to skip a point's neighbours).
     """
-    heights = query @ tube.tangent.T - np.sum(tube.origin * tube.tangent, axis=-1)  # (q, m)
+    heights = query @ tube.frames.tangent.T - np.sum(tube.frames.origin * tube.frames.tangent, axis=-1)  # (q, m)
     in_slab = (heights[:, :-1] >= 0.0) & (heights[:, 1:] < 0.0)
     if allowed is not None:
         in_slab &= allowed
@@ -245,20 +238,20 @@ def _points_inside(tube: Tube, query: NDArray[np.float64], allowed: NDArray[np.b
     where = np.full(len(query), -1, dtype=np.int64)
     # A point inside slab k lies within the larger section radius (plus the slab's length) of C_k.
     radius = tube.section_radius
-    reach = np.maximum(radius[:-1], radius[1:]) + np.linalg.norm(np.diff(tube.origin, axis=0), axis=-1)
-    near = np.linalg.norm(query[point_index] - tube.origin[slab], axis=-1) <= reach[slab]
+    reach = np.maximum(radius[:-1], radius[1:]) + np.linalg.norm(np.diff(tube.frames.origin, axis=0), axis=-1)
+    near = np.linalg.norm(query[point_index] - tube.frames.origin[slab], axis=-1) <= reach[slab]
     point_index, slab = point_index[near], slab[near]
     if point_index.size == 0:
         return inside, where
     h0, h1 = heights[point_index, slab], heights[point_index, slab + 1]
     weight = (h0 / (h0 - h1))[:, None]
     polygon = (1.0 - weight[:, :, None]) * tube.planar[slab] + weight[:, :, None] * tube.planar[slab + 1]
-    relative0 = query[point_index] - tube.origin[slab]
-    relative1 = query[point_index] - tube.origin[slab + 1]
-    x = (1.0 - weight[:, 0]) * np.sum(relative0 * tube.normal[slab], -1) + weight[:, 0] * np.sum(
-        relative1 * tube.normal[slab + 1], -1)
-    y = (1.0 - weight[:, 0]) * np.sum(relative0 * tube.binormal[slab], -1) + weight[:, 0] * np.sum(
-        relative1 * tube.binormal[slab + 1], -1)
+    relative0 = query[point_index] - tube.frames.origin[slab]
+    relative1 = query[point_index] - tube.frames.origin[slab + 1]
+    x = (1.0 - weight[:, 0]) * np.sum(relative0 * tube.frames.normal[slab], -1) + weight[:, 0] * np.sum(
+        relative1 * tube.frames.normal[slab + 1], -1)
+    y = (1.0 - weight[:, 0]) * np.sum(relative0 * tube.frames.binormal[slab], -1) + weight[:, 0] * np.sum(
+        relative1 * tube.frames.binormal[slab + 1], -1)
     hit = _in_polygons(polygon, x, y)
     inside[point_index[hit]] = True
     where[point_index[hit]] = slab[hit]
@@ -289,8 +282,8 @@ def check_no_self_intersection(hub: HubGeometry, tube: Tube) -> None:
     inside, slab = _points_inside(tube, query, allowed)
     if np.any(inside):
         first = int(np.argmax(inside))
-        s_point = tube.s[section_of_point[first]]
-        s_slab = 0.5 * (tube.s[slab[first]] + tube.s[slab[first] + 1])
+        s_point = tube.frames.s[section_of_point[first]]
+        s_slab = 0.5 * (tube.frames.s[slab[first]] + tube.frames.s[slab[first] + 1])
         place = "outside" if _outside_hub(hub, query[first]) else "inside"
         low, high = sorted((s_point, s_slab))
         raise GeometryError(
@@ -329,8 +322,8 @@ def check_blades_clear(geometry: PropellerGeometry, tube: Tube) -> None:
         inside, slab = _points_inside(tube, rotated)
         if np.any(inside):
             first = int(np.argmax(inside))
-            s_other = tube.s[section_of_point[first]]
-            s_here = 0.5 * (tube.s[slab[first]] + tube.s[slab[first] + 1])
+            s_other = tube.frames.s[section_of_point[first]]
+            s_here = 0.5 * (tube.frames.s[slab[first]] + tube.frames.s[slab[first] + 1])
             gap = min(blade, geometry.blades - blade)
             raise GeometryError(
                 f"the blades would intersect each other outside the hub: blade 1's part near s = {s_here:.3f} "

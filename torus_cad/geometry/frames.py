@@ -17,7 +17,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from torus_cad.errors import GeometryError
 from torus_cad.geometry.centerline import Centerline
-from torus_cad.tolerances import FRENET_MIN_CURVATURE, FRAME_SCAN_SAMPLES
+from torus_cad.tolerances import FRAME_SCAN_SAMPLES, FRENET_MIN_CURVATURE
 
 
 class FrameKind(StrEnum):
@@ -46,6 +46,10 @@ class Frames:
     tangent: NDArray[np.float64]
     normal: NDArray[np.float64]
     binormal: NDArray[np.float64]
+
+    def take(self, rows: NDArray[np.int64]) -> Frames:
+        """The frames at the given row indices."""
+        return Frames(self.s[rows], self.origin[rows], self.tangent[rows], self.normal[rows], self.binormal[rows])
 
 
 def _unit(vectors: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -137,7 +141,7 @@ def rotation_minimizing_frames(centerline: Centerline, s: ArrayLike,
 
 def _initial_normal(tangent: NDArray[np.float64], second: NDArray[np.float64]) -> NDArray[np.float64]:
     candidate = second - np.dot(second, tangent) * tangent
-    if np.linalg.norm(candidate) < 1e-9 * max(1.0, np.linalg.norm(second)):
+    if np.linalg.norm(candidate) < 1e-9 * max(1.0, float(np.linalg.norm(second))):
         helper = np.eye(3)[int(np.argmin(np.abs(tangent)))]
         candidate = helper - np.dot(helper, tangent) * tangent
     return candidate / np.linalg.norm(candidate)

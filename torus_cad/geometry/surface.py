@@ -38,6 +38,13 @@ class BladeSurface:
     trailing_edge_index: int | None
     frames: Frames
 
+    @property
+    def trailing_edge_column(self) -> int:
+        """The column of the sharp trailing edge, for surfaces sampled with it as a point (mm arrays' axis 1)."""
+        if self.trailing_edge_index is None:
+            raise ValueError("this surface was sampled without the trailing edge as a point")
+        return self.trailing_edge_index
+
 
 def place_on_frames(frames: Frames, planar: NDArray[np.float64]) -> NDArray[np.float64]:
     """X along N, Y along B (spec §4.2): ``(k, p, 2)`` section coordinates -> ``(k, p, 3)`` mm."""

@@ -34,7 +34,7 @@ def quartic_minimum(coefficients: Sequence[float]) -> tuple[float, float]:
     # np.roots divides by the leading coefficient: drop leading terms that are negligible
     # (e.g. subnormal) against the largest, or it overflows.
     significant = np.nonzero(np.abs(derivative) > 1e-12 * np.abs(derivative).max(initial=0.0))[0]
-    derivative_roots = np.roots(derivative[significant[0]:]) if significant.size else []
+    derivative_roots = np.roots(derivative[significant[0]:]) if significant.size else np.array([])
     candidates = [0.0, 1.0] + [r.real for r in np.atleast_1d(derivative_roots)
                                if abs(r.imag) < 1e-12 and 0.0 <= r.real <= 1.0]
     values = np.polyval(coefficients, candidates)

@@ -15,6 +15,7 @@ import math
 from collections.abc import Sequence
 from enum import StrEnum
 
+import cadquery as cq
 from OCP.BOPAlgo import BOPAlgo_GlueShift
 from OCP.BRep import BRep_Builder, BRep_Tool
 from OCP.BRepAdaptor import BRepAdaptor_Surface
@@ -23,13 +24,11 @@ from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
 from OCP.BRepTools import BRepTools
 from OCP.GeomAbs import GeomAbs_Cylinder
 from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt, gp_Trsf, gp_Vec2d
-from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_WIRE
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_ShapeEnum, TopAbs_WIRE
 from OCP.TopExp import TopExp_Explorer
 from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS, TopoDS_Edge, TopoDS_Face, TopoDS_Shape, TopoDS_Shell, TopoDS_Solid
 from OCP.TopTools import TopTools_ListOfShape
-
-import cadquery as cq
 
 from torus_cad.errors import KernelError
 
@@ -209,8 +208,9 @@ def _result(operation: BRepAlgoAPI_BooleanOperation, what: str) -> TopoDS_Shape:
     return operation.Shape()
 
 
-def _explore(shape: TopoDS_Shape, kind) -> list[TopoDS_Shape]:
-    found, explorer = [], TopExp_Explorer(shape, kind)
+def _explore(shape: TopoDS_Shape, kind: TopAbs_ShapeEnum) -> list[TopoDS_Shape]:
+    found: list[TopoDS_Shape] = []
+    explorer = TopExp_Explorer(shape, kind)
     while explorer.More():
         found.append(explorer.Current())
         explorer.Next()
@@ -225,5 +225,5 @@ def _edges(shape: TopoDS_Shape) -> list[TopoDS_Edge]:
     return [TopoDS.Edge_s(edge) for edge in _explore(shape, TopAbs_EDGE)]
 
 
-def _count(shape: TopoDS_Shape, kind) -> int:
+def _count(shape: TopoDS_Shape, kind: TopAbs_ShapeEnum) -> int:
     return len(_explore(shape, kind))

@@ -24,15 +24,17 @@ from torus_cad.geometry.airfoil import NacaAirfoil
 from torus_cad.geometry.frames import FrameKind
 from torus_cad.geometry.propeller import BladeGeometry, HubGeometry, PropellerGeometry
 from torus_cad.geometry.surface import BladeSurface, blade_surface
-from torus_cad.geometry.transforms import Quartic, SectionLaws, quartic_minimum
+from torus_cad.geometry.transforms import SectionLaws, quartic_minimum
 from torus_cad.parameters.document import Document
-from torus_cad.parameters.schema import Bounds, Section, check_in_bounds, param, vector
+from torus_cad.parameters.schema import AS_TUPLE, Bounds, Section, Vector2, Vector3, check_in_bounds, param
 from torus_cad.tolerances import FOLD_RATIO_LIMIT, STL_ANGULAR_DEFLECTION, STL_LINEAR_DEFLECTION
 
 _NAME_PATTERN = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,63}")
 
+#: One coefficient of a quartic law.
+Coefficient = Annotated[float, Field(ge=-1e4, le=1e4)]
 #: A quartic's coefficients, highest power first, each in [-1e4, 1e4].
-QuarticCoefficients = vector(5, -1e4, 1e4)
+QuarticCoefficients = Annotated[tuple[Coefficient, Coefficient, Coefficient, Coefficient, Coefficient], AS_TUPLE]
 
 
 class StepSchema(StrEnum):
@@ -90,9 +92,9 @@ class Airfoil(Section):
 class Centerline(Section):
     """Frame L: [x_L deg around the axis, y_L mm down the axis, z_L mm radially out]; P1 = origin."""
 
-    p2: vector(3) = param((25.0, 3.0, 22.0), unit="deg, mm, mm", doc="free control point [x2, y2, z2]")
-    p3: vector(3) = param((75.0, 15.0, 22.0), unit="deg, mm, mm", doc="free control point [x3, y3, z3]")
-    p4: vector(2) = param((100.0, 18.0), unit="deg, mm",
+    p2: Vector3 = param((25.0, 3.0, 22.0), unit="deg, mm, mm", doc="free control point [x2, y2, z2]")
+    p3: Vector3 = param((75.0, 15.0, 22.0), unit="deg, mm, mm", doc="free control point [x3, y3, z3]")
+    p4: Vector2 = param((100.0, 18.0), unit="deg, mm",
                           doc="[x4, y4], with z_L = 0: the blade returns into the hub")
     frame: FrameKind = param(FrameKind.FRENET, strict=False,
                              doc="'frenet' (spec §4) or 'rotation_minimizing' (beyond the spec)")
@@ -175,16 +177,11 @@ class PropellerParameters(Document):
     def geometry(self) -> PropellerGeometry:
         """The kernel-free geometry these parameters describe (mm, degrees)."""
         line = self.centerline
-        laws = SectionLaws(_quartic(self.transforms.angle_of_attack), _quartic(self.transforms.scale_x),
-                           _quartic(self.transforms.scale_y), self.airfoil.pivot)
-        local = ((0.0, 0.0, 0.0), tuple(line.p2), tuple(line.p3), (*line.p4, 0.0))
-        blade = BladeGeometry(self.airfoil.section(), laws, local, line.frame)  # type: ignore[arg-type]
+        laws = SectionLaws(self.transforms.angle_of_attack, self.transforms.scale_x, self.transforms.scale_y,
+                           self.airfoil.pivot)
+        local = ((0.0, 0.0, 0.0), line.p2, line.p3, (*line.p4, 0.0))
+        blade = BladeGeometry(self.airfoil.section(), laws, local, line.frame)
         return PropellerGeometry(HubGeometry(self.hub.radius, self.hub.length), blade, self.blades, self.phase_deg)
-
-
-def _quartic(coefficients: tuple[float, ...]) -> Quartic:
-    a, b, c, d, e = coefficients
-    return (a, b, c, d, e)
 
 
 # ParameterError is what every caller catches; keep it importable from here.

@@ -27,12 +27,12 @@ def _list_to_tuple(value: Any) -> Any:
     return tuple(value) if isinstance(value, list) else value
 
 
-def vector(length: int, low: float | None = None, high: float | None = None) -> Any:
-    """The annotation of a fixed-length vector of floats, each in ``[low, high]`` when given.
+#: Put on a vector's annotation: TOML gives lists, the frozen parameters keep tuples.
+AS_TUPLE = BeforeValidator(_list_to_tuple)
 
-    TOML gives lists; they are accepted as tuples (the parameters are frozen)."""
-    element = Annotated[float, Field(ge=low, le=high)] if low is not None or high is not None else float
-    return Annotated[tuple[(element,) * length], BeforeValidator(_list_to_tuple)]  # type: ignore[misc]
+#: Fixed-length vectors of floats (elements unbounded; cross-field validators check them).
+Vector2 = Annotated[tuple[float, float], AS_TUPLE]
+Vector3 = Annotated[tuple[float, float, float], AS_TUPLE]
 
 
 def param(default: Any, *, doc: str, unit: str = "", ge: float | None = None, gt: float | None = None,
@@ -78,7 +78,7 @@ class Bounds:
 
     def contains(self, value: float) -> bool:
         """Whether ``value`` lies inside (NaN never does)."""
-        if not math.isfinite(value):
+        if isinstance(value, float) and not math.isfinite(value):
             return False
         low_ok = self.low is None or (value > self.low if self.low_open else value >= self.low)
         high_ok = self.high is None or (value < self.high if self.high_open else value <= self.high)
@@ -209,7 +209,10 @@ def _dotted(location: Sequence[Any]) -> str:
 
 
 def _describe(value: Any) -> str:
-    text = repr(value)
+    try:
+        text = repr(value)
+    except ValueError:  # an int too long to print (Python refuses > 4300 digits)
+        text = "a huge number"
     return f"{type(value).__name__} {text if len(text) <= 40 else text[:37] + '...'}"
 
 
