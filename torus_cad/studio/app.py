@@ -81,7 +81,7 @@ class Studio:
         self._previewer = ThreadPoolExecutor(max_workers=1, thread_name_prefix="torus-cad-preview")
         self._changed: set[str] = set()  # keys edited since the last good design
         self._dirty = False
-        self._refresh_task: asyncio.Task | None = None
+        self._refresh_task: asyncio.Task[None] | None = None
         self._build_counter = 0
         self._change_time = time.perf_counter()
         self._init_state()
@@ -326,7 +326,7 @@ class Studio:
         return resolve_parameters(path)
 
 
-def _log_failure(task: asyncio.Task) -> None:
+def _log_failure(task: asyncio.Task[None]) -> None:
     if not task.cancelled() and task.exception() is not None:
         LOG.error("studio update failed", exc_info=task.exception())
 

@@ -126,7 +126,7 @@ def run_build(request: BuildRequest, connection: multiprocessing.connection.Conn
         connection.send(("refused", build_id, str(error)))
     except TorusCadError as error:
         connection.send(("failed", build_id, f"OpenCascade failed: {error}"))
-    except Exception as error:  # noqa: BLE001 - reported on the page, never a crashed server
+    except Exception as error:  # reported on the page, never a crashed server
         traceback.print_exc()
         connection.send(("failed", build_id, f"internal error ({type(error).__name__}): {error}"))
     finally:

@@ -41,13 +41,14 @@ FEATURE_ANGLE_DEG = 40.0
 def _cells(connectivity: NDArray[np.int64], sizes: NDArray[np.int64]) -> vtkCellArray:
     offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
     cells = vtkCellArray()
-    cells.SetData(numpy_to_vtkIdTypeArray(offsets, deep=True), numpy_to_vtkIdTypeArray(connectivity, deep=True))
+    cells.SetData(numpy_to_vtkIdTypeArray(offsets, deep=True),  # type: ignore[no-untyped-call]
+                  numpy_to_vtkIdTypeArray(connectivity, deep=True))  # type: ignore[no-untyped-call]
     return cells
 
 
 def _points(vertices: NDArray[np.float64]) -> vtkPoints:
     points = vtkPoints()
-    points.SetData(numpy_to_vtk(np.ascontiguousarray(vertices, dtype=float), deep=True))
+    points.SetData(numpy_to_vtk(np.ascontiguousarray(vertices, dtype=float), deep=True))  # type: ignore[no-untyped-call]
     return points
 
 
@@ -96,7 +97,8 @@ class PropellerView:
         self.window.AddRenderer(self.renderer)
         self._part_actors: list[vtkActor] = []
         self._section_actor = vtkActor()
-        self._section_actor.SetMapper(vtkPolyDataMapper())
+        self._section_mapper = vtkPolyDataMapper()
+        self._section_actor.SetMapper(self._section_mapper)
         self._section_actor.GetProperty().SetLineWidth(1.5)
         self._section_actor.GetProperty().SetLighting(False)
         self.renderer.AddActor(self._section_actor)
@@ -131,10 +133,10 @@ class PropellerView:
         counts = [len(blade) for blade in sections]
         colors = np.concatenate([np.tile(np.array(blade_color(index, blades)) * SECTION_SHADE, (count, 1))
                                  for index, count in enumerate(counts)]) if counts else np.zeros((0, 3))
-        scalars = numpy_to_vtk((colors * 255).astype(np.uint8), deep=True)
+        scalars = numpy_to_vtk((colors * 255).astype(np.uint8), deep=True)  # type: ignore[no-untyped-call]
         scalars.SetName("colors")
         polydata.GetCellData().SetScalars(scalars)
-        mapper = self._section_actor.GetMapper()
+        mapper = self._section_mapper
         mapper.SetInputData(polydata)
         mapper.SetColorModeToDirectScalars()
         mapper.SetScalarModeToUseCellData()
