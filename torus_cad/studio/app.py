@@ -57,7 +57,6 @@ class _Exact:
     build_id: int
     design: PropellerParameters
     started: float
-    solid: SolidResult | None = None
     properties: dict[str, Any] | None = None
     files: dict[str, Path] = field(default_factory=dict)
 
@@ -186,7 +185,7 @@ class Studio:
             self.state.refusal, self.state.failure = "", ""
             self.state.status = "preview"
             self.state.file_stem = params.name
-            self.state.tip_text = f"{scene.tip_diameter_mm:.3f} mm"
+            self.state.tip_text = f"≈ {scene.tip_diameter_mm:.2f} mm"  # sampled at the design's resolution
             self.ctrl.view_update()
             times["view update"] = time.perf_counter() - started - sum(times.values())
             self.state.preview_ms = round((time.perf_counter() - started) * 1000.0, 1)
@@ -217,14 +216,12 @@ class Studio:
             LOG.exception("handling the build's %s message failed", kind)
 
     def _on_solid(self, exact: _Exact, solid: SolidResult) -> None:
-        exact.solid = solid
         self.view.show_parts(solid.parts, exact.design.blades)
         self.ctrl.view_update()
         if not self.state.refusal:  # a refused newer value stays the news
             self.state.status = "exact"
         self.state.valid_text = "valid: 1 closed solid"  # the build fails on anything else
         self.state.route_text = solid.fuse_route
-        self.state.tip_text = f"{solid.tip_diameter_mm:.3f} mm"
         self.state.stage_rows = [{"stage": name, "ms": f"{seconds * 1000.0:.0f}"}
                                  for name, seconds in solid.stage_seconds.items() if name != "parameters"]
         self.state.exact_ms = round((time.perf_counter() - exact.started) * 1000.0, 1)
@@ -234,6 +231,7 @@ class Studio:
         exact.properties = properties
         self.state.volume_text = f"{properties['volume_mm3']:.2f} mm³"
         self.state.area_text = f"{properties['surface_area_mm2']:.2f} mm²"
+        self.state.tip_text = f"{properties['tip_diameter_mm']:.3f} mm"
         self.state.stage_rows = [*self.state.stage_rows, {"stage": "mass properties",
                                                           "ms": f"{properties['seconds'] * 1000.0:.0f}"}]
         self._update_mass()

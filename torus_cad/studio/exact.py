@@ -36,6 +36,7 @@ DISPLAY_RELATIVE_DEFLECTION = 1.0 / 1000.0
 #: 4-blade propeller in twice the time of 0.5 (13k against 5k triangles); the view smooths normals.
 DISPLAY_ANGULAR_DEFLECTION = 0.5
 
+
 def _face_parts(propeller: Propeller, faces: list[Any], face_vertices: list[NDArray[np.float64]]) -> list[int]:
     """Hub (-1) or blade i for each face: the hub's faces are its cylinder and end planes; a blade
     face belongs to the blade whose sampled surface passes nearest its vertices."""
@@ -110,10 +111,11 @@ def run_build(request: BuildRequest, connection: multiprocessing.connection.Conn
         start = time.perf_counter()
         parts = tessellate_parts(propeller)
         stages = {**propeller.stage_seconds, "tessellate": time.perf_counter() - start}
-        connection.send(("solid", build_id, SolidResult(parts, stages, str(propeller.fuse_route), tip_diameter_mm(params))))
+        connection.send(("solid", build_id, SolidResult(parts, stages, str(propeller.fuse_route))))
         start = time.perf_counter()
         properties = mass_properties(propeller.solid, 1.0).to_dict()
         properties["seconds"] = time.perf_counter() - start
+        properties["tip_diameter_mm"] = tip_diameter_mm(params)
         connection.send(("properties", build_id, properties))
         start = time.perf_counter()
         export = params.export

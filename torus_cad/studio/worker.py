@@ -7,7 +7,7 @@ never finishes, a slow one never queues the next, and an OpenCascade crash takes
 that process. Results come back over a pipe as messages, in this order::
 
     ("solid", build_id, SolidResult)        the fused solid's tessellation, per part
-    ("properties", build_id, dict)          MassProperties.to_dict() at 1 g/cm^3
+    ("properties", build_id, dict)          MassProperties.to_dict() at 1 g/cm^3, tip_diameter_mm
     ("files", build_id, {"step": Path, "stl": Path})
     ("refused", build_id, "one-line reason")    ParameterError / GeometryError
     ("failed", build_id, "one-line reason")     KernelError or anything unexpected
@@ -46,8 +46,6 @@ class SolidResult:
         parts: one mesh per part (the hub first, then blade 0, 1, ...).
         stage_seconds: seconds per pipeline stage, plus ``tessellate``.
         fuse_route: how the blades were joined (a torus_cad.kernel.fuse.FuseRoute value).
-        tip_diameter_mm: twice the largest distance of the blade surface from the spin axis, mm
-            (torus_cad.studio.scene.tip_diameter_mm).
 
     The solid is valid: a build that is not one valid, closed solid fails instead.
     """
@@ -55,7 +53,6 @@ class SolidResult:
     parts: list[PartMesh]
     stage_seconds: dict[str, float]
     fuse_route: str
-    tip_diameter_mm: float
 
 
 # -- parent side -----------------------------------------------------------------------------------
