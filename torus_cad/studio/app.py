@@ -24,6 +24,7 @@ from typing import Any
 
 from torus_cad.errors import GeometryError, ParameterError
 from torus_cad.parameters import PropellerParameters, resolve_parameters
+from torus_cad.stages import Stage
 from torus_cad.studio.panel import (
     PanelField,
     PanelGroup,
@@ -222,8 +223,8 @@ class Studio:
             self.state.status = "exact"
         self.state.valid_text = "valid: 1 closed solid"  # the build fails on anything else
         self.state.route_text = solid.fuse_route
-        self.state.stage_rows = [{"stage": name, "ms": f"{seconds * 1000.0:.0f}"}
-                                 for name, seconds in solid.stage_seconds.items() if name != "parameters"]
+        self.state.stage_rows = [{"stage": _stage_label(name), "ms": f"{seconds * 1000.0:.0f}"}
+                                 for name, seconds in solid.stage_seconds.items() if name != Stage.PARAMETERS]
         self.state.exact_ms = round((time.perf_counter() - exact.started) * 1000.0, 1)
         self.state.exact_stamp += 1
 
@@ -322,6 +323,11 @@ class Studio:
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_bytes(data)
         return resolve_parameters(path)
+
+
+def _stage_label(name: str) -> str:
+    """Words for a stage of the build (torus_cad.stages), or the name of the studio's own step."""
+    return Stage(name).label if name in Stage.__members__.values() else name.replace("_", " ")
 
 
 def _log_failure(task: asyncio.Task[None]) -> None:

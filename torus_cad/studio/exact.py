@@ -110,7 +110,7 @@ def run_build(request: BuildRequest, connection: multiprocessing.connection.Conn
         propeller = build_propeller(params)
         start = time.perf_counter()
         parts = tessellate_parts(propeller)
-        stages = {**propeller.stage_seconds, "tessellate": time.perf_counter() - start}
+        stages = {**propeller.stage_seconds, "display_mesh": time.perf_counter() - start}
         connection.send(("solid", build_id, SolidResult(parts, stages, str(propeller.fuse_route))))
         start = time.perf_counter()
         properties = mass_properties(propeller.solid, 1.0).to_dict()

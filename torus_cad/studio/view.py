@@ -2,8 +2,10 @@
 blades' section curves.
 
 The scene is rendered in the browser (trame's VtkLocalView serializes it to vtk.js, WebGL): orbit,
-zoom and pan need no round trip, and the server never renders, so it needs no OpenGL. Rendering
-on the server instead (llvmpipe, no GPU) took 0.3-1.2 s a frame on the 2-core project machine.
+zoom and pan need no round trip, and the server never renders: its render window is VTK's
+plain, OpenGL-free ``vtkRenderWindow`` (vtkRenderingOpenGL2 is never imported), which only holds
+the scene for serialization. Rendering on the server instead (llvmpipe, no GPU) took 0.3-1.2 s a
+frame on the 2-core project machine.
 """
 
 from __future__ import annotations
@@ -11,7 +13,6 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
-import vtkmodules.vtkRenderingOpenGL2  # noqa: F401  (the render window's implementation)
 from numpy.typing import NDArray
 from vtkmodules.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray
 from vtkmodules.vtkCommonCore import vtkPoints
@@ -86,7 +87,7 @@ def part_color(part: int, blades: int) -> tuple[float, float, float]:
 
 
 class PropellerView:
-    """A render window (never rendered on the server) holding the propeller's parts and section curves."""
+    """A render window, never rendered on the server, holding the propeller's parts and section curves."""
 
     def __init__(self) -> None:
         self.renderer = vtkRenderer()
