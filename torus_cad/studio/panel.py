@@ -17,6 +17,7 @@ from enum import Enum, StrEnum
 from typing import Any
 
 from torus_cad.errors import ParameterError
+from torus_cad.parameters.schema import Bounds, ParameterSpec
 
 #: Prefix of the page's state names of parameters (state names must be JavaScript identifiers).
 STATE_PREFIX = "p_"
@@ -113,7 +114,7 @@ def _nice_step(span: float) -> float:
     return next(factor * power for factor in (1.0, 2.0, 5.0, 10.0) if factor * power >= raw)
 
 
-def _slider(kind: FieldKind, explore: Any) -> tuple[float, float, float] | None:
+def _slider(kind: FieldKind, explore: Bounds | None) -> tuple[float, float, float] | None:
     """A slider over the range worth exploring (the schema's fuzz range), when it is finite."""
     if explore is None or explore.low is None or explore.high is None or explore.high <= explore.low:
         return None
@@ -122,7 +123,7 @@ def _slider(kind: FieldKind, explore: Any) -> tuple[float, float, float] | None:
     return (float(explore.low), float(explore.high), _nice_step(explore.high - explore.low))
 
 
-def _kind(spec: Any) -> FieldKind:
+def _kind(spec: ParameterSpec) -> FieldKind:
     if spec.choices or (isinstance(spec.kind, type) and issubclass(spec.kind, Enum)):
         return FieldKind.CHOICE
     if spec.kind is bool:
@@ -134,14 +135,14 @@ def _kind(spec: Any) -> FieldKind:
     return FieldKind.TEXT
 
 
-def panel_field(spec: Any) -> PanelField:
-    """The panel field of one schema parameter (a torus_cad.parameters ParameterSpec)."""
+def panel_field(spec: ParameterSpec) -> PanelField:
+    """The panel field of one schema parameter."""
     kind = _kind(spec)
     names = tuple(state_name(spec.key, i) for i in range(spec.length)) if spec.length else (state_name(spec.key),)
     bounds = spec.bounds
     choices = tuple(str(choice.value if isinstance(choice, Enum) else choice) for choice in spec.choices)
-    slider = _slider(kind, getattr(spec, "fuzz", None) or bounds) if kind in (FieldKind.INTEGER, FieldKind.NUMBER) \
-        and not spec.length else None
+    numeric_scalar = kind in (FieldKind.INTEGER, FieldKind.NUMBER) and not spec.length
+    slider = _slider(kind, spec.fuzz or bounds) if numeric_scalar else None
     return PanelField(spec.key, kind, spec.key.rpartition(".")[2], spec.unit, spec.doc, names,
                       bounds.low, bounds.high, bounds.low_open, bounds.high_open, slider, choices,
                       _element_units(spec.unit, len(names)))
@@ -153,7 +154,7 @@ def _element_units(unit: str, count: int) -> tuple[str, ...]:
     return tuple(parts) if len(parts) == count else (unit,) * count
 
 
-def panel_groups(specs: Iterable[Any], section_docs: Mapping[str, str] | None = None) -> list[PanelGroup]:
+def panel_groups(specs: Iterable[ParameterSpec], section_docs: Mapping[str, str] | None = None) -> list[PanelGroup]:
     """The panel's groups in the schema's order: top-level keys first, then one group per table."""
     fields: dict[str, list[PanelField]] = {}
     for spec in specs:
