@@ -62,3 +62,8 @@ HUB_FOOTPRINT_MARGIN_DEG = 1.0
 
 #: Largest configuration file read (bytes): a design is a few hundred bytes.
 CONFIG_FILE_MAX_BYTES = 1 << 20
+
+#: Most designs one sweep may hold (grid product or samples), checked from the axis sizes before
+#: any design is generated. Beyond it the design list and table alone take gigabytes, and at
+#: ~2 designs/s per machine the sweep would run for weeks.
+MAX_SWEEP_DESIGNS = 1_000_000
