@@ -198,6 +198,24 @@ def _command_sweep(args: argparse.Namespace) -> int:
     return result.exit_code
 
 
+def _port(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--port must be a whole number, got {text!r}") from None
+    if not 0 <= value <= 65535:
+        raise argparse.ArgumentTypeError(f"--port = {value} is out of range; allowed [0, 65535] (0: any free port)")
+    return value
+
+
+def _command_studio(args: argparse.Namespace) -> int:
+    from torus_cad.studio.app import serve
+
+    params = load_parameters(args.config, args.overrides)  # a bad design exits 2 before the server starts
+    serve(params, port=args.port, host=args.host)
+    return EXIT_OK
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with every subcommand."""
     parser = _Parser(prog="torus-cad", description=DESCRIPTION, epilog=EPILOG,
@@ -267,6 +285,17 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("--rebuild", action="store_true", help="build every design again, even those already done")
     sweep.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary")
     sweep.set_defaults(handler=_command_sweep)
+
+    studio = commands.add_parser("studio", help="design in the browser: parameters, live 3D view, downloads",
+                                 description="Serve a local web page to design a propeller: a parameters panel, a "
+                                 "live 3D view (a preview at once, the exact solid when it is built), readouts, and "
+                                 "STEP / STL / TOML downloads. Starts from CONFIG (or the default design).")
+    _add_design_arguments(studio)
+    studio.add_argument("--port", type=_port, default=8080, help="port to serve on (default 8080; 0: any free port)")
+    studio.add_argument("--host", default="127.0.0.1",
+                        help="address to listen on (default 127.0.0.1: only this machine can connect; "
+                             "0.0.0.0 serves every network, without a password)")
+    studio.set_defaults(handler=_command_studio)
     return parser
 
 
