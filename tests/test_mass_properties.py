@@ -156,7 +156,7 @@ def test_the_default_takes_the_fast_route_and_agrees_with_the_reference(default_
 @pytest.mark.slow
 def test_the_fast_route_agrees_with_the_reference_on_random_designs():
     from torus_cad.errors import GeometryError, ParameterError
-    from torus_cad.fuzzing import random_design
+    from torus_cad.studies.fuzz import random_design
     from torus_cad.propeller import build_propeller
 
     built, seed = 0, 0

@@ -23,6 +23,7 @@ from torus_cad.preview import (
     SceneMesh,
     View,
     blade_silhouettes,
+    face_parts_by_distance,
     oblique_view,
     parse_size,
     propeller_mesh,
@@ -81,13 +82,13 @@ def test_write_preview_gives_the_exact_size_and_a_real_picture(objects, tmp_path
 @pytest.mark.parametrize("size", [(333, 217), (1001, 64), (64, 400)])
 def test_render_preview_gives_exactly_the_requested_pixels(objects, size):
     image = render_preview(objects, size=size, title="t")
-    assert image.shape == (size[1], size[0], 4)
+    assert image.shape == (size[1], size[0], 3)
     assert image.dtype == np.uint8
     assert image[..., :3].std() > 255 * 0.03  # something was drawn even in a thin strip
 
 
 def test_the_two_views_both_show_the_propeller(objects):
-    rgb = render_preview(objects, size=(800, 400))[..., :3] / 255.0
+    rgb = render_preview(objects, size=(800, 400)) / 255.0
     for half in (rgb[:, :400], rgb[:, 400:]):  # isometric left, along the axis right
         grey = half.mean(axis=2)
         assert np.count_nonzero(grey < 0.97) > 0.08 * grey.size
@@ -134,19 +135,25 @@ def _box(low: tuple[float, float, float], high: tuple[float, float, float]) -> t
     return vertices, triangles
 
 
-def test_the_near_box_hides_the_far_box_whatever_the_drawing_order():
-    # The near (red) box covers the left half of the far (blue) box, seen along -z. Its triangles
-    # come first, so without a depth test the far box, drawn after it, would paint over it.
-    near_vertices, near_triangles = _box((-1.0, -1.0, 2.0), (0.2, 1.0, 3.0))
-    far_vertices, far_triangles = _box((-1.0, -1.0, -3.0), (1.0, 1.0, -2.0))
-    red, blue = (0.9, 0.1, 0.1), (0.1, 0.1, 0.9)
-    scene = SceneMesh(np.concatenate([near_vertices, far_vertices]),
-                      np.concatenate([near_triangles, far_triangles + len(near_vertices)]),
-                      np.array([red] * len(near_triangles) + [blue] * len(far_triangles)),
-                      np.array([0] * len(near_triangles) + [1] * len(far_triangles)))
+@pytest.mark.parametrize("near_first", [True, False])
+def test_the_near_box_hides_the_far_box_whatever_the_drawing_order(near_first):
+    # The near (red) box covers the left half of the far (blue) box, seen along -z. Triangles are
+    # drawn in order: with the near box's first, a renderer without a depth test would let the
+    # far box paint over it; with the far box's first, a renderer that drew back faces or ignored
+    # the near box would fail the other way.
+    boxes = [(_box((-1.0, -1.0, 2.0), (0.2, 1.0, 3.0)), (0.9, 0.1, 0.1), 0),   # near, red
+             (_box((-1.0, -1.0, -3.0), (1.0, 1.0, -2.0)), (0.1, 0.1, 0.9), 1)]  # far, blue
+    if not near_first:
+        boxes.reverse()
+    (first_vertices, first_triangles), first_colour, first_part = boxes[0]
+    (second_vertices, second_triangles), second_colour, second_part = boxes[1]
+    scene = SceneMesh(np.concatenate([first_vertices, second_vertices]),
+                      np.concatenate([first_triangles, second_triangles + len(first_vertices)]),
+                      np.array([first_colour] * len(first_triangles) + [second_colour] * len(second_triangles)),
+                      np.array([first_part] * len(first_triangles) + [second_part] * len(second_triangles)))
     image = render_views(scene, [View((0.0, 0.0, 1.0), (0.0, 1.0, 0.0), "")], (200, 200)).astype(float)
     # x in [-1, 1] spans the middle of the 200 px view (the camera frames the scene with a margin).
-    overlap, far_only = image[100, 70, :3], image[100, 150, :3]
+    overlap, far_only = image[100, 70], image[100, 150]
     assert overlap[0] > 2.0 * overlap[2], f"the near red box should cover the far blue one, got {overlap}"
     assert far_only[2] > 2.0 * far_only[0], f"the far blue box should show beside the near one, got {far_only}"
 
@@ -211,7 +218,8 @@ def test_cli_preview_refuses_a_bad_size_before_building(tmp_path, size, capsys):
 def test_cli_build_preview_writes_the_picture_beside_the_files(tmp_path, capsys):
     assert main(["build", *FAST, "--no-stl", "--preview", "--preview-size", "400x200", "--out", str(tmp_path)]) == EXIT_OK
     name = "torus_propeller"
-    assert sorted(path.name for path in tmp_path.iterdir()) == [f"{name}.json", f"{name}.png", f"{name}.step"]
+    assert sorted(path.name for path in tmp_path.iterdir()) == [f"{name}.json", f"{name}.png", f"{name}.step",
+                                                                f"{name}_sections.csv", f"{name}_sections.png"]
     assert f"wrote {tmp_path / (name + '.png')}" in capsys.readouterr().out
     assert _read_png(tmp_path / f"{name}.png").shape == (200, 400, 3)
     assert json.loads((tmp_path / f"{name}.json").read_text())["valid"] is True
@@ -221,3 +229,24 @@ def test_cli_build_refuses_a_bad_preview_size_and_writes_nothing(tmp_path, capsy
     assert main(["build", "--preview", "--preview-size", "5x5", "--out", str(tmp_path)]) == EXIT_BAD_INPUT
     assert "--preview-size 5x5: width 5 px is out of range" in capsys.readouterr().err
     assert not any(tmp_path.iterdir())
+
+
+def test_the_oblique_view_faces_every_blades_window(default_propeller):
+    # A second measure of "not edge-on": each blade's window (its centerline loop closed through
+    # the hub) faces the camera by a fifth of its area or more, where the classic (1, 1, 1)
+    # isometric direction shows one default blade at ~6 % of its window, nearly as a line.
+    geometry = default_propeller.parameters.geometry()
+    s = np.linspace(0.0, 1.0, 64)
+    loops = [geometry.centerline(index).points(s) for index in range(geometry.blades)]
+    areas = np.array([0.5 * np.cross(loop, np.roll(loop, -1, axis=0)).sum(axis=0) for loop in loops])
+    unit = areas / np.linalg.norm(areas, axis=1, keepdims=True)
+    mesh = propeller_mesh(default_propeller.solid, default_propeller.face_parts, 3, tolerance=0.1)
+    view = np.array(oblique_view(mesh).toward_camera)
+    classic = np.array([1.0, 1.0, 1.0]) / np.sqrt(3.0)
+    assert np.abs(unit @ view).min() > 0.2
+    assert np.abs(unit @ view).min() > 3 * np.abs(unit @ classic).min()
+
+
+def test_parts_found_by_distance_are_the_fuses(objects):
+    # The fallback for builds that do not report the parts (the root fillet) agrees with the fuse.
+    assert face_parts_by_distance(objects.solid, objects.hub, objects.blades) == objects.face_parts

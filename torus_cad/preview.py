@@ -31,7 +31,7 @@ from numpy.typing import NDArray
 
 from torus_cad.colors import HUB_COLOR, blade_color
 from torus_cad.errors import ParameterError, TorusCadError
-from torus_cad.kernel.checks import mass_properties
+from torus_cad.kernel.checks import distances_to_shape, mass_properties
 from torus_cad.kernel.export import atomic_path
 from torus_cad.kernel.fuse import HUB_PART
 from torus_cad.parameters import PropellerParameters
@@ -58,6 +58,7 @@ _TEXT_RGB = (0.2, 0.2, 0.2)
 class _HasParts(Protocol):
     parameters: PropellerParameters
     solid: cq.Solid
+    hub: cq.Solid
     blades: list[cq.Solid]
     face_parts: tuple[int, ...]
 
@@ -152,6 +153,31 @@ def propeller_mesh(solid: cq.Shape, face_parts: Sequence[int], blades: int, tole
                      palette[np.where(all_parts == HUB_PART, 0, all_parts + 1)], all_parts)
 
 
+def face_parts_by_distance(solid: cq.Shape, hub: cq.Shape, blades: Sequence[cq.Shape]) -> tuple[int, ...]:
+    """The part (HUB_PART or blade i) of each face of ``solid``, as ``solid.Faces()`` orders them,
+    found by geometry: the part whose boundary passes nearest a few points of the face.
+
+    Only for solids whose build does not report the parts (the root fillet's); the fuse does
+    (:attr:`torus_cad.kernel.fuse.Fused.face_parts`). A fillet face, between a blade and the hub,
+    goes to whichever it lies nearer.
+    """
+    parts: list[cq.Shape] = [hub, *blades]
+    boxes = [shape.BoundingBox() for shape in parts]
+    found = []
+    for face in solid.Faces():
+        u_min, u_max, v_min, v_max = face._uvBounds()
+        samples = np.array([face.positionAt(u_min + a * (u_max - u_min), v_min + b * (v_max - v_min)).toTuple()
+                            for a, b in ((0.5, 0.5), (0.25, 0.5), (0.75, 0.5))])
+        slack = 1e-3 * boxes[0].DiagonalLength
+        candidates = [index for index, box in enumerate(boxes)
+                      if np.all(samples >= np.array([box.xmin, box.ymin, box.zmin]) - slack)
+                      and np.all(samples <= np.array([box.xmax, box.ymax, box.zmax]) + slack)] or list(range(len(parts)))
+        distances = [float(np.median(distances_to_shape(parts[index], samples))) if len(candidates) > 1 else 0.0
+                     for index in candidates]
+        found.append(candidates[int(np.argmin(distances))] - 1)  # parts[0] is the hub
+    return tuple(found)
+
+
 def blade_silhouettes(mesh: SceneMesh, directions: NDArray[np.float64], most_triangles: int = 3000
                       ) -> NDArray[np.float64]:
     """``(blades, d)``: each blade's projected area (mm^2) seen along each of ``(d, 3)`` unit
@@ -201,8 +227,8 @@ def oblique_view(mesh: SceneMesh) -> View:
 
 def render_views(mesh: SceneMesh, views: Sequence[View], size: Sequence[int], title: str = "",
                  smooth: bool = True) -> NDArray[np.uint8]:
-    """``mesh`` seen in each of ``views``, side by side, under ``title``: an ``(height, width, 4)``
-    RGBA uint8 array of exactly ``size`` = (width, height) pixels."""
+    """``mesh`` seen in each of ``views``, side by side, under ``title``: an ``(height, width, 3)``
+    RGB uint8 array of exactly ``size`` = (width, height) pixels."""
     from vtkmodules.vtkRenderingCore import vtkRenderer
 
     width, height = _checked_size(size)
@@ -235,11 +261,12 @@ def render_views(mesh: SceneMesh, views: Sequence[View], size: Sequence[int], ti
 
 def render_preview(propeller: _HasParts, size: Sequence[int] = DEFAULT_SIZE, title: str | None = None,
                    progress: Callable[[str], None] | None = None) -> NDArray[np.uint8]:
-    """The preview picture as an ``(height, width, 4)`` RGBA uint8 array of exactly ``size`` pixels.
+    """The preview picture as an ``(height, width, 3)`` RGB uint8 array of exactly ``size`` pixels.
 
     Args:
-        propeller: a built :class:`torus_cad.propeller.Propeller`: its ``solid``,
-            ``face_parts`` and ``blades``.
+        propeller: a built :class:`torus_cad.propeller.Propeller`: its ``solid``, ``face_parts``
+            (where the build does not know them, after a root fillet, each face gets the part
+            nearest to it: :func:`face_parts_by_distance`), ``hub`` and ``blades``.
         size: (width, height) in pixels, each 64..8000.
         title: text above the views (default: the name, blade count and volume in mm^3).
         progress: optional callback, called with ``"tessellate"`` and ``"render"``.
@@ -252,7 +279,8 @@ def render_preview(propeller: _HasParts, size: Sequence[int] = DEFAULT_SIZE, tit
     # smooth normals hide the facets; only the outline shows them).
     diagonal = propeller.solid.BoundingBox().DiagonalLength
     view_px = min(width / 2.0, height)
-    mesh = propeller_mesh(propeller.solid, propeller.face_parts, blades, max(diagonal / (3.0 * view_px), 1e-3))
+    parts = propeller.face_parts or face_parts_by_distance(propeller.solid, propeller.hub, propeller.blades)
+    mesh = propeller_mesh(propeller.solid, parts, blades, max(diagonal / (3.0 * view_px), 1e-3))
     if title is None:
         volume = mass_properties(propeller.solid, 1.0).volume_mm3
         title = (f"{propeller.parameters.name}: {blades} blade{'s' if blades != 1 else ''}, "
@@ -265,15 +293,11 @@ def render_preview(propeller: _HasParts, size: Sequence[int] = DEFAULT_SIZE, tit
 def write_preview(propeller: _HasParts, path: str | Path, size: Sequence[int] = DEFAULT_SIZE,
                   title: str | None = None, progress: Callable[[str], None] | None = None) -> Path:
     """Render the preview (see :func:`render_preview`) and write it as a PNG, atomically; return the path."""
-    image = render_preview(propeller, size, title, progress)
-    path = Path(path)
-    with atomic_path(path) as temp:
-        write_png(image, temp)
-    return path
+    return write_png(render_preview(propeller, size, title, progress), path)
 
 
-def write_png(image: NDArray[np.uint8], path: Path) -> None:
-    """Write an ``(height, width, 3 or 4)`` uint8 array as a PNG (VTK's writer)."""
+def write_png(image: NDArray[np.uint8], path: str | Path) -> Path:
+    """Write an ``(height, width, 3 or 4)`` uint8 picture as a PNG (VTK's writer), atomically; return the path."""
     from vtkmodules.util.numpy_support import numpy_to_vtk
     from vtkmodules.vtkCommonDataModel import vtkImageData
     from vtkmodules.vtkIOImage import vtkPNGWriter
@@ -283,12 +307,15 @@ def write_png(image: NDArray[np.uint8], path: Path) -> None:
     data.SetDimensions(width, height, 1)
     scalars = numpy_to_vtk(np.ascontiguousarray(image[::-1]).reshape(-1, channels), deep=True)  # type: ignore[no-untyped-call]
     data.GetPointData().SetScalars(scalars)
-    writer = vtkPNGWriter()
-    writer.SetFileName(str(path))
-    writer.SetInputData(data)
-    writer.Write()
-    if writer.GetErrorCode():
-        raise TorusCadError(f"could not write the preview picture {path}")
+    path = Path(path)
+    with atomic_path(path) as temp:
+        writer = vtkPNGWriter()
+        writer.SetFileName(str(temp))
+        writer.SetInputData(data)
+        writer.Write()
+        if writer.GetErrorCode():
+            raise TorusCadError(f"could not write the picture {path}")
+    return path
 
 
 def _offscreen_window(width: int, height: int) -> vtkRenderWindow:
@@ -316,7 +343,7 @@ def _pixels(window: vtkRenderWindow, width: int, height: int) -> NDArray[np.uint
 
     grab = vtkWindowToImageFilter()
     grab.SetInput(window)
-    grab.SetInputBufferTypeToRGBA()
+    grab.SetInputBufferTypeToRGB()
     grab.ReadFrontBufferOff()
     grab.Update()
     output = grab.GetOutput()
@@ -326,7 +353,7 @@ def _pixels(window: vtkRenderWindow, width: int, height: int) -> NDArray[np.uint
     if (got_width, got_height) != (width, height) or np.abs(corner - BACKGROUND_RGB).max() > 0.02:
         raise TorusCadError("off-screen OpenGL did not render the preview (no EGL or OSMesa? on Debian: "
                             "apt-get install libegl1 libegl-mesa0 libgl1-mesa-dri)")
-    return np.ascontiguousarray(pixels, dtype=np.uint8)
+    return np.ascontiguousarray(pixels[..., :3], dtype=np.uint8)
 
 
 def _mesh_actor(mesh: SceneMesh, smooth: bool) -> Any:
