@@ -177,3 +177,9 @@ def test_the_general_fuse_knows_each_faces_part(light_params):
     assert fused.route == FuseRoute.GENERAL
     _assert_faces_come_from_their_parts(single_valid_solid(fused.shape, "the general fuse"), fused.face_parts,
                                         propeller)
+
+
+def test_a_mirrored_propeller_keeps_each_faces_part(light_params):
+    # handedness ccw mirrors the fused solid (a transformed copy): the faces keep their order.
+    mirrored = build_propeller(light_params.with_values({"handedness": "ccw"}))
+    _assert_faces_come_from_their_parts(mirrored.solid, mirrored.face_parts, mirrored)

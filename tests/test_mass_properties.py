@@ -156,8 +156,8 @@ def test_the_default_takes_the_fast_route_and_agrees_with_the_reference(default_
 @pytest.mark.slow
 def test_the_fast_route_agrees_with_the_reference_on_random_designs():
     from torus_cad.errors import GeometryError, ParameterError
-    from torus_cad.studies.fuzz import random_design
     from torus_cad.propeller import build_propeller
+    from torus_cad.studies.fuzz import random_design
 
     built, seed = 0, 0
     while built < 20:
@@ -196,3 +196,11 @@ def test_the_local_b_spline_basis_is_scipys(degree):
     dense = np.zeros((len(x), len(knots) - degree - 1))
     np.put_along_axis(dense, columns, values, axis=1)
     assert np.allclose(dense, BSpline.design_matrix(x, knots, degree).toarray(), rtol=0.0, atol=1e-14)
+
+
+def test_a_mirrored_propeller_takes_the_fast_route_and_agrees(light_params):
+    from torus_cad.propeller import build_propeller
+
+    mirrored = build_propeller(light_params.with_values({"handedness": "ccw"}))
+    assert hub_with_blade_integrals(mirrored.solid.wrapped) is not None
+    _assert_agrees_with_the_reference(mirrored.solid)
