@@ -12,10 +12,12 @@ import sys
 import tomllib
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from torus_cad.errors import GeometryError, ParameterError, TorusCadError
-from torus_cad.parameters import PropellerParameters, resolve_parameters
+
+if TYPE_CHECKING:
+    from torus_cad.parameters import PropellerParameters
 
 EXIT_OK, EXIT_KERNEL_FAILURE, EXIT_BAD_INPUT = 0, 1, 2
 
@@ -59,6 +61,8 @@ def _parse_override(text: str) -> tuple[str, Any]:
 
 def load_parameters(config: str | None, overrides: Sequence[str] = ()) -> PropellerParameters:
     """Parameters from a TOML file (or the defaults) with ``key=value`` overrides applied."""
+    from torus_cad.parameters import resolve_parameters  # imported here: the schema takes most of a second
+
     return resolve_parameters(config or None, dict(_parse_override(item) for item in overrides))
 
 
@@ -74,9 +78,9 @@ def _command_build(args: argparse.Namespace) -> int:
     from torus_cad.progress import StageProgress
 
     progress = StageProgress.for_terminal(quiet=args.quiet)  # stderr, only on a terminal
+    progress("kernel_import")  # a line on the terminal before the seconds of importing the schema and cadquery
     params = load_parameters(args.config, args.overrides)
     size = _preview_size(args.preview_size, "--preview-size") if args.preview else None
-    progress("kernel_import")  # a line on the terminal before the seconds that importing cadquery takes
     from torus_cad.propeller import build_propeller
 
     propeller = build_propeller(params, progress=progress)
@@ -111,10 +115,10 @@ def _command_preview(args: argparse.Namespace) -> int:
     from torus_cad.progress import StageProgress
 
     progress = StageProgress.for_terminal(quiet=args.quiet)
+    progress("kernel_import")
     params = load_parameters(args.config, args.overrides)
     size = _preview_size(args.size, "--size")
     out = Path(args.out) if args.out else Path("step_out") / f"{params.name}.png"
-    progress("kernel_import")
     from torus_cad.preview import write_preview
     from torus_cad.propeller import build_propeller
 
@@ -128,6 +132,8 @@ def _command_preview(args: argparse.Namespace) -> int:
 
 def _command_defaults(args: argparse.Namespace) -> int:
     sys.stdout.write("# torus_cad design file: every key is optional and defaults to the value below.\n")
+    from torus_cad.parameters import PropellerParameters
+
     sys.stdout.write(PropellerParameters().to_toml(comments=True))
     return EXIT_OK
 
