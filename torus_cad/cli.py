@@ -85,7 +85,7 @@ def _command_build(args: argparse.Namespace) -> int:
 
     propeller = build_propeller(params, progress=progress)
     progress("write")
-    paths = propeller.write(Path(args.out), density_g_cm3=args.density, stl=not args.no_stl)
+    paths = propeller.write(Path(args.out), density_g_cm3=args.density, stl=not args.no_stl, sections_table=True)
     if size is not None:
         from torus_cad.preview import write_preview
 
@@ -131,10 +131,28 @@ def _command_preview(args: argparse.Namespace) -> int:
 
 
 def _command_defaults(args: argparse.Namespace) -> int:
-    sys.stdout.write("# torus_cad design file: every key is optional and defaults to the value below.\n")
     from torus_cad.parameters import PropellerParameters
 
-    sys.stdout.write(PropellerParameters().to_toml(comments=True))
+    if not args.resolved:
+        if args.config or args.overrides:
+            raise ParameterError("torus-cad defaults takes a design file or --set only with --resolved")
+        sys.stdout.write("# torus_cad design file: every key is optional and defaults to the value below.\n")
+        sys.stdout.write(PropellerParameters().to_toml(comments=True))
+        return EXIT_OK
+    from torus_cad.design_targets import resolve_design_targets
+
+    params = load_parameters(args.config, args.overrides)
+    targets = resolve_design_targets(params)
+    sys.stdout.write("# torus_cad design file: the spec's parameters that the design's airfoil.naca, diameter and\n"
+                     "# pitch resolved to (" + (", ".join(f"{key} = {value!r}" for key, value in targets.requested.items())
+                                                or "none set") + "); it builds the same propeller.\n")
+    if targets.tip_diameter_mm is not None:
+        sys.stdout.write(f"# tip diameter {targets.tip_diameter_mm:.3f} mm")
+        if targets.pitch_fit is not None:
+            achieved = ", ".join(f"{value:.2f}" for value in targets.pitch_fit.pitch_at_75_mm)
+            sys.stdout.write(f"; geometric pitch at 75 % of the tip radius {achieved} mm")
+        sys.stdout.write("\n")
+    sys.stdout.write(targets.parameters.to_toml(comments=True))
     return EXIT_OK
 
 
@@ -208,7 +226,12 @@ def build_parser() -> argparse.ArgumentParser:
     preview.set_defaults(handler=_command_preview)
 
     defaults = commands.add_parser("defaults", help="print the default design as commented TOML",
-                                   description="Print the default design as a commented TOML file to start from.")
+                                   description="Print the default design as a commented TOML file to start from; "
+                                   "with --resolved, a design's spec parameters after its airfoil.naca, diameter "
+                                   "and pitch are applied.")
+    _add_design_arguments(defaults)
+    defaults.add_argument("--resolved", action="store_true",
+                          help="print the spec parameters the design file (and --set) resolve to")
     defaults.set_defaults(handler=_command_defaults)
 
     sweep = commands.add_parser("sweep", help="build many variants of a design in parallel (local or Dask)",
@@ -256,7 +279,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("torus-cad: interrupted; no partial file was left behind", file=sys.stderr)
         return 130
-    except Exception as error:  # noqa: BLE001 - the command line never shows a traceback
+    except Exception as error:
         print(f"torus-cad: internal error ({type(error).__name__}): {error}; please report it with the design file",
               file=sys.stderr)
         return EXIT_KERNEL_FAILURE

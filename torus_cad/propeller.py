@@ -23,6 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from torus_cad.colors import HUB_COLOR, blade_color
+from torus_cad.design_targets import DesignTargets, resolve_design_targets, write_sections_table
 from torus_cad.errors import KernelError
 from torus_cad.geometry.feasibility import check_feasible
 from torus_cad.geometry.hub import seam_angle_deg
@@ -55,6 +56,8 @@ class Propeller:
         section_curves: blade 0's section B-splines (plain arrays).
         stage_seconds: seconds per stage (keys: :class:`torus_cad.stages.Stage` values).
         fuse_route: how the blades were joined to the hub.
+        design_targets: what the designer's inputs (airfoil.naca, diameter, pitch) resolved to;
+            ``parameters`` are already the resolved spec parameters.
     """
 
     parameters: PropellerParameters
@@ -65,6 +68,7 @@ class Propeller:
     section_curves: SectionCurves
     stage_seconds: dict[str, float] = field(default_factory=dict)
     fuse_route: FuseRoute = FuseRoute.ASSEMBLED
+    design_targets: DesignTargets | None = None
 
     @property
     def workplane(self) -> cq.Workplane:
@@ -91,9 +95,11 @@ class Propeller:
         return mass_properties(self.solid, density_g_cm3)
 
     def write(self, out_dir: str | Path, density_g_cm3: float = DEFAULT_DENSITY_G_CM3,
-              stl: bool = True) -> dict[str, Path]:
-        """Write ``<name>.step``, ``<name>.stl`` (unless ``stl`` is False) and ``<name>.json`` into ``out_dir``."""
-        return write_outputs(self, Path(out_dir), density_g_cm3, stl)
+              stl: bool = True, sections_table: bool = False) -> dict[str, Path]:
+        """Write ``<name>.step``, ``<name>.stl`` (unless ``stl`` is False), the blade-element table
+        ``<name>_sections.csv`` and ``<name>_sections.png`` (if ``sections_table``) and ``<name>.json``
+        into ``out_dir``."""
+        return write_outputs(self, Path(out_dir), density_g_cm3, stl, sections_table)
 
 
 def _section_chords(surface: BladeSurface) -> NDArray[np.float64]:
@@ -120,6 +126,9 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
     timer = StageTimer(progress)
     with timer.stage(Stage.PARAMETERS):
         params = resolve_parameters(design, overrides)
+    with timer.stage(Stage.DESIGN_TARGETS):
+        targets = resolve_design_targets(params)  # airfoil.naca, diameter, pitch -> the spec's parameters
+        params = targets.parameters
         geometry = params.geometry()
     with timer.stage(Stage.SECTION_MATH):
         surface = params.blade_surface()
@@ -127,7 +136,8 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
         # The hub is symmetric about its axis; its seam goes where it crosses no blade root.
         seam_deg = seam_angle_deg(surface.points, geometry.hub.radius_mm, geometry.blades)
     with timer.stage(Stage.WIRES):
-        curves = fit_section_curves(surface.points, surface.trailing_edge_column, _section_chords(surface))
+        curves = fit_section_curves(surface.points, surface.trailing_edge_column, _section_chords(surface),
+                                    surface.lower_corner_index)
         wires = curves.wires()
     with timer.stage(Stage.LOFT):
         blade = loft_solid(wires, surface.s)
@@ -135,7 +145,7 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
         angles_deg = [geometry.blade_angle_deg(i) for i in range(geometry.blades)]
         blades = pattern_blades(blade, angles_deg)
     solid, route = _join_blades_to_hub(hub, blade, blades, angles_deg, timer)
-    return Propeller(params, solid, hub, blades, surface, curves, timer.seconds, route)
+    return Propeller(params, solid, hub, blades, surface, curves, timer.seconds, route, targets)
 
 
 #: Another name for :func:`build_propeller`, for people who continue in CadQuery.
@@ -186,12 +196,16 @@ def build_report(propeller: Propeller, density_g_cm3: float) -> dict[str, Any]:
         "section_fit_error_mm": propeller.section_curves.fit_error,
         "stage_seconds": dict(propeller.stage_seconds),
         "fuse_route": propeller.fuse_route.value,
+        **({"design_targets": propeller.design_targets.to_dict()}
+           if propeller.design_targets is not None and propeller.design_targets.requested else {}),
     }
 
 
 def write_outputs(propeller: Propeller, out_dir: Path, density_g_cm3: float = DEFAULT_DENSITY_G_CM3,
-                  stl: bool = True) -> dict[str, Path]:
-    """Write STEP, STL and the JSON report atomically; return the paths by kind."""
+                  stl: bool = True, sections_table: bool = False) -> dict[str, Path]:
+    """Write STEP, STL, the blade-element table (``<name>_sections.csv`` and ``.png``, when
+    ``sections_table``; ``torus-cad build`` writes it) and the JSON report atomically; return the
+    paths by kind."""
     params = propeller.parameters
     timer = StageTimer()
     paths: dict[str, Path] = {}
@@ -202,6 +216,9 @@ def write_outputs(propeller: Propeller, out_dir: Path, density_g_cm3: float = DE
         with timer.stage(Stage.STL_WRITE):
             paths["stl"] = write_stl(propeller.solid, out_dir / f"{params.name}.stl",
                                      params.export.stl_linear_deflection, params.export.stl_angular_deflection)
+    if sections_table:
+        with timer.stage(Stage.SECTIONS_TABLE):
+            paths.update(write_sections_table(propeller.surface, params, out_dir))
     propeller.stage_seconds.update(timer.seconds)
     report = build_report(propeller, density_g_cm3)
     paths["json"] = out_dir / f"{params.name}.json"

@@ -17,6 +17,7 @@ class Stage(StrEnum):
     """A stage of building and writing a propeller; the value is its key in reports."""
 
     PARAMETERS = "parameters"
+    DESIGN_TARGETS = "design_targets"
     SECTION_MATH = "section_math"
     WIRES = "wires"
     LOFT = "loft"
@@ -24,6 +25,7 @@ class Stage(StrEnum):
     CHECK = "check"
     STEP_WRITE = "step_write"
     STL_WRITE = "stl_write"
+    SECTIONS_TABLE = "sections_table"
 
     @property
     def label(self) -> str:
@@ -33,6 +35,7 @@ class Stage(StrEnum):
 
 _LABELS = {
     Stage.PARAMETERS: "reading parameters",
+    Stage.DESIGN_TARGETS: "diameter and pitch targets",
     Stage.SECTION_MATH: "blade sections (geometry)",
     Stage.WIRES: "section curves",
     Stage.LOFT: "lofting the blade",
@@ -40,6 +43,7 @@ _LABELS = {
     Stage.CHECK: "checking the solid",
     Stage.STEP_WRITE: "writing STEP",
     Stage.STL_WRITE: "writing STL",
+    Stage.SECTIONS_TABLE: "writing the blade-element table",
 }
 
 
