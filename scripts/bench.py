@@ -132,6 +132,24 @@ def stage_times(runs: int) -> dict[str, Any]:
             "stl_triangles": (stl_bytes - 84) // 50}
 
 
+#: The workshop scenario (issue 13): the default with a bore, D-flat, set screw, chamfer and a
+#: 0.5 mm root fillet. The chamfer is 0.2 mm: the default's blade root comes within 0.85 mm of the
+#: hub's end, and a chamfer may not reach the fillet's spread (2 radii) over the hub.
+WORKSHOP_CHANGES = {"hub.bore_diameter": 5.0, "hub.bore_flat_depth": 0.5, "hub.set_screw_diameter": 3.0,
+                    "hub.chamfer": 0.2, "hub.root_fillet_radius": 0.5}
+
+
+def workshop_stage_times(runs: int) -> dict[str, Any]:
+    """Stage times of the workshop scenario, build to a valid STEP (median of ``runs`` warm runs)."""
+    params = _params(WORKSHOP_CHANGES)
+    with tempfile.TemporaryDirectory() as folder:
+        timed_build_and_write(params, Path(folder))  # warm-up
+        samples = [timed_build_and_write(params, Path(folder)) for _ in range(runs)]
+    keys = samples[0].keys()
+    return {"runs": runs, "changes": WORKSHOP_CHANGES,
+            "median_s": {key: _median([sample[key] for sample in samples]) for key in keys}}
+
+
 def cli_wall_time(runs: int) -> dict[str, Any]:
     """Cold `torus-cad build` of the default, new process each time (imports included)."""
     times = []
@@ -455,7 +473,8 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--runs", type=int, default=7, help="runs per median (default 7)")
     parser.add_argument("--quick", action="store_true", help="fewer scaling points, skip the cold CLI timing")
-    parser.add_argument("--skip", nargs="*", default=[], choices=["scaling", "mesh", "cli"], help="sections to skip")
+    parser.add_argument("--skip", nargs="*", default=[], choices=["scaling", "mesh", "cli", "workshop"],
+                        help="sections to skip")
     parser.add_argument("--out", type=Path, default=Path("bench_out/bench.json"), help="JSON report path")
     args = parser.parse_args(argv)
 
@@ -467,6 +486,10 @@ def main(argv: list[str] | None = None) -> int:
     report["machine"]["cadquery"] = cadquery.__version__
     print("stage times ...", flush=True)
     report["stage_times"] = stage_times(args.runs)
+    if "workshop" not in args.skip:
+        print("workshop scenario (bore, flat, set screw, chamfer, 0.5 mm fillet) ...", flush=True)
+        report["workshop"] = workshop_stage_times(max(1, min(args.runs, 3)))
+        print("  " + ", ".join(f"{key} {1000 * value:.0f} ms" for key, value in report["workshop"]["median_s"].items()))
     if not args.quick and "cli" not in args.skip:
         print("cold CLI ...", flush=True)
         report["cli"] = cli_wall_time(3)

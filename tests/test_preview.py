@@ -195,7 +195,8 @@ def test_cli_preview_refuses_a_bad_size_before_building(tmp_path, size, capsys):
 def test_cli_build_preview_writes_the_picture_beside_the_files(tmp_path, capsys):
     assert main(["build", *FAST, "--no-stl", "--preview", "--preview-size", "400x200", "--out", str(tmp_path)]) == EXIT_OK
     name = "torus_propeller"
-    assert sorted(path.name for path in tmp_path.iterdir()) == [f"{name}.json", f"{name}.png", f"{name}.step"]
+    assert sorted(path.name for path in tmp_path.iterdir()) == [f"{name}.json", f"{name}.png", f"{name}.step",
+                                                                f"{name}_sections.csv", f"{name}_sections.png"]
     assert f"wrote {tmp_path / (name + '.png')}" in capsys.readouterr().out
     assert _read_png(tmp_path / f"{name}.png").shape == (200, 400, 3)
     assert json.loads((tmp_path / f"{name}.json").read_text())["valid"] is True

@@ -76,12 +76,19 @@ def _command_build(args: argparse.Namespace) -> int:
     progress = StageProgress.for_terminal(quiet=args.quiet)  # stderr, only on a terminal
     params = load_parameters(args.config, args.overrides)
     size = _preview_size(args.preview_size, "--preview-size") if args.preview else None
+    if args.require_printable:  # decided from the analytic section, before any work or file
+        from torus_cad.geometry.printability import printability
+
+        blade = params.geometry().blade
+        problem = printability(blade.airfoil, blade.laws, params.manufacturing.min_wall).problem()
+        if problem:
+            raise GeometryError(f"not printable (--require-printable): {problem}")
     progress("kernel_import")  # a line on the terminal before the seconds that importing cadquery takes
     from torus_cad.propeller import build_propeller
 
     propeller = build_propeller(params, progress=progress)
     progress("write")
-    paths = propeller.write(Path(args.out), density_g_cm3=args.density, stl=not args.no_stl)
+    paths = propeller.write(Path(args.out), density_g_cm3=args.density, stl=not args.no_stl, sections_table=True)
     if size is not None:
         from torus_cad.preview import write_preview
 
@@ -93,6 +100,9 @@ def _command_build(args: argparse.Namespace) -> int:
             print(f"wrote {path}")
         print(f"volume {report['volume_mm3']:.3f} mm^3, area {report['surface_area_mm2']:.3f} mm^2, "
               f"mass {report['mass_g']:.3f} g at {args.density:g} g/cm^3")
+        if params.blades == 1:
+            print(f"warning: a one-blade propeller is out of balance: static imbalance "
+                  f"{report['balance']['static_imbalance_g_mm']:.3f} g mm; add a counterweight or use 2 or more blades")
     if args.verbose:
         print(f"centroid {tuple(round(c, 6) for c in report['centroid_mm'])} mm, "
               f"spin-axis inertia {report['spin_axis_inertia_g_mm2']:.4f} g mm^2")
@@ -102,7 +112,9 @@ def _command_build(args: argparse.Namespace) -> int:
 
 
 def _preview_size(text: str, option: str) -> tuple[int, int]:
-    from torus_cad.preview import parse_size  # raises ParameterError (exit 2) for a bad WxH
+    from torus_cad.preview import (
+        parse_size,  # raises ParameterError (exit 2) for a bad WxH
+    )
 
     return parse_size(text, option)
 
@@ -127,8 +139,26 @@ def _command_preview(args: argparse.Namespace) -> int:
 
 
 def _command_defaults(args: argparse.Namespace) -> int:
-    sys.stdout.write("# torus_cad design file: every key is optional and defaults to the value below.\n")
-    sys.stdout.write(PropellerParameters().to_toml(comments=True))
+    if not args.resolved:
+        if args.config or args.overrides:
+            raise ParameterError("torus-cad defaults takes a design file or --set only with --resolved")
+        sys.stdout.write("# torus_cad design file: every key is optional and defaults to the value below.\n")
+        sys.stdout.write(PropellerParameters().to_toml(comments=True))
+        return EXIT_OK
+    from torus_cad.design_targets import resolve_design_targets
+
+    params = load_parameters(args.config, args.overrides)
+    targets = resolve_design_targets(params)
+    sys.stdout.write("# torus_cad design file: the spec's parameters that the design's airfoil.naca, diameter and\n"
+                     "# pitch resolved to (" + (", ".join(f"{key} = {value!r}" for key, value in targets.requested.items())
+                                                or "none set") + "); it builds the same propeller.\n")
+    if targets.tip_diameter_mm is not None:
+        sys.stdout.write(f"# tip diameter {targets.tip_diameter_mm:.3f} mm")
+        if targets.pitch_fit is not None:
+            achieved = ", ".join(f"{value:.2f}" for value in targets.pitch_fit.pitch_at_75_mm)
+            sys.stdout.write(f"; geometric pitch at 75 % of the tip radius {achieved} mm")
+        sys.stdout.write("\n")
+    sys.stdout.write(targets.parameters.to_toml(comments=True))
     return EXIT_OK
 
 
@@ -155,9 +185,10 @@ def _command_sweep(args: argparse.Namespace) -> int:
                            time_limit_s=args.time_limit, rebuild=args.rebuild, progress=False if args.quiet else None)
     except SweepInterrupted as interrupt:
         partial = interrupt.result
-        table = partial.tables.get("csv", out / "results.csv")
-        print(f"torus-cad: sweep interrupted by {interrupt.signal_name}: {partial.counts_text()}; "
-              f"table written to {table}; rerun the same command to resume", file=sys.stderr)
+        done = (f"{partial.counts_text()}; table written to {partial.tables['csv']}" if partial.tables
+                else "nothing was built")
+        print(f"torus-cad: sweep interrupted by {interrupt.signal_name}: {done}; rerun the same command to resume",
+              file=sys.stderr)
         return interrupt.exit_code
     except BatchError as error:
         print(f"torus-cad: sweep failed: {error}", file=sys.stderr)
@@ -200,6 +231,9 @@ def build_parser() -> argparse.ArgumentParser:
     build.add_argument("--density", type=_positive_density, default=1.24,
                        help="material density for the mass, g/cm^3 (default 1.24, PLA)")
     build.add_argument("--no-stl", action="store_true", help="write STEP and JSON only")
+    build.add_argument("--require-printable", action="store_true",
+                       help="exit 2, writing nothing, when the blade is thinner than manufacturing.min_wall "
+                            "(thinnest section or trailing edge; see the JSON's printability)")
     build.add_argument("-v", "--verbose", action="store_true", help="print mass properties and stage times")
     build.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     build.add_argument("--preview", action="store_true", help="also render <name>.png (see 'torus-cad preview')")
@@ -219,14 +253,22 @@ def build_parser() -> argparse.ArgumentParser:
     preview.set_defaults(handler=_command_preview)
 
     defaults = commands.add_parser("defaults", help="print the default design as commented TOML",
-                                   description="Print the default design as a commented TOML file to start from.")
+                                   description="Print the default design as a commented TOML file to start from; "
+                                   "with --resolved, a design's spec parameters after its airfoil.naca, diameter "
+                                   "and pitch are applied.")
+    _add_design_arguments(defaults)
+    defaults.add_argument("--resolved", action="store_true",
+                          help="print the spec parameters the design file (and --set) resolve to")
     defaults.set_defaults(handler=_command_defaults)
 
     sweep = commands.add_parser("sweep", help="build many variants of a design in parallel (local or Dask)",
                                 description="Build every design of a sweep file (a base design plus the "
                                 "parameters to vary: lists, grid ranges, or random / Latin-hypercube bounds) "
                                 "into OUT/designs/<id>/ and tabulate them in OUT/results.csv. Rerunning "
-                                "resumes: designs already done are skipped.")
+                                "resumes: designs already done are skipped. Exit codes: 0 every design valid "
+                                "or refused; 1 a design failed, errored, crashed or timed out; 2 a bad sweep "
+                                "file (or more than 1,000,000 designs); 130 / 143 interrupted by Ctrl-C / SIGTERM "
+                                "(the table of what finished is written).")
     sweep.add_argument("sweep", metavar="SWEEP.toml", help="sweep file (see examples/sweep_example.toml)")
     sweep.add_argument("--out", help="output folder (default: sweep_out/<sweep file name>)")
     sweep.add_argument("--workers", type=int, metavar="N",
@@ -275,7 +317,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("torus-cad: interrupted; no partial file was left behind", file=sys.stderr)
         return 130
-    except Exception as error:  # noqa: BLE001 - the command line never shows a traceback
+    except Exception as error:
         print(f"torus-cad: internal error ({type(error).__name__}): {error}; please report it with the design file",
               file=sys.stderr)
         return EXIT_KERNEL_FAILURE

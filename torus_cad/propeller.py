@@ -12,6 +12,7 @@ This is the package's Python API::
 
 from __future__ import annotations
 
+import functools
 import json
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -22,18 +23,33 @@ import cadquery as cq
 import numpy as np
 from numpy.typing import NDArray
 
+from torus_cad import __version__
 from torus_cad.colors import HUB_COLOR, blade_color
+from torus_cad.design_targets import DesignTargets, resolve_design_targets, write_sections_table
 from torus_cad.errors import KernelError
 from torus_cad.geometry.feasibility import check_feasible
+from torus_cad.geometry.handedness import Spin, spin_to_push_air_down
 from torus_cad.geometry.hub import seam_angle_deg
+from torus_cad.geometry.mounting import HubMounting, place_mounting, set_screw_arc_deg
+from torus_cad.geometry.printability import Printability, printability
 from torus_cad.geometry.surface import BladeSurface
-from torus_cad.kernel.checks import MassProperties, mass_properties, precise_volume, single_valid_solid
+from torus_cad.kernel.checks import (
+    MassProperties,
+    balance,
+    mass_properties,
+    precise_volume,
+    single_valid_solid,
+)
 from torus_cad.kernel.export import atomic_path, write_step, write_stl
+from torus_cad.kernel.export_3mf import write_3mf
+from torus_cad.kernel.fillet import fillet_pattern
 from torus_cad.kernel.fuse import FuseRoute, fuse_all, fuse_pattern, pattern_blades
-from torus_cad.kernel.hub import hub_solid
+from torus_cad.kernel.hub import hub_solid, run_out_hub
 from torus_cad.kernel.loft import loft_solid
+from torus_cad.kernel.mirror import mirrored
 from torus_cad.kernel.wires import SectionCurves, fit_section_curves
 from torus_cad.parameters import PropellerParameters, resolve_parameters
+from torus_cad.parameters.design import ExportFormat, Handedness
 from torus_cad.stages import Stage, StageTimer
 from torus_cad.tolerances import VOLUME_CHECK_RELATIVE_PRECISION
 
@@ -55,6 +71,9 @@ class Propeller:
         section_curves: blade 0's section B-splines (plain arrays).
         stage_seconds: seconds per stage (keys: :class:`torus_cad.stages.Stage` values).
         fuse_route: how the blades were joined to the hub.
+        design_targets: what the designer's inputs (airfoil.naca, diameter, pitch) resolved to;
+            ``parameters`` are already the resolved spec parameters.
+        mounting: the hub's bore, flat, set screw and chamfer, with the set screw's direction.
     """
 
     parameters: PropellerParameters
@@ -65,6 +84,8 @@ class Propeller:
     section_curves: SectionCurves
     stage_seconds: dict[str, float] = field(default_factory=dict)
     fuse_route: FuseRoute = FuseRoute.ASSEMBLED
+    design_targets: DesignTargets | None = None
+    mounting: HubMounting = field(default_factory=HubMounting)
 
     @property
     def workplane(self) -> cq.Workplane:
@@ -85,15 +106,34 @@ class Propeller:
             assembly.add(blade, name=f"blade_{index}", color=cq.Color(*blade_color(index, len(self.blades))))
         return assembly
 
+    def printability(self) -> Printability:
+        """Thinnest blade wall and trailing-edge thickness against ``manufacturing.min_wall`` (from the analytic section)."""
+        return design_printability(self.parameters)
+
+    def spin_to_push_air_down(self) -> Spin:
+        """The turn, seen from +z, that pushes air toward -z: a flat-plate estimate (torus_cad.geometry.handedness)."""
+        spin = spin_to_push_air_down(self.surface.points, self.surface.trailing_edge_column)
+        if self.parameters.handedness == Handedness.CCW:  # the surface is the spec's blade, before the mirror
+            return Spin.CLOCKWISE if spin == Spin.COUNTER_CLOCKWISE else Spin.COUNTER_CLOCKWISE
+        return spin
+
     def mass_properties(self, density_g_cm3: float = DEFAULT_DENSITY_G_CM3) -> MassProperties:
         """Volume (mm^3), area (mm^2), centroid (mm), spin-axis inertia and mass (g) for a density in
         g/cm^3 (default 1.24, PLA), by OpenCascade's adaptive integration."""
         return mass_properties(self.solid, density_g_cm3)
 
     def write(self, out_dir: str | Path, density_g_cm3: float = DEFAULT_DENSITY_G_CM3,
-              stl: bool = True) -> dict[str, Path]:
-        """Write ``<name>.step``, ``<name>.stl`` (unless ``stl`` is False) and ``<name>.json`` into ``out_dir``."""
-        return write_outputs(self, Path(out_dir), density_g_cm3, stl)
+              stl: bool = True, sections_table: bool = False) -> dict[str, Path]:
+        """Write ``<name>.step``, ``<name>.stl`` (unless ``stl`` is False), the blade-element table
+        ``<name>_sections.csv`` and ``<name>_sections.png`` (if ``sections_table``) and ``<name>.json``
+        into ``out_dir``."""
+        return write_outputs(self, Path(out_dir), density_g_cm3, stl, sections_table)
+
+
+def design_printability(params: PropellerParameters) -> Printability:
+    """The blade's printability from the analytic section alone (no kernel): see torus_cad.geometry.printability."""
+    blade = params.geometry().blade
+    return printability(blade.airfoil, blade.laws, params.manufacturing.min_wall)
 
 
 def _section_chords(surface: BladeSurface) -> NDArray[np.float64]:
@@ -120,22 +160,59 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
     timer = StageTimer(progress)
     with timer.stage(Stage.PARAMETERS):
         params = resolve_parameters(design, overrides)
+    with timer.stage(Stage.DESIGN_TARGETS):
+        targets = resolve_design_targets(params)  # airfoil.naca, diameter, pitch -> the spec's parameters
+        params = targets.parameters
         geometry = params.geometry()
     with timer.stage(Stage.SECTION_MATH):
         surface = params.blade_surface()
         check_feasible(geometry, surface)
-        # The hub is symmetric about its axis; its seam goes where it crosses no blade root.
-        seam_deg = seam_angle_deg(surface.points, geometry.hub.radius_mm, geometry.blades)
+        mounting = _place_mounting(params)
+        # The hub is symmetric about its axis; its seam goes where it crosses no blade root (nor the set screw).
+        screw_arc = set_screw_arc_deg(mounting, geometry.hub.radius_mm)
+        seam_deg = seam_angle_deg(surface.points, geometry.hub.radius_mm, geometry.blades,
+                                  () if screw_arc is None else (screw_arc,))
     with timer.stage(Stage.WIRES):
-        curves = fit_section_curves(surface.points, surface.trailing_edge_column, _section_chords(surface))
+        curves = fit_section_curves(surface.points, surface.trailing_edge_column, _section_chords(surface),
+                                    surface.lower_corner_index)
         wires = curves.wires()
     with timer.stage(Stage.LOFT):
         blade = loft_solid(wires, surface.s)
-        hub = hub_solid(geometry.hub.radius_mm, geometry.hub.length_mm, 0.0 if seam_deg is None else seam_deg)
+        fillet_radius = params.hub.root_fillet_radius
+        hub = hub_solid(geometry.hub.radius_mm, geometry.hub.length_mm, 0.0 if seam_deg is None else seam_deg,
+                        mounting)
         angles_deg = [geometry.blade_angle_deg(i) for i in range(geometry.blades)]
         blades = pattern_blades(blade, angles_deg)
-    solid, route = _join_blades_to_hub(hub, blade, blades, angles_deg, timer)
-    return Propeller(params, solid, hub, blades, surface, curves, timer.seconds, route)
+    if fillet_radius > 0.0:  # blade 0 filleted once, then patterned (torus_cad.kernel.fillet)
+        with timer.stage(Stage.FILLET):
+            run_out = None if mounting.chamfer_mm > 0.0 else functools.partial(
+                run_out_hub, geometry.hub.radius_mm, geometry.hub.length_mm, 0.0 if seam_deg is None else seam_deg,
+                mounting, reach=geometry.hub.radius_mm + 4.0 * fillet_radius)
+            solid = fillet_pattern(hub, blade, angles_deg, fillet_radius, run_out)
+            route = FuseRoute.ASSEMBLED
+    else:
+        solid, route = _join_blades_to_hub(hub, blade, blades, angles_deg, timer)
+    if params.handedness == Handedness.CCW:  # the spec's blade is 'cw'; 'ccw' is its mirror image
+        with timer.stage(Stage.MIRROR):
+            solid = mirrored(solid)
+            hub, blades = mirrored(hub, check=False), [mirrored(part, check=False) for part in blades]
+    return Propeller(params, solid, hub, blades, surface, curves, timer.seconds, route, targets, mounting)
+
+
+def _place_mounting(params: PropellerParameters) -> HubMounting:
+    """The hub's mounting features checked against the blades (densely sampled), the set screw placed."""
+    mounting = params.hub.mounting()
+    if not mounting.any:
+        return mounting
+    resolution = params.resolution
+    dense = params.blade_surface(sections=max(resolution.sections, _MOUNTING_SECTIONS),
+                                 points=max(resolution.points, _MOUNTING_POINTS))
+    return place_mounting(mounting, dense.points, params.blades, params.hub.radius, params.hub.length,
+                          params.hub.root_fillet_radius)
+
+
+#: Sampling of the blade surface for the mounting checks (the check uses the points as they are).
+_MOUNTING_SECTIONS, _MOUNTING_POINTS = 200, 160
 
 
 #: Another name for :func:`build_propeller`, for people who continue in CadQuery.
@@ -175,7 +252,7 @@ def _check_volume(solid: cq.Solid, hub: cq.Solid, blade: cq.Solid, blades: int) 
 
 
 def build_report(propeller: Propeller, density_g_cm3: float) -> dict[str, Any]:
-    """The JSON report: parameters, mass properties, validity and stage times."""
+    """The JSON report: parameters, mass properties, balance, printability, validity and stage times."""
     properties = propeller.mass_properties(density_g_cm3)
     return {
         "name": propeller.parameters.name,
@@ -183,25 +260,43 @@ def build_report(propeller: Propeller, density_g_cm3: float) -> dict[str, Any]:
         "valid": True,
         "solids": 1,
         **properties.to_dict(),
+        "balance": balance(propeller.solid, density_g_cm3).to_dict(),
+        "printability": propeller.printability().to_dict(),
+        "handedness": propeller.parameters.handedness.value,
+        "spin_to_push_air_down": propeller.spin_to_push_air_down().value,
+        "set_screw_angle_deg": propeller.mounting.set_screw_angle_deg if propeller.mounting.set_screw_diameter_mm else None,
         "section_fit_error_mm": propeller.section_curves.fit_error,
         "stage_seconds": dict(propeller.stage_seconds),
         "fuse_route": propeller.fuse_route.value,
+        **({"design_targets": propeller.design_targets.to_dict()}
+           if propeller.design_targets is not None and propeller.design_targets.requested else {}),
     }
 
 
 def write_outputs(propeller: Propeller, out_dir: Path, density_g_cm3: float = DEFAULT_DENSITY_G_CM3,
-                  stl: bool = True) -> dict[str, Path]:
-    """Write STEP, STL and the JSON report atomically; return the paths by kind."""
+                  stl: bool = True, sections_table: bool = False) -> dict[str, Path]:
+    """Write the files of ``export.formats`` (STEP, STL, 3MF; ``stl=False`` drops the STL), the
+    blade-element table (``<name>_sections.csv`` and ``.png``, when ``sections_table``; ``torus-cad
+    build`` writes it) and the JSON report atomically; return the paths by kind."""
     params = propeller.parameters
+    formats = params.export.formats
+    deflections = (params.export.stl_linear_deflection, params.export.stl_angular_deflection)
     timer = StageTimer()
     paths: dict[str, Path] = {}
-    with timer.stage(Stage.STEP_WRITE):
-        paths["step"] = write_step(propeller.solid, out_dir / f"{params.name}.step", params.name,
-                                   params.export.step_schema)
-    if stl:
+    if ExportFormat.STEP in formats:
+        with timer.stage(Stage.STEP_WRITE):
+            paths["step"] = write_step(propeller.solid, out_dir / f"{params.name}.step", params.name,
+                                       params.export.step_schema, program=f"torus_cad {__version__}")
+    if stl and ExportFormat.STL in formats:
         with timer.stage(Stage.STL_WRITE):
-            paths["stl"] = write_stl(propeller.solid, out_dir / f"{params.name}.stl",
-                                     params.export.stl_linear_deflection, params.export.stl_angular_deflection)
+            paths["stl"] = write_stl(propeller.solid, out_dir / f"{params.name}.stl", *deflections)
+    if ExportFormat.THREE_MF in formats:
+        with timer.stage(Stage.THREE_MF_WRITE):
+            paths["3mf"] = write_3mf(propeller.solid, out_dir / f"{params.name}.3mf", params.name, *deflections,
+                                     version=__version__)
+    if sections_table:
+        with timer.stage(Stage.SECTIONS_TABLE):
+            paths.update(write_sections_table(propeller.surface, params, out_dir))
     propeller.stage_seconds.update(timer.seconds)
     report = build_report(propeller, density_g_cm3)
     paths["json"] = out_dir / f"{params.name}.json"

@@ -67,3 +67,14 @@ CONFIG_FILE_MAX_BYTES = 1 << 20
 #: any design is generated. Beyond it the design list and table alone take gigabytes, and at
 #: ~2 designs/s per machine the sweep would run for weeks.
 MAX_SWEEP_DESIGNS = 1_000_000
+
+#: Smallest gap (mm) the hub's mounting features (bore, chamfer, set-screw hole) must keep from
+#: any sampled blade point; covers the blade surface between its samples.
+MOUNTING_CLEARANCE_MM = 0.05
+
+#: Seconds the root fillet may take (in its child process) before it counts as failed.
+FILLET_TIME_LIMIT_S = 60.0
+
+#: Relative precision of the integration for the balance report (static imbalance, products of
+#: inertia): coarser than the mass properties', as it integrates the solid a second time.
+BALANCE_RELATIVE_PRECISION = 1e-4

@@ -25,7 +25,7 @@ from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt
 import cadquery as cq
 
 from torus_cad.errors import KernelError
-from torus_cad.tolerances import MASS_PROPERTIES_RELATIVE_PRECISION
+from torus_cad.tolerances import BALANCE_RELATIVE_PRECISION, MASS_PROPERTIES_RELATIVE_PRECISION
 
 
 def single_valid_solid(shape: cq.Shape, what: str) -> cq.Solid:
@@ -125,3 +125,40 @@ def distances_to_shape(shape: cq.Shape, points: NDArray[np.float64]) -> NDArray[
             raise KernelError("OpenCascade could not measure a point's distance to the solid")
         distances[index] = extrema.Value()
     return distances
+
+
+@dataclass(frozen=True)
+class Balance:
+    """How far a part is from spinning true about the z axis (issue 13).
+
+    Attributes:
+        static_imbalance_g_mm: mass times the distance of the centroid from the spin axis, g mm.
+        centroid_offset_mm: that distance, mm.
+        products_of_inertia_g_mm2: {"xz", "yz", "xy"}: integrals of (x - cx)(z - cz) dm, ... about
+            axes through the centroid parallel to x, y, z, g mm^2. xz and yz are the couple
+            (dynamic) imbalance about the spin axis; 0 for a part symmetric about it.
+    """
+
+    static_imbalance_g_mm: float
+    centroid_offset_mm: float
+    products_of_inertia_g_mm2: dict[str, float]
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dict."""
+        return asdict(self)
+
+
+def balance_of(properties: GProp_GProps, density_g_cm3: float) -> Balance:
+    """:class:`Balance` from OpenCascade's volume properties and a density in g/cm^3."""
+    density_g_mm3 = density_g_cm3 * 1e-3
+    centre = properties.CentreOfMass()
+    offset = float(np.hypot(centre.X(), centre.Y()))
+    matrix = properties.MatrixOfInertia()  # about the centroid; off-diagonal terms are minus the products
+    products = {name: -float(matrix.Value(row, column)) * density_g_mm3
+                for name, (row, column) in (("xz", (1, 3)), ("yz", (2, 3)), ("xy", (1, 2)))}
+    return Balance(float(properties.Mass()) * density_g_mm3 * offset, offset, products)
+
+
+def balance(shape: cq.Shape, density_g_cm3: float, relative_precision: float = BALANCE_RELATIVE_PRECISION) -> Balance:
+    """Static imbalance and products of inertia of ``shape`` (OpenCascade's adaptive integration)."""
+    return balance_of(volume_properties(shape, relative_precision), density_g_cm3)

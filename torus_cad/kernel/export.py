@@ -12,12 +12,13 @@ import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
+from OCP.APIHeaderSection import APIHeaderSection_MakeHeader
 from OCP.BRepMesh import BRepMesh_IncrementalMesh
 from OCP.IFSelect import IFSelect_RetDone
 from OCP.Interface import Interface_Static
 from OCP.STEPCAFControl import STEPCAFControl_Writer
 from OCP.STEPControl import STEPControl_AsIs, STEPControl_Reader
-from OCP.TCollection import TCollection_ExtendedString
+from OCP.TCollection import TCollection_ExtendedString, TCollection_HAsciiString
 from OCP.TDataStd import TDataStd_Name
 from OCP.TDocStd import TDocStd_Document
 from OCP.XCAFDoc import XCAFDoc_DocumentTool
@@ -54,7 +55,8 @@ def _current_umask() -> int:
     return mask
 
 
-def write_step(shape: cq.Shape, path: str | Path, product_name: str, schema: str = "AP214") -> Path:
+def write_step(shape: cq.Shape, path: str | Path, product_name: str, schema: str = "AP214",
+               program: str = "torus_cad") -> Path:
     """Write ``shape`` as STEP (``schema`` 'AP214' or 'AP242', millimetres, product named ``product_name``).
 
     The shape goes through an XCAF document so that the STEP PRODUCT carries exactly the
@@ -71,11 +73,23 @@ def write_step(shape: cq.Shape, path: str | Path, product_name: str, schema: str
             raise KernelError(f"OpenCascade refused the STEP setting {key} = {value!r}")
     if not writer.Transfer(document, STEPControl_AsIs):
         raise KernelError("OpenCascade could not translate the solid to STEP")
+    _name_the_author(writer, product_name, program)
     path = Path(path)
     with atomic_path(path) as temp:
         if writer.Write(str(temp)) != IFSelect_RetDone:
             raise KernelError(f"OpenCascade could not write STEP file {str(path)!r}")
     return path
+
+
+def _name_the_author(writer: STEPCAFControl_Writer, product_name: str, program: str) -> None:
+    """The STEP header's FILE_NAME: the design's name, and ``program`` (torus_cad and its version) as
+    author, organisation and originating system, instead of OpenCascade's placeholders."""
+    header = APIHeaderSection_MakeHeader(writer.ChangeWriter().Model())
+    header.SetName(TCollection_HAsciiString(product_name))
+    header.SetAuthorValue(1, TCollection_HAsciiString(program))
+    header.SetOrganizationValue(1, TCollection_HAsciiString(program.split()[0]))
+    header.SetOriginatingSystem(TCollection_HAsciiString(program))
+    header.SetAuthorisation(TCollection_HAsciiString(program))
 
 
 def read_step(path: str | Path) -> cq.Shape:

@@ -110,7 +110,11 @@ def _assemble(hub: cq.Solid, lateral: TopoDS_Face, copies: Sequence[TopoDS_Shape
     keeps the material on the other side of the same curve; the two flips cancel, so the
     patch's wires, oriented as the patch uses them, are the holes as the lateral face uses them.
     """
-    lateral_with_holes = BRepBuilderAPI_MakeFace(BRep_Tool.Surface_s(lateral), BRepTools.OuterWire_s(lateral), True)
+    outer_wire = BRepTools.OuterWire_s(lateral)
+    lateral_with_holes = BRepBuilderAPI_MakeFace(BRep_Tool.Surface_s(lateral), outer_wire, True)
+    for wire in _explore(lateral, TopAbs_WIRE):  # holes the hub already has (a set-screw hole)
+        if not wire.IsSame(outer_wire):
+            lateral_with_holes.Add(TopoDS.Wire_s(wire))
     builder = BRep_Builder()
     shell = TopoDS_Shell()
     builder.MakeShell(shell)
@@ -171,10 +175,13 @@ def _rotated_with_hub_curves(outside: TopoDS_Shape, patches: list[TopoDS_Face], 
 
 
 def _lateral_face(hub: cq.Solid) -> TopoDS_Face:
-    for face in hub.Faces():
-        if BRepAdaptor_Surface(face.wrapped).GetType() == GeomAbs_Cylinder:
-            return face.wrapped
-    raise KernelError("the hub has no cylindrical face")
+    """The hub's outer cylindrical face (a bore or a set-screw hole is a smaller cylinder)."""
+    cylinders = [(BRepAdaptor_Surface(face.wrapped).Cylinder().Radius(), index, face.wrapped)
+                 for index, face in enumerate(hub.Faces())
+                 if BRepAdaptor_Surface(face.wrapped).GetType() == GeomAbs_Cylinder]
+    if not cylinders:
+        raise KernelError("the hub has no cylindrical face")
+    return max(cylinders, key=lambda item: item[:2])[2]
 
 
 def _modified_faces(operation: BRepAlgoAPI_BooleanOperation, face: TopoDS_Face) -> list[TopoDS_Face]:
