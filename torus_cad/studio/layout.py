@@ -69,6 +69,9 @@ def _scalar_field(panel_field: PanelField) -> None:
         v3.VSelect(v_model=(name,), items=list(panel_field.choices), **common)
     elif panel_field.kind is FieldKind.CHOICES:
         v3.VSelect(v_model=(name,), items=list(panel_field.choices), multiple=True, chips=True, **common)
+    elif panel_field.read_only:  # a file path: the server would read it, so the page may not set it
+        v3.VTextField(v_model=(name,), **{**common, "hint": f"{panel_field.hint} (set in the design file the "
+                                                              "studio was started with)"}, readonly=True)
     elif panel_field.kind is FieldKind.TEXT:
         v3.VTextField(v_model=(name,), **common)
     else:
@@ -143,13 +146,12 @@ def _readouts() -> None:
         html.Span("{{ exact_stamp }}", id="exact-stamp", style="display: none")
         v3.VCardSubtitle("download", classes="mt-2")
         with v3.VCardActions(classes="flex-wrap"):
-            v3.VBtn("STEP", prepend_icon="mdi-download", variant="tonal", id="download-step",
-                    disabled=("!files_ready",),
-                    click="utils.download(file_stem + '.step', trigger('download_step'), 'application/step')")
-            v3.VBtn("STL", prepend_icon="mdi-download", variant="tonal", id="download-stl",
-                    disabled=("!files_ready",),
-                    click="utils.download(file_stem + '.stl', trigger('download_stl'), 'model/stl')")
-            v3.VBtn("TOML", prepend_icon="mdi-download", variant="tonal", id="download-toml",
+            # One button per file the build wrote (export.formats, the blade-element table, the report).
+            v3.VBtn("{{ item.label }}", v_for="item in downloads", key="item.kind", prepend_icon="mdi-download",
+                    variant="tonal", size="small", classes="ma-1", id=("'download-' + item.kind",),
+                    click="utils.download(item.file, trigger('download_file', [item.kind]))")
+            v3.VBtn("design TOML", prepend_icon="mdi-download", variant="tonal", size="small", classes="ma-1",
+                    id="download-toml",
                     click="utils.download(file_stem + '.toml', trigger('download_toml'), 'application/toml')")
 
 
