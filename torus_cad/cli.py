@@ -100,7 +100,7 @@ def _command_build(args: argparse.Namespace) -> int:
     progress.finish()
     report = json.loads(paths["json"].read_text())
     if not args.quiet:
-        for kind, path in paths.items():
+        for path in paths.values():
             print(f"wrote {path}")
         print(f"volume {report['volume_mm3']:.3f} mm^3, area {report['surface_area_mm2']:.3f} mm^2, "
               f"mass {report['mass_g']:.3f} g at {args.density:g} g/cm^3")

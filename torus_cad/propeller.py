@@ -193,7 +193,8 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
                 run_out_hub, geometry.hub.radius_mm, geometry.hub.length_mm, 0.0 if seam_deg is None else seam_deg,
                 mounting, reach=geometry.hub.radius_mm + 4.0 * fillet_radius)
             solid = fillet_pattern(hub, blade, angles_deg, fillet_radius, run_out)
-            route, face_parts = FuseRoute.ASSEMBLED, ()
+            route = FuseRoute.ASSEMBLED
+            face_parts: tuple[int, ...] = ()  # the preview tags a filleted solid's faces itself
     else:
         solid, fused = _join_blades_to_hub(hub, blade, blades, angles_deg, timer)
         route, face_parts = fused.route, fused.face_parts
