@@ -12,10 +12,12 @@ import sys
 import tomllib
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from torus_cad.errors import GeometryError, ParameterError, TorusCadError
-from torus_cad.parameters import PropellerParameters, resolve_parameters
+
+if TYPE_CHECKING:
+    from torus_cad.parameters import PropellerParameters
 
 EXIT_OK, EXIT_KERNEL_FAILURE, EXIT_BAD_INPUT = 0, 1, 2
 
@@ -59,6 +61,8 @@ def _parse_override(text: str) -> tuple[str, Any]:
 
 def load_parameters(config: str | None, overrides: Sequence[str] = ()) -> PropellerParameters:
     """Parameters from a TOML file (or the defaults) with ``key=value`` overrides applied."""
+    from torus_cad.parameters import resolve_parameters  # imported here: the schema takes most of a second
+
     return resolve_parameters(config or None, dict(_parse_override(item) for item in overrides))
 
 
@@ -74,6 +78,7 @@ def _command_build(args: argparse.Namespace) -> int:
     from torus_cad.progress import StageProgress
 
     progress = StageProgress.for_terminal(quiet=args.quiet)  # stderr, only on a terminal
+    progress("kernel_import")  # a line on the terminal before the seconds of importing the schema and cadquery
     params = load_parameters(args.config, args.overrides)
     size = _preview_size(args.preview_size, "--preview-size") if args.preview else None
     if args.require_printable:  # decided from the analytic section, before any work or file
@@ -83,12 +88,11 @@ def _command_build(args: argparse.Namespace) -> int:
         problem = printability(blade.airfoil, blade.laws, params.manufacturing.min_wall).problem()
         if problem:
             raise GeometryError(f"not printable (--require-printable): {problem}")
-    progress("kernel_import")  # a line on the terminal before the seconds that importing cadquery takes
     from torus_cad.propeller import build_propeller
 
     propeller = build_propeller(params, progress=progress)
     progress("write")
-    paths = propeller.write(Path(args.out), density_g_cm3=args.density, stl=not args.no_stl)
+    paths = propeller.write(Path(args.out), density_g_cm3=args.density, stl=not args.no_stl, sections_table=True)
     if size is not None:
         from torus_cad.preview import write_preview
 
@@ -96,7 +100,7 @@ def _command_build(args: argparse.Namespace) -> int:
     progress.finish()
     report = json.loads(paths["json"].read_text())
     if not args.quiet:
-        for kind, path in paths.items():
+        for path in paths.values():
             print(f"wrote {path}")
         print(f"volume {report['volume_mm3']:.3f} mm^3, area {report['surface_area_mm2']:.3f} mm^2, "
               f"mass {report['mass_g']:.3f} g at {args.density:g} g/cm^3")
@@ -123,10 +127,10 @@ def _command_preview(args: argparse.Namespace) -> int:
     from torus_cad.progress import StageProgress
 
     progress = StageProgress.for_terminal(quiet=args.quiet)
+    progress("kernel_import")
     params = load_parameters(args.config, args.overrides)
     size = _preview_size(args.size, "--size")
     out = Path(args.out) if args.out else Path("step_out") / f"{params.name}.png"
-    progress("kernel_import")
     from torus_cad.preview import write_preview
     from torus_cad.propeller import build_propeller
 
@@ -139,8 +143,28 @@ def _command_preview(args: argparse.Namespace) -> int:
 
 
 def _command_defaults(args: argparse.Namespace) -> int:
-    sys.stdout.write("# torus_cad design file: every key is optional and defaults to the value below.\n")
-    sys.stdout.write(PropellerParameters().to_toml(comments=True))
+    from torus_cad.parameters import PropellerParameters
+
+    if not args.resolved:
+        if args.config or args.overrides:
+            raise ParameterError("torus-cad defaults takes a design file or --set only with --resolved")
+        sys.stdout.write("# torus_cad design file: every key is optional and defaults to the value below.\n")
+        sys.stdout.write(PropellerParameters().to_toml(comments=True))
+        return EXIT_OK
+    from torus_cad.design_targets import resolve_design_targets
+
+    params = load_parameters(args.config, args.overrides)
+    targets = resolve_design_targets(params)
+    sys.stdout.write("# torus_cad design file: the spec's parameters that the design's airfoil.naca, diameter and\n"
+                     "# pitch resolved to (" + (", ".join(f"{key} = {value!r}" for key, value in targets.requested.items())
+                                                or "none set") + "); it builds the same propeller.\n")
+    if targets.tip_diameter_mm is not None:
+        sys.stdout.write(f"# tip diameter {targets.tip_diameter_mm:.3f} mm")
+        if targets.pitch_fit is not None:
+            achieved = ", ".join(f"{value:.2f}" for value in targets.pitch_fit.pitch_at_75_mm)
+            sys.stdout.write(f"; geometric pitch at 75 % of the tip radius {achieved} mm")
+        sys.stdout.write("\n")
+    sys.stdout.write(targets.parameters.to_toml(comments=True))
     return EXIT_OK
 
 
@@ -167,9 +191,10 @@ def _command_sweep(args: argparse.Namespace) -> int:
                            time_limit_s=args.time_limit, rebuild=args.rebuild, progress=False if args.quiet else None)
     except SweepInterrupted as interrupt:
         partial = interrupt.result
-        table = partial.tables.get("csv", out / "results.csv")
-        print(f"torus-cad: sweep interrupted by {interrupt.signal_name}: {partial.counts_text()}; "
-              f"table written to {table}; rerun the same command to resume", file=sys.stderr)
+        done = (f"{partial.counts_text()}; table written to {partial.tables['csv']}" if partial.tables
+                else "nothing was built")
+        print(f"torus-cad: sweep interrupted by {interrupt.signal_name}: {done}; rerun the same command to resume",
+              file=sys.stderr)
         return interrupt.exit_code
     except BatchError as error:
         print(f"torus-cad: sweep failed: {error}", file=sys.stderr)
@@ -177,6 +202,24 @@ def _command_sweep(args: argparse.Namespace) -> int:
     if not args.quiet:
         print(result.summary())
     return result.exit_code
+
+
+def _port(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--port must be a whole number, got {text!r}") from None
+    if not 0 <= value <= 65535:
+        raise argparse.ArgumentTypeError(f"--port = {value} is out of range; allowed [0, 65535] (0: any free port)")
+    return value
+
+
+def _command_studio(args: argparse.Namespace) -> int:
+    from torus_cad.studio.app import serve
+
+    params = load_parameters(args.config, args.overrides)  # a bad design exits 2 before the server starts
+    serve(params, port=args.port, host=args.host)
+    return EXIT_OK
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -216,14 +259,22 @@ def build_parser() -> argparse.ArgumentParser:
     preview.set_defaults(handler=_command_preview)
 
     defaults = commands.add_parser("defaults", help="print the default design as commented TOML",
-                                   description="Print the default design as a commented TOML file to start from.")
+                                   description="Print the default design as a commented TOML file to start from; "
+                                   "with --resolved, a design's spec parameters after its airfoil.naca, diameter "
+                                   "and pitch are applied.")
+    _add_design_arguments(defaults)
+    defaults.add_argument("--resolved", action="store_true",
+                          help="print the spec parameters the design file (and --set) resolve to")
     defaults.set_defaults(handler=_command_defaults)
 
     sweep = commands.add_parser("sweep", help="build many variants of a design in parallel (local or Dask)",
                                 description="Build every design of a sweep file (a base design plus the "
                                 "parameters to vary: lists, grid ranges, or random / Latin-hypercube bounds) "
                                 "into OUT/designs/<id>/ and tabulate them in OUT/results.csv. Rerunning "
-                                "resumes: designs already done are skipped.")
+                                "resumes: designs already done are skipped. Exit codes: 0 every design valid "
+                                "or refused; 1 a design failed, errored, crashed or timed out; 2 a bad sweep "
+                                "file (or more than 1,000,000 designs); 130 / 143 interrupted by Ctrl-C / SIGTERM "
+                                "(the table of what finished is written).")
     sweep.add_argument("sweep", metavar="SWEEP.toml", help="sweep file (see examples/sweep_example.toml)")
     sweep.add_argument("--out", help="output folder (default: sweep_out/<sweep file name>)")
     sweep.add_argument("--workers", type=int, metavar="N",
@@ -240,6 +291,17 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("--rebuild", action="store_true", help="build every design again, even those already done")
     sweep.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary")
     sweep.set_defaults(handler=_command_sweep)
+
+    studio = commands.add_parser("studio", help="design in the browser: parameters, live 3D view, downloads",
+                                 description="Serve a local web page to design a propeller: a parameters panel, a "
+                                 "live 3D view (a preview at once, the exact solid when it is built), readouts, and "
+                                 "STEP / STL / TOML downloads. Starts from CONFIG (or the default design).")
+    _add_design_arguments(studio)
+    studio.add_argument("--port", type=_port, default=8080, help="port to serve on (default 8080; 0: any free port)")
+    studio.add_argument("--host", default="127.0.0.1",
+                        help="address to listen on (default 127.0.0.1: only this machine can connect; "
+                             "0.0.0.0 serves every network, without a password)")
+    studio.set_defaults(handler=_command_studio)
     return parser
 
 
@@ -261,7 +323,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("torus-cad: interrupted; no partial file was left behind", file=sys.stderr)
         return 130
-    except Exception as error:  # noqa: BLE001 - the command line never shows a traceback
+    except Exception as error:
         print(f"torus-cad: internal error ({type(error).__name__}): {error}; please report it with the design file",
               file=sys.stderr)
         return EXIT_KERNEL_FAILURE

@@ -25,6 +25,7 @@ from numpy.typing import NDArray
 
 from torus_cad import __version__
 from torus_cad.colors import HUB_COLOR, blade_color
+from torus_cad.design_targets import DesignTargets, resolve_design_targets, write_sections_table
 from torus_cad.errors import KernelError
 from torus_cad.geometry.feasibility import check_feasible
 from torus_cad.geometry.handedness import Spin, spin_to_push_air_down
@@ -42,7 +43,7 @@ from torus_cad.kernel.checks import (
 from torus_cad.kernel.export import atomic_path, write_step, write_stl
 from torus_cad.kernel.export_3mf import write_3mf
 from torus_cad.kernel.fillet import fillet_pattern
-from torus_cad.kernel.fuse import FuseRoute, fuse_all, fuse_pattern, pattern_blades
+from torus_cad.kernel.fuse import Fused, FuseRoute, fuse_all, fuse_pattern, pattern_blades
 from torus_cad.kernel.hub import hub_solid, run_out_hub
 from torus_cad.kernel.loft import loft_solid
 from torus_cad.kernel.mirror import mirrored
@@ -70,7 +71,12 @@ class Propeller:
         section_curves: blade 0's section B-splines (plain arrays).
         stage_seconds: seconds per stage (keys: :class:`torus_cad.stages.Stage` values).
         fuse_route: how the blades were joined to the hub.
+        design_targets: what the designer's inputs (airfoil.naca, diameter, pitch) resolved to;
+            ``parameters`` are already the resolved spec parameters.
         mounting: the hub's bore, flat, set screw and chamfer, with the set screw's direction.
+        face_parts: the part each face of ``solid`` came from, in the order of ``solid.Faces()``:
+            -1 (``torus_cad.kernel.fuse.HUB_PART``) the hub, i blade i; empty where the build
+            does not know it (after the root fillet).
     """
 
     parameters: PropellerParameters
@@ -81,7 +87,9 @@ class Propeller:
     section_curves: SectionCurves
     stage_seconds: dict[str, float] = field(default_factory=dict)
     fuse_route: FuseRoute = FuseRoute.ASSEMBLED
+    design_targets: DesignTargets | None = None
     mounting: HubMounting = field(default_factory=HubMounting)
+    face_parts: tuple[int, ...] = ()
 
     @property
     def workplane(self) -> cq.Workplane:
@@ -115,13 +123,15 @@ class Propeller:
 
     def mass_properties(self, density_g_cm3: float = DEFAULT_DENSITY_G_CM3) -> MassProperties:
         """Volume (mm^3), area (mm^2), centroid (mm), spin-axis inertia and mass (g) for a density in
-        g/cm^3 (default 1.24, PLA), by OpenCascade's adaptive integration."""
+        g/cm^3 (default 1.24, PLA), to 1e-6 relative (see :func:`torus_cad.kernel.checks.mass_properties`)."""
         return mass_properties(self.solid, density_g_cm3)
 
     def write(self, out_dir: str | Path, density_g_cm3: float = DEFAULT_DENSITY_G_CM3,
-              stl: bool = True) -> dict[str, Path]:
-        """Write ``<name>.step``, ``<name>.stl`` (unless ``stl`` is False) and ``<name>.json`` into ``out_dir``."""
-        return write_outputs(self, Path(out_dir), density_g_cm3, stl)
+              stl: bool = True, sections_table: bool = False) -> dict[str, Path]:
+        """Write ``<name>.step``, ``<name>.stl`` (unless ``stl`` is False), the blade-element table
+        ``<name>_sections.csv`` and ``<name>_sections.png`` (if ``sections_table``) and ``<name>.json``
+        into ``out_dir``."""
+        return write_outputs(self, Path(out_dir), density_g_cm3, stl, sections_table)
 
 
 def design_printability(params: PropellerParameters) -> Printability:
@@ -154,6 +164,9 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
     timer = StageTimer(progress)
     with timer.stage(Stage.PARAMETERS):
         params = resolve_parameters(design, overrides)
+    with timer.stage(Stage.DESIGN_TARGETS):
+        targets = resolve_design_targets(params)  # airfoil.naca, diameter, pitch -> the spec's parameters
+        params = targets.parameters
         geometry = params.geometry()
     with timer.stage(Stage.SECTION_MATH):
         surface = params.blade_surface()
@@ -164,7 +177,8 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
         seam_deg = seam_angle_deg(surface.points, geometry.hub.radius_mm, geometry.blades,
                                   () if screw_arc is None else (screw_arc,))
     with timer.stage(Stage.WIRES):
-        curves = fit_section_curves(surface.points, surface.trailing_edge_column, _section_chords(surface))
+        curves = fit_section_curves(surface.points, surface.trailing_edge_column, _section_chords(surface),
+                                    surface.lower_corner_index)
         wires = curves.wires()
     with timer.stage(Stage.LOFT):
         blade = loft_solid(wires, surface.s)
@@ -180,13 +194,16 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
                 mounting, reach=geometry.hub.radius_mm + 4.0 * fillet_radius)
             solid = fillet_pattern(hub, blade, angles_deg, fillet_radius, run_out)
             route = FuseRoute.ASSEMBLED
+            face_parts: tuple[int, ...] = ()  # the preview tags a filleted solid's faces itself
     else:
-        solid, route = _join_blades_to_hub(hub, blade, blades, angles_deg, timer)
+        solid, fused = _join_blades_to_hub(hub, blade, blades, angles_deg, timer)
+        route, face_parts = fused.route, fused.face_parts
     if params.handedness == Handedness.CCW:  # the spec's blade is 'cw'; 'ccw' is its mirror image
         with timer.stage(Stage.MIRROR):
-            solid = mirrored(solid)
+            solid = mirrored(solid)  # a transformed copy: the same faces in the same order
             hub, blades = mirrored(hub, check=False), [mirrored(part, check=False) for part in blades]
-    return Propeller(params, solid, hub, blades, surface, curves, timer.seconds, route, mounting)
+    return Propeller(params, solid, hub, blades, surface, curves, timer.seconds, route, targets, mounting,
+                     face_parts)
 
 
 def _place_mounting(params: PropellerParameters) -> HubMounting:
@@ -210,8 +227,8 @@ propeller_objects = build_propeller
 
 
 def _join_blades_to_hub(hub: cq.Solid, blade: cq.Solid, blades: list[cq.Solid], angles_deg: list[float],
-                        timer: StageTimer) -> tuple[cq.Solid, FuseRoute]:
-    """The fused, checked propeller and the route that made it.
+                        timer: StageTimer) -> tuple[cq.Solid, Fused]:
+    """The fused, checked propeller and how it was made (route, each face's part).
 
     The shared-intersection route's result is checked for validity, which includes every
     edge's curve on the hub against its 3D curve. Where that route fails, one general fuse
@@ -219,17 +236,17 @@ def _join_blades_to_hub(hub: cq.Solid, blade: cq.Solid, blades: list[cq.Solid], 
     """
     try:
         with timer.stage(Stage.FUSE):
-            fused, route = fuse_pattern(hub, blade, angles_deg)
+            fused = fuse_pattern(hub, blade, angles_deg)
         with timer.stage(Stage.CHECK):
-            return single_valid_solid(fused, "joining the blades to the hub"), route
+            return single_valid_solid(fused.shape, "joining the blades to the hub"), fused
     except KernelError:
         pass  # the general fuse below decides
     with timer.stage(Stage.FUSE):
         fused = fuse_all(hub, blades)
     with timer.stage(Stage.CHECK):
-        solid = single_valid_solid(fused, "fusing the blades with the hub")
+        solid = single_valid_solid(fused.shape, "fusing the blades with the hub")
         _check_volume(solid, hub, blade, len(blades))
-    return solid, FuseRoute.GENERAL
+    return solid, fused
 
 
 def _check_volume(solid: cq.Solid, hub: cq.Solid, blade: cq.Solid, blades: int) -> None:
@@ -258,13 +275,16 @@ def build_report(propeller: Propeller, density_g_cm3: float) -> dict[str, Any]:
         "section_fit_error_mm": propeller.section_curves.fit_error,
         "stage_seconds": dict(propeller.stage_seconds),
         "fuse_route": propeller.fuse_route.value,
+        **({"design_targets": propeller.design_targets.to_dict()}
+           if propeller.design_targets is not None and propeller.design_targets.requested else {}),
     }
 
 
 def write_outputs(propeller: Propeller, out_dir: Path, density_g_cm3: float = DEFAULT_DENSITY_G_CM3,
-                  stl: bool = True) -> dict[str, Path]:
-    """Write the files of ``export.formats`` (STEP, STL, 3MF; ``stl=False`` drops the STL) and the
-    JSON report atomically; return the paths by kind."""
+                  stl: bool = True, sections_table: bool = False) -> dict[str, Path]:
+    """Write the files of ``export.formats`` (STEP, STL, 3MF; ``stl=False`` drops the STL), the
+    blade-element table (``<name>_sections.csv`` and ``.png``, when ``sections_table``; ``torus-cad
+    build`` writes it) and the JSON report atomically; return the paths by kind."""
     params = propeller.parameters
     formats = params.export.formats
     deflections = (params.export.stl_linear_deflection, params.export.stl_angular_deflection)
@@ -281,6 +301,9 @@ def write_outputs(propeller: Propeller, out_dir: Path, density_g_cm3: float = DE
         with timer.stage(Stage.THREE_MF_WRITE):
             paths["3mf"] = write_3mf(propeller.solid, out_dir / f"{params.name}.3mf", params.name, *deflections,
                                      version=__version__)
+    if sections_table:
+        with timer.stage(Stage.SECTIONS_TABLE):
+            paths.update(write_sections_table(propeller.surface, params, out_dir))
     propeller.stage_seconds.update(timer.seconds)
     report = build_report(propeller, density_g_cm3)
     paths["json"] = out_dir / f"{params.name}.json"

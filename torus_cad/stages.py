@@ -17,6 +17,7 @@ class Stage(StrEnum):
     """A stage of building and writing a propeller; the value is its key in reports."""
 
     PARAMETERS = "parameters"
+    DESIGN_TARGETS = "design_targets"
     SECTION_MATH = "section_math"
     WIRES = "wires"
     LOFT = "loft"
@@ -26,6 +27,7 @@ class Stage(StrEnum):
     MIRROR = "mirror"
     STEP_WRITE = "step_write"
     STL_WRITE = "stl_write"
+    SECTIONS_TABLE = "sections_table"
     THREE_MF_WRITE = "3mf_write"
 
     @property
@@ -36,6 +38,7 @@ class Stage(StrEnum):
 
 _LABELS = {
     Stage.PARAMETERS: "reading parameters",
+    Stage.DESIGN_TARGETS: "diameter and pitch targets",
     Stage.SECTION_MATH: "blade sections (geometry)",
     Stage.WIRES: "section curves",
     Stage.LOFT: "lofting the blade",
@@ -45,6 +48,7 @@ _LABELS = {
     Stage.MIRROR: "mirroring (clockwise)",
     Stage.STEP_WRITE: "writing STEP",
     Stage.STL_WRITE: "writing STL",
+    Stage.SECTIONS_TABLE: "writing the blade-element table",
     Stage.THREE_MF_WRITE: "writing 3MF",
 }
 

@@ -212,25 +212,29 @@ def interrupts_raised(signals: Iterable[int] = (signal.SIGINT, signal.SIGTERM)) 
 def _result_of(future: Future[Any], task: DesignTask, check_visible: bool) -> DesignResult:
     """The design's result, or the outcome the executor's exception stands for (recorded in its folder)."""
     error = future.exception()
-    if error is None:
-        result: DesignResult = future.result()
-        if check_visible and result.outcome is Outcome.VALID and task.folder is not None and not (
-                Path(task.folder) / f"{task.design_id}.json").is_file():
-            result = DesignResult(task.design_id, Outcome.ERROR, f"the worker wrote {task.folder} but it is not "
-                                  "visible here; the output folder must be on a file system shared by the workers "
-                                  "and this machine")
-        else:
+    if error is not None:
+        result = _failure(error, task.design_id)
+    else:
+        result = future.result()
+        if not (check_visible and result.outcome is Outcome.VALID and task.folder is not None
+                and not (Path(task.folder) / f"{task.design_id}.json").is_file()):
             return result
-    elif isinstance(error, TimeoutError):
-        result = DesignResult(task.design_id, Outcome.TIMEOUT, f"no result within the time limit "
-                              f"({error.args[1] if len(error.args) > 1 else '?'} s); the worker was stopped")
-    elif type(error).__name__ in ("ProcessExpired", "KilledWorker"):
-        code = getattr(error, "exitcode", None)
-        result = DesignResult(task.design_id, Outcome.CRASH, "the worker process died while running this design"
-                              + (f" (exit code {code})" if code is not None else "") + " (a crash inside OpenCascade?)")
-    else:  # e.g. the task could not be sent to a Dask worker
-        result = DesignResult(task.design_id, Outcome.ERROR, f"{type(error).__name__}: {error}")
+        result = DesignResult(task.design_id, Outcome.ERROR, f"the worker wrote {task.folder} but it is not visible "
+                              "here; the output folder must be on a file system shared by the workers and this machine")
     return record_result(task, result) if task.folder is not None else result
+
+
+def _failure(error: BaseException, design_id: str) -> DesignResult:
+    """The outcome of a design whose future failed: pebble's time-out or dead worker, Dask's killed worker."""
+    if isinstance(error, TimeoutError):
+        limit = error.args[1] if len(error.args) > 1 else "?"
+        return DesignResult(design_id, Outcome.TIMEOUT, f"no result within the time limit ({limit} s); "
+                            "the worker was stopped")
+    if type(error).__name__ in ("ProcessExpired", "KilledWorker"):
+        code = getattr(error, "exitcode", None)
+        return DesignResult(design_id, Outcome.CRASH, "the worker process died while running this design"
+                            + (f" (exit code {code})" if code is not None else "") + " (a crash inside OpenCascade?)")
+    return DesignResult(design_id, Outcome.ERROR, f"{type(error).__name__}: {error}")  # e.g. not sent to a worker
 
 
 def run_tasks(tasks: Sequence[DesignTask], on_result: Callable[[DesignTask, DesignResult], None],

@@ -15,15 +15,18 @@ from __future__ import annotations
 
 import re
 from enum import StrEnum
+from pathlib import Path
 from typing import Annotated, Any, Self
 
 from pydantic import AfterValidator, BeforeValidator, Field, model_validator
 
 from torus_cad.errors import ParameterError
-from torus_cad.geometry.airfoil import NacaAirfoil
+from torus_cad.geometry.airfoil import Naca5Airfoil, NacaAirfoil, naca4_numbers, naca_section
+from torus_cad.geometry.airfoil_file import load_airfoil_file
 from torus_cad.geometry.frames import FrameKind
 from torus_cad.geometry.mounting import HubMounting
 from torus_cad.geometry.propeller import BladeGeometry, HubGeometry, PropellerGeometry
+from torus_cad.geometry.section import Section as SectionShape
 from torus_cad.geometry.surface import BladeSurface, blade_surface
 from torus_cad.geometry.transforms import SectionLaws, quartic_minimum
 from torus_cad.parameters.document import Document
@@ -94,8 +97,12 @@ class Hub(Section):
         return HubMounting(self.bore_diameter, self.bore_flat_depth, self.set_screw_diameter, self.chamfer)
 
 
+#: The spec's section numbers, which airfoil.naca and airfoil.file replace.
+_NUMBERS = ("max_camber", "camber_position", "thickness")
+
+
 class Airfoil(Section):
-    """NACA 4-digit section (spec §1), fractions of the chord."""
+    """The section (spec §1): NACA 4-digit numbers (fractions of the chord), a NACA designation, or a coordinate file."""
 
     max_camber: float = param(0.02, ge=0.0, le=0.095, doc="m (0 = symmetric section)")
     camber_position: float = param(0.4, ge=0.0, lt=1.0, fuzz=(0.1, 0.9),
@@ -104,20 +111,63 @@ class Airfoil(Section):
     camber_normal: bool = param(True, doc="thickness normal to the camber line (false: theta_c = 0, spec §1.2)")
     pivot: float = param(0.0, ge=0.0, le=1.0,
                          doc="chord fraction on the centerline, the centre of alpha (0 = leading edge, the spec)")
+    naca: str = param("", doc="NACA designation instead of the numbers: 4-digit '2412' sets max_camber, "
+                              "camber_position, thickness; 5-digit '23012' (\"\" = use the numbers)")
+    file: str = param("", doc="airfoil coordinate file (.dat, Selig or Lednicer layout) instead of the numbers; "
+                              "relative to the design file's folder (\"\" = none)")
+    trailing_edge_thickness: float = param(0.0, unit="mm", ge=0.0, le=50.0, fuzz=(0.0, 0.0),
+                                           doc="blunt trailing edge of this thickness on every section "
+                                               "(0 = the spec's sharp edge)")
 
-    def section(self) -> NacaAirfoil:
-        """The chord-unit section this table describes."""
+    def section(self) -> SectionShape:
+        """The chord-unit section this table describes (without the blunt trailing edge)."""
+        if self.file:
+            return load_airfoil_file(self.file)
+        if self.naca:
+            return naca_section(self.naca, self.camber_normal)
         return NacaAirfoil(self.max_camber, self.camber_position, self.thickness, self.camber_normal)
 
     @model_validator(mode="after")
+    def _one_source_of_the_section(self) -> Self:
+        """naca and file replace the numbers: a number other than its default (or, for a 4-digit
+        designation, the designation's own value) contradicts them."""
+        if self.naca and self.file:
+            raise ValueError(f"airfoil.naca = {self.naca!r} conflicts with airfoil.file = {self.file!r}: "
+                             "give one of them")
+        if not (self.naca or self.file):
+            return self
+        key = "naca" if self.naca else "file"
+        implied = dict(zip(_NUMBERS, naca4_numbers(self.naca))) if len(self.naca.strip()) == 4 else {}
+        if self.naca:
+            naca_section(self.naca)  # raises ParameterError (a ValueError) naming airfoil.naca
+        if self.file:
+            try:
+                load_airfoil_file(self.file)
+            except ParameterError as error:
+                raise ValueError(f"airfoil.file: {error}") from None
+        for number in _NUMBERS:
+            value, default = getattr(self, number), type(self).model_fields[number].default
+            if value != default and value != implied.get(number, default):
+                raise ValueError(f"airfoil.{key} = {getattr(self, key)!r} conflicts with airfoil.{number} = {value!r}: "
+                                 f"give the section by {key} or by its numbers, not both")
+        return self
+
+    @model_validator(mode="after")
     def _camber_and_fold(self) -> Self:
-        if self.max_camber > 0.0:
-            check_in_bounds("airfoil.camber_position", self.camber_position, Bounds(0.0, 1.0, True, True))
-        ratio, where = self.section().fold_ratio()
+        section = self.section()
+        if not isinstance(section, NacaAirfoil | Naca5Airfoil):
+            return self  # a coordinate file: its surfaces were checked for crossing when it was read
+        if self.naca:
+            where_from = f"airfoil.naca = {self.naca!r}"
+        else:
+            if self.max_camber > 0.0:
+                check_in_bounds("airfoil.camber_position", self.camber_position, Bounds(0.0, 1.0, True, True))
+            where_from = (f"airfoil.thickness = {self.thickness:g} is too thick for max_camber = "
+                          f"{self.max_camber:g} at camber_position = {self.camber_position:g}")
+        ratio, where = section.fold_ratio()
         if ratio >= FOLD_RATIO_LIMIT:
             raise ValueError(
-                f"airfoil.thickness = {self.thickness:g} is too thick for max_camber = {self.max_camber:g} at "
-                f"camber_position = {self.camber_position:g}: the lower surface folds over itself near chord "
+                f"{where_from}: the lower surface folds over itself near chord "
                 f"{where:.2f} (thickness exceeds the camber line's radius of curvature); reduce the thickness or "
                 "the camber, move camber_position toward 0.5, or set camber_normal = false")
         return self
@@ -219,6 +269,11 @@ class PropellerParameters(Document):
     blades: int = param(3, ge=1, le=12, fuzz=(1, 8), doc="number of blades n; blade i at theta_0 + 360 i / n")
     phase_deg: float = param(0.0, unit="deg", ge=-360.0, le=360.0, fuzz=(-180.0, 180.0),
                              doc="theta_0: angle of blade 0 around the axis")
+    diameter: float = param(0.0, unit="mm", ge=0.0, le=100000.0, fuzz=(0.0, 0.0),
+                            doc="tip diameter to reach by scaling z_L of centerline.p2 and p3 (0 = as the control points give)")
+    pitch: float = param(0.0, unit="mm", ge=0.0, le=100000.0, fuzz=(0.0, 0.0),
+                         doc="geometric pitch of the outer half to reach by refitting transforms.angle_of_attack "
+                             "(0 = as the quartic gives)")
     handedness: Handedness = param(Handedness.CW, strict=False,
                                    doc="'cw': the spec's blade, which turns clockwise seen from +z to push air toward -z; "
                                        "'ccw': its exact mirror image, for counter-rotating pairs")
@@ -257,6 +312,16 @@ class PropellerParameters(Document):
                 check_in_bounds(f"centerline.{key}[1]", point[1], Bounds(-1.0, length - 1.0, True, True), "mm")
         return self
 
+    @classmethod
+    def paths_relative_to(cls, data: dict[str, Any], folder: Path) -> dict[str, Any]:
+        """A relative ``airfoil.file`` in a design file is relative to the design file's folder."""
+        airfoil = data.get("airfoil")
+        if isinstance(airfoil, dict) and isinstance(airfoil.get("file"), str) and airfoil["file"]:
+            path = Path(airfoil["file"]).expanduser()
+            if not path.is_absolute():
+                data = {**data, "airfoil": {**airfoil, "file": str(folder / path)}}
+        return data
+
     def blade_surface(self, blade_index: int = 0, sections: int | None = None, points: int | None = None
                       ) -> BladeSurface:
         """Blade ``blade_index`` sampled at ``sections`` x ``points`` (default: ``resolution``):
@@ -272,7 +337,7 @@ class PropellerParameters(Document):
         laws = SectionLaws(self.transforms.angle_of_attack, self.transforms.scale_x, self.transforms.scale_y,
                            self.airfoil.pivot)
         local = ((0.0, 0.0, 0.0), line.p2, line.p3, (*line.p4, 0.0))
-        blade = BladeGeometry(self.airfoil.section(), laws, local, line.frame)
+        blade = BladeGeometry(self.airfoil.section(), laws, local, line.frame, self.airfoil.trailing_edge_thickness)
         return PropellerGeometry(HubGeometry(self.hub.radius, self.hub.length), blade, self.blades, self.phase_deg)
 
 
