@@ -12,10 +12,12 @@ import sys
 import tomllib
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from torus_cad.errors import GeometryError, ParameterError, TorusCadError
-from torus_cad.parameters import PropellerParameters, resolve_parameters
+
+if TYPE_CHECKING:
+    from torus_cad.parameters import PropellerParameters
 
 EXIT_OK, EXIT_KERNEL_FAILURE, EXIT_BAD_INPUT = 0, 1, 2
 
@@ -59,6 +61,8 @@ def _parse_override(text: str) -> tuple[str, Any]:
 
 def load_parameters(config: str | None, overrides: Sequence[str] = ()) -> PropellerParameters:
     """Parameters from a TOML file (or the defaults) with ``key=value`` overrides applied."""
+    from torus_cad.parameters import resolve_parameters  # imported here: the schema takes most of a second
+
     return resolve_parameters(config or None, dict(_parse_override(item) for item in overrides))
 
 
@@ -74,6 +78,7 @@ def _command_build(args: argparse.Namespace) -> int:
     from torus_cad.progress import StageProgress
 
     progress = StageProgress.for_terminal(quiet=args.quiet)  # stderr, only on a terminal
+    progress("kernel_import")  # a line on the terminal before the seconds of importing the schema and cadquery
     params = load_parameters(args.config, args.overrides)
     size = _preview_size(args.preview_size, "--preview-size") if args.preview else None
     if args.require_printable:  # decided from the analytic section, before any work or file
@@ -83,7 +88,6 @@ def _command_build(args: argparse.Namespace) -> int:
         problem = printability(blade.airfoil, blade.laws, params.manufacturing.min_wall).problem()
         if problem:
             raise GeometryError(f"not printable (--require-printable): {problem}")
-    progress("kernel_import")  # a line on the terminal before the seconds that importing cadquery takes
     from torus_cad.propeller import build_propeller
 
     propeller = build_propeller(params, progress=progress)
@@ -96,7 +100,7 @@ def _command_build(args: argparse.Namespace) -> int:
     progress.finish()
     report = json.loads(paths["json"].read_text())
     if not args.quiet:
-        for kind, path in paths.items():
+        for path in paths.values():
             print(f"wrote {path}")
         print(f"volume {report['volume_mm3']:.3f} mm^3, area {report['surface_area_mm2']:.3f} mm^2, "
               f"mass {report['mass_g']:.3f} g at {args.density:g} g/cm^3")
@@ -123,10 +127,10 @@ def _command_preview(args: argparse.Namespace) -> int:
     from torus_cad.progress import StageProgress
 
     progress = StageProgress.for_terminal(quiet=args.quiet)
+    progress("kernel_import")
     params = load_parameters(args.config, args.overrides)
     size = _preview_size(args.size, "--size")
     out = Path(args.out) if args.out else Path("step_out") / f"{params.name}.png"
-    progress("kernel_import")
     from torus_cad.preview import write_preview
     from torus_cad.propeller import build_propeller
 
@@ -139,6 +143,8 @@ def _command_preview(args: argparse.Namespace) -> int:
 
 
 def _command_defaults(args: argparse.Namespace) -> int:
+    from torus_cad.parameters import PropellerParameters
+
     if not args.resolved:
         if args.config or args.overrides:
             raise ParameterError("torus-cad defaults takes a design file or --set only with --resolved")

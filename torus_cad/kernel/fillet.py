@@ -180,7 +180,7 @@ class _LazySplits:
 
 def _fillet_and_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], radius_mm: float,
                         suggest: bool = True) -> cq.Solid:
-    single, _ = fuse_pattern(hub, blade, angles_deg[:1])
+    single = fuse_pattern(hub, blade, angles_deg[:1]).shape
     filleted = fillet_blade_roots(single_valid_solid(single, "joining blade 0 to the hub"), radius_mm, suggest)
     if len(angles_deg) == 1:
         return filleted
@@ -188,7 +188,7 @@ def _fillet_and_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[flo
         return single_valid_solid(cq.Shape.cast(_assemble_filleted(filleted.wrapped, angles_deg)),
                                   "patterning the filleted blade")
     except KernelError:
-        whole, _ = fuse_pattern(hub, blade, angles_deg)
+        whole = fuse_pattern(hub, blade, angles_deg).shape
         return fillet_blade_roots(single_valid_solid(whole, "joining the blades to the hub"), radius_mm, suggest)
 
 
