@@ -137,7 +137,7 @@ def _readouts() -> None:
         with v3.VTable(density="compact", classes="studio-readouts"), html.Tbody(), \
                 html.Tr(v_for="row in stage_rows", key="row.stage"):
                     html.Td("{{ row.stage }}")
-                    html.Td("{{ row.ms }} ms", classes="text-right")
+                    html.Td("{{ row.ms }} ms", classes="text-right text-no-wrap")
         html.Div("preview {{ preview_ms }} ms after the change, exact solid {{ exact_ms }} ms",
                  classes="text-caption text-medium-emphasis mx-3 mt-1", id="timings")
         html.Div("preview stages (ms): {{ preview_detail }}", classes="text-caption text-medium-emphasis mx-3",
@@ -197,7 +197,7 @@ def build_layout(studio: Studio) -> None:
                               messages=("upload_message",))
             parameter_panel(studio.groups)
         with layout.content, v3.VContainer(fluid=True, classes="fill-height pa-0"), \
-                html.Div(style="display: flex; width: 100%; height: 100%;"):
+                html.Div(style="display: flex; width: 100%; height: calc(100vh - 64px);"):  # below the toolbar
             _view_area(studio)
-            with html.Div(style="flex: 0 0 300px; overflow-y: auto;", id="readouts-column"):
+            with html.Div(style="flex: 0 0 330px; overflow-y: auto;", id="readouts-column"):
                 _readouts()
