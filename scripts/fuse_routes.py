@@ -23,8 +23,8 @@ from concurrent.futures import ProcessPoolExecutor
 from typing import Any
 
 from torus_cad.errors import GeometryError, ParameterError
-from torus_cad.fuzzing import random_design
 from torus_cad.kernel.fuse import FuseRoute
+from torus_cad.studies.fuzz import random_design
 
 VOLUME_PRECISION = 1e-7
 
@@ -42,7 +42,7 @@ def compare(seed: int) -> dict[str, Any]:
     except Exception as error:
         return {"seed": seed, "outcome": "error", "message": f"{type(error).__name__}: {error}"}
     start = time.perf_counter()
-    general = single_valid_solid(fuse_all(propeller.hub, propeller.blades), "the general fuse")
+    general = single_valid_solid(fuse_all(propeller.hub, propeller.blades).shape, "the general fuse")
     general_s = time.perf_counter() - start
     built_volume = precise_volume(propeller.solid, VOLUME_PRECISION)
     general_volume = precise_volume(general, VOLUME_PRECISION)

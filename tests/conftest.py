@@ -20,7 +20,7 @@ def assert_same_volume_as_general_fuse(propeller) -> None:
     from torus_cad.kernel.checks import precise_volume, single_valid_solid
     from torus_cad.kernel.fuse import fuse_all
 
-    general = single_valid_solid(fuse_all(propeller.hub, propeller.blades), "the general fuse")
+    general = single_valid_solid(fuse_all(propeller.hub, propeller.blades).shape, "the general fuse")
     assert precise_volume(propeller.solid, VOLUME_PRECISION) == pytest.approx(
         precise_volume(general, VOLUME_PRECISION), rel=ROUTE_VOLUME_TOLERANCE)
     assert len(propeller.solid.Faces()) == len(general.Faces())

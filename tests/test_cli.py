@@ -14,7 +14,8 @@ def test_build_writes_step_stl_and_report(tmp_path, capsys):
     assert main(["build", "--set", "resolution.sections=16", "--set", "resolution.points=48",
                  "--out", str(tmp_path)]) == 0
     names = sorted(path.name for path in tmp_path.iterdir())
-    assert names == ["torus_propeller.json", "torus_propeller.step", "torus_propeller.stl"]
+    assert names == ["torus_propeller.json", "torus_propeller.step", "torus_propeller.stl",
+                     "torus_propeller_sections.csv", "torus_propeller_sections.png"]
     report = json.loads((tmp_path / "torus_propeller.json").read_text())
     assert report["valid"] is True and report["solids"] == 1
     assert report["volume_mm3"] > 0 and report["surface_area_mm2"] > 0

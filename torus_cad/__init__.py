@@ -15,8 +15,8 @@ __version__ = "0.2.0"
 __all__ = ["GeometryError", "KernelError", "ParameterError", "Propeller", "PropellerParameters", "TorusCadError",
            "build_propeller", "propeller_objects", "resolve_parameters"]
 
-# Loaded when first asked for: the kernel (cadquery / OCP) so the geometry layer stays light, and the
-# parameters (pydantic, numpy) so the command line can install its signal handlers before they load.
+# Each loads when first asked for: the kernel (cadquery / OCP) takes seconds, the schema (pydantic,
+# scipy through the geometry) most of a second, and `torus-cad build` shows its first line before either.
 _LAZY = {"build_propeller": "torus_cad.propeller", "Propeller": "torus_cad.propeller",
          "propeller_objects": "torus_cad.propeller", "PropellerParameters": "torus_cad.parameters",
          "resolve_parameters": "torus_cad.parameters"}

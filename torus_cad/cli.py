@@ -20,14 +20,8 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from torus_cad.errors import (
-    GeometryError,
-    IncompleteOutputError,
-    OutputError,
-    ParameterError,
-    TorusCadError,
-)
-from torus_cad.interrupts import exit_on_signals, restore_default_interrupts
+from torus_cad.errors import GeometryError, IncompleteOutputError, OutputError, ParameterError, TorusCadError
+from torus_cad.interrupts import exit_on_signals
 
 if TYPE_CHECKING:
     from torus_cad.parameters import PropellerParameters
@@ -81,7 +75,7 @@ def _first_clause(error: BaseException) -> str:
 
 def load_parameters(config: str | None, overrides: Sequence[str] = ()) -> PropellerParameters:
     """Parameters from a TOML file (or the defaults) with ``key=value`` overrides applied."""
-    from torus_cad.parameters import resolve_parameters
+    from torus_cad.parameters import resolve_parameters  # imported here: the schema takes most of a second
 
     changes = dict(_parse_override(item) for item in overrides)
     try:
@@ -104,16 +98,24 @@ def _add_design_arguments(parser: argparse.ArgumentParser) -> None:
 def _command_build(args: argparse.Namespace) -> int:
     from torus_cad.budgets import check_stl_budget
     from torus_cad.outputs import check_writable_folder, write_output_set
-    from torus_cad.progress import Progress
+    from torus_cad.progress import StageProgress
 
+    progress = StageProgress.for_terminal(quiet=args.quiet)  # stderr, only on a terminal
+    progress("kernel_import")  # a line on the terminal before the seconds of importing the schema and cadquery
     params = load_parameters(args.config, args.overrides)
     size = _preview_size(args.preview_size, "--preview-size") if args.preview else None
-    if not args.no_stl:
-        check_stl_budget(params)  # an STL that would blow up is refused before anything is built (~7 ms)
-    check_writable_folder(args.out)  # before the build, not after it
-    from torus_cad.propeller import build_propeller  # CadQuery: seconds to load, only once the input is good
+    if args.require_printable:  # decided from the analytic section, before any work or file
+        from torus_cad.geometry.printability import printability
 
-    progress = Progress.for_terminal(quiet=args.quiet)  # stderr, only on a terminal
+        blade = params.geometry().blade
+        problem = printability(blade.airfoil, blade.laws, params.manufacturing.min_wall).problem()
+        if problem:
+            raise GeometryError(f"not printable (--require-printable): {problem}")
+    if _writes_a_mesh(params, args.no_stl):
+        check_stl_budget(params)  # a mesh that would blow up is refused before anything is built (~7 ms)
+    check_writable_folder(args.out)  # before the build, not after it
+    from torus_cad.propeller import build_propeller
+
     propeller = build_propeller(params, progress=progress)
     progress("write")
     extra_files = {}
@@ -121,8 +123,9 @@ def _command_build(args: argparse.Namespace) -> int:
         from torus_cad.preview import write_preview
 
         extra_files["png"] = lambda path: write_preview(propeller, path, size, progress=progress)
-    # One output set: STEP, STL, picture and report appear together (torus_cad.outputs).
-    paths = write_output_set(propeller, Path(args.out), args.density, stl=not args.no_stl, extra_files=extra_files)
+    # One output set: the files, the blade-element table, the picture and the report appear together.
+    paths = write_output_set(propeller, Path(args.out), args.density, stl=not args.no_stl, sections_table=True,
+                             extra_files=extra_files)
     progress.finish()
     report = json.loads(paths["json"].read_text())
     if not args.quiet:
@@ -130,12 +133,23 @@ def _command_build(args: argparse.Namespace) -> int:
             print(f"wrote {path}")
         print(f"volume {report['volume_mm3']:.3f} mm^3, area {report['surface_area_mm2']:.3f} mm^2, "
               f"mass {report['mass_g']:.3f} g at {args.density:g} g/cm^3")
+        if params.blades == 1:
+            print(f"warning: a one-blade propeller is out of balance: static imbalance "
+                  f"{report['balance']['static_imbalance_g_mm']:.3f} g mm; add a counterweight or use 2 or more blades")
     if args.verbose:
         print(f"centroid {tuple(round(c, 6) for c in report['centroid_mm'])} mm, "
               f"spin-axis inertia {report['spin_axis_inertia_g_mm2']:.4f} g mm^2")
         for stage, seconds in report["stage_seconds"].items():
             print(f"  {stage:<13} {seconds * 1000:8.1f} ms")
     return EXIT_OK
+
+
+def _writes_a_mesh(params: PropellerParameters, no_stl: bool) -> bool:
+    """Whether the build tessellates the solid for a file (STL, 3MF): then its triangle budget applies."""
+    from torus_cad.parameters.design import ExportFormat
+
+    formats = params.export.formats
+    return (ExportFormat.STL in formats and not no_stl) or ExportFormat.THREE_MF in formats
 
 
 def _preview_size(text: str, option: str) -> tuple[int, int]:
@@ -146,15 +160,17 @@ def _preview_size(text: str, option: str) -> tuple[int, int]:
 
 def _command_preview(args: argparse.Namespace) -> int:
     from torus_cad.outputs import check_writable_folder
-    from torus_cad.preview import write_preview
-    from torus_cad.progress import Progress
-    from torus_cad.propeller import build_propeller
+    from torus_cad.progress import StageProgress
 
+    progress = StageProgress.for_terminal(quiet=args.quiet)
+    progress("kernel_import")
     params = load_parameters(args.config, args.overrides)
     size = _preview_size(args.size, "--size")
     out = Path(args.out) if args.out else Path("step_out") / f"{params.name}.png"
     check_writable_folder(out.parent)  # before the build, not after it
-    progress = Progress.for_terminal(quiet=args.quiet)
+    from torus_cad.preview import write_preview
+    from torus_cad.propeller import build_propeller
+
     propeller = build_propeller(params, progress=progress)
     path = write_preview(propeller, out, size, progress=progress)
     progress.finish()
@@ -166,8 +182,26 @@ def _command_preview(args: argparse.Namespace) -> int:
 def _command_defaults(args: argparse.Namespace) -> int:
     from torus_cad.parameters import PropellerParameters
 
-    sys.stdout.write("# torus_cad design file: every key is optional and defaults to the value below.\n")
-    sys.stdout.write(PropellerParameters().to_toml(comments=True))
+    if not args.resolved:
+        if args.config or args.overrides:
+            raise ParameterError("torus-cad defaults takes a design file or --set only with --resolved")
+        sys.stdout.write("# torus_cad design file: every key is optional and defaults to the value below.\n")
+        sys.stdout.write(PropellerParameters().to_toml(comments=True))
+        return EXIT_OK
+    from torus_cad.design_targets import resolve_design_targets
+
+    params = load_parameters(args.config, args.overrides)
+    targets = resolve_design_targets(params)
+    sys.stdout.write("# torus_cad design file: the spec's parameters that the design's airfoil.naca, diameter and\n"
+                     "# pitch resolved to (" + (", ".join(f"{key} = {value!r}" for key, value in targets.requested.items())
+                                                or "none set") + "); it builds the same propeller.\n")
+    if targets.tip_diameter_mm is not None:
+        sys.stdout.write(f"# tip diameter {targets.tip_diameter_mm:.3f} mm")
+        if targets.pitch_fit is not None:
+            achieved = ", ".join(f"{value:.2f}" for value in targets.pitch_fit.pitch_at_75_mm)
+            sys.stdout.write(f"; geometric pitch at 75 % of the tip radius {achieved} mm")
+        sys.stdout.write("\n")
+    sys.stdout.write(targets.parameters.to_toml(comments=True))
     return EXIT_OK
 
 
@@ -182,22 +216,46 @@ def _positive_density(text: str) -> float:
 
 
 def _command_sweep(args: argparse.Namespace) -> int:
-    from torus_cad.sweep import SweepError, SweepInterrupted, load_sweep, run_sweep
+    """Exit 0 when every design is valid or refused, 1 when any failed (errored, crashed, timed out), 2 for a bad
+    sweep file, 130 / 143 on SIGINT / SIGTERM (one line; the table of what finished is written)."""
+    from torus_cad.batch import BatchError, SweepInterrupted, load_sweep, run_sweep
 
     spec = load_sweep(args.sweep)  # a bad sweep file raises ParameterError: exit 2
     out = Path(args.out) if args.out else Path("sweep_out") / Path(args.sweep).stem
     try:
         result = run_sweep(spec, out, workers=args.workers, scheduler=args.scheduler,
-                           stl=False if args.no_stl else None, density_g_cm3=args.density, rebuild=args.rebuild,
-                           progress=False if args.quiet else None)
+                           stl=False if args.no_stl else None, density_g_cm3=args.density,
+                           time_limit_s=args.time_limit, rebuild=args.rebuild, progress=False if args.quiet else None)
     except SweepInterrupted as interrupt:
-        print(interrupt.result.summary(), file=sys.stderr)
-        return 130
-    except SweepError as error:
+        partial = interrupt.result
+        done = (f"{partial.counts_text()}; table written to {partial.tables['csv']}" if partial.tables
+                else "nothing was built")
+        print(f"torus-cad: sweep interrupted by {interrupt.signal_name}: {done}; rerun the same command to resume",
+              file=sys.stderr)
+        return interrupt.exit_code
+    except BatchError as error:
         print(f"torus-cad: sweep failed: {error}", file=sys.stderr)
         return EXIT_KERNEL_FAILURE
     if not args.quiet:
         print(result.summary())
+    return result.exit_code
+
+
+def _port(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--port must be a whole number, got {text!r}") from None
+    if not 0 <= value <= 65535:
+        raise argparse.ArgumentTypeError(f"--port = {value} is out of range; allowed [0, 65535] (0: any free port)")
+    return value
+
+
+def _command_studio(args: argparse.Namespace) -> int:
+    from torus_cad.studio.app import serve
+
+    params = load_parameters(args.config, args.overrides)  # a bad design exits 2 before the server starts
+    serve(params, port=args.port, host=args.host)
     return EXIT_OK
 
 
@@ -232,6 +290,9 @@ def build_parser() -> argparse.ArgumentParser:
     build.add_argument("--density", type=_positive_density, default=1.24,
                        help="material density for the mass, g/cm^3 (default 1.24, PLA)")
     build.add_argument("--no-stl", action="store_true", help="write STEP and JSON only")
+    build.add_argument("--require-printable", action="store_true",
+                       help="exit 2, writing nothing, when the blade is thinner than manufacturing.min_wall "
+                            "(thinnest section or trailing edge; see the JSON's printability)")
     build.add_argument("-v", "--verbose", action="store_true", help="print mass properties and stage times")
     build.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     build.add_argument("--preview", action="store_true", help="also render <name>.png (see 'torus-cad preview')")
@@ -261,14 +322,22 @@ def build_parser() -> argparse.ArgumentParser:
     verify.set_defaults(handler=_command_verify)
 
     defaults = commands.add_parser("defaults", help="print the default design as commented TOML",
-                                   description="Print the default design as a commented TOML file to start from.")
+                                   description="Print the default design as a commented TOML file to start from; "
+                                   "with --resolved, a design's spec parameters after its airfoil.naca, diameter "
+                                   "and pitch are applied.")
+    _add_design_arguments(defaults)
+    defaults.add_argument("--resolved", action="store_true",
+                          help="print the spec parameters the design file (and --set) resolve to")
     defaults.set_defaults(handler=_command_defaults)
 
     sweep = commands.add_parser("sweep", help="build many variants of a design in parallel (local or Dask)",
                                 description="Build every design of a sweep file (a base design plus the "
                                 "parameters to vary: lists, grid ranges, or random / Latin-hypercube bounds) "
                                 "into OUT/designs/<id>/ and tabulate them in OUT/results.csv. Rerunning "
-                                "resumes: designs already done are skipped.")
+                                "resumes: designs already done are skipped. Exit codes: 0 every design valid "
+                                "or refused; 1 a design failed, errored, crashed or timed out; 2 a bad sweep "
+                                "file (or more than 1,000,000 designs); 130 / 143 interrupted by Ctrl-C / SIGTERM "
+                                "(the table of what finished is written).")
     sweep.add_argument("sweep", metavar="SWEEP.toml", help="sweep file (see examples/sweep_example.toml)")
     sweep.add_argument("--out", help="output folder (default: sweep_out/<sweep file name>)")
     sweep.add_argument("--workers", type=int, metavar="N",
@@ -279,9 +348,23 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("--density", type=_positive_density, default=None,
                        help="material density for the mass, g/cm^3 (default: the sweep file's, else 1.24)")
     sweep.add_argument("--no-stl", action="store_true", help="write STEP and JSON only")
+    sweep.add_argument("--time-limit", type=float, metavar="SECONDS",
+                       help="stop a design that runs longer and record it as 'timeout' (default: the sweep "
+                            "file's time_limit_s, else 300; local pool only)")
     sweep.add_argument("--rebuild", action="store_true", help="build every design again, even those already done")
     sweep.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary")
-    sweep.set_defaults(handler=_command_sweep, interrupts="raise")
+    sweep.set_defaults(handler=_command_sweep)
+
+    studio = commands.add_parser("studio", help="design in the browser: parameters, live 3D view, downloads",
+                                 description="Serve a local web page to design a propeller: a parameters panel, a "
+                                 "live 3D view (a preview at once, the exact solid when it is built), readouts, and "
+                                 "STEP / STL / TOML downloads. Starts from CONFIG (or the default design).")
+    _add_design_arguments(studio)
+    studio.add_argument("--port", type=_port, default=8080, help="port to serve on (default 8080; 0: any free port)")
+    studio.add_argument("--host", default="127.0.0.1",
+                        help="address to listen on (default 127.0.0.1: only this machine can connect; "
+                             "0.0.0.0 serves every network, without a password)")
+    studio.set_defaults(handler=_command_studio)
     return parser
 
 
@@ -290,8 +373,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     restore_signals = exit_on_signals()  # first: an interrupt while importing is clean too
     try:
         args = build_parser().parse_args(argv)
-        if getattr(args, "interrupts", None) == "raise":  # the command handles KeyboardInterrupt itself
-            restore_default_interrupts()
         handler: Callable[[argparse.Namespace], int] = args.handler
         return _run(handler, args)
     finally:
@@ -321,7 +402,7 @@ def _run(handler: Callable[[argparse.Namespace], int], args: argparse.Namespace)
     except OSError as error:
         where = f" {error.filename!r}" if error.filename else ""
         return _error(f"cannot write output{where}: {error.strerror or error}", EXIT_KERNEL_FAILURE)
-    except KeyboardInterrupt:  # only where a command asked for KeyboardInterrupt (sweep)
+    except KeyboardInterrupt:  # main() called outside the main thread, where no handler could be installed
         return _error("interrupted", 130)
     except Exception as error:
         return _error(f"internal error ({type(error).__name__}): {error}; please report it with the design file",

@@ -89,19 +89,6 @@ def exit_on_signals(program: str = "torus-cad") -> Callable[[], None]:
     return restore
 
 
-def restore_default_interrupts() -> None:
-    """Python's own behaviour again where :func:`exit_on_signals` took over: SIGINT raises
-    KeyboardInterrupt, SIGTERM and SIGHUP end the process."""
-    defaults: dict[int, _Handler] = {signal.SIGINT: signal.default_int_handler, signal.SIGTERM: signal.SIG_DFL,
-                                     signal.SIGHUP: signal.SIG_DFL}
-    try:
-        for signum, default in defaults.items():
-            if signal.getsignal(signum) is _handler:
-                signal.signal(signum, default)
-    except ValueError:
-        pass
-
-
 @contextmanager
 def deferred() -> Iterator[None]:
     """Signals that arrive within the block take effect when it ends (used while publishing a set)."""

@@ -176,11 +176,14 @@ class OutputSet:
         self.staging, self._cleanup = None, None
 
     def final_path(self, kind: str) -> Path:
-        """Where the file of ``kind`` (its suffix: "step", "stl", "png", ...) is published."""
+        """Where the file of ``kind`` is published: ``<name>.<kind>`` ("step", "stl", "3mf", "png"), or
+        the name it was staged under (see :meth:`write_files`)."""
+        if kind in self._staged:
+            return self.out_dir / self._staged[kind].name
         return self.out_dir / f"{self.name}.{kind}"
 
     def stage(self, kind: str) -> Path:
-        """The staging path to write the file of ``kind`` to."""
+        """The staging path to write the file of ``kind`` (``<name>.<kind>``) to."""
         if self.staging is None:
             raise RuntimeError("OutputSet.stage() outside its with-block")
         if kind == "json":
@@ -192,13 +195,31 @@ class OutputSet:
         """Stage the file of ``kind`` with ``writer(path)``; an OSError (no space left, permission denied,
         file size limit) becomes an OutputError naming the final file and the cause."""
         path = self.stage(kind)
-        try:
+        with self._naming_failures(self.final_path(kind)):
             writer(path)
-        except OSError as error:
-            raise OutputError(describe_os_error(error, self.final_path(kind))) from None
         if not path.is_file():
             raise OutputError(f"{str(self.final_path(kind))!r} was not written")
         return path
+
+    def write_files(self, writer: Callable[[Path], Mapping[str, Path]]) -> None:
+        """Stage files of names of their own: ``writer(folder)`` writes them into the staging folder
+        and returns ``{kind: path}`` (e.g. ``<name>_sections.csv``); they join the set."""
+        if self.staging is None:
+            raise RuntimeError("OutputSet.write_files() outside its with-block")
+        with self._naming_failures(self.out_dir):
+            written = writer(self.staging)
+        for kind, path in written.items():
+            if Path(path).parent != self.staging or not Path(path).is_file() or kind == "json":
+                raise OutputError(f"{str(self.out_dir / Path(path).name)!r} was not written into the set")
+            self._staged[kind] = Path(path)
+
+    @contextlib.contextmanager
+    def _naming_failures(self, final: Path) -> Iterator[None]:
+        try:
+            yield
+        except OSError as error:
+            named = Path(error.filename).name if error.filename else None
+            raise OutputError(describe_os_error(error, self.out_dir / named if named else final)) from None
 
     def publish(self, report: Mapping[str, Any]) -> dict[str, Path]:
         """Seal the staged files into ``report`` (as its ``"files"``), write it, publish the set; return
@@ -216,6 +237,14 @@ class OutputSet:
             self._swap_in(staged_report)
         return {**{kind: self.final_path(kind) for kind in self._staged}, "json": self.final_path("json")}
 
+    def _old_members_left(self, old_files: Mapping[str, Any]) -> list[str]:
+        """Files of the old set that the new one does not have (only names of this set: a report
+        cannot make us remove anything else)."""
+        new_names = {path.name for path in self._staged.values()}
+        names = [entry.get("file") for entry in old_files.values() if isinstance(entry, dict)]
+        return [name for name in names if isinstance(name, str) and name not in new_names and "/" not in name
+                and name.startswith((f"{self.name}.", f"{self.name}_")) and name != f"{self.name}.json"]
+
     def _swap_in(self, staged_report: Path) -> None:
         report_path = self.final_path("json")
         old = _read_report(report_path)
@@ -224,11 +253,9 @@ class OutputSet:
             report_path.unlink(missing_ok=True)  # from here until the last rename the set is visibly incomplete
             for kind, path in self._staged.items():
                 os.replace(path, self.final_path(kind))
-            if isinstance(old_files, dict):  # the old set's files the new set does not have
-                for kind, entry in old_files.items():
-                    if kind not in self._staged and isinstance(entry, dict) and entry.get("file") == \
-                            self.final_path(kind).name:
-                        self.final_path(kind).unlink(missing_ok=True)
+            if isinstance(old_files, dict):
+                for stale in self._old_members_left(old_files):
+                    (self.out_dir / stale).unlink(missing_ok=True)
             os.replace(staged_report, report_path)
         except OSError as error:
             raise OutputError(f"publishing the output set {self.name!r} in {str(self.out_dir)!r} failed: "
@@ -300,30 +327,48 @@ def set_names(out_dir: str | Path) -> list[str]:
 # -- the propeller's set --------------------------------------------------------------------------
 
 def write_output_set(propeller: Propeller, out_dir: str | Path, density_g_cm3: float, stl: bool = True,
-                     extra_files: Mapping[str, FileWriter] | None = None) -> dict[str, Path]:
-    """Write ``<name>.step``, ``<name>.stl`` (unless ``stl`` is False), any ``extra_files``
-    (``{suffix: writer(path)}``, e.g. a preview picture) and the sealed ``<name>.json`` report as one
-    output set (see the module doc); return the final paths by kind, the report last.
+                     sections_table: bool = False, extra_files: Mapping[str, FileWriter] | None = None
+                     ) -> dict[str, Path]:
+    """Write the files of ``export.formats`` (STEP, STL unless ``stl`` is False, 3MF), the
+    blade-element table (``<name>_sections.csv`` and ``.png``, if ``sections_table``), any
+    ``extra_files`` (``{suffix: writer(path)}``, e.g. a preview picture) and the sealed
+    ``<name>.json`` report as one output set (see the module doc); return the final paths by kind,
+    the report last.
 
-    The STL's triangle count is checked against its budget before anything is written.
+    A mesh (STL, 3MF) over its triangle budget is refused before anything is written.
     """
+    from torus_cad import __version__
     from torus_cad.budgets import check_stl_budget
+    from torus_cad.design_targets import write_sections_table
     from torus_cad.kernel.export import write_step, write_stl
+    from torus_cad.kernel.export_3mf import write_3mf
+    from torus_cad.parameters.design import ExportFormat
     from torus_cad.propeller import build_report
     from torus_cad.stages import Stage, StageTimer
 
     params = propeller.parameters
-    if stl:
-        check_stl_budget(params, propeller.surface, propeller.section_curves.poles.shape[:2])
     export = params.export
+    formats = export.formats
+    write_stl_file = stl and ExportFormat.STL in formats
+    deflections = (export.stl_linear_deflection, export.stl_angular_deflection)
+    if write_stl_file or ExportFormat.THREE_MF in formats:
+        check_stl_budget(params, propeller.surface, propeller.section_curves.poles.shape[:2])
     timer = StageTimer()
     with OutputSet(out_dir, params.name) as output:
-        with timer.stage(Stage.STEP_WRITE):
-            output.write("step", lambda path: write_step(propeller.solid, path, params.name, export.step_schema))
-        if stl:
+        if ExportFormat.STEP in formats:
+            with timer.stage(Stage.STEP_WRITE):
+                output.write("step", lambda path: write_step(propeller.solid, path, params.name, export.step_schema,
+                                                             program=f"torus_cad {__version__}"))
+        if write_stl_file:
             with timer.stage(Stage.STL_WRITE):
-                output.write("stl", lambda path: write_stl(propeller.solid, path, export.stl_linear_deflection,
-                                                           export.stl_angular_deflection))
+                output.write("stl", lambda path: write_stl(propeller.solid, path, *deflections))
+        if ExportFormat.THREE_MF in formats:
+            with timer.stage(Stage.THREE_MF_WRITE):
+                output.write("3mf", lambda path: write_3mf(propeller.solid, path, params.name, *deflections,
+                                                           version=__version__))
+        if sections_table:
+            with timer.stage(Stage.SECTIONS_TABLE):
+                output.write_files(lambda folder: write_sections_table(propeller.surface, params, folder))
         for kind, writer in (extra_files or {}).items():
             output.write(kind, writer)
         propeller.stage_seconds.update(timer.seconds)

@@ -1,20 +1,25 @@
 """Off-screen preview picture of a propeller: an isometric view and a view along the spin axis.
 
-Rendered with matplotlib's Agg backend (no window, no display, no OpenGL) from OpenCascade's
-tessellation of the fused solid. Each face of the fused solid is coloured by the part it came
-from (the hub grey, every blade its own colour) and shaded by its facet normals; back faces are
-culled per view and the rest painted far to near::
+Rendered with VTK (installed with cadquery) off-screen: OpenGL with a depth buffer, smooth
+vertex normals (vtkPolyDataNormals, split at sharp edges such as the trailing edge and the hub's
+rims), a light kit and FXAA, from OpenCascade's tessellation of the fused solid. Each face is
+coloured by the part it came from, as the fuse reports it (``Propeller.face_parts``): the hub
+grey, every blade its own colour. No window or display is needed: without an X display VTK
+draws through EGL (Mesa's software rasteriser on a machine without a GPU)::
 
     from torus_cad.propeller import build_propeller
     from torus_cad.preview import write_preview
     write_preview(build_propeller(), "propeller.png", size=(1200, 600))
 
-matplotlib is imported only when a picture is made.
+VTK is imported only when a picture is made.
 """
 
 from __future__ import annotations
 
+import math
+import os
 import re
+import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -25,13 +30,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from torus_cad.colors import HUB_COLOR, blade_color
-from torus_cad.errors import ParameterError
-from torus_cad.kernel.checks import distances_to_shape, precise_volume
+from torus_cad.errors import ParameterError, TorusCadError
+from torus_cad.kernel.checks import distances_to_shape, mass_properties
 from torus_cad.kernel.export import atomic_path
+from torus_cad.kernel.fuse import HUB_PART
 from torus_cad.parameters import PropellerParameters
 
 if TYPE_CHECKING:  # pragma: no cover
-    from matplotlib.figure import Figure
+    from vtkmodules.vtkRenderingCore import vtkRenderWindow
 
 #: Default picture size in pixels (width, height): two square views side by side.
 DEFAULT_SIZE: tuple[int, int] = (1200, 600)
@@ -39,14 +45,14 @@ DEFAULT_SIZE: tuple[int, int] = (1200, 600)
 #: Smallest and largest accepted picture edge, pixels.
 MIN_EDGE, MAX_EDGE = 64, 8000
 
-#: Isometric view: elevation and azimuth of the camera, degrees (the classic (1, 1, 1) direction).
-ISOMETRIC_VIEW: tuple[float, float] = (35.264, 45.0)
+#: The classic isometric elevation (the (1, 1, 1) direction), degrees.
+ISOMETRIC_ELEVATION_DEG = math.degrees(math.atan(1.0 / math.sqrt(2.0)))
 
-#: Along the spin axis: looking down the z axis from +z, x to the right, y up.
-AXIAL_VIEW: tuple[float, float] = (90.0, -90.0)
+#: Elevations (degrees) the oblique view may take: the isometric one up to 55°.
+VIEW_ELEVATIONS_DEG = (ISOMETRIC_ELEVATION_DEG, 40.0, 45.0, 50.0, 55.0)
 
-_BACKGROUND = "white"
-_HUB_PART = -1
+BACKGROUND_RGB = (1.0, 1.0, 1.0)
+_TEXT_RGB = (0.2, 0.2, 0.2)
 
 
 class _HasParts(Protocol):
@@ -54,41 +60,38 @@ class _HasParts(Protocol):
     solid: cq.Solid
     hub: cq.Solid
     blades: list[cq.Solid]
+    face_parts: tuple[int, ...]
 
 
 @dataclass(frozen=True)
-class PreviewMesh:
-    """A triangle mesh of the fused solid with each triangle's part.
+class SceneMesh:
+    """A triangle mesh with one colour per triangle.
 
     Attributes:
         vertices: ``(k, 3)`` points, mm.
         triangles: ``(m, 3)`` vertex indices, counter-clockwise seen from outside.
-        parts: ``(m,)`` part of each triangle: -1 the hub, i >= 0 blade i.
+        colors: ``(m, 3)`` RGB in 0..1.
+        parts: ``(m,)`` part of each triangle (HUB_PART or a blade index; any int for other scenes).
     """
 
     vertices: NDArray[np.float64]
     triangles: NDArray[np.int64]
+    colors: NDArray[np.float64]
     parts: NDArray[np.int64]
 
-    def normals(self) -> NDArray[np.float64]:
-        """Unit outward normal of each triangle, ``(m, 3)``."""
-        corners = self.vertices[self.triangles]
-        normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-        length = np.linalg.norm(normal, axis=1, keepdims=True)
-        return normal / np.where(length > 0.0, length, 1.0)
 
-    def vertex_normals(self) -> NDArray[np.float64]:
-        """Unit normal at each vertex, ``(k, 3)``: the area-weighted mean of its triangles' normals.
+@dataclass(frozen=True)
+class View:
+    """An orthographic view: ``toward_camera`` unit vector from the scene to the camera, ``up``
+    the screen's up direction (any vector not along it), ``label`` text under the view."""
 
-        Vertices are not shared between B-rep faces, so sharp edges (the hub's rims) stay sharp.
-        """
-        corners = self.vertices[self.triangles]
-        weighted = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])  # 2 x area x normal
-        sums = np.zeros_like(self.vertices)
-        for corner in range(3):
-            np.add.at(sums, self.triangles[:, corner], weighted)
-        length = np.linalg.norm(sums, axis=1, keepdims=True)
-        return sums / np.where(length > 0.0, length, 1.0)
+    toward_camera: tuple[float, float, float]
+    up: tuple[float, float, float]
+    label: str
+
+
+#: Looking down the spin axis from +z: x to the right, y up.
+AXIAL_VIEW = View((0.0, 0.0, 1.0), (0.0, 1.0, 0.0), "along the spin axis (+z toward you)")
 
 
 def parse_size(text: str, option: str = "--size") -> tuple[int, int]:
@@ -107,173 +110,163 @@ def _checked_size(size: Sequence[int], what: str = "preview size") -> tuple[int,
     return width, height
 
 
-def preview_mesh(solid: cq.Shape, hub: cq.Shape, blades: Sequence[cq.Shape],
-                 tolerance: float | None = None, angular_tolerance: float = 0.2,
-                 max_edge: float | None = None) -> PreviewMesh:
-    """Tessellate ``solid`` (a copy: the caller's triangulation is left alone) and tag each face
-    with the part (hub or blade i) it lies on, measured by OpenCascade's point-to-face distance.
+# -- the scene ------------------------------------------------------------------------------------
 
-    ``tolerance`` is the chordal deviation in mm (default: 1/3000 of the bounding-box diagonal).
-    Triangles are split until no edge is longer than ``max_edge`` mm (default: 1/50 of the
-    diagonal): a painter's algorithm sorts small triangles far better than the hub's long strips.
+def propeller_mesh(solid: cq.Shape, face_parts: Sequence[int], blades: int, tolerance: float,
+                   angular_tolerance: float = 0.3) -> SceneMesh:
+    """OpenCascade's tessellation of ``solid`` (of a copy: the caller's triangulation is left
+    alone), each face coloured by its part: ``face_parts[k]`` for ``solid.Faces()[k]``.
+
+    ``tolerance`` is the chordal deviation in mm, ``angular_tolerance`` in radians.
     """
-    shape = solid.copy()
-    diagonal = shape.BoundingBox().DiagonalLength
-    if tolerance is None:
-        tolerance = max(diagonal / 3000.0, 1e-3)
-    if max_edge is None:
-        max_edge = diagonal / 50.0
-    parts: list[cq.Shape] = [hub, *blades]
-    all_vertices: list[NDArray[np.float64]] = []
-    all_triangles: list[NDArray[np.int64]] = []
-    all_parts: list[NDArray[np.int64]] = []
+    from OCP.BRep import BRep_Tool
+    from OCP.BRepMesh import BRepMesh_IncrementalMesh
+    from OCP.TopAbs import TopAbs_REVERSED
+    from OCP.TopLoc import TopLoc_Location
+
+    faces = solid.Faces()
+    if len(face_parts) != len(faces):
+        raise ValueError(f"face_parts has {len(face_parts)} entries for a solid of {len(faces)} faces")
+    shape = solid.copy()  # same faces in the same order, new triangulation
+    BRepMesh_IncrementalMesh(shape.wrapped, tolerance, False, angular_tolerance, True)
+    palette = np.array([HUB_COLOR] + [blade_color(index, blades) for index in range(blades)])
+    vertices, triangles, parts = [], [], []
     offset = 0
-    shape.mesh(tolerance, angular_tolerance)
-    boxes = [_box(part) for part in parts]
-    for face in shape.Faces():
-        points, triangles = face.tessellate(tolerance, angular_tolerance)  # reuses the solid's mesh
-        if not triangles:
+    for face, part in zip(shape.Faces(), face_parts, strict=True):
+        location = TopLoc_Location()
+        mesh = BRep_Tool.Triangulation_s(face.wrapped, location)
+        if mesh is None or mesh.NbTriangles() == 0:
             continue
-        vertices = np.array([point.toTuple() for point in points], dtype=float)
-        indices = np.asarray(triangles, dtype=np.int64)
-        part = _face_part(vertices, indices, parts, boxes, 10.0 * tolerance)
-        vertices, indices = split_long_edges(vertices, indices, max_edge)
-        all_vertices.append(vertices)
-        all_triangles.append(indices + offset)
-        all_parts.append(np.full(len(indices), part, dtype=np.int64))
-        offset += len(vertices)
-    if not all_triangles:
+        transform = location.Transformation()
+        points = np.array([mesh.Node(i).Transformed(transform).Coord() for i in range(1, mesh.NbNodes() + 1)])
+        corners = np.array([mesh.Triangle(i).Get() for i in range(1, mesh.NbTriangles() + 1)], dtype=np.int64) - 1
+        if face.wrapped.Orientation() == TopAbs_REVERSED:
+            corners = corners[:, ::-1]  # outward normals for a reversed face
+        vertices.append(points)
+        triangles.append(corners + offset)
+        parts.append(np.full(len(corners), part, dtype=np.int64))
+        offset += len(points)
+    if not triangles:
         raise ValueError("the solid has no triangulated faces to draw")
-    return PreviewMesh(np.concatenate(all_vertices), np.concatenate(all_triangles), np.concatenate(all_parts))
+    all_parts = np.concatenate(parts)
+    return SceneMesh(np.concatenate(vertices), np.concatenate(triangles),
+                     palette[np.where(all_parts == HUB_PART, 0, all_parts + 1)], all_parts)
 
 
-def split_long_edges(vertices: NDArray[np.float64], triangles: NDArray[np.int64],
-                     max_edge: float) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
-    """Halve every triangle's longest edge until none is longer than ``max_edge``.
+def face_parts_by_distance(solid: cq.Shape, hub: cq.Shape, blades: Sequence[cq.Shape]) -> tuple[int, ...]:
+    """The part (HUB_PART or blade i) of each face of ``solid``, as ``solid.Faces()`` orders them,
+    found by geometry: the part whose boundary passes nearest a few points of the face.
 
-    Orientation is kept, and an edge split from either side (in any pass) gets one shared midpoint.
+    Only for solids whose build does not report the parts (the root fillet's); the fuse does
+    (:attr:`torus_cad.kernel.fuse.Fused.face_parts`). A fillet face, between a blade and the hub,
+    goes to whichever it lies nearer.
     """
-    if max_edge <= 0.0:
-        raise ValueError(f"max_edge must be positive, got {max_edge}")
-    vertices, triangles = np.asarray(vertices, dtype=float), np.asarray(triangles, dtype=np.int64)
-    midpoint_of: dict[tuple[int, int], int] = {}  # edge (low, high) -> index of its midpoint
-    new_points: list[NDArray[np.float64]] = []
-    while len(triangles):
-        corners = vertices[triangles]
-        lengths = np.linalg.norm(corners - np.roll(corners, -1, axis=1), axis=2)  # edges 01, 12, 20
-        longest = lengths.argmax(axis=1)
-        split = lengths[np.arange(len(triangles)), longest] > max_edge
-        if not split.any():
-            break
-        chosen, which = triangles[split], longest[split]
-        rows = np.arange(len(chosen))
-        a, b, c = chosen[rows, which], chosen[rows, (which + 1) % 3], chosen[rows, (which + 2) % 3]
-        middle = np.empty(len(chosen), dtype=np.int64)
-        new_points.clear()
-        for row, edge in enumerate(zip(np.minimum(a, b).tolist(), np.maximum(a, b).tolist())):
-            index = midpoint_of.get(edge)
-            if index is None:
-                index = midpoint_of[edge] = len(vertices) + len(new_points)
-                new_points.append((vertices[edge[0]] + vertices[edge[1]]) / 2.0)
-            middle[row] = index
-        if new_points:
-            vertices = np.concatenate([vertices, np.array(new_points)])
-        triangles = np.concatenate([triangles[~split], np.column_stack([a, middle, c]),
-                                    np.column_stack([middle, b, c])])
-    return vertices, triangles
+    parts: list[cq.Shape] = [hub, *blades]
+    boxes = [shape.BoundingBox() for shape in parts]
+    found = []
+    for face in solid.Faces():
+        u_min, u_max, v_min, v_max = face._uvBounds()
+        samples = np.array([face.positionAt(u_min + a * (u_max - u_min), v_min + b * (v_max - v_min)).toTuple()
+                            for a, b in ((0.5, 0.5), (0.25, 0.5), (0.75, 0.5))])
+        slack = 1e-3 * boxes[0].DiagonalLength
+        candidates = [index for index, box in enumerate(boxes)
+                      if np.all(samples >= np.array([box.xmin, box.ymin, box.zmin]) - slack)
+                      and np.all(samples <= np.array([box.xmax, box.ymax, box.zmax]) + slack)] or list(range(len(parts)))
+        distances = [float(np.median(distances_to_shape(parts[index], samples))) if len(candidates) > 1 else 0.0
+                     for index in candidates]
+        found.append(candidates[int(np.argmin(distances))] - 1)  # parts[0] is the hub
+    return tuple(found)
 
 
-def _face_part(vertices: NDArray[np.float64], triangles: NDArray[np.int64], parts: Sequence[cq.Shape],
-               boxes: Sequence[tuple[NDArray[np.float64], NDArray[np.float64]]], slack: float) -> int:
-    """-1 for the hub, i for blade i: the part whose boundary passes nearest a few of the face's facets.
+def blade_silhouettes(mesh: SceneMesh, directions: NDArray[np.float64], most_triangles: int = 3000
+                      ) -> NDArray[np.float64]:
+    """``(blades, d)``: each blade's projected area (mm^2) seen along each of ``(d, 3)`` unit
+    ``directions``, as half the sum of its triangles' |projected area| (exact for a convex body,
+    close for a blade). At most ``most_triangles`` evenly picked triangles per blade are summed,
+    scaled up to the blade's whole area."""
+    corners = mesh.vertices[mesh.triangles]
+    weighted_normals = 0.5 * np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    silhouettes = []
+    for part in sorted(set(mesh.parts.tolist()) - {HUB_PART}):
+        normals = weighted_normals[mesh.parts == part]
+        picked = normals[np.linspace(0, len(normals) - 1, min(most_triangles, len(normals))).astype(int)]
+        scale = np.linalg.norm(normals, axis=1).sum() / np.linalg.norm(picked, axis=1).sum()
+        silhouettes.append(0.5 * scale * np.abs(picked @ directions.T).sum(axis=0))
+    return np.array(silhouettes).reshape(-1, len(directions))
 
-    Parts whose bounding box (grown by ``slack`` mm) does not hold the samples are ruled out first;
-    OpenCascade measures distances only when more than one part is left.
+
+def oblique_view(mesh: SceneMesh) -> View:
+    """A view from above that shows every blade: none edge-on.
+
+    A blade of a toroidal propeller is a loop, nearly flat; seen along its plane it collapses
+    into a thin sliver that reads as a broken fragment (the fixed isometric corner did that to
+    one blade of the default). Each blade's visible size from a direction d is its silhouette
+    area (:func:`blade_silhouettes`); the view takes the d, over azimuths in 2° steps and the
+    elevations VIEW_ELEVATIONS_DEG (isometric 35.26° up to 55°), that maximises the smallest
+    blade's silhouette as a fraction of the largest silhouette any blade shows from any of
+    these directions. The blades are copies of one another, so this is the direction where the
+    worst-placed blade looks most like itself. Ties go to the lower elevation.
     """
-    centroids = vertices[triangles].mean(axis=1)
-    samples = centroids[np.linspace(0, len(centroids) - 1, min(5, len(centroids))).astype(int)]
-    candidates = [index for index, (low, high) in enumerate(boxes)
-                  if np.all(samples >= low - slack) and np.all(samples <= high + slack)] or list(range(len(parts)))
-    if len(candidates) == 1:
-        return candidates[0] - 1  # parts[0] is the hub
-    medians = [float(np.median(distances_to_shape(parts[index], samples))) for index in candidates]
-    return candidates[int(np.argmin(medians))] - 1
+    azimuths = np.radians(np.arange(0.0, 360.0, 2.0))
+    elevations = np.radians(np.array(VIEW_ELEVATIONS_DEG))
+    e, a = np.meshgrid(elevations, azimuths, indexing="ij")
+    directions = np.column_stack([(np.cos(e) * np.cos(a)).ravel(), (np.cos(e) * np.sin(a)).ravel(),
+                                  np.sin(e).ravel()])
+    silhouettes = blade_silhouettes(mesh, directions)
+    if silhouettes.size:
+        worst = (silhouettes / silhouettes.max()).min(axis=0)
+        best = int(np.argmax(worst > worst.max() - 1e-3))  # first within 0.1 % of the best: lowest elevation
+    else:
+        best = int(np.argmin(np.abs(e.ravel() - math.radians(ISOMETRIC_ELEVATION_DEG))))
+    elevation, azimuth = math.degrees(e.ravel()[best]), math.degrees(a.ravel()[best])
+    x, y, z = (float(value) for value in directions[best])
+    return View((x, y, z), (0.0, 0.0, 1.0), f"from above: elevation {elevation:.0f}°, azimuth {azimuth:.0f}°")
 
 
-def _box(shape: cq.Shape) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    box = shape.BoundingBox()
-    return np.array([box.xmin, box.ymin, box.zmin]), np.array([box.xmax, box.ymax, box.zmax])
+# -- rendering ---------------------------------------------------------------------------------------
 
+def render_views(mesh: SceneMesh, views: Sequence[View], size: Sequence[int], title: str = "",
+                 smooth: bool = True) -> NDArray[np.uint8]:
+    """``mesh`` seen in each of ``views``, side by side, under ``title``: an ``(height, width, 3)``
+    RGB uint8 array of exactly ``size`` = (width, height) pixels."""
+    from vtkmodules.vtkRenderingCore import vtkRenderer
 
-def _view_vectors(elevation: float, azimuth: float) -> tuple[NDArray[np.float64], ...]:
-    """Unit vectors toward the camera, to the screen's right and up, for matplotlib's view angles."""
-    elev, azim = np.radians(elevation), np.radians(azimuth)
-    eye = np.array([np.cos(elev) * np.cos(azim), np.cos(elev) * np.sin(azim), np.sin(elev)])
-    right = np.array([-np.sin(azim), np.cos(azim), 0.0])
-    up = np.cross(eye, right)
-    return eye, right, up
-
-
-def _shaded_colors(mesh: PreviewMesh, vertex_normals: NDArray[np.float64], keep: NDArray[np.bool_],
-                   eye: NDArray[np.float64], right: NDArray[np.float64], up: NDArray[np.float64],
-                   blades: int) -> NDArray[np.float64]:
-    """RGBA per kept triangle: ambient + Lambert + a little Blinn-Phong (a key light above-left of
-    the camera, a weak fill from the right), evaluated at the smooth vertex normals and averaged
-    over each triangle's corners, so that the facets do not show."""
-    light = eye + 0.55 * up - 0.35 * right
-    light /= np.linalg.norm(light)
-    fill = eye - 0.3 * up + 0.5 * right
-    fill /= np.linalg.norm(fill)
-    halfway = (light + eye) / np.linalg.norm(light + eye)
-    n = vertex_normals[mesh.triangles[keep]]  # (m, 3 corners, 3)
-    diffuse = np.clip(n @ light, 0.0, 1.0).mean(axis=1)
-    fill_diffuse = np.clip(n @ fill, 0.0, 1.0).mean(axis=1)
-    specular = (np.clip(n @ halfway, 0.0, 1.0) ** 40).mean(axis=1)
-    palette = np.array([HUB_COLOR] + [blade_color(i, blades) for i in range(blades)])
-    base = palette[mesh.parts[keep] + 1]
-    intensity = (0.28 + 0.62 * diffuse + 0.18 * fill_diffuse)[:, None]
-    rgb = np.clip(base * intensity + 0.35 * specular[:, None], 0.0, 1.0)
-    return np.column_stack([rgb, np.ones(len(rgb))])
-
-
-def _draw_view(figure: Figure, rect: Sequence[float], mesh: PreviewMesh, normals: NDArray[np.float64],
-               vertex_normals: NDArray[np.float64], view: tuple[float, float], label: str, blades: int) -> None:
-    """One orthographic view in ``rect`` (figure fractions): cull back faces, paint far to near."""
-    from matplotlib.collections import PolyCollection
-
-    eye, right, up = _view_vectors(*view)
-    keep = normals @ eye > -1e-9  # back faces of a closed solid are hidden: cull them
-    colors = _shaded_colors(mesh, vertex_normals, keep, eye, right, up, blades)
-    screen = np.column_stack([mesh.vertices @ right, mesh.vertices @ up])  # orthographic projection, mm
-    triangles = mesh.triangles[keep]
-    order = np.argsort((mesh.vertices @ eye)[triangles].mean(axis=1), kind="stable")  # far first
-    axes: Any = figure.add_axes(rect)
-    # Edges stroked in the face colour, ~0.8 px wide, hide the antialiasing seams between facets.
-    axes.add_collection(PolyCollection(screen[triangles[order]], facecolors=colors[order],
-                                       edgecolors=colors[order], linewidths=0.8 * 72.0 / figure.dpi,
-                                       antialiaseds=True))
-    # Limits with the axes' own width : height ratio, so one mm is as long across as up.
-    low, high = screen.min(axis=0), screen.max(axis=0)
-    margin = 0.06 * float((high - low).max())
-    low, high = low - margin, high + margin
-    low[1] -= margin  # a little more room below, for the label
-    box_ratio = rect[2] * figure.bbox.width / (rect[3] * figure.bbox.height)
-    span_x, span_y = high - low
-    span_x, span_y = max(span_x, span_y * box_ratio), max(span_y, span_x / box_ratio)
-    centre = (low + high) / 2.0
-    axes.set_xlim(centre[0] - span_x / 2.0, centre[0] + span_x / 2.0)
-    axes.set_ylim(centre[1] - span_y / 2.0, centre[1] + span_y / 2.0)
-    axes.set_axis_off()
-    axes.text(0.5, 0.01, label, transform=axes.transAxes, ha="center", va="bottom", fontsize=10, color="0.35")
+    width, height = _checked_size(size)
+    window = _offscreen_window(width, height)
+    title_px = _title_height_px(height) if title else 0
+    view_top = 1.0 - title_px / height
+    actor = _mesh_actor(mesh, smooth)
+    for column, view in enumerate(views):
+        renderer = vtkRenderer()
+        renderer.SetViewport(column / len(views), 0.0, (column + 1) / len(views), view_top)
+        renderer.SetBackground(*BACKGROUND_RGB)
+        renderer.AddActor(actor)
+        renderer.UseFXAAOn()
+        _light(renderer)
+        _place_camera(renderer, mesh.vertices, view, (width / len(views)) / (height * view_top))
+        if view.label:
+            renderer.AddViewProp(_text(view.label, _label_size_px(height), (0.5, 0.015), vertical="bottom"))
+        window.AddRenderer(renderer)
+    if title:
+        overlay = vtkRenderer()
+        overlay.SetViewport(0.0, view_top, 1.0, 1.0)
+        overlay.SetBackground(*BACKGROUND_RGB)
+        overlay.AddViewProp(_text(title, round(title_px * 0.5), (0.5, 0.45), vertical="center"))
+        window.AddRenderer(overlay)
+    window.Render()
+    image = _pixels(window, width, height)
+    window.Finalize()
+    return image
 
 
 def render_preview(propeller: _HasParts, size: Sequence[int] = DEFAULT_SIZE, title: str | None = None,
                    progress: Callable[[str], None] | None = None) -> NDArray[np.uint8]:
-    """The preview picture as an ``(height, width, 4)`` RGBA uint8 array of exactly ``size`` pixels.
+    """The preview picture as an ``(height, width, 3)`` RGB uint8 array of exactly ``size`` pixels.
 
     Args:
-        propeller: a built propeller (``torus_cad.propeller.Propeller`` or
-            ``torus_cad.propeller.Propeller``): its ``solid``, ``hub`` and ``blades``.
+        propeller: a built :class:`torus_cad.propeller.Propeller`: its ``solid``, ``face_parts``
+            (where the build does not know them, after a root fillet, each face gets the part
+            nearest to it: :func:`face_parts_by_distance`), ``hub`` and ``blades``.
         size: (width, height) in pixels, each 64..8000.
         title: text above the views (default: the name, blade count and volume in mm^3).
         progress: optional callback, called with ``"tessellate"`` and ``"render"``.
@@ -282,45 +275,186 @@ def render_preview(propeller: _HasParts, size: Sequence[int] = DEFAULT_SIZE, tit
     if progress:
         progress("tessellate")
     blades = len(propeller.blades)
-    # Tessellate about as finely as the picture can show: the chordal deviation is ~1/5 px of a view.
+    # About as fine as the picture can show: the chordal deviation is ~1/3 px of a view (the
+    # smooth normals hide the facets; only the outline shows them).
     diagonal = propeller.solid.BoundingBox().DiagonalLength
-    mesh = preview_mesh(propeller.solid, propeller.hub, propeller.blades,
-                        tolerance=max(diagonal / (2.5 * min(width / 2.0, height) * 2.0), 1e-3))
-    normals, vertex_normals = mesh.normals(), mesh.vertex_normals()
+    view_px = min(width / 2.0, height)
+    parts = propeller.face_parts or face_parts_by_distance(propeller.solid, propeller.hub, propeller.blades)
+    mesh = propeller_mesh(propeller.solid, parts, blades, max(diagonal / (3.0 * view_px), 1e-3))
     if title is None:
-        volume = precise_volume(propeller.solid, 1e-5)  # shown to 4-5 digits: a coarser integral will do
+        volume = mass_properties(propeller.solid, 1.0).volume_mm3
         title = (f"{propeller.parameters.name}: {blades} blade{'s' if blades != 1 else ''}, "
                  f"volume {volume:,.0f} mm³")
     if progress:
         progress("render")
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    dpi = max(height / 6.0, 20.0)  # text scales with the picture; 600 px high -> 100 dpi
-    # A hair over the exact size so that Agg's int() truncation cannot lose a pixel.
-    figure = Figure(figsize=((width + 1e-3) / dpi, (height + 1e-3) / dpi), dpi=dpi, facecolor=_BACKGROUND)
-    canvas = FigureCanvasAgg(figure)
-    top = 1.0 - min(0.12, 40.0 / dpi / (height / dpi))  # room for the title
-    for column, (view, label) in enumerate(((ISOMETRIC_VIEW, "isometric"),
-                                            (AXIAL_VIEW, "along the spin axis (+z toward you)"))):
-        _draw_view(figure, (0.5 * column, 0.0, 0.5, top), mesh, normals, vertex_normals, view, label, blades)
-    figure.suptitle(title, y=1.0 - 0.02, va="top", fontsize=13, color="0.15")
-    canvas.draw()
-    image = np.asarray(canvas.buffer_rgba())[:height, :width].copy()
-    if image.shape[:2] != (height, width):  # pragma: no cover - Agg gave fewer pixels than asked
-        padded = np.full((height, width, 4), 255, dtype=np.uint8)
-        padded[: image.shape[0], : image.shape[1]] = image
-        image = padded
-    return image
+    return render_views(mesh, (oblique_view(mesh), AXIAL_VIEW), (width, height), title)
 
 
 def write_preview(propeller: _HasParts, path: str | Path, size: Sequence[int] = DEFAULT_SIZE,
                   title: str | None = None, progress: Callable[[str], None] | None = None) -> Path:
     """Render the preview (see :func:`render_preview`) and write it as a PNG, atomically; return the path."""
-    from matplotlib.image import imsave
+    return write_png(render_preview(propeller, size, title, progress), path)
 
-    image = render_preview(propeller, size, title, progress)
+
+def write_png(image: NDArray[np.uint8], path: str | Path) -> Path:
+    """Write an ``(height, width, 3 or 4)`` uint8 picture as a PNG (VTK's writer), atomically; return the path."""
+    from vtkmodules.util.numpy_support import numpy_to_vtk
+    from vtkmodules.vtkCommonDataModel import vtkImageData
+    from vtkmodules.vtkIOImage import vtkPNGWriter
+
+    height, width, channels = image.shape
+    data = vtkImageData()
+    data.SetDimensions(width, height, 1)
+    scalars = numpy_to_vtk(np.ascontiguousarray(image[::-1]).reshape(-1, channels), deep=True)  # type: ignore[no-untyped-call]
+    data.GetPointData().SetScalars(scalars)
     path = Path(path)
     with atomic_path(path) as temp:
-        imsave(temp, image, format="png")
+        writer = vtkPNGWriter()
+        writer.SetFileName(str(temp))
+        writer.SetInputData(data)
+        writer.Write()
+        if writer.GetErrorCode():
+            raise TorusCadError(f"could not write the picture {path}")
     return path
+
+
+def _offscreen_window(width: int, height: int) -> vtkRenderWindow:
+    """An off-screen render window: EGL when there is no X display (no window system needed),
+    else VTK's default for this platform."""
+    import vtkmodules.vtkRenderingFreeType
+    import vtkmodules.vtkRenderingOpenGL2  # noqa: F401 - the OpenGL implementations
+    from vtkmodules.vtkRenderingCore import vtkRenderWindow
+
+    window: vtkRenderWindow
+    if sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
+        from vtkmodules.vtkRenderingOpenGL2 import vtkEGLRenderWindow
+        window = vtkEGLRenderWindow()
+    else:
+        window = vtkRenderWindow()
+    window.SetOffScreenRendering(1)
+    window.SetSize(width, height)
+    window.SetMultiSamples(0)  # FXAA instead: multisampled off-screen buffers are not everywhere
+    return window
+
+
+def _pixels(window: vtkRenderWindow, width: int, height: int) -> NDArray[np.uint8]:
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+    from vtkmodules.vtkRenderingCore import vtkWindowToImageFilter
+
+    grab = vtkWindowToImageFilter()
+    grab.SetInput(window)
+    grab.SetInputBufferTypeToRGB()
+    grab.ReadFrontBufferOff()
+    grab.Update()
+    output = grab.GetOutput()
+    got_width, got_height, _ = output.GetDimensions()
+    pixels = vtk_to_numpy(output.GetPointData().GetScalars()).reshape(got_height, got_width, -1)[::-1]  # type: ignore[no-untyped-call]
+    corner = pixels[0, 0, :3].astype(float) / 255.0
+    if (got_width, got_height) != (width, height) or np.abs(corner - BACKGROUND_RGB).max() > 0.02:
+        raise TorusCadError("off-screen OpenGL did not render the preview (no EGL or OSMesa? on Debian: "
+                            "apt-get install libegl1 libegl-mesa0 libgl1-mesa-dri)")
+    return np.ascontiguousarray(pixels[..., :3], dtype=np.uint8)
+
+
+def _mesh_actor(mesh: SceneMesh, smooth: bool) -> Any:
+    """A VTK actor of ``mesh``: per-triangle colours, smooth normals split at edges sharper than 35°."""
+    from vtkmodules.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray
+    from vtkmodules.vtkCommonCore import vtkPoints
+    from vtkmodules.vtkCommonDataModel import vtkCellArray, vtkPolyData
+    from vtkmodules.vtkFiltersCore import vtkPolyDataNormals
+    from vtkmodules.vtkRenderingCore import vtkActor, vtkPolyDataMapper
+
+    points = vtkPoints()
+    points.SetData(numpy_to_vtk(np.ascontiguousarray(mesh.vertices, dtype=float), deep=True))  # type: ignore[no-untyped-call]
+    cells = vtkCellArray()
+    offsets = np.arange(0, 3 * len(mesh.triangles) + 1, 3, dtype=np.int64)
+    cells.SetData(numpy_to_vtkIdTypeArray(offsets, deep=True),  # type: ignore[no-untyped-call]
+                  numpy_to_vtkIdTypeArray(np.ascontiguousarray(mesh.triangles.ravel(), dtype=np.int64), deep=True))  # type: ignore[no-untyped-call]
+    polydata = vtkPolyData()
+    polydata.SetPoints(points)
+    polydata.SetPolys(cells)
+    colors = numpy_to_vtk(np.ascontiguousarray(np.round(mesh.colors * 255.0), dtype=np.uint8), deep=True)  # type: ignore[no-untyped-call]
+    colors.SetName("colors")
+    polydata.GetCellData().SetScalars(colors)
+    mapper = vtkPolyDataMapper()
+    if smooth:
+        normals = vtkPolyDataNormals()
+        normals.SetInputData(polydata)
+        normals.SetFeatureAngle(35.0)
+        normals.SplittingOn()
+        normals.ConsistencyOff()  # the tessellation is already oriented outward
+        normals.AutoOrientNormalsOff()
+        normals.ComputeCellNormalsOff()
+        mapper.SetInputConnection(normals.GetOutputPort())
+    else:
+        mapper.SetInputData(polydata)
+    mapper.SetScalarModeToUseCellData()
+    mapper.SetColorModeToDirectScalars()
+    actor = vtkActor()
+    actor.SetMapper(mapper)
+    surface = actor.GetProperty()
+    surface.SetInterpolationToPhong()
+    surface.SetAmbient(0.15)
+    surface.SetDiffuse(0.82)
+    surface.SetSpecular(0.25)
+    surface.SetSpecularPower(40.0)
+    return actor
+
+
+def _light(renderer: Any) -> None:
+    """VTK's light kit: a key light above and left of the camera, a fill, back and head light."""
+    from vtkmodules.vtkRenderingCore import vtkLightKit
+
+    kit = vtkLightKit()
+    kit.SetKeyLightIntensity(0.85)
+    kit.SetKeyToFillRatio(1.6)
+    kit.SetKeyToHeadRatio(1.7)
+    kit.AddLightsToRenderer(renderer)
+
+
+def _place_camera(renderer: Any, vertices: NDArray[np.float64], view: View, aspect: float) -> None:
+    """Orthographic camera along ``view``, framing the projected ``vertices`` with a margin."""
+    toward = np.asarray(view.toward_camera, dtype=float)
+    toward /= np.linalg.norm(toward)
+    up = np.asarray(view.up, dtype=float)
+    up = up - (up @ toward) * toward
+    up /= np.linalg.norm(up)
+    right = np.cross(up, toward)
+    across, along = vertices @ right, vertices @ up
+    centre_screen = np.array([(across.min() + across.max()) / 2.0, (along.min() + along.max()) / 2.0])
+    half = max((across.max() - across.min()) / 2.0 / aspect, (along.max() - along.min()) / 2.0)
+    depth = vertices @ toward
+    focal = centre_screen[0] * right + centre_screen[1] * up + ((depth.min() + depth.max()) / 2.0) * toward
+    distance = float(depth.max() - depth.min()) + 10.0 * half + 1.0
+    camera = renderer.GetActiveCamera()
+    camera.ParallelProjectionOn()
+    camera.SetFocalPoint(*focal)
+    camera.SetPosition(*(focal + distance * toward))
+    camera.SetViewUp(*up)
+    camera.SetParallelScale(half * 1.1 + 1e-9)  # 10 % margin; room for the label below
+    renderer.ResetCameraClippingRange()
+
+
+def _text(text: str, size_px: int, position: tuple[float, float], vertical: str) -> Any:
+    from vtkmodules.vtkRenderingCore import vtkTextActor
+
+    actor = vtkTextActor()
+    actor.SetInput(text)
+    style = actor.GetTextProperty()
+    style.SetFontSize(max(size_px, 8))
+    style.SetColor(*_TEXT_RGB)
+    style.SetFontFamilyToArial()
+    style.SetJustificationToCentered()
+    {"bottom": style.SetVerticalJustificationToBottom,
+     "center": style.SetVerticalJustificationToCentered}[vertical]()
+    actor.GetPositionCoordinate().SetCoordinateSystemToNormalizedViewport()
+    actor.SetPosition(*position)
+    return actor
+
+
+def _title_height_px(height: int) -> int:
+    return round(min(0.12 * height, 60.0))
+
+
+def _label_size_px(height: int) -> int:
+    return round(min(max(0.028 * height, 9.0), 30.0))

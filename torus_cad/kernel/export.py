@@ -16,13 +16,14 @@ import shutil
 from pathlib import Path
 
 import cadquery as cq
+from OCP.APIHeaderSection import APIHeaderSection_MakeHeader
 from OCP.BRepMesh import BRepMesh_IncrementalMesh
 from OCP.IFSelect import IFSelect_RetDone
 from OCP.Interface import Interface_Static
 from OCP.STEPCAFControl import STEPCAFControl_Writer
 from OCP.STEPControl import STEPControl_AsIs, STEPControl_Reader
 from OCP.StlAPI import StlAPI_Writer
-from OCP.TCollection import TCollection_ExtendedString
+from OCP.TCollection import TCollection_ExtendedString, TCollection_HAsciiString
 from OCP.TDataStd import TDataStd_Name
 from OCP.TDocStd import TDocStd_Document
 from OCP.XCAFDoc import XCAFDoc_DocumentTool
@@ -38,7 +39,8 @@ _STEP_END_MARKER = b"END-ISO-10303-21;"
 _STL_HEADER_BYTES, _STL_TRIANGLE_BYTES = 84, 50
 
 
-def write_step(shape: cq.Shape, path: str | Path, product_name: str, schema: str = "AP214") -> Path:
+def write_step(shape: cq.Shape, path: str | Path, product_name: str, schema: str = "AP214",
+               program: str = "torus_cad") -> Path:
     """Write ``shape`` as STEP (``schema`` 'AP214' or 'AP242', millimetres, product named ``product_name``).
 
     The shape goes through an XCAF document so that the STEP PRODUCT carries exactly the
@@ -55,6 +57,7 @@ def write_step(shape: cq.Shape, path: str | Path, product_name: str, schema: str
             raise KernelError(f"OpenCascade refused the STEP setting {key} = {value!r}")
     if not writer.Transfer(document, STEPControl_AsIs):
         raise KernelError("OpenCascade could not translate the solid to STEP")
+    _name_the_author(writer, product_name, program)
     path = Path(path)
     with atomic_path(path) as temp:
         if writer.Write(str(temp)) != IFSelect_RetDone or not _step_whole(temp):
@@ -94,6 +97,17 @@ def _write_failure(kind: str, path: Path, temp: Path) -> Exception:
         if limit != resource.RLIM_INFINITY and temp.stat().st_size >= limit:
             return OSError(errno.EFBIG, os.strerror(errno.EFBIG), str(path))
     return KernelError(f"OpenCascade could not write {kind} file {str(path)!r}")
+
+
+def _name_the_author(writer: STEPCAFControl_Writer, product_name: str, program: str) -> None:
+    """The STEP header's FILE_NAME: the design's name, and ``program`` (torus_cad and its version) as
+    author, organisation and originating system, instead of OpenCascade's placeholders."""
+    header = APIHeaderSection_MakeHeader(writer.ChangeWriter().Model())
+    header.SetName(TCollection_HAsciiString(product_name))
+    header.SetAuthorValue(1, TCollection_HAsciiString(program))
+    header.SetOrganizationValue(1, TCollection_HAsciiString(program.split()[0]))
+    header.SetOriginatingSystem(TCollection_HAsciiString(program))
+    header.SetAuthorisation(TCollection_HAsciiString(program))
 
 
 def read_step(path: str | Path) -> cq.Shape:

@@ -7,12 +7,17 @@ Two routes give the same solid:
   and joined to the hub. Its cost barely grows with the blade count.
 * :func:`fuse_all` fuses the hub and all n blades in one general boolean: the fallback for
   whenever the first route raises or its result fails the checks.
+
+Both report which part every face of the result came from (:attr:`Fused.face_parts`): the
+assembled shell is put together from faces whose part is known; a boolean's history
+(``Modified`` / ``IsDeleted`` of each argument's faces) says where each input face went.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
 from enum import StrEnum
 
 import cadquery as cq
@@ -25,10 +30,10 @@ from OCP.BRepTools import BRepTools
 from OCP.GeomAbs import GeomAbs_Cylinder
 from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt, gp_Trsf, gp_Vec2d
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_ShapeEnum, TopAbs_WIRE
-from OCP.TopExp import TopExp_Explorer
+from OCP.TopExp import TopExp, TopExp_Explorer
 from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS, TopoDS_Edge, TopoDS_Face, TopoDS_Shape, TopoDS_Shell, TopoDS_Solid
-from OCP.TopTools import TopTools_ListOfShape
+from OCP.TopTools import TopTools_IndexedMapOfShape, TopTools_ListOfShape
 
 from torus_cad.errors import KernelError
 
@@ -46,10 +51,16 @@ def pattern_blades(blade: cq.Solid, angles_deg: Sequence[float]) -> list[cq.Soli
             for angle in angles_deg]
 
 
-def fuse_all(hub: cq.Solid, blades: Sequence[cq.Solid]) -> cq.Shape:
+#: The hub's entry in :attr:`Fused.face_parts`; blades are 0 .. n-1.
+HUB_PART = -1
+
+
+def fuse_all(hub: cq.Solid, blades: Sequence[cq.Solid]) -> Fused:
     """Hub and all blades fused in one BRepAlgoAPI_Fuse call (parallel, oriented bounding boxes)."""
     fuse = _boolean(BRepAlgoAPI_Fuse(), [hub.wrapped], [blade.wrapped for blade in blades])
-    return cq.Shape.cast(_result(fuse, "fuse the blades with the hub"))
+    shape = _result(fuse, "fuse the blades with the hub")
+    parts = [(hub.wrapped, HUB_PART), *((blade.wrapped, index) for index, blade in enumerate(blades))]
+    return Fused(cq.Shape.cast(shape), FuseRoute.GENERAL, _face_parts(shape, _history(fuse, parts)))
 
 
 class FuseRoute(StrEnum):
@@ -63,7 +74,23 @@ class FuseRoute(StrEnum):
     """The fallback: one general boolean of the hub and all blades."""
 
 
-def fuse_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float]) -> tuple[cq.Shape, FuseRoute]:
+@dataclass(frozen=True)
+class Fused:
+    """The hub and blades joined into one shape.
+
+    Attributes:
+        shape: the result (to be checked: one valid closed solid is expected).
+        route: how it was joined.
+        face_parts: which part each face of ``shape`` came from, in the order of
+            ``shape.Faces()`` (TopExp's indexed map of faces): HUB_PART or the blade's index.
+    """
+
+    shape: cq.Shape
+    route: FuseRoute
+    face_parts: tuple[int, ...]
+
+
+def fuse_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float]) -> Fused:
     """Hub and copies of ``blade`` at every angle, with one blade-hub intersection for all of them.
 
     1. Cut the blade (built at ``angles_deg[0]``) by the hub: its part outside the hub, whose
@@ -77,7 +104,7 @@ def fuse_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float]) ->
        end face, or a patch straddles the hub's seam, the copies are glued to the hub with a
        fuse that needs no surface-surface intersection (:func:`_glue`).
 
-    Returns the shape and how it was joined (ASSEMBLED or GLUED). The caller checks the result (validity covers each edge's curve on the hub against its 3D
+    Returns the shape, how it was joined (ASSEMBLED or GLUED) and each face's part. The caller checks the result (validity covers each edge's curve on the hub against its 3D
     curve) and falls back to :func:`fuse_all` on a KernelError or an invalid solid. The
     propeller's hub has its seam beside every footprint, see
     :func:`torus_cad.geometry.hub.seam_angle_deg`.
@@ -94,15 +121,16 @@ def fuse_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float]) ->
     whole_patches = len(hub_pieces) == len(patches) and not any(
         BRep_Tool.IsClosed_s(edge, patch) for patch in patches for edge in _edges(patch))
     if whole_patches:
-        return cq.Shape.cast(_assemble(hub, lateral, copies, patches)), FuseRoute.ASSEMBLED
+        solid, origins = _assemble(hub, lateral, copies, patches)
+        return Fused(cq.Shape.cast(solid), FuseRoute.ASSEMBLED, _face_parts(solid, origins))
     blade_faces = _count(outside, TopAbs_FACE) - len(hub_pieces)
-    glued = _glue(hub, copies, _count(hub.wrapped, TopAbs_FACE) + len(copies) * blade_faces)
-    return cq.Shape.cast(glued), FuseRoute.GLUED
+    glued, origins = _glue(hub, copies, _count(hub.wrapped, TopAbs_FACE) + len(copies) * blade_faces)
+    return Fused(cq.Shape.cast(glued), FuseRoute.GLUED, _face_parts(glued, origins))
 
 
 def _assemble(hub: cq.Solid, lateral: TopoDS_Face, copies: Sequence[TopoDS_Shape],
-              patches: Sequence[TopoDS_Face]) -> TopoDS_Solid:
-    """The propeller's solid put together from known faces, with no boolean.
+              patches: Sequence[TopoDS_Face]) -> tuple[TopoDS_Solid, list[tuple[TopoDS_Shape, int]]]:
+    """The propeller's solid put together from known faces, with no boolean, and each face's part.
 
     Its shell: the hub's end faces, a new lateral face (the hub's surface and outer wire) with
     each copy's patch boundaries as holes, and each copy's faces off the hub. A patch lies on
@@ -110,39 +138,76 @@ def _assemble(hub: cq.Solid, lateral: TopoDS_Face, copies: Sequence[TopoDS_Shape
     keeps the material on the other side of the same curve; the two flips cancel, so the
     patch's wires, oriented as the patch uses them, are the holes as the lateral face uses them.
     """
-    lateral_with_holes = BRepBuilderAPI_MakeFace(BRep_Tool.Surface_s(lateral), BRepTools.OuterWire_s(lateral), True)
+    outer_wire = BRepTools.OuterWire_s(lateral)
+    lateral_with_holes = BRepBuilderAPI_MakeFace(BRep_Tool.Surface_s(lateral), outer_wire, True)
+    for wire in _explore(lateral, TopAbs_WIRE):  # holes the hub already has (a set-screw hole)
+        if not wire.IsSame(outer_wire):
+            lateral_with_holes.Add(TopoDS.Wire_s(wire))
     builder = BRep_Builder()
     shell = TopoDS_Shell()
     builder.MakeShell(shell)
-    for copy in copies:
+    origins: list[tuple[TopoDS_Shape, int]] = []
+    for index, copy in enumerate(copies):
         for face in _faces(copy):
             if any(face.IsPartner(patch) for patch in patches):
                 for wire in _explore(face, TopAbs_WIRE):
                     lateral_with_holes.Add(TopoDS.Wire_s(wire))
             else:
                 builder.Add(shell, face)
+                origins.append((face, index))
     if not lateral_with_holes.IsDone():
         raise KernelError("OpenCascade could not cut the blade roots out of the hub's lateral face")
-    builder.Add(shell, lateral_with_holes.Face())
-    for face in _faces(hub.wrapped):
-        if not face.IsSame(lateral):
-            builder.Add(shell, face)
+    hub_faces = [lateral_with_holes.Face(), *(face for face in _faces(hub.wrapped) if not face.IsSame(lateral))]
+    for face in hub_faces:
+        builder.Add(shell, face)
+        origins.append((face, HUB_PART))
     shell.Closed(BRep_Tool.IsClosed_s(shell))
     solid = TopoDS_Solid()
     builder.MakeSolid(solid)
     builder.Add(solid, shell)
-    return solid
+    return solid, origins
 
 
-def _glue(hub: cq.Solid, copies: Sequence[TopoDS_Shape], expected_faces: int) -> TopoDS_Shape:
-    """Hub and copies fused with BOPAlgo_GlueShift: they only touch along faces of the hub's surfaces."""
+def _glue(hub: cq.Solid, copies: Sequence[TopoDS_Shape], expected_faces: int
+          ) -> tuple[TopoDS_Shape, list[tuple[TopoDS_Shape, int]]]:
+    """Hub and copies fused with BOPAlgo_GlueShift (they only touch along faces of the hub's
+    surfaces), and where each of their faces went."""
     glue = BRepAlgoAPI_Fuse()
     glue.SetGlue(BOPAlgo_GlueShift)
     fused = _result(_boolean(glue, [hub.wrapped], copies), "glue the blades to the hub")
     faces = _count(fused, TopAbs_FACE)
     if faces != expected_faces:
         raise KernelError(f"gluing the blades to the hub gave {faces} faces instead of {expected_faces}")
-    return fused
+    return fused, _history(glue, [(hub.wrapped, HUB_PART), *((copy, index) for index, copy in enumerate(copies))])
+
+
+def _history(operation: BRepAlgoAPI_BooleanOperation, arguments: Iterable[tuple[TopoDS_Shape, int]]
+             ) -> list[tuple[TopoDS_Shape, int]]:
+    """(result face, part) for every face of every (argument, part): its pieces in the result if
+    the boolean split it, itself if it kept it whole, nothing if it was removed."""
+    origins: list[tuple[TopoDS_Shape, int]] = []
+    for argument, part in arguments:
+        for face in _faces(argument):
+            pieces = list(operation.Modified(face))
+            if not pieces and not operation.IsDeleted(face):
+                pieces = [face]
+            origins.extend((piece, part) for piece in pieces)
+    return origins
+
+
+def _face_parts(shape: TopoDS_Shape, origins: Iterable[tuple[TopoDS_Shape, int]]) -> tuple[int, ...]:
+    """The part of each face of ``shape`` (in the order of ``shape.Faces()``) from (face, part) pairs."""
+    faces = TopTools_IndexedMapOfShape()
+    TopExp.MapShapes_s(shape, TopAbs_FACE, faces)
+    parts: list[int | None] = [None] * faces.Extent()
+    for face, part in origins:
+        index = faces.FindIndex(face)
+        if index:
+            parts[index - 1] = part
+    known = [part for part in parts if part is not None]
+    if len(known) != len(parts):
+        raise KernelError(f"{len(parts) - len(known)} faces of the joined propeller came from no known part")
+    return tuple(known)
 
 
 def _rotated_with_hub_curves(outside: TopoDS_Shape, patches: list[TopoDS_Face], lateral: TopoDS_Face,
@@ -171,10 +236,13 @@ def _rotated_with_hub_curves(outside: TopoDS_Shape, patches: list[TopoDS_Face], 
 
 
 def _lateral_face(hub: cq.Solid) -> TopoDS_Face:
-    for face in hub.Faces():
-        if BRepAdaptor_Surface(face.wrapped).GetType() == GeomAbs_Cylinder:
-            return face.wrapped
-    raise KernelError("the hub has no cylindrical face")
+    """The hub's outer cylindrical face (a bore or a set-screw hole is a smaller cylinder)."""
+    cylinders = [(BRepAdaptor_Surface(face.wrapped).Cylinder().Radius(), index, face.wrapped)
+                 for index, face in enumerate(hub.Faces())
+                 if BRepAdaptor_Surface(face.wrapped).GetType() == GeomAbs_Cylinder]
+    if not cylinders:
+        raise KernelError("the hub has no cylindrical face")
+    return max(cylinders, key=lambda item: item[:2])[2]
 
 
 def _modified_faces(operation: BRepAlgoAPI_BooleanOperation, face: TopoDS_Face) -> list[TopoDS_Face]:
