@@ -6,10 +6,10 @@
 
 Builds the default propeller once, then alternates, into fresh folders:
 
-* **plain**: what ``write_outputs`` did before output sets: STEP, STL and the JSON report, each
-  written to a temp file and renamed onto its final name;
-* **set**: ``write_output_set`` as the build runs it now: the STL budget estimate, a staging
-  folder, the same writers, SHA-256 of every file in the report, the locked publish.
+* **plain**: what ``write_outputs`` did before output sets: STEP, STL, the blade-element table
+  (CSV, PNG) and the JSON report, each written to a temp file and renamed onto its final name;
+* **set**: ``write_output_set`` as ``torus-cad build`` runs it now: the mesh budget estimate, a
+  staging folder, the same writers, SHA-256 of every file in the report, the locked publish.
 
 Prints the median of each, the difference, and the difference as a share of the whole default
 build (build + write, medians). The JSON report's mass properties are part of both.
@@ -27,13 +27,17 @@ from pathlib import Path
 
 
 def _plain_write(propeller, out_dir: Path, density_g_cm3: float) -> None:
+    from torus_cad import __version__
+    from torus_cad.design_targets import write_sections_table
     from torus_cad.kernel.export import atomic_path, write_step, write_stl
     from torus_cad.propeller import build_report
 
     params = propeller.parameters
-    write_step(propeller.solid, out_dir / f"{params.name}.step", params.name, params.export.step_schema)
+    write_step(propeller.solid, out_dir / f"{params.name}.step", params.name, params.export.step_schema,
+               program=f"torus_cad {__version__}")
     write_stl(propeller.solid, out_dir / f"{params.name}.stl", params.export.stl_linear_deflection,
               params.export.stl_angular_deflection)
+    write_sections_table(propeller.surface, params, out_dir)
     with atomic_path(out_dir / f"{params.name}.json") as temp:
         temp.write_text(json.dumps(build_report(propeller, density_g_cm3), indent=2) + "\n")
 
@@ -41,7 +45,7 @@ def _plain_write(propeller, out_dir: Path, density_g_cm3: float) -> None:
 def _set_write(propeller, out_dir: Path, density_g_cm3: float) -> None:
     from torus_cad.outputs import write_output_set
 
-    write_output_set(propeller, out_dir, density_g_cm3)
+    write_output_set(propeller, out_dir, density_g_cm3, sections_table=True)
 
 
 def main() -> int:
