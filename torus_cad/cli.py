@@ -158,6 +158,105 @@ def _command_sweep(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _mesh_formats(text: str) -> tuple[str, ...]:
+    """--format: a comma-separated list of mesh formats (validated by MeshSettings)."""
+    return tuple(item.strip() for item in text.split(",") if item.strip())
+
+
+def _command_mesh(args: argparse.Namespace) -> int:
+    from torus_cad.mesh.pipeline import summary_line, write_surface_mesh
+    from torus_cad.mesh.settings import MeshSettings
+    from torus_cad.progress import Progress
+
+    params = load_parameters(args.config, args.overrides)
+    formats = tuple(item for text in args.formats for item in _mesh_formats(text)) if args.formats else None
+    defaults = MeshSettings()
+    settings = MeshSettings(sections=args.sections or defaults.sections, points=args.points or defaults.points,
+                            spacing=args.spacing or defaults.spacing, formats=formats or defaults.formats,
+                            compare=not args.no_compare)
+    progress = Progress.for_terminal(quiet=args.quiet)
+    report, paths = write_surface_mesh(params, settings, Path(args.out), progress=progress)
+    progress.finish()
+    if not args.quiet:
+        for path in paths.values():
+            print(f"wrote {path}")
+        print(summary_line(report))
+    return EXIT_OK
+
+
+def _command_cfd(args: argparse.Namespace) -> int:
+    from torus_cad.cfd.settings import CfdSettings, MissingExtraError
+    from torus_cad.progress import Progress
+
+    params = load_parameters(args.config, args.overrides)
+    given = {key: getattr(args, key) for key in CfdSettings.option_names() if getattr(args, key) is not None}
+    settings = CfdSettings(**given)
+    progress = Progress.for_terminal(quiet=args.quiet)
+    try:
+        from torus_cad.cfd.domain import write_cfd_domain
+
+        report, paths = write_cfd_domain(params, settings, Path(args.out), progress=progress)
+    except MissingExtraError as error:
+        print(f"torus-cad: {error}", file=sys.stderr)
+        return EXIT_KERNEL_FAILURE
+    progress.finish()
+    if not args.quiet:
+        for path in paths.values():
+            print(f"wrote {path}")
+        from torus_cad.cfd.domain import summary_line
+
+        print(summary_line(report))
+    return EXIT_OK
+
+
+def _add_mesh_parser(commands: Any) -> None:
+    from torus_cad.mesh.settings import MeshFormat, MeshSettings, SectionSpacing
+    from torus_cad.tolerances import MESH_TRIANGLE_LIMIT
+
+    defaults = MeshSettings()
+    mesh = commands.add_parser(
+        "mesh", help="closed triangle mesh straight from the spec's math (STL, OBJ groups, PLY, VTK)",
+        description="Mesh the propeller of CONFIG (or the default) without the B-rep: each blade's structured "
+        "grid at exactly --sections x --points (points equally spaced in arc length, spec §5), the hub as a "
+        "§6.2 grid at the blades' cell size, united into one closed 2-manifold (manifold3d). Writes "
+        "<name>_mesh.<format> files and <name>_mesh.json, a quality report. Meshes estimated above "
+        f"{MESH_TRIANGLE_LIMIT:,} triangles are refused before they are built.")
+    _add_design_arguments(mesh)
+    mesh.add_argument("--sections", type=int, metavar="N",
+                      help=f"sections along each blade (default {defaults.sections})")
+    mesh.add_argument("--points", type=int, metavar="M",
+                      help=f"points around each section (default {defaults.points})")
+    mesh.add_argument("--spacing", choices=[item.value for item in SectionSpacing],
+                      help="sections evenly in the centerline parameter s or in its arc length "
+                           f"(default {defaults.spacing.value})")
+    mesh.add_argument("--format", dest="formats", action="append", metavar="FORMAT[,FORMAT]",
+                      help="files to write, repeatable or comma-separated: "
+                           + ", ".join(item.value for item in MeshFormat)
+                           + f" (default {','.join(item.value for item in defaults.formats)})")
+    mesh.add_argument("--out", default="mesh_out", help="output folder (default: mesh_out)")
+    mesh.add_argument("--no-compare", action="store_true",
+                      help="skip the B-rep comparison in the report (volume, OpenCascade's tessellation)")
+    mesh.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
+    mesh.set_defaults(handler=_command_mesh)
+
+
+def _add_cfd_parser(commands: Any) -> None:
+    from torus_cad.cfd.settings import CfdSettings
+
+    cfd = commands.add_parser(
+        "cfd", help="fluid domain and tetrahedral volume mesh for a rotating-propeller simulation (gmsh)",
+        description="Mesh the fluid around the propeller of CONFIG (or the default) with gmsh: an outer "
+        "cylinder, a rotating-zone cylinder around the propeller, conformal at their interface, tetrahedra "
+        "refined near the blades. Writes <name>_cfd.msh (v4.1), <name>_cfd_v2.msh (v2.2 ASCII, for "
+        "OpenFOAM's gmshToFoam), README.txt and <name>_cfd.json. Needs the cfd extra: "
+        "pip install 'torus_cad[cfd]'. Sizes are multiples of the tip diameter D.")
+    _add_design_arguments(cfd)
+    CfdSettings.add_arguments(cfd)
+    cfd.add_argument("--out", default="cfd_out", help="output folder (default: cfd_out)")
+    cfd.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
+    cfd.set_defaults(handler=_command_cfd)
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with every subcommand."""
     parser = _Parser(prog="torus-cad", description=DESCRIPTION, epilog=EPILOG,
@@ -213,6 +312,8 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("--rebuild", action="store_true", help="build every design again, even those already done")
     sweep.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary")
     sweep.set_defaults(handler=_command_sweep)
+    _add_mesh_parser(commands)
+    _add_cfd_parser(commands)
     return parser
 
 

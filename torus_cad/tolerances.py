@@ -56,3 +56,16 @@ HUB_FOOTPRINT_NEAR_RELATIVE = 0.02
 #: Angular margin (degrees) added at each side of a blade's footprint on the hub before the
 #: seam is placed beside it.
 HUB_FOOTPRINT_MARGIN_DEG = 1.0
+
+#: Surface meshes (torus_cad.mesh): largest sag of the flat faces from the analytic blade, as a
+#: fraction of the local chord, above which a resolution is refused (the default design sags
+#: 0.02 % at 100 x 400, 1.8 % with 10 sections).
+MESH_SAG_LIMIT = 0.01
+
+#: Surface meshes: most triangles `torus-cad mesh` builds (estimated before it starts); peak
+#: memory grows ~0.9 GB per million triangles (scripts/bench_mesh.py), so this keeps it within ~18 GB.
+MESH_TRIANGLE_LIMIT = 20_000_000
+
+#: Surface meshes: triangles with every corner at least this fraction of the hub radius outside
+#: the hub count as "away from the junctions" in the quality report.
+MESH_JUNCTION_MARGIN_RELATIVE = 0.05
