@@ -33,7 +33,7 @@ class MeshFormat(StrEnum):
     STL = "stl"              # binary STL, the whole surface
     STL_ASCII = "stl_ascii"  # ASCII STL, one named solid per part
     OBJ = "obj"              # Wavefront OBJ, one group per part (snappyHexMesh regions)
-    PLY = "ply"              # binary PLY with a per-face part index (meshio)
+    PLY = "ply"              # binary PLY with a per-face part index
     VTK = "vtk"              # legacy VTK with a per-face part index (meshio)
 
 

@@ -82,23 +82,35 @@ def write_obj(mesh: LabeledMesh, path: Path, name: str) -> None:
             _write_rows(handle, "f %d %d %d\n", mesh.faces[mesh.part == index] + 1)
 
 
-def _write_meshio(file_format: str) -> Callable[[LabeledMesh, Path, str], None]:
-    def write(mesh: LabeledMesh, path: Path, name: str) -> None:
-        import meshio
+def write_ply(mesh: LabeledMesh, path: Path, name: str) -> None:
+    """Binary little-endian PLY: float64 vertices, triangles with an int ``part`` property per face (0 = hub)."""
+    header = (f"ply\nformat binary_little_endian 1.0\ncomment torus_cad surface mesh {name}, mm; part: "
+              + ", ".join(f"{index} = {part_name}" for index, part_name in enumerate(mesh.part_names))
+              + f"\nelement vertex {len(mesh.vertices)}\nproperty double x\nproperty double y\nproperty double z\n"
+              f"element face {len(mesh.faces)}\nproperty list uchar int vertex_indices\nproperty int part\n"
+              "end_header\n")
+    faces = np.empty(len(mesh.faces), dtype=[("count", "u1"), ("vertices", "<i4", (3,)), ("part", "<i4")])
+    faces["count"], faces["vertices"], faces["part"] = 3, mesh.faces, mesh.part
+    with path.open("wb") as handle:
+        handle.write(header.encode("ascii"))
+        np.ascontiguousarray(mesh.vertices, dtype="<f8").tofile(handle)
+        faces.tofile(handle)
 
-        cells = [("triangle", mesh.faces.astype(np.int64))]
-        meshio.write_points_cells(str(path), mesh.vertices, cells, cell_data={"part": [mesh.part.astype(np.int32)]},
-                                  file_format=file_format, binary=True)
-    write.__doc__ = f"{file_format.upper()} through meshio, binary, with a per-face ``part`` index (0 = hub)."
-    return write
+
+def write_vtk(mesh: LabeledMesh, path: Path, name: str) -> None:
+    """Legacy VTK (binary) through meshio, with a per-face ``part`` index (0 = hub)."""
+    import meshio
+
+    meshio.write_points_cells(str(path), mesh.vertices, [("triangle", mesh.faces.astype(np.int64))],
+                              cell_data={"part": [mesh.part.astype(np.int32)]}, file_format="vtk", binary=True)
 
 
 WRITERS: dict[MeshFormat, Callable[[LabeledMesh, Path, str], None]] = {
     MeshFormat.STL: write_binary_stl,
     MeshFormat.STL_ASCII: write_ascii_stl,
     MeshFormat.OBJ: write_obj,
-    MeshFormat.PLY: _write_meshio("ply"),
-    MeshFormat.VTK: _write_meshio("vtk"),
+    MeshFormat.PLY: write_ply,
+    MeshFormat.VTK: write_vtk,
 }
 
 
