@@ -54,7 +54,7 @@ TARGETS = {"step_s": 1.0, "step_stl_s": 2.0, "speedup": 5.0}
 # -- helpers -----------------------------------------------------------------------------------
 
 def _params(changes: dict[str, Any] | None = None):
-    from torus_cad.geometry.parameters import PropellerParameters
+    from torus_cad.parameters import PropellerParameters
 
     return PropellerParameters().with_values(changes or {})
 
@@ -216,12 +216,12 @@ def _growth(rows: list[dict[str, Any]]) -> dict[str, Any]:
 
 def accuracy_samples(params, per_gap: int = 3, limit: int = 400) -> np.ndarray:
     """Analytic surface points at s half-way between sections and t between samples, away from the hub."""
-    from torus_cad.geometry.surface import blade_surface, surface_points
+    from torus_cad.geometry.surface import surface_points
 
-    surface = blade_surface(params)
+    surface = params.blade_surface()
     s = 0.5 * (surface.s[:-1] + surface.s[1:])
     t = np.sort(np.concatenate([surface.t, 0.5 * (surface.t[:-1] + surface.t[1:])]))[::per_gap]
-    points = surface_points(params, s, t).reshape(-1, 3)
+    points = surface_points(params.geometry().blade, params.geometry().centerline(), s, t).reshape(-1, 3)
     margin = 0.05 * params.hub.radius
     away = (np.hypot(points[:, 0], points[:, 1]) > params.hub.radius + margin) | (
         np.abs(points[:, 2]) > params.hub.length / 2 + margin)
@@ -269,12 +269,12 @@ def child_mesh_route(payload: dict[str, Any]) -> dict[str, Any]:
     import pyvista as pv
 
     from torus_cad.geometry.mesh import blade_mesh
-    from torus_cad.geometry.surface import blade_surface
+
 
     params = _params(payload.get("changes"))
     variant = payload["variant"]
     start = time.perf_counter()
-    blades = [blade_mesh(blade_surface(params, index)) for index in range(params.blades)]
+    blades = [blade_mesh(params.blade_surface(index)) for index in range(params.blades)]
     if variant in ("pyvista_spec", "pyvista_grid"):
         bodies = [_polydata(mesh.vertices, mesh.faces) for mesh in blades]
         if variant == "pyvista_spec":

@@ -24,7 +24,7 @@ from typing import Any
 
 from torus_cad.errors import GeometryError, ParameterError
 from torus_cad.fuzzing import random_design
-from torus_cad.propeller import FUSE_ROUTES
+from torus_cad.kernel.fuse import FuseRoute
 
 VOLUME_PRECISION = 1e-7
 
@@ -39,7 +39,7 @@ def compare(seed: int) -> dict[str, Any]:
         propeller = build_propeller(random_design(seed))
     except (ParameterError, GeometryError) as refusal:
         return {"seed": seed, "outcome": "refused", "message": str(refusal)}
-    except Exception as error:  # noqa: BLE001 - reported, the fuzz script classifies these
+    except Exception as error:
         return {"seed": seed, "outcome": "error", "message": f"{type(error).__name__}: {error}"}
     start = time.perf_counter()
     general = single_valid_solid(fuse_all(propeller.hub, propeller.blades), "the general fuse")
@@ -64,13 +64,13 @@ def main(argv: list[str] | None = None) -> int:
     with ProcessPoolExecutor(args.workers) as pool:
         rows = list(pool.map(compare, range(args.seed, args.seed + args.count)))
     valid = [row for row in rows if row["outcome"] == "valid"]
-    shared = [row for row in valid if row["route"] != FUSE_ROUTES[-1]]
+    shared = [row for row in valid if row["route"] != FuseRoute.GENERAL]
     print(f"{args.count} designs: {len(valid)} built, {sum(r['outcome'] == 'refused' for r in rows)} refused, "
           f"{sum(r['outcome'] == 'error' for r in rows)} errors ({time.perf_counter() - started:.0f} s)")
     routes = collections.Counter(row["route"] for row in valid)
     print("routes: " + ", ".join(f"{route} {count}" for route, count in sorted(routes.items())))
     for route in sorted(routes):
-        if route != FUSE_ROUTES[0]:
+        if route != FuseRoute.ASSEMBLED:
             print(f"  {route}: seeds {', '.join(str(row['seed']) for row in valid if row['route'] == route)}")
     bad = [row for row in valid if row["relative_volume_difference"] > args.tolerance or
            row["faces"][0] != row["faces"][1]]

@@ -25,7 +25,7 @@ from pathlib import Path
 
 from torus_cad.fuzzing import (ACCEPTABLE, OUTCOMES, Outcome, SupervisedPool, default_workers,
                                random_design_dict, tally)
-from torus_cad.geometry.parameters import PropellerParameters
+from torus_cad.parameters import PropellerParameters
 
 
 def _save_failure(out_dir: Path, params: PropellerParameters, outcome: Outcome) -> Path:

@@ -7,8 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from torus_cad.geometry.parameters import PropellerParameters
-
+from torus_cad.parameters import PropellerParameters
 
 #: The shared-intersection fuse and one general fuse integrate the same surfaces; their volumes,
 #: each integrated to VOLUME_PRECISION, agree far below this (measured ~1e-9).

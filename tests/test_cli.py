@@ -7,7 +7,7 @@ import sys
 import pytest
 
 from torus_cad.cli import main
-from torus_cad.geometry.parameters import PropellerParameters
+from torus_cad.parameters import PropellerParameters
 
 
 def test_build_writes_step_stl_and_report(tmp_path, capsys):

@@ -7,13 +7,12 @@ import runpy
 import types
 from pathlib import Path
 
+import cadquery as cq
 import pytest
 
-import cadquery as cq
-
-from torus_cad.geometry.parameters import PropellerParameters
 from torus_cad.kernel.checks import is_valid_closed_solid, precise_volume
 from torus_cad.kernel.export import read_step
+from torus_cad.parameters import PropellerParameters
 from torus_cad.tolerances import READ_BACK_RELATIVE_TOLERANCE
 
 SCRIPT = Path(__file__).resolve().parent.parent / "scripts" / "cq_editor_propeller.py"
@@ -92,29 +91,19 @@ def test_parameters_sit_at_the_top_and_default_to_the_built_in_design():
     source = SCRIPT.read_text()
     constants = _top_constants()
     first_import = min(source.index(word) for word in ("\nimport ", "\nfrom "))
-    assert source.index("NAME = ") < first_import  # parameters come before any code
-    defaults = PropellerParameters()
-    expected = {
-        "NAME": defaults.name, "BLADES": defaults.blades, "PHASE_DEG": defaults.phase_deg,
-        "HUB_RADIUS": defaults.hub.radius, "HUB_LENGTH": defaults.hub.length,
-        "MAX_CAMBER": defaults.airfoil.max_camber, "CAMBER_POSITION": defaults.airfoil.camber_position,
-        "THICKNESS": defaults.airfoil.thickness,
-        "CENTERLINE_P2": defaults.centerline.p2, "CENTERLINE_P3": defaults.centerline.p3,
-        "CENTERLINE_P4": defaults.centerline.p4,
-        "ANGLE_OF_ATTACK": defaults.transforms.angle_of_attack, "SCALE_X": defaults.transforms.scale_x,
-        "SCALE_Y": defaults.transforms.scale_y,
-        "SECTIONS": defaults.resolution.sections, "POINTS": defaults.resolution.points,
-    }
-    for key, value in expected.items():
-        assert constants[key] == value, key
+    assert source.index("CHANGES = ") < first_import  # parameters come before any code
+    assert constants["DESIGN"] is None
+    # Every key is a real parameter at its default: the script builds the built-in design.
+    assert PropellerParameters().with_values(constants["CHANGES"]) == PropellerParameters()
 
 
 def test_edited_parameters_change_the_shown_propeller(tmp_path, monkeypatch):
     # Edit the script the way a user would (in place) and run it like cq-editor does.
     monkeypatch.chdir(tmp_path)
-    text = SCRIPT.read_text().replace("BLADES = 3 ", "BLADES = 2 ").replace("SECTIONS = 25 ", "SECTIONS = 12 ")
-    text = text.replace("POINTS = 80 ", "POINTS = 40 ")
-    assert "BLADES = 2 " in text and "SECTIONS = 12 " in text and "POINTS = 40 " in text
+    text = SCRIPT.read_text().replace('"blades": 3,', '"blades": 2,')
+    text = text.replace('"resolution.sections": 25,', '"resolution.sections": 12,')
+    text = text.replace('"resolution.points": 80,', '"resolution.points": 40,')
+    assert '"blades": 2,' in text and '"resolution.sections": 12,' in text and '"resolution.points": 40,' in text
     recorder = ShowObjectRecorder()
     namespace: dict = {"show_object": recorder, "__name__": "temp"}
     exec(compile(text, "<string>", "exec"), namespace)

@@ -9,17 +9,17 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import ROUTE_VOLUME_TOLERANCE, VOLUME_PRECISION, assert_same_volume_as_general_fuse
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from conftest import ROUTE_VOLUME_TOLERANCE, VOLUME_PRECISION, assert_same_volume_as_general_fuse
 import torus_cad.propeller as pipeline
 from torus_cad.errors import KernelError
 from torus_cad.geometry.hub import footprint_arcs_deg, seam_angle_deg
 from torus_cad.kernel.checks import is_valid_closed_solid, precise_volume, single_valid_solid
-from torus_cad.kernel.fuse import fuse_pattern
+from torus_cad.kernel.fuse import FuseRoute, fuse_pattern
 from torus_cad.kernel.hub import hub_solid
-from torus_cad.propeller import FUSE_ROUTES, build_propeller
+from torus_cad.propeller import build_propeller
 from torus_cad.tolerances import HUB_FOOTPRINT_MARGIN_DEG
 
 
@@ -94,11 +94,11 @@ def test_hub_seam_angle_moves_the_seam_not_the_solid():
 
 
 def test_default_takes_the_shared_route_and_equals_the_general_fuse(default_propeller):
-    assert default_propeller.fuse_route == FUSE_ROUTES[0]  # shared intersection, assembled
+    assert default_propeller.fuse_route == FuseRoute.ASSEMBLED  # shared intersection, assembled
     assert_same_volume_as_general_fuse(default_propeller)
 
 
-@pytest.mark.parametrize("seam_deg, join", [(20.0, "glued"), (90.0, "glued"), (None, "assembled")])
+@pytest.mark.parametrize("seam_deg, join", [(20.0, FuseRoute.GLUED), (90.0, FuseRoute.GLUED), (None, FuseRoute.ASSEMBLED)])
 def test_any_seam_angle_gives_the_same_solid(default_propeller, seam_deg, join):
     # A seam through a blade root splits that root's patch; the split pieces are shifted on
     # their own and glued. The seam the pipeline picks (None here) lets the shell be assembled.
@@ -123,7 +123,7 @@ def test_when_the_shared_route_fails_the_general_fuse_builds_it(light_params, mo
 
     monkeypatch.setattr(pipeline, "fuse_pattern", failing)
     fallback = build_propeller(light_params)
-    assert (shared.fuse_route, fallback.fuse_route) == (FUSE_ROUTES[0], FUSE_ROUTES[-1])
+    assert (shared.fuse_route, fallback.fuse_route) == (FuseRoute.ASSEMBLED, FuseRoute.GENERAL)
     assert is_valid_closed_solid(fallback.solid)
     assert precise_volume(fallback.solid, VOLUME_PRECISION) == pytest.approx(
         precise_volume(shared.solid, VOLUME_PRECISION), rel=ROUTE_VOLUME_TOLERANCE)
@@ -137,5 +137,5 @@ def test_a_wrong_curve_on_the_hub_is_caught_not_shipped(light_params, monkeypatc
     real_vector = fuse.gp_Vec2d
     monkeypatch.setattr(fuse, "gp_Vec2d", lambda du, dv: real_vector(du + 0.05 if du else du, dv))
     propeller = build_propeller(light_params)
-    assert propeller.fuse_route == FUSE_ROUTES[-1]
+    assert propeller.fuse_route == FuseRoute.GENERAL
     assert is_valid_closed_solid(propeller.solid)

@@ -1,33 +1,83 @@
-"""The geometry layer imports no CAD kernel: it must run with numpy / scipy / geomdl only."""
+"""The import layers: geometry imports no CAD kernel and nothing above it; the kernel imports no
+pipeline or app; nothing imports the CLI. Read from the sources' import statements, and checked
+once more in a fresh interpreter for the geometry layer."""
+
+from __future__ import annotations
 
 import ast
 import subprocess
 import sys
 from pathlib import Path
 
-import torus_cad.geometry
+import pytest
 
-GEOMETRY_DIR = Path(torus_cad.geometry.__file__).parent
+PACKAGE = Path(__file__).resolve().parent.parent / "torus_cad"
 KERNEL_PACKAGES = {"OCP", "cadquery", "OCC", "build123d"}
 
 
-def test_geometry_sources_import_no_kernel():
-    offenders = []
-    for source in GEOMETRY_DIR.glob("*.py"):
-        for node in ast.walk(ast.parse(source.read_text())):
-            names = []
-            if isinstance(node, ast.Import):
-                names = [alias.name for alias in node.names]
-            elif isinstance(node, ast.ImportFrom) and node.module:
-                names = [node.module]
-            offenders += [f"{source.name}: {name}" for name in names if name.split(".")[0] in KERNEL_PACKAGES]
-    assert offenders == []
+def _module_name(path: Path) -> str:
+    parts = path.relative_to(PACKAGE.parent).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 
 
-def test_importing_geometry_loads_no_kernel_module():
-    modules = [f"torus_cad.geometry.{path.stem}" for path in GEOMETRY_DIR.glob("*.py") if path.stem != "__init__"]
+def _imports(path: Path) -> set[str]:
+    """Every module a source file imports (absolute names; relative imports resolved)."""
+    names: set[str] = set()
+    package = _module_name(path).rsplit(".", 0 if path.stem == "__init__" else 1)[0]
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            names.update(alias.name for alias in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                base = ".".join(package.split(".")[: len(package.split(".")) - node.level + 1] + ([base] if base else []))
+            names.add(base)
+            names.update(f"{base}.{alias.name}" for alias in node.names)
+    return names
+
+
+def _sources(subpackage: str = "") -> list[Path]:
+    return sorted((PACKAGE / subpackage).rglob("*.py"))
+
+
+def _offenders(sources: list[Path], forbidden: callable) -> list[str]:  # type: ignore[valid-type]
+    return [f"{path.relative_to(PACKAGE.parent)}: {name}" for path in sources for name in sorted(_imports(path))
+            if forbidden(name)]
+
+
+def test_geometry_imports_no_kernel_and_nothing_above_it():
+    def forbidden(name: str) -> bool:
+        top = name.split(".")[0]
+        inside = name.startswith("torus_cad.") and not name.startswith(
+            ("torus_cad.geometry", "torus_cad.errors", "torus_cad.tolerances"))
+        return top in KERNEL_PACKAGES or inside
+    assert _offenders(_sources("geometry"), forbidden) == []
+
+
+def test_kernel_imports_no_pipeline_or_app():
+    def forbidden(name: str) -> bool:
+        return name.startswith("torus_cad.") and not name.startswith(
+            ("torus_cad.kernel", "torus_cad.geometry", "torus_cad.errors", "torus_cad.tolerances"))
+    assert _offenders(_sources("kernel"), forbidden) == []
+
+
+def test_parameters_import_no_kernel():
+    def forbidden(name: str) -> bool:
+        return name.split(".")[0] in KERNEL_PACKAGES or name.startswith("torus_cad.kernel")
+    assert _offenders(_sources("parameters"), forbidden) == []
+
+
+def test_nothing_imports_the_cli():
+    sources = [path for path in _sources() if path.name not in ("cli.py", "__main__.py")]
+    assert _offenders(sources, lambda name: name == "torus_cad.cli" or name.startswith("torus_cad.cli.")) == []
+
+
+@pytest.mark.parametrize("package", ["geometry", "parameters"])
+def test_importing_a_kernel_free_layer_loads_no_kernel_module(package):
+    modules = [_module_name(path) for path in _sources(package)]
     code = ("import sys\n" + "".join(f"import {name}\n" for name in modules)
             + "loaded = sorted(m for m in sys.modules if m.split('.')[0] in {'OCP', 'cadquery'})\n"
             + "print(','.join(loaded))\n")
-    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                            cwd=PACKAGE.parent)
     assert result.stdout.strip() == ""

@@ -7,9 +7,9 @@ import math
 
 import pytest
 
-from torus_cad.cadquery_api import propeller_objects
+from torus_cad.propeller import propeller_objects
 from torus_cad.cli import EXIT_BAD_INPUT, EXIT_OK, main
-from torus_cad.geometry.parameters import PropellerParameters
+from torus_cad.parameters import PropellerParameters
 from torus_cad.kernel.checks import is_valid_closed_solid, mass_properties, precise_volume
 from torus_cad.kernel.export import read_step
 from torus_cad.kernel.hub import hub_solid

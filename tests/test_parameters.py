@@ -7,7 +7,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from torus_cad.errors import ParameterError
-from torus_cad.geometry.parameters import PropellerParameters, quartic_minimum
+from torus_cad.geometry.transforms import quartic_minimum
+from torus_cad.parameters import PropellerParameters
 
 
 def test_defaults_follow_the_spec_appendix(default_params):

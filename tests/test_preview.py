@@ -11,7 +11,8 @@ from OCP.BRep import BRep_Tool
 from OCP.TopLoc import TopLoc_Location
 from PIL import Image
 
-from torus_cad.cadquery_api import HUB_COLOR, blade_color, propeller_objects
+from torus_cad.colors import HUB_COLOR, blade_color
+from torus_cad.propeller import propeller_objects
 from torus_cad.cli import EXIT_BAD_INPUT, EXIT_OK, main
 from torus_cad.errors import ParameterError
 from torus_cad.kernel.checks import mass_properties

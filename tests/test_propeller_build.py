@@ -4,12 +4,13 @@ import re
 
 import numpy as np
 import pytest
-
 from conftest import assert_same_volume_as_general_fuse, read_binary_stl
+
 from torus_cad.geometry.surface import surface_points
 from torus_cad.kernel.checks import distances_to_shape, is_valid_closed_solid, precise_volume
 from torus_cad.kernel.export import read_step
-from torus_cad.propeller import FUSE_ROUTES, build_propeller
+from torus_cad.kernel.fuse import FuseRoute
+from torus_cad.propeller import build_propeller
 from torus_cad.tolerances import READ_BACK_RELATIVE_TOLERANCE, SURFACE_ACCURACY_RELATIVE
 
 
@@ -59,8 +60,8 @@ def test_analytic_surface_lies_on_the_brep(default_propeller, default_params):
     sections = default_params.resolution.sections
     s = (np.arange(4, sections - 5) + 0.5) / (sections - 1)
     t = np.linspace(0.03, 1.97, 9)
-    points = surface_points(default_params, s, t)
-    chord = np.linalg.norm(surface_points(default_params, s, [1.0])[:, 0] - surface_points(default_params, s, [0.0])[:, 0],
+    points = surface_points(default_params.geometry().blade, default_params.geometry().centerline(), s, t)
+    chord = np.linalg.norm(surface_points(default_params.geometry().blade, default_params.geometry().centerline(), s, [1.0])[:, 0] - surface_points(default_params.geometry().blade, default_params.geometry().centerline(), s, [0.0])[:, 0],
                            axis=-1)
     distances = distances_to_shape(default_propeller.blades[0], points.reshape(-1, 3)).reshape(points.shape[:2])
     assert np.all(distances <= SURFACE_ACCURACY_RELATIVE * chord[:, None])
@@ -94,5 +95,5 @@ def test_any_blade_count_fuses_into_one_solid(light_params, blades):
     assert len(propeller.blades) == blades
     assert precise_volume(propeller.solid) > precise_volume(propeller.hub)
     # One blade-hub intersection serves every blade, and gives what one general fuse gives.
-    assert propeller.fuse_route != FUSE_ROUTES[-1]
+    assert propeller.fuse_route != FuseRoute.GENERAL
     assert_same_volume_as_general_fuse(propeller)

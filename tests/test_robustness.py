@@ -25,8 +25,9 @@ from torus_cad.fuzzing import (TEST_ACTION_KEY, UNIT_DIMENSION, SupervisedPool, 
                                random_design_dict, run_design)
 from torus_cad.geometry import feasibility
 from torus_cad.geometry.centerline import Centerline
-from torus_cad.geometry.parameters import PropellerParameters
-from torus_cad.geometry.surface import blade_surface
+from torus_cad.geometry.frames import Frames
+from torus_cad.parameters import PropellerParameters
+
 
 LOW = {"sections": (24, 32), "points": (24, 32)}  # low points; sections near the default
 unit_vectors = st.lists(st.floats(0.0, 1.0), min_size=UNIT_DIMENSION, max_size=UNIT_DIMENSION)
@@ -148,10 +149,10 @@ def test_refused_design_exits_2_with_one_line_and_no_files(tmp_path, capsys):
 
 def test_default_design_passes_every_check_with_margin():
     params = PropellerParameters()
-    surface = blade_surface(params)
-    feasibility.check_feasible(params, surface, Centerline.for_blade(params))
+    surface = params.blade_surface()
+    feasibility.check_feasible(params.geometry(), surface)
     grid, step = feasibility.tube_grid(len(surface.s))
-    fine = feasibility.sample_tube(params, Centerline.for_blade(params), grid, surface.t)
+    fine = feasibility.sample_tube(params.geometry(), params.geometry().centerline(), grid, surface.t)
     assert feasibility.fold_ratio(fine)[0] < 0.95
     assert feasibility.resolution_deviation(surface, fine, step)[0] < feasibility.RESOLUTION_DEVIATION_LIMIT / 3
 
@@ -159,7 +160,7 @@ def test_default_design_passes_every_check_with_margin():
 def test_interleaved_blades_are_not_refused():
     """Toroidal blades nest: six default blades clear each other although each spans 100 > 60 degrees."""
     params = PropellerParameters().with_values({"blades": 6})
-    feasibility.check_feasible(params, blade_surface(params), Centerline.for_blade(params))
+    feasibility.check_feasible(params.geometry(), params.blade_surface())
 
 
 def _circle_tube(centers: np.ndarray, radius: float, points: int = 24) -> feasibility.Tube:
@@ -175,25 +176,25 @@ def _circle_tube(centers: np.ndarray, radius: float, points: int = 24) -> feasib
                              (len(centers), points, 2)).copy()
     surface = centers[:, None] + planar[..., :1] * normal[:, None] + planar[..., 1:] * binormal[:, None]
     arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(centers, axis=0), axis=1))])
-    return feasibility.Tube(np.linspace(0, 1, len(centers)), centers, tangent, normal, binormal, planar, surface,
-                            np.zeros_like(centers), arc)
+    frames = Frames(np.linspace(0, 1, len(centers)), centers, tangent, normal, binormal)
+    return feasibility.Tube(frames, planar, surface, np.zeros_like(centers), arc)
 
 
 def test_self_intersection_is_found():
     turns = np.linspace(0.0, 2.5 * np.pi, 160)  # a helix that climbs less than its tube's width per turn
     helix = np.stack([30 * np.cos(turns), 30 * np.sin(turns), 0.5 * turns], -1)
     with pytest.raises(GeometryError, match="intersects itself"):
-        feasibility.check_no_self_intersection(PropellerParameters(), _circle_tube(helix, 3.0))
+        feasibility.check_no_self_intersection(PropellerParameters().geometry().hub, _circle_tube(helix, 3.0))
     apart = np.stack([30 * np.cos(turns), 30 * np.sin(turns), 8.0 * turns], -1)  # well apart per turn
-    feasibility.check_no_self_intersection(PropellerParameters(), _circle_tube(apart, 3.0))
+    feasibility.check_no_self_intersection(PropellerParameters().geometry().hub, _circle_tube(apart, 3.0))
 
 
 def test_blades_running_into_each_other_are_found():
     rod = np.stack([np.linspace(12.0, 30.0, 40), np.zeros(40), np.zeros(40)], -1)  # radial rods, 8 mm thick
     crowded = PropellerParameters().with_values({"blades": 12})  # 30 degrees apart: axes 6.2 mm apart at r = 12
     with pytest.raises(GeometryError, match="intersect each other"):
-        feasibility.check_blades_clear(crowded, _circle_tube(rod, 4.0))
-    feasibility.check_blades_clear(PropellerParameters().with_values({"blades": 3}), _circle_tube(rod, 4.0))
+        feasibility.check_blades_clear(crowded.geometry(), _circle_tube(rod, 4.0))
+    feasibility.check_blades_clear(PropellerParameters().with_values({"blades": 3}).geometry(), _circle_tube(rod, 4.0))
 
 
 def test_hooked_trailing_edge_with_too_few_points_is_refused():
@@ -219,7 +220,7 @@ def test_hooked_trailing_edge_with_too_few_points_is_refused():
 _WRITER = textwrap.dedent("""
     import sys
     from pathlib import Path
-    from torus_cad.geometry.parameters import PropellerParameters
+    from torus_cad.parameters import PropellerParameters
     from torus_cad.propeller import build_propeller
     from torus_cad.kernel.export import write_step, write_stl
     kind, out = sys.argv[1], Path(sys.argv[2])

@@ -5,10 +5,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from torus_cad.geometry.centerline import Centerline
 from torus_cad.geometry.mesh import blade_mesh
-from torus_cad.geometry.parameters import PropellerParameters
-from torus_cad.geometry.surface import blade_surface, surface_points
+from torus_cad.geometry.surface import surface_points
+from torus_cad.parameters import PropellerParameters
 
 
 def rotation_about_z(angle_deg: float) -> np.ndarray:
@@ -19,23 +18,23 @@ def rotation_about_z(angle_deg: float) -> np.ndarray:
 @pytest.mark.parametrize("blades", [2, 3, 5])
 def test_blade_i_is_blade_0_rotated(blades):
     params = PropellerParameters().with_values({"blades": blades, "phase_deg": 17.0})
-    first = blade_surface(params, 0).points
+    first = params.blade_surface(0).points
     for index in range(1, blades):
         rotated = first @ rotation_about_z(360.0 * index / blades).T
-        np.testing.assert_allclose(blade_surface(params, index).points, rotated, atol=1e-9)
+        np.testing.assert_allclose(params.blade_surface(index).points, rotated, atol=1e-9)
 
 
 def test_leading_edge_sits_on_the_centerline(default_params):
-    surface = blade_surface(default_params)
-    np.testing.assert_allclose(surface.points[:, 0], Centerline.for_blade(default_params).points(surface.s),
+    surface = default_params.blade_surface()
+    np.testing.assert_allclose(surface.points[:, 0], default_params.geometry().centerline().points(surface.s),
                                atol=1e-12)
 
 
 def test_pivot_puts_that_chord_point_on_the_centerline():
     params = PropellerParameters().with_values({"airfoil.max_camber": 0.0, "airfoil.pivot": 0.5})
     s = np.linspace(0, 1, 7)
-    upper, lower = surface_points(params, s, [0.5, 1.5])[:, 0], surface_points(params, s, [0.5, 1.5])[:, 1]
-    np.testing.assert_allclose(0.5 * (upper + lower), Centerline.for_blade(params).points(s), atol=1e-12)
+    upper, lower = surface_points(params.geometry().blade, params.geometry().centerline(), s, [0.5, 1.5])[:, 0], surface_points(params.geometry().blade, params.geometry().centerline(), s, [0.5, 1.5])[:, 1]
+    np.testing.assert_allclose(0.5 * (upper + lower), params.geometry().centerline().points(s), atol=1e-12)
 
 
 def test_section_is_transformed_then_placed_on_n_and_b():
@@ -43,21 +42,21 @@ def test_section_is_transformed_then_placed_on_n_and_b():
                                                 "transforms.angle_of_attack": [0, 0, 0, 0, 0.0],
                                                 "transforms.scale_x": [0, 0, 0, 0, 5.0],
                                                 "transforms.scale_y": [0, 0, 0, 0, 2.0]})
-    surface = blade_surface(params, sections=5, points=40)
+    surface = params.blade_surface(sections=5, points=40)
     trailing_edge = surface.points[:, surface.trailing_edge_index]
     expected = surface.frames.origin + 5.0 * surface.frames.normal  # chord 1 along N, scaled by Sx
     np.testing.assert_allclose(trailing_edge, expected, atol=1e-12)
 
 
 def test_mesh_is_closed_and_outward(default_params):
-    mesh = blade_mesh(blade_surface(default_params))
+    mesh = blade_mesh(default_params.blade_surface())
     assert mesh.is_watertight()
     assert np.all(mesh.edge_use_counts() == 2)
     assert mesh.volume > 0
 
 
 def test_mesh_volume_converges_with_resolution(default_params):
-    volumes = [blade_mesh(blade_surface(default_params, sections=k, points=4 * k)).volume for k in (20, 40, 80)]
+    volumes = [blade_mesh(default_params.blade_surface(sections=k, points=4 * k)).volume for k in (20, 40, 80)]
     assert volumes[0] < volumes[1] < volumes[2]  # inscribed polyhedra grow toward the surface
     assert (volumes[2] - volumes[1]) < 0.3 * (volumes[1] - volumes[0])  # second-order convergence
 
@@ -68,6 +67,6 @@ def test_mesh_volume_converges_with_resolution(default_params):
 def test_mesh_is_closed_for_any_sampling(sections, points, camber, thickness, camber_normal):
     params = PropellerParameters().with_values({"airfoil.max_camber": camber, "airfoil.thickness": thickness,
                                                 "airfoil.camber_normal": camber_normal})
-    mesh = blade_mesh(blade_surface(params, sections=sections, points=points))
+    mesh = blade_mesh(params.blade_surface(sections=sections, points=points))
     assert mesh.is_watertight() and mesh.volume > 0
     assert mesh.faces.shape[0] == 2 * (sections - 1) * points + 2 * (points - 2)

@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from torus_cad.errors import GeometryError, ParameterError, TorusCadError
-from torus_cad.geometry.parameters import PropellerParameters, resolve_parameters
+from torus_cad.parameters import PropellerParameters, resolve_parameters
 
 EXIT_OK, EXIT_KERNEL_FAILURE, EXIT_BAD_INPUT = 0, 1, 2
 

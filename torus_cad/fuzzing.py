@@ -38,7 +38,9 @@ from typing import Any
 
 import numpy as np
 
-from torus_cad.geometry.parameters import FRAME_CHOICES, PropellerParameters, quartic_minimum
+from torus_cad.geometry.frames import FrameKind
+from torus_cad.geometry.transforms import quartic_minimum
+from torus_cad.parameters import PropellerParameters
 
 #: Length of the unit vector that :func:`design_from_unit` consumes.
 UNIT_DIMENSION = 39
@@ -140,7 +142,7 @@ def design_dict_from_unit(u: Sequence[float], name: str = "fuzz",
     z2 = max(vary(22.0 * size, 3.0), -0.9 * inset)
     z3 = max(vary(22.0 * size, 3.0), -0.9 * inset)
     x2, x3 = (float(np.clip(x, -359.0, 359.0)) for x in (x2, x3))
-    frame = FRAME_CHOICES[0] if take() < 0.5 else FRAME_CHOICES[1]
+    frame = (FrameKind.FRENET if take() < 0.5 else FrameKind.ROTATION_MINIMIZING).value
 
     alpha = (shift(0.0, 250.0), shift(0.0, 250.0), shift(0.0, 250.0), shift(0.0, 250.0), shift(20.0, 90.0))
     # Sections shrink with the span (a shorter blade bends tighter); ends start at half the default's.

@@ -25,9 +25,9 @@ from numpy.typing import NDArray
 
 import cadquery as cq
 
-from torus_cad.cadquery_api import HUB_COLOR, blade_color
+from torus_cad.colors import HUB_COLOR, blade_color
 from torus_cad.errors import ParameterError
-from torus_cad.geometry.parameters import PropellerParameters
+from torus_cad.parameters import PropellerParameters
 from torus_cad.kernel.checks import distances_to_shape, precise_volume
 from torus_cad.kernel.export import atomic_path
 
@@ -274,7 +274,7 @@ def render_preview(propeller: _HasParts, size: Sequence[int] = DEFAULT_SIZE, tit
 
     Args:
         propeller: a built propeller (``torus_cad.propeller.Propeller`` or
-            ``torus_cad.cadquery_api.PropellerObjects``): its ``solid``, ``hub`` and ``blades``.
+            ``torus_cad.propeller.Propeller``): its ``solid``, ``hub`` and ``blades``.
         size: (width, height) in pixels, each 64..8000.
         title: text above the views (default: the name, blade count and volume in mm^3).
         progress: optional callback, called with ``"tessellate"`` and ``"render"``.

@@ -2,83 +2,59 @@
 
 This is the package's Python API::
 
-    from torus_cad import PropellerParameters, build_propeller
-    propeller = build_propeller(PropellerParameters())     # or build_propeller("design.toml")
+    from torus_cad import build_propeller
+    propeller = build_propeller("design.toml", overrides={"blades": 4})   # or None: the default
     propeller.solid          # cq.Solid, the fused propeller (mm)
-    propeller.workplane()    # cq.Workplane holding it, for further CadQuery work
-    propeller.hub, propeller.blades
+    propeller.workplane      # cq.Workplane holding it, for further CadQuery work
+    propeller.hub, propeller.blades, propeller.assembly()
     propeller.write("step_out")  # <name>.step, .stl, .json
 """
 
 from __future__ import annotations
 
 import json
-import time
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-
-import numpy as np
+from typing import Any
 
 import cadquery as cq
+import numpy as np
+from numpy.typing import NDArray
 
+from torus_cad.colors import HUB_COLOR, blade_color
 from torus_cad.errors import KernelError
-from torus_cad.geometry.centerline import Centerline, blade_angle_deg
 from torus_cad.geometry.feasibility import check_feasible
 from torus_cad.geometry.hub import seam_angle_deg
-from torus_cad.geometry.parameters import PropellerParameters, resolve_parameters
-from torus_cad.geometry.surface import BladeSurface, blade_surface
+from torus_cad.geometry.surface import BladeSurface
 from torus_cad.kernel.checks import MassProperties, mass_properties, precise_volume, single_valid_solid
 from torus_cad.kernel.export import atomic_path, write_step, write_stl
-from torus_cad.kernel.fuse import JOINS, fuse_all, fuse_pattern, pattern_blades
+from torus_cad.kernel.fuse import FuseRoute, fuse_all, fuse_pattern, pattern_blades
 from torus_cad.kernel.hub import hub_solid
 from torus_cad.kernel.loft import loft_solid
 from torus_cad.kernel.wires import SectionCurves, fit_section_curves
+from torus_cad.parameters import PropellerParameters, resolve_parameters
+from torus_cad.stages import Stage, StageTimer
 from torus_cad.tolerances import VOLUME_CHECK_RELATIVE_PRECISION
-
-#: The ways the blades are joined to the hub (see torus_cad.kernel.fuse): one blade-hub
-#: intersection shared by all blades, then the shell assembled or the parts glued; or, as
-#: the fallback, one general fuse of the hub and all blades.
-FUSE_ROUTES = (*(f"shared intersection, {join}" for join in JOINS), "one fuse")
 
 #: Default density for mass: PLA, a common printing plastic (g/cm^3).
 DEFAULT_DENSITY_G_CM3 = 1.24
 
 
-class StageTimer:
-    """Wall-clock seconds per named stage, in the order the stages ran."""
-
-    def __init__(self, on_start: Callable[[str], None] | None = None) -> None:
-        self.seconds: dict[str, float] = {}
-        self.on_start = on_start  # called with each stage's name as it starts (progress display)
-
-    @contextmanager
-    def stage(self, name: str) -> Iterator[None]:
-        if self.on_start is not None:
-            self.on_start(name)
-        start = time.perf_counter()
-        try:
-            yield
-        finally:
-            self.seconds[name] = self.seconds.get(name, 0.0) + time.perf_counter() - start
-
-
 @dataclass
 class Propeller:
-    """A built propeller: the fused solid, its parts and how long each stage took.
+    """A built propeller: the fused solid, its parts, and how it was made (mm; spin axis = z).
 
     Attributes:
         parameters: the design.
-        solid: the fused propeller, one valid closed solid (mm).
-        hub: the hub cylinder alone.
-        blades: every blade alone, blade i at theta_0 + 360 i / n.
+        solid: the fused propeller, one valid closed ``cq.Solid``.
+        hub: the hub cylinder alone (radius R, length L, centred at the origin), before the fuse.
+        blades: each blade alone, before the fuse, blade i at ``phase_deg + 360 i / n`` degrees.
+            The blades' ends reach into the hub, so hub and blades overlap; ``solid`` is the union.
         surface: blade 0's sampled surface from the geometry layer.
         section_curves: blade 0's section B-splines (plain arrays).
-        stage_seconds: seconds per stage (section math, wires, loft, fuse, check, ...).
-        fuse_route: how the blades were joined to the hub, one of FUSE_ROUTES: one
-            blade-hub intersection reused for every blade (the usual route), or
-            ``"one fuse"``, a general boolean of the hub and all blades (the fallback).
+        stage_seconds: seconds per stage (keys: :class:`torus_cad.stages.Stage` values).
+        fuse_route: how the blades were joined to the hub.
     """
 
     parameters: PropellerParameters
@@ -88,14 +64,30 @@ class Propeller:
     surface: BladeSurface
     section_curves: SectionCurves
     stage_seconds: dict[str, float] = field(default_factory=dict)
-    fuse_route: str = FUSE_ROUTES[0]
+    fuse_route: FuseRoute = FuseRoute.ASSEMBLED
 
+    @property
     def workplane(self) -> cq.Workplane:
-        """A cq.Workplane holding the fused solid."""
+        """A ``cq.Workplane`` on XY holding the fused solid; chain CadQuery operations on it."""
         return cq.Workplane("XY").add(self.solid)
 
+    def assembly(self, name: str | None = None, fused: bool = False) -> cq.Assembly:
+        """A ``cq.Assembly`` of named, coloured parts: ``hub`` and ``blade_0`` .. ``blade_{n-1}``.
+
+        With ``fused=True`` it holds the single fused solid instead, named ``propeller``.
+        The assembly's name defaults to the design's name.
+        """
+        assembly = cq.Assembly(name=name or self.parameters.name)
+        if fused:
+            return assembly.add(self.solid, name="propeller", color=cq.Color(*HUB_COLOR))
+        assembly.add(self.hub, name="hub", color=cq.Color(*HUB_COLOR))
+        for index, blade in enumerate(self.blades):
+            assembly.add(blade, name=f"blade_{index}", color=cq.Color(*blade_color(index, len(self.blades))))
+        return assembly
+
     def mass_properties(self, density_g_cm3: float = DEFAULT_DENSITY_G_CM3) -> MassProperties:
-        """Volume, area, centroid, spin-axis inertia and mass (OpenCascade, adaptive precision)."""
+        """Volume (mm^3), area (mm^2), centroid (mm), spin-axis inertia and mass (g) for a density in
+        g/cm^3 (default 1.24, PLA), by OpenCascade's adaptive integration."""
         return mass_properties(self.solid, density_g_cm3)
 
     def write(self, out_dir: str | Path, density_g_cm3: float = DEFAULT_DENSITY_G_CM3,
@@ -104,62 +96,73 @@ class Propeller:
         return write_outputs(self, Path(out_dir), density_g_cm3, stl)
 
 
-def _section_chords(surface: BladeSurface) -> np.ndarray:
-    trailing_edge = surface.trailing_edge_index or 0
-    return np.linalg.norm(surface.points[:, trailing_edge] - surface.points[:, 0], axis=-1)
+def _section_chords(surface: BladeSurface) -> NDArray[np.float64]:
+    return np.linalg.norm(surface.points[:, surface.trailing_edge_column] - surface.points[:, 0], axis=-1)
 
 
 def build_propeller(design: PropellerParameters | str | Path | None = None,
-                    progress: Callable[[str], None] | None = None) -> Propeller:
-    """Build the fused propeller of ``design`` (parameters, a TOML path, or None for the default).
+                    overrides: Mapping[str, Any] | None = None,
+                    progress: Callable[[Stage], None] | None = None) -> Propeller:
+    """Build the fused propeller of ``design``.
 
-    ``progress``, if given, is called with each stage's name (``section_math``, ``wires``,
-    ``loft``, ``fuse``, ``check``, ...) as the stage starts.
+    Args:
+        design: a :class:`PropellerParameters`, the path of a TOML design file, or None for the
+            default propeller.
+        overrides: optional dotted-key changes applied on top of ``design``, in the design's
+            units (mm, degrees), e.g. ``{"blades": 4, "hub.radius": 12.0}``.
+        progress: optional callback, called with each :class:`Stage` as it starts.
 
-    Raises ParameterError for bad parameters, GeometryError for designs that cannot make a
-    sound propeller (refused before the kernel runs), KernelError when OpenCascade fails.
+    Raises:
+        ParameterError: a bad parameter or design file (the message names the field).
+        GeometryError: valid parameters that describe no sound propeller (refused before the kernel runs).
+        KernelError: OpenCascade failed.
     """
     timer = StageTimer(progress)
-    with timer.stage("parameters"):
-        params = resolve_parameters(design)
-    with timer.stage("section_math"):
-        surface = blade_surface(params)
-        check_feasible(params, surface, Centerline.for_blade(params))
+    with timer.stage(Stage.PARAMETERS):
+        params = resolve_parameters(design, overrides)
+        geometry = params.geometry()
+    with timer.stage(Stage.SECTION_MATH):
+        surface = params.blade_surface()
+        check_feasible(geometry, surface)
         # The hub is symmetric about its axis; its seam goes where it crosses no blade root.
-        seam_deg = seam_angle_deg(surface.points, params.hub.radius, params.blades)
-    with timer.stage("wires"):
-        curves = fit_section_curves(surface.points, surface.trailing_edge_index, _section_chords(surface))
+        seam_deg = seam_angle_deg(surface.points, geometry.hub.radius_mm, geometry.blades)
+    with timer.stage(Stage.WIRES):
+        curves = fit_section_curves(surface.points, surface.trailing_edge_column, _section_chords(surface))
         wires = curves.wires()
-    with timer.stage("loft"):
+    with timer.stage(Stage.LOFT):
         blade = loft_solid(wires, surface.s)
-        hub = hub_solid(params.hub.radius, params.hub.length, 0.0 if seam_deg is None else seam_deg)
-        angles_deg = [blade_angle_deg(params, i) for i in range(params.blades)]
+        hub = hub_solid(geometry.hub.radius_mm, geometry.hub.length_mm, 0.0 if seam_deg is None else seam_deg)
+        angles_deg = [geometry.blade_angle_deg(i) for i in range(geometry.blades)]
         blades = pattern_blades(blade, angles_deg)
     solid, route = _join_blades_to_hub(hub, blade, blades, angles_deg, timer)
     return Propeller(params, solid, hub, blades, surface, curves, timer.seconds, route)
 
 
+#: Another name for :func:`build_propeller`, for people who continue in CadQuery.
+propeller_objects = build_propeller
+
+
 def _join_blades_to_hub(hub: cq.Solid, blade: cq.Solid, blades: list[cq.Solid], angles_deg: list[float],
-                        timer: StageTimer) -> tuple[cq.Solid, str]:
-    """The fused, checked propeller and the route that made it (one of FUSE_ROUTES).
+                        timer: StageTimer) -> tuple[cq.Solid, FuseRoute]:
+    """The fused, checked propeller and the route that made it.
 
     The shared-intersection route's result is checked for validity, which includes every
     edge's curve on the hub against its 3D curve. Where that route fails, one general fuse
     is used and its volume is checked as well.
     """
     try:
-        with timer.stage("fuse"):
-            fused, join = fuse_pattern(hub, blade, angles_deg)
-        with timer.stage("check"):
-            return single_valid_solid(fused, "joining the blades to the hub"), FUSE_ROUTES[JOINS.index(join)]
+        with timer.stage(Stage.FUSE):
+            fused, route = fuse_pattern(hub, blade, angles_deg)
+        with timer.stage(Stage.CHECK):
+            return single_valid_solid(fused, "joining the blades to the hub"), route
     except KernelError:
         pass  # the general fuse below decides
-    with timer.stage("fuse"):
+    with timer.stage(Stage.FUSE):
         fused = fuse_all(hub, blades)
-    with timer.stage("check"):
+    with timer.stage(Stage.CHECK):
         solid = single_valid_solid(fused, "fusing the blades with the hub")
         _check_volume(solid, hub, blade, len(blades))
-    return solid, FUSE_ROUTES[-1]
+    return solid, FuseRoute.GENERAL
 
 
 def _check_volume(solid: cq.Solid, hub: cq.Solid, blade: cq.Solid, blades: int) -> None:
@@ -171,7 +174,7 @@ def _check_volume(solid: cq.Solid, hub: cq.Solid, blade: cq.Solid, blades: int) 
                           f"hub + {blades} blades {hub_volume + blades * blade_volume:.3f}] mm^3")
 
 
-def build_report(propeller: Propeller, density_g_cm3: float) -> dict:
+def build_report(propeller: Propeller, density_g_cm3: float) -> dict[str, Any]:
     """The JSON report: parameters, mass properties, validity and stage times."""
     properties = propeller.mass_properties(density_g_cm3)
     return {
@@ -182,7 +185,7 @@ def build_report(propeller: Propeller, density_g_cm3: float) -> dict:
         **properties.to_dict(),
         "section_fit_error_mm": propeller.section_curves.fit_error,
         "stage_seconds": dict(propeller.stage_seconds),
-        "fuse_route": propeller.fuse_route,
+        "fuse_route": propeller.fuse_route.value,
     }
 
 
@@ -192,11 +195,11 @@ def write_outputs(propeller: Propeller, out_dir: Path, density_g_cm3: float = DE
     params = propeller.parameters
     timer = StageTimer()
     paths: dict[str, Path] = {}
-    with timer.stage("step_write"):
+    with timer.stage(Stage.STEP_WRITE):
         paths["step"] = write_step(propeller.solid, out_dir / f"{params.name}.step", params.name,
                                    params.export.step_schema)
     if stl:
-        with timer.stage("stl_write"):
+        with timer.stage(Stage.STL_WRITE):
             paths["stl"] = write_stl(propeller.solid, out_dir / f"{params.name}.stl",
                                      params.export.stl_linear_deflection, params.export.stl_angular_deflection)
     propeller.stage_seconds.update(timer.seconds)

@@ -75,7 +75,7 @@ from typing import Any, TextIO
 import numpy as np
 
 from torus_cad.errors import GeometryError, KernelError, ParameterError, TorusCadError
-from torus_cad.geometry.parameters import PropellerParameters
+from torus_cad.parameters import PropellerParameters
 from torus_cad.progress import is_terminal
 
 __all__ = [

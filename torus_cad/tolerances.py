@@ -57,6 +57,11 @@ HUB_FOOTPRINT_NEAR_RELATIVE = 0.02
 #: seam is placed beside it.
 HUB_FOOTPRINT_MARGIN_DEG = 1.0
 
+# -- limits on inputs ------------------------------------------------------------------------
+
+#: Largest configuration file read (bytes): a design is a few hundred bytes.
+CONFIG_FILE_MAX_BYTES = 1 << 20
+
 #: Surface meshes (torus_cad.mesh): largest sag of the flat faces from the analytic blade, as a
 #: fraction of the local chord, above which a resolution is refused (the default design sags
 #: 0.02 % at 100 x 400, 1.8 % with 10 sections).

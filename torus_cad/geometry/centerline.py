@@ -10,17 +10,10 @@ from __future__ import annotations
 import numpy as np
 from geomdl import BSpline
 from numpy.typing import ArrayLike, NDArray
-
-from torus_cad.geometry.parameters import PropellerParameters
+from scipy.interpolate import BSpline as ScipyBSpline
 
 #: Clamped cubic knot vector with a single span (spec §3.4).
 KNOT_VECTOR = (0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0)
-
-
-def local_control_points(params: PropellerParameters) -> NDArray[np.float64]:
-    """P1..P4 in frame L, ``(4, 3)`` float: [x_L deg, y_L mm, z_L mm]."""
-    line = params.centerline
-    return np.array([(0.0, 0.0, 0.0), line.p2, line.p3, (*line.p4, 0.0)], dtype=float)
 
 
 def local_to_cylindrical(local: ArrayLike, hub_radius: float, hub_length: float,
@@ -39,22 +32,13 @@ def cylindrical_to_cartesian(cylindrical: ArrayLike) -> NDArray[np.float64]:
     return np.stack([r * np.cos(theta), r * np.sin(theta), z], axis=-1)
 
 
-def blade_angle_deg(params: PropellerParameters, blade_index: int) -> float:
-    """theta_i = theta_0 + 360 i / n (spec §6.1), degrees."""
-    return params.phase_deg + 360.0 * blade_index / params.blades
-
-
-def control_points(params: PropellerParameters, blade_index: int = 0) -> NDArray[np.float64]:
-    """Cartesian control points of blade ``blade_index``, ``(4, 3)`` mm."""
-    cylindrical = local_to_cylindrical(local_control_points(params), params.hub.radius, params.hub.length,
-                                       blade_angle_deg(params, blade_index))
-    return cylindrical_to_cartesian(cylindrical)
-
-
 class Centerline:
     """The cubic clamped B-spline C(s), s in [0, 1] (all weights 1, so the NURBS is polynomial).
 
-    Built with geomdl from Cartesian control points; evaluation returns numpy arrays in mm.
+    The curve is defined with geomdl (``self.curve``: degree, knots, control points); it is
+    evaluated, with its derivatives, for whole arrays of s at once by scipy's B-spline of the
+    same knots and poles (geomdl evaluates one point at a time in Python). Results are numpy
+    arrays in mm.
     """
 
     def __init__(self, cartesian_control_points: ArrayLike) -> None:
@@ -67,21 +51,26 @@ class Centerline:
         curve.ctrlpts = points.tolist()
         curve.knotvector = list(KNOT_VECTOR)
         self.curve = curve
+        spline = ScipyBSpline(np.asarray(curve.knotvector), np.asarray(curve.ctrlpts), curve.degree)
+        self._derivatives = [spline] + [spline.derivative(k) for k in range(1, curve.degree + 1)]
 
     @classmethod
-    def for_blade(cls, params: PropellerParameters, blade_index: int = 0) -> "Centerline":
-        """The centerline of blade ``blade_index`` of a propeller."""
-        return cls(control_points(params, blade_index))
+    def in_hub_frame(cls, local_control_points: ArrayLike, hub_radius_mm: float, hub_length_mm: float,
+                     blade_angle_deg: float) -> "Centerline":
+        """The centerline whose control points ``(4, 3)`` are given in frame L of a blade at ``blade_angle_deg``."""
+        cylindrical = local_to_cylindrical(local_control_points, hub_radius_mm, hub_length_mm, blade_angle_deg)
+        return cls(cylindrical_to_cartesian(cylindrical))
 
     def derivatives(self, s: ArrayLike, order: int = 3) -> NDArray[np.float64]:
         """C and its derivatives d^k C / ds^k, k = 0..order: ``(len(s), order + 1, 3)`` mm."""
         s = np.atleast_1d(np.asarray(s, dtype=float))
-        return np.array([self.curve.derivatives(float(value), order=order) for value in s])
+        values = [self._derivatives[k](s) if k < len(self._derivatives) else np.zeros((len(s), 3))
+                  for k in range(order + 1)]
+        return np.stack(values, axis=1)
 
     def points(self, s: ArrayLike) -> NDArray[np.float64]:
         """C(s), ``(len(s), 3)`` mm."""
-        s = np.atleast_1d(np.asarray(s, dtype=float))
-        return np.array(self.curve.evaluate_list(s.tolist()))
+        return np.asarray(self._derivatives[0](np.atleast_1d(np.asarray(s, dtype=float))))
 
     def length(self, samples: int = 2001) -> float:
         """Arc length of the centerline (mm), from a dense polyline."""

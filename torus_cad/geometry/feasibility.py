@@ -28,10 +28,9 @@ from numpy.typing import NDArray
 from torus_cad.errors import GeometryError
 from torus_cad.geometry.airfoil import airfoil_points
 from torus_cad.geometry.centerline import Centerline
-from torus_cad.geometry.frames import Frames, frenet_from_derivatives
-from torus_cad.geometry.parameters import PropellerParameters
-from torus_cad.geometry.surface import (BladeSurface, airfoil_of, blade_frames, place_on_frames,
-                                       section_coordinates)
+from torus_cad.geometry.frames import Frames
+from torus_cad.geometry.propeller import HubGeometry, PropellerGeometry
+from torus_cad.geometry.surface import BladeSurface, blade_frames, place_on_frames
 
 #: A section may reach at most this fraction of the way to the centre of curvature (check 3).
 FOLD_LIMIT = 1.0
@@ -57,15 +56,15 @@ def _radius(points: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.hypot(points[..., 0], points[..., 1])
 
 
-def _outside_hub(params: PropellerParameters, points: NDArray[np.float64]) -> NDArray[np.bool_]:
-    return (_radius(points) > params.hub.radius) | (np.abs(points[..., 2]) > params.hub.length / 2.0)
+def _outside_hub(hub: HubGeometry, points: NDArray[np.float64]) -> NDArray[np.bool_]:
+    return (_radius(points) > hub.radius_mm) | (np.abs(points[..., 2]) > hub.length_mm / 2.0)
 
 
 # -- 1, 2: ends and centerline ----------------------------------------------------------------
 
-def check_ends_inside_hub(params: PropellerParameters, surface: BladeSurface) -> None:
+def check_ends_inside_hub(hub: HubGeometry, surface: BladeSurface) -> None:
     """The first and last sections must lie inside the hub (r < R, |z| < L/2) so the fuse hides them."""
-    radius, half_length = params.hub.radius, params.hub.length / 2.0
+    radius, half_length = hub.radius_mm, hub.length_mm / 2.0
     for label, section in (("root (s = 0)", surface.points[0]), ("tip end (s = 1)", surface.points[-1])):
         outside_radius = _radius(section).max()
         outside_axis = np.abs(section[:, 2]).max()
@@ -76,12 +75,12 @@ def check_ends_inside_hub(params: PropellerParameters, surface: BladeSurface) ->
                 "make transforms.scale_x / scale_y smaller at that end or the hub larger")
 
 
-def check_centerline_leaves_through_side(params: PropellerParameters, centerline: Centerline,
+def check_centerline_leaves_through_side(hub: HubGeometry, centerline: Centerline,
                                          samples: int = 401) -> None:
     """Inside the hub's radius the centerline must stay between the end faces (|z| < L/2)."""
     points = centerline.points(np.linspace(0.0, 1.0, samples))
-    inside = _radius(points) < params.hub.radius
-    crossing = inside & (np.abs(points[:, 2]) >= params.hub.length / 2.0)
+    inside = _radius(points) < hub.radius_mm
+    crossing = inside & (np.abs(points[:, 2]) >= hub.length_mm / 2.0)
     if np.any(crossing):
         where = np.linspace(0.0, 1.0, samples)[np.argmax(crossing)]
         raise GeometryError(
@@ -96,19 +95,14 @@ class Tube:
     """The blade surface sampled on a check grid, with its frames and in-plane coordinates.
 
     Attributes:
-        s: ``(m,)`` parameters of the grid's sections.
-        origin, tangent, normal, binormal: ``(m, 3)`` the frames (unit vectors).
+        frames: the ``m`` sections' frames (s, origin, unit tangent, normal, binormal).
         planar: ``(m, p, 2)`` section coordinates (X along N, Y along B), mm.
         points: ``(m, p, 3)`` surface points, mm.
         curvature: ``(m, 3)`` curvature vectors of the centerline (kappa times the Frenet normal), 1/mm.
         arc_length: ``(m,)`` centerline arc length from s = 0, mm.
     """
 
-    s: NDArray[np.float64]
-    origin: NDArray[np.float64]
-    tangent: NDArray[np.float64]
-    normal: NDArray[np.float64]
-    binormal: NDArray[np.float64]
+    frames: Frames
     planar: NDArray[np.float64]
     points: NDArray[np.float64]
     curvature: NDArray[np.float64]
@@ -120,23 +114,6 @@ class Tube:
         return np.linalg.norm(self.planar, axis=-1).max(axis=1)
 
 
-def _bezier_derivatives(control_points: NDArray[np.float64], s: NDArray[np.float64]
-                        ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """C'(s) and C''(s) of the single-span cubic (clamped knots 0,0,0,0,1,1,1,1 make it a Bezier curve)."""
-    p0, p1, p2, p3 = control_points
-    u = s[:, None]
-    first = 3 * ((1 - u) ** 2 * (p1 - p0) + 2 * u * (1 - u) * (p2 - p1) + u**2 * (p3 - p2))
-    second = 6 * ((1 - u) * (p2 - 2 * p1 + p0) + u * (p3 - 2 * p2 + p1))
-    return first, second
-
-
-def _bezier_points(control_points: NDArray[np.float64], s: NDArray[np.float64]) -> NDArray[np.float64]:
-    """C(s) of the single-span cubic."""
-    p0, p1, p2, p3 = control_points
-    u = s[:, None]
-    return (1 - u) ** 3 * p0 + 3 * u * (1 - u) ** 2 * p1 + 3 * u**2 * (1 - u) * p2 + u**3 * p3
-
-
 def tube_grid(sections: int, at_least: int = CHECK_SECTIONS) -> tuple[NDArray[np.float64], int]:
     """A uniform s grid that holds every section's s and every midpoint between sections, and its step.
 
@@ -146,29 +123,23 @@ def tube_grid(sections: int, at_least: int = CHECK_SECTIONS) -> tuple[NDArray[np
     return np.linspace(0.0, 1.0, k * (sections - 1) + 1), k
 
 
-def sample_tube(params: PropellerParameters, centerline: Centerline, s: NDArray[np.float64],
+def sample_tube(geometry: PropellerGeometry, centerline: Centerline, s: NDArray[np.float64],
                 t: NDArray[np.float64]) -> Tube:
     """Blade 0's analytic surface at every (s, t) of the grid, with frames and curvature.
 
-    Frenet frames are evaluated here in closed form (the centerline is one cubic Bezier span,
-    the same curve geomdl evaluates); the caller has already checked with
-    :func:`torus_cad.geometry.frames.check_frenet_defined` (inside ``blade_surface``) that they
-    exist. Other frame kinds come from :func:`blade_frames`.
+    The frames are the blade's own kind (:func:`torus_cad.geometry.surface.blade_frames`).
     """
-    first, second = _bezier_derivatives(centerline.control_points, s)
+    derivatives = centerline.derivatives(s, order=2)
+    first, second = derivatives[:, 1], derivatives[:, 2]
     speed = np.linalg.norm(first, axis=-1)
     tangent = first / speed[:, None]
     curvature = (second - np.sum(second * tangent, axis=-1, keepdims=True) * tangent) / speed[:, None] ** 2
-    if params.centerline.frame == "frenet":
-        frames = Frames(s, _bezier_points(centerline.control_points, s), *frenet_from_derivatives(first, second))
-    else:
-        frames = blade_frames(params, s)
-    planar = section_coordinates(params, s, airfoil_points(airfoil_of(params), t))
+    frames = blade_frames(geometry.blade, centerline, s)
+    planar = geometry.blade.laws.apply(airfoil_points(geometry.blade.airfoil, t), s)
     surface = place_on_frames(frames, planar)
     steps = np.linalg.norm(np.diff(frames.origin, axis=0), axis=-1)
     arc_length = np.concatenate([[0.0], np.cumsum(steps)])
-    return Tube(s, frames.origin, frames.tangent, frames.normal, frames.binormal, planar, surface, curvature,
-                arc_length)
+    return Tube(frames, planar, surface, curvature, arc_length)
 
 
 def coarsen(tube: Tube, sections: int = CHECK_SECTIONS, points: int = CHECK_POINTS) -> Tube:
@@ -176,8 +147,7 @@ def coarsen(tube: Tube, sections: int = CHECK_SECTIONS, points: int = CHECK_POIN
     m, p, _ = tube.points.shape
     rows = np.unique(np.concatenate([np.arange(0, m, max(1, m // sections)), [m - 1]]))
     columns = np.arange(0, p, max(1, int(np.ceil(p / points))))
-    return Tube(tube.s[rows], tube.origin[rows], tube.tangent[rows], tube.normal[rows], tube.binormal[rows],
-                tube.planar[rows][:, columns], tube.points[rows][:, columns], tube.curvature[rows],
+    return Tube(tube.frames.take(rows), tube.planar[rows][:, columns], tube.points[rows][:, columns], tube.curvature[rows],
                 tube.arc_length[rows])
 
 
@@ -190,10 +160,10 @@ def fold_ratio(tube: Tube) -> tuple[float, float]:
     where k is the curvature vector: where k . o reaches 1 neighbouring sections cross and
     the surface folds over itself.
     """
-    offsets = tube.points - tube.origin[:, None, :]
+    offsets = tube.points - tube.frames.origin[:, None, :]
     ratio = np.einsum("mpk,mk->mp", offsets, tube.curvature).max(axis=1)
     worst = int(np.argmax(ratio))
-    return float(ratio[worst]), float(tube.s[worst])
+    return float(ratio[worst]), float(tube.frames.s[worst])
 
 
 def check_no_fold(tube: Tube, limit: float | None = None) -> None:
@@ -201,7 +171,7 @@ def check_no_fold(tube: Tube, limit: float | None = None) -> None:
     limit = FOLD_LIMIT if limit is None else limit
     ratio, where = fold_ratio(tube)
     if ratio >= limit:
-        index = int(np.argmin(np.abs(tube.s - where)))
+        index = int(np.argmin(np.abs(tube.frames.s - where)))
         bend_radius = 1.0 / max(float(np.linalg.norm(tube.curvature[index])), 1e-300)
         raise GeometryError(
             f"the blade folds over itself near s = {where:.3f}: its section reaches {ratio:.2f} x the "
@@ -221,7 +191,7 @@ def resolution_deviation(surface: BladeSurface, fine: Tube, step: int) -> tuple[
     sparse sections of a strongly changing blade misses the design badly, can come out
     inside out, and the fuse then fails or hangs (found by ``scripts/fuzz.py``).
     """
-    middle = fine.s[step // 2::step]
+    middle = fine.frames.s[step // 2::step]
     exact = fine.points[step // 2::step]
     straight = 0.5 * (surface.points[:-1] + surface.points[1:])
     sag = np.linalg.norm(straight - exact, axis=-1).max(axis=1)
@@ -231,7 +201,7 @@ def resolution_deviation(surface: BladeSurface, fine: Tube, step: int) -> tuple[
     return float(relative[worst]), float(middle[worst])
 
 
-def check_sections_resolved(params: PropellerParameters, surface: BladeSurface, fine: Tube, step: int,
+def check_sections_resolved(surface: BladeSurface, fine: Tube, step: int,
                             limit: float | None = None) -> None:
     """Refuse a blade whose sections are too sparse for how fast it bends, twists or tapers.
 
@@ -240,7 +210,7 @@ def check_sections_resolved(params: PropellerParameters, surface: BladeSurface, 
     limit = RESOLUTION_DEVIATION_LIMIT if limit is None else limit
     relative, where = resolution_deviation(surface, fine, step)
     if relative > limit:
-        sections = params.resolution.sections
+        sections = len(surface.s)
         # The sag falls like the square of the spacing: estimate the sections that meet the limit.
         needed = int(np.ceil((sections - 1) * np.sqrt(relative / limit) * 1.05)) + 1
         raise GeometryError(
@@ -259,7 +229,7 @@ def _points_inside(tube: Tube, query: NDArray[np.float64], allowed: NDArray[np.b
     backward side of section k + 1's, and inside the section interpolated to its position.
     ``allowed`` ``(q, m - 1)`` masks the slabs tested per point (e.g. to skip a point's neighbours).
     """
-    heights = query @ tube.tangent.T - np.sum(tube.origin * tube.tangent, axis=-1)  # (q, m)
+    heights = query @ tube.frames.tangent.T - np.sum(tube.frames.origin * tube.frames.tangent, axis=-1)  # (q, m)
     in_slab = (heights[:, :-1] >= 0.0) & (heights[:, 1:] < 0.0)
     if allowed is not None:
         in_slab &= allowed
@@ -268,20 +238,20 @@ def _points_inside(tube: Tube, query: NDArray[np.float64], allowed: NDArray[np.b
     where = np.full(len(query), -1, dtype=np.int64)
     # A point inside slab k lies within the larger section radius (plus the slab's length) of C_k.
     radius = tube.section_radius
-    reach = np.maximum(radius[:-1], radius[1:]) + np.linalg.norm(np.diff(tube.origin, axis=0), axis=-1)
-    near = np.linalg.norm(query[point_index] - tube.origin[slab], axis=-1) <= reach[slab]
+    reach = np.maximum(radius[:-1], radius[1:]) + np.linalg.norm(np.diff(tube.frames.origin, axis=0), axis=-1)
+    near = np.linalg.norm(query[point_index] - tube.frames.origin[slab], axis=-1) <= reach[slab]
     point_index, slab = point_index[near], slab[near]
     if point_index.size == 0:
         return inside, where
     h0, h1 = heights[point_index, slab], heights[point_index, slab + 1]
     weight = (h0 / (h0 - h1))[:, None]
     polygon = (1.0 - weight[:, :, None]) * tube.planar[slab] + weight[:, :, None] * tube.planar[slab + 1]
-    relative0 = query[point_index] - tube.origin[slab]
-    relative1 = query[point_index] - tube.origin[slab + 1]
-    x = (1.0 - weight[:, 0]) * np.sum(relative0 * tube.normal[slab], -1) + weight[:, 0] * np.sum(
-        relative1 * tube.normal[slab + 1], -1)
-    y = (1.0 - weight[:, 0]) * np.sum(relative0 * tube.binormal[slab], -1) + weight[:, 0] * np.sum(
-        relative1 * tube.binormal[slab + 1], -1)
+    relative0 = query[point_index] - tube.frames.origin[slab]
+    relative1 = query[point_index] - tube.frames.origin[slab + 1]
+    x = (1.0 - weight[:, 0]) * np.sum(relative0 * tube.frames.normal[slab], -1) + weight[:, 0] * np.sum(
+        relative1 * tube.frames.normal[slab + 1], -1)
+    y = (1.0 - weight[:, 0]) * np.sum(relative0 * tube.frames.binormal[slab], -1) + weight[:, 0] * np.sum(
+        relative1 * tube.frames.binormal[slab + 1], -1)
     hit = _in_polygons(polygon, x, y)
     inside[point_index[hit]] = True
     where[point_index[hit]] = slab[hit]
@@ -301,7 +271,7 @@ def _in_polygons(polygons: NDArray[np.float64], x: NDArray[np.float64], y: NDArr
     return (np.count_nonzero(crossings, axis=1) % 2) == 1
 
 
-def check_no_self_intersection(params: PropellerParameters, tube: Tube) -> None:
+def check_no_self_intersection(hub: HubGeometry, tube: Tube) -> None:
     """Refuse a blade whose surface enters its own volume away from the neighbouring sections."""
     m, p, _ = tube.points.shape
     query = tube.points.reshape(-1, 3)
@@ -312,67 +282,68 @@ def check_no_self_intersection(params: PropellerParameters, tube: Tube) -> None:
     inside, slab = _points_inside(tube, query, allowed)
     if np.any(inside):
         first = int(np.argmax(inside))
-        s_point = tube.s[section_of_point[first]]
-        s_slab = 0.5 * (tube.s[slab[first]] + tube.s[slab[first] + 1])
-        place = "outside" if _outside_hub(params, query[first]) else "inside"
+        s_point = tube.frames.s[section_of_point[first]]
+        s_slab = 0.5 * (tube.frames.s[slab[first]] + tube.frames.s[slab[first] + 1])
+        place = "outside" if _outside_hub(hub, query[first]) else "inside"
         low, high = sorted((s_point, s_slab))
         raise GeometryError(
             f"the blade intersects itself: its part near s = {low:.3f} runs into its part near s = {high:.3f} "
             f"({place} the hub); move the centerline's control points apart or make the sections smaller")
 
 
-def check_leaves_hub(params: PropellerParameters, tube: Tube) -> None:
+def check_leaves_hub(hub: HubGeometry, tube: Tube) -> None:
     """Refuse a blade that never leaves the hub: the fuse would swallow it (a propeller without blades)."""
-    if not np.any(_outside_hub(params, tube.points)):
+    if not np.any(_outside_hub(hub, tube.points)):
         raise GeometryError(
             "the blade never leaves the hub (all of it lies within r < R and |z| < L/2); raise the centerline's "
             "control points (z_L of p2 / p3) or make the hub smaller")
 
 
-def check_blades_clear(params: PropellerParameters, tube: Tube) -> None:
+def check_blades_clear(geometry: PropellerGeometry, tube: Tube) -> None:
     """Refuse blades that run into each other outside the hub (inside, the hub absorbs them).
 
     Blade i is blade 0 rotated by 360 i / n about the axis: blade 0's surface points are
     rotated to every other blade and tested against blade 0's volume, which covers every
     pair of blades in both directions.
     """
-    if params.blades == 1:
+    if geometry.blades == 1:
         return
     m, p, _ = tube.points.shape
     points = tube.points.reshape(-1, 3)
-    outside = _outside_hub(params, points)
+    outside = _outside_hub(geometry.hub, points)
     if not np.any(outside):
         return
     candidates = points[outside]
     section_of_point = np.repeat(np.arange(m), p)[outside]
-    for blade in range(1, params.blades):
-        angle = 2.0 * np.pi * blade / params.blades
+    for blade in range(1, geometry.blades):
+        angle = 2.0 * np.pi * blade / geometry.blades
         cos, sin = np.cos(angle), np.sin(angle)
         rotated = candidates @ np.array([[cos, sin, 0.0], [-sin, cos, 0.0], [0.0, 0.0, 1.0]])
         inside, slab = _points_inside(tube, rotated)
         if np.any(inside):
             first = int(np.argmax(inside))
-            s_other = tube.s[section_of_point[first]]
-            s_here = 0.5 * (tube.s[slab[first]] + tube.s[slab[first] + 1])
-            gap = min(blade, params.blades - blade)
+            s_other = tube.frames.s[section_of_point[first]]
+            s_here = 0.5 * (tube.frames.s[slab[first]] + tube.frames.s[slab[first] + 1])
+            gap = min(blade, geometry.blades - blade)
             raise GeometryError(
                 f"the blades would intersect each other outside the hub: blade 1's part near s = {s_here:.3f} "
                 f"meets blade {1 + blade}'s part near s = {s_other:.3f} ({gap} blade pitch{'es' if gap > 1 else ''}"
-                f" = {360.0 * gap / params.blades:.1f} degrees apart); reduce the centerline's angular span x_L, "
+                f" = {360.0 * gap / geometry.blades:.1f} degrees apart); reduce the centerline's angular span x_L, "
                 "the section sizes or the number of blades")
 
 
 # -- all checks --------------------------------------------------------------------------------------
 
-def check_feasible(params: PropellerParameters, surface: BladeSurface, centerline: Centerline) -> None:
+def check_feasible(geometry: PropellerGeometry, surface: BladeSurface) -> None:
     """Run every pre-kernel check on blade 0 (the others are its rotations)."""
-    check_ends_inside_hub(params, surface)
-    check_centerline_leaves_through_side(params, centerline)
+    centerline = geometry.centerline(0)
+    check_ends_inside_hub(geometry.hub, surface)
+    check_centerline_leaves_through_side(geometry.hub, centerline)
     s, step = tube_grid(len(surface.s))
-    fine = sample_tube(params, centerline, s, surface.t)
+    fine = sample_tube(geometry, centerline, s, surface.t)
     check_no_fold(fine)
-    check_sections_resolved(params, surface, fine, step)
-    check_leaves_hub(params, fine)
+    check_sections_resolved(surface, fine, step)
+    check_leaves_hub(geometry.hub, fine)
     tube = coarsen(fine)
-    check_no_self_intersection(params, tube)
-    check_blades_clear(params, tube)
+    check_no_self_intersection(geometry.hub, tube)
+    check_blades_clear(geometry, tube)

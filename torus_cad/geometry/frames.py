@@ -10,13 +10,23 @@ Wang et al. 2008) is defined on any regular curve; it is beyond the spec and opt
 from __future__ import annotations
 
 from dataclasses import dataclass
+from enum import StrEnum
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from torus_cad.errors import GeometryError
 from torus_cad.geometry.centerline import Centerline
-from torus_cad.tolerances import FRENET_MIN_CURVATURE, FRAME_SCAN_SAMPLES
+from torus_cad.tolerances import FRAME_SCAN_SAMPLES, FRENET_MIN_CURVATURE
+
+
+class FrameKind(StrEnum):
+    """The moving frame the sections sit on."""
+
+    FRENET = "frenet"
+    """Frenet-Serret (spec §4); undefined where the curvature vanishes."""
+    ROTATION_MINIMIZING = "rotation_minimizing"
+    """Double-reflection rotation-minimising frame (beyond the spec); defined on any regular curve."""
 
 
 @dataclass(frozen=True)
@@ -36,6 +46,10 @@ class Frames:
     tangent: NDArray[np.float64]
     normal: NDArray[np.float64]
     binormal: NDArray[np.float64]
+
+    def take(self, rows: NDArray[np.int64]) -> Frames:
+        """The frames at the given row indices."""
+        return Frames(self.s[rows], self.origin[rows], self.tangent[rows], self.normal[rows], self.binormal[rows])
 
 
 def _unit(vectors: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -127,16 +141,14 @@ def rotation_minimizing_frames(centerline: Centerline, s: ArrayLike,
 
 def _initial_normal(tangent: NDArray[np.float64], second: NDArray[np.float64]) -> NDArray[np.float64]:
     candidate = second - np.dot(second, tangent) * tangent
-    if np.linalg.norm(candidate) < 1e-9 * max(1.0, np.linalg.norm(second)):
+    if np.linalg.norm(candidate) < 1e-9 * max(1.0, float(np.linalg.norm(second))):
         helper = np.eye(3)[int(np.argmin(np.abs(tangent)))]
         candidate = helper - np.dot(helper, tangent) * tangent
     return candidate / np.linalg.norm(candidate)
 
 
-def section_frames(centerline: Centerline, s: ArrayLike, frame: str) -> Frames:
-    """Frames of the named kind ('frenet' or 'rotation_minimizing') at ``s``."""
-    if frame == "frenet":
+def section_frames(centerline: Centerline, s: ArrayLike, frame: FrameKind) -> Frames:
+    """Frames of the given kind at ``s``."""
+    if frame is FrameKind.FRENET:
         return frenet_frames(centerline, s)
-    if frame == "rotation_minimizing":
-        return rotation_minimizing_frames(centerline, s)
-    raise ValueError(f"unknown frame {frame!r}")
+    return rotation_minimizing_frames(centerline, s)

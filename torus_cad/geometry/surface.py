@@ -1,7 +1,8 @@
 """The blade surface: sections transformed (spec §2) and placed on the frames (spec §4.2).
 
 X_final(s, t) = C(s) + X_scaled(s, t) N(s) + Y_scaled(s, t) B(s), evaluated exactly at any
-resolution; blade i is built on its own centerline at theta_0 + 360 i / n (spec §6.1).
+resolution; blade i is built on its own centerline at theta_0 + 360 i / n (spec §6.1), which
+:meth:`torus_cad.geometry.propeller.PropellerGeometry.centerline` gives.
 """
 
 from __future__ import annotations
@@ -11,12 +12,11 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from torus_cad.geometry.airfoil import NacaAirfoil, airfoil_points
+from torus_cad.geometry.airfoil import airfoil_points
 from torus_cad.geometry.arc_length import equal_arc_length_section
 from torus_cad.geometry.centerline import Centerline
 from torus_cad.geometry.frames import Frames, section_frames
-from torus_cad.geometry.parameters import PropellerParameters
-from torus_cad.geometry.transforms import evaluate_quartic, transform_sections
+from torus_cad.geometry.propeller import BladeGeometry
 
 
 @dataclass(frozen=True)
@@ -38,20 +38,12 @@ class BladeSurface:
     trailing_edge_index: int | None
     frames: Frames
 
-
-def airfoil_of(params: PropellerParameters) -> NacaAirfoil:
-    """The NacaAirfoil described by ``params.airfoil``."""
-    a = params.airfoil
-    return NacaAirfoil(a.max_camber, a.camber_position, a.thickness, a.camber_normal)
-
-
-def section_coordinates(params: PropellerParameters, s: NDArray[np.float64], section: NDArray[np.float64]
-                        ) -> NDArray[np.float64]:
-    """A chord-unit section ``(p, 2)`` rotated and scaled for every s (spec §2.3): ``(k, p, 2)`` mm."""
-    transforms = params.transforms
-    return transform_sections(section, evaluate_quartic(transforms.angle_of_attack, s),
-                              evaluate_quartic(transforms.scale_x, s), evaluate_quartic(transforms.scale_y, s),
-                              params.airfoil.pivot)
+    @property
+    def trailing_edge_column(self) -> int:
+        """The column of the sharp trailing edge, for surfaces sampled with it as a point (mm arrays' axis 1)."""
+        if self.trailing_edge_index is None:
+            raise ValueError("this surface was sampled without the trailing edge as a point")
+        return self.trailing_edge_index
 
 
 def place_on_frames(frames: Frames, planar: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -60,32 +52,30 @@ def place_on_frames(frames: Frames, planar: NDArray[np.float64]) -> NDArray[np.f
             + planar[..., 1:2] * frames.binormal[:, None, :])
 
 
-def place_sections(params: PropellerParameters, frames: Frames, section: NDArray[np.float64]) -> NDArray[np.float64]:
+def place_sections(blade: BladeGeometry, frames: Frames, section: NDArray[np.float64]) -> NDArray[np.float64]:
     """Transform a chord-unit section ``(p, 2)`` for every frame and place it: ``(k, p, 3)`` mm."""
-    return place_on_frames(frames, section_coordinates(params, frames.s, section))
+    return place_on_frames(frames, blade.laws.apply(section, frames.s))
 
 
-def blade_frames(params: PropellerParameters, s: ArrayLike, blade_index: int = 0) -> Frames:
-    """Frames of the configured kind on blade ``blade_index``'s centerline at ``s``."""
-    return section_frames(Centerline.for_blade(params, blade_index), s, params.centerline.frame)
+def blade_frames(blade: BladeGeometry, centerline: Centerline, s: ArrayLike) -> Frames:
+    """Frames of the blade's kind on ``centerline`` at ``s``."""
+    return section_frames(centerline, s, blade.frame)
 
 
-def surface_points(params: PropellerParameters, s: ArrayLike, t: ArrayLike, blade_index: int = 0) -> NDArray[np.float64]:
+def surface_points(blade: BladeGeometry, centerline: Centerline, s: ArrayLike, t: ArrayLike) -> NDArray[np.float64]:
     """The analytic surface at every (s, t) pair of the grid: ``(len(s), len(t), 3)`` mm."""
-    frames = blade_frames(params, np.atleast_1d(np.asarray(s, dtype=float)), blade_index)
-    return place_sections(params, frames, airfoil_points(airfoil_of(params), t))
+    frames = blade_frames(blade, centerline, np.atleast_1d(np.asarray(s, dtype=float)))
+    return place_sections(blade, frames, airfoil_points(blade.airfoil, t))
 
 
-def blade_surface(params: PropellerParameters, blade_index: int = 0, sections: int | None = None,
-                  points: int | None = None, anchor_trailing_edge: bool = True) -> BladeSurface:
-    """Sample blade ``blade_index`` on ``sections`` x ``points`` (defaults: ``params.resolution``).
+def blade_surface(blade: BladeGeometry, centerline: Centerline, sections: int, points: int,
+                  anchor_trailing_edge: bool = True) -> BladeSurface:
+    """Sample the blade on ``centerline`` at ``sections`` x ``points``.
 
     Sections are uniform in s; points are equally spaced in arc length around the airfoil
     (spec §5), with the trailing edge kept as a point unless ``anchor_trailing_edge`` is False.
     """
-    sections = params.resolution.sections if sections is None else sections
-    points = params.resolution.points if points is None else points
-    sampling = equal_arc_length_section(airfoil_of(params), points, anchor_trailing_edge)
-    frames = blade_frames(params, np.linspace(0.0, 1.0, sections), blade_index)
-    return BladeSurface(place_sections(params, frames, sampling.points), frames.s, sampling.t,
+    sampling = equal_arc_length_section(blade.airfoil, points, anchor_trailing_edge)
+    frames = blade_frames(blade, centerline, np.linspace(0.0, 1.0, sections))
+    return BladeSurface(place_sections(blade, frames, sampling.points), frames.s, sampling.t,
                         sampling.trailing_edge_index, frames)

@@ -8,9 +8,13 @@ by Sx(s) along X and Sy(s) along Y (spec §2.3: rotation, then scaling).
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
+#: Coefficients of a quartic in s, highest power first: (a, b, c, d, e).
+Quartic = tuple[float, float, float, float, float]
 
 
 def evaluate_quartic(coefficients: Sequence[float], s: ArrayLike) -> NDArray[np.float64]:
@@ -18,6 +22,48 @@ def evaluate_quartic(coefficients: Sequence[float], s: ArrayLike) -> NDArray[np.
     if len(coefficients) != 5:
         raise ValueError(f"a quartic needs 5 coefficients, got {len(coefficients)}")
     return np.polyval(np.asarray(coefficients, dtype=float), np.asarray(s, dtype=float))
+
+
+def quartic_minimum(coefficients: Sequence[float]) -> tuple[float, float]:
+    """Minimum of a quartic (highest power first) on s in [0, 1]: ``(value, s)``.
+
+    Checks the end points and every real root of the derivative inside [0, 1], so the
+    answer is exact, not a sampled estimate.
+    """
+    derivative = np.polyder(np.asarray(coefficients, dtype=float))
+    # np.roots divides by the leading coefficient: drop leading terms that are negligible
+    # (e.g. subnormal) against the largest, or it overflows.
+    significant = np.nonzero(np.abs(derivative) > 1e-12 * np.abs(derivative).max(initial=0.0))[0]
+    derivative_roots = np.roots(derivative[significant[0]:]) if significant.size else np.array([])
+    candidates = [0.0, 1.0] + [r.real for r in np.atleast_1d(derivative_roots)
+                               if abs(r.imag) < 1e-12 and 0.0 <= r.real <= 1.0]
+    values = np.polyval(coefficients, candidates)
+    index = int(np.argmin(values))
+    return float(values[index]), float(candidates[index])
+
+
+@dataclass(frozen=True)
+class SectionLaws:
+    """How the section changes along the blade (spec §2): three quartics in s and the pivot.
+
+    Attributes:
+        angle_of_attack_deg: alpha(s) coefficients, degrees.
+        scale_x_mm: Sx(s) coefficients, mm (the chord, along N).
+        scale_y_mm: Sy(s) coefficients, mm (along B).
+        pivot: chord fraction put on the centerline, the centre of the rotation (0 = leading edge).
+    """
+
+    angle_of_attack_deg: Quartic
+    scale_x_mm: Quartic
+    scale_y_mm: Quartic
+    pivot: float = 0.0
+
+    def apply(self, section: NDArray[np.float64], s: ArrayLike) -> NDArray[np.float64]:
+        """A chord-unit section ``(p, 2)`` rotated and scaled for every s: ``(len(s), p, 2)`` mm."""
+        s = np.atleast_1d(np.asarray(s, dtype=float))
+        return transform_sections(section, evaluate_quartic(self.angle_of_attack_deg, s),
+                                  evaluate_quartic(self.scale_x_mm, s), evaluate_quartic(self.scale_y_mm, s),
+                                  self.pivot)
 
 
 def rotation_matrices(angle_deg: ArrayLike) -> NDArray[np.float64]:

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass
 
+from typing import Any
+
 import numpy as np
 from numpy.typing import NDArray
 from OCP.BRep import BRep_Tool
@@ -75,7 +77,7 @@ class MassProperties:
     spin_axis_inertia_g_mm2: float
     bounding_box_mm: tuple[tuple[float, float, float], tuple[float, float, float]]
 
-    def to_dict(self) -> dict:
+    def to_dict(self) -> dict[str, Any]:
         """JSON-ready dict."""
         return asdict(self)
 

@@ -13,7 +13,9 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from enum import StrEnum
 
+import cadquery as cq
 from OCP.BOPAlgo import BOPAlgo_GlueShift
 from OCP.BRep import BRep_Builder, BRep_Tool
 from OCP.BRepAdaptor import BRepAdaptor_Surface
@@ -22,13 +24,11 @@ from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
 from OCP.BRepTools import BRepTools
 from OCP.GeomAbs import GeomAbs_Cylinder
 from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt, gp_Trsf, gp_Vec2d
-from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_WIRE
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_ShapeEnum, TopAbs_WIRE
 from OCP.TopExp import TopExp_Explorer
 from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS, TopoDS_Edge, TopoDS_Face, TopoDS_Shape, TopoDS_Shell, TopoDS_Solid
 from OCP.TopTools import TopTools_ListOfShape
-
-import cadquery as cq
 
 from torus_cad.errors import KernelError
 
@@ -52,11 +52,18 @@ def fuse_all(hub: cq.Solid, blades: Sequence[cq.Solid]) -> cq.Shape:
     return cq.Shape.cast(_result(fuse, "fuse the blades with the hub"))
 
 
-#: How :func:`fuse_pattern` joined the copies to the hub.
-JOINS = ("assembled", "glued")
+class FuseRoute(StrEnum):
+    """How the blades were joined to the hub (the value is what the JSON report says)."""
+
+    ASSEMBLED = "shared intersection, assembled"
+    """One blade-hub intersection reused for every blade; the shell put together from known faces."""
+    GLUED = "shared intersection, glued"
+    """One blade-hub intersection reused; the copies glued to the hub (a blade cuts an end face)."""
+    GENERAL = "one fuse"
+    """The fallback: one general boolean of the hub and all blades."""
 
 
-def fuse_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float]) -> tuple[cq.Shape, str]:
+def fuse_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float]) -> tuple[cq.Shape, FuseRoute]:
     """Hub and copies of ``blade`` at every angle, with one blade-hub intersection for all of them.
 
     1. Cut the blade (built at ``angles_deg[0]``) by the hub: its part outside the hub, whose
@@ -70,7 +77,7 @@ def fuse_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float]) ->
        end face, or a patch straddles the hub's seam, the copies are glued to the hub with a
        fuse that needs no surface-surface intersection (:func:`_glue`).
 
-    Returns the shape and how it was joined (one of :data:`JOINS`). The caller checks the result (validity covers each edge's curve on the hub against its 3D
+    Returns the shape and how it was joined (ASSEMBLED or GLUED). The caller checks the result (validity covers each edge's curve on the hub against its 3D
     curve) and falls back to :func:`fuse_all` on a KernelError or an invalid solid. The
     propeller's hub has its seam beside every footprint, see
     :func:`torus_cad.geometry.hub.seam_angle_deg`.
@@ -87,10 +94,10 @@ def fuse_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float]) ->
     whole_patches = len(hub_pieces) == len(patches) and not any(
         BRep_Tool.IsClosed_s(edge, patch) for patch in patches for edge in _edges(patch))
     if whole_patches:
-        return cq.Shape.cast(_assemble(hub, lateral, copies, patches)), JOINS[0]
+        return cq.Shape.cast(_assemble(hub, lateral, copies, patches)), FuseRoute.ASSEMBLED
     blade_faces = _count(outside, TopAbs_FACE) - len(hub_pieces)
     glued = _glue(hub, copies, _count(hub.wrapped, TopAbs_FACE) + len(copies) * blade_faces)
-    return cq.Shape.cast(glued), JOINS[1]
+    return cq.Shape.cast(glued), FuseRoute.GLUED
 
 
 def _assemble(hub: cq.Solid, lateral: TopoDS_Face, copies: Sequence[TopoDS_Shape],
@@ -201,8 +208,9 @@ def _result(operation: BRepAlgoAPI_BooleanOperation, what: str) -> TopoDS_Shape:
     return operation.Shape()
 
 
-def _explore(shape: TopoDS_Shape, kind) -> list[TopoDS_Shape]:
-    found, explorer = [], TopExp_Explorer(shape, kind)
+def _explore(shape: TopoDS_Shape, kind: TopAbs_ShapeEnum) -> list[TopoDS_Shape]:
+    found: list[TopoDS_Shape] = []
+    explorer = TopExp_Explorer(shape, kind)
     while explorer.More():
         found.append(explorer.Current())
         explorer.Next()
@@ -217,5 +225,5 @@ def _edges(shape: TopoDS_Shape) -> list[TopoDS_Edge]:
     return [TopoDS.Edge_s(edge) for edge in _explore(shape, TopAbs_EDGE)]
 
 
-def _count(shape: TopoDS_Shape, kind) -> int:
+def _count(shape: TopoDS_Shape, kind: TopAbs_ShapeEnum) -> int:
     return len(_explore(shape, kind))

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+import cadquery as cq
 import numpy as np
+from numpy.typing import NDArray
 from OCP.BRep import BRep_Tool
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace, BRepBuilderAPI_MakeSolid, BRepBuilderAPI_Sewing
 from OCP.BRepCheck import BRepCheck_Analyzer
@@ -17,8 +19,6 @@ from OCP.TopAbs import TopAbs_SHELL
 from OCP.TopoDS import TopoDS
 from scipy.interpolate import make_interp_spline
 
-import cadquery as cq
-
 from torus_cad.errors import KernelError
 from torus_cad.kernel.wires import knot_arrays
 from torus_cad.tolerances import LOFT_PRECISION
@@ -28,7 +28,7 @@ from torus_cad.tolerances import LOFT_PRECISION
 LOFT_SEWING_TOLERANCE = 1e-6
 
 
-def loft_solid(wires: Sequence[cq.Wire], parameters: Sequence[float] | None = None) -> cq.Solid:
+def loft_solid(wires: Sequence[cq.Wire], parameters: Sequence[float] | NDArray[np.float64] | None = None) -> cq.Solid:
     """A smooth closed solid through ``wires``, capped by planar end faces.
 
     The wires must be compatible single-edge B-splines (same degree, knots and pole count,
@@ -61,7 +61,7 @@ def _bspline_of(wire: cq.Wire) -> Geom_BSplineCurve:
     return curve
 
 
-def _loft_through_poles(wires: Sequence[cq.Wire], parameters: Sequence[float] | None) -> cq.Solid:
+def _loft_through_poles(wires: Sequence[cq.Wire], parameters: Sequence[float] | NDArray[np.float64] | None) -> cq.Solid:
     curves = [_bspline_of(wire) for wire in wires]
     first = curves[0]
     degree, count = first.Degree(), first.NbPoles()

@@ -66,7 +66,7 @@ def _fit(points: NDArray[np.float64], parameters: NDArray[np.float64], interior_
     return poles, knots, np.linalg.norm(fitted - points, axis=-1)
 
 
-def _evaluate(poles: NDArray[np.float64], knots: NDArray[np.float64], parameters: NDArray[np.float64]) -> NDArray:
+def _evaluate(poles: NDArray[np.float64], knots: NDArray[np.float64], parameters: NDArray[np.float64]) -> NDArray[np.float64]:
     return BSpline(knots, poles, DEGREE)(parameters)
 
 
@@ -126,7 +126,7 @@ def _polylines_cross(first: NDArray[np.float64], second: NDArray[np.float64]) ->
     p, q = first[:-1, None, :], first[1:, None, :]
     r, t = second[None, :-1, :], second[None, 1:, :]
 
-    def orient(a, b, c):
+    def orient(a: NDArray[np.float64], b: NDArray[np.float64], c: NDArray[np.float64]) -> NDArray[np.float64]:
         return np.sign((b[..., 0] - a[..., 0]) * (c[..., 1] - a[..., 1]) - (b[..., 1] - a[..., 1]) * (c[..., 0] - a[..., 0]))
 
     return bool(np.any((orient(p, q, r) * orient(p, q, t) < 0) & (orient(r, t, p) * orient(r, t, q) < 0)))

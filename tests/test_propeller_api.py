@@ -5,16 +5,16 @@ from __future__ import annotations
 import io
 import math
 
+import cadquery as cq
 import numpy as np
 import pytest
 
-import cadquery as cq
-
-from torus_cad.cadquery_api import PropellerObjects, blade_color, propeller_objects, resolve_parameters
+from torus_cad.colors import blade_color
 from torus_cad.errors import ParameterError
-from torus_cad.geometry.parameters import PropellerParameters
 from torus_cad.kernel.checks import is_valid_closed_solid, precise_volume
+from torus_cad.parameters import PropellerParameters, resolve_parameters
 from torus_cad.progress import Progress
+from torus_cad.propeller import Propeller, propeller_objects
 
 FAST = {"resolution.sections": 16, "resolution.points": 40}
 
@@ -25,7 +25,7 @@ def fast_params() -> PropellerParameters:
 
 
 @pytest.fixture(scope="module")
-def objects(fast_params) -> PropellerObjects:
+def objects(fast_params) -> Propeller:
     return propeller_objects(fast_params)
 
 
@@ -132,7 +132,7 @@ def test_progress_callback_sees_every_stage_in_order(fast_params):
     seen: list[str] = []
     built = propeller_objects(fast_params, progress=seen.append)
     assert seen == ["parameters", "section_math", "wires", "loft", "fuse", "check"]
-    assert list(built.propeller.stage_seconds) == seen
+    assert list(built.stage_seconds) == seen
 
 
 def test_mass_properties_and_write_delegate_to_the_pipeline(objects, tmp_path):

@@ -1,0 +1,72 @@
+"""The propeller's geometry as kernel-free objects: hub, blade (section, laws, centerline, frame), pattern.
+
+The parameter schema (:mod:`torus_cad.parameters`) converts a design into a
+:class:`PropellerGeometry`; every geometry function takes these objects, not the parameter
+set, and the kernel takes the arrays they produce. Units: mm and degrees.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from torus_cad.geometry.airfoil import NacaAirfoil
+from torus_cad.geometry.centerline import Centerline
+from torus_cad.geometry.frames import FrameKind
+from torus_cad.geometry.transforms import SectionLaws
+
+
+@dataclass(frozen=True)
+class HubGeometry:
+    """The cylindrical hub on the z axis, centred at the origin: radius and length in mm."""
+
+    radius_mm: float
+    length_mm: float
+
+    @property
+    def inset_radius_mm(self) -> float:
+        """R_inset = R - R/8 (spec §3.2), mm: the radius of the blade's ends."""
+        return self.radius_mm - self.radius_mm / 8.0
+
+
+@dataclass(frozen=True)
+class BladeGeometry:
+    """One blade: its section, how the section changes along s, and the frame it sits on.
+
+    Attributes:
+        airfoil: the chord-unit section (spec §1).
+        laws: alpha(s), Sx(s), Sy(s) and the pivot (spec §2).
+        local_control_points: ``(4, 3)`` P1..P4 in the hub's frame L ([deg, mm, mm], spec §3.1).
+        frame: the moving frame's kind (spec §4).
+    """
+
+    airfoil: NacaAirfoil
+    laws: SectionLaws
+    local_control_points: tuple[tuple[float, float, float], ...]
+    frame: FrameKind = FrameKind.FRENET
+
+
+@dataclass(frozen=True)
+class PropellerGeometry:
+    """Hub, blade and pattern: blade i sits at theta_0 + 360 i / n degrees (spec §6.1)."""
+
+    hub: HubGeometry
+    blade: BladeGeometry
+    blades: int
+    phase_deg: float = 0.0
+
+    def blade_angle_deg(self, blade_index: int) -> float:
+        """theta_i = theta_0 + 360 i / n (spec §6.1), degrees."""
+        return self.phase_deg + 360.0 * blade_index / self.blades
+
+    def centerline(self, blade_index: int = 0) -> Centerline:
+        """Blade ``blade_index``'s centerline in global Cartesian coordinates (mm)."""
+        return Centerline.in_hub_frame(self.local_control_points, self.hub.radius_mm, self.hub.length_mm,
+                                       self.blade_angle_deg(blade_index))
+
+    @property
+    def local_control_points(self) -> NDArray[np.float64]:
+        """``(4, 3)`` P1..P4 in frame L."""
+        return np.asarray(self.blade.local_control_points, dtype=float)

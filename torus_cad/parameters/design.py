@@ -1,0 +1,189 @@
+"""Every parameter of a toroidal propeller, each declared once (key, type, unit, default, range, doc).
+
+Units: lengths in mm, angles in degrees, airfoil quantities as fractions of the chord. The
+centerline's control points live in the hub's local frame L (spec §3.1): ``x_L`` is the
+angle around the hub axis (degrees), ``y_L`` runs along the axis pointing down (mm, toward
+-z) and ``z_L`` runs radially outward (mm). P1 is the origin of L, P4 has ``z_L = 0``.
+
+To add a parameter, declare it in its table below with :func:`param`; validation, the
+commented TOML of ``torus-cad defaults``, the README's configuration table, the fuzz ranges,
+the sweep's checks and the studio's panel follow from the declaration. Checks that involve
+several fields are the tables' ``model_validator``s.
+"""
+
+from __future__ import annotations
+
+import re
+from enum import StrEnum
+from typing import Annotated, Self
+
+from pydantic import AfterValidator, Field, model_validator
+
+from torus_cad.errors import ParameterError
+from torus_cad.geometry.airfoil import NacaAirfoil
+from torus_cad.geometry.frames import FrameKind
+from torus_cad.geometry.propeller import BladeGeometry, HubGeometry, PropellerGeometry
+from torus_cad.geometry.surface import BladeSurface, blade_surface
+from torus_cad.geometry.transforms import SectionLaws, quartic_minimum
+from torus_cad.parameters.document import Document
+from torus_cad.parameters.schema import AS_TUPLE, Bounds, Section, Vector2, Vector3, check_in_bounds, param
+from torus_cad.tolerances import FOLD_RATIO_LIMIT, STL_ANGULAR_DEFLECTION, STL_LINEAR_DEFLECTION
+
+_NAME_PATTERN = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,63}")
+
+#: One coefficient of a quartic law.
+Coefficient = Annotated[float, Field(ge=-1e4, le=1e4)]
+#: A quartic's coefficients, highest power first, each in [-1e4, 1e4].
+QuarticCoefficients = Annotated[tuple[Coefficient, Coefficient, Coefficient, Coefficient, Coefficient], AS_TUPLE]
+
+
+class StepSchema(StrEnum):
+    """The STEP application protocol written."""
+
+    AP214 = "AP214"
+    AP242 = "AP242"
+
+
+def _checked_name(name: str) -> str:
+    if not _NAME_PATTERN.fullmatch(name):
+        raise ValueError(f"name = {name!r} must be 1-64 letters, digits, '_', '-' or '.', "
+                         "starting with a letter or digit")
+    return name
+
+
+class Hub(Section):
+    """Cylinder on the z axis, centred at the origin."""
+
+    radius: float = param(10.0, unit="mm", ge=0.5, le=1000.0, fuzz=(4.0, 25.0),
+                          doc="R; the blade ends sit at R - R/8 (spec §3.2)")
+    length: float = param(20.0, unit="mm", gt=2.0, le=2000.0, fuzz=(8.0, 50.0),
+                          doc="L; the hub spans z in [-L/2, L/2]")
+
+
+class Airfoil(Section):
+    """NACA 4-digit section (spec §1), fractions of the chord."""
+
+    max_camber: float = param(0.02, ge=0.0, le=0.095, doc="m (0 = symmetric section)")
+    camber_position: float = param(0.4, ge=0.0, lt=1.0, fuzz=(0.1, 0.9),
+                                   doc="p; in (0, 1) when m > 0")
+    thickness: float = param(0.5, gt=0.0, le=1.0, fuzz=(0.06, 1.0), doc="maximum thickness")
+    camber_normal: bool = param(True, doc="thickness normal to the camber line (false: theta_c = 0, spec §1.2)")
+    pivot: float = param(0.0, ge=0.0, le=1.0,
+                         doc="chord fraction on the centerline, the centre of alpha (0 = leading edge, the spec)")
+
+    def section(self) -> NacaAirfoil:
+        """The chord-unit section this table describes."""
+        return NacaAirfoil(self.max_camber, self.camber_position, self.thickness, self.camber_normal)
+
+    @model_validator(mode="after")
+    def _camber_and_fold(self) -> Self:
+        if self.max_camber > 0.0:
+            check_in_bounds("airfoil.camber_position", self.camber_position, Bounds(0.0, 1.0, True, True))
+        ratio, where = self.section().fold_ratio()
+        if ratio >= FOLD_RATIO_LIMIT:
+            raise ValueError(
+                f"airfoil.thickness = {self.thickness:g} is too thick for max_camber = {self.max_camber:g} at "
+                f"camber_position = {self.camber_position:g}: the lower surface folds over itself near chord "
+                f"{where:.2f} (thickness exceeds the camber line's radius of curvature); reduce the thickness or "
+                "the camber, move camber_position toward 0.5, or set camber_normal = false")
+        return self
+
+
+class Centerline(Section):
+    """Frame L: [x_L deg around the axis, y_L mm down the axis, z_L mm radially out]; P1 = origin."""
+
+    p2: Vector3 = param((25.0, 3.0, 22.0), unit="deg, mm, mm", doc="free control point [x2, y2, z2]")
+    p3: Vector3 = param((75.0, 15.0, 22.0), unit="deg, mm, mm", doc="free control point [x3, y3, z3]")
+    p4: Vector2 = param((100.0, 18.0), unit="deg, mm",
+                          doc="[x4, y4], with z_L = 0: the blade returns into the hub")
+    frame: FrameKind = param(FrameKind.FRENET, strict=False,
+                             doc="'frenet' (spec §4) or 'rotation_minimizing' (beyond the spec)")
+
+
+class Transforms(Section):
+    """Quartics in s in [0, 1], highest power first: a s^4 + b s^3 + c s^2 + d s + e (spec §2)."""
+
+    angle_of_attack: QuarticCoefficients = param((0.0, 0.0, 0.0, 0.0, 20.0), unit="deg", doc="alpha(s)")
+    scale_x: QuarticCoefficients = param((0.0, 0.0, -16.0, 16.0, 6.0), unit="mm",
+                                         doc="Sx(s): the chord, along N; must stay > 0 on [0, 1]")
+    scale_y: QuarticCoefficients = param((0.0, 0.0, -4.0, 4.0, 2.0), unit="mm",
+                                         doc="Sy(s): along B; must stay > 0 on [0, 1]")
+
+    @model_validator(mode="after")
+    def _scales_positive(self) -> Self:
+        for key in ("scale_x", "scale_y"):
+            low, where = quartic_minimum(getattr(self, key))
+            if low <= 0.0:
+                raise ValueError(f"transforms.{key} must stay positive on s in [0, 1], "
+                                 f"but reaches {low:.4g} mm at s = {where:.3f}")
+        return self
+
+
+class Resolution(Section):
+    """Sampling of the blade surface."""
+
+    sections: int = param(25, ge=4, le=400, fuzz=(16, 36), doc="sections along the centerline")
+    points: int = param(80, ge=16, le=2000, fuzz=(24, 48),
+                        doc="points around each section, equal arc length (spec §5)")
+
+
+class Export(Section):
+    """File output."""
+
+    stl_linear_deflection: float = param(STL_LINEAR_DEFLECTION, unit="mm", gt=0.0, le=10.0,
+                                         doc="STL chordal deviation")
+    stl_angular_deflection: float = param(STL_ANGULAR_DEFLECTION, unit="rad", gt=0.0, le=1.5,
+                                          doc="STL angular deviation")
+    step_schema: StepSchema = param(StepSchema.AP214, strict=False, doc="STEP application protocol")
+
+
+class PropellerParameters(Document):
+    """Every input of a toroidal propeller; frozen and validated on construction."""
+
+    name: Annotated[str, AfterValidator(_checked_name)] = param(
+        "torus_propeller", doc="names the output files <name>.step/.stl/.json and the STEP product")
+    blades: int = param(3, ge=1, le=12, fuzz=(1, 8), doc="number of blades n; blade i at theta_0 + 360 i / n")
+    phase_deg: float = param(0.0, unit="deg", ge=-360.0, le=360.0, doc="theta_0: angle of blade 0 around the axis")
+    hub: Hub = Field(default_factory=Hub)
+    airfoil: Airfoil = Field(default_factory=Airfoil)
+    centerline: Centerline = Field(default_factory=Centerline)
+    transforms: Transforms = Field(default_factory=Transforms)
+    resolution: Resolution = Field(default_factory=Resolution)
+    export: Export = Field(default_factory=Export)
+
+    @model_validator(mode="after")
+    def _control_points_fit_the_hub(self) -> Self:
+        """Ranges of the control points that depend on the hub's size."""
+        length, inset = self.hub.length, self.hub.radius - self.hub.radius / 8.0
+        for key in ("p2", "p3", "p4"):
+            point = getattr(self.centerline, key)
+            check_in_bounds(f"centerline.{key}[0]", point[0], Bounds(-360.0, 360.0), "deg")
+            if len(point) == 3:  # free control points may lie outside the hub; the curve is checked later
+                check_in_bounds(f"centerline.{key}[1]", point[1], Bounds(-2.0 * length, 2.0 * length), "mm")
+                check_in_bounds(f"centerline.{key}[2]", point[2], Bounds(-inset, 100.0 * self.hub.radius, True), "mm")
+            else:  # P4 is the blade's second end: it must sit between the hub's end faces
+                check_in_bounds(f"centerline.{key}[1]", point[1], Bounds(-1.0, length - 1.0, True, True), "mm")
+        return self
+
+    def blade_surface(self, blade_index: int = 0, sections: int | None = None, points: int | None = None
+                      ) -> BladeSurface:
+        """Blade ``blade_index`` sampled at ``sections`` x ``points`` (default: ``resolution``):
+        a :class:`~torus_cad.geometry.surface.BladeSurface`, whose ``points`` are ``(sections, points, 3)`` mm."""
+        geometry = self.geometry()
+        return blade_surface(geometry.blade, geometry.centerline(blade_index),
+                             self.resolution.sections if sections is None else sections,
+                             self.resolution.points if points is None else points)
+
+    def geometry(self) -> PropellerGeometry:
+        """The kernel-free geometry these parameters describe (mm, degrees)."""
+        line = self.centerline
+        laws = SectionLaws(self.transforms.angle_of_attack, self.transforms.scale_x, self.transforms.scale_y,
+                           self.airfoil.pivot)
+        local = ((0.0, 0.0, 0.0), line.p2, line.p3, (*line.p4, 0.0))
+        blade = BladeGeometry(self.airfoil.section(), laws, local, line.frame)
+        return PropellerGeometry(HubGeometry(self.hub.radius, self.hub.length), blade, self.blades, self.phase_deg)
+
+
+# ParameterError is what every caller catches; keep it importable from here.
+__all__ = ["Airfoil", "Centerline", "Export", "Hub", "ParameterError", "PropellerParameters", "Resolution",
+           "StepSchema", "Transforms"]

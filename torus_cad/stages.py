@@ -1,0 +1,62 @@
+"""The pipeline's stages, in the order they run, and a timer that records each one's seconds.
+
+One list for everything that names a stage: the build's timer, the JSON report's
+``stage_seconds``, the progress display, the sweep table's ``time_<stage>_s`` columns and the
+benchmarks.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from enum import StrEnum
+
+
+class Stage(StrEnum):
+    """A stage of building and writing a propeller; the value is its key in reports."""
+
+    PARAMETERS = "parameters"
+    SECTION_MATH = "section_math"
+    WIRES = "wires"
+    LOFT = "loft"
+    FUSE = "fuse"
+    CHECK = "check"
+    STEP_WRITE = "step_write"
+    STL_WRITE = "stl_write"
+
+    @property
+    def label(self) -> str:
+        """Words for a progress display."""
+        return _LABELS[self]
+
+
+_LABELS = {
+    Stage.PARAMETERS: "reading parameters",
+    Stage.SECTION_MATH: "blade sections (geometry)",
+    Stage.WIRES: "section curves",
+    Stage.LOFT: "lofting the blade",
+    Stage.FUSE: "fusing blades with the hub",
+    Stage.CHECK: "checking the solid",
+    Stage.STEP_WRITE: "writing STEP",
+    Stage.STL_WRITE: "writing STL",
+}
+
+
+class StageTimer:
+    """Wall-clock seconds per stage, in the order the stages ran (keys: the stages' values)."""
+
+    def __init__(self, on_start: Callable[[Stage], None] | None = None) -> None:
+        self.seconds: dict[str, float] = {}
+        self.on_start = on_start  # called with each stage as it starts (progress display)
+
+    @contextmanager
+    def stage(self, stage: Stage) -> Iterator[None]:
+        """Time the ``with`` block as ``stage`` (seconds add up if the stage runs twice)."""
+        if self.on_start is not None:
+            self.on_start(stage)
+        start = time.perf_counter()
+        try:
+            yield
+        finally:
+            self.seconds[stage.value] = self.seconds.get(stage.value, 0.0) + time.perf_counter() - start
