@@ -23,16 +23,20 @@ import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import asdict, dataclass
+from enum import StrEnum
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from torus_cad.cfd.readme import readme_text
-from torus_cad.cfd.settings import CfdSettings, InletSide, MissingExtraError
-from torus_cad.errors import KernelError
-from torus_cad.geometry.parameters import PropellerParameters
+from torus_cad.cfd.settings import MissingExtraError
+from torus_cad.errors import KernelError, ParameterError
+from torus_cad.geometry.propeller import PropellerGeometry
 from torus_cad.geometry.transforms import evaluate_quartic
+from torus_cad.parameters import PropellerParameters
+from torus_cad.parameters.design import Cfd, InletSide
+from torus_cad.stages import StageTimer
 
 #: Names of the physical groups: surfaces, then volumes.
 SURFACE_GROUPS = ("propeller", "rotating_interface", "inlet", "outlet", "farfield")
@@ -95,22 +99,36 @@ class Domain:
         return float(np.pi * self.zone_radius**2 * (self.zone_z[1] - self.zone_z[0]))
 
 
-def tip_radius(params: PropellerParameters) -> float:
-    """Largest distance of the blade surface from the spin axis, mm (sampled densely, analytic surface)."""
+#: Grid on which the analytic blade is sampled for the tip radius.
+TIP_RADIUS_GRID = (201, 200)
+
+
+class CfdStage(StrEnum):
+    """Stages of ``torus-cad cfd``; the value is the key in the report's ``stage_seconds``."""
+
+    BREP = "brep"
+    DOMAIN = "domain"
+    SURFACE_MESH = "surface_mesh"
+    VOLUME_MESH = "volume_mesh"
+    WRITE = "write"
+
+
+def tip_radius(geometry: PropellerGeometry) -> float:
+    """Largest distance of the blade surface from the spin axis, mm (analytic surface, sampled densely)."""
     from torus_cad.geometry.surface import blade_surface
 
-    points = blade_surface(params, sections=201, points=200).points
-    return float(max(np.hypot(points[..., 0], points[..., 1]).max(), params.hub.radius))
+    points = blade_surface(geometry.blade, geometry.centerline(0), *TIP_RADIUS_GRID).points
+    return float(max(np.hypot(points[..., 0], points[..., 1]).max(), geometry.hub.radius_mm))
 
 
-def smallest_chord(params: PropellerParameters) -> float:
+def smallest_chord(geometry: PropellerGeometry) -> float:
     """Smallest chord Sx(s) over the blade, mm."""
-    return float(evaluate_quartic(params.transforms.scale_x, np.linspace(0.0, 1.0, 201)).min())
+    return float(evaluate_quartic(geometry.blade.laws.scale_x_mm, np.linspace(0.0, 1.0, 201)).min())
 
 
-def domain_for(params: PropellerParameters, settings: CfdSettings, propeller_z: tuple[float, float]) -> Domain:
+def domain_for(geometry: PropellerGeometry, settings: Cfd, propeller_z: tuple[float, float]) -> Domain:
     """The domain's sizes for a propeller spanning ``propeller_z`` (mm) axially."""
-    diameter = 2.0 * tip_radius(params)
+    diameter = 2.0 * tip_radius(geometry)
     centre = 0.5 * (propeller_z[0] + propeller_z[1])
     clearance = settings.zone_clearance * diameter
     zone_z = (propeller_z[0] - clearance, propeller_z[1] + clearance)
@@ -121,15 +139,13 @@ def domain_for(params: PropellerParameters, settings: CfdSettings, propeller_z: 
         inlet_z, outlet_z = centre - upstream, centre + downstream
     outer_z = (min(inlet_z, outlet_z), max(inlet_z, outlet_z))
     if outer_z[0] >= zone_z[0] - clearance or outer_z[1] <= zone_z[1] + clearance:
-        from torus_cad.errors import ParameterError
-
         raise ParameterError(
             f"cfd.upstream = {settings.upstream:g} / cfd.downstream = {settings.downstream:g} put an end of the domain "
             f"inside the rotating zone (it spans z = {zone_z[0]:.1f} .. {zone_z[1]:.1f} mm, D = {diameter:.1f} mm); "
             "make them larger")
     return Domain(tip_diameter=diameter, propeller_z=propeller_z, outer_radius=settings.domain_radius * diameter,
                   outer_z=outer_z, zone_radius=settings.zone_radius * diameter, zone_z=zone_z, inlet_z=inlet_z,
-                  outlet_z=outlet_z, surface_size=smallest_chord(params) / settings.cells_per_chord,
+                  outlet_z=outlet_z, surface_size=smallest_chord(geometry) / settings.cells_per_chord,
                   far_size=settings.far_size * diameter)
 
 
@@ -216,7 +232,7 @@ def _boundary(gmsh: Any, volumes: set[int]) -> set[int]:
     return {abs(tag) for _, tag in faces}
 
 
-def set_sizes(gmsh: Any, domain: Domain, settings: CfdSettings, wall: list[int]) -> None:
+def set_sizes(gmsh: Any, domain: Domain, settings: Cfd, wall: list[int]) -> None:
     """Element sizes: ``surface_size`` on the propeller growing linearly with the distance from it
     (neighbours differ by about ``growth_rate``), capped at ``far_size``; curvature refinement on top."""
     field = gmsh.model.mesh.field
@@ -288,35 +304,41 @@ def write_msh(gmsh: Any, path: Path, version: float) -> None:
             staged.unlink(missing_ok=True)
 
 
-def write_cfd_domain(params: PropellerParameters, settings: CfdSettings, out_dir: str | Path,
+def write_cfd_domain(params: PropellerParameters, out_dir: str | Path, threads: int = 0,
                      progress: Callable[[str], None] | None = None) -> tuple[dict[str, Any], dict[str, Path]]:
-    """Build the B-rep, the domain and its mesh; write STEP, both .msh files, README.txt and ``<name>_cfd.json``."""
+    """Build the B-rep, the domain of ``params.cfd`` and its mesh (gmsh with ``threads`` threads, 0 = one
+    per CPU); write STEP, both .msh files, README.txt and ``<name>_cfd.json``. Returns the report and paths.
+
+    Raises MissingExtraError without gmsh, ParameterError / GeometryError for bad input (nothing
+    written), KernelError naming the step when OpenCascade or gmsh fails.
+    """
     from torus_cad.kernel.checks import precise_volume
     from torus_cad.kernel.export import atomic_path, write_step
-    from torus_cad.propeller import StageTimer, build_propeller
+    from torus_cad.propeller import build_propeller
 
     gmsh = import_gmsh()
+    settings = params.cfd
     out = Path(out_dir)
     timer = StageTimer(progress)
     cpu_start, wall_start = time.process_time(), time.perf_counter()
-    with timer.stage("brep"):
+    with timer.stage(CfdStage.BREP):
         propeller = build_propeller(params)
         box = propeller.solid.BoundingBox()
-        domain = domain_for(params, settings, (box.zmin, box.zmax))
+        domain = domain_for(params.geometry(), settings, (box.zmin, box.zmax))
         paths = {"step": write_step(propeller.solid, out / f"{params.name}.step", params.name,
                                     params.export.step_schema)}
         propeller_volume = precise_volume(propeller.solid)
-    with gmsh_session(gmsh, settings.threads):
-        with timer.stage("domain"):
+    with gmsh_session(gmsh, threads):
+        with timer.stage(CfdStage.DOMAIN):
             entities = build_domain(gmsh, paths["step"], domain)
             set_sizes(gmsh, domain, settings, entities.surfaces["propeller"])
             add_groups(gmsh, entities)
-        with timer.stage("surface_mesh"), gmsh_step("surface mesh"):
+        with timer.stage(CfdStage.SURFACE_MESH), gmsh_step("surface mesh"):
             gmsh.model.mesh.generate(2)
-        with timer.stage("volume_mesh"), gmsh_step("volume mesh"):
+        with timer.stage(CfdStage.VOLUME_MESH), gmsh_step("volume mesh"):
             gmsh.model.mesh.generate(3)
         statistics = mesh_statistics(gmsh, entities)
-        with timer.stage("write"):
+        with timer.stage(CfdStage.WRITE):
             paths["msh"] = out / f"{params.name}_cfd.msh"
             write_msh(gmsh, paths["msh"], 4.1)
             paths["msh_v2"] = out / f"{params.name}_cfd_v2.msh"
@@ -326,8 +348,8 @@ def write_cfd_domain(params: PropellerParameters, settings: CfdSettings, out_dir
                 "fluid": domain.outer_volume - domain.zone_volume}
     meshed = statistics["meshed_volume_mm3"]
     report: dict[str, Any] = {
-        "name": params.name, "gmsh_version": gmsh_version, "settings": {**asdict(settings),
-                                                                       "inlet_side": settings.inlet_side.value},
+        "name": params.name, "gmsh_version": gmsh_version, "threads": threads,
+        "settings": settings.model_dump(mode="json"),
         "domain_mm": {**asdict(domain), "outer_volume_mm3": domain.outer_volume, "zone_volume_mm3": domain.zone_volume},
         "propeller_volume_mm3": propeller_volume,
         "physical_groups": {"surfaces": list(SURFACE_GROUPS), "volumes": list(VOLUME_GROUPS)},

@@ -16,12 +16,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from torus_cad.geometry.arc_length import equal_arc_length_section
-from torus_cad.geometry.centerline import Centerline, blade_angle_deg
-from torus_cad.geometry.frames import section_frames
+from torus_cad.geometry.centerline import Centerline
 from torus_cad.geometry.mesh import TriangleMesh, blade_mesh
-from torus_cad.geometry.parameters import PropellerParameters
-from torus_cad.geometry.surface import BladeSurface, airfoil_of, place_sections
-from torus_cad.mesh.settings import SectionSpacing
+from torus_cad.geometry.propeller import PropellerGeometry
+from torus_cad.geometry.surface import BladeSurface, blade_frames, place_sections
+from torus_cad.parameters.design import SectionSpacing
 
 #: Points on the centerline used to tabulate its arc length for arc-length spacing.
 CENTERLINE_LENGTH_SAMPLES = 4001
@@ -60,14 +59,14 @@ def section_parameters(centerline: Centerline, sections: int, spacing: SectionSp
     return s
 
 
-def blade_grid(params: PropellerParameters, sections: int, points: int, spacing: SectionSpacing) -> BladeSurface:
+def blade_grid(geometry: PropellerGeometry, sections: int, points: int, spacing: SectionSpacing) -> BladeSurface:
     """Blade 0 sampled on ``sections`` x ``points``: sections spread by ``spacing``, points equally
     spaced in arc length around each section with the sharp trailing edge kept as a point (spec §5)."""
-    centerline = Centerline.for_blade(params, 0)
+    centerline = geometry.centerline(0)
     s = section_parameters(centerline, sections, spacing)
-    sampling = equal_arc_length_section(airfoil_of(params), points)
-    frames = section_frames(centerline, s, params.centerline.frame)
-    return BladeSurface(place_sections(params, frames, sampling.points), s, sampling.t,
+    sampling = equal_arc_length_section(geometry.blade.airfoil, points)
+    frames = blade_frames(geometry.blade, centerline, s)
+    return BladeSurface(place_sections(geometry.blade, frames, sampling.points), s, sampling.t,
                         sampling.trailing_edge_index, frames)
 
 
@@ -87,12 +86,12 @@ def rotated_about_axis(vertices: NDArray[np.float64], angle_deg: float) -> NDArr
     return vertices @ rotation.T
 
 
-def blade_meshes(params: PropellerParameters, surface: BladeSurface) -> list[TriangleMesh]:
+def blade_meshes(geometry: PropellerGeometry, surface: BladeSurface) -> list[TriangleMesh]:
     """Every blade's closed mesh: blade 0's capped grid rotated to theta_i (spec §6.1), outward faces."""
     mesh = blade_mesh(surface)
-    first = blade_angle_deg(params, 0)
-    return [TriangleMesh(rotated_about_axis(mesh.vertices, blade_angle_deg(params, index) - first), mesh.faces)
-            for index in range(params.blades)]
+    first = geometry.blade_angle_deg(0)
+    return [TriangleMesh(rotated_about_axis(mesh.vertices, geometry.blade_angle_deg(index) - first), mesh.faces)
+            for index in range(geometry.blades)]
 
 
 def blade_triangle_count(sections: int, points: int) -> int:

@@ -9,30 +9,40 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from enum import StrEnum
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from torus_cad.geometry.centerline import Centerline
+from torus_cad.geometry.airfoil import airfoil_points
 from torus_cad.geometry.feasibility import (check_blades_clear, check_centerline_leaves_through_side,
                                             check_ends_inside_hub, check_leaves_hub, check_no_fold,
                                             check_no_self_intersection, coarsen, sample_tube, tube_grid)
-from torus_cad.geometry.frames import section_frames
-from torus_cad.geometry.parameters import PropellerParameters
-from torus_cad.geometry.surface import BladeSurface, airfoil_of, blade_surface, place_sections
-from torus_cad.geometry.airfoil import airfoil_points
+from torus_cad.geometry.propeller import PropellerGeometry
+from torus_cad.geometry.surface import BladeSurface, blade_frames, place_sections
 from torus_cad.kernel.export import atomic_path
 from torus_cad.mesh.grids import blade_grid, blade_meshes, cell_size, hub_mesh
-from torus_cad.mesh.quality import (Evenness, aspect_ratios, cell_deviation, edge_topology, evenness,
-                                    faces_away_from_hub, hub_surface_distance, outside_hub)
+from torus_cad.mesh.quality import (aspect_ratios, cell_deviation, edge_topology, evenness, faces_away_from_hub,
+                                    hub_surface_distance, outside_hub)
 from torus_cad.mesh.resolution import check_budget, check_resolution, estimate_triangles
-from torus_cad.mesh.settings import MeshFormat, MeshSettings
+from torus_cad.mesh.settings import MeshFormat, selected_formats
 from torus_cad.mesh.union import LabeledMesh, unite
 from torus_cad.mesh.writers import write_mesh_files
-from torus_cad.propeller import StageTimer
+from torus_cad.parameters import PropellerParameters
+from torus_cad.stages import StageTimer
 from torus_cad.tolerances import MESH_JUNCTION_MARGIN_RELATIVE
+
+
+class MeshStage(StrEnum):
+    """Stages of ``torus-cad mesh``; the value is the key in the report's ``stage_seconds``."""
+
+    CHECKS = "checks"
+    GRIDS = "grids"
+    UNION = "union"
+    QUALITY = "quality"
+    WRITE = "write"
 
 
 @dataclass
@@ -40,64 +50,67 @@ class SurfaceMesh:
     """The united surface mesh of a propeller and how it was made.
 
     Attributes:
-        parameters: the design.
-        settings: the mesh settings.
+        parameters: the design (``parameters.mesh`` holds the resolution and formats).
         mesh: one closed 2-manifold, faces labelled hub / blade_i.
-        blade_grid: blade 0's structured grid (sections x points x 3, mm) and its parameters.
+        blade_grid: blade 0's structured grid (``(sections, points, 3)`` mm) and its parameters.
         hub_cell_mm: edge length of the hub grid's cells.
         estimated_triangles: the estimate the budget was checked against.
-        stage_seconds: seconds per stage.
+        stage_seconds: seconds per stage (keys: MeshStage values).
     """
 
     parameters: PropellerParameters
-    settings: MeshSettings
     mesh: LabeledMesh
     blade_grid: BladeSurface
     hub_cell_mm: float
     estimated_triangles: int
     stage_seconds: dict[str, float] = field(default_factory=dict)
 
+    @property
+    def geometry(self) -> PropellerGeometry:
+        return self.parameters.geometry()
+
 
 def check_design(params: PropellerParameters) -> None:
-    """The pre-kernel design checks of ``geometry.feasibility`` that concern the shape (not the loft's resolution)."""
-    surface = blade_surface(params)
-    centerline = Centerline.for_blade(params)
-    check_ends_inside_hub(params, surface)
-    check_centerline_leaves_through_side(params, centerline)
+    """The pre-kernel design checks of ``geometry.feasibility`` about the shape (not the loft's resolution)."""
+    geometry = params.geometry()
+    surface = params.blade_surface()
+    centerline = geometry.centerline(0)
+    check_ends_inside_hub(geometry.hub, surface)
+    check_centerline_leaves_through_side(geometry.hub, centerline)
     s, _ = tube_grid(len(surface.s))
-    fine = sample_tube(params, centerline, s, surface.t)
+    fine = sample_tube(geometry, centerline, s, surface.t)
     check_no_fold(fine)
-    check_leaves_hub(params, fine)
+    check_leaves_hub(geometry.hub, fine)
     tube = coarsen(fine)
-    check_no_self_intersection(params, tube)
-    check_blades_clear(params, tube)
+    check_no_self_intersection(geometry.hub, tube)
+    check_blades_clear(geometry, tube)
 
 
-def build_surface_mesh(params: PropellerParameters, settings: MeshSettings,
-                       progress: Callable[[str], None] | None = None) -> SurfaceMesh:
-    """Check, grid and unite: the propeller's closed, labelled surface mesh.
+def build_surface_mesh(params: PropellerParameters, progress: Callable[[str], None] | None = None) -> SurfaceMesh:
+    """Check, grid and unite at ``params.mesh``'s resolution: the propeller's closed, labelled surface mesh.
 
-    Raises ParameterError (budget, resolution), GeometryError (design), MeshBooleanError (union).
+    Raises ParameterError (triangle budget, resolution), GeometryError (design), MeshBooleanError (union).
     """
     timer = StageTimer(progress)
-    with timer.stage("checks"):
-        estimate = estimate_triangles(params, settings)
+    geometry, table = params.geometry(), params.mesh
+    with timer.stage(MeshStage.CHECKS):
+        estimate = estimate_triangles(geometry, table.sections, table.points, table.spacing)
         check_budget(estimate)
-        check_resolution(params, settings)
+        check_resolution(geometry, table.sections, table.points, table.spacing)
         check_design(params)
-    with timer.stage("grids"):
-        grid = blade_grid(params, settings.sections, settings.points, settings.spacing)
+    with timer.stage(MeshStage.GRIDS):
+        grid = blade_grid(geometry, table.sections, table.points, table.spacing)
         cell = cell_size(grid).matched
-        parts = [hub_mesh(params.hub.radius, params.hub.length, cell), *blade_meshes(params, grid)]
-    with timer.stage("union"):
-        mesh = unite(parts, ["hub", *(f"blade_{index}" for index in range(params.blades))])
-    return SurfaceMesh(params, settings, mesh, grid, cell, estimate.total, timer.seconds)
+        parts = [hub_mesh(geometry.hub.radius_mm, geometry.hub.length_mm, cell), *blade_meshes(geometry, grid)]
+    with timer.stage(MeshStage.UNION):
+        mesh = unite(parts, ["hub", *(f"blade_{index}" for index in range(geometry.blades))])
+    return SurfaceMesh(params, mesh, grid, cell, estimate.total, timer.seconds)
 
 
 # -- quality report ---------------------------------------------------------------------------------
 
-def _junction_margin(params: PropellerParameters) -> float:
-    return MESH_JUNCTION_MARGIN_RELATIVE * params.hub.radius
+def _junction_margin(geometry: PropellerGeometry) -> float:
+    return MESH_JUNCTION_MARGIN_RELATIVE * geometry.hub.radius_mm
 
 
 def vertex_distances(result: SurfaceMesh) -> NDArray[np.float64]:
@@ -108,13 +121,13 @@ def vertex_distances(result: SurfaceMesh) -> NDArray[np.float64]:
     other vertex is a blade grid vertex, evaluated on the analytic surface (distance 0); a vertex
     that is neither gets its distance from the nearest grid vertex, again an upper bound.
     """
-    mesh, params = result.mesh, result.parameters
+    mesh, hub = result.mesh, result.geometry.hub
     on_hub = np.zeros(len(mesh.vertices), dtype=bool)
     on_hub[mesh.faces_of(0).ravel()] = True
     distance = np.zeros(len(mesh.vertices))
-    distance[on_hub] = np.abs(hub_surface_distance(mesh.vertices[on_hub], params.hub.radius, params.hub.length))
+    distance[on_hub] = np.abs(hub_surface_distance(mesh.vertices[on_hub], hub.radius_mm, hub.length_mm))
     others = np.flatnonzero(~on_hub)
-    blade_vertices = np.concatenate([part.vertices for part in blade_meshes(params, result.blade_grid)])
+    blade_vertices = np.concatenate([part.vertices for part in blade_meshes(result.geometry, result.blade_grid)])
     row = np.dtype((np.void, 24))
     exact = np.isin(np.ascontiguousarray(mesh.vertices[others]).view(row).ravel(),
                     np.ascontiguousarray(blade_vertices).view(row).ravel())
@@ -129,14 +142,14 @@ def vertex_distances(result: SurfaceMesh) -> NDArray[np.float64]:
 def blade_cell_sag(result: SurfaceMesh) -> tuple[float, float]:
     """Largest distance (mm, and as a fraction of the local chord) of the analytic blade at its
     cells' parameter midpoints from the cells' triangles, over the cells outside the hub."""
-    params, grid = result.parameters, result.blade_grid
+    geometry, grid = result.geometry, result.blade_grid
     s_mid = 0.5 * (grid.s[:-1] + grid.s[1:])
     t_mid = 0.5 * (grid.t + np.append(grid.t[1:], 2.0))
-    frames = section_frames(Centerline.for_blade(params, 0), s_mid, params.centerline.frame)
-    centres = place_sections(params, frames, airfoil_points(airfoil_of(params), t_mid))
+    frames = blade_frames(geometry.blade, geometry.centerline(0), s_mid)
+    centres = place_sections(geometry.blade, frames, airfoil_points(geometry.blade.airfoil, t_mid))
     sag = cell_deviation(grid.points, centres)
-    outside = outside_hub(centres.reshape(-1, 3), params.hub.radius, params.hub.length,
-                          _junction_margin(params)).reshape(sag.shape)
+    outside = outside_hub(centres.reshape(-1, 3), geometry.hub.radius_mm, geometry.hub.length_mm,
+                          _junction_margin(geometry)).reshape(sag.shape)
     chord = 2.0 * np.linalg.norm(centres - frames.origin[:, None, :], axis=-1).max(axis=1)
     if not outside.any():
         return 0.0, 0.0
@@ -172,10 +185,11 @@ def opencascade_comparison(params: PropellerParameters, margin: float) -> dict[s
                                 "blades_away_from_junctions": evenness(vertices, away).to_dict()}}
 
 
-def quality_report(result: SurfaceMesh) -> dict[str, Any]:
-    """The mesh's quality as a JSON-ready dict (see README, 'Meshes for simulation')."""
-    mesh, params, settings = result.mesh, result.parameters, result.settings
-    margin = _junction_margin(params)
+def quality_report(result: SurfaceMesh, compare: bool = True) -> dict[str, Any]:
+    """The mesh's quality as a JSON-ready dict (see README, 'Meshes for simulation'); ``compare``
+    adds the B-rep's volume and OpenCascade's tessellation of the same design."""
+    mesh, params, table = result.mesh, result.parameters, result.parameters.mesh
+    margin = _junction_margin(result.geometry)
     topology = edge_topology(mesh.faces)
     blade = _blade_faces(mesh)
     away = blade[faces_away_from_hub(mesh.vertices, blade, params.hub.radius, params.hub.length, margin)]
@@ -184,8 +198,8 @@ def quality_report(result: SurfaceMesh) -> dict[str, Any]:
     grid_cell = cell_size(result.blade_grid)
     report: dict[str, Any] = {
         "name": params.name,
-        "settings": {"sections": settings.sections, "points": settings.points, "spacing": settings.spacing.value,
-                     "formats": [item.value for item in settings.formats]},
+        "settings": {"sections": table.sections, "points": table.points, "spacing": table.spacing.value,
+                     "formats": [item.value for item in selected_formats(table)]},
         "triangles": len(mesh.faces), "vertices": len(mesh.vertices),
         "estimated_triangles": result.estimated_triangles,
         "triangles_per_part": dict(zip(mesh.part_names, np.bincount(mesh.part, minlength=len(mesh.part_names))
@@ -200,7 +214,7 @@ def quality_report(result: SurfaceMesh) -> dict[str, Any]:
         "vertex_distance_max_mm": float(vertex_distances(result).max()),
         "cell_sag_max_mm": sag_mm, "cell_sag_max_relative_chord": sag_relative,
     }
-    if settings.compare:
+    if compare:
         report.update(opencascade_comparison(params, margin))
         report["volume_relative_difference"] = report["volume_mm3"] / report["brep_volume_mm3"] - 1.0
     return report
@@ -223,24 +237,24 @@ def summary_line(report: dict[str, Any]) -> str:
     return line
 
 
-def write_surface_mesh(params: PropellerParameters, settings: MeshSettings, out_dir: str | Path,
+def write_surface_mesh(params: PropellerParameters, out_dir: str | Path, compare: bool = True,
                        progress: Callable[[str], None] | None = None) -> tuple[dict[str, Any], dict[str, Path]]:
-    """Build, measure and write: the mesh files and ``<name>_mesh.json``. Returns the report and the paths."""
-    import json
-    import time
+    """Build, measure and write at ``params.mesh``: the mesh files and ``<name>_mesh.json``.
 
-    result = build_surface_mesh(params, settings, progress)
-    if progress is not None:
-        progress("quality")
-    start = time.perf_counter()
-    report = quality_report(result)
-    result.stage_seconds["quality"] = time.perf_counter() - start
-    if progress is not None:
-        progress("write")
-    start = time.perf_counter()
-    paths: dict[str, Path] = {item.value: path for item, path in
-                              write_mesh_files(result.mesh, out_dir, params.name, settings.formats).items()}
-    result.stage_seconds["write"] = time.perf_counter() - start
+    Returns the report and the written paths by format (and ``"json"``). Nothing is written
+    when a check refuses the design or the resolution.
+    """
+    import json
+
+    formats = selected_formats(params.mesh)
+    result = build_surface_mesh(params, progress)
+    timer = StageTimer(progress)
+    with timer.stage(MeshStage.QUALITY):
+        report = quality_report(result, compare)
+    with timer.stage(MeshStage.WRITE):
+        paths: dict[str, Path] = {item.value: path for item, path in
+                                  write_mesh_files(result.mesh, out_dir, params.name, formats).items()}
+    result.stage_seconds.update(timer.seconds)
     report["files"] = {key: path.name for key, path in paths.items()}
     report["stage_seconds"] = result.stage_seconds
     json_path = Path(out_dir) / f"{params.name}_mesh.json"
@@ -250,5 +264,5 @@ def write_surface_mesh(params: PropellerParameters, settings: MeshSettings, out_
     return report, paths
 
 
-__all__ = ["Evenness", "MeshFormat", "SurfaceMesh", "build_surface_mesh", "quality_report", "summary_line",
+__all__ = ["MeshFormat", "MeshStage", "SurfaceMesh", "build_surface_mesh", "quality_report", "summary_line",
            "write_surface_mesh"]

@@ -18,12 +18,10 @@ from numpy.typing import NDArray
 from torus_cad.errors import ParameterError
 from torus_cad.geometry.airfoil import airfoil_points
 from torus_cad.geometry.arc_length import equal_arc_length_section
-from torus_cad.geometry.centerline import Centerline
-from torus_cad.geometry.frames import section_frames
-from torus_cad.geometry.parameters import PropellerParameters
-from torus_cad.geometry.surface import airfoil_of, place_on_frames, section_coordinates
+from torus_cad.geometry.propeller import PropellerGeometry
+from torus_cad.geometry.surface import blade_frames, place_on_frames
 from torus_cad.mesh.grids import blade_grid, blade_triangle_count, cell_size, hub_layout, section_parameters
-from torus_cad.mesh.settings import MeshSettings
+from torus_cad.parameters.design import SectionSpacing
 from torus_cad.tolerances import MESH_SAG_LIMIT, MESH_TRIANGLE_LIMIT
 
 #: Sections at which the sag around the section is measured.
@@ -68,32 +66,30 @@ def _chord_position(t: float) -> float:
     return float(t if t <= 1.0 else 2.0 - t)
 
 
-def around_sag(params: PropellerParameters, points: int) -> Sag:
+def around_sag(geometry: PropellerGeometry, points: int) -> Sag:
     """Sag of the section polygons of ``points`` equal-arc-length points, over the blade."""
-    sampling = equal_arc_length_section(airfoil_of(params), points)
-    t = sampling.t
-    t_next = np.append(t[1:], 2.0)
-    t_mid = 0.5 * (t + t_next)
+    airfoil, laws = geometry.blade.airfoil, geometry.blade.laws
+    t = equal_arc_length_section(airfoil, points).t
+    t_mid = 0.5 * (t + np.append(t[1:], 2.0))
     s = np.linspace(0.0, 1.0, AROUND_CHECK_SECTIONS)
-    airfoil = airfoil_of(params)
-    planar = section_coordinates(params, s, airfoil_points(airfoil, t))
-    middle = section_coordinates(params, s, airfoil_points(airfoil, t_mid))
+    planar = laws.apply(airfoil_points(airfoil, t), s)
+    middle = laws.apply(airfoil_points(airfoil, t_mid), s)
     sag = _line_distance(middle, planar, np.roll(planar, -1, axis=1)) / _chords(planar)[:, None]
     row, column = np.unravel_index(int(np.argmax(sag)), sag.shape)
     return Sag(float(sag[row, column]), float(s[row]), _chord_position(float(t_mid[column])))
 
 
-def along_sag(params: PropellerParameters, sections: int, settings: MeshSettings) -> Sag:
+def along_sag(geometry: PropellerGeometry, sections: int, points: int, spacing: SectionSpacing) -> Sag:
     """Sag of the straight edges between neighbouring sections, over the blade."""
-    centerline = Centerline.for_blade(params, 0)
-    s = section_parameters(centerline, sections, settings.spacing)
-    sampling = equal_arc_length_section(airfoil_of(params), settings.points)
+    centerline = geometry.centerline(0)
+    s = section_parameters(centerline, sections, spacing)
+    sampling = equal_arc_length_section(geometry.blade.airfoil, points)
     columns = np.unique(np.linspace(0, len(sampling.t) - 1, min(ALONG_CHECK_POINTS, len(sampling.t))).astype(int))
     section = sampling.points[columns]
     s_all = np.concatenate([s, 0.5 * (s[:-1] + s[1:])])
     order = np.argsort(s_all, kind="stable")
-    frames = section_frames(centerline, s_all[order], params.centerline.frame)
-    planar = section_coordinates(params, frames.s, section)
+    frames = blade_frames(geometry.blade, centerline, s_all[order])
+    planar = geometry.blade.laws.apply(section, frames.s)
     surface = np.empty((len(s_all), len(columns), 3))
     surface[order] = place_on_frames(frames, planar)
     chord = np.empty(len(s_all))
@@ -112,21 +108,23 @@ def _needed(count: int, relative: float, limit: float, closed: bool) -> int:
     return needed_cells if closed else needed_cells + 1
 
 
-def check_resolution(params: PropellerParameters, settings: MeshSettings, limit: float | None = None) -> None:
-    """Refuse (ParameterError) a resolution whose flat faces leave the blade by more than ``limit`` of the chord."""
+def check_resolution(geometry: PropellerGeometry, sections: int, points: int, spacing: SectionSpacing,
+                     limit: float | None = None) -> None:
+    """Refuse (ParameterError) a resolution whose flat faces leave the blade by more than ``limit`` of the chord
+    (default MESH_SAG_LIMIT); the message gives the smallest ``mesh.sections`` / ``mesh.points`` that would do."""
     limit = MESH_SAG_LIMIT if limit is None else limit
     problems = []
-    around = around_sag(params, settings.points)
+    around = around_sag(geometry, points)
     if around.relative > limit:
         problems.append(
-            f"--points {settings.points} cuts the sections by {around.relative:.1%} of the chord near chord position "
-            f"{around.chord_position:.2f} (s = {around.s:.2f}); use --points >= "
-            f"{_needed(settings.points, around.relative, limit, closed=True)}")
-    along = along_sag(params, settings.sections, settings)
+            f"mesh.points = {points} cuts the sections by {around.relative:.1%} of the chord near chord position "
+            f"{around.chord_position:.2f} (s = {around.s:.2f}); use mesh.points >= "
+            f"{_needed(points, around.relative, limit, closed=True)} (--points)")
+    along = along_sag(geometry, sections, points, spacing)
     if along.relative > limit:
         problems.append(
-            f"--sections {settings.sections} cuts the blade's bends by {along.relative:.1%} of the chord near s = "
-            f"{along.s:.2f}; use --sections >= {_needed(settings.sections, along.relative, limit, closed=False)}")
+            f"mesh.sections = {sections} cuts the blade's bends by {along.relative:.1%} of the chord near s = "
+            f"{along.s:.2f}; use mesh.sections >= {_needed(sections, along.relative, limit, closed=False)} (--sections)")
     if problems:
         raise ParameterError(f"mesh resolution too coarse for this blade (limit {limit:.1%} of the chord): "
                              + "; ".join(problems))
@@ -145,15 +143,16 @@ class TriangleEstimate:
         return self.blades + self.hub
 
 
-def estimate_triangles(params: PropellerParameters, settings: MeshSettings) -> TriangleEstimate:
+def estimate_triangles(geometry: PropellerGeometry, sections: int, points: int, spacing: SectionSpacing
+                       ) -> TriangleEstimate:
     """Estimate the triangle count from a cheap coarse grid, without building the mesh."""
-    sections, points = ESTIMATE_GRID
-    coarse = cell_size(blade_grid(params, sections, points, settings.spacing))
-    around = coarse.around * points / settings.points
-    along = coarse.along * (sections - 1) / (settings.sections - 1)
+    coarse_sections, coarse_points = ESTIMATE_GRID
+    coarse = cell_size(blade_grid(geometry, coarse_sections, coarse_points, spacing))
+    around = coarse.around * coarse_points / points
+    along = coarse.along * (coarse_sections - 1) / (sections - 1)
     cell = float(np.sqrt(around * along))
-    hub = hub_layout(params.hub.radius, params.hub.length, cell).triangles
-    return TriangleEstimate(params.blades * blade_triangle_count(settings.sections, settings.points), hub, cell)
+    hub = hub_layout(geometry.hub.radius_mm, geometry.hub.length_mm, cell).triangles
+    return TriangleEstimate(geometry.blades * blade_triangle_count(sections, points), hub, cell)
 
 
 def check_budget(estimate: TriangleEstimate, limit: int | None = None) -> None:
@@ -162,4 +161,4 @@ def check_budget(estimate: TriangleEstimate, limit: int | None = None) -> None:
     if estimate.total > limit:
         raise ParameterError(
             f"the mesh would have about {estimate.total:,} triangles ({estimate.blades:,} on the blades, "
-            f"{estimate.hub:,} on the hub), over the limit of {limit:,}; lower --sections or --points")
+            f"{estimate.hub:,} on the hub), over the limit of {limit:,}; lower mesh.sections or mesh.points (--sections, --points)")

@@ -1,34 +1,17 @@
-"""Settings of ``torus-cad mesh``: resolution, how sections are spaced, file formats, and their limits."""
+"""Mesh file formats and how the ``[mesh]`` table (``torus_cad.parameters.design.Mesh``) selects them."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from collections.abc import Iterable
 from enum import StrEnum
-from typing import TypeVar
+from typing import Any
 
 from torus_cad.errors import ParameterError
-
-#: Allowed ranges of the mesh resolution (the triangle ceiling usually binds first).
-SECTIONS_RANGE = (4, 20000)
-POINTS_RANGE = (16, 50000)
-
-_Choice = TypeVar("_Choice", bound=StrEnum)
-
-
-class SectionSpacing(StrEnum):
-    """How the sections are spread along a blade.
-
-    ``parameter``: evenly in the centerline parameter s (what ``blade_surface`` does); cells
-    then stretch where the centerline runs fast. ``arc_length``: evenly in the centerline's
-    arc length, so every row of cells along the blade has the same length.
-    """
-
-    PARAMETER = "parameter"
-    ARC_LENGTH = "arc_length"
+from torus_cad.parameters.design import Mesh, SectionSpacing
 
 
 class MeshFormat(StrEnum):
-    """Mesh file formats; the suffix of each file is given by :data:`SUFFIXES`."""
+    """Mesh file formats; each value is also the ``[mesh]`` key that switches the format on."""
 
     STL = "stl"              # binary STL, the whole surface
     STL_ASCII = "stl_ascii"  # ASCII STL, one named solid per part
@@ -42,42 +25,28 @@ SUFFIXES = {MeshFormat.STL: ".stl", MeshFormat.STL_ASCII: "_ascii.stl", MeshForm
             MeshFormat.PLY: ".ply", MeshFormat.VTK: ".vtk"}
 
 
-@dataclass(frozen=True)
-class MeshSettings:
-    """Resolution and output of the surface mesh.
-
-    Attributes:
-        sections: sections along each blade (rows of the structured grid).
-        points: points around each section, equally spaced in arc length (spec §5).
-        spacing: how the sections are spread along the blade.
-        formats: files to write.
-        compare: also build the B-rep and OpenCascade's tessellation for the quality report
-            (volume, distance to the surface, OpenCascade's edge ratio); False skips them.
-    """
-
-    sections: int = 100
-    points: int = 400
-    spacing: SectionSpacing = SectionSpacing.ARC_LENGTH
-    formats: tuple[MeshFormat, ...] = field(default=(MeshFormat.STL, MeshFormat.OBJ))
-    compare: bool = True
-
-    def __post_init__(self) -> None:
-        for label, value, (low, high) in (("sections", self.sections, SECTIONS_RANGE),
-                                          ("points", self.points, POINTS_RANGE)):
-            if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
-                raise ParameterError(f"mesh.{label} = {value!r} is out of range; allowed whole numbers "
-                                     f"[{low}, {high}]")
-        object.__setattr__(self, "spacing", _choice(SectionSpacing, self.spacing, "mesh.spacing"))
-        formats = tuple(_choice(MeshFormat, item, "mesh.formats") for item in self.formats)
-        if not formats:
-            raise ParameterError("mesh.formats is empty; allowed: one or more of "
-                                 + ", ".join(item.value for item in MeshFormat))
-        object.__setattr__(self, "formats", tuple(dict.fromkeys(formats)))
+def selected_formats(table: Mesh) -> tuple[MeshFormat, ...]:
+    """The formats the ``[mesh]`` table switches on; ParameterError when none is."""
+    formats = tuple(item for item in MeshFormat if getattr(table, item.value))
+    if not formats:
+        raise ParameterError("no mesh format is switched on; set one of " +
+                             ", ".join(f"mesh.{item.value}" for item in MeshFormat) + " = true")
+    return formats
 
 
-def _choice(kind: type[_Choice], value: object, label: str) -> _Choice:
-    try:
-        return kind(value)
-    except ValueError:
-        allowed = ", ".join(repr(item.value) for item in kind)
-        raise ParameterError(f"{label} = {value!r} is not allowed; allowed: {allowed}") from None
+def format_overrides(names: Iterable[str]) -> dict[str, Any]:
+    """``{"mesh.<format>": bool}`` that switches exactly ``names`` on (for ``--format``); ParameterError
+    naming the allowed formats for an unknown one."""
+    chosen = []
+    for name in names:
+        try:
+            chosen.append(MeshFormat(name.strip().lower()))
+        except ValueError:
+            allowed = ", ".join(item.value for item in MeshFormat)
+            raise ParameterError(f"--format {name!r} is not a mesh format; allowed: {allowed}") from None
+    if not chosen:
+        raise ParameterError("--format is empty; allowed: " + ", ".join(item.value for item in MeshFormat))
+    return {f"mesh.{item.value}": item in chosen for item in MeshFormat}
+
+
+__all__ = ["SUFFIXES", "MeshFormat", "SectionSpacing", "format_overrides", "selected_formats"]
