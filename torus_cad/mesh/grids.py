@@ -123,8 +123,10 @@ class HubLayout:
 
 def hub_layout(radius: float, length: float, cell: float) -> HubLayout:
     """Grid counts of a hub of ``radius`` x ``length`` (mm) with cells of about ``cell`` mm."""
-    around = max(3 * CAP_INNER_RING_POINTS, int(np.ceil(2.0 * np.pi * radius / cell)))
-    along = max(2, int(np.ceil(length / cell)))
+    # Cells no larger than the hub's length and a fraction of its circumference, so they stay square.
+    cell = min(cell, length, 2.0 * np.pi * radius / (3 * CAP_INNER_RING_POINTS))
+    around = int(np.ceil(2.0 * np.pi * radius / cell))
+    along = int(np.ceil(length / cell))
     rings = max(1, int(np.ceil(radius / cell)))
     ring_radius = radius * np.arange(1, rings + 1) / rings
     counts = np.maximum(CAP_INNER_RING_POINTS, np.ceil(2.0 * np.pi * ring_radius / cell)).astype(np.int64)

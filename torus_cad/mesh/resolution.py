@@ -1,15 +1,18 @@
 """Is a mesh resolution fine enough for the blade, and small enough for the machine? Checked before building.
 
-A flat-faced mesh leaves the surface between its points. Its sag (largest distance from
-the analytic surface to the straight edges, as a fraction of the local chord) is measured
-around the sections (from ``points``) and along the blade (from ``sections``); where it
-exceeds :data:`MESH_SAG_LIMIT` the resolution is refused with the smallest count that meets
-the limit (the sag falls like the square of the spacing). The triangle count is estimated
-from the grid counts and refused above :data:`MESH_TRIANGLE_LIMIT`.
+A flat-faced mesh leaves the surface between its points. Its sag (largest distance from the
+analytic surface to the straight edges) is measured around the sections (set by ``points``)
+and along the blade (set by ``sections``), as a fraction of the local section thickness
+(thickness x Sy(s), mm): the leading edge of a thin section, where equal arc-length points
+(spec §5) are sparsest for its radius, needs the most points. Above :data:`MESH_SAG_LIMIT`
+the resolution is refused with the smallest count that meets the limit, found by search.
+The triangle count is estimated from the grid counts and refused above
+:data:`MESH_TRIANGLE_LIMIT`.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -20,6 +23,7 @@ from torus_cad.geometry.airfoil import airfoil_points
 from torus_cad.geometry.arc_length import equal_arc_length_section
 from torus_cad.geometry.propeller import PropellerGeometry
 from torus_cad.geometry.surface import blade_frames, place_on_frames
+from torus_cad.geometry.transforms import evaluate_quartic
 from torus_cad.mesh.grids import blade_grid, blade_triangle_count, cell_size, hub_layout, section_parameters
 from torus_cad.parameters.design import SectionSpacing
 from torus_cad.tolerances import MESH_SAG_LIMIT, MESH_TRIANGLE_LIMIT
@@ -34,10 +38,10 @@ ESTIMATE_GRID = (41, 160)
 
 @dataclass(frozen=True)
 class Sag:
-    """Largest sag of the mesh edges as a fraction of the local chord, and where it is.
+    """Largest sag of the mesh edges as a fraction of the local section thickness, and where it is.
 
     Attributes:
-        relative: sag / chord.
+        relative: sag / (thickness x Sy(s)).
         s: centerline parameter where it is largest.
         chord_position: position along the chord there (0 leading edge, 1 trailing edge).
     """
@@ -57,13 +61,15 @@ def _line_distance(point: NDArray[np.float64], start: NDArray[np.float64], end: 
     return np.linalg.norm(offset - along[..., None] * direction, axis=-1)
 
 
-def _chords(planar: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``(k,)`` local chord of ``(k, p, 2)`` sections: twice the largest distance from the centerline."""
-    return 2.0 * np.linalg.norm(planar, axis=-1).max(axis=1)
+def local_thickness(geometry: PropellerGeometry, s: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``(k,)`` section thickness at ``s``: the airfoil's maximum thickness times Sy(s), mm."""
+    return geometry.blade.airfoil.thickness * evaluate_quartic(geometry.blade.laws.scale_y_mm, s)
 
 
-def _chord_position(t: float) -> float:
-    return float(t if t <= 1.0 else 2.0 - t)
+def _worst(relative: NDArray[np.float64], s: NDArray[np.float64], t: NDArray[np.float64]) -> Sag:
+    row, column = np.unravel_index(int(np.argmax(relative)), relative.shape)
+    chord = float(t[column] if t[column] <= 1.0 else 2.0 - t[column])
+    return Sag(float(relative[row, column]), float(s[row]), chord)
 
 
 def around_sag(geometry: PropellerGeometry, points: int) -> Sag:
@@ -74,9 +80,8 @@ def around_sag(geometry: PropellerGeometry, points: int) -> Sag:
     s = np.linspace(0.0, 1.0, AROUND_CHECK_SECTIONS)
     planar = laws.apply(airfoil_points(airfoil, t), s)
     middle = laws.apply(airfoil_points(airfoil, t_mid), s)
-    sag = _line_distance(middle, planar, np.roll(planar, -1, axis=1)) / _chords(planar)[:, None]
-    row, column = np.unravel_index(int(np.argmax(sag)), sag.shape)
-    return Sag(float(sag[row, column]), float(s[row]), _chord_position(float(t_mid[column])))
+    sag = _line_distance(middle, planar, np.roll(planar, -1, axis=1))
+    return _worst(sag / local_thickness(geometry, s)[:, None], s, t_mid)
 
 
 def along_sag(geometry: PropellerGeometry, sections: int, points: int, spacing: SectionSpacing) -> Sag:
@@ -85,49 +90,63 @@ def along_sag(geometry: PropellerGeometry, sections: int, points: int, spacing: 
     s = section_parameters(centerline, sections, spacing)
     sampling = equal_arc_length_section(geometry.blade.airfoil, points)
     columns = np.unique(np.linspace(0, len(sampling.t) - 1, min(ALONG_CHECK_POINTS, len(sampling.t))).astype(int))
-    section = sampling.points[columns]
     s_all = np.concatenate([s, 0.5 * (s[:-1] + s[1:])])
     order = np.argsort(s_all, kind="stable")
     frames = blade_frames(geometry.blade, centerline, s_all[order])
-    planar = geometry.blade.laws.apply(section, frames.s)
     surface = np.empty((len(s_all), len(columns), 3))
-    surface[order] = place_on_frames(frames, planar)
-    chord = np.empty(len(s_all))
-    chord[order] = _chords(planar)
+    surface[order] = place_on_frames(frames, geometry.blade.laws.apply(sampling.points[columns], frames.s))
     grid, middle = surface[: len(s)], surface[len(s):]
-    sag = _line_distance(middle, grid[:-1], grid[1:]) / chord[len(s):, None]
-    row, column = np.unravel_index(int(np.argmax(sag)), sag.shape)
-    return Sag(float(sag[row, column]), float(0.5 * (s[row] + s[row + 1])),
-               _chord_position(float(sampling.t[columns[column]])))
+    s_mid = s_all[len(s):]
+    sag = _line_distance(middle, grid[:-1], grid[1:])
+    return _worst(sag / local_thickness(geometry, s_mid)[:, None], s_mid, sampling.t[columns])
 
 
-def _needed(count: int, relative: float, limit: float, closed: bool) -> int:
-    """Smallest count whose sag meets ``limit``, given ``relative`` at ``count`` (sag ~ spacing^2)."""
-    cells = count if closed else count - 1
-    needed_cells = int(np.ceil(cells * np.sqrt(relative / limit) * 1.02))
-    return needed_cells if closed else needed_cells + 1
+def smallest_count(passes: Callable[[int], bool], start: int, high: int) -> int | None:
+    """Smallest count in (start, high] for which ``passes`` holds (sag falls as counts grow): doubling,
+    then bisection; None if even ``high`` fails."""
+    low, count = start, start
+    while True:
+        count = min(2 * count, high)
+        if passes(count):
+            break
+        if count == high:
+            return None
+        low = count
+    while count - low > 1:
+        middle = (low + count) // 2
+        low, count = (low, middle) if passes(middle) else (middle, count)
+    return count
 
 
 def check_resolution(geometry: PropellerGeometry, sections: int, points: int, spacing: SectionSpacing,
                      limit: float | None = None) -> None:
-    """Refuse (ParameterError) a resolution whose flat faces leave the blade by more than ``limit`` of the chord
-    (default MESH_SAG_LIMIT); the message gives the smallest ``mesh.sections`` / ``mesh.points`` that would do."""
+    """Refuse (ParameterError) a resolution whose flat faces leave the blade by more than ``limit`` of the
+    local section thickness (default MESH_SAG_LIMIT); the message gives the smallest ``mesh.points`` /
+    ``mesh.sections`` that would do."""
+    from torus_cad.parameters.design import Mesh
+
     limit = MESH_SAG_LIMIT if limit is None else limit
+    most_points = Mesh.model_fields["points"].metadata[-1].le
+    most_sections = Mesh.model_fields["sections"].metadata[-1].le
     problems = []
     around = around_sag(geometry, points)
     if around.relative > limit:
+        needed = smallest_count(lambda count: around_sag(geometry, count).relative <= limit, points, most_points)
         problems.append(
-            f"mesh.points = {points} cuts the sections by {around.relative:.1%} of the chord near chord position "
-            f"{around.chord_position:.2f} (s = {around.s:.2f}); use mesh.points >= "
-            f"{_needed(points, around.relative, limit, closed=True)} (--points)")
+            f"mesh.points = {points} cuts the sections by {around.relative:.1%} of their thickness near chord "
+            f"position {around.chord_position:.2f} (s = {around.s:.2f}); "
+            + (f"use mesh.points >= {needed} (--points)" if needed else "no allowed mesh.points resolves them"))
     along = along_sag(geometry, sections, points, spacing)
     if along.relative > limit:
+        needed = smallest_count(lambda count: along_sag(geometry, count, points, spacing).relative <= limit,
+                                sections, most_sections)
         problems.append(
-            f"mesh.sections = {sections} cuts the blade's bends by {along.relative:.1%} of the chord near s = "
-            f"{along.s:.2f}; use mesh.sections >= {_needed(sections, along.relative, limit, closed=False)} (--sections)")
+            f"mesh.sections = {sections} cuts the blade's bends by {along.relative:.1%} of the section thickness "
+            f"near s = {along.s:.2f}; "
+            + (f"use mesh.sections >= {needed} (--sections)" if needed else "no allowed mesh.sections resolves them"))
     if problems:
-        raise ParameterError(f"mesh resolution too coarse for this blade (limit {limit:.1%} of the chord): "
-                             + "; ".join(problems))
+        raise ParameterError(f"mesh resolution too coarse for this blade (limit {limit:.0%} of the section "
+                             "thickness): " + "; ".join(problems))
 
 
 @dataclass(frozen=True)
