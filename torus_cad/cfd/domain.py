@@ -34,9 +34,9 @@ from torus_cad.cfd.settings import MissingExtraError
 from torus_cad.errors import KernelError, ParameterError
 from torus_cad.geometry.propeller import PropellerGeometry
 from torus_cad.geometry.transforms import evaluate_quartic
+from torus_cad.mesh.timing import StageClock
 from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.design import Cfd, InletSide
-from torus_cad.stages import StageTimer
 
 #: Names of the physical groups: surfaces, then volumes.
 SURFACE_GROUPS = ("propeller", "rotating_interface", "inlet", "outlet", "farfield")
@@ -44,6 +44,8 @@ VOLUME_GROUPS = ("rotating_zone", "fluid")
 
 #: Samples per parametric direction of each propeller face for gmsh's distance field.
 DISTANCE_SAMPLING = 60
+#: Elements around the rotating zone's and the outer cylinder's circumference, at least.
+CYLINDER_SEGMENTS = 64
 #: Smallest element allowed, as a fraction of the surface size (bounds curvature refinement).
 MIN_SIZE_FRACTION = 0.1
 #: gmsh algorithms: 2D Frontal-Delaunay (gmsh falls back to MeshAdapt per face), 3D Delaunay.
@@ -232,17 +234,27 @@ def _boundary(gmsh: Any, volumes: set[int]) -> set[int]:
     return {abs(tag) for _, tag in faces}
 
 
-def set_sizes(gmsh: Any, domain: Domain, settings: Cfd, wall: list[int]) -> None:
+def set_sizes(gmsh: Any, domain: Domain, settings: Cfd, entities: DomainEntities) -> None:
     """Element sizes: ``surface_size`` on the propeller growing linearly with the distance from it
-    (neighbours differ by about ``growth_rate``), capped at ``far_size``; curvature refinement on top."""
+    (neighbours differ by about ``growth_rate``), capped at ``far_size``; on the two cylinders at most
+    1/CYLINDER_SEGMENTS of their circumference (so their facets keep the volumes within ~0.1 %);
+    curvature refinement on top."""
     field = gmsh.model.mesh.field
     distance = field.add("Distance")
-    field.setNumbers(distance, "SurfacesList", wall)
+    field.setNumbers(distance, "SurfacesList", entities.surfaces["propeller"])
     field.setNumber(distance, "Sampling", DISTANCE_SAMPLING)
-    size = field.add("MathEval")
-    field.setString(size, "F", f"Min({domain.far_size!r}, {domain.surface_size!r} + "
-                               f"{settings.growth_rate - 1.0!r} * F{distance})")
-    field.setAsBackgroundMesh(size)
+    growth = field.add("MathEval")
+    field.setString(growth, "F", f"Min({domain.far_size!r}, {domain.surface_size!r} + "
+                                 f"{settings.growth_rate - 1.0!r} * F{distance})")
+    limits = [growth]
+    for group, radius in (("rotating_interface", domain.zone_radius), ("farfield", domain.outer_radius)):
+        cap = field.add("Constant")
+        field.setNumbers(cap, "SurfacesList", entities.surfaces[group])
+        field.setNumber(cap, "VIn", 2.0 * np.pi * radius / CYLINDER_SEGMENTS)
+        limits.append(cap)
+    smallest = field.add("Min")
+    field.setNumbers(smallest, "FieldsList", limits)
+    field.setAsBackgroundMesh(smallest)
     options = {"Mesh.MeshSizeExtendFromBoundary": 0, "Mesh.MeshSizeFromPoints": 0,
                "Mesh.MeshSizeFromCurvature": settings.curvature_cells,
                "Mesh.MeshSizeMin": MIN_SIZE_FRACTION * domain.surface_size, "Mesh.MeshSizeMax": domain.far_size,
@@ -319,7 +331,7 @@ def write_cfd_domain(params: PropellerParameters, out_dir: str | Path, threads: 
     gmsh = import_gmsh()
     settings = params.cfd
     out = Path(out_dir)
-    timer = StageTimer(progress)
+    timer = StageClock(progress)
     cpu_start, wall_start = time.process_time(), time.perf_counter()
     with timer.stage(CfdStage.BREP):
         propeller = build_propeller(params)
@@ -331,7 +343,7 @@ def write_cfd_domain(params: PropellerParameters, out_dir: str | Path, threads: 
     with gmsh_session(gmsh, threads):
         with timer.stage(CfdStage.DOMAIN):
             entities = build_domain(gmsh, paths["step"], domain)
-            set_sizes(gmsh, domain, settings, entities.surfaces["propeller"])
+            set_sizes(gmsh, domain, settings, entities)
             add_groups(gmsh, entities)
         with timer.stage(CfdStage.SURFACE_MESH), gmsh_step("surface mesh"):
             gmsh.model.mesh.generate(2)

@@ -4,11 +4,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import cadquery as cq
 import numpy as np
 from numpy.typing import NDArray
 from OCP.BRepMesh import BRepMesh_IncrementalMesh
-
-import cadquery as cq
 
 from torus_cad.errors import KernelError
 

@@ -11,6 +11,7 @@ runs per triangle.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from itertools import pairwise
 
 import numpy as np
 from numpy.typing import NDArray
@@ -182,9 +183,9 @@ def hub_mesh(radius: float, length: float, cell: float) -> TriangleMesh:
     top = [add(_ring(r, int(n), half)) for r, n in zip(ring_radius, layout.ring_points)]
     side.append(top[-1])
     faces = []
-    for inner, outer in zip(bottom[:-1], bottom[1:]):
+    for inner, outer in pairwise(bottom):
         faces.append(zip_rings(inner, outer)[:, ::-1])  # seen from -z: clockwise from +z
-    for inner, outer in zip(top[:-1], top[1:]):
+    for inner, outer in pairwise(top):
         faces.append(zip_rings(inner, outer))
     rows = np.stack(side)                                # (along + 1, around)
     a, b = rows[:-1], np.roll(rows[:-1], -1, axis=1)

@@ -16,22 +16,19 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from torus_cad.geometry import feasibility
 from torus_cad.geometry.airfoil import airfoil_points
-from torus_cad.geometry.feasibility import (check_blades_clear, check_centerline_leaves_through_side,
-                                            check_ends_inside_hub, check_leaves_hub, check_no_fold,
-                                            check_no_self_intersection, coarsen, sample_tube, tube_grid)
 from torus_cad.geometry.propeller import PropellerGeometry
 from torus_cad.geometry.surface import BladeSurface, blade_frames, place_sections
 from torus_cad.kernel.export import atomic_path
+from torus_cad.mesh import quality
 from torus_cad.mesh.grids import blade_grid, blade_meshes, cell_size, hub_mesh
-from torus_cad.mesh.quality import (aspect_ratios, cell_deviation, edge_topology, evenness, faces_away_from_hub,
-                                    hub_surface_distance, outside_hub)
 from torus_cad.mesh.resolution import check_budget, check_resolution, estimate_triangles
 from torus_cad.mesh.settings import MeshFormat, selected_formats
+from torus_cad.mesh.timing import StageClock
 from torus_cad.mesh.union import LabeledMesh, unite
 from torus_cad.mesh.writers import write_mesh_files
 from torus_cad.parameters import PropellerParameters
-from torus_cad.stages import StageTimer
 from torus_cad.tolerances import MESH_JUNCTION_MARGIN_RELATIVE
 
 
@@ -75,15 +72,15 @@ def check_design(params: PropellerParameters) -> None:
     geometry = params.geometry()
     surface = params.blade_surface()
     centerline = geometry.centerline(0)
-    check_ends_inside_hub(geometry.hub, surface)
-    check_centerline_leaves_through_side(geometry.hub, centerline)
-    s, _ = tube_grid(len(surface.s))
-    fine = sample_tube(geometry, centerline, s, surface.t)
-    check_no_fold(fine)
-    check_leaves_hub(geometry.hub, fine)
-    tube = coarsen(fine)
-    check_no_self_intersection(geometry.hub, tube)
-    check_blades_clear(geometry, tube)
+    feasibility.check_ends_inside_hub(geometry.hub, surface)
+    feasibility.check_centerline_leaves_through_side(geometry.hub, centerline)
+    s, _ = feasibility.tube_grid(len(surface.s))
+    fine = feasibility.sample_tube(geometry, centerline, s, surface.t)
+    feasibility.check_no_fold(fine)
+    feasibility.check_leaves_hub(geometry.hub, fine)
+    tube = feasibility.coarsen(fine)
+    feasibility.check_no_self_intersection(geometry.hub, tube)
+    feasibility.check_blades_clear(geometry, tube)
 
 
 def build_surface_mesh(params: PropellerParameters, progress: Callable[[str], None] | None = None) -> SurfaceMesh:
@@ -91,7 +88,7 @@ def build_surface_mesh(params: PropellerParameters, progress: Callable[[str], No
 
     Raises ParameterError (triangle budget, resolution), GeometryError (design), MeshBooleanError (union).
     """
-    timer = StageTimer(progress)
+    timer = StageClock(progress)
     geometry, table = params.geometry(), params.mesh
     with timer.stage(MeshStage.CHECKS):
         estimate = estimate_triangles(geometry, table.sections, table.points, table.spacing)
@@ -125,7 +122,7 @@ def vertex_distances(result: SurfaceMesh) -> NDArray[np.float64]:
     on_hub = np.zeros(len(mesh.vertices), dtype=bool)
     on_hub[mesh.faces_of(0).ravel()] = True
     distance = np.zeros(len(mesh.vertices))
-    distance[on_hub] = np.abs(hub_surface_distance(mesh.vertices[on_hub], hub.radius_mm, hub.length_mm))
+    distance[on_hub] = np.abs(quality.hub_surface_distance(mesh.vertices[on_hub], hub.radius_mm, hub.length_mm))
     others = np.flatnonzero(~on_hub)
     blade_vertices = np.concatenate([part.vertices for part in blade_meshes(result.geometry, result.blade_grid)])
     row = np.dtype((np.void, 24))
@@ -147,8 +144,8 @@ def blade_cell_sag(result: SurfaceMesh) -> tuple[float, float]:
     t_mid = 0.5 * (grid.t + np.append(grid.t[1:], 2.0))
     frames = blade_frames(geometry.blade, geometry.centerline(0), s_mid)
     centres = place_sections(geometry.blade, frames, airfoil_points(geometry.blade.airfoil, t_mid))
-    sag = cell_deviation(grid.points, centres)
-    outside = outside_hub(centres.reshape(-1, 3), geometry.hub.radius_mm, geometry.hub.length_mm,
+    sag = quality.cell_deviation(grid.points, centres)
+    outside = quality.outside_hub(centres.reshape(-1, 3), geometry.hub.radius_mm, geometry.hub.length_mm,
                           _junction_margin(geometry)).reshape(sag.shape)
     chord = 2.0 * np.linalg.norm(centres - frames.origin[:, None, :], axis=-1).max(axis=1)
     if not outside.any():
@@ -176,13 +173,13 @@ def opencascade_comparison(params: PropellerParameters, margin: float) -> dict[s
     on_blade = np.concatenate([np.full(len(face.triangles), face.surface_type not in ("PLANE", "CYLINDER"))
                                for face in faces])
     blade = triangles[on_blade]
-    away = blade[faces_away_from_hub(vertices, blade, params.hub.radius, params.hub.length, margin)]
+    away = blade[quality.faces_away_from_hub(vertices, blade, params.hub.radius, params.hub.length, margin)]
     return {"brep_volume_mm3": precise_volume(propeller.solid),
             "opencascade_stl": {"linear_deflection_mm": params.export.stl_linear_deflection,
                                 "angular_deflection_rad": params.export.stl_angular_deflection,
                                 "triangles": len(triangles),
-                                "aspect_ratio_max": float(aspect_ratios(vertices, triangles).max()),
-                                "blades_away_from_junctions": evenness(vertices, away).to_dict()}}
+                                "aspect_ratio_max": float(quality.aspect_ratios(vertices, triangles).max()),
+                                "blades_away_from_junctions": quality.evenness(vertices, away).to_dict()}}
 
 
 def quality_report(result: SurfaceMesh, compare: bool = True) -> dict[str, Any]:
@@ -190,10 +187,10 @@ def quality_report(result: SurfaceMesh, compare: bool = True) -> dict[str, Any]:
     adds the B-rep's volume and OpenCascade's tessellation of the same design."""
     mesh, params, table = result.mesh, result.parameters, result.parameters.mesh
     margin = _junction_margin(result.geometry)
-    topology = edge_topology(mesh.faces)
+    topology = quality.edge_topology(mesh.faces)
     blade = _blade_faces(mesh)
-    away = blade[faces_away_from_hub(mesh.vertices, blade, params.hub.radius, params.hub.length, margin)]
-    ratios = aspect_ratios(mesh.vertices, mesh.faces)
+    away = blade[quality.faces_away_from_hub(mesh.vertices, blade, params.hub.radius, params.hub.length, margin)]
+    ratios = quality.aspect_ratios(mesh.vertices, mesh.faces)
     sag_mm, sag_relative = blade_cell_sag(result)
     grid_cell = cell_size(result.blade_grid)
     report: dict[str, Any] = {
@@ -207,7 +204,7 @@ def quality_report(result: SurfaceMesh, compare: bool = True) -> dict[str, Any]:
         "topology": topology.to_dict(),
         "blade_cell_mm": {"around": grid_cell.around, "along": grid_cell.along}, "hub_cell_mm": result.hub_cell_mm,
         "junction_margin_mm": margin,
-        "blades_away_from_junctions": evenness(mesh.vertices, away).to_dict(),
+        "blades_away_from_junctions": quality.evenness(mesh.vertices, away).to_dict(),
         "aspect_ratio_max": float(ratios.max()),
         "aspect_ratio_max_hub": float(ratios[mesh.part == 0].max()),
         "volume_mm3": mesh.triangle_mesh.volume,
@@ -248,7 +245,7 @@ def write_surface_mesh(params: PropellerParameters, out_dir: str | Path, compare
 
     formats = selected_formats(params.mesh)
     result = build_surface_mesh(params, progress)
-    timer = StageTimer(progress)
+    timer = StageClock(progress)
     with timer.stage(MeshStage.QUALITY):
         report = quality_report(result, compare)
     with timer.stage(MeshStage.WRITE):

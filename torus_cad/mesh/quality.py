@@ -19,8 +19,6 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from torus_cad.geometry.mesh import TriangleMesh
-
 
 @dataclass(frozen=True)
 class Topology:
@@ -118,7 +116,7 @@ def faces_away_from_hub(vertices: NDArray[np.float64], faces: NDArray[np.int64],
                         margin: float) -> NDArray[np.bool_]:
     """``(f,)`` True for triangles whose three corners all lie more than ``margin`` outside the hub."""
     outside = outside_hub(vertices, radius, length, margin)
-    return outside[faces].all(axis=1)
+    return np.asarray(outside[faces].all(axis=1))
 
 
 def cell_deviation(grid: NDArray[np.float64], centres: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -131,7 +129,8 @@ def cell_deviation(grid: NDArray[np.float64], centres: NDArray[np.float64]) -> N
     a, b = grid[:-1], np.roll(grid[:-1], -1, axis=1)
     c, d = grid[1:], np.roll(grid[1:], -1, axis=1)
 
-    def plane_distance(p, q, r):
+    def plane_distance(p: NDArray[np.float64], q: NDArray[np.float64], r: NDArray[np.float64]
+                       ) -> NDArray[np.float64]:
         normal = np.cross(q - p, r - p)
         norm = np.linalg.norm(normal, axis=-1)
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -139,9 +138,3 @@ def cell_deviation(grid: NDArray[np.float64], centres: NDArray[np.float64]) -> N
         return np.where(norm > 0, distance, np.linalg.norm(centres - p, axis=-1))
 
     return np.minimum(plane_distance(a, b, d), plane_distance(a, d, c))
-
-
-def mesh_from_parts(vertices: list[NDArray[np.float64]], faces: list[NDArray[np.int64]]) -> TriangleMesh:
-    """Concatenate separate vertex/face lists into one mesh (indices shifted)."""
-    offsets = np.cumsum([0] + [len(v) for v in vertices[:-1]])
-    return TriangleMesh(np.concatenate(vertices), np.concatenate([f + o for f, o in zip(faces, offsets)]))

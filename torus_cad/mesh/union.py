@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -46,7 +47,7 @@ class LabeledMesh:
         return self.faces[self.part == index]
 
 
-def _manifold(mesh: TriangleMesh, name: str):
+def _manifold(mesh: TriangleMesh, name: str) -> Any:
     import manifold3d as mf
 
     body = mf.Manifold(mf.Mesh64(vert_properties=np.ascontiguousarray(mesh.vertices, dtype=np.float64),

@@ -39,7 +39,7 @@ def _chunks(count: int) -> Iterator[slice]:
         yield slice(start, min(start + CHUNK_TRIANGLES, count))
 
 
-def _write_rows(handle: IO[str], template: str, rows: NDArray) -> None:
+def _write_rows(handle: IO[str], template: str, rows: NDArray[np.float64] | NDArray[np.int64]) -> None:
     """Write ``template % row`` for every row of a 2-D array, a chunk at a time."""
     for part in _chunks(len(rows)):
         block = rows[part]

@@ -242,5 +242,5 @@ class PropellerParameters(Document):
 
 
 # ParameterError is what every caller catches; keep it importable from here.
-__all__ = ["Airfoil", "Cfd", "Centerline", "Export", "Hub", "InletSide", "Mesh", "ParameterError", "PropellerParameters",
-           "Resolution", "SectionSpacing", "StepSchema", "Transforms"]
+__all__ = ["Airfoil", "Centerline", "Cfd", "Export", "Hub", "InletSide", "Mesh", "ParameterError",
+           "PropellerParameters", "Resolution", "SectionSpacing", "StepSchema", "Transforms"]
