@@ -125,9 +125,7 @@ def vertex_distances(result: SurfaceMesh) -> NDArray[np.float64]:
     distance[on_hub] = np.abs(quality.hub_surface_distance(mesh.vertices[on_hub], hub.radius_mm, hub.length_mm))
     others = np.flatnonzero(~on_hub)
     blade_vertices = np.concatenate([part.vertices for part in blade_meshes(result.geometry, result.blade_grid)])
-    row = np.dtype((np.void, 24))
-    exact = np.isin(np.ascontiguousarray(mesh.vertices[others]).view(row).ravel(),
-                    np.ascontiguousarray(blade_vertices).view(row).ravel())
+    exact = quality.rows_in(mesh.vertices[others], blade_vertices)
     strays = others[~exact]
     if len(strays):
         from scipy.spatial import cKDTree
@@ -174,11 +172,13 @@ def opencascade_comparison(params: PropellerParameters, margin: float) -> dict[s
                                for face in faces])
     blade = triangles[on_blade]
     away = blade[quality.faces_away_from_hub(vertices, blade, params.hub.radius, params.hub.length, margin)]
+    ratios = quality.aspect_ratios(vertices, triangles)
     return {"brep_volume_mm3": precise_volume(propeller.solid),
             "opencascade_stl": {"linear_deflection_mm": params.export.stl_linear_deflection,
                                 "angular_deflection_rad": params.export.stl_angular_deflection,
                                 "triangles": len(triangles),
-                                "aspect_ratio_max": float(quality.aspect_ratios(vertices, triangles).max()),
+                                "aspect_ratio_max": float(ratios.max()),
+                                "triangles_aspect_ratio_over_100": int(np.sum(ratios > 100.0)),
                                 "blades_away_from_junctions": quality.evenness(vertices, away).to_dict()}}
 
 
@@ -206,6 +206,7 @@ def quality_report(result: SurfaceMesh, compare: bool = True) -> dict[str, Any]:
         "junction_margin_mm": margin,
         "blades_away_from_junctions": quality.evenness(mesh.vertices, away).to_dict(),
         "aspect_ratio_max": float(ratios.max()),
+        "triangles_aspect_ratio_over_100": int(np.sum(ratios > 100.0)),
         "aspect_ratio_max_hub": float(ratios[mesh.part == 0].max()),
         "volume_mm3": mesh.triangle_mesh.volume,
         "vertex_distance_max_mm": float(vertex_distances(result).max()),
@@ -226,7 +227,8 @@ def summary_line(report: dict[str, Any]) -> str:
             f"{topology['non_manifold_edges']} non-manifold edges); blade edge ratio {away['edge_ratio']:.2f}")
     if "opencascade_stl" in report:
         line += f" (OpenCascade STL {report['opencascade_stl']['blades_away_from_junctions']['edge_ratio']:.1f})"
-    line += f", worst aspect {report['aspect_ratio_max']:.1f}, volume {report['volume_mm3']:.2f} mm^3"
+    line += (f", worst aspect ratio {report['aspect_ratio_max']:.3g} ({report['triangles_aspect_ratio_over_100']} "
+             f"triangles over 100), volume {report['volume_mm3']:.2f} mm^3")
     if "brep_volume_mm3" in report:
         line += f" (B-rep {report['brep_volume_mm3']:.2f}, {report['volume_relative_difference']:+.3%})"
     line += (f", vertices within {report['vertex_distance_max_mm']:.2g} mm and cells within "

@@ -54,17 +54,23 @@ def edge_topology(faces: NDArray[np.int64]) -> Topology:
                     non_manifold_edges=int(np.sum(counts > 2)), inconsistent_edges=int(np.sum(two & (direction != 0))))
 
 
+def _edges(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> NDArray[np.float64]:
+    """``(3, f, 3)`` edge vectors 01, 12, 20 of every triangle."""
+    a, b, c = vertices[faces[:, 0]], vertices[faces[:, 1]], vertices[faces[:, 2]]
+    return np.stack([b - a, c - b, a - c])
+
+
 def edge_lengths(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> NDArray[np.float64]:
     """``(f, 3)`` lengths of the edges 01, 12, 20 of every triangle, mm."""
-    corners = vertices[faces]
-    return np.linalg.norm(corners - np.roll(corners, -1, axis=1), axis=2)
+    edges = _edges(vertices, faces)
+    return np.sqrt(np.einsum("efk,efk->fe", edges, edges))
 
 
 def aspect_ratios(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> NDArray[np.float64]:
     """``(f,)`` longest edge x perimeter / (4 sqrt(3) area): 1 for equilateral, inf for degenerate."""
-    lengths = edge_lengths(vertices, faces)
-    corners = vertices[faces]
-    area = 0.5 * np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1)
+    edges = _edges(vertices, faces)
+    lengths = np.sqrt(np.einsum("efk,efk->fe", edges, edges))
+    area = 0.5 * np.linalg.norm(np.cross(edges[0], -edges[2]), axis=1)
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = lengths.max(axis=1) * lengths.sum(axis=1) / (4.0 * np.sqrt(3.0) * area)
     return np.where(area > 0.0, ratio, np.inf)
@@ -138,3 +144,24 @@ def cell_deviation(grid: NDArray[np.float64], centres: NDArray[np.float64]) -> N
         return np.where(norm > 0, distance, np.linalg.norm(centres - p, axis=-1))
 
     return np.minimum(plane_distance(a, b, d), plane_distance(a, d, c))
+
+
+def rows_in(query: NDArray[np.float64], reference: NDArray[np.float64]) -> NDArray[np.bool_]:
+    """``(q,)`` True where a row of ``query`` ``(q, 3)`` equals a row of ``reference`` ``(r, 3)`` bit for bit.
+
+    Rows are hashed to one int64 each (sorted once, looked up with searchsorted), and every hit is
+    confirmed by comparing the coordinates, so a hash collision cannot give a false True.
+    """
+    def keys(rows: NDArray[np.float64]) -> NDArray[np.int64]:
+        bits = np.ascontiguousarray(rows, dtype=np.float64).view(np.int64)
+        with np.errstate(over="ignore"):
+            return np.asarray(bits[:, 0] * np.int64(0x9E3779B97F4A7C15 - (1 << 64)) ^ bits[:, 1] * np.int64(
+                0xC2B2AE3D27D4EB4F - (1 << 64)) ^ bits[:, 2])
+
+    reference_keys = keys(reference)
+    order = np.argsort(reference_keys, kind="stable")
+    sorted_keys = reference_keys[order]
+    query_keys = keys(query)
+    position = np.minimum(np.searchsorted(sorted_keys, query_keys), len(sorted_keys) - 1)
+    candidate = order[position]
+    return np.asarray((sorted_keys[position] == query_keys) & np.all(reference[candidate] == query, axis=1))
