@@ -13,7 +13,8 @@ from hypothesis import strategies as st
 from torus_cad.cli import main
 from torus_cad.errors import ParameterError
 from torus_cad.geometry.mesh import TriangleMesh
-from torus_cad.mesh.grids import blade_grid, hub_layout, hub_mesh, section_parameters
+from torus_cad.mesh.cleanup import collapse_junction_needles
+from torus_cad.mesh.grids import blade_grid, blade_meshes, cell_size, hub_layout, hub_mesh, section_parameters
 from torus_cad.mesh.pipeline import build_surface_mesh
 from torus_cad.mesh.quality import aspect_ratios, edge_topology
 from torus_cad.mesh.resolution import check_resolution
@@ -134,6 +135,21 @@ def _minimum_points(thickness: float) -> int:
 def test_thin_sections_need_more_points():
     # equal arc-length points (spec §5) are sparse at a thin section's small leading-edge radius
     assert _minimum_points(0.08) > 3 * _minimum_points(0.5)
+
+
+def test_cleanup_collapses_the_junction_needles_and_keeps_the_surface_closed():
+    geometry = PropellerParameters().geometry()
+    grid = blade_grid(geometry, 48, 120, SectionSpacing.ARC_LENGTH)
+    parts = [hub_mesh(10.0, 20.0, cell_size(grid).matched), *blade_meshes(geometry, grid)]
+    united = unite(parts, PARTS)
+    cleaned, collapsed = collapse_junction_needles(united)
+    before = aspect_ratios(united.vertices, united.faces)
+    after = aspect_ratios(cleaned.vertices, cleaned.faces)
+    assert collapsed > 0 and np.sum(after > 100) <= np.sum(before > 100) // 10
+    assert after.max() < before.max() / 10
+    assert edge_topology(cleaned.faces).closed
+    assert cleaned.triangle_mesh.volume == pytest.approx(united.triangle_mesh.volume, rel=1e-5)
+    assert np.array_equal(np.unique(cleaned.part), np.unique(united.part))
 
 
 def test_a_part_that_is_not_closed_fails_naming_the_step():

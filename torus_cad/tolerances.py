@@ -74,3 +74,7 @@ MESH_TRIANGLE_LIMIT = 20_000_000
 #: Surface meshes: triangles with every corner at least this fraction of the hub radius outside
 #: the hub count as "away from the junctions" in the quality report.
 MESH_JUNCTION_MARGIN_RELATIVE = 0.05
+
+#: Surface meshes: at the blade-hub junctions, a triangle edge shorter than this fraction of its
+#: triangle's longest edge is a needle the cleanup collapses (torus_cad.mesh.cleanup).
+MESH_NEEDLE_EDGE_RATIO = 0.1
