@@ -142,10 +142,11 @@ def test_cleanup_collapses_the_junction_needles_and_keeps_the_surface_closed():
     grid = blade_grid(geometry, 48, 120, SectionSpacing.ARC_LENGTH)
     parts = [hub_mesh(10.0, 20.0, cell_size(grid).matched), *blade_meshes(geometry, grid)]
     united = unite(parts, PARTS)
-    cleaned, collapsed = collapse_junction_needles(united)
+    cleaned, cleanup = collapse_junction_needles(united)
     before = aspect_ratios(united.vertices, united.faces)
     after = aspect_ratios(cleaned.vertices, cleaned.faces)
-    assert collapsed > 0 and np.sum(after > 100) <= np.sum(before > 100) // 10
+    assert cleanup.collapsed > 0 and np.sum(after > 100) <= np.sum(before > 100) // 10
+    assert cleanup.over_100_before == np.sum(before > 100) and cleanup.aspect_ratio_max_before == before.max()
     assert after.max() < before.max() / 10
     assert edge_topology(cleaned.faces).closed
     assert cleaned.triangle_mesh.volume == pytest.approx(united.triangle_mesh.volume, rel=1e-5)

@@ -69,16 +69,34 @@ def _shape_after(vertices: NDArray[np.float64], rows: NDArray[np.int64], normals
     return float(aspect_ratios(vertices, rows).max())
 
 
-def collapse_junction_needles(mesh: LabeledMesh) -> tuple[LabeledMesh, int]:
-    """The mesh with the junction's needle edges collapsed, and how many were."""
+@dataclass(frozen=True)
+class Cleanup:
+    """What the junction cleanup did.
+
+    Attributes:
+        collapsed: edges collapsed.
+        aspect_ratio_max_before: worst aspect ratio of the triangles at the junctions before.
+        over_100_before: triangles at the junctions with an aspect ratio over 100, before.
+    """
+
+    collapsed: int
+    aspect_ratio_max_before: float
+    over_100_before: int
+
+
+def collapse_junction_needles(mesh: LabeledMesh) -> tuple[LabeledMesh, Cleanup]:
+    """The mesh with the junction's needle edges collapsed, and what was done."""
     vertices, faces = mesh.vertices, mesh.faces.copy()
     junction = junction_vertices(mesh)
+    at_junction = junction[faces].any(axis=1)
+    ratios = aspect_ratios(vertices, faces[at_junction])
     lengths = edge_lengths(vertices, faces)
     shortest = lengths.argmin(axis=1)
-    needle = (lengths.min(axis=1) < MESH_NEEDLE_EDGE_RATIO * lengths.max(axis=1)) & junction[faces].any(axis=1)
+    needle = (lengths.min(axis=1) < MESH_NEEDLE_EDGE_RATIO * lengths.max(axis=1)) & at_junction
     rows = np.flatnonzero(needle)
+    before = (float(ratios.max()) if len(ratios) else 1.0, int(np.sum(ratios > 100.0)))
     if len(rows) == 0:
-        return mesh, 0
+        return mesh, Cleanup(0, *before)
     ends = np.stack([faces[rows, shortest[rows]], faces[rows, (shortest[rows] + 1) % 3]], axis=1)
     candidates = np.unique(np.sort(ends, axis=1), axis=0)
     candidates = candidates[np.argsort(np.linalg.norm(vertices[candidates[:, 0]] - vertices[candidates[:, 1]],
@@ -96,9 +114,9 @@ def collapse_junction_needles(mesh: LabeledMesh) -> tuple[LabeledMesh, int]:
         if len(shared) != 2 or len(adjacency.neighbours(mover) & adjacency.neighbours(keeper)) != 2:
             continue  # not an edge any more, or collapsing it would pinch the surface
         moved = sorted(adjacency.around(mover) - shared)
-        before = faces[moved]
-        after = np.where(before == mover, keeper, before)
-        corners = vertices[before]
+        old = faces[moved]
+        after = np.where(old == mover, keeper, old)
+        corners = vertices[old]
         normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
         worst = _shape_after(vertices, after, normals)
         if worst is None or worst >= float(aspect_ratios(vertices, faces[sorted(shared)]).max()):
@@ -116,4 +134,4 @@ def collapse_junction_needles(mesh: LabeledMesh) -> tuple[LabeledMesh, int]:
     used[faces[keep].ravel()] = True
     index = np.cumsum(used) - 1
     cleaned = LabeledMesh(vertices[used], index[faces[keep]], mesh.part[keep], mesh.part_names)
-    return cleaned, collapsed
+    return cleaned, Cleanup(collapsed, *before)

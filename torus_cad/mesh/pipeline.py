@@ -9,7 +9,7 @@ quality report -> files.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from enum import StrEnum
 from pathlib import Path
 from typing import Any
@@ -23,7 +23,7 @@ from torus_cad.geometry.propeller import PropellerGeometry
 from torus_cad.geometry.surface import BladeSurface, blade_frames, place_sections
 from torus_cad.kernel.export import atomic_path
 from torus_cad.mesh import quality
-from torus_cad.mesh.cleanup import collapse_junction_needles
+from torus_cad.mesh.cleanup import Cleanup, collapse_junction_needles
 from torus_cad.mesh.grids import blade_grid, blade_meshes, cell_size, hub_mesh
 from torus_cad.mesh.resolution import check_budget, check_resolution, estimate_triangles
 from torus_cad.mesh.settings import MeshFormat, selected_formats
@@ -55,7 +55,7 @@ class SurfaceMesh:
         blade_grid: blade 0's structured grid (``(sections, points, 3)`` mm) and its parameters.
         hub_cell_mm: edge length of the hub grid's cells.
         estimated_triangles: the estimate the budget was checked against.
-        needles_collapsed: short edges collapsed at the junctions after the union (``mesh.cleanup``).
+        cleanup: what the junction cleanup after the union did (``mesh.cleanup``).
         stage_seconds: seconds per stage (keys: MeshStage values).
     """
 
@@ -64,7 +64,7 @@ class SurfaceMesh:
     blade_grid: BladeSurface
     hub_cell_mm: float
     estimated_triangles: int
-    needles_collapsed: int
+    cleanup: Cleanup
     stage_seconds: dict[str, float] = field(default_factory=dict)
 
     @property
@@ -107,8 +107,8 @@ def build_surface_mesh(params: PropellerParameters, progress: Callable[[str], No
     with timer.stage(MeshStage.UNION):
         mesh = unite(parts, ["hub", *(f"blade_{index}" for index in range(geometry.blades))])
     with timer.stage(MeshStage.CLEANUP):
-        mesh, collapsed = collapse_junction_needles(mesh)
-    return SurfaceMesh(params, mesh, grid, cell, estimate.total, collapsed, timer.seconds)
+        mesh, cleanup = collapse_junction_needles(mesh)
+    return SurfaceMesh(params, mesh, grid, cell, estimate.total, cleanup, timer.seconds)
 
 
 # -- quality report ---------------------------------------------------------------------------------
@@ -206,7 +206,7 @@ def quality_report(result: SurfaceMesh, compare: bool = True) -> dict[str, Any]:
                      "formats": [item.value for item in selected_formats(table)]},
         "triangles": len(mesh.faces), "vertices": len(mesh.vertices),
         "estimated_triangles": result.estimated_triangles,
-        "needles_collapsed": result.needles_collapsed,
+        "junction_cleanup": asdict(result.cleanup),
         "triangles_per_part": dict(zip(mesh.part_names, np.bincount(mesh.part, minlength=len(mesh.part_names))
                                        .tolist())),
         "topology": topology.to_dict(),
