@@ -151,7 +151,7 @@ def blade_cell_sag(result: SurfaceMesh) -> tuple[float, float]:
     centres = place_sections(geometry.blade, frames, airfoil_points(geometry.blade.airfoil, t_mid))
     sag = quality.cell_deviation(grid.points, centres)
     outside = quality.outside_hub(centres.reshape(-1, 3), geometry.hub.radius_mm, geometry.hub.length_mm,
-                          _junction_margin(geometry)).reshape(sag.shape)
+                                  _junction_margin(geometry)).reshape(sag.shape)
     chord = 2.0 * np.linalg.norm(centres - frames.origin[:, None, :], axis=-1).max(axis=1)
     if not outside.any():
         return 0.0, 0.0
