@@ -64,8 +64,8 @@ CONFIG_FILE_MAX_BYTES = 1 << 20
 
 #: Surface meshes (torus_cad.mesh): largest sag of the flat faces from the analytic blade, as a
 #: fraction of the local section thickness, above which a resolution is refused. The default design
-#: needs 18 points and 20-23 sections for it; a 6 % thick section needs ~400 points (its leading edge).
-MESH_SAG_LIMIT = 0.05
+#: needs 15 sections (any allowed points); a 6 % thick section needs 31 points (its leading edge).
+MESH_SAG_LIMIT = 0.10
 
 #: Surface meshes: most triangles `torus-cad mesh` builds (estimated before it starts); peak
 #: memory grows ~0.9 GB per million triangles (scripts/bench_mesh.py), so this keeps it within ~18 GB.
