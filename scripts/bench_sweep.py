@@ -23,7 +23,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from torus_cad.sweep import load_sweep, run_sweep
+from torus_cad.batch import Outcome, load_sweep, run_sweep
 
 # 12 designs at the default resolution (25 sections x 80 points): 3 blade counts x 4 cambers.
 BENCH_SWEEP = """\
@@ -48,12 +48,12 @@ def run_configuration(label: str, sweep_path: Path, out: Path, **kwargs: Any) ->
     seconds = time.perf_counter() - start
     busy = (_cpu_seconds() - cpu_before) / seconds  # CPUs busy on the whole machine, any process
     counts = result.counts()
-    figures = {"configuration": label, "designs": len(result.designs), "built": result.built, "ok": counts["ok"],
-               "refused": counts["refused"], "failed": counts["failed"] + counts["error"],
+    figures = {"configuration": label, "designs": len(result.designs), "built": result.built,
+               "valid": counts[Outcome.VALID], "refused": counts[Outcome.REFUSED], "problems": result.problems,
                "wall_s": round(seconds, 2), "designs_per_minute": round(60.0 * result.built / seconds, 2),
                "machine_cpus_busy": round(busy, 2), "backend": result.backend}
     print(f"{label:<28} {result.built:3d} designs in {seconds:7.1f} s  ->  "
-          f"{figures['designs_per_minute']:6.1f} designs/min   ({counts['ok']} ok; "
+          f"{figures['designs_per_minute']:6.1f} designs/min   ({counts[Outcome.VALID]} valid; "
           f"machine busy {busy:.2f} of {os.cpu_count()} CPUs)", flush=True)
     return figures
 

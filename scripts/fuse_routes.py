@@ -23,8 +23,8 @@ from concurrent.futures import ProcessPoolExecutor
 from typing import Any
 
 from torus_cad.errors import GeometryError, ParameterError
-from torus_cad.fuzzing import random_design
 from torus_cad.kernel.fuse import FuseRoute
+from torus_cad.studies.fuzz import random_design
 
 VOLUME_PRECISION = 1e-7
 

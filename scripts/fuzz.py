@@ -5,13 +5,15 @@
     python scripts/fuzz.py 200 --seed 5000      # seeds 5000..5199
     python scripts/fuzz.py --replay fuzz_out/fuzz_17.toml [more.toml ...]
 
-Every design comes from :func:`torus_cad.fuzzing.random_design` (the same sampler the
-hypothesis tests use) and runs in a worker process with a time limit, so a hang or a crash
-is counted rather than stopping the run. Outcomes: valid solid / clear refusal
-(ParameterError, GeometryError) / anything else (KernelError on an in-range design, any
-other exception, a bad file, a time-out, a crash). The parameters of every "anything else"
-design are saved as ``<out>/<name>.toml`` (with the outcome in a comment on top) to replay
-with ``--replay`` or ``torus-cad build <file>``. Exit status: 0 when "anything else" is 0.
+Every design comes from :func:`torus_cad.studies.fuzz.random_design_dict` (the same sampler the
+hypothesis tests use) and runs on the batch runner that sweeps use (:mod:`torus_cad.batch`):
+a worker process per core, a time limit per design, so a hang or a crash is counted rather
+than stopping the run. Outcomes (:class:`torus_cad.batch.Outcome`): valid solid / clear
+refusal (ParameterError, GeometryError) / anything else (``failed``: KernelError on an
+in-range design, ``error``: any other exception, ``bad_file``, ``timeout``, ``crash``). The
+parameters of every "anything else" design are saved as ``<out>/<name>.toml`` (with the
+outcome in a comment on top) to replay with ``--replay`` or ``torus-cad build <file>``.
+A progress bar shows on a terminal. Exit status: 0 when "anything else" is 0.
 """
 
 from __future__ import annotations
@@ -23,27 +25,35 @@ import sys
 import time
 from pathlib import Path
 
-from torus_cad.fuzzing import (ACCEPTABLE, OUTCOMES, Outcome, SupervisedPool, default_workers,
-                               random_design_dict, tally)
+from torus_cad.batch.job import DesignTask
+from torus_cad.batch.outcome import RUN_OUTCOMES, DesignResult, Outcome, tally
+from torus_cad.batch.runner import LocalPool, default_workers, run_tasks
 from torus_cad.parameters import PropellerParameters
+from torus_cad.progress import BatchProgress
+from torus_cad.studies.fuzz import fuzz_range, fuzz_tasks, random_design_dict
 
 
-def _save_failure(out_dir: Path, params: PropellerParameters, outcome: Outcome) -> Path:
+def _save_failure(out_dir: Path, params: PropellerParameters, result: DesignResult) -> Path:
     out_dir.mkdir(parents=True, exist_ok=True)
     path = out_dir / f"{params.name}.toml"
-    header = [f"# fuzz failure: {outcome.kind}: {outcome.message}".replace("\n", " "),
+    header = [f"# fuzz failure: {result.outcome}: {result.reason}".replace("\n", " "),
               f"# replay: python scripts/fuzz.py --replay {path}"]
-    header += ["# " + line for line in outcome.detail.strip().splitlines()[-6:]]
+    header += ["# " + line for line in result.detail.strip().splitlines()[-6:]]
     path.write_text("\n".join(header) + "\n" + params.to_toml(comments=False))
     return path
 
 
-def _reason(outcome: Outcome) -> str:
+def _reason(result: DesignResult) -> str:
     """A short key for grouping refusals by their reason."""
-    text = outcome.message
+    text = result.reason
     for marker in (";", "(", " near ", " at s ", ":"):
         text = text.split(marker)[0]
     return text.strip()[:90]
+
+
+def _whole_range(key: str) -> tuple[int, int]:
+    low, high = fuzz_range(key)
+    return int(low), int(high)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -56,10 +66,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--no-write", action="store_true", help="build only; do not write and re-read the files")
     parser.add_argument("--no-stl", action="store_true", help="write STEP and JSON only")
     parser.add_argument("--replay", nargs="+", type=Path, metavar="TOML", help="run these saved designs instead")
-    parser.add_argument("--sections", type=int, nargs=2, default=(16, 36), metavar=("LOW", "HIGH"),
-                        help="range of resolution.sections to sample (default 16 36)")
-    parser.add_argument("--points", type=int, nargs=2, default=(24, 48), metavar=("LOW", "HIGH"),
-                        help="range of resolution.points to sample (default 24 48: low, for speed)")
+    parser.add_argument("--sections", type=int, nargs=2, default=_whole_range("resolution.sections"),
+                        metavar=("LOW", "HIGH"), help="range of resolution.sections to sample "
+                        "(default: the schema's fuzz range, %(default)s)")
+    parser.add_argument("--points", type=int, nargs=2, default=_whole_range("resolution.points"),
+                        metavar=("LOW", "HIGH"), help="range of resolution.points to sample "
+                        "(default: the schema's fuzz range, %(default)s: low, for speed)")
     parser.add_argument("--record", type=Path, metavar="JSONL", help="append every outcome to this JSON-lines file")
     parser.add_argument("-v", "--verbose", action="store_true", help="print every design's outcome")
     args = parser.parse_args(argv)
@@ -70,58 +82,63 @@ def main(argv: list[str] | None = None) -> int:
         designs = [random_design_dict(seed, sections=tuple(args.sections), points=tuple(args.points))
                    for seed in range(args.seed, args.seed + args.count)]
 
-    pool = SupervisedPool(workers=args.workers, time_limit=args.time_limit, write=not args.no_write,
-                          stl=not args.no_stl)
+    tasks = fuzz_tasks(designs, write=not args.no_write, stl=not args.no_stl)
     start = time.perf_counter()
-    done = 0
-    failures: list[tuple[str, Outcome]] = []
+    results: list[DesignResult] = []
+    failures: list[DesignResult] = []
+    bar = BatchProgress(len(tasks), label="fuzz")
 
-    def on_result(index: int, outcome: Outcome) -> None:
-        nonlocal done
-        done += 1
-        design = designs[index]
-        name = design["name"]
+    def say(text: str) -> None:  # above the bar on a terminal; plain lines in a log
+        if bar.enabled:
+            bar.message(text)
+        else:
+            print(text, flush=True)
+
+    def on_result(task: DesignTask, result: DesignResult) -> None:
+        results.append(result)
+        bar.update(result.outcome)
+        if not bar.enabled and len(results) % 50 == 0:
+            say(f"  ... {len(results)}/{len(tasks)} in {time.perf_counter() - start:.0f} s")
         if args.record:
             with args.record.open("a") as handle:
-                handle.write(json.dumps({"name": name, "kind": outcome.kind, "message": outcome.message,
-                                         "seconds": round(outcome.seconds, 3)}) + "\n")
-        if not outcome.acceptable:
-            failures.append((name, outcome))
+                handle.write(json.dumps({"name": task.design_id, "kind": result.outcome.value,
+                                         "message": result.reason, "seconds": round(result.seconds, 3)}) + "\n")
+        if not result.outcome.acceptable:
+            failures.append(result)
             if not args.replay:
-                saved = _save_failure(args.out, PropellerParameters.from_dict(design), outcome)
-                print(f"  {outcome.kind:<9} {name}: {outcome.message[:150]} -> {saved}", flush=True)
+                saved = _save_failure(args.out, PropellerParameters.from_dict(task.parameters), result)
+                say(f"  {result.outcome:<9} {task.design_id}: {result.reason[:150]} -> {saved}")
             else:
-                print(f"  {outcome.kind:<9} {name}: {outcome.message}\n{outcome.detail}", flush=True)
+                say(f"  {result.outcome:<9} {task.design_id}: {result.reason}\n{result.detail}")
         elif args.verbose or args.replay:
-            print(f"  {outcome.kind:<9} {name} ({outcome.seconds:.2f} s) {outcome.message[:150]}", flush=True)
-        if done % 50 == 0:
-            print(f"  ... {done}/{len(designs)} in {time.perf_counter() - start:.0f} s", flush=True)
+            say(f"  {result.outcome:<9} {task.design_id} ({result.seconds:.2f} s) {result.reason[:150]}")
 
-    outcomes = pool.run(designs, on_result)
+    with bar:
+        run_tasks(tasks, on_result, lambda: LocalPool(args.workers, args.time_limit), window=2 * args.workers)
     elapsed = time.perf_counter() - start
-    counts = tally(outcomes)
-    anything_else = sum(counts[kind] for kind in OUTCOMES if kind not in ACCEPTABLE)
+    counts = tally(results)
+    anything_else = sum(counts[outcome] for outcome in RUN_OUTCOMES if not outcome.acceptable)
 
     print()
-    print(f"{len(outcomes)} designs in {elapsed:.1f} s on {args.workers} workers "
+    print(f"{len(results)} designs in {elapsed:.1f} s on {args.workers} workers "
           f"({'build only' if args.no_write else 'build, write, read back'})")
-    print(f"  valid solid     {counts['valid']:6d}")
-    print(f"  clear refusal   {counts['refused']:6d}")
-    print(f"  anything else   {anything_else:6d}"
-          + (f"  ({', '.join(f'{kind} {counts[kind]}' for kind in OUTCOMES if kind not in ACCEPTABLE and counts[kind])})"
-             if anything_else else ""))
-    reasons = collections.Counter(_reason(o) for o in outcomes if o.kind == "refused")
+    print(f"  valid solid     {counts[Outcome.VALID]:6d}")
+    print(f"  clear refusal   {counts[Outcome.REFUSED]:6d}")
+    others = [f"{outcome} {counts[outcome]}" for outcome in RUN_OUTCOMES if not outcome.acceptable and counts[outcome]]
+    print(f"  anything else   {anything_else:6d}" + (f"  ({', '.join(others)})" if others else ""))
+    reasons = collections.Counter(_reason(r) for r in results if r.outcome is Outcome.REFUSED)
     if reasons:
         print("refusal reasons:")
         for reason, count in reasons.most_common():
             print(f"  {count:5d}  {reason}")
     if not args.replay:
         args.out.mkdir(parents=True, exist_ok=True)
-        summary = {"count": len(outcomes), "first_seed": args.seed, "sections": list(args.sections),
+        summary = {"count": len(results), "first_seed": args.seed, "sections": list(args.sections),
                    "points": list(args.points), "seconds": elapsed, "workers": args.workers,
-                   "write": not args.no_write, "tally": counts, "anything_else": anything_else,
-                   "refusal_reasons": dict(reasons.most_common()),
-                   "failures": [{"name": n, "kind": o.kind, "message": o.message} for n, o in failures]}
+                   "write": not args.no_write, "tally": {outcome.value: counts[outcome] for outcome in RUN_OUTCOMES},
+                   "anything_else": anything_else, "refusal_reasons": dict(reasons.most_common()),
+                   "failures": [{"name": r.design_id, "kind": r.outcome.value, "message": r.reason}
+                                for r in failures]}
         (args.out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
         print(f"summary: {args.out / 'summary.json'}")
     return 0 if anything_else == 0 else 1

@@ -11,12 +11,22 @@ from OCP.BRep import BRep_Tool
 from OCP.TopLoc import TopLoc_Location
 from PIL import Image
 
-from torus_cad.colors import HUB_COLOR, blade_color
-from torus_cad.propeller import propeller_objects
 from torus_cad.cli import EXIT_BAD_INPUT, EXIT_OK, main
+from torus_cad.colors import HUB_COLOR, blade_color
 from torus_cad.errors import ParameterError
 from torus_cad.kernel.checks import mass_properties
-from torus_cad.preview import parse_size, preview_mesh, render_preview, split_long_edges, write_preview
+from torus_cad.preview import (
+    View,
+    _actor,
+    loop_area_vectors,
+    parse_size,
+    preview_mesh,
+    propeller_views,
+    render_preview,
+    render_views,
+    write_preview,
+)
+from torus_cad.propeller import propeller_objects
 
 FAST = ["--set", "resolution.sections=16", "--set", "resolution.points=40"]
 
@@ -67,13 +77,13 @@ def test_write_preview_gives_the_exact_size_and_a_real_picture(objects, tmp_path
 @pytest.mark.parametrize("size", [(333, 217), (1001, 64), (64, 400)])
 def test_render_preview_gives_exactly_the_requested_pixels(objects, size):
     image = render_preview(objects, size=size, title="t")
-    assert image.shape == (size[1], size[0], 4)
+    assert image.shape == (size[1], size[0], 3)
     assert image.dtype == np.uint8
     assert image[..., :3].std() > 255 * 0.03  # something was drawn even in a thin strip
 
 
 def test_the_two_views_both_show_the_propeller(objects):
-    rgb = render_preview(objects, size=(800, 400))[..., :3] / 255.0
+    rgb = render_preview(objects, size=(800, 400)) / 255.0
     for half in (rgb[:, :400], rgb[:, 400:]):  # isometric left, along the axis right
         grey = half.mean(axis=2)
         assert np.count_nonzero(grey < 0.97) > 0.08 * grey.size
@@ -101,20 +111,45 @@ def test_preview_mesh_covers_the_solid_and_tags_every_part(objects):
     assert all(BRep_Tool.Triangulation_s(face.wrapped, location) is None for face in objects.solid.Faces())
 
 
-def test_split_long_edges_bounds_edges_and_keeps_area_and_orientation():
-    vertices = np.array([[0.0, 0.0, 0.0], [10.0, 0.0, 0.0], [0.0, 3.0, 0.0], [10.0, 3.0, 0.0]])
-    triangles = np.array([[0, 1, 2], [1, 3, 2]])
-    new_vertices, new_triangles = split_long_edges(vertices, triangles, max_edge=1.0)
-    corners = new_vertices[new_triangles]
-    edges = np.linalg.norm(corners - np.roll(corners, -1, axis=1), axis=2)
-    assert edges.max() <= 1.0
-    normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-    assert np.all(normals[:, 2] > 0)  # same orientation as the input (+z)
-    assert 0.5 * normals[:, 2].sum() == pytest.approx(30.0, rel=1e-12)
-    # Shared edges get one shared midpoint: no duplicate vertices.
-    assert len(np.unique(new_vertices.round(12), axis=0)) == len(new_vertices)
-    with pytest.raises(ValueError):
-        split_long_edges(vertices, triangles, 0.0)
+def _box_mesh(low: tuple[float, float, float], high: tuple[float, float, float]) -> tuple[np.ndarray, np.ndarray]:
+    """An axis-aligned box as 12 outward triangles."""
+    x0, y0, z0 = low
+    x1, y1, z1 = high
+    vertices = np.array([[x0, y0, z0], [x1, y0, z0], [x1, y1, z0], [x0, y1, z0],
+                         [x0, y0, z1], [x1, y0, z1], [x1, y1, z1], [x0, y1, z1]], dtype=float)
+    quads = [(0, 3, 2, 1), (4, 5, 6, 7), (0, 1, 5, 4), (1, 2, 6, 5), (2, 3, 7, 6), (3, 0, 4, 7)]
+    triangles = np.array([t for a, b, c, d in quads for t in ((a, b, c), (a, c, d))], dtype=np.int64)
+    return vertices, triangles
+
+
+@pytest.mark.parametrize("near_first", [True, False])
+def test_depth_order_a_near_box_covers_a_far_box(near_first):
+    """A red box nearer the camera hides a blue one behind it at the picture's centre, whichever is
+    drawn first: the renderer has a depth buffer (a painter's algorithm in the wrong order fails)."""
+    near = _box_mesh((-1.0, -1.0, 2.0), (1.0, 1.0, 3.0))   # camera on +z: this one is nearer
+    far = _box_mesh((-3.0, -3.0, -1.0), (3.0, 3.0, 0.0))    # larger, behind it
+    red, blue = np.array([[0.9, 0.1, 0.1]]), np.array([[0.1, 0.1, 0.9]])
+    meshes = [(near, red), (far, blue)] if near_first else [(far, blue), (near, red)]
+    view = View((0.0, 0.0, 1.0), (0.0, 1.0, 0.0))
+    image = render_views(lambda: [_actor(v, t, np.repeat(c, len(t), axis=0)) for (v, t), c in meshes],
+                         [view], (200, 200)).astype(float)
+    centre, corner = image[100, 100], image[100, 30]   # inside the near box; only the far box there
+    assert centre[0] > 2 * centre[2], f"the far box shows through the near one: {centre}"
+    assert corner[2] > 2 * corner[0], f"the far box is missing beside the near one: {corner}"
+
+
+def test_isometric_camera_sees_no_blade_edge_on(objects):
+    """Every blade's window (its centerline loop closed through the hub) faces the isometric camera
+    by a fifth of its area or more: no blade is drawn as a line or a fragment. The classic (1, 1, 1)
+    isometric direction shows one default blade at 6 % of its window, nearly edge-on."""
+    geometry = objects.parameters.geometry()
+    s = np.linspace(0.0, 1.0, 64)
+    areas = loop_area_vectors([geometry.centerline(index).points(s) for index in range(geometry.blades)])
+    view = np.array(propeller_views(objects)[0].toward_camera)
+    unit = areas / np.linalg.norm(areas, axis=1, keepdims=True)
+    classic = np.array([1.0, 1.0, 1.0]) / np.sqrt(3.0)
+    assert np.abs(unit @ view).min() > 0.2
+    assert np.abs(unit @ view).min() > 3 * np.abs(unit @ classic).min()
 
 
 @pytest.mark.parametrize(("text", "size"), [("1200x600", (1200, 600)), ("64X64", (64, 64)), (" 800 x 300 ", (800, 300))])

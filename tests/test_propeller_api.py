@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import io
 import math
 
 import cadquery as cq
@@ -13,7 +12,6 @@ from torus_cad.colors import blade_color
 from torus_cad.errors import ParameterError
 from torus_cad.kernel.checks import is_valid_closed_solid, precise_volume
 from torus_cad.parameters import PropellerParameters, resolve_parameters
-from torus_cad.progress import Progress
 from torus_cad.propeller import Propeller, propeller_objects
 
 FAST = {"resolution.sections": 16, "resolution.points": 40}
@@ -149,36 +147,3 @@ def test_blade_colours_are_distinct(blades):
     colours = [blade_color(i, blades) for i in range(blades)]
     assert len(set(colours)) == blades
     assert all(0.0 <= c <= 1.0 for colour in colours for c in colour)
-
-
-# -- progress display ---------------------------------------------------------------------------
-
-class _Terminal(io.StringIO):
-    def isatty(self) -> bool:
-        return True
-
-
-def test_progress_prints_stage_names_with_elapsed_time_on_a_terminal():
-    stream = _Terminal()
-    progress = Progress.for_terminal(stream=stream)
-    progress("fuse")
-    progress("my_stage")
-    progress.finish()
-    lines = stream.getvalue().splitlines()
-    assert len(lines) == 3
-    assert "fusing" in lines[0] and "my stage" in lines[1] and "done" in lines[2]
-    assert all(line.startswith("torus-cad: [") and " s] " in line for line in lines)
-
-
-def test_progress_is_silent_when_quiet_or_not_a_terminal():
-    terminal = _Terminal()
-    progress = Progress.for_terminal(quiet=True, stream=terminal)
-    progress("fuse")
-    progress.finish()
-    assert terminal.getvalue() == ""
-    pipe = io.StringIO()  # isatty() is False: a pipe, a file, CI
-    progress = Progress.for_terminal(stream=pipe)
-    progress("fuse")
-    progress.finish()
-    assert pipe.getvalue() == ""
-    assert progress.stages == ["fuse"]

@@ -1,11 +1,12 @@
 """Robustness: random in-range designs, refusals before the kernel, and interrupted exports.
 
-Kept fast: low resolution, few hypothesis examples, no deadline. The same sampler drives
-``scripts/fuzz.py`` (N = 1000 there).
+Kept fast: low resolution, few hypothesis examples, no deadline. The same sampler and the same
+batch runner drive ``scripts/fuzz.py`` (N = 1000 there).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import faulthandler
 import os
 import signal
@@ -16,18 +17,19 @@ import time
 
 import numpy as np
 import pytest
+from batch_jobs import FAULT_KEY, faulty
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from torus_cad.batch import DesignTask, LocalPool, Outcome, run_design, run_tasks
 from torus_cad.cli import main
 from torus_cad.errors import GeometryError, ParameterError
-from torus_cad.fuzzing import (TEST_ACTION_KEY, UNIT_DIMENSION, SupervisedPool, design_from_unit,
-                               random_design_dict, run_design)
 from torus_cad.geometry import feasibility
-from torus_cad.geometry.centerline import Centerline
 from torus_cad.geometry.frames import Frames
 from torus_cad.parameters import PropellerParameters
-
+from torus_cad.parameters.schema import Bounds
+from torus_cad.studies import fuzz as fuzz_module
+from torus_cad.studies.fuzz import UNIT_DIMENSION, design_from_unit, fuzz_range, fuzz_tasks, random_design_dict
 
 LOW = {"sections": (24, 32), "points": (24, 32)}  # low points; sections near the default
 unit_vectors = st.lists(st.floats(0.0, 1.0), min_size=UNIT_DIMENSION, max_size=UNIT_DIMENSION)
@@ -57,10 +59,10 @@ def test_every_design_is_a_valid_solid_or_a_clear_refusal(u):
         assert "\n" not in str(error)
         return
     with _Watchdog(120):
-        outcome = run_design(params)
-    assert outcome.kind in ("valid", "refused"), f"{outcome.kind}: {outcome.message}\n{outcome.detail}"
-    if outcome.kind == "refused":
-        assert outcome.message and "\n" not in outcome.message
+        result = run_design(DesignTask(params.name, params.to_dict(), write=False))
+    assert result.outcome.acceptable, f"{result.outcome}: {result.reason}\n{result.detail}"
+    if result.outcome is Outcome.REFUSED:
+        assert result.reason and "\n" not in result.reason
 
 
 @settings(max_examples=3, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow,
@@ -102,12 +104,42 @@ def test_sampler_stays_in_range_and_is_reproducible():
             assert "is out of range" not in str(error) and "must be" not in str(error), str(error)
 
 
-def test_supervised_pool_counts_a_hang_and_a_crash():
-    """The fuzz runner survives a design that never finishes and a worker that dies, and goes on."""
-    pool = SupervisedPool(workers=1, time_limit=6.0, write=False)
-    good = PropellerParameters().with_values({"resolution.points": 24}).to_dict()
-    outcomes = pool.run([{TEST_ACTION_KEY: "hang"}, {TEST_ACTION_KEY: "crash"}, {"name": "bad", "blades": "x"}, good])
-    assert [o.kind for o in outcomes] == ["timeout", "crash", "refused", "valid"]
+#: The fields the sampler draws directly, each within the schema's fuzz range.
+FUZZED = ("blades", "phase_deg", "hub.radius", "hub.length", "airfoil.max_camber", "airfoil.camber_position",
+          "airfoil.thickness", "airfoil.pivot", "resolution.sections", "resolution.points",
+          "export.stl_linear_deflection", "export.stl_angular_deflection")
+
+
+def _flat(design: dict, prefix: str = "") -> dict:
+    flat = {}
+    for key, value in design.items():
+        flat.update(_flat(value, f"{prefix}{key}.") if isinstance(value, dict) else {prefix + key: value})
+    return flat
+
+
+def test_sampler_ranges_come_from_the_schema(monkeypatch):
+    draws = [_flat(random_design_dict(seed)) for seed in range(300)]
+    for key in FUZZED:
+        low, high = fuzz_range(key)
+        values = [draw[key] for draw in draws]
+        assert low <= min(values) and max(values) <= high, key
+        assert max(values) - min(values) > 0.5 * (high - low), key  # the sampler covers the range
+    # narrowing a field's fuzz range in its declaration narrows what the sampler draws
+    spec = fuzz_module._SPECS["hub.radius"]
+    monkeypatch.setitem(fuzz_module._SPECS, "hub.radius", dataclasses.replace(spec, fuzz=Bounds(11.0, 12.0)))
+    assert {11.0 <= _flat(random_design_dict(seed))["hub.radius"] <= 12.0 for seed in range(50)} == {True}
+
+
+def test_the_runner_counts_a_hang_and_a_crash_and_goes_on():
+    """The fuzz runner survives a design that never finishes and a worker that dies; files are read back."""
+    good = PropellerParameters().with_values({"resolution.points": 24, "name": "good"}).to_dict()
+    designs = [{"name": "hang", FAULT_KEY: "hang"}, {"name": "crash", FAULT_KEY: "crash"},
+               {"name": "bad", "blades": "x"}, good]
+    results = {}
+    run_tasks(fuzz_tasks(designs, write=True, stl=True), lambda task, result: results.__setitem__(task.design_id, result),
+              lambda: LocalPool(1, time_limit_s=6.0), window=2, job=faulty)
+    assert {name: result.outcome for name, result in results.items()} == {
+        "hang": Outcome.TIMEOUT, "crash": Outcome.CRASH, "bad": Outcome.REFUSED, "good": Outcome.VALID}
 
 
 # -- refusals before the kernel, each with its reason -------------------------------------------
@@ -211,7 +243,7 @@ def test_hooked_trailing_edge_with_too_few_points_is_refused():
               "resolution": {"sections": 40, "points": 25}}
     from torus_cad.propeller import build_propeller
 
-    with pytest.raises(GeometryError, match="resolution.points = 25 is too few"):
+    with pytest.raises(GeometryError, match=r"resolution\.points = 25 is too few"):
         build_propeller(PropellerParameters.from_dict(design))
 
 

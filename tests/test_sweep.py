@@ -1,4 +1,5 @@
-"""Design sweeps (torus_cad.sweep): the sweep file, design ids, the local pool and Dask, resuming, failures."""
+"""Design sweeps (torus_cad.batch): the sweep file, design ids, the local pool and Dask, resuming, failures,
+budgets, exit codes and signals."""
 
 from __future__ import annotations
 
@@ -6,19 +7,35 @@ import csv
 import json
 import os
 import shutil
+import signal
+import subprocess
+import sys
 import textwrap
+import time
 from pathlib import Path
 
 import pytest
+from batch_jobs import crash_on_four_or_six_blades
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from torus_cad.batch import (
+    BatchError,
+    DesignTask,
+    LocalPool,
+    Outcome,
+    design_id,
+    generate_designs,
+    load_sweep,
+    parse_sweep,
+    run_design,
+    run_sweep,
+    run_tasks,
+)
+from torus_cad.batch.job import FAILURE_FILE, REFUSAL_FILE
+from torus_cad.batch.table import DESIGNS_DIR
 from torus_cad.cli import main
 from torus_cad.errors import KernelError, ParameterError
-from torus_cad.sweep import (
-    DESIGNS_DIR, FAILURE_FILE, REFUSAL_FILE, DesignTask, Progress, SweepError, _drive, design_id, generate_designs,
-    load_sweep, parse_sweep, run_design, run_sweep,
-)
 
 LIGHT = {"resolution": {"sections": 16, "points": 32}}
 
@@ -99,7 +116,7 @@ def test_sampling_is_seeded_within_bounds_and_keeps_ints(mode):
 
 
 @settings(max_examples=40, deadline=None)
-@given(low=st.floats(0.6, 50.0), width=st.floats(0.01, 50.0), int_low=st.integers(1, 10),
+@given(low=st.floats(0.6, 50.0), width=st.floats(0.01, 50.0), int_low=st.integers(4, 10),
        int_width=st.integers(0, 5), seed=st.integers(0, 2**32), mode=st.sampled_from(["random", "latin_hypercube"]))
 def test_samples_stay_within_their_bounds(low, width, int_low, int_width, seed, mode):
     spec = parse_sweep({"sweep": {"mode": mode, "samples": 7, "seed": seed},
@@ -154,12 +171,12 @@ def test_base_config_is_relative_to_the_sweep_file_and_inline_values_override_it
     ({"sweep": {"sed": 3}}, "did you mean 'sweep.seed'"),
     ({"varry": {}}, "unknown table [varry]"),
     ({"vary": {"blades": [2.5]}}, "'blades' item 0 must be a whole number"),
-    ({"vary": {"hub.radius": ["big"]}}, "'hub.radius' item 0 must be a number"),
+    ({"vary": {"hub.radius": ["big"]}}, "'hub.radius' item 0 must be a finite number"),
     ({"vary": {"blades": {"low": 2.0, "high": 4.0}}, "sweep": {"mode": "random", "samples": 2}},
      "'blades' low must be a whole number"),
     ({"vary": {"centerline.p2[3]": [1.0]}}, "index 3 is out of range"),
     ({"vary": {"hub.radius[0]": [1.0]}}, "not a vector"),
-    ({"vary": {"centerline.p2": [1.0]}}, "must be a list of 3 numbers"),
+    ({"vary": {"centerline.p2": [1.0]}}, "must be a list of 3 finite numbers"),
     ({"vary": {"centerline.p2": [[1, 2, 3]], "centerline.p2[1]": [1.0]}}, "set the same parameter"),
     ({"vary": {"hub.radius": {"start": 9.0, "stop": 8.0, "step": 1.0}}}, "must not be below start"),
     ({"vary": {"hub.radius": {"start": 9.0, "step": 1.0}}}, "use {start, stop, step}"),
@@ -168,6 +185,15 @@ def test_base_config_is_relative_to_the_sweep_file_and_inline_values_override_it
     ({"vary": {"name": ["a", "b"]}}, "the name cannot be varied"),
     ({"vary": {"hub": [1.0]}}, "is a table"),
     ({"vary": {"blades": []}}, "empty list"),
+    # the schema's ranges and choices, checked before any design is made
+    ({"vary": {"hub.radius": [10.0, 0.1]}},
+     "vary.'hub.radius' item 1: hub.radius = 0.1 is out of range; allowed [0.5, 1000] mm"),
+    ({"vary": {"blades": {"start": 0, "stop": 3, "step": 1}}}, "blades = 0 is out of range; allowed [1, 12]"),
+    ({"vary": {"transforms.scale_x[4]": [6.0, 2e4]}}, "transforms.scale_x[4] = 20000 is out of range"),
+    ({"vary": {"centerline.frame": ["frenet", "spiral"]}},
+     "'spiral' is not allowed; choose one of frenet, rotation_minimizing"),
+    ({"vary": {"airfoil.thickness": {"low": 0.0, "high": 0.5}}, "sweep": {"mode": "random", "samples": 2}},
+     "airfoil.thickness = 0 is out of range; allowed (0, 1]"),
     ({"base": {"hub": {"radius": -1.0}}}, "[base] hub.radius = -1 is out of range"),
     ({"base": {"config": "missing.toml"}}, "base.config: cannot read configuration"),
 ])
@@ -198,13 +224,15 @@ def _task(tmp_path: Path, **changes) -> DesignTask:
 
 def test_run_design_records_a_refusal_and_never_raises(tmp_path):
     task = _task(tmp_path, **{"hub.radius": 3.0})  # the blade's root sticks out of the hub: GeometryError
-    outcome = run_design(task)
-    assert outcome["status"] == "refused" and "hub" in outcome["reason"]
+    result = run_design(task)
+    assert result.outcome is Outcome.REFUSED and "hub" in result.reason
     record = json.loads((Path(task.folder) / REFUSAL_FILE).read_text())
-    assert record["status"] == "refused" and record["error"] == "GeometryError"
-    out_of_range = _task(tmp_path, **{"airfoil.thickness": 1.5})  # ParameterError inside the worker
-    assert run_design(out_of_range)["status"] == "refused"
-    assert "airfoil.thickness = 1.5 is out of range" in run_design(out_of_range)["reason"]
+    assert record["status"] == "refused" and record["error"] == "GeometryError" and record["reason"] == result.reason
+    parameters = json.loads(json.dumps(task.parameters))
+    parameters["airfoil"]["thickness"] = 1.5  # a sweep file refuses it; a task may still carry it
+    out_of_range = DesignTask("out_of_range", parameters, str(tmp_path / "out_of_range"), stl=False)
+    assert run_design(out_of_range).outcome is Outcome.REFUSED
+    assert "airfoil.thickness = 1.5 is out of range" in run_design(out_of_range).reason
 
 
 @pytest.mark.parametrize("error, status", [(KernelError("the loft failed"), "failed"),
@@ -218,27 +246,9 @@ def test_run_design_records_kernel_failures_and_unexpected_errors(tmp_path, monk
 
     monkeypatch.setattr(torus_cad.propeller, "build_propeller", broken)
     task = _task(tmp_path, blades=3)
-    outcome = run_design(task)
-    assert outcome["status"] == status and str(error) in outcome["reason"]
+    result = run_design(task)
+    assert result.outcome == status and str(error) in result.reason
     assert json.loads((Path(task.folder) / FAILURE_FILE).read_text())["status"] == status
-
-
-def test_progress_bar_draws_only_on_a_terminal(tmp_path):
-    import io
-
-    class Terminal(io.StringIO):
-        def isatty(self) -> bool:
-            return True
-
-    quiet, terminal = io.StringIO(), Terminal()
-    for stream in (quiet, terminal):
-        bar = Progress(4, already_done=1, stream=stream)
-        for status in ("ok", "refused", "failed"):
-            bar.update(status)
-        bar.close()
-    assert quiet.getvalue() == ""
-    last = terminal.getvalue().rstrip("\n").split("\r")[-1]
-    assert "4/4 done" in last and "ok 1" in last and "refused 1" in last and "failed 1" in last and "/min" in last
 
 
 # -- whole sweeps: local pool, Dask, resume ------------------------------------------------------------
@@ -255,7 +265,7 @@ def local_run(small_sweep, tmp_path_factory):
 
 
 def test_local_sweep_builds_every_design_into_its_folder(local_run):
-    assert [row["status"] for row in local_run.rows] == ["ok"] * 6 and local_run.built == 6
+    assert [row["status"] for row in local_run.rows] == ["valid"] * 6 and local_run.built == 6
     for design, row in zip(local_run.designs, local_run.rows):
         folder = local_run.out_dir / DESIGNS_DIR / design.design_id
         assert sorted(path.name for path in folder.iterdir()) == [f"{design.design_id}.json",
@@ -274,7 +284,8 @@ def test_local_sweep_builds_every_design_into_its_folder(local_run):
 
 
 def test_the_table_is_also_written_as_parquet_when_pyarrow_is_installed(local_run):
-    parquet = pytest.importorskip("pyarrow.parquet")
+    from pyarrow import parquet
+
     table = parquet.read_table(local_run.tables["parquet"]).to_pylist()
     assert [row["id"] for row in table] == [d.design_id for d in local_run.designs]
     assert [row["volume_mm3"] for row in table] == [row["volume_mm3"] for row in local_run.rows]
@@ -315,11 +326,11 @@ def test_cli_sweep_with_an_impossible_design_records_the_refusal_and_finishes_th
         "hub.radius" = [10.0, 3.0]   # the blade's root does not fit in a 3 mm hub
         """)
     out = tmp_path / "out"
-    assert main(["sweep", str(sweep), "--out", str(out), "--workers", "2", "--no-stl"]) == 0
+    assert main(["sweep", str(sweep), "--out", str(out), "--workers", "2", "--no-stl"]) == 0  # refusals alone: 0
     summary = capsys.readouterr().out
-    assert "1 ok, 1 refused, 0 failed" in summary and "refused" in summary.splitlines()[-1]
+    assert "1 valid, 1 refused, 0 failed" in summary and "refused" in summary.splitlines()[-1]
     table = read_table(out / "results.csv")
-    assert [(row["hub.radius"], row["status"], row["valid"]) for row in table] == [("10.0", "ok", "True"),
+    assert [(row["hub.radius"], row["status"], row["valid"]) for row in table] == [("10.0", "valid", "True"),
                                                                                  ("3.0", "refused", "False")]
     assert "hub" in table[1]["reason"] and table[1]["volume_mm3"] == ""
     refused = out / DESIGNS_DIR / table[1]["id"]
@@ -331,30 +342,178 @@ def test_cli_sweep_with_an_impossible_design_records_the_refusal_and_finishes_th
 
 # -- a worker process that dies --------------------------------------------------------------------
 
-def crash_on_four_or_six_blades(task: DesignTask) -> dict:
-    """Kills its worker process for 4 and 6 blades, like a segfault in OpenCascade would."""
-    if task.parameters["blades"] in (4, 6):
-        os._exit(1)
-    return {"id": task.design_id, "status": "ok", "reason": "", "seconds": 0.0}
-
-
-def test_a_worker_crash_is_recorded_for_its_design_and_the_pool_is_replaced(tmp_path):
-    from torus_cad.sweep import _local_pool
-
+def test_a_worker_crash_is_recorded_for_its_design_and_the_others_go_on(tmp_path):
     designs = generate_designs(parse_sweep({"vary": {"blades": [2, 3, 4, 5, 6, 7, 8]}}))
     tasks = [DesignTask(d.design_id, d.parameters, str(tmp_path / d.design_id), stl=False) for d in designs]
-    outcomes: dict[str, dict] = {}
-    _drive(lambda: _local_pool(2), tasks, 2, lambda task, outcome: outcomes.__setitem__(task.parameters["blades"],
-                                                                                         outcome),
-           Progress(len(tasks), enabled=False), check_files=False, function=crash_on_four_or_six_blades)
-    assert {blades: outcome["status"] for blades, outcome in outcomes.items()} == {
-        2: "ok", 3: "ok", 4: "error", 5: "ok", 6: "error", 7: "ok", 8: "ok"}
-    assert "worker process died" in outcomes[4]["reason"]
-    assert json.loads((tmp_path / tasks[2].design_id / FAILURE_FILE).read_text())["status"] == "error"
+    results = {}
+    run_tasks(tasks, lambda task, result: results.__setitem__(task.parameters["blades"], result),
+              lambda: LocalPool(2), window=4, job=crash_on_four_or_six_blades)
+    assert {blades: result.outcome.value for blades, result in results.items()} == {
+        2: "valid", 3: "valid", 4: "crash", 5: "valid", 6: "crash", 7: "valid", 8: "valid"}
+    assert "worker process died" in results[4].reason
+    assert json.loads((tmp_path / tasks[2].design_id / FAILURE_FILE).read_text())["status"] == "crash"
 
 
-def test_an_unreachable_scheduler_is_a_sweep_error(tmp_path, small_sweep, monkeypatch):
+def test_an_unreachable_scheduler_is_a_batch_error(tmp_path, small_sweep, monkeypatch):
     pytest.importorskip("dask.distributed")
-    monkeypatch.setattr("torus_cad.sweep.CONNECT_TIMEOUT_S", 1.0)
-    with pytest.raises(SweepError, match="cannot connect to the Dask scheduler"):
+    monkeypatch.setattr("torus_cad.batch.cluster.CONNECT_TIMEOUT_S", 1.0)
+    with pytest.raises(BatchError, match="cannot connect to the Dask scheduler"):
         run_sweep(load_sweep(small_sweep), tmp_path / "out", scheduler="tcp://127.0.0.1:1", progress=False)
+
+
+# -- budgets and numbers that are not numbers (issue 17) ------------------------------------------------
+
+def _sweep_cli(*args: str, timeout: float = 120.0) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "torus_cad", "sweep", *args], capture_output=True, text=True,
+                          timeout=timeout, check=False)
+
+
+@pytest.mark.parametrize("vary, mode, expected", [
+    ('"hub.radius" = {start = 9.0, stop = 12.0, num = 100000000}', "", "100,000,000 designs"),
+    ('"hub.radius" = {low = 9.0, high = 12.0}', 'mode = "random"\nsamples = 3000000', "3,000,000 designs"),
+    ('"hub.radius" = {start = 5.0, stop = 15.0, step = 0.002}\n"hub.length" = {start = 10.0, stop = 30.0, step = 0.004}',
+     "", "25,010,001 designs = 5,001 (hub.radius) x 5,001 (hub.length)"),
+    ('"hub.radius" = {start = 9.0, stop = 10.0, step = 5e-324}', "", "more than 1e308 designs"),
+])
+def test_a_sweep_over_the_budget_is_refused_before_any_design_is_made(tmp_path, vary, mode, expected):
+    sweep = write(tmp_path / "huge.toml", f"[sweep]\n{mode}\n[vary]\n{vary}\n")
+    done = _sweep_cli(str(sweep), "--out", str(tmp_path / "out"), timeout=60)
+    assert done.returncode == 2, done.stderr
+    message = done.stderr.strip()
+    assert "\n" not in message and expected in message and "the limit is 1,000,000 designs" in message
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("vary, mode, expected", [
+    ('"hub.radius" = {start = 9.0, stop = nan, step = 0.5}', "", "'hub.radius' stop must be a finite number, got nan"),
+    ('"hub.radius" = {start = 9.0, stop = inf, step = 0.5}', "", "'hub.radius' stop must be a finite number, got inf"),
+    ("blades = {start = 2, stop = nan, step = 1}", "", "'blades' stop must be a whole number, got nan"),
+    ('"hub.radius" = [9.0, nan]', "", "'hub.radius' item 1 must be a finite number, got nan"),
+    ('"hub.radius" = {low = -inf, high = inf}', 'mode = "random"\nsamples = 4',
+     "'hub.radius' low must be a finite number, got -inf"),
+    ('"centerline.p2" = [[25.0, 3.0, inf]]', "", "must be a list of 3 finite numbers"),
+])
+def test_not_a_number_in_a_sweep_is_bad_input(tmp_path, vary, mode, expected):
+    sweep = write(tmp_path / "nan.toml", f"[sweep]\n{mode}\n[vary]\n{vary}\n")
+    done = _sweep_cli(str(sweep), "--out", str(tmp_path / "out"), timeout=60)
+    assert done.returncode == 2, done.stderr
+    assert "\n" not in done.stderr.strip() and expected in done.stderr
+    assert not (tmp_path / "out").exists()
+
+
+def _no_nan(constant: str) -> float:
+    raise AssertionError(f"{constant} in a JSON file")
+
+
+def test_sweep_json_is_strict_json(local_run):
+    manifest = json.loads((local_run.out_dir / "sweep.json").read_text(), parse_constant=_no_nan)
+    assert manifest["vary"]["blades"] == [2, 3] and len(manifest["designs"]) == 6
+
+
+# -- exit codes ------------------------------------------------------------------------------------
+
+def test_a_sweep_whose_designs_error_exits_1(tmp_path):
+    sweep = write(tmp_path / "s.toml", "[base.resolution]\nsections = 16\npoints = 32\n[sweep]\nstl = false\n"
+                                       "[vary]\nblades = [2, 3]\n")
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / DESIGNS_DIR).write_text("a file where the designs' folders should go\n")  # every design errors
+    done = _sweep_cli(str(sweep), "--out", str(out), "--workers", "1")
+    assert done.returncode == 1, done.stdout + done.stderr
+    assert "0 valid, 0 refused, 0 failed, 2 errors" in done.stdout
+    assert [row["status"] for row in read_table(out / "results.csv")] == ["error", "error"]
+
+
+# -- signals ---------------------------------------------------------------------------------------
+
+def _state(pid: int) -> str:
+    """The process's state letter from /proc ('' when it is gone; 'Z' for a zombie)."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except (OSError, IndexError):
+        return ""
+
+
+def _children(pid: int) -> list[int]:
+    kids = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            if int(stat.read_text().rsplit(")", 1)[1].split()[1]) == pid:
+                kids.append(int(stat.parent.name))
+        except (OSError, IndexError, ValueError):
+            continue
+    return kids
+
+
+def _descendants(pid: int) -> list[int]:
+    found, todo = [], [pid]
+    while todo:
+        for child in _children(todo.pop()):
+            found.append(child)
+            todo.append(child)
+    return found
+
+
+def _wait_for(condition, seconds: float, what: str) -> None:
+    deadline = time.monotonic() + seconds
+    while not condition():
+        assert time.monotonic() < deadline, f"timed out waiting for {what}"
+        time.sleep(0.1)
+
+
+_DRIVER = """
+import sys
+sys.path.insert(0, {tests!r})
+from batch_jobs import announce_and_sleep
+from torus_cad.batch import load_sweep, run_sweep
+
+if __name__ == "__main__":
+    run_sweep(load_sweep(sys.argv[1]), sys.argv[2], workers=2, job=announce_and_sleep, progress=False)
+"""
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads /proc")
+def test_sweep_workers_die_with_the_sweep_when_it_is_killed(tmp_path):
+    """SIGKILL to the sweep's process: its fork server and workers (each in a ten-minute design) go too."""
+    driver = write(tmp_path / "driver.py", _DRIVER.format(tests=str(Path(__file__).parent)))
+    sweep = write(tmp_path / "s.toml", "[vary]\nblades = [2, 3, 4, 5]\n")
+    out = tmp_path / "out"
+    process = subprocess.Popen([sys.executable, str(driver), str(sweep), str(out)])
+    try:
+        _wait_for(lambda: len(list((out / DESIGNS_DIR).glob("*.started"))) == 2, 180, "two designs to start")
+        workers = [int(path.read_text()) for path in (out / DESIGNS_DIR).glob("*.started")]
+        helpers = _descendants(process.pid)
+        assert set(workers) <= set(helpers)
+        process.kill()  # and not reaped yet: the workers must not wait for its pid to disappear
+        _wait_for(lambda: all(_state(pid) in ("", "Z") for pid in helpers), 10, "the workers to die")
+        process.wait(30)
+    finally:
+        if process.poll() is None:
+            process.kill()
+        for pid in _descendants(process.pid):
+            os.kill(pid, signal.SIGKILL)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_stops_the_sweep_with_one_line_its_exit_code_and_the_table(tmp_path, signum):
+    sweep = write(tmp_path / "s.toml", "[base.resolution]\nsections = 16\npoints = 32\n[sweep]\nstl = false\n"
+                                       "[vary]\nblades = [2, 3, 4, 5, 6]\n\"airfoil.max_camber\" = [0.0, 0.02]\n")
+    out = tmp_path / "out"
+    process = subprocess.Popen([sys.executable, "-m", "torus_cad", "sweep", str(sweep), "--out", str(out),
+                                "--workers", "1"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        _wait_for(lambda: any((out / DESIGNS_DIR).glob("*/*.json")), 180, "a first design")
+        helpers = _descendants(process.pid)
+        process.send_signal(signum)
+        stdout, stderr = process.communicate(timeout=60)
+    finally:
+        if process.poll() is None:
+            process.kill()
+    assert process.returncode == 128 + signum, stderr
+    name = signal.Signals(signum).name
+    assert stdout == "" and len(stderr.strip().splitlines()) == 1 and f"interrupted by {name}" in stderr
+    statuses = [row["status"] for row in read_table(out / "results.csv")]
+    assert len(statuses) == 10 and "valid" in statuses and "pending" in statuses
+    _wait_for(lambda: all(_state(pid) in ("", "Z") for pid in helpers), 10, "the workers to stop")

@@ -71,12 +71,14 @@ def _add_design_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _command_build(args: argparse.Namespace) -> int:
-    from torus_cad.progress import Progress
-    from torus_cad.propeller import build_propeller
+    from torus_cad.progress import StageProgress
 
+    progress = StageProgress.for_terminal(quiet=args.quiet)  # stderr, only on a terminal
     params = load_parameters(args.config, args.overrides)
     size = _preview_size(args.preview_size, "--preview-size") if args.preview else None
-    progress = Progress.for_terminal(quiet=args.quiet)  # stderr, only on a terminal
+    progress("kernel_import")  # a line on the terminal before the seconds that importing cadquery takes
+    from torus_cad.propeller import build_propeller
+
     propeller = build_propeller(params, progress=progress)
     progress("write")
     paths = propeller.write(Path(args.out), density_g_cm3=args.density, stl=not args.no_stl)
@@ -106,14 +108,16 @@ def _preview_size(text: str, option: str) -> tuple[int, int]:
 
 
 def _command_preview(args: argparse.Namespace) -> int:
-    from torus_cad.preview import write_preview
-    from torus_cad.progress import Progress
-    from torus_cad.propeller import build_propeller
+    from torus_cad.progress import StageProgress
 
+    progress = StageProgress.for_terminal(quiet=args.quiet)
     params = load_parameters(args.config, args.overrides)
     size = _preview_size(args.size, "--size")
     out = Path(args.out) if args.out else Path("step_out") / f"{params.name}.png"
-    progress = Progress.for_terminal(quiet=args.quiet)
+    progress("kernel_import")
+    from torus_cad.preview import write_preview
+    from torus_cad.propeller import build_propeller
+
     propeller = build_propeller(params, progress=progress)
     path = write_preview(propeller, out, size, progress=progress)
     progress.finish()
@@ -139,23 +143,28 @@ def _positive_density(text: str) -> float:
 
 
 def _command_sweep(args: argparse.Namespace) -> int:
-    from torus_cad.sweep import SweepError, SweepInterrupted, load_sweep, run_sweep
+    """Exit 0 when every design is valid or refused, 1 when any failed (errored, crashed, timed out), 2 for a bad
+    sweep file, 130 / 143 on SIGINT / SIGTERM (one line; the table of what finished is written)."""
+    from torus_cad.batch import BatchError, SweepInterrupted, load_sweep, run_sweep
 
     spec = load_sweep(args.sweep)  # a bad sweep file raises ParameterError: exit 2
     out = Path(args.out) if args.out else Path("sweep_out") / Path(args.sweep).stem
     try:
         result = run_sweep(spec, out, workers=args.workers, scheduler=args.scheduler,
-                           stl=False if args.no_stl else None, density_g_cm3=args.density, rebuild=args.rebuild,
-                           progress=False if args.quiet else None)
+                           stl=False if args.no_stl else None, density_g_cm3=args.density,
+                           time_limit_s=args.time_limit, rebuild=args.rebuild, progress=False if args.quiet else None)
     except SweepInterrupted as interrupt:
-        print(interrupt.result.summary(), file=sys.stderr)
-        return 130
-    except SweepError as error:
+        partial = interrupt.result
+        table = partial.tables.get("csv", out / "results.csv")
+        print(f"torus-cad: sweep interrupted by {interrupt.signal_name}: {partial.counts_text()}; "
+              f"table written to {table}; rerun the same command to resume", file=sys.stderr)
+        return interrupt.exit_code
+    except BatchError as error:
         print(f"torus-cad: sweep failed: {error}", file=sys.stderr)
         return EXIT_KERNEL_FAILURE
     if not args.quiet:
         print(result.summary())
-    return EXIT_OK
+    return result.exit_code
 
 
 def _mesh_overrides(args: argparse.Namespace) -> dict[str, Any]:
@@ -329,6 +338,9 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("--density", type=_positive_density, default=None,
                        help="material density for the mass, g/cm^3 (default: the sweep file's, else 1.24)")
     sweep.add_argument("--no-stl", action="store_true", help="write STEP and JSON only")
+    sweep.add_argument("--time-limit", type=float, metavar="SECONDS",
+                       help="stop a design that runs longer and record it as 'timeout' (default: the sweep "
+                            "file's time_limit_s, else 300; local pool only)")
     sweep.add_argument("--rebuild", action="store_true", help="build every design again, even those already done")
     sweep.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary")
     sweep.set_defaults(handler=_command_sweep)

@@ -62,6 +62,11 @@ HUB_FOOTPRINT_MARGIN_DEG = 1.0
 #: Largest configuration file read (bytes): a design is a few hundred bytes.
 CONFIG_FILE_MAX_BYTES = 1 << 20
 
+#: Most designs one sweep may hold (grid product or samples), checked from the axis sizes before
+#: any design is generated. Beyond it the design list and table alone take gigabytes, and at
+#: ~2 designs/s per machine the sweep would run for weeks.
+MAX_SWEEP_DESIGNS = 1_000_000
+
 #: Surface meshes (torus_cad.mesh): largest sag of the flat faces from the analytic blade, as a
 #: fraction of the local section thickness, above which a resolution is refused. The default design
 #: needs 15 sections (any allowed points); a 6 % thick section needs 31 points (its leading edge).

@@ -130,9 +130,9 @@ class Resolution(Section):
 class Export(Section):
     """File output."""
 
-    stl_linear_deflection: float = param(STL_LINEAR_DEFLECTION, unit="mm", gt=0.0, le=10.0,
+    stl_linear_deflection: float = param(STL_LINEAR_DEFLECTION, unit="mm", gt=0.0, le=10.0, fuzz=(0.02, 0.5),
                                          doc="STL chordal deviation")
-    stl_angular_deflection: float = param(STL_ANGULAR_DEFLECTION, unit="rad", gt=0.0, le=1.5,
+    stl_angular_deflection: float = param(STL_ANGULAR_DEFLECTION, unit="rad", gt=0.0, le=1.5, fuzz=(0.2, 0.8),
                                           doc="STL angular deviation")
     step_schema: StepSchema = param(StepSchema.AP214, strict=False, doc="STEP application protocol")
 
@@ -198,7 +198,8 @@ class PropellerParameters(Document):
     name: Annotated[str, AfterValidator(_checked_name)] = param(
         "torus_propeller", doc="names the output files <name>.step/.stl/.json and the STEP product")
     blades: int = param(3, ge=1, le=12, fuzz=(1, 8), doc="number of blades n; blade i at theta_0 + 360 i / n")
-    phase_deg: float = param(0.0, unit="deg", ge=-360.0, le=360.0, doc="theta_0: angle of blade 0 around the axis")
+    phase_deg: float = param(0.0, unit="deg", ge=-360.0, le=360.0, fuzz=(-180.0, 180.0),
+                             doc="theta_0: angle of blade 0 around the axis")
     hub: Hub = Field(default_factory=Hub)
     airfoil: Airfoil = Field(default_factory=Airfoil)
     centerline: Centerline = Field(default_factory=Centerline)

@@ -181,8 +181,8 @@ class StudyConfig:
                 f"points n = {self.points}, evenly spaced on [0, 1]",
                 f"generator draw: {draw}",
                 f"piecewise-linear: {knots}",
-                f"sinusoid fit: Levenberg-Marquardt, start = {self.sinusoid_start}: {start}; "
-                f"budget {self.sinusoid_max_evaluations} evaluations",
+                (f"sinusoid fit: Levenberg-Marquardt, start = {self.sinusoid_start}: {start}; "
+                 f"budget {self.sinusoid_max_evaluations} evaluations"),
             ]
         )
 
@@ -431,10 +431,7 @@ def fit_sinusoid(
     _check_int("sinusoid_max_evaluations", max_evaluations, 1, MAX_SINUSOID_EVALUATIONS)
     values = np.atleast_2d(np.asarray(values, dtype=np.float64))
     s = np.asarray(s, dtype=np.float64)
-    if start == "fft":
-        starts = fft_start_parameters(s, values)
-    else:
-        starts = np.ones((len(values), 4))
+    starts = fft_start_parameters(s, values) if start == "fft" else np.ones((len(values), 4))
     parameters = np.empty_like(starts)
     converged = np.zeros(len(values), dtype=np.bool_)
     status = np.zeros(len(values), dtype=np.int64)
@@ -699,8 +696,8 @@ def format_overall_table(result: StudyResult) -> str:
             str(row["parameters"]),
             f"{_format_number(row['mean_mse'])} ± {_format_number(row['standard_error_mse'])}",
             _format_number(row["median_mse"]),
-            f"{_format_number(row['mean_range_normalised_sse'])} ± "
-            f"{_format_number(row['standard_error_range_normalised_sse'])}",
+            (f"{_format_number(row['mean_range_normalised_sse'])} ± "
+             f"{_format_number(row['standard_error_range_normalised_sse'])}"),
             _format_number(row["median_range_normalised_sse"]),
             f"{row['spec_table_1']:.3f}",
         ]

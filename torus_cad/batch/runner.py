@@ -1,0 +1,300 @@
+"""The batch runner: designs on a local process pool or a Dask cluster, one outcome each, whatever happens.
+
+One loop (:func:`run_tasks`) drives any executor with the ``concurrent.futures`` shape
+(``submit`` / futures / ``shutdown``): :class:`LocalPool` on this machine, or
+``dask.distributed.Client.get_executor()`` on a cluster. A design never stops the batch:
+
+* the local pool is pebble's ``ProcessPool``: each design has a wall-clock limit (past it the
+  worker is killed and replaced, the design is ``timeout``), and a worker that dies (a
+  segfault in OpenCascade, the OOM killer) costs only its own design (``crash``);
+* workers die with the process that started them, even when it is killed with SIGKILL: the
+  kernel's parent-death signal (Linux ``prctl(PR_SET_PDEATHSIG)``) plus a watchdog thread
+  that notices a new parent process;
+* SIGINT and SIGTERM, within :func:`interrupts_raised`, stop the batch at once: the pool's
+  workers are stopped, and :class:`Interrupted` (naming the signal) reaches the caller, which
+  still writes its table.
+
+Workers start from multiprocessing's fork server, which imports the kernel once (cadquery
+takes seconds to import), so workers start at once and never fork a process that holds
+threads. A script that runs a batch needs an ``if __name__ == "__main__":`` guard, as the
+workers re-import it.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import multiprocessing
+import os
+import signal
+import threading
+import time
+from collections import deque
+from collections.abc import Callable, Iterable, Iterator, Sequence
+from concurrent.futures import FIRST_COMPLETED, CancelledError, Future, wait
+from concurrent.futures.process import BrokenProcessPool
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any, Protocol
+
+from torus_cad.batch.job import DesignTask, record_result, run_design
+from torus_cad.batch.outcome import DesignResult, Outcome
+from torus_cad.errors import TorusCadError
+
+__all__ = ["BatchError", "Executor", "Interrupted", "Job", "LocalPool", "default_workers", "interrupts_raised",
+           "run_tasks"]
+
+Job = Callable[[DesignTask], DesignResult]
+
+_POLL_SECONDS = 0.5  #: how often the loop wakes up when nothing finishes
+_WATCHDOG_SECONDS = 1.0  #: how often a worker checks that its parent is alive
+_PR_SET_PDEATHSIG = 1  #: prctl option (linux/prctl.h)
+_MAX_POOL_RESTARTS = 3  #: pool breaks in a row, with no design finishing between them, before giving up
+
+
+class BatchError(TorusCadError):
+    """The batch machinery failed (the pool's workers cannot start, the Dask scheduler is unreachable)."""
+
+
+class Interrupted(KeyboardInterrupt):
+    """SIGINT or SIGTERM arrived during a batch; ``signum`` says which (exit code 128 + signum)."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(f"interrupted by {signal.Signals(signum).name}")
+        self.signum = signum
+
+    @property
+    def signal_name(self) -> str:
+        return signal.Signals(self.signum).name
+
+    @property
+    def exit_code(self) -> int:
+        """The shell's convention: 130 for SIGINT, 143 for SIGTERM."""
+        return 128 + self.signum
+
+
+class Executor(Protocol):
+    """What :func:`run_tasks` needs of an executor (concurrent.futures' and Dask's have it)."""
+
+    def submit(self, fn: Callable[..., Any], /, *args: Any) -> Future[Any]: ...
+
+    def shutdown(self, wait: bool = True) -> None: ...
+
+
+def default_workers() -> int:
+    """One worker per CPU."""
+    return max(1, os.cpu_count() or 1)
+
+
+# -- worker processes -------------------------------------------------------------------------------
+
+def _worker_started(batch_pid: int) -> None:
+    """Initialiser of every local worker: die with the batch's process; SIGTERM ends the worker at once.
+
+    A worker's parent is the fork server, which lives as long as any worker does (each holds
+    its lifeline), so two guards: the kernel's parent-death signal for when the fork server
+    dies, and a watchdog thread for when the batch's process dies, even by SIGKILL and even
+    if nobody reaps it. pebble's workers already ignore SIGINT (Ctrl-C goes to the whole
+    terminal's process group; the parent decides). Its graceful SIGTERM handler would wait for
+    OpenCascade to return before running, so the default action is restored: a stopped worker
+    stops now (an export killed mid-write leaves only a temporary file, never a partial file).
+    """
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    with contextlib.suppress(OSError, AttributeError):  # not Linux: the watchdog below still works
+        ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0)
+    threading.Thread(target=_watch_parents, args=(os.getppid(), batch_pid, _identity(batch_pid)),
+                     name="torus-cad parent watchdog", daemon=True).start()
+
+
+def _watch_parents(worker_parent: int, batch_pid: int, batch_identity: str | None) -> None:
+    """SIGKILL this worker once its parent changed or the batch's process is no longer the one it was."""
+    while True:
+        time.sleep(_WATCHDOG_SECONDS)
+        if os.getppid() != worker_parent or _identity(batch_pid) != batch_identity:
+            os.kill(os.getpid(), signal.SIGKILL)
+
+
+def _identity(pid: int) -> str | None:
+    """What tells a live process from a successor with its pid: its start time (Linux /proc).
+
+    None when the process is gone or a zombie (killed, not yet reaped); without /proc, ''
+    for any existing process.
+    """
+    try:
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    except FileNotFoundError:
+        if Path("/proc/self/stat").exists():
+            return None
+        try:
+            os.kill(pid, 0)
+        except ProcessLookupError:
+            return None
+        except PermissionError:
+            pass
+        return ""
+    except OSError:
+        return None
+    return None if fields[0] in ("Z", "X") else fields[19]
+
+
+class LocalPool:
+    """A local process pool with a per-design time limit, behind the shape of a concurrent.futures executor.
+
+    Args:
+        workers: worker processes.
+        time_limit_s: wall-clock limit per design, s (None: none); counted from when a worker starts it.
+    """
+
+    def __init__(self, workers: int, time_limit_s: float | None = None) -> None:
+        import pebble
+
+        self.workers = workers
+        self.time_limit_s = time_limit_s
+        self._pool: Any = pebble.ProcessPool(max_workers=workers, initializer=_worker_started, initargs=(os.getpid(),),
+                                        context=_worker_context())
+
+    def submit(self, fn: Callable[..., Any], /, *args: Any) -> Future[Any]:
+        """Run ``fn(*args)`` in a worker; its future raises TimeoutError past the limit, ProcessExpired on a crash."""
+        try:
+            return self._pool.schedule(fn, args=args, timeout=self.time_limit_s)
+        except RuntimeError as error:  # pebble: "Unexpected error within the Pool" once it is broken
+            raise BrokenProcessPool(str(error)) from error
+
+    def shutdown(self, wait: bool = True) -> None:
+        """``wait``: let the queued designs finish; otherwise stop the workers now (their designs are lost)."""
+        if wait:
+            self._pool.close()
+        else:
+            self._pool.stop()
+        self._pool.join()
+
+
+def _worker_context() -> Any:
+    """The fork server (kernel imported once, no fork of a threaded process); spawn where there is none."""
+    if "forkserver" not in multiprocessing.get_all_start_methods():  # pragma: no cover - Windows
+        return multiprocessing.get_context("spawn")
+    context = multiprocessing.get_context("forkserver")
+    context.set_forkserver_preload(["torus_cad.batch.job", "torus_cad.propeller"])
+    return context
+
+
+# -- signals ----------------------------------------------------------------------------------------
+
+@contextmanager
+def interrupts_raised(signals: Iterable[int] = (signal.SIGINT, signal.SIGTERM)) -> Iterator[None]:
+    """Within the block, the first SIGINT or SIGTERM raises :class:`Interrupted`; later ones are ignored.
+
+    Later signals are ignored so that the cleanup the first one starts (stopping the pool,
+    writing the table) is not cut short. Outside the main thread, signals cannot be caught and
+    this does nothing.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    raised = False
+
+    def handler(signum: int, frame: Any) -> None:
+        nonlocal raised
+        if not raised:
+            raised = True
+            raise Interrupted(signum)
+
+    previous = {signum: signal.signal(signum, handler) for signum in signals}
+    try:
+        yield
+    finally:
+        for signum, old in previous.items():
+            signal.signal(signum, old)
+
+
+# -- the loop ---------------------------------------------------------------------------------------
+
+def _result_of(future: Future[Any], task: DesignTask, check_visible: bool) -> DesignResult:
+    """The design's result, or the outcome the executor's exception stands for (recorded in its folder)."""
+    error = future.exception()
+    if error is None:
+        result: DesignResult = future.result()
+        if check_visible and result.outcome is Outcome.VALID and task.folder is not None and not (
+                Path(task.folder) / f"{task.design_id}.json").is_file():
+            result = DesignResult(task.design_id, Outcome.ERROR, f"the worker wrote {task.folder} but it is not "
+                                  "visible here; the output folder must be on a file system shared by the workers "
+                                  "and this machine")
+        else:
+            return result
+    elif isinstance(error, TimeoutError):
+        result = DesignResult(task.design_id, Outcome.TIMEOUT, f"no result within the time limit "
+                              f"({error.args[1] if len(error.args) > 1 else '?'} s); the worker was stopped")
+    elif type(error).__name__ in ("ProcessExpired", "KilledWorker"):
+        code = getattr(error, "exitcode", None)
+        result = DesignResult(task.design_id, Outcome.CRASH, "the worker process died while running this design"
+                              + (f" (exit code {code})" if code is not None else "") + " (a crash inside OpenCascade?)")
+    else:  # e.g. the task could not be sent to a Dask worker
+        result = DesignResult(task.design_id, Outcome.ERROR, f"{type(error).__name__}: {error}")
+    return record_result(task, result) if task.folder is not None else result
+
+
+def run_tasks(tasks: Sequence[DesignTask], on_result: Callable[[DesignTask, DesignResult], None],
+              make_executor: Callable[[], Executor], window: int | None, job: Job | None = None,
+              check_visible: bool = False) -> None:
+    """Run ``tasks`` on executors from ``make_executor``, calling ``on_result`` as each one finishes.
+
+    Args:
+        tasks: the designs to run.
+        on_result: called in this thread with each task and its result, in finishing order.
+        make_executor: makes the executor (again, when a local pool breaks).
+        window: most tasks in flight (None: submit all at once, for Dask's scheduler).
+        job: the function a worker runs per task (default :func:`run_design`); any top-level
+            function of a :class:`DesignTask` returning a :class:`DesignResult`.
+        check_visible: a valid design's report must be visible here (a cluster writing to a disk
+            this machine cannot see is an error).
+
+    A time-out, a crash and an exception the job did not catch each become that design's
+    outcome. On any exception from here (Interrupted included) the executor is stopped
+    without waiting and the exception propagates; the tasks that did not finish get no result.
+    """
+    job = run_design if job is None else job
+    queue: deque[DesignTask] = deque(tasks)
+    in_flight: dict[Future[Any], DesignTask] = {}
+    executor = make_executor()
+    restarts = 0
+    try:
+        while queue or in_flight:
+            refused = False  # the executor refused a task: its pool is broken
+            while queue and (window is None or len(in_flight) < window):
+                try:
+                    future = executor.submit(job, queue[0])
+                except BrokenProcessPool:
+                    refused = True
+                    break
+                in_flight[future] = queue.popleft()
+            done, _ = wait(list(in_flight), timeout=_POLL_SECONDS, return_when=FIRST_COMPLETED)
+            broken = [in_flight.pop(future) for future in list(done) if _broke(future)]
+            for future in done:
+                if future in in_flight:
+                    task = in_flight.pop(future)
+                    on_result(task, _result_of(future, task, check_visible))
+                    restarts = 0
+            if broken or refused:  # the pool broke (e.g. its workers cannot start): a new one
+                restarts += 1
+                if restarts > _MAX_POOL_RESTARTS:
+                    raise BatchError("the worker processes cannot start or keep dying before finishing a design "
+                                     "(a script that runs a batch needs an `if __name__ == \"__main__\":` guard, "
+                                     "as the workers re-import it)")
+                queue.extendleft(reversed(broken + list(in_flight.values())))
+                in_flight.clear()
+                executor.shutdown(wait=False)
+                executor = make_executor()
+    except BaseException:
+        for future in in_flight:
+            future.cancel()
+        executor.shutdown(wait=False)
+        raise
+    executor.shutdown(wait=True)
+
+
+def _broke(future: Future[Any]) -> bool:
+    """The future failed because its whole pool broke (not because of its own design)."""
+    try:
+        return isinstance(future.exception(timeout=0), BrokenProcessPool)
+    except CancelledError:
+        return True
