@@ -180,10 +180,10 @@ def _mesh_overrides(args: argparse.Namespace) -> dict[str, Any]:
 
 def _command_mesh(args: argparse.Namespace) -> int:
     from torus_cad.mesh.pipeline import summary_line, write_surface_mesh
-    from torus_cad.progress import Progress
+    from torus_cad.progress import StageProgress
 
     params = load_parameters(args.config, args.overrides).with_values(_mesh_overrides(args))
-    progress = Progress.for_terminal(quiet=args.quiet)
+    progress = StageProgress.for_terminal(quiet=args.quiet)
     report, paths = write_surface_mesh(params, Path(args.out), compare=not args.no_compare, progress=progress)
     progress.finish()
     if not args.quiet:
@@ -221,12 +221,12 @@ def _table_overrides(args: argparse.Namespace, table: str) -> dict[str, Any]:
 
 def _command_cfd(args: argparse.Namespace) -> int:
     from torus_cad.cfd.settings import MissingExtraError
-    from torus_cad.progress import Progress
+    from torus_cad.progress import StageProgress
 
     params = load_parameters(args.config, args.overrides).with_values(_table_overrides(args, "cfd"))
     if args.threads < 0:
         raise ParameterError(f"--threads = {args.threads} is out of range; allowed 0 (one per CPU) or more")
-    progress = Progress.for_terminal(quiet=args.quiet)
+    progress = StageProgress.for_terminal(quiet=args.quiet)
     try:
         from torus_cad.cfd.domain import summary_line, write_cfd_domain
 
