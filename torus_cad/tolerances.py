@@ -73,7 +73,8 @@ MAX_SWEEP_DESIGNS = 1_000_000
 MESH_SAG_LIMIT = 0.10
 
 #: Surface meshes: most triangles `torus-cad mesh` builds (estimated before it starts); peak
-#: memory grows ~0.9 GB per million triangles (scripts/bench_mesh.py), so this keeps it within ~18 GB.
+#: memory grows ~0.75 GB per million triangles (6.7 GB at 8.9 million, scripts/bench_mesh.py), so
+#: this keeps it within ~15 GB of the machine's 24 GiB.
 MESH_TRIANGLE_LIMIT = 20_000_000
 
 #: Surface meshes: triangles with every corner at least this fraction of the hub radius outside
