@@ -100,7 +100,7 @@ def _rss_mb() -> float:
 def timed_build_and_write(params, out_dir: Path) -> dict[str, float]:
     """One build plus STEP and STL writes (the JSON report separately); seconds per stage."""
     from torus_cad.kernel.export import write_step, write_stl
-    from torus_cad.propeller import build_report, build_propeller
+    from torus_cad.propeller import build_propeller, build_report
 
     start = time.perf_counter()
     propeller = build_propeller(params)
@@ -179,7 +179,6 @@ def cli_wall_time(runs: int) -> dict[str, Any]:
 def child_scaling(payload: dict[str, Any]) -> dict[str, Any]:
     """Child: build twice (the second is timed), write STEP + STL; report stage times and memory."""
     import torus_cad.propeller  # noqa: F401 - imports before the memory baseline
-
     from torus_cad.errors import TorusCadError
 
     baseline = _rss_mb()

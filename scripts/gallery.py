@@ -23,13 +23,14 @@ from torus_cad.propeller import build_propeller
 
 EXAMPLES = Path("examples")
 
-#: Design files in examples/ that are not designs of the gallery (sweep definitions).
-NOT_DESIGNS = ("sweep_example.toml",)
+#: Files in examples/ that are not in the gallery: sweep definitions, and the workshop examples
+#: (mounting, fillet and handedness options; docs/images/handedness_pair.png shows those).
+NOT_IN_GALLERY = ("sweep_*.toml", "workshop_*.toml")
 
 
 def gallery_designs(folder: Path = EXAMPLES) -> list[Path]:
-    """The example design files, in name order."""
-    return sorted(path for path in folder.glob("*.toml") if path.name not in NOT_DESIGNS)
+    """The gallery's design files, in name order."""
+    return sorted(path for path in folder.glob("*.toml") if not any(path.match(skip) for skip in NOT_IN_GALLERY))
 
 
 def caption(propeller) -> str:

@@ -42,4 +42,4 @@ def main(paths: list[Path]) -> int:
 if __name__ == "__main__":
     arguments = [Path(arg) for arg in sys.argv[1:]]
     raise SystemExit(main(arguments or sorted(path for path in Path("examples").glob("*.toml")
-                                              if not path.name.startswith("sweep"))))
+                                              if not path.name.startswith(("sweep", "workshop")))))

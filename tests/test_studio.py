@@ -53,6 +53,13 @@ def test_panel_has_one_field_per_schema_parameter_grouped_by_toml_table(groups):
     assert fields["airfoil.camber_normal"].kind is FieldKind.BOOLEAN
 
 
+def test_file_paths_are_read_only_in_the_panel(groups):
+    fields = {field.key: field for group in groups for field in group.fields}
+    assert fields["airfoil.file"].read_only  # the server would read it: never taken from the page
+    assert not any(field.read_only for key, field in fields.items() if key != "airfoil.file")
+    assert fields["export.formats"].kind is FieldKind.CHOICES
+
+
 def _bored_schema():
     """The schema with one more parameter, declared the way torus_cad/parameters/design.py does."""
     from pydantic import Field
@@ -101,7 +108,8 @@ def test_a_parameter_added_to_the_schema_appears_in_the_panel_by_itself():
 
 def test_state_round_trip_gives_the_same_design(groups):
     design = PropellerParameters().with_values({"blades": 5, "hub.radius": 12.5, "centerline.p2": [20.0, 4.0, 24.0],
-                                                "airfoil.camber_normal": False, "centerline.frame": "rotation_minimizing"})
+                                                "airfoil.camber_normal": False, "centerline.frame": "rotation_minimizing",
+                                                "export.formats": ["step", "3mf"], "handedness": "ccw"})
     values = state_values(design.to_dict(), groups)
     assert values[state_name("blades")] == 5
     assert values[state_name("centerline.p2", 1)] == 4.0
@@ -171,6 +179,23 @@ def test_preview_draws_every_blade_closed_and_rotated_about_the_axis():
     quarter_turn = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
     np.testing.assert_allclose(blade_1, blade_0 @ quarter_turn.T, atol=1e-9)
     assert len(scene.sections) == 4 and scene.sections[0].shape == (25, 80, 3)
+
+
+def test_preview_of_the_mirror_image_is_the_mirrored_preview():
+    clockwise = preview_scene(PropellerParameters().with_values({"phase_deg": 20.0}))
+    counter = preview_scene(PropellerParameters().with_values({"phase_deg": 20.0, "handedness": "ccw"}))
+    for cw_part, ccw_part in zip(clockwise.parts[1:], counter.parts[1:]):
+        cw_mesh = TriangleMesh(cw_part.vertices, cw_part.triangles)
+        ccw_mesh = TriangleMesh(ccw_part.vertices, ccw_part.triangles)
+        assert ccw_mesh.is_watertight() and ccw_mesh.volume == pytest.approx(cw_mesh.volume, rel=1e-12)
+    # Some blade of the mirror image is the mirror of blade 0 (which one depends on the angles).
+    mirrored_blade_0 = clockwise.parts[1].vertices * np.array([1.0, -1.0, 1.0])
+    assert min(np.abs(part.vertices - mirrored_blade_0).max() for part in counter.parts[1:]) < 1e-9
+
+
+def test_preview_applies_the_diameter_target():
+    scene = preview_scene(PropellerParameters().with_values({"diameter": 60.0}))
+    assert scene.tip_diameter_mm == pytest.approx(60.0, rel=5e-3)
 
 
 def test_preview_refuses_what_the_build_refuses():

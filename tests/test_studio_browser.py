@@ -106,7 +106,8 @@ def test_a_refused_value_shows_the_reason_and_keeps_the_last_good_propeller(page
     page.set_field("hub.radius", radius)  # typed key by key: "0.1" passes through "0" (refused too)
     page.wait(lambda: reason in page.field_message("hub.radius"), "the reason under the field")
     assert reason in page.text("refusal") and page.text("status") == "refused"
-    assert page.text("readout-volume") == volume and page.element("download-step").is_enabled()
+    assert page.text("readout-volume") == volume  # the last good propeller stays, downloadable
+    assert page.element("download-step").is_enabled()
     page.change("hub.radius", "10")
     assert page.field_message("hub.radius").count(reason) == 0
 
@@ -200,9 +201,33 @@ def test_an_uploaded_design_goes_through_the_cli_validation(page, tmp_path):
     page.wait(lambda: cli_reason in page.message_of("upload"), "the upload's refusal")
     assert page.text("readout-volume") == volume
 
+    remote_file = tmp_path / "remote_file.toml"  # a design from the page may not make the server read a file
+    remote_file.write_text('[airfoil]\nfile = "/etc/hostname"\n')
+    page.element("upload").send_keys(str(remote_file))
+    page.wait(lambda: "may not name a file on this machine" in page.message_of("upload"), "the file path's refusal")
+
     good = tmp_path / "five.toml"
-    good.write_text("blades = 5\n")
+    good.write_text('blades = 5\n[export]\nformats = ["step", "stl", "3mf"]\n')
     page.element("upload").send_keys(str(good))
     page.wait(lambda: page.field_value("blades") == "5", "the uploaded design in the panel")
     page.wait(lambda: page.idle() and page.text("readout-volume") != volume, "the uploaded design's solid")
-    assert page.text("readout-volume") == _volume_text(PropellerParameters().with_values({"blades": 5}))
+    design = PropellerParameters.from_toml(good)
+    assert page.text("readout-volume") == _volume_text(design)
+
+
+def test_every_file_the_build_writes_is_downloadable(page, downloads):
+    import csv
+
+    import trimesh
+
+    page.wait(lambda: page.field_value("blades") == "5", "the 3MF design of the upload test")
+    page.wait_idle()
+    page.click("download-3mf")
+    mesh = trimesh.load(wait_for_download(downloads, ".3mf"), force="mesh")
+    assert mesh.is_watertight
+    volume_mm3 = float(page.text("readout-volume").split()[0])
+    assert mesh.volume == pytest.approx(volume_mm3, rel=0.01)
+    page.click("download-sections_csv")
+    with wait_for_download(downloads, "_sections.csv").open(newline="") as table:
+        rows = list(csv.reader(line for line in table if not line.startswith("#")))
+    assert len(rows) - 1 == PropellerParameters().resolution.sections  # a header, then one row per section

@@ -1,7 +1,13 @@
-"""Command line: ``torus-cad build | defaults | ...``. Thin: parse, call the package, map errors to exit codes.
+"""Command line: ``torus-cad build | defaults | verify | ...``. Thin: parse, call the package, map errors to exit codes.
 
 Exit codes: 0 success; 2 bad input (a one-line message naming the field, no traceback, no
-file written); 1 the kernel or the file system failed.
+file written); 1 the kernel or the file system failed (the cause named: OpenCascade, no space
+left, permission denied, out of memory) or ``verify`` found an incomplete set; 130 / 143 / 129
+interrupted by SIGINT / SIGTERM / SIGHUP (torus_cad.interrupts).
+
+The signal handlers are installed before anything heavy is imported (this module imports only
+the standard library and torus_cad's light modules at the top; numpy, CadQuery and the rest load
+inside the commands), so an interrupt at any moment ends the command with one line.
 """
 
 from __future__ import annotations
@@ -12,10 +18,13 @@ import sys
 import tomllib
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from torus_cad.errors import GeometryError, ParameterError, TorusCadError
-from torus_cad.parameters import PropellerParameters, resolve_parameters
+from torus_cad.errors import GeometryError, IncompleteOutputError, OutputError, ParameterError, TorusCadError
+from torus_cad.interrupts import exit_on_signals
+
+if TYPE_CHECKING:
+    from torus_cad.parameters import PropellerParameters
 
 EXIT_OK, EXIT_KERNEL_FAILURE, EXIT_BAD_INPUT = 0, 1, 2
 
@@ -54,12 +63,28 @@ def _parse_override(text: str) -> tuple[str, Any]:
         value = tomllib.loads(f"value = {raw}")["value"]
     except tomllib.TOMLDecodeError:
         value = raw  # a bare word: treat as a string (e.g. name=my_prop)
+    except ValueError as error:  # e.g. an integer of more than 4300 digits
+        raise ParameterError(f"--set {key.strip()}: {_first_clause(error)}") from None
     return key.strip(), value
+
+
+def _first_clause(error: BaseException) -> str:
+    """The error's message up to its first ';', on one line."""
+    return " ".join(str(error).split(";")[0].split())[:200]
 
 
 def load_parameters(config: str | None, overrides: Sequence[str] = ()) -> PropellerParameters:
     """Parameters from a TOML file (or the defaults) with ``key=value`` overrides applied."""
-    return resolve_parameters(config or None, dict(_parse_override(item) for item in overrides))
+    from torus_cad.parameters import resolve_parameters  # imported here: the schema takes most of a second
+
+    changes = dict(_parse_override(item) for item in overrides)
+    try:
+        return resolve_parameters(config or None, changes)
+    except ParameterError:
+        raise
+    except (OverflowError, ValueError) as error:  # reading input only: whatever fails here is bad input
+        source = f"configuration {config!r}" if config else "a --set value"
+        raise ParameterError(f"{source} holds a value that cannot be used: {_first_clause(error)}") from None
 
 
 def _add_design_arguments(parser: argparse.ArgumentParser) -> None:
@@ -71,32 +96,39 @@ def _add_design_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _command_build(args: argparse.Namespace) -> int:
+    from torus_cad.budgets import check_stl_budget
+    from torus_cad.outputs import check_writable_folder, write_output_set
     from torus_cad.progress import StageProgress
 
     progress = StageProgress.for_terminal(quiet=args.quiet)  # stderr, only on a terminal
+    progress("kernel_import")  # a line on the terminal before the seconds of importing the schema and cadquery
     params = load_parameters(args.config, args.overrides)
     size = _preview_size(args.preview_size, "--preview-size") if args.preview else None
     if args.require_printable:  # decided from the analytic section, before any work or file
         from torus_cad.geometry.printability import printability
 
-        blade = params.geometry().blade
-        problem = printability(blade.airfoil, blade.laws, params.manufacturing.min_wall).problem()
+        problem = printability(params.geometry().blade, params.manufacturing.min_wall).problem()
         if problem:
             raise GeometryError(f"not printable (--require-printable): {problem}")
-    progress("kernel_import")  # a line on the terminal before the seconds that importing cadquery takes
+    if _writes_a_mesh(params, args.no_stl):
+        check_stl_budget(params)  # a mesh that would blow up is refused before anything is built (~7 ms)
+    check_writable_folder(args.out)  # before the build, not after it
     from torus_cad.propeller import build_propeller
 
     propeller = build_propeller(params, progress=progress)
     progress("write")
-    paths = propeller.write(Path(args.out), density_g_cm3=args.density, stl=not args.no_stl, sections_table=True)
+    extra_files = {}
     if size is not None:
         from torus_cad.preview import write_preview
 
-        paths["png"] = write_preview(propeller, Path(args.out) / f"{params.name}.png", size, progress=progress)
+        extra_files["png"] = lambda path: write_preview(propeller, path, size, progress=progress)
+    # One output set: the files, the blade-element table, the picture and the report appear together.
+    paths = write_output_set(propeller, Path(args.out), args.density, stl=not args.no_stl, sections_table=True,
+                             extra_files=extra_files)
     progress.finish()
     report = json.loads(paths["json"].read_text())
     if not args.quiet:
-        for kind, path in paths.items():
+        for path in paths.values():
             print(f"wrote {path}")
         print(f"volume {report['volume_mm3']:.3f} mm^3, area {report['surface_area_mm2']:.3f} mm^2, "
               f"mass {report['mass_g']:.3f} g at {args.density:g} g/cm^3")
@@ -111,22 +143,30 @@ def _command_build(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _preview_size(text: str, option: str) -> tuple[int, int]:
-    from torus_cad.preview import (
-        parse_size,  # raises ParameterError (exit 2) for a bad WxH
-    )
+def _writes_a_mesh(params: PropellerParameters, no_stl: bool) -> bool:
+    """Whether the build tessellates the solid for a file (STL, 3MF): then its triangle budget applies."""
+    from torus_cad.parameters.design import ExportFormat
 
-    return parse_size(text, option)
+    formats = params.export.formats
+    return (ExportFormat.STL in formats and not no_stl) or ExportFormat.THREE_MF in formats
+
+
+def _preview_size(text: str, option: str) -> tuple[int, int]:
+    from torus_cad.preview import parse_size
+
+    return parse_size(text, option)  # raises ParameterError (exit 2) for a bad WxH
 
 
 def _command_preview(args: argparse.Namespace) -> int:
+    from torus_cad.outputs import check_writable_folder
     from torus_cad.progress import StageProgress
 
     progress = StageProgress.for_terminal(quiet=args.quiet)
+    progress("kernel_import")
     params = load_parameters(args.config, args.overrides)
     size = _preview_size(args.size, "--size")
     out = Path(args.out) if args.out else Path("step_out") / f"{params.name}.png"
-    progress("kernel_import")
+    check_writable_folder(out.parent)  # before the build, not after it
     from torus_cad.preview import write_preview
     from torus_cad.propeller import build_propeller
 
@@ -139,6 +179,8 @@ def _command_preview(args: argparse.Namespace) -> int:
 
 
 def _command_defaults(args: argparse.Namespace) -> int:
+    from torus_cad.parameters import PropellerParameters
+
     if not args.resolved:
         if args.config or args.overrides:
             raise ParameterError("torus-cad defaults takes a design file or --set only with --resolved")
@@ -216,6 +258,22 @@ def _command_studio(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _command_verify(args: argparse.Namespace) -> int:
+    from torus_cad.outputs import set_names, verify_set
+
+    folder = Path(args.folder)
+    if not folder.is_dir():
+        raise ParameterError(f"verify: {str(folder)!r} is not a folder")
+    names = [args.name] if args.name else set_names(folder)
+    if not names:
+        raise IncompleteOutputError(f"no output set in {str(folder)!r}")
+    for name in names:
+        checked = verify_set(folder, name)  # IncompleteOutputError names the file: exit 1
+        if not args.quiet:
+            print(f"ok {checked.report.parent / name}: {', '.join(path.name for path in checked.files)}")
+    return EXIT_OK
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with every subcommand."""
     parser = _Parser(prog="torus-cad", description=DESCRIPTION, epilog=EPILOG,
@@ -251,6 +309,16 @@ def build_parser() -> argparse.ArgumentParser:
                          help="picture size in pixels, each side 64..8000 (default 1200x600)")
     preview.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     preview.set_defaults(handler=_command_preview)
+
+    verify = commands.add_parser("verify", help="check that output sets are complete: every file of one build",
+                                 description="Check the output sets in FOLDER (or only NAME): each <name>.json "
+                                 "report lists the files of its build with their SHA-256; every one must be there "
+                                 "and unchanged. Exit 0 if all are complete, 1 naming the first missing or mixed "
+                                 "file.")
+    verify.add_argument("folder", metavar="FOLDER", help="output folder, e.g. step_out")
+    verify.add_argument("name", nargs="?", metavar="NAME", help="check only the set <NAME>.json (default: every set)")
+    verify.add_argument("-q", "--quiet", action="store_true", help="print nothing when the sets are complete")
+    verify.set_defaults(handler=_command_verify)
 
     defaults = commands.add_parser("defaults", help="print the default design as commented TOML",
                                    description="Print the default design as a commented TOML file to start from; "
@@ -301,26 +369,43 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``torus-cad``; returns the exit code."""
-    args = build_parser().parse_args(argv)
-    handler: Callable[[argparse.Namespace], int] = args.handler
+    restore_signals = exit_on_signals()  # first: an interrupt while importing is clean too
+    try:
+        args = build_parser().parse_args(argv)
+        handler: Callable[[argparse.Namespace], int] = args.handler
+        return _run(handler, args)
+    finally:
+        restore_signals()
+
+
+def _error(message: str, code: int) -> int:
+    print(f"torus-cad: {message}", file=sys.stderr)
+    return code
+
+
+def _run(handler: Callable[[argparse.Namespace], int], args: argparse.Namespace) -> int:
+    """The handler's exit code; every failure becomes one line on stderr and its exit code."""
     try:
         return handler(args)
     except (ParameterError, GeometryError) as error:
-        print(f"torus-cad: error: {error}", file=sys.stderr)
-        return EXIT_BAD_INPUT
+        return _error(f"error: {error}", EXIT_BAD_INPUT)
+    except IncompleteOutputError as error:
+        return _error(f"verify: {error}", EXIT_KERNEL_FAILURE)
+    except OutputError as error:
+        return _error(f"build failed: {error}", EXIT_KERNEL_FAILURE)
     except TorusCadError as error:
-        print(f"torus-cad: kernel failure: {error}", file=sys.stderr)
-        return EXIT_KERNEL_FAILURE
+        return _error(f"kernel failure: {error}", EXIT_KERNEL_FAILURE)
+    except MemoryError:
+        return _error("out of memory; lower resolution.sections / resolution.points or raise the STL deflections",
+                      EXIT_KERNEL_FAILURE)
     except OSError as error:
-        print(f"torus-cad: cannot write output: {error}", file=sys.stderr)
-        return EXIT_KERNEL_FAILURE
-    except KeyboardInterrupt:
-        print("torus-cad: interrupted; no partial file was left behind", file=sys.stderr)
-        return 130
+        where = f" {error.filename!r}" if error.filename else ""
+        return _error(f"cannot write output{where}: {error.strerror or error}", EXIT_KERNEL_FAILURE)
+    except KeyboardInterrupt:  # main() called outside the main thread, where no handler could be installed
+        return _error("interrupted", 130)
     except Exception as error:
-        print(f"torus-cad: internal error ({type(error).__name__}): {error}; please report it with the design file",
-              file=sys.stderr)
-        return EXIT_KERNEL_FAILURE
+        return _error(f"internal error ({type(error).__name__}): {error}; please report it with the design file",
+                      EXIT_KERNEL_FAILURE)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -16,6 +16,7 @@ build the same propeller without solving again) and what each step achieved.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -241,12 +242,17 @@ def write_sections_table(surface: BladeSurface, params: Any, out_dir: Path, rota
     ``out_dir`` (each atomically); their paths by kind (``sections_csv``, ``sections_png``).
 
     The table reads the surface the solid was lofted through (``resolution.points`` around each
-    section): the thickness comes within 0.04 % of a 1000-point sampling at the default 80.
+    section): the thickness comes within 0.04 % of a 1000-point sampling at the default 80. A
+    ``handedness = "ccw"`` part is that surface's mirror image through the XZ plane: the same
+    table, with the position angles negated and the rotation counter-clockwise.
     """
     from torus_cad.kernel.export import atomic_path
     from torus_cad.sections_table import write_sections_csv, write_sections_png
 
     elements = elements_of(surface, rotation)
+    if str(getattr(params, "handedness", "cw")) == "ccw":  # the part is the surface's mirror image (y -> -y)
+        elements = dataclasses.replace(elements, position_angle_deg=-elements.position_angle_deg,
+                                       rotation=-elements.rotation)
     paths = {"sections_csv": out_dir / f"{params.name}_sections.csv",
              "sections_png": out_dir / f"{params.name}_sections.png"}
     with atomic_path(paths["sections_csv"]) as temp:

@@ -58,10 +58,19 @@ HUB_FOOTPRINT_NEAR_RELATIVE = 0.02
 HUB_FOOTPRINT_MARGIN_DEG = 1.0
 
 
-# -- limits on inputs ------------------------------------------------------------------------
+# -- limits: inputs and work refused before they start ---------------------------------------------
 
-#: Largest configuration file read (bytes): a design is a few hundred bytes.
+#: Largest configuration file read (bytes): a design is a few hundred bytes. Only regular files are read.
 CONFIG_FILE_MAX_BYTES = 1 << 20
+
+#: Most triangles an STL may have, by the estimate made before tessellating
+#: (torus_cad.geometry.triangle_estimate). OpenCascade's mesher slows down faster than its
+#: triangle count grows on the lofted blades (see the README's "Limits").
+STL_TRIANGLE_LIMIT = 2_000_000
+
+#: A writer that fails while its file system has less free space than this (bytes) failed for
+#: lack of space: OpenCascade's writers report only that they could not write.
+DISK_FULL_FREE_BYTES = 1 << 20
 
 #: Most designs one sweep may hold (grid product or samples), checked from the axis sizes before
 #: any design is generated. Beyond it the design list and table alone take gigabytes, and at

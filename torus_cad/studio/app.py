@@ -16,6 +16,7 @@ import os
 import shutil
 import tempfile
 import time
+import tomllib
 from collections.abc import Iterator, Mapping
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
@@ -47,6 +48,10 @@ DEFAULT_DENSITY_G_CM3 = 1.24
 #: Allowed density, g/cm^3 (as ``torus-cad build --density``).
 DENSITY_RANGE_G_CM3 = (0.0, 25.0)
 
+#: The download buttons' names of the files a build writes (keys of Propeller.write's paths).
+DOWNLOAD_LABELS = {"step": "STEP", "stl": "STL", "3mf": "3MF", "sections_csv": "sections CSV",
+                   "sections_png": "sections PNG", "json": "report JSON"}
+
 #: Largest design file accepted from the page, bytes.
 MAX_UPLOAD_BYTES = 256 * 1024
 
@@ -60,6 +65,7 @@ class _Exact:
     started: float
     properties: dict[str, Any] | None = None
     files: dict[str, Path] = field(default_factory=dict)
+    changed: set[str] = field(default_factory=set)  # the keys edited into this design
 
 
 class Studio:
@@ -80,10 +86,14 @@ class Studio:
         self._runner = BuildRunner(self._on_build_message)
         self._previewer = ThreadPoolExecutor(max_workers=1, thread_name_prefix="torus-cad-preview")
         self._changed: set[str] = set()  # keys edited since the last good design
+        self._last_changes: set[str] = set()  # the keys edited into the last good design
         self._dirty = False
         self._refresh_task: asyncio.Task[None] | None = None
         self._build_counter = 0
         self._change_time = time.perf_counter()
+        self._trusted_paths = {name: value for name, value in state_values(design.to_dict(), self.groups).items()
+                               if any(name in f.state_names for f in self.fields.values() if f.read_only)}
+        self._last_good: tuple[PropellerParameters, SolidResult] | None = None  # the newest exact solid shown
         self._init_state()
         self._bind()
 
@@ -92,7 +102,7 @@ class Studio:
         self.state.update({
             **state_values(self.design.to_dict(), self.groups),
             "field_errors": {}, "element_errors": {}, "refusal": "", "status": "starting",
-            "building": False, "files_ready": False, "show_sections": False,
+            "building": False, "downloads": [], "show_sections": False,
             "density_g_cm3": DEFAULT_DENSITY_G_CM3, "density_error": "", "upload_file": None,
             "upload_message": "", "upload_error": "", "file_stem": self.design.name,
             "volume_text": "…", "mass_text": "…", "area_text": "…", "tip_text": "…", "valid_text": "…",
@@ -107,8 +117,7 @@ class Studio:
         self.state.change("show_sections")(self._on_sections_toggle)
         self.state.change("density_g_cm3")(self._on_density)
         self.state.change("upload_file")(self._on_upload)
-        self.ctrl.trigger("download_step")(lambda: self._download("step"))
-        self.ctrl.trigger("download_stl")(lambda: self._download("stl"))
+        self.ctrl.trigger("download_file")(self._download)
         self.ctrl.trigger("download_toml")(self._download_toml)
         self.ctrl.on_server_ready.add(self._on_ready)
         self.ctrl.on_server_exited.add(self._on_exit)
@@ -135,7 +144,9 @@ class Studio:
 
     # -- a change: validate, preview, build --------------------------------------------------------
     def _values(self) -> dict[str, Any]:
-        return {name: self.state[name] for panel_field in self.fields.values() for name in panel_field.state_names}
+        """The panel's values; file paths always the trusted design's, whatever the page sends."""
+        values = {name: self.state[name] for panel_field in self.fields.values() for name in panel_field.state_names}
+        return {**values, **self._trusted_paths}
 
     async def _refresh(self) -> None:
         loop = asyncio.get_running_loop()
@@ -176,7 +187,7 @@ class Studio:
     def _show_preview(self, params: PropellerParameters, scene: PreviewScene, started: float,
                       times: dict[str, float]) -> None:
         self.design = self._displayed = params
-        self._changed.clear()
+        self._last_changes, self._changed = self._changed, set()
         self.view.show_parts(scene.parts, params.blades)
         self.view.show_sections(scene.sections, params.blades)
         self.view.set_sections_visible(self.state.show_sections)
@@ -196,14 +207,14 @@ class Studio:
     def _start_build(self, params: PropellerParameters, started: float) -> None:
         self._build_counter += 1
         build_id = self._build_counter
-        self.exact = _Exact(build_id, params, started)
+        self.exact = _Exact(build_id, params, started, changed=set(self._last_changes))
         self._runner.submit(BuildRequest(build_id, params.to_dict(), self.workdir / "builds" / str(build_id)))
         with self.state:
             self.state.building = True
             for name in ("volume_text", "mass_text", "area_text", "valid_text"):
                 self.state[name] = "…"
             self.state.route_text = ""
-            self.state.files_ready = False
+            self.state.downloads = []
 
     # -- results of the exact build ----------------------------------------------------------------
     def _on_build_message(self, kind: str, build_id: int, payload: Any) -> None:
@@ -217,6 +228,7 @@ class Studio:
             LOG.exception("handling the build's %s message failed", kind)
 
     def _on_solid(self, exact: _Exact, solid: SolidResult) -> None:
+        self._last_good = (exact.design, solid)
         self.view.show_parts(solid.parts, exact.design.blades)
         self.ctrl.view_update()
         if not self.state.refusal:  # a refused newer value stays the news
@@ -242,14 +254,24 @@ class Studio:
         previous, self._shown_exact = self._shown_exact, exact
         if previous is not None and previous.files:
             shutil.rmtree(next(iter(previous.files.values())).parent, ignore_errors=True)
-        self.state.stage_rows = [*self.state.stage_rows, {"stage": "STEP + STL files",
+        self.state.stage_rows = [*self.state.stage_rows, {"stage": "files (as torus-cad build)",
                                                           "ms": f"{files['seconds'] * 1000.0:.0f}"}]
         self.state.building = False
-        self.state.files_ready = True
+        self.state.downloads = [{"kind": kind, "label": DOWNLOAD_LABELS.get(kind, kind), "file": path.name}
+                                for kind, path in exact.files.items()]
 
     def _on_refused(self, exact: _Exact, message: str) -> None:
+        """A check only the build makes (e.g. the hub's mounting features) refused the design: as a
+        refusal of the preview, with the last exact propeller back on screen."""
         self.state.building = False
-        self.state.failure = f"the build refused this design: {message}"
+        self._changed.update(exact.changed)
+        self._refuse(message)
+        if self._last_good is not None:
+            design, solid = self._last_good
+            self.design = design
+            self._displayed = None  # the view no longer shows the refused design's preview
+            self.view.show_parts(solid.parts, design.blades)
+            self.ctrl.view_update()
 
     def _on_failed(self, exact: _Exact, message: str) -> None:
         self.state.building = False
@@ -287,6 +309,8 @@ class Studio:
         self.ctrl.view_update()
 
     def _download(self, kind: str) -> Any:
+        """The bytes of one file of the exact solid on screen; ``kind`` picks among the files the
+        server made (never a path)."""
         exact = self._shown_exact
         if exact is None or kind not in exact.files:
             return None
@@ -319,10 +343,25 @@ class Studio:
         if len(data) > MAX_UPLOAD_BYTES:
             raise ParameterError(f"the uploaded design is {len(data)} bytes; a design file is at most "
                                  f"{MAX_UPLOAD_BYTES} bytes")
+        self._refuse_uploaded_paths(data)
         path = self.workdir / "uploads" / "design.toml"  # our name: the page's file name is never a path
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_bytes(data)
         return resolve_parameters(path)
+
+    def _refuse_uploaded_paths(self, data: bytes) -> None:
+        """A design from the page may not name files on the server (e.g. ``airfoil.file``)."""
+        try:
+            table = tomllib.loads(data.decode("utf-8"))
+        except (UnicodeDecodeError, tomllib.TOMLDecodeError):
+            return  # resolve_parameters gives the CLI's message for that
+        for panel_field in self.fields.values():
+            value: Any = table
+            for part in panel_field.key.split("."):
+                value = value.get(part) if isinstance(value, dict) else None
+            if panel_field.read_only and value:
+                raise ParameterError(f"{panel_field.key} = {value!r}: a design opened in the page may not name a "
+                                     "file on this machine; start the studio with it: torus-cad studio DESIGN.toml")
 
 
 def _stage_label(name: str) -> str:

@@ -197,7 +197,12 @@ class StudioPage:
 
     def idle(self) -> bool:
         """The exact solid is on screen and its files are ready."""
-        return self.text("status") == "exact" and self.element("download-step").is_enabled()
+        from selenium.common.exceptions import NoSuchElementException
+
+        try:
+            return self.text("status") == "exact" and self.element("download-step").is_enabled()
+        except NoSuchElementException:  # the download buttons appear with the files
+            return False
 
     def wait_idle(self) -> None:
         self.wait(self.idle, "the exact solid and its files")

@@ -24,9 +24,9 @@ from scipy.spatial import cKDTree
 from torus_cad import PropellerParameters
 from torus_cad.errors import GeometryError, ParameterError, TorusCadError
 from torus_cad.kernel.checks import mass_properties
-from torus_cad.kernel.export import write_step, write_stl
+from torus_cad.parameters.design import Handedness
 from torus_cad.propeller import Propeller, build_propeller
-from torus_cad.studio.scene import HUB_PART, PartMesh, rotation_about_z, tip_diameter_mm
+from torus_cad.studio.scene import HUB_PART, MIRROR, PartMesh, rotation_about_z, tip_diameter_mm
 from torus_cad.studio.worker import BuildRequest, SolidResult
 
 #: Chordal deviation of the exact solid's display mesh, as a fraction of its bounding-box diagonal.
@@ -37,20 +37,27 @@ DISPLAY_RELATIVE_DEFLECTION = 1.0 / 1000.0
 DISPLAY_ANGULAR_DEFLECTION = 0.5
 
 
+#: Surface types only the hub has: its cylinder, end planes, bore, flat, set-screw hole and chamfer cones.
+_HUB_SURFACES = ("CYLINDER", "PLANE", "CONE")
+
+
 def _face_parts(propeller: Propeller, faces: list[Any], face_vertices: list[NDArray[np.float64]]) -> list[int]:
     """Hub (-1) or blade i for each face: the hub's faces are its cylinder and end planes; a blade
     face belongs to the blade whose sampled surface passes nearest its vertices."""
     geometry = propeller.parameters.geometry()
-    blade_points = propeller.surface.points.reshape(-1, 3)
+    blade_points = propeller.surface.points.reshape(-1, 3)  # the spec's blade 0, before any mirror
+    mirrored = propeller.parameters.handedness == Handedness.CCW
+    if mirrored:  # the mirror image of blade i is the mirrored blade 0 turned back by blade i's angle
+        blade_points = blade_points * MIRROR
     clouds, labels = [], []
     for index in range(geometry.blades):
         rotation = rotation_about_z(geometry.blade_angle_deg(index) - geometry.blade_angle_deg(0))
-        clouds.append(blade_points @ rotation.T)
+        clouds.append(blade_points @ (rotation if mirrored else rotation.T))
         labels.append(np.full(len(blade_points), index))
     tree, label = cKDTree(np.concatenate(clouds)), np.concatenate(labels)
     parts = []
     for face, vertices in zip(faces, face_vertices):
-        if face.geomType() in ("CYLINDER", "PLANE"):
+        if face.geomType() in _HUB_SURFACES:
             parts.append(HUB_PART)
             continue
         samples = vertices[np.linspace(0, len(vertices) - 1, min(25, len(vertices))).astype(int)]
@@ -106,8 +113,8 @@ def run_build(request: BuildRequest, connection: multiprocessing.connection.Conn
     """Build, tessellate, measure and export ``request``, sending each result as soon as it exists."""
     build_id = request.build_id
     try:
-        params = PropellerParameters.from_dict(request.design)
-        propeller = build_propeller(params)
+        propeller = build_propeller(PropellerParameters.from_dict(request.design))
+        params = propeller.parameters  # with the design targets (diameter, pitch, naca) applied
         start = time.perf_counter()
         parts = tessellate_parts(propeller)
         stages = {**propeller.stage_seconds, "display_mesh": time.perf_counter() - start}
@@ -118,11 +125,8 @@ def run_build(request: BuildRequest, connection: multiprocessing.connection.Conn
         properties["tip_diameter_mm"] = tip_diameter_mm(params)
         connection.send(("properties", build_id, properties))
         start = time.perf_counter()
-        export = params.export
-        paths = {"step": write_step(propeller.solid, request.out_dir / f"{params.name}.step", params.name,
-                                    str(export.step_schema)),
-                 "stl": write_stl(propeller.solid, request.out_dir / f"{params.name}.stl",
-                                  export.stl_linear_deflection, export.stl_angular_deflection)}
+        # The files `torus-cad build` writes: export.formats (STEP, STL, 3MF), the blade-element table, the report.
+        paths = propeller.write(request.out_dir, stl=True, sections_table=True)
         connection.send(("files", build_id, {"paths": paths, "seconds": time.perf_counter() - start}))
     except (ParameterError, GeometryError) as error:
         connection.send(("refused", build_id, str(error)))

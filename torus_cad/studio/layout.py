@@ -69,6 +69,9 @@ def _scalar_field(panel_field: PanelField) -> None:
         v3.VSelect(v_model=(name,), items=list(panel_field.choices), **common)
     elif panel_field.kind is FieldKind.CHOICES:
         v3.VSelect(v_model=(name,), items=list(panel_field.choices), multiple=True, chips=True, **common)
+    elif panel_field.read_only:  # a file path: the server would read it, so the page may not set it
+        v3.VTextField(v_model=(name,), **{**common, "hint": f"{panel_field.hint} (set in the design file the "
+                                                              "studio was started with)"}, readonly=True)
     elif panel_field.kind is FieldKind.TEXT:
         v3.VTextField(v_model=(name,), **common)
     else:
@@ -134,7 +137,7 @@ def _readouts() -> None:
         with v3.VTable(density="compact", classes="studio-readouts"), html.Tbody(), \
                 html.Tr(v_for="row in stage_rows", key="row.stage"):
                     html.Td("{{ row.stage }}")
-                    html.Td("{{ row.ms }} ms", classes="text-right")
+                    html.Td("{{ row.ms }} ms", classes="text-right text-no-wrap")
         html.Div("preview {{ preview_ms }} ms after the change, exact solid {{ exact_ms }} ms",
                  classes="text-caption text-medium-emphasis mx-3 mt-1", id="timings")
         html.Div("preview stages (ms): {{ preview_detail }}", classes="text-caption text-medium-emphasis mx-3",
@@ -143,13 +146,12 @@ def _readouts() -> None:
         html.Span("{{ exact_stamp }}", id="exact-stamp", style="display: none")
         v3.VCardSubtitle("download", classes="mt-2")
         with v3.VCardActions(classes="flex-wrap"):
-            v3.VBtn("STEP", prepend_icon="mdi-download", variant="tonal", id="download-step",
-                    disabled=("!files_ready",),
-                    click="utils.download(file_stem + '.step', trigger('download_step'), 'application/step')")
-            v3.VBtn("STL", prepend_icon="mdi-download", variant="tonal", id="download-stl",
-                    disabled=("!files_ready",),
-                    click="utils.download(file_stem + '.stl', trigger('download_stl'), 'model/stl')")
-            v3.VBtn("TOML", prepend_icon="mdi-download", variant="tonal", id="download-toml",
+            # One button per file the build wrote (export.formats, the blade-element table, the report).
+            v3.VBtn("{{ item.label }}", v_for="item in downloads", key="item.kind", prepend_icon="mdi-download",
+                    variant="tonal", size="small", classes="ma-1", id=("'download-' + item.kind",),
+                    click="utils.download(item.file, trigger('download_file', [item.kind]))")
+            v3.VBtn("design TOML", prepend_icon="mdi-download", variant="tonal", size="small", classes="ma-1",
+                    id="download-toml",
                     click="utils.download(file_stem + '.toml', trigger('download_toml'), 'application/toml')")
 
 
@@ -195,7 +197,7 @@ def build_layout(studio: Studio) -> None:
                               messages=("upload_message",))
             parameter_panel(studio.groups)
         with layout.content, v3.VContainer(fluid=True, classes="fill-height pa-0"), \
-                html.Div(style="display: flex; width: 100%; height: 100%;"):
+                html.Div(style="display: flex; width: 100%; height: calc(100vh - 64px);"):  # below the toolbar
             _view_area(studio)
-            with html.Div(style="flex: 0 0 300px; overflow-y: auto;", id="readouts-column"):
+            with html.Div(style="flex: 0 0 330px; overflow-y: auto;", id="readouts-column"):
                 _readouts()

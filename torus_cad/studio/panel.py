@@ -14,6 +14,7 @@ import re
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from enum import Enum, StrEnum
+from pathlib import Path
 from typing import Any
 
 from torus_cad.errors import ParameterError
@@ -33,8 +34,7 @@ class FieldKind(StrEnum):
     NUMBER = "number"
     BOOLEAN = "boolean"
     CHOICE = "choice"
-    CHOICES = "choices"
-    """Any number of the choices (a list such as export.formats)."""
+    CHOICES = "choices"  # several of the choices (e.g. export.formats)
     TEXT = "text"
 
 
@@ -54,6 +54,7 @@ class PanelField:
         slider: ``(low, high, step)`` of a slider, or None for a number field only.
         choices: allowed values of a choice.
         element_units: the unit of each element (a control point's are ``deg, mm, mm``).
+        read_only: a file path: shown, never taken from the page (the server would read it).
     """
 
     key: str
@@ -69,6 +70,7 @@ class PanelField:
     slider: tuple[float, float, float] | None = None
     choices: tuple[str, ...] = ()
     element_units: tuple[str, ...] = ()
+    read_only: bool = False
 
     @property
     def is_vector(self) -> bool:
@@ -139,8 +141,8 @@ def _kind(spec: ParameterSpec) -> FieldKind:
     return FieldKind.TEXT
 
 
-def panel_field(spec: ParameterSpec) -> PanelField:
-    """The panel field of one schema parameter."""
+def panel_field(spec: ParameterSpec, read_only: bool = False) -> PanelField:
+    """The panel field of one schema parameter (``read_only`` for a file path)."""
     kind = _kind(spec)
     names = tuple(state_name(spec.key, i) for i in range(spec.length)) if spec.length else (state_name(spec.key),)
     bounds = spec.bounds
@@ -149,7 +151,7 @@ def panel_field(spec: ParameterSpec) -> PanelField:
     slider = _slider(kind, spec.fuzz or bounds) if numeric_scalar else None
     return PanelField(spec.key, kind, spec.key.rpartition(".")[2], spec.unit, spec.doc, names,
                       bounds.low, bounds.high, bounds.low_open, bounds.high_open, slider, choices,
-                      _element_units(spec.unit, len(names)))
+                      _element_units(spec.unit, len(names)), read_only)
 
 
 def _element_units(unit: str, count: int) -> tuple[str, ...]:
@@ -158,11 +160,14 @@ def _element_units(unit: str, count: int) -> tuple[str, ...]:
     return tuple(parts) if len(parts) == count else (unit,) * count
 
 
-def panel_groups(specs: Iterable[ParameterSpec], section_docs: Mapping[str, str] | None = None) -> list[PanelGroup]:
-    """The panel's groups in the schema's order: top-level keys first, then one group per table."""
+def panel_groups(specs: Iterable[ParameterSpec], section_docs: Mapping[str, str] | None = None,
+                 path_keys: Iterable[str] = ()) -> list[PanelGroup]:
+    """The panel's groups in the schema's order: top-level keys first, then one group per table;
+    the fields of ``path_keys`` (file paths) read-only."""
     fields: dict[str, list[PanelField]] = {}
+    paths = set(path_keys)
     for spec in specs:
-        fields.setdefault(spec.key.rpartition(".")[0], []).append(panel_field(spec))
+        fields.setdefault(spec.key.rpartition(".")[0], []).append(panel_field(spec, spec.key in paths))
     docs = dict(section_docs or {})
     order = ([""] if "" in fields else []) + [section for section in fields if section]
     return [PanelGroup(section, section or "propeller", docs.get(section, ""), tuple(fields[section]))
@@ -174,12 +179,28 @@ def schema_groups() -> list[PanelGroup]:
     from torus_cad.parameters import PropellerParameters
     from torus_cad.parameters.schema import iter_parameter_specs, section_docs
 
-    return panel_groups(iter_parameter_specs(PropellerParameters), section_docs(PropellerParameters))
+    specs = list(iter_parameter_specs(PropellerParameters))
+    return panel_groups(specs, section_docs(PropellerParameters), path_keys(PropellerParameters, specs))
+
+
+def path_keys(model: Any, specs: Iterable[ParameterSpec]) -> set[str]:
+    """The text parameters that name files: those the schema resolves against a design file's folder
+    (``paths_relative_to``), found by asking it about a relative name in each text parameter."""
+    probe, folder = "studio-probe", Path("/studio-probe-folder")
+    keys = set()
+    for spec in specs:
+        if spec.kind is not str:
+            continue
+        *tables, leaf = spec.key.split(".")
+        data: dict[str, Any] = {leaf: probe}
+        for table in reversed(tables):
+            data = {table: data}
+        if _lookup(model.paths_relative_to(data, folder), spec.key) != probe:
+            keys.add(spec.key)
+    return keys
 
 
 def _plain(value: Any) -> Any:
-    if isinstance(value, (list, tuple)):
-        return [_plain(item) for item in value]
     return value.value if isinstance(value, Enum) else value
 
 
@@ -195,7 +216,9 @@ def state_values(design: Mapping[str, Any], groups: Iterable[PanelGroup]) -> dic
     for group in groups:
         for field in group.fields:
             value = _plain(_lookup(design, field.key))
-            if field.is_vector:
+            if field.kind is FieldKind.CHOICES:
+                values[field.state_names[0]] = [_plain(item) for item in value]
+            elif field.is_vector:
                 values.update({name: _plain(item) for name, item in zip(field.state_names, value)})
             else:
                 values[field.state_names[0]] = value
@@ -233,7 +256,7 @@ def _value(field: PanelField, values: Mapping[str, Any]) -> Any:
     if field.kind is FieldKind.BOOLEAN:
         return bool(raw)
     if field.kind is FieldKind.CHOICES:
-        return [str(item) for item in (raw or [])]
+        return [str(item) for item in raw or []]
     return "" if raw is None else str(raw)
 
 

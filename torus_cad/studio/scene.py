@@ -12,9 +12,11 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from torus_cad.design_targets import resolve_design_targets
 from torus_cad.geometry.feasibility import check_feasible
 from torus_cad.geometry.mesh import blade_mesh
 from torus_cad.parameters import PropellerParameters
+from torus_cad.parameters.design import Handedness
 
 #: Segments around the preview hub cylinder.
 HUB_SEGMENTS = 96
@@ -23,6 +25,9 @@ HUB_SEGMENTS = 96
 #: built (the preview uses the design's own sampling): 400 x 400 lands within 1e-5 mm of the
 #: limit on the default design (25 x 80 is 0.008 mm short), in ~0.1 s.
 TIP_SAMPLES = (400, 400)
+
+#: Handedness 'ccw' is the spec's propeller reflected through the XZ plane (torus_cad.kernel.mirror).
+MIRROR = np.array([1.0, -1.0, 1.0])
 
 #: Parts of a scene: -1 is the hub, i >= 0 blade i.
 HUB_PART = -1
@@ -86,19 +91,27 @@ def cylinder_mesh(radius: float, length: float, segments: int = HUB_SEGMENTS) ->
 def preview_scene(params: PropellerParameters) -> PreviewScene:
     """The preview of ``params``: hub cylinder and every blade's surface mesh, at the design's resolution.
 
-    Raises GeometryError, with the build's one-line reason, for a design the build would refuse.
+    The design targets (diameter, pitch, NACA designation) are applied and the blade checked as a
+    build does them, so a design the build refuses raises the build's one-line GeometryError or
+    ParameterError here. The hub's mounting features (bore, flat, set screw, chamfer) and the root
+    fillet are left to the exact solid: the preview hub is the plain cylinder.
     """
+    params = resolve_design_targets(params).parameters
     geometry = params.geometry()
     surface = params.blade_surface()
     check_feasible(geometry, surface)
     mesh = blade_mesh(surface)
+    points, vertices, faces = surface.points, mesh.vertices, mesh.faces
+    if params.handedness == Handedness.CCW:  # the mirror image: reflect, and keep the faces outward
+        points, vertices, faces = points * MIRROR, vertices * MIRROR, faces[:, ::-1]
     parts = [cylinder_mesh(geometry.hub.radius_mm, geometry.hub.length_mm)]
     sections = []
     for index in range(geometry.blades):  # blade i is blade 0 turned about the axis (spec §6.1)
         rotation = rotation_about_z(geometry.blade_angle_deg(index) - geometry.blade_angle_deg(0))
-        parts.append(PartMesh(index, mesh.vertices @ rotation.T, mesh.faces))
-        sections.append(surface.points @ rotation.T)
-    return PreviewScene(parts, sections, _tip_diameter(surface.points))
+        turn = rotation if params.handedness == Handedness.CW else rotation.T  # mirrored angles turn back
+        parts.append(PartMesh(index, vertices @ turn.T, faces))
+        sections.append(points @ turn.T)
+    return PreviewScene(parts, sections, _tip_diameter(points))
 
 
 def _tip_diameter(points: NDArray[np.float64]) -> float:
@@ -106,5 +119,6 @@ def _tip_diameter(points: NDArray[np.float64]) -> float:
 
 
 def tip_diameter_mm(params: PropellerParameters, samples: tuple[int, int] = TIP_SAMPLES) -> float:
-    """Twice the largest distance of the blade surface from the spin axis, mm (sampled ``samples``)."""
+    """Twice the largest distance of the blade surface from the spin axis, mm (sampled ``samples``);
+    ``params`` with its design targets applied (``Propeller.parameters``)."""
     return _tip_diameter(params.blade_surface(sections=samples[0], points=samples[1]).points)
