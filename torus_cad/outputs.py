@@ -159,10 +159,9 @@ class OutputSet:
             self.staging = self.out_dir / f".{self.name}{_STAGING_MARK}{owner_tag()}{secrets.token_hex(4)}"
             self._cleanup.enter_context(removed_on_exit(self.staging))
             self.staging.mkdir()
-        except OSError as error:
+        except OSError:
             self._discard()
-            raise OutputError(f"cannot write to output folder {str(self.out_dir)!r}: "
-                              f"{describe_os_error(error, self.out_dir).rsplit(' writing ', 1)[0]}") from None
+            raise  # the folder itself: checked before the build on the command line (check_writable_folder)
         return self
 
     def __exit__(self, *exc_info: object) -> None:
