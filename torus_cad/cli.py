@@ -299,9 +299,9 @@ def build_parser() -> argparse.ArgumentParser:
                        help="size of the --preview picture in pixels (default 1200x600)")
     build.set_defaults(handler=_command_build)
 
-    preview = commands.add_parser("preview", help="render a PNG picture: isometric view and view along the axis",
+    preview = commands.add_parser("preview", help="render a PNG picture: a view from above and a view along the axis",
                                   description="Build the propeller of CONFIG (or the default) and render a shaded "
-                                  "picture of it off-screen: an isometric view and a view along the spin axis, "
+                                  "picture of it off-screen: a view from above that shows every blade and a view along the spin axis, "
                                   "each blade in its own colour.")
     _add_design_arguments(preview)
     preview.add_argument("--out", metavar="FILE.png", help="picture to write (default: step_out/<name>.png)")
