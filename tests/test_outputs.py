@@ -287,11 +287,11 @@ def test_stress_eight_same_name_builds_of_four_designs_three_times(tmp_path):
 
 @pytest.fixture
 def small_disk(tmp_path):
-    """A 1500 KB tmpfs (needs root): room for an old STEP-only set and a new STEP, not for an STL too.
-    Skipped where it cannot be mounted."""
+    """A 2500 KB tmpfs (needs root): room for an old set without STL (700 KB) and a new 4-blade STEP
+    (830 KB), not for its 2.7 MB STL too. Skipped where it cannot be mounted."""
     mount_point = tmp_path / "disk"
     mount_point.mkdir()
-    result = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=1500k", "tmpfs", str(mount_point)],
+    result = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=2500k", "tmpfs", str(mount_point)],
                             check=False, capture_output=True, text=True)
     if result.returncode != 0:
         pytest.skip(f"cannot mount a small tmpfs: {result.stderr.strip()}")
