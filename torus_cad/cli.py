@@ -96,12 +96,13 @@ def _add_design_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _command_build(args: argparse.Namespace) -> int:
-    from torus_cad.budgets import check_stl_budget
-    from torus_cad.outputs import check_writable_folder, write_output_set
     from torus_cad.progress import StageProgress
 
     progress = StageProgress.for_terminal(quiet=args.quiet)  # stderr, only on a terminal
     progress("kernel_import")  # a line on the terminal before the seconds of importing the schema and cadquery
+    from torus_cad.budgets import check_stl_budget
+    from torus_cad.outputs import check_writable_folder, write_output_set
+
     params = load_parameters(args.config, args.overrides)
     size = _preview_size(args.preview_size, "--preview-size") if args.preview else None
     if args.require_printable:  # decided from the analytic section, before any work or file
@@ -158,11 +159,12 @@ def _preview_size(text: str, option: str) -> tuple[int, int]:
 
 
 def _command_preview(args: argparse.Namespace) -> int:
-    from torus_cad.outputs import check_writable_folder
     from torus_cad.progress import StageProgress
 
     progress = StageProgress.for_terminal(quiet=args.quiet)
     progress("kernel_import")
+    from torus_cad.outputs import check_writable_folder
+
     params = load_parameters(args.config, args.overrides)
     size = _preview_size(args.size, "--size")
     out = Path(args.out) if args.out else Path("step_out") / f"{params.name}.png"
