@@ -372,11 +372,9 @@ def _add_mesh_parser(commands: Any) -> None:
     mesh.add_argument("--format", dest="formats", action="append", metavar="FORMAT[,FORMAT]",
                       help="files to write instead of the design's, repeatable or comma-separated: "
                            + ", ".join(item.value for item in MeshFormat) + " (default stl,obj)")
-    mesh.add_argument("--out", default="mesh_out", help="output folder (default: mesh_out)")
     mesh.add_argument("--no-compare", action="store_true",
                       help="skip the B-rep comparison in the report (volume, OpenCascade's tessellation)")
-    mesh.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
-    mesh.set_defaults(handler=_command_mesh)
+    _add_out_and_quiet(mesh, "mesh_out", _command_mesh)
 
 
 def _add_cfd_parser(commands: Any) -> None:
@@ -390,9 +388,15 @@ def _add_cfd_parser(commands: Any) -> None:
     _add_design_arguments(cfd)
     _add_table_arguments(cfd, "cfd")
     cfd.add_argument("--threads", type=int, default=0, metavar="N", help="gmsh threads (default 0: one per CPU)")
-    cfd.add_argument("--out", default="cfd_out", help="output folder (default: cfd_out)")
-    cfd.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
-    cfd.set_defaults(handler=_command_cfd)
+    _add_out_and_quiet(cfd, "cfd_out", _command_cfd)
+
+
+def _add_out_and_quiet(parser: argparse.ArgumentParser, default_out: str,
+                       handler: Callable[[argparse.Namespace], int]) -> None:
+    """The output folder, --quiet and the handler, as every writing subcommand has them."""
+    parser.add_argument("--out", default=default_out, help=f"output folder (default: {default_out})")
+    parser.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
+    parser.set_defaults(handler=handler)
 
 
 def build_parser() -> argparse.ArgumentParser:
