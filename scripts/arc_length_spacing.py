@@ -12,6 +12,7 @@ from __future__ import annotations
 import argparse
 import statistics
 import time
+from itertools import pairwise
 
 import numpy as np
 
@@ -23,7 +24,7 @@ def arc_gaps(airfoil: NacaAirfoil, t: np.ndarray, fine: int = 2000) -> np.ndarra
     """Arc length between consecutive parameters of the closed section, from fine polylines."""
     closed = np.append(t, 2.0)
     return np.array([np.linalg.norm(np.diff(airfoil_points(airfoil, np.linspace(a, b, fine)), axis=0), axis=1).sum()
-                     for a, b in zip(closed[:-1], closed[1:])])
+                     for a, b in pairwise(closed)])
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -19,6 +19,9 @@ Never part of the test suite. Sections of the report:
    a robust mesh boolean, for comparison. Time, closed-manifold or not, triangles.
 4. Accuracy of each route against the analytic surface: distance from surface samples half
    way between sections (away from the hub) to the result.
+5. Mass properties and balance: the fast route (blade faces alone) against BRepGProp at 1e-6
+   and 1e-4 (the old route), CPU time on the default; both routes' mass properties against
+   BRepGProp at 1e-9 on the default and ``--mass-designs`` random designs.
 
 The mesh routes run in subprocesses: PyVista's boolean can crash the interpreter.
 """
@@ -97,7 +100,7 @@ def _rss_mb() -> float:
 def timed_build_and_write(params, out_dir: Path) -> dict[str, float]:
     """One build plus STEP and STL writes (the JSON report separately); seconds per stage."""
     from torus_cad.kernel.export import write_step, write_stl
-    from torus_cad.propeller import build_report, build_propeller
+    from torus_cad.propeller import build_propeller, build_report
 
     start = time.perf_counter()
     propeller = build_propeller(params)
@@ -132,6 +135,24 @@ def stage_times(runs: int) -> dict[str, Any]:
             "stl_triangles": (stl_bytes - 84) // 50}
 
 
+#: The workshop scenario (issue 13): the default with a bore, D-flat, set screw, chamfer and a
+#: 0.5 mm root fillet. The chamfer is 0.2 mm: the default's blade root comes within 0.85 mm of the
+#: hub's end, and a chamfer may not reach the fillet's spread (2 radii) over the hub.
+WORKSHOP_CHANGES = {"hub.bore_diameter": 5.0, "hub.bore_flat_depth": 0.5, "hub.set_screw_diameter": 3.0,
+                    "hub.chamfer": 0.2, "hub.root_fillet_radius": 0.5}
+
+
+def workshop_stage_times(runs: int) -> dict[str, Any]:
+    """Stage times of the workshop scenario, build to a valid STEP (median of ``runs`` warm runs)."""
+    params = _params(WORKSHOP_CHANGES)
+    with tempfile.TemporaryDirectory() as folder:
+        timed_build_and_write(params, Path(folder))  # warm-up
+        samples = [timed_build_and_write(params, Path(folder)) for _ in range(runs)]
+    keys = samples[0].keys()
+    return {"runs": runs, "changes": WORKSHOP_CHANGES,
+            "median_s": {key: _median([sample[key] for sample in samples]) for key in keys}}
+
+
 def cli_wall_time(runs: int) -> dict[str, Any]:
     """Cold `torus-cad build` of the default, new process each time (imports included)."""
     times = []
@@ -158,7 +179,6 @@ def cli_wall_time(runs: int) -> dict[str, Any]:
 def child_scaling(payload: dict[str, Any]) -> dict[str, Any]:
     """Child: build twice (the second is timed), write STEP + STL; report stage times and memory."""
     import torus_cad.propeller  # noqa: F401 - imports before the memory baseline
-
     from torus_cad.errors import TorusCadError
 
     baseline = _rss_mb()
@@ -369,6 +389,65 @@ def mesh_route(runs: int) -> dict[str, Any]:
     return summary
 
 
+# -- 5. mass properties -------------------------------------------------------------------------------
+
+def mass_properties_bench(runs: int, designs: int) -> dict[str, Any]:
+    """The JSON report's mass properties and balance: the fast route (blade faces alone) against
+    the old route (BRepGProp at 1e-6 for the mass properties, 1e-4 for the balance), CPU seconds
+    on the default (median of ``runs``); and the mass properties of both routes against BRepGProp
+    at 1e-9 on the default and ``designs`` random designs (worst relative errors)."""
+    import torus_cad.kernel.blade_integrals as blade_integrals
+    from torus_cad.errors import GeometryError, ParameterError
+    from torus_cad.kernel.checks import balance, balance_of, mass_properties, occt_mass_properties, volume_properties
+    from torus_cad.propeller import build_propeller
+    from torus_cad.studies.fuzz import random_design
+    from torus_cad.tolerances import BALANCE_RELATIVE_PRECISION
+
+    def fast(solid) -> Any:
+        blade_integrals._LAST[0] = (None, 0, None)  # no answer kept from an earlier call
+        return mass_properties(solid, 1.0), balance(solid, 1.0)
+
+    def old(solid) -> Any:
+        return (occt_mass_properties(solid, 1.0),
+                balance_of(volume_properties(solid, BALANCE_RELATIVE_PRECISION), 1.0))
+
+    def cpu_seconds(function, solid) -> tuple[float, Any]:
+        start = time.process_time()
+        result = function(solid)
+        return time.process_time() - start, result
+
+    default = build_propeller(_params())
+    fast_s = [cpu_seconds(fast, default.solid)[0] for _ in range(runs)]
+    old_s = [cpu_seconds(old, default.solid)[0] for _ in range(runs)]
+    keys = ("volume", "area", "inertia", "centroid", "box")
+    worst = {"fast": dict.fromkeys(keys, 0.0), "old": dict.fromkeys(keys, 0.0)}
+    ratios, fast_route, seed, checked = [], 0, 0, [default]
+    while len(checked) < designs + 1:
+        seed += 1
+        try:
+            checked.append(build_propeller(random_design(seed)))
+        except (ParameterError, GeometryError):
+            continue
+    for propeller in checked:
+        reference = occt_mass_properties(propeller.solid, 1.0, 1e-9)
+        size = float(np.linalg.norm(np.subtract(*reference.bounding_box_mm)))
+        seconds = {}
+        for route, function in (("fast", fast), ("old", old)):
+            seconds[route], (got, _) = cpu_seconds(function, propeller.solid)
+            errors = {"volume": abs(got.volume_mm3 / reference.volume_mm3 - 1.0),
+                      "area": abs(got.surface_area_mm2 / reference.surface_area_mm2 - 1.0),
+                      "inertia": abs(got.spin_axis_inertia_mm5 / reference.spin_axis_inertia_mm5 - 1.0),
+                      "centroid": float(np.abs(np.subtract(got.centroid_mm, reference.centroid_mm)).max()) / size,
+                      "box": float(np.abs(np.subtract(got.bounding_box_mm, reference.bounding_box_mm)).max()) / size}
+            worst[route] = {key: max(worst[route][key], value) for key, value in errors.items()}
+        fast_route += blade_integrals.hub_with_blade_integrals(propeller.solid.wrapped) is not None
+        ratios.append(seconds["old"] / seconds["fast"])
+    return {"runs": runs, "default_fast_cpu_s": _median(fast_s), "default_old_cpu_s": _median(old_s),
+            "speedup": _median(old_s) / _median(fast_s), "designs": len(checked), "fast_route_taken": fast_route,
+            "speedup_median_over_designs": _median(ratios), "speedup_min_over_designs": min(ratios),
+            "worst_relative_error": worst}
+
+
 # -- report --------------------------------------------------------------------------------------------
 
 def print_report(report: dict[str, Any]) -> None:
@@ -445,6 +524,20 @@ def print_report(report: dict[str, Any]) -> None:
             print(f"  target: B-rep >= {TARGETS['speedup']:g}x faster than the PyVista route: "
                   f"{grid['speedup_of_brep']:.1f}x ({'met' if met else 'MISSED'})")
 
+    if "mass_properties" in report:
+        mass = report["mass_properties"]
+        print()
+        print(f"== Mass properties and balance (JSON report; CPU time, median of {mass['runs']}) ==")
+        print(f"  {'mass_properties':<14}{mass['default_fast_cpu_s'] * 1e3:10.1f} ms  blade faces alone "
+              f"(old route, BRepGProp 1e-6 and 1e-4: {mass['default_old_cpu_s'] * 1e3:.0f} ms; "
+              f"{mass['speedup']:.1f}x faster, target >= 4x: {'met' if mass['speedup'] >= 4.0 else 'MISSED'})")
+        print(f"  {mass['designs']} designs (default + random): fast route taken by {mass['fast_route_taken']}, "
+              f"speed-up median {mass['speedup_median_over_designs']:.1f}x, min {mass['speedup_min_over_designs']:.1f}x")
+        for route, label in (("fast", "fast route"), ("old", "BRepGProp 1e-6")):
+            errors = mass["worst_relative_error"][route]
+            print(f"  worst vs BRepGProp 1e-9, {label:<15} " + ", ".join(f"{key} {value:.1e}" for key, value in errors.items())
+                  + "  (centroid, box: / box diagonal)")
+
 
 def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
@@ -455,7 +548,10 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--runs", type=int, default=7, help="runs per median (default 7)")
     parser.add_argument("--quick", action="store_true", help="fewer scaling points, skip the cold CLI timing")
-    parser.add_argument("--skip", nargs="*", default=[], choices=["scaling", "mesh", "cli"], help="sections to skip")
+    parser.add_argument("--skip", nargs="*", default=[], choices=["scaling", "mesh", "cli", "workshop", "mass"],
+                        help="sections to skip")
+    parser.add_argument("--mass-designs", type=int, default=20,
+                        help="random designs for the mass-properties accuracy check (default 20)")
     parser.add_argument("--out", type=Path, default=Path("bench_out/bench.json"), help="JSON report path")
     args = parser.parse_args(argv)
 
@@ -467,6 +563,10 @@ def main(argv: list[str] | None = None) -> int:
     report["machine"]["cadquery"] = cadquery.__version__
     print("stage times ...", flush=True)
     report["stage_times"] = stage_times(args.runs)
+    if "workshop" not in args.skip:
+        print("workshop scenario (bore, flat, set screw, chamfer, 0.5 mm fillet) ...", flush=True)
+        report["workshop"] = workshop_stage_times(max(1, min(args.runs, 3)))
+        print("  " + ", ".join(f"{key} {1000 * value:.0f} ms" for key, value in report["workshop"]["median_s"].items()))
     if not args.quick and "cli" not in args.skip:
         print("cold CLI ...", flush=True)
         report["cli"] = cli_wall_time(3)
@@ -476,6 +576,9 @@ def main(argv: list[str] | None = None) -> int:
     if "scaling" not in args.skip:
         print("scaling ...", flush=True)
         report["scaling"] = scaling(args.quick)
+    if "mass" not in args.skip:
+        print("mass properties ...", flush=True)
+        report["mass_properties"] = mass_properties_bench(args.runs, args.mass_designs)
     report["machine"]["load_average_at_end"] = os.getloadavg()
     report["seconds"] = time.perf_counter() - started
     print_report(report)

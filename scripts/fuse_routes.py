@@ -42,7 +42,7 @@ def compare(seed: int) -> dict[str, Any]:
     except Exception as error:
         return {"seed": seed, "outcome": "error", "message": f"{type(error).__name__}: {error}"}
     start = time.perf_counter()
-    general = single_valid_solid(fuse_all(propeller.hub, propeller.blades), "the general fuse")
+    general = single_valid_solid(fuse_all(propeller.hub, propeller.blades).shape, "the general fuse")
     general_s = time.perf_counter() - start
     built_volume = precise_volume(propeller.solid, VOLUME_PRECISION)
     general_volume = precise_volume(general, VOLUME_PRECISION)

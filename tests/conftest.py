@@ -20,7 +20,7 @@ def assert_same_volume_as_general_fuse(propeller) -> None:
     from torus_cad.kernel.checks import precise_volume, single_valid_solid
     from torus_cad.kernel.fuse import fuse_all
 
-    general = single_valid_solid(fuse_all(propeller.hub, propeller.blades), "the general fuse")
+    general = single_valid_solid(fuse_all(propeller.hub, propeller.blades).shape, "the general fuse")
     assert precise_volume(propeller.solid, VOLUME_PRECISION) == pytest.approx(
         precise_volume(general, VOLUME_PRECISION), rel=ROUTE_VOLUME_TOLERANCE)
     assert len(propeller.solid.Faces()) == len(general.Faces())
@@ -57,3 +57,17 @@ def default_propeller(default_params):
 @pytest.fixture(scope="session")
 def default_files(default_propeller, tmp_path_factory) -> dict[str, Path]:
     return default_propeller.write(tmp_path_factory.mktemp("default_build"))
+
+
+#: Test modules that need no CAD kernel build, browser or worker pool: `pytest -m "not slow"`
+#: runs these (under a minute on the 2-core machine); every other module is marked slow.
+FAST_MODULES = {
+    "test_airfoil", "test_airfoil_file", "test_arc_length", "test_centerline_and_frames", "test_layering",
+    "test_parameters", "test_schema", "test_surface_and_mesh", "test_trailing_edge",
+}
+
+
+def pytest_collection_modifyitems(config, items):
+    for item in items:
+        if item.module.__name__.rpartition(".")[2] not in FAST_MODULES:
+            item.add_marker(pytest.mark.slow)

@@ -1,5 +1,7 @@
 """Equal arc-length resampling (spec §5)."""
 
+from itertools import pairwise
+
 import numpy as np
 import pytest
 from hypothesis import assume, given, settings
@@ -25,7 +27,7 @@ def arc_gaps(airfoil: NacaAirfoil, t: np.ndarray) -> np.ndarray:
     """Arc length between consecutive parameters (closed), measured on a fine polyline."""
     closed = np.append(t, 2.0)
     gaps = []
-    for start, stop in zip(closed[:-1], closed[1:]):
+    for start, stop in pairwise(closed):
         fine = airfoil_points(airfoil, np.linspace(start, stop, 400))
         gaps.append(np.linalg.norm(np.diff(fine, axis=0), axis=1).sum())
     return np.array(gaps)

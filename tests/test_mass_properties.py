@@ -1,22 +1,32 @@
-"""Mass properties by OpenCascade (issue 6): analytic checks, the JSON report, --density, --verbose."""
+"""Mass properties (issue 6, issue 12 part 6): analytic checks, the fast route over the blade faces
+against OpenCascade's adaptive integration at 1e-9, the fallback, the JSON report, --density, --verbose."""
 
 from __future__ import annotations
 
 import json
 import math
 
+import cadquery as cq
+import numpy as np
 import pytest
 
-from torus_cad.propeller import propeller_objects
 from torus_cad.cli import EXIT_BAD_INPUT, EXIT_OK, main
-from torus_cad.parameters import PropellerParameters
-from torus_cad.kernel.checks import is_valid_closed_solid, mass_properties, precise_volume
+from torus_cad.kernel.blade_integrals import hub_with_blade_integrals
+from torus_cad.kernel.checks import is_valid_closed_solid, mass_properties, occt_mass_properties, precise_volume
 from torus_cad.kernel.export import read_step
 from torus_cad.kernel.hub import hub_solid
-from torus_cad.propeller import DEFAULT_DENSITY_G_CM3
+from torus_cad.parameters import PropellerParameters
+from torus_cad.propeller import DEFAULT_DENSITY_G_CM3, propeller_objects
 from torus_cad.tolerances import READ_BACK_RELATIVE_TOLERANCE
 
 FAST = ["--set", "resolution.sections=16", "--set", "resolution.points=40"]
+
+#: The reference: BRepGProp's adaptive integration at this relative precision (and BRepBndLib's box).
+REFERENCE_PRECISION = 1e-9
+
+#: What the reported figures must agree with the reference to: relative for volume, area and
+#: inertia; times the box diagonal for centroid and box (mm).
+AGREEMENT = 1e-6
 
 
 @pytest.fixture(scope="module")
@@ -76,7 +86,7 @@ def test_propeller_mass_properties_are_physically_sound(objects):
     assert properties.mass_g > hub_properties.mass_g
     assert properties.spin_axis_inertia_mm5 > hub_properties.spin_axis_inertia_mm5
     assert properties.surface_area_mm2 > hub_properties.surface_area_mm2
-    (xmin, ymin, zmin), (xmax, ymax, zmax) = properties.bounding_box_mm
+    (xmin, _, zmin), (xmax, _, zmax) = properties.bounding_box_mm
     assert xmax - xmin > 2 * hub.radius and zmax - zmin >= hub.length - 1e-6
 
 
@@ -123,3 +133,98 @@ def test_bad_density_is_refused(tmp_path, density, capsys):
     assert stop.value.code == EXIT_BAD_INPUT
     assert "--density" in capsys.readouterr().err
     assert not any(tmp_path.iterdir())
+
+
+# -- the fast route: blade faces alone, against BRepGProp at 1e-9 ----------------------------------
+
+def _assert_agrees_with_the_reference(solid: cq.Solid) -> None:
+    fast = mass_properties(solid, 1.0)
+    reference = occt_mass_properties(solid, 1.0, REFERENCE_PRECISION)
+    size = float(np.linalg.norm(np.subtract(*reference.bounding_box_mm)))
+    assert fast.volume_mm3 == pytest.approx(reference.volume_mm3, rel=AGREEMENT)
+    assert fast.surface_area_mm2 == pytest.approx(reference.surface_area_mm2, rel=AGREEMENT)
+    assert fast.spin_axis_inertia_mm5 == pytest.approx(reference.spin_axis_inertia_mm5, rel=AGREEMENT)
+    assert fast.centroid_mm == pytest.approx(reference.centroid_mm, abs=AGREEMENT * size)
+    assert np.allclose(fast.bounding_box_mm, reference.bounding_box_mm, rtol=0.0, atol=AGREEMENT * size)
+
+
+def test_the_default_takes_the_fast_route_and_agrees_with_the_reference(default_propeller):
+    assert hub_with_blade_integrals(default_propeller.solid.wrapped) is not None
+    _assert_agrees_with_the_reference(default_propeller.solid)
+
+
+@pytest.mark.slow
+def test_the_fast_route_agrees_with_the_reference_on_random_designs():
+    from torus_cad.errors import GeometryError, ParameterError
+    from torus_cad.propeller import build_propeller
+    from torus_cad.studies.fuzz import random_design
+
+    built, seed = 0, 0
+    while built < 20:
+        seed += 1
+        try:
+            propeller = build_propeller(random_design(seed))
+        except (ParameterError, GeometryError):
+            continue  # refused before the kernel: nothing to integrate
+        built += 1
+        assert hub_with_blade_integrals(propeller.solid.wrapped) is not None, f"seed {seed} fell back"
+        _assert_agrees_with_the_reference(propeller.solid)
+
+
+@pytest.mark.parametrize("shape", [
+    pytest.param(lambda: cq.Solid.makeBox(3.0, 4.0, 5.0), id="box"),
+    pytest.param(lambda: hub_solid(10.0, 20.0), id="hub without blades"),
+    pytest.param(lambda: hub_solid(10.0, 20.0).fuse(cq.Solid.makeBox(4.0, 4.0, 30.0, cq.Vector(-2, -2, -15))),
+                 id="end faces with holes"),
+])
+def test_other_shapes_fall_back_to_opencascade(shape):
+    solid = shape()
+    assert hub_with_blade_integrals(solid.wrapped) is None
+    assert mass_properties(solid, 2.0) == occt_mass_properties(solid, 2.0)
+
+
+@pytest.mark.parametrize("degree", [1, 2, 3, 5])
+def test_the_local_b_spline_basis_is_scipys(degree):
+    from scipy.interpolate import BSpline
+
+    from torus_cad.kernel.blade_integrals import _local_basis
+
+    rng = np.random.default_rng(degree)
+    knots = np.r_[[0.0] * (degree + 1), np.sort(rng.random(9)), [2.0] * (degree + 1)]
+    x = np.r_[2.0 * rng.random(300), 0.0, 2.0, knots[degree + 4]]  # ends and an inner knot included
+    columns, values = _local_basis(x, knots, degree)
+    dense = np.zeros((len(x), len(knots) - degree - 1))
+    np.put_along_axis(dense, columns, values, axis=1)
+    assert np.allclose(dense, BSpline.design_matrix(x, knots, degree).toarray(), rtol=0.0, atol=1e-14)
+
+
+def test_a_mirrored_propeller_takes_the_fast_route_and_agrees(light_params):
+    from torus_cad.propeller import build_propeller
+
+    mirrored = build_propeller(light_params.with_values({"handedness": "ccw"}))
+    assert hub_with_blade_integrals(mirrored.solid.wrapped) is not None
+    _assert_agrees_with_the_reference(mirrored.solid)
+
+
+@pytest.mark.parametrize("overrides", [{"blades": 1}, {"blades": 2, "phase_deg": 17.0}, {}], ids=["1", "2", "3"])
+def test_the_balance_from_the_blade_faces_agrees_with_the_reference(light_params, overrides):
+    from torus_cad.kernel.checks import balance, balance_of, volume_properties
+    from torus_cad.propeller import build_propeller
+
+    solid = build_propeller(light_params.with_values(overrides)).solid
+    assert hub_with_blade_integrals(solid.wrapped) is not None
+    fast = balance(solid, 1.0)
+    reference = balance_of(volume_properties(solid, REFERENCE_PRECISION), 1.0)
+    spin_inertia_g_mm2 = mass_properties(solid, 1.0).spin_axis_inertia_g_mm2  # the scale of the products
+    mass_g = mass_properties(solid, 1.0).mass_g
+    size = float(np.linalg.norm(np.subtract(*reference_box(solid))))
+    assert fast.centroid_offset_mm == pytest.approx(reference.centroid_offset_mm, abs=AGREEMENT * size)
+    assert fast.static_imbalance_g_mm == pytest.approx(reference.static_imbalance_g_mm, abs=AGREEMENT * mass_g * size)
+    for name, value in reference.products_of_inertia_g_mm2.items():
+        assert fast.products_of_inertia_g_mm2[name] == pytest.approx(value, abs=AGREEMENT * spin_inertia_g_mm2)
+    if overrides.get("blades", 3) >= 3:  # 3-fold symmetry or more: no imbalance, no products
+        assert fast.static_imbalance_g_mm < 1e-6 and max(map(abs, fast.products_of_inertia_g_mm2.values())) < 1e-3
+
+
+def reference_box(solid: cq.Solid) -> tuple:
+    return occt_mass_properties(solid, 1.0).bounding_box_mm

@@ -1,4 +1,5 @@
-"""Off-screen preview pictures (issue 6): exact size, not blank, every blade visible in its colour."""
+"""Off-screen preview pictures (issue 6, issue 12 part 5): exact size, not blank, every blade visible
+in its colour, the depth buffer working, no blade seen edge-on."""
 
 from __future__ import annotations
 
@@ -15,13 +16,17 @@ from torus_cad.cli import EXIT_BAD_INPUT, EXIT_OK, main
 from torus_cad.colors import HUB_COLOR, blade_color
 from torus_cad.errors import ParameterError
 from torus_cad.kernel.checks import mass_properties
+from torus_cad.kernel.fuse import HUB_PART
 from torus_cad.preview import (
+    AXIAL_VIEW,
+    ISOMETRIC_ELEVATION_DEG,
+    SceneMesh,
     View,
-    _actor,
-    loop_area_vectors,
+    blade_silhouettes,
+    face_parts_by_distance,
+    oblique_view,
     parse_size,
-    preview_mesh,
-    propeller_views,
+    propeller_mesh,
     render_preview,
     render_views,
     write_preview,
@@ -96,9 +101,12 @@ def test_a_four_blade_design_shows_four_colours(tmp_path):
     _assert_a_real_picture(rgb, 4)
 
 
-def test_preview_mesh_covers_the_solid_and_tags_every_part(objects):
-    mesh = preview_mesh(objects.solid, objects.hub, objects.blades)
-    assert set(np.unique(mesh.parts)) == {-1, 0, 1, 2}
+def test_propeller_mesh_covers_the_solid_and_colours_every_part(objects):
+    mesh = propeller_mesh(objects.solid, objects.face_parts, len(objects.blades), tolerance=0.02)
+    assert set(np.unique(mesh.parts)) == {HUB_PART, 0, 1, 2}
+    assert np.allclose(mesh.colors[mesh.parts == HUB_PART], HUB_COLOR, atol=1e-12)
+    for blade in range(3):
+        assert np.allclose(mesh.colors[mesh.parts == blade], blade_color(blade, 3), atol=1e-12)
     corners = mesh.vertices[mesh.triangles]
     area = 0.5 * np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1).sum()
     assert area == pytest.approx(mass_properties(objects.solid, 1.0).surface_area_mm2, rel=0.01)
@@ -111,45 +119,60 @@ def test_preview_mesh_covers_the_solid_and_tags_every_part(objects):
     assert all(BRep_Tool.Triangulation_s(face.wrapped, location) is None for face in objects.solid.Faces())
 
 
-def _box_mesh(low: tuple[float, float, float], high: tuple[float, float, float]) -> tuple[np.ndarray, np.ndarray]:
-    """An axis-aligned box as 12 outward triangles."""
-    x0, y0, z0 = low
-    x1, y1, z1 = high
-    vertices = np.array([[x0, y0, z0], [x1, y0, z0], [x1, y1, z0], [x0, y1, z0],
-                         [x0, y0, z1], [x1, y0, z1], [x1, y1, z1], [x0, y1, z1]], dtype=float)
-    quads = [(0, 3, 2, 1), (4, 5, 6, 7), (0, 1, 5, 4), (1, 2, 6, 5), (2, 3, 7, 6), (3, 0, 4, 7)]
-    triangles = np.array([t for a, b, c, d in quads for t in ((a, b, c), (a, c, d))], dtype=np.int64)
+def test_propeller_mesh_refuses_parts_that_do_not_match_the_faces(objects):
+    with pytest.raises(ValueError, match="face_parts"):
+        propeller_mesh(objects.solid, objects.face_parts[:-1], len(objects.blades), tolerance=0.05)
+
+
+# -- the renderer: depth order, and the view that shows every blade ------------------------------
+
+def _box(low: tuple[float, float, float], high: tuple[float, float, float]) -> tuple[np.ndarray, np.ndarray]:
+    """An axis-aligned box as 8 vertices and 12 outward (counter-clockwise) triangles."""
+    x, y, z = zip(low, high, strict=True)
+    vertices = np.array([[x[i], y[j], z[k]] for i in (0, 1) for j in (0, 1) for k in (0, 1)], dtype=float)
+    quads = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
+    triangles = np.array([t for a, b, c, d in quads for t in ((a, b, c), (a, c, d))])
     return vertices, triangles
 
 
 @pytest.mark.parametrize("near_first", [True, False])
-def test_depth_order_a_near_box_covers_a_far_box(near_first):
-    """A red box nearer the camera hides a blue one behind it at the picture's centre, whichever is
-    drawn first: the renderer has a depth buffer (a painter's algorithm in the wrong order fails)."""
-    near = _box_mesh((-1.0, -1.0, 2.0), (1.0, 1.0, 3.0))   # camera on +z: this one is nearer
-    far = _box_mesh((-3.0, -3.0, -1.0), (3.0, 3.0, 0.0))    # larger, behind it
-    red, blue = np.array([[0.9, 0.1, 0.1]]), np.array([[0.1, 0.1, 0.9]])
-    meshes = [(near, red), (far, blue)] if near_first else [(far, blue), (near, red)]
-    view = View((0.0, 0.0, 1.0), (0.0, 1.0, 0.0))
-    image = render_views(lambda: [_actor(v, t, np.repeat(c, len(t), axis=0)) for (v, t), c in meshes],
-                         [view], (200, 200)).astype(float)
-    centre, corner = image[100, 100], image[100, 30]   # inside the near box; only the far box there
-    assert centre[0] > 2 * centre[2], f"the far box shows through the near one: {centre}"
-    assert corner[2] > 2 * corner[0], f"the far box is missing beside the near one: {corner}"
+def test_the_near_box_hides_the_far_box_whatever_the_drawing_order(near_first):
+    # The near (red) box covers the left half of the far (blue) box, seen along -z. Triangles are
+    # drawn in order: with the near box's first, a renderer without a depth test would let the
+    # far box paint over it; with the far box's first, a renderer that drew back faces or ignored
+    # the near box would fail the other way.
+    boxes = [(_box((-1.0, -1.0, 2.0), (0.2, 1.0, 3.0)), (0.9, 0.1, 0.1), 0),   # near, red
+             (_box((-1.0, -1.0, -3.0), (1.0, 1.0, -2.0)), (0.1, 0.1, 0.9), 1)]  # far, blue
+    if not near_first:
+        boxes.reverse()
+    (first_vertices, first_triangles), first_colour, first_part = boxes[0]
+    (second_vertices, second_triangles), second_colour, second_part = boxes[1]
+    scene = SceneMesh(np.concatenate([first_vertices, second_vertices]),
+                      np.concatenate([first_triangles, second_triangles + len(first_vertices)]),
+                      np.array([first_colour] * len(first_triangles) + [second_colour] * len(second_triangles)),
+                      np.array([first_part] * len(first_triangles) + [second_part] * len(second_triangles)))
+    image = render_views(scene, [View((0.0, 0.0, 1.0), (0.0, 1.0, 0.0), "")], (200, 200)).astype(float)
+    # x in [-1, 1] spans the middle of the 200 px view (the camera frames the scene with a margin).
+    overlap, far_only = image[100, 70], image[100, 150]
+    assert overlap[0] > 2.0 * overlap[2], f"the near red box should cover the far blue one, got {overlap}"
+    assert far_only[2] > 2.0 * far_only[0], f"the far blue box should show beside the near one, got {far_only}"
 
 
-def test_isometric_camera_sees_no_blade_edge_on(objects):
-    """Every blade's window (its centerline loop closed through the hub) faces the isometric camera
-    by a fifth of its area or more: no blade is drawn as a line or a fragment. The classic (1, 1, 1)
-    isometric direction shows one default blade at 6 % of its window, nearly edge-on."""
-    geometry = objects.parameters.geometry()
-    s = np.linspace(0.0, 1.0, 64)
-    areas = loop_area_vectors([geometry.centerline(index).points(s) for index in range(geometry.blades)])
-    view = np.array(propeller_views(objects)[0].toward_camera)
-    unit = areas / np.linalg.norm(areas, axis=1, keepdims=True)
-    classic = np.array([1.0, 1.0, 1.0]) / np.sqrt(3.0)
-    assert np.abs(unit @ view).min() > 0.2
-    assert np.abs(unit @ view).min() > 3 * np.abs(unit @ classic).min()
+def _worst_blade_fraction(mesh: SceneMesh, direction: np.ndarray, reference: np.ndarray) -> float:
+    return float((blade_silhouettes(mesh, direction[None, :])[:, 0] / reference).min())
+
+
+def test_the_oblique_view_shows_every_blade_of_the_default(default_propeller):
+    mesh = propeller_mesh(default_propeller.solid, default_propeller.face_parts, 3, tolerance=0.1)
+    largest = blade_silhouettes(mesh, np.array([[0.0, 0.0, 1.0]]))[:, 0].max()  # the loops open upward
+    view = oblique_view(mesh)
+    chosen = _worst_blade_fraction(mesh, np.array(view.toward_camera), largest)
+    # The classic isometric corner (elevation 35.26°, azimuth 45°) shows one blade nearly edge-on.
+    e, a = np.radians(ISOMETRIC_ELEVATION_DEG), np.radians(45.0)
+    corner = _worst_blade_fraction(mesh, np.array([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)]), largest)
+    assert chosen > 0.5 and chosen > 1.5 * corner
+    assert view.toward_camera[2] > 0.5  # from above
+    assert AXIAL_VIEW.toward_camera == (0.0, 0.0, 1.0)
 
 
 @pytest.mark.parametrize(("text", "size"), [("1200x600", (1200, 600)), ("64X64", (64, 64)), (" 800 x 300 ", (800, 300))])
@@ -195,7 +218,8 @@ def test_cli_preview_refuses_a_bad_size_before_building(tmp_path, size, capsys):
 def test_cli_build_preview_writes_the_picture_beside_the_files(tmp_path, capsys):
     assert main(["build", *FAST, "--no-stl", "--preview", "--preview-size", "400x200", "--out", str(tmp_path)]) == EXIT_OK
     name = "torus_propeller"
-    assert sorted(path.name for path in tmp_path.iterdir()) == [f"{name}.json", f"{name}.png", f"{name}.step"]
+    assert sorted(path.name for path in tmp_path.iterdir()) == [f"{name}.json", f"{name}.png", f"{name}.step",
+                                                                f"{name}_sections.csv", f"{name}_sections.png"]
     assert f"wrote {tmp_path / (name + '.png')}" in capsys.readouterr().out
     assert _read_png(tmp_path / f"{name}.png").shape == (200, 400, 3)
     assert json.loads((tmp_path / f"{name}.json").read_text())["valid"] is True
@@ -205,3 +229,32 @@ def test_cli_build_refuses_a_bad_preview_size_and_writes_nothing(tmp_path, capsy
     assert main(["build", "--preview", "--preview-size", "5x5", "--out", str(tmp_path)]) == EXIT_BAD_INPUT
     assert "--preview-size 5x5: width 5 px is out of range" in capsys.readouterr().err
     assert not any(tmp_path.iterdir())
+
+
+def test_the_oblique_view_faces_every_blades_window(default_propeller):
+    # A second measure of "not edge-on": each blade's window (its centerline loop closed through
+    # the hub) faces the camera by a fifth of its area or more, where the classic (1, 1, 1)
+    # isometric direction shows one default blade at ~6 % of its window, nearly as a line.
+    geometry = default_propeller.parameters.geometry()
+    s = np.linspace(0.0, 1.0, 64)
+    loops = [geometry.centerline(index).points(s) for index in range(geometry.blades)]
+    areas = np.array([0.5 * np.cross(loop, np.roll(loop, -1, axis=0)).sum(axis=0) for loop in loops])
+    unit = areas / np.linalg.norm(areas, axis=1, keepdims=True)
+    mesh = propeller_mesh(default_propeller.solid, default_propeller.face_parts, 3, tolerance=0.1)
+    view = np.array(oblique_view(mesh).toward_camera)
+    classic = np.array([1.0, 1.0, 1.0]) / np.sqrt(3.0)
+    assert np.abs(unit @ view).min() > 0.2
+    assert np.abs(unit @ view).min() > 3 * np.abs(unit @ classic).min()
+
+
+def test_parts_found_by_distance_are_the_fuses(objects):
+    # The fallback for builds that do not report the parts (the root fillet) agrees with the fuse.
+    assert face_parts_by_distance(objects.solid, objects.hub, objects.blades) == objects.face_parts
+
+
+@pytest.mark.slow
+def test_a_filleted_propeller_shows_every_part(tmp_path):
+    # The root fillet's build does not report face parts; the preview finds them by distance.
+    filleted = propeller_objects("examples/workshop_fillet.toml")
+    assert filleted.face_parts == ()
+    _assert_a_real_picture(_read_png(write_preview(filleted, tmp_path / "fillet.png", size=(800, 400))), 3)

@@ -307,3 +307,11 @@ def test_killed_mid_write_leaves_no_partial_file(tmp_path, kind):
         temp.write_text("ok")
     assert target.read_text() == "ok"
     assert not list(tmp_path.glob(f".{target.name}.tmp-*"))
+
+
+def test_the_product_never_imports_the_studies():
+    """The fuzz sampler and the function-space study live in torus_cad.studies, outside the runtime."""
+    code = ("import sys, torus_cad.cli, torus_cad.batch, torus_cad.propeller, torus_cad.preview; "
+            "print(sorted(name for name in sys.modules if name.startswith('torus_cad.studies')))")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, check=True)
+    assert done.stdout.strip() == "[]"

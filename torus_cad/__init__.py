@@ -9,19 +9,21 @@ Two layers: :mod:`torus_cad.geometry` evaluates the spec exactly with numpy / sc
 from typing import Any
 
 from torus_cad.errors import GeometryError, KernelError, ParameterError, TorusCadError
-from torus_cad.parameters import PropellerParameters, resolve_parameters
 
 __version__ = "0.2.0"
 
 __all__ = ["GeometryError", "KernelError", "ParameterError", "Propeller", "PropellerParameters", "TorusCadError",
            "build_propeller", "propeller_objects", "resolve_parameters"]
 
-# The kernel (cadquery / OCP) loads only when one of these is asked for, so the geometry layer stays light.
-_LAZY = {"build_propeller", "Propeller", "propeller_objects"}
+# Each loads when first asked for: the kernel (cadquery / OCP) takes seconds, the schema (pydantic,
+# scipy through the geometry) most of a second, and `torus-cad build` shows its first line before either.
+_LAZY = {"build_propeller": "torus_cad.propeller", "Propeller": "torus_cad.propeller",
+         "propeller_objects": "torus_cad.propeller", "PropellerParameters": "torus_cad.parameters",
+         "resolve_parameters": "torus_cad.parameters"}
 
 
 def __getattr__(name: str) -> Any:
     if name in _LAZY:
         import importlib
-        return getattr(importlib.import_module("torus_cad.propeller"), name)
+        return getattr(importlib.import_module(_LAZY[name]), name)
     raise AttributeError(f"module 'torus_cad' has no attribute {name!r}")

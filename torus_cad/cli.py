@@ -1,7 +1,13 @@
-"""Command line: ``torus-cad build | defaults | ...``. Thin: parse, call the package, map errors to exit codes.
+"""Command line: ``torus-cad build | defaults | verify | ...``. Thin: parse, call the package, map errors to exit codes.
 
 Exit codes: 0 success; 2 bad input (a one-line message naming the field, no traceback, no
-file written); 1 the kernel or the file system failed.
+file written); 1 the kernel or the file system failed (the cause named: OpenCascade, no space
+left, permission denied, out of memory) or ``verify`` found an incomplete set; 130 / 143 / 129
+interrupted by SIGINT / SIGTERM / SIGHUP (torus_cad.interrupts).
+
+The signal handlers are installed before anything heavy is imported (this module imports only
+the standard library and torus_cad's light modules at the top; numpy, CadQuery and the rest load
+inside the commands), so an interrupt at any moment ends the command with one line.
 """
 
 from __future__ import annotations
@@ -12,10 +18,13 @@ import sys
 import tomllib
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from torus_cad.errors import GeometryError, ParameterError, TorusCadError
-from torus_cad.parameters import PropellerParameters, resolve_parameters
+from torus_cad.errors import GeometryError, IncompleteOutputError, OutputError, ParameterError, TorusCadError
+from torus_cad.interrupts import exit_on_signals
+
+if TYPE_CHECKING:
+    from torus_cad.parameters import PropellerParameters
 
 EXIT_OK, EXIT_KERNEL_FAILURE, EXIT_BAD_INPUT = 0, 1, 2
 
@@ -54,12 +63,28 @@ def _parse_override(text: str) -> tuple[str, Any]:
         value = tomllib.loads(f"value = {raw}")["value"]
     except tomllib.TOMLDecodeError:
         value = raw  # a bare word: treat as a string (e.g. name=my_prop)
+    except ValueError as error:  # e.g. an integer of more than 4300 digits
+        raise ParameterError(f"--set {key.strip()}: {_first_clause(error)}") from None
     return key.strip(), value
+
+
+def _first_clause(error: BaseException) -> str:
+    """The error's message up to its first ';', on one line."""
+    return " ".join(str(error).split(";")[0].split())[:200]
 
 
 def load_parameters(config: str | None, overrides: Sequence[str] = ()) -> PropellerParameters:
     """Parameters from a TOML file (or the defaults) with ``key=value`` overrides applied."""
-    return resolve_parameters(config or None, dict(_parse_override(item) for item in overrides))
+    from torus_cad.parameters import resolve_parameters  # imported here: the schema takes most of a second
+
+    changes = dict(_parse_override(item) for item in overrides)
+    try:
+        return resolve_parameters(config or None, changes)
+    except ParameterError:
+        raise
+    except (OverflowError, ValueError) as error:  # reading input only: whatever fails here is bad input
+        source = f"configuration {config!r}" if config else "a --set value"
+        raise ParameterError(f"{source} holds a value that cannot be used: {_first_clause(error)}") from None
 
 
 def _add_design_arguments(parser: argparse.ArgumentParser) -> None:
@@ -74,25 +99,43 @@ def _command_build(args: argparse.Namespace) -> int:
     from torus_cad.progress import StageProgress
 
     progress = StageProgress.for_terminal(quiet=args.quiet)  # stderr, only on a terminal
+    progress("kernel_import")  # a line on the terminal before the seconds of importing the schema and cadquery
+    from torus_cad.budgets import check_stl_budget
+    from torus_cad.outputs import check_writable_folder, write_output_set
+
     params = load_parameters(args.config, args.overrides)
     size = _preview_size(args.preview_size, "--preview-size") if args.preview else None
-    progress("kernel_import")  # a line on the terminal before the seconds that importing cadquery takes
+    if args.require_printable:  # decided from the analytic section, before any work or file
+        from torus_cad.geometry.printability import printability
+
+        problem = printability(params.geometry().blade, params.manufacturing.min_wall).problem()
+        if problem:
+            raise GeometryError(f"not printable (--require-printable): {problem}")
+    if _writes_a_mesh(params, args.no_stl):
+        check_stl_budget(params)  # a mesh that would blow up is refused before anything is built (~7 ms)
+    check_writable_folder(args.out)  # before the build, not after it
     from torus_cad.propeller import build_propeller
 
     propeller = build_propeller(params, progress=progress)
     progress("write")
-    paths = propeller.write(Path(args.out), density_g_cm3=args.density, stl=not args.no_stl)
+    extra_files = {}
     if size is not None:
         from torus_cad.preview import write_preview
 
-        paths["png"] = write_preview(propeller, Path(args.out) / f"{params.name}.png", size, progress=progress)
+        extra_files["png"] = lambda path: write_preview(propeller, path, size, progress=progress)
+    # One output set: the files, the blade-element table, the picture and the report appear together.
+    paths = write_output_set(propeller, Path(args.out), args.density, stl=not args.no_stl, sections_table=True,
+                             extra_files=extra_files)
     progress.finish()
     report = json.loads(paths["json"].read_text())
     if not args.quiet:
-        for kind, path in paths.items():
+        for path in paths.values():
             print(f"wrote {path}")
         print(f"volume {report['volume_mm3']:.3f} mm^3, area {report['surface_area_mm2']:.3f} mm^2, "
               f"mass {report['mass_g']:.3f} g at {args.density:g} g/cm^3")
+        if params.blades == 1:
+            print(f"warning: a one-blade propeller is out of balance: static imbalance "
+                  f"{report['balance']['static_imbalance_g_mm']:.3f} g mm; add a counterweight or use 2 or more blades")
     if args.verbose:
         print(f"centroid {tuple(round(c, 6) for c in report['centroid_mm'])} mm, "
               f"spin-axis inertia {report['spin_axis_inertia_g_mm2']:.4f} g mm^2")
@@ -101,20 +144,31 @@ def _command_build(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _preview_size(text: str, option: str) -> tuple[int, int]:
-    from torus_cad.preview import parse_size  # raises ParameterError (exit 2) for a bad WxH
+def _writes_a_mesh(params: PropellerParameters, no_stl: bool) -> bool:
+    """Whether the build tessellates the solid for a file (STL, 3MF): then its triangle budget applies."""
+    from torus_cad.parameters.design import ExportFormat
 
-    return parse_size(text, option)
+    formats = params.export.formats
+    return (ExportFormat.STL in formats and not no_stl) or ExportFormat.THREE_MF in formats
+
+
+def _preview_size(text: str, option: str) -> tuple[int, int]:
+    from torus_cad.preview import parse_size
+
+    return parse_size(text, option)  # raises ParameterError (exit 2) for a bad WxH
 
 
 def _command_preview(args: argparse.Namespace) -> int:
     from torus_cad.progress import StageProgress
 
     progress = StageProgress.for_terminal(quiet=args.quiet)
+    progress("kernel_import")
+    from torus_cad.outputs import check_writable_folder
+
     params = load_parameters(args.config, args.overrides)
     size = _preview_size(args.size, "--size")
     out = Path(args.out) if args.out else Path("step_out") / f"{params.name}.png"
-    progress("kernel_import")
+    check_writable_folder(out.parent)  # before the build, not after it
     from torus_cad.preview import write_preview
     from torus_cad.propeller import build_propeller
 
@@ -127,8 +181,28 @@ def _command_preview(args: argparse.Namespace) -> int:
 
 
 def _command_defaults(args: argparse.Namespace) -> int:
-    sys.stdout.write("# torus_cad design file: every key is optional and defaults to the value below.\n")
-    sys.stdout.write(PropellerParameters().to_toml(comments=True))
+    from torus_cad.parameters import PropellerParameters
+
+    if not args.resolved:
+        if args.config or args.overrides:
+            raise ParameterError("torus-cad defaults takes a design file or --set only with --resolved")
+        sys.stdout.write("# torus_cad design file: every key is optional and defaults to the value below.\n")
+        sys.stdout.write(PropellerParameters().to_toml(comments=True))
+        return EXIT_OK
+    from torus_cad.design_targets import resolve_design_targets
+
+    params = load_parameters(args.config, args.overrides)
+    targets = resolve_design_targets(params)
+    sys.stdout.write("# torus_cad design file: the spec's parameters that the design's airfoil.naca, diameter and\n"
+                     "# pitch resolved to (" + (", ".join(f"{key} = {value!r}" for key, value in targets.requested.items())
+                                                or "none set") + "); it builds the same propeller.\n")
+    if targets.tip_diameter_mm is not None:
+        sys.stdout.write(f"# tip diameter {targets.tip_diameter_mm:.3f} mm")
+        if targets.pitch_fit is not None:
+            achieved = ", ".join(f"{value:.2f}" for value in targets.pitch_fit.pitch_at_75_mm)
+            sys.stdout.write(f"; geometric pitch at 75 % of the tip radius {achieved} mm")
+        sys.stdout.write("\n")
+    sys.stdout.write(targets.parameters.to_toml(comments=True))
     return EXIT_OK
 
 
@@ -155,9 +229,10 @@ def _command_sweep(args: argparse.Namespace) -> int:
                            time_limit_s=args.time_limit, rebuild=args.rebuild, progress=False if args.quiet else None)
     except SweepInterrupted as interrupt:
         partial = interrupt.result
-        table = partial.tables.get("csv", out / "results.csv")
-        print(f"torus-cad: sweep interrupted by {interrupt.signal_name}: {partial.counts_text()}; "
-              f"table written to {table}; rerun the same command to resume", file=sys.stderr)
+        done = (f"{partial.counts_text()}; table written to {partial.tables['csv']}" if partial.tables
+                else "nothing was built")
+        print(f"torus-cad: sweep interrupted by {interrupt.signal_name}: {done}; rerun the same command to resume",
+              file=sys.stderr)
         return interrupt.exit_code
     except BatchError as error:
         print(f"torus-cad: sweep failed: {error}", file=sys.stderr)
@@ -165,6 +240,40 @@ def _command_sweep(args: argparse.Namespace) -> int:
     if not args.quiet:
         print(result.summary())
     return result.exit_code
+
+
+def _port(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--port must be a whole number, got {text!r}") from None
+    if not 0 <= value <= 65535:
+        raise argparse.ArgumentTypeError(f"--port = {value} is out of range; allowed [0, 65535] (0: any free port)")
+    return value
+
+
+def _command_studio(args: argparse.Namespace) -> int:
+    from torus_cad.studio.app import serve
+
+    params = load_parameters(args.config, args.overrides)  # a bad design exits 2 before the server starts
+    serve(params, port=args.port, host=args.host)
+    return EXIT_OK
+
+
+def _command_verify(args: argparse.Namespace) -> int:
+    from torus_cad.outputs import set_names, verify_set
+
+    folder = Path(args.folder)
+    if not folder.is_dir():
+        raise ParameterError(f"verify: {str(folder)!r} is not a folder")
+    names = [args.name] if args.name else set_names(folder)
+    if not names:
+        raise IncompleteOutputError(f"no output set in {str(folder)!r}")
+    for name in names:
+        checked = verify_set(folder, name)  # IncompleteOutputError names the file: exit 1
+        if not args.quiet:
+            print(f"ok {checked.report.parent / name}: {', '.join(path.name for path in checked.files)}")
+    return EXIT_OK
 
 
 def _mesh_overrides(args: argparse.Namespace) -> dict[str, Any]:
@@ -263,11 +372,9 @@ def _add_mesh_parser(commands: Any) -> None:
     mesh.add_argument("--format", dest="formats", action="append", metavar="FORMAT[,FORMAT]",
                       help="files to write instead of the design's, repeatable or comma-separated: "
                            + ", ".join(item.value for item in MeshFormat) + " (default stl,obj)")
-    mesh.add_argument("--out", default="mesh_out", help="output folder (default: mesh_out)")
     mesh.add_argument("--no-compare", action="store_true",
                       help="skip the B-rep comparison in the report (volume, OpenCascade's tessellation)")
-    mesh.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
-    mesh.set_defaults(handler=_command_mesh)
+    _add_out_and_quiet(mesh, "mesh_out", _command_mesh)
 
 
 def _add_cfd_parser(commands: Any) -> None:
@@ -281,9 +388,15 @@ def _add_cfd_parser(commands: Any) -> None:
     _add_design_arguments(cfd)
     _add_table_arguments(cfd, "cfd")
     cfd.add_argument("--threads", type=int, default=0, metavar="N", help="gmsh threads (default 0: one per CPU)")
-    cfd.add_argument("--out", default="cfd_out", help="output folder (default: cfd_out)")
-    cfd.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
-    cfd.set_defaults(handler=_command_cfd)
+    _add_out_and_quiet(cfd, "cfd_out", _command_cfd)
+
+
+def _add_out_and_quiet(parser: argparse.ArgumentParser, default_out: str,
+                       handler: Callable[[argparse.Namespace], int]) -> None:
+    """The output folder, --quiet and the handler, as every writing subcommand has them."""
+    parser.add_argument("--out", default=default_out, help=f"output folder (default: {default_out})")
+    parser.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
+    parser.set_defaults(handler=handler)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -301,6 +414,9 @@ def build_parser() -> argparse.ArgumentParser:
     build.add_argument("--density", type=_positive_density, default=1.24,
                        help="material density for the mass, g/cm^3 (default 1.24, PLA)")
     build.add_argument("--no-stl", action="store_true", help="write STEP and JSON only")
+    build.add_argument("--require-printable", action="store_true",
+                       help="exit 2, writing nothing, when the blade is thinner than manufacturing.min_wall "
+                            "(thinnest section or trailing edge; see the JSON's printability)")
     build.add_argument("-v", "--verbose", action="store_true", help="print mass properties and stage times")
     build.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     build.add_argument("--preview", action="store_true", help="also render <name>.png (see 'torus-cad preview')")
@@ -308,9 +424,9 @@ def build_parser() -> argparse.ArgumentParser:
                        help="size of the --preview picture in pixels (default 1200x600)")
     build.set_defaults(handler=_command_build)
 
-    preview = commands.add_parser("preview", help="render a PNG picture: isometric view and view along the axis",
+    preview = commands.add_parser("preview", help="render a PNG picture: a view from above and a view along the axis",
                                   description="Build the propeller of CONFIG (or the default) and render a shaded "
-                                  "picture of it off-screen: an isometric view and a view along the spin axis, "
+                                  "picture of it off-screen: a view from above that shows every blade and a view along the spin axis, "
                                   "each blade in its own colour.")
     _add_design_arguments(preview)
     preview.add_argument("--out", metavar="FILE.png", help="picture to write (default: step_out/<name>.png)")
@@ -319,15 +435,33 @@ def build_parser() -> argparse.ArgumentParser:
     preview.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     preview.set_defaults(handler=_command_preview)
 
+    verify = commands.add_parser("verify", help="check that output sets are complete: every file of one build",
+                                 description="Check the output sets in FOLDER (or only NAME): each <name>.json "
+                                 "report lists the files of its build with their SHA-256; every one must be there "
+                                 "and unchanged. Exit 0 if all are complete, 1 naming the first missing or mixed "
+                                 "file.")
+    verify.add_argument("folder", metavar="FOLDER", help="output folder, e.g. step_out")
+    verify.add_argument("name", nargs="?", metavar="NAME", help="check only the set <NAME>.json (default: every set)")
+    verify.add_argument("-q", "--quiet", action="store_true", help="print nothing when the sets are complete")
+    verify.set_defaults(handler=_command_verify)
+
     defaults = commands.add_parser("defaults", help="print the default design as commented TOML",
-                                   description="Print the default design as a commented TOML file to start from.")
+                                   description="Print the default design as a commented TOML file to start from; "
+                                   "with --resolved, a design's spec parameters after its airfoil.naca, diameter "
+                                   "and pitch are applied.")
+    _add_design_arguments(defaults)
+    defaults.add_argument("--resolved", action="store_true",
+                          help="print the spec parameters the design file (and --set) resolve to")
     defaults.set_defaults(handler=_command_defaults)
 
     sweep = commands.add_parser("sweep", help="build many variants of a design in parallel (local or Dask)",
                                 description="Build every design of a sweep file (a base design plus the "
                                 "parameters to vary: lists, grid ranges, or random / Latin-hypercube bounds) "
                                 "into OUT/designs/<id>/ and tabulate them in OUT/results.csv. Rerunning "
-                                "resumes: designs already done are skipped.")
+                                "resumes: designs already done are skipped. Exit codes: 0 every design valid "
+                                "or refused; 1 a design failed, errored, crashed or timed out; 2 a bad sweep "
+                                "file (or more than 1,000,000 designs); 130 / 143 interrupted by Ctrl-C / SIGTERM "
+                                "(the table of what finished is written).")
     sweep.add_argument("sweep", metavar="SWEEP.toml", help="sweep file (see examples/sweep_example.toml)")
     sweep.add_argument("--out", help="output folder (default: sweep_out/<sweep file name>)")
     sweep.add_argument("--workers", type=int, metavar="N",
@@ -344,6 +478,17 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("--rebuild", action="store_true", help="build every design again, even those already done")
     sweep.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary")
     sweep.set_defaults(handler=_command_sweep)
+
+    studio = commands.add_parser("studio", help="design in the browser: parameters, live 3D view, downloads",
+                                 description="Serve a local web page to design a propeller: a parameters panel, a "
+                                 "live 3D view (a preview at once, the exact solid when it is built), readouts, and "
+                                 "STEP / STL / TOML downloads. Starts from CONFIG (or the default design).")
+    _add_design_arguments(studio)
+    studio.add_argument("--port", type=_port, default=8080, help="port to serve on (default 8080; 0: any free port)")
+    studio.add_argument("--host", default="127.0.0.1",
+                        help="address to listen on (default 127.0.0.1: only this machine can connect; "
+                             "0.0.0.0 serves every network, without a password)")
+    studio.set_defaults(handler=_command_studio)
     _add_mesh_parser(commands)
     _add_cfd_parser(commands)
     return parser
@@ -351,26 +496,43 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``torus-cad``; returns the exit code."""
-    args = build_parser().parse_args(argv)
-    handler: Callable[[argparse.Namespace], int] = args.handler
+    restore_signals = exit_on_signals()  # first: an interrupt while importing is clean too
+    try:
+        args = build_parser().parse_args(argv)
+        handler: Callable[[argparse.Namespace], int] = args.handler
+        return _run(handler, args)
+    finally:
+        restore_signals()
+
+
+def _error(message: str, code: int) -> int:
+    print(f"torus-cad: {message}", file=sys.stderr)
+    return code
+
+
+def _run(handler: Callable[[argparse.Namespace], int], args: argparse.Namespace) -> int:
+    """The handler's exit code; every failure becomes one line on stderr and its exit code."""
     try:
         return handler(args)
     except (ParameterError, GeometryError) as error:
-        print(f"torus-cad: error: {error}", file=sys.stderr)
-        return EXIT_BAD_INPUT
+        return _error(f"error: {error}", EXIT_BAD_INPUT)
+    except IncompleteOutputError as error:
+        return _error(f"verify: {error}", EXIT_KERNEL_FAILURE)
+    except OutputError as error:
+        return _error(f"build failed: {error}", EXIT_KERNEL_FAILURE)
     except TorusCadError as error:
-        print(f"torus-cad: kernel failure: {error}", file=sys.stderr)
-        return EXIT_KERNEL_FAILURE
+        return _error(f"kernel failure: {error}", EXIT_KERNEL_FAILURE)
+    except MemoryError:
+        return _error("out of memory; lower resolution.sections / resolution.points or raise the STL deflections",
+                      EXIT_KERNEL_FAILURE)
     except OSError as error:
-        print(f"torus-cad: cannot write output: {error}", file=sys.stderr)
-        return EXIT_KERNEL_FAILURE
-    except KeyboardInterrupt:
-        print("torus-cad: interrupted; no partial file was left behind", file=sys.stderr)
-        return 130
-    except Exception as error:  # noqa: BLE001 - the command line never shows a traceback
-        print(f"torus-cad: internal error ({type(error).__name__}): {error}; please report it with the design file",
-              file=sys.stderr)
-        return EXIT_KERNEL_FAILURE
+        where = f" {error.filename!r}" if error.filename else ""
+        return _error(f"cannot write output{where}: {error.strerror or error}", EXIT_KERNEL_FAILURE)
+    except KeyboardInterrupt:  # main() called outside the main thread, where no handler could be installed
+        return _error("interrupted", 130)
+    except Exception as error:
+        return _error(f"internal error ({type(error).__name__}): {error}; please report it with the design file",
+                      EXIT_KERNEL_FAILURE)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -1,8 +1,12 @@
-"""Off-screen preview picture of a propeller: an isometric view and a view along the spin axis.
+"""Off-screen preview picture of a propeller: a view from above that shows every blade (none
+edge-on, see :func:`oblique_view`) and a view along the spin axis.
 
-Rendered by VTK off-screen (EGL or OSMesa: no window, no display needed) with a depth buffer and
-smooth normals, from OpenCascade's tessellation of the fused solid. Each face is coloured by the
-part it came from (the hub grey, every blade its own colour)::
+Rendered with VTK (installed with cadquery) off-screen: OpenGL with a depth buffer, smooth
+vertex normals (vtkPolyDataNormals, split at sharp edges such as the trailing edge and the hub's
+rims), a light kit and FXAA, from OpenCascade's tessellation of the fused solid. Each face is
+coloured by the part it came from, as the fuse reports it (``Propeller.face_parts``): the hub
+grey, every blade its own colour. No window or display is needed: without an X display VTK
+draws through EGL (Mesa's software rasteriser on a machine without a GPU)::
 
     from torus_cad.propeller import build_propeller
     from torus_cad.preview import write_preview
@@ -13,22 +17,28 @@ VTK is imported only when a picture is made.
 
 from __future__ import annotations
 
+import math
 import os
 import re
+import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import cadquery as cq
 import numpy as np
 from numpy.typing import NDArray
 
 from torus_cad.colors import HUB_COLOR, blade_color
-from torus_cad.errors import ParameterError
-from torus_cad.kernel.checks import distances_to_shape, precise_volume
+from torus_cad.errors import ParameterError, TorusCadError
+from torus_cad.kernel.checks import distances_to_shape, mass_properties
 from torus_cad.kernel.export import atomic_path
+from torus_cad.kernel.fuse import HUB_PART
 from torus_cad.parameters import PropellerParameters
+
+if TYPE_CHECKING:  # pragma: no cover
+    from vtkmodules.vtkRenderingCore import vtkRenderWindow
 
 #: Default picture size in pixels (width, height): two square views side by side.
 DEFAULT_SIZE: tuple[int, int] = (1200, 600)
@@ -36,10 +46,14 @@ DEFAULT_SIZE: tuple[int, int] = (1200, 600)
 #: Smallest and largest accepted picture edge, pixels.
 MIN_EDGE, MAX_EDGE = 64, 8000
 
-#: Along the spin axis: looking down the z axis from +z, x to the right, y up.
-AXIAL_DIRECTION = (0.0, 0.0, 1.0)
+#: The classic isometric elevation (the (1, 1, 1) direction), degrees.
+ISOMETRIC_ELEVATION_DEG = math.degrees(math.atan(1.0 / math.sqrt(2.0)))
 
-_HUB_PART = -1
+#: Elevations (degrees) the oblique view may take: the isometric one up to 55°.
+VIEW_ELEVATIONS_DEG = (ISOMETRIC_ELEVATION_DEG, 40.0, 45.0, 50.0, 55.0)
+
+BACKGROUND_RGB = (1.0, 1.0, 1.0)
+_TEXT_RGB = (0.2, 0.2, 0.2)
 
 
 class _HasParts(Protocol):
@@ -47,30 +61,38 @@ class _HasParts(Protocol):
     solid: cq.Solid
     hub: cq.Solid
     blades: list[cq.Solid]
+    face_parts: tuple[int, ...]
 
 
 @dataclass(frozen=True)
-class PreviewMesh:
-    """A triangle mesh of the fused solid with each triangle's part.
+class SceneMesh:
+    """A triangle mesh with one colour per triangle.
 
     Attributes:
         vertices: ``(k, 3)`` points, mm.
         triangles: ``(m, 3)`` vertex indices, counter-clockwise seen from outside.
-        parts: ``(m,)`` part of each triangle: -1 the hub, i >= 0 blade i.
+        colors: ``(m, 3)`` RGB in 0..1.
+        parts: ``(m,)`` part of each triangle (HUB_PART or a blade index; any int for other scenes).
     """
 
     vertices: NDArray[np.float64]
     triangles: NDArray[np.int64]
+    colors: NDArray[np.float64]
     parts: NDArray[np.int64]
 
 
 @dataclass(frozen=True)
 class View:
-    """An orthographic camera: the unit direction from the scene toward the camera, and the screen's up."""
+    """An orthographic view: ``toward_camera`` unit vector from the scene to the camera, ``up``
+    the screen's up direction (any vector not along it), ``label`` text under the view."""
 
     toward_camera: tuple[float, float, float]
     up: tuple[float, float, float]
     label: str = ""
+
+
+#: Looking down the spin axis from +z: x to the right, y up.
+AXIAL_VIEW = View((0.0, 0.0, 1.0), (0.0, 1.0, 0.0), "along the spin axis (+z toward you)")
 
 
 def parse_size(text: str, option: str = "--size") -> tuple[int, int]:
@@ -89,215 +111,155 @@ def _checked_size(size: Sequence[int], what: str = "preview size") -> tuple[int,
     return width, height
 
 
-# -- tessellation --------------------------------------------------------------------------------
+# -- the scene ------------------------------------------------------------------------------------
 
-def preview_mesh(solid: cq.Shape, hub: cq.Shape, blades: Sequence[cq.Shape],
-                 tolerance: float | None = None, angular_tolerance: float = 0.2) -> PreviewMesh:
-    """Tessellate ``solid`` (a copy: the caller's triangulation is left alone) and tag each face
-    with the part (hub or blade i) it lies on.
+def propeller_mesh(solid: cq.Shape, face_parts: Sequence[int], blades: int, tolerance: float,
+                   angular_tolerance: float = 0.3) -> SceneMesh:
+    """OpenCascade's tessellation of ``solid`` (of a copy: the caller's triangulation is left
+    alone), each face coloured by its part: ``face_parts[k]`` for ``solid.Faces()[k]``.
 
-    ``tolerance`` is the chordal deviation in mm (default: 1/3000 of the bounding-box diagonal).
+    ``tolerance`` is the chordal deviation in mm, ``angular_tolerance`` in radians.
     """
-    shape = solid.copy()
-    diagonal = shape.BoundingBox().DiagonalLength
-    tolerance = max(diagonal / 3000.0, 1e-3) if tolerance is None else tolerance
-    parts: list[cq.Shape] = [hub, *blades]
-    boxes = [_box(part) for part in parts]
-    vertices: list[NDArray[np.float64]] = []
-    triangles: list[NDArray[np.int64]] = []
-    labels: list[NDArray[np.int64]] = []
+    from OCP.BRep import BRep_Tool
+    from OCP.BRepMesh import BRepMesh_IncrementalMesh
+    from OCP.TopAbs import TopAbs_REVERSED
+    from OCP.TopLoc import TopLoc_Location
+
+    faces = solid.Faces()
+    if len(face_parts) != len(faces):
+        raise ValueError(f"face_parts has {len(face_parts)} entries for a solid of {len(faces)} faces")
+    shape = solid.copy()  # same faces in the same order, new triangulation
+    BRepMesh_IncrementalMesh(shape.wrapped, tolerance, False, angular_tolerance, True)
+    palette = np.array([HUB_COLOR] + [blade_color(index, blades) for index in range(blades)])
+    vertices, triangles, parts = [], [], []
     offset = 0
-    shape.mesh(tolerance, angular_tolerance)
-    for face in shape.Faces():
-        points, indices = face.tessellate(tolerance, angular_tolerance)  # reuses the solid's mesh
-        if not indices:
+    for face, part in zip(shape.Faces(), face_parts, strict=True):
+        location = TopLoc_Location()
+        mesh = BRep_Tool.Triangulation_s(face.wrapped, location)
+        if mesh is None or mesh.NbTriangles() == 0:
             continue
-        face_vertices = np.array([point.toTuple() for point in points], dtype=float)
-        face_triangles = np.asarray(indices, dtype=np.int64)
-        part = _face_part(face_vertices, face_triangles, parts, boxes, 10.0 * tolerance)
-        vertices.append(face_vertices)
-        triangles.append(face_triangles + offset)
-        labels.append(np.full(len(face_triangles), part, dtype=np.int64))
-        offset += len(face_vertices)
+        transform = location.Transformation()
+        points = np.array([mesh.Node(i).Transformed(transform).Coord() for i in range(1, mesh.NbNodes() + 1)])
+        corners = np.array([mesh.Triangle(i).Get() for i in range(1, mesh.NbTriangles() + 1)], dtype=np.int64) - 1
+        if face.wrapped.Orientation() == TopAbs_REVERSED:
+            corners = corners[:, ::-1]  # outward normals for a reversed face
+        vertices.append(points)
+        triangles.append(corners + offset)
+        parts.append(np.full(len(corners), part, dtype=np.int64))
+        offset += len(points)
     if not triangles:
         raise ValueError("the solid has no triangulated faces to draw")
-    return PreviewMesh(np.concatenate(vertices), np.concatenate(triangles), np.concatenate(labels))
+    all_parts = np.concatenate(parts)
+    return SceneMesh(np.concatenate(vertices), np.concatenate(triangles),
+                     palette[np.where(all_parts == HUB_PART, 0, all_parts + 1)], all_parts)
 
 
-def _face_part(vertices: NDArray[np.float64], triangles: NDArray[np.int64], parts: Sequence[cq.Shape],
-               boxes: Sequence[tuple[NDArray[np.float64], NDArray[np.float64]]], slack: float) -> int:
-    """-1 for the hub, i for blade i: the part whose boundary passes nearest a few of the face's facets."""
-    centroids = vertices[triangles].mean(axis=1)
-    samples = centroids[np.linspace(0, len(centroids) - 1, min(5, len(centroids))).astype(int)]
-    candidates = [index for index, (low, high) in enumerate(boxes)
-                  if np.all(samples >= low - slack) and np.all(samples <= high + slack)] or list(range(len(parts)))
-    if len(candidates) == 1:
-        return candidates[0] - 1  # parts[0] is the hub
-    medians = [float(np.median(distances_to_shape(parts[index], samples))) for index in candidates]
-    return candidates[int(np.argmin(medians))] - 1
+def face_parts_by_distance(solid: cq.Shape, hub: cq.Shape, blades: Sequence[cq.Shape]) -> tuple[int, ...]:
+    """The part (HUB_PART or blade i) of each face of ``solid``, as ``solid.Faces()`` orders them,
+    found by geometry: the part whose boundary passes nearest a few points of the face.
+
+    Only for solids whose build does not report the parts (the root fillet's); the fuse does
+    (:attr:`torus_cad.kernel.fuse.Fused.face_parts`). A fillet face, between a blade and the hub,
+    goes to whichever it lies nearer.
+    """
+    parts: list[cq.Shape] = [hub, *blades]
+    boxes = [shape.BoundingBox() for shape in parts]
+    found = []
+    for face in solid.Faces():
+        u_min, u_max, v_min, v_max = face._uvBounds()
+        samples = np.array([face.positionAt(u_min + a * (u_max - u_min), v_min + b * (v_max - v_min)).toTuple()
+                            for a, b in ((0.5, 0.5), (0.25, 0.5), (0.75, 0.5))])
+        slack = 1e-3 * boxes[0].DiagonalLength
+        candidates = [index for index, box in enumerate(boxes)
+                      if np.all(samples >= np.array([box.xmin, box.ymin, box.zmin]) - slack)
+                      and np.all(samples <= np.array([box.xmax, box.ymax, box.zmax]) + slack)] or list(range(len(parts)))
+        distances = [float(np.median(distances_to_shape(parts[index], samples))) if len(candidates) > 1 else 0.0
+                     for index in candidates]
+        found.append(candidates[int(np.argmin(distances))] - 1)  # parts[0] is the hub
+    return tuple(found)
 
 
-def _box(shape: cq.Shape) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    box = shape.BoundingBox()
-    return np.array([box.xmin, box.ymin, box.zmin]), np.array([box.xmax, box.ymax, box.zmax])
+def blade_silhouettes(mesh: SceneMesh, directions: NDArray[np.float64], most_triangles: int = 3000
+                      ) -> NDArray[np.float64]:
+    """``(blades, d)``: each blade's projected area (mm^2) seen along each of ``(d, 3)`` unit
+    ``directions``, as half the sum of its triangles' |projected area| (exact for a convex body,
+    close for a blade). At most ``most_triangles`` evenly picked triangles per blade are summed,
+    scaled up to the blade's whole area."""
+    corners = mesh.vertices[mesh.triangles]
+    weighted_normals = 0.5 * np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    silhouettes = []
+    for part in sorted(set(mesh.parts.tolist()) - {HUB_PART}):
+        normals = weighted_normals[mesh.parts == part]
+        picked = normals[np.linspace(0, len(normals) - 1, min(most_triangles, len(normals))).astype(int)]
+        scale = np.linalg.norm(normals, axis=1).sum() / np.linalg.norm(picked, axis=1).sum()
+        silhouettes.append(0.5 * scale * np.abs(picked @ directions.T).sum(axis=0))
+    return np.array(silhouettes).reshape(-1, len(directions))
 
 
-# -- the camera ----------------------------------------------------------------------------------
+def oblique_view(mesh: SceneMesh) -> View:
+    """A view from above that shows every blade: none edge-on.
 
-def loop_area_vectors(loops: Sequence[NDArray[np.float64]]) -> NDArray[np.float64]:
-    """The vector area (1/2 of the sum of r x dr, mm^2) of each closed polyline ``(k, 3)``: ``(n, 3)``.
-
-    A loop blade's centerline, closed through the hub, bounds the blade's "window"; a camera
-    perpendicular to this vector sees that window as a line, the blade edge-on."""
-    areas = []
-    for loop in loops:
-        points = np.asarray(loop, dtype=float)
-        areas.append(0.5 * np.cross(points, np.roll(points, -1, axis=0)).sum(axis=0))
-    return np.array(areas)
-
-
-def isometric_direction(area_vectors: NDArray[np.float64]) -> NDArray[np.float64]:
-    """The unit direction toward an isometric-like camera (elevation 35-45 degrees) that keeps
-    every blade as far from edge-on as it can: it maximises the smallest projected window area,
-    |view . A_i|, over the blades (0 would show that blade as a line)."""
-    azimuth, elevation = np.meshgrid(np.radians(np.arange(0.0, 360.0, 2.0)), np.radians(np.arange(35.0, 46.0, 5.0)))
-    directions = np.stack([np.cos(elevation) * np.cos(azimuth), np.cos(elevation) * np.sin(azimuth),
-                           np.sin(elevation)], axis=-1).reshape(-1, 3)
-    worst = np.abs(directions @ np.asarray(area_vectors, dtype=float).T).min(axis=1)
-    return directions[int(np.argmax(worst))]
-
-
-def propeller_views(propeller: _HasParts) -> tuple[View, View]:
-    """The isometric view (no blade edge-on) and the view along the spin axis."""
-    geometry = propeller.parameters.geometry()
-    s = np.linspace(0.0, 1.0, 64)
-    loops = [geometry.centerline(index).points(s) for index in range(geometry.blades)]
-    iso = isometric_direction(loop_area_vectors(loops))
-    return (View((float(iso[0]), float(iso[1]), float(iso[2])), (0.0, 0.0, 1.0), "isometric"),
-            View(AXIAL_DIRECTION, (0.0, 1.0, 0.0), "along the spin axis (+z toward you)"))
+    A blade of a toroidal propeller is a loop, nearly flat; seen along its plane it collapses
+    into a thin sliver that reads as a broken fragment (the fixed isometric corner did that to
+    one blade of the default). Each blade's visible size from a direction d is its silhouette
+    area (:func:`blade_silhouettes`); the view takes the d, over azimuths in 2° steps and the
+    elevations VIEW_ELEVATIONS_DEG (isometric 35.26° up to 55°), that maximises the smallest
+    blade's silhouette as a fraction of the largest silhouette any blade shows from any of
+    these directions. The blades are copies of one another, so this is the direction where the
+    worst-placed blade looks most like itself. Ties go to the lower elevation.
+    """
+    azimuths = np.radians(np.arange(0.0, 360.0, 2.0))
+    elevations = np.radians(np.array(VIEW_ELEVATIONS_DEG))
+    e, a = np.meshgrid(elevations, azimuths, indexing="ij")
+    directions = np.column_stack([(np.cos(e) * np.cos(a)).ravel(), (np.cos(e) * np.sin(a)).ravel(),
+                                  np.sin(e).ravel()])
+    silhouettes = blade_silhouettes(mesh, directions)
+    if silhouettes.size:
+        worst = (silhouettes / silhouettes.max()).min(axis=0)
+        best = int(np.argmax(worst > worst.max() - 1e-3))  # first within 0.1 % of the best: lowest elevation
+    else:
+        best = int(np.argmin(np.abs(e.ravel() - math.radians(ISOMETRIC_ELEVATION_DEG))))
+    elevation, azimuth = math.degrees(e.ravel()[best]), math.degrees(a.ravel()[best])
+    x, y, z = (float(value) for value in directions[best])
+    return View((x, y, z), (0.0, 0.0, 1.0), f"from above: elevation {elevation:.0f}°, azimuth {azimuth:.0f}°")
 
 
-# -- rendering -----------------------------------------------------------------------------------
+# -- rendering ---------------------------------------------------------------------------------------
 
-def _import_vtk() -> Any:
-    if not os.environ.get("DISPLAY"):
-        # Without an X server, VTK's default window tries X first and warns; go straight to EGL.
-        os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
-    import vtkmodules.vtkRenderingOpenGL2  # noqa: F401 - registers the OpenGL back end
-    from vtkmodules import (
-        vtkCommonCore,
-        vtkCommonDataModel,
-        vtkFiltersCore,
-        vtkRenderingCore,
-        vtkRenderingFreeType,  # noqa: F401 - text rendering
-    )
-    from vtkmodules.util import numpy_support
+def render_views(mesh: SceneMesh, views: Sequence[View], size: Sequence[int], title: str = "",
+                 smooth: bool = True) -> NDArray[np.uint8]:
+    """``mesh`` seen in each of ``views``, side by side, under ``title``: an ``(height, width, 3)``
+    RGB uint8 array of exactly ``size`` = (width, height) pixels."""
+    from vtkmodules.vtkRenderingCore import vtkRenderer
 
-    return vtkCommonCore, vtkCommonDataModel, vtkFiltersCore, vtkRenderingCore, numpy_support
-
-
-def _actor(vertices: NDArray[np.float64], triangles: NDArray[np.int64], colors: NDArray[np.float64]) -> Any:
-    """A VTK actor of a triangle mesh with one RGB (0..1) colour per triangle and smooth normals."""
-    core, data, filters, rendering, numpy_support = _import_vtk()
-    points = core.vtkPoints()
-    points.SetData(numpy_support.numpy_to_vtk(np.ascontiguousarray(vertices, dtype=np.float64), deep=True))
-    cells = data.vtkCellArray()
-    connectivity = np.ascontiguousarray(triangles, dtype=np.int64).ravel()
-    offsets = np.arange(0, len(connectivity) + 1, 3, dtype=np.int64)
-    cells.SetData(numpy_support.numpy_to_vtkIdTypeArray(offsets, deep=True),
-                  numpy_support.numpy_to_vtkIdTypeArray(connectivity, deep=True))
-    poly = data.vtkPolyData()
-    poly.SetPoints(points)
-    poly.SetPolys(cells)
-    rgb = numpy_support.numpy_to_vtk(np.ascontiguousarray(np.clip(colors, 0, 1) * 255, dtype=np.uint8), deep=True)
-    rgb.SetName("colors")
-    poly.GetCellData().SetScalars(rgb)
-    normals = filters.vtkPolyDataNormals()  # smooth shading; edges sharper than 40 degrees stay sharp
-    normals.SetInputData(poly)
-    normals.SetFeatureAngle(40.0)
-    normals.SplittingOn()
-    normals.ConsistencyOff()  # OpenCascade's triangles are already oriented outward
-    normals.ComputeCellNormalsOff()
-    mapper = rendering.vtkPolyDataMapper()
-    mapper.SetInputConnection(normals.GetOutputPort())
-    mapper.SetScalarModeToUseCellData()
-    mapper.SetColorModeToDirectScalars()
-    actor = rendering.vtkActor()
-    actor.SetMapper(mapper)
-    properties = actor.GetProperty()
-    properties.SetInterpolationToPhong()
-    properties.SetAmbient(0.25)
-    properties.SetDiffuse(0.75)
-    properties.SetSpecular(0.25)
-    properties.SetSpecularPower(40.0)
-    return actor
-
-
-def _text(text: str, x: float, y: float, size: int, gray: float, centred: bool = True) -> Any:
-    rendering = _import_vtk()[3]
-    actor = rendering.vtkTextActor()
-    actor.SetInput(text)
-    properties = actor.GetTextProperty()
-    properties.SetFontSize(size)
-    properties.SetColor(gray, gray, gray)
-    properties.SetJustificationToCentered() if centred else properties.SetJustificationToLeft()
-    properties.SetVerticalJustificationToTop()
-    actor.GetPositionCoordinate().SetCoordinateSystemToNormalizedViewport()
-    actor.GetPositionCoordinate().SetValue(x, y)
-    return actor
-
-
-def render_views(actors_of: Callable[[], list[Any]], views: Sequence[View], size: Sequence[int],
-                 title: str = "") -> NDArray[np.uint8]:
-    """Render the views side by side, each with its own actors (``actors_of()`` is called per view):
-    an ``(height, width, 3)`` uint8 RGB picture of exactly ``size`` = (width, height) pixels."""
     width, height = _checked_size(size)
-    _, _, _, rendering, numpy_support = _import_vtk()
-    window = rendering.vtkRenderWindow()
-    window.SetOffScreenRendering(1)
-    window.SetMultiSamples(8)
-    window.SetSize(width, height)
-    title_px = max(12, int(height * 0.035)) if title else 0
-    top = 1.0 - (2.2 * title_px / height if title else 0.0)
+    window = _offscreen_window(width, height)
+    title_px = _title_height_px(height) if title else 0
+    view_top = 1.0 - title_px / height
+    actor = _mesh_actor(mesh, smooth)
     for column, view in enumerate(views):
-        renderer = rendering.vtkRenderer()
-        renderer.SetBackground(1.0, 1.0, 1.0)
-        renderer.SetViewport(column / len(views), 0.0, (column + 1) / len(views), top)
-        for actor in actors_of():
-            renderer.AddActor(actor)
-        camera = renderer.GetActiveCamera()
-        camera.ParallelProjectionOn()
-        camera.SetFocalPoint(0.0, 0.0, 0.0)
-        camera.SetPosition(*view.toward_camera)
-        camera.SetViewUp(*view.up)
-        renderer.ResetCamera()
-        camera.SetParallelScale(camera.GetParallelScale() * 0.88)
-        renderer.ResetCameraClippingRange()
+        renderer = vtkRenderer()
+        renderer.SetViewport(column / len(views), 0.0, (column + 1) / len(views), view_top)
+        renderer.SetBackground(*BACKGROUND_RGB)
+        renderer.AddActor(actor)
+        renderer.UseFXAAOn()
+        _light(renderer)
+        _place_camera(renderer, mesh.vertices, view, (width / len(views)) / (height * view_top))
         if view.label:
-            renderer.AddViewProp(_text(view.label, 0.5, 0.06, max(10, int(height * 0.022)), 0.35))
+            label_px = _fitting_font_px(view.label, _label_size_px(height), width / len(views))
+            renderer.AddViewProp(_text(view.label, label_px, (0.5, 0.015), vertical="bottom"))
         window.AddRenderer(renderer)
     if title:
-        overlay = rendering.vtkRenderer()
-        overlay.SetViewport(0.0, top, 1.0, 1.0)
-        overlay.SetBackground(1.0, 1.0, 1.0)
-        overlay.AddViewProp(_text(title, 0.5, 0.85, title_px, 0.15))
+        overlay = vtkRenderer()
+        overlay.SetViewport(0.0, view_top, 1.0, 1.0)
+        overlay.SetBackground(*BACKGROUND_RGB)
+        overlay.AddViewProp(_text(title, _fitting_font_px(title, round(title_px * 0.5), width), (0.5, 0.45),
+                                  vertical="center"))
         window.AddRenderer(overlay)
     window.Render()
-    grabber = rendering.vtkWindowToImageFilter()
-    grabber.SetInput(window)
-    grabber.ReadFrontBufferOff()
-    grabber.Update()
-    image = grabber.GetOutput()
-    pixels = numpy_support.vtk_to_numpy(image.GetPointData().GetScalars())
-    picture = pixels.reshape(height, width, -1)[::-1, :, :3].copy()  # VTK's rows run bottom to top
+    image = _pixels(window, width, height)
     window.Finalize()
-    return picture
-
-
-def part_colors(parts: NDArray[np.int64], blades: int) -> NDArray[np.float64]:
-    """RGB (0..1) for every triangle from its part: the hub grey, blade i its own colour."""
-    palette = np.array([HUB_COLOR] + [blade_color(index, blades) for index in range(blades)])
-    return palette[np.asarray(parts) + 1]
+    return image
 
 
 def render_preview(propeller: _HasParts, size: Sequence[int] = DEFAULT_SIZE, title: str | None = None,
@@ -305,8 +267,9 @@ def render_preview(propeller: _HasParts, size: Sequence[int] = DEFAULT_SIZE, tit
     """The preview picture as an ``(height, width, 3)`` RGB uint8 array of exactly ``size`` pixels.
 
     Args:
-        propeller: a built propeller (:class:`torus_cad.propeller.Propeller`): its ``solid``, ``hub``
-            and ``blades``.
+        propeller: a built :class:`torus_cad.propeller.Propeller`: its ``solid``, ``face_parts``
+            (where the build does not know them, after a root fillet, each face gets the part
+            nearest to it: :func:`face_parts_by_distance`), ``hub`` and ``blades``.
         size: (width, height) in pixels, each 64..8000.
         title: text above the views (default: the name, blade count and volume in mm^3).
         progress: optional callback, called with ``"tessellate"`` and ``"render"``.
@@ -315,41 +278,195 @@ def render_preview(propeller: _HasParts, size: Sequence[int] = DEFAULT_SIZE, tit
     if progress:
         progress("tessellate")
     blades = len(propeller.blades)
-    # Tessellate about as finely as the picture can show: the chordal deviation is ~1/5 px of a view.
+    # About as fine as the picture can show: the chordal deviation is ~1/3 px of a view (the
+    # smooth normals hide the facets; only the outline shows them).
     diagonal = propeller.solid.BoundingBox().DiagonalLength
-    mesh = preview_mesh(propeller.solid, propeller.hub, propeller.blades,
-                        tolerance=max(diagonal / (5.0 * min(width / 2.0, height)), 1e-3))
+    view_px = min(width / 2.0, height)
+    parts = propeller.face_parts or face_parts_by_distance(propeller.solid, propeller.hub, propeller.blades)
+    mesh = propeller_mesh(propeller.solid, parts, blades, max(diagonal / (3.0 * view_px), 1e-3))
     if title is None:
-        volume = precise_volume(propeller.solid, 1e-5)  # shown to 4-5 digits: a coarser integral will do
+        volume = mass_properties(propeller.solid, 1.0).volume_mm3
         title = (f"{propeller.parameters.name}: {blades} blade{'s' if blades != 1 else ''}, "
                  f"volume {volume:,.0f} mm³")
     if progress:
         progress("render")
-    colors = part_colors(mesh.parts, blades)
-    return render_views(lambda: [_actor(mesh.vertices, mesh.triangles, colors)], propeller_views(propeller),
-                        (width, height), title)
-
-
-def write_png(image: NDArray[np.uint8], path: str | Path) -> Path:
-    """Write an ``(height, width, 3 or 4)`` uint8 picture as PNG, atomically; return the path."""
-    _, data, _, _, numpy_support = _import_vtk()
-    from vtkmodules.vtkIOImage import vtkPNGWriter
-
-    height, width, channels = image.shape
-    vtk_image = data.vtkImageData()
-    vtk_image.SetDimensions(width, height, 1)
-    scalars = numpy_support.numpy_to_vtk(np.ascontiguousarray(image[::-1].reshape(-1, channels)), deep=True)
-    vtk_image.GetPointData().SetScalars(scalars)
-    path = Path(path)
-    with atomic_path(path) as temp:
-        writer = vtkPNGWriter()
-        writer.SetFileName(str(temp))
-        writer.SetInputData(vtk_image)
-        writer.Write()
-    return path
+    return render_views(mesh, (oblique_view(mesh), AXIAL_VIEW), (width, height), title)
 
 
 def write_preview(propeller: _HasParts, path: str | Path, size: Sequence[int] = DEFAULT_SIZE,
                   title: str | None = None, progress: Callable[[str], None] | None = None) -> Path:
     """Render the preview (see :func:`render_preview`) and write it as a PNG, atomically; return the path."""
     return write_png(render_preview(propeller, size, title, progress), path)
+
+
+def write_png(image: NDArray[np.uint8], path: str | Path) -> Path:
+    """Write an ``(height, width, 3 or 4)`` uint8 picture as a PNG (VTK's writer), atomically; return the path."""
+    from vtkmodules.util.numpy_support import numpy_to_vtk
+    from vtkmodules.vtkCommonDataModel import vtkImageData
+    from vtkmodules.vtkIOImage import vtkPNGWriter
+
+    height, width, channels = image.shape
+    data = vtkImageData()
+    data.SetDimensions(width, height, 1)
+    scalars = numpy_to_vtk(np.ascontiguousarray(image[::-1]).reshape(-1, channels), deep=True)  # type: ignore[no-untyped-call]
+    data.GetPointData().SetScalars(scalars)
+    path = Path(path)
+    with atomic_path(path) as temp:
+        writer = vtkPNGWriter()
+        writer.SetFileName(str(temp))
+        writer.SetInputData(data)
+        writer.Write()
+        if writer.GetErrorCode():
+            raise TorusCadError(f"could not write the picture {path}")
+    return path
+
+
+def _offscreen_window(width: int, height: int) -> vtkRenderWindow:
+    """An off-screen render window: EGL when there is no X display (no window system needed),
+    else VTK's default for this platform."""
+    import vtkmodules.vtkRenderingFreeType
+    import vtkmodules.vtkRenderingOpenGL2  # noqa: F401 - the OpenGL implementations
+    from vtkmodules.vtkRenderingCore import vtkRenderWindow
+
+    window: vtkRenderWindow
+    if sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
+        from vtkmodules.vtkRenderingOpenGL2 import vtkEGLRenderWindow
+        window = vtkEGLRenderWindow()
+    else:
+        window = vtkRenderWindow()
+    window.SetOffScreenRendering(1)
+    window.SetSize(width, height)
+    window.SetMultiSamples(0)  # FXAA instead: multisampled off-screen buffers are not everywhere
+    return window
+
+
+def _pixels(window: vtkRenderWindow, width: int, height: int) -> NDArray[np.uint8]:
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+    from vtkmodules.vtkRenderingCore import vtkWindowToImageFilter
+
+    grab = vtkWindowToImageFilter()
+    grab.SetInput(window)
+    grab.SetInputBufferTypeToRGB()
+    grab.ReadFrontBufferOff()
+    grab.Update()
+    output = grab.GetOutput()
+    got_width, got_height, _ = output.GetDimensions()
+    pixels = vtk_to_numpy(output.GetPointData().GetScalars()).reshape(got_height, got_width, -1)[::-1]  # type: ignore[no-untyped-call]
+    corner = pixels[0, 0, :3].astype(float) / 255.0
+    if (got_width, got_height) != (width, height) or np.abs(corner - BACKGROUND_RGB).max() > 0.02:
+        raise TorusCadError("off-screen OpenGL did not render the preview (no EGL or OSMesa? on Debian: "
+                            "apt-get install libegl1 libegl-mesa0 libgl1-mesa-dri)")
+    return np.ascontiguousarray(pixels[..., :3], dtype=np.uint8)
+
+
+def _mesh_actor(mesh: SceneMesh, smooth: bool) -> Any:
+    """A VTK actor of ``mesh``: per-triangle colours, smooth normals split at edges sharper than 35°."""
+    from vtkmodules.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray
+    from vtkmodules.vtkCommonCore import vtkPoints
+    from vtkmodules.vtkCommonDataModel import vtkCellArray, vtkPolyData
+    from vtkmodules.vtkFiltersCore import vtkPolyDataNormals
+    from vtkmodules.vtkRenderingCore import vtkActor, vtkPolyDataMapper
+
+    points = vtkPoints()
+    points.SetData(numpy_to_vtk(np.ascontiguousarray(mesh.vertices, dtype=float), deep=True))  # type: ignore[no-untyped-call]
+    cells = vtkCellArray()
+    offsets = np.arange(0, 3 * len(mesh.triangles) + 1, 3, dtype=np.int64)
+    cells.SetData(numpy_to_vtkIdTypeArray(offsets, deep=True),  # type: ignore[no-untyped-call]
+                  numpy_to_vtkIdTypeArray(np.ascontiguousarray(mesh.triangles.ravel(), dtype=np.int64), deep=True))  # type: ignore[no-untyped-call]
+    polydata = vtkPolyData()
+    polydata.SetPoints(points)
+    polydata.SetPolys(cells)
+    colors = numpy_to_vtk(np.ascontiguousarray(np.round(mesh.colors * 255.0), dtype=np.uint8), deep=True)  # type: ignore[no-untyped-call]
+    colors.SetName("colors")
+    polydata.GetCellData().SetScalars(colors)
+    mapper = vtkPolyDataMapper()
+    if smooth:
+        normals = vtkPolyDataNormals()
+        normals.SetInputData(polydata)
+        normals.SetFeatureAngle(35.0)
+        normals.SplittingOn()
+        normals.ConsistencyOff()  # the tessellation is already oriented outward
+        normals.AutoOrientNormalsOff()
+        normals.ComputeCellNormalsOff()
+        mapper.SetInputConnection(normals.GetOutputPort())
+    else:
+        mapper.SetInputData(polydata)
+    mapper.SetScalarModeToUseCellData()
+    mapper.SetColorModeToDirectScalars()
+    actor = vtkActor()
+    actor.SetMapper(mapper)
+    surface = actor.GetProperty()
+    surface.SetInterpolationToPhong()
+    surface.SetAmbient(0.15)
+    surface.SetDiffuse(0.82)
+    surface.SetSpecular(0.25)
+    surface.SetSpecularPower(40.0)
+    return actor
+
+
+def _light(renderer: Any) -> None:
+    """VTK's light kit: a key light above and left of the camera, a fill, back and head light."""
+    from vtkmodules.vtkRenderingCore import vtkLightKit
+
+    kit = vtkLightKit()
+    kit.SetKeyLightIntensity(0.85)
+    kit.SetKeyToFillRatio(1.6)
+    kit.SetKeyToHeadRatio(1.7)
+    kit.AddLightsToRenderer(renderer)
+
+
+def _place_camera(renderer: Any, vertices: NDArray[np.float64], view: View, aspect: float) -> None:
+    """Orthographic camera along ``view``, framing the projected ``vertices`` with a margin."""
+    toward = np.asarray(view.toward_camera, dtype=float)
+    toward /= np.linalg.norm(toward)
+    up = np.asarray(view.up, dtype=float)
+    up = up - (up @ toward) * toward
+    up /= np.linalg.norm(up)
+    right = np.cross(up, toward)
+    across, along = vertices @ right, vertices @ up
+    centre_screen = np.array([(across.min() + across.max()) / 2.0, (along.min() + along.max()) / 2.0])
+    half = max((across.max() - across.min()) / 2.0 / aspect, (along.max() - along.min()) / 2.0)
+    depth = vertices @ toward
+    focal = centre_screen[0] * right + centre_screen[1] * up + ((depth.min() + depth.max()) / 2.0) * toward
+    distance = float(depth.max() - depth.min()) + 10.0 * half + 1.0
+    camera = renderer.GetActiveCamera()
+    camera.ParallelProjectionOn()
+    camera.SetFocalPoint(*focal)
+    camera.SetPosition(*(focal + distance * toward))
+    camera.SetViewUp(*up)
+    camera.SetParallelScale(half * 1.1 + 1e-9)  # 10 % margin; room for the label below
+    renderer.ResetCameraClippingRange()
+
+
+def _text(text: str, size_px: int, position: tuple[float, float], vertical: str) -> Any:
+    from vtkmodules.vtkRenderingCore import vtkTextActor
+
+    actor = vtkTextActor()
+    actor.SetInput(text)
+    style = actor.GetTextProperty()
+    style.SetFontSize(max(size_px, 8))
+    style.SetColor(*_TEXT_RGB)
+    style.SetFontFamilyToArial()
+    style.SetJustificationToCentered()
+    {"bottom": style.SetVerticalJustificationToBottom,
+     "center": style.SetVerticalJustificationToCentered}[vertical]()
+    actor.GetPositionCoordinate().SetCoordinateSystemToNormalizedViewport()
+    actor.SetPosition(*position)
+    return actor
+
+
+#: Width of an average character of the text font, in font sizes (Arial: about 0.55).
+_CHARACTER_WIDTH = 0.55
+
+
+def _fitting_font_px(text: str, size_px: int, width_px: float) -> int:
+    """``size_px``, or smaller so that ``text`` fits in 95 % of ``width_px``."""
+    return max(min(size_px, int(0.95 * width_px / (_CHARACTER_WIDTH * max(len(text), 1)))), 6)
+
+
+def _title_height_px(height: int) -> int:
+    return round(min(0.12 * height, 60.0))
+
+
+def _label_size_px(height: int) -> int:
+    return round(min(max(0.028 * height, 9.0), 30.0))

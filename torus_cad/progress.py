@@ -33,7 +33,7 @@ __all__ = ["STAGE_LABELS", "BatchProgress", "StageProgress", "is_terminal"]
 #: Words for the steps a command shows: the pipeline's stages and the steps around them
 #: (others are shown with spaces for underscores).
 STAGE_LABELS: dict[str, str] = {
-    "kernel_import": "loading the CAD kernel (cadquery)",
+    "kernel_import": "loading the schema and the CAD kernel (cadquery)",
     **{stage.value: stage.label for stage in Stage},
     "write": "writing STEP / STL / JSON",
     "tessellate": "tessellating for the preview",

@@ -12,7 +12,7 @@ This is the package's Python API::
 
 from __future__ import annotations
 
-import json
+import functools
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -23,17 +23,29 @@ import numpy as np
 from numpy.typing import NDArray
 
 from torus_cad.colors import HUB_COLOR, blade_color
+from torus_cad.design_targets import DesignTargets, resolve_design_targets
 from torus_cad.errors import KernelError
 from torus_cad.geometry.feasibility import check_feasible
+from torus_cad.geometry.handedness import Spin, spin_to_push_air_down
 from torus_cad.geometry.hub import seam_angle_deg
+from torus_cad.geometry.mounting import HubMounting, place_mounting, set_screw_arc_deg
+from torus_cad.geometry.printability import Printability, printability
 from torus_cad.geometry.surface import BladeSurface
-from torus_cad.kernel.checks import MassProperties, mass_properties, precise_volume, single_valid_solid
-from torus_cad.kernel.export import atomic_path, write_step, write_stl
-from torus_cad.kernel.fuse import FuseRoute, fuse_all, fuse_pattern, pattern_blades
-from torus_cad.kernel.hub import hub_solid
+from torus_cad.kernel.checks import (
+    MassProperties,
+    balance,
+    mass_properties,
+    precise_volume,
+    single_valid_solid,
+)
+from torus_cad.kernel.fillet import fillet_pattern
+from torus_cad.kernel.fuse import Fused, FuseRoute, fuse_all, fuse_pattern, pattern_blades
+from torus_cad.kernel.hub import hub_solid, run_out_hub
 from torus_cad.kernel.loft import loft_solid
+from torus_cad.kernel.mirror import mirrored
 from torus_cad.kernel.wires import SectionCurves, fit_section_curves
 from torus_cad.parameters import PropellerParameters, resolve_parameters
+from torus_cad.parameters.design import Handedness
 from torus_cad.stages import Stage, StageTimer
 from torus_cad.tolerances import VOLUME_CHECK_RELATIVE_PRECISION
 
@@ -55,6 +67,12 @@ class Propeller:
         section_curves: blade 0's section B-splines (plain arrays).
         stage_seconds: seconds per stage (keys: :class:`torus_cad.stages.Stage` values).
         fuse_route: how the blades were joined to the hub.
+        design_targets: what the designer's inputs (airfoil.naca, diameter, pitch) resolved to;
+            ``parameters`` are already the resolved spec parameters.
+        mounting: the hub's bore, flat, set screw and chamfer, with the set screw's direction.
+        face_parts: the part each face of ``solid`` came from, in the order of ``solid.Faces()``:
+            -1 (``torus_cad.kernel.fuse.HUB_PART``) the hub, i blade i; empty where the build
+            does not know it (after the root fillet).
     """
 
     parameters: PropellerParameters
@@ -65,6 +83,9 @@ class Propeller:
     section_curves: SectionCurves
     stage_seconds: dict[str, float] = field(default_factory=dict)
     fuse_route: FuseRoute = FuseRoute.ASSEMBLED
+    design_targets: DesignTargets | None = None
+    mounting: HubMounting = field(default_factory=HubMounting)
+    face_parts: tuple[int, ...] = ()
 
     @property
     def workplane(self) -> cq.Workplane:
@@ -85,15 +106,33 @@ class Propeller:
             assembly.add(blade, name=f"blade_{index}", color=cq.Color(*blade_color(index, len(self.blades))))
         return assembly
 
+    def printability(self) -> Printability:
+        """Thinnest blade wall and trailing-edge thickness against ``manufacturing.min_wall`` (from the analytic section)."""
+        return design_printability(self.parameters)
+
+    def spin_to_push_air_down(self) -> Spin:
+        """The turn, seen from +z, that pushes air toward -z: a flat-plate estimate (torus_cad.geometry.handedness)."""
+        spin = spin_to_push_air_down(self.surface.points, self.surface.trailing_edge_column)
+        if self.parameters.handedness == Handedness.CCW:  # the surface is the spec's blade, before the mirror
+            return Spin.CLOCKWISE if spin == Spin.COUNTER_CLOCKWISE else Spin.COUNTER_CLOCKWISE
+        return spin
+
     def mass_properties(self, density_g_cm3: float = DEFAULT_DENSITY_G_CM3) -> MassProperties:
         """Volume (mm^3), area (mm^2), centroid (mm), spin-axis inertia and mass (g) for a density in
-        g/cm^3 (default 1.24, PLA), by OpenCascade's adaptive integration."""
+        g/cm^3 (default 1.24, PLA), to 1e-6 relative (see :func:`torus_cad.kernel.checks.mass_properties`)."""
         return mass_properties(self.solid, density_g_cm3)
 
     def write(self, out_dir: str | Path, density_g_cm3: float = DEFAULT_DENSITY_G_CM3,
-              stl: bool = True) -> dict[str, Path]:
-        """Write ``<name>.step``, ``<name>.stl`` (unless ``stl`` is False) and ``<name>.json`` into ``out_dir``."""
-        return write_outputs(self, Path(out_dir), density_g_cm3, stl)
+              stl: bool = True, sections_table: bool = False) -> dict[str, Path]:
+        """Write ``<name>.step``, ``<name>.stl`` (unless ``stl`` is False), the blade-element table
+        ``<name>_sections.csv`` and ``<name>_sections.png`` (if ``sections_table``) and ``<name>.json``
+        into ``out_dir``."""
+        return write_outputs(self, Path(out_dir), density_g_cm3, stl, sections_table)
+
+
+def design_printability(params: PropellerParameters) -> Printability:
+    """The blade's printability from the analytic section alone (no kernel): see torus_cad.geometry.printability."""
+    return printability(params.geometry().blade, params.manufacturing.min_wall)
 
 
 def _section_chords(surface: BladeSurface) -> NDArray[np.float64]:
@@ -120,22 +159,62 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
     timer = StageTimer(progress)
     with timer.stage(Stage.PARAMETERS):
         params = resolve_parameters(design, overrides)
+    with timer.stage(Stage.DESIGN_TARGETS):
+        targets = resolve_design_targets(params)  # airfoil.naca, diameter, pitch -> the spec's parameters
+        params = targets.parameters
         geometry = params.geometry()
     with timer.stage(Stage.SECTION_MATH):
         surface = params.blade_surface()
         check_feasible(geometry, surface)
-        # The hub is symmetric about its axis; its seam goes where it crosses no blade root.
-        seam_deg = seam_angle_deg(surface.points, geometry.hub.radius_mm, geometry.blades)
+        mounting = _place_mounting(params)
+        # The hub is symmetric about its axis; its seam goes where it crosses no blade root (nor the set screw).
+        screw_arc = set_screw_arc_deg(mounting, geometry.hub.radius_mm)
+        seam_deg = seam_angle_deg(surface.points, geometry.hub.radius_mm, geometry.blades,
+                                  () if screw_arc is None else (screw_arc,))
     with timer.stage(Stage.WIRES):
-        curves = fit_section_curves(surface.points, surface.trailing_edge_column, _section_chords(surface))
+        curves = fit_section_curves(surface.points, surface.trailing_edge_column, _section_chords(surface),
+                                    surface.lower_corner_index)
         wires = curves.wires()
     with timer.stage(Stage.LOFT):
         blade = loft_solid(wires, surface.s)
-        hub = hub_solid(geometry.hub.radius_mm, geometry.hub.length_mm, 0.0 if seam_deg is None else seam_deg)
+        fillet_radius = params.hub.root_fillet_radius
+        hub = hub_solid(geometry.hub.radius_mm, geometry.hub.length_mm, 0.0 if seam_deg is None else seam_deg,
+                        mounting)
         angles_deg = [geometry.blade_angle_deg(i) for i in range(geometry.blades)]
         blades = pattern_blades(blade, angles_deg)
-    solid, route = _join_blades_to_hub(hub, blade, blades, angles_deg, timer)
-    return Propeller(params, solid, hub, blades, surface, curves, timer.seconds, route)
+    if fillet_radius > 0.0:  # blade 0 filleted once, then patterned (torus_cad.kernel.fillet)
+        with timer.stage(Stage.FILLET):
+            run_out = None if mounting.chamfer_mm > 0.0 else functools.partial(
+                run_out_hub, geometry.hub.radius_mm, geometry.hub.length_mm, 0.0 if seam_deg is None else seam_deg,
+                mounting, reach=geometry.hub.radius_mm + 4.0 * fillet_radius)
+            solid = fillet_pattern(hub, blade, angles_deg, fillet_radius, run_out)
+            route = FuseRoute.ASSEMBLED
+            face_parts: tuple[int, ...] = ()  # the preview tags a filleted solid's faces itself
+    else:
+        solid, fused = _join_blades_to_hub(hub, blade, blades, angles_deg, timer)
+        route, face_parts = fused.route, fused.face_parts
+    if params.handedness == Handedness.CCW:  # the spec's blade is 'cw'; 'ccw' is its mirror image
+        with timer.stage(Stage.MIRROR):
+            solid = mirrored(solid)  # a transformed copy: the same faces in the same order
+            hub, blades = mirrored(hub, check=False), [mirrored(part, check=False) for part in blades]
+    return Propeller(params, solid, hub, blades, surface, curves, timer.seconds, route, targets, mounting,
+                     face_parts)
+
+
+def _place_mounting(params: PropellerParameters) -> HubMounting:
+    """The hub's mounting features checked against the blades (densely sampled), the set screw placed."""
+    mounting = params.hub.mounting()
+    if not mounting.any:
+        return mounting
+    resolution = params.resolution
+    dense = params.blade_surface(sections=max(resolution.sections, _MOUNTING_SECTIONS),
+                                 points=max(resolution.points, _MOUNTING_POINTS))
+    return place_mounting(mounting, dense.points, params.blades, params.hub.radius, params.hub.length,
+                          params.hub.root_fillet_radius)
+
+
+#: Sampling of the blade surface for the mounting checks (the check uses the points as they are).
+_MOUNTING_SECTIONS, _MOUNTING_POINTS = 200, 160
 
 
 #: Another name for :func:`build_propeller`, for people who continue in CadQuery.
@@ -143,8 +222,8 @@ propeller_objects = build_propeller
 
 
 def _join_blades_to_hub(hub: cq.Solid, blade: cq.Solid, blades: list[cq.Solid], angles_deg: list[float],
-                        timer: StageTimer) -> tuple[cq.Solid, FuseRoute]:
-    """The fused, checked propeller and the route that made it.
+                        timer: StageTimer) -> tuple[cq.Solid, Fused]:
+    """The fused, checked propeller and how it was made (route, each face's part).
 
     The shared-intersection route's result is checked for validity, which includes every
     edge's curve on the hub against its 3D curve. Where that route fails, one general fuse
@@ -152,17 +231,17 @@ def _join_blades_to_hub(hub: cq.Solid, blade: cq.Solid, blades: list[cq.Solid], 
     """
     try:
         with timer.stage(Stage.FUSE):
-            fused, route = fuse_pattern(hub, blade, angles_deg)
+            fused = fuse_pattern(hub, blade, angles_deg)
         with timer.stage(Stage.CHECK):
-            return single_valid_solid(fused, "joining the blades to the hub"), route
+            return single_valid_solid(fused.shape, "joining the blades to the hub"), fused
     except KernelError:
         pass  # the general fuse below decides
     with timer.stage(Stage.FUSE):
         fused = fuse_all(hub, blades)
     with timer.stage(Stage.CHECK):
-        solid = single_valid_solid(fused, "fusing the blades with the hub")
+        solid = single_valid_solid(fused.shape, "fusing the blades with the hub")
         _check_volume(solid, hub, blade, len(blades))
-    return solid, FuseRoute.GENERAL
+    return solid, fused
 
 
 def _check_volume(solid: cq.Solid, hub: cq.Solid, blade: cq.Solid, blades: int) -> None:
@@ -175,7 +254,7 @@ def _check_volume(solid: cq.Solid, hub: cq.Solid, blade: cq.Solid, blades: int) 
 
 
 def build_report(propeller: Propeller, density_g_cm3: float) -> dict[str, Any]:
-    """The JSON report: parameters, mass properties, validity and stage times."""
+    """The JSON report: parameters, mass properties, balance, printability, validity and stage times."""
     properties = propeller.mass_properties(density_g_cm3)
     return {
         "name": propeller.parameters.name,
@@ -183,28 +262,24 @@ def build_report(propeller: Propeller, density_g_cm3: float) -> dict[str, Any]:
         "valid": True,
         "solids": 1,
         **properties.to_dict(),
+        "balance": balance(propeller.solid, density_g_cm3).to_dict(),
+        "printability": propeller.printability().to_dict(),
+        "handedness": propeller.parameters.handedness.value,
+        "spin_to_push_air_down": propeller.spin_to_push_air_down().value,
+        "set_screw_angle_deg": propeller.mounting.set_screw_angle_deg if propeller.mounting.set_screw_diameter_mm else None,
         "section_fit_error_mm": propeller.section_curves.fit_error,
         "stage_seconds": dict(propeller.stage_seconds),
         "fuse_route": propeller.fuse_route.value,
+        **({"design_targets": propeller.design_targets.to_dict()}
+           if propeller.design_targets is not None and propeller.design_targets.requested else {}),
     }
 
 
 def write_outputs(propeller: Propeller, out_dir: Path, density_g_cm3: float = DEFAULT_DENSITY_G_CM3,
-                  stl: bool = True) -> dict[str, Path]:
-    """Write STEP, STL and the JSON report atomically; return the paths by kind."""
-    params = propeller.parameters
-    timer = StageTimer()
-    paths: dict[str, Path] = {}
-    with timer.stage(Stage.STEP_WRITE):
-        paths["step"] = write_step(propeller.solid, out_dir / f"{params.name}.step", params.name,
-                                   params.export.step_schema)
-    if stl:
-        with timer.stage(Stage.STL_WRITE):
-            paths["stl"] = write_stl(propeller.solid, out_dir / f"{params.name}.stl",
-                                     params.export.stl_linear_deflection, params.export.stl_angular_deflection)
-    propeller.stage_seconds.update(timer.seconds)
-    report = build_report(propeller, density_g_cm3)
-    paths["json"] = out_dir / f"{params.name}.json"
-    with atomic_path(paths["json"]) as temp:
-        temp.write_text(json.dumps(report, indent=2) + "\n")
-    return paths
+                  stl: bool = True, sections_table: bool = False) -> dict[str, Path]:
+    """Write the files of ``export.formats`` (STEP, STL, 3MF; ``stl=False`` drops the STL), the
+    blade-element table (``<name>_sections.csv`` and ``.png``, when ``sections_table``; ``torus-cad
+    build`` writes it) and the JSON report as one output set (torus_cad.outputs); return the paths by kind."""
+    from torus_cad.outputs import write_output_set
+
+    return write_output_set(propeller, out_dir, density_g_cm3, stl=stl, sections_table=sections_table)

@@ -17,13 +17,18 @@ class Stage(StrEnum):
     """A stage of building and writing a propeller; the value is its key in reports."""
 
     PARAMETERS = "parameters"
+    DESIGN_TARGETS = "design_targets"
     SECTION_MATH = "section_math"
     WIRES = "wires"
     LOFT = "loft"
     FUSE = "fuse"
     CHECK = "check"
+    FILLET = "fillet"
+    MIRROR = "mirror"
     STEP_WRITE = "step_write"
     STL_WRITE = "stl_write"
+    SECTIONS_TABLE = "sections_table"
+    THREE_MF_WRITE = "3mf_write"
 
     @property
     def label(self) -> str:
@@ -33,13 +38,18 @@ class Stage(StrEnum):
 
 _LABELS = {
     Stage.PARAMETERS: "reading parameters",
+    Stage.DESIGN_TARGETS: "diameter and pitch targets",
     Stage.SECTION_MATH: "blade sections (geometry)",
     Stage.WIRES: "section curves",
     Stage.LOFT: "lofting the blade",
     Stage.FUSE: "fusing blades with the hub",
     Stage.CHECK: "checking the solid",
+    Stage.FILLET: "filleting the blade roots",
+    Stage.MIRROR: "mirroring (clockwise)",
     Stage.STEP_WRITE: "writing STEP",
     Stage.STL_WRITE: "writing STL",
+    Stage.SECTIONS_TABLE: "writing the blade-element table",
+    Stage.THREE_MF_WRITE: "writing 3MF",
 }
 
 

@@ -57,15 +57,36 @@ HUB_FOOTPRINT_NEAR_RELATIVE = 0.02
 #: seam is placed beside it.
 HUB_FOOTPRINT_MARGIN_DEG = 1.0
 
-# -- limits on inputs ------------------------------------------------------------------------
 
-#: Largest configuration file read (bytes): a design is a few hundred bytes.
+# -- limits: inputs and work refused before they start ---------------------------------------------
+
+#: Largest configuration file read (bytes): a design is a few hundred bytes. Only regular files are read.
 CONFIG_FILE_MAX_BYTES = 1 << 20
+
+#: Most triangles an STL may have, by the estimate made before tessellating
+#: (torus_cad.geometry.triangle_estimate). OpenCascade's mesher slows down faster than its
+#: triangle count grows on the lofted blades (see the README's "Limits").
+STL_TRIANGLE_LIMIT = 2_000_000
+
+#: A writer that fails while its file system has less free space than this (bytes) failed for
+#: lack of space: OpenCascade's writers report only that they could not write.
+DISK_FULL_FREE_BYTES = 1 << 20
 
 #: Most designs one sweep may hold (grid product or samples), checked from the axis sizes before
 #: any design is generated. Beyond it the design list and table alone take gigabytes, and at
 #: ~2 designs/s per machine the sweep would run for weeks.
 MAX_SWEEP_DESIGNS = 1_000_000
+
+#: Smallest gap (mm) the hub's mounting features (bore, chamfer, set-screw hole) must keep from
+#: any sampled blade point; covers the blade surface between its samples.
+MOUNTING_CLEARANCE_MM = 0.05
+
+#: Seconds the root fillet may take (in its child process) before it counts as failed.
+FILLET_TIME_LIMIT_S = 60.0
+
+#: Relative precision of the integration for the balance report (static imbalance, products of
+#: inertia): coarser than the mass properties', as it integrates the solid a second time.
+BALANCE_RELATIVE_PRECISION = 1e-4
 
 #: Surface meshes (torus_cad.mesh): largest sag of the flat faces from the analytic blade, as a
 #: fraction of the local section thickness, above which a resolution is refused. The default design

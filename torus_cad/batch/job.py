@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from torus_cad.batch.outcome import DesignResult, Outcome
-from torus_cad.errors import GeometryError, ParameterError, TorusCadError
+from torus_cad.errors import GeometryError, KernelError, ParameterError
 from torus_cad.parameters import PropellerParameters
 
 __all__ = ["FAILURE_FILE", "REFUSAL_FILE", "DesignTask", "read_design_status", "record_result", "run_design",
@@ -74,14 +74,8 @@ def run_design(task: DesignTask) -> DesignResult:
             propeller = build_propeller(PropellerParameters.from_dict(task.parameters))
             if task.write and folder is not None:
                 outcome, reason = _write(propeller, folder, task)
-    except (ParameterError, GeometryError) as error:
-        outcome, reason, error_type = Outcome.REFUSED, str(error), type(error).__name__
-    except TorusCadError as error:  # KernelError, or the package's other failures
-        outcome, reason, detail, error_type = Outcome.FAILED, _one_line(error), traceback.format_exc(), \
-            type(error).__name__
-    except Exception as error:
-        outcome, detail, error_type = Outcome.ERROR, traceback.format_exc(), type(error).__name__
-        reason = f"{type(error).__name__}: {_one_line(error)}"
+    except Exception as error:  # a batch records every failure and carries on
+        (outcome, reason, detail), error_type = _classify(error), type(error).__name__
     finally:
         if scratch is not None:
             shutil.rmtree(scratch, ignore_errors=True)
@@ -89,6 +83,15 @@ def run_design(task: DesignTask) -> DesignResult:
     if task.folder is not None:
         result = record_result(task, result)
     return result
+
+
+def _classify(error: Exception) -> tuple[Outcome, str, str]:
+    """The outcome, one-line reason and traceback of what a design raised (call inside ``except``)."""
+    if isinstance(error, (ParameterError, GeometryError)):  # the package's own refusal
+        return Outcome.REFUSED, str(error), ""
+    if isinstance(error, KernelError):  # OpenCascade failed on a design the checks let through
+        return Outcome.FAILED, _one_line(error), traceback.format_exc()
+    return Outcome.ERROR, f"{type(error).__name__}: {_one_line(error)}", traceback.format_exc()
 
 
 def _write(propeller: Any, folder: Path, task: DesignTask) -> tuple[Outcome, str]:

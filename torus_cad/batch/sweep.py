@@ -160,15 +160,35 @@ def run_sweep(spec: SweepSpec, out_dir: str | Path, *, workers: int | None = Non
     out_dir = Path(out_dir).resolve()
     stl = spec.stl if stl is None else stl
     density = spec.density_g_cm3 if density_g_cm3 is None else density_g_cm3
+    with interrupts_raised():
+        try:
+            designs, pending = _plan(spec, out_dir, stl, density, rebuild)
+        except Interrupted as interrupt:  # before anything was built: no table to write
+            raise SweepInterrupted(interrupt.signum, SweepResult(spec, out_dir, [], interrupted_by=
+                                                                 interrupt.signal_name)) from None
+        return _run(spec, out_dir, designs, pending, stl, workers=workers, scheduler=scheduler, client=client,
+                    time_limit_s=spec.time_limit_s if time_limit_s is None else time_limit_s,
+                    bar=BatchProgress(len(designs), len(designs) - len(pending), enabled=progress, stream=stream),
+                    job=job)
+
+
+def _plan(spec: SweepSpec, out_dir: Path, stl: bool, density: float | None,
+          rebuild: bool) -> tuple[list[Design], list[DesignTask]]:
+    """Every design (listed in ``sweep.json``) and the tasks of those not done yet."""
     designs = generate_designs(spec)
-    result = SweepResult(spec, out_dir, designs)
     _write_manifest(spec, designs, out_dir, stl, density)
     pending = [DesignTask(design.design_id, design.parameters, str(out_dir / DESIGNS_DIR / design.design_id),
                           stl=stl, density_g_cm3=density)
                for design in designs if rebuild or not _is_done(out_dir, design, stl)]
-    result.skipped = len(designs) - len(pending)
+    return designs, pending
+
+
+def _run(spec: SweepSpec, out_dir: Path, designs: list[Design], pending: list[DesignTask], stl: bool, *,
+         workers: int | None, scheduler: str | None, client: Any, time_limit_s: float, bar: BatchProgress,
+         job: Job | None) -> SweepResult:
+    """Run ``pending`` on the local pool or Dask; the table is written whatever happens."""
+    result = SweepResult(spec, out_dir, designs, skipped=len(designs) - len(pending))
     results: dict[str, DesignResult] = {}
-    bar = BatchProgress(len(designs), result.skipped, enabled=progress, stream=stream)
 
     def on_result(task: DesignTask, design_result: DesignResult) -> None:
         results[task.design_id] = design_result
@@ -177,21 +197,19 @@ def run_sweep(spec: SweepSpec, out_dir: str | Path, *, workers: int | None = Non
     own_client = own_cluster = None
     start = time.perf_counter()
     try:
-        with interrupts_raised():
-            if not pending:
-                result.backend = "nothing to run"
-            elif client is not None or scheduler is not None:
-                if client is None:
-                    own_client, own_cluster = cluster.connect(str(scheduler), workers)
-                    client = own_client
-                executor = client.get_executor(pure=False)
-                result.backend = f"dask: {cluster.client_label(client)}"
-                run_tasks(pending, on_result, lambda: executor, window=None, job=job, check_visible=True)
-            else:
-                count = max(1, min(workers or default_workers(), len(pending)))
-                limit = spec.time_limit_s if time_limit_s is None else time_limit_s
-                result.backend = f"local pool, {count} worker{'s' if count > 1 else ''}"
-                run_tasks(pending, on_result, lambda: LocalPool(count, limit), window=2 * count, job=job)
+        if not pending:
+            result.backend = "nothing to run"
+        elif client is not None or scheduler is not None:
+            if client is None:
+                own_client, own_cluster = cluster.connect(str(scheduler), workers)
+                client = own_client
+            executor = client.get_executor(pure=False)
+            result.backend = f"dask: {cluster.client_label(client)}"
+            run_tasks(pending, on_result, lambda: executor, window=None, job=job, check_visible=True)
+        else:
+            count = max(1, min(workers or default_workers(), len(pending)))
+            result.backend = f"local pool, {count} worker{'s' if count > 1 else ''}"
+            run_tasks(pending, on_result, lambda: LocalPool(count, time_limit_s), window=2 * count, job=job)
     except Interrupted as interrupt:
         result.interrupted_by = interrupt.signal_name
         raise SweepInterrupted(interrupt.signum, result) from None

@@ -9,6 +9,11 @@ The leading edge needs care: y_t grows like sqrt(t), so |f'(t)| is infinite at t
 uniform grid in t is far too coarse there. Both the quadrature and the table therefore run
 in u = sqrt(t) on each surface, where |df/du| is bounded; the spec's t is recovered as
 t = u^2 (upper) and t = 2 - u^2 (lower).
+
+Any :class:`~torus_cad.geometry.section.Section` is sampled this way (NACA 4- and 5-digit,
+.dat files). A section with a blunt trailing edge has a third piece, the straight base
+between its two corners; it takes its share of the points like the surfaces, so the spacing
+covers it too, and both corners are sample points.
 """
 
 from __future__ import annotations
@@ -21,7 +26,12 @@ from numpy.typing import NDArray
 from scipy.integrate import quad_vec
 
 from torus_cad.errors import ParameterError
-from torus_cad.geometry.airfoil import NacaAirfoil, airfoil_points
+from torus_cad.geometry.airfoil import airfoil_points
+from torus_cad.geometry.section import (
+    SHARP_TRAILING_EDGE_GAP,
+    Section,
+    trailing_edge_vector,
+)
 from torus_cad.tolerances import ARC_LENGTH_FINE_SAMPLES, ARC_LENGTH_QUAD_ABS
 
 
@@ -52,27 +62,33 @@ class SectionSampling:
     """Points of one section equally spaced in arc length, starting at the leading edge.
 
     Attributes:
-        t: ``(n,)`` float, the spec's closed-curve parameter in [0, 2).
+        t: ``(n,)`` float, the closed-curve parameter (the spec's, in [0, 2), for a sharp
+            section; in [0, 3) with a base, see :func:`torus_cad.geometry.section.closed_points`).
         points: ``(n, 2)`` float, chord units, order of f(t): upper surface first.
         perimeter: arc length of the closed section, chord units.
-        trailing_edge_index: index of the exact trailing-edge point, or None when the
-            spacing is the spec's single uniform spacing (which need not hit it).
+        trailing_edge_index: index of the exact trailing-edge point (the upper corner of a
+            blunt edge), or None when the spacing is the spec's single uniform spacing (which
+            need not hit it).
+        lower_corner_index: index of the lower corner of a blunt trailing edge (the base runs
+            from ``trailing_edge_index`` to it); None for a sharp edge or the uniform spacing.
+        base: whether the section has a blunt trailing edge (and ``t`` the extended parameter).
     """
 
     t: NDArray[np.float64]
     points: NDArray[np.float64]
     perimeter: float
     trailing_edge_index: int | None
+    lower_corner_index: int | None = None
+    base: bool = False
 
 
-def surface_arc_length_table(airfoil: NacaAirfoil, upper: bool,
+def surface_arc_length_table(airfoil: Section, upper: bool,
                              fine_samples: int = ARC_LENGTH_FINE_SAMPLES // 2) -> ArcLengthTable:
     """Tabulate the arc length of the upper or lower surface on ``fine_samples`` intervals in u."""
     edges = np.linspace(0.0, 1.0, fine_samples + 1)
-    if 0.0 < airfoil.max_camber and 0.0 < airfoil.camber_position < 1.0:
-        # The camber line's curvature jumps at p: make sqrt(p) a grid point so that no
+    for kink in airfoil.kinks:
+        # E.g. the camber line's curvature jumps at p: make sqrt(p) a grid point so that no
         # quadrature interval (and no interpolation interval) straddles the kink.
-        kink = np.sqrt(airfoil.camber_position)
         edges = np.union1d(edges[np.abs(edges - kink) > 0.25 / fine_samples], kink)
     starts, widths = edges[:-1], np.diff(edges)
 
@@ -84,36 +100,62 @@ def surface_arc_length_table(airfoil: NacaAirfoil, upper: bool,
 
 
 @lru_cache(maxsize=64)
-def equal_arc_length_section(airfoil: NacaAirfoil, count: int, anchor_trailing_edge: bool = True,
+def equal_arc_length_section(airfoil: Section, count: int, anchor_trailing_edge: bool = True,
                              fine_samples: int = ARC_LENGTH_FINE_SAMPLES // 2) -> SectionSampling:
     """``count`` points around the closed section, equally spaced in arc length (spec §5).
 
     With ``anchor_trailing_edge=False`` this is the spec's procedure exactly: one spacing
     Delta s = S_total / count around the whole section. With ``True`` (used for the solid
-    and the mesh) the points are shared between the surfaces in proportion to their arc
-    lengths, each surface is spaced equally, and the sharp trailing edge is always a point,
-    so the section never cuts its corner. The two spacings then differ by less than 1/count.
+    and the mesh) the points are shared between the surfaces (and the base of a blunt
+    trailing edge) in proportion to their arc lengths, each piece is spaced equally, and the
+    trailing edge's corners are always points, so the section never cuts a corner. The two
+    spacings then differ by less than 1/count.
     """
     if count < 8:
         raise ParameterError(f"points = {count} is out of range; allowed [8, inf)")
     upper = surface_arc_length_table(airfoil, True, fine_samples)
     lower = surface_arc_length_table(airfoil, False, fine_samples)
-    perimeter = upper.total + lower.total
+    base_length = float(np.linalg.norm(trailing_edge_vector(airfoil)))
+    base = base_length > SHARP_TRAILING_EDGE_GAP
+    perimeter = upper.total + base_length + lower.total
     if anchor_trailing_edge:
-        upper_count = int(np.clip(round(count * upper.total / perimeter), 2, count - 2))
-        lower_count = count - upper_count
-        upper_u = upper.root_chord_at(np.arange(upper_count) * upper.total / upper_count)
-        lower_u = lower.root_chord_at(lower.total - np.arange(lower_count) * lower.total / lower_count)
-        trailing_edge_index: int | None = upper_count
+        lengths = np.array([upper.total, base_length, lower.total])
+        counts = _shares(count, lengths, minimum=np.array([2, 1 if base else 0, 2]))
+        upper_arc = np.arange(counts[0]) * upper.total / counts[0]
+        base_fraction = np.arange(counts[1]) / max(counts[1], 1)
+        lower_arc = lower.total - np.arange(counts[2]) * lower.total / counts[2]
+        trailing_edge_index: int | None = int(counts[0])
+        lower_corner_index = int(counts[0] + counts[1]) if base else None
     else:
         arc = np.arange(count) * perimeter / count
-        on_upper = arc <= upper.total
-        upper_u = upper.root_chord_at(arc[on_upper])
-        lower_u = lower.root_chord_at(perimeter - arc[~on_upper])
-        trailing_edge_index = None
-    t = np.concatenate([upper_u**2, 2.0 - lower_u**2])
-    points = np.concatenate([airfoil.points_on_half(upper_u, True), airfoil.points_on_half(lower_u, False)])
-    return SectionSampling(t=t, points=points, perimeter=perimeter, trailing_edge_index=trailing_edge_index)
+        upper_arc = arc[arc <= upper.total]
+        on_base = (arc > upper.total) & (arc < upper.total + base_length)
+        base_fraction = (arc[on_base] - upper.total) / base_length if base else arc[:0]
+        lower_arc = perimeter - arc[arc >= upper.total + base_length]
+        trailing_edge_index = lower_corner_index = None
+    upper_u, lower_u = upper.root_chord_at(upper_arc), lower.root_chord_at(lower_arc)
+    lower_start = 2.0 if base else 1.0
+    t = np.concatenate([upper_u**2, 1.0 + base_fraction, lower_start + 1.0 - lower_u**2])
+    corners = [airfoil.points_on_half(np.array([1.0]), side)[0] for side in (True, False)]
+    points = np.concatenate([airfoil.points_on_half(upper_u, True),
+                             (1.0 - base_fraction[:, None]) * corners[0] + base_fraction[:, None] * corners[1],
+                             airfoil.points_on_half(lower_u, False)])
+    return SectionSampling(t=t, points=points, perimeter=perimeter, trailing_edge_index=trailing_edge_index,
+                           lower_corner_index=lower_corner_index, base=base)
+
+
+def _shares(count: int, lengths: NDArray[np.float64], minimum: NDArray[np.int64]) -> NDArray[np.int64]:
+    """``count`` points split between pieces in proportion to their lengths (largest remainders), each >= its minimum."""
+    exact = count * lengths / lengths.sum()
+    shares = np.maximum(np.floor(exact).astype(int), minimum)
+    while shares.sum() > count:  # the minimums took points: give them back from the largest piece
+        shares[int(np.argmax(shares - minimum))] -= 1
+    remainder = exact - shares
+    while shares.sum() < count:
+        index = int(np.argmax(remainder))
+        shares[index] += 1
+        remainder[index] -= 1.0
+    return shares
 
 
 def spacing_deviation(points: NDArray[np.float64]) -> float:

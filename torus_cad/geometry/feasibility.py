@@ -26,11 +26,17 @@ import numpy as np
 from numpy.typing import NDArray
 
 from torus_cad.errors import GeometryError
-from torus_cad.geometry.airfoil import airfoil_points
 from torus_cad.geometry.centerline import Centerline
 from torus_cad.geometry.frames import Frames
 from torus_cad.geometry.propeller import HubGeometry, PropellerGeometry
-from torus_cad.geometry.surface import BladeSurface, blade_frames, place_on_frames
+from torus_cad.geometry.surface import (
+    BladeSurface,
+    blade_frames,
+    check_trailing_edge,
+    place_on_frames,
+    sections_along,
+    sections_at,
+)
 
 #: A section may reach at most this fraction of the way to the centre of curvature (check 3).
 FOLD_LIMIT = 1.0
@@ -135,7 +141,7 @@ def sample_tube(geometry: PropellerGeometry, centerline: Centerline, s: NDArray[
     tangent = first / speed[:, None]
     curvature = (second - np.sum(second * tangent, axis=-1, keepdims=True) * tangent) / speed[:, None] ** 2
     frames = blade_frames(geometry.blade, centerline, s)
-    planar = geometry.blade.laws.apply(airfoil_points(geometry.blade.airfoil, t), s)
+    planar = geometry.blade.laws.apply(sections_at(sections_along(geometry.blade, s), t), s)
     surface = place_on_frames(frames, planar)
     steps = np.linalg.norm(np.diff(frames.origin, axis=0), axis=-1)
     arc_length = np.concatenate([[0.0], np.cumsum(steps)])
@@ -339,6 +345,7 @@ def check_feasible(geometry: PropellerGeometry, surface: BladeSurface) -> None:
     centerline = geometry.centerline(0)
     check_ends_inside_hub(geometry.hub, surface)
     check_centerline_leaves_through_side(geometry.hub, centerline)
+    check_trailing_edge(geometry.blade, centerline, geometry.hub.radius_mm, geometry.hub.length_mm)
     s, step = tube_grid(len(surface.s))
     fine = sample_tube(geometry, centerline, s, surface.t)
     check_no_fold(fine)

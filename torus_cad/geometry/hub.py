@@ -9,6 +9,8 @@ blade 0's shifted by 360 i / n degrees in u, in one piece.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -47,21 +49,22 @@ def footprint_arcs_deg(blade_points: NDArray[np.float64], hub_radius: float) -> 
     return arcs
 
 
-def seam_angle_deg(blade_points: NDArray[np.float64], hub_radius: float, blades: int) -> float | None:
+def seam_angle_deg(blade_points: NDArray[np.float64], hub_radius: float, blades: int,
+                   reserved_arcs_deg: Sequence[tuple[float, float]] = ()) -> float | None:
     """An angle (degrees about +z, from +x) where the hub's seam meets no blade, or None.
 
     Blade i's footprint is blade 0's rotated by 360 i / n (spec §6.1). The seam goes to the
-    middle of the widest free gap between the footprints of all ``blades`` blades; None
-    when they cover the whole circle.
+    middle of the widest free gap between the footprints of all ``blades`` blades and the
+    ``reserved_arcs_deg`` (start, end) (e.g. a set-screw hole); None when they cover the whole circle.
     """
     occupied = np.zeros(_SEAM_SCAN_BINS, dtype=bool)
     bin_deg = 360.0 / _SEAM_SCAN_BINS
-    for low, high in footprint_arcs_deg(blade_points, hub_radius):
-        for blade in range(blades):
-            offset = 360.0 * blade / blades
-            first = int(np.floor((low + offset) / bin_deg))
-            last = int(np.ceil((high + offset) / bin_deg))
-            occupied[np.arange(first, last + 1) % _SEAM_SCAN_BINS] = True
+    arcs = [(low + 360.0 * blade / blades, high + 360.0 * blade / blades)
+            for low, high in footprint_arcs_deg(blade_points, hub_radius) for blade in range(blades)]
+    for low, high in [*arcs, *reserved_arcs_deg]:
+        first = int(np.floor(low / bin_deg))
+        last = int(np.ceil(high / bin_deg))
+        occupied[np.arange(first, last + 1) % _SEAM_SCAN_BINS] = True
     if occupied.all():
         return None
     # Unroll the circle at an occupied bin so that no free gap wraps around the end.

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from torus_cad.geometry.section import chord_positions
 from torus_cad.geometry.surface import BladeSurface
 
 
@@ -81,7 +82,7 @@ def blade_mesh(surface: BladeSurface) -> TriangleMesh:
     b = section_index * count + (point_index + 1) % count
     c, d = a + count, b + count
     sides = np.concatenate([np.stack([a, b, d], -1).reshape(-1, 3), np.stack([a, d, c], -1).reshape(-1, 3)])
-    chord = np.where(surface.t <= 1.0, surface.t, 2.0 - surface.t)
+    chord = chord_positions(surface.t, surface.lower_corner_index is not None)
     trailing_edge_index = surface.trailing_edge_index
     if trailing_edge_index is None:
         trailing_edge_index = int(np.argmax(chord))

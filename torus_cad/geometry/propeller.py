@@ -12,9 +12,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from torus_cad.geometry.airfoil import NacaAirfoil
 from torus_cad.geometry.centerline import Centerline
 from torus_cad.geometry.frames import FrameKind
+from torus_cad.geometry.section import Section
 from torus_cad.geometry.transforms import SectionLaws
 
 
@@ -36,16 +36,20 @@ class BladeGeometry:
     """One blade: its section, how the section changes along s, and the frame it sits on.
 
     Attributes:
-        airfoil: the chord-unit section (spec §1).
+        airfoil: the chord-unit section (spec §1; any :class:`~torus_cad.geometry.section.Section`:
+            NACA 4- or 5-digit, a coordinate file).
         laws: alpha(s), Sx(s), Sy(s) and the pivot (spec §2).
         local_control_points: ``(4, 3)`` P1..P4 in the hub's frame L ([deg, mm, mm], spec §3.1).
         frame: the moving frame's kind (spec §4).
+        trailing_edge_thickness_mm: a blunt trailing edge this thick on every section (mm; 0 =
+            the section's own edge, sharp for NACA sections; :mod:`torus_cad.geometry.trailing_edge`).
     """
 
-    airfoil: NacaAirfoil
+    airfoil: Section
     laws: SectionLaws
     local_control_points: tuple[tuple[float, float, float], ...]
     frame: FrameKind = FrameKind.FRENET
+    trailing_edge_thickness_mm: float = 0.0
 
 
 @dataclass(frozen=True)

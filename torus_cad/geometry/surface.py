@@ -7,16 +7,24 @@ resolution; blade i is built on its own centerline at theta_0 + 360 i / n (spec 
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from torus_cad.geometry.airfoil import airfoil_points
 from torus_cad.geometry.arc_length import equal_arc_length_section
 from torus_cad.geometry.centerline import Centerline
 from torus_cad.geometry.frames import Frames, section_frames
 from torus_cad.geometry.propeller import BladeGeometry
+from torus_cad.geometry.section import Section, closed_points, has_base
+from torus_cad.geometry.trailing_edge import (
+    TRAILING_EDGE_CHECK_SECTIONS,
+    BluntSections,
+    blunt_sections,
+    check_trailing_edge_fits,
+)
+from torus_cad.geometry.transforms import evaluate_quartic
 
 
 @dataclass(frozen=True)
@@ -27,9 +35,13 @@ class BladeSurface:
         points: ``(sections, points, 3)`` float, mm; each row is a closed section starting at
             the leading edge, upper surface first (the order of f(t), spec §1.3).
         s: ``(sections,)`` centerline parameters of the sections, 0 and 1 included.
-        t: ``(points,)`` airfoil parameters in [0, 2) shared by all sections.
-        trailing_edge_index: column of the sharp trailing edge (None if not sampled exactly).
+        t: ``(points,)`` closed-curve parameters shared by all sections: in [0, 2) for sharp
+            sections, in [0, 3) for blunt ones (:func:`torus_cad.geometry.section.closed_points`).
+        trailing_edge_index: column of the sharp trailing edge, or of the upper corner of a
+            blunt one (None if not sampled exactly).
         frames: the frames the sections sit on.
+        lower_corner_index: column of the lower corner of a blunt trailing edge (the base runs
+            from ``trailing_edge_index`` to it); None for a sharp edge.
     """
 
     points: NDArray[np.float64]
@@ -37,6 +49,7 @@ class BladeSurface:
     t: NDArray[np.float64]
     trailing_edge_index: int | None
     frames: Frames
+    lower_corner_index: int | None = None
 
     @property
     def trailing_edge_column(self) -> int:
@@ -52,8 +65,47 @@ def place_on_frames(frames: Frames, planar: NDArray[np.float64]) -> NDArray[np.f
             + planar[..., 1:2] * frames.binormal[:, None, :])
 
 
+def sections_along(blade: BladeGeometry, s: ArrayLike) -> Sequence[Section]:
+    """The chord-unit section at every s: the airfoil itself, or, with a blunt trailing edge, the
+    airfoil opened to the blade's absolute trailing-edge thickness there (:mod:`.trailing_edge`)."""
+    s = np.atleast_1d(np.asarray(s, dtype=float))
+    thickness = blade.trailing_edge_thickness_mm
+    if thickness <= 0.0:
+        return [blade.airfoil] * len(s)
+    laws = blade.laws
+    return blunt_sections(blade.airfoil, thickness, evaluate_quartic(laws.angle_of_attack_deg, s),
+                          evaluate_quartic(laws.scale_x_mm, s), evaluate_quartic(laws.scale_y_mm, s))
+
+
+def check_trailing_edge(blade: BladeGeometry, centerline: Centerline, hub_radius_mm: float, hub_length_mm: float
+                        ) -> None:
+    """Refuse a blunt trailing edge thicker than the blade's sections where the blade is outside the hub
+    (:func:`.trailing_edge.check_trailing_edge_fits`; inside, the hub swallows the sections)."""
+    if blade.trailing_edge_thickness_mm <= 0.0:
+        return
+    s = np.linspace(0.0, 1.0, TRAILING_EDGE_CHECK_SECTIONS)
+    points = centerline.points(s)
+    outside = (np.hypot(points[:, 0], points[:, 1]) > hub_radius_mm) | (np.abs(points[:, 2]) > hub_length_mm / 2.0)
+    if not np.any(outside):
+        return
+    s, laws = s[outside], blade.laws
+    check_trailing_edge_fits(blade.airfoil, blade.trailing_edge_thickness_mm, evaluate_quartic(laws.angle_of_attack_deg, s),
+                             evaluate_quartic(laws.scale_x_mm, s), evaluate_quartic(laws.scale_y_mm, s), s)
+
+
+def sections_at(sections: Sequence[Section], t: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Every section at the closed parameters ``t``: ``(p, 2)`` if they are all one section, else ``(k, p, 2)``."""
+    if isinstance(sections, BluntSections):
+        return sections.points_at(t)
+    base = has_base(sections[0])
+    if all(section is sections[0] for section in sections):
+        return closed_points(sections[0], t, base)
+    return np.stack([closed_points(section, t, base) for section in sections])
+
+
 def place_sections(blade: BladeGeometry, frames: Frames, section: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Transform a chord-unit section ``(p, 2)`` for every frame and place it: ``(k, p, 3)`` mm."""
+    """Transform chord-unit sections, ``(p, 2)`` for all frames or ``(k, p, 2)`` one each, and place
+    them: ``(k, p, 3)`` mm."""
     return place_on_frames(frames, blade.laws.apply(section, frames.s))
 
 
@@ -65,7 +117,7 @@ def blade_frames(blade: BladeGeometry, centerline: Centerline, s: ArrayLike) -> 
 def surface_points(blade: BladeGeometry, centerline: Centerline, s: ArrayLike, t: ArrayLike) -> NDArray[np.float64]:
     """The analytic surface at every (s, t) pair of the grid: ``(len(s), len(t), 3)`` mm."""
     frames = blade_frames(blade, centerline, np.atleast_1d(np.asarray(s, dtype=float)))
-    return place_sections(blade, frames, airfoil_points(blade.airfoil, t))
+    return place_sections(blade, frames, sections_at(sections_along(blade, frames.s), np.asarray(t, dtype=float)))
 
 
 def blade_surface(blade: BladeGeometry, centerline: Centerline, sections: int, points: int,
@@ -74,8 +126,15 @@ def blade_surface(blade: BladeGeometry, centerline: Centerline, sections: int, p
 
     Sections are uniform in s; points are equally spaced in arc length around the airfoil
     (spec §5), with the trailing edge kept as a point unless ``anchor_trailing_edge`` is False.
+    With a blunt trailing edge of constant thickness in mm the chord-unit sections differ
+    along s: all of them are sampled at the parameters ``t`` of the section in the middle
+    (s = 0.5), which are spaced equally on it (and nearly so on the others), both corners included.
     """
-    sampling = equal_arc_length_section(blade.airfoil, points, anchor_trailing_edge)
     frames = blade_frames(blade, centerline, np.linspace(0.0, 1.0, sections))
-    return BladeSurface(place_sections(blade, frames, sampling.points), frames.s, sampling.t,
-                        sampling.trailing_edge_index, frames)
+    along = sections_along(blade, frames.s)
+    shared = all(section is along[0] for section in along)
+    reference = along[0] if shared else sections_along(blade, [0.5])[0]
+    sampling = equal_arc_length_section(reference, points, anchor_trailing_edge)
+    planar = sampling.points if shared else sections_at(along, sampling.t)
+    return BladeSurface(place_sections(blade, frames, planar), frames.s, sampling.t,
+                        sampling.trailing_edge_index, frames, sampling.lower_corner_index)

@@ -59,7 +59,8 @@ class SectionLaws:
     pivot: float = 0.0
 
     def apply(self, section: NDArray[np.float64], s: ArrayLike) -> NDArray[np.float64]:
-        """A chord-unit section ``(p, 2)`` rotated and scaled for every s: ``(len(s), p, 2)`` mm."""
+        """A chord-unit section ``(p, 2)`` (or one per s, ``(len(s), p, 2)``) rotated and scaled for
+        every s: ``(len(s), p, 2)`` mm."""
         s = np.atleast_1d(np.asarray(s, dtype=float))
         return transform_sections(section, evaluate_quartic(self.angle_of_attack_deg, s),
                                   evaluate_quartic(self.scale_x_mm, s), evaluate_quartic(self.scale_y_mm, s),
@@ -78,7 +79,8 @@ def transform_sections(section: NDArray[np.float64], angle_deg: ArrayLike, scale
     """Rotate, then scale, one section for every s (spec §2.3).
 
     Args:
-        section: ``(p, 2)`` float, the airfoil in chord units (x along the chord).
+        section: ``(p, 2)`` float, the airfoil in chord units (x along the chord), or
+            ``(k, p, 2)``, one per s (sections that change along s, e.g. a blunt trailing edge).
         angle_deg: ``(k,)`` alpha(s) in degrees.
         scale_x: ``(k,)`` Sx(s) in mm.
         scale_y: ``(k,)`` Sy(s) in mm.
@@ -87,7 +89,8 @@ def transform_sections(section: NDArray[np.float64], angle_deg: ArrayLike, scale
     Returns:
         ``(k, p, 2)`` float, mm: (X_scaled, Y_scaled) of each section in its own plane.
     """
-    shifted = section - np.array([pivot, 0.0])
-    rotated = np.einsum("kij,pj->kpi", rotation_matrices(angle_deg), shifted)
+    shifted = np.asarray(section, dtype=float) - np.array([pivot, 0.0])
+    pattern = "kij,pj->kpi" if shifted.ndim == 2 else "kij,kpj->kpi"
+    rotated = np.einsum(pattern, rotation_matrices(angle_deg), shifted)
     scales = np.stack([np.asarray(scale_x, float), np.asarray(scale_y, float)], axis=-1)
     return rotated * scales[:, None, :]

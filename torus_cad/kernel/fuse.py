@@ -7,12 +7,17 @@ Two routes give the same solid:
   and joined to the hub. Its cost barely grows with the blade count.
 * :func:`fuse_all` fuses the hub and all n blades in one general boolean: the fallback for
   whenever the first route raises or its result fails the checks.
+
+Both report which part every face of the result came from (:attr:`Fused.face_parts`): the
+assembled shell is put together from faces whose part is known; a boolean's history
+(``Modified`` / ``IsDeleted`` of each argument's faces) says where each input face went.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
 from enum import StrEnum
 
 import cadquery as cq
@@ -24,13 +29,14 @@ from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
 from OCP.BRepTools import BRepTools
 from OCP.GeomAbs import GeomAbs_Cylinder
 from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt, gp_Trsf, gp_Vec2d
-from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_ShapeEnum, TopAbs_WIRE
-from OCP.TopExp import TopExp_Explorer
+from OCP.TopAbs import TopAbs_FACE, TopAbs_WIRE
+from OCP.TopExp import TopExp
 from OCP.TopLoc import TopLoc_Location
-from OCP.TopoDS import TopoDS, TopoDS_Edge, TopoDS_Face, TopoDS_Shape, TopoDS_Shell, TopoDS_Solid
-from OCP.TopTools import TopTools_ListOfShape
+from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Shape, TopoDS_Shell, TopoDS_Solid
+from OCP.TopTools import TopTools_IndexedMapOfShape
 
 from torus_cad.errors import KernelError
+from torus_cad.kernel.topology import boolean, count, edges, explore, faces, result
 
 _FULL_TURN = 2.0 * math.pi
 
@@ -46,10 +52,16 @@ def pattern_blades(blade: cq.Solid, angles_deg: Sequence[float]) -> list[cq.Soli
             for angle in angles_deg]
 
 
-def fuse_all(hub: cq.Solid, blades: Sequence[cq.Solid]) -> cq.Shape:
+#: The hub's entry in :attr:`Fused.face_parts`; blades are 0 .. n-1.
+HUB_PART = -1
+
+
+def fuse_all(hub: cq.Solid, blades: Sequence[cq.Solid]) -> Fused:
     """Hub and all blades fused in one BRepAlgoAPI_Fuse call (parallel, oriented bounding boxes)."""
-    fuse = _boolean(BRepAlgoAPI_Fuse(), [hub.wrapped], [blade.wrapped for blade in blades])
-    return cq.Shape.cast(_result(fuse, "fuse the blades with the hub"))
+    fuse = boolean(BRepAlgoAPI_Fuse(), [hub.wrapped], [blade.wrapped for blade in blades])
+    shape = result(fuse, "fuse the blades with the hub")
+    parts = [(hub.wrapped, HUB_PART), *((blade.wrapped, index) for index, blade in enumerate(blades))]
+    return Fused(cq.Shape.cast(shape), FuseRoute.GENERAL, _face_parts(shape, _history(fuse, parts)))
 
 
 class FuseRoute(StrEnum):
@@ -63,7 +75,23 @@ class FuseRoute(StrEnum):
     """The fallback: one general boolean of the hub and all blades."""
 
 
-def fuse_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float]) -> tuple[cq.Shape, FuseRoute]:
+@dataclass(frozen=True)
+class Fused:
+    """The hub and blades joined into one shape.
+
+    Attributes:
+        shape: the result (to be checked: one valid closed solid is expected).
+        route: how it was joined.
+        face_parts: which part each face of ``shape`` came from, in the order of
+            ``shape.Faces()`` (TopExp's indexed map of faces): HUB_PART or the blade's index.
+    """
+
+    shape: cq.Shape
+    route: FuseRoute
+    face_parts: tuple[int, ...]
+
+
+def fuse_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float]) -> Fused:
     """Hub and copies of ``blade`` at every angle, with one blade-hub intersection for all of them.
 
     1. Cut the blade (built at ``angles_deg[0]``) by the hub: its part outside the hub, whose
@@ -77,14 +105,14 @@ def fuse_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float]) ->
        end face, or a patch straddles the hub's seam, the copies are glued to the hub with a
        fuse that needs no surface-surface intersection (:func:`_glue`).
 
-    Returns the shape and how it was joined (ASSEMBLED or GLUED). The caller checks the result (validity covers each edge's curve on the hub against its 3D
+    Returns the shape, how it was joined (ASSEMBLED or GLUED) and each face's part. The caller checks the result (validity covers each edge's curve on the hub against its 3D
     curve) and falls back to :func:`fuse_all` on a KernelError or an invalid solid. The
     propeller's hub has its seam beside every footprint, see
     :func:`torus_cad.geometry.hub.seam_angle_deg`.
     """
     lateral = _lateral_face(hub)
-    cut = _boolean(BRepAlgoAPI_Cut(), [blade.wrapped], [hub.wrapped])
-    outside = _result(cut, "cut the blade free of the hub")
+    cut = boolean(BRepAlgoAPI_Cut(), [blade.wrapped], [hub.wrapped])
+    outside = result(cut, "cut the blade free of the hub")
     patches = _modified_faces(cut, lateral)
     if not patches:
         raise KernelError("the blade does not meet the hub's lateral face")
@@ -92,17 +120,18 @@ def fuse_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float]) ->
     copies = [_rotated_with_hub_curves(outside, patches, lateral, math.radians(angle - angles_deg[0]))
               for angle in angles_deg]
     whole_patches = len(hub_pieces) == len(patches) and not any(
-        BRep_Tool.IsClosed_s(edge, patch) for patch in patches for edge in _edges(patch))
+        BRep_Tool.IsClosed_s(edge, patch) for patch in patches for edge in edges(patch))
     if whole_patches:
-        return cq.Shape.cast(_assemble(hub, lateral, copies, patches)), FuseRoute.ASSEMBLED
-    blade_faces = _count(outside, TopAbs_FACE) - len(hub_pieces)
-    glued = _glue(hub, copies, _count(hub.wrapped, TopAbs_FACE) + len(copies) * blade_faces)
-    return cq.Shape.cast(glued), FuseRoute.GLUED
+        solid, origins = _assemble(hub, lateral, copies, patches)
+        return Fused(cq.Shape.cast(solid), FuseRoute.ASSEMBLED, _face_parts(solid, origins))
+    blade_faces = count(outside, TopAbs_FACE) - len(hub_pieces)
+    glued, origins = _glue(hub, copies, count(hub.wrapped, TopAbs_FACE) + len(copies) * blade_faces)
+    return Fused(cq.Shape.cast(glued), FuseRoute.GLUED, _face_parts(glued, origins))
 
 
 def _assemble(hub: cq.Solid, lateral: TopoDS_Face, copies: Sequence[TopoDS_Shape],
-              patches: Sequence[TopoDS_Face]) -> TopoDS_Solid:
-    """The propeller's solid put together from known faces, with no boolean.
+              patches: Sequence[TopoDS_Face]) -> tuple[TopoDS_Solid, list[tuple[TopoDS_Shape, int]]]:
+    """The propeller's solid put together from known faces, with no boolean, and each face's part.
 
     Its shell: the hub's end faces, a new lateral face (the hub's surface and outer wire) with
     each copy's patch boundaries as holes, and each copy's faces off the hub. A patch lies on
@@ -110,39 +139,76 @@ def _assemble(hub: cq.Solid, lateral: TopoDS_Face, copies: Sequence[TopoDS_Shape
     keeps the material on the other side of the same curve; the two flips cancel, so the
     patch's wires, oriented as the patch uses them, are the holes as the lateral face uses them.
     """
-    lateral_with_holes = BRepBuilderAPI_MakeFace(BRep_Tool.Surface_s(lateral), BRepTools.OuterWire_s(lateral), True)
+    outer_wire = BRepTools.OuterWire_s(lateral)
+    lateral_with_holes = BRepBuilderAPI_MakeFace(BRep_Tool.Surface_s(lateral), outer_wire, True)
+    for wire in explore(lateral, TopAbs_WIRE):  # holes the hub already has (a set-screw hole)
+        if not wire.IsSame(outer_wire):
+            lateral_with_holes.Add(TopoDS.Wire_s(wire))
     builder = BRep_Builder()
     shell = TopoDS_Shell()
     builder.MakeShell(shell)
-    for copy in copies:
-        for face in _faces(copy):
+    origins: list[tuple[TopoDS_Shape, int]] = []
+    for index, copy in enumerate(copies):
+        for face in faces(copy):
             if any(face.IsPartner(patch) for patch in patches):
-                for wire in _explore(face, TopAbs_WIRE):
+                for wire in explore(face, TopAbs_WIRE):
                     lateral_with_holes.Add(TopoDS.Wire_s(wire))
             else:
                 builder.Add(shell, face)
+                origins.append((face, index))
     if not lateral_with_holes.IsDone():
         raise KernelError("OpenCascade could not cut the blade roots out of the hub's lateral face")
-    builder.Add(shell, lateral_with_holes.Face())
-    for face in _faces(hub.wrapped):
-        if not face.IsSame(lateral):
-            builder.Add(shell, face)
+    hub_faces = [lateral_with_holes.Face(), *(face for face in faces(hub.wrapped) if not face.IsSame(lateral))]
+    for face in hub_faces:
+        builder.Add(shell, face)
+        origins.append((face, HUB_PART))
     shell.Closed(BRep_Tool.IsClosed_s(shell))
     solid = TopoDS_Solid()
     builder.MakeSolid(solid)
     builder.Add(solid, shell)
-    return solid
+    return solid, origins
 
 
-def _glue(hub: cq.Solid, copies: Sequence[TopoDS_Shape], expected_faces: int) -> TopoDS_Shape:
-    """Hub and copies fused with BOPAlgo_GlueShift: they only touch along faces of the hub's surfaces."""
+def _glue(hub: cq.Solid, copies: Sequence[TopoDS_Shape], expected_faces: int
+          ) -> tuple[TopoDS_Shape, list[tuple[TopoDS_Shape, int]]]:
+    """Hub and copies fused with BOPAlgo_GlueShift (they only touch along faces of the hub's
+    surfaces), and where each of their faces went."""
     glue = BRepAlgoAPI_Fuse()
     glue.SetGlue(BOPAlgo_GlueShift)
-    fused = _result(_boolean(glue, [hub.wrapped], copies), "glue the blades to the hub")
-    faces = _count(fused, TopAbs_FACE)
+    fused = result(boolean(glue, [hub.wrapped], copies), "glue the blades to the hub")
+    faces = count(fused, TopAbs_FACE)
     if faces != expected_faces:
         raise KernelError(f"gluing the blades to the hub gave {faces} faces instead of {expected_faces}")
-    return fused
+    return fused, _history(glue, [(hub.wrapped, HUB_PART), *((copy, index) for index, copy in enumerate(copies))])
+
+
+def _history(operation: BRepAlgoAPI_BooleanOperation, arguments: Iterable[tuple[TopoDS_Shape, int]]
+             ) -> list[tuple[TopoDS_Shape, int]]:
+    """(result face, part) for every face of every (argument, part): its pieces in the result if
+    the boolean split it, itself if it kept it whole, nothing if it was removed."""
+    origins: list[tuple[TopoDS_Shape, int]] = []
+    for argument, part in arguments:
+        for face in faces(argument):
+            pieces = list(operation.Modified(face))
+            if not pieces and not operation.IsDeleted(face):
+                pieces = [face]
+            origins.extend((piece, part) for piece in pieces)
+    return origins
+
+
+def _face_parts(shape: TopoDS_Shape, origins: Iterable[tuple[TopoDS_Shape, int]]) -> tuple[int, ...]:
+    """The part of each face of ``shape`` (in the order of ``shape.Faces()``) from (face, part) pairs."""
+    faces = TopTools_IndexedMapOfShape()
+    TopExp.MapShapes_s(shape, TopAbs_FACE, faces)
+    parts: list[int | None] = [None] * faces.Extent()
+    for face, part in origins:
+        index = faces.FindIndex(face)
+        if index:
+            parts[index - 1] = part
+    known = [part for part in parts if part is not None]
+    if len(known) != len(parts):
+        raise KernelError(f"{len(parts) - len(known)} faces of the joined propeller came from no known part")
+    return tuple(known)
 
 
 def _rotated_with_hub_curves(outside: TopoDS_Shape, patches: list[TopoDS_Face], lateral: TopoDS_Face,
@@ -161,7 +227,7 @@ def _rotated_with_hub_curves(outside: TopoDS_Shape, patches: list[TopoDS_Face], 
         shift = angle_rad - _FULL_TURN * math.floor((u_min + angle_rad) / _FULL_TURN)
         if u_max + shift > _FULL_TURN:
             raise KernelError("a blade's footprint on the hub crosses the hub's seam")
-        for edge in _edges(patch):
+        for edge in edges(patch):
             curve = BRep_Tool.CurveOnSurface_s(edge, patch, 0.0, 0.0)
             if curve is None:
                 raise KernelError("an intersection edge has no curve on the hub")
@@ -171,10 +237,13 @@ def _rotated_with_hub_curves(outside: TopoDS_Shape, patches: list[TopoDS_Face], 
 
 
 def _lateral_face(hub: cq.Solid) -> TopoDS_Face:
-    for face in hub.Faces():
-        if BRepAdaptor_Surface(face.wrapped).GetType() == GeomAbs_Cylinder:
-            return face.wrapped
-    raise KernelError("the hub has no cylindrical face")
+    """The hub's outer cylindrical face (a bore or a set-screw hole is a smaller cylinder)."""
+    cylinders = [(BRepAdaptor_Surface(face.wrapped).Cylinder().Radius(), index, face.wrapped)
+                 for index, face in enumerate(hub.Faces())
+                 if BRepAdaptor_Surface(face.wrapped).GetType() == GeomAbs_Cylinder]
+    if not cylinders:
+        raise KernelError("the hub has no cylindrical face")
+    return max(cylinders, key=lambda item: item[:2])[2]
 
 
 def _modified_faces(operation: BRepAlgoAPI_BooleanOperation, face: TopoDS_Face) -> list[TopoDS_Face]:
@@ -183,47 +252,15 @@ def _modified_faces(operation: BRepAlgoAPI_BooleanOperation, face: TopoDS_Face) 
 
 
 def _modified_faces_of_shape(operation: BRepAlgoAPI_BooleanOperation, shape: TopoDS_Shape) -> list[TopoDS_Face]:
-    return [piece for face in _faces(shape) for piece in _modified_faces(operation, face)]
+    return [piece for face in faces(shape) for piece in _modified_faces(operation, face)]
 
 
-def _boolean(operation: BRepAlgoAPI_BooleanOperation, arguments: Sequence[TopoDS_Shape],
-             tools: Sequence[TopoDS_Shape]) -> BRepAlgoAPI_BooleanOperation:
-    """Run ``operation`` on ``arguments`` and ``tools`` (parallel, oriented bounding boxes)."""
-    argument_list, tool_list = TopTools_ListOfShape(), TopTools_ListOfShape()
-    for shape in arguments:
-        argument_list.Append(shape)
-    for shape in tools:
-        tool_list.Append(shape)
-    operation.SetArguments(argument_list)
-    operation.SetTools(tool_list)
-    operation.SetRunParallel(True)
-    operation.SetUseOBB(True)
-    operation.Build()
-    return operation
 
 
-def _result(operation: BRepAlgoAPI_BooleanOperation, what: str) -> TopoDS_Shape:
-    if not operation.IsDone() or operation.Shape().IsNull():
-        raise KernelError(f"OpenCascade could not {what} (the boolean operation reported errors)")
-    return operation.Shape()
 
 
-def _explore(shape: TopoDS_Shape, kind: TopAbs_ShapeEnum) -> list[TopoDS_Shape]:
-    found: list[TopoDS_Shape] = []
-    explorer = TopExp_Explorer(shape, kind)
-    while explorer.More():
-        found.append(explorer.Current())
-        explorer.Next()
-    return found
 
 
-def _faces(shape: TopoDS_Shape) -> list[TopoDS_Face]:
-    return [TopoDS.Face_s(face) for face in _explore(shape, TopAbs_FACE)]
 
 
-def _edges(shape: TopoDS_Shape) -> list[TopoDS_Edge]:
-    return [TopoDS.Edge_s(edge) for edge in _explore(shape, TopAbs_EDGE)]
 
-
-def _count(shape: TopoDS_Shape, kind: TopAbs_ShapeEnum) -> int:
-    return len(_explore(shape, kind))

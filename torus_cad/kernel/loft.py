@@ -11,12 +11,13 @@ from OCP.BRep import BRep_Tool
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace, BRepBuilderAPI_MakeSolid, BRepBuilderAPI_Sewing
 from OCP.BRepCheck import BRepCheck_Analyzer
 from OCP.BRepOffsetAPI import BRepOffsetAPI_ThruSections
+from OCP.BRepTools import BRepTools_WireExplorer
 from OCP.Geom import Geom_BSplineCurve, Geom_BSplineSurface
 from OCP.gp import gp_Pnt
 from OCP.ShapeFix import ShapeFix_Solid
 from OCP.TColgp import TColgp_Array2OfPnt
 from OCP.TopAbs import TopAbs_SHELL
-from OCP.TopoDS import TopoDS
+from OCP.TopoDS import TopoDS, TopoDS_Face
 from scipy.interpolate import make_interp_spline
 
 from torus_cad.errors import KernelError
@@ -31,9 +32,10 @@ LOFT_SEWING_TOLERANCE = 1e-6
 def loft_solid(wires: Sequence[cq.Wire], parameters: Sequence[float] | NDArray[np.float64] | None = None) -> cq.Solid:
     """A smooth closed solid through ``wires``, capped by planar end faces.
 
-    The wires must be compatible single-edge B-splines (same degree, knots and pole count,
-    start at the trailing edge), as :func:`torus_cad.kernel.wires.fit_section_curves` makes
-    them. The side surface interpolates every pole across the sections with a cubic
+    The wires must be compatible B-splines (same edges, each with the same degree, knots and
+    pole count, starting at the trailing edge), as :func:`torus_cad.kernel.wires.fit_section_curves`
+    makes them; each edge position gets its own side face (a blunt trailing edge's base and
+    the airfoil). The side surface interpolates every pole across the sections with a cubic
     (not-a-knot) spline in the sections' own parameters ``parameters`` (default: uniform in
     [0, 1], the s of :func:`torus_cad.geometry.surface.blade_surface`), so it follows the
     design between sections. BRepOffsetAPI_ThruSections, used before and kept as a fallback,
@@ -51,18 +53,31 @@ def loft_solid(wires: Sequence[cq.Wire], parameters: Sequence[float] | NDArray[n
     return thru_sections_solid(wires)
 
 
-def _bspline_of(wire: cq.Wire) -> Geom_BSplineCurve:
-    edges = wire.Edges()
-    if len(edges) != 1:
-        raise KernelError("a section wire must be one B-spline edge")
-    curve = BRep_Tool.Curve_s(edges[0].wrapped, 0.0, 1.0)
-    if not isinstance(curve, Geom_BSplineCurve):
-        raise KernelError("a section wire must be one B-spline edge")
-    return curve
+def _bsplines_of(wire: cq.Wire) -> list[Geom_BSplineCurve]:
+    """The wire's edges' B-spline curves, in the wire's order."""
+    curves = []
+    explorer = BRepTools_WireExplorer(wire.wrapped)
+    while explorer.More():
+        curve = BRep_Tool.Curve_s(explorer.Current(), 0.0, 1.0)
+        if not isinstance(curve, Geom_BSplineCurve):
+            raise KernelError("a section wire must be made of B-spline edges")
+        curves.append(curve)
+        explorer.Next()
+    return curves
 
 
 def _loft_through_poles(wires: Sequence[cq.Wire], parameters: Sequence[float] | NDArray[np.float64] | None) -> cq.Solid:
-    curves = [_bspline_of(wire) for wire in wires]
+    """One side face per edge position (one for a sharp trailing edge; base and airfoil for a blunt one)."""
+    edges = [_bsplines_of(wire) for wire in wires]
+    if len({len(curves) for curves in edges}) != 1:
+        raise KernelError("the section wires have different numbers of edges")
+    s = np.linspace(0.0, 1.0, len(wires)) if parameters is None else np.asarray(parameters, dtype=float)
+    faces = [_side_face([curves[index] for curves in edges], s) for index in range(len(edges[0]))]
+    return _closed_solid(faces, wires)
+
+
+def _side_face(curves: Sequence[Geom_BSplineCurve], s: NDArray[np.float64]) -> TopoDS_Face:
+    """A B-spline face through compatible curves: every pole column interpolated by a cubic in s."""
     first = curves[0]
     degree, count = first.Degree(), first.NbPoles()
     knots = np.concatenate([[first.Knot(i)] * first.Multiplicity(i) for i in range(1, first.NbKnots() + 1)])
@@ -71,7 +86,6 @@ def _loft_through_poles(wires: Sequence[cq.Wire], parameters: Sequence[float] | 
             raise KernelError("the section B-splines are not compatible")
     poles = np.array([[(p.X(), p.Y(), p.Z()) for p in (curve.Pole(i) for i in range(1, count + 1))]
                       for curve in curves])
-    s = np.linspace(0.0, 1.0, len(wires)) if parameters is None else np.asarray(parameters, dtype=float)
     along = make_interp_spline(s, poles, k=3)  # not-a-knot cubic through every pole column
     surface_poles = TColgp_Array2OfPnt(1, count, 1, along.c.shape[0])
     for j, column in enumerate(along.c, start=1):
@@ -83,8 +97,14 @@ def _loft_through_poles(wires: Sequence[cq.Wire], parameters: Sequence[float] | 
     face = BRepBuilderAPI_MakeFace(surface, LOFT_PRECISION)
     if not face.IsDone():
         raise KernelError("OpenCascade could not make the blade's side face")
+    return face.Face()
+
+
+def _closed_solid(faces: Sequence[TopoDS_Face], wires: Sequence[cq.Wire]) -> cq.Solid:
+    """The side faces and planar caps on the first and last wires, sewn into one checked solid."""
     sewing = BRepBuilderAPI_Sewing(LOFT_SEWING_TOLERANCE)
-    sewing.Add(face.Face())
+    for face in faces:
+        sewing.Add(face)
     for wire in (wires[0], wires[-1]):
         cap = BRepBuilderAPI_MakeFace(wire.wrapped, True)
         if not cap.IsDone():

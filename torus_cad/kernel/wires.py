@@ -1,16 +1,23 @@
-"""Section wires: each sampled section becomes one closed cubic B-spline edge (arrays in, wire out).
+"""Section wires: each sampled section becomes one closed cubic B-spline (arrays in, wire out).
 
 Every section is fitted by least squares with the *same* knot vector and the same parameter
 values, so all section curves are compatible and the loft needs no knot insertion (which
 keeps the blade surface light and the boolean fast). Each curve starts and ends exactly at
 the sharp trailing edge: the corner is the curve's end point, a C0 joint, so the spline
 never has to turn through it and cannot overshoot or self-intersect there.
+
+A blunt trailing edge has two corners. The curve then starts at the upper corner, runs
+straight along the base to the lower corner (one Bezier span with collinear poles), and on
+over the lower surface, the leading edge and the upper surface back to the upper corner; the
+lower corner is a knot of multiplicity 3 (a C0 joint again). The wire is split there into two
+edges, the base and the airfoil, so the loft gives the base its own face.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
+import cadquery as cq
 import numpy as np
 from numpy.typing import NDArray
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge, BRepBuilderAPI_MakeWire
@@ -18,13 +25,11 @@ from OCP.Geom import Geom_BSplineCurve
 from OCP.gp import gp_Pnt
 from OCP.TColgp import TColgp_Array1OfPnt
 from OCP.TColStd import TColStd_Array1OfInteger, TColStd_Array1OfReal
+from OCP.TopoDS import TopoDS_Edge
 from scipy.interpolate import BSpline, make_lsq_spline
 
-import cadquery as cq
-
 from torus_cad.errors import GeometryError, KernelError
-from torus_cad.tolerances import (WIRE_FIT_INITIAL_KNOTS, WIRE_FIT_MAXIMUM_KNOTS,
-                                  WIRE_FIT_RELATIVE_TOLERANCE)
+from torus_cad.tolerances import WIRE_FIT_INITIAL_KNOTS, WIRE_FIT_MAXIMUM_KNOTS, WIRE_FIT_RELATIVE_TOLERANCE
 
 DEGREE = 3
 
@@ -34,8 +39,10 @@ class SectionCurves:
     """Compatible cubic B-splines of all sections, kept as plain arrays.
 
     Attributes:
-        poles: ``(sections, m, 3)`` float, mm; pole 0 and pole m-1 are the trailing edge.
-        knots: ``(m + 4,)`` float, clamped knot vector on [0, 1] shared by every section.
+        poles: ``(sections, m, 3)`` float, mm; pole 0 and pole m-1 are the trailing edge (its
+            upper corner when blunt; the lower corner is pole 3, the base poles 0-3).
+        knots: ``(m + 4,)`` float, clamped knot vector on [0, 1] shared by every section;
+            a blunt edge's lower corner is an interior knot of multiplicity 3.
         fit_error: largest distance (mm) from a sampled point to its section's curve.
     """
 
@@ -44,7 +51,7 @@ class SectionCurves:
     fit_error: float
 
     def wires(self) -> list[cq.Wire]:
-        """One closed wire (a single edge) per section."""
+        """One closed wire per section: one edge, or two (base, airfoil) with a blunt trailing edge."""
         return [bspline_wire(poles, self.knots) for poles in self.poles]
 
 
@@ -56,8 +63,9 @@ def _closed_from_trailing_edge(section_points: NDArray[np.float64], trailing_edg
 
 def _fit(points: NDArray[np.float64], parameters: NDArray[np.float64], interior_knots: int
          ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """Open clamped cubic least-squares fits of ``(sections, q, 3)`` with pinned ends: poles, knots, errors."""
     inner = np.quantile(parameters[1:-1], np.linspace(0.0, 1.0, interior_knots + 2)[1:-1])
-    knots = np.concatenate([np.zeros(DEGREE + 1), inner, np.ones(DEGREE + 1)])
+    knots = np.concatenate([np.full(DEGREE + 1, parameters[0]), inner, np.full(DEGREE + 1, parameters[-1])])
     weights = np.ones(len(parameters))
     weights[[0, -1]] = 1e4  # pull the ends onto the trailing edge; they are then set exactly
     poles = np.stack([make_lsq_spline(parameters, ring, knots, k=DEGREE, w=weights).c for ring in points])
@@ -66,18 +74,34 @@ def _fit(points: NDArray[np.float64], parameters: NDArray[np.float64], interior_
     return poles, knots, np.linalg.norm(fitted - points, axis=-1)
 
 
+def _fit_with_base(points: NDArray[np.float64], parameters: NDArray[np.float64], corner: int, interior_knots: int
+                   ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """Like :func:`_fit`, with columns 0..corner a straight base (one Bezier span) before the airfoil."""
+    poles, knots, error = _fit(points[:, corner:], parameters[corner:], interior_knots)
+    start, end = points[:, 0], points[:, corner]
+    base_poles = np.stack([start + fraction * (end - start) for fraction in (0.0, 1 / 3, 2 / 3)], axis=1)
+    all_poles = np.concatenate([base_poles, poles], axis=1)
+    all_knots = np.concatenate([np.zeros(DEGREE + 1), knots[1:]])  # knots[:4] = the corner's parameter
+    base_fit = np.stack([_evaluate(ring, all_knots, parameters[:corner + 1]) for ring in all_poles])
+    base_error = np.linalg.norm(base_fit - points[:, :corner + 1], axis=-1)
+    return all_poles, all_knots, np.concatenate([base_error[:, :-1], error], axis=1)
+
+
 def _evaluate(poles: NDArray[np.float64], knots: NDArray[np.float64], parameters: NDArray[np.float64]) -> NDArray[np.float64]:
     return BSpline(knots, poles, DEGREE)(parameters)
 
 
 def fit_section_curves(section_points: NDArray[np.float64], trailing_edge_index: int,
-                       chord_lengths: NDArray[np.float64]) -> SectionCurves:
+                       chord_lengths: NDArray[np.float64], lower_corner_index: int | None = None) -> SectionCurves:
     """Fit compatible closed B-splines to sampled sections.
 
     Args:
         section_points: ``(sections, p, 3)`` float, mm; closed rings (last point != first).
-        trailing_edge_index: column of the sharp trailing edge in every ring.
+        trailing_edge_index: column of the sharp trailing edge (the upper corner of a blunt
+            one) in every ring.
         chord_lengths: ``(sections,)`` mm, the local chords that scale the fit tolerance.
+        lower_corner_index: column of a blunt trailing edge's lower corner (the base runs
+            from ``trailing_edge_index`` to it, straight); None for a sharp edge.
 
     The parameter of each point is the mean normalised chord-length position over all
     sections (identical for all sections, so corresponding points match in the loft).
@@ -85,17 +109,22 @@ def fit_section_curves(section_points: NDArray[np.float64], trailing_edge_index:
     within WIRE_FIT_RELATIVE_TOLERANCE x chord of its curve.
     """
     points = _closed_from_trailing_edge(section_points, trailing_edge_index)
+    corner = None if lower_corner_index is None else (lower_corner_index - trailing_edge_index) % section_points.shape[1]
     steps = np.linalg.norm(np.diff(points, axis=1), axis=-1)
     cumulative = np.concatenate([np.zeros((len(points), 1)), np.cumsum(steps, axis=1)], axis=1)
     parameters = (cumulative / cumulative[:, -1:]).mean(axis=0)
     allowed = WIRE_FIT_RELATIVE_TOLERANCE * np.asarray(chord_lengths)[:, None]
-    interior = min(WIRE_FIT_INITIAL_KNOTS, len(parameters) - DEGREE - 2)
+    most = len(parameters) - (corner or 0) - DEGREE - 2
+    interior = min(WIRE_FIT_INITIAL_KNOTS, most)
     while True:
-        poles, knots, error = _fit(points, parameters, interior)
-        if np.all(error <= allowed) or interior >= min(WIRE_FIT_MAXIMUM_KNOTS, len(parameters) - DEGREE - 2):
+        if corner is None:
+            poles, knots, error = _fit(points, parameters, interior)
+        else:
+            poles, knots, error = _fit_with_base(points, parameters, corner, interior)
+        if np.all(error <= allowed) or interior >= min(WIRE_FIT_MAXIMUM_KNOTS, most):
             _check_trailing_edge_resolved(poles, knots, len(parameters) - 1)
             return SectionCurves(poles, knots, float(error.max()))
-        interior = min(2 * interior, WIRE_FIT_MAXIMUM_KNOTS, len(parameters) - DEGREE - 2)
+        interior = min(2 * interior, WIRE_FIT_MAXIMUM_KNOTS, most)
 
 
 def _check_trailing_edge_resolved(poles: NDArray[np.float64], knots: NDArray[np.float64], points: int,
@@ -107,10 +136,11 @@ def _check_trailing_edge_resolved(poles: NDArray[np.float64], knots: NDArray[np.
     loft and the fuse then fail (found by scripts/fuzz.py). Tests, in each section's plane,
     the first tenth of the curve against the last tenth.
     """
-    u = np.linspace(0.0, 0.1, samples)
+    first = float(_corner_knots(knots)[-1]) if len(_corner_knots(knots)) else 0.0  # after a blunt edge's base
+    u = np.linspace(0.0, 0.1, samples) * (1.0 - first)
     for ring in poles[:: max(1, len(poles) // 4)]:  # the sections are affine images of one airfoil
         curve = BSpline(knots, ring, DEGREE)
-        start, end = curve(u), curve(1.0 - u)[::-1]
+        start, end = curve(first + u), curve(1.0 - u)[::-1]
         centre = ring.mean(axis=0)
         basis = np.linalg.svd(ring - centre, full_matrices=False)[2][:2]
         a, b = (start - centre) @ basis.T, (end - centre) @ basis.T
@@ -143,8 +173,13 @@ def knot_arrays(knots: NDArray[np.float64]) -> tuple[TColStd_Array1OfReal, TColS
     return knot_array, multiplicity_array
 
 
-def bspline_wire(poles: NDArray[np.float64], knots: NDArray[np.float64]) -> cq.Wire:
-    """A wire of one non-rational B-spline edge from ``(m, 3)`` poles and a full knot vector."""
+def _corner_knots(knots: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Interior knots of multiplicity DEGREE: C0 corners of the curve (a blunt trailing edge's lower corner)."""
+    distinct, multiplicities = np.unique(knots, return_counts=True)
+    return distinct[1:-1][multiplicities[1:-1] >= DEGREE]
+
+
+def _bspline_edge(poles: NDArray[np.float64], knots: NDArray[np.float64]) -> TopoDS_Edge:
     pole_array = TColgp_Array1OfPnt(1, len(poles))
     for index, (x, y, z) in enumerate(poles, start=1):
         pole_array.SetValue(index, gp_Pnt(float(x), float(y), float(z)))
@@ -153,7 +188,36 @@ def bspline_wire(poles: NDArray[np.float64], knots: NDArray[np.float64]) -> cq.W
     edge = BRepBuilderAPI_MakeEdge(curve)
     if not edge.IsDone():
         raise KernelError("OpenCascade could not make a section edge from its B-spline")
-    wire = BRepBuilderAPI_MakeWire(edge.Edge())
-    if not wire.IsDone():
+    return edge.Edge()
+
+
+def bspline_wire(poles: NDArray[np.float64], knots: NDArray[np.float64]) -> cq.Wire:
+    """A closed wire from ``(m, 3)`` poles and a full knot vector of a non-rational cubic B-spline.
+
+    One edge, or one edge per piece between C0 corner knots (see :func:`_corner_knots`), so
+    that each piece lofts into its own face.
+    """
+    builder = BRepBuilderAPI_MakeWire()
+    for piece_poles, piece_knots in _pieces(np.asarray(poles, float), np.asarray(knots, float)):
+        builder.Add(_bspline_edge(piece_poles, piece_knots))
+    if not builder.IsDone():
         raise KernelError("OpenCascade could not make a closed section wire")
-    return cq.Wire(wire.Wire())
+    return cq.Wire(builder.Wire())
+
+
+def _pieces(poles: NDArray[np.float64], knots: NDArray[np.float64]
+            ) -> list[tuple[NDArray[np.float64], NDArray[np.float64]]]:
+    """The curve split at its C0 corner knots: ``(poles, knots)`` per piece, pieces share their corner pole."""
+    pieces = []
+    start_pole, start_knot = 0, knots[0]
+    for corner in _corner_knots(knots):
+        first = int(np.searchsorted(knots, corner, side="left"))  # index of the corner's first copy
+        pole = first - 1  # the one basis function alive at a knot of multiplicity DEGREE
+        inner = knots[(knots > start_knot) & (knots < corner)]
+        pieces.append((poles[start_pole:pole + 1],
+                       np.concatenate([np.full(DEGREE + 1, start_knot), inner, np.full(DEGREE + 1, corner)])))
+        start_pole, start_knot = pole, corner
+    inner = knots[(knots > start_knot) & (knots < knots[-1])]
+    pieces.append((poles[start_pole:], np.concatenate([np.full(DEGREE + 1, start_knot), inner,
+                                                       np.full(DEGREE + 1, knots[-1])])))
+    return pieces

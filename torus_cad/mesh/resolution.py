@@ -22,6 +22,7 @@ from torus_cad.errors import ParameterError
 from torus_cad.geometry.airfoil import airfoil_points
 from torus_cad.geometry.arc_length import equal_arc_length_section
 from torus_cad.geometry.propeller import PropellerGeometry
+from torus_cad.geometry.section import max_thickness
 from torus_cad.geometry.surface import blade_frames, place_on_frames
 from torus_cad.geometry.transforms import evaluate_quartic
 from torus_cad.mesh.grids import blade_grid, blade_triangle_count, cell_size, hub_layout, section_parameters
@@ -63,7 +64,7 @@ def _line_distance(point: NDArray[np.float64], start: NDArray[np.float64], end: 
 
 def local_thickness(geometry: PropellerGeometry, s: NDArray[np.float64]) -> NDArray[np.float64]:
     """``(k,)`` section thickness at ``s``: the airfoil's maximum thickness times Sy(s), mm."""
-    return geometry.blade.airfoil.thickness * evaluate_quartic(geometry.blade.laws.scale_y_mm, s)
+    return max_thickness(geometry.blade.airfoil) * evaluate_quartic(geometry.blade.laws.scale_y_mm, s)
 
 
 def _worst(relative: NDArray[np.float64], s: NDArray[np.float64], t: NDArray[np.float64]) -> Sag:

@@ -15,14 +15,18 @@ from __future__ import annotations
 
 import re
 from enum import StrEnum
-from typing import Annotated, Self
+from pathlib import Path
+from typing import Annotated, Any, Self
 
-from pydantic import AfterValidator, Field, model_validator
+from pydantic import AfterValidator, BeforeValidator, Field, model_validator
 
 from torus_cad.errors import ParameterError
-from torus_cad.geometry.airfoil import NacaAirfoil
+from torus_cad.geometry.airfoil import Naca5Airfoil, NacaAirfoil, naca4_numbers, naca_section
+from torus_cad.geometry.airfoil_file import load_airfoil_file
 from torus_cad.geometry.frames import FrameKind
+from torus_cad.geometry.mounting import HubMounting
 from torus_cad.geometry.propeller import BladeGeometry, HubGeometry, PropellerGeometry
+from torus_cad.geometry.section import Section as SectionShape
 from torus_cad.geometry.surface import BladeSurface, blade_surface
 from torus_cad.geometry.transforms import SectionLaws, quartic_minimum
 from torus_cad.parameters.document import Document
@@ -58,10 +62,47 @@ class Hub(Section):
                           doc="R; the blade ends sit at R - R/8 (spec §3.2)")
     length: float = param(20.0, unit="mm", gt=2.0, le=2000.0, fuzz=(8.0, 50.0),
                           doc="L; the hub spans z in [-L/2, L/2]")
+    bore_diameter: float = param(0.0, unit="mm", ge=0.0, le=2000.0,
+                                 doc="coaxial through-bore for a shaft; 0 = solid hub")
+    bore_flat_depth: float = param(0.0, unit="mm", ge=0.0, le=1000.0,
+                                   doc="D-flat for a D-cut shaft: how far the flat reaches into the bore; 0 = round bore")
+    set_screw_diameter: float = param(0.0, unit="mm", ge=0.0, le=100.0,
+                                      doc="radial set-screw hole at mid-length, between blades, onto the flat; 0 = none")
+    chamfer: float = param(0.0, unit="mm", ge=0.0, le=100.0, doc="45-degree chamfer on the hub's outer end edges; 0 = none")
+    root_fillet_radius: float = param(0.0, unit="mm", ge=0.0, le=20.0,
+                                      doc="fillet along every blade-hub junction; 0 = sharp junction (the spec)")
+
+    @model_validator(mode="after")
+    def _mounting_fits(self) -> Self:
+        """Limits that follow from the hub's own size (the blades' limits are checked with the geometry)."""
+        bore_radius = self.bore_diameter / 2.0
+        if self.bore_flat_depth > 0.0 and self.bore_diameter == 0.0:
+            raise ValueError(f"hub.bore_flat_depth = {self.bore_flat_depth:g} mm needs a bore; set hub.bore_diameter")
+        if self.bore_flat_depth >= bore_radius > 0.0:
+            raise ValueError(f"hub.bore_flat_depth = {self.bore_flat_depth:g} mm is out of range; allowed "
+                             f"[0, {bore_radius:g}) mm, less than the bore's radius")
+        if self.set_screw_diameter > 0.0 and self.bore_diameter == 0.0:
+            raise ValueError(f"hub.set_screw_diameter = {self.set_screw_diameter:g} mm needs a bore to reach; "
+                             "set hub.bore_diameter")
+        if self.set_screw_diameter >= self.length - 2.0 * self.chamfer:
+            raise ValueError(f"hub.set_screw_diameter = {self.set_screw_diameter:g} mm is out of range; allowed "
+                             f"[0, {self.length - 2.0 * self.chamfer:g}) mm, the hub's length less its chamfers")
+        if self.chamfer >= min(self.radius, self.length / 2.0):
+            raise ValueError(f"hub.chamfer = {self.chamfer:g} mm is out of range; allowed "
+                             f"[0, {min(self.radius, self.length / 2.0):g}) mm")
+        return self
+
+    def mounting(self) -> HubMounting:
+        """The mounting features as geometry (the set screw's direction is chosen later, from the blades)."""
+        return HubMounting(self.bore_diameter, self.bore_flat_depth, self.set_screw_diameter, self.chamfer)
+
+
+#: The spec's section numbers, which airfoil.naca and airfoil.file replace.
+_NUMBERS = ("max_camber", "camber_position", "thickness")
 
 
 class Airfoil(Section):
-    """NACA 4-digit section (spec §1), fractions of the chord."""
+    """The section (spec §1): NACA 4-digit numbers (fractions of the chord), a NACA designation, or a coordinate file."""
 
     max_camber: float = param(0.02, ge=0.0, le=0.095, doc="m (0 = symmetric section)")
     camber_position: float = param(0.4, ge=0.0, lt=1.0, fuzz=(0.1, 0.9),
@@ -70,20 +111,63 @@ class Airfoil(Section):
     camber_normal: bool = param(True, doc="thickness normal to the camber line (false: theta_c = 0, spec §1.2)")
     pivot: float = param(0.0, ge=0.0, le=1.0,
                          doc="chord fraction on the centerline, the centre of alpha (0 = leading edge, the spec)")
+    naca: str = param("", doc="NACA designation instead of the numbers: 4-digit '2412' sets max_camber, "
+                              "camber_position, thickness; 5-digit '23012' (\"\" = use the numbers)")
+    file: str = param("", doc="airfoil coordinate file (.dat, Selig or Lednicer layout) instead of the numbers; "
+                              "relative to the design file's folder (\"\" = none)")
+    trailing_edge_thickness: float = param(0.0, unit="mm", ge=0.0, le=50.0, fuzz=(0.0, 0.0),
+                                           doc="blunt trailing edge of this thickness on every section "
+                                               "(0 = the spec's sharp edge)")
 
-    def section(self) -> NacaAirfoil:
-        """The chord-unit section this table describes."""
+    def section(self) -> SectionShape:
+        """The chord-unit section this table describes (without the blunt trailing edge)."""
+        if self.file:
+            return load_airfoil_file(self.file)
+        if self.naca:
+            return naca_section(self.naca, self.camber_normal)
         return NacaAirfoil(self.max_camber, self.camber_position, self.thickness, self.camber_normal)
 
     @model_validator(mode="after")
+    def _one_source_of_the_section(self) -> Self:
+        """naca and file replace the numbers: a number other than its default (or, for a 4-digit
+        designation, the designation's own value) contradicts them."""
+        if self.naca and self.file:
+            raise ValueError(f"airfoil.naca = {self.naca!r} conflicts with airfoil.file = {self.file!r}: "
+                             "give one of them")
+        if not (self.naca or self.file):
+            return self
+        key = "naca" if self.naca else "file"
+        implied = dict(zip(_NUMBERS, naca4_numbers(self.naca))) if len(self.naca.strip()) == 4 else {}
+        if self.naca:
+            naca_section(self.naca)  # raises ParameterError (a ValueError) naming airfoil.naca
+        if self.file:
+            try:
+                load_airfoil_file(self.file)
+            except ParameterError as error:
+                raise ValueError(f"airfoil.file: {error}") from None
+        for number in _NUMBERS:
+            value, default = getattr(self, number), type(self).model_fields[number].default
+            if value != default and value != implied.get(number, default):
+                raise ValueError(f"airfoil.{key} = {getattr(self, key)!r} conflicts with airfoil.{number} = {value!r}: "
+                                 f"give the section by {key} or by its numbers, not both")
+        return self
+
+    @model_validator(mode="after")
     def _camber_and_fold(self) -> Self:
-        if self.max_camber > 0.0:
-            check_in_bounds("airfoil.camber_position", self.camber_position, Bounds(0.0, 1.0, True, True))
-        ratio, where = self.section().fold_ratio()
+        section = self.section()
+        if not isinstance(section, NacaAirfoil | Naca5Airfoil):
+            return self  # a coordinate file: its surfaces were checked for crossing when it was read
+        if self.naca:
+            where_from = f"airfoil.naca = {self.naca!r}"
+        else:
+            if self.max_camber > 0.0:
+                check_in_bounds("airfoil.camber_position", self.camber_position, Bounds(0.0, 1.0, True, True))
+            where_from = (f"airfoil.thickness = {self.thickness:g} is too thick for max_camber = "
+                          f"{self.max_camber:g} at camber_position = {self.camber_position:g}")
+        ratio, where = section.fold_ratio()
         if ratio >= FOLD_RATIO_LIMIT:
             raise ValueError(
-                f"airfoil.thickness = {self.thickness:g} is too thick for max_camber = {self.max_camber:g} at "
-                f"camber_position = {self.camber_position:g}: the lower surface folds over itself near chord "
+                f"{where_from}: the lower surface folds over itself near chord "
                 f"{where:.2f} (thickness exceeds the camber line's radius of curvature); reduce the thickness or "
                 "the camber, move camber_position toward 0.5, or set camber_normal = false")
         return self
@@ -127,8 +211,48 @@ class Resolution(Section):
                         doc="points around each section, equal arc length (spec §5)")
 
 
+class Manufacturing(Section):
+    """What the workshop can make."""
+
+    min_wall: float = param(0.8, unit="mm", gt=0.0, le=100.0,
+                            doc="thinnest wall a part may have: hub wall, blade thickness (0.8 = two 0.4 mm lines)")
+
+
+class Handedness(StrEnum):
+    """Which way the propeller turns, seen from +z, to push air toward -z: 'cw' is the spec's blade
+    (a ribbon descending as its angle grows, torus_cad.geometry.handedness), 'ccw' its exact mirror image."""
+
+    CW = "cw"
+    CCW = "ccw"
+
+
+class ExportFormat(StrEnum):
+    """A file format the build writes."""
+
+    STEP = "step"
+    STL = "stl"
+    THREE_MF = "3mf"
+
+
+def _formats(value: Any) -> Any:
+    """TOML lists as tuples of formats, each once, in the order given; at least one."""
+    if isinstance(value, list | tuple):
+        if not value:
+            raise ValueError("export.formats must name at least one of step, stl, 3mf")
+        try:
+            formats = tuple(ExportFormat(item) for item in value)
+        except ValueError:
+            raise ValueError(f"export.formats = {list(value)!r} is not allowed; choose from step, stl, 3mf") from None
+        return tuple(dict.fromkeys(formats))
+    return value
+
+
 class Export(Section):
     """File output."""
+
+    formats: Annotated[tuple[ExportFormat, ...], BeforeValidator(_formats)] = param(
+        (ExportFormat.STEP, ExportFormat.STL), strict=False,
+        doc="files to write: any of 'step', 'stl', '3mf' (3MF: one fused mesh object, millimetres)")
 
     stl_linear_deflection: float = param(STL_LINEAR_DEFLECTION, unit="mm", gt=0.0, le=10.0, fuzz=(0.02, 0.5),
                                          doc="STL chordal deviation")
@@ -200,6 +324,14 @@ class PropellerParameters(Document):
     blades: int = param(3, ge=1, le=12, fuzz=(1, 8), doc="number of blades n; blade i at theta_0 + 360 i / n")
     phase_deg: float = param(0.0, unit="deg", ge=-360.0, le=360.0, fuzz=(-180.0, 180.0),
                              doc="theta_0: angle of blade 0 around the axis")
+    diameter: float = param(0.0, unit="mm", ge=0.0, le=100000.0, fuzz=(0.0, 0.0),
+                            doc="tip diameter to reach by scaling z_L of centerline.p2 and p3 (0 = as the control points give)")
+    pitch: float = param(0.0, unit="mm", ge=0.0, le=100000.0, fuzz=(0.0, 0.0),
+                         doc="geometric pitch of the outer half to reach by refitting transforms.angle_of_attack "
+                             "(0 = as the quartic gives)")
+    handedness: Handedness = param(Handedness.CW, strict=False,
+                                   doc="'cw': the spec's blade, which turns clockwise seen from +z to push air toward -z; "
+                                       "'ccw': its exact mirror image, for counter-rotating pairs")
     hub: Hub = Field(default_factory=Hub)
     airfoil: Airfoil = Field(default_factory=Airfoil)
     centerline: Centerline = Field(default_factory=Centerline)
@@ -208,6 +340,20 @@ class PropellerParameters(Document):
     export: Export = Field(default_factory=Export)
     mesh: Mesh = Field(default_factory=Mesh)
     cfd: Cfd = Field(default_factory=Cfd)
+    manufacturing: Manufacturing = Field(default_factory=Manufacturing)
+
+    @model_validator(mode="after")
+    def _hub_wall(self) -> Self:
+        """The hub's wall around the bore (at the chamfered ends too) must be at least manufacturing.min_wall."""
+        if self.hub.bore_diameter == 0.0:
+            return self
+        wall = self.hub.radius - self.hub.chamfer - self.hub.bore_diameter / 2.0
+        if wall < self.manufacturing.min_wall:
+            limit = 2.0 * (self.hub.radius - self.hub.chamfer - self.manufacturing.min_wall)
+            raise ValueError(f"hub.bore_diameter = {self.hub.bore_diameter:g} mm leaves a hub wall of {wall:.3g} mm, "
+                             f"thinner than manufacturing.min_wall = {self.manufacturing.min_wall:g} mm; "
+                             f"allowed at most {max(limit, 0.0):g} mm")
+        return self
 
     @model_validator(mode="after")
     def _control_points_fit_the_hub(self) -> Self:
@@ -222,6 +368,16 @@ class PropellerParameters(Document):
             else:  # P4 is the blade's second end: it must sit between the hub's end faces
                 check_in_bounds(f"centerline.{key}[1]", point[1], Bounds(-1.0, length - 1.0, True, True), "mm")
         return self
+
+    @classmethod
+    def paths_relative_to(cls, data: dict[str, Any], folder: Path) -> dict[str, Any]:
+        """A relative ``airfoil.file`` in a design file is relative to the design file's folder."""
+        airfoil = data.get("airfoil")
+        if isinstance(airfoil, dict) and isinstance(airfoil.get("file"), str) and airfoil["file"]:
+            path = Path(airfoil["file"]).expanduser()
+            if not path.is_absolute():
+                data = {**data, "airfoil": {**airfoil, "file": str(folder / path)}}
+        return data
 
     def blade_surface(self, blade_index: int = 0, sections: int | None = None, points: int | None = None
                       ) -> BladeSurface:
@@ -238,10 +394,10 @@ class PropellerParameters(Document):
         laws = SectionLaws(self.transforms.angle_of_attack, self.transforms.scale_x, self.transforms.scale_y,
                            self.airfoil.pivot)
         local = ((0.0, 0.0, 0.0), line.p2, line.p3, (*line.p4, 0.0))
-        blade = BladeGeometry(self.airfoil.section(), laws, local, line.frame)
+        blade = BladeGeometry(self.airfoil.section(), laws, local, line.frame, self.airfoil.trailing_edge_thickness)
         return PropellerGeometry(HubGeometry(self.hub.radius, self.hub.length), blade, self.blades, self.phase_deg)
 
 
 # ParameterError is what every caller catches; keep it importable from here.
-__all__ = ["Airfoil", "Centerline", "Cfd", "Export", "Hub", "InletSide", "Mesh", "ParameterError",
-           "PropellerParameters", "Resolution", "SectionSpacing", "StepSchema", "Transforms"]
+__all__ = ["Airfoil", "Centerline", "Cfd", "Export", "ExportFormat", "Handedness", "Hub", "InletSide", "Manufacturing",
+           "Mesh", "ParameterError", "PropellerParameters", "Resolution", "SectionSpacing", "StepSchema", "Transforms"]

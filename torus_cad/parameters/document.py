@@ -45,7 +45,12 @@ class Document(Section):
             data = tomllib.loads(text)
         except tomllib.TOMLDecodeError as error:
             raise ParameterError(f"configuration {str(path)!r} is not valid TOML: {error}") from None
-        return cls.from_dict(data)
+        return cls.from_dict(cls.paths_relative_to(data, Path(path).resolve().parent))
+
+    @classmethod
+    def paths_relative_to(cls, data: dict[str, Any], folder: Path) -> dict[str, Any]:
+        """``data`` with its file paths (relative to the design file's ``folder``) made absolute; none here."""
+        return data
 
     def to_toml(self, comments: bool = True) -> str:
         """The document as TOML that :meth:`from_toml` reads back unchanged (commented from the schema)."""

@@ -26,7 +26,7 @@ def _default_text(value: Any) -> str:
     if isinstance(value, bool):
         return f"`{str(value).lower()}`"
     if isinstance(value, (tuple, list)):
-        return "`[" + ", ".join(f"{item:g}" for item in value) + "]`"
+        return "`[" + ", ".join(f'"{item.value}"' if isinstance(item, Enum) else f"{item:g}" for item in value) + "]`"
     if isinstance(value, float):
         return f"`{value:g}`"
     return f"`{value}`"
@@ -34,7 +34,8 @@ def _default_text(value: Any) -> str:
 
 def _allowed_text(spec: ParameterSpec) -> str:
     if spec.choices:
-        return " / ".join(f'`"{choice.value}"`' for choice in spec.choices)
+        listed = " / ".join(f'`"{choice.value}"`' for choice in spec.choices)
+        return f"a list of {listed}" if spec.kind is tuple else listed
     if spec.kind is bool:
         return "`true` / `false`"
     if spec.bounds.low is None and spec.bounds.high is None:

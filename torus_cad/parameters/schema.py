@@ -157,11 +157,18 @@ def _element_metadata(vector_type: Any) -> list[Any]:
     return expanded
 
 
+def _is_enum(kind: Any) -> bool:
+    return isinstance(kind, type) and issubclass(kind, Enum)
+
+
 def _spec(key: str, info: FieldInfo) -> ParameterSpec:
     kind, metadata = _unwrap(info.annotation)
     extra = info.json_schema_extra if isinstance(info.json_schema_extra, dict) else {}
     unit, doc = str(extra.get("unit", "")), info.description or ""
     fuzz = Bounds(*extra["fuzz"]) if "fuzz" in extra else None  # type: ignore[misc]
+    if get_origin(kind) is tuple and get_args(kind)[-1] is Ellipsis and _is_enum(get_args(kind)[0]):
+        # a list of choices (export.formats): each element one of the Enum's values
+        return ParameterSpec(key, tuple, info.default, unit, doc, Bounds(), choices=tuple(get_args(kind)[0]))
     if get_origin(kind) is tuple:
         bounds = bounds_of(_element_metadata(kind))
         return ParameterSpec(key, tuple, info.default, unit, doc, bounds, len(get_args(kind)), fuzz or bounds)

@@ -1,0 +1,233 @@
+"""The studio in a real browser: headless Chromium (Debian's chromium + chromium-driver, driven by
+selenium) against ``python -m torus_cad studio --port 0`` started as a separate process."""
+
+from __future__ import annotations
+
+import colorsys
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from torus_cad.parameters import PropellerParameters, parameter_specs
+from torus_cad.studio.browser import (
+    CHROMEDRIVER,
+    CHROMIUM,
+    StudioPage,
+    StudioProcess,
+    chromium,
+    wait_for_download,
+)
+from torus_cad.studio.layout import field_id
+
+pytestmark = pytest.mark.slow
+
+REPO = Path(__file__).resolve().parent.parent
+SCREENSHOT = REPO / "docs" / "images" / "studio.png"
+
+
+@pytest.fixture(scope="module")
+def studio():
+    if not (CHROMIUM.exists() and CHROMEDRIVER.exists()):
+        pytest.fail("the studio's browser tests need Debian's chromium and chromium-driver "
+                    "(apt-get install chromium chromium-driver; .ci/run installs them)")
+    with StudioProcess(cwd=REPO) as process:
+        yield process
+
+
+@pytest.fixture(scope="module")
+def downloads(tmp_path_factory) -> Path:
+    return tmp_path_factory.mktemp("downloads")
+
+
+@pytest.fixture(scope="module")
+def page(studio, downloads):
+    with chromium(downloads) as driver:
+        page = StudioPage(driver, studio.url)
+        page.wait_idle()
+        yield page
+
+
+def _volume_text(design: PropellerParameters) -> str:
+    """The volume readout the page should show for ``design``: the same build, in this process."""
+    from torus_cad.propeller import build_propeller
+
+    return f"{build_propeller(design).mass_properties().volume_mm3:.2f} mm³"
+
+
+def test_the_studio_serves_this_machine_only_and_says_so(studio):
+    assert studio.url.startswith("http://127.0.0.1:")
+    assert "only this machine can connect" in "".join(studio.output)
+
+
+def test_page_shows_every_parameter_and_the_default_propeller(page):
+    for spec in parameter_specs():
+        element = field_id(spec.key) + ("-0" if spec.length else "")
+        assert page.element(element) is not None, f"no input for {spec.key}"
+    page.change("blades", "3")
+    assert page.text("readout-volume") == _volume_text(PropellerParameters())
+    assert page.text("readout-valid") == "valid: 1 closed solid"
+
+
+def test_four_blades_change_the_volume_readout(page):
+    page.change("blades", "3")
+    three_blades = page.text("readout-volume")
+    page.start_latency_probe()
+    page.change("blades", "4")
+    assert page.text("readout-volume") != three_blades
+    assert page.text("readout-volume") == _volume_text(PropellerParameters().with_values({"blades": 4}))
+    latencies = page.latencies_ms()
+    print(f"\nstudio latency in the browser, 3 -> 4 blades: preview {latencies['preview']:.0f} ms, "
+          f"exact solid {latencies['exact']:.0f} ms ({page.text('timings')}; {page.text('preview-detail')})")
+
+
+def test_mass_follows_the_density_entered(page):
+    page.change("blades", "4")
+    volume_mm3 = float(page.text("readout-volume").split()[0])
+    page.set_field("density_g_cm3", "7.85")  # steel
+    page.wait(lambda: page.text("readout-mass") == f"{volume_mm3 * 7.85e-3:.3f} g", "the steel mass")
+    page.set_field("density_g_cm3", "0")
+    page.wait(lambda: "density = 0 is out of range; allowed (0, 25] g/cm^3" in page.message_of(field_id("density_g_cm3")),
+              "the density's refusal")
+    page.set_field("density_g_cm3", "1.24")
+    page.wait(lambda: page.text("readout-mass") == f"{volume_mm3 * 1.24e-3:.3f} g", "the PLA mass")
+
+
+@pytest.mark.parametrize(("radius", "reason"), [
+    ("0.1", "hub.radius = 0.1 is out of range; allowed [0.5, 1000] mm"),
+    ("3", "the blade's root (s = 0) section leaves the hub's inset"),
+])
+def test_a_refused_value_shows_the_reason_and_keeps_the_last_good_propeller(page, radius, reason):
+    page.change("hub.radius", "10")
+    volume = page.text("readout-volume")
+    page.set_field("hub.radius", radius)  # typed key by key: "0.1" passes through "0" (refused too)
+    page.wait(lambda: reason in page.field_message("hub.radius"), "the reason under the field")
+    assert reason in page.text("refusal") and page.text("status") == "refused"
+    assert page.text("readout-volume") == volume  # the last good propeller stays, downloadable
+    assert page.element("download-step").is_enabled()
+    page.change("hub.radius", "10")
+    assert page.field_message("hub.radius").count(reason) == 0
+
+
+def test_orbiting_turns_the_view_and_a_change_keeps_the_viewpoint(page):
+    page.change("hub.length", "20")
+    time.sleep(1.0)  # the browser draws asynchronously
+    before = page.view_pixels()
+    page.drag_view(150, 60)
+    time.sleep(1.0)
+    orbited = page.view_pixels()
+    assert (np.abs(orbited - before).sum(axis=2) > 30).mean() > 0.05  # the propeller turned
+    page.change("hub.length", "22")
+    time.sleep(1.0)
+    changed = page.view_pixels()
+    page.change("hub.length", "20")
+    differs = (np.abs(changed - orbited).sum(axis=2) > 30).mean()
+    assert differs < (np.abs(changed - before).sum(axis=2) > 30).mean() / 2  # still seen from the new side
+    page.click("reset-view")
+
+
+def test_downloaded_step_is_one_valid_solid_with_the_readout_volume(page, downloads):
+    from torus_cad.kernel.checks import is_valid_closed_solid, precise_volume
+    from torus_cad.kernel.export import read_step
+
+    page.change("blades", "4")
+    page.click("download-step")
+    shape = read_step(wait_for_download(downloads, ".step"))
+    assert len(shape.Solids()) == 1 and is_valid_closed_solid(shape.Solids()[0])
+    assert f"{precise_volume(shape):.2f} mm³" == page.text("readout-volume")
+
+
+def test_downloaded_stl_is_watertight_with_the_readout_volume(page, downloads):
+    from conftest import read_binary_stl
+
+    page.change("blades", "4")
+    page.click("download-stl")
+    triangles = read_binary_stl(wait_for_download(downloads, ".stl")).astype(float)
+    vertices, index = np.unique(triangles.reshape(-1, 3), axis=0, return_inverse=True)
+    faces = index.reshape(-1, 3)
+    edges = np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+    assert np.all(np.unique(edges, axis=0, return_counts=True)[1] == 2)  # closed: every edge used twice
+    a, b, c = (vertices[faces[:, k]] for k in range(3))
+    volume_mm3 = float(page.text("readout-volume").split()[0])
+    assert np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6.0 == pytest.approx(volume_mm3, rel=0.01)
+
+
+def test_downloaded_design_builds_unchanged_with_the_cli(page, downloads, tmp_path):
+    page.change("blades", "4")
+    page.click("download-toml")
+    design = wait_for_download(downloads, ".toml")
+    assert PropellerParameters.from_toml(design) == PropellerParameters().with_values({"blades": 4})
+    result = subprocess.run([sys.executable, "-m", "torus_cad", "build", str(design), "--out", str(tmp_path),
+                             "--no-stl", "-q"], capture_output=True, text=True, timeout=300, check=False)
+    assert result.returncode == 0, result.stderr
+    assert (tmp_path / "torus_propeller.step").stat().st_size > 0
+
+
+def test_screenshot_of_the_studio(page):
+    from PIL import Image
+
+    from torus_cad.colors import blade_color
+
+    page.change("blades", "4")
+    if not page.element("toggle-sections").is_selected():
+        page.click("toggle-sections")
+    page.wait(lambda: page.element("toggle-sections").is_selected(), "the section curves")
+    time.sleep(2.0)  # the browser draws the curves after the toggle's round trip; nothing on the page says when
+    page.screenshot(SCREENSHOT)
+    box = page.element("view").rect
+    image = Image.open(SCREENSHOT).convert("HSV").crop(
+        (int(box["x"]), int(box["y"]), int(box["x"] + box["width"]), int(box["y"] + box["height"])))
+    hue, saturation, value = np.moveaxis(np.asarray(image, dtype=float) / 255.0, 2, 0)
+    for blade in range(4):  # every blade is drawn in its own colour (lit and shaded: compare hues)
+        blade_hue = colorsys.rgb_to_hsv(*blade_color(blade, 4))[0]
+        near = (np.abs((hue - blade_hue + 0.5) % 1.0 - 0.5) < 0.03) & (saturation > 0.5) & (value > 0.25)
+        assert near.sum() > 1000, f"blade {blade}'s colour is missing from the 3D view"
+    grey = (saturation < 0.1) & (value > 0.3) & (value < 0.8)  # the hub
+    assert grey.sum() > 5000
+
+
+def test_an_uploaded_design_goes_through_the_cli_validation(page, tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text("blades = 5\n[hub]\nradius = 0.1\n")
+    cli = subprocess.run([sys.executable, "-m", "torus_cad", "build", str(bad), "--out", str(tmp_path / "out")],
+                         capture_output=True, text=True, timeout=300, check=False)
+    assert cli.returncode == 2
+    cli_reason = cli.stderr.strip().removeprefix("torus-cad: error: ")
+    volume = page.text("readout-volume")
+    page.element("upload").send_keys(str(bad))
+    page.wait(lambda: cli_reason in page.message_of("upload"), "the upload's refusal")
+    assert page.text("readout-volume") == volume
+
+    remote_file = tmp_path / "remote_file.toml"  # a design from the page may not make the server read a file
+    remote_file.write_text('[airfoil]\nfile = "/etc/hostname"\n')
+    page.element("upload").send_keys(str(remote_file))
+    page.wait(lambda: "may not name a file on this machine" in page.message_of("upload"), "the file path's refusal")
+
+    good = tmp_path / "five.toml"
+    good.write_text('blades = 5\n[export]\nformats = ["step", "stl", "3mf"]\n')
+    page.element("upload").send_keys(str(good))
+    page.wait(lambda: page.field_value("blades") == "5", "the uploaded design in the panel")
+    page.wait(lambda: page.idle() and page.text("readout-volume") != volume, "the uploaded design's solid")
+    design = PropellerParameters.from_toml(good)
+    assert page.text("readout-volume") == _volume_text(design)
+
+
+def test_every_file_the_build_writes_is_downloadable(page, downloads):
+    import csv
+
+    import trimesh
+
+    page.wait(lambda: page.field_value("blades") == "5", "the 3MF design of the upload test")
+    page.wait_idle()
+    page.click("download-3mf")
+    mesh = trimesh.load(wait_for_download(downloads, ".3mf"), force="mesh")
+    assert mesh.is_watertight
+    volume_mm3 = float(page.text("readout-volume").split()[0])
+    assert mesh.volume == pytest.approx(volume_mm3, rel=0.01)
+    page.click("download-sections_csv")
+    with wait_for_download(downloads, "_sections.csv").open(newline="") as table:
+        rows = list(csv.reader(line for line in table if not line.startswith("#")))
+    assert len(rows) - 1 == PropellerParameters().resolution.sections  # a header, then one row per section

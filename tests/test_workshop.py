@@ -1,0 +1,229 @@
+"""Workshop-ready parts (issue 13): bore, D-flat, set screw, chamfer, handedness, printability,
+root fillet, 3MF, balance and STEP metadata, each checked on the solid or the written file."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from OCP.BRepAdaptor import BRepAdaptor_Surface
+from OCP.BRepLProp import BRepLProp_SLProps
+from OCP.BRepTools import BRepTools
+from OCP.GeomAbs import GeomAbs_Cylinder
+
+from torus_cad import __version__
+from torus_cad.cli import main
+from torus_cad.geometry.handedness import Spin, air_push_z
+from torus_cad.geometry.mounting import HubMounting
+from torus_cad.geometry.printability import printability, wall_mm
+from torus_cad.kernel.checks import balance, is_valid_closed_solid, precise_volume
+from torus_cad.kernel.export import read_step
+from torus_cad.parameters import PropellerParameters
+from torus_cad.propeller import build_propeller
+
+MOUNT = {"hub.bore_diameter": 5.0, "hub.bore_flat_depth": 0.5, "hub.set_screw_diameter": 3.0, "hub.chamfer": 0.5}
+
+
+@pytest.fixture(scope="module")
+def plain():
+    return build_propeller()
+
+
+@pytest.fixture(scope="module")
+def mounted():
+    return build_propeller(None, overrides=MOUNT)
+
+
+def _cylinders(solid, radius):
+    """(axis location, axis direction) of every cylindrical face of ``radius`` (mm)."""
+    found = []
+    for face in solid.Faces():
+        surface = BRepAdaptor_Surface(face.wrapped)
+        if surface.GetType() == GeomAbs_Cylinder and surface.Cylinder().Radius() == pytest.approx(radius, abs=1e-9):
+            axis = surface.Cylinder().Axis()
+            found.append((np.array(axis.Location().Coord()), np.array(axis.Direction().Coord())))
+    return found
+
+
+def test_bore_is_a_cylinder_of_the_requested_radius_on_the_axis_and_removes_its_volume(plain):
+    bored = build_propeller(None, overrides={"hub.bore_diameter": 5.0})
+    ((location, direction),) = _cylinders(bored.solid, 2.5)
+    assert abs(direction[2]) == pytest.approx(1.0, abs=1e-12)
+    assert np.hypot(*location[:2]) == pytest.approx(0.0, abs=1e-12)
+    removed = precise_volume(plain.solid) - precise_volume(bored.solid)
+    assert removed == pytest.approx(math.pi * 2.5**2 * 20.0, rel=1e-6)  # no blade root is cut
+    assert is_valid_closed_solid(bored.solid)
+
+
+def test_flat_screw_and_chamfer_remove_the_analytic_volume_plus_the_screw_hole(plain, mounted):
+    assert is_valid_closed_solid(mounted.solid)
+    expected = HubMounting(5.0, 0.5, 0.0, 0.5).removed_volume_mm3(10.0, 20.0)
+    removed = precise_volume(plain.solid) - precise_volume(mounted.solid)
+    hole = math.pi * 1.5**2 * (10.0 - 2.5)  # the set-screw hole through the wall, ends not flat
+    assert expected < removed < expected + 1.2 * hole
+    ((location, direction),) = _cylinders(mounted.solid, 1.5)
+    angle = math.radians(mounted.mounting.set_screw_angle_deg)
+    assert abs(direction @ [math.cos(angle), math.sin(angle), 0.0]) == pytest.approx(1.0, abs=1e-12)
+    assert location[2] == pytest.approx(0.0, abs=1e-12)
+
+
+def test_set_screw_line_clears_every_blade(mounted):
+    angle = math.radians(mounted.mounting.set_screw_angle_deg)
+    ray = np.array([math.cos(angle), math.sin(angle), 0.0])
+    for blade in range(3):
+        points = PropellerParameters().blade_surface(blade, sections=200, points=160).points.reshape(-1, 3)
+        along = np.clip(points @ ray, 0.0, None)
+        assert np.linalg.norm(points - along[:, None] * ray, axis=1).min() > 1.5
+
+
+@pytest.mark.parametrize("overrides, field", [
+    ({"hub.bore_diameter": 18.8}, "hub.bore_diameter"),              # wall thinner than min_wall
+    ({"hub.bore_diameter": 16.0}, "hub.bore_diameter"),              # reaches the buried blade roots
+    ({"hub.chamfer": 1.5}, "hub.chamfer"),                           # cuts into a blade root
+    ({"hub.set_screw_diameter": 3.0}, "hub.set_screw_diameter"),     # no bore to reach
+    ({"hub.bore_diameter": 5.0, "hub.bore_flat_depth": 2.5}, "hub.bore_flat_depth"),
+])
+def test_mounting_refusals_exit_2_naming_field_and_limit(tmp_path, capsys, overrides, field):
+    sets = [item for key, value in overrides.items() for item in ("--set", f"{key}={value}")]
+    assert main(["build", "--out", str(tmp_path), *sets]) == 2
+    error = capsys.readouterr().err.strip()
+    assert field in error and ("allowed" in error or "needs" in error) and len(error.splitlines()) == 1
+    assert not any(tmp_path.iterdir())
+
+
+def test_ccw_is_the_exact_mirror_image_of_cw(plain):
+    mirrored = build_propeller(None, overrides={"handedness": "ccw"})
+    assert is_valid_closed_solid(mirrored.solid)
+    assert precise_volume(mirrored.solid) == pytest.approx(precise_volume(plain.solid), rel=1e-9)
+    original = np.array([vertex.toTuple() for vertex in plain.solid.Vertices()])
+    image = np.array([vertex.toTuple() for vertex in mirrored.solid.Vertices()]) * [1.0, -1.0, 1.0]
+    distances = np.linalg.norm(original[:, None, :] - image[None, :, :], axis=-1).min(axis=1)
+    assert distances.max() < 1e-6
+    # points inside one are inside the mirror image of the other
+    samples = np.random.default_rng(1).uniform(-40, 40, (300, 3)) * [1, 1, 0.3]
+    inside = [plain.solid.isInside(tuple(p)) for p in samples]
+    mirrored_inside = [mirrored.solid.isInside((x, -y, z)) for x, y, z in samples]
+    assert inside == mirrored_inside and any(inside)
+    assert plain.spin_to_push_air_down() == Spin.CLOCKWISE
+    assert mirrored.spin_to_push_air_down() == Spin.COUNTER_CLOCKWISE
+
+
+def test_mirror_turns_the_air_push_around():
+    surface = PropellerParameters().blade_surface(sections=100)
+    image = surface.points * [1.0, -1.0, 1.0]
+    assert air_push_z(surface.points, surface.trailing_edge_column) == pytest.approx(
+        -air_push_z(image, surface.trailing_edge_column), rel=1e-12)
+
+
+def test_wall_is_the_distance_between_the_surfaces_at_a_chord_station():
+    params = PropellerParameters()
+    blade = params.geometry().blade
+    from torus_cad.geometry.surface import surface_points
+
+    for s, x in ((0.0, 0.3), (0.37, 0.6), (0.8, 0.95)):
+        upper, lower = surface_points(blade, params.geometry().centerline(0), [s], [x, 2.0 - x])[0]
+        assert wall_mm(blade, [s], [math.sqrt(x)])[0, 0] == pytest.approx(np.linalg.norm(upper - lower), rel=1e-9)
+
+
+def test_printability_of_the_default_and_require_printable(tmp_path, capsys):
+    params = PropellerParameters()
+    blade = params.geometry().blade
+    result = printability(blade, 0.8)
+    walls = wall_mm(blade, np.linspace(0, 1, 101), np.linspace(0, 1, 1001)).max(axis=1)
+    assert result.thinnest_wall_mm == pytest.approx(walls.min(), rel=1e-4)
+    assert result.trailing_edge_thickness_mm == 0.0 and not result.printable  # the spec's knife edge
+    assert main(["build", "--out", str(tmp_path), "--require-printable"]) == 2
+    error = capsys.readouterr().err
+    assert "s = " in error and "manufacturing.min_wall" in error and not any(tmp_path.iterdir())
+
+
+def test_blunt_trailing_edge_is_the_reported_trailing_edge_thickness():
+    blade = PropellerParameters().with_values({"airfoil.trailing_edge_thickness": 0.9}).geometry().blade
+    result = printability(blade, 0.8)
+    assert result.trailing_edge_thickness_mm == pytest.approx(0.9, rel=1e-6)
+    assert result.printable
+
+
+def test_report_3mf_and_stl_read_back_closed_with_the_same_volume(tmp_path, capsys):
+    trimesh = pytest.importorskip("trimesh")
+    out = tmp_path / "out"
+    assert main(["build", "examples/workshop_motor_mount.toml", "--out", str(out), "-q"]) == 0
+    scene = trimesh.load(out / "workshop_motor_mount.3mf")
+    (mesh,) = scene.geometry.values()
+    stl = trimesh.load(out / "workshop_motor_mount.stl")
+    assert scene.units == "millimeter" and mesh.is_watertight and stl.is_watertight
+    assert mesh.volume == pytest.approx(stl.volume, rel=0.01)
+    step = (out / "workshop_motor_mount.step").read_text()
+    header = step[step.index("FILE_NAME"):step.index("FILE_SCHEMA")]
+    assert f"torus_cad {__version__}" in header and "'workshop_motor_mount'" in header
+    assert "PRODUCT('workshop_motor_mount'" in step
+    assert is_valid_closed_solid(read_step(out / "workshop_motor_mount.step"))
+
+
+def test_balance_of_three_blades_is_zero_and_one_blade_warns(tmp_path, capsys, plain):
+    assert balance(plain.solid, 1.24).static_imbalance_g_mm < 1e-4
+    assert main(["build", "--set", "blades=1", "--out", str(tmp_path), "--no-stl"]) == 0
+    output = capsys.readouterr().out
+    assert "warning: a one-blade propeller is out of balance" in output
+    import json
+
+    report = json.loads((tmp_path / "torus_propeller.json").read_text())
+    assert report["balance"]["static_imbalance_g_mm"] > 1.0
+    assert set(report["balance"]["products_of_inertia_g_mm2"]) == {"xz", "yz", "xy"}
+
+
+def _principal_curvatures(face):
+    u_min, u_max, v_min, v_max = BRepTools.UVBounds_s(face.wrapped)
+    properties = BRepLProp_SLProps(BRepAdaptor_Surface(face.wrapped), (u_min + u_max) / 2, (v_min + v_max) / 2,
+                                   2, 1e-9)
+    return sorted((abs(properties.MinCurvature()), abs(properties.MaxCurvature())))
+
+
+@pytest.mark.slow
+def test_root_fillet_has_the_requested_radius_and_gives_one_valid_solid(plain):
+    filleted = build_propeller(None, overrides={"hub.root_fillet_radius": 0.5})
+    assert is_valid_closed_solid(filleted.solid)
+    assert precise_volume(filleted.solid) > precise_volume(plain.solid)
+    fillet_faces = [face for face in filleted.solid.Faces()
+                    if _principal_curvatures(face)[1] == pytest.approx(1 / 0.5, rel=1e-3)]
+    assert len(fillet_faces) >= 3  # at least one per blade
+
+
+@pytest.mark.slow
+def test_root_fillet_failure_exits_1_naming_the_fillet_and_writes_nothing(tmp_path, capsys):
+    assert main(["build", "--set", "hub.root_fillet_radius=4", "--out", str(tmp_path)]) == 1
+    error = capsys.readouterr().err
+    assert "root fillet failed" in error and "hub.root_fillet_radius" in error
+    assert not any(tmp_path.iterdir())
+
+
+#: A fuzz design (seed 14) whose blade root comes within 0.34 mm of the hub's end face: a 0.5 mm
+#: fillet there has to run out past the hub's end (torus_cad.kernel.fillet.fillet_pattern).
+NEAR_THE_END = {
+    "blades": 3, "phase_deg": 50.874293083739275, "hub": {"radius": 13.61708909652224, "length": 34.609812248156054},
+    "airfoil": {"max_camber": 0.07241977514046337, "camber_position": 0.6730515061120323,
+                "thickness": 0.44636836614136105, "camber_normal": False, "pivot": 0.6201814317498328},
+    "centerline": {"p2": [18.453512387913314, 5.707455909130194, 70.82985374762225],
+                   "p3": [45.865531535043466, 16.883183979667987, 20.744098528711426],
+                   "p4": [46.545493345258755, 32.609812248156054]},
+    "transforms": {"angle_of_attack": [162.7123091824475, 21.356635805245872, -32.6307454555129, 69.92340124190818,
+                                       -50.17850102756502],
+                   "scale_x": [-23.79116406298313, 47.58232812596626, -30.583042645355977, 9.526982443481968,
+                               1.0105497873581675],
+                   "scale_y": [4.377315427700926, -8.754630855401851, -4.7154596915318665, 8.717713392790992,
+                               1.3806269760402894]},
+    "resolution": {"sections": 34, "points": 32},
+}
+
+
+@pytest.mark.slow
+def test_root_fillet_runs_out_past_the_hub_end_and_keeps_the_hub_length():
+    params = PropellerParameters.from_dict(NEAR_THE_END)
+    plain = build_propeller(params)
+    filleted = build_propeller(params, overrides={"hub.root_fillet_radius": 0.5})
+    assert is_valid_closed_solid(filleted.solid)
+    assert precise_volume(filleted.solid) > precise_volume(plain.solid)
+    box, plain_box = filleted.solid.BoundingBox(), plain.solid.BoundingBox()  # the hub keeps its length
+    assert box.zmax == pytest.approx(plain_box.zmax, abs=1e-6) and box.zmin == pytest.approx(plain_box.zmin, abs=1e-6)
+    assert any(_principal_curvatures(face)[1] == pytest.approx(1 / 0.5, rel=1e-3) for face in filleted.solid.Faces())

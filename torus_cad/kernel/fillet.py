@@ -1,0 +1,371 @@
+"""Root fillet (issue 13): a constant-radius fillet along every blade-hub junction (BRepFilletAPI_MakeFillet).
+
+What makes OpenCascade's rolling-ball fillet work on these blades (measured, see the README):
+
+* The lofted blade's side is one B-spline face, closed in u with its seam on the sharp
+  trailing edge. A fillet along a junction that runs round such a face fails; the face is
+  therefore split into three (u in thirds, ShapeUpgrade_ShapeDivideClosed) before the fuse, so
+  the trailing edge is a true edge between two faces, where the fillet's two ends meet.
+  A split vertex near the leading edge (u = 1/2), where the section turns tightly, makes the
+  fillet fail again, so it is not split in halves.
+* The junction edges are the edges between a blade face (B-spline) and a hub face (the hub is
+  made of planes, cylinders and cones only).
+* When that fails, the side face split in quarters is tried; then, where a blade root comes
+  within about a radius of the hub's end face (the blade ends sit 1 mm below it, spec §3.1) so
+  that the fillet would have to roll over the hub's edge, the fillet is made on a hub longer at
+  both ends and the result cut back to the hub's length (see :func:`fillet_pattern`).
+* OpenCascade's fillet can crash the process on some inputs (a segmentation fault in a few
+  per cent of random designs), so it runs in a forked child process with a time limit; the
+  result comes back as a BRep string.
+
+* The pattern trick of the fuse applies (:func:`fillet_pattern`): blade 0 alone is joined to
+  the hub and filleted, once; its blade and fillet faces are rotated to every blade angle, the
+  fillet's contact curves on the hub's cylinder shifted in u, and the shell is assembled from
+  known faces. The cost is one blade's fillet for any blade count, and one blade's success is
+  every blade's. If that assembly fails its checks, the whole propeller is filleted instead.
+
+When the fillet fails, smaller radii are tried to name one that works in the error message.
+"""
+
+from __future__ import annotations
+
+import faulthandler
+import io
+import math
+import os
+import select
+import signal
+import time
+from collections.abc import Callable, Iterator, Sequence
+
+import cadquery as cq
+from OCP.BRep import BRep_Builder, BRep_Tool
+from OCP.BRepAdaptor import BRepAdaptor_Surface
+from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
+from OCP.BRepExtrema import BRepExtrema_DistShapeShape
+from OCP.BRepFilletAPI import BRepFilletAPI_MakeFillet
+from OCP.BRepTools import BRepTools
+from OCP.GeomAbs import GeomAbs_BezierSurface, GeomAbs_BSplineSurface, GeomAbs_Cylinder, GeomAbs_OffsetSurface
+from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt, gp_Trsf, gp_Vec2d
+from OCP.ShapeUpgrade import ShapeUpgrade_ShapeDivideClosed
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_WIRE
+from OCP.TopExp import TopExp
+from OCP.TopLoc import TopLoc_Location
+from OCP.TopoDS import TopoDS, TopoDS_Edge, TopoDS_Face, TopoDS_Shape, TopoDS_Shell, TopoDS_Solid, TopoDS_Wire
+from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape, TopTools_IndexedMapOfShape
+
+from torus_cad.errors import KernelError
+from torus_cad.kernel.checks import precise_volume, single_valid_solid
+from torus_cad.kernel.fuse import fuse_pattern
+from torus_cad.kernel.topology import cut, explore
+from torus_cad.tolerances import FILLET_TIME_LIMIT_S, VOLUME_CHECK_RELATIVE_PRECISION
+
+#: Faces of these surface types belong to a blade; every other face (plane, cylinder, cone) to the hub.
+_BLADE_SURFACES = (GeomAbs_BSplineSurface, GeomAbs_BezierSurface, GeomAbs_OffsetSurface)
+
+#: Pieces the blade's closed side face is split into, in the order tried (see the module docstring):
+#: thirds work best; quarters (a split vertex at the leading edge) save some designs thirds do not.
+SIDE_FACE_PIECES = (3, 4)
+
+#: BRepFilletAPI_MakeFillet.SetParams (Tang, Tesp, T2d, TApp3d, TolApp2d, Fleche) for a last try:
+#: ten times tighter approximation than OpenCascade's defaults; saves some fillets the defaults
+#: lose (measured: 3 of 13 failing fuzz designs).
+TIGHT_FILLET_PARAMS = (1e-3, 1e-5, 1e-6, 1e-5, 1e-6, 1e-4)
+
+#: The tries, in order: (index into SIDE_FACE_PIECES, fillet parameters or None for the defaults).
+_TRIES = ((0, None), (1, None), (0, TIGHT_FILLET_PARAMS))
+
+_FULL_TURN = 2.0 * math.pi
+
+#: Radii tried, as fractions of the requested one, to suggest a radius that works.
+_FALLBACK_FRACTIONS = (0.5, 0.25, 0.1)
+
+
+def prepare_blade_for_fillet(blade: cq.Solid, pieces: int = SIDE_FACE_PIECES[0]) -> cq.Solid:
+    """The same blade with its closed side face split into ``pieces`` equal parts in u (the trailing edge becomes an edge)."""
+    divide = ShapeUpgrade_ShapeDivideClosed(blade.wrapped)
+    divide.SetNbSplitPoints(pieces - 1)
+    divide.Perform()
+    solids = cq.Shape.cast(divide.Result()).Solids()
+    if len(solids) != 1:
+        raise KernelError("splitting the blade's side face for the root fillet did not give one solid")
+    return solids[0]
+
+
+def junction_edges(solid: cq.Solid) -> list[TopoDS_Edge]:
+    """Edges of ``solid`` between a blade face and a hub face (module docstring)."""
+    ancestors = TopTools_IndexedDataMapOfShapeListOfShape()
+    TopExp.MapShapesAndAncestors_s(solid.wrapped, TopAbs_EDGE, TopAbs_FACE, ancestors)
+    edges = []
+    for index in range(1, ancestors.Extent() + 1):
+        kinds = {BRepAdaptor_Surface(TopoDS.Face_s(face)).GetType() in _BLADE_SURFACES
+                 for face in ancestors.FindFromIndex(index)}
+        if kinds == {True, False}:
+            edges.append(TopoDS.Edge_s(ancestors.FindKey(index)))
+    return edges
+
+
+def fillet_blade_roots(solid: cq.Solid, radius_mm: float, suggest: bool = True,
+                       params: FilletParams | None = None) -> cq.Solid:
+    """``solid`` with a fillet of ``radius_mm`` along every blade-hub junction; one valid solid.
+
+    Raises KernelError ("root fillet failed ...", with a radius that works when one of the
+    smaller radii tried does) when OpenCascade cannot make it.
+    """
+    edges = junction_edges(solid)
+    if not edges:
+        raise KernelError("root fillet failed: no blade-hub junction edges found")
+    filleted = _fillet_in_child(solid, edges, radius_mm, params)
+    if filleted is not None:
+        return filleted
+    if not suggest:
+        raise KernelError(f"root fillet failed at hub.root_fillet_radius = {radius_mm:g} mm")
+    works = next((radius_mm * fraction for fraction in _FALLBACK_FRACTIONS
+                  if _fillet_in_child(solid, edges, radius_mm * fraction) is not None), None)
+    smallest = radius_mm * min(_FALLBACK_FRACTIONS, default=1.0)
+    hint = f"; hub.root_fillet_radius = {works:.3g} mm works" if works is not None else f"; {smallest:.3g} mm fails as well"
+    raise KernelError(f"root fillet failed: OpenCascade could not fillet the blade roots at "
+                      f"hub.root_fillet_radius = {radius_mm:g} mm{hint}")
+
+
+#: BRepFilletAPI_MakeFillet.SetParams arguments: Tang, Tesp, T2d, TApp3d, TolApp2d, Fleche.
+FilletParams = tuple[float, float, float, float, float, float]
+
+#: Builds the run-out hub for a given extension (mm): a plain hub that much longer at each end,
+#: and the tools that cut it back to the real hub afterwards (see :func:`fillet_pattern`).
+RunOutHub = Callable[[float], tuple[cq.Solid, list[TopoDS_Shape]]]
+
+#: The run-out hub's extension at each end, in fillet radii.
+_RUN_OUT_RADII = 3.0
+
+
+def fillet_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], radius_mm: float,
+                   run_out: RunOutHub | None = None) -> cq.Solid:
+    """The filleted propeller from one filleted blade: blade 0 joined to ``hub``, filleted, patterned.
+
+    ``blade`` is built at ``angles_deg[0]``; its side face is split as
+    :func:`prepare_blade_for_fillet` does, into each number of :data:`SIDE_FACE_PIECES` in turn
+    until the fillet works. Where a blade root comes within about a radius of the hub's end
+    face, the fillet would have to roll over the hub's edge and fails. With ``run_out``, it is then tried on a hub longer at
+    both ends (the fillet runs out past the end), and the result is cut back to the hub's length
+    (the fillet ends in the end face, as it would when a longer filleted hub is faced) with the
+    bore and set-screw hole cut at the same time.
+
+    Raises KernelError as :func:`fillet_blade_roots` does when the fillet fails; returns a
+    checked single valid solid.
+    """
+    split = _LazySplits(blade)
+    for index, params in _TRIES:
+        try:
+            return _fillet_and_pattern(hub, split[index], angles_deg, radius_mm, suggest=False, params=params)
+        except KernelError:
+            pass
+    if run_out is not None:
+        extended, tools = run_out(_RUN_OUT_RADII * radius_mm)
+        if not _touches(blade, tools[:2]):  # else the blade itself reaches past the hub's ends
+            for index, params in _TRIES:
+                try:
+                    filleted = _fillet_and_pattern(extended, split[index], angles_deg, radius_mm, suggest=False,
+                                                   params=params)
+                    return single_valid_solid(cq.Shape.cast(cut(filleted.wrapped, tools, "cut the run-out hub back to the hub\'s length")),
+                                              "cutting the run-out hub back")
+                except KernelError:
+                    pass
+    return _fillet_and_pattern(hub, split[0], angles_deg, radius_mm)  # raises, suggesting a radius
+
+
+class _LazySplits:
+    """``blade`` split into each number of :data:`SIDE_FACE_PIECES`, made when first asked for."""
+
+    def __init__(self, blade: cq.Solid) -> None:
+        self.blade = blade
+        self.made: dict[int, cq.Solid] = {}
+
+    def __getitem__(self, index: int) -> cq.Solid:
+        pieces = SIDE_FACE_PIECES[index]
+        if pieces not in self.made:
+            self.made[pieces] = prepare_blade_for_fillet(self.blade, pieces)
+        return self.made[pieces]
+
+    def __iter__(self) -> Iterator[cq.Solid]:
+        return (self[index] for index in range(len(SIDE_FACE_PIECES)))
+
+
+def _fillet_and_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], radius_mm: float,
+                        suggest: bool = True, params: FilletParams | None = None) -> cq.Solid:
+    single = fuse_pattern(hub, blade, angles_deg[:1]).shape
+    filleted = fillet_blade_roots(single_valid_solid(single, "joining blade 0 to the hub"), radius_mm, suggest, params)
+    if len(angles_deg) == 1:
+        return filleted
+    try:
+        return single_valid_solid(cq.Shape.cast(_assemble_filleted(filleted.wrapped, angles_deg)),
+                                  "patterning the filleted blade")
+    except KernelError:
+        whole = fuse_pattern(hub, blade, angles_deg).shape
+        return fillet_blade_roots(single_valid_solid(whole, "joining the blades to the hub"), radius_mm, suggest,
+                                  params)
+
+
+def _touches(shape: cq.Solid, tools: Sequence[TopoDS_Shape]) -> bool:
+    """Whether ``shape`` comes within 1e-6 mm of any of ``tools``."""
+    for tool in tools:
+        distance = BRepExtrema_DistShapeShape(shape.wrapped, tool)
+        if not distance.IsDone() or distance.Value() < 1e-6:
+            return True
+    return False
+
+
+
+
+def _assemble_filleted(filleted: TopoDS_Shape, angles_deg: Sequence[float]) -> TopoDS_Solid:
+    """The shell of the hub with every blade: blade 0's blade and fillet faces rotated to each angle.
+
+    The hub's lateral face keeps its own surface and outer wire, its holes that no blade made
+    (a set-screw hole), and gets, for each copy, blade 0's fillet-contact wires rotated, their
+    curves on the cylinder shifted in u by the copy's angle (as :mod:`torus_cad.kernel.fuse` does
+    for the bare intersection curves).
+    """
+    faces = [TopoDS.Face_s(face) for face in explore(filleted, TopAbs_FACE)]
+    lateral = _outer_cylinder(faces)
+    blade_faces = [face for face in faces if BRepAdaptor_Surface(face).GetType() in _BLADE_SURFACES]
+    blade_edges = TopTools_IndexedMapOfShape()
+    for face in blade_faces:
+        TopExp.MapShapes_s(face, TopAbs_EDGE, blade_edges)
+    outer_wire = BRepTools.OuterWire_s(lateral)
+    inner_wires = [TopoDS.Wire_s(wire) for wire in explore(lateral, TopAbs_WIRE) if not wire.IsSame(outer_wire)]
+    blade_holes = [wire for wire in inner_wires if blade_edges.Contains(explore(wire, TopAbs_EDGE)[0])]
+    lateral_with_holes = BRepBuilderAPI_MakeFace(BRep_Tool.Surface_s(lateral), outer_wire, True)
+    for wire in inner_wires:
+        if not any(wire.IsSame(hole) for hole in blade_holes):
+            lateral_with_holes.Add(wire)
+    builder, shell = BRep_Builder(), TopoDS_Shell()
+    builder.MakeShell(shell)
+    for angle in angles_deg:
+        location = _shift_hole_curves(blade_holes, lateral, math.radians(angle - angles_deg[0]))
+        for wire in blade_holes:
+            lateral_with_holes.Add(TopoDS.Wire_s(wire.Moved(location)))
+        for face in blade_faces:
+            builder.Add(shell, face.Moved(location))
+    if not lateral_with_holes.IsDone():
+        raise KernelError("OpenCascade could not cut the filleted blade roots out of the hub's lateral face")
+    new_lateral = lateral_with_holes.Face()
+    new_lateral.Orientation(lateral.Orientation())
+    builder.Add(shell, new_lateral)
+    for face in faces:
+        if not face.IsSame(lateral) and BRepAdaptor_Surface(face).GetType() not in _BLADE_SURFACES:
+            builder.Add(shell, face)
+    shell.Closed(BRep_Tool.IsClosed_s(shell))
+    solid = TopoDS_Solid()
+    builder.MakeSolid(solid)
+    builder.Add(solid, shell)
+    return solid
+
+
+def _shift_hole_curves(holes: Sequence[TopoDS_Wire], lateral: TopoDS_Face, angle_rad: float) -> TopLoc_Location:
+    """The rotation by ``angle_rad`` about +z; the rotated hole edges get their curves on ``lateral`` shifted in u."""
+    rotation = gp_Trsf()
+    rotation.SetRotation(gp_Ax1(gp_Pnt(0.0, 0.0, 0.0), gp_Dir(0.0, 0.0, 1.0)), angle_rad)
+    location = TopLoc_Location(rotation)  # not the empty location even at 0: every copy gets its curves
+    builder = BRep_Builder()
+    for wire in holes:
+        u_min, u_max, _, _ = BRepTools.UVBounds_s(lateral, wire)
+        shift = angle_rad - _FULL_TURN * math.floor((u_min + angle_rad) / _FULL_TURN)
+        if u_max + shift > _FULL_TURN:
+            raise KernelError("a filleted blade root crosses the hub's seam")
+        for edge in explore(wire, TopAbs_EDGE):
+            edge = TopoDS.Edge_s(edge)
+            curve = BRep_Tool.CurveOnSurface_s(edge, lateral, 0.0, 0.0)
+            if curve is None:
+                raise KernelError("a fillet contact edge has no curve on the hub")
+            moved = TopoDS.Edge_s(edge.Moved(location))
+            builder.UpdateEdge(moved, curve.Translated(gp_Vec2d(shift, 0.0)), lateral, BRep_Tool.Tolerance_s(edge))
+    return location
+
+
+def _outer_cylinder(faces: Sequence[TopoDS_Face]) -> TopoDS_Face:
+    cylinders = [(BRepAdaptor_Surface(face).Cylinder().Radius(), index, face) for index, face in enumerate(faces)
+                 if BRepAdaptor_Surface(face).GetType() == GeomAbs_Cylinder]
+    if not cylinders:
+        raise KernelError("the filleted hub has no cylindrical face")
+    return max(cylinders, key=lambda item: item[:2])[2]
+
+
+
+
+def fillet_edges(solid: cq.Solid, edges: list[TopoDS_Edge], radius_mm: float,
+                 params: FilletParams | None = None) -> cq.Solid | None:
+    """The fillet in this process: the checked solid, or None when OpenCascade fails or the result is unsound.
+
+    ``params``: BRepFilletAPI_MakeFillet.SetParams values (default: OpenCascade's)."""
+    fillet = BRepFilletAPI_MakeFillet(solid.wrapped)
+    if params is not None:
+        fillet.SetParams(*params)
+    for edge in edges:
+        fillet.Add(radius_mm, edge)
+    try:
+        fillet.Build()
+    except Exception:  # OCCT raises Standard_Failure subclasses through OCP
+        return None
+    if not fillet.IsDone():
+        return None
+    try:
+        result = single_valid_solid(cq.Shape.cast(fillet.Shape()), "the root fillet")
+    except KernelError:
+        return None
+    # A concave fillet only adds material: a smaller volume means a wrong result.
+    if precise_volume(result, VOLUME_CHECK_RELATIVE_PRECISION) < precise_volume(solid, VOLUME_CHECK_RELATIVE_PRECISION):
+        return None
+    return result
+
+
+def _fillet_in_child(solid: cq.Solid, edges: list[TopoDS_Edge], radius_mm: float,
+                     params: FilletParams | None = None) -> cq.Solid | None:
+    """:func:`fillet_edges` in a forked child (a crash or a hang there is a failed fillet, not a dead process)."""
+    read_end, write_end = os.pipe()
+    pid = os.fork()
+    if pid == 0:  # the child: fillet, send the BRep text, leave without cleanup handlers
+        faulthandler.disable()  # a crash here is an expected outcome, reported by the parent; no dump
+        os.close(read_end)
+        status = 1
+        try:
+            result = fillet_edges(solid, edges, radius_mm, params)
+            if result is not None:
+                with os.fdopen(write_end, "wb") as pipe:
+                    pipe.write(_to_brep(result.wrapped))
+                status = 0
+        finally:
+            os._exit(status)
+    os.close(write_end)
+    data = _read_with_limit(read_end, pid, FILLET_TIME_LIMIT_S)
+    _, status = os.waitpid(pid, 0)
+    if data is None or os.WIFSIGNALED(status) or os.WEXITSTATUS(status) != 0 or not data:
+        return None
+    return single_valid_solid(cq.Shape.cast(_from_brep(data)), "the root fillet")
+
+
+def _read_with_limit(descriptor: int, pid: int, limit_s: float) -> bytes | None:
+    """Everything the child writes, or None (the child killed) when it takes longer than ``limit_s``."""
+    chunks: list[bytes] = []
+    deadline = time.monotonic() + limit_s
+    with os.fdopen(descriptor, "rb") as pipe:
+        while True:
+            remaining = deadline - time.monotonic()
+            if remaining <= 0 or not select.select([pipe], [], [], remaining)[0]:
+                os.kill(pid, signal.SIGKILL)
+                return None
+            chunk = pipe.read1(1 << 20)
+            if not chunk:
+                return b"".join(chunks)
+            chunks.append(chunk)
+
+
+def _to_brep(shape: TopoDS_Shape) -> bytes:
+    stream = io.BytesIO()
+    BRepTools.Write_s(shape, stream)
+    return stream.getvalue()
+
+
+def _from_brep(data: bytes) -> TopoDS_Shape:
+    shape = TopoDS_Shape()
+    BRepTools.Read_s(shape, io.BytesIO(data), BRep_Builder())
+    return shape

@@ -1,0 +1,85 @@
+"""The blade-element table beside the STEP: ``<name>_sections.csv`` and ``<name>_sections.png``.
+
+One row per section of the design (``resolution.sections``), columns as
+:data:`CSV_COLUMNS` (mm and degrees; definitions in :mod:`torus_cad.geometry.blade_elements`).
+The picture plots chord, beta and thickness against r, so designers see what their quartics
+do; a loop blade passes each radius twice, so each quantity is drawn as one line along the
+blade with the outgoing half solid and the returning half dashed.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+from pathlib import Path
+
+import numpy as np
+
+from torus_cad.geometry.blade_elements import NEARLY_RADIAL_FRACTION, BladeElements
+
+#: CSV header: name in the file -> BladeElements attribute.
+CSV_COLUMNS = {
+    "s": "s",
+    "r_mm": "radius_mm",
+    "axial_mm": "axial_mm",
+    "chord_mm": "chord_mm",
+    "max_thickness_mm": "thickness_mm",
+    "thickness_to_chord": "thickness_ratio",
+    "beta_deg": "beta_deg",
+    "geometric_pitch_mm": "pitch_mm",
+    "position_angle_deg": "position_angle_deg",
+    "radial_fraction": "radial_fraction",
+    "trailing_edge_mm": "trailing_edge_mm",
+}
+
+
+def sections_csv_text(elements: BladeElements, trailing_edge_mm: np.ndarray | None = None) -> str:
+    """The table as CSV text (header, then one row per section; 6 significant digits)."""
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(CSV_COLUMNS)
+    edge = np.zeros(len(elements.s)) if trailing_edge_mm is None else np.asarray(trailing_edge_mm, float)
+    for index in range(len(elements.s)):
+        row = []
+        for attribute in CSV_COLUMNS.values():
+            value = edge[index] if attribute == "trailing_edge_mm" else getattr(elements, attribute)[index]
+            row.append(f"{float(value):.6g}")
+        writer.writerow(row)
+    return buffer.getvalue()
+
+
+def write_sections_csv(elements: BladeElements, path: Path, trailing_edge_mm: np.ndarray | None = None) -> Path:
+    """Write the CSV table to ``path`` (the caller makes the write atomic)."""
+    Path(path).write_text(sections_csv_text(elements, trailing_edge_mm))
+    return Path(path)
+
+
+def write_sections_png(elements: BladeElements, path: Path, title: str = "", size_px: tuple[int, int] = (1500, 500)
+                       ) -> Path:
+    """Chord, beta and thickness against r, three panels side by side (matplotlib, off-screen)."""
+    from matplotlib.figure import Figure  # no pyplot: no global state, no display
+
+    dpi = 100
+    figure = Figure(figsize=(size_px[0] / dpi, size_px[1] / dpi), dpi=dpi)
+    figure.subplots_adjust(left=0.06, right=0.99, bottom=0.13, top=0.88, wspace=0.3)
+    axes = figure.subplots(1, 3)
+    tip = int(np.argmax(elements.radius_mm))
+    halves = ((slice(0, tip + 1), "-", "outgoing (s up to the tip)"),
+              (slice(tip, None), "--", "returning (s from the tip)"))
+    radial = elements.radial_fraction > NEARLY_RADIAL_FRACTION
+    panels = (("chord_mm", "chord (mm)"), ("beta_deg", "blade angle beta (deg)"), ("thickness_mm", "max thickness (mm)"))
+    for axis, (attribute, label) in zip(axes, panels):
+        values = getattr(elements, attribute)
+        for part, style, legend in halves:
+            axis.plot(elements.radius_mm[part], values[part], style, color="tab:blue", label=legend)
+        if attribute == "beta_deg" and np.any(radial):
+            axis.plot(elements.radius_mm[radial], values[radial], "x", color="tab:red",
+                      label="chord nearly radial: beta says little")
+        axis.set_xlabel("r (mm)")
+        axis.set_ylabel(label)
+        axis.grid(True, alpha=0.3)
+    axes[1].legend(fontsize="small")
+    if title:
+        figure.suptitle(title)
+    figure.savefig(path, format="png")
+    return Path(path)
