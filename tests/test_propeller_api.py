@@ -120,7 +120,7 @@ def test_resolve_parameters_accepts_none_parameters_and_paths(tmp_path):
 
 
 def test_bad_overrides_raise_parameter_errors_naming_the_key():
-    with pytest.raises(ParameterError, match="hub.raduis"):
+    with pytest.raises(ParameterError, match=r"hub\.raduis"):
         propeller_objects(overrides={"hub.raduis": 3.0})
     with pytest.raises(ParameterError, match="blades"):
         propeller_objects(overrides={"blades": 0})

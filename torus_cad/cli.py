@@ -96,19 +96,19 @@ def _add_design_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _command_build(args: argparse.Namespace) -> int:
-    from torus_cad.budgets import check_stl_budget
-    from torus_cad.outputs import check_writable_folder, write_output_set
     from torus_cad.progress import StageProgress
 
     progress = StageProgress.for_terminal(quiet=args.quiet)  # stderr, only on a terminal
     progress("kernel_import")  # a line on the terminal before the seconds of importing the schema and cadquery
+    from torus_cad.budgets import check_stl_budget
+    from torus_cad.outputs import check_writable_folder, write_output_set
+
     params = load_parameters(args.config, args.overrides)
     size = _preview_size(args.preview_size, "--preview-size") if args.preview else None
     if args.require_printable:  # decided from the analytic section, before any work or file
         from torus_cad.geometry.printability import printability
 
-        blade = params.geometry().blade
-        problem = printability(blade.airfoil, blade.laws, params.manufacturing.min_wall).problem()
+        problem = printability(params.geometry().blade, params.manufacturing.min_wall).problem()
         if problem:
             raise GeometryError(f"not printable (--require-printable): {problem}")
     if _writes_a_mesh(params, args.no_stl):
@@ -159,11 +159,12 @@ def _preview_size(text: str, option: str) -> tuple[int, int]:
 
 
 def _command_preview(args: argparse.Namespace) -> int:
-    from torus_cad.outputs import check_writable_folder
     from torus_cad.progress import StageProgress
 
     progress = StageProgress.for_terminal(quiet=args.quiet)
     progress("kernel_import")
+    from torus_cad.outputs import check_writable_folder
+
     params = load_parameters(args.config, args.overrides)
     size = _preview_size(args.size, "--size")
     out = Path(args.out) if args.out else Path("step_out") / f"{params.name}.png"
@@ -275,6 +276,129 @@ def _command_verify(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _mesh_overrides(args: argparse.Namespace) -> dict[str, Any]:
+    """``[mesh]`` values given on the command line (they override the design file's)."""
+    from torus_cad.mesh.settings import format_overrides
+
+    overrides: dict[str, Any] = {f"mesh.{key}": getattr(args, key) for key in ("sections", "points", "spacing")
+                                 if getattr(args, key) is not None}
+    if args.formats:
+        overrides.update(format_overrides(name for text in args.formats for name in text.split(",")))
+    return overrides
+
+
+def _command_mesh(args: argparse.Namespace) -> int:
+    from torus_cad.mesh.pipeline import summary_line, write_surface_mesh
+    from torus_cad.progress import StageProgress
+
+    params = load_parameters(args.config, args.overrides).with_values(_mesh_overrides(args))
+    progress = StageProgress.for_terminal(quiet=args.quiet)
+    report, paths = write_surface_mesh(params, Path(args.out), compare=not args.no_compare, progress=progress)
+    progress.finish()
+    if not args.quiet:
+        for path in paths.values():
+            print(f"wrote {path}")
+        print(summary_line(report))
+    return EXIT_OK
+
+
+def _table_specs(table: str) -> list[Any]:
+    from torus_cad.parameters import parameter_specs
+
+    return [spec for spec in parameter_specs() if spec.section == table]
+
+
+def _add_table_arguments(parser: argparse.ArgumentParser, table: str) -> None:
+    """One ``--name`` option per parameter of a schema table (default None: keep the design's value)."""
+    from enum import Enum
+
+    for spec in _table_specs(table):
+        name = spec.key.rpartition(".")[2]
+        unit = f" ({spec.unit})" if spec.unit else ""
+        if isinstance(spec.kind, type) and issubclass(spec.kind, Enum):
+            parser.add_argument(f"--{name.replace('_', '-')}", dest=name, choices=[item.value for item in spec.choices],
+                                help=f"{spec.doc} (default {spec.default.value})")
+        else:
+            parser.add_argument(f"--{name.replace('_', '-')}", dest=name, type=spec.kind, metavar="X",
+                                help=f"{spec.doc}{unit}; {spec.bounds} (default {spec.default:g})")
+
+
+def _table_overrides(args: argparse.Namespace, table: str) -> dict[str, Any]:
+    return {spec.key: getattr(args, spec.key.rpartition(".")[2]) for spec in _table_specs(table)
+            if getattr(args, spec.key.rpartition(".")[2]) is not None}
+
+
+def _command_cfd(args: argparse.Namespace) -> int:
+    from torus_cad.cfd.settings import MissingExtraError
+    from torus_cad.progress import StageProgress
+
+    params = load_parameters(args.config, args.overrides).with_values(_table_overrides(args, "cfd"))
+    if args.threads < 0:
+        raise ParameterError(f"--threads = {args.threads} is out of range; allowed 0 (one per CPU) or more")
+    progress = StageProgress.for_terminal(quiet=args.quiet)
+    try:
+        from torus_cad.cfd.domain import summary_line, write_cfd_domain
+
+        report, paths = write_cfd_domain(params, Path(args.out), threads=args.threads, progress=progress)
+    except MissingExtraError as error:
+        print(f"torus-cad: {error}", file=sys.stderr)
+        return EXIT_KERNEL_FAILURE
+    progress.finish()
+    if not args.quiet:
+        for path in paths.values():
+            print(f"wrote {path}")
+        print(summary_line(report))
+    return EXIT_OK
+
+
+def _add_mesh_parser(commands: Any) -> None:
+    from torus_cad.mesh.settings import MeshFormat
+    from torus_cad.tolerances import MESH_TRIANGLE_LIMIT
+
+    mesh = commands.add_parser(
+        "mesh", help="closed triangle mesh straight from the spec's math (STL, OBJ groups, PLY, VTK)",
+        description="Mesh the propeller of CONFIG (or the default) from the spec's math: each blade's structured "
+        "grid at exactly --sections x --points (points equally spaced in arc length, spec §5), the hub as a "
+        "§6.2 grid at the blades' cell size, united into one closed 2-manifold (manifold3d). Writes "
+        "<name>_mesh.<format> files and <name>_mesh.json, a quality report. The options override the design's "
+        f"[mesh] table. Meshes estimated above {MESH_TRIANGLE_LIMIT:,} triangles are refused before they are built.")
+    _add_design_arguments(mesh)
+    mesh.add_argument("--sections", type=int, metavar="N", help="sections along each blade (mesh.sections, default 100)")
+    mesh.add_argument("--points", type=int, metavar="M",
+                      help="points around each section, equal arc length (mesh.points, default 400)")
+    mesh.add_argument("--spacing", choices=["arc_length", "parameter"],
+                      help="sections evenly in the centerline's arc length or in its parameter s "
+                           "(mesh.spacing, default arc_length)")
+    mesh.add_argument("--format", dest="formats", action="append", metavar="FORMAT[,FORMAT]",
+                      help="files to write instead of the design's, repeatable or comma-separated: "
+                           + ", ".join(item.value for item in MeshFormat) + " (default stl,obj)")
+    mesh.add_argument("--no-compare", action="store_true",
+                      help="skip the B-rep comparison in the report (volume, OpenCascade's tessellation)")
+    _add_out_and_quiet(mesh, "mesh_out", _command_mesh)
+
+
+def _add_cfd_parser(commands: Any) -> None:
+    cfd = commands.add_parser(
+        "cfd", help="fluid domain and tetrahedral volume mesh for a rotating-propeller simulation (gmsh)",
+        description="Mesh the fluid around the propeller of CONFIG (or the default) with gmsh: an outer "
+        "cylinder, a rotating-zone cylinder around the propeller, conformal at their interface, tetrahedra "
+        "refined near the blades. Writes <name>_cfd.msh (v4.1), <name>_cfd_v2.msh (v2.2 ASCII, for "
+        "OpenFOAM's gmshToFoam), <name>.step, README.txt and <name>_cfd.json. The options override the design's "
+        "[cfd] table; D is the tip diameter. Needs the cfd extra: pip install 'torus_cad[cfd]'.")
+    _add_design_arguments(cfd)
+    _add_table_arguments(cfd, "cfd")
+    cfd.add_argument("--threads", type=int, default=0, metavar="N", help="gmsh threads (default 0: one per CPU)")
+    _add_out_and_quiet(cfd, "cfd_out", _command_cfd)
+
+
+def _add_out_and_quiet(parser: argparse.ArgumentParser, default_out: str,
+                       handler: Callable[[argparse.Namespace], int]) -> None:
+    """The output folder, --quiet and the handler, as every writing subcommand has them."""
+    parser.add_argument("--out", default=default_out, help=f"output folder (default: {default_out})")
+    parser.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
+    parser.set_defaults(handler=handler)
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with every subcommand."""
     parser = _Parser(prog="torus-cad", description=DESCRIPTION, epilog=EPILOG,
@@ -300,9 +424,9 @@ def build_parser() -> argparse.ArgumentParser:
                        help="size of the --preview picture in pixels (default 1200x600)")
     build.set_defaults(handler=_command_build)
 
-    preview = commands.add_parser("preview", help="render a PNG picture: isometric view and view along the axis",
+    preview = commands.add_parser("preview", help="render a PNG picture: a view from above and a view along the axis",
                                   description="Build the propeller of CONFIG (or the default) and render a shaded "
-                                  "picture of it off-screen: an isometric view and a view along the spin axis, "
+                                  "picture of it off-screen: a view from above that shows every blade and a view along the spin axis, "
                                   "each blade in its own colour.")
     _add_design_arguments(preview)
     preview.add_argument("--out", metavar="FILE.png", help="picture to write (default: step_out/<name>.png)")
@@ -365,6 +489,8 @@ def build_parser() -> argparse.ArgumentParser:
                         help="address to listen on (default 127.0.0.1: only this machine can connect; "
                              "0.0.0.0 serves every network, without a password)")
     studio.set_defaults(handler=_command_studio)
+    _add_mesh_parser(commands)
+    _add_cfd_parser(commands)
     return parser
 
 

@@ -56,17 +56,17 @@ from OCP.GeomAbs import (
 from OCP.gp import gp_Pnt, gp_Vec
 from OCP.TopAbs import (
     TopAbs_EDGE,
-    TopAbs_FACE,
     TopAbs_REVERSED,
-    TopAbs_ShapeEnum,
     TopAbs_SOLID,
     TopAbs_WIRE,
 )
-from OCP.TopExp import TopExp, TopExp_Explorer
+from OCP.TopExp import TopExp
 from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Shape
 from OCP.TopTools import TopTools_IndexedMapOfShape
 from scipy.interpolate import BSpline
+
+from torus_cad.kernel.topology import count, explore, faces
 
 _Array = NDArray[np.float64]
 
@@ -216,10 +216,10 @@ def _recognise(shape: TopoDS_Shape) -> _Hub | None:
     """The hub's radius and end planes and the blade faces, or None unless ``shape`` is one solid
     made of z-axis cylinder faces of one radius, two whole end discs and B-spline faces bounded
     only by the cylinder's edges (and their own seam)."""
-    if _count(shape, TopAbs_SOLID) != 1:
+    if count(shape, TopAbs_SOLID) != 1:
         return None
     by_kind: dict[object, list[TopoDS_Face]] = {}
-    for face in _faces(shape):
+    for face in faces(shape):
         by_kind.setdefault(BRepAdaptor_Surface(face).GetType(), []).append(face)
     cylinders, planes, blades = (by_kind.pop(kind, []) for kind in (GeomAbs_Cylinder, GeomAbs_Plane,
                                                                      GeomAbs_BSplineSurface))
@@ -238,9 +238,9 @@ def _recognise(shape: TopoDS_Shape) -> _Hub | None:
     for face in cylinders:
         TopExp.MapShapes_s(face, TopAbs_EDGE, cylinder_edges)
     for face in blades:
-        if _count(face, TopAbs_WIRE) != 1 or not all(
+        if count(face, TopAbs_WIRE) != 1 or not all(
                 cylinder_edges.Contains(edge) or BRep_Tool.IsClosed_s(TopoDS.Edge_s(edge), face)
-                for edge in _explore(face, TopAbs_EDGE)):
+                for edge in explore(face, TopAbs_EDGE)):
             return None
     return _Hub(radius, z_bottom, z_top, blades)
 
@@ -259,9 +259,9 @@ def _z_axis_cylinder_radius(faces: list[TopoDS_Face]) -> float | None:
 def _end_disc_z(face: TopoDS_Face, radius: float) -> float | None:
     """z of a plane face that is a whole disc of ``radius`` about the z axis, else None."""
     plane = BRepAdaptor_Surface(face).Plane()
-    if abs(abs(plane.Axis().Direction().Z()) - 1.0) > 1e-12 or _count(face, TopAbs_WIRE) != 1:
+    if abs(abs(plane.Axis().Direction().Z()) - 1.0) > 1e-12 or count(face, TopAbs_WIRE) != 1:
         return None
-    for edge in _explore(face, TopAbs_EDGE):
+    for edge in explore(face, TopAbs_EDGE):
         curve = BRepAdaptor_Curve(TopoDS.Edge_s(edge))
         if curve.GetType() != GeomAbs_Circle:
             return None
@@ -743,17 +743,6 @@ def _gauss_on_spans(knots: NDArray[np.float64], degree: int, points: int
     return (low[:, None] + length[:, None] * (x + 1.0) / 2.0).ravel(), (length[:, None] * w / 2.0).ravel()
 
 
-def _explore(shape: TopoDS_Shape, kind: TopAbs_ShapeEnum) -> list[TopoDS_Shape]:
-    found, explorer = [], TopExp_Explorer(shape, kind)
-    while explorer.More():
-        found.append(explorer.Current())
-        explorer.Next()
-    return found
 
 
-def _faces(shape: TopoDS_Shape) -> list[TopoDS_Face]:
-    return [TopoDS.Face_s(face) for face in _explore(shape, TopAbs_FACE)]
 
-
-def _count(shape: TopoDS_Shape, kind: TopAbs_ShapeEnum) -> int:
-    return len(_explore(shape, kind))

@@ -41,7 +41,6 @@ from collections.abc import Callable, Iterator, Sequence
 import cadquery as cq
 from OCP.BRep import BRep_Builder, BRep_Tool
 from OCP.BRepAdaptor import BRepAdaptor_Surface
-from OCP.BRepAlgoAPI import BRepAlgoAPI_Cut
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
 from OCP.BRepExtrema import BRepExtrema_DistShapeShape
 from OCP.BRepFilletAPI import BRepFilletAPI_MakeFillet
@@ -49,15 +48,16 @@ from OCP.BRepTools import BRepTools
 from OCP.GeomAbs import GeomAbs_BezierSurface, GeomAbs_BSplineSurface, GeomAbs_Cylinder, GeomAbs_OffsetSurface
 from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt, gp_Trsf, gp_Vec2d
 from OCP.ShapeUpgrade import ShapeUpgrade_ShapeDivideClosed
-from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_ShapeEnum, TopAbs_WIRE
-from OCP.TopExp import TopExp, TopExp_Explorer
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_WIRE
+from OCP.TopExp import TopExp
 from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS, TopoDS_Edge, TopoDS_Face, TopoDS_Shape, TopoDS_Shell, TopoDS_Solid, TopoDS_Wire
-from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape, TopTools_IndexedMapOfShape, TopTools_ListOfShape
+from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape, TopTools_IndexedMapOfShape
 
 from torus_cad.errors import KernelError
 from torus_cad.kernel.checks import precise_volume, single_valid_solid
 from torus_cad.kernel.fuse import fuse_pattern
+from torus_cad.kernel.topology import cut, explore
 from torus_cad.tolerances import FILLET_TIME_LIMIT_S, VOLUME_CHECK_RELATIVE_PRECISION
 
 #: Faces of these surface types belong to a blade; every other face (plane, cylinder, cone) to the hub.
@@ -167,7 +167,7 @@ def fillet_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], 
                 try:
                     filleted = _fillet_and_pattern(extended, split[index], angles_deg, radius_mm, suggest=False,
                                                    params=params)
-                    return single_valid_solid(cq.Shape.cast(_cut(filleted.wrapped, tools)),
+                    return single_valid_solid(cq.Shape.cast(cut(filleted.wrapped, tools, "cut the run-out hub back to the hub\'s length")),
                                               "cutting the run-out hub back")
                 except KernelError:
                     pass
@@ -215,19 +215,6 @@ def _touches(shape: cq.Solid, tools: Sequence[TopoDS_Shape]) -> bool:
     return False
 
 
-def _cut(shape: TopoDS_Shape, tools: Sequence[TopoDS_Shape]) -> TopoDS_Shape:
-    arguments, tool_list = TopTools_ListOfShape(), TopTools_ListOfShape()
-    arguments.Append(shape)
-    for tool in tools:
-        tool_list.Append(tool)
-    cut = BRepAlgoAPI_Cut()
-    cut.SetArguments(arguments)
-    cut.SetTools(tool_list)
-    cut.SetRunParallel(True)
-    cut.Build()
-    if not cut.IsDone() or cut.Shape().IsNull():
-        raise KernelError("OpenCascade could not cut the run-out hub back to the hub's length")
-    return cut.Shape()
 
 
 def _assemble_filleted(filleted: TopoDS_Shape, angles_deg: Sequence[float]) -> TopoDS_Solid:
@@ -238,15 +225,15 @@ def _assemble_filleted(filleted: TopoDS_Shape, angles_deg: Sequence[float]) -> T
     curves on the cylinder shifted in u by the copy's angle (as :mod:`torus_cad.kernel.fuse` does
     for the bare intersection curves).
     """
-    faces = [TopoDS.Face_s(face) for face in _explore(filleted, TopAbs_FACE)]
+    faces = [TopoDS.Face_s(face) for face in explore(filleted, TopAbs_FACE)]
     lateral = _outer_cylinder(faces)
     blade_faces = [face for face in faces if BRepAdaptor_Surface(face).GetType() in _BLADE_SURFACES]
     blade_edges = TopTools_IndexedMapOfShape()
     for face in blade_faces:
         TopExp.MapShapes_s(face, TopAbs_EDGE, blade_edges)
     outer_wire = BRepTools.OuterWire_s(lateral)
-    inner_wires = [TopoDS.Wire_s(wire) for wire in _explore(lateral, TopAbs_WIRE) if not wire.IsSame(outer_wire)]
-    blade_holes = [wire for wire in inner_wires if blade_edges.Contains(_explore(wire, TopAbs_EDGE)[0])]
+    inner_wires = [TopoDS.Wire_s(wire) for wire in explore(lateral, TopAbs_WIRE) if not wire.IsSame(outer_wire)]
+    blade_holes = [wire for wire in inner_wires if blade_edges.Contains(explore(wire, TopAbs_EDGE)[0])]
     lateral_with_holes = BRepBuilderAPI_MakeFace(BRep_Tool.Surface_s(lateral), outer_wire, True)
     for wire in inner_wires:
         if not any(wire.IsSame(hole) for hole in blade_holes):
@@ -285,7 +272,7 @@ def _shift_hole_curves(holes: Sequence[TopoDS_Wire], lateral: TopoDS_Face, angle
         shift = angle_rad - _FULL_TURN * math.floor((u_min + angle_rad) / _FULL_TURN)
         if u_max + shift > _FULL_TURN:
             raise KernelError("a filleted blade root crosses the hub's seam")
-        for edge in _explore(wire, TopAbs_EDGE):
+        for edge in explore(wire, TopAbs_EDGE):
             edge = TopoDS.Edge_s(edge)
             curve = BRep_Tool.CurveOnSurface_s(edge, lateral, 0.0, 0.0)
             if curve is None:
@@ -303,13 +290,6 @@ def _outer_cylinder(faces: Sequence[TopoDS_Face]) -> TopoDS_Face:
     return max(cylinders, key=lambda item: item[:2])[2]
 
 
-def _explore(shape: TopoDS_Shape, kind: TopAbs_ShapeEnum) -> list[TopoDS_Shape]:
-    found: list[TopoDS_Shape] = []
-    explorer = TopExp_Explorer(shape, kind)
-    while explorer.More():
-        found.append(explorer.Current())
-        explorer.Next()
-    return found
 
 
 def fillet_edges(solid: cq.Solid, edges: list[TopoDS_Edge], radius_mm: float,
