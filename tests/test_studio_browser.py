@@ -64,9 +64,9 @@ def test_the_studio_serves_this_machine_only_and_says_so(studio):
 
 
 def test_page_shows_every_parameter_and_the_default_propeller(page):
-    for spec in parameter_specs():
-        element = field_id(spec.key) + ("-0" if spec.length else "")
-        assert page.element(element) is not None, f"no input for {spec.key}"
+    page.open_all_groups()
+    inputs = [field_id(spec.key) + ("-0" if spec.length else "") for spec in parameter_specs()]
+    page.wait(lambda: all(page.exists(element) for element in inputs), "an input for every parameter")
     page.change("blades", "3")
     assert page.text("readout-volume") == _volume_text(PropellerParameters())
     assert page.text("readout-valid") == "valid: 1 closed solid"

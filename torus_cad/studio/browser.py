@@ -141,6 +141,11 @@ class StudioPage:
 
         return self.driver.find_element(By.ID, element_id)
 
+    def exists(self, element_id: str) -> bool:
+        from selenium.webdriver.common.by import By
+
+        return bool(self.driver.find_elements(By.ID, element_id))
+
     def text(self, element_id: str) -> str:
         from selenium.common.exceptions import (
             NoSuchElementException,
@@ -215,6 +220,20 @@ class StudioPage:
         field = self.element(field_id(key))
         field.send_keys(Keys.CONTROL, "a")
         field.send_keys(text)
+
+    def open_all_groups(self) -> None:
+        """Expand every group of the parameters panel (only the first few start open), one at a time."""
+        from selenium.webdriver.common.by import By
+
+        closed = ".v-expansion-panel:not(.v-expansion-panel--active) > .v-expansion-panel-title"
+        for _ in range(100):
+            titles = self.driver.find_elements(By.CSS_SELECTOR, closed)
+            if not titles:
+                return
+            count = len(titles)
+            self.driver.execute_script("arguments[0].click();", titles[0])
+            self.wait(lambda count=count: len(self.driver.find_elements(By.CSS_SELECTOR, closed)) < count,
+                      "a group to open")
 
     def click(self, element_id: str) -> None:
         element = self.element(element_id)

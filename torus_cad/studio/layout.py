@@ -101,7 +101,7 @@ def _vector_field(panel_field: PanelField) -> None:
 def _group(group: PanelGroup) -> None:
     with v3.VExpansionPanel(value=group.section or "propeller"):
         v3.VExpansionPanelTitle(group.title, classes="text-subtitle-1 font-weight-medium")
-        with v3.VExpansionPanelText(eager=True):  # rendered while collapsed: every input exists
+        with v3.VExpansionPanelText():
             if group.doc:
                 html.Div(group.doc, classes="text-caption text-medium-emphasis mb-2")
             for panel_field in group.fields:
