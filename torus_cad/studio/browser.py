@@ -15,6 +15,7 @@ Chromium starts with a fresh, empty profile and its background networking disabl
 from __future__ import annotations
 
 import contextlib
+import functools
 import os
 import re
 import signal
@@ -230,10 +231,13 @@ class StudioPage:
             titles = self.driver.find_elements(By.CSS_SELECTOR, closed)
             if not titles:
                 return
-            count = len(titles)
             self.driver.execute_script("arguments[0].click();", titles[0])
-            self.wait(lambda count=count: len(self.driver.find_elements(By.CSS_SELECTOR, closed)) < count,
-                      "a group to open")
+            self.wait(functools.partial(self._fewer, closed, len(titles)), "a group to open")
+
+    def _fewer(self, selector: str, count: int) -> bool:
+        from selenium.webdriver.common.by import By
+
+        return len(self.driver.find_elements(By.CSS_SELECTOR, selector)) < count
 
     def click(self, element_id: str) -> None:
         element = self.element(element_id)
