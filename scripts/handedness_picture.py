@@ -10,7 +10,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from PIL import Image, ImageDraw
+from PIL import Image
 
 from torus_cad.preview import write_preview
 from torus_cad.propeller import build_propeller
@@ -21,12 +21,10 @@ def main(out: Path = Path("docs/images/handedness_pair.png")) -> int:
     with tempfile.TemporaryDirectory() as folder:
         for handedness in ("cw", "ccw"):
             propeller = build_propeller(None, overrides={"handedness": handedness, "name": f"prop_{handedness}"})
-            path = write_preview(propeller, Path(folder) / f"{handedness}.png", (1000, 500))
-            picture = Image.open(path).convert("RGB")
             spin = propeller.spin_to_push_air_down().value
-            ImageDraw.Draw(picture).text((20, 20), f"handedness = \"{handedness}\": turns {spin} seen from +z",
-                                         fill=(0, 0, 0))
-            pictures.append(picture)
+            title = f"handedness = \"{handedness}\": turns {spin} seen from +z"
+            path = write_preview(propeller, Path(folder) / f"{handedness}.png", (1000, 500), title=title)
+            pictures.append(Image.open(path).convert("RGB"))
     pair = Image.new("RGB", (pictures[0].width, sum(picture.height for picture in pictures)), "white")
     for index, picture in enumerate(pictures):
         pair.paste(picture, (0, index * pictures[0].height))

@@ -57,3 +57,17 @@ def default_propeller(default_params):
 @pytest.fixture(scope="session")
 def default_files(default_propeller, tmp_path_factory) -> dict[str, Path]:
     return default_propeller.write(tmp_path_factory.mktemp("default_build"))
+
+
+#: Test modules that need no CAD kernel build, browser or worker pool: `pytest -m "not slow"`
+#: runs these (under a minute on the 2-core machine); every other module is marked slow.
+FAST_MODULES = {
+    "test_airfoil", "test_airfoil_file", "test_arc_length", "test_centerline_and_frames", "test_layering",
+    "test_parameters", "test_schema", "test_surface_and_mesh", "test_trailing_edge",
+}
+
+
+def pytest_collection_modifyitems(config, items):
+    for item in items:
+        if item.module.__name__.rpartition(".")[2] not in FAST_MODULES:
+            item.add_marker(pytest.mark.slow)

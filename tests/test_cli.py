@@ -86,3 +86,55 @@ def test_console_script_prints_no_traceback_on_bad_input(tmp_path):
     assert result.returncode == 2
     assert result.stderr.strip().splitlines() == [result.stderr.strip()]
     assert "hub.length" in result.stderr and "Traceback" not in result.stderr
+
+
+# -- issue 17: exit codes and one-line messages for failures --------------------------------------
+
+def _memory_after_imports_kb(env: dict[str, str]) -> int:
+    """Address space of a torus-cad process once everything is imported (VmPeak, kB)."""
+    code = ("import torus_cad.propeller, torus_cad.outputs, torus_cad.cli, torus_cad.budgets\n"
+            "print([l for l in open('/proc/self/status') if l.startswith('VmPeak')][0].split()[1])")
+    return int(subprocess.run([sys.executable, "-c", code], env=env, check=True, capture_output=True,
+                              text=True).stdout)
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc and sets RLIMIT_AS")
+def test_out_of_memory_is_one_line_and_exit_1(tmp_path):
+    """Case 6: a MemoryError printed a 46-line traceback with install paths. Here the process gets
+    a little more address space than its imports take and builds the finest allowed blade: the
+    geometry's arrays do not fit. (With ~200 MB more, the allocation that fails is OpenCascade's,
+    which crashes the process: no Python code runs then.)"""
+    import os
+    import resource
+
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1")  # BLAS thread buffers would fail first, outside Python
+    baseline_kb = _memory_after_imports_kb(env)
+    outcomes = []
+    for margin_mb in (50, 100):
+        limit = (baseline_kb + margin_mb * 1000) * 1024
+
+        def limit_memory(limit: int = limit) -> None:
+            resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+
+        result = subprocess.run([sys.executable, "-m", "torus_cad", "build", "--out", str(tmp_path / "out"), "-q",
+                                 "--no-stl", "--set", "resolution.sections=400", "--set", "resolution.points=2000"],
+                                env=env, preexec_fn=limit_memory, check=False, capture_output=True, text=True,
+                                timeout=900)
+        assert "Traceback" not in result.stderr and result.returncode in (0, 1), result.stderr
+        if result.returncode == 1:
+            assert result.stderr.strip() == ("torus-cad: out of memory; lower resolution.sections / "
+                                             "resolution.points or raise the STL deflections")
+        outcomes.append(result.returncode)
+    assert 1 in outcomes, f"no limit ran out of memory ({outcomes}): the test proved nothing"
+
+
+def test_verify_exit_codes(tmp_path):
+    """0 for a complete set, 1 naming the file for an incomplete one, 2 for a folder that is not one."""
+    out = tmp_path / "out"
+    assert main(["build", "--set", "resolution.sections=16", "--set", "resolution.points=48", "--no-stl", "-q",
+                 "--out", str(out)]) == 0
+    assert main(["verify", str(out), "-q"]) == 0
+    (out / "torus_propeller.step").write_text("ISO-10303-21; truncated")
+    assert main(["verify", str(out)]) == 1
+    assert main(["verify", str(tmp_path / "missing")]) == 2

@@ -7,8 +7,10 @@ element, or a table header without its table's keys being valid.
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -132,7 +134,7 @@ def test_command_line_prints_no_traceback(tmp_path, content):
     config.write_bytes(content)
     out_dir = tmp_path / "out"
     result = subprocess.run([sys.executable, "-m", "torus_cad.cli", "build", str(config), "--out", str(out_dir)],
-                            capture_output=True, text=True, timeout=120)
+                            check=False, capture_output=True, text=True, timeout=120)
     assert result.returncode == 2, result.stderr
     assert "Traceback" not in result.stderr + result.stdout
     assert len(result.stderr.strip().splitlines()) == 1, result.stderr
@@ -144,3 +146,80 @@ def test_subnormal_quartic_coefficient_is_not_a_traceback(tmp_path, capsys):
     code = main(["build", "--set", "transforms.scale_x=[1e-310, 1.0, 0.0, 0.0, 5.0]", "--out", str(out_dir),
                  "--no-stl"])
     assert code in (0, 2)
+
+
+# -- issue 17: files that are not design files, sizes, encodings, numbers too big for anything ------
+
+def _run_new_process(*args: str, timeout: float = 120) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "torus_cad", *args], check=False, capture_output=True, text=True, timeout=timeout)
+
+
+def _assert_one_line_refusal(result: subprocess.CompletedProcess, out_dir: Path, words: list[str]) -> None:
+    assert result.returncode == 2, result.stderr
+    line = result.stderr.strip()
+    assert line.splitlines() == [line] and line.startswith("torus-cad: error: ") and "Traceback" not in line
+    for word in words:
+        assert word in line, f"{word!r} not in {line!r}"
+    assert not out_dir.exists() or not any(out_dir.iterdir())
+
+
+def test_dev_zero_is_refused_at_once_without_reading_it(tmp_path):
+    """Case 3: ``torus-cad build /dev/zero`` read 2.2 GB."""
+    start = time.monotonic()
+    result = _run_new_process("build", "/dev/zero", "--out", str(tmp_path / "out"))
+    _assert_one_line_refusal(result, tmp_path / "out", ["/dev/zero", "character device", "not a regular file"])
+    assert time.monotonic() - start < 60
+
+
+def test_a_named_pipe_is_refused_without_waiting_for_a_writer(tmp_path):
+    """Case 3: a named pipe blocked forever."""
+    pipe = tmp_path / "design.toml"
+    os.mkfifo(pipe)
+    result = _run_new_process("build", str(pipe), "--out", str(tmp_path / "out"), timeout=60)
+    _assert_one_line_refusal(result, tmp_path / "out", ["design.toml", "named pipe"])
+
+
+def test_a_config_over_the_size_limit_is_refused(tmp_path, capsys):
+    from torus_cad.tolerances import CONFIG_FILE_MAX_BYTES
+
+    big = tmp_path / "big.toml"
+    big.write_text("blades = 3\n" + "# padding\n" * (CONFIG_FILE_MAX_BYTES // 10 + 1))
+    out_dir = tmp_path / "out"
+    _assert_refused(*_run_cli(capsys, big, out_dir), out_dir, ["big.toml", "over the limit", f"{CONFIG_FILE_MAX_BYTES:,}"])
+
+
+def test_a_utf8_bom_is_accepted(tmp_path, capsys):
+    """Case 4: a file with a UTF-8 byte-order mark (Windows editors write one) was refused as invalid TOML."""
+    from torus_cad.parameters import PropellerParameters
+
+    config = tmp_path / "windows.toml"
+    config.write_bytes("\ufeffblades = 4\n[resolution]\nsections = 16\npoints = 48\n".encode())
+    assert PropellerParameters.from_toml(config).blades == 4
+    out_dir = tmp_path / "out"
+    assert main(["build", str(config), "--out", str(out_dir), "--no-stl", "-q"]) == 0, capsys.readouterr().err
+    from torus_cad.outputs import verify_set
+
+    assert [path.name for path in verify_set(out_dir, "torus_propeller").files][-2:] == \
+        ["torus_propeller_sections.png", "torus_propeller.json"]
+    assert (out_dir / "torus_propeller.step").is_file() and not (out_dir / "torus_propeller.stl").exists()
+
+
+@pytest.mark.parametrize("digits", [401, 5001])
+def test_huge_integers_are_bad_input(tmp_path, digits):
+    """Case 4: a 401-digit integer gave "internal error (OverflowError)", a 5001-digit one a ValueError."""
+    number = "1" + "0" * (digits - 1)
+    config = tmp_path / "huge.toml"
+    config.write_text(f"blades = {number}\n")
+    for result in (_run_new_process("build", str(config), "--out", str(tmp_path / "out")),
+                   _run_new_process("build", "--set", f"blades={number}", "--out", str(tmp_path / "out"))):
+        _assert_one_line_refusal(result, tmp_path / "out", [])
+        # the field where the schema sees the number; the file or --set where the TOML reader cannot read it
+        assert "blades" in result.stderr or "huge.toml" in result.stderr, result.stderr
+
+
+def test_a_name_with_a_newline_is_refused(tmp_path, capsys):
+    """Case 4: ``name = "abc\\n"`` passed the name check and wrote ``abc⏎.step``."""
+    config = tmp_path / "newline.toml"
+    config.write_text('name = "abc\\n"\n')
+    out_dir = tmp_path / "out"
+    _assert_refused(*_run_cli(capsys, config, out_dir), out_dir, ["name"])

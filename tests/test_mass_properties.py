@@ -204,3 +204,27 @@ def test_a_mirrored_propeller_takes_the_fast_route_and_agrees(light_params):
     mirrored = build_propeller(light_params.with_values({"handedness": "ccw"}))
     assert hub_with_blade_integrals(mirrored.solid.wrapped) is not None
     _assert_agrees_with_the_reference(mirrored.solid)
+
+
+@pytest.mark.parametrize("overrides", [{"blades": 1}, {"blades": 2, "phase_deg": 17.0}, {}], ids=["1", "2", "3"])
+def test_the_balance_from_the_blade_faces_agrees_with_the_reference(light_params, overrides):
+    from torus_cad.kernel.checks import balance, balance_of, volume_properties
+    from torus_cad.propeller import build_propeller
+
+    solid = build_propeller(light_params.with_values(overrides)).solid
+    assert hub_with_blade_integrals(solid.wrapped) is not None
+    fast = balance(solid, 1.0)
+    reference = balance_of(volume_properties(solid, REFERENCE_PRECISION), 1.0)
+    spin_inertia_g_mm2 = mass_properties(solid, 1.0).spin_axis_inertia_g_mm2  # the scale of the products
+    mass_g = mass_properties(solid, 1.0).mass_g
+    size = float(np.linalg.norm(np.subtract(*reference_box(solid))))
+    assert fast.centroid_offset_mm == pytest.approx(reference.centroid_offset_mm, abs=AGREEMENT * size)
+    assert fast.static_imbalance_g_mm == pytest.approx(reference.static_imbalance_g_mm, abs=AGREEMENT * mass_g * size)
+    for name, value in reference.products_of_inertia_g_mm2.items():
+        assert fast.products_of_inertia_g_mm2[name] == pytest.approx(value, abs=AGREEMENT * spin_inertia_g_mm2)
+    if overrides.get("blades", 3) >= 3:  # 3-fold symmetry or more: no imbalance, no products
+        assert fast.static_imbalance_g_mm < 1e-6 and max(map(abs, fast.products_of_inertia_g_mm2.values())) < 1e-3
+
+
+def reference_box(solid: cq.Solid) -> tuple:
+    return occt_mass_properties(solid, 1.0).bounding_box_mm

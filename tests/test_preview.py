@@ -250,3 +250,11 @@ def test_the_oblique_view_faces_every_blades_window(default_propeller):
 def test_parts_found_by_distance_are_the_fuses(objects):
     # The fallback for builds that do not report the parts (the root fillet) agrees with the fuse.
     assert face_parts_by_distance(objects.solid, objects.hub, objects.blades) == objects.face_parts
+
+
+@pytest.mark.slow
+def test_a_filleted_propeller_shows_every_part(tmp_path):
+    # The root fillet's build does not report face parts; the preview finds them by distance.
+    filleted = propeller_objects("examples/workshop_fillet.toml")
+    assert filleted.face_parts == ()
+    _assert_a_real_picture(_read_png(write_preview(filleted, tmp_path / "fillet.png", size=(800, 400))), 3)

@@ -123,19 +123,26 @@ def test_wall_is_the_distance_between_the_surfaces_at_a_chord_station():
 
     for s, x in ((0.0, 0.3), (0.37, 0.6), (0.8, 0.95)):
         upper, lower = surface_points(blade, params.geometry().centerline(0), [s], [x, 2.0 - x])[0]
-        assert wall_mm(blade.airfoil, blade.laws, [s], [x])[0, 0] == pytest.approx(np.linalg.norm(upper - lower), rel=1e-9)
+        assert wall_mm(blade, [s], [math.sqrt(x)])[0, 0] == pytest.approx(np.linalg.norm(upper - lower), rel=1e-9)
 
 
 def test_printability_of_the_default_and_require_printable(tmp_path, capsys):
     params = PropellerParameters()
     blade = params.geometry().blade
-    result = printability(blade.airfoil, blade.laws, 0.8)
-    walls = wall_mm(blade.airfoil, blade.laws, np.linspace(0, 1, 101), np.linspace(0, 1, 1001)).max(axis=1)
+    result = printability(blade, 0.8)
+    walls = wall_mm(blade, np.linspace(0, 1, 101), np.linspace(0, 1, 1001)).max(axis=1)
     assert result.thinnest_wall_mm == pytest.approx(walls.min(), rel=1e-4)
     assert result.trailing_edge_thickness_mm == 0.0 and not result.printable  # the spec's knife edge
     assert main(["build", "--out", str(tmp_path), "--require-printable"]) == 2
     error = capsys.readouterr().err
     assert "s = " in error and "manufacturing.min_wall" in error and not any(tmp_path.iterdir())
+
+
+def test_blunt_trailing_edge_is_the_reported_trailing_edge_thickness():
+    blade = PropellerParameters().with_values({"airfoil.trailing_edge_thickness": 0.9}).geometry().blade
+    result = printability(blade, 0.8)
+    assert result.trailing_edge_thickness_mm == pytest.approx(0.9, rel=1e-6)
+    assert result.printable
 
 
 def test_report_3mf_and_stl_read_back_closed_with_the_same_volume(tmp_path, capsys):

@@ -1,7 +1,13 @@
-"""Command line: ``torus-cad build | defaults | ...``. Thin: parse, call the package, map errors to exit codes.
+"""Command line: ``torus-cad build | defaults | verify | ...``. Thin: parse, call the package, map errors to exit codes.
 
 Exit codes: 0 success; 2 bad input (a one-line message naming the field, no traceback, no
-file written); 1 the kernel or the file system failed.
+file written); 1 the kernel or the file system failed (the cause named: OpenCascade, no space
+left, permission denied, out of memory) or ``verify`` found an incomplete set; 130 / 143 / 129
+interrupted by SIGINT / SIGTERM / SIGHUP (torus_cad.interrupts).
+
+The signal handlers are installed before anything heavy is imported (this module imports only
+the standard library and torus_cad's light modules at the top; numpy, CadQuery and the rest load
+inside the commands), so an interrupt at any moment ends the command with one line.
 """
 
 from __future__ import annotations
@@ -14,7 +20,8 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from torus_cad.errors import GeometryError, ParameterError, TorusCadError
+from torus_cad.errors import GeometryError, IncompleteOutputError, OutputError, ParameterError, TorusCadError
+from torus_cad.interrupts import exit_on_signals
 
 if TYPE_CHECKING:
     from torus_cad.parameters import PropellerParameters
@@ -56,14 +63,28 @@ def _parse_override(text: str) -> tuple[str, Any]:
         value = tomllib.loads(f"value = {raw}")["value"]
     except tomllib.TOMLDecodeError:
         value = raw  # a bare word: treat as a string (e.g. name=my_prop)
+    except ValueError as error:  # e.g. an integer of more than 4300 digits
+        raise ParameterError(f"--set {key.strip()}: {_first_clause(error)}") from None
     return key.strip(), value
+
+
+def _first_clause(error: BaseException) -> str:
+    """The error's message up to its first ';', on one line."""
+    return " ".join(str(error).split(";")[0].split())[:200]
 
 
 def load_parameters(config: str | None, overrides: Sequence[str] = ()) -> PropellerParameters:
     """Parameters from a TOML file (or the defaults) with ``key=value`` overrides applied."""
     from torus_cad.parameters import resolve_parameters  # imported here: the schema takes most of a second
 
-    return resolve_parameters(config or None, dict(_parse_override(item) for item in overrides))
+    changes = dict(_parse_override(item) for item in overrides)
+    try:
+        return resolve_parameters(config or None, changes)
+    except ParameterError:
+        raise
+    except (OverflowError, ValueError) as error:  # reading input only: whatever fails here is bad input
+        source = f"configuration {config!r}" if config else "a --set value"
+        raise ParameterError(f"{source} holds a value that cannot be used: {_first_clause(error)}") from None
 
 
 def _add_design_arguments(parser: argparse.ArgumentParser) -> None:
@@ -79,24 +100,32 @@ def _command_build(args: argparse.Namespace) -> int:
 
     progress = StageProgress.for_terminal(quiet=args.quiet)  # stderr, only on a terminal
     progress("kernel_import")  # a line on the terminal before the seconds of importing the schema and cadquery
+    from torus_cad.budgets import check_stl_budget
+    from torus_cad.outputs import check_writable_folder, write_output_set
+
     params = load_parameters(args.config, args.overrides)
     size = _preview_size(args.preview_size, "--preview-size") if args.preview else None
     if args.require_printable:  # decided from the analytic section, before any work or file
         from torus_cad.geometry.printability import printability
 
-        blade = params.geometry().blade
-        problem = printability(blade.airfoil, blade.laws, params.manufacturing.min_wall).problem()
+        problem = printability(params.geometry().blade, params.manufacturing.min_wall).problem()
         if problem:
             raise GeometryError(f"not printable (--require-printable): {problem}")
+    if _writes_a_mesh(params, args.no_stl):
+        check_stl_budget(params)  # a mesh that would blow up is refused before anything is built (~7 ms)
+    check_writable_folder(args.out)  # before the build, not after it
     from torus_cad.propeller import build_propeller
 
     propeller = build_propeller(params, progress=progress)
     progress("write")
-    paths = propeller.write(Path(args.out), density_g_cm3=args.density, stl=not args.no_stl, sections_table=True)
+    extra_files = {}
     if size is not None:
         from torus_cad.preview import write_preview
 
-        paths["png"] = write_preview(propeller, Path(args.out) / f"{params.name}.png", size, progress=progress)
+        extra_files["png"] = lambda path: write_preview(propeller, path, size, progress=progress)
+    # One output set: the files, the blade-element table, the picture and the report appear together.
+    paths = write_output_set(propeller, Path(args.out), args.density, stl=not args.no_stl, sections_table=True,
+                             extra_files=extra_files)
     progress.finish()
     report = json.loads(paths["json"].read_text())
     if not args.quiet:
@@ -115,12 +144,18 @@ def _command_build(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _preview_size(text: str, option: str) -> tuple[int, int]:
-    from torus_cad.preview import (
-        parse_size,  # raises ParameterError (exit 2) for a bad WxH
-    )
+def _writes_a_mesh(params: PropellerParameters, no_stl: bool) -> bool:
+    """Whether the build tessellates the solid for a file (STL, 3MF): then its triangle budget applies."""
+    from torus_cad.parameters.design import ExportFormat
 
-    return parse_size(text, option)
+    formats = params.export.formats
+    return (ExportFormat.STL in formats and not no_stl) or ExportFormat.THREE_MF in formats
+
+
+def _preview_size(text: str, option: str) -> tuple[int, int]:
+    from torus_cad.preview import parse_size
+
+    return parse_size(text, option)  # raises ParameterError (exit 2) for a bad WxH
 
 
 def _command_preview(args: argparse.Namespace) -> int:
@@ -128,9 +163,12 @@ def _command_preview(args: argparse.Namespace) -> int:
 
     progress = StageProgress.for_terminal(quiet=args.quiet)
     progress("kernel_import")
+    from torus_cad.outputs import check_writable_folder
+
     params = load_parameters(args.config, args.overrides)
     size = _preview_size(args.size, "--size")
     out = Path(args.out) if args.out else Path("step_out") / f"{params.name}.png"
+    check_writable_folder(out.parent)  # before the build, not after it
     from torus_cad.preview import write_preview
     from torus_cad.propeller import build_propeller
 
@@ -222,6 +260,145 @@ def _command_studio(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _command_verify(args: argparse.Namespace) -> int:
+    from torus_cad.outputs import set_names, verify_set
+
+    folder = Path(args.folder)
+    if not folder.is_dir():
+        raise ParameterError(f"verify: {str(folder)!r} is not a folder")
+    names = [args.name] if args.name else set_names(folder)
+    if not names:
+        raise IncompleteOutputError(f"no output set in {str(folder)!r}")
+    for name in names:
+        checked = verify_set(folder, name)  # IncompleteOutputError names the file: exit 1
+        if not args.quiet:
+            print(f"ok {checked.report.parent / name}: {', '.join(path.name for path in checked.files)}")
+    return EXIT_OK
+
+
+def _mesh_overrides(args: argparse.Namespace) -> dict[str, Any]:
+    """``[mesh]`` values given on the command line (they override the design file's)."""
+    from torus_cad.mesh.settings import format_overrides
+
+    overrides: dict[str, Any] = {f"mesh.{key}": getattr(args, key) for key in ("sections", "points", "spacing")
+                                 if getattr(args, key) is not None}
+    if args.formats:
+        overrides.update(format_overrides(name for text in args.formats for name in text.split(",")))
+    return overrides
+
+
+def _command_mesh(args: argparse.Namespace) -> int:
+    from torus_cad.mesh.pipeline import summary_line, write_surface_mesh
+    from torus_cad.progress import StageProgress
+
+    params = load_parameters(args.config, args.overrides).with_values(_mesh_overrides(args))
+    progress = StageProgress.for_terminal(quiet=args.quiet)
+    report, paths = write_surface_mesh(params, Path(args.out), compare=not args.no_compare, progress=progress)
+    progress.finish()
+    if not args.quiet:
+        for path in paths.values():
+            print(f"wrote {path}")
+        print(summary_line(report))
+    return EXIT_OK
+
+
+def _table_specs(table: str) -> list[Any]:
+    from torus_cad.parameters import parameter_specs
+
+    return [spec for spec in parameter_specs() if spec.section == table]
+
+
+def _add_table_arguments(parser: argparse.ArgumentParser, table: str) -> None:
+    """One ``--name`` option per parameter of a schema table (default None: keep the design's value)."""
+    from enum import Enum
+
+    for spec in _table_specs(table):
+        name = spec.key.rpartition(".")[2]
+        unit = f" ({spec.unit})" if spec.unit else ""
+        if isinstance(spec.kind, type) and issubclass(spec.kind, Enum):
+            parser.add_argument(f"--{name.replace('_', '-')}", dest=name, choices=[item.value for item in spec.choices],
+                                help=f"{spec.doc} (default {spec.default.value})")
+        else:
+            parser.add_argument(f"--{name.replace('_', '-')}", dest=name, type=spec.kind, metavar="X",
+                                help=f"{spec.doc}{unit}; {spec.bounds} (default {spec.default:g})")
+
+
+def _table_overrides(args: argparse.Namespace, table: str) -> dict[str, Any]:
+    return {spec.key: getattr(args, spec.key.rpartition(".")[2]) for spec in _table_specs(table)
+            if getattr(args, spec.key.rpartition(".")[2]) is not None}
+
+
+def _command_cfd(args: argparse.Namespace) -> int:
+    from torus_cad.cfd.settings import MissingExtraError
+    from torus_cad.progress import StageProgress
+
+    params = load_parameters(args.config, args.overrides).with_values(_table_overrides(args, "cfd"))
+    if args.threads < 0:
+        raise ParameterError(f"--threads = {args.threads} is out of range; allowed 0 (one per CPU) or more")
+    progress = StageProgress.for_terminal(quiet=args.quiet)
+    try:
+        from torus_cad.cfd.domain import summary_line, write_cfd_domain
+
+        report, paths = write_cfd_domain(params, Path(args.out), threads=args.threads, progress=progress)
+    except MissingExtraError as error:
+        print(f"torus-cad: {error}", file=sys.stderr)
+        return EXIT_KERNEL_FAILURE
+    progress.finish()
+    if not args.quiet:
+        for path in paths.values():
+            print(f"wrote {path}")
+        print(summary_line(report))
+    return EXIT_OK
+
+
+def _add_mesh_parser(commands: Any) -> None:
+    from torus_cad.mesh.settings import MeshFormat
+    from torus_cad.tolerances import MESH_TRIANGLE_LIMIT
+
+    mesh = commands.add_parser(
+        "mesh", help="closed triangle mesh straight from the spec's math (STL, OBJ groups, PLY, VTK)",
+        description="Mesh the propeller of CONFIG (or the default) from the spec's math: each blade's structured "
+        "grid at exactly --sections x --points (points equally spaced in arc length, spec §5), the hub as a "
+        "§6.2 grid at the blades' cell size, united into one closed 2-manifold (manifold3d). Writes "
+        "<name>_mesh.<format> files and <name>_mesh.json, a quality report. The options override the design's "
+        f"[mesh] table. Meshes estimated above {MESH_TRIANGLE_LIMIT:,} triangles are refused before they are built.")
+    _add_design_arguments(mesh)
+    mesh.add_argument("--sections", type=int, metavar="N", help="sections along each blade (mesh.sections, default 100)")
+    mesh.add_argument("--points", type=int, metavar="M",
+                      help="points around each section, equal arc length (mesh.points, default 400)")
+    mesh.add_argument("--spacing", choices=["arc_length", "parameter"],
+                      help="sections evenly in the centerline's arc length or in its parameter s "
+                           "(mesh.spacing, default arc_length)")
+    mesh.add_argument("--format", dest="formats", action="append", metavar="FORMAT[,FORMAT]",
+                      help="files to write instead of the design's, repeatable or comma-separated: "
+                           + ", ".join(item.value for item in MeshFormat) + " (default stl,obj)")
+    mesh.add_argument("--no-compare", action="store_true",
+                      help="skip the B-rep comparison in the report (volume, OpenCascade's tessellation)")
+    _add_out_and_quiet(mesh, "mesh_out", _command_mesh)
+
+
+def _add_cfd_parser(commands: Any) -> None:
+    cfd = commands.add_parser(
+        "cfd", help="fluid domain and tetrahedral volume mesh for a rotating-propeller simulation (gmsh)",
+        description="Mesh the fluid around the propeller of CONFIG (or the default) with gmsh: an outer "
+        "cylinder, a rotating-zone cylinder around the propeller, conformal at their interface, tetrahedra "
+        "refined near the blades. Writes <name>_cfd.msh (v4.1), <name>_cfd_v2.msh (v2.2 ASCII, for "
+        "OpenFOAM's gmshToFoam), <name>.step, README.txt and <name>_cfd.json. The options override the design's "
+        "[cfd] table; D is the tip diameter. Needs the cfd extra: pip install 'torus_cad[cfd]'.")
+    _add_design_arguments(cfd)
+    _add_table_arguments(cfd, "cfd")
+    cfd.add_argument("--threads", type=int, default=0, metavar="N", help="gmsh threads (default 0: one per CPU)")
+    _add_out_and_quiet(cfd, "cfd_out", _command_cfd)
+
+
+def _add_out_and_quiet(parser: argparse.ArgumentParser, default_out: str,
+                       handler: Callable[[argparse.Namespace], int]) -> None:
+    """The output folder, --quiet and the handler, as every writing subcommand has them."""
+    parser.add_argument("--out", default=default_out, help=f"output folder (default: {default_out})")
+    parser.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
+    parser.set_defaults(handler=handler)
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with every subcommand."""
     parser = _Parser(prog="torus-cad", description=DESCRIPTION, epilog=EPILOG,
@@ -247,9 +424,9 @@ def build_parser() -> argparse.ArgumentParser:
                        help="size of the --preview picture in pixels (default 1200x600)")
     build.set_defaults(handler=_command_build)
 
-    preview = commands.add_parser("preview", help="render a PNG picture: isometric view and view along the axis",
+    preview = commands.add_parser("preview", help="render a PNG picture: a view from above and a view along the axis",
                                   description="Build the propeller of CONFIG (or the default) and render a shaded "
-                                  "picture of it off-screen: an isometric view and a view along the spin axis, "
+                                  "picture of it off-screen: a view from above that shows every blade and a view along the spin axis, "
                                   "each blade in its own colour.")
     _add_design_arguments(preview)
     preview.add_argument("--out", metavar="FILE.png", help="picture to write (default: step_out/<name>.png)")
@@ -257,6 +434,16 @@ def build_parser() -> argparse.ArgumentParser:
                          help="picture size in pixels, each side 64..8000 (default 1200x600)")
     preview.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     preview.set_defaults(handler=_command_preview)
+
+    verify = commands.add_parser("verify", help="check that output sets are complete: every file of one build",
+                                 description="Check the output sets in FOLDER (or only NAME): each <name>.json "
+                                 "report lists the files of its build with their SHA-256; every one must be there "
+                                 "and unchanged. Exit 0 if all are complete, 1 naming the first missing or mixed "
+                                 "file.")
+    verify.add_argument("folder", metavar="FOLDER", help="output folder, e.g. step_out")
+    verify.add_argument("name", nargs="?", metavar="NAME", help="check only the set <NAME>.json (default: every set)")
+    verify.add_argument("-q", "--quiet", action="store_true", help="print nothing when the sets are complete")
+    verify.set_defaults(handler=_command_verify)
 
     defaults = commands.add_parser("defaults", help="print the default design as commented TOML",
                                    description="Print the default design as a commented TOML file to start from; "
@@ -302,31 +489,50 @@ def build_parser() -> argparse.ArgumentParser:
                         help="address to listen on (default 127.0.0.1: only this machine can connect; "
                              "0.0.0.0 serves every network, without a password)")
     studio.set_defaults(handler=_command_studio)
+    _add_mesh_parser(commands)
+    _add_cfd_parser(commands)
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``torus-cad``; returns the exit code."""
-    args = build_parser().parse_args(argv)
-    handler: Callable[[argparse.Namespace], int] = args.handler
+    restore_signals = exit_on_signals()  # first: an interrupt while importing is clean too
+    try:
+        args = build_parser().parse_args(argv)
+        handler: Callable[[argparse.Namespace], int] = args.handler
+        return _run(handler, args)
+    finally:
+        restore_signals()
+
+
+def _error(message: str, code: int) -> int:
+    print(f"torus-cad: {message}", file=sys.stderr)
+    return code
+
+
+def _run(handler: Callable[[argparse.Namespace], int], args: argparse.Namespace) -> int:
+    """The handler's exit code; every failure becomes one line on stderr and its exit code."""
     try:
         return handler(args)
     except (ParameterError, GeometryError) as error:
-        print(f"torus-cad: error: {error}", file=sys.stderr)
-        return EXIT_BAD_INPUT
+        return _error(f"error: {error}", EXIT_BAD_INPUT)
+    except IncompleteOutputError as error:
+        return _error(f"verify: {error}", EXIT_KERNEL_FAILURE)
+    except OutputError as error:
+        return _error(f"build failed: {error}", EXIT_KERNEL_FAILURE)
     except TorusCadError as error:
-        print(f"torus-cad: kernel failure: {error}", file=sys.stderr)
-        return EXIT_KERNEL_FAILURE
+        return _error(f"kernel failure: {error}", EXIT_KERNEL_FAILURE)
+    except MemoryError:
+        return _error("out of memory; lower resolution.sections / resolution.points or raise the STL deflections",
+                      EXIT_KERNEL_FAILURE)
     except OSError as error:
-        print(f"torus-cad: cannot write output: {error}", file=sys.stderr)
-        return EXIT_KERNEL_FAILURE
-    except KeyboardInterrupt:
-        print("torus-cad: interrupted; no partial file was left behind", file=sys.stderr)
-        return 130
+        where = f" {error.filename!r}" if error.filename else ""
+        return _error(f"cannot write output{where}: {error.strerror or error}", EXIT_KERNEL_FAILURE)
+    except KeyboardInterrupt:  # main() called outside the main thread, where no handler could be installed
+        return _error("interrupted", 130)
     except Exception as error:
-        print(f"torus-cad: internal error ({type(error).__name__}): {error}; please report it with the design file",
-              file=sys.stderr)
-        return EXIT_KERNEL_FAILURE
+        return _error(f"internal error ({type(error).__name__}): {error}; please report it with the design file",
+                      EXIT_KERNEL_FAILURE)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -1,4 +1,5 @@
-"""Off-screen preview picture of a propeller: an isometric view and a view along the spin axis.
+"""Off-screen preview picture of a propeller: a view from above that shows every blade (none
+edge-on, see :func:`oblique_view`) and a view along the spin axis.
 
 Rendered with VTK (installed with cadquery) off-screen: OpenGL with a depth buffer, smooth
 vertex normals (vtkPolyDataNormals, split at sharp edges such as the trailing edge and the hub's
@@ -87,7 +88,7 @@ class View:
 
     toward_camera: tuple[float, float, float]
     up: tuple[float, float, float]
-    label: str
+    label: str = ""
 
 
 #: Looking down the spin axis from +z: x to the right, y up.
@@ -245,13 +246,15 @@ def render_views(mesh: SceneMesh, views: Sequence[View], size: Sequence[int], ti
         _light(renderer)
         _place_camera(renderer, mesh.vertices, view, (width / len(views)) / (height * view_top))
         if view.label:
-            renderer.AddViewProp(_text(view.label, _label_size_px(height), (0.5, 0.015), vertical="bottom"))
+            label_px = _fitting_font_px(view.label, _label_size_px(height), width / len(views))
+            renderer.AddViewProp(_text(view.label, label_px, (0.5, 0.015), vertical="bottom"))
         window.AddRenderer(renderer)
     if title:
         overlay = vtkRenderer()
         overlay.SetViewport(0.0, view_top, 1.0, 1.0)
         overlay.SetBackground(*BACKGROUND_RGB)
-        overlay.AddViewProp(_text(title, round(title_px * 0.5), (0.5, 0.45), vertical="center"))
+        overlay.AddViewProp(_text(title, _fitting_font_px(title, round(title_px * 0.5), width), (0.5, 0.45),
+                                  vertical="center"))
         window.AddRenderer(overlay)
     window.Render()
     image = _pixels(window, width, height)
@@ -450,6 +453,15 @@ def _text(text: str, size_px: int, position: tuple[float, float], vertical: str)
     actor.GetPositionCoordinate().SetCoordinateSystemToNormalizedViewport()
     actor.SetPosition(*position)
     return actor
+
+
+#: Width of an average character of the text font, in font sizes (Arial: about 0.55).
+_CHARACTER_WIDTH = 0.55
+
+
+def _fitting_font_px(text: str, size_px: int, width_px: float) -> int:
+    """``size_px``, or smaller so that ``text`` fits in 95 % of ``width_px``."""
+    return max(min(size_px, int(0.95 * width_px / (_CHARACTER_WIDTH * max(len(text), 1)))), 6)
 
 
 def _title_height_px(height: int) -> int:

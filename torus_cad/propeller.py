@@ -13,7 +13,6 @@ This is the package's Python API::
 from __future__ import annotations
 
 import functools
-import json
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -23,9 +22,8 @@ import cadquery as cq
 import numpy as np
 from numpy.typing import NDArray
 
-from torus_cad import __version__
 from torus_cad.colors import HUB_COLOR, blade_color
-from torus_cad.design_targets import DesignTargets, resolve_design_targets, write_sections_table
+from torus_cad.design_targets import DesignTargets, resolve_design_targets
 from torus_cad.errors import KernelError
 from torus_cad.geometry.feasibility import check_feasible
 from torus_cad.geometry.handedness import Spin, spin_to_push_air_down
@@ -40,8 +38,6 @@ from torus_cad.kernel.checks import (
     precise_volume,
     single_valid_solid,
 )
-from torus_cad.kernel.export import atomic_path, write_step, write_stl
-from torus_cad.kernel.export_3mf import write_3mf
 from torus_cad.kernel.fillet import fillet_pattern
 from torus_cad.kernel.fuse import Fused, FuseRoute, fuse_all, fuse_pattern, pattern_blades
 from torus_cad.kernel.hub import hub_solid, run_out_hub
@@ -49,7 +45,7 @@ from torus_cad.kernel.loft import loft_solid
 from torus_cad.kernel.mirror import mirrored
 from torus_cad.kernel.wires import SectionCurves, fit_section_curves
 from torus_cad.parameters import PropellerParameters, resolve_parameters
-from torus_cad.parameters.design import ExportFormat, Handedness
+from torus_cad.parameters.design import Handedness
 from torus_cad.stages import Stage, StageTimer
 from torus_cad.tolerances import VOLUME_CHECK_RELATIVE_PRECISION
 
@@ -136,8 +132,7 @@ class Propeller:
 
 def design_printability(params: PropellerParameters) -> Printability:
     """The blade's printability from the analytic section alone (no kernel): see torus_cad.geometry.printability."""
-    blade = params.geometry().blade
-    return printability(blade.airfoil, blade.laws, params.manufacturing.min_wall)
+    return printability(params.geometry().blade, params.manufacturing.min_wall)
 
 
 def _section_chords(surface: BladeSurface) -> NDArray[np.float64]:
@@ -284,29 +279,7 @@ def write_outputs(propeller: Propeller, out_dir: Path, density_g_cm3: float = DE
                   stl: bool = True, sections_table: bool = False) -> dict[str, Path]:
     """Write the files of ``export.formats`` (STEP, STL, 3MF; ``stl=False`` drops the STL), the
     blade-element table (``<name>_sections.csv`` and ``.png``, when ``sections_table``; ``torus-cad
-    build`` writes it) and the JSON report atomically; return the paths by kind."""
-    params = propeller.parameters
-    formats = params.export.formats
-    deflections = (params.export.stl_linear_deflection, params.export.stl_angular_deflection)
-    timer = StageTimer()
-    paths: dict[str, Path] = {}
-    if ExportFormat.STEP in formats:
-        with timer.stage(Stage.STEP_WRITE):
-            paths["step"] = write_step(propeller.solid, out_dir / f"{params.name}.step", params.name,
-                                       params.export.step_schema, program=f"torus_cad {__version__}")
-    if stl and ExportFormat.STL in formats:
-        with timer.stage(Stage.STL_WRITE):
-            paths["stl"] = write_stl(propeller.solid, out_dir / f"{params.name}.stl", *deflections)
-    if ExportFormat.THREE_MF in formats:
-        with timer.stage(Stage.THREE_MF_WRITE):
-            paths["3mf"] = write_3mf(propeller.solid, out_dir / f"{params.name}.3mf", params.name, *deflections,
-                                     version=__version__)
-    if sections_table:
-        with timer.stage(Stage.SECTIONS_TABLE):
-            paths.update(write_sections_table(propeller.surface, params, out_dir))
-    propeller.stage_seconds.update(timer.seconds)
-    report = build_report(propeller, density_g_cm3)
-    paths["json"] = out_dir / f"{params.name}.json"
-    with atomic_path(paths["json"]) as temp:
-        temp.write_text(json.dumps(report, indent=2) + "\n")
-    return paths
+    build`` writes it) and the JSON report as one output set (torus_cad.outputs); return the paths by kind."""
+    from torus_cad.outputs import write_output_set
+
+    return write_output_set(propeller, out_dir, density_g_cm3, stl=stl, sections_table=sections_table)

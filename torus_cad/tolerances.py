@@ -58,10 +58,19 @@ HUB_FOOTPRINT_NEAR_RELATIVE = 0.02
 HUB_FOOTPRINT_MARGIN_DEG = 1.0
 
 
-# -- limits on inputs ------------------------------------------------------------------------
+# -- limits: inputs and work refused before they start ---------------------------------------------
 
-#: Largest configuration file read (bytes): a design is a few hundred bytes.
+#: Largest configuration file read (bytes): a design is a few hundred bytes. Only regular files are read.
 CONFIG_FILE_MAX_BYTES = 1 << 20
+
+#: Most triangles an STL may have, by the estimate made before tessellating
+#: (torus_cad.geometry.triangle_estimate). OpenCascade's mesher slows down faster than its
+#: triangle count grows on the lofted blades (see the README's "Limits").
+STL_TRIANGLE_LIMIT = 2_000_000
+
+#: A writer that fails while its file system has less free space than this (bytes) failed for
+#: lack of space: OpenCascade's writers report only that they could not write.
+DISK_FULL_FREE_BYTES = 1 << 20
 
 #: Most designs one sweep may hold (grid product or samples), checked from the axis sizes before
 #: any design is generated. Beyond it the design list and table alone take gigabytes, and at
@@ -78,3 +87,21 @@ FILLET_TIME_LIMIT_S = 60.0
 #: Relative precision of the integration for the balance report (static imbalance, products of
 #: inertia): coarser than the mass properties', as it integrates the solid a second time.
 BALANCE_RELATIVE_PRECISION = 1e-4
+
+#: Surface meshes (torus_cad.mesh): largest sag of the flat faces from the analytic blade, as a
+#: fraction of the local section thickness, above which a resolution is refused. The default design
+#: needs 15 sections (any allowed points); a 6 % thick section needs 31 points (its leading edge).
+MESH_SAG_LIMIT = 0.10
+
+#: Surface meshes: most triangles `torus-cad mesh` builds (estimated before it starts); peak
+#: memory grows ~0.75 GB per million triangles (6.7 GB at 8.9 million, scripts/bench_mesh.py), so
+#: this keeps it within ~15 GB of the machine's 24 GiB.
+MESH_TRIANGLE_LIMIT = 20_000_000
+
+#: Surface meshes: triangles with every corner at least this fraction of the hub radius outside
+#: the hub count as "away from the junctions" in the quality report.
+MESH_JUNCTION_MARGIN_RELATIVE = 0.05
+
+#: Surface meshes: at the blade-hub junctions, a triangle edge shorter than this fraction of its
+#: triangle's longest edge is a needle the cleanup collapses (torus_cad.mesh.cleanup).
+MESH_NEEDLE_EDGE_RATIO = 0.1

@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from torus_cad.batch.outcome import DesignResult, Outcome
-from torus_cad.errors import GeometryError, ParameterError, TorusCadError
+from torus_cad.errors import GeometryError, KernelError, ParameterError
 from torus_cad.parameters import PropellerParameters
 
 __all__ = ["FAILURE_FILE", "REFUSAL_FILE", "DesignTask", "read_design_status", "record_result", "run_design",
@@ -89,7 +89,7 @@ def _classify(error: Exception) -> tuple[Outcome, str, str]:
     """The outcome, one-line reason and traceback of what a design raised (call inside ``except``)."""
     if isinstance(error, (ParameterError, GeometryError)):  # the package's own refusal
         return Outcome.REFUSED, str(error), ""
-    if isinstance(error, TorusCadError):  # KernelError, or the package's other failures
+    if isinstance(error, KernelError):  # OpenCascade failed on a design the checks let through
         return Outcome.FAILED, _one_line(error), traceback.format_exc()
     return Outcome.ERROR, f"{type(error).__name__}: {_one_line(error)}", traceback.format_exc()
 

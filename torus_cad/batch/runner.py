@@ -9,8 +9,8 @@ One loop (:func:`run_tasks`) drives any executor with the ``concurrent.futures``
   segfault in OpenCascade, the OOM killer) costs only its own design (``crash``);
 * workers die with the process that started them, even when it is killed with SIGKILL: the
   kernel's parent-death signal (Linux ``prctl(PR_SET_PDEATHSIG)``) plus a watchdog thread
-  that notices a new parent process;
-* SIGINT and SIGTERM, within :func:`interrupts_raised`, stop the batch at once: the pool's
+  that notices, within a second, that the batch's process is gone (reaped or not);
+* SIGINT, SIGTERM and SIGHUP, within :func:`interrupts_raised`, stop the batch at once: the pool's
   workers are stopped, and :class:`Interrupted` (naming the signal) reaches the caller, which
   still writes its table.
 
@@ -57,7 +57,7 @@ class BatchError(TorusCadError):
 
 
 class Interrupted(KeyboardInterrupt):
-    """SIGINT or SIGTERM arrived during a batch; ``signum`` says which (exit code 128 + signum)."""
+    """SIGINT, SIGTERM or SIGHUP arrived during a batch; ``signum`` says which (exit code 128 + signum)."""
 
     def __init__(self, signum: int) -> None:
         super().__init__(f"interrupted by {signal.Signals(signum).name}")
@@ -69,7 +69,7 @@ class Interrupted(KeyboardInterrupt):
 
     @property
     def exit_code(self) -> int:
-        """The shell's convention: 130 for SIGINT, 143 for SIGTERM."""
+        """The shell's convention: 130 for SIGINT, 143 for SIGTERM, 129 for SIGHUP."""
         return 128 + self.signum
 
 
@@ -181,12 +181,13 @@ def _worker_context() -> Any:
 # -- signals ----------------------------------------------------------------------------------------
 
 @contextmanager
-def interrupts_raised(signals: Iterable[int] = (signal.SIGINT, signal.SIGTERM)) -> Iterator[None]:
-    """Within the block, the first SIGINT or SIGTERM raises :class:`Interrupted`; later ones are ignored.
+def interrupts_raised(signals: Iterable[int] = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)) -> Iterator[None]:
+    """Within the block, the first SIGINT, SIGTERM or SIGHUP raises :class:`Interrupted`; later ones are ignored.
 
     Later signals are ignored so that the cleanup the first one starts (stopping the pool,
-    writing the table) is not cut short. Outside the main thread, signals cannot be caught and
-    this does nothing.
+    writing the table) is not cut short. A signal the caller ignores (``nohup``, a background
+    job's SIGINT) stays ignored. Outside the main thread, signals cannot be caught and this
+    does nothing.
     """
     if threading.current_thread() is not threading.main_thread():
         yield
@@ -199,7 +200,8 @@ def interrupts_raised(signals: Iterable[int] = (signal.SIGINT, signal.SIGTERM)) 
             raised = True
             raise Interrupted(signum)
 
-    previous = {signum: signal.signal(signum, handler) for signum in signals}
+    previous = {signum: signal.signal(signum, handler) for signum in signals
+                if signal.getsignal(signum) is not signal.SIG_IGN}
     try:
         yield
     finally:

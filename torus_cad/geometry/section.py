@@ -97,3 +97,11 @@ def chord_positions(t: ArrayLike, base: bool) -> NDArray[np.float64]:
     t = np.asarray(t, dtype=float)
     lower_start = 2.0 if base else 1.0
     return np.where(t <= 1.0, t, np.where(t >= lower_start, lower_start + 1.0 - t, 1.0))
+
+
+def max_thickness(section: Section, samples: int = 401) -> float:
+    """The section's largest thickness across the chord (upper minus lower y at the same root-chord
+    parameter u, t = u^2), in chord units; sampled, so exact to the sampling."""
+    u = np.linspace(0.0, 1.0, samples)
+    upper, lower = section.points_on_half(u, True), section.points_on_half(u, False)
+    return float(np.max(upper[:, 1] - lower[:, 1]))

@@ -11,7 +11,8 @@ Every integral splits into the hub's, known in closed form, and one per blade fa
   G = (x, y, 0) k with k = 0 at r = R have G·n = 0 on the hub's lateral face, so the holes
   the blades leave in it contribute nothing and only the blade faces are integrated:
   f = 1: k = 1/2 - R²/(2r²); f = x (y): k = x (y) (1 - R³/r³)/3; f = z: k = z (1/2 - R²/(2r²));
-  f = x² + y² (the spin-axis inertia): k = (r² - R⁴/r²)/4.
+  f = x² + y² (the spin-axis inertia): k = (r² - R⁴/r²)/4; and for the balance's products
+  f = xz (yz): k = xz (yz) (1 - R³/r³)/3, f = xy, x² - y²: k = xy, x² - y² times (1 - R⁴/r⁴)/4.
 * **The trimmed domain from the surface, not from OpenCascade's trimming curves.** Along each
   v line (u fixed; u runs around the section, v along the span) the part outside the hub is
   v in [a(u), b(u)], the two roots of r(u, v) = R, found by sampling and safeguarded Newton.
@@ -21,8 +22,9 @@ Every integral splits into the hub's, known in closed form, and one per blade fa
 * **The hub's lateral area** is 2πRL less the blade footprints, each R |∮ z dθ| along the root
   and the tip curve (a line integral at the same u Gauss points).
 * **Once per blade shape**: the blades are copies of one face rotated about z. Volume, area,
-  z moment and spin-axis inertia do not change under that rotation; the x, y moments rotate,
-  and the box of each copy is the face's support in rotated directions.
+  z moment and spin-axis inertia do not change under that rotation; the x, y moments and
+  (∫xz, ∫yz) rotate as vectors, (∫(x² - y²), 2∫xy) by twice the angle, and the box of each copy
+  is the face's support in rotated directions.
 
 OpenCascade's adaptive integration subdivides every trimmed face from scratch and costs far
 more (``python scripts/bench.py`` prints both). Whenever the shape is not recognised as a hub
@@ -54,17 +56,17 @@ from OCP.GeomAbs import (
 from OCP.gp import gp_Pnt, gp_Vec
 from OCP.TopAbs import (
     TopAbs_EDGE,
-    TopAbs_FACE,
     TopAbs_REVERSED,
-    TopAbs_ShapeEnum,
     TopAbs_SOLID,
     TopAbs_WIRE,
 )
-from OCP.TopExp import TopExp, TopExp_Explorer
+from OCP.TopExp import TopExp
 from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Shape
 from OCP.TopTools import TopTools_IndexedMapOfShape
 from scipy.interpolate import BSpline
+
+from torus_cad.kernel.topology import count, explore, faces
 
 _Array = NDArray[np.float64]
 
@@ -84,8 +86,11 @@ U_RELATIVE_TOLERANCE, U_MAX_HALVINGS = 1e-6, 12
 V_RELATIVE_TOLERANCE, V_MAX_HALVINGS = 1e-6, 12
 
 #: Quantities integrated along each v line: volume, x, y, z moments, spin-axis inertia, area,
-#: and the root and tip footprints' line densities.
-_QUANTITIES = 8
+#: the root and tip footprints' line densities, then ∫xz, ∫yz, ∫xy, ∫(x² - y²).
+_QUANTITIES = 12
+
+#: Integrated over the face (v, then u): the _QUANTITIES but the footprints'.
+_INTEGRANDS = _QUANTITIES - 2
 
 #: Box: the copies whose best integration node along a direction comes within this fraction of
 #: the face's extent of the best copy's are refined on the surface (the nodes are far closer);
@@ -120,6 +125,7 @@ class HubWithBladeIntegrals:
         spin_inertia_mm5: ∫ (x² + y²) dV about the z axis, mm^5.
         area_mm2: boundary area, mm^2.
         box_min_mm, box_max_mm: ``(3,)`` corners of the tight bounding box, mm.
+        products_mm5: ``(3,)`` ∫xz, ∫yz, ∫xy dV about the origin, mm^5.
     """
 
     volume_mm3: float
@@ -128,6 +134,7 @@ class HubWithBladeIntegrals:
     area_mm2: float
     box_min_mm: NDArray[np.float64]
     box_max_mm: NDArray[np.float64]
+    products_mm5: NDArray[np.float64]
 
 
 @dataclass(frozen=True)
@@ -140,8 +147,25 @@ class _Hub:
 
 def hub_with_blade_integrals(shape: TopoDS_Shape,
                              gauss_points: int = GAUSS_POINTS_PER_SPAN) -> HubWithBladeIntegrals | None:
-    """Volume, centroid, spin-axis inertia, area and box of a hub-with-blades solid, or None
-    when ``shape`` is not one (see the module's docstring)."""
+    """Volume, centroid, spin-axis inertia, area, box and products of a hub-with-blades solid, or
+    None when ``shape`` is not one (see the module's docstring).
+
+    The last shape's answer is kept: the JSON report asks for the mass properties and the
+    balance of the same solid, one after the other.
+    """
+    last_shape, last_points, last_answer = _LAST[0]
+    if last_shape is not None and last_points == gauss_points and last_shape.IsEqual(shape):
+        return last_answer
+    answer = _integrate(shape, gauss_points)
+    _LAST[0] = (shape, gauss_points, answer)
+    return answer
+
+
+#: The last (shape, gauss points, answer) of :func:`hub_with_blade_integrals`.
+_LAST: list[tuple[TopoDS_Shape | None, int, HubWithBladeIntegrals | None]] = [(None, 0, None)]
+
+
+def _integrate(shape: TopoDS_Shape, gauss_points: int) -> HubWithBladeIntegrals | None:
     hub = _recognise(shape)
     if hub is None:
         return None
@@ -149,6 +173,7 @@ def hub_with_blade_integrals(shape: TopoDS_Shape,
     volume = math.pi * radius**2 * length
     moment = np.array([0.0, 0.0, volume * (hub.z_top + hub.z_bottom) / 2.0])
     inertia = math.pi * radius**4 * length / 2.0
+    products = np.zeros(3)  # the hub's are 0: it is symmetric about its axis
     area = 2.0 * math.pi * radius**2 + 2.0 * math.pi * radius * length
     box_max = np.array([radius, radius, radius, radius, -hub.z_bottom, hub.z_top])  # along _BOX_DIRECTIONS
     groups: dict[tuple[int, bool], list[tuple[TopoDS_Face, float]]] = {}
@@ -172,7 +197,17 @@ def hub_with_blade_integrals(shape: TopoDS_Shape,
         inertia += count * part.spin_inertia_mm5
         area += count * (part.area_mm2 - part.footprint_area_mm2)
         box_max = np.maximum(box_max, part.extremes_mm)
-    return HubWithBladeIntegrals(volume, moment / volume, inertia, area, -box_max[0::2], box_max[1::2])
+        products += _rotated_products(part.second_moments_mm5, angles)
+    return HubWithBladeIntegrals(volume, moment / volume, inertia, area, -box_max[0::2], box_max[1::2], products)
+
+
+def _rotated_products(second_moments: NDArray[np.float64], angles: NDArray[np.float64]) -> NDArray[np.float64]:
+    """(∫xz, ∫yz, ∫xy) summed over copies rotated by ``angles`` about z, from one copy's
+    (∫xz, ∫yz, ∫xy, ∫(x² - y²)): (xz, yz) turns by the angle, (x² - y², 2 xy) by twice it."""
+    xz, yz, xy, difference = second_moments
+    cos, sin = np.cos(angles).sum(), np.sin(angles).sum()
+    cos2, sin2 = np.cos(2.0 * angles).sum(), np.sin(2.0 * angles).sum()
+    return np.array([cos * xz - sin * yz, sin * xz + cos * yz, (sin2 * difference + cos2 * 2.0 * xy) / 2.0])
 
 
 # -- recognising the shape ----------------------------------------------------------------------
@@ -181,10 +216,10 @@ def _recognise(shape: TopoDS_Shape) -> _Hub | None:
     """The hub's radius and end planes and the blade faces, or None unless ``shape`` is one solid
     made of z-axis cylinder faces of one radius, two whole end discs and B-spline faces bounded
     only by the cylinder's edges (and their own seam)."""
-    if _count(shape, TopAbs_SOLID) != 1:
+    if count(shape, TopAbs_SOLID) != 1:
         return None
     by_kind: dict[object, list[TopoDS_Face]] = {}
-    for face in _faces(shape):
+    for face in faces(shape):
         by_kind.setdefault(BRepAdaptor_Surface(face).GetType(), []).append(face)
     cylinders, planes, blades = (by_kind.pop(kind, []) for kind in (GeomAbs_Cylinder, GeomAbs_Plane,
                                                                      GeomAbs_BSplineSurface))
@@ -203,9 +238,9 @@ def _recognise(shape: TopoDS_Shape) -> _Hub | None:
     for face in cylinders:
         TopExp.MapShapes_s(face, TopAbs_EDGE, cylinder_edges)
     for face in blades:
-        if _count(face, TopAbs_WIRE) != 1 or not all(
+        if count(face, TopAbs_WIRE) != 1 or not all(
                 cylinder_edges.Contains(edge) or BRep_Tool.IsClosed_s(TopoDS.Edge_s(edge), face)
-                for edge in _explore(face, TopAbs_EDGE)):
+                for edge in explore(face, TopAbs_EDGE)):
             return None
     return _Hub(radius, z_bottom, z_top, blades)
 
@@ -224,9 +259,9 @@ def _z_axis_cylinder_radius(faces: list[TopoDS_Face]) -> float | None:
 def _end_disc_z(face: TopoDS_Face, radius: float) -> float | None:
     """z of a plane face that is a whole disc of ``radius`` about the z axis, else None."""
     plane = BRepAdaptor_Surface(face).Plane()
-    if abs(abs(plane.Axis().Direction().Z()) - 1.0) > 1e-12 or _count(face, TopAbs_WIRE) != 1:
+    if abs(abs(plane.Axis().Direction().Z()) - 1.0) > 1e-12 or count(face, TopAbs_WIRE) != 1:
         return None
-    for edge in _explore(face, TopAbs_EDGE):
+    for edge in explore(face, TopAbs_EDGE):
         curve = BRepAdaptor_Curve(TopoDS.Edge_s(edge))
         if curve.GetType() != GeomAbs_Circle:
             return None
@@ -266,6 +301,7 @@ class FaceIntegrals:
         spin_inertia_mm5: ∫ (x² + y²) dV over it, mm^5.
         area_mm2: the face's area, mm^2.
         footprint_area_mm2: area of the holes the blade leaves in the cylinder, mm^2.
+        second_moments_mm5: ``(4,)`` ∫xz, ∫yz, ∫xy, ∫(x² - y²) dV over it, mm^5.
         extremes_mm: ``(6,)`` largest -x, x, -y, y, -z, z over the rotated copies of the face, mm
             (an extreme on the cylinder, if that is one, is inside the hub's box anyway).
         v_range: ``(2,)`` smallest a(u) and largest b(u) over the u Gauss points.
@@ -275,6 +311,7 @@ class FaceIntegrals:
     volume_mm3: float
     first_moment_mm4: NDArray[np.float64]
     spin_inertia_mm5: float
+    second_moments_mm5: NDArray[np.float64]
     area_mm2: float
     footprint_area_mm2: float
     extremes_mm: NDArray[np.float64]
@@ -313,11 +350,11 @@ def _face_integrals(geom: Geom_BSplineSurface, reversed_face: bool, radius: floa
     if integrated is None:
         return None
     totals, samples = integrated
-    volume, moment_x, moment_y, moment_z, inertia, area, root_footprint, tip_footprint = totals
+    volume, moment_x, moment_y, moment_z, inertia, area, root_footprint, tip_footprint = totals[:8]
     points = np.concatenate([sample.points for sample in samples])
     return FaceIntegrals(
         volume_mm3=float(volume), first_moment_mm4=np.array([moment_x, moment_y, moment_z]),
-        spin_inertia_mm5=float(inertia), area_mm2=float(area),
+        spin_inertia_mm5=float(inertia), second_moments_mm5=totals[8:].copy(), area_mm2=float(area),
         footprint_area_mm2=float(abs(root_footprint) + abs(tip_footprint)),
         extremes_mm=_extremes(surface, points, np.concatenate([sample.u for sample in samples]),
                               np.concatenate([sample.v for sample in samples]), radius, angles),
@@ -389,7 +426,7 @@ def _line_densities(surface: _Surface, u: NDArray[np.float64], radius: float, re
         return None
     line_integrals, points, rows, v_nodes = integrals
     densities = np.zeros((len(u), _QUANTITIES))
-    densities[:, :6] = line_integrals
+    densities[:, :6], densities[:, 8:] = line_integrals[:, :6], line_integrals[:, 6:]
     for column, root in enumerate(roots.T):
         densities[:, 6 + column] = _footprint_density(lines, root, surface, radius)
     return _LineSamples(densities, roots, points, u[rows], v_nodes)
@@ -453,17 +490,20 @@ def _crossings(lines: _Lines, knots: NDArray[np.float64], degree: int, radius: f
 
 def _integrands(points: NDArray[np.float64], d_u: NDArray[np.float64], d_v: NDArray[np.float64], radius: float,
                 sign: float) -> NDArray[np.float64]:
-    """``(n, 6)``: the volume, x, y, z moment, spin inertia and area integrands per du dv at
-    surface points with these derivatives (``sign`` -1 for a reversed face)."""
+    """``(n, _INTEGRANDS)``: the volume, x, y, z moment, spin inertia, area, xz, yz, xy and
+    x² - y² integrands per du dv at surface points with these derivatives (``sign`` -1 for a
+    reversed face)."""
     normal = np.cross(d_u, d_v) * sign
     x, y, z = points.T
     r2 = x * x + y * y
     radial = x * normal[:, 0] + y * normal[:, 1]  # (x, y, 0) . n
     volume_k = 0.5 - radius**2 / (2.0 * r2)
     moment_k = (1.0 - radius**3 / (r2 * np.sqrt(r2))) / 3.0
+    second_k = (1.0 - radius**4 / (r2 * r2)) / 4.0
     return np.column_stack([radial * volume_k, radial * x * moment_k, radial * y * moment_k,
-                            radial * z * volume_k, radial * (r2 - radius**4 / r2) / 4.0,
-                            np.linalg.norm(normal, axis=1)])
+                            radial * z * volume_k, radial * r2 * second_k, np.linalg.norm(normal, axis=1),
+                            radial * x * z * moment_k, radial * y * z * moment_k, radial * x * y * second_k,
+                            radial * (x * x - y * y) * second_k])
 
 
 def _v_integrals(lines: _Lines, surface: _Surface, roots: NDArray[np.float64], integrands: _Integrands,
@@ -476,7 +516,7 @@ def _v_integrals(lines: _Lines, surface: _Surface, roots: NDArray[np.float64], i
     first round evaluates the whole spans as a tensor product (one matrix product per
     quantity, the same v nodes on every line), everything else node by node.
 
-    Returns the ``(U, 6)`` integrals and the nodes' points ``(n, 3)``, line index and v, or
+    Returns the ``(U, _INTEGRANDS)`` integrals and the nodes' points ``(n, 3)``, line index and v, or
     None if some piece needs more than V_MAX_HALVINGS halvings.
     """
     knots, degree = surface.v_knots, surface.v_degree
@@ -491,7 +531,7 @@ def _v_integrals(lines: _Lines, surface: _Surface, roots: NDArray[np.float64], i
     start = np.concatenate([spans[spans_whole], low[lines_cut, spans_cut]])
     length = np.concatenate([np.diff(spans)[spans_whole], (high - low)[lines_cut, spans_cut]])
     domain = roots[:, 1] - roots[:, 0]
-    totals, scale = np.zeros((len(roots), 6)), None
+    totals, scale = np.zeros((len(roots), _INTEGRANDS)), None
     kept: list[tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.float64]]] = []
     for round_ in range(V_MAX_HALVINGS + 1):
         estimates = []
@@ -505,7 +545,7 @@ def _v_integrals(lines: _Lines, surface: _Surface, roots: NDArray[np.float64], i
                 point, d_u, d_v = (np.concatenate(pair) for pair in zip((point, d_u, d_v), cut))
             else:
                 point, d_u, d_v = _evaluate(lines, rows, v, knots, degree)
-            values = integrands(point, d_u, d_v).reshape(len(row), len(x), 6)
+            values = integrands(point, d_u, d_v).reshape(len(row), len(x), _INTEGRANDS)
             estimates.append((length[:, None, None] * w[None, :, None] / 2.0 * values).sum(axis=1))
             if len(x) == gauss_points:
                 kept.append((point, rows, v))
@@ -703,17 +743,6 @@ def _gauss_on_spans(knots: NDArray[np.float64], degree: int, points: int
     return (low[:, None] + length[:, None] * (x + 1.0) / 2.0).ravel(), (length[:, None] * w / 2.0).ravel()
 
 
-def _explore(shape: TopoDS_Shape, kind: TopAbs_ShapeEnum) -> list[TopoDS_Shape]:
-    found, explorer = [], TopExp_Explorer(shape, kind)
-    while explorer.More():
-        found.append(explorer.Current())
-        explorer.Next()
-    return found
 
 
-def _faces(shape: TopoDS_Shape) -> list[TopoDS_Face]:
-    return [TopoDS.Face_s(face) for face in _explore(shape, TopAbs_FACE)]
 
-
-def _count(shape: TopoDS_Shape, kind: TopAbs_ShapeEnum) -> int:
-    return len(_explore(shape, kind))

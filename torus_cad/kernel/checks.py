@@ -183,5 +183,15 @@ def balance_of(properties: GProp_GProps, density_g_cm3: float) -> Balance:
 
 
 def balance(shape: cq.Shape, density_g_cm3: float, relative_precision: float = BALANCE_RELATIVE_PRECISION) -> Balance:
-    """Static imbalance and products of inertia of ``shape`` (OpenCascade's adaptive integration)."""
-    return balance_of(volume_properties(shape, relative_precision), density_g_cm3)
+    """Static imbalance and products of inertia of ``shape``: from the blade faces alone for a hub
+    with blades (as :func:`mass_properties`), else by OpenCascade's adaptive integration to
+    ``relative_precision``."""
+    integrals = hub_with_blade_integrals(shape.wrapped)
+    if integrals is None:
+        return balance_of(volume_properties(shape, relative_precision), density_g_cm3)
+    density_g_mm3 = density_g_cm3 * 1e-3
+    (cx, cy, cz), volume = integrals.centroid_mm, integrals.volume_mm3
+    about_centroid = integrals.products_mm5 - volume * np.array([cx * cz, cy * cz, cx * cy])  # parallel axes
+    offset = float(np.hypot(cx, cy))
+    products = {name: float(value) * density_g_mm3 for name, value in zip(("xz", "yz", "xy"), about_centroid, strict=True)}
+    return Balance(volume * density_g_mm3 * offset, offset, products)

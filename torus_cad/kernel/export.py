@@ -1,58 +1,42 @@
-"""STEP and STL export (and STEP import), written atomically: a temp file, then a rename.
+"""STEP and STL export (and STEP import). Writers write the file they are given, atomically.
 
-A crash or a kill during a write leaves at most a hidden ``.<name>.tmp-*`` file that is
-removed on any Python-level failure, never a partial file under the final name.
+Each writer writes a hidden temp file beside the path (torus_cad.kernel.files.atomic_path), checks
+it is whole (a STEP file's end marker, an STL's size from its triangle count) and renames it onto
+the path. A writer that fails says why when it can: a full file system or the file size limit is
+an OSError naming the path, anything else a KernelError. A whole build's files are published
+together by torus_cad.outputs.
 """
 
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
-import tempfile
-from collections.abc import Iterator
+import shutil
 from pathlib import Path
 
+import cadquery as cq
 from OCP.APIHeaderSection import APIHeaderSection_MakeHeader
 from OCP.BRepMesh import BRepMesh_IncrementalMesh
 from OCP.IFSelect import IFSelect_RetDone
 from OCP.Interface import Interface_Static
 from OCP.STEPCAFControl import STEPCAFControl_Writer
 from OCP.STEPControl import STEPControl_AsIs, STEPControl_Reader
+from OCP.StlAPI import StlAPI_Writer
 from OCP.TCollection import TCollection_ExtendedString, TCollection_HAsciiString
 from OCP.TDataStd import TDataStd_Name
 from OCP.TDocStd import TDocStd_Document
 from OCP.XCAFDoc import XCAFDoc_DocumentTool
-from OCP.StlAPI import StlAPI_Writer
-
-import cadquery as cq
 
 from torus_cad.errors import KernelError
+from torus_cad.kernel.files import atomic_path
+from torus_cad.tolerances import DISK_FULL_FREE_BYTES
+
+__all__ = ["atomic_path", "read_step", "write_step", "write_stl"]
 
 _STEP_SCHEMAS = {"AP214": "AP214IS", "AP242": "AP242DIS"}
-
-
-@contextlib.contextmanager
-def atomic_path(path: str | Path) -> Iterator[Path]:
-    """Yield a temp path beside ``path``; on success rename it onto ``path``, on failure delete it."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    for stale in path.parent.glob(f".{path.name}.tmp-*"):  # left by a process killed mid-write
-        stale.unlink(missing_ok=True)
-    handle, temp_name = tempfile.mkstemp(prefix=f".{path.name}.tmp-", dir=path.parent)
-    os.close(handle)
-    temp = Path(temp_name)
-    try:
-        yield temp
-        os.chmod(temp, 0o666 & ~_current_umask())  # mkstemp makes 0600; give the file normal permissions
-        os.replace(temp, path)
-    finally:
-        temp.unlink(missing_ok=True)
-
-
-def _current_umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
+_STEP_END_MARKER = b"END-ISO-10303-21;"
+_STL_HEADER_BYTES, _STL_TRIANGLE_BYTES = 84, 50
 
 
 def write_step(shape: cq.Shape, path: str | Path, product_name: str, schema: str = "AP214",
@@ -76,9 +60,43 @@ def write_step(shape: cq.Shape, path: str | Path, product_name: str, schema: str
     _name_the_author(writer, product_name, program)
     path = Path(path)
     with atomic_path(path) as temp:
-        if writer.Write(str(temp)) != IFSelect_RetDone:
-            raise KernelError(f"OpenCascade could not write STEP file {str(path)!r}")
+        if writer.Write(str(temp)) != IFSelect_RetDone or not _step_whole(temp):
+            raise _write_failure("STEP", path, temp)
     return path
+
+
+def _step_whole(temp: Path) -> bool:
+    """Whether ``temp`` ends with the STEP end marker (a writer can lose its tail without saying so)."""
+    with open(temp, "rb") as handle:
+        handle.seek(max(0, temp.stat().st_size - 256))
+        return _STEP_END_MARKER in handle.read()
+
+
+def _stl_whole(temp: Path) -> bool:
+    """Whether ``temp``'s size is a binary STL's: 84 bytes + 50 per triangle it declares."""
+    size = temp.stat().st_size
+    with open(temp, "rb") as handle:
+        header = handle.read(_STL_HEADER_BYTES)
+    triangles = int.from_bytes(header[80:84], "little") if len(header) == _STL_HEADER_BYTES else -1
+    return triangles > 0 and size == _STL_HEADER_BYTES + _STL_TRIANGLE_BYTES * triangles
+
+
+def _write_failure(kind: str, path: Path, temp: Path) -> Exception:
+    """Why OpenCascade, which reports only that it failed, could not write ``temp`` (published as ``path``).
+
+    Looked at while the partial file is still there: a full file system or the process's file size
+    limit (``ulimit -f``) is an OSError naming ``path``; anything else is a KernelError.
+    """
+    with contextlib.suppress(OSError):
+        if shutil.disk_usage(temp.parent).free < DISK_FULL_FREE_BYTES:
+            return OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(path))
+    with contextlib.suppress(OSError, ValueError, ImportError):
+        import resource
+
+        limit = resource.getrlimit(resource.RLIMIT_FSIZE)[0]
+        if limit != resource.RLIM_INFINITY and temp.stat().st_size >= limit:
+            return OSError(errno.EFBIG, os.strerror(errno.EFBIG), str(path))
+    return KernelError(f"OpenCascade could not write {kind} file {str(path)!r}")
 
 
 def _name_the_author(writer: STEPCAFControl_Writer, product_name: str, program: str) -> None:
@@ -111,6 +129,6 @@ def write_stl(shape: cq.Shape, path: str | Path, linear_deflection: float, angul
     writer.ASCIIMode = False
     path = Path(path)
     with atomic_path(path) as temp:
-        if not writer.Write(shape.wrapped, str(temp)):
-            raise KernelError(f"OpenCascade could not write STL file {str(path)!r}")
+        if not writer.Write(shape.wrapped, str(temp)) or not _stl_whole(temp):
+            raise _write_failure("STL", path, temp)
     return path

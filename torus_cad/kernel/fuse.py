@@ -29,13 +29,14 @@ from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
 from OCP.BRepTools import BRepTools
 from OCP.GeomAbs import GeomAbs_Cylinder
 from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt, gp_Trsf, gp_Vec2d
-from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_ShapeEnum, TopAbs_WIRE
-from OCP.TopExp import TopExp, TopExp_Explorer
+from OCP.TopAbs import TopAbs_FACE, TopAbs_WIRE
+from OCP.TopExp import TopExp
 from OCP.TopLoc import TopLoc_Location
-from OCP.TopoDS import TopoDS, TopoDS_Edge, TopoDS_Face, TopoDS_Shape, TopoDS_Shell, TopoDS_Solid
-from OCP.TopTools import TopTools_IndexedMapOfShape, TopTools_ListOfShape
+from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Shape, TopoDS_Shell, TopoDS_Solid
+from OCP.TopTools import TopTools_IndexedMapOfShape
 
 from torus_cad.errors import KernelError
+from torus_cad.kernel.topology import boolean, count, edges, explore, faces, result
 
 _FULL_TURN = 2.0 * math.pi
 
@@ -57,8 +58,8 @@ HUB_PART = -1
 
 def fuse_all(hub: cq.Solid, blades: Sequence[cq.Solid]) -> Fused:
     """Hub and all blades fused in one BRepAlgoAPI_Fuse call (parallel, oriented bounding boxes)."""
-    fuse = _boolean(BRepAlgoAPI_Fuse(), [hub.wrapped], [blade.wrapped for blade in blades])
-    shape = _result(fuse, "fuse the blades with the hub")
+    fuse = boolean(BRepAlgoAPI_Fuse(), [hub.wrapped], [blade.wrapped for blade in blades])
+    shape = result(fuse, "fuse the blades with the hub")
     parts = [(hub.wrapped, HUB_PART), *((blade.wrapped, index) for index, blade in enumerate(blades))]
     return Fused(cq.Shape.cast(shape), FuseRoute.GENERAL, _face_parts(shape, _history(fuse, parts)))
 
@@ -110,8 +111,8 @@ def fuse_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float]) ->
     :func:`torus_cad.geometry.hub.seam_angle_deg`.
     """
     lateral = _lateral_face(hub)
-    cut = _boolean(BRepAlgoAPI_Cut(), [blade.wrapped], [hub.wrapped])
-    outside = _result(cut, "cut the blade free of the hub")
+    cut = boolean(BRepAlgoAPI_Cut(), [blade.wrapped], [hub.wrapped])
+    outside = result(cut, "cut the blade free of the hub")
     patches = _modified_faces(cut, lateral)
     if not patches:
         raise KernelError("the blade does not meet the hub's lateral face")
@@ -119,12 +120,12 @@ def fuse_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float]) ->
     copies = [_rotated_with_hub_curves(outside, patches, lateral, math.radians(angle - angles_deg[0]))
               for angle in angles_deg]
     whole_patches = len(hub_pieces) == len(patches) and not any(
-        BRep_Tool.IsClosed_s(edge, patch) for patch in patches for edge in _edges(patch))
+        BRep_Tool.IsClosed_s(edge, patch) for patch in patches for edge in edges(patch))
     if whole_patches:
         solid, origins = _assemble(hub, lateral, copies, patches)
         return Fused(cq.Shape.cast(solid), FuseRoute.ASSEMBLED, _face_parts(solid, origins))
-    blade_faces = _count(outside, TopAbs_FACE) - len(hub_pieces)
-    glued, origins = _glue(hub, copies, _count(hub.wrapped, TopAbs_FACE) + len(copies) * blade_faces)
+    blade_faces = count(outside, TopAbs_FACE) - len(hub_pieces)
+    glued, origins = _glue(hub, copies, count(hub.wrapped, TopAbs_FACE) + len(copies) * blade_faces)
     return Fused(cq.Shape.cast(glued), FuseRoute.GLUED, _face_parts(glued, origins))
 
 
@@ -140,7 +141,7 @@ def _assemble(hub: cq.Solid, lateral: TopoDS_Face, copies: Sequence[TopoDS_Shape
     """
     outer_wire = BRepTools.OuterWire_s(lateral)
     lateral_with_holes = BRepBuilderAPI_MakeFace(BRep_Tool.Surface_s(lateral), outer_wire, True)
-    for wire in _explore(lateral, TopAbs_WIRE):  # holes the hub already has (a set-screw hole)
+    for wire in explore(lateral, TopAbs_WIRE):  # holes the hub already has (a set-screw hole)
         if not wire.IsSame(outer_wire):
             lateral_with_holes.Add(TopoDS.Wire_s(wire))
     builder = BRep_Builder()
@@ -148,16 +149,16 @@ def _assemble(hub: cq.Solid, lateral: TopoDS_Face, copies: Sequence[TopoDS_Shape
     builder.MakeShell(shell)
     origins: list[tuple[TopoDS_Shape, int]] = []
     for index, copy in enumerate(copies):
-        for face in _faces(copy):
+        for face in faces(copy):
             if any(face.IsPartner(patch) for patch in patches):
-                for wire in _explore(face, TopAbs_WIRE):
+                for wire in explore(face, TopAbs_WIRE):
                     lateral_with_holes.Add(TopoDS.Wire_s(wire))
             else:
                 builder.Add(shell, face)
                 origins.append((face, index))
     if not lateral_with_holes.IsDone():
         raise KernelError("OpenCascade could not cut the blade roots out of the hub's lateral face")
-    hub_faces = [lateral_with_holes.Face(), *(face for face in _faces(hub.wrapped) if not face.IsSame(lateral))]
+    hub_faces = [lateral_with_holes.Face(), *(face for face in faces(hub.wrapped) if not face.IsSame(lateral))]
     for face in hub_faces:
         builder.Add(shell, face)
         origins.append((face, HUB_PART))
@@ -174,8 +175,8 @@ def _glue(hub: cq.Solid, copies: Sequence[TopoDS_Shape], expected_faces: int
     surfaces), and where each of their faces went."""
     glue = BRepAlgoAPI_Fuse()
     glue.SetGlue(BOPAlgo_GlueShift)
-    fused = _result(_boolean(glue, [hub.wrapped], copies), "glue the blades to the hub")
-    faces = _count(fused, TopAbs_FACE)
+    fused = result(boolean(glue, [hub.wrapped], copies), "glue the blades to the hub")
+    faces = count(fused, TopAbs_FACE)
     if faces != expected_faces:
         raise KernelError(f"gluing the blades to the hub gave {faces} faces instead of {expected_faces}")
     return fused, _history(glue, [(hub.wrapped, HUB_PART), *((copy, index) for index, copy in enumerate(copies))])
@@ -187,7 +188,7 @@ def _history(operation: BRepAlgoAPI_BooleanOperation, arguments: Iterable[tuple[
     the boolean split it, itself if it kept it whole, nothing if it was removed."""
     origins: list[tuple[TopoDS_Shape, int]] = []
     for argument, part in arguments:
-        for face in _faces(argument):
+        for face in faces(argument):
             pieces = list(operation.Modified(face))
             if not pieces and not operation.IsDeleted(face):
                 pieces = [face]
@@ -226,7 +227,7 @@ def _rotated_with_hub_curves(outside: TopoDS_Shape, patches: list[TopoDS_Face], 
         shift = angle_rad - _FULL_TURN * math.floor((u_min + angle_rad) / _FULL_TURN)
         if u_max + shift > _FULL_TURN:
             raise KernelError("a blade's footprint on the hub crosses the hub's seam")
-        for edge in _edges(patch):
+        for edge in edges(patch):
             curve = BRep_Tool.CurveOnSurface_s(edge, patch, 0.0, 0.0)
             if curve is None:
                 raise KernelError("an intersection edge has no curve on the hub")
@@ -251,47 +252,15 @@ def _modified_faces(operation: BRepAlgoAPI_BooleanOperation, face: TopoDS_Face) 
 
 
 def _modified_faces_of_shape(operation: BRepAlgoAPI_BooleanOperation, shape: TopoDS_Shape) -> list[TopoDS_Face]:
-    return [piece for face in _faces(shape) for piece in _modified_faces(operation, face)]
+    return [piece for face in faces(shape) for piece in _modified_faces(operation, face)]
 
 
-def _boolean(operation: BRepAlgoAPI_BooleanOperation, arguments: Sequence[TopoDS_Shape],
-             tools: Sequence[TopoDS_Shape]) -> BRepAlgoAPI_BooleanOperation:
-    """Run ``operation`` on ``arguments`` and ``tools`` (parallel, oriented bounding boxes)."""
-    argument_list, tool_list = TopTools_ListOfShape(), TopTools_ListOfShape()
-    for shape in arguments:
-        argument_list.Append(shape)
-    for shape in tools:
-        tool_list.Append(shape)
-    operation.SetArguments(argument_list)
-    operation.SetTools(tool_list)
-    operation.SetRunParallel(True)
-    operation.SetUseOBB(True)
-    operation.Build()
-    return operation
 
 
-def _result(operation: BRepAlgoAPI_BooleanOperation, what: str) -> TopoDS_Shape:
-    if not operation.IsDone() or operation.Shape().IsNull():
-        raise KernelError(f"OpenCascade could not {what} (the boolean operation reported errors)")
-    return operation.Shape()
 
 
-def _explore(shape: TopoDS_Shape, kind: TopAbs_ShapeEnum) -> list[TopoDS_Shape]:
-    found: list[TopoDS_Shape] = []
-    explorer = TopExp_Explorer(shape, kind)
-    while explorer.More():
-        found.append(explorer.Current())
-        explorer.Next()
-    return found
 
 
-def _faces(shape: TopoDS_Shape) -> list[TopoDS_Face]:
-    return [TopoDS.Face_s(face) for face in _explore(shape, TopAbs_FACE)]
 
 
-def _edges(shape: TopoDS_Shape) -> list[TopoDS_Edge]:
-    return [TopoDS.Edge_s(edge) for edge in _explore(shape, TopAbs_EDGE)]
 
-
-def _count(shape: TopoDS_Shape, kind: TopAbs_ShapeEnum) -> int:
-    return len(_explore(shape, kind))

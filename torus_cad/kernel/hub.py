@@ -13,7 +13,6 @@ from __future__ import annotations
 import math
 
 import cadquery as cq
-from OCP.BRepAlgoAPI import BRepAlgoAPI_Cut
 from OCP.BRepBuilderAPI import (
     BRepBuilderAPI_MakeEdge,
     BRepBuilderAPI_MakeFace,
@@ -27,10 +26,10 @@ from OCP.BRepPrimAPI import (
 from OCP.GC import GC_MakeArcOfCircle
 from OCP.gp import gp_Ax1, gp_Ax2, gp_Dir, gp_Pnt, gp_Vec
 from OCP.TopoDS import TopoDS_Shape
-from OCP.TopTools import TopTools_ListOfShape
 
 from torus_cad.errors import KernelError
 from torus_cad.geometry.mounting import SET_SCREW_OVERSHOOT_MM, HubMounting
+from torus_cad.kernel.topology import cut
 
 _Z = gp_Dir(0.0, 0.0, 1.0)
 
@@ -57,7 +56,7 @@ def hub_solid(radius: float, length: float, seam_angle_deg: float = 0.0,
         tools.append(_set_screw_hole(mounting, radius))
     if not tools:
         return cq.Solid(outer)
-    solids = cq.Shape.cast(_cut(outer, tools)).Solids()
+    solids = cq.Shape.cast(cut(outer, tools, "cut the bore and set-screw hole into the hub")).Solids()
     if len(solids) != 1:
         raise KernelError(f"cutting the bore and set-screw hole into the hub gave {len(solids)} solids instead of 1")
     return solids[0]
@@ -130,18 +129,4 @@ def _set_screw_hole(mounting: HubMounting, radius: float) -> TopoDS_Shape:
     angle = math.radians(mounting.set_screw_angle_deg)
     axis = gp_Ax2(gp_Pnt(0.0, 0.0, 0.0), gp_Dir(math.cos(angle), math.sin(angle), 0.0))
     return BRepPrimAPI_MakeCylinder(axis, mounting.set_screw_diameter_mm / 2.0, radius + SET_SCREW_OVERSHOOT_MM).Solid()
-
-
-def _cut(shape: TopoDS_Shape, tools: list[TopoDS_Shape]) -> TopoDS_Shape:
-    arguments, tool_list = TopTools_ListOfShape(), TopTools_ListOfShape()
-    arguments.Append(shape)
-    for tool in tools:
-        tool_list.Append(tool)
-    cut = BRepAlgoAPI_Cut()
-    cut.SetArguments(arguments)
-    cut.SetTools(tool_list)
-    cut.Build()
-    if not cut.IsDone() or cut.Shape().IsNull():
-        raise KernelError("OpenCascade could not cut the bore and set-screw hole into the hub")
-    return cut.Shape()
 

@@ -261,6 +261,61 @@ class Export(Section):
     step_schema: StepSchema = param(StepSchema.AP214, strict=False, doc="STEP application protocol")
 
 
+class SectionSpacing(StrEnum):
+    """How ``torus-cad mesh`` spreads the sections along a blade."""
+
+    ARC_LENGTH = "arc_length"  # evenly in the centerline's arc length: rows of cells of equal length
+    PARAMETER = "parameter"    # evenly in the centerline parameter s (as the B-rep's sections)
+
+
+class InletSide(StrEnum):
+    """The end of the CFD domain where the flow enters."""
+
+    PLUS_Z = "+z"
+    MINUS_Z = "-z"
+
+
+class Mesh(Section):
+    """Surface mesh of `torus-cad mesh`: structured grids united into one closed mesh (spec §5, §7)."""
+
+    sections: int = param(100, ge=4, le=20000, fuzz=(16, 40), doc="sections along each blade (grid rows)")
+    points: int = param(400, ge=16, le=50000, fuzz=(32, 100),
+                        doc="points around each section, equal arc length (spec §5)")
+    spacing: SectionSpacing = param(SectionSpacing.ARC_LENGTH, strict=False,
+                                    doc="sections evenly in the centerline's 'arc_length' or in its 'parameter' s")
+    stl: bool = param(True, doc="write <name>_mesh.stl (binary)")
+    stl_ascii: bool = param(False, doc="write <name>_mesh_ascii.stl, one named solid per part")
+    obj: bool = param(True, doc="write <name>_mesh.obj, one group per part (hub, blade_0, ...)")
+    ply: bool = param(False, doc="write <name>_mesh.ply (binary, per-face part index)")
+    vtk: bool = param(False, doc="write <name>_mesh.vtk (legacy binary, per-face part index)")
+
+
+class Cfd(Section):
+    """Fluid domain and tetrahedral mesh of `torus-cad cfd` (gmsh); D = tip diameter."""
+
+    domain_radius: float = param(4.0, unit="D", ge=1.0, le=50.0, doc="outer cylinder's radius")
+    upstream: float = param(3.0, unit="D", ge=0.5, le=100.0, doc="inlet's distance from the propeller's centre")
+    downstream: float = param(6.0, unit="D", ge=0.5, le=200.0, doc="outlet's distance from the propeller's centre")
+    zone_radius: float = param(0.6, unit="D", gt=0.5, le=5.0,
+                               doc="rotating zone's radius (> 0.5: it encloses the blade tips)")
+    zone_clearance: float = param(0.1, unit="D", ge=0.01, le=2.0,
+                                  doc="axial gap between the propeller and the rotating zone's end faces")
+    cells_per_chord: float = param(10.0, ge=2.0, le=200.0, doc="surface elements across the smallest chord")
+    curvature_cells: float = param(8.0, ge=0.0, le=100.0,
+                                   doc="elements per 2 pi radians of surface curvature (0 = off)")
+    growth_rate: float = param(1.25, gt=1.0, le=3.0,
+                               doc="size ratio of neighbouring elements away from the propeller")
+    far_size: float = param(0.3, unit="D", ge=0.01, le=5.0, doc="largest element")
+    inlet_side: InletSide = param(InletSide.PLUS_Z, strict=False, doc="end where the flow enters: '+z' or '-z'")
+
+    @model_validator(mode="after")
+    def _room_outside_the_zone(self) -> Self:
+        if self.domain_radius < 1.5 * self.zone_radius:
+            raise ValueError(f"cfd.domain_radius = {self.domain_radius:g} must be at least 1.5 x cfd.zone_radius "
+                             f"= {1.5 * self.zone_radius:g} (room for the stationary region)")
+        return self
+
+
 class PropellerParameters(Document):
     """Every input of a toroidal propeller; frozen and validated on construction."""
 
@@ -283,6 +338,8 @@ class PropellerParameters(Document):
     transforms: Transforms = Field(default_factory=Transforms)
     resolution: Resolution = Field(default_factory=Resolution)
     export: Export = Field(default_factory=Export)
+    mesh: Mesh = Field(default_factory=Mesh)
+    cfd: Cfd = Field(default_factory=Cfd)
     manufacturing: Manufacturing = Field(default_factory=Manufacturing)
 
     @model_validator(mode="after")
@@ -342,5 +399,5 @@ class PropellerParameters(Document):
 
 
 # ParameterError is what every caller catches; keep it importable from here.
-__all__ = ["Airfoil", "Centerline", "Export", "ExportFormat", "Handedness", "Hub", "Manufacturing", "ParameterError",
-           "PropellerParameters", "Resolution", "StepSchema", "Transforms"]
+__all__ = ["Airfoil", "Centerline", "Cfd", "Export", "ExportFormat", "Handedness", "Hub", "InletSide", "Manufacturing",
+           "Mesh", "ParameterError", "PropellerParameters", "Resolution", "SectionSpacing", "StepSchema", "Transforms"]

@@ -1,0 +1,1 @@
+"""Fluid domain and tetrahedral mesh for CFD (gmsh, the ``cfd`` extra): ``torus-cad cfd``."""

@@ -1,0 +1,108 @@
+"""Files written whole, and who owns a file in flight. Plain ``os``: no CAD kernel is loaded here.
+
+* :func:`atomic_path`: a writer writes a hidden temp file beside the path, which is renamed onto
+  the path when it is complete; a failure removes it, so no partial file ever has the final name.
+* Temp files and staging folders carry ``<host>-<pid>`` in their names (:func:`owner_tag`): one
+  left by a process that was killed can be removed by the next writer on that host
+  (:func:`left_by_dead_process`), while files of live processes, or of other hosts sharing the
+  folder, are never touched, so concurrent writers of one name cannot delete each other's files.
+* :func:`removed_on_exit` lists the paths a signal handler must remove before the process ends
+  (torus_cad.interrupts reads :data:`IN_FLIGHT`).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import re
+from collections.abc import Iterator
+from itertools import count
+from pathlib import Path
+
+#: Files and folders being written now, by a registration number: what a signal handler removes.
+IN_FLIGHT: dict[int, Path] = {}
+_registrations = count(1)
+_OWNER = re.compile(r"(?P<host>[A-Za-z0-9_]+)-(?P<pid>\d+)-")
+
+
+def host_tag() -> str:
+    """This host's name reduced to ``[A-Za-z0-9_]`` (so ``-`` can separate the fields)."""
+    import socket  # here: the command line imports this module before its signal handlers are in
+
+    return re.sub(r"[^A-Za-z0-9_]", "_", socket.gethostname())[:40] or "host"
+
+
+def owner_tag() -> str:
+    """``<host>-<pid>-``: goes right after a temp name's fixed prefix."""
+    return f"{host_tag()}-{os.getpid()}-"
+
+
+def process_alive(pid: int) -> bool:
+    """Whether process ``pid`` exists on this host."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True  # alive, another user's
+    return True
+
+
+def left_by_dead_process(name: str, prefix: str) -> bool:
+    """Whether the file ``name`` (``prefix`` + owner tag + ...) belongs to a process of this host that is gone."""
+    if not name.startswith(prefix):
+        return False
+    owner = _OWNER.match(name, len(prefix))
+    if owner is None:
+        return False
+    return owner["host"] == host_tag() and not process_alive(int(owner["pid"]))
+
+
+def glob_escape(name: str) -> str:
+    """``name`` with glob wildcards escaped."""
+    return re.sub(r"([*?\[])", r"[\1]", name)
+
+
+@contextlib.contextmanager
+def removed_on_exit(path: str | Path) -> Iterator[Path]:
+    """Within the block, ``path`` (a file or a folder) is listed in :data:`IN_FLIGHT`."""
+    key = next(_registrations)
+    IN_FLIGHT[key] = Path(path)
+    try:
+        yield Path(path)
+    finally:
+        IN_FLIGHT.pop(key, None)
+
+
+def _remove_stale_temps(path: Path) -> None:
+    """Remove temp files of ``path`` left by dead processes of this host (killed mid-write)."""
+    prefix = f".{path.name}.tmp-"
+    for stale in path.parent.glob(f"{glob_escape(prefix)}*"):
+        if left_by_dead_process(stale.name, prefix):
+            stale.unlink(missing_ok=True)
+
+
+def _current_umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+@contextlib.contextmanager
+def atomic_path(path: str | Path) -> Iterator[Path]:
+    """Yield a temp path beside ``path``; on success rename it onto ``path``, on failure delete it."""
+    import tempfile
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    _remove_stale_temps(path)
+    handle, temp_name = tempfile.mkstemp(prefix=f".{path.name}.tmp-{owner_tag()}", dir=path.parent)
+    os.close(handle)
+    temp = Path(temp_name)
+    with removed_on_exit(temp):
+        try:
+            yield temp
+            os.chmod(temp, 0o666 & ~_current_umask())  # mkstemp makes 0600; give the file normal permissions
+            os.replace(temp, path)
+        finally:
+            temp.unlink(missing_ok=True)

@@ -1,0 +1,275 @@
+"""Parameters in, closed surface mesh and quality report out: the ``torus-cad mesh`` pipeline.
+
+Stages: checks (triangle budget, resolution, design) -> grids (each blade's structured grid at
+exactly the requested resolution, capped; the hub's §6.2 grid at the blades' cell size) ->
+union (manifold3d, part labels kept) -> cleanup (the junctions' needle edges collapsed) ->
+quality report -> files.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field
+from enum import StrEnum
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from torus_cad.geometry import feasibility
+from torus_cad.geometry.airfoil import airfoil_points
+from torus_cad.geometry.propeller import PropellerGeometry
+from torus_cad.geometry.surface import BladeSurface, blade_frames, place_sections
+from torus_cad.kernel.export import atomic_path
+from torus_cad.mesh import quality
+from torus_cad.mesh.cleanup import Cleanup, collapse_junction_needles
+from torus_cad.mesh.grids import blade_grid, blade_meshes, cell_size, hub_mesh
+from torus_cad.mesh.resolution import check_budget, check_resolution, estimate_triangles
+from torus_cad.mesh.settings import MeshFormat, selected_formats
+from torus_cad.mesh.timing import StageClock
+from torus_cad.mesh.union import LabeledMesh, unite
+from torus_cad.mesh.writers import write_mesh_files
+from torus_cad.parameters import PropellerParameters
+from torus_cad.tolerances import MESH_JUNCTION_MARGIN_RELATIVE
+
+
+class MeshStage(StrEnum):
+    """Stages of ``torus-cad mesh``; the value is the key in the report's ``stage_seconds``."""
+
+    CHECKS = "checks"
+    GRIDS = "grids"
+    UNION = "union"
+    CLEANUP = "cleanup"
+    QUALITY = "quality"
+    WRITE = "write"
+
+
+@dataclass
+class SurfaceMesh:
+    """The united surface mesh of a propeller and how it was made.
+
+    Attributes:
+        parameters: the design (``parameters.mesh`` holds the resolution and formats).
+        mesh: one closed 2-manifold, faces labelled hub / blade_i.
+        blade_grid: blade 0's structured grid (``(sections, points, 3)`` mm) and its parameters.
+        hub_cell_mm: edge length of the hub grid's cells.
+        estimated_triangles: the estimate the budget was checked against.
+        cleanup: what the junction cleanup after the union did (``mesh.cleanup``).
+        stage_seconds: seconds per stage (keys: MeshStage values).
+    """
+
+    parameters: PropellerParameters
+    mesh: LabeledMesh
+    blade_grid: BladeSurface
+    hub_cell_mm: float
+    estimated_triangles: int
+    cleanup: Cleanup
+    stage_seconds: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def geometry(self) -> PropellerGeometry:
+        return self.parameters.geometry()
+
+
+def check_design(params: PropellerParameters) -> None:
+    """The pre-kernel design checks of ``geometry.feasibility`` about the shape (not the loft's resolution)."""
+    geometry = params.geometry()
+    surface = params.blade_surface()
+    centerline = geometry.centerline(0)
+    feasibility.check_ends_inside_hub(geometry.hub, surface)
+    feasibility.check_centerline_leaves_through_side(geometry.hub, centerline)
+    s, _ = feasibility.tube_grid(len(surface.s))
+    fine = feasibility.sample_tube(geometry, centerline, s, surface.t)
+    feasibility.check_no_fold(fine)
+    feasibility.check_leaves_hub(geometry.hub, fine)
+    tube = feasibility.coarsen(fine)
+    feasibility.check_no_self_intersection(geometry.hub, tube)
+    feasibility.check_blades_clear(geometry, tube)
+
+
+def build_surface_mesh(params: PropellerParameters, progress: Callable[[str], None] | None = None) -> SurfaceMesh:
+    """Check, grid and unite at ``params.mesh``'s resolution: the propeller's closed, labelled surface mesh.
+
+    Raises ParameterError (triangle budget, resolution), GeometryError (design), MeshBooleanError (union).
+    """
+    timer = StageClock(progress)
+    geometry, table = params.geometry(), params.mesh
+    with timer.stage(MeshStage.CHECKS):
+        estimate = estimate_triangles(geometry, table.sections, table.points, table.spacing)
+        check_budget(estimate)
+        check_resolution(geometry, table.sections, table.points, table.spacing)
+        check_design(params)
+    with timer.stage(MeshStage.GRIDS):
+        grid = blade_grid(geometry, table.sections, table.points, table.spacing)
+        cell = cell_size(grid).matched
+        parts = [hub_mesh(geometry.hub.radius_mm, geometry.hub.length_mm, cell), *blade_meshes(geometry, grid)]
+    with timer.stage(MeshStage.UNION):
+        mesh = unite(parts, ["hub", *(f"blade_{index}" for index in range(geometry.blades))])
+    with timer.stage(MeshStage.CLEANUP):
+        mesh, cleanup = collapse_junction_needles(mesh)
+    return SurfaceMesh(params, mesh, grid, cell, estimate.total, cleanup, timer.seconds)
+
+
+# -- quality report ---------------------------------------------------------------------------------
+
+def _junction_margin(geometry: PropellerGeometry) -> float:
+    return MESH_JUNCTION_MARGIN_RELATIVE * geometry.hub.radius_mm
+
+
+def vertex_distances(result: SurfaceMesh) -> NDArray[np.float64]:
+    """``(v,)`` distance (mm) of each mesh vertex from the analytic surface, or an upper bound of it.
+
+    Hub vertices and the junction vertices the union created lie on hub triangles: their exact
+    distance from the hub's cylinder bounds their distance from the propeller's surface. Every
+    other vertex is a blade grid vertex, evaluated on the analytic surface (distance 0); a vertex
+    that is neither gets its distance from the nearest grid vertex, again an upper bound.
+    """
+    mesh, hub = result.mesh, result.geometry.hub
+    on_hub = np.zeros(len(mesh.vertices), dtype=bool)
+    on_hub[mesh.faces_of(0).ravel()] = True
+    distance = np.zeros(len(mesh.vertices))
+    distance[on_hub] = np.abs(quality.hub_surface_distance(mesh.vertices[on_hub], hub.radius_mm, hub.length_mm))
+    others = np.flatnonzero(~on_hub)
+    blade_vertices = np.concatenate([part.vertices for part in blade_meshes(result.geometry, result.blade_grid)])
+    exact = quality.rows_in(mesh.vertices[others], blade_vertices)
+    strays = others[~exact]
+    if len(strays):
+        from scipy.spatial import cKDTree
+
+        distance[strays], _ = cKDTree(blade_vertices).query(mesh.vertices[strays])
+    return distance
+
+
+def blade_cell_sag(result: SurfaceMesh) -> tuple[float, float]:
+    """Largest distance (mm, and as a fraction of the local chord) of the analytic blade at its
+    cells' parameter midpoints from the cells' triangles, over the cells outside the hub."""
+    geometry, grid = result.geometry, result.blade_grid
+    s_mid = 0.5 * (grid.s[:-1] + grid.s[1:])
+    t_mid = 0.5 * (grid.t + np.append(grid.t[1:], 2.0))
+    frames = blade_frames(geometry.blade, geometry.centerline(0), s_mid)
+    centres = place_sections(geometry.blade, frames, airfoil_points(geometry.blade.airfoil, t_mid))
+    sag = quality.cell_deviation(grid.points, centres)
+    outside = quality.outside_hub(centres.reshape(-1, 3), geometry.hub.radius_mm, geometry.hub.length_mm,
+                                  _junction_margin(geometry)).reshape(sag.shape)
+    chord = 2.0 * np.linalg.norm(centres - frames.origin[:, None, :], axis=-1).max(axis=1)
+    if not outside.any():
+        return 0.0, 0.0
+    relative = np.where(outside, sag / chord[:, None], 0.0)
+    return float(np.where(outside, sag, 0.0).max()), float(relative.max())
+
+
+def _blade_faces(mesh: LabeledMesh) -> NDArray[np.int64]:
+    return mesh.faces[mesh.part > 0]
+
+
+def opencascade_comparison(params: PropellerParameters, margin: float) -> dict[str, Any]:
+    """B-rep volume and the evenness of OpenCascade's STL tessellation of the same design."""
+    from torus_cad.kernel.checks import precise_volume
+    from torus_cad.kernel.tessellation import tessellate_faces
+    from torus_cad.propeller import build_propeller
+
+    propeller = build_propeller(params)
+    faces = tessellate_faces(propeller.solid, params.export.stl_linear_deflection,
+                             params.export.stl_angular_deflection)
+    offsets = np.cumsum([0] + [len(face.vertices) for face in faces[:-1]])
+    vertices = np.concatenate([face.vertices for face in faces])
+    triangles = np.concatenate([face.triangles + offset for face, offset in zip(faces, offsets)])
+    on_blade = np.concatenate([np.full(len(face.triangles), face.surface_type not in ("PLANE", "CYLINDER"))
+                               for face in faces])
+    blade = triangles[on_blade]
+    away = blade[quality.faces_away_from_hub(vertices, blade, params.hub.radius, params.hub.length, margin)]
+    ratios = quality.aspect_ratios(vertices, triangles)
+    return {"brep_volume_mm3": precise_volume(propeller.solid),
+            "opencascade_stl": {"linear_deflection_mm": params.export.stl_linear_deflection,
+                                "angular_deflection_rad": params.export.stl_angular_deflection,
+                                "triangles": len(triangles),
+                                "aspect_ratio_max": float(ratios.max()),
+                                "triangles_aspect_ratio_over_100": int(np.sum(ratios > 100.0)),
+                                "blades_away_from_junctions": quality.evenness(vertices, away).to_dict()}}
+
+
+def quality_report(result: SurfaceMesh, compare: bool = True) -> dict[str, Any]:
+    """The mesh's quality as a JSON-ready dict (see README, 'Meshes for simulation'); ``compare``
+    adds the B-rep's volume and OpenCascade's tessellation of the same design."""
+    mesh, params, table = result.mesh, result.parameters, result.parameters.mesh
+    margin = _junction_margin(result.geometry)
+    topology = quality.edge_topology(mesh.faces)
+    blade = _blade_faces(mesh)
+    away = blade[quality.faces_away_from_hub(mesh.vertices, blade, params.hub.radius, params.hub.length, margin)]
+    ratios = quality.aspect_ratios(mesh.vertices, mesh.faces)
+    sag_mm, sag_relative = blade_cell_sag(result)
+    grid_cell = cell_size(result.blade_grid)
+    report: dict[str, Any] = {
+        "name": params.name,
+        "settings": {"sections": table.sections, "points": table.points, "spacing": table.spacing.value,
+                     "formats": [item.value for item in selected_formats(table)]},
+        "triangles": len(mesh.faces), "vertices": len(mesh.vertices),
+        "estimated_triangles": result.estimated_triangles,
+        "junction_cleanup": asdict(result.cleanup),
+        "triangles_per_part": dict(zip(mesh.part_names, np.bincount(mesh.part, minlength=len(mesh.part_names))
+                                       .tolist())),
+        "topology": topology.to_dict(),
+        "blade_cell_mm": {"around": grid_cell.around, "along": grid_cell.along}, "hub_cell_mm": result.hub_cell_mm,
+        "junction_margin_mm": margin,
+        "blades_away_from_junctions": quality.evenness(mesh.vertices, away).to_dict(),
+        "aspect_ratio_max": float(ratios.max()),
+        "triangles_aspect_ratio_over_100": int(np.sum(ratios > 100.0)),
+        "aspect_ratio_max_hub": float(ratios[mesh.part == 0].max()),
+        "volume_mm3": mesh.triangle_mesh.volume,
+        "vertex_distance_max_mm": float(vertex_distances(result).max()),
+        "cell_sag_max_mm": sag_mm, "cell_sag_max_relative_chord": sag_relative,
+    }
+    if compare:
+        report.update(opencascade_comparison(params, margin))
+        report["volume_relative_difference"] = report["volume_mm3"] / report["brep_volume_mm3"] - 1.0
+    return report
+
+
+def summary_line(report: dict[str, Any]) -> str:
+    """One terminal line: triangles, closedness, evenness, aspect ratio, volume, distance."""
+    topology = report["topology"]
+    away = report["blades_away_from_junctions"]
+    closed = "closed 2-manifold" if topology["closed_2_manifold"] else "NOT CLOSED"
+    line = (f"mesh: {report['triangles']:,} triangles, {closed} ({topology['open_edges']} open, "
+            f"{topology['non_manifold_edges']} non-manifold edges); blade edge ratio {away['edge_ratio']:.2f}")
+    if "opencascade_stl" in report:
+        line += f" (OpenCascade STL {report['opencascade_stl']['blades_away_from_junctions']['edge_ratio']:.1f})"
+    line += (f", worst aspect ratio {report['aspect_ratio_max']:.3g} ({report['triangles_aspect_ratio_over_100']} "
+             f"triangles over 100), volume {report['volume_mm3']:.2f} mm^3")
+    if "brep_volume_mm3" in report:
+        line += f" (B-rep {report['brep_volume_mm3']:.2f}, {report['volume_relative_difference']:+.3%})"
+    line += (f", vertices within {report['vertex_distance_max_mm']:.2g} mm and cells within "
+             f"{report['cell_sag_max_mm']:.2g} mm of the surface")
+    return line
+
+
+def write_surface_mesh(params: PropellerParameters, out_dir: str | Path, compare: bool = True,
+                       progress: Callable[[str], None] | None = None) -> tuple[dict[str, Any], dict[str, Path]]:
+    """Build, measure and write at ``params.mesh``: the mesh files and ``<name>_mesh.json``.
+
+    Returns the report and the written paths by format (and ``"json"``). Nothing is written
+    when a check refuses the design or the resolution.
+    """
+    import json
+
+    formats = selected_formats(params.mesh)
+    result = build_surface_mesh(params, progress)
+    timer = StageClock(progress)
+    with timer.stage(MeshStage.QUALITY):
+        report = quality_report(result, compare)
+    with timer.stage(MeshStage.WRITE):
+        paths: dict[str, Path] = {item.value: path for item, path in
+                                  write_mesh_files(result.mesh, out_dir, params.name, formats).items()}
+    result.stage_seconds.update(timer.seconds)
+    report["files"] = {key: path.name for key, path in paths.items()}
+    report["stage_seconds"] = result.stage_seconds
+    json_path = Path(out_dir) / f"{params.name}_mesh.json"
+    with atomic_path(json_path) as temp:
+        temp.write_text(json.dumps(report, indent=2) + "\n")
+    paths["json"] = json_path
+    return report, paths
+
+
+__all__ = ["MeshFormat", "MeshStage", "SurfaceMesh", "build_surface_mesh", "quality_report", "summary_line",
+           "write_surface_mesh"]

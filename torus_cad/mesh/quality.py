@@ -1,0 +1,167 @@
+"""Mesh quality measures, all vectorised: topology, edge evenness, aspect ratio, distance to the surface.
+
+Definitions used in the report:
+
+- open edge: used by one triangle; non-manifold edge: used by three or more; an edge used by
+  two triangles in the same direction is a flipped neighbour (inconsistent orientation).
+- aspect ratio of a triangle: longest edge x perimeter / (4 sqrt(3) x area); 1 for an
+  equilateral triangle, growing without bound for slivers.
+- edge ratio: longest over shortest edge among a set of triangles (the spec's "even cell
+  sizes", §5, measured).
+- away from the junctions: triangles all of whose corners lie at least a margin outside the
+  hub's surface (where the blades meet the hub, any triangulation has to fit a curve).
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+
+@dataclass(frozen=True)
+class Topology:
+    """Edge counts of a triangle mesh (``closed`` = all zero)."""
+
+    edges: int
+    open_edges: int
+    non_manifold_edges: int
+    inconsistent_edges: int
+
+    @property
+    def closed(self) -> bool:
+        """A closed, consistently oriented 2-manifold surface."""
+        return self.open_edges == 0 and self.non_manifold_edges == 0 and self.inconsistent_edges == 0
+
+    def to_dict(self) -> dict[str, int | bool]:
+        return {**asdict(self), "closed_2_manifold": self.closed}
+
+
+def edge_topology(faces: NDArray[np.int64]) -> Topology:
+    """Count open, non-manifold and inconsistently oriented edges of ``(f, 3)`` faces."""
+    faces = np.asarray(faces, dtype=np.int64)
+    start = faces.reshape(-1)
+    end = faces[:, [1, 2, 0]].reshape(-1)
+    low, high = np.minimum(start, end), np.maximum(start, end)
+    keys = low * (int(faces.max()) + 1) + high
+    _, inverse, counts = np.unique(keys, return_inverse=True, return_counts=True)
+    # Walking each triangle counter-clockwise, the two users of a good edge traverse it in opposite
+    # directions: their +1 / -1 cancel.
+    direction = np.bincount(inverse, weights=np.where(start < end, 1.0, -1.0), minlength=len(counts))
+    two = counts == 2
+    return Topology(edges=len(counts), open_edges=int(np.sum(counts == 1)),
+                    non_manifold_edges=int(np.sum(counts > 2)), inconsistent_edges=int(np.sum(two & (direction != 0))))
+
+
+def _edges(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> NDArray[np.float64]:
+    """``(3, f, 3)`` edge vectors 01, 12, 20 of every triangle."""
+    a, b, c = vertices[faces[:, 0]], vertices[faces[:, 1]], vertices[faces[:, 2]]
+    return np.stack([b - a, c - b, a - c])
+
+
+def edge_lengths(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> NDArray[np.float64]:
+    """``(f, 3)`` lengths of the edges 01, 12, 20 of every triangle, mm."""
+    edges = _edges(vertices, faces)
+    return np.sqrt(np.einsum("efk,efk->fe", edges, edges))
+
+
+def aspect_ratios(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> NDArray[np.float64]:
+    """``(f,)`` longest edge x perimeter / (4 sqrt(3) area): 1 for equilateral, inf for degenerate."""
+    edges = _edges(vertices, faces)
+    lengths = np.sqrt(np.einsum("efk,efk->fe", edges, edges))
+    area = 0.5 * np.linalg.norm(np.cross(edges[0], -edges[2]), axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = lengths.max(axis=1) * lengths.sum(axis=1) / (4.0 * np.sqrt(3.0) * area)
+    return np.where(area > 0.0, ratio, np.inf)
+
+
+def hub_surface_distance(points: NDArray[np.float64], radius: float, length: float) -> NDArray[np.float64]:
+    """``(k,)`` distance (mm) of points from the surface of the closed cylinder r <= R, |z| <= L/2."""
+    radial = np.hypot(points[:, 0], points[:, 1]) - radius
+    axial = np.abs(points[:, 2]) - length / 2.0
+    outside = np.hypot(np.maximum(radial, 0.0), np.maximum(axial, 0.0))
+    inside = np.minimum(-radial, -axial)
+    return np.where((radial < 0.0) & (axial < 0.0), inside, outside)
+
+
+def outside_hub(points: NDArray[np.float64], radius: float, length: float, margin: float) -> NDArray[np.bool_]:
+    """``(k,)`` True where a point lies more than ``margin`` mm outside the hub."""
+    radial = np.hypot(points[:, 0], points[:, 1]) - radius
+    axial = np.abs(points[:, 2]) - length / 2.0
+    return (np.maximum(radial, axial) > margin)
+
+
+@dataclass(frozen=True)
+class Evenness:
+    """Edge ratio and worst aspect ratio of a set of triangles."""
+
+    triangles: int
+    edge_min_mm: float
+    edge_max_mm: float
+    aspect_ratio_max: float
+
+    @property
+    def edge_ratio(self) -> float:
+        return self.edge_max_mm / self.edge_min_mm if self.edge_min_mm > 0 else float("inf")
+
+    def to_dict(self) -> dict[str, float | int]:
+        return {**asdict(self), "edge_ratio": self.edge_ratio}
+
+
+def evenness(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> Evenness:
+    """Shortest and longest edge and worst aspect ratio of ``(f, 3)`` faces."""
+    if len(faces) == 0:
+        return Evenness(0, float("nan"), float("nan"), float("nan"))
+    lengths = edge_lengths(vertices, faces)
+    return Evenness(len(faces), float(lengths.min()), float(lengths.max()),
+                    float(aspect_ratios(vertices, faces).max()))
+
+
+def faces_away_from_hub(vertices: NDArray[np.float64], faces: NDArray[np.int64], radius: float, length: float,
+                        margin: float) -> NDArray[np.bool_]:
+    """``(f,)`` True for triangles whose three corners all lie more than ``margin`` outside the hub."""
+    outside = outside_hub(vertices, radius, length, margin)
+    return np.asarray(outside[faces].all(axis=1))
+
+
+def cell_deviation(grid: NDArray[np.float64], centres: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Distance (mm) of the analytic surface at each cell's centre from the cell's two triangles' planes.
+
+    ``grid`` is a ``(m, p, 3)`` blade grid (closed around axis 1) cut into triangles a-b-d and
+    a-d-c as ``blade_mesh`` does; ``centres`` ``(m - 1, p, 3)`` holds the analytic surface at the
+    parameter midpoints of the cells. Returns ``(m - 1, p)``: the smaller distance to the two planes.
+    """
+    a, b = grid[:-1], np.roll(grid[:-1], -1, axis=1)
+    c, d = grid[1:], np.roll(grid[1:], -1, axis=1)
+
+    def plane_distance(p: NDArray[np.float64], q: NDArray[np.float64], r: NDArray[np.float64]
+                       ) -> NDArray[np.float64]:
+        normal = np.cross(q - p, r - p)
+        norm = np.linalg.norm(normal, axis=-1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            distance = np.abs(np.einsum("...k,...k->...", centres - p, normal)) / norm
+        return np.where(norm > 0, distance, np.linalg.norm(centres - p, axis=-1))
+
+    return np.minimum(plane_distance(a, b, d), plane_distance(a, d, c))
+
+
+def rows_in(query: NDArray[np.float64], reference: NDArray[np.float64]) -> NDArray[np.bool_]:
+    """``(q,)`` True where a row of ``query`` ``(q, 3)`` equals a row of ``reference`` ``(r, 3)`` bit for bit.
+
+    Rows are hashed to one int64 each (sorted once, looked up with searchsorted), and every hit is
+    confirmed by comparing the coordinates, so a hash collision cannot give a false True.
+    """
+    def keys(rows: NDArray[np.float64]) -> NDArray[np.int64]:
+        bits = np.ascontiguousarray(rows, dtype=np.float64).view(np.int64)
+        with np.errstate(over="ignore"):
+            return np.asarray(bits[:, 0] * np.int64(0x9E3779B97F4A7C15 - (1 << 64)) ^ bits[:, 1] * np.int64(
+                0xC2B2AE3D27D4EB4F - (1 << 64)) ^ bits[:, 2])
+
+    reference_keys = keys(reference)
+    order = np.argsort(reference_keys, kind="stable")
+    sorted_keys = reference_keys[order]
+    query_keys = keys(query)
+    position = np.minimum(np.searchsorted(sorted_keys, query_keys), len(sorted_keys) - 1)
+    candidate = order[position]
+    return np.asarray((sorted_keys[position] == query_keys) & np.all(reference[candidate] == query, axis=1))

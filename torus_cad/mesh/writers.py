@@ -1,0 +1,132 @@
+"""Write a labelled surface mesh: binary STL, ASCII STL (one solid per part), OBJ (one group per part), PLY, VTK.
+
+Every writer works on whole arrays (text is formatted in chunks of :data:`CHUNK_TRIANGLES`
+with one C-level ``%`` per chunk), so millions of triangles need no Python loop per triangle.
+Each file is written atomically (``kernel.export.atomic_path``): a temp file, then a rename.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import IO
+
+import numpy as np
+from numpy.typing import NDArray
+
+from torus_cad.kernel.export import atomic_path
+from torus_cad.mesh.settings import SUFFIXES, MeshFormat
+from torus_cad.mesh.union import LabeledMesh
+
+#: Triangles (or vertices) formatted per chunk by the text writers.
+CHUNK_TRIANGLES = 100_000
+
+_STL_RECORD = np.dtype([("normal", "<f4", (3,)), ("vertices", "<f4", (3, 3)), ("attribute", "<u2")])
+_ASCII_FACET = ("facet normal %.7e %.7e %.7e\n  outer loop\n    vertex %.9e %.9e %.9e\n"
+                "    vertex %.9e %.9e %.9e\n    vertex %.9e %.9e %.9e\n  endloop\nendfacet\n")
+
+
+def unit_normals(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> NDArray[np.float64]:
+    """``(f, 3)`` outward unit normals (zero for degenerate triangles)."""
+    corners = vertices[faces]
+    normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    length = np.linalg.norm(normal, axis=1, keepdims=True)
+    return np.divide(normal, length, out=np.zeros_like(normal), where=length > 0)
+
+
+def _chunks(count: int) -> Iterator[slice]:
+    for start in range(0, count, CHUNK_TRIANGLES):
+        yield slice(start, min(start + CHUNK_TRIANGLES, count))
+
+
+def _write_rows(handle: IO[str], template: str, rows: NDArray[np.float64] | NDArray[np.int64]) -> None:
+    """Write ``template % row`` for every row of a 2-D array, a chunk at a time."""
+    for part in _chunks(len(rows)):
+        block = rows[part]
+        handle.write((template * len(block)) % tuple(block.ravel().tolist()))
+
+
+def write_binary_stl(mesh: LabeledMesh, path: Path, name: str) -> None:
+    """Binary STL of the whole surface (float32, as the format requires)."""
+    records = np.zeros(len(mesh.faces), dtype=_STL_RECORD)
+    records["normal"] = unit_normals(mesh.vertices, mesh.faces)
+    records["vertices"] = mesh.vertices[mesh.faces]
+    header = f"torus_cad surface mesh {name}".encode("ascii", "replace")[:80].ljust(80, b" ")
+    with path.open("wb") as handle:
+        handle.write(header)
+        handle.write(np.uint32(len(records)).tobytes())
+        records.tofile(handle)
+
+
+def write_ascii_stl(mesh: LabeledMesh, path: Path, name: str) -> None:
+    """ASCII STL with one ``solid <part>`` per part: hub, blade_0, ..."""
+    normals = unit_normals(mesh.vertices, mesh.faces)
+    with path.open("w", encoding="ascii") as handle:
+        for index, part_name in enumerate(mesh.part_names):
+            chosen = mesh.part == index
+            rows = np.concatenate([normals[chosen], mesh.vertices[mesh.faces[chosen]].reshape(-1, 9)], axis=1)
+            handle.write(f"solid {part_name}\n")
+            _write_rows(handle, _ASCII_FACET, rows)
+            handle.write(f"endsolid {part_name}\n")
+
+
+def write_obj(mesh: LabeledMesh, path: Path, name: str) -> None:
+    """Wavefront OBJ: shared vertices, then one group ``g <part>`` of faces per part (1-based indices)."""
+    with path.open("w", encoding="ascii") as handle:
+        handle.write(f"# torus_cad surface mesh {name}: {len(mesh.vertices)} vertices, {len(mesh.faces)} triangles, "
+                     f"mm; groups {' '.join(mesh.part_names)}\n")
+        handle.write(f"o {name}\n")
+        _write_rows(handle, "v %.10g %.10g %.10g\n", mesh.vertices)
+        for index, part_name in enumerate(mesh.part_names):
+            handle.write(f"g {part_name}\n")
+            _write_rows(handle, "f %d %d %d\n", mesh.faces[mesh.part == index] + 1)
+
+
+def write_ply(mesh: LabeledMesh, path: Path, name: str) -> None:
+    """Binary little-endian PLY: float64 vertices, triangles with an int ``part`` property per face (0 = hub)."""
+    header = (f"ply\nformat binary_little_endian 1.0\ncomment torus_cad surface mesh {name}, mm; part: "
+              + ", ".join(f"{index} = {part_name}" for index, part_name in enumerate(mesh.part_names))
+              + f"\nelement vertex {len(mesh.vertices)}\nproperty double x\nproperty double y\nproperty double z\n"
+              f"element face {len(mesh.faces)}\nproperty list uchar int vertex_indices\nproperty int part\n"
+              "end_header\n")
+    faces = np.empty(len(mesh.faces), dtype=[("count", "u1"), ("vertices", "<i4", (3,)), ("part", "<i4")])
+    faces["count"], faces["vertices"], faces["part"] = 3, mesh.faces, mesh.part
+    with path.open("wb") as handle:
+        handle.write(header.encode("ascii"))
+        np.ascontiguousarray(mesh.vertices, dtype="<f8").tofile(handle)
+        faces.tofile(handle)
+
+
+def write_vtk(mesh: LabeledMesh, path: Path, name: str) -> None:
+    """Legacy VTK (binary) through meshio, with a per-face ``part`` index (0 = hub)."""
+    import meshio
+
+    meshio.write_points_cells(str(path), mesh.vertices, [("triangle", mesh.faces.astype(np.int64))],
+                              cell_data={"part": [mesh.part.astype(np.int32)]}, file_format="vtk", binary=True)
+
+
+WRITERS: dict[MeshFormat, Callable[[LabeledMesh, Path, str], None]] = {
+    MeshFormat.STL: write_binary_stl,
+    MeshFormat.STL_ASCII: write_ascii_stl,
+    MeshFormat.OBJ: write_obj,
+    MeshFormat.PLY: write_ply,
+    MeshFormat.VTK: write_vtk,
+}
+
+
+def mesh_path(out_dir: Path, name: str, file_format: MeshFormat) -> Path:
+    """``out_dir/<name>_mesh<suffix>`` for a format."""
+    return out_dir / f"{name}_mesh{SUFFIXES[file_format]}"
+
+
+def write_mesh_files(mesh: LabeledMesh, out_dir: str | Path, name: str,
+                     formats: tuple[MeshFormat, ...]) -> dict[MeshFormat, Path]:
+    """Write ``mesh`` in every format into ``out_dir`` (created if missing); the paths by format."""
+    out = Path(out_dir)
+    paths = {}
+    for file_format in formats:
+        path = mesh_path(out, name, file_format)
+        with atomic_path(path) as temp:
+            WRITERS[file_format](mesh, temp, name)
+        paths[file_format] = path
+    return paths
