@@ -112,6 +112,18 @@ def test_a_refused_value_shows_the_reason_and_keeps_the_last_good_propeller(page
     assert page.field_message("hub.radius").count(reason) == 0
 
 
+def test_a_menu_choice_rebuilds_the_mirror_image(page):
+    page.change("blades", "4")
+    volume = page.text("readout-volume")
+    before = page.stamp("exact-stamp")
+    page.choose("handedness", "ccw")
+    page.wait(lambda: page.stamp("exact-stamp") > before and page.idle(), "the mirror image's exact solid")
+    assert page.text("readout-volume") == volume  # a mirror image has the same volume
+    before = page.stamp("exact-stamp")
+    page.choose("handedness", "cw")
+    page.wait(lambda: page.stamp("exact-stamp") > before and page.idle(), "the clockwise propeller again")
+
+
 def test_orbiting_turns_the_view_and_a_change_keeps_the_viewpoint(page):
     page.change("hub.length", "20")
     time.sleep(1.0)  # the browser draws asynchronously

@@ -222,6 +222,19 @@ class StudioPage:
         field.send_keys(Keys.CONTROL, "a")
         field.send_keys(text)
 
+    def choose(self, key: str, option: str) -> None:
+        """Pick ``option`` in a parameter's menu (a choice), as a user would: open it, click the item."""
+        from selenium.webdriver.common.by import By
+
+        field = self.element(field_id(key))
+        control = field.find_element(By.XPATH, "./ancestor::div[contains(concat(' ', normalize-space(@class), ' '), "
+                                               "' v-field ')][1]")
+        self.driver.execute_script("arguments[0].scrollIntoView({block: 'center'});", control)
+        control.click()
+        xpath = f"//div[contains(@class, 'v-overlay--active')]//div[@role = 'option'][normalize-space(.) = '{option}']"
+        item = self.wait(lambda: self.driver.find_elements(By.XPATH, xpath), f"the menu item {option!r}")[0]
+        item.click()
+
     def open_all_groups(self) -> None:
         """Expand every group of the parameters panel (only the first few start open), one at a time."""
         from selenium.webdriver.common.by import By
