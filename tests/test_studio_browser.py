@@ -64,9 +64,9 @@ def test_the_studio_serves_this_machine_only_and_says_so(studio):
 
 
 def test_page_shows_every_parameter_and_the_default_propeller(page):
-    for spec in parameter_specs():
-        element = field_id(spec.key) + ("-0" if spec.length else "")
-        assert page.element(element) is not None, f"no input for {spec.key}"
+    page.open_all_groups()
+    inputs = [field_id(spec.key) + ("-0" if spec.length else "") for spec in parameter_specs()]
+    page.wait(lambda: all(page.exists(element) for element in inputs), "an input for every parameter")
     page.change("blades", "3")
     assert page.text("readout-volume") == _volume_text(PropellerParameters())
     assert page.text("readout-valid") == "valid: 1 closed solid"
@@ -110,6 +110,18 @@ def test_a_refused_value_shows_the_reason_and_keeps_the_last_good_propeller(page
     assert page.element("download-step").is_enabled()
     page.change("hub.radius", "10")
     assert page.field_message("hub.radius").count(reason) == 0
+
+
+def test_a_menu_choice_rebuilds_the_mirror_image(page):
+    page.change("blades", "4")
+    volume = page.text("readout-volume")
+    before = page.stamp("exact-stamp")
+    page.choose("handedness", "ccw")
+    page.wait(lambda: page.stamp("exact-stamp") > before and page.idle(), "the mirror image's exact solid")
+    assert page.text("readout-volume") == volume  # a mirror image has the same volume
+    before = page.stamp("exact-stamp")
+    page.choose("handedness", "cw")
+    page.wait(lambda: page.stamp("exact-stamp") > before and page.idle(), "the clockwise propeller again")
 
 
 def test_orbiting_turns_the_view_and_a_change_keeps_the_viewpoint(page):

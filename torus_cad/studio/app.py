@@ -180,6 +180,8 @@ class Studio:
         element_errors = {f"{target[0]}[{target[1]}]": True} if target is not None and target[1] is not None else {}
         with self.state:
             self.state.field_errors = {key: message for key in keys}
+            sections = [key.rpartition(".")[0] or "propeller" for key in keys if key in self.fields]
+            self.state.open_groups = list(dict.fromkeys([*(self.state.open_groups or []), *sections]))  # show them
             self.state.element_errors = element_errors
             self.state.refusal = message
             self.state.status = "refused"

@@ -15,6 +15,7 @@ Chromium starts with a fresh, empty profile and its background networking disabl
 from __future__ import annotations
 
 import contextlib
+import functools
 import os
 import re
 import signal
@@ -141,6 +142,11 @@ class StudioPage:
 
         return self.driver.find_element(By.ID, element_id)
 
+    def exists(self, element_id: str) -> bool:
+        from selenium.webdriver.common.by import By
+
+        return bool(self.driver.find_elements(By.ID, element_id))
+
     def text(self, element_id: str) -> str:
         from selenium.common.exceptions import (
             NoSuchElementException,
@@ -215,6 +221,36 @@ class StudioPage:
         field = self.element(field_id(key))
         field.send_keys(Keys.CONTROL, "a")
         field.send_keys(text)
+
+    def choose(self, key: str, option: str) -> None:
+        """Pick ``option`` in a parameter's menu (a choice), as a user would: open it, click the item."""
+        from selenium.webdriver.common.by import By
+
+        field = self.element(field_id(key))
+        control = field.find_element(By.XPATH, "./ancestor::div[contains(concat(' ', normalize-space(@class), ' '), "
+                                               "' v-field ')][1]")
+        self.driver.execute_script("arguments[0].scrollIntoView({block: 'center'});", control)
+        control.click()
+        xpath = f"//div[contains(@class, 'v-overlay--active')]//div[@role = 'option'][normalize-space(.) = '{option}']"
+        item = self.wait(lambda: self.driver.find_elements(By.XPATH, xpath), f"the menu item {option!r}")[0]
+        item.click()
+
+    def open_all_groups(self) -> None:
+        """Expand every group of the parameters panel (only the first few start open), one at a time."""
+        from selenium.webdriver.common.by import By
+
+        closed = ".v-expansion-panel:not(.v-expansion-panel--active) > .v-expansion-panel-title"
+        for _ in range(100):
+            titles = self.driver.find_elements(By.CSS_SELECTOR, closed)
+            if not titles:
+                return
+            self.driver.execute_script("arguments[0].click();", titles[0])
+            self.wait(functools.partial(self._fewer, closed, len(titles)), "a group to open")
+
+    def _fewer(self, selector: str, count: int) -> bool:
+        from selenium.webdriver.common.by import By
+
+        return len(self.driver.find_elements(By.CSS_SELECTOR, selector)) < count
 
     def click(self, element_id: str) -> None:
         element = self.element(element_id)

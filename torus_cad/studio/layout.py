@@ -36,6 +36,11 @@ def _js_key(text: str) -> str:
     return text.replace("\\", "\\\\").replace("'", "\\'")
 
 
+def _js_list(items: tuple[str, ...]) -> str:
+    """A JavaScript array literal of strings (trame reads a Python list as a state name and default)."""
+    return "[" + ", ".join(f"'{_js_key(item)}'" for item in items) + "]"
+
+
 def _error_of(panel_field: PanelField) -> str:
     return f"field_errors['{_js_key(panel_field.key)}'] || []"
 
@@ -66,9 +71,9 @@ def _scalar_field(panel_field: PanelField) -> None:
                    persistent_hint=True, error_messages=(_error_of(panel_field),), density="compact",
                    id=field_id(panel_field.key), hide_details="auto")
     elif panel_field.kind is FieldKind.CHOICE:
-        v3.VSelect(v_model=(name,), items=list(panel_field.choices), **common)
+        v3.VSelect(v_model=(name,), items=(_js_list(panel_field.choices),), **common)
     elif panel_field.kind is FieldKind.CHOICES:
-        v3.VSelect(v_model=(name,), items=list(panel_field.choices), multiple=True, chips=True, **common)
+        v3.VSelect(v_model=(name,), items=(_js_list(panel_field.choices),), multiple=True, chips=True, **common)
     elif panel_field.read_only:  # a file path: the server would read it, so the page may not set it
         v3.VTextField(v_model=(name,), **{**common, "hint": f"{panel_field.hint} (set in the design file the "
                                                               "studio was started with)"}, readonly=True)
@@ -101,7 +106,7 @@ def _vector_field(panel_field: PanelField) -> None:
 def _group(group: PanelGroup) -> None:
     with v3.VExpansionPanel(value=group.section or "propeller"):
         v3.VExpansionPanelTitle(group.title, classes="text-subtitle-1 font-weight-medium")
-        with v3.VExpansionPanelText(eager=True):  # rendered while collapsed: every input exists
+        with v3.VExpansionPanelText():
             if group.doc:
                 html.Div(group.doc, classes="text-caption text-medium-emphasis mb-2")
             for panel_field in group.fields:
