@@ -7,7 +7,7 @@ moment (torus_cad.interrupts).
 
 import sys
 
-from torus_cad.interrupts import exit_on_signals
+from torus_cad.interrupts import exit_on_signals, hold_signals_until_exit
 
 
 def main() -> int:
@@ -15,7 +15,9 @@ def main() -> int:
     exit_on_signals()
     from torus_cad.cli import main as cli_main
 
-    return cli_main()
+    code = cli_main()
+    hold_signals_until_exit()  # the work is done: a signal now must not turn exit 0 into "killed"
+    return code
 
 
 if __name__ == "__main__":

@@ -13,7 +13,6 @@ inside the commands), so an interrupt at any moment ends the command with one li
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import tomllib
 from collections.abc import Callable, Sequence
@@ -49,7 +48,20 @@ y_L mm down the axis from 1 mm below the top face, z_L mm radially out from R - 
 
 
 class _Parser(argparse.ArgumentParser):
-    """argparse whose usage errors are one line and exit 2, like every other bad input."""
+    """argparse whose usage errors are one line and exit 2, like every other bad input.
+
+    ``table``: the schema table whose parameters become options (``--name``), added when the
+    subcommand is actually used: reading the schema loads pydantic, which ``build`` must not wait
+    for before its first progress line.
+    """
+
+    table: str = ""
+
+    def parse_known_args(self, args: Any = None, namespace: Any = None) -> Any:  # type: ignore[override]
+        if self.table:
+            table, self.table = self.table, ""
+            _add_table_arguments(self, table)
+        return super().parse_known_args(args, namespace)
 
     def error(self, message: str) -> None:  # type: ignore[override]
         self.exit(EXIT_BAD_INPUT, f"torus-cad: error: {message} (see {self.prog} --help)\n")
@@ -124,10 +136,10 @@ def _command_build(args: argparse.Namespace) -> int:
 
         extra_files["png"] = lambda path: write_preview(propeller, path, size, progress=progress)
     # One output set: the files, the blade-element table, the picture and the report appear together.
-    paths = write_output_set(propeller, Path(args.out), args.density, stl=not args.no_stl, sections_table=True,
-                             extra_files=extra_files)
+    published = write_output_set(propeller, Path(args.out), args.density, stl=not args.no_stl,
+                                 sections_table=True, extra_files=extra_files)
     progress.finish()
-    report = json.loads(paths["json"].read_text())
+    paths, report = published.paths, published.report  # not re-read: a same-name build may have replaced it
     if not args.quiet:
         for path in paths.values():
             print(f"wrote {path}")
@@ -386,7 +398,7 @@ def _add_cfd_parser(commands: Any) -> None:
         "OpenFOAM's gmshToFoam), <name>.step, README.txt and <name>_cfd.json. The options override the design's "
         "[cfd] table; D is the tip diameter. Needs the cfd extra: pip install 'torus_cad[cfd]'.")
     _add_design_arguments(cfd)
-    _add_table_arguments(cfd, "cfd")
+    cfd.table = "cfd"  # its options, when the subcommand is used (_Parser.table)
     cfd.add_argument("--threads", type=int, default=0, metavar="N", help="gmsh threads (default 0: one per CPU)")
     _add_out_and_quiet(cfd, "cfd_out", _command_cfd)
 

@@ -18,7 +18,7 @@ import os
 import signal
 import sys
 from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from pathlib import Path
 from types import FrameType
 from typing import Any
@@ -87,6 +87,17 @@ def exit_on_signals(program: str = "torus-cad") -> Callable[[], None]:
             signal.signal(signum, handler)
 
     return restore
+
+
+def hold_signals_until_exit() -> None:
+    """Block SIGINT, SIGTERM and SIGHUP for the rest of the process: call it when the command's work is
+    done and its exit code decided.
+
+    Python puts the default handlers back while it shuts down (which takes a moment once CadQuery is
+    loaded), so a signal then would end a finished, successful command as "killed by SIGTERM".
+    A blocked signal stays pending and dies with the process."""
+    with suppress(AttributeError, ValueError, OSError):  # no pthread_sigmask (Windows), not the main thread
+        signal.pthread_sigmask(signal.SIG_BLOCK, set(EXIT_SIGNALS))
 
 
 @contextmanager

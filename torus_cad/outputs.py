@@ -150,6 +150,8 @@ class OutputSet:
         self.staging: Path | None = None
         self._staged: dict[str, Path] = {}
         self._cleanup: contextlib.ExitStack | None = None
+        #: The ``"files"`` entry of the published report (set by :meth:`publish`).
+        self.sealed_files: dict[str, dict[str, Any]] = {}
 
     def __enter__(self) -> Self:
         try:
@@ -226,6 +228,7 @@ class OutputSet:
         if self.staging is None:
             raise RuntimeError("OutputSet.publish() outside its with-block")
         files = {kind: file_entry(path) for kind, path in self._staged.items()}
+        self.sealed_files = files
         sealed = {**report, FILES_KEY: files}
         staged_report = self.staging / f"{self.name}.json"
         try:
@@ -325,14 +328,25 @@ def set_names(out_dir: str | Path) -> list[str]:
 
 # -- the propeller's set --------------------------------------------------------------------------
 
+@dataclass(frozen=True)
+class PublishedSet:
+    """What a build published: the final paths by kind (the report last) and the report as written.
+
+    Read the report from here, not from ``paths["json"]``: a later build of the same name may
+    already have replaced the file."""
+
+    paths: dict[str, Path]
+    report: dict[str, Any]
+
+
 def write_output_set(propeller: Propeller, out_dir: str | Path, density_g_cm3: float, stl: bool = True,
                      sections_table: bool = False, extra_files: Mapping[str, FileWriter] | None = None
-                     ) -> dict[str, Path]:
+                     ) -> PublishedSet:
     """Write the files of ``export.formats`` (STEP, STL unless ``stl`` is False, 3MF), the
     blade-element table (``<name>_sections.csv`` and ``.png``, if ``sections_table``), any
     ``extra_files`` (``{suffix: writer(path)}``, e.g. a preview picture) and the sealed
-    ``<name>.json`` report as one output set (see the module doc); return the final paths by kind,
-    the report last.
+    ``<name>.json`` report as one output set (see the module doc); return the final paths by kind
+    (the report last) and the report.
 
     A mesh (STL, 3MF) over its triangle budget is refused before anything is written.
     """
@@ -371,4 +385,6 @@ def write_output_set(propeller: Propeller, out_dir: str | Path, density_g_cm3: f
         for kind, writer in (extra_files or {}).items():
             output.write(kind, writer)
         propeller.stage_seconds.update(timer.seconds)
-        return output.publish(build_report(propeller, density_g_cm3))
+        report = build_report(propeller, density_g_cm3)
+        paths = output.publish(report)
+        return PublishedSet(paths, {**report, FILES_KEY: output.sealed_files})

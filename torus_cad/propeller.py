@@ -282,4 +282,4 @@ def write_outputs(propeller: Propeller, out_dir: Path, density_g_cm3: float = DE
     build`` writes it) and the JSON report as one output set (torus_cad.outputs); return the paths by kind."""
     from torus_cad.outputs import write_output_set
 
-    return write_output_set(propeller, out_dir, density_g_cm3, stl=stl, sections_table=sections_table)
+    return write_output_set(propeller, out_dir, density_g_cm3, stl=stl, sections_table=sections_table).paths

@@ -4,10 +4,12 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 from enum import StrEnum
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from torus_cad.errors import ParameterError
-from torus_cad.parameters.design import Mesh, SectionSpacing
+
+if TYPE_CHECKING:  # the command line builds its parser from this module before the schema is loaded
+    from torus_cad.parameters.design import Mesh
 
 
 class MeshFormat(StrEnum):
@@ -49,4 +51,4 @@ def format_overrides(names: Iterable[str]) -> dict[str, Any]:
     return {f"mesh.{item.value}": item in chosen for item in MeshFormat}
 
 
-__all__ = ["SUFFIXES", "MeshFormat", "SectionSpacing", "format_overrides", "selected_formats"]
+__all__ = ["SUFFIXES", "MeshFormat", "format_overrides", "selected_formats"]
