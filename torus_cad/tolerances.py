@@ -84,6 +84,16 @@ MOUNTING_CLEARANCE_MM = 0.05
 #: Seconds the root fillet may take (in its child process) before it counts as failed.
 FILLET_TIME_LIMIT_S = 60.0
 
+#: Seconds all the root fillet's tries together may take (each child still stops at
+#: FILLET_TIME_LIMIT_S); when it runs out, the remaining tries are skipped and the fillet fails.
+#: Failing designs mostly fail each try in under a second; a few tries hang until the limit.
+FILLET_TRIES_TIME_LIMIT_S = 180.0
+
+#: A repaired root fillet (ShapeFix) is accepted only if it adds at most this many r^2 of volume
+#: per mm of junction: a rolling-ball fillet between faces meeting at 30 degrees adds 2.4 r^2,
+#: at 90 degrees 0.21 r^2 (measured repaired fillets: 0.4-0.5 r^2).
+REPAIRED_FILLET_MAX_AREA_RADII2 = 4.0
+
 #: Relative precision of the integration for the balance report (static imbalance, products of
 #: inertia): coarser than the mass properties', as it integrates the solid a second time.
 BALANCE_RELATIVE_PRECISION = 1e-4

@@ -44,9 +44,12 @@ from OCP.BRepAdaptor import BRepAdaptor_Surface
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
 from OCP.BRepExtrema import BRepExtrema_DistShapeShape
 from OCP.BRepFilletAPI import BRepFilletAPI_MakeFillet
+from OCP.BRepGProp import BRepGProp
 from OCP.BRepTools import BRepTools
 from OCP.GeomAbs import GeomAbs_BezierSurface, GeomAbs_BSplineSurface, GeomAbs_Cylinder, GeomAbs_OffsetSurface
 from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt, gp_Trsf, gp_Vec2d
+from OCP.GProp import GProp_GProps
+from OCP.ShapeFix import ShapeFix_Shape
 from OCP.ShapeUpgrade import ShapeUpgrade_ShapeDivideClosed
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_WIRE
 from OCP.TopExp import TopExp
@@ -56,16 +59,22 @@ from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape, TopTools_Ind
 
 from torus_cad.errors import KernelError
 from torus_cad.kernel.checks import precise_volume, single_valid_solid
-from torus_cad.kernel.fuse import fuse_pattern
+from torus_cad.kernel.fuse import fuse_pattern, pattern_blades
 from torus_cad.kernel.topology import cut, explore
-from torus_cad.tolerances import FILLET_TIME_LIMIT_S, VOLUME_CHECK_RELATIVE_PRECISION
+from torus_cad.tolerances import (
+    FILLET_TIME_LIMIT_S,
+    FILLET_TRIES_TIME_LIMIT_S,
+    REPAIRED_FILLET_MAX_AREA_RADII2,
+    VOLUME_CHECK_RELATIVE_PRECISION,
+)
 
 #: Faces of these surface types belong to a blade; every other face (plane, cylinder, cone) to the hub.
 _BLADE_SURFACES = (GeomAbs_BSplineSurface, GeomAbs_BezierSurface, GeomAbs_OffsetSurface)
 
-#: Pieces the blade's closed side face is split into, in the order tried (see the module docstring):
-#: thirds work best; quarters (a split vertex at the leading edge) save some designs thirds do not.
-SIDE_FACE_PIECES = (3, 4)
+#: Pieces the blade's closed side face is split into (see the module docstring): thirds work
+#: best; quarters (a split vertex at the leading edge), fifths and sixths each save some designs
+#: the others do not.
+SIDE_FACE_PIECES = (3, 4, 5, 6)
 
 #: BRepFilletAPI_MakeFillet.SetParams (Tang, Tesp, T2d, TApp3d, TolApp2d, Fleche) for a last try:
 #: ten times tighter approximation than OpenCascade's defaults; saves some fillets the defaults
@@ -73,7 +82,8 @@ SIDE_FACE_PIECES = (3, 4)
 TIGHT_FILLET_PARAMS = (1e-3, 1e-5, 1e-6, 1e-5, 1e-6, 1e-4)
 
 #: The tries, in order: (index into SIDE_FACE_PIECES, fillet parameters or None for the defaults).
-_TRIES = ((0, None), (1, None), (0, TIGHT_FILLET_PARAMS))
+#: The first is the common case; the others cost time only where it fails.
+_TRIES = ((0, None), (1, None), (0, TIGHT_FILLET_PARAMS), (2, None), (3, None))
 
 _FULL_TURN = 2.0 * math.pi
 
@@ -106,16 +116,17 @@ def junction_edges(solid: cq.Solid) -> list[TopoDS_Edge]:
 
 
 def fillet_blade_roots(solid: cq.Solid, radius_mm: float, suggest: bool = True,
-                       params: FilletParams | None = None) -> cq.Solid:
+                       params: FilletParams | None = None, deadline: float | None = None) -> cq.Solid:
     """``solid`` with a fillet of ``radius_mm`` along every blade-hub junction; one valid solid.
 
     Raises KernelError ("root fillet failed ...", with a radius that works when one of the
-    smaller radii tried does) when OpenCascade cannot make it.
+    smaller radii tried does) when OpenCascade cannot make it. ``deadline`` (time.monotonic()
+    seconds) cuts the child's time limit short.
     """
     edges = junction_edges(solid)
     if not edges:
         raise KernelError("root fillet failed: no blade-hub junction edges found")
-    filleted = _fillet_in_child(solid, edges, radius_mm, params)
+    filleted = _fillet_in_child(solid, edges, radius_mm, params, deadline)
     if filleted is not None:
         return filleted
     if not suggest:
@@ -155,22 +166,26 @@ def fillet_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], 
     checked single valid solid.
     """
     split = _LazySplits(blade)
+    deadline = time.monotonic() + FILLET_TRIES_TIME_LIMIT_S
     for index, params in _TRIES:
         try:
-            return _fillet_and_pattern(hub, split[index], angles_deg, radius_mm, suggest=False, params=params)
+            return _fillet_and_pattern(hub, split[index], angles_deg, radius_mm, suggest=False, params=params,
+                                       deadline=deadline)
         except KernelError:
             pass
-    if run_out is not None:
+    if run_out is not None and time.monotonic() < deadline:
         extended, tools = run_out(_RUN_OUT_RADII * radius_mm)
-        if not _touches(blade, tools[:2]):  # else the blade itself reaches past the hub's ends
-            for index, params in _TRIES:
-                try:
-                    filleted = _fillet_and_pattern(extended, split[index], angles_deg, radius_mm, suggest=False,
-                                                   params=params)
-                    return single_valid_solid(cq.Shape.cast(cut(filleted.wrapped, tools, "cut the run-out hub back to the hub\'s length")),
-                                              "cutting the run-out hub back")
-                except KernelError:
-                    pass
+        if _touches(blade, tools[:2]):  # the blade itself reaches past a hub end: the cut-back keeps it there
+            blades = [copy.wrapped for copy in pattern_blades(blade, angles_deg)]
+            tools = [cut(slab, blades, "keep the blades out of the run-out's cut-back") for slab in tools[:2]] + tools[2:]
+        for index, params in _TRIES:
+            try:
+                filleted = _fillet_and_pattern(extended, split[index], angles_deg, radius_mm, suggest=False,
+                                               params=params, deadline=deadline)
+                return single_valid_solid(cq.Shape.cast(cut(filleted.wrapped, tools, "cut the run-out hub back to the hub's length")),
+                                          "cutting the run-out hub back")
+            except KernelError:
+                pass
     return _fillet_and_pattern(hub, split[0], angles_deg, radius_mm)  # raises, suggesting a radius
 
 
@@ -192,9 +207,11 @@ class _LazySplits:
 
 
 def _fillet_and_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], radius_mm: float,
-                        suggest: bool = True, params: FilletParams | None = None) -> cq.Solid:
+                        suggest: bool = True, params: FilletParams | None = None,
+                        deadline: float | None = None) -> cq.Solid:
     single = fuse_pattern(hub, blade, angles_deg[:1]).shape
-    filleted = fillet_blade_roots(single_valid_solid(single, "joining blade 0 to the hub"), radius_mm, suggest, params)
+    filleted = fillet_blade_roots(single_valid_solid(single, "joining blade 0 to the hub"), radius_mm, suggest, params,
+                                  deadline)
     if len(angles_deg) == 1:
         return filleted
     try:
@@ -203,7 +220,7 @@ def _fillet_and_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[flo
     except KernelError:
         whole = fuse_pattern(hub, blade, angles_deg).shape
         return fillet_blade_roots(single_valid_solid(whole, "joining the blades to the hub"), radius_mm, suggest,
-                                  params)
+                                  params, deadline)
 
 
 def _touches(shape: cq.Solid, tools: Sequence[TopoDS_Shape]) -> bool:
@@ -308,19 +325,43 @@ def fillet_edges(solid: cq.Solid, edges: list[TopoDS_Edge], radius_mm: float,
         return None
     if not fillet.IsDone():
         return None
+    repaired = False
     try:
         result = single_valid_solid(cq.Shape.cast(fillet.Shape()), "the root fillet")
-    except KernelError:
+    except KernelError:  # OpenCascade sometimes builds the fillet but leaves flaws ShapeFix mends
+        fix = ShapeFix_Shape(fillet.Shape())
+        fix.Perform()
+        try:
+            result = single_valid_solid(cq.Shape.cast(fix.Shape()), "the repaired root fillet")
+        except KernelError:
+            return None
+        repaired = True
+    added_mm3 = (precise_volume(result, VOLUME_CHECK_RELATIVE_PRECISION)
+                 - precise_volume(solid, VOLUME_CHECK_RELATIVE_PRECISION))
+    # A concave fillet only adds material: a smaller volume means a wrong result. A repaired one
+    # must also add no more than a fillet's cross-section along the junction.
+    if added_mm3 < 0.0:
         return None
-    # A concave fillet only adds material: a smaller volume means a wrong result.
-    if precise_volume(result, VOLUME_CHECK_RELATIVE_PRECISION) < precise_volume(solid, VOLUME_CHECK_RELATIVE_PRECISION):
+    if repaired and added_mm3 > REPAIRED_FILLET_MAX_AREA_RADII2 * radius_mm ** 2 * _length_mm(edges):
         return None
     return result
 
 
+def _length_mm(edges: Sequence[TopoDS_Edge]) -> float:
+    properties = GProp_GProps()
+    for edge in edges:
+        BRepGProp.LinearProperties_s(edge, properties)
+    return properties.Mass()
+
+
 def _fillet_in_child(solid: cq.Solid, edges: list[TopoDS_Edge], radius_mm: float,
-                     params: FilletParams | None = None) -> cq.Solid | None:
-    """:func:`fillet_edges` in a forked child (a crash or a hang there is a failed fillet, not a dead process)."""
+                     params: FilletParams | None = None, deadline: float | None = None) -> cq.Solid | None:
+    """:func:`fillet_edges` in a forked child (a crash or a hang there is a failed fillet, not a dead process).
+
+    The child gets FILLET_TIME_LIMIT_S, or what is left until ``deadline`` (time.monotonic()) if less."""
+    limit_s = FILLET_TIME_LIMIT_S if deadline is None else min(FILLET_TIME_LIMIT_S, deadline - time.monotonic())
+    if limit_s <= 0.0:
+        return None
     read_end, write_end = os.pipe()
     pid = os.fork()
     if pid == 0:  # the child: fillet, send the BRep text, leave without cleanup handlers
@@ -336,7 +377,7 @@ def _fillet_in_child(solid: cq.Solid, edges: list[TopoDS_Edge], radius_mm: float
         finally:
             os._exit(status)
     os.close(write_end)
-    data = _read_with_limit(read_end, pid, FILLET_TIME_LIMIT_S)
+    data = _read_with_limit(read_end, pid, limit_s)
     _, status = os.waitpid(pid, 0)
     if data is None or os.WIFSIGNALED(status) or os.WEXITSTATUS(status) != 0 or not data:
         return None
