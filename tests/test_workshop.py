@@ -227,3 +227,65 @@ def test_root_fillet_runs_out_past_the_hub_end_and_keeps_the_hub_length():
     box, plain_box = filleted.solid.BoundingBox(), plain.solid.BoundingBox()  # the hub keeps its length
     assert box.zmax == pytest.approx(plain_box.zmax, abs=1e-6) and box.zmin == pytest.approx(plain_box.zmin, abs=1e-6)
     assert any(_principal_curvatures(face)[1] == pytest.approx(1 / 0.5, rel=1e-3) for face in filleted.solid.Faces())
+
+
+#: A fuzz design (seed 0) whose blades pass through the hub's end faces: the fillet runs out on a
+#: longer hub, and the cut back to the hub's length keeps the blades' parts past the end.
+THROUGH_THE_END = {
+    "blades": 3, "phase_deg": 112.77728611209807, "hub": {"radius": 5.851925478341789, "length": 11.374598077984668},
+    "airfoil": {"max_camber": 0.057630398697882085, "camber_position": 0.6835972487871987,
+                "thickness": 0.56125359622257, "camber_normal": False, "pivot": 0.5196674564404565},
+    "centerline": {"p2": [27.624338396292693, -1.1490093670859596, 9.727095201879418],
+                   "p3": [20.776688587848987, 10.848255048855375, 11.553924627368621],
+                   "p4": [52.80048743830123, 9.374598077984668], "frame": "frenet"},
+    "transforms": {"angle_of_attack": [-119.65857907786302, 54.340607540745154, 46.87703982417754,
+                                       36.747947650436785, 6.6632705640723735],
+                   "scale_x": [2.842760229373578, -5.685520458747156, -5.169260905228089, 7.969903730055736,
+                               1.8589601820494932],
+                   "scale_y": [1.3949250596618799, -2.7898501193237597, 0.282440950895404, 0.9747485519093018,
+                               0.40223294755189243]},
+    "resolution": {"sections": 27, "points": 31},
+}
+
+#: A fuzz design (seed 113) where OpenCascade builds the fillet with flaws that ShapeFix mends.
+REPAIRED = {
+    "blades": 2, "phase_deg": -14.567965323226673, "hub": {"radius": 9.550931243627517, "length": 20.287876689262934},
+    "airfoil": {"max_camber": 0.04718930242256585, "camber_position": 0.23636703308682439,
+                "thickness": 0.4375190427537381, "camber_normal": False, "pivot": 0.03446037154260759},
+    "centerline": {"p2": [34.21217895947715, 3.455006913562256, 20.084091345835162],
+                   "p3": [106.21842566090763, 15.822293973950838, 22.387865696779784],
+                   "p4": [147.47858472251409, 18.287876689262934], "frame": "rotation_minimizing"},
+    "transforms": {"angle_of_attack": [-11.165647395184541, 17.015330681378774, 9.141026472055021,
+                                       -10.39006391092944, 14.81888883913727],
+                   "scale_x": [3.1180466213368647, -6.236093242673729, -15.990641623182283, 19.178296299106393,
+                               2.8610709437262507],
+                   "scale_y": [0.28142840819037795, -0.5628568163807559, -5.731785605895936, 5.930415711542785,
+                               0.9888638858031081]},
+    "resolution": {"sections": 23, "points": 48},
+}
+
+
+@pytest.mark.slow
+def test_root_fillet_keeps_the_blades_that_pass_the_hub_end():
+    params = PropellerParameters.from_dict(THROUGH_THE_END)
+    plain = build_propeller(params)
+    filleted = build_propeller(params, overrides={"hub.root_fillet_radius": 0.5})
+    assert is_valid_closed_solid(filleted.solid)
+    assert precise_volume(filleted.solid) > precise_volume(plain.solid)
+    box, plain_box = filleted.solid.BoundingBox(), plain.solid.BoundingBox()  # the blades past the end are kept
+    assert box.zmax == pytest.approx(plain_box.zmax, abs=1e-6) and box.zmin == pytest.approx(plain_box.zmin, abs=1e-6)
+    assert plain_box.zmax > params.hub.length / 2.0  # the design does pass the hub's end
+    assert any(_principal_curvatures(face)[1] == pytest.approx(1 / 0.5, rel=1e-3) for face in filleted.solid.Faces())
+
+
+@pytest.mark.slow
+def test_repaired_root_fillet_is_one_valid_solid_with_a_fillets_volume():
+    params = PropellerParameters.from_dict(REPAIRED)
+    plain = build_propeller(params)
+    filleted = build_propeller(params, overrides={"hub.root_fillet_radius": 0.5})
+    assert is_valid_closed_solid(filleted.solid)
+    added = precise_volume(filleted.solid) - precise_volume(plain.solid)
+    # two blades, each with 19.6 mm of junction (two loops); a fillet between faces at 60 degrees adds
+    # 0.69 r^2 per mm, at 90 degrees 0.21 r^2 (measured: 4.0 mm^3, 0.41 r^2)
+    assert 0.0 < added < 2 * 19.6 * 0.69 * 0.5 ** 2
+    assert any(_principal_curvatures(face)[1] == pytest.approx(1 / 0.5, rel=1e-3) for face in filleted.solid.Faces())
