@@ -10,10 +10,19 @@ What makes OpenCascade's rolling-ball fillet work on these blades (measured, see
   fillet fail again, so it is not split in halves.
 * The junction edges are the edges between a blade face (B-spline) and a hub face (the hub is
   made of planes, cylinders and cones only).
-* When that fails, the side face split in quarters is tried; then, where a blade root comes
-  within about a radius of the hub's end face (the blade ends sit 1 mm below it, spec §3.1) so
-  that the fillet would have to roll over the hub's edge, the fillet is made on a hub longer at
-  both ends and the result cut back to the hub's length (see :func:`fillet_pattern`).
+* When that fails, further tries (:data:`_TRIES`): the side face split in quarters, thirds with
+  ten times tighter approximation (SetParams), fifths, sixths. Each saves designs the others do
+  not; the first try is the common case and the others cost time only where it fails (all tries
+  together stop at FILLET_TRIES_TIME_LIMIT_S).
+* Where a blade root comes within about a radius of the hub's end face (the blade ends sit 1 mm
+  below it, spec §3.1) so that the fillet would have to roll over the hub's edge, the same tries
+  are made on a hub longer at both ends and the result cut back to the hub's length (see
+  :func:`fillet_pattern`); where the blade itself passes the hub's end, the cut-back spares the
+  blades.
+* OpenCascade sometimes builds the fillet and reports success but leaves a flawed solid
+  (BRepCheck_Analyzer rejects it); ShapeFix_Shape mends some. A mended solid must pass the same
+  checks (one valid closed solid, no less volume) and add no more volume than a fillet's
+  cross-section along the junction (REPAIRED_FILLET_MAX_AREA_RADII2 x r^2 per mm).
 * OpenCascade's fillet can crash the process on some inputs (a segmentation fault in a few
   per cent of random designs), so it runs in a forked child process with a time limit; the
   result comes back as a BRep string.
@@ -155,12 +164,15 @@ def fillet_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], 
     """The filleted propeller from one filleted blade: blade 0 joined to ``hub``, filleted, patterned.
 
     ``blade`` is built at ``angles_deg[0]``; its side face is split as
-    :func:`prepare_blade_for_fillet` does, into each number of :data:`SIDE_FACE_PIECES` in turn
-    until the fillet works. Where a blade root comes within about a radius of the hub's end
-    face, the fillet would have to roll over the hub's edge and fails. With ``run_out``, it is then tried on a hub longer at
-    both ends (the fillet runs out past the end), and the result is cut back to the hub's length
-    (the fillet ends in the end face, as it would when a longer filleted hub is faced) with the
-    bore and set-screw hole cut at the same time.
+    :func:`prepare_blade_for_fillet` does, and the fillet made as each of :data:`_TRIES` says
+    until it works. Where a blade root comes within about a radius of the hub's end face, the
+    fillet would have to roll over the hub's edge and fails. With ``run_out``, the tries are then
+    made on a hub longer at both ends (the fillet runs out past the end), and the result is cut
+    back to the hub's length (the fillet ends in the end face, as it would when a longer filleted
+    hub is faced) with the bore and set-screw hole cut at the same time. Where the blade itself
+    passes the hub's end plane, the cut-back's end slabs have the blades cut out of them, so the
+    blades' parts past the end stay as they are (the fillet still ends flush with the end face).
+    All tries together stop at FILLET_TRIES_TIME_LIMIT_S.
 
     Raises KernelError as :func:`fillet_blade_roots` does when the fillet fails; returns a
     checked single valid solid.
