@@ -140,12 +140,18 @@ def fillet_blade_roots(solid: cq.Solid, radius_mm: float, suggest: bool = True,
         return filleted
     if not suggest:
         raise KernelError(f"root fillet failed at hub.root_fillet_radius = {radius_mm:g} mm")
+    raise fillet_failure(solid, radius_mm)
+
+
+def fillet_failure(solid: cq.Solid, radius_mm: float) -> KernelError:
+    """The error for a fillet of ``radius_mm`` that failed on ``solid``, naming a smaller radius that works on it if one of :data:`_FALLBACK_FRACTIONS` does."""
+    edges = junction_edges(solid)
     works = next((radius_mm * fraction for fraction in _FALLBACK_FRACTIONS
                   if _fillet_in_child(solid, edges, radius_mm * fraction) is not None), None)
     smallest = radius_mm * min(_FALLBACK_FRACTIONS, default=1.0)
     hint = f"; hub.root_fillet_radius = {works:.3g} mm works" if works is not None else f"; {smallest:.3g} mm fails as well"
-    raise KernelError(f"root fillet failed: OpenCascade could not fillet the blade roots at "
-                      f"hub.root_fillet_radius = {radius_mm:g} mm{hint}")
+    return KernelError(f"root fillet failed: OpenCascade could not fillet the blade roots at "
+                       f"hub.root_fillet_radius = {radius_mm:g} mm{hint}")
 
 
 #: BRepFilletAPI_MakeFillet.SetParams arguments: Tang, Tesp, T2d, TApp3d, TolApp2d, Fleche.
@@ -198,7 +204,9 @@ def fillet_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], 
                                           "cutting the run-out hub back")
             except KernelError:
                 pass
-    return _fillet_and_pattern(hub, split[0], angles_deg, radius_mm)  # raises, suggesting a radius
+    # Every try failed: the error names a smaller radius that works on blade 0, if one does.
+    raise fillet_failure(single_valid_solid(fuse_pattern(hub, split[0], angles_deg[:1]).shape,
+                                            "joining blade 0 to the hub"), radius_mm)
 
 
 class _LazySplits:
