@@ -57,7 +57,7 @@ class _Parser(argparse.ArgumentParser):
 
     table: str = ""
 
-    def parse_known_args(self, args: Any = None, namespace: Any = None) -> Any:  # type: ignore[override]
+    def parse_known_args(self, args: Any = None, namespace: Any = None) -> Any:  # type: ignore[override, unused-ignore]
         if self.table:
             table, self.table = self.table, ""
             _add_table_arguments(self, table)
