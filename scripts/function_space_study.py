@@ -47,30 +47,14 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--samples", type=int, default=defaults.samples, help="N, number of random functions")
     parser.add_argument("--points", type=int, default=defaults.points, help="n, evenly spaced points on [0, 1]")
     parser.add_argument("--seed", type=int, default=defaults.seed, help="seed of numpy.random.default_rng")
-    parser.add_argument(
-        "--sinusoid-start",
-        choices=study.SINUSOID_STARTS,
-        default=defaults.sinusoid_start,
-        help="start of the A sin(Bs+C)+D fit: fft (sound) or ones (the spec author's)",
-    )
-    parser.add_argument(
-        "--generator-draw",
-        choices=study.GENERATOR_DRAWS,
-        default=defaults.generator_draw,
-        help="random: generator uniform per sample (as the original); balanced: generators in turn",
-    )
-    parser.add_argument(
-        "--knot-placement",
-        choices=study.KNOT_PLACEMENTS,
-        default=defaults.knot_placement,
-        help="piecewise-linear knots: even over [0, 1] or random sorted U(0, 1) positions",
-    )
-    parser.add_argument(
-        "--sinusoid-max-evaluations",
-        type=int,
-        default=defaults.sinusoid_max_evaluations,
-        help="Levenberg-Marquardt evaluation budget per sinusoid fit",
-    )
+    parser.add_argument("--sinusoid-start", choices=study.SINUSOID_STARTS, default=defaults.sinusoid_start,
+                        help="start of the A sin(Bs+C)+D fit: fft (sound) or ones (the spec author's)")
+    parser.add_argument("--generator-draw", choices=study.GENERATOR_DRAWS, default=defaults.generator_draw,
+                        help="random: generator uniform per sample (as the original); balanced: generators in turn")
+    parser.add_argument("--knot-placement", choices=study.KNOT_PLACEMENTS, default=defaults.knot_placement,
+                        help="piecewise-linear knots: even over [0, 1] or random sorted U(0, 1) positions")
+    parser.add_argument("--sinusoid-max-evaluations", type=int, default=defaults.sinusoid_max_evaluations,
+                        help="Levenberg-Marquardt evaluation budget per sinusoid fit")
     parser.add_argument("--out", type=Path, default=Path("study_out"), help="output directory")
     return parser
 

@@ -18,10 +18,17 @@ from torus_cad.batch import DesignResult, DesignTask, Outcome, run_design
 FAULT_KEY = "fault"
 
 
+#: A hanging design dict may name a file here, where the hang writes its worker's pid first.
+PID_FILE_KEY = "pid_file"
+
+
 def faulty(task: DesignTask) -> DesignResult:
-    """``fault = "hang"``: never finishes; ``"crash"``: kills its worker (like a segfault); else built as usual."""
+    """``fault = "hang"``: never finishes (writing its worker's pid to ``pid_file`` if given); ``"crash"``: kills
+    its worker (like a segfault); else built as usual."""
     fault = task.parameters.get(FAULT_KEY)
     if fault == "hang":
+        if PID_FILE_KEY in task.parameters:
+            Path(task.parameters[PID_FILE_KEY]).write_text(str(os.getpid()))
         time.sleep(3600)
     elif fault == "crash":
         os.kill(os.getpid(), signal.SIGKILL)

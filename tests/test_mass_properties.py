@@ -160,7 +160,7 @@ def test_the_fast_route_agrees_with_the_reference_on_random_designs():
     from torus_cad.studies.fuzz import random_design
 
     built, seed = 0, 0
-    while built < 20:
+    while built < 8:  # 8 designs of 1-8 blades; each reference integration costs seconds
         seed += 1
         try:
             propeller = build_propeller(random_design(seed))

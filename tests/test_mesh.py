@@ -3,6 +3,7 @@ file as other readers see them, bad resolutions refused with the minimum that wo
 
 from __future__ import annotations
 
+import importlib
 import json
 
 import numpy as np
@@ -169,6 +170,19 @@ def test_cli_writes_files_report_and_one_line(tmp_path, capsys):
     assert report["blades_away_from_junctions"]["edge_ratio"] < report["opencascade_stl"][
         "blades_away_from_junctions"]["edge_ratio"]
     assert report["settings"] == {"sections": 24, "points": 48, "spacing": "arc_length", "formats": ["stl", "obj"]}
+
+
+def test_mesh_stages_are_announced_in_order_and_timed_by_the_build_stage_timer(tmp_path):
+    """One StageTimer (torus_cad.stages) for the build, mesh and CFD pipelines: the mesh's own copy is gone."""
+    from torus_cad.mesh.pipeline import MeshStage, write_surface_mesh
+
+    seen: list[str] = []
+    report, _ = write_surface_mesh(_params(24, 48), tmp_path, compare=False, progress=seen.append)
+    assert seen == [stage.value for stage in MeshStage]
+    assert list(report["stage_seconds"]) == seen and all(seconds >= 0.0 for seconds in report["stage_seconds"].values())
+    assert json.loads((tmp_path / "torus_propeller_mesh.json").read_text())["stage_seconds"] == report["stage_seconds"]
+    with pytest.raises(ModuleNotFoundError):
+        importlib.import_module("torus_cad.mesh.timing")
 
 
 def test_mesh_table_in_a_design_file_sets_the_resolution(tmp_path):

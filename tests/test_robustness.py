@@ -14,14 +14,16 @@ import subprocess
 import sys
 import textwrap
 import time
+from collections.abc import Callable
+from pathlib import Path
 
 import numpy as np
 import pytest
-from batch_jobs import FAULT_KEY, faulty
+from batch_jobs import FAULT_KEY, PID_FILE_KEY, faulty
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from torus_cad.batch import DesignTask, LocalPool, Outcome, run_design, run_tasks
+from torus_cad.batch import DesignResult, DesignTask, LocalPool, Outcome, run_design, run_tasks
 from torus_cad.cli import main
 from torus_cad.errors import GeometryError, ParameterError
 from torus_cad.geometry import feasibility
@@ -130,16 +132,47 @@ def test_sampler_ranges_come_from_the_schema(monkeypatch):
     assert {11.0 <= _flat(random_design_dict(seed))["hub.radius"] <= 12.0 for seed in range(50)} == {True}
 
 
-def test_the_runner_counts_a_hang_and_a_crash_and_goes_on():
-    """The fuzz runner survives a design that never finishes and a worker that dies; files are read back."""
-    good = PropellerParameters().with_values({"resolution.points": 24, "name": "good"}).to_dict()
-    designs = [{"name": "hang", FAULT_KEY: "hang"}, {"name": "crash", FAULT_KEY: "crash"},
-               {"name": "bad", "blades": "x"}, good]
-    results = {}
+def _process_gone(pid: int) -> bool:
+    """No such process, or only its zombie (killed, not yet reaped)."""
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except FileNotFoundError:
+        return True
+    return state in ("Z", "X")
+
+
+def _outcomes(designs: list[dict], pool: Callable[[], LocalPool]) -> dict[str, DesignResult]:
+    results: dict[str, DesignResult] = {}
     run_tasks(fuzz_tasks(designs, write=True, stl=True), lambda task, result: results.__setitem__(task.design_id, result),
-              lambda: LocalPool(1, time_limit_s=6.0), window=2, job=faulty)
+              pool, window=2, job=faulty)
+    return results
+
+
+@pytest.mark.slow
+def test_the_runner_counts_a_hang_and_a_crash_and_goes_on(tmp_path):
+    """The fuzz runner survives a design that never finishes and a worker that dies; files are read back.
+
+    The time limit is a multiple of what the good design takes here and now (its wall time in a worker
+    of a pool without a limit, ~1.5 s on an idle machine), so a busy machine does not time the good
+    design out; whatever the limit, the hang must end as a timeout with its worker killed.
+    """
+    good = PropellerParameters().with_values({"resolution.points": 24, "name": "good"}).to_dict()
+    baseline = _outcomes([good], lambda: LocalPool(1))["good"]  # also starts the fork server (imports the kernel)
+    assert baseline.outcome is Outcome.VALID
+    limit_s = max(6.0, 4.0 * baseline.seconds)
+    pid_file = tmp_path / "hang.pid"
+    designs = [{"name": "hang", FAULT_KEY: "hang", PID_FILE_KEY: str(pid_file)}, {"name": "crash", FAULT_KEY: "crash"},
+               {"name": "bad", "blades": "x"}, good]
+    with _Watchdog(limit_s + 600.0):  # a hang the pool does not stop fails the run instead of stalling it
+        results = _outcomes(designs, lambda: LocalPool(1, time_limit_s=limit_s))
     assert {name: result.outcome for name, result in results.items()} == {
         "hang": Outcome.TIMEOUT, "crash": Outcome.CRASH, "bad": Outcome.REFUSED, "good": Outcome.VALID}
+    assert f"({limit_s} s)" in results["hang"].reason
+    hung_pid = int(pid_file.read_text())
+    deadline = time.monotonic() + 60.0
+    while not _process_gone(hung_pid) and time.monotonic() < deadline:  # killed; reaping may lag a little
+        time.sleep(0.1)
+    assert _process_gone(hung_pid), f"the hung worker {hung_pid} is still running"
 
 
 # -- refusals before the kernel, each with its reason -------------------------------------------

@@ -93,3 +93,22 @@ def test_only_regular_files_are_read_as_configuration(tmp_path, special):
         path = special
     with pytest.raises(ParameterError, match="is not a regular file"):
         PropellerParameters.from_toml(path)
+
+
+class Undocumented(Section):
+    spacer_length: float = param(1.0, unit="mm", ge=0.0, le=20.0, doc="spacer between hub and mount")
+
+
+class WithUndocumentedTable(Document):
+    """A design document whose extra table has no docstring."""
+
+    spacer: Undocumented = Field(default_factory=Undocumented)
+
+
+def test_a_table_without_docstring_has_an_empty_description_and_still_writes_toml():
+    from torus_cad.parameters.schema import section_docs
+
+    assert section_docs(WithUndocumentedTable) == {"spacer": ""}
+    text = WithUndocumentedTable().to_toml()
+    assert "\n[spacer]\n" in text and "spacer between hub and mount (mm); [0, 20]" in text
+    assert WithUndocumentedTable.from_dict(WithUndocumentedTable().to_dict()).spacer.spacer_length == 1.0

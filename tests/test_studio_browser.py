@@ -4,6 +4,7 @@ selenium) against ``python -m torus_cad studio --port 0`` started as a separate 
 from __future__ import annotations
 
 import colorsys
+import os
 import subprocess
 import sys
 import time
@@ -26,7 +27,23 @@ from torus_cad.studio.layout import field_id
 pytestmark = pytest.mark.slow
 
 REPO = Path(__file__).resolve().parent.parent
-SCREENSHOT = REPO / "docs" / "images" / "studio.png"
+SCREENSHOT = REPO / "docs" / "images" / "studio.png"  # the README's picture of the studio
+UPDATE_IMAGES = "TORUS_CAD_UPDATE_IMAGES"  # =1: the screenshot test rewrites SCREENSHOT
+
+
+def screenshot_path(scratch: Path) -> Path:
+    """Where the screenshot test saves the page: the README's picture with TORUS_CAD_UPDATE_IMAGES=1, else
+    ``scratch`` (running the tests leaves the git tree clean)."""
+    return SCREENSHOT if os.environ.get(UPDATE_IMAGES) == "1" else scratch / SCREENSHOT.name
+
+
+def test_the_readme_screenshot_is_rewritten_only_when_asked(monkeypatch, tmp_path):
+    monkeypatch.delenv(UPDATE_IMAGES, raising=False)
+    assert screenshot_path(tmp_path) == tmp_path / "studio.png"
+    monkeypatch.setenv(UPDATE_IMAGES, "0")
+    assert screenshot_path(tmp_path) == tmp_path / "studio.png"
+    monkeypatch.setenv(UPDATE_IMAGES, "1")
+    assert screenshot_path(tmp_path) == SCREENSHOT
 
 
 @pytest.fixture(scope="module")
@@ -178,19 +195,30 @@ def test_downloaded_design_builds_unchanged_with_the_cli(page, downloads, tmp_pa
     assert (tmp_path / "torus_propeller.step").stat().st_size > 0
 
 
-def test_screenshot_of_the_studio(page):
+def test_screenshot_of_the_studio(page, tmp_path):
+    """The README's picture (docs/images/studio.png, rewritten only with TORUS_CAD_UPDATE_IMAGES=1): the page
+    with a four-blade propeller, each blade in its colour."""
     from PIL import Image
 
     from torus_cad.colors import blade_color
 
+    readme_picture = SCREENSHOT.read_bytes() if SCREENSHOT.exists() else None
+    path = screenshot_path(tmp_path)
     page.change("blades", "4")
     if not page.element("toggle-sections").is_selected():
         page.click("toggle-sections")
     page.wait(lambda: page.element("toggle-sections").is_selected(), "the section curves")
     time.sleep(2.0)  # the browser draws the curves after the toggle's round trip; nothing on the page says when
-    page.screenshot(SCREENSHOT)
+    page.screenshot(path)
+    if path != SCREENSHOT:
+        assert (SCREENSHOT.read_bytes() if SCREENSHOT.exists() else None) == readme_picture
+    with Image.open(path) as picture:
+        assert picture.format == "PNG"
+        width, height = page.driver.execute_script(
+            "return [window.innerWidth * devicePixelRatio, window.innerHeight * devicePixelRatio]")
+        assert picture.size == (round(width), round(height))  # the whole window of the page
     box = page.element("view").rect
-    image = Image.open(SCREENSHOT).convert("HSV").crop(
+    image = Image.open(path).convert("HSV").crop(
         (int(box["x"]), int(box["y"]), int(box["x"] + box["width"]), int(box["y"] + box["height"])))
     hue, saturation, value = np.moveaxis(np.asarray(image, dtype=float) / 255.0, 2, 0)
     for blade in range(4):  # every blade is drawn in its own colour (lit and shaded: compare hues)

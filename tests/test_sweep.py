@@ -161,6 +161,56 @@ def test_base_config_is_relative_to_the_sweep_file_and_inline_values_override_it
     assert spec.name == "s" and len(generate_designs(spec)) == 2
 
 
+EXAMPLE_AIRFOILS = Path(__file__).resolve().parent.parent / "examples" / "airfoils"
+
+# A sweep naming .dat airfoils: inline in its base design and as a varied value.
+AIRFOIL_SWEEP = """
+[base.airfoil]
+file = "airfoils/clarky.dat"
+[base.resolution]
+sections = 16
+points = 32
+[sweep]
+stl = false
+[vary]
+"airfoil.file" = ["airfoils/clarky.dat", "airfoils/naca2412.dat"]
+"""
+
+
+@pytest.fixture
+def airfoil_project(tmp_path, monkeypatch) -> Path:
+    """A project folder with airfoils/*.dat, a design file and sweep files; the working directory elsewhere."""
+    project = tmp_path / "project"
+    shutil.copytree(EXAMPLE_AIRFOILS, project / "airfoils")
+    write(project / "prop.toml", '[airfoil]\nfile = "airfoils/naca2412.dat"\n')
+    write(project / "via_config.toml", '[base]\nconfig = "prop.toml"\n[vary]\nblades = [2, 3]\n')
+    write(project / "airfoils.toml", AIRFOIL_SWEEP)
+    (tmp_path / "elsewhere").mkdir()
+    monkeypatch.chdir(tmp_path / "elsewhere")
+    return project
+
+
+def test_airfoil_files_in_a_sweep_are_relative_to_the_file_naming_them(airfoil_project):
+    """As ``torus-cad build CONFIG`` reads a config's airfoil.file, whatever the working directory."""
+    clarky, naca2412 = (str(airfoil_project / "airfoils" / name) for name in ("clarky.dat", "naca2412.dat"))
+    assert load_sweep(Path("../project/via_config.toml")).base.airfoil.file == naca2412  # in the base design file
+    spec = load_sweep(Path("../project/airfoils.toml"))
+    assert spec.base.airfoil.file == clarky  # inline in the sweep file
+    assert [design.parameters["airfoil"]["file"] for design in generate_designs(spec)] == [clarky, naca2412]
+
+
+@pytest.mark.slow
+def test_a_sweep_run_from_another_folder_builds_each_design_from_its_airfoil_file(airfoil_project, capsys):
+    assert main(["sweep", "../project/airfoils.toml", "--workers", "1", "--out", "out", "--quiet"]) == 0, \
+        capsys.readouterr()
+    table = read_table(Path("out") / "results.csv")
+    assert [row["status"] for row in table] == ["valid", "valid"]
+    reports = [json.loads((Path("out") / DESIGNS_DIR / row["id"] / f"{row['id']}.json").read_text()) for row in table]
+    assert [report["parameters"]["airfoil"]["file"] for report in reports] == [
+        str(airfoil_project / "airfoils" / name) for name in ("clarky.dat", "naca2412.dat")]
+    assert reports[0]["volume_mm3"] != reports[1]["volume_mm3"]  # each design was built from its own file
+
+
 @pytest.mark.parametrize("data, message", [
     ({"vary": {"hub.radiu": [1.0]}}, "'hub.radiu'; did you mean 'hub.radius'"),
     ({"vary": {"blade": [2]}}, "did you mean 'blades'"),

@@ -57,7 +57,7 @@ class _Parser(argparse.ArgumentParser):
 
     table: str = ""
 
-    def parse_known_args(self, args: Any = None, namespace: Any = None) -> Any:  # type: ignore[override]
+    def parse_known_args(self, args: Any = None, namespace: Any = None) -> Any:  # type: ignore[override, unused-ignore]
         if self.table:
             table, self.table = self.table, ""
             _add_table_arguments(self, table)
@@ -99,12 +99,15 @@ def load_parameters(config: str | None, overrides: Sequence[str] = ()) -> Propel
         raise ParameterError(f"{source} holds a value that cannot be used: {_first_clause(error)}") from None
 
 
-def _add_design_arguments(parser: argparse.ArgumentParser) -> None:
+def _design_command(commands: Any, name: str, help: str, description: str, **options: Any) -> _Parser:
+    """A subcommand that reads a design: CONFIG (optional) and ``--set`` overrides."""
+    parser: _Parser = commands.add_parser(name, help=help, description=description, **options)
     parser.add_argument("config", nargs="?", help="TOML design file (default: the built-in propeller; "
                         "see 'torus-cad defaults')")
     parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                         help="override one parameter, dotted keys, TOML values (repeatable): "
                              "--set hub.radius=12 --set centerline.p2=[20,3,25]")
+    return parser
 
 
 def _command_build(args: argparse.Namespace) -> int:
@@ -367,14 +370,13 @@ def _add_mesh_parser(commands: Any) -> None:
     from torus_cad.mesh.settings import MeshFormat
     from torus_cad.tolerances import MESH_TRIANGLE_LIMIT
 
-    mesh = commands.add_parser(
-        "mesh", help="closed triangle mesh straight from the spec's math (STL, OBJ groups, PLY, VTK)",
+    mesh = _design_command(
+        commands, "mesh", help="closed triangle mesh straight from the spec's math (STL, OBJ groups, PLY, VTK)",
         description="Mesh the propeller of CONFIG (or the default) from the spec's math: each blade's structured "
         "grid at exactly --sections x --points (points equally spaced in arc length, spec §5), the hub as a "
         "§6.2 grid at the blades' cell size, united into one closed 2-manifold (manifold3d). Writes "
         "<name>_mesh.<format> files and <name>_mesh.json, a quality report. The options override the design's "
         f"[mesh] table. Meshes estimated above {MESH_TRIANGLE_LIMIT:,} triangles are refused before they are built.")
-    _add_design_arguments(mesh)
     mesh.add_argument("--sections", type=int, metavar="N", help="sections along each blade (mesh.sections, default 100)")
     mesh.add_argument("--points", type=int, metavar="M",
                       help="points around each section, equal arc length (mesh.points, default 400)")
@@ -390,14 +392,13 @@ def _add_mesh_parser(commands: Any) -> None:
 
 
 def _add_cfd_parser(commands: Any) -> None:
-    cfd = commands.add_parser(
-        "cfd", help="fluid domain and tetrahedral volume mesh for a rotating-propeller simulation (gmsh)",
+    cfd = _design_command(
+        commands, "cfd", help="fluid domain and tetrahedral volume mesh for a rotating-propeller simulation (gmsh)",
         description="Mesh the fluid around the propeller of CONFIG (or the default) with gmsh: an outer "
         "cylinder, a rotating-zone cylinder around the propeller, conformal at their interface, tetrahedra "
         "refined near the blades. Writes <name>_cfd.msh (v4.1), <name>_cfd_v2.msh (v2.2 ASCII, for "
         "OpenFOAM's gmshToFoam), <name>.step, README.txt and <name>_cfd.json. The options override the design's "
         "[cfd] table; D is the tip diameter. Needs the cfd extra: pip install 'torus_cad[cfd]'.")
-    _add_design_arguments(cfd)
     cfd.table = "cfd"  # its options, when the subcommand is used (_Parser.table)
     cfd.add_argument("--threads", type=int, default=0, metavar="N", help="gmsh threads (default 0: one per CPU)")
     _add_out_and_quiet(cfd, "cfd_out", _command_cfd)
@@ -417,11 +418,10 @@ def build_parser() -> argparse.ArgumentParser:
                      formatter_class=argparse.RawDescriptionHelpFormatter)
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=_Parser)
 
-    build = commands.add_parser("build", help="build a propeller: STEP + STL + JSON report",
-                                description="Build the propeller of CONFIG (or the default) and write "
-                                "<name>.step, <name>.stl and <name>.json into --out.", epilog=EPILOG,
-                                formatter_class=argparse.RawDescriptionHelpFormatter)
-    _add_design_arguments(build)
+    build = _design_command(commands, "build", help="build a propeller: STEP + STL + JSON report",
+                            description="Build the propeller of CONFIG (or the default) and write "
+                            "<name>.step, <name>.stl and <name>.json into --out.", epilog=EPILOG,
+                            formatter_class=argparse.RawDescriptionHelpFormatter)
     build.add_argument("--out", default="step_out", help="output folder (default: step_out)")
     build.add_argument("--density", type=_positive_density, default=1.24,
                        help="material density for the mass, g/cm^3 (default 1.24, PLA)")
@@ -436,11 +436,10 @@ def build_parser() -> argparse.ArgumentParser:
                        help="size of the --preview picture in pixels (default 1200x600)")
     build.set_defaults(handler=_command_build)
 
-    preview = commands.add_parser("preview", help="render a PNG picture: a view from above and a view along the axis",
-                                  description="Build the propeller of CONFIG (or the default) and render a shaded "
-                                  "picture of it off-screen: a view from above that shows every blade and a view along the spin axis, "
-                                  "each blade in its own colour.")
-    _add_design_arguments(preview)
+    preview = _design_command(
+        commands, "preview", help="render a PNG picture: a view from above and a view along the axis",
+        description="Build the propeller of CONFIG (or the default) and render a shaded picture of it off-screen: "
+        "a view from above that shows every blade and a view along the spin axis, each blade in its own colour.")
     preview.add_argument("--out", metavar="FILE.png", help="picture to write (default: step_out/<name>.png)")
     preview.add_argument("--size", default="1200x600", metavar="WxH",
                          help="picture size in pixels, each side 64..8000 (default 1200x600)")
@@ -457,11 +456,10 @@ def build_parser() -> argparse.ArgumentParser:
     verify.add_argument("-q", "--quiet", action="store_true", help="print nothing when the sets are complete")
     verify.set_defaults(handler=_command_verify)
 
-    defaults = commands.add_parser("defaults", help="print the default design as commented TOML",
-                                   description="Print the default design as a commented TOML file to start from; "
-                                   "with --resolved, a design's spec parameters after its airfoil.naca, diameter "
-                                   "and pitch are applied.")
-    _add_design_arguments(defaults)
+    defaults = _design_command(commands, "defaults", help="print the default design as commented TOML",
+                               description="Print the default design as a commented TOML file to start from; "
+                               "with --resolved, a design's spec parameters after its airfoil.naca, diameter "
+                               "and pitch are applied.")
     defaults.add_argument("--resolved", action="store_true",
                           help="print the spec parameters the design file (and --set) resolve to")
     defaults.set_defaults(handler=_command_defaults)
@@ -491,11 +489,10 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary")
     sweep.set_defaults(handler=_command_sweep)
 
-    studio = commands.add_parser("studio", help="design in the browser: parameters, live 3D view, downloads",
-                                 description="Serve a local web page to design a propeller: a parameters panel, a "
-                                 "live 3D view (a preview at once, the exact solid when it is built), readouts, and "
-                                 "STEP / STL / TOML downloads. Starts from CONFIG (or the default design).")
-    _add_design_arguments(studio)
+    studio = _design_command(commands, "studio", help="design in the browser: parameters, live 3D view, downloads",
+                             description="Serve a local web page to design a propeller: a parameters panel, a "
+                             "live 3D view (a preview at once, the exact solid when it is built), readouts, and "
+                             "STEP / STL / TOML downloads. Starts from CONFIG (or the default design).")
     studio.add_argument("--port", type=_port, default=8080, help="port to serve on (default 8080; 0: any free port)")
     studio.add_argument("--host", default="127.0.0.1",
                         help="address to listen on (default 127.0.0.1: only this machine can connect; "

@@ -90,14 +90,16 @@ def exit_on_signals(program: str = "torus-cad") -> Callable[[], None]:
 
 
 def hold_signals_until_exit() -> None:
-    """Block SIGINT, SIGTERM and SIGHUP for the rest of the process: call it when the command's work is
+    """Ignore SIGINT, SIGTERM and SIGHUP for the rest of the process: call it when the command's work is
     done and its exit code decided.
 
     Python puts the default handlers back while it shuts down (which takes a moment once CadQuery is
     loaded), so a signal then would end a finished, successful command as "killed by SIGTERM".
-    A blocked signal stays pending and dies with the process."""
-    with suppress(AttributeError, ValueError, OSError):  # no pthread_sigmask (Windows), not the main thread
-        signal.pthread_sigmask(signal.SIG_BLOCK, set(EXIT_SIGNALS))
+    Python leaves an ignored signal ignored. Ignoring, unlike blocking, is process-wide: OpenCascade's
+    worker threads would still take a signal that only the main thread blocks."""
+    with suppress(ValueError, OSError):  # not the main thread
+        for signum in EXIT_SIGNALS:
+            signal.signal(signum, signal.SIG_IGN)
 
 
 @contextmanager

@@ -366,7 +366,7 @@ def write_output_set(propeller: Propeller, out_dir: str | Path, density_g_cm3: f
     deflections = (export.stl_linear_deflection, export.stl_angular_deflection)
     if write_stl_file or ExportFormat.THREE_MF in formats:
         check_stl_budget(params, propeller.surface, propeller.section_curves.poles.shape[:2])
-    timer = StageTimer()
+    timer = StageTimer[Stage]()
     with OutputSet(out_dir, params.name) as output:
         if ExportFormat.STEP in formats:
             with timer.stage(Stage.STEP_WRITE):

@@ -156,7 +156,7 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
         GeometryError: valid parameters that describe no sound propeller (refused before the kernel runs).
         KernelError: OpenCascade failed.
     """
-    timer = StageTimer(progress)
+    timer = StageTimer[Stage](progress)
     with timer.stage(Stage.PARAMETERS):
         params = resolve_parameters(design, overrides)
     with timer.stage(Stage.DESIGN_TARGETS):
@@ -222,7 +222,7 @@ propeller_objects = build_propeller
 
 
 def _join_blades_to_hub(hub: cq.Solid, blade: cq.Solid, blades: list[cq.Solid], angles_deg: list[float],
-                        timer: StageTimer) -> tuple[cq.Solid, Fused]:
+                        timer: StageTimer[Stage]) -> tuple[cq.Solid, Fused]:
     """The fused, checked propeller and how it was made (route, each face's part).
 
     The shared-intersection route's result is checked for validity, which includes every

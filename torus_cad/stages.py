@@ -2,7 +2,7 @@
 
 One list for everything that names a stage: the build's timer, the JSON report's
 ``stage_seconds``, the progress display, the sweep table's ``time_<stage>_s`` columns and the
-benchmarks.
+benchmarks. The timer also times the mesh and CFD pipelines, whose stages are their own enums.
 """
 
 from __future__ import annotations
@@ -11,6 +11,7 @@ import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from enum import StrEnum
+from typing import Generic, TypeVar
 
 
 class Stage(StrEnum):
@@ -53,15 +54,22 @@ _LABELS = {
 }
 
 
-class StageTimer:
-    """Wall-clock seconds per stage, in the order the stages ran (keys: the stages' values)."""
+StageT = TypeVar("StageT", bound=StrEnum)
 
-    def __init__(self, on_start: Callable[[Stage], None] | None = None) -> None:
+
+class StageTimer(Generic[StageT]):
+    """Wall-clock seconds per stage, in the order the stages ran (keys: the stages' values).
+
+    Generic over the stage enum: the build's :class:`Stage`, or another pipeline's own StrEnum
+    (``torus-cad mesh``'s ``MeshStage``, ``torus-cad cfd``'s ``CfdStage``).
+    """
+
+    def __init__(self, on_start: Callable[[StageT], None] | None = None) -> None:
         self.seconds: dict[str, float] = {}
-        self.on_start = on_start  # called with each stage as it starts (progress display)
+        self.on_start = on_start  # called with each stage (a str: its value) as it starts (progress display)
 
     @contextmanager
-    def stage(self, stage: Stage) -> Iterator[None]:
+    def stage(self, stage: StageT) -> Iterator[None]:
         """Time the ``with`` block as ``stage`` (seconds add up if the stage runs twice)."""
         if self.on_start is not None:
             self.on_start(stage)

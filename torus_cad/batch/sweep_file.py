@@ -4,6 +4,8 @@
 
     [base]                       # the design every variant starts from
     config = "my_prop.toml"      # optional, relative to the sweep file; inline tables override it
+    [base.airfoil]
+    file = "airfoils/clarky.dat" # relative to the sweep file (in [vary] too), as in a design file
     [base.resolution]
     sections = 16
 
@@ -28,6 +30,7 @@ names the key (exit code 2 at the command line).
 
 from __future__ import annotations
 
+import dataclasses
 import difflib
 import math
 import re
@@ -164,7 +167,8 @@ def load_sweep(path: str | Path) -> SweepSpec:
 
 def parse_sweep(data: Mapping[str, Any], base_dir: str | Path = ".", name: str = "sweep",
                 source: str = "sweep") -> SweepSpec:
-    """Check a sweep given as a mapping (the parsed TOML); ``base.config`` is relative to ``base_dir``."""
+    """Check a sweep given as a mapping (the parsed TOML); ``base.config`` and file paths in the design
+    (``airfoil.file``, inline or varied) are relative to ``base_dir``, the sweep file's folder."""
 
     def fail(message: str) -> ParameterError:
         return ParameterError(f"{source}: {message}")
@@ -174,13 +178,14 @@ def parse_sweep(data: Mapping[str, Any], base_dir: str | Path = ".", name: str =
     for key in data:
         if key not in _TOP_KEYS:
             raise fail(f"unknown table [{key}]{_did_you_mean(str(key), _TOP_KEYS)}")
-    base = _parse_base(data.get("base", {}), Path(base_dir), fail)
+    folder = Path(base_dir).resolve()
+    base = _parse_base(data.get("base", {}), folder, fail)
     settings = _parse_settings(data.get("sweep", {}), name, fail)
     mode = settings["mode"]
     vary = data.get("vary", {})
     if not isinstance(vary, Mapping):
         raise fail("[vary] must be a table of parameter keys")
-    axes = tuple(_parse_axis(key, spec, mode, fail) for key, spec in _flatten_vary(vary))
+    axes = tuple(_paths_relative_to(_parse_axis(key, spec, mode, fail), folder) for key, spec in _flatten_vary(vary))
     _check_distinct(axes, fail)
     if mode is SweepMode.GRID:
         _check_budget(math.prod(len(axis.values) for axis in axes), [(axis.key, len(axis.values)) for axis in axes],
@@ -252,6 +257,7 @@ def _parse_base(table: Any, base_dir: Path, fail: Fail) -> PropellerParameters:
         raise fail("[base] must be a table of design parameters (or config = \"path.toml\")")
     inline = dict(table)
     config = inline.pop("config", None)
+    inline = PropellerParameters.paths_relative_to(inline, base_dir)  # as the build reads a design file
     if config is None:
         merged: dict[str, Any] = PropellerParameters().to_dict()
     elif isinstance(config, str):
@@ -267,6 +273,24 @@ def _parse_base(table: Any, base_dir: Path, fail: Fail) -> PropellerParameters:
         return PropellerParameters.from_dict(merged)
     except ParameterError as error:
         raise fail(f"[base] {error}") from None
+
+
+def _paths_relative_to(axis: VaryAxis, folder: Path) -> VaryAxis:
+    """``axis`` with each value that is a file path (``airfoil.file``) made relative to ``folder``,
+    by the rule of a design file (:meth:`PropellerParameters.paths_relative_to`)."""
+    if axis.index is not None or axis.is_bounds:
+        return axis
+
+    def resolved(value: Any) -> Any:
+        data: dict[str, Any] = {axis.path[-1]: value}
+        for part in reversed(axis.path[:-1]):
+            data = {part: data}
+        data = PropellerParameters.paths_relative_to(data, folder)
+        for part in axis.path:
+            data = data[part]
+        return data
+
+    return dataclasses.replace(axis, values=tuple(resolved(value) for value in axis.values))
 
 
 def _deep_merge(target: dict[str, Any], changes: Mapping[str, Any]) -> None:

@@ -34,9 +34,9 @@ from torus_cad.cfd.settings import MissingExtraError
 from torus_cad.errors import KernelError, ParameterError
 from torus_cad.geometry.propeller import PropellerGeometry
 from torus_cad.geometry.transforms import evaluate_quartic
-from torus_cad.mesh.timing import StageClock
 from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.design import Cfd, InletSide
+from torus_cad.stages import StageTimer
 
 #: Names of the physical groups: surfaces, then volumes.
 SURFACE_GROUPS = ("propeller", "rotating_interface", "inlet", "outlet", "farfield")
@@ -331,7 +331,7 @@ def write_cfd_domain(params: PropellerParameters, out_dir: str | Path, threads: 
     gmsh = import_gmsh()
     settings = params.cfd
     out = Path(out_dir)
-    timer = StageClock(progress)
+    timer = StageTimer[CfdStage](progress)
     cpu_start, wall_start = time.process_time(), time.perf_counter()
     with timer.stage(CfdStage.BREP):
         propeller = build_propeller(params)

@@ -38,7 +38,7 @@ THICKNESS_COEFFICIENTS = (0.2969, -0.1260, -0.3516, 0.2843, -0.1036)
 class _ThicknessOnCamberLine:
     """The NACA construction (spec §1.2): the thickness y_t laid off the camber line y_c.
 
-    Subclasses define ``camber``, ``camber_slope``, ``camber_curvature`` and ``kinks``, and
+    Subclasses define ``_mean_line`` (the camber line and its derivatives) and ``kinks``, and
     the fields ``thickness``, ``camber_normal`` and ``trailing_edge_gap``.
     """
 
@@ -46,14 +46,21 @@ class _ThicknessOnCamberLine:
     camber_normal: bool
     trailing_edge_gap: float
 
-    def camber(self, t: ArrayLike) -> NDArray[np.float64]:  # pragma: no cover - abstract
+    def _mean_line(self, t: NDArray[np.float64], order: int) -> NDArray[np.float64]:  # pragma: no cover - abstract
+        """The ``order``-th t derivative (0, 1 or 2) of the mean camber line y_c at ``t``, shape of ``t``."""
         raise NotImplementedError
 
-    def camber_slope(self, t: ArrayLike) -> NDArray[np.float64]:  # pragma: no cover - abstract
-        raise NotImplementedError
+    def camber(self, t: ArrayLike) -> NDArray[np.float64]:
+        """Mean camber line y_c(t), shape of ``t``."""
+        return self._mean_line(np.asarray(t, dtype=float), 0)
 
-    def camber_curvature(self, t: ArrayLike) -> NDArray[np.float64]:  # pragma: no cover - abstract
-        raise NotImplementedError
+    def camber_slope(self, t: ArrayLike) -> NDArray[np.float64]:
+        """dy_c/dt, shape of ``t``."""
+        return self._mean_line(np.asarray(t, dtype=float), 1)
+
+    def camber_curvature(self, t: ArrayLike) -> NDArray[np.float64]:
+        """d^2 y_c/dt^2, shape of ``t``."""
+        return self._mean_line(np.asarray(t, dtype=float), 2)
 
     def half_thickness(self, t: ArrayLike) -> NDArray[np.float64]:
         """y_t(t) = 5 thickness [0.2969 sqrt(t) - 0.1260 t - ...] + g/2 t^4, shape of ``t``; zero at t = 0."""
@@ -156,33 +163,15 @@ class NacaAirfoil(_ThicknessOnCamberLine):
             return (float(np.sqrt(self.camber_position)),)
         return ()
 
-    def camber(self, t: ArrayLike) -> NDArray[np.float64]:
-        """Mean camber line y_c(t), shape of ``t``."""
-        t = np.asarray(t, dtype=float)
+    def _mean_line(self, t: NDArray[np.float64], order: int) -> NDArray[np.float64]:
+        """Two parabolas meeting at p with zero slope: m/p^2 (2pt - t^2) before, m/(1-p)^2 ((1-2p) + 2pt - t^2)
+        after; the curvature is piecewise constant."""
         m, p = self.max_camber, self.camber_position
         if m == 0.0:
             return np.zeros_like(t)
-        front = m / p**2 * (2 * p * t - t**2)
-        back = m / (1 - p) ** 2 * ((1 - 2 * p) + 2 * p * t - t**2)
-        return np.where(t <= p, front, back)
-
-    def camber_slope(self, t: ArrayLike) -> NDArray[np.float64]:
-        """dy_c/dt, shape of ``t``."""
-        t = np.asarray(t, dtype=float)
-        m, p = self.max_camber, self.camber_position
-        if m == 0.0:
-            return np.zeros_like(t)
-        front = 2 * m / p**2 * (p - t)
-        back = 2 * m / (1 - p) ** 2 * (p - t)
-        return np.where(t <= p, front, back)
-
-    def camber_curvature(self, t: ArrayLike) -> NDArray[np.float64]:
-        """d^2 y_c/dt^2 (piecewise constant), shape of ``t``."""
-        t = np.asarray(t, dtype=float)
-        m, p = self.max_camber, self.camber_position
-        if m == 0.0:
-            return np.zeros_like(t)
-        return np.where(t <= p, -2 * m / p**2, -2 * m / (1 - p) ** 2)
+        front = [2 * p * t - t**2, 2 * (p - t), np.full_like(t, -2.0)][order]
+        back = [(1 - 2 * p) + 2 * p * t - t**2, 2 * (p - t), np.full_like(t, -2.0)][order]
+        return np.where(t <= p, m / p**2 * front, m / (1 - p) ** 2 * back)
 
 
 #: Standard NACA 5-digit mean lines for a design lift coefficient of 0.3, by the P digit:
@@ -234,7 +223,8 @@ class Naca5Airfoil(_ThicknessOnCamberLine):
         """u = sqrt(r): the mean line's third derivative jumps there (its curvature is continuous)."""
         return (float(np.sqrt(self.r)),)
 
-    def _cubic_terms(self, t: NDArray[np.float64], order: int) -> NDArray[np.float64]:
+    def _mean_line(self, t: NDArray[np.float64], order: int) -> NDArray[np.float64]:
+        """The cubic (then linear) mean line of the class docstring."""
         r, k1, ratio = self.r, self.k1, self.k2_over_k1
         if ratio == 0.0:
             front = [(t**3 - 3 * r * t**2 + r**2 * (3 - r) * t), (3 * t**2 - 6 * r * t + r**2 * (3 - r)),
@@ -246,18 +236,6 @@ class Naca5Airfoil(_ThicknessOnCamberLine):
         back = [ratio * (t - r) ** 3 - linear * t + r**3, 3 * ratio * (t - r) ** 2 - linear,
                 6 * ratio * (t - r)][order]
         return k1 / 6 * np.where(t < r, front, back)
-
-    def camber(self, t: ArrayLike) -> NDArray[np.float64]:
-        """Mean line y_c(t), shape of ``t``."""
-        return self._cubic_terms(np.asarray(t, dtype=float), 0)
-
-    def camber_slope(self, t: ArrayLike) -> NDArray[np.float64]:
-        """dy_c/dt, shape of ``t``."""
-        return self._cubic_terms(np.asarray(t, dtype=float), 1)
-
-    def camber_curvature(self, t: ArrayLike) -> NDArray[np.float64]:
-        """d^2 y_c/dt^2, shape of ``t``."""
-        return self._cubic_terms(np.asarray(t, dtype=float), 2)
 
 
 def _digits(designation: str, count: int) -> list[int]:

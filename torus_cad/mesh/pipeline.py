@@ -27,10 +27,10 @@ from torus_cad.mesh.cleanup import Cleanup, collapse_junction_needles
 from torus_cad.mesh.grids import blade_grid, blade_meshes, cell_size, hub_mesh
 from torus_cad.mesh.resolution import check_budget, check_resolution, estimate_triangles
 from torus_cad.mesh.settings import MeshFormat, selected_formats
-from torus_cad.mesh.timing import StageClock
 from torus_cad.mesh.union import LabeledMesh, unite
 from torus_cad.mesh.writers import write_mesh_files
 from torus_cad.parameters import PropellerParameters
+from torus_cad.stages import StageTimer
 from torus_cad.tolerances import MESH_JUNCTION_MARGIN_RELATIVE
 
 
@@ -93,7 +93,7 @@ def build_surface_mesh(params: PropellerParameters, progress: Callable[[str], No
 
     Raises ParameterError (triangle budget, resolution), GeometryError (design), MeshBooleanError (union).
     """
-    timer = StageClock(progress)
+    timer = StageTimer[MeshStage](progress)
     geometry, table = params.geometry(), params.mesh
     with timer.stage(MeshStage.CHECKS):
         estimate = estimate_triangles(geometry, table.sections, table.points, table.spacing)
@@ -255,7 +255,7 @@ def write_surface_mesh(params: PropellerParameters, out_dir: str | Path, compare
 
     formats = selected_formats(params.mesh)
     result = build_surface_mesh(params, progress)
-    timer = StageClock(progress)
+    timer = StageTimer[MeshStage](progress)
     with timer.stage(MeshStage.QUALITY):
         report = quality_report(result, compare)
     with timer.stage(MeshStage.WRITE):

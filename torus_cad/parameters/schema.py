@@ -189,12 +189,14 @@ def iter_parameter_specs(model: type[BaseModel], prefix: str = "") -> Iterator[P
 
 
 def section_docs(model: type[BaseModel], prefix: str = "") -> dict[str, str]:
-    """Dotted table name -> the table's one-line description (its class docstring's first line)."""
+    """Dotted table name -> the table's one-line description (its class docstring's first line;
+    empty for a table without a docstring)."""
     docs: dict[str, str] = {}
     for name, info in model.model_fields.items():
         annotation, _ = _unwrap(info.annotation)
         if isinstance(annotation, type) and issubclass(annotation, BaseModel):
-            docs[prefix + name] = (annotation.__doc__ or "").strip().splitlines()[0].rstrip(".")
+            first_line, _, _ = (annotation.__doc__ or "").strip().partition("\n")
+            docs[prefix + name] = first_line.strip().rstrip(".")
             docs.update(section_docs(annotation, f"{prefix}{name}."))
     return docs
 

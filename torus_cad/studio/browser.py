@@ -191,9 +191,14 @@ class StudioPage:
 
     def wait(self, condition: Callable[[], T], what: str, timeout_s: float | None = None) -> T:
         """Poll ``condition`` until it returns something truthy; fail naming ``what`` and the page state."""
+        from selenium.common.exceptions import StaleElementReferenceException
+
         deadline = time.monotonic() + (self.timeout_s if timeout_s is None else timeout_s)
         while True:
-            result = condition()
+            try:
+                result = condition()
+            except StaleElementReferenceException:  # Vue re-rendered the element between finding and reading it
+                result = None
             if result:
                 return result
             if time.monotonic() > deadline:
@@ -203,11 +208,11 @@ class StudioPage:
 
     def idle(self) -> bool:
         """The exact solid is on screen and its files are ready."""
-        from selenium.common.exceptions import NoSuchElementException
+        from selenium.common.exceptions import NoSuchElementException, StaleElementReferenceException
 
         try:
             return self.text("status") == "exact" and self.element("download-step").is_enabled()
-        except NoSuchElementException:  # the download buttons appear with the files
+        except (NoSuchElementException, StaleElementReferenceException):  # the buttons appear with the files
             return False
 
     def wait_idle(self) -> None:
