@@ -84,12 +84,16 @@ MOUNTING_CLEARANCE_MM = 0.05
 #: Seconds the root fillet may take (in its child process) before it counts as failed.
 FILLET_TIME_LIMIT_S = 60.0
 
-#: Seconds all the root fillet's tries together may take (each child still stops at
-#: FILLET_TIME_LIMIT_S); when it runs out, the remaining tries are skipped and the fillet fails.
-#: Failing designs mostly fail each try in under a second, a few tries hang until their limit;
-#: the tries that save a design take seconds (fuzz seeds 0-129). With the search for a smaller
-#: radius to suggest (up to 3 children), a failing fillet takes at most about 120 + 3 x 60 s.
-FILLET_TRIES_TIME_LIMIT_S = 120.0
+#: Seconds each of the root fillet's further tries (after the first, which has
+#: FILLET_TIME_LIMIT_S) may take in its child: the tries that save a design take under a second
+#: (fuzz seeds 0-129), the ones that fail either fail as fast or hang until their limit.
+FILLET_RETRY_TIME_LIMIT_S = 15.0
+
+#: Seconds the root fillet's further tries together may take (counted from the end of the first);
+#: when it runs out, the remaining tries are skipped and the fillet fails. With the first try and
+#: the search for a smaller radius to suggest (up to 3 children of FILLET_TIME_LIMIT_S), a failing
+#: fillet takes at most about 60 + 60 + 3 x 60 s.
+FILLET_TRIES_TIME_LIMIT_S = 60.0
 
 #: A repaired root fillet (ShapeFix) is accepted only if it adds at most this many r^2 of volume
 #: per mm of junction: a rolling-ball fillet between faces meeting at 30 degrees adds 2.4 r^2,

@@ -12,8 +12,8 @@ What makes OpenCascade's rolling-ball fillet work on these blades (measured, see
   made of planes, cylinders and cones only).
 * When that fails, further tries (:data:`_TRIES`): the side face split in quarters, thirds with
   ten times tighter approximation (SetParams), fifths, sixths. Each saves designs the others do
-  not; the first try is the common case and the others cost time only where it fails (all tries
-  together stop at FILLET_TRIES_TIME_LIMIT_S).
+  not; the first try is the common case and the others cost time only where it fails (each
+  stops at FILLET_RETRY_TIME_LIMIT_S, all of them together at FILLET_TRIES_TIME_LIMIT_S).
 * Where a blade root comes within about a radius of the hub's end face (the blade ends sit 1 mm
   below it, spec §3.1) so that the fillet would have to roll over the hub's edge, the same tries
   are made on a hub longer at both ends and the result cut back to the hub's length (see
@@ -71,6 +71,7 @@ from torus_cad.kernel.checks import precise_volume, single_valid_solid
 from torus_cad.kernel.fuse import fuse_pattern, pattern_blades
 from torus_cad.kernel.topology import cut, explore
 from torus_cad.tolerances import (
+    FILLET_RETRY_TIME_LIMIT_S,
     FILLET_TIME_LIMIT_S,
     FILLET_TRIES_TIME_LIMIT_S,
     REPAIRED_FILLET_MAX_AREA_RADII2,
@@ -78,7 +79,7 @@ from torus_cad.tolerances import (
 )
 
 #: Faces of these surface types belong to a blade; every other face (plane, cylinder, cone) to the hub.
-_BLADE_SURFACES = (GeomAbs_BSplineSurface, GeomAbs_BezierSurface, GeomAbs_OffsetSurface)
+BLADE_SURFACES = (GeomAbs_BSplineSurface, GeomAbs_BezierSurface, GeomAbs_OffsetSurface)
 
 #: Pieces the blade's closed side face is split into (see the module docstring): thirds work
 #: best; quarters (a split vertex at the leading edge), fifths and sixths each save some designs
@@ -117,7 +118,7 @@ def junction_edges(solid: cq.Solid) -> list[TopoDS_Edge]:
     TopExp.MapShapesAndAncestors_s(solid.wrapped, TopAbs_EDGE, TopAbs_FACE, ancestors)
     edges = []
     for index in range(1, ancestors.Extent() + 1):
-        kinds = {BRepAdaptor_Surface(TopoDS.Face_s(face)).GetType() in _BLADE_SURFACES
+        kinds = {BRepAdaptor_Surface(TopoDS.Face_s(face)).GetType() in BLADE_SURFACES
                  for face in ancestors.FindFromIndex(index)}
         if kinds == {True, False}:
             edges.append(TopoDS.Edge_s(ancestors.FindKey(index)))
@@ -178,19 +179,22 @@ def fillet_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], 
     hub is faced) with the bore and set-screw hole cut at the same time. Where the blade itself
     passes the hub's end plane, the cut-back's end slabs have the blades cut out of them, so the
     blades' parts past the end stay as they are (the fillet still ends flush with the end face).
-    All tries together stop at FILLET_TRIES_TIME_LIMIT_S.
+    The first try stops at FILLET_TIME_LIMIT_S; each further one at FILLET_RETRY_TIME_LIMIT_S, and all
+    of them together at FILLET_TRIES_TIME_LIMIT_S.
 
     Raises KernelError as :func:`fillet_blade_roots` does when the fillet fails; returns a
     checked single valid solid.
     """
     split = _LazySplits(blade)
-    deadline = time.monotonic() + FILLET_TRIES_TIME_LIMIT_S
+    deadline = math.inf  # the further tries' shared time starts when the first try ends
     for index, params in _TRIES:
         try:
             return _fillet_and_pattern(hub, split[index], angles_deg, radius_mm, suggest=False, params=params,
-                                       deadline=deadline)
+                                       deadline=_try_deadline(deadline, first=math.isinf(deadline)))
         except KernelError:
             pass
+        if math.isinf(deadline):
+            deadline = time.monotonic() + FILLET_TRIES_TIME_LIMIT_S
     if run_out is not None and time.monotonic() < deadline:
         extended, tools = run_out(_RUN_OUT_RADII * radius_mm)
         if _touches(blade, tools[:2]):  # the blade itself reaches past a hub end: the cut-back keeps it there
@@ -199,7 +203,7 @@ def fillet_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], 
         for index, params in _TRIES:
             try:
                 filleted = _fillet_and_pattern(extended, split[index], angles_deg, radius_mm, suggest=False,
-                                               params=params, deadline=deadline)
+                                               params=params, deadline=_try_deadline(deadline, first=False))
                 return single_valid_solid(cq.Shape.cast(cut(filleted.wrapped, tools, "cut the run-out hub back to the hub's length")),
                                           "cutting the run-out hub back")
             except KernelError:
@@ -207,6 +211,13 @@ def fillet_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], 
     # Every try failed: the error names a smaller radius that works on blade 0, if one does.
     raise fillet_failure(single_valid_solid(fuse_pattern(hub, split[0], angles_deg[:1]).shape,
                                             "joining blade 0 to the hub"), radius_mm)
+
+
+def _try_deadline(deadline: float, first: bool) -> float:
+    """When a try must end (time.monotonic()): the first try has no end of its own (each child stops
+    at FILLET_TIME_LIMIT_S, as ever); the others, which save a design in under a second when they
+    do, stop at FILLET_RETRY_TIME_LIMIT_S, and by ``deadline``."""
+    return math.inf if first else min(deadline, time.monotonic() + FILLET_RETRY_TIME_LIMIT_S)
 
 
 class _LazySplits:
@@ -264,7 +275,7 @@ def _assemble_filleted(filleted: TopoDS_Shape, angles_deg: Sequence[float]) -> T
     """
     faces = [TopoDS.Face_s(face) for face in explore(filleted, TopAbs_FACE)]
     lateral = _outer_cylinder(faces)
-    blade_faces = [face for face in faces if BRepAdaptor_Surface(face).GetType() in _BLADE_SURFACES]
+    blade_faces = [face for face in faces if BRepAdaptor_Surface(face).GetType() in BLADE_SURFACES]
     blade_edges = TopTools_IndexedMapOfShape()
     for face in blade_faces:
         TopExp.MapShapes_s(face, TopAbs_EDGE, blade_edges)
@@ -289,7 +300,7 @@ def _assemble_filleted(filleted: TopoDS_Shape, angles_deg: Sequence[float]) -> T
     new_lateral.Orientation(lateral.Orientation())
     builder.Add(shell, new_lateral)
     for face in faces:
-        if not face.IsSame(lateral) and BRepAdaptor_Surface(face).GetType() not in _BLADE_SURFACES:
+        if not face.IsSame(lateral) and BRepAdaptor_Surface(face).GetType() not in BLADE_SURFACES:
             builder.Add(shell, face)
     shell.Closed(BRep_Tool.IsClosed_s(shell))
     solid = TopoDS_Solid()
