@@ -34,6 +34,11 @@ What makes OpenCascade's rolling-ball fillet work on these blades (measured, see
   every blade's. If that assembly fails its checks, the whole propeller is filleted instead.
 
 When the fillet fails, smaller radii are tried to name one that works in the error message.
+
+Measured on the fuzz sampler's valid designs (seeds 0-129, 0.5 mm, ``scripts/fillet_rate.py``):
+70 of 83 work. 11 of the 13 left have a blade face that bends concavely tighter than the fillet
+radius near the hub (``scripts/root_concavity.py``): a rolling ball cannot stay in contact along
+such a bend, and no try here changes that.
 """
 
 from __future__ import annotations
