@@ -150,7 +150,8 @@ def fillet_blade_roots(solid: cq.Solid, radius_mm: float, suggest: bool = True,
 
 
 def fillet_failure(solid: cq.Solid, radius_mm: float) -> KernelError:
-    """The error for a fillet of ``radius_mm`` that failed on ``solid``, naming a smaller radius that works on it if one of :data:`_FALLBACK_FRACTIONS` does."""
+    """The error for a fillet of ``radius_mm`` that failed on ``solid``; it names a smaller radius
+    that works on ``solid`` if one of :data:`_FALLBACK_FRACTIONS` of it does."""
     edges = junction_edges(solid)
     works = next((radius_mm * fraction for fraction in _FALLBACK_FRACTIONS
                   if _fillet_in_child(solid, edges, radius_mm * fraction) is not None), None)
