@@ -235,10 +235,20 @@ class StudioPage:
         control = field.find_element(By.XPATH, "./ancestor::div[contains(concat(' ', normalize-space(@class), ' '), "
                                                "' v-field ')][1]")
         self.driver.execute_script("arguments[0].scrollIntoView({block: 'center'});", control)
-        control.click()
+        self._click(control)
         xpath = f"//div[contains(@class, 'v-overlay--active')]//div[@role = 'option'][normalize-space(.) = '{option}']"
         item = self.wait(lambda: self.driver.find_elements(By.XPATH, xpath), f"the menu item {option!r}")[0]
-        item.click()
+        self._click(item)
+
+    def _click(self, element: Any) -> None:
+        """Click ``element``; while an overlay is still animating over it (Vuetify's menus fade in and
+        out), the browser's click hits the overlay, so the click event is sent to the element itself."""
+        from selenium.common.exceptions import ElementClickInterceptedException, ElementNotInteractableException
+
+        try:
+            element.click()
+        except (ElementClickInterceptedException, ElementNotInteractableException):
+            self.driver.execute_script("arguments[0].click();", element)
 
     def open_all_groups(self) -> None:
         """Expand every group of the parameters panel (only the first few start open), one at a time."""
@@ -258,9 +268,10 @@ class StudioPage:
         return len(self.driver.find_elements(By.CSS_SELECTOR, selector)) < count
 
     def click(self, element_id: str) -> None:
+        """Click the element ``element_id`` (a button) as a user would."""
         element = self.element(element_id)
         self.driver.execute_script("arguments[0].scrollIntoView({block: 'center'});", element)
-        element.click()
+        self._click(element)
 
     def view_pixels(self) -> Any:
         """The 3D view's pixels as an ``(h, w, 3)`` float array, 0..255."""
