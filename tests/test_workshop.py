@@ -217,18 +217,6 @@ NEAR_THE_END = {
 }
 
 
-@pytest.mark.slow
-def test_root_fillet_runs_out_past_the_hub_end_and_keeps_the_hub_length():
-    params = PropellerParameters.from_dict(NEAR_THE_END)
-    plain = build_propeller(params)
-    filleted = build_propeller(params, overrides={"hub.root_fillet_radius": 0.5})
-    assert is_valid_closed_solid(filleted.solid)
-    assert precise_volume(filleted.solid) > precise_volume(plain.solid)
-    box, plain_box = filleted.solid.BoundingBox(), plain.solid.BoundingBox()  # the hub keeps its length
-    assert box.zmax == pytest.approx(plain_box.zmax, abs=1e-6) and box.zmin == pytest.approx(plain_box.zmin, abs=1e-6)
-    assert any(_principal_curvatures(face)[1] == pytest.approx(1 / 0.5, rel=1e-3) for face in filleted.solid.Faces())
-
-
 #: A fuzz design (seed 0) whose blades pass through the hub's end faces: the fillet runs out on a
 #: longer hub, and the cut back to the hub's length keeps the blades' parts past the end.
 THROUGH_THE_END = {
@@ -266,15 +254,20 @@ REPAIRED = {
 
 
 @pytest.mark.slow
-def test_root_fillet_keeps_the_blades_that_pass_the_hub_end():
-    params = PropellerParameters.from_dict(THROUGH_THE_END)
+@pytest.mark.parametrize("design", [pytest.param(NEAR_THE_END, id="root near the hub end"),
+                                    pytest.param(THROUGH_THE_END, id="blades pass the hub end")])
+def test_root_fillet_runs_out_past_the_hub_end_and_keeps_the_parts_extent(design):
+    """The fillet runs out on a longer hub and is cut back: the hub keeps its length, blades that
+    pass its end keep their parts past it, and the fillet face has the requested radius."""
+    params = PropellerParameters.from_dict(design)
     plain = build_propeller(params)
     filleted = build_propeller(params, overrides={"hub.root_fillet_radius": 0.5})
     assert is_valid_closed_solid(filleted.solid)
     assert precise_volume(filleted.solid) > precise_volume(plain.solid)
-    box, plain_box = filleted.solid.BoundingBox(), plain.solid.BoundingBox()  # the blades past the end are kept
+    box, plain_box = filleted.solid.BoundingBox(), plain.solid.BoundingBox()
     assert box.zmax == pytest.approx(plain_box.zmax, abs=1e-6) and box.zmin == pytest.approx(plain_box.zmin, abs=1e-6)
-    assert plain_box.zmax > params.hub.length / 2.0  # the design does pass the hub's end
+    if design is THROUGH_THE_END:
+        assert plain_box.zmax > params.hub.length / 2.0  # the design does pass the hub's end
     assert any(_principal_curvatures(face)[1] == pytest.approx(1 / 0.5, rel=1e-3) for face in filleted.solid.Faces())
 
 
