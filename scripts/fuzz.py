@@ -72,6 +72,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--points", type=int, nargs=2, default=_whole_range("resolution.points"),
                         metavar=("LOW", "HIGH"), help="range of resolution.points to sample "
                         "(default: the schema's fuzz range, %(default)s: low, for speed)")
+    parser.add_argument("--workshop", action="store_true",
+                        help="also draw bore, flat, set screw, chamfer, blunt trailing edge and handedness")
     parser.add_argument("--record", type=Path, metavar="JSONL", help="append every outcome to this JSON-lines file")
     parser.add_argument("-v", "--verbose", action="store_true", help="print every design's outcome")
     args = parser.parse_args(argv)
@@ -79,7 +81,8 @@ def main(argv: list[str] | None = None) -> int:
     if args.replay:
         designs = [PropellerParameters.from_toml(path).to_dict() for path in args.replay]
     else:
-        designs = [random_design_dict(seed, sections=tuple(args.sections), points=tuple(args.points))
+        designs = [random_design_dict(seed, workshop=args.workshop, sections=tuple(args.sections),
+                                      points=tuple(args.points))
                    for seed in range(args.seed, args.seed + args.count)]
 
     tasks = fuzz_tasks(designs, write=not args.no_write, stl=not args.no_stl)

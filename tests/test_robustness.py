@@ -106,6 +106,23 @@ def test_sampler_stays_in_range_and_is_reproducible():
             assert "is out of range" not in str(error) and "must be" not in str(error), str(error)
 
 
+def test_workshop_draws_add_only_workshop_features_and_stay_in_range():
+    """``fuzz.py --workshop``: the same design as without, plus in-range workshop features."""
+    workshop_keys = {"handedness", "hub.bore_diameter", "hub.bore_flat_depth", "hub.set_screw_diameter",
+                     "hub.chamfer", "airfoil.trailing_edge_thickness"}
+    drawn = set()
+    for seed in range(100):
+        plain, design = _flat(random_design_dict(seed)), _flat(random_design_dict(seed, workshop=True))
+        changed = {key for key in design if design[key] != plain.get(key)}
+        assert changed <= workshop_keys, changed
+        drawn |= changed
+        try:
+            PropellerParameters.from_dict(random_design_dict(seed, workshop=True))
+        except ParameterError as error:  # only rules that tie fields together may refuse
+            assert "is out of range" not in str(error) and "must be" not in str(error), str(error)
+    assert drawn == workshop_keys  # 100 seeds switch every feature on at least once
+
+
 #: The fields the sampler draws directly, each within the schema's fuzz range.
 FUZZED = ("blades", "phase_deg", "hub.radius", "hub.length", "airfoil.max_camber", "airfoil.camber_position",
           "airfoil.thickness", "airfoil.pivot", "resolution.sections", "resolution.points",

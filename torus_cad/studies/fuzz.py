@@ -182,10 +182,43 @@ def design_from_unit(u: Sequence[float], name: str = "fuzz", **kwargs: Any) -> P
     return PropellerParameters.from_dict(design_dict_from_unit(u, name, **kwargs))
 
 
-def random_design_dict(seed: int, **kwargs: Any) -> dict[str, Any]:
-    """The design of ``seed`` as a dict: unit vector from numpy's default_rng(seed); named fuzz_<seed>."""
+def random_design_dict(seed: int, workshop: bool = False, **kwargs: Any) -> dict[str, Any]:
+    """The design of ``seed`` as a dict: unit vector from numpy's default_rng(seed); named fuzz_<seed>.
+
+    ``workshop``: also draw the workshop features (:func:`workshop_features`) from a stream of
+    their own, so the design's other parameters are those of the plain design of ``seed``."""
     rng = np.random.default_rng(seed)
-    return design_dict_from_unit(rng.random(UNIT_DIMENSION), name=f"fuzz_{seed}", **kwargs)
+    design = design_dict_from_unit(rng.random(UNIT_DIMENSION), name=f"fuzz_{seed}", **kwargs)
+    if workshop:
+        for table, values in workshop_features(seed, design["hub"]["radius"]).items():
+            if isinstance(values, dict):
+                design.setdefault(table, {}).update(values)
+            else:
+                design[table] = values
+    return design
+
+
+def workshop_features(seed: int, hub_radius_mm: float) -> dict[str, Any]:
+    """Issue 13's features, each switched on with probability 1/2: handedness, a bore (10-70 % of
+    the hub's diameter) with maybe a D-flat and a set screw, a chamfer, a blunt trailing edge.
+    Values outside what the hub or blade allows are drawn on purpose: they must be refused
+    cleanly. The root fillet is left out (``scripts/fillet_rate.py`` measures it)."""
+    rng = np.random.default_rng([seed, 13])
+    on = rng.random(6) < 0.5
+    u = rng.random(6)
+    hub: dict[str, float] = {}
+    if on[0]:
+        hub["bore_diameter"] = _lerp(u[0], 0.1, 0.7) * 2.0 * hub_radius_mm
+        if on[1]:
+            hub["bore_flat_depth"] = _lerp(u[1], 0.05, 0.3) * hub["bore_diameter"]
+        if on[2]:  # a set screw needs a bore to reach
+            hub["set_screw_diameter"] = _lerp(u[2], 1.5, 4.0)
+    if on[3]:
+        hub["chamfer"] = _lerp(u[3], 0.1, 1.0)
+    features: dict[str, Any] = {"handedness": "ccw" if on[4] else "cw", "hub": hub}
+    if on[5]:
+        features["airfoil"] = {"trailing_edge_thickness": _lerp(u[5], 0.2, 1.0)}
+    return features
 
 
 def random_design(seed: int, **kwargs: Any) -> PropellerParameters:
