@@ -150,8 +150,8 @@ class OutputSet:
         self.staging: Path | None = None
         self._staged: dict[str, Path] = {}
         self._cleanup: contextlib.ExitStack | None = None
-        #: The ``"files"`` entry of the published report (set by :meth:`publish`).
-        self.sealed_files: dict[str, dict[str, Any]] = {}
+        #: The report as :meth:`publish` wrote it, ``"files"`` included.
+        self.sealed_report: dict[str, Any] = {}
 
     def __enter__(self) -> Self:
         try:
@@ -228,11 +228,11 @@ class OutputSet:
         if self.staging is None:
             raise RuntimeError("OutputSet.publish() outside its with-block")
         files = {kind: file_entry(path) for kind, path in self._staged.items()}
-        self.sealed_files = files
-        sealed = {**report, FILES_KEY: files}
+        self.sealed_report = {**report, FILES_KEY: files}
         staged_report = self.staging / f"{self.name}.json"
         try:
-            staged_report.write_text(json.dumps(sealed, indent=2, allow_nan=False) + "\n", encoding="utf-8")
+            staged_report.write_text(json.dumps(self.sealed_report, indent=2, allow_nan=False) + "\n",
+                                     encoding="utf-8")
         except OSError as error:
             raise OutputError(describe_os_error(error, self.final_path("json"))) from None
         with deferred(), _folder_lock(self.out_dir):
@@ -385,6 +385,5 @@ def write_output_set(propeller: Propeller, out_dir: str | Path, density_g_cm3: f
         for kind, writer in (extra_files or {}).items():
             output.write(kind, writer)
         propeller.stage_seconds.update(timer.seconds)
-        report = build_report(propeller, density_g_cm3)
-        paths = output.publish(report)
-        return PublishedSet(paths, {**report, FILES_KEY: output.sealed_files})
+        paths = output.publish(build_report(propeller, density_g_cm3))
+        return PublishedSet(paths, output.sealed_report)

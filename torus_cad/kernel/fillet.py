@@ -58,11 +58,9 @@ from OCP.BRepAdaptor import BRepAdaptor_Surface
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
 from OCP.BRepExtrema import BRepExtrema_DistShapeShape
 from OCP.BRepFilletAPI import BRepFilletAPI_MakeFillet
-from OCP.BRepGProp import BRepGProp
 from OCP.BRepTools import BRepTools
 from OCP.GeomAbs import GeomAbs_BezierSurface, GeomAbs_BSplineSurface, GeomAbs_Cylinder, GeomAbs_OffsetSurface
 from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt, gp_Trsf, gp_Vec2d
-from OCP.GProp import GProp_GProps
 from OCP.ShapeFix import ShapeFix_Shape
 from OCP.ShapeUpgrade import ShapeUpgrade_ShapeDivideClosed
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_WIRE
@@ -379,16 +377,10 @@ def fillet_edges(solid: cq.Solid, edges: list[TopoDS_Edge], radius_mm: float,
     # must also add no more than a fillet's cross-section along the junction.
     if added_mm3 < 0.0:
         return None
-    if repaired and added_mm3 > REPAIRED_FILLET_MAX_AREA_RADII2 * radius_mm ** 2 * _length_mm(edges):
+    junction_mm = sum(cq.Edge(edge).Length() for edge in edges)
+    if repaired and added_mm3 > REPAIRED_FILLET_MAX_AREA_RADII2 * radius_mm ** 2 * junction_mm:
         return None
     return result
-
-
-def _length_mm(edges: Sequence[TopoDS_Edge]) -> float:
-    properties = GProp_GProps()
-    for edge in edges:
-        BRepGProp.LinearProperties_s(edge, properties)
-    return properties.Mass()
 
 
 def _fillet_in_child(solid: cq.Solid, edges: list[TopoDS_Edge], radius_mm: float,
