@@ -2,8 +2,8 @@
 ```sh / ```bash blocks, in a scratch folder with the repository's examples/ and scripts/.
 
 A block preceded by a ``<!-- not-run: reason -->`` line is skipped (an example that needs a cluster,
-say); the README says so next to it. ``pip install`` and ``pytest`` commands are not run here
-(CI runs them itself).
+say); the README says so next to it. ``pip install``, ``pytest`` and ``bash .ci/run`` (the README's
+test command) are not run here: CI runs them itself.
 """
 
 from __future__ import annotations
