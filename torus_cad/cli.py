@@ -148,6 +148,11 @@ def _command_build(args: argparse.Namespace) -> int:
             print(f"wrote {path}")
         print(f"volume {report['volume_mm3']:.3f} mm^3, area {report['surface_area_mm2']:.3f} mm^2, "
               f"mass {report['mass_g']:.3f} g at {args.density:g} g/cm^3")
+        fillet = report.get("root_fillet")
+        if fillet is not None and not fillet["constant_radius"]:
+            print(f"warning: the root fillet is {fillet['radius_mm']:g} mm except along "
+                  f"{fillet['reduced_junction_per_blade_mm']:.2f} mm of each blade's junction, where the blade bends "
+                  f"too tightly for it: there it is smaller, down to {fillet['smallest_radius_mm']:.3g} mm")
         if params.blades == 1:
             print(f"warning: a one-blade propeller is out of balance: static imbalance "
                   f"{report['balance']['static_imbalance_g_mm']:.3f} g mm; add a counterweight or use 2 or more blades")

@@ -38,7 +38,7 @@ from torus_cad.kernel.checks import (
     precise_volume,
     single_valid_solid,
 )
-from torus_cad.kernel.fillet import fillet_pattern
+from torus_cad.kernel.fillet import RootFillet, fillet_pattern
 from torus_cad.kernel.fuse import Fused, FuseRoute, fuse_all, fuse_pattern, pattern_blades
 from torus_cad.kernel.hub import hub_solid, run_out_hub
 from torus_cad.kernel.loft import loft_solid
@@ -73,6 +73,9 @@ class Propeller:
         face_parts: the part each face of ``solid`` came from, in the order of ``solid.Faces()``:
             -1 (``torus_cad.kernel.fuse.HUB_PART``) the hub, i blade i; empty where the build
             does not know it (after the root fillet).
+        root_fillet: the radii the root fillet has (None without one): the requested radius
+            everywhere, or smaller along junction edges where the blade bends too tightly for it
+            (:class:`torus_cad.kernel.fillet.RootFillet`).
     """
 
     parameters: PropellerParameters
@@ -86,6 +89,7 @@ class Propeller:
     design_targets: DesignTargets | None = None
     mounting: HubMounting = field(default_factory=HubMounting)
     face_parts: tuple[int, ...] = ()
+    root_fillet: RootFillet | None = None
 
     @property
     def workplane(self) -> cq.Workplane:
@@ -182,12 +186,14 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
                         mounting)
         angles_deg = [geometry.blade_angle_deg(i) for i in range(geometry.blades)]
         blades = pattern_blades(blade, angles_deg)
+    root_fillet: RootFillet | None = None
     if fillet_radius > 0.0:  # blade 0 filleted once, then patterned (torus_cad.kernel.fillet)
         with timer.stage(Stage.FILLET):
             run_out = None if mounting.chamfer_mm > 0.0 else functools.partial(
                 run_out_hub, geometry.hub.radius_mm, geometry.hub.length_mm, 0.0 if seam_deg is None else seam_deg,
                 mounting, reach=geometry.hub.radius_mm + 4.0 * fillet_radius)
-            solid = fillet_pattern(hub, blade, angles_deg, fillet_radius, run_out)
+            filleted = fillet_pattern(hub, blade, angles_deg, fillet_radius, run_out)
+            solid, root_fillet = filleted.solid, filleted
             route = FuseRoute.ASSEMBLED
             face_parts: tuple[int, ...] = ()  # the preview tags a filleted solid's faces itself
     else:
@@ -198,7 +204,7 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
             solid = mirrored(solid)  # a transformed copy: the same faces in the same order
             hub, blades = mirrored(hub, check=False), [mirrored(part, check=False) for part in blades]
     return Propeller(params, solid, hub, blades, surface, curves, timer.seconds, route, targets, mounting,
-                     face_parts)
+                     face_parts, root_fillet)
 
 
 def _place_mounting(params: PropellerParameters) -> HubMounting:
@@ -270,6 +276,7 @@ def build_report(propeller: Propeller, density_g_cm3: float) -> dict[str, Any]:
         "section_fit_error_mm": propeller.section_curves.fit_error,
         "stage_seconds": dict(propeller.stage_seconds),
         "fuse_route": propeller.fuse_route.value,
+        "root_fillet": None if propeller.root_fillet is None else propeller.root_fillet.to_dict(),
         **({"design_targets": propeller.design_targets.to_dict()}
            if propeller.design_targets is not None and propeller.design_targets.requested else {}),
     }

@@ -95,6 +95,16 @@ FILLET_RETRY_TIME_LIMIT_S = 15.0
 #: fillet takes at most about 60 + 60 + 3 x 60 s.
 FILLET_TRIES_TIME_LIMIT_S = 60.0
 
+#: Where the constant-radius root fillet fails and a blade face bends concavely (seen from outside)
+#: along a junction edge tighter than the fillet radius / this fraction, a last round of tries gives
+#: that edge the radius this fraction x the bend's radius (the other edges keep the requested one):
+#: the ball then fits the bend (issue 13; the bends are the design's own sections, measured against
+#: the analytic surface).
+REDUCED_FILLET_FRACTION = 0.5
+
+#: Points per junction edge at which the blade face's bend is measured for the reduced fillet.
+REDUCED_FILLET_SAMPLES = 40
+
 #: A repaired root fillet (ShapeFix) is accepted only if it adds at most this many r^2 of volume
 #: per mm of junction: a rolling-ball fillet between faces meeting at 30 degrees adds 2.4 r^2,
 #: at 90 degrees 0.21 r^2 (measured repaired fillets: 0.4-0.5 r^2).

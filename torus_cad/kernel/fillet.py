@@ -51,19 +51,22 @@ import select
 import signal
 import time
 from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass
 
 import cadquery as cq
 from OCP.BRep import BRep_Builder, BRep_Tool
-from OCP.BRepAdaptor import BRepAdaptor_Surface
+from OCP.BRepAdaptor import BRepAdaptor_Curve, BRepAdaptor_Surface
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
 from OCP.BRepExtrema import BRepExtrema_DistShapeShape
 from OCP.BRepFilletAPI import BRepFilletAPI_MakeFillet
+from OCP.BRepLProp import BRepLProp_SLProps
 from OCP.BRepTools import BRepTools
 from OCP.GeomAbs import GeomAbs_BezierSurface, GeomAbs_BSplineSurface, GeomAbs_Cylinder, GeomAbs_OffsetSurface
 from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt, gp_Trsf, gp_Vec2d
+from OCP.ShapeAnalysis import ShapeAnalysis_Surface
 from OCP.ShapeFix import ShapeFix_Shape
 from OCP.ShapeUpgrade import ShapeUpgrade_ShapeDivideClosed
-from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_WIRE
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_REVERSED, TopAbs_WIRE
 from OCP.TopExp import TopExp
 from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS, TopoDS_Edge, TopoDS_Face, TopoDS_Shape, TopoDS_Shell, TopoDS_Solid, TopoDS_Wire
@@ -77,6 +80,8 @@ from torus_cad.tolerances import (
     FILLET_RETRY_TIME_LIMIT_S,
     FILLET_TIME_LIMIT_S,
     FILLET_TRIES_TIME_LIMIT_S,
+    REDUCED_FILLET_FRACTION,
+    REDUCED_FILLET_SAMPLES,
     REPAIRED_FILLET_MAX_AREA_RADII2,
     VOLUME_CHECK_RELATIVE_PRECISION,
 )
@@ -128,10 +133,43 @@ def junction_edges(solid: cq.Solid) -> list[TopoDS_Edge]:
     return edges
 
 
+@dataclass(frozen=True)
+class RootFillet:
+    """A filleted solid and the radii its fillet has (mm).
+
+    Attributes:
+        solid: one valid closed solid.
+        radius_mm: the requested radius (``hub.root_fillet_radius``).
+        smallest_radius_mm: the smallest radius on any junction edge; ``radius_mm`` when the fillet
+            has the requested radius everywhere.
+        reduced_junction_mm: length of blade 0's junction (mm) whose fillet has a smaller radius,
+            0 for a constant-radius fillet (see :func:`reduced_edge_radii`).
+    """
+
+    solid: cq.Solid
+    radius_mm: float
+    smallest_radius_mm: float
+    reduced_junction_mm: float = 0.0
+
+    @property
+    def constant_radius(self) -> bool:
+        """Whether the fillet has the requested radius along the whole junction."""
+        return self.reduced_junction_mm == 0.0
+
+    def to_dict(self) -> dict[str, float | bool]:
+        """For the JSON report."""
+        return {"radius_mm": self.radius_mm, "constant_radius": self.constant_radius,
+                "smallest_radius_mm": self.smallest_radius_mm,
+                "reduced_junction_per_blade_mm": self.reduced_junction_mm}
+
+
 def fillet_blade_roots(solid: cq.Solid, radius_mm: float, suggest: bool = True,
-                       params: FilletParams | None = None, deadline: float | None = None) -> cq.Solid:
+                       params: FilletParams | None = None, deadline: float | None = None,
+                       reduce: bool = False) -> RootFillet:
     """``solid`` with a fillet of ``radius_mm`` along every blade-hub junction; one valid solid.
 
+    With ``reduce``, junction edges along which a blade face bends too tightly for the ball get a
+    smaller radius (:func:`reduced_edge_radii`); without, the fillet has ``radius_mm`` everywhere.
     Raises KernelError ("root fillet failed ...", with a radius that works when one of the
     smaller radii tried does) when OpenCascade cannot make it. ``deadline`` (time.monotonic()
     seconds) cuts the child's time limit short.
@@ -139,12 +177,54 @@ def fillet_blade_roots(solid: cq.Solid, radius_mm: float, suggest: bool = True,
     edges = junction_edges(solid)
     if not edges:
         raise KernelError("root fillet failed: no blade-hub junction edges found")
-    filleted = _fillet_in_child(solid, edges, radius_mm, params, deadline)
+    radii = reduced_edge_radii(solid, edges, radius_mm) if reduce else [radius_mm] * len(edges)
+    filleted = _fillet_in_child(solid, edges, radius_mm, params, deadline, radii if reduce else None)
     if filleted is not None:
-        return filleted
+        reduced = sum(cq.Edge(edge).Length() for edge, radius in zip(edges, radii) if radius < radius_mm)
+        return RootFillet(filleted, radius_mm, min(radii), reduced)
     if not suggest:
         raise KernelError(f"root fillet failed at hub.root_fillet_radius = {radius_mm:g} mm")
     raise fillet_failure(solid, radius_mm)
+
+
+def reduced_edge_radii(solid: cq.Solid, edges: Sequence[TopoDS_Edge], radius_mm: float) -> list[float]:
+    """A fillet radius per junction edge (mm): ``radius_mm``, or, where the edge's blade face bends
+    concavely (seen from outside) tighter than ``radius_mm`` / REDUCED_FILLET_FRACTION along the
+    edge, REDUCED_FILLET_FRACTION x the tightest bend's radius there.
+
+    A rolling ball of radius r cannot stay in contact with a face that bends concavely tighter
+    than r (its centre path would have a cusp). On fuzz designs whose blade sections are a
+    millimetre or two long where they meet the hub, a cambered section's own concave stretch is
+    that tight (the analytic surface, not the loft's fit, bends so: measured against
+    :func:`torus_cad.geometry.surface.surface_points`)."""
+    ancestors = TopTools_IndexedDataMapOfShapeListOfShape()
+    TopExp.MapShapesAndAncestors_s(solid.wrapped, TopAbs_EDGE, TopAbs_FACE, ancestors)
+    radii = []
+    for edge in edges:
+        faces = [TopoDS.Face_s(face) for face in ancestors.FindFromKey(edge)]
+        blade_face = next(face for face in faces if BRepAdaptor_Surface(face).GetType() in BLADE_SURFACES)
+        bend_mm = _tightest_concave_radius_along(edge, blade_face)
+        radii.append(min(radius_mm, REDUCED_FILLET_FRACTION * bend_mm))
+    return radii
+
+
+def _tightest_concave_radius_along(edge: TopoDS_Edge, face: TopoDS_Face) -> float:
+    """The smallest radius (mm) of a concave bend (seen from outside) of ``face`` at REDUCED_FILLET_SAMPLES
+    points along ``edge``; inf where it bends only convexly."""
+    surface = BRepAdaptor_Surface(face)
+    outward = -1.0 if face.Orientation() == TopAbs_REVERSED else 1.0  # concave: positive curvature
+    projector = ShapeAnalysis_Surface(BRep_Tool.Surface_s(face))
+    curve = BRepAdaptor_Curve(edge)
+    first, last = curve.FirstParameter(), curve.LastParameter()
+    tightest = math.inf
+    for index in range(REDUCED_FILLET_SAMPLES):
+        uv = projector.ValueOfUV(curve.Value(first + (last - first) * index / (REDUCED_FILLET_SAMPLES - 1)), 1e-7)
+        props = BRepLProp_SLProps(surface, uv.X(), uv.Y(), 2, 1e-7)
+        if props.IsCurvatureDefined():
+            concave = max(outward * props.MaxCurvature(), outward * props.MinCurvature())
+            if concave > 0.0:
+                tightest = min(tightest, 1.0 / concave)
+    return tightest
 
 
 def fillet_failure(solid: cq.Solid, radius_mm: float) -> KernelError:
@@ -171,7 +251,7 @@ _RUN_OUT_RADII = 3.0
 
 
 def fillet_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], radius_mm: float,
-                   run_out: RunOutHub | None = None) -> cq.Solid:
+                   run_out: RunOutHub | None = None) -> RootFillet:
     """The filleted propeller from one filleted blade: blade 0 joined to ``hub``, filleted, patterned.
 
     ``blade`` is built at ``angles_deg[0]``; its side face is split as
@@ -186,6 +266,10 @@ def fillet_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], 
     The first try stops at FILLET_TIME_LIMIT_S; each further one at FILLET_RETRY_TIME_LIMIT_S, and all
     of them together at FILLET_TRIES_TIME_LIMIT_S.
 
+    When every try fails and a blade face bends too tightly for the ball along some junction edge
+    (:func:`reduced_edge_radii`), the same tries are made once more with those edges' radii
+    reduced; the result then says so (:attr:`RootFillet.constant_radius` is False).
+
     Raises KernelError as :func:`fillet_blade_roots` does when the fillet fails; returns a
     checked single valid solid.
     """
@@ -199,22 +283,60 @@ def fillet_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], 
             pass
         if math.isinf(deadline):
             deadline = time.monotonic() + FILLET_TRIES_TIME_LIMIT_S
-    if run_out is not None and time.monotonic() < deadline:
-        extended, tools = run_out(_RUN_OUT_RADII * radius_mm)
-        if _touches(blade, tools[:2]):  # the blade itself reaches past a hub end: the cut-back keeps it there
-            blades = [copy.wrapped for copy in pattern_blades(blade, angles_deg)]
-            tools = [cut(slab, blades, "keep the blades out of the run-out's cut-back") for slab in tools[:2]] + tools[2:]
+    attempt = _RunOut(blade, angles_deg, radius_mm, run_out)
+    filleted = attempt.tries(split, deadline, reduce=False)
+    if filleted is not None:
+        return filleted
+    joined = single_valid_solid(fuse_pattern(hub, split[0], angles_deg[:1]).shape, "joining blade 0 to the hub")
+    if any(radius < radius_mm for radius in reduced_edge_radii(joined, junction_edges(joined), radius_mm)):
+        deadline = time.monotonic() + FILLET_TRIES_TIME_LIMIT_S  # the reduced tries get the same time again
         for index, params in _TRIES:
             try:
-                filleted = _fillet_and_pattern(extended, split[index], angles_deg, radius_mm, suggest=False,
-                                               params=params, deadline=_try_deadline(deadline, first=False))
-                return single_valid_solid(cq.Shape.cast(cut(filleted.wrapped, tools, "cut the run-out hub back to the hub's length")),
-                                          "cutting the run-out hub back")
+                return _fillet_and_pattern(hub, split[index], angles_deg, radius_mm, suggest=False, params=params,
+                                           deadline=_try_deadline(deadline, first=False), reduce=True)
             except KernelError:
                 pass
+        filleted = attempt.tries(split, deadline, reduce=True)
+        if filleted is not None:
+            return filleted
     # Every try failed: the error names a smaller radius that works on blade 0, if one does.
-    raise fillet_failure(single_valid_solid(fuse_pattern(hub, split[0], angles_deg[:1]).shape,
-                                            "joining blade 0 to the hub"), radius_mm)
+    raise fillet_failure(joined, radius_mm)
+
+
+class _RunOut:
+    """The tries on the run-out hub (see :func:`fillet_pattern`), made when first needed."""
+
+    def __init__(self, blade: cq.Solid, angles_deg: Sequence[float], radius_mm: float, run_out: RunOutHub | None) -> None:
+        self.blade, self.angles_deg, self.radius_mm, self.run_out = blade, angles_deg, radius_mm, run_out
+        self.made: tuple[cq.Solid, list[TopoDS_Shape]] | None = None
+
+    def _hub_and_tools(self) -> tuple[cq.Solid, list[TopoDS_Shape]]:
+        if self.made is None:
+            assert self.run_out is not None
+            extended, tools = self.run_out(_RUN_OUT_RADII * self.radius_mm)
+            if _touches(self.blade, tools[:2]):  # the blade itself reaches past a hub end: the cut-back keeps it there
+                blades = [copy.wrapped for copy in pattern_blades(self.blade, self.angles_deg)]
+                tools = [cut(slab, blades, "keep the blades out of the run-out's cut-back") for slab in tools[:2]] + tools[2:]
+            self.made = extended, tools
+        return self.made
+
+    def tries(self, split: _LazySplits, deadline: float, reduce: bool) -> RootFillet | None:
+        """The first of :data:`_TRIES` that works on the run-out hub, cut back; None if none does by ``deadline``."""
+        if self.run_out is None or time.monotonic() >= deadline:
+            return None
+        extended, tools = self._hub_and_tools()
+        for index, params in _TRIES:
+            try:
+                filleted = _fillet_and_pattern(extended, split[index], self.angles_deg, self.radius_mm, suggest=False,
+                                               params=params, deadline=_try_deadline(deadline, first=False),
+                                               reduce=reduce)
+                solid = single_valid_solid(cq.Shape.cast(cut(filleted.solid.wrapped, tools,
+                                                             "cut the run-out hub back to the hub's length")),
+                                           "cutting the run-out hub back")
+                return RootFillet(solid, filleted.radius_mm, filleted.smallest_radius_mm, filleted.reduced_junction_mm)
+            except KernelError:
+                pass
+        return None
 
 
 def _try_deadline(deadline: float, first: bool) -> float:
@@ -243,19 +365,23 @@ class _LazySplits:
 
 def _fillet_and_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], radius_mm: float,
                         suggest: bool = True, params: FilletParams | None = None,
-                        deadline: float | None = None) -> cq.Solid:
+                        deadline: float | None = None, reduce: bool = False) -> RootFillet:
     single = fuse_pattern(hub, blade, angles_deg[:1]).shape
     filleted = fillet_blade_roots(single_valid_solid(single, "joining blade 0 to the hub"), radius_mm, suggest, params,
-                                  deadline)
+                                  deadline, reduce)
     if len(angles_deg) == 1:
         return filleted
     try:
-        return single_valid_solid(cq.Shape.cast(_assemble_filleted(filleted.wrapped, angles_deg)),
-                                  "patterning the filleted blade")
+        solid = single_valid_solid(cq.Shape.cast(_assemble_filleted(filleted.solid.wrapped, angles_deg)),
+                                   "patterning the filleted blade")
+        return RootFillet(solid, radius_mm, filleted.smallest_radius_mm, filleted.reduced_junction_mm)
     except KernelError:
         whole = fuse_pattern(hub, blade, angles_deg).shape
-        return fillet_blade_roots(single_valid_solid(whole, "joining the blades to the hub"), radius_mm, suggest,
-                                  params, deadline)
+        everywhere = fillet_blade_roots(single_valid_solid(whole, "joining the blades to the hub"), radius_mm, suggest,
+                                        params, deadline, reduce)
+        # every blade's junction is the same: report blade 0's share of the reduced length
+        return RootFillet(everywhere.solid, radius_mm, everywhere.smallest_radius_mm,
+                          everywhere.reduced_junction_mm / len(angles_deg))
 
 
 def _touches(shape: cq.Solid, tools: Sequence[TopoDS_Shape]) -> bool:
@@ -345,15 +471,22 @@ def _outer_cylinder(faces: Sequence[TopoDS_Face]) -> TopoDS_Face:
 
 
 def fillet_edges(solid: cq.Solid, edges: list[TopoDS_Edge], radius_mm: float,
-                 params: FilletParams | None = None) -> cq.Solid | None:
+                 params: FilletParams | None = None, edge_radii: Sequence[float] | None = None) -> cq.Solid | None:
     """The fillet in this process: the checked solid, or None when OpenCascade fails or the result is unsound.
 
-    ``params``: BRepFilletAPI_MakeFillet.SetParams values (default: OpenCascade's)."""
+    ``params``: BRepFilletAPI_MakeFillet.SetParams values (default: OpenCascade's). ``edge_radii``:
+    a radius per edge (mm) instead of ``radius_mm`` on all; OpenCascade blends the radius between
+    edges of one contour that differ."""
     fillet = BRepFilletAPI_MakeFillet(solid.wrapped)
     if params is not None:
         fillet.SetParams(*params)
     for edge in edges:
         fillet.Add(radius_mm, edge)
+    for edge, radius in zip(edges, edge_radii or ()):
+        if radius < radius_mm:
+            contour = fillet.Contour(edge)
+            index = next(i for i in range(1, fillet.NbEdges(contour) + 1) if fillet.Edge(contour, i).IsSame(edge))
+            fillet.SetRadius(radius, contour, index)
     try:
         fillet.Build()
     except Exception:  # OCCT raises Standard_Failure subclasses through OCP
@@ -384,7 +517,8 @@ def fillet_edges(solid: cq.Solid, edges: list[TopoDS_Edge], radius_mm: float,
 
 
 def _fillet_in_child(solid: cq.Solid, edges: list[TopoDS_Edge], radius_mm: float,
-                     params: FilletParams | None = None, deadline: float | None = None) -> cq.Solid | None:
+                     params: FilletParams | None = None, deadline: float | None = None,
+                     edge_radii: Sequence[float] | None = None) -> cq.Solid | None:
     """:func:`fillet_edges` in a forked child (a crash or a hang there is a failed fillet, not a dead process).
 
     The child gets FILLET_TIME_LIMIT_S, or what is left until ``deadline`` (time.monotonic()) if less."""
@@ -398,7 +532,7 @@ def _fillet_in_child(solid: cq.Solid, edges: list[TopoDS_Edge], radius_mm: float
         os.close(read_end)
         status = 1
         try:
-            result = fillet_edges(solid, edges, radius_mm, params)
+            result = fillet_edges(solid, edges, radius_mm, params, edge_radii)
             if result is not None:
                 with os.fdopen(write_end, "wb") as pipe:
                     pipe.write(_to_brep(result.wrapped))
