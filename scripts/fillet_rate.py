@@ -7,7 +7,9 @@
 Each design comes from the fuzz sampler (:func:`torus_cad.studies.fuzz.random_design_dict`, the
 designs ``scripts/fuzz.py`` draws) with ``hub.root_fillet_radius`` set. Designs refused before
 the kernel, or whose fuse fails, are not counted; the others either get their fillet (one
-valid solid) or fail with "root fillet failed". The fillet runs in a forked child process,
+valid solid: ``ok`` with the requested radius everywhere, ``reduced`` with a smaller one along
+junction edges where the blade bends too tightly for it, see torus_cad.kernel.fillet.RootFillet)
+or fail with "root fillet failed". The fillet runs in a forked child process,
 so a crash in OpenCascade counts as a failure. Prints one line per design and the rate;
 writes ``fillet_rate_out/fillet_rate.json``.
 """
@@ -42,23 +44,30 @@ def main() -> int:
         start = time.perf_counter()
         try:
             propeller = build_propeller(PropellerParameters.from_dict(design))
-            outcome = "ok" if is_valid_closed_solid(propeller.solid) else "failed"
+            made = propeller.root_fillet
+            outcome = ("failed" if made is None or not is_valid_closed_solid(propeller.solid)
+                       else "ok" if made.constant_radius else "reduced")
         except (ParameterError, GeometryError):
             outcome = "refused"
         except KernelError as error:
             outcome = "failed" if "root fillet failed" in str(error) else "fuse_failed"
         seconds = time.perf_counter() - start
-        rows.append({"seed": seed, "blades": design["blades"], "outcome": outcome, "seconds": round(seconds, 3)})
+        rows.append({"seed": seed, "blades": design["blades"], "outcome": outcome, "seconds": round(seconds, 3),
+                     **({"smallest_radius_mm": made.smallest_radius_mm, "reduced_junction_mm": made.reduced_junction_mm}
+                        if outcome == "reduced" and made is not None else {})})
         if outcome != "refused":
             print(f"seed {seed:5d}  blades {design['blades']}  {outcome:<8} {seconds:6.2f} s", flush=True)
     ok = sum(row["outcome"] == "ok" for row in rows)
-    counted = sum(row["outcome"] in ("ok", "failed") for row in rows)
+    reduced = sum(row["outcome"] == "reduced" for row in rows)
+    counted = sum(row["outcome"] in ("ok", "reduced", "failed") for row in rows)
     rate = ok / counted if counted else float("nan")
-    print(f"root fillet {args.radius:g} mm: {ok} of {counted} valid designs ({100 * rate:.1f} %); "
+    print(f"root fillet {args.radius:g} mm: {ok} of {counted} valid designs ({100 * rate:.1f} %) at that radius everywhere, "
+          f"{ok + reduced} ({100 * (ok + reduced) / max(counted, 1):.1f} %) with {reduced} reduced where the blade bends too "
+          "tightly; "
           f"{sum(row['outcome'] == 'refused' for row in rows)} refused, "
           f"{sum(row['outcome'] == 'fuse_failed' for row in rows)} fuse failures not counted")
     args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "fillet_rate.json").write_text(json.dumps({"radius_mm": args.radius, "ok": ok, "counted": counted,
+    (args.out / "fillet_rate.json").write_text(json.dumps({"radius_mm": args.radius, "ok": ok, "reduced": reduced, "counted": counted,
                                                            "rate": rate, "designs": rows}, indent=1) + "\n")
     return 0
 

@@ -282,3 +282,64 @@ def test_repaired_root_fillet_is_one_valid_solid_with_a_fillets_volume():
     # 0.69 r^2 per mm, at 90 degrees 0.21 r^2 (measured: 4.0 mm^3, 0.41 r^2)
     assert 0.0 < added < 2 * 19.6 * 0.69 * 0.5 ** 2
     assert any(_principal_curvatures(face)[1] == pytest.approx(1 / 0.5, rel=1e-3) for face in filleted.solid.Faces())
+
+
+#: A fuzz design (seed 51) whose blade sections are about 1.2 x 0.55 mm where they meet the hub: the
+#: section's own concave stretch there (the analytic surface's, not the loft fit's) bends with a
+#: radius of about 0.19 mm, so a 0.5 mm ball cannot roll along it (torus_cad.kernel.fillet.reduced_edge_radii).
+TIGHT_BEND = {
+    "blades": 3, "phase_deg": 103.0335194469152, "hub": {"radius": 6.548816038721474, "length": 12.387236822421597},
+    "airfoil": {"max_camber": 0.07654401786205449, "camber_position": 0.6861265172037483,
+                "thickness": 0.36797093380493295, "camber_normal": True, "pivot": 0.8569059966870309},
+    "centerline": {"p2": [-14.803222439446435, 8.465992310391492, 36.07793936790384],
+                   "p3": [107.90656828993106, 4.703584624432446, 17.01036565869155],
+                   "p4": [104.60197675694873, 8.63446334373841], "frame": "rotation_minimizing"},
+    "transforms": {"angle_of_attack": [49.360830104940554, -126.59802252316693, -209.90777427871342,
+                                       -190.82255514049896, -3.727244382709948],
+                   "scale_x": [-8.580485112561167, 17.160970225122334, -21.30099726004738, 12.86815331638894,
+                               0.8441724397513328],
+                   "scale_y": [2.8235597218405752, -5.6471194436811505, -1.589375876661439, 4.141528846991837,
+                               0.7448161848742575]},
+    "resolution": {"sections": 33, "points": 25},
+}
+
+
+def _tightest_analytic_concave_bend_mm(params, s, t, step=1e-4):
+    """The smallest concave (seen from outside) radius of the analytic sections at ``s`` over ``t`` (mm)."""
+    from torus_cad.geometry.surface import surface_points
+
+    geometry = params.geometry()
+    rings = surface_points(geometry.blade, geometry.centerline(0), s, np.concatenate([t - step, t, t + step]))
+    before, at, after = np.split(rings, 3, axis=1)
+    first, second = (after - before) / (2 * step), (after - 2 * at + before) / step ** 2
+    centre = at.mean(axis=1, keepdims=True)
+    normal = np.cross(np.cross(first, second), first)  # toward the centre of curvature, in the osculating plane
+    inward = np.sign(np.sum(normal * (centre - at), axis=-1))  # + where the section bends round its inside
+    curvature = np.linalg.norm(np.cross(first, second), axis=-1) / np.linalg.norm(first, axis=-1) ** 3
+    concave = np.where(inward < 0, curvature, 0.0)
+    return 1.0 / concave.max()
+
+
+@pytest.mark.slow
+def test_root_fillet_is_reduced_only_where_the_blade_bends_too_tightly_and_says_so(tmp_path):
+    """Where the blade's own section bends concavely tighter than the ball near the hub, the fillet is
+    made with a smaller radius along those junction edges, the requested one elsewhere; the solid is
+    one valid solid, and the report says the radius is not constant."""
+    params = PropellerParameters.from_dict(TIGHT_BEND)
+    root_s = np.linspace(0.96, 0.999, 40)  # where the blade's second end meets the hub
+    assert _tightest_analytic_concave_bend_mm(params, root_s, np.linspace(1.01, 1.99, 981)) < 0.25
+    plain = build_propeller(params)
+    filleted = build_propeller(params, overrides={"hub.root_fillet_radius": 0.5})
+    assert is_valid_closed_solid(filleted.solid)
+    assert precise_volume(filleted.solid) > precise_volume(plain.solid)
+    fillet = filleted.root_fillet
+    assert fillet is not None and not fillet.constant_radius
+    assert 0.0 < fillet.smallest_radius_mm < 0.25 and fillet.reduced_junction_mm > 0.0
+    curvatures = [_principal_curvatures(face)[1] for face in filleted.solid.Faces()]
+    assert any(curvature == pytest.approx(1 / 0.5, rel=1e-3) for curvature in curvatures)  # the requested radius elsewhere
+    # the reduced edges (OpenCascade blends the radius into the neighbouring edges)
+    assert any(curvature == pytest.approx(1 / fillet.smallest_radius_mm, rel=1e-2) for curvature in curvatures)
+    from torus_cad.propeller import build_report
+
+    report = build_report(filleted, 1.0)["root_fillet"]
+    assert report["constant_radius"] is False and report["smallest_radius_mm"] == fillet.smallest_radius_mm
