@@ -53,7 +53,7 @@ def main() -> int:
             outcome = "failed" if "root fillet failed" in str(error) else "fuse_failed"
         seconds = time.perf_counter() - start
         rows.append({"seed": seed, "blades": design["blades"], "outcome": outcome, "seconds": round(seconds, 3),
-                     **({"smallest_radius_mm": made.smallest_radius_mm, "reduced_junction_mm": made.reduced_junction_mm}
+                     **({"smallest_radius_mm": made.smallest_radius_mm, "varying_junction_mm": made.varying_junction_mm}
                         if outcome == "reduced" and made is not None else {})})
         if outcome != "refused":
             print(f"seed {seed:5d}  blades {design['blades']}  {outcome:<8} {seconds:6.2f} s", flush=True)

@@ -334,7 +334,7 @@ def test_root_fillet_is_reduced_only_where_the_blade_bends_too_tightly_and_says_
     assert precise_volume(filleted.solid) > precise_volume(plain.solid)
     fillet = filleted.root_fillet
     assert fillet is not None and not fillet.constant_radius
-    assert 0.0 < fillet.smallest_radius_mm < 0.25 and fillet.reduced_junction_mm > 0.0
+    assert 0.0 < fillet.smallest_radius_mm < 0.25 and fillet.varying_junction_mm > 0.0
     curvatures = [_principal_curvatures(face)[1] for face in filleted.solid.Faces()]
     assert any(curvature == pytest.approx(1 / 0.5, rel=1e-3) for curvature in curvatures)  # the requested radius elsewhere
     # the reduced edges (OpenCascade blends the radius into the neighbouring edges)

@@ -151,8 +151,8 @@ def _command_build(args: argparse.Namespace) -> int:
         fillet = report.get("root_fillet")
         if fillet is not None and not fillet["constant_radius"]:
             print(f"warning: the root fillet is {fillet['radius_mm']:g} mm except along "
-                  f"{fillet['reduced_junction_per_blade_mm']:.2f} mm of each blade's junction, where the blade bends "
-                  f"too tightly for it: there it is smaller, down to {fillet['smallest_radius_mm']:.3g} mm")
+                  f"{fillet['varying_junction_per_blade_mm']:.2f} mm of each blade's junction: a blade bends too tightly "
+                  f"there for it, and its radius varies down to {fillet['smallest_radius_mm']:.3g} mm")
         if params.blades == 1:
             print(f"warning: a one-blade propeller is out of balance: static imbalance "
                   f"{report['balance']['static_imbalance_g_mm']:.3f} g mm; add a counterweight or use 2 or more blades")

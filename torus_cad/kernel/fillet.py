@@ -142,25 +142,27 @@ class RootFillet:
         radius_mm: the requested radius (``hub.root_fillet_radius``).
         smallest_radius_mm: the smallest radius on any junction edge; ``radius_mm`` when the fillet
             has the requested radius everywhere.
-        reduced_junction_mm: length of blade 0's junction (mm) whose fillet has a smaller radius,
-            0 for a constant-radius fillet (see :func:`reduced_edge_radii`).
+        varying_junction_mm: length (mm) of blade 0's junction along which the fillet's radius is
+            not constant: the whole junction loops (blade 0 has one where each end meets the hub)
+            that hold an edge of reduced radius (:func:`reduced_edge_radii`), as OpenCascade blends
+            the radius between that edge and its neighbours; 0 for a constant-radius fillet.
     """
 
     solid: cq.Solid
     radius_mm: float
     smallest_radius_mm: float
-    reduced_junction_mm: float = 0.0
+    varying_junction_mm: float = 0.0
 
     @property
     def constant_radius(self) -> bool:
         """Whether the fillet has the requested radius along the whole junction."""
-        return self.reduced_junction_mm == 0.0
+        return self.varying_junction_mm == 0.0
 
     def to_dict(self) -> dict[str, float | bool]:
         """For the JSON report."""
         return {"radius_mm": self.radius_mm, "constant_radius": self.constant_radius,
                 "smallest_radius_mm": self.smallest_radius_mm,
-                "reduced_junction_per_blade_mm": self.reduced_junction_mm}
+                "varying_junction_per_blade_mm": self.varying_junction_mm}
 
 
 def fillet_blade_roots(solid: cq.Solid, radius_mm: float, suggest: bool = True,
@@ -180,8 +182,7 @@ def fillet_blade_roots(solid: cq.Solid, radius_mm: float, suggest: bool = True,
     radii = reduced_edge_radii(solid, edges, radius_mm) if reduce else [radius_mm] * len(edges)
     filleted = _fillet_in_child(solid, edges, radius_mm, params, deadline, radii if reduce else None)
     if filleted is not None:
-        reduced = sum(cq.Edge(edge).Length() for edge, radius in zip(edges, radii) if radius < radius_mm)
-        return RootFillet(filleted, radius_mm, min(radii), reduced)
+        return RootFillet(filleted, radius_mm, min(radii), _varying_junction_mm(solid, edges, radii, radius_mm))
     if not suggest:
         raise KernelError(f"root fillet failed at hub.root_fillet_radius = {radius_mm:g} mm")
     raise fillet_failure(solid, radius_mm)
@@ -206,6 +207,19 @@ def reduced_edge_radii(solid: cq.Solid, edges: Sequence[TopoDS_Edge], radius_mm:
         bend_mm = _tightest_concave_radius_along(edge, blade_face)
         radii.append(min(radius_mm, REDUCED_FILLET_FRACTION * bend_mm))
     return radii
+
+
+def _varying_junction_mm(solid: cq.Solid, edges: Sequence[TopoDS_Edge], radii: Sequence[float], radius_mm: float
+                         ) -> float:
+    """Length (mm) of the fillet contours (chains of tangent junction edges, as OpenCascade forms
+    them) that hold an edge whose radius is below ``radius_mm``."""
+    if min(radii, default=radius_mm) >= radius_mm:
+        return 0.0
+    contours = BRepFilletAPI_MakeFillet(solid.wrapped)
+    for edge in edges:
+        contours.Add(radius_mm, edge)
+    varying = {contours.Contour(edge) for edge, radius in zip(edges, radii) if radius < radius_mm}
+    return sum(cq.Edge(edge).Length() for edge in edges if contours.Contour(edge) in varying)
 
 
 def _tightest_concave_radius_along(edge: TopoDS_Edge, face: TopoDS_Face) -> float:
@@ -333,7 +347,7 @@ class _RunOut:
                 solid = single_valid_solid(cq.Shape.cast(cut(filleted.solid.wrapped, tools,
                                                              "cut the run-out hub back to the hub's length")),
                                            "cutting the run-out hub back")
-                return RootFillet(solid, filleted.radius_mm, filleted.smallest_radius_mm, filleted.reduced_junction_mm)
+                return RootFillet(solid, filleted.radius_mm, filleted.smallest_radius_mm, filleted.varying_junction_mm)
             except KernelError:
                 pass
         return None
@@ -374,14 +388,14 @@ def _fillet_and_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[flo
     try:
         solid = single_valid_solid(cq.Shape.cast(_assemble_filleted(filleted.solid.wrapped, angles_deg)),
                                    "patterning the filleted blade")
-        return RootFillet(solid, radius_mm, filleted.smallest_radius_mm, filleted.reduced_junction_mm)
+        return RootFillet(solid, radius_mm, filleted.smallest_radius_mm, filleted.varying_junction_mm)
     except KernelError:
         whole = fuse_pattern(hub, blade, angles_deg).shape
         everywhere = fillet_blade_roots(single_valid_solid(whole, "joining the blades to the hub"), radius_mm, suggest,
                                         params, deadline, reduce)
-        # every blade's junction is the same: report blade 0's share of the reduced length
+        # every blade's junction is the same: report blade 0's share
         return RootFillet(everywhere.solid, radius_mm, everywhere.smallest_radius_mm,
-                          everywhere.reduced_junction_mm / len(angles_deg))
+                          everywhere.varying_junction_mm / len(angles_deg))
 
 
 def _touches(shape: cq.Solid, tools: Sequence[TopoDS_Shape]) -> bool:
