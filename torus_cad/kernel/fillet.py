@@ -35,10 +35,21 @@ What makes OpenCascade's rolling-ball fillet work on these blades (measured, see
 
 When the fillet fails, smaller radii are tried to name one that works in the error message.
 
+Where a blade face bends concavely, seen from outside, tighter than the radius along a junction
+edge, a rolling ball of that radius cannot stay in contact with it (its centre path would have a
+cusp), and no try above helps. On fuzz designs this happens where the blade's sections are a
+millimetre or two long at the hub: a cambered section's own concave stretch, scaled that small,
+bends with radii of 0.02-0.8 mm. The bend is the design's (the analytic surface,
+:func:`torus_cad.geometry.surface.surface_points`, bends as tightly; the loft's fit slightly less),
+not the loft's. When every try fails and blade 0 has such an edge, the tries are made once more
+with those edges' radius reduced to REDUCED_FILLET_FRACTION of the bend's radius
+(:func:`reduced_edge_radii`; OpenCascade blends it with the requested radius along the rest of
+that junction loop). The result says so (:class:`RootFillet`: ``constant_radius`` False, the
+smallest radius, the length of junction along which the radius varies), and so do the JSON
+report and the CLI.
+
 Measured on the fuzz sampler's valid designs (seeds 0-129, 0.5 mm, ``scripts/fillet_rate.py``):
-70 of 83 work. 11 of the 13 left have a blade face that bends concavely tighter than the fillet
-radius near the hub (``scripts/root_concavity.py``): a rolling ball cannot stay in contact along
-such a bend, and no try here changes that.
+70 of 83 get the requested radius everywhere; see the README for the reduced ones.
 """
 
 from __future__ import annotations
