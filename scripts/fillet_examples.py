@@ -4,7 +4,8 @@
     python scripts/fillet_examples.py                  # radii 0.5 and 1.0 mm
     python scripts/fillet_examples.py --radius 0.25
 
-Prints one line per design and radius: ``ok``, ``refused`` (exit-2 input, e.g. a chamfer the
+Prints one line per design and radius: ``ok``, ``reduced`` (made, but with a smaller radius
+along junction edges where the blade bends too tightly for it: torus_cad.kernel.fillet.RootFillet), ``refused`` (exit-2 input, e.g. a chamfer the
 fillet's spread would cut into) or ``failed`` (OpenCascade could not make the fillet), and the
 build time. Only the requested radius is tried (no search for a smaller one that works).
 """
@@ -24,13 +25,16 @@ EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 
 
 def outcome(params: PropellerParameters) -> str:
-    """``ok``, ``refused: <reason>`` or ``failed: <reason>`` of one build."""
+    """``ok``, ``reduced: <radii>``, ``refused: <reason>`` or ``failed: <reason>`` of one build."""
     try:
-        build_propeller(params)
+        made = build_propeller(params).root_fillet
     except (ParameterError, GeometryError) as error:
         return f"refused: {error}"
     except KernelError as error:
         return f"failed: {error}"
+    if made is not None and not made.constant_radius:
+        return (f"reduced: down to {made.smallest_radius_mm:.3g} mm along {made.varying_junction_mm:.2f} mm "
+                "of each blade's junction")
     return "ok"
 
 
