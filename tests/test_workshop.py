@@ -362,3 +362,15 @@ def test_root_fillet_is_reduced_only_where_the_blade_bends_too_tightly_and_says_
 
     report = build_report(filleted, 1.0)["root_fillet"]
     assert report["constant_radius"] is False and report["smallest_radius_mm"] == fillet.smallest_radius_mm
+
+
+@pytest.mark.slow
+def test_cli_warns_of_a_reduced_root_fillet(tmp_path, capsys):
+    import json
+
+    design = tmp_path / "tight.toml"
+    design.write_text(PropellerParameters.from_dict({**TIGHT_BEND, "name": "tight"}).to_toml())
+    assert main(["build", str(design), "--set", "hub.root_fillet_radius=0.5", "--out", str(tmp_path / "out")]) == 0
+    assert "warning: the root fillet is 0.5 mm except along" in capsys.readouterr().out
+    report = json.loads((tmp_path / "out" / "tight.json").read_text())["root_fillet"]
+    assert report["constant_radius"] is False and 0.0 < report["smallest_radius_mm"] < 0.5
