@@ -70,7 +70,8 @@ class Hub(Section):
                                       doc="radial set-screw hole at mid-length, between blades, onto the flat; 0 = none")
     chamfer: float = param(0.0, unit="mm", ge=0.0, le=100.0, doc="45-degree chamfer on the hub's outer end edges; 0 = none")
     root_fillet_radius: float = param(0.0, unit="mm", ge=0.0, le=20.0,
-                                      doc="fillet along every blade-hub junction; 0 = sharp junction (the spec)")
+                                      doc="fillet along every blade-hub junction (smaller where a blade bends too tightly for it; "
+                                          "the report's root_fillet says so); 0 = sharp junction (the spec)")
 
     @model_validator(mode="after")
     def _mounting_fits(self) -> Self:
