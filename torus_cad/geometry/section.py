@@ -15,8 +15,7 @@ cap*: the cubic Bezier curve with poles
 (U, L the upper and lower half's ends, T_u, T_l their unit tangents there pointing aft, h_u, h_l
 > 0 the handle lengths), which leaves each half along its own tangent, so the closed curve is
 smooth (G1, no corner) all round. Its width where it meets the halves is |U - L|, the
-trailing-edge thickness, and, because the halves converge towards the trailing edge, nowhere
-is the cap wider. With both handles 2/3 |U - L| and parallel tangents this is the standard
+trailing-edge thickness. With both handles 2/3 |U - L| and parallel tangents this is the standard
 cubic approximation of a half circle of diameter |U - L| (within 1.8 % of its radius): the
 blade sets the handle lengths so that the cap is that near half circle in mm, after the
 section transform (:mod:`torus_cad.geometry.trailing_edge`). A Bezier cap is exact in the

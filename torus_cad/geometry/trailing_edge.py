@@ -16,7 +16,7 @@ of two shapes (``airfoil.trailing_edge_shape``):
 
 In both shapes the trailing-edge thickness is the distance between the surfaces' ends, where
 the base begins: the base's length when flat, the cap's width where it meets the surfaces when
-round (the cap is nowhere wider; measured on the solid as the chord of the cap's cut in a
+round (measured on the solid as the chord of the cap's cut in a
 section plane, ``tests/test_round_trailing_edge.py``). A coordinate file whose published
 trailing edge is open has a base of its own gap; with ``round`` it is capped the same way.
 
