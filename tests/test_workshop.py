@@ -4,6 +4,7 @@ root fillet, 3MF, balance and STEP metadata, each checked on the solid or the wr
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -127,20 +128,38 @@ def test_wall_is_the_distance_between_the_surfaces_at_a_chord_station():
 
 
 def test_printability_of_the_default_and_require_printable(tmp_path, capsys):
-    params = PropellerParameters()
-    blade = params.geometry().blade
-    result = printability(blade, 0.8)
-    walls = wall_mm(blade, np.linspace(0, 1, 101), np.linspace(0, 1, 1001)).max(axis=1)
+    geometry = PropellerParameters().geometry()
+    result = printability(geometry, 0.8)
+    s_in, s_out = result.exposed_s
+    walls = wall_mm(geometry.blade, np.linspace(s_in, s_out, 101), np.linspace(0, 1, 1001)).max(axis=1)
     assert result.thinnest_wall_mm == pytest.approx(walls.min(), rel=1e-4)
+    assert s_in <= result.thinnest_wall_s <= s_out
     assert result.trailing_edge_thickness_mm == 0.0 and not result.printable  # the spec's knife edge
     assert main(["build", "--out", str(tmp_path), "--require-printable"]) == 2
     error = capsys.readouterr().err
     assert "s = " in error and "manufacturing.min_wall" in error and not any(tmp_path.iterdir())
 
 
+@pytest.mark.parametrize("example", ["spec_default", "multirotor_5in_3blade", "marine_3blade_loop"])
+def test_printability_looks_only_at_the_blade_outside_the_hub(example):
+    """The buried ends (R_inset < r < R) are not printed as blade: the exposed span starts and ends
+    where the centerline crosses the hub's surface, and the thinnest wall lies inside it."""
+    geometry = PropellerParameters.from_toml(Path("examples") / f"{example}.toml").geometry()
+    result = printability(geometry, 0.8)
+    s_in, s_out = result.exposed_s
+    assert 0.0 < s_in < s_out < 1.0
+    points = geometry.centerline(0).points([s_in, s_out, 0.5 * (s_in + s_out)])
+    reach = np.maximum(np.hypot(points[:, 0], points[:, 1]) - geometry.hub.radius_mm,
+                       np.abs(points[:, 2]) - geometry.hub.length_mm / 2)
+    assert np.abs(reach[:2]).max() < 1e-9 and reach[2] > 0.0
+    assert s_in <= result.thinnest_wall_s <= s_out and s_in <= result.trailing_edge_thinnest_s <= s_out
+    buried = wall_mm(geometry.blade, np.linspace(0.0, s_in, 50), np.linspace(0, 1, 201)).max(axis=1).min()
+    assert result.thinnest_wall_mm >= buried * (1 - 1e-9)  # a buried root thinner than the blade does not count
+
+
 def test_blunt_trailing_edge_is_the_reported_trailing_edge_thickness():
-    blade = PropellerParameters().with_values({"airfoil.trailing_edge_thickness": 0.9}).geometry().blade
-    result = printability(blade, 0.8)
+    geometry = PropellerParameters().with_values({"airfoil.trailing_edge_thickness": 0.9}).geometry()
+    result = printability(geometry, 0.8)
     assert result.trailing_edge_thickness_mm == pytest.approx(0.9, rel=1e-6)
     assert result.printable
 

@@ -123,7 +123,7 @@ def _command_build(args: argparse.Namespace) -> int:
     if args.require_printable:  # decided from the analytic section, before any work or file
         from torus_cad.geometry.printability import printability
 
-        problem = printability(params.geometry().blade, params.manufacturing.min_wall).problem()
+        problem = printability(params.geometry(), params.manufacturing.min_wall).problem()
         if problem:
             raise GeometryError(f"not printable (--require-printable): {problem}")
     if _writes_a_mesh(params, args.no_stl):

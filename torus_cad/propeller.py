@@ -132,7 +132,7 @@ class Propeller:
 
 def design_printability(params: PropellerParameters) -> Printability:
     """The blade's printability from the analytic section alone (no kernel): see torus_cad.geometry.printability."""
-    return printability(params.geometry().blade, params.manufacturing.min_wall)
+    return printability(params.geometry(), params.manufacturing.min_wall)
 
 
 def _section_chords(surface: BladeSurface) -> NDArray[np.float64]:

@@ -10,11 +10,17 @@ Definitions (mm):
   placing the section on the frame is a rigid motion, so wall(s, u) = |diag(Sx, Sy) R(alpha)
   (upper(u) - lower(u))|, exactly; for NACA sections 2 y_t |diag(Sx, Sy) R(alpha) n_c|. A blunt
   trailing edge (``airfoil.trailing_edge_thickness``) is in the sections at every s.
-* **thinnest wall**: the smallest, over s in [0, 1], of the section's thickest wall
+* **exposed span** [s_in, s_out]: the sections a printer lays down as blade, those whose centre
+  (the centerline point) lies outside the hub, from where the centerline leaves the hub's
+  cylinder or end plane to where it comes back. The blade's ends are buried in the hub (they
+  start at R_inset, spec §3.2), and the sections that straddle the hub's surface are joined to
+  it (and to the root fillet), so their walls are not blade walls. Found from the centerline's
+  crossings of the hub surface, refined to 1e-12 in s.
+* **thinnest wall**: the smallest, over s in the exposed span, of the section's thickest wall
   max_u wall(s, u): the thinnest section of the blade. Where it is below the printer's minimum
   wall, no two perimeter lines fit anywhere in that section. Reported with its s and the chord
   fraction (chord units, the middle of the station) of that section's thickest point.
-* **trailing-edge thickness**: the smallest wall(s, u = 1) over s: 0 for the spec's sharp edge,
+* **trailing-edge thickness**: the smallest wall(s, u = 1) over the exposed span: 0 for the spec's sharp edge,
   the base of a blunt edge otherwise. The edges of every section taper below any printer's
   wall, so the sharp edge's zero is reported here, separately, instead of being the "thinnest
   wall" of every blade.
@@ -30,9 +36,9 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.optimize import minimize_scalar
+from scipy.optimize import brentq, minimize_scalar
 
-from torus_cad.geometry.propeller import BladeGeometry
+from torus_cad.geometry.propeller import BladeGeometry, PropellerGeometry
 from torus_cad.geometry.surface import sections_along
 from torus_cad.geometry.transforms import SectionLaws, evaluate_quartic, rotation_matrices
 
@@ -53,6 +59,7 @@ class Printability:
     thinnest_wall_chord_fraction: float
     trailing_edge_thickness_mm: float
     trailing_edge_thinnest_s: float
+    exposed_s: tuple[float, float]
     min_wall_mm: float
     printable: bool
 
@@ -100,10 +107,39 @@ def _section_matrices(laws: SectionLaws, s: NDArray[np.float64]) -> NDArray[np.f
     return scales[:, :, None] * rotation_matrices(evaluate_quartic(laws.angle_of_attack_deg, s))
 
 
-def printability(blade: BladeGeometry, min_wall_mm: float) -> Printability:
-    """Thinnest wall, trailing-edge thickness and the printable flag of a blade (module docstring)."""
+def exposed_span(geometry: PropellerGeometry) -> tuple[float, float]:
+    """[s_in, s_out] of the module docstring: where blade 0's centerline leaves the hub and comes back.
+
+    (0, 1) for a centerline that never leaves the hub (the kernel then has no blade to print).
+    """
+    centerline, hub = geometry.centerline(0), geometry.hub
+
+    def outside_mm(s: ArrayLike) -> NDArray[np.float64]:
+        """Positive outside the hub: max(r - R, |z| - L/2), mm, per s."""
+        points = centerline.points(s)
+        return np.maximum(np.hypot(points[:, 0], points[:, 1]) - hub.radius_mm, np.abs(points[:, 2]) - hub.length_mm / 2)
+
+    grid = np.linspace(0.0, 1.0, _S_SAMPLES)
+    out = outside_mm(grid) > 0.0
+    if not out.any():
+        return 0.0, 1.0
+    first, last = int(np.argmax(out)), len(grid) - 1 - int(np.argmax(out[::-1]))
+
+    def crossing(low: float, high: float) -> float:
+        return float(brentq(lambda s: float(outside_mm([s])[0]), low, high, xtol=1e-12))
+
+    s_in = crossing(grid[first - 1], grid[first]) if first > 0 else 0.0
+    s_out = crossing(grid[last], grid[last + 1]) if last < len(grid) - 1 else 1.0
+    return s_in, s_out
+
+
+def printability(geometry: PropellerGeometry, min_wall_mm: float) -> Printability:
+    """Thinnest wall, trailing-edge thickness and the printable flag of the blade over its exposed
+    span (module docstring)."""
+    blade = geometry.blade
+    span = exposed_span(geometry)
     u_grid = np.sin(np.linspace(0.0, 0.5 * np.pi, _X_SAMPLES))  # dense at the trailing edge
-    s_grid = np.linspace(0.0, 1.0, _S_SAMPLES)
+    s_grid = np.linspace(*span, _S_SAMPLES)
 
     def thickest(s: float) -> tuple[float, float]:
         walls = wall_mm(blade, [s], u_grid)[0]
@@ -120,8 +156,8 @@ def printability(blade: BladeGeometry, min_wall_mm: float) -> Printability:
     s_edge = _polish_minimum(lambda s: float(wall_mm(blade, [s], [1.0])[0, 0]), s_grid, edge)
     edge_thickness = float(wall_mm(blade, [s_edge], [1.0])[0, 0])
     edge_thickness = 0.0 if edge_thickness < 1e-12 else edge_thickness  # the spec's sharp edge: exactly 0
-    return Printability(wall, s_wall, chord_fraction(blade, s_wall, u_wall), edge_thickness, s_edge, min_wall_mm,
-                        bool(min(wall, edge_thickness) >= min_wall_mm * (1.0 - _ROUNDING)))
+    return Printability(wall, s_wall, chord_fraction(blade, s_wall, u_wall), edge_thickness, s_edge, span,
+                        min_wall_mm, bool(min(wall, edge_thickness) >= min_wall_mm * (1.0 - _ROUNDING)))
 
 
 def _polish_minimum(function: Any, grid: NDArray[np.float64], values: NDArray[np.float64]) -> float:
