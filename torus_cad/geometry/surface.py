@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -67,6 +68,13 @@ def place_on_frames(frames: Frames, planar: NDArray[np.float64]) -> NDArray[np.f
             + planar[..., 1:2] * frames.binormal[:, None, :])
 
 
+@lru_cache(maxsize=16)
+def _has_own_base(airfoil: Section) -> bool:
+    """:func:`has_base`, remembered: sections_along asks it of the same airfoil at every call
+    (hundreds per build, from the printability and blade-element reports)."""
+    return has_base(airfoil)
+
+
 def sections_along(blade: BladeGeometry, s: ArrayLike) -> Sequence[Section]:
     """The chord-unit section at every s: the airfoil itself, or, with a blunt trailing edge, the
     airfoil opened to the blade's absolute trailing-edge thickness there (:mod:`.trailing_edge`),
@@ -74,7 +82,7 @@ def sections_along(blade: BladeGeometry, s: ArrayLike) -> Sequence[Section]:
     blade's trailing-edge shape too (its round caps differ along s, as the section's size does)."""
     s = np.atleast_1d(np.asarray(s, dtype=float))
     thickness = blade.trailing_edge_thickness_mm
-    own_round = blade.round_trailing_edge and has_base(blade.airfoil)
+    own_round = blade.round_trailing_edge and _has_own_base(blade.airfoil)
     if thickness <= 0.0 and not own_round:
         return [blade.airfoil] * len(s)
     laws = blade.laws
