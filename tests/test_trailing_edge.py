@@ -1,6 +1,7 @@
 """Blunt trailing edge (issue 13 part 3): absolute thickness on every section, closed sections, sampling;
 flat and round (a cap tangent to both surfaces; on the solid: tests/test_round_trailing_edge.py)."""
 
+import itertools
 from pathlib import Path
 
 import numpy as np
@@ -146,7 +147,7 @@ def test_equal_arc_length_sampling_covers_the_cap():
     np.testing.assert_allclose(closed_points(section, sampling.t[te:lower + 1]), cap, atol=1e-14)
     cap_t = sampling.t[te:lower + 1] - 1.0
     arcs = [np.linalg.norm(np.diff(cap_points(section, np.linspace(a, b, 2001)), axis=0), axis=1).sum()
-            for a, b in zip(cap_t[:-1], cap_t[1:])]
+            for a, b in itertools.pairwise(cap_t)]
     assert max(arcs) / min(arcs) < 1.001
 
 
@@ -177,7 +178,7 @@ def test_coordinate_file_with_an_open_edge_gets_a_round_cap():
 
 
 def test_printability_reports_the_round_edge_thickness():
-    blade = PropellerParameters().with_values({"airfoil.trailing_edge_thickness": 0.9}).geometry().blade
-    assert blade.round_trailing_edge
-    result = printability(blade, 0.8)
+    geometry = PropellerParameters().with_values({"airfoil.trailing_edge_thickness": 0.9}).geometry()
+    assert geometry.blade.round_trailing_edge
+    result = printability(geometry, 0.8)
     assert result.trailing_edge_thickness_mm == pytest.approx(0.9, rel=1e-6)

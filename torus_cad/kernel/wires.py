@@ -29,6 +29,7 @@ the airfoil face in pieces (measured: README, "Root fillet").
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 
 import cadquery as cq
@@ -254,7 +255,7 @@ def bspline_wire(poles: NDArray[np.float64], knots: NDArray[np.float64], last_pi
         edge_curve = _bspline_curve(piece_poles, piece_knots)
         count = last_pieces if index == len(pieces) - 1 and len(pieces) > 1 else 1
         bounds = np.linspace(piece_knots[0], piece_knots[-1], count + 1)
-        for first, last in zip(bounds[:-1], bounds[1:]):
+        for first, last in itertools.pairwise(bounds):
             segment = edge_curve if count == 1 else _segment(edge_curve, float(first), float(last))
             builder.Add(_edge(segment))
     if not builder.IsDone():
