@@ -142,7 +142,7 @@ def blade_surface(blade: BladeGeometry, centerline: Centerline, sections: int, p
     (spec §5), with the trailing edge kept as a point unless ``anchor_trailing_edge`` is False.
     With a blunt trailing edge of constant thickness in mm the chord-unit sections differ
     along s: all of them are sampled at the parameters ``t`` of the section in the middle
-    (s = 0.5), which are spaced equally on it (and nearly so on the others), both corners included.
+    (s = 0.5), which are spaced equally on it (and nearly so on the others), both ends of the base included.
     """
     frames = blade_frames(blade, centerline, np.linspace(0.0, 1.0, sections))
     along = sections_along(blade, frames.s)
