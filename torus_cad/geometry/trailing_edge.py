@@ -31,6 +31,7 @@ unit normal at the trailing edge).
 from __future__ import annotations
 
 from collections.abc import Sequence
+from functools import lru_cache
 from typing import overload
 
 import numpy as np
@@ -107,40 +108,63 @@ def round_cap_handles(ends: NDArray[np.float64], derivatives: NDArray[np.float64
     return ROUND_CAP_HANDLE_FRACTION * thickness_mm[:, None] / mapped_tangent_mm
 
 
+@lru_cache(maxsize=16)
+def _family_ends(section: Section) -> tuple[tuple[NDArray[np.float64], NDArray[np.float64]],
+                                             tuple[NDArray[np.float64], NDArray[np.float64]]]:
+    """:func:`half_ends` and :func:`end_derivatives` of ``section`` opened by 0 and by 1, remembered
+    (every call of :func:`torus_cad.geometry.surface.sections_along` makes a new family)."""
+    family = section.with_trailing_edge_gap(0.0), section.with_trailing_edge_gap(1.0)
+    return ((half_ends(family[0]), half_ends(family[1])),
+            (end_derivatives(family[0]), end_derivatives(family[1])))
+
+
 class BluntSections(Sequence[Section]):
     """The sections of a blade with a blunt trailing edge: ``section`` opened by ``gaps[i]`` at the i-th s,
-    with a round cap of handles ``handles[i]`` (chord units, ``(k, 2)``) unless ``handles`` is None (flat).
+    flat, or, given the section matrices S(s) R(s) ``(k, 2, 2)`` as ``round_cap_matrices``, with a
+    round cap whose handles (:attr:`handles`) are made in mm by :func:`round_cap_handles`.
 
     Every section kind opens its trailing edge affinely in the gap (the thickness law changes by
     g times a fixed shape), so the whole family is evaluated from two sections: see :meth:`points_at`.
     """
 
-    def __init__(self, section: Section, gaps: NDArray[np.float64], handles: NDArray[np.float64] | None = None
-                 ) -> None:
+    def __init__(self, section: Section, gaps: NDArray[np.float64],
+                 round_cap_matrices: NDArray[np.float64] | None = None) -> None:
         self.section = section
         self.gaps = np.asarray(gaps, dtype=float)
-        self.handles = None if handles is None else np.asarray(handles, dtype=float)
+        self.round_cap_matrices = round_cap_matrices
+        self._handles: NDArray[np.float64] | None = None
+
+    @property
+    def handles(self) -> NDArray[np.float64] | None:
+        """The round caps' handle lengths h_u, h_l, chord units: ``(k, 2)``; None when flat. Made when
+        first asked for (the surfaces alone, e.g. for the printability report, do not need them)."""
+        if self.round_cap_matrices is None:
+            return None
+        if self._handles is None:
+            self._handles = round_cap_handles(self.ends(), self.end_derivatives(), self.round_cap_matrices)
+        return self._handles
 
     def _family(self) -> tuple[Section, Section]:
         return self.section.with_trailing_edge_gap(0.0), self.section.with_trailing_edge_gap(1.0)
 
     def ends(self) -> NDArray[np.float64]:
         """The surfaces' ends U, L of every section: ``(k, 2, 2)`` chord units."""
-        start, unit = (half_ends(section) for section in self._family())
+        start, unit = _family_ends(self.section)[0]
         return start[None] + self.gaps[:, None, None] * (unit - start)[None]
 
     def end_derivatives(self) -> NDArray[np.float64]:
         """The surfaces' end derivatives d f / du of every section: ``(k, 2, 2)`` (affine in the gap too)."""
-        start, unit = (end_derivatives(section) for section in self._family())
+        start, unit = _family_ends(self.section)[1]
         return start[None] + self.gaps[:, None, None] * (unit - start)[None]
 
     def cap_poles(self) -> NDArray[np.float64]:
         """Every section's round-cap poles (:meth:`RoundTrailingEdge.cap_poles`): ``(k, 4, 2)``."""
-        if self.handles is None:
+        lengths = self.handles
+        if lengths is None:
             raise ValueError("these sections have a flat trailing edge")
         ends, derivatives = self.ends(), self.end_derivatives()
         tangents = derivatives / np.linalg.norm(derivatives, axis=-1, keepdims=True)
-        handles = ends + self.handles[:, :, None] * tangents
+        handles = ends + lengths[:, :, None] * tangents
         return np.stack([ends[:, 0], handles[:, 0], handles[:, 1], ends[:, 1]], axis=1)
 
     def __len__(self) -> int:
@@ -154,11 +178,13 @@ class BluntSections(Sequence[Section]):
 
     def __getitem__(self, index: int | slice) -> Section | Sequence[Section]:
         if isinstance(index, slice):
-            return BluntSections(self.section, self.gaps[index], None if self.handles is None else self.handles[index])
+            matrices = self.round_cap_matrices
+            return BluntSections(self.section, self.gaps[index], None if matrices is None else matrices[index])
         opened = self.section.with_trailing_edge_gap(float(self.gaps[index]))
-        if self.handles is None:
+        lengths = self.handles
+        if lengths is None:
             return opened
-        return RoundTrailingEdge(opened, float(self.handles[index, 0]), float(self.handles[index, 1]))
+        return RoundTrailingEdge(opened, float(lengths[index, 0]), float(lengths[index, 1]))
 
     def points_at(self, t: ArrayLike) -> NDArray[np.float64]:
         """Every section at the closed parameters ``t`` (with a base): ``(len(self), len(t), 2)`` chord units."""
@@ -166,7 +192,7 @@ class BluntSections(Sequence[Section]):
         start, unit = (closed_points(section, t, base=True) for section in self._family())
         points = start[None] + self.gaps[:, None, None] * (unit - start)[None]
         on_cap = (t > 1.0) & (t < 2.0)
-        if self.handles is not None and np.any(on_cap):  # the cap is not affine in the gap
+        if self.round_cap_matrices is not None and np.any(on_cap):  # the cap is not affine in the gap
             points[:, on_cap] = bezier_points(self.cap_poles(), t[on_cap] - 1.0)
         return points
 
@@ -178,11 +204,7 @@ def blunt_sections(section: Section, thickness_mm: float | None, angle_deg: Arra
     count = len(np.atleast_1d(np.asarray(angle_deg, dtype=float)))
     gaps = (np.full(count, own_gap(section)) if thickness_mm is None
             else trailing_edge_gaps(section, thickness_mm, angle_deg, scale_x, scale_y))
-    sections = BluntSections(section, gaps)
-    if not round_cap:
-        return sections
-    matrices = section_matrices(angle_deg, scale_x, scale_y)
-    return BluntSections(section, gaps, round_cap_handles(sections.ends(), sections.end_derivatives(), matrices))
+    return BluntSections(section, gaps, section_matrices(angle_deg, scale_x, scale_y) if round_cap else None)
 
 
 def trailing_edge_thickness_mm(sections: Sequence[Section], angle_deg: ArrayLike, scale_x: ArrayLike,
