@@ -121,7 +121,7 @@ def equal_arc_length_section(airfoil: Section, count: int, anchor_trailing_edge:
     upper = surface_arc_length_table(airfoil, True, fine_samples)
     lower = surface_arc_length_table(airfoil, False, fine_samples)
     base = float(np.linalg.norm(trailing_edge_vector(airfoil))) > SHARP_TRAILING_EDGE_GAP
-    base_length = cap_length(airfoil) if base else 0.0
+    base_length = cap_length(airfoil)  # |U - L| unless round: below SHARP_TRAILING_EDGE_GAP when sharp
     perimeter = upper.total + base_length + lower.total
     if anchor_trailing_edge:
         lengths = np.array([upper.total, base_length, lower.total])
