@@ -85,8 +85,8 @@ MOUNTING_CLEARANCE_MM = 0.05
 #: for the root fillet when the trailing edge is round (torus_cad.kernel.wires): the airfoil face is
 #: then open, so the fillet's split of closed side faces does not apply. Fifths (split points at 20,
 #: 40, 60, 80 % of the way from the lower to the upper end, none at the leading edge, near 50 %) fillet
-#: the default with a 0.3 and a 0.8 mm edge at 0.5 and 1 mm; one piece fails all four, halves and
-#: thirds some (measured with scripts/fillet_examples.py-like builds, 2026-12-01).
+#: the default with a 0.3 and a 0.8 mm edge at 0.5 and 1 mm; one piece and halves fail all four,
+#: thirds and quarters one (0.3 mm at 1 mm) (in-process builds of those four, 2026-12-01).
 ROUND_EDGE_FILLET_PIECES = 5
 
 #: Seconds the root fillet may take (in its child process) before it counts as failed.
