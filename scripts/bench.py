@@ -135,11 +135,12 @@ def stage_times(runs: int) -> dict[str, Any]:
             "stl_triangles": (stl_bytes - 84) // 50}
 
 
-#: The workshop scenario (issue 13): the default with a bore, D-flat, set screw, chamfer and a
-#: 0.5 mm root fillet. The chamfer is 0.2 mm: the default's blade root comes within 0.85 mm of the
-#: hub's end, and a chamfer may not reach the fillet's spread (2 radii) over the hub.
+#: The workshop scenario (issue 13): the default with a bore, D-flat, set screw, chamfer, a 0.3 mm
+#: blunt trailing edge (round, the default shape) and a 0.5 mm root fillet. The chamfer is 0.2 mm:
+#: the default's blade root comes within 0.85 mm of the hub's end, and a chamfer may not reach the
+#: fillet's spread (2 radii) over the hub.
 WORKSHOP_CHANGES = {"hub.bore_diameter": 5.0, "hub.bore_flat_depth": 0.5, "hub.set_screw_diameter": 3.0,
-                    "hub.chamfer": 0.2, "hub.root_fillet_radius": 0.5}
+                    "hub.chamfer": 0.2, "airfoil.trailing_edge_thickness": 0.3, "hub.root_fillet_radius": 0.5}
 
 
 def workshop_stage_times(runs: int) -> dict[str, Any]:
@@ -564,7 +565,7 @@ def main(argv: list[str] | None = None) -> int:
     print("stage times ...", flush=True)
     report["stage_times"] = stage_times(args.runs)
     if "workshop" not in args.skip:
-        print("workshop scenario (bore, flat, set screw, chamfer, 0.5 mm fillet) ...", flush=True)
+        print("workshop scenario (bore, flat, set screw, chamfer, 0.3 mm round edge, 0.5 mm fillet) ...", flush=True)
         report["workshop"] = workshop_stage_times(max(1, min(args.runs, 3)))
         print("  " + ", ".join(f"{key} {1000 * value:.0f} ms" for key, value in report["workshop"]["median_s"].items()))
     if not args.quick and "cli" not in args.skip:

@@ -127,8 +127,10 @@ def test_other_airfoils_build_one_valid_solid(airfoil):
 
 @pytest.mark.slow
 def test_blunt_trailing_edge_measured_on_the_solid():
-    """A 0.4 mm base on every section: the straight edge where a section plane cuts the solid."""
-    params = PropellerParameters().with_values({"airfoil.trailing_edge_thickness": 0.4, **LIGHT})
+    """A 0.4 mm flat base on every section: the straight edge where a section plane cuts the solid
+    (the round cap: tests/test_round_trailing_edge.py)."""
+    params = PropellerParameters().with_values({"airfoil.trailing_edge_thickness": 0.4,
+                                                "airfoil.trailing_edge_shape": "flat", **LIGHT})
     propeller = build_propeller(params)
     assert propeller.solid.isValid() and len(propeller.solid.Solids()) == 1
     sharp_faces = len(build_propeller(PropellerParameters().with_values(LIGHT)).solid.Faces())

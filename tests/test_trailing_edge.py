@@ -1,5 +1,7 @@
-"""Blunt trailing edge (issue 13 part 3): absolute thickness on every section, closed sections, sampling."""
+"""Blunt trailing edge (issue 13 part 3): absolute thickness on every section, closed sections, sampling;
+flat and round (a cap tangent to both surfaces; on the solid: tests/test_round_trailing_edge.py)."""
 
+import itertools
 from pathlib import Path
 
 import numpy as np
@@ -9,12 +11,29 @@ from hypothesis import strategies as st
 
 from torus_cad.geometry.airfoil import NacaAirfoil
 from torus_cad.geometry.airfoil_file import read_airfoil_file
-from torus_cad.geometry.arc_length import equal_arc_length_section
-from torus_cad.geometry.section import closed_points, has_base
-from torus_cad.geometry.trailing_edge import blunt_sections, trailing_edge_thickness_mm
+from torus_cad.geometry.arc_length import ROUND_CAP_MINIMUM_POINTS, equal_arc_length_section
+from torus_cad.geometry.printability import printability
+from torus_cad.geometry.section import (
+    RoundTrailingEdge,
+    cap_points,
+    closed_points,
+    end_tangents,
+    half_ends,
+    has_base,
+)
+from torus_cad.geometry.surface import sections_along
+from torus_cad.geometry.trailing_edge import (
+    ROUND_CAP_HANDLE_FRACTION,
+    blunt_sections,
+    section_matrices,
+    trailing_edge_thickness_mm,
+)
 from torus_cad.geometry.transforms import transform_sections
+from torus_cad.parameters import PropellerParameters
+from torus_cad.parameters.design import TrailingEdgeShape
 
 AIRFOILS = Path(__file__).resolve().parent.parent / "examples" / "airfoils"
+EXAMPLES = AIRFOILS.parent
 
 
 @settings(max_examples=40, deadline=None)
@@ -73,3 +92,93 @@ def test_a_trailing_edge_thicker_than_the_sections_is_refused(tmp_path, capsys):
     error = capsys.readouterr().err
     assert code == 2 and "airfoil.trailing_edge_thickness = 1.2 mm is too thick" in error
     assert not (tmp_path / "out").exists()
+
+
+ANGLE, SCALE_X, SCALE_Y = [20.0, 35.0], [12.0, 6.0], [4.0, 2.0]
+
+
+def _round_sections(thickness_mm=0.4):
+    airfoil = PropellerParameters().geometry().blade.airfoil
+    return blunt_sections(airfoil, thickness_mm, ANGLE, SCALE_X, SCALE_Y, round_cap=True)
+
+
+def _cross(a, b):
+    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+
+
+def test_round_cap_leaves_each_surface_along_its_tangent():
+    for section in _round_sections():
+        assert isinstance(section, RoundTrailingEdge)
+        poles = section.cap_poles()
+        tangents = end_tangents(section)
+        leaving, arriving = poles[1] - poles[0], poles[3] - poles[2]
+        # the cap starts in the upper surface's direction and arrives along the lower one's reversed
+        assert abs(_cross(leaving / np.linalg.norm(leaving), tangents[0])) < 1e-12
+        assert leaving @ tangents[0] > 0.0
+        assert abs(_cross(arriving / np.linalg.norm(arriving), -tangents[1])) < 1e-12
+        # closed_points runs through the cap between t = 1 and 2, from U to L
+        np.testing.assert_allclose(closed_points(section, [1.0, 2.0]), half_ends(section), atol=1e-14)
+
+
+def test_round_cap_keeps_the_thickness_and_is_a_near_half_circle_in_mm():
+    sections = _round_sections(0.4)
+    np.testing.assert_allclose(trailing_edge_thickness_mm(sections, ANGLE, SCALE_X, SCALE_Y), 0.4, rtol=1e-10)
+    matrices = section_matrices(ANGLE, SCALE_X, SCALE_Y)
+    for matrix, section in zip(matrices, sections):
+        poles_mm = section.cap_poles() @ matrix.T
+        handles_mm = np.linalg.norm(poles_mm[[1, 2]] - poles_mm[[0, 3]], axis=1)
+        np.testing.assert_allclose(handles_mm, ROUND_CAP_HANDLE_FRACTION * 0.4, rtol=1e-9)
+        cap_mm = cap_points(section, np.linspace(0.0, 1.0, 201)) @ matrix.T
+        # it reaches aft of its ends by about a radius (a half circle: 0.2 mm; less where the surfaces converge)
+        across = (poles_mm[0] - poles_mm[3]) / 0.4
+        aft = np.array([across[1], -across[0]])
+        reach = np.max(np.abs((cap_mm - 0.5 * (poles_mm[0] + poles_mm[3])) @ aft))
+        assert 0.1 < reach < 0.25
+
+
+def test_equal_arc_length_sampling_covers_the_cap():
+    section = _round_sections()[0]
+    sampling = equal_arc_length_section(section, 200)
+    te, lower = sampling.trailing_edge_index, sampling.lower_corner_index
+    assert lower - te >= ROUND_CAP_MINIMUM_POINTS
+    cap = sampling.points[te:lower + 1]
+    np.testing.assert_allclose(cap[[0, -1]], half_ends(section), atol=1e-14)
+    # the points lie on the cap and are equally spaced in its arc length
+    np.testing.assert_allclose(closed_points(section, sampling.t[te:lower + 1]), cap, atol=1e-14)
+    cap_t = sampling.t[te:lower + 1] - 1.0
+    arcs = [np.linalg.norm(np.diff(cap_points(section, np.linspace(a, b, 2001)), axis=0), axis=1).sum()
+            for a, b in itertools.pairwise(cap_t)]
+    assert max(arcs) / min(arcs) < 1.001
+
+
+def test_sharp_default_is_the_same_whatever_the_shape():
+    round_surface = PropellerParameters().blade_surface()
+    flat_surface = PropellerParameters().with_values({"airfoil.trailing_edge_shape": "flat"}).blade_surface()
+    assert np.array_equal(round_surface.points, flat_surface.points)
+    assert round_surface.lower_corner_index is None and not round_surface.round_trailing_edge
+
+
+def test_shape_choice_is_validated():
+    params = PropellerParameters().with_values({"airfoil.trailing_edge_shape": "flat"})
+    assert params.airfoil.trailing_edge_shape == TrailingEdgeShape.FLAT
+    assert PropellerParameters().airfoil.trailing_edge_shape == TrailingEdgeShape.ROUND
+    with pytest.raises(Exception, match="trailing_edge_shape"):
+        PropellerParameters().with_values({"airfoil.trailing_edge_shape": "pointy"})
+
+
+def test_coordinate_file_with_an_open_edge_gets_a_round_cap():
+    params = PropellerParameters.from_toml(EXAMPLES / "prop_10x5_2blade.toml").with_values(
+        {"airfoil.trailing_edge_thickness": 0.0})  # the Clark Y file's own open edge
+    blade = params.geometry().blade
+    sections = sections_along(blade, [0.2, 0.5])
+    assert all(isinstance(section, RoundTrailingEdge) for section in sections)
+    # the cap closes the file's own gap: the surfaces are the file's
+    np.testing.assert_allclose(half_ends(sections[0]), half_ends(blade.airfoil), atol=1e-12)
+    assert params.blade_surface().round_trailing_edge
+
+
+def test_printability_reports_the_round_edge_thickness():
+    geometry = PropellerParameters().with_values({"airfoil.trailing_edge_thickness": 0.9}).geometry()
+    assert geometry.blade.round_trailing_edge
+    result = printability(geometry, 0.8)
+    assert result.trailing_edge_thickness_mm == pytest.approx(0.9, rel=1e-6)

@@ -281,9 +281,17 @@ def pitch_on_solid(propeller: Any, s: float, rotation: int = CLOCKWISE) -> float
     Measured on the B-rep: the plane cuts the solid and the contour through the centerline's
     point is sampled. The leading edge is the contour's point on the centerline (the spec's
     pivot 0 puts it there); the trailing edge is the middle of the contour's straight edge
-    (a blunt base) if it has one, else the contour's point farthest from the leading edge.
+    (a flat blunt base) if it has one, the middle of the chord of a round cap's cut (its ends are
+    the surfaces' ends, as the design's trailing edge is their middle), else the contour's point
+    farthest from the leading edge.
     """
-    from torus_cad.kernel.measure import contour_through, edge_points, plane_section_edges, straight_edges
+    from torus_cad.kernel.measure import (
+        contour_through,
+        edge_points,
+        farthest_middle_edge,
+        plane_section_edges,
+        straight_edges,
+    )
 
     geometry = propeller.parameters.geometry()
     frames = blade_frames(geometry.blade, geometry.centerline(0), [s])
@@ -295,6 +303,9 @@ def pitch_on_solid(propeller: Any, s: float, rotation: int = CLOCKWISE) -> float
     bases = straight_edges(edges)
     if bases:
         trailing = np.asarray(bases[0].positionAt(0.5).toTuple(), dtype=float)
+    elif propeller.surface.round_trailing_edge:
+        cap = farthest_middle_edge(edges, leading)
+        trailing = 0.5 * np.add(cap.startPoint().toTuple(), cap.endPoint().toTuple())
     else:
         trailing = points[int(np.argmax(np.linalg.norm(points - leading, axis=1)))]
     middle = 0.5 * (leading + trailing)

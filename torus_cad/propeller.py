@@ -47,7 +47,7 @@ from torus_cad.kernel.wires import SectionCurves, fit_section_curves
 from torus_cad.parameters import PropellerParameters, resolve_parameters
 from torus_cad.parameters.design import Handedness
 from torus_cad.stages import Stage, StageTimer
-from torus_cad.tolerances import VOLUME_CHECK_RELATIVE_PRECISION
+from torus_cad.tolerances import ROUND_EDGE_FILLET_PIECES, VOLUME_CHECK_RELATIVE_PRECISION
 
 #: Default density for mass: PLA, a common printing plastic (g/cm^3).
 DEFAULT_DENSITY_G_CM3 = 1.24
@@ -177,11 +177,12 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
                                   () if screw_arc is None else (screw_arc,))
     with timer.stage(Stage.WIRES):
         curves = fit_section_curves(surface.points, surface.trailing_edge_column, _section_chords(surface),
-                                    surface.lower_corner_index)
-        wires = curves.wires()
+                                    surface.lower_corner_index, surface.round_trailing_edge)
+        fillet_radius = params.hub.root_fillet_radius
+        # A round trailing edge leaves the blade's airfoil face open: the fillet needs it in pieces.
+        wires = curves.wires(ROUND_EDGE_FILLET_PIECES if fillet_radius > 0.0 and curves.round_trailing_edge else 1)
     with timer.stage(Stage.LOFT):
         blade = loft_solid(wires, surface.s)
-        fillet_radius = params.hub.root_fillet_radius
         hub = hub_solid(geometry.hub.radius_mm, geometry.hub.length_mm, 0.0 if seam_deg is None else seam_deg,
                         mounting)
         angles_deg = [geometry.blade_angle_deg(i) for i in range(geometry.blades)]

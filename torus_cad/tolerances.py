@@ -81,6 +81,15 @@ MAX_SWEEP_DESIGNS = 1_000_000
 #: any sampled blade point; covers the blade surface between its samples.
 MOUNTING_CLEARANCE_MM = 0.05
 
+#: Pieces the blade's airfoil face is split into (in equal ranges of its section curves' parameter)
+#: for the root fillet when the trailing edge is round (torus_cad.kernel.wires): the airfoil face is
+#: then open, so the fillet's split of closed side faces does not apply. Fifths (split points at 20,
+#: 40, 60, 80 % of the way from the lower to the upper end, none at the leading edge, near 50 %) fillet
+#: the default with a 0.3 and a 0.8 mm edge at 0.5 and 1 mm; one piece and halves fail all four,
+#: three pieces (split at 1/3 and 2/3, or at 1/4 and 3/4) one, the 0.3 mm edge at 1 mm (in-process
+#: builds of those four, 2026-12-01).
+ROUND_EDGE_FILLET_PIECES = 5
+
 #: Seconds the root fillet may take (in its child process) before it counts as failed.
 FILLET_TIME_LIMIT_S = 60.0
 

@@ -11,9 +11,10 @@ in u = sqrt(t) on each surface, where |df/du| is bounded; the spec's t is recove
 t = u^2 (upper) and t = 2 - u^2 (lower).
 
 Any :class:`~torus_cad.geometry.section.Section` is sampled this way (NACA 4- and 5-digit,
-.dat files). A section with a blunt trailing edge has a third piece, the straight base
-between its two corners; it takes its share of the points like the surfaces, so the spacing
-covers it too, and both corners are sample points.
+.dat files). A section with a blunt trailing edge has a third piece, the base between the two
+surfaces' ends (straight, or a round cap, :mod:`torus_cad.geometry.section`); it takes its share
+of the points like the surfaces, equally spaced in its own arc length, so the spacing covers it
+too, and both of its ends are sample points.
 """
 
 from __future__ import annotations
@@ -29,7 +30,11 @@ from torus_cad.errors import ParameterError
 from torus_cad.geometry.airfoil import airfoil_points
 from torus_cad.geometry.section import (
     SHARP_TRAILING_EDGE_GAP,
+    RoundTrailingEdge,
     Section,
+    cap_length,
+    cap_parameter_at,
+    cap_points,
     trailing_edge_vector,
 )
 from torus_cad.tolerances import ARC_LENGTH_FINE_SAMPLES, ARC_LENGTH_QUAD_ABS
@@ -115,12 +120,12 @@ def equal_arc_length_section(airfoil: Section, count: int, anchor_trailing_edge:
         raise ParameterError(f"points = {count} is out of range; allowed [8, inf)")
     upper = surface_arc_length_table(airfoil, True, fine_samples)
     lower = surface_arc_length_table(airfoil, False, fine_samples)
-    base_length = float(np.linalg.norm(trailing_edge_vector(airfoil)))
-    base = base_length > SHARP_TRAILING_EDGE_GAP
+    base = float(np.linalg.norm(trailing_edge_vector(airfoil))) > SHARP_TRAILING_EDGE_GAP
+    base_length = cap_length(airfoil)  # |U - L| unless round: below SHARP_TRAILING_EDGE_GAP when sharp
     perimeter = upper.total + base_length + lower.total
     if anchor_trailing_edge:
         lengths = np.array([upper.total, base_length, lower.total])
-        counts = _shares(count, lengths, minimum=np.array([2, 1 if base else 0, 2]))
+        counts = _shares(count, lengths, minimum=np.array([2, _base_minimum(airfoil) if base else 0, 2]))
         upper_arc = np.arange(counts[0]) * upper.total / counts[0]
         base_fraction = np.arange(counts[1]) / max(counts[1], 1)
         lower_arc = lower.total - np.arange(counts[2]) * lower.total / counts[2]
@@ -135,13 +140,21 @@ def equal_arc_length_section(airfoil: Section, count: int, anchor_trailing_edge:
         trailing_edge_index = lower_corner_index = None
     upper_u, lower_u = upper.root_chord_at(upper_arc), lower.root_chord_at(lower_arc)
     lower_start = 2.0 if base else 1.0
-    t = np.concatenate([upper_u**2, 1.0 + base_fraction, lower_start + 1.0 - lower_u**2])
-    corners = [airfoil.points_on_half(np.array([1.0]), side)[0] for side in (True, False)]
-    points = np.concatenate([airfoil.points_on_half(upper_u, True),
-                             (1.0 - base_fraction[:, None]) * corners[0] + base_fraction[:, None] * corners[1],
+    base_parameter = cap_parameter_at(airfoil, base_fraction)  # = the fraction on a flat base
+    t = np.concatenate([upper_u**2, 1.0 + base_parameter, lower_start + 1.0 - lower_u**2])
+    points = np.concatenate([airfoil.points_on_half(upper_u, True), cap_points(airfoil, base_parameter),
                              airfoil.points_on_half(lower_u, False)])
     return SectionSampling(t=t, points=points, perimeter=perimeter, trailing_edge_index=trailing_edge_index,
                            lower_corner_index=lower_corner_index, base=base)
+
+
+#: Fewest points on a round cap: its polygon (the mesh's, the plots') then turns round the edge in
+#: four steps (a flat base needs one: its upper corner).
+ROUND_CAP_MINIMUM_POINTS = 4
+
+
+def _base_minimum(airfoil: Section) -> int:
+    return ROUND_CAP_MINIMUM_POINTS if isinstance(airfoil, RoundTrailingEdge) else 1
 
 
 def _shares(count: int, lengths: NDArray[np.float64], minimum: NDArray[np.int64]) -> NDArray[np.int64]:

@@ -43,6 +43,8 @@ class BladeGeometry:
         frame: the moving frame's kind (spec §4).
         trailing_edge_thickness_mm: a blunt trailing edge this thick on every section (mm; 0 =
             the section's own edge, sharp for NACA sections; :mod:`torus_cad.geometry.trailing_edge`).
+        round_trailing_edge: a blunt trailing edge (the thickness above, or a coordinate file's open
+            edge) ends in a round cap (True) or a flat base (False; :mod:`torus_cad.geometry.trailing_edge`).
     """
 
     airfoil: Section
@@ -50,6 +52,7 @@ class BladeGeometry:
     local_control_points: tuple[tuple[float, float, float], ...]
     frame: FrameKind = FrameKind.FRENET
     trailing_edge_thickness_mm: float = 0.0
+    round_trailing_edge: bool = False
 
 
 @dataclass(frozen=True)

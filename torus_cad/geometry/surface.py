@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -17,7 +18,7 @@ from torus_cad.geometry.arc_length import equal_arc_length_section
 from torus_cad.geometry.centerline import Centerline
 from torus_cad.geometry.frames import Frames, section_frames
 from torus_cad.geometry.propeller import BladeGeometry
-from torus_cad.geometry.section import Section, closed_points, has_base
+from torus_cad.geometry.section import RoundTrailingEdge, Section, closed_points, has_base
 from torus_cad.geometry.trailing_edge import (
     TRAILING_EDGE_CHECK_SECTIONS,
     BluntSections,
@@ -42,6 +43,7 @@ class BladeSurface:
         frames: the frames the sections sit on.
         lower_corner_index: column of the lower corner of a blunt trailing edge (the base runs
             from ``trailing_edge_index`` to it); None for a sharp edge.
+        round_trailing_edge: whether that base is a round cap (:mod:`.trailing_edge`), not flat.
     """
 
     points: NDArray[np.float64]
@@ -50,6 +52,7 @@ class BladeSurface:
     trailing_edge_index: int | None
     frames: Frames
     lower_corner_index: int | None = None
+    round_trailing_edge: bool = False
 
     @property
     def trailing_edge_column(self) -> int:
@@ -65,16 +68,27 @@ def place_on_frames(frames: Frames, planar: NDArray[np.float64]) -> NDArray[np.f
             + planar[..., 1:2] * frames.binormal[:, None, :])
 
 
+@lru_cache(maxsize=16)
+def _has_own_base(airfoil: Section) -> bool:
+    """:func:`has_base`, remembered: sections_along asks it of the same airfoil at every call
+    (hundreds per build, from the printability and blade-element reports)."""
+    return has_base(airfoil)
+
+
 def sections_along(blade: BladeGeometry, s: ArrayLike) -> Sequence[Section]:
     """The chord-unit section at every s: the airfoil itself, or, with a blunt trailing edge, the
-    airfoil opened to the blade's absolute trailing-edge thickness there (:mod:`.trailing_edge`)."""
+    airfoil opened to the blade's absolute trailing-edge thickness there (:mod:`.trailing_edge`),
+    flat or round; an airfoil with a base of its own (a coordinate file's open edge) gets the
+    blade's trailing-edge shape too (its round caps differ along s, as the section's size does)."""
     s = np.atleast_1d(np.asarray(s, dtype=float))
     thickness = blade.trailing_edge_thickness_mm
-    if thickness <= 0.0:
+    own_round = blade.round_trailing_edge and _has_own_base(blade.airfoil)
+    if thickness <= 0.0 and not own_round:
         return [blade.airfoil] * len(s)
     laws = blade.laws
-    return blunt_sections(blade.airfoil, thickness, evaluate_quartic(laws.angle_of_attack_deg, s),
-                          evaluate_quartic(laws.scale_x_mm, s), evaluate_quartic(laws.scale_y_mm, s))
+    return blunt_sections(blade.airfoil, thickness if thickness > 0.0 else None,
+                          evaluate_quartic(laws.angle_of_attack_deg, s), evaluate_quartic(laws.scale_x_mm, s),
+                          evaluate_quartic(laws.scale_y_mm, s), blade.round_trailing_edge)
 
 
 def check_trailing_edge(blade: BladeGeometry, centerline: Centerline, hub_radius_mm: float, hub_length_mm: float
@@ -128,7 +142,7 @@ def blade_surface(blade: BladeGeometry, centerline: Centerline, sections: int, p
     (spec §5), with the trailing edge kept as a point unless ``anchor_trailing_edge`` is False.
     With a blunt trailing edge of constant thickness in mm the chord-unit sections differ
     along s: all of them are sampled at the parameters ``t`` of the section in the middle
-    (s = 0.5), which are spaced equally on it (and nearly so on the others), both corners included.
+    (s = 0.5), which are spaced equally on it (and nearly so on the others), both ends of the base included.
     """
     frames = blade_frames(blade, centerline, np.linspace(0.0, 1.0, sections))
     along = sections_along(blade, frames.s)
@@ -137,4 +151,5 @@ def blade_surface(blade: BladeGeometry, centerline: Centerline, sections: int, p
     sampling = equal_arc_length_section(reference, points, anchor_trailing_edge)
     planar = sampling.points if shared else sections_at(along, sampling.t)
     return BladeSurface(place_sections(blade, frames, planar), frames.s, sampling.t,
-                        sampling.trailing_edge_index, frames, sampling.lower_corner_index)
+                        sampling.trailing_edge_index, frames, sampling.lower_corner_index,
+                        isinstance(reference, RoundTrailingEdge))

@@ -2,8 +2,23 @@
 
 Each section kind changes its own thickness law smoothly to open its trailing edge by a
 gap g in chord units (``Section.with_trailing_edge_gap``; NACA: y_t + (g / 2) t^4, see
-:mod:`torus_cad.geometry.airfoil`). The section then ends in a straight *base* between two
-corners, and stays closed (:mod:`torus_cad.geometry.section`).
+:mod:`torus_cad.geometry.airfoil`). The section then ends in a *base* between the ends of its
+upper and lower surface, and stays closed (:mod:`torus_cad.geometry.section`). The base has one
+of two shapes (``airfoil.trailing_edge_shape``):
+
+* ``flat``: a straight base between two corners;
+* ``round`` (the default): a round cap, the cubic Bezier curve that leaves each surface along its
+  own tangent (:class:`~torus_cad.geometry.section.RoundTrailingEdge`), so the section is one
+  smooth (G1) closed curve and the blade has no sharp trailing-edge edge. Its handles are 2/3 of
+  the thickness *in mm* long (:func:`round_cap_handles`): after the section transform the cap is
+  the cubic near-half-circle of that diameter (within 1.8 % of its radius; exactly tangent to
+  both surfaces, and a little flatter than a half circle where the surfaces converge).
+
+In both shapes the trailing-edge thickness is the distance between the surfaces' ends, where
+the base begins: the base's length when flat, the cap's width where it meets the surfaces when
+round (measured on the solid as the chord of the cap's cut in a
+section plane, ``tests/test_round_trailing_edge.py``). A coordinate file whose published
+trailing edge is open has a base of its own gap; with ``round`` it is capped the same way.
 
 The sections are rotated by alpha(s), then scaled by Sx(s) along X and Sy(s) along Y (spec
 §2.3), so a chord-unit gap vector d becomes S(s) R(s) d in mm: a constant thickness in mm
@@ -16,13 +31,22 @@ unit normal at the trailing edge).
 from __future__ import annotations
 
 from collections.abc import Sequence
+from functools import lru_cache
 from typing import overload
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from torus_cad.errors import ParameterError
-from torus_cad.geometry.section import Section, closed_points, trailing_edge_vector
+from torus_cad.geometry.section import (
+    RoundTrailingEdge,
+    Section,
+    bezier_points,
+    closed_points,
+    end_derivatives,
+    half_ends,
+    trailing_edge_vector,
+)
 from torus_cad.geometry.transforms import rotation_matrices
 
 
@@ -54,16 +78,94 @@ def trailing_edge_gaps(section: Section, thickness_mm: float, angle_deg: ArrayLi
     return (-b + np.sqrt(discriminant)) / (2.0 * a)
 
 
+def own_gap(section: Section) -> float:
+    """The gap g (chord units) with ``section.with_trailing_edge_gap(g)`` the section itself
+    (a coordinate file's published gap); exact, the trailing-edge vector being affine in g."""
+    start = trailing_edge_vector(section.with_trailing_edge_gap(0.0))
+    change = trailing_edge_vector(section.with_trailing_edge_gap(1.0)) - start
+    return float((trailing_edge_vector(section) - start) @ change / (change @ change))
+
+
+#: A round cap's handles, as a fraction of the trailing-edge thickness (mm): the cubic Bezier
+#: approximation of a half circle (4/3 x the radius).
+ROUND_CAP_HANDLE_FRACTION = 2.0 / 3.0
+
+
+def round_cap_handles(ends: NDArray[np.float64], derivatives: NDArray[np.float64],
+                      matrices: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Handle lengths h_u, h_l (chord units) of round caps that are near half circles in mm: ``(k, 2)``.
+
+    Args:
+        ends: ``(k, 2, 2)`` the surfaces' ends U, L of each section, chord units.
+        derivatives: ``(k, 2, 2)`` the surfaces' end derivatives there (any length, pointing aft).
+        matrices: ``(k, 2, 2)`` S(s) R(s), chord units -> mm.
+
+    Each handle, mapped to mm, is ROUND_CAP_HANDLE_FRACTION x the mapped |U - L| long.
+    """
+    tangents = derivatives / np.linalg.norm(derivatives, axis=-1, keepdims=True)
+    thickness_mm = np.linalg.norm(np.einsum("kij,kj->ki", matrices, ends[:, 0] - ends[:, 1]), axis=-1)
+    mapped_tangent_mm = np.linalg.norm(np.einsum("kij,ksj->ksi", matrices, tangents), axis=-1)
+    return ROUND_CAP_HANDLE_FRACTION * thickness_mm[:, None] / mapped_tangent_mm
+
+
+@lru_cache(maxsize=16)
+def _family_ends(section: Section) -> tuple[tuple[NDArray[np.float64], NDArray[np.float64]],
+                                             tuple[NDArray[np.float64], NDArray[np.float64]]]:
+    """:func:`half_ends` and :func:`end_derivatives` of ``section`` opened by 0 and by 1, remembered
+    (every call of :func:`torus_cad.geometry.surface.sections_along` makes a new family)."""
+    family = section.with_trailing_edge_gap(0.0), section.with_trailing_edge_gap(1.0)
+    return ((half_ends(family[0]), half_ends(family[1])),
+            (end_derivatives(family[0]), end_derivatives(family[1])))
+
+
 class BluntSections(Sequence[Section]):
-    """The sections of a blade with a blunt trailing edge: ``section`` opened by ``gaps[i]`` at the i-th s.
+    """The sections of a blade with a blunt trailing edge: ``section`` opened by ``gaps[i]`` at the i-th s,
+    flat, or, given the section matrices S(s) R(s) ``(k, 2, 2)`` as ``round_cap_matrices``, with a
+    round cap whose handles (:attr:`handles`) are made in mm by :func:`round_cap_handles`.
 
     Every section kind opens its trailing edge affinely in the gap (the thickness law changes by
     g times a fixed shape), so the whole family is evaluated from two sections: see :meth:`points_at`.
     """
 
-    def __init__(self, section: Section, gaps: NDArray[np.float64]) -> None:
+    def __init__(self, section: Section, gaps: NDArray[np.float64],
+                 round_cap_matrices: NDArray[np.float64] | None = None) -> None:
         self.section = section
         self.gaps = np.asarray(gaps, dtype=float)
+        self.round_cap_matrices = round_cap_matrices
+        self._handles: NDArray[np.float64] | None = None
+
+    @property
+    def handles(self) -> NDArray[np.float64] | None:
+        """The round caps' handle lengths h_u, h_l, chord units: ``(k, 2)``; None when flat. Made when
+        first asked for (the surfaces alone, e.g. for the printability report, do not need them)."""
+        if self.round_cap_matrices is None:
+            return None
+        if self._handles is None:
+            self._handles = round_cap_handles(self.ends(), self.end_derivatives(), self.round_cap_matrices)
+        return self._handles
+
+    def _family(self) -> tuple[Section, Section]:
+        return self.section.with_trailing_edge_gap(0.0), self.section.with_trailing_edge_gap(1.0)
+
+    def ends(self) -> NDArray[np.float64]:
+        """The surfaces' ends U, L of every section: ``(k, 2, 2)`` chord units."""
+        start, unit = _family_ends(self.section)[0]
+        return start[None] + self.gaps[:, None, None] * (unit - start)[None]
+
+    def end_derivatives(self) -> NDArray[np.float64]:
+        """The surfaces' end derivatives d f / du of every section: ``(k, 2, 2)`` (affine in the gap too)."""
+        start, unit = _family_ends(self.section)[1]
+        return start[None] + self.gaps[:, None, None] * (unit - start)[None]
+
+    def cap_poles(self) -> NDArray[np.float64]:
+        """Every section's round-cap poles (:meth:`RoundTrailingEdge.cap_poles`): ``(k, 4, 2)``."""
+        lengths = self.handles
+        if lengths is None:
+            raise ValueError("these sections have a flat trailing edge")
+        ends, derivatives = self.ends(), self.end_derivatives()
+        tangents = derivatives / np.linalg.norm(derivatives, axis=-1, keepdims=True)
+        handles = ends + lengths[:, :, None] * tangents
+        return np.stack([ends[:, 0], handles[:, 0], handles[:, 1], ends[:, 1]], axis=1)
 
     def __len__(self) -> int:
         return len(self.gaps)
@@ -76,20 +178,33 @@ class BluntSections(Sequence[Section]):
 
     def __getitem__(self, index: int | slice) -> Section | Sequence[Section]:
         if isinstance(index, slice):
-            return BluntSections(self.section, self.gaps[index])
-        return self.section.with_trailing_edge_gap(float(self.gaps[index]))
+            matrices = self.round_cap_matrices
+            return BluntSections(self.section, self.gaps[index], None if matrices is None else matrices[index])
+        opened = self.section.with_trailing_edge_gap(float(self.gaps[index]))
+        lengths = self.handles
+        if lengths is None:
+            return opened
+        return RoundTrailingEdge(opened, float(lengths[index, 0]), float(lengths[index, 1]))
 
     def points_at(self, t: ArrayLike) -> NDArray[np.float64]:
         """Every section at the closed parameters ``t`` (with a base): ``(len(self), len(t), 2)`` chord units."""
-        closed = self.section.with_trailing_edge_gap(0.0), self.section.with_trailing_edge_gap(1.0)
-        start, unit = (closed_points(section, t, base=True) for section in closed)
-        return start[None] + self.gaps[:, None, None] * (unit - start)[None]
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        start, unit = (closed_points(section, t, base=True) for section in self._family())
+        points = start[None] + self.gaps[:, None, None] * (unit - start)[None]
+        on_cap = (t > 1.0) & (t < 2.0)
+        if self.round_cap_matrices is not None and np.any(on_cap):  # the cap is not affine in the gap
+            points[:, on_cap] = bezier_points(self.cap_poles(), t[on_cap] - 1.0)
+        return points
 
 
-def blunt_sections(section: Section, thickness_mm: float, angle_deg: ArrayLike, scale_x: ArrayLike,
-                   scale_y: ArrayLike) -> BluntSections:
-    """One section per s whose base is ``thickness_mm`` long once transformed (spec §2.3)."""
-    return BluntSections(section, trailing_edge_gaps(section, thickness_mm, angle_deg, scale_x, scale_y))
+def blunt_sections(section: Section, thickness_mm: float | None, angle_deg: ArrayLike, scale_x: ArrayLike,
+                   scale_y: ArrayLike, round_cap: bool = False) -> BluntSections:
+    """One section per s whose trailing edge is ``thickness_mm`` thick once transformed (spec §2.3),
+    or, with None, ``section``'s own (a coordinate file's open edge); flat, or round with ``round_cap``."""
+    count = len(np.atleast_1d(np.asarray(angle_deg, dtype=float)))
+    gaps = (np.full(count, own_gap(section)) if thickness_mm is None
+            else trailing_edge_gaps(section, thickness_mm, angle_deg, scale_x, scale_y))
+    return BluntSections(section, gaps, section_matrices(angle_deg, scale_x, scale_y) if round_cap else None)
 
 
 def trailing_edge_thickness_mm(sections: Sequence[Section], angle_deg: ArrayLike, scale_x: ArrayLike,

@@ -58,6 +58,13 @@ def straight_edges(edges: list[cq.Edge], relative: float = 1e-6) -> list[cq.Edge
     return straight
 
 
+def farthest_middle_edge(edges: list[cq.Edge], point: ArrayLike) -> cq.Edge:
+    """The edge whose middle (half its parameter range) is farthest from ``point``: in a section
+    plane's cut of a blade with a round trailing edge, measured from the leading edge, the cap's cut."""
+    x, y, z = (float(value) for value in np.asarray(point, dtype=float))
+    return max(edges, key=lambda edge: (edge.positionAt(0.5) - cq.Vector(x, y, z)).Length)
+
+
 def edge_points(edges: list[cq.Edge], per_edge: int = 2000) -> NDArray[np.float64]:
     """``(n, 3)`` points along the edges, ``per_edge`` each."""
     points = []

@@ -6,15 +6,30 @@ keeps the blade surface light and the boolean fast). Each curve starts and ends 
 the sharp trailing edge: the corner is the curve's end point, a C0 joint, so the spline
 never has to turn through it and cannot overshoot or self-intersect there.
 
-A blunt trailing edge has two corners. The curve then starts at the upper corner, runs
-straight along the base to the lower corner (one Bezier span with collinear poles), and on
-over the lower surface, the leading edge and the upper surface back to the upper corner; the
-lower corner is a knot of multiplicity 3 (a C0 joint again). The wire is split there into two
-edges, the base and the airfoil, so the loft gives the base its own face.
+A blunt trailing edge has a base between the surfaces' ends U (upper) and L (lower). The curve
+then starts at U, runs along the base to L (one Bezier span), and on over the lower surface,
+the leading edge and the upper surface back to U; L is a knot of multiplicity 3. The wire is
+split there into two edges, the base and the airfoil, so the loft gives the base its own face.
+
+* A flat base is a span with collinear poles: U and L are corners (C0).
+* A round cap (:mod:`torus_cad.geometry.trailing_edge`) is the span U, U + h T_u, L + h T_l, L
+  with h = 2/3 |U - L| (mm) and T_u, T_l the airfoil curve's own end tangents (the directions of
+  its end poles, which the fit takes from the sampled surfaces): the cap's inner poles are
+  collinear with the airfoil's end poles, so the curve is G1 at U and L (no corner), and the
+  blade's cap face meets its airfoil face tangentially. The geometry's cap is the same Bezier
+  span with the surfaces' exact end tangents; the two differ by the fit's tangent error times
+  h, and the fit's error check covers the cap's sample points.
+
+For the root fillet, :meth:`SectionCurves.wires` can also split the airfoil edge into equal
+pieces in parameter (exact copies of its spans, :meth:`Geom_BSplineCurve.Segment`): with a
+round cap the blade's airfoil face is not closed, so the fillet's split of closed side faces
+(:mod:`torus_cad.kernel.fillet`) does not apply, and the fillet rolls round the cap only with
+the airfoil face in pieces (measured: README, "Root fillet").
 """
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 
 import cadquery as cq
@@ -29,6 +44,7 @@ from OCP.TopoDS import TopoDS_Edge
 from scipy.interpolate import BSpline, make_lsq_spline
 
 from torus_cad.errors import GeometryError, KernelError
+from torus_cad.geometry.trailing_edge import ROUND_CAP_HANDLE_FRACTION
 from torus_cad.tolerances import WIRE_FIT_INITIAL_KNOTS, WIRE_FIT_MAXIMUM_KNOTS, WIRE_FIT_RELATIVE_TOLERANCE
 
 DEGREE = 3
@@ -44,15 +60,18 @@ class SectionCurves:
         knots: ``(m + 4,)`` float, clamped knot vector on [0, 1] shared by every section;
             a blunt edge's lower corner is an interior knot of multiplicity 3.
         fit_error: largest distance (mm) from a sampled point to its section's curve.
+        round_trailing_edge: whether the base (poles 0-3) is a round cap, G1 with the airfoil.
     """
 
     poles: NDArray[np.float64]
     knots: NDArray[np.float64]
     fit_error: float
+    round_trailing_edge: bool = False
 
-    def wires(self) -> list[cq.Wire]:
-        """One closed wire per section: one edge, or two (base, airfoil) with a blunt trailing edge."""
-        return [bspline_wire(poles, self.knots) for poles in self.poles]
+    def wires(self, airfoil_pieces: int = 1) -> list[cq.Wire]:
+        """One closed wire per section: one edge, or two (base, airfoil) with a blunt trailing edge;
+        with a base, the airfoil edge is split into ``airfoil_pieces`` equal parameter ranges."""
+        return [bspline_wire(poles, self.knots, airfoil_pieces) for poles in self.poles]
 
 
 def _closed_from_trailing_edge(section_points: NDArray[np.float64], trailing_edge_index: int) -> NDArray[np.float64]:
@@ -74,12 +93,16 @@ def _fit(points: NDArray[np.float64], parameters: NDArray[np.float64], interior_
     return poles, knots, np.linalg.norm(fitted - points, axis=-1)
 
 
-def _fit_with_base(points: NDArray[np.float64], parameters: NDArray[np.float64], corner: int, interior_knots: int
-                   ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-    """Like :func:`_fit`, with columns 0..corner a straight base (one Bezier span) before the airfoil."""
+def _fit_with_base(points: NDArray[np.float64], parameters: NDArray[np.float64], corner: int, interior_knots: int,
+                   round_cap: bool = False) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """Like :func:`_fit`, with columns 0..corner the base (one Bezier span) before the airfoil:
+    straight, or a round cap (module docstring)."""
     poles, knots, error = _fit(points[:, corner:], parameters[corner:], interior_knots)
     start, end = points[:, 0], points[:, corner]
-    base_poles = np.stack([start + fraction * (end - start) for fraction in (0.0, 1 / 3, 2 / 3)], axis=1)
+    if round_cap:
+        base_poles = _round_cap_poles(start, end, poles[:, -2], poles[:, 1])
+    else:
+        base_poles = np.stack([start + fraction * (end - start) for fraction in (0.0, 1 / 3, 2 / 3)], axis=1)
     all_poles = np.concatenate([base_poles, poles], axis=1)
     all_knots = np.concatenate([np.zeros(DEGREE + 1), knots[1:]])  # knots[:4] = the corner's parameter
     base_fit = np.stack([_evaluate(ring, all_knots, parameters[:corner + 1]) for ring in all_poles])
@@ -87,12 +110,27 @@ def _fit_with_base(points: NDArray[np.float64], parameters: NDArray[np.float64],
     return all_poles, all_knots, np.concatenate([base_error[:, :-1], error], axis=1)
 
 
+def _round_cap_poles(upper: NDArray[np.float64], lower: NDArray[np.float64], before_upper: NDArray[np.float64],
+                     after_lower: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The cap's first three poles U, U + h T_u, L + h T_l: ``(sections, 3, 3)`` mm.
+
+    ``before_upper`` and ``after_lower`` are the airfoil curve's poles next to U and L, so that
+    T_u, T_l (unit, pointing aft) continue its end tangents: the curve is G1 at both ends of the cap.
+    """
+    handle = ROUND_CAP_HANDLE_FRACTION * np.linalg.norm(upper - lower, axis=-1, keepdims=True)
+    upper_tangent, lower_tangent = upper - before_upper, lower - after_lower
+    upper_tangent /= np.linalg.norm(upper_tangent, axis=-1, keepdims=True)
+    lower_tangent /= np.linalg.norm(lower_tangent, axis=-1, keepdims=True)
+    return np.stack([upper, upper + handle * upper_tangent, lower + handle * lower_tangent], axis=1)
+
+
 def _evaluate(poles: NDArray[np.float64], knots: NDArray[np.float64], parameters: NDArray[np.float64]) -> NDArray[np.float64]:
     return BSpline(knots, poles, DEGREE)(parameters)
 
 
 def fit_section_curves(section_points: NDArray[np.float64], trailing_edge_index: int,
-                       chord_lengths: NDArray[np.float64], lower_corner_index: int | None = None) -> SectionCurves:
+                       chord_lengths: NDArray[np.float64], lower_corner_index: int | None = None,
+                       round_trailing_edge: bool = False) -> SectionCurves:
     """Fit compatible closed B-splines to sampled sections.
 
     Args:
@@ -101,7 +139,8 @@ def fit_section_curves(section_points: NDArray[np.float64], trailing_edge_index:
             one) in every ring.
         chord_lengths: ``(sections,)`` mm, the local chords that scale the fit tolerance.
         lower_corner_index: column of a blunt trailing edge's lower corner (the base runs
-            from ``trailing_edge_index`` to it, straight); None for a sharp edge.
+            from ``trailing_edge_index`` to it); None for a sharp edge.
+        round_trailing_edge: the base is a round cap (module docstring), not straight.
 
     The parameter of each point is the mean normalised chord-length position over all
     sections (identical for all sections, so corresponding points match in the loft).
@@ -120,10 +159,10 @@ def fit_section_curves(section_points: NDArray[np.float64], trailing_edge_index:
         if corner is None:
             poles, knots, error = _fit(points, parameters, interior)
         else:
-            poles, knots, error = _fit_with_base(points, parameters, corner, interior)
+            poles, knots, error = _fit_with_base(points, parameters, corner, interior, round_trailing_edge)
         if np.all(error <= allowed) or interior >= min(WIRE_FIT_MAXIMUM_KNOTS, most):
             _check_trailing_edge_resolved(poles, knots, len(parameters) - 1)
-            return SectionCurves(poles, knots, float(error.max()))
+            return SectionCurves(poles, knots, float(error.max()), corner is not None and round_trailing_edge)
         interior = min(2 * interior, WIRE_FIT_MAXIMUM_KNOTS, most)
 
 
@@ -179,27 +218,46 @@ def _corner_knots(knots: NDArray[np.float64]) -> NDArray[np.float64]:
     return distinct[1:-1][multiplicities[1:-1] >= DEGREE]
 
 
-def _bspline_edge(poles: NDArray[np.float64], knots: NDArray[np.float64]) -> TopoDS_Edge:
+def _bspline_curve(poles: NDArray[np.float64], knots: NDArray[np.float64]) -> Geom_BSplineCurve:
     pole_array = TColgp_Array1OfPnt(1, len(poles))
     for index, (x, y, z) in enumerate(poles, start=1):
         pole_array.SetValue(index, gp_Pnt(float(x), float(y), float(z)))
     knot_array, multiplicity_array = knot_arrays(knots)
-    curve = Geom_BSplineCurve(pole_array, knot_array, multiplicity_array, DEGREE)
+    return Geom_BSplineCurve(pole_array, knot_array, multiplicity_array, DEGREE)
+
+
+def _segment(curve: Geom_BSplineCurve, first: float, last: float) -> Geom_BSplineCurve:
+    """The part of ``curve`` on [first, last], as a B-spline of its own (the same spans, clamped there)."""
+    piece = curve.Copy()  # OCP hands back the copy as a Geom_BSplineCurve
+    if not isinstance(piece, Geom_BSplineCurve):
+        raise KernelError("OpenCascade did not copy a section's B-spline as a B-spline")
+    piece.Segment(first, last)
+    return piece
+
+
+def _edge(curve: Geom_BSplineCurve) -> TopoDS_Edge:
     edge = BRepBuilderAPI_MakeEdge(curve)
     if not edge.IsDone():
         raise KernelError("OpenCascade could not make a section edge from its B-spline")
     return edge.Edge()
 
 
-def bspline_wire(poles: NDArray[np.float64], knots: NDArray[np.float64]) -> cq.Wire:
+def bspline_wire(poles: NDArray[np.float64], knots: NDArray[np.float64], last_pieces: int = 1) -> cq.Wire:
     """A closed wire from ``(m, 3)`` poles and a full knot vector of a non-rational cubic B-spline.
 
     One edge, or one edge per piece between C0 corner knots (see :func:`_corner_knots`), so
-    that each piece lofts into its own face.
+    that each piece lofts into its own face; when there are corners, the last piece (a blunt
+    edge's airfoil) is further split into ``last_pieces`` equal parameter ranges.
     """
     builder = BRepBuilderAPI_MakeWire()
-    for piece_poles, piece_knots in _pieces(np.asarray(poles, float), np.asarray(knots, float)):
-        builder.Add(_bspline_edge(piece_poles, piece_knots))
+    pieces = _pieces(np.asarray(poles, float), np.asarray(knots, float))
+    for index, (piece_poles, piece_knots) in enumerate(pieces):
+        edge_curve = _bspline_curve(piece_poles, piece_knots)
+        count = last_pieces if index == len(pieces) - 1 and len(pieces) > 1 else 1
+        bounds = np.linspace(piece_knots[0], piece_knots[-1], count + 1)
+        for first, last in itertools.pairwise(bounds):
+            segment = edge_curve if count == 1 else _segment(edge_curve, float(first), float(last))
+            builder.Add(_edge(segment))
     if not builder.IsDone():
         raise KernelError("OpenCascade could not make a closed section wire")
     return cq.Wire(builder.Wire())

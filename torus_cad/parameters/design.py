@@ -102,6 +102,14 @@ class Hub(Section):
 _NUMBERS = ("max_camber", "camber_position", "thickness")
 
 
+class TrailingEdgeShape(StrEnum):
+    """The end of a blunt trailing edge (``airfoil.trailing_edge_thickness`` > 0, or a coordinate file's
+    open edge): torus_cad.geometry.trailing_edge."""
+
+    ROUND = "round"  # a round cap tangent to both surfaces: no sharp edge (the root fillet rolls round it)
+    FLAT = "flat"    # a straight base between two corners
+
+
 class Airfoil(Section):
     """The section (spec §1): NACA 4-digit numbers (fractions of the chord), a NACA designation, or a coordinate file."""
 
@@ -119,6 +127,10 @@ class Airfoil(Section):
     trailing_edge_thickness: float = param(0.0, unit="mm", ge=0.0, le=50.0, fuzz=(0.0, 0.0),
                                            doc="blunt trailing edge of this thickness on every section "
                                                "(0 = the spec's sharp edge)")
+    trailing_edge_shape: TrailingEdgeShape = param(
+        TrailingEdgeShape.ROUND, strict=False,
+        doc="end of a blunt trailing edge (and of a coordinate file's open one): 'round', a cap tangent to both "
+            "surfaces (no sharp edge; the root fillet works with it), or 'flat', a straight base with two corners")
 
     def section(self) -> SectionShape:
         """The chord-unit section this table describes (without the blunt trailing edge)."""
@@ -395,7 +407,8 @@ class PropellerParameters(Document):
         laws = SectionLaws(self.transforms.angle_of_attack, self.transforms.scale_x, self.transforms.scale_y,
                            self.airfoil.pivot)
         local = ((0.0, 0.0, 0.0), line.p2, line.p3, (*line.p4, 0.0))
-        blade = BladeGeometry(self.airfoil.section(), laws, local, line.frame, self.airfoil.trailing_edge_thickness)
+        blade = BladeGeometry(self.airfoil.section(), laws, local, line.frame, self.airfoil.trailing_edge_thickness,
+                              self.airfoil.trailing_edge_shape == TrailingEdgeShape.ROUND)
         return PropellerGeometry(HubGeometry(self.hub.radius, self.hub.length), blade, self.blades, self.phase_deg)
 
 
