@@ -41,8 +41,16 @@ def test_the_solid_has_the_requested_tip_diameter(multirotor):
     assert multirotor.design_targets.tip_diameter_mm == pytest.approx(127.0, abs=1e-3)
 
 
+@pytest.fixture(scope="module")
+def multirotor_ccw():
+    """The 5-inch example's mirror image (handedness ccw)."""
+    return build_propeller(EXAMPLES / "multirotor_5in_3blade_ccw.toml")
+
+
 @pytest.mark.slow
-def test_the_solid_has_the_requested_pitch_at_75_percent_radius(multirotor):
+@pytest.mark.parametrize("handed", ["multirotor", "multirotor_ccw"])
+def test_the_solid_has_the_requested_pitch_at_75_percent_radius(handed, request):
+    multirotor = request.getfixturevalue(handed)
     fit = multirotor.design_targets.pitch_fit
     radius = 0.75 * multirotor.design_targets.tip_diameter_mm / 2.0
     crossings = radius_crossings(multirotor.parameters, radius)

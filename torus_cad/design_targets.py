@@ -295,9 +295,14 @@ def pitch_on_solid(propeller: Any, s: float, rotation: int = CLOCKWISE) -> float
 
     geometry = propeller.parameters.geometry()
     frames = blade_frames(geometry.blade, geometry.centerline(0), [s])
-    origin = frames.origin[0]
+    # A ccw solid is the spec's blade mirrored (y -> -y, kernel/mirror.py): cut it in the mirrored
+    # plane, and mirror what is measured back, so the pitch is the spec blade's, as designed.
+    from torus_cad.parameters.design import Handedness  # here: the schema resolves design targets itself
+
+    flip = np.array([1.0, -1.0 if propeller.parameters.handedness == Handedness.CCW else 1.0, 1.0])
+    origin = frames.origin[0] * flip
     reach = 2.0 * float(np.max(evaluate_quartic(geometry.blade.laws.scale_x_mm, [s])))
-    edges = contour_through(plane_section_edges(propeller.solid, origin, frames.tangent[0], reach), origin)
+    edges = contour_through(plane_section_edges(propeller.solid, origin, frames.tangent[0] * flip, reach), origin)
     points = edge_points(edges, 1000)
     leading = points[int(np.argmin(np.linalg.norm(points - origin, axis=1)))]
     bases = straight_edges(edges)
@@ -308,6 +313,7 @@ def pitch_on_solid(propeller: Any, s: float, rotation: int = CLOCKWISE) -> float
         trailing = 0.5 * np.add(cap.startPoint().toTuple(), cap.endPoint().toTuple())
     else:
         trailing = points[int(np.argmax(np.linalg.norm(points - leading, axis=1)))]
+    leading, trailing = leading * flip, trailing * flip
     middle = 0.5 * (leading + trailing)
     beta, _ = blade_angles(middle[None], (trailing - leading)[None], rotation)
     return float(2.0 * np.pi * np.hypot(middle[0], middle[1]) * np.tan(np.radians(beta[0])))
