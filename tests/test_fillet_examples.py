@@ -1,6 +1,7 @@
 """The root fillet on every shipped example at 0.5 and 1 mm (issue 13).
 
-Each example gets one valid closed solid with the fillet; an example whose hub chamfer the
+Each example gets one valid closed solid with the fillet, of the requested radius everywhere
+(no edge reduced where a blade bends tightly, torus_cad.kernel.fillet.RootFillet); an example whose hub chamfer the
 fillet's spread would cut into gets the exit-2 refusal naming ``hub.chamfer`` instead, and
 then, with the chamfer taken off, the fillet.
 """
@@ -31,5 +32,6 @@ def test_root_fillet_works_on_every_shipped_example(example, radius_mm):
         assert params.hub.chamfer > 0.0 and "hub.chamfer" in str(refusal)
         propeller = build_propeller(params.with_values({"hub.chamfer": 0.0}))
     assert is_valid_closed_solid(propeller.solid)
+    assert propeller.root_fillet is not None and propeller.root_fillet.constant_radius  # no reduced radius anywhere
     assert len(propeller.solid.Faces()) > len(build_propeller(params.with_values({"hub.root_fillet_radius": 0.0,
                                                                                   "hub.chamfer": 0.0})).solid.Faces())
