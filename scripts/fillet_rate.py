@@ -41,6 +41,7 @@ def main() -> int:
     for seed in range(args.seed, args.seed + args.count):
         design = random_design_dict(seed)
         design["hub"]["root_fillet_radius"] = args.radius
+        design["hub"]["root_fillet_tight_bends"] = "reduce"  # 'ok' is the requested radius everywhere
         start = time.perf_counter()
         try:
             propeller = build_propeller(PropellerParameters.from_dict(design))

@@ -348,7 +348,7 @@ def test_root_fillet_is_reduced_only_where_the_blade_bends_too_tightly_and_says_
     root_s = np.linspace(0.96, 0.999, 40)  # where the blade's second end meets the hub
     assert _tightest_analytic_concave_bend_mm(params, root_s, np.linspace(1.01, 1.99, 981)) < 0.25
     plain = build_propeller(params)
-    filleted = build_propeller(params, overrides={"hub.root_fillet_radius": 0.5})
+    filleted = build_propeller(params, overrides={"hub.root_fillet_radius": 0.5, "hub.root_fillet_tight_bends": "reduce"})
     assert is_valid_closed_solid(filleted.solid)
     assert precise_volume(filleted.solid) > precise_volume(plain.solid)
     fillet = filleted.root_fillet
@@ -365,12 +365,19 @@ def test_root_fillet_is_reduced_only_where_the_blade_bends_too_tightly_and_says_
 
 
 @pytest.mark.slow
-def test_cli_warns_of_a_reduced_root_fillet(tmp_path, capsys):
+def test_tight_bend_fails_naming_the_reduce_choice_which_then_warns(tmp_path, capsys):
+    """By default a fillet that cannot have its radius everywhere is not made (exit 1, nothing
+    written, the message says why and names the choice); with 'reduce' it is made and the CLI warns."""
     import json
 
     design = tmp_path / "tight.toml"
     design.write_text(PropellerParameters.from_dict({**TIGHT_BEND, "name": "tight"}).to_toml())
-    assert main(["build", str(design), "--set", "hub.root_fillet_radius=0.5", "--out", str(tmp_path / "out")]) == 0
+    assert main(["build", str(design), "--set", "hub.root_fillet_radius=0.5", "--out", str(tmp_path / "failed")]) == 1
+    error = capsys.readouterr().err
+    assert "root fillet failed" in error and "too tight for the ball" in error and "hub.root_fillet_tight_bends" in error
+    assert not (tmp_path / "failed").exists() or not any((tmp_path / "failed").iterdir())
+    assert main(["build", str(design), "--set", "hub.root_fillet_radius=0.5", "--set", "hub.root_fillet_tight_bends=reduce",
+                 "--out", str(tmp_path / "out")]) == 0
     assert "warning: the root fillet is 0.5 mm except along" in capsys.readouterr().out
     report = json.loads((tmp_path / "out" / "tight.json").read_text())["root_fillet"]
     assert report["constant_radius"] is False and 0.0 < report["smallest_radius_mm"] < 0.5

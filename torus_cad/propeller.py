@@ -45,7 +45,7 @@ from torus_cad.kernel.loft import loft_solid
 from torus_cad.kernel.mirror import mirrored
 from torus_cad.kernel.wires import SectionCurves, fit_section_curves
 from torus_cad.parameters import PropellerParameters, resolve_parameters
-from torus_cad.parameters.design import Handedness
+from torus_cad.parameters.design import Handedness, TightBends
 from torus_cad.stages import Stage, StageTimer
 from torus_cad.tolerances import ROUND_EDGE_FILLET_PIECES, VOLUME_CHECK_RELATIVE_PRECISION
 
@@ -193,7 +193,8 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
             run_out = None if mounting.chamfer_mm > 0.0 else functools.partial(
                 run_out_hub, geometry.hub.radius_mm, geometry.hub.length_mm, 0.0 if seam_deg is None else seam_deg,
                 mounting, reach=geometry.hub.radius_mm + 4.0 * fillet_radius)
-            filleted = fillet_pattern(hub, blade, angles_deg, fillet_radius, run_out)
+            filleted = fillet_pattern(hub, blade, angles_deg, fillet_radius, run_out,
+                                      reduce_where_tight=params.hub.root_fillet_tight_bends == TightBends.REDUCE)
             solid, root_fillet = filleted.solid, filleted
             route = FuseRoute.ASSEMBLED
             face_parts: tuple[int, ...] = ()  # the preview tags a filleted solid's faces itself

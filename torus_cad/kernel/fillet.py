@@ -42,7 +42,8 @@ millimetre or two long at the hub: a cambered section's own concave stretch, sca
 bends with radii of 0.001-0.9 mm. The bend is the design's (the analytic surface,
 :func:`torus_cad.geometry.surface.surface_points`, bends tighter than 0.5 mm too, where the face does:
 ``scripts/root_concavity.py``), not the loft's, on 9 of the 11 fuzz designs (seeds 0-129) where the
-face bends tighter than 0.5 mm. When every try fails and blade 0 has such an edge, the tries are made once more
+face bends tighter than 0.5 mm. When every try fails and blade 0 has such an edge, the error says so; with
+``hub.root_fillet_tight_bends = 'reduce'`` the tries are made once more
 with those edges' radius reduced to REDUCED_FILLET_FRACTION of the bend's radius
 (:func:`reduced_edge_radii`; OpenCascade blends it with the requested radius along the rest of
 that junction loop). The result says so (:class:`RootFillet`: ``constant_radius`` False, the
@@ -253,14 +254,19 @@ def _tightest_concave_radius_along(edge: TopoDS_Edge, face: TopoDS_Face) -> floa
     return tightest
 
 
-def fillet_failure(solid: cq.Solid, radius_mm: float) -> KernelError:
+def fillet_failure(solid: cq.Solid, radius_mm: float, tight_bend_mm: float | None = None) -> KernelError:
     """The error for a fillet of ``radius_mm`` that failed on ``solid``; it names a smaller radius
-    that works on ``solid`` if one of :data:`_FALLBACK_FRACTIONS` of it does."""
+    that works on ``solid`` if one of :data:`_FALLBACK_FRACTIONS` of it does, and, with
+    ``tight_bend_mm`` (the tightest concave bend of a blade face along the junction, mm), says why
+    no constant-radius fillet of ``radius_mm`` exists and how to get a reduced one."""
     edges = junction_edges(solid)
     works = next((radius_mm * fraction for fraction in _FALLBACK_FRACTIONS
                   if _fillet_in_child(solid, edges, radius_mm * fraction) is not None), None)
     smallest = radius_mm * min(_FALLBACK_FRACTIONS, default=1.0)
     hint = f"; hub.root_fillet_radius = {works:.3g} mm works" if works is not None else f"; {smallest:.3g} mm fails as well"
+    if tight_bend_mm is not None:
+        hint += (f"; a blade bends concavely with a {tight_bend_mm:.3g} mm radius at the hub, too tight for the ball: "
+                 f"hub.root_fillet_tight_bends = 'reduce' makes the fillet smaller there")
     return KernelError(f"root fillet failed: OpenCascade could not fillet the blade roots at "
                        f"hub.root_fillet_radius = {radius_mm:g} mm{hint}")
 
@@ -277,7 +283,7 @@ _RUN_OUT_RADII = 3.0
 
 
 def fillet_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], radius_mm: float,
-                   run_out: RunOutHub | None = None) -> RootFillet:
+                   run_out: RunOutHub | None = None, reduce_where_tight: bool = False) -> RootFillet:
     """The filleted propeller from one filleted blade: blade 0 joined to ``hub``, filleted, patterned.
 
     ``blade`` is built at ``angles_deg[0]``; its side face is split as
@@ -293,8 +299,9 @@ def fillet_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], 
     of them together at FILLET_TRIES_TIME_LIMIT_S.
 
     When every try fails and a blade face bends too tightly for the ball along some junction edge
-    (:func:`reduced_edge_radii`), the same tries are made once more with those edges' radii
-    reduced; the result then says so (:attr:`RootFillet.constant_radius` is False).
+    (:func:`reduced_edge_radii`): with ``reduce_where_tight``, the same tries are made once more
+    with those edges' radii reduced, and the result says so (:attr:`RootFillet.constant_radius` is
+    False); without, the error says that no constant-radius fillet fits there.
 
     Raises KernelError as :func:`fillet_blade_roots` does when the fillet fails; returns a
     checked single valid solid.
@@ -314,7 +321,10 @@ def fillet_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], 
     if filleted is not None:
         return filleted
     joined = single_valid_solid(fuse_pattern(hub, split[0], angles_deg[:1]).shape, "joining blade 0 to the hub")
-    if any(radius < radius_mm for radius in reduced_edge_radii(joined, junction_edges(joined), radius_mm)):
+    smallest_mm = min(reduced_edge_radii(joined, junction_edges(joined), radius_mm))
+    if smallest_mm < radius_mm and not reduce_where_tight:
+        raise fillet_failure(joined, radius_mm, tight_bend_mm=smallest_mm / REDUCED_FILLET_FRACTION)
+    if smallest_mm < radius_mm:
         deadline = time.monotonic() + FILLET_TRIES_TIME_LIMIT_S  # the reduced tries get the same time again
         for index, params in _TRIES:
             try:

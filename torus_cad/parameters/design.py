@@ -55,6 +55,17 @@ def _checked_name(name: str) -> str:
     return name
 
 
+class TightBends(StrEnum):
+    """What the root fillet does where a blade face bends concavely, seen from outside, tighter than
+    its radius near the hub (a rolling ball of that radius does not fit there; no constant-radius
+    fillet exists): 'fail' (exit 1 naming a radius that works; the fillet has the requested radius
+    everywhere or is not made) or 'reduce' (the radius is reduced there to half the bend's radius
+    and blended along that junction loop; a warning and the report's root_fillet say so)."""
+
+    FAIL = "fail"
+    REDUCE = "reduce"
+
+
 class Hub(Section):
     """Cylinder on the z axis, centred at the origin."""
 
@@ -70,8 +81,11 @@ class Hub(Section):
                                       doc="radial set-screw hole at mid-length, between blades, onto the flat; 0 = none")
     chamfer: float = param(0.0, unit="mm", ge=0.0, le=100.0, doc="45-degree chamfer on the hub's outer end edges; 0 = none")
     root_fillet_radius: float = param(0.0, unit="mm", ge=0.0, le=20.0,
-                                      doc="fillet along every blade-hub junction (smaller where a blade bends too tightly for it; "
-                                          "the report's root_fillet says so); 0 = sharp junction (the spec)")
+                                      doc="fillet along every blade-hub junction; 0 = sharp junction (the spec)")
+    root_fillet_tight_bends: TightBends = param(TightBends.FAIL, strict=False,
+                                                doc="where a blade bends concavely tighter than the root fillet's radius: "
+                                                    "'fail' (exit 1, naming a radius that works) or 'reduce' (a smaller "
+                                                    "radius there, blended along that junction; the report says so)")
 
     @model_validator(mode="after")
     def _mounting_fits(self) -> Self:
