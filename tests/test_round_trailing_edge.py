@@ -6,9 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from OCP.BRepAdaptor import BRepAdaptor_Surface
-from OCP.BRepLProp import BRepLProp_SLProps
-from OCP.BRepTools import BRepTools
+from face_measures import principal_curvatures
 from scipy.interpolate import BSpline
 
 from torus_cad.geometry.surface import blade_frames
@@ -65,13 +63,6 @@ def test_round_edge_measured_on_the_solid():
         assert chord == pytest.approx(0.4, rel=0.01)
 
 
-def _principal_curvatures(face):
-    u_min, u_max, v_min, v_max = BRepTools.UVBounds_s(face.wrapped)
-    properties = BRepLProp_SLProps(BRepAdaptor_Surface(face.wrapped), (u_min + u_max) / 2, (v_min + v_max) / 2,
-                                   2, 1e-9)
-    return sorted((abs(properties.MinCurvature()), abs(properties.MaxCurvature())))
-
-
 @pytest.mark.slow
 @pytest.mark.parametrize("thickness_mm, radius_mm", [(0.3, 0.5), (0.8, 1.0)])
 def test_root_fillet_rolls_round_the_round_edge(thickness_mm, radius_mm):
@@ -81,6 +72,6 @@ def test_root_fillet_rolls_round_the_round_edge(thickness_mm, radius_mm):
                                        "hub.root_fillet_radius": radius_mm})
     assert is_valid_closed_solid(propeller.solid)
     fillet_faces = [face for face in propeller.solid.Faces()
-                    if _principal_curvatures(face)[1] == pytest.approx(1 / radius_mm, rel=1e-3)]
+                    if principal_curvatures(face)[1] == pytest.approx(1 / radius_mm, rel=1e-3)]
     assert len(fillet_faces) >= 3  # at least one per blade
     assert _cap_chords_mm(propeller, [0.5])[0] == pytest.approx(thickness_mm, rel=0.01)

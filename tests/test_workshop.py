@@ -8,9 +8,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from face_measures import principal_curvatures
 from OCP.BRepAdaptor import BRepAdaptor_Surface
-from OCP.BRepLProp import BRepLProp_SLProps
-from OCP.BRepTools import BRepTools
 from OCP.GeomAbs import GeomAbs_Cylinder
 
 from torus_cad import __version__
@@ -192,20 +191,13 @@ def test_balance_of_three_blades_is_zero_and_one_blade_warns(tmp_path, capsys, p
     assert set(report["balance"]["products_of_inertia_g_mm2"]) == {"xz", "yz", "xy"}
 
 
-def _principal_curvatures(face):
-    u_min, u_max, v_min, v_max = BRepTools.UVBounds_s(face.wrapped)
-    properties = BRepLProp_SLProps(BRepAdaptor_Surface(face.wrapped), (u_min + u_max) / 2, (v_min + v_max) / 2,
-                                   2, 1e-9)
-    return sorted((abs(properties.MinCurvature()), abs(properties.MaxCurvature())))
-
-
 @pytest.mark.slow
 def test_root_fillet_has_the_requested_radius_and_gives_one_valid_solid(plain):
     filleted = build_propeller(None, overrides={"hub.root_fillet_radius": 0.5})
     assert is_valid_closed_solid(filleted.solid)
     assert precise_volume(filleted.solid) > precise_volume(plain.solid)
     fillet_faces = [face for face in filleted.solid.Faces()
-                    if _principal_curvatures(face)[1] == pytest.approx(1 / 0.5, rel=1e-3)]
+                    if principal_curvatures(face)[1] == pytest.approx(1 / 0.5, rel=1e-3)]
     assert len(fillet_faces) >= 3  # at least one per blade
 
 
@@ -287,7 +279,7 @@ def test_root_fillet_runs_out_past_the_hub_end_and_keeps_the_parts_extent(design
     assert box.zmax == pytest.approx(plain_box.zmax, abs=1e-6) and box.zmin == pytest.approx(plain_box.zmin, abs=1e-6)
     if design is THROUGH_THE_END:
         assert plain_box.zmax > params.hub.length / 2.0  # the design does pass the hub's end
-    assert any(_principal_curvatures(face)[1] == pytest.approx(1 / 0.5, rel=1e-3) for face in filleted.solid.Faces())
+    assert any(principal_curvatures(face)[1] == pytest.approx(1 / 0.5, rel=1e-3) for face in filleted.solid.Faces())
 
 
 @pytest.mark.slow
@@ -300,7 +292,7 @@ def test_repaired_root_fillet_is_one_valid_solid_with_a_fillets_volume():
     # two blades, each with 19.6 mm of junction (two loops); a fillet between faces at 60 degrees adds
     # 0.69 r^2 per mm, at 90 degrees 0.21 r^2 (measured: 4.0 mm^3, 0.41 r^2)
     assert 0.0 < added < 2 * 19.6 * 0.69 * 0.5 ** 2
-    assert any(_principal_curvatures(face)[1] == pytest.approx(1 / 0.5, rel=1e-3) for face in filleted.solid.Faces())
+    assert any(principal_curvatures(face)[1] == pytest.approx(1 / 0.5, rel=1e-3) for face in filleted.solid.Faces())
 
 
 #: A fuzz design (seed 51) whose blade sections are about 1.2 x 0.55 mm where they meet the hub: the
@@ -354,7 +346,7 @@ def test_root_fillet_is_reduced_only_where_the_blade_bends_too_tightly_and_says_
     fillet = filleted.root_fillet
     assert fillet is not None and not fillet.constant_radius
     assert 0.0 < fillet.smallest_radius_mm < 0.25 and fillet.varying_junction_mm > 0.0
-    curvatures = [_principal_curvatures(face)[1] for face in filleted.solid.Faces()]
+    curvatures = [principal_curvatures(face)[1] for face in filleted.solid.Faces()]
     assert any(curvature == pytest.approx(1 / 0.5, rel=1e-3) for curvature in curvatures)  # the requested radius elsewhere
     # the reduced edges (OpenCascade blends the radius into the neighbouring edges)
     assert any(curvature == pytest.approx(1 / fillet.smallest_radius_mm, rel=1e-2) for curvature in curvatures)
