@@ -16,6 +16,8 @@ from torus_cad.parameters import PropellerParameters
 from torus_cad.propeller import build_propeller
 
 LIGHT = {"resolution.sections": 16, "resolution.points": 48}
+
+
 def _section_curve_tangents(curves, section, parameter):
     """Unit tangents just before and just after ``parameter`` on one section's kernel curve."""
     curve = BSpline(curves.knots, curves.poles[section], 3)
@@ -75,3 +77,16 @@ def test_root_fillet_rolls_round_the_round_edge(thickness_mm, radius_mm):
                     if principal_curvatures(face)[1] == pytest.approx(1 / radius_mm, rel=1e-3)]
     assert len(fillet_faces) >= 3  # at least one per blade
     assert _cap_chords_mm(propeller, [0.5])[0] == pytest.approx(thickness_mm, rel=0.01)
+
+
+@pytest.mark.slow
+def test_flat_edge_fillet_failure_names_the_round_edge(tmp_path, capsys):
+    """A flat base's corners stop the fillet: exit 1, nothing written, and the message says which
+    shape takes it."""
+    from torus_cad.cli import main
+
+    assert main(["build", "--set", "airfoil.trailing_edge_thickness=0.3", "--set", "airfoil.trailing_edge_shape=flat",
+                 "--set", "hub.root_fillet_radius=0.5", "--out", str(tmp_path / "out")]) == 1
+    error = capsys.readouterr().err
+    assert "root fillet failed" in error and "airfoil.trailing_edge_shape = 'round'" in error
+    assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())

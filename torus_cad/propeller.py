@@ -193,8 +193,15 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
             run_out = None if mounting.chamfer_mm > 0.0 else functools.partial(
                 run_out_hub, geometry.hub.radius_mm, geometry.hub.length_mm, 0.0 if seam_deg is None else seam_deg,
                 mounting, reach=geometry.hub.radius_mm + 4.0 * fillet_radius)
-            filleted = fillet_pattern(hub, blade, angles_deg, fillet_radius, run_out,
-                                      reduce_where_tight=params.hub.root_fillet_tight_bends == TightBends.REDUCE)
+            try:
+                filleted = fillet_pattern(hub, blade, angles_deg, fillet_radius, run_out,
+                                          reduce_where_tight=params.hub.root_fillet_tight_bends == TightBends.REDUCE)
+            except KernelError as error:
+                if surface.lower_corner_index is None or surface.round_trailing_edge:
+                    raise
+                # The flat base's two corners stop OpenCascade's fillet; the round cap has none (README).
+                raise KernelError(f"{error}; a flat trailing edge's corners stop the fillet: "
+                                  f"airfoil.trailing_edge_shape = 'round' takes it") from None
             solid, root_fillet = filleted.solid, filleted
             route = FuseRoute.ASSEMBLED
             face_parts: tuple[int, ...] = ()  # the preview tags a filleted solid's faces itself
