@@ -31,14 +31,13 @@ import cadquery as cq
 import numpy as np
 from OCP.BRepAdaptor import BRepAdaptor_Surface
 from OCP.BRepClass import BRepClass_FaceClassifier
-from OCP.BRepLProp import BRepLProp_SLProps
 from OCP.BRepTools import BRepTools
 from OCP.gp import gp_Pnt2d
-from OCP.TopAbs import TopAbs_IN, TopAbs_REVERSED
+from OCP.TopAbs import TopAbs_IN
 
 from torus_cad.errors import GeometryError, KernelError, ParameterError
 from torus_cad.geometry.surface import surface_points
-from torus_cad.kernel.fillet import BLADE_SURFACES
+from torus_cad.kernel.fillet import BLADE_SURFACES, concave_bend_radius_mm
 from torus_cad.kernel.fuse import fuse_pattern
 from torus_cad.parameters import PropellerParameters
 from torus_cad.propeller import build_propeller
@@ -56,7 +55,6 @@ def tightest_concave_radius_mm(hub_radius_mm: float, solid: cq.Solid, band_mm: f
         surface = BRepAdaptor_Surface(face.wrapped)
         if surface.GetType() not in BLADE_SURFACES:
             continue
-        outward = -1.0 if face.wrapped.Orientation() == TopAbs_REVERSED else 1.0
         u_min, u_max, v_min, v_max = BRepTools.UVBounds_s(face.wrapped)
         for u in np.linspace(u_min, u_max, GRID):
             for v in np.linspace(v_min, v_max, GRID):
@@ -65,13 +63,7 @@ def tightest_concave_radius_mm(hub_radius_mm: float, solid: cq.Solid, band_mm: f
                     continue
                 if BRepClass_FaceClassifier(face.wrapped, gp_Pnt2d(u, v), 1e-6).State() != TopAbs_IN:
                     continue
-                props = BRepLProp_SLProps(surface, u, v, 2, 1e-7)
-                if not props.IsCurvatureDefined():
-                    continue
-                # With the outward normal, a concave bend has a positive curvature.
-                concave = max(outward * props.MaxCurvature(), outward * props.MinCurvature())
-                if concave > 0.0:
-                    tightest = min(tightest, 1.0 / concave)
+                tightest = min(tightest, concave_bend_radius_mm(face.wrapped, surface, u, v))
     return tightest
 
 

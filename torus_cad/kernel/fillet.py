@@ -56,6 +56,7 @@ Measured on the fuzz sampler's valid designs (seeds 0-129, 0.5 mm, ``scripts/fil
 
 from __future__ import annotations
 
+import dataclasses
 import faulthandler
 import io
 import math
@@ -235,23 +236,28 @@ def _varying_junction_mm(solid: cq.Solid, edges: Sequence[TopoDS_Edge], radii: S
     return sum(cq.Edge(edge).Length() for edge in edges if contours.Contour(edge) in varying)
 
 
+def concave_bend_radius_mm(face: TopoDS_Face, surface: BRepAdaptor_Surface, u: float, v: float) -> float:
+    """Radius (mm) of ``face``'s tightest concave bend (seen from outside, from the material's
+    outward side) at surface parameters (u, v); inf where it bends only convexly there or its
+    curvature is not defined. ``surface`` is ``BRepAdaptor_Surface(face)``."""
+    props = BRepLProp_SLProps(surface, u, v, 2, 1e-7)
+    if not props.IsCurvatureDefined():
+        return math.inf
+    outward = -1.0 if face.Orientation() == TopAbs_REVERSED else 1.0  # concave: positive curvature
+    concave = max(outward * props.MaxCurvature(), outward * props.MinCurvature())
+    return 1.0 / concave if concave > 0.0 else math.inf
+
+
 def _tightest_concave_radius_along(edge: TopoDS_Edge, face: TopoDS_Face) -> float:
     """The smallest radius (mm) of a concave bend (seen from outside) of ``face`` at REDUCED_FILLET_SAMPLES
     points along ``edge``; inf where it bends only convexly."""
     surface = BRepAdaptor_Surface(face)
-    outward = -1.0 if face.Orientation() == TopAbs_REVERSED else 1.0  # concave: positive curvature
     projector = ShapeAnalysis_Surface(BRep_Tool.Surface_s(face))
     curve = BRepAdaptor_Curve(edge)
     first, last = curve.FirstParameter(), curve.LastParameter()
-    tightest = math.inf
-    for index in range(REDUCED_FILLET_SAMPLES):
-        uv = projector.ValueOfUV(curve.Value(first + (last - first) * index / (REDUCED_FILLET_SAMPLES - 1)), 1e-7)
-        props = BRepLProp_SLProps(surface, uv.X(), uv.Y(), 2, 1e-7)
-        if props.IsCurvatureDefined():
-            concave = max(outward * props.MaxCurvature(), outward * props.MinCurvature())
-            if concave > 0.0:
-                tightest = min(tightest, 1.0 / concave)
-    return tightest
+    uvs = (projector.ValueOfUV(curve.Value(first + (last - first) * index / (REDUCED_FILLET_SAMPLES - 1)), 1e-7)
+           for index in range(REDUCED_FILLET_SAMPLES))
+    return min((concave_bend_radius_mm(face, surface, uv.X(), uv.Y()) for uv in uvs), default=math.inf)
 
 
 def fillet_failure(solid: cq.Solid, radius_mm: float, tight_bend_mm: float | None = None) -> KernelError:
@@ -307,17 +313,15 @@ def fillet_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], 
     checked single valid solid.
     """
     split = _LazySplits(blade)
-    deadline = math.inf  # the further tries' shared time starts when the first try ends
-    for index, params in _TRIES:
-        try:
-            return _fillet_and_pattern(hub, split[index], angles_deg, radius_mm, suggest=False, params=params,
-                                       deadline=_try_deadline(deadline, first=math.isinf(deadline)))
-        except KernelError:
-            pass
-        if math.isinf(deadline):
-            deadline = time.monotonic() + FILLET_TRIES_TIME_LIMIT_S
+    try:  # the common case; the child stops at FILLET_TIME_LIMIT_S, as ever
+        return _fillet_and_pattern(hub, split[0], angles_deg, radius_mm, suggest=False)
+    except KernelError:
+        pass
+    deadline = time.monotonic() + FILLET_TRIES_TIME_LIMIT_S  # the further tries' shared time
     attempt = _RunOut(blade, angles_deg, radius_mm, run_out)
-    filleted = attempt.tries(split, deadline, reduce=False)
+    filleted = _first_that_works(hub, split, angles_deg, radius_mm, _TRIES[1:], deadline, reduce=False)
+    if filleted is None:
+        filleted = attempt.tries(split, deadline, reduce=False)
     if filleted is not None:
         return filleted
     joined = single_valid_solid(fuse_pattern(hub, split[0], angles_deg[:1]).shape, "joining blade 0 to the hub")
@@ -326,17 +330,29 @@ def fillet_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], 
         raise fillet_failure(joined, radius_mm, tight_bend_mm=smallest_mm / REDUCED_FILLET_FRACTION)
     if smallest_mm < radius_mm:
         deadline = time.monotonic() + FILLET_TRIES_TIME_LIMIT_S  # the reduced tries get the same time again
-        for index, params in _TRIES:
-            try:
-                return _fillet_and_pattern(hub, split[index], angles_deg, radius_mm, suggest=False, params=params,
-                                           deadline=_try_deadline(deadline, first=False), reduce=True)
-            except KernelError:
-                pass
-        filleted = attempt.tries(split, deadline, reduce=True)
+        filleted = _first_that_works(hub, split, angles_deg, radius_mm, _TRIES, deadline, reduce=True)
+        if filleted is None:
+            filleted = attempt.tries(split, deadline, reduce=True)
         if filleted is not None:
             return filleted
     # Every try failed: the error names a smaller radius that works on blade 0, if one does.
     raise fillet_failure(joined, radius_mm)
+
+
+def _first_that_works(hub: cq.Solid, split: _LazySplits, angles_deg: Sequence[float], radius_mm: float,
+                      tries: Sequence[tuple[int, FilletParams | None]], deadline: float, reduce: bool,
+                      finish: Callable[[RootFillet], RootFillet] = lambda made: made) -> RootFillet | None:
+    """The first of ``tries`` (as :data:`_TRIES`) that works on ``hub``, passed through ``finish``
+    (a KernelError there counts as a failed try); None if none does. Each try stops at
+    FILLET_RETRY_TIME_LIMIT_S (one that saves a design does so in under a second), all by ``deadline``."""
+    for index, params in tries:
+        try:
+            return finish(_fillet_and_pattern(hub, split[index], angles_deg, radius_mm, suggest=False, params=params,
+                                              deadline=min(deadline, time.monotonic() + FILLET_RETRY_TIME_LIMIT_S),
+                                              reduce=reduce))
+        except KernelError:
+            pass
+    return None
 
 
 class _RunOut:
@@ -361,25 +377,14 @@ class _RunOut:
         if self.run_out is None or time.monotonic() >= deadline:
             return None
         extended, tools = self._hub_and_tools()
-        for index, params in _TRIES:
-            try:
-                filleted = _fillet_and_pattern(extended, split[index], self.angles_deg, self.radius_mm, suggest=False,
-                                               params=params, deadline=_try_deadline(deadline, first=False),
-                                               reduce=reduce)
-                solid = single_valid_solid(cq.Shape.cast(cut(filleted.solid.wrapped, tools,
-                                                             "cut the run-out hub back to the hub's length")),
-                                           "cutting the run-out hub back")
-                return RootFillet(solid, filleted.radius_mm, filleted.smallest_radius_mm, filleted.varying_junction_mm)
-            except KernelError:
-                pass
-        return None
 
+        def cut_back(made: RootFillet) -> RootFillet:
+            solid = single_valid_solid(cq.Shape.cast(cut(made.solid.wrapped, tools,
+                                                         "cut the run-out hub back to the hub's length")),
+                                       "cutting the run-out hub back")
+            return dataclasses.replace(made, solid=solid)
 
-def _try_deadline(deadline: float, first: bool) -> float:
-    """When a try must end (time.monotonic()): the first try has no end of its own (each child stops
-    at FILLET_TIME_LIMIT_S, as ever); the others, which save a design in under a second when they
-    do, stop at FILLET_RETRY_TIME_LIMIT_S, and by ``deadline``."""
-    return math.inf if first else min(deadline, time.monotonic() + FILLET_RETRY_TIME_LIMIT_S)
+        return _first_that_works(extended, split, self.angles_deg, self.radius_mm, _TRIES, deadline, reduce, cut_back)
 
 
 class _LazySplits:
@@ -410,14 +415,13 @@ def _fillet_and_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[flo
     try:
         solid = single_valid_solid(cq.Shape.cast(_assemble_filleted(filleted.solid.wrapped, angles_deg)),
                                    "patterning the filleted blade")
-        return RootFillet(solid, radius_mm, filleted.smallest_radius_mm, filleted.varying_junction_mm)
+        return dataclasses.replace(filleted, solid=solid)
     except KernelError:
         whole = fuse_pattern(hub, blade, angles_deg).shape
         everywhere = fillet_blade_roots(single_valid_solid(whole, "joining the blades to the hub"), radius_mm, suggest,
                                         params, deadline, reduce)
         # every blade's junction is the same: report blade 0's share
-        return RootFillet(everywhere.solid, radius_mm, everywhere.smallest_radius_mm,
-                          everywhere.varying_junction_mm / len(angles_deg))
+        return dataclasses.replace(everywhere, varying_junction_mm=everywhere.varying_junction_mm / len(angles_deg))
 
 
 def _touches(shape: cq.Solid, tools: Sequence[TopoDS_Shape]) -> bool:
@@ -546,8 +550,8 @@ def fillet_edges(solid: cq.Solid, edges: list[TopoDS_Edge], radius_mm: float,
     # must also add no more than a fillet's cross-section along the junction.
     if added_mm3 < 0.0:
         return None
-    junction_mm = sum(cq.Edge(edge).Length() for edge in edges)
-    if repaired and added_mm3 > REPAIRED_FILLET_MAX_AREA_RADII2 * radius_mm ** 2 * junction_mm:
+    if repaired and added_mm3 > REPAIRED_FILLET_MAX_AREA_RADII2 * radius_mm ** 2 * sum(cq.Edge(edge).Length()
+                                                                                         for edge in edges):
         return None
     return result
 
