@@ -164,9 +164,18 @@ class RoundTrailingEdge:
 
     def cap_poles(self) -> NDArray[np.float64]:
         """The cap's Bezier poles U, U + h_u T_u, L + h_l T_l, L: ``(4, 2)`` chord units."""
-        (upper_end, lower_end), (upper_tangent, lower_tangent) = half_ends(self.section), end_tangents(self.section)
-        return np.array([upper_end, upper_end + self.upper_handle * upper_tangent,
-                         lower_end + self.lower_handle * lower_tangent, lower_end])
+        return round_cap_poles(half_ends(self.section), end_tangents(self.section),
+                               np.array([self.upper_handle, self.lower_handle]))
+
+
+def round_cap_poles(ends: ArrayLike, tangents: ArrayLike, handles: ArrayLike) -> NDArray[np.float64]:
+    """A round cap's Bezier poles U, U + h_u T_u, L + h_l T_l, L (module docstring): ``(..., 4, d)``.
+
+    ``ends`` ``(..., 2, d)`` are U and L, ``tangents`` ``(..., 2, d)`` the unit T_u, T_l (pointing
+    aft), ``handles`` ``(..., 2)`` h_u, h_l, all in one unit (chord units or mm)."""
+    ends, tangents = np.asarray(ends, dtype=float), np.asarray(tangents, dtype=float)
+    inner = ends + np.asarray(handles, dtype=float)[..., None] * tangents
+    return np.stack([ends[..., 0, :], inner[..., 0, :], inner[..., 1, :], ends[..., 1, :]], axis=-2)
 
 
 def half_ends(section: Section) -> NDArray[np.float64]:

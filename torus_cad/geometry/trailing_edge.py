@@ -45,6 +45,7 @@ from torus_cad.geometry.section import (
     closed_points,
     end_derivatives,
     half_ends,
+    round_cap_poles,
     trailing_edge_vector,
 )
 from torus_cad.geometry.transforms import rotation_matrices
@@ -162,10 +163,8 @@ class BluntSections(Sequence[Section]):
         lengths = self.handles
         if lengths is None:
             raise ValueError("these sections have a flat trailing edge")
-        ends, derivatives = self.ends(), self.end_derivatives()
-        tangents = derivatives / np.linalg.norm(derivatives, axis=-1, keepdims=True)
-        handles = ends + lengths[:, :, None] * tangents
-        return np.stack([ends[:, 0], handles[:, 0], handles[:, 1], ends[:, 1]], axis=1)
+        derivatives = self.end_derivatives()
+        return round_cap_poles(self.ends(), derivatives / np.linalg.norm(derivatives, axis=-1, keepdims=True), lengths)
 
     def __len__(self) -> int:
         return len(self.gaps)

@@ -44,6 +44,7 @@ from OCP.TopoDS import TopoDS_Edge
 from scipy.interpolate import BSpline, make_lsq_spline
 
 from torus_cad.errors import GeometryError, KernelError
+from torus_cad.geometry.section import round_cap_poles
 from torus_cad.geometry.trailing_edge import ROUND_CAP_HANDLE_FRACTION
 from torus_cad.tolerances import WIRE_FIT_INITIAL_KNOTS, WIRE_FIT_MAXIMUM_KNOTS, WIRE_FIT_RELATIVE_TOLERANCE
 
@@ -117,11 +118,10 @@ def _round_cap_poles(upper: NDArray[np.float64], lower: NDArray[np.float64], bef
     ``before_upper`` and ``after_lower`` are the airfoil curve's poles next to U and L, so that
     T_u, T_l (unit, pointing aft) continue its end tangents: the curve is G1 at both ends of the cap.
     """
-    handle = ROUND_CAP_HANDLE_FRACTION * np.linalg.norm(upper - lower, axis=-1, keepdims=True)
-    upper_tangent, lower_tangent = upper - before_upper, lower - after_lower
-    upper_tangent /= np.linalg.norm(upper_tangent, axis=-1, keepdims=True)
-    lower_tangent /= np.linalg.norm(lower_tangent, axis=-1, keepdims=True)
-    return np.stack([upper, upper + handle * upper_tangent, lower + handle * lower_tangent], axis=1)
+    handle = ROUND_CAP_HANDLE_FRACTION * np.linalg.norm(upper - lower, axis=-1)
+    tangents = np.stack([upper - before_upper, lower - after_lower], axis=1)
+    tangents /= np.linalg.norm(tangents, axis=-1, keepdims=True)
+    return round_cap_poles(np.stack([upper, lower], axis=1), tangents, np.stack([handle, handle], axis=1))[:, :3]
 
 
 def _evaluate(poles: NDArray[np.float64], knots: NDArray[np.float64], parameters: NDArray[np.float64]) -> NDArray[np.float64]:
