@@ -248,9 +248,11 @@ def test_an_uploaded_design_goes_through_the_cli_validation(page, tmp_path):
 
     good = tmp_path / "five.toml"
     good.write_text('blades = 5\n[export]\nformats = ["step", "stl", "3mf"]\n')
+    before = page.stamp("exact-stamp")
     page.element("upload").send_keys(str(good))
     page.wait(lambda: page.field_value("blades") == "5", "the uploaded design in the panel")
-    page.wait(lambda: page.idle() and page.text("readout-volume") != volume, "the uploaded design's solid")
+    # the stamp first: the old build's page is idle too, until the new build clears its files
+    page.wait(lambda: page.stamp("exact-stamp") > before and page.idle(), "the uploaded design's solid")
     design = PropellerParameters.from_toml(good)
     assert page.text("readout-volume") == _volume_text(design)
 
