@@ -3,6 +3,7 @@
 
     python scripts/fillet_rate.py 160                # seeds 0..159, radius 0.5 mm
     python scripts/fillet_rate.py 160 --radius 1.0 --seed 1000
+    python scripts/fillet_rate.py --seeds 32 55 --fillet-shape polynomial   # another cross-section law
 
 Each design comes from the fuzz sampler (:func:`torus_cad.studies.fuzz.random_design_dict`, the
 designs ``scripts/fuzz.py`` draws) with ``hub.root_fillet_radius`` set. Designs refused before
@@ -21,6 +22,8 @@ import json
 import time
 from pathlib import Path
 
+from OCP.ChFi3d import ChFi3d_Polynomial, ChFi3d_QuasiAngular, ChFi3d_Rational
+
 import torus_cad.kernel.fillet as fillet
 from torus_cad.errors import GeometryError, KernelError, ParameterError
 from torus_cad.kernel.checks import is_valid_closed_solid
@@ -28,17 +31,24 @@ from torus_cad.parameters import PropellerParameters
 from torus_cad.propeller import build_propeller
 from torus_cad.studies.fuzz import random_design_dict
 
+#: BRepFilletAPI_MakeFillet's cross-section laws, by name.
+FILLET_SHAPES = {"rational": ChFi3d_Rational, "quasi-angular": ChFi3d_QuasiAngular, "polynomial": ChFi3d_Polynomial}
+
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("count", nargs="?", type=int, default=160, help="number of seeds (default 160)")
     parser.add_argument("--seed", type=int, default=0, help="first seed")
     parser.add_argument("--radius", type=float, default=0.5, help="root fillet radius, mm (default 0.5)")
+    parser.add_argument("--seeds", type=int, nargs="+", help="these seeds instead of a range")
+    parser.add_argument("--fillet-shape", choices=sorted(FILLET_SHAPES), default="rational",
+                        help="the fillet's cross-section law (default rational, as torus_cad builds it)")
     parser.add_argument("--out", type=Path, default=Path("fillet_rate_out"))
     args = parser.parse_args()
     fillet._FALLBACK_FRACTIONS = ()  # measure the requested radius only; no search for one that works
+    fillet.FILLET_SHAPE = FILLET_SHAPES[args.fillet_shape]  # the fillet's forked child inherits it
     rows = []
-    for seed in range(args.seed, args.seed + args.count):
+    for seed in args.seeds or range(args.seed, args.seed + args.count):
         design = random_design_dict(seed)
         design["hub"]["root_fillet_radius"] = args.radius
         design["hub"]["root_fillet_tight_bends"] = "reduce"  # 'ok' is the requested radius everywhere

@@ -36,13 +36,15 @@ What makes OpenCascade's rolling-ball fillet work on these blades (measured, see
 When the fillet fails, smaller radii are tried to name one that works in the error message.
 
 Where a blade face bends concavely, seen from outside, tighter than the radius along a junction
-edge, a rolling ball of that radius cannot stay in contact with it (its centre path would have a
-cusp), and no try above helps. On fuzz designs this happens where the blade's sections are a
+edge, a rolling ball of that radius cannot stay in contact with it along the whole bend (its
+centre path would have a cusp), and no try above helps. On fuzz designs this happens where the blade's sections are a
 millimetre or two long at the hub: a cambered section's own concave stretch, scaled that small,
 bends with radii of 0.001-0.9 mm. The bend is the design's (the analytic surface,
 :func:`torus_cad.geometry.surface.surface_points`, bends tighter than 0.5 mm too, where the face does:
 ``scripts/root_concavity.py``), not the loft's, on 9 of the 11 fuzz designs (seeds 0-129) where the
-face bends tighter than 0.5 mm. When every try fails and blade 0 has such an edge, the error says so; with
+face bends tighter than 0.5 mm. Such a bend is where OpenCascade fails, not a strict bound: a short
+enough concave stretch is bridged (seed 128 takes a 0.5 mm fillet with a 0.20 mm analytic bend), and
+the other fillet shapes (:data:`FILLET_SHAPE`) save none of these designs. When every try fails and blade 0 has such an edge, the error says so; with
 ``hub.root_fillet_tight_bends = 'reduce'`` the tries are made once more
 with those edges' radius reduced to REDUCED_FILLET_FRACTION of the bend's radius
 (:func:`reduced_edge_radii`; OpenCascade blends it with the requested radius along the rest of
@@ -75,6 +77,7 @@ from OCP.BRepExtrema import BRepExtrema_DistShapeShape
 from OCP.BRepFilletAPI import BRepFilletAPI_MakeFillet
 from OCP.BRepLProp import BRepLProp_SLProps
 from OCP.BRepTools import BRepTools
+from OCP.ChFi3d import ChFi3d_FilletShape, ChFi3d_Rational
 from OCP.GeomAbs import GeomAbs_BezierSurface, GeomAbs_BSplineSurface, GeomAbs_Cylinder, GeomAbs_OffsetSurface
 from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt, gp_Trsf, gp_Vec2d
 from OCP.ShapeAnalysis import ShapeAnalysis_Surface
@@ -112,6 +115,11 @@ SIDE_FACE_PIECES = (3, 4, 5, 6)
 #: ten times tighter approximation than OpenCascade's defaults; saves some fillets the defaults
 #: lose (measured: 3 of 13 failing fuzz designs).
 TIGHT_FILLET_PARAMS = (1e-3, 1e-5, 1e-6, 1e-5, 1e-6, 1e-4)
+
+#: The fillet's cross-section law (BRepFilletAPI_MakeFillet's FShape): OpenCascade's default, the
+#: rational one, a true circular arc of the radius. The quasi-angular and polynomial laws save none
+#: of the 13 fuzz designs (seeds 0-129) the tries leave at 0.5 mm (``scripts/fillet_rate.py --fillet-shape``).
+FILLET_SHAPE: ChFi3d_FilletShape = ChFi3d_Rational
 
 #: The tries, in order: (index into SIDE_FACE_PIECES, fillet parameters or None for the defaults).
 #: The first is the common case; the others cost time only where it fails.
@@ -207,8 +215,8 @@ def reduced_edge_radii(solid: cq.Solid, edges: Sequence[TopoDS_Edge], radius_mm:
     concavely (seen from outside) tighter than ``radius_mm`` / REDUCED_FILLET_FRACTION along the
     edge, REDUCED_FILLET_FRACTION x the tightest bend's radius there.
 
-    A rolling ball of radius r cannot stay in contact with a face that bends concavely tighter
-    than r (its centre path would have a cusp). On fuzz designs whose blade sections are a
+    A rolling ball of radius r cannot stay in contact along a face that bends concavely tighter
+    than r (its centre path would have a cusp; a short enough bend is bridged). On fuzz designs whose blade sections are a
     millimetre or two long where they meet the hub, a cambered section's own concave stretch is
     that tight (the analytic surface, not the loft's fit, bends so: measured against
     :func:`torus_cad.geometry.surface.surface_points`)."""
@@ -517,7 +525,7 @@ def fillet_edges(solid: cq.Solid, edges: list[TopoDS_Edge], radius_mm: float,
     ``params``: BRepFilletAPI_MakeFillet.SetParams values (default: OpenCascade's). ``edge_radii``:
     a radius per edge (mm) instead of ``radius_mm`` on all; OpenCascade blends the radius between
     edges of one contour that differ."""
-    fillet = BRepFilletAPI_MakeFillet(solid.wrapped)
+    fillet = BRepFilletAPI_MakeFillet(solid.wrapped, FILLET_SHAPE)
     if params is not None:
         fillet.SetParams(*params)
     for edge in edges:
