@@ -29,13 +29,12 @@ from scipy.integrate import quad_vec
 from torus_cad.errors import ParameterError
 from torus_cad.geometry.airfoil import airfoil_points
 from torus_cad.geometry.section import (
-    SHARP_TRAILING_EDGE_GAP,
     RoundTrailingEdge,
     Section,
     cap_length,
     cap_parameter_at,
     cap_points,
-    trailing_edge_vector,
+    has_base,
 )
 from torus_cad.tolerances import ARC_LENGTH_FINE_SAMPLES, ARC_LENGTH_QUAD_ABS
 
@@ -120,7 +119,7 @@ def equal_arc_length_section(airfoil: Section, count: int, anchor_trailing_edge:
         raise ParameterError(f"points = {count} is out of range; allowed [8, inf)")
     upper = surface_arc_length_table(airfoil, True, fine_samples)
     lower = surface_arc_length_table(airfoil, False, fine_samples)
-    base = float(np.linalg.norm(trailing_edge_vector(airfoil))) > SHARP_TRAILING_EDGE_GAP
+    base = has_base(airfoil)
     base_length = cap_length(airfoil)  # |U - L| unless round: below SHARP_TRAILING_EDGE_GAP when sharp
     perimeter = upper.total + base_length + lower.total
     if anchor_trailing_edge:

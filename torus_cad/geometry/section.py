@@ -70,8 +70,8 @@ class Section(Hashable, Protocol):
 
 def trailing_edge_vector(section: Section) -> NDArray[np.float64]:
     """Upper trailing-edge point minus lower one, ``(2,)`` chord units: (0, 0) for a sharp edge."""
-    ends = [section.points_on_half(np.array([1.0]), upper)[0] for upper in (True, False)]
-    return ends[0] - ends[1]
+    upper_end, lower_end = half_ends(section)
+    return upper_end - lower_end
 
 
 def has_base(section: Section) -> bool:

@@ -66,8 +66,8 @@ def trailing_edge_gaps(section: Section, thickness_mm: float, angle_deg: ArrayLi
     the upper surface above the lower one.
     """
     matrices = section_matrices(angle_deg, scale_x, scale_y)
-    start = trailing_edge_vector(section.with_trailing_edge_gap(0.0))
-    change = trailing_edge_vector(section.with_trailing_edge_gap(1.0)) - start
+    start, unit = (trailing_edge_vector(opened) for opened in _opened_by_0_and_1(section))
+    change = unit - start
     mapped_start, mapped_change = matrices @ start, matrices @ change
     a = np.sum(mapped_change**2, axis=-1)
     b = 2.0 * np.sum(mapped_start * mapped_change, axis=-1)
@@ -79,11 +79,16 @@ def trailing_edge_gaps(section: Section, thickness_mm: float, angle_deg: ArrayLi
     return (-b + np.sqrt(discriminant)) / (2.0 * a)
 
 
+def _opened_by_0_and_1(section: Section) -> tuple[Section, Section]:
+    """``section`` opened by the gaps 0 and 1: every gap's section is affine between the two."""
+    return section.with_trailing_edge_gap(0.0), section.with_trailing_edge_gap(1.0)
+
+
 def own_gap(section: Section) -> float:
     """The gap g (chord units) with ``section.with_trailing_edge_gap(g)`` the section itself
     (a coordinate file's published gap); exact, the trailing-edge vector being affine in g."""
-    start = trailing_edge_vector(section.with_trailing_edge_gap(0.0))
-    change = trailing_edge_vector(section.with_trailing_edge_gap(1.0)) - start
+    start, unit = (trailing_edge_vector(opened) for opened in _opened_by_0_and_1(section))
+    change = unit - start
     return float((trailing_edge_vector(section) - start) @ change / (change @ change))
 
 
@@ -114,7 +119,7 @@ def _family_ends(section: Section) -> tuple[tuple[NDArray[np.float64], NDArray[n
                                              tuple[NDArray[np.float64], NDArray[np.float64]]]:
     """:func:`half_ends` and :func:`end_derivatives` of ``section`` opened by 0 and by 1, remembered
     (every call of :func:`torus_cad.geometry.surface.sections_along` makes a new family)."""
-    family = section.with_trailing_edge_gap(0.0), section.with_trailing_edge_gap(1.0)
+    family = _opened_by_0_and_1(section)
     return ((half_ends(family[0]), half_ends(family[1])),
             (end_derivatives(family[0]), end_derivatives(family[1])))
 
@@ -144,9 +149,6 @@ class BluntSections(Sequence[Section]):
         if self._handles is None:
             self._handles = round_cap_handles(self.ends(), self.end_derivatives(), self.round_cap_matrices)
         return self._handles
-
-    def _family(self) -> tuple[Section, Section]:
-        return self.section.with_trailing_edge_gap(0.0), self.section.with_trailing_edge_gap(1.0)
 
     def ends(self) -> NDArray[np.float64]:
         """The surfaces' ends U, L of every section: ``(k, 2, 2)`` chord units."""
@@ -188,7 +190,7 @@ class BluntSections(Sequence[Section]):
     def points_at(self, t: ArrayLike) -> NDArray[np.float64]:
         """Every section at the closed parameters ``t`` (with a base): ``(len(self), len(t), 2)`` chord units."""
         t = np.atleast_1d(np.asarray(t, dtype=float))
-        start, unit = (closed_points(section, t, base=True) for section in self._family())
+        start, unit = (closed_points(section, t, base=True) for section in _opened_by_0_and_1(self.section))
         points = start[None] + self.gaps[:, None, None] * (unit - start)[None]
         on_cap = (t > 1.0) & (t < 2.0)
         if self.round_cap_matrices is not None and np.any(on_cap):  # the cap is not affine in the gap
