@@ -271,8 +271,8 @@ def _tightest_concave_radius_along(edge: TopoDS_Edge, face: TopoDS_Face) -> floa
 def fillet_failure(solid: cq.Solid, radius_mm: float, tight_bend_mm: float | None = None) -> KernelError:
     """The error for a fillet of ``radius_mm`` that failed on ``solid``; it names a smaller radius
     that works on ``solid`` if one of :data:`_FALLBACK_FRACTIONS` of it does, and, with
-    ``tight_bend_mm`` (the tightest concave bend of a blade face along the junction, mm), says why
-    no constant-radius fillet of ``radius_mm`` exists and how to get a reduced one."""
+    ``tight_bend_mm`` (the tightest concave bend of a blade face along the junction, mm), says that
+    the blade bends too tightly for a ball of ``radius_mm`` and how to get a reduced fillet."""
     edges = junction_edges(solid)
     works = next((radius_mm * fraction for fraction in _FALLBACK_FRACTIONS
                   if _fillet_in_child(solid, edges, radius_mm * fraction) is not None), None)
@@ -315,7 +315,7 @@ def fillet_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], 
     When every try fails and a blade face bends too tightly for the ball along some junction edge
     (:func:`reduced_edge_radii`): with ``reduce_where_tight``, the same tries are made once more
     with those edges' radii reduced, and the result says so (:attr:`RootFillet.constant_radius` is
-    False); without, the error says that no constant-radius fillet fits there.
+    False); without, the error says that the blade bends too tightly there for the ball.
 
     Raises KernelError as :func:`fillet_blade_roots` does when the fillet fails; returns a
     checked single valid solid.

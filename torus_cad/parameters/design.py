@@ -57,8 +57,8 @@ def _checked_name(name: str) -> str:
 
 class TightBends(StrEnum):
     """What the root fillet does where a blade face bends concavely, seen from outside, tighter than
-    its radius near the hub (a rolling ball of that radius does not fit there; no constant-radius
-    fillet exists): 'fail' (exit 1 naming a radius that works; the fillet has the requested radius
+    its radius near the hub (a rolling ball of that radius does not fit along it, and OpenCascade finds
+    no constant-radius fillet): 'fail' (exit 1 naming a radius that works; the fillet has the requested radius
     everywhere or is not made) or 'reduce' (the radius is reduced there to half the bend's radius
     and blended along that junction loop; a warning and the report's root_fillet say so)."""
 
