@@ -13,6 +13,11 @@ from torus_cad.geometry.triangle_estimate import estimate_stl_triangles
 from torus_cad.parameters import PropellerParameters
 from torus_cad.tolerances import STL_TRIANGLE_LIMIT
 
+#: Surface meshes (``torus-cad mesh``) up to this many triangles are checked whole for intersecting
+#: triangle pairs (meshlib, ~10 us a triangle on the 2-core machine under load); larger ones where a
+#: structured mesh can cross (torus_cad.mesh.crossings).
+MESH_WHOLE_CROSSING_CHECK_TRIANGLES = 1_500_000
+
 #: Fewer samples than this (sections, points) do not resolve the blade's curvature for the
 #: estimate; such a surface is sampled again at the default resolution.
 _ESTIMATE_MIN_SAMPLES = (12, 40)

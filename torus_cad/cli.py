@@ -309,9 +309,11 @@ def _mesh_overrides(args: argparse.Namespace) -> dict[str, Any]:
 
 def _command_mesh(args: argparse.Namespace) -> int:
     from torus_cad.mesh.pipeline import summary_line, write_surface_mesh
+    from torus_cad.outputs import check_writable_folder
     from torus_cad.progress import StageProgress
 
     params = load_parameters(args.config, args.overrides).with_values(_mesh_overrides(args))
+    check_writable_folder(args.out)  # a folder the set cannot go into is refused before the mesh is built
     progress = StageProgress.for_terminal(quiet=args.quiet)
     report, paths = write_surface_mesh(params, Path(args.out), compare=not args.no_compare, progress=progress)
     progress.finish()

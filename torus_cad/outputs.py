@@ -316,13 +316,23 @@ def _check_entry(out_dir: Path, name: str, report_name: str, entry: Any) -> Path
 
 def set_names(out_dir: str | Path) -> list[str]:
     """Names of the output sets in ``out_dir``: every sealed ``<name>.json`` report, and every
-    ``<name>.step`` or ``<name>.stl`` (one without its report is an incomplete set)."""
-    names = set()
+    ``<name>.step`` or ``<name>.stl`` that no sealed report lists (one without its report is an
+    incomplete set; a mesh set's ``<name>_mesh_ascii.stl`` is a member of ``<name>_mesh``)."""
+    names: set[str] = set()
+    members: set[object] = set()
+    loose: set[Path] = set()
     for path in Path(out_dir).iterdir():
         if path.name.startswith(".") or not path.is_file():
             continue
-        if path.suffix in (".step", ".stl") or (path.suffix == ".json" and FILES_KEY in (_read_report(path) or {})):
+        report = _read_report(path) if path.suffix == ".json" else None
+        if report is not None and FILES_KEY in report:
             names.add(path.stem)
+            files = report[FILES_KEY]
+            members.update(entry.get("file") for entry in (files.values() if isinstance(files, dict) else ())
+                           if isinstance(entry, dict))
+        elif path.suffix in (".step", ".stl"):
+            loose.add(path)
+    names.update(path.stem for path in loose if path.name not in members)
     return sorted(names)
 
 

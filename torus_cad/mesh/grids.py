@@ -18,9 +18,10 @@ from numpy.typing import NDArray
 
 from torus_cad.geometry.arc_length import equal_arc_length_section
 from torus_cad.geometry.centerline import Centerline
-from torus_cad.geometry.mesh import TriangleMesh, blade_mesh
+from torus_cad.geometry.mesh import TriangleMesh
 from torus_cad.geometry.propeller import PropellerGeometry
-from torus_cad.geometry.surface import BladeSurface, blade_frames, place_sections
+from torus_cad.geometry.section import RoundTrailingEdge
+from torus_cad.geometry.surface import BladeSurface, blade_frames, place_sections, sections_along, sections_at
 from torus_cad.parameters.design import SectionSpacing
 
 #: Points on the centerline used to tabulate its arc length for arc-length spacing.
@@ -62,13 +63,22 @@ def section_parameters(centerline: Centerline, sections: int, spacing: SectionSp
 
 def blade_grid(geometry: PropellerGeometry, sections: int, points: int, spacing: SectionSpacing) -> BladeSurface:
     """Blade 0 sampled on ``sections`` x ``points``: sections spread by ``spacing``, points equally
-    spaced in arc length around each section with the sharp trailing edge kept as a point (spec §5)."""
+    spaced in arc length around each section with the trailing edge's corners kept as points (spec §5).
+
+    A blunt trailing edge (flat or round, ``airfoil.trailing_edge_*``) is sampled as
+    ``geometry.surface.blade_surface`` samples it for the solid: every section at the parameters
+    of the middle one, so the mesh and the B-rep have the same edge.
+    """
     centerline = geometry.centerline(0)
-    s = section_parameters(centerline, sections, spacing)
-    sampling = equal_arc_length_section(geometry.blade.airfoil, points)
-    frames = blade_frames(geometry.blade, centerline, s)
-    return BladeSurface(place_sections(geometry.blade, frames, sampling.points), s, sampling.t,
-                        sampling.trailing_edge_index, frames)
+    frames = blade_frames(geometry.blade, centerline, section_parameters(centerline, sections, spacing))
+    along = sections_along(geometry.blade, frames.s)
+    shared = all(section is along[0] for section in along)
+    reference = along[0] if shared else sections_along(geometry.blade, [0.5])[0]
+    sampling = equal_arc_length_section(reference, points)
+    planar = sampling.points if shared else sections_at(along, sampling.t)
+    return BladeSurface(place_sections(geometry.blade, frames, planar), frames.s, sampling.t,
+                        sampling.trailing_edge_index, frames, sampling.lower_corner_index,
+                        isinstance(reference, RoundTrailingEdge))
 
 
 def cell_size(surface: BladeSurface) -> CellSize:
@@ -87,9 +97,76 @@ def rotated_about_axis(vertices: NDArray[np.float64], angle_deg: float) -> NDArr
     return vertices @ rotation.T
 
 
+def _cap(ring: NDArray[np.float64], frame_normal: NDArray[np.float64], frame_binormal: NDArray[np.float64],
+         outward: NDArray[np.float64]) -> NDArray[np.int64]:
+    """Triangles ``(p - 2, 3)`` (indices into the ring) filling one planar section ring ``(p, 3)`` mm,
+    facing ``outward``: manifold3d's polygon triangulation of the ring in its section plane, so no
+    triangle leaves the section (a zipper from the upper to the lower surface can, across a blunt
+    edge's base or a concave lower surface)."""
+    import manifold3d as mf
+
+    planar = np.stack([ring @ frame_normal, ring @ frame_binormal], axis=-1)
+    x, y = planar[:, 0], planar[:, 1]
+    if float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y)) < 0.0:  # clockwise: wind it CCW
+        triangles = np.asarray(mf.triangulate([planar[::-1].copy()]), dtype=np.int64)
+        triangles = len(ring) - 1 - triangles
+    else:
+        triangles = np.asarray(mf.triangulate([planar]), dtype=np.int64)
+    corners = ring[triangles[0]]
+    if np.dot(np.cross(corners[1] - corners[0], corners[2] - corners[0]), outward) < 0.0:
+        triangles = triangles[:, ::-1]
+    return triangles
+
+
+def split_along_a_d(surface: BladeSurface) -> NDArray[np.bool_]:
+    """``(points,)`` True for the columns whose cells :func:`mirrored_diagonal_mesh` splits along a-d:
+    the upper surface, up to the trailing edge (or the middle of a blunt edge's base)."""
+    count = surface.points.shape[1]
+    upper_end = surface.trailing_edge_index if surface.trailing_edge_index is not None else count // 2
+    if surface.lower_corner_index is not None:
+        upper_end = (upper_end + surface.lower_corner_index + 1) // 2
+    return np.arange(count) < upper_end
+
+
+def mirrored_diagonal_mesh(surface: BladeSurface) -> TriangleMesh:
+    """Blade 0's closed mesh: its grid's cells split along diagonals mirrored about the chord, capped.
+
+    Each cell (a, b on one section, c, d on the next) is split along a-d on the upper surface
+    and along b-c on the lower one (the trailing edge's base counts half to each), so the two
+    triangles beside the trailing edge, and beside the leading edge, share that edge's vertex
+    of the same section pair and fold towards each other, never across: with one diagonal
+    direction everywhere, the thin wedge of a sharp trailing edge is crossed by the triangles
+    of its two sides where the edge runs obliquely to the sections. Each end section is capped
+    by a triangulation of its polygon in its plane (:func:`_cap`). Faces outward.
+    """
+    grid = surface.points
+    sections, count, _ = grid.shape
+    column = np.arange(count)
+    split = split_along_a_d(surface)
+    upper_end = int(split.sum())
+    row = np.arange(sections - 1)[:, None] * count
+    a, b = row + column, row + (column + 1) % count
+    c, d = a + count, b + count
+    on_upper = np.broadcast_to(split, a.shape)[..., None]
+    first = np.where(on_upper, np.stack([a, b, d], -1), np.stack([a, b, c], -1))
+    second = np.where(on_upper, np.stack([a, d, c], -1), np.stack([b, d, c], -1))
+    sides = np.concatenate([first.reshape(-1, 3), second.reshape(-1, 3)])
+    # (a, b, d) of a cell on the upper surface, mid-blade, points away from its section's centre when outward.
+    k, j = (sections - 1) // 2, max(upper_end // 3, 0)
+    normal = np.cross(grid[k, j + 1] - grid[k, j], grid[k + 1, j + 1] - grid[k, j])
+    if np.dot(normal, grid[k, j] - grid[k].mean(axis=0)) < 0.0:
+        sides = sides[:, ::-1]
+    frames = surface.frames
+    ends = []
+    for index, inward in ((0, grid[1].mean(axis=0) - grid[0].mean(axis=0)),
+                          (sections - 1, grid[-2].mean(axis=0) - grid[-1].mean(axis=0))):
+        ends.append(_cap(grid[index], frames.normal[index], frames.binormal[index], -inward) + index * count)
+    return TriangleMesh(grid.reshape(-1, 3), np.concatenate([sides, *ends]))
+
+
 def blade_meshes(geometry: PropellerGeometry, surface: BladeSurface) -> list[TriangleMesh]:
     """Every blade's closed mesh: blade 0's capped grid rotated to theta_i (spec §6.1), outward faces."""
-    mesh = blade_mesh(surface)
+    mesh = mirrored_diagonal_mesh(surface)
     first = geometry.blade_angle_deg(0)
     return [TriangleMesh(rotated_about_axis(mesh.vertices, geometry.blade_angle_deg(index) - first), mesh.faces)
             for index in range(geometry.blades)]
@@ -106,14 +183,20 @@ class HubLayout:
 
     Attributes:
         around: points around the axis on the lateral face (and the caps' outer rings).
-        along: cell rows along the axis on the lateral face.
+        profile: ``(k, 2)`` (r, z) mm of the lateral face's rings from the bottom cap's outer ring
+            to the top one's: up the chamfer, the cylinder, down the other chamfer.
         ring_points: ``(k,)`` points on each cap ring from the centre out (1 = the centre),
             the last equal to ``around``.
     """
 
     around: int
-    along: int
+    profile: NDArray[np.float64]
     ring_points: NDArray[np.int64]
+
+    @property
+    def along(self) -> int:
+        """Cell rows on the lateral face (chamfers included)."""
+        return len(self.profile) - 1
 
     @property
     def triangles(self) -> int:
@@ -122,18 +205,31 @@ class HubLayout:
         return side + 2 * cap
 
 
-def hub_layout(radius: float, length: float, cell: float) -> HubLayout:
-    """Grid counts of a hub of ``radius`` x ``length`` (mm) with cells of about ``cell`` mm."""
+def _polyline(corners: NDArray[np.float64], cell: float) -> NDArray[np.float64]:
+    """Points ``(k, 2)`` along a polyline ``(c, 2)``, its corners included, each piece cut into steps of at most ``cell``."""
+    pieces = [corners[:1]]
+    for start, end in pairwise(corners):
+        steps = max(1, int(np.ceil(np.linalg.norm(end - start) / cell)))
+        pieces.append(start + np.linspace(0.0, 1.0, steps + 1)[1:, None] * (end - start))
+    return np.concatenate(pieces)
+
+
+def hub_layout(radius: float, length: float, cell: float, chamfer: float = 0.0) -> HubLayout:
+    """Grid counts of a hub of ``radius`` x ``length`` (mm), its end edges chamfered by ``chamfer``
+    mm at 45 degrees, with cells of about ``cell`` mm."""
     # Cells no larger than the hub's length and a fraction of its circumference, so they stay square.
     cell = min(cell, length, 2.0 * np.pi * radius / (3 * CAP_INNER_RING_POINTS))
     around = int(np.ceil(2.0 * np.pi * radius / cell))
-    along = int(np.ceil(length / cell))
-    rings = max(1, int(np.ceil(radius / cell)))
-    ring_radius = radius * np.arange(1, rings + 1) / rings
+    half, cap_radius = length / 2.0, radius - chamfer
+    corners = np.array([(cap_radius, -half), (radius, -half + chamfer), (radius, half - chamfer), (cap_radius, half)])
+    if chamfer == 0.0:
+        corners = corners[1:3]
+    rings = max(1, int(np.ceil(cap_radius / cell)))
+    ring_radius = cap_radius * np.arange(1, rings + 1) / rings
     counts = np.maximum(CAP_INNER_RING_POINTS, np.ceil(2.0 * np.pi * ring_radius / cell)).astype(np.int64)
     counts[-1] = around
     counts = np.minimum(counts, around)
-    return HubLayout(around, along, np.concatenate([[1], counts]))
+    return HubLayout(around, _polyline(corners, cell), np.concatenate([[1], counts]))
 
 
 def _ring(radius: float, count: int, z: float) -> NDArray[np.float64]:
@@ -163,10 +259,12 @@ def zip_rings(inner: NDArray[np.int64], outer: NDArray[np.int64]) -> NDArray[np.
     return np.stack([a, b, third], axis=-1)
 
 
-def hub_mesh(radius: float, length: float, cell: float) -> TriangleMesh:
-    """Closed mesh of the hub cylinder (spec §6.2), outward faces, cells of about ``cell`` mm."""
-    layout = hub_layout(radius, length, cell)
-    ring_radius = radius * np.arange(len(layout.ring_points)) / (len(layout.ring_points) - 1)
+def hub_mesh(radius: float, length: float, cell: float, chamfer: float = 0.0) -> TriangleMesh:
+    """Closed mesh of the hub cylinder (spec §6.2), its end edges chamfered by ``chamfer`` mm at
+    45 degrees, outward faces, cells of about ``cell`` mm."""
+    layout = hub_layout(radius, length, cell, chamfer)
+    cap_radius = radius - chamfer
+    ring_radius = cap_radius * np.arange(len(layout.ring_points)) / (len(layout.ring_points) - 1)
     half = length / 2.0
     pieces: list[NDArray[np.float64]] = []
     offset = 0
@@ -178,8 +276,7 @@ def hub_mesh(radius: float, length: float, cell: float) -> TriangleMesh:
         return np.arange(offset - len(points), offset)
 
     bottom = [add(_ring(r, int(n), -half)) for r, n in zip(ring_radius, layout.ring_points)]
-    side_z = np.linspace(-half, half, layout.along + 1)
-    side = [bottom[-1]] + [add(_ring(radius, layout.around, z)) for z in side_z[1:-1]]
+    side = [bottom[-1]] + [add(_ring(r, layout.around, z)) for r, z in layout.profile[1:-1]]
     top = [add(_ring(r, int(n), half)) for r, n in zip(ring_radius, layout.ring_points)]
     side.append(top[-1])
     faces = []

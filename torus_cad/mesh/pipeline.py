@@ -8,6 +8,7 @@ quality report -> files.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from enum import StrEnum
@@ -17,19 +18,31 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from torus_cad.errors import ParameterError
 from torus_cad.geometry import feasibility
-from torus_cad.geometry.airfoil import airfoil_points
+from torus_cad.geometry.mesh import TriangleMesh
+from torus_cad.geometry.mounting import HubMounting
 from torus_cad.geometry.propeller import PropellerGeometry
-from torus_cad.geometry.surface import BladeSurface, blade_frames, place_sections
-from torus_cad.kernel.export import atomic_path
+from torus_cad.geometry.surface import BladeSurface, blade_frames, place_sections, sections_along, sections_at
 from torus_cad.mesh import quality
 from torus_cad.mesh.cleanup import Cleanup, collapse_junction_needles
-from torus_cad.mesh.grids import blade_grid, blade_meshes, cell_size, hub_mesh
+from torus_cad.mesh.crossings import CrossingCheck, blade_crossings, crossing_pairs
+from torus_cad.mesh.grids import (
+    blade_grid,
+    blade_meshes,
+    cell_size,
+    hub_mesh,
+    mirrored_diagonal_mesh,
+    rotated_about_axis,
+    split_along_a_d,
+)
+from torus_cad.mesh.hub_features import check_meshable, cut_features, feature_surface_distance, placed_mounting
 from torus_cad.mesh.resolution import check_budget, check_resolution, estimate_triangles
 from torus_cad.mesh.settings import MeshFormat, selected_formats
 from torus_cad.mesh.union import LabeledMesh, unite
 from torus_cad.mesh.writers import write_mesh_files
 from torus_cad.parameters import PropellerParameters
+from torus_cad.parameters.design import Handedness, SectionSpacing
 from torus_cad.stages import StageTimer
 from torus_cad.tolerances import MESH_JUNCTION_MARGIN_RELATIVE
 
@@ -41,6 +54,7 @@ class MeshStage(StrEnum):
     GRIDS = "grids"
     UNION = "union"
     CLEANUP = "cleanup"
+    CROSSINGS = "crossings"
     QUALITY = "quality"
     WRITE = "write"
 
@@ -56,6 +70,8 @@ class SurfaceMesh:
         hub_cell_mm: edge length of the hub grid's cells.
         estimated_triangles: the estimate the budget was checked against.
         cleanup: what the junction cleanup after the union did (``mesh.cleanup``).
+        mounting: the hub's features as meshed (set screw placed).
+        crossings: intersecting triangle pairs of the united mesh (meshlib) and what was checked.
         stage_seconds: seconds per stage (keys: MeshStage values).
     """
 
@@ -65,6 +81,8 @@ class SurfaceMesh:
     hub_cell_mm: float
     estimated_triangles: int
     cleanup: Cleanup
+    mounting: HubMounting
+    crossings: CrossingCheck
     stage_seconds: dict[str, float] = field(default_factory=dict)
 
     @property
@@ -88,27 +106,96 @@ def check_design(params: PropellerParameters) -> None:
     feasibility.check_blades_clear(geometry, tube)
 
 
-def build_surface_mesh(params: PropellerParameters, progress: Callable[[str], None] | None = None) -> SurfaceMesh:
-    """Check, grid and unite at ``params.mesh``'s resolution: the propeller's closed, labelled surface mesh.
+#: Scale factors of both counts tried, in order, for a resolution whose blade mesh crosses itself.
+_CROSSING_FREE_SCALES = (1.25, 1.5, 2.0, 3.0, 4.0)
 
-    Raises ParameterError (triangle budget, resolution), GeometryError (design), MeshBooleanError (union).
+
+def _blade_check(geometry: PropellerGeometry, grid: BladeSurface, mesh: TriangleMesh) -> CrossingCheck:
+    from torus_cad.budgets import MESH_WHOLE_CROSSING_CHECK_TRIANGLES
+
+    sections, count, _ = grid.points.shape
+    whole = geometry.blades * len(mesh.faces) <= MESH_WHOLE_CROSSING_CHECK_TRIANGLES
+    trailing_edge = grid.trailing_edge_index if grid.trailing_edge_index is not None else count // 2
+    return blade_crossings(mesh, sections, count, trailing_edge, grid.lower_corner_index, whole)
+
+
+def check_blade_crossings(geometry: PropellerGeometry, grid: BladeSurface, mesh: TriangleMesh,
+                          spacing: SectionSpacing) -> None:
+    """ParameterError (exit 2) when blade 0's mesh crosses itself, naming the smallest of the counts
+    scaled by :data:`_CROSSING_FREE_SCALES` whose mesh does not."""
+    from torus_cad.parameters.design import Mesh
+
+    found = _blade_check(geometry, grid, mesh).pairs
+    if found == 0:
+        return
+    sections, points, _ = grid.points.shape
+    most = (Mesh.model_fields["sections"].metadata[-1].le, Mesh.model_fields["points"].metadata[-1].le)
+    advice = "no allowed resolution up to 4 times finer avoids it"
+    for scale in _CROSSING_FREE_SCALES:
+        finer = (min(int(np.ceil(sections * scale)), most[0]), min(int(np.ceil(points * scale)), most[1]))
+        finer_grid = blade_grid(geometry, *finer, spacing)
+        if _blade_check(geometry, finer_grid, mirrored_diagonal_mesh(finer_grid)).pairs == 0:
+            advice = f"use --sections {finer[0]} --points {finer[1]} (mesh.sections, mesh.points) or finer"
+            break
+    raise ParameterError(f"mesh.sections = {sections}, mesh.points = {points} is too coarse for this blade: its "
+                         f"mesh crosses itself at {found} triangle pairs; {advice}")
+
+
+def _hub(geometry: PropellerGeometry, mounting: HubMounting, cell: float) -> TriangleMesh:
+    hub = hub_mesh(geometry.hub.radius_mm, geometry.hub.length_mm, cell, mounting.chamfer_mm)
+    return cut_features(hub, mounting, geometry.hub.radius_mm, geometry.hub.length_mm, cell)
+
+
+def united_crossings(mesh: LabeledMesh, geometry: PropellerGeometry, blade: CrossingCheck) -> CrossingCheck:
+    """Intersecting pairs of the united mesh: all of it when blade 0 was checked whole, else the
+    hub's and the junctions' triangles (blade 0's edge bands were checked already)."""
+    if blade.scope == "whole mesh":
+        return CrossingCheck(crossing_pairs(mesh.vertices, mesh.faces), len(mesh.faces), "whole mesh")
+    hub = geometry.hub
+    near = ~quality.faces_away_from_hub(mesh.vertices, mesh.faces, hub.radius_mm, hub.length_mm,
+                                        _junction_margin(geometry))
+    pairs = crossing_pairs(mesh.vertices, mesh.faces, near)
+    return CrossingCheck(blade.pairs + pairs, blade.checked_triangles + int(near.sum()),
+                         f"hub and junctions (all triangles within {_junction_margin(geometry):.3g} mm of the hub), "
+                         f"{blade.scope}")
+
+
+def build_surface_mesh(params: PropellerParameters, progress: Callable[[str], None] | None = None) -> SurfaceMesh:
+    """Check, grid and unite at ``params.mesh``'s resolution: the propeller's closed, labelled surface mesh
+    with the hub's features, checked for intersecting triangles.
+
+    Raises ParameterError (triangle budget, resolution, a crossing mesh, the root fillet), GeometryError
+    (design, hub features), MeshBooleanError (union).
     """
     timer = StageTimer[MeshStage](progress)
     geometry, table = params.geometry(), params.mesh
     with timer.stage(MeshStage.CHECKS):
+        check_meshable(params)
         estimate = estimate_triangles(geometry, table.sections, table.points, table.spacing)
         check_budget(estimate)
         check_resolution(geometry, table.sections, table.points, table.spacing)
         check_design(params)
+        mounting = placed_mounting(params)
     with timer.stage(MeshStage.GRIDS):
         grid = blade_grid(geometry, table.sections, table.points, table.spacing)
+        blade = mirrored_diagonal_mesh(grid)
+        check_blade_crossings(geometry, grid, blade, table.spacing)
         cell = cell_size(grid).matched
-        parts = [hub_mesh(geometry.hub.radius_mm, geometry.hub.length_mm, cell), *blade_meshes(geometry, grid)]
+        first = geometry.blade_angle_deg(0)
+        blades = [TriangleMesh(rotated_about_axis(blade.vertices, geometry.blade_angle_deg(index) - first),
+                               blade.faces) for index in range(geometry.blades)]
+        parts = [_hub(geometry, mounting, cell), *blades]
     with timer.stage(MeshStage.UNION):
         mesh = unite(parts, ["hub", *(f"blade_{index}" for index in range(geometry.blades))])
     with timer.stage(MeshStage.CLEANUP):
         mesh, cleanup = collapse_junction_needles(mesh)
-    return SurfaceMesh(params, mesh, grid, cell, estimate.total, cleanup, timer.seconds)
+    with timer.stage(MeshStage.CROSSINGS):
+        crossings = united_crossings(mesh, geometry, _blade_check(geometry, grid, blade))
+        if crossings.pairs:
+            raise ParameterError(
+                f"mesh.sections = {table.sections}, mesh.points = {table.points}: the united mesh crosses itself at "
+                f"{crossings.pairs} triangle pairs where the blades meet the hub; use finer --sections and --points")
+    return SurfaceMesh(params, mesh, grid, cell, estimate.total, cleanup, mounting, crossings, timer.seconds)
 
 
 # -- quality report ---------------------------------------------------------------------------------
@@ -120,16 +207,18 @@ def _junction_margin(geometry: PropellerGeometry) -> float:
 def vertex_distances(result: SurfaceMesh) -> NDArray[np.float64]:
     """``(v,)`` distance (mm) of each mesh vertex from the analytic surface, or an upper bound of it.
 
-    Hub vertices and the junction vertices the union created lie on hub triangles: their exact
-    distance from the hub's cylinder bounds their distance from the propeller's surface. Every
-    other vertex is a blade grid vertex, evaluated on the analytic surface (distance 0); a vertex
-    that is neither gets its distance from the nearest grid vertex, again an upper bound.
+    Hub vertices and the junction vertices the union created lie on hub triangles: their distance
+    from the nearest of the hub's surfaces (with its features, each surface taken unbounded:
+    ``hub_features.feature_surface_distance``) stands for their distance from the propeller's
+    surface. Every other vertex is a blade grid vertex, evaluated on the analytic surface
+    (distance 0); a vertex that is neither gets its distance from the nearest grid vertex, an
+    upper bound.
     """
     mesh, hub = result.mesh, result.geometry.hub
     on_hub = np.zeros(len(mesh.vertices), dtype=bool)
     on_hub[mesh.faces_of(0).ravel()] = True
     distance = np.zeros(len(mesh.vertices))
-    distance[on_hub] = np.abs(quality.hub_surface_distance(mesh.vertices[on_hub], hub.radius_mm, hub.length_mm))
+    distance[on_hub] = feature_surface_distance(mesh.vertices[on_hub], result.mounting, hub.radius_mm, hub.length_mm)
     others = np.flatnonzero(~on_hub)
     blade_vertices = np.concatenate([part.vertices for part in blade_meshes(result.geometry, result.blade_grid)])
     exact = quality.rows_in(mesh.vertices[others], blade_vertices)
@@ -146,10 +235,11 @@ def blade_cell_sag(result: SurfaceMesh) -> tuple[float, float]:
     cells' parameter midpoints from the cells' triangles, over the cells outside the hub."""
     geometry, grid = result.geometry, result.blade_grid
     s_mid = 0.5 * (grid.s[:-1] + grid.s[1:])
-    t_mid = 0.5 * (grid.t + np.append(grid.t[1:], 2.0))
+    period = 3.0 if grid.lower_corner_index is not None else 2.0  # closed parameters of blunt sections run to 3
+    t_mid = 0.5 * (grid.t + np.append(grid.t[1:], period))
     frames = blade_frames(geometry.blade, geometry.centerline(0), s_mid)
-    centres = place_sections(geometry.blade, frames, airfoil_points(geometry.blade.airfoil, t_mid))
-    sag = quality.cell_deviation(grid.points, centres)
+    centres = place_sections(geometry.blade, frames, sections_at(sections_along(geometry.blade, frames.s), t_mid))
+    sag = quality.cell_deviation(grid.points, centres, split_along_a_d(grid))
     outside = quality.outside_hub(centres.reshape(-1, 3), geometry.hub.radius_mm, geometry.hub.length_mm,
                                   _junction_margin(geometry)).reshape(sag.shape)
     chord = 2.0 * np.linalg.norm(centres - frames.origin[:, None, :], axis=-1).max(axis=1)
@@ -219,6 +309,10 @@ def quality_report(result: SurfaceMesh, compare: bool = True) -> dict[str, Any]:
         "volume_mm3": mesh.triangle_mesh.volume,
         "vertex_distance_max_mm": float(vertex_distances(result).max()),
         "cell_sag_max_mm": sag_mm, "cell_sag_max_relative_chord": sag_relative,
+        "self_intersections": result.crossings.pairs,
+        "self_intersection_check": {"scope": result.crossings.scope,
+                                    "checked_triangles": result.crossings.checked_triangles, "library": "meshlib"},
+        "hub_features": _features(result),
     }
     if compare:
         report.update(opencascade_comparison(params, margin))
@@ -226,13 +320,26 @@ def quality_report(result: SurfaceMesh, compare: bool = True) -> dict[str, Any]:
     return report
 
 
+def _features(result: SurfaceMesh) -> dict[str, Any]:
+    mounting, blade = result.mounting, result.parameters.airfoil
+    return {"bore_diameter_mm": mounting.bore_diameter_mm, "bore_flat_depth_mm": mounting.bore_flat_depth_mm,
+            "set_screw_diameter_mm": mounting.set_screw_diameter_mm,
+            "set_screw_angle_deg": mounting.set_screw_angle_deg if mounting.set_screw_diameter_mm else None,
+            "chamfer_mm": mounting.chamfer_mm, "trailing_edge_thickness_mm": blade.trailing_edge_thickness,
+            "trailing_edge_shape": blade.trailing_edge_shape.value if result.blade_grid.lower_corner_index is not None
+            else "sharp", "handedness": result.parameters.handedness.value}
+
+
 def summary_line(report: dict[str, Any]) -> str:
     """One terminal line: triangles, closedness, evenness, aspect ratio, volume, distance."""
     topology = report["topology"]
     away = report["blades_away_from_junctions"]
     closed = "closed 2-manifold" if topology["closed_2_manifold"] else "NOT CLOSED"
+    crossing = ("no intersecting triangles" if report["self_intersections"] == 0
+                else f"{report['self_intersections']} INTERSECTING TRIANGLE PAIRS")
     line = (f"mesh: {report['triangles']:,} triangles, {closed} ({topology['open_edges']} open, "
-            f"{topology['non_manifold_edges']} non-manifold edges); blade edge ratio {away['edge_ratio']:.2f}")
+            f"{topology['non_manifold_edges']} non-manifold edges), {crossing}; blade edge ratio "
+            f"{away['edge_ratio']:.2f}")
     if "opencascade_stl" in report:
         line += f" (OpenCascade STL {report['opencascade_stl']['blades_away_from_junctions']['edge_ratio']:.1f})"
     line += (f", worst aspect ratio {report['aspect_ratio_max']:.3g} ({report['triangles_aspect_ratio_over_100']} "
@@ -244,31 +351,42 @@ def summary_line(report: dict[str, Any]) -> str:
     return line
 
 
+def mirrored_mesh(mesh: LabeledMesh) -> LabeledMesh:
+    """``mesh`` reflected through the XZ plane (the 'ccw' propeller, as torus_cad.kernel.mirror makes the
+    B-rep's), faces turned to stay outward."""
+    return LabeledMesh(mesh.vertices * np.array([1.0, -1.0, 1.0]), mesh.faces[:, ::-1], mesh.part, mesh.part_names)
+
+
+def _write_one(mesh: LabeledMesh, name: str, file_format: MeshFormat, folder: Path) -> dict[str, Path]:
+    """One mesh file into an output set's staging ``folder``: ``{format: path}``."""
+    return {item.value: path for item, path in write_mesh_files(mesh, folder, name, (file_format,), atomic=False).items()}
+
+
 def write_surface_mesh(params: PropellerParameters, out_dir: str | Path, compare: bool = True,
                        progress: Callable[[str], None] | None = None) -> tuple[dict[str, Any], dict[str, Path]]:
-    """Build, measure and write at ``params.mesh``: the mesh files and ``<name>_mesh.json``.
+    """Build, measure and write at ``params.mesh``: the mesh files and ``<name>_mesh.json`` as one output
+    set (torus_cad.outputs: staged, sealed by the report, published whole or not at all).
 
-    Returns the report and the written paths by format (and ``"json"``). Nothing is written
-    when a check refuses the design or the resolution.
+    Returns the report as sealed and the published paths by format (and ``"json"``, last).
+    Nothing is written when a check refuses the design or the resolution.
     """
-    import json
+    from torus_cad.outputs import OutputSet
 
     formats = selected_formats(params.mesh)
     result = build_surface_mesh(params, progress)
     timer = StageTimer[MeshStage](progress)
     with timer.stage(MeshStage.QUALITY):
         report = quality_report(result, compare)
-    with timer.stage(MeshStage.WRITE):
-        paths: dict[str, Path] = {item.value: path for item, path in
-                                  write_mesh_files(result.mesh, out_dir, params.name, formats).items()}
-    result.stage_seconds.update(timer.seconds)
-    report["files"] = {key: path.name for key, path in paths.items()}
-    report["stage_seconds"] = result.stage_seconds
-    json_path = Path(out_dir) / f"{params.name}_mesh.json"
-    with atomic_path(json_path) as temp:
-        temp.write_text(json.dumps(report, indent=2) + "\n")
-    paths["json"] = json_path
-    return report, paths
+    mesh = mirrored_mesh(result.mesh) if params.handedness == Handedness.CCW else result.mesh
+    with OutputSet(out_dir, f"{params.name}_mesh") as output:
+        with timer.stage(MeshStage.WRITE):
+            for file_format in formats:
+                output.write_files(functools.partial(_write_one, mesh, params.name, file_format))
+        result.stage_seconds.update(timer.seconds)
+        report["stage_seconds"] = result.stage_seconds
+        paths = output.publish(report)
+        report = output.sealed_report
+    return report, {str(kind): path for kind, path in paths.items()}
 
 
 __all__ = ["MeshFormat", "MeshStage", "SurfaceMesh", "build_surface_mesh", "quality_report", "summary_line",

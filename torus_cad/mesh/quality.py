@@ -125,12 +125,15 @@ def faces_away_from_hub(vertices: NDArray[np.float64], faces: NDArray[np.int64],
     return np.asarray(outside[faces].all(axis=1))
 
 
-def cell_deviation(grid: NDArray[np.float64], centres: NDArray[np.float64]) -> NDArray[np.float64]:
+def cell_deviation(grid: NDArray[np.float64], centres: NDArray[np.float64],
+                   split_a_d: NDArray[np.bool_] | None = None) -> NDArray[np.float64]:
     """Distance (mm) of the analytic surface at each cell's centre from the cell's two triangles' planes.
 
-    ``grid`` is a ``(m, p, 3)`` blade grid (closed around axis 1) cut into triangles a-b-d and
-    a-d-c as ``blade_mesh`` does; ``centres`` ``(m - 1, p, 3)`` holds the analytic surface at the
-    parameter midpoints of the cells. Returns ``(m - 1, p)``: the smaller distance to the two planes.
+    ``grid`` is a ``(m, p, 3)`` blade grid (closed around axis 1) whose cell (a, b on one section,
+    c, d on the next) is cut into a-b-d and a-d-c where ``split_a_d`` ``(p,)`` is True (default:
+    everywhere) and into a-b-c and b-d-c elsewhere, as ``grids.mirrored_diagonal_mesh`` does;
+    ``centres`` ``(m - 1, p, 3)`` holds the analytic surface at the parameter midpoints of the cells.
+    Returns ``(m - 1, p)``: the smaller distance to the two planes.
     """
     a, b = grid[:-1], np.roll(grid[:-1], -1, axis=1)
     c, d = grid[1:], np.roll(grid[1:], -1, axis=1)
@@ -143,7 +146,11 @@ def cell_deviation(grid: NDArray[np.float64], centres: NDArray[np.float64]) -> N
             distance = np.abs(np.einsum("...k,...k->...", centres - p, normal)) / norm
         return np.where(norm > 0, distance, np.linalg.norm(centres - p, axis=-1))
 
-    return np.minimum(plane_distance(a, b, d), plane_distance(a, d, c))
+    along_a_d = np.minimum(plane_distance(a, b, d), plane_distance(a, d, c))
+    if split_a_d is None:
+        return along_a_d
+    along_b_c = np.minimum(plane_distance(a, b, c), plane_distance(b, d, c))
+    return np.where(split_a_d[None, :], along_a_d, along_b_c)
 
 
 def rows_in(query: NDArray[np.float64], reference: NDArray[np.float64]) -> NDArray[np.bool_]:

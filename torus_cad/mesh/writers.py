@@ -1,8 +1,11 @@
 """Write a labelled surface mesh: binary STL, ASCII STL (one solid per part), OBJ (one group per part), PLY, VTK.
 
 Every writer works on whole arrays (text is formatted in chunks of :data:`CHUNK_TRIANGLES`
-with one C-level ``%`` per chunk), so millions of triangles need no Python loop per triangle.
-Each file is written atomically (``kernel.export.atomic_path``): a temp file, then a rename.
+with one C-level ``%`` per chunk, binary records are built and written a chunk at a time), so
+millions of triangles need no Python loop per triangle and no full-size copy. ``torus-cad mesh``
+writes into its output set's staging folder (torus_cad.outputs); elsewhere each file is written
+atomically (``kernel.export.atomic_path``): a temp file, then a rename. A failed write raises
+OSError naming the file it was writing.
 """
 
 from __future__ import annotations
@@ -47,15 +50,17 @@ def _write_rows(handle: IO[str], template: str, rows: NDArray[np.float64] | NDAr
 
 
 def write_binary_stl(mesh: LabeledMesh, path: Path, name: str) -> None:
-    """Binary STL of the whole surface (float32, as the format requires)."""
-    records = np.zeros(len(mesh.faces), dtype=_STL_RECORD)
-    records["normal"] = unit_normals(mesh.vertices, mesh.faces)
-    records["vertices"] = mesh.vertices[mesh.faces]
+    """Binary STL of the whole surface (float32, as the format requires), a chunk of records at a time."""
     header = f"torus_cad surface mesh {name}".encode("ascii", "replace")[:80].ljust(80, b" ")
     with path.open("wb") as handle:
         handle.write(header)
-        handle.write(np.uint32(len(records)).tobytes())
-        records.tofile(handle)
+        handle.write(np.uint32(len(mesh.faces)).tobytes())
+        for part in _chunks(len(mesh.faces)):
+            faces = mesh.faces[part]
+            records = np.zeros(len(faces), dtype=_STL_RECORD)
+            records["normal"] = unit_normals(mesh.vertices, faces)
+            records["vertices"] = mesh.vertices[faces]
+            handle.write(records.tobytes())
 
 
 def write_ascii_stl(mesh: LabeledMesh, path: Path, name: str) -> None:
@@ -89,12 +94,14 @@ def write_ply(mesh: LabeledMesh, path: Path, name: str) -> None:
               + f"\nelement vertex {len(mesh.vertices)}\nproperty double x\nproperty double y\nproperty double z\n"
               f"element face {len(mesh.faces)}\nproperty list uchar int vertex_indices\nproperty int part\n"
               "end_header\n")
-    faces = np.empty(len(mesh.faces), dtype=[("count", "u1"), ("vertices", "<i4", (3,)), ("part", "<i4")])
-    faces["count"], faces["vertices"], faces["part"] = 3, mesh.faces, mesh.part
     with path.open("wb") as handle:
         handle.write(header.encode("ascii"))
-        np.ascontiguousarray(mesh.vertices, dtype="<f8").tofile(handle)
-        faces.tofile(handle)
+        for part in _chunks(len(mesh.vertices)):
+            handle.write(np.ascontiguousarray(mesh.vertices[part], dtype="<f8").tobytes())
+        for part in _chunks(len(mesh.faces)):
+            faces = np.empty(part.stop - part.start, dtype=[("count", "u1"), ("vertices", "<i4", (3,)), ("part", "<i4")])
+            faces["count"], faces["vertices"], faces["part"] = 3, mesh.faces[part], mesh.part[part]
+            handle.write(faces.tobytes())
 
 
 def write_vtk(mesh: LabeledMesh, path: Path, name: str) -> None:
@@ -120,13 +127,24 @@ def mesh_path(out_dir: Path, name: str, file_format: MeshFormat) -> Path:
 
 
 def write_mesh_files(mesh: LabeledMesh, out_dir: str | Path, name: str,
-                     formats: tuple[MeshFormat, ...]) -> dict[MeshFormat, Path]:
-    """Write ``mesh`` in every format into ``out_dir`` (created if missing); the paths by format."""
+                     formats: tuple[MeshFormat, ...], atomic: bool = True) -> dict[MeshFormat, Path]:
+    """Write ``mesh`` in every format into ``out_dir`` (an existing folder); the paths by format.
+
+    ``atomic``: each file through a temp file and a rename (off inside an output set's staging
+    folder, which is published whole). An OSError (no space left, permission denied, file size
+    limit) is raised again with the file's path as its ``filename``.
+    """
     out = Path(out_dir)
     paths = {}
     for file_format in formats:
         path = mesh_path(out, name, file_format)
-        with atomic_path(path) as temp:
-            WRITERS[file_format](mesh, temp, name)
+        try:
+            if atomic:
+                with atomic_path(path) as temp:
+                    WRITERS[file_format](mesh, temp, name)
+            else:
+                WRITERS[file_format](mesh, path, name)
+        except OSError as error:
+            raise OSError(error.errno, error.strerror or str(error), str(path)) from None
         paths[file_format] = path
     return paths
