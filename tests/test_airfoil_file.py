@@ -136,11 +136,11 @@ def test_blunt_edge_of_a_file_section_has_the_requested_gap():
 # -- malformed files: ParameterError naming the file and the line -----------------------------------
 
 MALFORMED = {
-    "no_numbers": ("just a name\nand some words\n", 2, "not two numbers"),
+    "no_numbers": ("just a name\nand some words\n", 2, "expected two numbers"),
     "empty": ("\n\n", 1, "no coordinates"),
     "name_only": ("NACA 2412\n", 1, "no coordinates"),
-    "text_in_data": ("foil\n1.0 0.0\n0.5 0.05\nhello world\n0.0 0.0\n", 4, "not two numbers"),
-    "three_columns": ("foil\n1.0 0.0 3\n", 2, "not two numbers"),
+    "text_in_data": ("foil\n1.0 0.0\n0.5 0.05\nhello world\n0.0 0.0\n", 4, "expected two numbers"),
+    "three_columns": ("foil\n1.0 0.0 3\n", 2, "expected two numbers"),
     "one_surface_selig": ("foil\n1.0 0.0\n0.8 0.03\n0.6 0.05\n0.4 0.06\n0.2 0.05\n0.1 0.03\n0.0 0.0\n", 8,
                           "only one surface"),
     "one_surface_lednicer": ("foil\n5. 5.\n\n0.0 0.0\n0.25 0.05\n0.5 0.06\n0.75 0.04\n1.0 0.0\n", 8,

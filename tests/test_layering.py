@@ -49,9 +49,17 @@ def test_geometry_imports_no_kernel_and_nothing_above_it():
     def forbidden(name: str) -> bool:
         top = name.split(".")[0]
         inside = name.startswith("torus_cad.") and not name.startswith(
-            ("torus_cad.geometry", "torus_cad.errors", "torus_cad.tolerances"))
+            ("torus_cad.geometry", "torus_cad.errors", "torus_cad.tolerances", "torus_cad.input_files"))
         return top in KERNEL_PACKAGES or inside
     assert _offenders(_sources("geometry"), forbidden) == []
+
+
+def test_the_untrusted_file_reader_imports_only_the_standard_library_and_the_errors():
+    """torus_cad.input_files sits below the geometry layer (it reads coordinate files)."""
+    def forbidden(name: str) -> bool:
+        return name.split(".")[0] not in sys.stdlib_module_names | {"__future__"} and not name.startswith(
+            ("torus_cad.errors", "torus_cad.tolerances"))
+    assert _offenders([PACKAGE / "input_files.py"], forbidden) == []
 
 
 def test_kernel_imports_no_pipeline_or_app():

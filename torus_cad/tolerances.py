@@ -63,6 +63,20 @@ HUB_FOOTPRINT_MARGIN_DEG = 1.0
 #: Largest configuration file read (bytes): a design is a few hundred bytes. Only regular files are read.
 CONFIG_FILE_MAX_BYTES = 1 << 20
 
+#: Largest airfoil coordinate file read (bytes): the UIUC database's files are a few kB.
+AIRFOIL_FILE_MAX_BYTES = 2_000_000
+
+#: Most points an airfoil coordinate file may hold: the database's files have tens to a few hundred;
+#: the parsing and crossing checks of this many take well under a second (scripts/bench_airfoil_file.py).
+AIRFOIL_FILE_MAX_POINTS = 20_000
+
+#: Seconds the parsing and checks of one airfoil coordinate file may take before it is refused.
+AIRFOIL_FILE_TIME_LIMIT_S = 10.0
+
+#: Largest magnitude of a coordinate in an airfoil file (any length unit: the section is scaled to
+#: chord units); larger values overflow the chord and area computations.
+AIRFOIL_COORDINATE_LIMIT = 1e6
+
 #: Most triangles an STL may have, by the estimate made before tessellating
 #: (torus_cad.geometry.triangle_estimate). OpenCascade's mesher slows down faster than its
 #: triangle count grows on the lofted blades (see the README's "Limits").

@@ -31,8 +31,16 @@ lower half down by (Delta / 2) u^8 (the NACA law's (g / 2) t^4 with t = u^2), so
 trailing-edge ends are ``gap`` apart in y; a file whose trailing edge is open already keeps
 its gap when no thickness is asked for.
 
-Malformed files raise ParameterError naming the file and the line: no coordinates, a line
-that is not two numbers, one surface only, surfaces that cross, a chord of zero.
+A coordinate file is untrusted input, read by torus_cad.input_files like a configuration file:
+a regular file only (no device, named pipe, socket or folder), at most
+:data:`~torus_cad.tolerances.AIRFOIL_FILE_MAX_BYTES`, at most
+:data:`~torus_cad.tolerances.AIRFOIL_FILE_MAX_POINTS` points, and the parsing and the crossing
+checks within :data:`~torus_cad.tolerances.AIRFOIL_FILE_TIME_LIMIT_S`. Malformed files raise
+ParameterError naming the file, the line and what was expected there, never quoting the line
+(the path may name any file the user can read): no coordinates, a line that is not two numbers,
+a coordinate that is not finite or beyond :data:`~torus_cad.tolerances.AIRFOIL_COORDINATE_LIMIT`,
+one surface only, surfaces that cross, a chord of zero. The crossing test compares only segments whose
+bounding boxes overlap (a sort and sweep over x), O(n log n) for a section, not all O(n^2) pairs.
 """
 
 from __future__ import annotations
@@ -47,7 +55,14 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.interpolate import CubicSpline
 from scipy.optimize import minimize_scalar
 
-from torus_cad.errors import ParameterError
+from torus_cad.errors import BudgetError, ParameterError
+from torus_cad.input_files import TimeBudget, decode_text, read_untrusted_bytes
+from torus_cad.tolerances import (
+    AIRFOIL_COORDINATE_LIMIT,
+    AIRFOIL_FILE_MAX_BYTES,
+    AIRFOIL_FILE_MAX_POINTS,
+    AIRFOIL_FILE_TIME_LIMIT_S,
+)
 
 #: Largest distance (chord units) between a file's spline and the analytic NACA section it was
 #: written from, at 81 cosine-spaced stations per surface (measured: at most 3.0e-6; module docstring).
@@ -60,8 +75,15 @@ NORMALISED_TOLERANCE = 1e-5
 #: Fewest points a surface needs for a cubic spline with a meaningful leading edge.
 MINIMUM_POINTS_PER_SURFACE = 4
 
-#: Files larger than this are refused before reading (a coordinate file is a few kB).
-MAXIMUM_FILE_BYTES = 2_000_000
+#: Files larger than this are refused (a coordinate file is a few kB).
+MAXIMUM_FILE_BYTES = AIRFOIL_FILE_MAX_BYTES
+
+#: What the file is called in messages.
+_WHAT = "airfoil file"
+
+#: Most segment pairs per segment the crossing test may examine (a section has about 3: each segment
+#: overlaps its neighbours and the facing surface's segments in x).
+_CANDIDATES_PER_SEGMENT = 64
 
 
 class AirfoilFile:
@@ -88,7 +110,7 @@ class AirfoilFile:
         chord_vector = trailing_middle - leading
         chord = float(np.linalg.norm(chord_vector))
         if not chord > 1e-9 * max(1.0, float(np.abs(loop).max())):
-            raise ParameterError(f"airfoil file {source!r} line {int(lines[0])}: the chord is zero "
+            raise ParameterError(f"{_WHAT} {source!r} line {int(lines[0])}: the chord is zero "
                                  "(leading and trailing edge coincide)")
         cos, sin = chord_vector / chord
         # Rows map a file point p to chord units: A (p - leading), A = rotation to +x / chord.
@@ -169,49 +191,43 @@ def load_airfoil_file(path: str | Path) -> AirfoilFile:
     """:func:`read_airfoil_file`, read once per file version (path, size, modification time)."""
     path = Path(path)
     try:
-        status = path.stat()
+        status = path.stat()  # never blocks, not even on a named pipe; the reader checks the file it opens
     except OSError as error:
-        raise ParameterError(f"cannot read airfoil file {str(path)!r}: {error.strerror}") from None
-    return _load_cached(str(path.resolve()), status.st_size, status.st_mtime_ns)
+        raise ParameterError(f"cannot read {_WHAT} {str(path)!r}: {error.strerror}") from None
+    return _load_cached(str(path.resolve()), status.st_size, status.st_mtime_ns, str(path))
 
 
 @lru_cache(maxsize=32)
-def _load_cached(path: str, size: int, modified_ns: int) -> AirfoilFile:
+def _load_cached(resolved: str, size: int, modified_ns: int, path: str) -> AirfoilFile:
+    """The file read by its path as given (messages name it so, not a symlink's target)."""
     return read_airfoil_file(path)
 
 
 def read_airfoil_file(path: str | Path) -> AirfoilFile:
-    """Read a Selig or Lednicer coordinate file; ParameterError naming the file and line if malformed."""
-    path = Path(path)
+    """Read a Selig or Lednicer coordinate file; ParameterError naming the file and line if malformed.
+
+    The file is untrusted: see the module docstring for what is refused and the limits.
+    """
+    raw = read_untrusted_bytes(path, _WHAT, AIRFOIL_FILE_MAX_BYTES)
     try:
-        size = path.stat().st_size
-        if size > MAXIMUM_FILE_BYTES:
-            raise ParameterError(f"airfoil file {str(path)!r} is {size} bytes; a coordinate file is at most "
-                                 f"{MAXIMUM_FILE_BYTES} bytes")
-        raw = path.read_bytes()
-    except OSError as error:
-        raise ParameterError(f"cannot read airfoil file {str(path)!r}: {error.strerror}") from None
-    try:
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError:
-        try:
-            text = raw.decode("latin-1")  # older database files carry Latin-1 names
-        except UnicodeDecodeError:  # pragma: no cover - latin-1 decodes any bytes
-            raise ParameterError(f"airfoil file {str(path)!r} is not a text file") from None
-    if "\x00" in text:
-        raise ParameterError(f"airfoil file {str(path)!r} line 1: not a text file (binary data)")
+        text = decode_text(raw, str(path), _WHAT, empty_ok=True)  # empty: "no coordinates", naming line 1
+    except ParameterError:
+        if b"\x00" in raw:
+            raise
+        text = raw.decode("latin-1")  # older database files carry Latin-1 names
     return parse_airfoil_text(text, str(path))
 
 
 def parse_airfoil_text(text: str, source: str = "<text>") -> AirfoilFile:
     """Parse the text of a Selig or Lednicer coordinate file (``source`` names it in messages)."""
-    name, rows = _numeric_rows(text, source)
+    budget = TimeBudget(source, _WHAT, AIRFOIL_FILE_TIME_LIMIT_S)
+    name, rows = _numeric_rows(text, source, budget)
     if not rows:
-        raise ParameterError(f"airfoil file {source!r} line 1: no coordinates found (expected lines of 'x y')")
+        raise ParameterError(f"{_WHAT} {source!r} line 1: no coordinates found (expected lines of 'x y')")
     _, (first_x, first_y) = rows[0]
     coordinates = np.array([values for _, values in rows], dtype=float)
     if np.linalg.norm(np.ptp(coordinates, axis=0)) <= 1e-12 * max(1.0, float(np.abs(coordinates).max())):
-        raise ParameterError(f"airfoil file {source!r} line {rows[0][0]}: the chord is zero (every point is the same)")
+        raise ParameterError(f"{_WHAT} {source!r} line {rows[0][0]}: the chord is zero (every point is the same)")
     if first_x >= 2.0 and first_y >= 2.0 and first_x.is_integer() and first_y.is_integer():
         loop, lines = _lednicer_loop(rows, source)
     else:
@@ -219,14 +235,21 @@ def parse_airfoil_text(text: str, source: str = "<text>") -> AirfoilFile:
     loop, lines = _without_repeats(loop, lines)
     if _signed_area(loop) < 0.0:  # stored lower surface first: turn it into Selig's order
         loop, lines = loop[::-1].copy(), lines[::-1].copy()
-    _check_no_crossing(loop, lines, source)
+    _check_no_crossing(loop, lines, source, budget)
     section = AirfoilFile(name or Path(source).stem, source, loop, lines)
-    _check_smooth_section(section, source)
+    budget.check("fitting the spline")
+    _check_smooth_section(section, source, budget)
     return section
 
 
-def _numeric_rows(text: str, source: str) -> tuple[str, list[tuple[int, tuple[float, float]]]]:
-    """The name line and every ``(line number, (x, y))`` row; other lines after the data are errors."""
+def _numeric_rows(text: str, source: str, budget: TimeBudget
+                  ) -> tuple[str, list[tuple[int, tuple[float, float]]]]:
+    """The name line and every ``(line number, (x, y))`` row; other lines after the data are errors.
+
+    Refused (naming the line, never quoting it): a line that is not two numbers after the first
+    coordinates, a coordinate that is not finite or over :data:`AIRFOIL_COORDINATE_LIMIT`, and
+    more than :data:`AIRFOIL_FILE_MAX_POINTS` points (BudgetError, as soon as the count passes it).
+    """
     name = ""
     rows: list[tuple[int, tuple[float, float]]] = []
     for number, line in enumerate(text.splitlines(), start=1):
@@ -238,11 +261,20 @@ def _numeric_rows(text: str, source: str) -> tuple[str, list[tuple[int, tuple[fl
             if not rows and not name:
                 name = content
                 continue
-            raise ParameterError(f"airfoil file {source!r} line {number}: {content[:40]!r} is not two numbers "
-                                 "'x y'")
+            raise ParameterError(f"{_WHAT} {source!r} line {number}: expected two numbers 'x y' (only the first "
+                                 "line before the coordinates may be a name)")
         if not all(math.isfinite(value) for value in values):
-            raise ParameterError(f"airfoil file {source!r} line {number}: coordinates must be finite numbers")
+            raise ParameterError(f"{_WHAT} {source!r} line {number}: coordinates must be finite numbers")
+        if max(abs(values[0]), abs(values[1])) > AIRFOIL_COORDINATE_LIMIT:
+            raise ParameterError(f"{_WHAT} {source!r} line {number}: a coordinate is out of range; allowed "
+                                 f"[-{AIRFOIL_COORDINATE_LIMIT:g}, {AIRFOIL_COORDINATE_LIMIT:g}]")
         rows.append((number, values))
+        if len(rows) > AIRFOIL_FILE_MAX_POINTS:
+            raise BudgetError(f"{_WHAT} {source!r} line {number}: more than {AIRFOIL_FILE_MAX_POINTS:,} points, the "
+                              f"limit for a coordinate file (the checks of a section grow with its points)")
+        if not len(rows) % 4096:
+            budget.check("reading the coordinates")
+    budget.check("reading the coordinates")
     return name, rows
 
 
@@ -269,11 +301,11 @@ def _lednicer_loop(rows: list[tuple[int, tuple[float, float]]], source: str
             f"lower points (line {header_line}) but the file ends after {min(len(data), upper_count)} upper and "
             f"{have} lower points" + ("; only one surface is given" if have == 0 else ""))
     if len(data) > upper_count + lower_count:
-        raise ParameterError(f"airfoil file {source!r} line {data[upper_count + lower_count][0]}: more points than "
+        raise ParameterError(f"{_WHAT} {source!r} line {data[upper_count + lower_count][0]}: more points than "
                              f"the {upper_count} + {lower_count} promised on line {header_line}")
     for count, label in ((upper_count, "upper"), (lower_count, "lower")):
         if count < MINIMUM_POINTS_PER_SURFACE:
-            raise ParameterError(f"airfoil file {source!r} line {header_line}: the {label} surface has {count} points; "
+            raise ParameterError(f"{_WHAT} {source!r} line {header_line}: the {label} surface has {count} points; "
                                  f"at least {MINIMUM_POINTS_PER_SURFACE} are needed")
     upper, lower = data[:upper_count], data[upper_count:]
     ordered = upper[::-1] + lower  # trailing edge -> upper -> leading edge -> lower -> trailing edge
@@ -286,7 +318,7 @@ def _selig_loop(rows: list[tuple[int, tuple[float, float]]], source: str
     loop = np.array([values for _, values in rows], dtype=float)
     lines = np.array([number for number, _ in rows], dtype=np.int64)
     if len(loop) < 2 * MINIMUM_POINTS_PER_SURFACE - 1:
-        raise ParameterError(f"airfoil file {source!r} line {lines[-1]}: {len(loop)} points are too few for two "
+        raise ParameterError(f"{_WHAT} {source!r} line {lines[-1]}: {len(loop)} points are too few for two "
                              f"surfaces (at least {2 * MINIMUM_POINTS_PER_SURFACE - 1})")
     trailing_middle = 0.5 * (loop[0] + loop[-1])
     leading = int(np.argmax(np.linalg.norm(loop - trailing_middle, axis=1)))
@@ -312,53 +344,91 @@ def _signed_area(loop: NDArray[np.float64]) -> float:
     return 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
 
 
-def _first_crossing(polygon: NDArray[np.float64], closed: bool, rows: int = 256) -> tuple[int, int] | None:
+def _segments(polygon: NDArray[np.float64], closed: bool) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Start and end points ``(m, 2)`` of the polygon's segments (m = n closed, n - 1 open)."""
+    if closed:
+        return polygon, np.roll(polygon, -1, axis=0)
+    return polygon[:-1], polygon[1:]
+
+
+def _candidate_pairs(start: NDArray[np.float64], end: NDArray[np.float64], limit: int) -> NDArray[np.int64]:
+    """Pairs ``(k, 2)`` (i < j) of segments whose bounding boxes overlap: every crossing pair is among them.
+
+    Sort and sweep: with the segments sorted by their smallest x, the ones whose x-range overlaps
+    segment i's and that start after it are a contiguous run found by binary search, so the pairs
+    are counted in O(n log n) before any is made, and made in O(k) for k overlapping x-ranges. A
+    section's two surfaces overlap only where they face each other (k ~ 3n). BudgetError if k
+    exceeds ``limit`` (segments stacked far more steeply than any airfoil's).
+    """
+    low_x, high_x = np.minimum(start[:, 0], end[:, 0]), np.maximum(start[:, 0], end[:, 0])
+    order = np.argsort(low_x, kind="stable")
+    sorted_low = low_x[order]
+    run = np.searchsorted(sorted_low, high_x[order], side="right") - np.arange(len(order)) - 1
+    run = np.maximum(run, 0)
+    total = int(run.sum())
+    if total > limit:
+        raise BudgetError(f"the surfaces cannot be checked for crossings within the budget: {total:,} segment "
+                          f"pairs overlap in x, over the limit of {limit:,}")
+    first = np.repeat(np.arange(len(order)), run)
+    offset = np.arange(total) - np.repeat(np.cumsum(run) - run, run)
+    pairs = np.sort(np.stack([order[first], order[first + 1 + offset]], axis=1), axis=1)
+    low_y, high_y = np.minimum(start[:, 1], end[:, 1]), np.maximum(start[:, 1], end[:, 1])
+    overlap_y = (low_y[pairs[:, 0]] <= high_y[pairs[:, 1]]) & (low_y[pairs[:, 1]] <= high_y[pairs[:, 0]])
+    return pairs[overlap_y]
+
+
+def _first_crossing(polygon: NDArray[np.float64], closed: bool) -> tuple[int, int] | None:
     """Indices (i, j), i < j, of the first pair of non-adjacent segments that properly cross, or None.
 
-    Compares every segment with every other in blocks of ``rows`` segments (memory stays small).
+    Only the candidate pairs of :func:`_candidate_pairs` are tested exactly.
     """
-    start = polygon if closed else polygon[:-1]
-    end = np.roll(polygon, -1, axis=0) if closed else polygon[1:]
+    start, end = _segments(polygon, closed)
     count = len(start)
+    if count < 2:
+        return None
+    pairs = _candidate_pairs(start, end, _CANDIDATES_PER_SEGMENT * count)
+    gap = pairs[:, 1] - pairs[:, 0]
+    pairs = pairs[(gap > 1) & ~(closed & (gap == count - 1))]
 
     def orientation(a: NDArray[np.float64], b: NDArray[np.float64], c: NDArray[np.float64]) -> NDArray[np.float64]:
-        return np.sign((b[..., 0] - a[..., 0]) * (c[..., 1] - a[..., 1]) - (b[..., 1] - a[..., 1]) * (c[..., 0] - a[..., 0]))
+        return np.sign((b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]))
 
-    index = np.arange(count)
-    for first in range(0, count, rows):
-        block = index[first:first + rows]
-        p, q = start[block][:, None], end[block][:, None]
-        r, s = start[None, :], end[None, :]
-        crossing = (orientation(p, q, r) * orientation(p, q, s) < 0) & (orientation(r, s, p) * orientation(r, s, q) < 0)
-        gap = np.abs(block[:, None] - index[None, :])
-        adjacent = (gap <= 1) | (closed & (gap == count - 1))
-        pairs = np.argwhere(crossing & ~adjacent & (block[:, None] < index[None, :]))
-        if len(pairs):
-            return int(block[pairs[0, 0]]), int(pairs[0, 1])
-    return None
+    p, q, r, s = start[pairs[:, 0]], end[pairs[:, 0]], start[pairs[:, 1]], end[pairs[:, 1]]
+    crossing = (orientation(p, q, r) * orientation(p, q, s) < 0) & (orientation(r, s, p) * orientation(r, s, q) < 0)
+    found = pairs[crossing]
+    if not len(found):
+        return None
+    i, j = found[np.lexsort((found[:, 1], found[:, 0]))[0]]
+    return int(i), int(j)
 
 
-def _check_no_crossing(loop: NDArray[np.float64], lines: NDArray[np.int64], source: str) -> None:
-    crossing = _first_crossing(loop, closed=True)
+def _check_no_crossing(loop: NDArray[np.float64], lines: NDArray[np.int64], source: str,
+                       budget: TimeBudget) -> None:
+    try:
+        crossing = _first_crossing(loop, closed=True)
+    except BudgetError as error:
+        raise BudgetError(f"{_WHAT} {source!r}: {error}") from None
+    budget.check("checking the surfaces for crossings")
     if crossing is not None:
         i, j = crossing
-        raise ParameterError(f"airfoil file {source!r} line {lines[i]}: the surfaces cross (the segment from line "
+        raise ParameterError(f"{_WHAT} {source!r} line {lines[i]}: the surfaces cross (the segment from line "
                              f"{lines[i]} crosses the one from line {lines[j]})")
 
 
-def _check_smooth_section(section: AirfoilFile, source: str, samples: int = 400) -> None:
+def _check_smooth_section(section: AirfoilFile, source: str, budget: TimeBudget, samples: int = 400) -> None:
     """The spline through the points must not cross itself either (an overshoot between sparse points)."""
     u = np.linspace(0.0, 1.0, samples)
     upper, lower = section.points_on_half(u, True), section.points_on_half(u, False)
     polygon = np.concatenate([upper[::-1], lower[1:]])  # trailing edge -> upper -> leading edge -> lower
     crossing = _first_crossing(polygon, closed=True)
+    budget.check("checking the smooth curve for crossings")
     if crossing is not None:
         point = polygon[crossing[0]]
         nearest = int(np.argmin(np.linalg.norm(section.loop - point, axis=1)))
-        raise ParameterError(f"airfoil file {source!r} line {section.lines[nearest]}: the surfaces cross (the smooth "
+        raise ParameterError(f"{_WHAT} {source!r} line {section.lines[nearest]}: the surfaces cross (the smooth "
                              "curve through the points runs into itself near this point; check the coordinates)")
     if upper[-1, 1] < lower[-1, 1] - 1e-12:
-        raise ParameterError(f"airfoil file {source!r} line {section.lines[0]}: the surfaces cross at the trailing "
+        raise ParameterError(f"{_WHAT} {source!r} line {section.lines[0]}: the surfaces cross at the trailing "
                              "edge (the upper surface ends below the lower one)")
 
 
