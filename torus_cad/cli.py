@@ -373,6 +373,41 @@ def _command_cfd(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _command_simulate(args: argparse.Namespace) -> int:
+    """Exit 0 on success, 2 for bad input or without OpenFOAM, 1 when the mesher or solver fails (diverged:
+    the iteration and residual named, the case kept)."""
+    from torus_cad.progress import StageProgress
+
+    params = load_parameters(args.config, args.overrides)
+    progress = StageProgress.for_terminal(quiet=args.quiet)
+    try:
+        from torus_cad.simulate.cli_output import IterationLine, summary_lines
+        from torus_cad.simulate.pipeline import Request, convergence_study, simulate
+        from torus_cad.simulate.run import MissingOpenFoamError
+        from torus_cad.simulate.settings import Level, OperatingPoint, max_processes
+    except ImportError as error:
+        print(f"torus-cad: {error.name or error} is not installed: install the simulate extra, "
+              "pip install 'torus_cad[simulate]'", file=sys.stderr)
+        return EXIT_KERNEL_FAILURE
+    request = Request(params, OperatingPoint(args.rpm, args.airspeed), Level(args.level), args.iterations,
+                      max_processes() if args.processes is None else args.processes, args.case_only, args.time_limit)
+    line = IterationLine.for_terminal(quiet=args.quiet)
+    try:
+        if args.convergence:
+            result = convergence_study(request, Path(args.out), progress=line, stage=progress)
+        else:
+            result = simulate(request, Path(args.out), progress=line, stage=progress)
+    except MissingOpenFoamError as error:
+        return _error(str(error), EXIT_BAD_INPUT)
+    finally:
+        line.close()
+    progress.finish()
+    if not args.quiet:
+        for text in summary_lines(result, convergence=args.convergence):
+            print(text)
+    return EXIT_OK
+
+
 def _add_mesh_parser(commands: Any) -> None:
     from torus_cad.mesh.settings import MeshFormat
     from torus_cad.tolerances import MESH_TRIANGLE_LIMIT
@@ -409,6 +444,34 @@ def _add_cfd_parser(commands: Any) -> None:
     cfd.table = "cfd"  # its options, when the subcommand is used (_Parser.table)
     cfd.add_argument("--threads", type=int, default=0, metavar="N", help="gmsh threads (default 0: one per CPU)")
     _add_out_and_quiet(cfd, "cfd_out", _command_cfd)
+
+
+def _add_simulate_parser(commands: Any) -> None:
+    simulate = _design_command(
+        commands, "simulate", help="run the propeller in OpenFOAM: thrust, torque, power, CT, CP (simulate extra)",
+        description="Mesh the fluid around the propeller of CONFIG (or the default) at --level, write a complete "
+        "OpenFOAM case (<name>_case/: steady MRF, k-omega SST, an Allrun that repeats the run) and run it with "
+        "simpleFoam through foamlib. Writes <name>_performance.json (thrust, torque, power, J, CT, CP, efficiency "
+        "or figure of merit, convergence) and <name>_performance.png (force and residual histories). Needs "
+        "OpenFOAM (v1912 or later) and the simulate extra: pip install 'torus_cad[simulate]'.")
+    simulate.add_argument("--rpm", type=float, required=True, help="revolutions per minute, >= 0, in the design's "
+                          "own sense of rotation (a 'cw' design clockwise seen from +z)")
+    simulate.add_argument("--airspeed", type=float, default=0.0, metavar="M_S",
+                          help="speed of the air arriving at the inlet, m/s (default 0: still air)")
+    simulate.add_argument("--level", choices=["coarse", "medium", "fine"], default="coarse",
+                          help="mesh level (default coarse: about 53k cells for the default design)")
+    simulate.add_argument("--iterations", type=int, metavar="N", help="SIMPLE iterations (default: the level's, "
+                          "300 / 400 / 500)")
+    simulate.add_argument("--processes", type=int, metavar="N", default=None,
+                          help="MPI processes for the solver (default: one per CPU)")
+    simulate.add_argument("--time-limit", type=float, default=3600.0, metavar="SECONDS",
+                          help="time budget of the run; refused before the solver starts if its estimate is over, "
+                               "stopped when it runs over (default 3600)")
+    simulate.add_argument("--case-only", action="store_true", help="write the case without running it")
+    simulate.add_argument("--convergence", action="store_true",
+                          help="run all three levels into OUT/<level>/ and write <name>_convergence.json: "
+                               "Richardson-extrapolated thrust and torque and the observed order")
+    _add_out_and_quiet(simulate, "simulate_out", _command_simulate)
 
 
 def _add_out_and_quiet(parser: argparse.ArgumentParser, default_out: str,
@@ -507,6 +570,7 @@ def build_parser() -> argparse.ArgumentParser:
     studio.set_defaults(handler=_command_studio)
     _add_mesh_parser(commands)
     _add_cfd_parser(commands)
+    _add_simulate_parser(commands)
     return parser
 
 

@@ -154,3 +154,17 @@ MESH_JUNCTION_MARGIN_RELATIVE = 0.05
 #: Surface meshes: at the blade-hub junctions, a triangle edge shorter than this fraction of its
 #: triangle's longest edge is a needle the cleanup collapses (torus_cad.mesh.cleanup).
 MESH_NEEDLE_EDGE_RATIO = 0.1
+
+#: Simulations (torus_cad.simulate): the incompressible solver is trusted up to this helical tip
+#: Mach number (tip speed with the airspeed, over the speed of sound); faster rpm are refused.
+SIMULATE_TIP_MACH_LIMIT = 0.6
+
+#: Simulations: largest airspeed, m/s (Mach 0.3 in air at 15 C: compressibility stays under ~2 %).
+SIMULATE_AIRSPEED_LIMIT_M_S = 100.0
+
+#: Simulations: an initial residual above this, or any non-finite residual or force, is divergence.
+SIMULATE_DIVERGENCE_RESIDUAL = 1e3
+
+#: Simulations: a run counts as converged when thrust and torque vary by at most this fraction of
+#: their mean over the last 10 % of its iterations.
+SIMULATE_CONVERGED_VARIATION = 0.02

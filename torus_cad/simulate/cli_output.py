@@ -1,0 +1,73 @@
+"""What ``torus-cad simulate`` prints: a progress line during the run, the numbers at the end."""
+
+from __future__ import annotations
+
+import sys
+from typing import TextIO
+
+from torus_cad.progress import is_terminal
+from torus_cad.simulate.pipeline import Result
+from torus_cad.simulate.run import Status
+
+
+class IterationLine:
+    """One line on a terminal (stderr), rewritten at each iteration: iteration, residuals, thrust, torque."""
+
+    def __init__(self, enabled: bool, stream: TextIO | None = None) -> None:
+        self.enabled, self.stream = enabled, stream if stream is not None else sys.stderr
+        self._open = False
+
+    @classmethod
+    def for_terminal(cls, quiet: bool = False) -> IterationLine:
+        return cls(not quiet and is_terminal(sys.stderr))
+
+    def __call__(self, status: Status) -> None:
+        if not self.enabled:
+            return
+        self.stream.write("\r\x1b[K" + status_text(status))
+        self.stream.flush()
+        self._open = True
+
+    def close(self) -> None:
+        if self._open:
+            self.stream.write("\n")
+            self.stream.flush()
+            self._open = False
+
+
+def status_text(status: Status) -> str:
+    """``simpleFoam 120/300  Ux 2.1e-03 ... | force z 0.512 N, moment z 1.23 N mm``"""
+    residuals = " ".join(f"{name} {value:.1e}" for name, value in status.residuals.items())
+    return (f"simpleFoam {status.iteration}/{status.total}  {residuals} | force z {status.force_n[2]:.4g} N, "
+            f"moment z {status.moment_nm[2] * 1000:.4g} N mm")
+
+
+def _number(value: float | None, digits: int = 4) -> str:
+    return "-" if value is None else f"{value:.{digits}g}"
+
+
+def summary_lines(result: Result, convergence: bool = False) -> list[str]:
+    """The paths written and the designer's numbers."""
+    lines = [f"wrote {path}" for path in result.paths.values()]
+    report = result.report
+    if convergence:
+        for key, unit in (("thrust_n", "N"), ("torque_nm", "N m")):
+            entry = report[key]
+            levels = ", ".join(f"{level} {_number(values[key])}" for level, values in report["levels"].items())
+            lines.append(f"{key.split('_')[0]}: {levels} {unit}; Richardson {_number(entry['extrapolated'])} {unit}, "
+                         f"observed order {_number(entry['observed_order'], 3)}")
+        return lines
+    if "thrust_n" not in report:  # --case-only
+        lines.append(f"case written ({report['cells']:,} cells, level {report['level']}); run it with its Allrun")
+        return lines
+    variation = report["force_variation_last_10_percent"]
+    state = "converged" if report["converged"] else "NOT converged"
+    merit = (f"efficiency {_number(report['efficiency'], 3)}" if report["efficiency"] is not None
+             else f"figure of merit {_number(report['figure_of_merit'], 3)}")
+    lines.append(f"thrust {report['thrust_n']:.4g} N, torque {report['torque_nm']:.4g} N m, power {report['power_w']:.4g} W "
+                 f"at {report['rpm']:g} rpm, {report['airspeed_m_s']:g} m/s (J {_number(report['advance_ratio'], 3)}): "
+                 f"CT {_number(report['ct'])}, CP {_number(report['cp'])}, {merit}")
+    lines.append(f"{state}: thrust varies {_number(variation['thrust'], 2)}, torque {_number(variation['torque'], 2)} "
+                 f"(fraction of the mean) over the last 10 % of {report['iterations']} iterations; {report['cells']:,} "
+                 f"cells, level {report['level']}, {report['wall_seconds']:.0f} s; {report['fluid']['name']}")
+    return lines

@@ -1,0 +1,108 @@
+"""The numbers a designer uses, from a run's force history: thrust, torque, power and their coefficients.
+
+Propeller convention: n in rev/s, D the tip diameter, CT = T / (rho n^2 D^4), CP = P / (rho n^3 D^5),
+advance ratio J = V / (n D), efficiency J CT / CP (undefined at J = 0), figure of merit (the ideal
+power of momentum theory over the power, at J = 0) CT^1.5 / (sqrt(2) CP).
+
+Signs: thrust is positive when the propeller pushes the fluid the way the design means to (toward
+-z for both 'cw' and its mirror image 'ccw', which turn opposite ways): the fluid pushes the
+propeller toward +z. Torque is positive when the fluid resists the design's rotation (what the
+motor must supply); power = torque x |omega|.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from torus_cad.parameters.design import Handedness
+from torus_cad.simulate.history import History
+from torus_cad.simulate.settings import OperatingPoint
+from torus_cad.tolerances import SIMULATE_CONVERGED_VARIATION
+
+#: The share of the last iterations whose force variation decides convergence.
+CONVERGENCE_WINDOW = 0.1
+
+
+def thrust_and_torque(force_n: np.ndarray, moment_nm: np.ndarray, handedness: Handedness) -> tuple[Any, Any]:
+    """(thrust N, torque N m) from the propeller's force and moment (..., 3) about the origin."""
+    rotation = -1.0 if handedness == Handedness.CW else 1.0  # the design's sense of rotation about +z
+    return force_n[..., 2], -rotation * moment_nm[..., 2]
+
+
+def force_variation(values: np.ndarray, window: float = CONVERGENCE_WINDOW) -> float:
+    """(max - min) / |mean| over the last ``window`` of ``values`` (at least 2 samples); 0 when all are 0."""
+    count = max(2, math.ceil(window * len(values)))
+    tail = np.asarray(values[-count:], dtype=float)
+    spread = float(tail.max() - tail.min()) if len(tail) else 0.0
+    mean = abs(float(tail.mean())) if len(tail) else 0.0
+    if spread == 0.0:
+        return 0.0
+    return spread / mean if mean > 0.0 else math.inf
+
+
+@dataclass(frozen=True)
+class Performance:
+    """Thrust N, torque N m, power W at an operating point; coefficients (None where undefined)."""
+
+    thrust_n: float
+    torque_nm: float
+    power_w: float
+    advance_ratio: float | None
+    ct: float | None
+    cp: float | None
+    efficiency: float | None
+    figure_of_merit: float | None
+
+
+def performance(thrust_n: float, torque_nm: float, point: OperatingPoint, diameter_m: float) -> Performance:
+    """Coefficients of ``thrust_n`` and ``torque_nm`` at ``point`` for tip diameter ``diameter_m``."""
+    rho, n = point.fluid.density_kg_m3, point.rpm / 60.0
+    power = torque_nm * 2.0 * math.pi * n
+    if n == 0.0:
+        return Performance(thrust_n, torque_nm, power, None, None, None, None, None)
+    advance = point.airspeed_m_s / (n * diameter_m)
+    ct = thrust_n / (rho * n**2 * diameter_m**4)
+    cp = power / (rho * n**3 * diameter_m**5)
+    efficiency = advance * ct / cp if advance > 0.0 and cp != 0.0 else None
+    merit = ct**1.5 / (math.sqrt(2.0) * cp) if advance == 0.0 and ct > 0.0 and cp > 0.0 else None
+    return Performance(thrust_n, torque_nm, power, advance, ct, cp, efficiency, merit)
+
+
+def run_summary(history: History, point: OperatingPoint, handedness: Handedness, diameter_m: float,
+                window: float = CONVERGENCE_WINDOW) -> dict[str, Any]:
+    """The report's numbers: the last iteration's performance, the force variation over the last
+    ``window`` of the run and whether it is within ``SIMULATE_CONVERGED_VARIATION``."""
+    thrust, torque = thrust_and_torque(history.force_n, history.moment_nm, handedness)
+    variation = {"thrust": force_variation(thrust, window), "torque": force_variation(torque, window)}
+    result = performance(float(thrust[-1]), float(torque[-1]), point, diameter_m)
+    converged = max(variation.values()) <= SIMULATE_CONVERGED_VARIATION
+    return {**result.__dict__, "converged": converged,
+            "force_variation_last_10_percent": {key: (value if math.isfinite(value) else None)
+                                                for key, value in variation.items()},
+            "convergence_limit": SIMULATE_CONVERGED_VARIATION}
+
+
+@dataclass(frozen=True)
+class Extrapolation:
+    """Richardson extrapolation over three levels (coarse, medium, fine) refined by ``ratio``."""
+
+    values: tuple[float, float, float]
+    ratio: float
+    order: float | None
+    extrapolated: float | None
+    monotone: bool
+
+
+def richardson(coarse: float, medium: float, fine: float, ratio: float) -> Extrapolation:
+    """Observed order p = ln((f_c - f_m) / (f_m - f_f)) / ln r and f = f_f + (f_f - f_m) / (r^p - 1);
+    undefined (None) unless the three converge monotonically."""
+    first, second = medium - coarse, fine - medium
+    monotone = first != 0.0 and second != 0.0 and first * second > 0.0 and abs(second) < abs(first)
+    if not monotone:
+        return Extrapolation((coarse, medium, fine), ratio, None, None, False)
+    order = math.log(first / second) / math.log(ratio)
+    return Extrapolation((coarse, medium, fine), ratio, order, fine + second / (ratio**order - 1.0), True)

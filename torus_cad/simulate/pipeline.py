@@ -1,0 +1,293 @@
+"""``torus-cad simulate``: mesh the design (``cfd``), write its OpenFOAM case, run it, publish the numbers.
+
+One run is one output set in ``OUT`` (torus_cad.outputs): the case is built and run inside the
+set's staging folder; on success the case folder ``<name>_case/`` is renamed into place, then
+``<name>_performance.png`` and the sealed ``<name>_performance.json`` are published; an error or
+an interrupt publishes nothing (the staging folder is removed). A case whose solver failed
+(diverged, over its time budget) is kept as ``<name>_case_failed/`` for inspection.
+
+:func:`simulate_async` is the coroutine (foamlib's AsyncFoamCase, or a subclass such as
+AsyncSlurmFoamCase as ``runner``); many can run at once with :func:`simulate_many`. Meshing
+(gmsh and OpenCascade, one model at a time) is serialised by a lock; the solvers share
+``AsyncFoamCase.max_cpus``.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import math
+import os
+import secrets
+import shutil
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from torus_cad.errors import BudgetError, ParameterError
+from torus_cad.interrupts import deferred
+from torus_cad.kernel.files import owner_tag
+from torus_cad.outputs import OutputSet
+from torus_cad.parameters import PropellerParameters
+from torus_cad.parameters.design import InletSide
+from torus_cad.simulate.case import CaseSpec, mesh_commands, solve_commands, write_case
+from torus_cad.simulate.history import History, momentum_balance_force_n
+from torus_cad.simulate.performance import richardson, run_summary
+from torus_cad.simulate.plot import write_history_plot
+from torus_cad.simulate.run import (
+    ProgressCallback,
+    SolverError,
+    check_openfoam,
+    openfoam_environ,
+    run_command,
+    run_solver,
+    solvers_stopped_on_signals,
+)
+from torus_cad.simulate.settings import (
+    DEFAULT_TIME_LIMIT_S,
+    LEVEL_ITERATIONS,
+    REFINEMENT_RATIO,
+    TURBULENCE_INTENSITY,
+    TURBULENCE_LENGTH_D,
+    Level,
+    OperatingPoint,
+    check_count,
+    check_operating_point,
+    max_processes,
+    with_level,
+)
+
+#: CPU seconds simpleFoam takes per cell and iteration on these meshes (53k tetrahedra, one core,
+#: 30 iterations in 12.8 s): the estimate a run's time budget is checked against before it starts.
+SOLVER_SECONDS_PER_CELL_ITERATION = 8e-6
+MAX_ITERATIONS = 20000
+
+_MESH_LOCK: asyncio.Lock | None = None
+
+
+def _mesh_lock() -> asyncio.Lock:
+    global _MESH_LOCK
+    if _MESH_LOCK is None:
+        _MESH_LOCK = asyncio.Lock()
+    return _MESH_LOCK
+
+
+@dataclass(frozen=True)
+class Request:
+    """One simulation: the design, where it runs, the mesh level, iterations (None: the level's),
+    MPI processes, whether to stop after writing the case, the time budget in seconds."""
+
+    params: PropellerParameters
+    point: OperatingPoint
+    level: Level = Level.COARSE
+    iterations: int | None = None
+    processes: int = 1
+    case_only: bool = False
+    time_limit_s: float = DEFAULT_TIME_LIMIT_S
+
+    @property
+    def run_iterations(self) -> int:
+        return self.iterations if self.iterations is not None else LEVEL_ITERATIONS[self.level]
+
+
+@dataclass
+class Result:
+    """What a run published: paths by kind ("case", "png", "json"), the report."""
+
+    paths: dict[str, Path]
+    report: dict[str, Any] = field(default_factory=dict)
+
+
+def check_request(request: Request) -> float:
+    """ParameterError (exit 2) for a value out of range; returns the tip diameter in m."""
+    from torus_cad.cfd.domain import tip_radius
+
+    check_count("--iterations", request.run_iterations, 1, MAX_ITERATIONS)
+    check_count("--processes", request.processes, 1, max_processes())
+    if not (math.isfinite(request.time_limit_s) and request.time_limit_s > 0.0):
+        raise ParameterError(f"--time-limit = {request.time_limit_s:g} s is out of range; allowed > 0 s")
+    diameter_m = 2.0 * tip_radius(request.params.geometry()) / 1000.0
+    check_operating_point(request.point, diameter_m, request.params)
+    return diameter_m
+
+
+def _flow_sign(params: PropellerParameters) -> float:
+    return -1.0 if params.cfd.inlet_side == InletSide.PLUS_Z else 1.0
+
+
+def _swap_folder(staged: Path, final: Path) -> None:
+    """Rename ``staged`` onto ``final``, replacing a folder there (signals wait until it is done)."""
+    trash = final.with_name(f".{final.name}.old-{owner_tag()}{secrets.token_hex(4)}")
+    with deferred():
+        if final.exists():
+            os.replace(final, trash)
+        os.replace(staged, final)
+    shutil.rmtree(trash, ignore_errors=True)
+
+
+def _remove_stale_report(out: Path, name: str) -> None:
+    """Remove a performance set that described the case a new one replaces."""
+    with deferred():
+        for suffix in (".json", ".png"):
+            (out / f"{name}_performance{suffix}").unlink(missing_ok=True)
+
+
+async def _mesh_and_write(request: Request, case: Path, diameter_m: float,
+                          stage: Callable[[str], None] | None) -> tuple[dict[str, Any], CaseSpec]:
+    from torus_cad.cfd.domain import write_cfd_domain
+
+    params = request.params
+    async with _mesh_lock():
+        cfd_report, cfd_paths = await asyncio.to_thread(write_cfd_domain, params, case / "cfd",
+                                                        request.processes, stage)
+    spec = CaseSpec(request.point, params.handedness, diameter_m, _flow_sign(params), request.run_iterations,
+                    request.processes, f"cfd/{cfd_paths['msh_v2'].name}")
+    write_case(case, spec)
+    return cfd_report, spec
+
+
+def _check_budget(cells: int, request: Request, elapsed_s: float) -> None:
+    estimate = cells * request.run_iterations * SOLVER_SECONDS_PER_CELL_ITERATION / request.processes
+    if elapsed_s + estimate > request.time_limit_s:
+        raise BudgetError(f"the solver would take about {estimate:.0f} s ({cells:,} cells x {request.run_iterations} "
+                          f"iterations on {request.processes} process(es)), over what is left of --time-limit = "
+                          f"{request.time_limit_s:g} s; raise --time-limit, lower --iterations or use --processes")
+
+
+async def simulate_async(request: Request, out_dir: str | Path, progress: ProgressCallback | None = None,
+                         stage: Callable[[str], None] | None = None, runner: type | None = None) -> Result:
+    """Mesh, write, run and publish one simulation (see the module doc). ``progress`` gets each
+    iteration's status, ``stage`` each stage's name; ``runner`` is the foamlib case class
+    (default AsyncFoamCase).
+
+    Raises ParameterError / BudgetError (bad input, refused before it starts),
+    MissingOpenFoamError, DivergedError / TimeBudgetError / SolverError (case kept as
+    ``<name>_case_failed``), KernelError from the mesher.
+    """
+    from foamlib import AsyncFoamCase
+
+    runner = runner or AsyncFoamCase
+    start = time.perf_counter()
+    diameter_m = check_request(request)
+    if not request.case_only:
+        check_openfoam()
+    params, out = with_level(request.params, request.level), Path(out_dir)
+    request = Request(params, request.point, request.level, request.iterations, request.processes,
+                      request.case_only, request.time_limit_s)
+    name = params.name
+    stage_seconds: dict[str, float] = {}
+    with OutputSet(out, f"{name}_performance") as output:
+        assert output.staging is not None
+        case = output.staging / f"{name}_case"
+        cfd_report, spec = await _mesh_and_write(request, case, diameter_m, stage)
+        stage_seconds["mesh"] = time.perf_counter() - start
+        cells = int(cfd_report["tetrahedra_total"])
+        if request.case_only:
+            _swap_folder(case, out / f"{name}_case")
+            _remove_stale_report(out, name)
+            return Result({"case": out / f"{name}_case"}, {"cells": cells, "level": request.level.value})
+        _check_budget(cells, request, time.perf_counter() - start)
+        deadline = time.monotonic() + request.time_limit_s - (time.perf_counter() - start)
+        foam = runner(case)
+        try:
+            for command in mesh_commands(spec):
+                if stage:
+                    stage(command[0])
+                await run_command(foam, command)
+            stage_seconds["convert"] = time.perf_counter() - start - stage_seconds["mesh"]
+            if stage:
+                stage("simpleFoam")
+            history = await _solve(foam, spec, deadline, progress)
+        except SolverError as error:
+            kept = out / f"{name}_case_failed"
+            _swap_folder(case, kept)
+            raise type(error)(f"{error}; the case is kept in {kept}") from None
+        stage_seconds["solve"] = time.perf_counter() - start - stage_seconds["mesh"] - stage_seconds["convert"]
+        report = _report(request, spec, cfd_report, history, diameter_m)
+        output.write("png", lambda path: write_history_plot(
+            history, params.handedness, path, f"{name}: {request.point.rpm:g} rpm, {request.point.airspeed_m_s:g} m/s, "
+                                              f"{request.level.value} ({cells:,} cells)"))
+        report.update(stage_seconds=stage_seconds, wall_seconds=time.perf_counter() - start,
+                      case=f"{name}_case")
+        with deferred():
+            _swap_folder(case, out / f"{name}_case")
+            paths = output.publish(report)
+    return Result({"case": out / f"{name}_case", **paths}, output.sealed_report)
+
+
+async def _solve(foam: Any, spec: CaseSpec, deadline: float, progress: ProgressCallback | None) -> History:
+    commands = solve_commands(spec)
+    for command in commands[: commands.index(["simpleFoam"])]:
+        await run_command(foam, command)
+    history = await run_solver(foam, spec.iterations, spec.processes, deadline, progress)
+    for command in commands[commands.index(["simpleFoam"]) + 1:]:
+        await run_command(foam, command)
+    return history
+
+
+def _report(request: Request, spec: CaseSpec, cfd_report: dict[str, Any], history: History,
+            diameter_m: float) -> dict[str, Any]:
+    point, fluid = request.point, request.point.fluid
+    summary = run_summary(history, point, request.params.handedness, diameter_m)
+    balance = momentum_balance_force_n(history, fluid.density_kg_m3)
+    k, omega = point.inflow_turbulence(diameter_m)
+    thrust = summary["thrust_n"]
+    return {
+        "name": request.params.name, "handedness": request.params.handedness.value,
+        "rpm": point.rpm, "airspeed_m_s": point.airspeed_m_s, "omega_rad_s": spec.point.omega_rad_s(spec.handedness),
+        "tip_diameter_m": diameter_m, **summary,
+        "momentum_balance": {"thrust_n": float(balance[2]),
+                             "relative_difference": (float(balance[2]) / thrust - 1.0) if thrust else None},
+        "cells": int(cfd_report["tetrahedra_total"]), "iterations": int(history.last_iteration),
+        "final_residuals": history.last_residuals(), "level": request.level.value,
+        "processes": request.processes, "cfd": cfd_report["settings"],
+        "fluid": {"name": fluid.name, "density_kg_m3": fluid.density_kg_m3, "viscosity_m2_s": fluid.viscosity_m2_s},
+        "turbulence": {"model": "kOmegaSST, wall functions", "inflow_intensity": TURBULENCE_INTENSITY,
+                       "inflow_length_scale_m": TURBULENCE_LENGTH_D * diameter_m, "inflow_k_m2_s2": k,
+                       "inflow_omega_1_s": omega},
+        "conventions": "thrust > 0 pushes the fluid toward -z (the design's way); torque > 0 resists the design's "
+                       "rotation; CT = T/(rho n^2 D^4), CP = P/(rho n^3 D^5), n in rev/s, D the tip diameter",
+    }
+
+
+def simulate(request: Request, out_dir: str | Path, progress: ProgressCallback | None = None,
+             stage: Callable[[str], None] | None = None) -> Result:
+    """:func:`simulate_async` in its own event loop, with OpenFOAM's environment and SIGINT / SIGTERM
+    stopping the solver."""
+    with openfoam_environ(), solvers_stopped_on_signals():
+        return asyncio.run(simulate_async(request, out_dir, progress, stage))
+
+
+async def simulate_many(requests: Sequence[tuple[Request, str | Path]], runner: type | None = None) -> list[Any]:
+    """Run many simulations at once (each into its own folder); their Results, or the exception each
+    raised. The solvers share ``AsyncFoamCase.max_cpus`` (foamlib's local pool); with
+    ``runner=AsyncSlurmFoamCase`` each command is a Slurm job."""
+    with openfoam_environ():
+        return list(await asyncio.gather(*(simulate_async(request, out, runner=runner) for request, out in requests),
+                                         return_exceptions=True))
+
+
+def convergence_study(request: Request, out_dir: str | Path, progress: ProgressCallback | None = None,
+                      stage: Callable[[str], None] | None = None) -> Result:
+    """The three levels (each a full run in ``OUT/<level>/``) and ``<name>_convergence.json``:
+    Richardson-extrapolated thrust and torque and their observed order."""
+    out = Path(out_dir)
+    runs = {}
+    for level in Level:
+        level_request = Request(request.params, request.point, level, request.iterations, request.processes,
+                                False, request.time_limit_s)
+        runs[level] = simulate(level_request, out / level.value, progress, stage)
+    report: dict[str, Any] = {"name": request.params.name, "rpm": request.point.rpm,
+                              "airspeed_m_s": request.point.airspeed_m_s, "refinement_ratio": REFINEMENT_RATIO,
+                              "levels": {level.value: {key: run.report[key] for key in
+                                                       ("cells", "thrust_n", "torque_nm", "ct", "cp", "converged")}
+                                         for level, run in runs.items()}}
+    for key in ("thrust_n", "torque_nm"):
+        coarse, medium, fine = (float(runs[level].report[key]) for level in Level)
+        extrapolation = richardson(coarse, medium, fine, REFINEMENT_RATIO)
+        report[key] = {"extrapolated": extrapolation.extrapolated, "observed_order": extrapolation.order,
+                       "monotone": extrapolation.monotone}
+    with OutputSet(out, f"{request.params.name}_convergence") as output:
+        paths = output.publish(report)
+    return Result(paths, report)

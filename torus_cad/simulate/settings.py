@@ -1,0 +1,148 @@
+"""What ``torus-cad simulate`` runs: mesh levels, the fluid, inflow turbulence, the operating point's ranges.
+
+Levels map to ``[cfd]`` sizes. All three share one domain (radius 3 D, inlet 2 D upstream and
+outlet 4 D downstream of the propeller's centre) and differ only in element size: every size
+(surface elements per chord, the growth per element, the largest element) is refined by
+``REFINEMENT_RATIO`` = 2^(1/3) from one level to the next, so that Richardson extrapolation over
+the three has one ratio.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass
+from enum import StrEnum
+from typing import Any
+
+from torus_cad.errors import ParameterError
+from torus_cad.parameters import PropellerParameters
+from torus_cad.parameters.design import Handedness, InletSide
+from torus_cad.tolerances import SIMULATE_AIRSPEED_LIMIT_M_S, SIMULATE_TIP_MACH_LIMIT
+
+
+class Level(StrEnum):
+    """Mesh level of a simulation (``--level``)."""
+
+    COARSE = "coarse"
+    MEDIUM = "medium"
+    FINE = "fine"
+
+
+#: Element sizes are divided by this from one level to the next.
+REFINEMENT_RATIO = 2.0 ** (1.0 / 3.0)
+
+#: The domain every level uses, in tip diameters D (``[cfd]`` keys).
+DOMAIN_D = {"domain_radius": 3.0, "upstream": 2.0, "downstream": 4.0}
+
+#: The coarse level's sizes: 53,153 tetrahedra on the default design.
+_COARSE_SIZES = {"cells_per_chord": 5.0, "growth_rate": 1.4, "far_size": 0.4}
+
+
+def level_cfd(level: Level) -> dict[str, float]:
+    """The ``[cfd]`` values of ``level`` (curvature refinement off: the sizes alone set the mesh)."""
+    steps = list(Level).index(level)
+    scale = REFINEMENT_RATIO**steps
+    sizes = {"cells_per_chord": round(_COARSE_SIZES["cells_per_chord"] * scale, 3),
+             "growth_rate": round(1.0 + (_COARSE_SIZES["growth_rate"] - 1.0) / scale, 4),
+             "far_size": round(_COARSE_SIZES["far_size"] / scale, 4), "curvature_cells": 0.0}
+    return {**DOMAIN_D, **sizes}
+
+
+#: Default iterations of each level (steady SIMPLE).
+LEVEL_ITERATIONS = {Level.COARSE: 300, Level.MEDIUM: 400, Level.FINE: 500}
+
+#: Default time budget of one run (meshing, conversion and solver), seconds.
+DEFAULT_TIME_LIMIT_S = 3600.0
+
+
+@dataclass(frozen=True)
+class Fluid:
+    """An incompressible fluid: density kg/m^3, kinematic viscosity m^2/s, speed of sound m/s."""
+
+    name: str
+    density_kg_m3: float
+    viscosity_m2_s: float
+    speed_of_sound_m_s: float
+
+
+#: Air at 15 C, sea level (ISA).
+AIR_15C = Fluid("air at 15 C (ISA sea level)", 1.225, 1.46e-5, 340.3)
+
+#: Inflow turbulence: intensity (fraction of the reference speed) and length scale (fraction of D).
+TURBULENCE_INTENSITY = 0.01
+TURBULENCE_LENGTH_D = 0.1
+#: The reference speed for the inflow turbulence is the airspeed, or at least this fraction of the
+#: tip speed (still air: the induced inflow), or at least 1 m/s.
+TURBULENCE_TIP_SPEED_FRACTION = 0.1
+_CMU = 0.09
+
+
+@dataclass(frozen=True)
+class OperatingPoint:
+    """Where the propeller runs: rpm (>= 0, in the design's own sense of rotation), airspeed m/s
+    (flowing from the inlet to the outlet), the fluid."""
+
+    rpm: float
+    airspeed_m_s: float = 0.0
+    fluid: Fluid = AIR_15C
+
+    def omega_rad_s(self, handedness: Handedness) -> float:
+        """Angular velocity about +z, rad/s: negative for 'cw' (clockwise seen from +z), positive for 'ccw'."""
+        sign = -1.0 if handedness == Handedness.CW else 1.0
+        return sign * self.rpm * 2.0 * math.pi / 60.0
+
+    def tip_speed_m_s(self, diameter_m: float) -> float:
+        return self.rpm * math.pi * diameter_m / 60.0
+
+    def inflow_turbulence(self, diameter_m: float) -> tuple[float, float]:
+        """(k m^2/s^2, omega 1/s) of the inflow from ``TURBULENCE_INTENSITY`` and ``TURBULENCE_LENGTH_D``."""
+        speed = max(self.airspeed_m_s, TURBULENCE_TIP_SPEED_FRACTION * self.tip_speed_m_s(diameter_m), 1.0)
+        k = 1.5 * (TURBULENCE_INTENSITY * speed) ** 2
+        return k, math.sqrt(k) / (_CMU**0.25 * TURBULENCE_LENGTH_D * diameter_m)
+
+
+def rpm_limit(diameter_m: float, airspeed_m_s: float, fluid: Fluid = AIR_15C) -> float:
+    """Highest rpm at which the helical tip Mach number stays within ``SIMULATE_TIP_MACH_LIMIT``."""
+    tip_speed = math.sqrt(max((SIMULATE_TIP_MACH_LIMIT * fluid.speed_of_sound_m_s) ** 2 - airspeed_m_s**2, 0.0))
+    return tip_speed * 60.0 / (math.pi * diameter_m)
+
+
+def check_operating_point(point: OperatingPoint, diameter_m: float, params: PropellerParameters) -> None:
+    """ParameterError naming the field, the value and the allowed range."""
+    if not (math.isfinite(point.airspeed_m_s) and 0.0 <= point.airspeed_m_s <= SIMULATE_AIRSPEED_LIMIT_M_S):
+        raise ParameterError(f"--airspeed = {point.airspeed_m_s:g} m/s is out of range; allowed "
+                             f"[0, {SIMULATE_AIRSPEED_LIMIT_M_S:g}] m/s (the solver is incompressible)")
+    limit = rpm_limit(diameter_m, point.airspeed_m_s, point.fluid)
+    if not (math.isfinite(point.rpm) and 0.0 <= point.rpm <= limit):
+        raise ParameterError(f"--rpm = {point.rpm:g} is out of range; allowed [0, {limit:.0f}] rpm (helical tip Mach "
+                             f"{SIMULATE_TIP_MACH_LIMIT:g} for D = {diameter_m * 1000:.1f} mm at "
+                             f"{point.airspeed_m_s:g} m/s; the solver is incompressible)")
+    if point.airspeed_m_s > 0.0 and params.cfd.inlet_side != InletSide.PLUS_Z:
+        raise ParameterError(f"cfd.inlet_side = '{params.cfd.inlet_side.value}' puts the inlet behind the propeller "
+                             "(it pushes air toward -z); with --airspeed > 0 use '+z'")
+
+
+def check_count(name: str, value: int, low: int, high: int) -> int:
+    """``value``, or ParameterError naming ``name`` and the range [low, high]."""
+    if not low <= value <= high:
+        raise ParameterError(f"{name} = {value} is out of range; allowed [{low}, {high}]")
+    return value
+
+
+def max_processes() -> int:
+    """Processes a run may use: the CPUs this process may run on."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - not Linux
+        return os.cpu_count() or 1
+
+
+def with_level(params: PropellerParameters, level: Level) -> PropellerParameters:
+    """``params`` with the ``[cfd]`` sizes of ``level``."""
+    return params.with_values({f"cfd.{key}": value for key, value in level_cfd(level).items()})
+
+
+def describe_levels() -> dict[str, Any]:
+    """``{level: [cfd] values}`` for documentation and reports."""
+    return {level.value: level_cfd(level) for level in Level}
