@@ -262,6 +262,35 @@ def _command_sweep(args: argparse.Namespace) -> int:
     return result.exit_code
 
 
+def _command_optimize(args: argparse.Namespace) -> int:
+    """Exit 0 when the study holds its trials (refused or failed designs included), 2 for a bad study file or
+    option, 1 when the storage or the workers cannot be used, 130 / 143 / 129 on a signal (rerun to continue)."""
+    try:
+        from torus_cad.optimize import StudyInterrupted, load_study, run_study
+        from torus_cad.optimize.storage import StorageError
+    except ImportError as error:
+        print(f"torus-cad: optimize needs the optimize extra ({error.name} is missing): "
+              "pip install 'torus_cad[optimize]'", file=sys.stderr)
+        return EXIT_KERNEL_FAILURE
+    from torus_cad.batch import BatchError
+
+    spec = load_study(args.study)  # a bad study file raises ParameterError: exit 2
+    out = Path(args.out) if args.out else Path("optimize_out") / Path(args.study).stem
+    try:
+        result = run_study(spec, out, trials=args.trials, workers=args.workers, scheduler=args.scheduler,
+                           storage=args.storage)
+    except StudyInterrupted as interrupt:
+        print(f"torus-cad: optimize interrupted by {interrupt.signal_name}: {interrupt.result.ran} trials finished "
+              "in this run; rerun the same command to continue", file=sys.stderr)
+        return interrupt.exit_code
+    except (BatchError, StorageError) as error:
+        print(f"torus-cad: optimize failed: {error}", file=sys.stderr)
+        return EXIT_KERNEL_FAILURE
+    if not args.quiet:
+        print(result.summary())
+    return EXIT_OK
+
+
 def _port(text: str) -> int:
     try:
         value = int(text)
@@ -558,6 +587,29 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("--rebuild", action="store_true", help="build every design again, even those already done")
     sweep.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary")
     sweep.set_defaults(handler=_command_sweep)
+
+    optimize = commands.add_parser(
+        "optimize", help="search the design space for the best designs (optuna; local pool or Dask)",
+        description="Run the study of STUDY.toml: optuna asks for designs within the [vary] ranges, each is built "
+        "(and simulated for performance.* metrics) into OUT/trials/<number>/, its report's numbers answer the "
+        "objectives and constraints. Writes OUT/results.csv (and .parquet), OUT/<name>_history.png and the best "
+        "designs as TOML with their STEP/STL/JSON in OUT/best/. The study lives in OUT/<name>.db (SQLite) or a "
+        "PostgreSQL server (--storage) shared by processes on many machines; rerunning continues it (--trials is "
+        "the total). Exit codes: 0 done; 1 storage or workers unusable; 2 a bad study file or option; "
+        "130 / 143 interrupted (rerun to continue).")
+    optimize.add_argument("study", metavar="STUDY.toml", help="study file (see examples/optimize_light.toml)")
+    optimize.add_argument("--out", help="output folder (default: optimize_out/<study file name>)")
+    optimize.add_argument("--trials", type=int, metavar="N", help="trials in all (default: the file's study.trials)")
+    optimize.add_argument("--workers", type=int, metavar="K",
+                          help="local worker processes (default and most: the CPUs available)")
+    optimize.add_argument("--scheduler", metavar="ADDRESS",
+                          help="run the trials on a Dask cluster, e.g. tcp://host:8786 ('local': a LocalCluster of "
+                               "--workers processes); OUT must be on a file system the workers share")
+    optimize.add_argument("--storage", metavar="URL",
+                          help="the study's storage: sqlite:///path.db or postgresql://user@host/db (default: the "
+                               "file's study.storage, else OUT/<name>.db)")
+    optimize.add_argument("-q", "--quiet", action="store_true", help="no summary")
+    optimize.set_defaults(handler=_command_optimize)
 
     studio = _design_command(commands, "studio", help="design in the browser: parameters, live 3D view, downloads",
                              description="Serve a local web page to design a propeller: a parameters panel, a "

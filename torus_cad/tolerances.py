@@ -91,6 +91,10 @@ DISK_FULL_FREE_BYTES = 1 << 20
 #: ~2 designs/s per machine the sweep would run for weeks.
 MAX_SWEEP_DESIGNS = 1_000_000
 
+#: Most trials one optimisation study may ask for (``[study] trials``, ``--trials``): at ~2 trials/s
+#: per machine, days of work; the sampler's own cost grows with the number of trials.
+MAX_STUDY_TRIALS = 100_000
+
 #: Smallest gap (mm) the hub's mounting features (bore, chamfer, set-screw hole) must keep from
 #: any sampled blade point; covers the blade surface between its samples.
 MOUNTING_CLEARANCE_MM = 0.05

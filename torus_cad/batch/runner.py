@@ -30,7 +30,7 @@ import signal
 import threading
 import time
 from collections import deque
-from collections.abc import Callable, Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import FIRST_COMPLETED, CancelledError, Future, wait
 from concurrent.futures.process import BrokenProcessPool
 from contextlib import contextmanager
@@ -239,13 +239,14 @@ def _failure(error: BaseException, design_id: str) -> DesignResult:
     return DesignResult(design_id, Outcome.ERROR, f"{type(error).__name__}: {error}")  # e.g. not sent to a worker
 
 
-def run_tasks(tasks: Sequence[DesignTask], on_result: Callable[[DesignTask, DesignResult], None],
+def run_tasks(tasks: Iterable[DesignTask], on_result: Callable[[DesignTask, DesignResult], None],
               make_executor: Callable[[], Executor], window: int | None, job: Job | None = None,
               check_visible: bool = False) -> None:
     """Run ``tasks`` on executors from ``make_executor``, calling ``on_result`` as each one finishes.
 
     Args:
-        tasks: the designs to run.
+        tasks: the designs to run; taken from the iterable only when a slot is free, so a
+            generator may decide each next task from the results so far (an optimiser does).
         on_result: called in this thread with each task and its result, in finishing order.
         make_executor: makes the executor (again, when a local pool breaks).
         window: most tasks in flight (None: submit all at once, for Dask's scheduler).
@@ -259,14 +260,15 @@ def run_tasks(tasks: Sequence[DesignTask], on_result: Callable[[DesignTask, Desi
     without waiting and the exception propagates; the tasks that did not finish get no result.
     """
     job = run_design if job is None else job
-    queue: deque[DesignTask] = deque(tasks)
+    source = iter(tasks)
+    queue: deque[DesignTask] = deque()  # taken from the source, not yet running (or to run again)
     in_flight: dict[Future[Any], DesignTask] = {}
     executor = make_executor()
     restarts = 0
     try:
-        while queue or in_flight:
+        while in_flight or _refilled(queue, source):
             refused = False  # the executor refused a task: its pool is broken
-            while queue and (window is None or len(in_flight) < window):
+            while (window is None or len(in_flight) < window) and _refilled(queue, source):
                 try:
                     future = executor.submit(job, queue[0])
                 except BrokenProcessPool:
@@ -296,6 +298,15 @@ def run_tasks(tasks: Sequence[DesignTask], on_result: Callable[[DesignTask, Desi
         executor.shutdown(wait=False)
         raise
     executor.shutdown(wait=True)
+
+
+def _refilled(queue: deque[DesignTask], source: Iterator[DesignTask]) -> bool:
+    """Whether a task is waiting in ``queue``, taking the next one from ``source`` if it is empty."""
+    if not queue:
+        task = next(source, None)
+        if task is not None:
+            queue.append(task)
+    return bool(queue)
 
 
 def _broke(future: Future[Any]) -> bool:

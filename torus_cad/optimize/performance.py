@@ -1,0 +1,87 @@
+"""A trial's performance: ``torus-cad simulate`` run on the trial's design file, behind one function.
+
+The contract: ``python -m torus_cad simulate CONFIG.toml --rpm RPM [--airspeed M_S] --level LEVEL
+--out DIR`` writes ``DIR/<name>_performance.json`` (thrust_n, torque_nm, power_w, ct, cp,
+efficiency, figure_of_merit, converged, ...) and exits 0; 2 for bad input (the design is refused),
+1 for a failure. :func:`run_simulate` is the only place that knows it, so that it can become a
+Python call later.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import json
+import signal
+import subprocess
+import sys
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+from torus_cad.errors import ParameterError, TorusCadError
+from torus_cad.parameters.config_file import read_config_text
+
+__all__ = ["SimulateError", "run_simulate", "simulate_unavailable"]
+
+_EXIT_BAD_INPUT = 2
+_REPORT_MAX_BYTES = 1 << 20  #: a performance report is a few kB
+_PR_SET_PDEATHSIG = 1
+
+
+class SimulateError(TorusCadError):
+    """``torus-cad simulate`` failed on a design (exit 1, a crash, a time-out, no report)."""
+
+
+def _command(config: Path, settings: Mapping[str, Any], out_dir: Path) -> list[str]:
+    command = [sys.executable, "-m", "torus_cad", "simulate", str(config), "--rpm", repr(float(settings["rpm"]))]
+    if settings.get("airspeed"):
+        command += ["--airspeed", repr(float(settings["airspeed"]))]
+    return command + ["--level", str(settings.get("level", "coarse")), "--out", str(out_dir)]
+
+
+def _die_with_parent() -> None:
+    """In the child: SIGKILL when the trial's worker dies (a worker stopped at its time limit)."""
+    with contextlib.suppress(OSError, AttributeError):
+        ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0)
+
+
+def run_simulate(config: Path, name: str, settings: Mapping[str, Any], out_dir: Path,
+                 time_limit_s: float | None = None) -> dict[str, Any]:
+    """The performance report of the design file ``config`` (named ``name``) at ``settings`` (rpm, airspeed m/s,
+    level), simulated into ``out_dir``.
+
+    Raises ParameterError when simulate refuses the design (exit 2), SimulateError when it fails.
+    """
+    try:
+        done = subprocess.run(_command(config, settings, out_dir), capture_output=True, text=True,
+                              timeout=time_limit_s, preexec_fn=_die_with_parent, check=False)
+    except subprocess.TimeoutExpired:
+        raise SimulateError(f"torus-cad simulate ran past {time_limit_s:g} s") from None
+    last = (done.stderr.strip().splitlines() or done.stdout.strip().splitlines() or [""])[-1][:300]
+    if done.returncode == _EXIT_BAD_INPUT:
+        raise ParameterError(f"torus-cad simulate refused the design: {last}")
+    if done.returncode != 0:
+        raise SimulateError(f"torus-cad simulate failed (exit {done.returncode}): {last}")
+    report_path = out_dir / f"{name}_performance.json"
+    try:
+        report = json.loads(read_config_text(report_path, "performance report", _REPORT_MAX_BYTES))
+    except (ParameterError, ValueError) as error:
+        raise SimulateError(f"torus-cad simulate exited 0 but its report is unusable: {error}") from None
+    if not isinstance(report, dict):
+        raise SimulateError(f"{report_path.name} is not a JSON object")
+    return report
+
+
+def simulate_unavailable() -> str:
+    """'' when ``torus-cad simulate`` can run here; otherwise why not (for a test's skip, a clear error)."""
+    if not Path("/usr/bin/simpleFoam").is_file():
+        return "OpenFOAM's simpleFoam is not installed (/usr/bin/simpleFoam)"
+    try:
+        done = subprocess.run([sys.executable, "-m", "torus_cad", "simulate", "--help"], capture_output=True,
+                              text=True, timeout=120, check=False)
+    except (OSError, subprocess.TimeoutExpired) as error:
+        return f"python -m torus_cad simulate --help did not run: {error}"
+    if done.returncode != 0:
+        return f"torus-cad simulate is not available (python -m torus_cad simulate --help exits {done.returncode})"
+    return ""

@@ -1,0 +1,232 @@
+"""A study's results: every trial in one table, the objective's history, the best designs built.
+
+* ``OUT/results.csv`` and ``OUT/results.parquet`` (the batch table code): one row per trial with
+  its state, outcome and reason, varied values, metrics, constraint violations and folder;
+* ``OUT/<name>_history.png``: each objective against the trial number with the best feasible
+  value so far, and ``OUT/<name>_pareto.png`` for two objectives;
+* ``OUT/best/<name>_best.toml`` (one objective) or ``OUT/best/<name>_pareto_<number>.toml``
+  (the Pareto front): design files that ``torus-cad build`` reads unchanged, each built beside
+  it as an output set (STEP, STL, JSON);
+* ``OUT/<name>_study.json``: counts, the best trials and their values.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from torus_cad.batch.table import write_table
+from torus_cad.optimize.storage import RETRY_OF
+from torus_cad.optimize.study import CONSTRAINT, FOLDER, METRICS, OUTCOME, REASON, SECONDS
+from torus_cad.optimize.study_file import StudySpec
+
+__all__ = ["BEST_DIR", "MAX_PARETO_BUILDS", "best_trials", "trial_rows", "write_results"]
+
+BEST_DIR = "best"
+MAX_PARETO_BUILDS = 20  #: Pareto designs built with their files (every one gets its TOML)
+INTERRUPTED = "interrupted"
+
+
+def write_results(spec: StudySpec, study: Any, out: Path) -> tuple[dict[str, Path], list[str]]:
+    """Write the table, the pictures, the best designs and the summary JSON; the paths and summary lines."""
+    from torus_cad.kernel.export import atomic_path
+
+    trials = study.get_trials(deepcopy=False)
+    rows, columns = trial_rows(spec, trials)
+    files: dict[str, Path] = dict(write_table(rows, out, columns))
+    files["history"] = _history_picture(spec, trials, out / f"{spec.name}_history.png")
+    if len(spec.objectives) == 2:
+        files["pareto"] = _pareto_picture(spec, trials, best_trials(spec, study), out / f"{spec.name}_pareto.png")
+    best = best_trials(spec, study)
+    lines, built = _build_best(spec, best, out / BEST_DIR)
+    summary = {"name": spec.name, "trials": len(trials), "states": _count(row["state"] for row in rows),
+               "outcomes": _count(row["outcome"] for row in rows),
+               "best": [{"number": trial.number, "values": list(trial.values), "params": dict(trial.params),
+                         "design": str(built.get(trial.number, ""))} for trial in best]}
+    files["summary"] = out / f"{spec.name}_study.json"
+    with atomic_path(files["summary"]) as temp:
+        temp.write_text(json.dumps(summary, indent=2, allow_nan=False, default=str) + "\n")
+    return files, lines
+
+
+def _count(items: Any) -> dict[str, int]:
+    counts: dict[str, int] = {}
+    for item in items:
+        counts[item] = counts.get(item, 0) + 1
+    return counts
+
+
+def best_trials(spec: StudySpec, study: Any) -> list[Any]:
+    """The best feasible trial (one objective) or the feasible Pareto front (several), by trial number."""
+    if len(spec.objectives) > 1:
+        return sorted(study.best_trials, key=lambda trial: trial.number)
+    try:
+        return [study.best_trial]
+    except ValueError:  # no feasible complete trial yet
+        return []
+
+
+def trial_rows(spec: StudySpec, trials: Sequence[Any]) -> tuple[list[dict[str, Any]], list[str]]:
+    """One row per trial and the columns, in table order."""
+    metrics = list(dict.fromkeys(spec.metrics))
+    columns = (["number", "state", "outcome", "feasible", "reason"] + [axis.key for axis in spec.axes] + metrics
+               + ["violation", "retry_of", "seconds", "folder"])
+    retried_by = {trial.user_attrs[RETRY_OF]: trial.number for trial in trials if RETRY_OF in trial.user_attrs}
+    rows = []
+    for trial in trials:
+        attrs = trial.user_attrs
+        row: dict[str, Any] = dict.fromkeys(columns)
+        state = trial.state.name.lower()
+        outcome, reason = attrs.get(OUTCOME), attrs.get(REASON, "")
+        if state == "fail" and outcome is None:
+            outcome = INTERRUPTED
+            again = retried_by.get(trial.number)
+            reason = "its run stopped" + (f"; asked again as trial {again}" if again is not None else "")
+        violations = attrs.get(CONSTRAINT, [])
+        row.update(number=trial.number, state=state, outcome=outcome or "", reason=reason,
+                   feasible=state == "complete" and all(v <= 0.0 for v in violations),
+                   violation=max(violations) if violations else None, retry_of=attrs.get(RETRY_OF),
+                   seconds=attrs.get(SECONDS), folder=attrs.get(FOLDER))
+        for axis in spec.axes:
+            value = trial.params.get(axis.key)
+            row[axis.key] = value if not isinstance(value, (list, tuple)) else json.dumps(value)
+        for metric, value in attrs.get(METRICS, {}).items():
+            if metric in row:
+                row[metric] = value
+        rows.append(row)
+    return rows, columns
+
+
+def _feasible(trial: Any) -> bool:
+    return trial.state.name == "COMPLETE" and all(v <= 0.0 for v in trial.user_attrs.get(CONSTRAINT, []))
+
+
+def _history_picture(spec: StudySpec, trials: Sequence[Any], path: Path) -> Path:
+    """Each objective against the trial number: feasible, infeasible, and the best so far."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.ticker import MaxNLocator
+
+    from torus_cad.kernel.export import atomic_path
+
+    figure, axes = plt.subplots(len(spec.objectives), 1, figsize=(8, 3.2 * len(spec.objectives)), squeeze=False)
+    complete = [trial for trial in trials if trial.state.name == "COMPLETE"]
+    for index, (objective, axis) in enumerate(zip(spec.objectives, axes[:, 0])):
+        good = [(t.number, t.values[index]) for t in complete if _feasible(t)]
+        bad = [(t.number, t.values[index]) for t in complete if not _feasible(t)]
+        if bad:
+            axis.scatter(*zip(*bad), marker="x", color="0.6", label="infeasible (a constraint is broken)")
+        if good:
+            axis.scatter(*zip(*good), color="tab:blue", label="feasible")
+            pick = min if objective.direction.value == "minimize" else max
+            best, steps = math.nan, []
+            for number, value in good:
+                best = value if math.isnan(best) else pick(best, value)
+                steps.append((number, best))
+            axis.step(*zip(*steps), where="post", color="tab:red", label="best so far")
+        axis.set_xlabel("trial")
+        axis.xaxis.set_major_locator(MaxNLocator(integer=True))
+        axis.set_ylabel(objective.metric)
+        axis.set_title(f"{spec.name}: {objective.direction.value} {objective.metric}")
+        axis.grid(alpha=0.3)
+        if good or bad:
+            axis.legend(loc="best", fontsize="small")
+    figure.tight_layout()
+    with atomic_path(path) as temp:
+        figure.savefig(temp, format="png", dpi=100)
+    plt.close(figure)
+    return path
+
+
+def _pareto_picture(spec: StudySpec, trials: Sequence[Any], front: Sequence[Any], path: Path) -> Path:
+    """The two objectives of every complete trial, the feasible Pareto front highlighted."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from torus_cad.kernel.export import atomic_path
+
+    figure, axis = plt.subplots(figsize=(6, 5))
+    complete = [trial for trial in trials if trial.state.name == "COMPLETE"]
+    styles: list[tuple[str, list[Any], dict[str, Any]]] = [
+        ("infeasible", [t for t in complete if not _feasible(t)], {"marker": "x", "color": "0.6"}),
+        ("feasible", [t for t in complete if _feasible(t)], {"color": "tab:blue"}),
+        ("Pareto front", sorted(front, key=lambda t: t.values[0]), {"color": "tab:red"})]
+    for label, group, style in styles:
+        if group:
+            axis.scatter([t.values[0] for t in group], [t.values[1] for t in group], label=label, **style)
+    first, second = spec.objectives
+    axis.set_xlabel(f"{first.metric} ({first.direction.value})")
+    axis.set_ylabel(f"{second.metric} ({second.direction.value})")
+    axis.set_title(f"{spec.name}: Pareto front")
+    axis.grid(alpha=0.3)
+    if complete:
+        axis.legend(loc="best", fontsize="small")
+    figure.tight_layout()
+    with atomic_path(path) as temp:
+        figure.savefig(temp, format="png", dpi=100)
+    plt.close(figure)
+    return path
+
+
+def _build_best(spec: StudySpec, best: Sequence[Any], folder: Path) -> tuple[list[str], dict[int, Path]]:
+    """Write each best design's TOML and build it (STEP, STL, JSON) beside it, unless that set is current."""
+    from torus_cad.kernel.export import atomic_path
+    from torus_cad.parameters import PropellerParameters
+
+    if not best:
+        return ["  no feasible trial yet: no best design"], {}
+    folder.mkdir(parents=True, exist_ok=True)
+    single = len(spec.objectives) == 1
+    names = {trial.number: f"{spec.name}_best" if single else f"{spec.name}_pareto_{trial.number}" for trial in best}
+    if not single:
+        _remove_stale_pareto(spec, folder, set(names.values()))
+    lines, built = [], {}
+    for position, trial in enumerate(best):
+        name = names[trial.number]
+        toml = PropellerParameters.from_dict(spec.parameters(trial.params, name)).to_toml()
+        path = folder / f"{name}.toml"
+        current = path.is_file() and path.read_text() == toml and _complete(folder, name)
+        if not current:
+            with atomic_path(path) as temp:
+                temp.write_text(toml)
+            if position < MAX_PARETO_BUILDS:
+                _build(path, folder)
+        built[trial.number] = path
+        values = ", ".join(f"{o.metric} = {v:.6g}" for o, v in zip(spec.objectives, trial.values))
+        lines.append(f"  best trial {trial.number}: {values}; design {path}")
+    return lines, built
+
+
+def _complete(folder: Path, name: str) -> bool:
+    from torus_cad.errors import IncompleteOutputError
+    from torus_cad.outputs import verify_set
+
+    try:
+        verify_set(folder, name)
+    except IncompleteOutputError:
+        return False
+    return True
+
+
+def _build(config: Path, folder: Path) -> None:
+    """Build the design file ``config`` into ``folder`` as ``torus-cad build`` does (its STL included)."""
+    from torus_cad.outputs import write_output_set
+    from torus_cad.propeller import DEFAULT_DENSITY_G_CM3, build_propeller
+
+    write_output_set(build_propeller(config), folder, DEFAULT_DENSITY_G_CM3, stl=True)
+
+
+def _remove_stale_pareto(spec: StudySpec, folder: Path, keep: set[str]) -> None:
+    """Designs of an earlier Pareto front that the current one no longer holds."""
+    prefix = f"{spec.name}_pareto_"
+    for path in folder.iterdir():
+        stem = path.name.split(".")[0]
+        if path.is_file() and stem.startswith(prefix) and stem not in keep:
+            path.unlink(missing_ok=True)

@@ -1,0 +1,196 @@
+"""Where a study lives: an SQLite file (one machine) or a PostgreSQL server (workers on many machines).
+
+Every process that runs trials of a study takes :func:`claim_lock` to count the trials and ask
+for the next one, so that processes sharing a study never ask for more than ``--trials`` in all:
+an ``flock`` on a file beside the SQLite database, a PostgreSQL advisory lock on a server.
+
+A process that dies (SIGKILL, a power cut) leaves its trials RUNNING. Each trial records its
+owner (host, pid, process start time), and its process records a heartbeat every
+:data:`HEARTBEAT_S` seconds; a RUNNING trial whose owner is gone from this host, or whose
+heartbeat is older than :data:`GRACE_S` (another host), is failed and its parameters are asked
+again as a new trial that records ``retry_of`` (:func:`retry_stale_trials`).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import fcntl
+import hashlib
+import os
+import threading
+import warnings
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+from urllib.parse import urlsplit, urlunsplit
+
+from torus_cad.batch.runner import _identity
+from torus_cad.errors import ParameterError, TorusCadError
+
+__all__ = ["GRACE_S", "HEARTBEAT_S", "Heartbeat", "StorageError", "claim_lock", "open_storage", "owner_record",
+           "public_url", "retry_stale_trials", "storage_url"]
+
+HEARTBEAT_S = 10  #: how often a running process records that its trials are alive, s
+GRACE_S = 120  #: a RUNNING trial without a heartbeat for this long belongs to a dead process, s
+_SQLITE_TIMEOUT_S = 120  #: how long a writer waits for SQLite's lock (several processes share one file)
+_SCHEMES = ("sqlite", "postgresql")
+
+RETRY_OF = "retry_of"  #: user attr of a trial that repeats an interrupted one: that trial's number
+OWNER = "owner"  #: user attr: ``{"host", "pid", "start"}`` of the process that runs the trial
+
+
+class StorageError(TorusCadError):
+    """The study's storage cannot be opened (server unreachable, database file unwritable)."""
+
+
+def storage_url(given: str, out_dir: Path, name: str) -> str:
+    """The storage URL: ``given`` (``--storage`` or ``study.storage``), or SQLite ``OUT/<name>.db``."""
+    if not given:
+        return f"sqlite:///{out_dir / f'{name}.db'}"
+    scheme = urlsplit(given).scheme.split("+")[0]
+    if scheme not in _SCHEMES:
+        raise ParameterError(f"storage = {public_url(given)!r} is not allowed; use '' (SQLite in the output folder), "
+                             "sqlite:///path.db or postgresql://user@host/database")
+    return given
+
+
+def public_url(url: str) -> str:
+    """``url`` with any password replaced by ``***``, for messages and tables."""
+    parts = urlsplit(url)
+    if parts.password is None:
+        return url
+    netloc = parts.netloc.replace(f":{parts.password}@", ":***@")
+    return urlunsplit(parts._replace(netloc=netloc))
+
+
+def _is_sqlite(url: str) -> bool:
+    return url.startswith("sqlite")
+
+
+def open_storage(url: str) -> Any:
+    """optuna's RDBStorage at ``url`` with heartbeats; StorageError naming the (password-free) URL."""
+    import optuna
+    import sqlalchemy.exc
+
+    kwargs: dict[str, Any] = {"connect_args": {"timeout": _SQLITE_TIMEOUT_S}} if _is_sqlite(url) else \
+        {"pool_pre_ping": True}
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # optuna's ExperimentalWarning for the heartbeat
+            return optuna.storages.RDBStorage(url, engine_kwargs=kwargs, heartbeat_interval=HEARTBEAT_S,
+                                              grace_period=GRACE_S)
+    except (sqlalchemy.exc.SQLAlchemyError, ImportError, ValueError) as error:
+        cause = " ".join(str(error).split("\n")[0].split())[:300]
+        raise StorageError(f"cannot open the study storage {public_url(url)!r}: {cause}") from None
+
+
+@contextlib.contextmanager
+def claim_lock(storage: Any, url: str, name: str) -> Iterator[None]:
+    """Hold the study's lock (flock beside an SQLite file, an advisory lock on PostgreSQL) in the block."""
+    if _is_sqlite(url):
+        database = url.split(":///", 1)[1].split("?")[0] if ":///" in url else ""
+        if not database or database == ":memory:":
+            yield
+            return
+        lock_path = Path(database).with_name(f".{Path(database).name}.lock")
+        descriptor = os.open(lock_path, os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            fcntl.flock(descriptor, fcntl.LOCK_EX)
+            yield
+        finally:
+            os.close(descriptor)
+        return
+    import sqlalchemy
+
+    key = int.from_bytes(hashlib.sha256(f"torus_cad optimize {name}".encode()).digest()[:8], "big", signed=True)
+    with storage.engine.connect() as connection:
+        connection.execute(sqlalchemy.text("SELECT pg_advisory_lock(:key)"), {"key": key})
+        connection.commit()
+        try:
+            yield
+        finally:
+            connection.execute(sqlalchemy.text("SELECT pg_advisory_unlock(:key)"), {"key": key})
+            connection.commit()
+
+
+def owner_record() -> dict[str, Any]:
+    """This process: host, pid and start time (a successor with the same pid is told apart)."""
+    from torus_cad.kernel.files import host_tag
+
+    return {"host": host_tag(), "pid": os.getpid(), "start": _identity(os.getpid())}
+
+
+def _owner_gone(owner: Any) -> bool:
+    """Whether ``owner`` (an :func:`owner_record`) is a process of this host that no longer runs."""
+    from torus_cad.kernel.files import host_tag
+
+    if not isinstance(owner, dict) or owner.get("host") != host_tag() or not isinstance(owner.get("pid"), int):
+        return False
+    return _identity(owner["pid"]) != owner.get("start")
+
+
+def retry_stale_trials(study: Any, rdb: Any) -> list[int]:
+    """Fail the RUNNING trials of dead processes and ask their parameters again; the failed trials' numbers.
+
+    Call under :func:`claim_lock`; ``rdb`` is the study's RDBStorage (:func:`open_storage`). Dead
+    owners on this host are found at once; those of other hosts once their heartbeat is :data:`GRACE_S` old.
+    """
+    import optuna
+    from optuna.trial import TrialState
+
+    storage = study._storage
+    stale = [trial for trial in study.get_trials(deepcopy=False, states=(TrialState.RUNNING,))
+             if _owner_gone(trial.user_attrs.get(OWNER))]
+    stale_ids = {trial._trial_id for trial in stale}
+    stale_ids |= set(rdb._get_stale_trial_ids(study._study_id))
+    retried = []
+    for trial_id in sorted(stale_ids):
+        try:
+            if not storage.set_trial_state_values(trial_id, state=TrialState.FAIL):
+                continue
+        except optuna.exceptions.UpdateFinishedTrialError:
+            continue  # another process finished or failed it first
+        trial = storage.get_trial(trial_id)
+        study.enqueue_trial(trial.params, user_attrs={RETRY_OF: trial.number}, skip_if_exists=False)
+        retried.append(trial.number)
+    return retried
+
+
+class Heartbeat:
+    """A thread that records the heartbeat of the trials this process runs, every :data:`HEARTBEAT_S` s."""
+
+    def __init__(self, storage: Any) -> None:
+        self._storage = storage
+        self._trial_ids: set[int] = set()
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, name="torus-cad study heartbeat", daemon=True)
+
+    def __enter__(self) -> Heartbeat:
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        self._stop.set()
+        self._thread.join(timeout=5.0)
+
+    def add(self, trial_id: int) -> None:
+        with self._lock:
+            self._trial_ids.add(trial_id)
+        self._beat([trial_id])
+
+    def discard(self, trial_id: int) -> None:
+        with self._lock:
+            self._trial_ids.discard(trial_id)
+
+    def _beat(self, trial_ids: list[int]) -> None:
+        for trial_id in trial_ids:
+            with contextlib.suppress(Exception):  # a lost heartbeat is retried; the trial goes on
+                self._storage.record_heartbeat(trial_id)
+
+    def _run(self) -> None:
+        while not self._stop.wait(HEARTBEAT_S):
+            with self._lock:
+                trial_ids = sorted(self._trial_ids)
+            self._beat(trial_ids)
+

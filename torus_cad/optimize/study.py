@@ -1,0 +1,364 @@
+"""Running a study: optuna asks for designs, the batch runner builds them, their reports answer.
+
+The loop is the batch runner's (:func:`torus_cad.batch.runner.run_tasks`) on the local pool or
+a Dask cluster; its tasks come from a generator that asks optuna for the next trial only when a
+worker is free (ask-and-tell), so the sampler always sees every finished trial. A design that
+is refused or fails is a FAIL trial with its outcome and reason in the trial's user attrs; a
+constraint goes to the sampler as a constraint (optuna's ``constraints_func``), never as a
+penalty. ``--trials`` is the total over every run and every process sharing the study: a rerun
+continues it, and trials of a killed run are asked again (:mod:`torus_cad.optimize.storage`).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import math
+import os
+import time
+import warnings
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from torus_cad.batch import cluster
+from torus_cad.batch.job import DesignTask
+from torus_cad.batch.outcome import DesignResult, Outcome
+from torus_cad.batch.runner import Interrupted, LocalPool, interrupts_raised, run_tasks
+from torus_cad.errors import ParameterError
+from torus_cad.optimize.metrics import metric_value
+from torus_cad.optimize.storage import (
+    OWNER,
+    RETRY_OF,
+    Heartbeat,
+    claim_lock,
+    open_storage,
+    owner_record,
+    public_url,
+    retry_stale_trials,
+    storage_url,
+)
+from torus_cad.optimize.study_file import Sampler, StudySpec
+from torus_cad.optimize.trial_job import PERFORMANCE_DIR, TrialTask, run_trial
+from torus_cad.tolerances import MAX_STUDY_TRIALS
+
+__all__ = ["DEFINITION_ATTR", "TRIALS_DIR", "StudyInterrupted", "StudyResult", "run_study", "trial_name"]
+
+TRIALS_DIR = "trials"
+DEFINITION_ATTR = "torus_cad_definition"  #: study user attr: the digest of what must not change between runs
+OUTCOME, REASON, METRICS, CONSTRAINT, FOLDER, SECONDS = "outcome", "reason", "metrics", "constraint", "folder", \
+    "seconds"
+
+
+def trial_name(number: int) -> str:
+    """The design name (and file stem) of trial ``number``."""
+    return f"trial_{number}"
+
+
+@dataclass
+class StudyResult:
+    """What a run of a study did.
+
+    Attributes:
+        spec: the study.
+        out_dir: its output folder.
+        storage: the storage URL, password hidden.
+        total: the trials asked for in all.
+        ran: trials this process ran (finished) in this run.
+        seconds: wall time of the trial loop, s.
+        backend: ``"local pool, N workers"`` or ``"dask: ..."``.
+        retried: numbers of trials of dead processes that were failed and asked again.
+        files: what :func:`torus_cad.optimize.results.write_results` wrote, by kind.
+        summary_lines: the best designs' lines for the terminal.
+        interrupted_by: the signal's name when interrupted, else ''.
+    """
+
+    spec: StudySpec
+    out_dir: Path
+    storage: str
+    total: int
+    ran: int = 0
+    seconds: float = 0.0
+    backend: str = ""
+    retried: list[int] = field(default_factory=list)
+    files: dict[str, Path] = field(default_factory=dict)
+    summary_lines: list[str] = field(default_factory=list)
+    interrupted_by: str = ""
+
+    def trials_per_minute(self) -> float:
+        return 60.0 * self.ran / self.seconds if self.seconds > 0 else 0.0
+
+    def summary(self) -> str:
+        head = (f"study {self.spec.name!r}: {self.ran} trials run in {self.seconds:.1f} s "
+                f"({self.trials_per_minute():.1f} trials/min, {self.backend}); storage {self.storage}")
+        lines = [head + (f" (INTERRUPTED by {self.interrupted_by}; rerun the same command to continue)"
+                         if self.interrupted_by else "")]
+        if self.retried:
+            lines.append(f"  trials {', '.join(map(str, self.retried))} of a stopped run were asked again")
+        lines += self.summary_lines
+        lines += [f"  {kind}: {path}" for kind, path in self.files.items()]
+        return "\n".join(lines)
+
+
+class StudyInterrupted(Interrupted):
+    """SIGINT, SIGTERM or SIGHUP during :func:`run_study`; ``result`` is the partial run (its outputs written)."""
+
+    def __init__(self, signum: int, result: StudyResult) -> None:
+        super().__init__(signum)
+        self.result = result
+
+
+def available_workers() -> int:
+    """The CPUs this process may use."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - not Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def run_study(spec: StudySpec, out_dir: str | Path, *, trials: int | None = None, workers: int | None = None,
+              scheduler: str | None = None, storage: str | None = None, write_results: bool = True) -> StudyResult:
+    """Run ``spec`` until it holds ``trials`` (default ``spec.trials``) finished trials, then write its results.
+
+    Args:
+        spec: the study (:func:`torus_cad.optimize.study_file.load_study`).
+        out_dir: the output folder: ``trials/<number>/``, ``<name>.db``, ``results.csv``, ``best/``.
+        trials: trials in all (over every run and process of the study).
+        workers: local worker processes (default and cap: the CPUs available), or a LocalCluster's
+            size with ``scheduler="local"``.
+        scheduler: a Dask scheduler address, or ``"local"``; ``out_dir`` must be shared with its workers.
+        storage: the storage URL (default ``spec.storage``, else SQLite ``OUT/<name>.db``).
+        write_results: write the table, the history picture and the best designs at the end.
+
+    Raises ParameterError for bad options or a study whose stored definition differs,
+    StorageError / BatchError when the storage or the executor cannot be used, and
+    :class:`StudyInterrupted` after a signal (the trials then running are asked again next run).
+    """
+    total = spec.trials if trials is None else trials
+    if isinstance(total, bool) or not isinstance(total, int) or not 1 <= total <= MAX_STUDY_TRIALS:
+        raise ParameterError(f"--trials = {total!r} is out of range; allowed [1, {MAX_STUDY_TRIALS}]")
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
+        raise ParameterError(f"--workers must be a whole number >= 1, got {workers!r}")
+    out = Path(out_dir).resolve()
+    url = storage_url(spec.storage if storage is None else storage, out, spec.name)
+    from torus_cad.outputs import check_writable_folder
+
+    check_writable_folder(out)
+    (out / TRIALS_DIR).mkdir(parents=True, exist_ok=True)
+    runner = _Runner(spec, out, url, total)
+    result = StudyResult(spec, out, public_url(url), total)
+    with interrupts_raised():
+        try:
+            runner.run(result, workers, scheduler)
+        except Interrupted as interrupt:
+            result.interrupted_by = interrupt.signal_name
+            if write_results:
+                runner.write(result)
+            raise StudyInterrupted(interrupt.signum, result) from None
+        if write_results:
+            runner.write(result)
+    return result
+
+
+class _Runner:
+    """One process's part of a study: its storage, sampler, trials in flight."""
+
+    def __init__(self, spec: StudySpec, out: Path, url: str, total: int) -> None:
+        import optuna
+
+        optuna.logging.set_verbosity(optuna.logging.WARNING)
+        self.spec, self.out, self.url, self.total = spec, out, url, total
+        self.rdb = open_storage(url)
+        self.study = _load_study(spec, self.rdb)
+        self.owner = owner_record()
+        self.in_flight: dict[str, Any] = {}  # design id -> optuna Trial
+        self.seeded = False
+        self.ran = 0
+        self.heartbeat = Heartbeat(self.rdb)
+
+    # -- the loop --------------------------------------------------------------------------------
+
+    def run(self, result: StudyResult, workers: int | None, scheduler: str | None) -> None:
+        start = time.perf_counter()
+        own_client = own_cluster = None
+        try:
+            with self.heartbeat:
+                if scheduler is not None:
+                    own_client, own_cluster = cluster.connect(scheduler, workers)
+                    executor = own_client.get_executor(pure=False)
+                    window = max(1, len(own_client.scheduler_info().get("workers", {})) or workers or 1)
+                    result.backend = f"dask: {cluster.client_label(own_client)}"
+                    run_tasks(self._tasks(result), self._on_result, lambda: executor, window=window, job=run_trial,
+                              check_visible=True)
+                else:
+                    count = min(workers or available_workers(), available_workers())
+                    result.backend = f"local pool, {count} worker{'s' if count > 1 else ''}"
+                    run_tasks(self._tasks(result), self._on_result,
+                              lambda: LocalPool(count, self.spec.time_limit_s), window=count, job=run_trial)
+        except BaseException:
+            self._retry_in_flight()
+            raise
+        finally:
+            result.ran, result.seconds = self.ran, time.perf_counter() - start
+            if own_client is not None:
+                cluster.close_client(own_client, own_cluster)
+
+    def _tasks(self, result: StudyResult) -> Iterator[TrialTask]:
+        """The next trial's task whenever a worker is free, until the study holds its trials."""
+        while True:
+            with claim_lock(self.rdb, self.url, self.spec.name):
+                result.retried += retry_stale_trials(self.study, self.rdb)
+                trial = self._claim()
+            if trial is None:
+                return
+            yield self._task(trial)
+
+    def _claim(self) -> Any:
+        """Ask for a trial (an enqueued retry first), or None when the study is full."""
+        from optuna.trial import TrialState
+
+        trials = self.study.get_trials(deepcopy=False)
+        if not self.seeded:  # distinct seeds for processes sharing a study, reproducible for one process
+            self.study.sampler = _sampler(self.spec, self.spec.seed + len(trials))
+            self.seeded = True
+        waiting = any(trial.state is TrialState.WAITING for trial in trials)
+        counted = sum(1 for trial in trials if trial.state in (TrialState.COMPLETE, TrialState.RUNNING,
+                                                               TrialState.WAITING) or _finished_fail(trial))
+        if not waiting and counted >= self.total:
+            return None
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # optuna's ExperimentalWarning for constraints_func etc.
+            trial = self.study.ask(_distributions(self.spec))
+        trial.set_user_attr(OWNER, self.owner)
+        self.heartbeat.add(trial._trial_id)
+        return trial
+
+    def _task(self, trial: Any) -> TrialTask:
+        name = trial_name(trial.number)
+        folder = self.out / TRIALS_DIR / str(trial.number)
+        folder.mkdir(parents=True, exist_ok=True)
+        self.in_flight[name] = trial
+        parameters = self.spec.parameters(trial.params, name)
+        trial.set_user_attr(FOLDER, f"{TRIALS_DIR}/{trial.number}")
+        return TrialTask(name, parameters, str(folder), stl=self.spec.stl, simulate=self.spec.simulate,
+                         simulate_time_limit_s=self.spec.time_limit_s)
+
+    def _on_result(self, task: DesignTask, result: DesignResult) -> None:
+        """Tell optuna what the trial gave: its objective values and constraints, or FAIL with the reason."""
+        import optuna
+        from optuna.trial import TrialState
+
+        trial = self.in_flight.pop(task.design_id)
+        self.heartbeat.discard(trial._trial_id)
+        outcome, reason = result.outcome, result.reason
+        values: list[float] | None = None
+        if outcome is Outcome.VALID:
+            try:
+                values = self._evaluate(trial, Path(str(task.folder)), task.design_id)
+            except (KeyError, OSError, ValueError) as error:
+                outcome, reason = Outcome.ERROR, f"the trial's report cannot be read: {error}"
+        trial.set_user_attr(OUTCOME, outcome.value)
+        trial.set_user_attr(REASON, reason)
+        trial.set_user_attr(SECONDS, result.seconds)
+        with contextlib.suppress(optuna.exceptions.UpdateFinishedTrialError):  # a process took it as stale
+            if values is None:
+                self.study.tell(trial, state=TrialState.FAIL)
+            else:
+                self.study.tell(trial, values)
+        self.ran += 1
+
+    def _evaluate(self, trial: Any, folder: Path, name: str) -> list[float]:
+        """The objective values; the metrics and the constraint violations go to the trial's user attrs."""
+        report = json.loads((folder / f"{name}.json").read_text())
+        performance = None
+        if self.spec.simulate is not None:
+            performance = json.loads((folder / PERFORMANCE_DIR / f"{name}_performance.json").read_text())
+        metrics = {metric: metric_value(metric, report, performance) for metric in dict.fromkeys(self.spec.metrics)}
+        violations = [v for c in self.spec.constraints for v in c.violations(metrics[c.metric])]
+        trial.set_user_attr(METRICS, metrics)
+        if self.spec.constraints:
+            trial.set_user_attr(CONSTRAINT, violations)
+        return [metrics[objective.metric] for objective in self.spec.objectives]
+
+    def _retry_in_flight(self) -> None:
+        """After an interrupt: fail the trials this process was running and ask their parameters again."""
+        import optuna
+        from optuna.trial import TrialState
+
+        for trial in list(self.in_flight.values()):
+            with contextlib.suppress(optuna.exceptions.UpdateFinishedTrialError, Exception):
+                self.study.tell(trial, state=TrialState.FAIL)
+                self.study.enqueue_trial(trial.params, user_attrs={RETRY_OF: trial.number}, skip_if_exists=False)
+        self.in_flight.clear()
+
+    def write(self, result: StudyResult) -> None:
+        from torus_cad.optimize.results import write_results
+
+        result.files, result.summary_lines = write_results(self.spec, self.study, self.out)
+
+
+def _finished_fail(trial: Any) -> bool:
+    """A FAIL trial that counts as done: a design's failure (its outcome recorded), not a stopped run's."""
+    from optuna.trial import TrialState
+
+    return trial.state is TrialState.FAIL and OUTCOME in trial.user_attrs
+
+
+def _distributions(spec: StudySpec) -> dict[str, Any]:
+    from optuna.distributions import CategoricalDistribution, FloatDistribution, IntDistribution
+
+    distributions: dict[str, Any] = {}
+    for axis in spec.axes:
+        if not axis.is_bounds:
+            distributions[axis.key] = CategoricalDistribution(list(axis.values))
+        elif axis.integer:
+            distributions[axis.key] = IntDistribution(int(axis.low or 0), int(axis.high or 0))
+        else:
+            distributions[axis.key] = FloatDistribution(float(axis.low or 0.0), float(axis.high or 0.0))
+    return distributions
+
+
+def _constraints(trial: Any) -> list[float]:
+    """optuna's constraints_func: the violations recorded with the trial (feasible when all <= 0)."""
+    return list(trial.user_attrs.get(CONSTRAINT, [math.inf]))
+
+
+def _sampler(spec: StudySpec, seed: int) -> Any:
+    import optuna
+
+    constraints = _constraints if spec.constraints else None
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # ExperimentalWarning: constraints_func, constant_liar
+        if spec.sampler is Sampler.TPE:
+            return optuna.samplers.TPESampler(seed=seed, constraints_func=constraints, constant_liar=True)
+        if spec.sampler is Sampler.CMAES:
+            return optuna.samplers.CmaEsSampler(seed=seed, warn_independent_sampling=False)
+        if spec.sampler is Sampler.NSGA2:
+            return optuna.samplers.NSGAIISampler(seed=seed, constraints_func=constraints,
+                                                 population_size=spec.population)
+        return optuna.samplers.RandomSampler(seed=seed)
+
+
+def _load_study(spec: StudySpec, rdb: Any) -> Any:
+    """The study in the storage (created on the first run); ParameterError if it was created from another file."""
+    import optuna
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        try:
+            directions: Any = spec.directions
+            study = optuna.create_study(storage=rdb, study_name=spec.name, directions=directions,
+                                        load_if_exists=True, sampler=_sampler(spec, spec.seed))
+        except ValueError as error:  # e.g. directions differ from the stored study's
+            raise ParameterError(f"study {spec.name!r} in the storage does not match the study file: {error}") from None
+    definition = spec.definition()
+    stored = study.user_attrs.get(DEFINITION_ATTR)
+    if stored is None:
+        study.set_user_attr(DEFINITION_ATTR, definition)
+    elif stored != definition:
+        raise ParameterError(f"study {spec.name!r} in the storage was made from another base, [vary], objectives, "
+                             "constraints or [simulate]; give the study a new name (study.name) or another --out")
+    return study
+
+

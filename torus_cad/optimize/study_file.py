@@ -1,0 +1,347 @@
+"""The study file: TOML naming a base design, the keys to vary, the objectives and the constraints.
+
+::
+
+    [study]
+    name = "light_prop"
+    base = "my_prop.toml"        # optional, relative to this file (default: the built-in design)
+    trials = 40
+    sampler = "tpe"              # tpe | cmaes | nsga2 | random
+    seed = 0
+    storage = ""                 # "": SQLite file OUT/<name>.db; or postgresql://user@host/db
+
+    [vary]                       # dotted design keys; [i] picks a vector element
+    "airfoil.thickness" = [0.2, 0.6]     # two numbers: a range (whole numbers stay whole numbers)
+    "handedness" = ["cw", "ccw"]         # strings (or true / false): a choice
+
+    [[objective]]
+    metric = "mass_g"            # a number of the build report (dotted), or performance.* (runs simulate)
+    direction = "minimize"
+
+    [constraints]
+    "printability.thinnest_wall_mm" = { min = 0.8 }
+
+    [simulate]                   # only with a performance.* metric
+    rpm = 8000.0
+    airspeed = 0.0               # m/s
+    level = "coarse"
+
+The tables are checked by pydantic models of the design schema's kind (strict types, no
+unknown keys, one line naming the key); the varied keys and their ranges by the schema itself,
+as a sweep's are. Every problem is a ParameterError (exit code 2 at the command line).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import re
+import tomllib
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from enum import StrEnum
+from pathlib import Path
+from typing import Any
+
+from pydantic import Field, ValidationError
+
+from torus_cad.batch.designs import _apply
+from torus_cad.batch.sweep_file import (
+    VaryAxis,
+    _check_distinct,
+    _checked_value,
+    _flatten_vary,
+    _paths_relative_to,
+    _resolve_leaf,
+)
+from torus_cad.errors import ParameterError
+from torus_cad.optimize.metrics import check_metric, is_performance
+from torus_cad.parameters import PropellerParameters
+from torus_cad.parameters.config_file import read_config_text
+from torus_cad.parameters.schema import Section, param, parameter_error
+from torus_cad.tolerances import MAX_STUDY_TRIALS
+
+__all__ = ["Direction", "Objective", "Sampler", "SimulateLevel", "StudySpec", "load_study", "parse_study"]
+
+_NAME_PATTERN = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.-]{0,99}$")
+
+
+class Sampler(StrEnum):
+    """The search: optuna's samplers."""
+
+    TPE = "tpe"  #: tree-structured Parzen estimator (one or more objectives)
+    CMAES = "cmaes"  #: CMA-ES (one objective, no constraints)
+    NSGA2 = "nsga2"  #: NSGA-II, the Pareto front of several objectives
+    RANDOM = "random"  #: independent uniform samples
+
+
+class Direction(StrEnum):
+    MINIMIZE = "minimize"
+    MAXIMIZE = "maximize"
+
+
+class SimulateLevel(StrEnum):
+    """``torus-cad simulate --level``."""
+
+    COARSE = "coarse"
+    MEDIUM = "medium"
+    FINE = "fine"
+
+
+class StudyTable(Section):
+    """[study]: the study's name, size, sampler and storage."""
+
+    name: str = param("", doc="the study's name (files OUT/<name>.db, OUT/best/<name>_best.toml); default: the file's stem")
+    base: str = param("", doc="the design file every trial starts from, relative to the study file ('' = defaults)")
+    trials: int = param(20, ge=1, le=MAX_STUDY_TRIALS, doc="trials in the study in all (--trials overrides it)")
+    sampler: Sampler = param(Sampler.TPE, strict=False, doc="tpe | cmaes | nsga2 | random")
+    seed: int = param(0, ge=0, le=2**31 - 1, doc="the sampler's random seed")
+    storage: str = param("", doc="'' = SQLite file OUT/<name>.db; or a postgresql:// URL")
+    population: int = param(20, ge=2, le=10000, doc="nsga2: designs per generation")
+    stl: bool = param(False, doc="write each trial's STL too (the best designs always get one)")
+    time_limit_s: float = param(0.0, unit="s", ge=0.0, le=86400.0,
+                                doc="per trial on the local pool (0 = 300 s, or 3600 s with simulate)")
+
+
+class ObjectiveTable(Section):
+    """One [[objective]]."""
+
+    metric: str = param("", doc="a number of the build report (dotted) or performance.*")
+    direction: Direction = param(Direction.MINIMIZE, strict=False, doc="minimize | maximize")
+
+
+class BoundTable(Section):
+    """One constraint: the metric's allowed interval."""
+
+    min: float | None = None
+    max: float | None = None
+
+
+class SimulateTable(Section):
+    """[simulate]: how ``torus-cad simulate`` runs each trial."""
+
+    rpm: float = param(0.0, ge=0.0, le=1.0e6, doc="rotational speed, rpm")
+    airspeed: float = param(0.0, unit="m/s", ge=0.0, le=1000.0, doc="axial inflow speed")
+    level: SimulateLevel = param(SimulateLevel.COARSE, strict=False, doc="mesh level of the simulation")
+
+
+class StudyFile(Section):
+    """A whole study file."""
+
+    study: StudyTable = Field(default_factory=StudyTable)
+    vary: dict[str, list[int | float | bool | str]] = Field(default_factory=dict)
+    objective: list[ObjectiveTable] = Field(default_factory=list)
+    constraints: dict[str, BoundTable] = Field(default_factory=dict)
+    simulate: SimulateTable = Field(default_factory=SimulateTable)
+
+
+@dataclass(frozen=True)
+class Objective:
+    metric: str
+    direction: Direction
+
+
+@dataclass(frozen=True)
+class Constraint:
+    """``low <= metric <= high`` (either may be None)."""
+
+    metric: str
+    low: float | None
+    high: float | None
+
+    def violations(self, value: float) -> list[float]:
+        """optuna's convention: a number per bound, feasible when <= 0."""
+        return ([self.low - value] if self.low is not None else []) + ([value - self.high] if self.high is not None
+                                                                      else [])
+
+
+@dataclass(frozen=True)
+class StudySpec:
+    """A checked study.
+
+    Attributes:
+        name: the study's name (storage and file names).
+        base: the design every trial starts from.
+        axes: the varied keys: ``low``/``high`` for a range (``integer`` for whole numbers), ``values``
+            for a choice.
+        objectives: what to optimise, in order.
+        constraints: the allowed intervals of metrics.
+        trials: trials in all.
+        sampler, seed, population: the search.
+        storage: the storage URL from the file ('' = SQLite in the output folder).
+        simulate: ``{"rpm", "airspeed", "level"}`` when a metric is ``performance.*``, else None.
+        stl: trials write STL files.
+        time_limit_s: per trial, s.
+        source: where it came from, for messages.
+    """
+
+    name: str
+    base: PropellerParameters
+    axes: tuple[VaryAxis, ...]
+    objectives: tuple[Objective, ...]
+    constraints: tuple[Constraint, ...] = ()
+    trials: int = 20
+    sampler: Sampler = Sampler.TPE
+    seed: int = 0
+    population: int = 20
+    storage: str = ""
+    simulate: dict[str, Any] | None = None
+    stl: bool = False
+    time_limit_s: float = 300.0
+    source: str = "<dict>"
+    metrics: tuple[str, ...] = field(default=())
+
+    @property
+    def directions(self) -> list[str]:
+        return [objective.direction.value for objective in self.objectives]
+
+    def parameters(self, values: Mapping[str, Any], name: str) -> dict[str, Any]:
+        """The full design (TOML layout) of the trial with ``values`` by vary key, named ``name``."""
+        parameters = _apply(self.base.to_dict(), self.axes, tuple(values[axis.key] for axis in self.axes))
+        parameters["name"] = name
+        return parameters
+
+    def definition(self) -> str:
+        """What must not change between runs of one study: a digest of base, axes, objectives and constraints."""
+        data = {"base": self.base.to_dict(), "axes": [[a.key, a.low, a.high, list(a.values)] for a in self.axes],
+                "objectives": [[o.metric, o.direction.value] for o in self.objectives],
+                "constraints": [[c.metric, c.low, c.high] for c in self.constraints], "simulate": self.simulate}
+        text = json.dumps(data, sort_keys=True, default=str, allow_nan=False)
+        return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def load_study(path: str | Path) -> StudySpec:
+    """Read and check a study file; any problem is a one-line ParameterError naming the key."""
+    path = Path(path)
+    source = f"study file {str(path)!r}"
+    text = read_config_text(path, "study file")
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as error:
+        raise ParameterError(f"{source} is not valid TOML: {error}") from None
+    return parse_study(data, base_dir=path.parent, name=path.stem, source=source)
+
+
+def parse_study(data: Mapping[str, Any], base_dir: str | Path = ".", name: str = "study",
+                source: str = "study") -> StudySpec:
+    """Check a study given as the parsed TOML; ``study.base`` and file values are relative to ``base_dir``."""
+
+    def fail(message: str) -> ParameterError:
+        return ParameterError(f"{source}: {message}")
+
+    data = dict(data)
+    if isinstance(data.get("vary"), Mapping):
+        data["vary"] = dict(_flatten_vary(data["vary"]))
+    if isinstance(data.get("constraints"), Mapping):
+        data["constraints"] = dict(_flatten_bounds(data["constraints"]))
+    try:
+        model = StudyFile.model_validate(data)
+    except ValidationError as error:
+        raise fail(str(parameter_error(StudyFile, error))) from None
+    folder = Path(base_dir).resolve()
+    table = model.study
+    study_name = table.name or name
+    if not _NAME_PATTERN.match(study_name):
+        raise fail(f"study.name = {study_name!r} must be 1-100 letters, digits, '_', '.' or '-' (it names files)")
+    axes = tuple(_axis(key, values, folder, fail) for key, values in model.vary.items())
+    if not axes:
+        raise fail("[vary] is empty; name at least one design key to vary, e.g. \"airfoil.thickness\" = [0.2, 0.6]")
+    _check_distinct(axes, fail)
+    objectives, constraints = _goals(model, fail)
+    metrics = tuple(o.metric for o in objectives) + tuple(c.metric for c in constraints)
+    simulate = _simulate(model, any(is_performance(metric) for metric in metrics), fail)
+    _check_sampler(table.sampler, objectives, constraints, fail)
+    return StudySpec(name=study_name, base=_base(table.base, folder, fail), axes=axes, objectives=objectives,
+                     constraints=constraints, trials=table.trials, sampler=table.sampler, seed=table.seed,
+                     population=table.population, storage=table.storage, simulate=simulate, stl=table.stl,
+                     time_limit_s=table.time_limit_s or (3600.0 if simulate else 300.0), source=source,
+                     metrics=metrics)
+
+
+def _flatten_bounds(table: Mapping[str, Any], prefix: str = "") -> list[tuple[str, Any]]:
+    """``a.b = {min = 1}`` unquoted (nested tables) means ``"a.b" = {min = 1}``."""
+    items: list[tuple[str, Any]] = []
+    for key, value in table.items():
+        if isinstance(value, Mapping) and value and not set(value) <= {"min", "max"}:
+            items += _flatten_bounds(value, f"{prefix}{key}.")
+        else:
+            items.append((f"{prefix}{key}", value))
+    return items
+
+
+def _axis(key: str, values: list[Any], folder: Path, fail: Any) -> VaryAxis:
+    """A range (two numbers) or a choice (strings or booleans), checked against the schema's ranges."""
+    where = f"vary.{key!r}"
+    path, index, leaf = _resolve_leaf(key, fail)
+    numbers = [v for v in values if isinstance(v, (int, float)) and not isinstance(v, bool)]
+    if numbers and len(numbers) == len(values):
+        if len(values) != 2:
+            raise fail(f"{where} must be [low, high], two numbers (a range), got {len(values)} numbers")
+        low, high = (_checked_value(value, leaf, f"{where} {end}", fail) for value, end in zip(values, ("low", "high")))
+        if isinstance(low, list) or not low < high:
+            raise fail(f"{where}: low = {low!r} must be below high = {high!r}")
+        return VaryAxis(key, path, index, low=low, high=high, integer=leaf.kind is int)
+    if numbers or not values:
+        raise fail(f"{where} must be two numbers (a range) or a list of strings or booleans (a choice), got {values!r}")
+    checked = tuple(_checked_value(value, leaf, f"{where} item {i}", fail) for i, value in enumerate(values))
+    if len(set(map(repr, checked))) != len(checked):
+        raise fail(f"{where} lists a choice twice")
+    return _paths_relative_to(VaryAxis(key, path, index, values=checked), folder)
+
+
+def _goals(model: StudyFile, fail: Any) -> tuple[tuple[Objective, ...], tuple[Constraint, ...]]:
+    if not model.objective:
+        raise fail("no [[objective]]; add one, e.g. [[objective]] metric = \"mass_g\" direction = \"minimize\"")
+    objectives = []
+    for number, item in enumerate(model.objective):
+        try:
+            check_metric(item.metric, f"objective[{number}].metric")
+        except ParameterError as error:
+            raise fail(str(error)) from None
+        objectives.append(Objective(item.metric, item.direction))
+    if len({o.metric for o in objectives}) != len(objectives):
+        raise fail("two [[objective]] tables name the same metric")
+    constraints = []
+    for metric, bound in model.constraints.items():
+        try:
+            check_metric(metric, "constraints key")
+        except ParameterError as error:
+            raise fail(str(error)) from None
+        if bound.min is None and bound.max is None:
+            raise fail(f"constraints.{metric!r} needs min, max or both, e.g. {{ min = 0.8 }}")
+        if bound.min is not None and bound.max is not None and not bound.min <= bound.max:
+            raise fail(f"constraints.{metric!r}: min = {bound.min:g} must not be above max = {bound.max:g}")
+        constraints.append(Constraint(metric, bound.min, bound.max))
+    return tuple(objectives), tuple(constraints)
+
+
+def _simulate(model: StudyFile, needed: bool, fail: Any) -> dict[str, Any] | None:
+    given = "simulate" in model.model_fields_set
+    if not needed:
+        if given:
+            raise fail("[simulate] applies only when an objective or constraint is a performance.* metric")
+        return None
+    if not given or model.simulate.rpm <= 0.0:
+        raise fail("a performance.* metric runs torus-cad simulate: give [simulate] rpm = ... (> 0)")
+    table = model.simulate
+    return {"rpm": table.rpm, "airspeed": table.airspeed, "level": table.level.value}
+
+
+def _check_sampler(sampler: Sampler, objectives: tuple[Objective, ...], constraints: tuple[Constraint, ...],
+                   fail: Any) -> None:
+    if sampler is Sampler.CMAES and len(objectives) > 1:
+        raise fail("study.sampler = 'cmaes' takes one objective; use 'nsga2' (or 'tpe') for several")
+    if sampler is Sampler.CMAES and constraints:
+        raise fail("study.sampler = 'cmaes' takes no [constraints] (optuna's CMA-ES has no constraints_func); "
+                   "use 'tpe'")
+
+
+def _base(base: str, folder: Path, fail: Any) -> PropellerParameters:
+    if not base:
+        return PropellerParameters()
+    path = Path(base).expanduser()
+    path = path if path.is_absolute() else folder / path
+    try:
+        return PropellerParameters.from_toml(path)
+    except ParameterError as error:
+        raise fail(f"study.base: {error}") from None
