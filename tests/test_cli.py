@@ -138,3 +138,32 @@ def test_verify_exit_codes(tmp_path):
     (out / "torus_propeller.step").write_text("ISO-10303-21; truncated")
     assert main(["verify", str(out)]) == 1
     assert main(["verify", str(tmp_path / "missing")]) == 2
+
+
+def test_a_sweep_file_given_to_build_points_to_the_sweep_command(tmp_path, capsys):
+    assert main(["build", "examples/sweep_example.toml", "--out", str(tmp_path / "out")]) == 2
+    assert "torus-cad sweep" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_numeric_naca_designation_on_the_command_line_is_the_designation(tmp_path):
+    from torus_cad.cli import load_parameters
+
+    assert load_parameters(None, ["airfoil.naca=4415"]).airfoil.naca == "4415"
+
+
+def test_build_format_writes_a_3mf_that_trimesh_reads(tmp_path, capsys):
+    trimesh = pytest.importorskip("trimesh")
+    assert main(["build", "--format", "step,3mf", "--set", "resolution.sections=16", "--set", "resolution.points=48",
+                 "--out", str(tmp_path)]) == 0
+    assert {path.suffix for path in tmp_path.iterdir()} == {".step", ".3mf", ".json", ".csv", ".png"}
+    mesh = trimesh.load(tmp_path / "torus_propeller.3mf", force="mesh")
+    assert mesh.is_watertight and mesh.volume > 0
+    assert main(["build", "--format", "stp", "--out", str(tmp_path / "bad")]) == 2
+    assert "export.formats" in capsys.readouterr().err
+
+
+def test_build_says_on_the_terminal_when_the_part_is_not_printable(tmp_path, capsys):
+    assert main(["build", "--set", "resolution.sections=16", "--set", "resolution.points=48", "--no-stl",
+                 "--out", str(tmp_path)]) == 0
+    assert "warning: not printable: the trailing edge" in capsys.readouterr().out

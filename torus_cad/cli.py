@@ -28,10 +28,11 @@ if TYPE_CHECKING:
 EXIT_OK, EXIT_KERNEL_FAILURE, EXIT_BAD_INPUT = 0, 1, 2
 
 DESCRIPTION = """\
-torus_cad turns a few design parameters into a toroidal propeller: NACA 4-digit sections
-swept along a cubic NURBS centerline, lofted into blades, patterned around a cylindrical hub
-and fused in OpenCascade. It writes a STEP solid (for CAD/CAM), a binary STL (for printing
-and meshing) and a JSON report (volume, area, mass properties, stage times).
+torus_cad turns a few design parameters into a toroidal propeller: airfoil sections (NACA 4- or
+5-digit, or a coordinate file) swept along a cubic NURBS centerline, lofted into blades, patterned
+around a cylindrical hub and fused in OpenCascade. It writes a STEP solid (for CAD/CAM), STL and
+3MF meshes (for printing) and a JSON report (volume, mass properties, printability, checks);
+further commands make CFD meshes and domains, sweeps and a browser studio.
 """
 
 EPILOG = """\
@@ -80,6 +81,17 @@ def _parse_override(text: str) -> tuple[str, Any]:
     return key.strip(), value
 
 
+def _as_declared_strings(changes: dict[str, Any]) -> dict[str, Any]:
+    """``changes`` with a number given to a text parameter taken as its text: ``--set airfoil.naca=4415``
+    means the designation '4415', as a user types it, not the integer TOML reads."""
+    from torus_cad.parameters import PropellerParameters
+    from torus_cad.parameters.schema import iter_parameter_specs
+
+    text_keys = {spec.key for spec in iter_parameter_specs(PropellerParameters) if spec.kind is str}
+    return {key: str(value) if key in text_keys and isinstance(value, int | float) and not isinstance(value, bool)
+            else value for key, value in changes.items()}
+
+
 def _first_clause(error: BaseException) -> str:
     """The error's message up to its first ';', on one line."""
     return " ".join(str(error).split(";")[0].split())[:200]
@@ -89,7 +101,7 @@ def load_parameters(config: str | None, overrides: Sequence[str] = ()) -> Propel
     """Parameters from a TOML file (or the defaults) with ``key=value`` overrides applied."""
     from torus_cad.parameters import resolve_parameters  # imported here: the schema takes most of a second
 
-    changes = dict(_parse_override(item) for item in overrides)
+    changes = _as_declared_strings(dict(_parse_override(item) for item in overrides))
     try:
         return resolve_parameters(config or None, changes)
     except ParameterError:
@@ -118,7 +130,7 @@ def _command_build(args: argparse.Namespace) -> int:
     from torus_cad.budgets import check_stl_budget
     from torus_cad.outputs import check_writable_folder, write_output_set
 
-    params = load_parameters(args.config, args.overrides)
+    params = load_parameters(args.config, args.overrides + _format_overrides(args.formats))
     size = _preview_size(args.preview_size, "--preview-size") if args.preview else None
     if args.require_printable:  # decided from the analytic section, before any work or file
         from torus_cad.geometry.printability import printability
@@ -153,6 +165,9 @@ def _command_build(args: argparse.Namespace) -> int:
             print(f"warning: the root fillet is {fillet['radius_mm']:g} mm except along "
                   f"{fillet['varying_junction_per_blade_mm']:.2f} mm of each blade's junction: a blade bends too tightly "
                   f"there for it, and its radius varies down to {fillet['smallest_radius_mm']:.3g} mm")
+        if not report["printability"]["printable"]:
+            print(f"warning: not printable: {propeller.printability().problem()}; "
+                  "--require-printable refuses such a design")
         if params.blades == 1:
             print(f"warning: a one-blade propeller is out of balance: static imbalance "
                   f"{report['balance']['static_imbalance_g_mm']:.3f} g mm; add a counterweight or use 2 or more blades")
@@ -162,6 +177,14 @@ def _command_build(args: argparse.Namespace) -> int:
         for stage, seconds in report["stage_seconds"].items():
             print(f"  {stage:<13} {seconds * 1000:8.1f} ms")
     return EXIT_OK
+
+
+def _format_overrides(formats: Sequence[str] | None) -> list[str]:
+    """``--format step,3mf`` as the ``--set export.formats=[...]`` it stands for (the schema checks the names)."""
+    if not formats:
+        return []
+    names = [name.strip() for item in formats for name in item.split(",") if name.strip()]
+    return ["export.formats=[" + ", ".join(f'"{name}"' for name in names) + "]"]
 
 
 def _writes_a_mesh(params: PropellerParameters, no_stl: bool) -> bool:
@@ -525,6 +548,9 @@ def build_parser() -> argparse.ArgumentParser:
     build.add_argument("--density", type=_positive_density, default=1.24,
                        help="material density for the mass, g/cm^3 (default 1.24, PLA)")
     build.add_argument("--no-stl", action="store_true", help="write STEP and JSON only")
+    build.add_argument("--format", dest="formats", action="append", metavar="FORMAT[,FORMAT]",
+                       help="files to write instead of the design's export.formats, repeatable or comma-separated: "
+                            "step, stl, 3mf (default step,stl)")
     build.add_argument("--require-printable", action="store_true",
                        help="exit 2, writing nothing, when the blade is thinner than manufacturing.min_wall "
                             "(thinnest section or trailing edge; see the JSON's printability)")

@@ -257,6 +257,10 @@ def _spec_at(model: type[BaseModel], location: Sequence[Any]) -> ParameterSpec |
     return next((spec for spec in iter_parameter_specs(model) if spec.key == key), None)
 
 
+#: The top-level tables of a sweep file (torus_cad.batch.sweep_file), which no design has.
+_SWEEP_TABLES = ("base", "sweep", "vary")
+
+
 def _message(model: type[BaseModel], error: Any) -> str:
     location = tuple(error["loc"])
     kind, value = error["type"], error.get("input")
@@ -265,6 +269,8 @@ def _message(model: type[BaseModel], error: Any) -> str:
         parent = _model_at(model, location[:-1])
         known = list(parent.model_fields) if parent is not None else []
         prefix = _dotted(location[:-1]) + "." if len(location) > 1 else ""
+        if field in _SWEEP_TABLES:  # a sweep file given to a command that reads one design
+            return f"unknown key {field!r}: this looks like a sweep file; run it with 'torus-cad sweep FILE'"
         return f"unknown key {field!r}{_closest(str(location[-1]), known, prefix)}"
     if kind == "value_error":
         cause = error.get("ctx", {}).get("error")
