@@ -2,7 +2,8 @@
 
 * In cq-editor (File > Open this script) the propeller appears through ``show_object``.
 * Run as plain ``python scripts/cq_editor_propeller.py`` it builds the same propeller and
-  writes ``<name>.step``, ``<name>.stl``, ``<name>.json`` and ``<name>.png`` into ``OUT_DIR``.
+  writes the same output set as ``torus-cad build --preview`` into ``OUT_DIR``: ``<name>.step``,
+  ``<name>.stl``, ``<name>.png``, the blade-element table and ``<name>.json``.
 
 Units: mm and degrees. The spin axis is z; the hub is centred at the origin. Control points are
 in the hub frame L: [x_L degrees around the axis, y_L mm down the axis from 1 mm below the hub's
@@ -53,10 +54,13 @@ propeller = result.workplane  # the fused propeller as a cq.Workplane (result.hu
 if "show_object" in globals():  # cq-editor (or anything else that injects show_object)
     show_object(propeller, name=NAME)  # type: ignore[name-defined]  # noqa: F821
 else:
+    from torus_cad.outputs import write_output_set
     from torus_cad.preview import write_preview
 
-    written = result.write(OUT_DIR, density_g_cm3=DENSITY_G_CM3)
-    written["png"] = write_preview(result, Path(OUT_DIR) / f"{NAME}.png")
+    # The same output set as 'torus-cad build --preview': the blade-element table and the picture
+    # belong to it, so a run after a build replaces that build's files instead of dropping some.
+    written = write_output_set(result, Path(OUT_DIR), DENSITY_G_CM3, sections_table=True,
+                               extra_files={"png": lambda path: write_preview(result, path)}).paths
     for path in written.values():
         print(f"wrote {path}")
     properties = result.mass_properties(DENSITY_G_CM3)

@@ -66,7 +66,8 @@ def test_plain_python_run_writes_the_files(tmp_path, monkeypatch, capsys):
     namespace = runpy.run_path(str(SCRIPT), run_name="__main__")
     out = tmp_path / "step_out"
     names = sorted(path.name for path in out.iterdir())
-    assert names == ["torus_propeller.json", "torus_propeller.png", "torus_propeller.step", "torus_propeller.stl"]
+    assert names == ["torus_propeller.json", "torus_propeller.png", "torus_propeller.step", "torus_propeller.stl",
+                     "torus_propeller_sections.csv", "torus_propeller_sections.png"]
     printed = capsys.readouterr().out
     assert "wrote step_out/torus_propeller.step" in printed and "mass" in printed
     shape = read_step(out / "torus_propeller.step")
@@ -110,3 +111,15 @@ def test_edited_parameters_change_the_shown_propeller(tmp_path, monkeypatch):
     assert len(recorder.calls) == 1
     assert len(namespace["result"].blades) == 2
     assert is_valid_closed_solid(recorder.calls[0][0].val())
+
+
+def test_a_run_after_a_build_keeps_the_builds_whole_set(tmp_path, monkeypatch):
+    from torus_cad.cli import main
+    from torus_cad.outputs import verify_set
+
+    monkeypatch.chdir(tmp_path)
+    assert main(["build", "--preview", "-q"]) == 0
+    built = sorted(path.name for path in (tmp_path / "step_out").iterdir())
+    runpy.run_path(str(SCRIPT), run_name="__main__")
+    assert sorted(path.name for path in (tmp_path / "step_out").iterdir()) == built
+    verify_set(tmp_path / "step_out", "torus_propeller")
