@@ -258,3 +258,12 @@ def test_a_filleted_propeller_shows_every_part(tmp_path):
     filleted = propeller_objects("examples/workshop_fillet.toml")
     assert filleted.face_parts == ()
     _assert_a_real_picture(_read_png(write_preview(filleted, tmp_path / "fillet.png", size=(800, 400))), 3)
+
+
+def test_build_preview_and_preview_show_the_same_picture(tmp_path):
+    assert main(["build", "--preview", "--no-stl", "-q", "--out", str(tmp_path / "built")]) == EXIT_OK
+    assert main(["preview", "-q", "--out", str(tmp_path / "preview.png")]) == EXIT_OK
+    built = np.asarray(Image.open(tmp_path / "built" / "torus_propeller.png").convert("RGB"), dtype=int)
+    alone = np.asarray(Image.open(tmp_path / "preview.png").convert("RGB"), dtype=int)
+    assert built.shape == alone.shape
+    assert (np.abs(built - alone).sum(axis=-1) > 30).mean() < 0.01  # the same camera: rendering noise only

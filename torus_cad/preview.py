@@ -206,9 +206,13 @@ def oblique_view(mesh: SceneMesh) -> View:
     elevations VIEW_ELEVATIONS_DEG (isometric 35.26° up to 55°), that maximises the smallest
     blade's silhouette as a fraction of the largest silhouette any blade shows from any of
     these directions. The blades are copies of one another, so this is the direction where the
-    worst-placed blade looks most like itself. Ties go to the lower elevation.
+    worst-placed blade looks most like itself. Ties go to the lower elevation. The azimuths span
+    one blade pitch (360°/n) only: a view one pitch further shows the same picture with the blades
+    relabelled, and choosing among those copies by rounding noise gave different cameras for one
+    design (``build --preview`` and ``preview``).
     """
-    azimuths = np.radians(np.arange(0.0, 360.0, 2.0))
+    blades = max(1, len(set(mesh.parts.tolist()) - {HUB_PART}))
+    azimuths = np.radians(np.arange(0.0, 360.0 / blades - 1e-9, 2.0))
     elevations = np.radians(np.array(VIEW_ELEVATIONS_DEG))
     e, a = np.meshgrid(elevations, azimuths, indexing="ij")
     directions = np.column_stack([(np.cos(e) * np.cos(a)).ravel(), (np.cos(e) * np.sin(a)).ravel(),
