@@ -193,9 +193,13 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
             run_out = None if mounting.chamfer_mm > 0.0 else functools.partial(
                 run_out_hub, geometry.hub.radius_mm, geometry.hub.length_mm, 0.0 if seam_deg is None else seam_deg,
                 mounting, reach=geometry.hub.radius_mm + 4.0 * fillet_radius)
+            # A sharp trailing edge's side in thirds (and the further tries' pieces): see kernel.fillet.
+            in_pieces = None if surface.lower_corner_index is not None else (
+                lambda pieces: loft_solid(curves.wires(pieces), surface.s))
             try:
                 filleted = fillet_pattern(hub, blade, angles_deg, fillet_radius, run_out,
-                                          reduce_where_tight=params.hub.root_fillet_tight_bends == TightBends.REDUCE)
+                                          reduce_where_tight=params.hub.root_fillet_tight_bends == TightBends.REDUCE,
+                                          blade_in_pieces=in_pieces)
             except KernelError as error:
                 if surface.lower_corner_index is None or surface.round_trailing_edge:
                     raise

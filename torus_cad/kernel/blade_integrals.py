@@ -20,7 +20,7 @@ Every integral splits into the hub's, known in closed form, and one per blade fa
   and b(u) on their own. The integrands are smooth on every piece, so 4 points per span give
   ~4e-10 relative on the default propeller against BRepGProp at 1e-9.
 * **The hub's lateral area** is 2πRL less the blade footprints, each R |∮ z dθ| along the root
-  and the tip curve (a line integral at the same u Gauss points).
+  and the tip curve (a line integral at the same u Gauss points, summed over the blade's faces).
 * **Once per blade shape**: the blades are copies of one face rotated about z. Volume, area,
   z moment and spin-axis inertia do not change under that rotation; the x, y moments and
   (∫xz, ∫yz) rotate as vectors, (∫(x² - y²), 2∫xy) by twice the angle, and the box of each copy
@@ -178,6 +178,7 @@ def _integrate(shape: TopoDS_Shape, gauss_points: int) -> HubWithBladeIntegrals 
     box_max = np.array([radius, radius, radius, radius, -hub.z_bottom, hub.z_top])  # along _BOX_DIRECTIONS
     groups: dict[tuple[int, bool], list[tuple[TopoDS_Face, float]]] = {}
     surfaces: dict[tuple[int, bool], Geom_BSplineSurface] = {}
+    footprints = np.zeros(2)  # one blade's, summed over its faces (signed)
     for face in hub.blade_faces:
         surface, angle = _base_surface_and_angle(face)
         if surface is None or angle is None:
@@ -195,9 +196,13 @@ def _integrate(shape: TopoDS_Shape, gauss_points: int) -> HubWithBladeIntegrals 
         volume += count * part.volume_mm3
         moment += np.array([cos * moment_x - sin * moment_y, sin * moment_x + cos * moment_y, count * moment_z])
         inertia += count * part.spin_inertia_mm5
-        area += count * (part.area_mm2 - part.footprint_area_mm2)
+        area += count * part.area_mm2
+        footprints += part.footprints_mm2
         box_max = np.maximum(box_max, part.extremes_mm)
         products += _rotated_products(part.second_moments_mm5, angles)
+    if len({len(members) for members in groups.values()}) != 1:
+        return None  # not every face has a copy on every blade
+    area -= len(next(iter(groups.values()))) * float(np.abs(footprints).sum())
     return HubWithBladeIntegrals(volume, moment / volume, inertia, area, -box_max[0::2], box_max[1::2], products)
 
 
@@ -215,7 +220,9 @@ def _rotated_products(second_moments: NDArray[np.float64], angles: NDArray[np.fl
 def _recognise(shape: TopoDS_Shape) -> _Hub | None:
     """The hub's radius and end planes and the blade faces, or None unless ``shape`` is one solid
     made of z-axis cylinder faces of one radius, two whole end discs and B-spline faces bounded
-    only by the cylinder's edges (and their own seam)."""
+    only by the cylinder's edges, their own seam and the edges between two of them (a blade side
+    in lower and upper faces meets itself at the leading and trailing edges; each face is still
+    integrated over its whole u range, trimmed in v by the cylinder)."""
     if count(shape, TopAbs_SOLID) != 1:
         return None
     by_kind: dict[object, list[TopoDS_Face]] = {}
@@ -240,9 +247,14 @@ def _recognise(shape: TopoDS_Shape) -> _Hub | None:
     for face in blades:
         if count(face, TopAbs_WIRE) != 1 or not all(
                 cylinder_edges.Contains(edge) or BRep_Tool.IsClosed_s(TopoDS.Edge_s(edge), face)
-                for edge in explore(face, TopAbs_EDGE)):
+                or _between_blade_faces(edge, blades) for edge in explore(face, TopAbs_EDGE)):
             return None
     return _Hub(radius, z_bottom, z_top, blades)
+
+
+def _between_blade_faces(edge: TopoDS_Shape, blades: list[TopoDS_Face]) -> bool:
+    """Whether ``edge`` bounds two of the blade faces (the side's faces meet there, inside the blade's boundary)."""
+    return sum(1 for face in blades if any(edge.IsSame(own) for own in explore(face, TopAbs_EDGE))) == 2
 
 
 def _z_axis_cylinder_radius(faces: list[TopoDS_Face]) -> float | None:
@@ -300,7 +312,9 @@ class FaceIntegrals:
         first_moment_mm4: ``(3,)`` ∫x, ∫y, ∫z dV over it, mm^4.
         spin_inertia_mm5: ∫ (x² + y²) dV over it, mm^5.
         area_mm2: the face's area, mm^2.
-        footprint_area_mm2: area of the holes the blade leaves in the cylinder, mm^2.
+        footprints_mm2: ``(2,)`` R ∫ z dθ along the face's root and tip crossing curves, mm^2,
+            signed: summed over the faces of one blade, their absolute values are the areas of the
+            holes the blade leaves in the cylinder (one face: the whole closed curve).
         second_moments_mm5: ``(4,)`` ∫xz, ∫yz, ∫xy, ∫(x² - y²) dV over it, mm^5.
         extremes_mm: ``(6,)`` largest -x, x, -y, y, -z, z over the rotated copies of the face, mm
             (an extreme on the cylinder, if that is one, is inside the hub's box anyway).
@@ -313,7 +327,7 @@ class FaceIntegrals:
     spin_inertia_mm5: float
     second_moments_mm5: NDArray[np.float64]
     area_mm2: float
-    footprint_area_mm2: float
+    footprints_mm2: NDArray[np.float64]
     extremes_mm: NDArray[np.float64]
     v_range: NDArray[np.float64]
     u_range: NDArray[np.float64]
@@ -355,7 +369,7 @@ def _face_integrals(geom: Geom_BSplineSurface, reversed_face: bool, radius: floa
     return FaceIntegrals(
         volume_mm3=float(volume), first_moment_mm4=np.array([moment_x, moment_y, moment_z]),
         spin_inertia_mm5=float(inertia), second_moments_mm5=totals[8:].copy(), area_mm2=float(area),
-        footprint_area_mm2=float(abs(root_footprint) + abs(tip_footprint)),
+        footprints_mm2=np.array([root_footprint, tip_footprint]),
         extremes_mm=_extremes(surface, points, np.concatenate([sample.u for sample in samples]),
                               np.concatenate([sample.v for sample in samples]), radius, angles),
         v_range=np.array([min(sample.roots[:, 0].min() for sample in samples),

@@ -6,6 +6,13 @@ keeps the blade surface light and the boolean fast). Each curve starts and ends 
 the sharp trailing edge: the corner is the curve's end point, a C0 joint, so the spline
 never has to turn through it and cannot overshoot or self-intersect there.
 
+The wire of a sharp section is two edges, the lower surface (trailing edge to leading edge)
+and the upper one (back to the trailing edge), split at the leading edge's curve parameter
+(:attr:`SectionCurves.leading_edge_parameter`, the same in every section): the loft then
+gives each surface its own face and the trailing edge is a true edge between them. One
+closed edge would loft into one face closed in u with its C0 crease inside the face, which
+OpenCascade's self-interference check (BRepAlgoAPI_Check) flags as a self-intersecting face.
+
 A blunt trailing edge has a base between the surfaces' ends U (upper) and L (lower). The curve
 then starts at U, runs along the base to L (one Bezier span), and on over the lower surface,
 the leading edge and the upper surface back to U; L is a knot of multiplicity 3. The wire is
@@ -62,17 +69,24 @@ class SectionCurves:
             a blunt edge's lower corner is an interior knot of multiplicity 3.
         fit_error: largest distance (mm) from a sampled point to its section's curve.
         round_trailing_edge: whether the base (poles 0-3) is a round cap, G1 with the airfoil.
+        leading_edge_parameter: the curves' parameter (in [0, 1]) at the leading edge, where a
+            sharp section's wire is split into its lower and upper edges.
     """
 
     poles: NDArray[np.float64]
     knots: NDArray[np.float64]
     fit_error: float
     round_trailing_edge: bool = False
+    leading_edge_parameter: float = 0.5
 
     def wires(self, airfoil_pieces: int = 1) -> list[cq.Wire]:
-        """One closed wire per section: one edge, or two (base, airfoil) with a blunt trailing edge;
-        with a base, the airfoil edge is split into ``airfoil_pieces`` equal parameter ranges."""
-        return [bspline_wire(poles, self.knots, airfoil_pieces) for poles in self.poles]
+        """One closed wire per section.
+
+        Sharp trailing edge: with ``airfoil_pieces`` 1, two edges (lower and upper surface, split
+        at the leading edge); otherwise ``airfoil_pieces`` edges of equal parameter ranges. Blunt:
+        the base and the airfoil edge, the latter split into ``airfoil_pieces`` equal ranges.
+        """
+        return [bspline_wire(poles, self.knots, airfoil_pieces, self.leading_edge_parameter) for poles in self.poles]
 
 
 def _closed_from_trailing_edge(section_points: NDArray[np.float64], trailing_edge_index: int) -> NDArray[np.float64]:
@@ -162,7 +176,9 @@ def fit_section_curves(section_points: NDArray[np.float64], trailing_edge_index:
             poles, knots, error = _fit_with_base(points, parameters, corner, interior, round_trailing_edge)
         if np.all(error <= allowed) or interior >= min(WIRE_FIT_MAXIMUM_KNOTS, most):
             _check_trailing_edge_resolved(poles, knots, len(parameters) - 1)
-            return SectionCurves(poles, knots, float(error.max()), corner is not None and round_trailing_edge)
+            leading_edge = float(parameters[(len(parameters) - 1 - trailing_edge_index) % (len(parameters) - 1)])
+            return SectionCurves(poles, knots, float(error.max()), corner is not None and round_trailing_edge,
+                                 leading_edge)
         interior = min(2 * interior, WIRE_FIT_MAXIMUM_KNOTS, most)
 
 
@@ -242,21 +258,26 @@ def _edge(curve: Geom_BSplineCurve) -> TopoDS_Edge:
     return edge.Edge()
 
 
-def bspline_wire(poles: NDArray[np.float64], knots: NDArray[np.float64], last_pieces: int = 1) -> cq.Wire:
+def bspline_wire(poles: NDArray[np.float64], knots: NDArray[np.float64], last_pieces: int = 1,
+                 closed_split: float = 0.5) -> cq.Wire:
     """A closed wire from ``(m, 3)`` poles and a full knot vector of a non-rational cubic B-spline.
 
-    One edge, or one edge per piece between C0 corner knots (see :func:`_corner_knots`), so
-    that each piece lofts into its own face; when there are corners, the last piece (a blunt
-    edge's airfoil) is further split into ``last_pieces`` equal parameter ranges.
+    One edge per piece between C0 corner knots (see :func:`_corner_knots`), so that each piece
+    lofts into its own face; the last piece (the airfoil) is further split into ``last_pieces``
+    equal parameter ranges. A curve without corners (a sharp trailing edge, whose crease is the
+    curve's start and end) is never left as one closed edge: with ``last_pieces`` 1 it is split
+    at the parameter ``closed_split`` (the leading edge) into two.
     """
     builder = BRepBuilderAPI_MakeWire()
     pieces = _pieces(np.asarray(poles, float), np.asarray(knots, float))
     for index, (piece_poles, piece_knots) in enumerate(pieces):
         edge_curve = _bspline_curve(piece_poles, piece_knots)
-        count = last_pieces if index == len(pieces) - 1 and len(pieces) > 1 else 1
+        count = last_pieces if index == len(pieces) - 1 else 1
         bounds = np.linspace(piece_knots[0], piece_knots[-1], count + 1)
+        if len(pieces) == 1 and count == 1:
+            bounds = np.array([piece_knots[0], closed_split, piece_knots[-1]])
         for first, last in itertools.pairwise(bounds):
-            segment = edge_curve if count == 1 else _segment(edge_curve, float(first), float(last))
+            segment = edge_curve if len(bounds) == 2 else _segment(edge_curve, float(first), float(last))
             builder.Add(_edge(segment))
     if not builder.IsDone():
         raise KernelError("OpenCascade could not make a closed section wire")
