@@ -139,7 +139,7 @@ def test_cleanup_collapses_the_junction_needles_and_keeps_the_surface_closed():
     geometry = PropellerParameters().geometry()
     grid = blade_grid(geometry, 48, 120, SectionSpacing.ARC_LENGTH)
     parts = [hub_mesh(10.0, 20.0, cell_size(grid).matched), *blade_meshes(geometry, grid)]
-    united = unite(parts, PARTS)
+    united, _ = unite(parts, PARTS)
     cleaned, cleanup = collapse_junction_needles(united)
     before = aspect_ratios(united.vertices, united.faces)
     after = aspect_ratios(cleaned.vertices, cleaned.faces)

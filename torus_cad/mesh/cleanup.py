@@ -94,6 +94,12 @@ class Cleanup:
 
 def collapse_junction_needles(mesh: LabeledMesh) -> tuple[LabeledMesh, Cleanup]:
     """The mesh with the junction's needle edges collapsed, and what was done."""
+    cleaned, cleanup, _ = collapse_keeping(mesh)
+    return cleaned, cleanup
+
+
+def collapse_keeping(mesh: LabeledMesh) -> tuple[LabeledMesh, Cleanup, NDArray[np.bool_]]:
+    """:func:`collapse_junction_needles`, and ``(f,)`` True for the input faces still in the result (in order)."""
     vertices, faces = mesh.vertices, mesh.faces.copy()
     junction = junction_vertices(mesh)
     near = faces[junction[faces].any(axis=1)]
@@ -103,7 +109,7 @@ def collapse_junction_needles(mesh: LabeledMesh) -> tuple[LabeledMesh, Cleanup]:
     shortest = lengths.argmin(axis=1)
     rows = np.flatnonzero(lengths.min(axis=1) < MESH_NEEDLE_EDGE_RATIO * lengths.max(axis=1))
     if len(rows) == 0:
-        return mesh, Cleanup(0, *before)
+        return mesh, Cleanup(0, *before), np.ones(len(faces), dtype=bool)
     ends = np.stack([near[rows, shortest[rows]], near[rows, (shortest[rows] + 1) % 3]], axis=1)
     candidates = np.unique(np.sort(ends, axis=1), axis=0)
     candidates = candidates[np.argsort(np.linalg.norm(vertices[candidates[:, 0]] - vertices[candidates[:, 1]],
@@ -121,6 +127,8 @@ def collapse_junction_needles(mesh: LabeledMesh) -> tuple[LabeledMesh, Cleanup]:
         if len(shared) != 2 or len(adjacency.neighbours(mover) & adjacency.neighbours(keeper)) != 2:
             continue  # not an edge any more, or collapsing it would pinch the surface
         moved = sorted(adjacency.around(mover) - shared)
+        if not moved:
+            continue
         old = faces[moved]
         after = np.where(old == mover, keeper, old)
         normals, _ = _normals_and_aspect(vertices[old])
@@ -141,4 +149,4 @@ def collapse_junction_needles(mesh: LabeledMesh) -> tuple[LabeledMesh, Cleanup]:
     used[faces[keep].ravel()] = True
     index = np.cumsum(used) - 1
     cleaned = LabeledMesh(vertices[used], index[faces[keep]], mesh.part[keep], mesh.part_names)
-    return cleaned, Cleanup(collapsed, *before)
+    return cleaned, Cleanup(collapsed, *before), keep

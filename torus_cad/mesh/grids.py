@@ -128,6 +128,38 @@ def split_along_a_d(surface: BladeSurface) -> NDArray[np.bool_]:
     return np.arange(count) < upper_end
 
 
+def _outward(surface: BladeSurface, split: NDArray[np.bool_]) -> bool:
+    """Whether a cell's (a, b, d) points away from its section's centre (then the grid's faces are outward as made)."""
+    grid = surface.points
+    k, j = (len(grid) - 1) // 2, max(int(split.sum()) // 3, 0)
+    normal = np.cross(grid[k, j + 1] - grid[k, j], grid[k + 1, j + 1] - grid[k, j])
+    return bool(np.dot(normal, grid[k, j] - grid[k].mean(axis=0)) >= 0.0)
+
+
+def side_faces(surface: BladeSurface, first_row: int, last_row: int) -> NDArray[np.int64]:
+    """``(2 (last - first) p, 3)`` outward triangles of the cells between sections ``first_row`` and
+    ``last_row`` (indices into the grid's ``(sections * p, 3)`` vertices): every cell's first triangle,
+    then every cell's second, split as :func:`mirrored_diagonal_mesh` says."""
+    count = surface.points.shape[1]
+    column = np.arange(count)
+    split = split_along_a_d(surface)
+    row = np.arange(first_row, last_row)[:, None] * count
+    a, b = row + column, row + (column + 1) % count
+    c, d = a + count, b + count
+    on_upper = np.broadcast_to(split, a.shape)[..., None]
+    first = np.where(on_upper, np.stack([a, b, d], -1), np.stack([a, b, c], -1))
+    second = np.where(on_upper, np.stack([a, d, c], -1), np.stack([b, d, c], -1))
+    sides = np.concatenate([first.reshape(-1, 3), second.reshape(-1, 3)])
+    return sides if _outward(surface, split) else sides[:, ::-1]
+
+
+def cap_faces(surface: BladeSurface, row: int, toward_row: int) -> NDArray[np.int64]:
+    """Triangles closing the grid at section ``row``, facing away from section ``toward_row`` (grid vertex indices)."""
+    grid, frames = surface.points, surface.frames
+    inward = grid[toward_row].mean(axis=0) - grid[row].mean(axis=0)
+    return _cap(grid[row], frames.normal[row], frames.binormal[row], -inward) + row * grid.shape[1]
+
+
 def mirrored_diagonal_mesh(surface: BladeSurface) -> TriangleMesh:
     """Blade 0's closed mesh: its grid's cells split along diagonals mirrored about the chord, capped.
 
@@ -139,29 +171,49 @@ def mirrored_diagonal_mesh(surface: BladeSurface) -> TriangleMesh:
     of its two sides where the edge runs obliquely to the sections. Each end section is capped
     by a triangulation of its polygon in its plane (:func:`_cap`). Faces outward.
     """
+    sections = len(surface.points)
+    faces = [side_faces(surface, 0, sections - 1), cap_faces(surface, 0, 1), cap_faces(surface, sections - 1, sections - 2)]
+    return TriangleMesh(surface.points.reshape(-1, 3), np.concatenate(faces))
+
+
+@dataclass(frozen=True)
+class BladePieces:
+    """Blade 0's mesh cut where it is well clear of the hub, so that only the pieces that meet the hub
+    go through the union (the rest is joined back afterwards, vertex for vertex).
+
+    Attributes:
+        near: closed pieces that meet the hub (grid vertex indices): sections 0 to ``cut[0]`` and
+            ``cut[1]`` to the last, each closed by the end cap and a cut cap; the whole blade when
+            no section is clear of the hub.
+        cut_cap_faces: ``(len(face),)`` True for each near piece's faces on a cut cap.
+        far: the open band of cells between the cuts, or None.
+        cut: the two cut sections, or None.
+    """
+
+    near: tuple[NDArray[np.int64], ...]
+    cut_cap_faces: tuple[NDArray[np.bool_], ...]
+    far: NDArray[np.int64] | None
+    cut: tuple[int, int] | None
+
+
+def blade_pieces(surface: BladeSurface, hub_radius_mm: float, hub_length_mm: float, margin_mm: float) -> BladePieces:
+    """Cut blade 0's mesh at the first and last sections lying wholly more than ``margin_mm`` outside the hub."""
     grid = surface.points
-    sections, count, _ = grid.shape
-    column = np.arange(count)
-    split = split_along_a_d(surface)
-    upper_end = int(split.sum())
-    row = np.arange(sections - 1)[:, None] * count
-    a, b = row + column, row + (column + 1) % count
-    c, d = a + count, b + count
-    on_upper = np.broadcast_to(split, a.shape)[..., None]
-    first = np.where(on_upper, np.stack([a, b, d], -1), np.stack([a, b, c], -1))
-    second = np.where(on_upper, np.stack([a, d, c], -1), np.stack([b, d, c], -1))
-    sides = np.concatenate([first.reshape(-1, 3), second.reshape(-1, 3)])
-    # (a, b, d) of a cell on the upper surface, mid-blade, points away from its section's centre when outward.
-    k, j = (sections - 1) // 2, max(upper_end // 3, 0)
-    normal = np.cross(grid[k, j + 1] - grid[k, j], grid[k + 1, j + 1] - grid[k, j])
-    if np.dot(normal, grid[k, j] - grid[k].mean(axis=0)) < 0.0:
-        sides = sides[:, ::-1]
-    frames = surface.frames
-    ends = []
-    for index, inward in ((0, grid[1].mean(axis=0) - grid[0].mean(axis=0)),
-                          (sections - 1, grid[-2].mean(axis=0) - grid[-1].mean(axis=0))):
-        ends.append(_cap(grid[index], frames.normal[index], frames.binormal[index], -inward) + index * count)
-    return TriangleMesh(grid.reshape(-1, 3), np.concatenate([sides, *ends]))
+    sections = len(grid)
+    radial = np.hypot(grid[..., 0], grid[..., 1]) - hub_radius_mm
+    axial = np.abs(grid[..., 2]) - hub_length_mm / 2.0
+    clear = np.flatnonzero((np.maximum(radial, axial) > margin_mm).all(axis=1))
+    whole = mirrored_diagonal_mesh(surface).faces
+    if len(clear) < 2 or clear[-1] - clear[0] + 1 != len(clear) or clear[0] == 0 or clear[-1] == sections - 1:
+        return BladePieces((whole,), (np.zeros(len(whole), dtype=bool),), None, None)
+    first, last = int(clear[0]), int(clear[-1])
+    start = np.concatenate([side_faces(surface, 0, first), cap_faces(surface, 0, 1)])
+    start_cut = cap_faces(surface, first, first - 1)
+    end = np.concatenate([side_faces(surface, last, sections - 1), cap_faces(surface, sections - 1, sections - 2)])
+    end_cut = cap_faces(surface, last, last + 1)
+    near = (np.concatenate([start, start_cut]), np.concatenate([end, end_cut]))
+    flags = (np.arange(len(near[0])) >= len(start), np.arange(len(near[1])) >= len(end))
+    return BladePieces(near, flags, side_faces(surface, first, last), (first, last))
 
 
 def blade_meshes(geometry: PropellerGeometry, surface: BladeSurface) -> list[TriangleMesh]:

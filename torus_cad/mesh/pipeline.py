@@ -1,9 +1,11 @@
 """Parameters in, closed surface mesh and quality report out: the ``torus-cad mesh`` pipeline.
 
-Stages: checks (triangle budget, resolution, design) -> grids (each blade's structured grid at
-exactly the requested resolution, capped; the hub's §6.2 grid at the blades' cell size) ->
-union (manifold3d, part labels kept) -> cleanup (the junctions' needle edges collapsed) ->
-quality report -> files.
+Stages: checks (memory budget, resolution, design, root fillet, hub features against the
+blades) -> grids (blade 0's structured grid at exactly the requested resolution, checked for
+crossing triangles; the hub's §6.2 grid at the blades' cell size with its chamfers, bore, flat
+and set-screw hole) -> union (the hub and the blade roots through manifold3d, the junctions'
+needle edges collapsed, the rest of each blade joined back: torus_cad.mesh.assembly) ->
+crossings (meshlib) -> quality report -> files (one output set).
 """
 
 from __future__ import annotations
@@ -25,11 +27,11 @@ from torus_cad.geometry.mounting import HubMounting
 from torus_cad.geometry.propeller import PropellerGeometry
 from torus_cad.geometry.surface import BladeSurface, blade_frames, place_sections, sections_along, sections_at
 from torus_cad.mesh import quality
-from torus_cad.mesh.cleanup import Cleanup, collapse_junction_needles
+from torus_cad.mesh.assembly import assemble
+from torus_cad.mesh.cleanup import Cleanup
 from torus_cad.mesh.crossings import CrossingCheck, blade_crossings, crossing_pairs
 from torus_cad.mesh.grids import (
     blade_grid,
-    blade_meshes,
     cell_size,
     hub_mesh,
     mirrored_diagonal_mesh,
@@ -39,7 +41,7 @@ from torus_cad.mesh.grids import (
 from torus_cad.mesh.hub_features import check_meshable, cut_features, feature_surface_distance, placed_mounting
 from torus_cad.mesh.resolution import check_budget, check_resolution, estimate_triangles
 from torus_cad.mesh.settings import MeshFormat, selected_formats
-from torus_cad.mesh.union import LabeledMesh, unite
+from torus_cad.mesh.union import LabeledMesh, MeshBooleanError
 from torus_cad.mesh.writers import write_mesh_files
 from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.design import Handedness, SectionSpacing
@@ -53,7 +55,6 @@ class MeshStage(StrEnum):
     CHECKS = "checks"
     GRIDS = "grids"
     UNION = "union"
-    CLEANUP = "cleanup"
     CROSSINGS = "crossings"
     QUALITY = "quality"
     WRITE = "write"
@@ -72,6 +73,8 @@ class SurfaceMesh:
         cleanup: what the junction cleanup after the union did (``mesh.cleanup``).
         mounting: the hub's features as meshed (set screw placed).
         crossings: intersecting triangle pairs of the united mesh (meshlib) and what was checked.
+        topology: the united mesh's edge counts (closed, checked before anything is written).
+        united_vertices: the first vertices, those of the union's result; the others are blade grid vertices.
         stage_seconds: seconds per stage (keys: MeshStage values).
     """
 
@@ -83,6 +86,8 @@ class SurfaceMesh:
     cleanup: Cleanup
     mounting: HubMounting
     crossings: CrossingCheck
+    topology: quality.Topology
+    united_vertices: int
     stage_seconds: dict[str, float] = field(default_factory=dict)
 
     @property
@@ -106,6 +111,11 @@ def check_design(params: PropellerParameters) -> None:
     feasibility.check_blades_clear(geometry, tube)
 
 
+#: On meshes too large to check whole, the junction check covers the triangles within this many
+#: blade cells of the hub (or the junction margin, if larger): beyond them the union and the
+#: cleanup left the blade grid's own triangles, which blade 0's check covers.
+JUNCTION_CHECK_CELLS = 3.0
+
 #: Scale factors of both counts tried, in order, for a resolution whose blade mesh crosses itself.
 _CROSSING_FREE_SCALES = (1.25, 1.5, 2.0, 3.0, 4.0)
 
@@ -120,14 +130,15 @@ def _blade_check(geometry: PropellerGeometry, grid: BladeSurface, mesh: Triangle
 
 
 def check_blade_crossings(geometry: PropellerGeometry, grid: BladeSurface, mesh: TriangleMesh,
-                          spacing: SectionSpacing) -> None:
-    """ParameterError (exit 2) when blade 0's mesh crosses itself, naming the smallest of the counts
-    scaled by :data:`_CROSSING_FREE_SCALES` whose mesh does not."""
+                          spacing: SectionSpacing) -> CrossingCheck:
+    """Blade 0's crossing check; ParameterError (exit 2) when its mesh crosses itself, naming the
+    smallest of the counts scaled by :data:`_CROSSING_FREE_SCALES` whose mesh does not."""
     from torus_cad.parameters.design import Mesh
 
-    found = _blade_check(geometry, grid, mesh).pairs
+    check = _blade_check(geometry, grid, mesh)
+    found = check.pairs
     if found == 0:
-        return
+        return check
     sections, points, _ = grid.points.shape
     most = (Mesh.model_fields["sections"].metadata[-1].le, Mesh.model_fields["points"].metadata[-1].le)
     advice = "no allowed resolution up to 4 times finer avoids it"
@@ -146,18 +157,21 @@ def _hub(geometry: PropellerGeometry, mounting: HubMounting, cell: float) -> Tri
     return cut_features(hub, mounting, geometry.hub.radius_mm, geometry.hub.length_mm, cell)
 
 
-def united_crossings(mesh: LabeledMesh, geometry: PropellerGeometry, blade: CrossingCheck) -> CrossingCheck:
-    """Intersecting pairs of the united mesh: all of it when blade 0 was checked whole, else the
-    hub's and the junctions' triangles (blade 0's edge bands were checked already)."""
+def united_crossings(mesh: LabeledMesh, united_faces: int, blade: CrossingCheck, geometry: PropellerGeometry,
+                     margin_mm: float) -> CrossingCheck:
+    """Intersecting pairs of the assembled mesh: all of it when blade 0 was checked whole, else the hub
+    and every triangle that went through the union within ``margin_mm`` of the hub (the junctions,
+    where the union and the cleanup made new triangles), blade 0's edge bands having been checked already."""
     if blade.scope == "whole mesh":
         return CrossingCheck(crossing_pairs(mesh.vertices, mesh.faces), len(mesh.faces), "whole mesh")
+    faces = mesh.faces[:united_faces]
     hub = geometry.hub
-    near = ~quality.faces_away_from_hub(mesh.vertices, mesh.faces, hub.radius_mm, hub.length_mm,
-                                        _junction_margin(geometry))
-    pairs = crossing_pairs(mesh.vertices, mesh.faces, near)
+    near = (mesh.part[:united_faces] == 0) | ~quality.faces_away_from_hub(mesh.vertices, faces, hub.radius_mm,
+                                                                          hub.length_mm, margin_mm)
+    used = np.unique(faces[near])
+    pairs = crossing_pairs(mesh.vertices[used], np.searchsorted(used, faces[near]))
     return CrossingCheck(blade.pairs + pairs, blade.checked_triangles + int(near.sum()),
-                         f"hub and junctions (all triangles within {_junction_margin(geometry):.3g} mm of the hub), "
-                         f"{blade.scope}")
+                         f"the hub and every triangle within {margin_mm:.3g} mm of it (the junctions), {blade.scope}")
 
 
 def build_surface_mesh(params: PropellerParameters, progress: Callable[[str], None] | None = None) -> SurfaceMesh:
@@ -179,23 +193,27 @@ def build_surface_mesh(params: PropellerParameters, progress: Callable[[str], No
     with timer.stage(MeshStage.GRIDS):
         grid = blade_grid(geometry, table.sections, table.points, table.spacing)
         blade = mirrored_diagonal_mesh(grid)
-        check_blade_crossings(geometry, grid, blade, table.spacing)
-        cell = cell_size(grid).matched
-        first = geometry.blade_angle_deg(0)
-        blades = [TriangleMesh(rotated_about_axis(blade.vertices, geometry.blade_angle_deg(index) - first),
-                               blade.faces) for index in range(geometry.blades)]
-        parts = [_hub(geometry, mounting, cell), *blades]
+        blade_check = check_blade_crossings(geometry, grid, blade, table.spacing)
+        del blade
+        cells = cell_size(grid)
+        hub = _hub(geometry, mounting, cells.matched)
     with timer.stage(MeshStage.UNION):
-        mesh = unite(parts, ["hub", *(f"blade_{index}" for index in range(geometry.blades))])
-    with timer.stage(MeshStage.CLEANUP):
-        mesh, cleanup = collapse_junction_needles(mesh)
+        assembled = assemble(geometry, grid, hub, max(cells.around, cells.along, cells.matched))
+    mesh = assembled.mesh
+    topology = quality.edge_topology(mesh.faces)
+    if not topology.closed:
+        raise MeshBooleanError(f"mesh union, step 'join': the mesh is not closed ({topology.open_edges} open, "
+                               f"{topology.non_manifold_edges} non-manifold, {topology.inconsistent_edges} "
+                               "inconsistently oriented edges)")
     with timer.stage(MeshStage.CROSSINGS):
-        crossings = united_crossings(mesh, geometry, _blade_check(geometry, grid, blade))
+        margin = max(_junction_margin(geometry), JUNCTION_CHECK_CELLS * max(cells.around, cells.along))
+        crossings = united_crossings(mesh, assembled.united_faces, blade_check, geometry, margin)
         if crossings.pairs:
             raise ParameterError(
                 f"mesh.sections = {table.sections}, mesh.points = {table.points}: the united mesh crosses itself at "
                 f"{crossings.pairs} triangle pairs where the blades meet the hub; use finer --sections and --points")
-    return SurfaceMesh(params, mesh, grid, cell, estimate.total, cleanup, mounting, crossings, timer.seconds)
+    return SurfaceMesh(params, mesh, grid, cells.matched, estimate.total, assembled.cleanup, mounting, crossings,
+                       topology, assembled.united_vertices, timer.seconds)
 
 
 # -- quality report ---------------------------------------------------------------------------------
@@ -219,8 +237,11 @@ def vertex_distances(result: SurfaceMesh) -> NDArray[np.float64]:
     on_hub[mesh.faces_of(0).ravel()] = True
     distance = np.zeros(len(mesh.vertices))
     distance[on_hub] = feature_surface_distance(mesh.vertices[on_hub], result.mounting, hub.radius_mm, hub.length_mm)
-    others = np.flatnonzero(~on_hub)
-    blade_vertices = np.concatenate([part.vertices for part in blade_meshes(result.geometry, result.blade_grid)])
+    others = np.flatnonzero(~on_hub[:result.united_vertices])  # the rest are the blades' joined bands: grid vertices
+    geometry, grid_vertices = result.geometry, result.blade_grid.points.reshape(-1, 3)
+    blade_vertices = np.concatenate([
+        rotated_about_axis(grid_vertices, geometry.blade_angle_deg(index) - geometry.blade_angle_deg(0))
+        for index in range(geometry.blades)])
     exact = quality.rows_in(mesh.vertices[others], blade_vertices)
     strays = others[~exact]
     if len(strays):
@@ -284,7 +305,7 @@ def quality_report(result: SurfaceMesh, compare: bool = True) -> dict[str, Any]:
     adds the B-rep's volume and OpenCascade's tessellation of the same design."""
     mesh, params, table = result.mesh, result.parameters, result.parameters.mesh
     margin = _junction_margin(result.geometry)
-    topology = quality.edge_topology(mesh.faces)
+    topology = result.topology
     blade = _blade_faces(mesh)
     away = blade[quality.faces_away_from_hub(mesh.vertices, blade, params.hub.radius, params.hub.length, margin)]
     ratios = quality.aspect_ratios(mesh.vertices, mesh.faces)

@@ -153,11 +153,12 @@ def cell_deviation(grid: NDArray[np.float64], centres: NDArray[np.float64],
     return np.where(split_a_d[None, :], along_a_d, along_b_c)
 
 
-def rows_in(query: NDArray[np.float64], reference: NDArray[np.float64]) -> NDArray[np.bool_]:
-    """``(q,)`` True where a row of ``query`` ``(q, 3)`` equals a row of ``reference`` ``(r, 3)`` bit for bit.
+def find_rows(query: NDArray[np.float64], reference: NDArray[np.float64]) -> NDArray[np.int64]:
+    """``(q,)`` index of a row of ``reference`` ``(r, 3)`` equal bit for bit to each row of ``query``
+    ``(q, 3)``, or -1.
 
     Rows are hashed to one int64 each (sorted once, looked up with searchsorted), and every hit is
-    confirmed by comparing the coordinates, so a hash collision cannot give a false True.
+    confirmed by comparing the coordinates, so a hash collision cannot give a false match.
     """
     def keys(rows: NDArray[np.float64]) -> NDArray[np.int64]:
         bits = np.ascontiguousarray(rows, dtype=np.float64).view(np.int64)
@@ -171,4 +172,10 @@ def rows_in(query: NDArray[np.float64], reference: NDArray[np.float64]) -> NDArr
     query_keys = keys(query)
     position = np.minimum(np.searchsorted(sorted_keys, query_keys), len(sorted_keys) - 1)
     candidate = order[position]
-    return np.asarray((sorted_keys[position] == query_keys) & np.all(reference[candidate] == query, axis=1))
+    found = (sorted_keys[position] == query_keys) & np.all(reference[candidate] == query, axis=1)
+    return np.where(found, candidate, -1)
+
+
+def rows_in(query: NDArray[np.float64], reference: NDArray[np.float64]) -> NDArray[np.bool_]:
+    """``(q,)`` True where a row of ``query`` ``(q, 3)`` equals a row of ``reference`` ``(r, 3)`` bit for bit."""
+    return np.asarray(find_rows(query, reference) >= 0)

@@ -1,8 +1,10 @@
 """Unite the parts' meshes into one closed 2-manifold with manifold3d, keeping each face's part.
 
-manifold3d gives every input mesh an original ID (``as_original``) and reports, for each run
-of output triangles, the ID of the input it came from (``run_original_id`` / ``run_index``
-of the output MeshGL64), so the part labels survive the union without any geometric guess.
+Every input triangle carries a face ID (manifold3d's ``face_id``, kept through the boolean for
+every output triangle that comes from it) that encodes its triangle index, its part and whether
+it is to be dropped after the union, so the part labels survive the union without any
+geometric guess. The triangle index keeps neighbouring IDs distinct, so manifold3d merges no
+neighbouring coplanar triangles of the structured grids.
 """
 
 from __future__ import annotations
@@ -47,40 +49,49 @@ class LabeledMesh:
         return self.faces[self.part == index]
 
 
-def _manifold(mesh: TriangleMesh, name: str) -> Any:
+#: Face ID = (triangle mod 2^23) << 8 | part << 1 | marked: manifold3d keeps face IDs as 32-bit ints.
+_PART_BITS = 7
+_TRIANGLE_BITS = 23
+
+
+def _manifold(mesh: TriangleMesh, name: str, part: int, dropped: NDArray[np.bool_] | None) -> Any:
     import manifold3d as mf
 
+    triangle = np.arange(len(mesh.faces), dtype=np.uint64) % np.uint64(1 << _TRIANGLE_BITS)
+    face_id = (triangle << np.uint64(_PART_BITS + 1)) | np.uint64(part << 1)
+    if dropped is not None:
+        face_id |= dropped.astype(np.uint64)
     body = mf.Manifold(mf.Mesh64(vert_properties=np.ascontiguousarray(mesh.vertices, dtype=np.float64),
-                                 tri_verts=np.ascontiguousarray(mesh.faces, dtype=np.uint64)))
+                                 tri_verts=np.ascontiguousarray(mesh.faces, dtype=np.uint64), face_id=face_id))
     if body.status() != mf.Error.NoError:
         raise MeshBooleanError(f"mesh union, step 'load {name}': manifold3d refused the {name} mesh "
                                f"({body.status().name})")
-    return body.as_original()
+    return body
 
 
-def unite(parts: Sequence[TriangleMesh], names: Sequence[str]) -> LabeledMesh:
-    """Union of closed, outward ``parts`` (named ``names``) as one labelled mesh.
+def unite(parts: Sequence[TriangleMesh], names: Sequence[str], part_of: Sequence[int] | None = None,
+          marked: Sequence[NDArray[np.bool_] | None] | None = None) -> tuple[LabeledMesh, NDArray[np.bool_]]:
+    """Union of closed, outward ``parts`` as one labelled mesh whose part names are ``names``, and
+    ``(f,)`` True for its faces that come from faces where ``marked`` (one mask per input, or None) is True.
 
-    Raises MeshBooleanError naming the step (loading a part, the union, reading the result)
-    when manifold3d fails or the result does not trace back to the parts.
+    ``part_of`` gives each input's index into ``names`` (default: one input per name).
+
+    Raises MeshBooleanError naming the step (loading a part, the union) when manifold3d fails.
     """
     import manifold3d as mf
 
-    bodies = [_manifold(mesh, name) for mesh, name in zip(parts, names, strict=True)]
-    part_of_id = {body.original_id(): index for index, body in enumerate(bodies)}
+    part_of = list(range(len(parts))) if part_of is None else list(part_of)
+    dropped = [None] * len(parts) if marked is None else list(marked)
+    if len(names) >= 1 << _PART_BITS:
+        raise MeshBooleanError(f"mesh union, step 'labels': {len(names)} parts, more than {(1 << _PART_BITS) - 1}")
+    bodies = [_manifold(mesh, names[part], part, mask)
+              for mesh, part, mask in zip(parts, part_of, dropped, strict=True)]
     union = mf.Manifold.batch_boolean(bodies, mf.OpType.Add)
     if union.status() != mf.Error.NoError or union.is_empty():
         raise MeshBooleanError(f"mesh union, step 'union': manifold3d failed ({union.status().name})")
     result = union.to_mesh64()
-    vertices = np.asarray(result.vert_properties, dtype=np.float64)[:, :3]
-    faces = np.asarray(result.tri_verts, dtype=np.int64)
-    run_start = np.asarray(result.run_index, dtype=np.int64) // 3
-    run_ids = np.asarray(result.run_original_id, dtype=np.int64)
-    unknown = sorted(set(run_ids.tolist()) - set(part_of_id))
-    if unknown:
-        raise MeshBooleanError(f"mesh union, step 'labels': output runs come from unknown meshes {unknown}")
-    run_part = np.array([part_of_id[run_id] for run_id in run_ids.tolist()], dtype=np.int16)
-    part = np.repeat(run_part, np.diff(run_start))
-    if len(part) != len(faces):
-        raise MeshBooleanError(f"mesh union, step 'labels': runs cover {len(part)} of {len(faces)} triangles")
-    return LabeledMesh(vertices, faces, part, tuple(names))
+    face_id = np.asarray(result.face_id, dtype=np.uint64)
+    part = ((face_id >> np.uint64(1)) & np.uint64((1 << _PART_BITS) - 1)).astype(np.int16)
+    vertices = np.array(result.vert_properties, dtype=np.float64)[:, :3]
+    faces = np.array(result.tri_verts, dtype=np.int64)
+    return LabeledMesh(np.ascontiguousarray(vertices), faces, part, tuple(names)), (face_id & np.uint64(1)) == 1
