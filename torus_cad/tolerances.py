@@ -140,3 +140,9 @@ MESH_JUNCTION_MARGIN_RELATIVE = 0.05
 #: Surface meshes: at the blade-hub junctions, a triangle edge shorter than this fraction of its
 #: triangle's longest edge is a needle the cleanup collapses (torus_cad.mesh.cleanup).
 MESH_NEEDLE_EDGE_RATIO = 0.1
+
+#: Largest CFD mesh ``torus-cad cfd`` starts, in tetrahedra (estimated from the settings before any
+#: meshing, torus_cad.cfd.estimate). The default design's default mesh has 231,405; gmsh's Delaunay
+#: mesher needs about 1 kB per tetrahedron, so the limit is near 3.5 GB of memory and, on a 2-core
+#: machine, about half an hour.
+CFD_TETRAHEDRA_LIMIT = 3_000_000
