@@ -1,16 +1,28 @@
 """`torus-cad cfd`: the .msh files read back (in gmsh and in meshio) with every physical group, and the
-meshed fluid fills the domain minus the propeller; bad input and a missing gmsh are one clear line."""
+meshed fluid fills the domain minus the propeller; coarse sizes and a blunt trailing edge mesh (no
+crossing triangles, by meshlib); README.txt's OpenFOAM steps give "Mesh OK" and no empty patch; a
+mesh over the budget is refused before any work; the files are one output set (verify, signals,
+a file size limit); bad input and a missing gmsh are one clear line."""
 
 from __future__ import annotations
 
 import json
+import random
+import re
+import shutil
+import signal
+import subprocess
 import sys
+import time
 
 import numpy as np
 import pytest
 
 from torus_cad.cfd.domain import SURFACE_GROUPS, VOLUME_GROUPS, tetrahedra_volume
+from torus_cad.cfd.readme import openfoam_block
 from torus_cad.cli import main
+from torus_cad.outputs import verify_set
+from torus_cad.tolerances import CFD_TETRAHEDRA_LIMIT
 
 gmsh = pytest.importorskip("gmsh")
 
@@ -24,6 +36,12 @@ def cfd_out(tmp_path_factory):
     out = tmp_path_factory.mktemp("cfd")
     assert main(["cfd", *COARSE, "--out", str(out), "-q"]) == 0
     return out
+
+
+def cli(*args: str, **kwargs) -> subprocess.CompletedProcess:
+    """``python -m torus_cad ARGS`` in a new process."""
+    return subprocess.run([sys.executable, "-m", "torus_cad", *args], check=False, capture_output=True, text=True,
+                          timeout=1200, **kwargs)
 
 
 def _read_back(path) -> tuple[dict[str, int], dict[str, float]]:
@@ -75,7 +93,7 @@ def test_meshio_reads_the_gmshtofoam_file_and_the_report_and_readme_agree(cfd_ou
     readme = (cfd_out / "README.txt").read_text()
     assert "gmshToFoam torus_propeller_cfd_v2.msh" in readme and "rotating_interface" in readme
     assert sorted(path.name for path in cfd_out.iterdir()) == [
-        "README.txt", "torus_propeller.step", "torus_propeller_cfd.json", "torus_propeller_cfd.msh",
+        "README.txt", "torus_propeller_cfd.json", "torus_propeller_cfd.msh", "torus_propeller_cfd.step",
         "torus_propeller_cfd_v2.msh"]
 
 
@@ -100,3 +118,126 @@ def test_without_gmsh_one_line_names_the_extra(tmp_path, capsys, monkeypatch):
     error = capsys.readouterr().err
     assert error.count("\n") == 1 and "pip install 'torus_cad[cfd]'" in error
     assert not (tmp_path / "out").exists()
+
+
+def _crossing_pairs(msh_path, group: str) -> int:
+    """Intersecting triangle pairs of one physical surface group of a .msh file (meshio reads it, meshlib checks)."""
+    meshio = pytest.importorskip("meshio")
+    mr = pytest.importorskip("meshlib.mrmeshpy")
+    from meshlib import mrmeshnumpy
+
+    mesh = meshio.read(msh_path)
+    tag = mesh.field_data[group][0]
+    triangles = np.concatenate([block.data for block, tags in zip(mesh.cells, mesh.cell_data["gmsh:physical"])
+                                if block.type == "triangle" and np.all(tags == tag)])
+    used, inverse = np.unique(triangles, return_inverse=True)
+    surface = mrmeshnumpy.meshFromFacesVerts(np.ascontiguousarray(inverse.reshape(-1, 3), dtype=np.int32),
+                                             np.ascontiguousarray(mesh.points[used], dtype=np.float64))
+    return len(mr.findSelfCollidingTriangles(surface))
+
+
+@pytest.mark.slow
+def test_the_coarse_propeller_wall_has_no_crossing_triangles_and_the_estimate_is_near(cfd_out):
+    assert _crossing_pairs(cfd_out / "torus_propeller_cfd.msh", "propeller") == 0
+    report = json.loads((cfd_out / "torus_propeller_cfd.json").read_text())
+    assert report["surface_refinement"]["crossing_triangles"][-1] == 0
+    assert 0.5 < report["estimate"]["tetrahedra"] / report["tetrahedra_total"] < 2.0
+
+
+@pytest.mark.slow
+def test_a_blunt_trailing_edge_meshes_at_coarse_sizes(tmp_path):
+    """A 0.1 mm edge (thinner than the coarse triangles) meshes; its wall has no crossing triangles."""
+    out = tmp_path / "out"
+    result = cli("cfd", *COARSE, "--set", "airfoil.trailing_edge_thickness=0.1", "--out", str(out), "-q")
+    assert result.returncode == 0, result.stderr
+    assert _crossing_pairs(out / "torus_propeller_cfd_v2.msh", "propeller") == 0
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(shutil.which("gmshToFoam") is None, reason="OpenFOAM is not installed")
+def test_readme_txt_openfoam_steps_give_mesh_ok_and_no_empty_patch(cfd_out, tmp_path):
+    """README.txt's OpenFOAM lines, as written, in a fresh case folder: checkMesh says "Mesh OK", every
+    patch has faces, the propeller is a wall, the zones are there."""
+    case = tmp_path / "case"
+    case.mkdir()
+    script = openfoam_block((cfd_out / "README.txt").read_text())
+    result = subprocess.run(["sh", "-e", "-c", script], cwd=case, check=False, capture_output=True, text=True,
+                            timeout=600)
+    assert result.returncode == 0, result.stdout + result.stderr
+    assert "Mesh OK" in (case / "log.checkMesh").read_text()
+    boundary = (case / "constant" / "polyMesh" / "boundary").read_text()
+    patches = dict(re.findall(r"\n\s*(\w+)\s*\{[^}]*?nFaces\s+(\d+);", boundary))
+    assert set(patches) == {"propeller", "inlet", "outlet", "farfield"}, boundary
+    assert all(int(count) > 0 for count in patches.values()), patches
+    assert re.search(r"propeller\s*\{\s*type\s+wall;", boundary)
+    assert "rotating_interface" in (case / "constant" / "polyMesh" / "faceZones").read_text()
+    cell_zones = (case / "constant" / "polyMesh" / "cellZones").read_text()
+    assert "rotating_zone" in cell_zones and "fluid" in cell_zones
+
+
+def test_a_mesh_over_the_budget_is_refused_before_any_work(tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main(["cfd", "--cells-per-chord", "200", "--far-size", "0.01", "--out", str(out)]) == 2
+    error = capsys.readouterr().err
+    assert error.count("\n") == 1 and "tetrahedra" in error and f"limit of {CFD_TETRAHEDRA_LIMIT:,}" in error
+    assert "cfd.cells_per_chord = 200" in error and "cfd.far_size = 0.01" in error
+    assert not out.exists()
+
+
+@pytest.mark.slow
+def test_verify_accepts_the_cfd_set_and_names_a_changed_file(cfd_out, tmp_path):
+    folder = tmp_path / "copy"
+    shutil.copytree(cfd_out, folder)
+    assert cli("verify", str(folder)).returncode == 0
+    with open(folder / "torus_propeller_cfd_v2.msh", "a") as handle:
+        handle.write("\n")
+    result = cli("verify", str(folder))
+    assert result.returncode == 1 and "torus_propeller_cfd_v2.msh" in result.stderr
+
+
+def _blades(folder) -> int:
+    verify_set(folder, "torus_propeller_cfd")
+    return json.loads((folder / "torus_propeller_cfd.json").read_text())["blades"]
+
+
+@pytest.mark.slow
+def test_sigterm_at_a_random_moment_leaves_the_old_set_or_the_new_one(tmp_path):
+    """Over a 4-blade set, a 3-blade run is stopped by SIGTERM at random moments: one line, exit 143
+    (or 0 if it had finished), nothing staged left, and verify passes on the set that is there."""
+    start = time.perf_counter()
+    assert cli("cfd", *COARSE, "--set", "blades=4", "--out", str(tmp_path), "-q").returncode == 0
+    duration = time.perf_counter() - start
+    moments = random.Random(7).sample(range(1, 100), 3)
+    for percent in moments:
+        process = subprocess.Popen([sys.executable, "-m", "torus_cad", "cfd", *COARSE, "--out", str(tmp_path), "-q"],
+                                   stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        time.sleep(duration * percent / 100.0)
+        process.send_signal(signal.SIGTERM)
+        _, stderr = process.communicate(timeout=600)
+        assert process.returncode in (0, 143), (percent, stderr)
+        if process.returncode == 143:
+            assert stderr.strip().splitlines() == [
+                "torus-cad: interrupted by SIGTERM; staged files removed, published output sets are complete"]
+        assert cli("verify", str(tmp_path)).returncode == 0
+        blades = _blades(tmp_path)
+        assert blades == 3 if process.returncode == 0 else blades in (3, 4)
+        assert sorted(p.name for p in tmp_path.iterdir() if p.name.startswith(".")) == []
+
+
+@pytest.mark.slow
+def test_a_file_size_limit_names_the_file_and_keeps_the_old_set(cfd_out, tmp_path):
+    """The .msh (1.8 MB) cannot be written under a 1.2 MB file size limit; the STEP (0.8 MB) can."""
+    import resource
+
+    folder = tmp_path / "out"
+    shutil.copytree(cfd_out, folder)
+
+    def limit_file_size() -> None:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (1_200_000, 1_200_000))
+
+    result = cli("cfd", *COARSE, "--set", "blades=4", "--out", str(folder), "-q", preexec_fn=limit_file_size)
+    assert result.returncode == 1
+    assert result.stderr.strip().splitlines() == [result.stderr.strip()]
+    assert "file size limit exceeded writing" in result.stderr and "torus_propeller_cfd.msh" in result.stderr
+    assert _blades(folder) == 3
+    assert sorted(p.name for p in folder.iterdir() if p.name.startswith(".")) == []

@@ -172,3 +172,9 @@ SIMULATE_DIVERGENCE_RESIDUAL = 1e3
 #: Simulations: a run counts as converged when thrust and torque vary by at most this fraction of
 #: their mean over the last 10 % of its iterations.
 SIMULATE_CONVERGED_VARIATION = 0.02
+
+#: Largest CFD mesh ``torus-cad cfd`` starts, in tetrahedra (estimated from the settings before any
+#: meshing, torus_cad.cfd.estimate). The default design's default mesh has 231,405; gmsh's Delaunay
+#: mesher needs about 1 kB per tetrahedron, so the limit is near 3.5 GB of memory and, on a 2-core
+#: machine, about half an hour.
+CFD_TETRAHEDRA_LIMIT = 3_000_000

@@ -16,16 +16,16 @@ stationary outer region).
 
 from __future__ import annotations
 
-import json
+import errno
 import os
 import threading
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from enum import StrEnum
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -38,6 +38,9 @@ from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.design import Cfd, InletSide
 from torus_cad.stages import StageTimer
 
+if TYPE_CHECKING:
+    from torus_cad.cfd.estimate import CfdEstimate
+
 #: Names of the physical groups: surfaces, then volumes.
 SURFACE_GROUPS = ("propeller", "rotating_interface", "inlet", "outlet", "farfield")
 VOLUME_GROUPS = ("rotating_zone", "fluid")
@@ -48,6 +51,17 @@ DISTANCE_SAMPLING = 60
 CYLINDER_SEGMENTS = 64
 #: Smallest element allowed, as a fraction of the surface size (bounds curvature refinement).
 MIN_SIZE_FRACTION = 0.1
+#: Sections sampled along each trailing edge; samples of gmsh's distance field along each.
+TRAILING_EDGE_SECTIONS, TRAILING_EDGE_SAMPLING = 41, 400
+#: Element size on a blunt trailing edge, in edge thicknesses.
+TRAILING_EDGE_SIZE_PER_THICKNESS = 1.0
+#: Local refinement where surface triangles cross: rounds at most, ball radius in longest edges of a
+#: crossing triangle, new element size as a fraction of that edge.
+REFINE_ROUNDS, REFINE_RADIUS_EDGES, REFINE_FACTOR = 4, 2.0, 0.35
+#: What to change when gmsh cannot mesh the domain (a crossing surface mesh, a volume mesher stop).
+CROSSING_ADVICE = ("Finer sizes near the trailing edge help: raise cfd.curvature_cells (the default 8 refines "
+                   "the trailing edge) or cfd.cells_per_chord, or give a blunt edge "
+                   "(airfoil.trailing_edge_thickness)")
 #: gmsh algorithms: 2D Frontal-Delaunay (gmsh falls back to MeshAdapt per face), 3D Delaunay.
 ALGORITHM_2D, ALGORITHM_3D = 6, 1
 
@@ -234,33 +248,144 @@ def _boundary(gmsh: Any, volumes: set[int]) -> set[int]:
     return {abs(tag) for _, tag in faces}
 
 
-def set_sizes(gmsh: Any, domain: Domain, settings: Cfd, entities: DomainEntities) -> None:
+@dataclass(frozen=True)
+class TrailingEdges:
+    """The propeller's trailing edges: where a coarse surface mesh crosses itself first.
+
+    Attributes:
+        curves_mm: ``(sections, 3)`` polylines, one per blade (two, the corners, for a blunt edge).
+        thickness_mm: the edge's thickness (0 for a knife edge).
+    """
+
+    curves_mm: tuple[np.ndarray, ...]
+    thickness_mm: float
+
+
+def trailing_edges(params: PropellerParameters) -> TrailingEdges:
+    """The trailing edges of every blade of ``params`` from the analytic surface (mirrored for 'ccw')."""
+    from torus_cad.parameters.design import Handedness
+
+    curves = []
+    for index in range(params.blades):
+        surface = params.blade_surface(index, sections=TRAILING_EDGE_SECTIONS)
+        columns = [surface.trailing_edge_index, surface.lower_corner_index]
+        for column in (c for c in columns if c is not None):
+            curve = surface.points[:, column, :].copy()
+            if params.handedness == Handedness.CCW:
+                curve[:, 1] *= -1.0
+            curves.append(curve)
+    return TrailingEdges(tuple(curves), params.airfoil.trailing_edge_thickness)
+
+
+def _trailing_edge_field(gmsh: Any, edges: TrailingEdges, domain: Domain, growth_rate: float) -> int:
+    """A size field around the trailing edges: ``TRAILING_EDGE_SIZE_PER_THICKNESS`` x their thickness
+    (at least MIN_SIZE_FRACTION of the surface size) on them, growing by ``growth_rate`` away.
+
+    The edges are added to the model as free splines (in no physical group, not written), only for
+    gmsh's distance field."""
+    occ, fields = gmsh.model.occ, gmsh.model.mesh.field
+    splines = [occ.addSpline([occ.addPoint(*map(float, point)) for point in curve]) for curve in edges.curves_mm]
+    occ.synchronize()
+    size = max(TRAILING_EDGE_SIZE_PER_THICKNESS * edges.thickness_mm, MIN_SIZE_FRACTION * domain.surface_size)
+    distance = fields.add("Distance")
+    fields.setNumbers(distance, "CurvesList", splines)
+    fields.setNumber(distance, "Sampling", TRAILING_EDGE_SAMPLING)
+    field = fields.add("MathEval")
+    fields.setString(field, "F", f"{size!r} + {growth_rate - 1.0!r} * F{distance}")
+    return int(field)
+
+
+def set_sizes(gmsh: Any, domain: Domain, settings: Cfd, entities: DomainEntities,
+              edges: TrailingEdges | None = None) -> int:
     """Element sizes: ``surface_size`` on the propeller growing linearly with the distance from it
     (neighbours differ by about ``growth_rate``), capped at ``far_size``; on the two cylinders at most
     1/CYLINDER_SEGMENTS of their circumference (so their facets keep the volumes within ~0.1 %);
-    curvature refinement on top."""
-    field = gmsh.model.mesh.field
-    distance = field.add("Distance")
-    field.setNumbers(distance, "SurfacesList", entities.surfaces["propeller"])
-    field.setNumber(distance, "Sampling", DISTANCE_SAMPLING)
-    growth = field.add("MathEval")
-    field.setString(growth, "F", f"Min({domain.far_size!r}, {domain.surface_size!r} + "
+    curvature refinement on top; around the trailing ``edges`` (if given) sizes scaled to their
+    thickness (:func:`_trailing_edge_field`). Returns the background field's tag."""
+    fields = gmsh.model.mesh.field
+    distance = fields.add("Distance")
+    fields.setNumbers(distance, "SurfacesList", entities.surfaces["propeller"])
+    fields.setNumber(distance, "Sampling", DISTANCE_SAMPLING)
+    growth = fields.add("MathEval")
+    fields.setString(growth, "F", f"Min({domain.far_size!r}, {domain.surface_size!r} + "
                                  f"{settings.growth_rate - 1.0!r} * F{distance})")
     limits = [growth]
+    if edges is not None:
+        limits.append(_trailing_edge_field(gmsh, edges, domain, settings.growth_rate))
     for group, radius in (("rotating_interface", domain.zone_radius), ("farfield", domain.outer_radius)):
-        cap = field.add("Constant")
-        field.setNumbers(cap, "SurfacesList", entities.surfaces[group])
-        field.setNumber(cap, "VIn", 2.0 * np.pi * radius / CYLINDER_SEGMENTS)
+        cap = fields.add("Constant")
+        fields.setNumbers(cap, "SurfacesList", entities.surfaces[group])
+        fields.setNumber(cap, "VIn", 2.0 * np.pi * radius / CYLINDER_SEGMENTS)
         limits.append(cap)
-    smallest = field.add("Min")
-    field.setNumbers(smallest, "FieldsList", limits)
-    field.setAsBackgroundMesh(smallest)
+    smallest = fields.add("Min")
+    fields.setNumbers(smallest, "FieldsList", limits)
+    fields.setAsBackgroundMesh(smallest)
     options = {"Mesh.MeshSizeExtendFromBoundary": 0, "Mesh.MeshSizeFromPoints": 0,
                "Mesh.MeshSizeFromCurvature": settings.curvature_cells,
                "Mesh.MeshSizeMin": MIN_SIZE_FRACTION * domain.surface_size, "Mesh.MeshSizeMax": domain.far_size,
                "Mesh.Algorithm": ALGORITHM_2D, "Mesh.Algorithm3D": ALGORITHM_3D, "Mesh.Optimize": 1}
     for name, value in options.items():
         gmsh.option.setNumber(name, value)
+    return smallest
+
+
+@dataclass
+class SurfaceRefinement:
+    """What :func:`mesh_surfaces` did: rounds of local refinement and the crossing triangles each found."""
+
+    rounds: int = 0
+    crossing_triangles: list[int] = field(default_factory=list)
+    smallest_size_mm: float = 0.0
+
+
+def mesh_surfaces(gmsh: Any, domain: Domain, entities: DomainEntities, background: int) -> SurfaceRefinement:
+    """The 2D mesh of every surface, free of crossing triangles.
+
+    Where triangles cross (a coarse mesh across a trailing edge thinner than its triangles), a
+    ball of ``REFINE_RADIUS_EDGES`` of their longest edge around each gets elements of
+    ``REFINE_FACTOR`` of that edge, and the surfaces holding them are meshed again, up to
+    ``REFINE_ROUNDS`` times. KernelError naming the settings that help if crossings remain.
+    """
+    from torus_cad.cfd.surface_check import find_crossings
+
+    surfaces = sorted({tag for tags in entities.surfaces.values() for tag in tags})
+    result = SurfaceRefinement(smallest_size_mm=MIN_SIZE_FRACTION * domain.surface_size)
+    with gmsh_step("surface mesh"):
+        gmsh.model.mesh.generate(2)
+    balls: list[int] = []
+    while True:
+        crossings = find_crossings(gmsh, surfaces)
+        result.crossing_triangles.append(len(crossings))
+        if not len(crossings):
+            return result
+        if result.rounds == REFINE_ROUNDS:
+            break
+        result.rounds += 1
+        sizes = REFINE_FACTOR * crossings.edge_mm
+        balls += [_ball(gmsh, centre, REFINE_RADIUS_EDGES * edge, size)
+                  for centre, edge, size in zip(crossings.centres_mm, crossings.edge_mm, sizes)]
+        combined = gmsh.model.mesh.field.add("Min")
+        gmsh.model.mesh.field.setNumbers(combined, "FieldsList", [background, *balls])
+        gmsh.model.mesh.field.setAsBackgroundMesh(combined)
+        result.smallest_size_mm = min(result.smallest_size_mm, float(sizes.min()))
+        gmsh.option.setNumber("Mesh.MeshSizeMin", result.smallest_size_mm)
+        with gmsh_step("surface mesh (refined where triangles crossed)"):
+            gmsh.model.mesh.clear([(2, tag) for tag in crossings.surfaces])
+            gmsh.model.mesh.generate(2)
+    centre = crossings.centres_mm[0]
+    raise KernelError(
+        f"gmsh's surface mesh still crosses itself near ({centre[0]:.2f}, {centre[1]:.2f}, {centre[2]:.2f}) mm "
+        f"({len(crossings)} triangles) after {REFINE_ROUNDS} local refinements; the volume mesh would fail. "
+        f"{CROSSING_ADVICE}")
+
+
+def _ball(gmsh: Any, centre: np.ndarray, radius: float, size: float) -> int:
+    """A gmsh Ball field: ``size`` (mm) within ``radius`` (mm) of ``centre``, no limit outside."""
+    ball = gmsh.model.mesh.field.add("Ball")
+    for key, value in (("XCenter", centre[0]), ("YCenter", centre[1]), ("ZCenter", centre[2]),
+                       ("Radius", radius), ("VIn", size), ("VOut", 1e22)):
+        gmsh.model.mesh.field.setNumber(ball, key, float(value))
+    return int(ball)
 
 
 def add_groups(gmsh: Any, entities: DomainEntities) -> None:
@@ -299,87 +424,143 @@ def mesh_statistics(gmsh: Any, entities: DomainEntities) -> dict[str, Any]:
             "sicn_below_0_1": int(np.sum(quality < 0.1)), "meshed_volume_mm3": volumes}
 
 
-def write_msh(gmsh: Any, path: Path, version: float) -> None:
-    """Write the mesh as .msh ``version`` (2.2 or 4.1), ASCII, physical groups only, atomically."""
-    from torus_cad.kernel.export import atomic_path
+def write_msh(gmsh: Any, path: Path, version: float) -> Path:
+    """Write the mesh to ``path`` (a ``.msh`` name: gmsh picks the format from the suffix) as .msh
+    ``version`` (2.2 or 4.1), ASCII, physical groups only; return ``path``.
 
+    gmsh does not report a failed write (a full disk, a file size limit); the file is checked to
+    end with its last section, and OSError names the cause otherwise.
+    """
     gmsh.option.setNumber("Mesh.MshFileVersion", version)
     gmsh.option.setNumber("Mesh.Binary", 0)
     gmsh.option.setNumber("Mesh.SaveAll", 0)
-    with atomic_path(path) as temp:
-        staged = temp.with_name(temp.name + ".msh")  # gmsh picks the format from the suffix
-        try:
-            with gmsh_step(f"write {path.name}"):
-                gmsh.write(str(staged))
-            os.replace(staged, temp)
-        finally:
-            staged.unlink(missing_ok=True)
+    try:
+        gmsh.write(str(path))
+    except Exception as error:  # gmsh raises plain Exception with its last error message
+        raise OSError(errno.EIO, f"gmsh could not write it ({error})", str(path)) from None
+    if not _ends_with(path, MSH_LAST_LINE):
+        raise _write_failure(path)
+    return path
+
+
+#: The last line of an ASCII .msh file (2.2 and 4.1).
+MSH_LAST_LINE = b"$EndElements"
+
+
+def _ends_with(path: Path, line: bytes) -> bool:
+    try:
+        with open(path, "rb") as handle:
+            handle.seek(0, os.SEEK_END)
+            handle.seek(max(0, handle.tell() - 64))
+            return handle.read().rstrip().endswith(line)
+    except OSError:
+        return False
+
+
+def _write_failure(path: Path) -> OSError:
+    """Why a file gmsh wrote is short: no space left, the file size limit, or an input/output error."""
+    import resource
+
+    from torus_cad.tolerances import DISK_FULL_FREE_BYTES
+
+    size = path.stat().st_size if path.exists() else 0
+    limit = resource.getrlimit(resource.RLIMIT_FSIZE)[0]
+    folder = os.statvfs(path.parent)
+    if limit != resource.RLIM_INFINITY and size >= limit:
+        code = errno.EFBIG
+    elif folder.f_bavail * folder.f_frsize < DISK_FULL_FREE_BYTES:
+        code = errno.ENOSPC
+    else:
+        code = errno.EIO
+    return OSError(code, os.strerror(code), str(path))
 
 
 def write_cfd_domain(params: PropellerParameters, out_dir: str | Path, threads: int = 0,
-                     progress: Callable[[str], None] | None = None) -> tuple[dict[str, Any], dict[str, Path]]:
+                     progress: Callable[[str], None] | None = None, estimate: CfdEstimate | None = None
+                     ) -> tuple[dict[str, Any], dict[str, Path]]:
     """Build the B-rep, the domain of ``params.cfd`` and its mesh (gmsh with ``threads`` threads, 0 = one
-    per CPU); write STEP, both .msh files, README.txt and ``<name>_cfd.json``. Returns the report and paths.
+    per CPU; ``estimate``: the budget's, if already checked); publish ``<name>_cfd.step``, ``<name>_cfd.msh``, ``<name>_cfd_v2.msh``, ``README.txt`` and
+    the sealed report ``<name>_cfd.json`` as one output set (torus_cad.outputs). Returns the report as
+    written and the final paths (the report last).
 
-    Raises MissingExtraError without gmsh, ParameterError / GeometryError for bad input (nothing
-    written), KernelError naming the step when OpenCascade or gmsh fails.
+    Raises MissingExtraError without gmsh or meshlib, BudgetError over the element budget,
+    ParameterError / GeometryError for bad input (nothing written), KernelError naming the step when
+    OpenCascade or gmsh fails, OutputError naming the file when it cannot be written.
     """
+    from torus_cad import __version__
+    from torus_cad.budgets import check_cfd_budget
+    from torus_cad.cfd.surface_check import import_meshlib
     from torus_cad.kernel.checks import precise_volume
-    from torus_cad.kernel.export import atomic_path, write_step
+    from torus_cad.kernel.export import write_step
+    from torus_cad.outputs import OutputSet
     from torus_cad.propeller import build_propeller
 
     gmsh = import_gmsh()
+    import_meshlib()
+    estimate = check_cfd_budget(params) if estimate is None else estimate
     settings = params.cfd
-    out = Path(out_dir)
+    name = f"{params.name}_cfd"
     timer = StageTimer[CfdStage](progress)
     cpu_start, wall_start = time.process_time(), time.perf_counter()
-    with timer.stage(CfdStage.BREP):
-        propeller = build_propeller(params)
-        box = propeller.solid.BoundingBox()
-        domain = domain_for(params.geometry(), settings, (box.zmin, box.zmax))
-        paths = {"step": write_step(propeller.solid, out / f"{params.name}.step", params.name,
-                                    params.export.step_schema)}
-        propeller_volume = precise_volume(propeller.solid)
-    with gmsh_session(gmsh, threads):
-        with timer.stage(CfdStage.DOMAIN):
-            entities = build_domain(gmsh, paths["step"], domain)
-            set_sizes(gmsh, domain, settings, entities)
-            add_groups(gmsh, entities)
-        with timer.stage(CfdStage.SURFACE_MESH), gmsh_step("surface mesh"):
-            gmsh.model.mesh.generate(2)
-        with timer.stage(CfdStage.VOLUME_MESH), gmsh_step("volume mesh"):
-            gmsh.model.mesh.generate(3)
-        statistics = mesh_statistics(gmsh, entities)
-        with timer.stage(CfdStage.WRITE):
-            paths["msh"] = out / f"{params.name}_cfd.msh"
-            write_msh(gmsh, paths["msh"], 4.1)
-            paths["msh_v2"] = out / f"{params.name}_cfd_v2.msh"
-            write_msh(gmsh, paths["msh_v2"], 2.2)
-            gmsh_version = gmsh.__version__
-    expected = {"rotating_zone": domain.zone_volume - propeller_volume,
-                "fluid": domain.outer_volume - domain.zone_volume}
-    meshed = statistics["meshed_volume_mm3"]
-    report: dict[str, Any] = {
-        "name": params.name, "gmsh_version": gmsh_version, "threads": threads,
-        "settings": settings.model_dump(mode="json"),
-        "domain_mm": {**asdict(domain), "outer_volume_mm3": domain.outer_volume, "zone_volume_mm3": domain.zone_volume},
-        "propeller_volume_mm3": propeller_volume,
-        "physical_groups": {"surfaces": list(SURFACE_GROUPS), "volumes": list(VOLUME_GROUPS)},
-        **statistics,
-        "expected_volume_mm3": expected,
-        "volume_relative_difference": {name: meshed[name] / expected[name] - 1.0 for name in expected},
-        "fluid_total_relative_difference": sum(meshed.values()) / sum(expected.values()) - 1.0,
-        "stage_seconds": timer.seconds,
-        "wall_seconds": time.perf_counter() - wall_start, "cpu_seconds": time.process_time() - cpu_start,
-    }
-    with atomic_path(out / "README.txt") as temp:
-        temp.write_text(readme_text(params.name, report))
-    paths["readme"] = out / "README.txt"
-    report["files"] = {key: path.name for key, path in paths.items()}
-    paths["json"] = out / f"{params.name}_cfd.json"
-    with atomic_path(paths["json"]) as temp:
-        temp.write_text(json.dumps(report, indent=2) + "\n")
-    return report, paths
+    with OutputSet(out_dir, name) as output:
+        with timer.stage(CfdStage.BREP):
+            propeller = build_propeller(params)
+            box = propeller.solid.BoundingBox()
+            domain = domain_for(params.geometry(), settings, (box.zmin, box.zmax))
+            step = output.write("step", lambda path: write_step(propeller.solid, path, params.name,
+                                                                 params.export.step_schema,
+                                                                 program=f"torus_cad {__version__}"))
+            propeller_volume = precise_volume(propeller.solid)
+        with gmsh_session(gmsh, threads):
+            with timer.stage(CfdStage.DOMAIN):
+                entities = build_domain(gmsh, step, domain)
+                background = set_sizes(gmsh, domain, settings, entities, trailing_edges(params))
+                add_groups(gmsh, entities)
+            with timer.stage(CfdStage.SURFACE_MESH):
+                refinement = mesh_surfaces(gmsh, domain, entities, background)
+            with timer.stage(CfdStage.VOLUME_MESH):
+                mesh_volumes(gmsh)
+            statistics = mesh_statistics(gmsh, entities)
+            with timer.stage(CfdStage.WRITE):
+                output.write("msh", lambda path: write_msh(gmsh, path, 4.1))
+                output.write_files(lambda folder: {"msh_v2": write_msh(gmsh, folder / f"{name}_v2.msh", 2.2)})
+                gmsh_version = gmsh.__version__
+        expected = {"rotating_zone": domain.zone_volume - propeller_volume,
+                    "fluid": domain.outer_volume - domain.zone_volume}
+        meshed = statistics["meshed_volume_mm3"]
+        report: dict[str, Any] = {
+            "name": params.name, "blades": params.blades, "gmsh_version": gmsh_version, "threads": threads,
+            "settings": settings.model_dump(mode="json"),
+            "domain_mm": {**asdict(domain), "outer_volume_mm3": domain.outer_volume,
+                          "zone_volume_mm3": domain.zone_volume},
+            "propeller_volume_mm3": propeller_volume,
+            "physical_groups": {"surfaces": list(SURFACE_GROUPS), "volumes": list(VOLUME_GROUPS)},
+            "estimate": asdict(estimate),
+            "surface_refinement": asdict(refinement),
+            **statistics,
+            "expected_volume_mm3": expected,
+            "volume_relative_difference": {key: meshed[key] / expected[key] - 1.0 for key in expected},
+            "fluid_total_relative_difference": sum(meshed.values()) / sum(expected.values()) - 1.0,
+            "stage_seconds": timer.seconds,
+            "wall_seconds": time.perf_counter() - wall_start, "cpu_seconds": time.process_time() - cpu_start,
+        }
+        output.write_files(lambda folder: {"readme": _write_text(folder / "README.txt",
+                                                                   readme_text(params.name, report, Path(out_dir)))})
+        paths = output.publish(report)
+        return output.sealed_report, paths
+
+
+def _write_text(path: Path, text: str) -> Path:
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def mesh_volumes(gmsh: Any) -> None:
+    """The tetrahedra; a gmsh stop becomes a KernelError that says which settings help."""
+    try:
+        gmsh.model.mesh.generate(3)
+    except Exception as error:  # gmsh raises plain Exception with its last error message
+        raise KernelError(f"gmsh failed at step 'volume mesh': {error}. {CROSSING_ADVICE}") from None
 
 
 def summary_line(report: dict[str, Any]) -> str:

@@ -1,0 +1,165 @@
+"""How many tetrahedra, and how much memory, ``torus-cad cfd`` will need: from the settings, before any meshing.
+
+The mesh follows the size field of :func:`torus_cad.cfd.domain.set_sizes`: ``h(x) = min(far_size,
+h_s + (growth_rate - 1) d(x))`` with ``d`` the distance from the propeller and ``h_s`` the size on
+its surface (``surface_size``, smaller where the surface curves when ``curvature_cells`` is on). A
+tetrahedral mesh of that field has about ``∫ dV / h³`` elements times a constant, and its surfaces
+add triangles ``∫ dA / h²`` that each bring a few more. Both integrals are taken numerically
+(no kernel, no gmsh): the propeller as a cloud of analytic surface points (blades and hub, with
+outward normals, each carrying its own ``h_s``), the domain sampled at random points (a fixed
+seed) whose distance to the cloud comes from a k-d tree. The two constants, and the memory per
+element, are fitted to measured runs (``scripts/cfd_budget.py``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from torus_cad.parameters import PropellerParameters
+
+#: Blade samples (sections, points around) and hub samples per mm for the surface cloud.
+CLOUD_GRID = (40, 128)
+HUB_SAMPLES_PER_MM = 2.0
+#: Random points in the rotating zone and in the stationary region.
+ZONE_SAMPLES, OUTER_SAMPLES = 60_000, 20_000
+#: Fitted constants: tetrahedra per unit of ∫ dV / h³ and per surface triangle (∫ dA / h² over
+#: the triangle's area, sqrt(3)/4 h²); resident memory of the process in MB, fixed part and per tetrahedron.
+TETS_PER_VOLUME_UNIT = 7.6
+TETS_PER_TRIANGLE = 1.1
+MEMORY_BASE_MB = 520.0
+MEMORY_PER_TET_KB = 1.0
+_SEED = 20260101
+_EQUILATERAL_AREA = np.sqrt(3.0) / 4.0
+
+
+@dataclass(frozen=True)
+class CfdEstimate:
+    """The expected size of the CFD mesh.
+
+    Attributes:
+        tetrahedra: element count.
+        surface_triangles: triangles on all surfaces (propeller, interface, caps, farfield).
+        memory_mb: peak resident memory of the process, MB.
+    """
+
+    tetrahedra: int
+    surface_triangles: int
+    memory_mb: float
+
+
+def _section_curvature(points: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Curvature (1/mm) of each point of ``(sections, points, 3)`` closed rows, from its two neighbours."""
+    before, after = np.roll(points, 1, axis=1), np.roll(points, -1, axis=1)
+    a, b, c = (np.linalg.norm(u - v, axis=-1) for u, v in ((points, before), (after, points), (after, before)))
+    twice_area = np.linalg.norm(np.cross(points - before, after - points), axis=-1)
+    return 2.0 * twice_area / np.maximum(a * b * c, 1e-30)
+
+
+def _blade_cloud(params: PropellerParameters) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """Points ``(n, 3)``, outward normals ``(n, 3)`` and curvature ``(n,)`` of every blade."""
+    from torus_cad.geometry.surface import blade_surface
+
+    geometry = params.geometry()
+    clouds = []
+    for index in range(params.blades):
+        points = blade_surface(geometry.blade, geometry.centerline(index), *CLOUD_GRID).points
+        along = np.gradient(points, axis=0)
+        around = np.roll(points, -1, axis=1) - np.roll(points, 1, axis=1)
+        normals = np.cross(along, around)
+        centre = points.mean(axis=1, keepdims=True)
+        normals *= np.sign(np.sum(normals * (points - centre), axis=-1, keepdims=True) + 1e-300)
+        normals /= np.maximum(np.linalg.norm(normals, axis=-1, keepdims=True), 1e-30)
+        clouds.append((points.reshape(-1, 3), normals.reshape(-1, 3), _section_curvature(points).ravel()))
+    return tuple(np.concatenate(parts) for parts in zip(*clouds))  # type: ignore[return-value]
+
+
+def _hub_cloud(radius: float, length: float) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """Points, outward normals and curvature of the hub's lateral face and end faces."""
+    around = max(int(2.0 * np.pi * radius * HUB_SAMPLES_PER_MM), 16)
+    along = max(int(length * HUB_SAMPLES_PER_MM), 4)
+    angles = np.linspace(0.0, 2.0 * np.pi, around, endpoint=False)
+    zs = np.linspace(-length / 2.0, length / 2.0, along)
+    a, z = np.meshgrid(angles, zs)
+    lateral = np.stack([radius * np.cos(a), radius * np.sin(a), z], axis=-1).reshape(-1, 3)
+    lateral_normals = np.stack([np.cos(a), np.sin(a), 0.0 * a], axis=-1).reshape(-1, 3)
+    rings = np.linspace(0.0, radius, max(int(radius * HUB_SAMPLES_PER_MM), 2), endpoint=False)
+    r, a = np.meshgrid(rings, angles)
+    caps, cap_normals = [], []
+    for side in (-1.0, 1.0):
+        caps.append(np.stack([r * np.cos(a), r * np.sin(a), np.full_like(r, side * length / 2.0)], axis=-1).reshape(-1, 3))
+        cap_normals.append(np.tile([0.0, 0.0, side], (r.size, 1)))
+    points = np.concatenate([lateral, *caps])
+    normals = np.concatenate([lateral_normals, *cap_normals])
+    curvature = np.concatenate([np.full(len(lateral), 1.0 / radius), np.zeros(2 * r.size)])
+    return points, normals, curvature
+
+
+def _cylinder_samples(rng: np.random.Generator, count: int, radius: float, z_range: tuple[float, float]
+                      ) -> NDArray[np.float64]:
+    r = radius * np.sqrt(rng.random(count))
+    a = 2.0 * np.pi * rng.random(count)
+    return np.stack([r * np.cos(a), r * np.sin(a), z_range[0] + (z_range[1] - z_range[0]) * rng.random(count)], axis=1)
+
+
+def estimate_cfd_mesh(params: PropellerParameters) -> CfdEstimate:
+    """The expected tetrahedra, surface triangles and memory of ``torus-cad cfd`` for ``params``."""
+    from scipy.spatial import cKDTree
+
+    from torus_cad.cfd.domain import CYLINDER_SEGMENTS, MIN_SIZE_FRACTION, domain_for
+
+    settings = params.cfd
+    blade_points, blade_normals, blade_curvature = _blade_cloud(params)
+    hub = _hub_cloud(params.hub.radius, params.hub.length)
+    points, normals = np.concatenate([blade_points, hub[0]]), np.concatenate([blade_normals, hub[1]])
+    curvature = np.concatenate([blade_curvature, hub[2]])
+    propeller_z = (min(float(blade_points[:, 2].min()), -params.hub.length / 2.0),
+                   max(float(blade_points[:, 2].max()), params.hub.length / 2.0))
+    domain = domain_for(params.geometry(), settings, propeller_z)
+    surface_size = np.full(len(points), domain.surface_size)
+    if settings.curvature_cells > 0.0:
+        bent = 2.0 * np.pi / (settings.curvature_cells * np.maximum(curvature, 1e-12))
+        surface_size = np.clip(bent, MIN_SIZE_FRACTION * domain.surface_size, domain.surface_size)
+    tree = cKDTree(points)
+    rng = np.random.default_rng(_SEED)
+    growth = settings.growth_rate - 1.0
+    volume_units = 0.0
+    for count, volume, samples in (
+            (ZONE_SAMPLES, domain.zone_volume, _cylinder_samples(rng, ZONE_SAMPLES, domain.zone_radius, domain.zone_z)),
+            (OUTER_SAMPLES, domain.outer_volume, _cylinder_samples(rng, OUTER_SAMPLES, domain.outer_radius,
+                                                                   domain.outer_z))):
+        if count == OUTER_SAMPLES:  # the outer cylinder's samples inside the zone are the zone's
+            inside = (np.hypot(samples[:, 0], samples[:, 1]) < domain.zone_radius) & (
+                samples[:, 2] > domain.zone_z[0]) & (samples[:, 2] < domain.zone_z[1])
+            keep = ~inside
+        else:
+            keep = np.ones(count, dtype=bool)
+        distance, nearest = tree.query(samples, workers=-1)
+        outside = np.sum((samples - points[nearest]) * normals[nearest], axis=1) > 0.0
+        size = np.minimum(domain.far_size, surface_size[nearest] + growth * distance)
+        volume_units += volume / count * float(np.sum(1.0 / size[keep & outside] ** 3))
+    triangles = _surface_triangles(params, domain, blade_points, surface_size, len(blade_points), CYLINDER_SEGMENTS)
+    tetrahedra = int(TETS_PER_VOLUME_UNIT * volume_units + TETS_PER_TRIANGLE * triangles)
+    return CfdEstimate(tetrahedra, triangles, MEMORY_BASE_MB + MEMORY_PER_TET_KB * tetrahedra / 1000.0)
+
+
+def _surface_triangles(params: PropellerParameters, domain: object, blade_points: NDArray[np.float64],
+                       surface_size: NDArray[np.float64], blade_count: int, segments: int) -> int:
+    """Triangles on the propeller (its area over its local sizes) and on the cylinders (their caps' sizes)."""
+    from torus_cad.cfd.domain import Domain
+
+    assert isinstance(domain, Domain)
+    grid = blade_points.reshape(params.blades, *CLOUD_GRID, 3)
+    along = np.linalg.norm(np.gradient(grid, axis=1), axis=-1)
+    around = np.linalg.norm(np.roll(grid, -1, axis=2) - grid, axis=-1)
+    areas = (along * around).ravel()
+    blade = float(np.sum(areas / surface_size[:blade_count] ** 2))
+    hub_area = 2.0 * np.pi * params.hub.radius * params.hub.length + 2.0 * np.pi * params.hub.radius**2
+    hub = hub_area / float(np.median(surface_size[blade_count:])) ** 2
+    cylinders = 0.0
+    for radius, z_range in ((domain.zone_radius, domain.zone_z), (domain.outer_radius, domain.outer_z)):
+        size = min(2.0 * np.pi * radius / segments, domain.far_size)
+        cylinders += (2.0 * np.pi * radius * (z_range[1] - z_range[0]) + 2.0 * np.pi * radius**2) / size**2
+    return int((blade + hub + cylinders) / _EQUILATERAL_AREA)
