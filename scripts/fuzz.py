@@ -27,7 +27,7 @@ from pathlib import Path
 
 from torus_cad.batch.job import DesignTask
 from torus_cad.batch.outcome import RUN_OUTCOMES, DesignResult, Outcome, tally
-from torus_cad.batch.runner import LocalPool, default_workers, run_tasks
+from torus_cad.batch.runner import LocalPool, capped_workers, default_workers, run_tasks
 from torus_cad.parameters import PropellerParameters
 from torus_cad.progress import BatchProgress
 from torus_cad.studies.fuzz import fuzz_range, fuzz_tasks, random_design_dict
@@ -60,7 +60,9 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("count", nargs="?", type=int, default=100, help="number of random designs (default 100)")
     parser.add_argument("--seed", type=int, default=0, help="first seed (designs use seeds seed..seed+N-1)")
-    parser.add_argument("--workers", type=int, default=default_workers(), help="worker processes (default: cores)")
+    parser.add_argument("--workers", type=int, default=default_workers(),
+                        help="worker processes (default: the available cores; more are capped at them)")
+    parser.add_argument("--oversubscribe", action="store_true", help="start --workers even beyond the cores")
     parser.add_argument("--time-limit", type=float, default=60.0, help="seconds per design before it counts as a hang")
     parser.add_argument("--out", type=Path, default=Path("fuzz_out"), help="folder for failing designs and the summary")
     parser.add_argument("--no-write", action="store_true", help="build only; do not write and re-read the files")
@@ -77,6 +79,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--record", type=Path, metavar="JSONL", help="append every outcome to this JSON-lines file")
     parser.add_argument("-v", "--verbose", action="store_true", help="print every design's outcome")
     args = parser.parse_args(argv)
+    if args.workers < 1:
+        parser.error(f"--workers must be a whole number >= 1, got {args.workers}")
 
     if args.replay:
         designs = [PropellerParameters.from_toml(path).to_dict() for path in args.replay]
@@ -116,6 +120,7 @@ def main(argv: list[str] | None = None) -> int:
         elif args.verbose or args.replay:
             say(f"  {result.outcome:<9} {task.design_id} ({result.seconds:.2f} s) {result.reason[:150]}")
 
+    args.workers = capped_workers(args.workers, len(tasks), args.oversubscribe, lambda line: print(line, file=sys.stderr))
     with bar:
         run_tasks(tasks, on_result, lambda: LocalPool(args.workers, args.time_limit), window=2 * args.workers)
     elapsed = time.perf_counter() - start

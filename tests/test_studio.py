@@ -242,8 +242,9 @@ def test_tip_diameter_reaches_the_exact_solids_outermost_point(light_params, lig
 
 # -- the worker process ------------------------------------------------------------------------------
 
-def _collect(requests, tmp_path, kill_after_start=False, timeout_s=240.0):
-    """Run requests through a BuildRunner (each superseding the one before); the messages received."""
+def _collect(requests, tmp_path, kill_after_start=False, timeout_s=240.0, **limits):
+    """Run requests through a BuildRunner (each superseding the one before); the messages received.
+    ``limits``: the runner's time_limit_s and memory_limit_bytes."""
     from torus_cad.studio.worker import BuildRequest, BuildRunner
 
     messages: list[tuple[str, int, object]] = []
@@ -256,7 +257,7 @@ def _collect(requests, tmp_path, kill_after_start=False, timeout_s=240.0):
             if build_id == len(requests) and kind in ("files", "refused", "failed"):
                 done.set()
 
-        runner = BuildRunner(on_message)
+        runner = BuildRunner(on_message, **limits)
         for build_id, design in enumerate(requests, start=1):
             runner.submit(BuildRequest(build_id, design, tmp_path / str(build_id)))
         if kill_after_start:
@@ -297,11 +298,48 @@ def test_a_refused_design_and_a_crashed_build_are_reported_not_raised(light_para
     assert messages[-1][0] == "failed" and "stopped unexpectedly" in messages[-1][2]
 
 
+@pytest.mark.slow
+def test_a_build_over_its_time_limit_is_stopped_and_reported(light_params, tmp_path):
+    heavy = light_params.with_values({"resolution.sections": 200, "resolution.points": 400}).to_dict()
+    messages = _collect([heavy], tmp_path, time_limit_s=1.0)
+    assert [kind for kind, _, _ in messages] == ["failed"], messages
+    assert "took longer than 1 s, the limit for a build in the studio" in messages[0][2]
+
+
+@pytest.mark.slow
+def test_a_build_over_its_memory_limit_fails_in_its_process_not_the_server(light_params, tmp_path):
+    messages = _collect([light_params.to_dict()], tmp_path, memory_limit_bytes=64 << 20)
+    assert [kind for kind, _, _ in messages] == ["failed"], messages
+    assert "ran out of memory" in messages[0][2] or "stopped unexpectedly" in messages[0][2]
+
+
+def test_an_upload_holds_one_design_and_plainly_named_files():
+    from torus_cad.studio.app import MAX_UPLOAD_BYTES, _upload_files
+
+    design = {"name": "d.toml", "content": b"blades = 3\n"}
+    assert _upload_files([design, {"name": "foil.dat", "content": b"x"}]) == {"d.toml": b"blades = 3\n",
+                                                                                "foil.dat": b"x"}
+    for uploads, reason in [
+        ([{"name": "foil.dat", "content": b"x"}], "holds 0 .toml files"),
+        ([design, {"name": "e.toml", "content": b""}], "holds 2 .toml files"),
+        ([design, {"name": ".hidden", "content": b""}], "name must be letters"),
+        ([design, {"name": "d.toml", "content": b""}], "each name once"),
+        ([{"name": "d.toml", "content": b" " * (MAX_UPLOAD_BYTES + 1)}], f"at most {MAX_UPLOAD_BYTES:,} bytes"),
+        ([{"name": "d.toml", "content": "text"}], "could not be read"),
+    ]:
+        with pytest.raises(ParameterError, match=reason):
+            _upload_files(uploads)
+    assert list(_upload_files([{"name": "../../etc/d.toml", "content": b""}])) == ["d.toml"]  # base names only
+
+
 # -- command line --------------------------------------------------------------------------------------
 
 @pytest.mark.parametrize(("arguments", "expected"), [
     (["--port", "70000"], "--port = 70000 is out of range"),
     (["--set", "hub.radius=0.1"], "hub.radius = 0.1 is out of range"),
+    (["--host", ""], "--host must name an address to listen on"),
+    (["--host", "  "], "--host must name an address to listen on"),
+    (["--files", "/nonexistent-folder"], "--files '/nonexistent-folder' is not a folder"),
 ])
 def test_studio_refuses_bad_input_before_serving(arguments, expected):
     result = subprocess.run([sys.executable, "-m", "torus_cad", "studio", *arguments], capture_output=True,
@@ -316,3 +354,30 @@ def test_start_message_says_who_can_connect():
     assert "only this machine can connect" in start_message("127.0.0.1", 8080)
     assert "http://127.0.0.1:8080/" in start_message("127.0.0.1", 8080)
     assert "other machines" in start_message("0.0.0.0", 8080)
+
+
+def test_a_busy_port_is_reported_as_such():
+    import socket
+
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        result = subprocess.run([sys.executable, "-m", "torus_cad", "studio", "--port", str(port)],
+                                capture_output=True, text=True, timeout=300, check=False)
+    assert result.returncode == 1
+    assert result.stderr.strip() == (f"torus-cad: studio: port {port} on 127.0.0.1 is already in use (another studio "
+                                     "or server?); choose another with --port, or --port 0 for any free one")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("signum", "code"), [(signal.SIGINT, 130), (signal.SIGTERM, 143)], ids=["SIGINT", "SIGTERM"])
+def test_a_signal_stops_the_studio_with_its_exit_code_and_one_line(signum, code):
+    from torus_cad.studio.browser import StudioProcess
+
+    with StudioProcess() as studio:
+        process = studio._process
+        assert process is not None
+        process.send_signal(signum)
+        assert process.wait(timeout=60) == code
+    assert studio.output[-1].strip().splitlines()[-1] == f"torus-cad: studio stopped by {signal.Signals(signum).name}"

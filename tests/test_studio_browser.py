@@ -7,7 +7,9 @@ import colorsys
 import os
 import subprocess
 import sys
+import threading
 import time
+import urllib.request
 from pathlib import Path
 
 import numpy as np
@@ -244,7 +246,7 @@ def test_an_uploaded_design_goes_through_the_cli_validation(page, tmp_path):
     remote_file = tmp_path / "remote_file.toml"  # a design from the page may not make the server read a file
     remote_file.write_text('[airfoil]\nfile = "/etc/hostname"\n')
     page.element("upload").send_keys(str(remote_file))
-    page.wait(lambda: "may not name a file on this machine" in page.message_of("upload"), "the file path's refusal")
+    page.wait(lambda: "may name only files uploaded with it" in page.message_of("upload"), "the file path's refusal")
 
     good = tmp_path / "five.toml"
     good.write_text('blades = 5\n[export]\nformats = ["step", "stl", "3mf"]\n')
@@ -273,3 +275,112 @@ def test_every_file_the_build_writes_is_downloadable(page, downloads):
     with wait_for_download(downloads, "_sections.csv").open(newline="") as table:
         rows = list(csv.reader(line for line in table if not line.startswith("#")))
     assert len(rows) - 1 == PropellerParameters().resolution.sections  # a header, then one row per section
+
+
+# -- hostile uploads: refused, nothing of the server's files shown, the server answers everyone ----------
+
+SECRET = "alice:$6$SECRETHASHxyz:19000:0:99999:7:::"
+
+
+def _coordinates(points: int, digits: int = 5, huge: bool = False) -> str:
+    u = 0.5 * (1.0 - np.cos(np.linspace(0.0, np.pi, points // 2)))
+    upper = [(x, 0.06 * np.sin(np.pi * x)) for x in u[::-1]]
+    lower = [(x, -0.04 * np.sin(np.pi * x)) for x in u[1:]]
+    lines = ["foil"] + [f"{x:.{digits}f} {y:.{digits}f}" for x, y in upper + lower]
+    if huge:
+        lines[3] = "1e308 0.01"
+    return "\n".join(lines) + "\n"
+
+
+def _hostile_uploads(folder: Path) -> list[tuple[str, list[Path], str]]:
+    """(case, the files chosen together in the page, what the refusal must say)."""
+    secret = folder / "shadow"
+    secret.write_text(f"root:x:0:0:root:/root:/bin/bash\n{SECRET}\n")
+    os.mkfifo(folder / "pipe.dat")
+
+    def design(name: str, text: str | bytes, *others: tuple[str, str]) -> list[Path]:
+        case = folder / name.removesuffix(".toml")
+        case.mkdir()
+        path = case / name
+        path.write_bytes(text if isinstance(text, bytes) else text.encode())
+        for other, content in others:
+            (case / other).write_text(content)
+        return [path, *(case / other for other, _ in others)]
+
+    only = "may name only files uploaded with it"
+    return [
+        ("byte-order mark + /etc/shadow", design("bom.toml", b'\xef\xbb\xbf[airfoil]\nfile = "/etc/shadow"\n'), only),
+        ("a private file", design("private.toml", f'[airfoil]\nfile = "{secret}"\n'), only),
+        ("../../etc/passwd", design("dots.toml", '[airfoil]\nfile = "../../etc/passwd"\n'), only),
+        ("~/.ssh/id_ed25519", design("home.toml", '[airfoil]\nfile = "~/.ssh/id_ed25519"\n'), only),
+        ("a named pipe", design("fifo.toml", f'[airfoil]\nfile = "{folder / "pipe.dat"}"\n'), only),
+        ("/dev/zero", design("zero.toml", '[airfoil]\nfile = "/dev/zero"\n'), only),
+        ("an uploaded private file", design("copied.toml", '[airfoil]\nfile = "foil.dat"\n',
+                                            ("foil.dat", secret.read_text())), "foil.dat' line 2: expected two numbers"),
+        ("94,000 points", design("huge.toml", '[airfoil]\nfile = "foil.dat"\n', ("foil.dat", _coordinates(94_000))),
+         "more than 20,000 points"),
+        ("a 1e308 coordinate", design("big.toml", '[airfoil]\nfile = "foil.dat"\n',
+                                      ("foil.dat", _coordinates(100, huge=True))), "line 4: a coordinate is out of range"),
+        ("500-deep nesting", design("deep.toml", "[hub]\nradius = " + "[" * 500 + "]" * 500 + "\n"),
+         "hub.radius is nested more than"),
+        ("a 5001-digit integer", design("digits.toml", "blades = " + "9" * 5001 + "\n"),
+         "blades holds a number of 5001 digits"),
+        ("an oversized design", design("large.toml", "blades = 3\n" + "# padding\n" * 30_000), "at most 262,144 bytes"),
+    ]
+
+
+class _Prober:
+    """Another client: fetches the page again and again while an upload is handled; the slowest answer, s."""
+
+    def __init__(self, url: str) -> None:
+        self.url, self.slowest_s, self.answers = url, 0.0, 0
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+
+    def _run(self) -> None:
+        while not self._stop.is_set():
+            start = time.perf_counter()
+            with urllib.request.urlopen(self.url, timeout=30) as response:
+                assert response.status == 200 and response.read()
+            self.slowest_s = max(self.slowest_s, time.perf_counter() - start)
+            self.answers += 1
+            time.sleep(0.05)
+
+    def __enter__(self) -> _Prober:
+        self._thread.start()
+        return self
+
+    def __exit__(self, *_: object) -> None:
+        self._stop.set()
+        self._thread.join(timeout=60)
+
+
+def test_hostile_uploads_are_refused_and_the_server_keeps_answering(page, studio, tmp_path):
+    """Every attack of the issue, through the page's own upload: refused with its reason, no content of any
+    server file on the page, and another client answered within a second while the upload is handled."""
+    page.change("blades", "3")
+    volume = page.text("readout-volume")
+    for case, files, reason in _hostile_uploads(tmp_path):
+        with _Prober(studio.url) as prober:
+            page.element("upload").send_keys("\n".join(str(path) for path in files))
+            page.wait(lambda reason=reason: reason in page.message_of("upload"), f"the refusal of {case}")
+            time.sleep(0.3)
+        assert prober.answers > 0 and prober.slowest_s < 1.0, f"{case}: another client waited {prober.slowest_s:.2f} s"
+        source = page.driver.page_source
+        assert "SECRETHASH" not in source and "/bin/bash" not in source, case
+        assert page.text("readout-volume") == volume, case  # the propeller on screen stays
+    with _Prober(studio.url) as prober:  # and it still builds
+        page.change("blades", "4")
+    assert prober.slowest_s < 1.0
+
+
+def test_a_design_uploaded_with_its_coordinate_file_is_built_from_it(page, tmp_path):
+    airfoils = REPO / "examples" / "airfoils"
+    (tmp_path / "clarky.dat").write_bytes((airfoils / "clarky.dat").read_bytes())
+    design = tmp_path / "clark.toml"
+    design.write_text('blades = 3\n[airfoil]\nfile = "clarky.dat"\n')
+    before = page.stamp("exact-stamp")
+    page.element("upload").send_keys(f"{design}\n{tmp_path / 'clarky.dat'}")
+    page.wait(lambda: "opened clark.toml" in page.message_of("upload"), "the upload")
+    page.wait(lambda: page.stamp("exact-stamp") > before and page.idle(), "the uploaded design's solid")
+    assert page.text("readout-volume") == _volume_text(PropellerParameters.from_toml(design))

@@ -169,3 +169,45 @@ def test_a_sweep_stores_the_refusal_of_a_private_file_without_its_content(tmp_pa
     texts = [captured.out, captured.err, *stored]
     assert not any(secret_line[-12:] in text for text in texts for secret_line in SECRET_LINES)
     assert "shadow" in " ".join(texts)  # the refusal names the file
+
+
+# -- designs the TOML reader cannot take: named, exit 2 ----------------------------------------------
+
+DEEP = "[" * 500 + "]" * 500
+HUGE = "9" * 5001
+
+
+@pytest.mark.parametrize(("text", "words"), [
+    (f"[hub]\nradius = {DEEP}\n", ["line 2: hub.radius is nested more than", "levels deep"]),
+    ("[centerline]\np2 = " + "{a = " * 500 + "1" + "}" * 500 + "\n", ["line 2: centerline.p2 is nested"]),
+    (f"blades = {HUGE}\n", ["line 1: blades holds a number of 5001 digits"]),
+    (f'name = "x"\n[hub]\nlength = 20.0\nradius = {HUGE}.5\n', ["line 4: hub.radius holds a number of 5001 digits"]),
+    (f'name = "{HUGE}"\nblades = 3\n[hub]\nradius = {DEEP}\n', ["line 4: hub.radius is nested"]),  # strings skipped
+])
+def test_a_config_nested_too_deep_or_with_a_huge_number_names_the_key(tmp_path, capsys, text, words):
+    design = tmp_path / "deep.toml"
+    design.write_text(text)
+    code = main(["build", str(design), "--out", str(tmp_path / "out"), "-q"])
+    line = capsys.readouterr().err.strip()
+    assert code == 2 and line.splitlines() == [line] and "deep.toml" in line, line
+    for word in words:
+        assert word in line, line
+
+
+@pytest.mark.parametrize(("value", "words"), [
+    (DEEP, ["--set: hub.radius is nested more than"]),
+    (HUGE, ["--set: hub.radius holds a number of 5001 digits"]),
+])
+def test_a_set_value_nested_too_deep_or_huge_names_the_key(tmp_path, capsys, value, words):
+    code = main(["build", "--set", f"hub.radius={value}", "--out", str(tmp_path / "out"), "-q"])
+    line = capsys.readouterr().err.strip()
+    assert code == 2 and line.splitlines() == [line], line
+    for word in words:
+        assert word in line, line
+
+
+def test_verify_of_a_report_nested_too_deep_is_an_incomplete_set(tmp_path, capsys):
+    (tmp_path / "part.step").write_text("x")
+    (tmp_path / "part.json").write_text('{"files": ' + "[" * 100_000 + "]" * 100_000 + "}")
+    assert main(["verify", str(tmp_path)]) == 1
+    assert capsys.readouterr().err.strip() == "torus-cad: verify: part: part.json is not a readable JSON report"

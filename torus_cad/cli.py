@@ -72,6 +72,9 @@ def _parse_override(text: str) -> tuple[str, Any]:
     if "=" not in text:
         raise ParameterError(f"--set {text!r} must look like key=value, e.g. hub.radius=12")
     key, raw = text.split("=", 1)
+    from torus_cad.parameters.config_file import check_toml_shape
+
+    check_toml_shape(f"{key.strip()} = {raw}", "--set", lines=False)  # too deep or too long: named, not a crash
     try:
         value = tomllib.loads(f"value = {raw}")["value"]
     except tomllib.TOMLDecodeError:
@@ -269,7 +272,8 @@ def _command_sweep(args: argparse.Namespace) -> int:
     try:
         result = run_sweep(spec, out, workers=args.workers, scheduler=args.scheduler,
                            stl=False if args.no_stl else None, density_g_cm3=args.density,
-                           time_limit_s=args.time_limit, rebuild=args.rebuild, progress=False if args.quiet else None)
+                           time_limit_s=args.time_limit, rebuild=args.rebuild, progress=False if args.quiet else None,
+                           oversubscribe=args.oversubscribe)
     except SweepInterrupted as interrupt:
         partial = interrupt.result
         done = (f"{partial.counts_text()}; table written to {partial.tables['csv']}" if partial.tables
@@ -325,11 +329,26 @@ def _port(text: str) -> int:
 
 
 def _command_studio(args: argparse.Namespace) -> int:
-    from torus_cad.studio.app import serve
+    """Exit 0 never on a signal: 130 / 143 / 129 with one line, as every command."""
+    from torus_cad.interrupts import EXIT_SIGNALS
+    from torus_cad.studio.app import check_host, serve
 
+    check_host(args.host)
+    files = Path(args.files) if args.files else None
+    if files is not None and not files.is_dir():
+        raise ParameterError(f"--files {args.files!r} is not a folder")
     params = load_parameters(args.config, args.overrides)  # a bad design exits 2 before the server starts
-    serve(params, port=args.port, host=args.host)
-    return EXIT_OK
+    try:
+        code = serve(params, port=args.port, host=args.host, files_folder=files)
+    except OutputError as error:  # the port is in use: not a build that failed
+        print(f"torus-cad: studio: {error}", file=sys.stderr)
+        return EXIT_KERNEL_FAILURE
+    if code:
+        import signal
+
+        name = next(signal.Signals(signum).name for signum, exit_code in EXIT_SIGNALS.items() if exit_code == code)
+        print(f"torus-cad: studio stopped by {name}", file=sys.stderr)
+    return code
 
 
 def _command_verify(args: argparse.Namespace) -> int:
@@ -610,7 +629,10 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("sweep", metavar="SWEEP.toml", help="sweep file (see examples/sweep_example.toml)")
     sweep.add_argument("--out", help="output folder (default: sweep_out/<sweep file name>)")
     sweep.add_argument("--workers", type=int, metavar="N",
-                       help="local worker processes (default: one per CPU)")
+                       help="local worker processes (default: one per available core; more are capped at the "
+                            "cores, with one line, unless --oversubscribe)")
+    sweep.add_argument("--oversubscribe", action="store_true",
+                       help="start --workers processes even when they are more than the available cores")
     sweep.add_argument("--scheduler", metavar="ADDRESS",
                        help="run on a Dask distributed cluster, e.g. tcp://host:8786 ('local': a LocalCluster "
                             "of --workers processes); OUT must be on a file system the workers share")
@@ -655,6 +677,9 @@ def build_parser() -> argparse.ArgumentParser:
     studio.add_argument("--host", default="127.0.0.1",
                         help="address to listen on (default 127.0.0.1: only this machine can connect; "
                              "0.0.0.0 serves every network, without a password)")
+    studio.add_argument("--files", metavar="FOLDER",
+                        help="a folder whose files (e.g. airfoil coordinate files) designs uploaded in the page may "
+                             "name; otherwise they may name only the files uploaded with them")
     studio.set_defaults(handler=_command_studio)
     _add_mesh_parser(commands)
     _add_cfd_parser(commands)

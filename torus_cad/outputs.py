@@ -35,9 +35,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Self
 
-from torus_cad.errors import IncompleteOutputError, OutputError
+from torus_cad.errors import IncompleteOutputError, OutputError, ParameterError
+from torus_cad.input_files import read_untrusted_bytes
 from torus_cad.interrupts import deferred
 from torus_cad.kernel.files import glob_escape, left_by_dead_process, owner_tag, removed_on_exit
+from torus_cad.tolerances import REPORT_FILE_MAX_BYTES
 
 if TYPE_CHECKING:
     from torus_cad.propeller import Propeller
@@ -125,9 +127,11 @@ def _folder_lock(out_dir: Path, shared: bool = False) -> Iterator[None]:
 
 
 def _read_report(path: Path) -> dict[str, Any] | None:
+    """The JSON report at ``path``, or None if it is not one (not a regular file, over the limit, not
+    JSON, nested too deep for the JSON reader)."""
     try:
-        report = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
+        report = json.loads(read_untrusted_bytes(path, "report", REPORT_FILE_MAX_BYTES).decode("utf-8"))
+    except (ParameterError, ValueError, RecursionError):
         return None
     return report if isinstance(report, dict) else None
 
@@ -303,7 +307,8 @@ def verify_set(out_dir: str | Path, name: str) -> VerifiedSet:
 
 def _check_entry(out_dir: Path, name: str, report_name: str, entry: Any) -> Path:
     if not isinstance(entry, dict) or not isinstance(entry.get("file"), str) or "/" in entry["file"]:
-        raise IncompleteOutputError(f"{name}: {report_name} has a malformed file entry {entry!r}")
+        raise IncompleteOutputError(f"{name}: {report_name} has a malformed file entry (expected a table of "
+                                    "file, bytes and sha256)")
     path = out_dir / entry["file"]
     if not path.is_file():
         raise IncompleteOutputError(f"{name}: incomplete set: {path.name} is missing")

@@ -63,6 +63,16 @@ HUB_FOOTPRINT_MARGIN_DEG = 1.0
 #: Largest configuration file read (bytes): a design is a few hundred bytes. Only regular files are read.
 CONFIG_FILE_MAX_BYTES = 1 << 20
 
+#: Largest JSON report ``torus-cad verify`` reads (bytes): a build's report is a few kB.
+REPORT_FILE_MAX_BYTES = 16 << 20
+
+#: Deepest nesting of lists and inline tables a TOML value may have (a design's deepest is a list of
+#: numbers, depth 1); Python's TOML reader recurses once per level and fails near 300.
+TOML_NESTING_LIMIT = 16
+
+#: Most digits one number in a TOML file may have (Python refuses integers of more than 4300).
+TOML_NUMBER_DIGITS_LIMIT = 400
+
 #: Largest airfoil coordinate file read (bytes): the UIUC database's files are a few kB.
 AIRFOIL_FILE_MAX_BYTES = 2_000_000
 

@@ -41,8 +41,8 @@ from torus_cad.batch.job import DesignTask, record_result, run_design
 from torus_cad.batch.outcome import DesignResult, Outcome
 from torus_cad.errors import TorusCadError
 
-__all__ = ["BatchError", "Executor", "Interrupted", "Job", "LocalPool", "default_workers", "interrupts_raised",
-           "run_tasks"]
+__all__ = ["BatchError", "Executor", "Interrupted", "Job", "LocalPool", "available_cores", "capped_workers",
+           "default_workers", "interrupts_raised", "run_tasks"]
 
 Job = Callable[[DesignTask], DesignResult]
 
@@ -81,9 +81,35 @@ class Executor(Protocol):
     def shutdown(self, wait: bool = True) -> None: ...
 
 
+def available_cores() -> int:
+    """The CPU cores this process may run on (its affinity mask, e.g. a container's or taskset's share)."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except (AttributeError, OSError):  # not Linux
+        return max(1, os.cpu_count() or 1)
+
+
 def default_workers() -> int:
-    """One worker per CPU."""
-    return max(1, os.cpu_count() or 1)
+    """One worker per available core."""
+    return available_cores()
+
+
+def capped_workers(requested: int | None, tasks: int, oversubscribe: bool = False,
+                   warn: Callable[[str], None] | None = None) -> int:
+    """Worker processes to start for ``tasks`` designs: ``requested`` (default: one per core), never more
+    than the tasks, and never more than the available cores unless ``oversubscribe``.
+
+    ``warn`` gets one line when the request is capped at the cores (a process per design of a large
+    sweep would only thrash the machine).
+    """
+    cores = available_cores()
+    count = max(1, min(requested or cores, tasks))
+    if count > cores and not oversubscribe:
+        if warn is not None:
+            warn(f"--workers {requested} capped at the {cores} core{'s' if cores > 1 else ''} available "
+                 f"(--oversubscribe to start {count})")
+        count = cores
+    return count
 
 
 # -- worker processes -------------------------------------------------------------------------------

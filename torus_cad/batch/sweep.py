@@ -11,6 +11,7 @@ table is rebuilt from those files at the end of every run, also after an interru
 from __future__ import annotations
 
 import json
+import sys
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -21,7 +22,15 @@ from torus_cad.batch import cluster
 from torus_cad.batch.designs import Design, generate_designs
 from torus_cad.batch.job import DesignTask, read_design_status
 from torus_cad.batch.outcome import DesignResult, Outcome
-from torus_cad.batch.runner import Interrupted, Job, LocalPool, default_workers, interrupts_raised, run_tasks
+from torus_cad.batch.runner import (
+    Interrupted,
+    Job,
+    LocalPool,
+    capped_workers,
+    default_workers,
+    interrupts_raised,
+    run_tasks,
+)
 from torus_cad.batch.sweep_file import SweepSpec
 from torus_cad.batch.table import DESIGNS_DIR, collect_rows, table_columns, write_table
 from torus_cad.errors import ParameterError
@@ -131,13 +140,14 @@ def _duration(seconds: float) -> str:
 def run_sweep(spec: SweepSpec, out_dir: str | Path, *, workers: int | None = None, scheduler: str | None = None,
               client: Any = None, stl: bool | None = None, density_g_cm3: float | None = None,
               time_limit_s: float | None = None, rebuild: bool = False, progress: bool | None = None,
-              stream: TextIO | None = None, job: Job | None = None) -> SweepResult:
+              stream: TextIO | None = None, job: Job | None = None, oversubscribe: bool = False) -> SweepResult:
     """Run every design of ``spec`` that is not done yet and write the results table.
 
     Args:
         spec: the sweep (see :func:`torus_cad.batch.sweep_file.load_sweep`).
         out_dir: output folder; ``designs/<id>/`` per design, ``results.csv``, ``sweep.json``.
-        workers: local processes (default: one per CPU); ignored with a scheduler or client.
+        workers: local processes (default: one per available core; more than the cores are capped at
+            them, with one line on ``stream``, unless ``oversubscribe``); ignored with a scheduler or client.
         scheduler: a Dask scheduler address (``"tcp://host:8786"``), or ``"local"`` for a
             LocalCluster of ``workers`` single-threaded processes on this machine.
         client: an existing ``dask.distributed.Client`` to use instead of ``scheduler``.
@@ -166,6 +176,9 @@ def run_sweep(spec: SweepSpec, out_dir: str | Path, *, workers: int | None = Non
         except Interrupted as interrupt:  # before anything was built: no table to write
             raise SweepInterrupted(interrupt.signum, SweepResult(spec, out_dir, [], interrupted_by=
                                                                  interrupt.signal_name)) from None
+        if scheduler in (None, "local") and client is None and pending:
+            workers = capped_workers(workers, len(pending), oversubscribe,
+                                     lambda line: print(f"torus-cad: {line}", file=stream or sys.stderr))
         return _run(spec, out_dir, designs, pending, stl, workers=workers, scheduler=scheduler, client=client,
                     time_limit_s=spec.time_limit_s if time_limit_s is None else time_limit_s,
                     bar=BatchProgress(len(designs), len(designs) - len(pending), enabled=progress, stream=stream),

@@ -34,7 +34,6 @@ import dataclasses
 import difflib
 import math
 import re
-import tomllib
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from enum import StrEnum
@@ -43,6 +42,7 @@ from typing import Any, TypeGuard
 
 from torus_cad.errors import ParameterError
 from torus_cad.parameters import ParameterSpec, PropellerParameters, parameter_specs
+from torus_cad.parameters.config_file import read_config_table
 from torus_cad.parameters.schema import Bounds, check_in_bounds
 from torus_cad.tolerances import MAX_SWEEP_DESIGNS
 
@@ -152,16 +152,7 @@ def load_sweep(path: str | Path) -> SweepSpec:
     """Read and check a sweep file; any problem raises a one-line ParameterError naming the key."""
     path = Path(path)
     source = f"sweep file {str(path)!r}"
-    try:
-        text = path.read_bytes().decode("utf-8-sig")  # -sig: a byte-order mark (Windows editors) is fine
-    except OSError as error:
-        raise ParameterError(f"cannot read sweep file {str(path)!r}: {error.strerror}") from None
-    except UnicodeDecodeError:
-        raise ParameterError(f"{source} is not a UTF-8 text file") from None
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as error:
-        raise ParameterError(f"{source} is not valid TOML: {error}") from None
+    data = read_config_table(path, "sweep file")  # untrusted like a design: regular file, capped, BOM allowed
     return parse_sweep(data, base_dir=path.parent, name=path.stem, source=source)
 
 

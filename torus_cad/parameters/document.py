@@ -7,7 +7,6 @@ conversion goes through pydantic's validation, and every failure is one
 
 from __future__ import annotations
 
-import tomllib
 from collections.abc import Mapping
 from enum import Enum
 from pathlib import Path
@@ -16,7 +15,7 @@ from typing import Any, Self
 from pydantic import ValidationError
 
 from torus_cad.errors import ParameterError
-from torus_cad.parameters.config_file import read_config_text
+from torus_cad.parameters.config_file import read_config_table
 from torus_cad.parameters.schema import Section, iter_parameter_specs, parameter_error, section_docs
 
 
@@ -40,12 +39,12 @@ class Document(Section):
     @classmethod
     def from_toml(cls, path: str | Path) -> Self:
         """Read a TOML configuration file; any problem raises ParameterError naming it."""
-        text = read_config_text(path)
-        try:
-            data = tomllib.loads(text)
-        except tomllib.TOMLDecodeError as error:
-            raise ParameterError(f"configuration {str(path)!r} is not valid TOML: {error}") from None
-        return cls.from_dict(cls.paths_relative_to(data, Path(path).resolve().parent))
+        return cls.from_table(read_config_table(path), Path(path).resolve().parent)
+
+    @classmethod
+    def from_table(cls, data: dict[str, Any], folder: Path) -> Self:
+        """Build from a parsed design file's table whose relative file paths are relative to ``folder``."""
+        return cls.from_dict(cls.paths_relative_to(data, folder))
 
     @classmethod
     def paths_relative_to(cls, data: dict[str, Any], folder: Path) -> dict[str, Any]:

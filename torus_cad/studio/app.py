@@ -5,26 +5,36 @@ is drawn at once from the kernel-free preview (torus_cad.studio.scene) and its e
 built in a worker process (torus_cad.studio.worker), which replaces the preview when it is
 ready. A refused design leaves the last good propeller on screen and puts the one-line reason
 next to the field that was changed.
+
+The studio is a service on a network: an uploaded design is read from its bytes by the same
+path as ``torus-cad build FILE`` (torus_cad.parameters.config_file: byte order mark, nesting and
+number limits, the TOML reader, the schema), off the event loop, and it may name only files
+uploaded with it (a coordinate file beside the design) or files in the folder given with
+``--files``, never another path on the server. Uploaded files are written under the studio's
+own folder by their base names; nothing on the page is ever used as a path.
 """
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
+import errno
 import logging
 import os
+import re
 import shutil
 import tempfile
 import time
-import tomllib
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterator, Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from torus_cad.errors import GeometryError, ParameterError
-from torus_cad.parameters import PropellerParameters, resolve_parameters
+from torus_cad.errors import GeometryError, OutputError, ParameterError
+from torus_cad.interrupts import EXIT_SIGNALS, exit_on_signals
+from torus_cad.parameters import PropellerParameters
+from torus_cad.parameters.config_file import parse_config_bytes
 from torus_cad.stages import Stage
 from torus_cad.studio.panel import (
     PanelField,
@@ -36,6 +46,7 @@ from torus_cad.studio.panel import (
 )
 from torus_cad.studio.scene import PreviewScene, preview_scene
 from torus_cad.studio.worker import BuildRequest, BuildRunner, SolidResult
+from torus_cad.tolerances import AIRFOIL_FILE_MAX_BYTES
 
 LOG = logging.getLogger(__name__)
 
@@ -55,6 +66,15 @@ DOWNLOAD_LABELS = {"step": "STEP", "stl": "STL", "3mf": "3MF", "sections_csv": "
 #: Largest design file accepted from the page, bytes.
 MAX_UPLOAD_BYTES = 256 * 1024
 
+#: Largest other file (a coordinate file) uploaded with a design, bytes: the airfoil file limit.
+MAX_UPLOAD_FILE_BYTES = AIRFOIL_FILE_MAX_BYTES
+
+#: Most files one upload may hold (the design and the files it names).
+MAX_UPLOAD_FILES = 8
+
+#: The names an uploaded file may have (its base name; it is stored under the studio's folder).
+UPLOAD_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,99}")
+
 
 @dataclass
 class _Exact:
@@ -71,11 +91,14 @@ class _Exact:
 class Studio:
     """State, callbacks and layout of one studio page, bound to a trame server."""
 
-    def __init__(self, server: Any, design: PropellerParameters, workdir: Path) -> None:
+    def __init__(self, server: Any, design: PropellerParameters, workdir: Path, files_folder: Path | None = None
+                 ) -> None:
         from torus_cad.studio.view import PropellerView
 
         self.server, self.state, self.ctrl = server, server.state, server.controller
         self.workdir = workdir
+        self.files_folder = files_folder.resolve() if files_folder is not None else None
+        self._uploads = 0
         self.groups: list[PanelGroup] = schema_groups()
         self.fields: dict[str, PanelField] = {f.key: f for group in self.groups for f in group.fields}
         self.view = PropellerView()
@@ -325,45 +348,108 @@ class Studio:
     def _on_upload(self, upload_file: Any, **_: Any) -> None:
         if not upload_file:
             return
-        upload = upload_file[0] if isinstance(upload_file, list) else upload_file
+        uploads = upload_file if isinstance(upload_file, list) else [upload_file]
         self.state.upload_file = None
+        self.state.upload_message, self.state.upload_error = "reading the upload…", ""
+        task = asyncio.get_event_loop().create_task(self._open_upload(uploads))
+        task.add_done_callback(_log_failure)
+
+    async def _open_upload(self, uploads: Sequence[Any]) -> None:
+        """Read the upload in the preview's thread: the event loop keeps serving every other client."""
+        loop = asyncio.get_running_loop()
         try:
-            params = self._read_upload(upload)
+            params = await loop.run_in_executor(self._previewer, self._read_upload, uploads)
         except ParameterError as error:
-            self.state.upload_error, self.state.upload_message = str(error), ""
+            with self.state:
+                self.state.upload_error, self.state.upload_message = str(error), ""
             return
-        self.state.upload_error = ""
-        self.state.upload_message = f"opened {str(upload.get('name', 'design'))[:80]}"
-        self.state.update(state_values(params.to_dict(), self.groups))
+        design_name = next(str(upload.get("name", "")) for upload in uploads if _is_design(upload))
+        with self.state:
+            self.state.upload_error = ""
+            self.state.upload_message = f"opened {design_name[:80]}"
+            values = state_values(params.to_dict(), self.groups)
+            self._trusted_paths = {name: values[name] for name in self._trusted_paths}
+            self.state.update(values)
 
-    def _read_upload(self, upload: Mapping[str, Any]) -> PropellerParameters:
-        """The design of an uploaded TOML file, read exactly as ``torus-cad build FILE`` reads it."""
-        content = upload.get("content")
-        data = bytes(content) if isinstance(content, (bytes, bytearray, memoryview)) else None
-        if data is None:
-            raise ParameterError("the uploaded design could not be read")
-        if len(data) > MAX_UPLOAD_BYTES:
-            raise ParameterError(f"the uploaded design is {len(data)} bytes; a design file is at most "
-                                 f"{MAX_UPLOAD_BYTES} bytes")
-        self._refuse_uploaded_paths(data)
-        path = self.workdir / "uploads" / "design.toml"  # our name: the page's file name is never a path
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_bytes(data)
-        return resolve_parameters(path)
+    def _read_upload(self, uploads: Sequence[Any]) -> PropellerParameters:
+        """The design of an upload (one TOML file and the files it names), read as ``torus-cad build FILE`` reads it.
 
-    def _refuse_uploaded_paths(self, data: bytes) -> None:
-        """A design from the page may not name files on the server (e.g. ``airfoil.file``)."""
+        The files are written to a new folder of the studio's under their base names; the design
+        may name only them, or files in ``files_folder``. The folder of a refused upload is removed.
+        """
+        files = _upload_files(uploads)
+        self._uploads += 1
+        folder = self.workdir / "uploads" / str(self._uploads)
+        folder.mkdir(parents=True)
         try:
-            table = tomllib.loads(data.decode("utf-8"))
-        except (UnicodeDecodeError, tomllib.TOMLDecodeError):
-            return  # resolve_parameters gives the CLI's message for that
+            for name, data in files.items():
+                with open(os.open(folder / name, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600), "wb") as handle:
+                    handle.write(data)
+            design_name = next(name for name in files if name.lower().endswith(".toml"))
+            table = parse_config_bytes(files[design_name], design_name, "uploaded design")
+            table = self._only_uploaded_files(table, folder, set(files) - {design_name})
+            return PropellerParameters.from_table(table, folder)
+        except BaseException:
+            shutil.rmtree(folder, ignore_errors=True)
+            raise
+
+    def _only_uploaded_files(self, table: dict[str, Any], folder: Path, uploaded: set[str]) -> dict[str, Any]:
+        """``table`` with each file it names made the path of an uploaded file (or one in ``files_folder``);
+        ParameterError for any other path, before anything opens it."""
+        table = {**table}
         for panel_field in self.fields.values():
-            value: Any = table
-            for part in panel_field.key.split("."):
-                value = value.get(part) if isinstance(value, dict) else None
-            if panel_field.read_only and value:
-                raise ParameterError(f"{panel_field.key} = {value!r}: a design opened in the page may not name a "
-                                     "file on this machine; start the studio with it: torus-cad studio DESIGN.toml")
+            if not panel_field.read_only:
+                continue
+            *parents, leaf = panel_field.key.split(".")
+            holder: Any = table
+            for part in parents:
+                holder = holder.get(part) if isinstance(holder, dict) else None
+            if not isinstance(holder, dict) or not holder.get(leaf):
+                continue
+            holder[leaf] = str(self._allowed_file(panel_field.key, holder[leaf], folder, uploaded))
+        return table
+
+    def _allowed_file(self, key: str, value: Any, folder: Path, uploaded: set[str]) -> Path:
+        if isinstance(value, str) and value in uploaded:
+            return folder / value
+        if isinstance(value, str) and self.files_folder is not None and not value.startswith("~"):
+            candidate = (self.files_folder / value).resolve()  # an absolute value stays absolute
+            if candidate.is_relative_to(self.files_folder) and candidate.is_file():
+                return candidate
+        shown = repr(value)[:120]
+        where = f" or files in {str(self.files_folder)!r}" if self.files_folder is not None else ""
+        raise ParameterError(f"{key} = {shown}: a design opened in the page may name only files uploaded with it"
+                             f"{where}, never a path on this machine; choose the design and the file together")
+
+
+def _is_design(upload: Any) -> bool:
+    return isinstance(upload, Mapping) and str(upload.get("name", "")).lower().endswith(".toml")
+
+
+def _upload_files(uploads: Sequence[Any]) -> dict[str, bytes]:
+    """The uploaded files by base name; ParameterError unless there is one design (.toml) and every
+    file has a plain name and is within its size limit."""
+    if len(uploads) > MAX_UPLOAD_FILES:
+        raise ParameterError(f"the upload holds {len(uploads)} files; at most {MAX_UPLOAD_FILES} (a design and the "
+                             "files it names)")
+    files: dict[str, bytes] = {}
+    for upload in uploads:
+        content = upload.get("content") if isinstance(upload, Mapping) else None
+        if not isinstance(content, (bytes, bytearray, memoryview)):
+            raise ParameterError("the uploaded file could not be read")
+        name = Path(str(upload.get("name", ""))).name
+        if not UPLOAD_NAME.fullmatch(name) or name in files:
+            raise ParameterError(f"an uploaded file's name must be letters, digits, '.', '_' or '-' (at most 100, "
+                                 f"each name once), got {name[:100]!r}")
+        limit = MAX_UPLOAD_BYTES if _is_design(upload) else MAX_UPLOAD_FILE_BYTES
+        if len(content) > limit:
+            raise ParameterError(f"the uploaded file {name!r} is {len(content):,} bytes; at most {limit:,} bytes")
+        files[name] = bytes(content)
+    designs = [name for name in files if name.lower().endswith(".toml")]
+    if len(designs) != 1:
+        raise ParameterError(f"an upload holds one design (.toml) and the files it names; this one holds "
+                             f"{len(designs)} .toml files")
+    return files
 
 
 def _stage_label(name: str) -> str:
@@ -402,18 +488,59 @@ def start_message(host: str, port: int) -> str:
     return f"torus-cad studio: open http://{url_host}:{port}/ ; {reach}; Ctrl-C stops it"
 
 
-def serve(design: PropellerParameters, port: int = 8080, host: str = "127.0.0.1") -> None:
-    """Serve the studio for ``design`` until interrupted (blocking)."""
+def check_host(host: str) -> str:
+    """``host`` if it names an address to listen on; ParameterError for an empty one (it would bind every
+    interface while the start line showed none)."""
+    if not host.strip():
+        raise ParameterError("--host must name an address to listen on, e.g. 127.0.0.1 (this machine only) or "
+                             "0.0.0.0 (every network); got an empty one")
+    return host.strip()
+
+
+def serve(design: PropellerParameters, port: int = 8080, host: str = "127.0.0.1",
+          files_folder: Path | None = None) -> int:
+    """Serve the studio for ``design`` until a signal stops it (blocking); the exit code, 128 + the signal.
+
+    ``files_folder``: a folder whose files uploaded designs may name (besides the files uploaded with them).
+    OutputError if the port is in use, ParameterError for an empty ``host``. SIGINT, SIGTERM and SIGHUP
+    stop the server's loop (its handlers, not the server's own, which would end with exit 0); the
+    builds and the studio's folder are removed on the way out.
+    """
     from trame.app import get_server
 
     from torus_cad.studio.layout import build_layout
 
+    host = check_host(host)
     server = get_server("torus_cad_studio", client_type="vue3")
+    stopped: list[int] = []
+
+    def stop(signum: int) -> None:
+        if stopped:  # a second signal while stopping: at once
+            os._exit(EXIT_SIGNALS[stopped[0]])
+        stopped.append(signum)
+        asyncio.get_running_loop().create_task(server.stop())
+
+    def ready(**_: Any) -> None:
+        loop = asyncio.get_running_loop()
+        for signum in EXIT_SIGNALS:
+            loop.add_signal_handler(signum, stop, signum)
+        print(start_message(host, server.port), flush=True)
+
     with tempfile.TemporaryDirectory(prefix="torus-cad-studio-") as workdir:
-        studio = Studio(server, design, Path(workdir))
+        studio = Studio(server, design, Path(workdir), files_folder)
         build_layout(studio)
-        server.controller.on_server_ready.add(
-            lambda **_: print(start_message(host, server.port), flush=True))
-        with _trame_ignores_command_line():
-            server.start(port=port, host=host, open_browser=False, show_connection_info=False,
-                         disable_logging=True, timeout=0)
+        server.controller.on_server_ready.add(ready)
+        try:
+            with _trame_ignores_command_line():
+                # thread=True: the server installs no signal handlers of its own (see ready()).
+                server.start(port=port, host=host, open_browser=False, show_connection_info=False,
+                             disable_logging=True, timeout=0, thread=True)
+        except OSError as error:
+            if error.errno == errno.EADDRINUSE:
+                raise OutputError(f"port {port} on {host} is already in use (another studio or server?); "
+                                  "choose another with --port, or --port 0 for any free one") from None
+            raise
+        finally:
+            exit_on_signals()  # the loop's handlers are gone: a signal while cleaning up ends with one line
+            studio._on_exit()
+    return EXIT_SIGNALS[stopped[0]] if stopped else 0

@@ -109,8 +109,12 @@ def tessellate_parts(propeller: Propeller) -> list[PartMesh]:
     return meshes
 
 
-def run_build(request: BuildRequest, connection: multiprocessing.connection.Connection) -> None:
-    """Build, tessellate, measure and export ``request``, sending each result as soon as it exists."""
+def run_build(request: BuildRequest, connection: multiprocessing.connection.Connection,
+              memory_limit_bytes: int | None = None) -> None:
+    """Build, tessellate, measure and export ``request``, sending each result as soon as it exists.
+
+    ``memory_limit_bytes``: the process's memory limit, named when an allocation fails.
+    """
     build_id = request.build_id
     try:
         propeller = build_propeller(PropellerParameters.from_dict(request.design))
@@ -130,6 +134,10 @@ def run_build(request: BuildRequest, connection: multiprocessing.connection.Conn
         connection.send(("files", build_id, {"paths": paths, "seconds": time.perf_counter() - start}))
     except (ParameterError, GeometryError) as error:
         connection.send(("refused", build_id, str(error)))
+    except MemoryError:
+        limit = f", the limit of {memory_limit_bytes / 2**30:g} GiB for a build in the studio" if memory_limit_bytes else ""
+        connection.send(("failed", build_id, f"the exact build ran out of memory{limit}; lower resolution.sections / "
+                                             "resolution.points"))
     except TorusCadError as error:
         connection.send(("failed", build_id, f"OpenCascade failed: {error}"))
     except Exception as error:  # reported on the page, never a crashed server

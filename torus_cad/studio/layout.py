@@ -196,7 +196,8 @@ def build_layout(studio: Studio) -> None:
         layout.drawer.width = DRAWER_WIDTH
         with layout.drawer:
             with html.Div(classes="pa-2"):
-                v3.VFileInput(v_model=("upload_file", None), label="open a design (TOML)", accept=".toml",
+                v3.VFileInput(v_model=("upload_file", None), label="open a design (TOML, with its .dat files)",
+                              accept=".toml,.dat,.txt", multiple=True,
                               density="compact", variant="outlined", prepend_icon="mdi-folder-open",
                               error_messages=("upload_error || []",), hide_details="auto", id="upload",
                               messages=("upload_message",))

@@ -12,6 +12,11 @@ that process. Results come back over a pipe as messages, in this order::
     ("refused", build_id, "one-line reason")    ParameterError / GeometryError
     ("failed", build_id, "one-line reason")     KernelError or anything unexpected
 
+Each build is bounded: its process may use at most :data:`BUILD_MEMORY_LIMIT_BYTES` of data
+memory (``RLIMIT_DATA``, set in the child before it builds: an allocation beyond it fails in
+the child, never in the server) and is killed after :data:`BUILD_TIME_LIMIT_S` seconds
+(a "failed" message says so). Whatever a design asks for, the server only waits on a pipe.
+
 Only the parent side (:class:`BuildRunner`) runs in the server process; it imports no kernel.
 """
 
@@ -27,6 +32,13 @@ from pathlib import Path
 from typing import Any
 
 from torus_cad.studio.scene import PartMesh
+
+#: Seconds an exact build may run in the studio before its process is killed (the default design
+#: takes about 2 s here; the largest resolutions a design may ask for take minutes).
+BUILD_TIME_LIMIT_S = 120.0
+
+#: Data memory (heap and anonymous mappings, bytes) a build process may use: RLIMIT_DATA.
+BUILD_MEMORY_LIMIT_BYTES = 3 << 30
 
 
 @dataclass(frozen=True)
@@ -64,8 +76,11 @@ class BuildRunner:
     with ``("failed", build_id, reason)`` if the process dies without finishing.
     """
 
-    def __init__(self, on_message: Callable[[str, int, Any], None]) -> None:
+    def __init__(self, on_message: Callable[[str, int, Any], None], time_limit_s: float = BUILD_TIME_LIMIT_S,
+                 memory_limit_bytes: int = BUILD_MEMORY_LIMIT_BYTES) -> None:
         self._on_message = on_message
+        self.time_limit_s, self.memory_limit_bytes = time_limit_s, memory_limit_bytes
+        self._timer: asyncio.TimerHandle | None = None
         self._context = multiprocessing.get_context("forkserver")
         self._context.set_forkserver_preload(["torus_cad.studio.exact"])
         # Start the forkserver now: it imports the kernel (seconds) while the page loads.
@@ -81,7 +96,8 @@ class BuildRunner:
         self.cancel()
         request.out_dir.mkdir(parents=True, exist_ok=True)
         receiver, sender = self._context.Pipe(duplex=False)
-        process = self._context.Process(target=_child_main, args=(request, sender), daemon=True,
+        process = self._context.Process(target=_child_main, args=(request, sender, self.memory_limit_bytes),
+                                        daemon=True,
                                         name=f"torus-cad-studio-build-{request.build_id}")
         process.start()
         sender.close()  # the child holds the only writer: its death ends our reads with EOF
@@ -89,9 +105,21 @@ class BuildRunner:
         self._build_id, self._finished = request.build_id, False
         self._loop = asyncio.get_running_loop()
         self._loop.add_reader(receiver.fileno(), self._readable)
+        self._timer = self._loop.call_later(self.time_limit_s, self._time_out, request.build_id)
+
+    def _time_out(self, build_id: int) -> None:
+        if build_id != self._build_id or self._finished:
+            return
+        self.cancel()
+        self._on_message("failed", build_id, f"the exact build took longer than {self.time_limit_s:g} s, the limit "
+                         "for a build in the studio, and was stopped; lower resolution.sections / "
+                         "resolution.points or build it with torus-cad build")
 
     def cancel(self) -> None:
         """Kill the running build, if any; its messages are dropped."""
+        if self._timer is not None:
+            self._timer.cancel()
+            self._timer = None
         if self._connection is not None:
             if self._loop is not None and not self._loop.is_closed():
                 self._loop.remove_reader(self._connection.fileno())
@@ -123,7 +151,11 @@ class BuildRunner:
                 self.cancel()
 
 
-def _child_main(request: BuildRequest, connection: multiprocessing.connection.Connection) -> None:
+def _child_main(request: BuildRequest, connection: multiprocessing.connection.Connection,
+                memory_limit_bytes: int) -> None:
+    import resource
+
     from torus_cad.studio.exact import run_build  # preloaded by the forkserver
 
-    run_build(request, connection)
+    resource.setrlimit(resource.RLIMIT_DATA, (memory_limit_bytes, memory_limit_bytes))
+    run_build(request, connection, memory_limit_bytes)
