@@ -471,7 +471,8 @@ def _command_simulate(args: argparse.Namespace) -> int:
               "pip install 'torus_cad[simulate]'", file=sys.stderr)
         return EXIT_KERNEL_FAILURE
     request = Request(params, OperatingPoint(args.rpm, args.airspeed), Level(args.level), args.iterations,
-                      max_processes() if args.processes is None else args.processes, args.case_only, args.time_limit)
+                      max_processes() if args.processes is None else args.processes, args.case_only, args.time_limit,
+                      Path(args.mesh_from) if args.mesh_from else None)
     line = IterationLine.for_terminal(quiet=args.quiet)
     try:
         if args.convergence:
@@ -549,6 +550,8 @@ def _add_simulate_parser(commands: Any) -> None:
                           help="time budget of the run; refused before the solver starts if its estimate is over, "
                                "stopped when it runs over (default 3600)")
     simulate.add_argument("--case-only", action="store_true", help="write the case without running it")
+    simulate.add_argument("--mesh-from", metavar="CASE", help="reuse the mesh of an earlier case of this design and "
+                          "level (OUT/<name>_case) instead of meshing again: another rpm or airspeed")
     simulate.add_argument("--convergence", action="store_true",
                           help="run all three levels into OUT/<level>/ and write <name>_convergence.json: "
                                "Richardson-extrapolated thrust and torque and the observed order")

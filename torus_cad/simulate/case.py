@@ -171,12 +171,16 @@ def write_operating_point(case: Path, spec: CaseSpec) -> None:
 
 
 def write_dictionaries(case: Path, spec: CaseSpec) -> None:
-    """Every dictionary of the case (the mesh itself comes from :func:`commands`)."""
+    """Every dictionary of the case (the mesh itself comes from :func:`mesh_commands`). The parallel
+    decomposition cuts along x (through the axis: each part gets its share of the propeller), with
+    the ``simple`` method, which every OpenFOAM build has (scotch is optional)."""
     fluid = spec.point.fluid
     write_operating_point(case, spec)
     _write(case / "system" / "fvSchemes", FV_SCHEMES)
     _write(case / "system" / "fvSolution", FV_SOLUTION)
-    _write(case / "system" / "decomposeParDict", {"numberOfSubdomains": spec.processes, "method": "scotch"})
+    _write(case / "system" / "decomposeParDict", {
+        "numberOfSubdomains": spec.processes, "method": "simple",
+        "coeffs": {"n": [spec.processes, 1, 1], "delta": 0.001}})
     _write(case / "constant" / "transportProperties", {
         "transportModel": "Newtonian", "nu": Dimensioned(fluid.viscosity_m2_s, DimensionSet(length=2, time=-1), "nu"),
         "rho": Dimensioned(fluid.density_kg_m3, DimensionSet(mass=1, length=-3), "rho")})

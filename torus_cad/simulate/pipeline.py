@@ -15,6 +15,8 @@ AsyncSlurmFoamCase as ``runner``); many can run at once with :func:`simulate_man
 from __future__ import annotations
 
 import asyncio
+import dataclasses
+import json
 import math
 import os
 import secrets
@@ -76,7 +78,9 @@ def _mesh_lock() -> asyncio.Lock:
 @dataclass(frozen=True)
 class Request:
     """One simulation: the design, where it runs, the mesh level, iterations (None: the level's),
-    MPI processes, whether to stop after writing the case, the time budget in seconds."""
+    MPI processes, whether to stop after writing the case, the time budget in seconds, and a case
+    folder of an earlier run of the same design and level whose mesh to reuse (another rpm or
+    airspeed without meshing again)."""
 
     params: PropellerParameters
     point: OperatingPoint
@@ -85,6 +89,7 @@ class Request:
     processes: int = 1
     case_only: bool = False
     time_limit_s: float = DEFAULT_TIME_LIMIT_S
+    mesh_from: Path | None = None
 
     @property
     def run_iterations(self) -> int:
@@ -141,8 +146,36 @@ async def _mesh_and_write(request: Request, case: Path, diameter_m: float,
     async with _mesh_lock():
         cfd_report, cfd_paths = await asyncio.to_thread(write_cfd_domain, params, case / "cfd",
                                                         request.processes, stage)
-    spec = CaseSpec(request.point, params.handedness, diameter_m, _flow_sign(params), request.run_iterations,
-                    request.processes, f"cfd/{cfd_paths['msh_v2'].name}")
+    spec = _case_spec(request, diameter_m, f"cfd/{cfd_paths['msh_v2'].name}")
+    write_case(case, spec)
+    return cfd_report, spec
+
+
+def _case_spec(request: Request, diameter_m: float, msh_file: str) -> CaseSpec:
+    params = request.params
+    return CaseSpec(request.point, params.handedness, diameter_m, _flow_sign(params), request.run_iterations,
+                    request.processes, msh_file)
+
+
+def _reuse_mesh(request: Request, case: Path, diameter_m: float) -> tuple[dict[str, Any], CaseSpec]:
+    """Copy the converted mesh (constant/polyMesh) and cfd/ of ``request.mesh_from`` into ``case`` and write
+    the dictionaries; ParameterError unless it is a case of the same design name and ``[cfd]`` settings."""
+    source, name = Path(request.mesh_from or ""), request.params.name
+    report_path = source / "cfd" / f"{name}_cfd.json"
+    if not ((source / "constant" / "polyMesh" / "boundary").is_file() and report_path.is_file()):
+        raise ParameterError(f"--mesh-from {str(source)!r} is not a converted case of {name!r} "
+                             f"(no constant/polyMesh/boundary or cfd/{name}_cfd.json)")
+    try:
+        cfd_report = json.loads(report_path.read_text(encoding="utf-8"))
+        settings = cfd_report["settings"]
+    except (OSError, ValueError, KeyError, TypeError):
+        raise ParameterError(f"--mesh-from {str(source)!r}: cfd/{name}_cfd.json is not a cfd report") from None
+    if settings != request.params.cfd.model_dump(mode="json"):
+        raise ParameterError(f"--mesh-from {str(source)!r} was meshed with other [cfd] settings than level "
+                             f"{request.level.value!r} of this design")
+    shutil.copytree(source / "cfd", case / "cfd")
+    shutil.copytree(source / "constant" / "polyMesh", case / "constant" / "polyMesh")
+    spec = _case_spec(request, diameter_m, f"cfd/{cfd_report['files']['msh_v2']}")
     write_case(case, spec)
     return cfd_report, spec
 
@@ -173,14 +206,16 @@ async def simulate_async(request: Request, out_dir: str | Path, progress: Progre
     if not request.case_only:
         check_openfoam()
     params, out = with_level(request.params, request.level), Path(out_dir)
-    request = Request(params, request.point, request.level, request.iterations, request.processes,
-                      request.case_only, request.time_limit_s)
+    request = dataclasses.replace(request, params=params)
     name = params.name
     stage_seconds: dict[str, float] = {}
     with OutputSet(out, f"{name}_performance") as output:
         assert output.staging is not None
         case = output.staging / f"{name}_case"
-        cfd_report, spec = await _mesh_and_write(request, case, diameter_m, stage)
+        if request.mesh_from is not None:
+            cfd_report, spec = _reuse_mesh(request, case, diameter_m)
+        else:
+            cfd_report, spec = await _mesh_and_write(request, case, diameter_m, stage)
         stage_seconds["mesh"] = time.perf_counter() - start
         cells = int(cfd_report["tetrahedra_total"])
         if request.case_only:
@@ -191,7 +226,7 @@ async def simulate_async(request: Request, out_dir: str | Path, progress: Progre
         deadline = time.monotonic() + request.time_limit_s - (time.perf_counter() - start)
         foam = runner(case)
         try:
-            for command in mesh_commands(spec):
+            for command in mesh_commands(spec) if request.mesh_from is None else []:
                 if stage:
                     stage(command[0])
                 await run_command(foam, command)
@@ -275,8 +310,7 @@ def convergence_study(request: Request, out_dir: str | Path, progress: ProgressC
     out = Path(out_dir)
     runs = {}
     for level in Level:
-        level_request = Request(request.params, request.point, level, request.iterations, request.processes,
-                                False, request.time_limit_s)
+        level_request = dataclasses.replace(request, level=level, case_only=False, mesh_from=None)
         runs[level] = simulate(level_request, out / level.value, progress, stage)
     report: dict[str, Any] = {"name": request.params.name, "rpm": request.point.rpm,
                               "airspeed_m_s": request.point.airspeed_m_s, "refinement_ratio": REFINEMENT_RATIO,

@@ -225,17 +225,18 @@ class Watcher:
 
 
 def _log_cause(case: Path, program: str) -> str:
-    """The first line of OpenFOAM's FATAL ERROR (or a floating point exception) in log.<program>."""
+    """The FATAL ERROR's first lines in log.<program>, or "floating point exception" for a crash in sigFpe."""
     try:
         lines = (case / f"log.{program}").read_text(errors="replace").splitlines()
     except OSError:
         return "no log"
     for index, line in enumerate(lines):
         if "FOAM FATAL" in line:
-            return " ".join(part.strip() for part in lines[index + 1:index + 3] if part.strip())[:300] or line
-        if "Floating point exception" in line or "sigFpe" in line:
-            return "floating point exception"
-    return "see its log"
+            words = [part.strip() for part in lines[index:index + 4] if part.strip()]
+            return " ".join(words).replace("--> ", "")[:300]
+    if any("sigFpe::sigHandler" in line or "Floating point exception" in line for line in lines):
+        return "floating point exception"
+    return f"see {case / f'log.{program}'}"
 
 
 async def run_command(case: AsyncFoamCase, command: Sequence[str], processes: int = 1) -> None:

@@ -1,0 +1,183 @@
+"""`torus-cad simulate`: the OpenFOAM case reads back through foamlib with the right rotation; the physics
+checks on the coarse level (mirror pair, rpm scaling, still propeller, momentum balance); bad input,
+a missing OpenFOAM and a diverging run are one clear line with the right exit code."""
+
+from __future__ import annotations
+
+import json
+import math
+import shutil
+
+import numpy as np
+import pytest
+
+from torus_cad.cli import main
+
+foamlib = pytest.importorskip("foamlib")
+pytest.importorskip("gmsh")
+
+from torus_cad.parameters import PropellerParameters  # noqa: E402
+from torus_cad.parameters.design import Handedness  # noqa: E402
+from torus_cad.simulate.history import History  # noqa: E402
+from torus_cad.simulate.performance import force_variation, performance, richardson  # noqa: E402
+from torus_cad.simulate.pipeline import Request, simulate  # noqa: E402
+from torus_cad.simulate.run import divergence  # noqa: E402
+from torus_cad.simulate.settings import Level, OperatingPoint  # noqa: E402
+
+HAS_OPENFOAM = shutil.which("simpleFoam") is not None
+needs_openfoam = pytest.mark.skipif(not HAS_OPENFOAM, reason="OpenFOAM (simpleFoam) is not installed")
+
+RPM = 10000.0
+#: Iterations of the physics runs: thrust settles within ~2 % by 120 on the coarse mesh.
+ITERATIONS = 150
+PROCESSES = 2 if (len(__import__("os").sched_getaffinity(0)) > 1) else 1
+
+
+# -- numbers without OpenFOAM ---------------------------------------------------------------------
+
+def test_richardson_recovers_the_order_and_limit_of_an_exact_power_series():
+    ratio, order, limit = 2.0 ** (1.0 / 3.0), 1.7, 0.25
+    coarse, medium, fine = (limit + 0.04 * (ratio**power) ** order for power in (2, 1, 0))
+    result = richardson(coarse, medium, fine, ratio)
+    assert result.monotone and result.order == pytest.approx(order) and result.extrapolated == pytest.approx(limit)
+    assert richardson(1.0, 2.0, 1.5, ratio).extrapolated is None  # oscillating: no extrapolation
+
+
+def test_coefficients_follow_the_propeller_convention():
+    point = OperatingPoint(rpm=6000.0, airspeed_m_s=5.0)
+    result = performance(thrust_n=1.0, torque_nm=0.02, point=point, diameter_m=0.1)
+    n = 100.0
+    assert result.power_w == pytest.approx(0.02 * 2 * math.pi * n)
+    assert result.ct == pytest.approx(1.0 / (1.225 * n**2 * 0.1**4))
+    assert result.cp == pytest.approx(result.power_w / (1.225 * n**3 * 0.1**5))
+    assert result.advance_ratio == pytest.approx(0.5)
+    assert result.efficiency == pytest.approx(0.5 * result.ct / result.cp) and result.figure_of_merit is None
+    hover = performance(1.0, 0.02, OperatingPoint(6000.0), 0.1)
+    assert hover.efficiency is None and hover.figure_of_merit == pytest.approx(hover.ct**1.5 / (2**0.5 * hover.cp))
+
+
+def test_omega_is_negative_about_z_for_cw_and_positive_for_its_mirror_image():
+    point = OperatingPoint(rpm=600.0)
+    assert point.omega_rad_s(Handedness.CW) == pytest.approx(-20 * math.pi)
+    assert point.omega_rad_s(Handedness.CCW) == pytest.approx(20 * math.pi)
+
+
+def test_divergence_names_the_iteration_and_the_residual():
+    history = History(iterations=np.arange(1, 4), force_n=np.ones((3, 3)), moment_nm=np.ones((3, 3)),
+                      residual_iterations=np.arange(1, 4), residuals={"p": np.array([1.0, 0.5, 4e5])})
+    assert divergence(history) == "iteration 3: p residual 4e+05 (limit 1000)"
+    history.residuals["p"][2] = 0.1
+    history.force_n[1, 2] = math.nan
+    assert divergence(history) == "iteration 2: the propeller's force is not finite"
+    assert force_variation(np.r_[np.zeros(90), np.full(5, 2.0), np.full(5, 2.02)]) == pytest.approx(0.02 / 2.01)
+
+
+@pytest.mark.parametrize("arguments, fragment", [
+    (["--rpm", "-1"], "--rpm = -1 is out of range; allowed [0, "),
+    (["--rpm", "1e6"], "--rpm = 1e+06 is out of range"),
+    (["--rpm", "nan"], "--rpm = nan is out of range"),
+    (["--rpm", "1000", "--airspeed", "500"], "--airspeed = 500 m/s is out of range; allowed [0, 100] m/s"),
+    (["--rpm", "1000", "--iterations", "0"], "--iterations = 0 is out of range; allowed [1, 20000]"),
+    (["--rpm", "1000", "--processes", "999"], "--processes = 999 is out of range"),
+    (["--rpm", "1000", "--time-limit", "0"], "--time-limit = 0 s is out of range"),
+    (["--rpm", "1000", "--airspeed", "5", "--set", "cfd.inlet_side='-z'"], "cfd.inlet_side = '-z'"),
+])
+def test_bad_input_exits_2_with_one_line_and_writes_nothing(tmp_path, capsys, arguments, fragment):
+    out = tmp_path / "out"
+    assert main(["simulate", *arguments, "--out", str(out)]) == 2
+    error = capsys.readouterr().err
+    assert fragment in error and error.count("\n") == 1
+    assert not out.exists()
+
+
+def test_without_openfoam_one_line_says_how_to_install_it(tmp_path, capsys, monkeypatch):
+    monkeypatch.setenv("PATH", str(tmp_path))  # no simpleFoam on it
+    out = tmp_path / "out"
+    assert main(["simulate", "--rpm", "1000", "--out", str(out)]) == 2
+    error = capsys.readouterr().err
+    assert error.count("\n") == 1 and "apt-get install --no-install-recommends openfoam" in error
+    assert not out.exists()
+
+
+# -- the case ---------------------------------------------------------------------------------------
+
+@pytest.mark.slow
+def test_case_only_writes_a_case_foamlib_reads_back_with_the_mirror_rotation(tmp_path):
+    params = PropellerParameters(handedness=Handedness.CCW)
+    result = simulate(Request(params, OperatingPoint(RPM), Level.COARSE, iterations=50, processes=2,
+                              case_only=True), tmp_path)
+    case = foamlib.FoamCase(result.paths["case"])
+    mrf = case.file("constant/MRFProperties")["MRF1"]
+    assert mrf["cellZone"] == "rotating_zone" and mrf["omega"] == pytest.approx(RPM * math.pi / 30)
+    assert list(mrf["axis"]) == [0, 0, 1]
+    assert case.control_dict["endTime"] == 50
+    assert case.file("system/decomposeParDict")["numberOfSubdomains"] == 2
+    assert case.turbulence_properties["RAS"]["RASModel"] == "kOmegaSST"
+    assert case[0]["nut"].boundary_field["propeller"]["type"] == "nutkWallFunction"
+    allrun = (result.paths["case"] / "Allrun").read_text()
+    assert "gmshToFoam cfd/torus_propeller_cfd_v2.msh" in allrun and "mpiexec -n 2 simpleFoam -parallel" in allrun
+    assert sorted(path.name for path in tmp_path.iterdir()) == ["torus_propeller_case"]
+    assert not (result.paths["case"] / "constant" / "polyMesh").exists()  # Allrun makes it
+
+
+# -- physics on the coarse level --------------------------------------------------------------------
+
+def _run(out, params, rpm, mesh_from=None, iterations=ITERATIONS):
+    request = Request(params, OperatingPoint(rpm), Level.COARSE, iterations, PROCESSES, mesh_from=mesh_from)
+    return simulate(request, out).report
+
+
+@pytest.fixture(scope="module")
+def cw(tmp_path_factory):
+    out = tmp_path_factory.mktemp("cw")
+    assert main(["simulate", "--rpm", f"{RPM:g}", "--iterations", str(ITERATIONS), "--processes", str(PROCESSES),
+                 "--out", str(out), "-q"]) == 0
+    return out, json.loads((out / "torus_propeller_performance.json").read_text())
+
+
+@pytest.mark.slow
+@needs_openfoam
+def test_the_published_set_verifies_and_thrust_is_positive_for_the_design_rotation(cw):
+    out, report = cw
+    assert main(["verify", str(out), "torus_propeller_performance", "-q"]) == 0
+    assert report["thrust_n"] > 0.0 and report["torque_nm"] > 0.0 and report["power_w"] > 0.0
+    assert report["cells"] <= 60_000 and report["level"] == "coarse"
+    assert report["fluid"]["density_kg_m3"] == 1.225 and report["fluid"]["viscosity_m2_s"] == 1.46e-5
+    assert report["efficiency"] is None and report["figure_of_merit"] > 0.0
+    assert (out / "torus_propeller_case" / "Allrun").is_file()
+
+
+@pytest.mark.slow
+@needs_openfoam
+def test_thrust_from_the_surface_agrees_with_the_momentum_balance(cw):
+    _, report = cw
+    balance = report["momentum_balance"]
+    assert abs(balance["relative_difference"]) < 0.10, (report["thrust_n"], balance)
+
+
+@pytest.mark.slow
+@needs_openfoam
+def test_mirror_image_at_the_same_rpm_gives_the_same_thrust_and_torque(cw, tmp_path):
+    _, report = cw
+    mirror = _run(tmp_path, PropellerParameters(handedness=Handedness.CCW), RPM)
+    assert mirror["omega_rad_s"] == pytest.approx(-report["omega_rad_s"])
+    assert mirror["thrust_n"] == pytest.approx(report["thrust_n"], rel=0.05)
+    assert mirror["torque_nm"] == pytest.approx(report["torque_nm"], rel=0.05)
+
+
+@pytest.mark.slow
+@needs_openfoam
+def test_doubling_the_rpm_in_still_air_scales_thrust_by_4(cw, tmp_path):
+    out, report = cw
+    doubled = _run(tmp_path, PropellerParameters(), 2 * RPM, mesh_from=out / "torus_propeller_case")
+    assert doubled["cells"] == report["cells"]  # the same mesh
+    assert doubled["thrust_n"] / report["thrust_n"] == pytest.approx(4.0, rel=0.15)
+
+
+@pytest.mark.slow
+@needs_openfoam
+def test_a_still_propeller_in_still_air_gives_no_thrust(cw, tmp_path):
+    out, report = cw
+    still = _run(tmp_path, PropellerParameters(), 0.0, mesh_from=out / "torus_propeller_case", iterations=20)
+    assert abs(still["thrust_n"]) < 0.01 * report["thrust_n"]
+    assert still["ct"] is None and still["advance_ratio"] is None
