@@ -341,3 +341,35 @@ def test_a_performance_study_runs_torus_cad_simulate_for_each_trial(tmp_path):
         else:
             assert trial.user_attrs["reason"]  # a refused or failed design says why
     assert any(t.state is TrialState.COMPLETE for t in trials), [t.user_attrs.get("reason") for t in trials]
+
+
+@pytest.mark.slow
+def test_optuna_dashboard_shows_the_study(tmp_path):
+    """The README's `optuna-dashboard sqlite:///OUT/<name>.db` line serves the study."""
+    pytest.importorskip("optuna_dashboard", reason="optuna-dashboard is not installed (the optimize extra has it)")
+    import socket
+    import urllib.request
+
+    from torus_cad.optimize.study import _load_study
+
+    url = f"sqlite:///{tmp_path / 'light.db'}"
+    _load_study(load_study(_study_file(tmp_path, trials=1)), open_storage(url))
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    command = "import sys; from optuna_dashboard._cli import main; sys.argv[0] = 'optuna-dashboard'; main()"
+    server = subprocess.Popen([sys.executable, "-c", command, url, "--host", "127.0.0.1", "--port", str(port)],
+                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        deadline, body = time.monotonic() + 120, ""
+        while time.monotonic() < deadline and not body:
+            try:
+                with urllib.request.urlopen(f"http://127.0.0.1:{port}/api/studies", timeout=5) as response:
+                    body = response.read().decode()
+            except OSError:
+                time.sleep(0.5)
+        summaries = json.loads(body)["study_summaries"]
+        assert [summary["study_name"] for summary in summaries] == ["light"]
+    finally:
+        server.terminate()
+        server.wait(timeout=30)
