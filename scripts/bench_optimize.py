@@ -64,8 +64,11 @@ def main() -> None:
     print(f"sweep:    {len(parameter_sets)} designs in {sweep_s:.1f} s = {sweep_per_min:.1f} designs/min "
           "(the same designs, the sweep's runner)")
     print(f"optimiser overhead: {100.0 * (sweep_per_min / optimize_per_min - 1.0):+.1f} % (target <= 5 %)")
+    from torus_cad.propeller import DEFAULT_DENSITY_G_CM3, build_propeller
+
+    base_g = build_propeller(spec.base).mass_properties(DEFAULT_DENSITY_G_CM3).mass_g
     best, marks = math.inf, {5, 10, 20, 30, 50, 100, args.trials}
-    print("best feasible mass_g against trials:")
+    print(f"best feasible mass_g against trials (the base design: {base_g:.4f} g):")
     for count, trial in enumerate(trials, start=1):
         constraint = trial.user_attrs.get("constraint", [math.inf])
         if trial.state.name == "COMPLETE" and max(constraint) <= 0.0:
