@@ -18,7 +18,7 @@ from torus_cad.parameters import PropellerParameters
 from torus_cad.propeller import build_propeller
 
 EXAMPLES = sorted(path for path in (Path(__file__).resolve().parent.parent / "examples").glob("*.toml")
-                  if "sweep" not in path.name)
+                  if "sweep" not in path.name and not path.name.startswith("optimize_"))
 
 
 @pytest.mark.slow

@@ -9,8 +9,8 @@ from torus_cad.parameters import PropellerParameters
 from torus_cad.propeller import build_propeller
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
-#: Sweep definitions live in examples/ too (not designs); the workshop examples have their own tests.
-NOT_IN_GALLERY = ("sweep_*.toml", "workshop_*.toml")
+#: Sweep and study definitions live in examples/ too (not designs); the workshop examples have their own tests.
+NOT_IN_GALLERY = ("sweep_*.toml", "workshop_*.toml", "optimize_*.toml")
 GALLERY = sorted(path.name for path in EXAMPLES.glob("*.toml") if not any(path.match(skip) for skip in NOT_IN_GALLERY))
 
 

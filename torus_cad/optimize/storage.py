@@ -18,6 +18,7 @@ import fcntl
 import hashlib
 import os
 import threading
+import time
 import warnings
 from collections.abc import Iterator
 from pathlib import Path
@@ -34,6 +35,7 @@ HEARTBEAT_S = 10  #: how often a running process records that its trials are ali
 GRACE_S = 120  #: a RUNNING trial without a heartbeat for this long belongs to a dead process, s
 _SQLITE_TIMEOUT_S = 120  #: how long a writer waits for SQLite's lock (several processes share one file)
 _SCHEMES = ("sqlite", "postgresql")
+_OPEN_ATTEMPTS = 5  #: tries to open a storage whose tables another process is creating at the same moment
 
 RETRY_OF = "retry_of"  #: user attr of a trial that repeats an interrupted one: that trial's number
 OWNER = "owner"  #: user attr: ``{"host", "pid", "start"}`` of the process that runs the trial
@@ -74,19 +76,29 @@ def open_storage(url: str) -> Any:
 
     kwargs: dict[str, Any] = {"connect_args": {"timeout": _SQLITE_TIMEOUT_S}} if _is_sqlite(url) else \
         {"pool_pre_ping": True}
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")  # optuna's ExperimentalWarning for the heartbeat
-            return optuna.storages.RDBStorage(url, engine_kwargs=kwargs, heartbeat_interval=HEARTBEAT_S,
-                                              grace_period=GRACE_S)
-    except (sqlalchemy.exc.SQLAlchemyError, ImportError, ValueError) as error:
-        cause = " ".join(str(error).split("\n")[0].split())[:300]
-        raise StorageError(f"cannot open the study storage {public_url(url)!r}: {cause}") from None
+    for attempt in range(_OPEN_ATTEMPTS):
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")  # optuna's ExperimentalWarning for the heartbeat
+                return optuna.storages.RDBStorage(url, engine_kwargs=kwargs, heartbeat_interval=HEARTBEAT_S,
+                                                  grace_period=GRACE_S)
+        except sqlalchemy.exc.IntegrityError:  # another process created the tables at the same moment
+            if attempt == _OPEN_ATTEMPTS - 1:
+                raise StorageError(f"cannot create the study tables in {public_url(url)!r}: other processes "
+                                   "keep creating them") from None
+            time.sleep(0.5)
+        except (sqlalchemy.exc.SQLAlchemyError, ImportError, ValueError) as error:
+            cause = " ".join(str(error).split("\n")[0].split())[:300]
+            raise StorageError(f"cannot open the study storage {public_url(url)!r}: {cause}") from None
+    raise AssertionError("unreachable")  # pragma: no cover
 
 
 @contextlib.contextmanager
 def claim_lock(storage: Any, url: str, name: str) -> Iterator[None]:
-    """Hold the study's lock (flock beside an SQLite file, an advisory lock on PostgreSQL) in the block."""
+    """Hold the study's lock (flock beside an SQLite file, an advisory lock on PostgreSQL) in the block.
+
+    ``storage`` (the RDBStorage) is needed for PostgreSQL only; without it there is no lock there.
+    """
     if _is_sqlite(url):
         database = url.split(":///", 1)[1].split("?")[0] if ":///" in url else ""
         if not database or database == ":memory:":
@@ -99,6 +111,9 @@ def claim_lock(storage: Any, url: str, name: str) -> Iterator[None]:
             yield
         finally:
             os.close(descriptor)
+        return
+    if storage is None:
+        yield
         return
     import sqlalchemy
 

@@ -169,8 +169,9 @@ class _Runner:
 
         optuna.logging.set_verbosity(optuna.logging.WARNING)
         self.spec, self.out, self.url, self.total = spec, out, url, total
-        self.rdb = open_storage(url)
-        self.study = _load_study(spec, self.rdb)
+        with claim_lock(None, url, spec.name):  # SQLite: one process at a time creates the tables and the study
+            self.rdb = open_storage(url)
+            self.study = _load_study(spec, self.rdb)
         self.owner = owner_record()
         self.in_flight: dict[str, Any] = {}  # design id -> optuna Trial
         self.seeded = False

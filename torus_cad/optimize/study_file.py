@@ -234,6 +234,9 @@ def parse_study(data: Mapping[str, Any], base_dir: str | Path = ".", name: str =
         data["vary"] = dict(_flatten_vary(data["vary"]))
     if isinstance(data.get("constraints"), Mapping):
         data["constraints"] = dict(_flatten_bounds(data["constraints"]))
+        for key, bound in data["constraints"].items():
+            if isinstance(bound, Mapping) and not set(bound) <= {"min", "max"}:
+                raise fail(f"constraints.{key!r} has keys {sorted(bound)}; give min, max or both, e.g. {{ min = 0.8 }}")
     try:
         model = StudyFile.model_validate(data)
     except ValidationError as error:
@@ -262,7 +265,7 @@ def _flatten_bounds(table: Mapping[str, Any], prefix: str = "") -> list[tuple[st
     """``a.b = {min = 1}`` unquoted (nested tables) means ``"a.b" = {min = 1}``."""
     items: list[tuple[str, Any]] = []
     for key, value in table.items():
-        if isinstance(value, Mapping) and value and not set(value) <= {"min", "max"}:
+        if isinstance(value, Mapping) and value and all(isinstance(item, Mapping) for item in value.values()):
             items += _flatten_bounds(value, f"{prefix}{key}.")
         else:
             items.append((f"{prefix}{key}", value))
