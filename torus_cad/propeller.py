@@ -43,6 +43,7 @@ from torus_cad.kernel.fuse import Fused, FuseRoute, fuse_all, fuse_pattern, patt
 from torus_cad.kernel.hub import hub_solid, run_out_hub
 from torus_cad.kernel.loft import loft_solid
 from torus_cad.kernel.mirror import mirrored
+from torus_cad.kernel.strict import StrictCheck, strict_valid_solid
 from torus_cad.kernel.wires import SectionCurves, fit_section_curves
 from torus_cad.parameters import PropellerParameters, resolve_parameters
 from torus_cad.parameters.design import Handedness, TightBends
@@ -76,6 +77,8 @@ class Propeller:
         root_fillet: the radii the root fillet has (None without one): the requested radius
             everywhere, or smaller along junction edges where the blade bends too tightly for it
             (:class:`torus_cad.kernel.fillet.RootFillet`).
+        checks: the strict validity check ``solid`` passed (BRepCheck_Analyzer and
+            BRepAlgoAPI_Check's small-edge and self-interference tests, :mod:`torus_cad.kernel.strict`).
     """
 
     parameters: PropellerParameters
@@ -90,6 +93,7 @@ class Propeller:
     mounting: HubMounting = field(default_factory=HubMounting)
     face_parts: tuple[int, ...] = ()
     root_fillet: RootFillet | None = None
+    checks: StrictCheck | None = None
 
     @property
     def workplane(self) -> cq.Workplane:
@@ -212,12 +216,14 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
     else:
         solid, fused = _join_blades_to_hub(hub, blade, blades, angles_deg, timer)
         route, face_parts = fused.route, fused.face_parts
-    if params.handedness == Handedness.CCW:  # the spec's blade is 'cw'; 'ccw' is its mirror image
+    with timer.stage(Stage.STRICT_CHECK):  # before the mirror, which copies the faces and loses the pattern
+        solid, checks = strict_valid_solid(solid, "the propeller")
+    if params.handedness == Handedness.CCW:  # the spec's blade is 'cw'; 'ccw' is its mirror image (an isometry)
         with timer.stage(Stage.MIRROR):
             solid = mirrored(solid)  # a transformed copy: the same faces in the same order
             hub, blades = mirrored(hub, check=False), [mirrored(part, check=False) for part in blades]
     return Propeller(params, solid, hub, blades, surface, curves, timer.seconds, route, targets, mounting,
-                     face_parts, root_fillet)
+                     face_parts, root_fillet, checks)
 
 
 def _place_mounting(params: PropellerParameters) -> HubMounting:
@@ -272,14 +278,23 @@ def _check_volume(solid: cq.Solid, hub: cq.Solid, blade: cq.Solid, blades: int) 
                           f"hub + {blades} blades {hub_volume + blades * blade_volume:.3f}] mm^3")
 
 
-def build_report(propeller: Propeller, density_g_cm3: float) -> dict[str, Any]:
-    """The JSON report: parameters, mass properties, balance, printability, validity and stage times."""
+def build_report(propeller: Propeller, density_g_cm3: float,
+                 meshes: Mapping[str, dict[str, Any]] | None = None) -> dict[str, Any]:
+    """The JSON report: parameters, mass properties, balance, printability, validity and stage times.
+
+    ``checks`` names every check the solid (and each written mesh, ``meshes``: {"stl" or "3mf":
+    :meth:`torus_cad.kernel.mesh_check.MeshCheck.to_dict`}) passed."""
     properties = propeller.mass_properties(density_g_cm3)
+    checks: dict[str, Any] = {} if propeller.checks is None else propeller.checks.to_dict()
+    for kind, mesh in (meshes or {}).items():
+        checks[f"{kind}_self_intersections"] = mesh["self_intersecting_pairs"] == 0
     return {
         "name": propeller.parameters.name,
         "parameters": propeller.parameters.to_dict(),
         "valid": True,
         "solids": 1,
+        "checks": checks,
+        **{f"{kind}_mesh": mesh for kind, mesh in (meshes or {}).items()},
         **properties.to_dict(),
         "balance": balance(propeller.solid, density_g_cm3).to_dict(),
         "printability": propeller.printability().to_dict(),

@@ -140,3 +140,17 @@ MESH_JUNCTION_MARGIN_RELATIVE = 0.05
 #: Surface meshes: at the blade-hub junctions, a triangle edge shorter than this fraction of its
 #: triangle's longest edge is a needle the cleanup collapses (torus_cad.mesh.cleanup).
 MESH_NEEDLE_EDGE_RATIO = 0.1
+
+
+# -- the strict validity check (torus_cad.kernel.strict) ---------------------------------------------
+
+#: Two blade copies closer than this (mm) count as interfering (their faces' tolerances are ~1e-7 mm).
+STRICT_BLADE_SEPARATION_MM = 1e-4
+
+#: Axis directions and positions within this of the z axis (unit vector components, mm) count as on it.
+STRICT_AXIS_TOLERANCE = 1e-9
+
+#: An STL or 3MF tessellation with intersecting triangle pairs is redone with half the linear
+#: deflection, at most this many times (torus_cad.kernel.mesh_check); each halving costs about 1.3-2x
+#: the triangles.
+STL_REFINE_HALVINGS = 3
