@@ -197,13 +197,11 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
             run_out = None if mounting.chamfer_mm > 0.0 else functools.partial(
                 run_out_hub, geometry.hub.radius_mm, geometry.hub.length_mm, 0.0 if seam_deg is None else seam_deg,
                 mounting, reach=geometry.hub.radius_mm + 4.0 * fillet_radius)
-            # A sharp trailing edge's side in thirds (and the further tries' pieces): see kernel.fillet.
-            in_pieces = None if surface.lower_corner_index is not None else (
-                lambda pieces: loft_solid(curves.wires(pieces), surface.s))
+            # A sharp edge's side as one closed face: the fillet splits it in its own pieces (kernel.fillet).
+            closed = blade if surface.lower_corner_index is not None else loft_solid(curves.wires(1, False), surface.s)
             try:
-                filleted = fillet_pattern(hub, blade, angles_deg, fillet_radius, run_out,
-                                          reduce_where_tight=params.hub.root_fillet_tight_bends == TightBends.REDUCE,
-                                          blade_in_pieces=in_pieces)
+                filleted = fillet_pattern(hub, closed, angles_deg, fillet_radius, run_out,
+                                          reduce_where_tight=params.hub.root_fillet_tight_bends == TightBends.REDUCE)
             except KernelError as error:
                 if surface.lower_corner_index is None or surface.round_trailing_edge:
                     raise
@@ -217,13 +215,26 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
         solid, fused = _join_blades_to_hub(hub, blade, blades, angles_deg, timer)
         route, face_parts = fused.route, fused.face_parts
     with timer.stage(Stage.STRICT_CHECK):  # before the mirror, which copies the faces and loses the pattern
-        solid, checks = strict_valid_solid(solid, "the propeller")
+        solid, checks = _strictly_valid(solid, root_fillet is not None and surface.lower_corner_index is None)
     if params.handedness == Handedness.CCW:  # the spec's blade is 'cw'; 'ccw' is its mirror image (an isometry)
         with timer.stage(Stage.MIRROR):
             solid = mirrored(solid)  # a transformed copy: the same faces in the same order
             hub, blades = mirrored(hub, check=False), [mirrored(part, check=False) for part in blades]
     return Propeller(params, solid, hub, blades, surface, curves, timer.seconds, route, targets, mounting,
                      face_parts, root_fillet, checks)
+
+
+def _strictly_valid(solid: cq.Solid, fillet_on_sharp_edge: bool) -> tuple[cq.Solid, StrictCheck]:
+    """:func:`torus_cad.kernel.strict.strict_valid_solid`, its error with the way out for a filleted knife edge."""
+    try:
+        return strict_valid_solid(solid, "the propeller")
+    except KernelError as error:
+        if not fillet_on_sharp_edge:
+            raise
+        # OpenCascade's rolling ball turns round the zero-thickness edge in one degenerate corner face.
+        raise KernelError(f"{error}; a root fillet round a sharp trailing edge can leave a self-intersecting "
+                          "corner face there: airfoil.trailing_edge_thickness > 0 with "
+                          "airfoil.trailing_edge_shape = 'round' takes it") from None
 
 
 def _place_mounting(params: PropellerParameters) -> HubMounting:
