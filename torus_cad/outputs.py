@@ -368,7 +368,7 @@ def write_output_set(propeller: Propeller, out_dir: str | Path, density_g_cm3: f
     from torus_cad import __version__
     from torus_cad.budgets import check_stl_budget
     from torus_cad.design_targets import write_sections_table
-    from torus_cad.kernel.export import write_step, write_stl
+    from torus_cad.kernel.export import write_checked_stl, write_step
     from torus_cad.kernel.export_3mf import write_3mf
     from torus_cad.parameters.design import ExportFormat
     from torus_cad.propeller import build_report
@@ -382,6 +382,14 @@ def write_output_set(propeller: Propeller, out_dir: str | Path, density_g_cm3: f
     if write_stl_file or ExportFormat.THREE_MF in formats:
         check_stl_budget(params, propeller.surface, propeller.section_curves.poles.shape[:2])
     timer = StageTimer[Stage]()
+    meshes: dict[str, dict[str, Any]] = {}  # each written mesh's check, for the report
+
+    def checked(kind: str, write: Callable[[Path], Any]) -> FileWriter:
+        def writer(path: Path) -> Path:
+            meshes[kind] = write(path).to_dict()
+            return path
+        return writer
+
     with OutputSet(out_dir, params.name) as output:
         if ExportFormat.STEP in formats:
             with timer.stage(Stage.STEP_WRITE):
@@ -389,16 +397,16 @@ def write_output_set(propeller: Propeller, out_dir: str | Path, density_g_cm3: f
                                                              program=f"torus_cad {__version__}"))
         if write_stl_file:
             with timer.stage(Stage.STL_WRITE):
-                output.write("stl", lambda path: write_stl(propeller.solid, path, *deflections))
+                output.write("stl", checked("stl", lambda path: write_checked_stl(propeller.solid, path, *deflections)))
         if ExportFormat.THREE_MF in formats:
             with timer.stage(Stage.THREE_MF_WRITE):
-                output.write("3mf", lambda path: write_3mf(propeller.solid, path, params.name, *deflections,
-                                                           version=__version__))
+                output.write("3mf", checked("3mf", lambda path: write_3mf(propeller.solid, path, params.name,
+                                                                          *deflections, version=__version__)))
         if sections_table:
             with timer.stage(Stage.SECTIONS_TABLE):
                 output.write_files(lambda folder: write_sections_table(propeller.surface, params, folder))
         for kind, writer in (extra_files or {}).items():
             output.write(kind, writer)
         propeller.stage_seconds.update(timer.seconds)
-        paths = output.publish(build_report(propeller, density_g_cm3))
+        paths = output.publish(build_report(propeller, density_g_cm3, meshes))
         return PublishedSet(paths, output.sealed_report)

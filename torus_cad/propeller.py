@@ -43,6 +43,7 @@ from torus_cad.kernel.fuse import Fused, FuseRoute, fuse_all, fuse_pattern, patt
 from torus_cad.kernel.hub import hub_solid, run_out_hub
 from torus_cad.kernel.loft import loft_solid
 from torus_cad.kernel.mirror import mirrored
+from torus_cad.kernel.strict import StrictCheck, strict_valid_solid
 from torus_cad.kernel.wires import SectionCurves, fit_section_curves
 from torus_cad.parameters import PropellerParameters, resolve_parameters
 from torus_cad.parameters.design import Handedness, TightBends
@@ -76,6 +77,8 @@ class Propeller:
         root_fillet: the radii the root fillet has (None without one): the requested radius
             everywhere, or smaller along junction edges where the blade bends too tightly for it
             (:class:`torus_cad.kernel.fillet.RootFillet`).
+        checks: the strict validity check ``solid`` passed (BRepCheck_Analyzer and
+            BRepAlgoAPI_Check's small-edge and self-interference tests, :mod:`torus_cad.kernel.strict`).
     """
 
     parameters: PropellerParameters
@@ -90,6 +93,7 @@ class Propeller:
     mounting: HubMounting = field(default_factory=HubMounting)
     face_parts: tuple[int, ...] = ()
     root_fillet: RootFillet | None = None
+    checks: StrictCheck | None = None
 
     @property
     def workplane(self) -> cq.Workplane:
@@ -193,13 +197,11 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
             run_out = None if mounting.chamfer_mm > 0.0 else functools.partial(
                 run_out_hub, geometry.hub.radius_mm, geometry.hub.length_mm, 0.0 if seam_deg is None else seam_deg,
                 mounting, reach=geometry.hub.radius_mm + 4.0 * fillet_radius)
-            # A sharp trailing edge's side in thirds (and the further tries' pieces): see kernel.fillet.
-            in_pieces = None if surface.lower_corner_index is not None else (
-                lambda pieces: loft_solid(curves.wires(pieces), surface.s))
+            # A sharp edge's side as one closed face: the fillet splits it in its own pieces (kernel.fillet).
+            closed = blade if surface.lower_corner_index is not None else loft_solid(curves.wires(1, False), surface.s)
             try:
-                filleted = fillet_pattern(hub, blade, angles_deg, fillet_radius, run_out,
-                                          reduce_where_tight=params.hub.root_fillet_tight_bends == TightBends.REDUCE,
-                                          blade_in_pieces=in_pieces)
+                filleted = fillet_pattern(hub, closed, angles_deg, fillet_radius, run_out,
+                                          reduce_where_tight=params.hub.root_fillet_tight_bends == TightBends.REDUCE)
             except KernelError as error:
                 if surface.lower_corner_index is None or surface.round_trailing_edge:
                     raise
@@ -212,12 +214,27 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
     else:
         solid, fused = _join_blades_to_hub(hub, blade, blades, angles_deg, timer)
         route, face_parts = fused.route, fused.face_parts
-    if params.handedness == Handedness.CCW:  # the spec's blade is 'cw'; 'ccw' is its mirror image
+    with timer.stage(Stage.STRICT_CHECK):  # before the mirror, which copies the faces and loses the pattern
+        solid, checks = _strictly_valid(solid, root_fillet is not None and surface.lower_corner_index is None)
+    if params.handedness == Handedness.CCW:  # the spec's blade is 'cw'; 'ccw' is its mirror image (an isometry)
         with timer.stage(Stage.MIRROR):
             solid = mirrored(solid)  # a transformed copy: the same faces in the same order
             hub, blades = mirrored(hub, check=False), [mirrored(part, check=False) for part in blades]
     return Propeller(params, solid, hub, blades, surface, curves, timer.seconds, route, targets, mounting,
-                     face_parts, root_fillet)
+                     face_parts, root_fillet, checks)
+
+
+def _strictly_valid(solid: cq.Solid, fillet_on_sharp_edge: bool) -> tuple[cq.Solid, StrictCheck]:
+    """:func:`torus_cad.kernel.strict.strict_valid_solid`, its error with the way out for a filleted knife edge."""
+    try:
+        return strict_valid_solid(solid, "the propeller")
+    except KernelError as error:
+        if not fillet_on_sharp_edge:
+            raise
+        # OpenCascade's rolling ball turns round the zero-thickness edge in one degenerate corner face.
+        raise KernelError(f"{error}; a root fillet round a sharp trailing edge can leave a self-intersecting "
+                          "corner face there: airfoil.trailing_edge_thickness > 0 with "
+                          "airfoil.trailing_edge_shape = 'round' takes it") from None
 
 
 def _place_mounting(params: PropellerParameters) -> HubMounting:
@@ -272,14 +289,23 @@ def _check_volume(solid: cq.Solid, hub: cq.Solid, blade: cq.Solid, blades: int) 
                           f"hub + {blades} blades {hub_volume + blades * blade_volume:.3f}] mm^3")
 
 
-def build_report(propeller: Propeller, density_g_cm3: float) -> dict[str, Any]:
-    """The JSON report: parameters, mass properties, balance, printability, validity and stage times."""
+def build_report(propeller: Propeller, density_g_cm3: float,
+                 meshes: Mapping[str, dict[str, Any]] | None = None) -> dict[str, Any]:
+    """The JSON report: parameters, mass properties, balance, printability, validity and stage times.
+
+    ``checks`` names every check the solid (and each written mesh, ``meshes``: {"stl" or "3mf":
+    :meth:`torus_cad.kernel.mesh_check.MeshCheck.to_dict`}) passed."""
     properties = propeller.mass_properties(density_g_cm3)
+    checks: dict[str, Any] = {} if propeller.checks is None else propeller.checks.to_dict()
+    for kind, mesh in (meshes or {}).items():
+        checks[f"{kind}_self_intersections"] = mesh["self_intersecting_pairs"] == 0
     return {
         "name": propeller.parameters.name,
         "parameters": propeller.parameters.to_dict(),
         "valid": True,
         "solids": 1,
+        "checks": checks,
+        **{f"{kind}_mesh": mesh for kind, mesh in (meshes or {}).items()},
         **properties.to_dict(),
         "balance": balance(propeller.solid, density_g_cm3).to_dict(),
         "printability": propeller.printability().to_dict(),

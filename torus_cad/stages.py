@@ -25,6 +25,7 @@ class Stage(StrEnum):
     FUSE = "fuse"
     CHECK = "check"
     FILLET = "fillet"
+    STRICT_CHECK = "strict_check"
     MIRROR = "mirror"
     STEP_WRITE = "step_write"
     STL_WRITE = "stl_write"
@@ -46,6 +47,7 @@ _LABELS = {
     Stage.FUSE: "fusing blades with the hub",
     Stage.CHECK: "checking the solid",
     Stage.FILLET: "filleting the blade roots",
+    Stage.STRICT_CHECK: "checking for self-intersections",
     Stage.MIRROR: "mirroring (clockwise)",
     Stage.STEP_WRITE: "writing STEP",
     Stage.STL_WRITE: "writing STL",

@@ -188,3 +188,16 @@ SIMULATE_CONVERGED_VARIATION = 0.02
 #: mesher needs about 1 kB per tetrahedron, so the limit is near 3.5 GB of memory and, on a 2-core
 #: machine, about half an hour.
 CFD_TETRAHEDRA_LIMIT = 3_000_000
+
+# -- the strict validity check (torus_cad.kernel.strict) ---------------------------------------------
+
+#: Two blade copies closer than this (mm) count as interfering (their faces' tolerances are ~1e-7 mm).
+STRICT_BLADE_SEPARATION_MM = 1e-4
+
+#: Axis directions and positions within this of the z axis (unit vector components, mm) count as on it.
+STRICT_AXIS_TOLERANCE = 1e-9
+
+#: An STL or 3MF tessellation with intersecting triangle pairs is redone with half the linear
+#: deflection, at most this many times (torus_cad.kernel.mesh_check); each halving costs about 1.3-2x
+#: the triangles.
+STL_REFINE_HALVINGS = 3

@@ -30,9 +30,10 @@ from OCP.XCAFDoc import XCAFDoc_DocumentTool
 
 from torus_cad.errors import KernelError
 from torus_cad.kernel.files import atomic_path
+from torus_cad.kernel.mesh_check import MeshCheck, intersecting_pairs_in_file, refined_until_intersection_free
 from torus_cad.tolerances import DISK_FULL_FREE_BYTES
 
-__all__ = ["atomic_path", "read_step", "write_step", "write_stl"]
+__all__ = ["atomic_path", "read_step", "write_checked_stl", "write_step", "write_stl"]
 
 _STEP_SCHEMAS = {"AP214": "AP214IS", "AP242": "AP242DIS"}
 _STEP_END_MARKER = b"END-ISO-10303-21;"
@@ -121,14 +122,31 @@ def read_step(path: str | Path) -> cq.Shape:
 
 def write_stl(shape: cq.Shape, path: str | Path, linear_deflection: float, angular_deflection: float) -> Path:
     """Tessellate ``shape`` (deflections in mm and radians) and write a binary STL."""
+    path = Path(path)
+    with atomic_path(path) as temp:
+        _write_stl_to(shape, temp, path, linear_deflection, angular_deflection)
+    return path
+
+
+def write_checked_stl(shape: cq.Shape, path: str | Path, linear_deflection: float,
+                      angular_deflection: float) -> MeshCheck:
+    """:func:`write_stl`, with the written file read back by meshlib and re-tessellated at half the
+    linear deflection until no two of its triangles intersect (torus_cad.kernel.mesh_check)."""
+    path = Path(path)
+    with atomic_path(path) as temp:
+        def write(deflection: float) -> tuple[int, int]:
+            _write_stl_to(shape, temp, path, deflection, angular_deflection)
+            return intersecting_pairs_in_file(temp)
+
+        return refined_until_intersection_free(write, linear_deflection, angular_deflection, "STL")
+
+
+def _write_stl_to(shape: cq.Shape, temp: Path, path: Path, linear_deflection: float, angular_deflection: float) -> None:
     mesher = BRepMesh_IncrementalMesh(shape.wrapped, linear_deflection, False, angular_deflection, True)
     mesher.Perform()
     if not mesher.IsDone():
         raise KernelError("OpenCascade could not tessellate the solid for STL")
     writer = StlAPI_Writer()
     writer.ASCIIMode = False
-    path = Path(path)
-    with atomic_path(path) as temp:
-        if not writer.Write(shape.wrapped, str(temp)) or not _stl_whole(temp):
-            raise _write_failure("STL", path, temp)
-    return path
+    if not writer.Write(shape.wrapped, str(temp)) or not _stl_whole(temp):
+        raise _write_failure("STL", path, temp)

@@ -19,6 +19,7 @@ from scipy.spatial import cKDTree
 
 from torus_cad.errors import KernelError
 from torus_cad.kernel.export import atomic_path
+from torus_cad.kernel.mesh_check import MeshCheck, intersecting_pairs, refined_until_intersection_free
 
 #: Tessellation nodes closer than this (mm) are one vertex of the 3MF mesh.
 _MERGE_DISTANCE_MM = 1e-6
@@ -84,9 +85,23 @@ def closed_mesh(shape: cq.Shape, linear_deflection: float, angular_deflection: f
 
 
 def write_3mf(shape: cq.Shape, path: str | Path, name: str, linear_deflection: float,
-              angular_deflection: float, version: str) -> Path:
-    """Write ``shape`` as a 3MF package with one mesh object named ``name`` (millimetres)."""
-    vertices, triangles = closed_mesh(shape, linear_deflection, angular_deflection)
+              angular_deflection: float, version: str) -> MeshCheck:
+    """Write ``shape`` as a 3MF package with one mesh object named ``name`` (millimetres), its mesh
+    re-tessellated at half the linear deflection until no two triangles intersect (meshlib,
+    torus_cad.kernel.mesh_check); return the deflection used."""
+    found: list[tuple[NDArray[np.float64], NDArray[np.int64]]] = []
+
+    def tessellate(deflection: float) -> tuple[int, int]:
+        found[:] = [closed_mesh(shape, deflection, angular_deflection)]
+        return intersecting_pairs(*found[0]), len(found[0][1])
+
+    check = refined_until_intersection_free(tessellate, linear_deflection, angular_deflection, "3MF")
+    _write_package(path, name, version, *found[0])
+    return check
+
+
+def _write_package(path: str | Path, name: str, version: str, vertices: NDArray[np.float64],
+                   triangles: NDArray[np.int64]) -> Path:
     vertex_lines = "".join(f'    <vertex x="{x:.6f}" y="{y:.6f}" z="{z:.6f}"/>\n' for x, y, z in vertices.tolist())
     triangle_lines = "".join(f'    <triangle v1="{a}" v2="{b}" v3="{c}"/>\n' for a, b, c in triangles.tolist())
     model = (_MODEL_HEAD.format(name=name, version=version) + "    <vertices>\n" + vertex_lines + "    </vertices>\n"

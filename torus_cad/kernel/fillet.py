@@ -2,12 +2,12 @@
 
 What makes OpenCascade's rolling-ball fillet work on these blades (measured, see the README):
 
-* The blade's side must have a true edge at the sharp trailing edge, where the fillet's two
-  ends meet: a fillet along a junction that runs round one face closed in u fails. The side is
-  lofted in three faces (u in thirds of the section curves' parameter, ``blade_in_pieces``; a
-  closed side face of a blade made otherwise is split so, ShapeUpgrade_ShapeDivideClosed).
-  A split vertex near the leading edge (u = 1/2, where the section turns tightly, as the
-  build's own lower/upper split has it) makes the fillet fail again, so it is not split in halves.
+* The lofted blade's side is one B-spline face, closed in u with its seam on the sharp
+  trailing edge. A fillet along a junction that runs round such a face fails; the face is
+  therefore split into three (u in thirds, ShapeUpgrade_ShapeDivideClosed) before the fuse, so
+  the trailing edge is a true edge between two faces, where the fillet's two ends meet.
+  A split vertex near the leading edge (u = 1/2), where the section turns tightly, makes the
+  fillet fail again, so it is not split in halves.
 * The junction edges are the edges between a blade face (B-spline) and a hub face (the hub is
   made of planes, cylinders and cones only).
 * When that fails, further tries (:data:`_TRIES`): the side face split in quarters, thirds with
@@ -131,13 +131,8 @@ _FULL_TURN = 2.0 * math.pi
 _FALLBACK_FRACTIONS = (0.5, 0.25, 0.1)
 
 
-#: Builds the blade with its side in the given number of faces of equal ranges of the section
-#: curves' parameter (torus_cad.kernel.wires.SectionCurves.wires, lofted).
-BladeInPieces = Callable[[int], cq.Solid]
-
-
 def prepare_blade_for_fillet(blade: cq.Solid, pieces: int = SIDE_FACE_PIECES[0]) -> cq.Solid:
-    """The same blade with a closed side face split into ``pieces`` equal parts in u (the trailing edge becomes an edge)."""
+    """The same blade with its closed side face split into ``pieces`` equal parts in u (the trailing edge becomes an edge)."""
     divide = ShapeUpgrade_ShapeDivideClosed(blade.wrapped)
     divide.SetNbSplitPoints(pieces - 1)
     divide.Perform()
@@ -302,13 +297,12 @@ _RUN_OUT_RADII = 3.0
 
 
 def fillet_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], radius_mm: float,
-                   run_out: RunOutHub | None = None, reduce_where_tight: bool = False,
-                   blade_in_pieces: BladeInPieces | None = None) -> RootFillet:
+                   run_out: RunOutHub | None = None, reduce_where_tight: bool = False) -> RootFillet:
     """The filleted propeller from one filleted blade: blade 0 joined to ``hub``, filleted, patterned.
 
-    ``blade`` is built at ``angles_deg[0]``; the side is in the pieces each of :data:`_TRIES`
-    names, by ``blade_in_pieces`` or, without it, by splitting a closed side face of ``blade``
-    (:func:`prepare_blade_for_fillet`), and the fillet made as each try says until it works. Where a blade root comes within about a radius of the hub's end face, the
+    ``blade`` is built at ``angles_deg[0]``; its side face is split as
+    :func:`prepare_blade_for_fillet` does, and the fillet made as each of :data:`_TRIES` says
+    until it works. Where a blade root comes within about a radius of the hub's end face, the
     fillet would have to roll over the hub's edge and fails. With ``run_out``, the tries are then
     made on a hub longer at both ends (the fillet runs out past the end), and the result is cut
     back to the hub's length (the fillet ends in the end face, as it would when a longer filleted
@@ -326,7 +320,7 @@ def fillet_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], 
     Raises KernelError as :func:`fillet_blade_roots` does when the fillet fails; returns a
     checked single valid solid.
     """
-    split = _LazySplits(blade, blade_in_pieces)
+    split = _LazySplits(blade)
     try:  # the common case; the child stops at FILLET_TIME_LIMIT_S, as ever
         return _fillet_and_pattern(hub, split[0], angles_deg, radius_mm, suggest=False)
     except KernelError:
@@ -402,19 +396,16 @@ class _RunOut:
 
 
 class _LazySplits:
-    """``blade`` with its side in each number of :data:`SIDE_FACE_PIECES`, made when first asked for
-    (by ``in_pieces``, else by :func:`prepare_blade_for_fillet`)."""
+    """``blade`` split into each number of :data:`SIDE_FACE_PIECES`, made when first asked for."""
 
-    def __init__(self, blade: cq.Solid, in_pieces: BladeInPieces | None = None) -> None:
+    def __init__(self, blade: cq.Solid) -> None:
         self.blade = blade
-        self.in_pieces = in_pieces
         self.made: dict[int, cq.Solid] = {}
 
     def __getitem__(self, index: int) -> cq.Solid:
         pieces = SIDE_FACE_PIECES[index]
         if pieces not in self.made:
-            self.made[pieces] = (prepare_blade_for_fillet(self.blade, pieces) if self.in_pieces is None
-                                 else self.in_pieces(pieces))
+            self.made[pieces] = prepare_blade_for_fillet(self.blade, pieces)
         return self.made[pieces]
 
     def __iter__(self) -> Iterator[cq.Solid]:

@@ -79,14 +79,17 @@ class SectionCurves:
     round_trailing_edge: bool = False
     leading_edge_parameter: float = 0.5
 
-    def wires(self, airfoil_pieces: int = 1) -> list[cq.Wire]:
+    def wires(self, airfoil_pieces: int = 1, split_sharp: bool = True) -> list[cq.Wire]:
         """One closed wire per section.
 
         Sharp trailing edge: with ``airfoil_pieces`` 1, two edges (lower and upper surface, split
-        at the leading edge); otherwise ``airfoil_pieces`` edges of equal parameter ranges. Blunt:
-        the base and the airfoil edge, the latter split into ``airfoil_pieces`` equal ranges.
+        at the leading edge; one closed edge with ``split_sharp`` False, for the root fillet, which
+        splits the closed face itself: torus_cad.kernel.fillet); otherwise ``airfoil_pieces`` edges
+        of equal parameter ranges. Blunt: the base and the airfoil edge, the latter split into
+        ``airfoil_pieces`` equal ranges.
         """
-        return [bspline_wire(poles, self.knots, airfoil_pieces, self.leading_edge_parameter) for poles in self.poles]
+        split = self.leading_edge_parameter if split_sharp else None
+        return [bspline_wire(poles, self.knots, airfoil_pieces, split) for poles in self.poles]
 
 
 def _closed_from_trailing_edge(section_points: NDArray[np.float64], trailing_edge_index: int) -> NDArray[np.float64]:
@@ -259,14 +262,14 @@ def _edge(curve: Geom_BSplineCurve) -> TopoDS_Edge:
 
 
 def bspline_wire(poles: NDArray[np.float64], knots: NDArray[np.float64], last_pieces: int = 1,
-                 closed_split: float = 0.5) -> cq.Wire:
+                 closed_split: float | None = 0.5) -> cq.Wire:
     """A closed wire from ``(m, 3)`` poles and a full knot vector of a non-rational cubic B-spline.
 
     One edge per piece between C0 corner knots (see :func:`_corner_knots`), so that each piece
     lofts into its own face; the last piece (the airfoil) is further split into ``last_pieces``
     equal parameter ranges. A curve without corners (a sharp trailing edge, whose crease is the
     curve's start and end) is never left as one closed edge: with ``last_pieces`` 1 it is split
-    at the parameter ``closed_split`` (the leading edge) into two.
+    at the parameter ``closed_split`` (the leading edge) into two (None: one closed edge).
     """
     builder = BRepBuilderAPI_MakeWire()
     pieces = _pieces(np.asarray(poles, float), np.asarray(knots, float))
@@ -274,7 +277,7 @@ def bspline_wire(poles: NDArray[np.float64], knots: NDArray[np.float64], last_pi
         edge_curve = _bspline_curve(piece_poles, piece_knots)
         count = last_pieces if index == len(pieces) - 1 else 1
         bounds = np.linspace(piece_knots[0], piece_knots[-1], count + 1)
-        if len(pieces) == 1 and count == 1:
+        if len(pieces) == 1 and count == 1 and closed_split is not None:
             bounds = np.array([piece_knots[0], closed_split, piece_knots[-1]])
         for first, last in itertools.pairwise(bounds):
             segment = edge_curve if len(bounds) == 2 else _segment(edge_curve, float(first), float(last))
