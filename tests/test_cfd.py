@@ -91,7 +91,7 @@ def test_meshio_reads_the_gmshtofoam_file_and_the_report_and_readme_agree(cfd_ou
     assert report["sicn_min"] > 0.0  # no inverted element
     assert all(count > 0 for count in report["triangles"].values())
     readme = (cfd_out / "README.txt").read_text()
-    assert "gmshToFoam torus_propeller_cfd_v2.msh" in readme and "rotating_interface" in readme
+    assert 'gmshToFoam "$MESH/torus_propeller_cfd_v2.msh"' in readme and "rotating_interface" in readme
     assert sorted(path.name for path in cfd_out.iterdir()) == [
         "README.txt", "torus_propeller_cfd.json", "torus_propeller_cfd.msh", "torus_propeller_cfd.step",
         "torus_propeller_cfd_v2.msh"]
@@ -128,8 +128,8 @@ def _crossing_pairs(msh_path, group: str) -> int:
 
     mesh = meshio.read(msh_path)
     tag = mesh.field_data[group][0]
-    triangles = np.concatenate([block.data for block, tags in zip(mesh.cells, mesh.cell_data["gmsh:physical"])
-                                if block.type == "triangle" and np.all(tags == tag)])
+    triangles = np.concatenate([block.data[tags == tag] for block, tags in zip(mesh.cells, mesh.cell_data["gmsh:physical"])
+                                if block.type == "triangle"])
     used, inverse = np.unique(triangles, return_inverse=True)
     surface = mrmeshnumpy.meshFromFacesVerts(np.ascontiguousarray(inverse.reshape(-1, 3), dtype=np.int32),
                                              np.ascontiguousarray(mesh.points[used], dtype=np.float64))

@@ -184,9 +184,9 @@ SIMULATE_DIVERGENCE_RESIDUAL = 1e3
 SIMULATE_CONVERGED_VARIATION = 0.02
 
 #: Largest CFD mesh ``torus-cad cfd`` starts, in tetrahedra (estimated from the settings before any
-#: meshing, torus_cad.cfd.estimate). The default design's default mesh has 231,405; gmsh's Delaunay
-#: mesher needs about 1 kB per tetrahedron, so the limit is near 3.5 GB of memory and, on a 2-core
-#: machine, about half an hour.
+#: meshing, torus_cad.cfd.estimate). The default design's default mesh has 231,405 (53 s of CPU, 0.9 GB
+#: peak); the process needs about 0.75 GB plus 0.62 kB per tetrahedron (scripts/cfd_budget.py), so
+#: the limit is about 2.6 GB and 13 times the default's work.
 CFD_TETRAHEDRA_LIMIT = 3_000_000
 
 # -- the strict validity check (torus_cad.kernel.strict) ---------------------------------------------

@@ -6,7 +6,13 @@ propeller itself are fragmented together (so the zone's boundary is one conforma
 shared by both regions), the propeller's volume is removed (its faces stay, as the wall),
 and the fluid is meshed with tetrahedra: ``cells_per_chord`` elements across the smallest
 chord on the propeller, finer where the surface curves (gmsh's curvature sizing), growing by
-``growth_rate`` per element away from the propeller up to ``far_size``.
+``growth_rate`` per element away from the propeller up to ``far_size``. Without curvature sizing
+the trailing edges get a size field of their own; the surface mesh is checked for crossing
+triangles and refined where they cross before the volume is meshed (a crossing surface stops
+gmsh's 3D mesher), so coarse settings mesh too.
+
+The files (STEP, both .msh, README.txt and the sealed report) are one output set
+(torus_cad.outputs), named ``<name>_cfd``.
 
 Physical groups (what solvers see as patches and zones):
 ``propeller`` (wall), ``rotating_interface`` (between the zones), ``inlet``, ``outlet``,
@@ -301,7 +307,12 @@ def set_sizes(gmsh: Any, domain: Domain, settings: Cfd, entities: DomainEntities
     (neighbours differ by about ``growth_rate``), capped at ``far_size``; on the two cylinders at most
     1/CYLINDER_SEGMENTS of their circumference (so their facets keep the volumes within ~0.1 %);
     curvature refinement on top; around the trailing ``edges`` (if given) sizes scaled to their
-    thickness (:func:`_trailing_edge_field`). Returns the background field's tag."""
+    thickness (:func:`_trailing_edge_field`). Returns the background field's tag.
+
+    The edges are needed only without curvature refinement: with it, gmsh already gives the
+    trailing edge (a crease, or a blunt edge's tight round or corners: the surface's highest
+    curvature) elements of ``MeshSizeMin``, and the edge field's graded band around it would
+    only add elements."""
     fields = gmsh.model.mesh.field
     distance = fields.add("Distance")
     fields.setNumbers(distance, "SurfacesList", entities.surfaces["propeller"])
@@ -514,7 +525,8 @@ def write_cfd_domain(params: PropellerParameters, out_dir: str | Path, threads: 
         with gmsh_session(gmsh, threads):
             with timer.stage(CfdStage.DOMAIN):
                 entities = build_domain(gmsh, step, domain)
-                background = set_sizes(gmsh, domain, settings, entities, trailing_edges(params))
+                edges = trailing_edges(params) if settings.curvature_cells == 0.0 else None
+                background = set_sizes(gmsh, domain, settings, entities, edges)
                 add_groups(gmsh, entities)
             with timer.stage(CfdStage.SURFACE_MESH):
                 refinement = mesh_surfaces(gmsh, domain, entities, background)

@@ -21,16 +21,16 @@ from numpy.typing import NDArray
 from torus_cad.parameters import PropellerParameters
 
 #: Blade samples (sections, points around) and hub samples per mm for the surface cloud.
-CLOUD_GRID = (40, 128)
+CLOUD_GRID = (32, 112)
 HUB_SAMPLES_PER_MM = 2.0
 #: Random points in the rotating zone and in the stationary region.
-ZONE_SAMPLES, OUTER_SAMPLES = 60_000, 20_000
+ZONE_SAMPLES, OUTER_SAMPLES = 30_000, 10_000
 #: Fitted constants: tetrahedra per unit of ∫ dV / h³ and per surface triangle (∫ dA / h² over
 #: the triangle's area, sqrt(3)/4 h²); resident memory of the process in MB, fixed part and per tetrahedron.
-TETS_PER_VOLUME_UNIT = 7.6
-TETS_PER_TRIANGLE = 1.1
-MEMORY_BASE_MB = 520.0
-MEMORY_PER_TET_KB = 1.0
+TETS_PER_VOLUME_UNIT = 3.0
+TETS_PER_TRIANGLE = 1.7
+MEMORY_BASE_MB = 750.0
+MEMORY_PER_TET_KB = 0.62
 _SEED = 20260101
 _EQUILATERAL_AREA = np.sqrt(3.0) / 4.0
 
@@ -106,6 +106,14 @@ def _cylinder_samples(rng: np.random.Generator, count: int, radius: float, z_ran
 
 def estimate_cfd_mesh(params: PropellerParameters) -> CfdEstimate:
     """The expected tetrahedra, surface triangles and memory of ``torus-cad cfd`` for ``params``."""
+    volume_units, triangles = size_integrals(params)
+    tetrahedra = int(TETS_PER_VOLUME_UNIT * volume_units + TETS_PER_TRIANGLE * triangles)
+    return CfdEstimate(tetrahedra, triangles, MEMORY_BASE_MB + MEMORY_PER_TET_KB * tetrahedra / 1000.0)
+
+
+def size_integrals(params: PropellerParameters) -> tuple[float, int]:
+    """``∫ dV / h³`` over the fluid and the surface triangles (``∫ dA / h²`` over an equilateral
+    triangle's area) of ``params``' CFD mesh: what the estimate's constants multiply."""
     from scipy.spatial import cKDTree
 
     from torus_cad.cfd.domain import CYLINDER_SEGMENTS, MIN_SIZE_FRACTION, domain_for
@@ -141,8 +149,26 @@ def estimate_cfd_mesh(params: PropellerParameters) -> CfdEstimate:
         size = np.minimum(domain.far_size, surface_size[nearest] + growth * distance)
         volume_units += volume / count * float(np.sum(1.0 / size[keep & outside] ** 3))
     triangles = _surface_triangles(params, domain, blade_points, surface_size, len(blade_points), CYLINDER_SEGMENTS)
-    tetrahedra = int(TETS_PER_VOLUME_UNIT * volume_units + TETS_PER_TRIANGLE * triangles)
-    return CfdEstimate(tetrahedra, triangles, MEMORY_BASE_MB + MEMORY_PER_TET_KB * tetrahedra / 1000.0)
+    if settings.curvature_cells == 0.0:  # the trailing edges' own size field (domain.set_sizes)
+        edge_volume, edge_triangles = _trailing_edge_band(params, domain.surface_size, growth)
+        volume_units, triangles = volume_units + edge_volume, triangles + edge_triangles
+    return volume_units, triangles
+
+
+def _trailing_edge_band(params: PropellerParameters, surface_size: float, growth: float) -> tuple[float, int]:
+    """``∫ dV / h³`` and the triangles added around the trailing edges by their size field: sizes
+    ``h = h_e + growth r`` at a distance ``r`` from edges of total length ``L``, up to the surface size,
+    on the two faces that meet there (triangles) and in the half space beside them (volume)."""
+    from torus_cad.cfd.domain import MIN_SIZE_FRACTION, TRAILING_EDGE_SIZE_PER_THICKNESS, trailing_edges
+
+    edges = trailing_edges(params)
+    length = sum(float(np.linalg.norm(np.diff(curve, axis=0), axis=1).sum()) for curve in edges.curves_mm)
+    edge_size = max(TRAILING_EDGE_SIZE_PER_THICKNESS * edges.thickness_mm, MIN_SIZE_FRACTION * surface_size)
+    if edge_size >= surface_size:
+        return 0.0, 0
+    triangles = 2.0 * length / growth * (1.0 / edge_size - 1.0 / surface_size) / _EQUILATERAL_AREA
+    volume = np.pi * length / growth**2 * (1.0 / edge_size - 1.0 / surface_size)
+    return float(volume), int(triangles)
 
 
 def _surface_triangles(params: PropellerParameters, domain: object, blade_points: NDArray[np.float64],
