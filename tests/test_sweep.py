@@ -567,3 +567,18 @@ def test_a_signal_stops_the_sweep_with_one_line_its_exit_code_and_the_table(tmp_
     statuses = [row["status"] for row in read_table(out / "results.csv")]
     assert len(statuses) == 10 and "valid" in statuses and "pending" in statuses
     _wait_for(lambda: all(_state(pid) in ("", "Z") for pid in helpers), 10, "the workers to stop")
+
+
+def test_workers_are_capped_at_the_available_cores_with_one_line(monkeypatch):
+    import os
+
+    from torus_cad.batch.runner import available_cores, capped_workers
+
+    monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0, 1})  # a process allowed on 2 cores
+    assert available_cores() == 2
+    lines: list[str] = []
+    assert capped_workers(100_000, 9, warn=lines.append) == 2
+    assert lines == ["--workers 100000 capped at the 2 cores available (--oversubscribe to start 9)"]
+    assert capped_workers(100_000, 9, oversubscribe=True, warn=lines.append) == 9 and len(lines) == 1
+    assert capped_workers(None, 9) == 2 and capped_workers(8, 1) == 1 and capped_workers(2, 5) == 2
+    assert len(lines) == 1

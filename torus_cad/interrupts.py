@@ -6,6 +6,12 @@ into whatever code was running (an exception inside a half-finished import can l
 half-initialised extension module behind, which crashed at exit): it removes the files staged for
 publishing (torus_cad.kernel.files.removed_on_exit), prints one line and leaves with ``os._exit``.
 
+Before the handlers are in, while Python itself starts (its ``site`` import, the first few
+milliseconds), a SIGINT is Python's: it can end the process with "Fatal Python error" and exit 1.
+A caller that needs a clean end at every moment starts the command with the signals blocked
+(``env --block-signal=INT,TERM,HUP torus-cad ...``): :func:`exit_on_signals` unblocks them once its
+handlers are installed, so one that arrived during the start is handled then, with one line.
+
 A signal that arrives while an output set is being published (:func:`deferred`) waits until the
 set is complete. Python runs signal handlers between bytecodes, so a signal during one long
 OpenCascade call takes effect when that call returns (the budgets in torus_cad.budgets keep such
@@ -71,7 +77,10 @@ def _handler(signum: int, frame: FrameType | None) -> None:
 
 def exit_on_signals(program: str = "torus-cad") -> Callable[[], None]:
     """Make SIGINT, SIGTERM and SIGHUP end the process cleanly (see the module doc); return a function
-    that restores the previous handlers. Does nothing outside the main thread."""
+    that restores the previous handlers. Does nothing outside the main thread.
+
+    The signals it handles are then unblocked: one that arrived while they were blocked (a caller
+    that blocks them over the interpreter's start-up) takes effect now, through the handler."""
     global _program
     _program = program
     previous: dict[int, _Handler] = {}
@@ -81,6 +90,8 @@ def exit_on_signals(program: str = "torus-cad") -> Callable[[], None]:
                 previous[signum] = signal.signal(signum, _handler)
     except ValueError:  # not the main thread: signals are not ours to handle
         pass
+    with suppress(AttributeError, OSError, ValueError):  # no pthread_sigmask (not POSIX)
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, list(previous))
 
     def restore() -> None:
         for signum, handler in previous.items():

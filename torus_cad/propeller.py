@@ -311,7 +311,7 @@ def build_report(propeller: Propeller, density_g_cm3: float,
         "printability": propeller.printability().to_dict(),
         "handedness": propeller.parameters.handedness.value,
         "spin_to_push_air_down": propeller.spin_to_push_air_down().value,
-        "set_screw_angle_deg": propeller.mounting.set_screw_angle_deg if propeller.mounting.set_screw_diameter_mm else None,
+        "set_screw_angle_deg": _set_screw_angle_on_the_part_deg(propeller),
         "section_fit_error_mm": propeller.section_curves.fit_error,
         "stage_seconds": dict(propeller.stage_seconds),
         "fuse_route": propeller.fuse_route.value,
@@ -319,6 +319,18 @@ def build_report(propeller: Propeller, density_g_cm3: float,
         **({"design_targets": propeller.design_targets.to_dict()}
            if propeller.design_targets is not None and propeller.design_targets.requested else {}),
     }
+
+
+def _set_screw_angle_on_the_part_deg(propeller: Propeller) -> float | None:
+    """Where the set-screw hole of the part as built points, degrees about +z from +x (None: no set screw).
+
+    The mounting is chosen on the spec's (cw) blades; a ccw part is their mirror image through the
+    XZ plane, which takes the direction at angle a to -a.
+    """
+    if not propeller.mounting.set_screw_diameter_mm:
+        return None
+    angle_deg = propeller.mounting.set_screw_angle_deg
+    return (-angle_deg) % 360.0 if propeller.parameters.handedness == Handedness.CCW else angle_deg
 
 
 def write_outputs(propeller: Propeller, out_dir: Path, density_g_cm3: float = DEFAULT_DENSITY_G_CM3,

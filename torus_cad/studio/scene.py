@@ -2,7 +2,10 @@
 
 The preview is the spec's own surface (torus_cad.geometry) at the design's resolution, run
 through the same pre-kernel checks as a build, so a design the build would refuse is refused
-here first, in a fraction of the build's time. No CAD kernel is imported.
+here first, in a fraction of the build's time. What is drawn is sampled at most
+:data:`PREVIEW_MAX_SAMPLES` (sections, points), so that a design asking for the largest
+resolution (400 x 2000 x 12 blades: 9.6 million vertices) cannot make the server serialise
+hundreds of megabytes to every page; the exact solid replaces it. No CAD kernel is imported.
 """
 
 from __future__ import annotations
@@ -25,6 +28,9 @@ HUB_SEGMENTS = 96
 #: built (the preview uses the design's own sampling): 400 x 400 lands within 1e-5 mm of the
 #: limit on the default design (25 x 80 is 0.008 mm short), in ~0.1 s.
 TIP_SAMPLES = (400, 400)
+
+#: Most (sections, points) of a blade's drawn preview (the default design's 25 x 80 is drawn as it is).
+PREVIEW_MAX_SAMPLES = (60, 240)
 
 #: Handedness 'ccw' is the spec's propeller reflected through the XZ plane (torus_cad.kernel.mirror).
 MIRROR = np.array([1.0, -1.0, 1.0])
@@ -89,7 +95,8 @@ def cylinder_mesh(radius: float, length: float, segments: int = HUB_SEGMENTS) ->
 
 
 def preview_scene(params: PropellerParameters) -> PreviewScene:
-    """The preview of ``params``: hub cylinder and every blade's surface mesh, at the design's resolution.
+    """The preview of ``params``: hub cylinder and every blade's surface mesh, checked at the design's
+    resolution and drawn at most at :data:`PREVIEW_MAX_SAMPLES`.
 
     The design targets (diameter, pitch, NACA designation) are applied and the blade checked as a
     build does them, so a design the build refuses raises the build's one-line GeometryError or
@@ -100,18 +107,23 @@ def preview_scene(params: PropellerParameters) -> PreviewScene:
     geometry = params.geometry()
     surface = params.blade_surface()
     check_feasible(geometry, surface)
+    tip = _tip_diameter(surface.points)  # at the design's sampling (a mirror keeps the radii)
+    sections, points = (min(wanted, most) for wanted, most in zip((params.resolution.sections,
+                                                                   params.resolution.points), PREVIEW_MAX_SAMPLES))
+    if (sections, points) != (params.resolution.sections, params.resolution.points):
+        surface = params.blade_surface(sections=sections, points=points)
     mesh = blade_mesh(surface)
-    points, vertices, faces = surface.points, mesh.vertices, mesh.faces
+    section_points, vertices, faces = surface.points, mesh.vertices, mesh.faces
     if params.handedness == Handedness.CCW:  # the mirror image: reflect, and keep the faces outward
-        points, vertices, faces = points * MIRROR, vertices * MIRROR, faces[:, ::-1]
+        section_points, vertices, faces = section_points * MIRROR, vertices * MIRROR, faces[:, ::-1]
     parts = [cylinder_mesh(geometry.hub.radius_mm, geometry.hub.length_mm)]
-    sections = []
+    curves = []
     for index in range(geometry.blades):  # blade i is blade 0 turned about the axis (spec §6.1)
         rotation = rotation_about_z(geometry.blade_angle_deg(index) - geometry.blade_angle_deg(0))
         turn = rotation if params.handedness == Handedness.CW else rotation.T  # mirrored angles turn back
         parts.append(PartMesh(index, vertices @ turn.T, faces))
-        sections.append(points @ turn.T)
-    return PreviewScene(parts, sections, _tip_diameter(points))
+        curves.append(section_points @ turn.T)
+    return PreviewScene(parts, curves, tip)
 
 
 def _tip_diameter(points: NDArray[np.float64]) -> float:
