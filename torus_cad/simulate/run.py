@@ -18,6 +18,7 @@ import asyncio
 import contextlib
 import math
 import os
+import re
 import shutil
 import signal
 import time
@@ -265,8 +266,8 @@ async def run_solver(case: AsyncFoamCase, iterations: int, processes: int, deadl
         if watcher.failure is not None:
             raise watcher.failure from None
         if "floating point" in str(error):
-            raise DivergedError(f"simpleFoam diverged at iteration {history.last_iteration}: floating point "
-                                f"exception; last residuals {_residual_text(history)}") from None
+            raise DivergedError(f"simpleFoam diverged at iteration {_log_iteration(path) or history.last_iteration}: "
+                                f"floating point exception; last residuals {_residual_text(history)}") from None
         raise
     finally:
         watch.cancel()
@@ -278,6 +279,16 @@ async def run_solver(case: AsyncFoamCase, iterations: int, processes: int, deadl
     if watcher.failure is not None:
         raise watcher.failure
     return read_history(path, balance=True)
+
+
+def _log_iteration(case: Path) -> int | None:
+    """The last ``Time = N`` in log.simpleFoam: the iteration the solver was in."""
+    try:
+        text = (case / "log.simpleFoam").read_text(errors="replace")
+    except OSError:
+        return None
+    times = re.findall(r"^Time = (\d+)\s*$", text, flags=re.MULTILINE)
+    return int(times[-1]) if times else None
 
 
 def _residual_text(history: History) -> str:
