@@ -377,6 +377,8 @@ def _command_simulate(args: argparse.Namespace) -> int:
     from torus_cad.progress import StageProgress
 
     params = load_parameters(args.config, args.overrides)
+    if args.convergence and (args.case_only or args.mesh_from):
+        raise ParameterError("--convergence meshes and runs all three levels; it takes neither --case-only nor --mesh-from")
     progress = StageProgress.for_terminal(quiet=args.quiet)
     try:
         from torus_cad.simulate.cli_output import IterationLine, summary_lines

@@ -259,6 +259,9 @@ async def run_solver(case: AsyncFoamCase, iterations: int, processes: int, deadl
     watch = asyncio.ensure_future(watcher.watch())
     try:
         await run_command(case, ["simpleFoam"], processes)
+    except asyncio.CancelledError:  # a cancelled task (a sweep stopping) leaves no solver behind
+        await asyncio.shield(asyncio.to_thread(stop_processes, path))
+        raise
     except SolverError as error:
         if watcher.failure is None:
             watcher.check(timed=False)
