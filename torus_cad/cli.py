@@ -454,7 +454,7 @@ def _add_simulate_parser(commands: Any) -> None:
         "OpenFOAM case (<name>_case/: steady MRF, k-omega SST, an Allrun that repeats the run) and run it with "
         "simpleFoam through foamlib. Writes <name>_performance.json (thrust, torque, power, J, CT, CP, efficiency "
         "or figure of merit, convergence) and <name>_performance.png (force and residual histories). Needs "
-        "OpenFOAM (v1912 or later) and the simulate extra: pip install 'torus_cad[simulate]'.")
+        "OpenFOAM (v1912) and the simulate extra: pip install 'torus_cad[simulate]'.")
     simulate.add_argument("--rpm", type=float, required=True, help="revolutions per minute, >= 0, in the design's "
                           "own sense of rotation (a 'cw' design clockwise seen from +z)")
     simulate.add_argument("--airspeed", type=float, default=0.0, metavar="M_S",

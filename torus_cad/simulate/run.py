@@ -41,7 +41,7 @@ STOP_GRACE_SECONDS = 3.0
 #: Where Debian's openfoam package keeps OpenFOAM's etc/ (its programs need WM_PROJECT_DIR to find it).
 DEBIAN_PROJECT_DIR = Path("/usr/share/openfoam")
 INSTALL_HINT = ("OpenFOAM is not installed (simpleFoam not found on PATH); on Debian or Ubuntu: "
-                "sudo apt-get install --no-install-recommends openfoam (OpenFOAM v1912 or later)")
+                "sudo apt-get install --no-install-recommends openfoam (OpenFOAM v1912)")
 
 
 class MissingOpenFoamError(TorusCadError):
