@@ -6,7 +6,14 @@ from __future__ import annotations
 
 import json
 import math
+import os
+import re
 import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -30,7 +37,7 @@ needs_openfoam = pytest.mark.skipif(not HAS_OPENFOAM, reason="OpenFOAM (simpleFo
 RPM = 10000.0
 #: Iterations of the physics runs: thrust settles within ~2 % by 120 on the coarse mesh.
 ITERATIONS = 150
-PROCESSES = 2 if (len(__import__("os").sched_getaffinity(0)) > 1) else 1
+PROCESSES = 2 if len(os.sched_getaffinity(0)) > 1 else 1
 
 
 # -- numbers without OpenFOAM ---------------------------------------------------------------------
@@ -181,3 +188,63 @@ def test_a_still_propeller_in_still_air_gives_no_thrust(cw, tmp_path):
     still = _run(tmp_path, PropellerParameters(), 0.0, mesh_from=out / "torus_propeller_case", iterations=20)
     assert abs(still["thrust_n"]) < 0.01 * report["thrust_n"]
     assert still["ct"] is None and still["advance_ratio"] is None
+
+
+# -- faults -------------------------------------------------------------------------------------------
+
+def _again(out, *arguments):
+    return ["simulate", "--rpm", f"{RPM:g}", "--processes", "1", "--mesh-from", str(out / "torus_propeller_case"),
+            *arguments]
+
+
+@pytest.mark.slow
+@needs_openfoam
+def test_a_diverging_run_exits_1_naming_the_iteration_and_residual_and_keeps_the_case(cw, tmp_path, capsys,
+                                                                                     monkeypatch):
+    out, _ = cw
+    # every residual above 1e-12 counts as divergence: the watcher stops the solver at its first iteration
+    monkeypatch.setattr("torus_cad.simulate.run.SIMULATE_DIVERGENCE_RESIDUAL", 1e-12)
+    target = tmp_path / "diverged"
+    assert main(_again(out, "--iterations", "50", "--out", str(target))) == 1
+    error = capsys.readouterr().err
+    assert error.count("\n") == 1 and re.search(r"simpleFoam diverged at iteration \d+: \w+ residual \S+ \(limit 1e-12\)",
+                                                error), error
+    assert f"the case is kept in {target / 'torus_propeller_case_failed'}" in error
+    assert (target / "torus_propeller_case_failed" / "log.simpleFoam").is_file()
+    assert [path.name for path in target.iterdir()] == ["torus_propeller_case_failed"]
+
+
+@pytest.mark.slow
+@needs_openfoam
+def test_a_run_over_its_time_budget_is_refused_before_the_solver_starts(cw, tmp_path, capsys):
+    out, _ = cw
+    target = tmp_path / "refused"
+    assert main(_again(out, "--iterations", "20000", "--time-limit", "10", "--out", str(target))) == 2
+    error = capsys.readouterr().err
+    assert error.count("\n") == 1 and "the solver would take about" in error and "--time-limit = 10 s" in error
+    assert not target.exists() or not list(target.iterdir())
+
+
+@pytest.mark.slow
+@needs_openfoam
+def test_sigterm_stops_the_solver_and_publishes_nothing(cw, tmp_path):
+    psutil = pytest.importorskip("psutil")
+    out, _ = cw
+    target = tmp_path / "stopped"
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(Path(__file__).resolve().parent.parent),
+                                                        os.environ.get("PYTHONPATH", "")])}
+    process = subprocess.Popen([sys.executable, "-m", "torus_cad", *_again(out, "--iterations", "2000", "--out",
+                                                                           str(target))],
+                               env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 180
+    while not list(target.glob(".*staging*/torus_propeller_case/postProcessing/residuals/0/solverInfo.dat")):
+        assert process.poll() is None and time.monotonic() < deadline, process.stderr.read() if process.stderr else ""
+        time.sleep(0.5)
+    solvers = psutil.Process(process.pid).children(recursive=True)
+    assert any(child.name() == "simpleFoam" for child in solvers)
+    process.send_signal(signal.SIGTERM)
+    _, error = process.communicate(timeout=60)
+    assert process.returncode == 143 and "interrupted by SIGTERM" in error
+    _, alive = psutil.wait_procs(solvers, timeout=10)
+    assert not alive
+    assert not list(target.iterdir())

@@ -460,6 +460,8 @@ def _command_simulate(args: argparse.Namespace) -> int:
     from torus_cad.progress import StageProgress
 
     params = load_parameters(args.config, args.overrides)
+    if args.convergence and (args.case_only or args.mesh_from):
+        raise ParameterError("--convergence meshes and runs all three levels; it takes neither --case-only nor --mesh-from")
     progress = StageProgress.for_terminal(quiet=args.quiet)
     try:
         from torus_cad.simulate.cli_output import IterationLine, summary_lines
@@ -535,7 +537,7 @@ def _add_simulate_parser(commands: Any) -> None:
         "OpenFOAM case (<name>_case/: steady MRF, k-omega SST, an Allrun that repeats the run) and run it with "
         "simpleFoam through foamlib. Writes <name>_performance.json (thrust, torque, power, J, CT, CP, efficiency "
         "or figure of merit, convergence) and <name>_performance.png (force and residual histories). Needs "
-        "OpenFOAM (v1912 or later) and the simulate extra: pip install 'torus_cad[simulate]'.")
+        "OpenFOAM (v1912) and the simulate extra: pip install 'torus_cad[simulate]'.")
     simulate.add_argument("--rpm", type=float, required=True, help="revolutions per minute, >= 0, in the design's "
                           "own sense of rotation (a 'cw' design clockwise seen from +z)")
     simulate.add_argument("--airspeed", type=float, default=0.0, metavar="M_S",

@@ -204,9 +204,13 @@ def solve_commands(spec: CaseSpec) -> list[list[str]]:
 
 def allrun_text(spec: CaseSpec) -> str:
     """A POSIX shell script that repeats the run by hand, step for step."""
-    lines = ["#!/bin/sh", "# Repeats torus-cad simulate's run of this case (OpenFOAM v1912 or later on PATH).",
+    lines = ["#!/bin/sh", "# Repeats torus-cad simulate's run of this case (OpenFOAM v1912 on PATH).",
              "# Logs go to log.<command>; results to postProcessing/ and the last time folder.",
-             'cd "${0%/*}" || exit 1', "set -e"]
+             'cd "${0%/*}" || exit 1', "set -e",
+             "# Debian's openfoam package: its programs find etc/ through WM_PROJECT_DIR",
+             '[ -n "${WM_PROJECT_DIR:-}" ] || [ ! -d /usr/share/openfoam/etc ] || export WM_PROJECT_DIR=/usr/share/openfoam']
+    if spec.processes > 1:
+        lines.append("# As root (a container), OpenMPI also needs OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1")
     for command in mesh_commands(spec) + solve_commands(spec):
         if command == ["simpleFoam"] and spec.processes > 1:
             command = ["mpiexec", "-n", str(spec.processes), "simpleFoam", "-parallel"]

@@ -18,6 +18,7 @@ import asyncio
 import contextlib
 import math
 import os
+import re
 import shutil
 import signal
 import time
@@ -40,7 +41,7 @@ STOP_GRACE_SECONDS = 3.0
 #: Where Debian's openfoam package keeps OpenFOAM's etc/ (its programs need WM_PROJECT_DIR to find it).
 DEBIAN_PROJECT_DIR = Path("/usr/share/openfoam")
 INSTALL_HINT = ("OpenFOAM is not installed (simpleFoam not found on PATH); on Debian or Ubuntu: "
-                "sudo apt-get install --no-install-recommends openfoam (OpenFOAM v1912 or later)")
+                "sudo apt-get install --no-install-recommends openfoam (OpenFOAM v1912)")
 
 
 class MissingOpenFoamError(TorusCadError):
@@ -258,6 +259,9 @@ async def run_solver(case: AsyncFoamCase, iterations: int, processes: int, deadl
     watch = asyncio.ensure_future(watcher.watch())
     try:
         await run_command(case, ["simpleFoam"], processes)
+    except asyncio.CancelledError:  # a cancelled task (a sweep stopping) leaves no solver behind
+        await asyncio.shield(asyncio.to_thread(stop_processes, path))
+        raise
     except SolverError as error:
         if watcher.failure is None:
             watcher.check(timed=False)
@@ -265,8 +269,8 @@ async def run_solver(case: AsyncFoamCase, iterations: int, processes: int, deadl
         if watcher.failure is not None:
             raise watcher.failure from None
         if "floating point" in str(error):
-            raise DivergedError(f"simpleFoam diverged at iteration {history.last_iteration}: floating point "
-                                f"exception; last residuals {_residual_text(history)}") from None
+            raise DivergedError(f"simpleFoam diverged at iteration {_log_iteration(path) or history.last_iteration}: "
+                                f"floating point exception; last residuals {_residual_text(history)}") from None
         raise
     finally:
         watch.cancel()
@@ -278,6 +282,16 @@ async def run_solver(case: AsyncFoamCase, iterations: int, processes: int, deadl
     if watcher.failure is not None:
         raise watcher.failure
     return read_history(path, balance=True)
+
+
+def _log_iteration(case: Path) -> int | None:
+    """The last ``Time = N`` in log.simpleFoam: the iteration the solver was in."""
+    try:
+        text = (case / "log.simpleFoam").read_text(errors="replace")
+    except OSError:
+        return None
+    times = re.findall(r"^Time = (\d+)\s*$", text, flags=re.MULTILINE)
+    return int(times[-1]) if times else None
 
 
 def _residual_text(history: History) -> str:
