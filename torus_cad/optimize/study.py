@@ -47,6 +47,9 @@ __all__ = ["DEFINITION_ATTR", "TRIALS_DIR", "StudyInterrupted", "StudyResult", "
 
 TRIALS_DIR = "trials"
 DEFINITION_ATTR = "torus_cad_definition"  #: study user attr: the digest of what must not change between runs
+#: Trials in flight per worker: one running and one queued, so that a worker never waits for the sampler
+#: and the storage between two trials (the sweep's window too); constant_liar keeps the sampler off both.
+_TASKS_PER_WORKER = 2
 OUTCOME, REASON, METRICS, CONSTRAINT, FOLDER, SECONDS = "outcome", "reason", "metrics", "constraint", "folder", \
     "seconds"
 
@@ -188,7 +191,8 @@ class _Runner:
                 if scheduler is not None:
                     own_client, own_cluster = cluster.connect(scheduler, workers)
                     executor = own_client.get_executor(pure=False)
-                    window = max(1, len(own_client.scheduler_info().get("workers", {})) or workers or 1)
+                    window = _TASKS_PER_WORKER * max(1, len(own_client.scheduler_info().get("workers", {}))
+                                                     or workers or 1)
                     result.backend = f"dask: {cluster.client_label(own_client)}"
                     run_tasks(self._tasks(result), self._on_result, lambda: executor, window=window, job=run_trial,
                               check_visible=True)
@@ -196,7 +200,8 @@ class _Runner:
                     count = min(workers or available_workers(), available_workers())
                     result.backend = f"local pool, {count} worker{'s' if count > 1 else ''}"
                     run_tasks(self._tasks(result), self._on_result,
-                              lambda: LocalPool(count, self.spec.time_limit_s), window=count, job=run_trial)
+                              lambda: LocalPool(count, self.spec.time_limit_s), window=_TASKS_PER_WORKER * count,
+                              job=run_trial)
         except BaseException:
             self._retry_in_flight()
             raise
