@@ -73,7 +73,7 @@ def _check_whole(trials, total: int) -> None:
 
 
 def _load(url: str, name: str = "light"):
-    return optuna.load_study(study_name=name, storage=url)
+    return optuna.load_study(study_name=name, storage=open_storage(url))
 
 
 # -- the study file ----------------------------------------------------------------------------------
@@ -248,6 +248,25 @@ def test_a_study_killed_with_sigkill_resumes_to_its_trial_count_with_no_duplicat
     _check_whole(trials, 6)
     assert {t.user_attrs.get(RETRY_OF) for t in trials} >= set(running)
     assert "of a stopped run were asked again" in stdout
+
+
+@pytest.mark.slow
+def test_sigterm_stops_the_study_with_one_line_and_exit_143_and_asks_its_running_trials_again(tmp_path):
+    study_path = _study_file(tmp_path, trials=6)
+    out = tmp_path / "out"
+    run = _cli("optimize", str(study_path), "--out", str(out), "--workers", "2")
+    deadline = time.monotonic() + 600
+    while time.monotonic() < deadline and run.poll() is None and not list(out.glob("trials/*/trial_*.json")):
+        time.sleep(0.2)
+    run.send_signal(signal.SIGTERM)
+    _, stderr = run.communicate(timeout=300)
+    assert run.returncode == 143, stderr
+    assert stderr.count("\n") == 1 and "interrupted by SIGTERM" in stderr
+    trials = _load(f"sqlite:///{out / 'light.db'}").get_trials()
+    assert not [t for t in trials if t.state is TrialState.RUNNING]
+    stopped = [t.number for t in trials if t.state is TrialState.FAIL and "outcome" not in t.user_attrs]
+    assert stopped and sorted(t.user_attrs[RETRY_OF] for t in trials if t.state is TrialState.WAITING) == stopped
+    assert (out / "results.csv").read_text().count("\n") == 1 + len(trials)
 
 
 @pytest.mark.slow

@@ -20,7 +20,7 @@ import os
 import threading
 import time
 import warnings
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any
 from urllib.parse import urlsplit, urlunsplit
@@ -28,7 +28,8 @@ from urllib.parse import urlsplit, urlunsplit
 from torus_cad.batch.runner import _identity
 from torus_cad.errors import ParameterError, TorusCadError
 
-__all__ = ["GRACE_S", "HEARTBEAT_S", "Heartbeat", "StorageError", "claim_lock", "open_storage", "owner_record",
+__all__ = ["GRACE_S", "HEARTBEAT_S", "Heartbeat", "StorageError", "claim_lock", "fail_and_retry", "open_storage",
+           "owner_record",
            "public_url", "retry_stale_trials", "storage_url"]
 
 HEARTBEAT_S = 10  #: how often a running process records that its trials are alive, s
@@ -56,6 +57,17 @@ def storage_url(given: str, out_dir: Path, name: str) -> str:
     return given
 
 
+def _with_driver(url: str) -> str:
+    """``postgresql://`` with the driver that is installed named (psycopg2 from the optimize extra, else
+    psycopg): SQLAlchemy's default driver changed between versions."""
+    if not url.startswith("postgresql://"):
+        return url
+    import importlib.util
+
+    driver = "psycopg2" if importlib.util.find_spec("psycopg2") is not None else "psycopg"
+    return f"postgresql+{driver}://" + url.removeprefix("postgresql://")
+
+
 def public_url(url: str) -> str:
     """``url`` with any password replaced by ``***``, for messages and tables."""
     parts = urlsplit(url)
@@ -80,7 +92,7 @@ def open_storage(url: str) -> Any:
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")  # optuna's ExperimentalWarning for the heartbeat
-                return optuna.storages.RDBStorage(url, engine_kwargs=kwargs, heartbeat_interval=HEARTBEAT_S,
+                return optuna.storages.RDBStorage(_with_driver(url), engine_kwargs=kwargs, heartbeat_interval=HEARTBEAT_S,
                                                   grace_period=GRACE_S)
         except sqlalchemy.exc.IntegrityError:  # another process created the tables at the same moment
             if attempt == _OPEN_ATTEMPTS - 1:
@@ -150,16 +162,24 @@ def retry_stale_trials(study: Any, rdb: Any) -> list[int]:
     Call under :func:`claim_lock`; ``rdb`` is the study's RDBStorage (:func:`open_storage`). Dead
     owners on this host are found at once; those of other hosts once their heartbeat is :data:`GRACE_S` old.
     """
-    import optuna
     from optuna.trial import TrialState
 
-    storage = study._storage
     stale = [trial for trial in study.get_trials(deepcopy=False, states=(TrialState.RUNNING,))
              if _owner_gone(trial.user_attrs.get(OWNER))]
     stale_ids = {trial._trial_id for trial in stale}
     stale_ids |= set(rdb._get_stale_trial_ids(study._study_id))
+    return fail_and_retry(study, stale_ids)
+
+
+def fail_and_retry(study: Any, trial_ids: Iterable[int]) -> list[int]:
+    """Fail each of these trials that is still RUNNING and enqueue its parameters as a new trial that
+    records ``retry_of``; the numbers of the trials failed (one that another process finished is skipped)."""
+    import optuna
+    from optuna.trial import TrialState
+
+    storage = study._storage
     retried = []
-    for trial_id in sorted(stale_ids):
+    for trial_id in sorted(set(trial_ids)):
         try:
             if not storage.set_trial_state_values(trial_id, state=TrialState.FAIL):
                 continue

@@ -30,9 +30,9 @@ from torus_cad.errors import ParameterError
 from torus_cad.optimize.metrics import metric_value
 from torus_cad.optimize.storage import (
     OWNER,
-    RETRY_OF,
     Heartbeat,
     claim_lock,
+    fail_and_retry,
     open_storage,
     owner_record,
     public_url,
@@ -47,6 +47,9 @@ __all__ = ["DEFINITION_ATTR", "TRIALS_DIR", "StudyInterrupted", "StudyResult", "
 
 TRIALS_DIR = "trials"
 DEFINITION_ATTR = "torus_cad_definition"  #: study user attr: the digest of what must not change between runs
+#: Trials in flight per worker: one running and one queued, so that a worker never waits for the sampler
+#: and the storage between two trials (the sweep's window too); constant_liar keeps the sampler off both.
+_TASKS_PER_WORKER = 2
 OUTCOME, REASON, METRICS, CONSTRAINT, FOLDER, SECONDS = "outcome", "reason", "metrics", "constraint", "folder", \
     "seconds"
 
@@ -188,7 +191,8 @@ class _Runner:
                 if scheduler is not None:
                     own_client, own_cluster = cluster.connect(scheduler, workers)
                     executor = own_client.get_executor(pure=False)
-                    window = max(1, len(own_client.scheduler_info().get("workers", {})) or workers or 1)
+                    window = _TASKS_PER_WORKER * max(1, len(own_client.scheduler_info().get("workers", {}))
+                                                     or workers or 1)
                     result.backend = f"dask: {cluster.client_label(own_client)}"
                     run_tasks(self._tasks(result), self._on_result, lambda: executor, window=window, job=run_trial,
                               check_visible=True)
@@ -196,7 +200,8 @@ class _Runner:
                     count = min(workers or available_workers(), available_workers())
                     result.backend = f"local pool, {count} worker{'s' if count > 1 else ''}"
                     run_tasks(self._tasks(result), self._on_result,
-                              lambda: LocalPool(count, self.spec.time_limit_s), window=count, job=run_trial)
+                              lambda: LocalPool(count, self.spec.time_limit_s), window=_TASKS_PER_WORKER * count,
+                              job=run_trial)
         except BaseException:
             self._retry_in_flight()
             raise
@@ -231,6 +236,7 @@ class _Runner:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # optuna's ExperimentalWarning for constraints_func etc.
             trial = self.study.ask(_distributions(self.spec))
+        self.in_flight[trial_name(trial.number)] = trial  # from here an interrupt fails it and asks it again
         trial.set_user_attr(OWNER, self.owner)
         self.heartbeat.add(trial._trial_id)
         return trial
@@ -239,7 +245,6 @@ class _Runner:
         name = trial_name(trial.number)
         folder = self.out / TRIALS_DIR / str(trial.number)
         folder.mkdir(parents=True, exist_ok=True)
-        self.in_flight[name] = trial
         parameters = self.spec.parameters(trial.params, name)
         trial.set_user_attr(FOLDER, f"{TRIALS_DIR}/{trial.number}")
         return TrialTask(name, parameters, str(folder), stl=self.spec.stl, simulate=self.spec.simulate,
@@ -250,8 +255,7 @@ class _Runner:
         import optuna
         from optuna.trial import TrialState
 
-        trial = self.in_flight.pop(task.design_id)
-        self.heartbeat.discard(trial._trial_id)
+        trial = self.in_flight[task.design_id]
         outcome, reason = result.outcome, result.reason
         values: list[float] | None = None
         if outcome is Outcome.VALID:
@@ -267,6 +271,8 @@ class _Runner:
                 self.study.tell(trial, state=TrialState.FAIL)
             else:
                 self.study.tell(trial, values)
+        del self.in_flight[task.design_id]
+        self.heartbeat.discard(trial._trial_id)
         self.ran += 1
 
     def _evaluate(self, trial: Any, folder: Path, name: str) -> list[float]:
@@ -283,14 +289,15 @@ class _Runner:
         return [metrics[objective.metric] for objective in self.spec.objectives]
 
     def _retry_in_flight(self) -> None:
-        """After an interrupt: fail the trials this process was running and ask their parameters again."""
-        import optuna
+        """After an interrupt: fail the trials this process was running and ask their parameters again
+        (those it holds, and any RUNNING trial that records this process as its owner)."""
         from optuna.trial import TrialState
 
-        for trial in list(self.in_flight.values()):
-            with contextlib.suppress(optuna.exceptions.UpdateFinishedTrialError, Exception):
-                self.study.tell(trial, state=TrialState.FAIL)
-                self.study.enqueue_trial(trial.params, user_attrs={RETRY_OF: trial.number}, skip_if_exists=False)
+        mine = {trial._trial_id for trial in self.in_flight.values()}
+        with contextlib.suppress(Exception):  # the storage is gone: the next run finds them by their owner
+            mine |= {trial._trial_id for trial in self.study.get_trials(deepcopy=False, states=(TrialState.RUNNING,))
+                     if trial.user_attrs.get(OWNER) == self.owner}
+            fail_and_retry(self.study, mine)
         self.in_flight.clear()
 
     def write(self, result: StudyResult) -> None:
