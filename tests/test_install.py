@@ -46,4 +46,4 @@ def test_every_dependency_is_pinned_within_its_range():
 
 def test_readme_command_and_ci_install_through_the_constraints():
     assert "pip install -c constraints.txt -e ." in (ROOT / "README.md").read_text()
-    assert re.search(r"pip install .*-c constraints\.txt -e \"\.\[test\]\"", (ROOT / ".ci" / "run").read_text())
+    assert re.search(r"pip install .*-c constraints\.txt -e \"\.\[test,docs\]\"", (ROOT / ".ci" / "run").read_text())
