@@ -129,7 +129,7 @@ def test_bad_overrides_raise_parameter_errors_naming_the_key():
 def test_progress_callback_sees_every_stage_in_order(fast_params):
     seen: list[str] = []
     built = propeller_objects(fast_params, progress=seen.append)
-    assert seen == ["parameters", "design_targets", "section_math", "wires", "loft", "fuse", "check"]
+    assert seen == ["parameters", "design_targets", "section_math", "wires", "loft", "fuse", "check", "strict_check"]
     assert list(built.stage_seconds) == seen
 
 

@@ -21,8 +21,9 @@ from pebble import ProcessPool
 
 @dataclass(frozen=True)
 class FuzzOutcome:
-    """One design: ``status`` 'built', 'refused' (bad input, exit 2) or 'failed' (KernelError);
-    for a built one whether the whole solid passes BRepCheck and BRepAlgoAPI_Check and its STL's
+    """One design: ``status`` 'built', 'refused' (bad input, exit 2) or 'failed' (KernelError: the
+    build, its strict check or its STL's; or a worker that died); whether the whole solid passes
+    BRepCheck and BRepAlgoAPI_Check (also for a solid whose STL failed) and, when built, its STL's
     crossing triangle pairs (meshlib)."""
 
     seed: int
@@ -59,7 +60,10 @@ def fuzz_one(seed: int, workshop: bool = True) -> FuzzOutcome:
     export = propeller.parameters.export
     with tempfile.TemporaryDirectory() as folder:
         path = Path(folder) / "fuzz.stl"
-        write_checked_stl(propeller.solid, path, export.stl_linear_deflection, export.stl_angular_deflection)
+        try:
+            write_checked_stl(propeller.solid, path, export.stl_linear_deflection, export.stl_angular_deflection)
+        except KernelError as error:  # the build refuses to publish such an STL (exit 1)
+            return FuzzOutcome(seed, "failed", str(error).splitlines()[0][:300], valid)
         pairs = intersecting_pairs_in_file(path)[0]
     return FuzzOutcome(seed, "built", "", valid, pairs, built - start, checked - built)
 
