@@ -106,7 +106,7 @@ def child_pyvista(sections: int, points: int) -> None:
     start = time.perf_counter()
     surfaces = [params.blade_surface(index, sections, points) for index in range(params.blades)]
     bodies = [polydata(*(lambda mesh: (mesh.vertices, mesh.faces))(blade_mesh(surface))) for surface in surfaces]
-    hub = hub_mesh(params.hub.radius, params.hub.length, cell_size(surfaces[0]).matched)
+    hub = hub_mesh(params.hub.radius, params.hub.length, cell_size(surfaces[0]).hub)
     result = polydata(hub.vertices, hub.faces)
     meshed = time.perf_counter()
     for body in bodies:
