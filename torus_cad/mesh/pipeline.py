@@ -184,9 +184,12 @@ def build_surface_mesh(params: PropellerParameters, progress: Callable[[str], No
     Raises ParameterError (memory budget, resolution, a crossing mesh, the root fillet), GeometryError
     (design, hub features), MeshBooleanError (union).
     """
+    from torus_cad.design_targets import resolve_design_targets
+
     timer = StageTimer[MeshStage](progress)
-    geometry, table = params.geometry(), params.mesh
     with timer.stage(MeshStage.CHECKS):
+        params = resolve_design_targets(params).parameters  # airfoil.naca, diameter, pitch, as the B-rep's
+        geometry, table = params.geometry(), params.mesh
         check_meshable(params)
         estimate = estimate_triangles(geometry, table.sections, table.points, table.spacing)
         check_budget(estimate, compare)
