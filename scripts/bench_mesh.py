@@ -81,7 +81,9 @@ def torus_cad_mesh(sections: int, points: int, timeout: float) -> dict[str, Any]
                           aspect_ratio_max=report["aspect_ratio_max"],
                           aspect_ratio_max_blades_away=report["blades_away_from_junctions"]["aspect_ratio_max"],
                           vertex_distance_max_mm=report["vertex_distance_max_mm"],
-                          cell_sag_max_mm=report["cell_sag_max_mm"])
+                          cell_sag_max_mm=report["cell_sag_max_mm"],
+                          self_intersections=report["self_intersections"],
+                          self_intersection_scope=report["self_intersection_check"]["scope"])
     return result
 
 
@@ -104,7 +106,7 @@ def child_pyvista(sections: int, points: int) -> None:
     start = time.perf_counter()
     surfaces = [params.blade_surface(index, sections, points) for index in range(params.blades)]
     bodies = [polydata(*(lambda mesh: (mesh.vertices, mesh.faces))(blade_mesh(surface))) for surface in surfaces]
-    hub = hub_mesh(params.hub.radius, params.hub.length, cell_size(surfaces[0]).matched)
+    hub = hub_mesh(params.hub.radius, params.hub.length, cell_size(surfaces[0]).hub)
     result = polydata(hub.vertices, hub.faces)
     meshed = time.perf_counter()
     for body in bodies:
@@ -191,6 +193,7 @@ def print_report(report: dict[str, Any]) -> None:
                 topology = result["topology"]
                 closed = ("yes (0 open, 0 non-manifold)" if topology["closed_2_manifold"] else
                           f"NO ({topology['open_edges']} open, {topology['non_manifold_edges']} non-manifold)")
+                closed += f", {result['self_intersections']} intersecting pairs ({result['self_intersection_scope']})"
             else:
                 closed = "yes" if result["closed"] else f"NO ({result['open_edges']} open edges)"
             print(f"  {name:<28}{label:>12}{result['wall_s']:9.1f}{result['cpu_s']:8.1f}"

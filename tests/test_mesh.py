@@ -198,7 +198,7 @@ def test_mesh_table_in_a_design_file_sets_the_resolution(tmp_path):
     (["--sections", "5", "--points", "64"], "use mesh.sections >= "),
     (["--sections", "3"], "mesh.sections = 3 is out of range"),
     (["--points", "8"], "mesh.points = 8 is out of range"),
-    (["--sections", "20000", "--points", "50000"], "over the limit of 20,000,000"),
+    (["--sections", "20000", "--points", "50000"], "GB of memory, over the limit of 4.0 GB"),
     (["--format", "step"], "--format 'step' is not a mesh format"),
     (["--spacing", "random"], "invalid choice"),
     (["--set", "centerline.p4=[100,25]"], "centerline.p4[1]"),

@@ -102,6 +102,19 @@ def test_blunt_trailing_edges_are_meshed_with_the_breps_volume(tmp_path):
         assert trimesh.load(stl).volume == pytest.approx(report["brep_volume_mm3"], rel=2e-3)
 
 
+def test_a_coarse_resolution_whose_blade_crosses_itself_is_refused_naming_one_that_works(capsys, tmp_path):
+    """A 60 mm propeller (diameter target) at 30 x 80: its blade's mesh crosses itself; the resolution the
+    refusal names is meshed without intersecting triangles (meshlib reading the STL)."""
+    design = ["--set", "diameter=60"]
+    assert main(["mesh", *design, "--sections", "30", "--points", "80", "--out", str(tmp_path / "refused")]) == 2
+    error = capsys.readouterr().err
+    assert error.count("\n") == 1 and "crosses itself at" in error and "triangle pairs" in error
+    sections, points = (word for word in error.split("use --sections ")[1].split()[:3:2])
+    assert not (tmp_path / "refused").exists()
+    report, stl = _mesh(tmp_path, *design, "--sections", sections, "--points", points, "--no-compare")
+    assert _crossing_pairs(stl) == 0 and report["self_intersections"] == 0
+
+
 def test_a_resolution_whose_blade_crosses_itself_is_refused_naming_one_that_does_not(monkeypatch, capsys, tmp_path):
     """With one diagonal direction everywhere (the layout before the mirrored diagonals) the blade's mesh
     at 20 x 64 crosses itself at its trailing edge; the refusal names a finer resolution that meshlib passes."""

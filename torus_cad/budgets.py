@@ -9,6 +9,7 @@ the resolution ranges.)
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING
 
 from torus_cad.errors import BudgetError
@@ -19,6 +20,39 @@ from torus_cad.tolerances import CFD_TETRAHEDRA_LIMIT, STL_TRIANGLE_LIMIT
 
 if TYPE_CHECKING:
     from torus_cad.cfd.estimate import CfdEstimate
+
+#: Peak resident memory of ``torus-cad mesh`` (binary STL, --no-compare) grows by this much per
+#: triangle of its estimate (torus_cad.mesh.resolution.estimate_triangles), bytes, over a fixed
+#: :data:`MESH_BASE_BYTES` (Python, numpy, manifold3d, meshlib): measured 0.77 GB at 268,260 and
+#: 2.22 GB at 5,251,396 estimated triangles (`/usr/bin/time -v torus-cad mesh --sections 100 --points 400`
+#: and `--sections 400 --points 2000`).
+MESH_BYTES_PER_TRIANGLE = 290.0
+MESH_BASE_BYTES = 0.70e9
+#: The B-rep built for the comparison (``--no-compare`` skips it) adds about this much, bytes.
+MESH_COMPARE_BYTES = 0.5e9
+#: Most memory ``torus-cad mesh`` may plan to use, bytes: a share of the 24 GiB machine that
+#: several jobs use at once.
+MESH_MEMORY_LIMIT_BYTES = 4.0e9
+#: The triangles that fit :data:`MESH_MEMORY_LIMIT_BYTES` with the comparison on.
+MESH_TRIANGLE_LIMIT = math.floor((MESH_MEMORY_LIMIT_BYTES - MESH_BASE_BYTES - MESH_COMPARE_BYTES)
+                                 / MESH_BYTES_PER_TRIANGLE)
+
+
+def mesh_memory_bytes(triangles: int, compare: bool = True) -> float:
+    """Estimated peak memory of ``torus-cad mesh`` for a mesh estimated at ``triangles``, bytes."""
+    return MESH_BASE_BYTES + (MESH_COMPARE_BYTES if compare else 0.0) + MESH_BYTES_PER_TRIANGLE * triangles
+
+
+def check_mesh_memory(triangles: int, compare: bool = True, limit_bytes: float = MESH_MEMORY_LIMIT_BYTES) -> None:
+    """BudgetError (exit 2) with the estimate and the limit when the mesh would need more than ``limit_bytes``."""
+    need = mesh_memory_bytes(triangles, compare)
+    if need > limit_bytes:
+        fits = math.floor((limit_bytes - mesh_memory_bytes(0, compare)) / MESH_BYTES_PER_TRIANGLE)
+        raise BudgetError(
+            f"the mesh would have about {triangles:,} triangles and need about {need / 1e9:.1f} GB of memory, over "
+            f"the limit of {limit_bytes / 1e9:.1f} GB (about {fits:,} triangles); lower mesh.sections or "
+            "mesh.points (--sections, --points)")
+
 
 #: Surface meshes (``torus-cad mesh``) up to this many triangles are checked whole for intersecting
 #: triangle pairs (meshlib, ~10 us a triangle on the 2-core machine under load); larger ones where a

@@ -494,15 +494,16 @@ def _command_simulate(args: argparse.Namespace) -> int:
 
 def _add_mesh_parser(commands: Any) -> None:
     from torus_cad.mesh.settings import MeshFormat
-    from torus_cad.tolerances import MESH_TRIANGLE_LIMIT
 
     mesh = _design_command(
         commands, "mesh", help="closed triangle mesh straight from the spec's math (STL, OBJ groups, PLY, VTK)",
         description="Mesh the propeller of CONFIG (or the default) from the spec's math: each blade's structured "
         "grid at exactly --sections x --points (points equally spaced in arc length, spec §5), the hub as a "
-        "§6.2 grid at the blades' cell size, united into one closed 2-manifold (manifold3d). Writes "
+        "§6.2 grid with its bore, D-flat, set-screw hole and chamfers, united into one closed 2-manifold without "
+        "intersecting triangles (manifold3d, meshlib). Writes "
         "<name>_mesh.<format> files and <name>_mesh.json, a quality report. The options override the design's "
-        f"[mesh] table. Meshes estimated above {MESH_TRIANGLE_LIMIT:,} triangles are refused before they are built.")
+        "[mesh] table. A mesh whose estimated memory is over the limit, a resolution too coarse for the blade "
+        "and a root fillet are refused before anything is built.")
     mesh.add_argument("--sections", type=int, metavar="N", help="sections along each blade (mesh.sections, default 100)")
     mesh.add_argument("--points", type=int, metavar="M",
                       help="points around each section, equal arc length (mesh.points, default 400)")

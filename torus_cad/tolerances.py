@@ -156,10 +156,6 @@ BALANCE_RELATIVE_PRECISION = 1e-4
 #: needs 15 sections (any allowed points); a 6 % thick section needs 31 points (its leading edge).
 MESH_SAG_LIMIT = 0.10
 
-#: Surface meshes: most triangles `torus-cad mesh` builds (estimated before it starts); peak
-#: memory grows ~0.75 GB per million triangles (6.7 GB at 8.9 million, scripts/bench_mesh.py), so
-#: this keeps it within ~15 GB of the machine's 24 GiB.
-MESH_TRIANGLE_LIMIT = 20_000_000
 
 #: Surface meshes: triangles with every corner at least this fraction of the hub radius outside
 #: the hub count as "away from the junctions" in the quality report.

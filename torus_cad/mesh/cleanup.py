@@ -131,10 +131,10 @@ def collapse_keeping(mesh: LabeledMesh) -> tuple[LabeledMesh, Cleanup, NDArray[n
             continue
         old = faces[moved]
         after = np.where(old == mover, keeper, old)
-        normals, _ = _normals_and_aspect(vertices[old])
-        new_normals, new_ratios = _normals_and_aspect(vertices[after])
-        _, needle_ratios = _normals_and_aspect(vertices[faces[sorted(shared)]])
-        if np.any((new_normals * normals).sum(1) <= 0.0) or new_ratios.max() >= needle_ratios.max():
+        count = len(moved)  # the moved triangles before and after, and the needles, in one pass
+        normals, ratios = _normals_and_aspect(vertices[np.concatenate([old, after, faces[sorted(shared)]])])
+        turned = (normals[count:2 * count] * normals[:count]).sum(1)
+        if turned.min() <= 0.0 or ratios[count:2 * count].max() >= ratios[2 * count:].max():
             continue  # a triangle would flip, or the moved ones would be no better than the needle
         faces[moved] = after
         removed_faces[list(shared)] = True

@@ -51,10 +51,13 @@ def crossing_pairs(vertices: NDArray[np.float64], faces: NDArray[np.int64],
     import meshlib.mrmeshnumpy as mn
     import meshlib.mrmeshpy as mr
 
+    if region is not None:  # a mesh of the region alone: meshlib's tree would cover the whole mesh
+        faces = faces[region]
+        used = np.unique(faces)
+        vertices, faces = vertices[used], np.searchsorted(used, faces)
     mesh = mn.meshFromFacesVerts(np.ascontiguousarray(faces, dtype=np.int32),
                                  np.ascontiguousarray(vertices, dtype=np.float32))
-    part = mr.MeshPart(mesh) if region is None else mr.MeshPart(mesh, mn.faceBitSetFromBools(region))
-    return len(mr.findSelfCollidingTriangles(part))
+    return len(mr.findSelfCollidingTriangles(mr.MeshPart(mesh)))
 
 
 def edge_band_faces(sections: int, count: int, trailing_edge: int, lower_corner: int | None) -> NDArray[np.bool_]:

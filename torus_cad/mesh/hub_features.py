@@ -25,6 +25,9 @@ from torus_cad.parameters import PropellerParameters
 BORE_MIN_SEGMENTS = 64
 #: Fewest sides of the set-screw hole's polygon.
 SET_SCREW_MIN_SEGMENTS = 32
+#: Bit of the face IDs that marks the hub grid's own triangles through the cuts (manifold3d keeps
+#: face IDs as 32-bit ints; the tools' primitives number theirs from 0).
+_GRID_BIT = 30
 #: Sampling of the blade surface for the mounting checks: the B-rep's (torus_cad.propeller).
 MOUNTING_SAMPLES = (200, 160)
 
@@ -75,35 +78,47 @@ def _tools(mounting: HubMounting, hub_radius_mm: float, hub_length_mm: float, ce
 
     tools = []
     if mounting.bore_diameter_mm > 0.0:
+        # Rows of about a cell along the axis, half a row past each end face: no long sliver where the ends cut the wall.
+        rows = math.ceil(hub_length_mm / cell_mm)
+        step = hub_length_mm / rows
         section = mf.CrossSection([bore_outline(mounting, cell_mm)])
-        tools.append(mf.Manifold.extrude(section, hub_length_mm + 2.0).translate([0.0, 0.0, -hub_length_mm / 2.0 - 1.0]))
+        bore = mf.Manifold.extrude(section, hub_length_mm + step, rows)
+        tools.append(bore.translate([0.0, 0.0, -(hub_length_mm + step) / 2.0]))
     if mounting.set_screw_diameter_mm > 0.0:
         radius = mounting.set_screw_diameter_mm / 2.0
-        hole = mf.Manifold.cylinder(hub_radius_mm + SET_SCREW_OVERSHOOT_MM, radius, radius,
-                                    _segments(radius, cell_mm, SET_SCREW_MIN_SEGMENTS))
+        length = hub_radius_mm + SET_SCREW_OVERSHOOT_MM
+        circle = mf.CrossSection.circle(radius, _segments(radius, cell_mm, SET_SCREW_MIN_SEGMENTS))
+        hole = mf.Manifold.extrude(circle, length, math.ceil(length / cell_mm) - 1)
         tools.append(hole.rotate([0.0, 90.0, 0.0]).rotate([0.0, 0.0, mounting.set_screw_angle_deg]))
     return tools
 
 
 def cut_features(hub: TriangleMesh, mounting: HubMounting, hub_radius_mm: float, hub_length_mm: float,
                  cell_mm: float) -> TriangleMesh:
-    """The hub's closed mesh with the bore and the set-screw hole of ``mounting`` cut out (manifold3d)."""
+    """The hub's closed mesh with the bore and the set-screw hole of ``mounting`` cut out (manifold3d),
+    the needle triangles where the holes' rims cross the grid collapsed (torus_cad.mesh.cleanup)."""
     import manifold3d as mf
 
-    from torus_cad.mesh.union import MeshBooleanError
+    from torus_cad.mesh.cleanup import collapse_junction_needles
+    from torus_cad.mesh.union import LabeledMesh, MeshBooleanError
 
     tools = _tools(mounting, hub_radius_mm, hub_length_mm, cell_mm)
     if not tools:
         return hub
+    grid_mark = np.uint64(1 << _GRID_BIT)  # the grid's faces: distinct IDs (no merging) with this bit set
+    face_id = (np.arange(len(hub.faces), dtype=np.uint64) % grid_mark) | grid_mark
     body = mf.Manifold(mf.Mesh64(vert_properties=np.ascontiguousarray(hub.vertices, dtype=np.float64),
-                                 tri_verts=np.ascontiguousarray(hub.faces, dtype=np.uint64)))
+                                 tri_verts=np.ascontiguousarray(hub.faces, dtype=np.uint64), face_id=face_id))
     for tool in tools:
         body = body - tool
     if body.status() != mf.Error.NoError or body.is_empty():
         raise MeshBooleanError(f"mesh union, step 'hub features': manifold3d failed ({body.status().name})")
     result = body.to_mesh64()
-    return TriangleMesh(np.array(result.vert_properties, dtype=np.float64)[:, :3].copy(),
-                        np.array(result.tri_verts, dtype=np.int64))
+    from_tool = (np.asarray(result.face_id, dtype=np.uint64) & grid_mark) == 0
+    cut = LabeledMesh(np.array(result.vert_properties, dtype=np.float64)[:, :3].copy(),
+                      np.array(result.tri_verts, dtype=np.int64), from_tool.astype(np.int16), ("grid", "features"))
+    cleaned, _ = collapse_junction_needles(cut)  # the needles where the features' rims cross the grid
+    return cleaned.triangle_mesh
 
 
 def feature_surface_distance(points: NDArray[np.float64], mounting: HubMounting, hub_radius_mm: float,

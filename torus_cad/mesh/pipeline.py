@@ -174,19 +174,25 @@ def united_crossings(mesh: LabeledMesh, united_faces: int, blade: CrossingCheck,
                          f"the hub and every triangle within {margin_mm:.3g} mm of it (the junctions), {blade.scope}")
 
 
-def build_surface_mesh(params: PropellerParameters, progress: Callable[[str], None] | None = None) -> SurfaceMesh:
+def build_surface_mesh(params: PropellerParameters, progress: Callable[[str], None] | None = None,
+                       compare: bool = False) -> SurfaceMesh:
     """Check, grid and unite at ``params.mesh``'s resolution: the propeller's closed, labelled surface mesh
     with the hub's features, checked for intersecting triangles.
 
-    Raises ParameterError (triangle budget, resolution, a crossing mesh, the root fillet), GeometryError
+    ``compare``: the B-rep will be built too (the memory budget counts it).
+
+    Raises ParameterError (memory budget, resolution, a crossing mesh, the root fillet), GeometryError
     (design, hub features), MeshBooleanError (union).
     """
+    from torus_cad.design_targets import resolve_design_targets
+
     timer = StageTimer[MeshStage](progress)
-    geometry, table = params.geometry(), params.mesh
     with timer.stage(MeshStage.CHECKS):
+        params = resolve_design_targets(params).parameters  # airfoil.naca, diameter, pitch, as the B-rep's
+        geometry, table = params.geometry(), params.mesh
         check_meshable(params)
         estimate = estimate_triangles(geometry, table.sections, table.points, table.spacing)
-        check_budget(estimate)
+        check_budget(estimate, compare)
         check_resolution(geometry, table.sections, table.points, table.spacing)
         check_design(params)
         mounting = placed_mounting(params)
@@ -196,9 +202,9 @@ def build_surface_mesh(params: PropellerParameters, progress: Callable[[str], No
         blade_check = check_blade_crossings(geometry, grid, blade, table.spacing)
         del blade
         cells = cell_size(grid)
-        hub = _hub(geometry, mounting, cells.matched)
+        hub = _hub(geometry, mounting, cells.hub)
     with timer.stage(MeshStage.UNION):
-        assembled = assemble(geometry, grid, hub, max(cells.around, cells.along, cells.matched))
+        assembled = assemble(geometry, grid, hub, cells.hub)
     mesh = assembled.mesh
     topology = quality.edge_topology(mesh.faces)
     if not topology.closed:
@@ -212,7 +218,7 @@ def build_surface_mesh(params: PropellerParameters, progress: Callable[[str], No
             raise ParameterError(
                 f"mesh.sections = {table.sections}, mesh.points = {table.points}: the united mesh crosses itself at "
                 f"{crossings.pairs} triangle pairs where the blades meet the hub; use finer --sections and --points")
-    return SurfaceMesh(params, mesh, grid, cells.matched, estimate.total, assembled.cleanup, mounting, crossings,
+    return SurfaceMesh(params, mesh, grid, cells.hub, estimate.total, assembled.cleanup, mounting, crossings,
                        topology, assembled.united_vertices, timer.seconds)
 
 
@@ -270,10 +276,6 @@ def blade_cell_sag(result: SurfaceMesh) -> tuple[float, float]:
     return float(np.where(outside, sag, 0.0).max()), float(relative.max())
 
 
-def _blade_faces(mesh: LabeledMesh) -> NDArray[np.int64]:
-    return mesh.faces[mesh.part > 0]
-
-
 def opencascade_comparison(params: PropellerParameters, margin: float) -> dict[str, Any]:
     """B-rep volume and the evenness of OpenCascade's STL tessellation of the same design."""
     from torus_cad.kernel.checks import precise_volume
@@ -306,8 +308,9 @@ def quality_report(result: SurfaceMesh, compare: bool = True) -> dict[str, Any]:
     mesh, params, table = result.mesh, result.parameters, result.parameters.mesh
     margin = _junction_margin(result.geometry)
     topology = result.topology
-    blade = _blade_faces(mesh)
-    away = blade[quality.faces_away_from_hub(mesh.vertices, blade, params.hub.radius, params.hub.length, margin)]
+    blade = np.flatnonzero(mesh.part > 0)
+    away = blade[quality.faces_away_from_hub(mesh.vertices, mesh.faces[blade], params.hub.radius,
+                                             params.hub.length, margin)]
     ratios = quality.aspect_ratios(mesh.vertices, mesh.faces)
     sag_mm, sag_relative = blade_cell_sag(result)
     grid_cell = cell_size(result.blade_grid)
@@ -323,7 +326,7 @@ def quality_report(result: SurfaceMesh, compare: bool = True) -> dict[str, Any]:
         "topology": topology.to_dict(),
         "blade_cell_mm": {"around": grid_cell.around, "along": grid_cell.along}, "hub_cell_mm": result.hub_cell_mm,
         "junction_margin_mm": margin,
-        "blades_away_from_junctions": quality.evenness(mesh.vertices, away).to_dict(),
+        "blades_away_from_junctions": quality.evenness(mesh.vertices, mesh.faces[away], ratios[away]).to_dict(),
         "aspect_ratio_max": float(ratios.max()),
         "triangles_aspect_ratio_over_100": int(np.sum(ratios > 100.0)),
         "aspect_ratio_max_hub": float(ratios[mesh.part == 0].max()),
@@ -394,7 +397,7 @@ def write_surface_mesh(params: PropellerParameters, out_dir: str | Path, compare
     from torus_cad.outputs import OutputSet
 
     formats = selected_formats(params.mesh)
-    result = build_surface_mesh(params, progress)
+    result = build_surface_mesh(params, progress, compare)
     timer = StageTimer[MeshStage](progress)
     with timer.stage(MeshStage.QUALITY):
         report = quality_report(result, compare)

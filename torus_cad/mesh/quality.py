@@ -109,13 +109,15 @@ class Evenness:
         return {**asdict(self), "edge_ratio": self.edge_ratio}
 
 
-def evenness(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> Evenness:
-    """Shortest and longest edge and worst aspect ratio of ``(f, 3)`` faces."""
+def evenness(vertices: NDArray[np.float64], faces: NDArray[np.int64],
+             ratios: NDArray[np.float64] | None = None) -> Evenness:
+    """Shortest and longest edge and worst aspect ratio of ``(f, 3)`` faces (``ratios``: their aspect
+    ratios ``(f,)``, if already computed)."""
     if len(faces) == 0:
         return Evenness(0, float("nan"), float("nan"), float("nan"))
     lengths = edge_lengths(vertices, faces)
-    return Evenness(len(faces), float(lengths.min()), float(lengths.max()),
-                    float(aspect_ratios(vertices, faces).max()))
+    ratios = aspect_ratios(vertices, faces) if ratios is None else ratios
+    return Evenness(len(faces), float(lengths.min()), float(lengths.max()), float(ratios.max()))
 
 
 def faces_away_from_hub(vertices: NDArray[np.float64], faces: NDArray[np.int64], radius: float, length: float,

@@ -7,7 +7,7 @@ and along the blade (set by ``sections``), as a fraction of the local section th
 (spec §5) are sparsest for its radius, needs the most points. Above :data:`MESH_SAG_LIMIT`
 the resolution is refused with the smallest count that meets the limit, found by search.
 The triangle count is estimated from the grid counts and refused above
-:data:`MESH_TRIANGLE_LIMIT`.
+the memory limit of torus_cad.budgets (bytes per triangle measured).
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ from torus_cad.geometry.surface import blade_frames, place_on_frames
 from torus_cad.geometry.transforms import evaluate_quartic
 from torus_cad.mesh.grids import blade_grid, blade_triangle_count, cell_size, hub_layout, section_parameters
 from torus_cad.parameters.design import SectionSpacing
-from torus_cad.tolerances import MESH_SAG_LIMIT, MESH_TRIANGLE_LIMIT
+from torus_cad.tolerances import MESH_SAG_LIMIT
 
 #: Sections at which the sag around the section is measured.
 AROUND_CHECK_SECTIONS = 33
@@ -170,15 +170,13 @@ def estimate_triangles(geometry: PropellerGeometry, sections: int, points: int, 
     coarse = cell_size(blade_grid(geometry, coarse_sections, coarse_points, spacing))
     around = coarse.around * coarse_points / points
     along = coarse.along * (coarse_sections - 1) / (sections - 1)
-    cell = float(np.sqrt(around * along))
+    cell = max(around, along)  # CellSize.hub
     hub = hub_layout(geometry.hub.radius_mm, geometry.hub.length_mm, cell).triangles
     return TriangleEstimate(geometry.blades * blade_triangle_count(sections, points), hub, cell)
 
 
-def check_budget(estimate: TriangleEstimate, limit: int | None = None) -> None:
-    """Refuse (ParameterError) meshes estimated above ``limit`` triangles (default MESH_TRIANGLE_LIMIT)."""
-    limit = MESH_TRIANGLE_LIMIT if limit is None else limit
-    if estimate.total > limit:
-        raise ParameterError(
-            f"the mesh would have about {estimate.total:,} triangles ({estimate.blades:,} on the blades, "
-            f"{estimate.hub:,} on the hub), over the limit of {limit:,}; lower mesh.sections or mesh.points (--sections, --points)")
+def check_budget(estimate: TriangleEstimate, compare: bool = True) -> None:
+    """Refuse (BudgetError, exit 2) meshes whose estimated memory is over the limit (torus_cad.budgets)."""
+    from torus_cad.budgets import check_mesh_memory
+
+    check_mesh_memory(estimate.total, compare)
