@@ -184,6 +184,17 @@ def test_a_mesh_over_the_budget_is_refused_before_any_work(tmp_path, capsys):
     assert not out.exists()
 
 
+def test_the_estimate_grows_with_finer_sizes():
+    from torus_cad.cfd.estimate import estimate_cfd_mesh
+    from torus_cad.parameters import PropellerParameters
+
+    base = PropellerParameters()
+    counts = [estimate_cfd_mesh(base.with_values({"cfd.cells_per_chord": cells})).tetrahedra for cells in (4, 10, 20)]
+    assert counts == sorted(counts) and counts[2] > 3 * counts[0]
+    coarser = estimate_cfd_mesh(base.with_values({"cfd.growth_rate": 1.6})).tetrahedra
+    assert coarser < counts[1]
+
+
 @pytest.mark.slow
 def test_verify_accepts_the_cfd_set_and_names_a_changed_file(cfd_out, tmp_path):
     folder = tmp_path / "copy"

@@ -431,18 +431,20 @@ def _command_cfd(args: argparse.Namespace) -> int:
     progress = StageProgress.for_terminal(quiet=args.quiet)
     try:
         from torus_cad.budgets import check_cfd_budget
-        from torus_cad.cfd.domain import import_gmsh, summary_line, write_cfd_domain
+        from torus_cad.cfd.domain import gmsh_library, import_gmsh, summary_line, write_cfd_domain
         from torus_cad.cfd.surface_check import import_meshlib
         from torus_cad.cfd.worker import run_in_worker
         from torus_cad.outputs import check_writable_folder
 
-        import_gmsh()
+        gmsh = import_gmsh()
         import_meshlib()
         estimate = check_cfd_budget(params)  # a mesh that would blow up is refused before any work (a few s)
         check_writable_folder(args.out)
-        # in a worker thread: a signal during a long gmsh call ends the command at once (cfd.worker)
-        report, paths = run_in_worker(lambda: write_cfd_domain(params, Path(args.out), threads=args.threads,
-                                                               progress=progress, estimate=estimate))
+        # gmsh set up here, meshing in a worker thread: a signal during a long gmsh call ends the command
+        # at once (cfd.worker, cfd.domain.gmsh_library)
+        with gmsh_library(gmsh):
+            report, paths = run_in_worker(lambda: write_cfd_domain(params, Path(args.out), threads=args.threads,
+                                                                   progress=progress, estimate=estimate))
     except MissingExtraError as error:
         print(f"torus-cad: {error}", file=sys.stderr)
         return EXIT_KERNEL_FAILURE
@@ -519,13 +521,17 @@ def _add_mesh_parser(commands: Any) -> None:
 
 
 def _add_cfd_parser(commands: Any) -> None:
+    from torus_cad.tolerances import CFD_TETRAHEDRA_LIMIT
+
     cfd = _design_command(
         commands, "cfd", help="fluid domain and tetrahedral volume mesh for a rotating-propeller simulation (gmsh)",
         description="Mesh the fluid around the propeller of CONFIG (or the default) with gmsh: an outer "
         "cylinder, a rotating-zone cylinder around the propeller, conformal at their interface, tetrahedra "
         "refined near the blades. Writes <name>_cfd.msh (v4.1), <name>_cfd_v2.msh (v2.2 ASCII, for "
-        "OpenFOAM's gmshToFoam), <name>_cfd.step, README.txt and <name>_cfd.json. The options override the design's "
-        "[cfd] table; D is the tip diameter. Needs the cfd extra: pip install 'torus_cad[cfd]'.")
+        "OpenFOAM's gmshToFoam), <name>_cfd.step, README.txt and <name>_cfd.json as one output set (see 'torus-cad "
+        "verify'). The options override the design's [cfd] table; D is the tip diameter. A mesh estimated above "
+        f"{CFD_TETRAHEDRA_LIMIT:,} tetrahedra is refused before any work. Needs the cfd extra: "
+        "pip install 'torus_cad[cfd]'.")
     cfd.table = "cfd"  # its options, when the subcommand is used (_Parser.table)
     cfd.add_argument("--threads", type=int, default=0, metavar="N", help="gmsh threads (default 0: one per CPU)")
     _add_out_and_quiet(cfd, "cfd_out", _command_cfd)

@@ -66,8 +66,7 @@ TRAILING_EDGE_SIZE_PER_THICKNESS = 1.0
 REFINE_ROUNDS, REFINE_RADIUS_EDGES, REFINE_FACTOR = 4, 2.0, 0.35
 #: What to change when gmsh cannot mesh the domain (a crossing surface mesh, a volume mesher stop).
 CROSSING_ADVICE = ("Finer sizes near the trailing edge help: raise cfd.curvature_cells (the default 8 refines "
-                   "the trailing edge) or cfd.cells_per_chord, or give a blunt edge "
-                   "(airfoil.trailing_edge_thickness)")
+                   "the trailing edge) or cfd.cells_per_chord (default 10)")
 #: gmsh algorithms: 2D Frontal-Delaunay (gmsh falls back to MeshAdapt per face), 3D Delaunay.
 ALGORITHM_2D, ALGORITHM_3D = 6, 1
 
@@ -186,6 +185,36 @@ def gmsh_session(gmsh: Any, threads: int) -> Iterator[None]:
         gmsh.model.remove()
         if owner:
             gmsh.finalize()
+
+
+@contextmanager
+def gmsh_library(gmsh: Any) -> Iterator[None]:
+    """gmsh initialised by the main thread for the block (a :func:`gmsh_session` inside then uses it).
+
+    gmsh's initialize and finalize put the default handlers of SIGTERM and its kin back at the C
+    level (Python still reports its own): here Python's handlers are set again after each, so a
+    signal during meshing still ends the command with one line (torus_cad.interrupts). Only the
+    main thread can do that; call this there, and mesh in a worker (torus_cad.cfd.worker)."""
+    gmsh.initialize(readConfigFiles=False, interruptible=False)
+    _reassert_signal_handlers()
+    try:
+        yield
+    finally:
+        gmsh.finalize()
+        _reassert_signal_handlers()
+
+
+def _reassert_signal_handlers() -> None:
+    import signal
+
+    from torus_cad.interrupts import EXIT_SIGNALS
+
+    if threading.current_thread() is not threading.main_thread():
+        return
+    for signum in EXIT_SIGNALS:
+        handler = signal.getsignal(signum)
+        if handler is not None:
+            signal.signal(signum, handler)
 
 
 @contextmanager
