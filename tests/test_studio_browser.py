@@ -316,7 +316,7 @@ def _hostile_uploads(folder: Path) -> list[tuple[str, list[Path], str]]:
         ("a named pipe", design("fifo.toml", f'[airfoil]\nfile = "{folder / "pipe.dat"}"\n'), only),
         ("/dev/zero", design("zero.toml", '[airfoil]\nfile = "/dev/zero"\n'), only),
         ("an uploaded private file", design("copied.toml", '[airfoil]\nfile = "foil.dat"\n',
-                                            ("foil.dat", secret.read_text())), "foil.dat' line 2: expected two numbers"),
+                                            ("foil.dat", secret.read_text())), "airfoil file 'foil.dat' line 2: expected two numbers"),
         ("94,000 points", design("huge.toml", '[airfoil]\nfile = "foil.dat"\n', ("foil.dat", _coordinates(94_000))),
          "more than 20,000 points"),
         ("a 1e308 coordinate", design("big.toml", '[airfoil]\nfile = "foil.dat"\n',
