@@ -211,3 +211,15 @@ def test_verify_of_a_report_nested_too_deep_is_an_incomplete_set(tmp_path, capsy
     (tmp_path / "part.json").write_text('{"files": ' + "[" * 100_000 + "]" * 100_000 + "}")
     assert main(["verify", str(tmp_path)]) == 1
     assert capsys.readouterr().err.strip() == "torus-cad: verify: part: part.json is not a readable JSON report"
+
+
+def test_a_home_relative_airfoil_file_is_read_from_the_home_folder(tmp_path, monkeypatch):
+    """``~/x.dat`` was kept unexpanded and then not found; it is the user's home, as in a shell."""
+    from torus_cad.parameters import PropellerParameters
+
+    home = tmp_path / "home"
+    home.mkdir()
+    (home / "clarky.dat").write_bytes((AIRFOILS / "clarky.dat").read_bytes())
+    monkeypatch.setenv("HOME", str(home))
+    params = PropellerParameters.from_toml(_design(tmp_path, "~/clarky.dat"))
+    assert params.airfoil.file == str(home / "clarky.dat")

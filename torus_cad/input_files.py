@@ -42,7 +42,7 @@ def _check_regular(path: Path, status: os.stat_result, what: str, max_bytes: int
         raise ParameterError(f"{what} {str(path)!r} is not a regular file ({_kind(status.st_mode)})")
     if status.st_size > max_bytes:
         raise ParameterError(f"{what} {str(path)!r} is {status.st_size:,} bytes, over the limit of "
-                             f"{max_bytes:,} bytes for a {what}")
+                             f"{max_bytes:,} bytes")
 
 
 def read_untrusted_bytes(path: str | Path, what: str, max_bytes: int) -> bytes:
@@ -72,7 +72,7 @@ def read_untrusted_bytes(path: str | Path, what: str, max_bytes: int) -> bytes:
     finally:
         os.close(descriptor)
     if size > max_bytes:  # it grew after the fstat
-        raise ParameterError(f"{what} {str(path)!r} is over the limit of {max_bytes:,} bytes for a {what}")
+        raise ParameterError(f"{what} {str(path)!r} is over the limit of {max_bytes:,} bytes")
     return b"".join(chunks)
 
 
@@ -115,5 +115,5 @@ class TimeBudget:
         """BudgetError if the budget is spent; ``step`` says what was being done."""
         spent = time.monotonic() - self._start
         if spent > self.limit_s:
-            raise BudgetError(f"{self.what} {self.source!r}: {step} took over {spent:.1f} s, over the limit of "
-                              f"{self.limit_s:g} s for a {self.what}")
+            raise BudgetError(f"{self.what} {self.source!r}: {step} took {spent:.1f} s, over the limit of "
+                              f"{self.limit_s:g} s")

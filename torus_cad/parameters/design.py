@@ -401,9 +401,8 @@ class PropellerParameters(Document):
         """A relative ``airfoil.file`` in a design file is relative to the design file's folder."""
         airfoil = data.get("airfoil")
         if isinstance(airfoil, dict) and isinstance(airfoil.get("file"), str) and airfoil["file"]:
-            path = Path(airfoil["file"]).expanduser()
-            if not path.is_absolute():
-                data = {**data, "airfoil": {**airfoil, "file": str(folder / path)}}
+            path = Path(airfoil["file"]).expanduser()  # "~/foils/x.dat" is the user's home, as in a shell
+            data = {**data, "airfoil": {**airfoil, "file": str(path if path.is_absolute() else folder / path)}}
         return data
 
     def blade_surface(self, blade_index: int = 0, sections: int | None = None, points: int | None = None

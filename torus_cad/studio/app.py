@@ -389,6 +389,9 @@ class Studio:
             table = parse_config_bytes(files[design_name], design_name, "uploaded design")
             table = self._only_uploaded_files(table, folder, set(files) - {design_name})
             return PropellerParameters.from_table(table, folder)
+        except ParameterError as error:  # named by the uploaded file's own name, not the server's folder
+            shutil.rmtree(folder, ignore_errors=True)
+            raise ParameterError(str(error).replace(f"{folder}{os.sep}", "")) from None
         except BaseException:
             shutil.rmtree(folder, ignore_errors=True)
             raise
