@@ -29,6 +29,7 @@ from torus_cad.batch.runner import Interrupted, LocalPool, interrupts_raised, ru
 from torus_cad.errors import ParameterError
 from torus_cad.optimize.metrics import metric_value
 from torus_cad.optimize.storage import (
+    HEARTBEAT_S,
     OWNER,
     Heartbeat,
     claim_lock,
@@ -212,9 +213,12 @@ class _Runner:
 
     def _tasks(self, result: StudyResult) -> Iterator[TrialTask]:
         """The next trial's task whenever a worker is free, until the study holds its trials."""
+        checked = -math.inf
         while True:
             with claim_lock(self.rdb, self.url, self.spec.name):
-                result.retried += retry_stale_trials(self.study, self.rdb)
+                if time.monotonic() - checked >= HEARTBEAT_S:  # at the start, then once per heartbeat
+                    result.retried += retry_stale_trials(self.study, self.rdb)
+                    checked = time.monotonic()
                 trial = self._claim()
             if trial is None:
                 return
