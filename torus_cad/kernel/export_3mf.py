@@ -20,6 +20,7 @@ from scipy.spatial import cKDTree
 from torus_cad.errors import KernelError
 from torus_cad.kernel.export import atomic_path
 from torus_cad.kernel.mesh_check import MeshCheck, intersecting_pairs, refined_until_intersection_free
+from torus_cad.kernel.tessellation import tessellate_faces
 
 #: Tessellation nodes closer than this (mm) are one vertex of the 3MF mesh.
 _MERGE_DISTANCE_MM = 1e-6
@@ -63,10 +64,14 @@ def closed_mesh(shape: cq.Shape, linear_deflection: float, angular_deflection: f
 
     Returns ``(vertices (v, 3) mm, triangles (t, 3) indices)``, triangles wound outward.
     """
-    vertices, triangles = shape.tessellate(linear_deflection, angular_deflection)
-    points = np.array([vertex.toTuple() for vertex in vertices], dtype=float)
-    if len(points) == 0 or len(triangles) == 0:
+    # The STL's tessellation (absolute deflection, on a copy): cadquery's Shape.tessellate takes the
+    # deflection as relative and keeps its mesh on the shape, which left the 3MF open and crossing.
+    faces = tessellate_faces(shape, linear_deflection, angular_deflection)
+    if not faces:
         raise KernelError("OpenCascade could not tessellate the solid for 3MF")
+    offsets = np.cumsum([0] + [len(face.vertices) for face in faces])
+    points = np.concatenate([face.vertices for face in faces])
+    triangles = np.concatenate([face.triangles + offset for face, offset in zip(faces, offsets, strict=False)])
     # Faces store their boundary nodes separately, each in its own placement (the blade copies
     # are rotated), so the same edge node can differ in the last bits: merge within a micrometre.
     representative = np.arange(len(points))
