@@ -49,10 +49,13 @@ def hidden_entries(folder: Path) -> list[str]:
 
 
 def step_blade_count(path: Path) -> int:
-    """Blades in a STEP file read back by OpenCascade: one B-spline side face per blade."""
+    """Blades in a STEP file read back by OpenCascade: two B-spline side faces (lower and upper
+    surface, a sharp trailing edge) per blade."""
     from torus_cad.kernel.export import read_step
 
-    return sum(face.geomType() == "BSPLINE" for face in read_step(path).Faces())
+    side_faces = sum(face.geomType() == "BSPLINE" for face in read_step(path).Faces())
+    assert side_faces % 2 == 0
+    return side_faces // 2
 
 
 def assert_consistent_set(folder: Path, name: str = "torus_propeller") -> int:
