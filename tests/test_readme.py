@@ -1,5 +1,5 @@
-"""Every example in README.md runs: ```python blocks as they are, and every ``torus-cad`` line of the
-```sh / ```bash blocks, in a scratch folder with the repository's examples/ and scripts/.
+"""Every example in README.md and the documentation (docs/) runs: ```python blocks as they are, and every
+``torus-cad`` line of the ```sh / ```bash blocks, in a scratch folder with the repository's examples/ and scripts/.
 
 A block preceded by a ``<!-- not-run: reason -->`` line is skipped (an example that needs a cluster,
 say); the README says so next to it. ``pip install``, ``pytest`` and ``bash .ci/run`` (the README's
@@ -20,6 +20,10 @@ import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
 README = ROOT / "README.md"
+DOCS = ROOT / "docs"
+#: The pages whose examples run: the README, then the documentation site's pages (the spec is quoted, not run).
+PAGES = [README] + sorted(path for path in DOCS.rglob("*.md") if "spec" not in path.relative_to(DOCS).parts)
+PARAMETERS_PAGE = DOCS / "reference" / "parameters.md"
 FENCE = re.compile(r"^```(\w*)\s*$")
 NOT_RUN = "<!-- not-run:"
 
@@ -32,21 +36,31 @@ class Block:
     code: str
     line: int
     skipped: bool
+    page: str = "README.md"
+
+    @property
+    def where(self) -> str:
+        return f"{self.page}:{self.line}"
 
 
-def readme_blocks() -> list[Block]:
-    """The fenced code blocks of the README, with the line each starts on."""
-    blocks, lines = [], README.read_text().splitlines()
+def page_blocks(page: Path) -> list[Block]:
+    """The fenced code blocks of one page, with the line each starts on."""
+    blocks, lines, name = [], page.read_text().splitlines(), str(page.relative_to(ROOT))
     index = 0
     while index < len(lines):
         match = FENCE.match(lines[index])
         if match and match.group(1):
             end = next(j for j in range(index + 1, len(lines)) if lines[j].startswith("```"))
             skipped = index > 0 and lines[index - 1].strip().startswith(NOT_RUN)
-            blocks.append(Block(match.group(1), "\n".join(lines[index + 1:end]), index + 1, skipped))
+            blocks.append(Block(match.group(1), "\n".join(lines[index + 1:end]), index + 1, skipped, name))
             index = end
         index += 1
     return blocks
+
+
+def readme_blocks() -> list[Block]:
+    """The fenced code blocks of the README and the documentation pages, page by page."""
+    return [block for page in PAGES for block in page_blocks(page)]
 
 
 def shell_commands(block: Block) -> list[str]:
@@ -92,18 +106,18 @@ def test_readme_has_examples():
     assert len(SHELL) >= 3 and len(PYTHON) >= 3
 
 
-@pytest.mark.parametrize("block", SHELL, ids=[f"line{block.line}" for block in SHELL])
+@pytest.mark.parametrize("block", SHELL, ids=[block.where for block in SHELL])
 def test_shell_example_runs(block: Block, workdir: Path):
     if block.skipped:
         pytest.skip("marked not-run in the README")
     for command in shell_commands(block):
         result = _run_shell(command, workdir)
-        assert result.returncode == 0, f"README line {block.line}: {command!r} exited {result.returncode}: " \
+        assert result.returncode == 0, f"{block.where}: {command!r} exited {result.returncode}: " \
                                        f"{result.stderr[-2000:]}"
 
 
 def test_python_examples_run_in_order(workdir: Path, monkeypatch):
-    """The Python blocks, in the README's order, in one namespace (later ones use earlier names)."""
+    """The Python blocks, page by page in order, in one namespace (later ones use earlier names)."""
     if not (workdir / "my_prop.toml").exists():
         _run_shell("torus-cad defaults > my_prop.toml", workdir)
     monkeypatch.chdir(workdir)
@@ -113,16 +127,16 @@ def test_python_examples_run_in_order(workdir: Path, monkeypatch):
         if block.skipped:
             continue
         try:
-            exec(compile(block.code, f"README.md:{block.line}", "exec"), namespace)
+            exec(compile(block.code, block.where, "exec"), namespace)
         except Exception as error:
-            pytest.fail(f"README python block at line {block.line} raised {type(error).__name__}: {error}")
+            pytest.fail(f"python block at {block.where} raised {type(error).__name__}: {error}")
 
 
 def test_parameter_table_is_current():
     from torus_cad.parameters.reference import replace_table
 
-    text = README.read_text()
-    assert replace_table(text) == text, "README's parameter table is stale: run python scripts/parameter_table.py"
+    text = PARAMETERS_PAGE.read_text()
+    assert replace_table(text) == text, "docs/reference/parameters.md is stale: run python scripts/parameter_table.py"
 
 
 def test_readme_links_stay_inside_the_repository():

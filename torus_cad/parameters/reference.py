@@ -1,7 +1,7 @@
-"""The configuration reference as Markdown, generated from the schema (the README's table).
+"""The configuration reference as Markdown, generated from the schema (the documentation's table).
 
-``python scripts/parameter_table.py`` writes it into README.md between the markers
-:data:`BEGIN` and :data:`END`; a test fails when the README is stale.
+``python scripts/parameter_table.py`` writes it into docs/reference/parameters.md between the markers
+:data:`BEGIN` and :data:`END`; a test fails when the page is stale.
 """
 
 from __future__ import annotations
