@@ -135,7 +135,7 @@ def stage_times(runs: int) -> dict[str, Any]:
             "stl_triangles": (stl_bytes - 84) // 50}
 
 
-#: The workshop scenario (issue 13): the default with a bore, D-flat, set screw, chamfer, a 0.3 mm
+#: The workshop scenario: the default with a bore, D-flat, set screw, chamfer, a 0.3 mm
 #: blunt trailing edge (round, the default shape) and a 0.5 mm root fillet. The chamfer is 0.2 mm:
 #: the default's blade root comes within 0.85 mm of the hub's end, and a chamfer may not reach the
 #: fillet's spread (2 radii) over the hub.

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Whether the root fillet works on the default and every shipped example, at 0.5 and 1.0 mm (issue 13).
+"""Whether the root fillet works on the default and every shipped example, at 0.5 and 1.0 mm.
 
     python scripts/fillet_examples.py                  # radii 0.5 and 1.0 mm
     python scripts/fillet_examples.py --radius 0.25

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""How often the root fillet works on random valid designs (issue 13: aim >= 90 % at 0.5 mm).
+"""How often the root fillet works on random valid designs (aim: >= 90 % at 0.5 mm).
 
     python scripts/fillet_rate.py 160                # seeds 0..159, radius 0.5 mm
     python scripts/fillet_rate.py 160 --radius 1.0 --seed 1000

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The tightest concave bend of the blade's faces next to the hub, per fuzz design (issue 13).
+"""The tightest concave bend of the blade's faces next to the hub, per fuzz design.
 
     python scripts/root_concavity.py 130 --rate fillet_rate_out/fillet_rate.json
 

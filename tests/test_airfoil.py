@@ -62,7 +62,7 @@ def test_thickness_normal_to_camber_differs_only_when_cambered():
                                atol=1e-12)
 
 
-# -- designations (issue 14 part 1) -------------------------------------------------------------
+# -- designations -------------------------------------------------------------
 
 @pytest.mark.parametrize("designation, m, p, thickness", [("2412", 0.02, 0.4, 0.12), ("0012", 0.0, 0.0, 0.12),
                                                           ("4415", 0.04, 0.4, 0.15), ("6409", 0.06, 0.4, 0.09)])

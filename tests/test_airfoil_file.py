@@ -1,4 +1,4 @@
-"""Airfoils from coordinate files (issue 14 part 1): layouts, normalisation, accuracy, malformed files."""
+"""Airfoils from coordinate files: layouts, normalisation, accuracy, malformed files."""
 
 from itertools import pairwise
 from pathlib import Path

@@ -1,4 +1,4 @@
-"""scripts/cq_editor_propeller.py (issue 6): shows one valid solid in cq-editor, writes files as plain python."""
+"""scripts/cq_editor_propeller.py: shows one valid solid in cq-editor, writes files as plain python."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Designing with diameter, pitch and airfoils (issue 14), measured on the built B-rep."""
+"""Designing with diameter, pitch and airfoils, measured on the built B-rep."""
 
 import csv
 import json

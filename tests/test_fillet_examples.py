@@ -1,4 +1,4 @@
-"""The root fillet on every shipped example at 0.5 and 1 mm (issue 13).
+"""The root fillet on every shipped example at 0.5 and 1 mm.
 
 Each example gets one valid closed solid with the fillet, of the requested radius everywhere
 (no edge reduced where a blade bends tightly, torus_cad.kernel.fillet.RootFillet); an example whose hub chamfer the

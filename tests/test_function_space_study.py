@@ -1,4 +1,4 @@
-"""Tests of the function-space study (spec §2.4–§2.5, issue 5)."""
+"""Tests of the function-space study (spec §2.4–§2.5)."""
 
 from __future__ import annotations
 

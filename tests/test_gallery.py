@@ -1,4 +1,4 @@
-"""The gallery (issue 14 part 5): every example design builds to one valid solid; its note is there."""
+"""The gallery: every example design builds to one valid solid; its note is there."""
 
 from pathlib import Path
 

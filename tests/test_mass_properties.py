@@ -1,4 +1,4 @@
-"""Mass properties (issue 6, issue 12 part 6): analytic checks, the fast route over the blade faces
+"""Mass properties: analytic checks, the fast route over the blade faces
 against OpenCascade's adaptive integration at 1e-9, the fallback, the JSON report, --density, --verbose."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Off-screen preview pictures (issue 6, issue 12 part 5): exact size, not blank, every blade visible
+"""Off-screen preview pictures: exact size, not blank, every blade visible
 in its colour, the depth buffer working, no blade seen edge-on."""
 
 from __future__ import annotations

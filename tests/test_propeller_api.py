@@ -1,4 +1,4 @@
-"""The CadQuery API (issue 6): real CadQuery objects a CAD user can keep working with."""
+"""The CadQuery API: real CadQuery objects a CAD user can keep working with."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Round blunt trailing edge (issue 13 parts 3 and 5): a cap tangent to both surfaces, so the
+"""Round blunt trailing edge: a cap tangent to both surfaces, so the
 section is one smooth closed curve, the trailing edge has the requested thickness, and the root
 fillet rolls round it, on the solid (the geometry: tests/test_trailing_edge.py)."""
 

@@ -1,4 +1,4 @@
-"""Blunt trailing edge (issue 13 part 3): absolute thickness on every section, closed sections, sampling;
+"""Blunt trailing edge: absolute thickness on every section, closed sections, sampling;
 flat and round (a cap tangent to both surfaces; on the solid: tests/test_round_trailing_edge.py)."""
 
 import itertools

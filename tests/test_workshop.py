@@ -1,4 +1,4 @@
-"""Workshop-ready parts (issue 13): bore, D-flat, set screw, chamfer, handedness, printability,
+"""Workshop-ready parts: bore, D-flat, set screw, chamfer, handedness, printability,
 root fillet, 3MF, balance and STEP metadata, each checked on the solid or the written file."""
 
 from __future__ import annotations

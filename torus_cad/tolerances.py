@@ -135,7 +135,7 @@ FILLET_TRIES_TIME_LIMIT_S = 60.0
 #: Where the constant-radius root fillet fails and a blade face bends concavely (seen from outside)
 #: along a junction edge tighter than the fillet radius / this fraction, a last round of tries gives
 #: that edge the radius this fraction x the bend's radius (the other edges keep the requested one):
-#: the ball then fits the bend (issue 13; the bends are the design's own sections, measured against
+#: the ball then fits the bend (the bends are the design's own sections, measured against
 #: the analytic surface).
 REDUCED_FILLET_FRACTION = 0.5
 

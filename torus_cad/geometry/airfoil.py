@@ -6,7 +6,7 @@ camber line and thickness, and the closed-curve parameter in [0, 2] for :func:`a
 edge on [1, 2], spec §1.3; see :mod:`torus_cad.geometry.section` for sections with a blunt
 trailing edge). Both kinds implement :class:`torus_cad.geometry.section.Section`.
 
-Blunt trailing edge (issue 13 part 3): ``trailing_edge_gap`` g (chord units) changes the
+Blunt trailing edge: ``trailing_edge_gap`` g (chord units) changes the
 thickness law to y_t(t) + (g / 2) t^4, i.e. the last coefficient of the NACA thickness
 polynomial -0.1036 becomes -0.1036 + g / (10 thickness). This is the classical "open
 trailing edge" variant of the four-digit thickness (-0.1015 gives g = 0.0021 x 10 thickness):

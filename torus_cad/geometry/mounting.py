@@ -1,4 +1,4 @@
-"""Mounting features of the hub (issue 13): bore, D-flat, set screw, chamfer; where they go and what they may not cut.
+"""Mounting features of the hub: bore, D-flat, set screw, chamfer; where they go and what they may not cut.
 
 Kernel-free: the limits come from the blades' sampled surfaces. The hub's parameters check
 what depends on the hub alone (wall thickness, flat depth, ...); here the blades are checked:

@@ -1,4 +1,4 @@
-"""Printability (issue 13): how thin the blade gets, from the analytic section (no mesh, no kernel).
+"""Printability: how thin the blade gets, from the analytic section (no mesh, no kernel).
 
 Definitions (mm):
 

@@ -6,7 +6,7 @@ surface, each running from the leading edge (u = 0) to the trailing edge (u = 1)
 bounded speed |df/du| (for the NACA sections u = sqrt(chord position), spec §5's cure for
 the sqrt(t) leading edge). When the two halves end at different points, the section also
 has a *base*: the trailing-edge edge from the upper half's end to the lower half's end (a
-blunt trailing edge, issue 13 part 3). The base is straight (``flat``: the closed curve has
+blunt trailing edge). The base is straight (``flat``: the closed curve has
 two corners there) unless the section is a :class:`RoundTrailingEdge`, whose base is a *round
 cap*: the cubic Bezier curve with poles
 

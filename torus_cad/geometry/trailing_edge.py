@@ -1,4 +1,4 @@
-"""Blunt trailing edge of an absolute thickness in mm on every section (issue 13, part 3).
+"""Blunt trailing edge of an absolute thickness in mm on every section.
 
 Each section kind changes its own thickness law smoothly to open its trailing edge by a
 gap g in chord units (``Section.with_trailing_edge_gap``; NACA: y_t + (g / 2) t^4, see

@@ -152,7 +152,7 @@ def distances_to_shape(shape: cq.Shape, points: NDArray[np.float64]) -> NDArray[
 
 @dataclass(frozen=True)
 class Balance:
-    """How far a part is from spinning true about the z axis (issue 13).
+    """How far a part is from spinning true about the z axis.
 
     Attributes:
         static_imbalance_g_mm: mass times the distance of the centroid from the spin axis, g mm.

@@ -1,4 +1,4 @@
-"""3MF export (issue 13): the fused propeller as ONE mesh object in millimetres, written atomically.
+"""3MF export: the fused propeller as ONE mesh object in millimetres, written atomically.
 
 A 3MF file is a zip package (OPC) holding ``3D/3dmodel.model``, an XML mesh: vertices and
 triangles with outward (counter-clockwise) winding, and ``unit="millimeter"``. The mesh is

@@ -1,4 +1,4 @@
-"""Root fillet (issue 13): a constant-radius fillet along every blade-hub junction (BRepFilletAPI_MakeFillet).
+"""Root fillet: a constant-radius fillet along every blade-hub junction (BRepFilletAPI_MakeFillet).
 
 What makes OpenCascade's rolling-ball fillet work on these blades (measured, see the README):
 

@@ -1,5 +1,5 @@
 """Hub (spec §6.2): a cylinder of radius R and length L on the z axis, centred at the origin,
-with the workshop's mounting features (issue 13): chamfered ends, a bore with an optional
+with the workshop's mounting features: chamfered ends, a bore with an optional
 D-flat, and a radial set-screw hole.
 
 The features are made on the hub *before* the blades are joined: the hub is small, so its

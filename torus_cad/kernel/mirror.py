@@ -1,4 +1,4 @@
-"""Handedness (issue 13): the clockwise propeller is the exact mirror image of the counter-clockwise one."""
+"""Handedness: the clockwise propeller is the exact mirror image of the counter-clockwise one."""
 
 from __future__ import annotations
 
