@@ -112,7 +112,6 @@ def _history_picture(spec: StudySpec, trials: Sequence[Any], path: Path) -> Path
     import matplotlib.pyplot as plt
     from matplotlib.ticker import MaxNLocator
 
-    from torus_cad.kernel.export import atomic_path
 
     figure, axes = plt.subplots(len(spec.objectives), 1, figsize=(8, 3.2 * len(spec.objectives)), squeeze=False)
     complete = [trial for trial in trials if trial.state.name == "COMPLETE"]
@@ -136,6 +135,15 @@ def _history_picture(spec: StudySpec, trials: Sequence[Any], path: Path) -> Path
         axis.grid(alpha=0.3)
         if good or bad:
             axis.legend(loc="best", fontsize="small")
+    return _save_png(figure, path)
+
+
+def _save_png(figure: Any, path: Path) -> Path:
+    """Write a matplotlib figure as a PNG, atomically, and close it."""
+    import matplotlib.pyplot as plt
+
+    from torus_cad.kernel.export import atomic_path
+
     figure.tight_layout()
     with atomic_path(path) as temp:
         figure.savefig(temp, format="png", dpi=100)
@@ -150,7 +158,6 @@ def _pareto_picture(spec: StudySpec, trials: Sequence[Any], front: Sequence[Any]
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from torus_cad.kernel.export import atomic_path
 
     figure, axis = plt.subplots(figsize=(6, 5))
     complete = [trial for trial in trials if trial.state.name == "COMPLETE"]
@@ -168,11 +175,7 @@ def _pareto_picture(spec: StudySpec, trials: Sequence[Any], front: Sequence[Any]
     axis.grid(alpha=0.3)
     if complete:
         axis.legend(loc="best", fontsize="small")
-    figure.tight_layout()
-    with atomic_path(path) as temp:
-        figure.savefig(temp, format="png", dpi=100)
-    plt.close(figure)
-    return path
+    return _save_png(figure, path)
 
 
 def _build_best(spec: StudySpec, best: Sequence[Any], folder: Path) -> tuple[list[str], dict[int, Path]]:
