@@ -2,12 +2,26 @@
 
 from __future__ import annotations
 
+import json
+import tomllib
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from torus_cad.parameters import PropellerParameters
+
+EXAMPLES_DIR = Path(__file__).resolve().parent.parent / "examples"
+
+
+def _is_design(path: Path) -> bool:
+    """A design file, not a sweep or an optimisation study (those live in examples/ too)."""
+    document = tomllib.loads(path.read_text(encoding="utf-8"))
+    return not ({"sweep", "study"} & document.keys())
+
+
+#: Every design file shipped in examples/ (sweeps and studies left out), sorted.
+SHIPPED_DESIGNS = sorted(path for path in EXAMPLES_DIR.glob("*.toml") if _is_design(path))
 
 #: The shared-intersection fuse and one general fuse integrate the same surfaces; their volumes,
 #: each integrated to VOLUME_PRECISION, agree far below this (measured ~1e-9).
@@ -59,15 +73,15 @@ def default_files(default_propeller, tmp_path_factory) -> dict[str, Path]:
     return default_propeller.write(tmp_path_factory.mktemp("default_build"))
 
 
-#: Test modules that need no CAD kernel build, browser or worker pool: `pytest -m "not slow"`
-#: runs these (under a minute on the 2-core machine); every other module is marked slow.
-FAST_MODULES = {
-    "test_airfoil", "test_airfoil_file", "test_arc_length", "test_centerline_and_frames", "test_layering",
-    "test_parameters", "test_schema", "test_surface_and_mesh", "test_trailing_edge",
-}
+#: The test tiers, chosen by measured duration (scripts/test_tiers.py writes the file): ``pytest -m fast``
+#: is the quick tier that touches every module, ``pytest -m long`` the multi-minute tests CI leaves out.
+TIERS = json.loads((Path(__file__).resolve().parent / "tiers.json").read_text(encoding="utf-8"))
 
 
 def pytest_collection_modifyitems(config, items):
+    fast, long = set(TIERS["fast"]), set(TIERS["long"])
     for item in items:
-        if item.module.__name__.rpartition(".")[2] not in FAST_MODULES:
-            item.add_marker(pytest.mark.slow)
+        if item.nodeid in fast:
+            item.add_marker(pytest.mark.fast)
+        if item.nodeid in long:
+            item.add_marker(pytest.mark.long)

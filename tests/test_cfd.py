@@ -65,7 +65,6 @@ def _read_back(path) -> tuple[dict[str, int], dict[str, float]]:
         gmsh.finalize()
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("file_name", ["torus_propeller_cfd.msh", "torus_propeller_cfd_v2.msh"])
 def test_msh_reads_back_with_every_group_and_the_fluid_volume(cfd_out, file_name):
     report = json.loads((cfd_out / "torus_propeller_cfd.json").read_text())
@@ -81,7 +80,6 @@ def test_msh_reads_back_with_every_group_and_the_fluid_volume(cfd_out, file_name
     assert volumes["fluid"] == pytest.approx(outer - zone, rel=0.01)
 
 
-@pytest.mark.slow
 def test_meshio_reads_the_gmshtofoam_file_and_the_report_and_readme_agree(cfd_out):
     meshio = pytest.importorskip("meshio")
     mesh = meshio.read(cfd_out / "torus_propeller_cfd_v2.msh")
@@ -136,7 +134,6 @@ def _crossing_pairs(msh_path, group: str) -> int:
     return len(mr.findSelfCollidingTriangles(surface))
 
 
-@pytest.mark.slow
 def test_the_coarse_propeller_wall_has_no_crossing_triangles_and_the_estimate_is_near(cfd_out):
     assert _crossing_pairs(cfd_out / "torus_propeller_cfd.msh", "propeller") == 0
     report = json.loads((cfd_out / "torus_propeller_cfd.json").read_text())
@@ -144,7 +141,6 @@ def test_the_coarse_propeller_wall_has_no_crossing_triangles_and_the_estimate_is
     assert 0.5 < report["estimate"]["tetrahedra"] / report["tetrahedra_total"] < 2.0
 
 
-@pytest.mark.slow
 def test_a_blunt_trailing_edge_meshes_at_coarse_sizes(tmp_path):
     """A 0.1 mm edge (thinner than the coarse triangles) meshes; its wall has no crossing triangles."""
     out = tmp_path / "out"
@@ -153,7 +149,6 @@ def test_a_blunt_trailing_edge_meshes_at_coarse_sizes(tmp_path):
     assert _crossing_pairs(out / "torus_propeller_cfd_v2.msh", "propeller") == 0
 
 
-@pytest.mark.slow
 @pytest.mark.skipif(shutil.which("gmshToFoam") is None, reason="OpenFOAM is not installed")
 def test_readme_txt_openfoam_steps_give_mesh_ok_and_no_empty_patch(cfd_out, tmp_path):
     """README.txt's OpenFOAM lines, as written, in a fresh case folder: checkMesh says "Mesh OK", every
@@ -195,7 +190,6 @@ def test_the_estimate_grows_with_finer_sizes():
     assert coarser < counts[1]
 
 
-@pytest.mark.slow
 def test_verify_accepts_the_cfd_set_and_names_a_changed_file(cfd_out, tmp_path):
     folder = tmp_path / "copy"
     shutil.copytree(cfd_out, folder)
@@ -211,7 +205,6 @@ def _blades(folder) -> int:
     return json.loads((folder / "torus_propeller_cfd.json").read_text())["blades"]
 
 
-@pytest.mark.slow
 def test_sigterm_at_a_random_moment_leaves_the_old_set_or_the_new_one(tmp_path):
     """Over a 4-blade set, a 3-blade run is stopped by SIGTERM at random moments: one line, exit 143
     (or 0 if it had finished), nothing staged left, and verify passes on the set that is there."""
@@ -235,7 +228,6 @@ def test_sigterm_at_a_random_moment_leaves_the_old_set_or_the_new_one(tmp_path):
         assert sorted(p.name for p in tmp_path.iterdir() if p.name.startswith(".")) == []
 
 
-@pytest.mark.slow
 def test_a_file_size_limit_names_the_file_and_keeps_the_old_set(cfd_out, tmp_path):
     """The .msh (1.8 MB) cannot be written under a 1.2 MB file size limit; the STEP (0.8 MB) can."""
     import resource

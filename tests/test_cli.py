@@ -98,7 +98,6 @@ def _memory_after_imports_kb(env: dict[str, str]) -> int:
                               text=True).stdout)
 
 
-@pytest.mark.slow
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc and sets RLIMIT_AS")
 def test_out_of_memory_is_one_line_and_exit_1(tmp_path):
     """Case 6: a MemoryError printed a 46-line traceback with install paths. Here the process gets

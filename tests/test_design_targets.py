@@ -33,7 +33,6 @@ def multirotor():
     return build_propeller(MULTIROTOR)
 
 
-@pytest.mark.slow
 def test_the_solid_has_the_requested_tip_diameter(multirotor):
     measured = 2.0 * max_radius_mm(multirotor.solid)  # BRepExtrema against a coaxial cylinder
     assert measured == pytest.approx(127.0, abs=DIAMETER_TOLERANCE_MM)
@@ -47,7 +46,6 @@ def multirotor_ccw():
     return build_propeller(EXAMPLES / "multirotor_5in_3blade_ccw.toml")
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("handed", ["multirotor", "multirotor_ccw"])
 def test_the_solid_has_the_requested_pitch_at_75_percent_radius(handed, request):
     multirotor = request.getfixturevalue(handed)
@@ -123,7 +121,6 @@ def test_a_naca_designation_builds_the_numbers_solid():
     np.testing.assert_array_equal(resolved.blade_surface().points, by_numbers.blade_surface().points)
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("airfoil", [{"airfoil.file": str(EXAMPLES / "airfoils" / "clarky.dat")},
                                      {"airfoil.file": str(EXAMPLES / "airfoils" / "naca2412_lednicer.dat")},
                                      {"airfoil.naca": "23012"}])
@@ -133,7 +130,6 @@ def test_other_airfoils_build_one_valid_solid(airfoil):
     assert propeller.solid.isValid() and len(propeller.solid.Solids()) == 1
 
 
-@pytest.mark.slow
 def test_blunt_trailing_edge_measured_on_the_solid():
     """A 0.4 mm flat base on every section: the straight edge where a section plane cuts the solid
     (the round cap: tests/test_round_trailing_edge.py)."""

@@ -11,9 +11,8 @@ edge of the multirotor examples, the 1 mm fillet's faces cross and the build ref
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import pytest
+from conftest import SHIPPED_DESIGNS
 
 from torus_cad.errors import GeometryError, KernelError, ParameterError
 from torus_cad.kernel.checks import is_valid_closed_solid
@@ -24,11 +23,9 @@ from torus_cad.propeller import build_propeller
 #: the build refuses it although the trailing edge is round.
 STRICTLY_REFUSED = {("multirotor_5in_3blade", 1.0), ("multirotor_5in_3blade_ccw", 1.0)}
 
-EXAMPLES = sorted(path for path in (Path(__file__).resolve().parent.parent / "examples").glob("*.toml")
-                  if "sweep" not in path.name and not path.name.startswith("optimize_"))
+EXAMPLES = SHIPPED_DESIGNS
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("radius_mm", [0.5, 1.0])
 @pytest.mark.parametrize("example", EXAMPLES, ids=lambda path: path.stem)
 def test_root_fillet_works_on_every_shipped_example(example, radius_mm):

@@ -1,17 +1,16 @@
 """The gallery: every example design builds to one valid solid; its note is there."""
 
-from pathlib import Path
 
 import pytest
+from conftest import EXAMPLES_DIR as EXAMPLES
+from conftest import SHIPPED_DESIGNS
 
 from torus_cad.kernel.checks import single_valid_solid
 from torus_cad.parameters import PropellerParameters
 from torus_cad.propeller import build_propeller
 
-EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
-#: Sweep and study definitions live in examples/ too (not designs); the workshop examples have their own tests.
-NOT_IN_GALLERY = ("sweep_*.toml", "workshop_*.toml", "optimize_*.toml")
-GALLERY = sorted(path.name for path in EXAMPLES.glob("*.toml") if not any(path.match(skip) for skip in NOT_IN_GALLERY))
+#: The workshop examples have their own tests.
+GALLERY = [path.name for path in SHIPPED_DESIGNS if not path.match("workshop_*.toml")]
 
 
 def test_the_gallery_has_the_designs_the_issue_asks_for():
@@ -35,7 +34,6 @@ def test_every_example_has_a_note_and_reads(name):
     PropellerParameters.from_toml(EXAMPLES / name)  # reads (airfoil files relative to examples/)
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("name", GALLERY)
 def test_every_example_builds_one_valid_solid(name):
     propeller = build_propeller(EXAMPLES / name)

@@ -153,7 +153,6 @@ def test_the_default_takes_the_fast_route_and_agrees_with_the_reference(default_
     _assert_agrees_with_the_reference(default_propeller.solid)
 
 
-@pytest.mark.slow
 def test_the_fast_route_agrees_with_the_reference_on_random_designs():
     from torus_cad.errors import GeometryError, ParameterError
     from torus_cad.propeller import build_propeller

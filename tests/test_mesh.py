@@ -55,7 +55,6 @@ def test_mesh_is_one_closed_two_manifold_with_every_part(sections, points, spaci
     assert counts.max() - counts.min() < 0.01 * counts.min()
 
 
-@pytest.mark.slow
 def test_volume_converges_to_the_brep_at_second_order(default_propeller):
     from torus_cad.kernel.checks import precise_volume
 

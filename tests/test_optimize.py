@@ -136,8 +136,8 @@ def test_every_number_of_a_real_build_report_is_a_metric():
 
     def walk(data, prefix=""):
         for key, value in data.items():
-            if key in ("parameters", "stage_seconds", "design_targets", "files", "valid", "solids"):
-                continue  # inputs, timings, present only when asked, and what every report says (valid, 1 solid)
+            if key in ("parameters", "stage_seconds", "design_targets", "files", "valid", "solids", "checks"):
+                continue  # inputs, timings, present only when asked, what every report says (valid, 1 solid, checks passed)
             if isinstance(value, dict):
                 walk(value, f"{prefix}{key}.")
             elif isinstance(value, (int, float)) and value is not None:
@@ -183,7 +183,6 @@ def test_a_study_made_from_another_file_is_refused(tmp_path):
 
 # -- studies -------------------------------------------------------------------------------------------
 
-@pytest.mark.slow
 def test_the_geometric_study_improves_on_its_base_and_its_best_design_rebuilds(tmp_path):
     """The shipped example: a lighter 100 mm propeller whose thinnest wall stays >= 0.8 mm within 30 trials."""
     from matplotlib.image import imread
@@ -224,7 +223,6 @@ def test_the_geometric_study_improves_on_its_base_and_its_best_design_rebuilds(t
     assert picture.shape[0] > 100 and picture.shape[1] > 100
 
 
-@pytest.mark.slow
 def test_a_study_killed_with_sigkill_resumes_to_its_trial_count_with_no_duplicate_or_lost_trial(tmp_path):
     study_path = _study_file(tmp_path, trials=6)
     out = tmp_path / "out"
@@ -250,7 +248,6 @@ def test_a_study_killed_with_sigkill_resumes_to_its_trial_count_with_no_duplicat
     assert "of a stopped run were asked again" in stdout
 
 
-@pytest.mark.slow
 def test_sigterm_stops_the_study_with_one_line_and_exit_143_and_asks_its_running_trials_again(tmp_path):
     study_path = _study_file(tmp_path, trials=6)
     out = tmp_path / "out"
@@ -269,7 +266,6 @@ def test_sigterm_stops_the_study_with_one_line_and_exit_143_and_asks_its_running
     assert (out / "results.csv").read_text().count("\n") == 1 + len(trials)
 
 
-@pytest.mark.slow
 def test_two_processes_share_one_sqlite_study(tmp_path):
     study_path = _study_file(tmp_path, trials=8)
     out = tmp_path / "out"
@@ -307,7 +303,6 @@ def postgres_url():
         shutil.rmtree(folder, ignore_errors=True)
 
 
-@pytest.mark.slow
 def test_a_study_on_a_postgresql_server_continues_on_a_second_run(tmp_path, postgres_url):
     spec = load_study(_study_file(tmp_path, trials=3))
     out = tmp_path / "out"
@@ -319,7 +314,6 @@ def test_a_study_on_a_postgresql_server_continues_on_a_second_run(tmp_path, post
     assert (out / "results.csv").read_text().count("\n") == 1 + 5
 
 
-@pytest.mark.slow
 def test_a_two_objective_study_on_a_dask_local_cluster_gives_its_pareto_front(tmp_path):
     objectives = ('[[objective]]\nmetric = "mass_g"\ndirection = "minimize"\n\n'
                   '[[objective]]\nmetric = "printability.thinnest_wall_mm"\ndirection = "maximize"\n')
@@ -340,7 +334,6 @@ def test_a_two_objective_study_on_a_dask_local_cluster_gives_its_pareto_front(tm
     assert (out / "light_pareto.png").stat().st_size > 1000
 
 
-@pytest.mark.slow
 def test_a_performance_study_runs_torus_cad_simulate_for_each_trial(tmp_path):
     reason = simulate_unavailable()
     if reason:
@@ -362,7 +355,6 @@ def test_a_performance_study_runs_torus_cad_simulate_for_each_trial(tmp_path):
     assert any(t.state is TrialState.COMPLETE for t in trials), [t.user_attrs.get("reason") for t in trials]
 
 
-@pytest.mark.slow
 def test_optuna_dashboard_shows_the_study(tmp_path):
     """The README's `optuna-dashboard sqlite:///OUT/<name>.db` line serves the study."""
     pytest.importorskip("optuna_dashboard", reason="optuna-dashboard is not installed (the optimize extra has it)")

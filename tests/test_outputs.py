@@ -222,7 +222,6 @@ def test_a_signal_between_the_renames_never_leaves_a_silent_mix(tmp_path, signal
     assert hidden_entries(out) == []
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("delay_s", [0.5, 2.0, 4.0, 6.0])
 @pytest.mark.parametrize("signal_name", ["SIGKILL", "SIGTERM", "SIGINT"])
 def test_a_signal_at_any_moment_leaves_the_old_set_the_new_set_or_a_reported_incomplete_one(
@@ -249,7 +248,6 @@ DESIGNS = [["--set", "blades=2"], ["--set", "blades=3", "--set", "hub.radius=11"
            ["--set", "blades=4", "--set", "phase_deg=10"], ["--set", "blades=5", "--set", "hub.length=24"]]
 
 
-@pytest.mark.slow
 def test_stress_eight_same_name_builds_of_four_designs_twice(tmp_path):
     """8 concurrent builds of one name (4 designs, twice each) into one folder, 2 rounds: every build
     succeeds, a reader verifying the folder all along never sees an incomplete or mixed set, and each

@@ -252,7 +252,6 @@ def test_parts_found_by_distance_are_the_fuses(objects):
     assert face_parts_by_distance(objects.solid, objects.hub, objects.blades) == objects.face_parts
 
 
-@pytest.mark.slow
 def test_a_filleted_propeller_shows_every_part(tmp_path):
     # The root fillet's build does not report face parts; the preview finds them by distance.
     filleted = propeller_objects("examples/workshop_fillet.toml")

@@ -70,7 +70,6 @@ def test_batch_bar_counts_outcomes_on_a_terminal_only():
     assert "4/4" in last and "valid 1" in last and "refused 1" in last and "failed 1" in last and "/min" in last
 
 
-@pytest.mark.slow
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="a pseudo-terminal")
 def test_build_shows_a_line_before_the_kernel_is_imported(tmp_path):
     """On a terminal, `torus-cad build` says what it does before the seconds of importing the schema and cadquery.

@@ -27,7 +27,6 @@ PARAMETERS_PAGE = DOCS / "reference" / "parameters.md"
 FENCE = re.compile(r"^```(\w*)\s*$")
 NOT_RUN = "<!-- not-run:"
 
-pytestmark = pytest.mark.slow
 
 
 @dataclass(frozen=True)

@@ -36,7 +36,6 @@ def _hole_angle_deg(step_path) -> float:
     return math.degrees(math.atan2(y, x)) % 360.0
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("handedness", ["cw", "ccw"])
 def test_the_reported_set_screw_angle_is_where_the_hole_is(tmp_path, capsys, handedness):
     out = tmp_path / handedness

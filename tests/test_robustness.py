@@ -165,7 +165,6 @@ def _outcomes(designs: list[dict], pool: Callable[[], LocalPool]) -> dict[str, D
     return results
 
 
-@pytest.mark.slow
 def test_the_runner_counts_a_hang_and_a_crash_and_goes_on(tmp_path):
     """The fuzz runner survives a design that never finishes and a worker that dies; files are read back.
 

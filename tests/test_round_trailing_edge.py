@@ -54,7 +54,6 @@ def _cap_chords_mm(propeller, s_values):
     return chords
 
 
-@pytest.mark.slow
 def test_round_edge_measured_on_the_solid():
     """The chord of the cap's cut in a section plane (the cap's ends, where it meets the surfaces)
     is the requested thickness, on a section and half-way between two."""
@@ -65,7 +64,6 @@ def test_round_edge_measured_on_the_solid():
         assert chord == pytest.approx(0.4, rel=0.01)
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("thickness_mm, radius_mm", [(0.3, 0.5), (0.8, 1.0)])
 def test_root_fillet_rolls_round_the_round_edge(thickness_mm, radius_mm):
     """The default with a round blunt edge and a root fillet: one valid solid, a fillet face of the
@@ -79,7 +77,6 @@ def test_root_fillet_rolls_round_the_round_edge(thickness_mm, radius_mm):
     assert _cap_chords_mm(propeller, [0.5])[0] == pytest.approx(thickness_mm, rel=0.01)
 
 
-@pytest.mark.slow
 def test_flat_edge_fillet_failure_names_the_round_edge(tmp_path, capsys):
     """A flat base's corners stop the fillet: exit 1, nothing written, and the message says which
     shape takes it."""

@@ -62,7 +62,6 @@ def _assert_clean_end(result: subprocess.CompletedProcess, signum: int, out: Pat
     assert staged == [], f"staged files left behind: {staged}"
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
 @pytest.mark.parametrize("after_startup_s", [0.0, 0.03, 0.1, 0.2, 0.35, 0.5, 0.7, 1.0, 1.3, 1.7, 2.5, 4.0])
 def test_a_signal_at_any_moment_ends_the_build_with_one_line(tmp_path, startup_s, signum, after_startup_s):

@@ -108,7 +108,6 @@ def test_without_openfoam_one_line_says_how_to_install_it(tmp_path, capsys, monk
 
 # -- the case ---------------------------------------------------------------------------------------
 
-@pytest.mark.slow
 def test_case_only_writes_a_case_foamlib_reads_back_with_the_mirror_rotation(tmp_path):
     params = PropellerParameters(handedness=Handedness.CCW)
     result = simulate(Request(params, OperatingPoint(RPM), Level.COARSE, iterations=50, processes=2,
@@ -142,7 +141,6 @@ def cw(tmp_path_factory):
     return out, json.loads((out / "torus_propeller_performance.json").read_text())
 
 
-@pytest.mark.slow
 @needs_openfoam
 def test_the_published_set_verifies_and_thrust_is_positive_for_the_design_rotation(cw):
     out, report = cw
@@ -154,7 +152,6 @@ def test_the_published_set_verifies_and_thrust_is_positive_for_the_design_rotati
     assert (out / "torus_propeller_case" / "Allrun").is_file()
 
 
-@pytest.mark.slow
 @needs_openfoam
 def test_thrust_from_the_surface_agrees_with_the_momentum_balance(cw):
     _, report = cw
@@ -162,7 +159,6 @@ def test_thrust_from_the_surface_agrees_with_the_momentum_balance(cw):
     assert abs(balance["relative_difference"]) < 0.10, (report["thrust_n"], balance)
 
 
-@pytest.mark.slow
 @needs_openfoam
 def test_mirror_image_at_the_same_rpm_gives_the_same_thrust_and_torque(cw, tmp_path):
     _, report = cw
@@ -172,7 +168,6 @@ def test_mirror_image_at_the_same_rpm_gives_the_same_thrust_and_torque(cw, tmp_p
     assert mirror["torque_nm"] == pytest.approx(report["torque_nm"], rel=0.05)
 
 
-@pytest.mark.slow
 @needs_openfoam
 def test_doubling_the_rpm_in_still_air_scales_thrust_by_4(cw, tmp_path):
     out, report = cw
@@ -181,7 +176,6 @@ def test_doubling_the_rpm_in_still_air_scales_thrust_by_4(cw, tmp_path):
     assert doubled["thrust_n"] / report["thrust_n"] == pytest.approx(4.0, rel=0.15)
 
 
-@pytest.mark.slow
 @needs_openfoam
 def test_a_still_propeller_in_still_air_gives_no_thrust(cw, tmp_path):
     out, report = cw
@@ -197,7 +191,6 @@ def _again(out, *arguments):
             *arguments]
 
 
-@pytest.mark.slow
 @needs_openfoam
 def test_a_diverging_run_exits_1_naming_the_iteration_and_residual_and_keeps_the_case(cw, tmp_path, capsys,
                                                                                      monkeypatch):
@@ -214,7 +207,6 @@ def test_a_diverging_run_exits_1_naming_the_iteration_and_residual_and_keeps_the
     assert [path.name for path in target.iterdir()] == ["torus_propeller_case_failed"]
 
 
-@pytest.mark.slow
 @needs_openfoam
 def test_a_run_over_its_time_budget_is_refused_before_the_solver_starts(cw, tmp_path, capsys):
     out, _ = cw
@@ -225,7 +217,6 @@ def test_a_run_over_its_time_budget_is_refused_before_the_solver_starts(cw, tmp_
     assert not target.exists() or not list(target.iterdir())
 
 
-@pytest.mark.slow
 @needs_openfoam
 def test_sigterm_stops_the_solver_and_publishes_nothing(cw, tmp_path):
     psutil = pytest.importorskip("psutil")

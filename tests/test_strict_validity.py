@@ -13,6 +13,7 @@ from pathlib import Path
 import cadquery as cq
 import numpy as np
 import pytest
+from conftest import SHIPPED_DESIGNS
 from lxml import etree
 from OCP.BRepAlgoAPI import BRepAlgoAPI_Check
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeWire
@@ -26,8 +27,7 @@ from torus_cad.kernel.strict import CheckScope, strict_valid_solid
 from torus_cad.kernel.wires import _bspline_curve, _edge
 from torus_cad.propeller import build_propeller
 
-EXAMPLES = sorted(path for path in (Path(__file__).resolve().parent.parent / "examples").glob("*.toml")
-                  if "sweep" not in path.name)
+EXAMPLES = SHIPPED_DESIGNS
 
 
 def _assert_whole_solid_valid(solid: cq.Solid) -> None:
@@ -81,7 +81,6 @@ def test_the_default_is_strictly_valid_and_its_stl_intersection_free(default_pro
     assert report["stl_mesh"]["linear_deflection_mm"] <= default_propeller.parameters.export.stl_linear_deflection
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("example", EXAMPLES, ids=lambda path: path.stem)
 def test_every_shipped_example_is_strictly_valid(example, tmp_path):
     _assert_published_set_valid(build_propeller(example), tmp_path)
@@ -118,7 +117,6 @@ def test_meshlib_sees_two_crossing_triangles_and_none_in_a_tetrahedron():
     assert intersecting_pairs(tetrahedron, np.array([[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]])) == 0
 
 
-@pytest.mark.slow
 def test_fuzz_designs_that_build_are_strictly_valid_with_intersection_free_stls():
     """>= 100 fuzz designs (workshop features included) at the default resolution, 2 worker processes."""
     from torus_cad.studies.strict_fuzz import fuzz_many

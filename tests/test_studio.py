@@ -245,7 +245,8 @@ def test_tip_diameter_reaches_the_exact_solids_outermost_point(light_params, lig
 def _collect(requests, tmp_path, kill_after_start=False, timeout_s=240.0, **limits):
     """Run requests through a BuildRunner (each superseding the one before); the messages received.
     ``limits``: the runner's time_limit_s and memory_limit_bytes."""
-    from torus_cad.studio.worker import BuildRequest, BuildRunner
+    from torus_cad.studio.build_messages import BuildRequest
+    from torus_cad.studio.worker import BuildRunner
 
     messages: list[tuple[str, int, object]] = []
 
@@ -270,7 +271,6 @@ def _collect(requests, tmp_path, kill_after_start=False, timeout_s=240.0, **limi
     return messages
 
 
-@pytest.mark.slow
 def test_a_newer_build_supersedes_the_older_one(light_params, tmp_path):
     from torus_cad.kernel.export import read_step
 
@@ -285,7 +285,6 @@ def test_a_newer_build_supersedes_the_older_one(light_params, tmp_path):
     assert step.parent == tmp_path / "2" and len(read_step(step).Solids()) == 1
 
 
-@pytest.mark.slow
 def test_a_refused_design_and_a_crashed_build_are_reported_not_raised(light_params, tmp_path):
     refused = light_params.to_dict()
     refused["hub"]["radius"] = 3.0  # valid field, but the blade's root leaves the hub
@@ -298,7 +297,6 @@ def test_a_refused_design_and_a_crashed_build_are_reported_not_raised(light_para
     assert messages[-1][0] == "failed" and "stopped unexpectedly" in messages[-1][2]
 
 
-@pytest.mark.slow
 def test_a_build_over_its_time_limit_is_stopped_and_reported(light_params, tmp_path):
     heavy = light_params.with_values({"resolution.sections": 200, "resolution.points": 400}).to_dict()
     messages = _collect([heavy], tmp_path, time_limit_s=1.0)
@@ -306,7 +304,6 @@ def test_a_build_over_its_time_limit_is_stopped_and_reported(light_params, tmp_p
     assert "took longer than 1 s, the limit for a build in the studio" in messages[0][2]
 
 
-@pytest.mark.slow
 def test_a_build_over_its_memory_limit_fails_in_its_process_not_the_server(light_params, tmp_path):
     messages = _collect([light_params.to_dict()], tmp_path, memory_limit_bytes=64 << 20)
     assert [kind for kind, _, _ in messages] == ["failed"], messages
@@ -370,7 +367,6 @@ def test_a_busy_port_is_reported_as_such():
                                      "or server?); choose another with --port, or --port 0 for any free one")
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize(("signum", "code"), [(signal.SIGINT, 130), (signal.SIGTERM, 143)], ids=["SIGINT", "SIGTERM"])
 def test_a_signal_stops_the_studio_with_its_exit_code_and_one_line(signum, code):
     from torus_cad.studio.browser import StudioProcess

@@ -26,8 +26,6 @@ from torus_cad.studio.browser import (
 )
 from torus_cad.studio.layout import field_id
 
-pytestmark = pytest.mark.slow
-
 REPO = Path(__file__).resolve().parent.parent
 SCREENSHOT = REPO / "docs" / "images" / "studio.png"  # the README's picture of the studio
 UPDATE_IMAGES = "TORUS_CAD_UPDATE_IMAGES"  # =1: the screenshot test rewrites SCREENSHOT

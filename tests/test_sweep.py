@@ -199,7 +199,6 @@ def test_airfoil_files_in_a_sweep_are_relative_to_the_file_naming_them(airfoil_p
     assert [design.parameters["airfoil"]["file"] for design in generate_designs(spec)] == [clarky, naca2412]
 
 
-@pytest.mark.slow
 def test_a_sweep_run_from_another_folder_builds_each_design_from_its_airfoil_file(airfoil_project, capsys):
     assert main(["sweep", "../project/airfoils.toml", "--workers", "1", "--out", "out", "--quiet"]) == 0, \
         capsys.readouterr()
@@ -522,7 +521,6 @@ if __name__ == "__main__":
 """
 
 
-@pytest.mark.slow
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads /proc")
 def test_sweep_workers_die_with_the_sweep_when_it_is_killed(tmp_path):
     """SIGKILL to the sweep's process: its fork server and workers (each in a ten-minute design) go too."""
@@ -545,7 +543,6 @@ def test_sweep_workers_die_with_the_sweep_when_it_is_killed(tmp_path):
             os.kill(pid, signal.SIGKILL)
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
 def test_a_signal_stops_the_sweep_with_one_line_its_exit_code_and_the_table(tmp_path, signum):
     sweep = write(tmp_path / "s.toml", "[base.resolution]\nsections = 16\npoints = 32\n[sweep]\nstl = false\n"

@@ -196,7 +196,6 @@ def test_balance_of_three_blades_is_zero_and_one_blade_warns(tmp_path, capsys, p
 ROUND_EDGE = {"airfoil.trailing_edge_thickness": 0.3, "airfoil.trailing_edge_shape": "round"}
 
 
-@pytest.mark.slow
 def test_root_fillet_has_the_requested_radius_and_gives_one_valid_solid():
     filleted = build_propeller(None, overrides={"hub.root_fillet_radius": 0.5, **ROUND_EDGE})
     assert is_valid_closed_solid(filleted.solid) and filleted.checks is not None
@@ -206,7 +205,6 @@ def test_root_fillet_has_the_requested_radius_and_gives_one_valid_solid():
     assert len(fillet_faces) >= 3  # at least one per blade
 
 
-@pytest.mark.slow
 def test_root_fillet_failure_exits_1_naming_the_fillet_and_writes_nothing(tmp_path, capsys):
     assert main(["build", "--set", "hub.root_fillet_radius=4", "--out", str(tmp_path)]) == 1
     error = capsys.readouterr().err
@@ -269,7 +267,6 @@ REPAIRED = {
 }
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("design", [pytest.param(NEAR_THE_END, id="root near the hub end"),
                                     pytest.param(THROUGH_THE_END, id="blades pass the hub end")])
 def test_root_fillet_runs_out_past_the_hub_end_and_keeps_the_parts_extent(design):
@@ -287,7 +284,6 @@ def test_root_fillet_runs_out_past_the_hub_end_and_keeps_the_parts_extent(design
     assert any(principal_curvatures(face)[1] == pytest.approx(1 / 0.5, rel=1e-3) for face in filleted.solid.Faces())
 
 
-@pytest.mark.slow
 def test_repaired_root_fillet_is_one_valid_solid_with_a_fillets_volume():
     params = PropellerParameters.from_dict(REPAIRED)
     plain = build_propeller(params)
@@ -336,7 +332,6 @@ def _tightest_analytic_concave_bend_mm(params, s, t, step=1e-4):
     return 1.0 / concave.max()
 
 
-@pytest.mark.slow
 def test_root_fillet_is_reduced_only_where_the_blade_bends_too_tightly_and_says_so(tmp_path):
     """Where the blade's own section bends concavely tighter than the ball near the hub, the fillet is
     made with a smaller radius along those junction edges, the requested one elsewhere; the solid is
@@ -361,7 +356,6 @@ def test_root_fillet_is_reduced_only_where_the_blade_bends_too_tightly_and_says_
     assert report["constant_radius"] is False and report["smallest_radius_mm"] == fillet.smallest_radius_mm
 
 
-@pytest.mark.slow
 def test_tight_bend_fails_naming_the_reduce_choice_which_then_warns(tmp_path, capsys):
     """By default a fillet that cannot have its radius everywhere is not made (exit 1, nothing
     written, the message says why and names the choice); with 'reduce' it is made and the CLI warns."""

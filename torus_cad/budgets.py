@@ -10,16 +10,12 @@ the resolution ranges.)
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
 
 from torus_cad.errors import BudgetError
 from torus_cad.geometry.surface import BladeSurface
 from torus_cad.geometry.triangle_estimate import estimate_stl_triangles
 from torus_cad.parameters import PropellerParameters
-from torus_cad.tolerances import CFD_TETRAHEDRA_LIMIT, STL_TRIANGLE_LIMIT
-
-if TYPE_CHECKING:
-    from torus_cad.cfd.estimate import CfdEstimate
+from torus_cad.tolerances import STL_TRIANGLE_LIMIT
 
 #: Peak resident memory of ``torus-cad mesh`` (binary STL, --no-compare) grows by this much per
 #: triangle of its estimate (torus_cad.mesh.resolution.estimate_triangles), bytes, over a fixed
@@ -95,21 +91,4 @@ def check_stl_budget(params: PropellerParameters, surface: BladeSurface | None =
             f"the STL would have about {estimate:,} triangles (export.stl_linear_deflection = "
             f"{export.stl_linear_deflection:g} mm, export.stl_angular_deflection = {export.stl_angular_deflection:g} "
             f"rad), over the limit of {limit:,}; raise the deflections or build with --no-stl")
-    return estimate
-
-
-def check_cfd_budget(params: PropellerParameters, limit: int = CFD_TETRAHEDRA_LIMIT) -> CfdEstimate:
-    """The CFD mesh's estimate, or BudgetError (exit 2) naming it, the sizes that set it and the limit
-    when its tetrahedra are over ``limit``."""
-    from torus_cad.cfd.estimate import estimate_cfd_mesh
-
-    estimate = estimate_cfd_mesh(params)
-    if estimate.tetrahedra > limit:
-        cfd = params.cfd
-        raise BudgetError(
-            f"the CFD mesh would have about {estimate.tetrahedra:,} tetrahedra and need about "
-            f"{estimate.memory_mb / 1000.0:.1f} GB of memory (cfd.cells_per_chord = {cfd.cells_per_chord:g}, "
-            f"cfd.curvature_cells = {cfd.curvature_cells:g}, cfd.growth_rate = {cfd.growth_rate:g}, cfd.far_size = "
-            f"{cfd.far_size:g} D, cfd.domain_radius = {cfd.domain_radius:g} D), over the limit of {limit:,} "
-            f"tetrahedra; lower cfd.cells_per_chord or raise cfd.far_size or cfd.growth_rate")
     return estimate

@@ -430,8 +430,8 @@ def _command_cfd(args: argparse.Namespace) -> int:
         raise ParameterError(f"--threads = {args.threads} is out of range; allowed 0 (one per CPU) or more")
     progress = StageProgress.for_terminal(quiet=args.quiet)
     try:
-        from torus_cad.budgets import check_cfd_budget
         from torus_cad.cfd.domain import gmsh_library, import_gmsh, summary_line, write_cfd_domain
+        from torus_cad.cfd.estimate import check_cfd_budget
         from torus_cad.cfd.surface_check import import_meshlib
         from torus_cad.cfd.worker import run_in_worker
         from torus_cad.outputs import check_writable_folder

@@ -31,21 +31,26 @@ from contextlib import contextmanager
 from dataclasses import asdict, dataclass, field
 from enum import StrEnum
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
+from torus_cad.cfd.estimate import CfdEstimate, check_cfd_budget
 from torus_cad.cfd.readme import readme_text
 from torus_cad.cfd.settings import MissingExtraError
-from torus_cad.errors import KernelError, ParameterError
-from torus_cad.geometry.propeller import PropellerGeometry
-from torus_cad.geometry.transforms import evaluate_quartic
+from torus_cad.cfd.sizes import (
+    CYLINDER_SEGMENTS,
+    MIN_SIZE_FRACTION,
+    TRAILING_EDGE_SIZE_PER_THICKNESS,
+    Domain,
+    TrailingEdges,
+    domain_for,
+    trailing_edges,
+)
+from torus_cad.errors import KernelError
 from torus_cad.parameters import PropellerParameters
-from torus_cad.parameters.design import Cfd, InletSide
+from torus_cad.parameters.design import Cfd
 from torus_cad.stages import StageTimer
-
-if TYPE_CHECKING:
-    from torus_cad.cfd.estimate import CfdEstimate
 
 #: Names of the physical groups: surfaces, then volumes.
 SURFACE_GROUPS = ("propeller", "rotating_interface", "inlet", "outlet", "farfield")
@@ -53,14 +58,8 @@ VOLUME_GROUPS = ("rotating_zone", "fluid")
 
 #: Samples per parametric direction of each propeller face for gmsh's distance field.
 DISTANCE_SAMPLING = 60
-#: Elements around the rotating zone's and the outer cylinder's circumference, at least.
-CYLINDER_SEGMENTS = 64
-#: Smallest element allowed, as a fraction of the surface size (bounds curvature refinement).
-MIN_SIZE_FRACTION = 0.1
-#: Sections sampled along each trailing edge; samples of gmsh's distance field along each.
-TRAILING_EDGE_SECTIONS, TRAILING_EDGE_SAMPLING = 41, 400
-#: Element size on a blunt trailing edge, in edge thicknesses.
-TRAILING_EDGE_SIZE_PER_THICKNESS = 1.0
+#: Samples of gmsh's distance field along each trailing edge.
+TRAILING_EDGE_SAMPLING = 400
 #: Local refinement where surface triangles cross: rounds at most, ball radius in longest edges of a
 #: crossing triangle, new element size as a fraction of that edge.
 REFINE_ROUNDS, REFINE_RADIUS_EDGES, REFINE_FACTOR = 4, 2.0, 0.35
@@ -84,46 +83,6 @@ def import_gmsh() -> Any:
     return gmsh
 
 
-@dataclass(frozen=True)
-class Domain:
-    """Sizes of the fluid domain and its mesh, mm (z along the spin axis).
-
-    Attributes:
-        tip_diameter: D, twice the largest distance of the blade surface from the axis.
-        propeller_z: (low, high) axial extent of the propeller.
-        outer_radius, outer_z: the outer cylinder; inlet at one end of ``outer_z``, outlet at the other.
-        zone_radius, zone_z: the rotating-zone cylinder.
-        inlet_z, outlet_z: axial positions of the inlet and outlet caps.
-        surface_size: element size on the propeller (smallest chord / cells_per_chord).
-        far_size: the largest element.
-    """
-
-    tip_diameter: float
-    propeller_z: tuple[float, float]
-    outer_radius: float
-    outer_z: tuple[float, float]
-    zone_radius: float
-    zone_z: tuple[float, float]
-    inlet_z: float
-    outlet_z: float
-    surface_size: float
-    far_size: float
-
-    @property
-    def outer_volume(self) -> float:
-        """Volume of the outer cylinder (the whole domain before the propeller is removed), mm^3."""
-        return float(np.pi * self.outer_radius**2 * (self.outer_z[1] - self.outer_z[0]))
-
-    @property
-    def zone_volume(self) -> float:
-        """Volume of the rotating-zone cylinder, mm^3."""
-        return float(np.pi * self.zone_radius**2 * (self.zone_z[1] - self.zone_z[0]))
-
-
-#: Grid on which the analytic blade is sampled for the tip radius.
-TIP_RADIUS_GRID = (201, 200)
-
-
 class CfdStage(StrEnum):
     """Stages of ``torus-cad cfd``; the value is the key in the report's ``stage_seconds``."""
 
@@ -132,42 +91,6 @@ class CfdStage(StrEnum):
     SURFACE_MESH = "surface_mesh"
     VOLUME_MESH = "volume_mesh"
     WRITE = "write"
-
-
-def tip_radius(geometry: PropellerGeometry) -> float:
-    """Largest distance of the blade surface from the spin axis, mm (analytic surface, sampled densely)."""
-    from torus_cad.geometry.surface import blade_surface
-
-    points = blade_surface(geometry.blade, geometry.centerline(0), *TIP_RADIUS_GRID).points
-    return float(max(np.hypot(points[..., 0], points[..., 1]).max(), geometry.hub.radius_mm))
-
-
-def smallest_chord(geometry: PropellerGeometry) -> float:
-    """Smallest chord Sx(s) over the blade, mm."""
-    return float(evaluate_quartic(geometry.blade.laws.scale_x_mm, np.linspace(0.0, 1.0, 201)).min())
-
-
-def domain_for(geometry: PropellerGeometry, settings: Cfd, propeller_z: tuple[float, float]) -> Domain:
-    """The domain's sizes for a propeller spanning ``propeller_z`` (mm) axially."""
-    diameter = 2.0 * tip_radius(geometry)
-    centre = 0.5 * (propeller_z[0] + propeller_z[1])
-    clearance = settings.zone_clearance * diameter
-    zone_z = (propeller_z[0] - clearance, propeller_z[1] + clearance)
-    upstream, downstream = settings.upstream * diameter, settings.downstream * diameter
-    if settings.inlet_side == InletSide.PLUS_Z:
-        inlet_z, outlet_z = centre + upstream, centre - downstream
-    else:
-        inlet_z, outlet_z = centre - upstream, centre + downstream
-    outer_z = (min(inlet_z, outlet_z), max(inlet_z, outlet_z))
-    if outer_z[0] >= zone_z[0] - clearance or outer_z[1] <= zone_z[1] + clearance:
-        raise ParameterError(
-            f"cfd.upstream = {settings.upstream:g} / cfd.downstream = {settings.downstream:g} put an end of the domain "
-            f"inside the rotating zone (it spans z = {zone_z[0]:.1f} .. {zone_z[1]:.1f} mm, D = {diameter:.1f} mm); "
-            "make them larger")
-    return Domain(tip_diameter=diameter, propeller_z=propeller_z, outer_radius=settings.domain_radius * diameter,
-                  outer_z=outer_z, zone_radius=settings.zone_radius * diameter, zone_z=zone_z, inlet_z=inlet_z,
-                  outlet_z=outlet_z, surface_size=smallest_chord(geometry) / settings.cells_per_chord,
-                  far_size=settings.far_size * diameter)
 
 
 @contextmanager
@@ -281,35 +204,6 @@ def build_domain(gmsh: Any, step_path: Path, domain: Domain) -> DomainEntities:
 def _boundary(gmsh: Any, volumes: set[int]) -> set[int]:
     faces = gmsh.model.getBoundary([(3, tag) for tag in sorted(volumes)], combined=False, oriented=False)
     return {abs(tag) for _, tag in faces}
-
-
-@dataclass(frozen=True)
-class TrailingEdges:
-    """The propeller's trailing edges: where a coarse surface mesh crosses itself first.
-
-    Attributes:
-        curves_mm: ``(sections, 3)`` polylines, one per blade (two, the corners, for a blunt edge).
-        thickness_mm: the edge's thickness (0 for a knife edge).
-    """
-
-    curves_mm: tuple[np.ndarray, ...]
-    thickness_mm: float
-
-
-def trailing_edges(params: PropellerParameters) -> TrailingEdges:
-    """The trailing edges of every blade of ``params`` from the analytic surface (mirrored for 'ccw')."""
-    from torus_cad.parameters.design import Handedness
-
-    curves = []
-    for index in range(params.blades):
-        surface = params.blade_surface(index, sections=TRAILING_EDGE_SECTIONS)
-        columns = [surface.trailing_edge_index, surface.lower_corner_index]
-        for column in (c for c in columns if c is not None):
-            curve = surface.points[:, column, :].copy()
-            if params.handedness == Handedness.CCW:
-                curve[:, 1] *= -1.0
-            curves.append(curve)
-    return TrailingEdges(tuple(curves), params.airfoil.trailing_edge_thickness)
 
 
 def _trailing_edge_field(gmsh: Any, edges: TrailingEdges, domain: Domain, growth_rate: float) -> int:
@@ -528,7 +422,6 @@ def write_cfd_domain(params: PropellerParameters, out_dir: str | Path, threads: 
     OpenCascade or gmsh fails, OutputError naming the file when it cannot be written.
     """
     from torus_cad import __version__
-    from torus_cad.budgets import check_cfd_budget
     from torus_cad.cfd.surface_check import import_meshlib
     from torus_cad.kernel.checks import precise_volume
     from torus_cad.kernel.export import write_step

@@ -20,7 +20,18 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from torus_cad.cfd.sizes import (
+    CYLINDER_SEGMENTS,
+    MIN_SIZE_FRACTION,
+    TRAILING_EDGE_SIZE_PER_THICKNESS,
+    Domain,
+    domain_for,
+    trailing_edges,
+)
+from torus_cad.errors import BudgetError
+from torus_cad.geometry.surface import blade_surface
 from torus_cad.parameters import PropellerParameters
+from torus_cad.tolerances import CFD_TETRAHEDRA_LIMIT
 
 #: Blade samples (sections, points around) and hub samples per mm for the surface cloud.
 CLOUD_GRID = (32, 112)
@@ -62,8 +73,6 @@ def _section_curvature(points: NDArray[np.float64]) -> NDArray[np.float64]:
 
 def _blade_cloud(params: PropellerParameters) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """Points ``(n, 3)``, outward normals ``(n, 3)`` and curvature ``(n,)`` of every blade."""
-    from torus_cad.geometry.surface import blade_surface
-
     geometry = params.geometry()
     clouds = []
     for index in range(params.blades):
@@ -116,9 +125,7 @@ def estimate_cfd_mesh(params: PropellerParameters) -> CfdEstimate:
 def size_integrals(params: PropellerParameters) -> tuple[float, int]:
     """``∫ dV / h³`` over the fluid and the surface triangles (``∫ dA / h²`` over an equilateral
     triangle's area) of ``params``' CFD mesh: what the estimate's constants multiply."""
-    from scipy.spatial import cKDTree
-
-    from torus_cad.cfd.domain import CYLINDER_SEGMENTS, MIN_SIZE_FRACTION, domain_for
+    from scipy.spatial import cKDTree  # scipy's spatial module only when an estimate is made (cold start)
 
     settings = params.cfd
     blade_points, blade_normals, blade_curvature = _blade_cloud(params)
@@ -161,8 +168,6 @@ def _trailing_edge_band(params: PropellerParameters, surface_size: float, growth
     """``∫ dV / h³`` and the triangles added around the trailing edges by their size field: sizes
     ``h = h_e + growth r`` at a distance ``r`` from edges of total length ``L``, up to the surface size,
     on the two faces that meet there (triangles) and in the half space beside them (volume)."""
-    from torus_cad.cfd.domain import MIN_SIZE_FRACTION, TRAILING_EDGE_SIZE_PER_THICKNESS, trailing_edges
-
     edges = trailing_edges(params)
     length = sum(float(np.linalg.norm(np.diff(curve, axis=0), axis=1).sum()) for curve in edges.curves_mm)
     edge_size = max(TRAILING_EDGE_SIZE_PER_THICKNESS * edges.thickness_mm, MIN_SIZE_FRACTION * surface_size)
@@ -173,12 +178,9 @@ def _trailing_edge_band(params: PropellerParameters, surface_size: float, growth
     return float(volume), int(triangles)
 
 
-def _surface_triangles(params: PropellerParameters, domain: object, blade_points: NDArray[np.float64],
+def _surface_triangles(params: PropellerParameters, domain: Domain, blade_points: NDArray[np.float64],
                        surface_size: NDArray[np.float64], blade_count: int, segments: int) -> int:
     """Triangles on the propeller (its area over its local sizes) and on the cylinders (their caps' sizes)."""
-    from torus_cad.cfd.domain import Domain
-
-    assert isinstance(domain, Domain)
     grid = blade_points.reshape(params.blades, *CLOUD_GRID, 3)
     along = np.linalg.norm(np.gradient(grid, axis=1), axis=-1)
     around = np.linalg.norm(np.roll(grid, -1, axis=2) - grid, axis=-1)
@@ -191,3 +193,18 @@ def _surface_triangles(params: PropellerParameters, domain: object, blade_points
         size = min(2.0 * np.pi * radius / segments, domain.far_size)
         cylinders += (2.0 * np.pi * radius * (z_range[1] - z_range[0]) + 2.0 * np.pi * radius**2) / size**2
     return int((blade + hub + cylinders) / _EQUILATERAL_AREA)
+
+
+def check_cfd_budget(params: PropellerParameters, limit: int = CFD_TETRAHEDRA_LIMIT) -> CfdEstimate:
+    """The CFD mesh's estimate, or BudgetError (exit 2) naming it, the sizes that set it and the limit
+    when its tetrahedra are over ``limit``."""
+    estimate = estimate_cfd_mesh(params)
+    if estimate.tetrahedra > limit:
+        cfd = params.cfd
+        raise BudgetError(
+            f"the CFD mesh would have about {estimate.tetrahedra:,} tetrahedra and need about "
+            f"{estimate.memory_mb / 1000.0:.1f} GB of memory (cfd.cells_per_chord = {cfd.cells_per_chord:g}, "
+            f"cfd.curvature_cells = {cfd.curvature_cells:g}, cfd.growth_rate = {cfd.growth_rate:g}, cfd.far_size = "
+            f"{cfd.far_size:g} D, cfd.domain_radius = {cfd.domain_radius:g} D), over the limit of {limit:,} "
+            f"tetrahedra; lower cfd.cells_per_chord or raise cfd.far_size or cfd.growth_rate")
+    return estimate

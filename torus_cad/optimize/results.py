@@ -19,8 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from torus_cad.batch.table import write_table
-from torus_cad.optimize.storage import RETRY_OF
-from torus_cad.optimize.study import CONSTRAINT, FOLDER, METRICS, OUTCOME, REASON, SECONDS
+from torus_cad.optimize.storage import CONSTRAINT, FOLDER, METRICS, OUTCOME, REASON, RETRY_OF, SECONDS
 from torus_cad.optimize.study_file import StudySpec
 
 __all__ = ["BEST_DIR", "MAX_PARETO_BUILDS", "best_trials", "trial_rows", "write_results"]

@@ -39,6 +39,10 @@ _SCHEMES = ("sqlite", "postgresql")
 _OPEN_ATTEMPTS = 5  #: tries to open a storage whose tables another process is creating at the same moment
 
 RETRY_OF = "retry_of"  #: user attr of a trial that repeats an interrupted one: that trial's number
+#: User attrs of a finished trial: its outcome, the refusal's reason, its metrics, its constraint
+#: violations, its folder under the study's out folder and its seconds.
+OUTCOME, REASON, METRICS, CONSTRAINT, FOLDER, SECONDS = "outcome", "reason", "metrics", "constraint", "folder", \
+    "seconds"
 OWNER = "owner"  #: user attr: ``{"host", "pid", "start"}`` of the process that runs the trial
 
 

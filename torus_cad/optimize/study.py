@@ -28,9 +28,16 @@ from torus_cad.batch.outcome import DesignResult, Outcome
 from torus_cad.batch.runner import Interrupted, LocalPool, interrupts_raised, run_tasks
 from torus_cad.errors import ParameterError
 from torus_cad.optimize.metrics import metric_value
+from torus_cad.optimize.results import write_results
 from torus_cad.optimize.storage import (
+    CONSTRAINT,
+    FOLDER,
     HEARTBEAT_S,
+    METRICS,
+    OUTCOME,
     OWNER,
+    REASON,
+    SECONDS,
     Heartbeat,
     claim_lock,
     fail_and_retry,
@@ -51,8 +58,6 @@ DEFINITION_ATTR = "torus_cad_definition"  #: study user attr: the digest of what
 #: Trials in flight per worker: one running and one queued, so that a worker never waits for the sampler
 #: and the storage between two trials (the sweep's window too); constant_liar keeps the sampler off both.
 _TASKS_PER_WORKER = 2
-OUTCOME, REASON, METRICS, CONSTRAINT, FOLDER, SECONDS = "outcome", "reason", "metrics", "constraint", "folder", \
-    "seconds"
 
 
 def trial_name(number: int) -> str:
@@ -305,7 +310,6 @@ class _Runner:
         self.in_flight.clear()
 
     def write(self, result: StudyResult) -> None:
-        from torus_cad.optimize.results import write_results
 
         result.files, result.summary_lines = write_results(self.spec, self.study, self.out)
 

@@ -106,7 +106,7 @@ class Result:
 
 def check_request(request: Request) -> float:
     """ParameterError (exit 2) for a value out of range; returns the tip diameter in m."""
-    from torus_cad.cfd.domain import tip_radius
+    from torus_cad.cfd.sizes import tip_radius
 
     check_count("--iterations", request.run_iterations, 1, MAX_ITERATIONS)
     check_count("--processes", request.processes, 1, max_processes())

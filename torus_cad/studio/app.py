@@ -36,6 +36,7 @@ from torus_cad.interrupts import EXIT_SIGNALS, exit_on_signals
 from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.config_file import parse_config_bytes
 from torus_cad.stages import Stage
+from torus_cad.studio.build_messages import BuildRequest, SolidResult
 from torus_cad.studio.panel import (
     PanelField,
     PanelGroup,
@@ -45,7 +46,7 @@ from torus_cad.studio.panel import (
     state_values,
 )
 from torus_cad.studio.scene import PreviewScene, preview_scene
-from torus_cad.studio.worker import BuildRequest, BuildRunner, SolidResult
+from torus_cad.studio.worker import BuildRunner
 from torus_cad.tolerances import AIRFOIL_FILE_MAX_BYTES
 
 LOG = logging.getLogger(__name__)

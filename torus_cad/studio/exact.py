@@ -26,8 +26,8 @@ from torus_cad.errors import GeometryError, ParameterError, TorusCadError
 from torus_cad.kernel.checks import mass_properties
 from torus_cad.parameters.design import Handedness
 from torus_cad.propeller import Propeller, build_propeller
+from torus_cad.studio.build_messages import BuildRequest, SolidResult
 from torus_cad.studio.scene import HUB_PART, MIRROR, PartMesh, rotation_about_z, tip_diameter_mm
-from torus_cad.studio.worker import BuildRequest, SolidResult
 
 #: Chordal deviation of the exact solid's display mesh, as a fraction of its bounding-box diagonal.
 DISPLAY_RELATIVE_DEFLECTION = 1.0 / 1000.0

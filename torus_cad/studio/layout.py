@@ -6,7 +6,7 @@ parameter of the schema gets a field without being listed here.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import Any, Protocol
 
 from trame.ui.vuetify3 import SinglePageWithDrawerLayout
 from trame.widgets import html
@@ -15,8 +15,17 @@ from trame.widgets import vuetify3 as v3
 
 from torus_cad.studio.panel import FieldKind, PanelField, PanelGroup
 
-if TYPE_CHECKING:  # pragma: no cover
-    from torus_cad.studio.app import Studio
+
+class Studio(Protocol):
+    """What the layout binds to (torus_cad.studio.app.Studio): the trame server and its controller,
+    the panel's groups, the VTK view whose window is shown, and the view reset of the toolbar."""
+
+    server: Any
+    ctrl: Any
+    groups: list[PanelGroup]
+    view: Any
+
+    def reset_view(self) -> None: ...
 
 #: Width of the parameters drawer, pixels.
 DRAWER_WIDTH = 400

@@ -27,11 +27,9 @@ import multiprocessing
 import multiprocessing.connection
 import multiprocessing.forkserver
 from collections.abc import Callable
-from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
-from torus_cad.studio.scene import PartMesh
+from torus_cad.studio.build_messages import BuildRequest
 
 #: Seconds an exact build may run in the studio before its process is killed (the default design
 #: takes about 2 s here; the largest resolutions a design may ask for take minutes).
@@ -39,32 +37,6 @@ BUILD_TIME_LIMIT_S = 120.0
 
 #: Data memory (heap and anonymous mappings, bytes) a build process may use: RLIMIT_DATA.
 BUILD_MEMORY_LIMIT_BYTES = 3 << 30
-
-
-@dataclass(frozen=True)
-class BuildRequest:
-    """One exact build: the design (``PropellerParameters.to_dict()``) and where its files go."""
-
-    build_id: int
-    design: dict[str, Any]
-    out_dir: Path
-
-
-@dataclass(frozen=True)
-class SolidResult:
-    """What the view and the readouts need from an exact build.
-
-    Attributes:
-        parts: one mesh per part (the hub first, then blade 0, 1, ...).
-        stage_seconds: seconds per pipeline stage, plus ``display_mesh`` (the tessellation above).
-        fuse_route: how the blades were joined (a torus_cad.kernel.fuse.FuseRoute value).
-
-    The solid is valid: a build that is not one valid, closed solid fails instead.
-    """
-
-    parts: list[PartMesh]
-    stage_seconds: dict[str, float]
-    fuse_route: str
 
 
 # -- parent side -----------------------------------------------------------------------------------
