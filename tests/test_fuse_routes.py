@@ -99,6 +99,12 @@ def test_default_takes_the_shared_route_and_equals_the_general_fuse(default_prop
     assert_same_volume_as_general_fuse(default_propeller)
 
 
+def test_the_report_names_the_route_by_its_code(default_files):
+    import json
+
+    assert json.loads(default_files["json"].read_text())["fuse_route"] == "assembled"
+
+
 @pytest.mark.parametrize("seam_deg, join", [(20.0, FuseRoute.GLUED), (90.0, FuseRoute.GLUED), (None, FuseRoute.ASSEMBLED)])
 def test_any_seam_angle_gives_the_same_solid(default_propeller, seam_deg, join):
     # A seam through a blade root splits that root's patch; the split pieces are shifted on

@@ -14,6 +14,7 @@ import time
 import pytest
 
 from torus_cad.progress import BatchProgress, StageProgress
+from torus_cad.stages import Stage
 
 _ANSI = re.compile(r"\x1b\[[0-9;?]*[A-Za-z]")
 
@@ -31,8 +32,8 @@ def _text(stream: io.StringIO) -> str:
 def test_stage_lines_with_elapsed_time_on_a_terminal():
     stream = _Terminal()
     progress = StageProgress.for_terminal(stream=stream)
-    progress("kernel_import")
-    progress("fuse")
+    progress(Stage.KERNEL_IMPORT)
+    progress(Stage.FUSE)
     progress("my_stage")
     progress.finish()
     lines = _text(stream).splitlines()

@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING, Any
 
 from torus_cad.errors import GeometryError, IncompleteOutputError, OutputError, ParameterError, TorusCadError
 from torus_cad.interrupts import exit_on_signals
+from torus_cad.stages import Stage
 
 if TYPE_CHECKING:
     from torus_cad.parameters import PropellerParameters
@@ -129,7 +130,7 @@ def _command_build(args: argparse.Namespace) -> int:
     from torus_cad.progress import StageProgress
 
     progress = StageProgress.for_terminal(quiet=args.quiet)  # stderr, only on a terminal
-    progress("kernel_import")  # a line on the terminal before the seconds of importing the schema and cadquery
+    progress(Stage.KERNEL_IMPORT)  # a line on the terminal before the seconds of importing the schema and cadquery
     from torus_cad.budgets import check_stl_budget
     from torus_cad.outputs import check_writable_folder, write_output_set
 
@@ -147,7 +148,7 @@ def _command_build(args: argparse.Namespace) -> int:
     from torus_cad.propeller import build_propeller
 
     propeller = build_propeller(params, progress=progress)
-    progress("write")
+    progress(Stage.WRITE)
     extra_files = {}
     if size is not None:
         from torus_cad.preview import write_preview
@@ -208,7 +209,7 @@ def _command_preview(args: argparse.Namespace) -> int:
     from torus_cad.progress import StageProgress
 
     progress = StageProgress.for_terminal(quiet=args.quiet)
-    progress("kernel_import")
+    progress(Stage.KERNEL_IMPORT)
     from torus_cad.outputs import check_writable_folder
 
     params = load_parameters(args.config, args.overrides)

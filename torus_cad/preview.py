@@ -36,6 +36,7 @@ from torus_cad.kernel.checks import distances_to_shape, mass_properties
 from torus_cad.kernel.export import atomic_path
 from torus_cad.kernel.fuse import HUB_PART
 from torus_cad.parameters import PropellerParameters
+from torus_cad.stages import Stage
 
 if TYPE_CHECKING:  # pragma: no cover
     from vtkmodules.vtkRenderingCore import vtkRenderWindow
@@ -267,7 +268,7 @@ def render_views(mesh: SceneMesh, views: Sequence[View], size: Sequence[int], ti
 
 
 def render_preview(propeller: _HasParts, size: Sequence[int] = DEFAULT_SIZE, title: str | None = None,
-                   progress: Callable[[str], None] | None = None) -> NDArray[np.uint8]:
+                   progress: Callable[[Stage], None] | None = None) -> NDArray[np.uint8]:
     """The preview picture as an ``(height, width, 3)`` RGB uint8 array of exactly ``size`` pixels.
 
     Args:
@@ -276,11 +277,11 @@ def render_preview(propeller: _HasParts, size: Sequence[int] = DEFAULT_SIZE, tit
             nearest to it: :func:`face_parts_by_distance`), ``hub`` and ``blades``.
         size: (width, height) in pixels, each 64..8000.
         title: text above the views (default: the name, blade count and volume in mm^3).
-        progress: optional callback, called with ``"tessellate"`` and ``"render"``.
+        progress: optional callback, called with ``Stage.PREVIEW_TESSELLATE`` and ``Stage.PREVIEW_RENDER``.
     """
     width, height = _checked_size(size)
     if progress:
-        progress("tessellate")
+        progress(Stage.PREVIEW_TESSELLATE)
     blades = len(propeller.blades)
     # About as fine as the picture can show: the chordal deviation is ~1/3 px of a view (the
     # smooth normals hide the facets; only the outline shows them).
@@ -293,12 +294,12 @@ def render_preview(propeller: _HasParts, size: Sequence[int] = DEFAULT_SIZE, tit
         title = (f"{propeller.parameters.name}: {blades} blade{'s' if blades != 1 else ''}, "
                  f"volume {volume:,.0f} mm³")
     if progress:
-        progress("render")
+        progress(Stage.PREVIEW_RENDER)
     return render_views(mesh, (oblique_view(mesh), AXIAL_VIEW), (width, height), title)
 
 
 def write_preview(propeller: _HasParts, path: str | Path, size: Sequence[int] = DEFAULT_SIZE,
-                  title: str | None = None, progress: Callable[[str], None] | None = None) -> Path:
+                  title: str | None = None, progress: Callable[[Stage], None] | None = None) -> Path:
     """Render the preview (see :func:`render_preview`) and write it as a PNG, atomically; return the path."""
     return write_png(render_preview(propeller, size, title, progress), path)
 

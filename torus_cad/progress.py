@@ -10,7 +10,7 @@ the output of scripted runs stays clean. rich is imported only when something is
   a terminal shows a line within a fraction of a second of the command starting::
 
       progress = StageProgress.for_terminal(quiet=args.quiet)
-      progress("kernel_import")
+      progress(Stage.KERNEL_IMPORT)
       from torus_cad.propeller import build_propeller
       propeller = build_propeller(params, progress=progress)
       progress.finish()
@@ -28,18 +28,7 @@ from typing import Any, Self, TextIO
 
 from torus_cad.stages import Stage
 
-__all__ = ["STAGE_LABELS", "BatchProgress", "StageProgress", "is_terminal"]
-
-#: Words for the steps a command shows: the pipeline's stages and the steps around them
-#: (others are shown with spaces for underscores).
-STAGE_LABELS: dict[str, str] = {
-    "kernel_import": "loading the schema and the CAD kernel (cadquery)",
-    **{stage.value: stage.label for stage in Stage},
-    "write": "writing STEP / STL / JSON",
-    "tessellate": "tessellating for the preview",
-    "render": "rendering the preview",
-}
-
+__all__ = ["BatchProgress", "StageProgress", "is_terminal"]
 
 def is_terminal(stream: TextIO) -> bool:
     """Whether ``stream`` is an interactive terminal (False for pipes, files and closed streams)."""
@@ -86,9 +75,10 @@ class StageProgress:
         return time.perf_counter() - self.start
 
     def __call__(self, stage: str) -> None:
-        """Announce that ``stage`` starts now."""
+        """Announce that ``stage`` starts now: a :class:`Stage` in its words; another pipeline's stage
+        (``MeshStage``, ``CfdStage``) or an OpenFOAM command of ``simulate`` as its name, with spaces."""
         self.stages.append(stage)
-        self._print(STAGE_LABELS.get(stage, stage.replace("_", " ")))
+        self._print(stage.label if isinstance(stage, Stage) else str(stage).replace("_", " "))
 
     def finish(self, message: str = "done") -> None:
         """Announce the end (with the total elapsed time)."""

@@ -31,6 +31,11 @@ class Stage(StrEnum):
     STL_WRITE = "stl_write"
     SECTIONS_TABLE = "sections_table"
     THREE_MF_WRITE = "3mf_write"
+    # the steps a command shows around the pipeline (progress only; no report key)
+    KERNEL_IMPORT = "kernel_import"
+    WRITE = "write"
+    PREVIEW_TESSELLATE = "tessellate"
+    PREVIEW_RENDER = "render"
 
     @property
     def label(self) -> str:
@@ -53,6 +58,10 @@ _LABELS = {
     Stage.STL_WRITE: "writing STL",
     Stage.SECTIONS_TABLE: "writing the blade-element table",
     Stage.THREE_MF_WRITE: "writing 3MF",
+    Stage.KERNEL_IMPORT: "loading the schema and the CAD kernel (cadquery)",
+    Stage.WRITE: "writing the files",
+    Stage.PREVIEW_TESSELLATE: "tessellating for the preview",
+    Stage.PREVIEW_RENDER: "rendering the preview",
 }
 
 

@@ -29,26 +29,26 @@ from OCP.TDocStd import TDocStd_Document
 from OCP.XCAFDoc import XCAFDoc_DocumentTool
 
 from torus_cad.errors import KernelError
+from torus_cad.formats import StepSchema
 from torus_cad.kernel.files import atomic_path
 from torus_cad.kernel.mesh_check import MeshCheck, intersecting_pairs_in_file, refined_until_intersection_free
 from torus_cad.tolerances import DISK_FULL_FREE_BYTES
 
 __all__ = ["atomic_path", "read_step", "write_checked_stl", "write_step", "write_stl"]
 
-_STEP_SCHEMAS = {"AP214": "AP214IS", "AP242": "AP242DIS"}
+#: OpenCascade's write.step.schema value of each protocol.
+_STEP_SCHEMAS = {StepSchema.AP214: "AP214IS", StepSchema.AP242: "AP242DIS"}
 _STEP_END_MARKER = b"END-ISO-10303-21;"
 _STL_HEADER_BYTES, _STL_TRIANGLE_BYTES = 84, 50
 
 
-def write_step(shape: cq.Shape, path: str | Path, product_name: str, schema: str = "AP214",
+def write_step(shape: cq.Shape, path: str | Path, product_name: str, schema: StepSchema = StepSchema.AP214,
                program: str = "torus_cad") -> Path:
-    """Write ``shape`` as STEP (``schema`` 'AP214' or 'AP242', millimetres, product named ``product_name``).
+    """Write ``shape`` as STEP (application protocol ``schema``, millimetres, product named ``product_name``).
 
     The shape goes through an XCAF document so that the STEP PRODUCT carries exactly the
     design's name (the plain writer appends a counter to it).
     """
-    if schema not in _STEP_SCHEMAS:
-        raise KernelError(f"unknown STEP schema {schema!r}; choose AP214 or AP242")
     document = TDocStd_Document(TCollection_ExtendedString("torus_cad"))
     label = XCAFDoc_DocumentTool.ShapeTool_s(document.Main()).AddShape(shape.wrapped, False)
     TDataStd_Name.Set_s(label, TCollection_ExtendedString(product_name))

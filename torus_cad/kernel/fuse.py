@@ -65,14 +65,20 @@ def fuse_all(hub: cq.Solid, blades: Sequence[cq.Solid]) -> Fused:
 
 
 class FuseRoute(StrEnum):
-    """How the blades were joined to the hub (the value is what the JSON report says)."""
+    """How the blades were joined to the hub (the value is the code the JSON report gives)."""
 
-    ASSEMBLED = "shared intersection, assembled"
+    ASSEMBLED = "assembled"
     """One blade-hub intersection reused for every blade; the shell put together from known faces."""
-    GLUED = "shared intersection, glued"
+    GLUED = "glued"
     """One blade-hub intersection reused; the copies glued to the hub (a blade cuts an end face)."""
-    GENERAL = "one fuse"
+    GENERAL = "general"
     """The fallback: one general boolean of the hub and all blades."""
+
+    @property
+    def description(self) -> str:
+        """The route in words, for people (the studio's readout)."""
+        return {FuseRoute.ASSEMBLED: "shared intersection, assembled", FuseRoute.GLUED: "shared intersection, glued",
+                FuseRoute.GENERAL: "one general fuse"}[self]
 
 
 @dataclass(frozen=True)

@@ -21,6 +21,7 @@ from typing import Annotated, Any, Self
 from pydantic import AfterValidator, BeforeValidator, Field, model_validator
 
 from torus_cad.errors import ParameterError
+from torus_cad.formats import ExportFormat, StepSchema
 from torus_cad.geometry.airfoil import Naca5Airfoil, NacaAirfoil, naca4_numbers, naca_section
 from torus_cad.geometry.airfoil_file import load_airfoil_file
 from torus_cad.geometry.frames import FrameKind
@@ -39,13 +40,6 @@ _NAME_PATTERN = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,63}")
 Coefficient = Annotated[float, Field(ge=-1e4, le=1e4)]
 #: A quartic's coefficients, highest power first, each in [-1e4, 1e4].
 QuarticCoefficients = Annotated[tuple[Coefficient, Coefficient, Coefficient, Coefficient, Coefficient], AS_TUPLE]
-
-
-class StepSchema(StrEnum):
-    """The STEP application protocol written."""
-
-    AP214 = "AP214"
-    AP242 = "AP242"
 
 
 def _checked_name(name: str) -> str:
@@ -251,14 +245,6 @@ class Handedness(StrEnum):
 
     CW = "cw"
     CCW = "ccw"
-
-
-class ExportFormat(StrEnum):
-    """A file format the build writes."""
-
-    STEP = "step"
-    STL = "stl"
-    THREE_MF = "3mf"
 
 
 def _formats(value: Any) -> Any:

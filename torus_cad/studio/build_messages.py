@@ -26,7 +26,7 @@ class SolidResult:
     Attributes:
         parts: one mesh per part (the hub first, then blade 0, 1, ...).
         stage_seconds: seconds per pipeline stage, plus ``display_mesh`` (the tessellation above).
-        fuse_route: how the blades were joined (a torus_cad.kernel.fuse.FuseRoute value).
+        fuse_route: how the blades were joined, in words (torus_cad.kernel.fuse.FuseRoute.description).
 
     The solid is valid: a build that is not one valid, closed solid fails instead.
     """

@@ -122,7 +122,7 @@ def run_build(request: BuildRequest, connection: multiprocessing.connection.Conn
         start = time.perf_counter()
         parts = tessellate_parts(propeller)
         stages = {**propeller.stage_seconds, "display_mesh": time.perf_counter() - start}
-        connection.send(("solid", build_id, SolidResult(parts, stages, str(propeller.fuse_route))))
+        connection.send(("solid", build_id, SolidResult(parts, stages, propeller.fuse_route.description)))
         start = time.perf_counter()
         properties = mass_properties(propeller.solid, 1.0).to_dict()
         properties["seconds"] = time.perf_counter() - start
