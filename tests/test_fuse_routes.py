@@ -99,10 +99,12 @@ def test_default_takes_the_shared_route_and_equals_the_general_fuse(default_prop
     assert_same_volume_as_general_fuse(default_propeller)
 
 
-def test_the_report_names_the_route_by_its_code(default_files):
+def test_the_report_gives_the_route_and_the_spin_as_codes(default_files):
     import json
 
-    assert json.loads(default_files["json"].read_text())["fuse_route"] == "assembled"
+    report = json.loads(default_files["json"].read_text())
+    assert report["fuse_route"] == "assembled"
+    assert report["spin_to_push_air_down"] == report["parameters"]["handedness"] == "cw"
 
 
 @pytest.mark.parametrize("seam_deg, join", [(20.0, FuseRoute.GLUED), (90.0, FuseRoute.GLUED), (None, FuseRoute.ASSEMBLED)])

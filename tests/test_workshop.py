@@ -14,7 +14,7 @@ from OCP.GeomAbs import GeomAbs_Cylinder
 
 from torus_cad import __version__
 from torus_cad.cli import main
-from torus_cad.geometry.handedness import Spin, air_push_z
+from torus_cad.geometry.handedness import Handedness, air_push_z
 from torus_cad.geometry.mounting import HubMounting
 from torus_cad.geometry.printability import printability, wall_mm
 from torus_cad.kernel.checks import balance, is_valid_closed_solid, precise_volume
@@ -105,8 +105,8 @@ def test_ccw_is_the_exact_mirror_image_of_cw(plain):
     inside = [plain.solid.isInside(tuple(p)) for p in samples]
     mirrored_inside = [mirrored.solid.isInside((x, -y, z)) for x, y, z in samples]
     assert inside == mirrored_inside and any(inside)
-    assert plain.spin_to_push_air_down() == Spin.CLOCKWISE
-    assert mirrored.spin_to_push_air_down() == Spin.COUNTER_CLOCKWISE
+    assert plain.spin_to_push_air_down() == Handedness.CW
+    assert mirrored.spin_to_push_air_down() == Handedness.CCW
 
 
 def test_mirror_turns_the_air_push_around():

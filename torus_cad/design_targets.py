@@ -26,10 +26,11 @@ from numpy.typing import NDArray
 
 from torus_cad.errors import GeometryError, ParameterError
 from torus_cad.geometry.airfoil import naca4_numbers
-from torus_cad.geometry.blade_elements import CLOCKWISE, BladeElements, blade_angles, blade_elements
+from torus_cad.geometry.blade_elements import BladeElements, blade_angles, blade_elements
 from torus_cad.geometry.centerline import Centerline
 from torus_cad.geometry.diameter import radial_scale_for_diameter, tip_radius
 from torus_cad.geometry.frames import FrameKind, Frames, frenet_from_derivatives
+from torus_cad.geometry.handedness import Handedness
 from torus_cad.geometry.pitch import (
     PITCH_FIT_SECTIONS,
     ChordModel,
@@ -161,17 +162,17 @@ def _pitch_model(params: Any) -> tuple[NDArray[np.float64], ChordModel]:
                           evaluate_quartic(laws.scale_x_mm, s), evaluate_quartic(laws.scale_y_mm, s), laws.pivot)
 
 
-def fit_angle_of_attack(params: Any, pitch_mm: float, rotation: int = CLOCKWISE) -> tuple[Any, PitchFit]:
+def fit_angle_of_attack(params: Any, pitch_mm: float, spin: Handedness = Handedness.CW) -> tuple[Any, PitchFit]:
     """``params`` with alpha(s) refitted so the outer half has geometric pitch ``pitch_mm``."""
     s, model = _pitch_model(params)
-    fit = fit_pitch(model, s, params.transforms.angle_of_attack, pitch_mm, tip_radius_mm(params), rotation)
+    fit = fit_pitch(model, s, params.transforms.angle_of_attack, pitch_mm, tip_radius_mm(params), spin)
     return params.with_values({"transforms.angle_of_attack": list(fit.angle_of_attack)}), fit
 
 
-def achieved_pitch(params: Any, pitch_mm: float, rotation: int = CLOCKWISE) -> PitchFit:
+def achieved_pitch(params: Any, pitch_mm: float, spin: Handedness = Handedness.CW) -> PitchFit:
     """How well ``params``' own alpha(s) meets ``pitch_mm`` (no fit)."""
     s, model = _pitch_model(params)
-    return pitch_report(model, s, params.transforms.angle_of_attack, pitch_mm, tip_radius_mm(params), rotation)
+    return pitch_report(model, s, params.transforms.angle_of_attack, pitch_mm, tip_radius_mm(params), spin)
 
 
 def _without_targets(params: Any) -> Any:
@@ -182,7 +183,7 @@ def _without_targets(params: Any) -> Any:
     return params.with_values(changes) if changes else params
 
 
-def resolve_design_targets(params: Any, rotation: int = CLOCKWISE) -> DesignTargets:
+def resolve_design_targets(params: Any, spin: Handedness = Handedness.CW) -> DesignTargets:
     """Apply ``airfoil.naca`` (4-digit), ``diameter`` and ``pitch`` (module docstring) to ``params``."""
     requested = requested_targets(params)
     if not requested:
@@ -202,28 +203,28 @@ def resolve_design_targets(params: Any, rotation: int = CLOCKWISE) -> DesignTarg
     # last alpha gives is reported on the final geometry).
     for _ in range(TARGET_ROUNDS if pitch_mm and diameter_mm else 1):
         if pitch_mm:
-            params, _ = fit_angle_of_attack(params, pitch_mm, rotation)
+            params, _ = fit_angle_of_attack(params, pitch_mm, spin)
         if diameter_mm:
             params, round_scale = fit_diameter(params, diameter_mm)
             scale *= round_scale
             if abs(round_scale - 1.0) < 1e-6:
                 break
     params = _without_targets(params)
-    fit = achieved_pitch(params, pitch_mm, rotation) if pitch_mm else None
+    fit = achieved_pitch(params, pitch_mm, spin) if pitch_mm else None
     diameter = 2.0 * tip_radius_mm(params)
     return DesignTargets(params, scale if diameter_mm else None, diameter, fit, requested)
 
 
-def elements_of(surface: BladeSurface, rotation: int = CLOCKWISE) -> BladeElements:
+def elements_of(surface: BladeSurface, spin: Handedness = Handedness.CW) -> BladeElements:
     """The blade-element table of a sampled blade surface."""
     frames = surface.frames
     return blade_elements(surface.s, surface.points, frames.origin, frames.normal, frames.binormal,
-                          surface.trailing_edge_index or 0, surface.lower_corner_index, rotation)
+                          surface.trailing_edge_index or 0, surface.lower_corner_index, spin)
 
 
-def design_elements(params: Any, points: int = 400, rotation: int = CLOCKWISE) -> BladeElements:
+def design_elements(params: Any, points: int = 400, spin: Handedness = Handedness.CW) -> BladeElements:
     """The blade-element table at the design's own sections (``resolution.sections``), finely sampled around."""
-    return elements_of(params.blade_surface(points=points), rotation)
+    return elements_of(params.blade_surface(points=points), spin)
 
 
 def trailing_edge_of(params: Any, s: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -237,7 +238,7 @@ def trailing_edge_of(params: Any, s: NDArray[np.float64]) -> NDArray[np.float64]
                                       evaluate_quartic(laws.scale_x_mm, s), evaluate_quartic(laws.scale_y_mm, s))
 
 
-def write_sections_table(surface: BladeSurface, params: Any, out_dir: Path, rotation: int = CLOCKWISE) -> dict[str, Path]:
+def write_sections_table(surface: BladeSurface, params: Any, out_dir: Path, spin: Handedness = Handedness.CW) -> dict[str, Path]:
     """Write ``<name>_sections.csv`` and ``<name>_sections.png`` of the built blade ``surface`` into
     ``out_dir`` (each atomically); their paths by kind (``sections_csv``, ``sections_png``).
 
@@ -249,10 +250,10 @@ def write_sections_table(surface: BladeSurface, params: Any, out_dir: Path, rota
     from torus_cad.kernel.export import atomic_path
     from torus_cad.sections_table import write_sections_csv, write_sections_png
 
-    elements = elements_of(surface, rotation)
+    elements = elements_of(surface, spin)
     if str(getattr(params, "handedness", "cw")) == "ccw":  # the part is the surface's mirror image (y -> -y)
         elements = dataclasses.replace(elements, position_angle_deg=-elements.position_angle_deg,
-                                       rotation=-elements.rotation)
+                                       spin=elements.spin.opposite)
     paths = {"sections_csv": out_dir / f"{params.name}_sections.csv",
              "sections_png": out_dir / f"{params.name}_sections.png"}
     with atomic_path(paths["sections_csv"]) as temp:
@@ -275,7 +276,7 @@ def radius_crossings(params: Any, radius_mm: float, sections: int = 801) -> list
     return found
 
 
-def pitch_on_solid(propeller: Any, s: float, rotation: int = CLOCKWISE) -> float:
+def pitch_on_solid(propeller: Any, s: float, spin: Handedness = Handedness.CW) -> float:
     """Geometric pitch (mm) of the built solid's section in the plane of section ``s``.
 
     Measured on the B-rep: the plane cuts the solid and the contour through the centerline's
@@ -315,5 +316,5 @@ def pitch_on_solid(propeller: Any, s: float, rotation: int = CLOCKWISE) -> float
         trailing = points[int(np.argmax(np.linalg.norm(points - leading, axis=1)))]
     leading, trailing = leading * flip, trailing * flip
     middle = 0.5 * (leading + trailing)
-    beta, _ = blade_angles(middle[None], (trailing - leading)[None], rotation)
+    beta, _ = blade_angles(middle[None], (trailing - leading)[None], spin)
     return float(2.0 * np.pi * np.hypot(middle[0], middle[1]) * np.tan(np.radians(beta[0])))

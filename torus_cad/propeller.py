@@ -26,7 +26,7 @@ from torus_cad.colors import HUB_COLOR, blade_color
 from torus_cad.design_targets import DesignTargets, resolve_design_targets
 from torus_cad.errors import KernelError
 from torus_cad.geometry.feasibility import check_feasible
-from torus_cad.geometry.handedness import Spin, spin_to_push_air_down
+from torus_cad.geometry.handedness import Handedness, spin_to_push_air_down
 from torus_cad.geometry.hub import seam_angle_deg
 from torus_cad.geometry.mounting import HubMounting, place_mounting, set_screw_arc_deg
 from torus_cad.geometry.printability import Printability, printability
@@ -46,7 +46,7 @@ from torus_cad.kernel.mirror import mirrored
 from torus_cad.kernel.strict import StrictCheck, strict_valid_solid
 from torus_cad.kernel.wires import SectionCurves, fit_section_curves
 from torus_cad.parameters import PropellerParameters, resolve_parameters
-from torus_cad.parameters.design import Handedness, TightBends
+from torus_cad.parameters.design import TightBends
 from torus_cad.stages import Stage, StageTimer
 from torus_cad.tolerances import ROUND_EDGE_FILLET_PIECES, VOLUME_CHECK_RELATIVE_PRECISION
 
@@ -118,11 +118,11 @@ class Propeller:
         """Thinnest blade wall and trailing-edge thickness against ``manufacturing.min_wall`` (from the analytic section)."""
         return design_printability(self.parameters)
 
-    def spin_to_push_air_down(self) -> Spin:
+    def spin_to_push_air_down(self) -> Handedness:
         """The turn, seen from +z, that pushes air toward -z: a flat-plate estimate (torus_cad.geometry.handedness)."""
         spin = spin_to_push_air_down(self.surface.points, self.surface.trailing_edge_column)
         if self.parameters.handedness == Handedness.CCW:  # the surface is the spec's blade, before the mirror
-            return Spin.CLOCKWISE if spin == Spin.COUNTER_CLOCKWISE else Spin.COUNTER_CLOCKWISE
+            return spin.opposite
         return spin
 
     def mass_properties(self, density_g_cm3: float = DEFAULT_DENSITY_G_CM3) -> MassProperties:

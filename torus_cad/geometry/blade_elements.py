@@ -2,7 +2,7 @@
 
 Conventions (mm and degrees; the spin axis is z; "cw" / "ccw" = clockwise / counter-clockwise
 seen from +z, looking down the axis toward -z). The blade as the spec builds it turns
-clockwise (``rotation = -1``, :data:`CLOCKWISE`), as ``handedness = "cw"`` says; its mirror image
+clockwise (``Handedness.CW``), as ``handedness = "cw"`` says; its mirror image
 (``"ccw"``) has the same table with the position angles negated.
 
 * The section's **chord line** runs from its leading edge (the section's point at t = 0) to its
@@ -32,8 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-#: The turning direction of the blade as built (seen from +z): clockwise, -1 (counter-clockwise is +1).
-CLOCKWISE = -1
+from torus_cad.geometry.handedness import Handedness
 
 #: Above this |c_r| / h the chord runs more radially than around the axis: beta and the pitch say little.
 NEARLY_RADIAL_FRACTION = float(np.sqrt(0.5))
@@ -54,7 +53,7 @@ class BladeElements:
         beta_deg: blade angle (module docstring), in (-180, 180].
         pitch_mm: geometric pitch 2 pi r tan beta.
         radial_fraction: |c_r| / h, how radially the chord runs (> NEARLY_RADIAL_FRACTION: beta says little).
-        rotation: -1 if the propeller turns cw seen from +z (:data:`CLOCKWISE`, the default), +1 if ccw.
+        spin: which way the propeller turns seen from +z (cw, the default, or ccw).
     """
 
     s: NDArray[np.float64]
@@ -67,7 +66,7 @@ class BladeElements:
     beta_deg: NDArray[np.float64]
     pitch_mm: NDArray[np.float64]
     radial_fraction: NDArray[np.float64]
-    rotation: int = CLOCKWISE
+    spin: Handedness = Handedness.CW
 
     COLUMNS = ("s", "radius_mm", "axial_mm", "chord_mm", "thickness_mm", "thickness_ratio", "beta_deg",
                "pitch_mm", "position_angle_deg", "radial_fraction")
@@ -99,7 +98,7 @@ def chord_lines(points: NDArray[np.float64], trailing_edge_index: int, lower_cor
     return leading, trailing - leading
 
 
-def blade_angles(middle: NDArray[np.float64], chord: NDArray[np.float64], rotation: int = CLOCKWISE
+def blade_angles(middle: NDArray[np.float64], chord: NDArray[np.float64], spin: Handedness = Handedness.CW
                  ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """beta (degrees) and the radial fraction |c_r| / h of chords ``(k, 3)`` whose mid points are ``middle``."""
     radial = middle[:, :2] / np.linalg.norm(middle[:, :2], axis=1, keepdims=True)
@@ -108,7 +107,7 @@ def blade_angles(middle: NDArray[np.float64], chord: NDArray[np.float64], rotati
     c_theta = np.sum(chord[:, :2] * tangential, axis=1)
     horizontal = np.hypot(c_r, c_theta)
     # The trailing edge trails the leading edge when the chord points against the rotation.
-    signed = np.where(rotation * c_theta <= 0.0, horizontal, -horizontal)
+    signed = np.where(spin.sign * c_theta <= 0.0, horizontal, -horizontal)
     beta = np.degrees(np.arctan2(-chord[:, 2], signed))
     return beta, np.abs(c_r) / np.maximum(horizontal, 1e-300)
 
@@ -148,7 +147,7 @@ def _sorted(x: NDArray[np.float64], y: NDArray[np.float64]) -> tuple[NDArray[np.
 
 def blade_elements(s: NDArray[np.float64], points: NDArray[np.float64], origin: NDArray[np.float64],
                    normal: NDArray[np.float64], binormal: NDArray[np.float64], trailing_edge_index: int,
-                   lower_corner_index: int | None = None, rotation: int = CLOCKWISE) -> BladeElements:
+                   lower_corner_index: int | None = None, spin: Handedness = Handedness.CW) -> BladeElements:
     """The blade-element table of sampled sections.
 
     Args:
@@ -156,12 +155,12 @@ def blade_elements(s: NDArray[np.float64], points: NDArray[np.float64], origin: 
         points: ``(k, p, 3)`` mm, closed sections starting at the leading edge, upper surface first.
         origin, normal, binormal: ``(k, 3)`` each section's frame (its plane is spanned by N and B).
         trailing_edge_index, lower_corner_index: columns of the trailing edge (and a blunt edge's lower corner).
-        rotation: -1 for a propeller turning cw seen from +z (the default), +1 for ccw.
+        spin: which way the propeller turns seen from +z (cw, the default, or ccw).
     """
     leading, chord = chord_lines(points, trailing_edge_index, lower_corner_index)
     middle = leading + 0.5 * chord
     radius = np.hypot(middle[:, 0], middle[:, 1])
-    beta, radial_fraction = blade_angles(middle, chord, rotation)
+    beta, radial_fraction = blade_angles(middle, chord, spin)
     relative = points - origin[:, None, :]
     planar = np.stack([np.einsum("kpj,kj->kp", relative, normal), np.einsum("kpj,kj->kp", relative, binormal)], -1)
     chord_mm = np.linalg.norm(chord, axis=1)
@@ -171,4 +170,4 @@ def blade_elements(s: NDArray[np.float64], points: NDArray[np.float64], origin: 
     return BladeElements(s=np.asarray(s, float), radius_mm=radius, axial_mm=middle[:, 2],
                          position_angle_deg=np.degrees(np.arctan2(middle[:, 1], middle[:, 0])), chord_mm=chord_mm,
                          thickness_mm=thickness, thickness_ratio=thickness / chord_mm, beta_deg=beta, pitch_mm=pitch,
-                         radial_fraction=radial_fraction, rotation=rotation)
+                         radial_fraction=radial_fraction, spin=spin)

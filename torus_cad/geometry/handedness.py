@@ -22,15 +22,30 @@ import numpy as np
 from numpy.typing import NDArray
 
 
-class Spin(StrEnum):
-    """A turn about the z axis, seen from +z (looking down the axis toward -z)."""
+class Handedness(StrEnum):
+    """A turn about the z axis, seen from +z (looking down the axis toward -z): the one spin type.
 
-    CLOCKWISE = "clockwise"
-    COUNTER_CLOCKWISE = "counter-clockwise"
+    As a design's ``handedness``: which way the propeller turns to push air toward -z; 'cw' is the
+    spec's blade (a ribbon descending as its angle grows), 'ccw' its exact mirror image.
+    """
+
+    CW = "cw"
+    CCW = "ccw"
+
+    @property
+    def sign(self) -> int:
+        """The turn's sign about +z by the right-hand rule: -1 clockwise, +1 counter-clockwise."""
+        return -1 if self is Handedness.CW else 1
+
+    @property
+    def opposite(self) -> Handedness:
+        """The other way round (a mirror image through a plane containing the axis)."""
+        return Handedness.CCW if self is Handedness.CW else Handedness.CW
 
 
-def air_push_z(blade_points: NDArray[np.float64], trailing_edge_index: int, spin: float = 1.0) -> float:
-    """z push on the air (arbitrary units) when the blade turns about +z with sign ``spin`` (+1: counter-clockwise).
+def air_push_z(blade_points: NDArray[np.float64], trailing_edge_index: int,
+               spin: Handedness = Handedness.CCW) -> float:
+    """z push on the air (arbitrary units) when the blade turns ``spin`` about +z.
 
     ``blade_points`` is a sampled blade ``(sections, points, 3)`` mm with the leading edge in
     column 0 and the trailing edge in column ``trailing_edge_index``. Negative: air toward -z.
@@ -43,11 +58,11 @@ def air_push_z(blade_points: NDArray[np.float64], trailing_edge_index: int, spin
     step = np.linalg.norm(tangent, axis=1)
     normal = np.cross(tangent, chord_vector)
     normal /= np.linalg.norm(normal, axis=1)[:, None]
-    wind = -spin * np.stack([-middle[:, 1], middle[:, 0], np.zeros(len(middle))], axis=1)
+    wind = -spin.sign * np.stack([-middle[:, 1], middle[:, 0], np.zeros(len(middle))], axis=1)
     across = np.einsum("ij,ij->i", wind, normal)
     return float(np.sum(-across * np.abs(across) * normal[:, 2] * np.linalg.norm(chord_vector, axis=1) * step))
 
 
-def spin_to_push_air_down(blade_points: NDArray[np.float64], trailing_edge_index: int) -> Spin:
+def spin_to_push_air_down(blade_points: NDArray[np.float64], trailing_edge_index: int) -> Handedness:
     """The turn, seen from +z, that pushes air toward -z (module docstring)."""
-    return Spin.COUNTER_CLOCKWISE if air_push_z(blade_points, trailing_edge_index, 1.0) < 0.0 else Spin.CLOCKWISE
+    return Handedness.CCW if air_push_z(blade_points, trailing_edge_index, Handedness.CCW) < 0.0 else Handedness.CW

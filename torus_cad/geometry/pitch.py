@@ -31,7 +31,8 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import least_squares
 
 from torus_cad.errors import GeometryError
-from torus_cad.geometry.blade_elements import CLOCKWISE, blade_angles
+from torus_cad.geometry.blade_elements import blade_angles
+from torus_cad.geometry.handedness import Handedness
 from torus_cad.geometry.transforms import evaluate_quartic
 
 #: Sections with r >= this fraction of the tip radius take part in the pitch fit.
@@ -97,7 +98,7 @@ def chord_model(origin: NDArray[np.float64], normal: NDArray[np.float64], binorm
 
 
 def fit_pitch(model: ChordModel, s: NDArray[np.float64], initial_quartic: ArrayLike, pitch_mm: float,
-              tip_radius_mm: float, rotation: int = CLOCKWISE) -> PitchFit:
+              tip_radius_mm: float, spin: Handedness = Handedness.CW) -> PitchFit:
     """Fit alpha(s) (a quartic) so the outer sections' geometric pitch is ``pitch_mm`` (module docstring)."""
     initial = np.asarray(initial_quartic, dtype=float)
     alpha0 = _quartic_at(initial, s)
@@ -105,7 +106,7 @@ def fit_pitch(model: ChordModel, s: NDArray[np.float64], initial_quartic: ArrayL
     def evaluate(alpha_deg: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
         middle, chord = model(alpha_deg)
         radius = np.hypot(middle[:, 0], middle[:, 1])
-        beta, radial = blade_angles(middle, chord, rotation)
+        beta, radial = blade_angles(middle, chord, spin)
         target = np.arctan2(pitch_mm, 2.0 * np.pi * radius)
         miss = np.angle(np.exp(1j * (np.radians(beta) - target)))  # wrapped to (-pi, pi]
         return radius, miss, np.sqrt(np.clip(1.0 - radial**2, 0.0, 1.0))
@@ -133,17 +134,17 @@ def fit_pitch(model: ChordModel, s: NDArray[np.float64], initial_quartic: ArrayL
     solution = least_squares(residuals, coefficients, x_scale=np.full(5, 10.0), method="trf", max_nfev=200)
     if np.sum(solution.fun**2) < np.sum(residuals(coefficients) ** 2):
         coefficients = np.asarray(solution.x, dtype=float)
-    return pitch_report(model, s, coefficients, pitch_mm, tip_radius_mm, rotation)
+    return pitch_report(model, s, coefficients, pitch_mm, tip_radius_mm, spin)
 
 
 def pitch_report(model: ChordModel, s: NDArray[np.float64], quartic: ArrayLike, pitch_mm: float,
-                 tip_radius_mm: float, rotation: int = CLOCKWISE) -> PitchFit:
+                 tip_radius_mm: float, spin: Handedness = Handedness.CW) -> PitchFit:
     """How well the alpha(s) ``quartic`` meets ``pitch_mm`` (nothing is fitted): a :class:`PitchFit`."""
     coefficients = np.asarray(quartic, dtype=float)
     alpha = _quartic_at(coefficients, s)
     middle, chord = model(alpha)
     radius = np.hypot(middle[:, 0], middle[:, 1])
-    beta, radial = blade_angles(middle, chord, rotation)
+    beta, radial = blade_angles(middle, chord, spin)
     outer = radius >= PITCH_FIT_RADIUS_FRACTION * tip_radius_mm
     miss = np.angle(np.exp(1j * (np.radians(beta) - np.arctan2(pitch_mm, 2.0 * np.pi * radius))))
     used = np.clip(1.0 - radial**2, 0.0, 1.0)[outer]

@@ -25,6 +25,7 @@ from torus_cad.formats import ExportFormat, StepSchema
 from torus_cad.geometry.airfoil import Naca5Airfoil, NacaAirfoil, naca4_numbers, naca_section
 from torus_cad.geometry.airfoil_file import load_airfoil_file
 from torus_cad.geometry.frames import FrameKind
+from torus_cad.geometry.handedness import Handedness
 from torus_cad.geometry.mounting import HubMounting
 from torus_cad.geometry.propeller import BladeGeometry, HubGeometry, PropellerGeometry
 from torus_cad.geometry.section import Section as SectionShape
@@ -237,14 +238,6 @@ class Manufacturing(Section):
 
     min_wall: float = param(0.8, unit="mm", gt=0.0, le=100.0,
                             doc="thinnest wall a part may have: hub wall, blade thickness (0.8 = two 0.4 mm lines)")
-
-
-class Handedness(StrEnum):
-    """Which way the propeller turns, seen from +z, to push air toward -z: 'cw' is the spec's blade
-    (a ribbon descending as its angle grows, torus_cad.geometry.handedness), 'ccw' its exact mirror image."""
-
-    CW = "cw"
-    CCW = "ccw"
 
 
 def _formats(value: Any) -> Any:
