@@ -21,7 +21,7 @@ from torus_cad.propeller import build_propeller
 
 #: Examples whose fillet at that radius OpenCascade makes with faces that cross (BRepAlgoAPI_Check), so
 #: the build refuses it although the trailing edge is round.
-STRICTLY_REFUSED = {("multirotor_5in_3blade", 1.0), ("multirotor_5in_3blade_ccw", 1.0)}
+STRICTLY_REFUSED = {("multirotor_5in_3blade", 1.0), ("multirotor_5in_3blade_ccw", 1.0), ("prop_10x5_2blade", 1.0)}
 
 EXAMPLES = SHIPPED_DESIGNS
 
