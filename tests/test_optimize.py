@@ -55,17 +55,21 @@ def _study_file(folder: Path, trials: int = 6, extra: str = "", objectives: str 
     return path
 
 
+def _stopped(trial) -> bool:
+    """Failed because its run stopped (not for a reason of the design)."""
+    return trial.state is TrialState.FAIL and ("outcome" not in trial.user_attrs or "stopped" in trial.user_attrs)
+
+
 def _finished(trials) -> list:
     """Trials that count towards --trials: complete, or failed for a reason of the design."""
-    return [t for t in trials if t.state is TrialState.COMPLETE
-            or (t.state is TrialState.FAIL and "outcome" in t.user_attrs)]
+    return [t for t in trials if t.state is TrialState.COMPLETE or (t.state is TrialState.FAIL and not _stopped(t))]
 
 
 def _check_whole(trials, total: int) -> None:
     """Exactly ``total`` finished trials, nothing left running, every interrupted trial asked again once."""
     assert len(_finished(trials)) == total
     assert not [t.number for t in trials if t.state in (TrialState.RUNNING, TrialState.WAITING)]
-    interrupted = [t for t in trials if t.state is TrialState.FAIL and "outcome" not in t.user_attrs]
+    interrupted = [t for t in trials if _stopped(t)]
     for trial in interrupted:
         retries = [t for t in trials if t.user_attrs.get(RETRY_OF) == trial.number]
         assert len(retries) == 1 and retries[0].params == trial.params
@@ -261,7 +265,7 @@ def test_sigterm_stops_the_study_with_one_line_and_exit_143_and_asks_its_running
     assert stderr.count("\n") == 1 and "interrupted by SIGTERM" in stderr
     trials = _load(f"sqlite:///{out / 'light.db'}").get_trials()
     assert not [t for t in trials if t.state is TrialState.RUNNING]
-    stopped = [t.number for t in trials if t.state is TrialState.FAIL and "outcome" not in t.user_attrs]
+    stopped = [t.number for t in trials if _stopped(t)]
     assert stopped and sorted(t.user_attrs[RETRY_OF] for t in trials if t.state is TrialState.WAITING) == stopped
     assert (out / "results.csv").read_text().count("\n") == 1 + len(trials)
 

@@ -39,6 +39,9 @@ _SCHEMES = ("sqlite", "postgresql")
 _OPEN_ATTEMPTS = 5  #: tries to open a storage whose tables another process is creating at the same moment
 
 RETRY_OF = "retry_of"  #: user attr of a trial that repeats an interrupted one: that trial's number
+#: User attr of a trial failed because its run stopped (set before the FAIL, so that a run stopped
+#: between recording a trial's outcome and telling it is still known as stopped, not as done).
+STOPPED = "stopped"
 #: User attrs of a finished trial: its outcome, the refusal's reason, its metrics, its constraint
 #: violations, its folder under the study's out folder and its seconds.
 OUTCOME, REASON, METRICS, CONSTRAINT, FOLDER, SECONDS = "outcome", "reason", "metrics", "constraint", "folder", \
@@ -185,6 +188,7 @@ def fail_and_retry(study: Any, trial_ids: Iterable[int]) -> list[int]:
     retried = []
     for trial_id in sorted(set(trial_ids)):
         try:
+            storage.set_trial_user_attr(trial_id, STOPPED, True)
             if not storage.set_trial_state_values(trial_id, state=TrialState.FAIL):
                 continue
         except optuna.exceptions.UpdateFinishedTrialError:

@@ -38,6 +38,7 @@ from torus_cad.optimize.storage import (
     OWNER,
     REASON,
     SECONDS,
+    STOPPED,
     Heartbeat,
     claim_lock,
     fail_and_retry,
@@ -272,10 +273,10 @@ class _Runner:
                 values = self._evaluate(trial, Path(str(task.folder)), task.design_id)
             except (KeyError, OSError, ValueError) as error:
                 outcome, reason = Outcome.ERROR, f"the trial's report cannot be read: {error}"
-        trial.set_user_attr(OUTCOME, outcome.value)
-        trial.set_user_attr(REASON, reason)
-        trial.set_user_attr(SECONDS, result.seconds)
         with contextlib.suppress(optuna.exceptions.UpdateFinishedTrialError):  # a process took it as stale
+            trial.set_user_attr(OUTCOME, outcome.value)
+            trial.set_user_attr(REASON, reason)
+            trial.set_user_attr(SECONDS, result.seconds)
             if values is None:
                 self.study.tell(trial, state=TrialState.FAIL)
             else:
@@ -318,7 +319,7 @@ def _finished_fail(trial: Any) -> bool:
     """A FAIL trial that counts as done: a design's failure (its outcome recorded), not a stopped run's."""
     from optuna.trial import TrialState
 
-    return trial.state is TrialState.FAIL and OUTCOME in trial.user_attrs
+    return trial.state is TrialState.FAIL and OUTCOME in trial.user_attrs and STOPPED not in trial.user_attrs
 
 
 def _distributions(spec: StudySpec) -> dict[str, Any]:
