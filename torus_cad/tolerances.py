@@ -189,6 +189,9 @@ CFD_TETRAHEDRA_LIMIT = 3_000_000
 
 #: Two blade copies closer than this (mm) count as interfering (their faces' tolerances are ~1e-7 mm).
 STRICT_BLADE_SEPARATION_MM = 1e-4
+#: Seconds the self-interference test (BRepAlgoAPI_Check, in its child process) may take before the
+#: build is refused: the shipped examples take seconds; a filleted fuzz design kept it busy for over 30 min.
+STRICT_CHECK_TIME_LIMIT_S = 300.0
 
 #: Axis directions and positions within this of the z axis (unit vector components, mm) count as on it.
 STRICT_AXIS_TOLERANCE = 1e-9

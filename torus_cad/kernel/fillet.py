@@ -59,12 +59,8 @@ Measured on the fuzz sampler's valid designs (seeds 0-129, 0.5 mm, ``scripts/fil
 from __future__ import annotations
 
 import dataclasses
-import faulthandler
 import io
 import math
-import os
-import select
-import signal
 import time
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
@@ -92,6 +88,7 @@ from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape, TopTools_Ind
 from torus_cad.errors import KernelError
 from torus_cad.kernel.checks import precise_volume, single_valid_solid
 from torus_cad.kernel.fuse import fuse_pattern, pattern_blades
+from torus_cad.kernel.isolation import IsolatedCrash, IsolatedTimeout, run_isolated
 from torus_cad.kernel.topology import cut, explore
 from torus_cad.tolerances import (
     FILLET_RETRY_TIME_LIMIT_S,
@@ -567,48 +564,25 @@ def fillet_edges(solid: cq.Solid, edges: list[TopoDS_Edge], radius_mm: float,
 def _fillet_in_child(solid: cq.Solid, edges: list[TopoDS_Edge], radius_mm: float,
                      params: FilletParams | None = None, deadline: float | None = None,
                      edge_radii: Sequence[float] | None = None) -> cq.Solid | None:
-    """:func:`fillet_edges` in a forked child (a crash or a hang there is a failed fillet, not a dead process).
+    """:func:`fillet_edges` in a forked child (torus_cad.kernel.isolation): a crash or a hang there is
+    a failed fillet, not a dead process.
 
     The child gets FILLET_TIME_LIMIT_S, or what is left until ``deadline`` (time.monotonic()) if less."""
     limit_s = FILLET_TIME_LIMIT_S if deadline is None else min(FILLET_TIME_LIMIT_S, deadline - time.monotonic())
     if limit_s <= 0.0:
         return None
-    read_end, write_end = os.pipe()
-    pid = os.fork()
-    if pid == 0:  # the child: fillet, send the BRep text, leave without cleanup handlers
-        faulthandler.disable()  # a crash here is an expected outcome, reported by the parent; no dump
-        os.close(read_end)
-        status = 1
-        try:
-            result = fillet_edges(solid, edges, radius_mm, params, edge_radii)
-            if result is not None:
-                with os.fdopen(write_end, "wb") as pipe:
-                    pipe.write(_to_brep(result.wrapped))
-                status = 0
-        finally:
-            os._exit(status)
-    os.close(write_end)
-    data = _read_with_limit(read_end, pid, limit_s)
-    _, status = os.waitpid(pid, 0)
-    if data is None or os.WIFSIGNALED(status) or os.WEXITSTATUS(status) != 0 or not data:
+
+    def fillet_as_brep() -> bytes | None:
+        result = fillet_edges(solid, edges, radius_mm, params, edge_radii)
+        return None if result is None else _to_brep(result.wrapped)
+
+    try:
+        data = run_isolated(fillet_as_brep, timeout_s=limit_s, what="the root fillet")
+    except (IsolatedTimeout, IsolatedCrash):
+        return None
+    if not data:
         return None
     return single_valid_solid(cq.Shape.cast(_from_brep(data)), "the root fillet")
-
-
-def _read_with_limit(descriptor: int, pid: int, limit_s: float) -> bytes | None:
-    """Everything the child writes, or None (the child killed) when it takes longer than ``limit_s``."""
-    chunks: list[bytes] = []
-    deadline = time.monotonic() + limit_s
-    with os.fdopen(descriptor, "rb") as pipe:
-        while True:
-            remaining = deadline - time.monotonic()
-            if remaining <= 0 or not select.select([pipe], [], [], remaining)[0]:
-                os.kill(pid, signal.SIGKILL)
-                return None
-            chunk = pipe.read1(1 << 20)
-            if not chunk:
-                return b"".join(chunks)
-            chunks.append(chunk)
 
 
 def _to_brep(shape: TopoDS_Shape) -> bytes:

@@ -43,7 +43,8 @@ from OCP.TopTools import TopTools_IndexedMapOfShape
 
 from torus_cad.errors import KernelError
 from torus_cad.kernel.checks import single_valid_solid
-from torus_cad.tolerances import STRICT_AXIS_TOLERANCE, STRICT_BLADE_SEPARATION_MM
+from torus_cad.kernel.isolation import IsolatedTimeout, run_isolated
+from torus_cad.tolerances import STRICT_AXIS_TOLERANCE, STRICT_BLADE_SEPARATION_MM, STRICT_CHECK_TIME_LIMIT_S
 
 
 class CheckScope(StrEnum):
@@ -102,11 +103,14 @@ def strict_valid_solid(shape: cq.Shape, what: str) -> tuple[cq.Solid, StrictChec
     return solid, StrictCheck(CheckScope.PATTERN, len(checked), time.perf_counter() - start)
 
 
-def boolean_check_faults(shape: TopoDS_Shape) -> list[tuple[str, list[TopoDS_Shape]]]:
-    """BRepAlgoAPI_Check(shape, small edges, self-interference): (status name, faulty shapes) per fault."""
+def boolean_check_faults(shape: TopoDS_Shape, parallel: bool = True) -> list[tuple[str, list[TopoDS_Shape]]]:
+    """BRepAlgoAPI_Check(shape, small edges, self-interference): (status name, faulty shapes) per fault.
+
+    ``parallel``: OpenCascade's thread pool; never in a forked child (the parent's pool threads are
+    not there, and the check waits for them forever)."""
     check = BRepAlgoAPI_Check()
     check.SetData(shape, True, True)
-    check.SetRunParallel(True)
+    check.SetRunParallel(parallel)
     check.Perform()
     if check.IsValid():
         return []
@@ -114,27 +118,47 @@ def boolean_check_faults(shape: TopoDS_Shape) -> list[tuple[str, list[TopoDS_Sha
              [*fault.GetFaultyShapes1(), *fault.GetFaultyShapes2()]) for fault in check.Result()]
 
 
+#: A faulty sub-shape as the child reports it: the index of a face in the solid's faces, or a shape type's name.
+_Where = int | str
+
+
+def _indexed_faults(shape: TopoDS_Shape, solid: TopoDS_Shape) -> list[tuple[str, list[_Where]]]:
+    """:func:`boolean_check_faults` as plain data (what a child process can send back)."""
+    faces = TopTools_IndexedMapOfShape()
+    TopExp.MapShapes_s(solid, TopAbs_FACE, faces)
+    return [(status, [faces.FindIndex(found) - 1 if found.ShapeType() == TopAbs_FACE
+                      else str(found.ShapeType()).rsplit(".", 1)[-1].removeprefix("TopAbs_").lower()
+                      for found in shapes])
+            for status, shapes in boolean_check_faults(shape, parallel=False)]
+
+
 def _raise_on_faults(shape: TopoDS_Shape, solid: TopoDS_Shape, pattern: _Pattern | None, what: str) -> None:
-    faults = boolean_check_faults(shape)
+    try:
+        faults = run_isolated(_indexed_faults, shape, solid, timeout_s=STRICT_CHECK_TIME_LIMIT_S,
+                              what=f"{what}: BRepAlgoAPI_Check (self-interference / small-edge test)")
+    except IsolatedTimeout as error:
+        raise KernelError(f"{error} (the limit); the solid is not known to be free of self-intersections, so "
+                          "nothing is written: a simpler design (fewer sections, no root fillet) checks faster") from None
     if faults:
-        status, shapes = faults[0]
-        where = ", ".join(_describe(found, solid, pattern) for found in shapes) or "the shape"
+        status, found = faults[0]
+        where = ", ".join(_describe(item, solid, pattern) for item in found) or "the shape"
         raise KernelError(f"{what}: BRepAlgoAPI_Check finds {len(faults)} fault(s), first {status} "
                           f"(self-interference / small-edge test) on {where}")
 
 
-def _describe(shape: TopoDS_Shape, solid: TopoDS_Shape, pattern: _Pattern | None) -> str:
-    """'face 7 (blade 0, BSplineSurface)' for a face of ``solid``; the shape's type otherwise."""
-    if shape.ShapeType() != TopAbs_FACE:
-        return str(shape.ShapeType()).rsplit(".", 1)[-1].removeprefix("TopAbs_").lower()
+def _describe(where: _Where, solid: TopoDS_Shape, pattern: _Pattern | None) -> str:
+    """'face 7 of solid.Faces() (blade 0, BSplineSurface)' for a face index; the shape type otherwise."""
+    if isinstance(where, str) or where < 0:
+        return str(where) if isinstance(where, str) else "a face of the checked shape"
     faces = TopTools_IndexedMapOfShape()
     TopExp.MapShapes_s(solid, TopAbs_FACE, faces)
+    face = TopoDS.Face_s(faces.FindKey(where + 1))
     part = "hub or blade"
     if pattern is not None:
-        blades = [k for k, copy in enumerate(pattern.copies) if any(shape.IsSame(face) for face in copy)]
+        blades = [k for k, copy in enumerate(pattern.copies) if any(face.IsSame(other) for other in copy)]
         part = f"blade {blades[0]}" if blades else "hub"
-    kind = str(BRepAdaptor_Surface(TopoDS.Face_s(shape)).GetType()).rsplit(".", 1)[-1].removeprefix("GeomAbs_")
-    return f"face {faces.FindIndex(shape) - 1} of solid.Faces() ({part}, {kind})"
+    kind = str(BRepAdaptor_Surface(face).GetType()).rsplit(".", 1)[-1].removeprefix("GeomAbs_")
+    return f"face {where} of solid.Faces() ({part}, {kind})"
 
 
 def blade_pattern(solid: TopoDS_Shape) -> _Pattern | None:
