@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import json
+import subprocess
 import tomllib
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import numpy as np
@@ -48,6 +50,27 @@ def read_binary_stl(path: Path) -> np.ndarray:
     records = np.frombuffer(data, dtype=np.dtype([("normal", "<f4", 3), ("vertices", "<f4", (3, 3)),
                                                   ("attribute", "<u2")]), count=count, offset=84)
     return records["vertices"].copy()
+
+
+@pytest.fixture
+def tmpfs(tmp_path) -> Iterator[Callable[[int], Path]]:
+    """``tmpfs(size_kb)``: a small tmpfs mounted in ``tmp_path`` (needs root; the test is skipped where
+    it cannot be mounted), unmounted afterwards: a disk that fills up."""
+    mounted: list[Path] = []
+
+    def mount(size_kb: int) -> Path:
+        mount_point = tmp_path / f"disk{len(mounted)}"
+        mount_point.mkdir()
+        result = subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={size_kb}k", "tmpfs", str(mount_point)],
+                                check=False, capture_output=True, text=True)
+        if result.returncode != 0:
+            pytest.skip(f"cannot mount a small tmpfs: {result.stderr.strip()}")
+        mounted.append(mount_point)
+        return mount_point
+
+    yield mount
+    for mount_point in mounted:
+        subprocess.run(["umount", "-l", str(mount_point)], check=False)
 
 
 @pytest.fixture(scope="session")

@@ -113,16 +113,9 @@ def test_a_file_size_limit_names_the_mesh_file_and_keeps_the_old_set(tmp_path):
 
 
 @pytest.fixture
-def small_disk(tmp_path):
-    """A 1500 KB tmpfs (needs root): room for the old set (about 700 KB), not for the new one."""
-    mount_point = tmp_path / "disk"
-    mount_point.mkdir()
-    result = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=1500k", "tmpfs", str(mount_point)],
-                            check=False, capture_output=True, text=True)
-    if result.returncode != 0:
-        pytest.skip(f"cannot mount a small tmpfs: {result.stderr.strip()}")
-    yield mount_point
-    subprocess.run(["umount", "-l", str(mount_point)], check=False)
+def small_disk(tmpfs):
+    """A 1500 KB disk: room for the old set (about 700 KB), not for the new one."""
+    return tmpfs(1500)
 
 
 def test_a_full_disk_names_the_mesh_file_and_keeps_the_old_set(small_disk):

@@ -287,17 +287,10 @@ def test_stress_eight_same_name_builds_of_four_designs_twice(tmp_path):
 # -- the disk and the folder fail -----------------------------------------------------------------
 
 @pytest.fixture
-def small_disk(tmp_path):
-    """A 2500 KB tmpfs (needs root): room for an old set without STL (700 KB) and a new 4-blade STEP
-    (830 KB), not for its 2.7 MB STL too. Skipped where it cannot be mounted."""
-    mount_point = tmp_path / "disk"
-    mount_point.mkdir()
-    result = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=2500k", "tmpfs", str(mount_point)],
-                            check=False, capture_output=True, text=True)
-    if result.returncode != 0:
-        pytest.skip(f"cannot mount a small tmpfs: {result.stderr.strip()}")
-    yield mount_point
-    subprocess.run(["umount", "-l", str(mount_point)], check=False)
+def small_disk(tmpfs):
+    """A 2500 KB disk: room for an old set without STL (700 KB) and a new 4-blade STEP (830 KB), not
+    for its 2.7 MB STL too."""
+    return tmpfs(2500)
 
 
 def test_a_full_disk_keeps_the_old_set_and_says_no_space_left(small_disk):
