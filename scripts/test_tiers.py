@@ -33,8 +33,11 @@ LONG_TEST_SECONDS = 30.0
 FAST_TIER_SECONDS = 30.0
 #: Only tests quicker than this in the suite run are candidates for the fast tier.
 FAST_CANDIDATE_SECONDS = 2.0
+#: Modules whose tests share one stateful page, in file order (each starts where the one before left
+#: it): only a run of tests at the end of such a module may go to the long tier.
+CHAINED_MODULES = ("tests/test_studio_browser.py",)
 #: The sum of the fast tier's test times is kept under this share of FAST_TIER_SECONDS (the rest is start-up).
-FAST_SUM_SHARE = 0.3
+FAST_SUM_SHARE = 0.25
 
 
 def _durations(junit: Path) -> dict[str, float]:
@@ -57,6 +60,27 @@ def _run_pytest(arguments: list[str]) -> tuple[dict[str, float], float]:
         subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", f"--junitxml={junit}",
                         *arguments], cwd=ROOT, check=False)
         return _durations(junit), time.monotonic() - start
+
+
+def _collected() -> list[str]:
+    """Every test's node id, in collection order."""
+    listing = subprocess.run([sys.executable, "-m", "pytest", "--collect-only", "-q", "-p", "no:cacheprovider"],
+                             cwd=ROOT, check=False, capture_output=True, text=True).stdout
+    return [line.strip() for line in listing.splitlines() if "::" in line]
+
+
+def _long_tier(durations: dict[str, float], unfinished: set[str]) -> list[str]:
+    """Tests of LONG_TEST_SECONDS or more (and the unfinished ones); in a chained module only its tail."""
+    long = {node for node, seconds in durations.items() if seconds >= LONG_TEST_SECONDS} | unfinished
+    for module in CHAINED_MODULES:
+        in_order = [node for node in _collected() if _module(node) == module]
+        tail: set[str] = set()
+        for node in reversed(in_order):
+            if node not in long:
+                break
+            tail.add(node)
+        long = {node for node in long if _module(node) != module} | tail
+    return sorted(long)
 
 
 def _module(node_id: str) -> str:
@@ -97,7 +121,7 @@ def main() -> None:
     args = parser.parse_args()
     durations = _durations(args.junit) if args.junit else _run_pytest(["-n", "2", "-m", ""])[0]
     unfinished = set(json.loads(TIERS_FILE.read_text())["long"]) - durations.keys() if TIERS_FILE.exists() else set()
-    long = sorted({node for node, seconds in durations.items() if seconds >= LONG_TEST_SECONDS} | unfinished)
+    long = _long_tier(durations, unfinished)
     fast = _fast_candidates(durations)
     TIERS_FILE.write_text(json.dumps({"fast": fast, "long": long}, indent=1) + "\n")
     measured, _ = _run_pytest(["-m", "fast"])

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import signal
 import subprocess
 import tomllib
 from collections.abc import Callable, Iterator
@@ -99,6 +100,13 @@ def default_files(default_propeller, tmp_path_factory) -> dict[str, Path]:
 #: The test tiers, chosen by measured duration (scripts/test_tiers.py writes the file): ``pytest -m fast``
 #: is the quick tier that touches every module, ``pytest -m long`` the multi-minute tests CI leaves out.
 TIERS = json.loads((Path(__file__).resolve().parent / "tiers.json").read_text(encoding="utf-8"))
+
+
+def pytest_configure(config):
+    """pytest-xdist's workers start with SIGINT ignored, and an ignored signal stays ignored in every
+    program they start; the signal tests need what a shell gives a command: SIGINT's default."""
+    if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 def pytest_collection_modifyitems(config, items):

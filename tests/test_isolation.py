@@ -31,6 +31,18 @@ def test_a_result_an_exception_a_hang_and_a_crash():
         run_isolated(_crash, timeout_s=30.0, what="a segfault")
 
 
+def _isolated_sum(values: list[int]) -> int:
+    return run_isolated(sum, values, timeout_s=30.0, what="a sum")
+
+
+def test_it_runs_in_a_pool_worker_which_is_a_daemonic_process():
+    """The sweep's and the optimiser's designs are built in pebble's (daemonic) pool processes."""
+    from pebble import ProcessPool
+
+    with ProcessPool(max_workers=1) as pool:
+        assert pool.schedule(_isolated_sum, ([4, 5],)).result(timeout=60) == 9
+
+
 def test_a_killed_parent_leaves_no_child_running():
     script = ("import time; from torus_cad.kernel.isolation import run_isolated; "
               "print('started', flush=True); run_isolated(time.sleep, 120.0, timeout_s=120.0, what='a sleep')")

@@ -573,7 +573,10 @@ def _fillet_in_child(solid: cq.Solid, edges: list[TopoDS_Edge], radius_mm: float
         return None
 
     def fillet_as_brep() -> bytes | None:
-        result = fillet_edges(solid, edges, radius_mm, params, edge_radii)
+        try:
+            result = fillet_edges(solid, edges, radius_mm, params, edge_radii)
+        except Exception:  # OpenCascade's failures (Standard_Failure and others): a failed fillet
+            return None
         return None if result is None else _to_brep(result.wrapped)
 
     try:

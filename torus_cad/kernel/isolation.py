@@ -1,31 +1,33 @@
-"""OpenCascade calls that can hang or crash, run in a forked child process with a time limit (pebble).
+"""OpenCascade calls that can hang or crash, run in a forked child process with a time limit.
 
-A hang or a crash there then costs that one call, never the command: the parent waits in Python,
-so a signal ends it at once (torus_cad.interrupts), and the child dies with its parent (Linux
-``PR_SET_PDEATHSIG``), so a stopped command leaves no OpenCascade call running behind it. The child
-is forked, so it has the shapes in memory already; what it returns is pickled back (plain data:
-BRep text, face indices, status names).
+A hang or a crash there then costs that one call, never the command: the parent waits in Python
+(``select``), so a signal ends it at once (torus_cad.interrupts), and the child dies with its
+parent (Linux ``PR_SET_PDEATHSIG``), so a stopped command leaves no OpenCascade call running behind
+it. The child is forked, so it has the shapes in memory already; what it returns is pickled back
+(plain data: BRep text, face indices, status names).
+
+Hand-written with ``os.fork``: multiprocessing, and pebble on top of it, refuse to start a child
+from a daemonic process, which the sweep's and the optimiser's pool workers are.
 """
 
 from __future__ import annotations
 
 import ctypes
 import faulthandler
-import multiprocessing
 import os
+import pickle
+import select
 import signal
+import time
 from collections.abc import Callable
-from concurrent.futures import TimeoutError as FutureTimeout
 from typing import Any, TypeVar
-
-from pebble import ProcessExpired, concurrent
 
 from torus_cad.errors import KernelError
 
 T = TypeVar("T")
 
-_FORK = multiprocessing.get_context("fork")
 _PR_SET_PDEATHSIG = 1  # linux/prctl.h
+_CHILD_DEFAULT_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 
 
 class IsolatedTimeout(KernelError):
@@ -36,30 +38,68 @@ class IsolatedCrash(KernelError):
     """The call's child process died (a crash in OpenCascade, or killed from outside)."""
 
 
-def _die_with(parent_pid: int) -> None:
-    """In the child: have the kernel send SIGKILL when the parent exits (or exit now if it already has)."""
-    libc = ctypes.CDLL(None, use_errno=True)
-    libc.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL)
-    if os.getppid() != parent_pid:
-        os._exit(1)
-
-
 def run_isolated(function: Callable[..., T], *args: Any, timeout_s: float, what: str) -> T:
     """``function(*args)`` in a forked child; IsolatedTimeout after ``timeout_s`` seconds, IsolatedCrash
     if the child dies, and the child's own exception (pickled back) if it raises."""
     if timeout_s <= 0.0:
         raise IsolatedTimeout(f"{what}: no time left to run it")
     parent_pid = os.getpid()
+    read_end, write_end = os.pipe()
+    pid = os.fork()
+    if pid == 0:
+        os.close(read_end)
+        _run_child(function, args, write_end, parent_pid, what)
+    os.close(write_end)
+    data = _read_with_limit(read_end, pid, timeout_s)
+    _, status = os.waitpid(pid, 0)
+    if data is None:
+        raise IsolatedTimeout(f"{what} did not finish within {timeout_s:g} s")
+    if not data:
+        ended = f"signal {os.WTERMSIG(status)}" if os.WIFSIGNALED(status) else f"exit {os.WEXITSTATUS(status)}"
+        raise IsolatedCrash(f"{what} crashed (its process ended with {ended})")
+    succeeded, value = pickle.loads(data)
+    if succeeded:
+        return value
+    raise value
 
-    def child(*child_args: Any) -> T:
-        _die_with(parent_pid)
-        faulthandler.disable()  # a crash here is an expected outcome, reported by the parent; no dump
-        return function(*child_args)
 
-    future = concurrent.process(timeout=timeout_s, mp_context=_FORK, daemon=True)(child)(*args)
+def _run_child(function: Callable[..., Any], args: tuple[Any, ...], write_end: int, parent_pid: int,
+               what: str) -> None:
+    """The child's side: die with the parent, run, send (succeeded, result or exception), leave at once."""
+    status = 1
     try:
-        return future.result()
-    except FutureTimeout:
-        raise IsolatedTimeout(f"{what} did not finish within {timeout_s:g} s") from None
-    except ProcessExpired as error:
-        raise IsolatedCrash(f"{what} crashed (its process ended with {error.exitcode})") from None
+        for signum in _CHILD_DEFAULT_SIGNALS:  # the parent's handlers print the command's one line; not here
+            signal.signal(signum, signal.SIG_DFL)
+        ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGKILL)
+        if os.getppid() != parent_pid:
+            return
+        faulthandler.disable()  # a crash here is an expected outcome, reported by the parent; no dump
+        try:
+            outcome: tuple[bool, Any] = (True, function(*args))
+        except Exception as error:
+            outcome = (False, error)
+        try:
+            data = pickle.dumps(outcome)
+        except Exception as error:  # an exception (or a result) that does not pickle
+            data = pickle.dumps((False, KernelError(f"{what}: {type(error).__name__}: {error}")))
+        with os.fdopen(write_end, "wb") as pipe:
+            pipe.write(data)
+        status = 0
+    finally:
+        os._exit(status)
+
+
+def _read_with_limit(descriptor: int, pid: int, limit_s: float) -> bytes | None:
+    """Everything the child writes, or None (the child killed) when it takes longer than ``limit_s``."""
+    chunks: list[bytes] = []
+    deadline = time.monotonic() + limit_s
+    with os.fdopen(descriptor, "rb") as pipe:
+        while True:
+            remaining = deadline - time.monotonic()
+            if remaining <= 0 or not select.select([pipe], [], [], remaining)[0]:
+                os.kill(pid, signal.SIGKILL)
+                return None
+            chunk = pipe.read1(1 << 20)
+            if not chunk:
+                return b"".join(chunks)
+            chunks.append(chunk)
