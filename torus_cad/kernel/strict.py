@@ -103,14 +103,14 @@ def strict_valid_solid(shape: cq.Shape, what: str) -> tuple[cq.Solid, StrictChec
     return solid, StrictCheck(CheckScope.PATTERN, len(checked), time.perf_counter() - start)
 
 
-def boolean_check_faults(shape: TopoDS_Shape, parallel: bool = True) -> list[tuple[str, list[TopoDS_Shape]]]:
+def boolean_check_faults(shape: TopoDS_Shape) -> list[tuple[str, list[TopoDS_Shape]]]:
     """BRepAlgoAPI_Check(shape, small edges, self-interference): (status name, faulty shapes) per fault.
 
-    ``parallel``: OpenCascade's thread pool; never in a forked child (the parent's pool threads are
-    not there, and the check waits for them forever)."""
+    Without OpenCascade's thread pool: the check runs in a forked child, where the parent's pool
+    threads are not, and a parallel check waits for them forever."""
     check = BRepAlgoAPI_Check()
     check.SetData(shape, True, True)
-    check.SetRunParallel(parallel)
+    check.SetRunParallel(False)
     check.Perform()
     if check.IsValid():
         return []
@@ -129,7 +129,7 @@ def _indexed_faults(shape: TopoDS_Shape, solid: TopoDS_Shape) -> list[tuple[str,
     return [(status, [faces.FindIndex(found) - 1 if found.ShapeType() == TopAbs_FACE
                       else str(found.ShapeType()).rsplit(".", 1)[-1].removeprefix("TopAbs_").lower()
                       for found in shapes])
-            for status, shapes in boolean_check_faults(shape, parallel=False)]
+            for status, shapes in boolean_check_faults(shape)]
 
 
 def _raise_on_faults(shape: TopoDS_Shape, solid: TopoDS_Shape, pattern: _Pattern | None, what: str) -> None:
