@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from torus_cad.batch.table import write_table
-from torus_cad.optimize.storage import CONSTRAINT, FOLDER, METRICS, OUTCOME, REASON, RETRY_OF, SECONDS, STOPPED
+from torus_cad.optimize.storage import CONSTRAINT, FOLDER, METRICS, OUTCOME, REASON, RETRY_OF, SECONDS, was_stopped
 from torus_cad.optimize.study_file import StudySpec
 
 __all__ = ["BEST_DIR", "MAX_PARETO_BUILDS", "best_trials", "trial_rows", "write_results"]
@@ -80,7 +80,7 @@ def trial_rows(spec: StudySpec, trials: Sequence[Any]) -> tuple[list[dict[str, A
         row: dict[str, Any] = dict.fromkeys(columns)
         state = trial.state.name.lower()
         outcome, reason = attrs.get(OUTCOME), attrs.get(REASON, "")
-        if state == "fail" and (outcome is None or attrs.get(STOPPED)):
+        if was_stopped(trial):
             outcome = INTERRUPTED
             again = retried_by.get(trial.number)
             reason = "its run stopped" + (f"; asked again as trial {again}" if again is not None else "")

@@ -178,6 +178,13 @@ def retry_stale_trials(study: Any, rdb: Any) -> list[int]:
     return fail_and_retry(study, stale_ids)
 
 
+def was_stopped(trial: Any) -> bool:
+    """A FAIL trial whose run stopped (asked again), not one failed for a reason of its design."""
+    from optuna.trial import TrialState
+
+    return trial.state is TrialState.FAIL and (OUTCOME not in trial.user_attrs or STOPPED in trial.user_attrs)
+
+
 def fail_and_retry(study: Any, trial_ids: Iterable[int]) -> list[int]:
     """Fail each of these trials that is still RUNNING and enqueue its parameters as a new trial that
     records ``retry_of``; the numbers of the trials failed (one that another process finished is skipped)."""

@@ -38,7 +38,6 @@ from torus_cad.optimize.storage import (
     OWNER,
     REASON,
     SECONDS,
-    STOPPED,
     Heartbeat,
     claim_lock,
     fail_and_retry,
@@ -47,6 +46,7 @@ from torus_cad.optimize.storage import (
     public_url,
     retry_stale_trials,
     storage_url,
+    was_stopped,
 )
 from torus_cad.optimize.study_file import Sampler, StudySpec
 from torus_cad.optimize.trial_job import PERFORMANCE_DIR, TrialTask, run_trial
@@ -319,7 +319,7 @@ def _finished_fail(trial: Any) -> bool:
     """A FAIL trial that counts as done: a design's failure (its outcome recorded), not a stopped run's."""
     from optuna.trial import TrialState
 
-    return trial.state is TrialState.FAIL and OUTCOME in trial.user_attrs and STOPPED not in trial.user_attrs
+    return trial.state is TrialState.FAIL and not was_stopped(trial)
 
 
 def _distributions(spec: StudySpec) -> dict[str, Any]:
