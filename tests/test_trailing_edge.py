@@ -166,9 +166,13 @@ def test_shape_choice_is_validated():
         PropellerParameters().with_values({"airfoil.trailing_edge_shape": "pointy"})
 
 
-def test_coordinate_file_with_an_open_edge_gets_a_round_cap():
+def test_coordinate_file_with_an_open_edge_gets_a_round_cap(tmp_path):
+    published = (AIRFOILS / "clarky.dat").read_text()
+    assert " 1.00000  0.00120\n" in published
+    (tmp_path / "open.dat").write_text(published.replace(" 1.00000  0.00120\n", " 1.00000  0.02000\n"))
     params = PropellerParameters.from_toml(EXAMPLES / "prop_10x5_2blade.toml").with_values(
-        {"airfoil.trailing_edge_thickness": 0.0})  # the Clark Y file's own open edge
+        {"airfoil.trailing_edge_thickness": 0.0, "airfoil.file": str(tmp_path / "open.dat")})  # the file's own edge
+    assert params.geometry().blade.closed_file_edge_mm is None  # over 0.05 mm thick everywhere: kept
     blade = params.geometry().blade
     sections = sections_along(blade, [0.2, 0.5])
     assert all(isinstance(section, RoundTrailingEdge) for section in sections)
@@ -182,3 +186,42 @@ def test_printability_reports_the_round_edge_thickness():
     assert geometry.blade.round_trailing_edge
     result = printability(geometry, 0.8)
     assert result.trailing_edge_thickness_mm == pytest.approx(0.9, rel=1e-6)
+
+
+def test_a_sharpened_file_section_meets_at_the_trailing_edge_and_keeps_its_surfaces():
+    clark = read_airfoil_file(AIRFOILS / "clarky.dat")
+    sharp = clark.sharpened()
+    assert has_base(clark) and not has_base(sharp)
+    u = np.linspace(0.0, 1.0, 201)
+    for upper in (True, False):
+        change = np.linalg.norm(sharp.points_on_half(u, upper) - clark.points_on_half(u, upper), axis=1)
+        assert change.max() < 0.002  # at most half the published 0.0012 gap, plus the chord's tilt
+        assert np.all(change[u < 0.5] < 1e-5)  # the u^8 law leaves the front half as published
+
+
+def test_a_blunt_trailing_edge_thinner_than_meshable_is_refused(tmp_path, capsys):
+    from torus_cad.cli import main
+
+    code = main(["build", "--set", "airfoil.trailing_edge_thickness=0.02", "--out", str(tmp_path / "out")])
+    error = capsys.readouterr().err
+    assert code == 2 and "airfoil.trailing_edge_thickness = 0.02 mm is too thin" in error
+    assert "allowed 0 (sharp) or 0.05 to 50 mm" in error and not (tmp_path / "out").exists()
+
+
+def test_a_files_hair_thin_open_edge_is_closed_and_the_build_says_so(tmp_path, capsys):
+    """Clark Y's published 0.0012-chord gap is a few micrometres on this blade: its faces' triangles
+    would cross, so the build makes the edge sharp, warns, and its STL (read by meshlib) is clean."""
+    import json
+
+    from torus_cad.cli import main
+    from torus_cad.kernel.mesh_check import intersecting_pairs_in_file
+
+    (tmp_path / "clarky.dat").write_bytes((AIRFOILS / "clarky.dat").read_bytes())
+    (tmp_path / "clark.toml").write_text('blades = 3\n[airfoil]\nfile = "clarky.dat"\n')
+    assert main(["build", str(tmp_path / "clark.toml"), "--out", str(tmp_path / "out")]) == 0
+    assert "warning: airfoil.file's open trailing edge is only" in capsys.readouterr().out
+    report = json.loads((tmp_path / "out" / "torus_propeller.json").read_text())
+    thinnest, thickest = report["closed_file_trailing_edge_mm"]
+    assert 0.0 < thinnest <= thickest < 0.05
+    assert report["printability"]["trailing_edge_thickness_mm"] == 0.0
+    assert intersecting_pairs_in_file(tmp_path / "out" / "torus_propeller.stl")[0] == 0

@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, Any
 from torus_cad.errors import GeometryError, IncompleteOutputError, OutputError, ParameterError, TorusCadError
 from torus_cad.interrupts import exit_on_signals
 from torus_cad.stages import Stage
+from torus_cad.tolerances import MIN_BLUNT_TRAILING_EDGE_MM
 
 if TYPE_CHECKING:
     from torus_cad.parameters import PropellerParameters
@@ -169,6 +170,11 @@ def _command_build(args: argparse.Namespace) -> int:
             print(f"warning: the root fillet is {fillet['radius_mm']:g} mm except along "
                   f"{fillet['varying_junction_per_blade_mm']:.2f} mm of each blade's junction: a blade bends too tightly "
                   f"there for it, and its radius varies down to {fillet['smallest_radius_mm']:.3g} mm")
+        closed = report["closed_file_trailing_edge_mm"]
+        if closed is not None:
+            print(f"warning: airfoil.file's open trailing edge is only {closed[0]:.3f}-{closed[1]:.3f} mm thick, under "
+                  f"the {MIN_BLUNT_TRAILING_EDGE_MM:g} mm a blunt edge needs to mesh without crossing triangles: built "
+                  f"sharp; set airfoil.trailing_edge_thickness >= {MIN_BLUNT_TRAILING_EDGE_MM:g} for a base")
         if not report["printability"]["printable"]:
             print(f"warning: not printable: {propeller.printability().problem()}; "
                   "--require-printable refuses such a design")

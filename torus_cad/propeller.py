@@ -315,6 +315,7 @@ def build_report(propeller: Propeller, density_g_cm3: float,
         "section_fit_error_mm": propeller.section_curves.fit_error,
         "stage_seconds": dict(propeller.stage_seconds),
         "fuse_route": propeller.fuse_route.value,
+        "closed_file_trailing_edge_mm": propeller.parameters.geometry().blade.closed_file_edge_mm,
         "root_fillet": None if propeller.root_fillet is None else propeller.root_fillet.to_dict(),
         **({"design_targets": propeller.design_targets.to_dict()}
            if propeller.design_targets is not None and propeller.design_targets.requested else {}),

@@ -23,6 +23,11 @@ READ_BACK_RELATIVE_TOLERANCE = 1e-6
 STL_LINEAR_DEFLECTION = 0.05
 STL_ANGULAR_DEFLECTION = 0.2
 
+#: Thinnest blunt trailing edge (mm). A thinner base is narrower than the STL's chordal deviation,
+#: so the triangles of its faces and of the surfaces beside it pass through each other: a
+#: blunt edge is 0 (sharp) or at least this, and a coordinate file's thinner open edge is closed.
+MIN_BLUNT_TRAILING_EDGE_MM = 0.05
+
 #: Largest allowed deviation of a section's B-spline from its sampled points, as a fraction
 #: of the section's chord. Interior knots are doubled until every section meets it.
 WIRE_FIT_RELATIVE_TOLERANCE = 2e-4

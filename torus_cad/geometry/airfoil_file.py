@@ -29,7 +29,8 @@ the camber line's curvature jump at p keeps cambered sections from converging fa
 Blunt trailing edge: :meth:`AirfoilFile.with_trailing_edge_gap` moves the upper half up and the
 lower half down by (Delta / 2) u^8 (the NACA law's (g / 2) t^4 with t = u^2), so that the two
 trailing-edge ends are ``gap`` apart in y; a file whose trailing edge is open already keeps
-its gap when no thickness is asked for.
+its gap when no thickness is asked for. :meth:`AirfoilFile.sharpened` closes an open edge the
+same way in x and y, so that both ends meet (the spec's sharp trailing edge).
 
 A coordinate file is untrusted input, read by torus_cad.input_files like a configuration file:
 a regular file only (no device, named pipe, socket or folder), at most
@@ -95,6 +96,7 @@ class AirfoilFile:
         loop: ``(n, 2)`` the file's points in Selig order, in chord units (leading edge at the origin).
         lines: ``(n,)`` the file line of each point of ``loop``.
         trailing_edge_extra: added trailing-edge thickness Delta (chord units, see the module docstring).
+        trailing_edge_shift_x: the same law's offset in x (chord units; nonzero only once sharpened).
     """
 
     def __init__(self, name: str, source: str, loop: NDArray[np.float64], lines: NDArray[np.int64]) -> None:
@@ -120,6 +122,7 @@ class AirfoilFile:
         self._sigma_le = float(sigma_le)
         self._sigma_end = float(sigma[-1])
         self.trailing_edge_extra = 0.0
+        self.trailing_edge_shift_x = 0.0
         self.loop = self._to_chord_units(loop)
 
     # -- the Section protocol ----------------------------------------------------------------
@@ -141,7 +144,8 @@ class AirfoilFile:
         u = np.atleast_1d(np.asarray(root_chord, dtype=float))
         sigma, _ = self._sigma(u, upper)
         points = self._to_chord_units(self._spline(sigma))
-        points[:, 1] += (0.5 if upper else -0.5) * self.trailing_edge_extra * u**8
+        half = 0.5 if upper else -0.5
+        points += half * np.array([self.trailing_edge_shift_x, self.trailing_edge_extra]) * (u**8)[:, None]
         return points
 
     def speed_on_half(self, root_chord: ArrayLike, upper: bool) -> NDArray[np.float64]:
@@ -149,7 +153,7 @@ class AirfoilFile:
         u = np.atleast_1d(np.asarray(root_chord, dtype=float))
         sigma, rate = self._sigma(u, upper)
         velocity = self._spline(sigma, 1) @ self._matrix.T * rate
-        velocity[:, 1] += (4.0 if upper else -4.0) * self.trailing_edge_extra * u**7
+        velocity += (4.0 if upper else -4.0) * np.array([self.trailing_edge_shift_x, self.trailing_edge_extra]) * (u**7)[:, None]
         return np.linalg.norm(velocity, axis=-1)
 
     def with_trailing_edge_gap(self, gap: float) -> AirfoilFile:
@@ -158,6 +162,14 @@ class AirfoilFile:
         result.trailing_edge_extra = 0.0
         ends = [result.points_on_half(np.array([1.0]), side)[0] for side in (True, False)]
         result.trailing_edge_extra = float(gap) - float(ends[0][1] - ends[1][1])
+        return result
+
+    def sharpened(self) -> AirfoilFile:
+        """A copy whose trailing-edge ends meet (module docstring): a sharp section."""
+        result = copy.copy(self)
+        result.trailing_edge_extra = result.trailing_edge_shift_x = 0.0
+        upper, lower = (result.points_on_half(np.array([1.0]), side)[0] for side in (True, False))
+        result.trailing_edge_shift_x, result.trailing_edge_extra = (lower - upper).tolist()
         return result
 
     def __repr__(self) -> str:

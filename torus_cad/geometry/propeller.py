@@ -45,6 +45,9 @@ class BladeGeometry:
             the section's own edge, sharp for NACA sections; :mod:`torus_cad.geometry.trailing_edge`).
         round_trailing_edge: a blunt trailing edge (the thickness above, or a coordinate file's open
             edge) ends in a round cap (True) or a flat base (False; :mod:`torus_cad.geometry.trailing_edge`).
+        closed_file_edge_mm: (thinnest, thickest) open trailing edge of the coordinate file that was
+            closed to the sharp ``airfoil`` because it is too thin to mesh, mm
+            (:func:`torus_cad.geometry.trailing_edge.closed_if_too_thin`); None when nothing was closed.
     """
 
     airfoil: Section
@@ -53,6 +56,7 @@ class BladeGeometry:
     frame: FrameKind = FrameKind.FRENET
     trailing_edge_thickness_mm: float = 0.0
     round_trailing_edge: bool = False
+    closed_file_edge_mm: tuple[float, float] | None = None
 
 
 @dataclass(frozen=True)

@@ -7,6 +7,7 @@ resolution; blade i is built on its own centerline at theta_0 + 360 i / n (spec 
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import lru_cache
@@ -17,13 +18,14 @@ from numpy.typing import ArrayLike, NDArray
 from torus_cad.geometry.arc_length import equal_arc_length_section
 from torus_cad.geometry.centerline import Centerline
 from torus_cad.geometry.frames import Frames, section_frames
-from torus_cad.geometry.propeller import BladeGeometry
+from torus_cad.geometry.propeller import BladeGeometry, PropellerGeometry
 from torus_cad.geometry.section import RoundTrailingEdge, Section, closed_points, has_base
 from torus_cad.geometry.trailing_edge import (
     TRAILING_EDGE_CHECK_SECTIONS,
     BluntSections,
     blunt_sections,
     check_trailing_edge_fits,
+    closed_if_too_thin,
 )
 from torus_cad.geometry.transforms import evaluate_quartic
 
@@ -91,18 +93,35 @@ def sections_along(blade: BladeGeometry, s: ArrayLike) -> Sequence[Section]:
                           evaluate_quartic(laws.scale_y_mm, s), blade.round_trailing_edge)
 
 
+def s_outside_the_hub(centerline: Centerline, hub_radius_mm: float, hub_length_mm: float) -> NDArray[np.float64]:
+    """The s of TRAILING_EDGE_CHECK_SECTIONS equally spaced sections whose centre is outside the hub
+    (inside, the hub swallows the section and its trailing edge): ``(k,)``."""
+    s = np.linspace(0.0, 1.0, TRAILING_EDGE_CHECK_SECTIONS)
+    points = centerline.points(s)
+    outside = (np.hypot(points[:, 0], points[:, 1]) > hub_radius_mm) | (np.abs(points[:, 2]) > hub_length_mm / 2.0)
+    return s[outside]
+
+
+def with_thin_file_edge_closed(geometry: PropellerGeometry) -> PropellerGeometry:
+    """``geometry``, with a coordinate file's open trailing edge closed where it is too thin to mesh
+    outside the hub (:func:`.trailing_edge.closed_if_too_thin`); BladeGeometry.closed_file_edge_mm says so."""
+    blade = geometry.blade
+    s = s_outside_the_hub(geometry.centerline(0), geometry.hub.radius_mm, geometry.hub.length_mm)
+    section, closed_mm = closed_if_too_thin(blade.airfoil, blade.laws, s)
+    if closed_mm is None:
+        return geometry
+    return dataclasses.replace(geometry, blade=dataclasses.replace(blade, airfoil=section, closed_file_edge_mm=closed_mm))
+
+
 def check_trailing_edge(blade: BladeGeometry, centerline: Centerline, hub_radius_mm: float, hub_length_mm: float
                         ) -> None:
     """Refuse a blunt trailing edge thicker than the blade's sections where the blade is outside the hub
     (:func:`.trailing_edge.check_trailing_edge_fits`; inside, the hub swallows the sections)."""
     if blade.trailing_edge_thickness_mm <= 0.0:
         return
-    s = np.linspace(0.0, 1.0, TRAILING_EDGE_CHECK_SECTIONS)
-    points = centerline.points(s)
-    outside = (np.hypot(points[:, 0], points[:, 1]) > hub_radius_mm) | (np.abs(points[:, 2]) > hub_length_mm / 2.0)
-    if not np.any(outside):
+    s, laws = s_outside_the_hub(centerline, hub_radius_mm, hub_length_mm), blade.laws
+    if not len(s):
         return
-    s, laws = s[outside], blade.laws
     check_trailing_edge_fits(blade.airfoil, blade.trailing_edge_thickness_mm, evaluate_quartic(laws.angle_of_attack_deg, s),
                              evaluate_quartic(laws.scale_x_mm, s), evaluate_quartic(laws.scale_y_mm, s), s)
 

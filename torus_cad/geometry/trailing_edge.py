@@ -19,6 +19,9 @@ the base begins: the base's length when flat, the cap's width where it meets the
 round (measured on the solid as the chord of the cap's cut in a
 section plane, ``tests/test_round_trailing_edge.py``). A coordinate file whose published
 trailing edge is open has a base of its own gap; with ``round`` it is capped the same way.
+A base thinner than MIN_BLUNT_TRAILING_EDGE_MM on some section cannot be tessellated without
+crossing triangles (its faces' chords pass through each other), so such a file's edge is closed
+to the spec's sharp one (:func:`closed_if_too_thin`) and the build says so.
 
 The sections are rotated by alpha(s), then scaled by Sx(s) along X and Sy(s) along Y (spec
 §2.3), so a chord-unit gap vector d becomes S(s) R(s) d in mm: a constant thickness in mm
@@ -38,6 +41,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from torus_cad.errors import ParameterError
+from torus_cad.geometry.airfoil_file import AirfoilFile
 from torus_cad.geometry.section import (
     RoundTrailingEdge,
     Section,
@@ -45,10 +49,12 @@ from torus_cad.geometry.section import (
     closed_points,
     end_derivatives,
     half_ends,
+    has_base,
     round_cap_poles,
     trailing_edge_vector,
 )
-from torus_cad.geometry.transforms import rotation_matrices
+from torus_cad.geometry.transforms import SectionLaws, evaluate_quartic, rotation_matrices
+from torus_cad.tolerances import MIN_BLUNT_TRAILING_EDGE_MM
 
 
 def section_matrices(angle_deg: ArrayLike, scale_x: ArrayLike, scale_y: ArrayLike) -> NDArray[np.float64]:
@@ -248,3 +254,18 @@ def check_trailing_edge_fits(section: Section, thickness_mm: float, angle_deg: A
             f"airfoil.trailing_edge_thickness = {thickness_mm:g} mm is too thick for the blade: near s = "
             f"{float(np.asarray(s, dtype=float)[worst]):.3f} the section is only {thickest[worst]:.3g} mm thick "
             f"(limit {TRAILING_EDGE_THICKNESS_LIMIT:g} x that); make the edge thinner or the sections thicker")
+
+
+def closed_if_too_thin(section: Section, laws: SectionLaws, s: ArrayLike) -> tuple[Section, tuple[float, float] | None]:
+    """``section`` itself, or, when its own base (a coordinate file's open trailing edge) is thinner
+    than MIN_BLUNT_TRAILING_EDGE_MM at one of the ``s`` given (the sections outside the hub), the
+    section closed to a sharp edge and the (thinnest, thickest) base it had there, mm (module docstring)."""
+    s = np.atleast_1d(np.asarray(s, dtype=float))
+    if not isinstance(section, AirfoilFile) or not has_base(section) or not len(s):  # only a file has its own
+        return section, None
+    angle, scale_x, scale_y = (evaluate_quartic(law, s) for law in (laws.angle_of_attack_deg, laws.scale_x_mm,
+                                                                     laws.scale_y_mm))
+    base_mm = trailing_edge_thickness_mm([section] * len(s), angle, scale_x, scale_y)
+    if base_mm.min() >= MIN_BLUNT_TRAILING_EDGE_MM:
+        return section, None
+    return section.sharpened(), (float(base_mm.min()), float(base_mm.max()))

@@ -29,11 +29,16 @@ from torus_cad.geometry.handedness import Handedness
 from torus_cad.geometry.mounting import HubMounting
 from torus_cad.geometry.propeller import BladeGeometry, HubGeometry, PropellerGeometry
 from torus_cad.geometry.section import Section as SectionShape
-from torus_cad.geometry.surface import BladeSurface, blade_surface
+from torus_cad.geometry.surface import BladeSurface, blade_surface, with_thin_file_edge_closed
 from torus_cad.geometry.transforms import SectionLaws, quartic_minimum
 from torus_cad.parameters.document import Document
 from torus_cad.parameters.schema import AS_TUPLE, Bounds, Section, Vector2, Vector3, check_in_bounds, param
-from torus_cad.tolerances import FOLD_RATIO_LIMIT, STL_ANGULAR_DEFLECTION, STL_LINEAR_DEFLECTION
+from torus_cad.tolerances import (
+    FOLD_RATIO_LIMIT,
+    MIN_BLUNT_TRAILING_EDGE_MM,
+    STL_ANGULAR_DEFLECTION,
+    STL_LINEAR_DEFLECTION,
+)
 
 _NAME_PATTERN = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,63}")
 
@@ -135,7 +140,7 @@ class Airfoil(Section):
                               "relative to the design file's folder (\"\" = none)")
     trailing_edge_thickness: float = param(0.0, unit="mm", ge=0.0, le=50.0, fuzz=(0.0, 0.0),
                                            doc="blunt trailing edge of this thickness on every section "
-                                               "(0 = the spec's sharp edge)")
+                                               "(0 = the spec's sharp edge; otherwise at least 0.05 mm)")
     trailing_edge_shape: TrailingEdgeShape = param(
         TrailingEdgeShape.ROUND, strict=False,
         doc="end of a blunt trailing edge (and of a coordinate file's open one): 'round', a cap tangent to both "
@@ -172,6 +177,16 @@ class Airfoil(Section):
             if value != default and value != implied.get(number, default):
                 raise ValueError(f"airfoil.{key} = {getattr(self, key)!r} conflicts with airfoil.{number} = {value!r}: "
                                  f"give the section by {key} or by its numbers, not both")
+        return self
+
+    @model_validator(mode="after")
+    def _blunt_edge_thick_enough(self) -> Self:
+        """A blunt trailing edge thinner than MIN_BLUNT_TRAILING_EDGE_MM cannot be meshed without
+        crossing triangles (torus_cad.geometry.trailing_edge)."""
+        thickness = self.trailing_edge_thickness
+        if 0.0 < thickness < MIN_BLUNT_TRAILING_EDGE_MM:
+            raise ValueError(f"airfoil.trailing_edge_thickness = {thickness:g} mm is too thin to mesh without crossing "
+                             f"triangles; allowed 0 (sharp) or {MIN_BLUNT_TRAILING_EDGE_MM:g} to 50 mm")
         return self
 
     @model_validator(mode="after")
@@ -401,7 +416,8 @@ class PropellerParameters(Document):
         local = ((0.0, 0.0, 0.0), line.p2, line.p3, (*line.p4, 0.0))
         blade = BladeGeometry(self.airfoil.section(), laws, local, line.frame, self.airfoil.trailing_edge_thickness,
                               self.airfoil.trailing_edge_shape == TrailingEdgeShape.ROUND)
-        return PropellerGeometry(HubGeometry(self.hub.radius, self.hub.length), blade, self.blades, self.phase_deg)
+        geometry = PropellerGeometry(HubGeometry(self.hub.radius, self.hub.length), blade, self.blades, self.phase_deg)
+        return geometry if self.airfoil.trailing_edge_thickness > 0.0 else with_thin_file_edge_closed(geometry)
 
 
 # ParameterError is what every caller catches; keep it importable from here.
