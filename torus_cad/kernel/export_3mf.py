@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
 from torus_cad.errors import KernelError
-from torus_cad.kernel.export import atomic_path
+from torus_cad.kernel.files import atomic_path
 from torus_cad.kernel.mesh_check import MeshCheck, intersecting_pairs, refined_until_intersection_free
 from torus_cad.kernel.tessellation import tessellate_faces
 

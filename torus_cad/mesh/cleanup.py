@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from torus_cad.mesh.quality import aspect_ratios, edge_lengths
+from torus_cad.mesh.quality import triangle_measures
 from torus_cad.mesh.union import LabeledMesh
 from torus_cad.tolerances import MESH_NEEDLE_EDGE_RATIO
 
@@ -103,9 +103,8 @@ def collapse_keeping(mesh: LabeledMesh) -> tuple[LabeledMesh, Cleanup, NDArray[n
     vertices, faces = mesh.vertices, mesh.faces.copy()
     junction = junction_vertices(mesh)
     near = faces[junction[faces].any(axis=1)]
-    ratios = aspect_ratios(vertices, near)
+    lengths, ratios = triangle_measures(vertices, near)
     before = (float(ratios.max()) if len(ratios) else 1.0, int(np.sum(ratios > 100.0)))
-    lengths = edge_lengths(vertices, near)
     shortest = lengths.argmin(axis=1)
     rows = np.flatnonzero(lengths.min(axis=1) < MESH_NEEDLE_EDGE_RATIO * lengths.max(axis=1))
     if len(rows) == 0:

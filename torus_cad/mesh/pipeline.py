@@ -311,7 +311,7 @@ def quality_report(result: SurfaceMesh, compare: bool = True) -> dict[str, Any]:
     blade = np.flatnonzero(mesh.part > 0)
     away = blade[quality.faces_away_from_hub(mesh.vertices, mesh.faces[blade], params.hub.radius,
                                              params.hub.length, margin)]
-    ratios = quality.aspect_ratios(mesh.vertices, mesh.faces)
+    lengths, ratios = quality.triangle_measures(mesh.vertices, mesh.faces)
     sag_mm, sag_relative = blade_cell_sag(result)
     grid_cell = cell_size(result.blade_grid)
     report: dict[str, Any] = {
@@ -326,7 +326,7 @@ def quality_report(result: SurfaceMesh, compare: bool = True) -> dict[str, Any]:
         "topology": topology.to_dict(),
         "blade_cell_mm": {"around": grid_cell.around, "along": grid_cell.along}, "hub_cell_mm": result.hub_cell_mm,
         "junction_margin_mm": margin,
-        "blades_away_from_junctions": quality.evenness(mesh.vertices, mesh.faces[away], ratios[away]).to_dict(),
+        "blades_away_from_junctions": quality.evenness(mesh.vertices, mesh.faces[away], (lengths[away], ratios[away])).to_dict(),
         "aspect_ratio_max": float(ratios.max()),
         "triangles_aspect_ratio_over_100": int(np.sum(ratios > 100.0)),
         "aspect_ratio_max_hub": float(ratios[mesh.part == 0].max()),

@@ -43,37 +43,44 @@ def edge_topology(faces: NDArray[np.int64]) -> Topology:
     faces = np.asarray(faces, dtype=np.int64)
     start = faces.reshape(-1)
     end = faces[:, [1, 2, 0]].reshape(-1)
-    low, high = np.minimum(start, end), np.maximum(start, end)
-    keys = low * (int(faces.max()) + 1) + high
-    _, inverse, counts = np.unique(keys, return_inverse=True, return_counts=True)
-    # Walking each triangle counter-clockwise, the two users of a good edge traverse it in opposite
-    # directions: their +1 / -1 cancel.
-    direction = np.bincount(inverse, weights=np.where(start < end, 1.0, -1.0), minlength=len(counts))
-    two = counts == 2
-    return Topology(edges=len(counts), open_edges=int(np.sum(counts == 1)),
-                    non_manifold_edges=int(np.sum(counts > 2)), inconsistent_edges=int(np.sum(two & (direction != 0))))
+    # One sort of (edge key, direction bit): the users of an edge are a run of equal keys, and walking
+    # each triangle counter-clockwise, the two users of a good edge traverse it in opposite directions.
+    keys = (np.minimum(start, end) * (int(faces.max()) + 1) + np.maximum(start, end)) * 2 + (start < end)
+    keys.sort()
+    edge = keys >> 1
+    first = np.flatnonzero(np.concatenate([[True], edge[1:] != edge[:-1]]))
+    counts = np.diff(np.append(first, len(edge)))
+    forward = np.add.reduceat(keys & 1, first)
+    return Topology(edges=len(counts), open_edges=int(np.sum(counts == 1)), non_manifold_edges=int(np.sum(counts > 2)),
+                    inconsistent_edges=int(np.sum((counts == 2) & (forward != 1))))
 
 
-def _edges(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> NDArray[np.float64]:
-    """``(3, f, 3)`` edge vectors 01, 12, 20 of every triangle."""
-    a, b, c = vertices[faces[:, 0]], vertices[faces[:, 1]], vertices[faces[:, 2]]
-    return np.stack([b - a, c - b, a - c])
+def triangle_measures(vertices: NDArray[np.float64], faces: NDArray[np.int64]
+                      ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """``(f, 3)`` lengths of the edges 01, 12, 20 (mm) and ``(f,)`` aspect ratios of every triangle
+    (longest edge x perimeter / (4 sqrt(3) area): 1 for equilateral, inf for degenerate), from one
+    pass over the edge vectors."""
+    corners = vertices[faces]
+    edges = np.roll(corners, -1, axis=1) - corners
+    lengths = np.sqrt(np.einsum("fek,fek->fe", edges, edges))
+    first, last = edges[:, 0], edges[:, 2]
+    normal = np.stack([first[:, 1] * last[:, 2] - first[:, 2] * last[:, 1],
+                       first[:, 2] * last[:, 0] - first[:, 0] * last[:, 2],
+                       first[:, 0] * last[:, 1] - first[:, 1] * last[:, 0]], axis=1)
+    area = 0.5 * np.sqrt(np.einsum("fk,fk->f", normal, normal))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = lengths.max(axis=1) * lengths.sum(axis=1) / (4.0 * np.sqrt(3.0) * area)
+    return lengths, np.where(area > 0.0, ratio, np.inf)
 
 
 def edge_lengths(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> NDArray[np.float64]:
     """``(f, 3)`` lengths of the edges 01, 12, 20 of every triangle, mm."""
-    edges = _edges(vertices, faces)
-    return np.sqrt(np.einsum("efk,efk->fe", edges, edges))
+    return triangle_measures(vertices, faces)[0]
 
 
 def aspect_ratios(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> NDArray[np.float64]:
     """``(f,)`` longest edge x perimeter / (4 sqrt(3) area): 1 for equilateral, inf for degenerate."""
-    edges = _edges(vertices, faces)
-    lengths = np.sqrt(np.einsum("efk,efk->fe", edges, edges))
-    area = 0.5 * np.linalg.norm(np.cross(edges[0], -edges[2]), axis=1)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ratio = lengths.max(axis=1) * lengths.sum(axis=1) / (4.0 * np.sqrt(3.0) * area)
-    return np.where(area > 0.0, ratio, np.inf)
+    return triangle_measures(vertices, faces)[1]
 
 
 def hub_surface_distance(points: NDArray[np.float64], radius: float, length: float) -> NDArray[np.float64]:
@@ -110,13 +117,12 @@ class Evenness:
 
 
 def evenness(vertices: NDArray[np.float64], faces: NDArray[np.int64],
-             ratios: NDArray[np.float64] | None = None) -> Evenness:
-    """Shortest and longest edge and worst aspect ratio of ``(f, 3)`` faces (``ratios``: their aspect
-    ratios ``(f,)``, if already computed)."""
+             measures: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None) -> Evenness:
+    """Shortest and longest edge and worst aspect ratio of ``(f, 3)`` faces (``measures``: their
+    :func:`triangle_measures`, if already computed)."""
     if len(faces) == 0:
         return Evenness(0, float("nan"), float("nan"), float("nan"))
-    lengths = edge_lengths(vertices, faces)
-    ratios = aspect_ratios(vertices, faces) if ratios is None else ratios
+    lengths, ratios = triangle_measures(vertices, faces) if measures is None else measures
     return Evenness(len(faces), float(lengths.min()), float(lengths.max()), float(ratios.max()))
 
 

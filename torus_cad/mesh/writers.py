@@ -4,7 +4,7 @@ Every writer works on whole arrays (text is formatted in chunks of :data:`CHUNK_
 with one C-level ``%`` per chunk, binary records are built and written a chunk at a time), so
 millions of triangles need no Python loop per triangle and no full-size copy. ``torus-cad mesh``
 writes into its output set's staging folder (torus_cad.outputs); elsewhere each file is written
-atomically (``kernel.export.atomic_path``): a temp file, then a rename. A failed write raises
+atomically (``kernel.files.atomic_path``): a temp file, then a rename. A failed write raises
 OSError naming the file it was writing.
 """
 
@@ -17,7 +17,7 @@ from typing import IO
 import numpy as np
 from numpy.typing import NDArray
 
-from torus_cad.kernel.export import atomic_path
+from torus_cad.kernel.files import atomic_path
 from torus_cad.mesh.settings import SUFFIXES, MeshFormat
 from torus_cad.mesh.union import LabeledMesh
 
@@ -31,7 +31,11 @@ _ASCII_FACET = ("facet normal %.7e %.7e %.7e\n  outer loop\n    vertex %.9e %.9e
 
 def unit_normals(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> NDArray[np.float64]:
     """``(f, 3)`` outward unit normals (zero for degenerate triangles)."""
-    corners = vertices[faces]
+    return _corner_normals(vertices[faces])
+
+
+def _corner_normals(corners: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``(f, 3)`` unit normals of triangles given by their corners ``(f, 3, 3)``."""
     normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
     length = np.linalg.norm(normal, axis=1, keepdims=True)
     return np.divide(normal, length, out=np.zeros_like(normal), where=length > 0)
@@ -58,8 +62,9 @@ def write_binary_stl(mesh: LabeledMesh, path: Path, name: str) -> None:
         for part in _chunks(len(mesh.faces)):
             faces = mesh.faces[part]
             records = np.zeros(len(faces), dtype=_STL_RECORD)
-            records["normal"] = unit_normals(mesh.vertices, faces)
-            records["vertices"] = mesh.vertices[faces]
+            corners = mesh.vertices[faces]
+            records["normal"] = _corner_normals(corners)
+            records["vertices"] = corners
             handle.write(records.tobytes())
 
 
