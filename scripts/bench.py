@@ -100,7 +100,8 @@ def _rss_mb() -> float:
 def timed_build_and_write(params, out_dir: Path) -> dict[str, float]:
     """One build plus STEP and STL writes (the JSON report separately); seconds per stage."""
     from torus_cad.kernel.export import write_step, write_stl
-    from torus_cad.propeller import build_propeller, build_report
+    from torus_cad.propeller import build_propeller
+    from torus_cad.report import build_report
 
     start = time.perf_counter()
     propeller = build_propeller(params)

@@ -42,7 +42,7 @@ from torus_cad.kernel.files import glob_escape, left_by_dead_process, owner_tag,
 from torus_cad.tolerances import REPORT_FILE_MAX_BYTES
 
 if TYPE_CHECKING:
-    from torus_cad.propeller import Propeller
+    from torus_cad.report import BuiltPropeller
 
 #: Key of the report that lists the set's other files: ``{kind: {"file", "bytes", "sha256"}}``.
 FILES_KEY = "files"
@@ -354,7 +354,7 @@ class PublishedSet:
     report: dict[str, Any]
 
 
-def write_output_set(propeller: Propeller, out_dir: str | Path, density_g_cm3: float, stl: bool = True,
+def write_output_set(propeller: BuiltPropeller, out_dir: str | Path, density_g_cm3: float, stl: bool = True,
                      sections_table: bool = False, extra_files: Mapping[str, FileWriter] | None = None
                      ) -> PublishedSet:
     """Write the files of ``export.formats`` (STEP, STL unless ``stl`` is False, 3MF), the
@@ -371,7 +371,7 @@ def write_output_set(propeller: Propeller, out_dir: str | Path, density_g_cm3: f
     from torus_cad.kernel.export import write_checked_stl, write_step
     from torus_cad.kernel.export_3mf import write_3mf
     from torus_cad.parameters.design import ExportFormat
-    from torus_cad.propeller import build_report
+    from torus_cad.report import build_report
     from torus_cad.stages import Stage, StageTimer
 
     params = propeller.parameters

@@ -33,7 +33,6 @@ from torus_cad.geometry.printability import Printability, printability
 from torus_cad.geometry.surface import BladeSurface
 from torus_cad.kernel.checks import (
     MassProperties,
-    balance,
     mass_properties,
     precise_volume,
     single_valid_solid,
@@ -45,6 +44,7 @@ from torus_cad.kernel.loft import loft_solid
 from torus_cad.kernel.mirror import mirrored
 from torus_cad.kernel.strict import StrictCheck, strict_valid_solid
 from torus_cad.kernel.wires import SectionCurves, fit_section_curves
+from torus_cad.outputs import write_output_set
 from torus_cad.parameters import PropellerParameters, resolve_parameters
 from torus_cad.parameters.design import TightBends
 from torus_cad.stages import Stage, StageTimer
@@ -289,56 +289,9 @@ def _check_volume(solid: cq.Solid, hub: cq.Solid, blade: cq.Solid, blades: int) 
                           f"hub + {blades} blades {hub_volume + blades * blade_volume:.3f}] mm^3")
 
 
-def build_report(propeller: Propeller, density_g_cm3: float,
-                 meshes: Mapping[str, dict[str, Any]] | None = None) -> dict[str, Any]:
-    """The JSON report: parameters, mass properties, balance, printability, validity and stage times.
-
-    ``checks`` names every check the solid (and each written mesh, ``meshes``: {"stl" or "3mf":
-    :meth:`torus_cad.kernel.mesh_check.MeshCheck.to_dict`}) passed."""
-    properties = propeller.mass_properties(density_g_cm3)
-    checks: dict[str, Any] = {} if propeller.checks is None else propeller.checks.to_dict()
-    for kind, mesh in (meshes or {}).items():
-        checks[f"{kind}_self_intersections"] = mesh["self_intersecting_pairs"] == 0
-    return {
-        "name": propeller.parameters.name,
-        "parameters": propeller.parameters.to_dict(),
-        "valid": True,
-        "solids": 1,
-        "checks": checks,
-        **{f"{kind}_mesh": mesh for kind, mesh in (meshes or {}).items()},
-        **properties.to_dict(),
-        "balance": balance(propeller.solid, density_g_cm3).to_dict(),
-        "printability": propeller.printability().to_dict(),
-        "handedness": propeller.parameters.handedness.value,
-        "spin_to_push_air_down": propeller.spin_to_push_air_down().value,
-        "set_screw_angle_deg": _set_screw_angle_on_the_part_deg(propeller),
-        "section_fit_error_mm": propeller.section_curves.fit_error,
-        "stage_seconds": dict(propeller.stage_seconds),
-        "fuse_route": propeller.fuse_route.value,
-        "closed_file_trailing_edge_mm": propeller.parameters.geometry().blade.closed_file_edge_mm,
-        "root_fillet": None if propeller.root_fillet is None else propeller.root_fillet.to_dict(),
-        **({"design_targets": propeller.design_targets.to_dict()}
-           if propeller.design_targets is not None and propeller.design_targets.requested else {}),
-    }
-
-
-def _set_screw_angle_on_the_part_deg(propeller: Propeller) -> float | None:
-    """Where the set-screw hole of the part as built points, degrees about +z from +x (None: no set screw).
-
-    The mounting is chosen on the spec's (cw) blades; a ccw part is their mirror image through the
-    XZ plane, which takes the direction at angle a to -a.
-    """
-    if not propeller.mounting.set_screw_diameter_mm:
-        return None
-    angle_deg = propeller.mounting.set_screw_angle_deg
-    return (-angle_deg) % 360.0 if propeller.parameters.handedness == Handedness.CCW else angle_deg
-
-
 def write_outputs(propeller: Propeller, out_dir: Path, density_g_cm3: float = DEFAULT_DENSITY_G_CM3,
                   stl: bool = True, sections_table: bool = False) -> dict[str, Path]:
     """Write the files of ``export.formats`` (STEP, STL, 3MF; ``stl=False`` drops the STL), the
     blade-element table (``<name>_sections.csv`` and ``.png``, when ``sections_table``; ``torus-cad
     build`` writes it) and the JSON report as one output set (torus_cad.outputs); return the paths by kind."""
-    from torus_cad.outputs import write_output_set
-
     return write_output_set(propeller, out_dir, density_g_cm3, stl=stl, sections_table=sections_table).paths
