@@ -10,7 +10,8 @@ Tiers (``tests/conftest.py`` marks them):
 - ``long``: tests that took LONG_TEST_SECONDS or more in the suite run (simulations, studies,
   fillet sweeps over every example), and long tests of the file before that did not finish in
   it (a run stopped by hand); ``pytest -m long`` runs them, CI runs everything else.
-- every other test, and any test not measured yet, is in neither and runs in CI.
+- every other test, and any test not measured yet, is in neither and runs in CI; so do the
+  modules of ALWAYS_IN_CI, whatever they take.
 """
 
 from __future__ import annotations
@@ -36,6 +37,8 @@ FAST_CANDIDATE_SECONDS = 2.0
 #: Modules whose tests share one stateful page, in file order (each starts where the one before left
 #: it): only a run of tests at the end of such a module may go to the long tier.
 CHAINED_MODULES = ("tests/test_studio_browser.py",)
+#: Modules that CI runs whole however long they take: the simulation's physics checks (coarse level).
+ALWAYS_IN_CI = ("tests/test_simulate.py",)
 #: The sum of the fast tier's test times is kept under this share of FAST_TIER_SECONDS (the rest is start-up).
 FAST_SUM_SHARE = 0.25
 
@@ -72,6 +75,7 @@ def _collected() -> list[str]:
 def _long_tier(durations: dict[str, float], unfinished: set[str]) -> list[str]:
     """Tests of LONG_TEST_SECONDS or more (and the unfinished ones); in a chained module only its tail."""
     long = {node for node, seconds in durations.items() if seconds >= LONG_TEST_SECONDS} | unfinished
+    long = {node for node in long if _module(node) not in ALWAYS_IN_CI}
     for module in CHAINED_MODULES:
         in_order = [node for node in _collected() if _module(node) == module]
         tail: set[str] = set()
