@@ -46,7 +46,7 @@ def test_richardson_recovers_the_order_and_limit_of_an_exact_power_series():
     ratio, order, limit = 2.0 ** (1.0 / 3.0), 1.7, 0.25
     coarse, medium, fine = (limit + 0.04 * (ratio**power) ** order for power in (2, 1, 0))
     result = richardson(coarse, medium, fine, ratio)
-    assert result.monotone and result.order == pytest.approx(order) and result.extrapolated == pytest.approx(limit)
+    assert result.converges_monotonically and result.order == pytest.approx(order) and result.extrapolated == pytest.approx(limit)
     assert richardson(1.0, 2.0, 1.5, ratio).extrapolated is None  # oscillating: no extrapolation
 
 

@@ -54,8 +54,13 @@ def summary_lines(result: Result, convergence: bool = False) -> list[str]:
         for key, unit in (("thrust_n", "N"), ("torque_nm", "N m")):
             entry = report[key]
             levels = ", ".join(f"{level} {_number(values[key])}" for level, values in report["levels"].items())
-            lines.append(f"{key.split('_')[0]}: {levels} {unit}; Richardson {_number(entry['extrapolated'])} {unit}, "
-                         f"observed order {_number(entry['observed_order'], 3)}")
+            if entry["converges_monotonically"]:
+                lines.append(f"{key.split('_')[0]}: {levels} {unit}; Richardson {_number(entry['extrapolated'])} {unit}, "
+                             f"observed order {_number(entry['observed_order'], 3)}")
+            else:
+                lines.append(f"{key.split('_')[0]}: {levels} {unit}; no Richardson extrapolation: the levels do not "
+                             "converge monotonically (the change from medium to fine is not smaller than from "
+                             "coarse to medium), so they are not in the asymptotic range")
         return lines
     if "thrust_n" not in report:  # --case-only
         lines.append(f"case written ({report['cells']:,} cells, level {report['level']}); run it with its Allrun")

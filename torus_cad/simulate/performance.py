@@ -88,13 +88,17 @@ def run_summary(history: History, point: OperatingPoint, handedness: Handedness,
 
 @dataclass(frozen=True)
 class Extrapolation:
-    """Richardson extrapolation over three levels (coarse, medium, fine) refined by ``ratio``."""
+    """Richardson extrapolation over three levels (coarse, medium, fine) refined by ``ratio``.
+
+    ``order`` and ``extrapolated`` are None unless ``converges_monotonically``: both changes
+    (coarse to medium, medium to fine) of one sign, the second the smaller.
+    """
 
     values: tuple[float, float, float]
     ratio: float
     order: float | None
     extrapolated: float | None
-    monotone: bool
+    converges_monotonically: bool
 
 
 def richardson(coarse: float, medium: float, fine: float, ratio: float) -> Extrapolation:

@@ -321,7 +321,7 @@ def convergence_study(request: Request, out_dir: str | Path, progress: ProgressC
         coarse, medium, fine = (float(runs[level].report[key]) for level in Level)
         extrapolation = richardson(coarse, medium, fine, REFINEMENT_RATIO)
         report[key] = {"extrapolated": extrapolation.extrapolated, "observed_order": extrapolation.order,
-                       "monotone": extrapolation.monotone}
+                       "converges_monotonically": extrapolation.converges_monotonically}
     with OutputSet(out, f"{request.params.name}_convergence") as output:
         paths = output.publish(report)
     return Result(paths, report)
