@@ -28,9 +28,9 @@ from pathlib import Path
 
 def _plain_write(propeller, out_dir: Path, density_g_cm3: float) -> None:
     from torus_cad import __version__
-    from torus_cad.design_targets import write_sections_table
     from torus_cad.kernel.export import atomic_path, write_step, write_stl
     from torus_cad.report import build_report
+    from torus_cad.sections_table import write_sections_table
 
     params = propeller.parameters
     write_step(propeller.solid, out_dir / f"{params.name}.step", params.name, params.export.step_schema,

@@ -16,9 +16,7 @@ build the same propeller without solving again) and what each step achieved.
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -26,7 +24,6 @@ from numpy.typing import NDArray
 
 from torus_cad.errors import GeometryError, ParameterError
 from torus_cad.geometry.airfoil import naca4_numbers
-from torus_cad.geometry.blade_elements import BladeElements, blade_angles, blade_elements
 from torus_cad.geometry.centerline import Centerline
 from torus_cad.geometry.diameter import radial_scale_for_diameter, tip_radius
 from torus_cad.geometry.frames import FrameKind, Frames, frenet_from_derivatives
@@ -39,15 +36,13 @@ from torus_cad.geometry.pitch import (
     fit_pitch,
     pitch_report,
 )
-from torus_cad.geometry.section import closed_points, has_base, parameter_end
+from torus_cad.geometry.section import closed_points, parameter_end
 from torus_cad.geometry.surface import (
-    BladeSurface,
     blade_frames,
     place_sections,
     sections_along,
     sections_at,
 )
-from torus_cad.geometry.trailing_edge import trailing_edge_thickness_mm
 from torus_cad.geometry.transforms import evaluate_quartic
 
 #: At most this many rounds of (pitch fit, diameter fit); they stop when the diameter fit no longer moves.
@@ -213,108 +208,3 @@ def resolve_design_targets(params: Any, spin: Handedness = Handedness.CW) -> Des
     fit = achieved_pitch(params, pitch_mm, spin) if pitch_mm else None
     diameter = 2.0 * tip_radius_mm(params)
     return DesignTargets(params, scale if diameter_mm else None, diameter, fit, requested)
-
-
-def elements_of(surface: BladeSurface, spin: Handedness = Handedness.CW) -> BladeElements:
-    """The blade-element table of a sampled blade surface."""
-    frames = surface.frames
-    return blade_elements(surface.s, surface.points, frames.origin, frames.normal, frames.binormal,
-                          surface.trailing_edge_index or 0, surface.lower_corner_index, spin)
-
-
-def design_elements(params: Any, points: int = 400, spin: Handedness = Handedness.CW) -> BladeElements:
-    """The blade-element table at the design's own sections (``resolution.sections``), finely sampled around."""
-    return elements_of(params.blade_surface(points=points), spin)
-
-
-def trailing_edge_of(params: Any, s: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Thickness of the trailing edge (mm) of the sections at ``s`` (0 where sharp)."""
-    blade = params.geometry().blade
-    laws = blade.laws
-    sections = sections_along(blade, s)
-    if not any(has_base(section) for section in sections):
-        return np.zeros(len(s))
-    return trailing_edge_thickness_mm(sections, evaluate_quartic(laws.angle_of_attack_deg, s),
-                                      evaluate_quartic(laws.scale_x_mm, s), evaluate_quartic(laws.scale_y_mm, s))
-
-
-def write_sections_table(surface: BladeSurface, params: Any, out_dir: Path, spin: Handedness = Handedness.CW) -> dict[str, Path]:
-    """Write ``<name>_sections.csv`` and ``<name>_sections.png`` of the built blade ``surface`` into
-    ``out_dir`` (each atomically); their paths by kind (``sections_csv``, ``sections_png``).
-
-    The table reads the surface the solid was lofted through (``resolution.points`` around each
-    section): the thickness comes within 0.04 % of a 1000-point sampling at the default 80. A
-    ``handedness = "ccw"`` part is that surface's mirror image through the XZ plane: the same
-    table, with the position angles negated and the rotation counter-clockwise.
-    """
-    from torus_cad.kernel.export import atomic_path
-    from torus_cad.sections_table import write_sections_csv, write_sections_png
-
-    elements = elements_of(surface, spin)
-    if str(getattr(params, "handedness", "cw")) == "ccw":  # the part is the surface's mirror image (y -> -y)
-        elements = dataclasses.replace(elements, position_angle_deg=-elements.position_angle_deg,
-                                       spin=elements.spin.opposite)
-    paths = {"sections_csv": out_dir / f"{params.name}_sections.csv",
-             "sections_png": out_dir / f"{params.name}_sections.png"}
-    with atomic_path(paths["sections_csv"]) as temp:
-        write_sections_csv(elements, temp, trailing_edge_of(params, elements.s))
-    with atomic_path(paths["sections_png"]) as temp:
-        write_sections_png(elements, temp, title=f"{params.name}: blade elements")
-    return paths
-
-
-# -- checking the targets on a built solid --------------------------------------------------------
-
-def radius_crossings(params: Any, radius_mm: float, sections: int = 801) -> list[tuple[float, float]]:
-    """``(s, geometric pitch mm)`` where blade 0 passes ``radius_mm`` (analytic, ``sections`` samples)."""
-    fine = elements_of(params.blade_surface(sections=sections, points=48))
-    found = []
-    for i in np.flatnonzero(np.diff(np.sign(fine.radius_mm - radius_mm))):
-        w = (radius_mm - fine.radius_mm[i]) / (fine.radius_mm[i + 1] - fine.radius_mm[i])
-        found.append((float(fine.s[i] + w * (fine.s[i + 1] - fine.s[i])),
-                      float(fine.pitch_mm[i] + w * (fine.pitch_mm[i + 1] - fine.pitch_mm[i]))))
-    return found
-
-
-def pitch_on_solid(propeller: Any, s: float, spin: Handedness = Handedness.CW) -> float:
-    """Geometric pitch (mm) of the built solid's section in the plane of section ``s``.
-
-    Measured on the B-rep: the plane cuts the solid and the contour through the centerline's
-    point is sampled. The leading edge is the contour's point on the centerline (the spec's
-    pivot 0 puts it there); the trailing edge is the middle of the contour's straight edge
-    (a flat blunt base) if it has one, the middle of the chord of a round cap's cut (its ends are
-    the surfaces' ends, as the design's trailing edge is their middle), else the contour's point
-    farthest from the leading edge.
-    """
-    from torus_cad.kernel.measure import (
-        contour_through,
-        edge_points,
-        farthest_middle_edge,
-        plane_section_edges,
-        straight_edges,
-    )
-
-    geometry = propeller.parameters.geometry()
-    frames = blade_frames(geometry.blade, geometry.centerline(0), [s])
-    # A ccw solid is the spec's blade mirrored (y -> -y, kernel/mirror.py): cut it in the mirrored
-    # plane, and mirror what is measured back, so the pitch is the spec blade's, as designed.
-    from torus_cad.parameters.design import Handedness  # here: the schema resolves design targets itself
-
-    flip = np.array([1.0, -1.0 if propeller.parameters.handedness == Handedness.CCW else 1.0, 1.0])
-    origin = frames.origin[0] * flip
-    reach = 2.0 * float(np.max(evaluate_quartic(geometry.blade.laws.scale_x_mm, [s])))
-    edges = contour_through(plane_section_edges(propeller.solid, origin, frames.tangent[0] * flip, reach), origin)
-    points = edge_points(edges, 1000)
-    leading = points[int(np.argmin(np.linalg.norm(points - origin, axis=1)))]
-    bases = straight_edges(edges)
-    if bases:
-        trailing = np.asarray(bases[0].positionAt(0.5).toTuple(), dtype=float)
-    elif propeller.surface.round_trailing_edge:
-        cap = farthest_middle_edge(edges, leading)
-        trailing = 0.5 * np.add(cap.startPoint().toTuple(), cap.endPoint().toTuple())
-    else:
-        trailing = points[int(np.argmax(np.linalg.norm(points - leading, axis=1)))]
-    leading, trailing = leading * flip, trailing * flip
-    middle = 0.5 * (leading + trailing)
-    beta, _ = blade_angles(middle[None], (trailing - leading)[None], spin)
-    return float(2.0 * np.pi * np.hypot(middle[0], middle[1]) * np.tan(np.radians(beta[0])))

@@ -367,11 +367,11 @@ def write_output_set(propeller: BuiltPropeller, out_dir: str | Path, density_g_c
     """
     from torus_cad import __version__
     from torus_cad.budgets import check_stl_budget
-    from torus_cad.design_targets import write_sections_table
     from torus_cad.kernel.export import write_checked_stl, write_step
     from torus_cad.kernel.export_3mf import write_3mf
     from torus_cad.parameters.design import ExportFormat
     from torus_cad.report import build_report
+    from torus_cad.sections_table import write_sections_table
     from torus_cad.stages import Stage, StageTimer
 
     params = propeller.parameters

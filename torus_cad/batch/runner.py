@@ -141,26 +141,22 @@ def _watch_parents(worker_parent: int, batch_pid: int, batch_identity: str | Non
 
 
 def _identity(pid: int) -> str | None:
-    """What tells a live process from a successor with its pid: its start time (Linux /proc).
+    """What tells a live process from a successor with its pid: its start time (psutil).
 
-    None when the process is gone or a zombie (killed, not yet reaped); without /proc, ''
-    for any existing process.
+    None when the process is gone or a zombie (killed, not yet reaped); '' for a process this
+    user may not inspect.
     """
+    import psutil
+
     try:
-        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
-    except FileNotFoundError:
-        if Path("/proc/self/stat").exists():
+        process = psutil.Process(pid)
+        if process.status() == psutil.STATUS_ZOMBIE:
             return None
-        try:
-            os.kill(pid, 0)
-        except ProcessLookupError:
-            return None
-        except PermissionError:
-            pass
-        return ""
-    except OSError:
+        return repr(process.create_time())
+    except psutil.NoSuchProcess:  # ZombieProcess included
         return None
-    return None if fields[0] in ("Z", "X") else fields[19]
+    except psutil.AccessDenied:
+        return ""
 
 
 class LocalPool:

@@ -38,14 +38,10 @@ def owner_tag() -> str:
 
 
 def process_alive(pid: int) -> bool:
-    """Whether process ``pid`` exists on this host."""
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True  # alive, another user's
-    return True
+    """Whether process ``pid`` exists on this host (psutil)."""
+    import psutil
+
+    return bool(psutil.pid_exists(pid))
 
 
 def left_by_dead_process(name: str, prefix: str) -> bool:
