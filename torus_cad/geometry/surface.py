@@ -106,6 +106,8 @@ def with_thin_file_edge_closed(geometry: PropellerGeometry) -> PropellerGeometry
     """``geometry``, with a coordinate file's open trailing edge closed where it is too thin to mesh
     outside the hub (:func:`.trailing_edge.closed_if_too_thin`); BladeGeometry.closed_file_edge_mm says so."""
     blade = geometry.blade
+    if not has_base(blade.airfoil):  # a sharp section (every NACA one): nothing to close
+        return geometry
     s = s_outside_the_hub(geometry.centerline(0), geometry.hub.radius_mm, geometry.hub.length_mm)
     section, closed_mm = closed_if_too_thin(blade.airfoil, blade.laws, s)
     if closed_mm is None:

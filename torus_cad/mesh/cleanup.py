@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from torus_cad.mesh.quality import triangle_measures
+from torus_cad.mesh.quality import corner_measures, triangle_measures
 from torus_cad.mesh.union import LabeledMesh
 from torus_cad.tolerances import MESH_NEEDLE_EDGE_RATIO
 
@@ -57,24 +57,6 @@ def junction_vertices(mesh: LabeledMesh) -> NDArray[np.bool_]:
     np.minimum.at(low, mesh.faces.ravel(), labels)
     np.maximum.at(high, mesh.faces.ravel(), labels)
     return np.asarray(low != high) & np.asarray(high >= 0)
-
-
-def _normals_and_aspect(corners: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Normals ``(k, 3)`` (length twice the area) and aspect ratios ``(k,)`` of a few triangles ``(k, 3, 3)``.
-
-    Written out by components: for the handful of triangles around one edge this is several times
-    faster than numpy's general ``cross``.
-    """
-    a, b, c = corners[:, 0], corners[:, 1], corners[:, 2]
-    u, v = b - a, c - a
-    normal = np.stack([u[:, 1] * v[:, 2] - u[:, 2] * v[:, 1], u[:, 2] * v[:, 0] - u[:, 0] * v[:, 2],
-                       u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]], axis=1)
-    w = c - b
-    lengths = np.sqrt(np.stack([(u * u).sum(1), (w * w).sum(1), (v * v).sum(1)], axis=1))
-    area = 0.5 * np.sqrt((normal * normal).sum(1))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ratio = lengths.max(axis=1) * lengths.sum(axis=1) / (4.0 * np.sqrt(3.0) * area)
-    return normal, np.where(area > 0.0, ratio, np.inf)
 
 
 @dataclass(frozen=True)
@@ -131,7 +113,7 @@ def collapse_keeping(mesh: LabeledMesh) -> tuple[LabeledMesh, Cleanup, NDArray[n
         old = faces[moved]
         after = np.where(old == mover, keeper, old)
         count = len(moved)  # the moved triangles before and after, and the needles, in one pass
-        normals, ratios = _normals_and_aspect(vertices[np.concatenate([old, after, faces[sorted(shared)]])])
+        _, normals, ratios = corner_measures(vertices[np.concatenate([old, after, faces[sorted(shared)]])])
         turned = (normals[count:2 * count] * normals[:count]).sum(1)
         if turned.min() <= 0.0 or ratios[count:2 * count].max() >= ratios[2 * count:].max():
             continue  # a triangle would flip, or the moved ones would be no better than the needle
