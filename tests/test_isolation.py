@@ -12,7 +12,7 @@ import psutil
 import pytest
 
 from torus_cad.errors import KernelError
-from torus_cad.kernel.isolation import IsolatedCrash, IsolatedTimeout, run_isolated
+from torus_cad.kernel.isolation import IsolatedCall, IsolatedCrash, IsolatedTimeout, run_isolated
 
 
 def _crash() -> None:
@@ -29,6 +29,21 @@ def test_a_result_an_exception_a_hang_and_a_crash():
     assert time.monotonic() - start < 10.0
     with pytest.raises(IsolatedCrash, match="a segfault crashed"):
         run_isolated(_crash, timeout_s=30.0, what="a segfault")
+
+
+def test_a_call_runs_beside_the_parent_and_is_killed_when_the_parent_gives_up():
+    """The mesh route builds its B-rep comparison in a child while it makes the mesh."""
+    start = time.monotonic()
+    with IsolatedCall(time.sleep, 1.0, what="a sleep") as call:
+        time.sleep(1.0)  # the parent's own work, at the same time
+        assert call.result(timeout_s=30.0) is None
+    assert time.monotonic() - start < 1.9
+    with pytest.raises(RuntimeError, match="the parent failed"):
+        with IsolatedCall(time.sleep, 120.0, what="a long sleep") as call:
+            assert call.pid is not None
+            child = psutil.Process(call.pid)
+            raise RuntimeError("the parent failed")
+    assert not child.is_running()
 
 
 def _isolated_sum(values: list[int]) -> int:

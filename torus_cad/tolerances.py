@@ -197,6 +197,9 @@ STRICT_BLADE_SEPARATION_MM = 1e-4
 #: Seconds the self-interference test (BRepAlgoAPI_Check, in its child process) may take before the
 #: build is refused: the shipped examples take seconds; a filleted fuzz design kept it busy for over 30 min.
 STRICT_CHECK_TIME_LIMIT_S = 300.0
+#: Longest wait (s) for the B-rep that ``torus-cad mesh`` compares its mesh with (built in a child
+#: beside the mesh): a build, its strict check (STRICT_CHECK_TIME_LIMIT_S) included, and one tessellation.
+MESH_COMPARISON_TIME_LIMIT_S = 900.0
 
 #: Axis directions and positions within this of the z axis (unit vector components, mm) count as on it.
 STRICT_AXIS_TOLERANCE = 1e-9

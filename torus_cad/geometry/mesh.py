@@ -15,6 +15,10 @@ from numpy.typing import NDArray
 from torus_cad.geometry.section import chord_positions
 from torus_cad.geometry.surface import BladeSurface
 
+#: Triangles measured at a time over a large mesh: the temporaries stay in the processor's cache,
+#: which makes a mesh of millions of triangles several times faster than whole-array passes.
+MEASURE_BLOCK_TRIANGLES = 1 << 16
+
 
 @dataclass(frozen=True)
 class TriangleMesh:
@@ -31,8 +35,11 @@ class TriangleMesh:
     @property
     def volume(self) -> float:
         """Signed enclosed volume (mm^3), positive when the faces point outward."""
-        a, b, c = (self.vertices[self.faces[:, k]] for k in range(3))
-        return float(np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6.0)
+        total = 0.0
+        for start in range(0, len(self.faces), MEASURE_BLOCK_TRIANGLES):
+            a, b, c = np.moveaxis(self.vertices[self.faces[start:start + MEASURE_BLOCK_TRIANGLES]], 1, 0)
+            total += float(np.einsum("ij,ij->", a, np.cross(b, c)))
+        return total / 6.0
 
     @property
     def area(self) -> float:

@@ -20,7 +20,7 @@ import select
 import signal
 import time
 from collections.abc import Callable
-from typing import Any, TypeVar
+from typing import Any, Generic, TypeVar, cast
 
 from torus_cad.errors import KernelError
 
@@ -38,29 +38,70 @@ class IsolatedCrash(KernelError):
     """The call's child process died (a crash in OpenCascade, or killed from outside)."""
 
 
+class IsolatedCall(Generic[T]):
+    """``function(*args)`` started now in a forked child, its result collected later by :meth:`result`,
+    so the parent can work meanwhile (the child has a core of its own). As a context manager, the
+    child is killed on leaving if its result was not collected (the parent raised meanwhile)."""
+
+    def __init__(self, function: Callable[..., T], *args: Any, what: str) -> None:
+        self.what = what
+        parent_pid = os.getpid()
+        read_end, write_end = os.pipe()
+        pid = os.fork()
+        if pid == 0:
+            os.close(read_end)
+            _run_child(function, args, write_end, parent_pid, what)
+        os.close(write_end)
+        self._pid: int | None = pid
+        self._read_end = read_end
+
+    @property
+    def pid(self) -> int | None:
+        """The child's process id until its result is collected or it is cancelled."""
+        return self._pid
+
+    def result(self, timeout_s: float) -> T:
+        """The call's value; IsolatedTimeout after ``timeout_s`` more seconds, IsolatedCrash if the child
+        died, and the child's own exception (pickled back) if it raised."""
+        pid = self._pid
+        if pid is None:
+            raise KernelError(f"{self.what}: its result was collected already")
+        data = _read_with_limit(self._read_end, pid, timeout_s)
+        _, status = os.waitpid(pid, 0)
+        self._pid = None
+        if data is None:
+            raise IsolatedTimeout(f"{self.what} did not finish within {timeout_s:g} s")
+        if not data:
+            ended = f"signal {os.WTERMSIG(status)}" if os.WIFSIGNALED(status) else f"exit {os.WEXITSTATUS(status)}"
+            raise IsolatedCrash(f"{self.what} crashed (its process ended with {ended})")
+        succeeded, value = pickle.loads(data)
+        if succeeded:
+            return cast(T, value)
+        raise value
+
+    def cancel(self) -> None:
+        """Kill the child and reap it, unless its result was collected."""
+        if self._pid is None:
+            return
+        os.kill(self._pid, signal.SIGKILL)
+        os.waitpid(self._pid, 0)
+        os.close(self._read_end)
+        self._pid = None
+
+    def __enter__(self) -> IsolatedCall[T]:
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        self.cancel()
+
+
 def run_isolated(function: Callable[..., T], *args: Any, timeout_s: float, what: str) -> T:
     """``function(*args)`` in a forked child; IsolatedTimeout after ``timeout_s`` seconds, IsolatedCrash
     if the child dies, and the child's own exception (pickled back) if it raises."""
     if timeout_s <= 0.0:
         raise IsolatedTimeout(f"{what}: no time left to run it")
-    parent_pid = os.getpid()
-    read_end, write_end = os.pipe()
-    pid = os.fork()
-    if pid == 0:
-        os.close(read_end)
-        _run_child(function, args, write_end, parent_pid, what)
-    os.close(write_end)
-    data = _read_with_limit(read_end, pid, timeout_s)
-    _, status = os.waitpid(pid, 0)
-    if data is None:
-        raise IsolatedTimeout(f"{what} did not finish within {timeout_s:g} s")
-    if not data:
-        ended = f"signal {os.WTERMSIG(status)}" if os.WIFSIGNALED(status) else f"exit {os.WEXITSTATUS(status)}"
-        raise IsolatedCrash(f"{what} crashed (its process ended with {ended})")
-    succeeded, value = pickle.loads(data)
-    if succeeded:
-        return value
-    raise value
+    with IsolatedCall(function, *args, what=what) as call:
+        return call.result(timeout_s)
 
 
 def _run_child(function: Callable[..., Any], args: tuple[Any, ...], write_end: int, parent_pid: int,

@@ -10,6 +10,7 @@ crossings (meshlib) -> quality report -> files (one output set).
 
 from __future__ import annotations
 
+import contextlib
 import functools
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
@@ -26,6 +27,7 @@ from torus_cad.geometry.mesh import TriangleMesh
 from torus_cad.geometry.mounting import HubMounting
 from torus_cad.geometry.propeller import PropellerGeometry
 from torus_cad.geometry.surface import BladeSurface, blade_frames, place_sections, sections_along, sections_at
+from torus_cad.kernel.isolation import IsolatedCall
 from torus_cad.mesh import quality
 from torus_cad.mesh.assembly import assemble
 from torus_cad.mesh.cleanup import Cleanup
@@ -46,7 +48,7 @@ from torus_cad.mesh.writers import write_mesh_files
 from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.design import Handedness, SectionSpacing
 from torus_cad.stages import StageTimer
-from torus_cad.tolerances import MESH_JUNCTION_MARGIN_RELATIVE
+from torus_cad.tolerances import MESH_COMPARISON_TIME_LIMIT_S, MESH_JUNCTION_MARGIN_RELATIVE
 
 
 class MeshStage(StrEnum):
@@ -302,9 +304,9 @@ def opencascade_comparison(params: PropellerParameters, margin: float) -> dict[s
                                 "blades_away_from_junctions": quality.evenness(vertices, away).to_dict()}}
 
 
-def quality_report(result: SurfaceMesh, compare: bool = True) -> dict[str, Any]:
-    """The mesh's quality as a JSON-ready dict (see README, 'Meshes for simulation'); ``compare``
-    adds the B-rep's volume and OpenCascade's tessellation of the same design."""
+def quality_report(result: SurfaceMesh, comparison: dict[str, Any] | None = None) -> dict[str, Any]:
+    """The mesh's quality as a JSON-ready dict (see docs, 'Mesh for CFD'), with ``comparison`` (the
+    :func:`opencascade_comparison` of the same design) and the volume difference from it, if given."""
     mesh, params, table = result.mesh, result.parameters, result.parameters.mesh
     margin = _junction_margin(result.geometry)
     topology = result.topology
@@ -338,8 +340,8 @@ def quality_report(result: SurfaceMesh, compare: bool = True) -> dict[str, Any]:
                                     "checked_triangles": result.crossings.checked_triangles, "library": "meshlib"},
         "hub_features": _features(result),
     }
-    if compare:
-        report.update(opencascade_comparison(params, margin))
+    if comparison is not None:
+        report.update(comparison)
         report["volume_relative_difference"] = report["volume_mm3"] / report["brep_volume_mm3"] - 1.0
     return report
 
@@ -397,10 +399,16 @@ def write_surface_mesh(params: PropellerParameters, out_dir: str | Path, compare
     from torus_cad.outputs import OutputSet
 
     formats = selected_formats(params.mesh)
-    result = build_surface_mesh(params, progress, compare)
-    timer = StageTimer[MeshStage](progress)
-    with timer.stage(MeshStage.QUALITY):
-        report = quality_report(result, compare)
+    with contextlib.ExitStack() as stack:
+        # The B-rep to compare with is built in a child meanwhile, on the second core.
+        comparison = stack.enter_context(IsolatedCall(
+            opencascade_comparison, params, MESH_JUNCTION_MARGIN_RELATIVE * params.hub.radius,
+            what="the B-rep to compare the mesh with")) if compare else None
+        result = build_surface_mesh(params, progress, compare)
+        timer = StageTimer[MeshStage](progress)
+        with timer.stage(MeshStage.QUALITY):
+            report = quality_report(result, None if comparison is None else comparison.result(
+                MESH_COMPARISON_TIME_LIMIT_S))
     mesh = mirrored_mesh(result.mesh) if params.handedness == Handedness.CCW else result.mesh
     with OutputSet(out_dir, f"{params.name}_mesh") as output:
         with timer.stage(MeshStage.WRITE):

@@ -19,6 +19,8 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from torus_cad.geometry.mesh import MEASURE_BLOCK_TRIANGLES
+
 
 @dataclass(frozen=True)
 class Topology:
@@ -77,8 +79,13 @@ def corner_measures(corners: NDArray[np.float64]
 
 def triangle_measures(vertices: NDArray[np.float64], faces: NDArray[np.int64]
                       ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """``(f, 3)`` edge lengths (mm) and ``(f,)`` aspect ratios of ``(f, 3)`` faces (:func:`corner_measures`)."""
-    lengths, _, ratios = corner_measures(vertices[faces])
+    """``(f, 3)`` edge lengths (mm) and ``(f,)`` aspect ratios of ``(f, 3)`` faces (:func:`corner_measures`).
+
+    Measured in blocks of MEASURE_BLOCK_TRIANGLES triangles."""
+    lengths, ratios = np.empty((len(faces), 3)), np.empty(len(faces))
+    for start in range(0, len(faces), MEASURE_BLOCK_TRIANGLES):
+        block = slice(start, start + MEASURE_BLOCK_TRIANGLES)
+        lengths[block], _, ratios[block] = corner_measures(vertices[faces[block]])
     return lengths, ratios
 
 
