@@ -6,6 +6,9 @@ millions of triangles need no Python loop per triangle and no full-size copy. ``
 writes into its output set's staging folder (torus_cad.outputs); elsewhere each file is written
 atomically (``kernel.files.atomic_path``): a temp file, then a rename. A failed write raises
 OSError naming the file it was writing.
+
+Hand-written for STL, OBJ and PLY rather than meshio's (used for VTK): meshio's STL and OBJ writers are
+4-7 times slower on a mesh of millions of triangles and write no per-part solids or groups.
 """
 
 from __future__ import annotations
