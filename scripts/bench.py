@@ -402,7 +402,8 @@ def mass_properties_bench(runs: int, designs: int) -> dict[str, Any]:
     from torus_cad.errors import GeometryError, ParameterError
     from torus_cad.kernel.checks import balance, balance_of, mass_properties, occt_mass_properties, volume_properties
     from torus_cad.propeller import build_propeller
-    from torus_cad.studies.fuzz import random_design
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # studies/ sits beside torus_cad, outside it
+    from studies.fuzz import random_design
     from torus_cad.tolerances import BALANCE_RELATIVE_PRECISION
 
     def fast(solid) -> Any:

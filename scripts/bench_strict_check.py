@@ -73,7 +73,8 @@ def bench(design: str, runs: int) -> None:
 def fuzz(count: int) -> None:
     from collections import Counter
 
-    from torus_cad.studies.strict_fuzz import fuzz_many
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # studies/ sits beside torus_cad, outside it
+    from studies.strict_fuzz import fuzz_many
 
     start = time.perf_counter()
     outcomes = fuzz_many(range(count), workers=2)

@@ -5,7 +5,7 @@
     python scripts/fillet_rate.py 160 --radius 1.0 --seed 1000
     python scripts/fillet_rate.py --seeds 32 55 --fillet-shape polynomial   # another cross-section law
 
-Each design comes from the fuzz sampler (:func:`torus_cad.studies.fuzz.random_design_dict`, the
+Each design comes from the fuzz sampler (:func:`studies.fuzz.random_design_dict`, the
 designs ``scripts/fuzz.py`` draws) with ``hub.root_fillet_radius`` set. Designs refused before
 the kernel, or whose fuse fails, are not counted; the others either get their fillet (one
 valid solid: ``ok`` with the requested radius everywhere, ``reduced`` with a smaller one along
@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 import time
 from pathlib import Path
 
@@ -29,7 +30,9 @@ from torus_cad.errors import GeometryError, KernelError, ParameterError
 from torus_cad.kernel.checks import is_valid_closed_solid
 from torus_cad.parameters import PropellerParameters
 from torus_cad.propeller import build_propeller
-from torus_cad.studies.fuzz import random_design_dict
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # studies/ sits beside torus_cad, outside it
+from studies.fuzz import random_design_dict
 
 #: BRepFilletAPI_MakeFillet's cross-section laws, by name.
 FILLET_SHAPES = {"rational": ChFi3d_Rational, "quasi-angular": ChFi3d_QuasiAngular, "polynomial": ChFi3d_Polynomial}

@@ -20,13 +20,9 @@ import sys
 from pathlib import Path
 from typing import Any, NoReturn
 
-try:
-    from torus_cad.errors import ParameterError
-    from torus_cad.studies import function_space as study
-except ModuleNotFoundError:  # run from a checkout without the package installed
-    sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
-    from torus_cad.errors import ParameterError
-    from torus_cad.studies import function_space as study
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # studies/ sits beside torus_cad, outside it
+from studies import function_space as study
+from torus_cad.errors import ParameterError
 
 
 class _OneLineErrorParser(argparse.ArgumentParser):
@@ -38,7 +34,7 @@ class _OneLineErrorParser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    """The command-line options; defaults are those of :class:`torus_cad.studies.function_space.StudyConfig`."""
+    """The command-line options; defaults are those of :class:`studies.function_space.StudyConfig`."""
     defaults = study.StudyConfig()
     parser = _OneLineErrorParser(
         prog="function_space_study.py",

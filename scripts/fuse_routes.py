@@ -20,11 +20,14 @@ import statistics
 import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
 from typing import Any
 
 from torus_cad.errors import GeometryError, ParameterError
 from torus_cad.kernel.fuse import FuseRoute
-from torus_cad.studies.fuzz import random_design
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # studies/ sits beside torus_cad, outside it
+from studies.fuzz import random_design
 
 VOLUME_PRECISION = 1e-7
 

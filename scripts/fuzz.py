@@ -5,7 +5,7 @@
     python scripts/fuzz.py 200 --seed 5000      # seeds 5000..5199
     python scripts/fuzz.py --replay fuzz_out/fuzz_17.toml [more.toml ...]
 
-Every design comes from :func:`torus_cad.studies.fuzz.random_design_dict` (the same sampler the
+Every design comes from :func:`studies.fuzz.random_design_dict` (the same sampler the
 hypothesis tests use) and runs on the batch runner that sweeps use (:mod:`torus_cad.batch`):
 a worker process per core, a time limit per design, so a hang or a crash is counted rather
 than stopping the run. Outcomes (:class:`torus_cad.batch.Outcome`): valid solid / clear
@@ -30,7 +30,9 @@ from torus_cad.batch.outcome import RUN_OUTCOMES, DesignResult, Outcome, tally
 from torus_cad.batch.runner import LocalPool, capped_workers, default_workers, run_tasks
 from torus_cad.parameters import PropellerParameters
 from torus_cad.progress import BatchProgress
-from torus_cad.studies.fuzz import fuzz_range, fuzz_tasks, random_design_dict
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # studies/ sits beside torus_cad, outside it
+from studies.fuzz import fuzz_range, fuzz_tasks, random_design_dict
 
 
 def _save_failure(out_dir: Path, params: PropellerParameters, result: DesignResult) -> Path:

@@ -5,7 +5,7 @@
 
 A constant-radius (rolling-ball) fillet cannot follow a blade face that bends concavely, seen from
 the fillet's side, tighter than its radius: the ball does not fit, its centre path would have a
-cusp. For each valid design the fuzz sampler draws (:func:`torus_cad.studies.fuzz.random_design_dict`),
+cusp. For each valid design the fuzz sampler draws (:func:`studies.fuzz.random_design_dict`),
 blade 0 is joined to the hub as the root fillet joins it, and the principal curvatures of its
 blade faces are sampled (a 160 x 160 grid per face) where the face lies within ``--band`` fillet
 radii of the hub's cylinder; the tightest concave radius is printed, with the design's fillet
@@ -25,6 +25,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import sys
 from pathlib import Path
 
 import cadquery as cq
@@ -41,7 +42,9 @@ from torus_cad.kernel.fillet import BLADE_SURFACES, concave_bend_radius_mm
 from torus_cad.kernel.fuse import fuse_pattern
 from torus_cad.parameters import PropellerParameters
 from torus_cad.propeller import build_propeller
-from torus_cad.studies.fuzz import random_design_dict
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # studies/ sits beside torus_cad, outside it
+from studies.fuzz import random_design_dict
 
 #: Samples per face direction.
 GRID = 160

@@ -14,8 +14,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from studies import function_space as study
 from torus_cad.errors import ParameterError
-from torus_cad.studies import function_space as study
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
 POLY4, POLY6, FOURIER2, FOURIER3, SINUSOID = (

@@ -154,9 +154,9 @@ def test_the_default_takes_the_fast_route_and_agrees_with_the_reference(default_
 
 
 def test_the_fast_route_agrees_with_the_reference_on_random_designs():
+    from studies.fuzz import random_design
     from torus_cad.errors import GeometryError, ParameterError
     from torus_cad.propeller import build_propeller
-    from torus_cad.studies.fuzz import random_design
 
     built, seed = 0, 0
     while built < 8:  # 8 designs of 1-8 blades; each reference integration costs seconds

@@ -23,6 +23,9 @@ from batch_jobs import FAULT_KEY, PID_FILE_KEY, faulty
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+import torus_cad
+from studies import fuzz as fuzz_module
+from studies.fuzz import UNIT_DIMENSION, design_from_unit, fuzz_range, fuzz_tasks, random_design_dict
 from torus_cad.batch import DesignResult, DesignTask, LocalPool, Outcome, run_design, run_tasks
 from torus_cad.cli import main
 from torus_cad.errors import GeometryError, ParameterError
@@ -30,8 +33,6 @@ from torus_cad.geometry import feasibility
 from torus_cad.geometry.frames import Frames
 from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.schema import Bounds
-from torus_cad.studies import fuzz as fuzz_module
-from torus_cad.studies.fuzz import UNIT_DIMENSION, design_from_unit, fuzz_range, fuzz_tasks, random_design_dict
 
 LOW = {"sections": (24, 32), "points": (24, 32)}  # low points; sections near the default
 unit_vectors = st.lists(st.floats(0.0, 1.0), min_size=UNIT_DIMENSION, max_size=UNIT_DIMENSION)
@@ -359,8 +360,9 @@ def test_killed_mid_write_leaves_no_partial_file(tmp_path, kind):
 
 
 def test_the_product_never_imports_the_studies():
-    """The fuzz sampler and the function-space study live in torus_cad.studies, outside the runtime."""
+    """The fuzz sampler and the function-space study live in studies/, outside the installed package."""
     code = ("import sys, torus_cad.cli, torus_cad.batch, torus_cad.propeller, torus_cad.preview; "
-            "print(sorted(name for name in sys.modules if name.startswith('torus_cad.studies')))")
+            "print(sorted(name for name in sys.modules if name.startswith('studies')))")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, check=True)
     assert done.stdout.strip() == "[]"
+    assert not (Path(torus_cad.__file__).parent / "studies").exists()

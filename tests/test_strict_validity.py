@@ -119,7 +119,7 @@ def test_meshlib_sees_two_crossing_triangles_and_none_in_a_tetrahedron():
 
 def test_fuzz_designs_that_build_are_strictly_valid_with_intersection_free_stls():
     """>= 100 fuzz designs (workshop features included) at the default resolution, 2 worker processes."""
-    from torus_cad.studies.strict_fuzz import fuzz_many
+    from studies.strict_fuzz import fuzz_many
 
     outcomes = fuzz_many(range(100), workers=2)
     built = [outcome for outcome in outcomes if outcome.status == "built"]

@@ -24,7 +24,7 @@ What the spec leaves open, and what this module does by default (each one is a f
 * ``sinusoid_max_evaluations`` – the Levenberg–Marquardt budget per sinusoid fit; fits that
   stop on it (or end non-finite) are counted as not converged.
 
-Two errors are computed for every fit (see ``/work/shared/notes/function-space-study.md``):
+Two errors are computed for every fit (docs/function_space_study.md explains why both):
 
 * ``mse`` – the mean squared error that §2.4.4 defines, (1/n) Σ (y_i − f(s_i))²;
 * ``range_normalised_sse`` – Σ ((y_i − f(s_i)) / (max y − min y))², the quantity the

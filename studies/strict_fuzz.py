@@ -1,7 +1,7 @@
 """Fuzz designs through the build and the strict validity check (the property test and
 ``scripts/bench_strict_check.py --fuzz`` use it).
 
-Each design of :func:`torus_cad.studies.fuzz.random_design` (``workshop`` features included) is
+Each design of :func:`studies.fuzz.random_design` (``workshop`` features included) is
 built; a build that succeeds has its whole solid checked again by BRepAlgoAPI_Check (not the
 build's blade-pattern shortcut: that is what is being tested) and its STL written and read back
 by meshlib.
@@ -40,11 +40,11 @@ def fuzz_one(seed: int, workshop: bool = True) -> FuzzOutcome:
     from OCP.BRepAlgoAPI import BRepAlgoAPI_Check
     from OCP.BRepCheck import BRepCheck_Analyzer
 
+    from studies.fuzz import random_design
     from torus_cad.errors import GeometryError, KernelError, ParameterError
     from torus_cad.kernel.export import write_checked_stl
     from torus_cad.kernel.mesh_check import intersecting_pairs_in_file
     from torus_cad.propeller import build_propeller
-    from torus_cad.studies.fuzz import random_design
 
     start = time.perf_counter()
     try:

@@ -1,0 +1,3 @@
+"""Studies that use the product rather than being part of it: the function-space study of the
+spec's §2.4-2.5 (:mod:`~studies.function_space`) and the random-design sampler of the
+fuzz runs (:mod:`~studies.fuzz`). Nothing in the runtime modules imports them."""

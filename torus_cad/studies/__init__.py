@@ -1,3 +1,0 @@
-"""Studies that use the product rather than being part of it: the function-space study of the
-spec's §2.4-2.5 (:mod:`~torus_cad.studies.function_space`) and the random-design sampler of the
-fuzz runs (:mod:`~torus_cad.studies.fuzz`). Nothing in the runtime modules imports them."""
