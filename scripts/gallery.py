@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from torus_cad.design_targets import tip_radius_mm
-from torus_cad.geometry.blade_elements import NEARLY_RADIAL_FRACTION
+from torus_cad.geometry.extensions.blade_elements import NEARLY_RADIAL_FRACTION
 from torus_cad.preview import parse_size, render_preview, write_png
 from torus_cad.propeller import build_propeller
 from torus_cad.sections_table import elements_of

@@ -9,14 +9,14 @@ from scipy.spatial import cKDTree
 
 from torus_cad.errors import ParameterError
 from torus_cad.geometry.airfoil import NacaAirfoil
-from torus_cad.geometry.airfoil_file import (
+from torus_cad.geometry.arc_length import equal_arc_length_section
+from torus_cad.geometry.extensions.airfoil_file import (
     INTERPOLATION_ERROR_LIMIT,
     parse_airfoil_text,
     read_airfoil_file,
     write_lednicer_file,
     write_selig_file,
 )
-from torus_cad.geometry.arc_length import equal_arc_length_section
 from torus_cad.geometry.section import (
     Section,
     closed_points,

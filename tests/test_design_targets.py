@@ -9,7 +9,7 @@ import pytest
 
 from torus_cad.cli import main
 from torus_cad.design_targets import resolve_design_targets
-from torus_cad.geometry.diameter import DIAMETER_TOLERANCE_MM
+from torus_cad.geometry.extensions.diameter import DIAMETER_TOLERANCE_MM
 from torus_cad.geometry.surface import blade_frames
 from torus_cad.kernel.measure import (
     contour_through,

@@ -10,9 +10,15 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from torus_cad.geometry.airfoil import NacaAirfoil
-from torus_cad.geometry.airfoil_file import read_airfoil_file
 from torus_cad.geometry.arc_length import ROUND_CAP_MINIMUM_POINTS, equal_arc_length_section
-from torus_cad.geometry.printability import printability
+from torus_cad.geometry.extensions.airfoil_file import read_airfoil_file
+from torus_cad.geometry.extensions.printability import printability
+from torus_cad.geometry.extensions.trailing_edge import (
+    ROUND_CAP_HANDLE_FRACTION,
+    blunt_sections,
+    section_matrices,
+    trailing_edge_thickness_mm,
+)
 from torus_cad.geometry.section import (
     RoundTrailingEdge,
     cap_points,
@@ -22,12 +28,6 @@ from torus_cad.geometry.section import (
     has_base,
 )
 from torus_cad.geometry.surface import sections_along
-from torus_cad.geometry.trailing_edge import (
-    ROUND_CAP_HANDLE_FRACTION,
-    blunt_sections,
-    section_matrices,
-    trailing_edge_thickness_mm,
-)
 from torus_cad.geometry.transforms import transform_sections
 from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.design import TrailingEdgeShape

@@ -14,9 +14,9 @@ from OCP.GeomAbs import GeomAbs_Cylinder
 
 from torus_cad import __version__
 from torus_cad.cli import main
-from torus_cad.geometry.handedness import Handedness, air_push_z
-from torus_cad.geometry.mounting import HubMounting
-from torus_cad.geometry.printability import printability, wall_mm
+from torus_cad.geometry.extensions.handedness import Handedness, air_push_z
+from torus_cad.geometry.extensions.mounting import HubMounting
+from torus_cad.geometry.extensions.printability import printability, wall_mm
 from torus_cad.kernel.checks import balance, is_valid_closed_solid, precise_volume
 from torus_cad.kernel.export import read_step
 from torus_cad.parameters import PropellerParameters

@@ -138,7 +138,7 @@ def _command_build(args: argparse.Namespace) -> int:
     params = load_parameters(args.config, args.overrides + _format_overrides(args.formats))
     size = _preview_size(args.preview_size, "--preview-size") if args.preview else None
     if args.require_printable:  # decided from the analytic section, before any work or file
-        from torus_cad.geometry.printability import printability
+        from torus_cad.geometry.extensions.printability import printability
 
         problem = printability(params.geometry(), params.manufacturing.min_wall).problem()
         if problem:

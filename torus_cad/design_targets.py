@@ -6,8 +6,8 @@ is built, in this order:
 1. ``airfoil.naca`` "MPTT" sets ``max_camber``, ``camber_position`` and ``thickness``
    (5-digit designations and ``airfoil.file`` have no spec numbers; they stay as they are).
 2. ``diameter`` scales the radial coordinates z_L of ``centerline.p2`` and ``p3`` until the
-   tip diameter is met (:mod:`torus_cad.geometry.diameter`).
-3. ``pitch`` refits ``transforms.angle_of_attack`` (:mod:`torus_cad.geometry.pitch`) on the
+   tip diameter is met (:mod:`torus_cad.geometry.extensions.diameter`).
+3. ``pitch`` refits ``transforms.angle_of_attack`` (:mod:`torus_cad.geometry.extensions.pitch`) on the
    centerline that step 2 left.
 
 :func:`resolve_design_targets` returns the resolved parameters (the targets removed, so they
@@ -25,10 +25,9 @@ from numpy.typing import NDArray
 from torus_cad.errors import GeometryError, ParameterError
 from torus_cad.geometry.airfoil import naca4_numbers
 from torus_cad.geometry.centerline import Centerline
-from torus_cad.geometry.diameter import radial_scale_for_diameter, tip_radius
-from torus_cad.geometry.frames import FrameKind, Frames, frenet_from_derivatives
-from torus_cad.geometry.handedness import Handedness
-from torus_cad.geometry.pitch import (
+from torus_cad.geometry.extensions.diameter import radial_scale_for_diameter, tip_radius
+from torus_cad.geometry.extensions.handedness import Handedness
+from torus_cad.geometry.extensions.pitch import (
     PITCH_FIT_SECTIONS,
     ChordModel,
     PitchFit,
@@ -36,6 +35,7 @@ from torus_cad.geometry.pitch import (
     fit_pitch,
     pitch_report,
 )
+from torus_cad.geometry.frames import FrameKind, Frames, frenet_from_derivatives
 from torus_cad.geometry.section import closed_points, parameter_end
 from torus_cad.geometry.surface import (
     blade_frames,

@@ -25,11 +25,11 @@ from numpy.typing import NDArray
 from torus_cad.colors import HUB_COLOR, blade_color
 from torus_cad.design_targets import DesignTargets, resolve_design_targets
 from torus_cad.errors import KernelError
-from torus_cad.geometry.feasibility import check_feasible
-from torus_cad.geometry.handedness import Handedness, spin_to_push_air_down
+from torus_cad.geometry.extensions.feasibility import check_feasible
+from torus_cad.geometry.extensions.handedness import Handedness, spin_to_push_air_down
+from torus_cad.geometry.extensions.mounting import HubMounting, place_mounting, set_screw_arc_deg
+from torus_cad.geometry.extensions.printability import Printability, printability
 from torus_cad.geometry.hub import seam_angle_deg
-from torus_cad.geometry.mounting import HubMounting, place_mounting, set_screw_arc_deg
-from torus_cad.geometry.printability import Printability, printability
 from torus_cad.geometry.surface import BladeSurface
 from torus_cad.kernel.checks import (
     MassProperties,
@@ -119,7 +119,7 @@ class Propeller:
         return design_printability(self.parameters)
 
     def spin_to_push_air_down(self) -> Handedness:
-        """The turn, seen from +z, that pushes air toward -z: a flat-plate estimate (torus_cad.geometry.handedness)."""
+        """The turn, seen from +z, that pushes air toward -z: a flat-plate estimate (torus_cad.geometry.extensions.handedness)."""
         spin = spin_to_push_air_down(self.surface.points, self.surface.trailing_edge_column)
         if self.parameters.handedness == Handedness.CCW:  # the surface is the spec's blade, before the mirror
             return spin.opposite
@@ -139,7 +139,7 @@ class Propeller:
 
 
 def design_printability(params: PropellerParameters) -> Printability:
-    """The blade's printability from the analytic section alone (no kernel): see torus_cad.geometry.printability."""
+    """The blade's printability from the analytic section alone (no kernel): see torus_cad.geometry.extensions.printability."""
     return printability(params.geometry(), params.manufacturing.min_wall)
 
 

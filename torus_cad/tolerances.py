@@ -93,7 +93,7 @@ AIRFOIL_FILE_TIME_LIMIT_S = 10.0
 AIRFOIL_COORDINATE_LIMIT = 1e6
 
 #: Most triangles an STL may have, by the estimate made before tessellating
-#: (torus_cad.geometry.triangle_estimate). OpenCascade's mesher slows down faster than its
+#: (torus_cad.geometry.extensions.triangle_estimate). OpenCascade's mesher slows down faster than its
 #: triangle count grows on the lofted blades (see the README's "Limits").
 STL_TRIANGLE_LIMIT = 2_000_000
 

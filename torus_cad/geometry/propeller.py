@@ -42,12 +42,12 @@ class BladeGeometry:
         local_control_points: ``(4, 3)`` P1..P4 in the hub's frame L ([deg, mm, mm], spec §3.1).
         frame: the moving frame's kind (spec §4).
         trailing_edge_thickness_mm: a blunt trailing edge this thick on every section (mm; 0 =
-            the section's own edge, sharp for NACA sections; :mod:`torus_cad.geometry.trailing_edge`).
+            the section's own edge, sharp for NACA sections; :mod:`torus_cad.geometry.extensions.trailing_edge`).
         round_trailing_edge: a blunt trailing edge (the thickness above, or a coordinate file's open
-            edge) ends in a round cap (True) or a flat base (False; :mod:`torus_cad.geometry.trailing_edge`).
+            edge) ends in a round cap (True) or a flat base (False; :mod:`torus_cad.geometry.extensions.trailing_edge`).
         closed_file_edge_mm: (thinnest, thickest) open trailing edge of the coordinate file that was
             closed to the sharp ``airfoil`` because it is too thin to mesh, mm
-            (:func:`torus_cad.geometry.trailing_edge.closed_if_too_thin`); None when nothing was closed.
+            (:func:`torus_cad.geometry.extensions.trailing_edge.closed_if_too_thin`); None when nothing was closed.
     """
 
     airfoil: Section

@@ -18,7 +18,7 @@ smooth (G1, no corner) all round. Its width where it meets the halves is |U - L|
 trailing-edge thickness. With both handles 2/3 |U - L| and parallel tangents this is the standard
 cubic approximation of a half circle of diameter |U - L| (within 1.8 % of its radius): the
 blade sets the handle lengths so that the cap is that near half circle in mm, after the
-section transform (:mod:`torus_cad.geometry.trailing_edge`). A Bezier cap is exact in the
+section transform (:mod:`torus_cad.geometry.extensions.trailing_edge`). A Bezier cap is exact in the
 kernel (an affine map of a Bezier curve is the Bezier curve of the mapped poles), so the
 section curves there carry it as one span (:mod:`torus_cad.kernel.wires`).
 

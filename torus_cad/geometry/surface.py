@@ -17,16 +17,16 @@ from numpy.typing import ArrayLike, NDArray
 
 from torus_cad.geometry.arc_length import equal_arc_length_section
 from torus_cad.geometry.centerline import Centerline
-from torus_cad.geometry.frames import Frames, section_frames
-from torus_cad.geometry.propeller import BladeGeometry, PropellerGeometry
-from torus_cad.geometry.section import RoundTrailingEdge, Section, closed_points, has_base
-from torus_cad.geometry.trailing_edge import (
+from torus_cad.geometry.extensions.trailing_edge import (
     TRAILING_EDGE_CHECK_SECTIONS,
     BluntSections,
     blunt_sections,
     check_trailing_edge_fits,
     closed_if_too_thin,
 )
+from torus_cad.geometry.frames import Frames, section_frames
+from torus_cad.geometry.propeller import BladeGeometry, PropellerGeometry
+from torus_cad.geometry.section import RoundTrailingEdge, Section, closed_points, has_base
 from torus_cad.geometry.transforms import evaluate_quartic
 
 

@@ -19,7 +19,7 @@ the leading edge and the upper surface back to U; L is a knot of multiplicity 3.
 split there into two edges, the base and the airfoil, so the loft gives the base its own face.
 
 * A flat base is a span with collinear poles: U and L are corners (C0).
-* A round cap (:mod:`torus_cad.geometry.trailing_edge`) is the span U, U + h T_u, L + h T_l, L
+* A round cap (:mod:`torus_cad.geometry.extensions.trailing_edge`) is the span U, U + h T_u, L + h T_l, L
   with h = 2/3 |U - L| (mm) and T_u, T_l the airfoil curve's own end tangents (the directions of
   its end poles, which the fit takes from the sampled surfaces): the cap's inner poles are
   collinear with the airfoil's end poles, so the curve is G1 at U and L (no corner), and the
@@ -51,8 +51,8 @@ from OCP.TopoDS import TopoDS_Edge
 from scipy.interpolate import BSpline, make_lsq_spline
 
 from torus_cad.errors import GeometryError, KernelError
+from torus_cad.geometry.extensions.trailing_edge import ROUND_CAP_HANDLE_FRACTION
 from torus_cad.geometry.section import round_cap_poles
-from torus_cad.geometry.trailing_edge import ROUND_CAP_HANDLE_FRACTION
 from torus_cad.tolerances import WIRE_FIT_INITIAL_KNOTS, WIRE_FIT_MAXIMUM_KNOTS, WIRE_FIT_RELATIVE_TOLERANCE
 
 DEGREE = 3

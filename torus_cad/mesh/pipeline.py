@@ -22,9 +22,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from torus_cad.errors import ParameterError
-from torus_cad.geometry import feasibility
+from torus_cad.geometry.extensions import feasibility
+from torus_cad.geometry.extensions.mounting import HubMounting
 from torus_cad.geometry.mesh import TriangleMesh
-from torus_cad.geometry.mounting import HubMounting
 from torus_cad.geometry.propeller import PropellerGeometry
 from torus_cad.geometry.surface import BladeSurface, blade_frames, place_sections, sections_along, sections_at
 from torus_cad.kernel.isolation import IsolatedCall

@@ -23,10 +23,10 @@ from pydantic import AfterValidator, BeforeValidator, Field, model_validator
 from torus_cad.errors import ParameterError
 from torus_cad.formats import ExportFormat, StepSchema
 from torus_cad.geometry.airfoil import Naca5Airfoil, NacaAirfoil, naca4_numbers, naca_section
-from torus_cad.geometry.airfoil_file import load_airfoil_file
+from torus_cad.geometry.extensions.airfoil_file import load_airfoil_file
+from torus_cad.geometry.extensions.handedness import Handedness
+from torus_cad.geometry.extensions.mounting import HubMounting
 from torus_cad.geometry.frames import FrameKind
-from torus_cad.geometry.handedness import Handedness
-from torus_cad.geometry.mounting import HubMounting
 from torus_cad.geometry.propeller import BladeGeometry, HubGeometry, PropellerGeometry
 from torus_cad.geometry.section import Section as SectionShape
 from torus_cad.geometry.surface import BladeSurface, blade_surface, with_thin_file_edge_closed
@@ -118,7 +118,7 @@ _NUMBERS = ("max_camber", "camber_position", "thickness")
 
 class TrailingEdgeShape(StrEnum):
     """The end of a blunt trailing edge (``airfoil.trailing_edge_thickness`` > 0, or a coordinate file's
-    open edge): torus_cad.geometry.trailing_edge."""
+    open edge): torus_cad.geometry.extensions.trailing_edge."""
 
     ROUND = "round"  # a round cap tangent to both surfaces: no sharp edge (the root fillet rolls round it)
     FLAT = "flat"    # a straight base between two corners
@@ -182,7 +182,7 @@ class Airfoil(Section):
     @model_validator(mode="after")
     def _blunt_edge_thick_enough(self) -> Self:
         """A blunt trailing edge thinner than MIN_BLUNT_TRAILING_EDGE_MM cannot be meshed without
-        crossing triangles (torus_cad.geometry.trailing_edge)."""
+        crossing triangles (torus_cad.geometry.extensions.trailing_edge)."""
         thickness = self.trailing_edge_thickness
         if 0.0 < thickness < MIN_BLUNT_TRAILING_EDGE_MM:
             raise ValueError(f"airfoil.trailing_edge_thickness = {thickness:g} mm is too thin to mesh without crossing "

@@ -16,7 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from torus_cad.design_targets import resolve_design_targets
-from torus_cad.geometry.feasibility import check_feasible
+from torus_cad.geometry.extensions.feasibility import check_feasible
 from torus_cad.geometry.mesh import blade_mesh
 from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.design import Handedness

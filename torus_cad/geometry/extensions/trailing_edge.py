@@ -41,7 +41,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from torus_cad.errors import ParameterError
-from torus_cad.geometry.airfoil_file import AirfoilFile
+from torus_cad.geometry.extensions.airfoil_file import AirfoilFile
 from torus_cad.geometry.section import (
     RoundTrailingEdge,
     Section,
@@ -241,7 +241,7 @@ def check_trailing_edge_fits(section: Section, thickness_mm: float, angle_deg: A
         return
     from torus_cad.errors import GeometryError
     from torus_cad.geometry.arc_length import equal_arc_length_section
-    from torus_cad.geometry.blade_elements import section_thickness
+    from torus_cad.geometry.extensions.blade_elements import section_thickness
     from torus_cad.geometry.transforms import transform_sections
 
     sharp = section.with_trailing_edge_gap(0.0)

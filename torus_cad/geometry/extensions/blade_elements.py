@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from torus_cad.geometry.handedness import Handedness
+from torus_cad.geometry.extensions.handedness import Handedness
 
 #: Above this |c_r| / h the chord runs more radially than around the axis: beta and the pitch say little.
 NEARLY_RADIAL_FRACTION = float(np.sqrt(0.5))
