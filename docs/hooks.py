@@ -15,7 +15,7 @@ def _help_of(parser: argparse.ArgumentParser, title: str) -> list[str]:
 
 def cli_reference() -> str:
     """Markdown of ``torus-cad --help`` and every subcommand's ``--help``."""
-    from torus_cad.cli import build_parser
+    from torus_cad.cli.parser import build_parser
 
     parser = build_parser()
     lines = _help_of(parser, "torus-cad")

@@ -100,8 +100,8 @@ def _rss_mb() -> float:
 def timed_build_and_write(params, out_dir: Path) -> dict[str, float]:
     """One build plus STEP and STL writes (the JSON report separately); seconds per stage."""
     from torus_cad.kernel.export import write_step, write_stl
+    from torus_cad.outputs.report import build_report
     from torus_cad.propeller import build_propeller
-    from torus_cad.report import build_report
 
     start = time.perf_counter()
     propeller = build_propeller(params)
@@ -161,12 +161,12 @@ def cli_wall_time(runs: int) -> dict[str, Any]:
     with tempfile.TemporaryDirectory() as folder:
         for _ in range(runs):
             start = time.perf_counter()
-            subprocess.run([sys.executable, "-m", "torus_cad.cli", "build", "--out", folder, "-q"], check=True)
+            subprocess.run([sys.executable, "-m", "torus_cad", "build", "--out", folder, "-q"], check=True)
             times.append(time.perf_counter() - start)
         times_no_stl = []
         for _ in range(runs):
             start = time.perf_counter()
-            subprocess.run([sys.executable, "-m", "torus_cad.cli", "build", "--out", folder, "-q", "--no-stl"],
+            subprocess.run([sys.executable, "-m", "torus_cad", "build", "--out", folder, "-q", "--no-stl"],
                            check=True)
             times_no_stl.append(time.perf_counter() - start)
     start = time.perf_counter()

@@ -28,7 +28,7 @@ def _sweep_rate(spec, parameter_sets, out: Path, workers: int) -> tuple[float, f
     from torus_cad.batch.job import DesignTask
     from torus_cad.batch.sweep import _run
     from torus_cad.batch.sweep_file import SweepSpec
-    from torus_cad.progress import BatchProgress
+    from torus_cad.runtime.progress import BatchProgress
 
     sweep = SweepSpec(name="bench", base=spec.base)
     designs = [Design(index, parameters["name"], {}, parameters) for index, parameters in enumerate(parameter_sets)]

@@ -29,8 +29,8 @@ from pathlib import Path
 def _plain_write(propeller, out_dir: Path, density_g_cm3: float) -> None:
     from torus_cad import __version__
     from torus_cad.kernel.export import atomic_path, write_step, write_stl
-    from torus_cad.report import build_report
-    from torus_cad.sections_table import write_sections_table
+    from torus_cad.outputs.report import build_report
+    from torus_cad.outputs.sections_table import write_sections_table
 
     params = propeller.parameters
     write_step(propeller.solid, out_dir / f"{params.name}.step", params.name, params.export.step_schema,
@@ -43,7 +43,7 @@ def _plain_write(propeller, out_dir: Path, density_g_cm3: float) -> None:
 
 
 def _set_write(propeller, out_dir: Path, density_g_cm3: float) -> None:
-    from torus_cad.outputs import write_output_set
+    from torus_cad.outputs.output_set import write_output_set
 
     write_output_set(propeller, out_dir, density_g_cm3, sections_table=True)
 

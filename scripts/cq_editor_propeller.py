@@ -54,8 +54,8 @@ propeller = result.workplane  # the fused propeller as a cq.Workplane (result.hu
 if "show_object" in globals():  # cq-editor (or anything else that injects show_object)
     show_object(propeller, name=NAME)  # type: ignore[name-defined]  # noqa: F821
 else:
-    from torus_cad.outputs import write_output_set
-    from torus_cad.preview import write_preview
+    from torus_cad.outputs.output_set import write_output_set
+    from torus_cad.preview.picture import write_preview
 
     # The same output set as 'torus-cad build --preview': the blade-element table and the picture
     # belong to it, so a run after a build replaces that build's files instead of dropping some.

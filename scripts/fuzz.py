@@ -29,7 +29,7 @@ from torus_cad.batch.job import DesignTask
 from torus_cad.batch.outcome import RUN_OUTCOMES, DesignResult, Outcome, tally
 from torus_cad.batch.runner import LocalPool, capped_workers, default_workers, run_tasks
 from torus_cad.parameters import PropellerParameters
-from torus_cad.progress import BatchProgress
+from torus_cad.runtime.progress import BatchProgress
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # studies/ sits beside torus_cad, outside it
 from studies.fuzz import fuzz_range, fuzz_tasks, random_design_dict

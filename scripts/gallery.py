@@ -1,6 +1,6 @@
 """Render the example designs into one picture: docs/images/gallery.png (run from the repo root).
 
-Builds every design in examples/ (not the sweep files), renders each with torus_cad.preview
+Builds every design in examples/ (not the sweep files), renders each with torus_cad.preview.picture
 (isometric and axial views), writes its name, blade count, tip diameter and the geometric
 pitch at 75 % of the tip radius under it, and tiles the pictures two to a row.
 
@@ -16,11 +16,11 @@ from pathlib import Path
 
 import numpy as np
 
-from torus_cad.design_targets import tip_radius_mm
 from torus_cad.geometry.extensions.blade_elements import NEARLY_RADIAL_FRACTION
-from torus_cad.preview import parse_size, render_preview, write_png
+from torus_cad.outputs.sections_table import elements_of
+from torus_cad.parameters.design_targets import tip_radius_mm
+from torus_cad.preview.picture import parse_size, render_preview, write_png
 from torus_cad.propeller import build_propeller
-from torus_cad.sections_table import elements_of
 
 EXAMPLES = Path("examples")
 

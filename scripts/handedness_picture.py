@@ -12,7 +12,7 @@ from pathlib import Path
 
 from PIL import Image
 
-from torus_cad.preview import write_preview
+from torus_cad.preview.picture import write_preview
 from torus_cad.propeller import build_propeller
 
 

@@ -14,7 +14,7 @@ import sys
 from pathlib import Path
 
 from torus_cad.kernel.measure import max_radius_mm
-from torus_cad.measured_targets import pitch_on_solid, radius_crossings
+from torus_cad.outputs.measured_targets import pitch_on_solid, radius_crossings
 from torus_cad.parameters import PropellerParameters
 from torus_cad.propeller import build_propeller
 

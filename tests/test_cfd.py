@@ -21,7 +21,7 @@ import pytest
 from torus_cad.cfd.domain import SURFACE_GROUPS, VOLUME_GROUPS, tetrahedra_volume
 from torus_cad.cfd.readme import openfoam_block
 from torus_cad.cli import main
-from torus_cad.outputs import verify_set
+from torus_cad.outputs.output_set import verify_set
 from torus_cad.tolerances import CFD_TETRAHEDRA_LIMIT
 
 gmsh = pytest.importorskip("gmsh")

@@ -81,7 +81,7 @@ def test_usage_errors_exit_2_and_help_exits_0():
 
 
 def test_console_script_prints_no_traceback_on_bad_input(tmp_path):
-    result = subprocess.run([sys.executable, "-m", "torus_cad.cli", "build", "--set", "hub.length=-3",
+    result = subprocess.run([sys.executable, "-m", "torus_cad", "build", "--set", "hub.length=-3",
                              "--out", str(tmp_path / "out")], capture_output=True, text=True)
     assert result.returncode == 2
     assert result.stderr.strip().splitlines() == [result.stderr.strip()]
@@ -92,7 +92,7 @@ def test_console_script_prints_no_traceback_on_bad_input(tmp_path):
 
 def _memory_after_imports_kb(env: dict[str, str]) -> int:
     """Address space of a torus-cad process once everything is imported (VmPeak, kB)."""
-    code = ("import torus_cad.propeller, torus_cad.outputs, torus_cad.cli, torus_cad.budgets\n"
+    code = ("import torus_cad.propeller, torus_cad.outputs.output_set, torus_cad.cli, torus_cad.runtime.budgets\n"
             "print([l for l in open('/proc/self/status') if l.startswith('VmPeak')][0].split()[1])")
     return int(subprocess.run([sys.executable, "-c", code], env=env, check=True, capture_output=True,
                               text=True).stdout)
@@ -146,7 +146,7 @@ def test_a_sweep_file_given_to_build_points_to_the_sweep_command(tmp_path, capsy
 
 
 def test_a_numeric_naca_designation_on_the_command_line_is_the_designation(tmp_path):
-    from torus_cad.cli import load_parameters
+    from torus_cad.cli.commands import load_parameters
 
     assert load_parameters(None, ["airfoil.naca=4415"]).airfoil.naca == "4415"
 

@@ -115,7 +115,7 @@ def test_edited_parameters_change_the_shown_propeller(tmp_path, monkeypatch):
 
 def test_a_run_after_a_build_keeps_the_builds_whole_set(tmp_path, monkeypatch):
     from torus_cad.cli import main
-    from torus_cad.outputs import verify_set
+    from torus_cad.outputs.output_set import verify_set
 
     monkeypatch.chdir(tmp_path)
     assert main(["build", "--preview", "-q"]) == 0

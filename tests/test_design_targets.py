@@ -8,7 +8,6 @@ import numpy as np
 import pytest
 
 from torus_cad.cli import main
-from torus_cad.design_targets import resolve_design_targets
 from torus_cad.geometry.extensions.diameter import DIAMETER_TOLERANCE_MM
 from torus_cad.geometry.surface import blade_frames
 from torus_cad.kernel.measure import (
@@ -18,8 +17,9 @@ from torus_cad.kernel.measure import (
     straight_edges,
     vertex_radius_mm,
 )
-from torus_cad.measured_targets import pitch_on_solid, radius_crossings
+from torus_cad.outputs.measured_targets import pitch_on_solid, radius_crossings
 from torus_cad.parameters import PropellerParameters
+from torus_cad.parameters.design_targets import resolve_design_targets
 from torus_cad.propeller import build_propeller
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"

@@ -49,17 +49,17 @@ def test_geometry_imports_no_kernel_and_nothing_above_it():
     def forbidden(name: str) -> bool:
         top = name.split(".")[0]
         inside = name.startswith("torus_cad.") and not name.startswith(
-            ("torus_cad.geometry", "torus_cad.errors", "torus_cad.tolerances", "torus_cad.input_files"))
+            ("torus_cad.geometry", "torus_cad.errors", "torus_cad.tolerances", "torus_cad.runtime.input_files"))
         return top in KERNEL_PACKAGES or inside
     assert _offenders(_sources("geometry"), forbidden) == []
 
 
 def test_the_untrusted_file_reader_imports_only_the_standard_library_and_the_errors():
-    """torus_cad.input_files sits below the geometry layer (it reads coordinate files)."""
+    """torus_cad.runtime.input_files sits below the geometry layer (it reads coordinate files)."""
     def forbidden(name: str) -> bool:
         return name.split(".")[0] not in sys.stdlib_module_names | {"__future__"} and not name.startswith(
             ("torus_cad.errors", "torus_cad.tolerances"))
-    assert _offenders([PACKAGE / "input_files.py"], forbidden) == []
+    assert _offenders([PACKAGE / "runtime" / "input_files.py"], forbidden) == []
 
 
 def test_kernel_imports_no_pipeline_or_app():
@@ -76,8 +76,27 @@ def test_parameters_import_no_kernel():
 
 
 def test_nothing_imports_the_cli():
-    sources = [path for path in _sources() if path.name not in ("cli.py", "__main__.py")]
+    sources = [path for path in _sources() if "cli" not in path.relative_to(PACKAGE).parts
+               and path.name != "__main__.py"]
     assert _offenders(sources, lambda name: name == "torus_cad.cli" or name.startswith("torus_cad.cli.")) == []
+
+
+#: The applications on top of the core, each a package by concept.
+APPS = ("cli", "preview", "studio", "mesh", "cfd", "batch", "simulate", "optimize")
+
+
+def test_the_core_imports_no_app():
+    """geometry, kernel, parameters, outputs, runtime and the pipeline are usable without any command."""
+    core = [path for path in _sources() if path.relative_to(PACKAGE).parts[0] not in APPS
+            and path.name != "__main__.py"]
+    assert _offenders(core, lambda name: name.startswith(tuple(f"torus_cad.{app}" for app in APPS))) == []
+
+
+def test_the_package_root_holds_only_the_core_s_face():
+    """The pipeline, the exceptions, the tolerances, the shared enums and colours; the rest lives in packages."""
+    loose = sorted(path.name for path in PACKAGE.glob("*.py"))
+    assert loose == ["__init__.py", "__main__.py", "colors.py", "errors.py", "formats.py", "propeller.py",
+                     "tolerances.py"]
 
 
 @pytest.mark.parametrize("package", ["geometry", "parameters", "mesh"])  # mesh: without --compare, no kernel

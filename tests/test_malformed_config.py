@@ -133,7 +133,7 @@ def test_command_line_prints_no_traceback(tmp_path, content):
     config = tmp_path / "design.toml"
     config.write_bytes(content)
     out_dir = tmp_path / "out"
-    result = subprocess.run([sys.executable, "-m", "torus_cad.cli", "build", str(config), "--out", str(out_dir)],
+    result = subprocess.run([sys.executable, "-m", "torus_cad", "build", str(config), "--out", str(out_dir)],
                             check=False, capture_output=True, text=True, timeout=120)
     assert result.returncode == 2, result.stderr
     assert "Traceback" not in result.stderr + result.stdout
@@ -197,7 +197,7 @@ def test_a_utf8_bom_is_accepted(tmp_path, capsys):
     assert PropellerParameters.from_toml(config).blades == 4
     out_dir = tmp_path / "out"
     assert main(["build", str(config), "--out", str(out_dir), "--no-stl", "-q"]) == 0, capsys.readouterr().err
-    from torus_cad.outputs import verify_set
+    from torus_cad.outputs.output_set import verify_set
 
     assert [path.name for path in verify_set(out_dir, "torus_propeller").files][-2:] == \
         ["torus_propeller_sections.png", "torus_propeller.json"]

@@ -133,8 +133,8 @@ def test_the_cli_refuses_a_bad_study_with_exit_2_and_writes_nothing(tmp_path):
 
 
 def test_every_number_of_a_real_build_report_is_a_metric():
+    from torus_cad.outputs.report import build_report
     from torus_cad.propeller import build_propeller
-    from torus_cad.report import build_report
 
     report = build_report(build_propeller(BASE), 1.24)
     leaves = set()
@@ -192,8 +192,8 @@ def test_the_geometric_study_improves_on_its_base_and_its_best_design_rebuilds(t
     """The shipped example: a lighter 100 mm propeller whose thinnest wall stays >= 0.8 mm within 30 trials."""
     from matplotlib.image import imread
 
+    from torus_cad.outputs.report import build_report
     from torus_cad.propeller import build_propeller
-    from torus_cad.report import build_report
 
     base = build_report(build_propeller(BASE), 1.24)
     assert base["printability"]["thinnest_wall_mm"] >= 0.8  # the base is feasible: the study must beat it

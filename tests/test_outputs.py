@@ -20,7 +20,7 @@ import pytest
 
 from torus_cad.errors import IncompleteOutputError, OutputError
 from torus_cad.kernel.files import owner_tag
-from torus_cad.outputs import (
+from torus_cad.outputs.output_set import (
     FILES_KEY,
     OutputSet,
     check_writable_folder,

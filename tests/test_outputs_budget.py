@@ -13,9 +13,9 @@ import time
 
 import pytest
 
-from torus_cad.budgets import estimated_stl_triangles
 from torus_cad.errors import BudgetError
 from torus_cad.parameters import PropellerParameters
+from torus_cad.runtime.budgets import estimated_stl_triangles
 from torus_cad.tolerances import STL_TRIANGLE_LIMIT
 
 

@@ -1,4 +1,4 @@
-"""The progress display (torus_cad.progress): build stages and the batch bar, drawn only on a terminal."""
+"""The progress display (torus_cad.runtime.progress): build stages and the batch bar, drawn only on a terminal."""
 
 from __future__ import annotations
 
@@ -13,8 +13,8 @@ import time
 
 import pytest
 
-from torus_cad.progress import BatchProgress, StageProgress
-from torus_cad.stages import Stage
+from torus_cad.runtime.progress import BatchProgress, StageProgress
+from torus_cad.runtime.stages import Stage
 
 _ANSI = re.compile(r"\x1b\[[0-9;?]*[A-Za-z]")
 

@@ -361,7 +361,7 @@ def test_killed_mid_write_leaves_no_partial_file(tmp_path, kind):
 
 def test_the_product_never_imports_the_studies():
     """The fuzz sampler and the function-space study live in studies/, outside the installed package."""
-    code = ("import sys, torus_cad.cli, torus_cad.batch, torus_cad.propeller, torus_cad.preview; "
+    code = ("import sys, torus_cad.cli, torus_cad.batch, torus_cad.propeller, torus_cad.preview.picture; "
             "print(sorted(name for name in sys.modules if name.startswith('studies')))")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, check=True)
     assert done.stdout.strip() == "[]"

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from torus_cad.outputs import verify_set
+from torus_cad.outputs.output_set import verify_set
 
 FAST = ["--set", "resolution.sections=16", "--set", "resolution.points=48",
         "--set", "export.stl_linear_deflection=0.2", "--set", "export.stl_angular_deflection=0.5"]
@@ -29,7 +29,7 @@ def _startup_seconds() -> float:
     times = []
     for _ in range(3):
         start = time.perf_counter()
-        subprocess.run([sys.executable, "-c", "import torus_cad.interrupts"], check=True)
+        subprocess.run([sys.executable, "-c", "import torus_cad.runtime.interrupts"], check=True)
         times.append(time.perf_counter() - start)
     return max(times)
 

@@ -364,7 +364,7 @@ def test_root_fillet_is_reduced_only_where_the_blade_bends_too_tightly_and_says_
     assert any(curvature == pytest.approx(1 / 0.5, rel=1e-3) for curvature in curvatures)  # the requested radius elsewhere
     # the reduced edges (OpenCascade blends the radius into the neighbouring edges)
     assert any(curvature == pytest.approx(1 / fillet.smallest_radius_mm, rel=1e-2) for curvature in curvatures)
-    from torus_cad.report import build_report
+    from torus_cad.outputs.report import build_report
 
     report = build_report(filleted, 1.0)["root_fillet"]
     assert report["constant_radius"] is False and report["smallest_radius_mm"] == fillet.smallest_radius_mm

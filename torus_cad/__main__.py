@@ -2,12 +2,12 @@
 
 The signal handlers go in before anything else is imported: a Ctrl-C or SIGTERM while numpy
 or CadQuery is still loading ends the command with one line and exit 130 / 143 like any other
-moment (torus_cad.interrupts).
+moment (torus_cad.runtime.interrupts).
 """
 
 import sys
 
-from torus_cad.interrupts import exit_on_signals, hold_signals_until_exit
+from torus_cad.runtime.interrupts import exit_on_signals, hold_signals_until_exit
 
 
 def main() -> int:

@@ -22,8 +22,6 @@ import cadquery as cq
 import numpy as np
 from numpy.typing import NDArray
 
-from torus_cad.colors import HUB_COLOR, blade_color
-from torus_cad.design_targets import DesignTargets, resolve_design_targets
 from torus_cad.errors import KernelError
 from torus_cad.geometry.extensions.feasibility import check_feasible
 from torus_cad.geometry.extensions.handedness import Handedness, spin_to_push_air_down
@@ -44,10 +42,12 @@ from torus_cad.kernel.loft import loft_solid
 from torus_cad.kernel.mirror import mirrored
 from torus_cad.kernel.strict import StrictCheck, strict_valid_solid
 from torus_cad.kernel.wires import SectionCurves, fit_section_curves
-from torus_cad.outputs import write_output_set
+from torus_cad.outputs.output_set import write_output_set
 from torus_cad.parameters import PropellerParameters, resolve_parameters
 from torus_cad.parameters.design import TightBends
-from torus_cad.stages import Stage, StageTimer
+from torus_cad.parameters.design_targets import DesignTargets, resolve_design_targets
+from torus_cad.colors import HUB_COLOR, blade_color
+from torus_cad.runtime.stages import Stage, StageTimer
 from torus_cad.tolerances import ROUND_EDGE_FILLET_PIECES, VOLUME_CHECK_RELATIVE_PRECISION
 
 #: Default density for mass: PLA, a common printing plastic (g/cm^3).
@@ -66,7 +66,7 @@ class Propeller:
             The blades' ends reach into the hub, so hub and blades overlap; ``solid`` is the union.
         surface: blade 0's sampled surface from the geometry layer.
         section_curves: blade 0's section B-splines (plain arrays).
-        stage_seconds: seconds per stage (keys: :class:`torus_cad.stages.Stage` values).
+        stage_seconds: seconds per stage (keys: :class:`torus_cad.runtime.stages.Stage` values).
         fuse_route: how the blades were joined to the hub.
         design_targets: what the designer's inputs (airfoil.naca, diameter, pitch) resolved to;
             ``parameters`` are already the resolved spec parameters.
@@ -293,5 +293,5 @@ def write_outputs(propeller: Propeller, out_dir: Path, density_g_cm3: float = DE
                   stl: bool = True, sections_table: bool = False) -> dict[str, Path]:
     """Write the files of ``export.formats`` (STEP, STL, 3MF; ``stl=False`` drops the STL), the
     blade-element table (``<name>_sections.csv`` and ``.png``, when ``sections_table``; ``torus-cad
-    build`` writes it) and the JSON report as one output set (torus_cad.outputs); return the paths by kind."""
+    build`` writes it) and the JSON report as one output set (torus_cad.outputs.output_set); return the paths by kind."""
     return write_output_set(propeller, out_dir, density_g_cm3, stl=stl, sections_table=sections_table).paths

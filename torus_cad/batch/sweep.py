@@ -34,7 +34,7 @@ from torus_cad.batch.runner import (
 from torus_cad.batch.sweep_file import SweepSpec
 from torus_cad.batch.table import DESIGNS_DIR, collect_rows, table_columns, write_table
 from torus_cad.errors import ParameterError
-from torus_cad.progress import BatchProgress
+from torus_cad.runtime.progress import BatchProgress
 
 __all__ = ["MANIFEST_FILE", "SweepInterrupted", "SweepResult", "run_sweep"]
 

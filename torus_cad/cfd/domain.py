@@ -12,7 +12,7 @@ triangles and refined where they cross before the volume is meshed (a crossing s
 gmsh's 3D mesher), so coarse settings mesh too.
 
 The files (STEP, both .msh, README.txt and the sealed report) are one output set
-(torus_cad.outputs), named ``<name>_cfd``.
+(torus_cad.outputs.output_set), named ``<name>_cfd``.
 
 Physical groups (what solvers see as patches and zones):
 ``propeller`` (wall), ``rotating_interface`` (between the zones), ``inlet``, ``outlet``,
@@ -50,7 +50,7 @@ from torus_cad.cfd.sizes import (
 from torus_cad.errors import KernelError
 from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.design import Cfd
-from torus_cad.stages import StageTimer
+from torus_cad.runtime.stages import StageTimer
 
 #: Names of the physical groups: surfaces, then volumes.
 SURFACE_GROUPS = ("propeller", "rotating_interface", "inlet", "outlet", "farfield")
@@ -116,7 +116,7 @@ def gmsh_library(gmsh: Any) -> Iterator[None]:
 
     gmsh's initialize and finalize put the default handlers of SIGTERM and its kin back at the C
     level (Python still reports its own): here Python's handlers are set again after each, so a
-    signal during meshing still ends the command with one line (torus_cad.interrupts). Only the
+    signal during meshing still ends the command with one line (torus_cad.runtime.interrupts). Only the
     main thread can do that; call this there, and mesh in a worker (torus_cad.cfd.worker)."""
     gmsh.initialize(readConfigFiles=False, interruptible=False)
     _reassert_signal_handlers()
@@ -130,7 +130,7 @@ def gmsh_library(gmsh: Any) -> Iterator[None]:
 def _reassert_signal_handlers() -> None:
     import signal
 
-    from torus_cad.interrupts import EXIT_SIGNALS
+    from torus_cad.runtime.interrupts import EXIT_SIGNALS
 
     if threading.current_thread() is not threading.main_thread():
         return
@@ -414,7 +414,7 @@ def write_cfd_domain(params: PropellerParameters, out_dir: str | Path, threads: 
                      ) -> tuple[dict[str, Any], dict[str, Path]]:
     """Build the B-rep, the domain of ``params.cfd`` and its mesh (gmsh with ``threads`` threads, 0 = one
     per CPU; ``estimate``: the budget's, if already checked); publish ``<name>_cfd.step``, ``<name>_cfd.msh``, ``<name>_cfd_v2.msh``, ``README.txt`` and
-    the sealed report ``<name>_cfd.json`` as one output set (torus_cad.outputs). Returns the report as
+    the sealed report ``<name>_cfd.json`` as one output set (torus_cad.outputs.output_set). Returns the report as
     written and the final paths (the report last).
 
     Raises MissingExtraError without gmsh or meshlib, BudgetError over the element budget,
@@ -425,7 +425,7 @@ def write_cfd_domain(params: PropellerParameters, out_dir: str | Path, threads: 
     from torus_cad.cfd.surface_check import import_meshlib
     from torus_cad.kernel.checks import precise_volume
     from torus_cad.kernel.export import write_step
-    from torus_cad.outputs import OutputSet
+    from torus_cad.outputs.output_set import OutputSet
     from torus_cad.propeller import build_propeller
 
     gmsh = import_gmsh()

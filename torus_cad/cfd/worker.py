@@ -3,7 +3,7 @@
 Python runs signal handlers in the main thread, between bytecodes: during one long gmsh call
 (a volume mesh takes minutes) a SIGTERM would wait for the call to return. gmsh's Python API
 calls its library through ctypes, which releases the GIL, so with the work in a worker thread
-the main thread, waiting on it, runs torus_cad.interrupts' handler at once: it removes the staged
+the main thread, waiting on it, runs torus_cad.runtime.interrupts' handler at once: it removes the staged
 files and ends the process (``os._exit``, which ends the worker too).
 """
 

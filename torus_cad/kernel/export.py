@@ -4,7 +4,7 @@ Each writer writes a hidden temp file beside the path (torus_cad.kernel.files.at
 it is whole (a STEP file's end marker, an STL's size from its triangle count) and renames it onto
 the path. A writer that fails says why when it can: a full file system or the file size limit is
 an OSError naming the path, anything else a KernelError. A whole build's files are published
-together by torus_cad.outputs.
+together by torus_cad.outputs.output_set.
 """
 
 from __future__ import annotations

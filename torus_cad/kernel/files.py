@@ -7,7 +7,7 @@
   (:func:`left_by_dead_process`), while files of live processes, or of other hosts sharing the
   folder, are never touched, so concurrent writers of one name cannot delete each other's files.
 * :func:`removed_on_exit` lists the paths a signal handler must remove before the process ends
-  (torus_cad.interrupts reads :data:`IN_FLIGHT`).
+  (torus_cad.runtime.interrupts reads :data:`IN_FLIGHT`).
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """OpenCascade calls that can hang or crash, run in a forked child process with a time limit.
 
 A hang or a crash there then costs that one call, never the command: the parent waits in Python
-(``select``), so a signal ends it at once (torus_cad.interrupts), and the child dies with its
+(``select``), so a signal ends it at once (torus_cad.runtime.interrupts), and the child dies with its
 parent (Linux ``PR_SET_PDEATHSIG``), so a stopped command leaves no OpenCascade call running behind
 it. The child is forked, so it has the shapes in memory already; what it returns is pickled back
 (plain data: BRep text, face indices, status names).

@@ -6,7 +6,7 @@ off).
 
 Checking every triangle costs about 10 us each on this project's 2-core machine (meshlib's mesh
 and tree included; see README, 'Meshes for simulation'). Meshes up to
-:data:`torus_cad.budgets.MESH_WHOLE_CROSSING_CHECK_TRIANGLES` are checked whole. Larger ones
+:data:`torus_cad.runtime.budgets.MESH_WHOLE_CROSSING_CHECK_TRIANGLES` are checked whole. Larger ones
 are checked where a structured mesh of the blade can cross itself: everywhere on the hub and
 at the junctions (where the union and the cleanup made new triangles), and on blade 0 in bands
 along the leading and trailing edges, the only places where the blade is thinner than its cells

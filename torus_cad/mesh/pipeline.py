@@ -47,7 +47,7 @@ from torus_cad.mesh.union import LabeledMesh, MeshBooleanError
 from torus_cad.mesh.writers import write_mesh_files
 from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.design import Handedness, SectionSpacing
-from torus_cad.stages import StageTimer
+from torus_cad.runtime.stages import StageTimer
 from torus_cad.tolerances import MESH_COMPARISON_TIME_LIMIT_S, MESH_JUNCTION_MARGIN_RELATIVE
 
 
@@ -123,7 +123,7 @@ _CROSSING_FREE_SCALES = (1.25, 1.5, 2.0, 3.0, 4.0)
 
 
 def _blade_check(geometry: PropellerGeometry, grid: BladeSurface, mesh: TriangleMesh) -> CrossingCheck:
-    from torus_cad.budgets import MESH_WHOLE_CROSSING_CHECK_TRIANGLES
+    from torus_cad.runtime.budgets import MESH_WHOLE_CROSSING_CHECK_TRIANGLES
 
     sections, count, _ = grid.points.shape
     whole = geometry.blades * len(mesh.faces) <= MESH_WHOLE_CROSSING_CHECK_TRIANGLES
@@ -186,7 +186,7 @@ def build_surface_mesh(params: PropellerParameters, progress: Callable[[str], No
     Raises ParameterError (memory budget, resolution, a crossing mesh, the root fillet), GeometryError
     (design, hub features), MeshBooleanError (union).
     """
-    from torus_cad.design_targets import resolve_design_targets
+    from torus_cad.parameters.design_targets import resolve_design_targets
 
     timer = StageTimer[MeshStage](progress)
     with timer.stage(MeshStage.CHECKS):
@@ -391,12 +391,12 @@ def _write_one(mesh: LabeledMesh, name: str, file_format: MeshFormat, folder: Pa
 def write_surface_mesh(params: PropellerParameters, out_dir: str | Path, compare: bool = True,
                        progress: Callable[[str], None] | None = None) -> tuple[dict[str, Any], dict[str, Path]]:
     """Build, measure and write at ``params.mesh``: the mesh files and ``<name>_mesh.json`` as one output
-    set (torus_cad.outputs: staged, sealed by the report, published whole or not at all).
+    set (torus_cad.outputs.output_set: staged, sealed by the report, published whole or not at all).
 
     Returns the report as sealed and the published paths by format (and ``"json"``, last).
     Nothing is written when a check refuses the design or the resolution.
     """
-    from torus_cad.outputs import OutputSet
+    from torus_cad.outputs.output_set import OutputSet
 
     formats = selected_formats(params.mesh)
     with contextlib.ExitStack() as stack:

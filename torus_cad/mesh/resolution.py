@@ -7,7 +7,7 @@ and along the blade (set by ``sections``), as a fraction of the local section th
 (spec §5) are sparsest for its radius, needs the most points. Above :data:`MESH_SAG_LIMIT`
 the resolution is refused with the smallest count that meets the limit, found by search.
 The triangle count is estimated from the grid counts and refused above
-the memory limit of torus_cad.budgets (bytes per triangle measured).
+the memory limit of torus_cad.runtime.budgets (bytes per triangle measured).
 """
 
 from __future__ import annotations
@@ -176,7 +176,7 @@ def estimate_triangles(geometry: PropellerGeometry, sections: int, points: int, 
 
 
 def check_budget(estimate: TriangleEstimate, compare: bool = True) -> None:
-    """Refuse (BudgetError, exit 2) meshes whose estimated memory is over the limit (torus_cad.budgets)."""
-    from torus_cad.budgets import check_mesh_memory
+    """Refuse (BudgetError, exit 2) meshes whose estimated memory is over the limit (torus_cad.runtime.budgets)."""
+    from torus_cad.runtime.budgets import check_mesh_memory
 
     check_mesh_memory(estimate.total, compare)

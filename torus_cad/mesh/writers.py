@@ -3,7 +3,7 @@
 Every writer works on whole arrays (text is formatted in chunks of :data:`CHUNK_TRIANGLES`
 with one C-level ``%`` per chunk, binary records are built and written a chunk at a time), so
 millions of triangles need no Python loop per triangle and no full-size copy. ``torus-cad mesh``
-writes into its output set's staging folder (torus_cad.outputs); elsewhere each file is written
+writes into its output set's staging folder (torus_cad.outputs.output_set); elsewhere each file is written
 atomically (``kernel.files.atomic_path``): a temp file, then a rename. A failed write raises
 OSError naming the file it was writing.
 

@@ -208,7 +208,7 @@ def _build_best(spec: StudySpec, best: Sequence[Any], folder: Path) -> tuple[lis
 
 def _complete(folder: Path, name: str) -> bool:
     from torus_cad.errors import IncompleteOutputError
-    from torus_cad.outputs import verify_set
+    from torus_cad.outputs.output_set import verify_set
 
     try:
         verify_set(folder, name)
@@ -219,7 +219,7 @@ def _complete(folder: Path, name: str) -> bool:
 
 def _build(config: Path, folder: Path) -> None:
     """Build the design file ``config`` into ``folder`` as ``torus-cad build`` does (its STL included)."""
-    from torus_cad.outputs import write_output_set
+    from torus_cad.outputs.output_set import write_output_set
     from torus_cad.propeller import DEFAULT_DENSITY_G_CM3, build_propeller
 
     write_output_set(build_propeller(config), folder, DEFAULT_DENSITY_G_CM3, stl=True)

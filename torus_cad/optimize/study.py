@@ -152,7 +152,7 @@ def run_study(spec: StudySpec, out_dir: str | Path, *, trials: int | None = None
         raise ParameterError(f"--workers must be a whole number >= 1, got {workers!r}")
     out = Path(out_dir).resolve()
     url = storage_url(spec.storage if storage is None else storage, out, spec.name)
-    from torus_cad.outputs import check_writable_folder
+    from torus_cad.outputs.output_set import check_writable_folder
 
     check_writable_folder(out)
     (out / TRIALS_DIR).mkdir(parents=True, exist_ok=True)

@@ -1,6 +1,6 @@
 """Reading a configuration file safely: only a regular file, only up to a size limit, UTF-8 (BOM allowed).
 
-The reading itself is torus_cad.input_files's, shared with every other file a design names
+The reading itself is torus_cad.runtime.input_files's, shared with every other file a design names
 (airfoil coordinate files): ``/dev/zero``, a named pipe, a socket or a folder is refused at once
 (opened non-blocking, checked with ``fstat``), so the command can neither read gigabytes nor wait
 forever.
@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from torus_cad.errors import ParameterError
-from torus_cad.input_files import decode_text, read_untrusted_bytes, read_untrusted_text
+from torus_cad.runtime.input_files import decode_text, read_untrusted_bytes, read_untrusted_text
 from torus_cad.tolerances import CONFIG_FILE_MAX_BYTES, TOML_NESTING_LIMIT, TOML_NUMBER_DIGITS_LIMIT
 
 _DIGITS = re.compile(r"[0-9][0-9_]*")

@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 from typing import TextIO
 
-from torus_cad.progress import is_terminal
+from torus_cad.runtime.progress import is_terminal
 from torus_cad.simulate.pipeline import Result
 from torus_cad.simulate.run import Status
 

@@ -1,6 +1,6 @@
 """``torus-cad simulate``: mesh the design (``cfd``), write its OpenFOAM case, run it, publish the numbers.
 
-One run is one output set in ``OUT`` (torus_cad.outputs): the case is built and run inside the
+One run is one output set in ``OUT`` (torus_cad.outputs.output_set): the case is built and run inside the
 set's staging folder; on success the case folder ``<name>_case/`` is renamed into place, then
 ``<name>_performance.png`` and the sealed ``<name>_performance.json`` are published; an error or
 an interrupt publishes nothing (the staging folder is removed). A case whose solver failed
@@ -28,11 +28,11 @@ from pathlib import Path
 from typing import Any
 
 from torus_cad.errors import BudgetError, ParameterError
-from torus_cad.interrupts import deferred
 from torus_cad.kernel.files import owner_tag
-from torus_cad.outputs import OutputSet
+from torus_cad.outputs.output_set import OutputSet
 from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.design import InletSide
+from torus_cad.runtime.interrupts import deferred
 from torus_cad.simulate.case import CaseSpec, mesh_commands, solve_commands, write_case
 from torus_cad.simulate.history import History, momentum_balance_force_n
 from torus_cad.simulate.performance import richardson, run_summary

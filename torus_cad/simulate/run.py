@@ -31,7 +31,7 @@ from typing import Any
 from foamlib import AsyncFoamCase, CalledProcessError
 
 from torus_cad.errors import KernelError, TorusCadError
-from torus_cad.interrupts import EXIT_SIGNALS
+from torus_cad.runtime.interrupts import EXIT_SIGNALS
 from torus_cad.simulate.history import History, read_history
 from torus_cad.tolerances import SIMULATE_DIVERGENCE_RESIDUAL
 
@@ -132,7 +132,7 @@ def stop_processes(case: Path | None = None) -> None:
 @contextlib.contextmanager
 def solvers_stopped_on_signals() -> Iterator[None]:
     """Within the block, SIGINT / SIGTERM / SIGHUP first stop every process this one started, then go
-    to the handler that was there before (torus_cad.interrupts' on the command line). Main thread only."""
+    to the handler that was there before (torus_cad.runtime.interrupts' on the command line). Main thread only."""
     previous: dict[int, Any] = {}
 
     def handler(signum: int, frame: FrameType | None) -> None:

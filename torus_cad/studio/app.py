@@ -32,10 +32,10 @@ from pathlib import Path
 from typing import Any
 
 from torus_cad.errors import GeometryError, OutputError, ParameterError
-from torus_cad.interrupts import EXIT_SIGNALS, exit_on_signals
 from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.config_file import parse_config_bytes
-from torus_cad.stages import Stage
+from torus_cad.runtime.interrupts import EXIT_SIGNALS, exit_on_signals
+from torus_cad.runtime.stages import Stage
 from torus_cad.studio.build_messages import BuildRequest, SolidResult
 from torus_cad.studio.panel import (
     PanelField,
@@ -457,7 +457,7 @@ def _upload_files(uploads: Sequence[Any]) -> dict[str, bytes]:
 
 
 def _stage_label(name: str) -> str:
-    """Words for a stage of the build (torus_cad.stages), or the name of the studio's own step."""
+    """Words for a stage of the build (torus_cad.runtime.stages), or the name of the studio's own step."""
     return Stage(name).label if name in Stage.__members__.values() else name.replace("_", " ")
 
 

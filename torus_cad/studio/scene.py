@@ -15,11 +15,11 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from torus_cad.design_targets import resolve_design_targets
 from torus_cad.geometry.extensions.feasibility import check_feasible
 from torus_cad.geometry.mesh import blade_mesh
 from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.design import Handedness
+from torus_cad.parameters.design_targets import resolve_design_targets
 
 #: Segments around the preview hub cylinder.
 HUB_SEGMENTS = 96

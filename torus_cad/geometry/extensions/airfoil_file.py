@@ -32,7 +32,7 @@ trailing-edge ends are ``gap`` apart in y; a file whose trailing edge is open al
 its gap when no thickness is asked for. :meth:`AirfoilFile.sharpened` closes an open edge the
 same way in x and y, so that both ends meet (the spec's sharp trailing edge).
 
-A coordinate file is untrusted input, read by torus_cad.input_files like a configuration file:
+A coordinate file is untrusted input, read by torus_cad.runtime.input_files like a configuration file:
 a regular file only (no device, named pipe, socket or folder), at most
 :data:`~torus_cad.tolerances.AIRFOIL_FILE_MAX_BYTES`, at most
 :data:`~torus_cad.tolerances.AIRFOIL_FILE_MAX_POINTS` points, and the parsing and the crossing
@@ -57,7 +57,7 @@ from scipy.interpolate import CubicSpline
 from scipy.optimize import minimize_scalar
 
 from torus_cad.errors import BudgetError, ParameterError
-from torus_cad.input_files import TimeBudget, decode_text, read_untrusted_bytes
+from torus_cad.runtime.input_files import TimeBudget, decode_text, read_untrusted_bytes
 from torus_cad.tolerances import (
     AIRFOIL_COORDINATE_LIMIT,
     AIRFOIL_FILE_MAX_BYTES,

@@ -3,7 +3,7 @@ the checks the solid and its meshes passed, and the stage times.
 
 It reads a built propeller through :class:`BuiltPropeller`, the attributes of
 :class:`torus_cad.propeller.Propeller` it needs, so that the writers of the output set
-(torus_cad.outputs) and the pipeline that builds the propeller do not import each other.
+(torus_cad.outputs.output_set) and the pipeline that builds the propeller do not import each other.
 """
 
 from __future__ import annotations
@@ -17,7 +17,6 @@ from torus_cad.kernel.checks import balance
 if TYPE_CHECKING:
     import cadquery as cq
 
-    from torus_cad.design_targets import DesignTargets
     from torus_cad.geometry.extensions.mounting import HubMounting
     from torus_cad.geometry.extensions.printability import Printability
     from torus_cad.geometry.surface import BladeSurface
@@ -27,6 +26,7 @@ if TYPE_CHECKING:
     from torus_cad.kernel.strict import StrictCheck
     from torus_cad.kernel.wires import SectionCurves
     from torus_cad.parameters import PropellerParameters
+    from torus_cad.parameters.design_targets import DesignTargets
 
 
 class BuiltPropeller(Protocol):

@@ -36,13 +36,13 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Self
 
 from torus_cad.errors import IncompleteOutputError, OutputError, ParameterError
-from torus_cad.input_files import read_untrusted_bytes
-from torus_cad.interrupts import deferred
 from torus_cad.kernel.files import glob_escape, left_by_dead_process, owner_tag, removed_on_exit
+from torus_cad.runtime.input_files import read_untrusted_bytes
+from torus_cad.runtime.interrupts import deferred
 from torus_cad.tolerances import REPORT_FILE_MAX_BYTES
 
 if TYPE_CHECKING:
-    from torus_cad.report import BuiltPropeller
+    from torus_cad.outputs.report import BuiltPropeller
 
 #: Key of the report that lists the set's other files: ``{kind: {"file", "bytes", "sha256"}}``.
 FILES_KEY = "files"
@@ -366,13 +366,13 @@ def write_output_set(propeller: BuiltPropeller, out_dir: str | Path, density_g_c
     A mesh (STL, 3MF) over its triangle budget is refused before anything is written.
     """
     from torus_cad import __version__
-    from torus_cad.budgets import check_stl_budget
     from torus_cad.kernel.export import write_checked_stl, write_step
     from torus_cad.kernel.export_3mf import write_3mf
+    from torus_cad.outputs.report import build_report
+    from torus_cad.outputs.sections_table import write_sections_table
     from torus_cad.parameters.design import ExportFormat
-    from torus_cad.report import build_report
-    from torus_cad.sections_table import write_sections_table
-    from torus_cad.stages import Stage, StageTimer
+    from torus_cad.runtime.budgets import check_stl_budget
+    from torus_cad.runtime.stages import Stage, StageTimer
 
     params = propeller.parameters
     export = params.export

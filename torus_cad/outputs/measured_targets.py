@@ -12,7 +12,7 @@ from torus_cad.geometry.extensions.blade_elements import blade_angles
 from torus_cad.geometry.extensions.handedness import Handedness
 from torus_cad.geometry.surface import blade_frames
 from torus_cad.geometry.transforms import evaluate_quartic
-from torus_cad.sections_table import elements_of
+from torus_cad.outputs.sections_table import elements_of
 
 
 def radius_crossings(params: Any, radius_mm: float, sections: int = 801) -> list[tuple[float, float]]:

@@ -14,7 +14,7 @@ handlers are installed, so one that arrived during the start is handled then, wi
 
 A signal that arrives while an output set is being published (:func:`deferred`) waits until the
 set is complete. Python runs signal handlers between bytecodes, so a signal during one long
-OpenCascade call takes effect when that call returns (the budgets in torus_cad.budgets keep such
+OpenCascade call takes effect when that call returns (the budgets in torus_cad.runtime.budgets keep such
 calls short).
 """
 

@@ -26,7 +26,7 @@ import time
 from collections.abc import Mapping
 from typing import Any, Self, TextIO
 
-from torus_cad.stages import Stage
+from torus_cad.runtime.stages import Stage
 
 __all__ = ["BatchProgress", "StageProgress", "is_terminal"]
 

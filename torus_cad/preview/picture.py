@@ -9,7 +9,7 @@ grey, every blade its own colour. No window or display is needed: without an X d
 draws through EGL (Mesa's software rasteriser on a machine without a GPU)::
 
     from torus_cad.propeller import build_propeller
-    from torus_cad.preview import write_preview
+    from torus_cad.preview.picture import write_preview
     write_preview(build_propeller(), "propeller.png", size=(1200, 600))
 
 VTK is imported only when a picture is made.
@@ -30,13 +30,13 @@ import cadquery as cq
 import numpy as np
 from numpy.typing import NDArray
 
-from torus_cad.colors import HUB_COLOR, blade_color
 from torus_cad.errors import ParameterError, TorusCadError
 from torus_cad.kernel.checks import distances_to_shape, mass_properties
 from torus_cad.kernel.files import atomic_path
 from torus_cad.kernel.fuse import HUB_PART
 from torus_cad.parameters import PropellerParameters
-from torus_cad.stages import Stage
+from torus_cad.colors import HUB_COLOR, blade_color
+from torus_cad.runtime.stages import Stage
 
 if TYPE_CHECKING:  # pragma: no cover
     from vtkmodules.vtkRenderingCore import vtkRenderWindow

@@ -1,0 +1,64 @@
+"""Command line: ``torus-cad build | defaults | verify | ...``. Thin: parse, call the package, map errors to exit codes.
+
+Exit codes: 0 success; 2 bad input (a one-line message naming the field, no traceback, no
+file written); 1 the kernel or the file system failed (the cause named: OpenCascade, no space
+left, permission denied, out of memory) or ``verify`` found an incomplete set; 130 / 143 / 129
+interrupted by SIGINT / SIGTERM / SIGHUP (torus_cad.runtime.interrupts).
+
+The signal handlers are installed before anything heavy is imported (this module imports only
+the standard library and torus_cad's light modules at the top; numpy, CadQuery and the rest load
+inside the commands), so an interrupt at any moment ends the command with one line.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Callable, Sequence
+
+from torus_cad.cli.commands import EXIT_BAD_INPUT, EXIT_KERNEL_FAILURE, EXIT_OK, report_error
+from torus_cad.cli.parser import build_parser
+from torus_cad.errors import GeometryError, IncompleteOutputError, OutputError, ParameterError, TorusCadError
+from torus_cad.runtime.interrupts import exit_on_signals
+
+__all__ = ["EXIT_BAD_INPUT", "EXIT_KERNEL_FAILURE", "EXIT_OK", "build_parser", "main"]
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of ``torus-cad``; returns the exit code."""
+    restore_signals = exit_on_signals()  # first: an interrupt while importing is clean too
+    try:
+        args = build_parser().parse_args(argv)
+        handler: Callable[[argparse.Namespace], int] = args.handler
+        return _run(handler, args)
+    finally:
+        restore_signals()
+
+
+def _run(handler: Callable[[argparse.Namespace], int], args: argparse.Namespace) -> int:
+    """The handler's exit code; every failure becomes one line on stderr and its exit code."""
+    try:
+        return handler(args)
+    except (ParameterError, GeometryError) as error:
+        return report_error(f"error: {error}", EXIT_BAD_INPUT)
+    except IncompleteOutputError as error:
+        return report_error(f"verify: {error}", EXIT_KERNEL_FAILURE)
+    except OutputError as error:
+        return report_error(f"build failed: {error}", EXIT_KERNEL_FAILURE)
+    except TorusCadError as error:
+        return report_error(f"kernel failure: {error}", EXIT_KERNEL_FAILURE)
+    except MemoryError:
+        return report_error("out of memory; lower resolution.sections / resolution.points or raise the STL deflections",
+                      EXIT_KERNEL_FAILURE)
+    except OSError as error:
+        where = f" {error.filename!r}" if error.filename else ""
+        return report_error(f"cannot write output{where}: {error.strerror or error}", EXIT_KERNEL_FAILURE)
+    except KeyboardInterrupt:  # main() called outside the main thread, where no handler could be installed
+        return report_error("interrupted", 130)
+    except Exception as error:
+        return report_error(f"internal error ({type(error).__name__}): {error}; please report it with the design file",
+                      EXIT_KERNEL_FAILURE)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,414 @@
+"""The ``torus-cad`` commands: one handler per subcommand, each parsing nothing and returning its exit code.
+
+Handlers import numpy, CadQuery and the apps inside their bodies, so that the signal handlers are
+installed (torus_cad.cli.main) before anything heavy loads.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tomllib
+from collections.abc import Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from torus_cad.errors import GeometryError, IncompleteOutputError, OutputError, ParameterError
+from torus_cad.runtime.stages import Stage
+from torus_cad.tolerances import MIN_BLUNT_TRAILING_EDGE_MM
+
+if TYPE_CHECKING:
+    from torus_cad.parameters import PropellerParameters
+
+EXIT_OK, EXIT_KERNEL_FAILURE, EXIT_BAD_INPUT = 0, 1, 2
+
+
+def _parse_override(text: str) -> tuple[str, Any]:
+    if "=" not in text:
+        raise ParameterError(f"--set {text!r} must look like key=value, e.g. hub.radius=12")
+    key, raw = text.split("=", 1)
+    from torus_cad.parameters.config_file import check_toml_shape
+
+    check_toml_shape(f"{key.strip()} = {raw}", "--set", lines=False)  # too deep or too long: named, not a crash
+    try:
+        value = tomllib.loads(f"value = {raw}")["value"]
+    except tomllib.TOMLDecodeError:
+        value = raw  # a bare word: treat as a string (e.g. name=my_prop)
+    except ValueError as error:  # e.g. an integer of more than 4300 digits
+        raise ParameterError(f"--set {key.strip()}: {_first_clause(error)}") from None
+    return key.strip(), value
+
+
+def _as_declared_strings(changes: dict[str, Any]) -> dict[str, Any]:
+    """``changes`` with a number given to a text parameter taken as its text: ``--set airfoil.naca=4415``
+    means the designation '4415', as a user types it, not the integer TOML reads."""
+    from torus_cad.parameters import PropellerParameters
+    from torus_cad.parameters.schema import iter_parameter_specs
+
+    text_keys = {spec.key for spec in iter_parameter_specs(PropellerParameters) if spec.kind is str}
+    return {key: str(value) if key in text_keys and isinstance(value, int | float) and not isinstance(value, bool)
+            else value for key, value in changes.items()}
+
+
+def _first_clause(error: BaseException) -> str:
+    """The error's message up to its first ';', on one line."""
+    return " ".join(str(error).split(";")[0].split())[:200]
+
+
+def load_parameters(config: str | None, overrides: Sequence[str] = ()) -> PropellerParameters:
+    """Parameters from a TOML file (or the defaults) with ``key=value`` overrides applied."""
+    from torus_cad.parameters import resolve_parameters  # imported here: the schema takes most of a second
+
+    changes = _as_declared_strings(dict(_parse_override(item) for item in overrides))
+    try:
+        return resolve_parameters(config or None, changes)
+    except ParameterError:
+        raise
+    except (OverflowError, ValueError) as error:  # reading input only: whatever fails here is bad input
+        source = f"configuration {config!r}" if config else "a --set value"
+        raise ParameterError(f"{source} holds a value that cannot be used: {_first_clause(error)}") from None
+
+
+def command_build(args: argparse.Namespace) -> int:
+    from torus_cad.runtime.progress import StageProgress
+
+    progress = StageProgress.for_terminal(quiet=args.quiet)  # stderr, only on a terminal
+    progress(Stage.KERNEL_IMPORT)  # a line on the terminal before the seconds of importing the schema and cadquery
+    from torus_cad.outputs.output_set import check_writable_folder, write_output_set
+    from torus_cad.runtime.budgets import check_stl_budget
+
+    params = load_parameters(args.config, args.overrides + _format_overrides(args.formats))
+    size = _preview_size(args.preview_size, "--preview-size") if args.preview else None
+    if args.require_printable:  # decided from the analytic section, before any work or file
+        from torus_cad.geometry.extensions.printability import printability
+
+        problem = printability(params.geometry(), params.manufacturing.min_wall).problem()
+        if problem:
+            raise GeometryError(f"not printable (--require-printable): {problem}")
+    if _writes_a_mesh(params, args.no_stl):
+        check_stl_budget(params)  # a mesh that would blow up is refused before anything is built (~7 ms)
+    check_writable_folder(args.out)  # before the build, not after it
+    from torus_cad.propeller import build_propeller
+
+    propeller = build_propeller(params, progress=progress)
+    progress(Stage.WRITE)
+    extra_files = {}
+    if size is not None:
+        from torus_cad.preview.picture import write_preview
+
+        extra_files["png"] = lambda path: write_preview(propeller, path, size, progress=progress)
+    # One output set: the files, the blade-element table, the picture and the report appear together.
+    published = write_output_set(propeller, Path(args.out), args.density, stl=not args.no_stl,
+                                 sections_table=True, extra_files=extra_files)
+    progress.finish()
+    paths, report = published.paths, published.report  # not re-read: a same-name build may have replaced it
+    if not args.quiet:
+        for path in paths.values():
+            print(f"wrote {path}")
+        print(f"volume {report['volume_mm3']:.3f} mm^3, area {report['surface_area_mm2']:.3f} mm^2, "
+              f"mass {report['mass_g']:.3f} g at {args.density:g} g/cm^3")
+        fillet = report.get("root_fillet")
+        if fillet is not None and not fillet["constant_radius"]:
+            print(f"warning: the root fillet is {fillet['radius_mm']:g} mm except along "
+                  f"{fillet['varying_junction_per_blade_mm']:.2f} mm of each blade's junction: a blade bends too tightly "
+                  f"there for it, and its radius varies down to {fillet['smallest_radius_mm']:.3g} mm")
+        closed = report["closed_file_trailing_edge_mm"]
+        if closed is not None:
+            print(f"warning: airfoil.file's open trailing edge is only {closed[0]:.3f}-{closed[1]:.3f} mm thick, under "
+                  f"the {MIN_BLUNT_TRAILING_EDGE_MM:g} mm a blunt edge needs to mesh without crossing triangles: built "
+                  f"sharp; set airfoil.trailing_edge_thickness >= {MIN_BLUNT_TRAILING_EDGE_MM:g} for a base")
+        if not report["printability"]["printable"]:
+            print(f"warning: not printable: {propeller.printability().problem()}; "
+                  "--require-printable refuses such a design")
+        if params.blades == 1:
+            print(f"warning: a one-blade propeller is out of balance: static imbalance "
+                  f"{report['balance']['static_imbalance_g_mm']:.3f} g mm; add a counterweight or use 2 or more blades")
+    if args.verbose:
+        print(f"centroid {tuple(round(c, 6) for c in report['centroid_mm'])} mm, "
+              f"spin-axis inertia {report['spin_axis_inertia_g_mm2']:.4f} g mm^2")
+        for stage, seconds in report["stage_seconds"].items():
+            print(f"  {stage:<13} {seconds * 1000:8.1f} ms")
+    return EXIT_OK
+
+
+def _format_overrides(formats: Sequence[str] | None) -> list[str]:
+    """``--format step,3mf`` as the ``--set export.formats=[...]`` it stands for (the schema checks the names)."""
+    if not formats:
+        return []
+    names = [name.strip() for item in formats for name in item.split(",") if name.strip()]
+    return ["export.formats=[" + ", ".join(f'"{name}"' for name in names) + "]"]
+
+
+def _writes_a_mesh(params: PropellerParameters, no_stl: bool) -> bool:
+    """Whether the build tessellates the solid for a file (STL, 3MF): then its triangle budget applies."""
+    from torus_cad.parameters.design import ExportFormat
+
+    formats = params.export.formats
+    return (ExportFormat.STL in formats and not no_stl) or ExportFormat.THREE_MF in formats
+
+
+def command_preview(args: argparse.Namespace) -> int:
+    from torus_cad.runtime.progress import StageProgress
+
+    progress = StageProgress.for_terminal(quiet=args.quiet)
+    progress(Stage.KERNEL_IMPORT)
+    from torus_cad.outputs.output_set import check_writable_folder
+
+    params = load_parameters(args.config, args.overrides)
+    size = _preview_size(args.size, "--size")
+    out = Path(args.out) if args.out else Path("step_out") / f"{params.name}.png"
+    check_writable_folder(out.parent)  # before the build, not after it
+    from torus_cad.preview.picture import write_preview
+    from torus_cad.propeller import build_propeller
+
+    propeller = build_propeller(params, progress=progress)
+    path = write_preview(propeller, out, size, progress=progress)
+    progress.finish()
+    if not args.quiet:
+        print(f"wrote {path} ({size[0]}x{size[1]} px)")
+    return EXIT_OK
+
+
+def command_defaults(args: argparse.Namespace) -> int:
+    from torus_cad.parameters import PropellerParameters
+
+    if not args.resolved:
+        if args.config or args.overrides:
+            raise ParameterError("torus-cad defaults takes a design file or --set only with --resolved")
+        sys.stdout.write("# torus_cad design file: every key is optional and defaults to the value below.\n")
+        sys.stdout.write(PropellerParameters().to_toml(comments=True))
+        return EXIT_OK
+    from torus_cad.parameters.design_targets import resolve_design_targets
+
+    params = load_parameters(args.config, args.overrides)
+    targets = resolve_design_targets(params)
+    sys.stdout.write("# torus_cad design file: the spec's parameters that the design's airfoil.naca, diameter and\n"
+                     "# pitch resolved to (" + (", ".join(f"{key} = {value!r}" for key, value in targets.requested.items())
+                                                or "none set") + "); it builds the same propeller.\n")
+    if targets.tip_diameter_mm is not None:
+        sys.stdout.write(f"# tip diameter {targets.tip_diameter_mm:.3f} mm")
+        if targets.pitch_fit is not None:
+            achieved = ", ".join(f"{value:.2f}" for value in targets.pitch_fit.pitch_at_75_mm)
+            sys.stdout.write(f"; geometric pitch at 75 % of the tip radius {achieved} mm")
+        sys.stdout.write("\n")
+    sys.stdout.write(targets.parameters.to_toml(comments=True))
+    return EXIT_OK
+
+
+def command_sweep(args: argparse.Namespace) -> int:
+    """Exit 0 when every design is valid or refused, 1 when any failed (errored, crashed, timed out), 2 for a bad
+    sweep file, 130 / 143 on SIGINT / SIGTERM (one line; the table of what finished is written)."""
+    from torus_cad.batch import BatchError, SweepInterrupted, load_sweep, run_sweep
+
+    spec = load_sweep(args.sweep)  # a bad sweep file raises ParameterError: exit 2
+    out = Path(args.out) if args.out else Path("sweep_out") / Path(args.sweep).stem
+    try:
+        result = run_sweep(spec, out, workers=args.workers, scheduler=args.scheduler,
+                           stl=False if args.no_stl else None, density_g_cm3=args.density,
+                           time_limit_s=args.time_limit, rebuild=args.rebuild, progress=False if args.quiet else None,
+                           oversubscribe=args.oversubscribe)
+    except SweepInterrupted as interrupt:
+        partial = interrupt.result
+        done = (f"{partial.counts_text()}; table written to {partial.tables['csv']}" if partial.tables
+                else "nothing was built")
+        print(f"torus-cad: sweep interrupted by {interrupt.signal_name}: {done}; rerun the same command to resume",
+              file=sys.stderr)
+        return interrupt.exit_code
+    except BatchError as error:
+        print(f"torus-cad: sweep failed: {error}", file=sys.stderr)
+        return EXIT_KERNEL_FAILURE
+    if not args.quiet:
+        print(result.summary())
+    return result.exit_code
+
+
+def command_optimize(args: argparse.Namespace) -> int:
+    """Exit 0 when the study holds its trials (refused or failed designs included), 2 for a bad study file or
+    option, 1 when the storage or the workers cannot be used, 130 / 143 / 129 on a signal (rerun to continue)."""
+    try:
+        from torus_cad.optimize import StudyInterrupted, load_study, run_study
+        from torus_cad.optimize.storage import StorageError
+    except ImportError as error:
+        print(f"torus-cad: optimize needs the optimize extra ({error.name} is missing): "
+              "pip install 'torus_cad[optimize]'", file=sys.stderr)
+        return EXIT_KERNEL_FAILURE
+    from torus_cad.batch import BatchError
+
+    spec = load_study(args.study)  # a bad study file raises ParameterError: exit 2
+    out = Path(args.out) if args.out else Path("optimize_out") / Path(args.study).stem
+    try:
+        result = run_study(spec, out, trials=args.trials, workers=args.workers, scheduler=args.scheduler,
+                           storage=args.storage)
+    except StudyInterrupted as interrupt:
+        print(f"torus-cad: optimize interrupted by {interrupt.signal_name}: {interrupt.result.ran} trials finished "
+              "in this run; rerun the same command to continue", file=sys.stderr)
+        return interrupt.exit_code
+    except (BatchError, StorageError) as error:
+        print(f"torus-cad: optimize failed: {error}", file=sys.stderr)
+        return EXIT_KERNEL_FAILURE
+    if not args.quiet:
+        print(result.summary())
+    return EXIT_OK
+
+
+def command_studio(args: argparse.Namespace) -> int:
+    """Exit 0 never on a signal: 130 / 143 / 129 with one line, as every command."""
+    from torus_cad.runtime.interrupts import EXIT_SIGNALS
+    from torus_cad.studio.app import check_host, serve
+
+    check_host(args.host)
+    files = Path(args.files) if args.files else None
+    if files is not None and not files.is_dir():
+        raise ParameterError(f"--files {args.files!r} is not a folder")
+    params = load_parameters(args.config, args.overrides)  # a bad design exits 2 before the server starts
+    try:
+        code = serve(params, port=args.port, host=args.host, files_folder=files)
+    except OutputError as error:  # the port is in use: not a build that failed
+        print(f"torus-cad: studio: {error}", file=sys.stderr)
+        return EXIT_KERNEL_FAILURE
+    if code:
+        import signal
+
+        name = next(signal.Signals(signum).name for signum, exit_code in EXIT_SIGNALS.items() if exit_code == code)
+        print(f"torus-cad: studio stopped by {name}", file=sys.stderr)
+    return code
+
+
+def command_verify(args: argparse.Namespace) -> int:
+    from torus_cad.outputs.output_set import set_names, verify_set
+
+    folder = Path(args.folder)
+    if not folder.is_dir():
+        raise ParameterError(f"verify: {str(folder)!r} is not a folder")
+    names = [args.name] if args.name else set_names(folder)
+    if not names:
+        raise IncompleteOutputError(f"no output set in {str(folder)!r}")
+    for name in names:
+        checked = verify_set(folder, name)  # IncompleteOutputError names the file: exit 1
+        if not args.quiet:
+            print(f"ok {checked.report.parent / name}: {', '.join(path.name for path in checked.files)}")
+    return EXIT_OK
+
+
+def _mesh_overrides(args: argparse.Namespace) -> dict[str, Any]:
+    """``[mesh]`` values given on the command line (they override the design file's)."""
+    from torus_cad.mesh.settings import format_overrides
+
+    overrides: dict[str, Any] = {f"mesh.{key}": getattr(args, key) for key in ("sections", "points", "spacing")
+                                 if getattr(args, key) is not None}
+    if args.formats:
+        overrides.update(format_overrides(name for text in args.formats for name in text.split(",")))
+    return overrides
+
+
+def command_mesh(args: argparse.Namespace) -> int:
+    from torus_cad.mesh.pipeline import summary_line, write_surface_mesh
+    from torus_cad.outputs.output_set import check_writable_folder
+    from torus_cad.runtime.progress import StageProgress
+
+    params = load_parameters(args.config, args.overrides).with_values(_mesh_overrides(args))
+    check_writable_folder(args.out)  # a folder the set cannot go into is refused before the mesh is built
+    progress = StageProgress.for_terminal(quiet=args.quiet)
+    report, paths = write_surface_mesh(params, Path(args.out), compare=not args.no_compare, progress=progress)
+    progress.finish()
+    if not args.quiet:
+        for path in paths.values():
+            print(f"wrote {path}")
+        print(summary_line(report))
+    return EXIT_OK
+
+
+def _table_overrides(args: argparse.Namespace, table: str) -> dict[str, Any]:
+    return {spec.key: getattr(args, spec.key.rpartition(".")[2]) for spec in table_specs(table)
+            if getattr(args, spec.key.rpartition(".")[2]) is not None}
+
+
+def command_cfd(args: argparse.Namespace) -> int:
+    from torus_cad.cfd.settings import MissingExtraError
+    from torus_cad.runtime.progress import StageProgress
+
+    params = load_parameters(args.config, args.overrides).with_values(_table_overrides(args, "cfd"))
+    if args.threads < 0:
+        raise ParameterError(f"--threads = {args.threads} is out of range; allowed 0 (one per CPU) or more")
+    progress = StageProgress.for_terminal(quiet=args.quiet)
+    try:
+        from torus_cad.cfd.domain import gmsh_library, import_gmsh, summary_line, write_cfd_domain
+        from torus_cad.cfd.estimate import check_cfd_budget
+        from torus_cad.cfd.surface_check import import_meshlib
+        from torus_cad.cfd.worker import run_in_worker
+        from torus_cad.outputs.output_set import check_writable_folder
+
+        gmsh = import_gmsh()
+        import_meshlib()
+        estimate = check_cfd_budget(params)  # a mesh that would blow up is refused before any work (a few s)
+        check_writable_folder(args.out)
+        # gmsh set up here, meshing in a worker thread: a signal during a long gmsh call ends the command
+        # at once (cfd.worker, cfd.domain.gmsh_library)
+        with gmsh_library(gmsh):
+            report, paths = run_in_worker(lambda: write_cfd_domain(params, Path(args.out), threads=args.threads,
+                                                                   progress=progress, estimate=estimate))
+    except MissingExtraError as error:
+        print(f"torus-cad: {error}", file=sys.stderr)
+        return EXIT_KERNEL_FAILURE
+    progress.finish()
+    if not args.quiet:
+        for path in paths.values():
+            print(f"wrote {path}")
+        print(summary_line(report))
+    return EXIT_OK
+
+
+def command_simulate(args: argparse.Namespace) -> int:
+    """Exit 0 on success, 2 for bad input or without OpenFOAM, 1 when the mesher or solver fails (diverged:
+    the iteration and residual named, the case kept)."""
+    from torus_cad.runtime.progress import StageProgress
+
+    params = load_parameters(args.config, args.overrides)
+    if args.convergence and (args.case_only or args.mesh_from):
+        raise ParameterError("--convergence meshes and runs all three levels; it takes neither --case-only nor --mesh-from")
+    progress = StageProgress.for_terminal(quiet=args.quiet)
+    try:
+        from torus_cad.simulate.cli_output import IterationLine, summary_lines
+        from torus_cad.simulate.pipeline import Request, convergence_study, simulate
+        from torus_cad.simulate.run import MissingOpenFoamError
+        from torus_cad.simulate.settings import Level, OperatingPoint, max_processes
+    except ImportError as error:
+        print(f"torus-cad: {error.name or error} is not installed: install the simulate extra, "
+              "pip install 'torus_cad[simulate]'", file=sys.stderr)
+        return EXIT_KERNEL_FAILURE
+    request = Request(params, OperatingPoint(args.rpm, args.airspeed), Level(args.level), args.iterations,
+                      max_processes() if args.processes is None else args.processes, args.case_only, args.time_limit,
+                      Path(args.mesh_from) if args.mesh_from else None)
+    line = IterationLine.for_terminal(quiet=args.quiet)
+    try:
+        if args.convergence:
+            result = convergence_study(request, Path(args.out), progress=line, stage=progress)
+        else:
+            result = simulate(request, Path(args.out), progress=line, stage=progress)
+    except MissingOpenFoamError as error:
+        return report_error(str(error), EXIT_BAD_INPUT)
+    finally:
+        line.close()
+    progress.finish()
+    if not args.quiet:
+        for text in summary_lines(result, convergence=args.convergence):
+            print(text)
+    return EXIT_OK
+
+
+def _preview_size(text: str, option: str) -> tuple[int, int]:
+    from torus_cad.preview.picture import parse_size
+
+    return parse_size(text, option)  # raises ParameterError (exit 2) for a bad WxH
+
+
+def table_specs(table: str) -> list[Any]:
+    from torus_cad.parameters import parameter_specs
+
+    return [spec for spec in parameter_specs() if spec.section == table]
+
+
+def report_error(message: str, code: int) -> int:
+    """Print ``torus-cad: message`` on stderr; return ``code``."""
+    print(f"torus-cad: {message}", file=sys.stderr)
+    return code

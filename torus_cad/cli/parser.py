@@ -1,0 +1,318 @@
+"""The ``torus-cad`` argument parser: every subcommand, its options and its handler (torus_cad.cli.commands)."""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Callable
+from typing import Any
+
+from torus_cad.cli.commands import (
+    EXIT_BAD_INPUT,
+    command_build,
+    command_cfd,
+    command_defaults,
+    command_mesh,
+    command_optimize,
+    command_preview,
+    command_simulate,
+    command_studio,
+    command_sweep,
+    command_verify,
+    table_specs,
+)
+
+DESCRIPTION = """\
+torus_cad turns a few design parameters into a toroidal propeller: airfoil sections (NACA 4- or
+5-digit, or a coordinate file) swept along a cubic NURBS centerline, lofted into blades, patterned
+around a cylindrical hub and fused in OpenCascade. It writes a STEP solid (for CAD/CAM), STL and
+3MF meshes (for printing) and a JSON report (volume, mass properties, printability, checks);
+further commands make CFD meshes and domains, sweeps and a browser studio.
+"""
+
+
+EPILOG = """\
+examples:
+  torus-cad build                          default propeller into step_out/
+  torus-cad defaults > my_prop.toml        start a design from the commented defaults
+  torus-cad build my_prop.toml --out parts/
+  torus-cad build my_prop.toml --set blades=4 --set hub.radius=12
+  torus-cad preview my_prop.toml --out prop.png --size 1600x800
+
+units: mm and degrees. Control points are in the hub frame L: [x_L degrees around the axis,
+y_L mm down the axis from 1 mm below the top face, z_L mm radially out from R - R/8].
+"""
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse whose usage errors are one line and exit 2, like every other bad input.
+
+    ``table``: the schema table whose parameters become options (``--name``), added when the
+    subcommand is actually used: reading the schema loads pydantic, which ``build`` must not wait
+    for before its first progress line.
+    """
+
+    table: str = ""
+
+    def parse_known_args(self, args: Any = None, namespace: Any = None) -> Any:  # type: ignore[override, unused-ignore]
+        if self.table:
+            table, self.table = self.table, ""
+            _add_table_arguments(self, table)
+        return super().parse_known_args(args, namespace)
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        self.exit(EXIT_BAD_INPUT, f"torus-cad: error: {message} (see {self.prog} --help)\n")
+
+
+def _design_command(commands: Any, name: str, help: str, description: str, **options: Any) -> _Parser:
+    """A subcommand that reads a design: CONFIG (optional) and ``--set`` overrides."""
+    parser: _Parser = commands.add_parser(name, help=help, description=description, **options)
+    parser.add_argument("config", nargs="?", help="TOML design file (default: the built-in propeller; "
+                        "see 'torus-cad defaults')")
+    parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                        help="override one parameter, dotted keys, TOML values (repeatable): "
+                             "--set hub.radius=12 --set centerline.p2=[20,3,25]")
+    return parser
+
+
+
+
+def _positive_density(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--density must be a number in g/cm^3, got {text!r}") from None
+    if not 0.0 < value <= 25.0:
+        raise argparse.ArgumentTypeError(f"--density = {value:g} is out of range; allowed (0, 25] g/cm^3")
+    return value
+
+
+def _port(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--port must be a whole number, got {text!r}") from None
+    if not 0 <= value <= 65535:
+        raise argparse.ArgumentTypeError(f"--port = {value} is out of range; allowed [0, 65535] (0: any free port)")
+    return value
+
+
+
+
+def _add_table_arguments(parser: argparse.ArgumentParser, table: str) -> None:
+    """One ``--name`` option per parameter of a schema table (default None: keep the design's value)."""
+    from enum import Enum
+
+    for spec in table_specs(table):
+        name = spec.key.rpartition(".")[2]
+        unit = f" ({spec.unit})" if spec.unit else ""
+        if isinstance(spec.kind, type) and issubclass(spec.kind, Enum):
+            parser.add_argument(f"--{name.replace('_', '-')}", dest=name, choices=[item.value for item in spec.choices],
+                                help=f"{spec.doc} (default {spec.default.value})")
+        else:
+            parser.add_argument(f"--{name.replace('_', '-')}", dest=name, type=spec.kind, metavar="X",
+                                help=f"{spec.doc}{unit}; {spec.bounds} (default {spec.default:g})")
+
+
+def _add_mesh_parser(commands: Any) -> None:
+    from torus_cad.mesh.settings import MeshFormat
+
+    mesh = _design_command(
+        commands, "mesh", help="closed triangle mesh straight from the spec's math (STL, OBJ groups, PLY, VTK)",
+        description="Mesh the propeller of CONFIG (or the default) from the spec's math: each blade's structured "
+        "grid at exactly --sections x --points (points equally spaced in arc length, spec §5), the hub as a "
+        "§6.2 grid with its bore, D-flat, set-screw hole and chamfers, united into one closed 2-manifold without "
+        "intersecting triangles (manifold3d, meshlib). Writes "
+        "<name>_mesh.<format> files and <name>_mesh.json, a quality report. The options override the design's "
+        "[mesh] table. A mesh whose estimated memory is over the limit, a resolution too coarse for the blade "
+        "and a root fillet are refused before anything is built.")
+    mesh.add_argument("--sections", type=int, metavar="N", help="sections along each blade (mesh.sections, default 100)")
+    mesh.add_argument("--points", type=int, metavar="M",
+                      help="points around each section, equal arc length (mesh.points, default 400)")
+    mesh.add_argument("--spacing", choices=["arc_length", "parameter"],
+                      help="sections evenly in the centerline's arc length or in its parameter s "
+                           "(mesh.spacing, default arc_length)")
+    mesh.add_argument("--format", dest="formats", action="append", metavar="FORMAT[,FORMAT]",
+                      help="files to write instead of the design's, repeatable or comma-separated: "
+                           + ", ".join(item.value for item in MeshFormat) + " (default stl,obj)")
+    mesh.add_argument("--no-compare", action="store_true",
+                      help="skip the B-rep comparison in the report (volume, OpenCascade's tessellation)")
+    _add_out_and_quiet(mesh, "mesh_out", command_mesh)
+
+
+def _add_cfd_parser(commands: Any) -> None:
+    from torus_cad.tolerances import CFD_TETRAHEDRA_LIMIT
+
+    cfd = _design_command(
+        commands, "cfd", help="fluid domain and tetrahedral volume mesh for a rotating-propeller simulation (gmsh)",
+        description="Mesh the fluid around the propeller of CONFIG (or the default) with gmsh: an outer "
+        "cylinder, a rotating-zone cylinder around the propeller, conformal at their interface, tetrahedra "
+        "refined near the blades. Writes <name>_cfd.msh (v4.1), <name>_cfd_v2.msh (v2.2 ASCII, for "
+        "OpenFOAM's gmshToFoam), <name>_cfd.step, README.txt and <name>_cfd.json as one output set (see 'torus-cad "
+        "verify'). The options override the design's [cfd] table; D is the tip diameter. A mesh estimated above "
+        f"{CFD_TETRAHEDRA_LIMIT:,} tetrahedra is refused before any work. Needs the cfd extra: "
+        "pip install 'torus_cad[cfd]'.")
+    cfd.table = "cfd"  # its options, when the subcommand is used (_Parser.table)
+    cfd.add_argument("--threads", type=int, default=0, metavar="N", help="gmsh threads (default 0: one per CPU)")
+    _add_out_and_quiet(cfd, "cfd_out", command_cfd)
+
+
+def _add_simulate_parser(commands: Any) -> None:
+    simulate = _design_command(
+        commands, "simulate", help="run the propeller in OpenFOAM: thrust, torque, power, CT, CP (simulate extra)",
+        description="Mesh the fluid around the propeller of CONFIG (or the default) at --level, write a complete "
+        "OpenFOAM case (<name>_case/: steady MRF, k-omega SST, an Allrun that repeats the run) and run it with "
+        "simpleFoam through foamlib. Writes <name>_performance.json (thrust, torque, power, J, CT, CP, efficiency "
+        "or figure of merit, convergence) and <name>_performance.png (force and residual histories). Needs "
+        "OpenFOAM (v1912) and the simulate extra: pip install 'torus_cad[simulate]'.")
+    simulate.add_argument("--rpm", type=float, required=True, help="revolutions per minute, >= 0, in the design's "
+                          "own sense of rotation (a 'cw' design clockwise seen from +z)")
+    simulate.add_argument("--airspeed", type=float, default=0.0, metavar="M_S",
+                          help="speed of the air arriving at the inlet, m/s (default 0: still air)")
+    simulate.add_argument("--level", choices=["coarse", "medium", "fine"], default="coarse",
+                          help="mesh level (default coarse: about 53k cells for the default design)")
+    simulate.add_argument("--iterations", type=int, metavar="N", help="SIMPLE iterations (default: the level's, "
+                          "300 / 400 / 500)")
+    simulate.add_argument("--processes", type=int, metavar="N", default=None,
+                          help="MPI processes for the solver (default: one per CPU)")
+    simulate.add_argument("--time-limit", type=float, default=3600.0, metavar="SECONDS",
+                          help="time budget of the run; refused before the solver starts if its estimate is over, "
+                               "stopped when it runs over (default 3600)")
+    simulate.add_argument("--case-only", action="store_true", help="write the case without running it")
+    simulate.add_argument("--mesh-from", metavar="CASE", help="reuse the mesh of an earlier case of this design and "
+                          "level (OUT/<name>_case) instead of meshing again: another rpm or airspeed")
+    simulate.add_argument("--convergence", action="store_true",
+                          help="run all three levels into OUT/<level>/ and write <name>_convergence.json: "
+                               "Richardson-extrapolated thrust and torque and the observed order")
+    _add_out_and_quiet(simulate, "simulate_out", command_simulate)
+
+
+def _add_out_and_quiet(parser: argparse.ArgumentParser, default_out: str,
+                       handler: Callable[[argparse.Namespace], int]) -> None:
+    """The output folder, --quiet and the handler, as every writing subcommand has them."""
+    parser.add_argument("--out", default=default_out, help=f"output folder (default: {default_out})")
+    parser.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
+    parser.set_defaults(handler=handler)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser with every subcommand."""
+    parser = _Parser(prog="torus-cad", description=DESCRIPTION, epilog=EPILOG,
+                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=_Parser)
+
+    build = _design_command(commands, "build", help="build a propeller: STEP + STL + JSON report",
+                            description="Build the propeller of CONFIG (or the default) and write "
+                            "<name>.step, <name>.stl and <name>.json into --out.", epilog=EPILOG,
+                            formatter_class=argparse.RawDescriptionHelpFormatter)
+    build.add_argument("--out", default="step_out", help="output folder (default: step_out)")
+    build.add_argument("--density", type=_positive_density, default=1.24,
+                       help="material density for the mass, g/cm^3 (default 1.24, PLA)")
+    build.add_argument("--no-stl", action="store_true", help="write STEP and JSON only")
+    build.add_argument("--format", dest="formats", action="append", metavar="FORMAT[,FORMAT]",
+                       help="files to write instead of the design's export.formats, repeatable or comma-separated: "
+                            "step, stl, 3mf (default step,stl)")
+    build.add_argument("--require-printable", action="store_true",
+                       help="exit 2, writing nothing, when the blade is thinner than manufacturing.min_wall "
+                            "(thinnest section or trailing edge; see the JSON's printability)")
+    build.add_argument("-v", "--verbose", action="store_true", help="print mass properties and stage times")
+    build.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
+    build.add_argument("--preview", action="store_true", help="also render <name>.png (see 'torus-cad preview')")
+    build.add_argument("--preview-size", default="1200x600", metavar="WxH",
+                       help="size of the --preview picture in pixels (default 1200x600)")
+    build.set_defaults(handler=command_build)
+
+    preview = _design_command(
+        commands, "preview", help="render a PNG picture: a view from above and a view along the axis",
+        description="Build the propeller of CONFIG (or the default) and render a shaded picture of it off-screen: "
+        "a view from above that shows every blade and a view along the spin axis, each blade in its own colour.")
+    preview.add_argument("--out", metavar="FILE.png", help="picture to write (default: step_out/<name>.png)")
+    preview.add_argument("--size", default="1200x600", metavar="WxH",
+                         help="picture size in pixels, each side 64..8000 (default 1200x600)")
+    preview.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
+    preview.set_defaults(handler=command_preview)
+
+    verify = commands.add_parser("verify", help="check that output sets are complete: every file of one build",
+                                 description="Check the output sets in FOLDER (or only NAME): each <name>.json "
+                                 "report lists the files of its build with their SHA-256; every one must be there "
+                                 "and unchanged. Exit 0 if all are complete, 1 naming the first missing or mixed "
+                                 "file.")
+    verify.add_argument("folder", metavar="FOLDER", help="output folder, e.g. step_out")
+    verify.add_argument("name", nargs="?", metavar="NAME", help="check only the set <NAME>.json (default: every set)")
+    verify.add_argument("-q", "--quiet", action="store_true", help="print nothing when the sets are complete")
+    verify.set_defaults(handler=command_verify)
+
+    defaults = _design_command(commands, "defaults", help="print the default design as commented TOML",
+                               description="Print the default design as a commented TOML file to start from; "
+                               "with --resolved, a design's spec parameters after its airfoil.naca, diameter "
+                               "and pitch are applied.")
+    defaults.add_argument("--resolved", action="store_true",
+                          help="print the spec parameters the design file (and --set) resolve to")
+    defaults.set_defaults(handler=command_defaults)
+
+    sweep = commands.add_parser("sweep", help="build many variants of a design in parallel (local or Dask)",
+                                description="Build every design of a sweep file (a base design plus the "
+                                "parameters to vary: lists, grid ranges, or random / Latin-hypercube bounds) "
+                                "into OUT/designs/<id>/ and tabulate them in OUT/results.csv. Rerunning "
+                                "resumes: designs already done are skipped. Exit codes: 0 every design valid "
+                                "or refused; 1 a design failed, errored, crashed or timed out; 2 a bad sweep "
+                                "file (or more than 1,000,000 designs); 130 / 143 interrupted by Ctrl-C / SIGTERM "
+                                "(the table of what finished is written).")
+    sweep.add_argument("sweep", metavar="SWEEP.toml", help="sweep file (see examples/sweep_example.toml)")
+    sweep.add_argument("--out", help="output folder (default: sweep_out/<sweep file name>)")
+    sweep.add_argument("--workers", type=int, metavar="N",
+                       help="local worker processes (default: one per available core; more are capped at the "
+                            "cores, with one line, unless --oversubscribe)")
+    sweep.add_argument("--oversubscribe", action="store_true",
+                       help="start --workers processes even when they are more than the available cores")
+    sweep.add_argument("--scheduler", metavar="ADDRESS",
+                       help="run on a Dask distributed cluster, e.g. tcp://host:8786 ('local': a LocalCluster "
+                            "of --workers processes); OUT must be on a file system the workers share")
+    sweep.add_argument("--density", type=_positive_density, default=None,
+                       help="material density for the mass, g/cm^3 (default: the sweep file's, else 1.24)")
+    sweep.add_argument("--no-stl", action="store_true", help="write STEP and JSON only")
+    sweep.add_argument("--time-limit", type=float, metavar="SECONDS",
+                       help="stop a design that runs longer and record it as 'timeout' (default: the sweep "
+                            "file's time_limit_s, else 300; local pool only)")
+    sweep.add_argument("--rebuild", action="store_true", help="build every design again, even those already done")
+    sweep.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary")
+    sweep.set_defaults(handler=command_sweep)
+
+    optimize = commands.add_parser(
+        "optimize", help="search the design space for the best designs (optuna; local pool or Dask)",
+        description="Run the study of STUDY.toml: optuna asks for designs within the [vary] ranges, each is built "
+        "(and simulated for performance.* metrics) into OUT/trials/<number>/, its report's numbers answer the "
+        "objectives and constraints. Writes OUT/results.csv (and .parquet), OUT/<name>_history.png and the best "
+        "designs as TOML with their STEP/STL/JSON in OUT/best/. The study lives in OUT/<name>.db (SQLite) or a "
+        "PostgreSQL server (--storage) shared by processes on many machines; rerunning continues it (--trials is "
+        "the total). Exit codes: 0 done; 1 storage or workers unusable; 2 a bad study file or option; "
+        "130 / 143 interrupted (rerun to continue).")
+    optimize.add_argument("study", metavar="STUDY.toml", help="study file (see examples/optimize_light.toml)")
+    optimize.add_argument("--out", help="output folder (default: optimize_out/<study file name>)")
+    optimize.add_argument("--trials", type=int, metavar="N", help="trials in all (default: the file's study.trials)")
+    optimize.add_argument("--workers", type=int, metavar="K",
+                          help="local worker processes (default and most: the CPUs available)")
+    optimize.add_argument("--scheduler", metavar="ADDRESS",
+                          help="run the trials on a Dask cluster, e.g. tcp://host:8786 ('local': a LocalCluster of "
+                               "--workers processes); OUT must be on a file system the workers share")
+    optimize.add_argument("--storage", metavar="URL",
+                          help="the study's storage: sqlite:///path.db or postgresql://user@host/db (default: the "
+                               "file's study.storage, else OUT/<name>.db)")
+    optimize.add_argument("-q", "--quiet", action="store_true", help="no summary")
+    optimize.set_defaults(handler=command_optimize)
+
+    studio = _design_command(commands, "studio", help="design in the browser: parameters, live 3D view, downloads",
+                             description="Serve a local web page to design a propeller: a parameters panel, a "
+                             "live 3D view (a preview at once, the exact solid when it is built), readouts, and "
+                             "STEP / STL / TOML downloads. Starts from CONFIG (or the default design).")
+    studio.add_argument("--port", type=_port, default=8080, help="port to serve on (default 8080; 0: any free port)")
+    studio.add_argument("--host", default="127.0.0.1",
+                        help="address to listen on (default 127.0.0.1: only this machine can connect; "
+                             "0.0.0.0 serves every network, without a password)")
+    studio.add_argument("--files", metavar="FOLDER",
+                        help="a folder whose files (e.g. airfoil coordinate files) designs uploaded in the page may "
+                             "name; otherwise they may name only the files uploaded with them")
+    studio.set_defaults(handler=command_studio)
+    _add_mesh_parser(commands)
+    _add_cfd_parser(commands)
+    _add_simulate_parser(commands)
+    return parser

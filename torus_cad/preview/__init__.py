@@ -1,0 +1,1 @@
+"""The preview picture (``picture``: VTK, off-screen), of ``build --preview`` and ``torus-cad preview``."""
