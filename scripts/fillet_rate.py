@@ -26,6 +26,7 @@ from pathlib import Path
 from OCP.ChFi3d import ChFi3d_Polynomial, ChFi3d_QuasiAngular, ChFi3d_Rational
 
 import torus_cad.kernel.fillet as fillet
+import torus_cad.kernel.fillet_edges as fillet_edges
 from torus_cad.errors import GeometryError, KernelError, ParameterError
 from torus_cad.kernel.checks import is_valid_closed_solid
 from torus_cad.parameters import PropellerParameters
@@ -49,7 +50,7 @@ def main() -> int:
     parser.add_argument("--out", type=Path, default=Path("fillet_rate_out"))
     args = parser.parse_args()
     fillet._FALLBACK_FRACTIONS = ()  # measure the requested radius only; no search for one that works
-    fillet.FILLET_SHAPE = FILLET_SHAPES[args.fillet_shape]  # the fillet's forked child inherits it
+    fillet_edges.FILLET_SHAPE = FILLET_SHAPES[args.fillet_shape]  # the fillet's forked child inherits it
     rows = []
     for seed in args.seeds or range(args.seed, args.seed + args.count):
         design = random_design_dict(seed)

@@ -38,8 +38,9 @@ from OCP.TopAbs import TopAbs_IN
 
 from torus_cad.errors import GeometryError, KernelError, ParameterError
 from torus_cad.geometry.surface import surface_points
-from torus_cad.kernel.fillet import BLADE_SURFACES, concave_bend_radius_mm
+from torus_cad.kernel.fillet_tight_bends import concave_bend_radius_mm
 from torus_cad.kernel.fuse import fuse_pattern
+from torus_cad.kernel.topology import BLADE_SURFACES
 from torus_cad.parameters import PropellerParameters
 from torus_cad.propeller import build_propeller
 

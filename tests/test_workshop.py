@@ -213,7 +213,7 @@ def test_root_fillet_failure_exits_1_naming_the_fillet_and_writes_nothing(tmp_pa
 
 
 #: A fuzz design (seed 14) whose blade root comes within 0.34 mm of the hub's end face: a 0.5 mm
-#: fillet there has to run out past the hub's end (torus_cad.kernel.fillet.fillet_pattern).
+#: fillet there has to run out past the hub's end (torus_cad.kernel.fillet_pattern.fillet_pattern).
 NEAR_THE_END = {
     "blades": 3, "phase_deg": 50.874293083739275, "hub": {"radius": 13.61708909652224, "length": 34.609812248156054},
     "airfoil": {"max_camber": 0.07241977514046337, "camber_position": 0.6730515061120323,
@@ -312,7 +312,7 @@ def test_repaired_root_fillet_is_one_valid_solid_with_a_fillets_volume(fillet_st
 
 #: A fuzz design (seed 51) whose blade sections are about 1.2 x 0.55 mm where they meet the hub: the
 #: section's own concave stretch there (the analytic surface's, not the loft fit's) bends with a
-#: radius of about 0.19 mm, so a 0.5 mm ball cannot roll along it (torus_cad.kernel.fillet.reduced_edge_radii).
+#: radius of about 0.19 mm, so a 0.5 mm ball cannot roll along it (torus_cad.kernel.fillet_tight_bends.reduced_edge_radii).
 TIGHT_BEND = {
     "blades": 3, "phase_deg": 103.0335194469152, "hub": {"radius": 6.548816038721474, "length": 12.387236822421597},
     "airfoil": {"max_camber": 0.07654401786205449, "camber_position": 0.6861265172037483,

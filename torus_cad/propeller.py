@@ -22,6 +22,7 @@ import cadquery as cq
 import numpy as np
 from numpy.typing import NDArray
 
+from torus_cad.colors import HUB_COLOR, blade_color
 from torus_cad.errors import KernelError
 from torus_cad.geometry.extensions.feasibility import check_feasible
 from torus_cad.geometry.extensions.handedness import Handedness, spin_to_push_air_down
@@ -35,7 +36,8 @@ from torus_cad.kernel.checks import (
     precise_volume,
     single_valid_solid,
 )
-from torus_cad.kernel.fillet import RootFillet, fillet_pattern
+from torus_cad.kernel.fillet import RootFillet
+from torus_cad.kernel.fillet_pattern import fillet_pattern
 from torus_cad.kernel.fuse import Fused, FuseRoute, fuse_all, fuse_pattern, pattern_blades
 from torus_cad.kernel.hub import hub_solid, run_out_hub
 from torus_cad.kernel.loft import loft_solid
@@ -46,7 +48,6 @@ from torus_cad.outputs.output_set import write_output_set
 from torus_cad.parameters import PropellerParameters, resolve_parameters
 from torus_cad.parameters.design import TightBends
 from torus_cad.parameters.design_targets import DesignTargets, resolve_design_targets
-from torus_cad.colors import HUB_COLOR, blade_color
 from torus_cad.runtime.stages import Stage, StageTimer
 from torus_cad.tolerances import ROUND_EDGE_FILLET_PIECES, VOLUME_CHECK_RELATIVE_PRECISION
 

@@ -127,8 +127,8 @@ ROUND_EDGE_FILLET_PIECES = 5
 FILLET_TIME_LIMIT_S = 60.0
 
 #: Seconds each of the root fillet's further tries (after the first, which has
-#: FILLET_TIME_LIMIT_S) may take in its child: the tries that save a design take under a second
-#: (fuzz seeds 0-129), the ones that fail either fail as fast or hang until their limit.
+#: FILLET_TIME_LIMIT_S) may take in its child: the tries that save a design take under a second,
+#: the ones that fail either fail as fast or hang until their limit (``scripts/fillet_rate.py``).
 FILLET_RETRY_TIME_LIMIT_S = 15.0
 
 #: Seconds the root fillet's further tries together may take (counted from the end of the first);

@@ -30,12 +30,12 @@ import cadquery as cq
 import numpy as np
 from numpy.typing import NDArray
 
+from torus_cad.colors import HUB_COLOR, blade_color
 from torus_cad.errors import ParameterError, TorusCadError
 from torus_cad.kernel.checks import distances_to_shape, mass_properties
 from torus_cad.kernel.files import atomic_path
 from torus_cad.kernel.fuse import HUB_PART
 from torus_cad.parameters import PropellerParameters
-from torus_cad.colors import HUB_COLOR, blade_color
 from torus_cad.runtime.stages import Stage
 
 if TYPE_CHECKING:  # pragma: no cover

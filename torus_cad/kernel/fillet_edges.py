@@ -1,0 +1,127 @@
+"""One root fillet on given junction edges: BRepFilletAPI_MakeFillet, the repair of a flawed result,
+and the forked child (torus_cad.kernel.isolation) it runs in, since OpenCascade's fillet can crash
+the process or hang on some inputs; the result comes back as a BRep string.
+
+OpenCascade sometimes builds the fillet, reports success and leaves a solid BRepCheck rejects;
+ShapeFix_Shape mends some. A mended solid must pass the same checks (one valid closed solid, no
+less volume) and add no more volume than a fillet's cross-section along the junction
+(REPAIRED_FILLET_MAX_AREA_RADII2 x r^2 per mm).
+"""
+
+
+from __future__ import annotations
+
+import io
+import time
+from collections.abc import Sequence
+
+import cadquery as cq
+from OCP.BRep import BRep_Builder
+from OCP.BRepFilletAPI import BRepFilletAPI_MakeFillet
+from OCP.BRepTools import BRepTools
+from OCP.ChFi3d import ChFi3d_FilletShape, ChFi3d_Rational
+from OCP.ShapeFix import ShapeFix_Shape
+from OCP.TopoDS import TopoDS_Edge, TopoDS_Shape
+
+from torus_cad.errors import KernelError
+from torus_cad.kernel.checks import precise_volume, single_valid_solid
+from torus_cad.kernel.isolation import IsolatedCrash, IsolatedTimeout, run_isolated
+from torus_cad.tolerances import (
+    FILLET_TIME_LIMIT_S,
+    REPAIRED_FILLET_MAX_AREA_RADII2,
+    VOLUME_CHECK_RELATIVE_PRECISION,
+)
+
+#: The fillet's cross-section law (BRepFilletAPI_MakeFillet's FShape): OpenCascade's default, the
+#: rational one, a true circular arc of the radius; the quasi-angular and polynomial laws save no
+#: design the tries lose (``scripts/fillet_rate.py --fillet-shape`` compares them).
+FILLET_SHAPE: ChFi3d_FilletShape = ChFi3d_Rational
+
+
+#: BRepFilletAPI_MakeFillet.SetParams arguments: Tang, Tesp, T2d, TApp3d, TolApp2d, Fleche.
+FilletParams = tuple[float, float, float, float, float, float]
+
+
+def fillet_edges(solid: cq.Solid, edges: list[TopoDS_Edge], radius_mm: float,
+                 params: FilletParams | None = None, edge_radii: Sequence[float] | None = None) -> cq.Solid | None:
+    """The fillet in this process: the checked solid, or None when OpenCascade fails or the result is unsound.
+
+    ``params``: BRepFilletAPI_MakeFillet.SetParams values (default: OpenCascade's). ``edge_radii``:
+    a radius per edge (mm) instead of ``radius_mm`` on all; OpenCascade blends the radius between
+    edges of one contour that differ."""
+    fillet = BRepFilletAPI_MakeFillet(solid.wrapped, FILLET_SHAPE)
+    if params is not None:
+        fillet.SetParams(*params)
+    for edge in edges:
+        fillet.Add(radius_mm, edge)
+    for edge, radius in zip(edges, edge_radii or ()):
+        if radius < radius_mm:
+            contour = fillet.Contour(edge)
+            index = next(i for i in range(1, fillet.NbEdges(contour) + 1) if fillet.Edge(contour, i).IsSame(edge))
+            fillet.SetRadius(radius, contour, index)
+    try:
+        fillet.Build()
+    except Exception:  # OCCT raises Standard_Failure subclasses through OCP
+        return None
+    if not fillet.IsDone():
+        return None
+    repaired = False
+    try:
+        result = single_valid_solid(cq.Shape.cast(fillet.Shape()), "the root fillet")
+    except KernelError:  # OpenCascade sometimes builds the fillet but leaves flaws ShapeFix mends
+        fix = ShapeFix_Shape(fillet.Shape())
+        fix.Perform()
+        try:
+            result = single_valid_solid(cq.Shape.cast(fix.Shape()), "the repaired root fillet")
+        except KernelError:
+            return None
+        repaired = True
+    added_mm3 = (precise_volume(result, VOLUME_CHECK_RELATIVE_PRECISION)
+                 - precise_volume(solid, VOLUME_CHECK_RELATIVE_PRECISION))
+    # A concave fillet only adds material: a smaller volume means a wrong result. A repaired one
+    # must also add no more than a fillet's cross-section along the junction.
+    if added_mm3 < 0.0:
+        return None
+    if repaired and added_mm3 > REPAIRED_FILLET_MAX_AREA_RADII2 * radius_mm ** 2 * sum(cq.Edge(edge).Length()
+                                                                                         for edge in edges):
+        return None
+    return result
+
+
+def fillet_in_child(solid: cq.Solid, edges: list[TopoDS_Edge], radius_mm: float,
+                     params: FilletParams | None = None, deadline: float | None = None,
+                     edge_radii: Sequence[float] | None = None) -> cq.Solid | None:
+    """:func:`fillet_edges` in a forked child (torus_cad.kernel.isolation): a crash or a hang there is
+    a failed fillet, not a dead process.
+
+    The child gets FILLET_TIME_LIMIT_S, or what is left until ``deadline`` (time.monotonic()) if less."""
+    limit_s = FILLET_TIME_LIMIT_S if deadline is None else min(FILLET_TIME_LIMIT_S, deadline - time.monotonic())
+    if limit_s <= 0.0:
+        return None
+
+    def fillet_as_brep() -> bytes | None:
+        try:
+            result = fillet_edges(solid, edges, radius_mm, params, edge_radii)
+        except Exception:  # OpenCascade's failures (Standard_Failure and others): a failed fillet
+            return None
+        return None if result is None else _to_brep(result.wrapped)
+
+    try:
+        data = run_isolated(fillet_as_brep, timeout_s=limit_s, what="the root fillet")
+    except (IsolatedTimeout, IsolatedCrash):
+        return None
+    if not data:
+        return None
+    return single_valid_solid(cq.Shape.cast(_from_brep(data)), "the root fillet")
+
+
+def _to_brep(shape: TopoDS_Shape) -> bytes:
+    stream = io.BytesIO()
+    BRepTools.Write_s(shape, stream)
+    return stream.getvalue()
+
+
+def _from_brep(data: bytes) -> TopoDS_Shape:
+    shape = TopoDS_Shape()
+    BRepTools.Read_s(shape, io.BytesIO(data), BRep_Builder())
+    return shape

@@ -1,0 +1,281 @@
+"""The pattern trick for the root fillet: blade 0 alone is joined to the hub and filleted, once; its
+blade and fillet faces are rotated to every blade angle, the fillet's contact curves on the hub's
+cylinder shifted in u, and the shell is assembled from known faces. One blade's fillet then costs
+the same for any blade count. If the assembly fails its checks, the whole propeller is filleted.
+
+Where a blade root comes within about a radius of the hub's end face, so that the fillet would
+roll over the hub's edge, the tries are made on a hub longer at both ends (the run-out hub) and
+the result is cut back to the hub's length, sparing a blade that itself passes the hub's end.
+"""
+
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from collections.abc import Callable, Iterator, Sequence
+
+import cadquery as cq
+from OCP.BRep import BRep_Builder, BRep_Tool
+from OCP.BRepAdaptor import BRepAdaptor_Surface
+from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
+from OCP.BRepExtrema import BRepExtrema_DistShapeShape
+from OCP.BRepTools import BRepTools
+from OCP.GeomAbs import GeomAbs_Cylinder
+from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt, gp_Trsf, gp_Vec2d
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_WIRE
+from OCP.TopExp import TopExp
+from OCP.TopLoc import TopLoc_Location
+from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Shape, TopoDS_Shell, TopoDS_Solid, TopoDS_Wire
+from OCP.TopTools import TopTools_IndexedMapOfShape
+
+from torus_cad.errors import KernelError
+from torus_cad.kernel.checks import single_valid_solid
+from torus_cad.kernel.fillet import (
+    FILLET_TRIES,
+    SIDE_FACE_PIECES,
+    RootFillet,
+    fillet_blade_roots,
+    fillet_failure,
+    junction_edges,
+    prepare_blade_for_fillet,
+)
+from torus_cad.kernel.fillet_edges import FilletParams
+from torus_cad.kernel.fillet_tight_bends import reduced_edge_radii
+from torus_cad.kernel.fuse import fuse_pattern, pattern_blades
+from torus_cad.kernel.topology import BLADE_SURFACES, cut, explore
+from torus_cad.tolerances import (
+    FILLET_RETRY_TIME_LIMIT_S,
+    FILLET_TRIES_TIME_LIMIT_S,
+    REDUCED_FILLET_FRACTION,
+)
+
+#: Builds the run-out hub for a given extension (mm): a plain hub that much longer at each end,
+#: and the tools that cut it back to the real hub afterwards (see :func:`fillet_pattern`).
+RunOutHub = Callable[[float], tuple[cq.Solid, list[TopoDS_Shape]]]
+
+
+#: The run-out hub's extension at each end, in fillet radii.
+_RUN_OUT_RADII = 3.0
+
+
+def fillet_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], radius_mm: float,
+                   run_out: RunOutHub | None = None, reduce_where_tight: bool = False) -> RootFillet:
+    """The filleted propeller from one filleted blade: blade 0 joined to ``hub``, filleted, patterned.
+
+    ``blade`` is built at ``angles_deg[0]``; its side face is split as
+    :func:`prepare_blade_for_fillet` does, and the fillet made as each of :data:`FILLET_TRIES` says
+    until it works. Where a blade root comes within about a radius of the hub's end face, the
+    fillet would have to roll over the hub's edge and fails. With ``run_out``, the tries are then
+    made on a hub longer at both ends (the fillet runs out past the end), and the result is cut
+    back to the hub's length (the fillet ends in the end face, as it would when a longer filleted
+    hub is faced) with the bore and set-screw hole cut at the same time. Where the blade itself
+    passes the hub's end plane, the cut-back's end slabs have the blades cut out of them, so the
+    blades' parts past the end stay as they are (the fillet still ends flush with the end face).
+    The first try stops at FILLET_TIME_LIMIT_S; each further one at FILLET_RETRY_TIME_LIMIT_S, and all
+    of them together at FILLET_TRIES_TIME_LIMIT_S.
+
+    When every try fails and a blade face bends too tightly for the ball along some junction edge
+    (:func:`reduced_edge_radii`): with ``reduce_where_tight``, the same tries are made once more
+    with those edges' radii reduced, and the result says so (:attr:`RootFillet.constant_radius` is
+    False); without, the error says that the blade bends too tightly there for the ball.
+
+    Raises KernelError as :func:`fillet_blade_roots` does when the fillet fails; returns a
+    checked single valid solid.
+    """
+    split = _LazySplits(blade)
+    try:  # the common case; the child stops at FILLET_TIME_LIMIT_S, as ever
+        return _fillet_and_pattern(hub, split[0], angles_deg, radius_mm, suggest=False)
+    except KernelError:
+        pass
+    deadline = time.monotonic() + FILLET_TRIES_TIME_LIMIT_S  # the further tries' shared time
+    attempt = _RunOut(blade, angles_deg, radius_mm, run_out)
+    filleted = _first_that_works(hub, split, angles_deg, radius_mm, FILLET_TRIES[1:], deadline, reduce=False)
+    if filleted is None:
+        filleted = attempt.tries(split, deadline, reduce=False)
+    if filleted is not None:
+        return filleted
+    joined = single_valid_solid(fuse_pattern(hub, split[0], angles_deg[:1]).shape, "joining blade 0 to the hub")
+    smallest_mm = min(reduced_edge_radii(joined, junction_edges(joined), radius_mm))
+    if smallest_mm < radius_mm and not reduce_where_tight:
+        raise fillet_failure(joined, radius_mm, tight_bend_mm=smallest_mm / REDUCED_FILLET_FRACTION)
+    if smallest_mm < radius_mm:
+        deadline = time.monotonic() + FILLET_TRIES_TIME_LIMIT_S  # the reduced tries get the same time again
+        filleted = _first_that_works(hub, split, angles_deg, radius_mm, FILLET_TRIES, deadline, reduce=True)
+        if filleted is None:
+            filleted = attempt.tries(split, deadline, reduce=True)
+        if filleted is not None:
+            return filleted
+    # Every try failed: the error names a smaller radius that works on blade 0, if one does.
+    raise fillet_failure(joined, radius_mm)
+
+
+def _first_that_works(hub: cq.Solid, split: _LazySplits, angles_deg: Sequence[float], radius_mm: float,
+                      tries: Sequence[tuple[int, FilletParams | None]], deadline: float, reduce: bool,
+                      finish: Callable[[RootFillet], RootFillet] = lambda made: made) -> RootFillet | None:
+    """The first of ``tries`` (as :data:`FILLET_TRIES`) that works on ``hub``, passed through ``finish``
+    (a KernelError there counts as a failed try); None if none does. Each try stops at
+    FILLET_RETRY_TIME_LIMIT_S (one that saves a design does so in under a second), all by ``deadline``."""
+    for index, params in tries:
+        try:
+            return finish(_fillet_and_pattern(hub, split[index], angles_deg, radius_mm, suggest=False, params=params,
+                                              deadline=min(deadline, time.monotonic() + FILLET_RETRY_TIME_LIMIT_S),
+                                              reduce=reduce))
+        except KernelError:
+            pass
+    return None
+
+
+class _RunOut:
+    """The tries on the run-out hub (see :func:`fillet_pattern`), made when first needed."""
+
+    def __init__(self, blade: cq.Solid, angles_deg: Sequence[float], radius_mm: float, run_out: RunOutHub | None) -> None:
+        self.blade, self.angles_deg, self.radius_mm, self.run_out = blade, angles_deg, radius_mm, run_out
+        self.made: tuple[cq.Solid, list[TopoDS_Shape]] | None = None
+
+    def _hub_and_tools(self) -> tuple[cq.Solid, list[TopoDS_Shape]]:
+        if self.made is None:
+            assert self.run_out is not None
+            extended, tools = self.run_out(_RUN_OUT_RADII * self.radius_mm)
+            if _touches(self.blade, tools[:2]):  # the blade itself reaches past a hub end: the cut-back keeps it there
+                blades = [copy.wrapped for copy in pattern_blades(self.blade, self.angles_deg)]
+                tools = [cut(slab, blades, "keep the blades out of the run-out's cut-back") for slab in tools[:2]] + tools[2:]
+            self.made = extended, tools
+        return self.made
+
+    def tries(self, split: _LazySplits, deadline: float, reduce: bool) -> RootFillet | None:
+        """The first of :data:`FILLET_TRIES` that works on the run-out hub, cut back; None if none does by ``deadline``."""
+        if self.run_out is None or time.monotonic() >= deadline:
+            return None
+        extended, tools = self._hub_and_tools()
+
+        def cut_back(made: RootFillet) -> RootFillet:
+            solid = single_valid_solid(cq.Shape.cast(cut(made.solid.wrapped, tools,
+                                                         "cut the run-out hub back to the hub's length")),
+                                       "cutting the run-out hub back")
+            return dataclasses.replace(made, solid=solid)
+
+        return _first_that_works(extended, split, self.angles_deg, self.radius_mm, FILLET_TRIES, deadline, reduce, cut_back)
+
+
+class _LazySplits:
+    """``blade`` split into each number of :data:`SIDE_FACE_PIECES`, made when first asked for."""
+
+    def __init__(self, blade: cq.Solid) -> None:
+        self.blade = blade
+        self.made: dict[int, cq.Solid] = {}
+
+    def __getitem__(self, index: int) -> cq.Solid:
+        pieces = SIDE_FACE_PIECES[index]
+        if pieces not in self.made:
+            self.made[pieces] = prepare_blade_for_fillet(self.blade, pieces)
+        return self.made[pieces]
+
+    def __iter__(self) -> Iterator[cq.Solid]:
+        return (self[index] for index in range(len(SIDE_FACE_PIECES)))
+
+
+def _fillet_and_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], radius_mm: float,
+                        suggest: bool = True, params: FilletParams | None = None,
+                        deadline: float | None = None, reduce: bool = False) -> RootFillet:
+    single = fuse_pattern(hub, blade, angles_deg[:1]).shape
+    filleted = fillet_blade_roots(single_valid_solid(single, "joining blade 0 to the hub"), radius_mm, suggest, params,
+                                  deadline, reduce)
+    if len(angles_deg) == 1:
+        return filleted
+    try:
+        solid = single_valid_solid(cq.Shape.cast(_assemble_filleted(filleted.solid.wrapped, angles_deg)),
+                                   "patterning the filleted blade")
+        return dataclasses.replace(filleted, solid=solid)
+    except KernelError:
+        whole = fuse_pattern(hub, blade, angles_deg).shape
+        everywhere = fillet_blade_roots(single_valid_solid(whole, "joining the blades to the hub"), radius_mm, suggest,
+                                        params, deadline, reduce)
+        # every blade's junction is the same: report blade 0's share
+        return dataclasses.replace(everywhere, varying_junction_mm=everywhere.varying_junction_mm / len(angles_deg))
+
+
+def _touches(shape: cq.Solid, tools: Sequence[TopoDS_Shape]) -> bool:
+    """Whether ``shape`` comes within 1e-6 mm of any of ``tools``."""
+    for tool in tools:
+        distance = BRepExtrema_DistShapeShape(shape.wrapped, tool)
+        if not distance.IsDone() or distance.Value() < 1e-6:
+            return True
+    return False
+
+
+def _assemble_filleted(filleted: TopoDS_Shape, angles_deg: Sequence[float]) -> TopoDS_Solid:
+    """The shell of the hub with every blade: blade 0's blade and fillet faces rotated to each angle.
+
+    The hub's lateral face keeps its own surface and outer wire, its holes that no blade made
+    (a set-screw hole), and gets, for each copy, blade 0's fillet-contact wires rotated, their
+    curves on the cylinder shifted in u by the copy's angle (as :mod:`torus_cad.kernel.fuse` does
+    for the bare intersection curves).
+    """
+    faces = [TopoDS.Face_s(face) for face in explore(filleted, TopAbs_FACE)]
+    lateral = _outer_cylinder(faces)
+    blade_faces = [face for face in faces if BRepAdaptor_Surface(face).GetType() in BLADE_SURFACES]
+    blade_edges = TopTools_IndexedMapOfShape()
+    for face in blade_faces:
+        TopExp.MapShapes_s(face, TopAbs_EDGE, blade_edges)
+    outer_wire = BRepTools.OuterWire_s(lateral)
+    inner_wires = [TopoDS.Wire_s(wire) for wire in explore(lateral, TopAbs_WIRE) if not wire.IsSame(outer_wire)]
+    blade_holes = [wire for wire in inner_wires if blade_edges.Contains(explore(wire, TopAbs_EDGE)[0])]
+    lateral_with_holes = BRepBuilderAPI_MakeFace(BRep_Tool.Surface_s(lateral), outer_wire, True)
+    for wire in inner_wires:
+        if not any(wire.IsSame(hole) for hole in blade_holes):
+            lateral_with_holes.Add(wire)
+    builder, shell = BRep_Builder(), TopoDS_Shell()
+    builder.MakeShell(shell)
+    for angle in angles_deg:
+        location = _shift_hole_curves(blade_holes, lateral, math.radians(angle - angles_deg[0]))
+        for wire in blade_holes:
+            lateral_with_holes.Add(TopoDS.Wire_s(wire.Moved(location)))
+        for face in blade_faces:
+            builder.Add(shell, face.Moved(location))
+    if not lateral_with_holes.IsDone():
+        raise KernelError("OpenCascade could not cut the filleted blade roots out of the hub's lateral face")
+    new_lateral = lateral_with_holes.Face()
+    new_lateral.Orientation(lateral.Orientation())
+    builder.Add(shell, new_lateral)
+    for face in faces:
+        if not face.IsSame(lateral) and BRepAdaptor_Surface(face).GetType() not in BLADE_SURFACES:
+            builder.Add(shell, face)
+    shell.Closed(BRep_Tool.IsClosed_s(shell))
+    solid = TopoDS_Solid()
+    builder.MakeSolid(solid)
+    builder.Add(solid, shell)
+    return solid
+
+
+def _shift_hole_curves(holes: Sequence[TopoDS_Wire], lateral: TopoDS_Face, angle_rad: float) -> TopLoc_Location:
+    """The rotation by ``angle_rad`` about +z; the rotated hole edges get their curves on ``lateral`` shifted in u."""
+    rotation = gp_Trsf()
+    rotation.SetRotation(gp_Ax1(gp_Pnt(0.0, 0.0, 0.0), gp_Dir(0.0, 0.0, 1.0)), angle_rad)
+    location = TopLoc_Location(rotation)  # not the empty location even at 0: every copy gets its curves
+    builder = BRep_Builder()
+    for wire in holes:
+        u_min, u_max, _, _ = BRepTools.UVBounds_s(lateral, wire)
+        shift = angle_rad - _FULL_TURN * math.floor((u_min + angle_rad) / _FULL_TURN)
+        if u_max + shift > _FULL_TURN:
+            raise KernelError("a filleted blade root crosses the hub's seam")
+        for edge in explore(wire, TopAbs_EDGE):
+            edge = TopoDS.Edge_s(edge)
+            curve = BRep_Tool.CurveOnSurface_s(edge, lateral, 0.0, 0.0)
+            if curve is None:
+                raise KernelError("a fillet contact edge has no curve on the hub")
+            moved = TopoDS.Edge_s(edge.Moved(location))
+            builder.UpdateEdge(moved, curve.Translated(gp_Vec2d(shift, 0.0)), lateral, BRep_Tool.Tolerance_s(edge))
+    return location
+
+
+def _outer_cylinder(faces: Sequence[TopoDS_Face]) -> TopoDS_Face:
+    cylinders = [(BRepAdaptor_Surface(face).Cylinder().Radius(), index, face) for index, face in enumerate(faces)
+                 if BRepAdaptor_Surface(face).GetType() == GeomAbs_Cylinder]
+    if not cylinders:
+        raise KernelError("the filleted hub has no cylindrical face")
+    return max(cylinders, key=lambda item: item[:2])[2]
+
+
+_FULL_TURN = 2.0 * math.pi
