@@ -99,7 +99,8 @@ def _rss_mb() -> float:
 
 def timed_build_and_write(params, out_dir: Path) -> dict[str, float]:
     """One build plus STEP and STL writes (the JSON report separately); seconds per stage."""
-    from torus_cad.kernel.export import write_step, write_stl
+    from torus_cad.kernel.writers.step import write_step
+    from torus_cad.kernel.writers.stl import write_stl
     from torus_cad.outputs.report import build_report
     from torus_cad.propeller import build_propeller
 

@@ -37,8 +37,8 @@ def _timed(work: Callable[[], Any]) -> tuple[Any, float, float]:
 def _one_run(design: str) -> dict[str, tuple[float, float]]:
     from OCP.BRepAlgoAPI import BRepAlgoAPI_Check
 
-    from torus_cad.kernel.export import write_checked_stl
     from torus_cad.kernel.strict import strict_valid_solid
+    from torus_cad.kernel.writers.stl import write_checked_stl
     from torus_cad.propeller import build_propeller
 
     propeller, wall, cpu = _timed(lambda: build_propeller(None if design == "default" else design))

@@ -42,8 +42,8 @@ def fuzz_one(seed: int, workshop: bool = True) -> FuzzOutcome:
 
     from studies.fuzz import random_design
     from torus_cad.errors import GeometryError, KernelError, ParameterError
-    from torus_cad.kernel.export import write_checked_stl
     from torus_cad.kernel.mesh_check import intersecting_pairs_in_file
+    from torus_cad.kernel.writers.stl import write_checked_stl
     from torus_cad.propeller import build_propeller
 
     start = time.perf_counter()

@@ -92,7 +92,7 @@ def test_cli_gives_files_or_exit_2_never_a_traceback(tmp_path_factory, u):
         assert not out_dir.exists() or not any(out_dir.iterdir())
     else:
         from torus_cad.kernel.checks import is_valid_closed_solid
-        from torus_cad.kernel.export import read_step
+        from torus_cad.kernel.writers.step import read_step
 
         assert is_valid_closed_solid(read_step(out_dir / f"{params.name}.step"))
 
@@ -304,7 +304,8 @@ _WRITER = textwrap.dedent("""
     from pathlib import Path
     from torus_cad.parameters import PropellerParameters
     from torus_cad.propeller import build_propeller
-    from torus_cad.kernel.export import write_step, write_stl
+    from torus_cad.kernel.writers.step import write_step
+    from torus_cad.kernel.writers.stl import write_stl
     kind, out = sys.argv[1], Path(sys.argv[2])
     params = PropellerParameters().with_values({"resolution.points": 40})
     solid = build_propeller(params).solid
@@ -351,7 +352,7 @@ def test_killed_mid_write_leaves_no_partial_file(tmp_path, kind):
         else:
             assert target.read_text(errors="replace").rstrip().endswith("END-ISO-10303-21;")
     # The next export removes the stale temp file and leaves exactly the final file.
-    from torus_cad.kernel.export import atomic_path
+    from torus_cad.kernel.files import atomic_path
 
     with atomic_path(target) as temp:
         temp.write_text("ok")

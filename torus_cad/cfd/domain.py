@@ -424,7 +424,7 @@ def write_cfd_domain(params: PropellerParameters, out_dir: str | Path, threads: 
     from torus_cad import __version__
     from torus_cad.cfd.surface_check import import_meshlib
     from torus_cad.kernel.checks import precise_volume
-    from torus_cad.kernel.export import write_step
+    from torus_cad.kernel.writers.step import write_step
     from torus_cad.outputs.output_set import OutputSet
     from torus_cad.propeller import build_propeller
 

@@ -31,7 +31,7 @@ INTERRUPTED = "interrupted"
 
 def write_results(spec: StudySpec, study: Any, out: Path) -> tuple[dict[str, Path], list[str]]:
     """Write the table, the pictures, the best designs and the summary JSON; the paths and summary lines."""
-    from torus_cad.kernel.export import atomic_path
+    from torus_cad.kernel.files import atomic_path
 
     trials = study.get_trials(deepcopy=False)
     rows, columns = trial_rows(spec, trials)
@@ -141,7 +141,7 @@ def _save_png(figure: Any, path: Path) -> Path:
     """Write a matplotlib figure as a PNG, atomically, and close it."""
     import matplotlib.pyplot as plt
 
-    from torus_cad.kernel.export import atomic_path
+    from torus_cad.kernel.files import atomic_path
 
     figure.tight_layout()
     with atomic_path(path) as temp:
@@ -179,7 +179,7 @@ def _pareto_picture(spec: StudySpec, trials: Sequence[Any], front: Sequence[Any]
 
 def _build_best(spec: StudySpec, best: Sequence[Any], folder: Path) -> tuple[list[str], dict[int, Path]]:
     """Write each best design's TOML and build it (STEP, STL, JSON) beside it, unless that set is current."""
-    from torus_cad.kernel.export import atomic_path
+    from torus_cad.kernel.files import atomic_path
     from torus_cad.parameters import PropellerParameters
 
     if not best:

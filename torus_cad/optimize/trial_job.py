@@ -60,7 +60,7 @@ def run_trial(task: DesignTask) -> DesignResult:
 
 def _write_design_file(task: DesignTask, folder: Path) -> Path:
     """``<id>.toml``: the trial's design, as ``torus-cad build`` reads it."""
-    from torus_cad.kernel.export import atomic_path
+    from torus_cad.kernel.files import atomic_path
     from torus_cad.parameters import PropellerParameters
 
     path = folder / f"{task.design_id}.toml"

@@ -366,8 +366,9 @@ def write_output_set(propeller: BuiltPropeller, out_dir: str | Path, density_g_c
     A mesh (STL, 3MF) over its triangle budget is refused before anything is written.
     """
     from torus_cad import __version__
-    from torus_cad.kernel.export import write_checked_stl, write_step
-    from torus_cad.kernel.export_3mf import write_3mf
+    from torus_cad.kernel.writers.step import write_step
+    from torus_cad.kernel.writers.stl import write_checked_stl
+    from torus_cad.kernel.writers.threemf import write_3mf
     from torus_cad.outputs.report import build_report
     from torus_cad.outputs.sections_table import write_sections_table
     from torus_cad.parameters.design import ExportFormat

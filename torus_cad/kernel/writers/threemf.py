@@ -5,6 +5,9 @@ triangles with outward (counter-clockwise) winding, and ``unit="millimeter"``. T
 OpenCascade's tessellation at the STL deflections, with the faces' shared boundary nodes merged
 into one vertex each, so the object is a closed, manifold mesh a slicer takes as it is.
 One object, the fused solid (not one per part): the part a printer makes is the union.
+
+Hand-written (a zip and a short XML): CadQuery's 3MF writer tessellates the shape itself, not the
+mesh checked free of crossing triangles here, and trimesh's needs lxml and networkx at run time.
 """
 
 from __future__ import annotations
