@@ -39,9 +39,16 @@ def startup_s() -> float:
     return _startup_seconds()
 
 
+def _block_ending_signals() -> None:
+    """In the child before exec: the documented way to start a command that must end cleanly at every
+    moment (torus_cad.runtime.interrupts): a signal during Python's own start waits for the handlers."""
+    signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM, signal.SIGHUP})
+
+
 def _interrupt_build(out: Path, signum: int, delay_s: float) -> subprocess.CompletedProcess:
     process = subprocess.Popen([sys.executable, "-m", "torus_cad", "build", "--out", str(out), "-q", *FAST],
-                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                               preexec_fn=_block_ending_signals)
     time.sleep(delay_s)
     process.send_signal(signum)
     stdout, stderr = process.communicate(timeout=600)

@@ -200,6 +200,8 @@ STRICT_CHECK_TIME_LIMIT_S = 300.0
 #: Longest wait (s) for the B-rep that ``torus-cad mesh`` compares its mesh with (built in a child
 #: beside the mesh): a build, its strict check (STRICT_CHECK_TIME_LIMIT_S) included, and one tessellation.
 MESH_COMPARISON_TIME_LIMIT_S = 900.0
+#: Longest wait (s) for the blade-element table (CSV and PNG), drawn in a child beside the build's files.
+SECTIONS_TABLE_TIME_LIMIT_S = 120.0
 
 #: Axis directions and positions within this of the z axis (unit vector components, mm) count as on it.
 STRICT_AXIS_TOLERANCE = 1e-9

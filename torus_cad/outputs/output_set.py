@@ -366,14 +366,16 @@ def write_output_set(propeller: BuiltPropeller, out_dir: str | Path, density_g_c
     A mesh (STL, 3MF) over its triangle budget is refused before anything is written.
     """
     from torus_cad import __version__
+    from torus_cad.kernel.isolation import IsolatedCall
     from torus_cad.kernel.writers.step import write_step
     from torus_cad.kernel.writers.stl import write_checked_stl
     from torus_cad.kernel.writers.threemf import write_3mf
     from torus_cad.outputs.report import build_report
-    from torus_cad.outputs.sections_table import write_sections_table
+    from torus_cad.outputs.sections_table import sections_table_files, write_files
     from torus_cad.parameters.design import ExportFormat
     from torus_cad.runtime.budgets import check_stl_budget
     from torus_cad.runtime.stages import Stage, StageTimer
+    from torus_cad.tolerances import SECTIONS_TABLE_TIME_LIMIT_S
 
     params = propeller.parameters
     export = params.export
@@ -391,7 +393,11 @@ def write_output_set(propeller: BuiltPropeller, out_dir: str | Path, density_g_c
             return path
         return writer
 
-    with OutputSet(out_dir, params.name) as output:
+    with OutputSet(out_dir, params.name) as output, contextlib.ExitStack() as children:
+        # The blade-element table (matplotlib) is drawn in a child meanwhile, on the second core; the child
+        # returns the files' contents and this process writes them (a signal here then leaves nothing behind).
+        table = children.enter_context(IsolatedCall(sections_table_files, propeller.surface, params,
+                                                    what="the blade-element table")) if sections_table else None
         if ExportFormat.STEP in formats:
             with timer.stage(Stage.STEP_WRITE):
                 output.write("step", lambda path: write_step(propeller.solid, path, params.name, export.step_schema,
@@ -403,9 +409,9 @@ def write_output_set(propeller: BuiltPropeller, out_dir: str | Path, density_g_c
             with timer.stage(Stage.THREE_MF_WRITE):
                 output.write("3mf", checked("3mf", lambda path: write_3mf(propeller.solid, path, params.name,
                                                                           *deflections, version=__version__)))
-        if sections_table:
-            with timer.stage(Stage.SECTIONS_TABLE):
-                output.write_files(lambda folder: write_sections_table(propeller.surface, params, folder))
+        if table is not None:
+            with timer.stage(Stage.SECTIONS_TABLE):  # what is left of it once the meshes are written
+                output.write_files(lambda folder: write_files(table.result(SECTIONS_TABLE_TIME_LIMIT_S), folder))
         for kind, writer in (extra_files or {}).items():
             output.write(kind, writer)
         propeller.stage_seconds.update(timer.seconds)

@@ -57,15 +57,8 @@ def sections_csv_text(elements: BladeElements, trailing_edge_mm: np.ndarray | No
     return buffer.getvalue()
 
 
-def write_sections_csv(elements: BladeElements, path: Path, trailing_edge_mm: np.ndarray | None = None) -> Path:
-    """Write the CSV table to ``path`` (the caller makes the write atomic)."""
-    Path(path).write_text(sections_csv_text(elements, trailing_edge_mm))
-    return Path(path)
-
-
-def write_sections_png(elements: BladeElements, path: Path, title: str = "", size_px: tuple[int, int] = (1500, 500)
-                       ) -> Path:
-    """Chord, beta and thickness against r, three panels side by side (matplotlib, off-screen)."""
+def sections_png(elements: BladeElements, title: str = "", size_px: tuple[int, int] = (1500, 500)) -> bytes:
+    """Chord, beta and thickness against r, three panels side by side, as PNG bytes (matplotlib, off-screen)."""
     from matplotlib.figure import Figure  # no pyplot: no global state, no display
 
     dpi = 100
@@ -90,8 +83,9 @@ def write_sections_png(elements: BladeElements, path: Path, title: str = "", siz
     axes[1].legend(fontsize="small")
     if title:
         figure.suptitle(title)
-    figure.savefig(path, format="png")
-    return Path(path)
+    buffer = io.BytesIO()
+    figure.savefig(buffer, format="png")
+    return buffer.getvalue()
 
 
 def elements_of(surface: BladeSurface, spin: Handedness = Handedness.CW) -> BladeElements:
@@ -117,23 +111,37 @@ def trailing_edge_of(params: Any, s: NDArray[np.float64]) -> NDArray[np.float64]
                                       evaluate_quartic(laws.scale_x_mm, s), evaluate_quartic(laws.scale_y_mm, s))
 
 
-def write_sections_table(surface: BladeSurface, params: Any, out_dir: Path, spin: Handedness = Handedness.CW) -> dict[str, Path]:
-    """Write ``<name>_sections.csv`` and ``<name>_sections.png`` of the built blade ``surface`` into
-    ``out_dir`` (each atomically); their paths by kind (``sections_csv``, ``sections_png``).
+def sections_table_files(surface: BladeSurface, params: Any, spin: Handedness = Handedness.CW
+                         ) -> dict[str, tuple[str, bytes]]:
+    """The blade-element table of the built blade ``surface``: ``{kind: (file name, content)}`` for
+    ``<name>_sections.csv`` (``sections_csv``) and ``<name>_sections.png`` (``sections_png``).
 
     The table reads the surface the solid was lofted through (``resolution.points`` around each
     section): the thickness comes within 0.04 % of a 1000-point sampling at the default 80. A
     ``handedness = "ccw"`` part is that surface's mirror image through the XZ plane: the same
-    table, with the position angles negated and the rotation counter-clockwise.
+    table, with the position angles negated and the rotation counter-clockwise. Computed without
+    touching the disk, so that it can run in a child process beside the build's other files.
     """
     elements = elements_of(surface, spin)
     if str(getattr(params, "handedness", "cw")) == "ccw":  # the part is the surface's mirror image (y -> -y)
         elements = dataclasses.replace(elements, position_angle_deg=-elements.position_angle_deg,
                                        spin=elements.spin.opposite)
-    paths = {"sections_csv": out_dir / f"{params.name}_sections.csv",
-             "sections_png": out_dir / f"{params.name}_sections.png"}
-    with atomic_path(paths["sections_csv"]) as temp:
-        write_sections_csv(elements, temp, trailing_edge_of(params, elements.s))
-    with atomic_path(paths["sections_png"]) as temp:
-        write_sections_png(elements, temp, title=f"{params.name}: blade elements")
+    csv_text = sections_csv_text(elements, trailing_edge_of(params, elements.s))
+    return {"sections_csv": (f"{params.name}_sections.csv", csv_text.encode()),
+            "sections_png": (f"{params.name}_sections.png", sections_png(elements, f"{params.name}: blade elements"))}
+
+
+def write_files(files: dict[str, tuple[str, bytes]], out_dir: Path) -> dict[str, Path]:
+    """Write :func:`sections_table_files` into ``out_dir``, each atomically; their paths by kind."""
+    paths = {}
+    for kind, (name, content) in files.items():
+        with atomic_path(out_dir / name) as temp:
+            temp.write_bytes(content)
+        paths[kind] = out_dir / name
     return paths
+
+
+def write_sections_table(surface: BladeSurface, params: Any, out_dir: Path, spin: Handedness = Handedness.CW
+                         ) -> dict[str, Path]:
+    """Write ``<name>_sections.csv`` and ``<name>_sections.png`` into ``out_dir``; their paths by kind."""
+    return write_files(sections_table_files(surface, params, spin), out_dir)
