@@ -311,11 +311,7 @@ def command_mesh(args: argparse.Namespace) -> int:
     progress = StageProgress.for_terminal(quiet=args.quiet)
     report, paths = write_surface_mesh(params, Path(args.out), compare=not args.no_compare, progress=progress)
     progress.finish()
-    if not args.quiet:
-        for path in paths.values():
-            print(f"wrote {path}")
-        print(summary_line(report))
-    return EXIT_OK
+    return _print_written(paths, summary_line(report), args.quiet)
 
 
 def _table_overrides(args: argparse.Namespace, table: str) -> dict[str, Any]:
@@ -351,11 +347,7 @@ def command_cfd(args: argparse.Namespace) -> int:
         print(f"torus-cad: {error}", file=sys.stderr)
         return EXIT_KERNEL_FAILURE
     progress.finish()
-    if not args.quiet:
-        for path in paths.values():
-            print(f"wrote {path}")
-        print(summary_line(report))
-    return EXIT_OK
+    return _print_written(paths, summary_line(report), args.quiet)
 
 
 def command_simulate(args: argparse.Namespace) -> int:
@@ -412,3 +404,12 @@ def report_error(message: str, code: int) -> int:
     """Print ``torus-cad: message`` on stderr; return ``code``."""
     print(f"torus-cad: {message}", file=sys.stderr)
     return code
+
+
+def _print_written(paths: dict[str, Path], summary: str, quiet: bool) -> int:
+    """Unless ``quiet``: one ``wrote <path>`` line per file, then the summary line; the exit code (0)."""
+    if not quiet:
+        for path in paths.values():
+            print(f"wrote {path}")
+        print(summary)
+    return EXIT_OK
