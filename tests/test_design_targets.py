@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from torus_cad.cli import main
+from torus_cad.cli.commands import load_parameters
 from torus_cad.geometry.extensions.diameter import DIAMETER_TOLERANCE_MM
 from torus_cad.geometry.surface import blade_frames
 from torus_cad.kernel.measure import (
@@ -165,3 +166,29 @@ def test_sections_table_is_written_beside_the_step(tmp_path):
         assert float(row["thickness_to_chord"]) == pytest.approx(
             float(row["max_thickness_mm"]) / float(row["chord_mm"]), rel=1e-4)
     assert (tmp_path / "torus_propeller_sections.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_targets_are_fitted_on_geometry_objects_with_few_validations(monkeypatch):
+    """A diameter + pitch design validates its document at most 3 times while its targets are fitted,
+    and builds its geometry a few times, not once per step of the fits."""
+    from torus_cad.parameters import PropellerParameters
+    from torus_cad.parameters.design_targets import resolve_design_targets
+
+    params = load_parameters(str(EXAMPLES / "cooling_fan_7blade.toml"))
+    calls = {"with_values": 0, "geometry": 0}
+    with_values, geometry = PropellerParameters.with_values, PropellerParameters.geometry
+
+    def counted_with_values(self, *args, **kwargs):
+        calls["with_values"] += 1
+        return with_values(self, *args, **kwargs)
+
+    def counted_geometry(self, *args, **kwargs):
+        calls["geometry"] += 1
+        return geometry(self, *args, **kwargs)
+
+    monkeypatch.setattr(PropellerParameters, "with_values", counted_with_values)
+    monkeypatch.setattr(PropellerParameters, "geometry", counted_geometry)
+    resolved = resolve_design_targets(params)
+    assert resolved.tip_diameter_mm == pytest.approx(120.0, abs=1e-6)
+    assert calls["with_values"] <= 3
+    assert calls["geometry"] <= 3

@@ -16,6 +16,7 @@ build the same propeller without solving again) and what each step achieved.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -36,6 +37,7 @@ from torus_cad.geometry.extensions.pitch import (
     pitch_report,
 )
 from torus_cad.geometry.frames import FrameKind, Frames, frenet_from_derivatives
+from torus_cad.geometry.propeller import PropellerGeometry
 from torus_cad.geometry.section import closed_points, parameter_end
 from torus_cad.geometry.surface import (
     blade_frames,
@@ -43,7 +45,8 @@ from torus_cad.geometry.surface import (
     sections_along,
     sections_at,
 )
-from torus_cad.geometry.transforms import evaluate_quartic
+from torus_cad.geometry.transforms import Quartic, evaluate_quartic
+from torus_cad.parameters.schema import Bounds, check_in_bounds
 
 #: At most this many rounds of (pitch fit, diameter fit); they stop when the diameter fit no longer moves.
 TARGET_ROUNDS = 4
@@ -100,7 +103,11 @@ def requested_targets(params: Any) -> dict[str, Any]:
 
 def tip_radius_mm(params: Any) -> float:
     """Largest distance of blade 0's analytic surface from the spin axis (mm)."""
-    geometry = params.geometry()
+    return tip_radius_of(params.geometry())
+
+
+def tip_radius_of(geometry: PropellerGeometry) -> float:
+    """Largest distance of blade 0's analytic surface from the spin axis (mm)."""
     blade, centerline = geometry.blade, geometry.centerline(0)
     blade_frames(blade, centerline, [0.0])  # checks once that the frame exists on the whole centerline
     end = parameter_end(sections_along(blade, [0.5])[0])
@@ -121,29 +128,31 @@ def section_frames_unchecked(blade: Any, centerline: Centerline, s: NDArray[np.f
                   *frenet_from_derivatives(derivatives[:, 1], derivatives[:, 2]))
 
 
-def with_radial_scale(params: Any, scale: float) -> Any:
-    """``params`` with z_L of the free control points p2 and p3 multiplied by ``scale``."""
-    p2, p3 = params.centerline.p2, params.centerline.p3
-    return params.with_values({"centerline.p2": [p2[0], p2[1], p2[2] * scale],
-                               "centerline.p3": [p3[0], p3[1], p3[2] * scale]})
+def with_radial_scale(geometry: PropellerGeometry, scale: float, hub_radius_mm: float) -> PropellerGeometry:
+    """``geometry`` with z_L of the free control points p2 and p3 multiplied by ``scale``; GeometryError
+    (not reachable) when a scaled point leaves the range the parameters allow it."""
+    p1, p2, p3, p4 = geometry.blade.local_control_points
+    scaled = [(point[0], point[1], point[2] * scale) for point in (p2, p3)]
+    inset = hub_radius_mm - hub_radius_mm / 8.0  # as PropellerParameters checks the control points
+    for name, point in zip(("p2", "p3"), scaled, strict=True):
+        try:
+            check_in_bounds(f"centerline.{name}[2]", point[2], Bounds(-inset, 100.0 * hub_radius_mm, True), "mm")
+        except ParameterError as error:
+            raise GeometryError(str(error)) from None
+    blade = dataclasses.replace(geometry.blade, local_control_points=(p1, scaled[0], scaled[1], p4))
+    return dataclasses.replace(geometry, blade=blade)
 
 
-def _tip_radius_at_scale(params: Any, scale: float) -> float:
-    try:
-        return tip_radius_mm(with_radial_scale(params, scale))
-    except ParameterError as error:  # a scaled control point out of its range: not reachable
-        raise GeometryError(str(error)) from None
+def fit_diameter(geometry: PropellerGeometry, diameter_mm: float, hub_radius_mm: float
+                 ) -> tuple[PropellerGeometry, float]:
+    """``geometry`` scaled radially to the tip diameter ``diameter_mm``, and the scale."""
+    scale = radial_scale_for_diameter(
+        lambda k: tip_radius_of(with_radial_scale(geometry, k, hub_radius_mm)), diameter_mm)
+    return with_radial_scale(geometry, scale, hub_radius_mm), scale
 
 
-def fit_diameter(params: Any, diameter_mm: float) -> tuple[Any, float]:
-    """``params`` scaled radially to the tip diameter ``diameter_mm``, and the scale."""
-    scale = radial_scale_for_diameter(lambda k: _tip_radius_at_scale(params, k), diameter_mm)
-    return with_radial_scale(params, scale), scale
-
-
-def _pitch_model(params: Any) -> tuple[NDArray[np.float64], ChordModel]:
+def _pitch_model(geometry: PropellerGeometry) -> tuple[NDArray[np.float64], ChordModel]:
     """The sections' s and the chord model alpha -> (chord mid points, chord vectors) of blade 0."""
-    geometry = params.geometry()
     blade = geometry.blade
     s = np.linspace(0.0, 1.0, PITCH_FIT_SECTIONS)
     frames = blade_frames(blade, geometry.centerline(0), s)
@@ -157,25 +166,37 @@ def _pitch_model(params: Any) -> tuple[NDArray[np.float64], ChordModel]:
                           evaluate_quartic(laws.scale_x_mm, s), evaluate_quartic(laws.scale_y_mm, s), laws.pivot)
 
 
-def fit_angle_of_attack(params: Any, pitch_mm: float, spin: Handedness = Handedness.CW) -> tuple[Any, PitchFit]:
-    """``params`` with alpha(s) refitted so the outer half has geometric pitch ``pitch_mm``."""
-    s, model = _pitch_model(params)
-    fit = fit_pitch(model, s, params.transforms.angle_of_attack, pitch_mm, tip_radius_mm(params), spin)
-    return params.with_values({"transforms.angle_of_attack": list(fit.angle_of_attack)}), fit
+def fit_angle_of_attack(geometry: PropellerGeometry, pitch_mm: float, spin: Handedness = Handedness.CW
+                        ) -> tuple[PropellerGeometry, PitchFit]:
+    """``geometry`` with alpha(s) refitted so the outer half has geometric pitch ``pitch_mm``."""
+    s, model = _pitch_model(geometry)
+    laws = geometry.blade.laws
+    fit = fit_pitch(model, s, laws.angle_of_attack_deg, pitch_mm, tip_radius_of(geometry), spin)
+    blade = dataclasses.replace(geometry.blade, laws=dataclasses.replace(
+        laws, angle_of_attack_deg=_quartic(fit.angle_of_attack)))
+    return dataclasses.replace(geometry, blade=blade), fit
 
 
-def achieved_pitch(params: Any, pitch_mm: float, spin: Handedness = Handedness.CW) -> PitchFit:
-    """How well ``params``' own alpha(s) meets ``pitch_mm`` (no fit)."""
-    s, model = _pitch_model(params)
-    return pitch_report(model, s, params.transforms.angle_of_attack, pitch_mm, tip_radius_mm(params), spin)
+def _quartic(values: Any) -> Quartic:
+    a, b, c, d, e = (float(value) for value in values)
+    return (a, b, c, d, e)
 
 
-def _without_targets(params: Any) -> Any:
-    changes: dict[str, Any] = {}
+def achieved_pitch(geometry: PropellerGeometry, pitch_mm: float, spin: Handedness = Handedness.CW) -> PitchFit:
+    """How well ``geometry``'s own alpha(s) meets ``pitch_mm`` (no fit)."""
+    s, model = _pitch_model(geometry)
+    return pitch_report(model, s, geometry.blade.laws.angle_of_attack_deg, pitch_mm, tip_radius_of(geometry), spin)
+
+
+def _without_targets(params: Any, geometry: PropellerGeometry) -> Any:
+    """``params`` with the fitted control points and alpha(s) of ``geometry``, and the targets removed."""
+    _, p2, p3, _ = geometry.blade.local_control_points
+    changes: dict[str, Any] = {"centerline.p2": list(p2), "centerline.p3": list(p3),
+                               "transforms.angle_of_attack": list(geometry.blade.laws.angle_of_attack_deg)}
     for key, empty in (("diameter", 0.0), ("pitch", 0.0)):
         if _value(params, key, None):
             changes[key] = empty
-    return params.with_values(changes) if changes else params
+    return params.with_values(changes)
 
 
 def resolve_design_targets(params: Any, spin: Handedness = Handedness.CW) -> DesignTargets:
@@ -193,18 +214,20 @@ def resolve_design_targets(params: Any, spin: Handedness = Handedness.CW) -> Des
     if not (diameter_mm or pitch_mm):
         return DesignTargets(params, requested=requested)
     scale = 1.0
-    # alpha turns the sections, which moves the outermost point, and the radius sets the pitch's
-    # beta targets: alternate the fits, and end with the diameter (met exactly; the pitch the
-    # last alpha gives is reported on the final geometry).
+    # Fitted on the geometry objects, validated once at the end. alpha turns the sections, which moves
+    # the outermost point, and the radius sets the pitch's beta targets: alternate the fits, and end
+    # with the diameter (met exactly; the pitch the last alpha gives is reported on the final geometry).
+    geometry = params.geometry()
     for _ in range(TARGET_ROUNDS if pitch_mm and diameter_mm else 1):
         if pitch_mm:
-            params, _ = fit_angle_of_attack(params, pitch_mm, spin)
+            geometry, _ = fit_angle_of_attack(geometry, pitch_mm, spin)
         if diameter_mm:
-            params, round_scale = fit_diameter(params, diameter_mm)
+            geometry, round_scale = fit_diameter(geometry, diameter_mm, params.hub.radius)
             scale *= round_scale
             if abs(round_scale - 1.0) < 1e-6:
                 break
-    params = _without_targets(params)
-    fit = achieved_pitch(params, pitch_mm, spin) if pitch_mm else None
-    diameter = 2.0 * tip_radius_mm(params)
+    params = _without_targets(params, geometry)
+    geometry = params.geometry()
+    fit = achieved_pitch(geometry, pitch_mm, spin) if pitch_mm else None
+    diameter = 2.0 * tip_radius_of(geometry)
     return DesignTargets(params, scale if diameter_mm else None, diameter, fit, requested)
