@@ -22,7 +22,8 @@
     blades = {start = 2, stop = 4, step = 1}       # a range, stop included (any mode)
     "centerline.p2[2]" = {low = 18.0, high = 26.0} # bounds (random / latin_hypercube only)
 
-Everything is checked here, before any design is generated: keys, types, finite values, and
+The [sweep] table is a pydantic model (:class:`SweepTable`), like the parameters. Everything is checked
+here, before any design is generated: keys, types, finite values, and
 the number of designs against :data:`torus_cad.tolerances.MAX_SWEEP_DESIGNS`, estimated
 from the axis sizes without listing them. Every problem is a one-line ParameterError that
 names the key (exit code 2 at the command line).
@@ -31,7 +32,6 @@ names the key (exit code 2 at the command line).
 from __future__ import annotations
 
 import dataclasses
-import difflib
 import math
 import re
 from collections.abc import Callable, Iterable, Mapping
@@ -40,10 +40,12 @@ from enum import StrEnum
 from pathlib import Path
 from typing import Any, TypeGuard
 
+from pydantic import Field, ValidationError
+
 from torus_cad.errors import ParameterError
 from torus_cad.parameters import ParameterSpec, PropellerParameters, parameter_specs
 from torus_cad.parameters.config_file import read_config_table
-from torus_cad.parameters.schema import Bounds, check_in_bounds
+from torus_cad.parameters.schema import Bounds, Section, check_in_bounds, closest_key, param, parameter_error
 from torus_cad.tolerances import MAX_SWEEP_DESIGNS
 
 __all__ = ["SweepMode", "SweepSpec", "VaryAxis", "estimate_designs", "load_sweep", "parse_sweep"]
@@ -60,7 +62,6 @@ class SweepMode(StrEnum):
 #: Default per-design time limit of a sweep, s (a design takes about a second at the default resolution).
 DEFAULT_TIME_LIMIT_S = 300.0
 
-_SWEEP_KEYS = ("mode", "samples", "seed", "name", "stl", "density_g_cm3", "time_limit_s")
 _TOP_KEYS = ("base", "sweep", "vary")
 _SPEC_KEYS = {"low", "high", "start", "stop", "step", "num"}
 _KEY_PATTERN = re.compile(r"^(?P<path>[A-Za-z_][A-Za-z0-9_]*(?:\.[A-Za-z_][A-Za-z0-9_]*)*)(?:\[(?P<index>\d+)\])?$")
@@ -168,7 +169,7 @@ def parse_sweep(data: Mapping[str, Any], base_dir: str | Path = ".", name: str =
         raise fail(f"must be a table, got {type(data).__name__}")
     for key in data:
         if key not in _TOP_KEYS:
-            raise fail(f"unknown table [{key}]{_did_you_mean(str(key), _TOP_KEYS)}")
+            raise fail(f"unknown table [{key}]{closest_key(str(key), _TOP_KEYS)}")
     folder = Path(base_dir).resolve()
     base = _parse_base(data.get("base", {}), folder, fail)
     settings = _parse_settings(data.get("sweep", {}), name, fail)
@@ -205,42 +206,38 @@ def _count(value: float) -> str:
     return f"{int(value):,}" if value < 1e12 else f"{value:.2e}"
 
 
+class SweepTable(Section):
+    """[sweep]: how the designs are drawn, what each writes, and its time limit."""
+
+    mode: SweepMode = param(SweepMode.GRID, strict=False, doc="grid | random | latin_hypercube")
+    samples: int | None = param(None, ge=1, doc="random / latin_hypercube only: how many designs")
+    seed: int = param(0, ge=0, le=2**63 - 1, doc="random / latin_hypercube only: the sampler's seed")
+    name: str = param("", doc="the sweep's name (default: the file's stem)")
+    stl: bool = param(True, doc="write each design's STL too")
+    density_g_cm3: float | None = param(None, unit="g/cm^3", gt=0.0, le=25.0,
+                                        doc="material density for the mass (default: PLA, 1.24)")
+    time_limit_s: float = param(DEFAULT_TIME_LIMIT_S, unit="s", gt=0.0, le=86400.0,
+                                doc="a design running longer is stopped and recorded as 'timeout'")
+
+
+class _SettingsTable(Section):
+    sweep: SweepTable = Field(default_factory=SweepTable)
+
+
 def _parse_settings(settings: Any, name: str, fail: Fail) -> dict[str, Any]:
-    """The ``[sweep]`` table as SweepSpec keyword arguments."""
-    if not isinstance(settings, Mapping):
-        raise fail("[sweep] must be a table")
-    for key in settings:
-        if key not in _SWEEP_KEYS:
-            raise fail(f"unknown key sweep.{key}{_did_you_mean(str(key), _SWEEP_KEYS, 'sweep.')}")
-    mode_text = settings.get("mode", SweepMode.GRID.value)
-    if mode_text not in tuple(SweepMode):
-        raise fail(f"sweep.mode = {mode_text!r} is not allowed; choose one of {', '.join(SweepMode)}")
-    mode = SweepMode(mode_text)
-    samples = settings.get("samples")
-    if mode is SweepMode.GRID:
-        if samples is not None:
-            raise fail("sweep.samples applies to mode = 'random' or 'latin_hypercube', not 'grid'")
-    elif not _is_int(samples) or samples < 1:
-        raise fail(f"sweep.samples must be a whole number >= 1 for mode = {mode.value!r}, got {samples!r}")
-    else:
-        _check_budget(samples, [], fail)
-    seed = settings.get("seed", 0)
-    if not _is_int(seed) or seed < 0:
-        raise fail(f"sweep.seed must be a whole number >= 0, got {seed!r}")
-    sweep_name = settings.get("name", name)
-    if not isinstance(sweep_name, str) or not sweep_name:
-        raise fail(f"sweep.name must be a non-empty string, got {sweep_name!r}")
-    stl = settings.get("stl", True)
-    if not isinstance(stl, bool):
-        raise fail(f"sweep.stl must be true or false, got {stl!r}")
-    density = settings.get("density_g_cm3")
-    if density is not None and (not _is_number(density) or not 0.0 < density <= 25.0):
-        raise fail(f"sweep.density_g_cm3 = {density!r} is out of range; allowed (0, 25] g/cm^3")
-    time_limit = settings.get("time_limit_s", DEFAULT_TIME_LIMIT_S)
-    if not _is_number(time_limit) or not 0.0 < time_limit <= 86400.0:
-        raise fail(f"sweep.time_limit_s = {time_limit!r} is out of range; allowed (0, 86400] s")
-    return {"name": sweep_name, "mode": mode, "samples": samples, "seed": seed, "stl": stl,
-            "density_g_cm3": None if density is None else float(density), "time_limit_s": float(time_limit)}
+    """The ``[sweep]`` table as SweepSpec keyword arguments (validated by :class:`SweepTable`)."""
+    try:
+        table = _SettingsTable.model_validate({"sweep": settings}).sweep
+    except ValidationError as error:
+        raise fail(str(parameter_error(_SettingsTable, error))) from None
+    if table.mode is SweepMode.GRID and table.samples is not None:
+        raise fail("sweep.samples applies to mode = 'random' or 'latin_hypercube', not 'grid'")
+    if table.mode is not SweepMode.GRID:
+        if table.samples is None:
+            raise fail(f"sweep.samples must be a whole number >= 1 for mode = {table.mode.value!r}, got None")
+        _check_budget(table.samples, [], fail)
+    return {"name": table.name or name, "mode": table.mode, "samples": table.samples, "seed": table.seed,
+            "stl": table.stl, "density_g_cm3": table.density_g_cm3, "time_limit_s": table.time_limit_s}
 
 
 def _parse_base(table: Any, base_dir: Path, fail: Fail) -> PropellerParameters:
@@ -357,7 +354,7 @@ def _resolve_leaf(key: str, fail: Fail) -> tuple[tuple[str, ...], int | None, _L
         inside = [known for known in specs if known.startswith(dotted + ".")]
         if inside:
             raise fail(f"{where} is a table; vary one of its keys, e.g. {inside[0]!r}")
-        raise fail(f"{where}: unknown key {dotted!r}{_did_you_mean(dotted, specs)}")
+        raise fail(f"{where}: unknown key {dotted!r}{closest_key(dotted, list(specs))}")
     path = tuple(dotted.split("."))
     if index is None:  # a choice is one of its Enum's values, as written in a design file
         choices = tuple(str(choice.value) for choice in spec.choices)
@@ -480,11 +477,3 @@ def _is_int(value: Any) -> TypeGuard[int]:
 
 def _is_number(value: Any) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool)
-
-
-def _did_you_mean(key: str, known: Iterable[str], prefix: str = "") -> str:
-    known = list(known)
-    close = difflib.get_close_matches(key, known, n=1, cutoff=0.5)
-    if close:
-        return f"; did you mean {prefix + close[0]!r}?"
-    return f"; known keys: {', '.join(prefix + k for k in sorted(known))}" if known else ""

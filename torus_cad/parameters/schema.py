@@ -234,7 +234,8 @@ def _value_text(value: Any) -> str:
     return repr(value)
 
 
-def _closest(key: str, known: Sequence[str], prefix: str) -> str:
+def closest_key(key: str, known: Sequence[str], prefix: str = "") -> str:
+    """``"; did you mean 'prefix.key'?"`` for the known key closest to ``key``, else the known keys."""
     close = difflib.get_close_matches(key, list(known), n=1, cutoff=0.5)
     if close:
         return f"; did you mean {prefix + close[0]!r}?"
@@ -271,7 +272,7 @@ def _message(model: type[BaseModel], error: Any) -> str:
         prefix = _dotted(location[:-1]) + "." if len(location) > 1 else ""
         if field in _SWEEP_TABLES:  # a sweep file given to a command that reads one design
             return f"unknown key {field!r}: this looks like a sweep file; run it with 'torus-cad sweep FILE'"
-        return f"unknown key {field!r}{_closest(str(location[-1]), known, prefix)}"
+        return f"unknown key {field!r}{closest_key(str(location[-1]), known, prefix)}"
     if kind == "value_error":
         cause = error.get("ctx", {}).get("error")
         return str(cause) if cause is not None else error["msg"]
