@@ -15,6 +15,7 @@ from OCP.BRepExtrema import BRepExtrema_DistShapeShape
 from OCP.gp import gp_Ax3, gp_Dir, gp_Pln, gp_Pnt
 
 from torus_cad.errors import KernelError
+from torus_cad.kernel.tessellation import tessellate_faces
 
 
 def max_radius_mm(solid: cq.Shape) -> float:
@@ -31,8 +32,8 @@ def max_radius_mm(solid: cq.Shape) -> float:
 
 def vertex_radius_mm(solid: cq.Shape, tolerance: float = 0.05) -> float:
     """Largest radius of a tessellation's vertices: a lower bound of :func:`max_radius_mm` within ~``tolerance``."""
-    vertices, _ = solid.tessellate(tolerance, 0.2)
-    return max(float(np.hypot(v.x, v.y)) for v in vertices)
+    vertices = np.concatenate([face.vertices for face in tessellate_faces(solid, tolerance, 0.2)])
+    return float(np.hypot(vertices[:, 0], vertices[:, 1]).max())
 
 
 def plane_section_edges(solid: cq.Shape, origin: ArrayLike, normal: ArrayLike, half_size: float) -> list[cq.Edge]:

@@ -121,33 +121,19 @@ def propeller_mesh(solid: cq.Shape, face_parts: Sequence[int], blades: int, tole
 
     ``tolerance`` is the chordal deviation in mm, ``angular_tolerance`` in radians.
     """
-    from OCP.BRep import BRep_Tool
-    from OCP.BRepMesh import BRepMesh_IncrementalMesh
-    from OCP.TopAbs import TopAbs_REVERSED
-    from OCP.TopLoc import TopLoc_Location
+    from torus_cad.kernel.tessellation import tessellate_faces
 
     faces = solid.Faces()
     if len(face_parts) != len(faces):
         raise ValueError(f"face_parts has {len(face_parts)} entries for a solid of {len(faces)} faces")
-    shape = solid.copy()  # same faces in the same order, new triangulation
-    BRepMesh_IncrementalMesh(shape.wrapped, tolerance, False, angular_tolerance, True)
     palette = np.array([HUB_COLOR] + [blade_color(index, blades) for index in range(blades)])
     vertices, triangles, parts = [], [], []
     offset = 0
-    for face, part in zip(shape.Faces(), face_parts, strict=True):
-        location = TopLoc_Location()
-        mesh = BRep_Tool.Triangulation_s(face.wrapped, location)
-        if mesh is None or mesh.NbTriangles() == 0:
-            continue
-        transform = location.Transformation()
-        points = np.array([mesh.Node(i).Transformed(transform).Coord() for i in range(1, mesh.NbNodes() + 1)])
-        corners = np.array([mesh.Triangle(i).Get() for i in range(1, mesh.NbTriangles() + 1)], dtype=np.int64) - 1
-        if face.wrapped.Orientation() == TopAbs_REVERSED:
-            corners = corners[:, ::-1]  # outward normals for a reversed face
-        vertices.append(points)
-        triangles.append(corners + offset)
-        parts.append(np.full(len(corners), part, dtype=np.int64))
-        offset += len(points)
+    for face in tessellate_faces(solid, tolerance, angular_tolerance):
+        vertices.append(face.vertices)
+        triangles.append(face.triangles + offset)
+        parts.append(np.full(len(face.triangles), face_parts[face.face_index], dtype=np.int64))
+        offset += len(face.vertices)
     if not triangles:
         raise ValueError("the solid has no triangulated faces to draw")
     all_parts = np.concatenate(parts)

@@ -10,20 +10,16 @@ import time
 import traceback
 from typing import Any
 
-import cadquery as cq
 import numpy as np
 from numpy.typing import NDArray
 from OCP.Bnd import Bnd_Box
-from OCP.BRep import BRep_Tool
 from OCP.BRepBndLib import BRepBndLib
-from OCP.BRepMesh import BRepMesh_IncrementalMesh
-from OCP.TopAbs import TopAbs_REVERSED
-from OCP.TopLoc import TopLoc_Location
 from scipy.spatial import cKDTree
 
 from torus_cad import PropellerParameters
 from torus_cad.errors import GeometryError, ParameterError, TorusCadError
 from torus_cad.kernel.checks import mass_properties
+from torus_cad.kernel.tessellation import tessellate_faces
 from torus_cad.parameters.design import Handedness
 from torus_cad.propeller import Propeller, build_propeller
 from torus_cad.studio.build_messages import BuildRequest, SolidResult
@@ -66,37 +62,17 @@ def _face_parts(propeller: Propeller, faces: list[Any], face_vertices: list[NDAr
     return parts
 
 
-def _face_triangulation(face: Any) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
-    """The vertices ``(k, 3)`` and outward triangles ``(m, 3)`` of a meshed face (empty if unmeshed)."""
-    location = TopLoc_Location()
-    triangulation = BRep_Tool.Triangulation_s(face, location)
-    if triangulation is None:
-        return np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64)
-    transform = location.Transformation()
-    vertices = np.array([triangulation.Node(i).Transformed(transform).Coord()
-                         for i in range(1, triangulation.NbNodes() + 1)], dtype=float)
-    triangles = np.array([triangulation.Triangle(i).Get() for i in range(1, triangulation.NbTriangles() + 1)],
-                         dtype=np.int64).reshape(-1, 3) - 1
-    if face.Orientation() == TopAbs_REVERSED:
-        triangles = triangles[:, ::-1]
-    return vertices, triangles
-
-
 def tessellate_parts(propeller: Propeller) -> list[PartMesh]:
     """The fused solid's triangles, grouped by part (hub, blade 0, 1, ...), for display."""
-    shape = propeller.solid.copy().wrapped  # leave the solid's own triangulation (used by the STL) alone
     box = Bnd_Box()
-    BRepBndLib.Add_s(shape, box)
+    BRepBndLib.Add_s(propeller.solid.wrapped, box)
     tolerance = max(np.sqrt(box.SquareExtent()) * DISPLAY_RELATIVE_DEFLECTION, 1e-3)
     # Not in parallel: on a busy 2-core machine the mesher's threads only contend with the server.
-    BRepMesh_IncrementalMesh(shape, tolerance, False, DISPLAY_ANGULAR_DEFLECTION, False)
-    faces, face_vertices, face_triangles = [], [], []
-    for face in cq.Shape.cast(shape).Faces():
-        vertices, triangles = _face_triangulation(face.wrapped)
-        if len(triangles):
-            faces.append(face)
-            face_vertices.append(vertices)
-            face_triangles.append(triangles)
+    tessellated = tessellate_faces(propeller.solid, tolerance, DISPLAY_ANGULAR_DEFLECTION, parallel=False)
+    solid_faces = propeller.solid.Faces()
+    faces = [solid_faces[face.face_index] for face in tessellated]
+    face_vertices = [face.vertices for face in tessellated]
+    face_triangles = [face.triangles for face in tessellated]
     parts = _face_parts(propeller, faces, face_vertices)
     meshes = []
     for part in [HUB_PART, *range(propeller.parameters.blades)]:
