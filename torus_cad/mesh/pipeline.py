@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import sys
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from enum import StrEnum
@@ -399,16 +400,19 @@ def write_surface_mesh(params: PropellerParameters, out_dir: str | Path, compare
     from torus_cad.outputs.output_set import OutputSet
 
     formats = selected_formats(params.mesh)
+    margin_mm = MESH_JUNCTION_MARGIN_RELATIVE * params.hub.radius
     with contextlib.ExitStack() as stack:
-        # The B-rep to compare with is built in a child meanwhile, on the second core.
-        comparison = stack.enter_context(IsolatedCall(
-            opencascade_comparison, params, MESH_JUNCTION_MARGIN_RELATIVE * params.hub.radius,
-            what="the B-rep to compare the mesh with")) if compare else None
+        # The B-rep to compare with is built in a child meanwhile, on the second core; only where this
+        # process has not loaded OpenCascade: a forked copy of its running thread pool can deadlock.
+        beside = compare and "OCP" not in sys.modules
+        child = stack.enter_context(IsolatedCall(opencascade_comparison, params, margin_mm,
+                                                 what="the B-rep to compare the mesh with")) if beside else None
         result = build_surface_mesh(params, progress, compare)
         timer = StageTimer[MeshStage](progress)
         with timer.stage(MeshStage.QUALITY):
-            report = quality_report(result, None if comparison is None else comparison.result(
-                MESH_COMPARISON_TIME_LIMIT_S))
+            comparison = (child.result(MESH_COMPARISON_TIME_LIMIT_S) if child is not None
+                          else opencascade_comparison(params, margin_mm) if compare else None)
+            report = quality_report(result, comparison)
     mesh = mirrored_mesh(result.mesh) if params.handedness == Handedness.CCW else result.mesh
     with OutputSet(out_dir, f"{params.name}_mesh") as output:
         with timer.stage(MeshStage.WRITE):
