@@ -18,6 +18,7 @@ import os
 import pickle
 import select
 import signal
+import sys
 import time
 from collections.abc import Callable
 from typing import Any, Generic, TypeVar, cast
@@ -93,6 +94,13 @@ class IsolatedCall(Generic[T]):
 
     def __exit__(self, *exc_info: object) -> None:
         self.cancel()
+
+
+def fork_is_safe_for_opencascade() -> bool:
+    """Whether a forked child may run OpenCascade's parallel algorithms (a boolean, the mesher): only
+    when this process has not loaded OpenCascade, since a forked copy of its running thread pool
+    can deadlock (seen in the fuse). The time-limited calls of the kernel run serial ones."""
+    return "OCP" not in sys.modules
 
 
 def run_isolated(function: Callable[..., T], *args: Any, timeout_s: float, what: str) -> T:

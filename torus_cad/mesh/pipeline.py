@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import contextlib
 import functools
-import sys
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from enum import StrEnum
@@ -28,7 +27,7 @@ from torus_cad.geometry.extensions.mounting import HubMounting
 from torus_cad.geometry.mesh import TriangleMesh
 from torus_cad.geometry.propeller import PropellerGeometry
 from torus_cad.geometry.surface import BladeSurface, blade_frames, place_sections, sections_along, sections_at
-from torus_cad.kernel.isolation import IsolatedCall
+from torus_cad.kernel.isolation import IsolatedCall, fork_is_safe_for_opencascade
 from torus_cad.mesh import quality
 from torus_cad.mesh.assembly import assemble
 from torus_cad.mesh.cleanup import Cleanup
@@ -215,7 +214,7 @@ def build_surface_mesh(params: PropellerParameters, progress: Callable[[str], No
                                f"{topology.non_manifold_edges} non-manifold, {topology.inconsistent_edges} "
                                "inconsistently oriented edges)")
     with timer.stage(MeshStage.CROSSINGS):
-        margin = max(_junction_margin(geometry), JUNCTION_CHECK_CELLS * max(cells.around, cells.along))
+        margin = max(_junction_margin(geometry.hub.radius_mm), JUNCTION_CHECK_CELLS * max(cells.around, cells.along))
         crossings = united_crossings(mesh, assembled.united_faces, blade_check, geometry, margin)
         if crossings.pairs:
             raise ParameterError(
@@ -227,8 +226,9 @@ def build_surface_mesh(params: PropellerParameters, progress: Callable[[str], No
 
 # -- quality report ---------------------------------------------------------------------------------
 
-def _junction_margin(geometry: PropellerGeometry) -> float:
-    return MESH_JUNCTION_MARGIN_RELATIVE * geometry.hub.radius_mm
+def _junction_margin(hub_radius_mm: float) -> float:
+    """How far outside the hub (mm) a triangle counts as away from the junctions."""
+    return MESH_JUNCTION_MARGIN_RELATIVE * hub_radius_mm
 
 
 def vertex_distances(result: SurfaceMesh) -> NDArray[np.float64]:
@@ -271,7 +271,7 @@ def blade_cell_sag(result: SurfaceMesh) -> tuple[float, float]:
     centres = place_sections(geometry.blade, frames, sections_at(sections_along(geometry.blade, frames.s), t_mid))
     sag = quality.cell_deviation(grid.points, centres, split_along_a_d(grid))
     outside = quality.outside_hub(centres.reshape(-1, 3), geometry.hub.radius_mm, geometry.hub.length_mm,
-                                  _junction_margin(geometry)).reshape(sag.shape)
+                                  _junction_margin(geometry.hub.radius_mm)).reshape(sag.shape)
     chord = 2.0 * np.linalg.norm(centres - frames.origin[:, None, :], axis=-1).max(axis=1)
     if not outside.any():
         return 0.0, 0.0
@@ -309,7 +309,7 @@ def quality_report(result: SurfaceMesh, comparison: dict[str, Any] | None = None
     """The mesh's quality as a JSON-ready dict (see docs, 'Mesh for CFD'), with ``comparison`` (the
     :func:`opencascade_comparison` of the same design) and the volume difference from it, if given."""
     mesh, params, table = result.mesh, result.parameters, result.parameters.mesh
-    margin = _junction_margin(result.geometry)
+    margin = _junction_margin(result.geometry.hub.radius_mm)
     topology = result.topology
     blade = np.flatnonzero(mesh.part > 0)
     away = blade[quality.faces_away_from_hub(mesh.vertices, mesh.faces[blade], params.hub.radius,
@@ -400,11 +400,10 @@ def write_surface_mesh(params: PropellerParameters, out_dir: str | Path, compare
     from torus_cad.outputs.output_set import OutputSet
 
     formats = selected_formats(params.mesh)
-    margin_mm = MESH_JUNCTION_MARGIN_RELATIVE * params.hub.radius
+    margin_mm = _junction_margin(params.hub.radius)
     with contextlib.ExitStack() as stack:
-        # The B-rep to compare with is built in a child meanwhile, on the second core; only where this
-        # process has not loaded OpenCascade: a forked copy of its running thread pool can deadlock.
-        beside = compare and "OCP" not in sys.modules
+        # The B-rep to compare with is built in a child meanwhile, on the second core, where that is safe.
+        beside = compare and fork_is_safe_for_opencascade()
         child = stack.enter_context(IsolatedCall(opencascade_comparison, params, margin_mm,
                                                  what="the B-rep to compare the mesh with")) if beside else None
         result = build_surface_mesh(params, progress, compare)
