@@ -19,7 +19,17 @@ from pathlib import Path
 from typing import Any
 
 from torus_cad.batch.table import write_table
-from torus_cad.optimize.storage import CONSTRAINT, FOLDER, METRICS, OUTCOME, REASON, RETRY_OF, SECONDS, was_stopped
+from torus_cad.optimize.storage import (
+    CONSTRAINT,
+    FOLDER,
+    METRICS,
+    OUTCOME,
+    REASON,
+    RETRY_OF,
+    SECONDS,
+    trial_result,
+    was_stopped,
+)
 from torus_cad.optimize.study_file import StudySpec
 
 __all__ = ["BEST_DIR", "MAX_PARETO_BUILDS", "best_trials", "trial_rows", "write_results"]
@@ -76,23 +86,23 @@ def trial_rows(spec: StudySpec, trials: Sequence[Any]) -> tuple[list[dict[str, A
     retried_by = {trial.user_attrs[RETRY_OF]: trial.number for trial in trials if RETRY_OF in trial.user_attrs}
     rows = []
     for trial in trials:
-        attrs = trial.user_attrs
+        attrs, record = trial.user_attrs, trial_result(trial)
         row: dict[str, Any] = dict.fromkeys(columns)
         state = trial.state.name.lower()
-        outcome, reason = attrs.get(OUTCOME), attrs.get(REASON, "")
+        outcome, reason = record.get(OUTCOME), record.get(REASON, "")
         if was_stopped(trial):
             outcome = INTERRUPTED
             again = retried_by.get(trial.number)
             reason = "its run stopped" + (f"; asked again as trial {again}" if again is not None else "")
-        violations = attrs.get(CONSTRAINT, [])
+        violations = record.get(CONSTRAINT, [])
         row.update(number=trial.number, state=state, outcome=outcome or "", reason=reason,
                    feasible=state == "complete" and all(v <= 0.0 for v in violations),
                    violation=max(violations) if violations else None, retry_of=attrs.get(RETRY_OF),
-                   seconds=attrs.get(SECONDS), folder=attrs.get(FOLDER))
+                   seconds=record.get(SECONDS), folder=record.get(FOLDER))
         for axis in spec.axes:
             value = trial.params.get(axis.key)
             row[axis.key] = value if not isinstance(value, (list, tuple)) else json.dumps(value)
-        for metric, value in attrs.get(METRICS, {}).items():
+        for metric, value in record.get(METRICS, {}).items():
             if metric in row:
                 row[metric] = value
         rows.append(row)
@@ -100,7 +110,7 @@ def trial_rows(spec: StudySpec, trials: Sequence[Any]) -> tuple[list[dict[str, A
 
 
 def _feasible(trial: Any) -> bool:
-    return trial.state.name == "COMPLETE" and all(v <= 0.0 for v in trial.user_attrs.get(CONSTRAINT, []))
+    return trial.state.name == "COMPLETE" and all(v <= 0.0 for v in trial_result(trial).get(CONSTRAINT, []))
 
 
 def _history_picture(spec: StudySpec, trials: Sequence[Any], path: Path) -> Path:

@@ -28,9 +28,9 @@ from urllib.parse import urlsplit, urlunsplit
 from torus_cad.batch.runner import _identity
 from torus_cad.errors import ParameterError, TorusCadError
 
-__all__ = ["GRACE_S", "HEARTBEAT_S", "Heartbeat", "StorageError", "claim_lock", "fail_and_retry", "open_storage",
+__all__ = ["GRACE_S", "HEARTBEAT_S", "Heartbeat", "StorageError", "claim_lock", "count_trials", "fail_and_retry", "open_storage",
            "owner_record",
-           "public_url", "retry_stale_trials", "storage_url"]
+           "public_url", "retry_stale_trials", "storage_url", "trial_result"]
 
 HEARTBEAT_S = 10  #: how often a running process records that its trials are alive, s
 GRACE_S = 120  #: a RUNNING trial without a heartbeat for this long belongs to a dead process, s
@@ -42,10 +42,12 @@ RETRY_OF = "retry_of"  #: user attr of a trial that repeats an interrupted one: 
 #: User attr of a trial failed because its run stopped (set before the FAIL, so that a run stopped
 #: between recording a trial's outcome and telling it is still known as stopped, not as done).
 STOPPED = "stopped"
-#: User attrs of a finished trial: its outcome, the refusal's reason, its metrics, its constraint
-#: violations, its folder under the study's out folder and its seconds.
+#: User attr of a finished trial, written in one transaction: ``{"outcome", "reason", "seconds", "folder",
+#: "metrics", "constraint"}`` (the outcome's value, the refusal's reason, the worker's s, the trial's folder
+#: under the study's out folder, the metrics by name, the constraint violations); read with :func:`trial_result`.
+RESULT = "result"
 OUTCOME, REASON, METRICS, CONSTRAINT, FOLDER, SECONDS = "outcome", "reason", "metrics", "constraint", "folder", \
-    "seconds"
+    "seconds"  #: the keys of :data:`RESULT`
 OWNER = "owner"  #: user attr: ``{"host", "pid", "start"}`` of the process that runs the trial
 
 
@@ -186,22 +188,57 @@ def retry_stale_trials(study: Any, rdb: Any) -> list[int]:
     """Fail the RUNNING trials of dead processes and ask their parameters again; the failed trials' numbers.
 
     Call under :func:`claim_lock`; ``rdb`` is the study's RDBStorage (:func:`open_storage`). Dead
-    owners on this host are found at once; those of other hosts once their heartbeat is :data:`GRACE_S` old.
+    owners on this host are found at once, and so is a trial with no owner (its process died while
+    claiming it); owners of other hosts once their heartbeat is :data:`GRACE_S` old.
     """
     from optuna.trial import TrialState
 
+    # Every process asks for a trial and records its owner under the claim lock, so a RUNNING trial
+    # without an owner, seen under that lock, was being claimed by a process that died in between.
     stale = [trial for trial in study.get_trials(deepcopy=False, states=(TrialState.RUNNING,))
-             if _owner_gone(trial.user_attrs.get(OWNER))]
+             if OWNER not in trial.user_attrs or _owner_gone(trial.user_attrs[OWNER])]
     stale_ids = {trial._trial_id for trial in stale}
     stale_ids |= set(rdb._get_stale_trial_ids(study._study_id))
     return fail_and_retry(study, stale_ids)
+
+
+def trial_result(trial: Any) -> dict[str, Any]:
+    """The :data:`RESULT` record of a (frozen) trial; empty while it runs or when its run stopped first."""
+    record = trial.user_attrs.get(RESULT)
+    return record if isinstance(record, dict) else {}
+
+
+def count_trials(rdb: Any, study_id: int) -> tuple[int, bool]:
+    """The trials that count toward ``--trials`` (COMPLETE, RUNNING, WAITING, and FAIL with a recorded
+    result and not stopped) and whether any is WAITING, in one query.
+
+    One aggregate over optuna's tables, not a read of every trial: asking for a trial reads them anyway,
+    and this count is made under :func:`claim_lock` before every ask."""
+    import sqlalchemy
+    from optuna.storages._rdb import models
+    from optuna.trial import TrialState
+
+    trial, attr = models.TrialModel, models.TrialUserAttributeModel
+
+    def has_attr(key: str) -> Any:
+        return sqlalchemy.exists().where(attr.trial_id == trial.trial_id, attr.key == key)
+
+    counted = sqlalchemy.or_(trial.state.in_([TrialState.COMPLETE, TrialState.RUNNING, TrialState.WAITING]),
+                             sqlalchemy.and_(trial.state == TrialState.FAIL, has_attr(RESULT), ~has_attr(STOPPED)))
+    query = sqlalchemy.select(
+        sqlalchemy.func.count().filter(counted),
+        sqlalchemy.func.count().filter(trial.state == TrialState.WAITING),
+    ).where(trial.study_id == study_id)
+    with rdb.engine.connect() as connection:
+        total, waiting = connection.execute(query).one()
+    return int(total or 0), bool(waiting)
 
 
 def was_stopped(trial: Any) -> bool:
     """A FAIL trial whose run stopped (asked again), not one failed for a reason of its design."""
     from optuna.trial import TrialState
 
-    return trial.state is TrialState.FAIL and (OUTCOME not in trial.user_attrs or STOPPED in trial.user_attrs)
+    return trial.state is TrialState.FAIL and (RESULT not in trial.user_attrs or STOPPED in trial.user_attrs)
 
 
 def fail_and_retry(study: Any, trial_ids: Iterable[int]) -> list[int]:

@@ -37,16 +37,18 @@ from torus_cad.optimize.storage import (
     OUTCOME,
     OWNER,
     REASON,
+    RESULT,
     SECONDS,
     Heartbeat,
     claim_lock,
+    count_trials,
     fail_and_retry,
     open_storage,
     owner_record,
     public_url,
     retry_stale_trials,
     storage_url,
-    was_stopped,
+    trial_result,
 )
 from torus_cad.optimize.study_file import Sampler, StudySpec
 from torus_cad.optimize.trial_job import PERFORMANCE_DIR, TrialTask, run_trial
@@ -77,6 +79,8 @@ class StudyResult:
         total: the trials asked for in all.
         ran: trials this process ran (finished) in this run.
         seconds: wall time of the trial loop, s.
+        cpu_seconds: CPU time of this process (all its threads) in the trial loop, s: the sampler, the
+            storage and the loop, which take their share of the cores the workers run on.
         backend: ``"local pool, N workers"`` or ``"dask: ..."``.
         retried: numbers of trials of dead processes that were failed and asked again.
         files: what :func:`torus_cad.optimize.results.write_results` wrote, by kind.
@@ -90,6 +94,7 @@ class StudyResult:
     total: int
     ran: int = 0
     seconds: float = 0.0
+    cpu_seconds: float = 0.0
     backend: str = ""
     retried: list[int] = field(default_factory=list)
     files: dict[str, Path] = field(default_factory=dict)
@@ -191,7 +196,7 @@ class _Runner:
     # -- the loop --------------------------------------------------------------------------------
 
     def run(self, result: StudyResult, workers: int | None, scheduler: str | None) -> None:
-        start = time.perf_counter()
+        start, cpu_start = time.perf_counter(), time.process_time()
         own_client = own_cluster = None
         try:
             with self.heartbeat:
@@ -214,6 +219,7 @@ class _Runner:
             raise
         finally:
             result.ran, result.seconds = self.ran, time.perf_counter() - start
+            result.cpu_seconds = time.process_time() - cpu_start
             if own_client is not None:
                 cluster.close_client(own_client, own_cluster)
 
@@ -232,15 +238,10 @@ class _Runner:
 
     def _claim(self) -> Any:
         """Ask for a trial (an enqueued retry first), or None when the study is full."""
-        from optuna.trial import TrialState
-
-        trials = self.study.get_trials(deepcopy=False)
+        counted, waiting = count_trials(self.rdb, self.study._study_id)
         if not self.seeded:  # distinct seeds for processes sharing a study, reproducible for one process
-            self.study.sampler = _sampler(self.spec, self.spec.seed + len(trials))
+            self.study.sampler = _sampler(self.spec, self.spec.seed + counted)
             self.seeded = True
-        waiting = any(trial.state is TrialState.WAITING for trial in trials)
-        counted = sum(1 for trial in trials if trial.state in (TrialState.COMPLETE, TrialState.RUNNING,
-                                                               TrialState.WAITING) or _finished_fail(trial))
         if not waiting and counted >= self.total:
             return None
         with warnings.catch_warnings():
@@ -256,27 +257,28 @@ class _Runner:
         folder = self.out / TRIALS_DIR / str(trial.number)
         folder.mkdir(parents=True, exist_ok=True)
         parameters = self.spec.parameters(trial.params, name)
-        trial.set_user_attr(FOLDER, f"{TRIALS_DIR}/{trial.number}")
         return TrialTask(name, parameters, str(folder), stl=self.spec.stl, simulate=self.spec.simulate,
                          simulate_time_limit_s=self.spec.time_limit_s)
 
     def _on_result(self, task: DesignTask, result: DesignResult) -> None:
-        """Tell optuna what the trial gave: its objective values and constraints, or FAIL with the reason."""
+        """Tell optuna what the trial gave: its objective values and constraints, or FAIL with the reason.
+
+        The trial's record (outcome, reason, metrics, violations) is one user attr, one write."""
         import optuna
         from optuna.trial import TrialState
 
         trial = self.in_flight[task.design_id]
         outcome, reason = result.outcome, result.reason
         values: list[float] | None = None
+        record: dict[str, Any] = {SECONDS: result.seconds, FOLDER: f"{TRIALS_DIR}/{trial.number}"}
         if outcome is Outcome.VALID:
             try:
-                values = self._evaluate(trial, Path(str(task.folder)), task.design_id)
+                values = self._evaluate(Path(str(task.folder)), task.design_id, record)
             except (KeyError, OSError, ValueError) as error:
                 outcome, reason = Outcome.ERROR, f"the trial's report cannot be read: {error}"
+        record.update({OUTCOME: outcome.value, REASON: reason})
         with contextlib.suppress(optuna.exceptions.UpdateFinishedTrialError):  # a process took it as stale
-            trial.set_user_attr(OUTCOME, outcome.value)
-            trial.set_user_attr(REASON, reason)
-            trial.set_user_attr(SECONDS, result.seconds)
+            trial.set_user_attr(RESULT, record)
             if values is None:
                 self.study.tell(trial, state=TrialState.FAIL)
             else:
@@ -285,17 +287,16 @@ class _Runner:
         self.heartbeat.discard(trial._trial_id)
         self.ran += 1
 
-    def _evaluate(self, trial: Any, folder: Path, name: str) -> list[float]:
-        """The objective values; the metrics and the constraint violations go to the trial's user attrs."""
+    def _evaluate(self, folder: Path, name: str, record: dict[str, Any]) -> list[float]:
+        """The objective values; the metrics and the constraint violations go into the trial's ``record``."""
         report = json.loads((folder / f"{name}.json").read_text())
         performance = None
         if self.spec.simulate is not None:
             performance = json.loads((folder / PERFORMANCE_DIR / f"{name}_performance.json").read_text())
         metrics = {metric: metric_value(metric, report, performance) for metric in dict.fromkeys(self.spec.metrics)}
-        violations = [v for c in self.spec.constraints for v in c.violations(metrics[c.metric])]
-        trial.set_user_attr(METRICS, metrics)
+        record[METRICS] = metrics
         if self.spec.constraints:
-            trial.set_user_attr(CONSTRAINT, violations)
+            record[CONSTRAINT] = [v for c in self.spec.constraints for v in c.violations(metrics[c.metric])]
         return [metrics[objective.metric] for objective in self.spec.objectives]
 
     def _retry_in_flight(self) -> None:
@@ -315,13 +316,6 @@ class _Runner:
         result.files, result.summary_lines = write_results(self.spec, self.study, self.out)
 
 
-def _finished_fail(trial: Any) -> bool:
-    """A FAIL trial that counts as done: a design's failure (its outcome recorded), not a stopped run's."""
-    from optuna.trial import TrialState
-
-    return trial.state is TrialState.FAIL and not was_stopped(trial)
-
-
 def _distributions(spec: StudySpec) -> dict[str, Any]:
     from optuna.distributions import CategoricalDistribution, FloatDistribution, IntDistribution
 
@@ -338,7 +332,7 @@ def _distributions(spec: StudySpec) -> dict[str, Any]:
 
 def _constraints(trial: Any) -> list[float]:
     """optuna's constraints_func: the violations recorded with the trial (feasible when all <= 0)."""
-    return list(trial.user_attrs.get(CONSTRAINT, [math.inf]))
+    return list(trial_result(trial).get(CONSTRAINT, [math.inf]))
 
 
 def _sampler(spec: StudySpec, seed: int) -> Any:

@@ -1,9 +1,9 @@
 """Off-screen preview picture of a propeller: a view from above that shows every blade (none
 edge-on, see :func:`oblique_view`) and a view along the spin axis.
 
-Rendered with VTK (installed with cadquery) off-screen: OpenGL with a depth buffer, smooth
-vertex normals (vtkPolyDataNormals, split at sharp edges such as the trailing edge and the hub's
-rims), a light kit and FXAA, from OpenCascade's tessellation of the fused solid. Each face is
+Rendered with VTK (installed with cadquery) off-screen: OpenGL with a depth buffer and FXAA, the
+scene of :mod:`torus_cad.preview.vtk_scene` (the studio's too), from OpenCascade's tessellation of
+the fused solid. Each face is
 coloured by the part it came from, as the fuse reports it (``Propeller.face_parts``): the hub
 grey, every blade its own colour. No window or display is needed: without an X display VTK
 draws through EGL (Mesa's software rasteriser on a machine without a GPU)::
@@ -223,18 +223,20 @@ def render_views(mesh: SceneMesh, views: Sequence[View], size: Sequence[int], ti
     RGB uint8 array of exactly ``size`` = (width, height) pixels."""
     from vtkmodules.vtkRenderingCore import vtkRenderer
 
+    from torus_cad.preview.vtk_scene import add_lights, surface_actor, triangle_polydata
+
     width, height = _checked_size(size)
     window = _offscreen_window(width, height)
     title_px = _title_height_px(height) if title else 0
     view_top = 1.0 - title_px / height
-    actor = _mesh_actor(mesh, smooth)
+    actor = surface_actor(triangle_polydata(mesh.vertices, mesh.triangles, mesh.colors, smooth))
     for column, view in enumerate(views):
         renderer = vtkRenderer()
         renderer.SetViewport(column / len(views), 0.0, (column + 1) / len(views), view_top)
         renderer.SetBackground(*BACKGROUND_RGB)
         renderer.AddActor(actor)
         renderer.UseFXAAOn()
-        _light(renderer)
+        add_lights(renderer)
         _place_camera(renderer, mesh.vertices, view, (width / len(views)) / (height * view_top))
         if view.label:
             label_px = _fitting_font_px(view.label, _label_size_px(height), width / len(views))
@@ -348,62 +350,6 @@ def _pixels(window: vtkRenderWindow, width: int, height: int) -> NDArray[np.uint
         raise TorusCadError("off-screen OpenGL did not render the preview (no EGL or OSMesa? on Debian: "
                             "apt-get install libegl1 libegl-mesa0 libgl1-mesa-dri)")
     return np.ascontiguousarray(pixels[..., :3], dtype=np.uint8)
-
-
-def _mesh_actor(mesh: SceneMesh, smooth: bool) -> Any:
-    """A VTK actor of ``mesh``: per-triangle colours, smooth normals split at edges sharper than 35°."""
-    from vtkmodules.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray
-    from vtkmodules.vtkCommonCore import vtkPoints
-    from vtkmodules.vtkCommonDataModel import vtkCellArray, vtkPolyData
-    from vtkmodules.vtkFiltersCore import vtkPolyDataNormals
-    from vtkmodules.vtkRenderingCore import vtkActor, vtkPolyDataMapper
-
-    points = vtkPoints()
-    points.SetData(numpy_to_vtk(np.ascontiguousarray(mesh.vertices, dtype=float), deep=True))  # type: ignore[no-untyped-call]
-    cells = vtkCellArray()
-    offsets = np.arange(0, 3 * len(mesh.triangles) + 1, 3, dtype=np.int64)
-    cells.SetData(numpy_to_vtkIdTypeArray(offsets, deep=True),  # type: ignore[no-untyped-call]
-                  numpy_to_vtkIdTypeArray(np.ascontiguousarray(mesh.triangles.ravel(), dtype=np.int64), deep=True))  # type: ignore[no-untyped-call]
-    polydata = vtkPolyData()
-    polydata.SetPoints(points)
-    polydata.SetPolys(cells)
-    colors = numpy_to_vtk(np.ascontiguousarray(np.round(mesh.colors * 255.0), dtype=np.uint8), deep=True)  # type: ignore[no-untyped-call]
-    colors.SetName("colors")
-    polydata.GetCellData().SetScalars(colors)
-    mapper = vtkPolyDataMapper()
-    if smooth:
-        normals = vtkPolyDataNormals()
-        normals.SetInputData(polydata)
-        normals.SetFeatureAngle(35.0)
-        normals.SplittingOn()
-        normals.ConsistencyOff()  # the tessellation is already oriented outward
-        normals.AutoOrientNormalsOff()
-        normals.ComputeCellNormalsOff()
-        mapper.SetInputConnection(normals.GetOutputPort())
-    else:
-        mapper.SetInputData(polydata)
-    mapper.SetScalarModeToUseCellData()
-    mapper.SetColorModeToDirectScalars()
-    actor = vtkActor()
-    actor.SetMapper(mapper)
-    surface = actor.GetProperty()
-    surface.SetInterpolationToPhong()
-    surface.SetAmbient(0.15)
-    surface.SetDiffuse(0.82)
-    surface.SetSpecular(0.25)
-    surface.SetSpecularPower(40.0)
-    return actor
-
-
-def _light(renderer: Any) -> None:
-    """VTK's light kit: a key light above and left of the camera, a fill, back and head light."""
-    from vtkmodules.vtkRenderingCore import vtkLightKit
-
-    kit = vtkLightKit()
-    kit.SetKeyLightIntensity(0.85)
-    kit.SetKeyToFillRatio(1.6)
-    kit.SetKeyToHeadRatio(1.7)
-    kit.AddLightsToRenderer(renderer)
 
 
 def _place_camera(renderer: Any, vertices: NDArray[np.float64], view: View, aspect: float) -> None:
