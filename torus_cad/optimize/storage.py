@@ -6,8 +6,9 @@ an ``flock`` on a file beside the SQLite database, a PostgreSQL advisory lock on
 
 A process that dies (SIGKILL, a power cut) leaves its trials RUNNING. Each trial records its
 owner (host, pid, process start time), and its process records a heartbeat every
-:data:`HEARTBEAT_S` seconds; a RUNNING trial whose owner is gone from this host, or whose
-heartbeat is older than :data:`GRACE_S` (another host), is failed and its parameters are asked
+:data:`HEARTBEAT_S` seconds; a RUNNING trial with no owner (its process died while claiming it),
+one whose owner is gone from this host, or one whose heartbeat is older than :data:`GRACE_S`
+(another host), is failed and its parameters are asked
 again as a new trial that records ``retry_of`` (:func:`retry_stale_trials`).
 """
 
@@ -28,9 +29,8 @@ from urllib.parse import urlsplit, urlunsplit
 from torus_cad.batch.runner import _identity
 from torus_cad.errors import ParameterError, TorusCadError
 
-__all__ = ["GRACE_S", "HEARTBEAT_S", "Heartbeat", "StorageError", "claim_lock", "count_trials", "fail_and_retry", "open_storage",
-           "owner_record",
-           "public_url", "retry_stale_trials", "storage_url", "trial_result"]
+__all__ = ["GRACE_S", "HEARTBEAT_S", "Heartbeat", "StorageError", "claim_lock", "count_trials", "fail_and_retry",
+           "open_storage", "owner_record", "public_url", "retry_stale_trials", "storage_url", "trial_result"]
 
 HEARTBEAT_S = 10  #: how often a running process records that its trials are alive, s
 GRACE_S = 120  #: a RUNNING trial without a heartbeat for this long belongs to a dead process, s
@@ -213,7 +213,8 @@ def count_trials(rdb: Any, study_id: int) -> tuple[int, bool]:
     result and not stopped) and whether any is WAITING, in one query.
 
     One aggregate over optuna's tables, not a read of every trial: asking for a trial reads them anyway,
-    and this count is made under :func:`claim_lock` before every ask."""
+    and this count is made under :func:`claim_lock` before every ask. The FAIL rule is
+    :func:`was_stopped`'s, in SQL: change them together."""
     import sqlalchemy
     from optuna.storages._rdb import models
     from optuna.trial import TrialState
