@@ -1,7 +1,8 @@
 """The root fillet on every shipped example at 0.5 and 1 mm.
 
 Each example gets one valid closed solid with the fillet, of the requested radius everywhere
-(no edge reduced where a blade bends tightly, torus_cad.kernel.fillet.RootFillet); an example whose hub chamfer the
+(no edge reduced where a blade bends tightly, torus_cad.kernel.fillet.RootFillet), every face
+knowing the part it came from (torus_cad.kernel.face_provenance); an example whose hub chamfer the
 fillet's spread would cut into gets the exit-2 refusal naming ``hub.chamfer`` instead, and
 then, with the chamfer taken off, the fillet. Round a sharp (knife) trailing edge OpenCascade's
 fillet can leave a corner face that crosses itself: the strict check then refuses the solid,
@@ -13,6 +14,7 @@ from __future__ import annotations
 
 import pytest
 from conftest import SHIPPED_DESIGNS
+from face_measures import assert_faces_come_from_their_parts
 
 from torus_cad.errors import GeometryError, KernelError, ParameterError
 from torus_cad.kernel.checks import is_valid_closed_solid
@@ -47,3 +49,5 @@ def test_root_fillet_works_on_every_shipped_example(example, radius_mm):
     assert propeller.root_fillet is not None and propeller.root_fillet.constant_radius  # no reduced radius anywhere
     assert len(propeller.solid.Faces()) > len(build_propeller(params.with_values({"hub.root_fillet_radius": 0.0,
                                                                                   "hub.chamfer": 0.0})).solid.Faces())
+    # each face's part comes through the fillet's history: the preview's and the studio's colours
+    assert_faces_come_from_their_parts(propeller.solid, propeller.face_parts, propeller, radius_mm)

@@ -10,14 +10,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from conftest import ROUTE_VOLUME_TOLERANCE, VOLUME_PRECISION, assert_same_volume_as_general_fuse
+from face_measures import assert_faces_come_from_their_parts
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import torus_cad.propeller as pipeline
 from torus_cad.errors import KernelError
 from torus_cad.geometry.hub import footprint_arcs_deg, seam_angle_deg
-from torus_cad.kernel.checks import distances_to_shape, is_valid_closed_solid, precise_volume, single_valid_solid
-from torus_cad.kernel.fuse import HUB_PART, FuseRoute, fuse_all, fuse_pattern
+from torus_cad.kernel.checks import is_valid_closed_solid, precise_volume, single_valid_solid
+from torus_cad.kernel.fuse import FuseRoute, fuse_all, fuse_pattern
 from torus_cad.kernel.hub import hub_solid
 from torus_cad.propeller import build_propeller
 from torus_cad.tolerances import HUB_FOOTPRINT_MARGIN_DEG
@@ -119,7 +120,7 @@ def test_any_seam_angle_gives_the_same_solid(default_propeller, seam_deg, join):
     fused = fuse_pattern(hub, default_propeller.blades[0], angles)
     solid = single_valid_solid(fused.shape, "the shared route")
     assert fused.route == join
-    _assert_faces_come_from_their_parts(solid, fused.face_parts, default_propeller)
+    assert_faces_come_from_their_parts(solid, fused.face_parts, default_propeller)
     assert precise_volume(solid, VOLUME_PRECISION) == pytest.approx(
         precise_volume(default_propeller.solid, VOLUME_PRECISION), rel=ROUTE_VOLUME_TOLERANCE)
     assert len(solid.Faces()) == len(default_propeller.solid.Faces())
@@ -153,41 +154,20 @@ def test_a_wrong_curve_on_the_hub_is_caught_not_shipped(light_params, monkeypatc
 
 # -- which part each face came from ------------------------------------------------------------------
 
-#: A face's tessellation vertices lie on its own part to this (mm); at least half of them are
-#: farther than ON_OTHER_PART_MM from every other part (the rest may lie on a shared edge).
-ON_PART_MM, OFF_OTHER_PART_MM = 1e-4, 1e-2
-
-
-def _assert_faces_come_from_their_parts(solid, face_parts, propeller) -> None:
-    faces = solid.Faces()
-    blades = len(propeller.blades)
-    assert len(face_parts) == len(faces)
-    assert set(face_parts) == {HUB_PART, *range(blades)}  # every part shows
-    parts = {HUB_PART: propeller.hub, **dict(enumerate(propeller.blades))}
-    for face, part in zip(faces, face_parts, strict=True):
-        vertices, _ = face.tessellate(0.2, 0.5)
-        points = np.array([vertex.toTuple() for vertex in vertices])
-        points = points[np.linspace(0, len(points) - 1, min(8, len(points))).astype(int)]
-        assert np.median(distances_to_shape(parts[part], points)) < ON_PART_MM
-        for other, shape in parts.items():
-            if other != part:
-                assert np.median(distances_to_shape(shape, points)) > OFF_OTHER_PART_MM, (part, other)
-
-
 def test_the_default_propeller_knows_each_faces_part(default_propeller):
     assert default_propeller.fuse_route == FuseRoute.ASSEMBLED
-    _assert_faces_come_from_their_parts(default_propeller.solid, default_propeller.face_parts, default_propeller)
+    assert_faces_come_from_their_parts(default_propeller.solid, default_propeller.face_parts, default_propeller)
 
 
 def test_the_general_fuse_knows_each_faces_part(light_params):
     propeller = build_propeller(light_params)
     fused = fuse_all(propeller.hub, propeller.blades)
     assert fused.route == FuseRoute.GENERAL
-    _assert_faces_come_from_their_parts(single_valid_solid(fused.shape, "the general fuse"), fused.face_parts,
-                                        propeller)
+    assert_faces_come_from_their_parts(single_valid_solid(fused.shape, "the general fuse"), fused.face_parts,
+                                       propeller)
 
 
 def test_a_mirrored_propeller_keeps_each_faces_part(light_params):
     # handedness ccw mirrors the fused solid (a transformed copy): the faces keep their order.
     mirrored = build_propeller(light_params.with_values({"handedness": "ccw"}))
-    _assert_faces_come_from_their_parts(mirrored.solid, mirrored.face_parts, mirrored)
+    assert_faces_come_from_their_parts(mirrored.solid, mirrored.face_parts, mirrored)

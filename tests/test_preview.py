@@ -15,15 +15,14 @@ from PIL import Image
 from torus_cad.cli import EXIT_BAD_INPUT, EXIT_OK, main
 from torus_cad.colors import HUB_COLOR, blade_color
 from torus_cad.errors import ParameterError
+from torus_cad.geometry.propeller import HUB_PART
 from torus_cad.kernel.checks import mass_properties
-from torus_cad.kernel.fuse import HUB_PART
 from torus_cad.preview.picture import (
     AXIAL_VIEW,
     ISOMETRIC_ELEVATION_DEG,
     SceneMesh,
     View,
     blade_silhouettes,
-    face_parts_by_distance,
     oblique_view,
     parse_size,
     propeller_mesh,
@@ -247,15 +246,9 @@ def test_the_oblique_view_faces_every_blades_window(default_propeller):
     assert np.abs(unit @ view).min() > 3 * np.abs(unit @ classic).min()
 
 
-def test_parts_found_by_distance_are_the_fuses(objects):
-    # The fallback for builds that do not report the parts (the root fillet) agrees with the fuse.
-    assert face_parts_by_distance(objects.solid, objects.hub, objects.blades) == objects.face_parts
-
-
 def test_a_filleted_propeller_shows_every_part(tmp_path):
-    # The root fillet's build does not report face parts; the preview finds them by distance.
+    # The root fillet's build reports each face's part from the fillet's history.
     filleted = propeller_objects("examples/workshop_fillet.toml")
-    assert filleted.face_parts == ()
     _assert_a_real_picture(_read_png(write_preview(filleted, tmp_path / "fillet.png", size=(800, 400))), 3)
 
 

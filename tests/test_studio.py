@@ -15,6 +15,7 @@ import pytest
 from torus_cad import PropellerParameters
 from torus_cad.errors import GeometryError, ParameterError
 from torus_cad.geometry.mesh import TriangleMesh
+from torus_cad.geometry.propeller import HUB_PART
 from torus_cad.studio.panel import (
     FieldKind,
     design_from_state,
@@ -23,7 +24,7 @@ from torus_cad.studio.panel import (
     state_name,
     state_values,
 )
-from torus_cad.studio.scene import HUB_PART, cylinder_mesh, preview_scene
+from torus_cad.studio.scene import cylinder_mesh, preview_scene
 
 
 @pytest.fixture(scope="module")

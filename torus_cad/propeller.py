@@ -73,8 +73,8 @@ class Propeller:
             ``parameters`` are already the resolved spec parameters.
         mounting: the hub's bore, flat, set screw and chamfer, with the set screw's direction.
         face_parts: the part each face of ``solid`` came from, in the order of ``solid.Faces()``:
-            -1 (``torus_cad.kernel.fuse.HUB_PART``) the hub, i blade i; empty where the build
-            does not know it (after the root fillet).
+            -1 (:data:`torus_cad.geometry.propeller.HUB_PART`) the hub, i blade i; a root fillet's
+            faces are their blade's (:mod:`torus_cad.kernel.face_provenance`).
         root_fillet: the radii the root fillet has (None without one): the requested radius
             everywhere, or smaller along junction edges where the blade bends too tightly for it
             (:class:`torus_cad.kernel.fillet.RootFillet`).
@@ -210,8 +210,7 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
                 raise KernelError(f"{error}; a flat trailing edge's corners stop the fillet: "
                                   f"airfoil.trailing_edge_shape = 'round' takes it") from None
             solid, root_fillet = filleted.solid, filleted
-            route = FuseRoute.ASSEMBLED
-            face_parts: tuple[int, ...] = ()  # the preview tags a filleted solid's faces itself
+            route, face_parts = FuseRoute.ASSEMBLED, filleted.face_parts
     else:
         solid, fused = _join_blades_to_hub(hub, blade, blades, angles_deg, timer)
         route, face_parts = fused.route, fused.face_parts

@@ -17,6 +17,9 @@ from torus_cad.geometry.frames import FrameKind
 from torus_cad.geometry.section import Section
 from torus_cad.geometry.transforms import SectionLaws
 
+#: The hub's number where the propeller's parts are numbered (a face's part, a scene's part); blade i is i.
+HUB_PART = -1
+
 
 @dataclass(frozen=True)
 class HubGeometry:

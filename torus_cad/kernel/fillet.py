@@ -14,6 +14,7 @@ Why each step is there: docs/explanation/how-the-solid-is-built.md.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import cadquery as cq
@@ -87,12 +88,15 @@ class RootFillet:
             not constant: the whole junction loops (blade 0 has one where each end meets the hub)
             that hold an edge of reduced radius (:func:`reduced_edge_radii`), as OpenCascade blends
             the radius between that edge and its neighbours; 0 for a constant-radius fillet.
+        face_parts: the part each face of ``solid`` came from, in the order of ``solid.Faces()``
+            (:mod:`torus_cad.kernel.face_provenance`; a fillet face is its blade's).
     """
 
     solid: cq.Solid
     radius_mm: float
     smallest_radius_mm: float
     varying_junction_mm: float = 0.0
+    face_parts: tuple[int, ...] = ()
 
     @property
     def constant_radius(self) -> bool:
@@ -106,10 +110,11 @@ class RootFillet:
                 "varying_junction_per_blade_mm": self.varying_junction_mm}
 
 
-def fillet_blade_roots(solid: cq.Solid, radius_mm: float, suggest: bool = True,
+def fillet_blade_roots(solid: cq.Solid, face_parts: Sequence[int], radius_mm: float, suggest: bool = True,
                        params: FilletParams | None = None, deadline: float | None = None,
                        reduce: bool = False) -> RootFillet:
-    """``solid`` with a fillet of ``radius_mm`` along every blade-hub junction; one valid solid.
+    """``solid`` (its faces' parts ``face_parts``) with a fillet of ``radius_mm`` along every
+    blade-hub junction; one valid solid, with its faces' parts.
 
     With ``reduce``, junction edges along which a blade face bends too tightly for the ball get a
     smaller radius (:func:`reduced_edge_radii`); without, the fillet has ``radius_mm`` everywhere.
@@ -121,9 +126,10 @@ def fillet_blade_roots(solid: cq.Solid, radius_mm: float, suggest: bool = True,
     if not edges:
         raise KernelError("root fillet failed: no blade-hub junction edges found")
     radii = reduced_edge_radii(solid, edges, radius_mm) if reduce else [radius_mm] * len(edges)
-    filleted = fillet_in_child(solid, edges, radius_mm, params, deadline, radii if reduce else None)
+    filleted = fillet_in_child(solid, edges, radius_mm, params, deadline, radii if reduce else None, face_parts)
     if filleted is not None:
-        return RootFillet(filleted, radius_mm, min(radii), varying_junction_mm(solid, edges, radii, radius_mm))
+        return RootFillet(filleted.solid, radius_mm, min(radii), varying_junction_mm(solid, edges, radii, radius_mm),
+                          filleted.face_parts)
     if not suggest:
         raise KernelError(f"root fillet failed at hub.root_fillet_radius = {radius_mm:g} mm")
     raise fillet_failure(solid, radius_mm)

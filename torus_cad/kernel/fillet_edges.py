@@ -14,6 +14,7 @@ from __future__ import annotations
 import io
 import time
 from collections.abc import Sequence
+from typing import NamedTuple
 
 import cadquery as cq
 from OCP.BRep import BRep_Builder
@@ -24,6 +25,7 @@ from OCP.ShapeFix import ShapeFix_Shape
 from OCP.TopoDS import TopoDS_Edge, TopoDS_Shape
 
 from torus_cad.errors import KernelError
+from torus_cad.kernel import face_provenance
 from torus_cad.kernel.checks import precise_volume, single_valid_solid
 from torus_cad.kernel.isolation import IsolatedCrash, IsolatedTimeout, run_isolated
 from torus_cad.tolerances import (
@@ -42,13 +44,23 @@ FILLET_SHAPE: ChFi3d_FilletShape = ChFi3d_Rational
 FilletParams = tuple[float, float, float, float, float, float]
 
 
+class Filleted(NamedTuple):
+    """A filleted solid and the part of each of its faces (:mod:`torus_cad.kernel.face_provenance`;
+    empty when the input's were not given)."""
+
+    solid: cq.Solid
+    face_parts: tuple[int, ...]
+
+
 def fillet_edges(solid: cq.Solid, edges: list[TopoDS_Edge], radius_mm: float,
-                 params: FilletParams | None = None, edge_radii: Sequence[float] | None = None) -> cq.Solid | None:
+                 params: FilletParams | None = None, edge_radii: Sequence[float] | None = None,
+                 face_parts: Sequence[int] | None = None) -> Filleted | None:
     """The fillet in this process: the checked solid, or None when OpenCascade fails or the result is unsound.
 
     ``params``: BRepFilletAPI_MakeFillet.SetParams values (default: OpenCascade's). ``edge_radii``:
     a radius per edge (mm) instead of ``radius_mm`` on all; OpenCascade blends the radius between
-    edges of one contour that differ."""
+    edges of one contour that differ. ``face_parts``: the part of each face of ``solid``; the
+    result's are then found through the fillet's history (KernelError if a face has none)."""
     fillet = BRepFilletAPI_MakeFillet(solid.wrapped, FILLET_SHAPE)
     if params is not None:
         fillet.SetParams(*params)
@@ -65,6 +77,9 @@ def fillet_edges(solid: cq.Solid, edges: list[TopoDS_Edge], radius_mm: float,
         return None
     if not fillet.IsDone():
         return None
+    origins = None if face_parts is None else (
+        face_provenance.through_history(fillet, face_provenance.labelled_faces(solid.wrapped, face_parts))
+        + face_provenance.fillet_faces(fillet, solid.wrapped, face_parts))
     repaired = False
     try:
         result = single_valid_solid(cq.Shape.cast(fillet.Shape()), "the root fillet")
@@ -76,6 +91,8 @@ def fillet_edges(solid: cq.Solid, edges: list[TopoDS_Edge], radius_mm: float,
         except KernelError:
             return None
         repaired = True
+        if origins is not None:
+            origins = face_provenance.through_reshape(fix.Context(), origins, result.wrapped)
     added_mm3 = (precise_volume(result, VOLUME_CHECK_RELATIVE_PRECISION)
                  - precise_volume(solid, VOLUME_CHECK_RELATIVE_PRECISION))
     # A concave fillet only adds material: a smaller volume means a wrong result. A repaired one
@@ -85,26 +102,27 @@ def fillet_edges(solid: cq.Solid, edges: list[TopoDS_Edge], radius_mm: float,
     if repaired and added_mm3 > REPAIRED_FILLET_MAX_AREA_RADII2 * radius_mm ** 2 * sum(cq.Edge(edge).Length()
                                                                                          for edge in edges):
         return None
-    return result
+    return Filleted(result, () if origins is None else face_provenance.face_parts(result.wrapped, origins))
 
 
 def fillet_in_child(solid: cq.Solid, edges: list[TopoDS_Edge], radius_mm: float,
-                     params: FilletParams | None = None, deadline: float | None = None,
-                     edge_radii: Sequence[float] | None = None) -> cq.Solid | None:
+                    params: FilletParams | None = None, deadline: float | None = None,
+                    edge_radii: Sequence[float] | None = None, face_parts: Sequence[int] | None = None
+                    ) -> Filleted | None:
     """:func:`fillet_edges` in a forked child (torus_cad.kernel.isolation): a crash or a hang there is
-    a failed fillet, not a dead process.
+    a failed fillet, not a dead process. The child sends the solid as a BRep string, with its face parts.
 
     The child gets FILLET_TIME_LIMIT_S, or what is left until ``deadline`` (time.monotonic()) if less."""
     limit_s = FILLET_TIME_LIMIT_S if deadline is None else min(FILLET_TIME_LIMIT_S, deadline - time.monotonic())
     if limit_s <= 0.0:
         return None
 
-    def fillet_as_brep() -> bytes | None:
+    def fillet_as_brep() -> tuple[bytes, tuple[int, ...]] | None:
         try:
-            result = fillet_edges(solid, edges, radius_mm, params, edge_radii)
+            result = fillet_edges(solid, edges, radius_mm, params, edge_radii, face_parts)
         except Exception:  # OpenCascade's failures (Standard_Failure and others): a failed fillet
             return None
-        return None if result is None else _to_brep(result.wrapped)
+        return None if result is None else (_to_brep(result.solid.wrapped), result.face_parts)
 
     try:
         data = run_isolated(fillet_as_brep, timeout_s=limit_s, what="the root fillet")
@@ -112,7 +130,8 @@ def fillet_in_child(solid: cq.Solid, edges: list[TopoDS_Edge], radius_mm: float,
         return None
     if not data:
         return None
-    return single_valid_solid(cq.Shape.cast(_from_brep(data)), "the root fillet")
+    brep, parts = data
+    return Filleted(single_valid_solid(cq.Shape.cast(_from_brep(brep)), "the root fillet"), parts)
 
 
 def _to_brep(shape: TopoDS_Shape) -> bytes:

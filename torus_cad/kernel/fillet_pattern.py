@@ -19,6 +19,7 @@ from collections.abc import Callable, Iterator, Sequence
 import cadquery as cq
 from OCP.BRep import BRep_Builder, BRep_Tool
 from OCP.BRepAdaptor import BRepAdaptor_Surface
+from OCP.BRepAlgoAPI import BRepAlgoAPI_Cut
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
 from OCP.BRepExtrema import BRepExtrema_DistShapeShape
 from OCP.BRepTools import BRepTools
@@ -31,7 +32,10 @@ from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Shape, TopoDS_Shell, TopoDS_S
 from OCP.TopTools import TopTools_IndexedMapOfShape
 
 from torus_cad.errors import KernelError
+from torus_cad.geometry.propeller import HUB_PART
+from torus_cad.kernel import face_provenance
 from torus_cad.kernel.checks import single_valid_solid
+from torus_cad.kernel.face_provenance import Origins
 from torus_cad.kernel.fillet import (
     FILLET_TRIES,
     SIDE_FACE_PIECES,
@@ -44,7 +48,7 @@ from torus_cad.kernel.fillet import (
 from torus_cad.kernel.fillet_edges import FilletParams
 from torus_cad.kernel.fillet_tight_bends import reduced_edge_radii
 from torus_cad.kernel.fuse import fuse_pattern, pattern_blades
-from torus_cad.kernel.topology import BLADE_SURFACES, cut, explore
+from torus_cad.kernel.topology import BLADE_SURFACES, boolean, explore, faces, result
 from torus_cad.tolerances import (
     FILLET_RETRY_TIME_LIMIT_S,
     FILLET_TRIES_TIME_LIMIT_S,
@@ -132,29 +136,40 @@ class _RunOut:
 
     def __init__(self, blade: cq.Solid, angles_deg: Sequence[float], radius_mm: float, run_out: RunOutHub | None) -> None:
         self.blade, self.angles_deg, self.radius_mm, self.run_out = blade, angles_deg, radius_mm, run_out
-        self.made: tuple[cq.Solid, list[TopoDS_Shape]] | None = None
+        self.made: tuple[cq.Solid, list[TopoDS_Shape], Origins] | None = None
 
-    def _hub_and_tools(self) -> tuple[cq.Solid, list[TopoDS_Shape]]:
+    def _hub_and_tools(self) -> tuple[cq.Solid, list[TopoDS_Shape], Origins]:
+        """The run-out hub, the tools that cut it back and their faces' parts (the hub's, or where a
+        slab had a blade cut out of it, that blade's)."""
         if self.made is None:
             assert self.run_out is not None
             extended, tools = self.run_out(_RUN_OUT_RADII * self.radius_mm)
+            origins: Origins = [(face, HUB_PART) for tool in tools for face in faces(tool)]
             if _touches(self.blade, tools[:2]):  # the blade itself reaches past a hub end: the cut-back keeps it there
                 blades = [copy.wrapped for copy in pattern_blades(self.blade, self.angles_deg)]
-                tools = [cut(slab, blades, "keep the blades out of the run-out's cut-back") for slab in tools[:2]] + tools[2:]
-            self.made = extended, tools
+                blade_faces = [(face, index) for index, copy in enumerate(blades) for face in faces(copy)]
+                origins = [(face, HUB_PART) for tool in tools[2:] for face in faces(tool)]
+                for slab in tools[:2]:
+                    operation = boolean(BRepAlgoAPI_Cut(), [slab], blades)
+                    tools.append(result(operation, "keep the blades out of the run-out's cut-back"))
+                    origins += face_provenance.through_history(operation, [(f, HUB_PART) for f in faces(slab)] + blade_faces)
+                tools = tools[2:]
+            self.made = extended, tools, origins
         return self.made
 
     def tries(self, split: _LazySplits, deadline: float, reduce: bool) -> RootFillet | None:
         """The first of :data:`FILLET_TRIES` that works on the run-out hub, cut back; None if none does by ``deadline``."""
         if self.run_out is None or time.monotonic() >= deadline:
             return None
-        extended, tools = self._hub_and_tools()
+        extended, tools, tool_faces = self._hub_and_tools()
 
         def cut_back(made: RootFillet) -> RootFillet:
-            solid = single_valid_solid(cq.Shape.cast(cut(made.solid.wrapped, tools,
-                                                         "cut the run-out hub back to the hub's length")),
-                                       "cutting the run-out hub back")
-            return dataclasses.replace(made, solid=solid)
+            operation = boolean(BRepAlgoAPI_Cut(), [made.solid.wrapped], tools)
+            shape = result(operation, "cut the run-out hub back to the hub's length")
+            solid = single_valid_solid(cq.Shape.cast(shape), "cutting the run-out hub back")
+            origins = face_provenance.labelled_faces(made.solid.wrapped, made.face_parts) + tool_faces
+            parts = face_provenance.face_parts(solid.wrapped, face_provenance.through_history(operation, origins))
+            return dataclasses.replace(made, solid=solid, face_parts=parts)
 
         return _first_that_works(extended, split, self.angles_deg, self.radius_mm, FILLET_TRIES, deadline, reduce, cut_back)
 
@@ -179,19 +194,19 @@ class _LazySplits:
 def _fillet_and_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], radius_mm: float,
                         suggest: bool = True, params: FilletParams | None = None,
                         deadline: float | None = None, reduce: bool = False) -> RootFillet:
-    single = fuse_pattern(hub, blade, angles_deg[:1]).shape
-    filleted = fillet_blade_roots(single_valid_solid(single, "joining blade 0 to the hub"), radius_mm, suggest, params,
-                                  deadline, reduce)
+    single = fuse_pattern(hub, blade, angles_deg[:1])
+    filleted = fillet_blade_roots(single_valid_solid(single.shape, "joining blade 0 to the hub"), single.face_parts,
+                                  radius_mm, suggest, params, deadline, reduce)
     if len(angles_deg) == 1:
         return filleted
     try:
-        solid = single_valid_solid(cq.Shape.cast(_assemble_filleted(filleted.solid.wrapped, angles_deg)),
-                                   "patterning the filleted blade")
-        return dataclasses.replace(filleted, solid=solid)
+        assembled, origins = _assemble_filleted(filleted.solid.wrapped, angles_deg)
+        solid = single_valid_solid(cq.Shape.cast(assembled), "patterning the filleted blade")
+        return dataclasses.replace(filleted, solid=solid, face_parts=face_provenance.face_parts(solid.wrapped, origins))
     except KernelError:
-        whole = fuse_pattern(hub, blade, angles_deg).shape
-        everywhere = fillet_blade_roots(single_valid_solid(whole, "joining the blades to the hub"), radius_mm, suggest,
-                                        params, deadline, reduce)
+        whole = fuse_pattern(hub, blade, angles_deg)
+        everywhere = fillet_blade_roots(single_valid_solid(whole.shape, "joining the blades to the hub"),
+                                        whole.face_parts, radius_mm, suggest, params, deadline, reduce)
         # every blade's junction is the same: report blade 0's share
         return dataclasses.replace(everywhere, varying_junction_mm=everywhere.varying_junction_mm / len(angles_deg))
 
@@ -205,8 +220,9 @@ def _touches(shape: cq.Solid, tools: Sequence[TopoDS_Shape]) -> bool:
     return False
 
 
-def _assemble_filleted(filleted: TopoDS_Shape, angles_deg: Sequence[float]) -> TopoDS_Solid:
-    """The shell of the hub with every blade: blade 0's blade and fillet faces rotated to each angle.
+def _assemble_filleted(filleted: TopoDS_Shape, angles_deg: Sequence[float]) -> tuple[TopoDS_Solid, Origins]:
+    """The shell of the hub with every blade: blade 0's blade and fillet faces rotated to each
+    angle (blade i's by construction, as each face's part), the hub's faces the hub's.
 
     The hub's lateral face keeps its own surface and outer wire, its holes that no blade made
     (a set-screw hole), and gets, for each copy, blade 0's fillet-contact wires rotated, their
@@ -228,25 +244,29 @@ def _assemble_filleted(filleted: TopoDS_Shape, angles_deg: Sequence[float]) -> T
             lateral_with_holes.Add(wire)
     builder, shell = BRep_Builder(), TopoDS_Shell()
     builder.MakeShell(shell)
-    for angle in angles_deg:
+    origins: Origins = []
+    for index, angle in enumerate(angles_deg):
         location = _shift_hole_curves(blade_holes, lateral, math.radians(angle - angles_deg[0]))
         for wire in blade_holes:
             lateral_with_holes.Add(TopoDS.Wire_s(wire.Moved(location)))
         for face in blade_faces:
-            builder.Add(shell, face.Moved(location))
+            moved = face.Moved(location)
+            builder.Add(shell, moved)
+            origins.append((moved, index))
     if not lateral_with_holes.IsDone():
         raise KernelError("OpenCascade could not cut the filleted blade roots out of the hub's lateral face")
     new_lateral = lateral_with_holes.Face()
     new_lateral.Orientation(lateral.Orientation())
-    builder.Add(shell, new_lateral)
-    for face in faces:
-        if not face.IsSame(lateral) and BRepAdaptor_Surface(face).GetType() not in BLADE_SURFACES:
-            builder.Add(shell, face)
+    hub_faces = [new_lateral, *(face for face in faces
+                                if not face.IsSame(lateral) and BRepAdaptor_Surface(face).GetType() not in BLADE_SURFACES)]
+    for face in hub_faces:
+        builder.Add(shell, face)
+        origins.append((face, HUB_PART))
     shell.Closed(BRep_Tool.IsClosed_s(shell))
     solid = TopoDS_Solid()
     builder.MakeSolid(solid)
     builder.Add(solid, shell)
-    return solid
+    return solid, origins
 
 
 def _shift_hole_curves(holes: Sequence[TopoDS_Wire], lateral: TopoDS_Face, angle_rad: float) -> TopLoc_Location:

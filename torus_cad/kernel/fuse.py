@@ -30,12 +30,12 @@ from OCP.BRepTools import BRepTools
 from OCP.GeomAbs import GeomAbs_Cylinder
 from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt, gp_Trsf, gp_Vec2d
 from OCP.TopAbs import TopAbs_FACE, TopAbs_WIRE
-from OCP.TopExp import TopExp
 from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Shape, TopoDS_Shell, TopoDS_Solid
-from OCP.TopTools import TopTools_IndexedMapOfShape
 
 from torus_cad.errors import KernelError
+from torus_cad.geometry.propeller import HUB_PART
+from torus_cad.kernel.face_provenance import Origins, face_parts, through_history
 from torus_cad.kernel.topology import boolean, count, edges, explore, faces, result
 
 _FULL_TURN = 2.0 * math.pi
@@ -52,16 +52,12 @@ def pattern_blades(blade: cq.Solid, angles_deg: Sequence[float]) -> list[cq.Soli
             for angle in angles_deg]
 
 
-#: The hub's entry in :attr:`Fused.face_parts`; blades are 0 .. n-1.
-HUB_PART = -1
-
-
 def fuse_all(hub: cq.Solid, blades: Sequence[cq.Solid]) -> Fused:
     """Hub and all blades fused in one BRepAlgoAPI_Fuse call (parallel, oriented bounding boxes)."""
     fuse = boolean(BRepAlgoAPI_Fuse(), [hub.wrapped], [blade.wrapped for blade in blades])
     shape = result(fuse, "fuse the blades with the hub")
     parts = [(hub.wrapped, HUB_PART), *((blade.wrapped, index) for index, blade in enumerate(blades))]
-    return Fused(cq.Shape.cast(shape), FuseRoute.GENERAL, _face_parts(shape, _history(fuse, parts)))
+    return Fused(cq.Shape.cast(shape), FuseRoute.GENERAL, face_parts(shape, _history(fuse, parts)))
 
 
 class FuseRoute(StrEnum):
@@ -129,14 +125,14 @@ def fuse_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float]) ->
         BRep_Tool.IsClosed_s(edge, patch) for patch in patches for edge in edges(patch))
     if whole_patches:
         solid, origins = _assemble(hub, lateral, copies, patches)
-        return Fused(cq.Shape.cast(solid), FuseRoute.ASSEMBLED, _face_parts(solid, origins))
+        return Fused(cq.Shape.cast(solid), FuseRoute.ASSEMBLED, face_parts(solid, origins))
     blade_faces = count(outside, TopAbs_FACE) - len(hub_pieces)
     glued, origins = _glue(hub, copies, count(hub.wrapped, TopAbs_FACE) + len(copies) * blade_faces)
-    return Fused(cq.Shape.cast(glued), FuseRoute.GLUED, _face_parts(glued, origins))
+    return Fused(cq.Shape.cast(glued), FuseRoute.GLUED, face_parts(glued, origins))
 
 
 def _assemble(hub: cq.Solid, lateral: TopoDS_Face, copies: Sequence[TopoDS_Shape],
-              patches: Sequence[TopoDS_Face]) -> tuple[TopoDS_Solid, list[tuple[TopoDS_Shape, int]]]:
+              patches: Sequence[TopoDS_Face]) -> tuple[TopoDS_Solid, Origins]:
     """The propeller's solid put together from known faces, with no boolean, and each face's part.
 
     Its shell: the hub's end faces, a new lateral face (the hub's surface and outer wire) with
@@ -153,7 +149,7 @@ def _assemble(hub: cq.Solid, lateral: TopoDS_Face, copies: Sequence[TopoDS_Shape
     builder = BRep_Builder()
     shell = TopoDS_Shell()
     builder.MakeShell(shell)
-    origins: list[tuple[TopoDS_Shape, int]] = []
+    origins: Origins = []
     for index, copy in enumerate(copies):
         for face in faces(copy):
             if any(face.IsPartner(patch) for patch in patches):
@@ -176,7 +172,7 @@ def _assemble(hub: cq.Solid, lateral: TopoDS_Face, copies: Sequence[TopoDS_Shape
 
 
 def _glue(hub: cq.Solid, copies: Sequence[TopoDS_Shape], expected_faces: int
-          ) -> tuple[TopoDS_Shape, list[tuple[TopoDS_Shape, int]]]:
+          ) -> tuple[TopoDS_Shape, Origins]:
     """Hub and copies fused with BOPAlgo_GlueShift (they only touch along faces of the hub's
     surfaces), and where each of their faces went."""
     glue = BRepAlgoAPI_Fuse()
@@ -188,33 +184,9 @@ def _glue(hub: cq.Solid, copies: Sequence[TopoDS_Shape], expected_faces: int
     return fused, _history(glue, [(hub.wrapped, HUB_PART), *((copy, index) for index, copy in enumerate(copies))])
 
 
-def _history(operation: BRepAlgoAPI_BooleanOperation, arguments: Iterable[tuple[TopoDS_Shape, int]]
-             ) -> list[tuple[TopoDS_Shape, int]]:
-    """(result face, part) for every face of every (argument, part): its pieces in the result if
-    the boolean split it, itself if it kept it whole, nothing if it was removed."""
-    origins: list[tuple[TopoDS_Shape, int]] = []
-    for argument, part in arguments:
-        for face in faces(argument):
-            pieces = list(operation.Modified(face))
-            if not pieces and not operation.IsDeleted(face):
-                pieces = [face]
-            origins.extend((piece, part) for piece in pieces)
-    return origins
-
-
-def _face_parts(shape: TopoDS_Shape, origins: Iterable[tuple[TopoDS_Shape, int]]) -> tuple[int, ...]:
-    """The part of each face of ``shape`` (in the order of ``shape.Faces()``) from (face, part) pairs."""
-    faces = TopTools_IndexedMapOfShape()
-    TopExp.MapShapes_s(shape, TopAbs_FACE, faces)
-    parts: list[int | None] = [None] * faces.Extent()
-    for face, part in origins:
-        index = faces.FindIndex(face)
-        if index:
-            parts[index - 1] = part
-    known = [part for part in parts if part is not None]
-    if len(known) != len(parts):
-        raise KernelError(f"{len(parts) - len(known)} faces of the joined propeller came from no known part")
-    return tuple(known)
+def _history(operation: BRepAlgoAPI_BooleanOperation, arguments: Iterable[tuple[TopoDS_Shape, int]]) -> Origins:
+    """(result face, part) for every face of every (argument, part), through the boolean's history."""
+    return through_history(operation, [(face, part) for argument, part in arguments for face in faces(argument)])
 
 
 def _rotated_with_hub_curves(outside: TopoDS_Shape, patches: list[TopoDS_Face], lateral: TopoDS_Face,

@@ -4,7 +4,7 @@ edge-on, see :func:`oblique_view`) and a view along the spin axis.
 Rendered with VTK (installed with cadquery) off-screen: OpenGL with a depth buffer and FXAA, the
 scene of :mod:`torus_cad.preview.vtk_scene` (the studio's too), from OpenCascade's tessellation of
 the fused solid. Each face is
-coloured by the part it came from, as the fuse reports it (``Propeller.face_parts``): the hub
+coloured by the part it came from, as the build reports it (``Propeller.face_parts``): the hub
 grey, every blade its own colour. No window or display is needed: without an X display VTK
 draws through EGL (Mesa's software rasteriser on a machine without a GPU)::
 
@@ -32,9 +32,9 @@ from numpy.typing import NDArray
 
 from torus_cad.colors import HUB_COLOR, blade_color
 from torus_cad.errors import ParameterError, TorusCadError
-from torus_cad.kernel.checks import distances_to_shape, mass_properties
+from torus_cad.geometry.propeller import HUB_PART
+from torus_cad.kernel.checks import mass_properties
 from torus_cad.kernel.files import atomic_path
-from torus_cad.kernel.fuse import HUB_PART
 from torus_cad.parameters import PropellerParameters
 from torus_cad.runtime.stages import Stage
 
@@ -60,7 +60,6 @@ _TEXT_RGB = (0.2, 0.2, 0.2)
 class _HasParts(Protocol):
     parameters: PropellerParameters
     solid: cq.Solid
-    hub: cq.Solid
     blades: list[cq.Solid]
     face_parts: tuple[int, ...]
 
@@ -139,31 +138,6 @@ def propeller_mesh(solid: cq.Shape, face_parts: Sequence[int], blades: int, tole
     all_parts = np.concatenate(parts)
     return SceneMesh(np.concatenate(vertices), np.concatenate(triangles),
                      palette[np.where(all_parts == HUB_PART, 0, all_parts + 1)], all_parts)
-
-
-def face_parts_by_distance(solid: cq.Shape, hub: cq.Shape, blades: Sequence[cq.Shape]) -> tuple[int, ...]:
-    """The part (HUB_PART or blade i) of each face of ``solid``, as ``solid.Faces()`` orders them,
-    found by geometry: the part whose boundary passes nearest a few points of the face.
-
-    Only for solids whose build does not report the parts (the root fillet's); the fuse does
-    (:attr:`torus_cad.kernel.fuse.Fused.face_parts`). A fillet face, between a blade and the hub,
-    goes to whichever it lies nearer.
-    """
-    parts: list[cq.Shape] = [hub, *blades]
-    boxes = [shape.BoundingBox() for shape in parts]
-    found = []
-    for face in solid.Faces():
-        u_min, u_max, v_min, v_max = face._uvBounds()
-        samples = np.array([face.positionAt(u_min + a * (u_max - u_min), v_min + b * (v_max - v_min)).toTuple()
-                            for a, b in ((0.5, 0.5), (0.25, 0.5), (0.75, 0.5))])
-        slack = 1e-3 * boxes[0].DiagonalLength
-        candidates = [index for index, box in enumerate(boxes)
-                      if np.all(samples >= np.array([box.xmin, box.ymin, box.zmin]) - slack)
-                      and np.all(samples <= np.array([box.xmax, box.ymax, box.zmax]) + slack)] or list(range(len(parts)))
-        distances = [float(np.median(distances_to_shape(parts[index], samples))) if len(candidates) > 1 else 0.0
-                     for index in candidates]
-        found.append(candidates[int(np.argmin(distances))] - 1)  # parts[0] is the hub
-    return tuple(found)
 
 
 def blade_silhouettes(mesh: SceneMesh, directions: NDArray[np.float64], most_triangles: int = 3000
@@ -261,8 +235,7 @@ def render_preview(propeller: _HasParts, size: Sequence[int] = DEFAULT_SIZE, tit
 
     Args:
         propeller: a built :class:`torus_cad.propeller.Propeller`: its ``solid``, ``face_parts``
-            (where the build does not know them, after a root fillet, each face gets the part
-            nearest to it: :func:`face_parts_by_distance`), ``hub`` and ``blades``.
+            (each face's colour) and ``blades``.
         size: (width, height) in pixels, each 64..8000.
         title: text above the views (default: the name, blade count and volume in mm^3).
         progress: optional callback, called with ``Stage.PREVIEW_TESSELLATE`` and ``Stage.PREVIEW_RENDER``.
@@ -275,8 +248,7 @@ def render_preview(propeller: _HasParts, size: Sequence[int] = DEFAULT_SIZE, tit
     # smooth normals hide the facets; only the outline shows them).
     diagonal = propeller.solid.BoundingBox().DiagonalLength
     view_px = min(width / 2.0, height)
-    parts = propeller.face_parts or face_parts_by_distance(propeller.solid, propeller.hub, propeller.blades)
-    mesh = propeller_mesh(propeller.solid, parts, blades, max(diagonal / (3.0 * view_px), 1e-3))
+    mesh = propeller_mesh(propeller.solid, propeller.face_parts, blades, max(diagonal / (3.0 * view_px), 1e-3))
     if title is None:
         volume = mass_properties(propeller.solid, 1.0).volume_mm3
         title = (f"{propeller.parameters.name}: {blades} blade{'s' if blades != 1 else ''}, "

@@ -8,22 +8,19 @@ from __future__ import annotations
 import multiprocessing.connection
 import time
 import traceback
-from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 from OCP.Bnd import Bnd_Box
 from OCP.BRepBndLib import BRepBndLib
-from scipy.spatial import cKDTree
 
 from torus_cad import PropellerParameters
 from torus_cad.errors import GeometryError, ParameterError, TorusCadError
+from torus_cad.geometry.propeller import HUB_PART
 from torus_cad.kernel.checks import mass_properties
 from torus_cad.kernel.tessellation import tessellate_faces
-from torus_cad.parameters.design import Handedness
 from torus_cad.propeller import Propeller, build_propeller
 from torus_cad.studio.build_messages import BuildRequest, SolidResult
-from torus_cad.studio.scene import HUB_PART, MIRROR, PartMesh, rotation_about_z, tip_diameter_mm
+from torus_cad.studio.scene import PartMesh, tip_diameter_mm
 
 #: Chordal deviation of the exact solid's display mesh, as a fraction of its bounding-box diagonal.
 DISPLAY_RELATIVE_DEFLECTION = 1.0 / 1000.0
@@ -33,35 +30,6 @@ DISPLAY_RELATIVE_DEFLECTION = 1.0 / 1000.0
 DISPLAY_ANGULAR_DEFLECTION = 0.5
 
 
-#: Surface types only the hub has: its cylinder, end planes, bore, flat, set-screw hole and chamfer cones.
-_HUB_SURFACES = ("CYLINDER", "PLANE", "CONE")
-
-
-def _face_parts(propeller: Propeller, faces: list[Any], face_vertices: list[NDArray[np.float64]]) -> list[int]:
-    """Hub (-1) or blade i for each face: the hub's faces are its cylinder and end planes; a blade
-    face belongs to the blade whose sampled surface passes nearest its vertices."""
-    geometry = propeller.parameters.geometry()
-    blade_points = propeller.surface.points.reshape(-1, 3)  # the spec's blade 0, before any mirror
-    mirrored = propeller.parameters.handedness == Handedness.CCW
-    if mirrored:  # the mirror image of blade i is the mirrored blade 0 turned back by blade i's angle
-        blade_points = blade_points * MIRROR
-    clouds, labels = [], []
-    for index in range(geometry.blades):
-        rotation = rotation_about_z(geometry.blade_angle_deg(index) - geometry.blade_angle_deg(0))
-        clouds.append(blade_points @ (rotation if mirrored else rotation.T))
-        labels.append(np.full(len(blade_points), index))
-    tree, label = cKDTree(np.concatenate(clouds)), np.concatenate(labels)
-    parts = []
-    for face, vertices in zip(faces, face_vertices):
-        if face.geomType() in _HUB_SURFACES:
-            parts.append(HUB_PART)
-            continue
-        samples = vertices[np.linspace(0, len(vertices) - 1, min(25, len(vertices))).astype(int)]
-        nearest = label[tree.query(samples)[1]]
-        parts.append(int(np.bincount(nearest).argmax()))
-    return parts
-
-
 def tessellate_parts(propeller: Propeller) -> list[PartMesh]:
     """The fused solid's triangles, grouped by part (hub, blade 0, 1, ...), for display."""
     box = Bnd_Box()
@@ -69,11 +37,9 @@ def tessellate_parts(propeller: Propeller) -> list[PartMesh]:
     tolerance = max(np.sqrt(box.SquareExtent()) * DISPLAY_RELATIVE_DEFLECTION, 1e-3)
     # Not in parallel: on a busy 2-core machine the mesher's threads only contend with the server.
     tessellated = tessellate_faces(propeller.solid, tolerance, DISPLAY_ANGULAR_DEFLECTION, parallel=False)
-    solid_faces = propeller.solid.Faces()
-    faces = [solid_faces[face.face_index] for face in tessellated]
     face_vertices = [face.vertices for face in tessellated]
     face_triangles = [face.triangles for face in tessellated]
-    parts = _face_parts(propeller, faces, face_vertices)
+    parts = [propeller.face_parts[face.face_index] for face in tessellated]  # from the build's history
     meshes = []
     for part in [HUB_PART, *range(propeller.parameters.blades)]:
         chosen = [index for index, owner in enumerate(parts) if owner == part]

@@ -17,6 +17,7 @@ from numpy.typing import NDArray
 
 from torus_cad.geometry.extensions.feasibility import check_feasible
 from torus_cad.geometry.mesh import blade_mesh
+from torus_cad.geometry.propeller import HUB_PART
 from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.design import Handedness
 from torus_cad.parameters.design_targets import resolve_design_targets
@@ -34,10 +35,6 @@ PREVIEW_MAX_SAMPLES = (60, 240)
 
 #: Handedness 'ccw' is the spec's propeller reflected through the XZ plane (torus_cad.kernel.mirror).
 MIRROR = np.array([1.0, -1.0, 1.0])
-
-#: Parts of a scene: -1 is the hub, i >= 0 blade i.
-HUB_PART = -1
-
 
 @dataclass(frozen=True)
 class PartMesh:

@@ -17,8 +17,9 @@ from numpy.typing import NDArray
 from vtkmodules.vtkRenderingCore import vtkActor, vtkPolyDataMapper, vtkRenderer, vtkRenderWindow
 
 from torus_cad.colors import HUB_COLOR, blade_color
+from torus_cad.geometry.propeller import HUB_PART
 from torus_cad.preview.vtk_scene import add_lights, polyline_polydata, surface_actor, triangle_polydata
-from torus_cad.studio.scene import HUB_PART, PartMesh
+from torus_cad.studio.scene import PartMesh
 
 #: Background of the view, RGB 0..1.
 BACKGROUND = (0.90, 0.92, 0.95)
