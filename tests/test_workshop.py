@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from face_measures import principal_curvatures
+from face_measures import assert_faces_come_from_their_parts, principal_curvatures
 from OCP.BRepAdaptor import BRepAdaptor_Surface
 from OCP.GeomAbs import GeomAbs_Cylinder
 
@@ -296,6 +296,7 @@ def test_root_fillet_runs_out_past_the_hub_end_and_keeps_the_parts_extent(design
     if design is THROUGH_THE_END:
         assert plain_box.zmax > params.hub.length / 2.0  # the design does pass the hub's end
     assert any(principal_curvatures(face)[1] == pytest.approx(1 / 0.5, rel=1e-3) for face in filleted.solid.Faces())
+    assert_faces_come_from_their_parts(filleted.solid, filleted.face_parts, filleted, 0.5)  # through the cut-back
 
 
 def test_repaired_root_fillet_is_one_valid_solid_with_a_fillets_volume(fillet_stage):
@@ -308,6 +309,7 @@ def test_repaired_root_fillet_is_one_valid_solid_with_a_fillets_volume(fillet_st
     # 0.69 r^2 per mm, at 90 degrees 0.21 r^2 (measured: 4.0 mm^3, 0.41 r^2)
     assert 0.0 < added < 2 * 19.6 * 0.69 * 0.5 ** 2
     assert any(principal_curvatures(face)[1] == pytest.approx(1 / 0.5, rel=1e-3) for face in filleted.solid.Faces())
+    assert_faces_come_from_their_parts(filleted.solid, filleted.face_parts, filleted, 0.5)  # through ShapeFix's mend
 
 
 #: A fuzz design (seed 51) whose blade sections are about 1.2 x 0.55 mm where they meet the hub: the
