@@ -141,6 +141,13 @@ def test_the_coarse_propeller_wall_has_no_crossing_triangles_and_the_estimate_is
     assert 0.5 < report["estimate"]["tetrahedra"] / report["tetrahedra_total"] < 2.0
 
 
+def test_the_same_design_gives_the_same_mesh_on_every_run(cfd_out, tmp_path):
+    # A CFD engineer compares designs, not mesh noise: gmsh on one thread repeats itself byte for byte.
+    assert main(["cfd", *COARSE, "--out", str(tmp_path), "-q"]) == 0
+    for name in ("torus_propeller_cfd.msh", "torus_propeller_cfd_v2.msh"):
+        assert (tmp_path / name).read_bytes() == (cfd_out / name).read_bytes(), name
+
+
 def test_a_blunt_trailing_edge_meshes_at_coarse_sizes(tmp_path):
     """A 0.1 mm edge (thinner than the coarse triangles) meshes; its wall has no crossing triangles."""
     out = tmp_path / "out"

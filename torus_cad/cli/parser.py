@@ -152,7 +152,9 @@ def _add_cfd_parser(commands: Any) -> None:
         f"{CFD_TETRAHEDRA_LIMIT:,} tetrahedra is refused before any work. Needs the cfd extra: "
         "pip install 'torus_cad[cfd]'.")
     cfd.table = "cfd"  # its options, when the subcommand is used (_Parser.table)
-    cfd.add_argument("--threads", type=int, default=0, metavar="N", help="gmsh threads (default 0: one per CPU)")
+    cfd.add_argument("--threads", type=int, default=1, metavar="N",
+                     help="gmsh threads (default 1: the same mesh on every run; 0 = one per CPU, whose meshes "
+                          "differ slightly from run to run)")
     _add_out_and_quiet(cfd, "cfd_out", command_cfd)
 
 
