@@ -184,6 +184,11 @@ SIMULATE_DIVERGENCE_RESIDUAL = 1e3
 #: their mean over the last 10 % of its iterations.
 SIMULATE_CONVERGED_VARIATION = 0.02
 
+#: gmsh threads that give the same CFD mesh, byte for byte, on every run of one design: with more,
+#: gmsh's parallel meshing orders its work differently from run to run, so the tetrahedra (and the
+#: forces simulated on them) differ slightly between runs of the same design.
+GMSH_REPRODUCIBLE_THREADS = 1
+
 #: Largest CFD mesh ``torus-cad cfd`` starts, in tetrahedra (estimated from the settings before any
 #: meshing, torus_cad.cfd.estimate). The default design's default mesh has 231,405 (53 s of CPU, 0.9 GB
 #: peak); the process needs about 0.75 GB plus 0.62 kB per tetrahedron (scripts/cfd_budget.py), so

@@ -51,6 +51,7 @@ from torus_cad.errors import KernelError
 from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.design import Cfd
 from torus_cad.runtime.stages import StageTimer
+from torus_cad.tolerances import GMSH_REPRODUCIBLE_THREADS
 
 #: Names of the physical groups: surfaces, then volumes.
 SURFACE_GROUPS = ("propeller", "rotating_interface", "inlet", "outlet", "farfield")
@@ -91,12 +92,6 @@ class CfdStage(StrEnum):
     SURFACE_MESH = "surface_mesh"
     VOLUME_MESH = "volume_mesh"
     WRITE = "write"
-
-
-#: gmsh threads that give the same mesh, byte for byte, on every run of one design: with more,
-#: gmsh's parallel meshing orders its work differently from run to run, so the tetrahedra (and the
-#: forces simulated on them) differ slightly between runs of the same design.
-REPRODUCIBLE_THREADS = 1
 
 
 @contextmanager
@@ -415,11 +410,13 @@ def _write_failure(path: Path) -> OSError:
     return OSError(code, os.strerror(code), str(path))
 
 
-def write_cfd_domain(params: PropellerParameters, out_dir: str | Path, threads: int = REPRODUCIBLE_THREADS,
+def write_cfd_domain(params: PropellerParameters, out_dir: str | Path, threads: int = GMSH_REPRODUCIBLE_THREADS,
                      progress: Callable[[str], None] | None = None, estimate: CfdEstimate | None = None
                      ) -> tuple[dict[str, Any], dict[str, Path]]:
     """Build the B-rep, the domain of ``params.cfd`` and its mesh (gmsh with ``threads`` threads, 0 = one
-    per CPU; one thread gives the same mesh on every run, several do not, see :data:`REPRODUCIBLE_THREADS`; ``estimate``: the budget's, if already checked); publish ``<name>_cfd.step``, ``<name>_cfd.msh``, ``<name>_cfd_v2.msh``, ``README.txt`` and
+    per CPU; one thread gives the same mesh on every run, see
+    :data:`torus_cad.tolerances.GMSH_REPRODUCIBLE_THREADS`; ``estimate``: the budget's, if already
+    checked); publish ``<name>_cfd.step``, ``<name>_cfd.msh``, ``<name>_cfd_v2.msh``, ``README.txt`` and
     the sealed report ``<name>_cfd.json`` as one output set (torus_cad.outputs.output_set). Returns the report as
     written and the final paths (the report last).
 

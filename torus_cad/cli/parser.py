@@ -140,7 +140,7 @@ def _add_mesh_parser(commands: Any) -> None:
 
 
 def _add_cfd_parser(commands: Any) -> None:
-    from torus_cad.tolerances import CFD_TETRAHEDRA_LIMIT
+    from torus_cad.tolerances import CFD_TETRAHEDRA_LIMIT, GMSH_REPRODUCIBLE_THREADS
 
     cfd = _design_command(
         commands, "cfd", help="fluid domain and tetrahedral volume mesh for a rotating-propeller simulation (gmsh)",
@@ -152,9 +152,9 @@ def _add_cfd_parser(commands: Any) -> None:
         f"{CFD_TETRAHEDRA_LIMIT:,} tetrahedra is refused before any work. Needs the cfd extra: "
         "pip install 'torus_cad[cfd]'.")
     cfd.table = "cfd"  # its options, when the subcommand is used (_Parser.table)
-    cfd.add_argument("--threads", type=int, default=1, metavar="N",
-                     help="gmsh threads (default 1: the same mesh on every run; 0 = one per CPU, whose meshes "
-                          "differ slightly from run to run)")
+    cfd.add_argument("--threads", type=int, default=GMSH_REPRODUCIBLE_THREADS, metavar="N",
+                     help=f"gmsh threads (default {GMSH_REPRODUCIBLE_THREADS}: the same mesh on every run; 0 = one "
+                          "per CPU, whose meshes differ slightly from run to run)")
     _add_out_and_quiet(cfd, "cfd_out", command_cfd)
 
 

@@ -10,22 +10,24 @@ colours and the studio's parts read the result (``Propeller.face_parts``).
 
 from __future__ import annotations
 
-import math
 from collections.abc import Iterable, Sequence
 
+import cadquery as cq
+import numpy as np
+from numpy.typing import NDArray
 from OCP.BRepAdaptor import BRepAdaptor_Surface
-from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeShape, BRepBuilderAPI_MakeVertex
-from OCP.BRepExtrema import BRepExtrema_DistShapeShape
+from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeShape
 from OCP.BRepFilletAPI import BRepFilletAPI_MakeFillet
 from OCP.BRepTools import BRepTools
 from OCP.ShapeBuild import ShapeBuild_ReShape
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_VERTEX
 from OCP.TopExp import TopExp
-from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Shape, TopoDS_Vertex
+from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Shape
 from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape, TopTools_IndexedMapOfShape
 
 from torus_cad.errors import KernelError
 from torus_cad.geometry.propeller import HUB_PART
+from torus_cad.kernel.checks import distances_to_shape
 from torus_cad.kernel.topology import explore, faces
 
 #: (face, part) pairs: where the faces of a step's result came from.
@@ -57,7 +59,6 @@ def fillet_faces(fillet: BRepFilletAPI_MakeFillet, solid: TopoDS_Shape, face_par
     junction's blade: the part of the edge's faces that is not the hub, for the faces
     ``Generated`` by every edge of the fillet's contours (the edges it was given and those it
     followed on along a tangent chain) and by their vertices (the corner blends)."""
-    labels = dict(enumerate(face_parts))
     indexed = _indexed_faces(solid)
     ancestors = TopTools_IndexedDataMapOfShapeListOfShape()
     TopExp.MapShapesAndAncestors_s(solid, TopAbs_EDGE, TopAbs_FACE, ancestors)
@@ -65,7 +66,7 @@ def fillet_faces(fillet: BRepFilletAPI_MakeFillet, solid: TopoDS_Shape, face_par
     for contour in range(1, fillet.NbContours() + 1):
         for index in range(1, fillet.NbEdges(contour) + 1):
             edge = fillet.Edge(contour, index)
-            parts = {labels[indexed.FindIndex(face) - 1] for face in ancestors.FindFromKey(edge)} - {HUB_PART}
+            parts = {face_parts[indexed.FindIndex(face) - 1] for face in ancestors.FindFromKey(edge)} - {HUB_PART}
             if len(parts) != 1:
                 raise KernelError(f"a filleted edge lies between {len(parts)} blades instead of 1")
             part = parts.pop()
@@ -95,7 +96,8 @@ def through_reshape(context: ShapeBuild_ReShape, origins: Iterable[tuple[TopoDS_
     for index in range(1, indexed.Extent() + 1):
         if index not in reached:
             face = TopoDS.Face_s(indexed.FindKey(index))
-            found.append((face, min(origins, key=lambda origin: _distance(_middle(face), origin[0]))[1]))
+            middle = _middle(face)
+            found.append((face, min(origins, key=lambda origin: distances_to_shape(cq.Face(origin[0]), middle)[0])[1]))
     return found
 
 
@@ -120,13 +122,8 @@ def _indexed_faces(shape: TopoDS_Shape) -> TopTools_IndexedMapOfShape:
     return indexed
 
 
-def _middle(face: TopoDS_Face) -> TopoDS_Vertex:
-    """A vertex at the middle of ``face``'s parameter box."""
+def _middle(face: TopoDS_Face) -> NDArray[np.float64]:
+    """``(1, 3)``: the point at the middle of ``face``'s parameter box (mm)."""
     u_min, u_max, v_min, v_max = BRepTools.UVBounds_s(face)
     point = BRepAdaptor_Surface(face).Value((u_min + u_max) / 2.0, (v_min + v_max) / 2.0)
-    return BRepBuilderAPI_MakeVertex(point).Vertex()
-
-
-def _distance(vertex: TopoDS_Vertex, shape: TopoDS_Shape) -> float:
-    distance = BRepExtrema_DistShapeShape(vertex, shape)
-    return distance.Value() if distance.IsDone() else math.inf
+    return np.array([[point.X(), point.Y(), point.Z()]])

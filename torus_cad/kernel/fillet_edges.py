@@ -77,10 +77,7 @@ def fillet_edges(solid: cq.Solid, edges: list[TopoDS_Edge], radius_mm: float,
         return None
     if not fillet.IsDone():
         return None
-    origins = None if face_parts is None else (
-        face_provenance.through_history(fillet, face_provenance.labelled_faces(solid.wrapped, face_parts))
-        + face_provenance.fillet_faces(fillet, solid.wrapped, face_parts))
-    repaired = False
+    fix: ShapeFix_Shape | None = None
     try:
         result = single_valid_solid(cq.Shape.cast(fillet.Shape()), "the root fillet")
     except KernelError:  # OpenCascade sometimes builds the fillet but leaves flaws ShapeFix mends
@@ -90,19 +87,28 @@ def fillet_edges(solid: cq.Solid, edges: list[TopoDS_Edge], radius_mm: float,
             result = single_valid_solid(cq.Shape.cast(fix.Shape()), "the repaired root fillet")
         except KernelError:
             return None
-        repaired = True
-        if origins is not None:
-            origins = face_provenance.through_reshape(fix.Context(), origins, result.wrapped)
     added_mm3 = (precise_volume(result, VOLUME_CHECK_RELATIVE_PRECISION)
                  - precise_volume(solid, VOLUME_CHECK_RELATIVE_PRECISION))
     # A concave fillet only adds material: a smaller volume means a wrong result. A repaired one
     # must also add no more than a fillet's cross-section along the junction.
     if added_mm3 < 0.0:
         return None
-    if repaired and added_mm3 > REPAIRED_FILLET_MAX_AREA_RADII2 * radius_mm ** 2 * sum(cq.Edge(edge).Length()
-                                                                                         for edge in edges):
+    if fix is not None and added_mm3 > REPAIRED_FILLET_MAX_AREA_RADII2 * radius_mm ** 2 * sum(
+            cq.Edge(edge).Length() for edge in edges):
         return None
-    return Filleted(result, () if origins is None else face_provenance.face_parts(result.wrapped, origins))
+    if face_parts is None:
+        return Filleted(result, ())
+    return Filleted(result, _filleted_face_parts(fillet, fix, solid, face_parts, result))
+
+
+def _filleted_face_parts(fillet: BRepFilletAPI_MakeFillet, fix: ShapeFix_Shape | None, solid: cq.Solid,
+                         face_parts: Sequence[int], result: cq.Solid) -> tuple[int, ...]:
+    """The part of each face of ``result`` through the fillet's history (and ShapeFix's, if it mended it)."""
+    origins = (face_provenance.through_history(fillet, face_provenance.labelled_faces(solid.wrapped, face_parts))
+               + face_provenance.fillet_faces(fillet, solid.wrapped, face_parts))
+    if fix is not None:
+        origins = face_provenance.through_reshape(fix.Context(), origins, result.wrapped)
+    return face_provenance.face_parts(result.wrapped, origins)
 
 
 def fillet_in_child(solid: cq.Solid, edges: list[TopoDS_Edge], radius_mm: float,

@@ -144,17 +144,20 @@ class _RunOut:
         if self.made is None:
             assert self.run_out is not None
             extended, tools = self.run_out(_RUN_OUT_RADII * self.radius_mm)
-            origins: Origins = [(face, HUB_PART) for tool in tools for face in faces(tool)]
-            if _touches(self.blade, tools[:2]):  # the blade itself reaches past a hub end: the cut-back keeps it there
+            slabs, others = tools[:2], tools[2:]
+            origins: Origins = [(face, HUB_PART) for tool in others for face in faces(tool)]
+            if _touches(self.blade, slabs):  # the blade itself reaches past a hub end: the cut-back keeps it there
                 blades = [copy.wrapped for copy in pattern_blades(self.blade, self.angles_deg)]
                 blade_faces = [(face, index) for index, copy in enumerate(blades) for face in faces(copy)]
-                origins = [(face, HUB_PART) for tool in tools[2:] for face in faces(tool)]
-                for slab in tools[:2]:
+                cut_slabs = []
+                for slab in slabs:
                     operation = boolean(BRepAlgoAPI_Cut(), [slab], blades)
-                    tools.append(result(operation, "keep the blades out of the run-out's cut-back"))
+                    cut_slabs.append(result(operation, "keep the blades out of the run-out's cut-back"))
                     origins += face_provenance.through_history(operation, [(f, HUB_PART) for f in faces(slab)] + blade_faces)
-                tools = tools[2:]
-            self.made = extended, tools, origins
+                slabs = cut_slabs
+            else:
+                origins += [(face, HUB_PART) for slab in slabs for face in faces(slab)]
+            self.made = extended, [*slabs, *others], origins
         return self.made
 
     def tries(self, split: _LazySplits, deadline: float, reduce: bool) -> RootFillet | None:

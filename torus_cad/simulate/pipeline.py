@@ -140,12 +140,13 @@ def _remove_stale_report(out: Path, name: str) -> None:
 
 async def _mesh_and_write(request: Request, case: Path, diameter_m: float,
                           stage: Callable[[str], None] | None) -> tuple[dict[str, Any], CaseSpec]:
-    from torus_cad.cfd.domain import REPRODUCIBLE_THREADS, write_cfd_domain
+    from torus_cad.cfd.domain import write_cfd_domain
+    from torus_cad.tolerances import GMSH_REPRODUCIBLE_THREADS
 
     params = request.params
     async with _mesh_lock():
         cfd_report, cfd_paths = await asyncio.to_thread(write_cfd_domain, params, case / "cfd",  # one mesh per design
-                                                        REPRODUCIBLE_THREADS, stage)
+                                                        GMSH_REPRODUCIBLE_THREADS, stage)
     spec = _case_spec(request, diameter_m, f"cfd/{cfd_paths['msh_v2'].name}")
     write_case(case, spec)
     return cfd_report, spec
