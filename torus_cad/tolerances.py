@@ -226,6 +226,8 @@ STATION_MAX_ROWS = 2000
 STATION_BETA_LIMIT_DEG = 85.0
 #: Largest chord of a station as a fraction of the tip radius (c/R; real propellers: < 0.4).
 STATION_MAX_CHORD_OVER_R = 2.0
+#: Largest propeller radius an APC PE0 file may give (inches; 100 in = 5 m across).
+STATION_MAX_RADIUS_IN = 100.0
 #: Largest |sweep| of a station's leading edge as a fraction of the tip radius.
 STATION_MAX_SWEEP_OVER_R = 2.0
 #: The root section of a conventional blade sits at this fraction of the hub's radius (well inside the

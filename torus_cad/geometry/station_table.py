@@ -37,6 +37,7 @@ from torus_cad.tolerances import (
     STATION_BETA_LIMIT_DEG,
     STATION_FILE_MAX_BYTES,
     STATION_MAX_CHORD_OVER_R,
+    STATION_MAX_RADIUS_IN,
     STATION_MAX_ROWS,
     STATION_MAX_SWEEP_OVER_R,
 )
@@ -141,8 +142,9 @@ def _pe0_radius_in(lines: list[str], source: str) -> float:
         match = _PE0_RADIUS.match(line)
         if match:
             (radius,) = _numbers([match.group(1)], source, number)
-            if not radius > 0.0:
-                raise ParameterError(f"{_where(source, number)}: the RADIUS must be positive")
+            if not 0.0 < radius <= STATION_MAX_RADIUS_IN:
+                raise ParameterError(f"{_where(source, number)}: the RADIUS is out of range; allowed "
+                                     f"(0, {STATION_MAX_RADIUS_IN:g}] in")
             return radius
     raise ParameterError(f"{_WHAT} {source!r}: an APC PE0 table without a 'RADIUS:' line")
 
@@ -200,18 +202,19 @@ def checked(table: StationTable) -> StationTable:
 
 
 def _check_station(table: StationTable, index: int) -> None:
+    """ParameterError naming the station's line and the rule it breaks (never its values: a file's content)."""
     r, chord, beta = table.r_over_r[index], table.chord_over_r[index], table.beta_deg[index]
     if not 0.0 < r <= 1.0:
-        raise _fail(table, index, f"r/R = {r:g} is out of range; allowed (0, 1]")
+        raise _fail(table, index, "r/R is out of range; allowed (0, 1]")
     if index and not r > table.r_over_r[index - 1]:
-        raise _fail(table, index, f"r/R = {r:g} does not increase (the station before has {table.r_over_r[index - 1]:g})")
+        raise _fail(table, index, "r/R does not increase (r/R must grow strictly from station to station)")
     if not 0.0 < chord <= STATION_MAX_CHORD_OVER_R:
-        raise _fail(table, index, f"c/R = {chord:g} is out of range; allowed (0, {STATION_MAX_CHORD_OVER_R:g}]")
+        raise _fail(table, index, f"c/R is out of range; allowed (0, {STATION_MAX_CHORD_OVER_R:g}]")
     if not abs(beta) <= STATION_BETA_LIMIT_DEG:
-        raise _fail(table, index, f"beta = {beta:g} deg is out of range; allowed "
-                                  f"[-{STATION_BETA_LIMIT_DEG:g}, {STATION_BETA_LIMIT_DEG:g}] deg")
+        raise _fail(table, index, f"beta is out of range; allowed [-{STATION_BETA_LIMIT_DEG:g}, "
+                                  f"{STATION_BETA_LIMIT_DEG:g}] deg")
     if table.thickness_ratio is not None and not 0.0 < table.thickness_ratio[index] <= 0.5:
-        raise _fail(table, index, f"thickness ratio = {table.thickness_ratio[index]:g} is out of range; allowed (0, 0.5]")
+        raise _fail(table, index, "the thickness ratio is out of range; allowed (0, 0.5]")
     if table.sweep_over_r is not None and not abs(table.sweep_over_r[index]) <= STATION_MAX_SWEEP_OVER_R:
-        raise _fail(table, index, f"sweep/R = {table.sweep_over_r[index]:g} is out of range; allowed "
-                                  f"[-{STATION_MAX_SWEEP_OVER_R:g}, {STATION_MAX_SWEEP_OVER_R:g}]")
+        raise _fail(table, index, f"sweep/R is out of range; allowed [-{STATION_MAX_SWEEP_OVER_R:g}, "
+                                  f"{STATION_MAX_SWEEP_OVER_R:g}]")

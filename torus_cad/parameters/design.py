@@ -366,7 +366,7 @@ _COLUMNS = ("r_over_R", "c_over_R", "beta", "thickness_ratio", "sweep")
 class Conventional(Section):
     """A conventional (open-tip) blade from a station table, used when kind = 'conventional'."""
 
-    diameter: float = param(254.0, unit="mm", gt=0.0, le=100000.0, fuzz=(100.0, 400.0),
+    diameter: float = param(254.0, unit="mm", gt=0.0, le=10000.0, fuzz=(100.0, 400.0),
                             doc="tip diameter D = 2 R; the stations' r/R and c/R are fractions of R")
     stations_file: str = param("", doc="station table file: UIUC geometry ('r/R c/R beta' rows) or APC's PE0 "
                                        "(detected by content); relative to the design file's folder (\"\" = inline)")
