@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import Annotated, Any, Self
 
 import numpy as np
+from numpy.typing import NDArray
 from pydantic import AfterValidator, BeforeValidator, Field, model_validator
 
 from torus_cad.errors import GeometryError, ParameterError
@@ -46,8 +47,8 @@ from torus_cad.parameters.schema import AS_TUPLE, Bounds, Section, Vector2, Vect
 from torus_cad.tolerances import (
     FOLD_RATIO_LIMIT,
     MIN_BLUNT_TRAILING_EDGE_MM,
-    STL_ANGULAR_DEFLECTION,
     STATION_MAX_ROWS,
+    STL_ANGULAR_DEFLECTION,
     STL_LINEAR_DEFLECTION,
 )
 
@@ -412,19 +413,20 @@ class Conventional(Section):
         return bool(self.stations_file or any(getattr(self, key) for key in _COLUMNS))
 
     def _inline(self) -> StationTable:
+        """The inline columns as a station table (sweep and a per-station thickness optional)."""
         count = len(self.r_over_R)
-        for key in _COLUMNS[1:]:
-            length = len(getattr(self, key))
-            optional = key in ("sweep", "thickness_ratio")
-            if length != count and not (optional and (length == 0 or key == "thickness_ratio"
-                                                      and self.thickness_r_over_R)):
-                raise ParameterError(f"conventional.{key} has {length} values but conventional.r_over_R has {count}")
-        array = np.asarray
-        return StationTable(array(self.r_over_R, dtype=float), array(self.c_over_R, dtype=float),
-                            array(self.beta, dtype=float),
-                            array(self.thickness_ratio, dtype=float) if self.thickness_ratio
-                            and not self.thickness_r_over_R else None,
-                            array(self.sweep, dtype=float) / 1.0 if self.sweep else None,
+        per_station_thickness = self.thickness_ratio if not self.thickness_r_over_R else ()
+        for key, values in (("c_over_R", self.c_over_R), ("beta", self.beta), ("sweep", self.sweep),
+                            ("thickness_ratio", per_station_thickness)):
+            if len(values) != count and (key in ("c_over_R", "beta") or values):
+                raise ParameterError(f"conventional.{key} has {len(values)} values but conventional.r_over_R "
+                                     f"has {count}")
+
+        def column(values: tuple[float, ...]) -> NDArray[np.float64] | None:
+            return np.asarray(values, dtype=float) if values else None
+
+        return StationTable(np.asarray(self.r_over_R, dtype=float), np.asarray(self.c_over_R, dtype=float),
+                            np.asarray(self.beta, dtype=float), column(per_station_thickness), column(self.sweep),
                             source="conventional's inline stations")
 
     def stations(self) -> StationTable:
