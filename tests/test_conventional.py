@@ -1,0 +1,162 @@
+"""The conventional (open-tip) kind: the APC 10x7 Slow Flyer from UIUC's station table (issue 32).
+
+One strictly valid solid of the right size, 2 blades, the table's beta and chord at 0.75 R on the
+built solid, STEP and STL whole, 'ccw' its mirror image; bad station tables exit 2 naming the line
+and write nothing; UIUC's and APC's tables of the same propeller agree where they overlap."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import EXAMPLES_DIR, read_binary_stl
+from OCP.BRepCheck import BRepCheck_Analyzer
+
+from torus_cad.errors import ParameterError
+from torus_cad.geometry.station_table import read_station_file
+from torus_cad.kernel.checks import precise_volume
+from torus_cad.kernel.measure import contour_through, edge_points, farthest_pair, max_radius_mm, plane_section_edges
+from torus_cad.kernel.strict import boolean_check_faults
+from torus_cad.kernel.writers.step import read_step
+from torus_cad.parameters import PropellerParameters
+from torus_cad.propeller import build_propeller
+
+DESIGN = EXAMPLES_DIR / "apc_10x7sf.toml"
+VALIDATION = EXAMPLES_DIR.parent / "validation" / "uiuc_apc_10x7sf"
+UIUC, PE0 = VALIDATION / "apcsf_10x7_geom.txt", VALIDATION / "10x7SF-PERF.PE0"
+TIP_RADIUS_MM = 127.0
+
+
+@pytest.fixture(scope="module")
+def apc():
+    return build_propeller(DESIGN)
+
+
+@pytest.fixture(scope="module")
+def apc_files(apc, tmp_path_factory):
+    return apc.write(tmp_path_factory.mktemp("apc"))
+
+
+def test_the_apc_is_one_strictly_valid_solid_with_two_blades(apc):
+    assert apc.checks is not None  # the build's own strict check passed
+    assert len(apc.solid.Solids()) == 1 and BRepCheck_Analyzer(apc.solid.wrapped).IsValid()
+    assert boolean_check_faults(apc.solid.wrapped) == []  # BRepAlgoAPI_Check: small edges, self-interference
+    assert len(apc.blades) == 2 and set(apc.face_parts) == {-1, 0, 1}
+    assert apc.spin_to_push_air_down().value == "cw"
+
+
+def test_the_apc_is_254_mm_across(apc):
+    assert 2.0 * max_radius_mm(apc.solid) == pytest.approx(254.0, rel=0.01)
+
+
+def _section_at(solid, radius_mm: float) -> tuple[np.ndarray, np.ndarray]:
+    """Leading and trailing edge ``(3,)`` of blade 0's cut by the plane x = radius_mm (the farthest pair)."""
+    edges = plane_section_edges(solid, (radius_mm, 0.0, 0.0), (1.0, 0.0, 0.0), 60.0)
+    points = edge_points(contour_through(edges, (radius_mm, 0.0, 0.0)), 400)
+    first, second = farthest_pair(points)
+    return (first, second) if first[1] < second[1] else (second, first)  # 'cw': the leading edge toward -y
+
+
+def test_beta_and_chord_at_three_quarter_radius_match_the_table(apc):
+    leading, trailing = _section_at(apc.solid, 0.75 * TIP_RADIUS_MM)
+    chord = trailing - leading
+    beta_deg = np.degrees(np.arctan2(-chord[2], chord[1]))
+    assert beta_deg == pytest.approx(14.38, abs=0.5)  # UIUC's beta at r/R = 0.75
+    assert np.linalg.norm(chord) == pytest.approx(0.197 * TIP_RADIUS_MM, rel=0.02)  # c/R = 0.197
+
+
+def test_step_and_stl_are_whole(apc, apc_files):
+    shape = read_step(apc_files["step"])
+    assert len(shape.Solids()) == 1
+    assert precise_volume(shape) == pytest.approx(precise_volume(apc.solid), rel=1e-6)
+    triangles = read_binary_stl(apc_files["stl"])
+    _, vertex = np.unique(triangles.reshape(-1, 3), axis=0, return_inverse=True)  # shared corners: equal floats
+    corners = vertex.reshape(-1, 3)
+    edges = np.sort(np.concatenate([corners[:, [0, 1]], corners[:, [1, 2]], corners[:, [2, 0]]]), axis=1)
+    _, uses = np.unique(edges, axis=0, return_counts=True)
+    assert np.all(uses == 2)  # closed: every edge between exactly two triangles
+    trimesh = pytest.importorskip("trimesh")
+    mesh = trimesh.load(apc_files["stl"])
+    assert mesh.is_watertight and mesh.is_winding_consistent and mesh.volume > 0
+
+
+def test_ccw_is_the_mirror_image(apc):
+    ccw = build_propeller(DESIGN, {"handedness": "ccw"})
+    assert ccw.spin_to_push_air_down().value == "ccw"
+    assert precise_volume(ccw.solid) == pytest.approx(precise_volume(apc.solid), rel=1e-6)
+    cw_box, ccw_box = apc.solid.BoundingBox(), ccw.solid.BoundingBox()
+    assert (ccw_box.ymin, ccw_box.ymax, ccw_box.zmin) == pytest.approx((-cw_box.ymax, -cw_box.ymin, cw_box.zmin), abs=1e-6)
+    leading, trailing = _section_at(ccw.solid, 0.75 * TIP_RADIUS_MM)
+    assert trailing[2] < leading[2]  # the same pitch, mirrored: the trailing edge still below
+
+
+_GOOD = "r/R c/R beta\n0.2 0.10 30\n0.5 0.20 20\n1.0 0.05 10\n"
+BAD_TABLES = {
+    "not increasing": ("r/R c/R beta\n0.2 0.10 30\n0.5 0.20 20\n0.4 0.15 15\n", 4),
+    "negative chord": ("r/R c/R beta\n0.2 0.10 30\n0.5 -0.20 20\n1.0 0.05 10\n", 3),
+    "zero chord": ("r/R c/R beta\n0.2 0.10 30\n0.5 0 20\n1.0 0.05 10\n", 3),
+    "missing column": ("r/R c/R beta\n0.2 0.10 30\n0.5 0.20\n1.0 0.05 10\n", 3),
+    "not a number": ("r/R c/R beta\n0.2 0.10 30\n0.5 secret42 20\n1.0 0.05 10\n", 3),
+    "r/R beyond the tip": ("r/R c/R beta\n0.2 0.10 30\n0.5 0.20 20\n1.5 0.05 10\n", 4),
+    "PE0 row too short": ("  STATION  CHORD\n   (IN)\n\n 1.0 0.5 4.0 4.0 4.0 0.1 0.06\n\n RADIUS:  5.00\n", 4),
+    "too many rows": ("r/R c/R beta\n" + "".join(f"{0.1 + i * 4e-4:.5f} 0.1 20\n" for i in range(2001)), 2002),
+}
+
+
+def _design(folder: Path, table: str) -> Path:
+    (folder / "stations.txt").write_text(table)
+    design = folder / "design.toml"
+    design.write_text('name = "bad"\nkind = "conventional"\nblades = 2\n[hub]\nradius = 9.5\nlength = 12.0\n'
+                      '[conventional]\nstations_file = "stations.txt"\n')
+    return design
+
+
+@pytest.mark.parametrize("case", BAD_TABLES, ids=lambda case: case.replace(" ", "_").replace("/", ""))
+def test_a_bad_station_table_exits_2_naming_the_line_and_writes_nothing(tmp_path, case):
+    table, line = BAD_TABLES[case]
+    out = tmp_path / "out"
+    run = subprocess.run([sys.executable, "-m", "torus_cad", "build", str(_design(tmp_path, table)), "--out", str(out)],
+                         capture_output=True, text=True, timeout=120)
+    assert run.returncode == 2, run.stderr
+    message = run.stderr.strip().splitlines()[-1]
+    assert f"stations.txt' line {line}:" in message
+    assert "secret42" not in run.stderr + run.stdout  # the file's content is never echoed
+    assert not out.exists()
+
+
+def test_a_good_table_and_its_inline_copy_give_the_same_blade(tmp_path):
+    from_file = PropellerParameters.from_toml(_design(tmp_path, _GOOD)).blade_surface()
+    inline = PropellerParameters.model_validate({
+        "kind": "conventional", "blades": 2, "hub": {"radius": 9.5, "length": 12.0},
+        "conventional": {"r_over_R": [0.2, 0.5, 1.0], "c_over_R": [0.1, 0.2, 0.05], "beta": [30.0, 20.0, 10.0]}})
+    np.testing.assert_allclose(inline.blade_surface().points, from_file.points, atol=1e-12)
+
+
+def test_the_kinds_refuse_each_others_inputs():
+    with pytest.raises(ParameterError, match="kind = 'conventional'"):
+        PropellerParameters.model_validate({"conventional": {"stations_file": str(UIUC)}})
+    with pytest.raises(ParameterError, match="needs stations"):
+        PropellerParameters.model_validate({"kind": "conventional"})
+    with pytest.raises(ParameterError, match="toroidal design target"):
+        PropellerParameters.model_validate({"kind": "conventional", "pitch": 178.0,
+                                            "conventional": {"stations_file": str(UIUC)}})
+    with pytest.raises(ParameterError, match="beta has 2 values"):
+        PropellerParameters.model_validate({"kind": "conventional", "conventional": {
+            "r_over_R": [0.2, 0.5, 1.0], "c_over_R": [0.1, 0.2, 0.05], "beta": [30.0, 20.0]}})
+
+
+def test_uiuc_and_apc_tables_of_the_same_propeller_agree_where_they_overlap():
+    uiuc, apc = read_station_file(UIUC), read_station_file(PE0)
+    assert len(uiuc.r_over_r) == 18 and len(apc.r_over_r) == 43 and apc.thickness_ratio is not None
+    # APC's quoted pitch is 7 in from 2.2 in out: beta = atan(pitch / (2 pi r)).
+    row = int(np.argmin(abs(apc.r_over_r - 3.7627 / 5.0)))
+    assert apc.beta_deg[row] == pytest.approx(np.degrees(np.arctan(7.0 / (2.0 * np.pi * 3.7627))), abs=1e-9)
+    overlap = (uiuc.r_over_r >= 0.2) & (uiuc.r_over_r <= 0.9)
+    r = uiuc.r_over_r[overlap]
+    # Measured (UIUC) and quoted (APC, referred to the flat lower surface) differ by up to 3.3 deg and 0.014 R.
+    np.testing.assert_allclose(np.interp(r, apc.r_over_r, apc.chord_over_r), uiuc.chord_over_r[overlap], atol=0.015)
+    np.testing.assert_allclose(np.interp(r, apc.r_over_r, apc.beta_deg), uiuc.beta_deg[overlap], atol=4.0)
+    assert apc.thickness_ratio[0] == pytest.approx(0.0663) and min(apc.thickness_ratio) == pytest.approx(0.0445)
