@@ -181,8 +181,8 @@ def _pe0_table(lines: list[str], source: str) -> StationTable:
 
 def _fail(table: StationTable, index: int, reason: str) -> ParameterError:
     line = int(table.lines[index]) if table.lines is not None else index + 1
-    if table.lines is None:
-        return ParameterError(f"conventional station {index + 1} of {table.source}: {reason}")
+    if table.lines is None:  # an inline table: its source names the columns
+        return ParameterError(f"{table.source}[{index}]: {reason}")
     return ParameterError(f"{_where(table.source, line)}: {reason}")
 
 

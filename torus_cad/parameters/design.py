@@ -427,7 +427,7 @@ class Conventional(Section):
 
         return StationTable(np.asarray(self.r_over_R, dtype=float), np.asarray(self.c_over_R, dtype=float),
                             np.asarray(self.beta, dtype=float), column(per_station_thickness), column(self.sweep),
-                            source="conventional's inline stations")
+                            source="conventional.r_over_R / c_over_R / beta")
 
     def stations(self) -> StationTable:
         """The checked station table, with the thickness law of thickness_r_over_R applied (ParameterError naming
