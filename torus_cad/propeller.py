@@ -24,8 +24,6 @@ from numpy.typing import NDArray
 
 from torus_cad.colors import HUB_COLOR, blade_color
 from torus_cad.errors import KernelError
-from torus_cad.geometry.conventional_blade import check_conventional_feasible
-from torus_cad.geometry.extensions.feasibility import check_feasible
 from torus_cad.geometry.extensions.handedness import Handedness, spin_to_push_air_down
 from torus_cad.geometry.extensions.mounting import HubMounting, place_mounting, set_screw_arc_deg
 from torus_cad.geometry.extensions.printability import Printability
@@ -47,7 +45,7 @@ from torus_cad.kernel.strict import StrictCheck, strict_valid_solid
 from torus_cad.kernel.wires import SectionCurves, fit_section_curves
 from torus_cad.outputs.output_set import write_output_set
 from torus_cad.parameters import PropellerParameters, resolve_parameters
-from torus_cad.parameters.design import DesignKind, TightBends
+from torus_cad.parameters.design import TightBends
 from torus_cad.parameters.design_targets import DesignTargets, resolve_design_targets
 from torus_cad.runtime.stages import Stage, StageTimer
 from torus_cad.tolerances import ROUND_EDGE_FILLET_PIECES, VOLUME_CHECK_RELATIVE_PRECISION
@@ -175,7 +173,7 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
         hub_geometry = params.hub_geometry()
     with timer.stage(Stage.SECTION_MATH):
         surface = params.blade_surface()
-        _check_feasible(params, surface)
+        params.check_feasible(surface)
         mounting = _place_mounting(params)
         # The hub is symmetric about its axis; its seam goes where it crosses no blade root (nor the set screw).
         screw_arc = set_screw_arc_deg(mounting, hub_geometry.radius_mm)
@@ -191,7 +189,7 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
         blade = loft_solid(wires, surface.s)
         hub = hub_solid(hub_geometry.radius_mm, hub_geometry.length_mm, 0.0 if seam_deg is None else seam_deg,
                         mounting)
-        angles_deg = [params.phase_deg + 360.0 * i / params.blades for i in range(params.blades)]
+        angles_deg = [params.blade_angle_deg(i) for i in range(params.blades)]
         blades = pattern_blades(blade, angles_deg)
     root_fillet: RootFillet | None = None
     if fillet_radius > 0.0:  # blade 0 filleted once, then patterned (torus_cad.kernel.fillet)
@@ -223,15 +221,6 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
             hub, blades = mirrored(hub, check=False), [mirrored(part, check=False) for part in blades]
     return Propeller(params, solid, hub, blades, surface, curves, timer.seconds, route, targets, mounting,
                      face_parts, root_fillet, checks)
-
-
-def _check_feasible(params: PropellerParameters, surface: BladeSurface) -> None:
-    """The pre-kernel checks of the design's kind (:mod:`torus_cad.geometry.extensions.feasibility`,
-    :func:`torus_cad.geometry.conventional_blade.check_conventional_feasible`)."""
-    if params.kind == DesignKind.CONVENTIONAL:
-        check_conventional_feasible(params.conventional_blade(), surface, params.blades)
-    else:
-        check_feasible(params.geometry(), surface)
 
 
 def _strictly_valid(solid: cq.Solid, fillet_on_sharp_edge: bool) -> tuple[cq.Solid, StrictCheck]:

@@ -28,11 +28,13 @@ from torus_cad.formats import ExportFormat, StepSchema
 from torus_cad.geometry.airfoil import Naca5Airfoil, NacaAirfoil, naca4_numbers, naca_section
 from torus_cad.geometry.conventional_blade import (
     ConventionalBlade,
+    check_conventional_feasible,
     conventional_printability,
     conventional_surface,
     rotated_surface,
 )
 from torus_cad.geometry.extensions.airfoil_file import load_airfoil_file
+from torus_cad.geometry.extensions.feasibility import check_feasible
 from torus_cad.geometry.extensions.handedness import Handedness
 from torus_cad.geometry.extensions.mounting import HubMounting
 from torus_cad.geometry.extensions.printability import Printability, printability
@@ -545,7 +547,7 @@ class PropellerParameters(Document):
         points = self.resolution.points if points is None else points
         if self.kind == DesignKind.CONVENTIONAL:
             surface = conventional_surface(self.conventional_blade(), sections, points)
-            return rotated_surface(surface, self.phase_deg + 360.0 * blade_index / self.blades)
+            return rotated_surface(surface, self.blade_angle_deg(blade_index))
         geometry = self.geometry()
         return blade_surface(geometry.blade, geometry.centerline(blade_index), sections, points)
 
@@ -555,6 +557,19 @@ class PropellerParameters(Document):
         if self.kind == DesignKind.CONVENTIONAL:
             return conventional_printability(self.conventional_blade(), self.manufacturing.min_wall)
         return printability(self.geometry(), self.manufacturing.min_wall)
+
+    def check_feasible(self, surface: BladeSurface) -> None:
+        """The pre-kernel checks of the design's kind on blade 0's ``surface`` (GeometryError naming the
+        problem): :func:`torus_cad.geometry.extensions.feasibility.check_feasible` or
+        :func:`torus_cad.geometry.conventional_blade.check_conventional_feasible`."""
+        if self.kind == DesignKind.CONVENTIONAL:
+            check_conventional_feasible(self.conventional_blade(), surface, self.blades)
+        else:
+            check_feasible(self.geometry(), surface)
+
+    def blade_angle_deg(self, blade_index: int) -> float:
+        """theta_i = theta_0 + 360 i / n (spec §6.1), degrees, of either kind."""
+        return self.phase_deg + 360.0 * blade_index / self.blades
 
     def hub_geometry(self) -> HubGeometry:
         """The hub's cylinder (mm), of either kind."""
