@@ -180,3 +180,17 @@ def test_uiuc_and_apc_tables_of_the_same_propeller_agree_where_they_overlap():
     np.testing.assert_allclose(np.interp(r, apc.r_over_r, apc.chord_over_r), uiuc.chord_over_r[overlap], atol=0.015)
     np.testing.assert_allclose(np.interp(r, apc.r_over_r, apc.beta_deg), uiuc.beta_deg[overlap], atol=4.0)
     assert apc.thickness_ratio[0] == pytest.approx(0.0663) and min(apc.thickness_ratio) == pytest.approx(0.0445)
+
+
+def test_the_studio_panel_round_trips_a_conventional_design():
+    from torus_cad.studio.panel import FieldKind, design_from_state, schema_groups, state_values
+
+    groups = schema_groups()
+    fields = {field.key: field for group in groups for field in group.fields}
+    assert fields["conventional.r_over_R"].kind is FieldKind.NUMBERS
+    design = PropellerParameters.from_dict({
+        "kind": "conventional", "blades": 2, "hub": {"radius": 9.5, "length": 12.0},
+        "conventional": {"r_over_R": [0.2, 0.5, 1.0], "c_over_R": [0.1, 0.2, 0.05], "beta": [30.0, 20.0, 10.0]}})
+    state = state_values(design.to_dict(), groups)
+    assert state["p_conventional__beta"] == "30, 20, 10"
+    assert PropellerParameters.from_dict(design_from_state(state, groups)) == design
