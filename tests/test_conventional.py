@@ -194,3 +194,13 @@ def test_the_studio_panel_round_trips_a_conventional_design():
     state = state_values(design.to_dict(), groups)
     assert state["p_conventional__beta"] == "30, 20, 10"
     assert PropellerParameters.from_dict(design_from_state(state, groups)) == design
+
+
+def test_a_blunt_round_trailing_edge_is_in_every_section():
+    params = PropellerParameters.from_toml(DESIGN).with_values({"airfoil.trailing_edge_thickness": 0.2})
+    surface = params.blade_surface()
+    assert surface.round_trailing_edge and surface.lower_corner_index is not None
+    gaps = np.linalg.norm(surface.points[:, surface.trailing_edge_column] - surface.points[:, surface.lower_corner_index],
+                          axis=-1)
+    np.testing.assert_allclose(gaps, 0.2, rtol=1e-6)
+    assert params.printability().trailing_edge_thickness_mm == pytest.approx(0.2)

@@ -40,9 +40,10 @@ from scipy.interpolate import PchipInterpolator
 from torus_cad.errors import GeometryError
 from torus_cad.geometry.arc_length import equal_arc_length_section
 from torus_cad.geometry.extensions.printability import Printability
+from torus_cad.geometry.extensions.trailing_edge import TRAILING_EDGE_THICKNESS_LIMIT, blunt_sections
 from torus_cad.geometry.frames import Frames
 from torus_cad.geometry.propeller import HubGeometry
-from torus_cad.geometry.section import Section, closed_points, max_thickness
+from torus_cad.geometry.section import RoundTrailingEdge, Section, closed_points, max_thickness
 from torus_cad.geometry.station_table import StationTable
 from torus_cad.geometry.surface import BladeSurface, place_on_frames
 from torus_cad.tolerances import (
@@ -102,6 +103,9 @@ class ConventionalBlade:
         airfoil: the chord-unit section; its thickness is scaled to the stations' t/c when given.
         stacking: chord fraction of the stacking point (0 = leading edge).
         hub: the hub the root sits in.
+        trailing_edge_thickness_mm: a blunt trailing edge this thick on every section (0 = the airfoil's own edge).
+        round_trailing_edge: that edge ends in a round cap (else a flat base), as the toroidal blade's
+            (:mod:`torus_cad.geometry.extensions.trailing_edge`).
     """
 
     stations: StationTable
@@ -109,6 +113,8 @@ class ConventionalBlade:
     airfoil: Section
     stacking: float
     hub: HubGeometry
+    trailing_edge_thickness_mm: float = 0.0
+    round_trailing_edge: bool = False
 
     @property
     def root_radius_mm(self) -> float:
@@ -196,9 +202,29 @@ class ConventionalBlade:
         binormal = np.stack([zeros, np.sin(beta), np.cos(beta)], axis=-1)
         return Frames(s, origin, tangent, normal, binormal)
 
-    def section_at(self, factor: float) -> Section:
-        """The airfoil with its thickness scaled by ``factor`` (itself when the factor is 1)."""
-        return self.airfoil if factor == 1.0 else ScaledThickness(self.airfoil, float(factor))
+    def section_at(self, r_mm: float) -> Section:
+        """The chord-unit section at radius ``r_mm``: the airfoil with its thickness scaled to the station's
+        t/c (itself without t/c), opened to the blunt trailing edge in mm when there is one."""
+        factor = float(self.thickness_factor([r_mm])[0])
+        section = self.airfoil if factor == 1.0 else ScaledThickness(self.airfoil, factor)
+        if self.trailing_edge_thickness_mm <= 0.0:
+            return section
+        chord = self.chord_mm([r_mm])
+        return blunt_sections(section, self.trailing_edge_thickness_mm, [0.0], chord, chord,
+                              self.round_trailing_edge)[0]
+
+    def check_trailing_edge(self, r_mm: NDArray[np.float64]) -> None:
+        """GeometryError when the blunt trailing edge is thicker than TRAILING_EDGE_THICKNESS_LIMIT x a
+        section's own largest thickness at the radii ``r_mm`` (mm)."""
+        if self.trailing_edge_thickness_mm <= 0.0:
+            return
+        own_mm = self.chord_mm(r_mm) * self.thickness_factor(r_mm) * max_thickness(self.airfoil)
+        thin = own_mm * TRAILING_EDGE_THICKNESS_LIMIT < self.trailing_edge_thickness_mm
+        if np.any(thin):
+            where = float(r_mm[int(np.argmax(thin))])
+            raise GeometryError(f"airfoil.trailing_edge_thickness = {self.trailing_edge_thickness_mm:g} mm is thicker "
+                                f"than {TRAILING_EDGE_THICKNESS_LIMIT:g} x the section's own thickness near r = "
+                                f"{where:.1f} mm ({float(own_mm[int(np.argmax(thin))]):.3f} mm); make it thinner")
 
 
 def conventional_surface(blade: ConventionalBlade, sections: int, points: int) -> BladeSurface:
@@ -208,15 +234,14 @@ def conventional_surface(blade: ConventionalBlade, sections: int, points: int) -
     in its arc length (spec §5), the trailing edge kept as a point.
     """
     s, r_mm = blade.section_radii_mm(sections)
-    factors = blade.thickness_factor(r_mm)
-    reference = blade.section_at(float(blade.thickness_factor([0.75 * blade.tip_radius_mm])[0]))
+    reference = blade.section_at(0.75 * blade.tip_radius_mm)
     sampling = equal_arc_length_section(reference, points)
-    planar = np.stack([closed_points(blade.section_at(float(k)), sampling.t, sampling.base) for k in factors])
+    planar = np.stack([closed_points(blade.section_at(float(r)), sampling.t, sampling.base) for r in r_mm])
     chord = blade.chord_mm(r_mm)
     scaled = np.stack([(planar[..., 0] - 0.5) * chord[:, None], planar[..., 1] * chord[:, None]], axis=-1)
     frames = blade.frames(s, r_mm)
     return BladeSurface(place_on_frames(frames, scaled), s, sampling.t, sampling.trailing_edge_index, frames,
-                        sampling.lower_corner_index, False)
+                        sampling.lower_corner_index, isinstance(reference, RoundTrailingEdge))
 
 
 def check_conventional_feasible(blade: ConventionalBlade, surface: BladeSurface, blades: int) -> None:
@@ -226,6 +251,7 @@ def check_conventional_feasible(blade: ConventionalBlade, surface: BladeSurface,
     when, at some radius outside the hub, one blade's angular extent about the axis exceeds the
     blade spacing 360 / n degrees.
     """
+    blade.check_trailing_edge(surface.frames.origin[surface.frames.origin[:, 0] > blade.hub.radius_mm, 0])
     root = surface.points[0]
     reach, height = float(np.hypot(root[:, 0], root[:, 1]).max()), float(np.abs(root[:, 2]).max())
     if reach >= blade.hub.radius_mm or height >= blade.hub.length_mm / 2.0:
@@ -276,12 +302,12 @@ def conventional_printability(blade: ConventionalBlade, min_wall_mm: float) -> P
     u = np.sin(np.linspace(0.0, 0.5 * np.pi, _PRINT_CHORD_STATIONS))
     chord = blade.chord_mm(r_mm)
     walls = np.stack([np.linalg.norm(section.points_on_half(u, True) - section.points_on_half(u, False), axis=-1)
-                      for section in (blade.section_at(float(k)) for k in blade.thickness_factor(r_mm))])
+                      for section in (blade.section_at(float(r)) for r in r_mm)])
     walls *= chord[:, None]
     thickest = walls.max(axis=1)
     row = int(np.argmin(thickest))
     column = int(np.argmax(walls[row]))
-    section = blade.section_at(float(blade.thickness_factor(r_mm[row : row + 1])[0]))
+    section = blade.section_at(float(r_mm[row]))
     fraction = float(0.5 * (section.points_on_half(u[column : column + 1], True)[0, 0]
                             + section.points_on_half(u[column : column + 1], False)[0, 0]))
     edge = walls[:, -1]

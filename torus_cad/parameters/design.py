@@ -506,9 +506,6 @@ class PropellerParameters(Document):
             if getattr(self, key):
                 raise ValueError(f"{key} = {getattr(self, key):g} mm is a toroidal design target; for kind = "
                                  "'conventional' the station table sets the blade (conventional.diameter the size)")
-        if self.airfoil.trailing_edge_thickness:
-            raise ValueError("airfoil.trailing_edge_thickness is not supported for kind = 'conventional' yet; "
-                             "set it to 0 (a sharp trailing edge)")
         return self
 
     @model_validator(mode="after")
@@ -578,7 +575,9 @@ class PropellerParameters(Document):
     def conventional_blade(self) -> ConventionalBlade:
         """The conventional blade these parameters describe (kind = 'conventional'; mm, degrees)."""
         return ConventionalBlade(self.conventional.stations(), self.conventional.diameter / 2.0,
-                                 self.airfoil.section(), self.conventional.stacking, self.hub_geometry())
+                                 self.airfoil.section(), self.conventional.stacking, self.hub_geometry(),
+                                 self.airfoil.trailing_edge_thickness,
+                                 self.airfoil.trailing_edge_shape == TrailingEdgeShape.ROUND)
 
     def geometry(self) -> PropellerGeometry:
         """The kernel-free geometry these parameters describe (mm, degrees); toroidal designs only
