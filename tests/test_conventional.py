@@ -204,3 +204,22 @@ def test_a_blunt_round_trailing_edge_is_in_every_section():
                           axis=-1)
     np.testing.assert_allclose(gaps, 0.2, rtol=1e-6)
     assert params.printability().trailing_edge_thickness_mm == pytest.approx(0.2)
+
+
+def test_a_station_file_is_read_as_untrusted_input(tmp_path):
+    design = _design(tmp_path, _GOOD)
+    design.write_text(design.read_text().replace('"stations.txt"', '"/dev/zero"'))
+    with pytest.raises(ParameterError, match="not a regular file"):
+        PropellerParameters.from_toml(design)
+
+
+def test_apc_sweep_puts_the_leading_edge_ahead_of_the_axis():
+    params = PropellerParameters.from_toml(DESIGN).with_values({"conventional.stations_file": str(PE0),
+                                                                "conventional.thickness_r_over_R": [],
+                                                                "conventional.thickness_ratio": []})
+    table, surface = read_station_file(PE0), params.blade_surface(sections=60)
+    radius = surface.frames.origin[:, 0]
+    outboard = (radius > 40.0) & (radius < 120.0)
+    leading_y = surface.points[outboard, 0, 1]  # column 0: the leading edge; 'cw' blade 0 moves toward -y
+    expected = -TIP_RADIUS_MM * np.interp(radius[outboard] / TIP_RADIUS_MM, table.r_over_r, table.sweep_over_r)
+    np.testing.assert_allclose(leading_y, expected, atol=0.05)  # PCHIP between APC's stations
