@@ -233,3 +233,13 @@ def test_cfd_sizes_the_apc_domain_from_its_own_blade():
     assert smallest_chord(params) == pytest.approx(0.049 * TIP_RADIUS_MM, rel=1e-9)  # UIUC's tip chord
     # measured: 'torus-cad cfd examples/apc_10x7sf.toml' meshes 496,864 tetrahedra in 38 s
     assert 4e5 < estimate_cfd_mesh(params).tetrahedra < 6e5
+
+
+def test_a_naca_section_thinned_by_its_number_is_the_mean_line_scaling():
+    from torus_cad.geometry.airfoil import NacaAirfoil
+    from torus_cad.geometry.conventional_blade import ScaledThickness, thickness_scaled
+
+    naca, u = NacaAirfoil(0.04, 0.4, 0.12, True), np.linspace(0.0, 1.0, 101)
+    for upper in (True, False):
+        np.testing.assert_allclose(thickness_scaled(naca, 0.37).points_on_half(u, upper),
+                                   ScaledThickness(naca, 0.37).points_on_half(u, upper), atol=1e-15)

@@ -38,6 +38,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.interpolate import PchipInterpolator
 
 from torus_cad.errors import GeometryError
+from torus_cad.geometry.airfoil import Naca5Airfoil, NacaAirfoil
 from torus_cad.geometry.arc_length import equal_arc_length_section
 from torus_cad.geometry.extensions.printability import Printability
 from torus_cad.geometry.extensions.trailing_edge import TRAILING_EDGE_THICKNESS_LIMIT, blunt_sections
@@ -91,6 +92,17 @@ class ScaledThickness:
     def with_trailing_edge_gap(self, gap: float) -> ScaledThickness:
         """``section`` opened so that the scaled section's trailing edge is ``gap`` thick."""
         return ScaledThickness(self.section.with_trailing_edge_gap(gap / self.factor), self.factor)
+
+
+def thickness_scaled(section: Section, factor: float) -> Section:
+    """``section`` with its thickness times ``factor``: a NACA section with its thickness number scaled (the
+    same as :class:`ScaledThickness` with the thickness normal to the camber line, and analytic), any other
+    section as a :class:`ScaledThickness`; ``section`` itself for a factor of 1."""
+    if factor == 1.0:
+        return section
+    if isinstance(section, NacaAirfoil | Naca5Airfoil) and section.camber_normal:
+        return dataclasses.replace(section, thickness=section.thickness * factor)
+    return ScaledThickness(section, factor)
 
 
 @dataclass(frozen=True)
@@ -205,8 +217,7 @@ class ConventionalBlade:
     def section_at(self, r_mm: float) -> Section:
         """The chord-unit section at radius ``r_mm``: the airfoil with its thickness scaled to the station's
         t/c (itself without t/c), opened to the blunt trailing edge in mm when there is one."""
-        factor = float(self.thickness_factor([r_mm])[0])
-        section = self.airfoil if factor == 1.0 else ScaledThickness(self.airfoil, factor)
+        section = thickness_scaled(self.airfoil, float(self.thickness_factor([r_mm])[0]))
         if self.trailing_edge_thickness_mm <= 0.0:
             return section
         chord = self.chord_mm([r_mm])
