@@ -243,3 +243,19 @@ def test_a_naca_section_thinned_by_its_number_is_the_mean_line_scaling():
     for upper in (True, False):
         np.testing.assert_allclose(thickness_scaled(naca, 0.37).points_on_half(u, upper),
                                    ScaledThickness(naca, 0.37).points_on_half(u, upper), atol=1e-15)
+
+
+def test_the_pre_kernel_checks_hold_at_any_phase_and_refuse_crowded_blades():
+    from torus_cad.errors import GeometryError
+
+    params = PropellerParameters.from_toml(DESIGN)
+    for phase_deg in (180.0, -170.0):
+        turned = params.with_values({"phase_deg": phase_deg})
+        turned.check_feasible(turned.blade_surface())
+    crowded = params.with_values({"blades": 12})
+    with pytest.raises(GeometryError, match="blades would meet each other"):
+        crowded.check_feasible(crowded.blade_surface())
+    small_hub = params.with_values({"hub.radius": 4.0, "hub.length": 3.0, "hub.bore_diameter": 0.0})
+    small_hub.check_feasible(small_hub.blade_surface())  # the root's chord is blended down to fit the hub
+    blade = small_hub.conventional_blade()
+    assert blade.root_chord_mm() < 0.5 * blade.table_chord_mm([blade.blend_end_mm])[0]

@@ -256,13 +256,16 @@ def conventional_surface(blade: ConventionalBlade, sections: int, points: int) -
 
 
 def check_conventional_feasible(blade: ConventionalBlade, surface: BladeSurface, blades: int) -> None:
-    """Refuse a blade whose root section leaves the hub, or whose neighbours would meet outside it.
+    """Refuse a blade whose root section leaves the hub, whose blunt trailing edge is too thick, or whose
+    neighbours would meet outside the hub (``surface``: blade 0, at any angle about the axis).
 
     The root must lie inside the hub (r < R_hub, |z| < L/2) so that the fuse hides it. Blades meet
     when, at some radius outside the hub, one blade's angular extent about the axis exceeds the
     blade spacing 360 / n degrees.
     """
-    blade.check_trailing_edge(surface.frames.origin[surface.frames.origin[:, 0] > blade.hub.radius_mm, 0])
+    radius_mm = np.hypot(surface.frames.origin[:, 0], surface.frames.origin[:, 1])
+    outside = radius_mm > blade.hub.radius_mm
+    blade.check_trailing_edge(radius_mm[outside])
     root = surface.points[0]
     reach, height = float(np.hypot(root[:, 0], root[:, 1]).max()), float(np.abs(root[:, 2]).max())
     if reach >= blade.hub.radius_mm or height >= blade.hub.length_mm / 2.0:
@@ -271,11 +274,13 @@ def check_conventional_feasible(blade: ConventionalBlade, surface: BladeSurface,
                             "make the hub larger")
     if blades < 2:
         return
-    angles = np.degrees(np.arctan2(surface.points[..., 1], surface.points[..., 0]))
-    outside = surface.frames.origin[:, 0] > blade.hub.radius_mm
+    origin = surface.frames.origin
+    turned = ((surface.points[..., 0] + 1j * surface.points[..., 1])
+              * np.exp(-1j * np.arctan2(origin[:, 1], origin[:, 0]))[:, None])  # each section's centre at angle 0
+    angles = np.degrees(np.angle(turned))
     spans = angles.max(axis=1) - angles.min(axis=1)
     if np.any(spans[outside] >= 360.0 / blades):
-        where = float(surface.frames.origin[outside][int(np.argmax(spans[outside])), 0])
+        where = float(radius_mm[outside][int(np.argmax(spans[outside]))])
         raise GeometryError(f"the conventional blades would meet each other near r = {where:.1f} mm: a section spans "
                             f"{spans[outside].max():.1f} degrees about the axis, more than the blade spacing "
                             f"{360.0 / blades:.1f} degrees; use fewer blades or smaller chords")
