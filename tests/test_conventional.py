@@ -85,7 +85,9 @@ def _hole_areas_mm2(triangles: np.ndarray) -> np.ndarray:
 
     OpenCascade's tessellation of the APC leaves one sliver-shaped gap at blade 1's root, where it meets
     the hub: three nodes, one of them 6 um off the line through the other two (0.0018 mm^2; the B-rep's
-    edge tolerances there are below 3e-5 mm, and the toroidal examples' STLs have no such gap)."""
+    edge tolerances there are below 3e-5 mm, and the toroidal examples' STLs have no such gap). It is the
+    assembled fuse route's (kernel.fuse.fuse_pattern): blade 1's face has a node on the junction edge that
+    the hub face's polygon lacks; the general fuse (fuse_all) of the same parts tessellates closed."""
     corners_mm, vertex = np.unique(triangles.reshape(-1, 3), axis=0, return_inverse=True)  # shared corners: equal
     corners = vertex.reshape(-1, 3)
     edges = np.sort(np.concatenate([corners[:, [0, 1]], corners[:, [1, 2]], corners[:, [2, 0]]]), axis=1)
