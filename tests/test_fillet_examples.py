@@ -27,6 +27,12 @@ STRICTLY_REFUSED = {("multirotor_5in_3blade", 1.0), ("multirotor_5in_3blade_ccw"
 
 EXAMPLES = SHIPPED_DESIGNS
 
+#: Designs whose blade roots are too thin for these radii: OpenCascade finds no fillet, and the build exits 1
+#: naming a radius that works or the concave bend that stops it (measured: the APC 10x7 SF's thin cambered
+#: root, 0.9 mm thick at the hub, takes 0.05 mm, with a sharp or a 0.2 mm round trailing edge, with or
+#: without root_fillet_tight_bends = 'reduce').
+TOO_THIN_FOR_THE_FILLET = {"apc_10x7sf"}
+
 
 @pytest.mark.parametrize("radius_mm", [0.5, 1.0])
 @pytest.mark.parametrize("example", EXAMPLES, ids=lambda path: path.stem)
@@ -39,6 +45,9 @@ def test_root_fillet_works_on_every_shipped_example(example, radius_mm):
             assert params.hub.chamfer > 0.0 and "hub.chamfer" in str(refusal)
             propeller = build_propeller(params.with_values({"hub.chamfer": 0.0}))
     except KernelError as error:  # the strict check refuses the fillet's crossing faces: never published
+        if example.stem in TOO_THIN_FOR_THE_FILLET:
+            assert "could not fillet the blade roots" in str(error), error
+            return
         assert "BRepAlgoAPI_Check" in str(error), error
         if params.airfoil.trailing_edge_thickness == 0.0:
             assert "trailing_edge_shape = 'round'" in str(error)

@@ -77,7 +77,7 @@ def shell_commands(block: Block) -> list[str]:
 def workdir(tmp_path_factory) -> Path:
     """A scratch folder laid out like the repository for the examples."""
     folder = tmp_path_factory.mktemp("readme")
-    for name in ("examples", "scripts"):
+    for name in ("examples", "scripts", "validation"):  # validation/: the APC example's station table
         shutil.copytree(ROOT / name, folder / name)
     return folder
 

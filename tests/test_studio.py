@@ -56,8 +56,9 @@ def test_panel_has_one_field_per_schema_parameter_grouped_by_toml_table(groups):
 
 def test_file_paths_are_read_only_in_the_panel(groups):
     fields = {field.key: field for group in groups for field in group.fields}
-    assert fields["airfoil.file"].read_only  # the server would read it: never taken from the page
-    assert not any(field.read_only for key, field in fields.items() if key != "airfoil.file")
+    paths = ("airfoil.file", "conventional.stations_file")
+    assert all(fields[key].read_only for key in paths)  # the server would read them: never taken from the page
+    assert not any(field.read_only for key, field in fields.items() if key not in paths)
     assert fields["export.formats"].kind is FieldKind.CHOICES
 
 

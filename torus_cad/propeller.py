@@ -24,10 +24,9 @@ from numpy.typing import NDArray
 
 from torus_cad.colors import HUB_COLOR, blade_color
 from torus_cad.errors import KernelError
-from torus_cad.geometry.extensions.feasibility import check_feasible
 from torus_cad.geometry.extensions.handedness import Handedness, spin_to_push_air_down
 from torus_cad.geometry.extensions.mounting import HubMounting, place_mounting, set_screw_arc_deg
-from torus_cad.geometry.extensions.printability import Printability, printability
+from torus_cad.geometry.extensions.printability import Printability
 from torus_cad.geometry.hub import seam_angle_deg
 from torus_cad.geometry.surface import BladeSurface
 from torus_cad.kernel.checks import (
@@ -141,7 +140,7 @@ class Propeller:
 
 def design_printability(params: PropellerParameters) -> Printability:
     """The blade's printability from the analytic section alone (no kernel): see torus_cad.geometry.extensions.printability."""
-    return printability(params.geometry(), params.manufacturing.min_wall)
+    return params.printability()
 
 
 def _section_chords(surface: BladeSurface) -> NDArray[np.float64]:
@@ -171,14 +170,14 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
     with timer.stage(Stage.DESIGN_TARGETS):
         targets = resolve_design_targets(params)  # airfoil.naca, diameter, pitch -> the spec's parameters
         params = targets.parameters
-        geometry = params.geometry()
+        hub_geometry = params.hub_geometry()
     with timer.stage(Stage.SECTION_MATH):
         surface = params.blade_surface()
-        check_feasible(geometry, surface)
+        params.check_feasible(surface)
         mounting = _place_mounting(params)
         # The hub is symmetric about its axis; its seam goes where it crosses no blade root (nor the set screw).
-        screw_arc = set_screw_arc_deg(mounting, geometry.hub.radius_mm)
-        seam_deg = seam_angle_deg(surface.points, geometry.hub.radius_mm, geometry.blades,
+        screw_arc = set_screw_arc_deg(mounting, hub_geometry.radius_mm)
+        seam_deg = seam_angle_deg(surface.points, hub_geometry.radius_mm, params.blades,
                                   () if screw_arc is None else (screw_arc,))
     with timer.stage(Stage.WIRES):
         curves = fit_section_curves(surface.points, surface.trailing_edge_column, _section_chords(surface),
@@ -188,16 +187,16 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
         wires = curves.wires(ROUND_EDGE_FILLET_PIECES if fillet_radius > 0.0 and curves.round_trailing_edge else 1)
     with timer.stage(Stage.LOFT):
         blade = loft_solid(wires, surface.s)
-        hub = hub_solid(geometry.hub.radius_mm, geometry.hub.length_mm, 0.0 if seam_deg is None else seam_deg,
+        hub = hub_solid(hub_geometry.radius_mm, hub_geometry.length_mm, 0.0 if seam_deg is None else seam_deg,
                         mounting)
-        angles_deg = [geometry.blade_angle_deg(i) for i in range(geometry.blades)]
+        angles_deg = [params.blade_angle_deg(i) for i in range(params.blades)]
         blades = pattern_blades(blade, angles_deg)
     root_fillet: RootFillet | None = None
     if fillet_radius > 0.0:  # blade 0 filleted once, then patterned (torus_cad.kernel.fillet)
         with timer.stage(Stage.FILLET):
             run_out = None if mounting.chamfer_mm > 0.0 else functools.partial(
-                run_out_hub, geometry.hub.radius_mm, geometry.hub.length_mm, 0.0 if seam_deg is None else seam_deg,
-                mounting, reach=geometry.hub.radius_mm + 4.0 * fillet_radius)
+                run_out_hub, hub_geometry.radius_mm, hub_geometry.length_mm, 0.0 if seam_deg is None else seam_deg,
+                mounting, reach=hub_geometry.radius_mm + 4.0 * fillet_radius)
             # A sharp edge's side as one closed face: the fillet splits it in its own pieces (kernel.fillet).
             closed = blade if surface.lower_corner_index is not None else loft_solid(curves.wires(1, False), surface.s)
             try:

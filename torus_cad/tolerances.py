@@ -215,3 +215,27 @@ STRICT_AXIS_TOLERANCE = 1e-9
 #: deflection, at most this many times (torus_cad.kernel.mesh_check); each halving costs about 1.3-2x
 #: the triangles.
 STL_REFINE_HALVINGS = 3
+
+# -- the conventional (open-tip) blade (torus_cad.geometry.station_table, .conventional_blade) ------
+
+#: Largest station file (a UIUC geometry file is < 1 kB, an APC PE0 file with its performance tables ~ 100 kB).
+STATION_FILE_MAX_BYTES = 1_000_000
+#: Most stations a table may have (UIUC: 18, APC: ~ 40).
+STATION_MAX_ROWS = 2000
+#: Allowed local pitch angle beta of a station (deg): a propeller blade's sections, not a feathered one.
+STATION_BETA_LIMIT_DEG = 85.0
+#: Largest chord of a station as a fraction of the tip radius (c/R; real propellers: < 0.4).
+STATION_MAX_CHORD_OVER_R = 2.0
+#: Largest propeller radius an APC PE0 file may give (inches; 100 in = 5 m across).
+STATION_MAX_RADIUS_IN = 100.0
+#: Largest |sweep| of a station's leading edge as a fraction of the tip radius.
+STATION_MAX_SWEEP_OVER_R = 2.0
+#: The root section of a conventional blade sits at this fraction of the hub's radius (well inside the
+#: hub, so that the hub swallows the root's blend); the stations below the table's first one are blended
+#: down to it.
+CONVENTIONAL_ROOT_RADIUS_FRACTION = 0.5
+#: The blended root section fits inside this fraction of the hub's half-width and half-length.
+CONVENTIONAL_ROOT_FIT_MARGIN = 0.8
+#: Share of sine clustering in the conventional blade's section radii (0: uniform in r; 1: a quarter
+#: sine, sections densest at the tip).
+CONVENTIONAL_TIP_CLUSTERING = 0.6

@@ -442,7 +442,7 @@ def write_cfd_domain(params: PropellerParameters, out_dir: str | Path, threads: 
         with timer.stage(CfdStage.BREP):
             propeller = build_propeller(params)
             box = propeller.solid.BoundingBox()
-            domain = domain_for(params.geometry(), settings, (box.zmin, box.zmax))
+            domain = domain_for(params, settings, (box.zmin, box.zmax))
             step = output.write("step", lambda path: write_step(propeller.solid, path, params.name,
                                                                  params.export.step_schema,
                                                                  program=f"torus_cad {__version__}"))

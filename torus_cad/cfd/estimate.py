@@ -29,7 +29,6 @@ from torus_cad.cfd.sizes import (
     trailing_edges,
 )
 from torus_cad.errors import BudgetError
-from torus_cad.geometry.surface import blade_surface
 from torus_cad.parameters import PropellerParameters
 from torus_cad.tolerances import CFD_TETRAHEDRA_LIMIT
 
@@ -73,10 +72,9 @@ def _section_curvature(points: NDArray[np.float64]) -> NDArray[np.float64]:
 
 def _blade_cloud(params: PropellerParameters) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """Points ``(n, 3)``, outward normals ``(n, 3)`` and curvature ``(n,)`` of every blade."""
-    geometry = params.geometry()
     clouds = []
     for index in range(params.blades):
-        points = blade_surface(geometry.blade, geometry.centerline(index), *CLOUD_GRID).points
+        points = params.blade_surface(index, *CLOUD_GRID).points
         along = np.gradient(points, axis=0)
         around = np.roll(points, -1, axis=1) - np.roll(points, 1, axis=1)
         normals = np.cross(along, around)
@@ -134,7 +132,7 @@ def size_integrals(params: PropellerParameters) -> tuple[float, int]:
     curvature = np.concatenate([blade_curvature, hub[2]])
     propeller_z = (min(float(blade_points[:, 2].min()), -params.hub.length / 2.0),
                    max(float(blade_points[:, 2].max()), params.hub.length / 2.0))
-    domain = domain_for(params.geometry(), settings, propeller_z)
+    domain = domain_for(params, settings, propeller_z)
     surface_size = np.full(len(points), domain.surface_size)
     if settings.curvature_cells > 0.0:
         bent = 2.0 * np.pi / (settings.curvature_cells * np.maximum(curvature, 1e-12))

@@ -11,11 +11,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from torus_cad.errors import ParameterError
-from torus_cad.geometry.propeller import PropellerGeometry
-from torus_cad.geometry.surface import blade_surface
 from torus_cad.geometry.transforms import evaluate_quartic
 from torus_cad.parameters import PropellerParameters
-from torus_cad.parameters.design import Cfd, Handedness, InletSide
+from torus_cad.parameters.design import Cfd, DesignKind, Handedness, InletSide
 
 #: Elements around the rotating zone's and the outer cylinder's circumference, at least.
 CYLINDER_SEGMENTS = 64
@@ -67,20 +65,23 @@ class Domain:
 TIP_RADIUS_GRID = (201, 200)
 
 
-def tip_radius(geometry: PropellerGeometry) -> float:
+def tip_radius(params: PropellerParameters) -> float:
     """Largest distance of the blade surface from the spin axis, mm (analytic surface, sampled densely)."""
-    points = blade_surface(geometry.blade, geometry.centerline(0), *TIP_RADIUS_GRID).points
-    return float(max(np.hypot(points[..., 0], points[..., 1]).max(), geometry.hub.radius_mm))
+    points = params.blade_surface(0, *TIP_RADIUS_GRID).points
+    return float(max(np.hypot(points[..., 0], points[..., 1]).max(), params.hub.radius))
 
 
-def smallest_chord(geometry: PropellerGeometry) -> float:
-    """Smallest chord Sx(s) over the blade, mm."""
-    return float(evaluate_quartic(geometry.blade.laws.scale_x_mm, np.linspace(0.0, 1.0, 201)).min())
+def smallest_chord(params: PropellerParameters) -> float:
+    """Smallest chord over the blade, mm: Sx(s) of a toroidal blade, c(r) of a conventional one (root blend included)."""
+    if params.kind == DesignKind.CONVENTIONAL:
+        blade = params.conventional_blade()
+        return float(blade.chord_mm(blade.section_radii_mm(201)[1]).min())
+    return float(evaluate_quartic(params.geometry().blade.laws.scale_x_mm, np.linspace(0.0, 1.0, 201)).min())
 
 
-def domain_for(geometry: PropellerGeometry, settings: Cfd, propeller_z: tuple[float, float]) -> Domain:
+def domain_for(params: PropellerParameters, settings: Cfd, propeller_z: tuple[float, float]) -> Domain:
     """The domain's sizes for a propeller spanning ``propeller_z`` (mm) axially."""
-    diameter = 2.0 * tip_radius(geometry)
+    diameter = 2.0 * tip_radius(params)
     centre = 0.5 * (propeller_z[0] + propeller_z[1])
     clearance = settings.zone_clearance * diameter
     zone_z = (propeller_z[0] - clearance, propeller_z[1] + clearance)
@@ -97,7 +98,7 @@ def domain_for(geometry: PropellerGeometry, settings: Cfd, propeller_z: tuple[fl
             "make them larger")
     return Domain(tip_diameter=diameter, propeller_z=propeller_z, outer_radius=settings.domain_radius * diameter,
                   outer_z=outer_z, zone_radius=settings.zone_radius * diameter, zone_z=zone_z, inlet_z=inlet_z,
-                  outlet_z=outlet_z, surface_size=smallest_chord(geometry) / settings.cells_per_chord,
+                  outlet_z=outlet_z, surface_size=smallest_chord(params) / settings.cells_per_chord,
                   far_size=settings.far_size * diameter)
 
 

@@ -80,9 +80,7 @@ def command_build(args: argparse.Namespace) -> int:
     params = load_parameters(args.config, args.overrides + _format_overrides(args.formats))
     size = _preview_size(args.preview_size, "--preview-size") if args.preview else None
     if args.require_printable:  # decided from the analytic section, before any work or file
-        from torus_cad.geometry.extensions.printability import printability
-
-        problem = printability(params.geometry(), params.manufacturing.min_wall).problem()
+        problem = params.printability().problem()
         if problem:
             raise GeometryError(f"not printable (--require-printable): {problem}")
     if _writes_a_mesh(params, args.no_stl):

@@ -33,7 +33,11 @@ MOUNTING_SAMPLES = (200, 160)
 
 
 def check_meshable(params: PropellerParameters) -> None:
-    """ParameterError (exit 2) naming a feature the structured mesh cannot carry: the root fillet."""
+    """ParameterError (exit 2) naming a feature the structured mesh cannot carry: the root fillet, or the
+    conventional kind (its grids follow the toroidal blade's centerline, and the open tip needs a cap)."""
+    if params.kind.value == "conventional":
+        raise ParameterError("kind = 'conventional': torus-cad mesh makes the toroidal kind's structured grids only; "
+                             "use the STL of 'torus-cad build' or the tetrahedral mesh of 'torus-cad cfd'")
     radius = params.hub.root_fillet_radius
     if radius > 0.0:
         raise ParameterError(f"hub.root_fillet_radius = {radius:g} mm: torus-cad mesh cannot mesh the root fillet "

@@ -191,8 +191,8 @@ def build_surface_mesh(params: PropellerParameters, progress: Callable[[str], No
     timer = StageTimer[MeshStage](progress)
     with timer.stage(MeshStage.CHECKS):
         params = resolve_design_targets(params).parameters  # airfoil.naca, diameter, pitch, as the B-rep's
-        geometry, table = params.geometry(), params.mesh
         check_meshable(params)
+        geometry, table = params.geometry(), params.mesh
         estimate = estimate_triangles(geometry, table.sections, table.points, table.spacing)
         check_budget(estimate, compare)
         check_resolution(geometry, table.sections, table.points, table.spacing)

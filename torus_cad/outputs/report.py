@@ -76,11 +76,19 @@ def build_report(propeller: BuiltPropeller, density_g_cm3: float,
         "section_fit_error_mm": propeller.section_curves.fit_error,
         "stage_seconds": dict(propeller.stage_seconds),
         "fuse_route": propeller.fuse_route.value,
-        "closed_file_trailing_edge_mm": propeller.parameters.geometry().blade.closed_file_edge_mm,
+        "kind": propeller.parameters.kind.value,
+        "closed_file_trailing_edge_mm": _closed_file_edge_mm(propeller.parameters),
         "root_fillet": None if propeller.root_fillet is None else propeller.root_fillet.to_dict(),
         **({"design_targets": propeller.design_targets.to_dict()}
            if propeller.design_targets is not None and propeller.design_targets.requested else {}),
     }
+
+
+def _closed_file_edge_mm(params: PropellerParameters) -> tuple[float, float] | None:
+    """The coordinate file's trailing edge closed because too thin to mesh (toroidal designs; None otherwise)."""
+    if params.kind.value != "toroidal":
+        return None
+    return params.geometry().blade.closed_file_edge_mm
 
 
 def _set_screw_angle_on_the_part_deg(propeller: BuiltPropeller) -> float | None:

@@ -101,7 +101,9 @@ def design_elements(params: Any, points: int = 400, spin: Handedness = Handednes
 
 
 def trailing_edge_of(params: Any, s: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Thickness of the trailing edge (mm) of the sections at ``s`` (0 where sharp)."""
+    """Thickness of the trailing edge (mm) of the sections at ``s`` (0 where sharp; a conventional blade's is sharp)."""
+    if str(getattr(params, "kind", "toroidal")) == "conventional":
+        return np.zeros(len(s))
     blade = params.geometry().blade
     laws = blade.laws
     sections = sections_along(blade, s)

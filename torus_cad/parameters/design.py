@@ -13,22 +13,35 @@ several fields are the tables' ``model_validator``s.
 
 from __future__ import annotations
 
+import dataclasses
 import re
 from enum import StrEnum
 from pathlib import Path
 from typing import Annotated, Any, Self
 
+import numpy as np
+from numpy.typing import NDArray
 from pydantic import AfterValidator, BeforeValidator, Field, model_validator
 
-from torus_cad.errors import ParameterError
+from torus_cad.errors import GeometryError, ParameterError
 from torus_cad.formats import ExportFormat, StepSchema
 from torus_cad.geometry.airfoil import Naca5Airfoil, NacaAirfoil, naca4_numbers, naca_section
+from torus_cad.geometry.conventional_blade import (
+    ConventionalBlade,
+    check_conventional_feasible,
+    conventional_printability,
+    conventional_surface,
+    rotated_surface,
+)
 from torus_cad.geometry.extensions.airfoil_file import load_airfoil_file
+from torus_cad.geometry.extensions.feasibility import check_feasible
 from torus_cad.geometry.extensions.handedness import Handedness
 from torus_cad.geometry.extensions.mounting import HubMounting
+from torus_cad.geometry.extensions.printability import Printability, printability
 from torus_cad.geometry.frames import FrameKind
 from torus_cad.geometry.propeller import BladeGeometry, HubGeometry, PropellerGeometry
 from torus_cad.geometry.section import Section as SectionShape
+from torus_cad.geometry.station_table import StationTable, checked, read_station_file
 from torus_cad.geometry.surface import BladeSurface, blade_surface, with_thin_file_edge_closed
 from torus_cad.geometry.transforms import SectionLaws, quartic_minimum
 from torus_cad.parameters.document import Document
@@ -36,6 +49,7 @@ from torus_cad.parameters.schema import AS_TUPLE, Bounds, Section, Vector2, Vect
 from torus_cad.tolerances import (
     FOLD_RATIO_LIMIT,
     MIN_BLUNT_TRAILING_EDGE_MM,
+    STATION_MAX_ROWS,
     STL_ANGULAR_DEFLECTION,
     STL_LINEAR_DEFLECTION,
 )
@@ -337,11 +351,112 @@ class Cfd(Section):
         return self
 
 
+
+class DesignKind(StrEnum):
+    """What kind of propeller a design describes."""
+
+    TOROIDAL = "toroidal"          # the spec's looped blades on a centerline
+    CONVENTIONAL = "conventional"  # open-tip blades from a station table ([conventional])
+
+
+#: A column of a station table (TOML array of numbers, any length up to STATION_MAX_ROWS).
+Column = Annotated[tuple[float, ...], AS_TUPLE]
+
+#: The inline station columns and their names in messages.
+_COLUMNS = ("r_over_R", "c_over_R", "beta", "thickness_ratio", "sweep")
+
+
+class Conventional(Section):
+    """A conventional (open-tip) blade from a station table, used when kind = 'conventional'."""
+
+    diameter: float = param(254.0, unit="mm", gt=0.0, le=10000.0, fuzz=(100.0, 400.0),
+                            doc="tip diameter D = 2 R; the stations' r/R and c/R are fractions of R")
+    stations_file: str = param("", doc="station table file: UIUC geometry ('r/R c/R beta' rows) or APC's PE0 "
+                                       "(detected by content); relative to the design file's folder (\"\" = inline)")
+    r_over_R: Column = param((), doc="inline stations' r/R, increasing in (0, 1]")
+    c_over_R: Column = param((), doc="inline stations' chord c/R")
+    beta: Column = param((), unit="deg", doc="inline stations' local pitch angle (pitch = 2 pi r tan beta)")
+    sweep: Column = param((), unit="R", doc="inline stations' leading edge ahead of the blade's axis in the plane of "
+                                            "rotation, /R (empty = stacked at 'stacking')")
+    thickness_ratio: Column = param((), doc="t/c: at the stations, or at thickness_r_over_R when given "
+                                            "(empty = the file's column, else the airfoil's own thickness)")
+    thickness_r_over_R: Column = param((), doc="r/R of thickness_ratio's values, for a table without "
+                                               "a thickness column (empty = thickness_ratio is per station)")
+    stacking: float = param(0.25, ge=0.0, le=1.0, doc="chord fraction of the sections' stacking point "
+                                                      "(0 = leading edge), in the plane z = 0")
+
+    @model_validator(mode="after")
+    def _one_table(self) -> Self:
+        """Stations from a file or inline, not both; inline columns of one length; readable file."""
+        inline = [key for key in _COLUMNS[:3] if getattr(self, key)]
+        if self.stations_file and inline:
+            raise ValueError(f"conventional.stations_file conflicts with conventional.{inline[0]}: give the "
+                             "stations by a file or inline, not both")
+        if self.stations_file and self.sweep:
+            raise ValueError("conventional.sweep is for inline stations; a station file gives its own")
+        for key in (*_COLUMNS, "thickness_r_over_R"):
+            if len(getattr(self, key)) > STATION_MAX_ROWS:
+                raise ValueError(f"conventional.{key} has {len(getattr(self, key))} values; allowed at most "
+                                 f"{STATION_MAX_ROWS}")
+        if self.thickness_r_over_R and len(self.thickness_r_over_R) != len(self.thickness_ratio):
+            raise ValueError("conventional.thickness_r_over_R and conventional.thickness_ratio must have the same "
+                             "length")
+        if self.stations_file:
+            try:
+                self.stations()
+            except ParameterError as error:
+                raise ValueError(f"conventional.stations_file: {error}") from None
+        elif inline:
+            self.stations()
+        return self
+
+    def given(self) -> bool:
+        """Whether any station is given (a file or an inline column)."""
+        return bool(self.stations_file or any(getattr(self, key) for key in _COLUMNS))
+
+    def _inline(self) -> StationTable:
+        """The inline columns as a station table (sweep and a per-station thickness optional)."""
+        count = len(self.r_over_R)
+        per_station_thickness = self.thickness_ratio if not self.thickness_r_over_R else ()
+        for key, values in (("c_over_R", self.c_over_R), ("beta", self.beta), ("sweep", self.sweep),
+                            ("thickness_ratio", per_station_thickness)):
+            if len(values) != count and (key in ("c_over_R", "beta") or values):
+                raise ParameterError(f"conventional.{key} has {len(values)} values but conventional.r_over_R "
+                                     f"has {count}")
+
+        def column(values: tuple[float, ...]) -> NDArray[np.float64] | None:
+            return np.asarray(values, dtype=float) if values else None
+
+        return StationTable(np.asarray(self.r_over_R, dtype=float), np.asarray(self.c_over_R, dtype=float),
+                            np.asarray(self.beta, dtype=float), column(per_station_thickness), column(self.sweep),
+                            source="conventional.r_over_R / c_over_R / beta")
+
+    def stations(self) -> StationTable:
+        """The checked station table, with the thickness law of thickness_r_over_R applied (ParameterError naming
+        the file's line or the inline station)."""
+        table = read_station_file(self.stations_file) if self.stations_file else checked(self._inline())
+        if not self.thickness_r_over_R:
+            if self.thickness_ratio and self.stations_file:
+                raise ParameterError("conventional.thickness_ratio with a station file needs "
+                                     "conventional.thickness_r_over_R (where its values apply)")
+            return table
+        law = checked(StationTable(np.asarray(self.thickness_r_over_R, dtype=float),
+                                   np.ones(len(self.thickness_r_over_R)), np.zeros(len(self.thickness_r_over_R)),
+                                   np.asarray(self.thickness_ratio, dtype=float),
+                                   source="conventional.thickness_r_over_R / thickness_ratio"))
+        thickness = np.interp(table.r_over_r, law.r_over_r, law.thickness_ratio if law.thickness_ratio is not None
+                              else np.ones(0))
+        return dataclasses.replace(table, thickness_ratio=thickness)
+
+
 class PropellerParameters(Document):
     """Every input of a toroidal propeller; frozen and validated on construction."""
 
     name: Annotated[str, AfterValidator(_checked_name)] = param(
         "torus_propeller", doc="names the output files <name>.step/.stl/.json and the STEP product")
+    kind: DesignKind = param(DesignKind.TOROIDAL, strict=False,
+                             doc="'toroidal' (the spec's looped blades) or 'conventional' (open-tip blades from the "
+                                 "[conventional] station table; centerline and transforms unused)")
     blades: int = param(3, ge=1, le=12, fuzz=(1, 8), doc="number of blades n; blade i at theta_0 + 360 i / n")
     phase_deg: float = param(0.0, unit="deg", ge=-360.0, le=360.0, fuzz=(-180.0, 180.0),
                              doc="theta_0: angle of blade 0 around the axis")
@@ -361,6 +476,7 @@ class PropellerParameters(Document):
     export: Export = Field(default_factory=Export)
     mesh: Mesh = Field(default_factory=Mesh)
     cfd: Cfd = Field(default_factory=Cfd)
+    conventional: Conventional = Field(default_factory=Conventional)
     manufacturing: Manufacturing = Field(default_factory=Manufacturing)
 
     @model_validator(mode="after")
@@ -377,8 +493,26 @@ class PropellerParameters(Document):
         return self
 
     @model_validator(mode="after")
+    def _kind_has_its_inputs(self) -> Self:
+        """A conventional design needs stations and has no toroidal targets; a toroidal one no stations."""
+        if self.kind == DesignKind.TOROIDAL:
+            if self.conventional.given():
+                raise ValueError("[conventional] stations are given but kind = 'toroidal'; set kind = 'conventional'")
+            return self
+        if not self.conventional.given():
+            raise ValueError("kind = 'conventional' needs stations: conventional.stations_file or the inline "
+                             "conventional.r_over_R, c_over_R and beta")
+        for key in ("diameter", "pitch"):
+            if getattr(self, key):
+                raise ValueError(f"{key} = {getattr(self, key):g} mm is a toroidal design target; for kind = "
+                                 "'conventional' the station table sets the blade (conventional.diameter the size)")
+        return self
+
+    @model_validator(mode="after")
     def _control_points_fit_the_hub(self) -> Self:
-        """Ranges of the control points that depend on the hub's size."""
+        """Ranges of the control points that depend on the hub's size (toroidal designs; a conventional one has none)."""
+        if self.kind == DesignKind.CONVENTIONAL:
+            return self
         length, inset = self.hub.length, self.hub.radius - self.hub.radius / 8.0
         for key in ("p2", "p3", "p4"):
             point = getattr(self.centerline, key)
@@ -393,23 +527,64 @@ class PropellerParameters(Document):
     @classmethod
     def paths_relative_to(cls, data: dict[str, Any], folder: Path) -> dict[str, Any]:
         """A relative ``airfoil.file`` in a design file is relative to the design file's folder."""
-        airfoil = data.get("airfoil")
-        if isinstance(airfoil, dict) and isinstance(airfoil.get("file"), str) and airfoil["file"]:
-            path = Path(airfoil["file"]).expanduser()  # "~/foils/x.dat" is the user's home, as in a shell
-            data = {**data, "airfoil": {**airfoil, "file": str(path if path.is_absolute() else folder / path)}}
+        for table, key in (("airfoil", "file"), ("conventional", "stations_file")):
+            values = data.get(table)
+            if isinstance(values, dict) and isinstance(values.get(key), str) and values[key]:
+                path = Path(values[key]).expanduser()  # "~/foils/x.dat" is the user's home, as in a shell
+                data = {**data, table: {**values, key: str(path if path.is_absolute() else folder / path)}}
         return data
 
     def blade_surface(self, blade_index: int = 0, sections: int | None = None, points: int | None = None
                       ) -> BladeSurface:
         """Blade ``blade_index`` sampled at ``sections`` x ``points`` (default: ``resolution``):
-        a :class:`~torus_cad.geometry.surface.BladeSurface`, whose ``points`` are ``(sections, points, 3)`` mm."""
+        a :class:`~torus_cad.geometry.surface.BladeSurface`, whose ``points`` are ``(sections, points, 3)`` mm.
+
+        A conventional blade is blade 0 rotated about +z to blade ``blade_index``'s angle."""
+        sections = self.resolution.sections if sections is None else sections
+        points = self.resolution.points if points is None else points
+        if self.kind == DesignKind.CONVENTIONAL:
+            surface = conventional_surface(self.conventional_blade(), sections, points)
+            return rotated_surface(surface, self.blade_angle_deg(blade_index))
         geometry = self.geometry()
-        return blade_surface(geometry.blade, geometry.centerline(blade_index),
-                             self.resolution.sections if sections is None else sections,
-                             self.resolution.points if points is None else points)
+        return blade_surface(geometry.blade, geometry.centerline(blade_index), sections, points)
+
+    def printability(self) -> Printability:
+        """The blade's thinnest wall and trailing edge against ``manufacturing.min_wall``, from the analytic
+        section (:mod:`torus_cad.geometry.extensions.printability`), of either kind."""
+        if self.kind == DesignKind.CONVENTIONAL:
+            return conventional_printability(self.conventional_blade(), self.manufacturing.min_wall)
+        return printability(self.geometry(), self.manufacturing.min_wall)
+
+    def check_feasible(self, surface: BladeSurface) -> None:
+        """The pre-kernel checks of the design's kind on blade 0's ``surface`` (GeometryError naming the
+        problem): :func:`torus_cad.geometry.extensions.feasibility.check_feasible` or
+        :func:`torus_cad.geometry.conventional_blade.check_conventional_feasible`."""
+        if self.kind == DesignKind.CONVENTIONAL:
+            check_conventional_feasible(self.conventional_blade(), surface, self.blades)
+        else:
+            check_feasible(self.geometry(), surface)
+
+    def blade_angle_deg(self, blade_index: int) -> float:
+        """theta_i = theta_0 + 360 i / n (spec §6.1), degrees, of either kind."""
+        return self.phase_deg + 360.0 * blade_index / self.blades
+
+    def hub_geometry(self) -> HubGeometry:
+        """The hub's cylinder (mm), of either kind."""
+        return HubGeometry(self.hub.radius, self.hub.length)
+
+    def conventional_blade(self) -> ConventionalBlade:
+        """The conventional blade these parameters describe (kind = 'conventional'; mm, degrees)."""
+        return ConventionalBlade(self.conventional.stations(), self.conventional.diameter / 2.0,
+                                 self.airfoil.section(), self.conventional.stacking, self.hub_geometry(),
+                                 self.airfoil.trailing_edge_thickness,
+                                 self.airfoil.trailing_edge_shape == TrailingEdgeShape.ROUND)
 
     def geometry(self) -> PropellerGeometry:
-        """The kernel-free geometry these parameters describe (mm, degrees)."""
+        """The kernel-free geometry these parameters describe (mm, degrees); toroidal designs only
+        (a conventional one has :meth:`conventional_blade`)."""
+        if self.kind == DesignKind.CONVENTIONAL:
+            raise GeometryError("this step is toroidal-only (it needs the blade's centerline); "
+                                "kind = 'conventional' has none")
         line = self.centerline
         laws = SectionLaws(self.transforms.angle_of_attack, self.transforms.scale_x, self.transforms.scale_y,
                            self.airfoil.pivot)
@@ -421,5 +596,5 @@ class PropellerParameters(Document):
 
 
 # ParameterError is what every caller catches; keep it importable from here.
-__all__ = ["Airfoil", "Centerline", "Cfd", "Export", "ExportFormat", "Handedness", "Hub", "InletSide", "Manufacturing",
+__all__ = ["Airfoil", "Centerline", "Cfd", "Conventional", "DesignKind", "Export", "ExportFormat", "Handedness", "Hub", "InletSide", "Manufacturing",
            "Mesh", "ParameterError", "PropellerParameters", "Resolution", "SectionSpacing", "StepSchema", "Transforms"]

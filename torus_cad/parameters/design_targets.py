@@ -102,8 +102,16 @@ def requested_targets(params: Any) -> dict[str, Any]:
 
 
 def tip_radius_mm(params: Any) -> float:
-    """Largest distance of blade 0's analytic surface from the spin axis (mm)."""
+    """Largest distance of blade 0's analytic surface from the spin axis (mm); a conventional blade's
+    sampled densely (its sections are planar, x = r: the tip section's points are the farthest)."""
+    if str(params.kind) == "conventional":
+        points = params.blade_surface(0, CONVENTIONAL_TIP_GRID[0], CONVENTIONAL_TIP_GRID[1]).points
+        return float(np.hypot(points[..., 0], points[..., 1]).max())
     return tip_radius_of(params.geometry())
+
+
+#: Sections and points of a conventional blade's sampling for its tip radius.
+CONVENTIONAL_TIP_GRID = (21, 400)
 
 
 def tip_radius_of(geometry: PropellerGeometry) -> float:

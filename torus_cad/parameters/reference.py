@@ -38,6 +38,8 @@ def _allowed_text(spec: ParameterSpec) -> str:
         return f"a list of {listed}" if spec.kind is tuple else listed
     if spec.kind is bool:
         return "`true` / `false`"
+    if spec.kind is tuple and not spec.length:
+        return "a list of numbers"
     if spec.bounds.low is None and spec.bounds.high is None:
         return "see below" if spec.kind is tuple else "–"
     text = str(spec.bounds)

@@ -169,6 +169,9 @@ def _spec(key: str, info: FieldInfo) -> ParameterSpec:
     if get_origin(kind) is tuple and get_args(kind)[-1] is Ellipsis and _is_enum(get_args(kind)[0]):
         # a list of choices (export.formats): each element one of the Enum's values
         return ParameterSpec(key, tuple, info.default, unit, doc, Bounds(), choices=tuple(get_args(kind)[0]))
+    if get_origin(kind) is tuple and get_args(kind)[-1] is Ellipsis:
+        # a list of numbers of any length (a station table's column): length 0, no fuzz range
+        return ParameterSpec(key, tuple, info.default, unit, doc, bounds_of(_element_metadata(kind)))
     if get_origin(kind) is tuple:
         bounds = bounds_of(_element_metadata(kind))
         return ParameterSpec(key, tuple, info.default, unit, doc, bounds, len(get_args(kind)), fuzz or bounds)

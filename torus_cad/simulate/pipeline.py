@@ -112,7 +112,7 @@ def check_request(request: Request) -> float:
     check_count("--processes", request.processes, 1, max_processes())
     if not (math.isfinite(request.time_limit_s) and request.time_limit_s > 0.0):
         raise ParameterError(f"--time-limit = {request.time_limit_s:g} s is out of range; allowed > 0 s")
-    diameter_m = 2.0 * tip_radius(request.params.geometry()) / 1000.0
+    diameter_m = 2.0 * tip_radius(request.params) / 1000.0
     check_operating_point(request.point, diameter_m, request.params)
     return diameter_m
 

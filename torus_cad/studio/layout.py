@@ -86,7 +86,7 @@ def _scalar_field(panel_field: PanelField) -> None:
     elif panel_field.read_only:  # a file path: the server would read it, so the page may not set it
         v3.VTextField(v_model=(name,), **{**common, "hint": f"{panel_field.hint} (set in the design file the "
                                                               "studio was started with)"}, readonly=True)
-    elif panel_field.kind is FieldKind.TEXT:
+    elif panel_field.kind in (FieldKind.TEXT, FieldKind.NUMBERS):
         v3.VTextField(v_model=(name,), **common)
     else:
         v3.VTextField(v_model=(name,), suffix=panel_field.unit, **common, **_number_attributes(panel_field))

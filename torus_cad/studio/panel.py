@@ -35,6 +35,7 @@ class FieldKind(StrEnum):
     BOOLEAN = "boolean"
     CHOICE = "choice"
     CHOICES = "choices"  # several of the choices (e.g. export.formats)
+    NUMBERS = "numbers"  # a list of numbers of any length (a station table's column), typed as "1, 2.5, 3"
     TEXT = "text"
 
 
@@ -130,6 +131,8 @@ def _slider(kind: FieldKind, explore: Bounds | None) -> tuple[float, float, floa
 def _kind(spec: ParameterSpec) -> FieldKind:
     if spec.choices and spec.kind is tuple:
         return FieldKind.CHOICES
+    if spec.kind is tuple and not spec.length:
+        return FieldKind.NUMBERS
     if spec.choices or (isinstance(spec.kind, type) and issubclass(spec.kind, Enum)):
         return FieldKind.CHOICE
     if spec.kind is bool:
@@ -218,6 +221,8 @@ def state_values(design: Mapping[str, Any], groups: Iterable[PanelGroup]) -> dic
             value = _plain(_lookup(design, field.key))
             if field.kind is FieldKind.CHOICES:
                 values[field.state_names[0]] = [_plain(item) for item in value]
+            elif field.kind is FieldKind.NUMBERS:
+                values[field.state_names[0]] = ", ".join(f"{float(item):g}" for item in value)
             elif field.is_vector:
                 values.update({name: _plain(item) for name, item in zip(field.state_names, value)})
             else:
@@ -257,6 +262,9 @@ def _value(field: PanelField, values: Mapping[str, Any]) -> Any:
         return bool(raw)
     if field.kind is FieldKind.CHOICES:
         return [str(item) for item in raw or []]
+    if field.kind is FieldKind.NUMBERS:
+        items = [item for item in re.split(r"[,\s]+", "" if raw is None else str(raw).strip()) if item]
+        return [_number(field, f"{field.key}[{index}]", item) for index, item in enumerate(items)]
     return "" if raw is None else str(raw)
 
 

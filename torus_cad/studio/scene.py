@@ -15,7 +15,6 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from torus_cad.geometry.extensions.feasibility import check_feasible
 from torus_cad.geometry.mesh import blade_mesh
 from torus_cad.geometry.propeller import HUB_PART
 from torus_cad.parameters import PropellerParameters
@@ -101,9 +100,9 @@ def preview_scene(params: PropellerParameters) -> PreviewScene:
     fillet are left to the exact solid: the preview hub is the plain cylinder.
     """
     params = resolve_design_targets(params).parameters
-    geometry = params.geometry()
+    hub = params.hub_geometry()
     surface = params.blade_surface()
-    check_feasible(geometry, surface)
+    params.check_feasible(surface)
     tip = _tip_diameter(surface.points)  # at the design's sampling (a mirror keeps the radii)
     sections, points = (min(wanted, most) for wanted, most in zip((params.resolution.sections,
                                                                    params.resolution.points), PREVIEW_MAX_SAMPLES))
@@ -113,10 +112,10 @@ def preview_scene(params: PropellerParameters) -> PreviewScene:
     section_points, vertices, faces = surface.points, mesh.vertices, mesh.faces
     if params.handedness == Handedness.CCW:  # the mirror image: reflect, and keep the faces outward
         section_points, vertices, faces = section_points * MIRROR, vertices * MIRROR, faces[:, ::-1]
-    parts = [cylinder_mesh(geometry.hub.radius_mm, geometry.hub.length_mm)]
+    parts = [cylinder_mesh(hub.radius_mm, hub.length_mm)]
     curves = []
-    for index in range(geometry.blades):  # blade i is blade 0 turned about the axis (spec §6.1)
-        rotation = rotation_about_z(geometry.blade_angle_deg(index) - geometry.blade_angle_deg(0))
+    for index in range(params.blades):  # blade i is blade 0 turned about the axis (spec §6.1)
+        rotation = rotation_about_z(params.blade_angle_deg(index) - params.blade_angle_deg(0))
         turn = rotation if params.handedness == Handedness.CW else rotation.T  # mirrored angles turn back
         parts.append(PartMesh(index, vertices @ turn.T, faces))
         curves.append(section_points @ turn.T)
