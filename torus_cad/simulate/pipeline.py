@@ -437,10 +437,15 @@ async def thrust_search_async(request: Request, target: ThrustTarget, out_dir: s
                   "rpm": state.best.rpm, "thrust_n": state.best.thrust_n, "within_tolerance": state.within_tolerance,
                   "rpm_limit": limit, "chosen_run": chosen,
                   "runs": [{"rpm": item.rpm, "thrust_n": item.thrust_n, "torque_nm": result.report["torque_nm"],
-                            "converged": result.report["converged"]} for item, (_, result) in zip(runs, results)],
+                            "power_w": result.report["power_w"], "figure_of_merit": result.report["figure_of_merit"],
+                            "efficiency": result.report["efficiency"], "converged": result.report["converged"],
+                            "solve_seconds": result.report["stage_seconds"]["solve"]}
+                           for item, (_, result) in zip(runs, results)],
                   "method": "secant on sqrt(thrust) over rpm, one mesh; the first rpm from CT = "
                             f"{INITIAL_CT:g}"}
-        return _publish(output, request, case, out, run, start, {"thrust_search": search})
+        seconds = {key: sum(result.report["stage_seconds"][key] for _, result in results)
+                   for key in ("mesh", "convert", "solve")}
+        return _publish(output, request, case, out, run, start, {"thrust_search": search, "stage_seconds": seconds})
 
 
 def thrust_search(request: Request, target: ThrustTarget, out_dir: str | Path,
