@@ -25,7 +25,11 @@ Measures, from the placed solid:
   innermost such radius and the hub radius (inside the hub's wall, clear of a bore) stays all
   inside (halvings too). No ring all inside: no hub (0, 0);
 * the smallest chord, which sets the element size on the propeller, is not measured: it is taken
-  as ``CHORD_PER_DIAMETER`` x D (the built default design's ratio, 6.0 mm at D = 45.1 mm).
+  as ``CHORD_PER_DIAMETER`` x D (the built default design's ratio, 6.0 mm at D = 45.1 mm);
+* the trailing edges, for their size field (the levels turn curvature sizing off): the knife edges,
+  where the two faces' normals differ by more than ``KNIFE_EDGE_NORMAL_ANGLE_DEG`` (a wedge under
+  45 degrees; a blunt or round trailing edge is not found, and its surface mesh is then refined only
+  where its triangles cross).
 """
 
 from __future__ import annotations
@@ -42,6 +46,7 @@ from typing import Any
 import numpy as np
 
 from torus_cad.cfd.domain import PropellerBody
+from torus_cad.cfd.sizes import TrailingEdges
 from torus_cad.errors import KernelError, ParameterError
 from torus_cad.parameters.design import Handedness
 from torus_cad.runtime.input_files import read_untrusted_bytes
@@ -54,6 +59,9 @@ STEP_MAGIC = b"ISO-10303-21;"
 HUB_RING_POINTS = 16
 HUB_RADIAL_STEPS = 24
 HUB_BISECTIONS = 8
+#: An edge whose two faces' normals differ by more than this (degrees) is a knife (trailing) edge; samples along it.
+KNIFE_EDGE_NORMAL_ANGLE_DEG = 135.0
+KNIFE_EDGE_SAMPLES = 41
 #: The smallest chord of a STEP propeller as a fraction of its tip diameter (the default design's 6.0 / 45.1).
 CHORD_PER_DIAMETER = 0.133
 #: What a STEP propeller's name is made of; everything else becomes '_'.
@@ -231,6 +239,33 @@ def _bisect(inside: Any, good: float, bad: float) -> float:
     return good
 
 
+def knife_edges(solid: Any) -> TrailingEdges | None:
+    """The solid's knife edges (edges between two faces whose normals, at the edge's middle, differ by more
+    than ``KNIFE_EDGE_NORMAL_ANGLE_DEG``: a sharp trailing edge), each sampled at ``KNIFE_EDGE_SAMPLES``
+    points, as trailing edges of thickness 0 mm for the size field; None when there are none."""
+    import cadquery as cq
+    from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE
+    from OCP.TopExp import TopExp
+    from OCP.TopoDS import TopoDS
+    from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape
+
+    ancestors = TopTools_IndexedDataMapOfShapeListOfShape()
+    TopExp.MapShapesAndAncestors_s(solid.wrapped, TopAbs_EDGE, TopAbs_FACE, ancestors)
+    limit = math.cos(math.radians(KNIFE_EDGE_NORMAL_ANGLE_DEG))
+    curves = []
+    for index in range(1, ancestors.Extent() + 1):
+        faces = list(ancestors.FindFromIndex(index))
+        if len(faces) != 2:
+            continue
+        edge = cq.Edge(TopoDS.Edge_s(ancestors.FindKey(index)))
+        middle = edge.positionAt(0.5)
+        normals = [cq.Face(TopoDS.Face_s(face)).normalAt(middle) for face in faces]
+        if normals[0].dot(normals[1]) < limit:
+            curves.append(np.array([edge.positionAt(t).toTuple()
+                                    for t in np.linspace(0.0, 1.0, KNIFE_EDGE_SAMPLES)]))
+    return TrailingEdges(tuple(curves), 0.0) if curves else None
+
+
 def load_step_propeller(path: str | Path, axis: Axis = Axis.PLUS_Z, turning: Handedness = Handedness.CW
                         ) -> StepPropeller:
     """Read, check, place and measure the STEP propeller at ``path`` (ParameterError for a bad file)."""
@@ -238,5 +273,5 @@ def load_step_propeller(path: str | Path, axis: Axis = Axis.PLUS_Z, turning: Han
     placed, centroid = place_on_z(solid, axis)
     diameter = tip_diameter_mm(placed)
     hub_radius, hub_length = hub_measures(placed, diameter)
-    body = PropellerBody(placed, step_name(path), diameter, CHORD_PER_DIAMETER * diameter)
+    body = PropellerBody(placed, step_name(path), diameter, CHORD_PER_DIAMETER * diameter, knife_edges(placed))
     return StepPropeller(str(path), axis, turning, body, hub_radius, hub_length, centroid)
