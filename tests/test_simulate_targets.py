@@ -303,3 +303,47 @@ def test_the_design_s_step_gives_the_design_s_thrust(design_step, tmp_path):
     # the two meshes differ (the STEP has no trailing-edge size field: docs/how-to/simulate.md)
     assert step["thrust_n"] == pytest.approx(design["thrust_n"], rel=0.05)
     assert step["torque_nm"] == pytest.approx(design["torque_nm"], rel=0.05)
+
+
+# -- what the terminal shows ----------------------------------------------------------------------------
+
+def _level(thrust, torque):
+    return {"cells": 1, "thrust_n": thrust, "torque_nm": torque, "ct": 0.3, "cp": 0.8, "converged": True}
+
+
+def test_the_convergence_study_prints_torque_in_n_mm_and_the_gci_in_percent():
+    from torus_cad.simulate.cli_output import summary_lines
+    from torus_cad.simulate.pipeline import Result
+
+    thrust = richardson(0.0400, 0.0440, 0.0456, RATIO)
+    report = {"levels": {"coarse": _level(0.0400, 0.00080), "medium": _level(0.0440, 0.00085),
+                         "fine": _level(0.0456, 0.00086)},
+              "thrust_n": {"extrapolated": thrust.extrapolated, "observed_order": thrust.order,
+                           "converges_monotonically": True, "gci_fine": thrust.gci_fine,
+                           "gci_medium": thrust.gci_medium, "gci_asymptotic_ratio": thrust.asymptotic_ratio,
+                           "in_asymptotic_range": False},
+              "torque_nm": {"converges_monotonically": False}}
+    thrust_line, torque_line = summary_lines(Result({}, report), convergence=True)
+    assert thrust_line.startswith("thrust: coarse 0.04, medium 0.044, fine 0.0456 N; Richardson ")
+    assert f"GCI fine {100 * thrust.gci_fine:.2g} %" in thrust_line and "NOT in the asymptotic range" in thrust_line
+    assert torque_line.startswith("torque: coarse 0.8, medium 0.85, fine 0.86 N mm; no Richardson extrapolation and "
+                                  "no grid convergence index")
+
+
+def test_a_run_prints_torque_in_n_mm_and_variations_in_percent():
+    from torus_cad.simulate.cli_output import summary_lines
+    from torus_cad.simulate.pipeline import Result
+
+    report = {"thrust_n": 0.05, "torque_nm": 0.000989, "power_w": 1.13, "rpm": 10932.0, "airspeed_m_s": 0.0,
+              "advance_ratio": 0.0, "ct": 0.297, "cp": 0.819, "efficiency": None, "figure_of_merit": 0.139,
+              "converged": True, "force_variation_last_10_percent": {"thrust": 0.014, "torque": 0.0041},
+              "iterations": 120, "cells": 54844, "level": "coarse", "wall_seconds": 129.0,
+              "fluid": {"name": "air"},
+              "thrust_search": {"target_thrust_n": 0.05, "tolerance": 0.01, "rpm": 10932.0, "thrust_n": 0.0499,
+                                "within_tolerance": True,
+                                "runs": [{"rpm": 11919.0, "thrust_n": 0.0594}, {"rpm": 10932.0, "thrust_n": 0.0499}]}}
+    lines = summary_lines(Result({}, report))
+    assert lines[0] == "thrust search, 2 runs on one mesh: 11919 rpm 0.0594 N; 10932 rpm 0.0499 N"
+    assert lines[1] == "rpm for 0.05 N: 10932 rpm (0.0499 N, within 1 %)"
+    assert "torque 0.989 N mm" in lines[2] and "figure of merit 0.139" in lines[2]
+    assert lines[3].startswith("converged: thrust varies 1.4 %, torque 0.41 % over the last 10 %")

@@ -403,9 +403,22 @@ async def thrust_search_async(request: Request, target: ThrustTarget, out_dir: s
     start = time.perf_counter()
     diameter_m, limit = check_thrust_target(request, target)
     check_openfoam()
+    request, out = _at_level(dataclasses.replace(request, case_only=False, mesh_from=None)), Path(out_dir)
+    created = not out.exists()
+    try:
+        return await _thrust_search(request, target, out, diameter_m, limit, start, progress, stage, runner)
+    except ParameterError:  # out of reach: nothing published, and no folder left behind that was not there
+        if created and out.is_dir() and not any(out.iterdir()):
+            out.rmdir()
+        raise
+
+
+async def _thrust_search(request: Request, target: ThrustTarget, out: Path, diameter_m: float, limit: float,
+                         start: float, progress: ProgressCallback | None, stage: Callable[[str], None] | None,
+                         runner: type | None) -> Result:
+    """The search of :func:`thrust_search_async` into the output set ``out`` (rpm limit ``limit`` in rpm)."""
     fluid = request.point.fluid
     rpm = first_rpm(target.thrust_n, limit, diameter_m, fluid.density_kg_m3)
-    request, out = _at_level(dataclasses.replace(request, case_only=False, mesh_from=None)), Path(out_dir)
     name = request.params.name
     runs: list[ThrustRun] = []
     results: list[tuple[Path, _Run]] = []
