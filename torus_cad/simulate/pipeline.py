@@ -249,7 +249,7 @@ async def simulate_async(request: Request, out_dir: str | Path, progress: Progre
                       "tip_diameter_m": diameter_m, **_step_entry(request)}
             return Result({"case": out / f"{name}_case"}, report)
         run = await _run_case(request, case, out, spec, cfd_report, diameter_m, start, stage, progress,
-                              runner, convert=request.mesh_from is None)
+                              runner, convert=request.mesh_from is None, mesh_s=time.perf_counter() - start)
         return _publish(output, request, case, out, run, start)
 
 
@@ -271,10 +271,10 @@ def _step_entry(request: Request) -> dict[str, Any]:
 
 async def _run_case(request: Request, case: Path, out: Path, spec: CaseSpec, cfd_report: dict[str, Any],
                     diameter_m: float, start: float, stage: Callable[[str], None] | None,
-                    progress: ProgressCallback | None, runner: type | None, convert: bool) -> _Run:
-    """Convert the mesh (if ``convert``) and run the solver in ``case``; the report of the run. The
-    time budget counts from ``start`` (time.perf_counter). A failed solver's case is kept as
-    ``OUT/<name>_case_failed``."""
+                    progress: ProgressCallback | None, runner: type | None, convert: bool, mesh_s: float) -> _Run:
+    """Convert the mesh (if ``convert``) and run the solver in ``case``; the report of the run (``mesh_s``:
+    the seconds its mesh took, meshed or copied). The time budget counts from ``start``
+    (time.perf_counter). A failed solver's case is kept as ``OUT/<name>_case_failed``."""
     from foamlib import AsyncFoamCase
 
     run_start = time.perf_counter()
@@ -296,7 +296,7 @@ async def _run_case(request: Request, case: Path, out: Path, spec: CaseSpec, cfd
         _swap_folder(case, kept)
         raise type(error)(f"{error}; the case is kept in {kept}") from None
     report = _report(request, spec, cfd_report, history, diameter_m)
-    report.update(stage_seconds={"mesh": run_start - start if convert else 0.0, "convert": convert_s,
+    report.update(stage_seconds={"mesh": mesh_s, "convert": convert_s,
                                  "solve": time.perf_counter() - run_start - convert_s}, **_step_entry(request))
     return _Run(report, history)
 
@@ -307,7 +307,7 @@ def _publish(output: OutputSet, request: Request, case: Path, out: Path, run: _R
     params, name = request.params, request.params.name
     cells = run.report["cells"]
     output.write("png", lambda path: write_history_plot(
-        run.history, params.handedness, path, f"{name}: {request.point.rpm:g} rpm, {request.point.airspeed_m_s:g} "
+        run.history, params.handedness, path, f"{name}: {run.report['rpm']:g} rpm, {request.point.airspeed_m_s:g} "
                                               f"m/s, {request.level.value} ({cells:,} cells)"))
     report = {**run.report, **(extra or {}), "wall_seconds": time.perf_counter() - start, "case": f"{name}_case"}
     with deferred():
@@ -427,6 +427,7 @@ async def _thrust_search(request: Request, target: ThrustTarget, out: Path, diam
         first_case = output.staging / "runs" / "0" / f"{name}_case"
         while True:
             run_request = dataclasses.replace(request, point=dataclasses.replace(request.point, rpm=rpm))
+            prepared = time.perf_counter()
             if not results:
                 cfd_report, spec = await _mesh_and_write(run_request, first_case, diameter_m, stage)
                 case = first_case
@@ -435,7 +436,7 @@ async def _thrust_search(request: Request, target: ThrustTarget, out: Path, diam
                 cfd_report, spec = _reuse_mesh(dataclasses.replace(run_request, mesh_from=first_case), case,
                                                diameter_m)
             run = await _run_case(run_request, case, out, spec, cfd_report, diameter_m, start, stage, progress,
-                                  runner, convert=not results)
+                                  runner, convert=not results, mesh_s=time.perf_counter() - prepared)
             results.append((case, run))
             runs.append(ThrustRun(rpm, float(run.report["thrust_n"])))
             if stage:
