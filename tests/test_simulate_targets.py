@@ -172,8 +172,24 @@ def _two_solids(path):
     return write_step(boxes, path, "two")
 
 
+def _open_box(path):
+    """A box with one face missing, made a solid: its STEP reads back as a shell, no solid."""
+    import cadquery as cq
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeSolid, BRepBuilderAPI_Sewing
+    from OCP.TopoDS import TopoDS
+
+    from torus_cad.kernel.writers.step import write_step
+
+    sewing = BRepBuilderAPI_Sewing()
+    for face in cq.Solid.makeBox(1, 1, 1).Faces()[:5]:
+        sewing.Add(face.wrapped)
+    sewing.Perform()
+    return write_step(cq.Solid(BRepBuilderAPI_MakeSolid(TopoDS.Shell_s(sewing.SewedShape())).Solid()), path, "open")
+
+
 @pytest.mark.parametrize("kind, fragment", [
     ("two_solids", "holds 2 solids; it must hold exactly one"),
+    ("open_box", "holds 0 solids; it must hold exactly one"),
     ("empty", "is not a STEP file"),
     ("text", "is not a STEP file"),
     ("broken", "does not read as STEP"),
@@ -184,6 +200,8 @@ def test_a_bad_step_file_exits_2_with_one_line_naming_it_and_writes_nothing(tmp_
     path = tmp_path / f"{kind}.step"
     if kind == "two_solids":
         _two_solids(path)
+    elif kind == "open_box":
+        _open_box(path)
     elif kind == "empty":
         path.write_bytes(b"")
     elif kind == "text":
