@@ -73,7 +73,9 @@ def main() -> int:
         for key in ("thrust_n", "torque_nm"):
             extrapolation = richardson(*(float(done[level][key]) for level in LEVELS), REFINEMENT_RATIO)
             summary[key] = {"extrapolated": extrapolation.extrapolated, "observed_order": extrapolation.order,
-                            "converges_monotonically": extrapolation.converges_monotonically}
+                            "converges_monotonically": extrapolation.converges_monotonically,
+                            "gci_fine": extrapolation.gci_fine, "gci_medium": extrapolation.gci_medium,
+                            "gci_asymptotic_ratio": extrapolation.asymptotic_ratio}
     print(f"{'level':<8}{'cells':>9}{'wall s':>9}{'thrust N':>11}{'torque N m':>12}{'CT':>9}{'CP':>9}  converged")
     for result in results:
         if result["exit_code"]:

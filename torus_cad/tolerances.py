@@ -85,6 +85,9 @@ AIRFOIL_FILE_MAX_BYTES = 2_000_000
 #: the parsing and crossing checks of this many take well under a second (scripts/bench_airfoil_file.py).
 AIRFOIL_FILE_MAX_POINTS = 20_000
 
+#: Largest STEP file ``torus-cad simulate --step`` reads (bytes): the default design's is about 1 MB.
+STEP_FILE_MAX_BYTES = 64 << 20
+
 #: Seconds the parsing and checks of one airfoil coordinate file may take before it is refused.
 AIRFOIL_FILE_TIME_LIMIT_S = 10.0
 

@@ -44,10 +44,11 @@ from torus_cad.cfd.sizes import (
     TRAILING_EDGE_SIZE_PER_THICKNESS,
     Domain,
     TrailingEdges,
-    domain_for,
+    domain_from_sizes,
     trailing_edges,
 )
 from torus_cad.errors import KernelError
+from torus_cad.formats import StepSchema
 from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.design import Cfd
 from torus_cad.runtime.stages import StageTimer
@@ -410,47 +411,93 @@ def _write_failure(path: Path) -> OSError:
     return OSError(code, os.strerror(code), str(path))
 
 
+@dataclass(frozen=True)
+class PropellerBody:
+    """What the fluid domain starts from: a propeller solid whose spin axis is +z through the origin (mm).
+
+    Attributes:
+        solid: the one valid solid (a cadquery Shape).
+        name: names the files (``<name>_cfd.*``) and the STEP product.
+        tip_diameter_mm: D, twice the largest distance of the solid from the axis.
+        chord_mm: the smallest chord, which sets the element size on the propeller (``chord / cells_per_chord``).
+        trailing_edges: lines for the trailing-edge size field (used when curvature sizing is off), or None.
+        blades: the blade count for the report, or None if unknown.
+        step_schema: the protocol of the STEP the domain writes.
+    """
+
+    solid: Any
+    name: str
+    tip_diameter_mm: float
+    chord_mm: float
+    trailing_edges: TrailingEdges | None = None
+    blades: int | None = None
+    step_schema: StepSchema = StepSchema.AP214
+
+
+def design_body(params: PropellerParameters) -> PropellerBody:
+    """The built B-rep of ``params`` as a :class:`PropellerBody` (the analytic tip radius and smallest chord)."""
+    from torus_cad.cfd.sizes import smallest_chord, tip_radius
+    from torus_cad.propeller import build_propeller
+
+    edges = trailing_edges(params) if params.cfd.curvature_cells == 0.0 else None
+    return PropellerBody(build_propeller(params).solid, params.name, 2.0 * tip_radius(params),
+                         smallest_chord(params), edges, params.blades, params.export.step_schema)
+
+
 def write_cfd_domain(params: PropellerParameters, out_dir: str | Path, threads: int = GMSH_REPRODUCIBLE_THREADS,
                      progress: Callable[[str], None] | None = None, estimate: CfdEstimate | None = None
                      ) -> tuple[dict[str, Any], dict[str, Path]]:
-    """Build the B-rep, the domain of ``params.cfd`` and its mesh (gmsh with ``threads`` threads, 0 = one
-    per CPU; one thread gives the same mesh on every run, see
-    :data:`torus_cad.tolerances.GMSH_REPRODUCIBLE_THREADS`; ``estimate``: the budget's, if already
-    checked); publish ``<name>_cfd.step``, ``<name>_cfd.msh``, ``<name>_cfd_v2.msh``, ``README.txt`` and
-    the sealed report ``<name>_cfd.json`` as one output set (torus_cad.outputs.output_set). Returns the report as
-    written and the final paths (the report last).
+    """Build the B-rep of ``params`` and mesh its domain (:func:`write_body_domain` with ``params.cfd``);
+    ``estimate``: the budget's, if already checked (else checked here: BudgetError over the element budget).
 
     Raises MissingExtraError without gmsh or meshlib, BudgetError over the element budget,
     ParameterError / GeometryError for bad input (nothing written), KernelError naming the step when
     OpenCascade or gmsh fails, OutputError naming the file when it cannot be written.
     """
-    from torus_cad import __version__
     from torus_cad.cfd.surface_check import import_meshlib
+
+    import_gmsh()
+    import_meshlib()
+    estimate = check_cfd_budget(params) if estimate is None else estimate
+    timer = StageTimer[CfdStage](progress)
+    started = time.process_time(), time.perf_counter()
+    with timer.stage(CfdStage.BREP):
+        body = design_body(params)
+    return write_body_domain(body, params.cfd, out_dir, threads, estimate, timer, started)
+
+
+def write_body_domain(body: PropellerBody, settings: Cfd, out_dir: str | Path,
+                      threads: int = GMSH_REPRODUCIBLE_THREADS, estimate: CfdEstimate | None = None,
+                      timer: StageTimer[CfdStage] | None = None, started: tuple[float, float] | None = None
+                      ) -> tuple[dict[str, Any], dict[str, Path]]:
+    """The domain of ``settings`` around ``body`` and its mesh (gmsh with ``threads`` threads, 0 = one
+    per CPU; one thread gives the same mesh on every run, see
+    :data:`torus_cad.tolerances.GMSH_REPRODUCIBLE_THREADS`); publish ``<name>_cfd.step``,
+    ``<name>_cfd.msh``, ``<name>_cfd_v2.msh``, ``README.txt`` and the sealed report ``<name>_cfd.json``
+    as one output set (torus_cad.outputs.output_set). ``estimate`` (if any) goes into the report;
+    ``timer`` times the stages (and reports them to its progress callback); ``started``: the CPU and wall
+    clock (time.process_time, time.perf_counter) the report's seconds count from (default: now). Returns the report as
+    written and the final paths (the report last).
+    """
+    from torus_cad import __version__
     from torus_cad.kernel.checks import precise_volume
     from torus_cad.kernel.writers.step import write_step
     from torus_cad.outputs.output_set import OutputSet
-    from torus_cad.propeller import build_propeller
 
     gmsh = import_gmsh()
-    import_meshlib()
-    estimate = check_cfd_budget(params) if estimate is None else estimate
-    settings = params.cfd
-    name = f"{params.name}_cfd"
-    timer = StageTimer[CfdStage](progress)
-    cpu_start, wall_start = time.process_time(), time.perf_counter()
+    timer = timer if timer is not None else StageTimer[CfdStage](None)
+    name = f"{body.name}_cfd"
+    cpu_start, wall_start = started if started is not None else (time.process_time(), time.perf_counter())
     with OutputSet(out_dir, name) as output:
-        with timer.stage(CfdStage.BREP):
-            propeller = build_propeller(params)
-            box = propeller.solid.BoundingBox()
-            domain = domain_for(params, settings, (box.zmin, box.zmax))
-            step = output.write("step", lambda path: write_step(propeller.solid, path, params.name,
-                                                                 params.export.step_schema,
-                                                                 program=f"torus_cad {__version__}"))
-            propeller_volume = precise_volume(propeller.solid)
         with gmsh_session(gmsh, threads):
             with timer.stage(CfdStage.DOMAIN):
+                box = body.solid.BoundingBox()
+                domain = domain_from_sizes(body.tip_diameter_mm, body.chord_mm, settings, (box.zmin, box.zmax))
+                step = output.write("step", lambda path: write_step(body.solid, path, body.name, body.step_schema,
+                                                                     program=f"torus_cad {__version__}"))
+                propeller_volume = precise_volume(body.solid)
                 entities = build_domain(gmsh, step, domain)
-                edges = trailing_edges(params) if settings.curvature_cells == 0.0 else None
+                edges = body.trailing_edges if settings.curvature_cells == 0.0 else None
                 background = set_sizes(gmsh, domain, settings, entities, edges)
                 add_groups(gmsh, entities)
             with timer.stage(CfdStage.SURFACE_MESH):
@@ -466,13 +513,13 @@ def write_cfd_domain(params: PropellerParameters, out_dir: str | Path, threads: 
                     "fluid": domain.outer_volume - domain.zone_volume}
         meshed = statistics["meshed_volume_mm3"]
         report: dict[str, Any] = {
-            "name": params.name, "blades": params.blades, "gmsh_version": gmsh_version, "threads": threads,
+            "name": body.name, "blades": body.blades, "gmsh_version": gmsh_version, "threads": threads,
             "settings": settings.model_dump(mode="json"),
             "domain_mm": {**asdict(domain), "outer_volume_mm3": domain.outer_volume,
                           "zone_volume_mm3": domain.zone_volume},
             "propeller_volume_mm3": propeller_volume,
             "physical_groups": {"surfaces": list(SURFACE_GROUPS), "volumes": list(VOLUME_GROUPS)},
-            "estimate": asdict(estimate),
+            "estimate": asdict(estimate) if estimate is not None else None,
             "surface_refinement": asdict(refinement),
             **statistics,
             "expected_volume_mm3": expected,
@@ -482,7 +529,7 @@ def write_cfd_domain(params: PropellerParameters, out_dir: str | Path, threads: 
             "wall_seconds": time.perf_counter() - wall_start, "cpu_seconds": time.process_time() - cpu_start,
         }
         output.write_files(lambda folder: {"readme": _write_text(folder / "README.txt",
-                                                                   readme_text(params.name, report, Path(out_dir)))})
+                                                                   readme_text(body.name, report, Path(out_dir)))})
         paths = output.publish(report)
         return output.sealed_report, paths
 

@@ -80,8 +80,13 @@ def smallest_chord(params: PropellerParameters) -> float:
 
 
 def domain_for(params: PropellerParameters, settings: Cfd, propeller_z: tuple[float, float]) -> Domain:
-    """The domain's sizes for a propeller spanning ``propeller_z`` (mm) axially."""
-    diameter = 2.0 * tip_radius(params)
+    """The domain's sizes for a designed propeller spanning ``propeller_z`` (mm) axially."""
+    return domain_from_sizes(2.0 * tip_radius(params), smallest_chord(params), settings, propeller_z)
+
+
+def domain_from_sizes(diameter: float, chord: float, settings: Cfd, propeller_z: tuple[float, float]) -> Domain:
+    """The domain's sizes for a propeller of tip diameter ``diameter`` (mm) whose smallest chord is
+    ``chord`` (mm; sets the surface size, ``chord / cells_per_chord``), spanning ``propeller_z`` (mm) along +z."""
     centre = 0.5 * (propeller_z[0] + propeller_z[1])
     clearance = settings.zone_clearance * diameter
     zone_z = (propeller_z[0] - clearance, propeller_z[1] + clearance)
@@ -98,7 +103,7 @@ def domain_for(params: PropellerParameters, settings: Cfd, propeller_z: tuple[fl
             "make them larger")
     return Domain(tip_diameter=diameter, propeller_z=propeller_z, outer_radius=settings.domain_radius * diameter,
                   outer_z=outer_z, zone_radius=settings.zone_radius * diameter, zone_z=zone_z, inlet_z=inlet_z,
-                  outlet_z=outlet_z, surface_size=smallest_chord(params) / settings.cells_per_chord,
+                  outlet_z=outlet_z, surface_size=chord / settings.cells_per_chord,
                   far_size=settings.far_size * diameter)
 
 

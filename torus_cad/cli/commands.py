@@ -353,26 +353,36 @@ def command_simulate(args: argparse.Namespace) -> int:
     the iteration and residual named, the case kept)."""
     from torus_cad.runtime.progress import StageProgress
 
+    _check_simulate_options(args)
     params = load_parameters(args.config, args.overrides)
-    if args.convergence and (args.case_only or args.mesh_from):
-        raise ParameterError("--convergence meshes and runs all three levels; it takes neither --case-only nor --mesh-from")
     progress = StageProgress.for_terminal(quiet=args.quiet)
     try:
         from torus_cad.simulate.cli_output import IterationLine, summary_lines
-        from torus_cad.simulate.pipeline import Request, convergence_study, simulate
+        from torus_cad.simulate.pipeline import Request, ThrustTarget, convergence_study, simulate, thrust_search
         from torus_cad.simulate.run import MissingOpenFoamError
         from torus_cad.simulate.settings import Level, OperatingPoint, max_processes
     except ImportError as error:
         print(f"torus-cad: {error.name or error} is not installed: install the simulate extra, "
               "pip install 'torus_cad[simulate]'", file=sys.stderr)
         return EXIT_KERNEL_FAILURE
-    request = Request(params, OperatingPoint(args.rpm, args.airspeed), Level(args.level), args.iterations,
+    step = None
+    if args.step is not None:
+        from torus_cad.cfd.step_body import Axis, load_step_propeller
+        from torus_cad.parameters.design import Handedness
+
+        step = load_step_propeller(args.step, Axis(args.axis), Handedness(args.turning))
+        params = params.with_values({"name": step.body.name, "handedness": args.turning})
+    rpm = args.rpm if args.thrust is None else 0.0  # --thrust: the search sets each run's rpm
+    request = Request(params, OperatingPoint(rpm, args.airspeed), Level(args.level), args.iterations,
                       max_processes() if args.processes is None else args.processes, args.case_only, args.time_limit,
-                      Path(args.mesh_from) if args.mesh_from else None)
+                      Path(args.mesh_from) if args.mesh_from else None, step)
     line = IterationLine.for_terminal(quiet=args.quiet)
     try:
         if args.convergence:
             result = convergence_study(request, Path(args.out), progress=line, stage=progress)
+        elif args.thrust is not None:
+            target = ThrustTarget(args.thrust, args.thrust_tolerance, args.thrust_runs)
+            result = thrust_search(request, target, Path(args.out), progress=line, stage=progress)
         else:
             result = simulate(request, Path(args.out), progress=line, stage=progress)
     except MissingOpenFoamError as error:
@@ -384,6 +394,17 @@ def command_simulate(args: argparse.Namespace) -> int:
         for text in summary_lines(result, convergence=args.convergence):
             print(text)
     return EXIT_OK
+
+
+def _check_simulate_options(args: argparse.Namespace) -> None:
+    """ParameterError (exit 2) for options that do not go together."""
+    if args.convergence and (args.case_only or args.mesh_from):
+        raise ParameterError("--convergence meshes and runs all three levels; it takes neither --case-only nor --mesh-from")
+    if args.thrust is not None and (args.convergence or args.case_only or args.mesh_from):
+        raise ParameterError("--thrust meshes once and runs the solver a few times; it takes none of --convergence, "
+                             "--case-only, --mesh-from")
+    if args.step is None and (args.axis != "+z" or args.turning != "cw"):
+        raise ParameterError("--axis and --turning describe a --step file; give --step FILE")
 
 
 def _preview_size(text: str, option: str) -> tuple[int, int]:

@@ -166,25 +166,51 @@ def _add_simulate_parser(commands: Any) -> None:
         "simpleFoam through foamlib. Writes <name>_performance.json (thrust, torque, power, J, CT, CP, efficiency "
         "or figure of merit, convergence) and <name>_performance.png (force and residual histories). Needs "
         "OpenFOAM (v1912) and the simulate extra: pip install 'torus_cad[simulate]'.")
-    simulate.add_argument("--rpm", type=float, required=True, help="revolutions per minute, >= 0, in the design's "
-                          "own sense of rotation (a 'cw' design clockwise seen from +z)")
+    from torus_cad.simulate.thrust_target import (
+        DEFAULT_MAX_RUNS,
+        DEFAULT_TOLERANCE,
+        MAX_RUNS_RANGE,
+        PLAUSIBLE_CT_LIMIT,
+        TOLERANCE_RANGE,
+    )
+
+    speed = simulate.add_mutually_exclusive_group(required=True)
+    speed.add_argument("--rpm", type=float, help="revolutions per minute, from 0 to the rpm at helical tip Mach 0.6, "
+                       "in the design's own sense of rotation (a 'cw' design clockwise seen from +z)")
+    speed.add_argument("--thrust", type=float, metavar="N",
+                       help="find the rpm that gives this thrust, newtons (> 0, at most the thrust at the rpm limit "
+                            f"with CT {PLAUSIBLE_CT_LIMIT:g}): one mesh, a few solver runs on it (a secant step on "
+                            "sqrt(thrust)); the report lists every run")
+    simulate.add_argument("--thrust-tolerance", type=float, default=DEFAULT_TOLERANCE, metavar="FRACTION",
+                          help=f"--thrust stops within this fraction of the target, [{TOLERANCE_RANGE[0]:g}, "
+                               f"{TOLERANCE_RANGE[1]:g}] (default {DEFAULT_TOLERANCE:g})")
+    simulate.add_argument("--thrust-runs", type=int, default=DEFAULT_MAX_RUNS, metavar="N",
+                          help=f"--thrust runs the solver at most this often, [{MAX_RUNS_RANGE[0]}, {MAX_RUNS_RANGE[1]}] "
+                               f"(default {DEFAULT_MAX_RUNS})")
+    simulate.add_argument("--step", metavar="FILE", help="simulate the one solid of this STEP file instead of a "
+                          "design (outputs named after the file's stem; CONFIG and --set give only [cfd])")
+    simulate.add_argument("--axis", choices=["+z", "-z", "+x", "-x", "+y", "-y"], default="+z",
+                          help="--step: the spin axis in the file's coordinates, through the solid's centroid "
+                               "(default +z); the thrust points along it")
+    simulate.add_argument("--turning", choices=["cw", "ccw"], default="cw",
+                          help="--step: the sense of rotation seen from the + end of --axis (default cw)")
     simulate.add_argument("--airspeed", type=float, default=0.0, metavar="M_S",
-                          help="speed of the air arriving at the inlet, m/s (default 0: still air)")
+                          help="speed of the air arriving at the inlet, [0, 100] m/s (default 0: still air)")
     simulate.add_argument("--level", choices=["coarse", "medium", "fine"], default="coarse",
                           help="mesh level (default coarse: about 53k cells for the default design)")
-    simulate.add_argument("--iterations", type=int, metavar="N", help="SIMPLE iterations (default: the level's, "
-                          "300 / 400 / 500)")
+    simulate.add_argument("--iterations", type=int, metavar="N", help="SIMPLE iterations, [1, 20000] (default: the "
+                          "level's, 300 / 400 / 500)")
     simulate.add_argument("--processes", type=int, metavar="N", default=None,
-                          help="MPI processes for the solver (default: one per CPU)")
+                          help="MPI processes for the solver, from 1 to the CPUs (default: one per CPU)")
     simulate.add_argument("--time-limit", type=float, default=3600.0, metavar="SECONDS",
-                          help="time budget of the run; refused before the solver starts if its estimate is over, "
-                               "stopped when it runs over (default 3600)")
+                          help="time budget of the run (> 0; of the whole search with --thrust); refused before the "
+                               "solver starts if its estimate is over, stopped when it runs over (default 3600)")
     simulate.add_argument("--case-only", action="store_true", help="write the case without running it")
     simulate.add_argument("--mesh-from", metavar="CASE", help="reuse the mesh of an earlier case of this design and "
                           "level (OUT/<name>_case) instead of meshing again: another rpm or airspeed")
     simulate.add_argument("--convergence", action="store_true",
                           help="run all three levels into OUT/<level>/ and write <name>_convergence.json: "
-                               "Richardson-extrapolated thrust and torque and the observed order")
+                               "Richardson-extrapolated thrust and torque, the observed order and the grid convergence index")
     _add_out_and_quiet(simulate, "simulate_out", command_simulate)
 
 

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import sys
-from typing import TextIO
+from typing import Any, TextIO
 
 from torus_cad.runtime.progress import is_terminal
 from torus_cad.simulate.pipeline import Result
@@ -46,33 +46,70 @@ def _number(value: float | None, digits: int = 4) -> str:
     return "-" if value is None else f"{value:.{digits}g}"
 
 
+def _percent(fraction: float | None, digits: int = 2) -> str:
+    return "-" if fraction is None else f"{100.0 * fraction:.{digits}g} %"
+
+
+#: What the terminal shows of each force: its name, its factor from the report's SI unit, its unit.
+#: Torque is in N mm on the terminal everywhere (the progress line, the plot), N m in the reports.
+_SHOWN = {"thrust_n": ("thrust", 1.0, "N"), "torque_nm": ("torque", 1000.0, "N mm")}
+
+
 def summary_lines(result: Result, convergence: bool = False) -> list[str]:
-    """The paths written and the designer's numbers."""
+    """The paths written and the designer's numbers (torque in N mm, variations in percent)."""
     lines = [f"wrote {path}" for path in result.paths.values()]
     report = result.report
     if convergence:
-        for key, unit in (("thrust_n", "N"), ("torque_nm", "N m")):
-            entry = report[key]
-            levels = ", ".join(f"{level} {_number(values[key])}" for level, values in report["levels"].items())
-            if entry["converges_monotonically"]:
-                lines.append(f"{key.split('_')[0]}: {levels} {unit}; Richardson {_number(entry['extrapolated'])} {unit}, "
-                             f"observed order {_number(entry['observed_order'], 3)}")
-            else:
-                lines.append(f"{key.split('_')[0]}: {levels} {unit}; no Richardson extrapolation: the levels do not "
-                             "converge monotonically (the change from medium to fine is not smaller than from "
-                             "coarse to medium), so they are not in the asymptotic range")
-        return lines
+        return lines + convergence_lines(report)
+    if "step" in report:
+        step = report["step"]
+        lines.append(f"STEP {step['file']}: axis {step['axis']}, turning {step['turning']}; tip diameter "
+                     f"{step['tip_diameter_mm']:.2f} mm, hub radius {step['hub_radius_mm']:.2f} mm, hub length "
+                     f"{step['hub_length_mm']:.2f} mm")
     if "thrust_n" not in report:  # --case-only
         lines.append(f"case written ({report['cells']:,} cells, level {report['level']}); run it with its Allrun")
         return lines
+    if "thrust_search" in report:
+        lines += thrust_search_lines(report["thrust_search"])
     variation = report["force_variation_last_10_percent"]
     state = "converged" if report["converged"] else "NOT converged"
     merit = (f"efficiency {_number(report['efficiency'], 3)}" if report["efficiency"] is not None
              else f"figure of merit {_number(report['figure_of_merit'], 3)}")
-    lines.append(f"thrust {report['thrust_n']:.4g} N, torque {report['torque_nm']:.4g} N m, power {report['power_w']:.4g} W "
-                 f"at {report['rpm']:g} rpm, {report['airspeed_m_s']:g} m/s (J {_number(report['advance_ratio'], 3)}): "
-                 f"CT {_number(report['ct'])}, CP {_number(report['cp'])}, {merit}")
-    lines.append(f"{state}: thrust varies {_number(variation['thrust'], 2)}, torque {_number(variation['torque'], 2)} "
-                 f"(fraction of the mean) over the last 10 % of {report['iterations']} iterations; {report['cells']:,} "
+    lines.append(f"thrust {report['thrust_n']:.4g} N, torque {report['torque_nm'] * 1000.0:.4g} N mm, power "
+                 f"{report['power_w']:.4g} W at {report['rpm']:g} rpm, {report['airspeed_m_s']:g} m/s (J "
+                 f"{_number(report['advance_ratio'], 3)}): CT {_number(report['ct'])}, CP {_number(report['cp'])}, {merit}")
+    lines.append(f"{state}: thrust varies {_percent(variation['thrust'])}, torque {_percent(variation['torque'])} "
+                 f"over the last 10 % of {report['iterations']} iterations; {report['cells']:,} "
                  f"cells, level {report['level']}, {report['wall_seconds']:.0f} s; {report['fluid']['name']}")
+    return lines
+
+
+def thrust_search_lines(search: dict[str, Any]) -> list[str]:
+    """``--thrust``: every run, then the rpm found (or the closest run, when none was within the tolerance)."""
+    runs = "; ".join(f"{run['rpm']:.0f} rpm {run['thrust_n']:.4g} N" for run in search["runs"])
+    verdict = (f"within {_percent(search['tolerance'])}" if search["within_tolerance"]
+               else f"NOT within {_percent(search['tolerance'])} after {len(search['runs'])} runs: the closest run")
+    return [f"thrust search, {len(search['runs'])} runs on one mesh: {runs}",
+            f"rpm for {search['target_thrust_n']:.4g} N: {search['rpm']:.0f} rpm ({search['thrust_n']:.4g} N, "
+            f"{verdict})"]
+
+
+def convergence_lines(report: dict[str, Any]) -> list[str]:
+    """The convergence study: each force on the three levels, Richardson's extrapolation, the observed
+    order and Roache's grid convergence index (or why there is none)."""
+    lines = []
+    for key, (label, factor, unit) in _SHOWN.items():
+        entry = report[key]
+        levels = ", ".join(f"{level} {_number(values[key] * factor)}" for level, values in report["levels"].items())
+        if entry["converges_monotonically"]:
+            asymptotic = ("in the asymptotic range" if entry.get("in_asymptotic_range")
+                          else "NOT in the asymptotic range")
+            lines.append(f"{label}: {levels} {unit}; Richardson {_number(entry['extrapolated'] * factor)} {unit}, "
+                         f"observed order {_number(entry['observed_order'], 3)}; GCI fine "
+                         f"{_percent(entry.get('gci_fine'))}, medium {_percent(entry.get('gci_medium'))}, "
+                         f"GCI_medium / (r^p GCI_fine) {_number(entry.get('gci_asymptotic_ratio'), 3)} ({asymptotic})")
+        else:
+            lines.append(f"{label}: {levels} {unit}; no Richardson extrapolation and no grid convergence index: the "
+                         "levels do not converge monotonically (the change from medium to fine is not smaller than "
+                         "from coarse to medium), so they are not in the asymptotic range")
     return lines

@@ -86,12 +86,21 @@ def run_summary(history: History, point: OperatingPoint, handedness: Handedness,
             "convergence_limit": SIMULATE_CONVERGED_VARIATION}
 
 
+#: Roache's factor of safety of the grid convergence index for three grids (an observed order).
+GCI_SAFETY_FACTOR = 1.25
+
+
 @dataclass(frozen=True)
 class Extrapolation:
-    """Richardson extrapolation over three levels (coarse, medium, fine) refined by ``ratio``.
+    """Richardson extrapolation and Roache's grid convergence index over three levels (coarse, medium,
+    fine) refined by ``ratio`` r (element size divided by r from one level to the next).
 
-    ``order`` and ``extrapolated`` are None unless ``converges_monotonically``: both changes
-    (coarse to medium, medium to fine) of one sign, the second the smaller.
+    ``order`` (observed order p), ``extrapolated`` (the value at zero element size, the unit of the
+    values), ``gci_fine`` and ``gci_medium`` (GCI = Fs |e| / (r^p - 1), e the relative change to the next
+    coarser level, Fs = ``GCI_SAFETY_FACTOR``: a fraction of the value, an error band) and
+    ``asymptotic_ratio`` (GCI_medium / (r^p GCI_fine), 1 in the asymptotic range) are None unless
+    ``converges_monotonically``: both changes (coarse to medium, medium to fine) of one sign, the
+    second the smaller.
     """
 
     values: tuple[float, float, float]
@@ -99,14 +108,25 @@ class Extrapolation:
     order: float | None
     extrapolated: float | None
     converges_monotonically: bool
+    gci_fine: float | None = None
+    gci_medium: float | None = None
+    asymptotic_ratio: float | None = None
 
 
 def richardson(coarse: float, medium: float, fine: float, ratio: float) -> Extrapolation:
-    """Observed order p = ln((f_c - f_m) / (f_m - f_f)) / ln r and f = f_f + (f_f - f_m) / (r^p - 1);
-    undefined (None) unless the three converge monotonically."""
+    """Observed order p = ln((f_c - f_m) / (f_m - f_f)) / ln r, f = f_f + (f_f - f_m) / (r^p - 1), and
+    Roache's GCI: GCI_fine = Fs |(f_m - f_f) / f_f| / (r^p - 1), GCI_medium = Fs |(f_c - f_m) / f_m| /
+    (r^p - 1), asymptotic ratio GCI_medium / (r^p GCI_fine); all undefined (None) unless the three
+    converge monotonically (a GCI also needs nonzero f_f and f_m)."""
     first, second = medium - coarse, fine - medium
     monotone = first != 0.0 and second != 0.0 and first * second > 0.0 and abs(second) < abs(first)
     if not monotone:
         return Extrapolation((coarse, medium, fine), ratio, None, None, False)
     order = math.log(first / second) / math.log(ratio)
-    return Extrapolation((coarse, medium, fine), ratio, order, fine + second / (ratio**order - 1.0), True)
+    growth = ratio**order - 1.0
+    gci_fine = GCI_SAFETY_FACTOR * abs(second / fine) / growth if fine != 0.0 else None
+    gci_medium = GCI_SAFETY_FACTOR * abs(first / medium) / growth if medium != 0.0 else None
+    asymptotic = (gci_medium / (ratio**order * gci_fine) if gci_fine is not None and gci_medium is not None
+                  else None)
+    return Extrapolation((coarse, medium, fine), ratio, order, fine + second / growth, True, gci_fine, gci_medium,
+                         asymptotic)

@@ -25,7 +25,7 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from torus_cad.errors import BudgetError, ParameterError
 from torus_cad.kernel.files import owner_tag
@@ -35,7 +35,7 @@ from torus_cad.parameters.design import InletSide
 from torus_cad.runtime.interrupts import deferred
 from torus_cad.simulate.case import CaseSpec, mesh_commands, solve_commands, write_case
 from torus_cad.simulate.history import History, momentum_balance_force_n
-from torus_cad.simulate.performance import richardson, run_summary
+from torus_cad.simulate.performance import GCI_SAFETY_FACTOR, richardson, run_summary
 from torus_cad.simulate.plot import write_history_plot
 from torus_cad.simulate.run import (
     ProgressCallback,
@@ -57,13 +57,31 @@ from torus_cad.simulate.settings import (
     check_count,
     check_operating_point,
     max_processes,
+    rpm_limit,
     with_level,
 )
+from torus_cad.simulate.thrust_target import (
+    DEFAULT_MAX_RUNS,
+    DEFAULT_TOLERANCE,
+    INITIAL_CT,
+    MAX_RUNS_RANGE,
+    TOLERANCE_RANGE,
+    ThrustRun,
+    check_target,
+    first_rpm,
+    next_rpm,
+    search_state,
+)
+
+if TYPE_CHECKING:
+    from torus_cad.cfd.step_body import StepPropeller
 
 #: CPU seconds simpleFoam takes per cell and iteration on these meshes (53k tetrahedra, one core,
 #: 30 iterations in 12.8 s): the estimate a run's time budget is checked against before it starts.
 SOLVER_SECONDS_PER_CELL_ITERATION = 8e-6
 MAX_ITERATIONS = 20000
+#: The levels count as in the asymptotic range when GCI_medium / (r^p GCI_fine) is within this of 1.
+ASYMPTOTIC_RANGE_TOLERANCE = 0.1
 
 _MESH_LOCK: asyncio.Lock | None = None
 
@@ -80,7 +98,8 @@ class Request:
     """One simulation: the design, where it runs, the mesh level, iterations (None: the level's),
     MPI processes, whether to stop after writing the case, the time budget in seconds, and a case
     folder of an earlier run of the same design and level whose mesh to reuse (another rpm or
-    airspeed without meshing again)."""
+    airspeed without meshing again), and a STEP propeller (``--step``) to simulate instead of
+    building ``params`` (then ``params`` gives only the name, the sense of rotation and ``[cfd]``)."""
 
     params: PropellerParameters
     point: OperatingPoint
@@ -90,6 +109,7 @@ class Request:
     case_only: bool = False
     time_limit_s: float = DEFAULT_TIME_LIMIT_S
     mesh_from: Path | None = None
+    step: StepPropeller | None = None
 
     @property
     def run_iterations(self) -> int:
@@ -112,7 +132,10 @@ def check_request(request: Request) -> float:
     check_count("--processes", request.processes, 1, max_processes())
     if not (math.isfinite(request.time_limit_s) and request.time_limit_s > 0.0):
         raise ParameterError(f"--time-limit = {request.time_limit_s:g} s is out of range; allowed > 0 s")
-    diameter_m = 2.0 * tip_radius(request.params) / 1000.0
+    if request.step is not None:
+        diameter_m = request.step.body.tip_diameter_mm / 1000.0
+    else:
+        diameter_m = 2.0 * tip_radius(request.params) / 1000.0
     check_operating_point(request.point, diameter_m, request.params)
     return diameter_m
 
@@ -140,13 +163,20 @@ def _remove_stale_report(out: Path, name: str) -> None:
 
 async def _mesh_and_write(request: Request, case: Path, diameter_m: float,
                           stage: Callable[[str], None] | None) -> tuple[dict[str, Any], CaseSpec]:
-    from torus_cad.cfd.domain import write_cfd_domain
+    from torus_cad.cfd.domain import CfdStage, write_body_domain, write_cfd_domain
+    from torus_cad.runtime.stages import StageTimer
     from torus_cad.tolerances import GMSH_REPRODUCIBLE_THREADS
 
-    params = request.params
+    params, step = request.params, request.step
     async with _mesh_lock():
-        cfd_report, cfd_paths = await asyncio.to_thread(write_cfd_domain, params, case / "cfd",  # one mesh per design
-                                                        GMSH_REPRODUCIBLE_THREADS, stage)
+        if step is not None:
+            body = dataclasses.replace(step.body, name=params.name)
+            cfd_report, cfd_paths = await asyncio.to_thread(write_body_domain, body, params.cfd, case / "cfd",
+                                                            GMSH_REPRODUCIBLE_THREADS, None,
+                                                            StageTimer[CfdStage](stage))
+        else:
+            cfd_report, cfd_paths = await asyncio.to_thread(write_cfd_domain, params, case / "cfd",  # one mesh per design
+                                                            GMSH_REPRODUCIBLE_THREADS, stage)
     spec = _case_spec(request, diameter_m, f"cfd/{cfd_paths['msh_v2'].name}")
     write_case(case, spec)
     return cfd_report, spec
@@ -199,17 +229,12 @@ async def simulate_async(request: Request, out_dir: str | Path, progress: Progre
     MissingOpenFoamError, DivergedError / TimeBudgetError / SolverError (case kept as
     ``<name>_case_failed``), KernelError from the mesher.
     """
-    from foamlib import AsyncFoamCase
-
-    runner = runner or AsyncFoamCase
     start = time.perf_counter()
     diameter_m = check_request(request)
     if not request.case_only:
         check_openfoam()
-    params, out = with_level(request.params, request.level), Path(out_dir)
-    request = dataclasses.replace(request, params=params)
-    name = params.name
-    stage_seconds: dict[str, float] = {}
+    request, out = _at_level(request), Path(out_dir)
+    name = request.params.name
     with OutputSet(out, f"{name}_performance") as output:
         assert output.staging is not None
         case = output.staging / f"{name}_case"
@@ -217,38 +242,77 @@ async def simulate_async(request: Request, out_dir: str | Path, progress: Progre
             cfd_report, spec = _reuse_mesh(request, case, diameter_m)
         else:
             cfd_report, spec = await _mesh_and_write(request, case, diameter_m, stage)
-        stage_seconds["mesh"] = time.perf_counter() - start
-        cells = int(cfd_report["tetrahedra_total"])
         if request.case_only:
             _swap_folder(case, out / f"{name}_case")
             _remove_stale_report(out, name)
-            return Result({"case": out / f"{name}_case"}, {"cells": cells, "level": request.level.value})
-        _check_budget(cells, request, time.perf_counter() - start)
-        deadline = time.monotonic() + request.time_limit_s - (time.perf_counter() - start)
-        foam = runner(case)
-        try:
-            for command in mesh_commands(spec) if request.mesh_from is None else []:
-                if stage:
-                    stage(command[0])
-                await run_command(foam, command)
-            stage_seconds["convert"] = time.perf_counter() - start - stage_seconds["mesh"]
+            report = {"cells": int(cfd_report["tetrahedra_total"]), "level": request.level.value,
+                      "tip_diameter_m": diameter_m, **_step_entry(request)}
+            return Result({"case": out / f"{name}_case"}, report)
+        run = await _run_case(request, case, out, spec, cfd_report, diameter_m, start, stage, progress,
+                              runner, convert=request.mesh_from is None, mesh_s=time.perf_counter() - start)
+        return _publish(output, request, case, out, run, start)
+
+
+@dataclass
+class _Run:
+    """One solver run's report and force history."""
+
+    report: dict[str, Any]
+    history: History
+
+
+def _at_level(request: Request) -> Request:
+    return dataclasses.replace(request, params=with_level(request.params, request.level))
+
+
+def _step_entry(request: Request) -> dict[str, Any]:
+    return {"step": request.step.report()} if request.step is not None else {}
+
+
+async def _run_case(request: Request, case: Path, out: Path, spec: CaseSpec, cfd_report: dict[str, Any],
+                    diameter_m: float, start: float, stage: Callable[[str], None] | None,
+                    progress: ProgressCallback | None, runner: type | None, convert: bool, mesh_s: float) -> _Run:
+    """Convert the mesh (if ``convert``) and run the solver in ``case``; the report of the run (``mesh_s``:
+    the seconds its mesh took, meshed or copied). The time budget counts from ``start``
+    (time.perf_counter). A failed solver's case is kept as ``OUT/<name>_case_failed``."""
+    from foamlib import AsyncFoamCase
+
+    run_start = time.perf_counter()
+    cells = int(cfd_report["tetrahedra_total"])
+    _check_budget(cells, request, run_start - start)
+    deadline = time.monotonic() + request.time_limit_s - (run_start - start)
+    foam = (runner or AsyncFoamCase)(case)
+    try:
+        for command in mesh_commands(spec) if convert else []:
             if stage:
-                stage("simpleFoam")
-            history = await _solve(foam, spec, deadline, progress)
-        except SolverError as error:
-            kept = out / f"{name}_case_failed"
-            _swap_folder(case, kept)
-            raise type(error)(f"{error}; the case is kept in {kept}") from None
-        stage_seconds["solve"] = time.perf_counter() - start - stage_seconds["mesh"] - stage_seconds["convert"]
-        report = _report(request, spec, cfd_report, history, diameter_m)
-        output.write("png", lambda path: write_history_plot(
-            history, params.handedness, path, f"{name}: {request.point.rpm:g} rpm, {request.point.airspeed_m_s:g} m/s, "
-                                              f"{request.level.value} ({cells:,} cells)"))
-        report.update(stage_seconds=stage_seconds, wall_seconds=time.perf_counter() - start,
-                      case=f"{name}_case")
-        with deferred():
-            _swap_folder(case, out / f"{name}_case")
-            paths = output.publish(report)
+                stage(command[0])
+            await run_command(foam, command)
+        convert_s = time.perf_counter() - run_start
+        if stage:
+            stage("simpleFoam")
+        history = await _solve(foam, spec, deadline, progress)
+    except SolverError as error:
+        kept = out / f"{request.params.name}_case_failed"
+        _swap_folder(case, kept)
+        raise type(error)(f"{error}; the case is kept in {kept}") from None
+    report = _report(request, spec, cfd_report, history, diameter_m)
+    report.update(stage_seconds={"mesh": mesh_s, "convert": convert_s,
+                                 "solve": time.perf_counter() - run_start - convert_s}, **_step_entry(request))
+    return _Run(report, history)
+
+
+def _publish(output: OutputSet, request: Request, case: Path, out: Path, run: _Run, start: float,
+             extra: dict[str, Any] | None = None) -> Result:
+    """Publish ``case`` (as ``OUT/<name>_case``), the history plot and the sealed report of ``run``."""
+    params, name = request.params, request.params.name
+    cells = run.report["cells"]
+    output.write("png", lambda path: write_history_plot(
+        run.history, params.handedness, path, f"{name}: {run.report['rpm']:g} rpm, {request.point.airspeed_m_s:g} "
+                                              f"m/s, {request.level.value} ({cells:,} cells)"))
+    report = {**run.report, **(extra or {}), "wall_seconds": time.perf_counter() - start, "case": f"{name}_case"}
+    with deferred():
+        _swap_folder(case, out / f"{name}_case")
+        paths = output.publish(report)
     return Result({"case": out / f"{name}_case", **paths}, output.sealed_report)
 
 
@@ -304,16 +368,121 @@ async def simulate_many(requests: Sequence[tuple[Request, str | Path]], runner: 
                                          return_exceptions=True))
 
 
+@dataclass(frozen=True)
+class ThrustTarget:
+    """``--thrust``: the target thrust N, the tolerance (a fraction of it) and the most solver runs."""
+
+    thrust_n: float
+    tolerance: float = DEFAULT_TOLERANCE
+    max_runs: int = DEFAULT_MAX_RUNS
+
+
+def check_thrust_target(request: Request, target: ThrustTarget) -> tuple[float, float]:
+    """ParameterError (exit 2) for a bad target, tolerance or run count; (tip diameter m, rpm limit)."""
+    check_count("--thrust-runs", target.max_runs, *MAX_RUNS_RANGE)
+    low, high = TOLERANCE_RANGE
+    if not (math.isfinite(target.tolerance) and low <= target.tolerance <= high):
+        raise ParameterError(f"--thrust-tolerance = {target.tolerance:g} is out of range; allowed [{low:g}, {high:g}] "
+                             "(a fraction of the target)")
+    diameter_m = check_request(request)
+    limit = rpm_limit(diameter_m, request.point.airspeed_m_s, request.point.fluid)
+    check_target(target.thrust_n, limit, diameter_m, request.point.fluid.density_kg_m3)
+    return diameter_m, limit
+
+
+async def thrust_search_async(request: Request, target: ThrustTarget, out_dir: str | Path,
+                              progress: ProgressCallback | None = None, stage: Callable[[str], None] | None = None,
+                              runner: type | None = None) -> Result:
+    """The rpm at which the propeller gives ``target.thrust_n`` (torus_cad.simulate.thrust_target): one mesh,
+    then one solver run per rpm on it (each a case of its own in the staging folder, the mesh copied from the
+    first), at most ``target.max_runs``. Publishes one set: the case, plot and report of the run closest to
+    the target, the report's ``thrust_search`` listing every run. ``request.point.rpm`` is ignored (the
+    first run's rpm comes from the target); the time budget covers the whole search.
+
+    Raises what :func:`simulate_async` raises, and ParameterError for a target out of reach."""
+    start = time.perf_counter()
+    diameter_m, limit = check_thrust_target(request, target)
+    check_openfoam()
+    request, out = _at_level(dataclasses.replace(request, case_only=False, mesh_from=None)), Path(out_dir)
+    created = not out.exists()
+    try:
+        return await _thrust_search(request, target, out, diameter_m, limit, start, progress, stage, runner)
+    except ParameterError:  # out of reach: nothing published, and no folder left behind that was not there
+        if created and out.is_dir() and not any(out.iterdir()):
+            out.rmdir()
+        raise
+
+
+async def _thrust_search(request: Request, target: ThrustTarget, out: Path, diameter_m: float, limit: float,
+                         start: float, progress: ProgressCallback | None, stage: Callable[[str], None] | None,
+                         runner: type | None) -> Result:
+    """The search of :func:`thrust_search_async` into the output set ``out`` (rpm limit ``limit`` in rpm)."""
+    fluid = request.point.fluid
+    rpm = first_rpm(target.thrust_n, limit, diameter_m, fluid.density_kg_m3)
+    name = request.params.name
+    runs: list[ThrustRun] = []
+    results: list[tuple[Path, _Run]] = []
+    with OutputSet(out, f"{name}_performance") as output:
+        assert output.staging is not None
+        first_case = output.staging / "runs" / "0" / f"{name}_case"
+        while True:
+            run_request = dataclasses.replace(request, point=dataclasses.replace(request.point, rpm=rpm))
+            prepared = time.perf_counter()
+            if not results:
+                cfd_report, spec = await _mesh_and_write(run_request, first_case, diameter_m, stage)
+                case = first_case
+            else:
+                case = output.staging / "runs" / str(len(results)) / f"{name}_case"
+                cfd_report, spec = _reuse_mesh(dataclasses.replace(run_request, mesh_from=first_case), case,
+                                               diameter_m)
+            run = await _run_case(run_request, case, out, spec, cfd_report, diameter_m, start, stage, progress,
+                                  runner, convert=not results, mesh_s=time.perf_counter() - prepared)
+            results.append((case, run))
+            runs.append(ThrustRun(rpm, float(run.report["thrust_n"])))
+            if stage:
+                stage(f"run {len(runs)}: {rpm:.0f} rpm, thrust {runs[-1].thrust_n:.4g} N")
+            state = search_state(runs, target.thrust_n, target.tolerance, target.max_runs, limit)
+            if state.done:
+                break
+            rpm = next_rpm(runs, target.thrust_n, limit)
+        chosen = runs.index(state.best)
+        case, run = results[chosen]
+        search = {"target_thrust_n": target.thrust_n, "tolerance": target.tolerance, "max_runs": target.max_runs,
+                  "rpm": state.best.rpm, "thrust_n": state.best.thrust_n, "within_tolerance": state.within_tolerance,
+                  "rpm_limit": limit, "chosen_run": chosen,
+                  "runs": [{"rpm": item.rpm, "thrust_n": item.thrust_n, "torque_nm": result.report["torque_nm"],
+                            "power_w": result.report["power_w"], "figure_of_merit": result.report["figure_of_merit"],
+                            "efficiency": result.report["efficiency"], "converged": result.report["converged"],
+                            "solve_seconds": result.report["stage_seconds"]["solve"]}
+                           for item, (_, result) in zip(runs, results)],
+                  "method": "secant on sqrt(thrust) over rpm, one mesh; the first rpm from CT = "
+                            f"{INITIAL_CT:g}"}
+        seconds = {key: sum(result.report["stage_seconds"][key] for _, result in results)
+                   for key in ("mesh", "convert", "solve")}
+        return _publish(output, request, case, out, run, start, {"thrust_search": search, "stage_seconds": seconds})
+
+
+def thrust_search(request: Request, target: ThrustTarget, out_dir: str | Path,
+                  progress: ProgressCallback | None = None, stage: Callable[[str], None] | None = None) -> Result:
+    """:func:`thrust_search_async` in its own event loop, with OpenFOAM's environment and SIGINT / SIGTERM
+    stopping the solver."""
+    with openfoam_environ(), solvers_stopped_on_signals():
+        return asyncio.run(thrust_search_async(request, target, out_dir, progress, stage))
+
+
 def convergence_study(request: Request, out_dir: str | Path, progress: ProgressCallback | None = None,
                       stage: Callable[[str], None] | None = None) -> Result:
     """The three levels (each a full run in ``OUT/<level>/``) and ``<name>_convergence.json``:
-    Richardson-extrapolated thrust and torque and their observed order."""
+    Richardson-extrapolated thrust and torque, their observed order and Roache's grid convergence index
+    (``gci_fine``, ``gci_medium``: fractions of the fine and medium values, safety factor 1.25;
+    ``gci_asymptotic_ratio`` GCI_medium / (r^p GCI_fine), ``in_asymptotic_range`` when it is within
+    ``ASYMPTOTIC_RANGE_TOLERANCE`` of 1); all null unless the levels converge monotonically."""
     out = Path(out_dir)
     runs = {}
     for level in Level:
         level_request = dataclasses.replace(request, level=level, case_only=False, mesh_from=None)
         runs[level] = simulate(level_request, out / level.value, progress, stage)
-    report: dict[str, Any] = {"name": request.params.name, "rpm": request.point.rpm,
+    report: dict[str, Any] = {"name": request.params.name, "rpm": request.point.rpm, "gci_safety_factor": GCI_SAFETY_FACTOR,
                               "airspeed_m_s": request.point.airspeed_m_s, "refinement_ratio": REFINEMENT_RATIO,
                               "levels": {level.value: {key: run.report[key] for key in
                                                        ("cells", "thrust_n", "torque_nm", "ct", "cp", "converged")}
@@ -322,7 +491,11 @@ def convergence_study(request: Request, out_dir: str | Path, progress: ProgressC
         coarse, medium, fine = (float(runs[level].report[key]) for level in Level)
         extrapolation = richardson(coarse, medium, fine, REFINEMENT_RATIO)
         report[key] = {"extrapolated": extrapolation.extrapolated, "observed_order": extrapolation.order,
-                       "converges_monotonically": extrapolation.converges_monotonically}
+                       "converges_monotonically": extrapolation.converges_monotonically,
+                       "gci_fine": extrapolation.gci_fine, "gci_medium": extrapolation.gci_medium,
+                       "gci_asymptotic_ratio": extrapolation.asymptotic_ratio,
+                       "in_asymptotic_range": (abs(extrapolation.asymptotic_ratio - 1.0) <= ASYMPTOTIC_RANGE_TOLERANCE
+                                               if extrapolation.asymptotic_ratio is not None else None)}
     with OutputSet(out, f"{request.params.name}_convergence") as output:
         paths = output.publish(report)
     return Result(paths, report)
