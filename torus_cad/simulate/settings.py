@@ -50,6 +50,23 @@ def level_cfd(level: Level) -> dict[str, float]:
     return {**DOMAIN_D, **sizes}
 
 
+#: The boundary-layer mesh (torus_cad.simulate.snappy) of the coarse level; the finer levels divide the
+#: background cell and the first layer's height by REFINEMENT_RATIO per step (the refinement levels below
+#: are counted from the background cell, so every size follows).
+#: Background cubes per tip diameter D.
+BACKGROUND_CELLS_PER_D = 3.0
+#: snappyHexMesh refinement levels (each halves the background cell): inside the rotating zone, on the
+#: propeller's surface, on its sharp edges (leading and trailing edges, hub rims).
+ZONE_LEVEL, SURFACE_LEVEL, FEATURE_LEVEL = 2, 4, 5
+#: Prism layers on the propeller and the thickness ratio of neighbouring layers.
+LAYERS = 8
+LAYER_EXPANSION_RATIO = 1.3
+#: The y+ the first layer is sized for (the viscous sublayer: the blades' Reynolds number, about 1e4 at
+#: 0.75 R, leaves little log layer for a wall function to model), and where on the blade it is estimated
+#: (a fraction of the tip radius).
+Y_PLUS_TARGET = 1.0
+Y_PLUS_REFERENCE_RADIUS = 0.75
+
 #: Default iterations of each level (steady SIMPLE).
 LEVEL_ITERATIONS = {Level.COARSE: 300, Level.MEDIUM: 400, Level.FINE: 500}
 
