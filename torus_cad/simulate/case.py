@@ -26,14 +26,15 @@ from typing import Any
 from foamlib import Dimensioned, DimensionSet, FoamFieldFile, FoamFile
 
 from torus_cad.parameters.design import Handedness
-from torus_cad.simulate.settings import OperatingPoint
+from torus_cad.simulate.settings import Mesher, OperatingPoint
+from torus_cad.simulate.snappy import MESH_COMMANDS as LAYERED_MESH_COMMANDS
 
 #: Patches of the cfd mesh (torus_cad.cfd.domain.SURFACE_GROUPS) as the case types them.
 WALL, OUTER_PATCHES, INTERFACE = "propeller", ("inlet", "outlet", "farfield"), "rotating_interface"
 ZONE = "rotating_zone"
 MM_TO_M = "(0.001 0.001 0.001)"
 #: Names of the function objects (their folders under postProcessing/).
-FORCES, RESIDUALS, OUTER_FORCES = "propeller_forces", "residuals", "outer_forces"
+FORCES, RESIDUALS, OUTER_FORCES, Y_PLUS = "propeller_forces", "residuals", "outer_forces", "yPlus"
 MOMENTUM_FLUX = {patch: f"momentum_flux_{patch}" for patch in OUTER_PATCHES}
 FIELDS = ("U", "p", "k", "omega")
 
@@ -41,7 +42,8 @@ FIELDS = ("U", "p", "k", "omega")
 @dataclass(frozen=True)
 class CaseSpec:
     """What the dictionaries need: the operating point, handedness, D (m), flow direction (+1/-1 along z
-    from inlet to outlet), iterations, processes, the mesh file relative to the case."""
+    from inlet to outlet), iterations, processes, the gmsh mesh file relative to the case (``tet`` route)
+    and the mesher."""
 
     point: OperatingPoint
     handedness: Handedness
@@ -50,6 +52,7 @@ class CaseSpec:
     iterations: int
     processes: int
     msh_file: str
+    mesher: Mesher = Mesher.SNAPPY
 
     @property
     def inflow(self) -> tuple[float, float, float]:
@@ -74,6 +77,8 @@ def control_dict(spec: CaseSpec) -> dict[str, Any]:
     functions: dict[str, Any] = {
         FORCES: {**forces, "patches": [WALL]},
         OUTER_FORCES: {**forces, "patches": list(OUTER_PATCHES)},
+        Y_PLUS: {"type": "yPlus", "libs": ['"libfieldFunctionObjects.so"'], "writeControl": "writeTime",
+                 "log": False},
         RESIDUALS: {"type": "solverInfo", "libs": ['"libutilityFunctionObjects.so"'], "fields": list(FIELDS),
                     "writeControl": "timeStep", "writeInterval": 1},
     }
@@ -189,7 +194,10 @@ def write_dictionaries(case: Path, spec: CaseSpec) -> None:
 
 
 def mesh_commands(spec: CaseSpec) -> list[list[str]]:
-    """Convert the gmsh mesh, scale it to metres, make the propeller a wall, check it."""
+    """The ``snappy`` route: torus_cad.simulate.snappy.MESH_COMMANDS (blockMesh ... snappyHexMesh, checkMesh).
+    The ``tet`` route: convert the gmsh mesh, scale it to metres, make the propeller a wall, check it."""
+    if spec.mesher == Mesher.SNAPPY:
+        return [list(command) for command in LAYERED_MESH_COMMANDS]
     return [["gmshToFoam", spec.msh_file], ["transformPoints", "-scale", MM_TO_M],
             ["foamDictionary", "constant/polyMesh/boundary", "-entry", f"entry0/{WALL}/type", "-set", "wall"],
             ["checkMesh"]]

@@ -63,7 +63,8 @@ def summary_lines(result: Result, convergence: bool = False) -> list[str]:
                              "coarse to medium), so they are not in the asymptotic range")
         return lines
     if "thrust_n" not in report:  # --case-only
-        lines.append(f"case written ({report['cells']:,} cells, level {report['level']}); run it with its Allrun")
+        cells = f"{report['cells']:,} cells" if report.get("cells") else "meshed by Allrun"
+        lines.append(f"case written ({cells}, level {report['level']}); run it with its Allrun")
         return lines
     variation = report["force_variation_last_10_percent"]
     state = "converged" if report["converged"] else "NOT converged"
@@ -75,4 +76,8 @@ def summary_lines(result: Result, convergence: bool = False) -> list[str]:
     lines.append(f"{state}: thrust varies {_number(variation['thrust'], 2)}, torque {_number(variation['torque'], 2)} "
                  f"(fraction of the mean) over the last 10 % of {report['iterations']} iterations; {report['cells']:,} "
                  f"cells, level {report['level']}, {report['wall_seconds']:.0f} s; {report['fluid']['name']}")
+    y_plus = report.get("y_plus")
+    if y_plus:
+        lines.append(f"y+ on the propeller: min {y_plus['min']:.3g}, mean {y_plus['mean']:.3g}, max {y_plus['max']:.3g} "
+                     f"({report['mesher']} mesh, first layer sized for y+ {report['mesh'].get('y_plus_target', '-')})")
     return lines

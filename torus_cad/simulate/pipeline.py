@@ -15,6 +15,7 @@ AsyncSlurmFoamCase as ``runner``); many can run at once with :func:`simulate_man
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import dataclasses
 import json
 import math
@@ -34,7 +35,7 @@ from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.design import InletSide
 from torus_cad.runtime.interrupts import deferred
 from torus_cad.simulate.case import CaseSpec, mesh_commands, solve_commands, write_case
-from torus_cad.simulate.history import History, momentum_balance_force_n
+from torus_cad.simulate.history import History, momentum_balance_force_n, read_y_plus
 from torus_cad.simulate.performance import richardson, run_summary
 from torus_cad.simulate.plot import write_history_plot
 from torus_cad.simulate.run import (
@@ -52,7 +53,9 @@ from torus_cad.simulate.settings import (
     REFINEMENT_RATIO,
     TURBULENCE_INTENSITY,
     TURBULENCE_LENGTH_D,
+    Y_PLUS_TARGET,
     Level,
+    Mesher,
     OperatingPoint,
     check_count,
     check_operating_point,
@@ -64,6 +67,12 @@ from torus_cad.simulate.settings import (
 #: 30 iterations in 12.8 s): the estimate a run's time budget is checked against before it starts.
 SOLVER_SECONDS_PER_CELL_ITERATION = 8e-6
 MAX_ITERATIONS = 20000
+#: The mesh's report in a case folder (mesher, level, checkMesh's verdict and cell types, layers).
+MESH_REPORT = "mesh_report.json"
+
+
+class MeshCheckError(SolverError):
+    """checkMesh did not say "Mesh OK"; the message names the level and the failed checks."""
 
 _MESH_LOCK: asyncio.Lock | None = None
 
@@ -78,9 +87,9 @@ def _mesh_lock() -> asyncio.Lock:
 @dataclass(frozen=True)
 class Request:
     """One simulation: the design, where it runs, the mesh level, iterations (None: the level's),
-    MPI processes, whether to stop after writing the case, the time budget in seconds, and a case
+    MPI processes, whether to stop after writing the case, the time budget in seconds, a case
     folder of an earlier run of the same design and level whose mesh to reuse (another rpm or
-    airspeed without meshing again)."""
+    airspeed without meshing again), and the mesher (``snappy``: prism layers; ``tet``: gmsh tetrahedra)."""
 
     params: PropellerParameters
     point: OperatingPoint
@@ -90,6 +99,7 @@ class Request:
     case_only: bool = False
     time_limit_s: float = DEFAULT_TIME_LIMIT_S
     mesh_from: Path | None = None
+    mesher: Mesher = Mesher.SNAPPY
 
     @property
     def run_iterations(self) -> int:
@@ -140,6 +150,9 @@ def _remove_stale_report(out: Path, name: str) -> None:
 
 async def _mesh_and_write(request: Request, case: Path, diameter_m: float,
                           stage: Callable[[str], None] | None) -> tuple[dict[str, Any], CaseSpec]:
+    """Write the case and what its mesh is made from; the mesh report so far (``cells`` None until checkMesh)."""
+    if request.mesher == Mesher.SNAPPY:
+        return await _layered_and_write(request, case, diameter_m, stage)
     from torus_cad.cfd.domain import write_cfd_domain
     from torus_cad.tolerances import GMSH_REPRODUCIBLE_THREADS
 
@@ -149,36 +162,98 @@ async def _mesh_and_write(request: Request, case: Path, diameter_m: float,
                                                         GMSH_REPRODUCIBLE_THREADS, stage)
     spec = _case_spec(request, diameter_m, f"cfd/{cfd_paths['msh_v2'].name}")
     write_case(case, spec)
-    return cfd_report, spec
+    return _mesh_report(request, {"cfd": cfd_report["settings"], "gmsh_tetrahedra": cfd_report["tetrahedra_total"],
+                                  "cfd_report": f"cfd/{params.name}_cfd.json"}), spec
+
+
+def _mesh_report(request: Request, extra: dict[str, Any]) -> dict[str, Any]:
+    return {"name": request.params.name, "mesher": request.mesher.value, "level": request.level.value,
+            "cells": None, **extra}
+
+
+def design_surface_stl(params: PropellerParameters, path: Path) -> Path:
+    """The design's closed surface as a binary STL in mm (the B-rep triangulated at the export deflections)."""
+    from torus_cad.kernel.writers.stl import write_stl
+    from torus_cad.propeller import build_propeller
+    from torus_cad.tolerances import STL_ANGULAR_DEFLECTION, STL_LINEAR_DEFLECTION
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    return write_stl(build_propeller(params).solid, path, STL_LINEAR_DEFLECTION, STL_ANGULAR_DEFLECTION)
+
+
+async def _layered_and_write(request: Request, case: Path, diameter_m: float,
+                             stage: Callable[[str], None] | None) -> tuple[dict[str, Any], CaseSpec]:
+    from torus_cad.simulate.snappy import SURFACE_MM, first_cell_height_m, write_layered_mesh
+
+    params, point = request.params, request.point
+    if stage:
+        stage("surface")
+    async with _mesh_lock():
+        surface = await asyncio.to_thread(design_surface_stl, params, case / SURFACE_MM)
+    first = first_cell_height_m(diameter_m, point.rpm, point.airspeed_m_s, Y_PLUS_TARGET, point.fluid)
+    cfd = params.cfd
+    layered = write_layered_mesh(surface, diameter_m * 1000.0, request.level, case, first, _flow_sign(params),
+                                 {"domain_radius": cfd.domain_radius, "upstream": cfd.upstream,
+                                  "downstream": cfd.downstream}, cfd.zone_radius, cfd.zone_clearance)
+    spec = _case_spec(request, diameter_m, "")
+    write_case(case, spec)
+    return _mesh_report(request, {
+        "y_plus_target": Y_PLUS_TARGET, "first_layer_m": layered.first_layer_m,
+        "background_cell_m": layered.background_cell_m, "domain": dataclasses.asdict(layered.domain),
+        "rpm_sized_for": point.rpm}), spec
 
 
 def _case_spec(request: Request, diameter_m: float, msh_file: str) -> CaseSpec:
     params = request.params
     return CaseSpec(request.point, params.handedness, diameter_m, _flow_sign(params), request.run_iterations,
-                    request.processes, msh_file)
+                    request.processes, msh_file, request.mesher)
+
+
+def _checked_mesh(case: Path, mesh_report: dict[str, Any]) -> dict[str, Any]:
+    """``mesh_report`` with checkMesh's verdict, cells, cell types and largest non-orthogonality (and
+    snappyHexMesh's layer report); MeshCheckError (exit 1) unless checkMesh said "Mesh OK"."""
+    from torus_cad.simulate.snappy import layer_coverage, parse_check_mesh
+
+    check = parse_check_mesh((case / "log.checkMesh").read_text(errors="replace"))
+    report = {**mesh_report, "cells": check.cells, "cell_types": check.cell_types, "mesh_ok": check.ok,
+              "max_non_orthogonality_deg": check.max_non_orthogonality}
+    snappy_log = case / "log.snappyHexMesh"
+    if snappy_log.is_file():
+        report["layers"] = layer_coverage(snappy_log.read_text(errors="replace"))
+    (case / MESH_REPORT).write_text(json.dumps(report, indent=1), encoding="utf-8")
+    if not check.ok:
+        failed = "; ".join(check.failures) or "no verdict in log.checkMesh"
+        raise MeshCheckError(f"checkMesh did not report 'Mesh OK' on the {report['level']} level "
+                             f"({report['mesher']} mesher): {failed}")
+    return report
 
 
 def _reuse_mesh(request: Request, case: Path, diameter_m: float) -> tuple[dict[str, Any], CaseSpec]:
-    """Copy the converted mesh (constant/polyMesh) and cfd/ of ``request.mesh_from`` into ``case`` and write
-    the dictionaries; ParameterError unless it is a case of the same design name and ``[cfd]`` settings."""
+    """Copy the mesh (constant/polyMesh) and its report of ``request.mesh_from`` into ``case`` and write the
+    dictionaries; ParameterError unless it is a checked case of the same design name, mesher and level."""
     source, name = Path(request.mesh_from or ""), request.params.name
-    report_path = source / "cfd" / f"{name}_cfd.json"
+    report_path = source / MESH_REPORT
     if not ((source / "constant" / "polyMesh" / "boundary").is_file() and report_path.is_file()):
-        raise ParameterError(f"--mesh-from {str(source)!r} is not a converted case of {name!r} "
-                             f"(no constant/polyMesh/boundary or cfd/{name}_cfd.json)")
+        raise ParameterError(f"--mesh-from {str(source)!r} is not a meshed case of {name!r} "
+                             f"(no constant/polyMesh/boundary or {MESH_REPORT})")
     try:
-        cfd_report = json.loads(report_path.read_text(encoding="utf-8"))
-        settings = cfd_report["settings"]
+        mesh_report = json.loads(report_path.read_text(encoding="utf-8"))
+        made = (mesh_report["name"], mesh_report["mesher"], mesh_report["level"])
     except (OSError, ValueError, KeyError, TypeError):
-        raise ParameterError(f"--mesh-from {str(source)!r}: cfd/{name}_cfd.json is not a cfd report") from None
-    if settings != request.params.cfd.model_dump(mode="json"):
-        raise ParameterError(f"--mesh-from {str(source)!r} was meshed with other [cfd] settings than level "
-                             f"{request.level.value!r} of this design")
-    shutil.copytree(source / "cfd", case / "cfd")
+        raise ParameterError(f"--mesh-from {str(source)!r}: {MESH_REPORT} is not a mesh report") from None
+    wanted = (name, request.mesher.value, request.level.value)
+    if made != wanted or (request.mesher == Mesher.TET and mesh_report.get("cfd") != request.params.cfd.model_dump(
+            mode="json")):
+        raise ParameterError(f"--mesh-from {str(source)!r} was meshed for design {made[0]!r}, mesher {made[1]!r}, level "
+                             f"{made[2]!r}, not {wanted[0]!r}, {wanted[1]!r}, {wanted[2]!r}"
+                             + (" (or with other [cfd] settings)" if request.mesher == Mesher.TET else ""))
+    if (source / "cfd").is_dir():
+        shutil.copytree(source / "cfd", case / "cfd")
     shutil.copytree(source / "constant" / "polyMesh", case / "constant" / "polyMesh")
-    spec = _case_spec(request, diameter_m, f"cfd/{cfd_report['files']['msh_v2']}")
+    shutil.copy2(report_path, case / MESH_REPORT)
+    spec = _case_spec(request, diameter_m, f"cfd/{name}_cfd_v2.msh" if request.mesher == Mesher.TET else "")
     write_case(case, spec)
-    return cfd_report, spec
+    return mesh_report, spec
 
 
 def _check_budget(cells: int, request: Request, elapsed_s: float) -> None:
@@ -214,24 +289,29 @@ async def simulate_async(request: Request, out_dir: str | Path, progress: Progre
         assert output.staging is not None
         case = output.staging / f"{name}_case"
         if request.mesh_from is not None:
-            cfd_report, spec = _reuse_mesh(request, case, diameter_m)
+            mesh_report, spec = _reuse_mesh(request, case, diameter_m)
         else:
-            cfd_report, spec = await _mesh_and_write(request, case, diameter_m, stage)
-        stage_seconds["mesh"] = time.perf_counter() - start
-        cells = int(cfd_report["tetrahedra_total"])
+            mesh_report, spec = await _mesh_and_write(request, case, diameter_m, stage)
         if request.case_only:
             _swap_folder(case, out / f"{name}_case")
             _remove_stale_report(out, name)
-            return Result({"case": out / f"{name}_case"}, {"cells": cells, "level": request.level.value})
-        _check_budget(cells, request, time.perf_counter() - start)
-        deadline = time.monotonic() + request.time_limit_s - (time.perf_counter() - start)
+            return Result({"case": out / f"{name}_case"}, {"cells": mesh_report["cells"] or mesh_report.get(
+                "gmsh_tetrahedra"), "level": request.level.value, "mesher": request.mesher.value})
+        if mesh_report.get("gmsh_tetrahedra"):  # the tet route knows its cells before OpenFOAM runs
+            _check_budget(int(mesh_report["gmsh_tetrahedra"]), request, time.perf_counter() - start)
         foam = runner(case)
         try:
-            for command in mesh_commands(spec) if request.mesh_from is None else []:
-                if stage:
-                    stage(command[0])
-                await run_command(foam, command)
-            stage_seconds["convert"] = time.perf_counter() - start - stage_seconds["mesh"]
+            async with _mesh_lock() if request.mesher == Mesher.SNAPPY else contextlib.nullcontext():
+                for command in mesh_commands(spec) if request.mesh_from is None else []:
+                    if stage:
+                        stage(command[0])
+                    await run_command(foam, command)
+            if request.mesh_from is None:
+                mesh_report = _checked_mesh(case, mesh_report)
+            stage_seconds["mesh"] = time.perf_counter() - start
+            cells = int(mesh_report["cells"])
+            _check_budget(cells, request, time.perf_counter() - start)
+            deadline = time.monotonic() + request.time_limit_s - (time.perf_counter() - start)
             if stage:
                 stage("simpleFoam")
             history = await _solve(foam, spec, deadline, progress)
@@ -239,8 +319,8 @@ async def simulate_async(request: Request, out_dir: str | Path, progress: Progre
             kept = out / f"{name}_case_failed"
             _swap_folder(case, kept)
             raise type(error)(f"{error}; the case is kept in {kept}") from None
-        stage_seconds["solve"] = time.perf_counter() - start - stage_seconds["mesh"] - stage_seconds["convert"]
-        report = _report(request, spec, cfd_report, history, diameter_m)
+        stage_seconds["solve"] = time.perf_counter() - start - stage_seconds["mesh"]
+        report = _report(request, spec, mesh_report, history, diameter_m, read_y_plus(case))
         output.write("png", lambda path: write_history_plot(
             history, params.handedness, path, f"{name}: {request.point.rpm:g} rpm, {request.point.airspeed_m_s:g} m/s, "
                                               f"{request.level.value} ({cells:,} cells)"))
@@ -262,8 +342,8 @@ async def _solve(foam: Any, spec: CaseSpec, deadline: float, progress: ProgressC
     return history
 
 
-def _report(request: Request, spec: CaseSpec, cfd_report: dict[str, Any], history: History,
-            diameter_m: float) -> dict[str, Any]:
+def _report(request: Request, spec: CaseSpec, mesh_report: dict[str, Any], history: History,
+            diameter_m: float, y_plus: dict[str, float] | None) -> dict[str, Any]:
     point, fluid = request.point, request.point.fluid
     summary = run_summary(history, point, request.params.handedness, diameter_m)
     balance = momentum_balance_force_n(history, fluid.density_kg_m3)
@@ -275,14 +355,16 @@ def _report(request: Request, spec: CaseSpec, cfd_report: dict[str, Any], histor
         "tip_diameter_m": diameter_m, **summary,
         "momentum_balance": {"thrust_n": float(balance[2]),
                              "relative_difference": (float(balance[2]) / thrust - 1.0) if thrust else None},
-        "cells": int(cfd_report["tetrahedra_total"]), "iterations": int(history.last_iteration),
+        "cells": int(mesh_report["cells"]), "iterations": int(history.last_iteration),
         "final_residuals": history.last_residuals(), "level": request.level.value,
-        "processes": request.processes, "cfd": cfd_report["settings"],
+        "processes": request.processes, "mesher": request.mesher.value, "mesh": mesh_report,
+        "y_plus": y_plus,
         "fluid": {"name": fluid.name, "density_kg_m3": fluid.density_kg_m3, "viscosity_m2_s": fluid.viscosity_m2_s},
         "turbulence": {"model": "kOmegaSST, wall functions", "inflow_intensity": TURBULENCE_INTENSITY,
                        "inflow_length_scale_m": TURBULENCE_LENGTH_D * diameter_m, "inflow_k_m2_s2": k,
                        "inflow_omega_1_s": omega},
-        "conventions": "thrust > 0 pushes the fluid toward -z (the design's way); torque > 0 resists the design's "
+        "conventions": "y_plus: min / area-weighted mean / max over the propeller's faces at the last iteration "
+                       "(OpenFOAM's yPlus function object); thrust > 0 pushes the fluid toward -z (the design's way); torque > 0 resists the design's "
                        "rotation; CT = T/(rho n^2 D^4), CP = P/(rho n^3 D^5), n in rev/s, D the tip diameter",
     }
 
@@ -316,7 +398,8 @@ def convergence_study(request: Request, out_dir: str | Path, progress: ProgressC
     report: dict[str, Any] = {"name": request.params.name, "rpm": request.point.rpm,
                               "airspeed_m_s": request.point.airspeed_m_s, "refinement_ratio": REFINEMENT_RATIO,
                               "levels": {level.value: {key: run.report[key] for key in
-                                                       ("cells", "thrust_n", "torque_nm", "ct", "cp", "converged")}
+                                                       ("cells", "thrust_n", "torque_nm", "ct", "cp", "converged",
+                                                        "y_plus", "wall_seconds")}
                                          for level, run in runs.items()}}
     for key in ("thrust_n", "torque_nm"):
         coarse, medium, fine = (float(runs[level].report[key]) for level in Level)

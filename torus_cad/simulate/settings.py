@@ -29,6 +29,14 @@ class Level(StrEnum):
     FINE = "fine"
 
 
+class Mesher(StrEnum):
+    """How ``simulate`` meshes the fluid (``--mesher``): ``snappy`` (snappyHexMesh, prism layers on the
+    propeller sized from a y+ target; the default) or ``tet`` (the ``cfd`` command's gmsh tetrahedra, no layers)."""
+
+    SNAPPY = "snappy"
+    TET = "tet"
+
+
 #: Element sizes are divided by this from one level to the next.
 REFINEMENT_RATIO = 2.0 ** (1.0 / 3.0)
 

@@ -53,6 +53,10 @@ MM_TO_M = 1e-3
 #: Names of the case files this module writes.
 SURFACE_MM = "constant/triSurface/propeller_mm.stl"
 SURFACE_M = "constant/triSurface/propeller.stl"
+#: The commands that make the mesh from the dictionaries, in the case folder.
+MESH_COMMANDS: tuple[tuple[str, ...], ...] = (
+    ("blockMesh",), ("surfaceTransformPoints", "-scale", "(0.001 0.001 0.001)", SURFACE_MM, SURFACE_M),
+    ("surfaceFeatureExtract",), ("snappyHexMesh", "-overwrite"), ("checkMesh",))
 
 
 @dataclass(frozen=True)
@@ -230,16 +234,15 @@ def write_layered_mesh(surface_stl_path_mm: str | Path, diameter_mm: float, leve
     cell = diameter_mm * MM_TO_M / BACKGROUND_CELLS_PER_D / scale
     first = first_layer_m / scale
     (case / SURFACE_MM).parent.mkdir(parents=True, exist_ok=True)
-    (case / SURFACE_MM).write_bytes(source.read_bytes())
+    if source.resolve() != (case / SURFACE_MM).resolve():
+        (case / SURFACE_MM).write_bytes(source.read_bytes())
     _write(case / "system" / "blockMeshDict", block_mesh_dict(domain, cell))
     _write(case / "system" / "surfaceFeatureExtractDict", {
         "propeller.stl": {"extractionMethod": "extractFromSurface", "includedAngle": 150,
                           "subsetFeatures": {"nonManifoldEdges": False, "openEdges": True},
                           "writeObj": False}})
     _write(case / "system" / "snappyHexMeshDict", snappy_dict(domain, cell, first))
-    commands = [["blockMesh"], ["surfaceTransformPoints", "-scale", "(0.001 0.001 0.001)", SURFACE_MM, SURFACE_M],
-                ["surfaceFeatureExtract"], ["snappyHexMesh", "-overwrite"], ["checkMesh"]]
-    return LayeredMesh(domain, cell, first, commands)
+    return LayeredMesh(domain, cell, first, [list(command) for command in MESH_COMMANDS])
 
 
 @dataclass(frozen=True)
