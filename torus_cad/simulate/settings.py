@@ -76,7 +76,7 @@ Y_PLUS_TARGET = 1.0
 Y_PLUS_REFERENCE_RADIUS = 0.75
 
 #: Default iterations of each level (steady SIMPLE).
-LEVEL_ITERATIONS = {Level.COARSE: 300, Level.MEDIUM: 400, Level.FINE: 500}
+LEVEL_ITERATIONS = {Level.COARSE: 200, Level.MEDIUM: 300, Level.FINE: 400}
 
 #: Default time budget of one run (meshing, conversion and solver), seconds.
 DEFAULT_TIME_LIMIT_S = 3600.0

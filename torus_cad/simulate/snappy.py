@@ -201,6 +201,17 @@ def snappy_dict(domain: Domain, cell_m: float, first_layer_m: float) -> dict[str
     }
 
 
+#: What the meshing programs need of a case when :func:`write_layered_mesh` is used alone.
+_UTILITY_DICTIONARIES: dict[str, dict[str, Any]] = {
+    "controlDict": {"application": "simpleFoam", "startFrom": "startTime", "startTime": 0, "stopAt": "endTime",
+                    "endTime": 1, "deltaT": 1, "writeControl": "timeStep", "writeInterval": 1},
+    "fvSchemes": {"ddtSchemes": {"default": "steadyState"}, "gradSchemes": {"default": ("Gauss", "linear")},
+                  "divSchemes": {"default": "none"}, "laplacianSchemes": {"default": ("Gauss", "linear", "corrected")},
+                  "interpolationSchemes": {"default": "linear"}, "snGradSchemes": {"default": "corrected"}},
+    "fvSolution": {"solvers": {}},
+}
+
+
 @dataclass(frozen=True)
 class LayeredMesh:
     """What :func:`write_layered_mesh` wrote: the domain (m), the background cell and the first layer's
@@ -242,6 +253,9 @@ def write_layered_mesh(surface_stl_path_mm: str | Path, diameter_mm: float, leve
                           "subsetFeatures": {"nonManifoldEdges": False, "openEdges": True},
                           "writeObj": False}})
     _write(case / "system" / "snappyHexMeshDict", snappy_dict(domain, cell, first))
+    for name, entries in _UTILITY_DICTIONARIES.items():  # the meshing programs read them; the case's own win
+        if not (case / "system" / name).exists():
+            _write(case / "system" / name, entries)
     return LayeredMesh(domain, cell, first, [list(command) for command in MESH_COMMANDS])
 
 
