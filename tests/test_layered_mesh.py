@@ -144,8 +144,14 @@ def test_levels_scale_every_length_by_the_refinement_ratio(tmp_path):
     assert layers["layers"]["propeller"]["nSurfaceLayers"] == LAYERS
     zone = snappy["castellatedMeshControls"]["refinementSurfaces"]["rotating_zone"]
     assert zone["cellZone"] == "rotating_zone" and zone["faceZone"] == "rotating_zone"
-    block = foamlib.FoamFile(tmp_path / "coarse" / "system" / "blockMeshDict")
-    assert [name for name, _ in block["boundary"]] == ["inlet", "outlet", "farfield"]
+    for level in Level:  # whole cubes of the level's edge, the box at least the domain asked for
+        block = foamlib.FoamFile(tmp_path / level.value / "system" / "blockMeshDict")
+        assert [name for name, _ in block["boundary"]] == ["inlet", "outlet", "farfield"]
+        vertices, counts = np.array(block["vertices"]), block["blocks"][2]
+        size = vertices.max(axis=0) - vertices.min(axis=0)
+        assert size / np.array(counts) == pytest.approx(np.full(3, meshes[level].background_cell_m))
+        assert size[0] >= 2 * 3 * 0.04 and vertices[:, 2].max() == pytest.approx(2 * 0.04)
+        assert vertices[:, 2].min() <= -4 * 0.04
     domain = meshes[Level.COARSE].domain
     assert domain.inlet_z_m == pytest.approx(2 * 0.04) and domain.outlet_z_m == pytest.approx(-4 * 0.04)
     assert domain.zone_z_m == pytest.approx((-0.001 - 0.004, 0.001 + 0.004))

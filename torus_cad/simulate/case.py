@@ -1,7 +1,12 @@
 """The OpenFOAM case of a simulation, written through foamlib's FoamFile / FoamFieldFile dictionaries.
 
-A steady frozen-rotor (MRF) run of simpleFoam with k-omega SST and wall functions on the ``cfd``
-mesh (tetrahedra, mm, converted with gmshToFoam and scaled to m). Boundaries:
+A steady frozen-rotor (MRF) run of simpleFoam with k-omega SST and wall functions, on a snappyHexMesh
+mesh with prism layers on the propeller (torus_cad.simulate.snappy, the default) or on the ``cfd``
+command's tetrahedra (mm, converted with gmshToFoam and scaled to m; ``Mesher.TET``). The first layer
+is sized for y+ 1, where OpenFOAM v1912's ``nutkWallFunction`` gives nut = 0 and ``omegaWallFunction``
+the viscous-sublayer omega: the wall functions then act as the low-Reynolds-number wall condition
+(they switch to the log law where y+ is above about 11, e.g. where snappyHexMesh left out layers).
+Boundaries:
 
 * still air (airspeed 0): inlet and far field take in air at total pressure 0
   (``totalPressure`` + ``pressureInletOutletVelocity``), the outlet is at static pressure 0;
@@ -10,7 +15,7 @@ mesh (tetrahedra, mm, converted with gmshToFoam and scaled to m). Boundaries:
 
 The propeller is a wall that turns with the MRF zone (its velocity is set by the zone). Function
 objects record the propeller's force and moment about the spin axis (``forces``), the residuals
-(``solverInfo``) and, for the momentum balance, the momentum flux (``surfaceFieldValue``:
+(``solverInfo``), y+ on the walls at the last iteration (``yPlus``) and, for the momentum balance, the momentum flux (``surfaceFieldValue``:
 sum of U phi) and the pressure and viscous force (``forces``) on each outer patch.
 
 The commands that mesh and run the case are :func:`commands`; ``Allrun`` lists the same ones.

@@ -1,4 +1,5 @@
-"""``torus-cad simulate``: mesh the design (``cfd``), write its OpenFOAM case, run it, publish the numbers.
+"""``torus-cad simulate``: mesh the design (snappyHexMesh with prism layers, or ``cfd``'s tetrahedra), write
+its OpenFOAM case, run it, publish the numbers.
 
 One run is one output set in ``OUT`` (torus_cad.outputs.output_set): the case is built and run inside the
 set's staging folder; on success the case folder ``<name>_case/`` is renamed into place, then
@@ -63,9 +64,10 @@ from torus_cad.simulate.settings import (
     with_level,
 )
 
-#: CPU seconds simpleFoam takes per cell and iteration on these meshes (53k tetrahedra, one core,
-#: 30 iterations in 12.8 s): the estimate a run's time budget is checked against before it starts.
-SOLVER_SECONDS_PER_CELL_ITERATION = 8e-6
+#: CPU seconds simpleFoam takes per cell and iteration (the default design's coarse layered mesh, 51,845 cells:
+#: 300 iterations in 85 CPU seconds on each of 2 processes): the estimate a run's time budget is checked against
+#: before the solver starts.
+SOLVER_SECONDS_PER_CELL_ITERATION = 1.1e-5
 MAX_ITERATIONS = 20000
 #: The mesh's report in a case folder (mesher, level, checkMesh's verdict and cell types, layers).
 MESH_REPORT = "mesh_report.json"

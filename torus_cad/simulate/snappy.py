@@ -136,20 +136,24 @@ def _write(path: Path, entries: dict[str, Any]) -> None:
 
 
 def block_mesh_dict(domain: Domain, cell_m: float) -> dict[str, Any]:
-    """A box of near-cubes of edge ``cell_m``; patches inlet, outlet (the z ends) and farfield (the sides)."""
-    w, z0, z1 = domain.half_width_m, min(domain.inlet_z_m, domain.outlet_z_m), max(domain.inlet_z_m, domain.outlet_z_m)
-    n_xy, n_z = max(2, round(2 * w / cell_m)), max(2, round((z1 - z0) / cell_m))
+    """A box of cubes of edge ``cell_m`` exactly (so the levels' cells keep the refinement ratio): the box
+    reaches at least ``domain``'s half width and inlet, its outlet end as far as the whole cubes take it;
+    patches inlet, outlet (the z ends) and farfield (the sides)."""
+    n_xy = math.ceil(2.0 * domain.half_width_m / cell_m - 1e-9)
+    w = 0.5 * n_xy * cell_m
+    n_z = math.ceil(abs(domain.inlet_z_m - domain.outlet_z_m) / cell_m - 1e-9)
+    outlet = domain.inlet_z_m + math.copysign(n_z * cell_m, domain.outlet_z_m - domain.inlet_z_m)
+    z0, z1 = min(domain.inlet_z_m, outlet), max(domain.inlet_z_m, outlet)
     vertices = [[-w, -w, z0], [w, -w, z0], [w, w, z0], [-w, w, z0], [-w, -w, z1], [w, -w, z1], [w, w, z1], [-w, w, z1]]
     low, high = [0, 3, 2, 1], [4, 5, 6, 7]
-    ends = {"inlet": high if domain.inlet_z_m > domain.outlet_z_m else low,
-            "outlet": low if domain.inlet_z_m > domain.outlet_z_m else high}
+    ends = {"inlet": high if domain.inlet_z_m > outlet else low, "outlet": low if domain.inlet_z_m > outlet else high}
     sides = [[0, 1, 5, 4], [1, 2, 6, 5], [2, 3, 7, 6], [3, 0, 4, 7]]
     return {"scale": 1, "vertices": vertices,
             "blocks": ["hex", [0, 1, 2, 3, 4, 5, 6, 7], [n_xy, n_xy, n_z], "simpleGrading", [1, 1, 1]],
             "edges": [],
-            "boundary": ["inlet", {"type": "patch", "faces": [ends["inlet"]]},
-                         "outlet", {"type": "patch", "faces": [ends["outlet"]]},
-                         "farfield", {"type": "patch", "faces": sides}],
+            "boundary": [("inlet", {"type": "patch", "faces": [ends["inlet"]]}),
+                         ("outlet", {"type": "patch", "faces": [ends["outlet"]]}),
+                         ("farfield", {"type": "patch", "faces": sides})],
             "mergePatchPairs": []}
 
 
