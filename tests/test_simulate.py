@@ -123,7 +123,7 @@ def test_case_only_writes_a_case_foamlib_reads_back_with_the_mirror_rotation(tmp
     assert case.control_dict["functions"]["yPlus"]["type"] == "yPlus"
     allrun = (result.paths["case"] / "Allrun").read_text()
     assert "snappyHexMesh -overwrite" in allrun and "mpiexec -n 2 simpleFoam -parallel" in allrun
-    assert "gmshToFoam" not in allrun
+    assert "gmshToFoam" not in allrun and "grep -q 'Mesh OK' log.checkMesh" in allrun
     assert (result.paths["case"] / "constant" / "triSurface" / "propeller_mm.stl").is_file()
     layers = case.file("system/snappyHexMeshDict")["addLayersControls"]
     assert 0.0 < layers["firstLayerThickness"] < 1e-4  # m: y+ 1 on a 45 mm propeller at 10,000 rpm

@@ -228,6 +228,9 @@ def allrun_text(spec: CaseSpec) -> str:
         if command == ["simpleFoam"] and spec.processes > 1:
             command = ["mpiexec", "-n", str(spec.processes), "simpleFoam", "-parallel"]
         lines.append(f"{shlex.join(command)} > log.{command[0] if command[0] != 'mpiexec' else 'simpleFoam'} 2>&1")
+        if command == ["checkMesh"]:
+            lines.append("grep -q 'Mesh OK' log.checkMesh || { echo 'checkMesh did not report Mesh OK: see log.checkMesh' >&2; "
+                         "exit 1; }")
     return "\n".join(lines) + "\n"
 
 
