@@ -16,6 +16,7 @@ import pytest
 
 foamlib = pytest.importorskip("foamlib")
 
+from torus_cad.errors import ParameterError  # noqa: E402
 from torus_cad.simulate.pipeline import MESH_REPORT, MeshCheckError, _checked_mesh  # noqa: E402
 from torus_cad.simulate.run import openfoam_environment  # noqa: E402
 from torus_cad.simulate.settings import (  # noqa: E402
@@ -155,6 +156,16 @@ def test_levels_scale_every_length_by_the_refinement_ratio(tmp_path):
     domain = meshes[Level.COARSE].domain
     assert domain.inlet_z_m == pytest.approx(2 * 0.04) and domain.outlet_z_m == pytest.approx(-4 * 0.04)
     assert domain.zone_z_m == pytest.approx((-0.001 - 0.004, 0.001 + 0.004))
+
+
+def test_a_surface_that_does_not_fit_its_diameter_is_refused_naming_it(tmp_path):
+    stl = _box_stl(tmp_path / "box.stl", (20.0, 3.0, 1.0))
+    with pytest.raises(ParameterError, match=r"surface 'box.stl' reaches 20.22 mm from the axis, outside the rotating "
+                                             r"zone's radius 18.00 mm \(0.6 D\)"):
+        write_layered_mesh(stl, 30.0, Level.COARSE, tmp_path / "case", 1e-5)
+    with pytest.raises(ParameterError, match=r"diameter = 0 mm is out of range"):
+        write_layered_mesh(stl, 0.0, Level.COARSE, tmp_path / "case", 1e-5)
+    assert not (tmp_path / "case").exists()
 
 
 @needs_openfoam

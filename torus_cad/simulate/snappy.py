@@ -33,6 +33,7 @@ from typing import Any
 import numpy as np
 from foamlib import FoamFile
 
+from torus_cad.errors import ParameterError
 from torus_cad.simulate.settings import (
     AIR_15C,
     BACKGROUND_CELLS_PER_D,
@@ -62,7 +63,7 @@ MESH_COMMANDS: tuple[tuple[str, ...], ...] = (
 @dataclass(frozen=True)
 class Domain:
     """The fluid domain in metres, around a propeller on +z: the box's half width, the inlet's and outlet's
-    z, the rotating zone (cylinder radius and z range), a point in the fluid."""
+    z, the rotating zone (cylinder radius and z range)."""
 
     half_width_m: float
     inlet_z_m: float
@@ -243,7 +244,16 @@ def write_layered_mesh(surface_stl_path_mm: str | Path, diameter_mm: float, leve
     from torus_cad.simulate.settings import DOMAIN_D
 
     case, source = Path(out_case_dir), Path(surface_stl_path_mm)
+    if not (math.isfinite(diameter_mm) and diameter_mm > 0.0):
+        raise ParameterError(f"diameter = {diameter_mm:g} mm is out of range; allowed > 0 mm")
     points = read_stl_points_mm(source)
+    if len(points) == 0 or not np.isfinite(points).all():
+        raise ParameterError(f"surface {source.name!r} has no triangles or a non-finite vertex")
+    reach = float(np.hypot(points[:, 0], points[:, 1]).max())
+    if reach >= zone_radius_d * diameter_mm:
+        raise ParameterError(f"surface {source.name!r} reaches {reach:.2f} mm from the axis, outside the rotating "
+                             f"zone's radius {zone_radius_d * diameter_mm:.2f} mm ({zone_radius_d:g} D): is D = "
+                             f"{diameter_mm:g} mm and the spin axis +z through the origin?")
     domain = domain_around(points, diameter_mm, flow_sign, domain_d or DOMAIN_D, zone_radius_d, zone_clearance_d)
     scale = level_scale(level)
     cell = diameter_mm * MM_TO_M / BACKGROUND_CELLS_PER_D / scale
