@@ -5,6 +5,7 @@ meshes with prism layers."""
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import shutil
@@ -190,3 +191,22 @@ def test_any_closed_surface_meshes_with_prism_layers_and_checkmesh_says_ok(tmp_p
     for patch in ("propeller", "inlet", "outlet", "farfield"):
         assert patch in boundary
     assert "rotating_zone" in (case / "constant" / "polyMesh" / "cellZones").read_text()
+
+
+@needs_openfoam
+def test_mesh_from_a_case_of_another_level_or_mesher_exits_2_naming_both(tmp_path, capsys):
+    from torus_cad.cli import main
+
+    source = tmp_path / "torus_propeller_case"
+    (source / "constant" / "polyMesh").mkdir(parents=True)
+    (source / "constant" / "polyMesh" / "boundary").write_text("")
+    (source / MESH_REPORT).write_text(json.dumps({"name": "torus_propeller", "mesher": "snappy", "level": "fine"}))
+    out = tmp_path / "out"
+    assert main(["simulate", "--rpm", "1000", "--mesh-from", str(source), "--out", str(out)]) == 2
+    error = capsys.readouterr().err
+    assert error.count("\n") == 1 and "was meshed for design 'torus_propeller', mesher 'snappy', level 'fine', not " \
+                                      "'torus_propeller', 'snappy', 'coarse'" in error
+    assert main(["simulate", "--rpm", "1000", "--mesher", "tet", "--level", "fine", "--mesh-from", str(source),
+                 "--out", str(out)]) == 2
+    assert "mesher 'snappy', level 'fine', not 'torus_propeller', 'tet', 'fine'" in capsys.readouterr().err
+    assert not out.exists() or not list(out.iterdir())
