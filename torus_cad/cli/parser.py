@@ -176,7 +176,7 @@ def _add_simulate_parser(commands: Any) -> None:
                           help="snappy (default): snappyHexMesh with prism layers on the propeller, the first layer "
                                "sized for y+ 1; tet: the cfd command's gmsh tetrahedra, no layers")
     simulate.add_argument("--iterations", type=int, metavar="N", help="SIMPLE iterations (default: the level's, "
-                          "300 / 400 / 500)")
+                          "200 / 300 / 400)")
     simulate.add_argument("--processes", type=int, metavar="N", default=None,
                           help="MPI processes for the solver (default: one per CPU)")
     simulate.add_argument("--time-limit", type=float, default=3600.0, metavar="SECONDS",
