@@ -75,8 +75,9 @@ class Domain:
 def skin_friction(reynolds: float) -> float:
     """Local skin-friction coefficient of a turbulent flat plate at ``reynolds`` (White: 0.026 Re_x^-1/7).
 
-    Turbulent at any Reynolds number: below transition the laminar friction is lower, so the cell
-    this gives is thinner than needed (a y+ a little under the target), never thicker."""
+    Used at any Reynolds number: at the blades' Re of a few thousand the laminar 0.664 Re_x^-1/2 is
+    about 20 % higher (a cell about 8 % thinner); the y+ measured on the default design's coarse
+    mesh (mean 1.13 for a target of 1) shows the estimate is close enough."""
     return 0.026 * reynolds ** (-1.0 / 7.0)
 
 
