@@ -117,14 +117,16 @@ class Result:
 
 
 def check_request(request: Request) -> float:
-    """ParameterError (exit 2) for a value out of range; returns the tip diameter in m."""
+    """ParameterError (exit 2) for a value out of range; returns the tip diameter in m (of the design as built:
+    its ``diameter`` / ``pitch`` / ``airfoil.naca`` targets applied)."""
     from torus_cad.cfd.sizes import tip_radius
+    from torus_cad.parameters.design_targets import resolve_design_targets
 
     check_count("--iterations", request.run_iterations, 1, MAX_ITERATIONS)
     check_count("--processes", request.processes, 1, max_processes())
     if not (math.isfinite(request.time_limit_s) and request.time_limit_s > 0.0):
         raise ParameterError(f"--time-limit = {request.time_limit_s:g} s is out of range; allowed > 0 s")
-    diameter_m = 2.0 * tip_radius(request.params.geometry()) / 1000.0
+    diameter_m = 2.0 * tip_radius(resolve_design_targets(request.params).parameters.geometry()) / 1000.0
     check_operating_point(request.point, diameter_m, request.params)
     return diameter_m
 
