@@ -210,3 +210,13 @@ def test_mesh_from_a_case_of_another_level_or_mesher_exits_2_naming_both(tmp_pat
                  "--out", str(out)]) == 2
     assert "mesher 'snappy', level 'fine', not 'torus_propeller', 'tet', 'fine'" in capsys.readouterr().err
     assert not out.exists() or not list(out.iterdir())
+
+
+def test_the_tip_diameter_is_the_designs_as_built_with_its_diameter_target():
+    from torus_cad.parameters import PropellerParameters
+    from torus_cad.simulate.pipeline import Request, check_request
+    from torus_cad.simulate.settings import OperatingPoint
+
+    targeted = PropellerParameters().with_values({"diameter": 100.0})
+    assert check_request(Request(targeted, OperatingPoint(1000.0))) == pytest.approx(0.1, rel=1e-3)
+    assert check_request(Request(PropellerParameters(), OperatingPoint(1000.0))) == pytest.approx(0.0451, rel=1e-3)
