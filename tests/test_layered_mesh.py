@@ -22,9 +22,11 @@ from torus_cad.simulate.pipeline import MESH_REPORT, MeshCheckError, _checked_me
 from torus_cad.simulate.run import openfoam_environment  # noqa: E402
 from torus_cad.simulate.settings import (  # noqa: E402
     AIR_15C,
+    LAST_LAYER_MIN_FRACTION,
     LAYER_EXPANSION_RATIO,
     LAYERS,
     REFINEMENT_RATIO,
+    SURFACE_LEVEL,
     Y_PLUS_REFERENCE_RADIUS,
     Level,
 )
@@ -135,11 +137,16 @@ def _box_stl(path: Path, half: tuple[float, float, float]) -> Path:
 def test_levels_scale_every_length_by_the_refinement_ratio(tmp_path):
     stl = _box_stl(tmp_path / "box.stl", (20.0, 3.0, 1.0))
     assert read_stl_points_mm(stl)[:, 0].max() == pytest.approx(20.0)
-    meshes = {level: write_layered_mesh(stl, 40.0, level, tmp_path / level.value, 1e-5) for level in Level}
+    meshes = {level: write_layered_mesh(stl, 40.0, level, tmp_path / level.value, 2e-5) for level in Level}
     cells = [meshes[level].background_cell_m for level in Level]
     firsts = [meshes[level].first_layer_m for level in Level]
     assert cells[0] / cells[1] == pytest.approx(REFINEMENT_RATIO) and cells[1] / cells[2] == pytest.approx(REFINEMENT_RATIO)
-    assert firsts[0] == pytest.approx(1e-5) and firsts[0] / firsts[2] == pytest.approx(REFINEMENT_RATIO**2)
+    assert firsts[0] == pytest.approx(2e-5) and firsts[0] / firsts[2] == pytest.approx(REFINEMENT_RATIO**2)
+    # a first layer too thin for the surface cell is raised until the last layer is a set share of that cell
+    raised = write_layered_mesh(stl, 40.0, Level.COARSE, tmp_path / "raised", 1e-6)
+    surface_cell = raised.background_cell_m / 2**SURFACE_LEVEL
+    assert raised.first_layer_m * LAYER_EXPANSION_RATIO ** (LAYERS - 1) == pytest.approx(
+        LAST_LAYER_MIN_FRACTION * surface_cell)
     snappy = foamlib.FoamFile(tmp_path / "fine" / "system" / "snappyHexMeshDict")
     layers = snappy["addLayersControls"]
     assert layers["firstLayerThickness"] == pytest.approx(firsts[2]) and layers["expansionRatio"] == LAYER_EXPANSION_RATIO

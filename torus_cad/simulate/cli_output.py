@@ -78,6 +78,12 @@ def summary_lines(result: Result, convergence: bool = False) -> list[str]:
                  f"cells, level {report['level']}, {report['wall_seconds']:.0f} s; {report['fluid']['name']}")
     y_plus = report.get("y_plus")
     if y_plus:
+        mesh = report["mesh"]
+        sizing = f"first layer sized for y+ {mesh.get('y_plus_target', '-')}"
+        wanted, first = mesh.get("first_layer_for_y_plus_target_m"), mesh.get("first_layer_m")
+        if wanted and first and first > wanted * 1.0001:
+            sizing = (f"first layer {first * 1e6:.3g} um, raised from the {wanted * 1e6:.3g} um of y+ "
+                      f"{mesh['y_plus_target']} so that the layers meet the surface cells")
         lines.append(f"y+ on the propeller: min {y_plus['min']:.3g}, mean {y_plus['mean']:.3g}, max {y_plus['max']:.3g} "
-                     f"({report['mesher']} mesh, first layer sized for y+ {report['mesh'].get('y_plus_target', '-')})")
+                     f"({report['mesher']} mesh, {sizing})")
     return lines

@@ -187,7 +187,7 @@ def design_surface_stl(params: PropellerParameters, path: Path) -> Path:
 
 async def _layered_and_write(request: Request, case: Path, diameter_m: float,
                              stage: Callable[[str], None] | None) -> tuple[dict[str, Any], CaseSpec]:
-    from torus_cad.simulate.snappy import SURFACE_MM, first_cell_height_m, write_layered_mesh
+    from torus_cad.simulate.snappy import SURFACE_MM, first_cell_height_m, level_scale, write_layered_mesh
 
     params, point = request.params, request.point
     if stage:
@@ -203,6 +203,7 @@ async def _layered_and_write(request: Request, case: Path, diameter_m: float,
     write_case(case, spec)
     return _mesh_report(request, {
         "y_plus_target": Y_PLUS_TARGET, "first_layer_m": layered.first_layer_m,
+        "first_layer_for_y_plus_target_m": first / level_scale(request.level),
         "background_cell_m": layered.background_cell_m, "domain": dataclasses.asdict(layered.domain),
         "rpm_sized_for": point.rpm}), spec
 

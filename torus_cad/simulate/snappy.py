@@ -38,6 +38,7 @@ from torus_cad.simulate.settings import (
     AIR_15C,
     BACKGROUND_CELLS_PER_D,
     FEATURE_LEVEL,
+    LAST_LAYER_MIN_FRACTION,
     LAYER_EXPANSION_RATIO,
     LAYERS,
     REFINEMENT_RATIO,
@@ -218,6 +219,13 @@ _UTILITY_DICTIONARIES: dict[str, dict[str, Any]] = {
 }
 
 
+def thinnest_first_layer_m(background_cell_m: float) -> float:
+    """The thinnest first layer (m) whose last layer is ``LAST_LAYER_MIN_FRACTION`` of the propeller's surface
+    cell (the background cell halved ``SURFACE_LEVEL`` times)."""
+    surface_cell = background_cell_m / 2.0**SURFACE_LEVEL
+    return LAST_LAYER_MIN_FRACTION * surface_cell / LAYER_EXPANSION_RATIO ** (LAYERS - 1)
+
+
 @dataclass(frozen=True)
 class LayeredMesh:
     """What :func:`write_layered_mesh` wrote: the domain (m), the background cell and the first layer's
@@ -238,7 +246,8 @@ def write_layered_mesh(surface_stl_path_mm: str | Path, diameter_mm: float, leve
     returned, not run.
 
     ``diameter_mm`` is the tip diameter D; ``first_layer_m`` the coarse level's first-layer height in m
-    (:func:`first_cell_height_m`; divided by the level's scale); ``flow_sign`` -1 puts the inlet at +z;
+    (:func:`first_cell_height_m`; divided by the level's scale, and raised to :func:`thinnest_first_layer_m`
+    where it is thinner); ``flow_sign`` -1 puts the inlet at +z;
     ``domain_d`` the box in D (``domain_radius``, ``upstream``, ``downstream``; default
     settings.DOMAIN_D); the rotating zone's radius and axial clearance are in D.
     """
@@ -258,7 +267,7 @@ def write_layered_mesh(surface_stl_path_mm: str | Path, diameter_mm: float, leve
     domain = domain_around(points, diameter_mm, flow_sign, domain_d or DOMAIN_D, zone_radius_d, zone_clearance_d)
     scale = level_scale(level)
     cell = diameter_mm * MM_TO_M / BACKGROUND_CELLS_PER_D / scale
-    first = first_layer_m / scale
+    first = max(first_layer_m / scale, thinnest_first_layer_m(cell))
     (case / SURFACE_MM).parent.mkdir(parents=True, exist_ok=True)
     if source.resolve() != (case / SURFACE_MM).resolve():
         (case / SURFACE_MM).write_bytes(source.read_bytes())
