@@ -42,7 +42,7 @@ def run_level(level: str, args: argparse.Namespace, out: Path) -> dict[str, Any]
         return {"level": level, "exit_code": completed.returncode, "error": completed.stderr.strip()[-500:],
                 "wall_seconds": wall}
     report = json.loads((out / "torus_propeller_performance.json").read_text())
-    keys = ("cells", "iterations", "thrust_n", "torque_nm", "power_w", "ct", "cp", "figure_of_merit", "efficiency",
+    keys = ("cells", "mesher", "y_plus", "iterations", "thrust_n", "torque_nm", "power_w", "ct", "cp", "figure_of_merit", "efficiency",
             "converged", "force_variation_last_10_percent", "momentum_balance", "stage_seconds")
     return {"level": level, "exit_code": 0, "wall_seconds": wall, **{key: report[key] for key in keys}}
 

@@ -29,7 +29,7 @@ from torus_cad.simulate.history import History  # noqa: E402
 from torus_cad.simulate.performance import force_variation, performance, richardson  # noqa: E402
 from torus_cad.simulate.pipeline import Request, simulate  # noqa: E402
 from torus_cad.simulate.run import divergence  # noqa: E402
-from torus_cad.simulate.settings import Level, OperatingPoint  # noqa: E402
+from torus_cad.simulate.settings import Level, Mesher, OperatingPoint  # noqa: E402
 
 HAS_OPENFOAM = shutil.which("simpleFoam") is not None
 needs_openfoam = pytest.mark.skipif(not HAS_OPENFOAM, reason="OpenFOAM (simpleFoam) is not installed")
@@ -120,10 +120,23 @@ def test_case_only_writes_a_case_foamlib_reads_back_with_the_mirror_rotation(tmp
     assert case.file("system/decomposeParDict")["numberOfSubdomains"] == 2
     assert case.turbulence_properties["RAS"]["RASModel"] == "kOmegaSST"
     assert case[0]["nut"].boundary_field["propeller"]["type"] == "nutkWallFunction"
+    assert case.control_dict["functions"]["yPlus"]["type"] == "yPlus"
     allrun = (result.paths["case"] / "Allrun").read_text()
-    assert "gmshToFoam cfd/torus_propeller_cfd_v2.msh" in allrun and "mpiexec -n 2 simpleFoam -parallel" in allrun
+    assert "snappyHexMesh -overwrite" in allrun and "mpiexec -n 2 simpleFoam -parallel" in allrun
+    assert "gmshToFoam" not in allrun and "grep -q 'Mesh OK' log.checkMesh" in allrun
+    assert (result.paths["case"] / "constant" / "triSurface" / "propeller_mm.stl").is_file()
+    layers = case.file("system/snappyHexMeshDict")["addLayersControls"]
+    assert 0.0 < layers["firstLayerThickness"] < 1e-4  # m: y+ 1 on a 45 mm propeller at 10,000 rpm
     assert sorted(path.name for path in tmp_path.iterdir()) == ["torus_propeller_case"]
     assert not (result.paths["case"] / "constant" / "polyMesh").exists()  # Allrun makes it
+
+
+def test_the_tet_mesher_stays_reachable(tmp_path):
+    result = simulate(Request(PropellerParameters(), OperatingPoint(RPM), Level.COARSE, iterations=50, processes=1,
+                              case_only=True, mesher=Mesher.TET), tmp_path)
+    allrun = (result.paths["case"] / "Allrun").read_text()
+    assert "gmshToFoam cfd/torus_propeller_cfd_v2.msh" in allrun and "snappyHexMesh" not in allrun
+    assert 0 < result.report["cells"] <= 60_000
 
 
 # -- physics on the coarse level --------------------------------------------------------------------
@@ -150,6 +163,20 @@ def test_the_published_set_verifies_and_thrust_is_positive_for_the_design_rotati
     assert report["fluid"]["density_kg_m3"] == 1.225 and report["fluid"]["viscosity_m2_s"] == 1.46e-5
     assert report["efficiency"] is None and report["figure_of_merit"] > 0.0
     assert (out / "torus_propeller_case" / "Allrun").is_file()
+
+
+@needs_openfoam
+def test_the_default_mesh_has_prism_layers_checkmesh_accepts_and_y_plus_is_reported(cw):
+    _, report = cw
+    mesh = report["mesh"]
+    assert report["mesher"] == "snappy" and mesh["mesh_ok"] and mesh["cells"] == report["cells"]
+    assert mesh["cell_types"]["prisms"] > 0 and sum(mesh["cell_types"].values()) == report["cells"]
+    assert mesh["layers"]["mean_layers"] > 1.0
+    y_plus = report["y_plus"]
+    assert all(math.isfinite(y_plus[key]) for key in ("min", "mean", "max"))
+    assert 0.0 <= y_plus["min"] <= y_plus["mean"] <= y_plus["max"]
+    # the first layer is sized for y+ 1 where layers were added; the mean stays in the viscous sublayer
+    assert y_plus["mean"] < 5.0
 
 
 @needs_openfoam

@@ -197,9 +197,12 @@ def _add_simulate_parser(commands: Any) -> None:
     simulate.add_argument("--airspeed", type=float, default=0.0, metavar="M_S",
                           help="speed of the air arriving at the inlet, [0, 100] m/s (default 0: still air)")
     simulate.add_argument("--level", choices=["coarse", "medium", "fine"], default="coarse",
-                          help="mesh level (default coarse: about 53k cells for the default design)")
+                          help="mesh level (default coarse: about 52k cells for the default design)")
+    simulate.add_argument("--mesher", choices=["snappy", "tet"], default="snappy",
+                          help="snappy (default): snappyHexMesh with prism layers on the propeller, the first layer "
+                               "sized for y+ 1; tet: the cfd command's gmsh tetrahedra, no layers")
     simulate.add_argument("--iterations", type=int, metavar="N", help="SIMPLE iterations, [1, 20000] (default: the "
-                          "level's, 300 / 400 / 500)")
+                          "level's, 200 / 300 / 400)")
     simulate.add_argument("--processes", type=int, metavar="N", default=None,
                           help="MPI processes for the solver, from 1 to the CPUs (default: one per CPU)")
     simulate.add_argument("--time-limit", type=float, default=3600.0, metavar="SECONDS",

@@ -1,7 +1,12 @@
 """The OpenFOAM case of a simulation, written through foamlib's FoamFile / FoamFieldFile dictionaries.
 
-A steady frozen-rotor (MRF) run of simpleFoam with k-omega SST and wall functions on the ``cfd``
-mesh (tetrahedra, mm, converted with gmshToFoam and scaled to m). Boundaries:
+A steady frozen-rotor (MRF) run of simpleFoam with k-omega SST and wall functions, on a snappyHexMesh
+mesh with prism layers on the propeller (torus_cad.simulate.snappy, the default) or on the ``cfd``
+command's tetrahedra (mm, converted with gmshToFoam and scaled to m; ``Mesher.TET``). The first layer
+is sized for y+ 1, where OpenFOAM v1912's ``nutkWallFunction`` gives nut = 0 and ``omegaWallFunction``
+the viscous-sublayer omega: the wall functions then act as the low-Reynolds-number wall condition
+(they switch to the log law where y+ is above about 11, e.g. where snappyHexMesh left out layers).
+Boundaries:
 
 * still air (airspeed 0): inlet and far field take in air at total pressure 0
   (``totalPressure`` + ``pressureInletOutletVelocity``), the outlet is at static pressure 0;
@@ -10,7 +15,7 @@ mesh (tetrahedra, mm, converted with gmshToFoam and scaled to m). Boundaries:
 
 The propeller is a wall that turns with the MRF zone (its velocity is set by the zone). Function
 objects record the propeller's force and moment about the spin axis (``forces``), the residuals
-(``solverInfo``) and, for the momentum balance, the momentum flux (``surfaceFieldValue``:
+(``solverInfo``), y+ on the walls at the last iteration (``yPlus``) and, for the momentum balance, the momentum flux (``surfaceFieldValue``:
 sum of U phi) and the pressure and viscous force (``forces``) on each outer patch.
 
 The commands that mesh and run the case are :func:`commands`; ``Allrun`` lists the same ones.
@@ -26,14 +31,15 @@ from typing import Any
 from foamlib import Dimensioned, DimensionSet, FoamFieldFile, FoamFile
 
 from torus_cad.parameters.design import Handedness
-from torus_cad.simulate.settings import OperatingPoint
+from torus_cad.simulate.settings import Mesher, OperatingPoint
+from torus_cad.simulate.snappy import MESH_COMMANDS as LAYERED_MESH_COMMANDS
 
 #: Patches of the cfd mesh (torus_cad.cfd.domain.SURFACE_GROUPS) as the case types them.
 WALL, OUTER_PATCHES, INTERFACE = "propeller", ("inlet", "outlet", "farfield"), "rotating_interface"
 ZONE = "rotating_zone"
 MM_TO_M = "(0.001 0.001 0.001)"
 #: Names of the function objects (their folders under postProcessing/).
-FORCES, RESIDUALS, OUTER_FORCES = "propeller_forces", "residuals", "outer_forces"
+FORCES, RESIDUALS, OUTER_FORCES, Y_PLUS = "propeller_forces", "residuals", "outer_forces", "yPlus"
 MOMENTUM_FLUX = {patch: f"momentum_flux_{patch}" for patch in OUTER_PATCHES}
 FIELDS = ("U", "p", "k", "omega")
 
@@ -41,7 +47,8 @@ FIELDS = ("U", "p", "k", "omega")
 @dataclass(frozen=True)
 class CaseSpec:
     """What the dictionaries need: the operating point, handedness, D (m), flow direction (+1/-1 along z
-    from inlet to outlet), iterations, processes, the mesh file relative to the case."""
+    from inlet to outlet), iterations, processes, the gmsh mesh file relative to the case (``tet`` route)
+    and the mesher."""
 
     point: OperatingPoint
     handedness: Handedness
@@ -50,6 +57,7 @@ class CaseSpec:
     iterations: int
     processes: int
     msh_file: str
+    mesher: Mesher = Mesher.SNAPPY
 
     @property
     def inflow(self) -> tuple[float, float, float]:
@@ -74,6 +82,8 @@ def control_dict(spec: CaseSpec) -> dict[str, Any]:
     functions: dict[str, Any] = {
         FORCES: {**forces, "patches": [WALL]},
         OUTER_FORCES: {**forces, "patches": list(OUTER_PATCHES)},
+        Y_PLUS: {"type": "yPlus", "libs": ['"libfieldFunctionObjects.so"'], "writeControl": "writeTime",
+                 "log": False},
         RESIDUALS: {"type": "solverInfo", "libs": ['"libutilityFunctionObjects.so"'], "fields": list(FIELDS),
                     "writeControl": "timeStep", "writeInterval": 1},
     }
@@ -189,7 +199,10 @@ def write_dictionaries(case: Path, spec: CaseSpec) -> None:
 
 
 def mesh_commands(spec: CaseSpec) -> list[list[str]]:
-    """Convert the gmsh mesh, scale it to metres, make the propeller a wall, check it."""
+    """The ``snappy`` route: torus_cad.simulate.snappy.MESH_COMMANDS (blockMesh ... snappyHexMesh, checkMesh).
+    The ``tet`` route: convert the gmsh mesh, scale it to metres, make the propeller a wall, check it."""
+    if spec.mesher == Mesher.SNAPPY:
+        return [list(command) for command in LAYERED_MESH_COMMANDS]
     return [["gmshToFoam", spec.msh_file], ["transformPoints", "-scale", MM_TO_M],
             ["foamDictionary", "constant/polyMesh/boundary", "-entry", f"entry0/{WALL}/type", "-set", "wall"],
             ["checkMesh"]]
@@ -215,6 +228,9 @@ def allrun_text(spec: CaseSpec) -> str:
         if command == ["simpleFoam"] and spec.processes > 1:
             command = ["mpiexec", "-n", str(spec.processes), "simpleFoam", "-parallel"]
         lines.append(f"{shlex.join(command)} > log.{command[0] if command[0] != 'mpiexec' else 'simpleFoam'} 2>&1")
+        if command == ["checkMesh"]:
+            lines.append("grep -q 'Mesh OK' log.checkMesh || { echo 'checkMesh did not report Mesh OK: see log.checkMesh' >&2; "
+                         "exit 1; }")
     return "\n".join(lines) + "\n"
 
 

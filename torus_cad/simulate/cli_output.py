@@ -67,7 +67,8 @@ def summary_lines(result: Result, convergence: bool = False) -> list[str]:
                      f"{step['tip_diameter_mm']:.2f} mm, hub radius {step['hub_radius_mm']:.2f} mm, hub length "
                      f"{step['hub_length_mm']:.2f} mm")
     if "thrust_n" not in report:  # --case-only
-        lines.append(f"case written ({report['cells']:,} cells, level {report['level']}); run it with its Allrun")
+        cells = f"{report['cells']:,} cells" if report.get("cells") else "meshed by Allrun"
+        lines.append(f"case written ({cells}, level {report['level']}); run it with its Allrun")
         return lines
     if "thrust_search" in report:
         lines += thrust_search_lines(report["thrust_search"])
@@ -81,6 +82,16 @@ def summary_lines(result: Result, convergence: bool = False) -> list[str]:
     lines.append(f"{state}: thrust varies {_percent(variation['thrust'])}, torque {_percent(variation['torque'])} "
                  f"over the last 10 % of {report['iterations']} iterations; {report['cells']:,} "
                  f"cells, level {report['level']}, {report['wall_seconds']:.0f} s; {report['fluid']['name']}")
+    y_plus = report.get("y_plus")
+    if y_plus:
+        mesh = report["mesh"]
+        sizing = f"first layer sized for y+ {mesh.get('y_plus_target', '-')}"
+        wanted, first = mesh.get("first_layer_for_y_plus_target_m"), mesh.get("first_layer_m")
+        if wanted and first and first > wanted * 1.0001:
+            sizing = (f"first layer {first * 1e6:.3g} um, raised from the {wanted * 1e6:.3g} um of y+ "
+                      f"{mesh['y_plus_target']} so that the layers meet the surface cells")
+        lines.append(f"y+ on the propeller: min {y_plus['min']:.3g}, mean {y_plus['mean']:.3g}, max {y_plus['max']:.3g} "
+                     f"({report['mesher']} mesh, {sizing})")
     return lines
 
 

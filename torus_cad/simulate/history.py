@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from torus_cad.simulate.case import FORCES, MOMENTUM_FLUX, OUTER_FORCES, RESIDUALS
+from torus_cad.simulate.case import FORCES, MOMENTUM_FLUX, OUTER_FORCES, RESIDUALS, WALL, Y_PLUS
 
 #: Residuals reported, in this order (initial residuals of each equation's first solve).
 RESIDUAL_NAMES = ("Ux", "Uy", "Uz", "p", "k", "omega")
@@ -127,3 +127,14 @@ def momentum_balance_force_n(history: History, density_kg_m3: float) -> np.ndarr
     """
     flux = sum(values[-1] for values in history.momentum_flux_m4_s2.values())
     return -(density_kg_m3 * np.asarray(flux) + history.outer_force_n[-1])
+
+
+def read_y_plus(case: str | Path, patch: str = WALL) -> dict[str, float] | None:
+    """y+ on ``patch`` at the last time the ``yPlus`` function object wrote: ``{"min", "mean", "max"}`` (the
+    mean weighted by face area, as OpenFOAM's ``average`` column is); None when it wrote nothing."""
+    _, rows = _rows(_time_folder(Path(case), Y_PLUS) / "yPlus.dat")
+    values = [row for row in rows if len(row) >= 5 and row[1] == patch]
+    if not values:
+        return None
+    low, high, mean = (float(word) for word in values[-1][2:5])
+    return {"min": low, "mean": mean, "max": high}

@@ -1,4 +1,5 @@
-"""``torus-cad simulate``: mesh the design (``cfd``), write its OpenFOAM case, run it, publish the numbers.
+"""``torus-cad simulate``: mesh the design (snappyHexMesh with prism layers, or ``cfd``'s tetrahedra), write
+its OpenFOAM case, run it, publish the numbers.
 
 One run is one output set in ``OUT`` (torus_cad.outputs.output_set): the case is built and run inside the
 set's staging folder; on success the case folder ``<name>_case/`` is renamed into place, then
@@ -15,6 +16,7 @@ AsyncSlurmFoamCase as ``runner``); many can run at once with :func:`simulate_man
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import dataclasses
 import json
 import math
@@ -34,7 +36,7 @@ from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.design import InletSide
 from torus_cad.runtime.interrupts import deferred
 from torus_cad.simulate.case import CaseSpec, mesh_commands, solve_commands, write_case
-from torus_cad.simulate.history import History, momentum_balance_force_n
+from torus_cad.simulate.history import History, momentum_balance_force_n, read_y_plus
 from torus_cad.simulate.performance import GCI_SAFETY_FACTOR, richardson, run_summary
 from torus_cad.simulate.plot import write_history_plot
 from torus_cad.simulate.run import (
@@ -52,7 +54,9 @@ from torus_cad.simulate.settings import (
     REFINEMENT_RATIO,
     TURBULENCE_INTENSITY,
     TURBULENCE_LENGTH_D,
+    Y_PLUS_TARGET,
     Level,
+    Mesher,
     OperatingPoint,
     check_count,
     check_operating_point,
@@ -76,10 +80,18 @@ from torus_cad.simulate.thrust_target import (
 if TYPE_CHECKING:
     from torus_cad.cfd.step_body import StepPropeller
 
-#: CPU seconds simpleFoam takes per cell and iteration on these meshes (53k tetrahedra, one core,
-#: 30 iterations in 12.8 s): the estimate a run's time budget is checked against before it starts.
-SOLVER_SECONDS_PER_CELL_ITERATION = 8e-6
+#: CPU seconds simpleFoam takes per cell and iteration (the default design's coarse layered mesh, 51,845 cells:
+#: 300 iterations in 85 CPU seconds on each of 2 processes): the estimate a run's time budget is checked against
+#: before the solver starts.
+SOLVER_SECONDS_PER_CELL_ITERATION = 1.1e-5
 MAX_ITERATIONS = 20000
+#: The mesh's report in a case folder (mesher, level, checkMesh's verdict and cell types, layers).
+MESH_REPORT = "mesh_report.json"
+
+
+class MeshCheckError(SolverError):
+    """checkMesh did not say "Mesh OK"; the message names the level and the failed checks."""
+
 #: The levels count as in the asymptotic range when GCI_medium / (r^p GCI_fine) is within this of 1.
 ASYMPTOTIC_RANGE_TOLERANCE = 0.1
 
@@ -98,8 +110,9 @@ class Request:
     """One simulation: the design, where it runs, the mesh level, iterations (None: the level's),
     MPI processes, whether to stop after writing the case, the time budget in seconds, and a case
     folder of an earlier run of the same design and level whose mesh to reuse (another rpm or
-    airspeed without meshing again), and a STEP propeller (``--step``) to simulate instead of
-    building ``params`` (then ``params`` gives only the name, the sense of rotation and ``[cfd]``)."""
+    airspeed without meshing again), the mesher (``snappy``: prism layers; ``tet``: gmsh tetrahedra), and a
+    STEP propeller (``--step``) to simulate instead of building ``params`` (then ``params`` gives only the name,
+    the sense of rotation and ``[cfd]``)."""
 
     params: PropellerParameters
     point: OperatingPoint
@@ -109,6 +122,7 @@ class Request:
     case_only: bool = False
     time_limit_s: float = DEFAULT_TIME_LIMIT_S
     mesh_from: Path | None = None
+    mesher: Mesher = Mesher.SNAPPY
     step: StepPropeller | None = None
 
     @property
@@ -125,8 +139,10 @@ class Result:
 
 
 def check_request(request: Request) -> float:
-    """ParameterError (exit 2) for a value out of range; returns the tip diameter in m."""
+    """ParameterError (exit 2) for a value out of range; returns the tip diameter in m (of the design as built:
+    its ``diameter`` / ``pitch`` / ``airfoil.naca`` targets applied)."""
     from torus_cad.cfd.sizes import tip_radius
+    from torus_cad.parameters.design_targets import resolve_design_targets
 
     check_count("--iterations", request.run_iterations, 1, MAX_ITERATIONS)
     check_count("--processes", request.processes, 1, max_processes())
@@ -135,7 +151,7 @@ def check_request(request: Request) -> float:
     if request.step is not None:
         diameter_m = request.step.body.tip_diameter_mm / 1000.0
     else:
-        diameter_m = 2.0 * tip_radius(request.params) / 1000.0
+        diameter_m = 2.0 * tip_radius(resolve_design_targets(request.params).parameters) / 1000.0
     check_operating_point(request.point, diameter_m, request.params)
     return diameter_m
 
@@ -163,6 +179,9 @@ def _remove_stale_report(out: Path, name: str) -> None:
 
 async def _mesh_and_write(request: Request, case: Path, diameter_m: float,
                           stage: Callable[[str], None] | None) -> tuple[dict[str, Any], CaseSpec]:
+    """Write the case and what its mesh is made from; the mesh report so far (``cells`` None until checkMesh)."""
+    if request.mesher == Mesher.SNAPPY:
+        return await _layered_and_write(request, case, diameter_m, stage)
     from torus_cad.cfd.domain import CfdStage, write_body_domain, write_cfd_domain
     from torus_cad.runtime.stages import StageTimer
     from torus_cad.tolerances import GMSH_REPRODUCIBLE_THREADS
@@ -179,36 +198,101 @@ async def _mesh_and_write(request: Request, case: Path, diameter_m: float,
                                                             GMSH_REPRODUCIBLE_THREADS, stage)
     spec = _case_spec(request, diameter_m, f"cfd/{cfd_paths['msh_v2'].name}")
     write_case(case, spec)
-    return cfd_report, spec
+    return _mesh_report(request, {"cfd": cfd_report["settings"], "gmsh_tetrahedra": cfd_report["tetrahedra_total"],
+                                  "cfd_report": f"cfd/{params.name}_cfd.json"}), spec
+
+
+def _mesh_report(request: Request, extra: dict[str, Any]) -> dict[str, Any]:
+    return {"name": request.params.name, "mesher": request.mesher.value, "level": request.level.value,
+            "cells": None, **extra}
+
+
+def surface_stl(request: Request, path: Path) -> Path:
+    """The propeller's closed surface as a binary STL in mm: the design's B-rep (or the ``--step`` solid, placed on
+    +z) triangulated at the export deflections."""
+    from torus_cad.kernel.writers.stl import write_stl
+    from torus_cad.propeller import build_propeller
+    from torus_cad.tolerances import STL_ANGULAR_DEFLECTION, STL_LINEAR_DEFLECTION
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    solid = request.step.body.solid if request.step is not None else build_propeller(request.params).solid
+    return write_stl(solid, path, STL_LINEAR_DEFLECTION, STL_ANGULAR_DEFLECTION)
+
+
+async def _layered_and_write(request: Request, case: Path, diameter_m: float,
+                             stage: Callable[[str], None] | None) -> tuple[dict[str, Any], CaseSpec]:
+    from torus_cad.simulate.snappy import SURFACE_MM, first_cell_height_m, level_scale, write_layered_mesh
+
+    params, point = request.params, request.point
+    if stage:
+        stage("surface")
+    async with _mesh_lock():
+        surface = await asyncio.to_thread(surface_stl, request, case / SURFACE_MM)
+    first = first_cell_height_m(diameter_m, point.rpm, point.airspeed_m_s, Y_PLUS_TARGET, point.fluid)
+    cfd = params.cfd
+    layered = write_layered_mesh(surface, diameter_m * 1000.0, request.level, case, first, _flow_sign(params),
+                                 {"domain_radius": cfd.domain_radius, "upstream": cfd.upstream,
+                                  "downstream": cfd.downstream}, cfd.zone_radius, cfd.zone_clearance)
+    spec = _case_spec(request, diameter_m, "")
+    write_case(case, spec)
+    return _mesh_report(request, {
+        "y_plus_target": Y_PLUS_TARGET, "first_layer_m": layered.first_layer_m,
+        "first_layer_for_y_plus_target_m": first / level_scale(request.level),
+        "background_cell_m": layered.background_cell_m, "domain": dataclasses.asdict(layered.domain),
+        "rpm_sized_for": point.rpm}), spec
 
 
 def _case_spec(request: Request, diameter_m: float, msh_file: str) -> CaseSpec:
     params = request.params
     return CaseSpec(request.point, params.handedness, diameter_m, _flow_sign(params), request.run_iterations,
-                    request.processes, msh_file)
+                    request.processes, msh_file, request.mesher)
+
+
+def _checked_mesh(case: Path, mesh_report: dict[str, Any]) -> dict[str, Any]:
+    """``mesh_report`` with checkMesh's verdict, cells, cell types and largest non-orthogonality (and
+    snappyHexMesh's layer report); MeshCheckError (exit 1) unless checkMesh said "Mesh OK"."""
+    from torus_cad.simulate.snappy import layer_coverage, parse_check_mesh
+
+    check = parse_check_mesh((case / "log.checkMesh").read_text(errors="replace"))
+    report = {**mesh_report, "cells": check.cells, "cell_types": check.cell_types, "mesh_ok": check.ok,
+              "max_non_orthogonality_deg": check.max_non_orthogonality}
+    snappy_log = case / "log.snappyHexMesh"
+    if snappy_log.is_file():
+        report["layers"] = layer_coverage(snappy_log.read_text(errors="replace"))
+    (case / MESH_REPORT).write_text(json.dumps(report, indent=1), encoding="utf-8")
+    if not check.ok:
+        failed = "; ".join(check.failures) or "no verdict in log.checkMesh"
+        raise MeshCheckError(f"checkMesh did not report 'Mesh OK' on the {report['level']} level "
+                             f"({report['mesher']} mesher): {failed}")
+    return report
 
 
 def _reuse_mesh(request: Request, case: Path, diameter_m: float) -> tuple[dict[str, Any], CaseSpec]:
-    """Copy the converted mesh (constant/polyMesh) and cfd/ of ``request.mesh_from`` into ``case`` and write
-    the dictionaries; ParameterError unless it is a case of the same design name and ``[cfd]`` settings."""
+    """Copy the mesh (constant/polyMesh) and its report of ``request.mesh_from`` into ``case`` and write the
+    dictionaries; ParameterError unless it is a checked case of the same design name, mesher and level."""
     source, name = Path(request.mesh_from or ""), request.params.name
-    report_path = source / "cfd" / f"{name}_cfd.json"
+    report_path = source / MESH_REPORT
     if not ((source / "constant" / "polyMesh" / "boundary").is_file() and report_path.is_file()):
-        raise ParameterError(f"--mesh-from {str(source)!r} is not a converted case of {name!r} "
-                             f"(no constant/polyMesh/boundary or cfd/{name}_cfd.json)")
+        raise ParameterError(f"--mesh-from {str(source)!r} is not a meshed case of {name!r} "
+                             f"(no constant/polyMesh/boundary or {MESH_REPORT})")
     try:
-        cfd_report = json.loads(report_path.read_text(encoding="utf-8"))
-        settings = cfd_report["settings"]
+        mesh_report = json.loads(report_path.read_text(encoding="utf-8"))
+        made = (mesh_report["name"], mesh_report["mesher"], mesh_report["level"])
     except (OSError, ValueError, KeyError, TypeError):
-        raise ParameterError(f"--mesh-from {str(source)!r}: cfd/{name}_cfd.json is not a cfd report") from None
-    if settings != request.params.cfd.model_dump(mode="json"):
-        raise ParameterError(f"--mesh-from {str(source)!r} was meshed with other [cfd] settings than level "
-                             f"{request.level.value!r} of this design")
-    shutil.copytree(source / "cfd", case / "cfd")
+        raise ParameterError(f"--mesh-from {str(source)!r}: {MESH_REPORT} is not a mesh report") from None
+    wanted = (name, request.mesher.value, request.level.value)
+    if made != wanted or (request.mesher == Mesher.TET and mesh_report.get("cfd") != request.params.cfd.model_dump(
+            mode="json")):
+        raise ParameterError(f"--mesh-from {str(source)!r} was meshed for design {made[0]!r}, mesher {made[1]!r}, level "
+                             f"{made[2]!r}, not {wanted[0]!r}, {wanted[1]!r}, {wanted[2]!r}"
+                             + (" (or with other [cfd] settings)" if request.mesher == Mesher.TET else ""))
+    if (source / "cfd").is_dir():
+        shutil.copytree(source / "cfd", case / "cfd")
     shutil.copytree(source / "constant" / "polyMesh", case / "constant" / "polyMesh")
-    spec = _case_spec(request, diameter_m, f"cfd/{cfd_report['files']['msh_v2']}")
+    shutil.copy2(report_path, case / MESH_REPORT)
+    spec = _case_spec(request, diameter_m, f"cfd/{name}_cfd_v2.msh" if request.mesher == Mesher.TET else "")
     write_case(case, spec)
-    return cfd_report, spec
+    return mesh_report, spec
 
 
 def _check_budget(cells: int, request: Request, elapsed_s: float) -> None:
@@ -239,16 +323,17 @@ async def simulate_async(request: Request, out_dir: str | Path, progress: Progre
         assert output.staging is not None
         case = output.staging / f"{name}_case"
         if request.mesh_from is not None:
-            cfd_report, spec = _reuse_mesh(request, case, diameter_m)
+            mesh_report, spec = _reuse_mesh(request, case, diameter_m)
         else:
-            cfd_report, spec = await _mesh_and_write(request, case, diameter_m, stage)
+            mesh_report, spec = await _mesh_and_write(request, case, diameter_m, stage)
         if request.case_only:
             _swap_folder(case, out / f"{name}_case")
             _remove_stale_report(out, name)
-            report = {"cells": int(cfd_report["tetrahedra_total"]), "level": request.level.value,
+            report = {"cells": mesh_report["cells"] or mesh_report.get("gmsh_tetrahedra"),
+                      "level": request.level.value, "mesher": request.mesher.value,
                       "tip_diameter_m": diameter_m, **_step_entry(request)}
             return Result({"case": out / f"{name}_case"}, report)
-        run = await _run_case(request, case, out, spec, cfd_report, diameter_m, start, stage, progress,
+        run = await _run_case(request, case, out, spec, mesh_report, diameter_m, start, stage, progress,
                               runner, convert=request.mesh_from is None, mesh_s=time.perf_counter() - start)
         return _publish(output, request, case, out, run, start)
 
@@ -269,25 +354,30 @@ def _step_entry(request: Request) -> dict[str, Any]:
     return {"step": request.step.report()} if request.step is not None else {}
 
 
-async def _run_case(request: Request, case: Path, out: Path, spec: CaseSpec, cfd_report: dict[str, Any],
+async def _run_case(request: Request, case: Path, out: Path, spec: CaseSpec, mesh_report: dict[str, Any],
                     diameter_m: float, start: float, stage: Callable[[str], None] | None,
                     progress: ProgressCallback | None, runner: type | None, convert: bool, mesh_s: float) -> _Run:
-    """Convert the mesh (if ``convert``) and run the solver in ``case``; the report of the run (``mesh_s``:
-    the seconds its mesh took, meshed or copied). The time budget counts from ``start``
-    (time.perf_counter). A failed solver's case is kept as ``OUT/<name>_case_failed``."""
+    """Run the mesh commands (if ``convert``: snappyHexMesh or gmshToFoam, then checkMesh, which must say
+    "Mesh OK") and the solver in ``case``; the report of the run (``mesh_s``: the seconds its mesh took before
+    OpenFOAM, meshed or copied; ``convert``: OpenFOAM's meshing and checking). The time budget counts from
+    ``start`` (time.perf_counter). A failed solver's or mesh check's case is kept as ``OUT/<name>_case_failed``."""
     from foamlib import AsyncFoamCase
 
     run_start = time.perf_counter()
-    cells = int(cfd_report["tetrahedra_total"])
-    _check_budget(cells, request, run_start - start)
-    deadline = time.monotonic() + request.time_limit_s - (run_start - start)
+    if mesh_report.get("gmsh_tetrahedra"):  # the tet route knows its cells before OpenFOAM runs
+        _check_budget(int(mesh_report["gmsh_tetrahedra"]), request, run_start - start)
     foam = (runner or AsyncFoamCase)(case)
     try:
-        for command in mesh_commands(spec) if convert else []:
-            if stage:
-                stage(command[0])
-            await run_command(foam, command)
+        async with _mesh_lock() if request.mesher == Mesher.SNAPPY else contextlib.nullcontext():
+            for command in mesh_commands(spec) if convert else []:
+                if stage:
+                    stage(command[0])
+                await run_command(foam, command)
+        if convert:
+            mesh_report = _checked_mesh(case, mesh_report)
         convert_s = time.perf_counter() - run_start
+        _check_budget(int(mesh_report["cells"]), request, time.perf_counter() - start)
+        deadline = time.monotonic() + request.time_limit_s - (time.perf_counter() - start)
         if stage:
             stage("simpleFoam")
         history = await _solve(foam, spec, deadline, progress)
@@ -295,7 +385,7 @@ async def _run_case(request: Request, case: Path, out: Path, spec: CaseSpec, cfd
         kept = out / f"{request.params.name}_case_failed"
         _swap_folder(case, kept)
         raise type(error)(f"{error}; the case is kept in {kept}") from None
-    report = _report(request, spec, cfd_report, history, diameter_m)
+    report = _report(request, spec, mesh_report, history, diameter_m, read_y_plus(case))
     report.update(stage_seconds={"mesh": mesh_s, "convert": convert_s,
                                  "solve": time.perf_counter() - run_start - convert_s}, **_step_entry(request))
     return _Run(report, history)
@@ -326,8 +416,8 @@ async def _solve(foam: Any, spec: CaseSpec, deadline: float, progress: ProgressC
     return history
 
 
-def _report(request: Request, spec: CaseSpec, cfd_report: dict[str, Any], history: History,
-            diameter_m: float) -> dict[str, Any]:
+def _report(request: Request, spec: CaseSpec, mesh_report: dict[str, Any], history: History,
+            diameter_m: float, y_plus: dict[str, float] | None) -> dict[str, Any]:
     point, fluid = request.point, request.point.fluid
     summary = run_summary(history, point, request.params.handedness, diameter_m)
     balance = momentum_balance_force_n(history, fluid.density_kg_m3)
@@ -339,14 +429,16 @@ def _report(request: Request, spec: CaseSpec, cfd_report: dict[str, Any], histor
         "tip_diameter_m": diameter_m, **summary,
         "momentum_balance": {"thrust_n": float(balance[2]),
                              "relative_difference": (float(balance[2]) / thrust - 1.0) if thrust else None},
-        "cells": int(cfd_report["tetrahedra_total"]), "iterations": int(history.last_iteration),
+        "cells": int(mesh_report["cells"]), "iterations": int(history.last_iteration),
         "final_residuals": history.last_residuals(), "level": request.level.value,
-        "processes": request.processes, "cfd": cfd_report["settings"],
+        "processes": request.processes, "mesher": request.mesher.value, "mesh": mesh_report,
+        "y_plus": y_plus,
         "fluid": {"name": fluid.name, "density_kg_m3": fluid.density_kg_m3, "viscosity_m2_s": fluid.viscosity_m2_s},
         "turbulence": {"model": "kOmegaSST, wall functions", "inflow_intensity": TURBULENCE_INTENSITY,
                        "inflow_length_scale_m": TURBULENCE_LENGTH_D * diameter_m, "inflow_k_m2_s2": k,
                        "inflow_omega_1_s": omega},
-        "conventions": "thrust > 0 pushes the fluid toward -z (the design's way); torque > 0 resists the design's "
+        "conventions": "y_plus: min / area-weighted mean / max over the propeller's faces at the last iteration "
+                       "(OpenFOAM's yPlus function object); thrust > 0 pushes the fluid toward -z (the design's way); torque > 0 resists the design's "
                        "rotation; CT = T/(rho n^2 D^4), CP = P/(rho n^3 D^5), n in rev/s, D the tip diameter",
     }
 
@@ -429,13 +521,13 @@ async def _thrust_search(request: Request, target: ThrustTarget, out: Path, diam
             run_request = dataclasses.replace(request, point=dataclasses.replace(request.point, rpm=rpm))
             prepared = time.perf_counter()
             if not results:
-                cfd_report, spec = await _mesh_and_write(run_request, first_case, diameter_m, stage)
+                mesh_report, spec = await _mesh_and_write(run_request, first_case, diameter_m, stage)
                 case = first_case
             else:
                 case = output.staging / "runs" / str(len(results)) / f"{name}_case"
-                cfd_report, spec = _reuse_mesh(dataclasses.replace(run_request, mesh_from=first_case), case,
+                mesh_report, spec = _reuse_mesh(dataclasses.replace(run_request, mesh_from=first_case), case,
                                                diameter_m)
-            run = await _run_case(run_request, case, out, spec, cfd_report, diameter_m, start, stage, progress,
+            run = await _run_case(run_request, case, out, spec, mesh_report, diameter_m, start, stage, progress,
                                   runner, convert=not results, mesh_s=time.perf_counter() - prepared)
             results.append((case, run))
             runs.append(ThrustRun(rpm, float(run.report["thrust_n"])))
@@ -485,7 +577,8 @@ def convergence_study(request: Request, out_dir: str | Path, progress: ProgressC
     report: dict[str, Any] = {"name": request.params.name, "rpm": request.point.rpm, "gci_safety_factor": GCI_SAFETY_FACTOR,
                               "airspeed_m_s": request.point.airspeed_m_s, "refinement_ratio": REFINEMENT_RATIO,
                               "levels": {level.value: {key: run.report[key] for key in
-                                                       ("cells", "thrust_n", "torque_nm", "ct", "cp", "converged")}
+                                                       ("cells", "thrust_n", "torque_nm", "ct", "cp", "converged",
+                                                        "y_plus", "wall_seconds")}
                                          for level, run in runs.items()}}
     for key in ("thrust_n", "torque_nm"):
         coarse, medium, fine = (float(runs[level].report[key]) for level in Level)

@@ -61,8 +61,9 @@ class TimeBudgetError(SolverError):
 
 
 def check_openfoam() -> None:
-    """MissingOpenFoamError unless simpleFoam, gmshToFoam and the other programs are on PATH."""
-    for program in ("simpleFoam", "gmshToFoam", "transformPoints", "foamDictionary", "checkMesh"):
+    """MissingOpenFoamError unless simpleFoam, snappyHexMesh, gmshToFoam and the other programs are on PATH."""
+    for program in ("simpleFoam", "blockMesh", "surfaceTransformPoints", "surfaceFeatureExtract", "snappyHexMesh",
+                    "gmshToFoam", "transformPoints", "foamDictionary", "checkMesh"):
         if shutil.which(program) is None:
             raise MissingOpenFoamError(INSTALL_HINT.replace("simpleFoam", program, 1))
 

@@ -29,6 +29,14 @@ class Level(StrEnum):
     FINE = "fine"
 
 
+class Mesher(StrEnum):
+    """How ``simulate`` meshes the fluid (``--mesher``): ``snappy`` (snappyHexMesh, prism layers on the
+    propeller sized from a y+ target; the default) or ``tet`` (the ``cfd`` command's gmsh tetrahedra, no layers)."""
+
+    SNAPPY = "snappy"
+    TET = "tet"
+
+
 #: Element sizes are divided by this from one level to the next.
 REFINEMENT_RATIO = 2.0 ** (1.0 / 3.0)
 
@@ -50,8 +58,29 @@ def level_cfd(level: Level) -> dict[str, float]:
     return {**DOMAIN_D, **sizes}
 
 
+#: The boundary-layer mesh (torus_cad.simulate.snappy) of the coarse level; the finer levels divide the
+#: background cell and the first layer's height by REFINEMENT_RATIO per step (the refinement levels below
+#: are counted from the background cell, so every size follows).
+#: Background cubes per tip diameter D.
+BACKGROUND_CELLS_PER_D = 3.0
+#: snappyHexMesh refinement levels (each halves the background cell): inside the rotating zone, on the
+#: propeller's surface, on its sharp edges (leading and trailing edges, hub rims).
+ZONE_LEVEL, SURFACE_LEVEL, FEATURE_LEVEL = 2, 4, 5
+#: Prism layers on the propeller and the thickness ratio of neighbouring layers.
+LAYERS = 8
+LAYER_EXPANSION_RATIO = 1.3
+#: The y+ the first layer is sized for (the viscous sublayer: the blades' Reynolds number, about 1e4 at
+#: 0.75 R, leaves little log layer for a wall function to model), and where on the blade it is estimated
+#: (a fraction of the tip radius).
+Y_PLUS_TARGET = 1.0
+Y_PLUS_REFERENCE_RADIUS = 0.75
+#: The last layer is at least this fraction of the propeller's surface cell: across a larger jump the
+#: face-weight check drops every layer (a 100 mm propeller at 10,000 rpm kept none for y+ 1); where the
+#: y+ target asks for thinner layers, the first layer is thickened to this and y+ comes out above the target.
+LAST_LAYER_MIN_FRACTION = 0.08
+
 #: Default iterations of each level (steady SIMPLE).
-LEVEL_ITERATIONS = {Level.COARSE: 300, Level.MEDIUM: 400, Level.FINE: 500}
+LEVEL_ITERATIONS = {Level.COARSE: 200, Level.MEDIUM: 300, Level.FINE: 400}
 
 #: Default time budget of one run (meshing, conversion and solver), seconds.
 DEFAULT_TIME_LIMIT_S = 3600.0
