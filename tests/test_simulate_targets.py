@@ -12,6 +12,7 @@ import math
 import re
 import shutil
 
+import numpy as np
 import pytest
 
 from torus_cad.cli import main
@@ -272,14 +273,34 @@ def test_case_only_from_the_design_step_has_a_propeller_patch_and_its_diameter(d
     path, _ = design_step
     out = tmp_path / "out"
     assert main(["simulate", "--step", str(path), "--rpm", "10000", "--case-only", "--processes", "1",
-                 "--out", str(out), "-q"]) == 0
+                 "--mesher", "tet", "--out", str(out), "-q"]) == 0
     case = out / "torus_propeller_case"
     msh = (case / "cfd" / "torus_propeller_cfd_v2.msh").read_text()
     names = msh[msh.index("$PhysicalNames"):msh.index("$EndPhysicalNames")]
     assert '"propeller"' in names and '"rotating_zone"' in names
     cfd = json.loads((case / "cfd" / "torus_propeller_cfd.json").read_text())
-    design = 2.0 * tip_radius(PropellerParameters().geometry())
+    design = 2.0 * tip_radius(PropellerParameters())
     assert cfd["domain_mm"]["tip_diameter"] == pytest.approx(design, rel=0.005)
+    assert (case / "Allrun").is_file()
+
+
+def test_case_only_from_the_design_step_on_the_layered_route_meshes_the_step_s_own_surface(design_step, tmp_path):
+    import trimesh
+
+    from torus_cad.cfd.sizes import tip_radius
+    from torus_cad.parameters import PropellerParameters
+    from torus_cad.simulate.snappy import SURFACE_MM
+
+    path, _ = design_step
+    out = tmp_path / "out"
+    assert main(["simulate", "--step", str(path), "--rpm", "10000", "--case-only", "--processes", "1",
+                 "--out", str(out), "-q"]) == 0
+    case = out / "torus_propeller_case"
+    surface = trimesh.load(case / SURFACE_MM)  # read by another library than the one that wrote it
+    assert surface.is_watertight
+    radius = np.hypot(surface.vertices[:, 0], surface.vertices[:, 1]).max()
+    assert 2.0 * radius == pytest.approx(2.0 * tip_radius(PropellerParameters()), rel=0.005)
+    assert "propeller" in (case / "system" / "snappyHexMeshDict").read_text()
     assert (case / "Allrun").is_file()
 
 
