@@ -8,12 +8,12 @@ from __future__ import annotations
 import json
 import math
 import os
-import shutil
 import subprocess
 from pathlib import Path
 
 import numpy as np
 import pytest
+from openfoam_marks import needs_openfoam
 
 foamlib = pytest.importorskip("foamlib")
 
@@ -39,9 +39,6 @@ from torus_cad.simulate.snappy import (  # noqa: E402
     skin_friction,
     write_layered_mesh,
 )
-
-HAS_SNAPPY = shutil.which("snappyHexMesh") is not None
-needs_openfoam = pytest.mark.skipif(not HAS_SNAPPY, reason="OpenFOAM (snappyHexMesh) is not installed")
 
 CHECK_MESH_OK = """
 Mesh stats

@@ -8,7 +8,6 @@ import json
 import math
 import os
 import re
-import shutil
 import signal
 import subprocess
 import sys
@@ -17,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from openfoam_marks import needs_openfoam
 
 from torus_cad.cli import main
 
@@ -30,9 +30,6 @@ from torus_cad.simulate.performance import force_variation, performance, richard
 from torus_cad.simulate.pipeline import Request, simulate  # noqa: E402
 from torus_cad.simulate.run import divergence  # noqa: E402
 from torus_cad.simulate.settings import Level, Mesher, OperatingPoint  # noqa: E402
-
-HAS_OPENFOAM = shutil.which("simpleFoam") is not None
-needs_openfoam = pytest.mark.skipif(not HAS_OPENFOAM, reason="OpenFOAM (simpleFoam) is not installed")
 
 RPM = 10000.0
 #: Iterations of the physics runs: thrust settles within ~2 % by 120 on the coarse mesh.

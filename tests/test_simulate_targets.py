@@ -10,10 +10,10 @@ from __future__ import annotations
 import json
 import math
 import re
-import shutil
 
 import numpy as np
 import pytest
+from openfoam_marks import needs_openfoam
 
 from torus_cad.cli import main
 from torus_cad.errors import ParameterError
@@ -28,8 +28,6 @@ from torus_cad.simulate.thrust_target import (
     thrust_at,
 )
 
-HAS_OPENFOAM = shutil.which("simpleFoam") is not None
-needs_openfoam = pytest.mark.skipif(not HAS_OPENFOAM, reason="OpenFOAM (simpleFoam) is not installed")
 RATIO = 2.0 ** (1.0 / 3.0)
 
 
