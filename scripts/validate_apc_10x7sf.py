@@ -6,7 +6,8 @@
     python scripts/validate_apc_10x7sf.py --static 5000 --advance-ratios   # one static point only
 
 Never part of the test suite (each point is minutes of OpenFOAM). The propeller is
-``examples/apc_10x7sf.toml`` (built from the shipped station table); the measurements are in
+``examples/apc_10x7sf_pe0.toml`` (APC's station table; ``--geometry uiuc``:
+``examples/apc_10x7sf.toml``, UIUC's measured blade); the measurements are in
 ``validation/uiuc_apc_10x7sf/`` (read by ``studies/wind_tunnel.py``). The points are the static
 test at 4000, 5000 and 6000 rpm and the 5000 rpm sweep at J = 0.2, 0.4 and 0.6: the first run
 meshes, every other reuses its mesh (``--mesh-from``). Each point is a fresh ``torus-cad
@@ -40,15 +41,15 @@ from studies.wind_tunnel import (  # noqa: E402  (the checkout's studies/, besid
     read_wind_tunnel,
 )
 
-DESIGN = ROOT / "examples" / "apc_10x7sf.toml"
-NAME = "apc_10x7sf"
+#: The two descriptions of the propeller: APC's station table (PE0) and UIUC's measured geometry.
+DESIGNS = {"pe0": ROOT / "examples" / "apc_10x7sf_pe0.toml", "uiuc": ROOT / "examples" / "apc_10x7sf.toml"}
 
 
 def simulate_point(rpm: float, advance_ratio: float, args: argparse.Namespace, out: Path,
                    mesh_from: Path | None) -> dict[str, Any]:
     """One ``torus-cad simulate`` run; its performance report with the process's wall seconds."""
     airspeed = advance_ratio * rpm / 60.0 * APC_10X7SF_DIAMETER_M
-    command = [sys.executable, "-m", "torus_cad", "simulate", str(DESIGN), "--rpm", f"{rpm:g}",
+    command = [sys.executable, "-m", "torus_cad", "simulate", str(DESIGNS[args.geometry]), "--rpm", f"{rpm:g}",
                "--airspeed", f"{airspeed:.6g}", "--level", args.level, "--processes", str(args.processes),
                "--out", str(out), "-q", *args.simulate_args]
     if mesh_from is not None:
@@ -60,7 +61,7 @@ def simulate_point(rpm: float, advance_ratio: float, args: argparse.Namespace, o
     if completed.returncode != 0:
         raise SystemExit(f"simulate failed at {rpm:g} rpm, J = {advance_ratio:g} (exit {completed.returncode}): "
                          f"{completed.stderr.strip().splitlines()[-1:]}")
-    report = json.loads((out / f"{NAME}_performance.json").read_text(encoding="utf-8"))
+    report = json.loads(next(out.glob("*_performance.json")).read_text(encoding="utf-8"))
     return {**report, "process_wall_seconds": wall}
 
 
@@ -108,6 +109,8 @@ def write_picture(rows: list[dict[str, Any]], data: Any, path: Path) -> None:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--level", default="coarse", choices=("coarse", "medium", "fine"))
+    parser.add_argument("--geometry", default="pe0", choices=sorted(DESIGNS),
+                        help="the blade from APC's station table (pe0, default) or UIUC's measured geometry (uiuc)")
     parser.add_argument("--processes", type=int, default=2)
     parser.add_argument("--static", type=float, nargs="*", default=[5000.0, 4000.0, 6000.0], help="rpm at J = 0")
     parser.add_argument("--sweep-rpm", type=float, default=5000.0)
@@ -122,9 +125,9 @@ def main() -> int:
     comparisons: list[Comparison] = []
     mesh_from: Path | None = None
     for rpm, j in points(args):
-        out = args.out / f"{args.level}_{rpm:.0f}_J{j:.2f}"
+        out = args.out / f"{args.geometry}_{args.level}_{rpm:.0f}_J{j:.2f}"
         report = simulate_point(rpm, j, args, out, mesh_from)
-        mesh_from = mesh_from or out / f"{NAME}_case"
+        mesh_from = mesh_from or next(out.glob("*_case"))
         measured = data.static_point(rpm) if j == 0.0 else data.sweep_point(rpm, j)
         comparison = Comparison(measured, float(report["ct"]), float(report["cp"]))
         comparisons.append(comparison)
@@ -139,7 +142,7 @@ def main() -> int:
               f"CP {comparison.cp:.4f} ({100 * comparison.cp_error:+.1f} %), {report['process_wall_seconds']:.0f} s",
               flush=True)
     table = markdown_table(comparisons)
-    (args.out / "validation.json").write_text(json.dumps({"level": args.level, "points": rows}, indent=2) + "\n",
+    (args.out / "validation.json").write_text(json.dumps({"level": args.level, "geometry": args.geometry, "points": rows}, indent=2) + "\n",
                                               encoding="utf-8")
     (args.out / "validation.md").write_text(table + "\n", encoding="utf-8")
     write_picture(rows, data, args.out / "validation_apc_10x7sf.png")
