@@ -112,7 +112,8 @@ def main() -> int:
     parser.add_argument("--geometry", default="pe0", choices=sorted(DESIGNS),
                         help="the blade from APC's station table (pe0, default) or UIUC's measured geometry (uiuc)")
     parser.add_argument("--processes", type=int, default=2)
-    parser.add_argument("--static", type=float, nargs="*", default=[5000.0, 4000.0, 6000.0], help="rpm at J = 0")
+    parser.add_argument("--static", type=float, nargs="*", default=[5000.0, 4000.0, 5987.0],
+                        help="rpm at J = 0 (UIUC measured up to 5987)")
     parser.add_argument("--sweep-rpm", type=float, default=5000.0)
     parser.add_argument("--advance-ratios", type=float, nargs="*", default=[0.2, 0.4, 0.6])
     parser.add_argument("--out", type=Path, default=ROOT / "validation_out")
