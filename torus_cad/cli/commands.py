@@ -360,7 +360,7 @@ def command_simulate(args: argparse.Namespace) -> int:
         from torus_cad.simulate.cli_output import IterationLine, summary_lines
         from torus_cad.simulate.pipeline import Request, ThrustTarget, convergence_study, simulate, thrust_search
         from torus_cad.simulate.run import MissingOpenFoamError
-        from torus_cad.simulate.settings import Level, Mesher, OperatingPoint, max_processes
+        from torus_cad.simulate.settings import Level, Mesher, OperatingPoint, TurbulenceModel, max_processes
     except ImportError as error:
         print(f"torus-cad: {error.name or error} is not installed: install the simulate extra, "
               "pip install 'torus_cad[simulate]'", file=sys.stderr)
@@ -375,7 +375,8 @@ def command_simulate(args: argparse.Namespace) -> int:
     rpm = args.rpm if args.thrust is None else 0.0  # --thrust: the search sets each run's rpm
     request = Request(params, OperatingPoint(rpm, args.airspeed), Level(args.level), args.iterations,
                       max_processes() if args.processes is None else args.processes, args.case_only, args.time_limit,
-                      Path(args.mesh_from) if args.mesh_from else None, Mesher(args.mesher), step)
+                      Path(args.mesh_from) if args.mesh_from else None, Mesher(args.mesher), step,
+                      TurbulenceModel(args.turbulence))
     line = IterationLine.for_terminal(quiet=args.quiet)
     try:
         if args.convergence:

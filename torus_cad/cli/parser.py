@@ -201,6 +201,9 @@ def _add_simulate_parser(commands: Any) -> None:
     simulate.add_argument("--mesher", choices=["snappy", "tet"], default="snappy",
                           help="snappy (default): snappyHexMesh with prism layers on the propeller, the first layer "
                                "sized for y+ 1; tet: the cfd command's gmsh tetrahedra, no layers")
+    simulate.add_argument("--turbulence", choices=["kOmegaSST", "kOmegaSSTLM"], default="kOmegaSST",
+                          help="RANS model: kOmegaSST (default) or kOmegaSSTLM, k-omega SST with Langtry-Menter "
+                               "transition (two more equations; compared against the wind tunnel in the simulate how-to)")
     simulate.add_argument("--iterations", type=int, metavar="N", help="SIMPLE iterations, [1, 20000] (default: the "
                           "level's, 200 / 300 / 400)")
     simulate.add_argument("--processes", type=int, metavar="N", default=None,

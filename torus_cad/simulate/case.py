@@ -31,7 +31,13 @@ from typing import Any
 from foamlib import Dimensioned, DimensionSet, FoamFieldFile, FoamFile
 
 from torus_cad.parameters.design import Handedness
-from torus_cad.simulate.settings import Mesher, OperatingPoint
+from torus_cad.simulate.settings import (
+    TURBULENCE_INTENSITY,
+    Mesher,
+    OperatingPoint,
+    TurbulenceModel,
+    transition_onset_re_theta,
+)
 from torus_cad.simulate.snappy import MESH_COMMANDS as LAYERED_MESH_COMMANDS
 
 #: Patches of the cfd mesh (torus_cad.cfd.domain.SURFACE_GROUPS) as the case types them.
@@ -42,13 +48,15 @@ MM_TO_M = "(0.001 0.001 0.001)"
 FORCES, RESIDUALS, OUTER_FORCES, Y_PLUS = "propeller_forces", "residuals", "outer_forces", "yPlus"
 MOMENTUM_FLUX = {patch: f"momentum_flux_{patch}" for patch in OUTER_PATCHES}
 FIELDS = ("U", "p", "k", "omega")
+#: The transition model's extra fields (kOmegaSSTLM): intermittency and transition-onset Re_theta.
+TRANSITION_FIELDS = ("gammaInt", "ReThetat")
 
 
 @dataclass(frozen=True)
 class CaseSpec:
     """What the dictionaries need: the operating point, handedness, D (m), flow direction (+1/-1 along z
     from inlet to outlet), iterations, processes, the gmsh mesh file relative to the case (``tet`` route)
-    and the mesher."""
+    the mesher and the turbulence model."""
 
     point: OperatingPoint
     handedness: Handedness
@@ -58,6 +66,12 @@ class CaseSpec:
     processes: int
     msh_file: str
     mesher: Mesher = Mesher.SNAPPY
+    turbulence: TurbulenceModel = TurbulenceModel.K_OMEGA_SST
+
+    @property
+    def fields(self) -> tuple[str, ...]:
+        """The solved fields whose residuals are recorded."""
+        return FIELDS + (TRANSITION_FIELDS if self.turbulence == TurbulenceModel.K_OMEGA_SST_LM else ())
 
     @property
     def inflow(self) -> tuple[float, float, float]:
@@ -84,7 +98,7 @@ def control_dict(spec: CaseSpec) -> dict[str, Any]:
         OUTER_FORCES: {**forces, "patches": list(OUTER_PATCHES)},
         Y_PLUS: {"type": "yPlus", "libs": ['"libfieldFunctionObjects.so"'], "writeControl": "writeTime",
                  "log": False},
-        RESIDUALS: {"type": "solverInfo", "libs": ['"libutilityFunctionObjects.so"'], "fields": list(FIELDS),
+        RESIDUALS: {"type": "solverInfo", "libs": ['"libutilityFunctionObjects.so"'], "fields": list(spec.fields),
                     "writeControl": "timeStep", "writeInterval": 1},
     }
     for patch, name in MOMENTUM_FLUX.items():
@@ -105,6 +119,8 @@ FV_SCHEMES: dict[str, Any] = {
                     "grad(omega)": ("cellLimited", "Gauss", "linear", 1)},
     "divSchemes": {"default": "none", "div(phi,U)": ("bounded", "Gauss", "linearUpwind", "grad(U)"),
                    "div(phi,k)": ("bounded", "Gauss", "upwind"), "div(phi,omega)": ("bounded", "Gauss", "upwind"),
+                   "div(phi,gammaInt)": ("bounded", "Gauss", "upwind"),
+                   "div(phi,ReThetat)": ("bounded", "Gauss", "upwind"),
                    "div((nuEff*dev2(T(grad(U)))))": ("Gauss", "linear")},
     "laplacianSchemes": {"default": ("Gauss", "linear", "limited", "corrected", 0.5)},
     "interpolationSchemes": {"default": "linear"},
@@ -114,11 +130,11 @@ FV_SCHEMES: dict[str, Any] = {
 
 FV_SOLUTION: dict[str, Any] = {
     "solvers": {"p": {"solver": "GAMG", "smoother": "GaussSeidel", "tolerance": 1e-7, "relTol": 0.05},
-                '"(U|k|omega)"': {"solver": "smoothSolver", "smoother": "symGaussSeidel", "tolerance": 1e-8,
+                '"(U|k|omega|gammaInt|ReThetat)"': {"solver": "smoothSolver", "smoother": "symGaussSeidel", "tolerance": 1e-8,
                                   "relTol": 0.1}},
     "SIMPLE": {"nNonOrthogonalCorrectors": 1, "consistent": False,
                "residualControl": {"p": 1e-5, "U": 1e-6, '"(k|omega)"': 1e-6}},
-    "relaxationFactors": {"fields": {"p": 0.3}, "equations": {"U": 0.7, '"(k|omega)"': 0.7}},
+    "relaxationFactors": {"fields": {"p": 0.3}, "equations": {"U": 0.7, '"(k|omega|gammaInt|ReThetat)"': 0.7}},
 }
 
 
@@ -128,7 +144,7 @@ def mrf_properties(spec: CaseSpec) -> dict[str, Any]:
 
 
 def _boundaries(spec: CaseSpec, field: str, inflow_value: Any) -> dict[str, Any]:
-    """boundaryField of ``field`` ("U", "p", "k", "omega", "nut") on every patch."""
+    """boundaryField of ``field`` ("U", "p", "k", "omega", "nut", "gammaInt", "ReThetat") on every patch."""
     zero_gradient = {"type": "zeroGradient"}
     inlet_outlet = {"type": "inletOutlet", "inletValue": inflow_value, "value": inflow_value}
     if field == "U":
@@ -147,7 +163,8 @@ def _boundaries(spec: CaseSpec, field: str, inflow_value: Any) -> dict[str, Any]
         calculated = {"type": "calculated", "value": 0}
         return {**{patch: calculated for patch in OUTER_PATCHES}, INTERFACE: calculated,
                 WALL: {"type": "nutkWallFunction", "value": 0}}
-    wall = {"type": "kqRWallFunction" if field == "k" else "omegaWallFunction", "value": inflow_value}
+    wall_types = {"k": "kqRWallFunction", "omega": "omegaWallFunction"}
+    wall = {"type": wall_types[field], "value": inflow_value} if field in wall_types else zero_gradient
     inlet = inlet_outlet if spec.still_air else {"type": "fixedValue", "value": inflow_value}
     return {"inlet": inlet, "farfield": inlet_outlet if spec.still_air else {"type": "slip"},
             "outlet": inlet_outlet, WALL: wall, INTERFACE: zero_gradient}
@@ -163,12 +180,15 @@ def _write_field(path: Path, dimensions: DimensionSet, value: Any, boundaries: d
 
 
 def write_fields(case: Path, spec: CaseSpec) -> None:
-    """0/U, p, k, omega, nut: the inflow everywhere to start from."""
+    """0/U, p, k, omega, nut (and gammaInt, ReThetat for kOmegaSSTLM): the inflow everywhere to start from."""
     k, omega = spec.point.inflow_turbulence(spec.diameter_m)
     inflow = list(spec.inflow)
     values = {"U": (DimensionSet(length=1, time=-1), inflow), "p": (DimensionSet(length=2, time=-2), 0),
               "k": (DimensionSet(length=2, time=-2), k), "omega": (DimensionSet(time=-1), omega),
               "nut": (DimensionSet(length=2, time=-1), 0)}
+    if spec.turbulence == TurbulenceModel.K_OMEGA_SST_LM:
+        values["gammaInt"] = (DimensionSet(), 1.0)
+        values["ReThetat"] = (DimensionSet(), transition_onset_re_theta(TURBULENCE_INTENSITY))
     for name, (dimensions, value) in values.items():
         _write_field(case / "0" / name, dimensions, value, _boundaries(spec, name, value))
 
@@ -195,7 +215,7 @@ def write_dictionaries(case: Path, spec: CaseSpec) -> None:
         "transportModel": "Newtonian", "nu": Dimensioned(fluid.viscosity_m2_s, DimensionSet(length=2, time=-1), "nu"),
         "rho": Dimensioned(fluid.density_kg_m3, DimensionSet(mass=1, length=-3), "rho")})
     _write(case / "constant" / "turbulenceProperties", {
-        "simulationType": "RAS", "RAS": {"RASModel": "kOmegaSST", "turbulence": True, "printCoeffs": False}})
+        "simulationType": "RAS", "RAS": {"RASModel": spec.turbulence.value, "turbulence": True, "printCoeffs": False}})
 
 
 def mesh_commands(spec: CaseSpec) -> list[list[str]]:

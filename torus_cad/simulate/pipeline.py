@@ -58,6 +58,7 @@ from torus_cad.simulate.settings import (
     Level,
     Mesher,
     OperatingPoint,
+    TurbulenceModel,
     check_count,
     check_operating_point,
     max_processes,
@@ -112,7 +113,7 @@ class Request:
     folder of an earlier run of the same design and level whose mesh to reuse (another rpm or
     airspeed without meshing again), the mesher (``snappy``: prism layers; ``tet``: gmsh tetrahedra), and a
     STEP propeller (``--step``) to simulate instead of building ``params`` (then ``params`` gives only the name,
-    the sense of rotation and ``[cfd]``)."""
+    the sense of rotation and ``[cfd]``), and the turbulence model."""
 
     params: PropellerParameters
     point: OperatingPoint
@@ -124,6 +125,7 @@ class Request:
     mesh_from: Path | None = None
     mesher: Mesher = Mesher.SNAPPY
     step: StepPropeller | None = None
+    turbulence: TurbulenceModel = TurbulenceModel.K_OMEGA_SST
 
     @property
     def run_iterations(self) -> int:
@@ -245,7 +247,7 @@ async def _layered_and_write(request: Request, case: Path, diameter_m: float,
 def _case_spec(request: Request, diameter_m: float, msh_file: str) -> CaseSpec:
     params = request.params
     return CaseSpec(request.point, params.handedness, diameter_m, _flow_sign(params), request.run_iterations,
-                    request.processes, msh_file, request.mesher)
+                    request.processes, msh_file, request.mesher, request.turbulence)
 
 
 def _checked_mesh(case: Path, mesh_report: dict[str, Any]) -> dict[str, Any]:
@@ -434,7 +436,7 @@ def _report(request: Request, spec: CaseSpec, mesh_report: dict[str, Any], histo
         "processes": request.processes, "mesher": request.mesher.value, "mesh": mesh_report,
         "y_plus": y_plus,
         "fluid": {"name": fluid.name, "density_kg_m3": fluid.density_kg_m3, "viscosity_m2_s": fluid.viscosity_m2_s},
-        "turbulence": {"model": "kOmegaSST, wall functions", "inflow_intensity": TURBULENCE_INTENSITY,
+        "turbulence": {"model": f"{request.turbulence.value}, wall functions", "inflow_intensity": TURBULENCE_INTENSITY,
                        "inflow_length_scale_m": TURBULENCE_LENGTH_D * diameter_m, "inflow_k_m2_s2": k,
                        "inflow_omega_1_s": omega},
         "conventions": "y_plus: min / area-weighted mean / max over the propeller's faces at the last iteration "

@@ -37,6 +37,24 @@ class Mesher(StrEnum):
     TET = "tet"
 
 
+class TurbulenceModel(StrEnum):
+    """RANS model of ``simulate`` (``--turbulence``): ``kOmegaSST`` (the default), or ``kOmegaSSTLM``:
+    the same model with Langtry and Menter's gamma-ReThetat transition equations (laminar boundary
+    layers up to a predicted transition; two more transported fields, ``gammaInt`` and ``ReThetat``)."""
+
+    K_OMEGA_SST = "kOmegaSST"
+    K_OMEGA_SST_LM = "kOmegaSSTLM"
+
+
+def transition_onset_re_theta(intensity: float) -> float:
+    """Langtry and Menter's transition-onset momentum-thickness Reynolds number for a free-stream
+    turbulence intensity (a fraction), zero pressure gradient: the inflow value of ``ReThetat``."""
+    tu_percent = max(100.0 * intensity, 0.027)  # the bound kOmegaSSTLM itself applies
+    if tu_percent <= 1.3:
+        return 1173.51 - 589.428 * tu_percent + 0.2196 / tu_percent**2
+    return 331.5 * (tu_percent - 0.5658) ** -0.671
+
+
 #: Element sizes are divided by this from one level to the next.
 REFINEMENT_RATIO = 2.0 ** (1.0 / 3.0)
 
