@@ -76,6 +76,14 @@ def test_divergence_names_the_iteration_and_the_residual():
     assert force_variation(np.r_[np.zeros(90), np.full(5, 2.0), np.full(5, 2.02)]) == pytest.approx(0.02 / 2.01)
 
 
+def _exit_code(argv: list[str]) -> int:
+    """``main``'s exit code, also when the parser refuses an option (argparse exits: out of range)."""
+    try:
+        return main(argv)
+    except SystemExit as stop:
+        return int(stop.code or 0)
+
+
 @pytest.mark.parametrize("arguments, fragment", [
     (["--rpm", "-1"], "--rpm = -1 is out of range; allowed [0, "),
     (["--rpm", "1e6"], "--rpm = 1e+06 is out of range"),
@@ -88,7 +96,7 @@ def test_divergence_names_the_iteration_and_the_residual():
 ])
 def test_bad_input_exits_2_with_one_line_and_writes_nothing(tmp_path, capsys, arguments, fragment):
     out = tmp_path / "out"
-    assert main(["simulate", *arguments, "--out", str(out)]) == 2
+    assert _exit_code(["simulate", *arguments, "--out", str(out)]) == 2
     error = capsys.readouterr().err
     assert fragment in error and error.count("\n") == 1
     assert not out.exists()

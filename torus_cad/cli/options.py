@@ -27,7 +27,10 @@ def range_help(bounds: Bounds, unit: str = "") -> str:
 
 
 def _refused(option: str, value: object, bounds: Bounds, unit: str, note: str) -> argparse.ArgumentTypeError:
-    return argparse.ArgumentTypeError(f"{option} = {value} is out of range; allowed {range_help(bounds, unit)}"
+    """``--time-limit = 0 s is out of range; ...``; an option that sets a design parameter is named by its key,
+    as the design file's checks name it: ``cfd.growth_rate = 1 is out of range; ...``."""
+    shown_value = f"{value}{' ' + unit if unit and option.startswith('-') else ''}"
+    return argparse.ArgumentTypeError(f"{option} = {shown_value} is out of range; allowed {range_help(bounds, unit)}"
                                       f"{' (' + note + ')' if note else ''}")
 
 
@@ -38,7 +41,8 @@ def in_range(option: str, value: float, bounds: Bounds, unit: str = "", note: st
 
 
 def integer(option: str, bounds: Bounds, unit: str = "", note: str = "") -> Callable[[str], int]:
-    """The ``type`` of an option taking a whole number in ``bounds`` (``note`` explains the range)."""
+    """The ``type`` of an option taking a whole number in ``bounds`` (``note`` explains the range). ``option``
+    names it in messages: ``--threads``, or the design key it sets (``mesh.sections``)."""
 
     def parse(text: str) -> int:
         try:
@@ -52,6 +56,7 @@ def integer(option: str, bounds: Bounds, unit: str = "", note: str = "") -> Call
         return value
 
     parse.__name__ = "whole number"  # argparse's fallback message names the type
+    parse.bounds = bounds  # type: ignore[attr-defined]  # for tests and docs: the range of this option
     return parse
 
 
@@ -70,4 +75,5 @@ def number(option: str, bounds: Bounds, unit: str = "", note: str = "") -> Calla
         return value
 
     parse.__name__ = "number"
+    parse.bounds = bounds  # type: ignore[attr-defined]
     return parse

@@ -113,12 +113,13 @@ _WORKERS_NOTE = f"{WORKERS_PER_CPU} per CPU, at most {WORKERS_LIMIT}"
 _THREADS_NOTE = f"{CFD_THREADS_PER_CPU} per CPU, at most {CFD_THREADS_LIMIT}"
 
 
-def _option_type(option: str, kind: Any, bounds: Bounds, unit: str) -> Callable[[str], Any]:
-    """The bounded parser of a schema parameter's option (``kind`` int or float), else ``kind`` itself."""
+def _option_type(key: str, kind: Any, bounds: Bounds, unit: str) -> Callable[[str], Any]:
+    """The bounded parser of the option that sets the schema parameter ``key`` (``kind`` int or float: messages
+    name the key, as the design file's do), else ``kind`` itself."""
     if kind is int:
-        return integer(option, bounds, unit)
+        return integer(key, bounds, unit)
     if kind is float:
-        return number(option, bounds, unit)
+        return number(key, bounds, unit)
     return kind  # type: ignore[no-any-return]
 
 
@@ -135,7 +136,7 @@ def _add_table_arguments(parser: argparse.ArgumentParser, table: str) -> None:
             parser.add_argument(option, dest=name, choices=[item.value for item in spec.choices],
                                 help=f"{spec.doc} (default {spec.default.value})")
         else:
-            parser.add_argument(option, dest=name, type=_option_type(option, spec.kind, spec.bounds, spec.unit),
+            parser.add_argument(option, dest=name, type=_option_type(spec.key, spec.kind, spec.bounds, spec.unit),
                                 metavar="X", help=f"{spec.doc}{unit}; {spec.bounds} (default {spec.default:g})")
 
 
@@ -149,7 +150,7 @@ def _bind_schema_ranges(parser: argparse.ArgumentParser, ranges: dict[str, str])
         if key is None:
             continue
         spec = specs[key]
-        action.type = _option_type(action.option_strings[-1], spec.kind, spec.bounds, spec.unit)
+        action.type = _option_type(key, spec.kind, spec.bounds, spec.unit)
         action.help = f"{action.help}; {range_help(spec.bounds, spec.unit)}"
 
 
@@ -215,7 +216,7 @@ def _add_simulate_parser(commands: Any) -> None:
     rpm, thrust = Bounds(0.0, SIMULATE_RPM_LIMIT), Bounds(0.0, SIMULATE_THRUST_LIMIT_N, low_open=True)
     tolerance, runs = Bounds(*THRUST_TOLERANCE_RANGE), Bounds(*THRUST_RUNS_RANGE)
     speed = simulate.add_mutually_exclusive_group(required=True)
-    speed.add_argument("--rpm", type=number("--rpm", rpm, "rpm"),
+    speed.add_argument("--rpm", type=number("--rpm", rpm),
                        help=f"revolutions per minute, {range_help(rpm)} and at most the design's rpm at helical tip "
                        "Mach 0.6, in the design's own sense of rotation (a 'cw' design clockwise seen from +z)")
     speed.add_argument("--thrust", type=number("--thrust", thrust, "N"), metavar="N",
