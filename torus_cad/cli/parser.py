@@ -120,7 +120,7 @@ def _option_type(key: str, kind: Any, bounds: Bounds, unit: str) -> Callable[[st
         return integer(key, bounds, unit)
     if kind is float:
         return number(key, bounds, unit)
-    return kind  # type: ignore[no-any-return]
+    return kind
 
 
 def _add_table_arguments(parser: argparse.ArgumentParser, table: str) -> None:

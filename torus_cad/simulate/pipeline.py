@@ -292,7 +292,7 @@ def _mesh_source_report(request: Request) -> dict[str, Any]:
         raise ParameterError(f"--mesh-from {str(source)!r} was meshed for design {made[0]!r}, mesher {made[1]!r}, level "
                              f"{made[2]!r}, not {wanted[0]!r}, {wanted[1]!r}, {wanted[2]!r}"
                              + (" (or with other [cfd] settings)" if request.mesher == Mesher.TET else ""))
-    return mesh_report  # type: ignore[no-any-return]
+    return mesh_report
 
 
 def _reuse_mesh(request: Request, case: Path, diameter_m: float) -> tuple[dict[str, Any], CaseSpec]:
