@@ -12,6 +12,7 @@ import subprocess
 import sys
 
 import pytest
+from cli_exit import exit_code
 
 from torus_cad.cli import main
 from torus_cad.cli.parser import build_parser
@@ -57,14 +58,6 @@ FILE_ATTACKS = [
     ("design", "table header", "[" + DOTTED + "]\nb = 1\n", ["a.a.a", "is nested"]),
 ]
 COMMANDS = {"study": "optimize", "sweep": "sweep", "design": "build"}
-
-
-def _exit_code(argv: list[str]) -> int:
-    """``main``'s exit code, also when the parser refuses an option (argparse exits)."""
-    try:
-        return main(argv)
-    except SystemExit as stop:
-        return int(stop.code or 0)
 
 
 def _one_line(capsys: pytest.CaptureFixture[str]) -> str:
@@ -174,7 +167,7 @@ def test_every_numeric_option_refuses_values_outside_its_range_with_one_line(cap
 ], ids=lambda arguments: " ".join(arguments)[:40])
 def test_an_option_out_of_range_makes_no_output_folder(tmp_path, capsys, monkeypatch, arguments):
     monkeypatch.chdir(tmp_path)  # each command's default output folder would go here
-    assert _exit_code(arguments) == 2
+    assert exit_code(arguments) == 2
     assert "out of range" in _one_line(capsys)
     assert list(tmp_path.iterdir()) == []
 
@@ -227,7 +220,7 @@ def test_a_long_value_is_cut_in_the_message(tmp_path, capsys, key, template, let
 ], ids=["--set", "--format", "--level choice", "config path"])
 def test_a_long_command_line_value_is_cut_in_the_message(tmp_path, capsys, monkeypatch, arguments):
     monkeypatch.chdir(tmp_path)
-    assert _exit_code(arguments) == 2
+    assert exit_code(arguments) == 2
     line = _one_line(capsys)
     assert "..." in line and len(line) < 600, line[:300]
 

@@ -17,6 +17,7 @@ import time
 
 import numpy as np
 import pytest
+from cli_exit import exit_code
 
 from torus_cad.cfd.domain import SURFACE_GROUPS, VOLUME_GROUPS, tetrahedra_volume
 from torus_cad.cfd.readme import openfoam_block
@@ -95,14 +96,6 @@ def test_meshio_reads_the_gmshtofoam_file_and_the_report_and_readme_agree(cfd_ou
         "torus_propeller_cfd_v2.msh"]
 
 
-def _exit_code(argv: list[str]) -> int:
-    """``main``'s exit code, also when the parser refuses an option (argparse exits: out of range)."""
-    try:
-        return main(argv)
-    except SystemExit as stop:
-        return int(stop.code or 0)
-
-
 @pytest.mark.parametrize("arguments, fragment", [
     (["--zone-radius", "0.4"], "cfd.zone_radius = 0.4 is out of range"),
     (["--growth-rate", "1"], "cfd.growth_rate = 1 is out of range"),
@@ -112,7 +105,7 @@ def _exit_code(argv: list[str]) -> int:
 ])
 def test_bad_input_exits_2_with_one_line_and_writes_nothing(tmp_path, capsys, arguments, fragment):
     out = tmp_path / "out"
-    assert _exit_code(["cfd", *arguments, "--out", str(out)]) == 2
+    assert exit_code(["cfd", *arguments, "--out", str(out)]) == 2
     error = capsys.readouterr().err
     assert fragment in error and error.count("\n") == 1
     assert not out.exists()

@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from cli_exit import exit_code
 from openfoam_marks import needs_openfoam
 
 from torus_cad.cli import main
@@ -76,14 +77,6 @@ def test_divergence_names_the_iteration_and_the_residual():
     assert force_variation(np.r_[np.zeros(90), np.full(5, 2.0), np.full(5, 2.02)]) == pytest.approx(0.02 / 2.01)
 
 
-def _exit_code(argv: list[str]) -> int:
-    """``main``'s exit code, also when the parser refuses an option (argparse exits: out of range)."""
-    try:
-        return main(argv)
-    except SystemExit as stop:
-        return int(stop.code or 0)
-
-
 @pytest.mark.parametrize("arguments, fragment", [
     (["--rpm", "-1"], "--rpm = -1 is out of range; allowed [0, "),
     (["--rpm", "1e6"], "--rpm = 1e+06 is out of range"),
@@ -96,7 +89,7 @@ def _exit_code(argv: list[str]) -> int:
 ])
 def test_bad_input_exits_2_with_one_line_and_writes_nothing(tmp_path, capsys, arguments, fragment):
     out = tmp_path / "out"
-    assert _exit_code(["simulate", *arguments, "--out", str(out)]) == 2
+    assert exit_code(["simulate", *arguments, "--out", str(out)]) == 2
     error = capsys.readouterr().err
     assert fragment in error and error.count("\n") == 1
     assert not out.exists()
