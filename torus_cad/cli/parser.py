@@ -77,13 +77,21 @@ class _Parser(argparse.ArgumentParser):
     schema_ranges: dict[str, str] = {}  # noqa: RUF012 - replaced, never mutated
 
     def parse_known_args(self, args: Any = None, namespace: Any = None) -> Any:  # type: ignore[override, unused-ignore]
+        self._add_schema_options()
+        return super().parse_known_args(args, namespace)
+
+    def format_help(self) -> str:
+        self._add_schema_options()  # the help of the documentation (docs/hooks.py) shows them too
+        return super().format_help()
+
+    def _add_schema_options(self) -> None:
+        """The options of ``table`` and the ranges of ``schema_ranges``, once."""
         if self.table:
             table, self.table = self.table, ""
             _add_table_arguments(self, table)
         if self.schema_ranges:
             ranges, self.schema_ranges = self.schema_ranges, {}
             _bind_schema_ranges(self, ranges)
-        return super().parse_known_args(args, namespace)
 
     def error(self, message: str) -> None:  # type: ignore[override]
         """One line (a long value in it cut short), exit 2: argparse's messages quote what was typed."""
