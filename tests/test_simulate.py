@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from cli_exit import exit_code
 from openfoam_marks import needs_openfoam
 
 from torus_cad.cli import main
@@ -88,7 +89,7 @@ def test_divergence_names_the_iteration_and_the_residual():
 ])
 def test_bad_input_exits_2_with_one_line_and_writes_nothing(tmp_path, capsys, arguments, fragment):
     out = tmp_path / "out"
-    assert main(["simulate", *arguments, "--out", str(out)]) == 2
+    assert exit_code(["simulate", *arguments, "--out", str(out)]) == 2
     error = capsys.readouterr().err
     assert fragment in error and error.count("\n") == 1
     assert not out.exists()
