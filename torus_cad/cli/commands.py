@@ -135,7 +135,7 @@ def command_check(args: argparse.Namespace) -> int:
     from torus_cad.parameters.feasibility import check_design
 
     params = load_parameters(args.config, args.overrides + _format_overrides(args.formats))
-    feasible = check_design(params, mesh=_writes_a_mesh(params, args.no_stl), walls=True,
+    feasible = check_design(params, mesh=_writes_a_mesh(params, args.no_stl), walls=not args.quiet,
                             require_printable=args.require_printable, estimate_mesh_first=True)
     if not args.quiet:
         print(feasible.summary())
