@@ -117,11 +117,11 @@ def main(argv: list[str] | None = None) -> int:
     figure.savefig(args.out, dpi=100)
     plt.close(figure)
 
-    counts = {KINDS[i][0]: int(np.count_nonzero(kinds == i)) for i in present}
     print(f"{len(points)} designs in {elapsed:.1f} s on {args.workers} processes; check CPU per design median "
           f"{1000 * statistics.median(cpu):.0f} ms, max {1000 * max(cpu):.0f} ms")
-    for label, count in counts.items():
-        print(f"  {count:5d}  {label}")
+    for index in present:
+        times = [seconds for (kind, seconds) in answers if kind == index]
+        print(f"  {len(times):5d}  {KINDS[index][0]:<40s} check CPU median {1000 * statistics.median(times):.0f} ms")
     print(f"wrote {args.out}")
     return 0
 
