@@ -24,13 +24,13 @@ from torus_cad.parameters.feasibility import check_design
 
 ROOT = Path(__file__).resolve().parent.parent
 
-#: Designs the checks refuse, the override that makes each and a words of the build's refusal.
+#: Designs the checks refuse: the overrides that make each, and words of the build's refusal.
 INFEASIBLE = {
     "fold": (["transforms.scale_x=[0,0,-32,32,6]"], "the blade folds over itself near s = "),
     "root_leaves_the_inset": (["transforms.scale_x=[0,0,-16,16,20]"], "root (s = 0) section leaves the hub's inset"),
     "end_face": (["centerline.p2=[25,-15,2]"], "leaves the hub through an end face"),
     "sparse_sections": (["resolution.sections=4"], "resolution.sections = 4 is too few"),
-    "bore_into_the_blades": (["hub.bore_diameter=14"], "hub.bore_diameter"),
+    "bore_into_the_blades": (["hub.bore_diameter=14"], "hub.bore_diameter = 14 mm cuts the blade roots"),
 }
 
 
