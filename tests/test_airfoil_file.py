@@ -171,3 +171,34 @@ def test_binary_and_missing_files_are_refused(tmp_path):
         read_airfoil_file(binary)
     with pytest.raises(ParameterError, match=r"missing\.dat"):
         read_airfoil_file(tmp_path / "missing.dat")
+
+
+# -- the crossing checks refuse crossings, not round-off (issue 33) ----------------------------------------
+
+def ellipse_text(points: int, thickness: float) -> str:
+    """A Selig file of a closed ellipse of chord 1: ``points`` points from (1, 0) round and back to (1, 0)."""
+    angle = np.linspace(0.0, 2.0 * np.pi, points)
+    loop = np.stack([0.5 + 0.5 * np.cos(angle), 0.5 * thickness * np.sin(angle)], axis=1)
+    return "ellipse\n" + "\n".join(f"{x:.7f} {y:.7f}" for x, y in loop) + "\n"
+
+
+def test_a_closed_ellipse_is_a_section_at_every_point_count():
+    """A closed smooth loop's two spline ends meet only to round-off (~1e-19 chord); the crossing check took that
+    for a crossing and refused 206 of 1448 closed ellipses of 20-200 points (80 points, thickness 0.12 among them:
+    'line 2: the surfaces cross')."""
+    for points in range(20, 201):
+        for thickness in (0.08, 0.12):
+            section = parse_airfoil_text(ellipse_text(points, thickness), "ellipse.dat")
+            upper, lower = section.points_on_half(U, True), section.points_on_half(U, False)
+            assert np.abs(upper[:, 1] + lower[:, 1]).max() < 1e-6  # symmetric about the chord
+            assert np.all(upper[1:-1, 1] > 0.0) and np.all(lower[1:-1, 1] < 0.0)  # the halves never meet between
+            assert upper[:, 1].max() == pytest.approx(0.5 * thickness, rel=1e-2)  # 20 points: 3e-3
+
+
+def test_a_smooth_curve_that_runs_into_the_other_surface_is_still_refused():
+    """The points do not cross, but the spline's overshoot next to a spike on the upper surface does."""
+    upper = [(1, 0), (0.8, 0.002), (0.62, 0.002), (0.56, 0.08), (0.5, 0.002), (0.3, 0.002), (0.1, 0.002), (0, 0)]
+    lower = [(0.1, -0.002), (0.3, -0.002), (0.5, -0.002), (0.7, -0.002), (0.9, -0.002), (1, 0)]
+    text = "spike\n" + "\n".join(f"{x} {y}" for x, y in upper + lower) + "\n"
+    with pytest.raises(ParameterError, match=r"spike\.dat' line 3: the surfaces cross \(the smooth curve"):
+        parse_airfoil_text(text, "spike.dat")

@@ -19,13 +19,11 @@ from pathlib import Path
 from typing import Any
 
 import cadquery as cq
-import numpy as np
-from numpy.typing import NDArray
 
 from torus_cad.colors import HUB_COLOR, blade_color
 from torus_cad.errors import KernelError
 from torus_cad.geometry.extensions.handedness import Handedness, spin_to_push_air_down
-from torus_cad.geometry.extensions.mounting import HubMounting, place_mounting, set_screw_arc_deg
+from torus_cad.geometry.extensions.mounting import HubMounting, set_screw_arc_deg
 from torus_cad.geometry.extensions.printability import Printability
 from torus_cad.geometry.hub import seam_angle_deg
 from torus_cad.geometry.surface import BladeSurface
@@ -47,6 +45,7 @@ from torus_cad.outputs.output_set import write_output_set
 from torus_cad.parameters import PropellerParameters, resolve_parameters
 from torus_cad.parameters.design import TightBends
 from torus_cad.parameters.design_targets import DesignTargets, resolve_design_targets
+from torus_cad.parameters.feasibility import placed_mounting, section_chords
 from torus_cad.runtime.stages import Stage, StageTimer
 from torus_cad.tolerances import ROUND_EDGE_FILLET_PIECES, VOLUME_CHECK_RELATIVE_PRECISION
 
@@ -143,10 +142,6 @@ def design_printability(params: PropellerParameters) -> Printability:
     return params.printability()
 
 
-def _section_chords(surface: BladeSurface) -> NDArray[np.float64]:
-    return np.linalg.norm(surface.points[:, surface.trailing_edge_column] - surface.points[:, 0], axis=-1)
-
-
 def build_propeller(design: PropellerParameters | str | Path | None = None,
                     overrides: Mapping[str, Any] | None = None,
                     progress: Callable[[Stage], None] | None = None) -> Propeller:
@@ -174,13 +169,13 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
     with timer.stage(Stage.SECTION_MATH):
         surface = params.blade_surface()
         params.check_feasible(surface)
-        mounting = _place_mounting(params)
+        mounting = placed_mounting(params)
         # The hub is symmetric about its axis; its seam goes where it crosses no blade root (nor the set screw).
         screw_arc = set_screw_arc_deg(mounting, hub_geometry.radius_mm)
         seam_deg = seam_angle_deg(surface.points, hub_geometry.radius_mm, params.blades,
                                   () if screw_arc is None else (screw_arc,))
     with timer.stage(Stage.WIRES):
-        curves = fit_section_curves(surface.points, surface.trailing_edge_column, _section_chords(surface),
+        curves = fit_section_curves(surface.points, surface.trailing_edge_column, section_chords(surface),
                                     surface.lower_corner_index, surface.round_trailing_edge)
         fillet_radius = params.hub.root_fillet_radius
         # A round trailing edge leaves the blade's airfoil face open: the fillet needs it in pieces.
@@ -234,22 +229,6 @@ def _strictly_valid(solid: cq.Solid, fillet_on_sharp_edge: bool) -> tuple[cq.Sol
         raise KernelError(f"{error}; a root fillet round a sharp trailing edge can leave a self-intersecting "
                           "corner face there: airfoil.trailing_edge_thickness > 0 with "
                           "airfoil.trailing_edge_shape = 'round' takes it") from None
-
-
-def _place_mounting(params: PropellerParameters) -> HubMounting:
-    """The hub's mounting features checked against the blades (densely sampled), the set screw placed."""
-    mounting = params.hub.mounting()
-    if not mounting.any:
-        return mounting
-    resolution = params.resolution
-    dense = params.blade_surface(sections=max(resolution.sections, _MOUNTING_SECTIONS),
-                                 points=max(resolution.points, _MOUNTING_POINTS))
-    return place_mounting(mounting, dense.points, params.blades, params.hub.radius, params.hub.length,
-                          params.hub.root_fillet_radius)
-
-
-#: Sampling of the blade surface for the mounting checks (the check uses the points as they are).
-_MOUNTING_SECTIONS, _MOUNTING_POINTS = 200, 160
 
 
 #: Another name for :func:`build_propeller`, for people who continue in CadQuery.

@@ -26,8 +26,8 @@ from torus_cad.batch.outcome import DesignResult, Outcome
 from torus_cad.errors import GeometryError, KernelError, ParameterError
 from torus_cad.parameters import PropellerParameters
 
-__all__ = ["FAILURE_FILE", "REFUSAL_FILE", "DesignTask", "read_design_status", "record_result", "run_design",
-           "verify_files"]
+__all__ = ["FAILURE_FILE", "REFUSAL_FILE", "DesignTask", "prescreen", "read_design_status", "record_result",
+           "run_design", "verify_files"]
 
 REFUSAL_FILE = "refusal.json"
 FAILURE_FILE = "failure.json"
@@ -83,6 +83,30 @@ def run_design(task: DesignTask) -> DesignResult:
     if task.folder is not None:
         result = record_result(task, result)
     return result
+
+
+def prescreen(task: DesignTask) -> DesignResult | None:
+    """The design's refusal by the checks the build makes before the kernel, run here, in the batch's own
+    process, before a worker is given it (:func:`torus_cad.parameters.feasibility.check_design`, tens of ms,
+    no kernel); None when it passes, and the worker builds it. The refusal is recorded in the task's folder
+    (``refusal.json``, ``"prescreened": true``) as a worker records one. Never raises for a bad design: an
+    unexpected exception is left for the worker to meet and classify."""
+    from torus_cad.parameters.design import ExportFormat
+    from torus_cad.parameters.feasibility import check_design
+
+    start = time.perf_counter()
+    try:
+        params = PropellerParameters.from_dict(task.parameters)
+        formats = params.export.formats
+        mesh = task.write and ((task.stl and ExportFormat.STL in formats) or ExportFormat.THREE_MF in formats)
+        check_design(params, mesh=mesh)  # the mesh's budget as the write checks it (output_set)
+    except (ParameterError, GeometryError) as error:
+        result = DesignResult(task.design_id, Outcome.REFUSED, str(error), time.perf_counter() - start,
+                              error=type(error).__name__, prescreened=True)
+        return record_result(task, result) if task.folder is not None else result
+    except Exception:  # a bug is the worker's to record, with its traceback
+        return None
+    return None
 
 
 def _classify(error: Exception) -> tuple[Outcome, str, str]:
@@ -164,7 +188,8 @@ def record_result(task: DesignTask, result: DesignResult) -> DesignResult:
             stale = [folder / name for name in (REFUSAL_FILE, FAILURE_FILE) if name != status_file]
             stale += [folder / f"{task.design_id}.{suffix}" for suffix in ("json", "step", "stl")]
             record = {"id": task.design_id, "status": result.outcome.value, "error": result.error,
-                      "reason": result.reason, "seconds": result.seconds, "parameters": task.parameters}
+                      "reason": result.reason, "seconds": result.seconds, "prescreened": result.prescreened,
+                      "parameters": task.parameters}
             with atomic_path(folder / status_file) as temp:
                 temp.write_text(json.dumps(record, indent=2, allow_nan=False) + "\n")
         for path in stale:

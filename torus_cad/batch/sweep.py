@@ -6,6 +6,10 @@ hold one row per design; ``OUT/sweep.json`` the sweep's settings and every desig
 values. A design is *done* when its report (with its STEP file, and STL if asked for) or its
 refusal exists: rerunning the sweep skips it, and every other design is tried again. The
 table is rebuilt from those files at the end of every run, also after an interruption.
+
+Before a worker is given a design, the sweep's own process runs the checks the build makes before
+the kernel (:func:`torus_cad.batch.job.prescreen`, tens of ms): a design they refuse is recorded
+at once, ``prescreened`` in its refusal and its row, and counted apart in the summary.
 """
 
 from __future__ import annotations
@@ -13,14 +17,14 @@ from __future__ import annotations
 import json
 import sys
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TextIO
 
 from torus_cad.batch import cluster
 from torus_cad.batch.designs import Design, generate_designs
-from torus_cad.batch.job import DesignTask, read_design_status
+from torus_cad.batch.job import DesignTask, prescreen, read_design_status
 from torus_cad.batch.outcome import DesignResult, Outcome
 from torus_cad.batch.runner import (
     Interrupted,
@@ -96,14 +100,21 @@ class SweepResult:
         """Designs run in this run per minute of wall time."""
         return 60.0 * self.built / self.seconds if self.seconds > 0 else 0.0
 
+    @property
+    def prescreened(self) -> int:
+        """Refused designs that the kernel-free checks refused before any worker built them."""
+        return sum(1 for row in self.rows if row.get("prescreened"))
+
     def counts_text(self) -> str:
-        """``"9 valid, 1 refused, 0 failed, 0 errors"`` and any other outcome that occurred."""
+        """``"9 valid, 1 refused, 0 failed, 0 errors"``, any other outcome that occurred, and how many of the
+        refused were pre-screened (``"; 1 refused before the kernel (pre-screened)"``)."""
         counts = self.counts()
         text = (f"{counts[Outcome.VALID]} valid, {counts[Outcome.REFUSED]} refused, {counts[Outcome.FAILED]} failed, "
                 f"{counts[Outcome.ERROR]} errors")
         others = [f"{counts[outcome]} {outcome.value}" for outcome in _OTHER_OUTCOMES
                   if counts[outcome]]
-        return ", ".join([text, *others])
+        screened = f"; {self.prescreened} refused before the kernel (pre-screened)" if self.prescreened else ""
+        return ", ".join([text, *others]) + screened
 
     def summary(self) -> str:
         """A few lines for the terminal: counts, rate, the table, the first problems."""
@@ -210,6 +221,7 @@ def _run(spec: SweepSpec, out_dir: Path, designs: list[Design], pending: list[De
 
     own_client = own_cluster = None
     start = time.perf_counter()
+    tasks = _prescreened(pending, on_result)
     try:
         if not pending:
             result.backend = "nothing to run"
@@ -219,11 +231,11 @@ def _run(spec: SweepSpec, out_dir: Path, designs: list[Design], pending: list[De
                 client = own_client
             executor = client.get_executor(pure=False)
             result.backend = f"dask: {cluster.client_label(client)}"
-            run_tasks(pending, on_result, lambda: executor, window=None, job=job, check_visible=True)
+            run_tasks(tasks, on_result, lambda: executor, window=None, job=job, check_visible=True)
         else:
             count = max(1, min(workers or default_workers(), len(pending)))
             result.backend = f"local pool, {count} worker{'s' if count > 1 else ''}"
-            run_tasks(pending, on_result, lambda: LocalPool(count, time_limit_s), window=2 * count, job=job)
+            run_tasks(tasks, on_result, lambda: LocalPool(count, time_limit_s), window=2 * count, job=job)
     except Interrupted as interrupt:
         result.interrupted_by = interrupt.signal_name
         raise SweepInterrupted(interrupt.signum, result) from None
@@ -237,6 +249,18 @@ def _run(spec: SweepSpec, out_dir: Path, designs: list[Design], pending: list[De
         result.rows = collect_rows(designs, keys, out_dir, stl, results)
         result.tables = write_table(result.rows, out_dir, table_columns(keys))
     return result
+
+
+def _prescreened(tasks: Iterable[DesignTask], on_result: Callable[[DesignTask, DesignResult], None]
+                 ) -> Iterator[DesignTask]:
+    """The tasks that pass the kernel-free checks (:func:`torus_cad.batch.job.prescreen`), taken one at a time
+    as workers free up; the others' refusals go to ``on_result`` at once, without a worker."""
+    for task in tasks:
+        refusal = prescreen(task)
+        if refusal is None:
+            yield task
+        else:
+            on_result(task, refusal)
 
 
 def _is_done(out_dir: Path, design: Design, stl: bool) -> bool:

@@ -35,8 +35,9 @@ _PROPERTY_COLUMNS = ("volume_mm3", "surface_area_mm2", "mass_g", "density_g_cm3"
 
 
 def table_columns(varied_keys: Sequence[str]) -> list[str]:
-    """The columns: id and status, the varied keys, mass properties, stage times (s), folder."""
-    return (["index", "id", "status", "valid", "reason"] + list(varied_keys) + list(_PROPERTY_COLUMNS)
+    """The columns: id and status (``prescreened``: refused before any worker built it), the varied keys, mass
+    properties, stage times (s), folder."""
+    return (["index", "id", "status", "valid", "reason", "prescreened"] + list(varied_keys) + list(_PROPERTY_COLUMNS)
             + [f"time_{stage}_s" for stage in STAGES] + ["time_total_s", "folder"])
 
 
@@ -52,8 +53,8 @@ def collect_rows(designs: Sequence[Design], varied_keys: Sequence[str], out_dir:
     rows = []
     for design in designs:
         row: dict[str, Any] = dict.fromkeys(columns)
-        row.update(index=design.index, id=design.design_id, status=Outcome.PENDING.value, valid=False, reason="",
-                   folder=f"{DESIGNS_DIR}/{design.design_id}")
+        row.update(index=design.index, id=design.design_id, status=Outcome.PENDING.value, valid=False,
+                   prescreened=False, reason="", folder=f"{DESIGNS_DIR}/{design.design_id}")
         for key, value in design.varied.items():
             row[key] = json.dumps(value) if isinstance(value, list) else value
         status = read_design_status(out_dir / DESIGNS_DIR / design.design_id, design.design_id, design.parameters,
@@ -62,7 +63,8 @@ def collect_rows(designs: Sequence[Design], varied_keys: Sequence[str], out_dir:
             _fill_recorded(row, *status)
         elif results and design.design_id in results:
             result = results[design.design_id]
-            row.update(status=result.outcome.value, reason=result.reason, time_total_s=result.seconds)
+            row.update(status=result.outcome.value, reason=result.reason, time_total_s=result.seconds,
+                       prescreened=result.prescreened)
         rows.append(row)
     return rows
 
@@ -72,6 +74,7 @@ def _fill_recorded(row: dict[str, Any], outcome: Outcome, record: Mapping[str, A
     row["status"] = outcome.value
     if outcome is not Outcome.VALID:
         row["reason"] = record.get("reason", "")
+        row["prescreened"] = record.get("prescreened") is True
         row["time_total_s"] = record.get("seconds")
         return
     row["valid"] = bool(record.get("valid", False))

@@ -129,6 +129,19 @@ def command_build(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def command_check(args: argparse.Namespace) -> int:
+    """Exit 0 with one line when the design passes every check the build makes before the kernel; 2 with the
+    build's own one-line refusal otherwise. OpenCascade is never loaded (torus_cad.parameters.feasibility)."""
+    from torus_cad.parameters.feasibility import check_design
+
+    params = load_parameters(args.config, args.overrides + _format_overrides(args.formats))
+    feasible = check_design(params, mesh=_writes_a_mesh(params, args.no_stl), walls=not args.quiet,
+                            require_printable=args.require_printable, estimate_mesh_first=True)
+    if not args.quiet:
+        print(feasible.summary())
+    return EXIT_OK
+
+
 def _format_overrides(formats: Sequence[str] | None) -> list[str]:
     """``--format step,3mf`` as the ``--set export.formats=[...]`` it stands for (the schema checks the names)."""
     if not formats:

@@ -10,6 +10,7 @@ from torus_cad.cli.commands import (
     EXIT_BAD_INPUT,
     command_build,
     command_cfd,
+    command_check,
     command_defaults,
     command_mesh,
     command_optimize,
@@ -56,6 +57,7 @@ examples:
   torus-cad defaults > my_prop.toml        start a design from the commented defaults
   torus-cad build my_prop.toml --out parts/
   torus-cad build my_prop.toml --set blades=4 --set hub.radius=12
+  torus-cad check my_prop.toml --set blades=4   would it build? (exit 0 / 2, no kernel, under a second)
   torus-cad preview my_prop.toml --out prop.png --size 1600x800
 
 units: mm and degrees. Control points are in the hub frame L: [x_L degrees around the axis,
@@ -311,6 +313,23 @@ def build_parser() -> argparse.ArgumentParser:
     build.add_argument("--preview-size", default="1200x600", metavar="WxH",
                        help=f"size of the --preview picture in pixels, {_PICTURE_SIDES} (default 1200x600)")
     build.set_defaults(handler=command_build)
+
+    check = _design_command(
+        commands, "check", help="check a design before building it: every refusal that needs no kernel, in a second",
+        description="Run every check that can refuse the design of CONFIG (or the default) before OpenCascade "
+        "builds anything, as 'torus-cad build' runs them: the parameters, the design targets, the blade's ends "
+        "inside the hub's inset, no fold-over inside a bend, sections dense enough, no self-intersection, blades "
+        "clear of each other, the mounting features, the section fit's trailing edge and the STL's triangle "
+        "budget. Exit 0 with one line (the margins to the fold and resolution limits, the walls against "
+        "manufacturing.min_wall) when it passes; exit 2 with the build's own one-line refusal when it does not. "
+        "Writes nothing and never loads the kernel.")
+    check.add_argument("--no-stl", action="store_true", help="the build will write no STL (no triangle budget)")
+    check.add_argument("--format", dest="formats", action="append", metavar="FORMAT[,FORMAT]",
+                       help="the files the build will write instead of the design's export.formats, as for build")
+    check.add_argument("--require-printable", action="store_true",
+                       help="exit 2 when the blade is thinner than manufacturing.min_wall, as build does")
+    check.add_argument("-q", "--quiet", action="store_true", help="print nothing when the design passes")
+    check.set_defaults(handler=command_check)
 
     preview = _design_command(
         commands, "preview", help="render a PNG picture: a view from above and a view along the axis",

@@ -24,6 +24,7 @@ from torus_cad.optimize.storage import (
     FOLDER,
     METRICS,
     OUTCOME,
+    PRESCREENED,
     REASON,
     RETRY_OF,
     SECONDS,
@@ -51,14 +52,26 @@ def write_results(spec: StudySpec, study: Any, out: Path) -> tuple[dict[str, Pat
         files["pareto"] = _pareto_picture(spec, trials, best_trials(spec, study), out / f"{spec.name}_pareto.png")
     best = best_trials(spec, study)
     lines, built = _build_best(spec, best, out / BEST_DIR)
+    lines.insert(0, _outcomes_line(rows))
     summary = {"name": spec.name, "trials": len(trials), "states": _count(row["state"] for row in rows),
                "outcomes": _count(row["outcome"] for row in rows),
+               "prescreened": sum(1 for row in rows if row["prescreened"]),
                "best": [{"number": trial.number, "values": list(trial.values), "params": dict(trial.params),
                          "design": str(built.get(trial.number, ""))} for trial in best]}
     files["summary"] = out / f"{spec.name}_study.json"
     with atomic_path(files["summary"]) as temp:
         temp.write_text(json.dumps(summary, indent=2, allow_nan=False, default=str) + "\n")
     return files, lines
+
+
+def _outcomes_line(rows: Sequence[dict[str, Any]]) -> str:
+    """``"  trials: 9 valid, 5 refused (4 before the kernel, pre-screened), 1 failed"`` and any other outcome."""
+    counts = _count(row["outcome"] for row in rows if row["outcome"])
+    screened = sum(1 for row in rows if row["prescreened"])
+    parts = [f"{counts.pop(name, 0)} {name}" for name in ("valid", "refused", "failed")]
+    if screened:
+        parts[1] += f" ({screened} before the kernel, pre-screened)"
+    return "  trials: " + ", ".join(parts + [f"{count} {name}" for name, count in sorted(counts.items())])
 
 
 def _count(items: Any) -> dict[str, int]:
@@ -81,8 +94,8 @@ def best_trials(spec: StudySpec, study: Any) -> list[Any]:
 def trial_rows(spec: StudySpec, trials: Sequence[Any]) -> tuple[list[dict[str, Any]], list[str]]:
     """One row per trial and the columns, in table order."""
     metrics = list(dict.fromkeys(spec.metrics))
-    columns = (["number", "state", "outcome", "feasible", "reason"] + [axis.key for axis in spec.axes] + metrics
-               + ["violation", "retry_of", "seconds", "folder"])
+    columns = (["number", "state", "outcome", "feasible", "reason", "prescreened"] + [axis.key for axis in spec.axes]
+               + metrics + ["violation", "retry_of", "seconds", "folder"])
     retried_by = {trial.user_attrs[RETRY_OF]: trial.number for trial in trials if RETRY_OF in trial.user_attrs}
     rows = []
     for trial in trials:
@@ -96,6 +109,7 @@ def trial_rows(spec: StudySpec, trials: Sequence[Any]) -> tuple[list[dict[str, A
             reason = "its run stopped" + (f"; asked again as trial {again}" if again is not None else "")
         violations = record.get(CONSTRAINT, [])
         row.update(number=trial.number, state=state, outcome=outcome or "", reason=reason,
+                   prescreened=record.get(PRESCREENED) is True,
                    feasible=state == "complete" and all(v <= 0.0 for v in violations),
                    violation=max(violations) if violations else None, retry_of=attrs.get(RETRY_OF),
                    seconds=record.get(SECONDS), folder=record.get(FOLDER))

@@ -29,7 +29,7 @@ from urllib.parse import urlsplit, urlunsplit
 from torus_cad.batch.runner import _identity
 from torus_cad.errors import ParameterError, TorusCadError
 
-__all__ = ["GRACE_S", "HEARTBEAT_S", "Heartbeat", "StorageError", "claim_lock", "count_trials", "fail_and_retry",
+__all__ = ["GRACE_S", "HEARTBEAT_S", "PRESCREENED", "Heartbeat", "StorageError", "claim_lock", "count_trials", "fail_and_retry",
            "open_storage", "owner_record", "public_url", "retry_stale_trials", "storage_url", "trial_result"]
 
 HEARTBEAT_S = 10  #: how often a running process records that its trials are alive, s
@@ -48,6 +48,8 @@ STOPPED = "stopped"
 RESULT = "result"
 OUTCOME, REASON, METRICS, CONSTRAINT, FOLDER, SECONDS = "outcome", "reason", "metrics", "constraint", "folder", \
     "seconds"  #: the keys of :data:`RESULT`
+#: Key of :data:`RESULT`, True when the kernel-free checks refused the trial before any worker built it.
+PRESCREENED = "prescreened"
 OWNER = "owner"  #: user attr: ``{"host", "pid", "start"}`` of the process that runs the trial
 
 

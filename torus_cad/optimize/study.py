@@ -2,7 +2,10 @@
 
 The loop is the batch runner's (:func:`torus_cad.batch.runner.run_tasks`) on the local pool or
 a Dask cluster; its tasks come from a generator that asks optuna for the next trial only when a
-worker is free (ask-and-tell), so the sampler always sees every finished trial. A design that
+worker is free (ask-and-tell), so the sampler always sees every finished trial. Each design is
+first checked here without the kernel (:func:`torus_cad.batch.job.prescreen`): one the checks
+refuse is told at once, ``prescreened`` in its record, and the generator asks for the next
+without a worker. A design that
 is refused or fails is a FAIL trial with its outcome and reason in the trial's user attrs; a
 constraint goes to the sampler as a constraint (optuna's ``constraints_func``), never as a
 penalty. ``--trials`` is the total over every run and every process sharing the study: a rerun
@@ -23,7 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from torus_cad.batch import cluster
-from torus_cad.batch.job import DesignTask
+from torus_cad.batch.job import DesignTask, prescreen
 from torus_cad.batch.outcome import DesignResult, Outcome
 from torus_cad.batch.runner import Interrupted, LocalPool, interrupts_raised, run_tasks
 from torus_cad.errors import ParameterError
@@ -36,6 +39,7 @@ from torus_cad.optimize.storage import (
     METRICS,
     OUTCOME,
     OWNER,
+    PRESCREENED,
     REASON,
     RESULT,
     SECONDS,
@@ -234,7 +238,12 @@ class _Runner:
                 trial = self._claim()
             if trial is None:
                 return
-            yield self._task(trial)
+            task = self._task(trial)
+            refusal = prescreen(task)  # refused by the kernel-free checks: told at once, no worker needed
+            if refusal is None:
+                yield task
+            else:
+                self._on_result(task, refusal)
 
     def _claim(self) -> Any:
         """Ask for a trial (an enqueued retry first), or None when the study is full."""
@@ -277,6 +286,8 @@ class _Runner:
             except (KeyError, OSError, ValueError) as error:
                 outcome, reason = Outcome.ERROR, f"the trial's report cannot be read: {error}"
         record.update({OUTCOME: outcome.value, REASON: reason})
+        if result.prescreened:
+            record[PRESCREENED] = True
         with contextlib.suppress(optuna.exceptions.UpdateFinishedTrialError):  # a process took it as stale
             trial.set_user_attr(RESULT, record)
             if values is None:

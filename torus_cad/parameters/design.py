@@ -34,7 +34,7 @@ from torus_cad.geometry.conventional_blade import (
     rotated_surface,
 )
 from torus_cad.geometry.extensions.airfoil_file import load_airfoil_file
-from torus_cad.geometry.extensions.feasibility import check_feasible
+from torus_cad.geometry.extensions.feasibility import Margins, check_feasible
 from torus_cad.geometry.extensions.handedness import Handedness
 from torus_cad.geometry.extensions.mounting import HubMounting
 from torus_cad.geometry.extensions.printability import Printability, printability
@@ -555,14 +555,15 @@ class PropellerParameters(Document):
             return conventional_printability(self.conventional_blade(), self.manufacturing.min_wall)
         return printability(self.geometry(), self.manufacturing.min_wall)
 
-    def check_feasible(self, surface: BladeSurface) -> None:
+    def check_feasible(self, surface: BladeSurface) -> Margins | None:
         """The pre-kernel checks of the design's kind on blade 0's ``surface`` (GeometryError naming the
-        problem): :func:`torus_cad.geometry.extensions.feasibility.check_feasible` or
-        :func:`torus_cad.geometry.conventional_blade.check_conventional_feasible`."""
+        problem): :func:`torus_cad.geometry.extensions.feasibility.check_feasible` (its margins to the fold
+        and resolution limits returned) or :func:`torus_cad.geometry.conventional_blade.check_conventional_feasible`
+        (None)."""
         if self.kind == DesignKind.CONVENTIONAL:
             check_conventional_feasible(self.conventional_blade(), surface, self.blades)
-        else:
-            check_feasible(self.geometry(), surface)
+            return None
+        return check_feasible(self.geometry(), surface)
 
     def blade_angle_deg(self, blade_index: int) -> float:
         """theta_i = theta_0 + 360 i / n (spec §6.1), degrees, of either kind."""

@@ -79,6 +79,11 @@ MINIMUM_POINTS_PER_SURFACE = 4
 #: Files larger than this are refused (a coordinate file is a few kB).
 MAXIMUM_FILE_BYTES = AIRFOIL_FILE_MAX_BYTES
 
+#: Points closer than this (times the largest coordinate, at least 1) are one point: a repeated point
+#: of a file, and the trailing-edge ends of a closed section, which the spline's two ends reproduce only
+#: to round-off (~1e-19 chord).
+COINCIDENT_RELATIVE = 1e-12
+
 #: What the file is called in messages.
 _WHAT = "airfoil file"
 
@@ -347,7 +352,8 @@ def _selig_loop(rows: list[tuple[int, tuple[float, float]]], source: str
 def _without_repeats(loop: NDArray[np.float64], lines: NDArray[np.int64]
                      ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
     """Drop points equal to their predecessor (Lednicer's doubled leading edge)."""
-    keep = np.concatenate([[True], np.linalg.norm(np.diff(loop, axis=0), axis=1) > 1e-12 * max(1.0, np.abs(loop).max())])
+    keep = np.concatenate([[True], np.linalg.norm(np.diff(loop, axis=0), axis=1)
+                           > COINCIDENT_RELATIVE * max(1.0, np.abs(loop).max())])
     return loop[keep], lines[keep]
 
 
@@ -392,8 +398,14 @@ def _candidate_pairs(start: NDArray[np.float64], end: NDArray[np.float64], limit
 def _first_crossing(polygon: NDArray[np.float64], closed: bool) -> tuple[int, int] | None:
     """Indices (i, j), i < j, of the first pair of non-adjacent segments that properly cross, or None.
 
-    Only the candidate pairs of :func:`_candidate_pairs` are tested exactly.
+    Only the candidate pairs of :func:`_candidate_pairs` are tested exactly. A closed polygon whose last
+    point is its first (within :data:`COINCIDENT_RELATIVE`) closes on that point: its ends, equal but for
+    round-off, would otherwise make a bow-tie of size ~1e-19 whose two sides "cross" (a closed ellipse
+    was refused so). Indices refer to ``polygon`` as given.
     """
+    if closed and len(polygon) > 3 and (np.linalg.norm(polygon[-1] - polygon[0])
+                                        <= COINCIDENT_RELATIVE * max(1.0, float(np.abs(polygon).max()))):
+        polygon = polygon[:-1]
     start, end = _segments(polygon, closed)
     count = len(start)
     if count < 2:

@@ -340,8 +340,23 @@ def check_blades_clear(geometry: PropellerGeometry, tube: Tube) -> None:
 
 # -- all checks --------------------------------------------------------------------------------------
 
-def check_feasible(geometry: PropellerGeometry, surface: BladeSurface) -> None:
-    """Run every pre-kernel check on blade 0 (the others are its rotations)."""
+@dataclass(frozen=True)
+class Margins:
+    """How close a blade that passed every check comes to the limits of checks 3 and 4.
+
+    Attributes:
+        fold_ratio: the largest kappa . offset over the surface (:func:`fold_ratio`; refused at FOLD_LIMIT).
+        resolution_deviation: the largest sag between neighbouring sections as a fraction of the local
+            chord (:func:`resolution_deviation`; refused above RESOLUTION_DEVIATION_LIMIT).
+    """
+
+    fold_ratio: float
+    resolution_deviation: float
+
+
+def check_feasible(geometry: PropellerGeometry, surface: BladeSurface) -> Margins:
+    """Run every pre-kernel check on blade 0 (the others are its rotations); GeometryError naming the first
+    that fails, else the margins to the fold and resolution limits."""
     centerline = geometry.centerline(0)
     check_ends_inside_hub(geometry.hub, surface)
     check_centerline_leaves_through_side(geometry.hub, centerline)
@@ -354,3 +369,4 @@ def check_feasible(geometry: PropellerGeometry, surface: BladeSurface) -> None:
     tube = coarsen(fine)
     check_no_self_intersection(geometry.hub, tube)
     check_blades_clear(geometry, tube)
+    return Margins(fold_ratio(fine)[0], resolution_deviation(surface, fine, step)[0])
