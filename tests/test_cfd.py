@@ -112,9 +112,9 @@ def test_bad_input_exits_2_with_one_line_and_writes_nothing(tmp_path, capsys, ar
 
 def test_without_gmsh_one_line_names_the_extra(tmp_path, capsys, monkeypatch):
     monkeypatch.setitem(sys.modules, "gmsh", None)  # what Python does when the package is absent: ImportError
-    assert main(["cfd", "--out", str(tmp_path / "out")]) == 1
+    assert main(["cfd", "--out", str(tmp_path / "out")]) == 2
     error = capsys.readouterr().err
-    assert error.count("\n") == 1 and "pip install 'torus_cad[cfd]'" in error
+    assert error.count("\n") == 1 and "the cfd extra" in error and "pip install -c constraints.txt -e '.[cfd]'" in error
     assert not (tmp_path / "out").exists()
 
 

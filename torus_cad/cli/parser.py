@@ -150,7 +150,7 @@ def _add_cfd_parser(commands: Any) -> None:
         "OpenFOAM's gmshToFoam), <name>_cfd.step, README.txt and <name>_cfd.json as one output set (see 'torus-cad "
         "verify'). The options override the design's [cfd] table; D is the tip diameter. A mesh estimated above "
         f"{CFD_TETRAHEDRA_LIMIT:,} tetrahedra is refused before any work. Needs the cfd extra: "
-        "pip install 'torus_cad[cfd]'.")
+        "pip install -c constraints.txt -e '.[cfd]'.")
     cfd.table = "cfd"  # its options, when the subcommand is used (_Parser.table)
     cfd.add_argument("--threads", type=int, default=GMSH_REPRODUCIBLE_THREADS, metavar="N",
                      help=f"gmsh threads (default {GMSH_REPRODUCIBLE_THREADS}: the same mesh on every run; 0 = one "
@@ -165,7 +165,7 @@ def _add_simulate_parser(commands: Any) -> None:
         "OpenFOAM case (<name>_case/: steady MRF, k-omega SST, an Allrun that repeats the run) and run it with "
         "simpleFoam through foamlib. Writes <name>_performance.json (thrust, torque, power, J, CT, CP, efficiency "
         "or figure of merit, convergence) and <name>_performance.png (force and residual histories). Needs "
-        "OpenFOAM (v1912) and the simulate extra: pip install 'torus_cad[simulate]'.")
+        "OpenFOAM (v1912) and the simulate extra: pip install -c constraints.txt -e '.[simulate]'.")
     from torus_cad.simulate.thrust_target import (
         DEFAULT_MAX_RUNS,
         DEFAULT_TOLERANCE,
