@@ -31,7 +31,14 @@ class OutputError(TorusCadError):
 
 
 class IncompleteOutputError(OutputError):
-    """An output set on disk is incomplete or mixed: a file is missing or belongs to another build."""
+    """An output set on disk is incomplete or mixed: a file is missing or belongs to another build.
+
+    ``problems``: every problem found, one sentence each (the message joins them with "; ").
+    """
+
+    def __init__(self, *problems: str) -> None:
+        super().__init__("; ".join(problems))
+        self.problems: tuple[str, ...] = problems
 
 
 class MissingExtraError(TorusCadError):

@@ -286,19 +286,29 @@ def command_studio(args: argparse.Namespace) -> int:
 
 
 def command_verify(args: argparse.Namespace) -> int:
-    from torus_cad.outputs.output_set import set_names, verify_set
+    """Exit 0 when every set is complete, 1 with one line per problem of every set (sub-folders included)."""
+    from torus_cad.outputs.output_set import set_folders, set_names, verify_set
 
     folder = Path(args.folder)
     if not folder.is_dir():
         raise ParameterError(f"verify: {str(folder)!r} is not a folder")
-    names = [args.name] if args.name else set_names(folder)
-    if not names:
-        raise IncompleteOutputError(f"no output set in {str(folder)!r}")
-    for name in names:
-        checked = verify_set(folder, name)  # IncompleteOutputError names the file: exit 1
+    sets = [(folder, args.name)] if args.name else [(where, name) for where in set_folders(folder)
+                                                    for name in set_names(where)]
+    if not sets:
+        raise IncompleteOutputError(f"no output set in {str(folder)!r} or its sub-folders")
+    problems = []
+    for where, name in sets:
+        try:
+            checked = verify_set(where, name)
+        except IncompleteOutputError as error:  # every problem of every set, not only the first
+            prefix = "" if where == folder else f"{where.relative_to(folder)}/"
+            problems += [f"{prefix}{problem}" for problem in error.problems]
+            continue
         if not args.quiet:
             print(f"ok {checked.report.parent / name}: {', '.join(path.name for path in checked.files)}")
-    return EXIT_OK
+    for problem in problems:
+        report_error(f"verify: {problem}", EXIT_KERNEL_FAILURE)
+    return EXIT_KERNEL_FAILURE if problems else EXIT_OK
 
 
 def _mesh_overrides(args: argparse.Namespace) -> dict[str, Any]:

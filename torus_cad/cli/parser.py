@@ -266,11 +266,12 @@ def build_parser() -> argparse.ArgumentParser:
     preview.set_defaults(handler=command_preview)
 
     verify = commands.add_parser("verify", help="check that output sets are complete: every file of one build",
-                                 description="Check the output sets in FOLDER (or only NAME): each <name>.json "
-                                 "report lists the files of its build with their SHA-256; every one must be there "
-                                 "and unchanged. Exit 0 if all are complete, 1 naming the first missing or mixed "
-                                 "file.")
-    verify.add_argument("folder", metavar="FOLDER", help="output folder, e.g. step_out")
+                                 description="Check the output sets in FOLDER and every folder under it (or only "
+                                 "the set NAME in FOLDER): each <name>.json report lists the files of its build "
+                                 "with their SHA-256; every one must be there and unchanged. Hidden folders (a "
+                                 "build's staging) are not entered. Exit 0 if all are complete, 1 with one line "
+                                 "per missing or mixed file of every set.")
+    verify.add_argument("folder", metavar="FOLDER", help="output folder, e.g. step_out (its sub-folders too)")
     verify.add_argument("name", nargs="?", metavar="NAME", help="check only the set <NAME>.json (default: every set)")
     verify.add_argument("-q", "--quiet", action="store_true", help="print nothing when the sets are complete")
     verify.set_defaults(handler=command_verify)

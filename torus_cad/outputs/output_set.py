@@ -282,7 +282,7 @@ class VerifiedSet:
 def verify_set(out_dir: str | Path, name: str) -> VerifiedSet:
     """Check that ``out_dir/<name>.json`` and every file it lists are there, whole and of the same build.
 
-    Raises IncompleteOutputError naming the first file that is missing, different or unlisted.
+    Raises IncompleteOutputError naming every file that is missing or different (its ``problems``).
     """
     out_dir = Path(out_dir)
     report_path = out_dir / f"{name}.json"
@@ -301,7 +301,14 @@ def verify_set(out_dir: str | Path, name: str) -> VerifiedSet:
         if not isinstance(files, dict) or not files:
             raise IncompleteOutputError(f"{name}: {report_path.name} lists no files (written before "
                                         f"output sets were sealed?)")
-        checked = [_check_entry(out_dir, name, report_path.name, entry) for entry in files.values()]
+        checked, problems = [], []
+        for entry in files.values():
+            try:
+                checked.append(_check_entry(out_dir, name, report_path.name, entry))
+            except IncompleteOutputError as error:
+                problems.extend(error.problems)
+        if problems:
+            raise IncompleteOutputError(*problems)
     return VerifiedSet(name, report_path, (*checked, report_path))
 
 
@@ -339,6 +346,20 @@ def set_names(out_dir: str | Path) -> list[str]:
             loose.add(path)
     names.update(path.stem for path in loose if path.name not in members)
     return sorted(names)
+
+
+def set_folders(root: str | Path) -> list[Path]:
+    """``root`` and every folder under it, sorted, that holds an output set (see :func:`set_names`).
+
+    Hidden folders (a build's ``.<name>.staging-...``) are not entered; symbolic links to folders are
+    not followed.
+    """
+    found = []
+    for folder, subfolders, _ in os.walk(root):
+        subfolders[:] = sorted(name for name in subfolders if not name.startswith("."))
+        if set_names(folder):
+            found.append(Path(folder))
+    return found
 
 
 # -- the propeller's set --------------------------------------------------------------------------
