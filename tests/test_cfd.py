@@ -158,11 +158,14 @@ def test_a_blunt_trailing_edge_meshes_at_coarse_sizes(tmp_path):
 
 @pytest.mark.skipif(shutil.which("gmshToFoam") is None, reason="OpenFOAM is not installed")
 def test_readme_txt_openfoam_steps_give_mesh_ok_and_no_empty_patch(cfd_out, tmp_path):
-    """README.txt's OpenFOAM lines, as written, in a fresh case folder: checkMesh says "Mesh OK", every
-    patch has faces, the propeller is a wall, the zones are there."""
-    case = tmp_path / "case"
+    """README.txt's OpenFOAM lines, as written, in a fresh case folder inside the output folder after the
+    folder was moved: checkMesh says "Mesh OK", every patch has faces, the propeller is a wall, the zones
+    are there."""
+    moved = tmp_path / "moved"
+    shutil.copytree(cfd_out, moved)
+    case = moved / "case"
     case.mkdir()
-    script = openfoam_block((cfd_out / "README.txt").read_text())
+    script = openfoam_block((moved / "README.txt").read_text())
     result = subprocess.run(["sh", "-e", "-c", script], cwd=case, check=False, capture_output=True, text=True,
                             timeout=600)
     assert result.returncode == 0, result.stdout + result.stderr

@@ -531,7 +531,7 @@ def write_body_domain(body: PropellerBody, settings: Cfd, out_dir: str | Path,
             "wall_seconds": time.perf_counter() - wall_start, "cpu_seconds": time.process_time() - cpu_start,
         }
         output.write_files(lambda folder: {"readme": _write_text(folder / "README.txt",
-                                                                   readme_text(body.name, report, Path(out_dir)))})
+                                                                   readme_text(body.name, report))})
         paths = output.publish(report)
         return output.sealed_report, paths
 

@@ -1,0 +1,53 @@
+"""What a new user trips over first (issue 35, item 7): the case's Allrun as root, the cfd README's steps
+that survive moving the folder, the default output folders ignored by git, an empty --out removed after
+Ctrl-C, the first line of ``cfd``, TOML arrays called arrays, the sections picture's beta panel."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+@pytest.mark.skipif(shutil.which("mpiexec") is None or os.geteuid() != 0, reason="needs OpenMPI's mpiexec, as root")
+def test_allrun_starts_mpiexec_as_root(tmp_path):
+    """OpenMPI refuses root unless two variables are set: the Allrun sets them itself (the lines before
+    its first OpenFOAM command, then mpiexec, run as the script runs)."""
+    pytest.importorskip("foamlib")
+    from torus_cad.parameters.design import Handedness
+    from torus_cad.simulate.case import CaseSpec, allrun_text
+    from torus_cad.simulate.settings import OperatingPoint
+
+    spec = CaseSpec(OperatingPoint(5000.0), Handedness.CW, 0.05, -1.0, iterations=10, processes=2, msh_file="x.msh")
+    lines = allrun_text(spec).splitlines()
+    prelude = lines[:next(index for index, line in enumerate(lines) if "> log." in line)]
+    script = tmp_path / "Allrun_prelude"
+    script.write_text("\n".join([*prelude, "mpiexec -n 1 true"]) + "\n")
+    environment = {key: value for key, value in os.environ.items() if not key.startswith("OMPI_")}
+    result = subprocess.run(["sh", str(script)], env=environment, capture_output=True, text=True, timeout=60,
+                            check=False)
+    assert result.returncode == 0, result.stderr[-500:]
+
+
+def _cfd_readme() -> str:
+    from torus_cad.cfd.readme import openfoam_block, readme_text
+
+    report = {"gmsh_version": "4.13.1", "tetrahedra_total": 3, "tetrahedra": {"rotating_zone": 1, "fluid": 2},
+              "sicn_min": 0.2, "triangles": {"rotating_interface": 4},
+              "domain_mm": {"inlet_z": 90.0, "outlet_z": -180.0, "tip_diameter": 45.0, "outer_radius": 135.0,
+                            "zone_radius": 30.0, "zone_z": (-20.0, 20.0)}}
+    text = readme_text("torus_propeller", report)
+    return text + "\n" + openfoam_block(text)
+
+
+def test_the_cfd_readme_points_to_a_runnable_case_and_names_no_absolute_path():
+    text = _cfd_readme()
+    assert "torus-cad simulate" in text and "--case-only" in text and "--mesher tet" in text
+    block = text.split("\n\n")[-1]
+    assert 'MESH="${MESH:-..}"' in block  # the folder of README.txt, from a case folder made inside it
+    assert str(Path.cwd()) not in text and "MESH='/" not in text
