@@ -51,3 +51,29 @@ def test_the_cfd_readme_points_to_a_runnable_case_and_names_no_absolute_path():
     block = text.split("\n\n")[-1]
     assert 'MESH="${MESH:-..}"' in block  # the folder of README.txt, from a case folder made inside it
     assert str(Path.cwd()) not in text and "MESH='/" not in text
+
+
+def _default_out_folders() -> set[str]:
+    """The first path part of every subcommand's default --out (from the parser itself), with the folders
+    sweep and optimize default to (sweep_out/<file>, optimize_out/<file>) and preview (step_out/<name>.png)."""
+    import argparse
+
+    from torus_cad.cli import build_parser
+
+    parser = build_parser()
+    commands = next(action for action in parser._actions if isinstance(action, argparse._SubParsersAction))
+    folders = {"sweep_out", "optimize_out", "step_out"}
+    for subparser in commands.choices.values():
+        for action in subparser._actions:
+            if action.dest == "out" and isinstance(action.default, str):
+                folders.add(Path(action.default).parts[0])
+    return folders
+
+
+@pytest.mark.skipif(shutil.which("git") is None or not (ROOT / ".git").exists(), reason="not a git checkout")
+def test_every_default_output_folder_is_ignored_by_git():
+    folders = _default_out_folders()
+    assert {"mesh_out", "cfd_out", "simulate_out"} <= folders
+    for folder in sorted(folders):
+        result = subprocess.run(["git", "check-ignore", "-q", f"{folder}/some_file.stl"], cwd=ROOT, check=False)
+        assert result.returncode == 0, f"{folder}/ is not in .gitignore"
