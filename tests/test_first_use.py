@@ -7,6 +7,7 @@ from __future__ import annotations
 import os
 import shutil
 import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -77,3 +78,101 @@ def test_every_default_output_folder_is_ignored_by_git():
     for folder in sorted(folders):
         result = subprocess.run(["git", "check-ignore", "-q", f"{folder}/some_file.stl"], cwd=ROOT, check=False)
         assert result.returncode == 0, f"{folder}/ is not in .gitignore"
+
+
+def test_an_output_folder_made_for_a_set_that_is_never_published_is_removed(tmp_path):
+    from torus_cad.outputs.output_set import OutputSet
+
+    (tmp_path / "kept").mkdir()
+    with pytest.raises(RuntimeError), OutputSet(tmp_path / "kept" / "new" / "deeper", "part") as output:
+        output.write("step", lambda path: path.write_text("solid") and path)
+        raise RuntimeError("the build failed")
+    assert [path.name for path in tmp_path.iterdir()] == ["kept"] and not any((tmp_path / "kept").iterdir())
+
+
+#: A process that installs the command line's signal handlers, enters an output set in a new folder (as
+#: build, mesh and cfd do) and waits there for the signal.
+WAITING_IN_A_SET = """
+import sys, time
+from torus_cad.runtime.interrupts import exit_on_signals
+exit_on_signals()
+from torus_cad.outputs.output_set import OutputSet
+with OutputSet(sys.argv[1], "part") as output:
+    output.write("step", lambda path: path.write_text("half a solid") and path)
+    print("ready", flush=True)
+    time.sleep(60)
+"""
+
+
+def test_sigint_while_a_set_is_written_removes_the_out_folder_the_command_made(tmp_path):
+    import signal
+
+    out = tmp_path / "out" / "deeper"
+    process = subprocess.Popen([sys.executable, "-c", WAITING_IN_A_SET, str(out)], cwd=tmp_path,
+                               env={**os.environ, "PYTHONPATH": str(ROOT)}, stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True)
+    assert process.stdout.readline() == "ready\n"
+    assert out.is_dir()
+    process.send_signal(signal.SIGINT)
+    assert process.wait(60) == 130
+    assert "interrupted by SIGINT" in process.stderr.read()
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.long
+def test_sigint_during_cfd_removes_the_out_folder_it_made(tmp_path):
+    """Ctrl-C while cfd meshes (its output folder already made): exit 130 and no empty folder left."""
+    pytest.importorskip("gmsh")
+    import signal
+    import time
+
+    out = tmp_path / "out" / "cfd"
+    process = subprocess.Popen([sys.executable, "-m", "torus_cad", "cfd", "--out", str(out), "-q"], cwd=tmp_path,
+                               env={**os.environ, "PYTHONPATH": str(ROOT)}, stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 120
+    while not out.exists() and process.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert out.exists(), "cfd never made its output folder"
+    time.sleep(0.2)
+    process.send_signal(signal.SIGINT)
+    assert process.wait(60) == 130, process.stderr.read()
+    assert list(tmp_path.iterdir()) == []
+
+
+def _terminal_text_until(command: list[str], marker: bytes, timeout_s: float = 120.0) -> str:
+    """What ``command`` prints on a pseudo-terminal (its stderr) until ``marker`` appears; then it is killed."""
+    import pty
+    import re
+    import select
+    import time
+
+    controller, terminal = pty.openpty()
+    process = subprocess.Popen([sys.executable, *command], stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                               stderr=terminal, env={**os.environ, "PYTHONPATH": str(ROOT)})
+    os.close(terminal)
+    shown = b""
+    try:
+        deadline = time.monotonic() + timeout_s
+        while marker not in shown and time.monotonic() < deadline:
+            if select.select([controller], [], [], 1.0)[0]:
+                try:
+                    shown += os.read(controller, 65536)
+                except OSError:  # the child closed the terminal
+                    break
+    finally:
+        process.kill()
+        process.wait(30)
+        os.close(controller)
+    return re.sub(r"\x1b\[[0-9;]*m", "", shown.decode(errors="replace"))
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="a pseudo-terminal")
+def test_cfd_says_what_it_does_before_loading_anything_heavy(tmp_path):
+    """The first progress line of cfd comes before the schema (pydantic), the CAD kernel and gmsh load:
+    -X importtime reports each module on stderr as its import ends."""
+    text = _terminal_text_until(["-X", "importtime", "-m", "torus_cad", "cfd", "--out", str(tmp_path / "out")],
+                                b"building the propeller")
+    assert "building the propeller" in text
+    before = text[:text.index("building the propeller")]
+    assert not any(module in before for module in ("pydantic", "cadquery", "OCP", "gmsh", "numpy")), before[-500:]

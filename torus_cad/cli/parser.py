@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from collections.abc import Callable
 from typing import Any
 
@@ -52,8 +53,14 @@ class _Parser(argparse.ArgumentParser):
     """
 
     table: str = ""
+    #: A progress line printed (on a terminal, without -q) as soon as the subcommand is chosen, before its
+    #: table options load the schema: the command says what it does within its first second.
+    first_line: str = ""
 
     def parse_known_args(self, args: Any = None, namespace: Any = None) -> Any:  # type: ignore[override, unused-ignore]
+        if self.first_line:
+            _announce(self.first_line, sys.argv[1:] if args is None else list(args))
+            self.first_line = ""
         if self.table:
             table, self.table = self.table, ""
             _add_table_arguments(self, table)
@@ -61,6 +68,15 @@ class _Parser(argparse.ArgumentParser):
 
     def error(self, message: str) -> None:  # type: ignore[override]
         self.exit(EXIT_BAD_INPUT, f"torus-cad: error: {message} (see {self.prog} --help)\n")
+
+
+def _announce(text: str, args: list[str]) -> None:
+    """``torus-cad: [   0.0 s] text`` on stderr when it is a terminal and ``args`` do not ask for quiet."""
+    from torus_cad.runtime.progress import is_terminal
+
+    if is_terminal(sys.stderr) and not {"-q", "--quiet"} & set(args):
+        sys.stderr.write(f"torus-cad: [{0.0:6.1f} s] {text}\n")
+        sys.stderr.flush()
 
 
 def _design_command(commands: Any, name: str, help: str, description: str, **options: Any) -> _Parser:
@@ -152,6 +168,7 @@ def _add_cfd_parser(commands: Any) -> None:
         f"{CFD_TETRAHEDRA_LIMIT:,} tetrahedra is refused before any work. Needs the cfd extra: "
         "pip install -c constraints.txt -e '.[cfd]'.")
     cfd.table = "cfd"  # its options, when the subcommand is used (_Parser.table)
+    cfd.first_line = "building the propeller and its fluid domain: loading the schema, the CAD kernel and gmsh"
     cfd.add_argument("--threads", type=int, default=GMSH_REPRODUCIBLE_THREADS, metavar="N",
                      help=f"gmsh threads (default {GMSH_REPRODUCIBLE_THREADS}: the same mesh on every run; 0 = one "
                           "per CPU, whose meshes differ slightly from run to run)")

@@ -36,7 +36,14 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Self
 
 from torus_cad.errors import IncompleteOutputError, OutputError, ParameterError
-from torus_cad.kernel.files import glob_escape, left_by_dead_process, owner_tag, removed_on_exit
+from torus_cad.kernel.files import (
+    glob_escape,
+    left_by_dead_process,
+    make_folders,
+    owner_tag,
+    removed_if_left_empty,
+    removed_on_exit,
+)
 from torus_cad.runtime.input_files import read_untrusted_bytes
 from torus_cad.runtime.interrupts import deferred
 from torus_cad.tolerances import REPORT_FILE_MAX_BYTES
@@ -159,9 +166,10 @@ class OutputSet:
 
     def __enter__(self) -> Self:
         try:
-            self.out_dir.mkdir(parents=True, exist_ok=True)
-            remove_stale_staging(self.out_dir)
             self._cleanup = contextlib.ExitStack()
+            # a folder made here and left empty (an error, a signal) is removed again: no empty --out
+            self._cleanup.enter_context(removed_if_left_empty(make_folders(self.out_dir)))
+            remove_stale_staging(self.out_dir)
             self.staging = self.out_dir / f".{self.name}{_STAGING_MARK}{owner_tag()}{secrets.token_hex(4)}"
             self._cleanup.enter_context(removed_on_exit(self.staging))
             self.staging.mkdir()
