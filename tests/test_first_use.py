@@ -176,3 +176,19 @@ def test_cfd_says_what_it_does_before_loading_anything_heavy(tmp_path):
     assert "building the propeller" in text
     before = text[:text.index("building the propeller")]
     assert not any(module in before for module in ("pydantic", "cadquery", "OCP", "gmsh", "numpy")), before[-500:]
+
+
+@pytest.mark.parametrize("toml, words", [
+    ("[centerline]\np2 = [[25.0, 3.0, 1.0], [1.0, 2.0, 3.0]]\n", "got array of 3 items [25.0, 3.0, 1.0]"),
+    ("blades = 'four'\n", "got string 'four'"),
+    ("hub = 3\n", "got integer 3"),
+])
+def test_a_wrong_value_is_described_in_toml_words_not_python_type_names(tmp_path, capsys, toml, words):
+    from torus_cad.cli import main
+
+    design = tmp_path / "design.toml"
+    design.write_text(toml)
+    assert main(["defaults", "--resolved", str(design)]) == 2
+    error = capsys.readouterr().err
+    assert words in error, error
+    assert not any(name in error for name in ("tuple", " str ", " int ", " list ", " dict "))

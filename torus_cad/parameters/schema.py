@@ -220,12 +220,30 @@ def _dotted(location: Sequence[Any]) -> str:
     return text
 
 
+#: What a TOML file calls the Python types its values arrive as (a message speaks TOML, not Python).
+_TOML_WORDS: dict[type, str] = {bool: "boolean", int: "integer", float: "float", str: "string", list: "array",
+                                tuple: "array", dict: "table"}
+
+
+def _as_toml_lists(value: Any) -> Any:
+    """``value`` with every tuple (what validation turns an array into) as a list, so it prints as ``[...]``."""
+    if isinstance(value, list | tuple):
+        return [_as_toml_lists(item) for item in value]
+    if isinstance(value, dict):
+        return {key: _as_toml_lists(item) for key, item in value.items()}
+    return value
+
+
 def _describe(value: Any) -> str:
+    """The value in the words of a TOML file: ``array of 25 items [[1, 2, 3], ...``, ``string 'x'``."""
     try:
-        text = repr(value)
+        text = repr(_as_toml_lists(value))
     except ValueError:  # an int too long to print (Python refuses > 4300 digits)
         text = "a huge number"
-    return f"{type(value).__name__} {text if len(text) <= 40 else text[:37] + '...'}"
+    word = next((name for kind, name in _TOML_WORDS.items() if type(value) is kind), type(value).__name__)
+    if isinstance(value, list | tuple):
+        word += f" of {len(value)} item{'s' if len(value) != 1 else ''}"
+    return f"{word} {text if len(text) <= 40 else text[:37] + '...'}"
 
 
 def _value_text(value: Any) -> str:
