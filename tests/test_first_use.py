@@ -10,6 +10,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -192,3 +193,16 @@ def test_a_wrong_value_is_described_in_toml_words_not_python_type_names(tmp_path
     error = capsys.readouterr().err
     assert words in error, error
     assert not any(name in error for name in ("tuple", " str ", " int ", " list ", " dict "))
+
+
+def test_the_sections_picture_plots_beta_without_the_jump_at_the_tip(default_params):
+    """The default blade's beta jumps from about -5 to -172 degrees at the tip (the chord line turns
+    back): the picture's curve continues instead, the same line's angle (mod 180), and spans tens of degrees."""
+    from torus_cad.outputs.sections_table import design_elements, plotted_beta_deg
+
+    elements = design_elements(default_params)
+    raw, plotted = np.asarray(elements.beta_deg), plotted_beta_deg(elements)
+    assert np.max(np.abs(np.diff(raw))) > 150.0  # the table's raw angle does jump (else this proves nothing)
+    assert np.max(np.abs(np.diff(plotted))) < 30.0
+    assert np.ptp(plotted) < 60.0
+    assert np.allclose(np.mod(plotted - raw + 90.0, 180.0), 90.0)  # the same chord line as the table's
