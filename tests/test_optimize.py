@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-optuna = pytest.importorskip("optuna", reason="the optimize extra is not installed: pip install -e '.[optimize]'")
+optuna = pytest.importorskip("optuna", reason="the optimize extra is not installed: pip install -c constraints.txt -e '.[optimize]'")
 
 from optuna.trial import TrialState  # noqa: E402
 

@@ -61,10 +61,14 @@ class _Parser(argparse.ArgumentParser):
         if self.first_line:
             _announce(self.first_line, sys.argv[1:] if args is None else list(args))
             self.first_line = ""
+        self.complete()
+        return super().parse_known_args(args, namespace)
+
+    def complete(self) -> None:
+        """Add the options of :attr:`table` now (once)."""
         if self.table:
             table, self.table = self.table, ""
             _add_table_arguments(self, table)
-        return super().parse_known_args(args, namespace)
 
     def error(self, message: str) -> None:  # type: ignore[override]
         self.exit(EXIT_BAD_INPUT, f"torus-cad: error: {message} (see {self.prog} --help)\n")
@@ -251,9 +255,12 @@ def build_parser() -> argparse.ArgumentParser:
                      formatter_class=argparse.RawDescriptionHelpFormatter)
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=_Parser)
 
-    build = _design_command(commands, "build", help="build a propeller: STEP + STL + JSON report",
-                            description="Build the propeller of CONFIG (or the default) and write "
-                            "<name>.step, <name>.stl and <name>.json into --out.", epilog=EPILOG,
+    build = _design_command(commands, "build", help="build a propeller: STEP, STL, blade-element table, JSON report",
+                            description="Build the propeller of CONFIG (or the default) and write one output set "
+                            "into --out: <name>.step, <name>.stl (not with --no-stl), <name>.3mf (only when "
+                            "--format or export.formats asks for 3mf), <name>_sections.csv and "
+                            "<name>_sections.png (the blade-element table and its picture), <name>.png (with "
+                            "--preview) and <name>.json, the report that lists them all.", epilog=EPILOG,
                             formatter_class=argparse.RawDescriptionHelpFormatter)
     build.add_argument("--out", default="step_out", help="output folder (default: step_out)")
     build.add_argument("--density", type=_positive_density, default=1.24,
