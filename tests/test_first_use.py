@@ -206,3 +206,33 @@ def test_the_sections_picture_plots_beta_without_the_jump_at_the_tip(default_par
     assert np.max(np.abs(np.diff(plotted))) < 30.0
     assert np.ptp(plotted) < 60.0
     assert np.allclose(np.mod(plotted - raw + 90.0, 180.0), 90.0)  # the same chord line as the table's
+
+
+def test_a_refused_trial_appears_in_the_optimize_summary_and_the_history_picture():
+    """The optimize example's refused trial (a design over a limit: no objective value) is named in the
+    terminal summary and marked in the history picture, not silently missing."""
+    optuna = pytest.importorskip("optuna")
+    from optuna.distributions import FloatDistribution
+    from optuna.trial import TrialState, create_trial
+
+    from torus_cad.optimize.results import history_figure, trial_rows, unvalued_lines
+    from torus_cad.optimize.storage import OUTCOME, REASON, RESULT
+    from torus_cad.optimize.study_file import load_study
+
+    spec = load_study(ROOT / "examples" / "optimize_light.toml")
+    distributions = {"airfoil.thickness": FloatDistribution(0.2, 0.6)}
+    reason = "airfoil.thickness: the blade is 10.1 % of the chord thick, over the limit of 10.0 %"
+    trials = [create_trial(state=TrialState.COMPLETE, value=value, params={"airfoil.thickness": 0.3},
+                           distributions=distributions, user_attrs={RESULT: {OUTCOME: "valid"}})
+              for value in (5.0, 4.0)]
+    trials.insert(1, create_trial(state=TrialState.FAIL, params={"airfoil.thickness": 0.59},
+                                  distributions=distributions, user_attrs={RESULT: {OUTCOME: "refused", REASON: reason}}))
+    study = optuna.create_study()
+    for trial in trials:
+        study.add_trial(trial)
+    trials = study.get_trials()
+    rows, _ = trial_rows(spec, trials)
+    assert unvalued_lines(rows) == [f"  trial 1 refused: {reason}"]
+    figure = history_figure(spec, trials)
+    marks = [line for line in figure.axes[0].get_lines() if "refused" in str(line.get_label())]
+    assert len(marks) == 1 and list(marks[0].get_xdata()) == [1]
