@@ -309,7 +309,8 @@ def verify_set(out_dir: str | Path, name: str) -> VerifiedSet:
         if not isinstance(files, dict) or not files:
             raise IncompleteOutputError(f"{name}: {report_path.name} lists no files (written before "
                                         f"output sets were sealed?)")
-        checked, problems = [], []
+        checked: list[Path] = []
+        problems: list[str] = []
         for entry in files.values():
             try:
                 checked.append(_check_entry(out_dir, name, report_path.name, entry))
