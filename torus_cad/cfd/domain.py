@@ -79,7 +79,7 @@ def import_gmsh() -> Any:
     try:
         import gmsh
     except ImportError:
-        raise MissingExtraError(missing_extra_message("torus-cad cfd", "cfd", "gmsh")) from None
+        raise MissingExtraError(missing_extra_message("cfd", "cfd", "gmsh")) from None
     except OSError as error:
         raise MissingExtraError(f"gmsh's library does not load ({error}); install the cfd extra "
                                 f"({install_line('cfd')}) and the system libraries it links, on Debian: "

@@ -78,8 +78,8 @@ def _missing_module_message(command: str, error: ModuleNotFoundError) -> str:
     module = error.name or str(error)
     extra = extra_of_module(module)
     if extra is not None:
-        return missing_extra_message(f"torus-cad {command}", extra, module)
-    return f"torus-cad {command} needs {module}, which is not installed: {install_line()}"
+        return missing_extra_message(command, extra, module)
+    return f"{command} needs {module}, which is not installed: {install_line()}"
 
 
 if __name__ == "__main__":  # pragma: no cover

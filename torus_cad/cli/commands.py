@@ -73,7 +73,7 @@ def _require(command: str, extra: str, modules: Sequence[str] | None = None) -> 
     """MissingExtraError (exit 2, one line: the extra and its install command) unless ``extra`` is installed."""
     from torus_cad.runtime.extras import require_extra
 
-    require_extra(f"torus-cad {command}", extra, modules)
+    require_extra(command, extra, modules)
 
 
 def command_build(args: argparse.Namespace) -> int:

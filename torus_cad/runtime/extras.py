@@ -54,7 +54,7 @@ def is_installed(module: str) -> bool:
 def require_extra(command: str, extra: str, modules: Iterable[str] | None = None) -> None:
     """MissingExtraError (exit 2, one line) unless every module of ``extra`` (or ``modules``) is installed.
 
-    ``command``: how the message names what needs them, e.g. ``"torus-cad mesh"``.
+    ``command``: how the message names what needs them, e.g. ``"mesh"`` (the line starts "torus-cad: ").
     """
     for module in EXTRA_MODULES[extra] if modules is None else modules:
         if not is_installed(module):
