@@ -109,3 +109,22 @@ def test_the_hint_of_every_extra_is_an_install_line_with_the_constraints(extra):
 
     assert install_line(extra) == f"pip install -c constraints.txt -e '.[{extra}]'"
     assert install_line(extra) in missing_extra_message("torus-cad x", extra, "module")
+
+
+#: A measured mesh size in the docs: "231,405 tetrahedra", "55,056 cells".
+MESH_FIGURE = re.compile(r"\d{1,3}(?:,\d{3})+\**\s+(?:linear\s+)?(?:tetrahedra|cells)\b")
+#: How a paragraph says where its figure comes from: the command or script that measures it, or that
+#: it is an example of its time. Limits ("over 3,000,000 tetrahedra is refused") are not measurements.
+SOURCE = re.compile(r"torus-cad |scripts/|pytest|python3? |example of its time|limit|refused", re.IGNORECASE)
+
+
+def test_every_measured_mesh_size_in_the_docs_names_its_command_or_is_an_example_of_its_time():
+    pages = [README, *sorted(path for path in (ROOT / "docs").rglob("*.md") if "spec" not in path.parts)]
+    unsourced = []
+    for page in pages:
+        if page == CLI_PAGE:
+            continue
+        for paragraph in re.split(r"\n\s*\n", page.read_text(encoding="utf-8")):
+            if MESH_FIGURE.search(paragraph) and not SOURCE.search(paragraph):
+                unsourced.append(f"{page.relative_to(ROOT)}: {MESH_FIGURE.search(paragraph).group(0)}")
+    assert not unsourced, unsourced
