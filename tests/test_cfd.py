@@ -17,6 +17,7 @@ import time
 
 import numpy as np
 import pytest
+from cli_exit import exit_code
 
 from torus_cad.cfd.domain import SURFACE_GROUPS, VOLUME_GROUPS, tetrahedra_volume
 from torus_cad.cfd.readme import openfoam_block
@@ -104,7 +105,7 @@ def test_meshio_reads_the_gmshtofoam_file_and_the_report_and_readme_agree(cfd_ou
 ])
 def test_bad_input_exits_2_with_one_line_and_writes_nothing(tmp_path, capsys, arguments, fragment):
     out = tmp_path / "out"
-    assert main(["cfd", *arguments, "--out", str(out)]) == 2
+    assert exit_code(["cfd", *arguments, "--out", str(out)]) == 2
     error = capsys.readouterr().err
     assert fragment in error and error.count("\n") == 1
     assert not out.exists()

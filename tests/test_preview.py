@@ -179,10 +179,12 @@ def test_parse_size(text, size):
     assert parse_size(text) == size
 
 
-@pytest.mark.parametrize("text", ["1200", "x600", "12.5x600", "-5x5", "63x100", "100x9000", "axb", ""])
+@pytest.mark.parametrize("text", ["1200", "x600", "12.5x600", "-5x5", "63x100", "100x9000", "axb", "",
+                                  pytest.param("9" * 5001 + "x600", id="5001_digits")])  # was an internal error
 def test_parse_size_refuses_bad_sizes(text):
-    with pytest.raises(ParameterError):
+    with pytest.raises(ParameterError) as refused:
         parse_size(text)
+    assert len(str(refused.value)) < 200  # a long size is cut in the message
 
 
 # -- command line ---------------------------------------------------------------------------------

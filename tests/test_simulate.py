@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from cli_exit import exit_code
 from openfoam_marks import needs_openfoam
 
 from torus_cad.cli import main
@@ -29,7 +30,7 @@ from torus_cad.simulate.history import History  # noqa: E402
 from torus_cad.simulate.performance import force_variation, performance, richardson  # noqa: E402
 from torus_cad.simulate.pipeline import Request, simulate  # noqa: E402
 from torus_cad.simulate.run import divergence  # noqa: E402
-from torus_cad.simulate.settings import Level, Mesher, OperatingPoint  # noqa: E402
+from torus_cad.simulate.settings import Level, Mesher, OperatingPoint, TurbulenceModel  # noqa: E402
 
 RPM = 10000.0
 #: Iterations of the physics runs: thrust settles within ~2 % by 120 on the coarse mesh.
@@ -88,7 +89,7 @@ def test_divergence_names_the_iteration_and_the_residual():
 ])
 def test_bad_input_exits_2_with_one_line_and_writes_nothing(tmp_path, capsys, arguments, fragment):
     out = tmp_path / "out"
-    assert main(["simulate", *arguments, "--out", str(out)]) == 2
+    assert exit_code(["simulate", *arguments, "--out", str(out)]) == 2
     error = capsys.readouterr().err
     assert fragment in error and error.count("\n") == 1
     assert not out.exists()
@@ -126,6 +127,21 @@ def test_case_only_writes_a_case_foamlib_reads_back_with_the_mirror_rotation(tmp
     assert 0.0 < layers["firstLayerThickness"] < 1e-4  # m: y+ 1 on a 45 mm propeller at 10,000 rpm
     assert sorted(path.name for path in tmp_path.iterdir()) == ["torus_propeller_case"]
     assert not (result.paths["case"] / "constant" / "polyMesh").exists()  # Allrun makes it
+
+
+def test_the_transition_model_case_carries_its_two_fields_from_the_inflow_turbulence(tmp_path):
+    result = simulate(Request(PropellerParameters(), OperatingPoint(RPM), Level.COARSE, iterations=50, processes=1,
+                              case_only=True, turbulence=TurbulenceModel.K_OMEGA_SST_LM), tmp_path)
+    case = foamlib.FoamCase(result.paths["case"])
+    assert case.turbulence_properties["RAS"]["RASModel"] == "kOmegaSSTLM"
+    re_theta, gamma = case[0]["ReThetat"], case[0]["gammaInt"]
+    # Langtry and Menter's onset correlation at 1 % inflow turbulence: Re_theta_t = 1173.51 - 589.428 + 0.2196
+    assert re_theta.internal_field == pytest.approx(584.30, abs=0.01) and gamma.internal_field == 1.0
+    assert re_theta.boundary_field["propeller"]["type"] == gamma.boundary_field["propeller"]["type"] == "zeroGradient"
+    schemes, solution = case.fv_schemes, case.fv_solution
+    assert {"div(phi,ReThetat)", "div(phi,gammaInt)"} <= set(schemes["divSchemes"])
+    assert "ReThetat" in case.control_dict["functions"]["residuals"]["fields"]
+    assert any("ReThetat" in key for key in solution["solvers"])
 
 
 def test_the_tet_mesher_stays_reachable(tmp_path):

@@ -13,6 +13,7 @@ import re
 
 import numpy as np
 import pytest
+from cli_exit import exit_code
 from openfoam_marks import needs_openfoam
 
 from torus_cad.cli import main
@@ -132,7 +133,7 @@ def test_check_target_refuses_naming_the_option_value_and_range(value):
 ])
 def test_bad_thrust_options_exit_2_with_one_line_and_write_nothing(tmp_path, capsys, arguments, fragment):
     out = tmp_path / "out"
-    assert main(["simulate", *arguments, "--out", str(out)]) == 2
+    assert exit_code(["simulate", *arguments, "--out", str(out)]) == 2  # out of an option's range: while parsing
     error = capsys.readouterr().err
     assert fragment in error and error.count("\n") == 1
     assert not out.exists()

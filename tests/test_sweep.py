@@ -16,6 +16,7 @@ from pathlib import Path
 
 import pytest
 from batch_jobs import crash_on_four_or_six_blades
+from cli_exit import exit_code
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -261,7 +262,7 @@ def test_cli_refuses_a_bad_sweep_file_with_exit_2(tmp_path, capsys):
     assert not (tmp_path / "out").exists()
     assert main(["sweep", str(tmp_path / "missing.toml")]) == 2
     write(tmp_path / "ok.toml", "[vary]\nblades = [2]\n")
-    assert main(["sweep", str(tmp_path / "ok.toml"), "--workers", "0", "--out", str(tmp_path / "o")]) == 2
+    assert exit_code(["sweep", str(tmp_path / "ok.toml"), "--workers", "0", "--out", str(tmp_path / "o")]) == 2
 
 
 # -- one design, in this process ---------------------------------------------------------------------

@@ -68,6 +68,16 @@ HUB_FOOTPRINT_MARGIN_DEG = 1.0
 #: Largest configuration file read (bytes): a design is a few hundred bytes. Only regular files are read.
 CONFIG_FILE_MAX_BYTES = 1 << 20
 
+#: Longest value an error message quotes (characters): a longer one (a name, a path, a list) is cut in its
+#: middle with ``...`` (torus_cad.errors.shown), so that a 900 k-character value gives a line, not a megabyte.
+MESSAGE_VALUE_MAX_CHARS = 80
+
+#: Longest word (a run without spaces: a quoted value, a path) and longest whole message any torus_cad
+#: error, and any ``torus-cad`` error line, may hold (characters); longer ones are cut in their middle with
+#: ``...`` (torus_cad.errors.bounded_message). A word this long is far beyond any real path or key.
+MESSAGE_WORD_MAX_CHARS = 240
+MESSAGE_MAX_CHARS = 2000
+
 #: Largest JSON report ``torus-cad verify`` reads (bytes): a build's report is a few kB.
 REPORT_FILE_MAX_BYTES = 16 << 20
 
@@ -242,3 +252,46 @@ CONVENTIONAL_ROOT_FIT_MARGIN = 0.8
 #: Share of sine clustering in the conventional blade's section radii (0: uniform in r; 1: a quarter
 #: sine, sections densest at the tip).
 CONVENTIONAL_TIP_CLUSTERING = 0.6
+
+# -- command-line options: the range of each numeric option of every command (torus_cad.cli.options), -----
+# -- shown in its --help; a value outside is refused with one line, exit 2, before any folder is made --------
+
+#: ``cfd --threads``: gmsh threads, at most this many per CPU the process may use and never more than
+#: CFD_THREADS_LIMIT. libgomp sets up every thread's state at once: ``--threads 1000000000`` asked for
+#: 224 GB and ``--threads 100000`` crashed (SIGSEGV); gmsh's meshing gains nothing past one thread per CPU.
+CFD_THREADS_PER_CPU = 4
+CFD_THREADS_LIMIT = 256
+
+#: ``sweep --workers`` and ``optimize --workers`` (also the size of a ``--scheduler local`` cluster): worker
+#: processes, at most this many per CPU and never more than WORKERS_LIMIT; each imports the kernel
+#: (about 0.3 GB), so more only thrash the machine (sweep caps them at the CPUs unless --oversubscribe).
+WORKERS_PER_CPU = 4
+WORKERS_LIMIT = 256
+
+#: ``simulate --iterations``: SIMPLE iterations of one run (the levels' defaults are 200 / 300 / 400).
+SIMULATE_MAX_ITERATIONS = 20000
+
+#: ``simulate --rpm`` and a study's ``[simulate] rpm``: at most this (rpm); the design's own limit,
+#: helical tip Mach SIMULATE_TIP_MACH_LIMIT, is checked once the design is read (smaller for any real one).
+SIMULATE_RPM_LIMIT = 1.0e6
+
+#: ``simulate --thrust``: at most this (N); the design's own ceiling (CT 1 at its rpm limit) is checked
+#: once the design is read.
+SIMULATE_THRUST_LIMIT_N = 1.0e6
+
+#: ``simulate --time-limit``: the budget of one run (of the whole search with --thrust), s: a week.
+SIMULATE_TIME_LIMIT_MAX_S = 7 * 86400.0
+
+#: ``simulate --thrust-tolerance`` (a fraction of the target) and ``--thrust-runs`` (solver runs).
+THRUST_TOLERANCE_RANGE = (0.001, 0.2)
+THRUST_RUNS_RANGE = (1, 10)
+
+#: ``sweep --time-limit``, a sweep's ``time_limit_s`` and a study's ``time_limit_s``: per design, s (a day).
+DESIGN_TIME_LIMIT_MAX_S = 86400.0
+
+#: ``build --density``, ``sweep --density`` and a sweep's ``density_g_cm3``: the material density, g/cm^3,
+#: in (0, this] (osmium, the densest element, is 22.6).
+DENSITY_LIMIT_G_CM3 = 25.0
+
+#: ``preview --size`` and ``build --preview-size``: each side of the picture, pixels.
+PREVIEW_EDGE_RANGE = (64, 8000)

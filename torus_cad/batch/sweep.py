@@ -35,6 +35,7 @@ from torus_cad.batch.sweep_file import SweepSpec
 from torus_cad.batch.table import DESIGNS_DIR, collect_rows, table_columns, write_table
 from torus_cad.errors import ParameterError
 from torus_cad.runtime.progress import BatchProgress
+from torus_cad.tolerances import DESIGN_TIME_LIMIT_MAX_S
 
 __all__ = ["MANIFEST_FILE", "SweepInterrupted", "SweepResult", "run_sweep"]
 
@@ -165,8 +166,8 @@ def run_sweep(spec: SweepSpec, out_dir: str | Path, *, workers: int | None = Non
     """
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
         raise ParameterError(f"--workers must be a whole number >= 1, got {workers!r}")
-    if time_limit_s is not None and not 0.0 < time_limit_s <= 86400.0:
-        raise ParameterError(f"--time-limit = {time_limit_s!r} is out of range; allowed (0, 86400] s")
+    if time_limit_s is not None and not 0.0 < time_limit_s <= DESIGN_TIME_LIMIT_MAX_S:
+        raise ParameterError(f"--time-limit = {time_limit_s!r} is out of range; allowed (0, {DESIGN_TIME_LIMIT_MAX_S:g}] s")
     out_dir = Path(out_dir).resolve()
     stl = spec.stl if stl is None else stl
     density = spec.density_g_cm3 if density_g_cm3 is None else density_g_cm3

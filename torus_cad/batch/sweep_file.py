@@ -42,11 +42,11 @@ from typing import Any, TypeGuard
 
 from pydantic import Field, ValidationError
 
-from torus_cad.errors import ParameterError
+from torus_cad.errors import ParameterError, shown
 from torus_cad.parameters import ParameterSpec, PropellerParameters, parameter_specs
 from torus_cad.parameters.config_file import read_config_table
 from torus_cad.parameters.schema import Bounds, Section, check_in_bounds, closest_key, param, parameter_error
-from torus_cad.tolerances import MAX_SWEEP_DESIGNS
+from torus_cad.tolerances import DENSITY_LIMIT_G_CM3, DESIGN_TIME_LIMIT_MAX_S, MAX_SWEEP_DESIGNS
 
 __all__ = ["SweepMode", "SweepSpec", "VaryAxis", "estimate_designs", "load_sweep", "parse_sweep"]
 
@@ -214,9 +214,9 @@ class SweepTable(Section):
     seed: int = param(0, ge=0, le=2**63 - 1, doc="random / latin_hypercube only: the sampler's seed")
     name: str = param("", doc="the sweep's name (default: the file's stem)")
     stl: bool = param(True, doc="write each design's STL too")
-    density_g_cm3: float | None = param(None, unit="g/cm^3", gt=0.0, le=25.0,
+    density_g_cm3: float | None = param(None, unit="g/cm^3", gt=0.0, le=DENSITY_LIMIT_G_CM3,
                                         doc="material density for the mass (default: PLA, 1.24)")
-    time_limit_s: float = param(DEFAULT_TIME_LIMIT_S, unit="s", gt=0.0, le=86400.0,
+    time_limit_s: float = param(DEFAULT_TIME_LIMIT_S, unit="s", gt=0.0, le=DESIGN_TIME_LIMIT_MAX_S,
                                 doc="a design running longer is stopped and recorded as 'timeout'")
 
 
@@ -255,7 +255,7 @@ def _parse_base(table: Any, base_dir: Path, fail: Fail) -> PropellerParameters:
         except ParameterError as error:
             raise fail(f"base.config: {error}") from None
     else:
-        raise fail(f"base.config must be a path string, got {config!r}")
+        raise fail(f"base.config must be a path string, got {shown(config)}")
     _deep_merge(merged, inline)
     try:
         return PropellerParameters.from_dict(merged)
@@ -340,7 +340,7 @@ def _specs() -> dict[str, ParameterSpec]:
 
 def _resolve_leaf(key: str, fail: Fail) -> tuple[tuple[str, ...], int | None, _Leaf]:
     """The parameter path, vector index and schema entry that ``key`` names."""
-    where = f"vary.{key!r}"
+    where = f"vary.{shown(key)}"
     match = _KEY_PATTERN.match(key)
     if not match:
         raise fail(f"{where} is not a parameter key; write e.g. \"hub.radius\" or \"centerline.p2[2]\"")
@@ -367,7 +367,7 @@ def _resolve_leaf(key: str, fail: Fail) -> tuple[tuple[str, ...], int | None, _L
 
 
 def _parse_axis(key: str, spec: Any, mode: SweepMode, fail: Fail) -> VaryAxis:
-    where = f"vary.{key!r}"
+    where = f"vary.{shown(key)}"
     path, index, leaf = _resolve_leaf(key, fail)
 
     def value_of(item: Any, what: str) -> Any:
@@ -381,7 +381,7 @@ def _parse_axis(key: str, spec: Any, mode: SweepMode, fail: Fail) -> VaryAxis:
         return VaryAxis(key, path, index, values=values, integer=integer)
     if not isinstance(spec, Mapping):
         raise fail(f"{where} must be a list, {{start, stop, step}} / {{start, stop, num}} or {{low, high}}, "
-                   f"got {spec!r}")
+                   f"got {shown(spec)}")
     keys = set(spec)
     if not leaf.numeric:
         raise fail(f"{where}: ranges and bounds need a number parameter; give a list of values")
@@ -412,7 +412,7 @@ def _range_values(spec: Mapping[str, Any], start: Any, stop: Any, leaf: _Leaf, w
     if "num" in spec:
         num = spec["num"]
         if not _is_int(num) or num < 1:
-            raise fail(f"{where}: num must be a whole number >= 1, got {num!r}")
+            raise fail(f"{where}: num must be a whole number >= 1, got {shown(num)}")
         if leaf.kind is int:
             raise fail(f"{where}: {{start, stop, num}} is for float parameters; use {{start, stop, step}}")
         _check_budget(num, [], lambda message: fail(f"{where}: {message}"))
@@ -420,7 +420,7 @@ def _range_values(spec: Mapping[str, Any], start: Any, stop: Any, leaf: _Leaf, w
                                                for i in range(num))
     step = _checked_type(spec["step"], leaf, f"{where} step", fail)
     if not step > 0:
-        raise fail(f"{where}: step must be positive, got {step!r}")
+        raise fail(f"{where}: step must be positive, got {shown(step)}")
     spans = (stop - start) / step  # a float even for ints: inf when step is tiny
     _check_budget(spans + 1.0, [], lambda message: fail(f"{where}: {message}"))
     count = math.floor(spans + 1e-9) + 1
@@ -433,7 +433,7 @@ def _checked_value(item: Any, leaf: _Leaf, where: str, fail: Fail) -> Any:
     value = _checked_type(item, leaf, where, fail)
     if leaf.choices:
         if value not in leaf.choices:
-            raise fail(f"{where} = {value!r} is not allowed; choose one of {', '.join(leaf.choices)}")
+            raise fail(f"{where} = {shown(value)} is not allowed; choose one of {', '.join(leaf.choices)}")
         return value
     numbers = value if isinstance(value, list) else [value] if leaf.numeric else []
     for position, number in enumerate(numbers):
@@ -449,24 +449,24 @@ def _checked_type(item: Any, leaf: _Leaf, where: str, fail: Fail) -> Any:
     """``item`` as the parameter's type: ints stay ints, ints become floats for float keys, no NaN or inf."""
     if leaf.kind is bool:
         if not isinstance(item, bool):
-            raise fail(f"{where} must be true or false, got {item!r}")
+            raise fail(f"{where} must be true or false, got {shown(item)}")
         return item
     if leaf.kind is int:
         if not _is_int(item):
-            raise fail(f"{where} must be a whole number, got {item!r}")
+            raise fail(f"{where} must be a whole number, got {shown(item)}")
         return item
     if leaf.kind is float:
         if not _is_number(item) or not math.isfinite(item):
-            raise fail(f"{where} must be a finite number, got {item!r}")
+            raise fail(f"{where} must be a finite number, got {shown(item)}")
         return float(item)
     if leaf.kind is str:
         if not isinstance(item, str):
-            raise fail(f"{where} must be a string, got {item!r}")
+            raise fail(f"{where} must be a string, got {shown(item)}")
         return item
     if leaf.kind is tuple:
         if not isinstance(item, list) or len(item) != leaf.length or not all(
                 _is_number(x) and math.isfinite(x) for x in item):
-            raise fail(f"{where} must be a list of {leaf.length} finite numbers (a whole vector), got {item!r}")
+            raise fail(f"{where} must be a list of {leaf.length} finite numbers (a whole vector), got {shown(item)}")
         return [float(x) for x in item]
     raise fail(f"{where}: cannot vary this parameter")  # pragma: no cover - the schema has no other kinds
 

@@ -47,10 +47,11 @@ from torus_cad.cfd.sizes import (
     domain_from_sizes,
     trailing_edges,
 )
-from torus_cad.errors import KernelError
+from torus_cad.errors import KernelError, ParameterError
 from torus_cad.formats import StepSchema
 from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.design import Cfd
+from torus_cad.runtime.cpus import max_cfd_threads
 from torus_cad.runtime.stages import StageTimer
 from torus_cad.tolerances import GMSH_REPRODUCIBLE_THREADS
 
@@ -486,6 +487,8 @@ def write_body_domain(body: PropellerBody, settings: Cfd, out_dir: str | Path,
     from torus_cad.kernel.writers.step import write_step
     from torus_cad.outputs.output_set import OutputSet
 
+    if isinstance(threads, bool) or not isinstance(threads, int) or not 0 <= threads <= max_cfd_threads():
+        raise ParameterError(f"threads = {threads!r} is out of range; allowed [0, {max_cfd_threads()}] (0 = one per CPU)")
     gmsh = import_gmsh()
     timer = timer if timer is not None else StageTimer[CfdStage](None)
     name = f"{body.name}_cfd"

@@ -346,8 +346,6 @@ def command_cfd(args: argparse.Namespace) -> int:
 
     _require("cfd", "cfd")
     params = load_parameters(args.config, args.overrides).with_values(_table_overrides(args, "cfd"))
-    if args.threads < 0:
-        raise ParameterError(f"--threads = {args.threads} is out of range; allowed 0 (one per CPU) or more")
     progress = StageProgress.for_terminal(quiet=args.quiet)
     from torus_cad.cfd.domain import gmsh_library, import_gmsh, summary_line, write_cfd_domain
     from torus_cad.cfd.estimate import check_cfd_budget
@@ -437,8 +435,10 @@ def table_specs(table: str) -> list[Any]:
 
 
 def report_error(message: str, code: int) -> int:
-    """Print ``torus-cad: message`` on stderr; return ``code``."""
-    print(f"torus-cad: {message}", file=sys.stderr)
+    """Print ``torus-cad: message`` on stderr, one line, a long value in it cut short; return ``code``."""
+    from torus_cad.errors import bounded_message
+
+    print(bounded_message(f"torus-cad: {message}"), file=sys.stderr)
     return code
 
 

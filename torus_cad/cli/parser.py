@@ -21,6 +21,26 @@ from torus_cad.cli.commands import (
     command_verify,
     table_specs,
 )
+from torus_cad.cli.options import Bounds, integer, number, range_help
+from torus_cad.errors import bounded_message
+from torus_cad.runtime.cpus import available_cpus, max_cfd_threads, max_workers
+from torus_cad.tolerances import (
+    CFD_THREADS_LIMIT,
+    CFD_THREADS_PER_CPU,
+    DENSITY_LIMIT_G_CM3,
+    DESIGN_TIME_LIMIT_MAX_S,
+    MAX_STUDY_TRIALS,
+    PREVIEW_EDGE_RANGE,
+    SIMULATE_AIRSPEED_LIMIT_M_S,
+    SIMULATE_MAX_ITERATIONS,
+    SIMULATE_RPM_LIMIT,
+    SIMULATE_THRUST_LIMIT_N,
+    SIMULATE_TIME_LIMIT_MAX_S,
+    THRUST_RUNS_RANGE,
+    THRUST_TOLERANCE_RANGE,
+    WORKERS_LIMIT,
+    WORKERS_PER_CPU,
+)
 
 DESCRIPTION = """\
 torus_cad turns a few design parameters into a toroidal propeller: airfoil sections (NACA 4- or
@@ -53,25 +73,37 @@ class _Parser(argparse.ArgumentParser):
     """
 
     table: str = ""
+    #: Options that set a design parameter (dest -> dotted schema key): their range, the schema's, is
+    #: checked as they are parsed and shown in --help, once the subcommand is used (as ``table``).
+    schema_ranges: dict[str, str] = {}  # noqa: RUF012 - replaced, never mutated
+
     #: A progress line printed (on a terminal, without -q) as soon as the subcommand is chosen, before its
-    #: table options load the schema: the command says what it does within its first second.
+    #: schema options load the schema: the command says what it does within its first second.
     first_line: str = ""
 
     def parse_known_args(self, args: Any = None, namespace: Any = None) -> Any:  # type: ignore[override, unused-ignore]
         if self.first_line:
             _announce(self.first_line, sys.argv[1:] if args is None else list(args))
             self.first_line = ""
-        self.complete()
+        self._add_schema_options()
         return super().parse_known_args(args, namespace)
 
-    def complete(self) -> None:
-        """Add the options of :attr:`table` now (once)."""
+    def format_help(self) -> str:
+        self._add_schema_options()  # the generated reference (docs/reference/cli.md) shows them too
+        return super().format_help()
+
+    def _add_schema_options(self) -> None:
+        """The options of ``table`` and the ranges of ``schema_ranges``, once."""
         if self.table:
             table, self.table = self.table, ""
             _add_table_arguments(self, table)
+        if self.schema_ranges:
+            ranges, self.schema_ranges = self.schema_ranges, {}
+            _bind_schema_ranges(self, ranges)
 
     def error(self, message: str) -> None:  # type: ignore[override]
-        self.exit(EXIT_BAD_INPUT, f"torus-cad: error: {message} (see {self.prog} --help)\n")
+        """One line (a long value in it cut short), exit 2: argparse's messages quote what was typed."""
+        self.exit(EXIT_BAD_INPUT, bounded_message(f"torus-cad: error: {message} (see {self.prog} --help)") + "\n")
 
 
 def _announce(text: str, args: list[str]) -> None:
@@ -96,41 +128,55 @@ def _design_command(commands: Any, name: str, help: str, description: str, **opt
 
 
 
-def _positive_density(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"--density must be a number in g/cm^3, got {text!r}") from None
-    if not 0.0 < value <= 25.0:
-        raise argparse.ArgumentTypeError(f"--density = {value:g} is out of range; allowed (0, 25] g/cm^3")
-    return value
+#: ``--density``: the material density, g/cm^3.
+DENSITY_RANGE = Bounds(0.0, DENSITY_LIMIT_G_CM3, low_open=True)
+_DENSITY = number("--density", DENSITY_RANGE, "g/cm^3")
+#: ``--time-limit`` of sweep: per design, s.
+DESIGN_TIME_RANGE = Bounds(0.0, DESIGN_TIME_LIMIT_MAX_S, low_open=True)
+_PICTURE_SIDES = f"each side {PREVIEW_EDGE_RANGE[0]}..{PREVIEW_EDGE_RANGE[1]}"
+_WORKERS_NOTE = f"{WORKERS_PER_CPU} per CPU, at most {WORKERS_LIMIT}"
+_THREADS_NOTE = f"{CFD_THREADS_PER_CPU} per CPU, at most {CFD_THREADS_LIMIT}"
 
 
-def _port(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"--port must be a whole number, got {text!r}") from None
-    if not 0 <= value <= 65535:
-        raise argparse.ArgumentTypeError(f"--port = {value} is out of range; allowed [0, 65535] (0: any free port)")
-    return value
-
-
+def _option_type(key: str, kind: Any, bounds: Bounds, unit: str) -> Callable[[str], Any]:
+    """The bounded parser of the option that sets the schema parameter ``key`` (``kind`` int or float: messages
+    name the key, as the design file's do), else ``kind`` itself."""
+    if kind is int:
+        return integer(key, bounds, unit)
+    if kind is float:
+        return number(key, bounds, unit)
+    return kind
 
 
 def _add_table_arguments(parser: argparse.ArgumentParser, table: str) -> None:
-    """One ``--name`` option per parameter of a schema table (default None: keep the design's value)."""
+    """One ``--name`` option per parameter of a schema table (default None: keep the design's value), a number
+    checked against the parameter's range as it is parsed."""
     from enum import Enum
 
     for spec in table_specs(table):
         name = spec.key.rpartition(".")[2]
+        option = f"--{name.replace('_', '-')}"
         unit = f" ({spec.unit})" if spec.unit else ""
         if isinstance(spec.kind, type) and issubclass(spec.kind, Enum):
-            parser.add_argument(f"--{name.replace('_', '-')}", dest=name, choices=[item.value for item in spec.choices],
+            parser.add_argument(option, dest=name, choices=[item.value for item in spec.choices],
                                 help=f"{spec.doc} (default {spec.default.value})")
         else:
-            parser.add_argument(f"--{name.replace('_', '-')}", dest=name, type=spec.kind, metavar="X",
-                                help=f"{spec.doc}{unit}; {spec.bounds} (default {spec.default:g})")
+            parser.add_argument(option, dest=name, type=_option_type(spec.key, spec.kind, spec.bounds, spec.unit),
+                                metavar="X", help=f"{spec.doc}{unit}; {spec.bounds} (default {spec.default:g})")
+
+
+def _bind_schema_ranges(parser: argparse.ArgumentParser, ranges: dict[str, str]) -> None:
+    """Give each option of ``ranges`` (dest -> dotted schema key) its parameter's range: checked as parsed, in --help."""
+    from torus_cad.parameters import parameter_specs
+
+    specs = {spec.key: spec for spec in parameter_specs()}
+    for action in parser._actions:
+        key = ranges.get(action.dest)
+        if key is None:
+            continue
+        spec = specs[key]
+        action.type = _option_type(key, spec.kind, spec.bounds, spec.unit)
+        action.help = f"{action.help}; {range_help(spec.bounds, spec.unit)}"
 
 
 def _add_mesh_parser(commands: Any) -> None:
@@ -145,9 +191,10 @@ def _add_mesh_parser(commands: Any) -> None:
         "<name>_mesh.<format> files and <name>_mesh.json, a quality report. The options override the design's "
         "[mesh] table. A mesh whose estimated memory is over the limit, a resolution too coarse for the blade "
         "and a root fillet are refused before anything is built.")
-    mesh.add_argument("--sections", type=int, metavar="N", help="sections along each blade (mesh.sections, default 100)")
-    mesh.add_argument("--points", type=int, metavar="M",
+    mesh.add_argument("--sections", metavar="N", help="sections along each blade (mesh.sections, default 100)")
+    mesh.add_argument("--points", metavar="M",
                       help="points around each section, equal arc length (mesh.points, default 400)")
+    mesh.schema_ranges = {"sections": "mesh.sections", "points": "mesh.points"}  # the schema's ranges, when used
     mesh.add_argument("--spacing", choices=["arc_length", "parameter"],
                       help="sections evenly in the centerline's arc length or in its parameter s "
                            "(mesh.spacing, default arc_length)")
@@ -173,9 +220,12 @@ def _add_cfd_parser(commands: Any) -> None:
         "pip install -c constraints.txt -e '.[cfd]'.")
     cfd.table = "cfd"  # its options, when the subcommand is used (_Parser.table)
     cfd.first_line = "building the propeller and its fluid domain: loading the schema, the CAD kernel and gmsh"
-    cfd.add_argument("--threads", type=int, default=GMSH_REPRODUCIBLE_THREADS, metavar="N",
-                     help=f"gmsh threads (default {GMSH_REPRODUCIBLE_THREADS}: the same mesh on every run; 0 = one "
-                          "per CPU, whose meshes differ slightly from run to run)")
+    threads = Bounds(0, max_cfd_threads())
+    cfd.add_argument("--threads", type=integer("--threads", threads, note="0 = one per CPU"),
+                     default=GMSH_REPRODUCIBLE_THREADS, metavar="N",
+                     help=f"gmsh threads, {range_help(threads)} ({_THREADS_NOTE}; default "
+                          f"{GMSH_REPRODUCIBLE_THREADS}: the same mesh on every run; 0 = one per CPU, whose meshes differ "
+                          "slightly from run to run)")
     _add_out_and_quiet(cfd, "cfd_out", command_cfd)
 
 
@@ -187,26 +237,23 @@ def _add_simulate_parser(commands: Any) -> None:
         "simpleFoam through foamlib. Writes <name>_performance.json (thrust, torque, power, J, CT, CP, efficiency "
         "or figure of merit, convergence) and <name>_performance.png (force and residual histories). Needs "
         "OpenFOAM (v1912) and the simulate extra: pip install -c constraints.txt -e '.[simulate]'.")
-    from torus_cad.simulate.thrust_target import (
-        DEFAULT_MAX_RUNS,
-        DEFAULT_TOLERANCE,
-        MAX_RUNS_RANGE,
-        PLAUSIBLE_CT_LIMIT,
-        TOLERANCE_RANGE,
-    )
+    from torus_cad.simulate.thrust_target import DEFAULT_MAX_RUNS, DEFAULT_TOLERANCE, PLAUSIBLE_CT_LIMIT
 
+    rpm, thrust = Bounds(0.0, SIMULATE_RPM_LIMIT), Bounds(0.0, SIMULATE_THRUST_LIMIT_N, low_open=True)
+    tolerance, runs = Bounds(*THRUST_TOLERANCE_RANGE), Bounds(*THRUST_RUNS_RANGE)
     speed = simulate.add_mutually_exclusive_group(required=True)
-    speed.add_argument("--rpm", type=float, help="revolutions per minute, from 0 to the rpm at helical tip Mach 0.6, "
-                       "in the design's own sense of rotation (a 'cw' design clockwise seen from +z)")
-    speed.add_argument("--thrust", type=float, metavar="N",
-                       help="find the rpm that gives this thrust, newtons (> 0, at most the thrust at the rpm limit "
-                            f"with CT {PLAUSIBLE_CT_LIMIT:g}): one mesh, a few solver runs on it (a secant step on "
-                            "sqrt(thrust)); the report lists every run")
-    simulate.add_argument("--thrust-tolerance", type=float, default=DEFAULT_TOLERANCE, metavar="FRACTION",
-                          help=f"--thrust stops within this fraction of the target, [{TOLERANCE_RANGE[0]:g}, "
-                               f"{TOLERANCE_RANGE[1]:g}] (default {DEFAULT_TOLERANCE:g})")
-    simulate.add_argument("--thrust-runs", type=int, default=DEFAULT_MAX_RUNS, metavar="N",
-                          help=f"--thrust runs the solver at most this often, [{MAX_RUNS_RANGE[0]}, {MAX_RUNS_RANGE[1]}] "
+    speed.add_argument("--rpm", type=number("--rpm", rpm),
+                       help=f"revolutions per minute, {range_help(rpm)} and at most the design's rpm at helical tip "
+                       "Mach 0.6, in the design's own sense of rotation (a 'cw' design clockwise seen from +z)")
+    speed.add_argument("--thrust", type=number("--thrust", thrust, "N"), metavar="N",
+                       help=f"find the rpm that gives this thrust, {range_help(thrust, 'N')} and at most the "
+                            f"thrust at the rpm limit with CT {PLAUSIBLE_CT_LIMIT:g}): one mesh, a few solver runs on "
+                            "it (a secant step on sqrt(thrust)); the report lists every run")
+    simulate.add_argument("--thrust-tolerance", type=number("--thrust-tolerance", tolerance), default=DEFAULT_TOLERANCE,
+                          metavar="FRACTION", help=f"--thrust stops within this fraction of the target, "
+                                                   f"{range_help(tolerance)} (default {DEFAULT_TOLERANCE:g})")
+    simulate.add_argument("--thrust-runs", type=integer("--thrust-runs", runs), default=DEFAULT_MAX_RUNS, metavar="N",
+                          help=f"--thrust runs the solver at most this often, {range_help(runs)} "
                                f"(default {DEFAULT_MAX_RUNS})")
     simulate.add_argument("--step", metavar="FILE", help="simulate the one solid of this STEP file instead of a "
                           "design (outputs named after the file's stem; CONFIG and --set give only [cfd])")
@@ -215,8 +262,10 @@ def _add_simulate_parser(commands: Any) -> None:
                                "(default +z); the thrust points along it")
     simulate.add_argument("--turning", choices=["cw", "ccw"], default="cw",
                           help="--step: the sense of rotation seen from the + end of --axis (default cw)")
-    simulate.add_argument("--airspeed", type=float, default=0.0, metavar="M_S",
-                          help="speed of the air arriving at the inlet, [0, 100] m/s (default 0: still air)")
+    airspeed = Bounds(0.0, SIMULATE_AIRSPEED_LIMIT_M_S)
+    simulate.add_argument("--airspeed", type=number("--airspeed", airspeed, "m/s", "the solver is incompressible"),
+                          default=0.0, metavar="M_S", help=f"speed of the air arriving at the inlet, "
+                                                            f"{range_help(airspeed, 'm/s')} (default 0: still air)")
     simulate.add_argument("--level", choices=["coarse", "medium", "fine"], default="coarse",
                           help="mesh level (default coarse: about 52k cells for the default design)")
     simulate.add_argument("--mesher", choices=["snappy", "tet"], default="snappy",
@@ -225,13 +274,18 @@ def _add_simulate_parser(commands: Any) -> None:
     simulate.add_argument("--turbulence", choices=["kOmegaSST", "kOmegaSSTLM"], default="kOmegaSST",
                           help="RANS model: kOmegaSST (default) or kOmegaSSTLM, k-omega SST with Langtry-Menter "
                                "transition (two more equations; compared against the wind tunnel in the simulate how-to)")
-    simulate.add_argument("--iterations", type=int, metavar="N", help="SIMPLE iterations, [1, 20000] (default: the "
-                          "level's, 200 / 300 / 400)")
-    simulate.add_argument("--processes", type=int, metavar="N", default=None,
-                          help="MPI processes for the solver, from 1 to the CPUs (default: one per CPU)")
-    simulate.add_argument("--time-limit", type=float, default=3600.0, metavar="SECONDS",
-                          help="time budget of the run (> 0; of the whole search with --thrust); refused before the "
-                               "solver starts if its estimate is over, stopped when it runs over (default 3600)")
+    iterations, processes = Bounds(1, SIMULATE_MAX_ITERATIONS), Bounds(1, available_cpus())
+    time_limit = Bounds(0.0, SIMULATE_TIME_LIMIT_MAX_S, low_open=True)
+    simulate.add_argument("--iterations", type=integer("--iterations", iterations), metavar="N",
+                          help=f"SIMPLE iterations, {range_help(iterations)} (default: the level's, 200 / 300 / 400)")
+    simulate.add_argument("--processes", type=integer("--processes", processes, note="the CPUs available"), metavar="N",
+                          default=None, help=f"MPI processes for the solver, {range_help(processes)}: from 1 to the "
+                                             "CPUs available (default: one per CPU)")
+    simulate.add_argument("--time-limit", type=number("--time-limit", time_limit, "s"), default=3600.0,
+                          metavar="SECONDS",
+                          help=f"time budget of the run, {range_help(time_limit, 's')} (of the whole search with "
+                               "--thrust); refused before the solver starts if its estimate is over, stopped when it "
+                               "runs over (default 3600)")
     simulate.add_argument("--case-only", action="store_true", help="write the case without running it")
     simulate.add_argument("--mesh-from", metavar="CASE", help="reuse the mesh of an earlier case of this design and "
                           "level (OUT/<name>_case) instead of meshing again: another rpm or airspeed")
@@ -263,8 +317,8 @@ def build_parser() -> argparse.ArgumentParser:
                             "--preview) and <name>.json, the report that lists them all.", epilog=EPILOG,
                             formatter_class=argparse.RawDescriptionHelpFormatter)
     build.add_argument("--out", default="step_out", help="output folder (default: step_out)")
-    build.add_argument("--density", type=_positive_density, default=1.24,
-                       help="material density for the mass, g/cm^3 (default 1.24, PLA)")
+    build.add_argument("--density", type=_DENSITY, default=1.24,
+                       help=f"material density for the mass, {range_help(DENSITY_RANGE, 'g/cm^3')} (default 1.24, PLA)")
     build.add_argument("--no-stl", action="store_true", help="write STEP and JSON only")
     build.add_argument("--format", dest="formats", action="append", metavar="FORMAT[,FORMAT]",
                        help="files to write instead of the design's export.formats, repeatable or comma-separated: "
@@ -276,7 +330,7 @@ def build_parser() -> argparse.ArgumentParser:
     build.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     build.add_argument("--preview", action="store_true", help="also render <name>.png (see 'torus-cad preview')")
     build.add_argument("--preview-size", default="1200x600", metavar="WxH",
-                       help="size of the --preview picture in pixels (default 1200x600)")
+                       help=f"size of the --preview picture in pixels, {_PICTURE_SIDES} (default 1200x600)")
     build.set_defaults(handler=command_build)
 
     preview = _design_command(
@@ -285,7 +339,7 @@ def build_parser() -> argparse.ArgumentParser:
         "a view from above that shows every blade and a view along the spin axis, each blade in its own colour.")
     preview.add_argument("--out", metavar="FILE.png", help="picture to write (default: step_out/<name>.png)")
     preview.add_argument("--size", default="1200x600", metavar="WxH",
-                         help="picture size in pixels, each side 64..8000 (default 1200x600)")
+                         help=f"picture size in pixels, {_PICTURE_SIDES} (default 1200x600)")
     preview.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     preview.set_defaults(handler=command_preview)
 
@@ -318,20 +372,22 @@ def build_parser() -> argparse.ArgumentParser:
                                 "(the table of what finished is written).")
     sweep.add_argument("sweep", metavar="SWEEP.toml", help="sweep file (see examples/sweep_example.toml)")
     sweep.add_argument("--out", help="output folder (default: sweep_out/<sweep file name>)")
-    sweep.add_argument("--workers", type=int, metavar="N",
-                       help="local worker processes (default: one per available core; more are capped at the "
-                            "cores, with one line, unless --oversubscribe)")
+    workers = Bounds(1, max_workers())
+    sweep.add_argument("--workers", type=integer("--workers", workers, note=_WORKERS_NOTE), metavar="N",
+                       help=f"local worker processes, {range_help(workers)} ({_WORKERS_NOTE}; default: one per "
+                            "available core; more are capped at the cores, with one line, unless --oversubscribe)")
     sweep.add_argument("--oversubscribe", action="store_true",
                        help="start --workers processes even when they are more than the available cores")
     sweep.add_argument("--scheduler", metavar="ADDRESS",
                        help="run on a Dask distributed cluster, e.g. tcp://host:8786 ('local': a LocalCluster "
                             "of --workers processes); OUT must be on a file system the workers share")
-    sweep.add_argument("--density", type=_positive_density, default=None,
-                       help="material density for the mass, g/cm^3 (default: the sweep file's, else 1.24)")
+    sweep.add_argument("--density", type=_DENSITY, default=None,
+                       help=f"material density for the mass, {range_help(DENSITY_RANGE, 'g/cm^3')} (default: the sweep "
+                            "file's, else 1.24)")
     sweep.add_argument("--no-stl", action="store_true", help="write STEP and JSON only")
-    sweep.add_argument("--time-limit", type=float, metavar="SECONDS",
-                       help="stop a design that runs longer and record it as 'timeout' (default: the sweep "
-                            "file's time_limit_s, else 300; local pool only)")
+    sweep.add_argument("--time-limit", type=number("--time-limit", DESIGN_TIME_RANGE, "s"), metavar="SECONDS",
+                       help=f"stop a design that runs longer and record it as 'timeout', {range_help(DESIGN_TIME_RANGE, 's')} "
+                            "(default: the sweep file's time_limit_s, else 300; local pool only)")
     sweep.add_argument("--rebuild", action="store_true", help="build every design again, even those already done")
     sweep.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary")
     sweep.set_defaults(handler=command_sweep)
@@ -347,9 +403,12 @@ def build_parser() -> argparse.ArgumentParser:
         "130 / 143 interrupted (rerun to continue).")
     optimize.add_argument("study", metavar="STUDY.toml", help="study file (see examples/optimize_light.toml)")
     optimize.add_argument("--out", help="output folder (default: optimize_out/<study file name>)")
-    optimize.add_argument("--trials", type=int, metavar="N", help="trials in all (default: the file's study.trials)")
-    optimize.add_argument("--workers", type=int, metavar="K",
-                          help="local worker processes (default and most: the CPUs available)")
+    trials = Bounds(1, MAX_STUDY_TRIALS)
+    optimize.add_argument("--trials", type=integer("--trials", trials), metavar="N",
+                          help=f"trials in all, {range_help(trials)} (default: the file's study.trials)")
+    optimize.add_argument("--workers", type=integer("--workers", workers, note=_WORKERS_NOTE), metavar="K",
+                          help=f"local worker processes, {range_help(workers)} ({_WORKERS_NOTE}; the local pool "
+                               "runs at most one per CPU available, the default; --scheduler local starts this many)")
     optimize.add_argument("--scheduler", metavar="ADDRESS",
                           help="run the trials on a Dask cluster, e.g. tcp://host:8786 ('local': a LocalCluster of "
                                "--workers processes); OUT must be on a file system the workers share")
@@ -363,7 +422,9 @@ def build_parser() -> argparse.ArgumentParser:
                              description="Serve a local web page to design a propeller: a parameters panel, a "
                              "live 3D view (a preview at once, the exact solid when it is built), readouts, and "
                              "STEP / STL / TOML downloads. Starts from CONFIG (or the default design).")
-    studio.add_argument("--port", type=_port, default=8080, help="port to serve on (default 8080; 0: any free port)")
+    port = Bounds(0, 65535)
+    studio.add_argument("--port", type=integer("--port", port, note="0: any free port"), default=8080,
+                        help=f"port to serve on, {range_help(port)} (default 8080; 0: any free port)")
     studio.add_argument("--host", default="127.0.0.1",
                         help="address to listen on (default 127.0.0.1: only this machine can connect; "
                              "0.0.0.0 serves every network, without a password)")

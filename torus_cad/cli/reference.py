@@ -28,10 +28,7 @@ def cli_reference() -> str:
     lines = [BEGIN, ""] + _help_of(parser, "torus-cad")
     for action in parser._actions:  # argparse keeps its subcommands here and nowhere public
         if isinstance(action, argparse._SubParsersAction):
-            for name, sub in action.choices.items():
-                complete = getattr(sub, "complete", None)
-                if complete is not None:
-                    complete()  # the options a subcommand adds from the schema when it is used
+            for name, sub in action.choices.items():  # format_help adds a subcommand's schema options
                 lines += _help_of(sub, f"torus-cad {name}")
     return "\n".join([*lines, END])
 

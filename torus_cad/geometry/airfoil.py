@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING, Any, Self, cast
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from torus_cad.errors import ParameterError
+from torus_cad.errors import ParameterError, shown
 
 if TYPE_CHECKING:
     from torus_cad.geometry.section import Section
@@ -241,7 +241,7 @@ class Naca5Airfoil(_ThicknessOnCamberLine):
 def _digits(designation: str, count: int) -> list[int]:
     text = designation.strip() if isinstance(designation, str) else ""
     if not re.fullmatch(rf"\d{{{count}}}", text):
-        raise ParameterError(f"airfoil.naca = {designation!r} must be {count} digits")
+        raise ParameterError(f"airfoil.naca = {shown(designation)} must be {count} digits")
     return [int(character) for character in text]
 
 
@@ -263,7 +263,7 @@ def naca_section(designation: str, camber_normal: bool = True) -> NacaAirfoil | 
         return Naca5Airfoil.from_designation(text, camber_normal)
     if len(text) == 4:
         return NacaAirfoil.from_designation(text, camber_normal)
-    raise ParameterError(f"airfoil.naca = {designation!r} must be a 4-digit (e.g. \"2412\") or "
+    raise ParameterError(f"airfoil.naca = {shown(designation)} must be a 4-digit (e.g. \"2412\") or "
                          "5-digit (e.g. \"23012\") NACA designation")
 
 

@@ -32,7 +32,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from torus_cad.errors import ParameterError
-from torus_cad.runtime.input_files import decode_text, read_untrusted_bytes
+from torus_cad.runtime.input_files import decode_text, is_number_text, read_untrusted_bytes
 from torus_cad.tolerances import (
     STATION_BETA_LIMIT_DEG,
     STATION_FILE_MAX_BYTES,
@@ -93,13 +93,6 @@ def _numbers(fields: list[str], source: str, line: int) -> list[float]:
     return values
 
 
-def _is_number(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
-
 
 def read_station_file(path: str | Path) -> StationTable:
     """The station table of a UIUC geometry file or an APC PE0 file (module docstring), checked."""
@@ -119,7 +112,7 @@ def _uiuc_table(lines: list[str], source: str) -> StationTable:
         fields = line.split()
         if not fields:
             continue
-        if not rows and not _is_number(fields[0]):
+        if not rows and not is_number_text(fields[0]):
             continue  # a header line
         if len(fields) != 3:
             raise ParameterError(f"{_where(source, number)}: expected 3 columns (r/R c/R beta), got {len(fields)}")
@@ -160,7 +153,7 @@ def _pe0_table(lines: list[str], source: str) -> StationTable:
             if rows:
                 break
             continue
-        if not rows and not _is_number(fields[0]):
+        if not rows and not is_number_text(fields[0]):
             continue  # the units line
         if len(fields) < _PE0_COLUMNS:
             raise ParameterError(f"{_where(source, number)}: expected at least {_PE0_COLUMNS} columns (STATION CHORD "

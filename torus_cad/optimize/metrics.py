@@ -14,7 +14,7 @@ import math
 from collections.abc import Mapping
 from typing import Any
 
-from torus_cad.errors import ParameterError
+from torus_cad.errors import ParameterError, shown
 
 __all__ = ["PERFORMANCE_METRICS", "PERFORMANCE_PREFIX", "REPORT_METRICS", "check_metric", "is_performance",
            "metric_value"]
@@ -50,7 +50,7 @@ def check_metric(metric: str, where: str) -> None:
     close = difflib.get_close_matches(metric, known + [PERFORMANCE_PREFIX + k for k in PERFORMANCE_METRICS]
                                       + list(REPORT_METRICS), n=1, cutoff=0.5)
     hint = f"; did you mean {close[0]!r}?" if close else f"; known: {', '.join(REPORT_METRICS)}, performance.*"
-    raise ParameterError(f"{where} = {metric!r} is not a number of the build report nor performance.*{hint}")
+    raise ParameterError(f"{where} = {shown(metric)} is not a number of the build report nor performance.*{hint}")
 
 
 def metric_value(metric: str, report: Mapping[str, Any], performance: Mapping[str, Any] | None) -> float:

@@ -36,7 +36,6 @@ from __future__ import annotations
 import hashlib
 import json
 import re
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from enum import StrEnum
@@ -54,12 +53,12 @@ from torus_cad.batch.sweep_file import (
     _paths_relative_to,
     _resolve_leaf,
 )
-from torus_cad.errors import ParameterError
+from torus_cad.errors import ParameterError, shown
 from torus_cad.optimize.metrics import check_metric, is_performance
 from torus_cad.parameters import PropellerParameters
-from torus_cad.parameters.config_file import read_config_text
+from torus_cad.parameters.config_file import read_config_table
 from torus_cad.parameters.schema import Section, param, parameter_error
-from torus_cad.tolerances import MAX_STUDY_TRIALS
+from torus_cad.tolerances import DESIGN_TIME_LIMIT_MAX_S, MAX_STUDY_TRIALS, SIMULATE_RPM_LIMIT
 
 __all__ = ["Direction", "Objective", "Sampler", "SimulateLevel", "StudySpec", "load_study", "parse_study"]
 
@@ -99,7 +98,7 @@ class StudyTable(Section):
     storage: str = param("", doc="'' = SQLite file OUT/<name>.db; or a postgresql:// URL")
     population: int = param(20, ge=2, le=10000, doc="nsga2: designs per generation")
     stl: bool = param(False, doc="write each trial's STL too (the best designs always get one)")
-    time_limit_s: float = param(0.0, unit="s", ge=0.0, le=86400.0,
+    time_limit_s: float = param(0.0, unit="s", ge=0.0, le=DESIGN_TIME_LIMIT_MAX_S,
                                 doc="per trial on the local pool (0 = 300 s, or 3600 s with simulate)")
 
 
@@ -120,7 +119,7 @@ class BoundTable(Section):
 class SimulateTable(Section):
     """[simulate]: how ``torus-cad simulate`` runs each trial."""
 
-    rpm: float = param(0.0, ge=0.0, le=1.0e6, doc="rotational speed, rpm")
+    rpm: float = param(0.0, ge=0.0, le=SIMULATE_RPM_LIMIT, doc="rotational speed, rpm")
     airspeed: float = param(0.0, unit="m/s", ge=0.0, le=1000.0, doc="axial inflow speed")
     level: SimulateLevel = param(SimulateLevel.COARSE, strict=False, doc="mesh level of the simulation")
 
@@ -214,11 +213,7 @@ def load_study(path: str | Path) -> StudySpec:
     """Read and check a study file; any problem is a one-line ParameterError naming the key."""
     path = Path(path)
     source = f"study file {str(path)!r}"
-    text = read_config_text(path, "study file")
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as error:
-        raise ParameterError(f"{source} is not valid TOML: {error}") from None
+    data = read_config_table(path, "study file")  # the readers of every file: shape, size, nesting, digits
     return parse_study(data, base_dir=path.parent, name=path.stem, source=source)
 
 
@@ -236,7 +231,7 @@ def parse_study(data: Mapping[str, Any], base_dir: str | Path = ".", name: str =
         data["constraints"] = dict(_flatten_bounds(data["constraints"]))
         for key, bound in data["constraints"].items():
             if isinstance(bound, Mapping) and not set(bound) <= {"min", "max"}:
-                raise fail(f"constraints.{key!r} has keys {sorted(bound)}; give min, max or both, e.g. {{ min = 0.8 }}")
+                raise fail(f"constraints.{shown(key)} has keys {sorted(bound)}; give min, max or both, e.g. {{ min = 0.8 }}")
     try:
         model = StudyFile.model_validate(data)
     except ValidationError as error:
@@ -274,7 +269,7 @@ def _flatten_bounds(table: Mapping[str, Any], prefix: str = "") -> list[tuple[st
 
 def _axis(key: str, values: list[Any], folder: Path, fail: Any) -> VaryAxis:
     """A range (two numbers) or a choice (strings or booleans), checked against the schema's ranges."""
-    where = f"vary.{key!r}"
+    where = f"vary.{shown(key)}"
     path, index, leaf = _resolve_leaf(key, fail)
     numbers = [v for v in values if isinstance(v, (int, float)) and not isinstance(v, bool)]
     if numbers and len(numbers) == len(values):
@@ -285,7 +280,7 @@ def _axis(key: str, values: list[Any], folder: Path, fail: Any) -> VaryAxis:
             raise fail(f"{where}: low = {low!r} must be below high = {high!r}")
         return VaryAxis(key, path, index, low=low, high=high, integer=leaf.kind is int)
     if numbers or not values:
-        raise fail(f"{where} must be two numbers (a range) or a list of strings or booleans (a choice), got {values!r}")
+        raise fail(f"{where} must be two numbers (a range) or a list of strings or booleans (a choice), got {shown(values)}")
     checked = tuple(_checked_value(value, leaf, f"{where} item {i}", fail) for i, value in enumerate(values))
     if len(set(map(repr, checked))) != len(checked):
         raise fail(f"{where} lists a choice twice")

@@ -5,12 +5,15 @@ The reading itself is torus_cad.runtime.input_files's, shared with every other f
 (opened non-blocking, checked with ``fstat``), so the command can neither read gigabytes nor wait
 forever.
 
-:func:`parse_config_bytes` is the one path from bytes to a table, for files on disk, designs
-uploaded to the studio and ``--set`` values alike: UTF-8 with or without a byte order mark, then
-a scan (:func:`check_toml_shape`) that refuses values nested deeper than
-:data:`~torus_cad.tolerances.TOML_NESTING_LIMIT` or numbers longer than
-:data:`~torus_cad.tolerances.TOML_NUMBER_DIGITS_LIMIT` naming their key, before the TOML reader
-(which recurses on nesting and refuses integers over 4300 digits without saying where) sees them.
+:func:`parse_config_bytes` is the one path from bytes to a table, for every TOML file a person hands
+the program (designs on disk or uploaded to the studio, sweep files, study files) and ``--set``
+values alike: UTF-8 with or without a byte order mark, then a scan (:func:`check_toml_shape`) that
+refuses values nested deeper than :data:`~torus_cad.tolerances.TOML_NESTING_LIMIT` or numbers
+longer than :data:`~torus_cad.tolerances.TOML_NUMBER_DIGITS_LIMIT` naming their key, before the
+TOML reader (which recurses on nesting and refuses integers over 4300 digits without saying where)
+sees them, and after it a walk (:func:`check_table_depth`) that refuses tables nested deeper than
+the same limit through dotted keys or headers (``a.b.c.… = 1``, ``[a.b.c.…]``), which the readers
+of sweeps and studies would otherwise follow down until Python's recursion limit.
 """
 
 from __future__ import annotations
@@ -20,7 +23,7 @@ import tomllib
 from pathlib import Path
 from typing import Any
 
-from torus_cad.errors import ParameterError
+from torus_cad.errors import ParameterError, cut
 from torus_cad.runtime.input_files import decode_text, read_untrusted_bytes, read_untrusted_text
 from torus_cad.tolerances import CONFIG_FILE_MAX_BYTES, TOML_NESTING_LIMIT, TOML_NUMBER_DIGITS_LIMIT
 
@@ -54,9 +57,30 @@ def parse_config_text(text: str, source: str, what: str = "configuration") -> di
     """The TOML table in ``text``: :func:`check_toml_shape` first, then the TOML reader."""
     check_toml_shape(text, f"{what} {source!r}")
     try:
-        return tomllib.loads(text)
+        table = tomllib.loads(text)
     except tomllib.TOMLDecodeError as error:
         raise ParameterError(f"{what} {source!r} is not valid TOML: {error}") from None
+    check_table_depth(table, f"{what} {source!r}")
+    return table
+
+
+def check_table_depth(table: dict[str, Any], where: str) -> None:
+    """Refuse a table whose values are nested more than TOML_NESTING_LIMIT tables and lists deep.
+
+    Dotted keys and table headers nest tables without brackets (``a.b.c = 1``, ``[a.b.c]``), so the
+    scan of the text does not see them. ParameterError ``"{where}: KEY is nested more than N levels
+    deep"``, KEY dotted (cut short when long). Walks without recursion, at most N levels down.
+    """
+    stack: list[tuple[Any, str, int]] = [(table, "", 0)]
+    while stack:
+        value, key, depth = stack.pop()  # a table or list at depth d sits within d - 1 others (the file's not counted)
+        if depth > TOML_NESTING_LIMIT and isinstance(value, dict | list):
+            raise ParameterError(f"{where}: {cut(key)} is nested more than {TOML_NESTING_LIMIT} levels deep "
+                                 "(lists or tables within each other)")
+        if isinstance(value, dict):
+            stack.extend((item, f"{key}.{name}" if key else str(name), depth + 1) for name, item in value.items())
+        elif isinstance(value, list):
+            stack.extend((item, f"{key}[{index}]", depth + 1) for index, item in enumerate(value))
 
 
 def check_toml_shape(text: str, where: str, key_prefix: str = "", lines: bool = True) -> None:

@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import AfterValidator, BeforeValidator, Field, model_validator
 
-from torus_cad.errors import GeometryError, ParameterError
+from torus_cad.errors import GeometryError, ParameterError, shown
 from torus_cad.formats import ExportFormat, StepSchema
 from torus_cad.geometry.airfoil import Naca5Airfoil, NacaAirfoil, naca4_numbers, naca_section
 from torus_cad.geometry.conventional_blade import (
@@ -64,7 +64,7 @@ QuarticCoefficients = Annotated[tuple[Coefficient, Coefficient, Coefficient, Coe
 
 def _checked_name(name: str) -> str:
     if not _NAME_PATTERN.fullmatch(name):
-        raise ValueError(f"name = {name!r} must be 1-64 letters, digits, '_', '-' or '.', "
+        raise ValueError(f"name = {shown(name)} must be 1-64 letters, digits, '_', '-' or '.', "
                          "starting with a letter or digit")
     return name
 
@@ -173,7 +173,7 @@ class Airfoil(Section):
         """naca and file replace the numbers: a number other than its default (or, for a 4-digit
         designation, the designation's own value) contradicts them."""
         if self.naca and self.file:
-            raise ValueError(f"airfoil.naca = {self.naca!r} conflicts with airfoil.file = {self.file!r}: "
+            raise ValueError(f"airfoil.naca = {shown(self.naca)} conflicts with airfoil.file = {shown(self.file)}: "
                              "give one of them")
         if not (self.naca or self.file):
             return self
@@ -189,7 +189,7 @@ class Airfoil(Section):
         for number in _NUMBERS:
             value, default = getattr(self, number), type(self).model_fields[number].default
             if value != default and value != implied.get(number, default):
-                raise ValueError(f"airfoil.{key} = {getattr(self, key)!r} conflicts with airfoil.{number} = {value!r}: "
+                raise ValueError(f"airfoil.{key} = {shown(getattr(self, key))} conflicts with airfoil.{number} = {shown(value)}: "
                                  f"give the section by {key} or by its numbers, not both")
         return self
 
@@ -209,7 +209,7 @@ class Airfoil(Section):
         if not isinstance(section, NacaAirfoil | Naca5Airfoil):
             return self  # a coordinate file: its surfaces were checked for crossing when it was read
         if self.naca:
-            where_from = f"airfoil.naca = {self.naca!r}"
+            where_from = f"airfoil.naca = {shown(self.naca)}"
         else:
             if self.max_camber > 0.0:
                 check_in_bounds("airfoil.camber_position", self.camber_position, Bounds(0.0, 1.0, True, True))
@@ -277,7 +277,7 @@ def _formats(value: Any) -> Any:
         try:
             formats = tuple(ExportFormat(item) for item in value)
         except ValueError:
-            raise ValueError(f"export.formats = {list(value)!r} is not allowed; choose from step, stl, 3mf") from None
+            raise ValueError(f"export.formats = {shown(list(value))} is not allowed; choose from step, stl, 3mf") from None
         return tuple(dict.fromkeys(formats))
     return value
 

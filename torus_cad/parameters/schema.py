@@ -10,7 +10,6 @@ the sweep's axis checks and the studio's panel (all through :func:`parameter_spe
 from __future__ import annotations
 
 import difflib
-import math
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from enum import Enum
@@ -20,7 +19,8 @@ import annotated_types
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError
 from pydantic.fields import FieldInfo
 
-from torus_cad.errors import ParameterError
+from torus_cad.bounds import Bounds as Bounds  # declared beside the command line's option ranges
+from torus_cad.errors import ParameterError, shown
 
 
 def _list_to_tuple(value: Any) -> Any:
@@ -61,29 +61,6 @@ class Section(BaseModel):
 
 
 # -- describing the declarations -------------------------------------------------------------------
-
-@dataclass(frozen=True)
-class Bounds:
-    """An interval of allowed values; an open end is excluded."""
-
-    low: float | None = None
-    high: float | None = None
-    low_open: bool = False
-    high_open: bool = False
-
-    def __str__(self) -> str:
-        low = "-inf" if self.low is None else f"{self.low:g}"
-        high = "inf" if self.high is None else f"{self.high:g}"
-        return f"{'(' if self.low_open or self.low is None else '['}{low}, {high}{')' if self.high_open or self.high is None else ']'}"
-
-    def contains(self, value: float) -> bool:
-        """Whether ``value`` lies inside (NaN never does)."""
-        if isinstance(value, float) and not math.isfinite(value):
-            return False
-        low_ok = self.low is None or (value > self.low if self.low_open else value >= self.low)
-        high_ok = self.high is None or (value < self.high if self.high_open else value <= self.high)
-        return low_ok and high_ok
-
 
 def check_in_bounds(dotted: str, value: float, bounds: Bounds, unit: str = "") -> None:
     """Raise ValueError naming the field, the value and the interval when ``value`` lies outside."""
@@ -235,15 +212,12 @@ def _as_toml_lists(value: Any) -> Any:
 
 
 def _describe(value: Any) -> str:
-    """The value in the words of a TOML file: ``array of 25 items [[1, 2, 3], ...``, ``string 'x'``."""
-    try:
-        text = repr(_as_toml_lists(value))
-    except ValueError:  # an int too long to print (Python refuses > 4300 digits)
-        text = "a huge number"
+    """The value in the words of a TOML file, its text cut short (40 characters): ``array of 25 items [[1, 2,
+    3], ...``, ``string 'x'``."""
     word = next((name for kind, name in _TOML_WORDS.items() if type(value) is kind), type(value).__name__)
     if isinstance(value, list | tuple):
         word += f" of {len(value)} item{'s' if len(value) != 1 else ''}"
-    return f"{word} {text if len(text) <= 40 else text[:37] + '...'}"
+    return f"{word} {shown(_as_toml_lists(value), 40)}"
 
 
 def _value_text(value: Any) -> str:
@@ -252,7 +226,7 @@ def _value_text(value: Any) -> str:
     if isinstance(value, int) and not isinstance(value, bool):
         text = str(value) if abs(value) < 10**15 else f"{float(value):g}" if abs(value) < 10**300 else "a huge number"
         return text
-    return repr(value)
+    return shown(value)
 
 
 def closest_key(key: str, known: Sequence[str], prefix: str = "") -> str:
@@ -293,7 +267,7 @@ def _message(model: type[BaseModel], error: Any) -> str:
         prefix = _dotted(location[:-1]) + "." if len(location) > 1 else ""
         if field in _SWEEP_TABLES:  # a sweep file given to a command that reads one design
             return f"unknown key {field!r}: this looks like a sweep file; run it with 'torus-cad sweep FILE'"
-        return f"unknown key {field!r}{closest_key(str(location[-1]), known, prefix)}"
+        return f"unknown key {shown(field)}{closest_key(str(location[-1]), known, prefix)}"
     if kind == "value_error":
         cause = error.get("ctx", {}).get("error")
         return str(cause) if cause is not None else error["msg"]
@@ -301,7 +275,7 @@ def _message(model: type[BaseModel], error: Any) -> str:
     if kind in ("model_type", "dict_type") and _model_at(model, location) is not None:
         return f"{field} must be a table ([{field}]), got {_describe(value)}"
     if kind in ("finite_number",):
-        return f"{field} = {value!r} must be a finite number"
+        return f"{field} = {shown(value)} must be a finite number"
     if kind in ("greater_than", "greater_than_equal", "less_than", "less_than_equal") and spec is not None:
         try:
             check_in_bounds(field, value, spec.bounds, spec.unit)
@@ -309,7 +283,7 @@ def _message(model: type[BaseModel], error: Any) -> str:
             return str(out_of_range)
     if kind in ("enum", "is_instance_of") and spec is not None and spec.choices:
         choices = ", ".join(str(choice.value) for choice in spec.choices)
-        return f"{field} = {value!r} is not allowed; choose one of {choices}"
+        return f"{field} = {shown(value)} is not allowed; choose one of {choices}"
     if kind in ("tuple_type", "too_short", "too_long", "missing") and spec is not None and spec.length:
         vector_field = _dotted([part for part in location if not isinstance(part, int)])
         return f"{vector_field} must be a list of {spec.length} numbers, got {_describe(value)}"

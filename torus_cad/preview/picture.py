@@ -31,12 +31,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from torus_cad.colors import HUB_COLOR, blade_color
-from torus_cad.errors import ParameterError, TorusCadError
+from torus_cad.errors import ParameterError, TorusCadError, shown
 from torus_cad.geometry.propeller import HUB_PART
 from torus_cad.kernel.checks import mass_properties
 from torus_cad.kernel.files import atomic_path
 from torus_cad.parameters import PropellerParameters
 from torus_cad.runtime.stages import Stage
+from torus_cad.tolerances import PREVIEW_EDGE_RANGE
 
 if TYPE_CHECKING:  # pragma: no cover
     from vtkmodules.vtkRenderingCore import vtkRenderWindow
@@ -45,7 +46,7 @@ if TYPE_CHECKING:  # pragma: no cover
 DEFAULT_SIZE: tuple[int, int] = (1200, 600)
 
 #: Smallest and largest accepted picture edge, pixels.
-MIN_EDGE, MAX_EDGE = 64, 8000
+MIN_EDGE, MAX_EDGE = PREVIEW_EDGE_RANGE
 
 #: The classic isometric elevation (the (1, 1, 1) direction), degrees.
 ISOMETRIC_ELEVATION_DEG = math.degrees(math.atan(1.0 / math.sqrt(2.0)))
@@ -97,9 +98,10 @@ AXIAL_VIEW = View((0.0, 0.0, 1.0), (0.0, 1.0, 0.0), "along the spin axis (+z tow
 
 def parse_size(text: str, option: str = "--size") -> tuple[int, int]:
     """``"1200x600"`` -> ``(1200, 600)``; raise ParameterError (naming ``option``) for anything else."""
-    match = re.fullmatch(r"\s*(\d+)\s*[xX×]\s*(\d+)\s*", text)
+    match = re.fullmatch(r"\s*(\d{1,9})\s*[xX×]\s*(\d{1,9})\s*", text)  # 9 digits: far over MAX_EDGE, an int
     if not match:
-        raise ParameterError(f"{option} {text!r} must look like WIDTHxHEIGHT in pixels, e.g. 1200x600")
+        raise ParameterError(f"{option} {shown(text)} must look like WIDTHxHEIGHT in pixels, e.g. 1200x600, each "
+                             f"side {MIN_EDGE}..{MAX_EDGE}")
     return _checked_size((int(match.group(1)), int(match.group(2))), f"{option} {text.strip()}")
 
 

@@ -117,3 +117,12 @@ class TimeBudget:
         if spent > self.limit_s:
             raise BudgetError(f"{self.what} {self.source!r}: {step} took {spent:.1f} s, over the limit of "
                               f"{self.limit_s:g} s")
+
+
+def is_number_text(text: str) -> bool:
+    """Whether ``text`` reads as a float (a header word or a time folder's name does not)."""
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True

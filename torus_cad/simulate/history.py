@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from torus_cad.runtime.input_files import is_number_text
 from torus_cad.simulate.case import FORCES, MOMENTUM_FLUX, OUTER_FORCES, RESIDUALS, WALL, Y_PLUS
 
 #: Residuals reported, in this order (initial residuals of each equation's first solve).
@@ -43,16 +44,9 @@ def _rows(path: Path) -> tuple[list[str], list[list[str]]]:
 def _time_folder(root: Path, name: str) -> Path:
     """The function object's folder of the first time (``0``)."""
     folder = root / "postProcessing" / name
-    times = sorted(folder.glob("*"), key=lambda path: float(path.name) if _is_number(path.name) else math.inf)
+    times = sorted(folder.glob("*"), key=lambda path: float(path.name) if is_number_text(path.name) else math.inf)
     return times[0] if times else folder / "0"
 
-
-def _is_number(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
 
 
 def _vectors(path: Path, columns: int = 3) -> tuple[np.ndarray, np.ndarray]:

@@ -34,6 +34,7 @@ from torus_cad.kernel.files import owner_tag
 from torus_cad.outputs.output_set import OutputSet
 from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.design import InletSide
+from torus_cad.runtime.input_files import read_untrusted_bytes
 from torus_cad.runtime.interrupts import deferred
 from torus_cad.simulate.case import CaseSpec, mesh_commands, solve_commands, write_case
 from torus_cad.simulate.history import History, momentum_balance_force_n, read_y_plus
@@ -77,6 +78,7 @@ from torus_cad.simulate.thrust_target import (
     next_rpm,
     search_state,
 )
+from torus_cad.tolerances import REPORT_FILE_MAX_BYTES, SIMULATE_MAX_ITERATIONS, SIMULATE_TIME_LIMIT_MAX_S
 
 if TYPE_CHECKING:
     from torus_cad.cfd.step_body import StepPropeller
@@ -85,7 +87,7 @@ if TYPE_CHECKING:
 #: 300 iterations in 85 CPU seconds on each of 2 processes): the estimate a run's time budget is checked against
 #: before the solver starts.
 SOLVER_SECONDS_PER_CELL_ITERATION = 1.1e-5
-MAX_ITERATIONS = 20000
+MAX_ITERATIONS = SIMULATE_MAX_ITERATIONS  # simulate --iterations: torus_cad.tolerances'
 #: The mesh's report in a case folder (mesher, level, checkMesh's verdict and cell types, layers).
 MESH_REPORT = "mesh_report.json"
 
@@ -148,8 +150,9 @@ def check_request(request: Request) -> float:
 
     check_count("--iterations", request.run_iterations, 1, MAX_ITERATIONS)
     check_count("--processes", request.processes, 1, max_processes())
-    if not (math.isfinite(request.time_limit_s) and request.time_limit_s > 0.0):
-        raise ParameterError(f"--time-limit = {request.time_limit_s:g} s is out of range; allowed > 0 s")
+    if not (math.isfinite(request.time_limit_s) and 0.0 < request.time_limit_s <= SIMULATE_TIME_LIMIT_MAX_S):
+        raise ParameterError(f"--time-limit = {request.time_limit_s:g} s is out of range; allowed "
+                             f"(0, {SIMULATE_TIME_LIMIT_MAX_S:g}] s")
     if request.step is not None:
         diameter_m = request.step.body.tip_diameter_mm / 1000.0
     else:
@@ -269,18 +272,19 @@ def _checked_mesh(case: Path, mesh_report: dict[str, Any]) -> dict[str, Any]:
     return report
 
 
-def _reuse_mesh(request: Request, case: Path, diameter_m: float) -> tuple[dict[str, Any], CaseSpec]:
-    """Copy the mesh (constant/polyMesh) and its report of ``request.mesh_from`` into ``case`` and write the
-    dictionaries; ParameterError unless it is a checked case of the same design name, mesher and level."""
+def _mesh_source_report(request: Request) -> dict[str, Any]:
+    """The mesh report of ``request.mesh_from``; ParameterError unless it is a checked case of the same design
+    name, mesher and level (and ``[cfd]`` for the tet mesher). Nothing is written: checked before the output
+    folder is made."""
     source, name = Path(request.mesh_from or ""), request.params.name
     report_path = source / MESH_REPORT
     if not ((source / "constant" / "polyMesh" / "boundary").is_file() and report_path.is_file()):
         raise ParameterError(f"--mesh-from {str(source)!r} is not a meshed case of {name!r} "
                              f"(no constant/polyMesh/boundary or {MESH_REPORT})")
     try:
-        mesh_report = json.loads(report_path.read_text(encoding="utf-8"))
+        mesh_report = json.loads(read_untrusted_bytes(report_path, "mesh report", REPORT_FILE_MAX_BYTES))
         made = (mesh_report["name"], mesh_report["mesher"], mesh_report["level"])
-    except (OSError, ValueError, KeyError, TypeError):
+    except (ParameterError, ValueError, KeyError, TypeError, RecursionError):
         raise ParameterError(f"--mesh-from {str(source)!r}: {MESH_REPORT} is not a mesh report") from None
     wanted = (name, request.mesher.value, request.level.value)
     if made != wanted or (request.mesher == Mesher.TET and mesh_report.get("cfd") != request.params.cfd.model_dump(
@@ -288,6 +292,15 @@ def _reuse_mesh(request: Request, case: Path, diameter_m: float) -> tuple[dict[s
         raise ParameterError(f"--mesh-from {str(source)!r} was meshed for design {made[0]!r}, mesher {made[1]!r}, level "
                              f"{made[2]!r}, not {wanted[0]!r}, {wanted[1]!r}, {wanted[2]!r}"
                              + (" (or with other [cfd] settings)" if request.mesher == Mesher.TET else ""))
+    return mesh_report
+
+
+def _reuse_mesh(request: Request, case: Path, diameter_m: float) -> tuple[dict[str, Any], CaseSpec]:
+    """Copy the mesh (constant/polyMesh) and its report of ``request.mesh_from`` into ``case`` and write the
+    dictionaries; ParameterError unless it is a checked case of the same design name, mesher and level."""
+    mesh_report = _mesh_source_report(request)
+    source, name = Path(request.mesh_from or ""), request.params.name
+    report_path = source / MESH_REPORT
     if (source / "cfd").is_dir():
         shutil.copytree(source / "cfd", case / "cfd")
     shutil.copytree(source / "constant" / "polyMesh", case / "constant" / "polyMesh")
@@ -320,6 +333,8 @@ async def simulate_async(request: Request, out_dir: str | Path, progress: Progre
     if not request.case_only:
         check_openfoam()
     request, out = _at_level(request), Path(out_dir)
+    if request.mesh_from is not None:
+        _mesh_source_report(request)  # a wrong case is refused before the output folder is made
     name = request.params.name
     with OutputSet(out, f"{name}_performance") as output:
         assert output.staging is not None

@@ -10,7 +10,6 @@ the three has one ratio.
 from __future__ import annotations
 
 import math
-import os
 from dataclasses import dataclass
 from enum import StrEnum
 from typing import Any
@@ -18,6 +17,7 @@ from typing import Any
 from torus_cad.errors import ParameterError
 from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.design import Handedness, InletSide
+from torus_cad.runtime.cpus import available_cpus
 from torus_cad.tolerances import SIMULATE_AIRSPEED_LIMIT_M_S, SIMULATE_TIP_MACH_LIMIT
 
 
@@ -180,10 +180,7 @@ def check_count(name: str, value: int, low: int, high: int) -> int:
 
 def max_processes() -> int:
     """Processes a run may use: the CPUs this process may run on."""
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:  # pragma: no cover - not Linux
-        return os.cpu_count() or 1
+    return available_cpus()
 
 
 def with_level(params: PropellerParameters, level: Level) -> PropellerParameters:

@@ -28,6 +28,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from torus_cad.errors import ParameterError
+from torus_cad.tolerances import THRUST_RUNS_RANGE, THRUST_TOLERANCE_RANGE
 
 #: The thrust coefficient CT = T / (rho n^2 D^4) of the first guess (the default design's is about 0.29).
 INITIAL_CT = 0.25
@@ -36,9 +37,9 @@ PLAUSIBLE_CT_LIMIT = 1.0
 #: Default stopping rule: within 1 % of the target, at most 5 runs.
 DEFAULT_TOLERANCE = 0.01
 DEFAULT_MAX_RUNS = 5
-#: Bounds of the options (--thrust-tolerance as a fraction, --thrust-runs).
-TOLERANCE_RANGE = (0.001, 0.2)
-MAX_RUNS_RANGE = (1, 10)
+#: Bounds of the options (--thrust-tolerance as a fraction, --thrust-runs): torus_cad.tolerances'.
+TOLERANCE_RANGE = THRUST_TOLERANCE_RANGE
+MAX_RUNS_RANGE = THRUST_RUNS_RANGE
 
 
 @dataclass(frozen=True)
