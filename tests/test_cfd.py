@@ -113,9 +113,9 @@ def test_bad_input_exits_2_with_one_line_and_writes_nothing(tmp_path, capsys, ar
 
 def test_without_gmsh_one_line_names_the_extra(tmp_path, capsys, monkeypatch):
     monkeypatch.setitem(sys.modules, "gmsh", None)  # what Python does when the package is absent: ImportError
-    assert main(["cfd", "--out", str(tmp_path / "out")]) == 1
+    assert main(["cfd", "--out", str(tmp_path / "out")]) == 2
     error = capsys.readouterr().err
-    assert error.count("\n") == 1 and "pip install 'torus_cad[cfd]'" in error
+    assert error.count("\n") == 1 and "the cfd extra" in error and "pip install -c constraints.txt -e '.[cfd]'" in error
     assert not (tmp_path / "out").exists()
 
 
@@ -159,11 +159,14 @@ def test_a_blunt_trailing_edge_meshes_at_coarse_sizes(tmp_path):
 
 @pytest.mark.skipif(shutil.which("gmshToFoam") is None, reason="OpenFOAM is not installed")
 def test_readme_txt_openfoam_steps_give_mesh_ok_and_no_empty_patch(cfd_out, tmp_path):
-    """README.txt's OpenFOAM lines, as written, in a fresh case folder: checkMesh says "Mesh OK", every
-    patch has faces, the propeller is a wall, the zones are there."""
-    case = tmp_path / "case"
+    """README.txt's OpenFOAM lines, as written, in a fresh case folder inside the output folder after the
+    folder was moved: checkMesh says "Mesh OK", every patch has faces, the propeller is a wall, the zones
+    are there."""
+    moved = tmp_path / "moved"
+    shutil.copytree(cfd_out, moved)
+    case = moved / "case"
     case.mkdir()
-    script = openfoam_block((cfd_out / "README.txt").read_text())
+    script = openfoam_block((moved / "README.txt").read_text())
     result = subprocess.run(["sh", "-e", "-c", script], cwd=case, check=False, capture_output=True, text=True,
                             timeout=600)
     assert result.returncode == 0, result.stdout + result.stderr

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-optuna = pytest.importorskip("optuna", reason="the optimize extra is not installed: pip install -e '.[optimize]'")
+optuna = pytest.importorskip("optuna", reason="the optimize extra is not installed: pip install -c constraints.txt -e '.[optimize]'")
 
 from optuna.trial import TrialState  # noqa: E402
 
@@ -102,7 +102,7 @@ def test_the_shipped_example_reads_and_names_real_report_numbers():
     ({"vary": {"handedness": ["cw", "left"]}}, "vary.'handedness' item 1 = 'left' is not allowed; choose one of cw, ccw"),
     ({"vary": {"centerline.p2[3]": [1.0, 2.0]}}, "index 3 is out of range; centerline.p2 has 3 elements"),
     ({"objective": [{"metric": "mass"}]}, "objective[0].metric = 'mass' is not a number of the build report"),
-    ({"objective": [{"metric": "mass_g", "direction": "down"}]}, "objective[0].direction: Input should be 'minimize' or 'maximize' (got str 'down')"),
+    ({"objective": [{"metric": "mass_g", "direction": "down"}]}, "objective[0].direction: Input should be 'minimize' or 'maximize' (got string 'down')"),
     ({"constraints": {"printability.thinnest_wall_mm": {"least": 0.8}}},
      "constraints.'printability.thinnest_wall_mm' has keys ['least']; give min, max or both"),
     ({"constraints": {"printability.thinnest_wall_mm": {"min": 2.0, "max": 1.0}}}, "must not be above max"),

@@ -353,3 +353,32 @@ def test_permission_denied_on_the_output_folder_is_found_before_building(tmp_pat
     assert result.stderr.strip() == f"torus-cad: build failed: cannot write to output folder {str(locked)!r}: " \
                                     f"permission denied"
     assert list(locked.iterdir()) == []
+
+
+def test_verify_walks_sub_folders_and_names_every_problem_of_a_tampered_copy(tmp_path):
+    """A folder with sets in sub-folders (as the mesh how-to makes): verify checks them all, and on a
+    tampered copy it reports each problem, one line each, not only the first."""
+    for folder, name in (("top", "part"), ("top/ply", "part"), ("top/ply/deeper", "other")):
+        with OutputSet(tmp_path / folder, name) as output:
+            output.write("step", _text_writer(f"{folder} solid"))
+            output.write("stl", _text_writer(f"{folder} mesh"))
+            output.publish({})
+    top = tmp_path / "top"
+    result = cli("verify", str(top))
+    assert result.returncode == 0, result.stderr
+    assert len(result.stdout.splitlines()) == 3 and "ply/deeper/other" in result.stdout
+    (top / "part.stl").write_text("changed")
+    (top / "ply" / "part.step").unlink()
+    (top / "ply" / "part.stl").write_text("changed")
+    (top / "ply" / "deeper" / "other.stl").unlink()
+    result = cli("verify", str(top), "-q")
+    assert result.returncode == 1
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 4, lines
+    assert any("mixed set: part.stl" in line and "ply/" not in line for line in lines)
+    assert any(line.startswith("torus-cad: verify: ply/part: incomplete set: part.step is missing") for line in lines)
+    assert any(line.startswith("torus-cad: verify: ply/part: mixed set: part.stl") for line in lines)
+    assert any(line.startswith("torus-cad: verify: ply/deeper/other: incomplete set: other.stl") for line in lines)
+    with pytest.raises(IncompleteOutputError) as raised:
+        verify_set(top / "ply", "part")
+    assert len(raised.value.problems) == 2

@@ -1,7 +1,7 @@
 """The package's exceptions: one base, one subclass per kind of failure.
 
 The CLI maps :class:`ParameterError` (with :class:`BudgetError`) and :class:`GeometryError` to
-exit code 2 (bad input), every other :class:`TorusCadError` to exit code 1 (the kernel or the
+exit code 2 (bad input), :class:`MissingExtraError` to exit code 2 as well (nothing was tried), every other :class:`TorusCadError` to exit code 1 (the kernel or the
 file system failed; :class:`IncompleteOutputError` is ``torus-cad verify`` finding a broken set).
 
 Messages stay short whatever the input: :func:`shown` quotes a value cut to
@@ -81,4 +81,16 @@ class OutputError(TorusCadError):
 
 
 class IncompleteOutputError(OutputError):
-    """An output set on disk is incomplete or mixed: a file is missing or belongs to another build."""
+    """An output set on disk is incomplete or mixed: a file is missing or belongs to another build.
+
+    ``problems``: every problem found, one sentence each (the message joins them with "; ").
+    """
+
+    def __init__(self, *problems: str) -> None:
+        super().__init__("; ".join(problems))
+        self.problems: tuple[str, ...] = problems
+
+
+class MissingExtraError(TorusCadError):
+    """An optional dependency is not installed; the message names the extra and the line that installs it
+    (see :mod:`torus_cad.runtime.extras`)."""

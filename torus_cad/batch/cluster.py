@@ -27,7 +27,9 @@ def connect(scheduler: str, workers: int | None) -> tuple[Any, Any]:
     try:
         from dask.distributed import Client, LocalCluster
     except ImportError:
-        raise BatchError("--scheduler needs dask.distributed: pip install 'dask[distributed]'") from None
+        from torus_cad.runtime.extras import missing_extra_message
+
+        raise BatchError(missing_extra_message("--scheduler", "sweep", "dask.distributed")) from None
     try:
         if scheduler == "local":
             cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1,  # type: ignore[no-untyped-call]

@@ -75,13 +75,15 @@ ALGORITHM_2D, ALGORITHM_3D = 6, 1
 
 def import_gmsh() -> Any:
     """The gmsh module, or MissingExtraError naming the extra (and the system libraries it needs)."""
+    from torus_cad.runtime.extras import install_line, missing_extra_message
+
     try:
         import gmsh
     except ImportError:
-        raise MissingExtraError("gmsh is not installed: install the cfd extra, pip install 'torus_cad[cfd]'") from None
+        raise MissingExtraError(missing_extra_message("cfd", "cfd", "gmsh")) from None
     except OSError as error:
         raise MissingExtraError(f"gmsh's library does not load ({error}); install the cfd extra "
-                                "(pip install 'torus_cad[cfd]') and the system libraries it links, on Debian: "
+                                f"({install_line('cfd')}) and the system libraries it links, on Debian: "
                                 "apt-get install libglu1-mesa libxcursor1 libxft2 libxinerama1 libgl1") from None
     return gmsh
 
@@ -532,7 +534,7 @@ def write_body_domain(body: PropellerBody, settings: Cfd, out_dir: str | Path,
             "wall_seconds": time.perf_counter() - wall_start, "cpu_seconds": time.process_time() - cpu_start,
         }
         output.write_files(lambda folder: {"readme": _write_text(folder / "README.txt",
-                                                                   readme_text(body.name, report, Path(out_dir)))})
+                                                                   readme_text(body.name, report))})
         paths = output.publish(report)
         return output.sealed_report, paths
 

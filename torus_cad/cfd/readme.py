@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from pathlib import Path
 from typing import Any
 
 _TEMPLATE = """\
@@ -34,8 +33,13 @@ Physical groups
   fluid               volume   the stationary outer region
 
 OpenFOAM (these steps were run with OpenFOAM v1912)
-  In an empty case folder, run the lines between BEGIN and END in a POSIX shell
-  (sh or bash; they are indented by 4 spaces here). MESH is the folder of this README.
+  A runnable case (boundary conditions, MRF, k-omega SST, an Allrun script) comes from
+      torus-cad simulate CONFIG --rpm RPM --mesher tet --case-only --out FOLDER
+  which meshes such a domain again at the sizes of its --level. To import this mesh by hand
+  instead: make an empty case folder inside this folder (mkdir case && cd case) and run the lines
+  between BEGIN and END in a POSIX shell (sh or bash; they are indented by 4 spaces here). MESH is
+  the folder of this README, .. from the case folder; for a case elsewhere, set MESH first.
+  The steps name no absolute path, so they still work after this folder is moved.
   - gmshToFoam needs system/controlDict, checkMesh also system/fvSchemes and fvSolution:
     the first lines write minimal ones (replace them with your solver's).
   - gmshToFoam turns the boundary groups into patches (propeller, inlet, outlet, farfield),
@@ -50,7 +54,7 @@ OpenFOAM (these steps were run with OpenFOAM v1912)
     WM_PROJECT_DIR; elsewhere source OpenFOAM's etc/bashrc first.
 
   BEGIN
-    MESH='{folder}'
+    MESH="${{MESH:-..}}"
     export WM_PROJECT_DIR="${{WM_PROJECT_DIR:-/usr/share/openfoam}}"
     mkdir -p system
     echo 'FoamFile {{ version 2.0; format ascii; class dictionary; object controlDict; }} application simpleFoam; startFrom startTime; startTime 0; stopAt endTime; endTime 100; deltaT 1; writeControl timeStep; writeInterval 100;' > system/controlDict
@@ -85,17 +89,16 @@ Other tools
 BLOCK_BEGIN, BLOCK_END = "  BEGIN", "  END"
 
 
-def readme_text(name: str, report: dict[str, Any], folder: Path) -> str:
-    """The README.txt for a CFD mesh published in ``folder``, from its report (see
-    ``cfd.domain.write_cfd_domain``)."""
+def readme_text(name: str, report: dict[str, Any]) -> str:
+    """The README.txt for a CFD mesh, from its report (see ``cfd.domain.write_cfd_domain``); it names
+    no absolute path, so the folder can move."""
     domain = report["domain_mm"]
     return _TEMPLATE.format(
         name=name, gmsh_version=report["gmsh_version"], inlet_z=domain["inlet_z"], outlet_z=domain["outlet_z"],
         diameter=domain["tip_diameter"], outer_radius=domain["outer_radius"], zone_radius=domain["zone_radius"],
         zone_low=domain["zone_z"][0], zone_high=domain["zone_z"][1], tets=report["tetrahedra_total"],
         zone_tets=report["tetrahedra"]["rotating_zone"], fluid_tets=report["tetrahedra"]["fluid"],
-        sicn=report["sicn_min"], interface=report["triangles"]["rotating_interface"],
-        folder=str(folder.resolve()).replace("'", "'\\''"))
+        sicn=report["sicn_min"], interface=report["triangles"]["rotating_interface"])
 
 
 def openfoam_block(text: str) -> str:

@@ -2,12 +2,7 @@
 
 from __future__ import annotations
 
-from torus_cad.errors import TorusCadError
+from torus_cad.errors import MissingExtraError
 from torus_cad.parameters.design import Cfd, InletSide
-
-
-class MissingExtraError(TorusCadError):
-    """An optional dependency is not installed; the message names the extra that installs it."""
-
 
 __all__ = ["Cfd", "InletSide", "MissingExtraError"]

@@ -16,13 +16,14 @@ import numpy as np
 
 
 def import_meshlib() -> Any:
-    """meshlib's mesh module, or MissingExtraError naming the extra."""
-    from torus_cad.cfd.settings import MissingExtraError
+    """meshlib's mesh module, or MissingExtraError naming the install command."""
+    from torus_cad.errors import MissingExtraError
+    from torus_cad.runtime.extras import install_line
 
     try:
         import meshlib.mrmeshpy as mr
-    except ImportError:
-        raise MissingExtraError("meshlib is not installed: install the cfd extra, pip install 'torus_cad[cfd]'") from None
+    except ImportError:  # meshlib is a dependency of the package itself
+        raise MissingExtraError(f"meshlib is not installed: {install_line()}") from None
     return mr
 
 

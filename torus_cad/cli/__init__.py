@@ -18,7 +18,14 @@ from collections.abc import Callable, Sequence
 
 from torus_cad.cli.commands import EXIT_BAD_INPUT, EXIT_KERNEL_FAILURE, EXIT_OK, report_error
 from torus_cad.cli.parser import build_parser
-from torus_cad.errors import GeometryError, IncompleteOutputError, OutputError, ParameterError, TorusCadError
+from torus_cad.errors import (
+    GeometryError,
+    IncompleteOutputError,
+    MissingExtraError,
+    OutputError,
+    ParameterError,
+    TorusCadError,
+)
 from torus_cad.runtime.interrupts import exit_on_signals
 
 __all__ = ["EXIT_BAD_INPUT", "EXIT_KERNEL_FAILURE", "EXIT_OK", "build_parser", "main"]
@@ -41,6 +48,8 @@ def _run(handler: Callable[[argparse.Namespace], int], args: argparse.Namespace)
         return handler(args)
     except (ParameterError, GeometryError) as error:
         return report_error(f"error: {error}", EXIT_BAD_INPUT)
+    except MissingExtraError as error:
+        return report_error(str(error), EXIT_BAD_INPUT)
     except IncompleteOutputError as error:
         return report_error(f"verify: {error}", EXIT_KERNEL_FAILURE)
     except OutputError as error:
@@ -55,9 +64,22 @@ def _run(handler: Callable[[argparse.Namespace], int], args: argparse.Namespace)
         return report_error(f"cannot write output{where}: {error.strerror or error}", EXIT_KERNEL_FAILURE)
     except KeyboardInterrupt:  # main() called outside the main thread, where no handler could be installed
         return report_error("interrupted", 130)
+    except ModuleNotFoundError as error:  # an import that require_extra did not foresee: still named, with its extra
+        return report_error(_missing_module_message(args.command, error), EXIT_BAD_INPUT)
     except Exception as error:
         return report_error(f"internal error ({type(error).__name__}): {error}; please report it with the design file",
                       EXIT_KERNEL_FAILURE)
+
+
+def _missing_module_message(command: str, error: ModuleNotFoundError) -> str:
+    """One line for a module missing at run time: the extra that installs it and the install command."""
+    from torus_cad.runtime.extras import extra_of_module, install_line, missing_extra_message
+
+    module = error.name or str(error)
+    extra = extra_of_module(module)
+    if extra is not None:
+        return missing_extra_message(command, extra, module)
+    return f"{command} needs {module}, which is not installed: {install_line()}"
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -69,6 +69,13 @@ def load_parameters(config: str | None, overrides: Sequence[str] = ()) -> Propel
         raise ParameterError(f"{source} holds a value that cannot be used: {_first_clause(error)}") from None
 
 
+def _require(command: str, extra: str, modules: Sequence[str] | None = None) -> None:
+    """MissingExtraError (exit 2, one line: the extra and its install command) unless ``extra`` is installed."""
+    from torus_cad.runtime.extras import require_extra
+
+    require_extra(command, extra, modules)
+
+
 def command_build(args: argparse.Namespace) -> int:
     from torus_cad.runtime.progress import StageProgress
 
@@ -209,6 +216,8 @@ def command_defaults(args: argparse.Namespace) -> int:
 def command_sweep(args: argparse.Namespace) -> int:
     """Exit 0 when every design is valid or refused, 1 when any failed (errored, crashed, timed out), 2 for a bad
     sweep file, 130 / 143 on SIGINT / SIGTERM (one line; the table of what finished is written)."""
+    if args.scheduler:
+        _require("sweep --scheduler", "sweep")
     from torus_cad.batch import BatchError, SweepInterrupted, load_sweep, run_sweep
 
     spec = load_sweep(args.sweep)  # a bad sweep file raises ParameterError: exit 2
@@ -236,16 +245,19 @@ def command_sweep(args: argparse.Namespace) -> int:
 def command_optimize(args: argparse.Namespace) -> int:
     """Exit 0 when the study holds its trials (refused or failed designs included), 2 for a bad study file or
     option, 1 when the storage or the workers cannot be used, 130 / 143 / 129 on a signal (rerun to continue)."""
-    try:
-        from torus_cad.optimize import StudyInterrupted, load_study, run_study
-        from torus_cad.optimize.storage import StorageError
-    except ImportError as error:
-        print(f"torus-cad: optimize needs the optimize extra ({error.name} is missing): "
-              "pip install 'torus_cad[optimize]'", file=sys.stderr)
-        return EXIT_KERNEL_FAILURE
+    _require("optimize", "optimize")
     from torus_cad.batch import BatchError
+    from torus_cad.optimize import StudyInterrupted, load_study, run_study
+    from torus_cad.optimize.storage import StorageError
+    from torus_cad.optimize.study_file import Sampler
 
     spec = load_study(args.study)  # a bad study file raises ParameterError: exit 2
+    if spec.sampler is Sampler.CMAES:
+        _require("optimize (sampler cmaes)", "optimize", ["cmaes"])
+    if (args.storage or spec.storage).startswith("postgresql"):
+        _require("optimize (PostgreSQL storage)", "optimize", ["psycopg2"])
+    if args.scheduler:
+        _require("optimize --scheduler", "optimize", ["dask.distributed"])
     out = Path(args.out) if args.out else Path("optimize_out") / Path(args.study).stem
     try:
         result = run_study(spec, out, trials=args.trials, workers=args.workers, scheduler=args.scheduler,
@@ -264,6 +276,7 @@ def command_optimize(args: argparse.Namespace) -> int:
 
 def command_studio(args: argparse.Namespace) -> int:
     """Exit 0 never on a signal: 130 / 143 / 129 with one line, as every command."""
+    _require("studio", "studio")
     from torus_cad.runtime.interrupts import EXIT_SIGNALS
     from torus_cad.studio.app import check_host, serve
 
@@ -286,19 +299,29 @@ def command_studio(args: argparse.Namespace) -> int:
 
 
 def command_verify(args: argparse.Namespace) -> int:
-    from torus_cad.outputs.output_set import set_names, verify_set
+    """Exit 0 when every set is complete, 1 with one line per problem of every set (sub-folders included)."""
+    from torus_cad.outputs.output_set import set_folders, set_names, verify_set
 
     folder = Path(args.folder)
     if not folder.is_dir():
         raise ParameterError(f"verify: {str(folder)!r} is not a folder")
-    names = [args.name] if args.name else set_names(folder)
-    if not names:
-        raise IncompleteOutputError(f"no output set in {str(folder)!r}")
-    for name in names:
-        checked = verify_set(folder, name)  # IncompleteOutputError names the file: exit 1
+    sets = [(folder, args.name)] if args.name else [(where, name) for where in set_folders(folder)
+                                                    for name in set_names(where)]
+    if not sets:
+        raise IncompleteOutputError(f"no output set in {str(folder)!r} or its sub-folders")
+    problems = []
+    for where, name in sets:
+        try:
+            checked = verify_set(where, name)
+        except IncompleteOutputError as error:  # every problem of every set, not only the first
+            prefix = "" if where == folder else f"{where.relative_to(folder)}/"
+            problems += [f"{prefix}{problem}" for problem in error.problems]
+            continue
         if not args.quiet:
             print(f"ok {checked.report.parent / name}: {', '.join(path.name for path in checked.files)}")
-    return EXIT_OK
+    for problem in problems:
+        report_error(f"verify: {problem}", EXIT_KERNEL_FAILURE)
+    return EXIT_KERNEL_FAILURE if problems else EXIT_OK
 
 
 def _mesh_overrides(args: argparse.Namespace) -> dict[str, Any]:
@@ -313,6 +336,7 @@ def _mesh_overrides(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def command_mesh(args: argparse.Namespace) -> int:
+    _require("mesh", "mesh")
     from torus_cad.mesh.pipeline import summary_line, write_surface_mesh
     from torus_cad.outputs.output_set import check_writable_folder
     from torus_cad.runtime.progress import StageProgress
@@ -331,30 +355,26 @@ def _table_overrides(args: argparse.Namespace, table: str) -> dict[str, Any]:
 
 
 def command_cfd(args: argparse.Namespace) -> int:
-    from torus_cad.cfd.settings import MissingExtraError
     from torus_cad.runtime.progress import StageProgress
 
+    _require("cfd", "cfd")
     params = load_parameters(args.config, args.overrides).with_values(_table_overrides(args, "cfd"))
     progress = StageProgress.for_terminal(quiet=args.quiet)
-    try:
-        from torus_cad.cfd.domain import gmsh_library, import_gmsh, summary_line, write_cfd_domain
-        from torus_cad.cfd.estimate import check_cfd_budget
-        from torus_cad.cfd.surface_check import import_meshlib
-        from torus_cad.cfd.worker import run_in_worker
-        from torus_cad.outputs.output_set import check_writable_folder
+    from torus_cad.cfd.domain import gmsh_library, import_gmsh, summary_line, write_cfd_domain
+    from torus_cad.cfd.estimate import check_cfd_budget
+    from torus_cad.cfd.surface_check import import_meshlib
+    from torus_cad.cfd.worker import run_in_worker
+    from torus_cad.outputs.output_set import check_writable_folder
 
-        gmsh = import_gmsh()
-        import_meshlib()
-        estimate = check_cfd_budget(params)  # a mesh that would blow up is refused before any work (a few s)
-        check_writable_folder(args.out)
-        # gmsh set up here, meshing in a worker thread: a signal during a long gmsh call ends the command
-        # at once (cfd.worker, cfd.domain.gmsh_library)
-        with gmsh_library(gmsh):
-            report, paths = run_in_worker(lambda: write_cfd_domain(params, Path(args.out), threads=args.threads,
-                                                                   progress=progress, estimate=estimate))
-    except MissingExtraError as error:
-        print(f"torus-cad: {error}", file=sys.stderr)
-        return EXIT_KERNEL_FAILURE
+    gmsh = import_gmsh()  # MissingExtraError (exit 2) when gmsh's library does not load
+    import_meshlib()
+    estimate = check_cfd_budget(params)  # a mesh that would blow up is refused before any work (a few s)
+    check_writable_folder(args.out)
+    # gmsh set up here, meshing in a worker thread: a signal during a long gmsh call ends the command
+    # at once (cfd.worker, cfd.domain.gmsh_library)
+    with gmsh_library(gmsh):
+        report, paths = run_in_worker(lambda: write_cfd_domain(params, Path(args.out), threads=args.threads,
+                                                               progress=progress, estimate=estimate))
     progress.finish()
     return _print_written(paths, summary_line(report), args.quiet)
 
@@ -364,18 +384,14 @@ def command_simulate(args: argparse.Namespace) -> int:
     the iteration and residual named, the case kept)."""
     from torus_cad.runtime.progress import StageProgress
 
+    _require("simulate", "simulate")
     _check_simulate_options(args)
     params = load_parameters(args.config, args.overrides)
     progress = StageProgress.for_terminal(quiet=args.quiet)
-    try:
-        from torus_cad.simulate.cli_output import IterationLine, summary_lines
-        from torus_cad.simulate.pipeline import Request, ThrustTarget, convergence_study, simulate, thrust_search
-        from torus_cad.simulate.run import MissingOpenFoamError
-        from torus_cad.simulate.settings import Level, Mesher, OperatingPoint, TurbulenceModel, max_processes
-    except ImportError as error:
-        print(f"torus-cad: {error.name or error} is not installed: install the simulate extra, "
-              "pip install 'torus_cad[simulate]'", file=sys.stderr)
-        return EXIT_KERNEL_FAILURE
+    from torus_cad.simulate.cli_output import IterationLine, summary_lines
+    from torus_cad.simulate.pipeline import Request, ThrustTarget, convergence_study, simulate, thrust_search
+    from torus_cad.simulate.run import MissingOpenFoamError
+    from torus_cad.simulate.settings import Level, Mesher, OperatingPoint, TurbulenceModel, max_processes
     step = None
     if args.step is not None:
         from torus_cad.cfd.step_body import Axis, load_step_propeller

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from collections.abc import Callable
 from typing import Any
 
@@ -78,12 +79,19 @@ class _Parser(argparse.ArgumentParser):
     #: checked as they are parsed and shown in --help, once the subcommand is used (as ``table``).
     schema_ranges: dict[str, str] = {}  # noqa: RUF012 - replaced, never mutated
 
+    #: A progress line printed (on a terminal, without -q) as soon as the subcommand is chosen, before its
+    #: schema options load the schema: the command says what it does within its first second.
+    first_line: str = ""
+
     def parse_known_args(self, args: Any = None, namespace: Any = None) -> Any:  # type: ignore[override, unused-ignore]
+        if self.first_line:
+            _announce(self.first_line, sys.argv[1:] if args is None else list(args))
+            self.first_line = ""
         self._add_schema_options()
         return super().parse_known_args(args, namespace)
 
     def format_help(self) -> str:
-        self._add_schema_options()  # the help of the documentation (docs/hooks.py) shows them too
+        self._add_schema_options()  # the generated reference (docs/reference/cli.md) shows them too
         return super().format_help()
 
     def _add_schema_options(self) -> None:
@@ -98,6 +106,15 @@ class _Parser(argparse.ArgumentParser):
     def error(self, message: str) -> None:  # type: ignore[override]
         """One line (a long value in it cut short), exit 2: argparse's messages quote what was typed."""
         self.exit(EXIT_BAD_INPUT, bounded_message(f"torus-cad: error: {message} (see {self.prog} --help)") + "\n")
+
+
+def _announce(text: str, args: list[str]) -> None:
+    """``torus-cad: [   0.0 s] text`` on stderr when it is a terminal and ``args`` do not ask for quiet."""
+    from torus_cad.runtime.progress import is_terminal
+
+    if is_terminal(sys.stderr) and not {"-q", "--quiet"} & set(args):
+        sys.stderr.write(f"torus-cad: [{0.0:6.1f} s] {text}\n")
+        sys.stderr.flush()
 
 
 def _design_command(commands: Any, name: str, help: str, description: str, **options: Any) -> _Parser:
@@ -202,8 +219,9 @@ def _add_cfd_parser(commands: Any) -> None:
         "OpenFOAM's gmshToFoam), <name>_cfd.step, README.txt and <name>_cfd.json as one output set (see 'torus-cad "
         "verify'). The options override the design's [cfd] table; D is the tip diameter. A mesh estimated above "
         f"{CFD_TETRAHEDRA_LIMIT:,} tetrahedra is refused before any work. Needs the cfd extra: "
-        "pip install 'torus_cad[cfd]'.")
+        "pip install -c constraints.txt -e '.[cfd]'.")
     cfd.table = "cfd"  # its options, when the subcommand is used (_Parser.table)
+    cfd.first_line = "building the propeller and its fluid domain: loading the schema, the CAD kernel and gmsh"
     threads = Bounds(0, max_cfd_threads())
     cfd.add_argument("--threads", type=integer("--threads", threads, note="0 = one per CPU"),
                      default=GMSH_REPRODUCIBLE_THREADS, metavar="N",
@@ -220,7 +238,7 @@ def _add_simulate_parser(commands: Any) -> None:
         "OpenFOAM case (<name>_case/: steady MRF, k-omega SST, an Allrun that repeats the run) and run it with "
         "simpleFoam through foamlib. Writes <name>_performance.json (thrust, torque, power, J, CT, CP, efficiency "
         "or figure of merit, convergence) and <name>_performance.png (force and residual histories). Needs "
-        "OpenFOAM (v1912) and the simulate extra: pip install 'torus_cad[simulate]'.")
+        "OpenFOAM (v1912) and the simulate extra: pip install -c constraints.txt -e '.[simulate]'.")
     from torus_cad.simulate.thrust_target import DEFAULT_MAX_RUNS, DEFAULT_TOLERANCE, PLAUSIBLE_CT_LIMIT
 
     rpm, thrust = Bounds(0.0, SIMULATE_RPM_LIMIT), Bounds(0.0, SIMULATE_THRUST_LIMIT_N, low_open=True)
@@ -293,9 +311,12 @@ def build_parser() -> argparse.ArgumentParser:
                      formatter_class=argparse.RawDescriptionHelpFormatter)
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=_Parser)
 
-    build = _design_command(commands, "build", help="build a propeller: STEP + STL + JSON report",
-                            description="Build the propeller of CONFIG (or the default) and write "
-                            "<name>.step, <name>.stl and <name>.json into --out.", epilog=EPILOG,
+    build = _design_command(commands, "build", help="build a propeller: STEP, STL, blade-element table, JSON report",
+                            description="Build the propeller of CONFIG (or the default) and write one output set "
+                            "into --out: <name>.step, <name>.stl (not with --no-stl), <name>.3mf (only when "
+                            "--format or export.formats asks for 3mf), <name>_sections.csv and "
+                            "<name>_sections.png (the blade-element table and its picture), <name>.png (with "
+                            "--preview) and <name>.json, the report that lists them all.", epilog=EPILOG,
                             formatter_class=argparse.RawDescriptionHelpFormatter)
     build.add_argument("--out", default="step_out", help="output folder (default: step_out)")
     build.add_argument("--density", type=_DENSITY, default=1.24,
@@ -342,11 +363,12 @@ def build_parser() -> argparse.ArgumentParser:
     preview.set_defaults(handler=command_preview)
 
     verify = commands.add_parser("verify", help="check that output sets are complete: every file of one build",
-                                 description="Check the output sets in FOLDER (or only NAME): each <name>.json "
-                                 "report lists the files of its build with their SHA-256; every one must be there "
-                                 "and unchanged. Exit 0 if all are complete, 1 naming the first missing or mixed "
-                                 "file.")
-    verify.add_argument("folder", metavar="FOLDER", help="output folder, e.g. step_out")
+                                 description="Check the output sets in FOLDER and every folder under it (or only "
+                                 "the set NAME in FOLDER): each <name>.json report lists the files of its build "
+                                 "with their SHA-256; every one must be there and unchanged. Hidden folders (a "
+                                 "build's staging) are not entered. Exit 0 if all are complete, 1 with one line "
+                                 "per missing or mixed file of every set.")
+    verify.add_argument("folder", metavar="FOLDER", help="output folder, e.g. step_out (its sub-folders too)")
     verify.add_argument("name", nargs="?", metavar="NAME", help="check only the set <NAME>.json (default: every set)")
     verify.add_argument("-q", "--quiet", action="store_true", help="print nothing when the sets are complete")
     verify.set_defaults(handler=command_verify)

@@ -7,7 +7,8 @@
   (:func:`left_by_dead_process`), while files of live processes, or of other hosts sharing the
   folder, are never touched, so concurrent writers of one name cannot delete each other's files.
 * :func:`removed_on_exit` lists the paths a signal handler must remove before the process ends
-  (torus_cad.runtime.interrupts reads :data:`IN_FLIGHT`).
+  (torus_cad.runtime.interrupts reads :data:`IN_FLIGHT`); :func:`removed_if_left_empty` the output
+  folders a command made, removed on a signal or an error if still empty (:data:`MADE_FOLDERS`).
 """
 
 from __future__ import annotations
@@ -68,6 +69,40 @@ def removed_on_exit(path: str | Path) -> Iterator[Path]:
         yield Path(path)
     finally:
         IN_FLIGHT.pop(key, None)
+
+
+#: Folders this process made for output (outermost first), by a registration number: a signal handler
+#: removes those still empty, so an interrupted command leaves no empty --out folder behind.
+MADE_FOLDERS: dict[int, tuple[Path, ...]] = {}
+
+
+def make_folders(path: str | Path) -> tuple[Path, ...]:
+    """Make ``path`` and any missing parents; return the folders made here, outermost first."""
+    path = Path(path)
+    missing = [folder for folder in (path, *path.parents) if not folder.exists()][::-1]
+    path.mkdir(parents=True, exist_ok=True)
+    return tuple(missing)
+
+
+def remove_if_empty(folders: tuple[Path, ...]) -> None:
+    """Remove each of ``folders`` (outermost first, as :func:`make_folders` returns them) that is empty,
+    innermost first; a folder something was put into stays."""
+    for folder in reversed(folders):
+        with contextlib.suppress(OSError):
+            os.rmdir(folder)
+
+
+@contextlib.contextmanager
+def removed_if_left_empty(folders: tuple[Path, ...]) -> Iterator[None]:
+    """Within the block, ``folders`` are listed in :data:`MADE_FOLDERS` (removed by a signal handler if
+    empty); leaving the block removes those still empty (an error: nothing was published)."""
+    key = next(_registrations)
+    MADE_FOLDERS[key] = folders
+    try:
+        yield
+    finally:
+        MADE_FOLDERS.pop(key, None)
+        remove_if_empty(folders)
 
 
 def _remove_stale_temps(path: Path) -> None:

@@ -16,7 +16,7 @@
         result = run_study(load_study("examples/optimize_light.toml"), "optimize_out/light", workers=2)
         print(result.summary())
 
-Needs the ``optimize`` extra (optuna, psycopg2-binary): ``pip install 'torus_cad[optimize]'``.
+Needs the ``optimize`` extra (optuna, cmaes, psycopg2-binary): ``pip install -c constraints.txt -e '.[optimize]'``.
 """
 
 from torus_cad.optimize.study import StudyInterrupted, StudyResult, run_study

@@ -52,7 +52,7 @@ def write_results(spec: StudySpec, study: Any, out: Path) -> tuple[dict[str, Pat
         files["pareto"] = _pareto_picture(spec, trials, best_trials(spec, study), out / f"{spec.name}_pareto.png")
     best = best_trials(spec, study)
     lines, built = _build_best(spec, best, out / BEST_DIR)
-    lines.insert(0, _outcomes_line(rows))
+    lines = [_outcomes_line(rows), *unvalued_lines(rows), *lines]
     summary = {"name": spec.name, "trials": len(trials), "states": _count(row["state"] for row in rows),
                "outcomes": _count(row["outcome"] for row in rows),
                "prescreened": sum(1 for row in rows if row["prescreened"]),
@@ -123,18 +123,41 @@ def trial_rows(spec: StudySpec, trials: Sequence[Any]) -> tuple[list[dict[str, A
     return rows, columns
 
 
+#: Trials without a value (refused, failed) the terminal summary names one by one; the rest are counted.
+MAX_UNVALUED_LINES = 5
+
+
+def unvalued_lines(rows: Sequence[dict[str, Any]]) -> list[str]:
+    """Summary lines for the finished trials that have no objective value (a refused or failed design, not
+    one whose run stopped): number, outcome and reason, so a refused design is not silently missing."""
+    unvalued = [row for row in rows if row["state"] == "fail" and row["outcome"] not in ("", INTERRUPTED)]
+    lines = [f"  trial {row['number']} {row['outcome']}: {row['reason']}" for row in unvalued[:MAX_UNVALUED_LINES]]
+    if len(unvalued) > MAX_UNVALUED_LINES:
+        lines.append(f"  and {len(unvalued) - MAX_UNVALUED_LINES} more trials without a value (see results.csv)")
+    return lines
+
+
 def _feasible(trial: Any) -> bool:
     return trial.state.name == "COMPLETE" and all(v <= 0.0 for v in trial_result(trial).get(CONSTRAINT, []))
 
 
 def _history_picture(spec: StudySpec, trials: Sequence[Any], path: Path) -> Path:
     """Each objective against the trial number: feasible, infeasible, and the best so far."""
+    return _save_png(history_figure(spec, trials), path)
+
+
+def history_figure(spec: StudySpec, trials: Sequence[Any]) -> Any:
+    """The history picture's matplotlib figure: each objective against the trial number (feasible,
+    infeasible, the best so far), and the trials without a value (refused, failed) as marks along the
+    bottom of each panel."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.ticker import MaxNLocator
 
+    unvalued = [trial.number for trial in trials if trial.state.name == "FAIL" and not was_stopped(trial)
+                and trial_result(trial).get(OUTCOME)]
 
     figure, axes = plt.subplots(len(spec.objectives), 1, figsize=(8, 3.2 * len(spec.objectives)), squeeze=False)
     complete = [trial for trial in trials if trial.state.name == "COMPLETE"]
@@ -151,14 +174,17 @@ def _history_picture(spec: StudySpec, trials: Sequence[Any], path: Path) -> Path
                 best = value if math.isnan(best) else pick(best, value)
                 steps.append((number, best))
             axis.step(*zip(*steps), where="post", color="tab:red", label="best so far")
+        if unvalued:  # no value to plot: a mark at the bottom of the panel, at its trial number
+            axis.plot(unvalued, [0.02] * len(unvalued), "v", color="tab:orange", transform=axis.get_xaxis_transform(),
+                      label="refused or failed (no value; see results.csv)")
         axis.set_xlabel("trial")
         axis.xaxis.set_major_locator(MaxNLocator(integer=True))
         axis.set_ylabel(objective.metric)
         axis.set_title(f"{spec.name}: {objective.direction.value} {objective.metric}")
         axis.grid(alpha=0.3)
-        if good or bad:
+        if good or bad or unvalued:
             axis.legend(loc="best", fontsize="small")
-    return _save_png(figure, path)
+    return figure
 
 
 def _save_png(figure: Any, path: Path) -> Path:

@@ -36,7 +36,14 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Self
 
 from torus_cad.errors import IncompleteOutputError, OutputError, ParameterError
-from torus_cad.kernel.files import glob_escape, left_by_dead_process, owner_tag, removed_on_exit
+from torus_cad.kernel.files import (
+    glob_escape,
+    left_by_dead_process,
+    make_folders,
+    owner_tag,
+    removed_if_left_empty,
+    removed_on_exit,
+)
 from torus_cad.runtime.input_files import read_untrusted_bytes
 from torus_cad.runtime.interrupts import deferred
 from torus_cad.tolerances import REPORT_FILE_MAX_BYTES
@@ -159,9 +166,10 @@ class OutputSet:
 
     def __enter__(self) -> Self:
         try:
-            self.out_dir.mkdir(parents=True, exist_ok=True)
-            remove_stale_staging(self.out_dir)
             self._cleanup = contextlib.ExitStack()
+            # a folder made here and left empty (an error, a signal) is removed again: no empty --out
+            self._cleanup.enter_context(removed_if_left_empty(make_folders(self.out_dir)))
+            remove_stale_staging(self.out_dir)
             self.staging = self.out_dir / f".{self.name}{_STAGING_MARK}{owner_tag()}{secrets.token_hex(4)}"
             self._cleanup.enter_context(removed_on_exit(self.staging))
             self.staging.mkdir()
@@ -282,7 +290,7 @@ class VerifiedSet:
 def verify_set(out_dir: str | Path, name: str) -> VerifiedSet:
     """Check that ``out_dir/<name>.json`` and every file it lists are there, whole and of the same build.
 
-    Raises IncompleteOutputError naming the first file that is missing, different or unlisted.
+    Raises IncompleteOutputError naming every file that is missing or different (its ``problems``).
     """
     out_dir = Path(out_dir)
     report_path = out_dir / f"{name}.json"
@@ -301,7 +309,15 @@ def verify_set(out_dir: str | Path, name: str) -> VerifiedSet:
         if not isinstance(files, dict) or not files:
             raise IncompleteOutputError(f"{name}: {report_path.name} lists no files (written before "
                                         f"output sets were sealed?)")
-        checked = [_check_entry(out_dir, name, report_path.name, entry) for entry in files.values()]
+        checked: list[Path] = []
+        problems: list[str] = []
+        for entry in files.values():
+            try:
+                checked.append(_check_entry(out_dir, name, report_path.name, entry))
+            except IncompleteOutputError as error:
+                problems.extend(error.problems)
+        if problems:
+            raise IncompleteOutputError(*problems)
     return VerifiedSet(name, report_path, (*checked, report_path))
 
 
@@ -339,6 +355,20 @@ def set_names(out_dir: str | Path) -> list[str]:
             loose.add(path)
     names.update(path.stem for path in loose if path.name not in members)
     return sorted(names)
+
+
+def set_folders(root: str | Path) -> list[Path]:
+    """``root`` and every folder under it, sorted, that holds an output set (see :func:`set_names`).
+
+    Hidden folders (a build's ``.<name>.staging-...``) are not entered; symbolic links to folders are
+    not followed.
+    """
+    found = []
+    for folder, subfolders, _ in os.walk(root):
+        subfolders[:] = sorted(name for name in subfolders if not name.startswith("."))
+        if set_names(folder):
+            found.append(Path(folder))
+    return found
 
 
 # -- the propeller's set --------------------------------------------------------------------------

@@ -57,6 +57,17 @@ def sections_csv_text(elements: BladeElements, trailing_edge_mm: np.ndarray | No
     return buffer.getvalue()
 
 
+#: beta is the angle of the chord *line*: the same line every 180 degrees.
+BETA_PERIOD_DEG = 180.0
+
+
+def plotted_beta_deg(elements: BladeElements) -> NDArray[np.float64]:
+    """beta along s as the picture plots it: unwrapped with the 180-degree period of a line's angle, so the
+    returning half of a toroidal blade (whose chord points back, e.g. -172 deg for +8 deg) continues the
+    curve instead of jumping by about 175 degrees at the tip and dwarfing the rest. The table keeps the raw values."""
+    return np.unwrap(np.asarray(elements.beta_deg, dtype=float), period=BETA_PERIOD_DEG)
+
+
 def sections_png(elements: BladeElements, title: str = "", size_px: tuple[int, int] = (1500, 500)) -> bytes:
     """Chord, beta and thickness against r, three panels side by side, as PNG bytes (matplotlib, off-screen)."""
     from matplotlib.figure import Figure  # no pyplot: no global state, no display
@@ -69,9 +80,10 @@ def sections_png(elements: BladeElements, title: str = "", size_px: tuple[int, i
     halves = ((slice(0, tip + 1), "-", "outgoing (s up to the tip)"),
               (slice(tip, None), "--", "returning (s from the tip)"))
     radial = elements.radial_fraction > NEARLY_RADIAL_FRACTION
-    panels = (("chord_mm", "chord (mm)"), ("beta_deg", "blade angle beta (deg)"), ("thickness_mm", "max thickness (mm)"))
+    panels = (("chord_mm", "chord (mm)"), ("beta_deg", "blade angle beta (deg, unwrapped mod 180)"),
+              ("thickness_mm", "max thickness (mm)"))
     for axis, (attribute, label) in zip(axes, panels):
-        values = getattr(elements, attribute)
+        values = plotted_beta_deg(elements) if attribute == "beta_deg" else getattr(elements, attribute)
         for part, style, legend in halves:
             axis.plot(elements.radius_mm[part], values[part], style, color="tab:blue", label=legend)
         if attribute == "beta_deg" and np.any(radial):

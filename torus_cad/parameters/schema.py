@@ -197,9 +197,27 @@ def _dotted(location: Sequence[Any]) -> str:
     return text
 
 
+#: What a TOML file calls the Python types its values arrive as (a message speaks TOML, not Python).
+_TOML_WORDS: dict[type, str] = {bool: "boolean", int: "integer", float: "float", str: "string", list: "array",
+                                tuple: "array", dict: "table"}
+
+
+def _as_toml_lists(value: Any) -> Any:
+    """``value`` with every tuple (what validation turns an array into) as a list, so it prints as ``[...]``."""
+    if isinstance(value, list | tuple):
+        return [_as_toml_lists(item) for item in value]
+    if isinstance(value, dict):
+        return {key: _as_toml_lists(item) for key, item in value.items()}
+    return value
+
+
 def _describe(value: Any) -> str:
-    """The value's type and its text, cut short (a vector, a list, a table: 40 characters)."""
-    return f"{type(value).__name__} {shown(value, 40)}"
+    """The value in the words of a TOML file, its text cut short (40 characters): ``array of 25 items [[1, 2,
+    3], ...``, ``string 'x'``."""
+    word = next((name for kind, name in _TOML_WORDS.items() if type(value) is kind), type(value).__name__)
+    if isinstance(value, list | tuple):
+        word += f" of {len(value)} item{'s' if len(value) != 1 else ''}"
+    return f"{word} {shown(_as_toml_lists(value), 40)}"
 
 
 def _value_text(value: Any) -> str:

@@ -29,7 +29,7 @@ from pathlib import Path
 from types import FrameType
 from typing import Any
 
-from torus_cad.kernel.files import IN_FLIGHT
+from torus_cad.kernel.files import IN_FLIGHT, MADE_FOLDERS, remove_if_empty
 
 _Handler = Callable[[int, FrameType | None], Any] | int | signal.Handlers | None
 
@@ -56,6 +56,8 @@ def _remove(path: Path) -> None:
 def _exit_now(signum: int) -> None:
     for path in list(IN_FLIGHT.values()):
         _remove(path)
+    for folders in list(MADE_FOLDERS.values()):  # an --out folder this command made and left empty
+        remove_if_empty(folders)
     name = signal.Signals(signum).name
     try:
         for stream in (sys.stdout, sys.stderr):

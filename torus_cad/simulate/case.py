@@ -243,7 +243,8 @@ def allrun_text(spec: CaseSpec) -> str:
              "# Debian's openfoam package: its programs find etc/ through WM_PROJECT_DIR",
              '[ -n "${WM_PROJECT_DIR:-}" ] || [ ! -d /usr/share/openfoam/etc ] || export WM_PROJECT_DIR=/usr/share/openfoam']
     if spec.processes > 1:
-        lines.append("# As root (a container), OpenMPI also needs OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1")
+        lines += ["# As root (a container), OpenMPI's mpiexec refuses to start without these two",
+                  'if [ "$(id -u)" -eq 0 ]; then export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1; fi']
     for command in mesh_commands(spec) + solve_commands(spec):
         if command == ["simpleFoam"] and spec.processes > 1:
             command = ["mpiexec", "-n", str(spec.processes), "simpleFoam", "-parallel"]
