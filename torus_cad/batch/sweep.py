@@ -29,6 +29,7 @@ from torus_cad.batch.runner import (
     capped_workers,
     default_workers,
     interrupts_raised,
+    raise_if_interrupted,
     run_tasks,
 )
 from torus_cad.batch.sweep_file import SweepSpec
@@ -171,19 +172,25 @@ def run_sweep(spec: SweepSpec, out_dir: str | Path, *, workers: int | None = Non
     out_dir = Path(out_dir).resolve()
     stl = spec.stl if stl is None else stl
     density = spec.density_g_cm3 if density_g_cm3 is None else density_g_cm3
-    with interrupts_raised():
-        try:
+    result: SweepResult | None = None
+    try:
+        with interrupts_raised():
             designs, pending = _plan(spec, out_dir, stl, density, rebuild)
-        except Interrupted as interrupt:  # before anything was built: no table to write
-            raise SweepInterrupted(interrupt.signum, SweepResult(spec, out_dir, [], interrupted_by=
-                                                                 interrupt.signal_name)) from None
-        if scheduler in (None, "local") and client is None and pending:
-            workers = capped_workers(workers, len(pending), oversubscribe,
-                                     lambda line: print(f"torus-cad: {line}", file=stream or sys.stderr))
-        return _run(spec, out_dir, designs, pending, stl, workers=workers, scheduler=scheduler, client=client,
-                    time_limit_s=spec.time_limit_s if time_limit_s is None else time_limit_s,
-                    bar=BatchProgress(len(designs), len(designs) - len(pending), enabled=progress, stream=stream),
-                    job=job)
+            raise_if_interrupted()  # before anything was built: no table to write
+            if scheduler in (None, "local") and client is None and pending:
+                workers = capped_workers(workers, len(pending), oversubscribe,
+                                         lambda line: print(f"torus-cad: {line}", file=stream or sys.stderr))
+            result = _run(spec, out_dir, designs, pending, stl, workers=workers, scheduler=scheduler, client=client,
+                          time_limit_s=spec.time_limit_s if time_limit_s is None else time_limit_s,
+                          bar=BatchProgress(len(designs), len(designs) - len(pending), enabled=progress,
+                                            stream=stream), job=job)
+    except SweepInterrupted:
+        raise
+    except Interrupted as interrupt:  # before the first design, or while the table was written at the end
+        partial = result if result is not None else SweepResult(spec, out_dir, [])
+        partial.interrupted_by = interrupt.signal_name
+        raise SweepInterrupted(interrupt.signum, partial) from None
+    return result
 
 
 def _plan(spec: SweepSpec, out_dir: Path, stl: bool, density: float | None,
@@ -191,9 +198,12 @@ def _plan(spec: SweepSpec, out_dir: Path, stl: bool, density: float | None,
     """Every design (listed in ``sweep.json``) and the tasks of those not done yet."""
     designs = generate_designs(spec)
     _write_manifest(spec, designs, out_dir, stl, density)
-    pending = [DesignTask(design.design_id, design.parameters, str(out_dir / DESIGNS_DIR / design.design_id),
-                          stl=stl, density_g_cm3=density)
-               for design in designs if rebuild or not _is_done(out_dir, design, stl)]
+    pending = []
+    for design in designs:
+        raise_if_interrupted()  # a large sweep's designs take a while to look up
+        if rebuild or not _is_done(out_dir, design, stl):
+            pending.append(DesignTask(design.design_id, design.parameters,
+                                      str(out_dir / DESIGNS_DIR / design.design_id), stl=stl, density_g_cm3=density))
     return designs, pending
 
 

@@ -326,7 +326,9 @@ def build_parser() -> argparse.ArgumentParser:
                                  description="Check the output sets in FOLDER (or only NAME): each <name>.json "
                                  "report lists the files of its build with their SHA-256; every one must be there "
                                  "and unchanged. Exit 0 if all are complete, 1 naming the first missing or mixed "
-                                 "file.")
+                                 "file. A study folder (optimize --out) or a sweep folder (sweep --out) is checked "
+                                 "whole: every set of its trials or designs and of best/, and no staging folder "
+                                 "left by a stopped process.")
     verify.add_argument("folder", metavar="FOLDER", help="output folder, e.g. step_out")
     verify.add_argument("name", nargs="?", metavar="NAME", help="check only the set <NAME>.json (default: every set)")
     verify.add_argument("-q", "--quiet", action="store_true", help="print nothing when the sets are complete")
