@@ -68,6 +68,8 @@ def _moment_reached(moment: str, out: Path, trials: int) -> Callable[[], bool]:
     """When the clock for the delay starts: the process start, a first trial's folder, or the results table."""
     if moment == "startup":
         return lambda: True
+    if moment == "storage":  # the storage is made: the pool starts next
+        return lambda: (out / f"{NAME}.db").is_file() or (out / "sweep.json").is_file()
     if moment == "trials":
         return lambda: any((out / "trials").glob("*/")) or any((out / "designs").glob("*/"))
     if moment == "finish":
