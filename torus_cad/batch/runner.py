@@ -52,6 +52,7 @@ _POLL_SECONDS = 0.5  #: how often the loop wakes up when nothing finishes
 _WATCHDOG_SECONDS = 1.0  #: how often a worker checks that its parent is alive
 _PR_SET_PDEATHSIG = 1  #: prctl option (linux/prctl.h)
 _MAX_POOL_RESTARTS = 3  #: pool breaks in a row, with no design finishing between them, before giving up
+_WORKER_STOP_S = 5.0  #: how long a stopped worker may take to exit before pebble kills it, s
 
 
 class BatchError(TorusCadError):
@@ -190,7 +191,28 @@ class LocalPool:
             self._pool.close()
         else:
             self._pool.stop()
+            self._stop_workers()
         self._pool.join()
+
+    def _stop_workers(self) -> None:
+        """Stop the workers before pebble's ``join`` does: it removes the pool's semaphores first, and a
+        worker still starting (reading its start-up data from the fork server) then fails to open them
+        with a FileNotFoundError traceback. Uses pebble 5's internals (constraints.txt pins it); where
+        they differ, pebble's own order is kept."""
+        manager = getattr(getattr(self._pool, "_pool_manager", None), "worker_manager", None)
+        workers = getattr(manager, "workers", None)
+        loop = getattr(self._pool, "_pool_manager_loop", None)
+        if not isinstance(workers, dict) or not isinstance(loop, (threading.Thread, type(None))):
+            return
+        if loop is not None:
+            loop.join()  # a stopped pool's manager loop ends, and starts no worker after that
+        processes = list(workers.values())
+        for process in processes:
+            with contextlib.suppress(Exception):
+                process.terminate()
+        for process in processes:
+            with contextlib.suppress(Exception):
+                process.join(_WORKER_STOP_S)
 
 
 def _worker_context() -> Any:

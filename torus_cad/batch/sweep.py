@@ -11,6 +11,7 @@ table is rebuilt from those files at the end of every run, also after an interru
 from __future__ import annotations
 
 import json
+import os
 import sys
 import time
 from collections.abc import Sequence
@@ -35,6 +36,7 @@ from torus_cad.batch.runner import (
 from torus_cad.batch.sweep_file import SweepSpec
 from torus_cad.batch.table import DESIGNS_DIR, collect_rows, table_columns, write_table
 from torus_cad.errors import ParameterError
+from torus_cad.outputs.output_set import remove_stale_staging
 from torus_cad.runtime.progress import BatchProgress
 from torus_cad.tolerances import DESIGN_TIME_LIMIT_MAX_S
 
@@ -217,6 +219,8 @@ def _run(spec: SweepSpec, out_dir: Path, designs: list[Design], pending: list[De
     def on_result(task: DesignTask, design_result: DesignResult) -> None:
         results[task.design_id] = design_result
         bar.update(design_result.outcome)
+        if design_result.outcome is not Outcome.VALID and task.folder is not None:
+            remove_stale_staging(Path(task.folder))  # of a worker stopped at its time limit, or killed
 
     own_client = own_cluster = None
     start = time.perf_counter()
@@ -236,6 +240,9 @@ def _run(spec: SweepSpec, out_dir: Path, designs: list[Design], pending: list[De
             run_tasks(pending, on_result, lambda: LocalPool(count, time_limit_s), window=2 * count, job=job)
     except Interrupted as interrupt:
         result.interrupted_by = interrupt.signal_name
+        for task in pending:  # the pool is stopped: the staging folders its workers had open are debris now
+            if task.design_id not in results and task.folder is not None and os.path.isdir(task.folder):
+                remove_stale_staging(Path(task.folder))
         raise SweepInterrupted(interrupt.signum, result) from None
     finally:
         bar.close()
