@@ -65,13 +65,14 @@ class Outcome:
 
 
 def _moment_reached(moment: str, out: Path, trials: int) -> Callable[[], bool]:
-    """When the clock for the delay starts: the process start, a first trial's folder, or the results table."""
+    """When the clock for the delay starts: the process start, the storage made, a first trial written, or the
+    results table."""
     if moment == "startup":
         return lambda: True
     if moment == "storage":  # the storage is made: the pool starts next
         return lambda: (out / f"{NAME}.db").is_file() or (out / "sweep.json").is_file()
-    if moment == "trials":
-        return lambda: any((out / "trials").glob("*/")) or any((out / "designs").glob("*/"))
+    if moment == "trials":  # a first trial or design is written: the others are running
+        return lambda: any((out / "trials").glob("*/trial_*.json")) or any((out / "designs").glob("*/*.json"))
     if moment == "finish":
         return lambda: (out / "results.csv").is_file()
     raise ValueError(moment)

@@ -51,7 +51,7 @@ def _assert_no_staging_left(out: Path) -> None:
 
 @pytest.mark.parametrize(("moment", "delay_s", "trials"), [
     ("storage", 0.3, 1),   # the pool is starting (forkserver, its workers)
-    ("trials", 0.5, 2),    # a trial is running
+    ("trials", 0.0, 3),    # a first trial is written, the next ones are running
     ("finish", 0.0, 1),    # the table is written; the picture, best/ and the summary are being written
 ])
 def test_a_sigterm_while_the_pool_starts_trials_run_or_the_results_are_written_is_one_line_and_leaves_all_whole(
@@ -90,6 +90,30 @@ def test_sigterm_at_random_moments_of_optimize_and_sweep_always_ends_cleanly(tmp
                 failures.append((command, moment, round(delay_s, 2), "verify", verified.stderr))
         shutil.rmtree(folder)
     assert not failures, f"seed {seed}: {failures}"
+
+
+_STOP_AS_WORKERS_START = textwrap.dedent("""
+    import sys
+    from torus_cad.batch.runner import LocalPool
+
+    def job(value):
+        return value
+
+    if __name__ == "__main__":
+        for _ in range(5):
+            pool = LocalPool(2)
+            pool.submit(job, 1)  # starts the workers (from the fork server)
+            pool.shutdown(wait=False)  # at once, as after a signal: they may still be reading their start-up data
+""")
+
+
+def test_a_pool_stopped_while_its_workers_start_leaves_no_traceback(tmp_path):
+    """pebble removes a pool's semaphores before it stops the workers; a worker still starting then failed
+    with a fork-server traceback (FileNotFoundError in SemLock._rebuild) on the command's stderr."""
+    script = tmp_path / "stop_as_workers_start.py"
+    script.write_text(_STOP_AS_WORKERS_START)
+    run = subprocess.run([sys.executable, str(script)], env=env(), capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0 and run.stderr == "", run.stderr[-3000:]
 
 
 # -- storage and disk failures (item 3) --------------------------------------------------------------------
