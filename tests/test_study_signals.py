@@ -201,22 +201,26 @@ def test_a_disk_that_fills_up_during_a_study_is_one_line_naming_the_file_and_the
 def test_verify_names_a_staging_folder_left_in_a_study_and_the_next_run_removes_it(tmp_path):
     study = study_file(tmp_path, trials=1)
     out = tmp_path / "out"
-    first = _torus_cad("optimize", str(study), "--out", str(out), "--workers", "1", "-q")
-    assert first.returncode == 0, first.stderr
-    assert _torus_cad("verify", str(out)).returncode == 0
-    # what a worker killed mid-trial leaves (its trial is asked again under a new number, in a new folder)
-    debris = out / "trials" / "0" / f".trial_0.staging-{host_tag()}-{_dead_pid()}-0a1b2c3d"
-    debris.mkdir()
-    (debris / "trial_0.step").write_text("partial")
-    verified = _torus_cad("verify", str(out))
-    assert verified.returncode == 1 and "trials/0/.trial_0.staging-" in verified.stderr, verified.stderr
-    assert len(verified.stderr.strip().splitlines()) == 1
-    again = _torus_cad("optimize", str(study), "--out", str(out), "--workers", "1", "-q")  # the study continues
-    assert again.returncode == 0, again.stderr
-    assert not debris.exists()
+
+    def left_by_a_killed_worker(number: int) -> Path:
+        """What a worker killed mid-write leaves (its trial is asked again under a new number, in a new folder)."""
+        debris = out / "trials" / str(number) / f".trial_{number}.staging-{host_tag()}-{_dead_pid()}-0a1b2c3d"
+        debris.mkdir(parents=True)
+        (debris / f"trial_{number}.step").write_text("partial")
+        return debris
+
+    earlier = left_by_a_killed_worker(7)  # by an earlier run of the study
+    run = _torus_cad("optimize", str(study), "--out", str(out), "--workers", "1", "-q")  # the study continues
+    assert run.returncode == 0, run.stderr
+    assert not earlier.exists()
     verified = _torus_cad("verify", str(out))
     assert verified.returncode == 0 and "no staging folder left" in verified.stdout, verified.stderr
     assert (out / f"{NAME}.db").is_file() and not list(out.glob(f"{NAME}.db-*"))
+    left = left_by_a_killed_worker(0)
+    verified = _torus_cad("verify", str(out))
+    assert verified.returncode == 1 and "trials/0/.trial_0.staging-" in verified.stderr, verified.stderr
+    assert len(verified.stderr.strip().splitlines()) == 1
+    assert left.exists()  # verify only reads
 
 
 def test_a_staging_folder_of_a_running_process_is_not_reported_as_left(tmp_path):
