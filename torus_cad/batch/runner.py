@@ -10,9 +10,11 @@ One loop (:func:`run_tasks`) drives any executor with the ``concurrent.futures``
 * workers die with the process that started them, even when it is killed with SIGKILL: the
   kernel's parent-death signal (Linux ``prctl(PR_SET_PDEATHSIG)``) plus a watchdog thread
   that notices, within a second, that the batch's process is gone (reaped or not);
-* SIGINT, SIGTERM and SIGHUP, within :func:`interrupts_raised`, stop the batch at once: the pool's
-  workers are stopped, and :class:`Interrupted` (naming the signal) reaches the caller, which
-  still writes its table.
+* SIGINT, SIGTERM and SIGHUP, within :func:`interrupts_raised`, stop the batch within
+  :data:`_POLL_SECONDS`: the handler only records the signal, and :class:`Interrupted` (naming
+  it) is raised at the next safe point (:func:`raise_if_interrupted`, which the loop calls
+  between two waits), never inside an import, a storage commit or the pool's start-up; the
+  pool's workers are then stopped, and the caller still writes its table.
 
 Workers start from multiprocessing's fork server, which imports the kernel once (cadquery
 takes seconds to import), so workers start at once and never fork a process that holds
@@ -42,7 +44,7 @@ from torus_cad.batch.outcome import DesignResult, Outcome
 from torus_cad.errors import TorusCadError
 
 __all__ = ["BatchError", "Executor", "Interrupted", "Job", "LocalPool", "available_cores", "capped_workers",
-           "default_workers", "interrupts_raised", "run_tasks"]
+           "default_workers", "interrupts_raised", "raise_if_interrupted", "run_tasks"]
 
 Job = Callable[[DesignTask], DesignResult]
 
@@ -50,6 +52,7 @@ _POLL_SECONDS = 0.5  #: how often the loop wakes up when nothing finishes
 _WATCHDOG_SECONDS = 1.0  #: how often a worker checks that its parent is alive
 _PR_SET_PDEATHSIG = 1  #: prctl option (linux/prctl.h)
 _MAX_POOL_RESTARTS = 3  #: pool breaks in a row, with no design finishing between them, before giving up
+_WORKER_STOP_S = 5.0  #: how long a stopped worker may take to exit before pebble kills it, s
 
 
 class BatchError(TorusCadError):
@@ -188,7 +191,28 @@ class LocalPool:
             self._pool.close()
         else:
             self._pool.stop()
+            self._stop_workers()
         self._pool.join()
+
+    def _stop_workers(self) -> None:
+        """Stop the workers before pebble's ``join`` does: it removes the pool's semaphores first, and a
+        worker still starting (reading its start-up data from the fork server) then fails to open them
+        with a FileNotFoundError traceback. Uses pebble 5's internals (constraints.txt pins it); where
+        they differ, pebble's own order is kept."""
+        manager = getattr(getattr(self._pool, "_pool_manager", None), "worker_manager", None)
+        workers = getattr(manager, "workers", None)
+        loop = getattr(self._pool, "_pool_manager_loop", None)
+        if not isinstance(workers, dict) or not isinstance(loop, (threading.Thread, type(None))):
+            return
+        if loop is not None:
+            loop.join()  # a stopped pool's manager loop ends, and starts no worker after that
+        processes = list(workers.values())
+        for process in processes:
+            with contextlib.suppress(Exception):
+                process.terminate()
+        for process in processes:
+            with contextlib.suppress(Exception):
+                process.join(_WORKER_STOP_S)
 
 
 def _worker_context() -> Any:
@@ -202,33 +226,65 @@ def _worker_context() -> Any:
 
 # -- signals ----------------------------------------------------------------------------------------
 
+class _Latch:
+    """The first signal of an :func:`interrupts_raised` block, until :func:`raise_if_interrupted` raises it."""
+
+    def __init__(self) -> None:
+        self.signum: int | None = None
+        self.raised = False
+
+
+_latches: list[_Latch] = []  #: the open interrupts_raised blocks of the main thread, innermost last
+
+
 @contextmanager
 def interrupts_raised(signals: Iterable[int] = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)) -> Iterator[None]:
-    """Within the block, the first SIGINT, SIGTERM or SIGHUP raises :class:`Interrupted`; later ones are ignored.
+    """Within the block, the first SIGINT, SIGTERM or SIGHUP is recorded, and :func:`raise_if_interrupted`
+    raises it as :class:`Interrupted` at the caller's next safe point; later signals are ignored.
 
-    Later signals are ignored so that the cleanup the first one starts (stopping the pool,
-    writing the table) is not cut short. A signal the caller ignores (``nohup``, a background
-    job's SIGINT) stays ignored. Outside the main thread, signals cannot be caught and this
-    does nothing.
+    The handler itself never raises: an exception injected between two arbitrary bytecodes can
+    land inside an import (leaving a half-initialised extension module: "initialization
+    failed"), inside a storage commit, inside ``Process.start`` of the pool's start-up (a
+    worker then reads its start-up data after this process removed its semaphores: a
+    forkserver traceback) or inside a finaliser ("Exception ignored"). Blocking calls go on
+    after the handler (PEP 475), so the signal takes effect when the running step returns;
+    :func:`run_tasks` waits at most :data:`_POLL_SECONDS` at a time. Later signals are ignored
+    so that the cleanup the first one starts (stopping the pool, writing the table) is not cut
+    short. A signal the caller ignores (``nohup``, a background job's SIGINT) stays ignored.
+    Outside the main thread, signals cannot be caught and this does nothing.
     """
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    raised = False
+    latch = _Latch()
 
     def handler(signum: int, frame: Any) -> None:
-        nonlocal raised
-        if not raised:
-            raised = True
-            raise Interrupted(signum)
+        if latch.signum is None:
+            latch.signum = signum
 
     previous = {signum: signal.signal(signum, handler) for signum in signals
                 if signal.getsignal(signum) is not signal.SIG_IGN}
+    _latches.append(latch)
     try:
         yield
     finally:
+        _latches.remove(latch)
         for signum, old in previous.items():
             signal.signal(signum, old)
+    if latch.signum is not None and not latch.raised:  # it arrived after the block's last safe point
+        latch.raised = True
+        raise Interrupted(latch.signum)
+
+
+def raise_if_interrupted() -> None:
+    """Raise :class:`Interrupted` if a signal arrived within the innermost :func:`interrupts_raised` block
+    and has not been raised yet (once: the cleanup it starts runs without further interrupts)."""
+    if not _latches or threading.current_thread() is not threading.main_thread():
+        return
+    latch = _latches[-1]
+    if latch.signum is not None and not latch.raised:
+        latch.raised = True
+        raise Interrupted(latch.signum)
 
 
 # -- the loop ---------------------------------------------------------------------------------------
@@ -280,6 +336,8 @@ def run_tasks(tasks: Iterable[DesignTask], on_result: Callable[[DesignTask, Desi
     A time-out, a crash and an exception the job did not catch each become that design's
     outcome. On any exception from here (Interrupted included) the executor is stopped
     without waiting and the exception propagates; the tasks that did not finish get no result.
+    Within :func:`interrupts_raised`, a signal is raised as :class:`Interrupted` at the top of
+    the loop (the designs already finished have had their ``on_result``) or after a submit.
     """
     job = run_design if job is None else job
     source = iter(tasks)
@@ -289,6 +347,7 @@ def run_tasks(tasks: Iterable[DesignTask], on_result: Callable[[DesignTask, Desi
     restarts = 0
     try:
         while in_flight or _refilled(queue, source):
+            raise_if_interrupted()
             refused = False  # the executor refused a task: its pool is broken
             while (window is None or len(in_flight) < window) and _refilled(queue, source):
                 try:
@@ -297,6 +356,7 @@ def run_tasks(tasks: Iterable[DesignTask], on_result: Callable[[DesignTask, Desi
                     refused = True
                     break
                 in_flight[future] = queue.popleft()
+                raise_if_interrupted()
             done, _ = wait(list(in_flight), timeout=_POLL_SECONDS, return_when=FIRST_COMPLETED)
             broken = [in_flight.pop(future) for future in list(done) if _broke(future)]
             for future in done:
@@ -320,6 +380,7 @@ def run_tasks(tasks: Iterable[DesignTask], on_result: Callable[[DesignTask, Desi
         executor.shutdown(wait=False)
         raise
     executor.shutdown(wait=True)
+    raise_if_interrupted()
 
 
 def _refilled(queue: deque[DesignTask], source: Iterator[DesignTask]) -> bool:

@@ -15,6 +15,7 @@ at once, ``prescreened`` in its refusal and its row, and counted apart in the su
 from __future__ import annotations
 
 import json
+import os
 import sys
 import time
 from collections.abc import Callable, Iterable, Iterator, Sequence
@@ -33,11 +34,13 @@ from torus_cad.batch.runner import (
     capped_workers,
     default_workers,
     interrupts_raised,
+    raise_if_interrupted,
     run_tasks,
 )
 from torus_cad.batch.sweep_file import SweepSpec
 from torus_cad.batch.table import DESIGNS_DIR, collect_rows, table_columns, write_table
 from torus_cad.errors import ParameterError
+from torus_cad.outputs.output_set import remove_stale_staging
 from torus_cad.runtime.progress import BatchProgress
 from torus_cad.tolerances import DESIGN_TIME_LIMIT_MAX_S
 
@@ -182,19 +185,25 @@ def run_sweep(spec: SweepSpec, out_dir: str | Path, *, workers: int | None = Non
     out_dir = Path(out_dir).resolve()
     stl = spec.stl if stl is None else stl
     density = spec.density_g_cm3 if density_g_cm3 is None else density_g_cm3
-    with interrupts_raised():
-        try:
+    result: SweepResult | None = None
+    try:
+        with interrupts_raised():
             designs, pending = _plan(spec, out_dir, stl, density, rebuild)
-        except Interrupted as interrupt:  # before anything was built: no table to write
-            raise SweepInterrupted(interrupt.signum, SweepResult(spec, out_dir, [], interrupted_by=
-                                                                 interrupt.signal_name)) from None
-        if scheduler in (None, "local") and client is None and pending:
-            workers = capped_workers(workers, len(pending), oversubscribe,
-                                     lambda line: print(f"torus-cad: {line}", file=stream or sys.stderr))
-        return _run(spec, out_dir, designs, pending, stl, workers=workers, scheduler=scheduler, client=client,
-                    time_limit_s=spec.time_limit_s if time_limit_s is None else time_limit_s,
-                    bar=BatchProgress(len(designs), len(designs) - len(pending), enabled=progress, stream=stream),
-                    job=job)
+            raise_if_interrupted()  # before anything was built: no table to write
+            if scheduler in (None, "local") and client is None and pending:
+                workers = capped_workers(workers, len(pending), oversubscribe,
+                                         lambda line: print(f"torus-cad: {line}", file=stream or sys.stderr))
+            result = _run(spec, out_dir, designs, pending, stl, workers=workers, scheduler=scheduler, client=client,
+                          time_limit_s=spec.time_limit_s if time_limit_s is None else time_limit_s,
+                          bar=BatchProgress(len(designs), len(designs) - len(pending), enabled=progress,
+                                            stream=stream), job=job)
+    except SweepInterrupted:
+        raise
+    except Interrupted as interrupt:  # before the first design, or while the table was written at the end
+        partial = result if result is not None else SweepResult(spec, out_dir, [])
+        partial.interrupted_by = interrupt.signal_name
+        raise SweepInterrupted(interrupt.signum, partial) from None
+    return result
 
 
 def _plan(spec: SweepSpec, out_dir: Path, stl: bool, density: float | None,
@@ -202,9 +211,12 @@ def _plan(spec: SweepSpec, out_dir: Path, stl: bool, density: float | None,
     """Every design (listed in ``sweep.json``) and the tasks of those not done yet."""
     designs = generate_designs(spec)
     _write_manifest(spec, designs, out_dir, stl, density)
-    pending = [DesignTask(design.design_id, design.parameters, str(out_dir / DESIGNS_DIR / design.design_id),
-                          stl=stl, density_g_cm3=density)
-               for design in designs if rebuild or not _is_done(out_dir, design, stl)]
+    pending = []
+    for design in designs:
+        raise_if_interrupted()  # a large sweep's designs take a while to look up
+        if rebuild or not _is_done(out_dir, design, stl):
+            pending.append(DesignTask(design.design_id, design.parameters,
+                                      str(out_dir / DESIGNS_DIR / design.design_id), stl=stl, density_g_cm3=density))
     return designs, pending
 
 
@@ -218,6 +230,8 @@ def _run(spec: SweepSpec, out_dir: Path, designs: list[Design], pending: list[De
     def on_result(task: DesignTask, design_result: DesignResult) -> None:
         results[task.design_id] = design_result
         bar.update(design_result.outcome)
+        if design_result.outcome is not Outcome.VALID and task.folder is not None:
+            remove_stale_staging(Path(task.folder))  # of a worker stopped at its time limit, or killed
 
     own_client = own_cluster = None
     start = time.perf_counter()
@@ -238,6 +252,9 @@ def _run(spec: SweepSpec, out_dir: Path, designs: list[Design], pending: list[De
             run_tasks(tasks, on_result, lambda: LocalPool(count, time_limit_s), window=2 * count, job=job)
     except Interrupted as interrupt:
         result.interrupted_by = interrupt.signal_name
+        for task in pending:  # the pool is stopped: the staging folders its workers had open are debris now
+            if task.design_id not in results and task.folder is not None and os.path.isdir(task.folder):
+                remove_stale_staging(Path(task.folder))
         raise SweepInterrupted(interrupt.signum, result) from None
     finally:
         bar.close()

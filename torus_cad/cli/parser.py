@@ -367,7 +367,9 @@ def build_parser() -> argparse.ArgumentParser:
                                  "the set NAME in FOLDER): each <name>.json report lists the files of its build "
                                  "with their SHA-256; every one must be there and unchanged. Hidden folders (a "
                                  "build's staging) are not entered. Exit 0 if all are complete, 1 with one line "
-                                 "per missing or mixed file of every set.")
+                                 "per missing or mixed file of every set. A study folder (optimize --out) or a sweep folder "
+                                 "(sweep --out) is checked whole: every set of its trials or designs and of best/, and no "
+                                 "staging folder left by a stopped process.")
     verify.add_argument("folder", metavar="FOLDER", help="output folder, e.g. step_out (its sub-folders too)")
     verify.add_argument("name", nargs="?", metavar="NAME", help="check only the set <NAME>.json (default: every set)")
     verify.add_argument("-q", "--quiet", action="store_true", help="print nothing when the sets are complete")

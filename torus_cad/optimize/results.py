@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -40,18 +40,28 @@ MAX_PARETO_BUILDS = 20  #: Pareto designs built with their files (every one gets
 INTERRUPTED = "interrupted"
 
 
-def write_results(spec: StudySpec, study: Any, out: Path) -> tuple[dict[str, Path], list[str]]:
-    """Write the table, the pictures, the best designs and the summary JSON; the paths and summary lines."""
+def write_results(spec: StudySpec, study: Any, out: Path, checkpoint: Callable[[], None] | None = None
+                  ) -> tuple[dict[str, Path], list[str]]:
+    """Write the table, the pictures, the best designs and the summary JSON; the paths and summary lines.
+
+    ``checkpoint`` is called before each of them: it may raise (a signal arrived) to stop there, each file
+    or set written so far being whole."""
     from torus_cad.kernel.files import atomic_path
 
+    check = checkpoint or (lambda: None)
     trials = study.get_trials(deepcopy=False)
     rows, columns = trial_rows(spec, trials)
+    best = best_trials(spec, study)  # read now: the storage is not needed after this line
+    check()
     files: dict[str, Path] = dict(write_table(rows, out, columns))
+    check()
     files["history"] = _history_picture(spec, trials, out / f"{spec.name}_history.png")
     if len(spec.objectives) == 2:
-        files["pareto"] = _pareto_picture(spec, trials, best_trials(spec, study), out / f"{spec.name}_pareto.png")
-    best = best_trials(spec, study)
+        check()
+        files["pareto"] = _pareto_picture(spec, trials, best, out / f"{spec.name}_pareto.png")
+    check()
     lines, built = _build_best(spec, best, out / BEST_DIR)
+    check()
     lines = [_outcomes_line(rows), *unvalued_lines(rows), *lines]
     summary = {"name": spec.name, "trials": len(trials), "states": _count(row["state"] for row in rows),
                "outcomes": _count(row["outcome"] for row in rows),

@@ -29,8 +29,9 @@ from urllib.parse import urlsplit, urlunsplit
 from torus_cad.batch.runner import _identity
 from torus_cad.errors import ParameterError, TorusCadError
 
-__all__ = ["GRACE_S", "HEARTBEAT_S", "PRESCREENED", "Heartbeat", "StorageError", "claim_lock", "count_trials", "fail_and_retry",
-           "open_storage", "owner_record", "public_url", "retry_stale_trials", "storage_url", "trial_result"]
+__all__ = ["GRACE_S", "HEARTBEAT_S", "PRESCREENED", "Heartbeat", "StorageError", "claim_lock", "count_trials",
+           "fail_and_retry", "open_storage", "owner_record", "public_url", "retry_stale_trials", "storage_failures_named",
+           "storage_url", "trial_result"]
 
 HEARTBEAT_S = 10  #: how often a running process records that its trials are alive, s
 GRACE_S = 120  #: a RUNNING trial without a heartbeat for this long belongs to a dead process, s
@@ -117,6 +118,34 @@ def open_storage(url: str) -> Any:
             cause = " ".join(str(error).split("\n")[0].split())[:300]
             raise StorageError(f"cannot open the study storage {public_url(url)!r}: {cause}") from None
     raise AssertionError("unreachable")  # pragma: no cover
+
+
+def _storage_cause(error: BaseException) -> str:
+    """The cause of a storage failure in the database's own words ("database or disk is full"), from the
+    driver's exception that optuna and SQLAlchemy wrap, on one line and cut to 300 characters."""
+    seen: set[int] = set()
+    current: BaseException | None = error
+    while current is not None and id(current) not in seen:
+        seen.add(id(current))
+        original = getattr(current, "orig", None)  # SQLAlchemy's DBAPIError: the driver's exception
+        if isinstance(original, BaseException) and str(original).strip():
+            return " ".join(str(original).split())[:300]
+        current = current.__cause__ or current.__context__
+    return " ".join(str(error).split("\n")[0].split())[:300] or type(error).__name__
+
+
+@contextlib.contextmanager
+def storage_failures_named(url: str) -> Iterator[None]:
+    """Within the block, a failure of the study storage (optuna's StorageInternalError, any SQLAlchemy error:
+    a full disk, a file that became unwritable, a server that went away) becomes a :class:`StorageError`
+    naming the storage (its URL, password hidden: for SQLite, the database file) and the cause."""
+    import optuna
+    import sqlalchemy.exc
+
+    try:
+        yield
+    except (optuna.exceptions.StorageInternalError, sqlalchemy.exc.SQLAlchemyError) as error:
+        raise StorageError(f"the study storage {public_url(url)!r} failed: {_storage_cause(error)}") from None
 
 
 def _write_ahead_log(engine: Any) -> None:

@@ -20,7 +20,7 @@ import math
 import os
 import time
 import warnings
-from collections.abc import Iterator
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -28,7 +28,7 @@ from typing import Any
 from torus_cad.batch import cluster
 from torus_cad.batch.job import DesignTask, prescreen
 from torus_cad.batch.outcome import DesignResult, Outcome
-from torus_cad.batch.runner import Interrupted, LocalPool, interrupts_raised, run_tasks
+from torus_cad.batch.runner import Interrupted, LocalPool, interrupts_raised, raise_if_interrupted, run_tasks
 from torus_cad.errors import ParameterError
 from torus_cad.optimize.metrics import metric_value
 from torus_cad.optimize.results import write_results
@@ -51,6 +51,7 @@ from torus_cad.optimize.storage import (
     owner_record,
     public_url,
     retry_stale_trials,
+    storage_failures_named,
     storage_url,
     trial_result,
 )
@@ -165,18 +166,33 @@ def run_study(spec: StudySpec, out_dir: str | Path, *, trials: int | None = None
 
     check_writable_folder(out)
     (out / TRIALS_DIR).mkdir(parents=True, exist_ok=True)
-    runner = _Runner(spec, out, url, total)
     result = StudyResult(spec, out, public_url(url), total)
-    with interrupts_raised():
-        try:
-            runner.run(result, workers, scheduler)
-        except Interrupted as interrupt:
-            result.interrupted_by = interrupt.signal_name
-            if write_results:
-                runner.write(result)
-            raise StudyInterrupted(interrupt.signum, result) from None
-        if write_results:
-            runner.write(result)
+    runner: _Runner | None = None
+    try:
+        # From opening the storage to closing it, a signal only takes effect at a safe point (between two
+        # trials' bookkeeping, between two files of the results): never inside a commit, an import or the
+        # pool's start-up; the storage is closed on every way out (no -wal / -shm left beside an SQLite file).
+        with interrupts_raised(), storage_failures_named(url):
+            try:
+                try:
+                    runner = _Runner(spec, out, url, total)
+                    raise_if_interrupted()
+                    runner.run(result, workers, scheduler)
+                except Interrupted as interrupt:
+                    result.interrupted_by = interrupt.signal_name
+                    if write_results and runner is not None:
+                        runner.write(result)  # the signal was raised once: this is not cut short
+                    raise StudyInterrupted(interrupt.signum, result) from None
+                if write_results:
+                    runner.write(result, checkpoint=raise_if_interrupted)
+            finally:
+                if runner is not None:
+                    runner.close()
+    except StudyInterrupted:
+        raise
+    except Interrupted as interrupt:  # while the results were written (they stop at the next file)
+        result.interrupted_by = interrupt.signal_name
+        raise StudyInterrupted(interrupt.signum, result) from None
     return result
 
 
@@ -190,7 +206,11 @@ class _Runner:
         self.spec, self.out, self.url, self.total = spec, out, url, total
         with claim_lock(None, url, spec.name):  # SQLite: one process at a time creates the tables and the study
             self.rdb = open_storage(url)
-            self.study = _load_study(spec, self.rdb)
+            try:
+                self.study = _load_study(spec, self.rdb)
+            except BaseException:
+                self.close()
+                raise
         self.owner = owner_record()
         self.in_flight: dict[str, Any] = {}  # design id -> optuna Trial
         self.seeded = False
@@ -201,6 +221,7 @@ class _Runner:
 
     def run(self, result: StudyResult, workers: int | None, scheduler: str | None) -> None:
         start, cpu_start = time.perf_counter(), time.process_time()
+        _remove_staging_debris((self.out / TRIALS_DIR).glob("*/"))  # of workers killed in earlier runs
         own_client = own_cluster = None
         try:
             with self.heartbeat:
@@ -288,6 +309,8 @@ class _Runner:
         record.update({OUTCOME: outcome.value, REASON: reason})
         if result.prescreened:
             record[PRESCREENED] = True
+        if outcome is not Outcome.VALID:  # a worker stopped at its time limit, or killed, leaves its staging folder
+            _remove_staging_debris([Path(str(task.folder))])
         with contextlib.suppress(optuna.exceptions.UpdateFinishedTrialError):  # a process took it as stale
             trial.set_user_attr(RESULT, record)
             if values is None:
@@ -320,11 +343,45 @@ class _Runner:
             mine |= {trial._trial_id for trial in self.study.get_trials(deepcopy=False, states=(TrialState.RUNNING,))
                      if trial.user_attrs.get(OWNER) == self.owner}
             fail_and_retry(self.study, mine)
+        # the pool is stopped: the staging folders its workers had open are debris now (their trials are
+        # asked again under new numbers, in new folders)
+        _remove_staging_debris(self.out / TRIALS_DIR / str(trial.number) for trial in self.in_flight.values())
         self.in_flight.clear()
 
-    def write(self, result: StudyResult) -> None:
+    def write(self, result: StudyResult, checkpoint: Callable[[], None] | None = None) -> None:
+        """The table, the pictures, the best designs and the summary; ``checkpoint`` is called between two of
+        them (it raises to stop there)."""
+        from torus_cad.errors import OutputError
+        from torus_cad.outputs.output_set import describe_os_error
 
-        result.files, result.summary_lines = write_results(self.spec, self.study, self.out)
+        try:
+            result.files, result.summary_lines = write_results(self.spec, self.study, self.out, checkpoint=checkpoint)
+        except OSError as error:  # a full disk: name the file as the user knows it, not its temp name
+            named = Path(error.filename) if isinstance(error.filename, str) else self.out
+            raise OutputError(describe_os_error(error, _final_name(named))) from None
+
+    def close(self) -> None:
+        """Close the storage's connections: SQLite's last connection folds its write-ahead log into the
+        database and removes ``-wal`` and ``-shm``. The study is read from the storage once more to write
+        the results, which opens a connection again; this is called after that too."""
+        with contextlib.suppress(Exception):  # a storage that already failed: its error is the one reported
+            self.rdb.remove_session()
+        with contextlib.suppress(Exception):
+            self.rdb.engine.dispose()
+
+
+def _final_name(path: Path) -> Path:
+    """The file a temp file of :func:`torus_cad.kernel.files.atomic_path` stands for (``.x.png.tmp-...`` -> ``x.png``)."""
+    name, marker, _ = path.name.partition(".tmp-")
+    return path.with_name(name[1:]) if marker and name.startswith(".") else path
+
+
+def _remove_staging_debris(folders: Iterable[Path]) -> None:
+    """Remove the staging folders that dead processes of this host left in these trial folders."""
+    from torus_cad.outputs.output_set import remove_stale_staging
+
+    for folder in folders:
+        remove_stale_staging(folder)
 
 
 def _distributions(spec: StudySpec) -> dict[str, Any]:

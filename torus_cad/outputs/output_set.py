@@ -76,6 +76,20 @@ def remove_stale_staging(out_dir: Path) -> list[Path]:
     return removed
 
 
+def staging_folders(out_dir: Path) -> tuple[list[Path], list[Path]]:
+    """The staging folders in ``out_dir``: those left by dead processes of this host (debris, removed by the
+    next build there or by :func:`remove_stale_staging`), and the others (a build in progress, or one of
+    another host sharing the folder)."""
+    left: list[Path] = []
+    other: list[Path] = []
+    with contextlib.suppress(OSError):
+        for entry in sorted(os.scandir(out_dir), key=lambda entry: entry.name):
+            if entry.name.startswith(".") and _STAGING_MARK in entry.name:
+                prefix = entry.name[: entry.name.find(_STAGING_MARK) + len(_STAGING_MARK)]
+                (left if left_by_dead_process(entry.name, prefix) else other).append(Path(entry.path))
+    return left, other
+
+
 def describe_os_error(error: OSError, path: Path) -> str:
     """One line naming the cause and the file the user knows (the final name, not a staged one)."""
     causes = {errno.ENOSPC: "no space left on device", errno.EDQUOT: "disk quota exceeded",
