@@ -218,6 +218,9 @@ STRICT_AXIS_TOLERANCE = 1e-9
 #: triangles by meshlib (torus_cad.kernel.uncrossed); a repair that moves it further is refused.
 #: Measured: 0.26 mm at the knife edge of fuzz seed 7 (Relax), under a 0.4 mm nozzle's line.
 MESH_REPAIR_MAX_DEVIATION_MM = 0.5
+#: meshlib's SelfIntersections.fix passes tried in turn on a crossing tessellation, each on the last
+#: one's result, until no triangle crosses.
+MESH_REPAIR_PASSES = ("Relax", "Relax", "Relax", "CutAndFill", "Relax", "CutAndFill")
 #: Tessellation nodes closer than this (mm) are one vertex of the written mesh (the faces store their
 #: shared boundary nodes each in its own placement, equal to the last bits).
 MESH_MERGE_DISTANCE_MM = 1e-6

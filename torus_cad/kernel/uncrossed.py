@@ -13,7 +13,8 @@ curve) did not converge either: 732, 1112, 2828, 7112, 15352, 40460 pairs in 5 r
 
 So the crossings are repaired with a maintained tool, meshlib's ``SelfIntersections.fix``: it
 finds the crossing triangles, grows the region a few rings (``maxExpand``), and relaxes it
-(``Relax``), or cuts it out and fills the hole (``CutAndFill``) if relaxing leaves crossings.
+(``Relax``), or cuts it out and fills the hole (``CutAndFill``), pass after pass
+(MESH_REPAIR_PASSES) until nothing crosses.
 The result is checked again by meshlib, must be closed, and may leave the tessellation by at most
 MESH_REPAIR_MAX_DEVIATION_MM (Hausdorff, one way); the writers then check the file they wrote.
 A mesh that cannot be repaired within that is a KernelError naming the face and the place.
@@ -35,7 +36,7 @@ from OCP.TopoDS import TopoDS_Face
 from scipy.spatial import cKDTree
 
 from torus_cad.errors import KernelError
-from torus_cad.tolerances import MESH_MERGE_DISTANCE_MM, MESH_REPAIR_MAX_DEVIATION_MM
+from torus_cad.tolerances import MESH_MERGE_DISTANCE_MM, MESH_REPAIR_MAX_DEVIATION_MM, MESH_REPAIR_PASSES
 
 __all__ = ["UncrossedMesh", "uncrossed_mesh"]
 
@@ -50,7 +51,7 @@ class UncrossedMesh:
         linear_deflection_mm: the mesher's linear deflection, mm.
         angular_deflection_rad: its angular deflection, rad.
         repaired_pairs: crossing triangle pairs of the tessellation that meshlib repaired (0: none crossed).
-        repair: meshlib's method that repaired them ("Relax" or "CutAndFill"; "" if none).
+        repair: meshlib's passes that repaired them (e.g. "Relax+Relax"; "" if none).
         repair_deviation_mm: the largest distance of the tessellation from the repaired mesh, mm.
     """
 
@@ -94,24 +95,23 @@ def uncrossed_mesh(shape: cq.Shape, linear_deflection: float, angular_deflection
     where = (f"{len(pairs)} pairs of intersecting triangles (meshlib), the first on face {owner[first]} "
              f"({cq.Face(faces[owner[first]]).geomType()}) against face {owner[other]} at "
              f"({', '.join(f'{value:.3f}' for value in points[triangles[first]].mean(axis=0))}) mm")
-    for method in ("Relax", "CutAndFill"):
-        repaired = _repaired(points, triangles, method)
-        if repaired is not None:
-            vertices, fixed, deviation = repaired
-            if deviation > MESH_REPAIR_MAX_DEVIATION_MM:
-                raise KernelError(f"the tessellation has {where}; meshlib's repair ({method}) moves it by "
-                                  f"{deviation:.3f} mm, over the {MESH_REPAIR_MAX_DEVIATION_MM} mm allowed")
-            return UncrossedMesh(vertices, fixed, linear_deflection, angular_deflection, len(pairs), method,
-                                 deviation)
-    raise KernelError(f"the tessellation has {where}; meshlib's repair (Relax, CutAndFill) leaves crossing "
-                      "triangles or an open mesh")
+    repaired = _repaired(points, triangles)
+    if repaired is None:
+        raise KernelError(f"the tessellation has {where}; meshlib's repair ({', '.join(MESH_REPAIR_PASSES)}) "
+                          "leaves crossing triangles or an open mesh")
+    vertices, fixed, passes, deviation = repaired
+    if deviation > MESH_REPAIR_MAX_DEVIATION_MM:
+        raise KernelError(f"the tessellation has {where}; meshlib's repair moves it by {deviation:.3f} mm, over "
+                          f"the {MESH_REPAIR_MAX_DEVIATION_MM} mm allowed")
+    return UncrossedMesh(vertices, fixed, linear_deflection, angular_deflection, len(pairs), "+".join(passes),
+                         deviation)
 
 
-def _repaired(points: NDArray[np.float64], triangles: NDArray[np.int64], method: str
-              ) -> tuple[NDArray[np.float64], NDArray[np.int64], float] | None:
-    """meshlib's SelfIntersections.fix of the mesh by ``method`` ("Relax", "CutAndFill"): the vertices,
-    triangles and the largest distance (mm) of the tessellation from the result; None unless the
-    result is closed and free of crossings."""
+def _repaired(points: NDArray[np.float64], triangles: NDArray[np.int64]
+              ) -> tuple[NDArray[np.float64], NDArray[np.int64], list[str], float] | None:
+    """meshlib's SelfIntersections.fix of the mesh, pass after pass of MESH_REPAIR_PASSES until nothing
+    crosses: the vertices, triangles, the passes used and the largest distance (mm) of the tessellation
+    from the result; None unless the result is closed and free of crossings."""
     import meshlib.mrmeshnumpy as mrn
     import meshlib.mrmeshpy as mr
 
@@ -120,15 +120,22 @@ def _repaired(points: NDArray[np.float64], triangles: NDArray[np.int64], method:
                                       np.ascontiguousarray(points, dtype=np.float32))
 
     original, mesh = to_mesh(), to_mesh()
-    settings = mr.SelfIntersections.Settings()
-    settings.method = getattr(mr.SelfIntersections.Settings.Method, method)
-    mr.SelfIntersections.fix(mesh, settings)
-    mesh.pack()
-    if len(mr.findSelfCollidingTriangles(mesh)) or mesh.topology.findNumHoles() != 0:
+    passes: list[str] = []
+    for method in MESH_REPAIR_PASSES:
+        settings = mr.SelfIntersections.Settings()
+        settings.method = getattr(mr.SelfIntersections.Settings.Method, method)
+        mr.SelfIntersections.fix(mesh, settings)
+        mesh.pack()
+        passes.append(method)
+        if not len(mr.findSelfCollidingTriangles(mesh)):
+            break
+    else:
+        return None
+    if mesh.topology.findNumHoles() != 0:
         return None
     deviation = float(np.sqrt(mr.findMaxDistanceSqOneWay(mesh, original)))
     return (np.asarray(mrn.getNumpyVerts(mesh), dtype=float),
-            np.asarray(mrn.getNumpyFaces(mesh.topology), dtype=np.int64), deviation)
+            np.asarray(mrn.getNumpyFaces(mesh.topology), dtype=np.int64), passes, deviation)
 
 
 def _merged_tessellation(faces: list[TopoDS_Face]
