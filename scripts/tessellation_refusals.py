@@ -39,8 +39,9 @@ def _one(label: str, load) -> str:
                                       export.stl_angular_deflection)
         except KernelError as error:
             return f"{label}: REFUSED for its tessellation: {str(error).splitlines()[0][:200]}"
-    repair = (f", {check.repaired_pairs} crossing pairs repaired ({check.repair}, moved <= "
-              f"{check.repair_deviation_mm:.3f} mm)" if check.repaired_pairs else "")
+    pairs = getattr(check, "repaired_pairs", 0)  # a checkout before the uncrossed tessellation has none
+    repair = (f", {pairs} crossing pairs repaired ({check.repair}, moved <= {check.repair_deviation_mm:.3f} mm)"
+              if pairs else "")
     return f"{label}: written, {check.triangles} triangles{repair}, {time.perf_counter() - start:.1f} s"
 
 

@@ -97,7 +97,9 @@ def uncrossed_mesh(shape: cq.Shape, linear_deflection: float, angular_deflection
              f"({', '.join(f'{value:.3f}' for value in points[triangles[first]].mean(axis=0))}) mm")
     repaired = _repaired(points, triangles)
     if repaired is None:
-        raise KernelError(f"the tessellation has {where}; meshlib's repair ({', '.join(MESH_REPAIR_PASSES)}) "
+        holes = _holes(points, triangles)
+        opening = f" and is open ({holes} holes: faces that do not meet)" if holes else ""
+        raise KernelError(f"the tessellation has {where}{opening}; meshlib's repair ({', '.join(MESH_REPAIR_PASSES)}) "
                           "leaves crossing triangles or an open mesh")
     vertices, fixed, passes, deviation = repaired
     if deviation > MESH_REPAIR_MAX_DEVIATION_MM:
@@ -136,6 +138,15 @@ def _repaired(points: NDArray[np.float64], triangles: NDArray[np.int64]
     deviation = float(np.sqrt(mr.findMaxDistanceSqOneWay(mesh, original)))
     return (np.asarray(mrn.getNumpyVerts(mesh), dtype=float),
             np.asarray(mrn.getNumpyFaces(mesh.topology), dtype=np.int64), passes, deviation)
+
+
+def _holes(points: NDArray[np.float64], triangles: NDArray[np.int64]) -> int:
+    """How many holes (boundary loops) the mesh has, by meshlib."""
+    import meshlib.mrmeshnumpy as mrn
+
+    mesh = mrn.meshFromFacesVerts(np.ascontiguousarray(triangles, dtype=np.int32),
+                                  np.ascontiguousarray(points, dtype=np.float32))
+    return int(mesh.topology.findNumHoles())
 
 
 def _merged_tessellation(faces: list[TopoDS_Face]
