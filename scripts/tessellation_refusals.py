@@ -38,7 +38,7 @@ def _one(label: str, load) -> str:
             check = write_checked_stl(propeller.solid, Path(folder) / "p.stl", export.stl_linear_deflection,
                                       export.stl_angular_deflection)
         except KernelError as error:
-            return f"{label}: REFUSED for its tessellation: {str(error).splitlines()[0][:200]}"
+            return f"{label}: REFUSED for its tessellation: {str(error).splitlines()[0]}"
     pairs = getattr(check, "repaired_pairs", 0)  # a checkout before the uncrossed tessellation has none
     repair = (f", {pairs} crossing pairs repaired ({check.repair}, moved <= {check.repair_deviation_mm:.3f} mm)"
               if pairs else "")
