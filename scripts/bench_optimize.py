@@ -61,7 +61,8 @@ def _sweep(spec, parameter_sets, out: Path, workers: int) -> Run:
 
     sweep = SweepSpec(name="bench", base=spec.base)
     designs = [Design(index, parameters["name"], {}, parameters) for index, parameters in enumerate(parameter_sets)]
-    pending = [DesignTask(d.design_id, d.parameters, str(out / "designs" / d.design_id), stl=False) for d in designs]
+    pending = [DesignTask(d.design_id, d.parameters, str(out / "designs" / d.design_id), stl=spec.stl)
+               for d in designs]  # the files the trials write
     cpu_start = time.process_time()  # the sweep's own loop, its table included
     result = _run(sweep, out, designs, pending, False, workers=workers, scheduler=None, client=None,
                   time_limit_s=300.0, bar=BatchProgress(len(designs), 0, enabled=False), job=None)

@@ -1,18 +1,14 @@
-"""Intersection-free tessellations: STL and 3MF meshes checked with meshlib and refined until no
-two triangles cross.
+"""The check of a written mesh: its triangle pairs that intersect, by meshlib.
 
-A tessellation inherits every crossing of the B-rep and adds its own where it is coarse: at a
-thin, sharp trailing edge the chords of the upper and lower faces' triangles can pass through
-each other although the surfaces do not touch. So every mesh the build writes is checked with
-meshlib's ``findSelfCollidingTriangles`` (a maintained checker; imported only here, when a mesh
-is checked, as importing it takes about a second), and re-tessellated with half the linear
-deflection until it has no crossing pair, at most STL_REFINE_HALVINGS times; a mesh that still
-crosses itself is a KernelError.
+Every mesh the build writes (STL, 3MF) is the uncrossed tessellation
+(torus_cad.kernel.uncrossed: OpenCascade's, any crossing triangles repaired by meshlib),
+and the written file is read back and checked again with meshlib's ``findSelfCollidingTriangles``
+(a maintained checker; imported only here, when a mesh is checked, as importing it takes about a
+second). A written mesh that crosses itself is a KernelError.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -21,7 +17,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from torus_cad.errors import KernelError
-from torus_cad.tolerances import STL_REFINE_HALVINGS
 
 
 @dataclass(frozen=True)
@@ -29,25 +24,30 @@ class MeshCheck:
     """A written mesh that passed the check.
 
     Attributes:
-        linear_deflection_mm: the linear deflection its tessellation used, mm (the design's, or a
-            halving of it).
+        linear_deflection_mm: the linear deflection of its tessellation, mm (the design's).
         angular_deflection_rad: its angular deflection, rad.
         triangles: how many triangles it has.
         self_intersecting_pairs: intersecting triangle pairs meshlib found in it (always 0).
-        refinements: how many times the linear deflection was halved to get there.
+        repaired_pairs: crossing pairs of the tessellation that meshlib repaired (0: none crossed).
+        repair: meshlib's repair method used ("Relax", "CutAndFill"; "" if none was needed).
+        repair_deviation_mm: the largest distance of the tessellation from the written mesh, mm.
     """
 
     linear_deflection_mm: float
     angular_deflection_rad: float
     triangles: int
     self_intersecting_pairs: int
-    refinements: int
+    repaired_pairs: int = 0
+    repair: str = ""
+    repair_deviation_mm: float = 0.0
 
     def to_dict(self) -> dict[str, Any]:
         """For the JSON report."""
         return {"linear_deflection_mm": self.linear_deflection_mm, "angular_deflection_rad": self.angular_deflection_rad,
                 "triangles": self.triangles, "self_intersecting_pairs": self.self_intersecting_pairs,
-                "refinements": self.refinements, "checker": "meshlib findSelfCollidingTriangles"}
+                "repaired_pairs": self.repaired_pairs, "repair": self.repair,
+                "repair_deviation_mm": self.repair_deviation_mm,
+                "checker": "meshlib findSelfCollidingTriangles"}
 
 
 def intersecting_pairs(vertices: NDArray[np.float64], triangles: NDArray[np.int64]) -> int:
@@ -68,16 +68,11 @@ def intersecting_pairs_in_file(path: str | Path) -> tuple[int, int]:
     return len(mr.findSelfCollidingTriangles(mesh)), int(mesh.topology.numValidFaces())
 
 
-def refined_until_intersection_free(write: Callable[[float], tuple[int, int]], linear_deflection_mm: float,
-                                    angular_deflection_rad: float, what: str) -> MeshCheck:
-    """Call ``write(linear deflection)`` (it tessellates, writes and returns (crossing pairs,
-    triangles)) with the deflection halved until no pair crosses; KernelError after STL_REFINE_HALVINGS."""
-    pairs = 0
-    for refinements in range(STL_REFINE_HALVINGS + 1):
-        deflection = linear_deflection_mm / 2**refinements
-        pairs, triangles = write(deflection)
-        if pairs == 0:
-            return MeshCheck(deflection, angular_deflection_rad, triangles, 0, refinements)
-    raise KernelError(f"the {what} tessellation has {pairs} pairs of intersecting triangles (meshlib) even at "
-                      f"linear deflection {deflection:g} mm ({STL_REFINE_HALVINGS} halvings of "
-                      f"export.stl_linear_deflection = {linear_deflection_mm:g} mm)")
+def checked(pairs: int, triangles: int, what: str, mesh: Any) -> MeshCheck:
+    """The MeshCheck of a written ``what`` mesh (an UncrossedMesh) whose read-back check found ``pairs``;
+    KernelError if any."""
+    if pairs:
+        raise KernelError(f"the written {what} file has {pairs} pairs of intersecting triangles (meshlib) "
+                          "although its tessellation had none")
+    return MeshCheck(mesh.linear_deflection_mm, mesh.angular_deflection_rad, triangles, 0, mesh.repaired_pairs,
+                     mesh.repair, mesh.repair_deviation_mm)

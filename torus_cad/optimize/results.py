@@ -5,8 +5,10 @@
 * ``OUT/<name>_history.png``: each objective against the trial number with the best feasible
   value so far, and ``OUT/<name>_pareto.png`` for two objectives;
 * ``OUT/best/<name>_best.toml`` (one objective) or ``OUT/best/<name>_pareto_<number>.toml``
-  (the Pareto front): design files that ``torus-cad build`` reads unchanged, each built beside
-  it as an output set (STEP, STL, JSON);
+  (the Pareto front): design files that ``torus-cad build`` reads unchanged, each with the output
+  set its trial wrote (STEP, STL, 3MF as the design asks, JSON) copied beside it under its name: the
+  files the study judged, not a rebuild. A best trial whose files cannot be published is named in
+  one line and (one objective) the next best feasible trial is published instead;
 * ``OUT/<name>_study.json``: counts, the best trials and their values.
 """
 
@@ -60,14 +62,16 @@ def write_results(spec: StudySpec, study: Any, out: Path, checkpoint: Callable[[
         check()
         files["pareto"] = _pareto_picture(spec, trials, best, out / f"{spec.name}_pareto.png")
     check()
-    lines, built = _build_best(spec, best, out / BEST_DIR)
+    lines, built = _publish_best(spec, trials, best, out / BEST_DIR, out)
     check()
     lines = [_outcomes_line(rows), *unvalued_lines(rows), *lines]
+    published = [trial for trial in trials if trial.number in built]
     summary = {"name": spec.name, "trials": len(trials), "states": _count(row["state"] for row in rows),
                "outcomes": _count(row["outcome"] for row in rows),
                "prescreened": sum(1 for row in rows if row["prescreened"]),
                "best": [{"number": trial.number, "values": list(trial.values), "params": dict(trial.params),
-                         "design": str(built.get(trial.number, ""))} for trial in best]}
+                         "design": str(built[trial.number])} for trial in published],
+               "not_published": [trial.number for trial in best if trial.number not in built]}
     files["summary"] = out / f"{spec.name}_study.json"
     with atomic_path(files["summary"]) as temp:
         temp.write_text(json.dumps(summary, indent=2, allow_nan=False, default=str) + "\n")
@@ -237,33 +241,103 @@ def _pareto_picture(spec: StudySpec, trials: Sequence[Any], front: Sequence[Any]
     return _save_png(figure, path)
 
 
-def _build_best(spec: StudySpec, best: Sequence[Any], folder: Path) -> tuple[list[str], dict[int, Path]]:
-    """Write each best design's TOML and build it (STEP, STL, JSON) beside it, unless that set is current."""
-    from torus_cad.kernel.files import atomic_path
-    from torus_cad.parameters import PropellerParameters
+def _publish_best(spec: StudySpec, trials: Sequence[Any], best: Sequence[Any], folder: Path, out: Path
+                  ) -> tuple[list[str], dict[int, Path]]:
+    """Write each best design's TOML and publish beside it, as an output set, the files its trial wrote
+    (copied, not rebuilt: the study judged the trial on them). A trial whose set cannot be published
+    is named in one line; for one objective the next best feasible trial takes its place."""
+    from torus_cad.errors import TorusCadError
 
     if not best:
         return ["  no feasible trial yet: no best design"], {}
     folder.mkdir(parents=True, exist_ok=True)
     single = len(spec.objectives) == 1
-    names = {trial.number: f"{spec.name}_best" if single else f"{spec.name}_pareto_{trial.number}" for trial in best}
-    if not single:
-        _remove_stale_pareto(spec, folder, set(names.values()))
+    if single:
+        ranked = [best[0]] + [trial for trial in _ranked_feasible(spec, trials) if trial.number != best[0].number]
+        slots = [(f"{spec.name}_best", ranked)]
+    else:
+        slots = [(f"{spec.name}_pareto_{trial.number}", [trial]) for trial in best]
+        _remove_stale_pareto(spec, folder, {name for name, _ in slots})
     lines, built = [], {}
-    for position, trial in enumerate(best):
-        name = names[trial.number]
-        toml = PropellerParameters.from_dict(spec.parameters(trial.params, name)).to_toml()
-        path = folder / f"{name}.toml"
-        current = path.is_file() and path.read_text() == toml and _complete(folder, name)
-        if not current:
-            with atomic_path(path) as temp:
-                temp.write_text(toml)
-            if position < MAX_PARETO_BUILDS:
-                _build(path, folder)
-        built[trial.number] = path
-        values = ", ".join(f"{o.metric} = {v:.6g}" for o, v in zip(spec.objectives, trial.values))
-        lines.append(f"  best trial {trial.number}: {values}; design {path}")
+    for position, (name, candidates) in enumerate(slots):
+        for rank, trial in enumerate(candidates):
+            try:
+                path = _publish_trial(spec, trial, name, folder, out, with_files=position < MAX_PARETO_BUILDS)
+            except (TorusCadError, OSError) as error:
+                lines.append(f"  trial {trial.number} is not published: {' '.join(str(error).split())}")
+                continue
+            built[trial.number] = path
+            values = ", ".join(f"{o.metric} = {v:.6g}" for o, v in zip(spec.objectives, trial.values))
+            which = "best" if rank == 0 else "next best"
+            lines.append(f"  {which} trial {trial.number}: {values}; design {path}")
+            break
     return lines, built
+
+
+def _ranked_feasible(spec: StudySpec, trials: Sequence[Any]) -> list[Any]:
+    """The feasible complete trials of a one-objective study, best first."""
+    sign = -1.0 if spec.objectives[0].direction.value == "maximize" else 1.0
+    return sorted((trial for trial in trials if _feasible(trial)), key=lambda trial: (sign * trial.values[0],
+                                                                                      trial.number))
+
+
+def _publish_trial(spec: StudySpec, trial: Any, name: str, folder: Path, out: Path, with_files: bool = True) -> Path:
+    """``folder/<name>.toml`` (the trial's design under ``name``) and, with ``with_files``, the trial's
+    own output set copied beside it as the set ``name`` (unless that set is already current).
+
+    Raises IncompleteOutputError when the trial's set is incomplete or lacks a format its design
+    writes (a trial run before trials wrote every format), OSError when a copy cannot be written."""
+    from torus_cad.kernel.files import atomic_path
+    from torus_cad.parameters import PropellerParameters
+
+    parameters = PropellerParameters.from_dict(spec.parameters(trial.params, name))
+    toml = parameters.to_toml()
+    path = folder / f"{name}.toml"
+    if path.is_file() and path.read_text() == toml and (not with_files or _complete(folder, name)):
+        return path
+    if with_files:
+        _copy_trial_set(trial, parameters, name, folder, out, stl=spec.stl)
+    with atomic_path(path) as temp:
+        temp.write_text(toml)
+    return path
+
+
+def _copy_trial_set(trial: Any, parameters: Any, name: str, folder: Path, out: Path, stl: bool = True) -> None:
+    """Publish the trial's verified output set (renamed ``name``: its files and its report, which names
+    the trial it came from) in ``folder``; the copies are checked against the trial's SHA-256. The set
+    must hold every format of the design's ``export.formats`` (STL only if ``stl``)."""
+    import shutil
+
+    from torus_cad.errors import IncompleteOutputError
+    from torus_cad.optimize.study import TRIALS_DIR, trial_name
+    from torus_cad.outputs.output_set import FILES_KEY, OutputSet, file_entry, verify_set
+
+    source = out / str(trial_result(trial).get(FOLDER, f"{TRIALS_DIR}/{trial.number}"))
+    design = trial_name(trial.number)
+    report = json.loads(verify_set(source, design).report.read_text(encoding="utf-8"))
+    files: dict[str, dict[str, Any]] = report[FILES_KEY]
+    formats = {fmt.value for fmt in parameters.export.formats if stl or fmt.value != "stl"}
+    missing = sorted(formats - set(files))
+    if missing:
+        raise IncompleteOutputError(f"{design}: its output set has no {', '.join(missing)} file")
+
+    def copy(kind: str, entry: dict[str, Any]) -> Any:
+        renamed = name + entry["file"][len(design):] if entry["file"].startswith(design) else entry["file"]
+
+        def write(staging: Path) -> dict[str, Path]:
+            copied = Path(shutil.copyfile(source / entry["file"], staging / renamed))
+            if file_entry(copied)["sha256"] != entry["sha256"]:
+                raise IncompleteOutputError(f"{design}: the copy of {entry['file']} differs from the trial's")
+            return {kind: copied}
+        return write
+
+    with OutputSet(folder, name) as output:
+        for kind, entry in files.items():
+            output.write_files(copy(kind, entry))
+        sealed = {key: value for key, value in report.items() if key != FILES_KEY}
+        sealed.update(name=name, study_trial={"number": trial.number, "design": design,
+                                              "folder": source.relative_to(out).as_posix()})
+        output.publish(sealed)
 
 
 def _complete(folder: Path, name: str) -> bool:
@@ -275,14 +349,6 @@ def _complete(folder: Path, name: str) -> bool:
     except IncompleteOutputError:
         return False
     return True
-
-
-def _build(config: Path, folder: Path) -> None:
-    """Build the design file ``config`` into ``folder`` as ``torus-cad build`` does (its STL included)."""
-    from torus_cad.outputs.output_set import write_output_set
-    from torus_cad.propeller import DEFAULT_DENSITY_G_CM3, build_propeller
-
-    write_output_set(build_propeller(config), folder, DEFAULT_DENSITY_G_CM3, stl=True)
 
 
 def _remove_stale_pareto(spec: StudySpec, folder: Path, keep: set[str]) -> None:

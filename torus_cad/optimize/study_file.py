@@ -97,7 +97,8 @@ class StudyTable(Section):
     seed: int = param(0, ge=0, le=2**31 - 1, doc="the sampler's random seed")
     storage: str = param("", doc="'' = SQLite file OUT/<name>.db; or a postgresql:// URL")
     population: int = param(20, ge=2, le=10000, doc="nsga2: designs per generation")
-    stl: bool = param(False, doc="write each trial's STL too (the best designs always get one)")
+    stl: bool = param(True, doc="each trial writes its STL, so it is judged on every file its best set holds "
+                                "(false: trials and best sets without STL)")
     time_limit_s: float = param(0.0, unit="s", ge=0.0, le=DESIGN_TIME_LIMIT_MAX_S,
                                 doc="per trial on the local pool (0 = 300 s, or 3600 s with simulate)")
 
@@ -169,7 +170,7 @@ class StudySpec:
         sampler, seed, population: the search.
         storage: the storage URL from the file ('' = SQLite in the output folder).
         simulate: ``{"rpm", "airspeed", "level"}`` when a metric is ``performance.*``, else None.
-        stl: trials write STL files.
+        stl: trials (and so the best sets copied from them) write STL files.
         time_limit_s: per trial, s.
         source: where it came from, for messages.
     """
@@ -185,7 +186,7 @@ class StudySpec:
     population: int = 20
     storage: str = ""
     simulate: dict[str, Any] | None = None
-    stl: bool = False
+    stl: bool = True
     time_limit_s: float = 300.0
     source: str = "<dict>"
     metrics: tuple[str, ...] = field(default=())

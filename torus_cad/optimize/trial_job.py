@@ -1,9 +1,10 @@
 """One trial, as a worker runs it: the sweep's design job, then (for ``performance.*``) the simulation.
 
 The trial's folder ``OUT/trials/<number>/`` holds the build's output set (``trial_<number>.step``,
-``.json``, and ``.stl`` when asked), the design file ``trial_<number>.toml`` that rebuilds it,
-and ``simulate/`` with the performance report; or the sweep's ``refusal.json`` /
-``failure.json`` naming the reason.
+``.json``, ``.stl`` unless the study says ``stl = false``, ``.3mf`` when the design asks): every
+file its best set would hold, so that the trial is judged on them; the design file
+``trial_<number>.toml`` that rebuilds it, and ``simulate/`` with the performance report; or the
+sweep's ``refusal.json`` / ``failure.json`` naming the reason.
 """
 
 from __future__ import annotations

@@ -411,6 +411,7 @@ def write_output_set(propeller: BuiltPropeller, out_dir: str | Path, density_g_c
     """
     from torus_cad import __version__
     from torus_cad.kernel.isolation import IsolatedCall
+    from torus_cad.kernel.uncrossed import UncrossedMesh, uncrossed_mesh
     from torus_cad.kernel.writers.step import write_step
     from torus_cad.kernel.writers.stl import write_checked_stl
     from torus_cad.kernel.writers.threemf import write_3mf
@@ -430,6 +431,13 @@ def write_output_set(propeller: BuiltPropeller, out_dir: str | Path, density_g_c
         check_stl_budget(params, propeller.surface, propeller.section_curves.poles.shape[:2])
     timer = StageTimer[Stage]()
     meshes: dict[str, dict[str, Any]] = {}  # each written mesh's check, for the report
+    made: list[UncrossedMesh] = []
+
+    def mesh() -> UncrossedMesh:
+        """The uncrossed tessellation that the STL and the 3MF both write, made once."""
+        if not made:
+            made.append(uncrossed_mesh(propeller.solid, *deflections))
+        return made[0]
 
     def checked(kind: str, write: Callable[[Path], Any]) -> FileWriter:
         def writer(path: Path) -> Path:
@@ -448,11 +456,13 @@ def write_output_set(propeller: BuiltPropeller, out_dir: str | Path, density_g_c
                                                              program=f"torus_cad {__version__}"))
         if write_stl_file:
             with timer.stage(Stage.STL_WRITE):
-                output.write("stl", checked("stl", lambda path: write_checked_stl(propeller.solid, path, *deflections)))
+                output.write("stl", checked("stl", lambda path: write_checked_stl(propeller.solid, path, *deflections,
+                                                                                  mesh=mesh())))
         if ExportFormat.THREE_MF in formats:
             with timer.stage(Stage.THREE_MF_WRITE):
                 output.write("3mf", checked("3mf", lambda path: write_3mf(propeller.solid, path, params.name,
-                                                                          *deflections, version=__version__)))
+                                                                          *deflections, version=__version__,
+                                                                          mesh=mesh())))
         if table is not None:
             with timer.stage(Stage.SECTIONS_TABLE):  # what is left of it once the meshes are written
                 output.write_files(lambda folder: write_files(table.result(SECTIONS_TABLE_TIME_LIMIT_S), folder))

@@ -1,5 +1,6 @@
-"""STL writer: OpenCascade's tessellation at the given deflections, and the checked STL, refined
-until its triangles cross nowhere (torus_cad.kernel.mesh_check).
+"""STL writers: OpenCascade's tessellation at the given deflections (``write_stl``, for the
+simulation's own use), and the build's STL, the uncrossed tessellation (torus_cad.kernel.uncrossed)
+read back and checked by meshlib (``write_checked_stl``).
 """
 
 
@@ -8,12 +9,14 @@ from __future__ import annotations
 from pathlib import Path
 
 import cadquery as cq
+import numpy as np
 from OCP.BRepMesh import BRepMesh_IncrementalMesh
 from OCP.StlAPI import StlAPI_Writer
 
 from torus_cad.errors import KernelError
 from torus_cad.kernel.files import atomic_path
-from torus_cad.kernel.mesh_check import MeshCheck, intersecting_pairs_in_file, refined_until_intersection_free
+from torus_cad.kernel.mesh_check import MeshCheck, checked, intersecting_pairs_in_file
+from torus_cad.kernel.uncrossed import UncrossedMesh, uncrossed_mesh
 from torus_cad.kernel.writers.failures import write_failure
 
 __all__ = ["write_checked_stl", "write_stl"]
@@ -39,16 +42,33 @@ def write_stl(shape: cq.Shape, path: str | Path, linear_deflection: float, angul
 
 
 def write_checked_stl(shape: cq.Shape, path: str | Path, linear_deflection: float,
-                      angular_deflection: float) -> MeshCheck:
-    """:func:`write_stl`, with the written file read back by meshlib and re-tessellated at half the
-    linear deflection until no two of its triangles intersect (torus_cad.kernel.mesh_check)."""
+                      angular_deflection: float, mesh: UncrossedMesh | None = None) -> MeshCheck:
+    """Write the uncrossed tessellation of ``shape`` (``mesh`` if given, else made at the deflections,
+    mm and rad) as a binary STL, read it back with meshlib and check that no two triangles intersect.
+
+    Raises KernelError when the mesh cannot be made uncrossed (naming the face and where)."""
+    mesh = uncrossed_mesh(shape, linear_deflection, angular_deflection) if mesh is None else mesh
     path = Path(path)
     with atomic_path(path) as temp:
-        def write(deflection: float) -> tuple[int, int]:
-            _write_stl_to(shape, temp, path, deflection, angular_deflection)
-            return intersecting_pairs_in_file(temp)
+        _write_binary_stl(temp, path, mesh.vertices, mesh.triangles)
+        return checked(*intersecting_pairs_in_file(temp), "STL", mesh)
 
-        return refined_until_intersection_free(write, linear_deflection, angular_deflection, "STL")
+
+def _write_binary_stl(temp: Path, path: Path, vertices: np.ndarray, triangles: np.ndarray) -> None:
+    """A binary STL of the triangles (facet normals from their corners, single precision)."""
+    corners = vertices[triangles]
+    normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    lengths = np.linalg.norm(normals, axis=1, keepdims=True)
+    normals = np.divide(normals, lengths, out=np.zeros_like(normals), where=lengths > 0)
+    record = np.dtype([("normal", "<f4", 3), ("corners", "<f4", (3, 3)), ("attribute", "<u2")])
+    data = np.zeros(len(triangles), dtype=record)
+    data["normal"], data["corners"] = normals, corners
+    header = b"binary STL written by torus_cad".ljust(80, b" ")
+    with open(temp, "wb") as handle:
+        handle.write(header + np.uint32(len(triangles)).tobytes())
+        handle.write(data.tobytes())
+    if not _stl_whole(temp):
+        raise write_failure("STL", path, temp)
 
 
 def _write_stl_to(shape: cq.Shape, temp: Path, path: Path, linear_deflection: float, angular_deflection: float) -> None:
