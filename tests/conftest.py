@@ -26,6 +26,19 @@ def _is_design(path: Path) -> bool:
 #: Every design file shipped in examples/ (sweeps and studies left out), sorted.
 SHIPPED_DESIGNS = sorted(path for path in EXAMPLES_DIR.glob("*.toml") if _is_design(path))
 
+#: Camber far aft on a thin, flattened section: with 25 points its curve crosses itself at the trailing
+#: edge (scripts/fuzz.py design fuzz_334); the section fit refuses it before the kernel.
+HOOKED_TRAILING_EDGE_DESIGN: dict = {
+    "name": "hooked", "blades": 4, "phase_deg": -66.88, "hub": {"radius": 6.9435, "length": 17.2294},
+    "airfoil": {"max_camber": 0.0553, "camber_position": 0.8961, "thickness": 0.2224, "camber_normal": False,
+                "pivot": 0.2828},
+    "centerline": {"p2": [6.6187, 6.5621, 11.7937], "p3": [60.9186, 17.2106, 13.0448], "p4": [70.0547, 11.1791],
+                   "frame": "rotation_minimizing"},
+    "transforms": {"angle_of_attack": [-13.8302, 16.3106, 20.0189, 0.0671, 47.4585],
+                   "scale_x": [6.2055, -12.411, -0.8573, 6.5329, 1.9422],
+                   "scale_y": [-2.5747, 5.1495, -6.3959, 4.1085, 0.3264]},
+    "resolution": {"sections": 40, "points": 25}}
+
 #: The shared-intersection fuse and one general fuse integrate the same surfaces; their volumes,
 #: each integrated to VOLUME_PRECISION, agree far below this (measured ~1e-9).
 ROUTE_VOLUME_TOLERANCE = 1e-7

@@ -79,7 +79,7 @@ def test_the_cli_reference_page_is_current_and_not_a_placeholder():
     from torus_cad.cli.reference import replace_reference
 
     page = CLI_PAGE.read_text()
-    assert replace_reference(page) == page, "docs/reference/cli.md is stale: run python3 scripts/cli_reference.py"
+    assert replace_reference(page) == page, "docs/reference/cli.md is stale: run python3 scripts/reference_pages.py"
     for name in _subcommands():
         assert f"## `torus-cad {name}`" in page, name
     assert "--cells-per-chord" in page and "--require-printable" in page  # schema options and build's alike

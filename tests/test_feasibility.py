@@ -4,6 +4,7 @@ designs in their own process and count them apart."""
 
 from __future__ import annotations
 
+import copy
 import json
 import shutil
 import subprocess
@@ -12,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import SHIPPED_DESIGNS
+from conftest import HOOKED_TRAILING_EDGE_DESIGN, SHIPPED_DESIGNS
 
 from torus_cad.batch import DesignResult, DesignTask, Outcome, generate_designs, parse_sweep, run_sweep
 from torus_cad.batch.job import REFUSAL_FILE
@@ -67,15 +68,7 @@ def test_check_refuses_with_exit_2_and_the_build_s_own_line(capsys, tmp_path, na
 def test_check_refuses_a_trailing_edge_the_section_fit_cannot_resolve_before_the_kernel(capsys, tmp_path):
     """The hooked trailing edge of tests/test_robustness.py (25 points): refused by the section fit, which is
     kernel-free now, with the build's line."""
-    design = {"name": "hooked", "blades": 4, "phase_deg": -66.88, "hub": {"radius": 6.9435, "length": 17.2294},
-              "airfoil": {"max_camber": 0.0553, "camber_position": 0.8961, "thickness": 0.2224,
-                          "camber_normal": False, "pivot": 0.2828},
-              "centerline": {"p2": [6.6187, 6.5621, 11.7937], "p3": [60.9186, 17.2106, 13.0448],
-                             "p4": [70.0547, 11.1791], "frame": "rotation_minimizing"},
-              "transforms": {"angle_of_attack": [-13.8302, 16.3106, 20.0189, 0.0671, 47.4585],
-                             "scale_x": [6.2055, -12.411, -0.8573, 6.5329, 1.9422],
-                             "scale_y": [-2.5747, 5.1495, -6.3959, 4.1085, 0.3264]},
-              "resolution": {"sections": 40, "points": 25}}
+    design = copy.deepcopy(HOOKED_TRAILING_EDGE_DESIGN)
     path = tmp_path / "hooked.toml"
     path.write_text(PropellerParameters.from_dict(design).to_toml())
     code, _, err = _check(capsys, str(path))

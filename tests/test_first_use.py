@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from terminal import terminal_text_until
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -141,38 +142,11 @@ def test_sigint_during_cfd_removes_the_out_folder_it_made(tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
-def _terminal_text_until(command: list[str], marker: bytes, timeout_s: float = 120.0) -> str:
-    """What ``command`` prints on a pseudo-terminal (its stderr) until ``marker`` appears; then it is killed."""
-    import pty
-    import re
-    import select
-    import time
-
-    controller, terminal = pty.openpty()
-    process = subprocess.Popen([sys.executable, *command], stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                               stderr=terminal, env={**os.environ, "PYTHONPATH": str(ROOT)})
-    os.close(terminal)
-    shown = b""
-    try:
-        deadline = time.monotonic() + timeout_s
-        while marker not in shown and time.monotonic() < deadline:
-            if select.select([controller], [], [], 1.0)[0]:
-                try:
-                    shown += os.read(controller, 65536)
-                except OSError:  # the child closed the terminal
-                    break
-    finally:
-        process.kill()
-        process.wait(30)
-        os.close(controller)
-    return re.sub(r"\x1b\[[0-9;]*m", "", shown.decode(errors="replace"))
-
-
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="a pseudo-terminal")
 def test_cfd_says_what_it_does_before_loading_anything_heavy(tmp_path):
     """The first progress line of cfd comes before the schema (pydantic), the CAD kernel and gmsh load:
     -X importtime reports each module on stderr as its import ends."""
-    text = _terminal_text_until(["-X", "importtime", "-m", "torus_cad", "cfd", "--out", str(tmp_path / "out")],
+    text = terminal_text_until(["-X", "importtime", "-m", "torus_cad", "cfd", "--out", str(tmp_path / "out")],
                                 b"building the propeller")
     assert "building the propeller" in text
     before = text[:text.index("building the propeller")]

@@ -3,20 +3,15 @@
 from __future__ import annotations
 
 import io
-import os
-import pty
 import re
-import select
-import subprocess
 import sys
-import time
 
 import pytest
+from terminal import ANSI as _ANSI
+from terminal import terminal_text_until
 
 from torus_cad.runtime.progress import BatchProgress, StageProgress
 from torus_cad.runtime.stages import Stage
-
-_ANSI = re.compile(r"\x1b\[[0-9;?]*[A-Za-z]")
 
 
 class _Terminal(io.StringIO):
@@ -78,25 +73,8 @@ def test_build_shows_a_line_before_the_kernel_is_imported(tmp_path):
     Python's -X importtime reports each module on stderr as its import ends; the first progress
     line must come before any line of cadquery, OCP, pydantic or scipy.
     """
-    controller, terminal = pty.openpty()
-    process = subprocess.Popen([sys.executable, "-X", "importtime", "-m", "torus_cad", "build", "--out",
-                                str(tmp_path), "--no-stl"], stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                               stderr=terminal)
-    os.close(terminal)
-    shown = b""
-    try:
-        deadline = time.monotonic() + 120
-        while b"CAD kernel" not in shown and time.monotonic() < deadline:
-            if select.select([controller], [], [], 1.0)[0]:
-                try:
-                    shown += os.read(controller, 65536)
-                except OSError:  # the child closed the terminal
-                    break
-    finally:
-        process.kill()
-        process.wait(30)
-        os.close(controller)
-    text = _ANSI.sub("", shown.decode(errors="replace"))
+    text = terminal_text_until(["-X", "importtime", "-m", "torus_cad", "build", "--out", str(tmp_path), "--no-stl"],
+                               b"CAD kernel")
     assert "CAD kernel" in text
     before = text[:text.index("CAD kernel")]
     assert not any(module in before for module in ("cadquery", "OCP", "pydantic", "scipy")), before[-500:]

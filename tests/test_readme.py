@@ -135,7 +135,7 @@ def test_parameter_table_is_current():
     from torus_cad.parameters.reference import replace_table
 
     text = PARAMETERS_PAGE.read_text()
-    assert replace_table(text) == text, "docs/reference/parameters.md is stale: run python scripts/parameter_table.py"
+    assert replace_table(text) == text, "docs/reference/parameters.md is stale: run python scripts/reference_pages.py"
 
 
 def test_readme_links_stay_inside_the_repository():

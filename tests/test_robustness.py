@@ -6,6 +6,7 @@ batch runner drive ``scripts/fuzz.py`` (N = 1000 there).
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import faulthandler
 import os
@@ -20,6 +21,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from batch_jobs import FAULT_KEY, PID_FILE_KEY, faulty
+from conftest import HOOKED_TRAILING_EDGE_DESIGN
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -282,15 +284,7 @@ def test_blades_running_into_each_other_are_found():
 def test_hooked_trailing_edge_with_too_few_points_is_refused():
     """Camber far aft on a thin, flattened section: 25 points leave its curve crossing itself at the
     trailing edge (scripts/fuzz.py design fuzz_334, which failed in the fuse); 48 points build."""
-    design = {"name": "hooked", "blades": 4, "phase_deg": -66.88, "hub": {"radius": 6.9435, "length": 17.2294},
-              "airfoil": {"max_camber": 0.0553, "camber_position": 0.8961, "thickness": 0.2224,
-                          "camber_normal": False, "pivot": 0.2828},
-              "centerline": {"p2": [6.6187, 6.5621, 11.7937], "p3": [60.9186, 17.2106, 13.0448],
-                             "p4": [70.0547, 11.1791], "frame": "rotation_minimizing"},
-              "transforms": {"angle_of_attack": [-13.8302, 16.3106, 20.0189, 0.0671, 47.4585],
-                             "scale_x": [6.2055, -12.411, -0.8573, 6.5329, 1.9422],
-                             "scale_y": [-2.5747, 5.1495, -6.3959, 4.1085, 0.3264]},
-              "resolution": {"sections": 40, "points": 25}}
+    design = copy.deepcopy(HOOKED_TRAILING_EDGE_DESIGN)
     from torus_cad.propeller import build_propeller
 
     with pytest.raises(GeometryError, match=r"resolution\.points = 25 is too few"):

@@ -1,12 +1,12 @@
 """The command-line reference page (docs/reference/cli.md): ``torus-cad --help`` and every subcommand's,
-generated from the program's own parser and written into the page by ``scripts/cli_reference.py``, so the
+generated from the program's own parser and written into the page by ``scripts/reference_pages.py``, so the
 page reads the same in the repository and on the site; a test checks that it is current."""
 
 from __future__ import annotations
 
 import argparse
 
-BEGIN = "<!-- BEGIN cli reference: generated from the parser by scripts/cli_reference.py; do not edit -->"
+BEGIN = "<!-- BEGIN cli reference: generated from the parser by scripts/reference_pages.py; do not edit -->"
 END = "<!-- END cli reference -->"
 
 #: Help is wrapped at this width, whatever the terminal, so the page does not depend on who generated it.
