@@ -242,3 +242,16 @@ CONVENTIONAL_ROOT_FIT_MARGIN = 0.8
 #: Share of sine clustering in the conventional blade's section radii (0: uniform in r; 1: a quarter
 #: sine, sections densest at the tip).
 CONVENTIONAL_TIP_CLUSTERING = 0.6
+
+# -- intersection edges rebuilt from exact points (torus_cad.kernel.edge_curves) ---------------------
+
+#: An intersection edge whose 3D curve and p-curves part by more than this (mm) is rebuilt: half of
+#: what OpenCascade's STEP reader gives an edge at least (Precision::Confusion, 1e-7 mm), since a STEP
+#: file carries no tolerance per edge (torus_cad.kernel.step_readback).
+EDGE_CURVE_REFIT_ABOVE_MM = 5e-8
+#: The rebuilt curves are refined until, half way between their points, they part by at most this (mm).
+EDGE_CURVE_FIT_MM = 1e-8
+#: Most points one rebuilt edge may need (the default's worst edge needs a few hundred); beyond, it is kept.
+EDGE_CURVE_MAX_POINTS = 4000
+#: Newton steps for one intersection point (it converges in 2-4 from the boolean's curves).
+EDGE_CURVE_NEWTON_STEPS = 12
