@@ -36,6 +36,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("designs", nargs="*", help="design files (default: the default and every shipped example)")
     args = parser.parse_args(argv)
+    from torus_cad.errors import TorusCadError
     from torus_cad.kernel.step_readback import argument_faults, step_readback_faults
     from torus_cad.kernel.writers.step import write_step
     from torus_cad.propeller import build_propeller
@@ -44,9 +45,9 @@ def main(argv: list[str] | None = None) -> int:
     for design in args.designs or _designs():
         start = time.perf_counter()
         try:
-            propeller = build_propeller(None if design == "default" else ROOT / design if not Path(design).exists()
-                                        else design)
-        except Exception as error:  # noqa: BLE001 - a table row says why
+            propeller = build_propeller(None if design == "default" else design if Path(design).exists()
+                                        else ROOT / design)
+        except TorusCadError as error:  # the table goes on; the line says why
             print(f"{design}: not built: {error}", file=sys.stderr)
             continue
         build_s = time.perf_counter() - start

@@ -255,3 +255,9 @@ EDGE_CURVE_FIT_MM = 1e-8
 EDGE_CURVE_MAX_POINTS = 4000
 #: Newton steps for one intersection point (it converges in 2-4 from the boolean's curves).
 EDGE_CURVE_NEWTON_STEPS = 12
+#: An exact intersection point farther than this many edge tolerances from the boolean's curve is
+#: another branch of the intersection (or surfaces that touch): the edge keeps its curves.
+EDGE_CURVE_REACH_TOLERANCES = 10.0
+#: Times a point is added where OpenCascade's measure finds the rebuilt curves parting most, after the
+#: half-way refinement (the interpolating spline can part between the half-way points).
+EDGE_CURVE_WORST_POINT_ROUNDS = 20

@@ -20,6 +20,7 @@ otherwise (surfaces that touch rather than cross, as a fillet's) it keeps its cu
 
 from __future__ import annotations
 
+import itertools
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -47,11 +48,15 @@ from torus_cad.tolerances import (
     EDGE_CURVE_FIT_MM,
     EDGE_CURVE_MAX_POINTS,
     EDGE_CURVE_NEWTON_STEPS,
+    EDGE_CURVE_REACH_TOLERANCES,
     EDGE_CURVE_REFIT_ABOVE_MM,
+    EDGE_CURVE_WORST_POINT_ROUNDS,
 )
 
 #: Newton's method stops when both surfaces' points agree and lie in the plane to this (mm).
 _NEWTON_RESIDUAL_MM = 1e-12
+#: An intersection point: (u1, v1, u2, v2) on the two surfaces, and the point (mm).
+_Point = tuple[NDArray[np.float64], NDArray[np.float64]]
 #: Points per knot span of the old 3D curve to start from.
 _POINTS_PER_SPAN = 4
 
@@ -130,9 +135,15 @@ def _distinct_faces(faces: object) -> list[TopoDS_Face]:
 
 
 def _deviation(curve: Geom_Curve, pcurve: Geom2d_Curve, surface: Geom_Surface, first: float, last: float) -> float:
+    return _deviation_at(curve, pcurve, surface, first, last)[0]
+
+
+def _deviation_at(curve: Geom_Curve, pcurve: Geom2d_Curve, surface: Geom_Surface, first: float, last: float
+                  ) -> tuple[float, float]:
+    """The largest distance between ``curve`` and ``surface(pcurve)`` at equal parameters (mm), and where."""
     check = GeomLib_CheckCurveOnSurface(GeomAdaptor_Curve(curve, first, last), 1e-9)
     check.Perform(Adaptor3d_CurveOnSurface(Geom2dAdaptor_Curve(pcurve, first, last), GeomAdaptor_Surface(surface)))
-    return check.MaxDistance() if check.IsDone() else float("inf")
+    return (check.MaxDistance(), check.MaxParameter()) if check.IsDone() else (float("inf"), first)
 
 
 @dataclass(frozen=True)
@@ -140,6 +151,7 @@ class _Fitted:
     curve: Geom_Curve
     pcurves: tuple[Geom2d_Curve, Geom2d_Curve]
     deviation: float
+    worst_parameter: float
 
     def apply(self, edge: TopoDS_Edge, faces: Sequence[TopoDS_Face]) -> None:
         """Replace the edge's 3D curve and its two p-curves (same range; the tolerance stays, it covers them)."""
@@ -155,6 +167,7 @@ class _IntersectionFit:
 
     def __init__(self, edge: TopoDS_Edge, first_face: TopoDS_Face, second_face: TopoDS_Face) -> None:
         self.curve = BRep_Tool.Curve_s(edge, 0.0, 0.0)
+        self.reach = EDGE_CURVE_REACH_TOLERANCES * BRep_Tool.Tolerance_s(edge)
         self.first, self.last = BRep_Tool.Range_s(edge)
         self.surfaces = (BRep_Tool.Surface_s(first_face), BRep_Tool.Surface_s(second_face))
         self.pcurves = (BRep_Tool.CurveOnSurface_s(edge, first_face, 0.0, 0.0),
@@ -162,45 +175,70 @@ class _IntersectionFit:
 
     def fit(self) -> _Fitted | None:
         """The interpolated curves, refined until they part by at most EDGE_CURVE_FIT_MM half way
-        between points; None when a point does not converge or the points run out."""
+        between points, then wherever OpenCascade's measure finds them parting by more (a point
+        added there, up to EDGE_CURVE_WORST_POINT_ROUNDS times); None when a point does not
+        converge or the points run out."""
         if self.curve is None or any(pcurve is None for pcurve in self.pcurves):
             return None
         parameters = self._start_parameters()
-        points = [self._solve(t) for t in parameters]
+        points: list[_Point | None] = [self._solve(t) for t in parameters]
         unchecked = set(range(len(parameters) - 1))
-        while unchecked:
-            if any(point is None for point in points) or len(parameters) > EDGE_CURVE_MAX_POINTS:
+        for _ in range(EDGE_CURVE_WORST_POINT_ROUNDS):
+            while unchecked:
+                if any(point is None for point in points) or len(parameters) > EDGE_CURVE_MAX_POINTS:
+                    return None
+                curves = self._interpolate(parameters, points)  # type: ignore[arg-type]
+                parameters, points, unchecked = self._refined(curves, parameters, points, unchecked)
+            if any(point is None for point in points):
                 return None
-            curves = self._interpolate(parameters, points)  # type: ignore[arg-type]
-            new_parameters, new_points, new_unchecked = [parameters[0]], [points[0]], set()
-            for i in range(len(parameters) - 1):
-                if i in unchecked:
-                    middle = 0.5 * (parameters[i] + parameters[i + 1])
-                    exact = self._solve(middle)
-                    if exact is None or self._error(curves, middle, exact) > EDGE_CURVE_FIT_MM:
-                        new_unchecked.update((len(new_parameters) - 1, len(new_parameters)))
-                        new_parameters.append(middle)
-                        new_points.append(exact)
-                new_parameters.append(parameters[i + 1])
-                new_points.append(points[i + 1])
-            parameters, points, unchecked = new_parameters, new_points, new_unchecked
-        curve, first_pcurve, second_pcurve = self._interpolate(parameters, points)  # type: ignore[arg-type]
-        deviation = max(_deviation(curve, pcurve, surface, self.first, self.last)
-                        for pcurve, surface in ((first_pcurve, self.surfaces[0]), (second_pcurve, self.surfaces[1])))
-        return _Fitted(curve, (first_pcurve, second_pcurve), deviation)
+            fitted = self._fitted(parameters, points)  # type: ignore[arg-type]
+            if fitted.deviation <= EDGE_CURVE_FIT_MM:
+                return fitted
+            index = int(np.searchsorted(parameters, fitted.worst_parameter))
+            if not 0 < index < len(parameters) or fitted.worst_parameter in parameters:
+                return fitted
+            parameters.insert(index, fitted.worst_parameter)
+            points.insert(index, self._solve(fitted.worst_parameter))
+            unchecked = {index - 1, index}
+        return fitted
+
+    def _refined(self, curves: tuple[Geom_Curve, Geom2d_Curve, Geom2d_Curve], parameters: list[float],
+                 points: list[_Point | None], unchecked: set[int]) -> tuple[list[float], list[_Point | None], set[int]]:
+        """A point added half way along every unchecked interval where the curves miss it by more
+        than EDGE_CURVE_FIT_MM; the new intervals are the unchecked ones of the next round."""
+        new_parameters, new_points, new_unchecked = [parameters[0]], [points[0]], set[int]()
+        for i in range(len(parameters) - 1):
+            if i in unchecked:
+                middle = 0.5 * (parameters[i] + parameters[i + 1])
+                exact = self._solve(middle)
+                if exact is None or self._error(curves, middle, exact) > EDGE_CURVE_FIT_MM:
+                    new_unchecked.update((len(new_parameters) - 1, len(new_parameters)))
+                    new_parameters.append(middle)
+                    new_points.append(exact)
+            new_parameters.append(parameters[i + 1])
+            new_points.append(points[i + 1])
+        return new_parameters, new_points, new_unchecked
+
+    def _fitted(self, parameters: list[float], points: list[_Point]) -> _Fitted:
+        curve, first_pcurve, second_pcurve = self._interpolate(parameters, points)
+        measured = [_deviation_at(curve, pcurve, surface, self.first, self.last)
+                    for pcurve, surface in ((first_pcurve, self.surfaces[0]), (second_pcurve, self.surfaces[1]))]
+        deviation, worst = max(measured)
+        return _Fitted(curve, (first_pcurve, second_pcurve), deviation, worst)
 
     def _start_parameters(self) -> list[float]:
         basis = self.curve.BasisCurve() if isinstance(self.curve, Geom_TrimmedCurve) else self.curve
         knots = [self.first, self.last]
         if isinstance(basis, Geom_BSplineCurve):
-            knots = sorted({self.first, self.last,
-                            *(basis.Knot(i) for i in range(1, basis.NbKnots() + 1) if self.first < basis.Knot(i) < self.last)})
-        spans = [np.linspace(a, b, _POINTS_PER_SPAN + 1)[:-1] for a, b in zip(knots[:-1], knots[1:], strict=True)]
+            inside = (basis.Knot(i) for i in range(1, basis.NbKnots() + 1))
+            knots = sorted({self.first, self.last, *(knot for knot in inside if self.first < knot < self.last)})
+        spans = [np.linspace(a, b, _POINTS_PER_SPAN + 1)[:-1] for a, b in itertools.pairwise(knots)]
         return [*(float(t) for t in np.concatenate(spans)), self.last]
 
-    def _solve(self, t: float) -> tuple[NDArray[np.float64], NDArray[np.float64]] | None:
+    def _solve(self, t: float) -> _Point | None:
         """(u1, v1, u2, v2) and the 3D point where both surfaces meet in the plane normal to the old
-        curve at ``t``, by Newton's method from the old p-curves' points; None if it does not converge."""
+        curve at ``t``, by Newton's method from the old p-curves' points; None if it does not converge
+        or converges farther from the old point than EDGE_CURVE_REACH_TOLERANCES edge tolerances."""
         point, tangent = gp_Pnt(), gp_Vec()
         self.curve.D1(t, point, tangent)
         normal = np.array([tangent.X(), tangent.Y(), tangent.Z()])
@@ -214,7 +252,8 @@ class _IntersectionFit:
             second, second_u, second_v = _d1(self.surfaces[1], uv[2], uv[3])
             residual = np.array([*(first - second), (first - origin) @ normal])
             if np.abs(residual).max() < _NEWTON_RESIDUAL_MM:
-                return uv, 0.5 * (first + second)
+                exact = 0.5 * (first + second)  # the old curves are within tolerance of it: farther is another branch
+                return (uv, exact) if float(np.linalg.norm(exact - origin)) <= self.reach else None
             jacobian[:3, 0], jacobian[:3, 1], jacobian[:3, 2], jacobian[:3, 3] = first_u, first_v, -second_u, -second_v
             jacobian[3, :2] = first_u @ normal, first_v @ normal
             try:
@@ -223,7 +262,7 @@ class _IntersectionFit:
                 return None
         return None
 
-    def _interpolate(self, parameters: list[float], points: list[tuple[NDArray[np.float64], NDArray[np.float64]]]
+    def _interpolate(self, parameters: list[float], points: list[_Point]
                      ) -> tuple[Geom_Curve, Geom2d_Curve, Geom2d_Curve]:
         count = len(parameters)
         values = TColStd_HArray1OfReal(1, count)
@@ -242,7 +281,7 @@ class _IntersectionFit:
         return curve.Curve(), pcurves[0].Curve(), pcurves[1].Curve()
 
     def _error(self, curves: tuple[Geom_Curve, Geom2d_Curve, Geom2d_Curve], t: float,
-               exact: tuple[NDArray[np.float64], NDArray[np.float64]]) -> float:
+               exact: _Point) -> float:
         """How far the interpolated curves at ``t`` are from the exact point and from each other (mm)."""
         curve, first_pcurve, second_pcurve = curves
         target = gp_Pnt(*exact[1])
