@@ -250,7 +250,10 @@ CONVENTIONAL_TIP_CLUSTERING = 0.6
 #: file carries no tolerance per edge (torus_cad.kernel.step_readback).
 EDGE_CURVE_REFIT_ABOVE_MM = 5e-8
 #: The rebuilt curves are refined until, half way between their points, they part by at most this (mm).
-EDGE_CURVE_FIT_MM = 1e-8
+EDGE_CURVE_FIT_MM = 2e-8
+#: ... and then until OpenCascade's own measure (GeomLib_CheckCurveOnSurface) finds them parting by at
+#: most this (mm), below EDGE_CURVE_REFIT_ABOVE_MM and 2.5 times below the reader's 1e-7 mm.
+EDGE_CURVE_ACCEPT_MM = 4e-8
 #: Most points one rebuilt edge may need (the default's worst edge needs a few hundred); beyond, it is kept.
 EDGE_CURVE_MAX_POINTS = 4000
 #: Newton steps for one intersection point (it converges in 2-4 from the boolean's curves).

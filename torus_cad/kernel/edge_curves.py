@@ -1,4 +1,4 @@
-"""Intersection edges whose 3D curve and p-curves lie on both their faces to 1e-8 mm.
+"""Intersection edges whose 3D curve and p-curves lie on both their faces to 4e-8 mm.
 
 The blade-hub boolean approximates each intersection curve (a 3D curve and a p-curve on each of
 the two faces) and gives the edge a tolerance that covers how far they part: on the default, up to
@@ -12,7 +12,8 @@ So every such edge is built again from exact intersection points: each point sol
 method on both surfaces (in the plane normal to the old curve through its old point), the 3D curve
 and both p-curves interpolated through them at the same parameters (so the edge stays same-range
 and same-parameter), and points added half way wherever the curves part by more than
-:data:`~torus_cad.tolerances.EDGE_CURVE_FIT_MM`. An edge is replaced only when the new curves part by
+:data:`~torus_cad.tolerances.EDGE_CURVE_FIT_MM`, then where OpenCascade's measure finds them parting
+most, until it finds at most :data:`~torus_cad.tolerances.EDGE_CURVE_ACCEPT_MM`. An edge is replaced only when the new curves part by
 less than :data:`~torus_cad.tolerances.EDGE_CURVE_REFIT_ABOVE_MM` (by OpenCascade's own measure,
 ``GeomLib_CheckCurveOnSurface``, the one the argument analyzer uses) and less than before;
 otherwise (surfaces that touch rather than cross, as a fillet's) it keeps its curves.
@@ -45,6 +46,7 @@ from OCP.TopoDS import TopoDS, TopoDS_Edge, TopoDS_Face, TopoDS_Shape
 from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape
 
 from torus_cad.tolerances import (
+    EDGE_CURVE_ACCEPT_MM,
     EDGE_CURVE_FIT_MM,
     EDGE_CURVE_MAX_POINTS,
     EDGE_CURVE_NEWTON_STEPS,
@@ -175,8 +177,9 @@ class _IntersectionFit:
 
     def fit(self) -> _Fitted | None:
         """The interpolated curves, refined until they part by at most EDGE_CURVE_FIT_MM half way
-        between points, then wherever OpenCascade's measure finds them parting by more (a point
-        added there, up to EDGE_CURVE_WORST_POINT_ROUNDS times); None when a point does not
+        between points, then until OpenCascade's measure finds them parting by at most
+        EDGE_CURVE_ACCEPT_MM (a point added where they part most, up to EDGE_CURVE_WORST_POINT_ROUNDS
+        times); None when a point does not
         converge or the points run out."""
         if self.curve is None or any(pcurve is None for pcurve in self.pcurves):
             return None
@@ -192,7 +195,7 @@ class _IntersectionFit:
             if any(point is None for point in points):
                 return None
             fitted = self._fitted(parameters, points)  # type: ignore[arg-type]
-            if fitted.deviation <= EDGE_CURVE_FIT_MM:
+            if fitted.deviation <= EDGE_CURVE_ACCEPT_MM:
                 return fitted
             index = int(np.searchsorted(parameters, fitted.worst_parameter))
             if not 0 < index < len(parameters) or fitted.worst_parameter in parameters:

@@ -120,7 +120,7 @@ def fuse_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float]) ->
     if not patches:
         raise KernelError("the blade does not meet the hub's lateral face")
     hub_pieces = _modified_faces_of_shape(cut, hub.wrapped)
-    refit_intersection_edges(outside, hub_pieces)  # exact to 1e-8 mm: what a STEP file keeps (kernel.edge_curves)
+    refit_intersection_edges(outside, hub_pieces)  # to 4e-8 mm: a STEP file keeps no edge tolerance (kernel.edge_curves)
     copies = [_rotated_with_hub_curves(outside, patches, lateral, math.radians(angle - angles_deg[0]))
               for angle in angles_deg]
     whole_patches = len(hub_pieces) == len(patches) and not any(
