@@ -29,6 +29,7 @@ from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
 from OCP.BRepTools import BRepTools
 from OCP.GeomAbs import GeomAbs_Cylinder
 from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt, gp_Trsf, gp_Vec2d
+from OCP.Precision import Precision
 from OCP.TopAbs import TopAbs_FACE, TopAbs_WIRE
 from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Shape, TopoDS_Shell, TopoDS_Solid
@@ -204,7 +205,8 @@ def _rotated_with_hub_curves(outside: TopoDS_Shape, patches: list[TopoDS_Face], 
     builder = BRep_Builder()
     for patch in patches:
         u_min, u_max, _, _ = BRepTools.UVBounds_s(patch)
-        shift = angle_rad - _FULL_TURN * math.floor((u_min + angle_rad) / _FULL_TURN)
+        # a patch starting at the seam may start a parametric hair before it (u = -1e-13 after kernel.edge_curves)
+        shift = angle_rad - _FULL_TURN * math.floor((u_min + angle_rad + Precision.PConfusion_s()) / _FULL_TURN)
         if u_max + shift > _FULL_TURN:
             raise KernelError("a blade's footprint on the hub crosses the hub's seam")
         for edge in edges(patch):
