@@ -301,3 +301,25 @@ DENSITY_LIMIT_G_CM3 = 25.0
 
 #: ``preview --size`` and ``build --preview-size``: each side of the picture, pixels.
 PREVIEW_EDGE_RANGE = (64, 8000)
+
+# -- intersection edges rebuilt from exact points (torus_cad.kernel.edge_curves) ---------------------
+
+#: An intersection edge whose 3D curve and p-curves part by more than this (mm) is rebuilt: half of
+#: what OpenCascade's STEP reader gives an edge at least (Precision::Confusion, 1e-7 mm), since a STEP
+#: file carries no tolerance per edge (torus_cad.kernel.step_readback).
+EDGE_CURVE_REFIT_ABOVE_MM = 5e-8
+#: The rebuilt curves are refined until, half way between their points, they part by at most this (mm).
+EDGE_CURVE_FIT_MM = 2e-8
+#: ... and then until OpenCascade's own measure (GeomLib_CheckCurveOnSurface) finds them parting by at
+#: most this (mm), below EDGE_CURVE_REFIT_ABOVE_MM and 2.5 times below the reader's 1e-7 mm.
+EDGE_CURVE_ACCEPT_MM = 4e-8
+#: Most points one rebuilt edge may need (the default's worst edge needs a few hundred); beyond, it is kept.
+EDGE_CURVE_MAX_POINTS = 4000
+#: Newton steps for one intersection point (it converges in 2-4 from the boolean's curves).
+EDGE_CURVE_NEWTON_STEPS = 12
+#: An exact intersection point farther than this many edge tolerances from the boolean's curve is
+#: another branch of the intersection (or surfaces that touch): the edge keeps its curves.
+EDGE_CURVE_REACH_TOLERANCES = 10.0
+#: Times a point is added where OpenCascade's measure finds the rebuilt curves parting most, after the
+#: half-way refinement (the interpolating spline can part between the half-way points).
+EDGE_CURVE_WORST_POINT_ROUNDS = 20

@@ -29,12 +29,14 @@ from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
 from OCP.BRepTools import BRepTools
 from OCP.GeomAbs import GeomAbs_Cylinder
 from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt, gp_Trsf, gp_Vec2d
+from OCP.Precision import Precision
 from OCP.TopAbs import TopAbs_FACE, TopAbs_WIRE
 from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Shape, TopoDS_Shell, TopoDS_Solid
 
 from torus_cad.errors import KernelError
 from torus_cad.geometry.propeller import HUB_PART
+from torus_cad.kernel.edge_curves import refit_intersection_edges
 from torus_cad.kernel.face_provenance import Origins, face_parts, through_history
 from torus_cad.kernel.topology import boolean, count, edges, explore, faces, result
 
@@ -119,6 +121,7 @@ def fuse_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float]) ->
     if not patches:
         raise KernelError("the blade does not meet the hub's lateral face")
     hub_pieces = _modified_faces_of_shape(cut, hub.wrapped)
+    refit_intersection_edges(outside, hub_pieces)  # to 4e-8 mm: a STEP file keeps no edge tolerance (kernel.edge_curves)
     copies = [_rotated_with_hub_curves(outside, patches, lateral, math.radians(angle - angles_deg[0]))
               for angle in angles_deg]
     whole_patches = len(hub_pieces) == len(patches) and not any(
@@ -202,7 +205,8 @@ def _rotated_with_hub_curves(outside: TopoDS_Shape, patches: list[TopoDS_Face], 
     builder = BRep_Builder()
     for patch in patches:
         u_min, u_max, _, _ = BRepTools.UVBounds_s(patch)
-        shift = angle_rad - _FULL_TURN * math.floor((u_min + angle_rad) / _FULL_TURN)
+        # a patch starting at the seam may start a parametric hair before it (u = -1e-13 after kernel.edge_curves)
+        shift = angle_rad - _FULL_TURN * math.floor((u_min + angle_rad + Precision.PConfusion_s()) / _FULL_TURN)
         if u_max + shift > _FULL_TURN:
             raise KernelError("a blade's footprint on the hub crosses the hub's seam")
         for edge in edges(patch):

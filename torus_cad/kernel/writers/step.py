@@ -30,11 +30,14 @@ _STEP_END_MARKER = b"END-ISO-10303-21;"
 
 
 def write_step(shape: cq.Shape, path: str | Path, product_name: str, schema: StepSchema = StepSchema.AP214,
-               program: str = "torus_cad") -> Path:
+               program: str = "torus_cad", check_readback: bool = False) -> Path:
     """Write ``shape`` as STEP (application protocol ``schema``, millimetres, product named ``product_name``).
 
     The shape goes through an XCAF document so that the STEP PRODUCT carries exactly the
-    design's name (the plain writer appends a counter to it).
+    design's name (the plain writer appends a counter to it). With ``check_readback`` the file is
+    read back by OpenCascade's STEP reader and must pass BOPAlgo_ArgumentAnalyzer's tests (all but
+    self-interference, which the strict check ran on the solid; torus_cad.kernel.step_readback)
+    before it is published; otherwise KernelError naming the first fault, and no file.
     """
     document = TDocStd_Document(TCollection_ExtendedString("torus_cad"))
     label = XCAFDoc_DocumentTool.ShapeTool_s(document.Main()).AddShape(shape.wrapped, False)
@@ -50,6 +53,10 @@ def write_step(shape: cq.Shape, path: str | Path, product_name: str, schema: Ste
     with atomic_path(path) as temp:
         if writer.Write(str(temp)) != IFSelect_RetDone or not _step_whole(temp):
             raise write_failure("STEP", path, temp)
+        if check_readback:
+            from torus_cad.kernel.step_readback import check_step_readback
+
+            check_step_readback(temp, f"{product_name}.step", self_interference=False)
     return path
 
 

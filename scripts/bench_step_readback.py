@@ -1,0 +1,63 @@
+#!/usr/bin/env python3
+"""What the STEP read-back validity costs, in process CPU seconds (the machine may be shared).
+
+    python scripts/bench_step_readback.py                      # the default
+    python scripts/bench_step_readback.py examples/cooling_fan_7blade.toml
+
+After a warm-up build: the build (its strict check runs in a child and is not counted), the rebuilt
+intersection edges within it (torus_cad.kernel.edge_curves), the STEP write, the read-back alone,
+the read-back check the build runs (every test but self-interference) and the self-interference
+test on the file read back.
+"""
+
+from __future__ import annotations
+
+import argparse
+import tempfile
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+
+def _cpu(work: Callable[[], Any]) -> tuple[Any, float]:
+    start = time.process_time()
+    result = work()
+    return result, time.process_time() - start
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("design", nargs="?", help="design file (default: the default design)")
+    args = parser.parse_args()
+    import torus_cad.kernel.fuse as fuse
+    from torus_cad.kernel.step_readback import check_step_readback, step_readback_faults
+    from torus_cad.kernel.writers.step import read_step, write_step
+    from torus_cad.propeller import build_propeller
+
+    refit_seconds: list[float] = []
+    refit = fuse.refit_intersection_edges
+
+    def timed_refit(*arguments: Any) -> Any:
+        result, seconds = _cpu(lambda: refit(*arguments))
+        refit_seconds.append(seconds)
+        return result
+
+    fuse.refit_intersection_edges = timed_refit  # type: ignore[assignment]
+    build_propeller(args.design)  # warm-up: imports, caches
+    refit_seconds.clear()
+    propeller, build_s = _cpu(lambda: build_propeller(args.design))
+    rows = {"build (strict check in a child, not counted)": build_s, "  of which rebuilt edges": sum(refit_seconds)}
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / "design.step"
+        rows["STEP write"] = _cpu(lambda: write_step(propeller.solid, path, propeller.parameters.name))[1]
+        rows["read back alone"] = _cpu(lambda: read_step(path))[1]
+        rows["read-back check (the build's: all but self-interference)"] = _cpu(
+            lambda: check_step_readback(path, "the design", self_interference=False))[1]
+        rows["read back, every test (self-interference included)"] = _cpu(lambda: step_readback_faults(path))[1]
+    for name, seconds in rows.items():
+        print(f"{seconds:7.3f} s  {name}")
+
+
+if __name__ == "__main__":
+    main()
