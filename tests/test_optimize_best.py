@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-pytest.importorskip("optuna", reason="the optimize extra is not installed: pip install -e '.[optimize]'")
+pytest.importorskip("optuna", reason="the optimize extra is not installed: pip install -c constraints.txt -e '.[optimize]'")
 
 ROOT = Path(__file__).resolve().parent.parent
 BASE = ROOT / "examples" / "optimize" / "light_prop.toml"
@@ -68,6 +68,7 @@ def _assert_best_set_is_the_trials_files(out: Path, run: subprocess.CompletedPro
     assert report["stl_mesh"]["self_intersecting_pairs"] == 0
 
 
+@pytest.mark.long
 def test_a_one_trial_study_publishes_its_trials_files_as_the_best_set(tmp_path):
     """The fast variant: one trial on one worker."""
     _, out, run = _run_study(tmp_path, 1, 1)

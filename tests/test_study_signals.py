@@ -19,7 +19,7 @@ from pathlib import Path
 
 import pytest
 
-pytest.importorskip("optuna", reason="the optimize extra is not installed: pip install -e '.[optimize]'")
+pytest.importorskip("optuna", reason="the optimize extra is not installed: pip install -c constraints.txt -e '.[optimize]'")
 
 from study_attacks import NAME, attack, env, study_file
 
@@ -51,7 +51,7 @@ def _assert_no_staging_left(out: Path) -> None:
 
 @pytest.mark.parametrize(("moment", "delay_s", "trials"), [
     ("storage", 0.3, 1),   # the pool is starting (forkserver, its workers)
-    ("trials", 0.0, 2),    # a first trial is written, the other one is running
+    pytest.param("trials", 0.0, 2, marks=pytest.mark.long),  # a first trial is written, the other one running
     ("finish", 0.0, 1),    # the table is written; the picture, best/ and the summary are being written
 ])
 def test_a_sigterm_while_the_pool_starts_trials_run_or_the_results_are_written_is_one_line_and_leaves_all_whole(
@@ -198,6 +198,7 @@ def test_a_disk_that_fills_up_during_a_study_is_one_line_naming_the_file_and_the
 
 # -- staging folders of stopped workers (item 5) ---------------------------------------------------------
 
+@pytest.mark.long
 def test_verify_names_a_staging_folder_left_in_a_study_and_the_next_run_removes_it(tmp_path):
     study = study_file(tmp_path, trials=1)
     out = tmp_path / "out"

@@ -13,8 +13,8 @@ import math
 import re
 from collections.abc import Callable
 
-from torus_cad.bounds import Bounds
 from torus_cad.errors import cut, shown
+from torus_cad.runtime.bounds import Bounds
 
 _WHOLE_NUMBER = re.compile(r"\s*[+-]?[0-9][0-9_]*\s*")
 

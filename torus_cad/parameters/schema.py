@@ -19,8 +19,8 @@ import annotated_types
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError
 from pydantic.fields import FieldInfo
 
-from torus_cad.bounds import Bounds as Bounds  # declared beside the command line's option ranges
 from torus_cad.errors import ParameterError, shown
+from torus_cad.runtime.bounds import Bounds as Bounds  # declared beside the command line's option ranges
 
 
 def _list_to_tuple(value: Any) -> Any:
