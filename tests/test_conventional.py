@@ -261,3 +261,18 @@ def test_the_pre_kernel_checks_hold_at_any_phase_and_refuse_crowded_blades():
     small_hub.check_feasible(small_hub.blade_surface())  # the root's chord is blended down to fit the hub
     blade = small_hub.conventional_blade()
     assert blade.root_chord_mm() < 0.5 * blade.table_chord_mm([blade.blend_end_mm])[0]
+
+
+def test_the_comparison_propeller_has_the_default_designs_tip_diameter_blades_and_hub():
+    """docs/how-to/compare.md compares the default toroidal design with this one at equal thrust: the
+    comparison is fair only while both have the same tip diameter, blade count and hub. The conventional
+    one's D = 45.1 mm is the tip station's radius; the ends of its 4.5 mm tip chord lie off the radial line,
+    so the circle its tips sweep is 1.1 % larger (45.59 mm)."""
+    from torus_cad.parameters import PropellerParameters, resolve_parameters
+    from torus_cad.parameters.design_targets import tip_radius_mm
+
+    toroidal = PropellerParameters()
+    conventional = resolve_parameters(EXAMPLES_DIR / "compare" / "conventional_45mm_3blade.toml")
+    assert 2.0 * tip_radius_mm(conventional) == pytest.approx(2.0 * tip_radius_mm(toroidal), rel=0.015)
+    assert conventional.blades == toroidal.blades
+    assert (conventional.hub.radius, conventional.hub.length) == (toroidal.hub.radius, toroidal.hub.length)
