@@ -52,7 +52,8 @@ def _assert_no_staging_left(out: Path) -> None:
 @pytest.mark.parametrize(("moment", "delay_s", "trials"), [
     ("storage", 0.3, 1),   # the pool is starting (forkserver, its workers)
     pytest.param("trials", 0.0, 2, marks=pytest.mark.long),  # a first trial is written, the other one running
-    ("finish", 0.0, 1),    # the table is written; the picture, best/ and the summary are being written
+    pytest.param("finish", 0.0, 1, marks=pytest.mark.long),  # the table is written; the picture, best/ and
+    # the summary are being written (34 s: the long tier; the random-moments test there covers it 7 times)
 ])
 def test_a_sigterm_while_the_pool_starts_trials_run_or_the_results_are_written_is_one_line_and_leaves_all_whole(
         tmp_path, moment, delay_s, trials):
