@@ -228,6 +228,10 @@ STRICT_AXIS_TOLERANCE = 1e-9
 #: triangles by meshlib (torus_cad.kernel.uncrossed); a repair that moves it further is refused.
 #: Measured: 0.26 mm at the knife edge of fuzz seed 7 (Relax), under a 0.4 mm nozzle's line.
 MESH_REPAIR_MAX_DEVIATION_MM = 0.5
+#: A repair that would move the tessellation further is tried again on a finer one: the linear
+#: deflection halved, at most this many times (a user's coarse 0.5 mm deflection on the light test
+#: design crossed in 36 pairs that the repair could only mend by moving it 0.84 mm).
+MESH_REFINE_HALVINGS = 3
 #: meshlib's SelfIntersections.fix passes tried in turn on a crossing tessellation, each on the last
 #: one's result, until no triangle crosses.
 MESH_REPAIR_PASSES = ("Relax", "Relax", "Relax", "CutAndFill", "Relax", "CutAndFill")

@@ -100,7 +100,7 @@ def fillet_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], 
         filleted = attempt.tries(split, deadline, reduce=False)
     if filleted is not None:
         return filleted
-    joined = single_valid_solid(fuse_pattern(hub, split[0], angles_deg[:1]).shape, "joining blade 0 to the hub")
+    joined = single_valid_solid(fuse_pattern(hub, split[0], angles_deg[:1], refit_edges=False).shape, "joining blade 0 to the hub")
     smallest_mm = min(reduced_edge_radii(joined, junction_edges(joined), radius_mm))
     if smallest_mm < radius_mm and not reduce_where_tight:
         raise fillet_failure(joined, radius_mm, tight_bend_mm=smallest_mm / REDUCED_FILLET_FRACTION)
@@ -197,7 +197,7 @@ class _LazySplits:
 def _fillet_and_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], radius_mm: float,
                         suggest: bool = True, params: FilletParams | None = None,
                         deadline: float | None = None, reduce: bool = False) -> RootFillet:
-    single = fuse_pattern(hub, blade, angles_deg[:1])
+    single = fuse_pattern(hub, blade, angles_deg[:1], refit_edges=False)
     filleted = fillet_blade_roots(single_valid_solid(single.shape, "joining blade 0 to the hub"), single.face_parts,
                                   radius_mm, suggest, params, deadline, reduce)
     if len(angles_deg) == 1:
@@ -207,7 +207,7 @@ def _fillet_and_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[flo
         solid = single_valid_solid(cq.Shape.cast(assembled), "patterning the filleted blade")
         return dataclasses.replace(filleted, solid=solid, face_parts=face_provenance.face_parts(solid.wrapped, origins))
     except KernelError:
-        whole = fuse_pattern(hub, blade, angles_deg)
+        whole = fuse_pattern(hub, blade, angles_deg, refit_edges=False)
         everywhere = fillet_blade_roots(single_valid_solid(whole.shape, "joining the blades to the hub"),
                                         whole.face_parts, radius_mm, suggest, params, deadline, reduce)
         # every blade's junction is the same: report blade 0's share

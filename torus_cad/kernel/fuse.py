@@ -95,7 +95,7 @@ class Fused:
     face_parts: tuple[int, ...]
 
 
-def fuse_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float]) -> Fused:
+def fuse_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], refit_edges: bool = True) -> Fused:
     """Hub and copies of ``blade`` at every angle, with one blade-hub intersection for all of them.
 
     1. Cut the blade (built at ``angles_deg[0]``) by the hub: its part outside the hub, whose
@@ -109,6 +109,10 @@ def fuse_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float]) ->
        end face, or a patch straddles the hub's seam, the copies are glued to the hub with a
        fuse that needs no surface-surface intersection (:func:`_glue`).
 
+    ``refit_edges=False`` keeps the boolean's own intersection curves: the root fillet's route, whose
+    rolling ball fails on the refitted curves (prop_10x5_2blade at 0.5 mm) and whose STEP file is not
+    read back (its fillet faces carry their own curve-on-surface gaps).
+
     Returns the shape, how it was joined (ASSEMBLED or GLUED) and each face's part. The caller checks the result (validity covers each edge's curve on the hub against its 3D
     curve) and falls back to :func:`fuse_all` on a KernelError or an invalid solid. The
     propeller's hub has its seam beside every footprint, see
@@ -121,7 +125,8 @@ def fuse_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float]) ->
     if not patches:
         raise KernelError("the blade does not meet the hub's lateral face")
     hub_pieces = _modified_faces_of_shape(cut, hub.wrapped)
-    refit_intersection_edges(outside, hub_pieces)  # to 4e-8 mm: a STEP file keeps no edge tolerance (kernel.edge_curves)
+    if refit_edges:  # to 4e-8 mm: a STEP file keeps no edge tolerance (kernel.edge_curves)
+        refit_intersection_edges(outside, hub_pieces)
     copies = [_rotated_with_hub_curves(outside, patches, lateral, math.radians(angle - angles_deg[0]))
               for angle in angles_deg]
     whole_patches = len(hub_pieces) == len(patches) and not any(

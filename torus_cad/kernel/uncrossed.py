@@ -36,7 +36,12 @@ from OCP.TopoDS import TopoDS_Face
 from scipy.spatial import cKDTree
 
 from torus_cad.errors import KernelError
-from torus_cad.tolerances import MESH_MERGE_DISTANCE_MM, MESH_REPAIR_MAX_DEVIATION_MM, MESH_REPAIR_PASSES
+from torus_cad.tolerances import (
+    MESH_MERGE_DISTANCE_MM,
+    MESH_REFINE_HALVINGS,
+    MESH_REPAIR_MAX_DEVIATION_MM,
+    MESH_REPAIR_PASSES,
+)
 
 __all__ = ["UncrossedMesh", "uncrossed_mesh"]
 
@@ -77,10 +82,28 @@ def crossing_pairs(vertices: NDArray[np.float64], triangles: NDArray[np.int64]) 
 
 def uncrossed_mesh(shape: cq.Shape, linear_deflection: float, angular_deflection: float) -> UncrossedMesh:
     """OpenCascade's tessellation of a copy of ``shape`` (absolute deflection, mm; angular, rad), its faces'
-    shared nodes merged, with any crossing triangles repaired by meshlib (see the module doc).
+    shared nodes merged, with any crossing triangles repaired by meshlib (see the module doc). Where the
+    repair would move a coarse tessellation further than MESH_REPAIR_MAX_DEVIATION_MM (a user's large
+    deflection: long triangles cross far), the linear deflection is halved, up to
+    MESH_REFINE_HALVINGS times, and the finer tessellation repaired instead.
 
     Raises KernelError when OpenCascade cannot tessellate the solid or the crossings cannot be
     repaired into a closed mesh within MESH_REPAIR_MAX_DEVIATION_MM (naming the face and where)."""
+    for halving in range(MESH_REFINE_HALVINGS + 1):
+        try:
+            return _uncrossed_at(shape, linear_deflection / 2.0**halving, angular_deflection)
+        except _RepairTooFar as error:
+            too_far = error
+    raise KernelError(f"{too_far} (also at linear deflection {linear_deflection / 2.0**MESH_REFINE_HALVINGS:g} mm, "
+                      f"{MESH_REFINE_HALVINGS} halvings of {linear_deflection:g} mm)")
+
+
+class _RepairTooFar(KernelError):
+    """meshlib's repair would move the tessellation further than MESH_REPAIR_MAX_DEVIATION_MM."""
+
+
+def _uncrossed_at(shape: cq.Shape, linear_deflection: float, angular_deflection: float) -> UncrossedMesh:
+    """:func:`uncrossed_mesh` at one linear deflection; _RepairTooFar when the repair moves it too far."""
     copy = shape.copy()
     mesher = BRepMesh_IncrementalMesh(copy.wrapped, linear_deflection, False, angular_deflection, True)
     mesher.Perform()
@@ -103,7 +126,7 @@ def uncrossed_mesh(shape: cq.Shape, linear_deflection: float, angular_deflection
                           "leaves crossing triangles or an open mesh")
     vertices, fixed, passes, deviation = repaired
     if deviation > MESH_REPAIR_MAX_DEVIATION_MM:
-        raise KernelError(f"the tessellation has {where}; meshlib's repair moves it by {deviation:.3f} mm, over "
+        raise _RepairTooFar(f"the tessellation has {where}; meshlib's repair moves it by {deviation:.3f} mm, over "
                           f"the {MESH_REPAIR_MAX_DEVIATION_MM} mm allowed")
     return UncrossedMesh(vertices, fixed, linear_deflection, angular_deflection, len(pairs), "+".join(passes),
                          deviation)
