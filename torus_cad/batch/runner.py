@@ -85,11 +85,10 @@ class Executor(Protocol):
 
 
 def available_cores() -> int:
-    """The CPU cores this process may run on (its affinity mask, e.g. a container's or taskset's share)."""
-    try:
-        return max(1, len(os.sched_getaffinity(0)))
-    except (AttributeError, OSError):  # not Linux
-        return max(1, os.cpu_count() or 1)
+    """The CPU cores this process may run on (torus_cad.runtime.cpus.available_cpus)."""
+    from torus_cad.runtime.cpus import available_cpus
+
+    return available_cpus()
 
 
 def default_workers() -> int:

@@ -46,13 +46,13 @@ def tessellate_faces(shape: cq.Shape, linear_deflection: float, angular_deflecti
         raise KernelError("OpenCascade could not tessellate the solid")
     faces = []
     for index, face in enumerate(copy.Faces()):
-        vertices, triangles = _triangulation(face.wrapped)
+        vertices, triangles = face_triangulation(face.wrapped)
         if len(triangles):
             faces.append(FaceTriangles(vertices, triangles, face.geomType(), index))
     return faces
 
 
-def _triangulation(face: TopoDS_Face) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+def face_triangulation(face: TopoDS_Face) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
     """The vertices ``(k, 3)`` and outward triangles ``(m, 3)`` of a meshed face (empty if unmeshed)."""
     location = TopLoc_Location()
     mesh = BRep_Tool.Triangulation_s(face, location)

@@ -28,14 +28,12 @@ from typing import Any
 import cadquery as cq
 import numpy as np
 from numpy.typing import NDArray
-from OCP.BRep import BRep_Tool
 from OCP.BRepMesh import BRepMesh_IncrementalMesh
-from OCP.TopAbs import TopAbs_REVERSED
-from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS_Face
 from scipy.spatial import cKDTree
 
 from torus_cad.errors import KernelError
+from torus_cad.kernel.tessellation import face_triangulation
 from torus_cad.tolerances import (
     MESH_MERGE_DISTANCE_MM,
     MESH_REFINE_HALVINGS,
@@ -179,7 +177,7 @@ def _merged_tessellation(faces: list[TopoDS_Face]
     points, triangles, owner = [], [], []
     offset = 0
     for index, face in enumerate(faces):
-        nodes, tris = _triangulation(face)
+        nodes, tris = face_triangulation(face)
         if not len(tris):
             continue
         points.append(nodes)
@@ -208,19 +206,3 @@ def _merge(points: NDArray[np.float64]) -> tuple[NDArray[np.int64], NDArray[np.i
         representative = parent
     roots, inverse = np.unique(representative, return_inverse=True)
     return inverse.reshape(-1).astype(np.int64), roots
-
-
-def _triangulation(face: TopoDS_Face) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
-    """The nodes ``(k, 3)`` mm and outward triangles ``(m, 3)`` of a meshed face."""
-    location = TopLoc_Location()
-    mesh = BRep_Tool.Triangulation_s(face, location)
-    if mesh is None or mesh.NbTriangles() == 0:
-        return np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64)
-    transform = location.Transformation()
-    nodes = np.array([mesh.Node(i).Transformed(transform).Coord() for i in range(1, mesh.NbNodes() + 1)],
-                     dtype=float)
-    triangles = np.array([mesh.Triangle(i).Get() for i in range(1, mesh.NbTriangles() + 1)],
-                         dtype=np.int64).reshape(-1, 3) - 1
-    if face.Orientation() == TopAbs_REVERSED:
-        triangles = triangles[:, ::-1]  # outward for a reversed face
-    return nodes, triangles
