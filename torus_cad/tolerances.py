@@ -327,3 +327,9 @@ EDGE_CURVE_REACH_TOLERANCES = 10.0
 #: Times a point is added where OpenCascade's measure finds the rebuilt curves parting most, after the
 #: half-way refinement (the interpolating spline can part between the half-way points).
 EDGE_CURVE_WORST_POINT_ROUNDS = 20
+
+#: simulate --observer: an observer's distance from the hub, m (open below, closed above). It must also lie
+#: outside the blade tips' circle (torus_cad.acoustics.observers.check_observers).
+NOISE_OBSERVER_DISTANCE_M = (0.0, 1.0e4)
+#: Most observers one simulate run takes (each costs about a second of noise evaluation).
+NOISE_MAX_OBSERVERS = 32

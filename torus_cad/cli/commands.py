@@ -448,7 +448,7 @@ def command_simulate(args: argparse.Namespace) -> int:
     request = Request(params, OperatingPoint(rpm, args.airspeed), Level(args.level), args.iterations,
                       max_processes() if args.processes is None else args.processes, args.case_only, args.time_limit,
                       Path(args.mesh_from) if args.mesh_from else None, Mesher(args.mesher), step,
-                      TurbulenceModel(args.turbulence))
+                      TurbulenceModel(args.turbulence), _observers(args.observer))
     line = IterationLine.for_terminal(quiet=args.quiet)
     try:
         if args.convergence:
@@ -467,6 +467,12 @@ def command_simulate(args: argparse.Namespace) -> int:
         for text in summary_lines(result, convergence=args.convergence):
             print(text)
     return EXIT_OK
+
+
+def _observers(given: list[Any] | None) -> tuple[Any, ...]:
+    from torus_cad.acoustics.observers import DEFAULT_OBSERVERS
+
+    return tuple(given) if given else DEFAULT_OBSERVERS
 
 
 def _check_simulate_options(args: argparse.Namespace) -> None:

@@ -15,7 +15,8 @@ Boundaries:
 
 The propeller is a wall that turns with the MRF zone (its velocity is set by the zone). Function
 objects record the propeller's force and moment about the spin axis (``forces``), the residuals
-(``solverInfo``), y+ on the walls at the last iteration (``yPlus``) and, for the momentum balance, the momentum flux (``surfaceFieldValue``:
+(``solverInfo``), y+ on the walls at the last iteration (``yPlus``), the propeller's surface pressure at the
+last iteration (``surfaces``, VTK PolyData, for the tonal noise of torus_cad.acoustics) and, for the momentum balance, the momentum flux (``surfaceFieldValue``:
 sum of U phi) and the pressure and viscous force (``forces``) on each outer patch.
 
 The commands that mesh and run the case are :func:`commands`; ``Allrun`` lists the same ones.
@@ -46,6 +47,9 @@ ZONE = "rotating_zone"
 MM_TO_M = "(0.001 0.001 0.001)"
 #: Names of the function objects (their folders under postProcessing/).
 FORCES, RESIDUALS, OUTER_FORCES, Y_PLUS = "propeller_forces", "residuals", "outer_forces", "yPlus"
+#: The function object that writes the propeller's surface pressure (face values, kinematic p in m^2/s^2) at the
+#: last time as VTK PolyData: ``postProcessing/<BLADE_PRESSURE>/<time>/<WALL>.vtp`` (torus_cad.acoustics.surface).
+BLADE_PRESSURE = "blade_pressure"
 MOMENTUM_FLUX = {patch: f"momentum_flux_{patch}" for patch in OUTER_PATCHES}
 FIELDS = ("U", "p", "k", "omega")
 #: The transition model's extra fields (kOmegaSSTLM): intermittency and transition-onset Re_theta.
@@ -98,6 +102,10 @@ def control_dict(spec: CaseSpec) -> dict[str, Any]:
         OUTER_FORCES: {**forces, "patches": list(OUTER_PATCHES)},
         Y_PLUS: {"type": "yPlus", "libs": ['"libfieldFunctionObjects.so"'], "writeControl": "writeTime",
                  "log": False},
+        BLADE_PRESSURE: {"type": "surfaces", "libs": ['"libsampling.so"'], "writeControl": "writeTime",
+                         "surfaceFormat": "vtk", "formatOptions": {"vtk": {"format": "binary", "legacy": False}},
+                         "fields": ["p"], "interpolationScheme": "cell",
+                         "surfaces": {WALL: {"type": "patch", "patches": [WALL], "interpolate": False}}},
         RESIDUALS: {"type": "solverInfo", "libs": ['"libutilityFunctionObjects.so"'], "fields": list(spec.fields),
                     "writeControl": "timeStep", "writeInterval": 1},
     }

@@ -92,7 +92,22 @@ def summary_lines(result: Result, convergence: bool = False) -> list[str]:
                       f"{mesh['y_plus_target']} so that the layers meet the surface cells")
         lines.append(f"y+ on the propeller: min {y_plus['min']:.3g}, mean {y_plus['mean']:.3g}, max {y_plus['max']:.3g} "
                      f"({report['mesher']} mesh, {sizing})")
+    if report.get("noise"):
+        lines.append(noise_line(report["noise"]))
     return lines
+
+
+def _level(value: float | None) -> str:
+    return "-" if value is None else f"{value:.1f}"
+
+
+def noise_line(noise: dict[str, Any]) -> str:
+    """``tonal noise (BPF 500 Hz): 1 m 0 deg -259 dB ...``: each observer's overall SPL and dB(A)."""
+    heard = "; ".join(f"{entry['distance_m']:g} m {entry['angle_deg']:g} deg {_level(entry['oaspl_db'])} dB "
+                      f"({_level(entry['oaspl_dba'])} dB(A))" for entry in noise["observers"])
+    passing = (f"BPF {noise['blade_passing_frequency_hz']:.4g} Hz" if noise.get("blades")
+               else f"rotation {noise['rotation_hz']:.4g} Hz")
+    return f"tonal noise ({passing}, steady loading and thickness, FW-H): {heard}"
 
 
 def thrust_search_lines(search: dict[str, Any]) -> list[str]:

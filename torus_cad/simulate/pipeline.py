@@ -3,7 +3,9 @@ its OpenFOAM case, run it, publish the numbers.
 
 One run is one output set in ``OUT`` (torus_cad.outputs.output_set): the case is built and run inside the
 set's staging folder; on success the case folder ``<name>_case/`` is renamed into place, then
-``<name>_performance.png`` and the sealed ``<name>_performance.json`` are published; an error or
+``<name>_performance.png``, the tonal noise's picture ``<name>_noise.png`` and signals ``<name>_noise.csv``
+(torus_cad.acoustics, from the blade surface pressure at the last iteration) and the sealed
+``<name>_performance.json`` are published; an error or
 an interrupt publishes nothing (the staging folder is removed). A case whose solver failed
 (diverged, over its time budget) is kept as ``<name>_case_failed/`` for inspection.
 
@@ -29,6 +31,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from torus_cad.acoustics.observers import DEFAULT_OBSERVERS, Observer, check_observers
 from torus_cad.errors import BudgetError, ParameterError
 from torus_cad.kernel.files import owner_tag
 from torus_cad.outputs.output_set import OutputSet
@@ -36,7 +39,7 @@ from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.design import InletSide
 from torus_cad.runtime.input_files import read_untrusted_bytes
 from torus_cad.runtime.interrupts import deferred
-from torus_cad.simulate.case import CaseSpec, mesh_commands, solve_commands, write_case
+from torus_cad.simulate.case import BLADE_PRESSURE, WALL, CaseSpec, mesh_commands, solve_commands, write_case
 from torus_cad.simulate.history import History, momentum_balance_force_n, read_y_plus
 from torus_cad.simulate.performance import GCI_SAFETY_FACTOR, richardson, run_summary
 from torus_cad.simulate.plot import write_history_plot
@@ -78,9 +81,15 @@ from torus_cad.simulate.thrust_target import (
     next_rpm,
     search_state,
 )
-from torus_cad.tolerances import REPORT_FILE_MAX_BYTES, SIMULATE_MAX_ITERATIONS, SIMULATE_TIME_LIMIT_MAX_S
+from torus_cad.tolerances import (
+    NOISE_MAX_OBSERVERS,
+    REPORT_FILE_MAX_BYTES,
+    SIMULATE_MAX_ITERATIONS,
+    SIMULATE_TIME_LIMIT_MAX_S,
+)
 
 if TYPE_CHECKING:
+    from torus_cad.acoustics.report import Noise
     from torus_cad.cfd.step_body import StepPropeller
 
 #: CPU seconds simpleFoam takes per cell and iteration (the default design's coarse layered mesh, 51,845 cells:
@@ -115,7 +124,7 @@ class Request:
     folder of an earlier run of the same design and level whose mesh to reuse (another rpm or
     airspeed without meshing again), the mesher (``snappy``: prism layers; ``tet``: gmsh tetrahedra), and a
     STEP propeller (``--step``) to simulate instead of building ``params`` (then ``params`` gives only the name,
-    the sense of rotation and ``[cfd]``), and the turbulence model."""
+    the sense of rotation and ``[cfd]``), the turbulence model and the observers of the tonal noise."""
 
     params: PropellerParameters
     point: OperatingPoint
@@ -128,6 +137,7 @@ class Request:
     mesher: Mesher = Mesher.SNAPPY
     step: StepPropeller | None = None
     turbulence: TurbulenceModel = TurbulenceModel.K_OMEGA_SST
+    observers: tuple[Observer, ...] = DEFAULT_OBSERVERS
 
     @property
     def run_iterations(self) -> int:
@@ -158,6 +168,8 @@ def check_request(request: Request) -> float:
     else:
         diameter_m = 2.0 * tip_radius(resolve_design_targets(request.params).parameters) / 1000.0
     check_operating_point(request.point, diameter_m, request.params)
+    check_count("--observer", len(request.observers), 1, NOISE_MAX_OBSERVERS)
+    check_observers(request.observers, diameter_m / 2.0)
     return diameter_m
 
 
@@ -180,6 +192,8 @@ def _remove_stale_report(out: Path, name: str) -> None:
     with deferred():
         for suffix in (".json", ".png"):
             (out / f"{name}_performance{suffix}").unlink(missing_ok=True)
+        for suffix in (".png", ".csv"):
+            (out / f"{name}_noise{suffix}").unlink(missing_ok=True)
 
 
 async def _mesh_and_write(request: Request, case: Path, diameter_m: float,
@@ -352,7 +366,8 @@ async def simulate_async(request: Request, out_dir: str | Path, progress: Progre
             return Result({"case": out / f"{name}_case"}, report)
         run = await _run_case(request, case, out, spec, mesh_report, diameter_m, start, stage, progress,
                               runner, convert=request.mesh_from is None, mesh_s=time.perf_counter() - start)
-        return _publish(output, request, case, out, run, start)
+        noise = await _noise(request, case, stage)
+        return _publish(output, request, case, out, run, start, noise=noise)
 
 
 @dataclass
@@ -408,19 +423,56 @@ async def _run_case(request: Request, case: Path, out: Path, spec: CaseSpec, mes
     return _Run(report, history)
 
 
+async def _noise(request: Request, case: Path, stage: Callable[[str], None] | None) -> Noise | None:
+    """The tonal noise of the finished ``case`` at ``request.observers`` (None when the propeller does not turn)."""
+    from torus_cad.acoustics.fwh import Medium
+    from torus_cad.acoustics.report import evaluate_noise
+    from torus_cad.acoustics.surface import read_surface, surface_pressure_file
+
+    omega = request.point.omega_rad_s(request.params.handedness)
+    if omega == 0.0:
+        return None
+    if stage:
+        stage("noise")
+    fluid = request.point.fluid
+    surface = read_surface(surface_pressure_file(case, BLADE_PRESSURE, WALL), fluid.density_kg_m3)
+    blades = request.params.blades if request.step is None else 1
+    noise = await asyncio.to_thread(evaluate_noise, surface, omega, blades,
+                                    Medium(fluid.density_kg_m3, fluid.speed_of_sound_m_s), request.observers)
+    if request.step is not None:
+        noise.report.update(blades=None, harmonics_of="the rotation frequency (a --step propeller's blade count is "
+                                                      "not known)")
+    else:
+        noise.report["harmonics_of"] = "the blade-passing frequency"
+    if request.point.airspeed_m_s > 0.0:
+        noise.report["airspeed_note"] = "the airspeed's convection of the sound is neglected"
+    return noise
+
+
 def _publish(output: OutputSet, request: Request, case: Path, out: Path, run: _Run, start: float,
-             extra: dict[str, Any] | None = None) -> Result:
-    """Publish ``case`` (as ``OUT/<name>_case``), the history plot and the sealed report of ``run``."""
+             extra: dict[str, Any] | None = None, noise: Noise | None = None) -> Result:
+    """Publish ``case`` (as ``OUT/<name>_case``), the history plot, the noise picture and signals and the sealed
+    report of ``run``."""
     params, name = request.params, request.params.name
     cells = run.report["cells"]
-    output.write("png", lambda path: write_history_plot(
-        run.history, params.handedness, path, f"{name}: {run.report['rpm']:g} rpm, {request.point.airspeed_m_s:g} "
-                                              f"m/s, {request.level.value} ({cells:,} cells)"))
-    report = {**run.report, **(extra or {}), "wall_seconds": time.perf_counter() - start, "case": f"{name}_case"}
+    title = (f"{name}: {run.report['rpm']:g} rpm, {request.point.airspeed_m_s:g} m/s, {request.level.value} "
+             f"({cells:,} cells)")
+    output.write("png", lambda path: write_history_plot(run.history, params.handedness, path, title))
+    if noise is not None:
+        output.write_files(lambda folder: _noise_files(noise, folder, name, title))
+    report = {**run.report, **(extra or {}), "noise": noise.report if noise is not None else None,
+              "wall_seconds": time.perf_counter() - start, "case": f"{name}_case"}
     with deferred():
         _swap_folder(case, out / f"{name}_case")
         paths = output.publish(report)
     return Result({"case": out / f"{name}_case", **paths}, output.sealed_report)
+
+
+def _noise_files(noise: Noise, folder: Path, name: str, title: str) -> dict[str, Path]:
+    from torus_cad.acoustics.report import write_noise_csv, write_noise_plot
+
+    return {"noise_png": write_noise_plot(noise, folder / f"{name}_noise.png", f"tonal noise, {title}"),
+            "noise_csv": write_noise_csv(noise, folder / f"{name}_noise.csv")}
 
 
 async def _solve(foam: Any, spec: CaseSpec, deadline: float, progress: ProgressCallback | None) -> History:
@@ -568,7 +620,9 @@ async def _thrust_search(request: Request, target: ThrustTarget, out: Path, diam
                             f"{INITIAL_CT:g}"}
         seconds = {key: sum(result.report["stage_seconds"][key] for _, result in results)
                    for key in ("mesh", "convert", "solve")}
-        return _publish(output, request, case, out, run, start, {"thrust_search": search, "stage_seconds": seconds})
+        noise = await _noise(request, case, stage)
+        return _publish(output, request, case, out, run, start, {"thrust_search": search, "stage_seconds": seconds},
+                        noise)
 
 
 def thrust_search(request: Request, target: ThrustTarget, out_dir: str | Path,
