@@ -1,12 +1,14 @@
 #!/usr/bin/env python3
-"""Toroidal against conventional at the same thrust: rpm, power and figure of merit of each.
+"""Toroidal against conventional at the same thrust: rpm, power, figure of merit and tonal noise of each.
 
     python scripts/equal_thrust.py                          # 0.05 N, coarse level, still air
     python scripts/equal_thrust.py --thrust 0.08 --level medium --out equal_out
 
 Runs ``torus-cad simulate --thrust N`` on the default toroidal design (no design file) and on
 ``examples/compare/conventional_45mm_3blade.toml`` (a conventional propeller of the same tip diameter,
-blade count and hub), each as a fresh process; prints a Markdown table and writes ``OUT/equal_thrust.json``
+blade count and hub), each as a fresh process; prints a Markdown table (the noise columns: overall SPL and
+dB(A) of the steady-loading and thickness tones at 1 m in the rotor's plane, from the report's ``noise``)
+and writes ``OUT/equal_thrust.json``
 and a bar chart (``--picture``, default ``OUT/equal_thrust.png``). Never part of the test suite
 (two thrust searches, a few solver runs each).
 """
@@ -32,6 +34,17 @@ DESIGNS: dict[str, Path | None] = {
 #: What the table and the picture show: report key -> (heading, scale, unit).
 QUANTITIES = {"rpm": ("rpm", 1.0, ""), "thrust_n": ("thrust", 1.0, "N"), "power_w": ("power", 1.0, "W"),
               "torque_nm": ("torque", 1000.0, "N mm"), "figure_of_merit": ("figure of merit", 1.0, "")}
+#: The observer of the noise columns: 1 m from the hub in the rotor's plane (one of simulate's defaults).
+NOISE_OBSERVER = (1.0, 90.0)
+#: Noise columns: the observer entry's key -> heading (differences in dB, not percent).
+NOISE = {"oaspl_db": "tonal SPL 1 m, 90° (dB)", "oaspl_dba": "tonal 1 m, 90° (dB(A))"}
+
+
+def noise_levels(report: dict[str, Any]) -> dict[str, float]:
+    """The NOISE columns of a performance report, at NOISE_OBSERVER."""
+    entry = next(entry for entry in report["noise"]["observers"]
+                 if (entry["distance_m"], entry["angle_deg"]) == NOISE_OBSERVER)
+    return {key: entry[key] for key in NOISE}
 
 
 def search(label: str, design: Path | None, args: argparse.Namespace) -> dict[str, Any]:
@@ -51,33 +64,41 @@ def search(label: str, design: Path | None, args: argparse.Namespace) -> dict[st
 
 def table(results: dict[str, dict[str, Any]]) -> str:
     """A Markdown table: one row per design, then the conventional's difference from the toroidal in %."""
-    headings = [f"{name} ({unit})" if unit else name for name, _, unit in QUANTITIES.values()]
-    lines = ["| design | " + " | ".join(headings) + " | cells | y+ mean |", "|---" * (len(QUANTITIES) + 3) + "|"]
+    headings = [f"{name} ({unit})" if unit else name for name, _, unit in QUANTITIES.values()] + list(NOISE.values())
+    lines = ["| design | " + " | ".join(headings) + " | cells | y+ mean |",
+             "|---" * (len(QUANTITIES) + len(NOISE) + 3) + "|"]
     for label, report in results.items():
         cells = [f"{report[key] * scale:.4g}" for key, (_, scale, _) in QUANTITIES.items()]
+        cells += [f"{value:.1f}" for value in noise_levels(report).values()]
         lines.append(f"| {label} | " + " | ".join(cells) + f" | {report['cells']:,} | {report['y_plus']['mean']:.3g} |")
     toroidal, conventional = results.values()
     change = [f"{100.0 * (conventional[key] / toroidal[key] - 1.0):+.1f} %" for key in QUANTITIES]
+    change += [f"{noise_levels(conventional)[key] - noise_levels(toroidal)[key]:+.1f} dB" for key in NOISE]
     lines.append("| conventional against toroidal | " + " | ".join(change) + " | | |")
     return "\n".join(lines)
 
 
 def write_picture(results: dict[str, dict[str, Any]], path: Path, thrust_n: float) -> None:
-    """Bars of rpm, power and figure of merit, one colour per design."""
+    """Bars of rpm, power, figure of merit and the tonal dB(A) at 1 m in the rotor's plane, one colour per design."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    shown = ("rpm", "power_w", "figure_of_merit")
-    figure, axes = plt.subplots(1, len(shown), figsize=(10, 3.6))
+    shown = ("rpm", "power_w", "figure_of_merit", "oaspl_dba")
+    figure, axes = plt.subplots(1, len(shown), figsize=(13, 3.6))
     for axis, key in zip(axes, shown):
-        name, scale, unit = QUANTITIES[key]
-        values = [report[key] * scale for report in results.values()]
+        if key in NOISE:
+            title = NOISE[key]
+            values = [noise_levels(report)[key] for report in results.values()]
+        else:
+            name, scale, unit = QUANTITIES[key]
+            title = f"{name} ({unit})" if unit else name
+            values = [report[key] * scale for report in results.values()]
         bars = axis.bar(range(len(values)), values, color=["C0", "C1"])
         axis.bar_label(bars, labels=[f"{value:.3g}" for value in values], fontsize=8)
         axis.set_xticks(range(len(values)), [label.split(" (")[0] for label in results], fontsize=8)
-        axis.set_title(f"{name} ({unit})" if unit else name)
+        axis.set_title(title)
         axis.grid(axis="y", alpha=0.3)
     figure.suptitle(f"At {thrust_n:g} N of static thrust (torus-cad simulate --thrust, coarse RANS)")
     figure.tight_layout()
@@ -100,7 +121,7 @@ def main() -> int:
     print(table(results))
     args.out.mkdir(parents=True, exist_ok=True)
     write_picture(results, args.picture or args.out / "equal_thrust.png", args.thrust)
-    keep = (*QUANTITIES, "cells", "y_plus", "process_wall_seconds", "thrust_search", "level")
+    keep = (*QUANTITIES, "cells", "y_plus", "process_wall_seconds", "thrust_search", "level", "noise")
     summary = {label: {key: report.get(key) for key in keep} for label, report in results.items()}
     (args.out / "equal_thrust.json").write_text(json.dumps(summary, indent=2), encoding="utf-8")
     return 0

@@ -193,6 +193,31 @@ def test_the_default_mesh_has_prism_layers_checkmesh_accepts_and_y_plus_is_repor
 
 
 @needs_openfoam
+def test_the_report_gives_finite_tonal_noise_at_the_default_observers_and_the_set_holds_its_signals(cw):
+    """The noise entry (torus_cad.acoustics, from the blade surface pressure the case wrote): finite levels at 1 m,
+    0 / 30 / 60 / 90 degrees, no tone on the axis, the loudest in the rotor's plane; the surface's pressure
+    thrust is the forces function object's thrust less its small viscous part; the signals CSV (read by numpy)
+    covers one revolution."""
+    out, report = cw
+    noise = report["noise"]
+    assert [(entry["distance_m"], entry["angle_deg"]) for entry in noise["observers"]] == [
+        (1.0, 0.0), (1.0, 30.0), (1.0, 60.0), (1.0, 90.0)]
+    assert noise["blades"] == 3 and noise["blade_passing_frequency_hz"] == pytest.approx(3 * RPM / 60.0)
+    off_axis = noise["observers"][1:]
+    for entry in off_axis:
+        assert math.isfinite(entry["oaspl_db"]) and math.isfinite(entry["oaspl_dba"])
+        assert len(entry["harmonics"]) == 10 and all(math.isfinite(row["spl_db"]) for row in entry["harmonics"][:3])
+        assert entry["oaspl_dba"] < entry["oaspl_db"]  # the blade-passing tones lie below 1 kHz
+    assert noise["observers"][0]["oaspl_db"] < off_axis[-1]["oaspl_db"] - 100.0
+    assert off_axis[0]["oaspl_db"] < off_axis[1]["oaspl_db"] < off_axis[2]["oaspl_db"]
+    assert noise["surface_pressure_thrust_n"] == pytest.approx(report["thrust_n"], rel=0.1)
+    signals = np.loadtxt(out / "torus_propeller_noise.csv", delimiter=",", skiprows=1)
+    assert signals.shape == (noise["samples_per_revolution"], 5)
+    assert signals[-1, 0] == pytest.approx(60.0 / RPM * (1.0 - 1.0 / len(signals)))
+    assert set(report["files"]) >= {"png", "noise_png", "noise_csv"}
+
+
+@needs_openfoam
 def test_thrust_from_the_surface_agrees_with_the_momentum_balance(cw):
     _, report = cw
     balance = report["momentum_balance"]

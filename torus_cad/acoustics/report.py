@@ -21,6 +21,9 @@ HARMONICS = 10
 #: Fewest samples per revolution; more when 4 per period of the highest listed harmonic need more (the levels of
 #: the harmonics above fall by tens of dB each, so what folds back below the Nyquist frequency is negligible).
 MIN_SAMPLES = 64
+#: The picture shows levels down to this far below its loudest (lower ones, such as the round-off of the axis,
+#: where a steady rotor makes no tone, at this floor).
+PICTURE_RANGE_DB = 60.0
 #: The picture's directivity: observers every this many degrees from 0 to 180 at the first observer's distance.
 DIRECTIVITY_STEP_DEG = 15.0
 METHOD = ("Ffowcs Williams-Hawkings, Farassat formulation 1A, impermeable rotating blade surface (each face of "
@@ -124,43 +127,53 @@ def write_noise_csv(noise: Noise, path: Path) -> Path:
 
 def write_noise_plot(noise: Noise, path: Path, title: str) -> Path:
     """The picture (matplotlib, Agg): directivity (OASPL and dB(A) against the angle from the axis), SPL per
-    blade-passing harmonic at each observer, and the signal over one revolution."""
+    blade-passing harmonic at each observer (both down to PICTURE_RANGE_DB below the loudest), and the signal
+    over one revolution (less its mean: the steady near field of the thrust)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
+    levels = [row[1] for row in noise.directivity] + [
+        row["spl_db"] for entry in noise.report["observers"] for row in entry["harmonics"] if row["spl_db"] is not None]
+    floor = max((level for level in levels if math.isfinite(level)), default=0.0) - PICTURE_RANGE_DB
+
+    def shown(values: list[float | None]) -> np.ndarray:
+        return np.array([floor if value is None or not value > floor else value for value in values])
 
     figure = plt.figure(figsize=(12, 8))
     try:
         polar = figure.add_subplot(2, 2, 1, projection="polar")
         if noise.directivity:
             angles = np.radians([row[0] for row in noise.directivity])
-            polar.plot(angles, [row[1] for row in noise.directivity], label="overall SPL, dB")
-            polar.plot(angles, [row[2] for row in noise.directivity], label="dB(A)")
+            polar.plot(angles, shown([row[1] for row in noise.directivity]), label="overall SPL, dB")
+            polar.plot(angles, shown([row[2] for row in noise.directivity]), label="dB(A)")
+            polar.set_rorigin(floor - 0.1 * PICTURE_RANGE_DB)
+            polar.set_rmin(floor)
             polar.set_thetamin(0.0)
             polar.set_thetamax(180.0)
             polar.set_theta_zero_location("N")
             polar.set_theta_direction(-1)
             polar.legend(loc="lower left", fontsize="small")
         distance = noise.observers[0].distance_m if noise.observers else 1.0
-        polar.set_title(f"directivity at {distance:g} m (0 deg = +z, ahead)", fontsize="medium")
+        polar.set_title(f"directivity at {distance:g} m (0 deg = +z, ahead; floor {floor:.0f} dB)", fontsize="medium")
         spectrum = figure.add_subplot(2, 2, 2)
         width = 0.8 / max(1, len(noise.observers))
         for index, entry in enumerate(noise.report["observers"]):
             harmonics = [row["harmonic"] for row in entry["harmonics"]]
-            levels = [row["spl_db"] if row["spl_db"] is not None else np.nan for row in entry["harmonics"]]
-            spectrum.bar(np.array(harmonics) + (index - (len(noise.observers) - 1) / 2) * width, levels, width,
-                         label=f"{entry['distance_m']:g} m, {entry['angle_deg']:g} deg")
+            heights = shown([row["spl_db"] for row in entry["harmonics"]]) - floor
+            spectrum.bar(np.array(harmonics) + (index - (len(noise.observers) - 1) / 2) * width, heights, width,
+                         bottom=floor, label=f"{entry['distance_m']:g} m, {entry['angle_deg']:g} deg")
         spectrum.set_xlabel(f"harmonic of the blade-passing frequency ({noise.report['blade_passing_frequency_hz']:.4g} Hz)")
         spectrum.set_ylabel("SPL, dB re 20 uPa")
         spectrum.grid(True, alpha=0.3)
         spectrum.legend(fontsize="small")
         signal_axes = figure.add_subplot(2, 1, 2)
         for observer, signal in zip(noise.observers, noise.signals):
-            signal_axes.plot(signal.time_s * 1000.0, signal.total_pa,
+            signal_axes.plot(signal.time_s * 1000.0, signal.total_pa - np.mean(signal.total_pa),
                              label=f"{observer.distance_m:g} m, {observer.angle_deg:g} deg")
         signal_axes.set_xlabel("observer time over one revolution, ms")
-        signal_axes.set_ylabel("acoustic pressure, Pa")
+        signal_axes.set_ylabel("acoustic pressure less its mean, Pa")
         signal_axes.grid(True, alpha=0.3)
         signal_axes.legend(fontsize="small")
         figure.suptitle(title)
