@@ -237,7 +237,9 @@ def _add_simulate_parser(commands: Any) -> None:
         description="Mesh the fluid around the propeller of CONFIG (or the default) at --level, write a complete "
         "OpenFOAM case (<name>_case/: steady MRF, k-omega SST, an Allrun that repeats the run) and run it with "
         "simpleFoam through foamlib. Writes <name>_performance.json (thrust, torque, power, J, CT, CP, efficiency "
-        "or figure of merit, convergence) and <name>_performance.png (force and residual histories). Needs "
+        "or figure of merit, convergence, tonal noise at --observer positions) and <name>_performance.png (force "
+        "and residual histories), <name>_noise.png and <name>_noise.csv (the noise's directivity, spectrum and "
+        "signals). Needs "
         "OpenFOAM (v1912) and the simulate extra: pip install -c constraints.txt -e '.[simulate]'.")
     from torus_cad.simulate.thrust_target import DEFAULT_MAX_RUNS, DEFAULT_TOLERANCE, PLAUSIBLE_CT_LIMIT
 
