@@ -113,7 +113,7 @@ def observer_signal(surface: RotatingSurface, omega_rad_s: float, observer_m: Ar
     observer = np.asarray(observer_m, dtype=float)
     c, rho = medium.speed_of_sound_m_s, medium.density_kg_m3
     period = 2.0 * math.pi / abs(omega_rad_s)
-    time_s = np.arange(samples) * (period / samples)
+    time_s: Array = np.arange(samples, dtype=np.float64) * (period / samples)
     thickness, loading = np.zeros(samples), np.zeros(samples)
     for start in range(0, len(surface.areas_m2), FACE_CHUNK):
         part = slice(start, start + FACE_CHUNK)

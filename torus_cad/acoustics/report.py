@@ -8,13 +8,16 @@ import math
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
 from torus_cad.acoustics.fwh import Medium, ObserverSignal, RotatingSurface, observer_signal
 from torus_cad.acoustics.observers import Observer
 from torus_cad.acoustics.spectrum import REFERENCE_PRESSURE_PA, harmonic_rms, overall_db, spl_db
+
+if TYPE_CHECKING:
+    from matplotlib.projections.polar import PolarAxes
 
 #: Blade-passing harmonics listed per observer.
 HARMONICS = 10
@@ -143,7 +146,7 @@ def write_noise_plot(noise: Noise, path: Path, title: str) -> Path:
 
     figure = plt.figure(figsize=(12, 8))
     try:
-        polar = figure.add_subplot(2, 2, 1, projection="polar")
+        polar = cast("PolarAxes", figure.add_subplot(2, 2, 1, projection="polar"))
         if noise.directivity:
             angles = np.radians([row[0] for row in noise.directivity])
             polar.plot(angles, shown([row[1] for row in noise.directivity]), label="overall SPL, dB")

@@ -9,6 +9,7 @@ domain (into the blade); the acoustic surface's normal points into the fluid, so
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -45,7 +46,10 @@ def read_surface(path: Path, density_kg_m3: float, field: str = "p") -> Rotating
     """The faces of the VTK PolyData file ``path`` (points in m) with the gauge pressure ``density_kg_m3`` times
     the face field ``field`` (kinematic, m^2/s^2), normals reversed into the fluid. Polygons are split into fans
     for their area vector and centroid."""
-    from vtkmodules.util.numpy_support import vtk_to_numpy
+    from vtkmodules.util.numpy_support import vtk_to_numpy as untyped_vtk_to_numpy
+
+    def vtk_to_numpy(array: Any) -> np.ndarray:
+        return np.asarray(untyped_vtk_to_numpy(array))  # type: ignore[no-untyped-call]
     from vtkmodules.vtkIOXML import vtkXMLPolyDataReader
 
     reader = vtkXMLPolyDataReader()
