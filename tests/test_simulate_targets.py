@@ -323,8 +323,10 @@ def test_thrust_search_finds_the_rpm_within_one_percent_on_one_mesh(tmp_path, ca
     assert report["figure_of_merit"] > 0.0 and report["power_w"] > 0.0
     assert f"rpm for 0.05 N: {search['rpm']:.0f} rpm" in printed and "N mm" in printed
     assert main(["verify", str(out), "torus_propeller_performance", "-q"]) == 0
-    assert sorted(path.name for path in out.iterdir()) == ["torus_propeller_case", "torus_propeller_performance.json",
+    assert sorted(path.name for path in out.iterdir()) == ["torus_propeller_case", "torus_propeller_noise.csv",
+                                                         "torus_propeller_noise.png", "torus_propeller_performance.json",
                                                          "torus_propeller_performance.png"]
+    assert report["noise"]["observers"][-1]["oaspl_db"] > 0.0  # the chosen run's tones, in the rotor's plane
 
 
 @needs_openfoam
