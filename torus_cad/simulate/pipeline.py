@@ -168,7 +168,7 @@ def check_request(request: Request) -> float:
     else:
         diameter_m = 2.0 * tip_radius(resolve_design_targets(request.params).parameters) / 1000.0
     check_operating_point(request.point, diameter_m, request.params)
-    check_count("--observer", len(request.observers), 1, NOISE_MAX_OBSERVERS)
+    check_count("the number of --observer options", len(request.observers), 1, NOISE_MAX_OBSERVERS)
     check_observers(request.observers, diameter_m / 2.0)
     return diameter_m
 
