@@ -19,8 +19,8 @@ from torus_cad.errors import ParameterError
 from torus_cad.geometry.station_table import read_station_file
 from torus_cad.kernel.checks import precise_volume
 from torus_cad.kernel.measure import contour_through, edge_points, farthest_pair, max_radius_mm, plane_section_edges
+from torus_cad.kernel.step_readback import read_step
 from torus_cad.kernel.strict import boolean_check_faults
-from torus_cad.kernel.writers.step import read_step
 from torus_cad.parameters import PropellerParameters
 from torus_cad.propeller import build_propeller
 

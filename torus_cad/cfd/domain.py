@@ -37,7 +37,6 @@ import numpy as np
 
 from torus_cad.cfd.estimate import CfdEstimate, check_cfd_budget
 from torus_cad.cfd.readme import readme_text
-from torus_cad.cfd.settings import MissingExtraError
 from torus_cad.cfd.sizes import (
     CYLINDER_SEGMENTS,
     MIN_SIZE_FRACTION,
@@ -47,7 +46,7 @@ from torus_cad.cfd.sizes import (
     domain_from_sizes,
     trailing_edges,
 )
-from torus_cad.errors import KernelError, ParameterError
+from torus_cad.errors import KernelError, MissingExtraError, ParameterError
 from torus_cad.formats import StepSchema
 from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.design import Cfd

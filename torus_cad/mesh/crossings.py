@@ -6,7 +6,7 @@ off).
 
 Checking every triangle costs about 10 us each on this project's 2-core machine (meshlib's mesh
 and tree included; see README, 'Meshes for simulation'). Meshes up to
-:data:`torus_cad.runtime.budgets.MESH_WHOLE_CROSSING_CHECK_TRIANGLES` are checked whole. Larger ones
+:data:`MESH_WHOLE_CROSSING_CHECK_TRIANGLES` are checked whole. Larger ones
 are checked where a structured mesh of the blade can cross itself: everywhere on the hub and
 at the junctions (where the union and the cleanup made new triangles), and on blade 0 in bands
 along the leading and trailing edges, the only places where the blade is thinner than its cells
@@ -23,6 +23,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from torus_cad.geometry.mesh import TriangleMesh
+
+#: Surface meshes (``torus-cad mesh``) up to this many triangles are checked whole for intersecting
+#: triangle pairs; larger ones where a structured mesh can cross (the cost per triangle:
+#: docs/explanation/measurements.md).
+MESH_WHOLE_CROSSING_CHECK_TRIANGLES = 1_500_000
 
 #: Columns on each side of the leading and trailing edges (and the whole base of a blunt edge)
 #: that the partial check covers, as a fraction of the points around a section (at least 8).

@@ -24,7 +24,7 @@ from torus_cad.geometry.extensions.trailing_edge import trailing_edge_thickness_
 from torus_cad.geometry.section import has_base
 from torus_cad.geometry.surface import BladeSurface, sections_along
 from torus_cad.geometry.transforms import evaluate_quartic
-from torus_cad.kernel.files import atomic_path
+from torus_cad.runtime.files import atomic_path
 
 #: CSV header: name in the file -> BladeElements attribute.
 CSV_COLUMNS = {

@@ -30,10 +30,10 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from torus_cad.errors import BudgetError, ParameterError
-from torus_cad.kernel.files import owner_tag
 from torus_cad.outputs.output_set import OutputSet
 from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.design import InletSide
+from torus_cad.runtime.files import owner_tag
 from torus_cad.runtime.input_files import read_untrusted_bytes
 from torus_cad.runtime.interrupts import deferred
 from torus_cad.simulate.case import CaseSpec, mesh_commands, solve_commands, write_case

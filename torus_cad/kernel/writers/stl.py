@@ -14,10 +14,10 @@ from OCP.BRepMesh import BRepMesh_IncrementalMesh
 from OCP.StlAPI import StlAPI_Writer
 
 from torus_cad.errors import KernelError
-from torus_cad.kernel.files import atomic_path
 from torus_cad.kernel.mesh_check import MeshCheck, checked, intersecting_pairs_in_file
 from torus_cad.kernel.uncrossed import UncrossedMesh, uncrossed_mesh
 from torus_cad.kernel.writers.failures import write_failure
+from torus_cad.runtime.files import atomic_path
 
 __all__ = ["write_checked_stl", "write_stl"]
 

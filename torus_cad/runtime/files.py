@@ -20,29 +20,17 @@ from collections.abc import Iterator
 from itertools import count
 from pathlib import Path
 
+from torus_cad.runtime.processes import host_tag, process_alive
+
 #: Files and folders being written now, by a registration number: what a signal handler removes.
 IN_FLIGHT: dict[int, Path] = {}
 _registrations = count(1)
 _OWNER = re.compile(r"(?P<host>[A-Za-z0-9_]+)-(?P<pid>\d+)-")
 
 
-def host_tag() -> str:
-    """This host's name reduced to ``[A-Za-z0-9_]`` (so ``-`` can separate the fields)."""
-    import socket  # here: the command line imports this module before its signal handlers are in
-
-    return re.sub(r"[^A-Za-z0-9_]", "_", socket.gethostname())[:40] or "host"
-
-
 def owner_tag() -> str:
     """``<host>-<pid>-``: goes right after a temp name's fixed prefix."""
     return f"{host_tag()}-{os.getpid()}-"
-
-
-def process_alive(pid: int) -> bool:
-    """Whether process ``pid`` exists on this host (psutil)."""
-    import psutil
-
-    return bool(psutil.pid_exists(pid))
 
 
 def left_by_dead_process(name: str, prefix: str) -> bool:
