@@ -58,8 +58,8 @@ def test_geometry_imports_no_kernel_and_nothing_above_it():
 def test_the_runtime_imports_only_the_errors_and_the_tolerances():
     """torus_cad.runtime is the ground floor: files, processes, isolation, signals, extras, progress."""
     def forbidden(name: str) -> bool:
-        return name.split(".")[0] in KERNEL_PACKAGES or name.startswith("torus_cad.") and not name.startswith(
-            ("torus_cad.errors", "torus_cad.tolerances", "torus_cad.runtime"))
+        return name.split(".")[0] in KERNEL_PACKAGES or (name.startswith("torus_cad.") and not name.startswith(
+            ("torus_cad.errors", "torus_cad.tolerances", "torus_cad.runtime")))
     assert _offenders(_sources("runtime"), forbidden) == []
 
 

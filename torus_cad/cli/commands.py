@@ -407,8 +407,8 @@ def command_cfd(args: argparse.Namespace) -> int:
     progress = StageProgress.for_terminal(quiet=args.quiet)
     from torus_cad.cfd.domain import gmsh_library, import_gmsh, summary_line, write_cfd_domain
     from torus_cad.cfd.estimate import check_cfd_budget
-    from torus_cad.cfd.surface_check import import_meshlib
     from torus_cad.cfd.worker import run_in_worker
+    from torus_cad.kernel.mesh_check import import_meshlib
     from torus_cad.outputs.output_set import check_writable_folder
 
     gmsh = import_gmsh()  # MissingExtraError (exit 2) when gmsh's library does not load

@@ -1,8 +1,8 @@
-"""Intersecting triangle pairs, found by meshlib (``findSelfCollidingTriangles``), and the resolutions that have none.
+"""Intersecting triangle pairs of the surface mesh, and where they are looked for.
 
-meshlib works in float32, the precision of a binary STL: the check is of the mesh as the STL
-stores it. Triangles that only share an edge or a vertex do not count (``touchIsIntersection``
-off).
+The check is the package's one crossing check (torus_cad.kernel.mesh_check.crossing_pairs, meshlib's
+``findSelfCollidingTriangles`` on single-precision coordinates, the precision of a binary STL: the
+check is of the mesh as the STL stores it). Triangles that only share an edge or a vertex do not count.
 
 Checking every triangle costs about 10 us each on this project's 2-core machine (meshlib's mesh
 and tree included; see README, 'Meshes for simulation'). Meshes up to
@@ -23,6 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from torus_cad.geometry.mesh import TriangleMesh
+from torus_cad.kernel.mesh_check import crossing_pairs as mesh_crossing_pairs
 
 #: Surface meshes (``torus-cad mesh``) up to this many triangles are checked whole for intersecting
 #: triangle pairs; larger ones where a structured mesh can cross (the cost per triangle:
@@ -51,18 +52,9 @@ class CrossingCheck:
 
 def crossing_pairs(vertices: NDArray[np.float64], faces: NDArray[np.int64],
                    region: NDArray[np.bool_] | None = None) -> int:
-    """Intersecting pairs among the ``(f, 3)`` faces over ``(v, 3)`` vertices (mm), or among the faces
-    where ``region`` ``(f,)`` is True."""
-    import meshlib.mrmeshnumpy as mn
-    import meshlib.mrmeshpy as mr
-
-    if region is not None:  # a mesh of the region alone: meshlib's tree would cover the whole mesh
-        faces = faces[region]
-        used = np.unique(faces)
-        vertices, faces = vertices[used], np.searchsorted(used, faces)
-    mesh = mn.meshFromFacesVerts(np.ascontiguousarray(faces, dtype=np.int32),
-                                 np.ascontiguousarray(vertices, dtype=np.float32))
-    return len(mr.findSelfCollidingTriangles(mr.MeshPart(mesh)))
+    """How many intersecting pairs among the ``(f, 3)`` faces over ``(v, 3)`` vertices (mm), or among the
+    faces where ``region`` ``(f,)`` is True (torus_cad.kernel.mesh_check.crossing_pairs)."""
+    return len(mesh_crossing_pairs(vertices, faces, region))
 
 
 def edge_band_faces(sections: int, count: int, trailing_edge: int, lower_corner: int | None) -> NDArray[np.bool_]:

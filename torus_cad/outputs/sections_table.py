@@ -107,11 +107,6 @@ def elements_of(surface: BladeSurface, spin: Handedness = Handedness.CW) -> Blad
                           surface.trailing_edge_index or 0, surface.lower_corner_index, spin)
 
 
-def design_elements(params: Any, points: int = 400, spin: Handedness = Handedness.CW) -> BladeElements:
-    """The blade-element table at the design's own sections (``resolution.sections``), finely sampled around."""
-    return elements_of(params.blade_surface(points=points), spin)
-
-
 def trailing_edge_of(params: Any, s: NDArray[np.float64]) -> NDArray[np.float64]:
     """Thickness of the trailing edge (mm) of the sections at ``s`` (0 where sharp; a conventional blade's is sharp)."""
     if str(getattr(params, "kind", "toroidal")) == "conventional":

@@ -12,7 +12,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from enum import StrEnum
-from typing import Any
 
 from torus_cad.errors import ParameterError
 from torus_cad.parameters import PropellerParameters
@@ -186,8 +185,3 @@ def max_processes() -> int:
 def with_level(params: PropellerParameters, level: Level) -> PropellerParameters:
     """``params`` with the ``[cfd]`` sizes of ``level``."""
     return params.with_values({f"cfd.{key}": value for key, value in level_cfd(level).items()})
-
-
-def describe_levels() -> dict[str, Any]:
-    """``{level: [cfd] values}`` for documentation and reports."""
-    return {level.value: level_cfd(level) for level in Level}
