@@ -4,8 +4,7 @@ The check is the package's one crossing check (torus_cad.kernel.mesh_check.cross
 ``findSelfCollidingTriangles`` on single-precision coordinates, the precision of a binary STL: the
 check is of the mesh as the STL stores it). Triangles that only share an edge or a vertex do not count.
 
-Checking every triangle costs about 10 us each on this project's 2-core machine (meshlib's mesh
-and tree included; see README, 'Meshes for simulation'). Meshes up to
+Checking every triangle costs time in proportion (the docs' measurements page). Meshes up to
 :data:`MESH_WHOLE_CROSSING_CHECK_TRIANGLES` are checked whole. Larger ones
 are checked where a structured mesh of the blade can cross itself: everywhere on the hub and
 at the junctions (where the union and the cleanup made new triangles), and on blade 0 in bands

@@ -39,10 +39,8 @@ ESTIMATE_GRID = (41, 160)
 
 
 #: Peak resident memory of ``torus-cad mesh`` (binary STL, --no-compare) grows by this much per
-#: triangle of its estimate (torus_cad.mesh.resolution.estimate_triangles), bytes, over a fixed
-#: :data:`MESH_BASE_BYTES` (Python, numpy, manifold3d, meshlib): measured 0.77 GB at 268,260 and
-#: 2.22 GB at 5,251,396 estimated triangles (`/usr/bin/time -v torus-cad mesh --sections 100 --points 400`
-#: and `--sections 400 --points 2000`).
+#: triangle of its estimate (:func:`estimate_triangles`), bytes, over a fixed :data:`MESH_BASE_BYTES`
+#: (Python, numpy, manifold3d, meshlib); both measured (the docs' measurements page).
 MESH_BYTES_PER_TRIANGLE = 290.0
 MESH_BASE_BYTES = 0.70e9
 #: The B-rep built for the comparison (``--no-compare`` skips it) adds about this much, bytes.
