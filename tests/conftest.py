@@ -138,10 +138,10 @@ def pytest_collection_modifyitems(config, items):
             item.add_marker(pytest.mark.fast)
         if item.nodeid in long:
             item.add_marker(pytest.mark.long)
-    named = {arg.split("::")[0] for arg in config.args if "::" in arg}  # files of which only some tests ran
     root = Path(str(config.rootpath))
-    whole = {item.nodeid.split("::")[0] for item in items} - {
-        str((Path.cwd() / name).resolve().relative_to(root)) for name in named}
+    named = {str((Path.cwd() / arg.split("::")[0]).resolve()) for arg in config.args if "::" in arg}
+    whole = {item.nodeid.split("::")[0] for item in items  # files of which every test was collected
+             if str((root / item.nodeid.split("::")[0]).resolve()) not in named}
     config.stale_tier_ids = stale_tier_ids(fast | long, {item.nodeid for item in items}, whole, root)
 
 
