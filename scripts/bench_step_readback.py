@@ -31,8 +31,8 @@ def main() -> None:
     parser.add_argument("design", nargs="?", help="design file (default: the default design)")
     args = parser.parse_args()
     import torus_cad.kernel.fuse as fuse
-    from torus_cad.kernel.step_readback import check_step_readback, step_readback_faults
-    from torus_cad.kernel.writers.step import read_step, write_step
+    from torus_cad.kernel.step_readback import check_step_readback, read_step, step_readback_faults
+    from torus_cad.kernel.writers.step import write_step
     from torus_cad.propeller import build_propeller
 
     refit_seconds: list[float] = []

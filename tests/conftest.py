@@ -122,6 +122,15 @@ def pytest_configure(config):
         signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
+def stale_tier_ids(tier_ids: set[str], collected: set[str], whole_files: set[str], root: Path) -> list[str]:
+    """The ids of ``tier_ids`` that name no test: their file is gone, or it was collected whole (listed in
+    ``whole_files``) and holds no test ``collected`` under that id (a test renamed, removed or re-parametrised)."""
+    return sorted(nodeid for nodeid in tier_ids
+                  if not (root / nodeid.split("::")[0]).is_file()
+                  or (nodeid.split("::")[0] in whole_files and nodeid not in collected))
+
+
+@pytest.hookimpl(tryfirst=True)  # before -k, -m and --deselect leave tests out: every test of a file is here
 def pytest_collection_modifyitems(config, items):
     fast, long = set(TIERS["fast"]), set(TIERS["long"])
     for item in items:
@@ -129,3 +138,17 @@ def pytest_collection_modifyitems(config, items):
             item.add_marker(pytest.mark.fast)
         if item.nodeid in long:
             item.add_marker(pytest.mark.long)
+    root = Path(str(config.rootpath))
+    named = {str((Path.cwd() / arg.split("::")[0]).resolve()) for arg in config.args if "::" in arg}
+    whole = {item.nodeid.split("::")[0] for item in items  # files of which every test was collected
+             if str((root / item.nodeid.split("::")[0]).resolve()) not in named}
+    config.stale_tier_ids = stale_tier_ids(fast | long, {item.nodeid for item in items}, whole, root)
+
+
+def pytest_runtest_setup(item):
+    """Every test fails while tests/tiers.json names a test that does not exist (under pytest-xdist a
+    collection error would not name the ids)."""
+    stale = getattr(item.config, "stale_tier_ids", [])
+    if stale:
+        pytest.fail(f"tests/tiers.json names {len(stale)} test(s) that do not exist: {', '.join(stale[:5])}"
+                    f"{' ...' if len(stale) > 5 else ''} (scripts/test_tiers.py writes the file again)", pytrace=False)

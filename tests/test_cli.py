@@ -92,7 +92,8 @@ def test_console_script_prints_no_traceback_on_bad_input(tmp_path):
 
 def _memory_after_imports_kb(env: dict[str, str]) -> int:
     """Address space of a torus-cad process once everything is imported (VmPeak, kB)."""
-    code = ("import torus_cad.propeller, torus_cad.outputs.output_set, torus_cad.cli, torus_cad.runtime.budgets\n"
+    code = ("import torus_cad.propeller, torus_cad.outputs.output_set, torus_cad.cli, "
+            "torus_cad.parameters.stl_budget\n"
             "print([l for l in open('/proc/self/status') if l.startswith('VmPeak')][0].split()[1])")
     return int(subprocess.run([sys.executable, "-c", code], env=env, check=True, capture_output=True,
                               text=True).stdout)

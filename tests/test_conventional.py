@@ -14,13 +14,14 @@ import numpy as np
 import pytest
 from conftest import EXAMPLES_DIR, read_binary_stl
 from OCP.BRepCheck import BRepCheck_Analyzer
+from scipy.spatial import ConvexHull
 
 from torus_cad.errors import ParameterError
 from torus_cad.geometry.station_table import read_station_file
 from torus_cad.kernel.checks import precise_volume
-from torus_cad.kernel.measure import contour_through, edge_points, farthest_pair, max_radius_mm, plane_section_edges
+from torus_cad.kernel.measure import contour_through, edge_points, max_radius_mm, plane_section_edges
+from torus_cad.kernel.step_readback import read_step
 from torus_cad.kernel.strict import boolean_check_faults
-from torus_cad.kernel.writers.step import read_step
 from torus_cad.parameters import PropellerParameters
 from torus_cad.propeller import build_propeller
 
@@ -52,12 +53,20 @@ def test_the_apc_is_254_mm_across(apc):
     assert 2.0 * max_radius_mm(apc.solid) == pytest.approx(254.0, rel=0.01)
 
 
+def _farthest_pair(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The two points of ``(n, 3)`` farthest apart (the chord of a thin symmetric section)."""
+    hull = points[ConvexHull(points, qhull_options="QJ").vertices]
+    distance = np.linalg.norm(hull[:, None] - hull[None, :], axis=-1)
+    i, j = np.unravel_index(int(np.argmax(distance)), distance.shape)
+    return hull[i], hull[j]
+
+
 def _section_at(solid, radius_mm: float, spin: str = "cw") -> tuple[np.ndarray, np.ndarray]:
     """Leading and trailing edge ``(3,)`` of blade 0's cut by the plane x = radius_mm (the farthest pair);
     turning ``spin`` seen from +z, blade 0 moves toward -y ('cw') or +y ('ccw'), its leading edge first."""
     edges = plane_section_edges(solid, (radius_mm, 0.0, 0.0), (1.0, 0.0, 0.0), 60.0)
     points = edge_points(contour_through(edges, (radius_mm, 0.0, 0.0)), 400)
-    first, second = farthest_pair(points)
+    first, second = _farthest_pair(points)
     ahead = first[1] < second[1] if spin == "cw" else first[1] > second[1]
     return (first, second) if ahead else (second, first)
 

@@ -1,4 +1,4 @@
-"""Kernel calls in a child process (torus_cad.kernel.isolation): a time limit, a crash, and no child left behind."""
+"""Kernel calls in a child process (torus_cad.runtime.isolation): a time limit, a crash, and no child left behind."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ import psutil
 import pytest
 
 from torus_cad.errors import KernelError
-from torus_cad.kernel.isolation import IsolatedCall, IsolatedCrash, IsolatedTimeout, run_isolated
+from torus_cad.runtime.isolation import IsolatedCall, IsolatedCrash, IsolatedTimeout, run_isolated
 
 
 def _crash() -> None:
@@ -59,7 +59,7 @@ def test_it_runs_in_a_pool_worker_which_is_a_daemonic_process():
 
 
 def test_a_killed_parent_leaves_no_child_running():
-    script = ("import time; from torus_cad.kernel.isolation import run_isolated; "
+    script = ("import time; from torus_cad.runtime.isolation import run_isolated; "
               "print('started', flush=True); run_isolated(time.sleep, 120.0, timeout_s=120.0, what='a sleep')")
     parent = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True)
     try:

@@ -1,5 +1,6 @@
-"""The import layers: geometry imports no CAD kernel and nothing above it; the kernel imports no
-pipeline or app; nothing imports the CLI. Read from the sources' import statements, and checked
+"""The import layers: the runtime (the ground floor) imports nothing of the package but the errors and the
+tolerances; geometry imports no CAD kernel and nothing above it; the kernel imports no pipeline or app;
+nothing imports the CLI. Read from the sources' import statements, and checked
 once more in a fresh interpreter for the geometry layer."""
 
 from __future__ import annotations
@@ -54,6 +55,14 @@ def test_geometry_imports_no_kernel_and_nothing_above_it():
     assert _offenders(_sources("geometry"), forbidden) == []
 
 
+def test_the_runtime_imports_only_the_errors_and_the_tolerances():
+    """torus_cad.runtime is the ground floor: files, processes, isolation, signals, extras, progress."""
+    def forbidden(name: str) -> bool:
+        return name.split(".")[0] in KERNEL_PACKAGES or (name.startswith("torus_cad.") and not name.startswith(
+            ("torus_cad.errors", "torus_cad.tolerances", "torus_cad.runtime")))
+    assert _offenders(_sources("runtime"), forbidden) == []
+
+
 def test_the_untrusted_file_reader_imports_only_the_standard_library_and_the_errors():
     """torus_cad.runtime.input_files sits below the geometry layer (it reads coordinate files)."""
     def forbidden(name: str) -> bool:
@@ -65,7 +74,8 @@ def test_the_untrusted_file_reader_imports_only_the_standard_library_and_the_err
 def test_kernel_imports_no_pipeline_or_app():
     def forbidden(name: str) -> bool:
         return name.startswith("torus_cad.") and not name.startswith(
-            ("torus_cad.kernel", "torus_cad.geometry", "torus_cad.errors", "torus_cad.tolerances", "torus_cad.formats"))
+            ("torus_cad.kernel", "torus_cad.geometry", "torus_cad.errors", "torus_cad.tolerances", "torus_cad.formats",
+             "torus_cad.runtime"))
     assert _offenders(_sources("kernel"), forbidden) == []
 
 

@@ -14,7 +14,7 @@ from torus_cad.cli import EXIT_BAD_INPUT, EXIT_OK, main
 from torus_cad.kernel.blade_integrals import hub_with_blade_integrals
 from torus_cad.kernel.checks import is_valid_closed_solid, mass_properties, occt_mass_properties, precise_volume
 from torus_cad.kernel.hub import hub_solid
-from torus_cad.kernel.writers.step import read_step
+from torus_cad.kernel.step_readback import read_step
 from torus_cad.parameters import PropellerParameters
 from torus_cad.propeller import DEFAULT_DENSITY_G_CM3, propeller_objects
 from torus_cad.tolerances import READ_BACK_RELATIVE_TOLERANCE

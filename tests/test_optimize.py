@@ -160,7 +160,7 @@ def test_a_dead_processs_running_trial_is_failed_and_asked_again(tmp_path):
     rdb = open_storage(url)
     study = optuna.create_study(storage=rdb, study_name="x")
     dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
-    from torus_cad.kernel.files import host_tag
+    from torus_cad.runtime.processes import host_tag
 
     alive = study.ask({"a": optuna.distributions.FloatDistribution(0.0, 1.0)})
     alive.set_user_attr("owner", owner_record())

@@ -19,7 +19,6 @@ from pathlib import Path
 import pytest
 
 from torus_cad.errors import IncompleteOutputError, OutputError
-from torus_cad.kernel.files import owner_tag
 from torus_cad.outputs.output_set import (
     FILES_KEY,
     OutputSet,
@@ -27,6 +26,7 @@ from torus_cad.outputs.output_set import (
     set_names,
     verify_set,
 )
+from torus_cad.runtime.files import owner_tag
 
 #: Low resolution and a coarse STL keep each build short; the transaction does not depend on them.
 FAST = ["--set", "resolution.sections=16", "--set", "resolution.points=48",
@@ -51,7 +51,7 @@ def hidden_entries(folder: Path) -> list[str]:
 def step_blade_count(path: Path) -> int:
     """Blades in a STEP file read back by OpenCascade: two B-spline side faces (lower and upper
     surface, a sharp trailing edge) per blade."""
-    from torus_cad.kernel.writers.step import read_step
+    from torus_cad.kernel.step_readback import read_step
 
     side_faces = sum(face.geomType() == "BSPLINE" for face in read_step(path).Faces())
     assert side_faces % 2 == 0
@@ -153,7 +153,7 @@ def test_stale_staging_of_a_dead_process_is_removed_and_a_live_ones_kept(tmp_pat
     (tmp_path / f".part.staging-{owner_tag()}0000beef").mkdir()  # this process: alive
     (tmp_path / ".part.staging-otherhost-1-0000cafe").mkdir()  # another host sharing the folder
     with OutputSet(tmp_path, "part") as output:
-        from torus_cad.kernel.files import atomic_path
+        from torus_cad.runtime.files import atomic_path
 
         with atomic_path(output.stage("step")) as temp:
             temp.write_text("solid")

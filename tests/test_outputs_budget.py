@@ -15,7 +15,7 @@ import pytest
 
 from torus_cad.errors import BudgetError
 from torus_cad.parameters import PropellerParameters
-from torus_cad.runtime.budgets import estimated_stl_triangles
+from torus_cad.parameters.stl_budget import estimated_stl_triangles
 from torus_cad.tolerances import STL_TRIANGLE_LIMIT
 
 

@@ -15,7 +15,7 @@ from OCP.BRepAdaptor import BRepAdaptor_Surface
 from OCP.GeomAbs import GeomAbs_Cylinder
 
 from torus_cad.cli import main
-from torus_cad.kernel.writers.step import read_step
+from torus_cad.kernel.step_readback import read_step
 
 LIGHT = ["--set", "resolution.sections=16", "--set", "resolution.points=48"]
 MOUNT = ["--set", "hub.bore_diameter=5.0", "--set", "hub.bore_flat_depth=0.5", "--set", "hub.set_screw_diameter=3.0"]

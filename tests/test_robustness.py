@@ -94,7 +94,7 @@ def test_cli_gives_files_or_exit_2_never_a_traceback(tmp_path_factory, u):
         assert not out_dir.exists() or not any(out_dir.iterdir())
     else:
         from torus_cad.kernel.checks import is_valid_closed_solid
-        from torus_cad.kernel.writers.step import read_step
+        from torus_cad.kernel.step_readback import read_step
 
         assert is_valid_closed_solid(read_step(out_dir / f"{params.name}.step"))
 
@@ -346,7 +346,7 @@ def test_killed_mid_write_leaves_no_partial_file(tmp_path, kind):
         else:
             assert target.read_text(errors="replace").rstrip().endswith("END-ISO-10303-21;")
     # The next export removes the stale temp file and leaves exactly the final file.
-    from torus_cad.kernel.files import atomic_path
+    from torus_cad.runtime.files import atomic_path
 
     with atomic_path(target) as temp:
         temp.write_text("ok")

@@ -274,7 +274,7 @@ def _collect(requests, tmp_path, kill_after_start=False, timeout_s=240.0, **limi
 
 
 def test_a_newer_build_supersedes_the_older_one(light_params, tmp_path):
-    from torus_cad.kernel.writers.step import read_step
+    from torus_cad.kernel.step_readback import read_step
 
     older = light_params.with_values({"blades": 3}).to_dict()
     newer = light_params.with_values({"blades": 5}).to_dict()

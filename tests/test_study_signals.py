@@ -23,7 +23,7 @@ pytest.importorskip("optuna", reason="the optimize extra is not installed: pip i
 
 from study_attacks import NAME, attack, env, study_file
 
-from torus_cad.kernel.files import host_tag
+from torus_cad.runtime.processes import host_tag
 
 
 def _torus_cad(*args: str, timeout: float = 600) -> subprocess.CompletedProcess[str]:

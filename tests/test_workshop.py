@@ -18,7 +18,7 @@ from torus_cad.geometry.extensions.handedness import Handedness, air_push_z
 from torus_cad.geometry.extensions.mounting import HubMounting
 from torus_cad.geometry.extensions.printability import printability, wall_mm
 from torus_cad.kernel.checks import balance, is_valid_closed_solid, precise_volume
-from torus_cad.kernel.writers.step import read_step
+from torus_cad.kernel.step_readback import read_step
 from torus_cad.parameters import PropellerParameters
 from torus_cad.propeller import build_propeller
 

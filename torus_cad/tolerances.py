@@ -1,4 +1,14 @@
-"""Every numerical tolerance of the package, in one place (lengths in mm)."""
+"""The tolerances, time limits, input limits and option ranges that several modules share or that a user
+meets (lengths in mm).
+
+A constant that belongs to one algorithm stays beside it, at module level with its unit: the geometry
+checks' limits (torus_cad.geometry.extensions.feasibility), the parameters' ranges
+(torus_cad.parameters.design), the STL budget's sampling (torus_cad.parameters.stl_budget), the surface
+mesh's memory budget and crossing check (torus_cad.mesh.resolution, torus_cad.mesh.crossings), the CFD
+domain's sizes and its estimate (torus_cad.cfd.sizes, torus_cad.cfd.estimate), the simulation's levels,
+fluid and layers (torus_cad.simulate.settings), and the optimiser's storage timings
+(torus_cad.optimize.storage). The measurements behind the limits: the docs' measurements page.
+"""
 
 #: Curvature |T'(s)| / |C'(s)| below which the Frenet normal counts as undefined (1/mm).
 FRENET_MIN_CURVATURE = 1e-6
@@ -8,8 +18,8 @@ FRENET_MIN_CURVATURE = 1e-6
 FRAME_SCAN_SAMPLES = 401
 
 #: Fine grid of the arc-length table, both surfaces together (spec §5.2: n_fine, whose default
-#: is 1000). 4000 costs ~15 ms once per airfoil and keeps the spacing within ~1e-4 even for
-#: strongly cambered sections, where 1000 leaves ~2e-3 near the trailing edge.
+#: is 1000); 4000 keeps the spacing even for strongly cambered sections (cost and spacing measured:
+#: the docs' measurements page).
 ARC_LENGTH_FINE_SAMPLES = 4000
 
 #: Absolute tolerance of the adaptive quadrature of |f'(t)| (chord units).
@@ -131,9 +141,7 @@ MOUNTING_CLEARANCE_MM = 0.05
 #: for the root fillet when the trailing edge is round (torus_cad.kernel.wires): the airfoil face is
 #: then open, so the fillet's split of closed side faces does not apply. Fifths (split points at 20,
 #: 40, 60, 80 % of the way from the lower to the upper end, none at the leading edge, near 50 %) fillet
-#: the default with a 0.3 and a 0.8 mm edge at 0.5 and 1 mm; one piece and halves fail all four,
-#: three pieces (split at 1/3 and 2/3, or at 1/4 and 3/4) one, the 0.3 mm edge at 1 mm (in-process
-#: builds of those four, 2026-12-01).
+#: round edges that fewer pieces do not (measured: the docs' measurements page).
 ROUND_EDGE_FILLET_PIECES = 5
 
 #: Seconds the root fillet may take (in its child process) before it counts as failed.
@@ -162,7 +170,7 @@ REDUCED_FILLET_SAMPLES = 40
 
 #: A repaired root fillet (ShapeFix) is accepted only if it adds at most this many r^2 of volume
 #: per mm of junction: a rolling-ball fillet between faces meeting at 30 degrees adds 2.4 r^2,
-#: at 90 degrees 0.21 r^2 (measured repaired fillets: 0.4-0.5 r^2).
+#: at 90 degrees 0.21 r^2 (what repaired fillets add: the docs' measurements page).
 REPAIRED_FILLET_MAX_AREA_RADII2 = 4.0
 
 #: Relative precision of the integration for the balance report (static imbalance, products of
@@ -203,9 +211,8 @@ SIMULATE_CONVERGED_VARIATION = 0.02
 GMSH_REPRODUCIBLE_THREADS = 1
 
 #: Largest CFD mesh ``torus-cad cfd`` starts, in tetrahedra (estimated from the settings before any
-#: meshing, torus_cad.cfd.estimate). The default design's default mesh had 231,405 when this limit was set
-#: (2026-12-01; 215,281 on 2026-12-03), 53 s of CPU, 0.9 GB peak; the process needs about 0.75 GB plus 0.62 kB per tetrahedron (scripts/cfd_budget.py), so
-#: the limit is about 2.6 GB and 13 times the default's work.
+#: meshing, torus_cad.cfd.estimate): about 2.6 GB and 13 times the default design's work (measured:
+#: the docs' measurements page).
 CFD_TETRAHEDRA_LIMIT = 3_000_000
 
 # -- the strict validity check (torus_cad.kernel.strict) ---------------------------------------------
@@ -213,7 +220,8 @@ CFD_TETRAHEDRA_LIMIT = 3_000_000
 #: Two blade copies closer than this (mm) count as interfering (their faces' tolerances are ~1e-7 mm).
 STRICT_BLADE_SEPARATION_MM = 1e-4
 #: Seconds the self-interference test (BRepAlgoAPI_Check, in its child process) may take before the
-#: build is refused: the shipped examples take seconds; a filleted fuzz design kept it busy for over 30 min.
+#: build is refused: the shipped examples take seconds (a fuzz design that took far longer: the docs'
+#: measurements page).
 STRICT_CHECK_TIME_LIMIT_S = 300.0
 #: Longest wait (s) for the B-rep that ``torus-cad mesh`` compares its mesh with (built in a child
 #: beside the mesh): a build, its strict check (STRICT_CHECK_TIME_LIMIT_S) included, and one tessellation.
@@ -225,12 +233,12 @@ SECTIONS_TABLE_TIME_LIMIT_S = 120.0
 STRICT_AXIS_TOLERANCE = 1e-9
 
 #: Largest distance (mm) of an STL or 3MF tessellation from its mesh repaired free of crossing
-#: triangles by meshlib (torus_cad.kernel.uncrossed); a repair that moves it further is refused.
-#: Measured: 0.26 mm at the knife edge of fuzz seed 7 (Relax), under a 0.4 mm nozzle's line.
+#: triangles by meshlib (torus_cad.kernel.uncrossed); a repair that moves it further is refused
+#: (under a 0.4 mm nozzle's line; what repairs moved: the docs' measurements page).
 MESH_REPAIR_MAX_DEVIATION_MM = 0.5
 #: A repair that would move the tessellation further is tried again on a finer one: the linear
-#: deflection halved, at most this many times (a user's coarse 0.5 mm deflection on the light test
-#: design crossed in 36 pairs that the repair could only mend by moving it 0.84 mm).
+#: deflection halved, at most this many times (a user's coarse deflection crosses far: the docs'
+#: measurements page).
 MESH_REFINE_HALVINGS = 3
 #: meshlib's SelfIntersections.fix passes tried in turn on a crossing tessellation, each on the last
 #: one's result, until no triangle crosses.
@@ -267,8 +275,8 @@ CONVENTIONAL_TIP_CLUSTERING = 0.6
 # -- shown in its --help; a value outside is refused with one line, exit 2, before any folder is made --------
 
 #: ``cfd --threads``: gmsh threads, at most this many per CPU the process may use and never more than
-#: CFD_THREADS_LIMIT. libgomp sets up every thread's state at once: ``--threads 1000000000`` asked for
-#: 224 GB and ``--threads 100000`` crashed (SIGSEGV); gmsh's meshing gains nothing past one thread per CPU.
+#: CFD_THREADS_LIMIT. libgomp sets up every thread's state at once (what huge counts did: the docs'
+#: measurements page); gmsh's meshing gains nothing past one thread per CPU.
 CFD_THREADS_PER_CPU = 4
 CFD_THREADS_LIMIT = 256
 

@@ -140,7 +140,7 @@ def verify_files(paths: Mapping[str, Path]) -> str:
     no temporary file left beside them.
     """
     from torus_cad.kernel.checks import is_valid_closed_solid
-    from torus_cad.kernel.writers.step import read_step
+    from torus_cad.kernel.step_readback import read_step
 
     for kind, path in paths.items():
         if not path.is_file() or path.stat().st_size == 0:
@@ -177,7 +177,7 @@ def record_result(task: DesignTask, result: DesignResult) -> DesignResult:
     Called in the worker after a design ran, and in the parent for outcomes only it sees
     (a time-out, a crashed worker).
     """
-    from torus_cad.kernel.files import atomic_path
+    from torus_cad.runtime.files import atomic_path
 
     assert task.folder is not None
     folder = Path(task.folder)

@@ -42,6 +42,7 @@ from typing import Any, Protocol
 from torus_cad.batch.job import DesignTask, record_result, run_design
 from torus_cad.batch.outcome import DesignResult, Outcome
 from torus_cad.errors import TorusCadError
+from torus_cad.runtime.processes import process_identity
 
 __all__ = ["BatchError", "Executor", "Interrupted", "Job", "LocalPool", "available_cores", "capped_workers",
            "default_workers", "interrupts_raised", "raise_if_interrupted", "run_tasks"]
@@ -130,7 +131,7 @@ def _worker_started(batch_pid: int) -> None:
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     with contextlib.suppress(OSError, AttributeError):  # not Linux: the watchdog below still works
         ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0)
-    threading.Thread(target=_watch_parents, args=(os.getppid(), batch_pid, _identity(batch_pid)),
+    threading.Thread(target=_watch_parents, args=(os.getppid(), batch_pid, process_identity(batch_pid)),
                      name="torus-cad parent watchdog", daemon=True).start()
 
 
@@ -138,27 +139,8 @@ def _watch_parents(worker_parent: int, batch_pid: int, batch_identity: str | Non
     """SIGKILL this worker once its parent changed or the batch's process is no longer the one it was."""
     while True:
         time.sleep(_WATCHDOG_SECONDS)
-        if os.getppid() != worker_parent or _identity(batch_pid) != batch_identity:
+        if os.getppid() != worker_parent or process_identity(batch_pid) != batch_identity:
             os.kill(os.getpid(), signal.SIGKILL)
-
-
-def _identity(pid: int) -> str | None:
-    """What tells a live process from a successor with its pid: its start time (psutil).
-
-    None when the process is gone or a zombie (killed, not yet reaped); '' for a process this
-    user may not inspect.
-    """
-    import psutil
-
-    try:
-        process = psutil.Process(pid)
-        if process.status() == psutil.STATUS_ZOMBIE:
-            return None
-        return repr(process.create_time())
-    except psutil.NoSuchProcess:  # ZombieProcess included
-        return None
-    except psutil.AccessDenied:
-        return ""
 
 
 class LocalPool:

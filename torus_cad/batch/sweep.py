@@ -288,7 +288,7 @@ def _is_done(out_dir: Path, design: Design, stl: bool) -> bool:
 def _write_manifest(spec: SweepSpec, designs: Sequence[Design], out_dir: Path, stl: bool,
                     density_g_cm3: float | None) -> None:
     """``sweep.json``: the sweep's settings and every design's id and varied values (strict JSON: no NaN)."""
-    from torus_cad.kernel.files import atomic_path
+    from torus_cad.runtime.files import atomic_path
 
     manifest = {
         "name": spec.name, "source": spec.source, "mode": spec.mode.value, "samples": spec.samples,

@@ -91,7 +91,7 @@ def _fill_recorded(row: dict[str, Any], outcome: Outcome, record: Mapping[str, A
 def write_table(rows: Sequence[Mapping[str, Any]], out_dir: str | Path,
                 columns: Sequence[str] | None = None) -> dict[str, Path]:
     """Write ``results.csv`` (and ``results.parquet`` when pyarrow is installed) atomically; paths by format."""
-    from torus_cad.kernel.files import atomic_path
+    from torus_cad.runtime.files import atomic_path
 
     out_dir = Path(out_dir)
     columns = list(columns if columns is not None else (rows[0].keys() if rows else []))

@@ -37,7 +37,6 @@ import numpy as np
 
 from torus_cad.cfd.estimate import CfdEstimate, check_cfd_budget
 from torus_cad.cfd.readme import readme_text
-from torus_cad.cfd.settings import MissingExtraError
 from torus_cad.cfd.sizes import (
     CYLINDER_SEGMENTS,
     MIN_SIZE_FRACTION,
@@ -47,11 +46,12 @@ from torus_cad.cfd.sizes import (
     domain_from_sizes,
     trailing_edges,
 )
-from torus_cad.errors import KernelError, ParameterError
+from torus_cad.errors import KernelError, MissingExtraError, ParameterError
 from torus_cad.formats import StepSchema
 from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.design import Cfd
 from torus_cad.runtime.cpus import max_cfd_threads
+from torus_cad.runtime.files import file_ends_with, write_failure
 from torus_cad.runtime.stages import StageTimer
 from torus_cad.tolerances import GMSH_REPRODUCIBLE_THREADS
 
@@ -377,41 +377,13 @@ def write_msh(gmsh: Any, path: Path, version: float) -> Path:
         gmsh.write(str(path))
     except Exception as error:  # gmsh raises plain Exception with its last error message
         raise OSError(errno.EIO, f"gmsh could not write it ({error})", str(path)) from None
-    if not _ends_with(path, MSH_LAST_LINE):
-        raise _write_failure(path)
+    if not file_ends_with(path, MSH_LAST_LINE, tail=64):
+        raise write_failure(path)
     return path
 
 
 #: The last line of an ASCII .msh file (2.2 and 4.1).
 MSH_LAST_LINE = b"$EndElements"
-
-
-def _ends_with(path: Path, line: bytes) -> bool:
-    try:
-        with open(path, "rb") as handle:
-            handle.seek(0, os.SEEK_END)
-            handle.seek(max(0, handle.tell() - 64))
-            return handle.read().rstrip().endswith(line)
-    except OSError:
-        return False
-
-
-def _write_failure(path: Path) -> OSError:
-    """Why a file gmsh wrote is short: no space left, the file size limit, or an input/output error."""
-    import resource
-
-    from torus_cad.tolerances import DISK_FULL_FREE_BYTES
-
-    size = path.stat().st_size if path.exists() else 0
-    limit = resource.getrlimit(resource.RLIMIT_FSIZE)[0]
-    folder = os.statvfs(path.parent)
-    if limit != resource.RLIM_INFINITY and size >= limit:
-        code = errno.EFBIG
-    elif folder.f_bavail * folder.f_frsize < DISK_FULL_FREE_BYTES:
-        code = errno.ENOSPC
-    else:
-        code = errno.EIO
-    return OSError(code, os.strerror(code), str(path))
 
 
 @dataclass(frozen=True)
@@ -457,7 +429,7 @@ def write_cfd_domain(params: PropellerParameters, out_dir: str | Path, threads: 
     ParameterError / GeometryError for bad input (nothing written), KernelError naming the step when
     OpenCascade or gmsh fails, OutputError naming the file when it cannot be written.
     """
-    from torus_cad.cfd.surface_check import import_meshlib
+    from torus_cad.kernel.mesh_check import import_meshlib
 
     import_gmsh()
     import_meshlib()

@@ -129,7 +129,7 @@ def step_name(path: str | Path) -> str:
 def read_step_solid(path: str | Path) -> Any:
     """The one valid solid of the STEP file ``path`` (a cadquery Solid), or ParameterError naming the path."""
     from torus_cad.kernel.checks import single_valid_solid
-    from torus_cad.kernel.writers.step import read_step
+    from torus_cad.kernel.step_readback import read_step
 
     source = str(path)
     raw = read_untrusted_bytes(path, _WHAT, STEP_FILE_MAX_BYTES)

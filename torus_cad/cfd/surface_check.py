@@ -3,7 +3,8 @@
 gmsh's 3D Delaunay mesher stops with "PLC Error: A segment and a facet intersect" when the
 surface mesh crosses itself. A coarse mesh does that where the propeller is thinner than its
 triangles' sag, e.g. at a knife trailing edge that is a crease inside one B-rep face. The
-surface mesh is read from gmsh and checked with meshlib's ``findSelfCollidingTriangles`` (a
+surface mesh is read from gmsh and checked by the package's one crossing check
+(torus_cad.kernel.mesh_check.crossing_pairs, meshlib's ``findSelfCollidingTriangles``: a
 bounding-volume tree; tens of milliseconds for tens of thousands of triangles).
 """
 
@@ -14,17 +15,7 @@ from typing import Any
 
 import numpy as np
 
-
-def import_meshlib() -> Any:
-    """meshlib's mesh module, or MissingExtraError naming the install command."""
-    from torus_cad.errors import MissingExtraError
-    from torus_cad.runtime.extras import install_line
-
-    try:
-        import meshlib.mrmeshpy as mr
-    except ImportError:  # meshlib is a dependency of the package itself
-        raise MissingExtraError(f"meshlib is not installed: {install_line()}") from None
-    return mr
+from torus_cad.kernel.mesh_check import crossing_pairs
 
 
 @dataclass(frozen=True)
@@ -63,14 +54,8 @@ def surface_triangles(gmsh: Any, surfaces: list[int]) -> tuple[np.ndarray, np.nd
 
 def find_crossings(gmsh: Any, surfaces: list[int]) -> Crossings:
     """The triangles of ``surfaces`` (their current gmsh mesh) that cross another one of them."""
-    from meshlib import mrmeshnumpy
-
-    mr = import_meshlib()
     points, triangles, owners = surface_triangles(gmsh, surfaces)
-    mesh = mrmeshnumpy.meshFromFacesVerts(np.ascontiguousarray(triangles, dtype=np.int32),
-                                          np.ascontiguousarray(points, dtype=np.float64))
-    pairs = mr.findSelfCollidingTriangles(mesh)
-    crossing = np.unique([face.get() for pair in pairs for face in (pair.aFace, pair.bFace)]).astype(np.int64)
+    crossing = np.unique(crossing_pairs(points, triangles)).astype(np.int64)
     corners = points[triangles[crossing]]  # (k, 3 corners, 3)
     edges = np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2).max(axis=1) if len(crossing) else np.zeros(0)
     return Crossings(corners.mean(axis=1).reshape(-1, 3), edges,

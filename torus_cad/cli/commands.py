@@ -82,7 +82,7 @@ def command_build(args: argparse.Namespace) -> int:
     progress = StageProgress.for_terminal(quiet=args.quiet)  # stderr, only on a terminal
     progress(Stage.KERNEL_IMPORT)  # a line on the terminal before the seconds of importing the schema and cadquery
     from torus_cad.outputs.output_set import check_writable_folder, write_output_set
-    from torus_cad.runtime.budgets import check_stl_budget
+    from torus_cad.parameters.stl_budget import check_stl_budget
 
     params = load_parameters(args.config, args.overrides + _format_overrides(args.formats))
     size = _preview_size(args.preview_size, "--preview-size") if args.preview else None
@@ -331,7 +331,7 @@ def _batch_members(folder: Path) -> list[Path] | None:
     (``designs/<id>/``); None for any other folder."""
     from torus_cad.batch.table import DESIGNS_DIR
 
-    for members in ("trials", DESIGNS_DIR):  # torus_cad.optimize.study.TRIALS_DIR (optuna is not needed here)
+    for members in ("trials", DESIGNS_DIR):  # torus_cad.optimize.trial_job.TRIALS_DIR (optuna is not needed here)
         if (folder / members).is_dir():
             return sorted(path for path in (folder / members).iterdir() if path.is_dir() and not path.is_symlink())
     return None
@@ -407,8 +407,8 @@ def command_cfd(args: argparse.Namespace) -> int:
     progress = StageProgress.for_terminal(quiet=args.quiet)
     from torus_cad.cfd.domain import gmsh_library, import_gmsh, summary_line, write_cfd_domain
     from torus_cad.cfd.estimate import check_cfd_budget
-    from torus_cad.cfd.surface_check import import_meshlib
     from torus_cad.cfd.worker import run_in_worker
+    from torus_cad.kernel.mesh_check import import_meshlib
     from torus_cad.outputs.output_set import check_writable_folder
 
     gmsh = import_gmsh()  # MissingExtraError (exit 2) when gmsh's library does not load

@@ -746,17 +746,3 @@ def _derivative_poles(poles: NDArray[np.float64], knots: NDArray[np.float64], de
     scale = degree / (knots[degree + 1:count + degree] - knots[1:count])
     derivative = (moved[1:] - moved[:-1]) * scale.reshape(-1, *([1] * (moved.ndim - 1)))
     return np.moveaxis(derivative, 0, axis), knots[1:-1], degree - 1
-
-
-def _gauss_on_spans(knots: NDArray[np.float64], degree: int, points: int
-                    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Gauss-Legendre nodes and weights, ``points`` per nonzero knot span."""
-    spans = np.unique(knots[degree:-degree])
-    x, w = np.polynomial.legendre.leggauss(points)
-    low, length = spans[:-1], np.diff(spans)
-    return (low[:, None] + length[:, None] * (x + 1.0) / 2.0).ravel(), (length[:, None] * w / 2.0).ravel()
-
-
-
-
-

@@ -1,5 +1,5 @@
 """One root fillet on given junction edges: BRepFilletAPI_MakeFillet, the repair of a flawed result,
-and the forked child (torus_cad.kernel.isolation) it runs in, since OpenCascade's fillet can crash
+and the forked child (torus_cad.runtime.isolation) it runs in, since OpenCascade's fillet can crash
 the process or hang on some inputs; the result comes back as a BRep string.
 
 OpenCascade sometimes builds the fillet, reports success and leaves a solid BRepCheck rejects;
@@ -27,7 +27,7 @@ from OCP.TopoDS import TopoDS_Edge, TopoDS_Shape
 from torus_cad.errors import KernelError
 from torus_cad.kernel import face_provenance
 from torus_cad.kernel.checks import precise_volume, single_valid_solid
-from torus_cad.kernel.isolation import IsolatedCrash, IsolatedTimeout, run_isolated
+from torus_cad.runtime.isolation import IsolatedCrash, IsolatedTimeout, run_isolated
 from torus_cad.tolerances import (
     FILLET_TIME_LIMIT_S,
     REPAIRED_FILLET_MAX_AREA_RADII2,
@@ -115,7 +115,7 @@ def fillet_in_child(solid: cq.Solid, edges: list[TopoDS_Edge], radius_mm: float,
                     params: FilletParams | None = None, deadline: float | None = None,
                     edge_radii: Sequence[float] | None = None, face_parts: Sequence[int] | None = None
                     ) -> Filleted | None:
-    """:func:`fillet_edges` in a forked child (torus_cad.kernel.isolation): a crash or a hang there is
+    """:func:`fillet_edges` in a forked child (torus_cad.runtime.isolation): a crash or a hang there is
     a failed fillet, not a dead process. The child sends the solid as a BRep string, with its face parts.
 
     The child gets FILLET_TIME_LIMIT_S, or what is left until ``deadline`` (time.monotonic()) if less."""

@@ -28,7 +28,7 @@ from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt, gp_Trsf, gp_Vec2d
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_WIRE
 from OCP.TopExp import TopExp
 from OCP.TopLoc import TopLoc_Location
-from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Shape, TopoDS_Shell, TopoDS_Solid, TopoDS_Wire
+from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Shape, TopoDS_Solid, TopoDS_Wire
 from OCP.TopTools import TopTools_IndexedMapOfShape
 
 from torus_cad.errors import KernelError
@@ -47,7 +47,7 @@ from torus_cad.kernel.fillet import (
 )
 from torus_cad.kernel.fillet_edges import FilletParams
 from torus_cad.kernel.fillet_tight_bends import reduced_edge_radii
-from torus_cad.kernel.fuse import fuse_pattern, pattern_blades
+from torus_cad.kernel.fuse import fuse_pattern, pattern_blades, solid_of_faces
 from torus_cad.kernel.topology import BLADE_SURFACES, boolean, explore, faces, result
 from torus_cad.tolerances import (
     FILLET_RETRY_TIME_LIMIT_S,
@@ -245,31 +245,20 @@ def _assemble_filleted(filleted: TopoDS_Shape, angles_deg: Sequence[float]) -> t
     for wire in inner_wires:
         if not any(wire.IsSame(hole) for hole in blade_holes):
             lateral_with_holes.Add(wire)
-    builder, shell = BRep_Builder(), TopoDS_Shell()
-    builder.MakeShell(shell)
     origins: Origins = []
     for index, angle in enumerate(angles_deg):
         location = _shift_hole_curves(blade_holes, lateral, math.radians(angle - angles_deg[0]))
         for wire in blade_holes:
             lateral_with_holes.Add(TopoDS.Wire_s(wire.Moved(location)))
-        for face in blade_faces:
-            moved = face.Moved(location)
-            builder.Add(shell, moved)
-            origins.append((moved, index))
+        origins.extend((face.Moved(location), index) for face in blade_faces)
     if not lateral_with_holes.IsDone():
         raise KernelError("OpenCascade could not cut the filleted blade roots out of the hub's lateral face")
     new_lateral = lateral_with_holes.Face()
     new_lateral.Orientation(lateral.Orientation())
     hub_faces = [new_lateral, *(face for face in faces
                                 if not face.IsSame(lateral) and BRepAdaptor_Surface(face).GetType() not in BLADE_SURFACES)]
-    for face in hub_faces:
-        builder.Add(shell, face)
-        origins.append((face, HUB_PART))
-    shell.Closed(BRep_Tool.IsClosed_s(shell))
-    solid = TopoDS_Solid()
-    builder.MakeSolid(solid)
-    builder.Add(solid, shell)
-    return solid, origins
+    origins.extend((face, HUB_PART) for face in hub_faces)
+    return solid_of_faces(origins), origins
 
 
 def _shift_hole_curves(holes: Sequence[TopoDS_Wire], lateral: TopoDS_Face, angle_rad: float) -> TopLoc_Location:

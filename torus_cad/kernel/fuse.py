@@ -154,9 +154,6 @@ def _assemble(hub: cq.Solid, lateral: TopoDS_Face, copies: Sequence[TopoDS_Shape
     for wire in explore(lateral, TopAbs_WIRE):  # holes the hub already has (a set-screw hole)
         if not wire.IsSame(outer_wire):
             lateral_with_holes.Add(TopoDS.Wire_s(wire))
-    builder = BRep_Builder()
-    shell = TopoDS_Shell()
-    builder.MakeShell(shell)
     origins: Origins = []
     for index, copy in enumerate(copies):
         for face in faces(copy):
@@ -164,19 +161,27 @@ def _assemble(hub: cq.Solid, lateral: TopoDS_Face, copies: Sequence[TopoDS_Shape
                 for wire in explore(face, TopAbs_WIRE):
                     lateral_with_holes.Add(TopoDS.Wire_s(wire))
             else:
-                builder.Add(shell, face)
                 origins.append((face, index))
     if not lateral_with_holes.IsDone():
         raise KernelError("OpenCascade could not cut the blade roots out of the hub's lateral face")
     hub_faces = [lateral_with_holes.Face(), *(face for face in faces(hub.wrapped) if not face.IsSame(lateral))]
-    for face in hub_faces:
+    origins.extend((face, HUB_PART) for face in hub_faces)
+    return solid_of_faces(origins), origins
+
+
+def solid_of_faces(origins: Origins) -> TopoDS_Solid:
+    """The solid bounded by one shell of the faces of ``origins`` (each face with its part), in that order,
+    sewn by their shared edges (no boolean): the assembled routes' last step."""
+    builder = BRep_Builder()
+    shell = TopoDS_Shell()
+    builder.MakeShell(shell)
+    for face, _ in origins:
         builder.Add(shell, face)
-        origins.append((face, HUB_PART))
     shell.Closed(BRep_Tool.IsClosed_s(shell))
     solid = TopoDS_Solid()
     builder.MakeSolid(solid)
     builder.Add(solid, shell)
-    return solid, origins
+    return solid
 
 
 def _glue(hub: cq.Solid, copies: Sequence[TopoDS_Shape], expected_faces: int

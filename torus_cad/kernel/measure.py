@@ -76,16 +76,6 @@ def edge_points(edges: list[cq.Edge], per_edge: int = 2000) -> NDArray[np.float6
     return np.array(points)
 
 
-def farthest_pair(points: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """The two points of ``(n, 3)`` farthest apart (the chord of a thin symmetric section)."""
-    from scipy.spatial import ConvexHull
-
-    hull = points[ConvexHull(points, qhull_options="QJ").vertices]
-    distance = np.linalg.norm(hull[:, None] - hull[None, :], axis=-1)
-    i, j = np.unravel_index(int(np.argmax(distance)), distance.shape)
-    return hull[i], hull[j]
-
-
 def contour_through(edges: list[cq.Edge], point: ArrayLike, tolerance: float = 1e-3) -> list[cq.Edge]:
     """The edges of the closed contour (wire) among ``edges`` that passes nearest ``point``."""
     wires = cq.Wire.combine(edges, tol=tolerance)

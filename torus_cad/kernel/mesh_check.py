@@ -1,4 +1,8 @@
-"""The check of a written mesh: its triangle pairs that intersect, by meshlib.
+"""The one crossing check of the package: the triangle pairs of a mesh that intersect, by meshlib's
+``findSelfCollidingTriangles`` (:func:`crossing_pairs`; its meshes hold single-precision coordinates,
+the precision of a binary STL). Triangles that only share an edge or a vertex do not count. The
+tessellation's repair (torus_cad.kernel.uncrossed), the surface mesh of ``torus-cad mesh``
+(torus_cad.mesh.crossings) and the CFD domain's surface (torus_cad.cfd.surface_check) all use it.
 
 Every mesh the build writes (STL, 3MF) is the uncrossed tessellation
 (torus_cad.kernel.uncrossed: OpenCascade's, any crossing triangles repaired by meshlib),
@@ -50,20 +54,51 @@ class MeshCheck:
                 "checker": "meshlib findSelfCollidingTriangles"}
 
 
-def intersecting_pairs(vertices: NDArray[np.float64], triangles: NDArray[np.int64]) -> int:
-    """Triangle pairs of a mesh (``(v, 3)`` mm, ``(t, 3)`` indices) that cross each other, by meshlib."""
-    import meshlib.mrmeshnumpy as mrn
-    import meshlib.mrmeshpy as mr
+def import_meshlib() -> Any:
+    """meshlib's mesh module, or MissingExtraError naming the install command."""
+    from torus_cad.errors import MissingExtraError
+    from torus_cad.runtime.extras import install_line
 
-    mesh = mrn.meshFromFacesVerts(np.ascontiguousarray(triangles, dtype=np.int32),
-                                  np.ascontiguousarray(vertices, dtype=np.float32))
-    return len(mr.findSelfCollidingTriangles(mesh))
+    try:
+        import meshlib.mrmeshpy as mr
+    except ImportError:  # meshlib is a dependency of the package itself
+        raise MissingExtraError(f"meshlib is not installed: {install_line()}") from None
+    return mr
+
+
+def meshlib_mesh(vertices: NDArray[np.float64], triangles: NDArray[np.int64]) -> Any:
+    """meshlib's mesh of ``(t, 3)`` ``triangles`` over ``(v, 3)`` ``vertices`` (mm; meshlib stores them in
+    single precision)."""
+    import meshlib.mrmeshnumpy as mrn
+
+    import_meshlib()
+    return mrn.meshFromFacesVerts(np.ascontiguousarray(triangles, dtype=np.int32),
+                                  np.ascontiguousarray(vertices, dtype=np.float64))
+
+
+def crossing_pairs(vertices: NDArray[np.float64], triangles: NDArray[np.int64],
+                   region: NDArray[np.bool_] | None = None) -> NDArray[np.int64]:
+    """``(p, 2)`` indices of the triangle pairs that cross among the ``(t, 3)`` ``triangles`` over ``(v, 3)``
+    ``vertices`` (mm), or among the triangles where ``region`` ``(t,)`` is True (indices into ``triangles``)."""
+    mr = import_meshlib()
+    chosen = np.arange(len(triangles)) if region is None else np.flatnonzero(region)
+    if region is not None:  # a mesh of the region alone: meshlib's tree would cover the whole mesh
+        used = np.unique(triangles[chosen])
+        vertices, triangles = vertices[used], np.searchsorted(used, triangles[chosen])
+    mesh = meshlib_mesh(vertices, triangles)
+    pairs = np.array([(pair.aFace.get(), pair.bFace.get()) for pair in mr.findSelfCollidingTriangles(mesh)],
+                     dtype=np.int64).reshape(-1, 2)
+    return chosen[pairs]
+
+
+def intersecting_pairs(vertices: NDArray[np.float64], triangles: NDArray[np.int64]) -> int:
+    """How many triangle pairs of a mesh (``(v, 3)`` mm, ``(t, 3)`` indices) cross each other."""
+    return len(crossing_pairs(vertices, triangles))
 
 
 def intersecting_pairs_in_file(path: str | Path) -> tuple[int, int]:
     """(crossing triangle pairs, triangles) of a binary STL file, read and checked by meshlib."""
-    import meshlib.mrmeshpy as mr
-
+    mr = import_meshlib()
     mesh = mr.MeshLoad.fromBinaryStl(str(path))  # by its content: a staged file's name has no .stl suffix
     return len(mr.findSelfCollidingTriangles(mesh)), int(mesh.topology.numValidFaces())
 

@@ -20,14 +20,20 @@ import time
 from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from OCP.BOPAlgo import BOPAlgo_ArgumentAnalyzer
 from OCP.BRep import BRep_Tool
 from OCP.BRepAdaptor import BRepAdaptor_Surface
+from OCP.IFSelect import IFSelect_RetDone
+from OCP.STEPControl import STEPControl_Reader
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE
 from OCP.TopoDS import TopoDS, TopoDS_Shape
 
 from torus_cad.errors import KernelError
+
+if TYPE_CHECKING:
+    import cadquery as cq
 
 #: Every test of BOPAlgo_ArgumentAnalyzer, as FreeCAD's check with BOP turns them on.
 ANALYZER_TESTS = ("ArgumentTypeMode", "SelfInterMode", "SmallEdgeMode", "RebuildFaceMode", "TangentMode",
@@ -55,6 +61,18 @@ class ArgumentFaults:
         return sum(self.counts.values())
 
 
+def read_step(path: str | Path) -> cq.Shape:
+    """Read a STEP file back as one shape (OpenCascade's STEP reader, default settings); raise
+    KernelError if it does not read."""
+    import cadquery as cq
+
+    reader = STEPControl_Reader()
+    if reader.ReadFile(str(path)) != IFSelect_RetDone:
+        raise KernelError(f"cannot read STEP file {str(path)!r}")
+    reader.TransferRoots()
+    return cq.Shape.cast(reader.OneShape())
+
+
 def argument_faults(shape: TopoDS_Shape, self_interference: bool = True) -> ArgumentFaults:
     """BOPAlgo_ArgumentAnalyzer with every test of :data:`ANALYZER_TESTS` on ``shape`` (single-threaded);
     without the self-interference test if ``self_interference`` is False (see :func:`check_step_readback`)."""
@@ -73,8 +91,6 @@ def argument_faults(shape: TopoDS_Shape, self_interference: bool = True) -> Argu
 
 def step_readback_faults(path: str | Path, self_interference: bool = True) -> ArgumentFaults:
     """:func:`argument_faults` of the shape OpenCascade's STEP reader (default settings) makes of ``path``."""
-    from torus_cad.kernel.writers.step import read_step
-
     return argument_faults(read_step(path).wrapped, self_interference)
 
 

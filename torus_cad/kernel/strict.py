@@ -43,7 +43,7 @@ from OCP.TopTools import TopTools_IndexedMapOfShape
 
 from torus_cad.errors import KernelError
 from torus_cad.kernel.checks import single_valid_solid
-from torus_cad.kernel.isolation import IsolatedTimeout, run_isolated
+from torus_cad.runtime.isolation import IsolatedTimeout, run_isolated
 from torus_cad.tolerances import STRICT_AXIS_TOLERANCE, STRICT_BLADE_SEPARATION_MM, STRICT_CHECK_TIME_LIMIT_S
 
 

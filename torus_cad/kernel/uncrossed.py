@@ -23,7 +23,6 @@ A mesh that cannot be repaired within that is a KernelError naming the face and 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
 
 import cadquery as cq
 import numpy as np
@@ -33,6 +32,7 @@ from OCP.TopoDS import TopoDS_Face
 from scipy.spatial import cKDTree
 
 from torus_cad.errors import KernelError
+from torus_cad.kernel.mesh_check import crossing_pairs, meshlib_mesh
 from torus_cad.kernel.tessellation import face_triangulation
 from torus_cad.tolerances import (
     MESH_MERGE_DISTANCE_MM,
@@ -65,17 +65,6 @@ class UncrossedMesh:
     repaired_pairs: int = 0
     repair: str = ""
     repair_deviation_mm: float = 0.0
-
-
-def crossing_pairs(vertices: NDArray[np.float64], triangles: NDArray[np.int64]) -> NDArray[np.int64]:
-    """``(p, 2)`` indices of the triangle pairs that cross, by meshlib on single-precision coordinates."""
-    import meshlib.mrmeshnumpy as mrn
-    import meshlib.mrmeshpy as mr
-
-    mesh = mrn.meshFromFacesVerts(np.ascontiguousarray(triangles, dtype=np.int32),
-                                  np.ascontiguousarray(vertices, dtype=np.float32))
-    pairs = mr.findSelfCollidingTriangles(mesh)
-    return np.array([(pair.aFace.get(), pair.bFace.get()) for pair in pairs], dtype=np.int64).reshape(-1, 2)
 
 
 def uncrossed_mesh(shape: cq.Shape, linear_deflection: float, angular_deflection: float) -> UncrossedMesh:
@@ -138,11 +127,7 @@ def _repaired(points: NDArray[np.float64], triangles: NDArray[np.int64]
     import meshlib.mrmeshnumpy as mrn
     import meshlib.mrmeshpy as mr
 
-    def to_mesh() -> Any:
-        return mrn.meshFromFacesVerts(np.ascontiguousarray(triangles, dtype=np.int32),
-                                      np.ascontiguousarray(points, dtype=np.float32))
-
-    original, mesh = to_mesh(), to_mesh()
+    original, mesh = meshlib_mesh(points, triangles), meshlib_mesh(points, triangles)
     passes: list[str] = []
     for method in MESH_REPAIR_PASSES:
         settings = mr.SelfIntersections.Settings()
@@ -163,11 +148,7 @@ def _repaired(points: NDArray[np.float64], triangles: NDArray[np.int64]
 
 def _holes(points: NDArray[np.float64], triangles: NDArray[np.int64]) -> int:
     """How many holes (boundary loops) the mesh has, by meshlib."""
-    import meshlib.mrmeshnumpy as mrn
-
-    mesh = mrn.meshFromFacesVerts(np.ascontiguousarray(triangles, dtype=np.int32),
-                                  np.ascontiguousarray(points, dtype=np.float32))
-    return int(mesh.topology.findNumHoles())
+    return int(meshlib_mesh(points, triangles).topology.findNumHoles())
 
 
 def _merged_tessellation(faces: list[TopoDS_Face]

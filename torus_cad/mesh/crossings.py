@@ -1,12 +1,11 @@
-"""Intersecting triangle pairs, found by meshlib (``findSelfCollidingTriangles``), and the resolutions that have none.
+"""Intersecting triangle pairs of the surface mesh, and where they are looked for.
 
-meshlib works in float32, the precision of a binary STL: the check is of the mesh as the STL
-stores it. Triangles that only share an edge or a vertex do not count (``touchIsIntersection``
-off).
+The check is the package's one crossing check (torus_cad.kernel.mesh_check.crossing_pairs, meshlib's
+``findSelfCollidingTriangles`` on single-precision coordinates, the precision of a binary STL: the
+check is of the mesh as the STL stores it). Triangles that only share an edge or a vertex do not count.
 
-Checking every triangle costs about 10 us each on this project's 2-core machine (meshlib's mesh
-and tree included; see README, 'Meshes for simulation'). Meshes up to
-:data:`torus_cad.runtime.budgets.MESH_WHOLE_CROSSING_CHECK_TRIANGLES` are checked whole. Larger ones
+Checking every triangle costs time in proportion (the docs' measurements page). Meshes up to
+:data:`MESH_WHOLE_CROSSING_CHECK_TRIANGLES` are checked whole. Larger ones
 are checked where a structured mesh of the blade can cross itself: everywhere on the hub and
 at the junctions (where the union and the cleanup made new triangles), and on blade 0 in bands
 along the leading and trailing edges, the only places where the blade is thinner than its cells
@@ -23,6 +22,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from torus_cad.geometry.mesh import TriangleMesh
+from torus_cad.kernel.mesh_check import crossing_pairs as mesh_crossing_pairs
+
+#: Surface meshes (``torus-cad mesh``) up to this many triangles are checked whole for intersecting
+#: triangle pairs; larger ones where a structured mesh can cross (the cost per triangle:
+#: docs/explanation/measurements.md).
+MESH_WHOLE_CROSSING_CHECK_TRIANGLES = 1_500_000
 
 #: Columns on each side of the leading and trailing edges (and the whole base of a blunt edge)
 #: that the partial check covers, as a fraction of the points around a section (at least 8).
@@ -46,18 +51,9 @@ class CrossingCheck:
 
 def crossing_pairs(vertices: NDArray[np.float64], faces: NDArray[np.int64],
                    region: NDArray[np.bool_] | None = None) -> int:
-    """Intersecting pairs among the ``(f, 3)`` faces over ``(v, 3)`` vertices (mm), or among the faces
-    where ``region`` ``(f,)`` is True."""
-    import meshlib.mrmeshnumpy as mn
-    import meshlib.mrmeshpy as mr
-
-    if region is not None:  # a mesh of the region alone: meshlib's tree would cover the whole mesh
-        faces = faces[region]
-        used = np.unique(faces)
-        vertices, faces = vertices[used], np.searchsorted(used, faces)
-    mesh = mn.meshFromFacesVerts(np.ascontiguousarray(faces, dtype=np.int32),
-                                 np.ascontiguousarray(vertices, dtype=np.float32))
-    return len(mr.findSelfCollidingTriangles(mr.MeshPart(mesh)))
+    """How many intersecting pairs among the ``(f, 3)`` faces over ``(v, 3)`` vertices (mm), or among the
+    faces where ``region`` ``(f,)`` is True (torus_cad.kernel.mesh_check.crossing_pairs)."""
+    return len(mesh_crossing_pairs(vertices, faces, region))
 
 
 def edge_band_faces(sections: int, count: int, trailing_edge: int, lower_corner: int | None) -> NDArray[np.bool_]:

@@ -27,11 +27,10 @@ from torus_cad.geometry.extensions.mounting import HubMounting
 from torus_cad.geometry.mesh import TriangleMesh
 from torus_cad.geometry.propeller import PropellerGeometry
 from torus_cad.geometry.surface import BladeSurface, blade_frames, place_sections, sections_along, sections_at
-from torus_cad.kernel.isolation import IsolatedCall, fork_is_safe_for_opencascade
 from torus_cad.mesh import quality
 from torus_cad.mesh.assembly import assemble
 from torus_cad.mesh.cleanup import Cleanup
-from torus_cad.mesh.crossings import CrossingCheck, blade_crossings, crossing_pairs
+from torus_cad.mesh.crossings import MESH_WHOLE_CROSSING_CHECK_TRIANGLES, CrossingCheck, blade_crossings, crossing_pairs
 from torus_cad.mesh.grids import (
     blade_grid,
     cell_size,
@@ -47,6 +46,7 @@ from torus_cad.mesh.union import LabeledMesh, MeshBooleanError
 from torus_cad.mesh.writers import write_mesh_files
 from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.design import Handedness, SectionSpacing
+from torus_cad.runtime.isolation import IsolatedCall, fork_is_safe_for_opencascade
 from torus_cad.runtime.stages import StageTimer
 from torus_cad.tolerances import MESH_COMPARISON_TIME_LIMIT_S, MESH_JUNCTION_MARGIN_RELATIVE
 
@@ -123,8 +123,6 @@ _CROSSING_FREE_SCALES = (1.25, 1.5, 2.0, 3.0, 4.0)
 
 
 def _blade_check(geometry: PropellerGeometry, grid: BladeSurface, mesh: TriangleMesh) -> CrossingCheck:
-    from torus_cad.runtime.budgets import MESH_WHOLE_CROSSING_CHECK_TRIANGLES
-
     sections, count, _ = grid.points.shape
     whole = geometry.blades * len(mesh.faces) <= MESH_WHOLE_CROSSING_CHECK_TRIANGLES
     trailing_edge = grid.trailing_edge_index if grid.trailing_edge_index is not None else count // 2

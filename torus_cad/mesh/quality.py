@@ -89,23 +89,9 @@ def triangle_measures(vertices: NDArray[np.float64], faces: NDArray[np.int64]
     return lengths, ratios
 
 
-def edge_lengths(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> NDArray[np.float64]:
-    """``(f, 3)`` lengths of the edges 01, 12, 20 of every triangle, mm."""
-    return triangle_measures(vertices, faces)[0]
-
-
 def aspect_ratios(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> NDArray[np.float64]:
     """``(f,)`` longest edge x perimeter / (4 sqrt(3) area): 1 for equilateral, inf for degenerate."""
     return triangle_measures(vertices, faces)[1]
-
-
-def hub_surface_distance(points: NDArray[np.float64], radius: float, length: float) -> NDArray[np.float64]:
-    """``(k,)`` distance (mm) of points from the surface of the closed cylinder r <= R, |z| <= L/2."""
-    radial = np.hypot(points[:, 0], points[:, 1]) - radius
-    axial = np.abs(points[:, 2]) - length / 2.0
-    outside = np.hypot(np.maximum(radial, 0.0), np.maximum(axial, 0.0))
-    inside = np.minimum(-radial, -axial)
-    return np.where((radial < 0.0) & (axial < 0.0), inside, outside)
 
 
 def outside_hub(points: NDArray[np.float64], radius: float, length: float, margin: float) -> NDArray[np.bool_]:

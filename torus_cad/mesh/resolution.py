@@ -6,19 +6,20 @@ and along the blade (set by ``sections``), as a fraction of the local section th
 (thickness x Sy(s), mm): the leading edge of a thin section, where equal arc-length points
 (spec §5) are sparsest for its radius, needs the most points. Above :data:`MESH_SAG_LIMIT`
 the resolution is refused with the smallest count that meets the limit, found by search.
-The triangle count is estimated from the grid counts and refused above
-the memory limit of torus_cad.runtime.budgets (bytes per triangle measured).
+The triangle count is estimated from the grid counts and refused when the command's memory at that
+count (a fixed base plus bytes per triangle, measured) would be over :data:`MESH_MEMORY_LIMIT_BYTES`.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
 
-from torus_cad.errors import ParameterError
+from torus_cad.errors import BudgetError, ParameterError
 from torus_cad.geometry.airfoil import airfoil_points
 from torus_cad.geometry.arc_length import equal_arc_length_section
 from torus_cad.geometry.propeller import PropellerGeometry
@@ -35,6 +36,37 @@ AROUND_CHECK_SECTIONS = 33
 ALONG_CHECK_POINTS = 240
 #: Resolution of the cheap grid that the hub's cell size is estimated from.
 ESTIMATE_GRID = (41, 160)
+
+
+#: Peak resident memory of ``torus-cad mesh`` (binary STL, --no-compare) grows by this much per
+#: triangle of its estimate (:func:`estimate_triangles`), bytes, over a fixed :data:`MESH_BASE_BYTES`
+#: (Python, numpy, manifold3d, meshlib); both measured (the docs' measurements page).
+MESH_BYTES_PER_TRIANGLE = 290.0
+MESH_BASE_BYTES = 0.70e9
+#: The B-rep built for the comparison (``--no-compare`` skips it) adds about this much, bytes.
+MESH_COMPARE_BYTES = 0.5e9
+#: Most memory ``torus-cad mesh`` may plan to use, bytes: a share of the 24 GiB machine that
+#: several jobs use at once.
+MESH_MEMORY_LIMIT_BYTES = 4.0e9
+#: The triangles that fit :data:`MESH_MEMORY_LIMIT_BYTES` with the comparison on.
+MESH_TRIANGLE_LIMIT = math.floor((MESH_MEMORY_LIMIT_BYTES - MESH_BASE_BYTES - MESH_COMPARE_BYTES)
+                                 / MESH_BYTES_PER_TRIANGLE)
+
+
+def mesh_memory_bytes(triangles: int, compare: bool = True) -> float:
+    """Estimated peak memory of ``torus-cad mesh`` for a mesh estimated at ``triangles``, bytes."""
+    return MESH_BASE_BYTES + (MESH_COMPARE_BYTES if compare else 0.0) + MESH_BYTES_PER_TRIANGLE * triangles
+
+
+def check_mesh_memory(triangles: int, compare: bool = True, limit_bytes: float = MESH_MEMORY_LIMIT_BYTES) -> None:
+    """BudgetError (exit 2) with the estimate and the limit when the mesh would need more than ``limit_bytes``."""
+    need = mesh_memory_bytes(triangles, compare)
+    if need > limit_bytes:
+        fits = math.floor((limit_bytes - mesh_memory_bytes(0, compare)) / MESH_BYTES_PER_TRIANGLE)
+        raise BudgetError(
+            f"the mesh would have about {triangles:,} triangles and need about {need / 1e9:.1f} GB of memory, over "
+            f"the limit of {limit_bytes / 1e9:.1f} GB (about {fits:,} triangles); lower mesh.sections or "
+            "mesh.points (--sections, --points)")
 
 
 @dataclass(frozen=True)
@@ -176,7 +208,5 @@ def estimate_triangles(geometry: PropellerGeometry, sections: int, points: int, 
 
 
 def check_budget(estimate: TriangleEstimate, compare: bool = True) -> None:
-    """Refuse (BudgetError, exit 2) meshes whose estimated memory is over the limit (torus_cad.runtime.budgets)."""
-    from torus_cad.runtime.budgets import check_mesh_memory
-
+    """Refuse (BudgetError, exit 2) meshes whose estimated memory is over :data:`MESH_MEMORY_LIMIT_BYTES`."""
     check_mesh_memory(estimate.total, compare)

@@ -4,7 +4,7 @@ Every writer works on whole arrays (text is formatted in chunks of :data:`CHUNK_
 with one C-level ``%`` per chunk, binary records are built and written a chunk at a time), so
 millions of triangles need no Python loop per triangle and no full-size copy. ``torus-cad mesh``
 writes into its output set's staging folder (torus_cad.outputs.output_set); elsewhere each file is written
-atomically (``kernel.files.atomic_path``): a temp file, then a rename. A failed write raises
+atomically (``runtime.files.atomic_path``): a temp file, then a rename. A failed write raises
 OSError naming the file it was writing.
 
 Hand-written for STL, OBJ and PLY rather than meshio's (used for VTK): meshio's STL and OBJ writers are
@@ -20,9 +20,9 @@ from typing import IO
 import numpy as np
 from numpy.typing import NDArray
 
-from torus_cad.kernel.files import atomic_path
 from torus_cad.mesh.settings import SUFFIXES, MeshFormat
 from torus_cad.mesh.union import LabeledMesh
+from torus_cad.runtime.files import atomic_path
 
 #: Triangles (or vertices) formatted per chunk by the text writers.
 CHUNK_TRIANGLES = 100_000

@@ -48,7 +48,7 @@ def write_results(spec: StudySpec, study: Any, out: Path, checkpoint: Callable[[
 
     ``checkpoint`` is called before each of them: it may raise (a signal arrived) to stop there, each file
     or set written so far being whole."""
-    from torus_cad.kernel.files import atomic_path
+    from torus_cad.runtime.files import atomic_path
 
     check = checkpoint or (lambda: None)
     trials = study.get_trials(deepcopy=False)
@@ -205,7 +205,7 @@ def _save_png(figure: Any, path: Path) -> Path:
     """Write a matplotlib figure as a PNG, atomically, and close it."""
     import matplotlib.pyplot as plt
 
-    from torus_cad.kernel.files import atomic_path
+    from torus_cad.runtime.files import atomic_path
 
     figure.tight_layout()
     with atomic_path(path) as temp:
@@ -287,8 +287,8 @@ def _publish_trial(spec: StudySpec, trial: Any, name: str, folder: Path, out: Pa
 
     Raises IncompleteOutputError when the trial's set is incomplete or lacks a format its design
     writes (a trial run before trials wrote every format), OSError when a copy cannot be written."""
-    from torus_cad.kernel.files import atomic_path
     from torus_cad.parameters import PropellerParameters
+    from torus_cad.runtime.files import atomic_path
 
     parameters = PropellerParameters.from_dict(spec.parameters(trial.params, name))
     toml = parameters.to_toml()
@@ -309,7 +309,7 @@ def _copy_trial_set(trial: Any, parameters: Any, name: str, folder: Path, out: P
     import shutil
 
     from torus_cad.errors import IncompleteOutputError
-    from torus_cad.optimize.study import TRIALS_DIR, trial_name
+    from torus_cad.optimize.trial_job import TRIALS_DIR, trial_name
     from torus_cad.outputs.output_set import FILES_KEY, OutputSet, file_entry, verify_set
 
     source = out / str(trial_result(trial).get(FOLDER, f"{TRIALS_DIR}/{trial.number}"))

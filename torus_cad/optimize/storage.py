@@ -26,8 +26,8 @@ from pathlib import Path
 from typing import Any
 from urllib.parse import urlsplit, urlunsplit
 
-from torus_cad.batch.runner import _identity
 from torus_cad.errors import ParameterError, TorusCadError
+from torus_cad.runtime.processes import host_tag, process_identity
 
 __all__ = ["GRACE_S", "HEARTBEAT_S", "PRESCREENED", "Heartbeat", "StorageError", "claim_lock", "count_trials",
            "fail_and_retry", "open_storage", "owner_record", "public_url", "retry_stale_trials", "storage_failures_named",
@@ -201,18 +201,14 @@ def claim_lock(storage: Any, url: str, name: str) -> Iterator[None]:
 
 def owner_record() -> dict[str, Any]:
     """This process: host, pid and start time (a successor with the same pid is told apart)."""
-    from torus_cad.kernel.files import host_tag
-
-    return {"host": host_tag(), "pid": os.getpid(), "start": _identity(os.getpid())}
+    return {"host": host_tag(), "pid": os.getpid(), "start": process_identity(os.getpid())}
 
 
 def _owner_gone(owner: Any) -> bool:
     """Whether ``owner`` (an :func:`owner_record`) is a process of this host that no longer runs."""
-    from torus_cad.kernel.files import host_tag
-
     if not isinstance(owner, dict) or owner.get("host") != host_tag() or not isinstance(owner.get("pid"), int):
         return False
-    return _identity(owner["pid"]) != owner.get("start")
+    return process_identity(owner["pid"]) != owner.get("start")
 
 
 def retry_stale_trials(study: Any, rdb: Any) -> list[int]:

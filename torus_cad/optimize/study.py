@@ -56,21 +56,15 @@ from torus_cad.optimize.storage import (
     trial_result,
 )
 from torus_cad.optimize.study_file import Sampler, StudySpec
-from torus_cad.optimize.trial_job import PERFORMANCE_DIR, TrialTask, run_trial
+from torus_cad.optimize.trial_job import PERFORMANCE_DIR, TRIALS_DIR, TrialTask, run_trial, trial_name
 from torus_cad.tolerances import MAX_STUDY_TRIALS
 
-__all__ = ["DEFINITION_ATTR", "TRIALS_DIR", "StudyInterrupted", "StudyResult", "run_study", "trial_name"]
+__all__ = ["DEFINITION_ATTR", "StudyInterrupted", "StudyResult", "run_study"]
 
-TRIALS_DIR = "trials"
 DEFINITION_ATTR = "torus_cad_definition"  #: study user attr: the digest of what must not change between runs
 #: Trials in flight per worker: one running and one queued, so that a worker never waits for the sampler
 #: and the storage between two trials (the sweep's window too); constant_liar keeps the sampler off both.
 _TASKS_PER_WORKER = 2
-
-
-def trial_name(number: int) -> str:
-    """The design name (and file stem) of trial ``number``."""
-    return f"trial_{number}"
 
 
 @dataclass
@@ -371,7 +365,7 @@ class _Runner:
 
 
 def _final_name(path: Path) -> Path:
-    """The file a temp file of :func:`torus_cad.kernel.files.atomic_path` stands for (``.x.png.tmp-...`` -> ``x.png``)."""
+    """The file a temp file of :func:`torus_cad.runtime.files.atomic_path` stands for (``.x.png.tmp-...`` -> ``x.png``)."""
     name, marker, _ = path.name.partition(".tmp-")
     return path.with_name(name[1:]) if marker and name.startswith(".") else path
 

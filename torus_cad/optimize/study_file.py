@@ -58,9 +58,10 @@ from torus_cad.optimize.metrics import check_metric, is_performance
 from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.config_file import read_config_table
 from torus_cad.parameters.schema import Section, param, parameter_error
+from torus_cad.simulate.settings import Level
 from torus_cad.tolerances import DESIGN_TIME_LIMIT_MAX_S, MAX_STUDY_TRIALS, SIMULATE_RPM_LIMIT
 
-__all__ = ["Direction", "Objective", "Sampler", "SimulateLevel", "StudySpec", "load_study", "parse_study"]
+__all__ = ["Direction", "Objective", "Sampler", "StudySpec", "load_study", "parse_study"]
 
 _NAME_PATTERN = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.-]{0,99}$")
 
@@ -77,14 +78,6 @@ class Sampler(StrEnum):
 class Direction(StrEnum):
     MINIMIZE = "minimize"
     MAXIMIZE = "maximize"
-
-
-class SimulateLevel(StrEnum):
-    """``torus-cad simulate --level``."""
-
-    COARSE = "coarse"
-    MEDIUM = "medium"
-    FINE = "fine"
 
 
 class StudyTable(Section):
@@ -122,7 +115,7 @@ class SimulateTable(Section):
 
     rpm: float = param(0.0, ge=0.0, le=SIMULATE_RPM_LIMIT, doc="rotational speed, rpm")
     airspeed: float = param(0.0, unit="m/s", ge=0.0, le=1000.0, doc="axial inflow speed")
-    level: SimulateLevel = param(SimulateLevel.COARSE, strict=False, doc="mesh level of the simulation")
+    level: Level = param(Level.COARSE, strict=False, doc="mesh level of the simulation")
 
 
 class StudyFile(Section):

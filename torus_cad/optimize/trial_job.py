@@ -19,9 +19,15 @@ from torus_cad.batch.job import DesignTask, record_result, run_design
 from torus_cad.batch.outcome import DesignResult, Outcome
 from torus_cad.errors import ParameterError, TorusCadError
 
-__all__ = ["PERFORMANCE_DIR", "TrialTask", "run_trial"]
+__all__ = ["PERFORMANCE_DIR", "TRIALS_DIR", "TrialTask", "run_trial", "trial_name"]
 
+TRIALS_DIR = "trials"  #: the folder of the trials' folders, under the study's out folder
 PERFORMANCE_DIR = "simulate"
+
+
+def trial_name(number: int) -> str:
+    """The design name (and file stem) of trial ``number``."""
+    return f"trial_{number}"
 
 
 @dataclass(frozen=True)
@@ -61,8 +67,8 @@ def run_trial(task: DesignTask) -> DesignResult:
 
 def _write_design_file(task: DesignTask, folder: Path) -> Path:
     """``<id>.toml``: the trial's design, as ``torus-cad build`` reads it."""
-    from torus_cad.kernel.files import atomic_path
     from torus_cad.parameters import PropellerParameters
+    from torus_cad.runtime.files import atomic_path
 
     path = folder / f"{task.design_id}.toml"
     with atomic_path(path) as temp:

@@ -36,7 +36,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Self
 
 from torus_cad.errors import IncompleteOutputError, OutputError, ParameterError
-from torus_cad.kernel.files import (
+from torus_cad.runtime.files import (
     glob_escape,
     left_by_dead_process,
     make_folders,
@@ -410,7 +410,6 @@ def write_output_set(propeller: BuiltPropeller, out_dir: str | Path, density_g_c
     A mesh (STL, 3MF) over its triangle budget is refused before anything is written.
     """
     from torus_cad import __version__
-    from torus_cad.kernel.isolation import IsolatedCall
     from torus_cad.kernel.uncrossed import UncrossedMesh, uncrossed_mesh
     from torus_cad.kernel.writers.step import write_step
     from torus_cad.kernel.writers.stl import write_checked_stl
@@ -418,7 +417,8 @@ def write_output_set(propeller: BuiltPropeller, out_dir: str | Path, density_g_c
     from torus_cad.outputs.report import build_report
     from torus_cad.outputs.sections_table import sections_table_files, write_files
     from torus_cad.parameters.design import ExportFormat
-    from torus_cad.runtime.budgets import check_stl_budget
+    from torus_cad.parameters.stl_budget import check_stl_budget
+    from torus_cad.runtime.isolation import IsolatedCall
     from torus_cad.runtime.stages import Stage, StageTimer
     from torus_cad.tolerances import SECTIONS_TABLE_TIME_LIMIT_S
 

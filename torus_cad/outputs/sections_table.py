@@ -24,7 +24,7 @@ from torus_cad.geometry.extensions.trailing_edge import trailing_edge_thickness_
 from torus_cad.geometry.section import has_base
 from torus_cad.geometry.surface import BladeSurface, sections_along
 from torus_cad.geometry.transforms import evaluate_quartic
-from torus_cad.kernel.files import atomic_path
+from torus_cad.runtime.files import atomic_path
 
 #: CSV header: name in the file -> BladeElements attribute.
 CSV_COLUMNS = {
@@ -105,11 +105,6 @@ def elements_of(surface: BladeSurface, spin: Handedness = Handedness.CW) -> Blad
     frames = surface.frames
     return blade_elements(surface.s, surface.points, frames.origin, frames.normal, frames.binormal,
                           surface.trailing_edge_index or 0, surface.lower_corner_index, spin)
-
-
-def design_elements(params: Any, points: int = 400, spin: Handedness = Handedness.CW) -> BladeElements:
-    """The blade-element table at the design's own sections (``resolution.sections``), finely sampled around."""
-    return elements_of(params.blade_surface(points=points), spin)
 
 
 def trailing_edge_of(params: Any, s: NDArray[np.float64]) -> NDArray[np.float64]:

@@ -36,6 +36,7 @@ from torus_cad.geometry.section_fit import SectionFit, fit_sections
 from torus_cad.geometry.surface import BladeSurface
 from torus_cad.parameters.design import PropellerParameters
 from torus_cad.parameters.design_targets import resolve_design_targets
+from torus_cad.parameters.stl_budget import check_stl_budget
 
 __all__ = ["Feasibility", "check_design", "placed_mounting", "section_chords"]
 
@@ -133,8 +134,6 @@ def check_design(params: PropellerParameters, *, mesh: bool = False, walls: bool
     if printability is not None and printability.problem():
         raise GeometryError(f"not printable (--require-printable): {printability.problem()}")
     if mesh and estimate_mesh_first:
-        from torus_cad.runtime.budgets import check_stl_budget  # it imports this package
-
         check_stl_budget(params)
     params = resolve_design_targets(params).parameters
     surface = params.blade_surface()
@@ -143,8 +142,6 @@ def check_design(params: PropellerParameters, *, mesh: bool = False, walls: bool
     fit = fitted_sections(surface)
     triangles = None
     if mesh:
-        from torus_cad.runtime.budgets import check_stl_budget  # it imports this package
-
         triangles = check_stl_budget(params, surface, fit.poles.shape[:2])
     if walls and printability is None:
         printability = params.printability()

@@ -34,8 +34,8 @@ from torus_cad.colors import HUB_COLOR, blade_color
 from torus_cad.errors import ParameterError, TorusCadError, shown
 from torus_cad.geometry.propeller import HUB_PART
 from torus_cad.kernel.checks import mass_properties
-from torus_cad.kernel.files import atomic_path
 from torus_cad.parameters import PropellerParameters
+from torus_cad.runtime.files import atomic_path
 from torus_cad.runtime.stages import Stage
 from torus_cad.tolerances import PREVIEW_EDGE_RANGE
 

@@ -4,7 +4,7 @@ The command line installs :func:`exit_on_signals` before it imports anything hea
 while CadQuery is still loading is as clean as one during the build. The handler does not raise
 into whatever code was running (an exception inside a half-finished import can leave a
 half-initialised extension module behind, which crashed at exit): it removes the files staged for
-publishing (torus_cad.kernel.files.removed_on_exit), prints one line and leaves with ``os._exit``.
+publishing (torus_cad.runtime.files.removed_on_exit), prints one line and leaves with ``os._exit``.
 
 Before the handlers are in, while Python itself starts (its ``site`` import, the first few
 milliseconds), a SIGINT is Python's: it can end the process with "Fatal Python error" and exit 1.
@@ -29,7 +29,7 @@ from pathlib import Path
 from types import FrameType
 from typing import Any
 
-from torus_cad.kernel.files import IN_FLIGHT, MADE_FOLDERS, remove_if_empty
+from torus_cad.runtime.files import IN_FLIGHT, MADE_FOLDERS, remove_if_empty
 
 _Handler = Callable[[int, FrameType | None], Any] | int | signal.Handlers | None
 

@@ -33,10 +33,10 @@ from typing import TYPE_CHECKING, Any
 
 from torus_cad.acoustics.observers import DEFAULT_OBSERVERS, Observer, check_observers
 from torus_cad.errors import BudgetError, ParameterError
-from torus_cad.kernel.files import owner_tag
 from torus_cad.outputs.output_set import OutputSet
 from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.design import InletSide
+from torus_cad.runtime.files import owner_tag
 from torus_cad.runtime.input_files import read_untrusted_bytes
 from torus_cad.runtime.interrupts import deferred
 from torus_cad.simulate.case import BLADE_PRESSURE, WALL, CaseSpec, mesh_commands, solve_commands, write_case

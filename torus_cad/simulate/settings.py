@@ -12,7 +12,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from enum import StrEnum
-from typing import Any
 
 from torus_cad.errors import ParameterError
 from torus_cad.parameters import PropellerParameters
@@ -61,8 +60,8 @@ REFINEMENT_RATIO = 2.0 ** (1.0 / 3.0)
 #: The domain every level uses, in tip diameters D (``[cfd]`` keys).
 DOMAIN_D = {"domain_radius": 3.0, "upstream": 2.0, "downstream": 4.0}
 
-#: The coarse level's sizes: at most 60,000 tetrahedra on the default design (estimate 47,381; trailing edges
-#: with their own size field, as curvature sizing is off).
+#: The coarse level's sizes: at most 60,000 tetrahedra on the default design (trailing edges with their own
+#: size field, as curvature sizing is off; the estimate: the docs' measurements page).
 _COARSE_SIZES = {"cells_per_chord": 4.0, "growth_rate": 1.6, "far_size": 0.4}
 
 
@@ -93,7 +92,7 @@ LAYER_EXPANSION_RATIO = 1.3
 Y_PLUS_TARGET = 1.0
 Y_PLUS_REFERENCE_RADIUS = 0.75
 #: The last layer is at least this fraction of the propeller's surface cell: across a larger jump the
-#: face-weight check drops every layer (a 100 mm propeller at 10,000 rpm kept none for y+ 1); where the
+#: face-weight check drops every layer (the docs' measurements page); where the
 #: y+ target asks for thinner layers, the first layer is thickened to this and y+ comes out above the target.
 LAST_LAYER_MIN_FRACTION = 0.08
 
@@ -186,8 +185,3 @@ def max_processes() -> int:
 def with_level(params: PropellerParameters, level: Level) -> PropellerParameters:
     """``params`` with the ``[cfd]`` sizes of ``level``."""
     return params.with_values({f"cfd.{key}": value for key, value in level_cfd(level).items()})
-
-
-def describe_levels() -> dict[str, Any]:
-    """``{level: [cfd] values}`` for documentation and reports."""
-    return {level.value: level_cfd(level) for level in Level}

@@ -189,7 +189,7 @@ def _view_area(studio: Studio) -> None:
         v3.VAlert("{{ failure }}", v_if=("failure",), type="warning", density="compact", variant="tonal",
                   id="failure", style="position: absolute; bottom: 8px; left: 8px; right: 8px; z-index: 2;")
         # Rendered in the browser (WebGL): orbit, zoom and pan need no round trip, and the server
-        # renders nothing (rendering on the server, in software, took 0.3-1.2 s a frame here).
+        # renders nothing (rendering on the server, in software, is much slower: the docs' measurements page).
         view = vtk_widgets.VtkLocalView(studio.view.window, id="view", ref="view")
         studio.ctrl.view_update = view.update
         studio.ctrl.view_push_camera = view.push_camera

@@ -4,8 +4,8 @@ blades' section curves.
 The scene is rendered in the browser (trame's VtkLocalView serializes it to vtk.js, WebGL): orbit,
 zoom and pan need no round trip, and the server never renders: its render window is VTK's
 plain, OpenGL-free ``vtkRenderWindow`` (vtkRenderingOpenGL2 is never imported), which only holds
-the scene for serialization. Rendering on the server instead (llvmpipe, no GPU) took 0.3-1.2 s a
-frame on the 2-core project machine.
+the scene for serialization (rendering on the server, in software, is much slower: the measurements
+page of the docs).
 """
 
 from __future__ import annotations

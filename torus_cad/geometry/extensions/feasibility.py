@@ -47,11 +47,8 @@ CHECK_POINTS = 48
 
 #: Check 4: half-way between neighbouring sections the analytic surface may sag from the straight
 #: line joining them by at most this fraction of the local chord. The loft interpolates the
-#: sections exactly, but beyond this the blade changes too much between them to be represented.
-#: History (scripts/fuzz.py): with BRepOffsetAPI_ThruSections as the loft, sparse sections made
-#: ~10 % of random designs fail or hang in the fuse, which took a limit of 2.5 % to stop; the loft
-#: through poles in s (torus_cad.kernel.loft) removed those failures, so the limit only guards
-#: representation now. The default design sags 0.5 % (3.3 % with 10 sections).
+#: sections exactly, but beyond this the blade changes too much between them to be represented
+#: (how it was set: the measurements page of the docs).
 RESOLUTION_DEVIATION_LIMIT = 0.10
 
 #: Check 5: parts of one blade closer than this many grid steps along s are neighbours, not overlaps.

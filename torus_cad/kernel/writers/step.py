@@ -1,5 +1,5 @@
-"""STEP writer (AP214 or AP242, with the product's name and author) and the STEP reader.
-"""
+"""STEP writer (AP214 or AP242, with the product's name and author); the reader, and the check of the file
+read back, are torus_cad.kernel.step_readback."""
 
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ from OCP.APIHeaderSection import APIHeaderSection_MakeHeader
 from OCP.IFSelect import IFSelect_RetDone
 from OCP.Interface import Interface_Static
 from OCP.STEPCAFControl import STEPCAFControl_Writer
-from OCP.STEPControl import STEPControl_AsIs, STEPControl_Reader
+from OCP.STEPControl import STEPControl_AsIs
 from OCP.TCollection import TCollection_ExtendedString, TCollection_HAsciiString
 from OCP.TDataStd import TDataStd_Name
 from OCP.TDocStd import TDocStd_Document
@@ -19,13 +19,13 @@ from OCP.XCAFDoc import XCAFDoc_DocumentTool
 
 from torus_cad.errors import KernelError
 from torus_cad.formats import StepSchema
-from torus_cad.kernel.files import atomic_path
-from torus_cad.kernel.writers.failures import write_failure
+from torus_cad.kernel.step_readback import check_step_readback
+from torus_cad.runtime.files import atomic_path, file_ends_with, write_failure
 
 #: OpenCascade's write.step.schema value of each protocol.
 _STEP_SCHEMAS = {StepSchema.AP214: "AP214IS", StepSchema.AP242: "AP242DIS"}
 
-
+#: The STEP file's last line: a writer can lose its tail without saying so.
 _STEP_END_MARKER = b"END-ISO-10303-21;"
 
 
@@ -51,20 +51,11 @@ def write_step(shape: cq.Shape, path: str | Path, product_name: str, schema: Ste
     _name_the_author(writer, product_name, program)
     path = Path(path)
     with atomic_path(path) as temp:
-        if writer.Write(str(temp)) != IFSelect_RetDone or not _step_whole(temp):
-            raise write_failure("STEP", path, temp)
+        if writer.Write(str(temp)) != IFSelect_RetDone or not file_ends_with(temp, _STEP_END_MARKER):
+            raise write_failure(path, temp, KernelError(f"OpenCascade could not write STEP file {str(path)!r}"))
         if check_readback:
-            from torus_cad.kernel.step_readback import check_step_readback
-
             check_step_readback(temp, f"{product_name}.step", self_interference=False)
     return path
-
-
-def _step_whole(temp: Path) -> bool:
-    """Whether ``temp`` ends with the STEP end marker (a writer can lose its tail without saying so)."""
-    with open(temp, "rb") as handle:
-        handle.seek(max(0, temp.stat().st_size - 256))
-        return _STEP_END_MARKER in handle.read()
 
 
 def _name_the_author(writer: STEPCAFControl_Writer, product_name: str, program: str) -> None:
@@ -76,12 +67,3 @@ def _name_the_author(writer: STEPCAFControl_Writer, product_name: str, program: 
     header.SetOrganizationValue(1, TCollection_HAsciiString(program.split()[0]))
     header.SetOriginatingSystem(TCollection_HAsciiString(program))
     header.SetAuthorisation(TCollection_HAsciiString(program))
-
-
-def read_step(path: str | Path) -> cq.Shape:
-    """Read a STEP file back as one shape; raise KernelError if it does not read."""
-    reader = STEPControl_Reader()
-    if reader.ReadFile(str(path)) != IFSelect_RetDone:
-        raise KernelError(f"cannot read STEP file {str(path)!r}")
-    reader.TransferRoots()
-    return cq.Shape.cast(reader.OneShape())

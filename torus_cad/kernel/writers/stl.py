@@ -14,10 +14,9 @@ from OCP.BRepMesh import BRepMesh_IncrementalMesh
 from OCP.StlAPI import StlAPI_Writer
 
 from torus_cad.errors import KernelError
-from torus_cad.kernel.files import atomic_path
 from torus_cad.kernel.mesh_check import MeshCheck, checked, intersecting_pairs_in_file
 from torus_cad.kernel.uncrossed import UncrossedMesh, uncrossed_mesh
-from torus_cad.kernel.writers.failures import write_failure
+from torus_cad.runtime.files import atomic_path, write_failure
 
 __all__ = ["write_checked_stl", "write_stl"]
 
@@ -31,6 +30,10 @@ def _stl_whole(temp: Path) -> bool:
         header = handle.read(_STL_HEADER_BYTES)
     triangles = int.from_bytes(header[80:84], "little") if len(header) == _STL_HEADER_BYTES else -1
     return triangles > 0 and size == _STL_HEADER_BYTES + _STL_TRIANGLE_BYTES * triangles
+
+
+def _not_written(path: Path) -> KernelError:
+    return KernelError(f"OpenCascade could not write STL file {str(path)!r}")
 
 
 def write_stl(shape: cq.Shape, path: str | Path, linear_deflection: float, angular_deflection: float) -> Path:
@@ -68,7 +71,7 @@ def _write_binary_stl(temp: Path, path: Path, vertices: np.ndarray, triangles: n
         handle.write(header + np.uint32(len(triangles)).tobytes())
         handle.write(data.tobytes())
     if not _stl_whole(temp):
-        raise write_failure("STL", path, temp)
+        raise write_failure(path, temp, _not_written(path))
 
 
 def _write_stl_to(shape: cq.Shape, temp: Path, path: Path, linear_deflection: float, angular_deflection: float) -> None:
@@ -79,4 +82,4 @@ def _write_stl_to(shape: cq.Shape, temp: Path, path: Path, linear_deflection: fl
     writer = StlAPI_Writer()
     writer.ASCIIMode = False
     if not writer.Write(shape.wrapped, str(temp)) or not _stl_whole(temp):
-        raise write_failure("STL", path, temp)
+        raise write_failure(path, temp, _not_written(path))

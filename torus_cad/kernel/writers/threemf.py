@@ -20,9 +20,9 @@ import cadquery as cq
 import numpy as np
 from numpy.typing import NDArray
 
-from torus_cad.kernel.files import atomic_path
 from torus_cad.kernel.mesh_check import MeshCheck, checked, intersecting_pairs
 from torus_cad.kernel.uncrossed import UncrossedMesh, uncrossed_mesh
+from torus_cad.runtime.files import atomic_path
 
 #: Decimals of the millimetre coordinates written (a micrometre's thousandth).
 _DECIMALS = 6

@@ -6,6 +6,9 @@
   left by a process that was killed can be removed by the next writer on that host
   (:func:`left_by_dead_process`), while files of live processes, or of other hosts sharing the
   folder, are never touched, so concurrent writers of one name cannot delete each other's files.
+* :func:`file_ends_with` tells a file written whole from one whose writer lost its tail without
+  saying so; :func:`write_failure` says why a writer that reports only that it failed (OpenCascade,
+  gmsh) could not write (a full disk, the file size limit).
 * :func:`removed_on_exit` lists the paths a signal handler must remove before the process ends
   (torus_cad.runtime.interrupts reads :data:`IN_FLIGHT`); :func:`removed_if_left_empty` the output
   folders a command made, removed on a signal or an error if still empty (:data:`MADE_FOLDERS`).
@@ -14,11 +17,16 @@
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 import re
+import shutil
 from collections.abc import Iterator
 from itertools import count
 from pathlib import Path
+
+from torus_cad.runtime.processes import host_tag, process_alive
+from torus_cad.tolerances import DISK_FULL_FREE_BYTES
 
 #: Files and folders being written now, by a registration number: what a signal handler removes.
 IN_FLIGHT: dict[int, Path] = {}
@@ -26,23 +34,9 @@ _registrations = count(1)
 _OWNER = re.compile(r"(?P<host>[A-Za-z0-9_]+)-(?P<pid>\d+)-")
 
 
-def host_tag() -> str:
-    """This host's name reduced to ``[A-Za-z0-9_]`` (so ``-`` can separate the fields)."""
-    import socket  # here: the command line imports this module before its signal handlers are in
-
-    return re.sub(r"[^A-Za-z0-9_]", "_", socket.gethostname())[:40] or "host"
-
-
 def owner_tag() -> str:
     """``<host>-<pid>-``: goes right after a temp name's fixed prefix."""
     return f"{host_tag()}-{os.getpid()}-"
-
-
-def process_alive(pid: int) -> bool:
-    """Whether process ``pid`` exists on this host (psutil)."""
-    import psutil
-
-    return bool(psutil.pid_exists(pid))
 
 
 def left_by_dead_process(name: str, prefix: str) -> bool:
@@ -137,3 +131,36 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
             os.replace(temp, path)
         finally:
             temp.unlink(missing_ok=True)
+
+
+def file_ends_with(path: Path, marker: bytes, tail: int = 256) -> bool:
+    """Whether ``path``'s last ``tail`` bytes hold ``marker`` (a format's end line: a writer can lose its
+    tail without saying so); False if it cannot be read."""
+    try:
+        with open(path, "rb") as handle:
+            handle.seek(max(0, path.stat().st_size - tail))
+            return marker in handle.read()
+    except OSError:
+        return False
+
+
+def write_failure(path: Path, written: Path | None = None, otherwise: Exception | None = None) -> Exception:
+    """Why a writer that reports only that it failed (OpenCascade, gmsh) could not write ``written`` (the
+    temp file published as ``path``; default ``path`` itself).
+
+    Looked at while the partial file is still there: a full file system (less than
+    DISK_FULL_FREE_BYTES free) or the process's file size limit (``ulimit -f``) is an OSError naming
+    ``path``; anything else is ``otherwise`` (default: an input/output OSError naming ``path``).
+    """
+    written = path if written is None else written
+    code = errno.EIO
+    with contextlib.suppress(OSError):
+        if shutil.disk_usage(written.parent).free < DISK_FULL_FREE_BYTES:
+            return OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(path))
+    with contextlib.suppress(OSError, ValueError, ImportError):
+        import resource
+
+        limit = resource.getrlimit(resource.RLIMIT_FSIZE)[0]
+        if limit != resource.RLIM_INFINITY and written.stat().st_size >= limit:
+            return OSError(errno.EFBIG, os.strerror(errno.EFBIG), str(path))
+    return otherwise if otherwise is not None else OSError(code, os.strerror(code), str(path))

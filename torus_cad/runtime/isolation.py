@@ -1,4 +1,4 @@
-"""OpenCascade calls that can hang or crash, run in a forked child process with a time limit.
+"""Calls that can hang or crash (OpenCascade's), run in a forked child process with a time limit.
 
 A hang or a crash there then costs that one call, never the command: the parent waits in Python
 (``select``), so a signal ends it at once (torus_cad.runtime.interrupts), and the child dies with its
