@@ -16,7 +16,7 @@ from conftest import EXAMPLES_DIR, read_binary_stl
 from OCP.BRepCheck import BRepCheck_Analyzer
 
 from torus_cad.errors import ParameterError
-from torus_cad.geometry.station_table import read_station_file
+from torus_cad.geometry.blade.station_table import read_station_file
 from torus_cad.kernel.checks import precise_volume
 from torus_cad.kernel.measure import contour_through, edge_points, farthest_pair, max_radius_mm, plane_section_edges
 from torus_cad.kernel.strict import boolean_check_faults
@@ -238,8 +238,8 @@ def test_cfd_sizes_the_apc_domain_from_its_own_blade():
 
 
 def test_a_naca_section_thinned_by_its_number_is_the_mean_line_scaling():
-    from torus_cad.geometry.airfoil import NacaAirfoil
-    from torus_cad.geometry.conventional_blade import ScaledThickness, thickness_scaled
+    from torus_cad.geometry.blade.conventional_blade import ScaledThickness, thickness_scaled
+    from torus_cad.geometry.section.airfoil import NacaAirfoil
 
     naca, u = NacaAirfoil(0.04, 0.4, 0.12, True), np.linspace(0.0, 1.0, 101)
     for upper in (True, False):

@@ -14,8 +14,8 @@ import pytest
 
 from torus_cad import PropellerParameters
 from torus_cad.errors import GeometryError, ParameterError
-from torus_cad.geometry.mesh import TriangleMesh
-from torus_cad.geometry.propeller import HUB_PART
+from torus_cad.geometry.blade.mesh import TriangleMesh
+from torus_cad.geometry.blade.propeller import HUB_PART
 from torus_cad.studio.panel import (
     FieldKind,
     design_from_state,

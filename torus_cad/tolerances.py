@@ -106,7 +106,7 @@ AIRFOIL_FILE_TIME_LIMIT_S = 10.0
 AIRFOIL_COORDINATE_LIMIT = 1e6
 
 #: Most triangles an STL may have, by the estimate made before tessellating
-#: (torus_cad.geometry.extensions.triangle_estimate). OpenCascade's mesher slows down faster than its
+#: (torus_cad.geometry.analysis.triangle_estimate). OpenCascade's mesher slows down faster than its
 #: triangle count grows on the lofted blades (see the README's "Limits").
 STL_TRIANGLE_LIMIT = 2_000_000
 
@@ -239,7 +239,7 @@ MESH_REPAIR_PASSES = ("Relax", "Relax", "Relax", "CutAndFill", "Relax", "CutAndF
 #: shared boundary nodes each in its own placement, equal to the last bits).
 MESH_MERGE_DISTANCE_MM = 1e-6
 
-# -- the conventional (open-tip) blade (torus_cad.geometry.station_table, .conventional_blade) ------
+# -- the conventional (open-tip) blade (torus_cad.geometry.blade.station_table, .conventional_blade) ------
 
 #: Largest station file (a UIUC geometry file is < 1 kB, an APC PE0 file with its performance tables ~ 100 kB).
 STATION_FILE_MAX_BYTES = 1_000_000

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from torus_cad.geometry.mesh import TriangleMesh
+from torus_cad.geometry.blade.mesh import TriangleMesh
 
 #: Columns on each side of the leading and trailing edges (and the whole base of a blunt edge)
 #: that the partial check covers, as a fraction of the points around a section (at least 8).

@@ -1,7 +1,7 @@
 """Budgets: work that would blow up is refused before it starts, with the estimate and the limit.
 
 The STL's triangle count is estimated from the blade surface and the deflections
-(torus_cad.geometry.extensions.triangle_estimate) and refused above ``STL_TRIANGLE_LIMIT``. The CFD mesh's
+(torus_cad.geometry.analysis.triangle_estimate) and refused above ``STL_TRIANGLE_LIMIT``. The CFD mesh's
 tetrahedra and memory are estimated from the ``[cfd]`` sizes (torus_cad.cfd.estimate, a few
 seconds, no meshing) and refused above ``CFD_TETRAHEDRA_LIMIT``. (The B-rep itself is bounded by
 the resolution ranges.)
@@ -12,8 +12,8 @@ from __future__ import annotations
 import math
 
 from torus_cad.errors import BudgetError
-from torus_cad.geometry.extensions.triangle_estimate import estimate_stl_triangles
-from torus_cad.geometry.surface import BladeSurface
+from torus_cad.geometry.analysis.triangle_estimate import estimate_stl_triangles
+from torus_cad.geometry.blade.surface import BladeSurface
 from torus_cad.parameters import PropellerParameters
 from torus_cad.tolerances import STL_TRIANGLE_LIMIT
 
