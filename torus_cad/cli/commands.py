@@ -247,11 +247,11 @@ def command_optimize(args: argparse.Namespace) -> int:
     option, 1 when the storage or the workers cannot be used, 130 / 143 / 129 on a signal (rerun to continue)."""
     _require("optimize", "optimize")
     from torus_cad.batch import BatchError
-    from torus_cad.optimize import StudyInterrupted, load_study, run_study
+    from torus_cad.optimize import StudyInterrupted, read_study_file, run_study
     from torus_cad.optimize.storage import StorageError
     from torus_cad.optimize.study_file import Sampler
 
-    spec = load_study(args.study)  # a bad study file raises ParameterError: exit 2
+    spec = read_study_file(args.study)  # a bad study file raises ParameterError: exit 2
     if spec.sampler is Sampler.CMAES:
         _require("optimize (sampler cmaes)", "optimize", ["cmaes"])
     if (args.storage or spec.storage).startswith("postgresql"):
@@ -331,7 +331,7 @@ def _batch_members(folder: Path) -> list[Path] | None:
     (``designs/<id>/``); None for any other folder."""
     from torus_cad.batch.table import DESIGNS_DIR
 
-    for members in ("trials", DESIGNS_DIR):  # torus_cad.optimize.study.TRIALS_DIR (optuna is not needed here)
+    for members in ("trials", DESIGNS_DIR):  # torus_cad.optimize.trial_job.TRIALS_DIR (optuna is not needed here)
         if (folder / members).is_dir():
             return sorted(path for path in (folder / members).iterdir() if path.is_dir() and not path.is_symlink())
     return None

@@ -19,9 +19,15 @@ from torus_cad.batch.job import DesignTask, record_result, run_design
 from torus_cad.batch.outcome import DesignResult, Outcome
 from torus_cad.errors import ParameterError, TorusCadError
 
-__all__ = ["PERFORMANCE_DIR", "TrialTask", "run_trial"]
+__all__ = ["PERFORMANCE_DIR", "TRIALS_DIR", "TrialTask", "run_trial", "trial_name"]
 
 PERFORMANCE_DIR = "simulate"
+TRIALS_DIR = "trials"  #: the trials' folders under the study's out folder: ``OUT/trials/<number>/``
+
+
+def trial_name(number: int) -> str:
+    """The design name (and file stem) of trial ``number``."""
+    return f"trial_{number}"
 
 
 @dataclass(frozen=True)
