@@ -371,7 +371,7 @@ def test_a_busy_port_is_reported_as_such():
 
 @pytest.mark.parametrize(("signum", "code"), [(signal.SIGINT, 130), (signal.SIGTERM, 143)], ids=["SIGINT", "SIGTERM"])
 def test_a_signal_stops_the_studio_with_its_exit_code_and_one_line(signum, code):
-    from torus_cad.studio.browser import StudioProcess
+    from studio_driver import StudioProcess
 
     with StudioProcess() as studio:
         process = studio._process
