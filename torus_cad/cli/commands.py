@@ -278,7 +278,7 @@ def command_studio(args: argparse.Namespace) -> int:
     """Exit 0 never on a signal: 130 / 143 / 129 with one line, as every command."""
     _require("studio", "studio")
     from torus_cad.runtime.interrupts import EXIT_SIGNALS
-    from torus_cad.studio.app import check_host, serve
+    from torus_cad.studio.server import check_host, serve
 
     check_host(args.host)
     files = Path(args.files) if args.files else None
