@@ -1,7 +1,7 @@
 """The import layers: geometry imports no CAD kernel and nothing above it, and inside it section, hub,
 blade and analysis each import only the layers below; the kernel imports no pipeline or app; nothing
-imports the CLI. Read from the sources' import statements, and checked
-once more in a fresh interpreter for the geometry layer."""
+imports the CLI. Read from the sources' import statements, and checked once more in a fresh
+interpreter for the geometry layer."""
 
 from __future__ import annotations
 
