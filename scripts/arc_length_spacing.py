@@ -16,8 +16,8 @@ from itertools import pairwise
 
 import numpy as np
 
-from torus_cad.geometry.airfoil import NacaAirfoil, airfoil_points
-from torus_cad.geometry.arc_length import equal_arc_length_section, spacing_deviation
+from torus_cad.geometry.section.airfoil import NacaAirfoil, airfoil_points
+from torus_cad.geometry.section.arc_length import equal_arc_length_section, spacing_deviation
 
 
 def arc_gaps(airfoil: NacaAirfoil, t: np.ndarray, fine: int = 2000) -> np.ndarray:

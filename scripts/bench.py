@@ -239,7 +239,7 @@ def _growth(rows: list[dict[str, Any]]) -> dict[str, Any]:
 
 def accuracy_samples(params, per_gap: int = 3, limit: int = 400) -> np.ndarray:
     """Analytic surface points at s half-way between sections and t between samples, away from the hub."""
-    from torus_cad.geometry.surface import surface_points
+    from torus_cad.geometry.blade.surface import surface_points
 
     surface = params.blade_surface()
     s = 0.5 * (surface.s[:-1] + surface.s[1:])
@@ -255,7 +255,7 @@ def accuracy_samples(params, per_gap: int = 3, limit: int = 400) -> np.ndarray:
 
 
 def _chord(params) -> float:
-    from torus_cad.geometry.transforms import evaluate_quartic
+    from torus_cad.geometry.blade.transforms import evaluate_quartic
 
     return float(np.min(evaluate_quartic(params.transforms.scale_x, np.linspace(0, 1, 101))))
 
@@ -291,7 +291,7 @@ def child_mesh_route(payload: dict[str, Any]) -> dict[str, Any]:
     """Child: the mesh-boolean route on the default (or ``changes``), timed; closedness and accuracy."""
     import pyvista as pv
 
-    from torus_cad.geometry.mesh import blade_mesh
+    from torus_cad.geometry.blade.mesh import blade_mesh
 
 
     params = _params(payload.get("changes"))

@@ -5,7 +5,7 @@
     python scripts/bench_airfoil_file.py --points 94000  # one size (above the limit: refused, timed)
 
 Each file is a NACA 2412 in Selig order with cosine-spaced stations, written to a temp folder and
-read with :func:`torus_cad.geometry.extensions.airfoil_file.read_airfoil_file`. The reference column times the
+read with :func:`torus_cad.geometry.section.airfoil_file.read_airfoil_file`. The reference column times the
 all-pairs segment test (every segment against every other, blocks of 256 rows) that the sort-and-sweep
 search replaced, on the same loop; the ratio is reference / sweep. Never part of the test suite.
 """
@@ -20,8 +20,8 @@ from pathlib import Path
 import numpy as np
 
 from torus_cad.errors import ParameterError
-from torus_cad.geometry.airfoil import NacaAirfoil
-from torus_cad.geometry.extensions.airfoil_file import _first_crossing, read_airfoil_file, write_selig_file
+from torus_cad.geometry.section.airfoil import NacaAirfoil
+from torus_cad.geometry.section.airfoil_file import _first_crossing, read_airfoil_file, write_selig_file
 
 
 def _loop(points: int) -> np.ndarray:

@@ -95,7 +95,7 @@ def child_pyvista(sections: int, points: int) -> None:
     import numpy as np
     import pyvista as pv
 
-    from torus_cad.geometry.mesh import blade_mesh
+    from torus_cad.geometry.blade.mesh import blade_mesh
     from torus_cad.mesh.grids import cell_size, hub_mesh
     from torus_cad.parameters import PropellerParameters
 

@@ -106,9 +106,9 @@ def main() -> None:
                         help="study/sweep pairs, run one after the other; the overhead is their median")
     args = parser.parse_args()
 
-    from torus_cad.optimize import load_study
+    from torus_cad.optimize import read_study_file
 
-    spec = load_study(EXAMPLE)
+    spec = read_study_file(EXAMPLE)
     wall, inside, cpu_ms = [], [], []
     with tempfile.TemporaryDirectory(prefix="bench_optimize_") as scratch:
         start = time.perf_counter()

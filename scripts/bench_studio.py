@@ -15,10 +15,12 @@ import argparse
 import json
 import os
 import statistics
+import sys
 import tempfile
 from pathlib import Path
 
-from torus_cad.studio.browser import StudioPage, StudioProcess, chromium
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))  # the studio driver lives with the tests
+from studio_driver import StudioPage, StudioProcess, chromium
 
 
 def main() -> None:

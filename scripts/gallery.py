@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from torus_cad.geometry.extensions.blade_elements import NEARLY_RADIAL_FRACTION
+from torus_cad.geometry.analysis.blade_elements import NEARLY_RADIAL_FRACTION
 from torus_cad.outputs.sections_table import elements_of
 from torus_cad.parameters.design_targets import tip_radius_mm
 from torus_cad.preview.picture import parse_size, render_preview, write_png

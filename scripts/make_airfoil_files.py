@@ -17,8 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
-from torus_cad.geometry.airfoil import NacaAirfoil
-from torus_cad.geometry.extensions.airfoil_file import write_lednicer_file, write_selig_file
+from torus_cad.geometry.section.airfoil import NacaAirfoil
+from torus_cad.geometry.section.airfoil_file import write_lednicer_file, write_selig_file
 
 #: Clark Y: chord stations, upper and lower ordinates, all in percent chord.
 CLARK_Y_STATIONS = (0.0, 1.25, 2.5, 5.0, 7.5, 10.0, 15.0, 20.0, 30.0, 40.0, 50.0, 60.0, 70.0, 80.0, 90.0, 95.0, 100.0)

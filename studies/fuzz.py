@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from torus_cad.batch.job import DesignTask
-from torus_cad.geometry.transforms import quartic_minimum
+from torus_cad.geometry.blade.transforms import quartic_minimum
 from torus_cad.parameters import ParameterSpec, PropellerParameters, parameter_specs
 
 #: Length of the unit vector that :func:`design_from_unit` consumes.

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from torus_cad.errors import ParameterError
-from torus_cad.geometry.airfoil import NacaAirfoil, airfoil_points, naca_section
+from torus_cad.geometry.section.airfoil import NacaAirfoil, airfoil_points, naca_section
 
 CHORD = np.linspace(0.0, 1.0, 20001)
 

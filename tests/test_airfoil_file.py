@@ -8,16 +8,16 @@ import pytest
 from scipy.spatial import cKDTree
 
 from torus_cad.errors import ParameterError
-from torus_cad.geometry.airfoil import NacaAirfoil
-from torus_cad.geometry.arc_length import equal_arc_length_section
-from torus_cad.geometry.extensions.airfoil_file import (
+from torus_cad.geometry.section.airfoil import NacaAirfoil
+from torus_cad.geometry.section.airfoil_file import (
     INTERPOLATION_ERROR_LIMIT,
     parse_airfoil_text,
     read_airfoil_file,
     write_lednicer_file,
     write_selig_file,
 )
-from torus_cad.geometry.section import (
+from torus_cad.geometry.section.arc_length import equal_arc_length_section
+from torus_cad.geometry.section.section import (
     Section,
     closed_points,
     has_base,

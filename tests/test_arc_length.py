@@ -7,8 +7,8 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from torus_cad.geometry.airfoil import NacaAirfoil, airfoil_points
-from torus_cad.geometry.arc_length import equal_arc_length_section, spacing_deviation
+from torus_cad.geometry.section.airfoil import NacaAirfoil, airfoil_points
+from torus_cad.geometry.section.arc_length import equal_arc_length_section, spacing_deviation
 from torus_cad.tolerances import FOLD_RATIO_LIMIT
 
 

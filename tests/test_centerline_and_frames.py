@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from torus_cad.errors import GeometryError
-from torus_cad.geometry.centerline import Centerline, local_to_cylindrical
-from torus_cad.geometry.frames import frenet_frames, rotation_minimizing_frames
+from torus_cad.geometry.blade.centerline import Centerline, local_to_cylindrical
+from torus_cad.geometry.blade.frames import frenet_frames, rotation_minimizing_frames
 from torus_cad.parameters import PropellerParameters
 
 S = np.linspace(0.0, 1.0, 41)

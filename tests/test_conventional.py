@@ -17,7 +17,7 @@ from OCP.BRepCheck import BRepCheck_Analyzer
 from scipy.spatial import ConvexHull
 
 from torus_cad.errors import ParameterError
-from torus_cad.geometry.station_table import read_station_file
+from torus_cad.geometry.blade.station_table import read_station_file
 from torus_cad.kernel.checks import precise_volume
 from torus_cad.kernel.measure import contour_through, edge_points, max_radius_mm, plane_section_edges
 from torus_cad.kernel.step_readback import read_step
@@ -247,8 +247,8 @@ def test_cfd_sizes_the_apc_domain_from_its_own_blade():
 
 
 def test_a_naca_section_thinned_by_its_number_is_the_mean_line_scaling():
-    from torus_cad.geometry.airfoil import NacaAirfoil
-    from torus_cad.geometry.conventional_blade import ScaledThickness, thickness_scaled
+    from torus_cad.geometry.blade.conventional_blade import ScaledThickness, thickness_scaled
+    from torus_cad.geometry.section.airfoil import NacaAirfoil
 
     naca, u = NacaAirfoil(0.04, 0.4, 0.12, True), np.linspace(0.0, 1.0, 101)
     for upper in (True, False):

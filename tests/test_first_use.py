@@ -191,9 +191,9 @@ def test_a_refused_trial_appears_in_the_optimize_summary_and_the_history_picture
 
     from torus_cad.optimize.results import history_figure, trial_rows, unvalued_lines
     from torus_cad.optimize.storage import OUTCOME, REASON, RESULT
-    from torus_cad.optimize.study_file import load_study
+    from torus_cad.optimize.study_file import read_study_file
 
-    spec = load_study(ROOT / "examples" / "optimize_light.toml")
+    spec = read_study_file(ROOT / "examples" / "optimize_light.toml")
     distributions = {"airfoil.thickness": FloatDistribution(0.2, 0.6)}
     reason = "airfoil.thickness: the blade is 10.1 % of the chord thick, over the limit of 10.0 %"
     trials = [create_trial(state=TrialState.COMPLETE, value=value, params={"airfoil.thickness": 0.3},

@@ -16,7 +16,7 @@ from hypothesis import strategies as st
 
 import torus_cad.propeller as pipeline
 from torus_cad.errors import KernelError
-from torus_cad.geometry.hub import footprint_arcs_deg, seam_angle_deg
+from torus_cad.geometry.hub.seam import footprint_arcs_deg, seam_angle_deg
 from torus_cad.kernel.checks import is_valid_closed_solid, precise_volume, single_valid_solid
 from torus_cad.kernel.fuse import FuseRoute, fuse_all, fuse_pattern
 from torus_cad.kernel.hub import hub_solid

@@ -1,7 +1,8 @@
 """The import layers: the runtime (the ground floor) imports nothing of the package but the errors and the
-tolerances; geometry imports no CAD kernel and nothing above it; the kernel imports no pipeline or app;
-nothing imports the CLI. Read from the sources' import statements, and checked
-once more in a fresh interpreter for the geometry layer."""
+tolerances; geometry imports no CAD kernel and nothing above it, and inside it section, hub, blade and
+analysis each import only the layers below; the kernel imports no pipeline or app; nothing imports the
+CLI. Read from the sources' import statements, and checked once more in a fresh interpreter for the
+geometry layer."""
 
 from __future__ import annotations
 
@@ -61,6 +62,50 @@ def test_the_runtime_imports_only_the_errors_and_the_tolerances():
         return name.split(".")[0] in KERNEL_PACKAGES or (name.startswith("torus_cad.") and not name.startswith(
             ("torus_cad.errors", "torus_cad.tolerances", "torus_cad.runtime")))
     assert _offenders(_sources("runtime"), forbidden) == []
+
+
+#: geometry's sub-packages, each by job, from the ground up: a layer imports only the layers before it
+#: (and itself), so nothing in geometry runs back up and no two sub-packages import each other.
+GEOMETRY_LAYERS = ("section", "hub", "blade", "analysis")
+
+
+def test_geometry_is_sorted_into_its_layers():
+    """Every geometry module sits in one of the layers (nothing loose beside them)."""
+    loose = sorted(str(path.relative_to(PACKAGE)) for path in _sources("geometry")
+                   if path.relative_to(PACKAGE / "geometry").parts[0] not in GEOMETRY_LAYERS
+                   and path.name != "__init__.py")
+    packages = sorted(path.name for path in (PACKAGE / "geometry").iterdir() if path.is_dir()
+                      and path.name != "__pycache__")
+    assert (loose, packages) == ([], sorted(GEOMETRY_LAYERS))
+
+
+@pytest.mark.parametrize("layer", GEOMETRY_LAYERS)
+def test_a_geometry_layer_imports_only_the_layers_below_it(layer):
+    allowed = GEOMETRY_LAYERS[: GEOMETRY_LAYERS.index(layer) + 1]
+
+    def forbidden(name: str) -> bool:
+        parts = name.split(".")
+        return parts[:2] == ["torus_cad", "geometry"] and len(parts) > 2 and parts[2] not in allowed
+    assert _offenders(_sources(f"geometry/{layer}"), forbidden) == []
+
+
+def test_geometry_modules_import_each_other_without_cycles():
+    """Read from every import statement (function-local ones too): no module reaches itself."""
+    modules = {_module_name(path): path for path in _sources("geometry")}
+    graph = {name: {imported for imported in _imports(path) if imported in modules and imported != name}
+             for name, path in modules.items()}
+    cycles = []
+    for start in graph:
+        stack, seen = [(start, [start])], set()
+        while stack:
+            node, route = stack.pop()
+            for following in graph[node]:
+                if following == start:
+                    cycles.append(" -> ".join(route + [start]))
+                elif following not in seen:
+                    seen.add(following)
+                    stack.append((following, route + [following]))
+    assert cycles == []
 
 
 def test_the_untrusted_file_reader_imports_only_the_standard_library_and_the_errors():

@@ -186,12 +186,12 @@ def test_other_shapes_fall_back_to_opencascade(shape):
 def test_the_local_b_spline_basis_is_scipys(degree):
     from scipy.interpolate import BSpline
 
-    from torus_cad.kernel.blade_integrals import _local_basis
+    from torus_cad.kernel.blade_integrals.bspline import local_basis
 
     rng = np.random.default_rng(degree)
     knots = np.r_[[0.0] * (degree + 1), np.sort(rng.random(9)), [2.0] * (degree + 1)]
     x = np.r_[2.0 * rng.random(300), 0.0, 2.0, knots[degree + 4]]  # ends and an inner knot included
-    columns, values = _local_basis(x, knots, degree)
+    columns, values = local_basis(x, knots, degree)
     dense = np.zeros((len(x), len(knots) - degree - 1))
     np.put_along_axis(dense, columns, values, axis=1)
     assert np.allclose(dense, BSpline.design_matrix(x, knots, degree).toarray(), rtol=0.0, atol=1e-14)

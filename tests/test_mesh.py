@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 
 from torus_cad.cli import main
 from torus_cad.errors import ParameterError
-from torus_cad.geometry.mesh import TriangleMesh
+from torus_cad.geometry.blade.mesh import TriangleMesh
 from torus_cad.mesh.cleanup import collapse_junction_needles
 from torus_cad.mesh.grids import blade_grid, blade_meshes, cell_size, hub_layout, hub_mesh, section_parameters
 from torus_cad.mesh.pipeline import build_surface_mesh

@@ -62,7 +62,7 @@ def test_the_hub_features_are_in_the_mesh_with_the_breps_volume(workshop_mesh):
 
 def test_without_the_features_the_volume_is_the_plain_hubs(workshop_mesh, tmp_path):
     """The features' volume is really gone: the plain design's mesh is larger by what they remove."""
-    from torus_cad.geometry.extensions.mounting import HubMounting
+    from torus_cad.geometry.hub.mounting import HubMounting
 
     report, _ = workshop_mesh
     plain, _ = _mesh(tmp_path, "--sections", "48", "--points", "160", "--no-compare")

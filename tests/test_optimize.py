@@ -22,7 +22,7 @@ optuna = pytest.importorskip("optuna", reason="the optimize extra is not install
 from optuna.trial import TrialState  # noqa: E402
 
 from torus_cad.errors import ParameterError  # noqa: E402
-from torus_cad.optimize import load_study, parse_study, run_study  # noqa: E402
+from torus_cad.optimize import parse_study, read_study_file, run_study  # noqa: E402
 from torus_cad.optimize.metrics import REPORT_METRICS, metric_value  # noqa: E402
 from torus_cad.optimize.performance import simulate_unavailable  # noqa: E402
 from torus_cad.optimize.storage import RETRY_OF, open_storage, owner_record, retry_stale_trials  # noqa: E402
@@ -84,7 +84,7 @@ def _load(url: str, name: str = "light"):
 # -- the study file ----------------------------------------------------------------------------------
 
 def test_the_shipped_example_reads_and_names_real_report_numbers():
-    spec = load_study(EXAMPLE)
+    spec = read_study_file(EXAMPLE)
     assert spec.name == "light_prop" and spec.trials == 30 and spec.base.diameter == 100.0
     assert [axis.key for axis in spec.axes] == ["airfoil.thickness", "transforms.scale_x[4]"]
     assert spec.metrics == ("mass_g", "printability.thinnest_wall_mm")
@@ -170,10 +170,35 @@ def test_a_dead_processs_running_trial_is_failed_and_asked_again(tmp_path):
     trials = study.get_trials()
     assert trials[trial.number].state is TrialState.FAIL
     retry = trials[-1]
-    assert retry.state is TrialState.WAITING and retry.system_attrs["fixed_params"] == trial.params
-    assert retry.user_attrs[RETRY_OF] == trial.number
+    assert retry.state is TrialState.WAITING and retry.params == trial.params
+    assert retry.user_attrs == {RETRY_OF: trial.number}  # not the dead run's owner or records
+    assert optuna.storages.RetryHeartbeatStaleTrialCallback.retried_trial_number(retry) == trial.number
     assert trials[alive.number].state is TrialState.RUNNING  # its owner (this process) lives
     assert retry_stale_trials(study, rdb) == []  # once only
+    asked = study.ask({"a": optuna.distributions.FloatDistribution(0.0, 1.0)})
+    assert (asked.number, asked.params) == (retry.number, trial.params)  # the retry is asked first, as it was
+
+
+def test_a_trial_of_another_host_whose_heartbeat_stopped_is_failed_and_asked_again(tmp_path, monkeypatch):
+    """Owners on other hosts are judged by optuna's heartbeat (fail_stale_trials) once it is GRACE_S old."""
+    from torus_cad.optimize import storage
+
+    monkeypatch.setattr(storage, "GRACE_S", 1)
+    monkeypatch.setattr(storage, "HEARTBEAT_S", 1)
+    rdb = open_storage(f"sqlite:///{tmp_path / 'x.db'}")
+    study = optuna.create_study(storage=rdb, study_name="x")
+    trial = study.ask({"a": optuna.distributions.FloatDistribution(0.0, 1.0)})
+    trial.set_user_attr("owner", {"host": "another-host", "pid": os.getpid(), "start": "elsewhere"})
+    with storage.Heartbeat(rdb, study) as heartbeat:
+        heartbeat.add(trial)
+        assert retry_stale_trials(study, rdb) == []  # beating: alive, wherever its pid is
+        heartbeat.discard(trial)
+    time.sleep(2.5)
+    assert retry_stale_trials(study, rdb) == [trial.number]
+    trials = study.get_trials()
+    assert trials[trial.number].state is TrialState.FAIL
+    assert trials[-1].state is TrialState.WAITING and trials[-1].user_attrs == {RETRY_OF: trial.number}
+    assert trials[-1].params == trial.params
 
 
 def test_a_trial_left_without_an_owner_by_a_process_killed_while_claiming_it_is_asked_again(tmp_path):
@@ -190,13 +215,13 @@ def test_a_trial_left_without_an_owner_by_a_process_killed_while_claiming_it_is_
 
 def test_a_study_made_from_another_file_is_refused(tmp_path):
     study = _study_file(tmp_path, trials=1)
-    spec = load_study(study)
+    spec = read_study_file(study)
     from torus_cad.optimize.study import _load_study
 
     _load_study(spec, open_storage(f"sqlite:///{tmp_path / 'light.db'}"))
     study.write_text(study.read_text().replace("[4.0, 6.5]", "[4.0, 6.0]"))
     with pytest.raises(ParameterError, match="was made from another base"):
-        _load_study(load_study(study), open_storage(f"sqlite:///{tmp_path / 'light.db'}"))
+        _load_study(read_study_file(study), open_storage(f"sqlite:///{tmp_path / 'light.db'}"))
 
 
 # -- studies -------------------------------------------------------------------------------------------
@@ -211,7 +236,7 @@ def test_the_geometric_study_improves_on_its_base_and_its_best_design_rebuilds(t
     base = build_report(build_propeller(BASE), 1.24)
     assert base["printability"]["thinnest_wall_mm"] >= 0.8  # the base is feasible: the study must beat it
     out = tmp_path / "out"
-    result = run_study(load_study(EXAMPLE), out, workers=2)
+    result = run_study(read_study_file(EXAMPLE), out, workers=2)
     study = _load(f"sqlite:///{out / 'light_prop.db'}", "light_prop")
     trials = study.get_trials()
     _check_whole(trials, 30)
@@ -323,7 +348,7 @@ def postgres_url():
 
 
 def test_a_study_on_a_postgresql_server_continues_on_a_second_run(tmp_path, postgres_url):
-    spec = load_study(_study_file(tmp_path, trials=3))
+    spec = read_study_file(_study_file(tmp_path, trials=3))
     out = tmp_path / "out"
     run_study(spec, out, workers=2, storage=postgres_url)
     result = run_study(spec, out, trials=5, workers=2, storage=postgres_url)
@@ -336,7 +361,7 @@ def test_a_study_on_a_postgresql_server_continues_on_a_second_run(tmp_path, post
 def test_a_two_objective_study_on_a_dask_local_cluster_gives_its_pareto_front(tmp_path):
     objectives = ('[[objective]]\nmetric = "mass_g"\ndirection = "minimize"\n\n'
                   '[[objective]]\nmetric = "printability.thinnest_wall_mm"\ndirection = "maximize"\n')
-    spec = load_study(_study_file(tmp_path, trials=5, objectives=objectives, sampler="nsga2"))
+    spec = read_study_file(_study_file(tmp_path, trials=5, objectives=objectives, sampler="nsga2"))
     out = tmp_path / "out"
     result = run_study(spec, out, workers=2, scheduler="local")
     assert result.backend.startswith("dask")
@@ -362,7 +387,7 @@ def test_a_performance_study_runs_torus_cad_simulate_for_each_trial(tmp_path):
     study_path = _study_file(tmp_path, trials=2, objectives=objectives, sampler="random", extra=extra)
     study_path.write_text(study_path.read_text() + '\n[simulate]\nrpm = 10000.0\nlevel = "coarse"\n')
     out = tmp_path / "out"
-    run_study(load_study(study_path), out, workers=2)
+    run_study(read_study_file(study_path), out, workers=2)
     trials = _load(f"sqlite:///{out / 'light.db'}").get_trials()
     _check_whole(trials, 2)
     for trial in trials:
@@ -383,7 +408,7 @@ def test_optuna_dashboard_shows_the_study(tmp_path):
     from torus_cad.optimize.study import _load_study
 
     url = f"sqlite:///{tmp_path / 'light.db'}"
-    _load_study(load_study(_study_file(tmp_path, trials=1)), open_storage(url))
+    _load_study(read_study_file(_study_file(tmp_path, trials=1)), open_storage(url))
     with socket.socket() as probe:
         probe.bind(("127.0.0.1", 0))
         port = probe.getsockname()[1]

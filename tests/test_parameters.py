@@ -7,7 +7,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from torus_cad.errors import ParameterError
-from torus_cad.geometry.transforms import quartic_minimum
+from torus_cad.geometry.blade.transforms import quartic_minimum
 from torus_cad.parameters import PropellerParameters
 
 

@@ -31,8 +31,8 @@ from studies.fuzz import UNIT_DIMENSION, design_from_unit, fuzz_range, fuzz_task
 from torus_cad.batch import DesignResult, DesignTask, LocalPool, Outcome, run_design, run_tasks
 from torus_cad.cli import main
 from torus_cad.errors import GeometryError, ParameterError
-from torus_cad.geometry.extensions import feasibility
-from torus_cad.geometry.frames import Frames
+from torus_cad.geometry.analysis import feasibility
+from torus_cad.geometry.blade.frames import Frames
 from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.schema import Bounds
 

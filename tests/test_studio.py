@@ -14,8 +14,8 @@ import pytest
 
 from torus_cad import PropellerParameters
 from torus_cad.errors import GeometryError, ParameterError
-from torus_cad.geometry.mesh import TriangleMesh
-from torus_cad.geometry.propeller import HUB_PART
+from torus_cad.geometry.blade.mesh import TriangleMesh
+from torus_cad.geometry.blade.propeller import HUB_PART
 from torus_cad.studio.panel import (
     FieldKind,
     design_from_state,
@@ -313,10 +313,10 @@ def test_a_build_over_its_memory_limit_fails_in_its_process_not_the_server(light
 
 
 def test_an_upload_holds_one_design_and_plainly_named_files():
-    from torus_cad.studio.app import MAX_UPLOAD_BYTES, _upload_files
+    from torus_cad.studio.uploads import MAX_UPLOAD_BYTES, upload_files
 
     design = {"name": "d.toml", "content": b"blades = 3\n"}
-    assert _upload_files([design, {"name": "foil.dat", "content": b"x"}]) == {"d.toml": b"blades = 3\n",
+    assert upload_files([design, {"name": "foil.dat", "content": b"x"}]) == {"d.toml": b"blades = 3\n",
                                                                                 "foil.dat": b"x"}
     for uploads, reason in [
         ([{"name": "foil.dat", "content": b"x"}], "holds 0 .toml files"),
@@ -327,8 +327,8 @@ def test_an_upload_holds_one_design_and_plainly_named_files():
         ([{"name": "d.toml", "content": "text"}], "could not be read"),
     ]:
         with pytest.raises(ParameterError, match=reason):
-            _upload_files(uploads)
-    assert list(_upload_files([{"name": "../../etc/d.toml", "content": b""}])) == ["d.toml"]  # base names only
+            upload_files(uploads)
+    assert list(upload_files([{"name": "../../etc/d.toml", "content": b""}])) == ["d.toml"]  # base names only
 
 
 # -- command line --------------------------------------------------------------------------------------
@@ -348,7 +348,7 @@ def test_studio_refuses_bad_input_before_serving(arguments, expected):
 
 
 def test_start_message_says_who_can_connect():
-    from torus_cad.studio.app import start_message
+    from torus_cad.studio.server import start_message
 
     assert "only this machine can connect" in start_message("127.0.0.1", 8080)
     assert "http://127.0.0.1:8080/" in start_message("127.0.0.1", 8080)
@@ -371,7 +371,7 @@ def test_a_busy_port_is_reported_as_such():
 
 @pytest.mark.parametrize(("signum", "code"), [(signal.SIGINT, 130), (signal.SIGTERM, 143)], ids=["SIGINT", "SIGTERM"])
 def test_a_signal_stops_the_studio_with_its_exit_code_and_one_line(signum, code):
-    from torus_cad.studio.browser import StudioProcess
+    from studio_driver import StudioProcess
 
     with StudioProcess() as studio:
         process = studio._process

@@ -14,9 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
-from torus_cad.parameters import PropellerParameters, parameter_specs
-from torus_cad.studio.browser import (
+from studio_driver import (
     CHROMEDRIVER,
     CHROMIUM,
     StudioPage,
@@ -24,6 +22,8 @@ from torus_cad.studio.browser import (
     chromium,
     wait_for_download,
 )
+
+from torus_cad.parameters import PropellerParameters, parameter_specs
 from torus_cad.studio.layout import field_id
 
 REPO = Path(__file__).resolve().parent.parent

@@ -9,17 +9,19 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from torus_cad.geometry.airfoil import NacaAirfoil
-from torus_cad.geometry.arc_length import ROUND_CAP_MINIMUM_POINTS, equal_arc_length_section
-from torus_cad.geometry.extensions.airfoil_file import read_airfoil_file
-from torus_cad.geometry.extensions.printability import printability
-from torus_cad.geometry.extensions.trailing_edge import (
-    ROUND_CAP_HANDLE_FRACTION,
+from torus_cad.geometry.analysis.printability import printability
+from torus_cad.geometry.blade.surface import sections_along
+from torus_cad.geometry.blade.trailing_edge import (
     blunt_sections,
     section_matrices,
     trailing_edge_thickness_mm,
 )
-from torus_cad.geometry.section import (
+from torus_cad.geometry.blade.transforms import transform_sections
+from torus_cad.geometry.section.airfoil import NacaAirfoil
+from torus_cad.geometry.section.airfoil_file import read_airfoil_file
+from torus_cad.geometry.section.arc_length import ROUND_CAP_MINIMUM_POINTS, equal_arc_length_section
+from torus_cad.geometry.section.section import (
+    ROUND_CAP_HANDLE_FRACTION,
     RoundTrailingEdge,
     cap_points,
     closed_points,
@@ -27,8 +29,6 @@ from torus_cad.geometry.section import (
     half_ends,
     has_base,
 )
-from torus_cad.geometry.surface import sections_along
-from torus_cad.geometry.transforms import transform_sections
 from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.design import TrailingEdgeShape
 

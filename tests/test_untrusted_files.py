@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from torus_cad.cli import main
-from torus_cad.geometry.extensions.airfoil_file import read_airfoil_file, write_selig_file
+from torus_cad.geometry.section.airfoil_file import read_airfoil_file, write_selig_file
 from torus_cad.runtime.input_files import read_untrusted_bytes
 from torus_cad.tolerances import AIRFOIL_FILE_MAX_BYTES, AIRFOIL_FILE_MAX_POINTS
 

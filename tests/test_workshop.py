@@ -14,9 +14,9 @@ from OCP.GeomAbs import GeomAbs_Cylinder
 
 from torus_cad import __version__
 from torus_cad.cli import main
-from torus_cad.geometry.extensions.handedness import Handedness, air_push_z
-from torus_cad.geometry.extensions.mounting import HubMounting
-from torus_cad.geometry.extensions.printability import printability, wall_mm
+from torus_cad.geometry.analysis.printability import printability, wall_mm
+from torus_cad.geometry.blade.handedness import Handedness, air_push_z
+from torus_cad.geometry.hub.mounting import HubMounting
 from torus_cad.kernel.checks import balance, is_valid_closed_solid, precise_volume
 from torus_cad.kernel.step_readback import read_step
 from torus_cad.parameters import PropellerParameters
@@ -119,7 +119,7 @@ def test_mirror_turns_the_air_push_around():
 def test_wall_is_the_distance_between_the_surfaces_at_a_chord_station():
     params = PropellerParameters()
     blade = params.geometry().blade
-    from torus_cad.geometry.surface import surface_points
+    from torus_cad.geometry.blade.surface import surface_points
 
     for s, x in ((0.0, 0.3), (0.37, 0.6), (0.8, 0.95)):
         upper, lower = surface_points(blade, params.geometry().centerline(0), [s], [x, 2.0 - x])[0]
@@ -334,7 +334,7 @@ TIGHT_BEND = {
 
 def _tightest_analytic_concave_bend_mm(params, s, t, step=1e-4):
     """The smallest concave (seen from outside) radius of the analytic sections at ``s`` over ``t`` (mm)."""
-    from torus_cad.geometry.surface import surface_points
+    from torus_cad.geometry.blade.surface import surface_points
 
     geometry = params.geometry()
     rings = surface_points(geometry.blade, geometry.centerline(0), s, np.concatenate([t - step, t, t + step]))

@@ -22,11 +22,11 @@ import cadquery as cq
 
 from torus_cad.colors import HUB_COLOR, blade_color
 from torus_cad.errors import KernelError
-from torus_cad.geometry.extensions.handedness import Handedness, spin_to_push_air_down
-from torus_cad.geometry.extensions.mounting import HubMounting, set_screw_arc_deg
-from torus_cad.geometry.extensions.printability import Printability
-from torus_cad.geometry.hub import seam_angle_deg
-from torus_cad.geometry.surface import BladeSurface
+from torus_cad.geometry.analysis.printability import Printability
+from torus_cad.geometry.blade.handedness import Handedness, spin_to_push_air_down
+from torus_cad.geometry.blade.surface import BladeSurface
+from torus_cad.geometry.hub.mounting import HubMounting, set_screw_arc_deg
+from torus_cad.geometry.hub.seam import seam_angle_deg
 from torus_cad.kernel.checks import (
     MassProperties,
     mass_properties,
@@ -71,7 +71,7 @@ class Propeller:
             ``parameters`` are already the resolved spec parameters.
         mounting: the hub's bore, flat, set screw and chamfer, with the set screw's direction.
         face_parts: the part each face of ``solid`` came from, in the order of ``solid.Faces()``:
-            -1 (:data:`torus_cad.geometry.propeller.HUB_PART`) the hub, i blade i; a root fillet's
+            -1 (:data:`torus_cad.geometry.blade.propeller.HUB_PART`) the hub, i blade i; a root fillet's
             faces are their blade's (:mod:`torus_cad.kernel.face_provenance`).
         root_fillet: the radii the root fillet has (None without one): the requested radius
             everywhere, or smaller along junction edges where the blade bends too tightly for it
@@ -118,7 +118,7 @@ class Propeller:
         return design_printability(self.parameters)
 
     def spin_to_push_air_down(self) -> Handedness:
-        """The turn, seen from +z, that pushes air toward -z: a flat-plate estimate (torus_cad.geometry.extensions.handedness)."""
+        """The turn, seen from +z, that pushes air toward -z: a flat-plate estimate (torus_cad.geometry.blade.handedness)."""
         spin = spin_to_push_air_down(self.surface.points, self.surface.trailing_edge_column)
         if self.parameters.handedness == Handedness.CCW:  # the surface is the spec's blade, before the mirror
             return spin.opposite
@@ -138,7 +138,7 @@ class Propeller:
 
 
 def design_printability(params: PropellerParameters) -> Printability:
-    """The blade's printability from the analytic section alone (no kernel): see torus_cad.geometry.extensions.printability."""
+    """The blade's printability from the analytic section alone (no kernel): see torus_cad.geometry.analysis.printability."""
     return params.printability()
 
 

@@ -2,7 +2,7 @@
 meets (lengths in mm).
 
 A constant that belongs to one algorithm stays beside it, at module level with its unit: the geometry
-checks' limits (torus_cad.geometry.extensions.feasibility), the parameters' ranges
+checks' limits (torus_cad.geometry.analysis.feasibility), the parameters' ranges
 (torus_cad.parameters.design), the STL budget's sampling (torus_cad.parameters.stl_budget), the surface
 mesh's memory budget and crossing check (torus_cad.mesh.resolution, torus_cad.mesh.crossings), the CFD
 domain's sizes and its estimate (torus_cad.cfd.sizes, torus_cad.cfd.estimate), the simulation's levels,
@@ -116,7 +116,7 @@ AIRFOIL_FILE_TIME_LIMIT_S = 10.0
 AIRFOIL_COORDINATE_LIMIT = 1e6
 
 #: Most triangles an STL may have, by the estimate made before tessellating
-#: (torus_cad.geometry.extensions.triangle_estimate). OpenCascade's mesher slows down faster than its
+#: (torus_cad.geometry.analysis.triangle_estimate). OpenCascade's mesher slows down faster than its
 #: triangle count grows on the lofted blades (see the README's "Limits").
 STL_TRIANGLE_LIMIT = 2_000_000
 
@@ -247,7 +247,7 @@ MESH_REPAIR_PASSES = ("Relax", "Relax", "Relax", "CutAndFill", "Relax", "CutAndF
 #: shared boundary nodes each in its own placement, equal to the last bits).
 MESH_MERGE_DISTANCE_MM = 1e-6
 
-# -- the conventional (open-tip) blade (torus_cad.geometry.station_table, .conventional_blade) ------
+# -- the conventional (open-tip) blade (torus_cad.geometry.blade.station_table, .conventional_blade) ------
 
 #: Largest station file (a UIUC geometry file is < 1 kB, an APC PE0 file with its performance tables ~ 100 kB).
 STATION_FILE_MAX_BYTES = 1_000_000

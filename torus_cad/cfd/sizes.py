@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from torus_cad.errors import ParameterError
-from torus_cad.geometry.transforms import evaluate_quartic
+from torus_cad.geometry.blade.transforms import evaluate_quartic
 from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.design import Cfd, DesignKind, Handedness, InletSide
 

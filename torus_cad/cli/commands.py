@@ -247,11 +247,11 @@ def command_optimize(args: argparse.Namespace) -> int:
     option, 1 when the storage or the workers cannot be used, 130 / 143 / 129 on a signal (rerun to continue)."""
     _require("optimize", "optimize")
     from torus_cad.batch import BatchError
-    from torus_cad.optimize import StudyInterrupted, load_study, run_study
+    from torus_cad.optimize import StudyInterrupted, read_study_file, run_study
     from torus_cad.optimize.storage import StorageError
     from torus_cad.optimize.study_file import Sampler
 
-    spec = load_study(args.study)  # a bad study file raises ParameterError: exit 2
+    spec = read_study_file(args.study)  # a bad study file raises ParameterError: exit 2
     if spec.sampler is Sampler.CMAES:
         _require("optimize (sampler cmaes)", "optimize", ["cmaes"])
     if (args.storage or spec.storage).startswith("postgresql"):
@@ -278,7 +278,7 @@ def command_studio(args: argparse.Namespace) -> int:
     """Exit 0 never on a signal: 130 / 143 / 129 with one line, as every command."""
     _require("studio", "studio")
     from torus_cad.runtime.interrupts import EXIT_SIGNALS
-    from torus_cad.studio.app import check_host, serve
+    from torus_cad.studio.server import check_host, serve
 
     check_host(args.host)
     files = Path(args.files) if args.files else None

@@ -32,7 +32,7 @@ from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Shape, TopoDS_Solid, TopoDS_W
 from OCP.TopTools import TopTools_IndexedMapOfShape
 
 from torus_cad.errors import KernelError
-from torus_cad.geometry.propeller import HUB_PART
+from torus_cad.geometry.blade.propeller import HUB_PART
 from torus_cad.kernel import face_provenance
 from torus_cad.kernel.checks import single_valid_solid
 from torus_cad.kernel.face_provenance import Origins

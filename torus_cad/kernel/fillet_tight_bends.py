@@ -41,7 +41,7 @@ def reduced_edge_radii(solid: cq.Solid, edges: Sequence[TopoDS_Edge], radius_mm:
     than r (its centre path would have a cusp; a short enough bend is bridged). On fuzz designs whose blade sections are a
     millimetre or two long where they meet the hub, a cambered section's own concave stretch is
     that tight (the analytic surface, not the loft's fit, bends so: measured against
-    :func:`torus_cad.geometry.surface.surface_points`)."""
+    :func:`torus_cad.geometry.blade.surface.surface_points`)."""
     ancestors = TopTools_IndexedDataMapOfShapeListOfShape()
     TopExp.MapShapesAndAncestors_s(solid.wrapped, TopAbs_EDGE, TopAbs_FACE, ancestors)
     radii = []

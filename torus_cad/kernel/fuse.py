@@ -35,7 +35,7 @@ from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Shape, TopoDS_Shell, TopoDS_Solid
 
 from torus_cad.errors import KernelError
-from torus_cad.geometry.propeller import HUB_PART
+from torus_cad.geometry.blade.propeller import HUB_PART
 from torus_cad.kernel.edge_curves import refit_intersection_edges
 from torus_cad.kernel.face_provenance import Origins, face_parts, through_history
 from torus_cad.kernel.topology import boolean, count, edges, explore, faces, result
@@ -116,7 +116,7 @@ def fuse_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], re
     Returns the shape, how it was joined (ASSEMBLED or GLUED) and each face's part. The caller checks the result (validity covers each edge's curve on the hub against its 3D
     curve) and falls back to :func:`fuse_all` on a KernelError or an invalid solid. The
     propeller's hub has its seam beside every footprint, see
-    :func:`torus_cad.geometry.hub.seam_angle_deg`.
+    :func:`torus_cad.geometry.hub.seam.seam_angle_deg`.
     """
     lateral = _lateral_face(hub)
     cut = boolean(BRepAlgoAPI_Cut(), [blade.wrapped], [hub.wrapped])

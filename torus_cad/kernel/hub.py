@@ -5,7 +5,7 @@ D-flat, and a radial set-screw hole.
 The features are made on the hub *before* the blades are joined: the hub is small, so its
 booleans are cheap, and the shared-intersection fuse (:mod:`torus_cad.kernel.fuse`) still
 meets only the hub's outer cylinder, because the geometry layer refuses features that would
-reach a blade (:mod:`torus_cad.geometry.extensions.mounting`).
+reach a blade (:mod:`torus_cad.geometry.hub.mounting`).
 """
 
 from __future__ import annotations
@@ -28,7 +28,7 @@ from OCP.gp import gp_Ax1, gp_Ax2, gp_Dir, gp_Pnt, gp_Vec
 from OCP.TopoDS import TopoDS_Shape
 
 from torus_cad.errors import KernelError
-from torus_cad.geometry.extensions.mounting import SET_SCREW_OVERSHOOT_MM, HubMounting
+from torus_cad.geometry.hub.mounting import SET_SCREW_OVERSHOOT_MM, HubMounting
 from torus_cad.kernel.topology import cut
 
 _Z = gp_Dir(0.0, 0.0, 1.0)

@@ -5,7 +5,7 @@ values, so all section curves are compatible and the loft needs no knot insertio
 keeps the blade surface light and the boolean fast). Each curve starts and ends exactly at
 the sharp trailing edge: the corner is the curve's end point, a C0 joint, so the spline
 never has to turn through it and cannot overshoot or self-intersect there. The fit itself is
-kernel-free (:mod:`torus_cad.geometry.section_fit`), so that its refusals come before the kernel loads.
+kernel-free (:mod:`torus_cad.geometry.section.section_fit`), so that its refusals come before the kernel loads.
 
 The wire of a sharp section is two edges, the lower surface (trailing edge to leading edge)
 and the upper one (back to the trailing edge), split at the leading edge's curve parameter
@@ -20,7 +20,7 @@ the leading edge and the upper surface back to U; L is a knot of multiplicity 3.
 split there into two edges, the base and the airfoil, so the loft gives the base its own face.
 
 * A flat base is a span with collinear poles: U and L are corners (C0).
-* A round cap (:mod:`torus_cad.geometry.extensions.trailing_edge`) is the span U, U + h T_u, L + h T_l, L
+* A round cap (:mod:`torus_cad.geometry.blade.trailing_edge`) is the span U, U + h T_u, L + h T_l, L
   with h = 2/3 |U - L| (mm) and T_u, T_l the airfoil curve's own end tangents (the directions of
   its end poles, which the fit takes from the sampled surfaces): the cap's inner poles are
   collinear with the airfoil's end poles, so the curve is G1 at U and L (no corner), and the
@@ -51,14 +51,14 @@ from OCP.TColStd import TColStd_Array1OfInteger, TColStd_Array1OfReal
 from OCP.TopoDS import TopoDS_Edge
 
 from torus_cad.errors import KernelError
-from torus_cad.geometry.section_fit import DEGREE, SectionFit, corner_knots, fit_sections
+from torus_cad.geometry.section.section_fit import DEGREE, SectionFit, corner_knots, fit_sections
 
 __all__ = ["DEGREE", "SectionCurves", "bspline_wire", "fit_section_curves", "knot_arrays"]
 
 
 @dataclass(frozen=True)
 class SectionCurves(SectionFit):
-    """Compatible cubic B-splines of all sections (:class:`torus_cad.geometry.section_fit.SectionFit`:
+    """Compatible cubic B-splines of all sections (:class:`torus_cad.geometry.section.section_fit.SectionFit`:
     plain arrays), and the section wires the loft takes."""
 
     def wires(self, airfoil_pieces: int = 1, split_sharp: bool = True) -> list[cq.Wire]:
@@ -77,7 +77,7 @@ class SectionCurves(SectionFit):
 def fit_section_curves(section_points: NDArray[np.float64], trailing_edge_index: int,
                        chord_lengths: NDArray[np.float64], lower_corner_index: int | None = None,
                        round_trailing_edge: bool = False) -> SectionCurves:
-    """:func:`torus_cad.geometry.section_fit.fit_sections` (its arguments, its GeometryError), as curves that
+    """:func:`torus_cad.geometry.section.section_fit.fit_sections` (its arguments, its GeometryError), as curves that
     make wires."""
     fit = fit_sections(section_points, trailing_edge_index, chord_lengths, lower_corner_index, round_trailing_edge)
     return SectionCurves(**{field.name: getattr(fit, field.name) for field in fields(fit)})

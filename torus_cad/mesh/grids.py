@@ -17,12 +17,12 @@ from itertools import pairwise
 import numpy as np
 from numpy.typing import NDArray
 
-from torus_cad.geometry.arc_length import equal_arc_length_section
-from torus_cad.geometry.centerline import Centerline
-from torus_cad.geometry.mesh import TriangleMesh
-from torus_cad.geometry.propeller import PropellerGeometry
-from torus_cad.geometry.section import RoundTrailingEdge
-from torus_cad.geometry.surface import BladeSurface, blade_frames, place_sections, sections_along, sections_at
+from torus_cad.geometry.blade.centerline import Centerline
+from torus_cad.geometry.blade.mesh import TriangleMesh
+from torus_cad.geometry.blade.propeller import PropellerGeometry
+from torus_cad.geometry.blade.surface import BladeSurface, blade_frames, place_sections, sections_along, sections_at
+from torus_cad.geometry.section.arc_length import equal_arc_length_section
+from torus_cad.geometry.section.section import RoundTrailingEdge
 from torus_cad.parameters.design import SectionSpacing
 
 #: Points on the centerline used to tabulate its arc length for arc-length spacing.
@@ -75,7 +75,7 @@ def blade_grid(geometry: PropellerGeometry, sections: int, points: int, spacing:
     spaced in arc length around each section with the trailing edge's corners kept as points (spec §5).
 
     A blunt trailing edge (flat or round, ``airfoil.trailing_edge_*``) is sampled as
-    ``geometry.surface.blade_surface`` samples it for the solid: every section at the parameters
+    ``geometry.blade.surface.blade_surface`` samples it for the solid: every section at the parameters
     of the middle one, so the mesh and the B-rep have the same edge.
     """
     centerline = geometry.centerline(0)

@@ -2,7 +2,7 @@
 and the set-screw hole cut out of it with manifold3d, as the B-rep's hub (torus_cad.kernel.hub) has them.
 
 The features are placed and checked against the blades exactly as for the B-rep
-(torus_cad.geometry.extensions.mounting.place_mounting on the same dense sampling), so the set screw
+(torus_cad.geometry.hub.mounting.place_mounting on the same dense sampling), so the set screw
 points the same way. The circles are polygons inscribed in them, with at least
 :data:`BORE_MIN_SEGMENTS` / :data:`SET_SCREW_MIN_SEGMENTS` sides and sides no longer than the
 hub's cells: their vertices lie on the B-rep's surfaces. The root fillet has no structured mesh:
@@ -17,8 +17,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from torus_cad.errors import ParameterError
-from torus_cad.geometry.extensions.mounting import SET_SCREW_OVERSHOOT_MM, HubMounting, place_mounting
-from torus_cad.geometry.mesh import TriangleMesh
+from torus_cad.geometry.blade.mesh import TriangleMesh
+from torus_cad.geometry.hub.mounting import SET_SCREW_OVERSHOOT_MM, HubMounting, place_mounting
 from torus_cad.parameters import PropellerParameters
 
 #: Fewest sides of the bore's polygon (its area is then within 0.16 % of the circle's).

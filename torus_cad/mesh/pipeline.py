@@ -22,11 +22,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from torus_cad.errors import ParameterError
-from torus_cad.geometry.extensions import feasibility
-from torus_cad.geometry.extensions.mounting import HubMounting
-from torus_cad.geometry.mesh import TriangleMesh
-from torus_cad.geometry.propeller import PropellerGeometry
-from torus_cad.geometry.surface import BladeSurface, blade_frames, place_sections, sections_along, sections_at
+from torus_cad.geometry.analysis import feasibility
+from torus_cad.geometry.blade.mesh import TriangleMesh
+from torus_cad.geometry.blade.propeller import PropellerGeometry
+from torus_cad.geometry.blade.surface import BladeSurface, blade_frames, place_sections, sections_along, sections_at
+from torus_cad.geometry.hub.mounting import HubMounting
 from torus_cad.mesh import quality
 from torus_cad.mesh.assembly import assemble
 from torus_cad.mesh.cleanup import Cleanup

@@ -20,12 +20,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from torus_cad.errors import BudgetError, ParameterError
-from torus_cad.geometry.airfoil import airfoil_points
-from torus_cad.geometry.arc_length import equal_arc_length_section
-from torus_cad.geometry.propeller import PropellerGeometry
-from torus_cad.geometry.section import max_thickness
-from torus_cad.geometry.surface import blade_frames, place_on_frames
-from torus_cad.geometry.transforms import evaluate_quartic
+from torus_cad.geometry.blade.propeller import PropellerGeometry
+from torus_cad.geometry.blade.surface import blade_frames, place_on_frames
+from torus_cad.geometry.blade.transforms import evaluate_quartic
+from torus_cad.geometry.section.airfoil import airfoil_points
+from torus_cad.geometry.section.arc_length import equal_arc_length_section
+from torus_cad.geometry.section.section import max_thickness
 from torus_cad.mesh.grids import blade_grid, blade_triangle_count, cell_size, hub_layout, section_parameters
 from torus_cad.parameters.design import SectionSpacing
 from torus_cad.tolerances import MESH_SAG_LIMIT

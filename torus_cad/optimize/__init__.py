@@ -10,16 +10,16 @@
 
 ::
 
-    from torus_cad.optimize import load_study, run_study
+    from torus_cad.optimize import read_study_file, run_study
 
     if __name__ == "__main__":          # needed: the worker processes re-import this script
-        result = run_study(load_study("examples/optimize_light.toml"), "optimize_out/light", workers=2)
+        result = run_study(read_study_file("examples/optimize_light.toml"), "optimize_out/light", workers=2)
         print(result.summary())
 
 Needs the ``optimize`` extra (optuna, cmaes, psycopg2-binary): ``pip install -c constraints.txt -e '.[optimize]'``.
 """
 
 from torus_cad.optimize.study import StudyInterrupted, StudyResult, run_study
-from torus_cad.optimize.study_file import StudySpec, load_study, parse_study
+from torus_cad.optimize.study_file import StudySpec, parse_study, read_study_file
 
-__all__ = ["StudyInterrupted", "StudyResult", "StudySpec", "load_study", "parse_study", "run_study"]
+__all__ = ["StudyInterrupted", "StudyResult", "StudySpec", "parse_study", "read_study_file", "run_study"]

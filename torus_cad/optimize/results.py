@@ -18,7 +18,7 @@ import json
 import math
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from torus_cad.batch.table import write_table
 from torus_cad.optimize.storage import (
@@ -34,6 +34,14 @@ from torus_cad.optimize.storage import (
     was_stopped,
 )
 from torus_cad.optimize.study_file import StudySpec
+from torus_cad.optimize.trial_job import TRIALS_DIR, trial_name
+
+if TYPE_CHECKING:  # optuna and matplotlib are imported where they are used
+    import optuna
+    from matplotlib.figure import Figure
+    from optuna.trial import FrozenTrial
+
+    from torus_cad.parameters import PropellerParameters
 
 __all__ = ["BEST_DIR", "MAX_PARETO_BUILDS", "best_trials", "trial_rows", "write_results"]
 
@@ -42,7 +50,7 @@ MAX_PARETO_BUILDS = 20  #: Pareto designs built with their files (every one gets
 INTERRUPTED = "interrupted"
 
 
-def write_results(spec: StudySpec, study: Any, out: Path, checkpoint: Callable[[], None] | None = None
+def write_results(spec: StudySpec, study: optuna.Study, out: Path, checkpoint: Callable[[], None] | None = None
                   ) -> tuple[dict[str, Path], list[str]]:
     """Write the table, the pictures, the best designs and the summary JSON; the paths and summary lines.
 
@@ -95,7 +103,7 @@ def _count(items: Any) -> dict[str, int]:
     return counts
 
 
-def best_trials(spec: StudySpec, study: Any) -> list[Any]:
+def best_trials(spec: StudySpec, study: optuna.Study) -> list[FrozenTrial]:
     """The best feasible trial (one objective) or the feasible Pareto front (several), by trial number."""
     if len(spec.objectives) > 1:
         return sorted(study.best_trials, key=lambda trial: trial.number)
@@ -105,7 +113,7 @@ def best_trials(spec: StudySpec, study: Any) -> list[Any]:
         return []
 
 
-def trial_rows(spec: StudySpec, trials: Sequence[Any]) -> tuple[list[dict[str, Any]], list[str]]:
+def trial_rows(spec: StudySpec, trials: Sequence[FrozenTrial]) -> tuple[list[dict[str, Any]], list[str]]:
     """One row per trial and the columns, in table order."""
     metrics = list(dict.fromkeys(spec.metrics))
     columns = (["number", "state", "outcome", "feasible", "reason", "prescreened"] + [axis.key for axis in spec.axes]
@@ -151,16 +159,16 @@ def unvalued_lines(rows: Sequence[dict[str, Any]]) -> list[str]:
     return lines
 
 
-def _feasible(trial: Any) -> bool:
+def _feasible(trial: FrozenTrial) -> bool:
     return trial.state.name == "COMPLETE" and all(v <= 0.0 for v in trial_result(trial).get(CONSTRAINT, []))
 
 
-def _history_picture(spec: StudySpec, trials: Sequence[Any], path: Path) -> Path:
+def _history_picture(spec: StudySpec, trials: Sequence[FrozenTrial], path: Path) -> Path:
     """Each objective against the trial number: feasible, infeasible, and the best so far."""
     return _save_png(history_figure(spec, trials), path)
 
 
-def history_figure(spec: StudySpec, trials: Sequence[Any]) -> Any:
+def history_figure(spec: StudySpec, trials: Sequence[FrozenTrial]) -> Figure:
     """The history picture's matplotlib figure: each objective against the trial number (feasible,
     infeasible, the best so far), and the trials without a value (refused, failed) as marks along the
     bottom of each panel."""
@@ -201,7 +209,7 @@ def history_figure(spec: StudySpec, trials: Sequence[Any]) -> Any:
     return figure
 
 
-def _save_png(figure: Any, path: Path) -> Path:
+def _save_png(figure: Figure, path: Path) -> Path:
     """Write a matplotlib figure as a PNG, atomically, and close it."""
     import matplotlib.pyplot as plt
 
@@ -214,7 +222,7 @@ def _save_png(figure: Any, path: Path) -> Path:
     return path
 
 
-def _pareto_picture(spec: StudySpec, trials: Sequence[Any], front: Sequence[Any], path: Path) -> Path:
+def _pareto_picture(spec: StudySpec, trials: Sequence[FrozenTrial], front: Sequence[FrozenTrial], path: Path) -> Path:
     """The two objectives of every complete trial, the feasible Pareto front highlighted."""
     import matplotlib
 
@@ -241,7 +249,7 @@ def _pareto_picture(spec: StudySpec, trials: Sequence[Any], front: Sequence[Any]
     return _save_png(figure, path)
 
 
-def _publish_best(spec: StudySpec, trials: Sequence[Any], best: Sequence[Any], folder: Path, out: Path
+def _publish_best(spec: StudySpec, trials: Sequence[FrozenTrial], best: Sequence[FrozenTrial], folder: Path, out: Path
                   ) -> tuple[list[str], dict[int, Path]]:
     """Write each best design's TOML and publish beside it, as an output set, the files its trial wrote
     (copied, not rebuilt: the study judged the trial on them). A trial whose set cannot be published
@@ -274,14 +282,14 @@ def _publish_best(spec: StudySpec, trials: Sequence[Any], best: Sequence[Any], f
     return lines, built
 
 
-def _ranked_feasible(spec: StudySpec, trials: Sequence[Any]) -> list[Any]:
+def _ranked_feasible(spec: StudySpec, trials: Sequence[FrozenTrial]) -> list[FrozenTrial]:
     """The feasible complete trials of a one-objective study, best first."""
     sign = -1.0 if spec.objectives[0].direction.value == "maximize" else 1.0
     return sorted((trial for trial in trials if _feasible(trial)), key=lambda trial: (sign * trial.values[0],
                                                                                       trial.number))
 
 
-def _publish_trial(spec: StudySpec, trial: Any, name: str, folder: Path, out: Path, with_files: bool = True) -> Path:
+def _publish_trial(spec: StudySpec, trial: FrozenTrial, name: str, folder: Path, out: Path, with_files: bool = True) -> Path:
     """``folder/<name>.toml`` (the trial's design under ``name``) and, with ``with_files``, the trial's
     own output set copied beside it as the set ``name`` (unless that set is already current).
 
@@ -302,14 +310,13 @@ def _publish_trial(spec: StudySpec, trial: Any, name: str, folder: Path, out: Pa
     return path
 
 
-def _copy_trial_set(trial: Any, parameters: Any, name: str, folder: Path, out: Path, stl: bool = True) -> None:
+def _copy_trial_set(trial: FrozenTrial, parameters: PropellerParameters, name: str, folder: Path, out: Path, stl: bool = True) -> None:
     """Publish the trial's verified output set (renamed ``name``: its files and its report, which names
     the trial it came from) in ``folder``; the copies are checked against the trial's SHA-256. The set
     must hold every format of the design's ``export.formats`` (STL only if ``stl``)."""
     import shutil
 
     from torus_cad.errors import IncompleteOutputError
-    from torus_cad.optimize.trial_job import TRIALS_DIR, trial_name
     from torus_cad.outputs.output_set import FILES_KEY, OutputSet, file_entry, verify_set
 
     source = out / str(trial_result(trial).get(FOLDER, f"{TRIALS_DIR}/{trial.number}"))

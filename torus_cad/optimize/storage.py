@@ -10,11 +10,19 @@ owner (host, pid, process start time), and its process records a heartbeat every
 one whose owner is gone from this host, or one whose heartbeat is older than :data:`GRACE_S`
 (another host), is failed and its parameters are asked
 again as a new trial that records ``retry_of`` (:func:`retry_stale_trials`).
+
+All of it is optuna's public API: heartbeats through ``RDBStorage(heartbeat_interval=...,
+grace_period=..., heartbeat_stale_trial_callback=...)``, the stale trials of other hosts failed by
+``optuna.storages.fail_stale_trials``, a failed trial asked again by
+``RetryHeartbeatStaleTrialCallback`` (``RetryFailedTrialCallback`` before optuna 4.9); this host's
+dead owners are found first, at once, by their pid. The one private name left (the trials' table,
+for the one-query count) sits in :func:`_trial_tables`, pinned to optuna's version.
 """
 
 from __future__ import annotations
 
 import contextlib
+import copy
 import fcntl
 import hashlib
 import os
@@ -23,15 +31,21 @@ import time
 import warnings
 from collections.abc import Iterable, Iterator
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 from urllib.parse import urlsplit, urlunsplit
 
 from torus_cad.errors import ParameterError, TorusCadError
 from torus_cad.runtime.processes import host_tag, process_identity
 
+if TYPE_CHECKING:  # optuna and SQLAlchemy are imported where they are used (the optimize extra)
+    import optuna
+    import sqlalchemy
+    from optuna.storages import RDBStorage
+    from optuna.trial import FrozenTrial, Trial
+
 __all__ = ["GRACE_S", "HEARTBEAT_S", "PRESCREENED", "Heartbeat", "StorageError", "claim_lock", "count_trials",
-           "fail_and_retry", "open_storage", "owner_record", "public_url", "retry_stale_trials", "storage_failures_named",
-           "storage_url", "trial_result"]
+           "fail_and_retry", "open_storage", "owner_record", "public_url", "retry_failed_trial", "retry_stale_trials",
+           "storage_failures_named", "storage_url", "trial_result"]
 
 HEARTBEAT_S = 10  #: how often a running process records that its trials are alive, s
 GRACE_S = 120  #: a RUNNING trial without a heartbeat for this long belongs to a dead process, s
@@ -93,8 +107,9 @@ def _is_sqlite(url: str) -> bool:
     return url.startswith("sqlite")
 
 
-def open_storage(url: str) -> Any:
-    """optuna's RDBStorage at ``url`` with heartbeats; StorageError naming the (password-free) URL."""
+def open_storage(url: str) -> RDBStorage:
+    """optuna's RDBStorage at ``url`` with heartbeats, a stale trial asked again by :func:`retry_failed_trial`;
+    StorageError naming the (password-free) URL."""
     import optuna
     import sqlalchemy.exc
 
@@ -105,7 +120,8 @@ def open_storage(url: str) -> Any:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")  # optuna's ExperimentalWarning for the heartbeat
                 storage = optuna.storages.RDBStorage(_with_driver(url), engine_kwargs=kwargs,
-                                                     heartbeat_interval=HEARTBEAT_S, grace_period=GRACE_S)
+                                                     heartbeat_interval=HEARTBEAT_S, grace_period=GRACE_S,
+                                                     heartbeat_stale_trial_callback=_Retries())
             if _is_sqlite(url):
                 _write_ahead_log(storage.engine)
             return storage
@@ -148,7 +164,7 @@ def storage_failures_named(url: str) -> Iterator[None]:
         raise StorageError(f"the study storage {public_url(url)!r} failed: {_storage_cause(error)}") from None
 
 
-def _write_ahead_log(engine: Any) -> None:
+def _write_ahead_log(engine: sqlalchemy.engine.Engine) -> None:
     """SQLite in write-ahead-log mode with NORMAL synchronisation on every connection of ``engine``: a
     commit then costs no fsync (a trial's records take several), and a killed process still loses
     nothing it committed; only a power cut can undo the last commits (those trials are asked again)."""
@@ -165,7 +181,7 @@ def _write_ahead_log(engine: Any) -> None:
 
 
 @contextlib.contextmanager
-def claim_lock(storage: Any, url: str, name: str) -> Iterator[None]:
+def claim_lock(storage: RDBStorage | None, url: str, name: str) -> Iterator[None]:
     """Hold the study's lock (flock beside an SQLite file, an advisory lock on PostgreSQL) in the block.
 
     ``storage`` (the RDBStorage) is needed for PostgreSQL only; without it there is no lock there.
@@ -204,38 +220,69 @@ def owner_record() -> dict[str, Any]:
     return {"host": host_tag(), "pid": os.getpid(), "start": process_identity(os.getpid())}
 
 
-def _owner_gone(owner: Any) -> bool:
+def _owner_gone(owner: object) -> bool:
     """Whether ``owner`` (an :func:`owner_record`) is a process of this host that no longer runs."""
     if not isinstance(owner, dict) or owner.get("host") != host_tag() or not isinstance(owner.get("pid"), int):
         return False
     return process_identity(owner["pid"]) != owner.get("start")
 
 
-def retry_stale_trials(study: Any, rdb: Any) -> list[int]:
+def retry_stale_trials(study: optuna.Study, rdb: RDBStorage) -> list[int]:
     """Fail the RUNNING trials of dead processes and ask their parameters again; the failed trials' numbers.
 
-    Call under :func:`claim_lock`; ``rdb`` is the study's RDBStorage (:func:`open_storage`). Dead
-    owners on this host are found at once, and so is a trial with no owner (its process died while
-    claiming it); owners of other hosts once their heartbeat is :data:`GRACE_S` old.
+    Call under :func:`claim_lock`; ``rdb`` is the study's RDBStorage (:func:`open_storage`). A first,
+    fast pass finds dead owners on this host by their pid, and a trial with no owner (its process died
+    while claiming it); then optuna's ``fail_stale_trials`` fails the trials whose heartbeat is
+    :data:`GRACE_S` old (owners on other hosts) and asks them again through :func:`retry_failed_trial`.
     """
+    from optuna.storages import fail_stale_trials
     from optuna.trial import TrialState
 
     # Every process asks for a trial and records its owner under the claim lock, so a RUNNING trial
     # without an owner, seen under that lock, was being claimed by a process that died in between.
-    stale = [trial for trial in study.get_trials(deepcopy=False, states=(TrialState.RUNNING,))
+    stale = [trial.number for trial in study.get_trials(deepcopy=False, states=(TrialState.RUNNING,))
              if OWNER not in trial.user_attrs or _owner_gone(trial.user_attrs[OWNER])]
-    stale_ids = {trial._trial_id for trial in stale}
-    stale_ids |= set(rdb._get_stale_trial_ids(study._study_id))
-    return fail_and_retry(study, stale_ids)
+    retried = fail_and_retry(study, rdb, stale)
+    recorder = rdb.get_heartbeat_stale_trial_callback()
+    seen = len(recorder.numbers) if isinstance(recorder, _Retries) else 0
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # optuna's ExperimentalWarning for fail_stale_trials
+        fail_stale_trials(study)
+    return retried + (sorted(recorder.numbers[seen:]) if isinstance(recorder, _Retries) else [])
 
 
-def trial_result(trial: Any) -> dict[str, Any]:
+def retry_failed_trial(study: optuna.Study, trial: FrozenTrial) -> None:
+    """Ask a failed trial's parameters again as a new WAITING trial that records ``retry_of`` (optuna's
+    ``RetryHeartbeatStaleTrialCallback``, given the trial with that one user attr: the failed run's own
+    records, owner, result and stopped, stay with the failed trial)."""
+    from optuna.storages import RetryHeartbeatStaleTrialCallback
+
+    retry = copy.copy(trial)
+    retry.user_attrs = {RETRY_OF: trial.number}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # optuna's ExperimentalWarning for the callback
+        RetryHeartbeatStaleTrialCallback()(study, retry)
+
+
+class _Retries:
+    """The storage's ``heartbeat_stale_trial_callback``: :func:`retry_failed_trial`, keeping the numbers of
+    the trials it asked again (``fail_stale_trials`` returns none)."""
+
+    def __init__(self) -> None:
+        self.numbers: list[int] = []
+
+    def __call__(self, study: optuna.Study, trial: FrozenTrial) -> None:
+        retry_failed_trial(study, trial)
+        self.numbers.append(trial.number)
+
+
+def trial_result(trial: FrozenTrial) -> dict[str, Any]:
     """The :data:`RESULT` record of a (frozen) trial; empty while it runs or when its run stopped first."""
     record = trial.user_attrs.get(RESULT)
     return record if isinstance(record, dict) else {}
 
 
-def count_trials(rdb: Any, study_id: int) -> tuple[int, bool]:
+def count_trials(rdb: RDBStorage, study_id: int) -> tuple[int, bool]:
     """The trials that count toward ``--trials`` (COMPLETE, RUNNING, WAITING, and FAIL with a recorded
     result and not stopped) and whether any is WAITING, in one query.
 
@@ -243,12 +290,11 @@ def count_trials(rdb: Any, study_id: int) -> tuple[int, bool]:
     and this count is made under :func:`claim_lock` before every ask. The FAIL rule is
     :func:`was_stopped`'s, in SQL: change them together."""
     import sqlalchemy
-    from optuna.storages._rdb import models
     from optuna.trial import TrialState
 
-    trial, attr = models.TrialModel, models.TrialUserAttributeModel
+    trial, attr = _trial_tables()
 
-    def has_attr(key: str) -> Any:
+    def has_attr(key: str) -> sqlalchemy.Exists:
         return sqlalchemy.exists().where(attr.trial_id == trial.trial_id, attr.key == key)
 
     counted = sqlalchemy.or_(trial.state.in_([TrialState.COMPLETE, TrialState.RUNNING, TrialState.WAITING]),
@@ -262,40 +308,54 @@ def count_trials(rdb: Any, study_id: int) -> tuple[int, bool]:
     return int(total or 0), bool(waiting)
 
 
-def was_stopped(trial: Any) -> bool:
+def _trial_tables() -> tuple[Any, Any]:
+    """optuna's trial and trial-user-attribute tables (SQLAlchemy models), for :func:`count_trials`.
+
+    The one private name of optuna this package uses, read as of optuna 5.0.0 (constraints.txt): the
+    public API has no aggregate over a study's trials. A new optuna: check the models' names and columns
+    (``trial_id``, ``study_id``, ``state``; ``trial_id``, ``key``)."""
+    from optuna.storages._rdb import models
+
+    return models.TrialModel, models.TrialUserAttributeModel
+
+
+def was_stopped(trial: FrozenTrial) -> bool:
     """A FAIL trial whose run stopped (asked again), not one failed for a reason of its design."""
     from optuna.trial import TrialState
 
     return trial.state is TrialState.FAIL and (RESULT not in trial.user_attrs or STOPPED in trial.user_attrs)
 
 
-def fail_and_retry(study: Any, trial_ids: Iterable[int]) -> list[int]:
-    """Fail each of these trials that is still RUNNING and enqueue its parameters as a new trial that
-    records ``retry_of``; the numbers of the trials failed (one that another process finished is skipped)."""
+def fail_and_retry(study: optuna.Study, rdb: RDBStorage, trial_numbers: Iterable[int]) -> list[int]:
+    """Fail each of these trials that is still RUNNING, marked :data:`STOPPED` first, and ask its parameters
+    again (:func:`retry_failed_trial`); the numbers of the trials failed (one that another process
+    finished is skipped)."""
     import optuna
     from optuna.trial import TrialState
 
-    storage = study._storage
+    study_id = rdb.get_study_id_from_name(study.study_name)
     retried = []
-    for trial_id in sorted(set(trial_ids)):
+    for number in sorted(set(trial_numbers)):
+        trial_id = rdb.get_trial_id_from_study_id_trial_number(study_id, number)
         try:
-            storage.set_trial_user_attr(trial_id, STOPPED, True)
-            if not storage.set_trial_state_values(trial_id, state=TrialState.FAIL):
+            rdb.set_trial_user_attr(trial_id, STOPPED, True)
+            if not rdb.set_trial_state_values(trial_id, state=TrialState.FAIL):
                 continue
         except optuna.exceptions.UpdateFinishedTrialError:
             continue  # another process finished or failed it first
-        trial = storage.get_trial(trial_id)
-        study.enqueue_trial(trial.params, user_attrs={RETRY_OF: trial.number}, skip_if_exists=False)
-        retried.append(trial.number)
+        retry_failed_trial(study, rdb.get_trial(trial_id))
+        retried.append(number)
     return retried
 
 
 class Heartbeat:
-    """A thread that records the heartbeat of the trials this process runs, every :data:`HEARTBEAT_S` s."""
+    """A thread that records the heartbeat of the trials this process runs, every :data:`HEARTBEAT_S` s
+    (optuna's ``RDBStorage.record_heartbeat``; optuna's own thread runs inside ``Study.optimize`` only)."""
 
-    def __init__(self, storage: Any) -> None:
+    def __init__(self, storage: RDBStorage, study: optuna.Study) -> None:
         self._storage = storage
-        self._trial_ids: set[int] = set()
+        self._study_id = storage.get_study_id_from_name(study.study_name)
+        self._trial_ids: dict[int, int] = {}  # trial number -> trial id
         self._lock = threading.Lock()
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name="torus-cad study heartbeat", daemon=True)
@@ -308,14 +368,15 @@ class Heartbeat:
         self._stop.set()
         self._thread.join(timeout=5.0)
 
-    def add(self, trial_id: int) -> None:
+    def add(self, trial: Trial) -> None:
+        trial_id = self._storage.get_trial_id_from_study_id_trial_number(self._study_id, trial.number)
         with self._lock:
-            self._trial_ids.add(trial_id)
+            self._trial_ids[trial.number] = trial_id
         self._beat([trial_id])
 
-    def discard(self, trial_id: int) -> None:
+    def discard(self, trial: Trial) -> None:
         with self._lock:
-            self._trial_ids.discard(trial_id)
+            self._trial_ids.pop(trial.number, None)
 
     def _beat(self, trial_ids: list[int]) -> None:
         for trial_id in trial_ids:
@@ -325,6 +386,6 @@ class Heartbeat:
     def _run(self) -> None:
         while not self._stop.wait(HEARTBEAT_S):
             with self._lock:
-                trial_ids = sorted(self._trial_ids)
+                trial_ids = sorted(self._trial_ids.values())
             self._beat(trial_ids)
 

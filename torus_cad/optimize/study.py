@@ -23,7 +23,7 @@ import warnings
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from torus_cad.batch import cluster
 from torus_cad.batch.job import DesignTask, prescreen
@@ -58,6 +58,13 @@ from torus_cad.optimize.storage import (
 from torus_cad.optimize.study_file import Sampler, StudySpec
 from torus_cad.optimize.trial_job import PERFORMANCE_DIR, TRIALS_DIR, TrialTask, run_trial, trial_name
 from torus_cad.tolerances import MAX_STUDY_TRIALS
+
+if TYPE_CHECKING:  # optuna is imported where it is used (the optimize extra)
+    import optuna
+    from optuna.distributions import BaseDistribution
+    from optuna.samplers import BaseSampler
+    from optuna.storages import RDBStorage
+    from optuna.trial import FrozenTrial, Trial
 
 __all__ = ["DEFINITION_ATTR", "StudyInterrupted", "StudyResult", "run_study"]
 
@@ -136,7 +143,7 @@ def run_study(spec: StudySpec, out_dir: str | Path, *, trials: int | None = None
     """Run ``spec`` until it holds ``trials`` (default ``spec.trials``) finished trials, then write its results.
 
     Args:
-        spec: the study (:func:`torus_cad.optimize.study_file.load_study`).
+        spec: the study (:func:`torus_cad.optimize.study_file.read_study_file`).
         out_dir: the output folder: ``trials/<number>/``, ``<name>.db``, ``results.csv``, ``best/``.
         trials: trials in all (over every run and process of the study).
         workers: local worker processes (default and cap: the CPUs available), or a LocalCluster's
@@ -205,11 +212,12 @@ class _Runner:
             except BaseException:
                 self.close()
                 raise
+        self.study_id = self.rdb.get_study_id_from_name(self.study.study_name)
         self.owner = owner_record()
-        self.in_flight: dict[str, Any] = {}  # design id -> optuna Trial
+        self.in_flight: dict[str, Trial] = {}  # design id -> optuna Trial
         self.seeded = False
         self.ran = 0
-        self.heartbeat = Heartbeat(self.rdb)
+        self.heartbeat = Heartbeat(self.rdb, self.study)
 
     # -- the loop --------------------------------------------------------------------------------
 
@@ -260,9 +268,9 @@ class _Runner:
             else:
                 self._on_result(task, refusal)
 
-    def _claim(self) -> Any:
+    def _claim(self) -> Trial | None:
         """Ask for a trial (an enqueued retry first), or None when the study is full."""
-        counted, waiting = count_trials(self.rdb, self.study._study_id)
+        counted, waiting = count_trials(self.rdb, self.study_id)
         if not self.seeded:  # distinct seeds for processes sharing a study, reproducible for one process
             self.study.sampler = _sampler(self.spec, self.spec.seed + counted)
             self.seeded = True
@@ -273,10 +281,10 @@ class _Runner:
             trial = self.study.ask(_distributions(self.spec))
         self.in_flight[trial_name(trial.number)] = trial  # from here an interrupt fails it and asks it again
         trial.set_user_attr(OWNER, self.owner)
-        self.heartbeat.add(trial._trial_id)
+        self.heartbeat.add(trial)
         return trial
 
-    def _task(self, trial: Any) -> TrialTask:
+    def _task(self, trial: Trial) -> TrialTask:
         name = trial_name(trial.number)
         folder = self.out / TRIALS_DIR / str(trial.number)
         folder.mkdir(parents=True, exist_ok=True)
@@ -312,7 +320,7 @@ class _Runner:
             else:
                 self.study.tell(trial, values)
         del self.in_flight[task.design_id]
-        self.heartbeat.discard(trial._trial_id)
+        self.heartbeat.discard(trial)
         self.ran += 1
 
     def _evaluate(self, folder: Path, name: str, record: dict[str, Any]) -> list[float]:
@@ -332,11 +340,11 @@ class _Runner:
         (those it holds, and any RUNNING trial that records this process as its owner)."""
         from optuna.trial import TrialState
 
-        mine = {trial._trial_id for trial in self.in_flight.values()}
+        mine = {trial.number for trial in self.in_flight.values()}
         with contextlib.suppress(Exception):  # the storage is gone: the next run finds them by their owner
-            mine |= {trial._trial_id for trial in self.study.get_trials(deepcopy=False, states=(TrialState.RUNNING,))
+            mine |= {trial.number for trial in self.study.get_trials(deepcopy=False, states=(TrialState.RUNNING,))
                      if trial.user_attrs.get(OWNER) == self.owner}
-            fail_and_retry(self.study, mine)
+            fail_and_retry(self.study, self.rdb, mine)
         # the pool is stopped: the staging folders its workers had open are debris now (their trials are
         # asked again under new numbers, in new folders)
         _remove_staging_debris(self.out / TRIALS_DIR / str(trial.number) for trial in self.in_flight.values())
@@ -378,10 +386,10 @@ def _remove_staging_debris(folders: Iterable[Path]) -> None:
         remove_stale_staging(folder)
 
 
-def _distributions(spec: StudySpec) -> dict[str, Any]:
+def _distributions(spec: StudySpec) -> dict[str, BaseDistribution]:
     from optuna.distributions import CategoricalDistribution, FloatDistribution, IntDistribution
 
-    distributions: dict[str, Any] = {}
+    distributions: dict[str, BaseDistribution] = {}
     for axis in spec.axes:
         if not axis.is_bounds:
             distributions[axis.key] = CategoricalDistribution(list(axis.values))
@@ -392,12 +400,12 @@ def _distributions(spec: StudySpec) -> dict[str, Any]:
     return distributions
 
 
-def _constraints(trial: Any) -> list[float]:
+def _constraints(trial: FrozenTrial) -> list[float]:
     """optuna's constraints_func: the violations recorded with the trial (feasible when all <= 0)."""
     return list(trial_result(trial).get(CONSTRAINT, [math.inf]))
 
 
-def _sampler(spec: StudySpec, seed: int) -> Any:
+def _sampler(spec: StudySpec, seed: int) -> BaseSampler:
     import optuna
 
     constraints = _constraints if spec.constraints else None
@@ -413,7 +421,7 @@ def _sampler(spec: StudySpec, seed: int) -> Any:
         return optuna.samplers.RandomSampler(seed=seed)
 
 
-def _load_study(spec: StudySpec, rdb: Any) -> Any:
+def _load_study(spec: StudySpec, rdb: RDBStorage) -> optuna.Study:
     """The study in the storage (created on the first run); ParameterError if it was created from another file."""
     import optuna
 

@@ -61,7 +61,7 @@ from torus_cad.parameters.schema import Section, param, parameter_error
 from torus_cad.simulate.settings import Level
 from torus_cad.tolerances import DESIGN_TIME_LIMIT_MAX_S, MAX_STUDY_TRIALS, SIMULATE_RPM_LIMIT
 
-__all__ = ["Direction", "Objective", "Sampler", "StudySpec", "load_study", "parse_study"]
+__all__ = ["Direction", "Objective", "Sampler", "StudySpec", "parse_study", "read_study_file"]
 
 _NAME_PATTERN = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.-]{0,99}$")
 
@@ -203,7 +203,7 @@ class StudySpec:
         return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
-def load_study(path: str | Path) -> StudySpec:
+def read_study_file(path: str | Path) -> StudySpec:
     """Read and check a study file; any problem is a one-line ParameterError naming the key."""
     path = Path(path)
     source = f"study file {str(path)!r}"

@@ -21,8 +21,8 @@ from torus_cad.errors import ParameterError, TorusCadError
 
 __all__ = ["PERFORMANCE_DIR", "TRIALS_DIR", "TrialTask", "run_trial", "trial_name"]
 
-TRIALS_DIR = "trials"  #: the folder of the trials' folders, under the study's out folder
 PERFORMANCE_DIR = "simulate"
+TRIALS_DIR = "trials"  #: the trials' folders under the study's out folder: ``OUT/trials/<number>/``
 
 
 def trial_name(number: int) -> str:

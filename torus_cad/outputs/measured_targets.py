@@ -8,10 +8,10 @@ from typing import Any
 
 import numpy as np
 
-from torus_cad.geometry.extensions.blade_elements import blade_angles
-from torus_cad.geometry.extensions.handedness import Handedness
-from torus_cad.geometry.surface import blade_frames
-from torus_cad.geometry.transforms import evaluate_quartic
+from torus_cad.geometry.analysis.blade_elements import blade_angles
+from torus_cad.geometry.blade.handedness import Handedness
+from torus_cad.geometry.blade.surface import blade_frames
+from torus_cad.geometry.blade.transforms import evaluate_quartic
 from torus_cad.outputs.sections_table import elements_of
 
 

@@ -11,15 +11,15 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any, Protocol
 
-from torus_cad.geometry.extensions.handedness import Handedness
+from torus_cad.geometry.blade.handedness import Handedness
 from torus_cad.kernel.checks import balance
 
 if TYPE_CHECKING:
     import cadquery as cq
 
-    from torus_cad.geometry.extensions.mounting import HubMounting
-    from torus_cad.geometry.extensions.printability import Printability
-    from torus_cad.geometry.surface import BladeSurface
+    from torus_cad.geometry.analysis.printability import Printability
+    from torus_cad.geometry.blade.surface import BladeSurface
+    from torus_cad.geometry.hub.mounting import HubMounting
     from torus_cad.kernel.checks import MassProperties
     from torus_cad.kernel.fillet import RootFillet
     from torus_cad.kernel.fuse import FuseRoute

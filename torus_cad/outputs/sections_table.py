@@ -1,7 +1,7 @@
 """The blade-element table beside the STEP: ``<name>_sections.csv`` and ``<name>_sections.png``.
 
 One row per section of the design (``resolution.sections``), columns as
-:data:`CSV_COLUMNS` (mm and degrees; definitions in :mod:`torus_cad.geometry.extensions.blade_elements`).
+:data:`CSV_COLUMNS` (mm and degrees; definitions in :mod:`torus_cad.geometry.analysis.blade_elements`).
 The picture plots chord, beta and thickness against r, so designers see what their quartics
 do; a loop blade passes each radius twice, so each quantity is drawn as one line along the
 blade with the outgoing half solid and the returning half dashed.
@@ -18,12 +18,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from torus_cad.geometry.extensions.blade_elements import NEARLY_RADIAL_FRACTION, BladeElements, blade_elements
-from torus_cad.geometry.extensions.handedness import Handedness
-from torus_cad.geometry.extensions.trailing_edge import trailing_edge_thickness_mm
-from torus_cad.geometry.section import has_base
-from torus_cad.geometry.surface import BladeSurface, sections_along
-from torus_cad.geometry.transforms import evaluate_quartic
+from torus_cad.geometry.analysis.blade_elements import NEARLY_RADIAL_FRACTION, BladeElements, blade_elements
+from torus_cad.geometry.blade.handedness import Handedness
+from torus_cad.geometry.blade.surface import BladeSurface, sections_along
+from torus_cad.geometry.blade.trailing_edge import trailing_edge_thickness_mm
+from torus_cad.geometry.blade.transforms import evaluate_quartic
+from torus_cad.geometry.section.section import has_base
 from torus_cad.runtime.files import atomic_path
 
 #: CSV header: name in the file -> BladeElements attribute.

@@ -25,25 +25,24 @@ from pydantic import AfterValidator, BeforeValidator, Field, model_validator
 
 from torus_cad.errors import GeometryError, ParameterError, shown
 from torus_cad.formats import ExportFormat, StepSchema
-from torus_cad.geometry.airfoil import Naca5Airfoil, NacaAirfoil, naca4_numbers, naca_section
-from torus_cad.geometry.conventional_blade import (
+from torus_cad.geometry.analysis.feasibility import Margins, check_feasible
+from torus_cad.geometry.analysis.printability import Printability, conventional_printability, printability
+from torus_cad.geometry.blade.conventional_blade import (
     ConventionalBlade,
     check_conventional_feasible,
-    conventional_printability,
     conventional_surface,
     rotated_surface,
 )
-from torus_cad.geometry.extensions.airfoil_file import load_airfoil_file
-from torus_cad.geometry.extensions.feasibility import Margins, check_feasible
-from torus_cad.geometry.extensions.handedness import Handedness
-from torus_cad.geometry.extensions.mounting import HubMounting
-from torus_cad.geometry.extensions.printability import Printability, printability
-from torus_cad.geometry.frames import FrameKind
-from torus_cad.geometry.propeller import BladeGeometry, HubGeometry, PropellerGeometry
-from torus_cad.geometry.section import Section as SectionShape
-from torus_cad.geometry.station_table import StationTable, checked, read_station_file
-from torus_cad.geometry.surface import BladeSurface, blade_surface, with_thin_file_edge_closed
-from torus_cad.geometry.transforms import SectionLaws, quartic_minimum
+from torus_cad.geometry.blade.frames import FrameKind
+from torus_cad.geometry.blade.handedness import Handedness
+from torus_cad.geometry.blade.propeller import BladeGeometry, HubGeometry, PropellerGeometry
+from torus_cad.geometry.blade.station_table import StationTable, checked, read_station_file
+from torus_cad.geometry.blade.surface import BladeSurface, blade_surface, with_thin_file_edge_closed
+from torus_cad.geometry.blade.transforms import SectionLaws, quartic_minimum
+from torus_cad.geometry.hub.mounting import HubMounting
+from torus_cad.geometry.section.airfoil import Naca5Airfoil, NacaAirfoil, naca4_numbers, naca_section
+from torus_cad.geometry.section.airfoil_file import load_airfoil_file
+from torus_cad.geometry.section.section import Section as SectionShape
 from torus_cad.parameters.document import Document
 from torus_cad.parameters.schema import AS_TUPLE, Bounds, Section, Vector2, Vector3, check_in_bounds, param
 from torus_cad.tolerances import (
@@ -132,7 +131,7 @@ _NUMBERS = ("max_camber", "camber_position", "thickness")
 
 class TrailingEdgeShape(StrEnum):
     """The end of a blunt trailing edge (``airfoil.trailing_edge_thickness`` > 0, or a coordinate file's
-    open edge): torus_cad.geometry.extensions.trailing_edge."""
+    open edge): torus_cad.geometry.blade.trailing_edge."""
 
     ROUND = "round"  # a round cap tangent to both surfaces: no sharp edge (the root fillet rolls round it)
     FLAT = "flat"    # a straight base between two corners
@@ -196,7 +195,7 @@ class Airfoil(Section):
     @model_validator(mode="after")
     def _blunt_edge_thick_enough(self) -> Self:
         """A blunt trailing edge thinner than MIN_BLUNT_TRAILING_EDGE_MM cannot be meshed without
-        crossing triangles (torus_cad.geometry.extensions.trailing_edge)."""
+        crossing triangles (torus_cad.geometry.blade.trailing_edge)."""
         thickness = self.trailing_edge_thickness
         if 0.0 < thickness < MIN_BLUNT_TRAILING_EDGE_MM:
             raise ValueError(f"airfoil.trailing_edge_thickness = {thickness:g} mm is too thin to mesh without crossing "
@@ -537,7 +536,7 @@ class PropellerParameters(Document):
     def blade_surface(self, blade_index: int = 0, sections: int | None = None, points: int | None = None
                       ) -> BladeSurface:
         """Blade ``blade_index`` sampled at ``sections`` x ``points`` (default: ``resolution``):
-        a :class:`~torus_cad.geometry.surface.BladeSurface`, whose ``points`` are ``(sections, points, 3)`` mm.
+        a :class:`~torus_cad.geometry.blade.surface.BladeSurface`, whose ``points`` are ``(sections, points, 3)`` mm.
 
         A conventional blade is blade 0 rotated about +z to blade ``blade_index``'s angle."""
         sections = self.resolution.sections if sections is None else sections
@@ -550,15 +549,15 @@ class PropellerParameters(Document):
 
     def printability(self) -> Printability:
         """The blade's thinnest wall and trailing edge against ``manufacturing.min_wall``, from the analytic
-        section (:mod:`torus_cad.geometry.extensions.printability`), of either kind."""
+        section (:mod:`torus_cad.geometry.analysis.printability`), of either kind."""
         if self.kind == DesignKind.CONVENTIONAL:
             return conventional_printability(self.conventional_blade(), self.manufacturing.min_wall)
         return printability(self.geometry(), self.manufacturing.min_wall)
 
     def check_feasible(self, surface: BladeSurface) -> Margins | None:
         """The pre-kernel checks of the design's kind on blade 0's ``surface`` (GeometryError naming the
-        problem): :func:`torus_cad.geometry.extensions.feasibility.check_feasible` (its margins to the fold
-        and resolution limits returned) or :func:`torus_cad.geometry.conventional_blade.check_conventional_feasible`
+        problem): :func:`torus_cad.geometry.analysis.feasibility.check_feasible` (its margins to the fold
+        and resolution limits returned) or :func:`torus_cad.geometry.blade.conventional_blade.check_conventional_feasible`
         (None)."""
         if self.kind == DesignKind.CONVENTIONAL:
             check_conventional_feasible(self.conventional_blade(), surface, self.blades)

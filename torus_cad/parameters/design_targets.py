@@ -6,8 +6,8 @@ is built, in this order:
 1. ``airfoil.naca`` "MPTT" sets ``max_camber``, ``camber_position`` and ``thickness``
    (5-digit designations and ``airfoil.file`` have no spec numbers; they stay as they are).
 2. ``diameter`` scales the radial coordinates z_L of ``centerline.p2`` and ``p3`` until the
-   tip diameter is met (:mod:`torus_cad.geometry.extensions.diameter`).
-3. ``pitch`` refits ``transforms.angle_of_attack`` (:mod:`torus_cad.geometry.extensions.pitch`) on the
+   tip diameter is met (:mod:`torus_cad.geometry.analysis.diameter`).
+3. ``pitch`` refits ``transforms.angle_of_attack`` (:mod:`torus_cad.geometry.analysis.pitch`) on the
    centerline that step 2 left.
 
 :func:`resolve_design_targets` returns the resolved parameters (the targets removed, so they
@@ -24,11 +24,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from torus_cad.errors import GeometryError, ParameterError
-from torus_cad.geometry.airfoil import naca4_numbers
-from torus_cad.geometry.centerline import Centerline
-from torus_cad.geometry.extensions.diameter import radial_scale_for_diameter, tip_radius
-from torus_cad.geometry.extensions.handedness import Handedness
-from torus_cad.geometry.extensions.pitch import (
+from torus_cad.geometry.analysis.diameter import radial_scale_for_diameter, tip_radius
+from torus_cad.geometry.analysis.pitch import (
     PITCH_FIT_SECTIONS,
     ChordModel,
     PitchFit,
@@ -36,16 +33,19 @@ from torus_cad.geometry.extensions.pitch import (
     fit_pitch,
     pitch_report,
 )
-from torus_cad.geometry.frames import FrameKind, Frames, frenet_from_derivatives
-from torus_cad.geometry.propeller import PropellerGeometry
-from torus_cad.geometry.section import closed_points, parameter_end
-from torus_cad.geometry.surface import (
+from torus_cad.geometry.blade.centerline import Centerline
+from torus_cad.geometry.blade.frames import FrameKind, Frames, frenet_from_derivatives
+from torus_cad.geometry.blade.handedness import Handedness
+from torus_cad.geometry.blade.propeller import PropellerGeometry
+from torus_cad.geometry.blade.surface import (
     blade_frames,
     place_sections,
     sections_along,
     sections_at,
 )
-from torus_cad.geometry.transforms import Quartic, evaluate_quartic
+from torus_cad.geometry.blade.transforms import Quartic, evaluate_quartic
+from torus_cad.geometry.section.airfoil import naca4_numbers
+from torus_cad.geometry.section.section import closed_points, parameter_end
 from torus_cad.parameters.schema import Bounds, check_in_bounds
 
 #: At most this many rounds of (pitch fit, diameter fit); they stop when the diameter fit no longer moves.

@@ -3,14 +3,14 @@
 :func:`check_design` runs, in the order :func:`torus_cad.propeller.build_propeller` runs them,
 every check that can refuse a design before the kernel builds anything: the parameters and
 their cross-field rules, the design targets (``diameter``, ``pitch``), blade 0's sampled
-surface, the geometric checks (:mod:`torus_cad.geometry.extensions.feasibility`: the ends
+surface, the geometric checks (:mod:`torus_cad.geometry.analysis.feasibility`: the ends
 inside the hub's inset, the centerline leaving through the hub's side, the trailing edge, no
 fold-over inside a bend, sections dense enough, no self-intersection, blades clear of each
-other; for a conventional blade :func:`~torus_cad.geometry.conventional_blade.check_conventional_feasible`),
-the hub's mounting features against the blades (:mod:`torus_cad.geometry.extensions.mounting`),
-the section fit and its trailing edge (:mod:`torus_cad.geometry.section_fit`) and, when the
+other; for a conventional blade :func:`~torus_cad.geometry.blade.conventional_blade.check_conventional_feasible`),
+the hub's mounting features against the blades (:mod:`torus_cad.geometry.hub.mounting`),
+the section fit and its trailing edge (:mod:`torus_cad.geometry.section.section_fit`) and, when the
 design writes a mesh, the STL's triangle budget. The blade's walls against
-``manufacturing.min_wall`` (:mod:`torus_cad.geometry.extensions.printability`) are measured too;
+``manufacturing.min_wall`` (:mod:`torus_cad.geometry.analysis.printability`) are measured too;
 they refuse the design only when asked (``--require-printable``), as in the build.
 
 Nothing here imports the kernel (numpy, scipy and the geometry layer only), so ``torus-cad
@@ -29,11 +29,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from torus_cad.errors import GeometryError
-from torus_cad.geometry.extensions.feasibility import FOLD_LIMIT, RESOLUTION_DEVIATION_LIMIT, Margins
-from torus_cad.geometry.extensions.mounting import HubMounting, place_mounting
-from torus_cad.geometry.extensions.printability import Printability
-from torus_cad.geometry.section_fit import SectionFit, fit_sections
-from torus_cad.geometry.surface import BladeSurface
+from torus_cad.geometry.analysis.feasibility import FOLD_LIMIT, RESOLUTION_DEVIATION_LIMIT, Margins
+from torus_cad.geometry.analysis.printability import Printability
+from torus_cad.geometry.blade.surface import BladeSurface
+from torus_cad.geometry.hub.mounting import HubMounting, place_mounting
+from torus_cad.geometry.section.section_fit import SectionFit, fit_sections
 from torus_cad.parameters.design import PropellerParameters
 from torus_cad.parameters.design_targets import resolve_design_targets
 from torus_cad.parameters.stl_budget import check_stl_budget

@@ -32,7 +32,7 @@ from numpy.typing import NDArray
 
 from torus_cad.colors import HUB_COLOR, blade_color
 from torus_cad.errors import ParameterError, TorusCadError, shown
-from torus_cad.geometry.propeller import HUB_PART
+from torus_cad.geometry.blade.propeller import HUB_PART
 from torus_cad.kernel.checks import mass_properties
 from torus_cad.parameters import PropellerParameters
 from torus_cad.runtime.files import atomic_path

@@ -1,4 +1,4 @@
-"""The studio's web page and its server-side logic (trame, Vuetify 3, a VTK view drawn in the browser).
+"""The studio page's server-side logic (trame, Vuetify 3, a VTK view drawn in the browser).
 
 A change in the panel goes through the same validation as ``torus-cad build``; a valid design
 is drawn at once from the kernel-free preview (torus_cad.studio.scene) and its exact solid is
@@ -6,35 +6,25 @@ built in a worker process (torus_cad.studio.worker), which replaces the preview 
 ready. A refused design leaves the last good propeller on screen and puts the one-line reason
 next to the field that was changed.
 
-The studio is a service on a network: an uploaded design is read from its bytes by the same
-path as ``torus-cad build FILE`` (torus_cad.parameters.config_file: byte order mark, nesting and
-number limits, the TOML reader, the schema), off the event loop, and it may name only files
-uploaded with it (a coordinate file beside the design) or files in the folder given with
-``--files``, never another path on the server. Uploaded files are written under the studio's
-own folder by their base names; nothing on the page is ever used as a path.
+The studio is a service on a network: an uploaded design is read off the event loop, as
+``torus-cad build FILE`` reads it, and may name only files uploaded with it or in ``--files``
+(torus_cad.studio.uploads); the server's start and stop are torus_cad.studio.server's.
 """
 
 from __future__ import annotations
 
 import asyncio
-import contextlib
-import errno
 import logging
-import os
-import re
 import shutil
-import tempfile
 import time
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from torus_cad.errors import GeometryError, OutputError, ParameterError
+from torus_cad.errors import GeometryError, ParameterError
 from torus_cad.parameters import PropellerParameters
-from torus_cad.parameters.config_file import parse_config_bytes
-from torus_cad.runtime.interrupts import EXIT_SIGNALS, exit_on_signals
 from torus_cad.runtime.stages import Stage
 from torus_cad.studio.build_messages import BuildRequest, SolidResult
 from torus_cad.studio.panel import (
@@ -46,13 +36,10 @@ from torus_cad.studio.panel import (
     state_values,
 )
 from torus_cad.studio.scene import PreviewScene, preview_scene
+from torus_cad.studio.uploads import is_design, read_upload
 from torus_cad.studio.worker import BuildRunner
-from torus_cad.tolerances import AIRFOIL_FILE_MAX_BYTES
 
 LOG = logging.getLogger(__name__)
-
-#: Hosts that only this machine can reach.
-LOCAL_HOSTS = ("127.0.0.1", "localhost", "::1")
 
 #: Default density for the mass readout: PLA (g/cm^3), as ``torus-cad build``.
 DEFAULT_DENSITY_G_CM3 = 1.24
@@ -63,18 +50,6 @@ DENSITY_RANGE_G_CM3 = (0.0, 25.0)
 #: The download buttons' names of the files a build writes (keys of Propeller.write's paths).
 DOWNLOAD_LABELS = {"step": "STEP", "stl": "STL", "3mf": "3MF", "sections_csv": "sections CSV",
                    "sections_png": "sections PNG", "json": "report JSON"}
-
-#: Largest design file accepted from the page, bytes.
-MAX_UPLOAD_BYTES = 256 * 1024
-
-#: Largest other file (a coordinate file) uploaded with a design, bytes: the airfoil file limit.
-MAX_UPLOAD_FILE_BYTES = AIRFOIL_FILE_MAX_BYTES
-
-#: Most files one upload may hold (the design and the files it names).
-MAX_UPLOAD_FILES = 8
-
-#: The names an uploaded file may have (its base name; it is stored under the studio's folder).
-UPLOAD_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,99}")
 
 
 @dataclass
@@ -364,7 +339,7 @@ class Studio:
             with self.state:
                 self.state.upload_error, self.state.upload_message = str(error), ""
             return
-        design_name = next(str(upload.get("name", "")) for upload in uploads if _is_design(upload))
+        design_name = next(str(upload.get("name", "")) for upload in uploads if is_design(upload))
         with self.state:
             self.state.upload_error = ""
             self.state.upload_message = f"opened {design_name[:80]}"
@@ -373,88 +348,10 @@ class Studio:
             self.state.update(values)
 
     def _read_upload(self, uploads: Sequence[Any]) -> PropellerParameters:
-        """The design of an upload (one TOML file and the files it names), read as ``torus-cad build FILE`` reads it.
-
-        The files are written to a new folder of the studio's under their base names; the design
-        may name only them, or files in ``files_folder``. The folder of a refused upload is removed.
-        """
-        files = _upload_files(uploads)
+        """The design of an upload, in a new folder of the studio's (:func:`torus_cad.studio.uploads.read_upload`)."""
         self._uploads += 1
-        folder = self.workdir / "uploads" / str(self._uploads)
-        folder.mkdir(parents=True)
-        try:
-            for name, data in files.items():
-                with open(os.open(folder / name, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600), "wb") as handle:
-                    handle.write(data)
-            design_name = next(name for name in files if name.lower().endswith(".toml"))
-            table = parse_config_bytes(files[design_name], design_name, "uploaded design")
-            table = self._only_uploaded_files(table, folder, set(files) - {design_name})
-            return PropellerParameters.from_table(table, folder)
-        except ParameterError as error:  # named by the uploaded file's own name, not the server's folder
-            shutil.rmtree(folder, ignore_errors=True)
-            raise ParameterError(str(error).replace(f"{folder}{os.sep}", "")) from None
-        except BaseException:
-            shutil.rmtree(folder, ignore_errors=True)
-            raise
-
-    def _only_uploaded_files(self, table: dict[str, Any], folder: Path, uploaded: set[str]) -> dict[str, Any]:
-        """``table`` with each file it names made the path of an uploaded file (or one in ``files_folder``);
-        ParameterError for any other path, before anything opens it."""
-        table = {**table}
-        for panel_field in self.fields.values():
-            if not panel_field.read_only:
-                continue
-            *parents, leaf = panel_field.key.split(".")
-            holder: Any = table
-            for part in parents:
-                holder = holder.get(part) if isinstance(holder, dict) else None
-            if not isinstance(holder, dict) or not holder.get(leaf):
-                continue
-            holder[leaf] = str(self._allowed_file(panel_field.key, holder[leaf], folder, uploaded))
-        return table
-
-    def _allowed_file(self, key: str, value: Any, folder: Path, uploaded: set[str]) -> Path:
-        if isinstance(value, str) and value in uploaded:
-            return folder / value
-        if isinstance(value, str) and self.files_folder is not None and not value.startswith("~"):
-            candidate = (self.files_folder / value).resolve()  # an absolute value stays absolute
-            if candidate.is_relative_to(self.files_folder) and candidate.is_file():
-                return candidate
-        shown = repr(value)[:120]
-        where = f" or files in {str(self.files_folder)!r}" if self.files_folder is not None else ""
-        raise ParameterError(f"{key} = {shown}: a design opened in the page may name only files uploaded with it"
-                             f"{where}, never a path on this machine; choose the design and the file together")
-
-
-def _is_design(upload: Any) -> bool:
-    return isinstance(upload, Mapping) and str(upload.get("name", "")).lower().endswith(".toml")
-
-
-def _upload_files(uploads: Sequence[Any]) -> dict[str, bytes]:
-    """The uploaded files by base name; ParameterError unless there is one design (.toml) and every
-    file has a plain name and is within its size limit."""
-    if len(uploads) > MAX_UPLOAD_FILES:
-        raise ParameterError(f"the upload holds {len(uploads)} files; at most {MAX_UPLOAD_FILES} (a design and the "
-                             "files it names)")
-    files: dict[str, bytes] = {}
-    for upload in uploads:
-        content = upload.get("content") if isinstance(upload, Mapping) else None
-        if not isinstance(content, (bytes, bytearray, memoryview)):
-            raise ParameterError("the uploaded file could not be read")
-        name = Path(str(upload.get("name", ""))).name
-        if not UPLOAD_NAME.fullmatch(name) or name in files:
-            raise ParameterError(f"an uploaded file's name must be letters, digits, '.', '_' or '-' (at most 100, "
-                                 f"each name once), got {name[:100]!r}")
-        limit = MAX_UPLOAD_BYTES if _is_design(upload) else MAX_UPLOAD_FILE_BYTES
-        if len(content) > limit:
-            raise ParameterError(f"the uploaded file {name!r} is {len(content):,} bytes; at most {limit:,} bytes")
-        files[name] = bytes(content)
-    designs = [name for name in files if name.lower().endswith(".toml")]
-    if len(designs) != 1:
-        raise ParameterError(f"an upload holds one design (.toml) and the files it names; this one holds "
-                             f"{len(designs)} .toml files")
-    return files
-
+        read_only = [panel_field.key for panel_field in self.fields.values() if panel_field.read_only]
+        return read_upload(uploads, self.workdir / "uploads" / str(self._uploads), read_only, self.files_folder)
 
 def _stage_label(name: str) -> str:
     """Words for a stage of the build (torus_cad.runtime.stages), or the name of the studio's own step."""
@@ -464,87 +361,3 @@ def _stage_label(name: str) -> str:
 def _log_failure(task: asyncio.Task[None]) -> None:
     if not task.cancelled() and task.exception() is not None:
         LOG.error("studio update failed", exc_info=task.exception())
-
-
-# -- serving --------------------------------------------------------------------------------------
-
-@contextlib.contextmanager
-def _trame_ignores_command_line() -> Iterator[None]:
-    """trame parses sys.argv (and $TRAME_ARGS) itself on start; the studio passes everything explicitly."""
-    saved = os.environ.get("TRAME_ARGS")
-    os.environ["TRAME_ARGS"] = ""
-    try:
-        yield
-    finally:
-        if saved is None:
-            os.environ.pop("TRAME_ARGS", None)
-        else:
-            os.environ["TRAME_ARGS"] = saved
-
-
-def start_message(host: str, port: int) -> str:
-    """What the studio prints on start: where it is and who can reach it."""
-    url_host = f"[{host}]" if ":" in host else host
-    if host in LOCAL_HOSTS:
-        reach = "only this machine can connect (use --host to serve other machines)"
-    else:
-        reach = f"listening on {host}: other machines that can reach it can use it, without a password"
-    return f"torus-cad studio: open http://{url_host}:{port}/ ; {reach}; Ctrl-C stops it"
-
-
-def check_host(host: str) -> str:
-    """``host`` if it names an address to listen on; ParameterError for an empty one (it would bind every
-    interface while the start line showed none)."""
-    if not host.strip():
-        raise ParameterError("--host must name an address to listen on, e.g. 127.0.0.1 (this machine only) or "
-                             "0.0.0.0 (every network); got an empty one")
-    return host.strip()
-
-
-def serve(design: PropellerParameters, port: int = 8080, host: str = "127.0.0.1",
-          files_folder: Path | None = None) -> int:
-    """Serve the studio for ``design`` until a signal stops it (blocking); the exit code, 128 + the signal.
-
-    ``files_folder``: a folder whose files uploaded designs may name (besides the files uploaded with them).
-    OutputError if the port is in use, ParameterError for an empty ``host``. SIGINT, SIGTERM and SIGHUP
-    stop the server's loop (its handlers, not the server's own, which would end with exit 0); the
-    builds and the studio's folder are removed on the way out.
-    """
-    from trame.app import get_server
-
-    from torus_cad.studio.layout import build_layout
-
-    host = check_host(host)
-    server = get_server("torus_cad_studio", client_type="vue3")
-    stopped: list[int] = []
-
-    def stop(signum: int) -> None:
-        if stopped:  # a second signal while stopping: at once
-            os._exit(EXIT_SIGNALS[stopped[0]])
-        stopped.append(signum)
-        asyncio.get_running_loop().create_task(server.stop())
-
-    def ready(**_: Any) -> None:
-        loop = asyncio.get_running_loop()
-        for signum in EXIT_SIGNALS:
-            loop.add_signal_handler(signum, stop, signum)
-        print(start_message(host, server.port), flush=True)
-
-    with tempfile.TemporaryDirectory(prefix="torus-cad-studio-") as workdir:
-        studio = Studio(server, design, Path(workdir), files_folder)
-        build_layout(studio)
-        server.controller.on_server_ready.add(ready)
-        try:
-            with _trame_ignores_command_line():
-                # thread=True: the server installs no signal handlers of its own (see ready()).
-                server.start(port=port, host=host, open_browser=False, show_connection_info=False,
-                             disable_logging=True, timeout=0, thread=True)
-        except OSError as error:
-            if error.errno == errno.EADDRINUSE:
-                raise OutputError(f"port {port} on {host} is already in use (another studio or server?); "
-                                  "choose another with --port, or --port 0 for any free one") from None
-            raise
-        finally:
-            exit_on_signals()  # the loop's handlers are gone: a signal while cleaning up ends with one line
-            studio._on_exit()
-    return EXIT_SIGNALS[stopped[0]] if stopped else 0

@@ -15,7 +15,7 @@ from OCP.BRepBndLib import BRepBndLib
 
 from torus_cad import PropellerParameters
 from torus_cad.errors import GeometryError, ParameterError, TorusCadError
-from torus_cad.geometry.propeller import HUB_PART
+from torus_cad.geometry.blade.propeller import HUB_PART
 from torus_cad.kernel.checks import mass_properties
 from torus_cad.kernel.tessellation import tessellate_faces
 from torus_cad.propeller import Propeller, build_propeller

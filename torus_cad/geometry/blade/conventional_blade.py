@@ -10,7 +10,7 @@ rotation, so that the geometric pitch is 2 pi r tan beta:
 
 The leading edge thus points toward -y and up (+z): turning clockwise seen from +z (blade 0 moving
 toward -y) the blade pushes air toward -z, the 'cw' of the toroidal default
-(:mod:`torus_cad.geometry.extensions.handedness`); 'ccw' is the pipeline's mirror image.
+(:mod:`torus_cad.geometry.blade.handedness`); 'ccw' is the pipeline's mirror image.
 
 Stacking: the section's point at chord fraction ``stacking`` lies in the plane z = 0; without a
 sweep it lies on the x axis; with a sweep (APC's definition) the section moves along y so that its
@@ -38,15 +38,14 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.interpolate import PchipInterpolator
 
 from torus_cad.errors import GeometryError
-from torus_cad.geometry.airfoil import Naca5Airfoil, NacaAirfoil
-from torus_cad.geometry.arc_length import equal_arc_length_section
-from torus_cad.geometry.extensions.printability import Printability
-from torus_cad.geometry.extensions.trailing_edge import TRAILING_EDGE_THICKNESS_LIMIT, blunt_sections
-from torus_cad.geometry.frames import Frames
-from torus_cad.geometry.propeller import HubGeometry
-from torus_cad.geometry.section import RoundTrailingEdge, Section, closed_points, max_thickness
-from torus_cad.geometry.station_table import StationTable
-from torus_cad.geometry.surface import BladeSurface, place_on_frames
+from torus_cad.geometry.blade.frames import Frames
+from torus_cad.geometry.blade.propeller import HubGeometry
+from torus_cad.geometry.blade.station_table import StationTable
+from torus_cad.geometry.blade.surface import BladeSurface, place_on_frames
+from torus_cad.geometry.blade.trailing_edge import TRAILING_EDGE_THICKNESS_LIMIT, blunt_sections
+from torus_cad.geometry.section.airfoil import Naca5Airfoil, NacaAirfoil
+from torus_cad.geometry.section.arc_length import equal_arc_length_section
+from torus_cad.geometry.section.section import RoundTrailingEdge, Section, closed_points, max_thickness
 from torus_cad.tolerances import (
     CONVENTIONAL_ROOT_FIT_MARGIN,
     CONVENTIONAL_ROOT_RADIUS_FRACTION,
@@ -117,7 +116,7 @@ class ConventionalBlade:
         hub: the hub the root sits in.
         trailing_edge_thickness_mm: a blunt trailing edge this thick on every section (0 = the airfoil's own edge).
         round_trailing_edge: that edge ends in a round cap (else a flat base), as the toroidal blade's
-            (:mod:`torus_cad.geometry.extensions.trailing_edge`).
+            (:mod:`torus_cad.geometry.blade.trailing_edge`).
     """
 
     stations: StationTable
@@ -300,35 +299,3 @@ def rotated_surface(surface: BladeSurface, angle_deg: float) -> BladeSurface:
     frames = surface.frames
     turned = Frames(frames.s, turn(frames.origin), turn(frames.tangent), turn(frames.normal), turn(frames.binormal))
     return dataclasses.replace(surface, points=turn(surface.points), frames=turned)
-
-
-#: Radii and chord stations of the conventional printability search.
-_PRINT_RADII, _PRINT_CHORD_STATIONS = 401, 401
-
-
-def conventional_printability(blade: ConventionalBlade, min_wall_mm: float) -> Printability:
-    """The blade's walls outside the hub against ``min_wall_mm`` (:mod:`.extensions.printability`'s
-    definitions; s is the sampling parameter of :meth:`ConventionalBlade.section_radii_mm`).
-
-    wall(r, u) = c(r) |upper(u) - lower(u)| of the thickness-scaled section (placing it is a rigid
-    motion); the trailing edge is the section's own (0 for a sharp one)."""
-    s, r_mm = blade.section_radii_mm(_PRINT_RADII)
-    exposed = r_mm >= blade.hub.radius_mm
-    s, r_mm = s[exposed], r_mm[exposed]
-    u = np.sin(np.linspace(0.0, 0.5 * np.pi, _PRINT_CHORD_STATIONS))
-    chord = blade.chord_mm(r_mm)
-    walls = np.stack([np.linalg.norm(section.points_on_half(u, True) - section.points_on_half(u, False), axis=-1)
-                      for section in (blade.section_at(float(r)) for r in r_mm)])
-    walls *= chord[:, None]
-    thickest = walls.max(axis=1)
-    row = int(np.argmin(thickest))
-    column = int(np.argmax(walls[row]))
-    section = blade.section_at(float(r_mm[row]))
-    fraction = float(0.5 * (section.points_on_half(u[column : column + 1], True)[0, 0]
-                            + section.points_on_half(u[column : column + 1], False)[0, 0]))
-    edge = walls[:, -1]
-    edge_row = int(np.argmin(edge))
-    edge_mm = 0.0 if edge[edge_row] < 1e-12 else float(edge[edge_row])
-    wall_mm = float(thickest[row])
-    return Printability(wall_mm, float(s[row]), fraction, edge_mm, float(s[edge_row]), (float(s[0]), 1.0),
-                        min_wall_mm, bool(min(wall_mm, edge_mm) >= min_wall_mm * (1.0 - 1e-9)))

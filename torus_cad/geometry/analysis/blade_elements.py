@@ -32,14 +32,11 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from torus_cad.geometry.extensions.handedness import Handedness
+from torus_cad.geometry.blade.handedness import Handedness
+from torus_cad.geometry.section.section import section_thickness
 
 #: Above this |c_r| / h the chord runs more radially than around the axis: beta and the pitch say little.
 NEARLY_RADIAL_FRACTION = float(np.sqrt(0.5))
-
-#: Chord positions at which the thickness is evaluated.
-THICKNESS_STATIONS = 801
-
 
 @dataclass(frozen=True)
 class BladeElements:
@@ -110,39 +107,6 @@ def blade_angles(middle: NDArray[np.float64], chord: NDArray[np.float64], spin: 
     signed = np.where(spin.sign * c_theta <= 0.0, horizontal, -horizontal)
     beta = np.degrees(np.arctan2(-chord[:, 2], signed))
     return beta, np.abs(c_r) / np.maximum(horizontal, 1e-300)
-
-
-def section_thickness(planar: NDArray[np.float64], trailing_edge_index: int, lower_corner_index: int | None,
-                      stations: int = THICKNESS_STATIONS) -> NDArray[np.float64]:
-    """Largest thickness perpendicular to the chord of sections in their planes ``(k, p, 2)``: ``(k,)``.
-
-    The upper surface is points 0..trailing_edge_index, the lower one from the lower corner
-    (or the trailing edge) back to point 0; both are read as functions of the position along
-    the chord and subtracted.
-    """
-    lower_start = trailing_edge_index if lower_corner_index is None else lower_corner_index
-    result = np.zeros(len(planar))
-    grid = np.linspace(0.0, 1.0, stations)
-    for index, ring in enumerate(planar):
-        leading = ring[0]
-        trailing = ring[trailing_edge_index] if lower_corner_index is None else 0.5 * (
-            ring[trailing_edge_index] + ring[lower_corner_index])
-        chord = trailing - leading
-        length = float(np.linalg.norm(chord))
-        axis = chord / length
-        normal = np.array([-axis[1], axis[0]])
-        along, across = (ring - leading) @ axis / length, (ring - leading) @ normal
-        upper = np.interp(grid, *_sorted(along[: trailing_edge_index + 1], across[: trailing_edge_index + 1]))
-        lower_along = np.append(along[lower_start:], along[0])
-        lower_across = np.append(across[lower_start:], across[0])
-        lower = np.interp(grid, *_sorted(lower_along, lower_across))
-        result[index] = float(np.max(np.abs(upper - lower)))
-    return result
-
-
-def _sorted(x: NDArray[np.float64], y: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    order = np.argsort(x, kind="stable")
-    return x[order], y[order]
 
 
 def blade_elements(s: NDArray[np.float64], points: NDArray[np.float64], origin: NDArray[np.float64],

@@ -18,8 +18,7 @@ from numpy.typing import NDArray
 from scipy.interpolate import BSpline, make_lsq_spline
 
 from torus_cad.errors import GeometryError
-from torus_cad.geometry.extensions.trailing_edge import ROUND_CAP_HANDLE_FRACTION
-from torus_cad.geometry.section import round_cap_poles
+from torus_cad.geometry.section.section import ROUND_CAP_HANDLE_FRACTION, round_cap_poles
 from torus_cad.tolerances import WIRE_FIT_INITIAL_KNOTS, WIRE_FIT_MAXIMUM_KNOTS, WIRE_FIT_RELATIVE_TOLERANCE
 
 DEGREE = 3

@@ -38,9 +38,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import brentq, minimize_scalar
 
-from torus_cad.geometry.propeller import BladeGeometry, PropellerGeometry
-from torus_cad.geometry.surface import sections_along
-from torus_cad.geometry.transforms import SectionLaws, evaluate_quartic, rotation_matrices
+from torus_cad.geometry.blade.conventional_blade import ConventionalBlade
+from torus_cad.geometry.blade.propeller import BladeGeometry, PropellerGeometry
+from torus_cad.geometry.blade.surface import sections_along
+from torus_cad.geometry.blade.transforms import SectionLaws, evaluate_quartic, rotation_matrices
 
 #: A wall equal to min_wall up to this relative rounding counts as reaching it (a 0.8 mm blunt edge
 #: evaluates to 0.7999999...).
@@ -166,3 +167,35 @@ def _polish_minimum(function: Any, grid: NDArray[np.float64], values: NDArray[np
     low, high = grid[max(index - 1, 0)], grid[min(index + 1, len(grid) - 1)]
     best = minimize_scalar(function, bounds=(low, high), method="bounded", options={"xatol": 1e-10})
     return float(best.x) if best.fun <= values[index] else float(grid[index])
+
+
+#: Radii and chord stations of the conventional printability search.
+_PRINT_RADII, _PRINT_CHORD_STATIONS = 401, 401
+
+
+def conventional_printability(blade: ConventionalBlade, min_wall_mm: float) -> Printability:
+    """The blade's walls outside the hub against ``min_wall_mm`` (this module's
+    definitions; s is the sampling parameter of :meth:`ConventionalBlade.section_radii_mm`).
+
+    wall(r, u) = c(r) |upper(u) - lower(u)| of the thickness-scaled section (placing it is a rigid
+    motion); the trailing edge is the section's own (0 for a sharp one)."""
+    s, r_mm = blade.section_radii_mm(_PRINT_RADII)
+    exposed = r_mm >= blade.hub.radius_mm
+    s, r_mm = s[exposed], r_mm[exposed]
+    u = np.sin(np.linspace(0.0, 0.5 * np.pi, _PRINT_CHORD_STATIONS))
+    chord = blade.chord_mm(r_mm)
+    walls = np.stack([np.linalg.norm(section.points_on_half(u, True) - section.points_on_half(u, False), axis=-1)
+                      for section in (blade.section_at(float(r)) for r in r_mm)])
+    walls *= chord[:, None]
+    thickest = walls.max(axis=1)
+    row = int(np.argmin(thickest))
+    column = int(np.argmax(walls[row]))
+    section = blade.section_at(float(r_mm[row]))
+    fraction = float(0.5 * (section.points_on_half(u[column : column + 1], True)[0, 0]
+                            + section.points_on_half(u[column : column + 1], False)[0, 0]))
+    edge = walls[:, -1]
+    edge_row = int(np.argmin(edge))
+    edge_mm = 0.0 if edge[edge_row] < 1e-12 else float(edge[edge_row])
+    wall_mm = float(thickest[row])
+    return Printability(wall_mm, float(s[row]), fraction, edge_mm, float(s[edge_row]), (float(s[0]), 1.0),
+                        min_wall_mm, bool(min(wall_mm, edge_mm) >= min_wall_mm * (1.0 - 1e-9)))

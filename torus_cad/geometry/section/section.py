@@ -18,7 +18,7 @@ smooth (G1, no corner) all round. Its width where it meets the halves is |U - L|
 trailing-edge thickness. With both handles 2/3 |U - L| and parallel tangents this is the standard
 cubic approximation of a half circle of diameter |U - L| (within 1.8 % of its radius): the
 blade sets the handle lengths so that the cap is that near half circle in mm, after the
-section transform (:mod:`torus_cad.geometry.extensions.trailing_edge`). A Bezier cap is exact in the
+section transform (:mod:`torus_cad.geometry.blade.trailing_edge`). A Bezier cap is exact in the
 kernel (an affine map of a Bezier curve is the Bezier curve of the mapped poles), so the
 section curves there carry it as one span (:mod:`torus_cad.kernel.wires`).
 
@@ -42,6 +42,13 @@ from numpy.typing import ArrayLike, NDArray
 
 #: Trailing-edge gaps (chord units) below this count as a sharp trailing edge (no base).
 SHARP_TRAILING_EDGE_GAP = 1e-9
+
+#: A round cap's handles, as a fraction of the trailing-edge thickness (mm): the cubic Bezier
+#: approximation of a half circle (4/3 x the radius).
+ROUND_CAP_HANDLE_FRACTION = 2.0 / 3.0
+
+#: Chord positions at which a section's thickness is evaluated (:func:`section_thickness`).
+THICKNESS_STATIONS = 801
 
 
 @runtime_checkable
@@ -247,3 +254,36 @@ def cap_parameter_at(section: Section, arc_fraction: ArrayLike) -> NDArray[np.fl
         return arc_fraction
     parameters, arc = _cap_arc_length_table(section.cap_poles())
     return np.interp(arc_fraction * arc[-1], arc, parameters)
+
+
+def section_thickness(planar: NDArray[np.float64], trailing_edge_index: int, lower_corner_index: int | None,
+                      stations: int = THICKNESS_STATIONS) -> NDArray[np.float64]:
+    """Largest thickness perpendicular to the chord of sections in their planes ``(k, p, 2)``: ``(k,)``.
+
+    The upper surface is points 0..trailing_edge_index, the lower one from the lower corner
+    (or the trailing edge) back to point 0; both are read as functions of the position along
+    the chord and subtracted.
+    """
+    lower_start = trailing_edge_index if lower_corner_index is None else lower_corner_index
+    result = np.zeros(len(planar))
+    grid = np.linspace(0.0, 1.0, stations)
+    for index, ring in enumerate(planar):
+        leading = ring[0]
+        trailing = ring[trailing_edge_index] if lower_corner_index is None else 0.5 * (
+            ring[trailing_edge_index] + ring[lower_corner_index])
+        chord = trailing - leading
+        length = float(np.linalg.norm(chord))
+        axis = chord / length
+        normal = np.array([-axis[1], axis[0]])
+        along, across = (ring - leading) @ axis / length, (ring - leading) @ normal
+        upper = np.interp(grid, *_sorted(along[: trailing_edge_index + 1], across[: trailing_edge_index + 1]))
+        lower_along = np.append(along[lower_start:], along[0])
+        lower_across = np.append(across[lower_start:], across[0])
+        lower = np.interp(grid, *_sorted(lower_along, lower_across))
+        result[index] = float(np.max(np.abs(upper - lower)))
+    return result
+
+
+def _sorted(x: NDArray[np.float64], y: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    order = np.argsort(x, kind="stable")
+    return x[order], y[order]

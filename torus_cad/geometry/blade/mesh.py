@@ -12,8 +12,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from torus_cad.geometry.section import chord_positions
-from torus_cad.geometry.surface import BladeSurface
+from torus_cad.geometry.blade.surface import BladeSurface
+from torus_cad.geometry.section.section import chord_positions
 
 #: Triangles measured at a time over a large mesh: the temporaries stay in the processor's cache,
 #: which makes a mesh of millions of triangles several times faster than whole-array passes.

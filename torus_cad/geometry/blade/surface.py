@@ -2,7 +2,7 @@
 
 X_final(s, t) = C(s) + X_scaled(s, t) N(s) + Y_scaled(s, t) B(s), evaluated exactly at any
 resolution; blade i is built on its own centerline at theta_0 + 360 i / n (spec §6.1), which
-:meth:`torus_cad.geometry.propeller.PropellerGeometry.centerline` gives.
+:meth:`torus_cad.geometry.blade.propeller.PropellerGeometry.centerline` gives.
 """
 
 from __future__ import annotations
@@ -15,19 +15,19 @@ from functools import lru_cache
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from torus_cad.geometry.arc_length import equal_arc_length_section
-from torus_cad.geometry.centerline import Centerline
-from torus_cad.geometry.extensions.trailing_edge import (
+from torus_cad.geometry.blade.centerline import Centerline
+from torus_cad.geometry.blade.frames import Frames, section_frames
+from torus_cad.geometry.blade.propeller import BladeGeometry, PropellerGeometry
+from torus_cad.geometry.blade.trailing_edge import (
     TRAILING_EDGE_CHECK_SECTIONS,
     BluntSections,
     blunt_sections,
     check_trailing_edge_fits,
     closed_if_too_thin,
 )
-from torus_cad.geometry.frames import Frames, section_frames
-from torus_cad.geometry.propeller import BladeGeometry, PropellerGeometry
-from torus_cad.geometry.section import RoundTrailingEdge, Section, closed_points, has_base
-from torus_cad.geometry.transforms import evaluate_quartic
+from torus_cad.geometry.blade.transforms import evaluate_quartic
+from torus_cad.geometry.section.arc_length import equal_arc_length_section
+from torus_cad.geometry.section.section import RoundTrailingEdge, Section, closed_points, has_base
 
 
 @dataclass(frozen=True)
@@ -39,7 +39,7 @@ class BladeSurface:
             the leading edge, upper surface first (the order of f(t), spec §1.3).
         s: ``(sections,)`` centerline parameters of the sections, 0 and 1 included.
         t: ``(points,)`` closed-curve parameters shared by all sections: in [0, 2) for sharp
-            sections, in [0, 3) for blunt ones (:func:`torus_cad.geometry.section.closed_points`).
+            sections, in [0, 3) for blunt ones (:func:`torus_cad.geometry.section.section.closed_points`).
         trailing_edge_index: column of the sharp trailing edge, or of the upper corner of a
             blunt one (None if not sampled exactly).
         frames: the frames the sections sit on.

@@ -1,4 +1,5 @@
-"""Drive a studio page in headless Chromium, for the browser tests and the latency benchmark.
+"""Drive a studio page in headless Chromium, for the browser tests and the latency benchmark
+(``scripts/bench_studio.py``); imported by test modules as ``studio_driver``.
 
 Needs selenium (the ``test`` extra) and Debian's ``chromium`` + ``chromium-driver``. Nothing is
 downloaded: the driver is /usr/bin/chromedriver, Selenium Manager's statistics are off, and

@@ -1,7 +1,7 @@
 """Pitch target: fit the alpha(s) quartic so the blade's outer half has a given geometric pitch.
 
 The blade element at s has the geometric pitch P(s) = 2 pi r(s) tan beta(s)
-(:mod:`torus_cad.geometry.extensions.blade_elements`). A pitch P asks for beta*(s) = atan(P / (2 pi r(s)))
+(:mod:`torus_cad.geometry.analysis.blade_elements`). A pitch P asks for beta*(s) = atan(P / (2 pi r(s)))
 at every section in the outer half of the radius (r >= half the tip radius). alpha(s) turns
 each section in its plane, and with it the chord and beta; the spec's alpha stays a quartic
 (§2.4 chose that form), so the quartic is fitted by nonlinear least squares
@@ -31,9 +31,9 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import least_squares
 
 from torus_cad.errors import GeometryError
-from torus_cad.geometry.extensions.blade_elements import blade_angles
-from torus_cad.geometry.extensions.handedness import Handedness
-from torus_cad.geometry.transforms import evaluate_quartic
+from torus_cad.geometry.analysis.blade_elements import blade_angles
+from torus_cad.geometry.blade.handedness import Handedness
+from torus_cad.geometry.blade.transforms import evaluate_quartic
 
 #: Sections with r >= this fraction of the tip radius take part in the pitch fit.
 PITCH_FIT_RADIUS_FRACTION = 0.5

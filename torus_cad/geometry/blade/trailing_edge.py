@@ -2,13 +2,13 @@
 
 Each section kind changes its own thickness law smoothly to open its trailing edge by a
 gap g in chord units (``Section.with_trailing_edge_gap``; NACA: y_t + (g / 2) t^4, see
-:mod:`torus_cad.geometry.airfoil`). The section then ends in a *base* between the ends of its
-upper and lower surface, and stays closed (:mod:`torus_cad.geometry.section`). The base has one
+:mod:`torus_cad.geometry.section.airfoil`). The section then ends in a *base* between the ends of its
+upper and lower surface, and stays closed (:mod:`torus_cad.geometry.section.section`). The base has one
 of two shapes (``airfoil.trailing_edge_shape``):
 
 * ``flat``: a straight base between two corners;
 * ``round`` (the default): a round cap, the cubic Bezier curve that leaves each surface along its
-  own tangent (:class:`~torus_cad.geometry.section.RoundTrailingEdge`), so the section is one
+  own tangent (:class:`~torus_cad.geometry.section.section.RoundTrailingEdge`), so the section is one
   smooth (G1) closed curve and the blade has no sharp trailing-edge edge. Its handles are 2/3 of
   the thickness *in mm* long (:func:`round_cap_handles`): after the section transform the cap is
   the cubic near-half-circle of that diameter (within 1.8 % of its radius; exactly tangent to
@@ -41,8 +41,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from torus_cad.errors import ParameterError
-from torus_cad.geometry.extensions.airfoil_file import AirfoilFile
-from torus_cad.geometry.section import (
+from torus_cad.geometry.blade.transforms import SectionLaws, evaluate_quartic, rotation_matrices
+from torus_cad.geometry.section.airfoil_file import AirfoilFile
+from torus_cad.geometry.section.section import (
+    ROUND_CAP_HANDLE_FRACTION,
     RoundTrailingEdge,
     Section,
     bezier_points,
@@ -53,7 +55,6 @@ from torus_cad.geometry.section import (
     round_cap_poles,
     trailing_edge_vector,
 )
-from torus_cad.geometry.transforms import SectionLaws, evaluate_quartic, rotation_matrices
 from torus_cad.tolerances import MIN_BLUNT_TRAILING_EDGE_MM
 
 
@@ -98,11 +99,6 @@ def own_gap(section: Section) -> float:
     return float((trailing_edge_vector(section) - start) @ change / (change @ change))
 
 
-#: A round cap's handles, as a fraction of the trailing-edge thickness (mm): the cubic Bezier
-#: approximation of a half circle (4/3 x the radius).
-ROUND_CAP_HANDLE_FRACTION = 2.0 / 3.0
-
-
 def round_cap_handles(ends: NDArray[np.float64], derivatives: NDArray[np.float64],
                       matrices: NDArray[np.float64]) -> NDArray[np.float64]:
     """Handle lengths h_u, h_l (chord units) of round caps that are near half circles in mm: ``(k, 2)``.
@@ -124,7 +120,7 @@ def round_cap_handles(ends: NDArray[np.float64], derivatives: NDArray[np.float64
 def _family_ends(section: Section) -> tuple[tuple[NDArray[np.float64], NDArray[np.float64]],
                                              tuple[NDArray[np.float64], NDArray[np.float64]]]:
     """:func:`half_ends` and :func:`end_derivatives` of ``section`` opened by 0 and by 1, remembered
-    (every call of :func:`torus_cad.geometry.surface.sections_along` makes a new family)."""
+    (every call of :func:`torus_cad.geometry.blade.surface.sections_along` makes a new family)."""
     family = _opened_by_0_and_1(section)
     return ((half_ends(family[0]), half_ends(family[1])),
             (end_derivatives(family[0]), end_derivatives(family[1])))
@@ -240,9 +236,9 @@ def check_trailing_edge_fits(section: Section, thickness_mm: float, angle_deg: A
     if thickness_mm <= 0.0:
         return
     from torus_cad.errors import GeometryError
-    from torus_cad.geometry.arc_length import equal_arc_length_section
-    from torus_cad.geometry.extensions.blade_elements import section_thickness
-    from torus_cad.geometry.transforms import transform_sections
+    from torus_cad.geometry.blade.transforms import transform_sections
+    from torus_cad.geometry.section.arc_length import equal_arc_length_section
+    from torus_cad.geometry.section.section import section_thickness
 
     sharp = section.with_trailing_edge_gap(0.0)
     sampling = equal_arc_length_section(sharp, points)

@@ -10,9 +10,9 @@ uniform grid in t is far too coarse there. Both the quadrature and the table the
 in u = sqrt(t) on each surface, where |df/du| is bounded; the spec's t is recovered as
 t = u^2 (upper) and t = 2 - u^2 (lower).
 
-Any :class:`~torus_cad.geometry.section.Section` is sampled this way (NACA 4- and 5-digit,
+Any :class:`~torus_cad.geometry.section.section.Section` is sampled this way (NACA 4- and 5-digit,
 .dat files). A section with a blunt trailing edge has a third piece, the base between the two
-surfaces' ends (straight, or a round cap, :mod:`torus_cad.geometry.section`); it takes its share
+surfaces' ends (straight, or a round cap, :mod:`torus_cad.geometry.section.section`); it takes its share
 of the points like the surfaces, equally spaced in its own arc length, so the spacing covers it
 too, and both of its ends are sample points.
 """
@@ -27,8 +27,8 @@ from numpy.typing import NDArray
 from scipy.integrate import quad_vec
 
 from torus_cad.errors import ParameterError
-from torus_cad.geometry.airfoil import airfoil_points
-from torus_cad.geometry.section import (
+from torus_cad.geometry.section.airfoil import airfoil_points
+from torus_cad.geometry.section.section import (
     RoundTrailingEdge,
     Section,
     cap_length,
@@ -67,7 +67,7 @@ class SectionSampling:
 
     Attributes:
         t: ``(n,)`` float, the closed-curve parameter (the spec's, in [0, 2), for a sharp
-            section; in [0, 3) with a base, see :func:`torus_cad.geometry.section.closed_points`).
+            section; in [0, 3) with a base, see :func:`torus_cad.geometry.section.section.closed_points`).
         points: ``(n, 2)`` float, chord units, order of f(t): upper surface first.
         perimeter: arc length of the closed section, chord units.
         trailing_edge_index: index of the exact trailing-edge point (the upper corner of a

@@ -3,8 +3,8 @@
 All lengths are fractions of the chord; ``t`` is the chord position in [0, 1] for the
 camber line and thickness, and the closed-curve parameter in [0, 2] for :func:`airfoil_points`
 (upper surface leading edge -> trailing edge on [0, 1], lower surface trailing edge -> leading
-edge on [1, 2], spec §1.3; see :mod:`torus_cad.geometry.section` for sections with a blunt
-trailing edge). Both kinds implement :class:`torus_cad.geometry.section.Section`.
+edge on [1, 2], spec §1.3; see :mod:`torus_cad.geometry.section.section` for sections with a blunt
+trailing edge). Both kinds implement :class:`torus_cad.geometry.section.section.Section`.
 
 Blunt trailing edge: ``trailing_edge_gap`` g (chord units) changes the
 thickness law to y_t(t) + (g / 2) t^4, i.e. the last coefficient of the NACA thickness
@@ -29,7 +29,7 @@ from numpy.typing import ArrayLike, NDArray
 from torus_cad.errors import ParameterError, shown
 
 if TYPE_CHECKING:
-    from torus_cad.geometry.section import Section
+    from torus_cad.geometry.section.section import Section
 
 #: Coefficients of the NACA thickness polynomial (spec §1.1): sqrt(t), t, t^2, t^3, t^4.
 THICKNESS_COEFFICIENTS = (0.2969, -0.1260, -0.3516, 0.2843, -0.1036)
@@ -272,9 +272,9 @@ def airfoil_points(airfoil: Section, t: ArrayLike) -> NDArray[np.float64]:
 
     t in [0, 1]: upper surface at chord t (leading edge -> trailing edge);
     t in (1, 2]: lower surface at chord 2 - t (trailing edge -> leading edge).
-    Any :class:`~torus_cad.geometry.section.Section` works (a blunt one with the extended
-    parameter of :func:`torus_cad.geometry.section.closed_points`).
+    Any :class:`~torus_cad.geometry.section.section.Section` works (a blunt one with the extended
+    parameter of :func:`torus_cad.geometry.section.section.closed_points`).
     """
-    from torus_cad.geometry.section import closed_points
+    from torus_cad.geometry.section.section import closed_points
 
     return closed_points(airfoil, t)

@@ -26,10 +26,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from torus_cad.errors import GeometryError
-from torus_cad.geometry.centerline import Centerline
-from torus_cad.geometry.frames import Frames
-from torus_cad.geometry.propeller import HubGeometry, PropellerGeometry
-from torus_cad.geometry.surface import (
+from torus_cad.geometry.blade.centerline import Centerline
+from torus_cad.geometry.blade.frames import Frames
+from torus_cad.geometry.blade.propeller import HubGeometry, PropellerGeometry
+from torus_cad.geometry.blade.surface import (
     BladeSurface,
     blade_frames,
     check_trailing_edge,
@@ -130,7 +130,7 @@ def sample_tube(geometry: PropellerGeometry, centerline: Centerline, s: NDArray[
                 t: NDArray[np.float64]) -> Tube:
     """Blade 0's analytic surface at every (s, t) of the grid, with frames and curvature.
 
-    The frames are the blade's own kind (:func:`torus_cad.geometry.surface.blade_frames`).
+    The frames are the blade's own kind (:func:`torus_cad.geometry.blade.surface.blade_frames`).
     """
     derivatives = centerline.derivatives(s, order=2)
     first, second = derivatives[:, 1], derivatives[:, 2]

@@ -16,7 +16,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from torus_cad.errors import GeometryError
-from torus_cad.geometry.centerline import Centerline
+from torus_cad.geometry.blade.centerline import Centerline
 from torus_cad.tolerances import FRAME_SCAN_SAMPLES, FRENET_MIN_CURVATURE
 
 

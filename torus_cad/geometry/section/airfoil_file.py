@@ -93,7 +93,7 @@ _CANDIDATES_PER_SEGMENT = 64
 
 
 class AirfoilFile:
-    """A section read from a coordinate file (implements :class:`~torus_cad.geometry.section.Section`).
+    """A section read from a coordinate file (implements :class:`~torus_cad.geometry.section.section.Section`).
 
     Attributes:
         name: the file's first line (or its file name when the file has no name line).
