@@ -119,8 +119,7 @@ def _uncrossed_at(shape: cq.Shape, linear_deflection: float, angular_deflection:
     """:func:`uncrossed_mesh` at one linear deflection; _TooCoarse when the tessellation is open or the repair
     moves it too far."""
     copy = shape.copy()
-    mesher = BRepMesh_IncrementalMesh(copy.wrapped, linear_deflection, False, angular_deflection, True)
-    mesher.Perform()
+    mesher = BRepMesh_IncrementalMesh(copy.wrapped, linear_deflection, False, angular_deflection, True)  # meshes here
     if not mesher.IsDone():
         raise KernelError("OpenCascade could not tessellate the solid")
     faces = [face.wrapped for face in copy.Faces()]
@@ -184,8 +183,9 @@ def _faces_with_holes(triangles: NDArray[np.int64], owner: NDArray[np.int64]) ->
     """The faces (indices) owning a triangle side that no other triangle shares (a hole's rim), or that
     more than two share; empty for a closed, manifold tessellation."""
     sides = np.sort(triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
-    _, inverse, uses = np.unique(sides, axis=0, return_inverse=True, return_counts=True)
-    rim = uses[inverse.reshape(-1)] != 2
+    keys = sides[:, 0] * (int(triangles.max()) + 1) + sides[:, 1]  # one integer per side: a 1-D sort
+    _, inverse, uses = np.unique(keys, return_inverse=True, return_counts=True)
+    rim = uses[inverse] != 2
     return sorted({int(face) for face in np.repeat(owner, 3)[rim]})
 
 
@@ -216,7 +216,8 @@ def _merge(points: NDArray[np.float64]) -> tuple[NDArray[np.int64], NDArray[np.i
     """Each point's index among the merged ones (nodes closer than MESH_MERGE_DISTANCE_MM are one: faces
     store their boundary nodes each in its own placement), and the points kept."""
     representative = np.arange(len(points))
-    for first, second in sorted(cKDTree(points).query_pairs(MESH_MERGE_DISTANCE_MM)):
+    pairs = cKDTree(points).query_pairs(MESH_MERGE_DISTANCE_MM, output_type="ndarray")
+    for first, second in pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))].tolist():
         representative[second] = representative[first]
     while True:  # follow chains to their root
         parent = representative[representative]
