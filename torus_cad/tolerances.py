@@ -168,6 +168,11 @@ REDUCED_FILLET_FRACTION = 0.5
 #: Points per junction edge at which the blade face's bend is measured for the reduced fillet.
 REDUCED_FILLET_SAMPLES = 40
 
+#: A root-fillet edge whose 3D curve leaves a face's p-curve by more than its tolerance (as
+#: BOPAlgo_ArgumentAnalyzer measures; 1.4e-4 mm against 1e-4 mm on workshop_fillet) gets this many
+#: times that deviation as tolerance (torus_cad.kernel.fillet_continuity).
+FILLET_EDGE_TOLERANCE_MARGIN = 1.1
+
 #: A repaired root fillet (ShapeFix) is accepted only if it adds at most this many r^2 of volume
 #: per mm of junction: a rolling-ball fillet between faces meeting at 30 degrees adds 2.4 r^2,
 #: at 90 degrees 0.21 r^2 (what repaired fillets add: the docs' measurements page).

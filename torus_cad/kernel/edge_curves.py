@@ -184,7 +184,7 @@ class _IntersectionFit:
         if self.curve is None or any(pcurve is None for pcurve in self.pcurves):
             return None
         parameters = self._start_parameters()
-        points: list[_Point | None] = [self._solve(t) for t in parameters]
+        points = self._solve_all(parameters)
         unchecked = set(range(len(parameters) - 1))
         for _ in range(EDGE_CURVE_WORST_POINT_ROUNDS):
             while unchecked:
@@ -201,7 +201,7 @@ class _IntersectionFit:
             if not 0 < index < len(parameters) or fitted.worst_parameter in parameters:
                 return fitted
             parameters.insert(index, fitted.worst_parameter)
-            points.insert(index, self._solve(fitted.worst_parameter))
+            points.insert(index, self._solve_all([fitted.worst_parameter])[0])
             unchecked = {index - 1, index}
         return fitted
 
@@ -210,10 +210,11 @@ class _IntersectionFit:
         """A point added half way along every unchecked interval where the curves miss it by more
         than EDGE_CURVE_FIT_MM; the new intervals are the unchecked ones of the next round."""
         new_parameters, new_points, new_unchecked = [parameters[0]], [points[0]], set[int]()
+        middles = {i: 0.5 * (parameters[i] + parameters[i + 1]) for i in sorted(unchecked)}
+        solved = dict(zip(middles, self._solve_all(list(middles.values())), strict=True))
         for i in range(len(parameters) - 1):
             if i in unchecked:
-                middle = 0.5 * (parameters[i] + parameters[i + 1])
-                exact = self._solve(middle)
+                middle, exact = middles[i], solved[i]
                 if exact is None or self._error(curves, middle, exact) > EDGE_CURVE_FIT_MM:
                     new_unchecked.update((len(new_parameters) - 1, len(new_parameters)))
                     new_parameters.append(middle)
@@ -238,32 +239,50 @@ class _IntersectionFit:
         spans = [np.linspace(a, b, _POINTS_PER_SPAN + 1)[:-1] for a, b in itertools.pairwise(knots)]
         return [*(float(t) for t in np.concatenate(spans)), self.last]
 
-    def _solve(self, t: float) -> _Point | None:
-        """(u1, v1, u2, v2) and the 3D point where both surfaces meet in the plane normal to the old
-        curve at ``t``, by Newton's method from the old p-curves' points; None if it does not converge
-        or converges farther from the old point than EDGE_CURVE_REACH_TOLERANCES edge tolerances."""
+    def _solve_all(self, parameters: Sequence[float]) -> list[_Point | None]:
+        """For each ``t`` of ``parameters``: (u1, v1, u2, v2) and the 3D point where both surfaces meet in the
+        plane normal to the old curve at ``t``, by Newton's method from the old p-curves' points; None if it
+        does not converge or converges farther from the old point than EDGE_CURVE_REACH_TOLERANCES edge
+        tolerances. The points' Newton steps are taken together (one batched linear solve a step)."""
+        count = len(parameters)
+        origins, normals, uv = np.empty((count, 3)), np.empty((count, 3)), np.empty((count, 4))
         point, tangent = gp_Pnt(), gp_Vec()
-        self.curve.D1(t, point, tangent)
-        normal = np.array([tangent.X(), tangent.Y(), tangent.Z()])
-        normal /= np.linalg.norm(normal)
-        origin = np.array([point.X(), point.Y(), point.Z()])
-        a, b = self.pcurves[0].Value(t), self.pcurves[1].Value(t)
-        uv = np.array([a.X(), a.Y(), b.X(), b.Y()])
-        jacobian = np.zeros((4, 4))
+        for index, t in enumerate(parameters):
+            self.curve.D1(t, point, tangent)
+            origins[index] = point.X(), point.Y(), point.Z()
+            normals[index] = tangent.X(), tangent.Y(), tangent.Z()
+            a, b = self.pcurves[0].Value(t), self.pcurves[1].Value(t)
+            uv[index] = a.X(), a.Y(), b.X(), b.Y()
+        normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+        found: list[_Point | None] = [None] * count
+        active = np.arange(count)
         for _ in range(EDGE_CURVE_NEWTON_STEPS):
-            first, first_u, first_v = _d1(self.surfaces[0], uv[0], uv[1])
-            second, second_u, second_v = _d1(self.surfaces[1], uv[2], uv[3])
-            residual = np.array([*(first - second), (first - origin) @ normal])
-            if np.abs(residual).max() < _NEWTON_RESIDUAL_MM:
-                exact = 0.5 * (first + second)  # the old curves are within tolerance of it: farther is another branch
-                return (uv, exact) if float(np.linalg.norm(exact - origin)) <= self.reach else None
-            jacobian[:3, 0], jacobian[:3, 1], jacobian[:3, 2], jacobian[:3, 3] = first_u, first_v, -second_u, -second_v
-            jacobian[3, :2] = first_u @ normal, first_v @ normal
-            try:
-                uv = uv - np.linalg.solve(jacobian, residual)
-            except np.linalg.LinAlgError:
-                return None
-        return None
+            if not len(active):
+                break
+            first, first_u, first_v, second, second_u, second_v = (np.empty((len(active), 3)) for _ in range(6))
+            for row, index in enumerate(active.tolist()):
+                first[row], first_u[row], first_v[row] = _d1(self.surfaces[0], uv[index, 0], uv[index, 1])
+                second[row], second_u[row], second_v[row] = _d1(self.surfaces[1], uv[index, 2], uv[index, 3])
+            residual = np.concatenate([first - second, np.einsum("ij,ij->i", first - origins[active],
+                                                                 normals[active])[:, None]], axis=1)
+            converged = np.abs(residual).max(axis=1) < _NEWTON_RESIDUAL_MM
+            for row in np.flatnonzero(converged).tolist():
+                index = int(active[row])
+                exact = 0.5 * (first[row] + second[row])  # the old curves are within tolerance of it: farther is another branch
+                if float(np.linalg.norm(exact - origins[index])) <= self.reach:
+                    found[index] = (uv[index].copy(), exact)
+            going = ~converged
+            active = active[going]
+            jacobian = np.zeros((len(active), 4, 4))
+            jacobian[:, :3, 0], jacobian[:, :3, 1] = first_u[going], first_v[going]
+            jacobian[:, :3, 2], jacobian[:, :3, 3] = -second_u[going], -second_v[going]
+            jacobian[:, 3, 0] = np.einsum("ij,ij->i", first_u[going], normals[active])
+            jacobian[:, 3, 1] = np.einsum("ij,ij->i", first_v[going], normals[active])
+            solvable = np.abs(np.linalg.det(jacobian)) > 0.0 if len(active) else np.zeros(0, dtype=bool)
+            if len(active) and solvable.any():
+                uv[active[solvable]] -= np.linalg.solve(jacobian[solvable], residual[going][solvable][:, :, None])[:, :, 0]
+            active = active[solvable]  # a singular step ends that point: None
+        return found
 
     def _interpolate(self, parameters: list[float], points: list[_Point]
                      ) -> tuple[Geom_Curve, Geom2d_Curve, Geom2d_Curve]:
@@ -294,8 +313,8 @@ class _IntersectionFit:
         return max(on_curve.Distance(target), on_curve.Distance(on_first), on_curve.Distance(on_second))
 
 
-def _d1(surface: Geom_Surface, u: float, v: float) -> tuple[NDArray[np.float64], ...]:
+def _d1(surface: Geom_Surface, u: float, v: float) -> tuple[tuple[float, float, float], ...]:
+    """The point and its two first derivatives of ``surface`` at (u, v)."""
     point, d_u, d_v = gp_Pnt(), gp_Vec(), gp_Vec()
     surface.D1(u, v, point, d_u, d_v)
-    return (np.array([point.X(), point.Y(), point.Z()]), np.array([d_u.X(), d_u.Y(), d_u.Z()]),
-            np.array([d_v.X(), d_v.Y(), d_v.Z()]))
+    return (point.X(), point.Y(), point.Z()), (d_u.X(), d_u.Y(), d_u.Z()), (d_v.X(), d_v.Y(), d_v.Z())

@@ -26,6 +26,7 @@ from OCP.TopoDS import TopoDS, TopoDS_Edge
 from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape
 
 from torus_cad.errors import KernelError
+from torus_cad.kernel.fillet_continuity import c1_fillet
 from torus_cad.kernel.fillet_edges import FilletParams, fillet_in_child
 from torus_cad.kernel.fillet_tight_bends import reduced_edge_radii, varying_junction_mm
 from torus_cad.kernel.topology import BLADE_SURFACES
@@ -128,8 +129,11 @@ def fillet_blade_roots(solid: cq.Solid, face_parts: Sequence[int], radius_mm: fl
     radii = reduced_edge_radii(solid, edges, radius_mm) if reduce else [radius_mm] * len(edges)
     filleted = fillet_in_child(solid, edges, radius_mm, params, deadline, radii if reduce else None, face_parts)
     if filleted is not None:
-        return RootFillet(filleted.solid, radius_mm, min(radii), varying_junction_mm(solid, edges, radii, radius_mm),
-                          filleted.face_parts)
+        try:  # no C0 face or edge (kernel.fillet_continuity)
+            smooth, parts = c1_fillet(filleted.solid, filleted.face_parts)
+        except KernelError:  # the split would not give a valid solid: the fillet as OpenCascade made it
+            smooth, parts = filleted.solid, tuple(filleted.face_parts)
+        return RootFillet(smooth, radius_mm, min(radii), varying_junction_mm(solid, edges, radii, radius_mm), parts)
     if not suggest:
         raise KernelError(f"root fillet failed at hub.root_fillet_radius = {radius_mm:g} mm")
     raise fillet_failure(solid, radius_mm)

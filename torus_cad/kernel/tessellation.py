@@ -40,8 +40,7 @@ def tessellate_faces(shape: cq.Shape, linear_deflection: float, angular_deflecti
     angular in radians; the shape's own triangulation is left alone) and return the triangles of
     every face that has some, in ``shape.Faces()`` order. ``parallel``: OpenCascade's mesher threads."""
     copy = shape.copy()
-    mesher = BRepMesh_IncrementalMesh(copy.wrapped, linear_deflection, False, angular_deflection, parallel)
-    mesher.Perform()
+    mesher = BRepMesh_IncrementalMesh(copy.wrapped, linear_deflection, False, angular_deflection, parallel)  # meshes here
     if not mesher.IsDone():
         raise KernelError("OpenCascade could not tessellate the solid")
     faces = []

@@ -75,8 +75,7 @@ def _write_binary_stl(temp: Path, path: Path, vertices: np.ndarray, triangles: n
 
 
 def _write_stl_to(shape: cq.Shape, temp: Path, path: Path, linear_deflection: float, angular_deflection: float) -> None:
-    mesher = BRepMesh_IncrementalMesh(shape.wrapped, linear_deflection, False, angular_deflection, True)
-    mesher.Perform()
+    mesher = BRepMesh_IncrementalMesh(shape.wrapped, linear_deflection, False, angular_deflection, True)  # meshes here
     if not mesher.IsDone():
         raise KernelError("OpenCascade could not tessellate the solid for STL")
     writer = StlAPI_Writer()
