@@ -19,7 +19,8 @@ import numpy as np
 from torus_cad.geometry.analysis.blade_elements import NEARLY_RADIAL_FRACTION
 from torus_cad.outputs.sections_table import elements_of
 from torus_cad.parameters.design_targets import tip_radius_mm
-from torus_cad.preview.picture import parse_size, render_preview, write_png
+from torus_cad.preview.picture import render_preview, write_png
+from torus_cad.preview.size import parse_size
 from torus_cad.propeller import build_propeller
 
 EXAMPLES = Path("examples")

@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 
 from torus_cad.geometry.section.airfoil import NacaAirfoil, airfoil_points
 from torus_cad.geometry.section.arc_length import equal_arc_length_section, spacing_deviation
-from torus_cad.tolerances import FOLD_RATIO_LIMIT
+from torus_cad.tolerances import ARC_LENGTH_QUAD_ABS, FOLD_RATIO_LIMIT
 
 
 def dense_perimeter(airfoil: NacaAirfoil, samples: int = 400001) -> float:
@@ -59,3 +59,36 @@ def test_spacing_is_equal_on_each_surface_for_any_section(m, p, thickness, cambe
     for side in (gaps[:te], gaps[te:]):
         assert np.abs(side / side.mean() - 1).max() < 2e-3
     assert sampling.points.shape == (count, 2)
+
+
+def _adaptive_table(airfoil, upper: bool, edges: np.ndarray) -> np.ndarray:
+    """The arc-length table of the same grid by QUADPACK's adaptive Gauss-Kronrod quadrature (scipy's
+    ``quad_vec``, run to ARC_LENGTH_QUAD_ABS): the method the table used before Gauss-Legendre."""
+    from scipy.integrate import quad_vec
+
+    starts, widths = edges[:-1], np.diff(edges)
+    pieces, _ = quad_vec(lambda f: airfoil.speed_on_half(starts + f * widths, upper) * widths, 0.0, 1.0,
+                         epsabs=ARC_LENGTH_QUAD_ABS, epsrel=1e-10, norm="max")
+    return np.concatenate([[0.0], np.cumsum(pieces)])
+
+
+def test_gauss_legendre_table_agrees_with_adaptive_quadrature_within_its_tolerance():
+    """The arc-length table (ARC_LENGTH_GAUSS_POINTS per interval) within ARC_LENGTH_QUAD_ABS of adaptive
+    Gauss-Kronrod at every grid point: NACA 4-digit sections from thin to thick and strongly cambered,
+    blunt trailing edges, and the coordinate files of examples/airfoils (whose speed is only piecewise
+    smooth)."""
+    from pathlib import Path
+
+    from torus_cad.geometry.section.airfoil_file import load_airfoil_file
+    from torus_cad.geometry.section.arc_length import surface_arc_length_table
+
+    nacas = [NacaAirfoil(), NacaAirfoil(0.04, 0.4, 0.15, True), NacaAirfoil(0.09, 0.9, 0.6, False),
+             NacaAirfoil(0.0, 0.5, 0.02, True), NacaAirfoil(0.06, 0.2, 0.3, False)]
+    files = [load_airfoil_file(path) for path in sorted((Path(__file__).parents[1] / "examples" / "airfoils").iterdir())]
+    sections = nacas + files + [section.with_trailing_edge_gap(0.01) for section in (nacas[1], files[0])]
+    assert len(files) >= 3
+    for section in sections:
+        for upper in (True, False):
+            table = surface_arc_length_table(section, upper)
+            difference = np.abs(table.arc_length - _adaptive_table(section, upper, table.root_chord)).max()
+            assert difference <= ARC_LENGTH_QUAD_ABS, (section, upper, difference)

@@ -147,7 +147,7 @@ def test_a_sweep_file_given_to_build_points_to_the_sweep_command(tmp_path, capsy
 
 
 def test_a_numeric_naca_designation_on_the_command_line_is_the_designation(tmp_path):
-    from torus_cad.cli.commands import load_parameters
+    from torus_cad.cli.design_input import load_parameters
 
     assert load_parameters(None, ["airfoil.naca=4415"]).airfoil.naca == "4415"
 
@@ -167,3 +167,27 @@ def test_build_says_on_the_terminal_when_the_part_is_not_printable(tmp_path, cap
     assert main(["build", "--set", "resolution.sections=16", "--set", "resolution.points=48", "--no-stl",
                  "--out", str(tmp_path)]) == 0
     assert "warning: not printable: the trailing edge" in capsys.readouterr().out
+
+
+def test_each_subcommand_is_its_own_module_loaded_only_when_it_runs():
+    """Parsing loads no command's module; running ``defaults`` loads its module and no other command's."""
+    import argparse
+    import importlib.util
+
+    from torus_cad.cli import build_parser
+    from torus_cad.cli.commands import COMMANDS
+
+    choices = next(action.choices for action in build_parser()._actions
+                   if isinstance(action, argparse._SubParsersAction))
+    assert sorted(choices) == sorted(COMMANDS)
+    for name in COMMANDS:
+        assert importlib.util.find_spec(f"torus_cad.cli.commands.{name}") is not None, name
+    probe = ("import sys\n"
+             "from torus_cad.cli import build_parser, main\n"
+             "build_parser().parse_args(['build'])\n"
+             "before = sorted(m for m in sys.modules if m.startswith('torus_cad.cli.commands.'))\n"
+             "main(['defaults'])\n"
+             "after = sorted(m for m in sys.modules if m.startswith('torus_cad.cli.commands.'))\n"
+             "print(before, after, 'cadquery' in sys.modules, file=sys.stderr)\n")
+    done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True)
+    assert done.stderr.strip() == "[] ['torus_cad.cli.commands.defaults'] False"

@@ -24,12 +24,12 @@ from torus_cad.preview.picture import (
     View,
     blade_silhouettes,
     oblique_view,
-    parse_size,
     propeller_mesh,
     render_preview,
     render_views,
     write_preview,
 )
+from torus_cad.preview.size import parse_size
 from torus_cad.propeller import propeller_objects
 
 FAST = ["--set", "resolution.sections=16", "--set", "resolution.points=40"]

@@ -7,7 +7,8 @@ interrupted by SIGINT / SIGTERM / SIGHUP (torus_cad.runtime.interrupts).
 
 The signal handlers are installed before anything heavy is imported (this module imports only
 the standard library and torus_cad's light modules at the top; numpy, CadQuery and the rest load
-inside the commands), so an interrupt at any moment ends the command with one line.
+with the command's own module, torus_cad.cli.commands.<name>), so an interrupt at any moment ends the
+command with one line.
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ import argparse
 import sys
 from collections.abc import Callable, Sequence
 
-from torus_cad.cli.commands import EXIT_BAD_INPUT, EXIT_KERNEL_FAILURE, EXIT_OK, report_error
+from torus_cad.cli.exits import EXIT_BAD_INPUT, EXIT_KERNEL_FAILURE, EXIT_OK, report_error
 from torus_cad.cli.parser import build_parser
 from torus_cad.errors import (
     GeometryError,

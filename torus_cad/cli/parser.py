@@ -1,35 +1,27 @@
-"""The ``torus-cad`` argument parser: every subcommand, its options and its handler (torus_cad.cli.commands)."""
+"""The ``torus-cad`` argument parser: every subcommand and its options; each runs through
+torus_cad.cli.commands.run_command, which loads the command's own module."""
 
 from __future__ import annotations
 
 import argparse
 import sys
 from collections.abc import Callable
+from enum import Enum
 from typing import Any
 
-from torus_cad.cli.commands import (
-    EXIT_BAD_INPUT,
-    command_build,
-    command_cfd,
-    command_check,
-    command_defaults,
-    command_mesh,
-    command_optimize,
-    command_preview,
-    command_simulate,
-    command_studio,
-    command_sweep,
-    command_verify,
-    table_specs,
-)
+from torus_cad.cli.commands import run_command
+from torus_cad.cli.exits import EXIT_BAD_INPUT
 from torus_cad.cli.options import Bounds, integer, number, range_help
 from torus_cad.errors import bounded_message
 from torus_cad.runtime.cpus import available_cpus, max_cfd_threads, max_workers
+from torus_cad.runtime.progress import is_terminal
 from torus_cad.tolerances import (
+    CFD_TETRAHEDRA_LIMIT,
     CFD_THREADS_LIMIT,
     CFD_THREADS_PER_CPU,
     DENSITY_LIMIT_G_CM3,
     DESIGN_TIME_LIMIT_MAX_S,
+    GMSH_REPRODUCIBLE_THREADS,
     MAX_STUDY_TRIALS,
     PREVIEW_EDGE_RANGE,
     SIMULATE_AIRSPEED_LIMIT_M_S,
@@ -110,8 +102,6 @@ class _Parser(argparse.ArgumentParser):
 
 def _announce(text: str, args: list[str]) -> None:
     """``torus-cad: [   0.0 s] text`` on stderr when it is a terminal and ``args`` do not ask for quiet."""
-    from torus_cad.runtime.progress import is_terminal
-
     if is_terminal(sys.stderr) and not {"-q", "--quiet"} & set(args):
         sys.stderr.write(f"torus-cad: [{0.0:6.1f} s] {text}\n")
         sys.stderr.flush()
@@ -153,7 +143,7 @@ def _option_type(key: str, kind: Any, bounds: Bounds, unit: str) -> Callable[[st
 def _add_table_arguments(parser: argparse.ArgumentParser, table: str) -> None:
     """One ``--name`` option per parameter of a schema table (default None: keep the design's value), a number
     checked against the parameter's range as it is parsed."""
-    from enum import Enum
+    from torus_cad.cli.design_input import table_specs  # the schema: loaded once the subcommand is used
 
     for spec in table_specs(table):
         name = spec.key.rpartition(".")[2]
@@ -205,12 +195,10 @@ def _add_mesh_parser(commands: Any) -> None:
                            + ", ".join(item.value for item in MeshFormat) + " (default stl,obj)")
     mesh.add_argument("--no-compare", action="store_true",
                       help="skip the B-rep comparison in the report (volume, OpenCascade's tessellation)")
-    _add_out_and_quiet(mesh, "mesh_out", command_mesh)
+    _add_out_and_quiet(mesh, "mesh_out")
 
 
 def _add_cfd_parser(commands: Any) -> None:
-    from torus_cad.tolerances import CFD_TETRAHEDRA_LIMIT, GMSH_REPRODUCIBLE_THREADS
-
     cfd = _design_command(
         commands, "cfd", help="fluid domain and tetrahedral volume mesh for a rotating-propeller simulation (gmsh)",
         description="Mesh the fluid around the propeller of CONFIG (or the default) with gmsh: an outer "
@@ -228,7 +216,7 @@ def _add_cfd_parser(commands: Any) -> None:
                      help=f"gmsh threads, {range_help(threads)} ({_THREADS_NOTE}; default "
                           f"{GMSH_REPRODUCIBLE_THREADS}: the same mesh on every run; 0 = one per CPU, whose meshes differ "
                           "slightly from run to run)")
-    _add_out_and_quiet(cfd, "cfd_out", command_cfd)
+    _add_out_and_quiet(cfd, "cfd_out")
 
 
 def _add_simulate_parser(commands: Any) -> None:
@@ -302,15 +290,14 @@ def _add_simulate_parser(commands: Any) -> None:
     simulate.add_argument("--convergence", action="store_true",
                           help="run all three levels into OUT/<level>/ and write <name>_convergence.json: "
                                "Richardson-extrapolated thrust and torque, the observed order and the grid convergence index")
-    _add_out_and_quiet(simulate, "simulate_out", command_simulate)
+    _add_out_and_quiet(simulate, "simulate_out")
 
 
-def _add_out_and_quiet(parser: argparse.ArgumentParser, default_out: str,
-                       handler: Callable[[argparse.Namespace], int]) -> None:
+def _add_out_and_quiet(parser: argparse.ArgumentParser, default_out: str) -> None:
     """The output folder, --quiet and the handler, as every writing subcommand has them."""
     parser.add_argument("--out", default=default_out, help=f"output folder (default: {default_out})")
     parser.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
-    parser.set_defaults(handler=handler)
+    parser.set_defaults(handler=run_command)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -341,7 +328,7 @@ def build_parser() -> argparse.ArgumentParser:
     build.add_argument("--preview", action="store_true", help="also render <name>.png (see 'torus-cad preview')")
     build.add_argument("--preview-size", default="1200x600", metavar="WxH",
                        help=f"size of the --preview picture in pixels, {_PICTURE_SIDES} (default 1200x600)")
-    build.set_defaults(handler=command_build)
+    build.set_defaults(handler=run_command)
 
     check = _design_command(
         commands, "check", help="check a design before building it: every refusal that needs no kernel, in a second",
@@ -358,7 +345,7 @@ def build_parser() -> argparse.ArgumentParser:
     check.add_argument("--require-printable", action="store_true",
                        help="exit 2 when the blade is thinner than manufacturing.min_wall, as build does")
     check.add_argument("-q", "--quiet", action="store_true", help="print nothing when the design passes")
-    check.set_defaults(handler=command_check)
+    check.set_defaults(handler=run_command)
 
     preview = _design_command(
         commands, "preview", help="render a PNG picture: a view from above and a view along the axis",
@@ -368,7 +355,7 @@ def build_parser() -> argparse.ArgumentParser:
     preview.add_argument("--size", default="1200x600", metavar="WxH",
                          help=f"picture size in pixels, {_PICTURE_SIDES} (default 1200x600)")
     preview.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
-    preview.set_defaults(handler=command_preview)
+    preview.set_defaults(handler=run_command)
 
     verify = commands.add_parser("verify", help="check that output sets are complete: every file of one build",
                                  description="Check the output sets in FOLDER and every folder under it (or only "
@@ -381,7 +368,7 @@ def build_parser() -> argparse.ArgumentParser:
     verify.add_argument("folder", metavar="FOLDER", help="output folder, e.g. step_out (its sub-folders too)")
     verify.add_argument("name", nargs="?", metavar="NAME", help="check only the set <NAME>.json (default: every set)")
     verify.add_argument("-q", "--quiet", action="store_true", help="print nothing when the sets are complete")
-    verify.set_defaults(handler=command_verify)
+    verify.set_defaults(handler=run_command)
 
     defaults = _design_command(commands, "defaults", help="print the default design as commented TOML",
                                description="Print the default design as a commented TOML file to start from; "
@@ -389,7 +376,7 @@ def build_parser() -> argparse.ArgumentParser:
                                "and pitch are applied.")
     defaults.add_argument("--resolved", action="store_true",
                           help="print the spec parameters the design file (and --set) resolve to")
-    defaults.set_defaults(handler=command_defaults)
+    defaults.set_defaults(handler=run_command)
 
     sweep = commands.add_parser("sweep", help="build many variants of a design in parallel (local or Dask)",
                                 description="Build every design of a sweep file (a base design plus the "
@@ -419,7 +406,7 @@ def build_parser() -> argparse.ArgumentParser:
                             "(default: the sweep file's time_limit_s, else 300; local pool only)")
     sweep.add_argument("--rebuild", action="store_true", help="build every design again, even those already done")
     sweep.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary")
-    sweep.set_defaults(handler=command_sweep)
+    sweep.set_defaults(handler=run_command)
 
     optimize = commands.add_parser(
         "optimize", help="search the design space for the best designs (optuna; local pool or Dask)",
@@ -445,7 +432,7 @@ def build_parser() -> argparse.ArgumentParser:
                           help="the study's storage: sqlite:///path.db or postgresql://user@host/db (default: the "
                                "file's study.storage, else OUT/<name>.db)")
     optimize.add_argument("-q", "--quiet", action="store_true", help="no summary")
-    optimize.set_defaults(handler=command_optimize)
+    optimize.set_defaults(handler=run_command)
 
     studio = _design_command(commands, "studio", help="design in the browser: parameters, live 3D view, downloads",
                              description="Serve a local web page to design a propeller: a parameters panel, a "
@@ -460,7 +447,7 @@ def build_parser() -> argparse.ArgumentParser:
     studio.add_argument("--files", metavar="FOLDER",
                         help="a folder whose files (e.g. airfoil coordinate files) designs uploaded in the page may "
                              "name; otherwise they may name only the files uploaded with them")
-    studio.set_defaults(handler=command_studio)
+    studio.set_defaults(handler=run_command)
     _add_mesh_parser(commands)
     _add_cfd_parser(commands)
     _add_simulate_parser(commands)

@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import math
 import os
-import re
 import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -31,22 +30,19 @@ import numpy as np
 from numpy.typing import NDArray
 
 from torus_cad.colors import HUB_COLOR, blade_color
-from torus_cad.errors import ParameterError, TorusCadError, shown
+from torus_cad.errors import TorusCadError
 from torus_cad.geometry.blade.propeller import HUB_PART
 from torus_cad.kernel.checks import mass_properties
 from torus_cad.parameters import PropellerParameters
+from torus_cad.preview.size import checked_size
 from torus_cad.runtime.files import atomic_path
 from torus_cad.runtime.stages import Stage
-from torus_cad.tolerances import PREVIEW_EDGE_RANGE
 
 if TYPE_CHECKING:  # pragma: no cover
     from vtkmodules.vtkRenderingCore import vtkRenderWindow
 
 #: Default picture size in pixels (width, height): two square views side by side.
 DEFAULT_SIZE: tuple[int, int] = (1200, 600)
-
-#: Smallest and largest accepted picture edge, pixels.
-MIN_EDGE, MAX_EDGE = PREVIEW_EDGE_RANGE
 
 #: The classic isometric elevation (the (1, 1, 1) direction), degrees.
 ISOMETRIC_ELEVATION_DEG = math.degrees(math.atan(1.0 / math.sqrt(2.0)))
@@ -94,23 +90,6 @@ class View:
 
 #: Looking down the spin axis from +z: x to the right, y up.
 AXIAL_VIEW = View((0.0, 0.0, 1.0), (0.0, 1.0, 0.0), "along the spin axis (+z toward you)")
-
-
-def parse_size(text: str, option: str = "--size") -> tuple[int, int]:
-    """``"1200x600"`` -> ``(1200, 600)``; raise ParameterError (naming ``option``) for anything else."""
-    match = re.fullmatch(r"\s*(\d{1,9})\s*[xX×]\s*(\d{1,9})\s*", text)  # 9 digits: far over MAX_EDGE, an int
-    if not match:
-        raise ParameterError(f"{option} {shown(text)} must look like WIDTHxHEIGHT in pixels, e.g. 1200x600, each "
-                             f"side {MIN_EDGE}..{MAX_EDGE}")
-    return _checked_size((int(match.group(1)), int(match.group(2))), f"{option} {text.strip()}")
-
-
-def _checked_size(size: Sequence[int], what: str = "preview size") -> tuple[int, int]:
-    width, height = (int(value) for value in size)
-    for label, value in (("width", width), ("height", height)):
-        if not MIN_EDGE <= value <= MAX_EDGE:
-            raise ParameterError(f"{what}: {label} {value} px is out of range; allowed [{MIN_EDGE}, {MAX_EDGE}]")
-    return width, height
 
 
 # -- the scene ------------------------------------------------------------------------------------
@@ -201,7 +180,7 @@ def render_views(mesh: SceneMesh, views: Sequence[View], size: Sequence[int], ti
 
     from torus_cad.preview.vtk_scene import add_lights, surface_actor, triangle_polydata
 
-    width, height = _checked_size(size)
+    width, height = checked_size(size)
     window = _offscreen_window(width, height)
     title_px = _title_height_px(height) if title else 0
     view_top = 1.0 - title_px / height
@@ -242,7 +221,7 @@ def render_preview(propeller: _HasParts, size: Sequence[int] = DEFAULT_SIZE, tit
         title: text above the views (default: the name, blade count and volume in mm^3).
         progress: optional callback, called with ``Stage.PREVIEW_TESSELLATE`` and ``Stage.PREVIEW_RENDER``.
     """
-    width, height = _checked_size(size)
+    width, height = checked_size(size)
     if progress:
         progress(Stage.PREVIEW_TESSELLATE)
     blades = len(propeller.blades)

@@ -1,0 +1,31 @@
+"""``torus-cad cfd``: the fluid domain and its tetrahedral mesh by gmsh (its extra checked before this loads)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from torus_cad.cfd.domain import gmsh_library, import_gmsh, summary_line, write_cfd_domain
+from torus_cad.cfd.estimate import check_cfd_budget
+from torus_cad.cfd.worker import run_in_worker
+from torus_cad.cli.design_input import load_parameters, table_overrides
+from torus_cad.cli.exits import print_written
+from torus_cad.kernel.mesh_check import import_meshlib
+from torus_cad.outputs.output_set import check_writable_folder
+from torus_cad.runtime.progress import StageProgress
+
+
+def run(args: argparse.Namespace) -> int:
+    params = load_parameters(args.config, args.overrides).with_values(table_overrides(args, "cfd"))
+    progress = StageProgress.for_terminal(quiet=args.quiet)
+    gmsh = import_gmsh()  # MissingExtraError (exit 2) when gmsh's library does not load
+    import_meshlib()
+    estimate = check_cfd_budget(params)  # a mesh that would blow up is refused before any work (a few s)
+    check_writable_folder(args.out)
+    # gmsh set up here, meshing in a worker thread: a signal during a long gmsh call ends the command
+    # at once (cfd.worker, cfd.domain.gmsh_library)
+    with gmsh_library(gmsh):
+        report, paths = run_in_worker(lambda: write_cfd_domain(params, Path(args.out), threads=args.threads,
+                                                               progress=progress, estimate=estimate))
+    progress.finish()
+    return print_written(paths, summary_line(report), args.quiet)
