@@ -30,6 +30,7 @@ from torus_cad.cfd.sizes import (
 )
 from torus_cad.errors import BudgetError
 from torus_cad.parameters import PropellerParameters
+from torus_cad.parameters.design_targets import resolve_design_targets
 from torus_cad.tolerances import CFD_TETRAHEDRA_LIMIT
 
 #: Blade samples (sections, points around) and hub samples per mm for the surface cloud.
@@ -43,6 +44,15 @@ TETS_PER_VOLUME_UNIT = 3.0
 TETS_PER_TRIANGLE = 1.7
 MEMORY_BASE_MB = 750.0
 MEMORY_PER_TET_KB = 0.62
+#: Tetrahedra per second of wall time of a whole ``torus-cad cfd`` run (one gmsh thread), the slowest
+#: of the shipped examples measured by ``scripts/cfd_budget.py --examples`` on the shared 2-core machine
+#: (docs/how-to/cfd.md): the time the estimate implies errs long.
+TETS_PER_WALL_SECOND = 2_000.0
+#: The real count over the estimate's, lowest and highest over the shipped examples at their own
+#: [cfd] (``scripts/cfd_budget.py --examples``): the factor the printed estimate states.
+REAL_OVER_ESTIMATE = (0.8, 1.5)
+#: A run expected to take longer than this (s) gets the settings that shorten it on its estimate line.
+LONG_RUN_S = 600.0
 _SEED = 20260101
 _EQUILATERAL_AREA = np.sqrt(3.0) / 4.0
 
@@ -55,11 +65,32 @@ class CfdEstimate:
         tetrahedra: element count.
         surface_triangles: triangles on all surfaces (propeller, interface, caps, farfield).
         memory_mb: peak resident memory of the process, MB.
+        wall_seconds: the run's wall time at :data:`TETS_PER_WALL_SECOND`, s.
     """
 
     tetrahedra: int
     surface_triangles: int
     memory_mb: float
+    wall_seconds: float
+
+    def line(self) -> str:
+        """One line for the terminal: the count with the factor it is within, the memory and the time."""
+        low, high = (round(factor * self.tetrahedra, -3) for factor in REAL_OVER_ESTIMATE)
+        return (f"estimate: about {self.tetrahedra:,} tetrahedra (real counts {REAL_OVER_ESTIMATE[0]:g}x to "
+                f"{REAL_OVER_ESTIMATE[1]:g}x of it on the shipped examples: {low:,.0f} to {high:,.0f}), "
+                f"{self.memory_mb / 1000.0:.1f} GB, about {_duration(self.wall_seconds)} "
+                f"(at {TETS_PER_WALL_SECOND:,.0f} tetrahedra/s)"
+                + ("; a lower cfd.cells_per_chord or a higher cfd.growth_rate makes it quicker"
+                   if self.wall_seconds > LONG_RUN_S else ""))
+
+
+def _duration(seconds: float) -> str:
+    """``40 s``, ``3 min``, ``1.5 h``."""
+    if seconds < 90.0:
+        return f"{max(seconds, 1.0):.0f} s"
+    if seconds < 5400.0:
+        return f"{seconds / 60.0:.0f} min"
+    return f"{seconds / 3600.0:.1f} h"
 
 
 def _section_curvature(points: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -117,7 +148,8 @@ def estimate_cfd_mesh(params: PropellerParameters) -> CfdEstimate:
     """The expected tetrahedra, surface triangles and memory of ``torus-cad cfd`` for ``params``."""
     volume_units, triangles = size_integrals(params)
     tetrahedra = int(TETS_PER_VOLUME_UNIT * volume_units + TETS_PER_TRIANGLE * triangles)
-    return CfdEstimate(tetrahedra, triangles, MEMORY_BASE_MB + MEMORY_PER_TET_KB * tetrahedra / 1000.0)
+    return CfdEstimate(tetrahedra, triangles, MEMORY_BASE_MB + MEMORY_PER_TET_KB * tetrahedra / 1000.0,
+                       tetrahedra / TETS_PER_WALL_SECOND)
 
 
 def size_integrals(params: PropellerParameters) -> tuple[float, int]:
@@ -125,6 +157,7 @@ def size_integrals(params: PropellerParameters) -> tuple[float, int]:
     triangle's area) of ``params``' CFD mesh: what the estimate's constants multiply."""
     from scipy.spatial import cKDTree  # scipy's spatial module only when an estimate is made (cold start)
 
+    params = resolve_design_targets(params).parameters  # the built propeller's size (diameter, pitch met)
     settings = params.cfd
     blade_points, blade_normals, blade_curvature = _blade_cloud(params)
     hub = _hub_cloud(params.hub.radius, params.hub.length)
@@ -201,7 +234,7 @@ def check_cfd_budget(params: PropellerParameters, limit: int = CFD_TETRAHEDRA_LI
         cfd = params.cfd
         raise BudgetError(
             f"the CFD mesh would have about {estimate.tetrahedra:,} tetrahedra and need about "
-            f"{estimate.memory_mb / 1000.0:.1f} GB of memory (cfd.cells_per_chord = {cfd.cells_per_chord:g}, "
+            f"{estimate.memory_mb / 1000.0:.1f} GB of memory and {_duration(estimate.wall_seconds)} (cfd.cells_per_chord = {cfd.cells_per_chord:g}, "
             f"cfd.curvature_cells = {cfd.curvature_cells:g}, cfd.growth_rate = {cfd.growth_rate:g}, cfd.far_size = "
             f"{cfd.far_size:g} D, cfd.domain_radius = {cfd.domain_radius:g} D), over the limit of {limit:,} "
             f"tetrahedra; lower cfd.cells_per_chord or raise cfd.far_size or cfd.growth_rate")

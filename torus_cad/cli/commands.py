@@ -116,18 +116,19 @@ def command_build(args: argparse.Namespace) -> int:
         if fillet is not None and not fillet["constant_radius"]:
             print(f"warning: the root fillet is {fillet['radius_mm']:g} mm except along "
                   f"{fillet['varying_junction_per_blade_mm']:.2f} mm of each blade's junction: a blade bends too tightly "
-                  f"there for it, and its radius varies down to {fillet['smallest_radius_mm']:.3g} mm")
+                  f"there for it, and its radius varies down to {fillet['smallest_radius_mm']:.3g} mm", file=sys.stderr)
         closed = report["closed_file_trailing_edge_mm"]
         if closed is not None:
             print(f"warning: airfoil.file's open trailing edge is only {closed[0]:.3f}-{closed[1]:.3f} mm thick, under "
                   f"the {MIN_BLUNT_TRAILING_EDGE_MM:g} mm a blunt edge needs to mesh without crossing triangles: built "
-                  f"sharp; set airfoil.trailing_edge_thickness >= {MIN_BLUNT_TRAILING_EDGE_MM:g} for a base")
+                  f"sharp; set airfoil.trailing_edge_thickness >= {MIN_BLUNT_TRAILING_EDGE_MM:g} for a base", file=sys.stderr)
         if not report["printability"]["printable"]:
             print(f"warning: not printable: {propeller.printability().problem()}; "
-                  "--require-printable refuses such a design")
+                  "--require-printable refuses such a design", file=sys.stderr)
         if params.blades == 1:
             print(f"warning: a one-blade propeller is out of balance: static imbalance "
-                  f"{report['balance']['static_imbalance_g_mm']:.3f} g mm; add a counterweight or use 2 or more blades")
+                  f"{report['balance']['static_imbalance_g_mm']:.3f} g mm; add a counterweight or use 2 or more blades",
+                  file=sys.stderr)
     if args.verbose:
         print(f"centroid {tuple(round(c, 6) for c in report['centroid_mm'])} mm, "
               f"spin-axis inertia {report['spin_axis_inertia_g_mm2']:.4f} g mm^2")
@@ -410,16 +411,21 @@ def command_cfd(args: argparse.Namespace) -> int:
     from torus_cad.cfd.surface_check import import_meshlib
     from torus_cad.cfd.worker import run_in_worker
     from torus_cad.outputs.output_set import check_writable_folder
+    from torus_cad.parameters.design_targets import resolve_design_targets
 
     gmsh = import_gmsh()  # MissingExtraError (exit 2) when gmsh's library does not load
     import_meshlib()
+    params = resolve_design_targets(params).parameters  # once, for the estimate and the mesh
     estimate = check_cfd_budget(params)  # a mesh that would blow up is refused before any work (a few s)
     check_writable_folder(args.out)
+    if not args.quiet:
+        print(f"torus-cad cfd: {estimate.line()}", file=sys.stderr, flush=True)
     # gmsh set up here, meshing in a worker thread: a signal during a long gmsh call ends the command
-    # at once (cfd.worker, cfd.domain.gmsh_library)
+    # at once (cfd.worker, cfd.domain.gmsh_library); the waiting thread prints the heartbeat of a long stage
     with gmsh_library(gmsh):
         report, paths = run_in_worker(lambda: write_cfd_domain(params, Path(args.out), threads=args.threads,
-                                                               progress=progress, estimate=estimate))
+                                                               progress=progress, estimate=estimate),
+                                      on_wait=progress.heartbeat)
     progress.finish()
     return _print_written(paths, summary_line(report), args.quiet)
 
