@@ -44,10 +44,10 @@ TETS_PER_VOLUME_UNIT = 3.0
 TETS_PER_TRIANGLE = 1.7
 MEMORY_BASE_MB = 750.0
 MEMORY_PER_TET_KB = 0.62
-#: Tetrahedra per second of wall time of a whole ``torus-cad cfd`` run (one gmsh thread), the slowest
-#: of the shipped examples measured by ``scripts/cfd_budget.py --examples`` on the shared 2-core machine
-#: (docs/how-to/cfd.md): the time the estimate implies errs long.
-TETS_PER_WALL_SECOND = 2_000.0
+#: Tetrahedra per CPU second of a whole ``torus-cad cfd`` run (gmsh meshes on one thread, so on an idle
+#: machine that is its wall time), the slowest of the shipped examples measured by
+#: ``scripts/cfd_budget.py --examples`` (docs/how-to/cfd.md), rounded down: the time it implies errs long.
+TETS_PER_SECOND = 2_000.0
 #: The real count over the estimate's, lowest and highest over the shipped examples at their own
 #: [cfd] (``scripts/cfd_budget.py --examples``): the factor the printed estimate states.
 REAL_OVER_ESTIMATE = (0.8, 1.5)
@@ -65,7 +65,7 @@ class CfdEstimate:
         tetrahedra: element count.
         surface_triangles: triangles on all surfaces (propeller, interface, caps, farfield).
         memory_mb: peak resident memory of the process, MB.
-        wall_seconds: the run's wall time at :data:`TETS_PER_WALL_SECOND`, s.
+        wall_seconds: the run's wall time on an idle machine at :data:`TETS_PER_SECOND`, s.
     """
 
     tetrahedra: int
@@ -79,7 +79,7 @@ class CfdEstimate:
         return (f"estimate: about {self.tetrahedra:,} tetrahedra (real counts {REAL_OVER_ESTIMATE[0]:g}x to "
                 f"{REAL_OVER_ESTIMATE[1]:g}x of it on the shipped examples: {low:,.0f} to {high:,.0f}), "
                 f"{self.memory_mb / 1000.0:.1f} GB, about {_duration(self.wall_seconds)} "
-                f"(at {TETS_PER_WALL_SECOND:,.0f} tetrahedra/s)"
+                f"(at {TETS_PER_SECOND:,.0f} tetrahedra/s on an idle core)"
                 + ("; a lower cfd.cells_per_chord or a higher cfd.growth_rate makes it quicker"
                    if self.wall_seconds > LONG_RUN_S else ""))
 
@@ -149,7 +149,7 @@ def estimate_cfd_mesh(params: PropellerParameters) -> CfdEstimate:
     volume_units, triangles = size_integrals(params)
     tetrahedra = int(TETS_PER_VOLUME_UNIT * volume_units + TETS_PER_TRIANGLE * triangles)
     return CfdEstimate(tetrahedra, triangles, MEMORY_BASE_MB + MEMORY_PER_TET_KB * tetrahedra / 1000.0,
-                       tetrahedra / TETS_PER_WALL_SECOND)
+                       tetrahedra / TETS_PER_SECOND)
 
 
 def size_integrals(params: PropellerParameters) -> tuple[float, int]:
