@@ -10,7 +10,10 @@ outward normals, each carrying its own ``h_s``), the domain sampled at random po
 seed) whose distance to the cloud comes from a k-d tree; without curvature sizing the trailing
 edges' own size field adds a band around them (closed form). The two constants, and the memory
 per element, are fitted to measured runs (``scripts/cfd_budget.py``): within 0.8x to 1.15x of
-the real count on the default design at four settings.
+the real count on the default design at four settings; the shipped examples at their own ``[cfd]``
+(``scripts/cfd_budget.py --examples``) set :data:`REAL_OVER_ESTIMATE`, the range the printed line
+states, and :data:`TETS_PER_SECOND`, the time it implies. The propeller is the one the build makes:
+its ``diameter`` and ``pitch`` targets met first.
 """
 
 from __future__ import annotations
@@ -234,7 +237,8 @@ def check_cfd_budget(params: PropellerParameters, limit: int = CFD_TETRAHEDRA_LI
         cfd = params.cfd
         raise BudgetError(
             f"the CFD mesh would have about {estimate.tetrahedra:,} tetrahedra and need about "
-            f"{estimate.memory_mb / 1000.0:.1f} GB of memory and {_duration(estimate.wall_seconds)} (cfd.cells_per_chord = {cfd.cells_per_chord:g}, "
+            f"{estimate.memory_mb / 1000.0:.1f} GB of memory and {_duration(estimate.wall_seconds)} "
+            f"(cfd.cells_per_chord = {cfd.cells_per_chord:g}, "
             f"cfd.curvature_cells = {cfd.curvature_cells:g}, cfd.growth_rate = {cfd.growth_rate:g}, cfd.far_size = "
             f"{cfd.far_size:g} D, cfd.domain_radius = {cfd.domain_radius:g} D), over the limit of {limit:,} "
             f"tetrahedra; lower cfd.cells_per_chord or raise cfd.far_size or cfd.growth_rate")

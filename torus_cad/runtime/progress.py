@@ -33,6 +33,7 @@ __all__ = ["HEARTBEAT_S", "BatchProgress", "StageProgress", "is_terminal"]
 #: Seconds without a line after which :meth:`StageProgress.heartbeat` says the stage still runs.
 HEARTBEAT_S = 30.0
 
+
 def is_terminal(stream: TextIO) -> bool:
     """Whether ``stream`` is an interactive terminal (False for pipes, files and closed streams)."""
     try:
