@@ -28,6 +28,7 @@ from torus_cad.cfd.sizes import (
     MIN_SIZE_FRACTION,
     TRAILING_EDGE_SIZE_PER_THICKNESS,
     Domain,
+    TrailingEdges,
     domain_for,
     trailing_edges,
 )
@@ -192,19 +193,24 @@ def size_integrals(params: PropellerParameters) -> tuple[float, int]:
         size = np.minimum(domain.far_size, surface_size[nearest] + growth * distance)
         volume_units += volume / count * float(np.sum(1.0 / size[keep & outside] ** 3))
     triangles = _surface_triangles(params, domain, blade_points, surface_size, len(blade_points), CYLINDER_SEGMENTS)
-    if settings.curvature_cells == 0.0:  # the trailing edges' own size field (domain.set_sizes)
-        edge_volume, edge_triangles = _trailing_edge_band(params, domain.surface_size, growth)
-        volume_units, triangles = volume_units + edge_volume, triangles + edge_triangles
-    return volume_units, triangles
-
-
-def _trailing_edge_band(params: PropellerParameters, surface_size: float, growth: float) -> tuple[float, int]:
-    """``∫ dV / h³`` and the triangles added around the trailing edges by their size field: sizes
-    ``h = h_e + growth r`` at a distance ``r`` from edges of total length ``L``, up to the surface size,
-    on the two faces that meet there (triangles) and in the half space beside them (volume)."""
     edges = trailing_edges(params)
+    smallest = MIN_SIZE_FRACTION * domain.surface_size
+    if settings.curvature_cells == 0.0:  # the trailing edges' own size field (domain.set_sizes)
+        edge_size = max(TRAILING_EDGE_SIZE_PER_THICKNESS * edges.thickness_mm, smallest)
+    elif edges.thickness_mm > 0.0:  # a blunt edge's round (curvature 2 / t), too narrow for the cloud to see
+        edge_size = max(np.pi * edges.thickness_mm / settings.curvature_cells, smallest)
+    else:  # a knife edge: the cloud's sections see its corner
+        return volume_units, triangles
+    edge_volume, edge_triangles = _trailing_edge_band(edges, edge_size, domain.surface_size, growth)
+    return volume_units + edge_volume, triangles + edge_triangles
+
+
+def _trailing_edge_band(edges: TrailingEdges, edge_size: float, surface_size: float, growth: float
+                        ) -> tuple[float, int]:
+    """``∫ dV / h³`` and the triangles added around the trailing ``edges`` by sizes ``h = edge_size +
+    growth r`` at a distance ``r`` from edges of total length ``L``, up to the surface size, on the two
+    faces that meet there (triangles) and in the half space beside them (volume)."""
     length = sum(float(np.linalg.norm(np.diff(curve, axis=0), axis=1).sum()) for curve in edges.curves_mm)
-    edge_size = max(TRAILING_EDGE_SIZE_PER_THICKNESS * edges.thickness_mm, MIN_SIZE_FRACTION * surface_size)
     if edge_size >= surface_size:
         return 0.0, 0
     triangles = 2.0 * length / growth * (1.0 / edge_size - 1.0 / surface_size) / _EQUILATERAL_AREA
