@@ -206,7 +206,7 @@ GMSH_REPRODUCIBLE_THREADS = 1
 #: meshing, torus_cad.cfd.estimate). The default design's default mesh had 231,405 when this limit was set
 #: (2026-12-01; 215,281 on 2026-12-03), 53 s of CPU, 0.9 GB peak; the process needs about 0.75 GB plus 0.62 kB per tetrahedron (scripts/cfd_budget.py), so
 #: the limit is about 2.6 GB and 13 times the default's work (at torus_cad.cfd.estimate.TETS_PER_SECOND, the
-#: time the command prints with its estimate, 25 minutes of one core). The estimate is of the propeller as
+#: time the command prints with its estimate, 33 minutes of one core). The estimate is of the propeller as
 #: built (design targets met) and within torus_cad.cfd.estimate.REAL_OVER_ESTIMATE of the real count.
 CFD_TETRAHEDRA_LIMIT = 3_000_000
 
