@@ -6,6 +6,8 @@ a file size limit); bad input and a missing gmsh are one clear line."""
 
 from __future__ import annotations
 
+import contextlib
+import io
 import json
 import random
 import re
@@ -33,10 +35,18 @@ COARSE = ["--cells-per-chord", "4", "--curvature-cells", "0", "--growth-rate", "
 
 
 @pytest.fixture(scope="module")
-def cfd_out(tmp_path_factory):
+def cfd_run(tmp_path_factory):
+    """The coarse mesh's folder and what the command printed on stderr (not a terminal: no stage lines)."""
     out = tmp_path_factory.mktemp("cfd")
-    assert main(["cfd", *COARSE, "--out", str(out), "-q"]) == 0
-    return out
+    stderr = io.StringIO()
+    with contextlib.redirect_stderr(stderr), contextlib.redirect_stdout(io.StringIO()):
+        assert main(["cfd", *COARSE, "--out", str(out)]) == 0
+    return out, stderr.getvalue()
+
+
+@pytest.fixture(scope="module")
+def cfd_out(cfd_run):
+    return cfd_run[0]
 
 
 def cli(*args: str, **kwargs) -> subprocess.CompletedProcess:
@@ -140,6 +150,35 @@ def test_the_coarse_propeller_wall_has_no_crossing_triangles_and_the_estimate_is
     report = json.loads((cfd_out / "torus_propeller_cfd.json").read_text())
     assert report["surface_refinement"]["crossing_triangles"][-1] == 0
     assert 0.5 < report["estimate"]["tetrahedra"] / report["tetrahedra_total"] < 2.0
+
+
+def test_the_estimate_is_printed_with_its_factor_and_time_and_the_mesh_falls_within_it(cfd_run):
+    from torus_cad.cfd.estimate import REAL_OVER_ESTIMATE, TETS_PER_SECOND
+
+    out, stderr = cfd_run
+    report = json.loads((out / "torus_propeller_cfd.json").read_text())
+    (line,) = [text for text in stderr.splitlines() if text.startswith("torus-cad cfd: estimate")]
+    estimate = report["estimate"]["tetrahedra"]
+    assert line.startswith(f"torus-cad cfd: estimate: about {estimate:,} tetrahedra") and "tetrahedra/s" in line
+    low, high = (int(text.replace(",", "")) for text in re.search(r": ([\d,]+) to ([\d,]+)\)", line).groups())
+    assert low <= report["tetrahedra_total"] <= high  # the stated range holds on this mesh
+    assert low == pytest.approx(REAL_OVER_ESTIMATE[0] * estimate, abs=500)
+    assert report["estimate"]["wall_seconds"] == pytest.approx(estimate / TETS_PER_SECOND)
+
+
+def test_a_long_stage_prints_a_heartbeat_with_its_time():
+    from torus_cad.cfd.worker import run_in_worker
+    from torus_cad.runtime.progress import StageProgress
+
+    stream = io.StringIO()
+    progress = StageProgress(enabled=True, stream=stream)
+    progress("volume_mesh")
+    assert run_in_worker(lambda: time.sleep(1.2) or 7, on_wait=lambda: progress.heartbeat(every_s=0.4)) == 7
+    lines = stream.getvalue().splitlines()
+    assert lines[0].endswith("] volume mesh") and len(lines) >= 2
+    assert all(re.search(r"volume mesh: still running, \d+ s in this stage$", line) for line in lines[1:])
+    progress.heartbeat(every_s=3600.0)  # no line unless the last one is that old
+    assert stream.getvalue().splitlines() == lines
 
 
 def test_the_same_design_gives_the_same_mesh_on_every_run(cfd_out, tmp_path):

@@ -219,7 +219,7 @@ def test_a_files_hair_thin_open_edge_is_closed_and_the_build_says_so(tmp_path, c
     (tmp_path / "clarky.dat").write_bytes((AIRFOILS / "clarky.dat").read_bytes())
     (tmp_path / "clark.toml").write_text('blades = 3\n[airfoil]\nfile = "clarky.dat"\n')
     assert main(["build", str(tmp_path / "clark.toml"), "--out", str(tmp_path / "out")]) == 0
-    assert "warning: airfoil.file's open trailing edge is only" in capsys.readouterr().out
+    assert "warning: airfoil.file's open trailing edge is only" in capsys.readouterr().err
     report = json.loads((tmp_path / "out" / "torus_propeller.json").read_text())
     thinnest, thickest = report["closed_file_trailing_edge_mm"]
     assert 0.0 < thinnest <= thickest < 0.05

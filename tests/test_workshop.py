@@ -4,6 +4,7 @@ root fillet, 3MF, balance and STEP metadata, each checked on the solid or the wr
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -163,10 +164,31 @@ def test_blunt_trailing_edge_is_the_reported_trailing_edge_thickness():
     assert result.printable
 
 
+@pytest.mark.parametrize("example", ["workshop_motor_mount", "workshop_ccw", "workshop_fillet", "optimize/light_prop"])
+def test_the_examples_made_for_printing_pass_require_printable_without_the_kernel(example, capsys):
+    """The build's own refusal (``--require-printable``, decided before the kernel): exit 0, so the
+    build prints no "not printable" warning for them."""
+    assert main(["check", f"examples/{example}.toml", "--require-printable"]) == 0
+    assert "not printable" not in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("min_wall", [0.8, 1.1])
+def test_the_trailing_edge_hint_names_the_thickness_that_makes_it_printable(min_wall):
+    params = PropellerParameters().with_values({"airfoil.trailing_edge_thickness": 0.3,
+                                                "manufacturing.min_wall": min_wall})
+    problem = params.printability().problem()
+    thickness = float(re.search(r"airfoil\.trailing_edge_thickness = ([\d.]+)\)$", problem).group(1))
+    assert thickness == min_wall
+    assert params.with_values({"airfoil.trailing_edge_thickness": thickness}).printability().printable
+    assert not params.with_values({"airfoil.trailing_edge_thickness": 0.98 * thickness}).printability().printable
+
+
 def test_report_3mf_and_stl_read_back_closed_with_the_same_volume(tmp_path, capsys):
     trimesh = pytest.importorskip("trimesh")
     out = tmp_path / "out"
-    assert main(["build", "examples/workshop_motor_mount.toml", "--out", str(out), "-q"]) == 0
+    assert main(["build", "examples/workshop_motor_mount.toml", "--out", str(out)]) == 0
+    written = capsys.readouterr()
+    assert "warning" not in written.err and "warning" not in written.out  # a printable part: no warning
     scene = trimesh.load(out / "workshop_motor_mount.3mf")
     (mesh,) = scene.geometry.values()
     stl = trimesh.load(out / "workshop_motor_mount.stl")
@@ -182,8 +204,8 @@ def test_report_3mf_and_stl_read_back_closed_with_the_same_volume(tmp_path, caps
 def test_balance_of_three_blades_is_zero_and_one_blade_warns(tmp_path, capsys, plain):
     assert balance(plain.solid, 1.24).static_imbalance_g_mm < 1e-4
     assert main(["build", "--set", "blades=1", "--out", str(tmp_path), "--no-stl"]) == 0
-    output = capsys.readouterr().out
-    assert "warning: a one-blade propeller is out of balance" in output
+    output = capsys.readouterr()
+    assert "warning: a one-blade propeller is out of balance" in output.err and "warning" not in output.out
     import json
 
     report = json.loads((tmp_path / "torus_propeller.json").read_text())

@@ -430,9 +430,12 @@ def write_cfd_domain(params: PropellerParameters, out_dir: str | Path, threads: 
     OpenCascade or gmsh fails, OutputError naming the file when it cannot be written.
     """
     from torus_cad.kernel.mesh_check import import_meshlib
+    from torus_cad.parameters.design_targets import resolve_design_targets
 
     import_gmsh()
     import_meshlib()
+    # the domain's sizes from the propeller as built: diameter and pitch met (else D is the control points')
+    params = resolve_design_targets(params).parameters
     estimate = check_cfd_budget(params) if estimate is None else estimate
     timer = StageTimer[CfdStage](progress)
     started = time.process_time(), time.perf_counter()

@@ -10,7 +10,10 @@ outward normals, each carrying its own ``h_s``), the domain sampled at random po
 seed) whose distance to the cloud comes from a k-d tree; without curvature sizing the trailing
 edges' own size field adds a band around them (closed form). The two constants, and the memory
 per element, are fitted to measured runs (``scripts/cfd_budget.py``): within 0.8x to 1.15x of
-the real count on the default design at four settings.
+the real count on the default design at four settings; the shipped examples at their own ``[cfd]``
+(``scripts/cfd_budget.py --examples``) set :data:`REAL_OVER_ESTIMATE`, the range the printed line
+states, and :data:`TETS_PER_SECOND`, the time it implies. The propeller is the one the build makes:
+its ``diameter`` and ``pitch`` targets met first.
 """
 
 from __future__ import annotations
@@ -25,11 +28,13 @@ from torus_cad.cfd.sizes import (
     MIN_SIZE_FRACTION,
     TRAILING_EDGE_SIZE_PER_THICKNESS,
     Domain,
+    TrailingEdges,
     domain_for,
     trailing_edges,
 )
 from torus_cad.errors import BudgetError
 from torus_cad.parameters import PropellerParameters
+from torus_cad.parameters.design_targets import resolve_design_targets
 from torus_cad.tolerances import CFD_TETRAHEDRA_LIMIT
 
 #: Blade samples (sections, points around) and hub samples per mm for the surface cloud.
@@ -43,6 +48,15 @@ TETS_PER_VOLUME_UNIT = 3.0
 TETS_PER_TRIANGLE = 1.7
 MEMORY_BASE_MB = 750.0
 MEMORY_PER_TET_KB = 0.62
+#: Tetrahedra per CPU second of a whole ``torus-cad cfd`` run (gmsh meshes on one thread, so on an idle
+#: machine that is its wall time), the slowest of the shipped examples measured by
+#: ``scripts/cfd_budget.py --examples`` (docs/how-to/cfd.md), rounded down: the time it implies errs long.
+TETS_PER_SECOND = 1_500.0
+#: The real count over the estimate's, lowest and highest over the shipped examples at their own
+#: [cfd] (``scripts/cfd_budget.py --examples``): the factor the printed estimate states.
+REAL_OVER_ESTIMATE = (0.8, 1.5)
+#: A run expected to take longer than this (s) gets the settings that shorten it on its estimate line.
+LONG_RUN_S = 600.0
 _SEED = 20260101
 _EQUILATERAL_AREA = np.sqrt(3.0) / 4.0
 
@@ -55,11 +69,32 @@ class CfdEstimate:
         tetrahedra: element count.
         surface_triangles: triangles on all surfaces (propeller, interface, caps, farfield).
         memory_mb: peak resident memory of the process, MB.
+        wall_seconds: the run's wall time on an idle machine at :data:`TETS_PER_SECOND`, s.
     """
 
     tetrahedra: int
     surface_triangles: int
     memory_mb: float
+    wall_seconds: float
+
+    def line(self) -> str:
+        """One line for the terminal: the count with the factor it is within, the memory and the time."""
+        low, high = (round(factor * self.tetrahedra, -3) for factor in REAL_OVER_ESTIMATE)
+        return (f"estimate: about {self.tetrahedra:,} tetrahedra (real counts {REAL_OVER_ESTIMATE[0]:g}x to "
+                f"{REAL_OVER_ESTIMATE[1]:g}x of it on the shipped examples: {low:,.0f} to {high:,.0f}), "
+                f"{self.memory_mb / 1000.0:.1f} GB, about {_duration(self.wall_seconds)} "
+                f"(at {TETS_PER_SECOND:,.0f} tetrahedra/s on an idle core)"
+                + ("; a lower cfd.cells_per_chord or a higher cfd.growth_rate makes it quicker"
+                   if self.wall_seconds > LONG_RUN_S else ""))
+
+
+def _duration(seconds: float) -> str:
+    """``40 s``, ``3 min``, ``1.5 h``."""
+    if seconds < 90.0:
+        return f"{max(seconds, 1.0):.0f} s"
+    if seconds < 5400.0:
+        return f"{seconds / 60.0:.0f} min"
+    return f"{seconds / 3600.0:.1f} h"
 
 
 def _section_curvature(points: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -117,7 +152,8 @@ def estimate_cfd_mesh(params: PropellerParameters) -> CfdEstimate:
     """The expected tetrahedra, surface triangles and memory of ``torus-cad cfd`` for ``params``."""
     volume_units, triangles = size_integrals(params)
     tetrahedra = int(TETS_PER_VOLUME_UNIT * volume_units + TETS_PER_TRIANGLE * triangles)
-    return CfdEstimate(tetrahedra, triangles, MEMORY_BASE_MB + MEMORY_PER_TET_KB * tetrahedra / 1000.0)
+    return CfdEstimate(tetrahedra, triangles, MEMORY_BASE_MB + MEMORY_PER_TET_KB * tetrahedra / 1000.0,
+                       tetrahedra / TETS_PER_SECOND)
 
 
 def size_integrals(params: PropellerParameters) -> tuple[float, int]:
@@ -125,6 +161,7 @@ def size_integrals(params: PropellerParameters) -> tuple[float, int]:
     triangle's area) of ``params``' CFD mesh: what the estimate's constants multiply."""
     from scipy.spatial import cKDTree  # scipy's spatial module only when an estimate is made (cold start)
 
+    params = resolve_design_targets(params).parameters  # the built propeller's size (diameter, pitch met)
     settings = params.cfd
     blade_points, blade_normals, blade_curvature = _blade_cloud(params)
     hub = _hub_cloud(params.hub.radius, params.hub.length)
@@ -156,19 +193,24 @@ def size_integrals(params: PropellerParameters) -> tuple[float, int]:
         size = np.minimum(domain.far_size, surface_size[nearest] + growth * distance)
         volume_units += volume / count * float(np.sum(1.0 / size[keep & outside] ** 3))
     triangles = _surface_triangles(params, domain, blade_points, surface_size, len(blade_points), CYLINDER_SEGMENTS)
-    if settings.curvature_cells == 0.0:  # the trailing edges' own size field (domain.set_sizes)
-        edge_volume, edge_triangles = _trailing_edge_band(params, domain.surface_size, growth)
-        volume_units, triangles = volume_units + edge_volume, triangles + edge_triangles
-    return volume_units, triangles
-
-
-def _trailing_edge_band(params: PropellerParameters, surface_size: float, growth: float) -> tuple[float, int]:
-    """``∫ dV / h³`` and the triangles added around the trailing edges by their size field: sizes
-    ``h = h_e + growth r`` at a distance ``r`` from edges of total length ``L``, up to the surface size,
-    on the two faces that meet there (triangles) and in the half space beside them (volume)."""
     edges = trailing_edges(params)
+    smallest = MIN_SIZE_FRACTION * domain.surface_size
+    if settings.curvature_cells == 0.0:  # the trailing edges' own size field (domain.set_sizes)
+        edge_size = max(TRAILING_EDGE_SIZE_PER_THICKNESS * edges.thickness_mm, smallest)
+    elif edges.thickness_mm > 0.0:  # a blunt edge's round (curvature 2 / t), too narrow for the cloud to see
+        edge_size = max(np.pi * edges.thickness_mm / settings.curvature_cells, smallest)
+    else:  # a knife edge: the cloud's sections see its corner
+        return volume_units, triangles
+    edge_volume, edge_triangles = _trailing_edge_band(edges, edge_size, domain.surface_size, growth)
+    return volume_units + edge_volume, triangles + edge_triangles
+
+
+def _trailing_edge_band(edges: TrailingEdges, edge_size: float, surface_size: float, growth: float
+                        ) -> tuple[float, int]:
+    """``∫ dV / h³`` and the triangles added around the trailing ``edges`` by sizes ``h = edge_size +
+    growth r`` at a distance ``r`` from edges of total length ``L``, up to the surface size, on the two
+    faces that meet there (triangles) and in the half space beside them (volume)."""
     length = sum(float(np.linalg.norm(np.diff(curve, axis=0), axis=1).sum()) for curve in edges.curves_mm)
-    edge_size = max(TRAILING_EDGE_SIZE_PER_THICKNESS * edges.thickness_mm, MIN_SIZE_FRACTION * surface_size)
     if edge_size >= surface_size:
         return 0.0, 0
     triangles = 2.0 * length / growth * (1.0 / edge_size - 1.0 / surface_size) / _EQUILATERAL_AREA
@@ -201,7 +243,8 @@ def check_cfd_budget(params: PropellerParameters, limit: int = CFD_TETRAHEDRA_LI
         cfd = params.cfd
         raise BudgetError(
             f"the CFD mesh would have about {estimate.tetrahedra:,} tetrahedra and need about "
-            f"{estimate.memory_mb / 1000.0:.1f} GB of memory (cfd.cells_per_chord = {cfd.cells_per_chord:g}, "
+            f"{estimate.memory_mb / 1000.0:.1f} GB of memory and {_duration(estimate.wall_seconds)} "
+            f"(cfd.cells_per_chord = {cfd.cells_per_chord:g}, "
             f"cfd.curvature_cells = {cfd.curvature_cells:g}, cfd.growth_rate = {cfd.growth_rate:g}, cfd.far_size = "
             f"{cfd.far_size:g} D, cfd.domain_radius = {cfd.domain_radius:g} D), over the limit of {limit:,} "
             f"tetrahedra; lower cfd.cells_per_chord or raise cfd.far_size or cfd.growth_rate")

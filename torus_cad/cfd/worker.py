@@ -19,8 +19,9 @@ T = TypeVar("T")
 _POLL_S = 0.5
 
 
-def run_in_worker(work: Callable[[], T]) -> T:
-    """``work()``'s result, computed in a worker thread while this thread waits; its exception re-raised here."""
+def run_in_worker(work: Callable[[], T], on_wait: Callable[[], None] | None = None) -> T:
+    """``work()``'s result, computed in a worker thread while this thread waits (calling ``on_wait``, if
+    given, every :data:`_POLL_S` seconds: a progress heartbeat); its exception re-raised here."""
     outcome: dict[str, Any] = {}
 
     def target() -> None:
@@ -33,6 +34,8 @@ def run_in_worker(work: Callable[[], T]) -> T:
     thread.start()
     while thread.is_alive():
         thread.join(_POLL_S)
+        if on_wait is not None and thread.is_alive():
+            on_wait()
     if "error" in outcome:
         raise outcome["error"]
     return outcome["value"]

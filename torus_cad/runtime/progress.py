@@ -28,7 +28,11 @@ from typing import Any, Self, TextIO
 
 from torus_cad.runtime.stages import Stage
 
-__all__ = ["BatchProgress", "StageProgress", "is_terminal"]
+__all__ = ["HEARTBEAT_S", "BatchProgress", "StageProgress", "is_terminal"]
+
+#: Seconds without a line after which :meth:`StageProgress.heartbeat` says the stage still runs.
+HEARTBEAT_S = 30.0
+
 
 def is_terminal(stream: TextIO) -> bool:
     """Whether ``stream`` is an interactive terminal (False for pipes, files and closed streams)."""
@@ -62,6 +66,7 @@ class StageProgress:
         self.start = time.perf_counter()
         self.stages: list[str] = []
         self._console = _console(self.stream) if self.enabled else None
+        self._stage_start = self._last_line = self.start
 
     @classmethod
     def for_terminal(cls, quiet: bool = False, stream: TextIO | None = None) -> StageProgress:
@@ -78,13 +83,27 @@ class StageProgress:
         """Announce that ``stage`` starts now: a :class:`Stage` in its words; another pipeline's stage
         (``MeshStage``, ``CfdStage``) or an OpenFOAM command of ``simulate`` as its name, with spaces."""
         self.stages.append(stage)
-        self._print(stage.label if isinstance(stage, Stage) else str(stage).replace("_", " "))
+        self._stage_start = time.perf_counter()
+        self._print(self._label(stage))
+
+    @staticmethod
+    def _label(stage: str) -> str:
+        return stage.label if isinstance(stage, Stage) else str(stage).replace("_", " ")
+
+    def heartbeat(self, every_s: float = HEARTBEAT_S) -> None:
+        """When no line came for ``every_s`` seconds: one line saying the current stage still runs and
+        for how long (a long gmsh call prints nothing itself). Call it often; it prints at most every ``every_s``."""
+        now = time.perf_counter()
+        if not self.stages or now - self._last_line < every_s:
+            return
+        self._print(f"{self._label(self.stages[-1])}: still running, {now - self._stage_start:.0f} s in this stage")
 
     def finish(self, message: str = "done") -> None:
         """Announce the end (with the total elapsed time)."""
         self._print(message)
 
     def _print(self, text: str) -> None:
+        self._last_line = time.perf_counter()
         if self._console is None:
             return
         from rich.text import Text

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 from torus_cad.cli.design_input import format_overrides, load_parameters, writes_a_mesh
@@ -50,18 +51,19 @@ def run(args: argparse.Namespace) -> int:
         if fillet is not None and not fillet["constant_radius"]:
             print(f"warning: the root fillet is {fillet['radius_mm']:g} mm except along "
                   f"{fillet['varying_junction_per_blade_mm']:.2f} mm of each blade's junction: a blade bends too tightly "
-                  f"there for it, and its radius varies down to {fillet['smallest_radius_mm']:.3g} mm")
+                  f"there for it, and its radius varies down to {fillet['smallest_radius_mm']:.3g} mm", file=sys.stderr)
         closed = report["closed_file_trailing_edge_mm"]
         if closed is not None:
             print(f"warning: airfoil.file's open trailing edge is only {closed[0]:.3f}-{closed[1]:.3f} mm thick, under "
                   f"the {MIN_BLUNT_TRAILING_EDGE_MM:g} mm a blunt edge needs to mesh without crossing triangles: built "
-                  f"sharp; set airfoil.trailing_edge_thickness >= {MIN_BLUNT_TRAILING_EDGE_MM:g} for a base")
+                  f"sharp; set airfoil.trailing_edge_thickness >= {MIN_BLUNT_TRAILING_EDGE_MM:g} for a base", file=sys.stderr)
         if not report["printability"]["printable"]:
             print(f"warning: not printable: {propeller.printability().problem()}; "
-                  "--require-printable refuses such a design")
+                  "--require-printable refuses such a design", file=sys.stderr)
         if params.blades == 1:
             print(f"warning: a one-blade propeller is out of balance: static imbalance "
-                  f"{report['balance']['static_imbalance_g_mm']:.3f} g mm; add a counterweight or use 2 or more blades")
+                  f"{report['balance']['static_imbalance_g_mm']:.3f} g mm; add a counterweight or use 2 or more blades",
+                  file=sys.stderr)
     if args.verbose:
         print(f"centroid {tuple(round(c, 6) for c in report['centroid_mm'])} mm, "
               f"spin-axis inertia {report['spin_axis_inertia_g_mm2']:.4f} g mm^2")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 from torus_cad.cfd.domain import gmsh_library, import_gmsh, summary_line, write_cfd_domain
@@ -12,6 +13,7 @@ from torus_cad.cli.design_input import load_parameters, table_overrides
 from torus_cad.cli.exits import print_written
 from torus_cad.kernel.mesh_check import import_meshlib
 from torus_cad.outputs.output_set import check_writable_folder
+from torus_cad.parameters.design_targets import resolve_design_targets
 from torus_cad.runtime.progress import StageProgress
 
 
@@ -20,12 +22,16 @@ def run(args: argparse.Namespace) -> int:
     progress = StageProgress.for_terminal(quiet=args.quiet)
     gmsh = import_gmsh()  # MissingExtraError (exit 2) when gmsh's library does not load
     import_meshlib()
+    params = resolve_design_targets(params).parameters  # once, for the estimate and the mesh
     estimate = check_cfd_budget(params)  # a mesh that would blow up is refused before any work (a few s)
     check_writable_folder(args.out)
+    if not args.quiet:
+        print(f"torus-cad cfd: {estimate.line()}", file=sys.stderr, flush=True)
     # gmsh set up here, meshing in a worker thread: a signal during a long gmsh call ends the command
-    # at once (cfd.worker, cfd.domain.gmsh_library)
+    # at once (cfd.worker, cfd.domain.gmsh_library); the waiting thread prints the heartbeat of a long stage
     with gmsh_library(gmsh):
         report, paths = run_in_worker(lambda: write_cfd_domain(params, Path(args.out), threads=args.threads,
-                                                               progress=progress, estimate=estimate))
+                                                               progress=progress, estimate=estimate),
+                                      on_wait=progress.heartbeat)
     progress.finish()
     return print_written(paths, summary_line(report), args.quiet)

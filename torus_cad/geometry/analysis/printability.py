@@ -24,7 +24,10 @@ Definitions (mm):
   the base of a blunt edge otherwise. The edges of every section taper below any printer's
   wall, so the sharp edge's zero is reported here, separately, instead of being the "thinnest
   wall" of every blade.
-* **printable**: both the thinnest wall and the trailing-edge thickness reach ``min_wall``.
+* **printable**: both the thinnest wall and the trailing-edge thickness reach ``min_wall``. A blunt
+  edge (``airfoil.trailing_edge_thickness``, mm) is that thick at every section, so a blade whose
+  thinnest wall reaches ``min_wall`` is printable with a blunt edge of ``min_wall`` or more, which is
+  what :meth:`Printability.problem` advises.
 
 Both minima are found on a fine grid and polished with a bounded scalar minimisation.
 """
@@ -79,7 +82,8 @@ class Printability:
         if self.trailing_edge_thickness_mm < self.min_wall_mm * (1.0 - _ROUNDING):
             return (f"the trailing edge of the section at s = {self.trailing_edge_thinnest_s:.3f} is "
                     f"{self.trailing_edge_thickness_mm:.3f} mm thick, thinner than manufacturing.min_wall = "
-                    f"{self.min_wall_mm:g} mm (a blunt trailing edge can make it printable)")
+                    f"{self.min_wall_mm:g} mm (a blunt trailing edge at least as thick makes it printable: "
+                    f"airfoil.trailing_edge_thickness = {self.min_wall_mm:g})")
         return ""
 
 
