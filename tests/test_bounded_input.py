@@ -115,9 +115,34 @@ def _bounded_options(capsys: pytest.CaptureFixture[str]) -> list[tuple[str, str,
     for name, sub in _subparsers().items():
         text = _help_of(name, sub, capsys)
         for action in sub._actions:
-            if action.option_strings and action.type is not None:
+            if action.option_strings and action.type is not None and not hasattr(action.type, "ranges"):
                 options.append((name, action.option_strings[-1], action, text))
     return options
+
+
+def _compound_options(capsys: pytest.CaptureFixture[str]) -> list[tuple[str, str, argparse.Action, str]]:
+    """(command, option, action, its --help text) of every option whose value holds several numbers
+    (``--observer DIST_M:ANGLE_DEG``): its type carries its ranges as text and values outside them."""
+    options = []
+    for name, sub in _subparsers().items():
+        text = _help_of(name, sub, capsys)
+        options += [(name, action.option_strings[-1], action, text) for action in sub._actions
+                    if action.option_strings and hasattr(action.type, "ranges")]
+    return options
+
+
+def test_every_option_of_several_numbers_shows_its_ranges_and_refuses_values_outside_them(capsys):
+    parser = build_parser()
+    options = _compound_options(capsys)
+    assert {option for _, option, _, _ in options} >= {"--observer"}
+    for command, option, action, text in options:
+        assert " ".join(action.type.ranges.split()) in text, f"{command} {option}: its ranges not in its --help"
+        for value in action.type.outside:
+            with pytest.raises(SystemExit) as stopped:
+                parser.parse_args(_arguments(command, option, value))
+            line = _one_line(capsys)
+            assert stopped.value.code == 2 and option in line and "allowed" in line, line
+            assert len(line) < 300, line
 
 
 def test_every_numeric_option_has_a_range_shown_in_its_help(capsys):

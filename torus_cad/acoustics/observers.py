@@ -9,11 +9,13 @@ from __future__ import annotations
 import argparse
 import math
 from dataclasses import dataclass
-
-import numpy as np
+from typing import TYPE_CHECKING
 
 from torus_cad.errors import ParameterError
 from torus_cad.tolerances import NOISE_OBSERVER_DISTANCE_M
+
+if TYPE_CHECKING:
+    import numpy as np
 
 #: The option that names an observer on the command line.
 OPTION = "--observer"
@@ -30,6 +32,8 @@ class Observer:
     @property
     def position_m(self) -> np.ndarray:
         """(x, y, z) in m, in the plane x-z."""
+        import numpy as np  # here, not at the top: the CLI's parser reads this module's option type
+
         angle = math.radians(self.angle_deg)
         return np.array([self.distance_m * math.sin(angle), 0.0, self.distance_m * math.cos(angle)])
 
@@ -41,11 +45,17 @@ class Observer:
 DEFAULT_OBSERVERS = tuple(Observer(1.0, angle) for angle in (0.0, 30.0, 60.0, 90.0))
 
 
+def observer_ranges() -> str:
+    """The allowed form and ranges of ``--observer``, as its help and its refusal say them."""
+    low, high = NOISE_OBSERVER_DISTANCE_M
+    return (f"DIST_M:ANGLE_DEG with DIST_M in ({low:g}, {high:g}] m and ANGLE_DEG in "
+            f"[{ANGLE_RANGE_DEG[0]:g}, {ANGLE_RANGE_DEG[1]:g}] degrees from the +z axis")
+
+
 def parse_observer(text: str) -> Observer:
     """``DIST_M:ANGLE_DEG`` (e.g. ``2:45``) as an Observer; ParameterError naming the option, the value and the
     allowed ranges (distance in ``NOISE_OBSERVER_DISTANCE_M``, angle in [0, 180] degrees)."""
     low, high = NOISE_OBSERVER_DISTANCE_M
-    allowed = f"DIST_M:ANGLE_DEG with DIST_M in ({low:g}, {high:g}] m and ANGLE_DEG in [0, 180] degrees from the +z axis"
     shown = text if len(text) <= 40 else text[:37] + "..."
     parts = text.split(":")
     try:
@@ -54,16 +64,28 @@ def parse_observer(text: str) -> Observer:
         distance = angle = math.nan
     if not (math.isfinite(distance) and math.isfinite(angle) and low < distance <= high
             and ANGLE_RANGE_DEG[0] <= angle <= ANGLE_RANGE_DEG[1]):
-        raise ParameterError(f"{OPTION} = {shown!r} is out of range or malformed; allowed {allowed}")
+        raise ParameterError(f"{OPTION} = {shown!r} is out of range or malformed; allowed {observer_ranges()}")
     return Observer(distance, angle)
 
 
-def observer_option(text: str) -> Observer:
-    """The argparse ``type`` of ``--observer``: :func:`parse_observer`, its refusal as argparse's error (exit 2)."""
-    try:
-        return parse_observer(text)
-    except ParameterError as error:
-        raise argparse.ArgumentTypeError(str(error)) from None
+class ObserverOption:
+    """The argparse ``type`` of ``--observer``: :func:`parse_observer`, its refusal as argparse's error (exit 2).
+
+    A value of two numbers has two ranges, so it carries them as text (``ranges``, in its help) and values
+    outside them (``outside``, for the tests) instead of the one-number options' ``bounds``."""
+
+    __name__ = "observer"
+    ranges = observer_ranges()
+    outside = ("0:45", "1:181", "1:-1", "20000:0", "nan:0", "1e999:30", "1:2:3", "x" * 100_000)
+
+    def __call__(self, text: str) -> Observer:
+        try:
+            return parse_observer(text)
+        except ParameterError as error:
+            raise argparse.ArgumentTypeError(str(error)) from None
+
+
+observer_option = ObserverOption()
 
 
 def check_observers(observers: tuple[Observer, ...], tip_radius_m: float) -> None:

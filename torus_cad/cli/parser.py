@@ -283,7 +283,7 @@ def _add_simulate_parser(commands: Any) -> None:
     simulate.add_argument("--observer", type=observer_option, action="append", metavar="DIST_M:ANGLE_DEG",
                           help="where the tonal noise is heard: DIST_M m from the hub at ANGLE_DEG degrees from +z "
                                "(ahead of the propeller; 90 = the rotor plane), e.g. 2:45; repeat for more "
-                               "(default 1:0 1:30 1:60 1:90)")
+                               f"(default 1:0 1:30 1:60 1:90); {observer_option.ranges}")
     simulate.add_argument("--case-only", action="store_true", help="write the case without running it")
     simulate.add_argument("--mesh-from", metavar="CASE", help="reuse the mesh of an earlier case of this design and "
                           "level (OUT/<name>_case) instead of meshing again: another rpm or airspeed")
