@@ -54,7 +54,7 @@ MEMORY_PER_TET_KB = 0.62
 TETS_PER_SECOND = 1_500.0
 #: The real count over the estimate's, lowest and highest over the shipped examples at their own
 #: [cfd] (``scripts/cfd_budget.py --examples``): the factor the printed estimate states.
-REAL_OVER_ESTIMATE = (0.8, 1.5)
+REAL_OVER_ESTIMATE = (0.5, 1.5)
 #: A run expected to take longer than this (s) gets the settings that shorten it on its estimate line.
 LONG_RUN_S = 600.0
 _SEED = 20260101
