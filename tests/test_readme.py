@@ -36,10 +36,18 @@ class Block:
     line: int
     skipped: bool
     page: str = "README.md"
+    number: int = 1
 
     @property
     def where(self) -> str:
+        """The page and the line the block starts on (for messages)."""
         return f"{self.page}:{self.line}"
+
+    @property
+    def key(self) -> str:
+        """The page and the block's place among the page's blocks: the test id, which an edit above the block
+        on its page does not change (tests/tiers.json names tests by it)."""
+        return f"{self.page}#{self.number}"
 
 
 def page_blocks(page: Path) -> list[Block]:
@@ -51,7 +59,8 @@ def page_blocks(page: Path) -> list[Block]:
         if match and match.group(1):
             end = next(j for j in range(index + 1, len(lines)) if lines[j].startswith("```"))
             skipped = index > 0 and lines[index - 1].strip().startswith(NOT_RUN)
-            blocks.append(Block(match.group(1), "\n".join(lines[index + 1:end]), index + 1, skipped, name))
+            blocks.append(Block(match.group(1), "\n".join(lines[index + 1:end]), index + 1, skipped, name,
+                                len(blocks) + 1))
             index = end
         index += 1
     return blocks
@@ -105,7 +114,7 @@ def test_readme_has_examples():
     assert len(SHELL) >= 3 and len(PYTHON) >= 3
 
 
-@pytest.mark.parametrize("block", SHELL, ids=[block.where for block in SHELL])
+@pytest.mark.parametrize("block", SHELL, ids=[block.key for block in SHELL])
 def test_shell_example_runs(block: Block, workdir: Path):
     if block.skipped:
         pytest.skip("marked not-run in the README")
