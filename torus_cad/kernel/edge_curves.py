@@ -108,7 +108,7 @@ def refit_intersection_edges(shape: TopoDS_Shape, on_faces: Sequence[TopoDS_Face
     for face in on_faces:
         for index in range(1, ancestors.Extent() + 1):
             edge = TopoDS.Edge_s(ancestors.FindKey(index))
-            adjacent = _distinct_faces(ancestors.FindFromIndex(index))
+            adjacent = distinct_faces(ancestors.FindFromIndex(index))
             if (BRep_Tool.Degenerated_s(edge) or any(edge.IsSame(other) for other in seen)
                     or len(adjacent) != 2 or not any(other.IsSame(face) for other in adjacent)
                     or any(BRep_Tool.IsClosed_s(edge, other) for other in adjacent)):
@@ -127,7 +127,8 @@ def refit_intersection_edges(shape: TopoDS_Shape, on_faces: Sequence[TopoDS_Face
     return EdgeRefit(len(seen), refitted, worst_before, worst_after, time.perf_counter() - start)
 
 
-def _distinct_faces(faces: object) -> list[TopoDS_Face]:
+def distinct_faces(faces: object) -> list[TopoDS_Face]:
+    """The faces of an OCP shape list (an edge's ancestors), each once: a seam edge lists its face twice."""
     distinct: list[TopoDS_Face] = []
     for shape in faces:  # type: ignore[attr-defined]
         face = TopoDS.Face_s(shape)

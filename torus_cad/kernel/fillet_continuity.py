@@ -33,7 +33,7 @@ from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape
 from torus_cad.errors import KernelError
 from torus_cad.kernel import face_provenance
 from torus_cad.kernel.checks import single_valid_solid
-from torus_cad.kernel.edge_curves import _distinct_faces, curve_on_surface_deviation
+from torus_cad.kernel.edge_curves import curve_on_surface_deviation, distinct_faces
 from torus_cad.kernel.topology import explore
 from torus_cad.tolerances import FILLET_EDGE_TOLERANCE_MARGIN
 
@@ -86,7 +86,7 @@ def _cover_deviations(shape: TopoDS_Shape) -> None:
         if BRep_Tool.Degenerated_s(edge):
             continue
         tolerance = BRep_Tool.Tolerance_s(edge)
-        deviation = max(curve_on_surface_deviation(edge, face) for face in _distinct_faces(ancestors.FindFromIndex(index)))
+        deviation = max(curve_on_surface_deviation(edge, face) for face in distinct_faces(ancestors.FindFromIndex(index)))
         if deviation > tolerance:
             covered = deviation * FILLET_EDGE_TOLERANCE_MARGIN
             builder.UpdateEdge(edge, covered)

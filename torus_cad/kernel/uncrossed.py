@@ -39,6 +39,7 @@ from OCP.TopoDS import TopoDS_Face
 from scipy.spatial import cKDTree
 
 from torus_cad.errors import KernelError
+from torus_cad.geometry.blade.mesh import side_use_counts
 from torus_cad.kernel.mesh_check import crossing_pairs, meshlib_mesh
 from torus_cad.kernel.tessellation import face_triangulation
 from torus_cad.tolerances import (
@@ -167,10 +168,7 @@ def _repaired(points: NDArray[np.float64], triangles: NDArray[np.int64]
 def _faces_with_holes(triangles: NDArray[np.int64], owner: NDArray[np.int64]) -> list[int]:
     """The faces (indices) owning a triangle side that no other triangle shares (a hole's rim), or that
     more than two share; empty for a closed, manifold tessellation."""
-    sides = np.sort(triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
-    keys = sides[:, 0] * (int(triangles.max()) + 1) + sides[:, 1]  # one integer per side: a 1-D sort
-    _, inverse, uses = np.unique(keys, return_inverse=True, return_counts=True)
-    rim = uses[inverse] != 2
+    rim = side_use_counts(triangles) != 2
     return sorted({int(face) for face in np.repeat(owner, 3)[rim]})
 
 

@@ -97,3 +97,12 @@ def blade_mesh(surface: BladeSurface) -> TriangleMesh:
     faces = np.concatenate([sides, cap[:, ::-1], cap + (sections - 1) * count])
     mesh = TriangleMesh(vertices, faces)
     return mesh if mesh.volume > 0 else TriangleMesh(vertices, faces[:, ::-1].copy())
+
+
+def side_use_counts(faces: NDArray[np.int64]) -> NDArray[np.int64]:
+    """For each side of each triangle of ``faces`` ``(n, 3)``, how many triangles use its undirected edge,
+    ``(3 n,)`` int in the order (0-1, 1-2, 2-0) per triangle; all 2 for a closed mesh (a hole's rim: 1)."""
+    sides = np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+    keys = sides[:, 0] * (int(faces.max()) + 1) + sides[:, 1]  # one integer per side: a 1-D sort
+    _, inverse, uses = np.unique(keys, return_inverse=True, return_counts=True)
+    return np.asarray(uses[inverse], dtype=np.int64)
