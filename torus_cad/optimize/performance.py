@@ -1,7 +1,8 @@
 """A trial's performance: ``torus-cad simulate`` run on the trial's design file, behind one function.
 
-The contract: ``python -m torus_cad simulate CONFIG.toml --rpm RPM [--airspeed M_S] --level LEVEL
---out DIR`` writes ``DIR/<name>_performance.json`` (thrust_n, torque_nm, power_w, ct, cp,
+The contract: ``python -m torus_cad simulate CONFIG.toml (--rpm RPM | --thrust N --thrust-tolerance F
+--thrust-runs K) [--airspeed M_S] [--iterations N] [--processes N] [--observer D:A ...] [--time-limit S]
+--level LEVEL --out DIR --quiet`` writes ``DIR/<name>_performance.json`` (thrust_n, torque_nm, power_w, ct, cp,
 efficiency, figure_of_merit, converged, ...) and exits 0; 2 for bad input (the design is refused),
 1 for a failure. :func:`run_simulate` is the only place that knows it, so that it can become a
 Python call later.
@@ -33,11 +34,24 @@ class SimulateError(TorusCadError):
     """``torus-cad simulate`` failed on a design (exit 1, a crash, a time-out, no report)."""
 
 
-def _command(config: Path, settings: Mapping[str, Any], out_dir: Path) -> list[str]:
-    command = [sys.executable, "-m", "torus_cad", "simulate", str(config), "--rpm", repr(float(settings["rpm"]))]
+def _command(config: Path, settings: Mapping[str, Any], out_dir: Path, time_limit_s: float | None) -> list[str]:
+    command = [sys.executable, "-m", "torus_cad", "simulate", str(config)]
+    if settings.get("thrust"):
+        command += ["--thrust", repr(float(settings["thrust"])),
+                    "--thrust-tolerance", repr(float(settings.get("thrust_tolerance", 0.01))),
+                    "--thrust-runs", str(int(settings.get("thrust_runs", 5)))]
+    else:
+        command += ["--rpm", repr(float(settings["rpm"]))]
     if settings.get("airspeed"):
         command += ["--airspeed", repr(float(settings["airspeed"]))]
-    return command + ["--level", str(settings.get("level", "coarse")), "--out", str(out_dir)]
+    for key, option in (("iterations", "--iterations"), ("processes", "--processes")):
+        if settings.get(key):
+            command += [option, str(int(settings[key]))]
+    for observer in settings.get("observers", ()):
+        command += ["--observer", str(observer)]
+    if time_limit_s:  # the study's limit for the whole run (a thrust search's runs included), not simulate's default
+        command += ["--time-limit", repr(float(time_limit_s))]
+    return command + ["--level", str(settings.get("level", "coarse")), "--out", str(out_dir), "--quiet"]
 
 
 def _die_with_parent() -> None:
@@ -48,13 +62,14 @@ def _die_with_parent() -> None:
 
 def run_simulate(config: Path, name: str, settings: Mapping[str, Any], out_dir: Path,
                  time_limit_s: float | None = None) -> dict[str, Any]:
-    """The performance report of the design file ``config`` (named ``name``) at ``settings`` (rpm, airspeed m/s,
-    level), simulated into ``out_dir``.
+    """The performance report of the design file ``config`` (named ``name``) at ``settings`` (``rpm`` or a target
+    ``thrust`` N with ``thrust_tolerance`` and ``thrust_runs``; ``airspeed`` m/s, ``level``, and ``iterations``,
+    ``processes``, ``observers`` when given), simulated into ``out_dir`` within ``time_limit_s``.
 
     Raises ParameterError when simulate refuses the design (exit 2), SimulateError when it fails.
     """
     try:
-        done = subprocess.run(_command(config, settings, out_dir), capture_output=True, text=True,
+        done = subprocess.run(_command(config, settings, out_dir, time_limit_s), capture_output=True, text=True,
                               timeout=time_limit_s, preexec_fn=_die_with_parent, check=False)
     except subprocess.TimeoutExpired:
         raise SimulateError(f"torus-cad simulate ran past {time_limit_s:g} s") from None

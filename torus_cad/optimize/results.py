@@ -1,7 +1,8 @@
 """A study's results: every trial in one table, the objective's history, the best designs built.
 
 * ``OUT/results.csv`` and ``OUT/results.parquet`` (the batch table code): one row per trial with
-  its state, outcome and reason, varied values, metrics, constraint violations and folder;
+  its state, outcome and reason, varied values, metrics, constraint violations and folder (and, in a
+  study of several mesh levels, the level of its metrics: state ``pruned`` for a trial stopped there);
 * ``OUT/<name>_history.png``: each objective against the trial number with the best feasible
   value so far, and ``OUT/<name>_pareto.png`` for two objectives;
 * ``OUT/best/<name>_best.toml`` (one objective) or ``OUT/best/<name>_pareto_<number>.toml``
@@ -24,9 +25,12 @@ from torus_cad.batch.table import write_table
 from torus_cad.optimize.storage import (
     CONSTRAINT,
     FOLDER,
+    LEVEL,
+    LEVEL_SECONDS,
     METRICS,
     OUTCOME,
     PRESCREENED,
+    PRUNED_AT,
     REASON,
     RETRY_OF,
     SECONDS,
@@ -72,11 +76,14 @@ def write_results(spec: StudySpec, study: optuna.Study, out: Path, checkpoint: C
     check()
     lines, built = _publish_best(spec, trials, best, out / BEST_DIR, out)
     check()
-    lines = [_outcomes_line(rows), *unvalued_lines(rows), *lines]
+    lines = [_outcomes_line(rows), *_level_lines(spec, trials), *unvalued_lines(rows), *lines]
     published = [trial for trial in trials if trial.number in built]
     summary = {"name": spec.name, "trials": len(trials), "states": _count(row["state"] for row in rows),
                "outcomes": _count(row["outcome"] for row in rows),
                "prescreened": sum(1 for row in rows if row["prescreened"]),
+               "pruned": _count(str(trial_result(trial)[PRUNED_AT]) for trial in trials
+                                if PRUNED_AT in trial_result(trial)),
+               "level_seconds": _level_seconds(trials),
                "best": [{"number": trial.number, "values": list(trial.values), "params": dict(trial.params),
                          "design": str(built[trial.number])} for trial in published],
                "not_published": [trial.number for trial in best if trial.number not in built]}
@@ -87,13 +94,42 @@ def write_results(spec: StudySpec, study: optuna.Study, out: Path, checkpoint: C
 
 
 def _outcomes_line(rows: Sequence[dict[str, Any]]) -> str:
-    """``"  trials: 9 valid, 5 refused (4 before the kernel, pre-screened), 1 failed"`` and any other outcome."""
+    """``"  trials: 9 valid, 5 refused (4 before the kernel, pre-screened), 1 failed"`` and any other outcome;
+    ``"9 valid (6 pruned at a screening level)"`` in a study of several mesh levels."""
     counts = _count(row["outcome"] for row in rows if row["outcome"])
     screened = sum(1 for row in rows if row["prescreened"])
+    pruned = sum(1 for row in rows if row["state"] == "pruned")
     parts = [f"{counts.pop(name, 0)} {name}" for name in ("valid", "refused", "failed")]
+    if pruned:
+        parts[0] += f" ({pruned} pruned at a screening level)"
     if screened:
         parts[1] += f" ({screened} before the kernel, pre-screened)"
     return "  trials: " + ", ".join(parts + [f"{count} {name}" for name, count in sorted(counts.items())])
+
+
+def _level_seconds(trials: Sequence[FrozenTrial]) -> dict[str, dict[str, float]]:
+    """By mesh level: the trials that ran it and their worker seconds there (a study of several levels)."""
+    spent: dict[str, dict[str, float]] = {}
+    for trial in trials:
+        for level, seconds in trial_result(trial).get(LEVEL_SECONDS, {}).items():
+            entry = spent.setdefault(level, {"trials": 0, "seconds": 0.0})
+            entry["trials"] += 1
+            entry["seconds"] += float(seconds or 0.0)
+    return spent
+
+
+def _level_lines(spec: StudySpec, trials: Sequence[FrozenTrial]) -> list[str]:
+    """``"  coarse: 12 trials, 1430 s (5 pruned); medium: 7 trials, 2210 s"``: what each mesh level cost."""
+    if len(spec.levels) < 2:
+        return []
+    spent = _level_seconds(trials)
+    pruned = _count(str(trial_result(trial)[PRUNED_AT]) for trial in trials if PRUNED_AT in trial_result(trial))
+    parts = []
+    for level in spec.levels:
+        entry = spent.get(level, {"trials": 0, "seconds": 0.0})
+        stopped = f" ({pruned[level]} pruned)" if pruned.get(level) else ""
+        parts.append(f"{level}: {entry['trials']:.0f} trials, {entry['seconds']:.0f} s{stopped}")
+    return ["  levels: " + "; ".join(parts)]
 
 
 def _count(items: Any) -> dict[str, int]:
@@ -116,8 +152,9 @@ def best_trials(spec: StudySpec, study: optuna.Study) -> list[FrozenTrial]:
 def trial_rows(spec: StudySpec, trials: Sequence[FrozenTrial]) -> tuple[list[dict[str, Any]], list[str]]:
     """One row per trial and the columns, in table order."""
     metrics = list(dict.fromkeys(spec.metrics))
+    levels = ["level"] if len(spec.levels) > 1 else []  # the level of the row's metrics
     columns = (["number", "state", "outcome", "feasible", "reason", "prescreened"] + [axis.key for axis in spec.axes]
-               + metrics + ["violation", "retry_of", "seconds", "folder"])
+               + levels + metrics + ["violation", "retry_of", "seconds", "folder"])
     retried_by = {trial.user_attrs[RETRY_OF]: trial.number for trial in trials if RETRY_OF in trial.user_attrs}
     rows = []
     for trial in trials:
@@ -135,6 +172,11 @@ def trial_rows(spec: StudySpec, trials: Sequence[FrozenTrial]) -> tuple[list[dic
                    feasible=state == "complete" and all(v <= 0.0 for v in violations),
                    violation=max(violations) if violations else None, retry_of=attrs.get(RETRY_OF),
                    seconds=record.get(SECONDS), folder=record.get(FOLDER))
+        if levels:
+            row["level"] = record.get(LEVEL)
+            if PRUNED_AT in record:
+                reason = reason or f"pruned at the {record[PRUNED_AT]} level"
+                row["reason"] = reason
         for axis in spec.axes:
             value = trial.params.get(axis.key)
             row[axis.key] = value if not isinstance(value, (list, tuple)) else json.dumps(value)
@@ -186,6 +228,9 @@ def history_figure(spec: StudySpec, trials: Sequence[FrozenTrial]) -> Figure:
     for index, (objective, axis) in enumerate(zip(spec.objectives, axes[:, 0])):
         good = [(t.number, t.values[index]) for t in complete if _feasible(t)]
         bad = [(t.number, t.values[index]) for t in complete if not _feasible(t)]
+        pruned = [(t.number, value[index]) for t, value in _pruned_values(spec, trials)]
+        if pruned:
+            axis.scatter(*zip(*pruned), marker="^", color="0.75", label="pruned (its value at a screening level)")
         if bad:
             axis.scatter(*zip(*bad), marker="x", color="0.6", label="infeasible (a constraint is broken)")
         if good:
@@ -204,9 +249,21 @@ def history_figure(spec: StudySpec, trials: Sequence[FrozenTrial]) -> Figure:
         axis.set_ylabel(objective.metric)
         axis.set_title(f"{spec.name}: {objective.direction.value} {objective.metric}")
         axis.grid(alpha=0.3)
-        if good or bad or unvalued:
+        if good or bad or unvalued or pruned:
             axis.legend(loc="best", fontsize="small")
     return figure
+
+
+def _pruned_values(spec: StudySpec, trials: Sequence[FrozenTrial]) -> list[tuple[FrozenTrial, list[float]]]:
+    """The pruned trials with their objective values at the screening level they stopped at."""
+    pruned = []
+    for trial in trials:
+        metrics = trial_result(trial).get(METRICS, {}) if trial.state.name == "PRUNED" else {}
+        try:
+            pruned.append((trial, [float(metrics[objective.metric]) for objective in spec.objectives]))
+        except (KeyError, TypeError, ValueError):
+            continue
+    return pruned
 
 
 def _save_png(figure: Figure, path: Path) -> Path:
@@ -232,6 +289,10 @@ def _pareto_picture(spec: StudySpec, trials: Sequence[FrozenTrial], front: Seque
 
     figure, axis = plt.subplots(figsize=(6, 5))
     complete = [trial for trial in trials if trial.state.name == "COMPLETE"]
+    pruned = _pruned_values(spec, trials)
+    if pruned:
+        axis.scatter([v[0] for _, v in pruned], [v[1] for _, v in pruned], marker="^", color="0.75",
+                     label=f"pruned (at {'/'.join(spec.levels[:-1])})")
     styles: list[tuple[str, list[Any], dict[str, Any]]] = [
         ("infeasible", [t for t in complete if not _feasible(t)], {"marker": "x", "color": "0.6"}),
         ("feasible", [t for t in complete if _feasible(t)], {"color": "tab:blue"}),
@@ -244,7 +305,7 @@ def _pareto_picture(spec: StudySpec, trials: Sequence[FrozenTrial], front: Seque
     axis.set_ylabel(f"{second.metric} ({second.direction.value})")
     axis.set_title(f"{spec.name}: Pareto front")
     axis.grid(alpha=0.3)
-    if complete:
+    if complete or pruned:
         axis.legend(loc="best", fontsize="small")
     return _save_png(figure, path)
 

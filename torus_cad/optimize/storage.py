@@ -43,8 +43,8 @@ if TYPE_CHECKING:  # optuna and SQLAlchemy are imported where they are used (the
     from optuna.storages import RDBStorage
     from optuna.trial import FrozenTrial, Trial
 
-__all__ = ["GRACE_S", "HEARTBEAT_S", "PRESCREENED", "Heartbeat", "StorageError", "claim_lock", "count_trials",
-           "fail_and_retry", "open_storage", "owner_record", "public_url", "retry_failed_trial", "retry_stale_trials",
+__all__ = ["GRACE_S", "HEARTBEAT_S", "LEVEL", "LEVELS", "LEVEL_SECONDS", "PRESCREENED", "PRUNED_AT", "Heartbeat",
+           "StorageError", "claim_lock", "count_trials", "fail_and_retry", "open_storage", "owner_record", "public_url", "retry_failed_trial", "retry_stale_trials",
            "storage_failures_named", "storage_url", "trial_result"]
 
 HEARTBEAT_S = 10  #: how often a running process records that its trials are alive, s
@@ -65,6 +65,15 @@ OUTCOME, REASON, METRICS, CONSTRAINT, FOLDER, SECONDS = "outcome", "reason", "me
     "seconds"  #: the keys of :data:`RESULT`
 #: Key of :data:`RESULT`, True when the kernel-free checks refused the trial before any worker built it.
 PRESCREENED = "prescreened"
+#: Keys of :data:`RESULT` in a study of several mesh levels: the level of the trial's metrics (the finest it
+#: reached), and the screening level at which the pruner stopped it (absent when it was not pruned).
+LEVEL, PRUNED_AT = "level", "pruned_at"
+#: Key of :data:`RESULT` in a study of several mesh levels: the worker's seconds at each level the trial ran, by
+#: level (the first level's include the build).
+LEVEL_SECONDS = "level_seconds"
+#: User attr of a trial of a study of several mesh levels, written as each level finishes (other processes'
+#: pruners read it): ``{level: {"metrics": {...}, "feasible": bool, "seconds": s}}``.
+LEVELS = "levels"
 OWNER = "owner"  #: user attr: ``{"host", "pid", "start"}`` of the process that runs the trial
 
 
@@ -283,7 +292,7 @@ def trial_result(trial: FrozenTrial) -> dict[str, Any]:
 
 
 def count_trials(rdb: RDBStorage, study_id: int) -> tuple[int, bool]:
-    """The trials that count toward ``--trials`` (COMPLETE, RUNNING, WAITING, and FAIL with a recorded
+    """The trials that count toward ``--trials`` (COMPLETE, PRUNED, RUNNING, WAITING, and FAIL with a recorded
     result and not stopped) and whether any is WAITING, in one query.
 
     One aggregate over optuna's tables, not a read of every trial: asking for a trial reads them anyway,
@@ -297,7 +306,8 @@ def count_trials(rdb: RDBStorage, study_id: int) -> tuple[int, bool]:
     def has_attr(key: str) -> sqlalchemy.Exists:
         return sqlalchemy.exists().where(attr.trial_id == trial.trial_id, attr.key == key)
 
-    counted = sqlalchemy.or_(trial.state.in_([TrialState.COMPLETE, TrialState.RUNNING, TrialState.WAITING]),
+    counted = sqlalchemy.or_(trial.state.in_([TrialState.COMPLETE, TrialState.PRUNED, TrialState.RUNNING,
+                                              TrialState.WAITING]),
                              sqlalchemy.and_(trial.state == TrialState.FAIL, has_attr(RESULT), ~has_attr(STOPPED)))
     query = sqlalchemy.select(
         sqlalchemy.func.count().filter(counted),

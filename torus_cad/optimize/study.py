@@ -10,6 +10,15 @@ is refused or fails is a FAIL trial with its outcome and reason in the trial's u
 constraint goes to the sampler as a constraint (optuna's ``constraints_func``), never as a
 penalty. ``--trials`` is the total over every run and every process sharing the study: a rerun
 continues it, and trials of a killed run are asked again (:mod:`torus_cad.optimize.storage`).
+
+A study of several mesh levels (``[simulate] levels``) runs each trial in stages: every trial is
+built and simulated at the first (coarsest) level; its value there is reported to optuna
+(``Trial.report`` at a step per level) and the pruner (``Trial.should_prune``: optuna's
+MedianPruner or SuccessiveHalvingPruner for one objective; for several, where optuna's pruners do
+not apply, :func:`dominated_at_level`) decides whether it climbs: a trial that climbs is queued
+again, ahead of new trials, for the next level on the next free worker; one that does not is told
+PRUNED, its values those of the level it reached. A trial that breaks a constraint at a screening
+level stops there too. The trial's value is that of the finest level it reached.
 """
 
 from __future__ import annotations
@@ -20,7 +29,8 @@ import math
 import os
 import time
 import warnings
-from collections.abc import Callable, Iterable, Iterator
+from collections import deque
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -28,7 +38,7 @@ from typing import TYPE_CHECKING, Any
 from torus_cad.batch import cluster
 from torus_cad.batch.job import DesignTask, prescreen
 from torus_cad.batch.outcome import DesignResult, Outcome
-from torus_cad.batch.runner import Interrupted, LocalPool, interrupts_raised, raise_if_interrupted, run_tasks
+from torus_cad.batch.runner import Interrupted, Job, LocalPool, interrupts_raised, raise_if_interrupted, run_tasks
 from torus_cad.errors import ParameterError
 from torus_cad.optimize.metrics import metric_value
 from torus_cad.optimize.results import write_results
@@ -36,10 +46,14 @@ from torus_cad.optimize.storage import (
     CONSTRAINT,
     FOLDER,
     HEARTBEAT_S,
+    LEVEL,
+    LEVEL_SECONDS,
+    LEVELS,
     METRICS,
     OUTCOME,
     OWNER,
     PRESCREENED,
+    PRUNED_AT,
     REASON,
     RESULT,
     SECONDS,
@@ -55,18 +69,19 @@ from torus_cad.optimize.storage import (
     storage_url,
     trial_result,
 )
-from torus_cad.optimize.study_file import Sampler, StudySpec
-from torus_cad.optimize.trial_job import PERFORMANCE_DIR, TRIALS_DIR, TrialTask, run_trial, trial_name
+from torus_cad.optimize.study_file import Objective, PrunerKind, Sampler, StudySpec
+from torus_cad.optimize.trial_job import TRIALS_DIR, TrialTask, performance_dir, run_trial, trial_name
 from torus_cad.tolerances import MAX_STUDY_TRIALS
 
 if TYPE_CHECKING:  # optuna is imported where it is used (the optimize extra)
     import optuna
     from optuna.distributions import BaseDistribution
+    from optuna.pruners import BasePruner
     from optuna.samplers import BaseSampler
     from optuna.storages import RDBStorage
     from optuna.trial import FrozenTrial, Trial
 
-__all__ = ["DEFINITION_ATTR", "StudyInterrupted", "StudyResult", "run_study"]
+__all__ = ["DEFINITION_ATTR", "StudyInterrupted", "StudyResult", "dominated_at_level", "run_study"]
 
 DEFINITION_ATTR = "torus_cad_definition"  #: study user attr: the digest of what must not change between runs
 #: Trials in flight per worker: one running and one queued, so that a worker never waits for the sampler
@@ -139,7 +154,8 @@ def available_workers() -> int:
 
 
 def run_study(spec: StudySpec, out_dir: str | Path, *, trials: int | None = None, workers: int | None = None,
-              scheduler: str | None = None, storage: str | None = None, write_results: bool = True) -> StudyResult:
+              scheduler: str | None = None, storage: str | None = None, write_results: bool = True,
+              trial_job: Job = run_trial) -> StudyResult:
     """Run ``spec`` until it holds ``trials`` (default ``spec.trials``) finished trials, then write its results.
 
     Args:
@@ -151,6 +167,8 @@ def run_study(spec: StudySpec, out_dir: str | Path, *, trials: int | None = None
         scheduler: a Dask scheduler address, or ``"local"``; ``out_dir`` must be shared with its workers.
         storage: the storage URL (default ``spec.storage``, else SQLite ``OUT/<name>.db``).
         write_results: write the table, the history picture and the best designs at the end.
+        trial_job: what a worker runs for each stage of a trial (default :func:`run_trial`: the build and
+            ``torus-cad simulate``); a top-level function of a :class:`TrialTask` giving a DesignResult.
 
     Raises ParameterError for bad options or a study whose stored definition differs,
     StorageError / BatchError when the storage or the executor cannot be used, and
@@ -176,7 +194,7 @@ def run_study(spec: StudySpec, out_dir: str | Path, *, trials: int | None = None
         with interrupts_raised(), storage_failures_named(url):
             try:
                 try:
-                    runner = _Runner(spec, out, url, total)
+                    runner = _Runner(spec, out, url, total, trial_job)
                     raise_if_interrupted()
                     runner.run(result, workers, scheduler)
                 except Interrupted as interrupt:
@@ -200,7 +218,7 @@ def run_study(spec: StudySpec, out_dir: str | Path, *, trials: int | None = None
 class _Runner:
     """One process's part of a study: its storage, sampler, trials in flight."""
 
-    def __init__(self, spec: StudySpec, out: Path, url: str, total: int) -> None:
+    def __init__(self, spec: StudySpec, out: Path, url: str, total: int, job: Job = run_trial) -> None:
         import optuna
 
         optuna.logging.set_verbosity(optuna.logging.WARNING)
@@ -218,6 +236,9 @@ class _Runner:
         self.seeded = False
         self.ran = 0
         self.heartbeat = Heartbeat(self.rdb, self.study)
+        self.job = job
+        self.climbs: deque[TrialTask] = deque()  # trials the pruner let climb, ahead of new trials
+        self.seconds: dict[str, float] = {}  # design id -> worker seconds of its stages so far
 
     # -- the loop --------------------------------------------------------------------------------
 
@@ -233,14 +254,14 @@ class _Runner:
                     window = _TASKS_PER_WORKER * max(1, len(own_client.scheduler_info().get("workers", {}))
                                                      or workers or 1)
                     result.backend = f"dask: {cluster.client_label(own_client)}"
-                    run_tasks(self._tasks(result), self._on_result, lambda: executor, window=window, job=run_trial,
+                    run_tasks(_Tasks(self, result), self._on_result, lambda: executor, window=window, job=self.job,
                               check_visible=True)
                 else:
                     count = min(workers or available_workers(), available_workers())
                     result.backend = f"local pool, {count} worker{'s' if count > 1 else ''}"
-                    run_tasks(self._tasks(result), self._on_result,
+                    run_tasks(_Tasks(self, result), self._on_result,
                               lambda: LocalPool(count, self.spec.time_limit_s), window=_TASKS_PER_WORKER * count,
-                              job=run_trial)
+                              job=self.job)
         except BaseException:
             self._retry_in_flight()
             raise
@@ -250,23 +271,6 @@ class _Runner:
             if own_client is not None:
                 cluster.close_client(own_client, own_cluster)
 
-    def _tasks(self, result: StudyResult) -> Iterator[TrialTask]:
-        """The next trial's task whenever a worker is free, until the study holds its trials."""
-        checked = -math.inf
-        while True:
-            with claim_lock(self.rdb, self.url, self.spec.name):
-                if time.monotonic() - checked >= HEARTBEAT_S:  # at the start, then once per heartbeat
-                    result.retried += retry_stale_trials(self.study, self.rdb)
-                    checked = time.monotonic()
-                trial = self._claim()
-            if trial is None:
-                return
-            task = self._task(trial)
-            refusal = prescreen(task)  # refused by the kernel-free checks: told at once, no worker needed
-            if refusal is None:
-                yield task
-            else:
-                self._on_result(task, refusal)
 
     def _claim(self) -> Trial | None:
         """Ask for a trial (an enqueued retry first), or None when the study is full."""
@@ -284,30 +288,51 @@ class _Runner:
         self.heartbeat.add(trial)
         return trial
 
-    def _task(self, trial: Trial) -> TrialTask:
+    def _task(self, trial: Trial, stage: int = 0) -> TrialTask:
+        """Trial ``trial``'s task at ``stage`` (0: build it and simulate it at the first level)."""
         name = trial_name(trial.number)
         folder = self.out / TRIALS_DIR / str(trial.number)
         folder.mkdir(parents=True, exist_ok=True)
         parameters = self.spec.parameters(trial.params, name)
-        return TrialTask(name, parameters, str(folder), stl=self.spec.stl, simulate=self.spec.simulate,
-                         simulate_time_limit_s=self.spec.time_limit_s)
+        levels = self.spec.levels
+        report_dir = performance_dir(levels[stage], len(levels)) if levels else ""
+        return TrialTask(name, parameters, str(folder), stl=self.spec.stl, simulate=self.spec.stage_settings(stage),
+                         simulate_time_limit_s=self.spec.time_limit_s, simulate_dir=report_dir or "simulate",
+                         stage=stage)
 
     def _on_result(self, task: DesignTask, result: DesignResult) -> None:
-        """Tell optuna what the trial gave: its objective values and constraints, or FAIL with the reason.
+        """Tell optuna what the trial gave: its objective values and constraints, or FAIL with the reason; at a
+        screening level, climb (queue the next stage) or PRUNED.
 
         The trial's record (outcome, reason, metrics, violations) is one user attr, one write."""
         import optuna
         from optuna.trial import TrialState
 
         trial = self.in_flight[task.design_id]
+        stage = task.stage if isinstance(task, TrialTask) else 0
         outcome, reason = result.outcome, result.reason
         values: list[float] | None = None
-        record: dict[str, Any] = {SECONDS: result.seconds, FOLDER: f"{TRIALS_DIR}/{trial.number}"}
+        seconds = self.seconds.pop(task.design_id, 0.0) + result.seconds
+        record: dict[str, Any] = {SECONDS: seconds, FOLDER: f"{TRIALS_DIR}/{trial.number}"}
+        levels = self.spec.levels
         if outcome is Outcome.VALID:
             try:
-                values = self._evaluate(Path(str(task.folder)), task.design_id, record)
+                report_dir = task.simulate_dir if isinstance(task, TrialTask) else "simulate"
+                values = self._evaluate(Path(str(task.folder)), task.design_id, record, report_dir)
             except (KeyError, OSError, ValueError) as error:
                 outcome, reason = Outcome.ERROR, f"the trial's report cannot be read: {error}"
+        elif stage > 0:
+            reason = f"at the {levels[stage]} level: {reason}"
+        if len(levels) > 1 and outcome is Outcome.VALID:
+            record[LEVEL] = levels[stage]
+            record[LEVEL_SECONDS] = {**{name: entry.get(SECONDS) for name, entry in trial.user_attrs.get(LEVELS, {}).items()},
+                                     levels[stage]: result.seconds}
+            if stage + 1 < len(levels) and values is not None:
+                if not self._stops_here(trial, stage, values, record, result.seconds):
+                    self.seconds[task.design_id] = seconds
+                    self.climbs.append(self._task(trial, stage + 1))
+                    return
+                record[PRUNED_AT] = levels[stage]
         record.update({OUTCOME: outcome.value, REASON: reason})
         if result.prescreened:
             record[PRESCREENED] = True
@@ -317,18 +342,43 @@ class _Runner:
             trial.set_user_attr(RESULT, record)
             if values is None:
                 self.study.tell(trial, state=TrialState.FAIL)
+            elif PRUNED_AT in record:
+                self.study.tell(trial, state=TrialState.PRUNED)
             else:
                 self.study.tell(trial, values)
         del self.in_flight[task.design_id]
         self.heartbeat.discard(trial)
         self.ran += 1
 
-    def _evaluate(self, folder: Path, name: str, record: dict[str, Any]) -> list[float]:
+    def _stops_here(self, trial: Trial, stage: int, values: list[float], record: dict[str, Any],
+                    seconds: float) -> bool:
+        """Whether the trial stops at screening level ``stage`` (the pruner's word, or a broken constraint); its
+        values there are recorded with the trial first (``LEVELS``), where other processes' pruners read them."""
+        level = self.spec.levels[stage]
+        feasible = all(v <= 0.0 for v in record.get(CONSTRAINT, []))
+        done = dict(trial.user_attrs.get(LEVELS, {}))  # this process's own trial: its attrs are current
+        done[level] = {METRICS: record[METRICS], "feasible": feasible, SECONDS: seconds}
+        trial.set_user_attr(LEVELS, done)
+        pruner = self.spec.pruner
+        if pruner is None:
+            return False
+        if len(self.spec.objectives) == 1:  # optuna's pruners judge one value; a step per level
+            trial.report(values[0], _step(pruner.kind, pruner.reduction_factor, stage))
+        if not feasible:
+            return True
+        if pruner.kind in (PrunerKind.MEDIAN, PrunerKind.HALVING):
+            return bool(trial.should_prune())
+        if pruner.kind is PrunerKind.DOMINATED:
+            others = [other for other in self.study.get_trials(deepcopy=False) if other.number != trial.number]
+            return dominated_at_level(values, self.spec.objectives, level, others, pruner.startup_trials)
+        return False
+
+    def _evaluate(self, folder: Path, name: str, record: dict[str, Any], report_dir: str = "simulate") -> list[float]:
         """The objective values; the metrics and the constraint violations go into the trial's ``record``."""
         report = json.loads((folder / f"{name}.json").read_text())
         performance = None
         if self.spec.simulate is not None:
-            performance = json.loads((folder / PERFORMANCE_DIR / f"{name}_performance.json").read_text())
+            performance = json.loads((folder / report_dir / f"{name}_performance.json").read_text())
         metrics = {metric: metric_value(metric, report, performance) for metric in dict.fromkeys(self.spec.metrics)}
         record[METRICS] = metrics
         if self.spec.constraints:
@@ -349,6 +399,8 @@ class _Runner:
         # asked again under new numbers, in new folders)
         _remove_staging_debris(self.out / TRIALS_DIR / str(trial.number) for trial in self.in_flight.values())
         self.in_flight.clear()
+        self.climbs.clear()
+        self.seconds.clear()
 
     def write(self, result: StudyResult, checkpoint: Callable[[], None] | None = None) -> None:
         """The table, the pictures, the best designs and the summary; ``checkpoint`` is called between two of
@@ -370,6 +422,88 @@ class _Runner:
             self.rdb.remove_session()
         with contextlib.suppress(Exception):
             self.rdb.engine.dispose()
+
+
+class _Tasks:
+    """The runner's tasks: a trial that climbs to its next level first, else a new trial whenever a worker is
+    free, until the study holds its trials.
+
+    An iterator that may end and go on again: while trials in flight may still climb, it stops when it has
+    nothing to give now, and :func:`~torus_cad.batch.runner.run_tasks` asks it again after each result."""
+
+    def __init__(self, runner: _Runner, result: StudyResult) -> None:
+        self.runner, self.result = runner, result
+        self.checked = -math.inf
+        self.full = False  # the study holds its trials: no new one is asked for
+
+    def __iter__(self) -> _Tasks:
+        return self
+
+    def __next__(self) -> TrialTask:
+        runner = self.runner
+        while True:
+            if runner.climbs:
+                return runner.climbs.popleft()
+            if self.full:
+                raise StopIteration
+            with claim_lock(runner.rdb, runner.url, runner.spec.name):
+                if time.monotonic() - self.checked >= HEARTBEAT_S:  # at the start, then once per heartbeat
+                    self.result.retried += retry_stale_trials(runner.study, runner.rdb)
+                    self.checked = time.monotonic()
+                trial = runner._claim()
+            if trial is None:
+                self.full = True
+                continue
+            task = runner._task(trial)
+            refusal = prescreen(task)  # refused by the kernel-free checks: told at once, no worker needed
+            if refusal is None:
+                return task
+            runner._on_result(task, refusal)
+
+
+def _step(kind: PrunerKind, reduction_factor: int, stage: int) -> int:
+    """The step at which a trial reports its value at level ``stage``: ``reduction_factor ** stage`` for
+    successive halving (level i is its rung i: a resource that grows by the reduction factor per level), else
+    ``stage``."""
+    return reduction_factor**stage if kind is PrunerKind.HALVING else stage
+
+
+def dominated_at_level(values: Sequence[float], objectives: Sequence[Objective], level: str,
+                       others: Iterable[FrozenTrial], startup_trials: int) -> bool:
+    """The pruner of several objectives: whether ``values`` (a trial's at ``level``) are dominated by the values
+    at ``level`` of a feasible one of ``others`` (no worse in every objective, better in one), once at least
+    ``startup_trials`` of them have values there. optuna's pruners take one value; this is the Pareto
+    front's own test, on the screening level."""
+    signs = [1.0 if objective.direction.value == "minimize" else -1.0 for objective in objectives]
+    mine = [sign * value for sign, value in zip(signs, values)]
+    seen = []
+    for other in others:
+        entry = other.user_attrs.get(LEVELS, {}).get(level)
+        if isinstance(entry, dict) and entry.get("feasible") and isinstance(entry.get(METRICS), dict):
+            try:
+                seen.append([sign * float(entry[METRICS][o.metric]) for sign, o in zip(signs, objectives)])
+            except (KeyError, TypeError, ValueError):
+                continue
+    if len(seen) < startup_trials:
+        return False
+    return any(all(a <= b for a, b in zip(point, mine)) and any(a < b for a, b in zip(point, mine))
+               for point in seen)
+
+
+def _pruner(spec: StudySpec) -> BasePruner | None:
+    """optuna's pruner of a one-objective study of several levels; None otherwise (the study's default,
+    never consulted: trials report no values)."""
+    import optuna
+
+    pruner = spec.pruner
+    if pruner is None or len(spec.objectives) > 1:
+        return None
+    if pruner.kind is PrunerKind.MEDIAN:
+        return optuna.pruners.MedianPruner(n_startup_trials=pruner.startup_trials, n_warmup_steps=0)
+    if pruner.kind is PrunerKind.HALVING:
+        return optuna.pruners.SuccessiveHalvingPruner(min_resource=1, reduction_factor=pruner.reduction_factor,
+                                                      bootstrap_count=pruner.startup_trials)
+    return optuna.pruners.NopPruner()
 
 
 def _final_name(path: Path) -> Path:
@@ -430,7 +564,7 @@ def _load_study(spec: StudySpec, rdb: RDBStorage) -> optuna.Study:
         try:
             directions: Any = spec.directions
             study = optuna.create_study(storage=rdb, study_name=spec.name, directions=directions,
-                                        load_if_exists=True, sampler=_sampler(spec, spec.seed))
+                                        load_if_exists=True, sampler=_sampler(spec, spec.seed), pruner=_pruner(spec))
         except ValueError as error:  # e.g. directions differ from the stored study's
             raise ParameterError(f"study {spec.name!r} in the storage does not match the study file: {error}") from None
     definition = spec.definition()

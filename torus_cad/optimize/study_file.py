@@ -22,9 +22,12 @@
     "printability.thinnest_wall_mm" = { min = 0.8 }
 
     [simulate]                   # only with a performance.* metric
-    rpm = 8000.0
+    rpm = 8000.0                 # or thrust = 1.0 (N): each trial solved to that thrust, as simulate --thrust
     airspeed = 0.0               # m/s
-    level = "coarse"
+    level = "coarse"             # or levels = ["coarse", "medium"]: cheap levels screen, good designs climb
+
+    [pruner]                     # only with two or more levels: which trials climb
+    kind = "median"              # median | halving (one objective) | dominated | none
 
 The tables are checked by pydantic models of the design schema's kind (strict types, no
 unknown keys, one line naming the key); the varied keys and their ranges by the schema itself,
@@ -40,7 +43,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from enum import StrEnum
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any
 
 from pydantic import Field, ValidationError
 
@@ -54,14 +57,23 @@ from torus_cad.batch.sweep_file import (
     _resolve_leaf,
 )
 from torus_cad.errors import ParameterError, shown
-from torus_cad.optimize.metrics import check_metric, is_performance
+from torus_cad.optimize.metrics import PERFORMANCE_PREFIX, check_metric, is_performance, noise_observers
 from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.config_file import read_config_table
 from torus_cad.parameters.schema import Section, param, parameter_error
 from torus_cad.simulate.settings import Level
-from torus_cad.tolerances import DESIGN_TIME_LIMIT_MAX_S, MAX_STUDY_TRIALS, SIMULATE_RPM_LIMIT
+from torus_cad.tolerances import (
+    DESIGN_TIME_LIMIT_MAX_S,
+    MAX_STUDY_TRIALS,
+    NOISE_MAX_OBSERVERS,
+    SIMULATE_MAX_ITERATIONS,
+    SIMULATE_RPM_LIMIT,
+    SIMULATE_THRUST_LIMIT_N,
+    THRUST_RUNS_RANGE,
+    THRUST_TOLERANCE_RANGE,
+)
 
-__all__ = ["Direction", "Objective", "Sampler", "StudySpec", "parse_study", "read_study_file"]
+__all__ = ["Direction", "Objective", "Pruner", "PrunerKind", "Sampler", "StudySpec", "parse_study", "read_study_file"]
 
 _NAME_PATTERN = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.-]{0,99}$")
 
@@ -78,6 +90,21 @@ class Sampler(StrEnum):
 class Direction(StrEnum):
     MINIMIZE = "minimize"
     MAXIMIZE = "maximize"
+
+
+class PrunerKind(StrEnum):
+    """Which trials of a study of several mesh levels climb from one level to the next."""
+
+    MEDIAN = "median"  #: optuna's MedianPruner: worse than the median of the complete trials at that level stops
+    HALVING = "halving"  #: optuna's SuccessiveHalvingPruner: the best 1/reduction_factor at each level climb
+    DOMINATED = "dominated"  #: several objectives: stops when another trial's values at that level dominate its own
+    NONE = "none"  #: every trial climbs (the screening levels' values are only recorded)
+
+
+#: The pruners of optuna, which judge one value (Trial.report and should_prune take one objective).
+ONE_OBJECTIVE_PRUNERS = (PrunerKind.MEDIAN, PrunerKind.HALVING)
+#: Study-file keys of [simulate] for a target thrust (given without ``thrust``, they are refused).
+_THRUST_KEYS = ("thrust_tolerance", "thrust_runs")
 
 
 class StudyTable(Section):
@@ -113,9 +140,30 @@ class BoundTable(Section):
 class SimulateTable(Section):
     """[simulate]: how ``torus-cad simulate`` runs each trial."""
 
-    rpm: float = param(0.0, ge=0.0, le=SIMULATE_RPM_LIMIT, doc="rotational speed, rpm")
+    rpm: float = param(0.0, ge=0.0, le=SIMULATE_RPM_LIMIT, doc="rotational speed, rpm (or thrust)")
+    thrust: float = param(0.0, unit="N", ge=0.0, le=SIMULATE_THRUST_LIMIT_N,
+                          doc="target thrust: each trial solved to it as simulate --thrust does (or rpm)")
+    thrust_tolerance: float = param(0.01, ge=THRUST_TOLERANCE_RANGE[0], le=THRUST_TOLERANCE_RANGE[1],
+                                    doc="the target thrust's tolerance, a fraction (simulate --thrust-tolerance)")
+    thrust_runs: int = param(5, ge=THRUST_RUNS_RANGE[0], le=THRUST_RUNS_RANGE[1],
+                             doc="solver runs of a trial's rpm search at most (simulate --thrust-runs)")
     airspeed: float = param(0.0, unit="m/s", ge=0.0, le=1000.0, doc="axial inflow speed")
     level: Level = param(Level.COARSE, strict=False, doc="mesh level of the simulation")
+    levels: list[Annotated[Level, Field(strict=False)]] = Field(default_factory=list, json_schema_extra={"unit": ""},
+                                description="mesh levels, coarse to fine: every trial runs the first, those the "
+                                            "pruner keeps climb to the next (instead of level)")
+    iterations: int = param(0, ge=0, le=SIMULATE_MAX_ITERATIONS, doc="SIMPLE iterations (0: the level's own)")
+    processes: int = param(0, ge=0, le=2, doc="MPI processes of each simulation (0: one per CPU)")
+
+
+class PrunerTable(Section):
+    """[pruner]: which trials climb from one mesh level to the next."""
+
+    kind: PrunerKind | None = param(None, strict=False, doc="median | halving (one objective) | dominated | none; "
+                                    "default median for one objective, dominated for several")
+    startup_trials: int = param(4, ge=0, le=MAX_STUDY_TRIALS, doc="trials that reach a level before any is "
+                                "stopped there (median: complete trials)")
+    reduction_factor: int = param(3, ge=2, le=100, doc="halving: 1 in this many trials climbs at each level")
 
 
 class StudyFile(Section):
@@ -126,6 +174,17 @@ class StudyFile(Section):
     objective: list[ObjectiveTable] = Field(default_factory=list)
     constraints: dict[str, BoundTable] = Field(default_factory=dict)
     simulate: SimulateTable = Field(default_factory=SimulateTable)
+    pruner: PrunerTable = Field(default_factory=PrunerTable)
+
+
+@dataclass(frozen=True)
+class Pruner:
+    """Which trials climb from one mesh level to the next (:class:`PrunerKind`); ``startup_trials``: trials that
+    reach a level before any is stopped there; ``reduction_factor``: halving's."""
+
+    kind: PrunerKind
+    startup_trials: int = 4
+    reduction_factor: int = 3
 
 
 @dataclass(frozen=True)
@@ -162,7 +221,11 @@ class StudySpec:
         trials: trials in all.
         sampler, seed, population: the search.
         storage: the storage URL from the file ('' = SQLite in the output folder).
-        simulate: ``{"rpm", "airspeed", "level"}`` when a metric is ``performance.*``, else None.
+        simulate: ``{"rpm", "airspeed", "level"}`` when a metric is ``performance.*``, else None; with
+            ``"thrust"`` (N, rpm 0), ``"thrust_tolerance"``, ``"thrust_runs"`` for a target thrust, and
+            ``"iterations"``, ``"processes"``, ``"observers"`` (``DIST_M:ANGLE_DEG`` texts) when given.
+        levels: the mesh levels a trial climbs, coarse to fine (one: no climbing); () without simulate.
+        pruner: which trials climb (two or more levels), else None.
         stl: trials (and so the best sets copied from them) write STL files.
         time_limit_s: per trial, s.
         source: where it came from, for messages.
@@ -183,6 +246,16 @@ class StudySpec:
     time_limit_s: float = 300.0
     source: str = "<dict>"
     metrics: tuple[str, ...] = field(default=())
+    levels: tuple[str, ...] = ()
+    pruner: Pruner | None = None
+
+    def stage_settings(self, stage: int) -> dict[str, Any] | None:
+        """The simulation settings of stage ``stage`` (its level ``levels[stage]``); None without simulate."""
+        if self.simulate is None:
+            return None
+        settings = {key: value for key, value in self.simulate.items() if key != "levels"}
+        settings["level"] = self.levels[stage]
+        return settings
 
     @property
     def directions(self) -> list[str]:
@@ -195,7 +268,8 @@ class StudySpec:
         return parameters
 
     def definition(self) -> str:
-        """What must not change between runs of one study: a digest of base, axes, objectives and constraints."""
+        """What must not change between runs of one study: a digest of base, axes, objectives, constraints and
+        [simulate] (the [pruner] may change: it only decides which trials climb)."""
         data = {"base": self.base.to_dict(), "axes": [[a.key, a.low, a.high, list(a.values)] for a in self.axes],
                 "objectives": [[o.metric, o.direction.value] for o in self.objectives],
                 "constraints": [[c.metric, c.low, c.high] for c in self.constraints], "simulate": self.simulate}
@@ -241,13 +315,28 @@ def parse_study(data: Mapping[str, Any], base_dir: str | Path = ".", name: str =
     _check_distinct(axes, fail)
     objectives, constraints = _goals(model, fail)
     metrics = tuple(o.metric for o in objectives) + tuple(c.metric for c in constraints)
-    simulate = _simulate(model, any(is_performance(metric) for metric in metrics), fail)
+    base = _base(table.base, folder, fail)
+    simulate = _simulate(model, any(is_performance(metric) for metric in metrics), metrics, base, fail)
+    levels = _levels(model, simulate, fail)
+    pruner = _pruner(model, levels, len(objectives), fail)
+    if simulate is not None and simulate.get("thrust"):
+        if table.sampler is Sampler.CMAES:
+            raise fail("study.sampler = 'cmaes' cannot take [simulate] thrust (each trial's thrust is constrained to "
+                       "the target within thrust_tolerance, and optuna's CMA-ES has no constraints_func); use 'tpe'")
+        target, tolerance = simulate["thrust"], simulate["thrust_tolerance"]
+        constraints += (Constraint(THRUST_METRIC, target * (1.0 - tolerance), target * (1.0 + tolerance)),)
+        metrics += (THRUST_METRIC, RPM_METRIC)
     _check_sampler(table.sampler, objectives, constraints, fail)
-    return StudySpec(name=study_name, base=_base(table.base, folder, fail), axes=axes, objectives=objectives,
+    return StudySpec(name=study_name, base=base, axes=axes, objectives=objectives,
                      constraints=constraints, trials=table.trials, sampler=table.sampler, seed=table.seed,
                      population=table.population, storage=table.storage, simulate=simulate, stl=table.stl,
                      time_limit_s=table.time_limit_s or (3600.0 if simulate else 300.0), source=source,
-                     metrics=metrics)
+                     metrics=metrics, levels=levels, pruner=pruner)
+
+
+#: With a target thrust: the metrics every trial records (the thrust at the rpm found, and that rpm).
+THRUST_METRIC = PERFORMANCE_PREFIX + "thrust_n"
+RPM_METRIC = PERFORMANCE_PREFIX + "rpm"
 
 
 def _flatten_bounds(table: Mapping[str, Any], prefix: str = "") -> list[tuple[str, Any]]:
@@ -307,16 +396,99 @@ def _goals(model: StudyFile, fail: Any) -> tuple[tuple[Objective, ...], tuple[Co
     return tuple(objectives), tuple(constraints)
 
 
-def _simulate(model: StudyFile, needed: bool, fail: Any) -> dict[str, Any] | None:
+def _simulate(model: StudyFile, needed: bool, metrics: tuple[str, ...], base: PropellerParameters,
+              fail: Any) -> dict[str, Any] | None:
     given = "simulate" in model.model_fields_set
     if not needed:
         if given:
             raise fail("[simulate] applies only when an objective or constraint is a performance.* metric")
         return None
-    if not given or model.simulate.rpm <= 0.0:
-        raise fail("a performance.* metric runs torus-cad simulate: give [simulate] rpm = ... (> 0)")
     table = model.simulate
-    return {"rpm": table.rpm, "airspeed": table.airspeed, "level": table.level.value}
+    keys = table.model_fields_set
+    if not given or (table.rpm <= 0.0 and table.thrust <= 0.0):
+        raise fail("a performance.* metric runs torus-cad simulate: give [simulate] rpm = ... (> 0) or "
+                   "thrust = ... (N, > 0)")
+    if table.rpm > 0.0 and table.thrust > 0.0:
+        raise fail(f"simulate.rpm = {table.rpm:g} and simulate.thrust = {table.thrust:g} N: give one (thrust finds "
+                   "each trial's rpm)")
+    if table.thrust <= 0.0 and keys & set(_THRUST_KEYS):
+        raise fail(f"simulate.{sorted(keys & set(_THRUST_KEYS))[0]} applies only with simulate.thrust (a target thrust)")
+    if "level" in keys and "levels" in keys:
+        raise fail("simulate.level and simulate.levels: give one (levels = [\"coarse\", \"medium\"] climbs)")
+    settings: dict[str, Any] = {"rpm": table.rpm, "airspeed": table.airspeed, "level": table.level.value}
+    if table.thrust > 0.0:
+        _check_thrust(table.thrust, table.airspeed, base, fail)
+        settings.update(thrust=table.thrust, thrust_tolerance=table.thrust_tolerance, thrust_runs=table.thrust_runs)
+    if table.iterations:
+        settings["iterations"] = table.iterations
+    if table.processes:
+        settings["processes"] = table.processes
+    observers = noise_observers(metrics)
+    if observers:
+        _check_observers(observers, base, fail)
+        settings["observers"] = list(observers)
+    if "levels" in keys:
+        settings["levels"] = [level.value for level in table.levels]
+        settings["level"] = settings["levels"][0] if settings["levels"] else settings["level"]
+    return settings
+
+
+def _check_thrust(target_n: float, airspeed_m_s: float, base: PropellerParameters, fail: Any) -> None:
+    """A target no propeller of the base's diameter reaches (CT 1 at the rpm limit) is refused here, once,
+    not in every trial (a base without a ``diameter`` target: each trial's simulate checks its own)."""
+    from torus_cad.simulate.settings import AIR_15C, rpm_limit
+    from torus_cad.simulate.thrust_target import PLAUSIBLE_CT_LIMIT, thrust_at
+
+    if base.diameter <= 0.0:
+        return
+    diameter_m = base.diameter / 1000.0
+    limit = rpm_limit(diameter_m, airspeed_m_s, AIR_15C)
+    ceiling = thrust_at(PLAUSIBLE_CT_LIMIT, limit, diameter_m, AIR_15C.density_kg_m3)
+    if target_n > ceiling:
+        raise fail(f"simulate.thrust = {target_n:g} N is out of range; allowed (0, {ceiling:.4g}] N (CT "
+                   f"{PLAUSIBLE_CT_LIMIT:g} at the rpm limit {limit:.0f} rpm for the base's D = {base.diameter:g} mm)")
+
+
+def _check_observers(observers: tuple[str, ...], base: PropellerParameters, fail: Any) -> None:
+    """At most NOISE_MAX_OBSERVERS, each outside the base's tip radius (when it has a ``diameter`` target)."""
+    from torus_cad.acoustics.observers import parse_observer
+
+    if len(observers) > NOISE_MAX_OBSERVERS:
+        raise fail(f"the metrics name {len(observers)} noise observers; allowed at most {NOISE_MAX_OBSERVERS}")
+    for text in observers:
+        observer = parse_observer(text)
+        if base.diameter > 0.0 and observer.distance_m * 1000.0 <= base.diameter / 2.0:
+            raise fail(f"performance.noise[{text}]: the observer is inside the rotor; allowed a distance above the "
+                       f"base's tip radius {base.diameter / 2000.0:g} m")
+
+
+def _levels(model: StudyFile, simulate: dict[str, Any] | None, fail: Any) -> tuple[str, ...]:
+    """The mesh levels a trial climbs, coarse to fine, each once."""
+    if simulate is None:
+        return ()
+    if "levels" not in simulate:
+        return (str(simulate["level"]),)
+    levels = tuple(simulate["levels"])
+    order = [level.value for level in Level]
+    if not levels or list(levels) != sorted(set(levels), key=order.index):
+        raise fail(f"simulate.levels = {list(levels)!r} must name mesh levels from coarse to fine, each once, e.g. "
+                   "[\"coarse\", \"medium\"]")
+    return levels
+
+
+def _pruner(model: StudyFile, levels: tuple[str, ...], objectives: int, fail: Any) -> Pruner | None:
+    """The pruner of a study of two or more levels (default median for one objective, dominated for several)."""
+    table = model.pruner
+    if len(levels) < 2:
+        if "pruner" in model.model_fields_set:
+            raise fail("[pruner] applies only with [simulate] levels of two or more, e.g. levels = [\"coarse\", "
+                       "\"medium\"]")
+        return None
+    kind = table.kind or (PrunerKind.MEDIAN if objectives == 1 else PrunerKind.DOMINATED)
+    if kind in ONE_OBJECTIVE_PRUNERS and objectives > 1:
+        raise fail(f"pruner.kind = {kind.value!r} judges one objective (optuna's pruners take one value); with "
+                   f"{objectives} objectives use 'dominated' or 'none'")
+    return Pruner(kind, table.startup_trials, table.reduction_factor)
 
 
 def _check_sampler(sampler: Sampler, objectives: tuple[Objective, ...], constraints: tuple[Constraint, ...],
