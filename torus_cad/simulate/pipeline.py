@@ -620,7 +620,9 @@ async def _thrust_search(request: Request, target: ThrustTarget, out: Path, diam
                             f"{INITIAL_CT:g}"}
         seconds = {key: sum(result.report["stage_seconds"][key] for _, result in results)
                    for key in ("mesh", "convert", "solve")}
-        noise = await _noise(request, case, stage)
+        # the chosen run's rpm: request.point.rpm is not the search's (0 from the command line: no noise at all)
+        chosen_request = dataclasses.replace(request, point=dataclasses.replace(request.point, rpm=state.best.rpm))
+        noise = await _noise(chosen_request, case, stage)
         return _publish(output, request, case, out, run, start, {"thrust_search": search, "stage_seconds": seconds},
                         noise)
 
