@@ -245,6 +245,21 @@ def test_a_two_objective_study_of_two_levels_prunes_the_trials_another_dominates
     assert (out / "levels_pareto.png").stat().st_size > 1000
 
 
+@pytest.mark.long
+def test_a_study_of_two_levels_climbs_and_prunes_on_a_dask_local_cluster(tmp_path):
+    pytest.importorskip("distributed", reason="Dask's distributed is not installed (the optimize extra has it)")
+    spec = read_study_file(_levels_study(tmp_path, 'kind = "median"\nstartup_trials = 1', trials=6,
+                                         thickness="[0.5, 0.9]", seed=3))
+    out = tmp_path / "out"
+    result = run_study(spec, out, workers=2, scheduler="local", trial_job=stand_in_without_build)
+    assert result.backend.startswith("dask")
+    trials = optuna.load_study(study_name="levels", storage=open_storage(f"sqlite:///{out / 'levels.db'}")).get_trials()
+    assert len(trials) == 6 and {t.state for t in trials} == {TrialState.COMPLETE, TrialState.PRUNED}
+    for trial in trials:
+        medium = out / "trials" / str(trial.number) / "simulate" / "medium"
+        assert medium.exists() == (trial.state is TrialState.COMPLETE)
+
+
 # -- with OpenFOAM -----------------------------------------------------------------------------------
 
 def _needs_simulate() -> None:
