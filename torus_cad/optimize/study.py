@@ -70,7 +70,7 @@ from torus_cad.optimize.storage import (
     trial_result,
 )
 from torus_cad.optimize.study_file import Objective, PrunerKind, Sampler, StudySpec
-from torus_cad.optimize.trial_job import TRIALS_DIR, TrialTask, performance_dir, run_trial, trial_name
+from torus_cad.optimize.trial_job import PERFORMANCE_DIR, TRIALS_DIR, TrialTask, performance_dir, run_trial, trial_name
 from torus_cad.tolerances import MAX_STUDY_TRIALS
 
 if TYPE_CHECKING:  # optuna is imported where it is used (the optimize extra)
@@ -271,7 +271,6 @@ class _Runner:
             if own_client is not None:
                 cluster.close_client(own_client, own_cluster)
 
-
     def _claim(self) -> Trial | None:
         """Ask for a trial (an enqueued retry first), or None when the study is full."""
         counted, waiting = count_trials(self.rdb, self.study_id)
@@ -295,10 +294,9 @@ class _Runner:
         folder.mkdir(parents=True, exist_ok=True)
         parameters = self.spec.parameters(trial.params, name)
         levels = self.spec.levels
-        report_dir = performance_dir(levels[stage], len(levels)) if levels else ""
+        report_dir = performance_dir(levels[stage], len(levels)) if levels else PERFORMANCE_DIR
         return TrialTask(name, parameters, str(folder), stl=self.spec.stl, simulate=self.spec.stage_settings(stage),
-                         simulate_time_limit_s=self.spec.time_limit_s, simulate_dir=report_dir or "simulate",
-                         stage=stage)
+                         simulate_time_limit_s=self.spec.time_limit_s, simulate_dir=report_dir, stage=stage)
 
     def _on_result(self, task: DesignTask, result: DesignResult) -> None:
         """Tell optuna what the trial gave: its objective values and constraints, or FAIL with the reason; at a
@@ -317,7 +315,7 @@ class _Runner:
         levels = self.spec.levels
         if outcome is Outcome.VALID:
             try:
-                report_dir = task.simulate_dir if isinstance(task, TrialTask) else "simulate"
+                report_dir = task.simulate_dir if isinstance(task, TrialTask) else PERFORMANCE_DIR
                 values = self._evaluate(Path(str(task.folder)), task.design_id, record, report_dir)
             except (KeyError, OSError, ValueError) as error:
                 outcome, reason = Outcome.ERROR, f"the trial's report cannot be read: {error}"
@@ -325,10 +323,16 @@ class _Runner:
             reason = f"at the {levels[stage]} level: {reason}"
         if len(levels) > 1 and outcome is Outcome.VALID:
             record[LEVEL] = levels[stage]
-            record[LEVEL_SECONDS] = {**{name: entry.get(SECONDS) for name, entry in trial.user_attrs.get(LEVELS, {}).items()},
+            earlier = trial.user_attrs.get(LEVELS, {})
+            record[LEVEL_SECONDS] = {**{name: entry.get(SECONDS) for name, entry in earlier.items()},
                                      levels[stage]: result.seconds}
             if stage + 1 < len(levels) and values is not None:
-                if not self._stops_here(trial, stage, values, record, result.seconds):
+                try:
+                    stops = self._stops_here(trial, stage, values, record, result.seconds)
+                except optuna.exceptions.UpdateFinishedTrialError:  # a process took it as stale: asked again
+                    self._forget(task.design_id, trial)
+                    return
+                if not stops:
                     self.seconds[task.design_id] = seconds
                     self.climbs.append(self._task(trial, stage + 1))
                     return
@@ -346,9 +350,14 @@ class _Runner:
                 self.study.tell(trial, state=TrialState.PRUNED)
             else:
                 self.study.tell(trial, values)
-        del self.in_flight[task.design_id]
-        self.heartbeat.discard(trial)
+        self._forget(task.design_id, trial)
         self.ran += 1
+
+    def _forget(self, design_id: str, trial: Trial) -> None:
+        """The trial is no longer this process's to run: out of the trials in flight and the heartbeat."""
+        del self.in_flight[design_id]
+        self.seconds.pop(design_id, None)
+        self.heartbeat.discard(trial)
 
     def _stops_here(self, trial: Trial, stage: int, values: list[float], record: dict[str, Any],
                     seconds: float) -> bool:
@@ -373,7 +382,8 @@ class _Runner:
             return dominated_at_level(values, self.spec.objectives, level, others, pruner.startup_trials)
         return False
 
-    def _evaluate(self, folder: Path, name: str, record: dict[str, Any], report_dir: str = "simulate") -> list[float]:
+    def _evaluate(self, folder: Path, name: str, record: dict[str, Any], report_dir: str = PERFORMANCE_DIR
+                  ) -> list[float]:
         """The objective values; the metrics and the constraint violations go into the trial's ``record``."""
         report = json.loads((folder / f"{name}.json").read_text())
         performance = None
