@@ -85,6 +85,9 @@ def test_the_shipped_quiet_study_reads_with_its_target_thrust_noise_objective_an
     thrust = [c for c in spec.constraints if c.metric == "performance.thrust_n"]
     assert thrust and thrust[0].low == pytest.approx(0.98) and thrust[0].high == pytest.approx(1.02)
     assert "performance.rpm" in spec.metrics
+    # the how-to shows the file as it is shipped
+    text = QUIET.read_text()
+    assert text[text.index("[study]"):] in (ROOT / "docs" / "how-to" / "optimize.md").read_text()
 
 
 @pytest.mark.parametrize(("tables", "message"), [
