@@ -436,7 +436,7 @@ def write_output_set(propeller: BuiltPropeller, out_dir: str | Path, density_g_c
     def mesh() -> UncrossedMesh:
         """The uncrossed tessellation that the STL and the 3MF both write, made once."""
         if not made:
-            made.append(uncrossed_mesh(propeller.solid, *deflections))
+            made.append(uncrossed_mesh(propeller.shape, *deflections))
         return made[0]
 
     def checked(kind: str, write: Callable[[Path], Any]) -> FileWriter:
@@ -455,16 +455,16 @@ def write_output_set(propeller: BuiltPropeller, out_dir: str | Path, density_g_c
                 # A root fillet's faces meet the blade and hub only within their edges' tolerances (up to
                 # 2.5e-5 mm apart), which a STEP file cannot carry per edge: its file is not checked read
                 # back (issue 33, open; kernel.fillet_continuity).
-                output.write("step", lambda path: write_step(propeller.solid, path, params.name, export.step_schema,
+                output.write("step", lambda path: write_step(propeller.shape, path, params.name, export.step_schema,
                                                              program=f"torus_cad {__version__}",
                                                              check_readback=propeller.root_fillet is None))
         if write_stl_file:
             with timer.stage(Stage.STL_WRITE):
-                output.write("stl", checked("stl", lambda path: write_checked_stl(propeller.solid, path, *deflections,
+                output.write("stl", checked("stl", lambda path: write_checked_stl(propeller.shape, path, *deflections,
                                                                                   mesh=mesh())))
         if ExportFormat.THREE_MF in formats:
             with timer.stage(Stage.THREE_MF_WRITE):
-                output.write("3mf", checked("3mf", lambda path: write_3mf(propeller.solid, path, params.name,
+                output.write("3mf", checked("3mf", lambda path: write_3mf(propeller.shape, path, params.name,
                                                                           *deflections, version=__version__,
                                                                           mesh=mesh())))
         if table is not None:
