@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any, overload
 
 import numpy as np
 from numpy.typing import NDArray
@@ -25,11 +25,22 @@ from OCP.TopoDS import TopoDS_Compound, TopoDS_Shape
 
 from torus_cad.errors import KernelError
 from torus_cad.kernel.blade_integrals import hub_with_blade_integrals
-from torus_cad.kernel.topology import AnyShape, ShapeT, faces_in_order, like, occ, shells, solids
+from torus_cad.kernel.topology import AnyShape, faces_in_order, like, occ, shells, solids
 from torus_cad.tolerances import BALANCE_RELATIVE_PRECISION, MASS_PROPERTIES_RELATIVE_PRECISION
 
+if TYPE_CHECKING:
+    import cadquery as cq
 
-def single_valid_solid(shape: ShapeT, what: str) -> ShapeT:
+
+@overload
+def single_valid_solid(shape: cq.Shape, what: str) -> cq.Solid: ...
+
+
+@overload
+def single_valid_solid(shape: TopoDS_Shape, what: str) -> TopoDS_Shape: ...
+
+
+def single_valid_solid(shape: AnyShape, what: str) -> TopoDS_Shape | cq.Solid:
     """The one solid of ``shape`` (of its kind: OpenCascade's or cadquery's); raise KernelError unless it is
     one solid, one closed shell, valid."""
     found = solids(occ(shape))

@@ -6,6 +6,9 @@ whose import loads VTK (through ``OCP.IVtkOCC``), ezdxf and more: over a second 
 (docs: measurements, cold start). The kernel's functions take either kind (:func:`occ`); those that
 make a shape give it back as the kind they were given (:func:`like`), so code that continues in
 cadquery keeps getting cadquery's shapes.
+
+Importing this module quiets OpenCascade's default message printers to failures only, as importing
+cadquery does: otherwise the STEP writer prints its transfer statistics on stdout.
 """
 
 from __future__ import annotations
@@ -30,6 +33,7 @@ from OCP.GeomAbs import (
     GeomAbs_Torus,
 )
 from OCP.gp import gp_Trsf
+from OCP.Message import Message, Message_Gravity
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_ShapeEnum, TopAbs_SHELL, TopAbs_SOLID
 from OCP.TopExp import TopExp, TopExp_Explorer
 from OCP.TopoDS import TopoDS, TopoDS_Edge, TopoDS_Face, TopoDS_Shape
@@ -39,6 +43,9 @@ from torus_cad.errors import KernelError
 
 if TYPE_CHECKING:
     import cadquery as cq
+
+for _printer in Message.DefaultMessenger_s().Printers():
+    _printer.SetTraceLevel(Message_Gravity.Message_Fail)
 
 #: A shape as the kernel takes it: OpenCascade's own, or cadquery's wrapper of one.
 AnyShape = Union[TopoDS_Shape, "cq.Shape"]
