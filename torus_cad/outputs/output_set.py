@@ -420,7 +420,7 @@ def write_output_set(propeller: BuiltPropeller, out_dir: str | Path, density_g_c
     from torus_cad.parameters.stl_budget import check_stl_budget
     from torus_cad.runtime.isolation import IsolatedCall
     from torus_cad.runtime.stages import Stage, StageTimer
-    from torus_cad.tolerances import SECTIONS_TABLE_TIME_LIMIT_S
+    from torus_cad.tolerances import SECTIONS_TABLE_TIME_LIMIT_S, STEP_WRITE_TIME_LIMIT_S
 
     params = propeller.parameters
     export = params.export
@@ -450,14 +450,15 @@ def write_output_set(propeller: BuiltPropeller, out_dir: str | Path, density_g_c
         # returns the files' contents and this process writes them (a signal here then leaves nothing behind).
         table = children.enter_context(IsolatedCall(sections_table_files, propeller.surface, params,
                                                     what="the blade-element table")) if sections_table else None
-        if ExportFormat.STEP in formats:
-            with timer.stage(Stage.STEP_WRITE):
-                # A root fillet's faces meet the blade and hub only within their edges' tolerances (up to
-                # 2.5e-5 mm apart), which a STEP file cannot carry per edge: its file is not checked read
-                # back (issue 33, open; kernel.fillet_continuity).
-                output.write("step", lambda path: write_step(propeller.shape, path, params.name, export.step_schema,
-                                                             program=f"torus_cad {__version__}",
-                                                             check_readback=propeller.root_fillet is None))
+        # The STEP file is written and read back in a child too, into its staging path, while this process
+        # makes and checks the meshes (a signal kills the child before the staging folder goes).
+        # A root fillet's faces meet the blade and hub only within their edges' tolerances (up to
+        # 2.5e-5 mm apart), which a STEP file cannot carry per edge: its file is not checked read
+        # back (issue 33, open; kernel.fillet_continuity).
+        step = children.enter_context(IsolatedCall(
+            write_step, propeller.shape, output.stage("step"), params.name, export.step_schema,
+            f"torus_cad {__version__}", propeller.root_fillet is None,
+            what="writing the STEP file")) if ExportFormat.STEP in formats else None
         if write_stl_file:
             with timer.stage(Stage.STL_WRITE):
                 output.write("stl", checked("stl", lambda path: write_checked_stl(propeller.shape, path, *deflections,
@@ -467,6 +468,9 @@ def write_output_set(propeller: BuiltPropeller, out_dir: str | Path, density_g_c
                 output.write("3mf", checked("3mf", lambda path: write_3mf(propeller.shape, path, params.name,
                                                                           *deflections, version=__version__,
                                                                           mesh=mesh())))
+        if step is not None:
+            with timer.stage(Stage.STEP_WRITE):  # what is left of it once the meshes are written
+                output.write("step", lambda path: step.result(STEP_WRITE_TIME_LIMIT_S))
         if table is not None:
             with timer.stage(Stage.SECTIONS_TABLE):  # what is left of it once the meshes are written
                 output.write_files(lambda folder: write_files(table.result(SECTIONS_TABLE_TIME_LIMIT_S), folder))
