@@ -50,6 +50,7 @@ from torus_cad.tolerances import REPORT_FILE_MAX_BYTES
 
 if TYPE_CHECKING:
     from torus_cad.outputs.report import BuiltPropeller
+    from torus_cad.runtime.isolation import IsolatedCall
 
 #: Key of the report that lists the set's other files: ``{kind: {"file", "bytes", "sha256"}}``.
 FILES_KEY = "files"
@@ -399,10 +400,11 @@ class PublishedSet:
 
 
 def write_output_set(propeller: BuiltPropeller, out_dir: str | Path, density_g_cm3: float, stl: bool = True,
-                     sections_table: bool = False, extra_files: Mapping[str, FileWriter] | None = None
-                     ) -> PublishedSet:
+                     sections_table: bool | IsolatedCall[dict[str, tuple[str, bytes]]] = False,
+                     extra_files: Mapping[str, FileWriter] | None = None) -> PublishedSet:
     """Write the files of ``export.formats`` (STEP, STL unless ``stl`` is False, 3MF), the
-    blade-element table (``<name>_sections.csv`` and ``.png``, if ``sections_table``), any
+    blade-element table (``<name>_sections.csv`` and ``.png``, if ``sections_table``: True, or its
+    files' call already started, :func:`torus_cad.outputs.sections_table.design_sections_table_files`), any
     ``extra_files`` (``{suffix: writer(path)}``, e.g. a preview picture) and the sealed
     ``<name>.json`` report as one output set (see the module doc); return the final paths by kind
     (the report last) and the report.
@@ -448,8 +450,8 @@ def write_output_set(propeller: BuiltPropeller, out_dir: str | Path, density_g_c
     with OutputSet(out_dir, params.name) as output, contextlib.ExitStack() as children:
         # The blade-element table (matplotlib) is drawn in a child meanwhile, on the second core; the child
         # returns the files' contents and this process writes them (a signal here then leaves nothing behind).
-        table = children.enter_context(IsolatedCall(sections_table_files, propeller.surface, params,
-                                                    what="the blade-element table")) if sections_table else None
+        table = sections_table if isinstance(sections_table, IsolatedCall) else children.enter_context(IsolatedCall(
+            sections_table_files, propeller.surface, params, what="the blade-element table")) if sections_table else None
         # The STEP file is written and read back in a child too, into its staging path, while this process
         # makes and checks the meshes (a signal kills the child before the staging folder goes).
         # A root fillet's faces meet the blade and hub only within their edges' tolerances (up to
