@@ -13,11 +13,13 @@ This is the package's Python API::
 from __future__ import annotations
 
 import functools
+import io
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from OCP.BinTools import BinTools
 from OCP.TopoDS import TopoDS_Shape
 
 from torus_cad.colors import HUB_COLOR, blade_color
@@ -101,6 +103,18 @@ class Propeller:
     root_fillet: RootFillet | None = None
     checks: StrictCheck | None = None
 
+    def __getstate__(self) -> dict[str, Any]:
+        """Pickled with its shapes as OpenCascade's binary BRep (as cadquery pickles its shapes); the
+        cadquery wrappers are made again when asked for."""
+        state = {name: value for name, value in self.__dict__.items() if name not in _CADQUERY_VIEWS}
+        state["shape"], state["hub_shape"] = _brep_bytes(self.shape), _brep_bytes(self.hub_shape)
+        state["blade_shapes"] = [_brep_bytes(blade) for blade in self.blade_shapes]
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state, shape=_brep_shape(state["shape"]), hub_shape=_brep_shape(state["hub_shape"]),
+                             blade_shapes=[_brep_shape(blade) for blade in state["blade_shapes"]])
+
     @functools.cached_property
     def solid(self) -> cq.Solid:
         """The fused propeller as a ``cq.Solid`` (the same OpenCascade solid as ``shape``)."""
@@ -167,6 +181,24 @@ class Propeller:
         ``<name>_sections.csv`` and ``<name>_sections.png`` (if ``sections_table``) and ``<name>.json``
         into ``out_dir``."""
         return write_outputs(self, Path(out_dir), density_g_cm3, stl, sections_table)
+
+
+#: The cached cadquery wrappers of a Propeller's shapes (not pickled: made again when asked for).
+_CADQUERY_VIEWS = ("solid", "hub", "blades")
+
+
+def _brep_bytes(shape: TopoDS_Shape) -> bytes:
+    """``shape`` as OpenCascade's binary BRep."""
+    data = io.BytesIO()
+    BinTools.Write_s(shape, data)
+    return data.getvalue()
+
+
+def _brep_shape(data: bytes) -> TopoDS_Shape:
+    """The shape of :func:`_brep_bytes`."""
+    shape = TopoDS_Shape()
+    BinTools.Read_s(shape, io.BytesIO(data))
+    return shape
 
 
 def design_printability(params: PropellerParameters) -> Printability:
