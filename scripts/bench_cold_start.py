@@ -15,7 +15,8 @@ alternate (build, script, build, ...) so that a change of the machine's speed to
 medians and their ratio are printed, wall and CPU (user + sys of the process and the children it waited
 for: on a shared machine the CPU ratio is the steadier one), then the floor: the reference script's own imports alone
 (:data:`REFERENCE_IMPORTS`), as a share of the whole script; and the heaviest imports of
-``torus-cad build`` (``python -X importtime``).
+``torus-cad build`` (``python -X importtime``, wall) and the CPU seconds of its import groups
+(:data:`IMPORT_GROUPS`).
 """
 
 from __future__ import annotations
@@ -136,6 +137,33 @@ def _timed(command: list[str], cpu: list[float] | None = None) -> float:
     return wall
 
 
+#: The build's import groups in the order the build loads them, each timed in CPU seconds after the ones before.
+IMPORT_GROUPS = ("torus_cad.cli.design_input", "torus_cad.propeller", "torus_cad.outputs.output_set",
+                 "meshlib.mrmeshpy", "matplotlib.figure")
+
+_IMPORT_CPU = """
+import importlib, json, resource, sys
+def cpu():
+    usage = resource.getrusage(resource.RUSAGE_SELF)
+    return usage.ru_utime + usage.ru_stime
+seconds = {}
+for name in sys.argv[1:]:
+    before = cpu()
+    importlib.import_module(name)
+    seconds[name] = cpu() - before
+print(json.dumps({"seconds": seconds, "cadquery": "cadquery" in sys.modules}))
+"""
+
+
+def import_cpu_seconds() -> tuple[dict[str, float], bool]:
+    """CPU seconds (user + sys) of importing each of :data:`IMPORT_GROUPS` in a new process, each after the
+    ones before it (what it adds), and whether cadquery got loaded."""
+    done = subprocess.run([sys.executable, "-c", _IMPORT_CPU, *IMPORT_GROUPS], capture_output=True, text=True,
+                          check=True)
+    outcome = json.loads(done.stdout)
+    return outcome["seconds"], outcome["cadquery"]
+
+
 def _heaviest_imports(count: int, folder: Path) -> list[tuple[float, str]]:
     """The ``count`` top-level imports of ``torus-cad build`` with the largest cumulative time (s)."""
     done = subprocess.run([sys.executable, "-X", "importtime", "-m", "torus_cad", "build", "--out", str(folder), "-q"],
@@ -189,6 +217,11 @@ def main() -> None:
     print("heaviest top-level imports of torus-cad build (cumulative s):")
     for seconds, name in imports:
         print(f"  {seconds:6.2f}  {name}")
+    runs = [import_cpu_seconds() for _ in range(args.runs)]
+    print(f"CPU of the build's imports, each group after the ones before (median of {args.runs}; cadquery loaded: "
+          f"{runs[0][1]}):")
+    for name in IMPORT_GROUPS:
+        print(f"  {statistics.median(seconds[name] for seconds, _ in runs):6.2f}  {name}")
 
 
 if __name__ == "__main__":
