@@ -13,13 +13,11 @@ This is the package's Python API::
 from __future__ import annotations
 
 import functools
-import io
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from OCP.BinTools import BinTools
 from OCP.TopoDS import TopoDS_Shape
 
 from torus_cad.colors import HUB_COLOR, blade_color
@@ -40,6 +38,7 @@ from torus_cad.kernel.hub import hub_shape, run_out_hub
 from torus_cad.kernel.loft import loft_solid
 from torus_cad.kernel.mirror import mirrored
 from torus_cad.kernel.strict import StrictCheck, strict_valid_solid
+from torus_cad.kernel.topology import shape_bytes, shape_from_bytes
 from torus_cad.kernel.wires import SectionCurves, fit_section_curves
 from torus_cad.outputs.output_set import write_output_set
 from torus_cad.parameters import PropellerParameters, resolve_parameters
@@ -107,13 +106,13 @@ class Propeller:
         """Pickled with its shapes as OpenCascade's binary BRep (as cadquery pickles its shapes); the
         cadquery wrappers are made again when asked for."""
         state = {name: value for name, value in self.__dict__.items() if name not in _CADQUERY_VIEWS}
-        state["shape"], state["hub_shape"] = _brep_bytes(self.shape), _brep_bytes(self.hub_shape)
-        state["blade_shapes"] = [_brep_bytes(blade) for blade in self.blade_shapes]
+        state["shape"], state["hub_shape"] = shape_bytes(self.shape), shape_bytes(self.hub_shape)
+        state["blade_shapes"] = [shape_bytes(blade) for blade in self.blade_shapes]
         return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:
-        self.__dict__.update(state, shape=_brep_shape(state["shape"]), hub_shape=_brep_shape(state["hub_shape"]),
-                             blade_shapes=[_brep_shape(blade) for blade in state["blade_shapes"]])
+        self.__dict__.update(state, shape=shape_from_bytes(state["shape"]), hub_shape=shape_from_bytes(state["hub_shape"]),
+                             blade_shapes=[shape_from_bytes(blade) for blade in state["blade_shapes"]])
 
     @functools.cached_property
     def solid(self) -> cq.Solid:
@@ -185,20 +184,6 @@ class Propeller:
 
 #: The cached cadquery wrappers of a Propeller's shapes (not pickled: made again when asked for).
 _CADQUERY_VIEWS = ("solid", "hub", "blades")
-
-
-def _brep_bytes(shape: TopoDS_Shape) -> bytes:
-    """``shape`` as OpenCascade's binary BRep."""
-    data = io.BytesIO()
-    BinTools.Write_s(shape, data)
-    return data.getvalue()
-
-
-def _brep_shape(data: bytes) -> TopoDS_Shape:
-    """The shape of :func:`_brep_bytes`."""
-    shape = TopoDS_Shape()
-    BinTools.Read_s(shape, io.BytesIO(data))
-    return shape
 
 
 def design_printability(params: PropellerParameters) -> Printability:

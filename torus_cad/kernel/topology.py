@@ -13,9 +13,11 @@ cadquery does: otherwise the STEP writer prints its transfer statistics on stdou
 
 from __future__ import annotations
 
+import io
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, TypeVar, Union, cast
 
+from OCP.BinTools import BinTools
 from OCP.BRepAdaptor import BRepAdaptor_Surface
 from OCP.BRepAlgoAPI import BRepAlgoAPI_BooleanOperation, BRepAlgoAPI_Cut
 from OCP.BRepBuilderAPI import BRepBuilderAPI_Copy, BRepBuilderAPI_Transform
@@ -101,6 +103,20 @@ def copied(shape: TopoDS_Shape) -> TopoDS_Shape:
 def transformed(shape: TopoDS_Shape, transform: gp_Trsf) -> TopoDS_Shape:
     """``shape`` transformed into a new shape (its geometry copied), as cadquery's ``rotate`` / ``mirror`` do."""
     return BRepBuilderAPI_Transform(shape, transform, True).Shape()
+
+
+def shape_bytes(shape: TopoDS_Shape) -> bytes:
+    """``shape`` as OpenCascade's binary BRep (BinTools), as cadquery pickles its shapes."""
+    data = io.BytesIO()
+    BinTools.Write_s(shape, data)
+    return data.getvalue()
+
+
+def shape_from_bytes(data: bytes) -> TopoDS_Shape:
+    """The shape of :func:`shape_bytes`."""
+    shape = TopoDS_Shape()
+    BinTools.Read_s(shape, io.BytesIO(data))
+    return shape
 
 
 def surface_kind(face: TopoDS_Face) -> str:
