@@ -12,15 +12,18 @@ design's 3 angles, fuses them with the hub cylinder (radius and length of the de
 BRepAlgoAPI_Fuse, writes STEP (AP214) and a binary STL meshed at the design's deflections (0.05 mm,
 0.2 rad). It checks nothing: it is the least any program pays for this OpenCascade part. Runs
 alternate (build, script, build, ...) so that a change of the machine's speed touches both; the
-medians and their ratio are printed, then the floor: the reference script's own imports alone
+medians and their ratio are printed, wall and CPU (user + sys of the process and the children it waited
+for: on a shared machine the CPU ratio is the steadier one), then the floor: the reference script's own imports alone
 (:data:`REFERENCE_IMPORTS`), as a share of the whole script; and the heaviest imports of
-``torus-cad build`` (``python -X importtime``).
+``torus-cad build`` (``python -X importtime``, wall) and the CPU seconds of its import groups
+(:data:`IMPORT_GROUPS`).
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import resource
 import statistics
 import subprocess
 import sys
@@ -121,10 +124,44 @@ def write_reference(folder: Path) -> tuple[Path, Path]:
 REFERENCE_IMPORTS = "\n".join(line for line in REFERENCE_SCRIPT.splitlines() if line.startswith(("import", "from")))
 
 
-def _timed(command: list[str]) -> float:
+def _timed(command: list[str], cpu: list[float] | None = None) -> float:
+    """Wall seconds of ``command``; its CPU seconds (user + sys, with the children it waited for) appended to
+    ``cpu``."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
     subprocess.run(command, check=True, stdout=subprocess.DEVNULL)
-    return time.perf_counter() - start
+    wall = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if cpu is not None:
+        cpu.append(after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime)
+    return wall
+
+
+#: The build's import groups in the order the build loads them, each timed in CPU seconds after the ones before.
+IMPORT_GROUPS = ("torus_cad.cli.design_input", "torus_cad.propeller", "torus_cad.outputs.output_set",
+                 "meshlib.mrmeshpy", "matplotlib.figure")
+
+_IMPORT_CPU = """
+import importlib, json, resource, sys
+def cpu():
+    usage = resource.getrusage(resource.RUSAGE_SELF)
+    return usage.ru_utime + usage.ru_stime
+seconds = {}
+for name in sys.argv[1:]:
+    before = cpu()
+    importlib.import_module(name)
+    seconds[name] = cpu() - before
+print(json.dumps({"seconds": seconds, "cadquery": "cadquery" in sys.modules}))
+"""
+
+
+def import_cpu_seconds() -> tuple[dict[str, float], bool]:
+    """CPU seconds (user + sys) of importing each of :data:`IMPORT_GROUPS` in a new process, each after the
+    ones before it (what it adds), and whether cadquery got loaded."""
+    done = subprocess.run([sys.executable, "-c", _IMPORT_CPU, *IMPORT_GROUPS], capture_output=True, text=True,
+                          check=True)
+    outcome = json.loads(done.stdout)
+    return outcome["seconds"], outcome["cadquery"]
 
 
 def _heaviest_imports(count: int, folder: Path) -> list[tuple[float, str]]:
@@ -152,12 +189,14 @@ def main() -> None:
         print(f"{sys.executable} {script} {data} OUT_FOLDER")
         return
     build_s, reference_s, floor_s = [], [], []
+    build_cpu, reference_cpu = [], []
     with tempfile.TemporaryDirectory(prefix="bench_cold_start_") as scratch:
         folder = Path(scratch)
         script, data = write_reference(folder / "reference")
         for _ in range(args.runs):
-            build_s.append(_timed([sys.executable, "-m", "torus_cad", "build", "--out", str(folder / "build"), "-q"]))
-            reference_s.append(_timed([sys.executable, str(script), str(data), scratch]))
+            build_s.append(_timed([sys.executable, "-m", "torus_cad", "build", "--out", str(folder / "build"), "-q"],
+                                  build_cpu))
+            reference_s.append(_timed([sys.executable, str(script), str(data), scratch], reference_cpu))
             floor_s.append(_timed([sys.executable, "-c", REFERENCE_IMPORTS]))
         imports = _heaviest_imports(8, folder / "imports")
     build, reference, floor = statistics.median(build_s), statistics.median(reference_s), statistics.median(floor_s)
@@ -168,11 +207,21 @@ def main() -> None:
           f"{reference:.2f} s (runs {', '.join(f'{value:.2f}' for value in reference_s)})")
     print(f"ratio build / reference: {build / reference:.2f} of the medians, {pairs:.2f} the median of the pairs "
           "(target <= 1.0)")
+    print(f"CPU (user + sys, children included), median of {args.runs}: build {statistics.median(build_cpu):.2f} s "
+          f"(runs {', '.join(f'{value:.2f}' for value in build_cpu)}), reference {statistics.median(reference_cpu):.2f} s "
+          f"(runs {', '.join(f'{value:.2f}' for value in reference_cpu)}); ratio "
+          f"{statistics.median(build_cpu) / statistics.median(reference_cpu):.2f} of the medians, "
+          f"{statistics.median(b / r for b, r in zip(build_cpu, reference_cpu)):.2f} the median of the pairs")
     print(f"floor: the reference script's imports alone, median of {args.runs}: {floor:.2f} s = "
           f"{floor / reference:.2f} x the reference (runs {', '.join(f'{value:.2f}' for value in floor_s)})")
     print("heaviest top-level imports of torus-cad build (cumulative s):")
     for seconds, name in imports:
         print(f"  {seconds:6.2f}  {name}")
+    runs = [import_cpu_seconds() for _ in range(args.runs)]
+    print(f"CPU of the build's imports, each group after the ones before (median of {args.runs}; cadquery loaded: "
+          f"{runs[0][1]}):")
+    for name in IMPORT_GROUPS:
+        print(f"  {statistics.median(seconds[name] for seconds, _ in runs):6.2f}  {name}")
 
 
 if __name__ == "__main__":

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import pickle
 
 import cadquery as cq
 import numpy as np
@@ -35,6 +36,20 @@ def test_returns_cadquery_objects(objects, fast_params):
     assert len(objects.blades) == fast_params.blades == 3
     assert objects.parameters == fast_params
     assert objects.workplane.val() is objects.solid  # the workplane holds the fused solid itself
+
+
+def test_the_cadquery_solids_wrap_the_opencascade_shapes(objects):
+    """``shape``, ``hub_shape``, ``blade_shapes`` are the solids the cadquery objects hold."""
+    assert objects.solid.wrapped.IsSame(objects.shape) and objects.hub.wrapped.IsSame(objects.hub_shape)
+    assert all(blade.wrapped.IsSame(shape) for blade, shape in zip(objects.blades, objects.blade_shapes, strict=True))
+
+
+def test_a_built_propeller_pickles_with_its_solids(objects):
+    copy = pickle.loads(pickle.dumps(objects))
+    assert copy.parameters == objects.parameters and copy.face_parts == objects.face_parts
+    assert copy.solid.Volume() == pytest.approx(objects.solid.Volume(), rel=1e-12)
+    assert [len(blade.Faces()) for blade in copy.blades] == [len(blade.Faces()) for blade in objects.blades]
+    assert is_valid_closed_solid(copy.solid) and len(copy.hub.Faces()) == len(objects.hub.Faces())
 
 
 def test_solid_hub_and_blades_are_valid_closed_solids(objects):

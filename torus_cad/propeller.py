@@ -16,9 +16,9 @@ import functools
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import cadquery as cq
+from OCP.TopoDS import TopoDS_Shape
 
 from torus_cad.colors import HUB_COLOR, blade_color
 from torus_cad.errors import KernelError
@@ -33,13 +33,12 @@ from torus_cad.kernel.checks import (
     precise_volume,
     single_valid_solid,
 )
-from torus_cad.kernel.fillet import RootFillet
-from torus_cad.kernel.fillet_pattern import fillet_pattern
 from torus_cad.kernel.fuse import Fused, FuseRoute, fuse_all, fuse_pattern, pattern_blades
-from torus_cad.kernel.hub import hub_solid, run_out_hub
+from torus_cad.kernel.hub import hub_shape, run_out_hub
 from torus_cad.kernel.loft import loft_solid
 from torus_cad.kernel.mirror import mirrored
 from torus_cad.kernel.strict import StrictCheck, strict_valid_solid
+from torus_cad.kernel.topology import shape_bytes, shape_from_bytes
 from torus_cad.kernel.wires import SectionCurves, fit_section_curves
 from torus_cad.outputs.output_set import write_output_set
 from torus_cad.parameters import PropellerParameters, resolve_parameters
@@ -49,6 +48,11 @@ from torus_cad.parameters.feasibility import placed_mounting, section_chords
 from torus_cad.runtime.stages import Stage, StageTimer
 from torus_cad.tolerances import ROUND_EDGE_FILLET_PIECES, VOLUME_CHECK_RELATIVE_PRECISION
 
+if TYPE_CHECKING:
+    import cadquery as cq
+
+    from torus_cad.kernel.fillet import RootFillet
+
 #: Default density for mass: PLA, a common printing plastic (g/cm^3).
 DEFAULT_DENSITY_G_CM3 = 1.24
 
@@ -57,12 +61,16 @@ DEFAULT_DENSITY_G_CM3 = 1.24
 class Propeller:
     """A built propeller: the fused solid, its parts, and how it was made (mm; spin axis = z).
 
+    The solid and its parts are OpenCascade's shapes (``shape``, ``hub_shape``, ``blade_shapes``);
+    ``solid``, ``hub`` and ``blades`` give them as cadquery's, loading cadquery when first asked for
+    (``torus-cad build`` never does: importing cadquery costs over a second of its start).
+
     Attributes:
         parameters: the design.
-        solid: the fused propeller, one valid closed ``cq.Solid``.
-        hub: the hub cylinder alone (radius R, length L, centred at the origin), before the fuse.
-        blades: each blade alone, before the fuse, blade i at ``phase_deg + 360 i / n`` degrees.
-            The blades' ends reach into the hub, so hub and blades overlap; ``solid`` is the union.
+        shape: the fused propeller, one valid closed solid (OpenCascade's ``TopoDS_Shape``).
+        hub_shape: the hub cylinder alone (radius R, length L, centred at the origin), before the fuse.
+        blade_shapes: each blade alone, before the fuse, blade i at ``phase_deg + 360 i / n`` degrees.
+            The blades' ends reach into the hub, so hub and blades overlap; ``shape`` is the union.
         surface: blade 0's sampled surface from the geometry layer.
         section_curves: blade 0's section B-splines (plain arrays).
         stage_seconds: seconds per stage (keys: :class:`torus_cad.runtime.stages.Stage` values).
@@ -81,9 +89,9 @@ class Propeller:
     """
 
     parameters: PropellerParameters
-    solid: cq.Solid
-    hub: cq.Solid
-    blades: list[cq.Solid]
+    shape: TopoDS_Shape
+    hub_shape: TopoDS_Shape
+    blade_shapes: list[TopoDS_Shape]
     surface: BladeSurface
     section_curves: SectionCurves
     stage_seconds: dict[str, float] = field(default_factory=dict)
@@ -94,9 +102,44 @@ class Propeller:
     root_fillet: RootFillet | None = None
     checks: StrictCheck | None = None
 
+    def __getstate__(self) -> dict[str, Any]:
+        """Pickled with its shapes as OpenCascade's binary BRep (as cadquery pickles its shapes); the
+        cadquery wrappers are made again when asked for."""
+        state = {name: value for name, value in self.__dict__.items() if name not in _CADQUERY_VIEWS}
+        state["shape"], state["hub_shape"] = shape_bytes(self.shape), shape_bytes(self.hub_shape)
+        state["blade_shapes"] = [shape_bytes(blade) for blade in self.blade_shapes]
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state, shape=shape_from_bytes(state["shape"]), hub_shape=shape_from_bytes(state["hub_shape"]),
+                             blade_shapes=[shape_from_bytes(blade) for blade in state["blade_shapes"]])
+
+    @functools.cached_property
+    def solid(self) -> cq.Solid:
+        """The fused propeller as a ``cq.Solid`` (the same OpenCascade solid as ``shape``)."""
+        import cadquery as cq
+
+        return cq.Solid(self.shape)
+
+    @functools.cached_property
+    def hub(self) -> cq.Solid:
+        """The hub alone as a ``cq.Solid`` (``hub_shape``)."""
+        import cadquery as cq
+
+        return cq.Solid(self.hub_shape)
+
+    @functools.cached_property
+    def blades(self) -> list[cq.Solid]:
+        """Each blade alone as a ``cq.Solid`` (``blade_shapes``)."""
+        import cadquery as cq
+
+        return [cq.Solid(blade) for blade in self.blade_shapes]
+
     @property
     def workplane(self) -> cq.Workplane:
         """A ``cq.Workplane`` on XY holding the fused solid; chain CadQuery operations on it."""
+        import cadquery as cq
+
         return cq.Workplane("XY").add(self.solid)
 
     def assembly(self, name: str | None = None, fused: bool = False) -> cq.Assembly:
@@ -105,6 +148,8 @@ class Propeller:
         With ``fused=True`` it holds the single fused solid instead, named ``propeller``.
         The assembly's name defaults to the design's name.
         """
+        import cadquery as cq
+
         assembly = cq.Assembly(name=name or self.parameters.name)
         if fused:
             return assembly.add(self.solid, name="propeller", color=cq.Color(*HUB_COLOR))
@@ -127,7 +172,7 @@ class Propeller:
     def mass_properties(self, density_g_cm3: float = DEFAULT_DENSITY_G_CM3) -> MassProperties:
         """Volume (mm^3), area (mm^2), centroid (mm), spin-axis inertia and mass (g) for a density in
         g/cm^3 (default 1.24, PLA), to 1e-6 relative (see :func:`torus_cad.kernel.checks.mass_properties`)."""
-        return mass_properties(self.solid, density_g_cm3)
+        return mass_properties(self.shape, density_g_cm3)
 
     def write(self, out_dir: str | Path, density_g_cm3: float = DEFAULT_DENSITY_G_CM3,
               stl: bool = True, sections_table: bool = False) -> dict[str, Path]:
@@ -135,6 +180,10 @@ class Propeller:
         ``<name>_sections.csv`` and ``<name>_sections.png`` (if ``sections_table``) and ``<name>.json``
         into ``out_dir``."""
         return write_outputs(self, Path(out_dir), density_g_cm3, stl, sections_table)
+
+
+#: The cached cadquery wrappers of a Propeller's shapes (not pickled: made again when asked for).
+_CADQUERY_VIEWS = ("solid", "hub", "blades")
 
 
 def design_printability(params: PropellerParameters) -> Printability:
@@ -179,10 +228,10 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
                                     surface.lower_corner_index, surface.round_trailing_edge)
         fillet_radius = params.hub.root_fillet_radius
         # A round trailing edge leaves the blade's airfoil face open: the fillet needs it in pieces.
-        wires = curves.wires(ROUND_EDGE_FILLET_PIECES if fillet_radius > 0.0 and curves.round_trailing_edge else 1)
+        wires = curves.occ_wires(ROUND_EDGE_FILLET_PIECES if fillet_radius > 0.0 and curves.round_trailing_edge else 1)
     with timer.stage(Stage.LOFT):
         blade = loft_solid(wires, surface.s)
-        hub = hub_solid(hub_geometry.radius_mm, hub_geometry.length_mm, 0.0 if seam_deg is None else seam_deg,
+        hub = hub_shape(hub_geometry.radius_mm, hub_geometry.length_mm, 0.0 if seam_deg is None else seam_deg,
                         mounting)
         angles_deg = [params.blade_angle_deg(i) for i in range(params.blades)]
         blades = pattern_blades(blade, angles_deg)
@@ -193,9 +242,12 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
                 run_out_hub, hub_geometry.radius_mm, hub_geometry.length_mm, 0.0 if seam_deg is None else seam_deg,
                 mounting, reach=hub_geometry.radius_mm + 4.0 * fillet_radius)
             # A sharp edge's side as one closed face: the fillet splits it in its own pieces (kernel.fillet).
-            closed = blade if surface.lower_corner_index is not None else loft_solid(curves.wires(1, False), surface.s)
+            closed = blade if surface.lower_corner_index is not None else loft_solid(curves.occ_wires(1, False), surface.s)
+            import cadquery as cq  # the root fillet's route is cadquery's (torus_cad.kernel.fillet_pattern)
+
+            from torus_cad.kernel.fillet_pattern import fillet_pattern
             try:
-                filleted = fillet_pattern(hub, closed, angles_deg, fillet_radius, run_out,
+                filleted = fillet_pattern(cq.Solid(hub), cq.Solid(closed), angles_deg, fillet_radius, run_out,
                                           reduce_where_tight=params.hub.root_fillet_tight_bends == TightBends.REDUCE)
             except KernelError as error:
                 if surface.lower_corner_index is None or surface.round_trailing_edge:
@@ -203,7 +255,7 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
                 # The flat base's two corners stop OpenCascade's fillet; the round cap has none (README).
                 raise KernelError(f"{error}; a flat trailing edge's corners stop the fillet: "
                                   f"airfoil.trailing_edge_shape = 'round' takes it") from None
-            solid, root_fillet = filleted.solid, filleted
+            solid, root_fillet = filleted.solid.wrapped, filleted
             route, face_parts = FuseRoute.ASSEMBLED, filleted.face_parts
     else:
         solid, fused = _join_blades_to_hub(hub, blade, blades, angles_deg, timer)
@@ -218,7 +270,7 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
                      face_parts, root_fillet, checks)
 
 
-def _strictly_valid(solid: cq.Solid, fillet_on_sharp_edge: bool) -> tuple[cq.Solid, StrictCheck]:
+def _strictly_valid(solid: TopoDS_Shape, fillet_on_sharp_edge: bool) -> tuple[TopoDS_Shape, StrictCheck]:
     """:func:`torus_cad.kernel.strict.strict_valid_solid`, its error with the way out for a filleted knife edge."""
     try:
         return strict_valid_solid(solid, "the propeller")
@@ -235,8 +287,8 @@ def _strictly_valid(solid: cq.Solid, fillet_on_sharp_edge: bool) -> tuple[cq.Sol
 propeller_objects = build_propeller
 
 
-def _join_blades_to_hub(hub: cq.Solid, blade: cq.Solid, blades: list[cq.Solid], angles_deg: list[float],
-                        timer: StageTimer[Stage]) -> tuple[cq.Solid, Fused]:
+def _join_blades_to_hub(hub: TopoDS_Shape, blade: TopoDS_Shape, blades: list[TopoDS_Shape], angles_deg: list[float],
+                        timer: StageTimer[Stage]) -> tuple[TopoDS_Shape, Fused[TopoDS_Shape]]:
     """The fused, checked propeller and how it was made (route, each face's part).
 
     The shared-intersection route's result is checked for validity, which includes every
@@ -258,7 +310,7 @@ def _join_blades_to_hub(hub: cq.Solid, blade: cq.Solid, blades: list[cq.Solid], 
     return solid, fused
 
 
-def _check_volume(solid: cq.Solid, hub: cq.Solid, blade: cq.Solid, blades: int) -> None:
+def _check_volume(solid: TopoDS_Shape, hub: TopoDS_Shape, blade: TopoDS_Shape, blades: int) -> None:
     """hub < fused <= hub + n x blade: a fuse that lost or doubled material is an error."""
     volume, hub_volume, blade_volume = (precise_volume(shape, VOLUME_CHECK_RELATIVE_PRECISION)
                                         for shape in (solid, hub, blade))

@@ -240,6 +240,9 @@ STRICT_CHECK_TIME_LIMIT_S = 300.0
 MESH_COMPARISON_TIME_LIMIT_S = 900.0
 #: Longest wait (s) for the blade-element table (CSV and PNG), drawn in a child beside the build's files.
 SECTIONS_TABLE_TIME_LIMIT_S = 120.0
+#: Longest wait (s) for the STEP file, written and read back in a child beside the STL: the default's
+#: takes under a second, and its read-back check leaves out the costly self-interference test.
+STEP_WRITE_TIME_LIMIT_S = 900.0
 
 #: Axis directions and positions within this of the z axis (unit vector components, mm) count as on it.
 STRICT_AXIS_TOLERANCE = 1e-9

@@ -8,13 +8,12 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any, overload
 
-import cadquery as cq
 import numpy as np
 from numpy.typing import NDArray
 from OCP.Bnd import Bnd_Box
-from OCP.BRep import BRep_Tool
+from OCP.BRep import BRep_Builder, BRep_Tool
 from OCP.BRepBndLib import BRepBndLib
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeVertex
 from OCP.BRepCheck import BRepCheck_Analyzer
@@ -22,29 +21,43 @@ from OCP.BRepExtrema import BRepExtrema_DistShapeShape
 from OCP.BRepGProp import BRepGProp
 from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt
 from OCP.GProp import GProp_GProps
+from OCP.TopoDS import TopoDS_Compound, TopoDS_Shape
 
 from torus_cad.errors import KernelError
 from torus_cad.kernel.blade_integrals import hub_with_blade_integrals
+from torus_cad.kernel.topology import AnyShape, faces_in_order, like, occ, shells, solids
 from torus_cad.tolerances import BALANCE_RELATIVE_PRECISION, MASS_PROPERTIES_RELATIVE_PRECISION
 
+if TYPE_CHECKING:
+    import cadquery as cq
 
-def single_valid_solid(shape: cq.Shape, what: str) -> cq.Solid:
-    """The one solid of ``shape``; raise KernelError unless it is one solid, one closed shell, valid."""
-    solids = shape.Solids()
-    if len(solids) != 1:
-        raise KernelError(f"{what} gave {len(solids)} solids instead of 1")
-    solid = solids[0]
-    shells = solid.Shells()
-    if len(shells) != 1:
-        raise KernelError(f"{what} gave a solid with {len(shells)} shells instead of 1")
-    if not BRep_Tool.IsClosed_s(shells[0].wrapped):
+
+@overload
+def single_valid_solid(shape: cq.Shape, what: str) -> cq.Solid: ...
+
+
+@overload
+def single_valid_solid(shape: TopoDS_Shape, what: str) -> TopoDS_Shape: ...
+
+
+def single_valid_solid(shape: AnyShape, what: str) -> TopoDS_Shape | cq.Solid:
+    """The one solid of ``shape`` (of its kind: OpenCascade's or cadquery's); raise KernelError unless it is
+    one solid, one closed shell, valid."""
+    found = solids(occ(shape))
+    if len(found) != 1:
+        raise KernelError(f"{what} gave {len(found)} solids instead of 1")
+    solid = found[0]
+    solid_shells = shells(solid)
+    if len(solid_shells) != 1:
+        raise KernelError(f"{what} gave a solid with {len(solid_shells)} shells instead of 1")
+    if not BRep_Tool.IsClosed_s(solid_shells[0]):
         raise KernelError(f"{what} gave an open shell (not watertight)")
-    if not BRepCheck_Analyzer(solid.wrapped).IsValid():
+    if not BRepCheck_Analyzer(solid).IsValid():
         raise KernelError(f"{what} gave a solid that BRepCheck_Analyzer finds invalid")
-    return solid
+    return like(shape, solid)
 
 
-def is_valid_closed_solid(shape: cq.Shape) -> bool:
+def is_valid_closed_solid(shape: AnyShape) -> bool:
     """True when ``shape`` holds exactly one valid solid with one closed shell."""
     try:
         single_valid_solid(shape, "the shape")
@@ -82,27 +95,27 @@ class MassProperties:
         return asdict(self)
 
 
-def volume_properties(shape: cq.Shape, relative_precision: float = MASS_PROPERTIES_RELATIVE_PRECISION
+def volume_properties(shape: AnyShape, relative_precision: float = MASS_PROPERTIES_RELATIVE_PRECISION
                       ) -> GProp_GProps:
     """OpenCascade volume properties by adaptive integration (not cadquery's coarse default)."""
     properties = GProp_GProps()
-    BRepGProp.VolumeProperties_s(shape.wrapped, properties, relative_precision, False)
+    BRepGProp.VolumeProperties_s(occ(shape), properties, relative_precision, False)
     return properties
 
 
-def precise_volume(shape: cq.Shape, relative_precision: float = MASS_PROPERTIES_RELATIVE_PRECISION) -> float:
+def precise_volume(shape: AnyShape, relative_precision: float = MASS_PROPERTIES_RELATIVE_PRECISION) -> float:
     """Volume in mm^3 by adaptive integration to ``relative_precision``."""
     return float(volume_properties(shape, relative_precision).Mass())
 
 
-def mass_properties(shape: cq.Shape, density_g_cm3: float) -> MassProperties:
+def mass_properties(shape: AnyShape, density_g_cm3: float) -> MassProperties:
     """Volume, area, centroid, inertia about the z axis, mass and box of ``shape`` for a density in g/cm^3.
 
     A hub with blades (what the shared-intersection fuse makes) is integrated over its blade
     faces alone (:mod:`torus_cad.kernel.blade_integrals`, ~4e-10 relative, a fraction of the
     time); any other shape by OpenCascade's adaptive integration, :func:`occt_mass_properties`.
     """
-    integrals = hub_with_blade_integrals(shape.wrapped)
+    integrals = hub_with_blade_integrals(occ(shape))
     if integrals is None:
         return occt_mass_properties(shape, density_g_cm3)
     return _with_density(integrals.volume_mm3, integrals.area_mm2, integrals.centroid_mm.tolist(),
@@ -110,16 +123,16 @@ def mass_properties(shape: cq.Shape, density_g_cm3: float) -> MassProperties:
                          (integrals.box_min_mm.tolist(), integrals.box_max_mm.tolist()))
 
 
-def occt_mass_properties(shape: cq.Shape, density_g_cm3: float,
+def occt_mass_properties(shape: AnyShape, density_g_cm3: float,
                          relative_precision: float = MASS_PROPERTIES_RELATIVE_PRECISION) -> MassProperties:
     """:func:`mass_properties` of any shape by OpenCascade: BRepGProp's adaptive integration to
     ``relative_precision`` and BRepBndLib's optimal box (which adds 1e-7 mm on every side)."""
     volume = volume_properties(shape, relative_precision)
     surface = GProp_GProps()
-    BRepGProp.SurfaceProperties_s(shape.wrapped, surface, relative_precision, False)
+    BRepGProp.SurfaceProperties_s(occ(shape), surface, relative_precision, False)
     centre = volume.CentreOfMass()
     box = Bnd_Box()
-    BRepBndLib.AddOptimal_s(shape.wrapped, box, False, False)
+    BRepBndLib.AddOptimal_s(occ(shape), box, False, False)
     xmin, ymin, zmin, xmax, ymax, zmax = box.Get()
     return _with_density(float(volume.Mass()), float(surface.Mass()), (centre.X(), centre.Y(), centre.Z()),
                          float(volume.MomentOfInertia(gp_Ax1(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1)))), density_g_cm3,
@@ -137,9 +150,18 @@ def _with_density(volume_mm3: float, area_mm2: float, centroid_mm: Sequence[floa
         bounding_box_mm=((float(x_min), float(y_min), float(z_min)), (float(x_max), float(y_max), float(z_max))))
 
 
-def distances_to_shape(shape: cq.Shape, points: NDArray[np.float64]) -> NDArray[np.float64]:
+def compound(shapes: Sequence[TopoDS_Shape]) -> TopoDS_Compound:
+    """One compound of ``shapes`` (as cadquery's ``Compound.makeCompound``)."""
+    builder, made = BRep_Builder(), TopoDS_Compound()
+    builder.MakeCompound(made)
+    for shape in shapes:
+        builder.Add(made, shape)
+    return made
+
+
+def distances_to_shape(shape: AnyShape, points: NDArray[np.float64]) -> NDArray[np.float64]:
     """Distance (mm) from each of ``(k, 3)`` points to the boundary of ``shape``: ``(k,)``."""
-    faces = cq.Compound.makeCompound(shape.Faces()).wrapped
+    faces = compound(faces_in_order(occ(shape)))
     distances = np.empty(len(points))
     for index, point in enumerate(np.asarray(points, dtype=float)):
         vertex = BRepBuilderAPI_MakeVertex(gp_Pnt(*map(float, point))).Vertex()
@@ -182,11 +204,11 @@ def balance_of(properties: GProp_GProps, density_g_cm3: float) -> Balance:
     return Balance(float(properties.Mass()) * density_g_mm3 * offset, offset, products)
 
 
-def balance(shape: cq.Shape, density_g_cm3: float, relative_precision: float = BALANCE_RELATIVE_PRECISION) -> Balance:
+def balance(shape: AnyShape, density_g_cm3: float, relative_precision: float = BALANCE_RELATIVE_PRECISION) -> Balance:
     """Static imbalance and products of inertia of ``shape``: from the blade faces alone for a hub
     with blades (as :func:`mass_properties`), else by OpenCascade's adaptive integration to
     ``relative_precision``."""
-    integrals = hub_with_blade_integrals(shape.wrapped)
+    integrals = hub_with_blade_integrals(occ(shape))
     if integrals is None:
         return balance_of(volume_properties(shape, relative_precision), density_g_cm3)
     density_g_mm3 = density_g_cm3 * 1e-3

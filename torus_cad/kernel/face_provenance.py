@@ -12,7 +12,6 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
 
-import cadquery as cq
 import numpy as np
 from numpy.typing import NDArray
 from OCP.BRepAdaptor import BRepAdaptor_Surface
@@ -97,7 +96,7 @@ def through_reshape(context: ShapeBuild_ReShape, origins: Iterable[tuple[TopoDS_
         if index not in reached:
             face = TopoDS.Face_s(indexed.FindKey(index))
             middle = _middle(face)
-            found.append((face, min(origins, key=lambda origin: distances_to_shape(cq.Face(origin[0]), middle)[0])[1]))
+            found.append((face, min(origins, key=lambda origin: distances_to_shape(origin[0], middle)[0])[1]))
     return found
 
 

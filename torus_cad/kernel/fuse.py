@@ -19,8 +19,8 @@ import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from enum import StrEnum
+from typing import TYPE_CHECKING, Generic
 
-import cadquery as cq
 from OCP.BOPAlgo import BOPAlgo_GlueShift
 from OCP.BRep import BRep_Builder, BRep_Tool
 from OCP.BRepAdaptor import BRepAdaptor_Surface
@@ -38,28 +38,53 @@ from torus_cad.errors import KernelError
 from torus_cad.geometry.blade.propeller import HUB_PART
 from torus_cad.kernel.edge_curves import refit_intersection_edges
 from torus_cad.kernel.face_provenance import Origins, face_parts, through_history
-from torus_cad.kernel.topology import boolean, count, edges, explore, faces, result
+from torus_cad.kernel.topology import (
+    AnyShape,
+    ShapeT,
+    boolean,
+    count,
+    edges,
+    explore,
+    faces,
+    faces_in_order,
+    like,
+    occ,
+    result,
+    transformed,
+)
+
+if TYPE_CHECKING:
+    import cadquery as cq  # noqa: F401 (the shapes' other kind, in annotations)
 
 _FULL_TURN = 2.0 * math.pi
 
 
-def pattern_blades(blade: cq.Solid, angles_deg: Sequence[float]) -> list[cq.Solid]:
-    """Copies of ``blade`` (built for angle ``angles_deg[0]``) rotated about z to every angle.
+def pattern_blades(blade: ShapeT, angles_deg: Sequence[float]) -> list[ShapeT]:
+    """Copies of ``blade`` (built for angle ``angles_deg[0]``) rotated about z to every angle (of the kind
+    ``blade`` is: OpenCascade's shape or cadquery's).
 
     Blade i's centerline is blade 0's rotated by theta_i - theta_0 (spec §3.3 and §6.1), so
     rotating the solid gives exactly the solid built from blade i's own control points.
     """
     first = angles_deg[0]
-    return [blade if angle == first else blade.rotate(cq.Vector(0, 0, 0), cq.Vector(0, 0, 1), angle - first)
+    return [blade if angle == first else like(blade, transformed(occ(blade), _turn(angle - first)))
             for angle in angles_deg]
 
 
-def fuse_all(hub: cq.Solid, blades: Sequence[cq.Solid]) -> Fused:
-    """Hub and all blades fused in one BRepAlgoAPI_Fuse call (parallel, oriented bounding boxes)."""
-    fuse = boolean(BRepAlgoAPI_Fuse(), [hub.wrapped], [blade.wrapped for blade in blades])
+def _turn(angle_deg: float) -> gp_Trsf:
+    """The rotation by ``angle_deg`` about +z."""
+    rotation = gp_Trsf()
+    rotation.SetRotation(gp_Ax1(gp_Pnt(0.0, 0.0, 0.0), gp_Dir(0.0, 0.0, 1.0)), math.radians(angle_deg))
+    return rotation
+
+
+def fuse_all(hub: ShapeT, blades: Sequence[AnyShape]) -> Fused[ShapeT]:
+    """Hub and all blades fused in one BRepAlgoAPI_Fuse call (parallel, oriented bounding boxes); the
+    result of the kind ``hub`` is."""
+    fuse = boolean(BRepAlgoAPI_Fuse(), [occ(hub)], [occ(blade) for blade in blades])
     shape = result(fuse, "fuse the blades with the hub")
-    parts = [(hub.wrapped, HUB_PART), *((blade.wrapped, index) for index, blade in enumerate(blades))]
-    return Fused(cq.Shape.cast(shape), FuseRoute.GENERAL, face_parts(shape, _history(fuse, parts)))
+    parts = [(occ(hub), HUB_PART), *((occ(blade), index) for index, blade in enumerate(blades))]
+    return Fused(like(hub, shape), FuseRoute.GENERAL, face_parts(shape, _history(fuse, parts)))
 
 
 class FuseRoute(StrEnum):
@@ -80,7 +105,7 @@ class FuseRoute(StrEnum):
 
 
 @dataclass(frozen=True)
-class Fused:
+class Fused(Generic[ShapeT]):
     """The hub and blades joined into one shape.
 
     Attributes:
@@ -90,12 +115,13 @@ class Fused:
             ``shape.Faces()`` (TopExp's indexed map of faces): HUB_PART or the blade's index.
     """
 
-    shape: cq.Shape
+    shape: ShapeT
     route: FuseRoute
     face_parts: tuple[int, ...]
 
 
-def fuse_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], refit_edges: bool = True) -> Fused:
+def fuse_pattern(hub: ShapeT, blade: AnyShape, angles_deg: Sequence[float], refit_edges: bool = True
+                 ) -> Fused[ShapeT]:
     """Hub and copies of ``blade`` at every angle, with one blade-hub intersection for all of them.
 
     1. Cut the blade (built at ``angles_deg[0]``) by the hub: its part outside the hub, whose
@@ -118,13 +144,14 @@ def fuse_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], re
     propeller's hub has its seam beside every footprint, see
     :func:`torus_cad.geometry.hub.seam.seam_angle_deg`.
     """
-    lateral = _lateral_face(hub)
-    cut = boolean(BRepAlgoAPI_Cut(), [blade.wrapped], [hub.wrapped])
+    hub_shape = occ(hub)
+    lateral = _lateral_face(hub_shape)
+    cut = boolean(BRepAlgoAPI_Cut(), [occ(blade)], [hub_shape])
     outside = result(cut, "cut the blade free of the hub")
     patches = _modified_faces(cut, lateral)
     if not patches:
         raise KernelError("the blade does not meet the hub's lateral face")
-    hub_pieces = _modified_faces_of_shape(cut, hub.wrapped)
+    hub_pieces = _modified_faces_of_shape(cut, hub_shape)
     if refit_edges:  # to 4e-8 mm: a STEP file keeps no edge tolerance (kernel.edge_curves)
         refit_intersection_edges(outside, hub_pieces)
     copies = [_rotated_with_hub_curves(outside, patches, lateral, math.radians(angle - angles_deg[0]))
@@ -132,14 +159,14 @@ def fuse_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], re
     whole_patches = len(hub_pieces) == len(patches) and not any(
         BRep_Tool.IsClosed_s(edge, patch) for patch in patches for edge in edges(patch))
     if whole_patches:
-        solid, origins = _assemble(hub, lateral, copies, patches)
-        return Fused(cq.Shape.cast(solid), FuseRoute.ASSEMBLED, face_parts(solid, origins))
+        solid, origins = _assemble(hub_shape, lateral, copies, patches)
+        return Fused(like(hub, solid), FuseRoute.ASSEMBLED, face_parts(solid, origins))
     blade_faces = count(outside, TopAbs_FACE) - len(hub_pieces)
-    glued, origins = _glue(hub, copies, count(hub.wrapped, TopAbs_FACE) + len(copies) * blade_faces)
-    return Fused(cq.Shape.cast(glued), FuseRoute.GLUED, face_parts(glued, origins))
+    glued, origins = _glue(hub_shape, copies, count(hub_shape, TopAbs_FACE) + len(copies) * blade_faces)
+    return Fused(like(hub, glued), FuseRoute.GLUED, face_parts(glued, origins))
 
 
-def _assemble(hub: cq.Solid, lateral: TopoDS_Face, copies: Sequence[TopoDS_Shape],
+def _assemble(hub: TopoDS_Shape, lateral: TopoDS_Face, copies: Sequence[TopoDS_Shape],
               patches: Sequence[TopoDS_Face]) -> tuple[TopoDS_Solid, Origins]:
     """The propeller's solid put together from known faces, with no boolean, and each face's part.
 
@@ -164,7 +191,7 @@ def _assemble(hub: cq.Solid, lateral: TopoDS_Face, copies: Sequence[TopoDS_Shape
                 origins.append((face, index))
     if not lateral_with_holes.IsDone():
         raise KernelError("OpenCascade could not cut the blade roots out of the hub's lateral face")
-    hub_faces = [lateral_with_holes.Face(), *(face for face in faces(hub.wrapped) if not face.IsSame(lateral))]
+    hub_faces = [lateral_with_holes.Face(), *(face for face in faces(hub) if not face.IsSame(lateral))]
     origins.extend((face, HUB_PART) for face in hub_faces)
     return solid_of_faces(origins), origins
 
@@ -184,17 +211,17 @@ def solid_of_faces(origins: Origins) -> TopoDS_Solid:
     return solid
 
 
-def _glue(hub: cq.Solid, copies: Sequence[TopoDS_Shape], expected_faces: int
+def _glue(hub: TopoDS_Shape, copies: Sequence[TopoDS_Shape], expected_faces: int
           ) -> tuple[TopoDS_Shape, Origins]:
     """Hub and copies fused with BOPAlgo_GlueShift (they only touch along faces of the hub's
     surfaces), and where each of their faces went."""
     glue = BRepAlgoAPI_Fuse()
     glue.SetGlue(BOPAlgo_GlueShift)
-    fused = result(boolean(glue, [hub.wrapped], copies), "glue the blades to the hub")
+    fused = result(boolean(glue, [hub], copies), "glue the blades to the hub")
     faces = count(fused, TopAbs_FACE)
     if faces != expected_faces:
         raise KernelError(f"gluing the blades to the hub gave {faces} faces instead of {expected_faces}")
-    return fused, _history(glue, [(hub.wrapped, HUB_PART), *((copy, index) for index, copy in enumerate(copies))])
+    return fused, _history(glue, [(hub, HUB_PART), *((copy, index) for index, copy in enumerate(copies))])
 
 
 def _history(operation: BRepAlgoAPI_BooleanOperation, arguments: Iterable[tuple[TopoDS_Shape, int]]) -> Origins:
@@ -228,11 +255,11 @@ def _rotated_with_hub_curves(outside: TopoDS_Shape, patches: list[TopoDS_Face], 
     return outside.Moved(location)
 
 
-def _lateral_face(hub: cq.Solid) -> TopoDS_Face:
+def _lateral_face(hub: TopoDS_Shape) -> TopoDS_Face:
     """The hub's outer cylindrical face (a bore or a set-screw hole is a smaller cylinder)."""
-    cylinders = [(BRepAdaptor_Surface(face.wrapped).Cylinder().Radius(), index, face.wrapped)
-                 for index, face in enumerate(hub.Faces())
-                 if BRepAdaptor_Surface(face.wrapped).GetType() == GeomAbs_Cylinder]
+    cylinders = [(BRepAdaptor_Surface(face).Cylinder().Radius(), index, face)
+                 for index, face in enumerate(faces_in_order(hub))
+                 if BRepAdaptor_Surface(face).GetType() == GeomAbs_Cylinder]
     if not cylinders:
         raise KernelError("the hub has no cylindrical face")
     return max(cylinders, key=lambda item: item[:2])[2]

@@ -11,8 +11,8 @@ reach a blade (:mod:`torus_cad.geometry.hub.mounting`).
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
-import cadquery as cq
 from OCP.BRepBuilderAPI import (
     BRepBuilderAPI_MakeEdge,
     BRepBuilderAPI_MakeFace,
@@ -29,13 +29,24 @@ from OCP.TopoDS import TopoDS_Shape
 
 from torus_cad.errors import KernelError
 from torus_cad.geometry.hub.mounting import SET_SCREW_OVERSHOOT_MM, HubMounting
-from torus_cad.kernel.topology import cut
+from torus_cad.kernel.topology import cut, solids
+
+if TYPE_CHECKING:
+    import cadquery as cq
 
 _Z = gp_Dir(0.0, 0.0, 1.0)
 
 
 def hub_solid(radius: float, length: float, seam_angle_deg: float = 0.0,
               mounting: HubMounting | None = None) -> cq.Solid:
+    """:func:`hub_shape` as cadquery's solid."""
+    import cadquery as cq
+
+    return cq.Solid(hub_shape(radius, length, seam_angle_deg, mounting))
+
+
+def hub_shape(radius: float, length: float, seam_angle_deg: float = 0.0,
+              mounting: HubMounting | None = None) -> TopoDS_Shape:
     """Cylinder r <= radius, |z| <= length / 2 (mm), its lateral face's seam at ``seam_angle_deg``.
 
     The seam (u = 0 of the lateral face) lies in the half-plane at ``seam_angle_deg`` about +z
@@ -55,11 +66,11 @@ def hub_solid(radius: float, length: float, seam_angle_deg: float = 0.0,
     if mounting.set_screw_diameter_mm > 0.0:
         tools.append(_set_screw_hole(mounting, radius))
     if not tools:
-        return cq.Solid(outer)
-    solids = cq.Shape.cast(cut(outer, tools, "cut the bore and set-screw hole into the hub")).Solids()
-    if len(solids) != 1:
-        raise KernelError(f"cutting the bore and set-screw hole into the hub gave {len(solids)} solids instead of 1")
-    return solids[0]
+        return outer
+    made = solids(cut(outer, tools, "cut the bore and set-screw hole into the hub"))
+    if len(made) != 1:
+        raise KernelError(f"cutting the bore and set-screw hole into the hub gave {len(made)} solids instead of 1")
+    return made[0]
 
 
 def run_out_hub(radius: float, length: float, seam_angle_deg: float, mounting: HubMounting, extension: float,

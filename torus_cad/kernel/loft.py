@@ -4,23 +4,25 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-import cadquery as cq
 import numpy as np
 from numpy.typing import NDArray
 from OCP.BRep import BRep_Tool
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace, BRepBuilderAPI_MakeSolid, BRepBuilderAPI_Sewing
 from OCP.BRepCheck import BRepCheck_Analyzer
+from OCP.BRepGProp import BRepGProp
 from OCP.BRepOffsetAPI import BRepOffsetAPI_ThruSections
 from OCP.BRepTools import BRepTools_WireExplorer
 from OCP.Geom import Geom_BSplineCurve, Geom_BSplineSurface
 from OCP.gp import gp_Pnt
+from OCP.GProp import GProp_GProps
 from OCP.ShapeFix import ShapeFix_Solid
 from OCP.TColgp import TColgp_Array2OfPnt
 from OCP.TopAbs import TopAbs_SHELL
-from OCP.TopoDS import TopoDS, TopoDS_Face
+from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Shape
 from scipy.interpolate import make_interp_spline
 
 from torus_cad.errors import KernelError
+from torus_cad.kernel.topology import ShapeT, like, occ, solids
 from torus_cad.kernel.wires import knot_arrays
 from torus_cad.tolerances import LOFT_PRECISION
 
@@ -29,8 +31,9 @@ from torus_cad.tolerances import LOFT_PRECISION
 LOFT_SEWING_TOLERANCE = 1e-6
 
 
-def loft_solid(wires: Sequence[cq.Wire], parameters: Sequence[float] | NDArray[np.float64] | None = None) -> cq.Solid:
-    """A smooth closed solid through ``wires``, capped by planar end faces.
+def loft_solid(wires: Sequence[ShapeT], parameters: Sequence[float] | NDArray[np.float64] | None = None) -> ShapeT:
+    """A smooth closed solid through ``wires``, capped by planar end faces (OpenCascade's wires give
+    OpenCascade's solid, cadquery's a ``cq.Solid``).
 
     The wires must be compatible B-splines (same edges, each with the same degree, knots and
     pole count, starting at the trailing edge), as :func:`torus_cad.kernel.wires.fit_section_curves`
@@ -47,16 +50,16 @@ def loft_solid(wires: Sequence[cq.Wire], parameters: Sequence[float] | NDArray[n
         raise KernelError(f"a loft needs at least 2 section wires, got {len(wires)}")
     if len(wires) >= 4:
         try:
-            return _loft_through_poles(wires, parameters)
+            return like(wires[0], _loft_through_poles([occ(wire) for wire in wires], parameters))
         except (KernelError, ValueError, RuntimeError):
             pass  # incompatible wires or a sewing failure: let ThruSections try
     return thru_sections_solid(wires)
 
 
-def _bsplines_of(wire: cq.Wire) -> list[Geom_BSplineCurve]:
+def _bsplines_of(wire: TopoDS_Shape) -> list[Geom_BSplineCurve]:
     """The wire's edges' B-spline curves, in the wire's order."""
     curves = []
-    explorer = BRepTools_WireExplorer(wire.wrapped)
+    explorer = BRepTools_WireExplorer(TopoDS.Wire_s(wire))
     while explorer.More():
         curve = BRep_Tool.Curve_s(explorer.Current(), 0.0, 1.0)
         if not isinstance(curve, Geom_BSplineCurve):
@@ -66,7 +69,8 @@ def _bsplines_of(wire: cq.Wire) -> list[Geom_BSplineCurve]:
     return curves
 
 
-def _loft_through_poles(wires: Sequence[cq.Wire], parameters: Sequence[float] | NDArray[np.float64] | None) -> cq.Solid:
+def _loft_through_poles(wires: Sequence[TopoDS_Shape], parameters: Sequence[float] | NDArray[np.float64] | None
+                        ) -> TopoDS_Shape:
     """One side face per edge position (one for a sharp trailing edge; base and airfoil for a blunt one)."""
     edges = [_bsplines_of(wire) for wire in wires]
     if len({len(curves) for curves in edges}) != 1:
@@ -100,13 +104,13 @@ def _side_face(curves: Sequence[Geom_BSplineCurve], s: NDArray[np.float64]) -> T
     return face.Face()
 
 
-def _closed_solid(faces: Sequence[TopoDS_Face], wires: Sequence[cq.Wire]) -> cq.Solid:
+def _closed_solid(faces: Sequence[TopoDS_Face], wires: Sequence[TopoDS_Shape]) -> TopoDS_Shape:
     """The side faces and planar caps on the first and last wires, sewn into one checked solid."""
     sewing = BRepBuilderAPI_Sewing(LOFT_SEWING_TOLERANCE)
     for face in faces:
         sewing.Add(face)
     for wire in (wires[0], wires[-1]):
-        cap = BRepBuilderAPI_MakeFace(wire.wrapped, True)
+        cap = BRepBuilderAPI_MakeFace(TopoDS.Wire_s(wire), True)
         if not cap.IsDone():
             raise KernelError("OpenCascade could not cap the blade with a planar end face")
         sewing.Add(cap.Face())
@@ -119,13 +123,13 @@ def _closed_solid(faces: Sequence[TopoDS_Face], wires: Sequence[cq.Wire]) -> cq.
         raise KernelError("OpenCascade could not make a solid from the blade's shell")
     fix = ShapeFix_Solid(solid.Solid())
     fix.Perform()  # orients the shell outward
-    result = cq.Shape.cast(fix.Solid()).Solids()
-    if len(result) != 1 or not BRepCheck_Analyzer(result[0].wrapped).IsValid() or result[0].Volume() <= 0.0:
+    result = solids(fix.Solid())
+    if len(result) != 1 or not BRepCheck_Analyzer(result[0]).IsValid() or _volume(result[0]) <= 0.0:
         raise KernelError("the lofted blade is not one valid solid")
     return result[0]
 
 
-def thru_sections_solid(wires: Sequence[cq.Wire]) -> cq.Solid:
+def thru_sections_solid(wires: Sequence[ShapeT]) -> ShapeT:
     """The loft by BRepOffsetAPI_ThruSections (smooth, not ruled); the fallback of :func:`loft_solid`.
 
     The compatibility search of ThruSections is switched off (the wires are already
@@ -136,12 +140,18 @@ def thru_sections_solid(wires: Sequence[cq.Wire]) -> cq.Solid:
     builder = BRepOffsetAPI_ThruSections(True, False, LOFT_PRECISION)
     builder.CheckCompatibility(False)
     for wire in wires:
-        builder.AddWire(wire.wrapped)
+        builder.AddWire(TopoDS.Wire_s(occ(wire)))
     builder.Build()
     if not builder.IsDone():
         raise KernelError("the loft of the blade sections failed in OpenCascade (BRepOffsetAPI_ThruSections)")
-    shape = cq.Shape.cast(builder.Shape())
-    solids = shape.Solids()
-    if len(solids) != 1:
-        raise KernelError(f"the loft of the blade sections gave {len(solids)} solids instead of 1")
-    return solids[0]
+    made = solids(builder.Shape())
+    if len(made) != 1:
+        raise KernelError(f"the loft of the blade sections gave {len(made)} solids instead of 1")
+    return like(wires[0], made[0])
+
+
+def _volume(shape: TopoDS_Shape) -> float:
+    """OpenCascade's volume of ``shape`` at its default precision (mm^3), as cadquery's ``Shape.Volume()``."""
+    properties = GProp_GProps()
+    BRepGProp.VolumeProperties_s(shape, properties)
+    return float(properties.Mass())

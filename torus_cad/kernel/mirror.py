@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-import cadquery as cq
 from OCP.BRepBuilderAPI import BRepBuilderAPI_Transform
 from OCP.gp import gp_Ax2, gp_Dir, gp_Pnt, gp_Trsf
 
 from torus_cad.errors import KernelError
 from torus_cad.kernel.checks import single_valid_solid
+from torus_cad.kernel.topology import ShapeT, like, occ, solids
 
 
 def mirror_trsf() -> gp_Trsf:
@@ -17,8 +17,9 @@ def mirror_trsf() -> gp_Trsf:
     return mirror
 
 
-def mirrored(solid: cq.Solid, check: bool = True) -> cq.Solid:
-    """``solid`` reflected through the XZ plane, as a new valid solid with outward faces.
+def mirrored(solid: ShapeT, check: bool = True) -> ShapeT:
+    """``solid`` reflected through the XZ plane, as a new valid solid with outward faces (of the kind ``solid``
+    is: OpenCascade's or cadquery's).
 
     The geometry is copied and transformed (not just given a negative location), so the
     result's surfaces are the reflected ones and its faces keep pointing out of the material;
@@ -26,10 +27,9 @@ def mirrored(solid: cq.Solid, check: bool = True) -> cq.Solid:
     same part up to a turn about the axis. ``check=False`` skips the validity check (for
     parts already checked before the reflection).
     """
-    transform = BRepBuilderAPI_Transform(solid.wrapped, mirror_trsf(), True)
+    transform = BRepBuilderAPI_Transform(occ(solid), mirror_trsf(), True)
     if not transform.IsDone():
         raise KernelError("OpenCascade could not mirror the propeller")
-    shape = cq.Shape.cast(transform.Shape())
     if not check:
-        return shape.Solids()[0]
-    return single_valid_solid(shape, "mirroring the propeller (handedness cw)")
+        return like(solid, solids(transform.Shape())[0])
+    return like(solid, single_valid_solid(transform.Shape(), "mirroring the propeller (handedness cw)"))

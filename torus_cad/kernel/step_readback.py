@@ -66,11 +66,16 @@ def read_step(path: str | Path) -> cq.Shape:
     KernelError if it does not read."""
     import cadquery as cq
 
+    return cq.Shape.cast(read_step_shape(path))
+
+
+def read_step_shape(path: str | Path) -> TopoDS_Shape:
+    """:func:`read_step` as OpenCascade's shape (no cadquery)."""
     reader = STEPControl_Reader()
     if reader.ReadFile(str(path)) != IFSelect_RetDone:
         raise KernelError(f"cannot read STEP file {str(path)!r}")
     reader.TransferRoots()
-    return cq.Shape.cast(reader.OneShape())
+    return reader.OneShape()
 
 
 def argument_faults(shape: TopoDS_Shape, self_interference: bool = True) -> ArgumentFaults:
@@ -91,7 +96,7 @@ def argument_faults(shape: TopoDS_Shape, self_interference: bool = True) -> Argu
 
 def step_readback_faults(path: str | Path, self_interference: bool = True) -> ArgumentFaults:
     """:func:`argument_faults` of the shape OpenCascade's STEP reader (default settings) makes of ``path``."""
-    return argument_faults(read_step(path).wrapped, self_interference)
+    return argument_faults(read_step_shape(path), self_interference)
 
 
 def check_step_readback(path: str | Path, what: str, self_interference: bool = True) -> ArgumentFaults:

@@ -27,7 +27,6 @@ from dataclasses import dataclass
 from enum import StrEnum
 from typing import Any
 
-import cadquery as cq
 from OCP.Bnd import Bnd_Box
 from OCP.BRepAdaptor import BRepAdaptor_Surface
 from OCP.BRepAlgoAPI import BRepAlgoAPI_Check
@@ -42,7 +41,8 @@ from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Shape
 from OCP.TopTools import TopTools_IndexedMapOfShape
 
 from torus_cad.errors import KernelError
-from torus_cad.kernel.checks import single_valid_solid
+from torus_cad.kernel.checks import compound, single_valid_solid
+from torus_cad.kernel.topology import ShapeT, occ
 from torus_cad.runtime.isolation import IsolatedTimeout, run_isolated
 from torus_cad.tolerances import STRICT_AXIS_TOLERANCE, STRICT_BLADE_SEPARATION_MM, STRICT_CHECK_TIME_LIMIT_S
 
@@ -82,8 +82,8 @@ class _Pattern:
     copies: list[list[TopoDS_Face]]
 
 
-def strict_valid_solid(shape: cq.Shape, what: str) -> tuple[cq.Solid, StrictCheck]:
-    """The one solid of ``shape`` and what it passed; KernelError naming the check and the face otherwise.
+def strict_valid_solid(shape: ShapeT, what: str) -> tuple[ShapeT, StrictCheck]:
+    """The one solid of ``shape`` (of its kind: OpenCascade's or cadquery's) and what it passed; KernelError naming the check and the face otherwise.
 
     :func:`torus_cad.kernel.checks.single_valid_solid` (one solid, one closed shell, BRepCheck_Analyzer),
     then BRepAlgoAPI_Check with the small-edge and self-interference tests, on the scope the module
@@ -91,15 +91,15 @@ def strict_valid_solid(shape: cq.Shape, what: str) -> tuple[cq.Solid, StrictChec
     """
     start = time.perf_counter()
     solid = single_valid_solid(shape, what)
-    pattern = blade_pattern(solid.wrapped)
+    occ_solid = occ(solid)
+    pattern = blade_pattern(occ_solid)
     if pattern is None or len(pattern.copies) < 2:
-        _raise_on_faults(solid.wrapped, solid.wrapped, pattern, what)
+        _raise_on_faults(occ_solid, occ_solid, pattern, what)
         return solid, StrictCheck(CheckScope.WHOLE, len(pattern.copies) if pattern else 0, time.perf_counter() - start)
     checked = [0, *_copies_near_asymmetric_hub_faces(pattern)]
-    scope = cq.Compound.makeCompound([cq.Face(face) for face in pattern.hub]
-                                     + [cq.Face(face) for k in checked for face in pattern.copies[k]])
-    _raise_on_faults(scope.wrapped, solid.wrapped, pattern, what)
-    _check_blade_separation(pattern, solid.wrapped, what)
+    scope = compound([*pattern.hub, *(face for k in checked for face in pattern.copies[k])])
+    _raise_on_faults(scope, occ_solid, pattern, what)
+    _check_blade_separation(pattern, occ_solid, what)
     return solid, StrictCheck(CheckScope.PATTERN, len(checked), time.perf_counter() - start)
 
 
@@ -247,9 +247,9 @@ def _copies_near_asymmetric_hub_faces(pattern: _Pattern) -> list[int]:
 
 
 def _check_blade_separation(pattern: _Pattern, solid: TopoDS_Shape, what: str) -> None:
-    first = cq.Compound.makeCompound([cq.Face(face) for face in pattern.copies[0]]).wrapped
+    first = compound(pattern.copies[0])
     for k in range(1, len(pattern.copies) // 2 + 1):
-        other = cq.Compound.makeCompound([cq.Face(face) for face in pattern.copies[k]]).wrapped
+        other = compound(pattern.copies[k])
         if _box(pattern.copies[0]).IsOut(_box(pattern.copies[k])):
             continue
         distance = BRepExtrema_DistShapeShape(first, other)

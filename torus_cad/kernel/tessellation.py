@@ -5,7 +5,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import cadquery as cq
 import numpy as np
 from numpy.typing import NDArray
 from OCP.BRep import BRep_Tool
@@ -15,6 +14,7 @@ from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS_Face
 
 from torus_cad.errors import KernelError
+from torus_cad.kernel.topology import AnyShape, copied, faces_in_order, occ, surface_kind
 
 
 @dataclass(frozen=True)
@@ -34,20 +34,20 @@ class FaceTriangles:
     face_index: int
 
 
-def tessellate_faces(shape: cq.Shape, linear_deflection: float, angular_deflection: float,
+def tessellate_faces(shape: AnyShape, linear_deflection: float, angular_deflection: float,
                      parallel: bool = True) -> list[FaceTriangles]:
     """Tessellate a copy of ``shape`` exactly as ``write_stl`` does (absolute deflection in mm,
     angular in radians; the shape's own triangulation is left alone) and return the triangles of
     every face that has some, in ``shape.Faces()`` order. ``parallel``: OpenCascade's mesher threads."""
-    copy = shape.copy()
-    mesher = BRepMesh_IncrementalMesh(copy.wrapped, linear_deflection, False, angular_deflection, parallel)  # meshes here
+    copy = copied(occ(shape))
+    mesher = BRepMesh_IncrementalMesh(copy, linear_deflection, False, angular_deflection, parallel)  # meshes here
     if not mesher.IsDone():
         raise KernelError("OpenCascade could not tessellate the solid")
     faces = []
-    for index, face in enumerate(copy.Faces()):
-        vertices, triangles = face_triangulation(face.wrapped)
+    for index, face in enumerate(faces_in_order(copy)):
+        vertices, triangles = face_triangulation(face)
         if len(triangles):
-            faces.append(FaceTriangles(vertices, triangles, face.geomType(), index))
+            faces.append(FaceTriangles(vertices, triangles, surface_kind(face), index))
     return faces
 
 

@@ -31,7 +31,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import cadquery as cq
 import numpy as np
 from numpy.typing import NDArray
 from OCP.BRepMesh import BRepMesh_IncrementalMesh
@@ -42,6 +41,7 @@ from torus_cad.errors import KernelError
 from torus_cad.geometry.blade.mesh import side_use_counts
 from torus_cad.kernel.mesh_check import crossing_pairs, meshlib_mesh
 from torus_cad.kernel.tessellation import face_triangulation
+from torus_cad.kernel.topology import AnyShape, copied, faces_in_order, occ, surface_kind
 from torus_cad.tolerances import (
     MESH_MERGE_DISTANCE_MM,
     MESH_REFINE_HALVINGS,
@@ -75,7 +75,7 @@ class UncrossedMesh:
     repair_deviation_mm: float = 0.0
 
 
-def uncrossed_mesh(shape: cq.Shape, linear_deflection: float, angular_deflection: float) -> UncrossedMesh:
+def uncrossed_mesh(shape: AnyShape, linear_deflection: float, angular_deflection: float) -> UncrossedMesh:
     """OpenCascade's tessellation of a copy of ``shape`` (absolute deflection, mm; angular, rad), its faces'
     shared nodes merged, with any crossing triangles repaired by meshlib (see the module doc). Where the
     repair would move a coarse tessellation further than MESH_REPAIR_MAX_DEVIATION_MM (a user's large
@@ -105,18 +105,18 @@ class _Open(_TooCoarse):
     """BRepMesh left the tessellation open (module doc)."""
 
 
-def _uncrossed_at(shape: cq.Shape, linear_deflection: float, angular_deflection: float) -> UncrossedMesh:
+def _uncrossed_at(shape: AnyShape, linear_deflection: float, angular_deflection: float) -> UncrossedMesh:
     """:func:`uncrossed_mesh` at one linear deflection; _TooCoarse when the tessellation is open or the repair
     moves it too far."""
-    copy = shape.copy()
-    mesher = BRepMesh_IncrementalMesh(copy.wrapped, linear_deflection, False, angular_deflection, True)  # meshes here
+    copy = copied(occ(shape))
+    mesher = BRepMesh_IncrementalMesh(copy, linear_deflection, False, angular_deflection, True)  # meshes here
     if not mesher.IsDone():
         raise KernelError("OpenCascade could not tessellate the solid")
-    faces = [face.wrapped for face in copy.Faces()]
+    faces = faces_in_order(copy)
     points, triangles, owner = _merged_tessellation(faces)
     open_faces = _faces_with_holes(triangles, owner)
     if open_faces:
-        named = ", ".join(f"{index} ({cq.Face(faces[index]).geomType()})" for index in open_faces)
+        named = ", ".join(f"{index} ({surface_kind(faces[index])})" for index in open_faces)
         raise _Open(f"OpenCascade's tessellation at linear deflection {linear_deflection:g} mm is open "
                     f"(holes beside faces {named}: boundary edges closer to each other than the deflection)")
     pairs = crossing_pairs(points, triangles)
@@ -124,7 +124,7 @@ def _uncrossed_at(shape: cq.Shape, linear_deflection: float, angular_deflection:
         return UncrossedMesh(points, triangles, linear_deflection, angular_deflection)
     first, other = (int(index) for index in pairs[0])
     where = (f"{len(pairs)} pairs of intersecting triangles (meshlib), the first on face {owner[first]} "
-             f"({cq.Face(faces[owner[first]]).geomType()}) against face {owner[other]} at "
+             f"({surface_kind(faces[owner[first]])}) against face {owner[other]} at "
              f"({', '.join(f'{value:.3f}' for value in points[triangles[first]].mean(axis=0))}) mm")
     repaired = _repaired(points, triangles)
     if repaired is None:

@@ -39,8 +39,8 @@ from __future__ import annotations
 
 import itertools
 from dataclasses import dataclass, fields
+from typing import TYPE_CHECKING
 
-import cadquery as cq
 import numpy as np
 from numpy.typing import NDArray
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge, BRepBuilderAPI_MakeWire
@@ -48,12 +48,15 @@ from OCP.Geom import Geom_BSplineCurve
 from OCP.gp import gp_Pnt
 from OCP.TColgp import TColgp_Array1OfPnt
 from OCP.TColStd import TColStd_Array1OfInteger, TColStd_Array1OfReal
-from OCP.TopoDS import TopoDS_Edge
+from OCP.TopoDS import TopoDS_Edge, TopoDS_Wire
 
 from torus_cad.errors import KernelError
 from torus_cad.geometry.section.section_fit import DEGREE, SectionFit, corner_knots, fit_sections
 
-__all__ = ["DEGREE", "SectionCurves", "bspline_wire", "fit_section_curves", "knot_arrays"]
+if TYPE_CHECKING:
+    import cadquery as cq
+
+__all__ = ["DEGREE", "SectionCurves", "bspline_wire", "fit_section_curves", "knot_arrays", "occ_bspline_wire"]
 
 
 @dataclass(frozen=True)
@@ -62,7 +65,13 @@ class SectionCurves(SectionFit):
     plain arrays), and the section wires the loft takes."""
 
     def wires(self, airfoil_pieces: int = 1, split_sharp: bool = True) -> list[cq.Wire]:
-        """One closed wire per section.
+        """:meth:`occ_wires` as cadquery's wires."""
+        import cadquery as cq
+
+        return [cq.Wire(wire) for wire in self.occ_wires(airfoil_pieces, split_sharp)]
+
+    def occ_wires(self, airfoil_pieces: int = 1, split_sharp: bool = True) -> list[TopoDS_Wire]:
+        """One closed wire per section (OpenCascade's).
 
         Sharp trailing edge: with ``airfoil_pieces`` 1, two edges (lower and upper surface, split
         at the leading edge; one closed edge with ``split_sharp`` False, for the root fillet, which
@@ -71,7 +80,7 @@ class SectionCurves(SectionFit):
         ``airfoil_pieces`` equal ranges.
         """
         split = self.leading_edge_parameter if split_sharp else None
-        return [bspline_wire(poles, self.knots, airfoil_pieces, split) for poles in self.poles]
+        return [occ_bspline_wire(poles, self.knots, airfoil_pieces, split) for poles in self.poles]
 
 
 def fit_section_curves(section_points: NDArray[np.float64], trailing_edge_index: int,
@@ -120,7 +129,15 @@ def _edge(curve: Geom_BSplineCurve) -> TopoDS_Edge:
 
 def bspline_wire(poles: NDArray[np.float64], knots: NDArray[np.float64], last_pieces: int = 1,
                  closed_split: float | None = 0.5) -> cq.Wire:
-    """A closed wire from ``(m, 3)`` poles and a full knot vector of a non-rational cubic B-spline.
+    """:func:`occ_bspline_wire` as cadquery's wire."""
+    import cadquery as cq
+
+    return cq.Wire(occ_bspline_wire(poles, knots, last_pieces, closed_split))
+
+
+def occ_bspline_wire(poles: NDArray[np.float64], knots: NDArray[np.float64], last_pieces: int = 1,
+                     closed_split: float | None = 0.5) -> TopoDS_Wire:
+    """A closed wire (OpenCascade's) from ``(m, 3)`` poles and a full knot vector of a non-rational cubic B-spline.
 
     One edge per piece between C0 corner knots (see :func:`_corner_knots`), so that each piece
     lofts into its own face; the last piece (the airfoil) is further split into ``last_pieces``
@@ -141,7 +158,7 @@ def bspline_wire(poles: NDArray[np.float64], knots: NDArray[np.float64], last_pi
             builder.Add(_edge(segment))
     if not builder.IsDone():
         raise KernelError("OpenCascade could not make a closed section wire")
-    return cq.Wire(builder.Wire())
+    return builder.Wire()
 
 
 def _pieces(poles: NDArray[np.float64], knots: NDArray[np.float64]

@@ -50,6 +50,7 @@ from torus_cad.tolerances import REPORT_FILE_MAX_BYTES
 
 if TYPE_CHECKING:
     from torus_cad.outputs.report import BuiltPropeller
+    from torus_cad.runtime.isolation import IsolatedCall
 
 #: Key of the report that lists the set's other files: ``{kind: {"file", "bytes", "sha256"}}``.
 FILES_KEY = "files"
@@ -399,10 +400,11 @@ class PublishedSet:
 
 
 def write_output_set(propeller: BuiltPropeller, out_dir: str | Path, density_g_cm3: float, stl: bool = True,
-                     sections_table: bool = False, extra_files: Mapping[str, FileWriter] | None = None
-                     ) -> PublishedSet:
+                     sections_table: bool | IsolatedCall[dict[str, tuple[str, bytes]]] = False,
+                     extra_files: Mapping[str, FileWriter] | None = None) -> PublishedSet:
     """Write the files of ``export.formats`` (STEP, STL unless ``stl`` is False, 3MF), the
-    blade-element table (``<name>_sections.csv`` and ``.png``, if ``sections_table``), any
+    blade-element table (``<name>_sections.csv`` and ``.png``, if ``sections_table``: True, or its
+    files' call already started, :func:`torus_cad.outputs.sections_table.design_sections_table_files`), any
     ``extra_files`` (``{suffix: writer(path)}``, e.g. a preview picture) and the sealed
     ``<name>.json`` report as one output set (see the module doc); return the final paths by kind
     (the report last) and the report.
@@ -420,7 +422,7 @@ def write_output_set(propeller: BuiltPropeller, out_dir: str | Path, density_g_c
     from torus_cad.parameters.stl_budget import check_stl_budget
     from torus_cad.runtime.isolation import IsolatedCall
     from torus_cad.runtime.stages import Stage, StageTimer
-    from torus_cad.tolerances import SECTIONS_TABLE_TIME_LIMIT_S
+    from torus_cad.tolerances import SECTIONS_TABLE_TIME_LIMIT_S, STEP_WRITE_TIME_LIMIT_S
 
     params = propeller.parameters
     export = params.export
@@ -436,7 +438,7 @@ def write_output_set(propeller: BuiltPropeller, out_dir: str | Path, density_g_c
     def mesh() -> UncrossedMesh:
         """The uncrossed tessellation that the STL and the 3MF both write, made once."""
         if not made:
-            made.append(uncrossed_mesh(propeller.solid, *deflections))
+            made.append(uncrossed_mesh(propeller.shape, *deflections))
         return made[0]
 
     def checked(kind: str, write: Callable[[Path], Any]) -> FileWriter:
@@ -448,25 +450,29 @@ def write_output_set(propeller: BuiltPropeller, out_dir: str | Path, density_g_c
     with OutputSet(out_dir, params.name) as output, contextlib.ExitStack() as children:
         # The blade-element table (matplotlib) is drawn in a child meanwhile, on the second core; the child
         # returns the files' contents and this process writes them (a signal here then leaves nothing behind).
-        table = children.enter_context(IsolatedCall(sections_table_files, propeller.surface, params,
-                                                    what="the blade-element table")) if sections_table else None
-        if ExportFormat.STEP in formats:
-            with timer.stage(Stage.STEP_WRITE):
-                # A root fillet's faces meet the blade and hub only within their edges' tolerances (up to
-                # 2.5e-5 mm apart), which a STEP file cannot carry per edge: its file is not checked read
-                # back (issue 33, open; kernel.fillet_continuity).
-                output.write("step", lambda path: write_step(propeller.solid, path, params.name, export.step_schema,
-                                                             program=f"torus_cad {__version__}",
-                                                             check_readback=propeller.root_fillet is None))
+        table = sections_table if isinstance(sections_table, IsolatedCall) else children.enter_context(IsolatedCall(
+            sections_table_files, propeller.surface, params, what="the blade-element table")) if sections_table else None
+        # The STEP file is written and read back in a child too, into its staging path, while this process
+        # makes and checks the meshes (a signal kills the child before the staging folder goes).
+        # A root fillet's faces meet the blade and hub only within their edges' tolerances (up to
+        # 2.5e-5 mm apart), which a STEP file cannot carry per edge: its file is not checked read
+        # back (issue 33, open; kernel.fillet_continuity).
+        step = children.enter_context(IsolatedCall(
+            write_step, propeller.shape, output.stage("step"), params.name, export.step_schema,
+            f"torus_cad {__version__}", propeller.root_fillet is None,
+            what="writing the STEP file")) if ExportFormat.STEP in formats else None
         if write_stl_file:
             with timer.stage(Stage.STL_WRITE):
-                output.write("stl", checked("stl", lambda path: write_checked_stl(propeller.solid, path, *deflections,
+                output.write("stl", checked("stl", lambda path: write_checked_stl(propeller.shape, path, *deflections,
                                                                                   mesh=mesh())))
         if ExportFormat.THREE_MF in formats:
             with timer.stage(Stage.THREE_MF_WRITE):
-                output.write("3mf", checked("3mf", lambda path: write_3mf(propeller.solid, path, params.name,
+                output.write("3mf", checked("3mf", lambda path: write_3mf(propeller.shape, path, params.name,
                                                                           *deflections, version=__version__,
                                                                           mesh=mesh())))
+        if step is not None:
+            with timer.stage(Stage.STEP_WRITE):  # what is left of it once the meshes are written
+                output.write("step", lambda path: step.result(STEP_WRITE_TIME_LIMIT_S))
         if table is not None:
             with timer.stage(Stage.SECTIONS_TABLE):  # what is left of it once the meshes are written
                 output.write_files(lambda folder: write_files(table.result(SECTIONS_TABLE_TIME_LIMIT_S), folder))

@@ -15,7 +15,7 @@ from torus_cad.geometry.blade.handedness import Handedness
 from torus_cad.kernel.checks import balance
 
 if TYPE_CHECKING:
-    import cadquery as cq
+    from OCP.TopoDS import TopoDS_Shape
 
     from torus_cad.geometry.analysis.printability import Printability
     from torus_cad.geometry.blade.surface import BladeSurface
@@ -33,7 +33,7 @@ class BuiltPropeller(Protocol):
     """What the report and the output set read of a built propeller (:class:`torus_cad.propeller.Propeller`)."""
 
     parameters: PropellerParameters
-    solid: cq.Solid
+    shape: TopoDS_Shape
     surface: BladeSurface
     section_curves: SectionCurves
     stage_seconds: dict[str, float]
@@ -68,7 +68,7 @@ def build_report(propeller: BuiltPropeller, density_g_cm3: float,
         "checks": checks,
         **{f"{kind}_mesh": mesh for kind, mesh in (meshes or {}).items()},
         **properties.to_dict(),
-        "balance": balance(propeller.solid, density_g_cm3).to_dict(),
+        "balance": balance(propeller.shape, density_g_cm3).to_dict(),
         "printability": propeller.printability().to_dict(),
         "handedness": propeller.parameters.handedness.value,
         "spin_to_push_air_down": propeller.spin_to_push_air_down().value,

@@ -140,6 +140,17 @@ def sections_table_files(surface: BladeSurface, params: Any, spin: Handedness = 
             "sections_png": (f"{params.name}_sections.png", sections_png(elements, f"{params.name}: blade elements"))}
 
 
+def design_sections_table_files(params: Any) -> dict[str, tuple[str, bytes]]:
+    """:func:`sections_table_files` of the blade that the build of ``params`` lofts (its design targets
+    resolved, its surface sampled, as torus_cad.propeller.build_propeller does), from the parameters
+    alone: ``torus-cad build`` starts it in a child before the kernel loads, so that the picture is drawn
+    on the second core while this process loads OpenCascade and builds."""
+    from torus_cad.parameters.design_targets import resolve_design_targets
+
+    resolved = resolve_design_targets(params).parameters
+    return sections_table_files(resolved.blade_surface(), resolved)
+
+
 def write_files(files: dict[str, tuple[str, bytes]], out_dir: Path) -> dict[str, Path]:
     """Write :func:`sections_table_files` into ``out_dir``, each atomically; their paths by kind."""
     paths = {}

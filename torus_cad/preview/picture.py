@@ -56,9 +56,13 @@ _TEXT_RGB = (0.2, 0.2, 0.2)
 
 class _HasParts(Protocol):
     parameters: PropellerParameters
-    solid: cq.Solid
-    blades: list[cq.Solid]
     face_parts: tuple[int, ...]
+
+    @property
+    def solid(self) -> cq.Solid: ...
+
+    @property
+    def blades(self) -> list[cq.Solid]: ...
 
 
 @dataclass(frozen=True)

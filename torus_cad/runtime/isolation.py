@@ -12,8 +12,10 @@ from a daemonic process, which the sweep's and the optimiser's pool workers are.
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import faulthandler
+import importlib
 import os
 import pickle
 import select
@@ -29,6 +31,24 @@ T = TypeVar("T")
 
 _PR_SET_PDEATHSIG = 1  # linux/prctl.h
 _CHILD_DEFAULT_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+
+#: Modules to import the next time this process waits for a child (:func:`prefetch_modules`).
+_PREFETCH: list[str] = []
+
+
+def prefetch_modules(*names: str) -> None:
+    """Import the modules ``names`` the next time this process waits for a child's result, instead of
+    when they are first used: the wait is time this process would otherwise sleep (``torus-cad build``
+    imports the mesh checker while the strict check runs in its child). A module that does not import
+    is left for its first use to report."""
+    _PREFETCH.extend(names)
+
+
+def _import_prefetched() -> None:
+    while _PREFETCH:
+        name = _PREFETCH.pop(0)
+        with contextlib.suppress(ImportError):  # its first use raises the error that names the missing package
+            importlib.import_module(name)
 
 
 class IsolatedTimeout(KernelError):
@@ -67,6 +87,7 @@ class IsolatedCall(Generic[T]):
         pid = self._pid
         if pid is None:
             raise KernelError(f"{self.what}: its result was collected already")
+        _import_prefetched()  # the child works meanwhile; its time limit counts from here on
         data = _read_with_limit(self._read_end, pid, timeout_s)
         _, status = os.waitpid(pid, 0)
         self._pid = None

@@ -58,7 +58,7 @@ _LABELS = {
     Stage.STL_WRITE: "writing STL",
     Stage.SECTIONS_TABLE: "writing the blade-element table",
     Stage.THREE_MF_WRITE: "writing 3MF",
-    Stage.KERNEL_IMPORT: "loading the schema and the CAD kernel (cadquery)",
+    Stage.KERNEL_IMPORT: "loading the schema and the CAD kernel (OpenCascade)",
     Stage.WRITE: "writing the files",
     Stage.PREVIEW_TESSELLATE: "tessellating for the preview",
     Stage.PREVIEW_RENDER: "rendering the preview",

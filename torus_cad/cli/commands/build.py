@@ -10,8 +10,10 @@ from torus_cad.cli.design_input import format_overrides, load_parameters, writes
 from torus_cad.cli.exits import EXIT_OK
 from torus_cad.errors import GeometryError
 from torus_cad.outputs.output_set import check_writable_folder, write_output_set
+from torus_cad.outputs.sections_table import design_sections_table_files
 from torus_cad.parameters.stl_budget import check_stl_budget
 from torus_cad.preview.size import parse_size
+from torus_cad.runtime.isolation import IsolatedCall, prefetch_modules
 from torus_cad.runtime.stages import Stage
 from torus_cad.tolerances import MIN_BLUNT_TRAILING_EDGE_MM
 
@@ -27,19 +29,24 @@ def run(args: argparse.Namespace) -> int:
     if writes_a_mesh(params, args.no_stl):
         check_stl_budget(params)  # a mesh that would blow up is refused before anything is built (~7 ms)
     check_writable_folder(args.out)  # before the build, not after it
-    # The kernel loads only now: a design refused above costs the schema, not cadquery's seconds too.
-    from torus_cad.propeller import build_propeller
+    # The blade-element table (matplotlib) is drawn in a child from now on, on the second core, while this
+    # process loads the kernel and builds; its files join the output set (torus_cad.outputs.output_set).
+    with IsolatedCall(design_sections_table_files, params, what="the blade-element table") as table:
+        # The kernel loads only now: a design refused above costs the schema, not OpenCascade's second too.
+        from torus_cad.propeller import build_propeller
 
-    propeller = build_propeller(params, progress=progress)
-    progress(Stage.WRITE)
-    extra_files = {}
-    if size is not None:
-        from torus_cad.preview.picture import write_preview
+        if writes_a_mesh(params, args.no_stl):  # the mesh checker loads while the strict check runs in its child
+            prefetch_modules("meshlib.mrmeshpy", "meshlib.mrmeshnumpy")
+        propeller = build_propeller(params, progress=progress)
+        progress(Stage.WRITE)
+        extra_files = {}
+        if size is not None:
+            from torus_cad.preview.picture import write_preview
 
-        extra_files["png"] = lambda path: write_preview(propeller, path, size, progress=progress)
-    # One output set: the files, the blade-element table, the picture and the report appear together.
-    published = write_output_set(propeller, Path(args.out), args.density, stl=not args.no_stl,
-                                 sections_table=True, extra_files=extra_files)
+            extra_files["png"] = lambda path: write_preview(propeller, path, size, progress=progress)
+        # One output set: the files, the blade-element table, the picture and the report appear together.
+        published = write_output_set(propeller, Path(args.out), args.density, stl=not args.no_stl,
+                                     sections_table=table, extra_files=extra_files)
     progress.finish()
     paths, report = published.paths, published.report  # not re-read: a same-name build may have replaced it
     if not args.quiet:

@@ -6,7 +6,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import cadquery as cq
 from OCP.APIHeaderSection import APIHeaderSection_MakeHeader
 from OCP.IFSelect import IFSelect_RetDone
 from OCP.Interface import Interface_Static
@@ -20,6 +19,7 @@ from OCP.XCAFDoc import XCAFDoc_DocumentTool
 from torus_cad.errors import KernelError
 from torus_cad.formats import StepSchema
 from torus_cad.kernel.step_readback import check_step_readback
+from torus_cad.kernel.topology import AnyShape, occ
 from torus_cad.runtime.files import atomic_path, file_ends_with, write_failure
 
 #: OpenCascade's write.step.schema value of each protocol.
@@ -29,7 +29,7 @@ _STEP_SCHEMAS = {StepSchema.AP214: "AP214IS", StepSchema.AP242: "AP242DIS"}
 _STEP_END_MARKER = b"END-ISO-10303-21;"
 
 
-def write_step(shape: cq.Shape, path: str | Path, product_name: str, schema: StepSchema = StepSchema.AP214,
+def write_step(shape: AnyShape, path: str | Path, product_name: str, schema: StepSchema = StepSchema.AP214,
                program: str = "torus_cad", check_readback: bool = False) -> Path:
     """Write ``shape`` as STEP (application protocol ``schema``, millimetres, product named ``product_name``).
 
@@ -40,7 +40,7 @@ def write_step(shape: cq.Shape, path: str | Path, product_name: str, schema: Ste
     before it is published; otherwise KernelError naming the first fault, and no file.
     """
     document = TDocStd_Document(TCollection_ExtendedString("torus_cad"))
-    label = XCAFDoc_DocumentTool.ShapeTool_s(document.Main()).AddShape(shape.wrapped, False)
+    label = XCAFDoc_DocumentTool.ShapeTool_s(document.Main()).AddShape(occ(shape), False)
     TDataStd_Name.Set_s(label, TCollection_ExtendedString(product_name))
     writer = STEPCAFControl_Writer()  # creating the writer initialises the statics; set them after
     for key, value in (("write.step.schema", _STEP_SCHEMAS[schema]), ("write.step.unit", "MM")):

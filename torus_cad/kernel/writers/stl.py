@@ -8,13 +8,13 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import cadquery as cq
 import numpy as np
 from OCP.BRepMesh import BRepMesh_IncrementalMesh
 from OCP.StlAPI import StlAPI_Writer
 
 from torus_cad.errors import KernelError
 from torus_cad.kernel.mesh_check import MeshCheck, checked, intersecting_pairs_in_file
+from torus_cad.kernel.topology import AnyShape, occ
 from torus_cad.kernel.uncrossed import UncrossedMesh, uncrossed_mesh
 from torus_cad.runtime.files import atomic_path, write_failure
 
@@ -36,7 +36,7 @@ def _not_written(path: Path) -> KernelError:
     return KernelError(f"OpenCascade could not write STL file {str(path)!r}")
 
 
-def write_stl(shape: cq.Shape, path: str | Path, linear_deflection: float, angular_deflection: float) -> Path:
+def write_stl(shape: AnyShape, path: str | Path, linear_deflection: float, angular_deflection: float) -> Path:
     """Tessellate ``shape`` (deflections in mm and radians) and write a binary STL."""
     path = Path(path)
     with atomic_path(path) as temp:
@@ -44,7 +44,7 @@ def write_stl(shape: cq.Shape, path: str | Path, linear_deflection: float, angul
     return path
 
 
-def write_checked_stl(shape: cq.Shape, path: str | Path, linear_deflection: float,
+def write_checked_stl(shape: AnyShape, path: str | Path, linear_deflection: float,
                       angular_deflection: float, mesh: UncrossedMesh | None = None) -> MeshCheck:
     """Write the uncrossed tessellation of ``shape`` (``mesh`` if given, else made at the deflections,
     mm and rad) as a binary STL, read it back with meshlib and check that no two triangles intersect.
@@ -74,11 +74,11 @@ def _write_binary_stl(temp: Path, path: Path, vertices: np.ndarray, triangles: n
         raise write_failure(path, temp, _not_written(path))
 
 
-def _write_stl_to(shape: cq.Shape, temp: Path, path: Path, linear_deflection: float, angular_deflection: float) -> None:
-    mesher = BRepMesh_IncrementalMesh(shape.wrapped, linear_deflection, False, angular_deflection, True)  # meshes here
+def _write_stl_to(shape: AnyShape, temp: Path, path: Path, linear_deflection: float, angular_deflection: float) -> None:
+    mesher = BRepMesh_IncrementalMesh(occ(shape), linear_deflection, False, angular_deflection, True)  # meshes here
     if not mesher.IsDone():
         raise KernelError("OpenCascade could not tessellate the solid for STL")
     writer = StlAPI_Writer()
     writer.ASCIIMode = False
-    if not writer.Write(shape.wrapped, str(temp)) or not _stl_whole(temp):
+    if not writer.Write(occ(shape), str(temp)) or not _stl_whole(temp):
         raise write_failure(path, temp, _not_written(path))

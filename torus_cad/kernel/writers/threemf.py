@@ -16,11 +16,11 @@ from __future__ import annotations
 import zipfile
 from pathlib import Path
 
-import cadquery as cq
 import numpy as np
 from numpy.typing import NDArray
 
 from torus_cad.kernel.mesh_check import MeshCheck, checked, intersecting_pairs
+from torus_cad.kernel.topology import AnyShape
 from torus_cad.kernel.uncrossed import UncrossedMesh, uncrossed_mesh
 from torus_cad.runtime.files import atomic_path
 
@@ -60,7 +60,7 @@ _MODEL_TAIL = """   </mesh>
 """
 
 
-def write_3mf(shape: cq.Shape, path: str | Path, name: str, linear_deflection: float,
+def write_3mf(shape: AnyShape, path: str | Path, name: str, linear_deflection: float,
               angular_deflection: float, version: str, mesh: UncrossedMesh | None = None) -> MeshCheck:
     """Write the uncrossed tessellation of ``shape`` (``mesh`` if given, else made at the deflections,
     mm and rad) as a 3MF package with one mesh object named ``name`` (millimetres), checked again with
