@@ -28,6 +28,7 @@ from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape
 from torus_cad.errors import KernelError
 from torus_cad.kernel.fillet_continuity import c1_fillet
 from torus_cad.kernel.fillet_edges import FilletParams, fillet_in_child
+from torus_cad.kernel.fillet_readback import readable_edges
 from torus_cad.kernel.fillet_tight_bends import reduced_edge_radii, varying_junction_mm
 from torus_cad.kernel.topology import BLADE_SURFACES
 
@@ -133,6 +134,11 @@ def fillet_blade_roots(solid: cq.Solid, face_parts: Sequence[int], radius_mm: fl
             smooth, parts = c1_fillet(filleted.solid, filleted.face_parts)
         except KernelError:  # the split would not give a valid solid: the fillet as OpenCascade made it
             smooth, parts = filleted.solid, tuple(filleted.face_parts)
+        try:  # edges that read back from STEP as they are (kernel.fillet_readback)
+            readable = readable_edges(smooth, parts)
+            smooth, parts = readable.solid, readable.face_parts
+        except KernelError:  # the split would not give a valid solid: the build's read-back check names what is left
+            pass
         return RootFillet(smooth, radius_mm, min(radii), varying_junction_mm(solid, edges, radii, radius_mm), parts)
     if not suggest:
         raise KernelError(f"root fillet failed at hub.root_fillet_radius = {radius_mm:g} mm")

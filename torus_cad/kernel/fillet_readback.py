@@ -116,15 +116,16 @@ def readable_edges(solid: cq.Solid, face_parts: Sequence[int]) -> ReadableEdges:
     shape = solid.wrapped
     edges = _edges_and_faces(shape)
     replaced, worst_before, worst_after = 0, 0.0, 0.0
-    for edge, faces in edges:
-        for face in faces:
-            before, after = _square_pcurve(edge, face)
-            worst_before, worst_after = max(worst_before, before), max(worst_after, after)
-            replaced += after < before
     context = ShapeBuild_ReShape()
     split = 0
     for edge, faces in edges:
-        where = _split_parameter(edge, faces)
+        worst: tuple[float, float] = (0.0, 0.0)  # the largest distance over the edge's faces, and where
+        for face in faces:
+            before, after = _square_pcurve(edge, face)
+            worst_before, worst_after = max(worst_before, before), max(worst_after, after[0])
+            replaced += after[0] < before
+            worst = max(worst, after)
+        where = _split_parameter(edge, faces, *worst)
         if where is not None:
             context.Replace(edge.Oriented(TopAbs_FORWARD), _split(edge, where))
             split += 1
@@ -160,27 +161,28 @@ def _deviation(curve: Geom_Curve, pcurve: Geom2d_Curve, surface: Geom_Surface, f
     return (check.MaxDistance(), check.MaxParameter()) if check.IsDone() else (math.inf, first)
 
 
-def _square_pcurve(edge: TopoDS_Edge, face: TopoDS_Face) -> tuple[float, float]:
+def _square_pcurve(edge: TopoDS_Edge, face: TopoDS_Face) -> tuple[float, tuple[float, float]]:
     """Replace ``edge``'s p-curve on ``face`` by the feet of the perpendiculars from its 3D curve (module
-    doc, step 1) if its curves part by more than READBACK_MIN_TOLERANCE_MM and the new one parts by less;
-    the largest distance before and after (mm). The edge's tolerance is raised to cover the new curve."""
+    doc, step 1) if its curves part by more than READBACK_MIN_TOLERANCE_MM and the new one parts by less.
+    Returns the largest distance before (mm), and after with its parameter. The edge's tolerance is
+    raised to cover the new curve."""
     curve = BRep_Tool.Curve_s(edge, 0.0, 0.0)
     pcurve = BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0)
-    if pcurve is None:
-        return 0.0, 0.0
-    surface = BRep_Tool.Surface_s(face)
     first, last = BRep_Tool.Range_s(edge)
-    before = _deviation(curve, pcurve, surface, first, last)[0]
-    if before <= READBACK_MIN_TOLERANCE_MM:
-        return before, before
+    if pcurve is None:
+        return 0.0, (0.0, first)
+    surface = BRep_Tool.Surface_s(face)
+    before = _deviation(curve, pcurve, surface, first, last)
+    if before[0] <= READBACK_MIN_TOLERANCE_MM:
+        return before[0], before
     square = _SquareFit(curve, pcurve, surface, first, last).fit()
-    after = _deviation(curve, square, surface, first, last)[0] if square is not None else math.inf
-    if after >= before:
-        return before, before
+    after = _deviation(curve, square, surface, first, last) if square is not None else (math.inf, first)
+    if after[0] >= before[0]:
+        return before[0], before
     builder = BRep_Builder()
-    tolerance = max(BRep_Tool.Tolerance_s(edge), after * READBACK_TOLERANCE_FACTOR)
+    tolerance = max(BRep_Tool.Tolerance_s(edge), after[0] * READBACK_TOLERANCE_FACTOR)
     builder.UpdateEdge(edge, square, face, tolerance)
-    return before, after
+    return before[0], after
 
 
 class _SquareFit:
@@ -335,25 +337,22 @@ def _bspline2d(coefficients: NDArray[np.float64], flat: NDArray[np.float64], deg
     return Geom2d_BSplineCurve(poles, knots, multiplicities, degree)
 
 
-def _split_parameter(edge: TopoDS_Edge, faces: Sequence[TopoDS_Face]) -> float | None:
-    """Where ``edge``'s curves part most, if that is between two of the reader's samples and more than the
-    reader would give the edge (module doc, step 2); None otherwise."""
+def _split_parameter(edge: TopoDS_Edge, faces: Sequence[TopoDS_Face], worst: float, where: float) -> float | None:
+    """``where`` (the parameter at which ``edge``'s curves part most, by ``worst`` mm) if that is more
+    than the reader would give the edge and not at an end (module doc, step 2); None otherwise."""
+    if worst <= READBACK_MIN_TOLERANCE_MM:
+        return None
     curve = BRep_Tool.Curve_s(edge, 0.0, 0.0)
     first, last = BRep_Tool.Range_s(edge)
-    worst, where, sampled = 0.0, first, 0.0
-    samples = np.linspace(first, last, READBACK_SAMPLES)
+    samples = np.linspace(first, last, READBACK_SAMPLES).tolist()
+    sampled = 0.0
     for face in faces:
         pcurve = BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0)
-        if pcurve is None:
-            continue
-        surface = BRep_Tool.Surface_s(face)
-        deviation, at = _deviation(curve, pcurve, surface, first, last)
-        if deviation > worst:
-            worst, where = deviation, at
-        sampled = max(sampled, *(curve.Value(t).Distance(surface.Value(*_uv(pcurve.Value(t)))) for t in samples))
-    reader = max(READBACK_MIN_TOLERANCE_MM, sampled * READBACK_TOLERANCE_FACTOR)
-    inside = first < where < last and min(where - first, last - where) > _KNOT_MERGE * (last - first)
-    return where if worst > reader and inside else None
+        if pcurve is not None:
+            surface = BRep_Tool.Surface_s(face)
+            sampled = max(sampled, *(curve.Value(t).Distance(surface.Value(*_uv(pcurve.Value(t)))) for t in samples))
+    inside = min(where - first, last - where) > _KNOT_MERGE * (last - first)
+    return where if worst > sampled * READBACK_TOLERANCE_FACTOR and inside else None
 
 
 def _split(edge: TopoDS_Edge, parameter: float) -> TopoDS_Wire:

@@ -452,12 +452,8 @@ def write_output_set(propeller: BuiltPropeller, out_dir: str | Path, density_g_c
                                                     what="the blade-element table")) if sections_table else None
         if ExportFormat.STEP in formats:
             with timer.stage(Stage.STEP_WRITE):
-                # A root fillet's faces meet the blade and hub only within their edges' tolerances (up to
-                # 2.5e-5 mm apart), which a STEP file cannot carry per edge: its file is not checked read
-                # back (issue 33, open; kernel.fillet_continuity).
                 output.write("step", lambda path: write_step(propeller.solid, path, params.name, export.step_schema,
-                                                             program=f"torus_cad {__version__}",
-                                                             check_readback=propeller.root_fillet is None))
+                                                             program=f"torus_cad {__version__}", check_readback=True))
         if write_stl_file:
             with timer.stage(Stage.STL_WRITE):
                 output.write("stl", checked("stl", lambda path: write_checked_stl(propeller.solid, path, *deflections,
