@@ -195,8 +195,15 @@ class _SquareFit:
 
     def fit(self) -> Geom2d_BSplineCurve | None:
         """The fitted p-curve, refined (a knot added half way along each span where it misses a foot
-        half way between points by more than READBACK_PCURVE_FIT_MM) for READBACK_PCURVE_FIT_ROUNDS at
-        most; None if it still misses or a foot does not converge."""
+        half way between points by more than READBACK_PCURVE_FIT_MM, or READBACK_PCURVE_FIT_GAP of the
+        gap) for READBACK_PCURVE_FIT_ROUNDS at most; None if it still misses, a foot does not converge
+        or the least squares cannot be solved."""
+        try:
+            return self._fit()
+        except (ValueError, np.linalg.LinAlgError):  # a singular system (scipy's, numpy's): the old p-curve stays
+            return None
+
+    def _fit(self) -> Geom2d_BSplineCurve | None:
         knots, multiplicities = self.knots, self.multiplicities
         for _ in range(READBACK_PCURVE_FIT_ROUNDS):
             flat = _flat(knots, multiplicities, self.degree)
@@ -209,6 +216,8 @@ class _SquareFit:
             spline = make_lsq_spline(parameters, feet, flat, k=self.degree)
             misses = self._misses(spline(middles), exact)
             allowed = max(READBACK_PCURVE_FIT_MM, READBACK_PCURVE_FIT_GAP * self._gap(middles, exact))
+            if not np.isfinite(misses).all():
+                return None
             if misses.max() <= allowed:
                 return _bspline2d(spline.c, flat, self.degree)
             spans = np.unique(np.searchsorted(knots, middles[misses > allowed]))
@@ -365,8 +374,8 @@ def _split(edge: TopoDS_Edge, parameter: float) -> TopoDS_Wire:
     builder.MakeVertex(middle, BRep_Tool.Curve_s(forward, 0.0, 0.0).Value(parameter), tolerance)
     wire = TopoDS_Wire()
     builder.MakeWire(wire)
-    ends = (TopExp.FirstVertex_s(forward), middle, TopExp.LastVertex_s(forward))
-    for (start, end), (a, b) in zip(zip(ends[:-1], ends[1:]), ((first, parameter), (parameter, last)), strict=True):
+    pieces = ((TopExp.FirstVertex_s(forward), middle, first, parameter), (middle, TopExp.LastVertex_s(forward), parameter, last))
+    for start, end, a, b in pieces:
         piece = TopoDS.Edge_s(forward.EmptyCopied())
         builder.Add(piece, start.Oriented(TopAbs_FORWARD))
         builder.Add(piece, end.Oriented(TopAbs_REVERSED))
