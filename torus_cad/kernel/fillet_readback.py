@@ -45,6 +45,7 @@ import numpy as np
 from numpy.typing import NDArray
 from OCP.Adaptor3d import Adaptor3d_CurveOnSurface
 from OCP.BRep import BRep_Builder, BRep_Tool
+from OCP.BRepCheck import BRepCheck_NoError, BRepCheck_Wire
 from OCP.Geom import Geom_BSplineCurve, Geom_BSplineSurface, Geom_Curve, Geom_Surface, Geom_TrimmedCurve
 from OCP.Geom2d import Geom2d_BSplineCurve, Geom2d_Curve, Geom2d_TrimmedCurve
 from OCP.Geom2dAdaptor import Geom2dAdaptor_Curve
@@ -54,7 +55,7 @@ from OCP.gp import gp_Pnt, gp_Pnt2d, gp_Vec
 from OCP.ShapeBuild import ShapeBuild_ReShape
 from OCP.TColgp import TColgp_Array1OfPnt2d
 from OCP.TColStd import TColStd_Array1OfInteger, TColStd_Array1OfReal
-from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_FORWARD, TopAbs_REVERSED
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_FORWARD, TopAbs_REVERSED, TopAbs_WIRE
 from OCP.TopExp import TopExp
 from OCP.TopoDS import TopoDS, TopoDS_Edge, TopoDS_Face, TopoDS_Shape, TopoDS_Vertex, TopoDS_Wire
 from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape
@@ -63,6 +64,7 @@ from scipy.interpolate import make_lsq_spline
 from torus_cad.kernel import face_provenance
 from torus_cad.kernel.checks import single_valid_solid
 from torus_cad.kernel.edge_curves import distinct_faces
+from torus_cad.kernel.topology import explore
 from torus_cad.tolerances import (
     READBACK_MIN_TOLERANCE_MM,
     READBACK_PCURVE_FIT_GAP,
@@ -182,7 +184,17 @@ def _square_pcurve(edge: TopoDS_Edge, face: TopoDS_Face) -> tuple[float, tuple[f
     builder = BRep_Builder()
     tolerance = max(BRep_Tool.Tolerance_s(edge), after[0] * READBACK_TOLERANCE_FACTOR)
     builder.UpdateEdge(edge, square, face, tolerance)
+    if _wires_cross(edge, face):  # moved across a neighbour's p-curve where two edges meet at a sliver: undone
+        builder.UpdateEdge(edge, pcurve, face, tolerance)
+        return before[0], before
     return before[0], after
+
+
+def _wires_cross(edge: TopoDS_Edge, face: TopoDS_Face) -> bool:
+    """Whether a wire of ``face`` holding ``edge`` crosses itself on the face (BRepCheck_Wire)."""
+    first, second = TopoDS_Edge(), TopoDS_Edge()
+    return any(BRepCheck_Wire(TopoDS.Wire_s(wire)).SelfIntersect(face, first, second) != BRepCheck_NoError
+               for wire in explore(face, TopAbs_WIRE) if any(edge.IsSame(other) for other in explore(wire, TopAbs_EDGE)))
 
 
 class _SquareFit:
@@ -196,8 +208,8 @@ class _SquareFit:
     def fit(self) -> Geom2d_BSplineCurve | None:
         """The fitted p-curve, refined (a knot added half way along each span where it misses a foot
         half way between points by more than READBACK_PCURVE_FIT_MM, or READBACK_PCURVE_FIT_GAP of the
-        gap) for READBACK_PCURVE_FIT_ROUNDS at most; None if it still misses, a foot does not converge
-        or the least squares cannot be solved."""
+        gap) for READBACK_PCURVE_FIT_ROUNDS at most. None when the old p-curve is as square as that
+        already, or the fit still misses, a foot does not converge or the least squares cannot be solved."""
         try:
             return self._fit()
         except (ValueError, np.linalg.LinAlgError):  # a singular system (scipy's, numpy's): the old p-curve stays
@@ -205,17 +217,18 @@ class _SquareFit:
 
     def _fit(self) -> Geom2d_BSplineCurve | None:
         knots, multiplicities = self.knots, self.multiplicities
-        for _ in range(READBACK_PCURVE_FIT_ROUNDS):
+        for round_ in range(READBACK_PCURVE_FIT_ROUNDS):
             flat = _flat(knots, multiplicities, self.degree)
             parameters = _sample_parameters(knots, multiplicities, self.degree)
-            feet = self._feet(parameters)
             middles = 0.5 * (parameters[1:] + parameters[:-1])
-            exact = self._feet(middles)
+            feet, exact = self._feet(parameters), self._feet(middles)
             if feet is None or exact is None:
                 return None
+            allowed = max(READBACK_PCURVE_FIT_MM, READBACK_PCURVE_FIT_GAP * self._gap(middles, exact))
+            if round_ == 0 and self._misses(np.array([_uv(self.pcurve.Value(t)) for t in middles]), exact).max() <= allowed:
+                return None  # square already
             spline = make_lsq_spline(parameters, feet, flat, k=self.degree)
             misses = self._misses(spline(middles), exact)
-            allowed = max(READBACK_PCURVE_FIT_MM, READBACK_PCURVE_FIT_GAP * self._gap(middles, exact))
             if not np.isfinite(misses).all():
                 return None
             if misses.max() <= allowed:
@@ -327,9 +340,9 @@ def _sample_parameters(knots: NDArray[np.float64], multiplicities: NDArray[np.in
                        ) -> NDArray[np.float64]:
     """Points for a least-squares fit in the basis of distinct ``knots``: in each span, evenly, twice the
     number of basis functions that start there (its first knot's multiplicity, degree + 1 in the
-    first), and at least 3."""
+    first), and at least degree + 1 (a span a refinement added holds a whole polynomial piece)."""
     starting = np.concatenate([[degree + 1], multiplicities])
-    inside = [np.linspace(a, b, max(3, 2 * int(count)) + 1)[:-1]
+    inside = [np.linspace(a, b, max(degree + 1, 2 * int(count)) + 1)[:-1]
               for a, b, count in zip(knots[:-1], knots[1:], starting, strict=True)]
     return np.concatenate([*inside, knots[-1:]])
 
