@@ -18,20 +18,24 @@ per edge, and OpenCascade's reader (FreeCAD's too) gives each edge what it sampl
 
 So, before the file is written:
 
-1. every p-curve whose curves part by more than :data:`~torus_cad.tolerances.READBACK_MIN_TOLERANCE_MM`
-   is replaced by the curve of the feet of the perpendiculars from the 3D curve to the surface, at
-   the same parameters (points solved by Gauss-Newton, the p-curve fitted by least squares in the
-   B-spline basis of the old 3D curve and p-curve, refined until it misses the feet by at most
-   :data:`~torus_cad.tolerances.READBACK_PCURVE_FIT_MM` half way between them): the curves then part
-   square to the surface everywhere, by the real gap only, and the reader's projection of the end
-   points lands where the file says;
+1. every p-curve whose curves part by more than :data:`~torus_cad.tolerances.READBACK_MIN_TOLERANCE_MM`,
+   and that is askew, is replaced by the curve of the feet of the perpendiculars from the 3D curve to
+   the surface, at the same parameters (points solved by Gauss-Newton, the p-curve fitted by least
+   squares in a B-spline basis holding the old 3D curve and p-curve and the surface's knot lines they
+   cross, refined until it misses the feet half way between them by at most
+   :data:`~torus_cad.tolerances.READBACK_PCURVE_FIT_MM` or
+   :data:`~torus_cad.tolerances.READBACK_PCURVE_FIT_GAP` of the gap): the curves then part square to
+   the surface everywhere, by the real gap only, and the reader's projection of the end points lands
+   where the file says. A new p-curve that would make its face's wire cross itself (two edges
+   meeting at a sliver) is undone;
 2. every edge whose largest distance lies between the reader's samples is split there: each piece
    then parts most at an end, which the reader samples.
 
 The faces stay as they are (only edges are split and p-curves replaced); the solid is checked
-(BRepCheck_Analyzer) and its faces keep their parts. Measured on ``workshop_fillet`` (python
-scripts/step_readback_check.py examples/workshop_fillet.toml): see
-docs/explanation/how-the-solid-is-built.md.
+(BRepCheck_Analyzer) and its faces keep their parts. Measured on ``workshop_fillet`` (``python
+scripts/step_readback_check.py examples/workshop_fillet.toml``): 93 ``InvalidCurveOnSurface`` faults
+read back before, 0 after (every test on; 30 edges split and 21 p-curves replaced a blade); the
+rest, and what it costs: docs/explanation/how-the-solid-is-built.md.
 """
 
 from __future__ import annotations
