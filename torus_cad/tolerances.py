@@ -356,3 +356,22 @@ EDGE_CURVE_WORST_POINT_ROUNDS = 20
 NOISE_OBSERVER_DISTANCE_M = (0.0, 1.0e4)
 #: Most observers one simulate run takes (each costs about a second of noise evaluation).
 NOISE_MAX_OBSERVERS = 32
+
+# -- the root fillet's edges made to read back from STEP (torus_cad.kernel.fillet_readback) ---------
+
+#: The least tolerance OpenCascade's STEP reader gives an edge (Precision::Confusion, mm): an edge whose
+#: curves part by no more than this reads back valid whatever they do.
+READBACK_MIN_TOLERANCE_MM = 1e-7
+#: The reader samples an edge's curves at this many points at equal parameters, ends included
+#: (ShapeAnalysis_Edge::CheckSameParameter's 23) ...
+READBACK_SAMPLES = 23
+#: ... and gives the edge the largest distance times this (BRepLib_ValidateEdge).
+READBACK_TOLERANCE_FACTOR = 1.00001
+#: A p-curve rebuilt from the feet of perpendiculars misses them, half way between its points, by at
+#: most this (mm) or this fraction of the largest gap between the 3D curve and the surface, whichever
+#: is larger: a miss along the curve of e moves the reader's projection of an end point, and the
+#: largest distance it reads, by about e^2 / gap, well within its factor of 1.00001.
+READBACK_PCURVE_FIT_MM = 1e-10
+READBACK_PCURVE_FIT_GAP = 1e-3
+#: Rounds of knots added where the rebuilt p-curve misses; beyond, the p-curve is kept.
+READBACK_PCURVE_FIT_ROUNDS = 6

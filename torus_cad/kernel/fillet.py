@@ -28,6 +28,7 @@ from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape
 from torus_cad.errors import KernelError
 from torus_cad.kernel.fillet_continuity import c1_fillet
 from torus_cad.kernel.fillet_edges import FilletParams, fillet_in_child
+from torus_cad.kernel.fillet_readback import readable_edges
 from torus_cad.kernel.fillet_tight_bends import reduced_edge_radii, varying_junction_mm
 from torus_cad.kernel.topology import BLADE_SURFACES
 
@@ -113,7 +114,7 @@ class RootFillet:
 
 def fillet_blade_roots(solid: cq.Solid, face_parts: Sequence[int], radius_mm: float, suggest: bool = True,
                        params: FilletParams | None = None, deadline: float | None = None,
-                       reduce: bool = False) -> RootFillet:
+                       reduce: bool = False, readable: bool = True) -> RootFillet:
     """``solid`` (its faces' parts ``face_parts``) with a fillet of ``radius_mm`` along every
     blade-hub junction; one valid solid, with its faces' parts.
 
@@ -121,7 +122,8 @@ def fillet_blade_roots(solid: cq.Solid, face_parts: Sequence[int], radius_mm: fl
     smaller radius (:func:`reduced_edge_radii`); without, the fillet has ``radius_mm`` everywhere.
     Raises KernelError ("root fillet failed ...", with a radius that works when one of the
     smaller radii tried does) when OpenCascade cannot make it. ``deadline`` (time.monotonic()
-    seconds) cuts the child's time limit short.
+    seconds) cuts the child's time limit short. With ``readable`` (unless a boolean still changes the
+    solid), its edges are made to read back from STEP as they are (:func:`made_readable`).
     """
     edges = junction_edges(solid)
     if not edges:
@@ -133,10 +135,23 @@ def fillet_blade_roots(solid: cq.Solid, face_parts: Sequence[int], radius_mm: fl
             smooth, parts = c1_fillet(filleted.solid, filleted.face_parts)
         except KernelError:  # the split would not give a valid solid: the fillet as OpenCascade made it
             smooth, parts = filleted.solid, tuple(filleted.face_parts)
+        if readable:
+            smooth, parts = made_readable(smooth, parts)
         return RootFillet(smooth, radius_mm, min(radii), varying_junction_mm(solid, edges, radii, radius_mm), parts)
     if not suggest:
         raise KernelError(f"root fillet failed at hub.root_fillet_radius = {radius_mm:g} mm")
     raise fillet_failure(solid, radius_mm)
+
+
+def made_readable(solid: cq.Solid, face_parts: Sequence[int]) -> tuple[cq.Solid, tuple[int, ...]]:
+    """``solid`` with edges that read back from STEP as they are, and its faces' parts
+    (:mod:`torus_cad.kernel.fillet_readback`); ``solid`` with its p-curves squared but no edge split
+    if the split would not give a valid solid (the build's read-back check then names what is left)."""
+    try:
+        readable = readable_edges(solid, face_parts)
+    except KernelError:
+        return solid, tuple(face_parts)
+    return readable.solid, readable.face_parts
 
 
 def fillet_failure(solid: cq.Solid, radius_mm: float, tight_bend_mm: float | None = None) -> KernelError:

@@ -43,6 +43,7 @@ from torus_cad.kernel.fillet import (
     fillet_blade_roots,
     fillet_failure,
     junction_edges,
+    made_readable,
     prepare_blade_for_fillet,
 )
 from torus_cad.kernel.fillet_edges import FilletParams
@@ -117,15 +118,17 @@ def fillet_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], 
 
 def _first_that_works(hub: cq.Solid, split: _LazySplits, angles_deg: Sequence[float], radius_mm: float,
                       tries: Sequence[tuple[int, FilletParams | None]], deadline: float, reduce: bool,
-                      finish: Callable[[RootFillet], RootFillet] = lambda made: made) -> RootFillet | None:
+                      finish: Callable[[RootFillet], RootFillet] | None = None) -> RootFillet | None:
     """The first of ``tries`` (as :data:`FILLET_TRIES`) that works on ``hub``, passed through ``finish``
-    (a KernelError there counts as a failed try); None if none does. Each try stops at
-    FILLET_RETRY_TIME_LIMIT_S (one that saves a design does so in under a second), all by ``deadline``."""
+    (a KernelError there counts as a failed try; the edges are made readable from STEP after it, not
+    before); None if none does. Each try stops at FILLET_RETRY_TIME_LIMIT_S (one that saves a design
+    does so in under a second), all by ``deadline``."""
     for index, params in tries:
         try:
-            return finish(_fillet_and_pattern(hub, split[index], angles_deg, radius_mm, suggest=False, params=params,
-                                              deadline=min(deadline, time.monotonic() + FILLET_RETRY_TIME_LIMIT_S),
-                                              reduce=reduce))
+            made = _fillet_and_pattern(hub, split[index], angles_deg, radius_mm, suggest=False, params=params,
+                                       deadline=min(deadline, time.monotonic() + FILLET_RETRY_TIME_LIMIT_S),
+                                       reduce=reduce, readable=finish is None)
+            return made if finish is None else finish(made)
         except KernelError:
             pass
     return None
@@ -172,6 +175,7 @@ class _RunOut:
             solid = single_valid_solid(cq.Shape.cast(shape), "cutting the run-out hub back")
             origins = face_provenance.labelled_faces(made.solid.wrapped, made.face_parts) + tool_faces
             parts = face_provenance.face_parts(solid.wrapped, face_provenance.through_history(operation, origins))
+            solid, parts = made_readable(solid, parts)  # the cut's new edges too
             return dataclasses.replace(made, solid=solid, face_parts=parts)
 
         return _first_that_works(extended, split, self.angles_deg, self.radius_mm, FILLET_TRIES, deadline, reduce, cut_back)
@@ -196,10 +200,10 @@ class _LazySplits:
 
 def _fillet_and_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], radius_mm: float,
                         suggest: bool = True, params: FilletParams | None = None,
-                        deadline: float | None = None, reduce: bool = False) -> RootFillet:
+                        deadline: float | None = None, reduce: bool = False, readable: bool = True) -> RootFillet:
     single = fuse_pattern(hub, blade, angles_deg[:1], refit_edges=False)
     filleted = fillet_blade_roots(single_valid_solid(single.shape, "joining blade 0 to the hub"), single.face_parts,
-                                  radius_mm, suggest, params, deadline, reduce)
+                                  radius_mm, suggest, params, deadline, reduce, readable)
     if len(angles_deg) == 1:
         return filleted
     try:
@@ -209,7 +213,7 @@ def _fillet_and_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[flo
     except KernelError:
         whole = fuse_pattern(hub, blade, angles_deg, refit_edges=False)
         everywhere = fillet_blade_roots(single_valid_solid(whole.shape, "joining the blades to the hub"),
-                                        whole.face_parts, radius_mm, suggest, params, deadline, reduce)
+                                        whole.face_parts, radius_mm, suggest, params, deadline, reduce, readable)
         # every blade's junction is the same: report blade 0's share
         return dataclasses.replace(everywhere, varying_junction_mm=everywhere.varying_junction_mm / len(angles_deg))
 

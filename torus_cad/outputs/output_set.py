@@ -454,12 +454,11 @@ def write_output_set(propeller: BuiltPropeller, out_dir: str | Path, density_g_c
             sections_table_files, propeller.surface, params, what="the blade-element table")) if sections_table else None
         # The STEP file is written and read back in a child too, into its staging path, while this process
         # makes and checks the meshes (a signal kills the child before the staging folder goes).
-        # A root fillet's faces meet the blade and hub only within their edges' tolerances (up to
-        # 2.5e-5 mm apart), which a STEP file cannot carry per edge: its file is not checked read
-        # back (issue 33, open; kernel.fillet_continuity).
+        # Every design's file is checked as OpenCascade's reader gives it back, a root fillet's too
+        # (kernel.fillet_readback makes its edges readable).
         step = children.enter_context(IsolatedCall(
             write_step, propeller.shape, output.stage("step"), params.name, export.step_schema,
-            f"torus_cad {__version__}", propeller.root_fillet is None,
+            f"torus_cad {__version__}", True,
             what="writing the STEP file")) if ExportFormat.STEP in formats else None
         if write_stl_file:
             with timer.stage(Stage.STL_WRITE):

@@ -1,0 +1,409 @@
+"""The root fillet's edges made to read back from a STEP file as valid as they are in memory.
+
+A fillet face's contact edge lies on the fillet surface (its 3D curve is the surface's boundary, to
+1e-13 mm) but only near the blade or hub surface the fillet rolls on: OpenCascade's fillet surface is
+an approximation. In memory the edge's tolerance covers the gap; a STEP file carries no tolerance
+per edge, and OpenCascade's reader (FreeCAD's too) gives each edge what it samples (mm):
+
+- it finds where each p-curve starts and ends by projecting the 3D curve's end points onto the
+  p-curve's curve on the surface (``ShapeFix_EdgeProjAux``). Where the 3D curve leaves that curve
+  askew (its point at parameter t is not the foot of the perpendicular from it), the projection
+  lands at another parameter, and the reader reparametrizes the p-curve to match: the curves then
+  part differently from what was written;
+- it samples the distance between the 3D curve and each p-curve at 23 points at equal parameters
+  and gives the edge the largest, times 1.00001 (at least 1e-7 mm). Where they part most between
+  two samples, the edge reads back with a tolerance that does not cover its curves: an
+  ``InvalidCurveOnSurface`` fault in ``BOPAlgo_ArgumentAnalyzer`` (FreeCAD's check with BOP),
+  whose measure (``GeomLib_CheckCurveOnSurface``) finds the true largest distance.
+
+So, before the file is written:
+
+1. every p-curve whose curves part by more than :data:`~torus_cad.tolerances.READBACK_MIN_TOLERANCE_MM`,
+   and that is askew, is replaced by the curve of the feet of the perpendiculars from the 3D curve to
+   the surface, at the same parameters (points solved by Gauss-Newton, the p-curve fitted by least
+   squares in a B-spline basis holding the old 3D curve and p-curve and the surface's knot lines they
+   cross, refined until it misses the feet half way between them by at most
+   :data:`~torus_cad.tolerances.READBACK_PCURVE_FIT_MM` or
+   :data:`~torus_cad.tolerances.READBACK_PCURVE_FIT_GAP` of the gap): the curves then part square to
+   the surface everywhere, by the real gap only, and the reader's projection of the end points lands
+   where the file says. A new p-curve that would make its face's wire cross itself (two edges
+   meeting at a sliver) is undone;
+2. every edge whose largest distance lies between the reader's samples is split there: each piece
+   then parts most at an end, which the reader samples.
+
+The faces stay as they are (only edges are split and p-curves replaced); the solid is checked
+(BRepCheck_Analyzer) and its faces keep their parts. Measured on ``workshop_fillet`` (``python
+scripts/step_readback_check.py examples/workshop_fillet.toml``): 93 ``InvalidCurveOnSurface`` faults
+read back before, 0 after (every test on; 30 edges split and 21 p-curves replaced a blade); the
+rest, and what it costs: docs/explanation/how-the-solid-is-built.md.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import cadquery as cq
+import numpy as np
+from numpy.typing import NDArray
+from OCP.Adaptor3d import Adaptor3d_CurveOnSurface
+from OCP.BRep import BRep_Builder, BRep_Tool
+from OCP.BRepCheck import BRepCheck_NoError, BRepCheck_Wire
+from OCP.Geom import Geom_BSplineCurve, Geom_BSplineSurface, Geom_Curve, Geom_Surface, Geom_TrimmedCurve
+from OCP.Geom2d import Geom2d_BSplineCurve, Geom2d_Curve, Geom2d_TrimmedCurve
+from OCP.Geom2dAdaptor import Geom2dAdaptor_Curve
+from OCP.GeomAdaptor import GeomAdaptor_Curve, GeomAdaptor_Surface
+from OCP.GeomLib import GeomLib_CheckCurveOnSurface
+from OCP.gp import gp_Pnt, gp_Pnt2d, gp_Vec
+from OCP.ShapeBuild import ShapeBuild_ReShape
+from OCP.TColgp import TColgp_Array1OfPnt2d
+from OCP.TColStd import TColStd_Array1OfInteger, TColStd_Array1OfReal
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_FORWARD, TopAbs_REVERSED, TopAbs_WIRE
+from OCP.TopExp import TopExp
+from OCP.TopoDS import TopoDS, TopoDS_Edge, TopoDS_Face, TopoDS_Shape, TopoDS_Vertex, TopoDS_Wire
+from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape
+from scipy.interpolate import make_lsq_spline
+
+from torus_cad.kernel import face_provenance
+from torus_cad.kernel.checks import single_valid_solid
+from torus_cad.kernel.edge_curves import distinct_faces
+from torus_cad.kernel.topology import explore
+from torus_cad.tolerances import (
+    READBACK_MIN_TOLERANCE_MM,
+    READBACK_PCURVE_FIT_GAP,
+    READBACK_PCURVE_FIT_MM,
+    READBACK_PCURVE_FIT_ROUNDS,
+    READBACK_SAMPLES,
+    READBACK_TOLERANCE_FACTOR,
+)
+
+__all__ = ["ReadableEdges", "readable_edges"]
+
+#: Gauss-Newton steps for one foot point (it converges in 2-3 from the old p-curve's point).
+_FOOT_STEPS = 8
+#: A foot point has converged when its step moves it by less than this (mm).
+_FOOT_STEP_MM = 1e-13
+#: Knots of the 3D curve and p-curve closer than this fraction of the edge's range are one knot.
+_KNOT_MERGE = 1e-6
+#: Points along a p-curve at which its crossings of the surface's knot lines are looked for ...
+_CROSSING_SAMPLES = 200
+#: ... and halvings of each crossing's interval (2^-40 of 1/200 of the range).
+_BISECTIONS = 40
+
+
+@dataclass(frozen=True)
+class ReadableEdges:
+    """What :func:`readable_edges` did.
+
+    Attributes:
+        solid: the solid, checked; face_parts: its faces' parts.
+        pcurves: p-curves replaced by the feet of perpendiculars; split: edges split where their curves part most.
+        worst_before_mm / worst_after_mm: the largest distance between an edge's 3D curve and a
+            p-curve (GeomLib_CheckCurveOnSurface) before and after the p-curves were replaced, mm.
+    """
+
+    solid: cq.Solid
+    face_parts: tuple[int, ...]
+    pcurves: int
+    split: int
+    worst_before_mm: float
+    worst_after_mm: float
+
+
+def readable_edges(solid: cq.Solid, face_parts: Sequence[int]) -> ReadableEdges:
+    """``solid`` (its faces' parts ``face_parts``) with its p-curves square to their surfaces and its
+    edges split where the STEP reader would miss how far their curves part (module doc).
+
+    The p-curves are replaced in place (in every shape that shares the edges); the edges' tolerances
+    are raised to cover the new curves where needed. Raises KernelError if the split solid is not one
+    valid solid.
+    """
+    shape = solid.wrapped
+    edges = _edges_and_faces(shape)
+    replaced, worst_before, worst_after = 0, 0.0, 0.0
+    context = ShapeBuild_ReShape()
+    split = 0
+    for edge, faces in edges:
+        worst: tuple[float, float] = (0.0, 0.0)  # the largest distance over the edge's faces, and where
+        for face in faces:
+            before, after = _square_pcurve(edge, face)
+            worst_before, worst_after = max(worst_before, before), max(worst_after, after[0])
+            replaced += after[0] < before
+            worst = max(worst, after)
+        where = _split_parameter(edge, faces, *worst)
+        if where is not None:
+            context.Replace(edge.Oriented(TopAbs_FORWARD), _split(edge, where))
+            split += 1
+    if not split:
+        return ReadableEdges(solid, tuple(face_parts), replaced, 0, worst_before, worst_after)
+    checked = single_valid_solid(cq.Shape.cast(context.Apply(shape)), "splitting the root fillet's edges for STEP")
+    origins = face_provenance.through_reshape(context, face_provenance.labelled_faces(shape, face_parts), checked.wrapped)
+    return ReadableEdges(checked, face_provenance.face_parts(checked.wrapped, origins), replaced, split,
+                         worst_before, worst_after)
+
+
+def _edges_and_faces(shape: TopoDS_Shape) -> list[tuple[TopoDS_Edge, list[TopoDS_Face]]]:
+    """Each edge of ``shape`` with a 3D curve, not degenerated and no seam, with its distinct faces."""
+    ancestors = TopTools_IndexedDataMapOfShapeListOfShape()
+    TopExp.MapShapesAndAncestors_s(shape, TopAbs_EDGE, TopAbs_FACE, ancestors)
+    found = []
+    for index in range(1, ancestors.Extent() + 1):
+        edge = TopoDS.Edge_s(ancestors.FindKey(index))
+        faces = distinct_faces(ancestors.FindFromIndex(index))
+        if (BRep_Tool.Degenerated_s(edge) or BRep_Tool.Curve_s(edge, 0.0, 0.0) is None
+                or any(BRep_Tool.IsClosed_s(edge, face) for face in faces)):
+            continue
+        found.append((edge, faces))
+    return found
+
+
+def _deviation(curve: Geom_Curve, pcurve: Geom2d_Curve, surface: Geom_Surface, first: float, last: float
+               ) -> tuple[float, float]:
+    """The largest distance between ``curve`` and ``surface(pcurve)`` at equal parameters (mm), and
+    where, as BOPAlgo_ArgumentAnalyzer measures it (GeomLib_CheckCurveOnSurface)."""
+    check = GeomLib_CheckCurveOnSurface(GeomAdaptor_Curve(curve, first, last), 1e-9)
+    check.Perform(Adaptor3d_CurveOnSurface(Geom2dAdaptor_Curve(pcurve, first, last), GeomAdaptor_Surface(surface)))
+    return (check.MaxDistance(), check.MaxParameter()) if check.IsDone() else (math.inf, first)
+
+
+def _square_pcurve(edge: TopoDS_Edge, face: TopoDS_Face) -> tuple[float, tuple[float, float]]:
+    """Replace ``edge``'s p-curve on ``face`` by the feet of the perpendiculars from its 3D curve (module
+    doc, step 1) if its curves part by more than READBACK_MIN_TOLERANCE_MM and the new one parts by less.
+    Returns the largest distance before (mm), and after with its parameter. The edge's tolerance is
+    raised to cover the new curve."""
+    curve = BRep_Tool.Curve_s(edge, 0.0, 0.0)
+    pcurve = BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0)
+    first, last = BRep_Tool.Range_s(edge)
+    if pcurve is None:
+        return 0.0, (0.0, first)
+    surface = BRep_Tool.Surface_s(face)
+    before = _deviation(curve, pcurve, surface, first, last)
+    if before[0] <= READBACK_MIN_TOLERANCE_MM:
+        return before[0], before
+    square = _SquareFit(curve, pcurve, surface, first, last).fit()
+    after = _deviation(curve, square, surface, first, last) if square is not None else (math.inf, first)
+    if after[0] >= before[0]:
+        return before[0], before
+    builder = BRep_Builder()
+    tolerance = max(BRep_Tool.Tolerance_s(edge), after[0] * READBACK_TOLERANCE_FACTOR)
+    builder.UpdateEdge(edge, square, face, tolerance)
+    if _wires_cross(edge, face):  # moved across a neighbour's p-curve where two edges meet at a sliver: undone
+        builder.UpdateEdge(edge, pcurve, face, tolerance)
+        return before[0], before
+    return before[0], after
+
+
+def _wires_cross(edge: TopoDS_Edge, face: TopoDS_Face) -> bool:
+    """Whether a wire of ``face`` holding ``edge`` crosses itself on the face (BRepCheck_Wire)."""
+    first, second = TopoDS_Edge(), TopoDS_Edge()
+    return any(BRepCheck_Wire(TopoDS.Wire_s(wire)).SelfIntersect(face, first, second) != BRepCheck_NoError
+               for wire in explore(face, TopAbs_WIRE) if any(edge.IsSame(other) for other in explore(wire, TopAbs_EDGE)))
+
+
+class _SquareFit:
+    """The feet of the perpendiculars from a 3D curve to a surface, and a p-curve fitted through them."""
+
+    def __init__(self, curve: Geom_Curve, pcurve: Geom2d_Curve, surface: Geom_Surface, first: float, last: float) -> None:
+        self.curve, self.pcurve, self.surface = curve, pcurve, surface
+        self.first, self.last = first, last
+        self.degree, self.knots, self.multiplicities = _basis(curve, pcurve, surface, first, last)
+
+    def fit(self) -> Geom2d_BSplineCurve | None:
+        """The fitted p-curve, refined (a knot added half way along each span where it misses a foot
+        half way between points by more than READBACK_PCURVE_FIT_MM, or READBACK_PCURVE_FIT_GAP of the
+        gap) for READBACK_PCURVE_FIT_ROUNDS at most. None when the old p-curve is as square as that
+        already, or the fit still misses, a foot does not converge or the least squares cannot be solved."""
+        try:
+            return self._fit()
+        except (ValueError, np.linalg.LinAlgError):  # a singular system (scipy's, numpy's): the old p-curve stays
+            return None
+
+    def _fit(self) -> Geom2d_BSplineCurve | None:
+        knots, multiplicities = self.knots, self.multiplicities
+        for round_ in range(READBACK_PCURVE_FIT_ROUNDS):
+            flat = _flat(knots, multiplicities, self.degree)
+            parameters = _sample_parameters(knots, multiplicities, self.degree)
+            middles = 0.5 * (parameters[1:] + parameters[:-1])
+            feet, exact = self._feet(parameters), self._feet(middles)
+            if feet is None or exact is None:
+                return None
+            allowed = max(READBACK_PCURVE_FIT_MM, READBACK_PCURVE_FIT_GAP * self._gap(middles, exact))
+            if round_ == 0 and self._misses(np.array([_uv(self.pcurve.Value(t)) for t in middles]), exact).max() <= allowed:
+                return None  # square already
+            spline = make_lsq_spline(parameters, feet, flat, k=self.degree)
+            misses = self._misses(spline(middles), exact)
+            if not np.isfinite(misses).all():
+                return None
+            if misses.max() <= allowed:
+                return _bspline2d(spline.c, flat, self.degree)
+            spans = np.unique(np.searchsorted(knots, middles[misses > allowed]))
+            added = 0.5 * (knots[spans - 1] + knots[spans])
+            order = np.argsort(np.concatenate([knots[1:-1], added]))
+            inner = np.concatenate([knots[1:-1], added])[order]
+            multiplicities = np.concatenate([multiplicities, np.ones(len(added), dtype=np.int64)])[order]
+            knots = np.concatenate([[knots[0]], inner, [knots[-1]]])
+        return None
+
+    def _feet(self, parameters: NDArray[np.float64]) -> NDArray[np.float64] | None:
+        """``(n, 2)``: (u, v) of the foot of the perpendicular from the 3D curve at each parameter to the
+        surface, by Gauss-Newton from the old p-curve's point; None if one does not converge."""
+        targets = np.array([_xyz(self.curve.Value(t)) for t in parameters])
+        uv = np.array([_uv(self.pcurve.Value(t)) for t in parameters])
+        point, d_u, d_v = gp_Pnt(), gp_Vec(), gp_Vec()
+        for _ in range(_FOOT_STEPS):
+            residual, jacobian = np.empty((len(uv), 3)), np.empty((len(uv), 3, 2))
+            for row, (u, v) in enumerate(uv.tolist()):
+                self.surface.D1(u, v, point, d_u, d_v)
+                residual[row] = _xyz(point)
+                jacobian[row, :, 0], jacobian[row, :, 1] = _xyz(d_u), _xyz(d_v)
+            residual -= targets
+            normal = np.einsum("nij,nik->njk", jacobian, jacobian)
+            step = np.linalg.solve(normal, np.einsum("nij,ni->nj", jacobian, residual)[:, :, None])[:, :, 0]
+            uv -= step
+            if np.linalg.norm(np.einsum("nij,nj->ni", jacobian, step), axis=1).max() < _FOOT_STEP_MM:
+                return uv
+        return None
+
+    def _gap(self, parameters: NDArray[np.float64], feet: NDArray[np.float64]) -> float:
+        """The largest distance (mm) from the 3D curve at ``parameters`` to the surface at ``feet``."""
+        return max(self.curve.Value(t).Distance(self.surface.Value(u, v))
+                   for t, (u, v) in zip(parameters.tolist(), feet.tolist(), strict=True))
+
+    def _misses(self, fitted: NDArray[np.float64], exact: NDArray[np.float64]) -> NDArray[np.float64]:
+        """How far (mm) the surface's points at ``fitted`` (u, v) are from its points at ``exact``."""
+        return np.array([self.surface.Value(*a).Distance(self.surface.Value(*b))
+                         for a, b in zip(fitted.tolist(), exact.tolist(), strict=True)])
+
+
+def _basis(curve: Geom_Curve, pcurve: Geom2d_Curve, surface: Geom_Surface, first: float, last: float
+           ) -> tuple[int, NDArray[np.float64], NDArray[np.int64]]:
+    """A B-spline basis on [first, last] that holds the curve of feet: the higher of the curves'
+    degrees (at least 3); the knots of both curves and the parameters where the p-curve crosses a
+    knot line of the surface (where the feet, which follow the surface's normal, are one degree less
+    smooth than the surface), close ones merged, each with the multiplicity that keeps the continuity
+    there. Returns the degree, the distinct knots (both ends included) and the inner ones' multiplicities."""
+    found: list[tuple[float, int]] = []  # (knot, continuity)
+    degree = 3
+    for geometry in (curve, pcurve):
+        while isinstance(geometry, (Geom_TrimmedCurve, Geom2d_TrimmedCurve)):
+            geometry = geometry.BasisCurve()
+        if isinstance(geometry, (Geom_BSplineCurve, Geom2d_BSplineCurve)):
+            degree = max(degree, geometry.Degree())
+            found += [(geometry.Knot(i), geometry.Degree() - geometry.Multiplicity(i))
+                      for i in range(1, geometry.NbKnots() + 1)]
+    found += _knot_line_crossings(pcurve, surface, first, last)
+    merge = _KNOT_MERGE * (last - first)
+    knots, continuities = [first], [degree]
+    for knot, continuity in sorted(found):
+        if knot - first <= merge or last - knot <= merge:
+            continue
+        if knot - knots[-1] <= merge:
+            continuities[-1] = min(continuities[-1], continuity)
+        else:
+            knots.append(knot)
+            continuities.append(continuity)
+    multiplicities = [min(degree, max(1, degree - continuity)) for continuity in continuities[1:]]
+    return degree, np.array([*knots, last]), np.array(multiplicities, dtype=np.int64)
+
+
+def _knot_line_crossings(pcurve: Geom2d_Curve, surface: Geom_Surface, first: float, last: float
+                         ) -> list[tuple[float, int]]:
+    """(parameter, continuity of the feet there) where ``pcurve`` crosses an inner knot line of
+    ``surface`` (a B-spline surface; none for others), found on :data:`_CROSSING_SAMPLES` points and
+    refined by bisection."""
+    if not isinstance(surface, Geom_BSplineSurface):
+        return []
+    lines = [(0, surface.UKnot(i), surface.UDegree() - surface.UMultiplicity(i) - 1)
+             for i in range(2, surface.NbUKnots())]
+    lines += [(1, surface.VKnot(i), surface.VDegree() - surface.VMultiplicity(i) - 1)
+              for i in range(2, surface.NbVKnots())]
+    parameters = np.linspace(first, last, _CROSSING_SAMPLES)
+    uv = np.array([_uv(pcurve.Value(t)) for t in parameters])
+    found = []
+    for axis, knot, continuity in lines:
+        side = uv[:, axis] > knot
+        for index in np.flatnonzero(side[1:] != side[:-1]).tolist():
+            low, high = float(parameters[index]), float(parameters[index + 1])
+            for _ in range(_BISECTIONS):
+                middle = 0.5 * (low + high)
+                if (_uv(pcurve.Value(middle))[axis] > knot) == side[index]:
+                    low = middle
+                else:
+                    high = middle
+            found.append((0.5 * (low + high), max(0, continuity)))
+    return found
+
+
+def _flat(knots: NDArray[np.float64], multiplicities: NDArray[np.int64], degree: int) -> NDArray[np.float64]:
+    """Clamped flat knots of the distinct ``knots`` (ends included) and the inner ones' multiplicities."""
+    return np.concatenate([[knots[0]] * (degree + 1), np.repeat(knots[1:-1], multiplicities), [knots[-1]] * (degree + 1)])
+
+
+def _sample_parameters(knots: NDArray[np.float64], multiplicities: NDArray[np.int64], degree: int
+                       ) -> NDArray[np.float64]:
+    """Points for a least-squares fit in the basis of distinct ``knots``: in each span, evenly, twice the
+    number of basis functions that start there (its first knot's multiplicity, degree + 1 in the
+    first), and at least degree + 1 (a span a refinement added holds a whole polynomial piece)."""
+    starting = np.concatenate([[degree + 1], multiplicities])
+    inside = [np.linspace(a, b, max(degree + 1, 2 * int(count)) + 1)[:-1]
+              for a, b, count in zip(knots[:-1], knots[1:], starting, strict=True)]
+    return np.concatenate([*inside, knots[-1:]])
+
+
+def _bspline2d(coefficients: NDArray[np.float64], flat: NDArray[np.float64], degree: int) -> Geom2d_BSplineCurve:
+    values, counts = np.unique(flat, return_counts=True)
+    poles = TColgp_Array1OfPnt2d(1, len(coefficients))
+    for index, (u, v) in enumerate(coefficients.tolist(), start=1):
+        poles.SetValue(index, gp_Pnt2d(u, v))
+    knots, multiplicities = TColStd_Array1OfReal(1, len(values)), TColStd_Array1OfInteger(1, len(values))
+    for index, (value, count) in enumerate(zip(values.tolist(), counts.tolist(), strict=True), start=1):
+        knots.SetValue(index, value)
+        multiplicities.SetValue(index, count)
+    return Geom2d_BSplineCurve(poles, knots, multiplicities, degree)
+
+
+def _split_parameter(edge: TopoDS_Edge, faces: Sequence[TopoDS_Face], worst: float, where: float) -> float | None:
+    """``where`` (the parameter at which ``edge``'s curves part most, by ``worst`` mm) if that is more
+    than the reader would give the edge and not at an end (module doc, step 2); None otherwise."""
+    if worst <= READBACK_MIN_TOLERANCE_MM:
+        return None
+    curve = BRep_Tool.Curve_s(edge, 0.0, 0.0)
+    first, last = BRep_Tool.Range_s(edge)
+    samples = np.linspace(first, last, READBACK_SAMPLES).tolist()
+    sampled = 0.0
+    for face in faces:
+        pcurve = BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0)
+        if pcurve is not None:
+            surface = BRep_Tool.Surface_s(face)
+            sampled = max(sampled, *(curve.Value(t).Distance(surface.Value(*_uv(pcurve.Value(t)))) for t in samples))
+    inside = min(where - first, last - where) > _KNOT_MERGE * (last - first)
+    return where if worst > sampled * READBACK_TOLERANCE_FACTOR and inside else None
+
+
+def _split(edge: TopoDS_Edge, parameter: float) -> TopoDS_Wire:
+    """``edge`` (forward) as two edges meeting at ``parameter``, with the same curves, as a wire."""
+    builder = BRep_Builder()
+    forward = TopoDS.Edge_s(edge.Oriented(TopAbs_FORWARD))
+    first, last = BRep_Tool.Range_s(forward)
+    tolerance = BRep_Tool.Tolerance_s(forward)
+    middle = TopoDS_Vertex()
+    builder.MakeVertex(middle, BRep_Tool.Curve_s(forward, 0.0, 0.0).Value(parameter), tolerance)
+    wire = TopoDS_Wire()
+    builder.MakeWire(wire)
+    pieces = ((TopExp.FirstVertex_s(forward), middle, first, parameter), (middle, TopExp.LastVertex_s(forward), parameter, last))
+    for start, end, a, b in pieces:
+        piece = TopoDS.Edge_s(forward.EmptyCopied())
+        builder.Add(piece, start.Oriented(TopAbs_FORWARD))
+        builder.Add(piece, end.Oriented(TopAbs_REVERSED))
+        builder.Range(piece, a, b)
+        builder.Add(wire, piece)
+    return wire
+
+
+def _xyz(value: gp_Pnt | gp_Vec) -> tuple[float, float, float]:
+    return value.X(), value.Y(), value.Z()
+
+
+def _uv(value: gp_Pnt2d) -> tuple[float, float]:
+    return value.X(), value.Y()
