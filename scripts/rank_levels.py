@@ -1,11 +1,11 @@
 #!/usr/bin/env python3
 """Does the coarse level rank designs as the fine one does? Spearman's rho over toroidal designs.
 
-    python scripts/rank_levels.py                       # 6 designs, coarse and fine, 10000 rpm, still air
+    python scripts/rank_levels.py                       # 8 designs, coarse and fine, 10000 rpm, still air
     python scripts/rank_levels.py --levels coarse medium --processes 2 --out rank_out
     python scripts/rank_levels.py --designs default pitch_low two_blades   # a subset
 
-Never part of the test suite (14 simulations). A run whose report is already in OUT is read, not
+Never part of the test suite (16 simulations). A run whose report is already in OUT is read, not
 repeated, so an interrupted study resumes where it stopped. The designs are the default toroidal propeller and
 variations of its pitch (the angle-of-attack law's constant term), chord (the scale_x law's
 constant term) and blade count, each a ``--set`` on the default; every design runs at each
@@ -38,6 +38,8 @@ DESIGNS: dict[str, list[str]] = {
     "chord_narrow": ["transforms.scale_x=[0,0,-16,16,4.5]"],
     "chord_wide": ["transforms.scale_x=[0,0,-16,16,6.8]"],
     "two_blades": ["blades=2"],
+    "four_blades": ["blades=4"],
+    "chord_very_narrow": ["transforms.scale_x=[0,0,-16,16,3.5]"],
     "four_blades": ["blades=4"],
 }
 
