@@ -11,22 +11,20 @@ less volume) and add no more volume than a fillet's cross-section along the junc
 
 from __future__ import annotations
 
-import io
 import time
 from collections.abc import Sequence
 from typing import NamedTuple
 
 import cadquery as cq
-from OCP.BRep import BRep_Builder
 from OCP.BRepFilletAPI import BRepFilletAPI_MakeFillet
-from OCP.BRepTools import BRepTools
 from OCP.ChFi3d import ChFi3d_FilletShape, ChFi3d_Rational
 from OCP.ShapeFix import ShapeFix_Shape
-from OCP.TopoDS import TopoDS_Edge, TopoDS_Shape
+from OCP.TopoDS import TopoDS_Edge
 
 from torus_cad.errors import KernelError
 from torus_cad.kernel import face_provenance
 from torus_cad.kernel.checks import precise_volume, single_valid_solid
+from torus_cad.kernel.topology import shape_bytes, shape_from_bytes
 from torus_cad.runtime.isolation import IsolatedCrash, IsolatedTimeout, run_isolated
 from torus_cad.tolerances import (
     FILLET_TIME_LIMIT_S,
@@ -128,7 +126,7 @@ def fillet_in_child(solid: cq.Solid, edges: list[TopoDS_Edge], radius_mm: float,
             result = fillet_edges(solid, edges, radius_mm, params, edge_radii, face_parts)
         except Exception:  # OpenCascade's failures (Standard_Failure and others): a failed fillet
             return None
-        return None if result is None else (_to_brep(result.solid.wrapped), result.face_parts)
+        return None if result is None else (shape_bytes(result.solid.wrapped), result.face_parts)
 
     try:
         data = run_isolated(fillet_as_brep, timeout_s=limit_s, what="the root fillet")
@@ -137,16 +135,5 @@ def fillet_in_child(solid: cq.Solid, edges: list[TopoDS_Edge], radius_mm: float,
     if not data:
         return None
     brep, parts = data
-    return Filleted(single_valid_solid(cq.Shape.cast(_from_brep(brep)), "the root fillet"), parts)
+    return Filleted(single_valid_solid(cq.Shape.cast(shape_from_bytes(brep)), "the root fillet"), parts)
 
-
-def _to_brep(shape: TopoDS_Shape) -> bytes:
-    stream = io.BytesIO()
-    BRepTools.Write_s(shape, stream)
-    return stream.getvalue()
-
-
-def _from_brep(data: bytes) -> TopoDS_Shape:
-    shape = TopoDS_Shape()
-    BRepTools.Read_s(shape, io.BytesIO(data), BRep_Builder())
-    return shape
