@@ -40,7 +40,6 @@ DESIGNS: dict[str, list[str]] = {
     "two_blades": ["blades=2"],
     "four_blades": ["blades=4"],
     "chord_very_narrow": ["transforms.scale_x=[0,0,-16,16,3.5]"],
-    "four_blades": ["blades=4"],
 }
 
 
