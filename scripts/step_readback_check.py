@@ -84,7 +84,8 @@ def main(argv: list[str] | None = None) -> int:
         memory = ArgumentFaults() if args.fast else argument_faults(propeller.solid.wrapped)
         with tempfile.TemporaryDirectory() as folder:
             path = Path(folder) / "design.step"
-            write_step(propeller.solid, path, propeller.parameters.name, propeller.parameters.export.step_schema)
+            write_step(propeller.solid, path, propeller.parameters.name, propeller.parameters.export.step_schema,
+                       check_readback=False)
             readback = step_readback_faults(path, self_interference=not args.fast)
         rows.append((design, build_s, memory, readback))
         print(f"{design}: build {build_s:.1f} s; in memory {_counts(memory.counts)} ({memory.seconds:.1f} s); "

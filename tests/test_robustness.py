@@ -308,7 +308,7 @@ _WRITER = textwrap.dedent("""
         if kind == "stl":
             write_stl(solid, out, 0.005, 0.1)  # ~50 000 triangles: 2.6 MB per write
         else:
-            write_step(solid, out, "killed")
+            write_step(solid, out, "killed", check_readback=False)
 """)
 
 

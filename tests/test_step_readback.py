@@ -32,12 +32,12 @@ def _c0_face() -> cq.Face:
 
 def test_a_step_file_that_reads_back_faulty_is_not_written(tmp_path: Path) -> None:
     with pytest.raises(KernelError, match=r"c0\.step: the STEP file read back fails .*GeomAbs_C0"):
-        write_step(_c0_face(), tmp_path / "c0.step", "c0", check_readback=True)
+        write_step(_c0_face(), tmp_path / "c0.step", "c0")
     assert list(tmp_path.iterdir()) == []
 
 
 def test_the_read_back_check_names_a_c0_surface_in_the_file(tmp_path: Path) -> None:
-    path = write_step(_c0_face(), tmp_path / "c0.step", "c0")
+    path = write_step(_c0_face(), tmp_path / "c0.step", "c0", check_readback=False)
     assert step_readback_faults(path).counts == {"GeomAbs_C0": 5}  # the face and its four edges
     with pytest.raises(KernelError, match=r"the C0 face: the STEP file read back fails .*: 5 GeomAbs_C0; first: GeomAbs_C0"):
         check_step_readback(path, "the C0 face")
@@ -122,7 +122,7 @@ def test_edges_made_readable_read_back_from_step_as_valid_as_in_memory(bump: str
                                                                        tmp_path: Path) -> None:
     solid = _cylinder_with_a_bumped_edge(bump)
     assert argument_faults(solid.wrapped).counts == {}  # valid in memory: the edge's tolerance covers the bump
-    before = write_step(solid, tmp_path / "before.step", "bumped")
+    before = write_step(solid, tmp_path / "before.step", "bumped", check_readback=False)
     assert step_readback_faults(before).counts == {"InvalidCurveOnSurface": 1}  # the reader's samples miss it
     made = readable_edges(solid, (7, 8, 9))
     # out: the side face's curve stays (the gap is real), the top's is squared, the edge split at the bump;

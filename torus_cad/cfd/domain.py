@@ -473,8 +473,11 @@ def write_body_domain(body: PropellerBody, settings: Cfd, out_dir: str | Path,
             with timer.stage(CfdStage.DOMAIN):
                 box = body.solid.BoundingBox()
                 domain = domain_from_sizes(body.tip_diameter_mm, body.chord_mm, settings, (box.zmin, box.zmax))
+                # gmsh's input, not the design's file (build checks that one): a user's own STEP solid
+                # (simulate --step) is meshed as it comes, without a read-back check of its copy.
                 step = output.write("step", lambda path: write_step(body.solid, path, body.name, body.step_schema,
-                                                                     program=f"torus_cad {__version__}"))
+                                                                     program=f"torus_cad {__version__}",
+                                                                     check_readback=False))
                 propeller_volume = precise_volume(body.solid)
                 entities = build_domain(gmsh, step, domain)
                 edges = body.trailing_edges if settings.curvature_cells == 0.0 else None

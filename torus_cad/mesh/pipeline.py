@@ -284,7 +284,7 @@ def opencascade_comparison(params: PropellerParameters, margin: float) -> dict[s
     from torus_cad.propeller import build_propeller
 
     propeller = build_propeller(params)
-    faces = tessellate_faces(propeller.solid, params.export.stl_linear_deflection,
+    faces = tessellate_faces(propeller.shape, params.export.stl_linear_deflection,
                              params.export.stl_angular_deflection)
     offsets = np.cumsum([0] + [len(face.vertices) for face in faces[:-1]])
     vertices = np.concatenate([face.vertices for face in faces])
@@ -294,7 +294,7 @@ def opencascade_comparison(params: PropellerParameters, margin: float) -> dict[s
     blade = triangles[on_blade]
     away = blade[quality.faces_away_from_hub(vertices, blade, params.hub.radius, params.hub.length, margin)]
     ratios = quality.aspect_ratios(vertices, triangles)
-    return {"brep_volume_mm3": precise_volume(propeller.solid),
+    return {"brep_volume_mm3": precise_volume(propeller.shape),
             "opencascade_stl": {"linear_deflection_mm": params.export.stl_linear_deflection,
                                 "angular_deflection_rad": params.export.stl_angular_deflection,
                                 "triangles": len(triangles),

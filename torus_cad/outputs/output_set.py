@@ -450,16 +450,19 @@ def write_output_set(propeller: BuiltPropeller, out_dir: str | Path, density_g_c
     with OutputSet(out_dir, params.name) as output, contextlib.ExitStack() as children:
         # The blade-element table (matplotlib) is drawn in a child meanwhile, on the second core; the child
         # returns the files' contents and this process writes them (a signal here then leaves nothing behind).
-        table = sections_table if isinstance(sections_table, IsolatedCall) else children.enter_context(IsolatedCall(
-            sections_table_files, propeller.surface, params, what="the blade-element table")) if sections_table else None
+        table: IsolatedCall[dict[str, tuple[str, bytes]]] | None = None
+        if isinstance(sections_table, IsolatedCall):
+            table = sections_table
+        elif sections_table:
+            table = children.enter_context(IsolatedCall(sections_table_files, propeller.surface, params,
+                                                        what="the blade-element table"))
         # The STEP file is written and read back in a child too, into its staging path, while this process
         # makes and checks the meshes (a signal kills the child before the staging folder goes).
         # Every design's file is checked as OpenCascade's reader gives it back, a root fillet's too
         # (kernel.fillet_readback makes its edges readable).
         step = children.enter_context(IsolatedCall(
             write_step, propeller.shape, output.stage("step"), params.name, export.step_schema,
-            f"torus_cad {__version__}", True,
-            what="writing the STEP file")) if ExportFormat.STEP in formats else None
+            f"torus_cad {__version__}", what="writing the STEP file")) if ExportFormat.STEP in formats else None
         if write_stl_file:
             with timer.stage(Stage.STL_WRITE):
                 output.write("stl", checked("stl", lambda path: write_checked_stl(propeller.shape, path, *deflections,

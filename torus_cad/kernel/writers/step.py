@@ -30,12 +30,12 @@ _STEP_END_MARKER = b"END-ISO-10303-21;"
 
 
 def write_step(shape: AnyShape, path: str | Path, product_name: str, schema: StepSchema = StepSchema.AP214,
-               program: str = "torus_cad", check_readback: bool = False) -> Path:
+               program: str = "torus_cad", check_readback: bool = True) -> Path:
     """Write ``shape`` as STEP (application protocol ``schema``, millimetres, product named ``product_name``).
 
     The shape goes through an XCAF document so that the STEP PRODUCT carries exactly the
-    design's name (the plain writer appends a counter to it). With ``check_readback`` the file is
-    read back by OpenCascade's STEP reader and must pass BOPAlgo_ArgumentAnalyzer's tests (all but
+    design's name (the plain writer appends a counter to it). With ``check_readback`` (the default) the
+    file is read back by OpenCascade's STEP reader and must pass BOPAlgo_ArgumentAnalyzer's tests (all but
     self-interference, which the strict check ran on the solid; torus_cad.kernel.step_readback)
     before it is published; otherwise KernelError naming the first fault, and no file.
     """
