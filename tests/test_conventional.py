@@ -285,3 +285,18 @@ def test_the_comparison_propeller_has_the_default_designs_tip_diameter_blades_an
     assert 2.0 * tip_radius_mm(conventional) == pytest.approx(2.0 * tip_radius_mm(toroidal), rel=0.015)
     assert conventional.blades == toroidal.blades
     assert (conventional.hub.radius, conventional.hub.length) == (toroidal.hub.radius, toroidal.hub.length)
+
+
+def test_the_quiet_studys_conventional_reference_has_its_base_designs_diameter_blades_and_hub():
+    """scripts/quiet_study.py compares the quiet study's chosen design with its base and with this conventional
+    propeller at the same thrust (docs/how-to/optimize.md): fair only with the same tip diameter, blade count
+    and hub, bore included."""
+    from torus_cad.parameters import resolve_parameters
+    from torus_cad.parameters.design_targets import resolve_design_targets, tip_radius_mm
+
+    toroidal = resolve_design_targets(resolve_parameters(EXAMPLES_DIR / "optimize" / "quiet_prop.toml")).parameters
+    conventional = resolve_parameters(EXAMPLES_DIR / "compare" / "conventional_127mm_3blade.toml")
+    assert 2.0 * tip_radius_mm(conventional) == pytest.approx(2.0 * tip_radius_mm(toroidal), rel=0.015)
+    assert conventional.blades == toroidal.blades
+    assert ((conventional.hub.radius, conventional.hub.length, conventional.hub.bore_diameter)
+            == (toroidal.hub.radius, toroidal.hub.length, toroidal.hub.bore_diameter))
