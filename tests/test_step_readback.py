@@ -7,6 +7,7 @@ from pathlib import Path
 import cadquery as cq
 import pytest
 from conftest import EXAMPLES_DIR, SHIPPED_DESIGNS
+from freecad_check import FREECADCMD, freecad_verdicts
 
 from torus_cad.errors import KernelError
 from torus_cad.kernel.fillet_readback import readable_edges
@@ -64,6 +65,8 @@ def test_every_shipped_design_reads_back_from_step_valid(design: Path, tmp_path:
     propeller = build_propeller(design)
     path = write_step(propeller.solid, tmp_path / "design.step", propeller.parameters.name)
     check_step_readback(path, design.stem)
+    if FREECADCMD:  # and FreeCAD's "Check geometry" with BOP check, as a CAD user runs it
+        assert freecad_verdicts([path], tmp_path / "freecad")[str(path)] == {"solids": 1, "valid": True, "faults": ""}
 
 
 def test_a_root_fillet_passes_the_analyzer_in_memory_and_read_back_from_step(tmp_path: Path) -> None:
