@@ -149,7 +149,7 @@ def write_picture(rows: list[dict[str, str]], summary: dict[str, Any], chosen: d
     for axis, (title, value) in zip(axes[1:], shown.values()):
         values = [value(report) for report in results.values()]
         bars = axis.bar(range(len(values)), values, color=["C0", "C3", "C1"][:len(values)])
-        axis.bar_label(bars, labels=[f"{v:.3g}" for v in values], fontsize=8)
+        axis.bar_label(bars, labels=[f"{v:.4g}" for v in values], fontsize=8)
         axis.set_xticks(range(len(values)), [label.split(" (")[0] for label in results], fontsize=8)
         axis.set_title(f"{title}, {level}", fontsize=9)
         axis.grid(axis="y", alpha=0.3)
