@@ -90,9 +90,9 @@ __all__ = ["ReadableEdges", "readable_edges"]
 _FOOT_STEPS = 8
 #: A foot point has converged when its step moves it by less than this (mm) ...
 _FOOT_STEP_MM = 1e-13
-#: ... or, after every step, by less than this: the surface's own rounding where a point lies on it
-#: (measured: steps of 1e-12 mm back and forth on a fillet surface's boundary).
-_FOOT_NOISE_MM = 1e-11
+#: ... or, after every step, by less than this: the surface's own rounding (measured: steps of 1e-12 mm
+#: back and forth on a fillet surface's boundary, up to 2.5e-11 mm just past a fillet surface's end).
+_FOOT_NOISE_MM = 1e-10
 #: Knots of the 3D curve and p-curve closer than this fraction of the edge's range are one knot.
 _KNOT_MERGE = 1e-6
 #: Points along a p-curve at which its crossings of the surface's knot lines are looked for ...
