@@ -14,28 +14,41 @@ per edge, and OpenCascade's reader (FreeCAD's too) gives each edge what it sampl
   and gives the edge the largest, times 1.00001 (at least 1e-7 mm). Where they part most between
   two samples, the edge reads back with a tolerance that does not cover its curves: an
   ``InvalidCurveOnSurface`` fault in ``BOPAlgo_ArgumentAnalyzer`` (FreeCAD's check with BOP),
-  whose measure (``GeomLib_CheckCurveOnSurface``) finds the true largest distance.
+  whose measure (``GeomLib_CheckCurveOnSurface``) finds the largest distance;
+- it closes a gap between the face curves of two edges meeting at a vertex on a face by bending
+  both to meet half way: a fillet contact edge's 3D curve can end up to a few 1e-4 mm from its vertex
+  (its tolerance covers it in memory), so its face curve, square to the surface, ends that far from
+  its neighbour's, and a neighbour that is exact (the blade's trailing-edge curve, tolerance 1e-7 mm)
+  reads back bent, parting from its face most between two samples.
 
 So, before the file is written:
 
+0. every edge's 3D curve (a B-spline) that ends farther than
+   :data:`~torus_cad.tolerances.READBACK_VERTEX_GAP_MM` from its vertex is moved to end on it (a
+   shift varying linearly along the edge added to it): face curves made square to the surfaces then
+   end on the feet of the vertex, and meet on every face;
 1. every p-curve whose curves part by more than :data:`~torus_cad.tolerances.READBACK_MIN_TOLERANCE_MM`,
    and that is askew, is replaced by the curve of the feet of the perpendiculars from the 3D curve to
    the surface, at the same parameters (points solved by Gauss-Newton, the p-curve fitted by least
    squares in a B-spline basis holding the old 3D curve and p-curve and the surface's knot lines they
    cross, refined until it misses the feet half way between them by at most
    :data:`~torus_cad.tolerances.READBACK_PCURVE_FIT_MM` or
-   :data:`~torus_cad.tolerances.READBACK_PCURVE_FIT_GAP` of the gap): the curves then part square to
-   the surface everywhere, by the real gap only, and the reader's projection of the end points lands
-   where the file says. A new p-curve that would make its face's wire cross itself (two edges
-   meeting at a sliver) is undone;
-2. every edge whose largest distance lies between the reader's samples is split there: each piece
-   then parts most at an end, which the reader samples.
+   :data:`~torus_cad.tolerances.READBACK_PCURVE_FIT_GAP` of the gap), its ends on the feet of the 3D
+   curve's ends: the curves then part square to the surface everywhere, by the real gap only, and the
+   reader's projection of the end points lands where the file says. A new p-curve that would make its
+   face's wire cross itself (two edges meeting at a sliver) is undone;
+2. every edge whose largest distance (looked for on
+   :data:`~torus_cad.tolerances.READBACK_WORST_SAMPLES` points and refined by Brent's method:
+   GeomLib_CheckCurveOnSurface can put it a fraction of a percent off next to an end) lies between
+   the reader's samples is split there: each piece then parts most at an end, which the reader
+   samples. The pieces get the tolerance their curves need, not the fillet's.
 
-The faces stay as they are (only edges are split and p-curves replaced); the solid is checked
+The faces stay as they are (only edges are split and curves replaced); the solid is checked
 (BRepCheck_Analyzer) and its faces keep their parts. Measured on ``workshop_fillet`` (``python
 scripts/step_readback_check.py examples/workshop_fillet.toml``): 93 ``InvalidCurveOnSurface`` faults
-read back before, 0 after (every test on; 30 edges split and 21 p-curves replaced a blade); the
-rest, and what it costs: docs/explanation/how-the-solid-is-built.md.
+read back before, 0 after (every test on); with a 0.5 mm fillet on ``prop_10x5_2blade`` and
+``marine_3blade_loop`` (``--fillet 0.5 --fast``) 4 and 6 before step 0 and the refined largest
+distance, 0 after; the rest, and what it costs: docs/explanation/how-the-solid-is-built.md.
 """
 
 from __future__ import annotations
