@@ -81,6 +81,7 @@ from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape
 from scipy.interpolate import make_lsq_spline
 from scipy.optimize import minimize_scalar
 
+from torus_cad.errors import KernelError
 from torus_cad.kernel import face_provenance
 from torus_cad.kernel.checks import single_valid_solid
 from torus_cad.kernel.edge_curves import distinct_faces
@@ -116,6 +117,8 @@ _BISECTIONS = 40
 _REFINED_PEAKS = 3
 #: ... to this fraction of the edge's range.
 _BRENT_XATOL = 1e-12
+#: A split edge's piece shorter than this many times the largest tolerance at it is a short piece (:func:`_split`).
+_SHORT_PIECE = 4.0
 
 
 @dataclass(frozen=True)
@@ -152,8 +155,7 @@ def readable_edges(solid: cq.Solid, face_parts: Sequence[int]) -> ReadableEdges:
     edges = _edges_and_faces(shape)
     closed = sum(_close_ends(edge) for edge, _ in edges)
     replaced, worst_before, worst_after = 0, 0.0, 0.0
-    context = ShapeBuild_ReShape()
-    split = 0
+    splits: list[tuple[TopoDS_Edge, float, float]] = []  # (edge, where, the tolerance its curves need)
     for edge, faces in edges:
         hints = []
         for face in faces:
@@ -165,14 +167,24 @@ def readable_edges(solid: cq.Solid, face_parts: Sequence[int]) -> ReadableEdges:
         _cover(edge, worst[0])
         where = _split_parameter(edge, faces, *worst)
         if where is not None:
-            context.Replace(edge.Oriented(TopAbs_FORWARD), _split(edge, where, max(READBACK_MIN_TOLERANCE_MM, worst[0] * READBACK_TOLERANCE_FACTOR)))
-            split += 1
-    if not split and not closed:
+            splits.append((edge, where, max(READBACK_MIN_TOLERANCE_MM, worst[0] * READBACK_TOLERANCE_FACTOR)))
+    if not splits and not closed:
         return ReadableEdges(solid, tuple(face_parts), replaced, 0, worst_before, worst_after)
-    checked = single_valid_solid(cq.Shape.cast(context.Apply(shape)), "making the root fillet's edges readable from STEP")
-    origins = face_provenance.through_reshape(context, face_provenance.labelled_faces(shape, face_parts), checked.wrapped)
-    return ReadableEdges(checked, face_provenance.face_parts(checked.wrapped, origins), replaced, split,
-                         worst_before, worst_after, closed)
+    failure: KernelError | None = None
+    for lower_short_pieces in (True, False):  # a piece's lower tolerance can make its face's wire cross itself
+        context = ShapeBuild_ReShape()
+        for edge, where, needed in splits:
+            context.Replace(edge.Oriented(TopAbs_FORWARD), _split(edge, where, needed if lower_short_pieces else None))
+        try:
+            checked = single_valid_solid(cq.Shape.cast(context.Apply(shape)), "making the root fillet's edges readable from STEP")
+        except KernelError as error:
+            failure = error
+            continue
+        origins = face_provenance.through_reshape(context, face_provenance.labelled_faces(shape, face_parts), checked.wrapped)
+        return ReadableEdges(checked, face_provenance.face_parts(checked.wrapped, origins), replaced, len(splits),
+                             worst_before, worst_after, closed)
+    assert failure is not None
+    raise failure
 
 
 def _edges_and_faces(shape: TopoDS_Shape) -> list[tuple[TopoDS_Edge, list[TopoDS_Face]]]:
@@ -518,18 +530,26 @@ def _split_parameter(edge: TopoDS_Edge, faces: Sequence[TopoDS_Face], worst: flo
     return where if worst > sampled * READBACK_TOLERANCE_FACTOR and inside else None
 
 
-def _split(edge: TopoDS_Edge, parameter: float, tolerance: float) -> TopoDS_Wire:
-    """``edge`` (forward) as two edges meeting at ``parameter``, with the same curves, as a wire; the
-    pieces and the vertex between them get ``tolerance`` (mm: what their curves need, not what the
-    fillet left on the edge, which would make a short piece smaller than its vertices' spheres)."""
+def _split(edge: TopoDS_Edge, parameter: float, needed: float | None) -> TopoDS_Wire:
+    """``edge`` (forward) as two edges meeting at ``parameter``, with the same curves, as a wire. A piece
+    shorter than :data:`_SHORT_PIECE` times the largest tolerance at it gets ``needed`` (mm, what its
+    curves need) if given, not the fillet's tolerance, which would leave it inside its vertices'
+    spheres (a TooSmallEdge fault); so does the vertex between the pieces."""
     builder = BRep_Builder()
     forward = TopoDS.Edge_s(edge.Oriented(TopAbs_FORWARD))
     first, last = BRep_Tool.Range_s(forward)
+    curve = BRep_Tool.Curve_s(forward, 0.0, 0.0)
+    tolerance = BRep_Tool.Tolerance_s(forward)
+    ends = (TopExp.FirstVertex_s(forward), TopExp.LastVertex_s(forward))
+    short = any(curve.Value(a).Distance(curve.Value(parameter)) <= _SHORT_PIECE * max(tolerance, BRep_Tool.Tolerance_s(end))
+                for a, end in ((first, ends[0]), (last, ends[1])))
+    if needed is not None and short:
+        tolerance = needed
     middle = TopoDS_Vertex()
-    builder.MakeVertex(middle, BRep_Tool.Curve_s(forward, 0.0, 0.0).Value(parameter), tolerance)
+    builder.MakeVertex(middle, curve.Value(parameter), tolerance)
     wire = TopoDS_Wire()
     builder.MakeWire(wire)
-    pieces = ((TopExp.FirstVertex_s(forward), middle, first, parameter), (middle, TopExp.LastVertex_s(forward), parameter, last))
+    pieces = ((ends[0], middle, first, parameter), (middle, ends[1], parameter, last))
     for start, end, a, b in pieces:
         piece = TopoDS.Edge_s(forward.EmptyCopied())
         ShapeFix_ShapeTolerance().SetTolerance(piece, tolerance, TopAbs_EDGE)
