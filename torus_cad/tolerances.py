@@ -386,3 +386,7 @@ READBACK_VERTEX_GAP_MM = 1e-9
 #: Points at equal parameters on which the largest distance between an edge's curves is looked for
 #: before refining (GeomLib_CheckCurveOnSurface's own can be a fraction of a percent off next to an end).
 READBACK_WORST_SAMPLES = 129
+#: A split edge's pieces are moved this far (mm) from their face at the split, so that their largest
+#: distance is there by more than the evaluation's rounding (about 1e-12 mm): a 1.1e-7 mm gap is within
+#: the reader's factor of 1.00001 of it.
+READBACK_SPLIT_MARGIN_MM = 1e-10

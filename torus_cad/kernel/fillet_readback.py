@@ -93,6 +93,7 @@ from torus_cad.tolerances import (
     READBACK_PCURVE_FIT_MM,
     READBACK_PCURVE_FIT_ROUNDS,
     READBACK_SAMPLES,
+    READBACK_SPLIT_MARGIN_MM,
     READBACK_TOLERANCE_FACTOR,
     READBACK_VERTEX_GAP_MM,
     READBACK_WORST_SAMPLES,
@@ -155,7 +156,7 @@ def readable_edges(solid: cq.Solid, face_parts: Sequence[int]) -> ReadableEdges:
     edges = _edges_and_faces(shape)
     closed = sum(_close_ends(edge) for edge, _ in edges)
     replaced, worst_before, worst_after = 0, 0.0, 0.0
-    splits: list[tuple[TopoDS_Edge, float, float]] = []  # (edge, where, the tolerance its curves need)
+    splits: list[tuple[TopoDS_Edge, list[TopoDS_Face], float, float]] = []  # (edge, faces, where, the tolerance needed)
     for edge, faces in edges:
         hints = []
         for face in faces:
@@ -167,14 +168,14 @@ def readable_edges(solid: cq.Solid, face_parts: Sequence[int]) -> ReadableEdges:
         _cover(edge, worst[0])
         where = _split_parameter(edge, faces, *worst)
         if where is not None:
-            splits.append((edge, where, max(READBACK_MIN_TOLERANCE_MM, worst[0] * READBACK_TOLERANCE_FACTOR)))
+            splits.append((edge, faces, where, max(READBACK_MIN_TOLERANCE_MM, worst[0] * READBACK_TOLERANCE_FACTOR + READBACK_SPLIT_MARGIN_MM)))
     if not splits and not closed:
         return ReadableEdges(solid, tuple(face_parts), replaced, 0, worst_before, worst_after)
     failure: KernelError | None = None
     for lower_short_pieces in (True, False):  # a piece's lower tolerance can make its face's wire cross itself
         context = ShapeBuild_ReShape()
-        for edge, where, needed in splits:
-            context.Replace(edge.Oriented(TopAbs_FORWARD), _split(edge, where, needed if lower_short_pieces else None))
+        for edge, faces, where, needed in splits:
+            context.Replace(edge.Oriented(TopAbs_FORWARD), _split(edge, faces, where, needed if lower_short_pieces else None))
         try:
             checked = single_valid_solid(cq.Shape.cast(context.Apply(shape)), "making the root fillet's edges readable from STEP")
         except KernelError as error:
@@ -230,6 +231,16 @@ def _close_ends(edge: TopoDS_Edge) -> int:
         basis = basis.BasisCurve()
     if not isinstance(basis, Geom_BSplineCurve) or basis.IsPeriodic():
         return 0
+    moved = _shifted_curve(basis, first, last, start, end)
+    builder = BRep_Builder()
+    builder.UpdateEdge(edge, moved, BRep_Tool.Tolerance_s(edge))
+    builder.Range(edge, first, last)
+    return 1
+
+
+def _shifted_curve(basis: Geom_BSplineCurve, first: float, last: float, start: gp_Vec, end: gp_Vec) -> Geom_BSplineCurve:
+    """``basis`` cut to [first, last] with a shift from ``start`` at ``first`` to ``end`` at ``last``
+    added (each pole moved by the shift at its Greville abscissa, so the ends move by exactly those)."""
     moved = basis.Copy()
     if first > moved.FirstParameter() or last < moved.LastParameter():
         moved.Segment(first, last)
@@ -240,10 +251,7 @@ def _close_ends(edge: TopoDS_Edge) -> int:
         greville = sum(flat.Value(index + k) for k in range(1, degree + 1)) / degree
         share = min(1.0, max(0.0, (greville - first) / (last - first)))
         moved.SetPole(index, moved.Pole(index).Translated(start.Multiplied(1.0 - share).Added(end.Multiplied(share))))
-    builder = BRep_Builder()
-    builder.UpdateEdge(edge, moved, BRep_Tool.Tolerance_s(edge))
-    builder.Range(edge, first, last)
-    return 1
+    return moved
 
 
 def _square_pcurve(edge: TopoDS_Edge, face: TopoDS_Face) -> tuple[float, tuple[float, float]]:
@@ -530,11 +538,15 @@ def _split_parameter(edge: TopoDS_Edge, faces: Sequence[TopoDS_Face], worst: flo
     return where if worst > sampled * READBACK_TOLERANCE_FACTOR and inside else None
 
 
-def _split(edge: TopoDS_Edge, parameter: float, needed: float | None) -> TopoDS_Wire:
-    """``edge`` (forward) as two edges meeting at ``parameter``, with the same curves, as a wire. A piece
-    shorter than :data:`_SHORT_PIECE` times the largest tolerance at it gets ``needed`` (mm, what its
-    curves need) if given, not the fillet's tolerance, which would leave it inside its vertices'
-    spheres (a TooSmallEdge fault); so does the vertex between the pieces."""
+def _split(edge: TopoDS_Edge, faces: Sequence[TopoDS_Face], parameter: float, needed: float | None) -> TopoDS_Wire:
+    """``edge`` (forward) as two edges meeting at ``parameter``, with the same p-curves, as a wire. Each
+    piece's 3D curve is moved by READBACK_SPLIT_MARGIN_MM at the split, away from the face it parts
+    most from there (a shift fading linearly to nothing at its other end): its largest distance is then
+    at the split by more than the rounding of the curves' evaluation (measured: 1.2e-12 mm between
+    GeomLib_CheckCurveOnSurface's value and the point's, 1e-5 of a 1.1e-7 mm gap, as much as the
+    reader's factor). A piece shorter than :data:`_SHORT_PIECE` times the largest tolerance at it gets
+    ``needed`` (mm, what its curves need) if given, not the fillet's tolerance, which would leave it
+    inside its vertices' spheres (a TooSmallEdge fault); so does the vertex between the pieces."""
     builder = BRep_Builder()
     forward = TopoDS.Edge_s(edge.Oriented(TopAbs_FORWARD))
     first, last = BRep_Tool.Range_s(forward)
@@ -545,19 +557,43 @@ def _split(edge: TopoDS_Edge, parameter: float, needed: float | None) -> TopoDS_
                 for a, end in ((first, ends[0]), (last, ends[1])))
     if needed is not None and short:
         tolerance = needed
+    point = curve.Value(parameter)
+    margin = _split_margin(point, forward, faces, parameter)
+    basis = curve
+    while isinstance(basis, Geom_TrimmedCurve):
+        basis = basis.BasisCurve()
+    if not isinstance(basis, Geom_BSplineCurve) or basis.IsPeriodic():
+        margin = gp_Vec(0.0, 0.0, 0.0)
     middle = TopoDS_Vertex()
-    builder.MakeVertex(middle, curve.Value(parameter), tolerance)
+    builder.MakeVertex(middle, point.Translated(margin), tolerance)
     wire = TopoDS_Wire()
     builder.MakeWire(wire)
-    pieces = ((ends[0], middle, first, parameter), (middle, ends[1], parameter, last))
-    for start, end, a, b in pieces:
+    none = gp_Vec(0.0, 0.0, 0.0)
+    pieces = ((ends[0], middle, first, parameter, none, margin), (middle, ends[1], parameter, last, margin, none))
+    for start, end, a, b, at_a, at_b in pieces:
         piece = TopoDS.Edge_s(forward.EmptyCopied())
         ShapeFix_ShapeTolerance().SetTolerance(piece, tolerance, TopAbs_EDGE)
+        if margin.Magnitude() > 0.0:
+            builder.UpdateEdge(piece, _shifted_curve(basis, a, b, at_a, at_b), tolerance)
         builder.Add(piece, start.Oriented(TopAbs_FORWARD))
         builder.Add(piece, end.Oriented(TopAbs_REVERSED))
         builder.Range(piece, a, b)
         builder.Add(wire, piece)
     return wire
+
+
+def _split_margin(point: gp_Pnt, edge: TopoDS_Edge, faces: Sequence[TopoDS_Face], parameter: float) -> gp_Vec:
+    """READBACK_SPLIT_MARGIN_MM along the gap from the face whose surface ``edge``'s p-curve puts
+    farthest from ``point`` at ``parameter`` (nothing if none is apart)."""
+    gaps = []
+    for face in faces:
+        pcurve = BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0)
+        if pcurve is not None:
+            gaps.append(gp_Vec(BRep_Tool.Surface_s(face).Value(*_uv(pcurve.Value(parameter))), point))
+    gap = max(gaps, key=lambda vector: vector.Magnitude(), default=gp_Vec(0.0, 0.0, 0.0))
+    if gap.Magnitude() <= READBACK_SPLIT_MARGIN_MM:
+        return gp_Vec(0.0, 0.0, 0.0)
+    return gap.Normalized().Multiplied(READBACK_SPLIT_MARGIN_MM)
 
 
 def _xyz(value: gp_Pnt | gp_Vec) -> tuple[float, float, float]:
