@@ -371,7 +371,22 @@ READBACK_TOLERANCE_FACTOR = 1.00001
 #: most this (mm) or this fraction of the largest gap between the 3D curve and the surface, whichever
 #: is larger: a miss along the curve of e moves the reader's projection of an end point, and the
 #: largest distance it reads, by about e^2 / gap, well within its factor of 1.00001.
-READBACK_PCURVE_FIT_MM = 1e-10
+READBACK_PCURVE_FIT_MM = 1e-9
 READBACK_PCURVE_FIT_GAP = 1e-3
 #: Rounds of knots added where the rebuilt p-curve misses; beyond, the p-curve is kept.
-READBACK_PCURVE_FIT_ROUNDS = 6
+READBACK_PCURVE_FIT_ROUNDS = 10
+#: After those rounds, the closest fit is taken if it misses the feet by no more than this (mm): still
+#: square to well within the reader's least tolerance (a 3D curve moved onto its vertices can leave
+#: feet whose refinement stalls near 1e-9 mm).
+READBACK_PCURVE_FIT_LOOSE_MM = 1e-8
+#: An edge's 3D curve ending farther than this from its vertex (mm; the vertex's tolerance covers it in
+#: memory) is moved to end on it: the reader closes the gap its p-curves then leave on a face by bending
+#: them, its neighbour's too, whose edge may have no tolerance for it.
+READBACK_VERTEX_GAP_MM = 1e-9
+#: Points at equal parameters on which the largest distance between an edge's curves is looked for
+#: before refining (GeomLib_CheckCurveOnSurface's own can be a fraction of a percent off next to an end).
+READBACK_WORST_SAMPLES = 129
+#: A split edge's pieces are moved this far (mm) from their face at the split, so that their largest
+#: distance is there by more than the evaluation's rounding (about 1e-12 mm): a 1.1e-7 mm gap is within
+#: the reader's factor of 1.00001 of it.
+READBACK_SPLIT_MARGIN_MM = 1e-10

@@ -14,28 +14,41 @@ per edge, and OpenCascade's reader (FreeCAD's too) gives each edge what it sampl
   and gives the edge the largest, times 1.00001 (at least 1e-7 mm). Where they part most between
   two samples, the edge reads back with a tolerance that does not cover its curves: an
   ``InvalidCurveOnSurface`` fault in ``BOPAlgo_ArgumentAnalyzer`` (FreeCAD's check with BOP),
-  whose measure (``GeomLib_CheckCurveOnSurface``) finds the true largest distance.
+  whose measure (``GeomLib_CheckCurveOnSurface``) finds the largest distance;
+- it closes a gap between the face curves of two edges meeting at a vertex on a face by bending
+  both to meet half way: a fillet contact edge's 3D curve can end up to a few 1e-4 mm from its vertex
+  (its tolerance covers it in memory), so its face curve, square to the surface, ends that far from
+  its neighbour's, and a neighbour that is exact (the blade's trailing-edge curve, tolerance 1e-7 mm)
+  reads back bent, parting from its face most between two samples.
 
 So, before the file is written:
 
+0. every edge's 3D curve (a B-spline) that ends farther than
+   :data:`~torus_cad.tolerances.READBACK_VERTEX_GAP_MM` from its vertex is moved to end on it (a
+   shift varying linearly along the edge added to it): face curves made square to the surfaces then
+   end on the feet of the vertex, and meet on every face;
 1. every p-curve whose curves part by more than :data:`~torus_cad.tolerances.READBACK_MIN_TOLERANCE_MM`,
    and that is askew, is replaced by the curve of the feet of the perpendiculars from the 3D curve to
    the surface, at the same parameters (points solved by Gauss-Newton, the p-curve fitted by least
    squares in a B-spline basis holding the old 3D curve and p-curve and the surface's knot lines they
    cross, refined until it misses the feet half way between them by at most
    :data:`~torus_cad.tolerances.READBACK_PCURVE_FIT_MM` or
-   :data:`~torus_cad.tolerances.READBACK_PCURVE_FIT_GAP` of the gap): the curves then part square to
-   the surface everywhere, by the real gap only, and the reader's projection of the end points lands
-   where the file says. A new p-curve that would make its face's wire cross itself (two edges
-   meeting at a sliver) is undone;
-2. every edge whose largest distance lies between the reader's samples is split there: each piece
-   then parts most at an end, which the reader samples.
+   :data:`~torus_cad.tolerances.READBACK_PCURVE_FIT_GAP` of the gap), its ends on the feet of the 3D
+   curve's ends: the curves then part square to the surface everywhere, by the real gap only, and the
+   reader's projection of the end points lands where the file says. A new p-curve that would make its
+   face's wire cross itself (two edges meeting at a sliver) is undone;
+2. every edge whose largest distance (looked for on
+   :data:`~torus_cad.tolerances.READBACK_WORST_SAMPLES` points and refined by Brent's method:
+   GeomLib_CheckCurveOnSurface can put it a fraction of a percent off next to an end) lies between
+   the reader's samples is split there: each piece then parts most at an end, which the reader
+   samples. The pieces get the tolerance their curves need, not the fillet's.
 
-The faces stay as they are (only edges are split and p-curves replaced); the solid is checked
+The faces stay as they are (only edges are split and curves replaced); the solid is checked
 (BRepCheck_Analyzer) and its faces keep their parts. Measured on ``workshop_fillet`` (``python
 scripts/step_readback_check.py examples/workshop_fillet.toml``): 93 ``InvalidCurveOnSurface`` faults
-read back before, 0 after (every test on; 30 edges split and 21 p-curves replaced a blade); the
-rest, and what it costs: docs/explanation/how-the-solid-is-built.md.
+read back before, 0 after (every test on); with a 0.5 mm fillet on ``prop_10x5_2blade`` and
+``marine_3blade_loop`` (``--fillet 0.5 --fast``) 4 and 6 before step 0 and the refined largest
+distance, 0 after; the rest, and what it costs: docs/explanation/how-the-solid-is-built.md.
 """
 
 from __future__ import annotations
@@ -53,10 +66,12 @@ from OCP.BRepCheck import BRepCheck_NoError, BRepCheck_Wire
 from OCP.Geom import Geom_BSplineCurve, Geom_BSplineSurface, Geom_Curve, Geom_Surface, Geom_TrimmedCurve
 from OCP.Geom2d import Geom2d_BSplineCurve, Geom2d_Curve, Geom2d_TrimmedCurve
 from OCP.Geom2dAdaptor import Geom2dAdaptor_Curve
+from OCP.Geom2dConvert import Geom2dConvert
 from OCP.GeomAdaptor import GeomAdaptor_Curve, GeomAdaptor_Surface
 from OCP.GeomLib import GeomLib_CheckCurveOnSurface
 from OCP.gp import gp_Pnt, gp_Pnt2d, gp_Vec
 from OCP.ShapeBuild import ShapeBuild_ReShape
+from OCP.ShapeFix import ShapeFix_ShapeTolerance
 from OCP.TColgp import TColgp_Array1OfPnt2d
 from OCP.TColStd import TColStd_Array1OfInteger, TColStd_Array1OfReal
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_FORWARD, TopAbs_REVERSED, TopAbs_WIRE
@@ -64,7 +79,9 @@ from OCP.TopExp import TopExp
 from OCP.TopoDS import TopoDS, TopoDS_Edge, TopoDS_Face, TopoDS_Shape, TopoDS_Vertex, TopoDS_Wire
 from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape
 from scipy.interpolate import make_lsq_spline
+from scipy.optimize import minimize_scalar
 
+from torus_cad.errors import KernelError
 from torus_cad.kernel import face_provenance
 from torus_cad.kernel.checks import single_valid_solid
 from torus_cad.kernel.edge_curves import distinct_faces
@@ -72,24 +89,37 @@ from torus_cad.kernel.topology import explore
 from torus_cad.tolerances import (
     READBACK_MIN_TOLERANCE_MM,
     READBACK_PCURVE_FIT_GAP,
+    READBACK_PCURVE_FIT_LOOSE_MM,
     READBACK_PCURVE_FIT_MM,
     READBACK_PCURVE_FIT_ROUNDS,
     READBACK_SAMPLES,
+    READBACK_SPLIT_MARGIN_MM,
     READBACK_TOLERANCE_FACTOR,
+    READBACK_VERTEX_GAP_MM,
+    READBACK_WORST_SAMPLES,
 )
 
 __all__ = ["ReadableEdges", "readable_edges"]
 
 #: Gauss-Newton steps for one foot point (it converges in 2-3 from the old p-curve's point).
 _FOOT_STEPS = 8
-#: A foot point has converged when its step moves it by less than this (mm).
+#: A foot point has converged when its step moves it by less than this (mm) ...
 _FOOT_STEP_MM = 1e-13
+#: ... or, after every step, by less than this: the surface's own rounding (measured: steps of 1e-12 mm
+#: back and forth on a fillet surface's boundary, up to 2.5e-11 mm just past a fillet surface's end).
+_FOOT_NOISE_MM = 1e-10
 #: Knots of the 3D curve and p-curve closer than this fraction of the edge's range are one knot.
 _KNOT_MERGE = 1e-6
 #: Points along a p-curve at which its crossings of the surface's knot lines are looked for ...
 _CROSSING_SAMPLES = 200
 #: ... and halvings of each crossing's interval (2^-40 of 1/200 of the range).
 _BISECTIONS = 40
+#: Local maxima of an edge's curves' distance refined (the largest ones) ...
+_REFINED_PEAKS = 3
+#: ... to this fraction of the edge's range.
+_BRENT_XATOL = 1e-12
+#: A split edge's piece shorter than this many times the largest tolerance at it is a short piece (:func:`_split`).
+_SHORT_PIECE = 4.0
 
 
 @dataclass(frozen=True)
@@ -101,6 +131,7 @@ class ReadableEdges:
         pcurves: p-curves replaced by the feet of perpendiculars; split: edges split where their curves part most.
         worst_before_mm / worst_after_mm: the largest distance between an edge's 3D curve and a
             p-curve (GeomLib_CheckCurveOnSurface) before and after the p-curves were replaced, mm.
+        closed: edges whose 3D curve was moved to end on its vertices.
     """
 
     solid: cq.Solid
@@ -109,38 +140,52 @@ class ReadableEdges:
     split: int
     worst_before_mm: float
     worst_after_mm: float
+    closed: int = 0
 
 
 def readable_edges(solid: cq.Solid, face_parts: Sequence[int]) -> ReadableEdges:
-    """``solid`` (its faces' parts ``face_parts``) with its p-curves square to their surfaces and its
-    edges split where the STEP reader would miss how far their curves part (module doc).
+    """``solid`` (its faces' parts ``face_parts``) with its edges' curves ending on their vertices, its
+    p-curves square to their surfaces and its edges split where the STEP reader would miss how far
+    their curves part (module doc).
 
-    The p-curves are replaced in place (in every shape that shares the edges); the edges' tolerances
-    are raised to cover the new curves where needed. Raises KernelError if the split solid is not one
+    The curves are replaced in place (in every shape that shares the edges); the edges' tolerances
+    are raised to cover the new curves where needed. Raises KernelError if the result is not one
     valid solid.
     """
     shape = solid.wrapped
     edges = _edges_and_faces(shape)
+    closed = sum(_close_ends(edge) for edge, _ in edges)
     replaced, worst_before, worst_after = 0, 0.0, 0.0
-    context = ShapeBuild_ReShape()
-    split = 0
+    splits: list[tuple[TopoDS_Edge, list[TopoDS_Face], float, float]] = []  # (edge, faces, where, the tolerance needed)
     for edge, faces in edges:
-        worst: tuple[float, float] = (0.0, 0.0)  # the largest distance over the edge's faces, and where
+        hints = []
         for face in faces:
             before, after = _square_pcurve(edge, face)
             worst_before, worst_after = max(worst_before, before), max(worst_after, after[0])
             replaced += after[0] < before
-            worst = max(worst, after)
+            hints.append(after[1])
+        worst = _true_worst(edge, faces, hints)
+        _cover(edge, worst[0])
         where = _split_parameter(edge, faces, *worst)
         if where is not None:
-            context.Replace(edge.Oriented(TopAbs_FORWARD), _split(edge, where))
-            split += 1
-    if not split:
+            splits.append((edge, faces, where, max(READBACK_MIN_TOLERANCE_MM, worst[0] * READBACK_TOLERANCE_FACTOR + READBACK_SPLIT_MARGIN_MM)))
+    if not splits and not closed:
         return ReadableEdges(solid, tuple(face_parts), replaced, 0, worst_before, worst_after)
-    checked = single_valid_solid(cq.Shape.cast(context.Apply(shape)), "splitting the root fillet's edges for STEP")
-    origins = face_provenance.through_reshape(context, face_provenance.labelled_faces(shape, face_parts), checked.wrapped)
-    return ReadableEdges(checked, face_provenance.face_parts(checked.wrapped, origins), replaced, split,
-                         worst_before, worst_after)
+    failure: KernelError | None = None
+    for lower_short_pieces in (True, False):  # a piece's lower tolerance can make its face's wire cross itself
+        context = ShapeBuild_ReShape()
+        for edge, faces, where, needed in splits:
+            context.Replace(edge.Oriented(TopAbs_FORWARD), _split(edge, faces, where, needed if lower_short_pieces else None))
+        try:
+            checked = single_valid_solid(cq.Shape.cast(context.Apply(shape)), "making the root fillet's edges readable from STEP")
+        except KernelError as error:
+            failure = error
+            continue
+        origins = face_provenance.through_reshape(context, face_provenance.labelled_faces(shape, face_parts), checked.wrapped)
+        return ReadableEdges(checked, face_provenance.face_parts(checked.wrapped, origins), replaced, len(splits),
+                             worst_before, worst_after, closed)
+    assert failure is not None
+    raise failure
 
 
 def _edges_and_faces(shape: TopoDS_Shape) -> list[tuple[TopoDS_Edge, list[TopoDS_Face]]]:
@@ -167,11 +212,54 @@ def _deviation(curve: Geom_Curve, pcurve: Geom2d_Curve, surface: Geom_Surface, f
     return (check.MaxDistance(), check.MaxParameter()) if check.IsDone() else (math.inf, first)
 
 
+def _close_ends(edge: TopoDS_Edge) -> int:
+    """Move ``edge``'s 3D curve to end on its vertices (module doc, step 0) where an end is farther
+    from its vertex than READBACK_VERTEX_GAP_MM: the curve (a B-spline; others stay) is cut to the
+    edge's range and a linear shift from the gap at one end to the gap at the other added to it (each
+    pole moved by the shift at its Greville abscissa, which adds the linear function itself to a
+    non-rational curve, a smooth blend of it to a rational one; either way the ends land on the
+    vertices). Returns 1 if the curve was moved, else 0; the p-curves are made to follow afterwards."""
+    forward = TopoDS.Edge_s(edge.Oriented(TopAbs_FORWARD))
+    first, last = BRep_Tool.Range_s(forward)
+    curve = BRep_Tool.Curve_s(forward, 0.0, 0.0)
+    start = gp_Vec(curve.Value(first), BRep_Tool.Pnt_s(TopExp.FirstVertex_s(forward)))
+    end = gp_Vec(curve.Value(last), BRep_Tool.Pnt_s(TopExp.LastVertex_s(forward)))
+    if max(start.Magnitude(), end.Magnitude()) <= READBACK_VERTEX_GAP_MM:
+        return 0
+    basis = curve
+    while isinstance(basis, Geom_TrimmedCurve):
+        basis = basis.BasisCurve()
+    if not isinstance(basis, Geom_BSplineCurve) or basis.IsPeriodic():
+        return 0
+    moved = _shifted_curve(basis, first, last, start, end)
+    builder = BRep_Builder()
+    builder.UpdateEdge(edge, moved, BRep_Tool.Tolerance_s(edge))
+    builder.Range(edge, first, last)
+    return 1
+
+
+def _shifted_curve(basis: Geom_BSplineCurve, first: float, last: float, start: gp_Vec, end: gp_Vec) -> Geom_BSplineCurve:
+    """``basis`` cut to [first, last] with a shift from ``start`` at ``first`` to ``end`` at ``last``
+    added (each pole moved by the shift at its Greville abscissa, so the ends move by exactly those)."""
+    moved = basis.Copy()
+    if first > moved.FirstParameter() or last < moved.LastParameter():
+        moved.Segment(first, last)
+    count, degree = moved.NbPoles(), moved.Degree()
+    flat = TColStd_Array1OfReal(1, count + degree + 1)
+    moved.KnotSequence(flat)
+    for index in range(1, count + 1):
+        greville = sum(flat.Value(index + k) for k in range(1, degree + 1)) / degree
+        share = min(1.0, max(0.0, (greville - first) / (last - first)))
+        moved.SetPole(index, moved.Pole(index).Translated(start.Multiplied(1.0 - share).Added(end.Multiplied(share))))
+    return moved
+
+
 def _square_pcurve(edge: TopoDS_Edge, face: TopoDS_Face) -> tuple[float, tuple[float, float]]:
     """Replace ``edge``'s p-curve on ``face`` by the feet of the perpendiculars from its 3D curve (module
-    doc, step 1) if its curves part by more than READBACK_MIN_TOLERANCE_MM and the new one parts by less.
-    Returns the largest distance before (mm), and after with its parameter. The edge's tolerance is
-    raised to cover the new curve."""
+    doc, step 1), its ends on the feet of the 3D curve's ends, if its curves part by more than
+    READBACK_MIN_TOLERANCE_MM and the new one parts by less; failing that, by the old p-curve shifted
+    linearly to end on those feet. Returns the largest distance before (mm), and after with its
+    parameter. The edge's tolerance is raised to cover the new curve."""
     curve = BRep_Tool.Curve_s(edge, 0.0, 0.0)
     pcurve = BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0)
     first, last = BRep_Tool.Range_s(edge)
@@ -181,17 +269,41 @@ def _square_pcurve(edge: TopoDS_Edge, face: TopoDS_Face) -> tuple[float, tuple[f
     before = _deviation(curve, pcurve, surface, first, last)
     if before[0] <= READBACK_MIN_TOLERANCE_MM:
         return before[0], before
-    square = _SquareFit(curve, pcurve, surface, first, last).fit()
-    after = _deviation(curve, square, surface, first, last) if square is not None else (math.inf, first)
-    if after[0] >= before[0]:
-        return before[0], before
+    fit = _SquareFit(curve, pcurve, surface, first, last)
+    ends = fit.feet(np.array([first, last]))
+    candidates = [fit.fit(), _shifted_pcurve(pcurve, first, last, ends) if ends is not None else None]
     builder = BRep_Builder()
-    tolerance = max(BRep_Tool.Tolerance_s(edge), after[0] * READBACK_TOLERANCE_FACTOR)
-    builder.UpdateEdge(edge, square, face, tolerance)
-    if _wires_cross(edge, face):  # moved across a neighbour's p-curve where two edges meet at a sliver: undone
-        builder.UpdateEdge(edge, pcurve, face, tolerance)
-        return before[0], before
-    return before[0], after
+    for square in candidates:
+        if square is None:
+            continue
+        if ends is not None:  # the ends exactly on the feet: the p-curves meeting at a vertex meet on every face
+            square.SetPole(1, gp_Pnt2d(*ends[0]))
+            square.SetPole(square.NbPoles(), gp_Pnt2d(*ends[1]))
+        after = _deviation(curve, square, surface, first, last)
+        if after[0] >= before[0]:
+            continue
+        tolerance = max(BRep_Tool.Tolerance_s(edge), after[0] * READBACK_TOLERANCE_FACTOR)
+        builder.UpdateEdge(edge, square, face, tolerance)
+        if not _wires_cross(edge, face):
+            return before[0], after
+        builder.UpdateEdge(edge, pcurve, face, tolerance)  # moved across a neighbour's p-curve where two edges meet at a sliver: undone
+    return before[0], before
+
+
+def _shifted_pcurve(pcurve: Geom2d_Curve, first: float, last: float, ends: NDArray[np.float64]) -> Geom2d_BSplineCurve:
+    """``pcurve`` on [first, last] as a B-spline, shifted linearly in (u, v) to run from ``ends[0]`` to ``ends[1]``."""
+    bspline = Geom2dConvert.CurveToBSplineCurve_s(Geom2d_TrimmedCurve(pcurve, first, last))
+    start = ends[0] - np.array(_uv(bspline.Value(first)))
+    end = ends[1] - np.array(_uv(bspline.Value(last)))
+    count, degree = bspline.NbPoles(), bspline.Degree()
+    flat = TColStd_Array1OfReal(1, count + degree + 1)
+    bspline.KnotSequence(flat)
+    for index in range(1, count + 1):
+        greville = sum(flat.Value(index + k) for k in range(1, degree + 1)) / degree
+        share = min(1.0, max(0.0, (greville - first) / (last - first)))
+        u, v = np.array(_uv(bspline.Pole(index))) + start * (1.0 - share) + end * share
+        bspline.SetPole(index, gp_Pnt2d(float(u), float(v)))
+    return bspline
 
 
 def _wires_cross(edge: TopoDS_Edge, face: TopoDS_Face) -> bool:
@@ -221,36 +333,40 @@ class _SquareFit:
 
     def _fit(self) -> Geom2d_BSplineCurve | None:
         knots, multiplicities = self.knots, self.multiplicities
+        best: tuple[float, Geom2d_BSplineCurve | None] = (READBACK_PCURVE_FIT_LOOSE_MM, None)
         for round_ in range(READBACK_PCURVE_FIT_ROUNDS):
             flat = _flat(knots, multiplicities, self.degree)
             parameters = _sample_parameters(knots, multiplicities, self.degree)
             middles = 0.5 * (parameters[1:] + parameters[:-1])
-            feet, exact = self._feet(parameters), self._feet(middles)
+            feet, exact = self.feet(parameters), self.feet(middles)
             if feet is None or exact is None:
-                return None
+                return best[1]
             allowed = max(READBACK_PCURVE_FIT_MM, READBACK_PCURVE_FIT_GAP * self._gap(middles, exact))
             if round_ == 0 and self._misses(np.array([_uv(self.pcurve.Value(t)) for t in middles]), exact).max() <= allowed:
                 return None  # square already
             spline = make_lsq_spline(parameters, feet, flat, k=self.degree)
             misses = self._misses(spline(middles), exact)
             if not np.isfinite(misses).all():
-                return None
+                return best[1]
             if misses.max() <= allowed:
                 return _bspline2d(spline.c, flat, self.degree)
+            if misses.max() <= best[0]:
+                best = (float(misses.max()), _bspline2d(spline.c, flat, self.degree))
             spans = np.unique(np.searchsorted(knots, middles[misses > allowed]))
             added = 0.5 * (knots[spans - 1] + knots[spans])
             order = np.argsort(np.concatenate([knots[1:-1], added]))
             inner = np.concatenate([knots[1:-1], added])[order]
             multiplicities = np.concatenate([multiplicities, np.ones(len(added), dtype=np.int64)])[order]
             knots = np.concatenate([[knots[0]], inner, [knots[-1]]])
-        return None
+        return best[1]  # the closest fit, if it misses the feet by no more than READBACK_PCURVE_FIT_LOOSE_MM
 
-    def _feet(self, parameters: NDArray[np.float64]) -> NDArray[np.float64] | None:
+    def feet(self, parameters: NDArray[np.float64]) -> NDArray[np.float64] | None:
         """``(n, 2)``: (u, v) of the foot of the perpendicular from the 3D curve at each parameter to the
         surface, by Gauss-Newton from the old p-curve's point; None if one does not converge."""
         targets = np.array([_xyz(self.curve.Value(t)) for t in parameters])
         uv = np.array([_uv(self.pcurve.Value(t)) for t in parameters])
         point, d_u, d_v = gp_Pnt(), gp_Vec(), gp_Vec()
+        moved = math.inf
         for _ in range(_FOOT_STEPS):
             residual, jacobian = np.empty((len(uv), 3)), np.empty((len(uv), 3, 2))
             for row, (u, v) in enumerate(uv.tolist()):
@@ -261,9 +377,10 @@ class _SquareFit:
             normal = np.einsum("nij,nik->njk", jacobian, jacobian)
             step = np.linalg.solve(normal, np.einsum("nij,ni->nj", jacobian, residual)[:, :, None])[:, :, 0]
             uv -= step
-            if np.linalg.norm(np.einsum("nij,nj->ni", jacobian, step), axis=1).max() < _FOOT_STEP_MM:
+            moved = float(np.linalg.norm(np.einsum("nij,nj->ni", jacobian, step), axis=1).max())
+            if moved < _FOOT_STEP_MM:
                 return uv
-        return None
+        return uv if moved < _FOOT_NOISE_MM else None
 
     def _gap(self, parameters: NDArray[np.float64], feet: NDArray[np.float64]) -> float:
         """The largest distance (mm) from the 3D curve at ``parameters`` to the surface at ``feet``."""
@@ -363,6 +480,46 @@ def _bspline2d(coefficients: NDArray[np.float64], flat: NDArray[np.float64], deg
     return Geom2d_BSplineCurve(poles, knots, multiplicities, degree)
 
 
+def _true_worst(edge: TopoDS_Edge, faces: Sequence[TopoDS_Face], hints: Sequence[float]) -> tuple[float, float]:
+    """The largest distance between ``edge``'s 3D curve and its p-curves (mm), and where: on
+    READBACK_WORST_SAMPLES points at equal parameters and at ``hints`` (where
+    GeomLib_CheckCurveOnSurface found the largest, which it can miss by a fraction of a percent next
+    to an end), each of the largest local maxima refined by Brent's method between its neighbours."""
+    curve = BRep_Tool.Curve_s(edge, 0.0, 0.0)
+    first, last = BRep_Tool.Range_s(edge)
+    worst = (0.0, first)
+    for face, hint in zip(faces, hints, strict=True):
+        pcurve = BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0)
+        if pcurve is None:
+            continue
+        surface = BRep_Tool.Surface_s(face)
+
+        def distance(t: float, pcurve: Geom2d_Curve = pcurve, surface: Geom_Surface = surface) -> float:
+            return curve.Value(t).Distance(surface.Value(*_uv(pcurve.Value(t))))
+
+        parameters = np.unique(np.concatenate([np.linspace(first, last, READBACK_WORST_SAMPLES),
+                                               [min(max(hint, first), last)]]))
+        values = np.array([distance(t) for t in parameters.tolist()])
+        if values.max() <= READBACK_MIN_TOLERANCE_MM:
+            worst = max(worst, (float(values.max()), float(parameters[values.argmax()])))
+            continue
+        padded = np.concatenate([[-1.0], values, [-1.0]])
+        peaks = np.flatnonzero((padded[1:-1] >= padded[:-2]) & (padded[1:-1] >= padded[2:]))
+        for index in peaks[np.argsort(values[peaks])[::-1][:_REFINED_PEAKS]].tolist():
+            low, high = parameters[max(index - 1, 0)], parameters[min(index + 1, len(parameters) - 1)]
+            found = minimize_scalar(lambda t: -distance(t), bounds=(low, high), method="bounded",
+                                    options={"xatol": _BRENT_XATOL * (last - first)})
+            best = (float(-found.fun), float(found.x)) if found.success else (0.0, first)
+            worst = max(worst, best, (float(values[index]), float(parameters[index])))
+    return worst
+
+
+def _cover(edge: TopoDS_Edge, worst_mm: float) -> None:
+    """Raise ``edge``'s tolerance to cover ``worst_mm`` (times the reader's factor)."""
+    if BRep_Tool.Tolerance_s(edge) < worst_mm * READBACK_TOLERANCE_FACTOR:
+        BRep_Builder().UpdateEdge(edge, worst_mm * READBACK_TOLERANCE_FACTOR)
+
+
 def _split_parameter(edge: TopoDS_Edge, faces: Sequence[TopoDS_Face], worst: float, where: float) -> float | None:
     """``where`` (the parameter at which ``edge``'s curves part most, by ``worst`` mm) if that is more
     than the reader would give the edge and not at an end (module doc, step 2); None otherwise."""
@@ -381,24 +538,62 @@ def _split_parameter(edge: TopoDS_Edge, faces: Sequence[TopoDS_Face], worst: flo
     return where if worst > sampled * READBACK_TOLERANCE_FACTOR and inside else None
 
 
-def _split(edge: TopoDS_Edge, parameter: float) -> TopoDS_Wire:
-    """``edge`` (forward) as two edges meeting at ``parameter``, with the same curves, as a wire."""
+def _split(edge: TopoDS_Edge, faces: Sequence[TopoDS_Face], parameter: float, needed: float | None) -> TopoDS_Wire:
+    """``edge`` (forward) as two edges meeting at ``parameter``, with the same p-curves, as a wire. Each
+    piece's 3D curve is moved by READBACK_SPLIT_MARGIN_MM at the split, away from the face it parts
+    most from there (a shift fading linearly to nothing at its other end): its largest distance is then
+    at the split by more than the rounding of the curves' evaluation (measured: 1.2e-12 mm between
+    GeomLib_CheckCurveOnSurface's value and the point's, 1e-5 of a 1.1e-7 mm gap, as much as the
+    reader's factor). A piece shorter than :data:`_SHORT_PIECE` times the largest tolerance at it gets
+    ``needed`` (mm, what its curves need) if given, not the fillet's tolerance, which would leave it
+    inside its vertices' spheres (a TooSmallEdge fault); so does the vertex between the pieces."""
     builder = BRep_Builder()
     forward = TopoDS.Edge_s(edge.Oriented(TopAbs_FORWARD))
     first, last = BRep_Tool.Range_s(forward)
+    curve = BRep_Tool.Curve_s(forward, 0.0, 0.0)
     tolerance = BRep_Tool.Tolerance_s(forward)
+    ends = (TopExp.FirstVertex_s(forward), TopExp.LastVertex_s(forward))
+    short = any(curve.Value(a).Distance(curve.Value(parameter)) <= _SHORT_PIECE * max(tolerance, BRep_Tool.Tolerance_s(end))
+                for a, end in ((first, ends[0]), (last, ends[1])))
+    if needed is not None and short:
+        tolerance = needed
+    point = curve.Value(parameter)
+    margin = _split_margin(point, forward, faces, parameter)
+    basis = curve
+    while isinstance(basis, Geom_TrimmedCurve):
+        basis = basis.BasisCurve()
+    if not isinstance(basis, Geom_BSplineCurve) or basis.IsPeriodic():
+        margin = gp_Vec(0.0, 0.0, 0.0)
     middle = TopoDS_Vertex()
-    builder.MakeVertex(middle, BRep_Tool.Curve_s(forward, 0.0, 0.0).Value(parameter), tolerance)
+    builder.MakeVertex(middle, point.Translated(margin), tolerance)
     wire = TopoDS_Wire()
     builder.MakeWire(wire)
-    pieces = ((TopExp.FirstVertex_s(forward), middle, first, parameter), (middle, TopExp.LastVertex_s(forward), parameter, last))
-    for start, end, a, b in pieces:
+    none = gp_Vec(0.0, 0.0, 0.0)
+    pieces = ((ends[0], middle, first, parameter, none, margin), (middle, ends[1], parameter, last, margin, none))
+    for start, end, a, b, at_a, at_b in pieces:
         piece = TopoDS.Edge_s(forward.EmptyCopied())
+        ShapeFix_ShapeTolerance().SetTolerance(piece, tolerance, TopAbs_EDGE)
+        if margin.Magnitude() > 0.0:
+            builder.UpdateEdge(piece, _shifted_curve(basis, a, b, at_a, at_b), tolerance)
         builder.Add(piece, start.Oriented(TopAbs_FORWARD))
         builder.Add(piece, end.Oriented(TopAbs_REVERSED))
         builder.Range(piece, a, b)
         builder.Add(wire, piece)
     return wire
+
+
+def _split_margin(point: gp_Pnt, edge: TopoDS_Edge, faces: Sequence[TopoDS_Face], parameter: float) -> gp_Vec:
+    """READBACK_SPLIT_MARGIN_MM along the gap from the face whose surface ``edge``'s p-curve puts
+    farthest from ``point`` at ``parameter`` (nothing if none is apart)."""
+    gaps = []
+    for face in faces:
+        pcurve = BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0)
+        if pcurve is not None:
+            gaps.append(gp_Vec(BRep_Tool.Surface_s(face).Value(*_uv(pcurve.Value(parameter))), point))
+    gap = max(gaps, key=lambda vector: vector.Magnitude(), default=gp_Vec(0.0, 0.0, 0.0))
+    if gap.Magnitude() <= READBACK_SPLIT_MARGIN_MM:
+        return gp_Vec(0.0, 0.0, 0.0)
+    return gap.Normalized().Multiplied(READBACK_SPLIT_MARGIN_MM)
 
 
 def _xyz(value: gp_Pnt | gp_Vec) -> tuple[float, float, float]:

@@ -15,12 +15,14 @@ projecting the 3D curve's end points onto it, and reparametrizes a p-curve whose
 leaves askew. An edge whose curves part most between those samples, or whose p-curve is askew, reads
 back with a tolerance that does not cover them. So a solid valid in memory can read back invalid, and
 the file is checked as read, not the solid. What the kernel does about it: the blade-hub
-intersection edges are rebuilt to 4e-8 mm (torus_cad.kernel.edge_curves), a root fillet's p-curves
-squared and its edges split where the largest distance falls between samples
+intersection edges are rebuilt to 4e-8 mm (torus_cad.kernel.edge_curves), a root fillet's edges
+moved to end on their vertices, its p-curves squared and its edges split where the largest distance
+falls between samples
 (torus_cad.kernel.fillet_readback). Measured, every test on (``python scripts/step_readback_check.py``,
 ``examples/workshop_fillet.toml`` as argument for the root fillet): every shipped design reads back
 with 0 faults; ``workshop_fillet`` had 93 ``InvalidCurveOnSurface`` faults before the fillet's edges
-were made readable.
+were made readable, ``prop_10x5_2blade`` and ``marine_3blade_loop`` with a 0.5 mm fillet (``--fillet
+0.5 --fast``) 4 and 6 before the edges' 3D curves were also moved to end on their vertices.
 """
 
 from __future__ import annotations
