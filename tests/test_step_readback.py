@@ -101,6 +101,8 @@ def test_a_looped_blades_root_fillet_reads_back_from_step_valid(tmp_path: Path) 
     path = write_step(propeller.solid, tmp_path / "design.step", propeller.parameters.name)
     faults = step_readback_faults(path)  # OpenCascade's STEP reader, every analyzer test
     assert faults.counts == {}, faults.first
+    if FREECADCMD:  # FreeCAD's own reader and check found the 4 faults too (tests/freecad_check.py)
+        assert freecad_verdicts([path], tmp_path / "freecad")[str(path)] == {"solids": 1, "valid": True, "faults": ""}
 
 
 def _cylinder_with_a_bumped_edge(bump: str, height_mm: float = 10.0, radius_mm: float = 10.0,
