@@ -244,14 +244,20 @@ def _shifted_curve(basis: Geom_BSplineCurve, first: float, last: float, start: g
     moved = basis.Copy()
     if first > moved.FirstParameter() or last < moved.LastParameter():
         moved.Segment(first, last)
-    count, degree = moved.NbPoles(), moved.Degree()
-    flat = TColStd_Array1OfReal(1, count + degree + 1)
-    moved.KnotSequence(flat)
-    for index in range(1, count + 1):
-        greville = sum(flat.Value(index + k) for k in range(1, degree + 1)) / degree
-        share = min(1.0, max(0.0, (greville - first) / (last - first)))
+    for index, share in enumerate(_greville_shares(moved, first, last), 1):
         moved.SetPole(index, moved.Pole(index).Translated(start.Multiplied(1.0 - share).Added(end.Multiplied(share))))
     return moved
+
+
+def _greville_shares(bspline: Geom_BSplineCurve | Geom2d_BSplineCurve, first: float, last: float) -> list[float]:
+    """Where each pole of ``bspline`` acts along [first, last], as a fraction in [0, 1]: its Greville
+    abscissa (the mean of the ``degree`` knots after the pole's own), which a linear shift of the
+    poles by that fraction turns into the same linear shift of the curve."""
+    count, degree = bspline.NbPoles(), bspline.Degree()
+    flat = TColStd_Array1OfReal(1, count + degree + 1)
+    bspline.KnotSequence(flat)
+    grevilles = (sum(flat.Value(index + k) for k in range(1, degree + 1)) / degree for index in range(1, count + 1))
+    return [min(1.0, max(0.0, (greville - first) / (last - first))) for greville in grevilles]
 
 
 def _square_pcurve(edge: TopoDS_Edge, face: TopoDS_Face) -> tuple[float, tuple[float, float]]:
@@ -295,12 +301,7 @@ def _shifted_pcurve(pcurve: Geom2d_Curve, first: float, last: float, ends: NDArr
     bspline = Geom2dConvert.CurveToBSplineCurve_s(Geom2d_TrimmedCurve(pcurve, first, last))
     start = ends[0] - np.array(_uv(bspline.Value(first)))
     end = ends[1] - np.array(_uv(bspline.Value(last)))
-    count, degree = bspline.NbPoles(), bspline.Degree()
-    flat = TColStd_Array1OfReal(1, count + degree + 1)
-    bspline.KnotSequence(flat)
-    for index in range(1, count + 1):
-        greville = sum(flat.Value(index + k) for k in range(1, degree + 1)) / degree
-        share = min(1.0, max(0.0, (greville - first) / (last - first)))
+    for index, share in enumerate(_greville_shares(bspline, first, last), 1):
         u, v = np.array(_uv(bspline.Pole(index))) + start * (1.0 - share) + end * share
         bspline.SetPole(index, gp_Pnt2d(float(u), float(v)))
     return bspline
