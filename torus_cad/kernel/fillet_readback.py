@@ -226,16 +226,22 @@ def _close_ends(edge: TopoDS_Edge) -> int:
     end = gp_Vec(curve.Value(last), BRep_Tool.Pnt_s(TopExp.LastVertex_s(forward)))
     if max(start.Magnitude(), end.Magnitude()) <= READBACK_VERTEX_GAP_MM:
         return 0
-    basis = curve
-    while isinstance(basis, Geom_TrimmedCurve):
-        basis = basis.BasisCurve()
-    if not isinstance(basis, Geom_BSplineCurve) or basis.IsPeriodic():
+    basis = _shiftable_bspline(curve)
+    if basis is None:
         return 0
     moved = _shifted_curve(basis, first, last, start, end)
     builder = BRep_Builder()
     builder.UpdateEdge(edge, moved, BRep_Tool.Tolerance_s(edge))
     builder.Range(edge, first, last)
     return 1
+
+
+def _shiftable_bspline(curve: Geom_Curve) -> Geom_BSplineCurve | None:
+    """The non-periodic B-spline under ``curve``'s trims, which :func:`_shifted_curve` can move; None for
+    any other curve (a line, a circle, a periodic B-spline stay as they are)."""
+    while isinstance(curve, Geom_TrimmedCurve):
+        curve = curve.BasisCurve()
+    return curve if isinstance(curve, Geom_BSplineCurve) and not curve.IsPeriodic() else None
 
 
 def _shifted_curve(basis: Geom_BSplineCurve, first: float, last: float, start: gp_Vec, end: gp_Vec) -> Geom_BSplineCurve:
@@ -559,12 +565,8 @@ def _split(edge: TopoDS_Edge, faces: Sequence[TopoDS_Face], parameter: float, ne
     if needed is not None and short:
         tolerance = needed
     point = curve.Value(parameter)
-    margin = _split_margin(point, forward, faces, parameter)
-    basis = curve
-    while isinstance(basis, Geom_TrimmedCurve):
-        basis = basis.BasisCurve()
-    if not isinstance(basis, Geom_BSplineCurve) or basis.IsPeriodic():
-        margin = gp_Vec(0.0, 0.0, 0.0)
+    basis = _shiftable_bspline(curve)
+    margin = _split_margin(point, forward, faces, parameter) if basis is not None else gp_Vec(0.0, 0.0, 0.0)
     middle = TopoDS_Vertex()
     builder.MakeVertex(middle, point.Translated(margin), tolerance)
     wire = TopoDS_Wire()
