@@ -22,6 +22,7 @@ from typing import Any
 
 from torus_cad.errors import ParameterError, TorusCadError
 from torus_cad.parameters.config_file import read_config_text
+from torus_cad.simulate.thrust_target import DEFAULT_MAX_RUNS, DEFAULT_TOLERANCE
 
 __all__ = ["SimulateError", "run_simulate", "simulate_unavailable"]
 
@@ -38,8 +39,8 @@ def _command(config: Path, settings: Mapping[str, Any], out_dir: Path, time_limi
     command = [sys.executable, "-m", "torus_cad", "simulate", str(config)]
     if settings.get("thrust"):
         command += ["--thrust", repr(float(settings["thrust"])),
-                    "--thrust-tolerance", repr(float(settings.get("thrust_tolerance", 0.01))),
-                    "--thrust-runs", str(int(settings.get("thrust_runs", 5)))]
+                    "--thrust-tolerance", repr(float(settings.get("thrust_tolerance", DEFAULT_TOLERANCE))),
+                    "--thrust-runs", str(int(settings.get("thrust_runs", DEFAULT_MAX_RUNS)))]
     else:
         command += ["--rpm", repr(float(settings["rpm"]))]
     if settings.get("airspeed"):

@@ -62,6 +62,7 @@ from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.config_file import read_config_table
 from torus_cad.parameters.schema import Section, param, parameter_error
 from torus_cad.simulate.settings import Level
+from torus_cad.simulate.thrust_target import DEFAULT_MAX_RUNS, DEFAULT_TOLERANCE
 from torus_cad.tolerances import (
     DESIGN_TIME_LIMIT_MAX_S,
     MAX_STUDY_TRIALS,
@@ -143,9 +144,9 @@ class SimulateTable(Section):
     rpm: float = param(0.0, ge=0.0, le=SIMULATE_RPM_LIMIT, doc="rotational speed, rpm (or thrust)")
     thrust: float = param(0.0, unit="N", ge=0.0, le=SIMULATE_THRUST_LIMIT_N,
                           doc="target thrust: each trial solved to it as simulate --thrust does (or rpm)")
-    thrust_tolerance: float = param(0.01, ge=THRUST_TOLERANCE_RANGE[0], le=THRUST_TOLERANCE_RANGE[1],
+    thrust_tolerance: float = param(DEFAULT_TOLERANCE, ge=THRUST_TOLERANCE_RANGE[0], le=THRUST_TOLERANCE_RANGE[1],
                                     doc="the target thrust's tolerance, a fraction (simulate --thrust-tolerance)")
-    thrust_runs: int = param(5, ge=THRUST_RUNS_RANGE[0], le=THRUST_RUNS_RANGE[1],
+    thrust_runs: int = param(DEFAULT_MAX_RUNS, ge=THRUST_RUNS_RANGE[0], le=THRUST_RUNS_RANGE[1],
                              doc="solver runs of a trial's rpm search at most (simulate --thrust-runs)")
     airspeed: float = param(0.0, unit="m/s", ge=0.0, le=1000.0, doc="axial inflow speed")
     level: Level = param(Level.COARSE, strict=False, doc="mesh level of the simulation")
@@ -437,13 +438,13 @@ def _check_thrust(target_n: float, airspeed_m_s: float, base: PropellerParameter
     """A target no propeller of the base's diameter reaches (CT 1 at the rpm limit) is refused here, once,
     not in every trial (a base without a ``diameter`` target: each trial's simulate checks its own)."""
     from torus_cad.simulate.settings import AIR_15C, rpm_limit
-    from torus_cad.simulate.thrust_target import PLAUSIBLE_CT_LIMIT, thrust_at
+    from torus_cad.simulate.thrust_target import PLAUSIBLE_CT_LIMIT, thrust_ceiling
 
     if base.diameter <= 0.0:
         return
     diameter_m = base.diameter / 1000.0
     limit = rpm_limit(diameter_m, airspeed_m_s, AIR_15C)
-    ceiling = thrust_at(PLAUSIBLE_CT_LIMIT, limit, diameter_m, AIR_15C.density_kg_m3)
+    ceiling = thrust_ceiling(limit, diameter_m, AIR_15C.density_kg_m3)
     if target_n > ceiling:
         raise fail(f"simulate.thrust = {target_n:g} N is out of range; allowed (0, {ceiling:.4g}] N (CT "
                    f"{PLAUSIBLE_CT_LIMIT:g} at the rpm limit {limit:.0f} rpm for the base's D = {base.diameter:g} mm)")

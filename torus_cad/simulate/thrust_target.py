@@ -60,10 +60,15 @@ def rpm_for(ct: float, thrust_n: float, diameter_m: float, density_kg_m3: float)
     return 60.0 * math.sqrt(thrust_n / (ct * density_kg_m3 * diameter_m**4))
 
 
+def thrust_ceiling(rpm_limit: float, diameter_m: float, density_kg_m3: float) -> float:
+    """The largest target thrust accepted, N: CT = ``PLAUSIBLE_CT_LIMIT`` at ``rpm_limit``."""
+    return thrust_at(PLAUSIBLE_CT_LIMIT, rpm_limit, diameter_m, density_kg_m3)
+
+
 def check_target(target_n: float, rpm_limit: float, diameter_m: float, density_kg_m3: float) -> None:
     """ParameterError (exit 2) naming ``--thrust``, the value and the allowed range for a target that is
-    not a positive finite number or is over the thrust at ``rpm_limit`` with CT = ``PLAUSIBLE_CT_LIMIT``."""
-    ceiling = thrust_at(PLAUSIBLE_CT_LIMIT, rpm_limit, diameter_m, density_kg_m3)
+    not a positive finite number or is over :func:`thrust_ceiling`."""
+    ceiling = thrust_ceiling(rpm_limit, diameter_m, density_kg_m3)
     if not (math.isfinite(target_n) and 0.0 < target_n <= ceiling):
         raise ParameterError(f"--thrust = {target_n:g} N is out of range; allowed (0, {ceiling:.4g}] N (CT "
                              f"{PLAUSIBLE_CT_LIMIT:g} at the rpm limit {rpm_limit:.0f} rpm for D = "
