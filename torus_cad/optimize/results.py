@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -76,14 +76,14 @@ def write_results(spec: StudySpec, study: optuna.Study, out: Path, checkpoint: C
     check()
     lines, built = _publish_best(spec, trials, best, out / BEST_DIR, out)
     check()
-    lines = [_outcomes_line(rows), *_level_lines(spec, trials), *unvalued_lines(rows), *lines]
+    spent = _level_seconds(trials)
+    pruned = _count(str(record[PRUNED_AT]) for record in map(trial_result, trials) if PRUNED_AT in record)
+    lines = [_outcomes_line(rows), *_level_lines(spec, spent, pruned), *unvalued_lines(rows), *lines]
     published = [trial for trial in trials if trial.number in built]
     summary = {"name": spec.name, "trials": len(trials), "states": _count(row["state"] for row in rows),
                "outcomes": _count(row["outcome"] for row in rows),
                "prescreened": sum(1 for row in rows if row["prescreened"]),
-               "pruned": _count(str(trial_result(trial)[PRUNED_AT]) for trial in trials
-                                if PRUNED_AT in trial_result(trial)),
-               "level_seconds": _level_seconds(trials),
+               "pruned": pruned, "level_seconds": spent,
                "best": [{"number": trial.number, "values": list(trial.values), "params": dict(trial.params),
                          "design": str(built[trial.number])} for trial in published],
                "not_published": [trial.number for trial in best if trial.number not in built]}
@@ -118,12 +118,11 @@ def _level_seconds(trials: Sequence[FrozenTrial]) -> dict[str, dict[str, float]]
     return spent
 
 
-def _level_lines(spec: StudySpec, trials: Sequence[FrozenTrial]) -> list[str]:
-    """``"  coarse: 12 trials, 1430 s (5 pruned); medium: 7 trials, 2210 s"``: what each mesh level cost."""
+def _level_lines(spec: StudySpec, spent: Mapping[str, Mapping[str, float]], pruned: Mapping[str, int]) -> list[str]:
+    """``"  coarse: 12 trials, 1430 s (5 pruned); medium: 7 trials, 2210 s"``: what each mesh level cost
+    (``spent``: :func:`_level_seconds`; ``pruned``: trials stopped at each level)."""
     if len(spec.levels) < 2:
         return []
-    spent = _level_seconds(trials)
-    pruned = _count(str(trial_result(trial)[PRUNED_AT]) for trial in trials if PRUNED_AT in trial_result(trial))
     parts = []
     for level in spec.levels:
         entry = spent.get(level, {"trials": 0, "seconds": 0.0})
