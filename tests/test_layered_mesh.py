@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from cli_exit import exit_code
 from openfoam_marks import needs_openfoam
 
 foamlib = pytest.importorskip("foamlib")
@@ -208,12 +209,45 @@ def test_mesh_from_a_case_of_another_level_or_mesher_exits_2_naming_both(tmp_pat
     out = tmp_path / "out"
     assert main(["simulate", "--rpm", "1000", "--mesh-from", str(source), "--out", str(out)]) == 2
     error = capsys.readouterr().err
-    assert error.count("\n") == 1 and "was meshed for design 'torus_propeller', mesher 'snappy', level 'fine', not " \
-                                      "'torus_propeller', 'snappy', 'coarse'" in error
+    assert error.count("\n") == 1 and "was meshed for design 'torus_propeller', mesher 'snappy', level 'fine', " \
+                                      "surface refinement 0, not 'torus_propeller', 'snappy', 'coarse', 0" in error
     assert main(["simulate", "--rpm", "1000", "--mesher", "tet", "--level", "fine", "--mesh-from", str(source),
                  "--out", str(out)]) == 2
-    assert "mesher 'snappy', level 'fine', not 'torus_propeller', 'tet', 'fine'" in capsys.readouterr().err
+    assert "mesher 'snappy', level 'fine', surface refinement 0, not 'torus_propeller', 'tet', 'fine', 0" in \
+        capsys.readouterr().err
+    assert main(["simulate", "--rpm", "1000", "--level", "fine", "--surface-refinement", "1", "--mesh-from",
+                 str(source), "--out", str(out)]) == 2
+    assert "level 'fine', surface refinement 0, not 'torus_propeller', 'snappy', 'fine', 1" in capsys.readouterr().err
     assert not out.exists() or not list(out.iterdir())
+
+
+def test_surface_refinement_halves_the_propellers_cells_and_keeps_the_levels_layers(tmp_path):
+    stl = _box_stl(tmp_path / "box.stl", (20.0, 3.0, 1.0))
+    plain = write_layered_mesh(stl, 40.0, Level.MEDIUM, tmp_path / "plain", 1e-6)
+    refined = write_layered_mesh(stl, 40.0, Level.MEDIUM, tmp_path / "refined", 1e-6, surface_refinement=2)
+    assert refined.first_layer_m == plain.first_layer_m and refined.background_cell_m == plain.background_cell_m
+    levels = {}
+    for name in ("plain", "refined"):
+        snappy = foamlib.FoamFile(tmp_path / name / "system" / "snappyHexMeshDict")
+        controls = snappy["castellatedMeshControls"]
+        levels[name] = (list(controls["refinementSurfaces"]["propeller"]["level"]), controls["features"][0]["level"],
+                        list(controls["refinementSurfaces"]["rotating_zone"]["level"]))
+        assert snappy["addLayersControls"]["firstLayerThickness"] == pytest.approx(plain.first_layer_m)
+    assert levels["plain"] == ([SURFACE_LEVEL] * 2, SURFACE_LEVEL + 1, [2, 2])
+    assert levels["refined"] == ([SURFACE_LEVEL + 2] * 2, SURFACE_LEVEL + 3, [2, 2])
+
+
+@pytest.mark.parametrize(("arguments", "message"), [
+    (["--surface-refinement", "4"], "--surface-refinement = 4 is out of range; allowed [0, 3]"),
+    (["--surface-refinement", "1", "--mesher", "tet"], "--surface-refinement = 1 refines snappyHexMesh's surface; "
+                                                        "allowed only with --mesher snappy"),
+])
+def test_a_surface_refinement_out_of_range_or_without_snappy_exits_2_naming_it(tmp_path, capsys, arguments, message):
+    out = tmp_path / "out"
+    assert exit_code(["simulate", "--rpm", "1000", "--case-only", *arguments, "--out", str(out)]) == 2
+    error = capsys.readouterr().err
+    assert error.count("\n") == 1 and message in error
+    assert not out.exists()
 
 
 def test_the_tip_diameter_is_the_designs_as_built_with_its_diameter_target():

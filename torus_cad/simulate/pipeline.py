@@ -55,6 +55,7 @@ from torus_cad.simulate.run import (
 from torus_cad.simulate.settings import (
     DEFAULT_TIME_LIMIT_S,
     LEVEL_ITERATIONS,
+    MAX_SURFACE_REFINEMENT,
     REFINEMENT_RATIO,
     TURBULENCE_INTENSITY,
     TURBULENCE_LENGTH_D,
@@ -124,7 +125,9 @@ class Request:
     folder of an earlier run of the same design and level whose mesh to reuse (another rpm or
     airspeed without meshing again), the mesher (``snappy``: prism layers; ``tet``: gmsh tetrahedra), and a
     STEP propeller (``--step``) to simulate instead of building ``params`` (then ``params`` gives only the name,
-    the sense of rotation and ``[cfd]``), the turbulence model and the observers of the tonal noise."""
+    the sense of rotation and ``[cfd]``), the turbulence model, the observers of the tonal noise and the
+    propeller's surface refinement beyond the level's (snappy mesher: its surface and edge cells halved that
+    many times more)."""
 
     params: PropellerParameters
     point: OperatingPoint
@@ -138,6 +141,7 @@ class Request:
     step: StepPropeller | None = None
     turbulence: TurbulenceModel = TurbulenceModel.K_OMEGA_SST
     observers: tuple[Observer, ...] = DEFAULT_OBSERVERS
+    surface_refinement: int = 0
 
     @property
     def run_iterations(self) -> int:
@@ -160,6 +164,10 @@ def check_request(request: Request) -> float:
 
     check_count("--iterations", request.run_iterations, 1, MAX_ITERATIONS)
     check_count("--processes", request.processes, 1, max_processes())
+    check_count("--surface-refinement", request.surface_refinement, 0, MAX_SURFACE_REFINEMENT)
+    if request.surface_refinement and request.mesher != Mesher.SNAPPY:
+        raise ParameterError(f"--surface-refinement = {request.surface_refinement} refines snappyHexMesh's surface; "
+                             "allowed only with --mesher snappy (the tet mesher sizes by [cfd] cells_per_chord)")
     if not (math.isfinite(request.time_limit_s) and 0.0 < request.time_limit_s <= SIMULATE_TIME_LIMIT_MAX_S):
         raise ParameterError(f"--time-limit = {request.time_limit_s:g} s is out of range; allowed "
                              f"(0, {SIMULATE_TIME_LIMIT_MAX_S:g}] s")
@@ -223,7 +231,7 @@ async def _mesh_and_write(request: Request, case: Path, diameter_m: float,
 
 def _mesh_report(request: Request, extra: dict[str, Any]) -> dict[str, Any]:
     return {"name": request.params.name, "mesher": request.mesher.value, "level": request.level.value,
-            "cells": None, **extra}
+            "surface_refinement": request.surface_refinement, "cells": None, **extra}
 
 
 def surface_stl(request: Request, path: Path) -> Path:
@@ -251,7 +259,8 @@ async def _layered_and_write(request: Request, case: Path, diameter_m: float,
     cfd = params.cfd
     layered = write_layered_mesh(surface, diameter_m * 1000.0, request.level, case, first, _flow_sign(params),
                                  {"domain_radius": cfd.domain_radius, "upstream": cfd.upstream,
-                                  "downstream": cfd.downstream}, cfd.zone_radius, cfd.zone_clearance)
+                                  "downstream": cfd.downstream}, cfd.zone_radius, cfd.zone_clearance,
+                                 request.surface_refinement)
     spec = _case_spec(request, diameter_m, "")
     write_case(case, spec)
     return _mesh_report(request, {
@@ -297,14 +306,16 @@ def _mesh_source_report(request: Request) -> dict[str, Any]:
                              f"(no constant/polyMesh/boundary or {MESH_REPORT})")
     try:
         mesh_report = json.loads(read_untrusted_bytes(report_path, "mesh report", REPORT_FILE_MAX_BYTES))
-        made = (mesh_report["name"], mesh_report["mesher"], mesh_report["level"])
+        made = (mesh_report["name"], mesh_report["mesher"], mesh_report["level"],
+                mesh_report.get("surface_refinement", 0))
     except (ParameterError, ValueError, KeyError, TypeError, RecursionError):
         raise ParameterError(f"--mesh-from {str(source)!r}: {MESH_REPORT} is not a mesh report") from None
-    wanted = (name, request.mesher.value, request.level.value)
+    wanted = (name, request.mesher.value, request.level.value, request.surface_refinement)
     if made != wanted or (request.mesher == Mesher.TET and mesh_report.get("cfd") != request.params.cfd.model_dump(
             mode="json")):
         raise ParameterError(f"--mesh-from {str(source)!r} was meshed for design {made[0]!r}, mesher {made[1]!r}, level "
-                             f"{made[2]!r}, not {wanted[0]!r}, {wanted[1]!r}, {wanted[2]!r}"
+                             f"{made[2]!r}, surface refinement {made[3]!r}, not {wanted[0]!r}, {wanted[1]!r}, "
+                             f"{wanted[2]!r}, {wanted[3]!r}"
                              + (" (or with other [cfd] settings)" if request.mesher == Mesher.TET else ""))
     return mesh_report
 

@@ -160,8 +160,11 @@ def block_mesh_dict(domain: Domain, cell_m: float) -> dict[str, Any]:
             "mergePatchPairs": []}
 
 
-def snappy_dict(domain: Domain, cell_m: float, first_layer_m: float) -> dict[str, Any]:
-    """snappyHexMeshDict: refinement, the rotating cellZone / faceZone, prism layers on the propeller."""
+def snappy_dict(domain: Domain, cell_m: float, first_layer_m: float, surface_refinement: int = 0) -> dict[str, Any]:
+    """snappyHexMeshDict: refinement, the rotating cellZone / faceZone, prism layers on the propeller; the
+    propeller's surface and edges refined ``surface_refinement`` levels beyond ``SURFACE_LEVEL`` and
+    ``FEATURE_LEVEL``."""
+    surface_level, feature_level = SURFACE_LEVEL + surface_refinement, FEATURE_LEVEL + surface_refinement
     point = [0.5 * (domain.zone_radius_m + domain.half_width_m) + 0.1234 * cell_m, 0.0321 * cell_m,
              0.5 * sum(domain.zone_z_m) + 0.0213 * cell_m]
     zone_half = 0.5 * (domain.zone_z_m[1] - domain.zone_z_m[0])
@@ -177,9 +180,9 @@ def snappy_dict(domain: Domain, cell_m: float, first_layer_m: float) -> dict[str
             "maxLocalCells": 2_000_000, "maxGlobalCells": 20_000_000, "minRefinementCells": 0,
             "maxLoadUnbalance": 0.1, "nCellsBetweenLevels": 2, "resolveFeatureAngle": 30,
             "allowFreeStandingZoneFaces": True,
-            "features": [{"file": '"propeller.eMesh"', "level": FEATURE_LEVEL}],
+            "features": [{"file": '"propeller.eMesh"', "level": feature_level}],
             "refinementSurfaces": {
-                WALL: {"level": [SURFACE_LEVEL, SURFACE_LEVEL], "patchInfo": {"type": "wall"}},
+                WALL: {"level": [surface_level, surface_level], "patchInfo": {"type": "wall"}},
                 ZONE: {"level": [ZONE_LEVEL, ZONE_LEVEL], "faceZone": ZONE, "cellZone": ZONE,
                        "cellZoneInside": "inside"},
             },
@@ -239,7 +242,8 @@ class LayeredMesh:
 
 def write_layered_mesh(surface_stl_path_mm: str | Path, diameter_mm: float, level: Level, out_case_dir: str | Path,
                        first_layer_m: float, flow_sign: float = -1.0, domain_d: dict[str, float] | None = None,
-                       zone_radius_d: float = 0.6, zone_clearance_d: float = 0.1) -> LayeredMesh:
+                       zone_radius_d: float = 0.6, zone_clearance_d: float = 0.1,
+                       surface_refinement: int = 0) -> LayeredMesh:
     """Write the dictionaries that mesh the propeller whose closed surface is ``surface_stl_path_mm``
     (STL, mm, spin axis +z through the origin) with prism layers, into ``out_case_dir``; the commands
     to run (blockMesh, surfaceTransformPoints, surfaceFeatureExtract, snappyHexMesh, checkMesh) are
@@ -249,7 +253,9 @@ def write_layered_mesh(surface_stl_path_mm: str | Path, diameter_mm: float, leve
     (:func:`first_cell_height_m`; divided by the level's scale, and raised to :func:`thinnest_first_layer_m`
     where it is thinner); ``flow_sign`` -1 puts the inlet at +z;
     ``domain_d`` the box in D (``domain_radius``, ``upstream``, ``downstream``; default
-    settings.DOMAIN_D); the rotating zone's radius and axial clearance are in D.
+    settings.DOMAIN_D); the rotating zone's radius and axial clearance are in D. ``surface_refinement``
+    halves the propeller's surface and edge cells that many times more; the layers stay the level's (sized
+    on its own surface cell), as thinner ones were dropped or made the E63 blade diverge (the simulate how-to).
     """
     from torus_cad.simulate.settings import DOMAIN_D
 
@@ -276,7 +282,7 @@ def write_layered_mesh(surface_stl_path_mm: str | Path, diameter_mm: float, leve
         "propeller.stl": {"extractionMethod": "extractFromSurface", "includedAngle": 150,
                           "subsetFeatures": {"nonManifoldEdges": False, "openEdges": True},
                           "writeObj": False}})
-    _write(case / "system" / "snappyHexMeshDict", snappy_dict(domain, cell, first))
+    _write(case / "system" / "snappyHexMeshDict", snappy_dict(domain, cell, first, surface_refinement))
     for name, entries in _UTILITY_DICTIONARIES.items():  # the meshing programs read them; the case's own win
         if not (case / "system" / name).exists():
             _write(case / "system" / name, entries)

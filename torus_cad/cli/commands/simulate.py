@@ -34,7 +34,7 @@ def run(args: argparse.Namespace) -> int:
     request = Request(params, OperatingPoint(rpm, args.airspeed), Level(args.level), args.iterations,
                       max_processes() if args.processes is None else args.processes, args.case_only, args.time_limit,
                       Path(args.mesh_from) if args.mesh_from else None, Mesher(args.mesher), step,
-                      TurbulenceModel(args.turbulence), _observers(args.observer))
+                      TurbulenceModel(args.turbulence), _observers(args.observer), args.surface_refinement)
     line = IterationLine.for_terminal(quiet=args.quiet)
     try:
         if args.convergence:
