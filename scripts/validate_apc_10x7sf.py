@@ -41,8 +41,10 @@ from studies.wind_tunnel import (  # noqa: E402  (the checkout's studies/, besid
     read_wind_tunnel,
 )
 
-#: The two descriptions of the propeller: APC's station table (PE0) and UIUC's measured geometry.
-DESIGNS = {"pe0": ROOT / "examples" / "apc_10x7sf_pe0.toml", "uiuc": ROOT / "examples" / "apc_10x7sf.toml"}
+#: The descriptions of the propeller: APC's station table (PE0) with the NACA 4412 stand-in or with the E63 section
+#: APC names, and UIUC's measured geometry.
+DESIGNS = {"pe0": ROOT / "examples" / "apc_10x7sf_pe0.toml", "e63": ROOT / "examples" / "apc_10x7sf_e63.toml",
+           "uiuc": ROOT / "examples" / "apc_10x7sf.toml"}
 
 
 def simulate_point(rpm: float, advance_ratio: float, args: argparse.Namespace, out: Path,
@@ -110,7 +112,8 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--level", default="coarse", choices=("coarse", "medium", "fine"))
     parser.add_argument("--geometry", default="pe0", choices=sorted(DESIGNS),
-                        help="the blade from APC's station table (pe0, default) or UIUC's measured geometry (uiuc)")
+                        help="the blade from APC's station table with a NACA 4412 (pe0, default) or with the E63 (e63), or "
+                             "UIUC's measured geometry (uiuc)")
     parser.add_argument("--processes", type=int, default=2)
     parser.add_argument("--static", type=float, nargs="*", default=[5000.0, 4000.0, 5987.0],
                         help="rpm at J = 0 (UIUC measured up to 5987)")

@@ -31,7 +31,7 @@ EXAMPLES = SHIPPED_DESIGNS
 #: naming a radius that works or the concave bend that stops it (measured: the APC 10x7 SF's thin cambered
 #: root, 0.9 mm thick at the hub, takes 0.05 mm, with a sharp or a 0.2 mm round trailing edge, with or
 #: without root_fillet_tight_bends = 'reduce').
-TOO_THIN_FOR_THE_FILLET = {"apc_10x7sf", "apc_10x7sf_pe0"}
+TOO_THIN_FOR_THE_FILLET = {"apc_10x7sf", "apc_10x7sf_pe0", "apc_10x7sf_e63"}
 
 
 @pytest.mark.parametrize("radius_mm", [0.5, 1.0])
