@@ -209,6 +209,10 @@ SIMULATE_TIP_MACH_LIMIT = 0.6
 #: Simulations: largest airspeed, m/s (Mach 0.3 in air at 15 C: compressibility stays under ~2 %).
 SIMULATE_AIRSPEED_LIMIT_M_S = 100.0
 
+#: Simulations: the most further halvings of the propeller's surface and edge cells that
+#: ``--surface-refinement`` takes (each about triples the cells near the blade).
+SIMULATE_MAX_SURFACE_REFINEMENT = 3
+
 #: Simulations: an initial residual above this, or any non-finite residual or force, is divergence.
 SIMULATE_DIVERGENCE_RESIDUAL = 1e3
 

@@ -26,6 +26,7 @@ from torus_cad.tolerances import (
     PREVIEW_EDGE_RANGE,
     SIMULATE_AIRSPEED_LIMIT_M_S,
     SIMULATE_MAX_ITERATIONS,
+    SIMULATE_MAX_SURFACE_REFINEMENT,
     SIMULATE_RPM_LIMIT,
     SIMULATE_THRUST_LIMIT_N,
     SIMULATE_TIME_LIMIT_MAX_S,
@@ -266,9 +267,7 @@ def _add_simulate_parser(commands: Any) -> None:
     simulate.add_argument("--turbulence", choices=["kOmegaSST", "kOmegaSSTLM"], default="kOmegaSST",
                           help="RANS model: kOmegaSST (default) or kOmegaSSTLM, k-omega SST with Langtry-Menter "
                                "transition (two more equations; compared against the wind tunnel in the simulate how-to)")
-    from torus_cad.simulate.settings import MAX_SURFACE_REFINEMENT
-
-    refinement = Bounds(0, MAX_SURFACE_REFINEMENT)
+    refinement = Bounds(0, SIMULATE_MAX_SURFACE_REFINEMENT)
     simulate.add_argument("--surface-refinement", type=integer("--surface-refinement", refinement), default=0,
                           metavar="N", help=f"snappy mesher: halve the propeller's surface and edge cells N more times "
                                             f"than the level does, {range_help(refinement)} (default 0; each step about "

@@ -55,7 +55,6 @@ from torus_cad.simulate.run import (
 from torus_cad.simulate.settings import (
     DEFAULT_TIME_LIMIT_S,
     LEVEL_ITERATIONS,
-    MAX_SURFACE_REFINEMENT,
     REFINEMENT_RATIO,
     TURBULENCE_INTENSITY,
     TURBULENCE_LENGTH_D,
@@ -86,6 +85,7 @@ from torus_cad.tolerances import (
     NOISE_MAX_OBSERVERS,
     REPORT_FILE_MAX_BYTES,
     SIMULATE_MAX_ITERATIONS,
+    SIMULATE_MAX_SURFACE_REFINEMENT,
     SIMULATE_TIME_LIMIT_MAX_S,
 )
 
@@ -164,7 +164,7 @@ def check_request(request: Request) -> float:
 
     check_count("--iterations", request.run_iterations, 1, MAX_ITERATIONS)
     check_count("--processes", request.processes, 1, max_processes())
-    check_count("--surface-refinement", request.surface_refinement, 0, MAX_SURFACE_REFINEMENT)
+    check_count("--surface-refinement", request.surface_refinement, 0, SIMULATE_MAX_SURFACE_REFINEMENT)
     if request.surface_refinement and request.mesher != Mesher.SNAPPY:
         raise ParameterError(f"--surface-refinement = {request.surface_refinement} refines snappyHexMesh's surface; "
                              "allowed only with --mesher snappy (the tet mesher sizes by [cfd] cells_per_chord)")

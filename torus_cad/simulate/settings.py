@@ -83,9 +83,6 @@ BACKGROUND_CELLS_PER_D = 3.0
 #: snappyHexMesh refinement levels (each halves the background cell): inside the rotating zone, on the
 #: propeller's surface, on its sharp edges (leading and trailing edges, hub rims).
 ZONE_LEVEL, SURFACE_LEVEL, FEATURE_LEVEL = 2, 4, 5
-#: The most further halvings of the propeller's surface and edge cells that ``--surface-refinement`` takes
-#: (each about triples the cells near the blade; 3 makes the APC 10x7's coarse mesh 290k cells).
-MAX_SURFACE_REFINEMENT = 3
 #: Prism layers on the propeller and the thickness ratio of neighbouring layers.
 LAYERS = 8
 LAYER_EXPANSION_RATIO = 1.3
