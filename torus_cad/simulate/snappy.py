@@ -315,8 +315,9 @@ def parse_check_mesh(log: str) -> MeshCheck:
 
 
 def layer_coverage(log: str) -> dict[str, float] | None:
-    """snappyHexMesh's layer report on the propeller: the share of its faces with layers (0..1), the mean
-    layer count and the share of the wanted thickness reached; None when the log has no report."""
+    """snappyHexMesh's layer report on the propeller: its face count, their mean layer count, the layers'
+    mean overall thickness (m) and the share of the wanted thickness reached (0..1), and ``coverage``, the
+    mean layer count over the wanted ``LAYERS`` (0..1); None when the log has no report."""
     matches = re.findall(rf"^{WALL}\s+(\d+)\s+(\S+)\s+(\S+)\s+(\S+)\s*$", log, re.MULTILINE)
     if not matches:
         return None
