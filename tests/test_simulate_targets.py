@@ -387,3 +387,6 @@ def test_a_run_prints_torque_in_n_mm_and_variations_in_percent():
     assert lines[1] == "rpm for 0.05 N: 10932 rpm (0.0499 N, within 1 %)"
     assert "torque 0.989 N mm" in lines[2] and "figure of merit 0.139" in lines[2]
     assert lines[3].startswith("converged: thrust varies 1.4 %, torque 0.41 % over the last 10 %")
+    assert len(lines) == 4  # a report without the wall shear's part (written before it was reported)
+    report["viscous"] = {"thrust_n": -0.0001, "torque_nm": 0.0000189, "thrust_share": -0.002, "torque_share": 0.0191}
+    assert summary_lines(Result({}, report))[4] == "wall shear: 1.9 % of the torque, -0.2 % of the thrust (the rest is pressure)"

@@ -92,6 +92,10 @@ def summary_lines(result: Result, convergence: bool = False) -> list[str]:
                       f"{mesh['y_plus_target']} so that the layers meet the surface cells")
         lines.append(f"y+ on the propeller: min {y_plus['min']:.3g}, mean {y_plus['mean']:.3g}, max {y_plus['max']:.3g} "
                      f"({report['mesher']} mesh, {sizing})")
+    viscous = report.get("viscous")
+    if viscous and viscous["torque_share"] is not None and viscous["thrust_share"] is not None:
+        lines.append(f"wall shear: {_percent(viscous['torque_share'])} of the torque, "
+                     f"{_percent(viscous['thrust_share'])} of the thrust (the rest is pressure)")
     if report.get("noise"):
         lines.append(noise_line(report["noise"]))
     return lines

@@ -49,6 +49,11 @@ def _time_folder(root: Path, name: str) -> Path:
 
 
 
+#: The forces function object's columns after the time (OpenFOAM v1912): total, pressure and viscous
+#: vectors; the viscous ones are the last three.
+FORCE_COLUMNS, VISCOUS_COLUMNS = 9, slice(6, 9)
+
+
 def _vectors(path: Path, columns: int = 3) -> tuple[np.ndarray, np.ndarray]:
     """(iterations (n,), the first ``columns`` numbers after the time (n, columns))."""
     _, rows = _rows(path)
@@ -62,12 +67,15 @@ def _vectors(path: Path, columns: int = 3) -> tuple[np.ndarray, np.ndarray]:
 @dataclass
 class History:
     """A run's histories by iteration. Arrays: ``iterations`` (n,), ``force_n`` / ``moment_nm`` (n, 3)
-    on the propeller, ``residuals`` {name: (n,)}; the outer patches' ``outer_force_n`` (n, 3) (pressure
-    and viscous) and ``momentum_flux_m4_s2`` {patch: (n, 3)} (sum of U phi, kinematic)."""
+    on the propeller (pressure and viscous), ``viscous_force_n`` / ``viscous_moment_nm`` (n, 3) their
+    viscous part (wall shear), ``residuals`` {name: (n,)}; the outer patches' ``outer_force_n`` (n, 3)
+    (pressure and viscous) and ``momentum_flux_m4_s2`` {patch: (n, 3)} (sum of U phi, kinematic)."""
 
     iterations: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
     force_n: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     moment_nm: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    viscous_force_n: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    viscous_moment_nm: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     residual_iterations: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
     residuals: dict[str, np.ndarray] = field(default_factory=dict)
     outer_force_n: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
@@ -98,10 +106,11 @@ def read_residuals(case: Path) -> tuple[np.ndarray, dict[str, np.ndarray]]:
 def read_history(case: str | Path, balance: bool = False) -> History:
     """The histories of ``case``; with ``balance`` also the outer patches' forces and momentum fluxes."""
     case = Path(case)
-    iterations, force = _vectors(_time_folder(case, FORCES) / "force.dat")
-    moment_iterations, moment = _vectors(_time_folder(case, FORCES) / "moment.dat")
+    iterations, force = _vectors(_time_folder(case, FORCES) / "force.dat", FORCE_COLUMNS)
+    moment_iterations, moment = _vectors(_time_folder(case, FORCES) / "moment.dat", FORCE_COLUMNS)
     count = min(len(iterations), len(moment_iterations))
-    history = History(iterations[:count], force[:count], moment[:count])
+    history = History(iterations[:count], force[:count, :3], moment[:count, :3],
+                      force[:count, VISCOUS_COLUMNS], moment[:count, VISCOUS_COLUMNS])
     history.residual_iterations, history.residuals = read_residuals(case)
     if balance:
         _, history.outer_force_n = _vectors(_time_folder(case, OUTER_FORCES) / "force.dat")

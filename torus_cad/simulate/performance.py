@@ -72,6 +72,20 @@ def performance(thrust_n: float, torque_nm: float, point: OperatingPoint, diamet
     return Performance(thrust_n, torque_nm, power, advance, ct, cp, efficiency, merit)
 
 
+def viscous_part(history: History, handedness: Handedness) -> dict[str, float | None] | None:
+    """The wall shear's part of the last iteration's thrust (N) and torque (N m), and its share of each
+    (None where the total is zero): how much a skin-friction error (a laminar or turbulent boundary
+    layer, the wall treatment) can move the result. None when the history has no viscous columns."""
+    if not len(history.viscous_force_n):
+        return None
+    thrust, torque = thrust_and_torque(history.force_n[-1], history.moment_nm[-1], handedness)
+    viscous_thrust, viscous_torque = thrust_and_torque(history.viscous_force_n[-1], history.viscous_moment_nm[-1],
+                                                       handedness)
+    return {"thrust_n": float(viscous_thrust), "torque_nm": float(viscous_torque),
+            "thrust_share": float(viscous_thrust / thrust) if thrust else None,
+            "torque_share": float(viscous_torque / torque) if torque else None}
+
+
 def run_summary(history: History, point: OperatingPoint, handedness: Handedness, diameter_m: float,
                 window: float = CONVERGENCE_WINDOW) -> dict[str, Any]:
     """The report's numbers: the last iteration's performance, the force variation over the last
@@ -80,7 +94,7 @@ def run_summary(history: History, point: OperatingPoint, handedness: Handedness,
     variation = {"thrust": force_variation(thrust, window), "torque": force_variation(torque, window)}
     result = performance(float(thrust[-1]), float(torque[-1]), point, diameter_m)
     converged = max(variation.values()) <= SIMULATE_CONVERGED_VARIATION
-    return {**result.__dict__, "converged": converged,
+    return {**result.__dict__, "converged": converged, "viscous": viscous_part(history, handedness),
             "force_variation_last_10_percent": {key: (value if math.isfinite(value) else None)
                                                 for key, value in variation.items()},
             "convergence_limit": SIMULATE_CONVERGED_VARIATION}
