@@ -25,6 +25,7 @@ from torus_cad.simulate.settings import (  # noqa: E402
     AIR_15C,
     LAST_LAYER_MIN_FRACTION,
     LAYER_EXPANSION_RATIO,
+    LAYER_STACK_MAX_SURFACE_CELLS,
     LAYERS,
     REFINEMENT_RATIO,
     SURFACE_LEVEL,
@@ -34,12 +35,15 @@ from torus_cad.simulate.settings import (  # noqa: E402
 from torus_cad.simulate.snappy import (  # noqa: E402
     MESH_COMMANDS,
     first_cell_height_m,
+    layer_count,
     layer_coverage,
+    layer_stack_m,
     parse_check_mesh,
     read_stl_points_mm,
     skin_friction,
     write_layered_mesh,
 )
+from torus_cad.tolerances import SIMULATE_MAX_SURFACE_REFINEMENT  # noqa: E402
 
 CHECK_MESH_OK = """
 Mesh stats
@@ -237,8 +241,30 @@ def test_surface_refinement_halves_the_propellers_cells_and_keeps_the_levels_lay
     assert levels["refined"] == ([SURFACE_LEVEL + 2] * 2, SURFACE_LEVEL + 3, [2, 2])
 
 
+def test_the_layers_fit_the_refined_surface_with_the_first_layer_kept(tmp_path):
+    """Each surface refinement halves the surface cell; from the step where the level's eight layers would
+    stand taller than LAYER_STACK_MAX_SURFACE_CELLS cells, fewer are asked for, the first layer unchanged."""
+    stl = _box_stl(tmp_path / "box.stl", (20.0, 3.0, 1.0))
+    asked, first = [], set()
+    for refinement in range(SIMULATE_MAX_SURFACE_REFINEMENT + 1):
+        mesh = write_layered_mesh(stl, 40.0, Level.COARSE, tmp_path / str(refinement), 1e-6,
+                                  surface_refinement=refinement)
+        layers = foamlib.FoamFile(tmp_path / str(refinement) / "system" / "snappyHexMeshDict")["addLayersControls"]
+        asked.append(layers["layers"]["propeller"]["nSurfaceLayers"])
+        first.add(layers["firstLayerThickness"])
+        surface_cell = mesh.background_cell_m / 2.0 ** (SURFACE_LEVEL + refinement)
+        assert layer_stack_m(mesh.first_layer_m, asked[-1]) <= LAYER_STACK_MAX_SURFACE_CELLS * surface_cell
+    assert len(first) == 1 and asked[0] == LAYERS and asked == sorted(asked, reverse=True) and asked[-1] < LAYERS
+    assert layer_count(1e-3, 1e-6) == 1  # never none
+
+
+def test_the_layer_coverage_is_over_the_layers_asked_for():
+    coverage = layer_coverage(LAYER_TABLES.replace("     8      1.34e-05", "     5      1.34e-05"))
+    assert coverage is not None and coverage["wanted_layers"] == 5 and coverage["coverage"] == pytest.approx(2.66 / 5)
+
+
 @pytest.mark.parametrize(("arguments", "message"), [
-    (["--surface-refinement", "4"], "--surface-refinement = 4 is out of range; allowed [0, 3]"),
+    (["--surface-refinement", "5"], "--surface-refinement = 5 is out of range; allowed [0, 4]"),
     (["--surface-refinement", "1", "--mesher", "tet"], "--surface-refinement = 1 refines snappyHexMesh's surface; "
                                                         "allowed only with --mesher snappy"),
 ])

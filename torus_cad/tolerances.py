@@ -211,7 +211,7 @@ SIMULATE_AIRSPEED_LIMIT_M_S = 100.0
 
 #: Simulations: the most further halvings of the propeller's surface and edge cells that
 #: ``--surface-refinement`` takes (each about triples the cells near the blade).
-SIMULATE_MAX_SURFACE_REFINEMENT = 3
+SIMULATE_MAX_SURFACE_REFINEMENT = 4
 
 #: Simulations: an initial residual above this, or any non-finite residual or force, is divergence.
 SIMULATE_DIVERGENCE_RESIDUAL = 1e3

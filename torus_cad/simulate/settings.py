@@ -86,6 +86,10 @@ ZONE_LEVEL, SURFACE_LEVEL, FEATURE_LEVEL = 2, 4, 5
 #: Prism layers on the propeller and the thickness ratio of neighbouring layers.
 LAYERS = 8
 LAYER_EXPANSION_RATIO = 1.3
+#: The layers' total height is at most this many of the propeller's surface cells: on a finer surface
+#: (``--surface-refinement``) fewer layers are asked for, as snappyHexMesh drops most of a taller stack
+#: (the simulate how-to's surface series).
+LAYER_STACK_MAX_SURFACE_CELLS = 2.5
 #: The y+ the first layer is sized for (the viscous sublayer: the blades' Reynolds number, about 1e4 at
 #: 0.75 R, leaves little log layer for a wall function to model), and where on the blade it is estimated
 #: (a fraction of the tip radius).

@@ -40,6 +40,7 @@ from torus_cad.simulate.settings import (
     FEATURE_LEVEL,
     LAST_LAYER_MIN_FRACTION,
     LAYER_EXPANSION_RATIO,
+    LAYER_STACK_MAX_SURFACE_CELLS,
     LAYERS,
     REFINEMENT_RATIO,
     SURFACE_LEVEL,
@@ -160,11 +161,24 @@ def block_mesh_dict(domain: Domain, cell_m: float) -> dict[str, Any]:
             "mergePatchPairs": []}
 
 
+def layer_stack_m(first_layer_m: float, layers: int) -> float:
+    """Total height (m) of ``layers`` prism layers growing by ``LAYER_EXPANSION_RATIO`` from ``first_layer_m``."""
+    return first_layer_m * (LAYER_EXPANSION_RATIO**layers - 1.0) / (LAYER_EXPANSION_RATIO - 1.0)
+
+
+def layer_count(first_layer_m: float, surface_cell_m: float) -> int:
+    """The prism layers asked of snappyHexMesh: ``LAYERS``, or the most (at least 1) whose stack is at most
+    ``LAYER_STACK_MAX_SURFACE_CELLS`` surface cells (m), the first layer kept."""
+    limit_m = LAYER_STACK_MAX_SURFACE_CELLS * surface_cell_m
+    return next((count for count in range(LAYERS, 0, -1) if layer_stack_m(first_layer_m, count) <= limit_m), 1)
+
+
 def snappy_dict(domain: Domain, cell_m: float, first_layer_m: float, surface_refinement: int = 0) -> dict[str, Any]:
     """snappyHexMeshDict: refinement, the rotating cellZone / faceZone, prism layers on the propeller; the
     propeller's surface and edges refined ``surface_refinement`` levels beyond ``SURFACE_LEVEL`` and
     ``FEATURE_LEVEL``."""
     surface_level, feature_level = SURFACE_LEVEL + surface_refinement, FEATURE_LEVEL + surface_refinement
+    layers = layer_count(first_layer_m, cell_m / 2.0**surface_level)
     point = [0.5 * (domain.zone_radius_m + domain.half_width_m) + 0.1234 * cell_m, 0.0321 * cell_m,
              0.5 * sum(domain.zone_z_m) + 0.0213 * cell_m]
     zone_half = 0.5 * (domain.zone_z_m[1] - domain.zone_z_m[0])
@@ -193,7 +207,7 @@ def snappy_dict(domain: Domain, cell_m: float, first_layer_m: float, surface_ref
                          "nFeatureSnapIter": 10, "implicitFeatureSnap": False, "explicitFeatureSnap": True,
                          "multiRegionFeatureSnap": False},
         "addLayersControls": {
-            "relativeSizes": False, "layers": {WALL: {"nSurfaceLayers": LAYERS}},
+            "relativeSizes": False, "layers": {WALL: {"nSurfaceLayers": layers}},
             "expansionRatio": LAYER_EXPANSION_RATIO, "firstLayerThickness": first_layer_m,
             "minThickness": 0.1 * first_layer_m, "nGrow": 0, "featureAngle": 60, "slipFeatureAngle": 30,
             "nRelaxIter": 5, "nSmoothSurfaceNormals": 1, "nSmoothNormals": 3, "nSmoothThickness": 10,
@@ -316,11 +330,14 @@ def parse_check_mesh(log: str) -> MeshCheck:
 
 def layer_coverage(log: str) -> dict[str, float] | None:
     """snappyHexMesh's layer report on the propeller: its face count, their mean layer count, the layers'
-    mean overall thickness (m) and the share of the wanted thickness reached (0..1), and ``coverage``, the
-    mean layer count over the wanted ``LAYERS`` (0..1); None when the log has no report."""
+    mean overall thickness (m) and the share of the wanted thickness reached (0..1), the layers asked for
+    (:func:`layer_count`) and ``coverage``, the mean layer count over them (0..1); None when the log has
+    no report."""
     matches = re.findall(rf"^{WALL}\s+(\d+)\s+(\S+)\s+(\S+)\s+(\S+)\s*$", log, re.MULTILINE)
     if not matches:
         return None
+    wanted = float(matches[0][1])  # the first table: the layers asked for
     faces, layers, thickness, percent = matches[-1]  # the last table: the layers kept
-    return {"faces": float(faces), "mean_layers": float(layers), "thickness_m": float(thickness),
-            "thickness_fraction": float(percent) / 100.0, "coverage": float(layers) / LAYERS}
+    return {"faces": float(faces), "wanted_layers": wanted, "mean_layers": float(layers),
+            "thickness_m": float(thickness), "thickness_fraction": float(percent) / 100.0,
+            "coverage": float(layers) / wanted}
