@@ -306,7 +306,9 @@ def run_tasks(tasks: Iterable[DesignTask], on_result: Callable[[DesignTask, Desi
     Args:
         tasks: the designs to run; taken from the iterable only when a slot is free, so a
             generator may decide each next task from the results so far (an optimiser does).
-        on_result: called in this thread with each task and its result, in finishing order.
+        on_result: called in this thread with each task and its result, in finishing order; tasks
+            found finished at the same poll in the order they were submitted (an optimiser's pruner then
+            judges a trial after the ones asked before it, however busy the machine).
         make_executor: makes the executor (again, when a local pool breaks).
         window: most tasks in flight (None: submit all at once, for Dask's scheduler).
         job: the function a worker runs per task (default :func:`run_design`); any top-level
@@ -340,11 +342,10 @@ def run_tasks(tasks: Iterable[DesignTask], on_result: Callable[[DesignTask, Desi
                 raise_if_interrupted()
             done, _ = wait(list(in_flight), timeout=_POLL_SECONDS, return_when=FIRST_COMPLETED)
             broken = [in_flight.pop(future) for future in list(done) if _broke(future)]
-            for future in done:
-                if future in in_flight:
-                    task = in_flight.pop(future)
-                    on_result(task, _result_of(future, task, check_visible))
-                    restarts = 0
+            for future in [future for future in in_flight if future in done]:  # found done together: as submitted
+                task = in_flight.pop(future)
+                on_result(task, _result_of(future, task, check_visible))
+                restarts = 0
             if broken or refused:  # the pool broke (e.g. its workers cannot start): a new one
                 restarts += 1
                 if restarts > _MAX_POOL_RESTARTS:
