@@ -272,7 +272,7 @@ def _add_simulate_parser(commands: Any) -> None:
                           metavar="N", help=f"snappy mesher: halve the propeller's surface and edge cells N more times "
                                             f"than the level does, {range_help(refinement)} (default 0; each step about "
                                             "triples the cells; the prism layers keep the level's first layer, "
-                                            "fewer of them where their stack would pass 2.5 surface cells)")
+                                            "fewer of them where their stack would outgrow the finer surface cells)")
     iterations, processes = Bounds(1, SIMULATE_MAX_ITERATIONS), Bounds(1, available_cpus())
     time_limit = Bounds(0.0, SIMULATE_TIME_LIMIT_MAX_S, low_open=True)
     simulate.add_argument("--iterations", type=integer("--iterations", iterations), metavar="N",

@@ -72,18 +72,19 @@ def performance(thrust_n: float, torque_nm: float, point: OperatingPoint, diamet
     return Performance(thrust_n, torque_nm, power, advance, ct, cp, efficiency, merit)
 
 
-def viscous_part(history: History, handedness: Handedness) -> dict[str, float | None] | None:
-    """The wall shear's part of the last iteration's thrust (N) and torque (N m), and its share of each
-    (None where the total is zero): how much a skin-friction error (a laminar or turbulent boundary
-    layer, the wall treatment) can move the result. None when the history has no viscous columns."""
+def viscous_part(history: History, handedness: Handedness, thrust_n: float, torque_nm: float
+                 ) -> dict[str, float | None] | None:
+    """The wall shear's part of the last iteration's thrust (N) and torque (N m), and its share of the totals
+    ``thrust_n`` and ``torque_nm`` (None where a total is zero): how much a skin-friction error (a laminar or
+    turbulent boundary layer, the wall treatment) can move the result. None when the history has no viscous
+    columns."""
     if not len(history.viscous_force_n):
         return None
-    thrust, torque = thrust_and_torque(history.force_n[-1], history.moment_nm[-1], handedness)
     viscous_thrust, viscous_torque = thrust_and_torque(history.viscous_force_n[-1], history.viscous_moment_nm[-1],
                                                        handedness)
     return {"thrust_n": float(viscous_thrust), "torque_nm": float(viscous_torque),
-            "thrust_share": float(viscous_thrust / thrust) if thrust else None,
-            "torque_share": float(viscous_torque / torque) if torque else None}
+            "thrust_share": float(viscous_thrust / thrust_n) if thrust_n else None,
+            "torque_share": float(viscous_torque / torque_nm) if torque_nm else None}
 
 
 def run_summary(history: History, point: OperatingPoint, handedness: Handedness, diameter_m: float,
@@ -94,7 +95,8 @@ def run_summary(history: History, point: OperatingPoint, handedness: Handedness,
     variation = {"thrust": force_variation(thrust, window), "torque": force_variation(torque, window)}
     result = performance(float(thrust[-1]), float(torque[-1]), point, diameter_m)
     converged = max(variation.values()) <= SIMULATE_CONVERGED_VARIATION
-    return {**result.__dict__, "converged": converged, "viscous": viscous_part(history, handedness),
+    return {**result.__dict__, "converged": converged,
+            "viscous": viscous_part(history, handedness, result.thrust_n, result.torque_nm),
             "force_variation_last_10_percent": {key: (value if math.isfinite(value) else None)
                                                 for key, value in variation.items()},
             "convergence_limit": SIMULATE_CONVERGED_VARIATION}
