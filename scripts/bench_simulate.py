@@ -105,11 +105,7 @@ def main() -> int:
     done = {result["level"]: result for result in results if result["exit_code"] == 0}
     if all(level in done for level in LEVELS):
         for key in ("thrust_n", "torque_nm"):
-            extrapolation = richardson(*(float(done[level][key]) for level in LEVELS), REFINEMENT_RATIO)
-            summary[key] = {"extrapolated": extrapolation.extrapolated, "observed_order": extrapolation.order,
-                            "converges_monotonically": extrapolation.converges_monotonically,
-                            "gci_fine": extrapolation.gci_fine, "gci_medium": extrapolation.gci_medium,
-                            "gci_asymptotic_ratio": extrapolation.asymptotic_ratio}
+            summary[key] = richardson(*(float(done[level][key]) for level in LEVELS), REFINEMENT_RATIO).report()
     print(f"{'level':<8}{'cells':>9}{'wall s':>9}{'peak GB':>9}{'thrust N':>11}{'torque N m':>12}{'CT':>9}{'CP':>9}  converged")
     for result in results:
         if result["exit_code"]:
@@ -120,7 +116,9 @@ def main() -> int:
               f"{result['torque_nm']:>12.4g}{result['ct']:>9.4f}{result['cp']:>9.4f}  {result['converged']}")
     for key in ("thrust_n", "torque_nm"):
         if key in summary:
-            print(f"{key}: Richardson {summary[key]['extrapolated']}, observed order {summary[key]['observed_order']}")
+            entry = summary[key]
+            print(f"{key}: Richardson {entry['extrapolated']}, observed order {entry['observed_order']}, "
+                  f"uncertainty of the fine level {entry['uncertainty_fine']} ({entry['uncertainty_method']})")
     out = Path(args.out)
     out.mkdir(exist_ok=True)
     (out / "bench_simulate.json").write_text(json.dumps(summary, indent=2) + "\n")

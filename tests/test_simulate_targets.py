@@ -14,11 +14,13 @@ import re
 import numpy as np
 import pytest
 from cli_exit import exit_code
+from hypothesis import given
+from hypothesis import strategies as st
 from openfoam_marks import needs_openfoam
 
 from torus_cad.cli import main
 from torus_cad.errors import ParameterError
-from torus_cad.simulate.performance import GCI_SAFETY_FACTOR, richardson
+from torus_cad.simulate.performance import GCI_SAFETY_FACTOR, SPREAD_SAFETY_FACTOR, UncertaintyMethod, richardson
 from torus_cad.simulate.thrust_target import (
     ThrustRun,
     check_target,
@@ -67,6 +69,35 @@ def test_no_order_and_no_gci_when_the_levels_do_not_converge_monotonically():
         assert not result.converges_monotonically
         assert (result.order, result.extrapolated, result.gci_fine, result.gci_medium,
                 result.asymptotic_ratio) == (None,) * 5
+
+
+def test_levels_that_do_not_converge_still_get_an_uncertainty_from_their_spread():
+    # the default design's torque without layers: +5.0 %, then +4.9 % (no order, no GCI)
+    result = richardson(0.9862, 1.036, 1.087, RATIO)
+    assert not result.converges_monotonically and result.uncertainty_method is UncertaintyMethod.SPREAD
+    assert result.spread == pytest.approx((1.087 - 0.9862) / 1.087)
+    assert result.uncertainty_fine == pytest.approx(SPREAD_SAFETY_FACTOR * (1.087 - 0.9862) / 1.087)  # 27.8 %
+    entry = result.report()
+    assert (entry["uncertainty_method"], entry["gci_fine"]) == ("spread", None)
+    assert json.loads(json.dumps(entry)) == entry  # the study's JSON holds it as it is
+
+
+def test_levels_that_converge_take_their_gci_as_the_uncertainty():
+    result = richardson(1.00, 0.90, 0.86, 2.0)
+    assert result.uncertainty_method is UncertaintyMethod.GCI and result.uncertainty_fine == result.gci_fine
+    assert result.spread == pytest.approx(0.14 / 0.86)
+    assert result.report()["in_asymptotic_range"] is True  # GCI_medium / (r^p GCI_fine) = 0.956, within 0.1 of 1
+
+
+@given(st.lists(st.floats(min_value=-1e3, max_value=1e3, allow_nan=False).filter(lambda value: abs(value) > 1e-6),
+                min_size=3, max_size=3))
+def test_the_uncertainty_band_of_levels_without_a_gci_holds_every_level(values):
+    result = richardson(*values, RATIO)
+    if result.converges_monotonically:
+        return
+    fine = values[2]
+    band = result.uncertainty_fine * abs(fine)
+    assert all(abs(value - fine) <= band * (1.0 + 1e-12) for value in values)
 
 
 # -- the thrust search's arithmetic ------------------------------------------------------------------
@@ -368,6 +399,11 @@ def test_the_convergence_study_prints_torque_in_n_mm_and_the_gci_in_percent():
     assert f"GCI fine {100 * thrust.gci_fine:.2g} %" in thrust_line and "NOT in the asymptotic range" in thrust_line
     assert torque_line.startswith("torque: coarse 0.8, medium 0.85, fine 0.86 N mm; no Richardson extrapolation and "
                                   "no grid convergence index")
+    torque = richardson(0.00080, 0.00086, 0.00085, RATIO).report()
+    _, torque_line = summary_lines(Result({}, {**report, "torque_nm": torque}), convergence=True)
+    assert torque_line.endswith(f"uncertainty of the fine value {100 * 3 * 0.06 / 0.85:.2g} % (the levels spread over "
+                                f"{100 * 0.06 / 0.85:.2g} % of it; three times that bounds the error without an "
+                                "observed order)")
 
 
 def test_a_run_prints_torque_in_n_mm_and_variations_in_percent():

@@ -124,6 +124,14 @@ def thrust_search_lines(search: dict[str, Any]) -> list[str]:
             f"{verdict})"]
 
 
+def _spread_bound(entry: dict[str, Any]) -> str:
+    """The uncertainty a study without a GCI still has: a multiple of the levels' spread (empty if unknown)."""
+    if entry.get("uncertainty_fine") is None or entry.get("spread") is None:
+        return ""
+    return (f"; uncertainty of the fine value {_percent(entry['uncertainty_fine'])} (the levels spread over "
+            f"{_percent(entry['spread'])} of it; three times that bounds the error without an observed order)")
+
+
 def convergence_lines(report: dict[str, Any]) -> list[str]:
     """The convergence study: each force on the three levels, Richardson's extrapolation, the observed
     order and Roache's grid convergence index (or why there is none)."""
@@ -141,5 +149,5 @@ def convergence_lines(report: dict[str, Any]) -> list[str]:
         else:
             lines.append(f"{label}: {levels} {unit}; no Richardson extrapolation and no grid convergence index: the "
                          "levels do not converge monotonically (the change from medium to fine is not smaller than "
-                         "from coarse to medium), so they are not in the asymptotic range")
+                         "from coarse to medium), so they are not in the asymptotic range" + _spread_bound(entry))
     return lines

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from enum import StrEnum
 from typing import Any
 
 import numpy as np
@@ -104,6 +105,19 @@ def run_summary(history: History, point: OperatingPoint, handedness: Handedness,
 
 #: Roache's factor of safety of the grid convergence index for three grids (an observed order).
 GCI_SAFETY_FACTOR = 1.25
+#: The factor of safety on the levels' spread when they do not converge monotonically: without an
+#: observed order, Eca and Hoekstra (J. Comput. Phys. 262, 2014) bound the numerical error by three
+#: times the largest difference between the levels.
+SPREAD_SAFETY_FACTOR = 3.0
+#: The levels count as in the asymptotic range when GCI_medium / (r^p GCI_fine) is within this of 1.
+ASYMPTOTIC_RANGE_TOLERANCE = 0.1
+
+
+class UncertaintyMethod(StrEnum):
+    """How a convergence study's numerical uncertainty of the fine level is estimated."""
+
+    GCI = "gci"  #: Roache's GCI_fine: the levels converge monotonically
+    SPREAD = "spread"  #: SPREAD_SAFETY_FACTOR times the levels' spread: they do not
 
 
 @dataclass(frozen=True)
@@ -116,7 +130,9 @@ class Extrapolation:
     coarser level, Fs = ``GCI_SAFETY_FACTOR``: a fraction of the value, an error band) and
     ``asymptotic_ratio`` (GCI_medium / (r^p GCI_fine), 1 in the asymptotic range) are None unless
     ``converges_monotonically``: both changes (coarse to medium, medium to fine) of one sign, the
-    second the smaller.
+    second the smaller. ``spread`` ((max - min) / |fine| over the three values, a fraction; None when
+    the fine value is 0) is always given, so that levels which do not converge still get an
+    uncertainty (:attr:`uncertainty_fine`).
     """
 
     values: tuple[float, float, float]
@@ -127,22 +143,52 @@ class Extrapolation:
     gci_fine: float | None = None
     gci_medium: float | None = None
     asymptotic_ratio: float | None = None
+    spread: float | None = None
+
+    @property
+    def uncertainty_method(self) -> UncertaintyMethod:
+        return UncertaintyMethod.GCI if self.converges_monotonically else UncertaintyMethod.SPREAD
+
+    @property
+    def uncertainty_fine(self) -> float | None:
+        """The fine value's numerical uncertainty, a fraction of it: GCI_fine where the levels converge
+        monotonically, else ``SPREAD_SAFETY_FACTOR`` x ``spread`` (a band that holds every level)."""
+        if self.converges_monotonically:
+            return self.gci_fine
+        return None if self.spread is None else SPREAD_SAFETY_FACTOR * self.spread
+
+    @property
+    def in_asymptotic_range(self) -> bool | None:
+        """``asymptotic_ratio`` within ``ASYMPTOTIC_RANGE_TOLERANCE`` of 1 (None without one)."""
+        if self.asymptotic_ratio is None:
+            return None
+        return abs(self.asymptotic_ratio - 1.0) <= ASYMPTOTIC_RANGE_TOLERANCE
+
+    def report(self) -> dict[str, Any]:
+        """The study's JSON entry of one force (fractions for the GCIs, the spread and the uncertainty)."""
+        return {"extrapolated": self.extrapolated, "observed_order": self.order,
+                "converges_monotonically": self.converges_monotonically, "gci_fine": self.gci_fine,
+                "gci_medium": self.gci_medium, "gci_asymptotic_ratio": self.asymptotic_ratio,
+                "in_asymptotic_range": self.in_asymptotic_range, "spread": self.spread,
+                "uncertainty_fine": self.uncertainty_fine, "uncertainty_method": self.uncertainty_method.value}
 
 
 def richardson(coarse: float, medium: float, fine: float, ratio: float) -> Extrapolation:
     """Observed order p = ln((f_c - f_m) / (f_m - f_f)) / ln r, f = f_f + (f_f - f_m) / (r^p - 1), and
     Roache's GCI: GCI_fine = Fs |(f_m - f_f) / f_f| / (r^p - 1), GCI_medium = Fs |(f_c - f_m) / f_m| /
     (r^p - 1), asymptotic ratio GCI_medium / (r^p GCI_fine); all undefined (None) unless the three
-    converge monotonically (a GCI also needs nonzero f_f and f_m)."""
+    converge monotonically (a GCI also needs nonzero f_f and f_m). The spread is always computed."""
+    values = (coarse, medium, fine)
+    spread = (max(values) - min(values)) / abs(fine) if fine != 0.0 else None
     first, second = medium - coarse, fine - medium
     monotone = first != 0.0 and second != 0.0 and first * second > 0.0 and abs(second) < abs(first)
     if not monotone:
-        return Extrapolation((coarse, medium, fine), ratio, None, None, False)
+        return Extrapolation(values, ratio, None, None, False, spread=spread)
     order = math.log(first / second) / math.log(ratio)
     growth = ratio**order - 1.0
     gci_fine = GCI_SAFETY_FACTOR * abs(second / fine) / growth if fine != 0.0 else None
     gci_medium = GCI_SAFETY_FACTOR * abs(first / medium) / growth if medium != 0.0 else None
     asymptotic = (gci_medium / (ratio**order * gci_fine) if gci_fine is not None and gci_medium is not None
                   else None)
-    return Extrapolation((coarse, medium, fine), ratio, order, fine + second / growth, True, gci_fine, gci_medium,
-                         asymptotic)
+    return Extrapolation(values, ratio, order, fine + second / growth, True, gci_fine, gci_medium,
+                         asymptotic, spread)

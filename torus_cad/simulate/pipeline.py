@@ -105,9 +105,6 @@ MESH_REPORT = "mesh_report.json"
 class MeshCheckError(SolverError):
     """checkMesh did not say "Mesh OK"; the message names the level and the failed checks."""
 
-#: The levels count as in the asymptotic range when GCI_medium / (r^p GCI_fine) is within this of 1.
-ASYMPTOTIC_RANGE_TOLERANCE = 0.1
-
 _MESH_LOCK: asyncio.Lock | None = None
 
 
@@ -652,7 +649,9 @@ def convergence_study(request: Request, out_dir: str | Path, progress: ProgressC
     Richardson-extrapolated thrust and torque, their observed order and Roache's grid convergence index
     (``gci_fine``, ``gci_medium``: fractions of the fine and medium values, safety factor 1.25;
     ``gci_asymptotic_ratio`` GCI_medium / (r^p GCI_fine), ``in_asymptotic_range`` when it is within
-    ``ASYMPTOTIC_RANGE_TOLERANCE`` of 1); all null unless the levels converge monotonically."""
+    ``ASYMPTOTIC_RANGE_TOLERANCE`` of 1); all null unless the levels converge monotonically. Always:
+    ``spread`` and ``uncertainty_fine`` (GCI_fine, or three times the spread where there is no GCI;
+    ``uncertainty_method`` says which), fractions of the fine value (Extrapolation.report)."""
     out = Path(out_dir)
     runs = {}
     for level in Level:
@@ -666,13 +665,7 @@ def convergence_study(request: Request, out_dir: str | Path, progress: ProgressC
                                          for level, run in runs.items()}}
     for key in ("thrust_n", "torque_nm"):
         coarse, medium, fine = (float(runs[level].report[key]) for level in Level)
-        extrapolation = richardson(coarse, medium, fine, REFINEMENT_RATIO)
-        report[key] = {"extrapolated": extrapolation.extrapolated, "observed_order": extrapolation.order,
-                       "converges_monotonically": extrapolation.converges_monotonically,
-                       "gci_fine": extrapolation.gci_fine, "gci_medium": extrapolation.gci_medium,
-                       "gci_asymptotic_ratio": extrapolation.asymptotic_ratio,
-                       "in_asymptotic_range": (abs(extrapolation.asymptotic_ratio - 1.0) <= ASYMPTOTIC_RANGE_TOLERANCE
-                                               if extrapolation.asymptotic_ratio is not None else None)}
+        report[key] = richardson(coarse, medium, fine, REFINEMENT_RATIO).report()
     with OutputSet(out, f"{request.params.name}_convergence") as output:
         paths = output.publish(report)
     return Result(paths, report)
