@@ -402,7 +402,7 @@ def test_the_convergence_study_prints_torque_in_n_mm_and_the_gci_in_percent():
     torque = richardson(0.00080, 0.00086, 0.00085, RATIO).report()
     _, torque_line = summary_lines(Result({}, {**report, "torque_nm": torque}), convergence=True)
     assert torque_line.endswith(f"uncertainty of the fine value {100 * 3 * 0.06 / 0.85:.2g} % (the levels spread over "
-                                f"{100 * 0.06 / 0.85:.2g} % of it; three times that bounds the error without an "
+                                f"{100 * 0.06 / 0.85:.2g} % of it; 3 times that bounds the error without an "
                                 "observed order)")
 
 

@@ -6,6 +6,7 @@ import sys
 from typing import Any, TextIO
 
 from torus_cad.runtime.progress import is_terminal
+from torus_cad.simulate.performance import SPREAD_SAFETY_FACTOR
 from torus_cad.simulate.pipeline import Result
 from torus_cad.simulate.run import Status
 
@@ -129,7 +130,8 @@ def _spread_bound(entry: dict[str, Any]) -> str:
     if entry.get("uncertainty_fine") is None or entry.get("spread") is None:
         return ""
     return (f"; uncertainty of the fine value {_percent(entry['uncertainty_fine'])} (the levels spread over "
-            f"{_percent(entry['spread'])} of it; three times that bounds the error without an observed order)")
+            f"{_percent(entry['spread'])} of it; {SPREAD_SAFETY_FACTOR:g} times that bounds the error without an "
+            "observed order)")
 
 
 def convergence_lines(report: dict[str, Any]) -> list[str]:
