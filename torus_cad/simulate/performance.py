@@ -130,9 +130,8 @@ class Extrapolation:
     coarser level, Fs = ``GCI_SAFETY_FACTOR``: a fraction of the value, an error band) and
     ``asymptotic_ratio`` (GCI_medium / (r^p GCI_fine), 1 in the asymptotic range) are None unless
     ``converges_monotonically``: both changes (coarse to medium, medium to fine) of one sign, the
-    second the smaller. ``spread`` ((max - min) / |fine| over the three values, a fraction; None when
-    the fine value is 0) is always given, so that levels which do not converge still get an
-    uncertainty (:attr:`uncertainty_fine`).
+    second the smaller. :attr:`spread` is always given, so that levels which do not converge still
+    get an uncertainty (:attr:`uncertainty_fine`).
     """
 
     values: tuple[float, float, float]
@@ -143,7 +142,12 @@ class Extrapolation:
     gci_fine: float | None = None
     gci_medium: float | None = None
     asymptotic_ratio: float | None = None
-    spread: float | None = None
+
+    @property
+    def spread(self) -> float | None:
+        """(max - min) / |fine| over the three values, a fraction; None when the fine value is 0."""
+        fine = self.values[2]
+        return (max(self.values) - min(self.values)) / abs(fine) if fine != 0.0 else None
 
     @property
     def uncertainty_method(self) -> UncertaintyMethod:
@@ -177,18 +181,16 @@ def richardson(coarse: float, medium: float, fine: float, ratio: float) -> Extra
     """Observed order p = ln((f_c - f_m) / (f_m - f_f)) / ln r, f = f_f + (f_f - f_m) / (r^p - 1), and
     Roache's GCI: GCI_fine = Fs |(f_m - f_f) / f_f| / (r^p - 1), GCI_medium = Fs |(f_c - f_m) / f_m| /
     (r^p - 1), asymptotic ratio GCI_medium / (r^p GCI_fine); all undefined (None) unless the three
-    converge monotonically (a GCI also needs nonzero f_f and f_m). The spread is always computed."""
+    converge monotonically (a GCI also needs nonzero f_f and f_m)."""
     values = (coarse, medium, fine)
-    spread = (max(values) - min(values)) / abs(fine) if fine != 0.0 else None
     first, second = medium - coarse, fine - medium
     monotone = first != 0.0 and second != 0.0 and first * second > 0.0 and abs(second) < abs(first)
     if not monotone:
-        return Extrapolation(values, ratio, None, None, False, spread=spread)
+        return Extrapolation(values, ratio, None, None, False)
     order = math.log(first / second) / math.log(ratio)
     growth = ratio**order - 1.0
     gci_fine = GCI_SAFETY_FACTOR * abs(second / fine) / growth if fine != 0.0 else None
     gci_medium = GCI_SAFETY_FACTOR * abs(first / medium) / growth if medium != 0.0 else None
     asymptotic = (gci_medium / (ratio**order * gci_fine) if gci_fine is not None and gci_medium is not None
                   else None)
-    return Extrapolation(values, ratio, order, fine + second / growth, True, gci_fine, gci_medium,
-                         asymptotic, spread)
+    return Extrapolation(values, ratio, order, fine + second / growth, True, gci_fine, gci_medium, asymptotic)
