@@ -10,7 +10,7 @@ from conftest import EXAMPLES_DIR, SHIPPED_DESIGNS
 from freecad_check import FREECADCMD, freecad_verdicts
 
 from torus_cad.errors import KernelError
-from torus_cad.kernel.fillet_readback import readable_edges
+from torus_cad.kernel.readable_edges import readable_edges
 from torus_cad.kernel.step_readback import argument_faults, check_step_readback, step_readback_faults
 from torus_cad.kernel.writers.step import write_step
 

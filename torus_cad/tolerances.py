@@ -361,7 +361,7 @@ NOISE_OBSERVER_DISTANCE_M = (0.0, 1.0e4)
 #: Most observers one simulate run takes (each costs about a second of noise evaluation).
 NOISE_MAX_OBSERVERS = 32
 
-# -- the root fillet's edges made to read back from STEP (torus_cad.kernel.fillet_readback) ---------
+# -- the root fillet's edges made to read back from STEP (torus_cad.kernel.readable_edges) ---------
 
 #: The least tolerance OpenCascade's STEP reader gives an edge (Precision::Confusion, mm): an edge whose
 #: curves part by no more than this reads back valid whatever they do.

@@ -28,8 +28,8 @@ from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape
 from torus_cad.errors import KernelError
 from torus_cad.kernel.fillet_continuity import c1_fillet
 from torus_cad.kernel.fillet_edges import FilletParams, fillet_in_child
-from torus_cad.kernel.fillet_readback import readable_edges
 from torus_cad.kernel.fillet_tight_bends import reduced_edge_radii, varying_junction_mm
+from torus_cad.kernel.readable_edges import readable_edges
 from torus_cad.kernel.topology import BLADE_SURFACES
 
 #: Pieces the blade's closed side face is split into (see the module docstring): thirds work
@@ -145,7 +145,7 @@ def fillet_blade_roots(solid: cq.Solid, face_parts: Sequence[int], radius_mm: fl
 
 def made_readable(solid: cq.Solid, face_parts: Sequence[int]) -> tuple[cq.Solid, tuple[int, ...]]:
     """``solid`` with edges that read back from STEP as they are, and its faces' parts
-    (:mod:`torus_cad.kernel.fillet_readback`); ``solid`` with its p-curves squared but no edge split
+    (:mod:`torus_cad.kernel.readable_edges`); ``solid`` with its p-curves squared but no edge split
     if the split would not give a valid solid (the build's read-back check then names what is left)."""
     try:
         readable = readable_edges(solid, face_parts)

@@ -14,7 +14,7 @@ gets a tolerance that covers it.
 A fillet face's contact edges keep a real gap to the blade or hub surface they roll on (the
 fillet surface is an approximation: up to 2.3e-5 mm on workshop_fillet), which the edge's tolerance
 covers in memory; a STEP file cannot carry that tolerance (torus_cad.kernel.step_readback): the
-edges are then made to read back as they are (torus_cad.kernel.fillet_readback).
+edges are then made to read back as they are (torus_cad.kernel.readable_edges).
 """
 
 from __future__ import annotations

@@ -29,7 +29,8 @@ from OCP.TopoDS import TopoDS_Shape
 
 from torus_cad.errors import KernelError
 from torus_cad.geometry.hub.mounting import SET_SCREW_OVERSHOOT_MM, HubMounting
-from torus_cad.kernel.topology import cut, solids
+from torus_cad.kernel.edge_curves import refit_intersection_edges
+from torus_cad.kernel.topology import cut, faces, solids
 
 if TYPE_CHECKING:
     import cadquery as cq
@@ -70,6 +71,9 @@ def hub_shape(radius: float, length: float, seam_angle_deg: float = 0.0,
     made = solids(cut(outer, tools, "cut the bore and set-screw hole into the hub"))
     if len(made) != 1:
         raise KernelError(f"cutting the bore and set-screw hole into the hub gave {len(made)} solids instead of 1")
+    # The set screw's intersection curves with the bore (B-splines) part from a cylinder by up to about
+    # 1.4e-7 mm, more than a STEP file's 1e-7 mm reads back: rebuilt from exact points (kernel.edge_curves).
+    refit_intersection_edges(made[0], faces(made[0]))
     return made[0]
 
 

@@ -18,7 +18,7 @@ the file is checked as read, not the solid. What the kernel does about it: the b
 intersection edges are rebuilt to 4e-8 mm (torus_cad.kernel.edge_curves), a root fillet's edges
 moved to end on their vertices, its p-curves squared and its edges split where the largest distance
 falls between samples
-(torus_cad.kernel.fillet_readback). Measured, every test on (``python scripts/step_readback_check.py``,
+(torus_cad.kernel.readable_edges). Measured, every test on (``python scripts/step_readback_check.py``,
 ``examples/workshop_fillet.toml`` as argument for the root fillet): every shipped design reads back
 with 0 faults; ``workshop_fillet`` had 93 ``InvalidCurveOnSurface`` faults before the fillet's edges
 were made readable, ``prop_10x5_2blade`` and ``marine_3blade_loop`` with a 0.5 mm fillet (``--fillet
@@ -27,6 +27,7 @@ were made readable, ``prop_10x5_2blade`` and ``marine_3blade_loop`` with a 0.5 m
 
 from __future__ import annotations
 
+import math
 import time
 from collections import Counter
 from dataclasses import dataclass, field
@@ -36,15 +37,23 @@ from typing import TYPE_CHECKING
 from OCP.BOPAlgo import BOPAlgo_ArgumentAnalyzer
 from OCP.BRep import BRep_Tool
 from OCP.BRepAdaptor import BRepAdaptor_Surface
+from OCP.BRepLProp import BRepLProp_SLProps
 from OCP.IFSelect import IFSelect_RetDone
 from OCP.STEPControl import STEPControl_Reader
-from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE
-from OCP.TopoDS import TopoDS, TopoDS_Shape
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_REVERSED
+from OCP.TopExp import TopExp
+from OCP.TopoDS import TopoDS, TopoDS_Edge, TopoDS_Face, TopoDS_Shape
+from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape
 
 from torus_cad.errors import KernelError
+from torus_cad.kernel.edge_curves import distinct_faces
+from torus_cad.kernel.topology import BLADE_SURFACES
 
 if TYPE_CHECKING:
     import cadquery as cq
+
+#: Two faces whose outward normals part by less than this at an edge meet tangentially there (deg).
+TANGENT_FACES_DEG = 1.0
 
 #: Every test of BOPAlgo_ArgumentAnalyzer, as FreeCAD's check with BOP turns them on.
 ANALYZER_TESTS = ("ArgumentTypeMode", "SelfInterMode", "SmallEdgeMode", "RebuildFaceMode", "TangentMode",
@@ -93,16 +102,21 @@ def argument_faults(shape: TopoDS_Shape, self_interference: bool = True) -> Argu
     """BOPAlgo_ArgumentAnalyzer with every test of :data:`ANALYZER_TESTS` on ``shape`` (single-threaded);
     without the self-interference test if ``self_interference`` is False (see :func:`check_step_readback`)."""
     start = time.perf_counter()
+    results = list(_analyzer(shape, self_interference).GetCheckResult())
+    counts = Counter(_status(result) for result in results)
+    first = _describe(results[0]) if results else ""
+    return ArgumentFaults(dict(sorted(counts.items())), first, time.perf_counter() - start)
+
+
+def _analyzer(shape: TopoDS_Shape, self_interference: bool) -> BOPAlgo_ArgumentAnalyzer:
+    """The analyzer run on ``shape`` with every test (but self-interference unless ``self_interference``)."""
     analyzer = BOPAlgo_ArgumentAnalyzer()
     analyzer.SetShape1(shape)
     for test in ANALYZER_TESTS:
         setattr(analyzer, test, self_interference or test != "SelfInterMode")  # OCP binds the modes as properties
     analyzer.SetRunParallel(False)
     analyzer.Perform()
-    results = list(analyzer.GetCheckResult())
-    counts = Counter(_status(result) for result in results)
-    first = _describe(results[0]) if results else ""
-    return ArgumentFaults(dict(sorted(counts.items())), first, time.perf_counter() - start)
+    return analyzer
 
 
 def step_readback_faults(path: str | Path, self_interference: bool = True) -> ArgumentFaults:
@@ -117,12 +131,116 @@ def check_step_readback(path: str | Path, what: str, self_interference: bool = T
     of CPU, the other tests together 0.2 s): the build runs it, on the blade pattern, on the solid the
     file is written from (torus_cad.kernel.strict), whose faces the file carries unchanged.
     """
-    faults = step_readback_faults(path, self_interference)
+    shape = read_step_shape(path)
+    faults = argument_faults(shape, self_interference)
     if faults.counts:
         listed = ", ".join(f"{count} {status}" for status, count in faults.counts.items())
+        on_edges = classified_faults(shape)
+        worst = max(on_edges, key=lambda fault: fault.gap_mm / max(fault.tolerance_mm, 1e-300), default=None)
+        where = (f"; worst on a {worst.edge_kind} edge ({worst.surfaces}): curves {worst.gap_mm:.2g} mm apart, "
+                 f"tolerance read back {worst.tolerance_mm:.2g} mm" if worst is not None else "")
         raise KernelError(f"{what}: the STEP file read back fails BOPAlgo_ArgumentAnalyzer (every test, as "
-                          f"FreeCAD's check with BOP): {listed}; first: {faults.first}")
+                          f"FreeCAD's check with BOP): {listed}; first: {faults.first}{where}")
     return faults
+
+
+@dataclass(frozen=True)
+class EdgeFault:
+    """One fault of the argument analyzer on an edge, with what kind of edge it is.
+
+    Attributes:
+        status: the analyzer's status name (``InvalidCurveOnSurface``, ...).
+        edge_kind: what the edge is in the propeller (:func:`edge_kind`).
+        surfaces: the surface types on its sides, sorted, joined by " | " ("BSplineSurface | Cylinder").
+        gap_mm: how far the edge's curves part (the analyzer's largest distance), mm; 0 if not measured.
+        tolerance_mm: the edge's tolerance (as the reader gave it, for a file read back), mm.
+    """
+
+    status: str
+    edge_kind: str
+    surfaces: str
+    gap_mm: float
+    tolerance_mm: float
+
+    def as_dict(self) -> dict[str, str | float]:
+        """For a JSON row."""
+        return {"status": self.status, "edge_kind": self.edge_kind, "surfaces": self.surfaces,
+                "gap_mm": self.gap_mm, "tolerance_mm": self.tolerance_mm}
+
+
+def classified_faults(shape: TopoDS_Shape) -> list[EdgeFault]:
+    """The argument analyzer's faults on ``shape``'s edges (every test but self-interference), each with
+    its edge's kind (:func:`edge_kind`)."""
+    analyzer = _analyzer(shape, self_interference=False)
+    ancestors = TopTools_IndexedDataMapOfShapeListOfShape()
+    TopExp.MapShapesAndAncestors_s(shape, TopAbs_EDGE, TopAbs_FACE, ancestors)
+    fillet_faces = _fillet_faces(ancestors)
+    found = []
+    for result in analyzer.GetCheckResult():
+        edge = next((TopoDS.Edge_s(part) for part in [*result.GetFaultyShapes1(), *result.GetFaultyShapes2()]
+                     if part.ShapeType() == TopAbs_EDGE), None)
+        if edge is None:
+            continue
+        faces = distinct_faces(ancestors.FindFromKey(edge))
+        surfaces = " | ".join(sorted(_surface_name(face) for face in faces))
+        found.append(EdgeFault(_status(result), edge_kind(edge, faces, fillet_faces), surfaces,
+                               max(result.GetMaxDistance1(), result.GetMaxDistance2()), BRep_Tool.Tolerance_s(edge)))
+    return found
+
+
+def edge_kind(edge: TopoDS_Edge, faces: list[TopoDS_Face], fillet_faces: list[TopoDS_Face]) -> str:
+    """What ``edge`` (between ``faces``) is in a propeller: 'blade-hub intersection', 'root fillet on the
+    hub', 'root fillet on the blade', 'root fillet seam', 'trailing edge' (a crease between blade faces),
+    'blade face seam' (blade faces meeting tangentially), 'hub feature' (bore, D-flat, set screw, chamfer,
+    end faces) or 'face seam' (an edge of one face only). ``fillet_faces``: the root fillet's faces.
+
+    Blade and fillet faces are B-spline surfaces, the hub's analytic (plane, cylinder, cone)."""
+    if len(faces) != 2:
+        return "face seam"
+    on_blade = [BRepAdaptor_Surface(face).GetType() in BLADE_SURFACES for face in faces]
+    in_fillet = [any(face.IsSame(other) for other in fillet_faces) for face in faces]
+    if not any(on_blade):
+        return "hub feature"
+    if not all(on_blade):
+        return "root fillet on the hub" if any(in_fillet) else "blade-hub intersection"
+    if all(in_fillet):
+        return "root fillet seam"
+    if any(in_fillet):
+        return "root fillet on the blade"
+    return "blade face seam" if _tangent(edge, faces) else "trailing edge"
+
+
+def _fillet_faces(ancestors: TopTools_IndexedDataMapOfShapeListOfShape) -> list[TopoDS_Face]:
+    """The B-spline faces that meet a hub face tangentially: the root fillet's (a blade crosses the hub
+    at an angle)."""
+    found: list[TopoDS_Face] = []
+    for index in range(1, ancestors.Extent() + 1):
+        faces = distinct_faces(ancestors.FindFromIndex(index))
+        kinds = [BRepAdaptor_Surface(face).GetType() in BLADE_SURFACES for face in faces]
+        if len(faces) == 2 and kinds[0] != kinds[1] and _tangent(TopoDS.Edge_s(ancestors.FindKey(index)), faces):
+            found.append(faces[0] if kinds[0] else faces[1])
+    return found
+
+
+def _tangent(edge: TopoDS_Edge, faces: list[TopoDS_Face]) -> bool:
+    """Whether the two faces' outward normals agree to within TANGENT_FACES_DEG at the edge's middle."""
+    first, last = BRep_Tool.Range_s(edge)
+    normals = []
+    for face in faces:
+        pcurve = BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0)
+        if pcurve is None:
+            return False
+        uv = pcurve.Value(0.5 * (first + last))
+        props = BRepLProp_SLProps(BRepAdaptor_Surface(face), uv.X(), uv.Y(), 1, 1e-9)
+        if not props.IsNormalDefined():
+            return False
+        normal = props.Normal()
+        normals.append(normal.Reversed() if face.Orientation() == TopAbs_REVERSED else normal)
+    return normals[0].Angle(normals[1]) < math.radians(TANGENT_FACES_DEG)
+
+
+def _surface_name(face: TopoDS_Face) -> str:
+    return str(BRepAdaptor_Surface(face).GetType()).rsplit(".", 1)[-1].removeprefix("GeomAbs_")
 
 
 def _status(result: object) -> str:

@@ -459,7 +459,7 @@ def write_output_set(propeller: BuiltPropeller, out_dir: str | Path, density_g_c
         # The STEP file is written and read back in a child too, into its staging path, while this process
         # makes and checks the meshes (a signal kills the child before the staging folder goes).
         # Every design's file is checked as OpenCascade's reader gives it back, a root fillet's too
-        # (kernel.fillet_readback makes its edges readable).
+        # (kernel.readable_edges makes its edges readable).
         step = children.enter_context(IsolatedCall(
             write_step, propeller.shape, output.stage("step"), params.name, export.step_schema,
             f"torus_cad {__version__}", what="writing the STEP file")) if ExportFormat.STEP in formats else None

@@ -14,11 +14,13 @@ from OCP.STEPControl import STEPControl_AsIs
 from OCP.TCollection import TCollection_ExtendedString, TCollection_HAsciiString
 from OCP.TDataStd import TDataStd_Name
 from OCP.TDocStd import TDocStd_Document
+from OCP.TopoDS import TopoDS_Shape
 from OCP.XCAFDoc import XCAFDoc_DocumentTool
 
 from torus_cad.errors import KernelError
 from torus_cad.formats import StepSchema
-from torus_cad.kernel.step_readback import check_step_readback
+from torus_cad.kernel.readable_edges import readable_copy
+from torus_cad.kernel.step_readback import check_step_readback, step_readback_faults
 from torus_cad.kernel.topology import AnyShape, occ
 from torus_cad.runtime.files import atomic_path, file_ends_with, write_failure
 
@@ -37,10 +39,40 @@ def write_step(shape: AnyShape, path: str | Path, product_name: str, schema: Ste
     design's name (the plain writer appends a counter to it). With ``check_readback`` (the default) the
     file is read back by OpenCascade's STEP reader and must pass BOPAlgo_ArgumentAnalyzer's tests (all but
     self-interference, which the strict check ran on the solid; torus_cad.kernel.step_readback)
-    before it is published; otherwise KernelError naming the first fault, and no file.
+    before it is published. A file that reads back with faults is written again from a copy of ``shape``
+    whose edges are made readable (torus_cad.kernel.readable_edges: p-curves square to their surfaces,
+    edges split where the reader's samples would miss how far their curves part); if that file still
+    reads back with faults, KernelError naming the kind of edge and the gap, and no file.
+
+    Args:
+        shape: the solid (OpenCascade's or cadquery's); not changed.
+        path: the file to write (atomically: nothing at ``path`` unless the whole file is written and checked).
+        product_name: the STEP PRODUCT's name and the header's FILE_NAME.
+        schema: AP214 or AP242.
+        program: the header's author, organisation and originating system.
+        check_readback: read the file back and check it (above).
+
+    Returns:
+        ``path``.
+
+    Raises:
+        KernelError: OpenCascade could not translate or write the solid, or the file reads back invalid.
+        OSError: the file system refused the file (full disk, size limit), naming ``path``.
     """
+    path = Path(path)
+    with atomic_path(path) as temp:
+        _write(occ(shape), temp, path, product_name, schema, program)
+        if check_readback and step_readback_faults(temp, self_interference=False).counts:
+            readable = readable_copy(occ(shape))
+            _write(readable, temp, path, product_name, schema, program)
+            check_step_readback(temp, f"{product_name}.step", self_interference=False)
+    return path
+
+
+def _write(shape: TopoDS_Shape, temp: Path, path: Path, product_name: str, schema: StepSchema, program: str) -> None:
+    """``shape`` as STEP at ``temp`` (the staging file of ``path``), checked whole."""
     document = TDocStd_Document(TCollection_ExtendedString("torus_cad"))
-    label = XCAFDoc_DocumentTool.ShapeTool_s(document.Main()).AddShape(occ(shape), False)
+    label = XCAFDoc_DocumentTool.ShapeTool_s(document.Main()).AddShape(shape, False)
     TDataStd_Name.Set_s(label, TCollection_ExtendedString(product_name))
     writer = STEPCAFControl_Writer()  # creating the writer initialises the statics; set them after
     for key, value in (("write.step.schema", _STEP_SCHEMAS[schema]), ("write.step.unit", "MM")):
@@ -49,13 +81,8 @@ def write_step(shape: AnyShape, path: str | Path, product_name: str, schema: Ste
     if not writer.Transfer(document, STEPControl_AsIs):
         raise KernelError("OpenCascade could not translate the solid to STEP")
     _name_the_author(writer, product_name, program)
-    path = Path(path)
-    with atomic_path(path) as temp:
-        if writer.Write(str(temp)) != IFSelect_RetDone or not file_ends_with(temp, _STEP_END_MARKER):
-            raise write_failure(path, temp, KernelError(f"OpenCascade could not write STEP file {str(path)!r}"))
-        if check_readback:
-            check_step_readback(temp, f"{product_name}.step", self_interference=False)
-    return path
+    if writer.Write(str(temp)) != IFSelect_RetDone or not file_ends_with(temp, _STEP_END_MARKER):
+        raise write_failure(path, temp, KernelError(f"OpenCascade could not write STEP file {str(path)!r}"))
 
 
 def _name_the_author(writer: STEPCAFControl_Writer, product_name: str, program: str) -> None:

@@ -62,7 +62,7 @@ import numpy as np
 from numpy.typing import NDArray
 from OCP.Adaptor3d import Adaptor3d_CurveOnSurface
 from OCP.BRep import BRep_Builder, BRep_Tool
-from OCP.BRepCheck import BRepCheck_NoError, BRepCheck_Wire
+from OCP.BRepCheck import BRepCheck_Analyzer, BRepCheck_NoError, BRepCheck_Wire
 from OCP.Geom import Geom_BSplineCurve, Geom_BSplineSurface, Geom_Curve, Geom_Surface, Geom_TrimmedCurve
 from OCP.Geom2d import Geom2d_BSplineCurve, Geom2d_Curve, Geom2d_TrimmedCurve
 from OCP.Geom2dAdaptor import Geom2dAdaptor_Curve
@@ -74,7 +74,7 @@ from OCP.ShapeBuild import ShapeBuild_ReShape
 from OCP.ShapeFix import ShapeFix_ShapeTolerance
 from OCP.TColgp import TColgp_Array1OfPnt2d
 from OCP.TColStd import TColStd_Array1OfInteger, TColStd_Array1OfReal
-from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_FORWARD, TopAbs_REVERSED, TopAbs_WIRE
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_FORWARD, TopAbs_REVERSED, TopAbs_VERTEX, TopAbs_WIRE
 from OCP.TopExp import TopExp
 from OCP.TopoDS import TopoDS, TopoDS_Edge, TopoDS_Face, TopoDS_Shape, TopoDS_Vertex, TopoDS_Wire
 from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape
@@ -85,7 +85,7 @@ from torus_cad.errors import KernelError
 from torus_cad.kernel import face_provenance
 from torus_cad.kernel.checks import single_valid_solid
 from torus_cad.kernel.edge_curves import distinct_faces
-from torus_cad.kernel.topology import explore
+from torus_cad.kernel.topology import copied, explore
 from torus_cad.tolerances import (
     READBACK_MIN_TOLERANCE_MM,
     READBACK_PCURVE_FIT_GAP,
@@ -99,7 +99,7 @@ from torus_cad.tolerances import (
     READBACK_WORST_SAMPLES,
 )
 
-__all__ = ["ReadableEdges", "readable_edges"]
+__all__ = ["ReadableEdges", "readable_copy", "readable_edges"]
 
 #: Gauss-Newton steps for one foot point (it converges in 2-3 from the old p-curve's point).
 _FOOT_STEPS = 8
@@ -118,6 +118,8 @@ _BISECTIONS = 40
 _REFINED_PEAKS = 3
 #: ... to this fraction of the edge's range.
 _BRENT_XATOL = 1e-12
+#: Times the splits are applied again without those whose neighbourhood BRepCheck_Analyzer faulted.
+_PRUNING_ROUNDS = 3
 #: A split edge's piece shorter than this many times the largest tolerance at it is a short piece (:func:`_split`).
 _SHORT_PIECE = 4.0
 
@@ -173,19 +175,70 @@ def readable_edges(solid: cq.Solid, face_parts: Sequence[int]) -> ReadableEdges:
         return ReadableEdges(solid, tuple(face_parts), replaced, 0, worst_before, worst_after)
     failure: KernelError | None = None
     for lower_short_pieces in (True, False):  # a piece's lower tolerance can make its face's wire cross itself
-        context = ShapeBuild_ReShape()
-        for edge, faces, where, needed in splits:
-            context.Replace(edge.Oriented(TopAbs_FORWARD), _split(edge, faces, where, needed if lower_short_pieces else None))
-        try:
-            checked = single_valid_solid(cq.Shape.cast(context.Apply(shape)), "making the root fillet's edges readable from STEP")
-        except KernelError as error:
-            failure = error
-            continue
-        origins = face_provenance.through_reshape(context, face_provenance.labelled_faces(shape, face_parts), checked.wrapped)
-        return ReadableEdges(checked, face_provenance.face_parts(checked.wrapped, origins), replaced, len(splits),
-                             worst_before, worst_after, closed)
+        for _ in range(_PRUNING_ROUNDS):
+            context = ShapeBuild_ReShape()
+            for edge, faces, where, needed in splits:
+                context.Replace(edge.Oriented(TopAbs_FORWARD), _split(edge, faces, where, needed if lower_short_pieces else None))
+            result = context.Apply(shape)
+            try:
+                checked = single_valid_solid(cq.Shape.cast(result), "making the edges readable from STEP")
+            except KernelError as error:
+                failure = error
+                kept = _splits_on_valid_parts(context, result, splits)
+                if len(kept) == len(splits):
+                    break
+                splits = kept
+                continue
+            origins = face_provenance.through_reshape(context, face_provenance.labelled_faces(shape, face_parts), checked.wrapped)
+            return ReadableEdges(checked, face_provenance.face_parts(checked.wrapped, origins), replaced, len(splits),
+                                 worst_before, worst_after, closed)
     assert failure is not None
     raise failure
+
+
+def _splits_on_valid_parts(context: ShapeBuild_ReShape, result: TopoDS_Shape,
+                           splits: list[tuple[TopoDS_Edge, list[TopoDS_Face], float, float]]
+                           ) -> list[tuple[TopoDS_Edge, list[TopoDS_Face], float, float]]:
+    """The ``splits`` none of whose pieces BRepCheck_Analyzer faults in ``result`` (on the piece, its
+    vertices or a face holding it): a split that leaves its neighbourhood invalid is left out, and its
+    edge reads back as it would have without one."""
+    analyzer = BRepCheck_Analyzer(result)
+    faulty = [part for kind in (TopAbs_VERTEX, TopAbs_EDGE, TopAbs_FACE) for part in explore(result, kind)
+              if not _fault_free(analyzer, part)]
+    kept = []
+    for split in splits:
+        pieces = explore(context.Value(split[0].Oriented(TopAbs_FORWARD)), TopAbs_EDGE)
+        near = [*pieces, *(vertex for piece in pieces for vertex in explore(piece, TopAbs_VERTEX))]
+        touched = [face for face in explore(result, TopAbs_FACE)
+                   if any(piece.IsSame(edge) for edge in explore(face, TopAbs_EDGE) for piece in pieces)]
+        if not any(part.IsSame(other) for part in faulty for other in [*near, *touched]):
+            kept.append(split)
+    return kept
+
+
+def _fault_free(analyzer: BRepCheck_Analyzer, part: TopoDS_Shape) -> bool:
+    """Whether BRepCheck_Analyzer finds no fault on ``part`` itself nor on it in the context of its faces."""
+    result = analyzer.Result(part)
+    if result is None:
+        return True
+    if any(status != BRepCheck_NoError for status in result.Status()):
+        return False
+    result.InitContextIterator()
+    while result.MoreShapeInContext():
+        if any(status != BRepCheck_NoError for status in result.StatusOnShape()):
+            return False
+        result.NextShapeInContext()
+    return True
+
+
+def readable_copy(shape: TopoDS_Shape) -> TopoDS_Shape:
+    """A copy of the solid ``shape`` whose edges read back from STEP as they are (:func:`readable_edges`);
+    the copy as it is where making them readable would not give a valid solid. ``shape`` is not changed."""
+    solid = cq.Solid(copied(shape))
+    try:
+        return readable_edges(solid, [0] * len(solid.Faces())).solid.wrapped
+    except KernelError:
+        return solid.wrapped
 
 
 def _edges_and_faces(shape: TopoDS_Shape) -> list[tuple[TopoDS_Edge, list[TopoDS_Face]]]:
