@@ -4,6 +4,7 @@
     python scripts/step_readback_tally.py 300                 # seeds 0..299, two workers
     python scripts/step_readback_tally.py 40 --seed 1000 --freecad --gmsh
     python scripts/step_readback_tally.py --replay 17 203     # just these seeds, one line each
+    python scripts/step_readback_tally.py 1100 --fillet-share 0 --freecad --gmsh   # no root fillets
 
 Each seed is one design (:func:`studies.step_tally.tally_design_dict`): a toroidal design from the fuzz
 sampler with the workshop features (bores, D-flats, set screws, chamfers, blunt flat or round trailing
@@ -59,7 +60,7 @@ def _follow_advice(design: dict[str, Any], refusal: str) -> bool:
     return False
 
 
-def tally_one(seed: int, folder: str) -> dict[str, Any]:
+def tally_one(seed: int, folder: str, fillet_share: float) -> dict[str, Any]:
     """Build the design of ``seed``, write its STEP file into ``folder`` (readable edges made as the
     build makes them, the read-back check off) and read it back: the faults by edge kind."""
     from studies.step_tally import tally_design_dict
@@ -70,7 +71,7 @@ def tally_one(seed: int, folder: str) -> dict[str, Any]:
     from torus_cad.parameters import PropellerParameters
     from torus_cad.propeller import build_propeller
 
-    design = tally_design_dict(seed)
+    design = tally_design_dict(seed, fillet_share)
     row: dict[str, Any] = {"seed": seed, "kind": design.get("kind", "toroidal"),
                            "fillet": design.get("hub", {}).get("root_fillet_radius", 0.0) > 0.0}
     start = time.perf_counter()
@@ -99,12 +100,12 @@ def tally_one(seed: int, folder: str) -> dict[str, Any]:
             "remaining": [fault.as_dict() for fault in remaining]}
 
 
-def _run(seeds: list[int], folder: Path, workers: int, time_limit_s: float) -> list[dict[str, Any]]:
+def _run(seeds: list[int], folder: Path, workers: int, time_limit_s: float, fillet_share: float) -> list[dict[str, Any]]:
     from pebble import ProcessPool
 
     rows = []
     with ProcessPool(max_workers=workers, max_tasks=20) as pool:
-        futures = [(seed, pool.schedule(tally_one, (seed, str(folder)), timeout=time_limit_s)) for seed in seeds]
+        futures = [(seed, pool.schedule(tally_one, (seed, str(folder), fillet_share), timeout=time_limit_s)) for seed in seeds]
         for seed, future in futures:
             try:
                 row = future.result()
@@ -172,6 +173,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--replay", type=int, nargs="+", default=None, metavar="SEED", help="only these seeds")
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--time-limit", type=float, default=120.0, help="seconds per design before it counts as a hang")
+    parser.add_argument("--fillet-share", type=float, default=0.25,
+                        help="share of the designs drawn with a root fillet (default 0.25; 0 for none, 1 for all)")
     parser.add_argument("--freecad", action="store_true", help="also check each file with FreeCAD's check(True)")
     parser.add_argument("--gmsh", action="store_true", help="also import each file into gmsh and count its warnings")
     parser.add_argument("--json", type=Path, default=None, help="write every design's row to this file")
@@ -179,7 +182,7 @@ def main(argv: list[str] | None = None) -> int:
     seeds = args.replay or list(range(args.seed, args.seed + args.count))
     start = time.perf_counter()
     with tempfile.TemporaryDirectory() as folder:
-        rows = _run(seeds, Path(folder), args.workers, args.time_limit)
+        rows = _run(seeds, Path(folder), args.workers, args.time_limit, args.fillet_share)
         if args.freecad:
             _freecad(rows, Path(folder))
         if args.gmsh:

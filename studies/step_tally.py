@@ -28,15 +28,16 @@ _C_OVER_R = (0.36, 0.34, 0.31, 0.28, 0.25, 0.22, 0.20)
 _THICKNESS = (0.10, 0.095, 0.09, 0.085, 0.08, 0.08, 0.08)
 
 
-def tally_design_dict(seed: int) -> dict[str, Any]:
-    """The design of ``seed`` as a nested dict (the TOML layout), named ``tally_<seed>``."""
+def tally_design_dict(seed: int, fillet_share: float = FILLET_SHARE) -> dict[str, Any]:
+    """The design of ``seed`` as a nested dict (the TOML layout), named ``tally_<seed>``; a root fillet on
+    ``fillet_share`` of the designs."""
     rng = np.random.default_rng([seed, 45])
     design = _conventional(seed, rng) if rng.random() < CONVENTIONAL_SHARE else random_design_dict(seed, workshop=True)
     design["name"] = f"tally_{seed}"
     airfoil = design.setdefault("airfoil", {})
     if airfoil.get("trailing_edge_thickness", 0.0) > 0.0 and rng.random() < FLAT_TRAILING_EDGE_SHARE:
         airfoil["trailing_edge_shape"] = "flat"
-    if rng.random() < FILLET_SHARE:
+    if rng.random() < fillet_share:
         hub = design.setdefault("hub", {})
         hub["root_fillet_radius"] = float(rng.uniform(0.2, 1.0))
         hub["root_fillet_tight_bends"] = "reduce" if rng.random() < 0.5 else "fail"

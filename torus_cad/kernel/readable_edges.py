@@ -170,6 +170,7 @@ def readable_edges(solid: cq.Solid, face_parts: Sequence[int]) -> ReadableEdges:
         _cover(edge, worst[0])
         where = _split_parameter(edge, faces, *worst)
         if where is not None:
+            _cover(edge, worst[0] + READBACK_SPLIT_MARGIN_MM)  # the pieces part by the margin more at the split
             splits.append((edge, faces, where, max(READBACK_MIN_TOLERANCE_MM, worst[0] * READBACK_TOLERANCE_FACTOR + READBACK_SPLIT_MARGIN_MM)))
     if not splits and not closed:
         return ReadableEdges(solid, tuple(face_parts), replaced, 0, worst_before, worst_after)

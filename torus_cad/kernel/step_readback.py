@@ -135,7 +135,7 @@ def check_step_readback(path: str | Path, what: str, self_interference: bool = T
     faults = argument_faults(shape, self_interference)
     if faults.counts:
         listed = ", ".join(f"{count} {status}" for status, count in faults.counts.items())
-        on_edges = classified_faults(shape)
+        on_edges = [fault for fault in classified_faults(shape) if fault.gap_mm > 0.0]
         worst = max(on_edges, key=lambda fault: fault.gap_mm / max(fault.tolerance_mm, 1e-300), default=None)
         where = (f"; worst on a {worst.edge_kind} edge ({worst.surfaces}): curves {worst.gap_mm:.2g} mm apart, "
                  f"tolerance read back {worst.tolerance_mm:.2g} mm" if worst is not None else "")
