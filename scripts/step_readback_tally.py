@@ -42,6 +42,8 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))  # studies/ and tests/ sit beside torus_cad, outside it
 
 
+#: STEP files FreeCAD checks in one process (tests/freecad_check.py gives it 300 s).
+_FREECAD_BATCH = 20
 #: Builds of one design, each after following the refusal's advice (:func:`_follow_advice`).
 _RETRIES = 3
 
@@ -123,7 +125,10 @@ def _freecad(rows: list[dict[str, Any]], folder: Path) -> None:
     from tests.freecad_check import freecad_verdicts
 
     paths = [Path(row["path"]) for row in rows if "path" in row]
-    verdicts = freecad_verdicts(paths, folder / "freecad") if paths else {}
+    verdicts: dict[str, dict[str, object]] = {}
+    for start in range(0, len(paths), _FREECAD_BATCH):  # one freecadcmd a batch, within its time limit
+        verdicts.update(freecad_verdicts(paths[start:start + _FREECAD_BATCH], folder / f"freecad_{start}"))
+        print(f"FreeCAD: {len(verdicts)} of {len(paths)} files checked", file=sys.stderr, flush=True)
     for row in rows:
         if "path" in row:
             verdict = verdicts[row["path"]]
@@ -178,11 +183,16 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--freecad", action="store_true", help="also check each file with FreeCAD's check(True)")
     parser.add_argument("--gmsh", action="store_true", help="also import each file into gmsh and count its warnings")
     parser.add_argument("--json", type=Path, default=None, help="write every design's row to this file")
+    parser.add_argument("--keep", type=Path, default=None, help="keep the STEP files in this folder")
     args = parser.parse_args(argv)
     seeds = args.replay or list(range(args.seed, args.seed + args.count))
     start = time.perf_counter()
-    with tempfile.TemporaryDirectory() as folder:
+    with tempfile.TemporaryDirectory() as temporary:
+        folder = args.keep or Path(temporary)
+        folder.mkdir(parents=True, exist_ok=True)
         rows = _run(seeds, Path(folder), args.workers, args.time_limit, args.fillet_share)
+        if args.json:
+            args.json.write_text(json.dumps(rows, indent=1))
         if args.freecad:
             _freecad(rows, Path(folder))
         if args.gmsh:

@@ -24,6 +24,7 @@ from __future__ import annotations
 import contextlib
 import errno
 import fcntl
+import functools
 import hashlib
 import json
 import os
@@ -399,6 +400,13 @@ class PublishedSet:
     report: dict[str, Any]
 
 
+def _collected(call: IsolatedCall[dict[str, Any] | None]) -> Callable[[Path], dict[str, Any] | None]:
+    """A writer that collects ``call``'s result: the child wrote the file at its staging path already."""
+    from torus_cad.tolerances import STEP_WRITE_TIME_LIMIT_S
+
+    return lambda _path: call.result(STEP_WRITE_TIME_LIMIT_S)
+
+
 def write_output_set(propeller: BuiltPropeller, out_dir: str | Path, density_g_cm3: float, stl: bool = True,
                      sections_table: bool | IsolatedCall[dict[str, tuple[str, bytes]]] = False,
                      extra_files: Mapping[str, FileWriter] | None = None) -> PublishedSet:
@@ -413,23 +421,19 @@ def write_output_set(propeller: BuiltPropeller, out_dir: str | Path, density_g_c
     """
     from torus_cad import __version__
     from torus_cad.kernel.uncrossed import UncrossedMesh, uncrossed_mesh
-    from torus_cad.kernel.writers.step import write_step
-    from torus_cad.kernel.writers.stl import write_checked_stl
-    from torus_cad.kernel.writers.threemf import write_3mf
+    from torus_cad.kernel.writers import WRITERS, ExportJob
     from torus_cad.outputs.report import build_report
     from torus_cad.outputs.sections_table import sections_table_files, write_files
     from torus_cad.parameters.design import ExportFormat
     from torus_cad.parameters.stl_budget import check_stl_budget
     from torus_cad.runtime.isolation import IsolatedCall
     from torus_cad.runtime.stages import Stage, StageTimer
-    from torus_cad.tolerances import SECTIONS_TABLE_TIME_LIMIT_S, STEP_WRITE_TIME_LIMIT_S
+    from torus_cad.tolerances import SECTIONS_TABLE_TIME_LIMIT_S
 
     params = propeller.parameters
     export = params.export
-    formats = export.formats
-    write_stl_file = stl and ExportFormat.STL in formats
-    deflections = (export.stl_linear_deflection, export.stl_angular_deflection)
-    if write_stl_file or ExportFormat.THREE_MF in formats:
+    formats = [fmt for fmt in export.formats if stl or fmt != ExportFormat.STL]
+    if {ExportFormat.STL, ExportFormat.THREE_MF} & set(formats):
         check_stl_budget(params, propeller.surface, propeller.section_curves.poles.shape[:2])
     timer = StageTimer[Stage]()
     meshes: dict[str, dict[str, Any]] = {}  # each written mesh's check, for the report
@@ -438,14 +442,20 @@ def write_output_set(propeller: BuiltPropeller, out_dir: str | Path, density_g_c
     def mesh() -> UncrossedMesh:
         """The uncrossed tessellation that the STL and the 3MF both write, made once."""
         if not made:
-            made.append(uncrossed_mesh(propeller.shape, *deflections))
+            made.append(uncrossed_mesh(propeller.shape, export.stl_linear_deflection, export.stl_angular_deflection))
         return made[0]
 
-    def checked(kind: str, write: Callable[[Path], Any]) -> FileWriter:
-        def writer(path: Path) -> Path:
-            meshes[kind] = write(path).to_dict()
+    job = ExportJob(propeller.shape, params.name, export.step_schema, export.stl_linear_deflection,
+                    export.stl_angular_deflection, __version__, mesh)
+
+    def recorded(fmt: ExportFormat, write: Callable[[Path], dict[str, Any] | None]) -> FileWriter:
+        """``write``, its mesh check (if it returns one) kept for the report."""
+        def written(path: Path) -> Path:
+            check = write(path)
+            if check is not None:
+                meshes[fmt.value] = check
             return path
-        return writer
+        return written
 
     with OutputSet(out_dir, params.name) as output, contextlib.ExitStack() as children:
         # The blade-element table (matplotlib) is drawn in a child meanwhile, on the second core; the child
@@ -456,25 +466,20 @@ def write_output_set(propeller: BuiltPropeller, out_dir: str | Path, density_g_c
         elif sections_table:
             table = children.enter_context(IsolatedCall(sections_table_files, propeller.surface, params,
                                                         what="the blade-element table"))
-        # The STEP file is written and read back in a child too, into its staging path, while this process
-        # makes and checks the meshes (a signal kills the child before the staging folder goes).
-        # Every design's file is checked as OpenCascade's reader gives it back, a root fillet's too
-        # (kernel.readable_edges makes its edges readable).
-        step = children.enter_context(IsolatedCall(
-            write_step, propeller.shape, output.stage("step"), params.name, export.step_schema,
-            f"torus_cad {__version__}", what="writing the STEP file")) if ExportFormat.STEP in formats else None
-        if write_stl_file:
-            with timer.stage(Stage.STL_WRITE):
-                output.write("stl", checked("stl", lambda path: write_checked_stl(propeller.shape, path, *deflections,
-                                                                                  mesh=mesh())))
-        if ExportFormat.THREE_MF in formats:
-            with timer.stage(Stage.THREE_MF_WRITE):
-                output.write("3mf", checked("3mf", lambda path: write_3mf(propeller.shape, path, params.name,
-                                                                          *deflections, version=__version__,
-                                                                          mesh=mesh())))
-        if step is not None:
-            with timer.stage(Stage.STEP_WRITE):  # what is left of it once the meshes are written
-                output.write("step", lambda path: step.result(STEP_WRITE_TIME_LIMIT_S))
+        # A writer that runs in a child (the STEP file, written and read back into its staging path) starts
+        # first, while this process writes the others (a signal kills the child before the staging folder
+        # goes). Every design's STEP file is checked as OpenCascade's reader gives it back
+        # (kernel.writers.step writes it again with readable edges where it reads back faulty).
+        started = {fmt: children.enter_context(IsolatedCall(WRITERS[fmt].write, job, output.stage(fmt.value),
+                                                            what=f"writing the {fmt.name} file"))
+                   for fmt in formats if WRITERS[fmt].in_child}
+        for fmt in formats:
+            if not WRITERS[fmt].in_child:
+                with timer.stage(WRITERS[fmt].stage):
+                    output.write(fmt.value, recorded(fmt, functools.partial(WRITERS[fmt].write, job)))
+        for fmt, call in started.items():
+            with timer.stage(WRITERS[fmt].stage):  # what is left of it once the others are written
+                output.write(fmt.value, recorded(fmt, _collected(call)))
         if table is not None:
             with timer.stage(Stage.SECTIONS_TABLE):  # what is left of it once the meshes are written
                 output.write_files(lambda folder: write_files(table.result(SECTIONS_TABLE_TIME_LIMIT_S), folder))
