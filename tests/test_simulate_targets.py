@@ -224,6 +224,7 @@ def _open_box(path):
     ("empty", "is not a STEP file"),
     ("text", "is not a STEP file"),
     ("broken", "does not read as STEP"),
+    ("no_data", "holds no shape"),
     ("folder", "is not a regular file (a folder)"),
     ("missing", "cannot read STEP file"),
 ])
@@ -239,6 +240,10 @@ def test_a_bad_step_file_exits_2_with_one_line_naming_it_and_writes_nothing(tmp_
         path.write_text("solid secret_content\nendsolid\n")
     elif kind == "broken":
         path.write_text("ISO-10303-21;\nHEADER;\nsecret_content garbage\n")
+    elif kind == "no_data":  # a whole file whose DATA section is empty
+        path.write_text("ISO-10303-21;\nHEADER;\nFILE_DESCRIPTION(('secret_content'),'2;1');\n"
+                        "FILE_NAME('x','2026-01-01',(''),(''),'','','');\nFILE_SCHEMA(('AUTOMOTIVE_DESIGN'));\n"
+                        "ENDSEC;\nDATA;\nENDSEC;\nEND-ISO-10303-21;\n")
     elif kind == "folder":
         path.mkdir()
     capsys.readouterr()

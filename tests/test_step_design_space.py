@@ -71,3 +71,11 @@ def test_a_file_that_cannot_be_made_readable_is_refused_naming_its_edge(tmp_path
     with pytest.raises(KernelError, match=r"c0\.step: the STEP file read back fails .*GeomAbs_C0"):
         write_step(_c0_face(), tmp_path / "c0.step", "c0")
     assert list(tmp_path.iterdir()) == []
+
+
+def test_every_export_format_has_one_writer_in_the_registry() -> None:
+    from torus_cad.formats import ExportFormat
+    from torus_cad.kernel.writers import WRITERS
+
+    assert set(WRITERS) == set(ExportFormat)
+    assert len({writer.stage for writer in WRITERS.values()}) == len(WRITERS)  # each timed as its own stage

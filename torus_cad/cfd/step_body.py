@@ -142,8 +142,9 @@ def read_step_solid(path: str | Path) -> Any:
         try:
             with _quiet_stdout():
                 shape = read_step(copy)
-        except KernelError:
-            raise ParameterError(f"{_WHAT} {source!r} does not read as STEP") from None
+        except KernelError as error:
+            what = "holds no shape" if "holds no shape" in str(error) else "does not read as STEP"
+            raise ParameterError(f"{_WHAT} {source!r} {what}") from None
     solids = shape.Solids() if shape is not None and not shape.wrapped.IsNull() else []
     if len(solids) != 1:
         raise ParameterError(f"{_WHAT} {source!r} holds {len(solids)} solids; it must hold exactly one (the propeller)")

@@ -90,12 +90,16 @@ def read_step(path: str | Path) -> cq.Shape:
 
 
 def read_step_shape(path: str | Path) -> TopoDS_Shape:
-    """:func:`read_step` as OpenCascade's shape (no cadquery)."""
+    """:func:`read_step` as OpenCascade's shape (no cadquery); KernelError for a file that does not read
+    or holds no shape."""
     reader = STEPControl_Reader()
     if reader.ReadFile(str(path)) != IFSelect_RetDone:
         raise KernelError(f"cannot read STEP file {str(path)!r}")
     reader.TransferRoots()
-    return reader.OneShape()
+    shape = reader.OneShape()
+    if shape.IsNull():  # a file whose DATA section holds no shape
+        raise KernelError(f"STEP file {str(path)!r} holds no shape")
+    return shape
 
 
 def argument_faults(shape: TopoDS_Shape, self_interference: bool = True) -> ArgumentFaults:
