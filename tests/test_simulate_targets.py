@@ -271,6 +271,12 @@ def test_step_names_are_sanitised():
     assert step_name("dir/My prop (v2).step") == "My_prop__v2_"
     assert step_name("/x/..step") == "step_propeller"
     assert len(step_name("a" * 100 + ".stp")) == 64
+    # a stem starting with what a name may not start with is cleaned, not refused as a bad name
+    assert step_name("x/-dash.step") == "dash" and step_name("x/_under.step") == "under"
+    from torus_cad.parameters import PropellerParameters
+
+    for stem in ("-dash", "_under", "._-x"):
+        PropellerParameters.from_dict({"name": step_name(f"{stem}.step")})  # a valid name
 
 
 @pytest.mark.parametrize("axis", ["+z", "-z", "+x", "-x", "+y", "-y"])
@@ -431,3 +437,11 @@ def test_a_run_prints_torque_in_n_mm_and_variations_in_percent():
     assert len(lines) == 4  # a report without the wall shear's part (written before it was reported)
     report["viscous"] = {"thrust_n": -0.0001, "torque_nm": 0.0000189, "thrust_share": -0.002, "torque_share": 0.0191}
     assert summary_lines(Result({}, report))[4] == "wall shear: 1.9 % of the torque, -0.2 % of the thrust (the rest is pressure)"
+
+
+@pytest.mark.parametrize("axis", ["-x", "-y", "-z", "+x"])
+def test_the_axis_is_taken_with_or_without_an_equals_sign(axis):
+    from torus_cad.cli import _joined_signed_values, build_parser
+
+    for argv in (["simulate", "--step", "p.step", "--axis", axis], ["simulate", "--step", "p.step", f"--axis={axis}"]):
+        assert build_parser().parse_args(_joined_signed_values(argv)).axis == axis

@@ -121,8 +121,9 @@ class StepPropeller:
 
 def step_name(path: str | Path) -> str:
     """The output name from the file's stem: characters other than letters, digits, '_', '-' and '.'
-    become '_', at most 64 of them ('step_propeller' when nothing is left)."""
-    name = _NAME_CHARACTERS.sub("_", Path(path).stem)[:64].strip(".")
+    become '_', leading ones other than a letter or digit are dropped (a name starts with one), at most
+    64 characters ('step_propeller' when nothing is left)."""
+    name = _NAME_CHARACTERS.sub("_", Path(path).stem).lstrip("_.-")[:64].rstrip(".")
     return name or "step_propeller"
 
 

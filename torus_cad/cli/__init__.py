@@ -36,11 +36,26 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``torus-cad``; returns the exit code."""
     restore_signals = exit_on_signals()  # first: an interrupt while importing is clean too
     try:
-        args = build_parser().parse_args(argv)
+        args = build_parser().parse_args(_joined_signed_values(sys.argv[1:] if argv is None else list(argv)))
         handler: Callable[[argparse.Namespace], int] = args.handler
         return _run(handler, args)
     finally:
         restore_signals()
+
+
+#: Options whose values start with '-' ('--axis -x'): argparse would take such a value for an option.
+_SIGNED_VALUE_OPTIONS = ("--axis",)
+
+
+def _joined_signed_values(argv: list[str]) -> list[str]:
+    """``argv`` with ``--axis -x`` written as ``--axis=-x``, which argparse reads as the value."""
+    joined: list[str] = []
+    for word in argv:
+        if joined and joined[-1] in _SIGNED_VALUE_OPTIONS and word.startswith("-") and word[1:] in ("x", "y", "z"):
+            joined[-1] = f"{joined[-1]}={word}"
+        else:
+            joined.append(word)
+    return joined
 
 
 def _run(handler: Callable[[argparse.Namespace], int], args: argparse.Namespace) -> int:
