@@ -443,5 +443,6 @@ def test_a_run_prints_torque_in_n_mm_and_variations_in_percent():
 def test_the_axis_is_taken_with_or_without_an_equals_sign(axis):
     from torus_cad.cli import _joined_signed_values, build_parser
 
-    for argv in (["simulate", "--step", "p.step", "--axis", axis], ["simulate", "--step", "p.step", f"--axis={axis}"]):
+    for argv in (["simulate", "--step", "p.step", "--rpm", "1000", "--axis", axis],
+                 ["simulate", "--step", "p.step", "--rpm", "1000", f"--axis={axis}"]):
         assert build_parser().parse_args(_joined_signed_values(argv)).axis == axis
