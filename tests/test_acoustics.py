@@ -175,3 +175,15 @@ def test_an_observer_inside_the_rotor_is_refused_naming_the_tip_radius():
     check_observers((Observer(0.03, 45.0),), tip_radius_m=0.0225)
     with pytest.raises(ParameterError, match=r"^--observer = 0.02:45 is inside the rotor; .*tip radius 0.0225 m$"):
         check_observers((Observer(1.0, 0.0), Observer(0.02, 45.0)), tip_radius_m=0.0225)
+
+
+def test_an_observer_that_hears_no_tone_is_printed_and_reported_as_silent():
+    from torus_cad.acoustics.report import SILENT_BELOW_DB, _level_db
+    from torus_cad.simulate.cli_output import noise_line
+
+    assert _level_db(-261.0) is None and _level_db(float("-inf")) is None  # round-off of a cancelled sound
+    assert _level_db(SILENT_BELOW_DB + 1.0) == SILENT_BELOW_DB + 1.0
+    line = noise_line({"blades": 3, "blade_passing_frequency_hz": 500.0, "observers": [
+        {"distance_m": 1.0, "angle_deg": 0.0, "oaspl_db": None, "oaspl_dba": None, "silent": True},
+        {"distance_m": 1.0, "angle_deg": 90.0, "oaspl_db": 61.25, "oaspl_dba": 50.0, "silent": False}]})
+    assert "1 m 0 deg silent (no tonal noise); 1 m 90 deg 61.2 dB (50.0 dB(A))" in line and "-2" not in line

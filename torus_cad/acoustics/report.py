@@ -51,8 +51,14 @@ class Noise:
     directivity: tuple[tuple[float, float, float], ...]
 
 
-def _finite(value: float) -> float | None:
-    return float(value) if math.isfinite(value) else None
+#: A level below this (dB re 20 uPa) is the round-off of a sound that cancels (a steady rotor's tones on
+#: its axis come out near -260 dB): reported as silent (None), not as a level.
+SILENT_BELOW_DB = -100.0
+
+
+def _level_db(value: float) -> float | None:
+    """``value`` (dB) if it is a level; None for silence (-inf) and for round-off below SILENT_BELOW_DB."""
+    return float(value) if math.isfinite(value) and value > SILENT_BELOW_DB else None
 
 
 def _overall(rms: np.ndarray, blades: int, rotation_hz: float) -> tuple[float, float, float]:
@@ -73,10 +79,11 @@ def _levels(signal: ObserverSignal, blades: int, rotation_hz: float, harmonics: 
         k = m * blades - 1
         if k >= len(total):
             break
-        listed.append({"harmonic": m, "frequency_hz": float(frequency[k]), "spl_db": _finite(float(spl_db(total[k]))),
-                       "thickness_spl_db": _finite(float(spl_db(thickness[k]))),
-                       "loading_spl_db": _finite(float(spl_db(loading[k])))})
-    return {"oaspl_db": _finite(oaspl), "oaspl_dba": _finite(oaspl_a), "other_harmonics_spl_db": _finite(others),
+        listed.append({"harmonic": m, "frequency_hz": float(frequency[k]), "spl_db": _level_db(float(spl_db(total[k]))),
+                       "thickness_spl_db": _level_db(float(spl_db(thickness[k]))),
+                       "loading_spl_db": _level_db(float(spl_db(loading[k])))})
+    return {"oaspl_db": _level_db(oaspl), "oaspl_dba": _level_db(oaspl_a), "silent": _level_db(oaspl) is None,
+            "other_harmonics_spl_db": _level_db(others),
             "peak_to_peak_pa": float(np.ptp(signal.total_pa)), "harmonics": listed}
 
 

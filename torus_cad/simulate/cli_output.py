@@ -107,9 +107,12 @@ def _level(value: float | None) -> str:
 
 
 def noise_line(noise: dict[str, Any]) -> str:
-    """``tonal noise (BPF 500 Hz): 1 m 0 deg -259 dB ...``: each observer's overall SPL and dB(A)."""
-    heard = "; ".join(f"{entry['distance_m']:g} m {entry['angle_deg']:g} deg {_level(entry['oaspl_db'])} dB "
-                      f"({_level(entry['oaspl_dba'])} dB(A))" for entry in noise["observers"])
+    """``tonal noise (BPF 500 Hz): 1 m 0 deg silent (no tonal noise); 1 m 90 deg 61.2 dB ...``: each
+    observer's overall SPL and dB(A), or that it hears no tone (a steady rotor on its axis)."""
+    heard = "; ".join(f"{entry['distance_m']:g} m {entry['angle_deg']:g} deg "
+                      + ("silent (no tonal noise)" if entry.get("silent") else
+                         f"{_level(entry['oaspl_db'])} dB ({_level(entry['oaspl_dba'])} dB(A))")
+                      for entry in noise["observers"])
     passing = (f"BPF {noise['blade_passing_frequency_hz']:.4g} Hz" if noise.get("blades")
                else f"rotation {noise['rotation_hz']:.4g} Hz")
     return f"tonal noise ({passing}, steady loading and thickness, FW-H): {heard}"
