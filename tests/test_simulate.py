@@ -58,7 +58,9 @@ def test_coefficients_follow_the_propeller_convention():
     assert result.advance_ratio == pytest.approx(0.5)
     assert result.efficiency == pytest.approx(0.5 * result.ct / result.cp) and result.figure_of_merit is None
     hover = performance(1.0, 0.02, OperatingPoint(6000.0), 0.1)
-    assert hover.efficiency is None and hover.figure_of_merit == pytest.approx(hover.ct**1.5 / (2**0.5 * hover.cp))
+    # the figure of merit is momentum theory's ideal power T^1.5 / sqrt(2 rho A) over the power, A the tip circle
+    ideal_w = 1.0**1.5 / math.sqrt(2.0 * 1.225 * math.pi * 0.1**2 / 4.0)
+    assert hover.efficiency is None and hover.figure_of_merit == pytest.approx(ideal_w / hover.power_w)
 
 
 def test_omega_is_negative_about_z_for_cw_and_positive_for_its_mirror_image():

@@ -10,7 +10,7 @@ from typing import Any
 
 from torus_cad.errors import GeometryError, KernelError, ParameterError, TorusCadError
 
-__version__ = "0.2.0"
+__version__ = "0.2.1"
 
 __all__ = ["GeometryError", "KernelError", "ParameterError", "Propeller", "PropellerParameters", "TorusCadError",
            "build_propeller", "propeller_objects", "resolve_parameters"]

@@ -2,7 +2,9 @@
 
 Propeller convention: n in rev/s, D the tip diameter, CT = T / (rho n^2 D^4), CP = P / (rho n^3 D^5),
 advance ratio J = V / (n D), efficiency J CT / CP (undefined at J = 0), figure of merit (the ideal
-power of momentum theory over the power, at J = 0) CT^1.5 / (sqrt(2) CP).
+power of momentum theory over the power, at J = 0): T^1.5 / sqrt(2 rho A) / P with A = pi D^2 / 4, which in
+these coefficients is CT^1.5 / (sqrt(pi / 2) CP) (the helicopter form CT^1.5 / (sqrt(2) CP) holds for
+coefficients on rho A (Omega R)^2, not on rho n^2 D^4).
 
 Signs: thrust is positive when the propeller pushes the fluid the way the design means to (toward
 -z for both 'cw' and its mirror image 'ccw', which turn opposite ways): the fluid pushes the
@@ -69,7 +71,7 @@ def performance(thrust_n: float, torque_nm: float, point: OperatingPoint, diamet
     ct = thrust_n / (rho * n**2 * diameter_m**4)
     cp = power / (rho * n**3 * diameter_m**5)
     efficiency = advance * ct / cp if advance > 0.0 and cp != 0.0 else None
-    merit = ct**1.5 / (math.sqrt(2.0) * cp) if advance == 0.0 and ct > 0.0 and cp > 0.0 else None
+    merit = ct**1.5 / (math.sqrt(math.pi / 2.0) * cp) if advance == 0.0 and ct > 0.0 and cp > 0.0 else None
     return Performance(thrust_n, torque_nm, power, advance, ct, cp, efficiency, merit)
 
 

@@ -165,7 +165,13 @@ def blade_surface(blade: BladeGeometry, centerline: Centerline, sections: int, p
     along s: all of them are sampled at the parameters ``t`` of the section in the middle
     (s = 0.5), which are spaced equally on it (and nearly so on the others), both ends of the base included.
     """
-    frames = blade_frames(blade, centerline, np.linspace(0.0, 1.0, sections))
+    return blade_surface_at(blade, centerline, np.linspace(0.0, 1.0, sections), points, anchor_trailing_edge)
+
+
+def blade_surface_at(blade: BladeGeometry, centerline: Centerline, s: ArrayLike, points: int,
+                     anchor_trailing_edge: bool = True) -> BladeSurface:
+    """:func:`blade_surface` with its sections at the centerline parameters ``s`` ``(k,)`` (increasing)."""
+    frames = blade_frames(blade, centerline, s)
     along = sections_along(blade, frames.s)
     shared = all(section is along[0] for section in along)
     reference = along[0] if shared else sections_along(blade, [0.5])[0]

@@ -1,0 +1,209 @@
+"""The rotor's vortex lattice: rings on blade 0's camber surface, their images on the other blades, and
+the helical wake shed from the whole trailing edge (SI units: m, s).
+
+Rings (Katz and Plotkin, ch. 12): the camber surface's panels, each ring's leading segment a quarter of
+its panel behind the panel's leading edge (the last ring ends on the trailing edge), its collocation
+point at three quarters of the panel, where the flow may not cross the surface. A strip's last ring
+and its wake form a horseshoe: the trailing-edge segment cancels against the wake's first one in a
+steady wake of constant strength, so each strip sheds two helical lines from its trailing-edge nodes. Both ends of a toroidal blade sit in the hub: their rings
+shed into the wake like any other; no image of the hub is modelled.
+
+A strip sheds from the edge its flow leaves by: the trailing edge, or the leading edge where the air
+meets the trailing edge first (a toroidal loop's return leg turns its trailing edge into the rotation);
+each strip sheds its own two lines.
+
+The wake is prescribed: in the blade's frame its lines turn against the rotation at the rotor's rate
+and travel downstream at the free stream plus the induced velocity on the axis of a uniformly loaded
+actuator disk, v (1 + z / sqrt(z^2 + R^2)) (v at the disk, 2 v far downstream), contracting as the
+slipstream's mass flow requires. v comes from the thrust by momentum theory (:mod:`.solver` iterates).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.sparse import csr_matrix
+
+#: Ring segments: corners (first, second) of each of a ring's four sides, as (section, chord) offsets.
+_SIDES = (((0, 0), (1, 0)), ((1, 0), (1, 1)), ((1, 1), (0, 1)), ((0, 1), (0, 0)))
+
+
+@dataclass(frozen=True)
+class WakeShape:
+    """How the wake is laid out.
+
+    Attributes:
+        length_diameters: how far downstream it reaches, in tip diameters.
+        steps_per_turn: segments per turn of each helical line in its first turn ...
+        growth: ... after which each segment is this much longer than the one before ...
+        longest_step_deg: ... up to this turn a segment.
+        max_turns: turns at most (a still-air wake of small pitch would need very many).
+        core_chords: the wake lines' vortex core radius, in mean chords, reached one mean chord behind
+            the blade: a line that passes a blade downstream (a toroidal loop's return leg) induces a
+            finite velocity there.
+    """
+
+    length_diameters: float = 4.0
+    steps_per_turn: int = 24
+    growth: float = 1.1
+    longest_step_deg: float = 60.0
+    max_turns: float = 40.0
+    core_chords: float = 0.1
+
+
+@dataclass(frozen=True)
+class Lattice:
+    """Blade 0's rings and every segment of the rotor (all blades, the wake) with its unknown.
+
+    Attributes:
+        grid: ``(K - 1, 2, C + 1, 3)`` m, the rings' corners of each strip on blade 0 (C rings a strip).
+        collocation / normals: ``(1, (K - 1) C, 3)`` the rings' control points and unit normals.
+        starts / ends: ``(S, 3)`` m, every segment of the rotor and its wake.
+        incidence: ``(S, rings)`` sparse: the circulation each segment carries is incidence @ the rings'
+            (a wake line carries its strip's last ring's).
+        bound_segments: the first this many segments are blade 0's bound ones, one ring's each.
+        core_m: ``(S,)`` each segment's vortex core radius (0 on the blades, the wake's core on the wake).
+    """
+
+    grid: NDArray[np.float64]
+    collocation: NDArray[np.float64]
+    normals: NDArray[np.float64]
+    starts: NDArray[np.float64]
+    ends: NDArray[np.float64]
+    incidence: csr_matrix
+    bound_segments: int
+    core_m: NDArray[np.float64]
+
+    @property
+    def rings(self) -> int:
+        """Number of unknowns: rings of blade 0."""
+        return int(self.collocation.shape[1])
+
+
+def ring_grid(camber_m: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``(K, C + 1, 3)``: the ring corners of a camber grid ``(K, C + 1, 3)``: each panel's quarter line,
+    and the trailing edge."""
+    grid = camber_m.copy()
+    grid[:, :-1] = camber_m[:, :-1] + 0.25 * (camber_m[:, 1:] - camber_m[:, :-1])
+    return grid
+
+
+def control_points(camber_m: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Each panel's three-quarter point (mean of its two section lines) and unit normal (the cross
+    product of its diagonals): ``(K - 1, C, 3)`` each."""
+    three_quarter = camber_m[:, :-1] + 0.75 * (camber_m[:, 1:] - camber_m[:, :-1])
+    points = 0.5 * (three_quarter[:-1] + three_quarter[1:])
+    normals = np.cross(camber_m[1:, 1:] - camber_m[:-1, :-1], camber_m[:-1, 1:] - camber_m[1:, :-1])
+    return points, normals / np.linalg.norm(normals, axis=2, keepdims=True)
+
+
+def wake_lines(trailing_edge_m: NDArray[np.float64], omega_rad_s: float, spin: float, inflow_m_s: float,
+               induced_m_s: float, radius_m: float, shape: WakeShape) -> NDArray[np.float64]:
+    """``(N, M + 1, 3)``: the helical lines shed from the trailing-edge nodes ``(N, 3)`` (module doc), in
+    the blade's frame; ``spin`` +1 where the air seems to turn the +theta way past the blade (cw)."""
+    length = shape.length_diameters * 2.0 * radius_m
+    base = inflow_m_s + induced_m_s
+    if omega_rad_s == 0.0 or base <= 0.0:
+        times = np.linspace(0.0, length / max(base, 1e-9), shape.steps_per_turn * 4 + 1)
+    else:
+        turns = min(shape.max_turns, length * omega_rad_s / (2.0 * np.pi * base))
+        times = _wake_angles(turns, shape) / omega_rad_s
+    travelled = _travelled(times, inflow_m_s, induced_m_s, radius_m)
+    far = inflow_m_s + induced_m_s * (1.0 + travelled / np.hypot(travelled, radius_m))
+    contraction = np.sqrt(max(base, 1e-12) / np.maximum(far, 1e-12)) if base > 0.0 else np.ones_like(times)
+    angle = spin * omega_rad_s * times
+    x, y, z = trailing_edge_m[:, 0:1], trailing_edge_m[:, 1:2], trailing_edge_m[:, 2:3]
+    cos, sin = np.cos(angle)[None, :], np.sin(angle)[None, :]
+    scale = contraction[None, :]
+    return np.stack([(x * cos - y * sin) * scale, (x * sin + y * cos) * scale,
+                     z - travelled[None, :]], axis=2)
+
+
+def _wake_angles(turns: float, shape: WakeShape) -> NDArray[np.float64]:
+    """Angles (rad) of a line's nodes over ``turns`` turns: even steps in the first turn, then each step
+    ``shape.growth`` times the one before, up to ``shape.longest_step_deg``."""
+    first = 2.0 * np.pi / shape.steps_per_turn
+    angles, step = [0.0], first
+    end = turns * 2.0 * np.pi
+    while angles[-1] < end:
+        if angles[-1] >= 2.0 * np.pi - 1e-12:
+            step = min(step * shape.growth, np.radians(shape.longest_step_deg))
+        angles.append(min(angles[-1] + step, end))
+    return np.array(angles)
+
+
+def _travelled(times: NDArray[np.float64], inflow: float, induced: float, radius: float) -> NDArray[np.float64]:
+    """Distance downstream at ``times`` of a point leaving the disk (explicit midpoint steps)."""
+    travelled = np.zeros_like(times)
+    for step in range(1, len(times)):
+        dt = times[step] - times[step - 1]
+
+        def speed(distance: float) -> float:
+            return inflow + induced * (1.0 + distance / np.hypot(distance, radius))
+
+        half = travelled[step - 1] + 0.5 * dt * speed(travelled[step - 1])
+        travelled[step] = travelled[step - 1] + dt * speed(half)
+    return travelled
+
+
+def strip_edges(camber_m: NDArray[np.float64], downstream_first: NDArray[np.bool_]) -> NDArray[np.float64]:
+    """``(K - 1, 2, C + 1, 3)``: each strip's two section lines ordered from the edge the flow meets first
+    to the edge it leaves (the trailing edge, or the leading edge where ``downstream_first`` says the
+    flow runs from the trailing edge to the leading edge there: a loop's return leg)."""
+    pairs = np.stack([camber_m[:-1], camber_m[1:]], axis=1)
+    return np.where(downstream_first[:, None, None, None], pairs[:, :, ::-1], pairs)
+
+
+def rotor_lattice(strips_m: NDArray[np.float64], blades: int, wake: NDArray[np.float64], core_m: float,
+                  core_growth_m: float) -> Lattice:
+    """The lattice of ``blades`` blades whose blade 0 has the strips ``strips_m`` ``(K - 1, 2, C + 1, 3)``
+    (:func:`strip_edges`) and whose strips shed the lines ``wake`` ``(K - 1, 2, M + 1, 3)`` from the
+    last nodes of their two lines (blade 0's; the others are blade 0's turned by 360 / blades degrees
+    about +z), the wake's lines with a vortex core growing from nothing at the blade to ``core_m`` at
+    ``core_growth_m`` along the line (the near wake stays a sheet at the trailing edge)."""
+    strips, chordwise = strips_m.shape[0], strips_m.shape[2] - 1
+    grid = np.stack([ring_grid(pair) for pair in strips_m])  # (K - 1, 2, C + 1, 3)
+    controls = [control_points(pair) for pair in strips_m]
+    points = np.concatenate([point for point, _ in controls]).reshape(-1, 3)
+    normals = np.concatenate([normal for _, normal in controls]).reshape(-1, 3)
+    starts, ends, rows, columns, signs = [], [], [], [], []
+
+    def add(start: NDArray[np.float64], end: NDArray[np.float64], ring: int, sign: float) -> None:
+        rows.append(len(starts))
+        columns.append(ring)
+        signs.append(sign)
+        starts.append(start)
+        ends.append(end)
+
+    for j in range(strips):
+        for i in range(chordwise):
+            for side, ((dk0, di0), (dk1, di1)) in enumerate(_SIDES):
+                if side == 2 and i == chordwise - 1:
+                    continue  # the trailing-edge segment: cancelled by the wake's first one
+                add(grid[j, dk0, i + di0], grid[j, dk1, i + di1], j * chordwise + i, 1.0)
+    bound = len(starts)
+    cores = [0.0] * bound
+    for j in range(strips):  # the horseshoe's two legs: out of the second line's node, into the first's
+        last = j * chordwise + chordwise - 1
+        for line, sign in ((wake[j, 1], 1.0), (wake[j, 0], -1.0)):
+            steps = np.linalg.norm(np.diff(line, axis=0), axis=1)
+            along = np.cumsum(steps) - 0.5 * steps  # each segment's middle, from the blade
+            cores.extend(core_m * np.minimum(1.0, along / core_growth_m))
+            for start, end in zip(line[:-1], line[1:], strict=True):
+                add(start, end, last, sign)
+    one_start, one_end = np.array(starts), np.array(ends)
+    count = len(starts)
+    all_starts = np.concatenate([_turned(one_start, 2.0 * np.pi * b / blades) for b in range(blades)])
+    all_ends = np.concatenate([_turned(one_end, 2.0 * np.pi * b / blades) for b in range(blades)])
+    incidence = csr_matrix((np.tile(signs, blades), (np.concatenate([np.array(rows) + b * count for b in range(blades)]),
+                                                     np.tile(columns, blades))), shape=(count * blades, strips * chordwise))
+    return Lattice(grid, points[None], normals[None], all_starts, all_ends, incidence, bound,
+                   np.tile(np.array(cores), blades))
+
+
+def _turned(points: NDArray[np.float64], angle_rad: float) -> NDArray[np.float64]:
+    cos, sin = np.cos(angle_rad), np.sin(angle_rad)
+    return np.stack([cos * points[:, 0] - sin * points[:, 1], sin * points[:, 0] + cos * points[:, 1],
+                     points[:, 2]], axis=1)

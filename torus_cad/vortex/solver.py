@@ -1,0 +1,136 @@
+"""The steady lifting-surface solve of a rotor in the blade's frame (SI units).
+
+For a prescribed wake (:mod:`.lattice`): the rings' circulations that let no flow through any control
+point, (V_kinematic + v_induced) . n = 0, with V_kinematic = -V_inf z + spin Omega z x r (the air's
+velocity seen from the turning blade); then the Kutta-Joukowski force rho Gamma V x dl on every bound
+bound segment (where two rings share a side, both carry their circulation there), at the velocity the whole lattice induces at its midpoint. The wake's induced
+velocity comes from the thrust by momentum theory, v = -V/2 + sqrt((V/2)^2 + T / (2 rho A)), A the
+tip circle's area; wake and solve are iterated until that velocity changes by less than
+:data:`INDUCED_TOLERANCE` of the tip speed.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from torus_cad.errors import KernelError
+from torus_cad.vortex.biot_savart import induced_velocity, normal_influence
+from torus_cad.vortex.lattice import Lattice, WakeShape, rotor_lattice, strip_edges, wake_lines
+
+#: The wake iteration stops when its induced velocity changes by less than this fraction of the tip speed
+#: (plus the airspeed).
+INDUCED_TOLERANCE = 1e-5
+#: Wake iterations at most; a solve that has not converged then raises.
+MAX_WAKE_ITERATIONS = 40
+#: Under-relaxation of the wake's induced velocity between iterations.
+WAKE_RELAXATION = 1.0
+#: The blade's own segments get a vortex core of this many mean chords where the force on a bound segment
+#: is evaluated: where a loop's flow turns round, two strips' rings meet on one section line at different
+#: nodes, and a segment's midpoint lies a hair from its neighbour's segment.
+BOUND_CORE_CHORDS = 0.02
+#: The first guess of the induced velocity in still air, as a fraction of the tip speed.
+STATIC_INDUCED_GUESS = 0.05
+
+
+@dataclass(frozen=True)
+class Inviscid:
+    """The inviscid solution on one blade (all blades carry the same).
+
+    Attributes:
+        circulation: ``(K - 1, C)`` m^2/s, each ring's.
+        force_n: ``(K - 1, C, 3)`` N, the force on each ring's bound segments (blade 0).
+        moment_nm: ``(K - 1, C, 3)`` N m, their moment about the origin.
+        thrust_n / torque_nm: the rotor's (all blades): thrust along +z, torque resisting the rotation.
+        induced_m_s: the wake's induced velocity at the disk (momentum theory).
+        iterations: wake iterations; change: the last relative change of the thrust.
+    """
+
+    circulation: NDArray[np.float64]
+    force_n: NDArray[np.float64]
+    moment_nm: NDArray[np.float64]
+    thrust_n: float
+    torque_nm: float
+    induced_m_s: float
+    iterations: int
+    change: float
+    lattice: Lattice = field(repr=False)
+
+
+def kinematic_velocity(points: NDArray[np.float64], omega_rad_s: float, spin: float,
+                       airspeed_m_s: float) -> NDArray[np.float64]:
+    """``(P, 3)`` the air's velocity at ``points`` seen from the turning blade (module doc)."""
+    velocity = np.zeros_like(points)
+    velocity[:, 0] = -spin * omega_rad_s * points[:, 1]
+    velocity[:, 1] = spin * omega_rad_s * points[:, 0]
+    velocity[:, 2] = -airspeed_m_s
+    return velocity
+
+
+def solve_inviscid(camber_m: NDArray[np.float64], blades: int, spin: float, omega_rad_s: float,
+                   airspeed_m_s: float, density: float, tip_radius_m: float, wake: WakeShape) -> Inviscid:
+    """Circulations and forces of the rotor whose blade 0 has the camber grid ``camber_m`` (module doc)."""
+    area = np.pi * tip_radius_m**2
+    middle = 0.5 * (camber_m[:-1] + camber_m[1:]).mean(axis=1)
+    chord = (camber_m[:-1, -1] + camber_m[1:, -1] - camber_m[:-1, 0] - camber_m[1:, 0])
+    downstream_first = np.einsum("jk,jk->j", kinematic_velocity(middle, omega_rad_s, spin, airspeed_m_s), chord) < 0.0
+    strips = strip_edges(camber_m, downstream_first)
+    induced = STATIC_INDUCED_GUESS * omega_rad_s * tip_radius_m if airspeed_m_s == 0.0 else 0.0
+    scale = airspeed_m_s + omega_rad_s * tip_radius_m
+    mean_chord = float(np.linalg.norm(chord, axis=1).mean()) / 2.0
+    thrust, change = 0.0, np.inf
+    for iteration in range(1, MAX_WAKE_ITERATIONS + 1):
+        edges = strips[:, :, -1].reshape(-1, 3)
+        lines = wake_lines(edges, omega_rad_s, spin, airspeed_m_s, induced, tip_radius_m, wake)
+        lattice = rotor_lattice(strips, blades, lines.reshape(len(strips), 2, *lines.shape[1:]),
+                                wake.core_chords * mean_chord, mean_chord)
+        circulation, force, moment = _solve_once(lattice, spin, omega_rad_s, airspeed_m_s, density,
+                                                 BOUND_CORE_CHORDS * mean_chord)
+        thrust = blades * float(force[..., 2].sum())
+        if scale == 0.0:
+            break
+        momentum = -airspeed_m_s / 2.0 + np.sqrt((airspeed_m_s / 2.0) ** 2 + max(thrust, 0.0) / (2.0 * density * area))
+        change = abs(momentum - induced) / scale
+        induced = (1.0 - WAKE_RELAXATION) * induced + WAKE_RELAXATION * momentum
+        if change < INDUCED_TOLERANCE:
+            break
+    else:
+        raise KernelError(f"the vortex solve did not converge: the wake's induced velocity still changed by "
+                          f"{change:.2g} of the tip speed after {MAX_WAKE_ITERATIONS} wake iterations "
+                          f"(tolerance {INDUCED_TOLERANCE:g})")
+    torque = spin * blades * float(moment[..., 2].sum())
+    return Inviscid(circulation, force, moment, thrust, torque, induced, iteration, change, lattice)
+
+
+def _solve_once(lattice: Lattice, spin: float, omega: float, airspeed: float, density: float,
+                bound_core_m: float) -> tuple[NDArray[np.float64], ...]:
+    """One solve on a fixed wake: circulations ``(K - 1, C)``, and the force on each ring's bound segments
+    and its moment about the origin ``(K - 1, C, 3)`` (blade 0)."""
+    shape = (-1, lattice.grid.shape[2] - 1)
+    points = lattice.collocation.reshape(-1, 3)
+    normals = lattice.normals.reshape(-1, 3)
+    influence = normal_influence(points, normals, lattice.starts, lattice.ends, lattice.core_m)
+    matrix = np.asarray((lattice.incidence.T @ influence.T).T)
+    rhs = -np.einsum("pk,pk->p", kinematic_velocity(points, omega, spin, airspeed), normals)
+    if not rhs.any():
+        circulation = np.zeros(lattice.rings)
+    else:
+        circulation = np.linalg.solve(matrix, rhs)
+    bound = lattice.bound_segments
+    starts, ends = lattice.starts[:bound], lattice.ends[:bound]
+    middle = 0.5 * (starts + ends)
+    strengths = lattice.incidence @ circulation
+    velocity = kinematic_velocity(middle, omega, spin, airspeed)
+    if circulation.any():
+        cores = lattice.core_m.copy()
+        cores[cores == 0.0] = bound_core_m  # neighbours' segments on a shared section line (module doc)
+        velocity = velocity + induced_velocity(middle, lattice.starts, lattice.ends, strengths, cores)
+    force = density * strengths[:bound, None] * np.cross(velocity, ends - starts)
+    ring = lattice.incidence[:bound].indices  # each bound segment carries one ring's circulation
+    per_ring = np.zeros((lattice.rings, 3))
+    moment = np.zeros((lattice.rings, 3))
+    np.add.at(per_ring, ring, force)
+    np.add.at(moment, ring, np.cross(middle, force))
+    return (circulation.reshape(shape), per_ring.reshape(*shape, 3), moment.reshape(*shape, 3))
