@@ -30,7 +30,6 @@ from __future__ import annotations
 import argparse
 import collections
 import json
-import re
 import sys
 import tempfile
 import time
@@ -44,49 +43,27 @@ sys.path.insert(0, str(ROOT))  # studies/ and tests/ sit beside torus_cad, outsi
 
 #: STEP files FreeCAD checks in one process (tests/freecad_check.py gives it 300 s).
 _FREECAD_BATCH = 20
-#: Builds of one design, each after following the refusal's advice (:func:`_follow_advice`).
-_RETRIES = 3
-
-
-def _follow_advice(design: dict[str, Any], refusal: str) -> bool:
-    """Change ``design`` as a user would on reading ``refusal``: a trailing edge too thick for the blade
-    halved, a root fillet that fails at its radius given the radius the message says works; False when
-    the refusal gives no such way on."""
-    works = re.search(r"hub.root_fillet_radius = ([0-9.e-]+) mm works", refusal)
-    if works:
-        design["hub"]["root_fillet_radius"] = float(works.group(1))
-        return True
-    if refusal.startswith("airfoil.trailing_edge_thickness") and "too thick" in refusal:
-        design["airfoil"]["trailing_edge_thickness"] /= 2.0
-        return True
-    return False
 
 
 def tally_one(seed: int, folder: str, fillet_share: float) -> dict[str, Any]:
     """Build the design of ``seed``, write its STEP file into ``folder`` (readable edges made as the
     build makes them, the read-back check off) and read it back: the faults by edge kind."""
-    from studies.step_tally import tally_design_dict
+    from studies.step_tally import built_tally_design, tally_design_dict
     from torus_cad.errors import GeometryError, KernelError, ParameterError
     from torus_cad.kernel.readable_edges import readable_copy
     from torus_cad.kernel.step_readback import classified_faults, read_step_shape
     from torus_cad.kernel.writers.step import write_step
-    from torus_cad.parameters import PropellerParameters
-    from torus_cad.propeller import build_propeller
 
     design = tally_design_dict(seed, fillet_share)
     row: dict[str, Any] = {"seed": seed, "kind": design.get("kind", "toroidal"),
                            "fillet": design.get("hub", {}).get("root_fillet_radius", 0.0) > 0.0}
     start = time.perf_counter()
-    for _ in range(_RETRIES):
-        try:
-            propeller = build_propeller(PropellerParameters.from_dict(design))
-            break
-        except (ParameterError, GeometryError, KernelError) as refusal:
-            if not _follow_advice(design, str(refusal)):
-                outcome = "kernel" if isinstance(refusal, KernelError) else "refused"
-                return {**row, "outcome": outcome, "reason": str(refusal)[:160]}
-    else:
-        return {**row, "outcome": "refused", "reason": f"still refused after {_RETRIES} tries"}
+    try:
+        propeller = built_tally_design(seed, fillet_share)
+    except (ParameterError, GeometryError) as refusal:
+        return {**row, "outcome": "refused", "reason": str(refusal)[:160]}
+    except KernelError as failure:
+        return {**row, "outcome": "kernel", "reason": str(failure)[:160]}
     row["build_s"] = time.perf_counter() - start
     path = Path(folder) / f"tally_{seed}.step"
     start = time.perf_counter()

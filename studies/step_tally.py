@@ -11,6 +11,7 @@ in five (diameter, blade count, chord and pitch drawn around ``examples/compare/
 from __future__ import annotations
 
 import math
+import re
 from typing import Any
 
 import numpy as np
@@ -70,3 +71,38 @@ def _conventional(seed: int, rng: np.random.Generator) -> dict[str, Any]:
             design[table] = values
     design["hub"].update({"radius": hub_radius, "length": float(rng.uniform(0.8, 1.6)) * hub_radius})
     return design
+
+
+#: Builds of one design, each after following the refusal's advice (:func:`follow_advice`).
+RETRIES = 3
+
+
+def follow_advice(design: dict[str, Any], refusal: str) -> bool:
+    """Change ``design`` as a user would on reading ``refusal``: a trailing edge too thick for the blade
+    halved, a root fillet that fails at its radius given the radius the message says works; False when
+    the refusal gives no such way on."""
+    works = re.search(r"hub.root_fillet_radius = ([0-9.e-]+) mm works", refusal)
+    if works:
+        design["hub"]["root_fillet_radius"] = float(works.group(1))
+        return True
+    if refusal.startswith("airfoil.trailing_edge_thickness") and "too thick" in refusal:
+        design["airfoil"]["trailing_edge_thickness"] /= 2.0
+        return True
+    return False
+
+
+def built_tally_design(seed: int, fillet_share: float = FILLET_SHARE) -> Any:
+    """The propeller of ``seed`` (:func:`tally_design_dict`), built again after each refusal whose advice
+    :func:`follow_advice` follows, up to RETRIES builds; the last refusal is raised."""
+    from torus_cad.errors import GeometryError, KernelError, ParameterError
+    from torus_cad.parameters import PropellerParameters
+    from torus_cad.propeller import build_propeller
+
+    design = tally_design_dict(seed, fillet_share)
+    for attempt in range(RETRIES):
+        try:
+            return build_propeller(PropellerParameters.from_dict(design))
+        except (ParameterError, GeometryError, KernelError) as refusal:
+            if attempt == RETRIES - 1 or not follow_advice(design, str(refusal)):
+                raise
+    raise AssertionError("unreachable")

@@ -10,17 +10,19 @@ import pytest
 from freecad_check import FREECADCMD, freecad_verdicts
 from test_step_readback import _cylinder_with_a_bumped_edge
 
-from studies.step_tally import tally_design_dict
+from studies.step_tally import built_tally_design, tally_design_dict
 from torus_cad.errors import KernelError
 from torus_cad.kernel.step_readback import classified_faults, read_step_shape, step_readback_faults
 from torus_cad.kernel.writers.step import write_step
 from torus_cad.parameters import PropellerParameters
 from torus_cad.propeller import build_propeller
 
-#: Seeds of studies.step_tally whose STEP files, as first written, read back with InvalidCurveOnSurface
-#: faults (``python scripts/step_readback_tally.py --replay SEED``): the set screw's intersection with the
-#: bore (a cylinder on a cylinder, its curves 1.0-1.4e-7 mm apart where the reader gives 1e-7 mm).
-FAULTY_BEFORE = (10, 23, 106, 138, 144, 172, 279, 280, 293, 368, 433, 470)
+#: Seeds of studies.step_tally (no root fillet) whose STEP files read back with InvalidCurveOnSurface faults
+#: before this fix (``python scripts/step_readback_tally.py --replay SEED --fillet-share 0``): the set
+#: screw's intersection with the bore (a cylinder on a cylinder, its curves 1.0-1.4e-7 mm apart where the
+#: reader gives 1e-7 mm: the first twelve), a blade crossing the hub's chamfer (a cone: 14, 54, 621, 1033),
+#: a blade's intersection with the hub's cylinder (833) and one of the general fuse's (889, conventional).
+FAULTY_BEFORE = (10, 23, 106, 138, 144, 172, 279, 280, 293, 368, 433, 470, 14, 54, 621, 833, 889, 1033)
 
 
 @pytest.fixture(scope="module")
@@ -29,7 +31,7 @@ def written(tmp_path_factory: pytest.TempPathFactory) -> dict[int, Path]:
     folder = tmp_path_factory.mktemp("design_space")
     paths = {}
     for seed in FAULTY_BEFORE:
-        propeller = build_propeller(PropellerParameters.from_dict(tally_design_dict(seed)))
+        propeller = built_tally_design(seed, fillet_share=0.0)
         paths[seed] = write_step(propeller.solid, folder / f"tally_{seed}.step", f"tally_{seed}")
     return paths
 

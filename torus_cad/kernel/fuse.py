@@ -84,7 +84,11 @@ def fuse_all(hub: ShapeT, blades: Sequence[AnyShape]) -> Fused[ShapeT]:
     fuse = boolean(BRepAlgoAPI_Fuse(), [occ(hub)], [occ(blade) for blade in blades])
     shape = result(fuse, "fuse the blades with the hub")
     parts = [(occ(hub), HUB_PART), *((occ(blade), index) for index, blade in enumerate(blades))]
-    return Fused(like(hub, shape), FuseRoute.GENERAL, face_parts(shape, _history(fuse, parts)))
+    labels = face_parts(shape, _history(fuse, parts))
+    # As on the shared route: the intersection edges rebuilt to 4e-8 mm, for the STEP file (kernel.edge_curves).
+    refit_intersection_edges(shape, [face for face, part in zip(faces_in_order(shape), labels, strict=True)
+                                     if part == HUB_PART])
+    return Fused(like(hub, shape), FuseRoute.GENERAL, labels)
 
 
 class FuseRoute(StrEnum):
