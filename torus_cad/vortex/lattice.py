@@ -20,6 +20,7 @@ slipstream's mass flow requires. v comes from the thrust by momentum theory (:mo
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 
 import numpy as np
@@ -168,7 +169,11 @@ def rotor_lattice(strips_m: NDArray[np.float64], blades: int, wake: NDArray[np.f
     controls = [control_points(pair) for pair in strips_m]
     points = np.concatenate([point for point, _ in controls]).reshape(-1, 3)
     normals = np.concatenate([normal for _, normal in controls]).reshape(-1, 3)
-    starts, ends, rows, columns, signs = [], [], [], [], []
+    starts: list[NDArray[np.float64]] = []
+    ends: list[NDArray[np.float64]] = []
+    rows: list[int] = []
+    columns: list[int] = []
+    signs: list[float] = []
 
     def add(start: NDArray[np.float64], end: NDArray[np.float64], ring: int, sign: float) -> None:
         rows.append(len(starts))
@@ -184,14 +189,14 @@ def rotor_lattice(strips_m: NDArray[np.float64], blades: int, wake: NDArray[np.f
                     continue  # the trailing-edge segment: cancelled by the wake's first one
                 add(grid[j, dk0, i + di0], grid[j, dk1, i + di1], j * chordwise + i, 1.0)
     bound = len(starts)
-    cores = [0.0] * bound
+    cores: list[float] = [0.0] * bound
     for j in range(strips):  # the horseshoe's two legs: out of the second line's node, into the first's
         last = j * chordwise + chordwise - 1
         for line, sign in ((wake[j, 1], 1.0), (wake[j, 0], -1.0)):
             steps = np.linalg.norm(np.diff(line, axis=0), axis=1)
             along = np.cumsum(steps) - 0.5 * steps  # each segment's middle, from the blade
             cores.extend(core_m * np.minimum(1.0, along / core_growth_m))
-            for start, end in zip(line[:-1], line[1:], strict=True):
+            for start, end in itertools.pairwise(line):
                 add(start, end, last, sign)
     one_start, one_end = np.array(starts), np.array(ends)
     count = len(starts)

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from torus_cad.geometry.blade.camber_surface import camber_surface, cosine_fractions, section_coordinates
+from torus_cad.geometry.analysis.camber_surface import camber_surface, cosine_fractions, section_coordinates
 from torus_cad.geometry.blade.handedness import Handedness
 from torus_cad.geometry.blade.surface import BladeSurface, blade_surface_at
 from torus_cad.parameters.design import DesignKind, PropellerParameters

@@ -70,18 +70,32 @@ def kinematic_velocity(points: NDArray[np.float64], omega_rad_s: float, spin: fl
 
 
 def solve_inviscid(camber_m: NDArray[np.float64], blades: int, spin: float, omega_rad_s: float,
-                   airspeed_m_s: float, density: float, tip_radius_m: float, wake: WakeShape) -> Inviscid:
-    """Circulations and forces of the rotor whose blade 0 has the camber grid ``camber_m`` (module doc)."""
+                   airspeed_m_s: float, density: float, tip_radius_m: float, wake: WakeShape,
+                   momentum_wake: bool = True) -> Inviscid:
+    """Circulations and forces of the rotor whose blade 0 has the camber grid ``camber_m`` (module doc).
+
+    Args:
+        camber_m: ``(K, C + 1, 3)`` blade 0's camber surface, m (sections along the blade, leading to
+            trailing edge across it).
+        blades: blade count; spin: +1 where the blade turns clockwise seen from +z, -1 otherwise.
+        omega_rad_s: rotation rate (>= 0); airspeed_m_s: axial inflow (>= 0), toward -z.
+        density: kg/m^3; tip_radius_m: the disk's radius (momentum theory, the wake's length).
+        wake: the wake's layout.
+        momentum_wake: iterate the wake's induced velocity (a rotor); False leaves it at 0 (a wing).
+
+    Raises:
+        KernelError: the wake iteration did not converge (naming the change reached).
+    """
     area = np.pi * tip_radius_m**2
     middle = 0.5 * (camber_m[:-1] + camber_m[1:]).mean(axis=1)
     chord = (camber_m[:-1, -1] + camber_m[1:, -1] - camber_m[:-1, 0] - camber_m[1:, 0])
     downstream_first = np.einsum("jk,jk->j", kinematic_velocity(middle, omega_rad_s, spin, airspeed_m_s), chord) < 0.0
     strips = strip_edges(camber_m, downstream_first)
-    induced = STATIC_INDUCED_GUESS * omega_rad_s * tip_radius_m if airspeed_m_s == 0.0 else 0.0
+    induced = STATIC_INDUCED_GUESS * omega_rad_s * tip_radius_m if airspeed_m_s == 0.0 and momentum_wake else 0.0
     scale = airspeed_m_s + omega_rad_s * tip_radius_m
     mean_chord = float(np.linalg.norm(chord, axis=1).mean()) / 2.0
     thrust, change = 0.0, np.inf
-    for iteration in range(1, MAX_WAKE_ITERATIONS + 1):
+    for iteration in range(1, MAX_WAKE_ITERATIONS + 1):  # noqa: B007 (the count is reported)
         edges = strips[:, :, -1].reshape(-1, 3)
         lines = wake_lines(edges, omega_rad_s, spin, airspeed_m_s, induced, tip_radius_m, wake)
         lattice = rotor_lattice(strips, blades, lines.reshape(len(strips), 2, *lines.shape[1:]),
@@ -89,7 +103,7 @@ def solve_inviscid(camber_m: NDArray[np.float64], blades: int, spin: float, omeg
         circulation, force, moment = _solve_once(lattice, spin, omega_rad_s, airspeed_m_s, density,
                                                  BOUND_CORE_CHORDS * mean_chord)
         thrust = blades * float(force[..., 2].sum())
-        if scale == 0.0:
+        if scale == 0.0 or not momentum_wake:
             break
         momentum = -airspeed_m_s / 2.0 + np.sqrt((airspeed_m_s / 2.0) ** 2 + max(thrust, 0.0) / (2.0 * density * area))
         change = abs(momentum - induced) / scale
@@ -114,10 +128,7 @@ def _solve_once(lattice: Lattice, spin: float, omega: float, airspeed: float, de
     influence = normal_influence(points, normals, lattice.starts, lattice.ends, lattice.core_m)
     matrix = np.asarray((lattice.incidence.T @ influence.T).T)
     rhs = -np.einsum("pk,pk->p", kinematic_velocity(points, omega, spin, airspeed), normals)
-    if not rhs.any():
-        circulation = np.zeros(lattice.rings)
-    else:
-        circulation = np.linalg.solve(matrix, rhs)
+    circulation = np.linalg.solve(matrix, rhs) if rhs.any() else np.zeros(lattice.rings)
     bound = lattice.bound_segments
     starts, ends = lattice.starts[:bound], lattice.ends[:bound]
     middle = 0.5 * (starts + ends)

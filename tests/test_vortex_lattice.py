@@ -1,0 +1,85 @@
+"""The lifting-surface vortex lattice (torus_cad.vortex) against closed forms and symmetries: a planar
+elliptic wing's lift slope, a rotor's thrust scaling with the square of its speed, the mirror image, and
+no force without motion. Inviscid: the section polars are not in these."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from torus_cad.geometry.analysis.camber_surface import cosine_fractions
+from torus_cad.parameters import PropellerParameters
+from torus_cad.vortex.lattice import WakeShape
+from torus_cad.vortex.rotor import Discretisation, rotor_blade
+from torus_cad.vortex.solver import solve_inviscid
+
+APC = "examples/apc_10x7sf.toml"
+SMALL = Discretisation(chordwise=6, spanwise=20)
+
+
+def _elliptic_wing(aspect_ratio: float, alpha_rad: float, spanwise: int = 40, chordwise: int = 6) -> np.ndarray:
+    """A flat elliptic wing of span 1 m in the flow along -z: its span along x, its chord along -z turned
+    by ``alpha_rad`` about x (leading edge at the top). ``(K, C + 1, 3)``."""
+    theta = np.linspace(0.0, math.pi, spanwise + 1)
+    x = -0.5 * np.cos(theta)  # cosine spacing: finer at the tips
+    root_chord = 4.0 / (math.pi * aspect_ratio)  # area pi b c0 / 4 = b^2 / AR
+    chord = root_chord * np.sqrt(np.clip(1.0 - (2.0 * x) ** 2, 0.0, None)) + 1e-6
+    fractions = cosine_fractions(chordwise)
+    along = (fractions[None, :] - 0.25) * chord[:, None]  # quarter chord straight
+    grid = np.zeros((spanwise + 1, chordwise + 1, 3))
+    grid[..., 0] = x[:, None]
+    grid[..., 1] = along * math.sin(alpha_rad)
+    grid[..., 2] = -along * math.cos(alpha_rad)
+    return grid
+
+
+def _lifting_line(aspect_ratio: float) -> float:
+    return 2.0 * math.pi * aspect_ratio / (aspect_ratio + 2.0)
+
+
+def _helmbold(aspect_ratio: float) -> float:
+    """Helmbold's lift slope of a low-aspect-ratio wing (the lifting line's with the chord's own effect)."""
+    return 2.0 * math.pi * aspect_ratio / (2.0 + math.sqrt(aspect_ratio**2 + 4.0))
+
+
+@pytest.mark.parametrize(("aspect_ratio", "closed_form"), [(8.0, _lifting_line), (12.0, _lifting_line),
+                                                            (4.0, _helmbold)])
+def test_a_planar_elliptic_wing_has_the_lifting_line_lift_slope(aspect_ratio: float, closed_form) -> None:
+    alpha = math.radians(2.0)
+    result = solve_inviscid(_elliptic_wing(aspect_ratio, alpha), 1, 1.0, 0.0, 10.0, 1.225, 0.5,
+                            WakeShape(length_diameters=20.0), momentum_wake=False)
+    lift = -float(result.force_n[..., 1].sum())  # the flow runs along -z, the wing lifts toward -y
+    slope = lift / (0.5 * 1.225 * 10.0**2 * (1.0 / aspect_ratio)) / alpha
+    assert slope == pytest.approx(closed_form(aspect_ratio), rel=0.03)
+
+
+@pytest.fixture(scope="module")
+def apc_blade():
+    return rotor_blade(PropellerParameters.from_toml(APC), SMALL)
+
+
+def _solve(blade, rpm: float, airspeed: float = 0.0):
+    return solve_inviscid(blade.camber_m, blade.blades, blade.spin, rpm * math.pi / 30.0, airspeed, 1.225,
+                          blade.tip_radius_m, WakeShape())
+
+
+def test_zero_rpm_in_still_air_gives_exactly_no_force(apc_blade) -> None:
+    result = _solve(apc_blade, 0.0)
+    assert result.thrust_n == 0.0 and result.torque_nm == 0.0 and not result.circulation.any()
+
+
+def test_inviscid_thrust_and_torque_scale_with_the_square_of_the_speed_at_fixed_advance_ratio(apc_blade) -> None:
+    slow, fast = _solve(apc_blade, 4000.0, 4.0), _solve(apc_blade, 8000.0, 8.0)
+    assert fast.thrust_n == pytest.approx(4.0 * slow.thrust_n, rel=0.01)
+    assert fast.torque_nm == pytest.approx(4.0 * slow.torque_nm, rel=0.01)
+
+
+def test_the_mirror_image_turning_the_other_way_gives_the_same_thrust_and_torque(apc_blade) -> None:
+    params = PropellerParameters.from_toml(APC).with_values({"handedness": "ccw"})
+    mirror = rotor_blade(params, SMALL)
+    assert mirror.spin == -1.0 and np.allclose(mirror.camber_m[..., 1], -apc_blade.camber_m[..., 1])
+    cw, ccw = _solve(apc_blade, 5000.0), _solve(mirror, 5000.0)
+    assert ccw.thrust_n == pytest.approx(cw.thrust_n, rel=0.005) and cw.thrust_n > 0.0
+    assert ccw.torque_nm == pytest.approx(cw.torque_nm, rel=0.005) and cw.torque_nm > 0.0
