@@ -376,14 +376,30 @@ def set_names(out_dir: str | Path) -> list[str]:
 def set_folders(root: str | Path) -> list[Path]:
     """``root`` and every folder under it, sorted, that holds an output set (see :func:`set_names`).
 
-    Hidden folders (a build's ``.<name>.staging-...``) are not entered; symbolic links to folders are
-    not followed.
+    Hidden folders (a build's ``.<name>.staging-...``) and OpenFOAM case folders (:func:`is_case_folder`)
+    are not entered; symbolic links to folders are not followed.
     """
     found = []
     for folder, subfolders, _ in os.walk(root):
-        subfolders[:] = sorted(name for name in subfolders if not name.startswith("."))
+        subfolders[:] = sorted(name for name in subfolders if not name.startswith(".")
+                               and not is_case_folder(Path(folder) / name))
         if set_names(folder):
             found.append(Path(folder))
+    return found
+
+
+def is_case_folder(folder: str | Path) -> bool:
+    """Whether ``folder`` is an OpenFOAM case (it holds ``system/controlDict``): its files (the surface's
+    STL among them) belong to the case, not to output sets of their own."""
+    return (Path(folder) / "system" / "controlDict").is_file()
+
+
+def folders_under(root: str | Path) -> list[Path]:
+    """``root`` and every folder under it but hidden ones (staging folders), sorted; links not followed."""
+    found = []
+    for folder, subfolders, _ in os.walk(root):
+        subfolders[:] = sorted(name for name in subfolders if not name.startswith("."))
+        found.append(Path(folder))
     return found
 
 

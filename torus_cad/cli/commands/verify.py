@@ -7,7 +7,17 @@ from pathlib import Path
 
 from torus_cad.cli.exits import EXIT_KERNEL_FAILURE, EXIT_OK, report_error
 from torus_cad.errors import IncompleteOutputError, ParameterError
-from torus_cad.outputs.output_set import set_folders, set_names, staging_folders, verify_set
+from torus_cad.outputs.output_set import (
+    folders_under,
+    is_case_folder,
+    set_folders,
+    set_names,
+    staging_folders,
+    verify_set,
+)
+
+#: What an OpenFOAM case this project writes holds (``simulate``'s case folder, ``--case-only`` too).
+CASE_ENTRIES = ("system/controlDict", "system/fvSchemes", "system/fvSolution", "constant", "0", "Allrun")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -19,9 +29,16 @@ def run(args: argparse.Namespace) -> int:
         return _verify_batch_folder(folder, args.quiet)
     sets = [(folder, args.name)] if args.name else [(where, name) for where in set_folders(folder)
                                                     for name in set_names(where)]
-    if not sets:
+    cases = [] if args.name else [where for where in folders_under(folder) if is_case_folder(where)]
+    if not sets and not cases:
         raise IncompleteOutputError(f"no output set in {str(folder)!r} or its sub-folders")
-    problems = []
+    problems = [] if args.name else _debris(folder)
+    for case in cases:
+        missing = [entry for entry in CASE_ENTRIES if not (case / entry).exists()]
+        if missing:
+            problems.append(f"{case.relative_to(folder)}: incomplete OpenFOAM case: {', '.join(missing)} missing")
+        elif not args.quiet:
+            print(f"ok {case}: OpenFOAM case ({', '.join(CASE_ENTRIES)})")
     for where, name in sets:
         try:
             checked = verify_set(where, name)
@@ -34,6 +51,12 @@ def run(args: argparse.Namespace) -> int:
     for problem in problems:
         report_error(f"verify: {problem}", EXIT_KERNEL_FAILURE)
     return EXIT_KERNEL_FAILURE if problems else EXIT_OK
+
+
+def _debris(folder: Path) -> list[str]:
+    """A problem for every staging folder left by a stopped process, at any depth under ``folder``."""
+    return [f"staging folder {str(path.relative_to(folder))!r} left by a stopped process (the next run there "
+            "removes it)" for where in folders_under(folder) for path in staging_folders(where)[0]]
 
 
 def _batch_members(folder: Path) -> list[Path] | None:
@@ -52,13 +75,10 @@ def _verify_batch_folder(folder: Path, quiet: bool) -> int:
     complete, and no staging folder left by a stopped process (the next run of the study or sweep removes
     them). IncompleteOutputError (exit 1) naming the first problems and their count."""
     folders = [folder, *(_batch_members(folder) or [])] + ([folder / "best"] if (folder / "best").is_dir() else [])
-    problems: list[str] = []
-    sets = in_progress = 0
+    problems: list[str] = _debris(folder)  # at any depth: a trial's simulate/<level>/ folder too
+    sets = 0
+    in_progress = sum(len(staging_folders(where)[1]) for where in folders_under(folder))
     for member in folders:
-        left, other = staging_folders(member)
-        problems += [f"staging folder {str(path.relative_to(folder))!r} left by a stopped process "
-                     "(the next run removes it)" for path in left]
-        in_progress += len(other)
         for name in set_names(member) if member != folder else []:
             try:
                 verify_set(member, name)
