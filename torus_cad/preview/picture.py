@@ -251,7 +251,7 @@ def write_preview(propeller: _HasParts, path: str | Path, size: Sequence[int] = 
 
 def write_png(image: NDArray[np.uint8], path: str | Path) -> Path:
     """Write an ``(height, width, 3 or 4)`` uint8 picture as a PNG (VTK's writer), atomically; return the path."""
-    from vtkmodules.util.numpy_support import numpy_to_vtk
+    from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
     from vtkmodules.vtkCommonDataModel import vtkImageData
     from vtkmodules.vtkIOImage import vtkPNGWriter
 
@@ -261,13 +261,18 @@ def write_png(image: NDArray[np.uint8], path: str | Path) -> Path:
     scalars = numpy_to_vtk(np.ascontiguousarray(image[::-1]).reshape(-1, channels), deep=True)  # type: ignore[no-untyped-call]
     data.GetPointData().SetScalars(scalars)
     path = Path(path)
+    writer = vtkPNGWriter()
+    writer.SetWriteToMemory(True)  # encoded here, written by Python: a full disk is an OSError naming the file
+    writer.SetInputData(data)
+    writer.Write()
+    if writer.GetErrorCode():
+        raise TorusCadError(f"could not encode the picture {path}")
+    encoded = vtk_to_numpy(writer.GetResult()).tobytes()  # type: ignore[no-untyped-call]
     with atomic_path(path) as temp:
-        writer = vtkPNGWriter()
-        writer.SetFileName(str(temp))
-        writer.SetInputData(data)
-        writer.Write()
-        if writer.GetErrorCode():
-            raise TorusCadError(f"could not write the picture {path}")
+        try:
+            temp.write_bytes(encoded)
+        except OSError as error:
+            raise OSError(error.errno, error.strerror or str(error), str(path)) from None
     return path
 
 

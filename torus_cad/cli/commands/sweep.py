@@ -8,7 +8,7 @@ from pathlib import Path
 
 from torus_cad.batch import BatchError, SweepInterrupted, load_sweep, run_sweep
 from torus_cad.cli.design_input import require
-from torus_cad.cli.exits import EXIT_KERNEL_FAILURE
+from torus_cad.cli.exits import EXIT_KERNEL_FAILURE, EXIT_OK
 
 
 def run(args: argparse.Namespace) -> int:
@@ -36,4 +36,6 @@ def run(args: argparse.Namespace) -> int:
         return EXIT_KERNEL_FAILURE
     if not args.quiet:
         print(result.summary())
+    elif result.exit_code != EXIT_OK:  # -q keeps a run quiet, not its failures: their causes go to stderr
+        print(result.summary(), file=sys.stderr)
     return result.exit_code
