@@ -93,6 +93,9 @@ def test_the_shipped_quiet_study_reads_with_its_target_thrust_noise_objective_an
 @pytest.mark.parametrize(("tables", "message"), [
     ({"simulate": {"thrust": 1.0, "rpm": 8000.0}}, "simulate.rpm = 8000 and simulate.thrust = 1 N: give one"),
     ({"simulate": {"thrust": -1.0}}, "simulate.thrust = -1 is out of range; allowed [0, 1e+06] N"),
+    # simulate's own limits, before the first trial: the airspeed named (not the thrust), the tip-Mach rpm
+    ({"simulate": {"thrust": 1.0, "airspeed": 500.0}}, "simulate.airspeed = 500 is out of range; allowed [0, 100] m/s"),
+    ({"simulate": {"rpm": 90000.0}}, "simulate.rpm = 90000 is out of range; allowed (0, 86481] rpm"),
     ({"simulate": {}}, "give [simulate] rpm = ... (> 0) or thrust = ..."),
     ({"simulate": {"thrust": 1.0, "thrust_tolerance": 0.5}}, "simulate.thrust_tolerance = 0.5 is out of range; allowed [0.001, 0.2]"),
     ({"simulate": {"rpm": 8000.0, "thrust_runs": 3}}, "simulate.thrust_runs applies only with simulate.thrust"),

@@ -67,6 +67,7 @@ from torus_cad.tolerances import (
     DESIGN_TIME_LIMIT_MAX_S,
     MAX_STUDY_TRIALS,
     NOISE_MAX_OBSERVERS,
+    SIMULATE_AIRSPEED_LIMIT_M_S,
     SIMULATE_MAX_ITERATIONS,
     SIMULATE_RPM_LIMIT,
     SIMULATE_THRUST_LIMIT_N,
@@ -148,7 +149,8 @@ class SimulateTable(Section):
                                     doc="the target thrust's tolerance, a fraction (simulate --thrust-tolerance)")
     thrust_runs: int = param(DEFAULT_MAX_RUNS, ge=THRUST_RUNS_RANGE[0], le=THRUST_RUNS_RANGE[1],
                              doc="solver runs of a trial's rpm search at most (simulate --thrust-runs)")
-    airspeed: float = param(0.0, unit="m/s", ge=0.0, le=1000.0, doc="axial inflow speed")
+    airspeed: float = param(0.0, unit="m/s", ge=0.0, le=SIMULATE_AIRSPEED_LIMIT_M_S,
+                            doc="axial inflow speed (simulate --airspeed's range)")
     level: Level = param(Level.COARSE, strict=False, doc="mesh level of the simulation")
     levels: list[Annotated[Level, Field(strict=False)]] = Field(default_factory=list, json_schema_extra={"unit": ""},
                                 description="mesh levels, coarse to fine: every trial runs the first, those the "
@@ -417,6 +419,8 @@ def _simulate(model: StudyFile, needed: bool, metrics: tuple[str, ...], base: Pr
     if "level" in keys and "levels" in keys:
         raise fail("simulate.level and simulate.levels: give one (levels = [\"coarse\", \"medium\"] climbs)")
     settings: dict[str, Any] = {"rpm": table.rpm, "airspeed": table.airspeed, "level": table.level.value}
+    if table.rpm > 0.0:
+        _check_rpm(table.rpm, table.airspeed, base, fail)
     if table.thrust > 0.0:
         _check_thrust(table.thrust, table.airspeed, base, fail)
         settings.update(thrust=table.thrust, thrust_tolerance=table.thrust_tolerance, thrust_runs=table.thrust_runs)
@@ -432,6 +436,26 @@ def _simulate(model: StudyFile, needed: bool, metrics: tuple[str, ...], base: Pr
         settings["levels"] = [level.value for level in table.levels]
         settings["level"] = settings["levels"][0] if settings["levels"] else settings["level"]
     return settings
+
+
+def _check_rpm(rpm: float, airspeed_m_s: float, base: PropellerParameters, fail: Any) -> None:
+    """An rpm above simulate's tip-Mach limit for the base design's tip diameter is refused here, before
+    the first trial, with simulate's own range (each trial's simulate checks its own design again)."""
+    from torus_cad.simulate.settings import AIR_15C, rpm_limit
+
+    diameter_mm = base.diameter if base.diameter > 0.0 else _tip_diameter_mm(base)
+    limit = rpm_limit(diameter_mm / 1000.0, airspeed_m_s, AIR_15C)
+    if rpm > limit:
+        raise fail(f"simulate.rpm = {rpm:g} is out of range; allowed (0, {limit:.0f}] rpm (simulate's helical tip "
+                   f"Mach limit for the base's D = {diameter_mm:.1f} mm at {airspeed_m_s:g} m/s)")
+
+
+def _tip_diameter_mm(base: PropellerParameters) -> float:
+    """Twice the largest radius of the base design's blade surface (kernel-free)."""
+    import numpy as np
+
+    points = base.blade_surface().points
+    return 2.0 * float(np.hypot(points[..., 0], points[..., 1]).max())
 
 
 def _check_thrust(target_n: float, airspeed_m_s: float, base: PropellerParameters, fail: Any) -> None:
