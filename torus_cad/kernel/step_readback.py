@@ -155,7 +155,7 @@ class EdgeFault:
     Attributes:
         status: the analyzer's status name (``InvalidCurveOnSurface``, ...).
         edge_kind: what the edge is in the propeller (:func:`edge_kind`).
-        surfaces: the surface types on its sides, sorted, joined by " | " ("BSplineSurface | Cylinder").
+        surfaces: the surface types on its sides, sorted, joined by ", " ("BSplineSurface, Cylinder").
         gap_mm: how far the edge's curves part (the analyzer's largest distance), mm; 0 if not measured.
         tolerance_mm: the edge's tolerance (as the reader gave it, for a file read back), mm.
     """
@@ -186,7 +186,7 @@ def classified_faults(shape: TopoDS_Shape) -> list[EdgeFault]:
         if edge is None:
             continue
         faces = distinct_faces(ancestors.FindFromKey(edge))
-        surfaces = " | ".join(sorted(_surface_name(face) for face in faces))
+        surfaces = ", ".join(sorted(_surface_name(face) for face in faces))
         found.append(EdgeFault(_status(result), edge_kind(edge, faces, fillet_faces), surfaces,
                                max(result.GetMaxDistance1(), result.GetMaxDistance2()), BRep_Tool.Tolerance_s(edge)))
     return found
