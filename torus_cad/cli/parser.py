@@ -51,7 +51,7 @@ examples:
   torus-cad defaults > my_prop.toml        start a design from the commented defaults
   torus-cad build my_prop.toml --out parts/
   torus-cad build my_prop.toml --set blades=4 --set hub.radius=12
-  torus-cad check my_prop.toml --set blades=4   would it build? (exit 0 / 2, no kernel, under a second)
+  torus-cad check my_prop.toml --set blades=4   would it build? (exit 0 / 2, no kernel, about 1 s)
   torus-cad preview my_prop.toml --out prop.png --size 1600x800
 
 units: mm and degrees. Control points are in the hub frame L: [x_L degrees around the axis,
