@@ -42,6 +42,7 @@ def test_a_random_designs_step_file_reads_back_with_no_fault(written: dict[int, 
     assert faults.counts == {}, faults.first
 
 
+@pytest.mark.long  # about a minute; scripts/step_readback_tally.py --freecad checks hundreds of designs
 @pytest.mark.skipif(FREECADCMD is None, reason="freecadcmd is not installed (.ci/run installs Debian's freecad)")
 def test_freecads_check_with_bop_passes_every_random_designs_step_file(written: dict[int, Path], tmp_path: Path) -> None:
     verdicts = freecad_verdicts(list(written.values()), tmp_path / "freecad")
