@@ -28,6 +28,20 @@ def _cpu(work: Callable[[], Any]) -> tuple[Any, float]:
     return result, time.process_time() - start
 
 
+def _timed(module: Any) -> list[float]:
+    """Wrap ``module.refit_intersection_edges`` so that each call's CPU seconds land in the list returned."""
+    seconds: list[float] = []
+    refit = module.refit_intersection_edges
+
+    def timed(*arguments: Any) -> Any:
+        result, spent = _cpu(lambda: refit(*arguments))
+        seconds.append(spent)
+        return result
+
+    module.refit_intersection_edges = timed
+    return seconds
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("design", nargs="?", help="design file (default: the default design)")
@@ -44,24 +58,8 @@ def main() -> None:
     from torus_cad.parameters import PropellerParameters
     from torus_cad.propeller import build_propeller
 
-    refit_seconds: list[float] = []
-    refit = fuse.refit_intersection_edges
-
-    def timed_refit(*arguments: Any) -> Any:
-        result, seconds = _cpu(lambda: refit(*arguments))
-        refit_seconds.append(seconds)
-        return result
-
-    hub_seconds: list[float] = []
-    hub_refit = hub.refit_intersection_edges
-
-    def timed_hub_refit(*arguments: Any) -> Any:
-        result, seconds = _cpu(lambda: hub_refit(*arguments))
-        hub_seconds.append(seconds)
-        return result
-
-    fuse.refit_intersection_edges = timed_refit  # type: ignore[assignment]
-    hub.refit_intersection_edges = timed_hub_refit  # type: ignore[assignment]
+    refit_seconds = _timed(fuse)
+    hub_seconds = _timed(hub)
     params = PropellerParameters() if args.design is None else PropellerParameters.from_toml(args.design)
     params = params.with_values({key: tomllib.loads(f"v = {value}")["v"]
                                  for key, value in (item.split("=", 1) for item in args.set)})
