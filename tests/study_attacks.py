@@ -79,21 +79,27 @@ def _moment_reached(moment: str, out: Path, trials: int) -> Callable[[], bool]:
 
 
 def attack(command: str, moment: str, delay_s: float, folder: Path, trials: int = 2, signum: int = signal.SIGTERM,
-           timeout_s: float = 600.0) -> Outcome:
-    """Run ``command`` in ``folder``, send ``signum`` ``delay_s`` after ``moment``, check what it left."""
+           timeout_s: float = 600.0, group: bool = False) -> Outcome:
+    """Run ``command`` in ``folder``, send ``signum`` ``delay_s`` after ``moment``, check what it left; with
+    ``group`` the run is started in a session of its own and the signal goes to its whole process group
+    (the workers too, as ``timeout`` and job schedulers send it)."""
     out = folder / "out"
     source = study_file(folder, trials) if command == "optimize" else sweep_file(folder)
     argv = [sys.executable, "-m", "torus_cad", command, str(source), "--out", str(out), "--workers", "2", "-q"]
     outcome = Outcome(command, moment, delay_s)
     reached = _moment_reached(moment, out, trials)
-    process = subprocess.Popen(argv, env=env(), text=True, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    process = subprocess.Popen(argv, env=env(), text=True, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                               start_new_session=group)
     try:
         deadline = time.monotonic() + timeout_s
         while process.poll() is None and not reached() and time.monotonic() < deadline:
             time.sleep(0.02)
         time.sleep(delay_s)
         if process.poll() is None:
-            process.send_signal(signum)
+            if group:
+                os.killpg(process.pid, signum)
+            else:
+                process.send_signal(signum)
         _, outcome.stderr = process.communicate(timeout=timeout_s)
     finally:
         if process.poll() is None:
@@ -149,7 +155,8 @@ def _check_storage(database: Path, total: int) -> list[str]:
             storage.engine.dispose()
         except Exception as error:  # any failure to read it is the finding
             return [f"the storage does not open with optuna: {type(error).__name__}: {error}"]
-    problems = []
+    problems = [f"trial {t.number} recorded as a crash" for t in trials
+                if "crash" in str(t.user_attrs.get("result", "")) or "crash" in str(t.user_attrs.get("outcome", ""))]
     stopped = [t for t in trials if t.state is TrialState.FAIL and
                ("result" not in t.user_attrs or "stopped" in t.user_attrs)]
     finished = [t for t in trials if t.state is TrialState.COMPLETE or (t.state is TrialState.FAIL and t not in stopped)]

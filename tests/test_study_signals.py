@@ -66,6 +66,14 @@ def test_a_sigterm_while_the_pool_starts_trials_run_or_the_results_are_written_i
         _assert_no_staging_left(tmp_path / "out")
 
 
+def test_a_sigterm_to_the_whole_process_group_is_an_interruption_not_a_crash(tmp_path):
+    # the workers die of the signal too; their trials are asked again, none is recorded as a crash
+    outcome = attack("optimize", "trials", 0.0, tmp_path, trials=2, group=True)
+    _assert_clean(outcome)
+    if outcome.returncode == 143:
+        assert "interrupted by SIGTERM" in outcome.stderr
+
+
 @pytest.mark.long
 def test_sigterm_at_random_moments_of_optimize_and_sweep_always_ends_cleanly(tmp_path):
     """27 SIGTERMs at random moments: 21 for optimize (7 over the start-up and the pool's start, 7 while

@@ -341,6 +341,9 @@ def run_tasks(tasks: Iterable[DesignTask], on_result: Callable[[DesignTask, Desi
                 in_flight[future] = queue.popleft()
                 raise_if_interrupted()
             done, _ = wait(list(in_flight), timeout=_POLL_SECONDS, return_when=FIRST_COMPLETED)
+            # A signal to the whole process group (what `timeout` and job schedulers send) ends the workers too:
+            # their futures fail with it, and the interruption is this run's, not a crash of those designs.
+            raise_if_interrupted()
             broken = [in_flight.pop(future) for future in list(done) if _broke(future)]
             for future in [future for future in in_flight if future in done]:  # found done together: as submitted
                 task = in_flight.pop(future)
