@@ -128,3 +128,24 @@ def test_every_measured_mesh_size_in_the_docs_names_its_command_or_is_an_example
             if MESH_FIGURE.search(paragraph) and not SOURCE.search(paragraph):
                 unsourced.append(f"{page.relative_to(ROOT)}: {MESH_FIGURE.search(paragraph).group(0)}")
     assert not unsourced, unsourced
+
+
+ARCHITECTURE = ROOT / "docs" / "explanation" / "architecture.md"
+
+
+def test_the_architecture_page_names_every_module_and_every_path_it_names_exists():
+    page = ARCHITECTURE.read_text(encoding="utf-8")
+    rows = {match[1]: match[0] for match in re.finditer(r"^\| `(torus_cad/[^`]*/)`.*$", page, re.MULTILINE)}
+    unnamed = []
+    for module in sorted((ROOT / "torus_cad").rglob("*.py")):
+        relative = module.relative_to(ROOT).as_posix()
+        if module.name == "__init__.py" and module.parent != ROOT / "torus_cad":
+            continue  # a package: its row
+        package = next((folder for folder in sorted(rows, key=len, reverse=True) if relative.startswith(folder)), None)
+        named = relative in page or (package is not None and f"`{module.stem}`" in rows[package])
+        if not named and f"`{module.name}`" not in page and f"{module.name}`" not in page:
+            unnamed.append(relative)
+    assert not unnamed, unnamed
+    named_paths = set(re.findall(r"`((?:torus_cad|scripts|tests|docs|studies|examples)/[^`\s<>]*)`", page))
+    missing = sorted(path for path in named_paths if not (ROOT / path.rstrip("/")).exists())
+    assert not missing, missing
