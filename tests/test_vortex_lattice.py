@@ -83,3 +83,18 @@ def test_the_mirror_image_turning_the_other_way_gives_the_same_thrust_and_torque
     cw, ccw = _solve(apc_blade, 5000.0), _solve(mirror, 5000.0)
     assert ccw.thrust_n == pytest.approx(cw.thrust_n, rel=0.005) and cw.thrust_n > 0.0
     assert ccw.torque_nm == pytest.approx(cw.torque_nm, rel=0.005) and cw.torque_nm > 0.0
+
+
+def test_the_section_polars_take_thrust_and_add_power_at_every_strips_own_reynolds_number() -> None:
+    pytest.importorskip("neuralfoil", reason="the simulate extra is not installed")
+    from torus_cad.vortex.performance import vortex_performance
+
+    result = vortex_performance(PropellerParameters.from_toml(APC), 5000.0, 0.0, SMALL)
+    report = result.report
+    assert 0.0 < report["thrust_n"] < report["inviscid_thrust_n"]
+    assert report["power_w"] > report["inviscid_power_w"] > 0.0
+    assert report["figure_of_merit"] is not None and 0.0 < report["figure_of_merit"] < 1.0
+    strips = result.strips
+    assert (strips.cd > 0.0).all() and (np.diff(strips.radius_m) > 0.0).all()  # root to tip
+    # the Reynolds number of a strip is its own: V c / nu with the strip's flow (tens of thousands here)
+    assert 5e3 < np.median(strips.reynolds) < 2e5

@@ -44,6 +44,8 @@ class WakeShape:
         core_chords: the wake lines' vortex core radius, in mean chords, reached one mean chord behind
             the blade: a line that passes a blade downstream (a toroidal loop's return leg) induces a
             finite velocity there.
+        free_turns: the wake's first turn follows the flow (relaxed, :mod:`.solver`); False keeps the
+            whole wake prescribed.
     """
 
     length_diameters: float = 4.0
@@ -52,6 +54,7 @@ class WakeShape:
     longest_step_deg: float = 60.0
     max_turns: float = 40.0
     core_chords: float = 0.1
+    free_turns: bool = True
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,57 @@
+#!/usr/bin/env python3
+"""The vortex solver (torus_cad.vortex) against UIUC's wind tunnel: the APC 10x7 Slow Flyer, static at 4000,
+5000 and 5987 rpm (the last static point measured) and the 5000 rpm sweep at J = 0.2, 0.4 and 0.6, as validate_apc_10x7sf.py does for
+OpenFOAM.
+
+    python scripts/validate_vortex_apc.py                                   # UIUC's blade, NACA 4412
+    python scripts/validate_vortex_apc.py --design examples/apc_10x7sf_e63.toml
+    python scripts/validate_vortex_apc.py --inviscid --chordwise 8 --spanwise 30
+
+Prints the markdown table of studies/wind_tunnel.py (CT, CP and eta measured and computed, the errors,
+whether each is within the targets) and each point's seconds.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from studies.wind_tunnel import Comparison, markdown_table, read_wind_tunnel  # noqa: E402
+
+POINTS = ((4000.0, 0.0), (5000.0, 0.0), (5987.0, 0.0), (5000.0, 0.2), (5000.0, 0.4), (5000.0, 0.6))
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--design", type=Path, default=ROOT / "examples" / "apc_10x7sf.toml")
+    parser.add_argument("--chordwise", type=int, default=8)
+    parser.add_argument("--spanwise", type=int, default=24)
+    parser.add_argument("--inviscid", action="store_true", help="no section polars")
+    args = parser.parse_args(argv)
+    from torus_cad.parameters import PropellerParameters
+    from torus_cad.vortex.performance import vortex_performance
+    from torus_cad.vortex.rotor import Discretisation
+
+    params = PropellerParameters.from_toml(args.design)
+    data = read_wind_tunnel()
+    comparisons = []
+    for rpm, advance in POINTS:
+        measured = data.static_point(rpm) if advance == 0.0 else data.sweep_point(rpm, advance)
+        diameter_m = 2.0 * params.conventional.diameter / 2000.0
+        airspeed = advance * rpm / 60.0 * diameter_m
+        start = time.perf_counter()
+        result = vortex_performance(params, rpm, airspeed, Discretisation(args.chordwise, args.spanwise),
+                                    viscous=not args.inviscid)
+        print(f"{rpm:.0f} rpm, J {advance:.2f}: {time.perf_counter() - start:.1f} s", file=sys.stderr, flush=True)
+        comparisons.append(Comparison(measured, result.report["ct"], result.report["cp"]))
+    print(markdown_table(comparisons))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,142 @@
+"""A design's thrust, torque and coefficients from the vortex lattice with its sections' viscous polars.
+
+The lattice (:mod:`.solver`) gives each strip its circulation and force. At each strip's flow (the mean of
+the velocity at its control points, less its part along the span) the polar (:mod:`.polars`) at the
+strip's Reynolds number takes over where potential flow stops: the strip's effective angle of attack is
+its zero-lift angle plus cl / 2 pi (thin-airfoil theory's slope for the lattice's lift coefficient cl),
+its force is scaled by the polar's lift over the lattice's there (viscous loss of lift, stall), and its
+profile drag, 1/2 rho V^2 c ds cd along the flow, adds to the torque and takes from the thrust.
+
+The coefficients follow UIUC's convention (n in rev/s, D the tip diameter): CT = T / (rho n^2 D^4),
+CP = P / (rho n^3 D^5), J = V / (n D), efficiency J CT / CP, and at J = 0 the figure of merit
+(momentum theory's ideal power over the power), as :mod:`torus_cad.simulate.performance` reports them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from torus_cad.parameters.design import PropellerParameters
+from torus_cad.simulate.performance import performance
+from torus_cad.simulate.settings import OperatingPoint
+from torus_cad.vortex.biot_savart import induced_velocity
+from torus_cad.vortex.polars import LOW_CONFIDENCE, strip_polars
+from torus_cad.vortex.rotor import Discretisation, RotorBlade, rotor_blade
+from torus_cad.vortex.solver import Inviscid, kinematic_velocity, solve_inviscid
+
+#: The lattice's lift over the polar's is taken within these bounds (a stalled strip keeps some lift).
+LIFT_RATIO_BOUNDS = (0.0, 1.5)
+
+
+@dataclass(frozen=True)
+class StripLoads:
+    """Blade 0's loading along the blade, one entry a strip (``(K - 1,)`` arrays).
+
+    Attributes:
+        s: centerline parameter; radius_m: radius of the strip's middle.
+        circulation_m2_s: the strip's bound circulation.
+        thrust_n_per_m / torque_nm_per_m: thrust and torque per unit length of the blade (viscous).
+        reynolds, cl, cd, confidence: the strip's Reynolds number, lift and drag coefficients and NeuralFoil's
+            confidence.
+    """
+
+    s: NDArray[np.float64]
+    radius_m: NDArray[np.float64]
+    circulation_m2_s: NDArray[np.float64]
+    thrust_n_per_m: NDArray[np.float64]
+    torque_nm_per_m: NDArray[np.float64]
+    reynolds: NDArray[np.float64]
+    cl: NDArray[np.float64]
+    cd: NDArray[np.float64]
+    confidence: NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class VortexResult:
+    """The vortex solver's answer at one operating point.
+
+    Attributes:
+        report: thrust_n, torque_nm, power_w, advance_ratio, ct, cp, efficiency, figure_of_merit (the simulate
+            report's keys), and inviscid_thrust_n / inviscid_power_w, low_confidence_strips.
+        strips: the loading along the blade.
+    """
+
+    report: dict[str, Any]
+    strips: StripLoads = field(repr=False)
+
+
+def vortex_performance(params: PropellerParameters, rpm: float, airspeed_m_s: float = 0.0,
+                       discretisation: Discretisation | None = None, viscous: bool = True) -> VortexResult:
+    """The performance of ``params`` at ``rpm`` and axial ``airspeed_m_s`` (module doc)."""
+    point = OperatingPoint(rpm=rpm, airspeed_m_s=airspeed_m_s)
+    blade = rotor_blade(params, discretisation or Discretisation())
+    density = point.fluid.density_kg_m3
+    omega = rpm * np.pi / 30.0
+    inviscid = solve_inviscid(blade.camber_m, blade.blades, blade.spin, omega, airspeed_m_s, density,
+                              blade.tip_radius_m, (discretisation or Discretisation()).wake)
+    force, moment, strips = _strip_forces(blade, inviscid, omega, airspeed_m_s, point, viscous)
+    thrust = blade.blades * float(force[:, 2].sum())
+    torque = blade.spin * blade.blades * float(moment[:, 2].sum())
+    coefficients = performance(thrust, torque, point, 2.0 * blade.tip_radius_m)
+    report = {"thrust_n": thrust, "torque_nm": torque, "power_w": coefficients.power_w,
+              "advance_ratio": coefficients.advance_ratio, "ct": coefficients.ct, "cp": coefficients.cp,
+              "efficiency": coefficients.efficiency, "figure_of_merit": coefficients.figure_of_merit,
+              "inviscid_thrust_n": inviscid.thrust_n, "inviscid_power_w": inviscid.torque_nm * omega,
+              "low_confidence_strips": int((strips.confidence < LOW_CONFIDENCE).sum())}
+    return VortexResult(report, strips)
+
+
+def _strip_forces(blade: RotorBlade, inviscid: Inviscid, omega: float, airspeed: float, point: OperatingPoint,
+                  viscous: bool) -> tuple[NDArray[np.float64], NDArray[np.float64], StripLoads]:
+    """Each strip's force and moment ``(K - 1, 3)`` on blade 0 with the polars' corrections, and its loading."""
+    lattice = inviscid.lattice
+    strips = inviscid.circulation.shape[0]
+    force = inviscid.force_n.sum(axis=1)
+    moment = inviscid.moment_nm.sum(axis=1)
+    camber = blade.camber_m
+    middle = 0.5 * (camber[:-1] + camber[1:]).mean(axis=1)
+    span = camber[1:].mean(axis=1) - camber[:-1].mean(axis=1)
+    width = np.linalg.norm(span, axis=1)
+    along = span / width[:, None]
+    chord = 0.5 * (blade.chord_m[:-1] + blade.chord_m[1:])
+    points = lattice.collocation.reshape(-1, 3)
+    velocity = kinematic_velocity(points, omega, blade.spin, airspeed)
+    if inviscid.circulation.any():
+        velocity = velocity + induced_velocity(points, lattice.starts, lattice.ends,
+                                               lattice.incidence @ inviscid.circulation.ravel(), lattice.core_m)
+    flow = velocity.reshape(strips, -1, 3).mean(axis=1)
+    flow = flow - np.einsum("jk,jk->j", flow, along)[:, None] * along
+    speed = np.linalg.norm(flow, axis=1)
+    density, viscosity = point.fluid.density_kg_m3, point.fluid.viscosity_m2_s
+    reynolds = speed * chord / viscosity
+    dynamic = 0.5 * density * speed**2 * chord * width
+    lift = _lift(force, flow, speed)
+    cl = np.where(dynamic > 0.0, lift / np.maximum(dynamic, 1e-300), 0.0)
+    cd = np.zeros(strips)
+    confidence = np.ones(strips)
+    if viscous and speed.any():
+        turned = np.einsum("jk,jk->j", flow, camber[:-1, -1] + camber[1:, -1] - camber[:-1, 0] - camber[1:, 0]) < 0.0
+        for j, polar in enumerate(strip_polars(blade.sections, reynolds, turned)):
+            alpha = polar.zero_lift_deg + np.degrees(cl[j] / (2.0 * np.pi))
+            viscous_cl = float(np.interp(alpha, polar.alpha_deg, polar.cl))
+            cd[j] = float(np.interp(alpha, polar.alpha_deg, polar.cd))
+            confidence[j] = float(np.interp(alpha, polar.alpha_deg, polar.confidence))
+            ratio = float(np.clip(viscous_cl / cl[j], *LIFT_RATIO_BOUNDS)) if cl[j] > 0.0 else 1.0
+            drag = dynamic[j] * cd[j] * flow[j] / max(speed[j], 1e-300)
+            force[j] = ratio * force[j] + drag
+            moment[j] = ratio * moment[j] + np.cross(middle[j], drag)
+            cl[j] = cl[j] * ratio
+    loads = StripLoads(0.5 * (blade.s[:-1] + blade.s[1:]), np.hypot(middle[:, 0], middle[:, 1]),
+                       inviscid.circulation[:, -1], force[:, 2] / width, blade.spin * moment[:, 2] / width,
+                       reynolds, cl, cd, confidence)
+    return force, moment, loads
+
+
+def _lift(force: NDArray[np.float64], flow: NDArray[np.float64], speed: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The part of each strip's force ``(K - 1, 3)`` across its flow, N."""
+    unit = flow / np.maximum(speed, 1e-300)[:, None]
+    return np.linalg.norm(force - np.einsum("jk,jk->j", force, unit)[:, None] * unit, axis=1)
