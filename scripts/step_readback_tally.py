@@ -42,7 +42,7 @@ sys.path.insert(0, str(ROOT))  # studies/ and tests/ sit beside torus_cad, outsi
 
 
 #: STEP files FreeCAD checks in one process (tests/freecad_check.py gives it 300 s).
-_FREECAD_BATCH = 20
+_FREECAD_BATCH = 5
 
 
 def tally_one(seed: int, folder: str, fillet_share: float) -> dict[str, Any]:
