@@ -50,9 +50,8 @@ def tally_one(seed: int, folder: str, fillet_share: float) -> dict[str, Any]:
     build makes them, the read-back check off) and read it back: the faults by edge kind."""
     from studies.step_tally import built_tally_design, tally_design_dict
     from torus_cad.errors import GeometryError, KernelError, ParameterError
-    from torus_cad.kernel.readable_edges import readable_copy
     from torus_cad.kernel.step_readback import classified_faults, read_step_shape
-    from torus_cad.kernel.writers.step import write_step
+    from torus_cad.kernel.writers.step import rewritten_until_readable, write_step
 
     design = tally_design_dict(seed, fillet_share)
     row: dict[str, Any] = {"seed": seed, "kind": design.get("kind", "toroidal"),
@@ -70,8 +69,9 @@ def tally_one(seed: int, folder: str, fillet_share: float) -> dict[str, Any]:
     write_step(propeller.solid, path, f"tally_{seed}", check_readback=False)
     faults = classified_faults(read_step_shape(path))
     remaining = []
-    if faults:  # what write_step does with such a file: written again from a copy with readable edges
-        write_step(readable_copy(propeller.solid.wrapped), path, f"tally_{seed}", check_readback=False)
+    if faults:  # what write_step does with such a file: written again with readable edges
+        rewritten_until_readable(propeller.solid.wrapped, path,
+                                 lambda shape: write_step(shape, path, f"tally_{seed}", check_readback=False))
         remaining = classified_faults(read_step_shape(path))
     row["readback_s"] = time.perf_counter() - start
     outcome = "faulty" if remaining else "made readable" if faults else "valid"

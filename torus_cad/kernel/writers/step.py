@@ -4,6 +4,7 @@ read back, are torus_cad.kernel.step_readback."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 
 from OCP.APIHeaderSection import APIHeaderSection_MakeHeader
@@ -20,12 +21,18 @@ from OCP.XCAFDoc import XCAFDoc_DocumentTool
 from torus_cad.errors import KernelError
 from torus_cad.formats import StepSchema
 from torus_cad.kernel.readable_edges import readable_copy
-from torus_cad.kernel.step_readback import check_step_readback, step_readback_faults
+from torus_cad.kernel.step_readback import ArgumentFaults, check_step_readback, read_step_shape, step_readback_faults
 from torus_cad.kernel.topology import AnyShape, occ
 from torus_cad.runtime.files import atomic_path, file_ends_with, write_failure
 
 #: OpenCascade's write.step.schema value of each protocol.
 _STEP_SCHEMAS = {StepSchema.AP214: "AP214IS", StepSchema.AP242: "AP242DIS"}
+
+#: Times a file that reads back faulty is written again, each time from the solid the reader made of the
+#: last file with its edges made readable: the reader moves some edges' curves (its reparametrisation,
+#: the gaps it closes at vertices), so the file converges on the reader's own curves (a root fillet's
+#: edges: two or three tries).
+READABLE_REWRITES = 3
 
 #: The STEP file's last line: a writer can lose its tail without saying so.
 _STEP_END_MARKER = b"END-ISO-10303-21;"
@@ -41,8 +48,9 @@ def write_step(shape: AnyShape, path: str | Path, product_name: str, schema: Ste
     self-interference, which the strict check ran on the solid; torus_cad.kernel.step_readback)
     before it is published. A file that reads back with faults is written again from a copy of ``shape``
     whose edges are made readable (torus_cad.kernel.readable_edges: p-curves square to their surfaces,
-    edges split where the reader's samples would miss how far their curves part); if that file still
-    reads back with faults, KernelError naming the kind of edge and the gap, and no file.
+    edges split where the reader's samples would miss how far their curves part), then up to
+    READABLE_REWRITES - 1 times more from the shape read back from the last file, made readable; if the
+    file still reads back with faults, KernelError naming the kind of edge and the gap, and no file.
 
     Args:
         shape: the solid (OpenCascade's or cadquery's); not changed.
@@ -61,12 +69,28 @@ def write_step(shape: AnyShape, path: str | Path, product_name: str, schema: Ste
     """
     path = Path(path)
     with atomic_path(path) as temp:
-        _write(occ(shape), temp, path, product_name, schema, program)
-        if check_readback and step_readback_faults(temp, self_interference=False).counts:
-            readable = readable_copy(occ(shape))
-            _write(readable, temp, path, product_name, schema, program)
-            check_step_readback(temp, f"{product_name}.step", self_interference=False)
+        def write(source: TopoDS_Shape) -> None:
+            _write(source, temp, path, product_name, schema, program)
+
+        write(occ(shape))
+        if check_readback and rewritten_until_readable(occ(shape), temp, write).counts:
+            check_step_readback(temp, f"{product_name}.step", self_interference=False)  # raises, naming the edge
     return path
+
+
+def rewritten_until_readable(shape: TopoDS_Shape, path: Path, write: Callable[[TopoDS_Shape], None]) -> ArgumentFaults:
+    """The faults of the STEP file ``path`` (``shape`` as ``write`` wrote it there) read back, after writing it
+    again while it has any, up to READABLE_REWRITES times: first from a copy of ``shape`` with readable edges,
+    then from the shape read back from the last file, made readable (the module's READABLE_REWRITES)."""
+    source = shape
+    faults = step_readback_faults(path, self_interference=False)
+    for _ in range(READABLE_REWRITES):
+        if not faults.counts:
+            break
+        write(readable_copy(source))
+        source = read_step_shape(path)  # the next try starts from the file as the reader gives it
+        faults = step_readback_faults(path, self_interference=False)
+    return faults
 
 
 def _write(shape: TopoDS_Shape, temp: Path, path: Path, product_name: str, schema: StepSchema, program: str) -> None:
