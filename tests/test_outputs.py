@@ -238,8 +238,10 @@ def test_a_signal_at_any_moment_leaves_the_old_set_the_new_set_or_a_reported_inc
     verified = cli("verify", str(tmp_path))
     if verified.returncode == 0:
         assert assert_consistent_set(tmp_path) in (3, 4)
-    else:  # only SIGKILL inside the publishing renames can leave this, and verify says so
-        assert signal_name == "SIGKILL" and "incomplete set" in verified.stderr
+    else:  # only SIGKILL can leave this: inside the publishing renames an incomplete set, anywhere its staging
+        # folder (no process left to remove it; the next build there does): verify says which
+        assert signal_name == "SIGKILL"
+        assert "incomplete set" in verified.stderr or "left by a stopped process" in verified.stderr
     if code != -signal.SIGKILL:
         assert hidden_entries(tmp_path) == []
 

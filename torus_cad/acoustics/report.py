@@ -51,9 +51,10 @@ class Noise:
     directivity: tuple[tuple[float, float, float], ...]
 
 
-#: A level below this (dB re 20 uPa) is the round-off of a sound that cancels (a steady rotor's tones on
-#: its axis come out near -260 dB): reported as silent (None), not as a level.
-SILENT_BELOW_DB = -100.0
+#: A level below this (dB re 20 uPa, 2e-14 Pa) is the round-off of a sound that cancels (a steady rotor's
+#: tones on its axis come out near -260 dB; a weak high harmonic off the axis is a real -150 dB): reported
+#: as silent (None), not as a level.
+SILENT_BELOW_DB = -200.0
 
 
 def _level_db(value: float) -> float | None:
