@@ -52,7 +52,7 @@ class Inviscid:
         moment_nm: ``(K - 1, C, 3)`` N m, their moment about the origin.
         thrust_n / torque_nm: the rotor's (all blades): thrust along +z, torque resisting the rotation.
         induced_m_s: the wake's induced velocity at the disk (momentum theory).
-        iterations: wake iterations; change: the last relative change of the thrust.
+        iterations: wake iterations and relaxation sweeps; change: the last change the iteration measured.
     """
 
     circulation: NDArray[np.float64]
@@ -124,8 +124,8 @@ def solve_inviscid(camber_m: NDArray[np.float64], blades: int, spin: float, omeg
     if momentum_wake and omega_rad_s > 0.0 and wake.free_turns:
         relaxed = _relaxed(strips, lines.reshape(len(strips), 2, *lines.shape[1:]), blades, spin, omega_rad_s,
                            airspeed_m_s, density, wake, mean_chord)
-        circulation, force, moment, lattice, change = relaxed
-        iteration += RELAXATION_SWEEPS_MAX
+        circulation, force, moment, lattice, change, sweeps = relaxed
+        iteration += sweeps
         thrust = blades * float(force[..., 2].sum())
     torque = spin * blades * float(moment[..., 2].sum())
     return Inviscid(circulation, force, moment, thrust, torque, induced, iteration, change, lattice)
@@ -141,14 +141,14 @@ def _relaxed(strips: NDArray[np.float64], lines: NDArray[np.float64], blades: in
     step_s = 2.0 * np.pi / wake.steps_per_turn / omega
     core = wake.core_chords * mean_chord
     thrust, change = np.nan, np.inf
-    for _ in range(RELAXATION_SWEEPS_MAX):
+    for sweep in range(1, RELAXATION_SWEEPS_MAX + 1):
         lattice = rotor_lattice(strips, blades, lines, core, mean_chord)
         circulation, force, moment = _solve_once(lattice, spin, omega, airspeed, density, BOUND_CORE_CHORDS * mean_chord)
         new_thrust = blades * float(force[..., 2].sum())
         change = abs(new_thrust - thrust) / max(abs(new_thrust), 1e-300)
         thrust = new_thrust
         if change < RELAXED_THRUST_TOLERANCE:
-            return circulation, force, moment, lattice, change
+            return circulation, force, moment, lattice, change, sweep
         nodes = lines[:, :, : free + 1].reshape(-1, 3)
         velocity = kinematic_velocity(nodes, omega, spin, airspeed) + induced_velocity(
             nodes, lattice.starts, lattice.ends, lattice.incidence @ circulation.ravel(), np.maximum(lattice.core_m, core))
