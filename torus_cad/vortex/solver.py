@@ -36,8 +36,8 @@ BOUND_CORE_CHORDS = 0.02
 WAKE_SWEEP_RELAXATION = 0.3
 #: ... until the thrust changes by less than this fraction of itself between sweeps ...
 RELAXED_THRUST_TOLERANCE = 5e-3
-#: ... in this many sweeps at most.
-RELAXATION_SWEEPS_MAX = 20
+#: ... in this many sweeps at most (each a solve after the prescribed wake's).
+RELAXATION_SWEEPS_MAX = 19
 #: The first guess of the induced velocity in still air, as a fraction of the tip speed.
 STATIC_INDUCED_GUESS = 0.05
 
@@ -122,8 +122,8 @@ def solve_inviscid(camber_m: NDArray[np.float64], blades: int, spin: float, omeg
                           f"{change:.2g} of the tip speed after {MAX_WAKE_ITERATIONS} wake iterations "
                           f"(tolerance {INDUCED_TOLERANCE:g})")
     if momentum_wake and omega_rad_s > 0.0 and wake.free_turns:
-        relaxed = _relaxed(strips, lines.reshape(len(strips), 2, *lines.shape[1:]), blades, spin, omega_rad_s,
-                           airspeed_m_s, density, wake, mean_chord)
+        relaxed = _relaxed(strips, lines.reshape(len(strips), 2, *lines.shape[1:]), (lattice, circulation, force),
+                           blades, spin, omega_rad_s, airspeed_m_s, density, wake, mean_chord)
         circulation, force, moment, lattice, change, sweeps = relaxed
         iteration += sweeps
         thrust = blades * float(force[..., 2].sum())
@@ -131,24 +131,21 @@ def solve_inviscid(camber_m: NDArray[np.float64], blades: int, spin: float, omeg
     return Inviscid(circulation, force, moment, thrust, torque, induced, iteration, change, lattice)
 
 
-def _relaxed(strips: NDArray[np.float64], lines: NDArray[np.float64], blades: int, spin: float, omega: float,
-             airspeed: float, density: float, wake: WakeShape, mean_chord: float) -> tuple[Any, ...]:
-    """The solve on a wake whose first turn follows the flow (module doc): its lines retraced as streamlines
-    of the blade frame's velocity (kinematic plus induced, the wake's core on every segment), the rest moved
-    with their first turn's end, each sweep blended by WAKE_SWEEP_RELAXATION, until the thrust changes by
-    less than RELAXED_THRUST_TOLERANCE of itself; KernelError naming the change after RELAXATION_SWEEPS_MAX."""
+def _relaxed(strips: NDArray[np.float64], lines: NDArray[np.float64], prescribed: tuple[Any, ...], blades: int,
+             spin: float, omega: float, airspeed: float, density: float, wake: WakeShape, mean_chord: float
+             ) -> tuple[Any, ...]:
+    """The solve on a wake whose first turn follows the flow (module doc), from the solve on the prescribed
+    ``lines`` (``prescribed``: its lattice, circulations and forces): each sweep retraces the first turn as
+    streamlines of the blade frame's velocity (kinematic plus induced, the wake's core on every segment),
+    moves the rest with its end, blends by WAKE_SWEEP_RELAXATION and solves again, until the thrust changes
+    by less than RELAXED_THRUST_TOLERANCE of itself; KernelError naming the change after
+    RELAXATION_SWEEPS_MAX sweeps."""
     free = wake.steps_per_turn  # the first turn's even steps
     step_s = 2.0 * np.pi / wake.steps_per_turn / omega
     core = wake.core_chords * mean_chord
-    thrust, change = np.nan, np.inf
+    lattice, circulation, force = prescribed
+    thrust, change = blades * float(force[..., 2].sum()), np.inf
     for sweep in range(1, RELAXATION_SWEEPS_MAX + 1):
-        lattice = rotor_lattice(strips, blades, lines, core, mean_chord)
-        circulation, force, moment = _solve_once(lattice, spin, omega, airspeed, density, BOUND_CORE_CHORDS * mean_chord)
-        new_thrust = blades * float(force[..., 2].sum())
-        change = abs(new_thrust - thrust) / max(abs(new_thrust), 1e-300)
-        thrust = new_thrust
-        if change < RELAXED_THRUST_TOLERANCE:
-            return circulation, force, moment, lattice, change, sweep
         nodes = lines[:, :, : free + 1].reshape(-1, 3)
         velocity = kinematic_velocity(nodes, omega, spin, airspeed) + induced_velocity(
             nodes, lattice.starts, lattice.ends, lattice.incidence @ circulation.ravel(), np.maximum(lattice.core_m, core))
@@ -158,6 +155,13 @@ def _relaxed(strips: NDArray[np.float64], lines: NDArray[np.float64], blades: in
             traced[:, :, node + 1] = traced[:, :, node] + step_s * 0.5 * (velocity[:, :, node] + velocity[:, :, node + 1])
         traced[:, :, free + 1:] += (traced[:, :, free] - lines[:, :, free])[:, :, None, :]
         lines = (1.0 - WAKE_SWEEP_RELAXATION) * lines + WAKE_SWEEP_RELAXATION * traced
+        lattice = rotor_lattice(strips, blades, lines, core, mean_chord)
+        circulation, force, moment = _solve_once(lattice, spin, omega, airspeed, density, BOUND_CORE_CHORDS * mean_chord)
+        new_thrust = blades * float(force[..., 2].sum())
+        change = abs(new_thrust - thrust) / max(abs(new_thrust), 1e-300)
+        thrust = new_thrust
+        if change < RELAXED_THRUST_TOLERANCE:
+            return circulation, force, moment, lattice, change, sweep
     raise KernelError(f"the vortex solve did not converge: with its first wake turn following the flow the thrust "
                       f"still changed by {change:.2g} of itself after {RELAXATION_SWEEPS_MAX} sweeps "
                       f"(tolerance {RELAXED_THRUST_TOLERANCE:g})")
