@@ -32,7 +32,7 @@ def run(args: argparse.Namespace) -> int:
     cases = [] if args.name else [where for where in folders_under(folder) if is_case_folder(where)]
     if not sets and not cases:
         raise IncompleteOutputError(f"no output set in {str(folder)!r} or its sub-folders")
-    problems = [] if args.name else _debris(folder)
+    problems = [] if args.name else _debris(_staging_under(folder)[0], folder)
     for case in cases:
         missing = [entry for entry in CASE_ENTRIES if not (case / entry).exists()]
         if missing:
@@ -53,10 +53,21 @@ def run(args: argparse.Namespace) -> int:
     return EXIT_KERNEL_FAILURE if problems else EXIT_OK
 
 
-def _debris(folder: Path) -> list[str]:
-    """A problem for every staging folder left by a stopped process, at any depth under ``folder``."""
+def _staging_under(folder: Path) -> tuple[list[Path], list[Path]]:
+    """The staging folders at any depth under ``folder``: those left by stopped processes, and the others."""
+    left: list[Path] = []
+    running: list[Path] = []
+    for where in folders_under(folder):
+        stopped, other = staging_folders(where)
+        left += stopped
+        running += other
+    return left, running
+
+
+def _debris(left: list[Path], folder: Path) -> list[str]:
+    """A problem for every staging folder in ``left`` (left by a stopped process), named from ``folder``."""
     return [f"staging folder {str(path.relative_to(folder))!r} left by a stopped process (the next run there "
-            "removes it)" for where in folders_under(folder) for path in staging_folders(where)[0]]
+            "removes it)" for path in left]
 
 
 def _batch_members(folder: Path) -> list[Path] | None:
@@ -75,9 +86,10 @@ def _verify_batch_folder(folder: Path, quiet: bool) -> int:
     complete, and no staging folder left by a stopped process (the next run of the study or sweep removes
     them). IncompleteOutputError (exit 1) naming the first problems and their count."""
     folders = [folder, *(_batch_members(folder) or [])] + ([folder / "best"] if (folder / "best").is_dir() else [])
-    problems: list[str] = _debris(folder)  # at any depth: a trial's simulate/<level>/ folder too
+    left, running = _staging_under(folder)  # at any depth: a trial's simulate/<level>/ folder too
+    problems: list[str] = _debris(left, folder)
     sets = 0
-    in_progress = sum(len(staging_folders(where)[1]) for where in folders_under(folder))
+    in_progress = len(running)
     for member in folders:
         for name in set_names(member) if member != folder else []:
             try:
