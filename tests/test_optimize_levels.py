@@ -99,8 +99,8 @@ def test_the_shipped_quiet_study_reads_with_its_target_thrust_noise_objective_an
     ({"simulate": {}}, "give [simulate] rpm = ... (> 0) or thrust = ..."),
     ({"simulate": {"thrust": 1.0, "thrust_tolerance": 0.5}}, "simulate.thrust_tolerance = 0.5 is out of range; allowed [0.001, 0.2]"),
     ({"simulate": {"rpm": 8000.0, "thrust_runs": 3}}, "simulate.thrust_runs applies only with simulate.thrust"),
-    ({"simulate": {"thrust": 1.0, "levels": ["medium", "coarse"]}}, "simulate.levels = ['medium', 'coarse'] must name mesh levels from coarse to fine"),
-    ({"simulate": {"thrust": 1.0, "levels": ["coarse", "huge"]}}, "simulate.levels[1]: Input should be 'coarse', 'medium' or 'fine'"),
+    ({"simulate": {"thrust": 1.0, "levels": ["medium", "coarse"]}}, "simulate.levels = ['medium', 'coarse'] must name levels from the cheapest to the finest"),
+    ({"simulate": {"thrust": 1.0, "levels": ["coarse", "huge"]}}, "simulate.levels[1]: Input should be 'vortex', 'coarse', 'medium' or 'fine'"),
     ({"simulate": {"thrust": 1.0, "level": "coarse", "levels": ["coarse", "medium"]}}, "simulate.level and simulate.levels: give one"),
     ({"simulate": {"thrust": 1.0, "iterations": -1}}, "simulate.iterations = -1 is out of range"),
     ({"pruner": {"kind": "median"}}, "[pruner] applies only with [simulate] levels of two or more"),
@@ -139,7 +139,7 @@ def test_the_cli_refuses_a_bad_new_key_with_exit_2_one_line_and_writes_nothing(t
     done = subprocess.run([sys.executable, "-m", "torus_cad", "optimize", str(study), "--out", str(out)], env=env,
                           capture_output=True, text=True, timeout=300, check=False)
     assert done.returncode == 2, done.stderr
-    assert done.stderr.count("\n") == 1 and "simulate.levels = ['coarse', 'coarse'] must name mesh levels" in done.stderr
+    assert done.stderr.count("\n") == 1 and "simulate.levels = ['coarse', 'coarse'] must name levels" in done.stderr
     assert not out.exists()
 
 

@@ -229,7 +229,10 @@ def _add_simulate_parser(commands: Any) -> None:
         "or figure of merit, convergence, tonal noise at --observer positions) and <name>_performance.png (force "
         "and residual histories), <name>_noise.png and <name>_noise.csv (the noise's directivity, spectrum and "
         "signals). Needs "
-        "OpenFOAM (v1912) and the simulate extra: pip install -c constraints.txt -e '.[simulate]'.")
+        "OpenFOAM (v1912) and the simulate extra: pip install -c constraints.txt -e '.[simulate]'. With --solver "
+        "vortex, a lifting-surface vortex lattice on the blade's camber surface with NeuralFoil's section polars "
+        "instead (seconds, no OpenFOAM): the same report, plus <name>_loading.csv and .png (the loading along the "
+        "blade) and <name>_wake.png.")
     from torus_cad.simulate.thrust_target import DEFAULT_MAX_RUNS, DEFAULT_TOLERANCE, PLAUSIBLE_CT_LIMIT
 
     rpm, thrust = Bounds(0.0, SIMULATE_RPM_LIMIT), Bounds(0.0, SIMULATE_THRUST_LIMIT_N, low_open=True)
@@ -259,16 +262,29 @@ def _add_simulate_parser(commands: Any) -> None:
     simulate.add_argument("--airspeed", type=number("--airspeed", airspeed, "m/s", "the solver is incompressible"),
                           default=0.0, metavar="M_S", help=f"speed of the air arriving at the inlet, "
                                                             f"{range_help(airspeed, 'm/s')} (default 0: still air)")
-    simulate.add_argument("--level", choices=["coarse", "medium", "fine"], default="coarse",
+    from torus_cad.vortex.pipeline import CHORDWISE_RANGE, SPANWISE_RANGE
+    from torus_cad.vortex.rotor import Discretisation
+
+    simulate.add_argument("--solver", choices=["openfoam", "vortex"], default="openfoam",
+                          help="openfoam (default): RANS in OpenFOAM; vortex: the vortex lattice with section polars "
+                               "(seconds; takes none of the mesh and OpenFOAM options)")
+    chordwise, spanwise = Bounds(*CHORDWISE_RANGE), Bounds(*SPANWISE_RANGE)
+    simulate.add_argument("--chordwise", type=integer("--chordwise", chordwise), default=None, metavar="N",
+                          help=f"--solver vortex: rings across the chord, {range_help(chordwise)} "
+                               f"(default {Discretisation.chordwise})")
+    simulate.add_argument("--spanwise", type=integer("--spanwise", spanwise), default=None, metavar="N",
+                          help=f"--solver vortex: strips along the blade, {range_help(spanwise)} "
+                               f"(default {Discretisation.spanwise})")
+    simulate.add_argument("--level", choices=["coarse", "medium", "fine"], default=None,
                           help="mesh level (default coarse: about 52k cells for the default design)")
-    simulate.add_argument("--mesher", choices=["snappy", "tet"], default="snappy",
+    simulate.add_argument("--mesher", choices=["snappy", "tet"], default=None,
                           help="snappy (default): snappyHexMesh with prism layers on the propeller, the first layer "
                                "sized for y+ 1; tet: the cfd command's gmsh tetrahedra, no layers")
-    simulate.add_argument("--turbulence", choices=["kOmegaSST", "kOmegaSSTLM"], default="kOmegaSST",
+    simulate.add_argument("--turbulence", choices=["kOmegaSST", "kOmegaSSTLM"], default=None,
                           help="RANS model: kOmegaSST (default) or kOmegaSSTLM, k-omega SST with Langtry-Menter "
                                "transition (two more equations; compared against the wind tunnel in the simulate how-to)")
     refinement = Bounds(0, SIMULATE_MAX_SURFACE_REFINEMENT)
-    simulate.add_argument("--surface-refinement", type=integer("--surface-refinement", refinement), default=0,
+    simulate.add_argument("--surface-refinement", type=integer("--surface-refinement", refinement), default=None,
                           metavar="N", help=f"snappy mesher: halve the propeller's surface and edge cells N more times "
                                             f"than the level does, {range_help(refinement)} (default 0; each step about "
                                             "triples the cells; the prism layers keep the level's first layer, "

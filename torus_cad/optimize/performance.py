@@ -31,6 +31,10 @@ _REPORT_MAX_BYTES = 1 << 20  #: a performance report is a few kB
 _PR_SET_PDEATHSIG = 1
 
 
+#: The study level (``[simulate] level`` or ``levels``) that runs ``simulate --solver vortex`` instead of a mesh level.
+VORTEX_LEVEL = "vortex"
+
+
 class SimulateError(TorusCadError):
     """``torus-cad simulate`` failed on a design (exit 1, a crash, a time-out, no report)."""
 
@@ -45,14 +49,16 @@ def _command(config: Path, settings: Mapping[str, Any], out_dir: Path, time_limi
         command += ["--rpm", repr(float(settings["rpm"]))]
     if settings.get("airspeed"):
         command += ["--airspeed", repr(float(settings["airspeed"]))]
+    level = str(settings.get("level", "coarse"))
     for key, option in (("iterations", "--iterations"), ("processes", "--processes")):
-        if settings.get(key):
+        if settings.get(key) and level != VORTEX_LEVEL:  # OpenFOAM's; the vortex solver takes neither
             command += [option, str(int(settings[key]))]
     for observer in settings.get("observers", ()):
         command += ["--observer", str(observer)]
     if time_limit_s:  # the study's limit for the whole run (a thrust search's runs included), not simulate's default
         command += ["--time-limit", repr(float(time_limit_s))]
-    return command + ["--level", str(settings.get("level", "coarse")), "--out", str(out_dir), "--quiet"]
+    fidelity = ["--solver", "vortex"] if level == VORTEX_LEVEL else ["--level", level]
+    return command + fidelity + ["--out", str(out_dir), "--quiet"]
 
 
 def _die_with_parent() -> None:

@@ -139,6 +139,16 @@ class BoundTable(Section):
     max: float | None = None
 
 
+class StudyLevel(StrEnum):
+    """The fidelity a trial is evaluated at, cheapest first: the vortex solver (``simulate --solver vortex``,
+    seconds) or one of OpenFOAM's mesh levels (``simulate --level``)."""
+
+    VORTEX = "vortex"
+    COARSE = Level.COARSE.value
+    MEDIUM = Level.MEDIUM.value
+    FINE = Level.FINE.value
+
+
 class SimulateTable(Section):
     """[simulate]: how ``torus-cad simulate`` runs each trial."""
 
@@ -151,10 +161,12 @@ class SimulateTable(Section):
                              doc="solver runs of a trial's rpm search at most (simulate --thrust-runs)")
     airspeed: float = param(0.0, unit="m/s", ge=0.0, le=SIMULATE_AIRSPEED_LIMIT_M_S,
                             doc="axial inflow speed (simulate --airspeed's range)")
-    level: Level = param(Level.COARSE, strict=False, doc="mesh level of the simulation")
-    levels: list[Annotated[Level, Field(strict=False)]] = Field(default_factory=list, json_schema_extra={"unit": ""},
-                                description="mesh levels, coarse to fine: every trial runs the first, those the "
-                                            "pruner keeps climb to the next (instead of level)")
+    level: StudyLevel = param(StudyLevel.COARSE, strict=False,
+                              doc="vortex (the vortex solver) or the mesh level of the simulation")
+    levels: list[Annotated[StudyLevel, Field(strict=False)]] = Field(
+        default_factory=list, json_schema_extra={"unit": ""},
+        description="levels, cheapest first (vortex, coarse, medium, fine): every trial runs the first, those the "
+                    "pruner keeps climb to the next (instead of level)")
     iterations: int = param(0, ge=0, le=SIMULATE_MAX_ITERATIONS, doc="SIMPLE iterations (0: the level's own)")
     processes: int = param(0, ge=0, le=2, doc="MPI processes of each simulation (0: one per CPU)")
 
@@ -494,10 +506,10 @@ def _levels(model: StudyFile, simulate: dict[str, Any] | None, fail: Any) -> tup
     if "levels" not in simulate:
         return (str(simulate["level"]),)
     levels = tuple(simulate["levels"])
-    order = [level.value for level in Level]
+    order = [level.value for level in StudyLevel]
     if not levels or list(levels) != sorted(set(levels), key=order.index):
-        raise fail(f"simulate.levels = {list(levels)!r} must name mesh levels from coarse to fine, each once, e.g. "
-                   "[\"coarse\", \"medium\"]")
+        raise fail(f"simulate.levels = {list(levels)!r} must name levels from the cheapest to the finest (vortex, "
+                   "coarse, medium, fine), each once, e.g. [\"vortex\", \"medium\"]")
     return levels
 
 

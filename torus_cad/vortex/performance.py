@@ -3,9 +3,11 @@
 The lattice (:mod:`.solver`) gives each strip its circulation and force. At each strip's flow (the mean of
 the velocity at its control points, less its part along the span) the polar (:mod:`.polars`) at the
 strip's Reynolds number takes over where potential flow stops: the strip's effective angle of attack is
-its zero-lift angle plus cl / 2 pi (thin-airfoil theory's slope for the lattice's lift coefficient cl),
-its force is scaled by the polar's lift over the lattice's there (viscous loss of lift, stall), and its
-profile drag, 1/2 rho V^2 c ds cd along the flow, adds to the torque and takes from the thrust.
+the one at which the polar's linear part gives the lattice's lift coefficient cl (the polar's zero-lift
+angle plus cl over its own lift slope); past the polar's stall angle the strip's force is scaled by the
+polar's lift over the lattice's there (before it the lattice's lift stands: the lift is corrected beyond
+the linear range only), and its profile drag, 1/2 rho V^2 c ds cd along the flow, adds to the torque and
+takes from the thrust.
 
 The coefficients follow UIUC's convention (n in rev/s, D the tip diameter): CT = T / (rho n^2 D^4),
 CP = P / (rho n^3 D^5), J = V / (n D), efficiency J CT / CP, and at J = 0 the figure of merit
@@ -63,10 +65,15 @@ class VortexResult:
         report: thrust_n, torque_nm, power_w, advance_ratio, ct, cp, efficiency, figure_of_merit (the simulate
             report's keys), and inviscid_thrust_n / inviscid_power_w, low_confidence_strips.
         strips: the loading along the blade.
+        blade: blade 0 as solved; inviscid: the lattice's solution.
+        ring_force_n: ``(K - 1, C, 3)`` N, the force on each of blade 0's rings with its strip's loss of lift.
     """
 
     report: dict[str, Any]
     strips: StripLoads = field(repr=False)
+    blade: RotorBlade | None = field(repr=False, default=None)
+    inviscid: Inviscid | None = field(repr=False, default=None)
+    ring_force_n: NDArray[np.float64] | None = field(repr=False, default=None)
 
 
 def vortex_performance(params: PropellerParameters, rpm: float, airspeed_m_s: float = 0.0,
@@ -78,7 +85,7 @@ def vortex_performance(params: PropellerParameters, rpm: float, airspeed_m_s: fl
     omega = rpm * np.pi / 30.0
     inviscid = solve_inviscid(blade.camber_m, blade.blades, blade.spin, omega, airspeed_m_s, density,
                               blade.tip_radius_m, (discretisation or Discretisation()).wake)
-    force, moment, strips = _strip_forces(blade, inviscid, omega, airspeed_m_s, point, viscous)
+    force, moment, strips, ratio = _strip_forces(blade, inviscid, omega, airspeed_m_s, point, viscous)
     thrust = blade.blades * float(force[:, 2].sum())
     torque = blade.spin * blade.blades * float(moment[:, 2].sum())
     coefficients = performance(thrust, torque, point, 2.0 * blade.tip_radius_m)
@@ -87,12 +94,13 @@ def vortex_performance(params: PropellerParameters, rpm: float, airspeed_m_s: fl
               "efficiency": coefficients.efficiency, "figure_of_merit": coefficients.figure_of_merit,
               "inviscid_thrust_n": inviscid.thrust_n, "inviscid_power_w": inviscid.torque_nm * omega,
               "low_confidence_strips": int((strips.confidence < LOW_CONFIDENCE).sum())}
-    return VortexResult(report, strips)
+    return VortexResult(report, strips, blade, inviscid, inviscid.force_n * ratio[:, None, None])
 
 
 def _strip_forces(blade: RotorBlade, inviscid: Inviscid, omega: float, airspeed: float, point: OperatingPoint,
-                  viscous: bool) -> tuple[NDArray[np.float64], NDArray[np.float64], StripLoads]:
-    """Each strip's force and moment ``(K - 1, 3)`` on blade 0 with the polars' corrections, and its loading."""
+                  viscous: bool) -> tuple[NDArray[np.float64], NDArray[np.float64], StripLoads, NDArray[np.float64]]:
+    """Each strip's force and moment ``(K - 1, 3)`` on blade 0 with the polars' corrections, its loading, and
+    its lift's ratio to the lattice's ``(K - 1,)``."""
     lattice = inviscid.lattice
     strips = inviscid.circulation.shape[0]
     force = inviscid.force_n.sum(axis=1)
@@ -118,14 +126,17 @@ def _strip_forces(blade: RotorBlade, inviscid: Inviscid, omega: float, airspeed:
     cl = np.where(dynamic > 0.0, lift / np.maximum(dynamic, 1e-300), 0.0)
     cd = np.zeros(strips)
     confidence = np.ones(strips)
+    ratios = np.ones(strips)
     if viscous and speed.any():
         turned = np.einsum("jk,jk->j", flow, camber[:-1, -1] + camber[1:, -1] - camber[:-1, 0] - camber[1:, 0]) < 0.0
         for j, polar in enumerate(strip_polars(blade.sections, reynolds, turned)):
-            alpha = polar.zero_lift_deg + np.degrees(cl[j] / (2.0 * np.pi))
-            viscous_cl = float(np.interp(alpha, polar.alpha_deg, polar.cl))
+            alpha = polar.zero_lift_deg + cl[j] / polar.lift_slope_per_deg
+            past_stall = alpha > polar.stall_deg  # before stall the lattice's lift stands (module doc)
+            viscous_cl = float(np.interp(alpha, polar.alpha_deg, polar.cl)) if past_stall else cl[j]
             cd[j] = float(np.interp(alpha, polar.alpha_deg, polar.cd))
             confidence[j] = float(np.interp(alpha, polar.alpha_deg, polar.confidence))
             ratio = float(np.clip(viscous_cl / cl[j], *LIFT_RATIO_BOUNDS)) if cl[j] > 0.0 else 1.0
+            ratios[j] = ratio
             drag = dynamic[j] * cd[j] * flow[j] / max(speed[j], 1e-300)
             force[j] = ratio * force[j] + drag
             moment[j] = ratio * moment[j] + np.cross(middle[j], drag)
@@ -133,7 +144,7 @@ def _strip_forces(blade: RotorBlade, inviscid: Inviscid, omega: float, airspeed:
     loads = StripLoads(0.5 * (blade.s[:-1] + blade.s[1:]), np.hypot(middle[:, 0], middle[:, 1]),
                        inviscid.circulation[:, -1], force[:, 2] / width, blade.spin * moment[:, 2] / width,
                        reynolds, cl, cd, confidence)
-    return force, moment, loads
+    return force, moment, loads, ratios
 
 
 def _lift(force: NDArray[np.float64], flow: NDArray[np.float64], speed: NDArray[np.float64]) -> NDArray[np.float64]:

@@ -17,6 +17,8 @@ from numpy.typing import NDArray
 ALPHA_DEG = np.linspace(-12.0, 20.0, 65)
 #: NeuralFoil's network size ("large" is its most accurate, a few ms a polar).
 MODEL_SIZE = "large"
+#: The window above the zero-lift angle (deg) over which a polar's lift slope is fitted (its linear range).
+LINEAR_RANGE_DEG = 6.0
 #: Below this confidence (NeuralFoil's analysis_confidence, 0 to 1) a strip's polar is flagged.
 LOW_CONFIDENCE = 0.5
 
@@ -42,6 +44,21 @@ class Polar:
             return float(self.alpha_deg[np.argmin(np.abs(self.cl))])
         i = int(rising[0])
         return float(np.interp(0.0, self.cl[i:i + 2], self.alpha_deg[i:i + 2]))
+
+    @property
+    def stall_deg(self) -> float:
+        """The angle of the polar's largest lift on the table."""
+        return float(self.alpha_deg[int(np.argmax(self.cl))])
+
+    @property
+    def lift_slope_per_deg(self) -> float:
+        """The slope of cl over the linear range (LINEAR_RANGE_DEG above the zero-lift angle), least squares through
+        the zero-lift angle; at least a tenth of thin-airfoil theory's 2 pi per radian."""
+        zero = self.zero_lift_deg
+        window = (self.alpha_deg >= zero) & (self.alpha_deg <= zero + LINEAR_RANGE_DEG)
+        offset = self.alpha_deg[window] - zero
+        slope = float(offset @ self.cl[window] / max(float(offset @ offset), 1e-300)) if window.any() else 0.0
+        return max(slope, 0.1 * 2.0 * np.pi * np.pi / 180.0)
 
 
 def turned_round(coordinates: NDArray[np.float64]) -> NDArray[np.float64]:

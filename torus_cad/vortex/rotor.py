@@ -54,6 +54,7 @@ class RotorBlade:
         s: ``(K,)`` the sections' centerline parameters.
         blades: blade count; spin: +1 for 'cw' (clockwise seen from +z), -1 for 'ccw'.
         tip_radius_m: the largest radius of the blade surface.
+        surface_m: ``(K, P, 3)`` the blade's surface (the K sections' P points each), m: its thickness noise.
     """
 
     camber_m: NDArray[np.float64]
@@ -63,6 +64,7 @@ class RotorBlade:
     blades: int
     spin: float
     tip_radius_m: float
+    surface_m: NDArray[np.float64] = field(repr=False, default_factory=lambda: np.zeros((0, 0, 3)))
 
 
 def rotor_blade(params: PropellerParameters, discretisation: Discretisation) -> RotorBlade:
@@ -71,13 +73,15 @@ def rotor_blade(params: PropellerParameters, discretisation: Discretisation) -> 
     surface = _surface(params, sections)
     camber = camber_surface(surface, cosine_fractions(discretisation.chordwise))
     points = camber.points / 1000.0
+    outline = surface.points / 1000.0
     spin = 1.0
     if params.handedness == Handedness.CCW:
         points = points * np.array([1.0, -1.0, 1.0])
+        outline = outline * np.array([1.0, -1.0, 1.0])
         spin = -1.0
     shapes = tuple(section_coordinates(surface, k) for k in range(sections))
     tip = float(np.hypot(surface.points[..., 0], surface.points[..., 1]).max()) / 1000.0
-    return RotorBlade(points, camber.chord_mm / 1000.0, shapes, camber.s, params.blades, spin, tip)
+    return RotorBlade(points, camber.chord_mm / 1000.0, shapes, camber.s, params.blades, spin, tip, outline)
 
 
 def _surface(params: PropellerParameters, sections: int) -> BladeSurface:

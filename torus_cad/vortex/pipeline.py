@@ -1,0 +1,228 @@
+"""``simulate --solver vortex``: a design's operating point (or the rpm for a thrust) in the vortex solver, published
+as the OpenFOAM route publishes a run (torus_cad.simulate.pipeline): ``<name>_performance.json`` with the same
+keys (thrust, torque, power, CT, CP, efficiency or figure of merit, J, converged, rpm, noise), the loading along
+the blade as CSV and picture, a picture of the wake and the tonal noise, written as one set (all or none).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from torus_cad.acoustics.fwh import Medium
+from torus_cad.acoustics.observers import DEFAULT_OBSERVERS, Observer, check_observers
+from torus_cad.acoustics.report import Noise, evaluate_noise, write_noise_csv, write_noise_plot
+from torus_cad.outputs.output_set import OutputSet
+from torus_cad.parameters.design import PropellerParameters
+from torus_cad.parameters.design_targets import resolve_design_targets
+from torus_cad.simulate.settings import OperatingPoint, check_count, check_operating_point, rpm_limit
+from torus_cad.simulate.thrust_target import (
+    DEFAULT_MAX_RUNS,
+    DEFAULT_TOLERANCE,
+    ThrustRun,
+    check_target,
+    first_rpm,
+    next_rpm,
+    search_state,
+)
+from torus_cad.vortex.loading_files import write_loading_csv, write_loading_plot, write_wake_plot
+from torus_cad.vortex.noise_surface import rotor_surface
+from torus_cad.vortex.performance import LIFT_RATIO_BOUNDS, VortexResult, vortex_performance
+from torus_cad.vortex.polars import LOW_CONFIDENCE
+from torus_cad.vortex.rotor import Discretisation
+
+#: Rings across the chord, and strips along the blade, a run may ask for (--chordwise, --spanwise).
+CHORDWISE_RANGE = (2, 24)
+SPANWISE_RANGE = (6, 120)
+
+
+@dataclass(frozen=True)
+class VortexRequest:
+    """One vortex run: the design, the operating point, the lattice, the noise's observers, and whether the section
+    polars correct the lattice (``viscous``)."""
+
+    params: PropellerParameters
+    point: OperatingPoint
+    discretisation: Discretisation = field(default_factory=Discretisation)
+    observers: tuple[Observer, ...] = DEFAULT_OBSERVERS
+    viscous: bool = True
+
+
+@dataclass
+class VortexRun:
+    """What a run published: paths by kind, and the report."""
+
+    paths: dict[str, Path]
+    report: dict[str, Any]
+
+
+def check_vortex_request(request: VortexRequest) -> float:
+    """ParameterError (exit 2) naming the option, the value and the range; the design's tip diameter, m."""
+    from torus_cad.cfd.sizes import tip_radius
+
+    check_count("--chordwise", request.discretisation.chordwise, *CHORDWISE_RANGE)
+    check_count("--spanwise", request.discretisation.spanwise, *SPANWISE_RANGE)
+    diameter_m = 2.0 * tip_radius(resolve_design_targets(request.params).parameters) / 1000.0
+    check_operating_point(request.point, diameter_m, request.params)
+    check_observers(request.observers, diameter_m / 2.0)
+    return diameter_m
+
+
+def simulate_vortex(request: VortexRequest, out_dir: str | Path, stage: Callable[[str], None] | None = None,
+                    search: dict[str, Any] | None = None) -> VortexRun:
+    """Solve ``request`` and publish its set into ``out_dir`` (module doc); ``search``: a thrust search's record,
+    kept in the report."""
+    check_vortex_request(request)
+    start = time.perf_counter()
+    result = _solved(request, stage)
+    noise = _noise(request, result, stage)
+    return _publish(request, result, noise, Path(out_dir), start, search)
+
+
+def vortex_thrust_search(request: VortexRequest, thrust_n: float, out_dir: str | Path,
+                         stage: Callable[[str], None] | None = None, tolerance: float = DEFAULT_TOLERANCE,
+                         max_runs: int = DEFAULT_MAX_RUNS) -> VortexRun:
+    """The rpm at which ``request``'s design gives ``thrust_n`` N within ``tolerance`` of it, found by the OpenFOAM
+    route's search (torus_cad.simulate.thrust_target: the first rpm from a plausible CT, then secant steps on
+    sqrt(thrust)), published as :func:`simulate_vortex` publishes one run, the search in its report."""
+    diameter_m = check_vortex_request(request)
+    density = request.point.fluid.density_kg_m3
+    limit = rpm_limit(diameter_m, request.point.airspeed_m_s, request.point.fluid)
+    check_target(thrust_n, limit, diameter_m, density)
+    rpm, runs = first_rpm(thrust_n, limit, diameter_m, density), []
+    while True:
+        report = vortex_performance(request.params, rpm, request.point.airspeed_m_s, request.discretisation,
+                                    request.viscous).report
+        runs.append((ThrustRun(rpm, float(report["thrust_n"])), report))
+        if stage:
+            stage(f"run {len(runs)}: {rpm:.0f} rpm, thrust {report['thrust_n']:.4g} N")
+        state = search_state([run for run, _ in runs], thrust_n, tolerance, max_runs, limit)
+        if state.done:
+            break
+        rpm = next_rpm([run for run, _ in runs], thrust_n, limit)
+    search = {"target_thrust_n": thrust_n, "tolerance": tolerance, "max_runs": max_runs, "rpm": state.best.rpm,
+              "thrust_n": state.best.thrust_n, "within_tolerance": state.within_tolerance, "rpm_limit": limit,
+              "chosen_run": [run for run, _ in runs].index(state.best),
+              "runs": [{"rpm": run.rpm, "thrust_n": run.thrust_n, "torque_nm": report["torque_nm"],
+                        "power_w": report["power_w"], "figure_of_merit": report["figure_of_merit"],
+                        "efficiency": report["efficiency"], "converged": True} for run, report in runs],
+              "method": "secant on sqrt(thrust) over rpm; the first rpm from CT = the OpenFOAM route's"}
+    best_point = OperatingPoint(state.best.rpm, request.point.airspeed_m_s, request.point.fluid)
+    return simulate_vortex(_with_point(request, best_point), out_dir, stage, search)
+
+
+def _with_point(request: VortexRequest, point: OperatingPoint) -> VortexRequest:
+    return VortexRequest(request.params, point, request.discretisation, request.observers, request.viscous)
+
+
+def _solved(request: VortexRequest, stage: Callable[[str], None] | None) -> VortexResult:
+    if stage:
+        stage("vortex lattice")
+    return vortex_performance(request.params, request.point.rpm, request.point.airspeed_m_s, request.discretisation,
+                              request.viscous)
+
+
+def _noise(request: VortexRequest, result: VortexResult, stage: Callable[[str], None] | None) -> Noise | None:
+    """The tonal noise at the request's observers (None when the rotor does not turn)."""
+    if request.point.rpm == 0.0 or result.blade is None or result.inviscid is None or result.ring_force_n is None:
+        return None
+    if stage:
+        stage("noise")
+    fluid = request.point.fluid
+    surface = rotor_surface(result.blade, result.inviscid.lattice, result.ring_force_n)
+    omega = -result.blade.spin * request.point.rpm * math.pi / 30.0  # FW-H: positive counter-clockwise from +z
+    noise = evaluate_noise(surface, omega, result.blade.blades, Medium(fluid.density_kg_m3, fluid.speed_of_sound_m_s),
+                           request.observers)
+    noise.report["harmonics_of"] = "the blade-passing frequency"
+    noise.report["source"] = ("the vortex lattice's pressure jump (loading) and the blade's surface (thickness); "
+                              "profile drag and leading-edge suction left out")
+    return noise
+
+
+def _publish(request: VortexRequest, result: VortexResult, noise: Noise | None, out: Path, start: float,
+             search: dict[str, Any] | None) -> VortexRun:
+    name = request.params.name
+    title = f"{name}: {request.point.rpm:.0f} rpm, {request.point.airspeed_m_s:g} m/s, vortex lattice"
+    with OutputSet(out, f"{name}_performance") as output:
+        output.write_files(lambda folder: _files(result, noise, folder, name, title))
+        report = {**_report(request, result, start), "noise": noise.report if noise is not None else None,
+                  **({"thrust_search": search} if search is not None else {})}
+        paths = output.publish(report)
+        return VortexRun(paths, output.sealed_report)
+
+
+def _files(result: VortexResult, noise: Noise | None, folder: Path, name: str, title: str) -> dict[str, Path]:
+    paths = {"loading_csv": write_loading_csv(result.strips, folder / f"{name}_loading.csv"),
+             "loading_png": write_loading_plot(result.strips, folder / f"{name}_loading.png", f"loading, {title}")}
+    if result.inviscid is not None and result.blade is not None:
+        paths["wake_png"] = write_wake_plot(result.blade, result.inviscid.lattice, folder / f"{name}_wake.png",
+                                            f"wake, {title}")
+    if noise is not None:
+        paths["noise_png"] = write_noise_plot(noise, folder / f"{name}_noise.png", f"tonal noise, {title}")
+        paths["noise_csv"] = write_noise_csv(noise, folder / f"{name}_noise.csv")
+    return paths
+
+
+def _report(request: VortexRequest, result: VortexResult, start: float) -> dict[str, Any]:
+    params, point, fluid = request.params, request.point, request.point.fluid
+    strips = result.strips
+    doubtful = np.flatnonzero(strips.confidence < LOW_CONFIDENCE)
+    inviscid = result.inviscid
+    return {
+        "name": params.name, "handedness": params.handedness.value, "solver": "vortex",
+        "rpm": point.rpm, "airspeed_m_s": point.airspeed_m_s, "omega_rad_s": point.omega_rad_s(params.handedness),
+        "tip_diameter_m": 2.0 * result.blade.tip_radius_m if result.blade is not None else None,
+        **{key: result.report[key] for key in ("thrust_n", "torque_nm", "power_w", "advance_ratio", "ct", "cp",
+                                                "efficiency", "figure_of_merit")},
+        "converged": True,
+        "inviscid": {"thrust_n": result.report["inviscid_thrust_n"], "power_w": result.report["inviscid_power_w"]},
+        "lattice": {"chordwise": request.discretisation.chordwise, "spanwise": request.discretisation.spanwise,
+                    "wake_diameters": request.discretisation.wake.length_diameters,
+                    "wake_steps_per_turn": request.discretisation.wake.steps_per_turn,
+                    "relaxed_first_turn": request.discretisation.wake.free_turns,
+                    "iterations": inviscid.iterations if inviscid is not None else 0},
+        "polars": {"viscous": request.viscous, "source": "NeuralFoil (large) at each strip's Reynolds number",
+                   "lift_ratio_bounds": list(LIFT_RATIO_BOUNDS), "low_confidence_below": LOW_CONFIDENCE,
+                   "low_confidence_strips": [float(strips.s[j]) for j in doubtful],
+                   "reynolds_range": [float(strips.reynolds.min()), float(strips.reynolds.max())]},
+        "fluid": {"name": fluid.name, "density_kg_m3": fluid.density_kg_m3, "viscosity_m2_s": fluid.viscosity_m2_s},
+        "wall_seconds": time.perf_counter() - start,
+        "conventions": "thrust > 0 pushes the air toward -z (the design's way); torque > 0 resists the design's "
+                       "rotation; CT = T/(rho n^2 D^4), CP = P/(rho n^3 D^5), n in rev/s, D the tip diameter; "
+                       "polars.low_confidence_strips: the centerline parameters s of strips whose polar NeuralFoil "
+                       "trusts less than low_confidence_below (stall, very low Reynolds number)",
+    }
+
+
+def vortex_summary_lines(run: VortexRun) -> list[str]:
+    """The paths written and the designer's numbers, as the OpenFOAM route prints them; a warning line where the
+    polars are out of their confident range."""
+    from torus_cad.simulate.cli_output import noise_line, thrust_search_lines
+
+    report = run.report
+    lines = [f"wrote {path}" for path in run.paths.values()]
+    if "thrust_search" in report:
+        lines += thrust_search_lines(report["thrust_search"])
+    merit = (f"efficiency {report['efficiency']:.3f}" if report["efficiency"] is not None
+             else f"figure of merit {report['figure_of_merit']:.3f}" if report["figure_of_merit"] is not None else "")
+    lines.append(f"thrust {report['thrust_n']:.4g} N, torque {report['torque_nm'] * 1000.0:.4g} N mm, power "
+                 f"{report['power_w']:.4g} W at {report['rpm']:g} rpm, {report['airspeed_m_s']:g} m/s: CT "
+                 f"{report['ct']:.4g}, CP {report['cp']:.4g}, {merit}")
+    lattice = report["lattice"]
+    lines.append(f"vortex lattice {lattice['chordwise']} x {lattice['spanwise']} a blade, wake "
+                 f"{lattice['wake_diameters']:g} D, {report['wall_seconds']:.1f} s; inviscid thrust "
+                 f"{report['inviscid']['thrust_n']:.4g} N, power {report['inviscid']['power_w']:.4g} W")
+    doubtful = report["polars"]["low_confidence_strips"]
+    if doubtful:
+        lines.append(f"warning: NeuralFoil's polars are not confident on {len(doubtful)} strip(s), at s = "
+                     f"{', '.join(f'{s:.2f}' for s in doubtful[:8])}{' ...' if len(doubtful) > 8 else ''} (stall or "
+                     "very low Reynolds number): the numbers there are rough")
+    if report.get("noise"):
+        lines.append(noise_line(report["noise"]))
+    return lines
