@@ -114,6 +114,9 @@ def test_the_shipped_quiet_study_reads_with_its_target_thrust_noise_objective_an
     ({"objective": [{"metric": "performance.noise[1:90].dba"}]}, "'dba' is not a number of an observer's noise; did you mean 'oaspl_dba'?"),
     ({"objective": [{"metric": "performance.noise.dba"}]}, "is not a noise number; name the observer as simulate --observer does"),
     ({"study": {"trials": 4, "sampler": "cmaes"}}, "study.sampler = 'cmaes' cannot take [simulate] thrust"),
+    # a range's NaN or infinite end: the parameter's own range named, not the type the schema tried
+    ({"vary": {"hub.length": [math.nan, 140.0]}}, "vary.'hub.length' low must be a finite number in (2, 2000] mm, got nan"),
+    ({"vary": {"blades": [2, math.inf]}}, "vary.'blades' high must be a whole number in [1, 12], got inf"),
 ])
 def test_bad_new_keys_are_one_line_naming_the_field(tables, message):
     with pytest.raises(ParameterError) as raised:

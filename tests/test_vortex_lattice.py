@@ -55,6 +55,28 @@ def test_a_planar_elliptic_wing_has_the_lifting_line_lift_slope(aspect_ratio: fl
     assert slope == pytest.approx(closed_form(aspect_ratio), rel=0.03)
 
 
+def _naca_mean_line(fractions: np.ndarray, camber: float = 0.04, position: float = 0.4) -> np.ndarray:
+    """The NACA four-digit mean line's height (a fraction of the chord) at the chord ``fractions``."""
+    front = camber / position**2 * (2.0 * position * fractions - fractions**2)
+    back = camber / (1.0 - position) ** 2 * ((1.0 - 2.0 * position) + 2.0 * position * fractions - fractions**2)
+    return np.where(fractions < position, front, back)
+
+
+@pytest.mark.parametrize("chordwise", [6, 8, 12])
+def test_a_cambered_elliptic_wing_lifts_at_zero_incidence_as_thin_airfoil_theory_says(chordwise: int) -> None:
+    """A NACA 4412 mean line on an elliptic wing of aspect ratio 8 at zero incidence: the lifting line's
+    slope times the mean line's zero-lift angle of thin-airfoil theory (-4.15 deg), within 3 %."""
+    aspect_ratio, spanwise = 8.0, 40
+    grid = _elliptic_wing(aspect_ratio, 0.0, spanwise, chordwise)
+    theta = np.linspace(0.0, math.pi, spanwise + 1)
+    chord = 4.0 / (math.pi * aspect_ratio) * np.sqrt(np.clip(1.0 - np.cos(theta) ** 2, 0.0, None)) + 1e-6
+    grid[..., 1] -= _naca_mean_line(cosine_fractions(chordwise))[None, :] * chord[:, None]  # toward the lift
+    result = solve_inviscid(grid, 1, 1.0, 0.0, 10.0, 1.225, 0.5, WakeShape(length_diameters=20.0),
+                            momentum_wake=False)
+    lift_coefficient = -float(result.force_n[..., 1].sum()) / (0.5 * 1.225 * 10.0**2 / aspect_ratio)
+    assert lift_coefficient == pytest.approx(_lifting_line(aspect_ratio) * math.radians(4.15), rel=0.03)
+
+
 @pytest.fixture(scope="module")
 def apc_blade():
     return rotor_blade(PropellerParameters.from_toml(APC), SMALL)

@@ -453,11 +453,11 @@ def _checked_type(item: Any, leaf: _Leaf, where: str, fail: Fail) -> Any:
         return item
     if leaf.kind is int:
         if not _is_int(item):
-            raise fail(f"{where} must be a whole number, got {shown(item)}")
+            raise fail(f"{where} must be a whole number{_within(leaf)}, got {shown(item)}")
         return item
     if leaf.kind is float:
         if not _is_number(item) or not math.isfinite(item):
-            raise fail(f"{where} must be a finite number, got {shown(item)}")
+            raise fail(f"{where} must be a finite number{_within(leaf)}, got {shown(item)}")
         return float(item)
     if leaf.kind is str:
         if not isinstance(item, str):
@@ -469,6 +469,11 @@ def _checked_type(item: Any, leaf: _Leaf, where: str, fail: Fail) -> Any:
             raise fail(f"{where} must be a list of {leaf.length} finite numbers (a whole vector), got {shown(item)}")
         return [float(x) for x in item]
     raise fail(f"{where}: cannot vary this parameter")  # pragma: no cover - the schema has no other kinds
+
+
+def _within(leaf: _Leaf) -> str:
+    """`` in [low, high] unit`` of a numeric parameter, for a message; empty for the others."""
+    return f" in {leaf.bounds}{' ' + leaf.unit if leaf.unit else ''}" if leaf.numeric else ""
 
 
 def _is_int(value: Any) -> TypeGuard[int]:

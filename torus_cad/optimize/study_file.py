@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -310,6 +311,7 @@ def parse_study(data: Mapping[str, Any], base_dir: str | Path = ".", name: str =
     data = dict(data)
     if isinstance(data.get("vary"), Mapping):
         data["vary"] = dict(_flatten_vary(data["vary"]))
+        _refuse_non_finite(data["vary"], fail)
     if isinstance(data.get("constraints"), Mapping):
         data["constraints"] = dict(_flatten_bounds(data["constraints"]))
         for key, bound in data["constraints"].items():
@@ -363,6 +365,18 @@ def _flatten_bounds(table: Mapping[str, Any], prefix: str = "") -> list[tuple[st
         else:
             items.append((f"{prefix}{key}", value))
     return items
+
+
+def _refuse_non_finite(vary: Mapping[str, Any], fail: Any) -> None:
+    """A NaN or infinite bound of a [vary] range, named with the parameter's range (before the file's schema,
+    whose own message would name only the type it tried)."""
+    for key, values in vary.items():
+        if not isinstance(values, list):
+            continue
+        for end, value in zip(("low", "high"), values):
+            if isinstance(value, float) and not math.isfinite(value):
+                _, _, leaf = _resolve_leaf(key, fail)
+                _checked_value(value, leaf, f"vary.{shown(key)} {end}", fail)
 
 
 def _axis(key: str, values: list[Any], folder: Path, fail: Any) -> VaryAxis:

@@ -95,12 +95,37 @@ def ring_grid(camber_m: NDArray[np.float64]) -> NDArray[np.float64]:
 
 
 def control_points(camber_m: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Each panel's three-quarter point (mean of its two section lines) and unit normal (the cross
-    product of its diagonals): ``(K - 1, C, 3)`` each."""
+    """Each panel's three-quarter point (mean of its two section lines) and unit normal there: ``(K - 1, C, 3)``
+    each. The normal is square to the span and to the camber line's tangent at the point (the derivative of
+    the parabola through the panel's and a neighbour's nodes), not to the panel's chord: on a curved camber
+    line the chord's slope is the slope half way along the panel, and a lattice of chord normals misses a
+    tenth of the camber's lift at 8 panels (a NACA 4412 mean line on an elliptic wing; tested)."""
     three_quarter = camber_m[:, :-1] + 0.75 * (camber_m[:, 1:] - camber_m[:, :-1])
     points = 0.5 * (three_quarter[:-1] + three_quarter[1:])
-    normals = np.cross(camber_m[1:, 1:] - camber_m[:-1, :-1], camber_m[:-1, 1:] - camber_m[1:, :-1])
+    diagonal_normals = np.cross(camber_m[1:, 1:] - camber_m[:-1, :-1], camber_m[:-1, 1:] - camber_m[1:, :-1])
+    tangents = _camber_tangents(0.5 * (camber_m[:-1] + camber_m[1:]))
+    normals = np.cross(tangents, three_quarter[1:] - three_quarter[:-1])
+    normals *= np.sign(np.einsum("jik,jik->ji", normals, diagonal_normals))[..., None]  # the same side as before
     return points, normals / np.linalg.norm(normals, axis=2, keepdims=True)
+
+
+def _camber_tangents(line: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``(K - 1, C, 3)``: the tangent of each strip's mean camber line ``(K - 1, C + 1, 3)`` at three quarters of
+    each panel, from the parabola through three neighbouring nodes (parameter: the distance along the line)."""
+    chordwise = line.shape[1] - 1
+    if chordwise < 2:
+        return np.diff(line, axis=1)
+    steps = np.linalg.norm(np.diff(line, axis=1), axis=2)
+    t = np.concatenate([np.zeros((len(line), 1)), np.cumsum(steps, axis=1)], axis=1)
+    first = np.clip(np.arange(chordwise) - 1, 0, chordwise - 2)  # the parabola's first node, each panel
+    nodes = first[:, None] + np.arange(3)[None, :]                # (C, 3)
+    where = t[:, :-1] + 0.75 * steps                              # (K - 1, C)
+    tn = t[:, nodes]                                              # (K - 1, C, 3)
+    weights = np.empty_like(tn)
+    for a in range(3):
+        b, c = (a + 1) % 3, (a + 2) % 3
+        weights[..., a] = ((where - tn[..., b]) + (where - tn[..., c])) / ((tn[..., a] - tn[..., b]) * (tn[..., a] - tn[..., c]))
+    return np.einsum("jca,jcak->jck", weights, line[:, nodes])
 
 
 def wake_lines(trailing_edge_m: NDArray[np.float64], omega_rad_s: float, spin: float, inflow_m_s: float,

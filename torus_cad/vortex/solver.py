@@ -34,10 +34,12 @@ WAKE_RELAXATION = 1.0
 BOUND_CORE_CHORDS = 0.02
 #: The relaxed wake: each sweep moves its first turn this share of the way to the streamlines ...
 WAKE_SWEEP_RELAXATION = 0.3
-#: ... until the thrust changes by less than this fraction of itself between sweeps ...
+#: ... halved, down to this, after a sweep whose change grew (the wake swinging round its shape) ...
+WAKE_SWEEP_RELAXATION_MIN = 0.05
+#: ... until the thrust changes by less than this fraction of itself between sweeps (scaled to a full step) ...
 RELAXED_THRUST_TOLERANCE = 5e-3
 #: ... in this many sweeps at most (each a solve after the prescribed wake's).
-RELAXATION_SWEEPS_MAX = 19
+RELAXATION_SWEEPS_MAX = 30
 #: The first guess of the induced velocity in still air, as a fraction of the tip speed.
 STATIC_INDUCED_GUESS = 0.05
 
@@ -144,7 +146,7 @@ def _relaxed(strips: NDArray[np.float64], lines: NDArray[np.float64], prescribed
     step_s = 2.0 * np.pi / wake.steps_per_turn / omega
     core = wake.core_chords * mean_chord
     lattice, circulation, force = prescribed
-    thrust, change = blades * float(force[..., 2].sum()), np.inf
+    thrust, change, blend = blades * float(force[..., 2].sum()), np.inf, WAKE_SWEEP_RELAXATION
     for sweep in range(1, RELAXATION_SWEEPS_MAX + 1):
         nodes = lines[:, :, : free + 1].reshape(-1, 3)
         velocity = kinematic_velocity(nodes, omega, spin, airspeed) + induced_velocity(
@@ -154,12 +156,16 @@ def _relaxed(strips: NDArray[np.float64], lines: NDArray[np.float64], prescribed
         for node in range(free):
             traced[:, :, node + 1] = traced[:, :, node] + step_s * 0.5 * (velocity[:, :, node] + velocity[:, :, node + 1])
         traced[:, :, free + 1:] += (traced[:, :, free] - lines[:, :, free])[:, :, None, :]
-        lines = (1.0 - WAKE_SWEEP_RELAXATION) * lines + WAKE_SWEEP_RELAXATION * traced
+        lines = (1.0 - blend) * lines + blend * traced
         lattice = rotor_lattice(strips, blades, lines, core, mean_chord)
         circulation, force, moment = _solve_once(lattice, spin, omega, airspeed, density, BOUND_CORE_CHORDS * mean_chord)
         new_thrust = blades * float(force[..., 2].sum())
-        change = abs(new_thrust - thrust) / max(abs(new_thrust), 1e-300)
+        previous = change
+        # the change a full WAKE_SWEEP_RELAXATION step would make: a smaller blend moves the wake less
+        change = abs(new_thrust - thrust) / max(abs(new_thrust), 1e-300) * WAKE_SWEEP_RELAXATION / blend
         thrust = new_thrust
+        if change > previous:  # the sweeps overshoot (the wake swings round its shape): smaller steps
+            blend = max(0.5 * blend, WAKE_SWEEP_RELAXATION_MIN)
         if change < RELAXED_THRUST_TOLERANCE:
             return circulation, force, moment, lattice, change, sweep
     raise KernelError(f"the vortex solve did not converge: with its first wake turn following the flow the thrust "
