@@ -69,6 +69,7 @@ class Lattice:
             (a wake line carries its strip's last ring's).
         bound_segments: the first this many segments are blade 0's bound ones, one ring's each.
         core_m: ``(S,)`` each segment's vortex core radius (0 on the blades, the wake's core on the wake).
+        on_blades: ``(S,)`` whether each segment is a blade's (bound) rather than the wake's.
     """
 
     grid: NDArray[np.float64]
@@ -79,6 +80,7 @@ class Lattice:
     incidence: csr_matrix
     bound_segments: int
     core_m: NDArray[np.float64]
+    on_blades: NDArray[np.bool_]
 
     @property
     def rings(self) -> int:
@@ -218,9 +220,19 @@ def rotor_lattice(strips_m: NDArray[np.float64], blades: int, wake: NDArray[np.f
                 add(grid[j, dk0, i + di0], grid[j, dk1, i + di1], j * chordwise + i, 1.0)
     bound = len(starts)
     cores: list[float] = [0.0] * bound
+    shed: dict[tuple[float, ...], int] = {}  # a line's first node -> its first segment's row
     for j in range(strips):  # the horseshoe's two legs: out of the second line's node, into the first's
         last = j * chordwise + chordwise - 1
         for line, sign in ((wake[j, 1], 1.0), (wake[j, 0], -1.0)):
+            key = tuple(line[0].tolist())
+            if key in shed:  # a neighbour's leg from the same node: the same line, both circulations on it
+                first = shed[key]
+                for step in range(len(line) - 1):
+                    rows.append(first + step)
+                    columns.append(last)
+                    signs.append(sign)
+                continue
+            shed[key] = len(starts)
             steps = np.linalg.norm(np.diff(line, axis=0), axis=1)
             along = np.cumsum(steps) - 0.5 * steps  # each segment's middle, from the blade
             cores.extend(core_m * np.minimum(1.0, along / core_growth_m))
@@ -233,7 +245,7 @@ def rotor_lattice(strips_m: NDArray[np.float64], blades: int, wake: NDArray[np.f
     incidence = csr_matrix((np.tile(signs, blades), (np.concatenate([np.array(rows) + b * count for b in range(blades)]),
                                                      np.tile(columns, blades))), shape=(count * blades, strips * chordwise))
     return Lattice(grid, points[None], normals[None], all_starts, all_ends, incidence, bound,
-                   np.tile(np.array(cores), blades))
+                   np.tile(np.array(cores), blades), np.tile(np.arange(count) < bound, blades))
 
 
 def _turned(points: NDArray[np.float64], angle_rad: float) -> NDArray[np.float64]:

@@ -103,14 +103,14 @@ def solve_inviscid(camber_m: NDArray[np.float64], blades: int, spin: float, omeg
     induced = STATIC_INDUCED_GUESS * omega_rad_s * tip_radius_m if airspeed_m_s == 0.0 and momentum_wake else 0.0
     scale = airspeed_m_s + omega_rad_s * tip_radius_m
     mean_chord = float(np.linalg.norm(chord, axis=1).mean()) / 2.0
-    thrust, change = 0.0, np.inf
+    thrust, change, blade_part = 0.0, np.inf, BladePart()
     for iteration in range(1, MAX_WAKE_ITERATIONS + 1):  # noqa: B007 (the count is reported)
         edges = strips[:, :, -1].reshape(-1, 3)
         lines = wake_lines(edges, omega_rad_s, spin, airspeed_m_s, induced, tip_radius_m, wake)
         lattice = rotor_lattice(strips, blades, lines.reshape(len(strips), 2, *lines.shape[1:]),
                                 wake.core_chords * mean_chord, mean_chord)
         circulation, force, moment = _solve_once(lattice, spin, omega_rad_s, airspeed_m_s, density,
-                                                 BOUND_CORE_CHORDS * mean_chord)
+                                                 BOUND_CORE_CHORDS * mean_chord, blade_part)
         thrust = blades * float(force[..., 2].sum())
         if scale == 0.0 or not momentum_wake:
             break
@@ -124,9 +124,11 @@ def solve_inviscid(camber_m: NDArray[np.float64], blades: int, spin: float, omeg
                           f"{change:.2g} of the tip speed after {MAX_WAKE_ITERATIONS} wake iterations "
                           f"(tolerance {INDUCED_TOLERANCE:g})")
     if momentum_wake and omega_rad_s > 0.0 and wake.free_turns:
-        relaxed = _relaxed(strips, lines.reshape(len(strips), 2, *lines.shape[1:]), (lattice, circulation, force),
-                           blades, spin, omega_rad_s, airspeed_m_s, density, wake, mean_chord)
-        circulation, force, moment, lattice, change, sweeps = relaxed
+        relaxed = _relaxed(strips, lines.reshape(len(strips), 2, *lines.shape[1:]), (lattice, circulation, blade_part),
+                           blades, spin, omega_rad_s, airspeed_m_s, wake, mean_chord)
+        circulation, lattice, change, sweeps = relaxed
+        force, moment = _forces(lattice, circulation, spin, omega_rad_s, airspeed_m_s, density,
+                                BOUND_CORE_CHORDS * mean_chord)
         iteration += sweeps
         thrust = blades * float(force[..., 2].sum())
     torque = spin * blades * float(moment[..., 2].sum())
@@ -134,19 +136,20 @@ def solve_inviscid(camber_m: NDArray[np.float64], blades: int, spin: float, omeg
 
 
 def _relaxed(strips: NDArray[np.float64], lines: NDArray[np.float64], prescribed: tuple[Any, ...], blades: int,
-             spin: float, omega: float, airspeed: float, density: float, wake: WakeShape, mean_chord: float
-             ) -> tuple[Any, ...]:
+             spin: float, omega: float, airspeed: float, wake: WakeShape, mean_chord: float) -> tuple[Any, ...]:
     """The solve on a wake whose first turn follows the flow (module doc), from the solve on the prescribed
-    ``lines`` (``prescribed``: its lattice, circulations and forces): each sweep retraces the first turn as
-    streamlines of the blade frame's velocity (kinematic plus induced, the wake's core on every segment),
-    moves the rest with its end, blends by WAKE_SWEEP_RELAXATION and solves again, until the thrust changes
-    by less than RELAXED_THRUST_TOLERANCE of itself; KernelError naming the change after
-    RELAXATION_SWEEPS_MAX sweeps."""
+    ``lines`` (``prescribed``: its lattice, circulations and the blades' part of the influence matrix): each
+    sweep retraces the first turn as streamlines of the blade frame's velocity (kinematic plus induced, the
+    wake's core on every segment), moves the rest with its end, blends by WAKE_SWEEP_RELAXATION and solves
+    for the circulations again, until the thrust (:func:`_kinematic_thrust`, which needs no Biot-Savart sum)
+    changes by less than RELAXED_THRUST_TOLERANCE of itself; KernelError naming the change after
+    RELAXATION_SWEEPS_MAX sweeps. Returns the circulations, the lattice, the last change and the sweeps."""
     free = wake.steps_per_turn  # the first turn's even steps
     step_s = 2.0 * np.pi / wake.steps_per_turn / omega
     core = wake.core_chords * mean_chord
-    lattice, circulation, force = prescribed
-    thrust, change, blend = blades * float(force[..., 2].sum()), np.inf, WAKE_SWEEP_RELAXATION
+    lattice, circulation, blade_part = prescribed
+    thrust = _kinematic_thrust(lattice, circulation, blades, spin, omega, airspeed)
+    change, blend = np.inf, WAKE_SWEEP_RELAXATION
     for sweep in range(1, RELAXATION_SWEEPS_MAX + 1):
         nodes = lines[:, :, : free + 1].reshape(-1, 3)
         velocity = kinematic_velocity(nodes, omega, spin, airspeed) + induced_velocity(
@@ -158,8 +161,8 @@ def _relaxed(strips: NDArray[np.float64], lines: NDArray[np.float64], prescribed
         traced[:, :, free + 1:] += (traced[:, :, free] - lines[:, :, free])[:, :, None, :]
         lines = (1.0 - blend) * lines + blend * traced
         lattice = rotor_lattice(strips, blades, lines, core, mean_chord)
-        circulation, force, moment = _solve_once(lattice, spin, omega, airspeed, density, BOUND_CORE_CHORDS * mean_chord)
-        new_thrust = blades * float(force[..., 2].sum())
+        circulation = _circulation(lattice, spin, omega, airspeed, blade_part)
+        new_thrust = _kinematic_thrust(lattice, circulation, blades, spin, omega, airspeed)
         previous = change
         # the change a full WAKE_SWEEP_RELAXATION step would make: a smaller blend moves the wake less
         change = abs(new_thrust - thrust) / max(abs(new_thrust), 1e-300) * WAKE_SWEEP_RELAXATION / blend
@@ -167,27 +170,57 @@ def _relaxed(strips: NDArray[np.float64], lines: NDArray[np.float64], prescribed
         if change > previous:  # the sweeps overshoot (the wake swings round its shape): smaller steps
             blend = max(0.5 * blend, WAKE_SWEEP_RELAXATION_MIN)
         if change < RELAXED_THRUST_TOLERANCE:
-            return circulation, force, moment, lattice, change, sweep
+            return circulation, lattice, change, sweep
     raise KernelError(f"the vortex solve did not converge: with its first wake turn following the flow the thrust "
                       f"still changed by {change:.2g} of itself after {RELAXATION_SWEEPS_MAX} sweeps "
                       f"(tolerance {RELAXED_THRUST_TOLERANCE:g})")
 
 
 def _solve_once(lattice: Lattice, spin: float, omega: float, airspeed: float, density: float,
-                bound_core_m: float) -> tuple[NDArray[np.float64], ...]:
+                bound_core_m: float, blade_part: BladePart | None = None) -> tuple[NDArray[np.float64], ...]:
     """One solve on a fixed wake: circulations ``(K - 1, C)``, and the force on each ring's bound segments
     and its moment about the origin ``(K - 1, C, 3)`` (blade 0)."""
-    shape = (-1, lattice.grid.shape[2] - 1)
+    circulation = _circulation(lattice, spin, omega, airspeed, blade_part)
+    return (circulation, *_forces(lattice, circulation, spin, omega, airspeed, density, bound_core_m))
+
+
+class BladePart:
+    """The part of the influence matrix that the blades' own segments make: the same for every wake of one
+    solve (only the wake moves), so it is computed once (the rings' rows, ``(P, rings)``)."""
+
+    def __init__(self) -> None:
+        self.matrix: NDArray[np.float64] | None = None
+
+
+def _circulation(lattice: Lattice, spin: float, omega: float, airspeed: float,
+                 blade_part: BladePart | None = None) -> NDArray[np.float64]:
+    """The rings' circulations ``(K - 1, C)`` that let no flow through the control points."""
     points = lattice.collocation.reshape(-1, 3)
     normals = lattice.normals.reshape(-1, 3)
-    influence = normal_influence(points, normals, lattice.starts, lattice.ends, lattice.core_m)
-    matrix = np.asarray((lattice.incidence.T @ influence.T).T)
+    on_blades = lattice.on_blades
+    if blade_part is None:
+        blade_part = BladePart()
+    if blade_part.matrix is None:
+        influence = normal_influence(points, normals, lattice.starts[on_blades], lattice.ends[on_blades],
+                                     lattice.core_m[on_blades])
+        blade_part.matrix = np.asarray(influence @ lattice.incidence[on_blades])
+    wake = ~on_blades
+    influence = normal_influence(points, normals, lattice.starts[wake], lattice.ends[wake], lattice.core_m[wake])
+    matrix = blade_part.matrix + np.asarray(influence @ lattice.incidence[wake])
     rhs = -np.einsum("pk,pk->p", kinematic_velocity(points, omega, spin, airspeed), normals)
     circulation = np.linalg.solve(matrix, rhs) if rhs.any() else np.zeros(lattice.rings)
+    return circulation.reshape(-1, lattice.grid.shape[2] - 1)
+
+
+def _forces(lattice: Lattice, circulation: NDArray[np.float64], spin: float, omega: float, airspeed: float,
+            density: float, bound_core_m: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The Kutta-Joukowski force on each ring's bound segments and its moment about the origin ``(K - 1, C, 3)``
+    (blade 0), at the velocity the whole lattice induces at each segment's middle."""
+    shape = circulation.shape
     bound = lattice.bound_segments
     starts, ends = lattice.starts[:bound], lattice.ends[:bound]
     middle = 0.5 * (starts + ends)
-    strengths = lattice.incidence @ circulation
+    strengths = lattice.incidence @ circulation.ravel()
     velocity = kinematic_velocity(middle, omega, spin, airspeed)
     if circulation.any():
         cores = lattice.core_m.copy()
@@ -199,4 +232,15 @@ def _solve_once(lattice: Lattice, spin: float, omega: float, airspeed: float, de
     moment = np.zeros((lattice.rings, 3))
     np.add.at(per_ring, ring, force)
     np.add.at(moment, ring, np.cross(middle, force))
-    return (circulation.reshape(shape), per_ring.reshape(*shape, 3), moment.reshape(*shape, 3))
+    return per_ring.reshape(*shape, 3), moment.reshape(*shape, 3)
+
+
+def _kinematic_thrust(lattice: Lattice, circulation: NDArray[np.float64], blades: int, spin: float, omega: float,
+                      airspeed: float) -> float:
+    """The rotor's thrust (per unit density) from the Kutta-Joukowski force at the kinematic velocity alone: no
+    Biot-Savart sum, so it is cheap; the relaxed wake's sweeps watch it settle."""
+    bound = lattice.bound_segments
+    starts, ends = lattice.starts[:bound], lattice.ends[:bound]
+    strengths = (lattice.incidence @ circulation.ravel())[:bound]
+    velocity = kinematic_velocity(0.5 * (starts + ends), omega, spin, airspeed)
+    return blades * float((strengths[:, None] * np.cross(velocity, ends - starts))[:, 2].sum())
