@@ -394,3 +394,11 @@ READBACK_WORST_SAMPLES = 129
 #: distance is there by more than the evaluation's rounding (about 1e-12 mm): a 1.1e-7 mm gap is within
 #: the reader's factor of 1.00001 of it.
 READBACK_SPLIT_MARGIN_MM = 1e-10
+
+#: simulate --solver vortex: rings across the chord and strips along the blade a run may ask for (--chordwise,
+#: --spanwise), and the defaults (torus_cad.vortex.rotor.Discretisation; here so that the command line's help
+#: names them without importing the solver).
+VORTEX_CHORDWISE_RANGE = (2, 24)
+VORTEX_SPANWISE_RANGE = (6, 120)
+VORTEX_CHORDWISE_DEFAULT = 8
+VORTEX_SPANWISE_DEFAULT = 30

@@ -32,6 +32,10 @@ from torus_cad.tolerances import (
     SIMULATE_TIME_LIMIT_MAX_S,
     THRUST_RUNS_RANGE,
     THRUST_TOLERANCE_RANGE,
+    VORTEX_CHORDWISE_DEFAULT,
+    VORTEX_CHORDWISE_RANGE,
+    VORTEX_SPANWISE_DEFAULT,
+    VORTEX_SPANWISE_RANGE,
     WORKERS_LIMIT,
     WORKERS_PER_CPU,
 )
@@ -262,19 +266,16 @@ def _add_simulate_parser(commands: Any) -> None:
     simulate.add_argument("--airspeed", type=number("--airspeed", airspeed, "m/s", "the solver is incompressible"),
                           default=0.0, metavar="M_S", help=f"speed of the air arriving at the inlet, "
                                                             f"{range_help(airspeed, 'm/s')} (default 0: still air)")
-    from torus_cad.vortex.pipeline import CHORDWISE_RANGE, SPANWISE_RANGE
-    from torus_cad.vortex.rotor import Discretisation
-
     simulate.add_argument("--solver", choices=["openfoam", "vortex"], default="openfoam",
                           help="openfoam (default): RANS in OpenFOAM; vortex: the vortex lattice with section polars "
                                "(seconds; takes none of the mesh and OpenFOAM options)")
-    chordwise, spanwise = Bounds(*CHORDWISE_RANGE), Bounds(*SPANWISE_RANGE)
+    chordwise, spanwise = Bounds(*VORTEX_CHORDWISE_RANGE), Bounds(*VORTEX_SPANWISE_RANGE)
     simulate.add_argument("--chordwise", type=integer("--chordwise", chordwise), default=None, metavar="N",
                           help=f"--solver vortex: rings across the chord, {range_help(chordwise)} "
-                               f"(default {Discretisation.chordwise})")
+                               f"(default {VORTEX_CHORDWISE_DEFAULT})")
     simulate.add_argument("--spanwise", type=integer("--spanwise", spanwise), default=None, metavar="N",
                           help=f"--solver vortex: strips along the blade, {range_help(spanwise)} "
-                               f"(default {Discretisation.spanwise})")
+                               f"(default {VORTEX_SPANWISE_DEFAULT})")
     simulate.add_argument("--level", choices=["coarse", "medium", "fine"], default=None,
                           help="mesh level (default coarse: about 52k cells for the default design)")
     simulate.add_argument("--mesher", choices=["snappy", "tet"], default=None,

@@ -31,6 +31,7 @@ from torus_cad.simulate.thrust_target import (
     next_rpm,
     search_state,
 )
+from torus_cad.tolerances import VORTEX_CHORDWISE_RANGE, VORTEX_SPANWISE_RANGE
 from torus_cad.vortex.loading_files import write_loading_csv, write_loading_plot, write_wake_plot
 from torus_cad.vortex.noise_surface import rotor_surface
 from torus_cad.vortex.performance import LIFT_RATIO_BOUNDS, VortexResult, vortex_performance
@@ -38,8 +39,8 @@ from torus_cad.vortex.polars import LOW_CONFIDENCE
 from torus_cad.vortex.rotor import Discretisation
 
 #: Rings across the chord, and strips along the blade, a run may ask for (--chordwise, --spanwise).
-CHORDWISE_RANGE = (2, 24)
-SPANWISE_RANGE = (6, 120)
+CHORDWISE_RANGE = VORTEX_CHORDWISE_RANGE
+SPANWISE_RANGE = VORTEX_SPANWISE_RANGE
 
 
 @dataclass(frozen=True)

@@ -18,6 +18,7 @@ from torus_cad.geometry.analysis.camber_surface import camber_surface, cosine_fr
 from torus_cad.geometry.blade.handedness import Handedness
 from torus_cad.geometry.blade.surface import BladeSurface, blade_surface_at
 from torus_cad.parameters.design import DesignKind, PropellerParameters
+from torus_cad.tolerances import VORTEX_CHORDWISE_DEFAULT, VORTEX_SPANWISE_DEFAULT
 from torus_cad.vortex.lattice import WakeShape
 
 #: Points around each section the camber surface is taken from (equal arc length).
@@ -38,8 +39,8 @@ class Discretisation:
         wake: the wake's length and steps.
     """
 
-    chordwise: int = 8
-    spanwise: int = 30
+    chordwise: int = VORTEX_CHORDWISE_DEFAULT
+    spanwise: int = VORTEX_SPANWISE_DEFAULT
     wake: WakeShape = field(default_factory=WakeShape)
 
 
