@@ -6,7 +6,8 @@
     python scripts/bench_vortex.py --design examples/apc_10x7sf.toml --rpm 5000
 
 Never part of the test suite. Prints, for one operating point at the default lattice: the solver's stage times
-in this process (the blade's lattice, the inviscid solve, the polars and strip forces: CPU seconds, one core),
+in this process (the blade's lattice, the inviscid solve, the polars and strip forces: CPU seconds on one core:
+the BLAS libraries' threads are set to 1 before numpy loads, for the commands too),
 then each command as a fresh process timed from outside (wall seconds and peak memory of its process tree):
 ``simulate --solver vortex --rpm``, ``simulate --solver vortex --thrust`` (the thrust of that point) and, with
 ``--cfd``, ``simulate --level coarse --processes 1``; and the ratios of the vortex commands to the CFD one.
@@ -24,6 +25,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+for _variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):  # one core, before numpy loads
+    os.environ.setdefault(_variable, "1")
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "scripts"))
 

@@ -17,11 +17,15 @@ from torus_cad.acoustics.fwh import RotatingSurface
 from torus_cad.vortex.lattice import Lattice
 from torus_cad.vortex.rotor import RotorBlade
 
+#: Every this many of a section's points make the thickness noise's faces: a face stays far smaller than the
+#: wavelength of the highest harmonic reported, and the noise's cost goes with the faces.
+THICKNESS_POINT_STRIDE = 4
+
 
 def rotor_surface(blade: RotorBlade, lattice: Lattice, ring_force_n: NDArray[np.float64]) -> RotatingSurface:
     """Every blade's surface and lattice (blade 0's ``ring_force_n`` ``(K - 1, C, 3)`` N on its rings, the
     others' turned round the axis) as FW-H faces; module doc."""
-    centroids, normals, areas, pressure = _blade_faces(blade.surface_m)
+    centroids, normals, areas, pressure = _blade_faces(blade.surface_m[:, ::THICKNESS_POINT_STRIDE])
     ring_centroids, ring_normals, ring_areas = _ring_faces(lattice.grid)
     jump = np.einsum("ik,ik->i", ring_force_n.reshape(-1, 3), ring_normals) / np.maximum(ring_areas, 1e-300)
     one_blade = (np.concatenate([centroids, ring_centroids, ring_centroids]),

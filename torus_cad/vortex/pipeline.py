@@ -81,9 +81,13 @@ def simulate_vortex(request: VortexRequest, out_dir: str | Path, stage: Callable
     kept in the report."""
     check_vortex_request(request)
     start = time.perf_counter()
-    result = _solved(request, stage)
-    noise = _noise(request, result, stage)
-    return _publish(request, result, noise, Path(out_dir), start, search)
+    return _published(request, _solved(request, stage), Path(out_dir), start, stage, search)
+
+
+def _published(request: VortexRequest, result: VortexResult, out: Path, start: float,
+               stage: Callable[[str], None] | None, search: dict[str, Any] | None) -> VortexRun:
+    """``result`` (of ``request``) with its noise, published into ``out``."""
+    return _publish(request, result, _noise(request, result, stage), out, start, search)
 
 
 def vortex_thrust_search(request: VortexRequest, thrust_n: float, out_dir: str | Path,
@@ -96,10 +100,12 @@ def vortex_thrust_search(request: VortexRequest, thrust_n: float, out_dir: str |
     density = request.point.fluid.density_kg_m3
     limit = rpm_limit(diameter_m, request.point.airspeed_m_s, request.point.fluid)
     check_target(thrust_n, limit, diameter_m, density)
-    rpm, runs = first_rpm(thrust_n, limit, diameter_m, density), []
+    start = time.perf_counter()
+    rpm, runs, results = first_rpm(thrust_n, limit, diameter_m, density), [], []
     while True:
-        report = vortex_performance(request.params, rpm, request.point.airspeed_m_s, request.discretisation,
-                                    request.viscous).report
+        results.append(vortex_performance(request.params, rpm, request.point.airspeed_m_s, request.discretisation,
+                                          request.viscous))
+        report = results[-1].report
         runs.append((ThrustRun(rpm, float(report["thrust_n"])), report))
         if stage:
             stage(f"run {len(runs)}: {rpm:.0f} rpm, thrust {report['thrust_n']:.4g} N")
@@ -107,15 +113,17 @@ def vortex_thrust_search(request: VortexRequest, thrust_n: float, out_dir: str |
         if state.done:
             break
         rpm = next_rpm([run for run, _ in runs], thrust_n, limit)
+    chosen = [run for run, _ in runs].index(state.best)
     search = {"target_thrust_n": thrust_n, "tolerance": tolerance, "max_runs": max_runs, "rpm": state.best.rpm,
               "thrust_n": state.best.thrust_n, "within_tolerance": state.within_tolerance, "rpm_limit": limit,
-              "chosen_run": [run for run, _ in runs].index(state.best),
+              "chosen_run": chosen,
               "runs": [{"rpm": run.rpm, "thrust_n": run.thrust_n, "torque_nm": report["torque_nm"],
                         "power_w": report["power_w"], "figure_of_merit": report["figure_of_merit"],
                         "efficiency": report["efficiency"], "converged": True} for run, report in runs],
               "method": "secant on sqrt(thrust) over rpm; the first rpm from CT = the OpenFOAM route's"}
     best_point = OperatingPoint(state.best.rpm, request.point.airspeed_m_s, request.point.fluid)
-    return simulate_vortex(_with_point(request, best_point), out_dir, stage, search)
+    return _published(_with_point(request, best_point), results[chosen], Path(out_dir), start, stage,
+                      search)
 
 
 def _with_point(request: VortexRequest, point: OperatingPoint) -> VortexRequest:

@@ -6,7 +6,9 @@ velocity seen from the turning blade); then the Kutta-Joukowski force rho Gamma 
 bound segment (where two rings share a side, both carry their circulation there), at the velocity the whole lattice induces at its midpoint. The wake's induced
 velocity comes from the thrust by momentum theory, v = -V/2 + sqrt((V/2)^2 + T / (2 rho A)), A the
 tip circle's area; wake and solve are iterated until that velocity changes by less than
-:data:`INDUCED_TOLERANCE` of the tip speed.
+:data:`INDUCED_TOLERANCE` of the tip speed. Between iterations the thrust is the Kutta-Joukowski force at
+the kinematic velocity alone (no Biot-Savart sum) times the ratio of the full force to it on the last wake
+where the full sum was made; the iteration ends only where that ratio holds on the final wake too.
 """
 
 from __future__ import annotations
@@ -103,26 +105,36 @@ def solve_inviscid(camber_m: NDArray[np.float64], blades: int, spin: float, omeg
     induced = STATIC_INDUCED_GUESS * omega_rad_s * tip_radius_m if airspeed_m_s == 0.0 and momentum_wake else 0.0
     scale = airspeed_m_s + omega_rad_s * tip_radius_m
     mean_chord = float(np.linalg.norm(chord, axis=1).mean()) / 2.0
-    thrust, change, blade_part = 0.0, np.inf, BladePart()
+    change, blade_part, bound_core = np.inf, BladePart(), BOUND_CORE_CHORDS * mean_chord
+    ratio: float | None = None  # the full Kutta-Joukowski thrust over the kinematic one (module doc)
     for iteration in range(1, MAX_WAKE_ITERATIONS + 1):  # noqa: B007 (the count is reported)
         edges = strips[:, :, -1].reshape(-1, 3)
         lines = wake_lines(edges, omega_rad_s, spin, airspeed_m_s, induced, tip_radius_m, wake)
         lattice = rotor_lattice(strips, blades, lines.reshape(len(strips), 2, *lines.shape[1:]),
                                 wake.core_chords * mean_chord, mean_chord)
-        circulation, force, moment = _solve_once(lattice, spin, omega_rad_s, airspeed_m_s, density,
-                                                 BOUND_CORE_CHORDS * mean_chord, blade_part)
-        thrust = blades * float(force[..., 2].sum())
+        circulation = _circulation(lattice, spin, omega_rad_s, airspeed_m_s, blade_part)
         if scale == 0.0 or not momentum_wake:
+            force, moment = _forces(lattice, circulation, spin, omega_rad_s, airspeed_m_s, density, bound_core)
             break
+        kinematic = density * _kinematic_thrust(lattice, circulation, blades, spin, omega_rad_s, airspeed_m_s)
+        if ratio is None:
+            force, moment = _forces(lattice, circulation, spin, omega_rad_s, airspeed_m_s, density, bound_core)
+            ratio = blades * float(force[..., 2].sum()) / kinematic if kinematic else 1.0
+        thrust = kinematic * ratio
         momentum = -airspeed_m_s / 2.0 + np.sqrt((airspeed_m_s / 2.0) ** 2 + max(thrust, 0.0) / (2.0 * density * area))
         change = abs(momentum - induced) / scale
+        if change < INDUCED_TOLERANCE:  # settled on the ratio of the last full sum: check it on this wake
+            force, moment = _forces(lattice, circulation, spin, omega_rad_s, airspeed_m_s, density, bound_core)
+            full = blades * float(force[..., 2].sum()) / kinematic if kinematic else 1.0
+            if abs(full - ratio) <= INDUCED_TOLERANCE:
+                break
+            ratio = full
         induced = (1.0 - WAKE_RELAXATION) * induced + WAKE_RELAXATION * momentum
-        if change < INDUCED_TOLERANCE:
-            break
     else:
         raise KernelError(f"the vortex solve did not converge: the wake's induced velocity still changed by "
                           f"{change:.2g} of the tip speed after {MAX_WAKE_ITERATIONS} wake iterations "
                           f"(tolerance {INDUCED_TOLERANCE:g})")
+    thrust = blades * float(force[..., 2].sum())
     if momentum_wake and omega_rad_s > 0.0 and wake.free_turns:
         relaxed = _relaxed(strips, lines.reshape(len(strips), 2, *lines.shape[1:]), (lattice, circulation, blade_part),
                            blades, spin, omega_rad_s, airspeed_m_s, wake, mean_chord)
@@ -174,14 +186,6 @@ def _relaxed(strips: NDArray[np.float64], lines: NDArray[np.float64], prescribed
     raise KernelError(f"the vortex solve did not converge: with its first wake turn following the flow the thrust "
                       f"still changed by {change:.2g} of itself after {RELAXATION_SWEEPS_MAX} sweeps "
                       f"(tolerance {RELAXED_THRUST_TOLERANCE:g})")
-
-
-def _solve_once(lattice: Lattice, spin: float, omega: float, airspeed: float, density: float,
-                bound_core_m: float, blade_part: BladePart | None = None) -> tuple[NDArray[np.float64], ...]:
-    """One solve on a fixed wake: circulations ``(K - 1, C)``, and the force on each ring's bound segments
-    and its moment about the origin ``(K - 1, C, 3)`` (blade 0)."""
-    circulation = _circulation(lattice, spin, omega, airspeed, blade_part)
-    return (circulation, *_forces(lattice, circulation, spin, omega, airspeed, density, bound_core_m))
 
 
 class BladePart:
