@@ -212,3 +212,52 @@ def test_a_study_tells_prescreened_trials_at_once_and_counts_them(tmp_path):
     header, *rows = (tmp_path / "out" / "results.csv").read_text().splitlines()
     assert header.startswith("number,state,outcome,feasible,reason,prescreened")
     assert all(",refused," in row and "hub's inset" in row for row in rows)
+
+
+#: Seeds of the fuzz sampler's workshop designs (bores, D-flats, set screws, chamfers, blunt edges, ccw; no root
+#: fillet) that check and the build both judge: the ones check passes are built.
+AGREEMENT_SEEDS = range(100, 116)
+
+
+def test_check_and_the_build_give_the_same_answer_on_random_workshop_designs():
+    """Issue 47: check is "would it build?". On seeded random workshop designs, every design check refuses the build
+    refuses with the same line before the kernel, and every design check passes builds (no kernel failure)."""
+    sys.path.insert(0, str(ROOT))
+    from studies.fuzz import random_design_dict
+    from torus_cad.propeller import build_propeller
+
+    answers = {"refused by both": 0, "built": 0}
+    for seed in AGREEMENT_SEEDS:
+        design = random_design_dict(seed, workshop=True)
+        try:
+            params = PropellerParameters.from_dict(design)
+        except ParameterError:
+            answers["refused by both"] += 1  # the parameters themselves: check and build read them alike
+            continue
+        verdict = _verdict(design)
+        try:
+            build_propeller(params)
+        except (ParameterError, GeometryError) as refusal:
+            assert str(refusal) == verdict, seed
+            answers["refused by both"] += 1
+            continue
+        assert verdict == "", (seed, verdict)  # check refused a design that builds
+        answers["built"] += 1
+    assert answers["built"] >= 4 and answers["refused by both"] >= 2, answers
+
+
+@pytest.mark.parametrize(("edge", "words"), [
+    ({}, "knife trailing edge"),
+    ({"airfoil.trailing_edge_thickness": 0.4, "airfoil.trailing_edge_shape": "flat"}, "flat trailing edge"),
+    ({"airfoil.trailing_edge_thickness": 0.4}, "rolling ball fits"),
+])
+def test_check_says_the_root_fillet_is_the_kernels_to_decide(edge, words):
+    """What check cannot know without the kernel it says on a note line (exit 0): a root fillet's outcome."""
+    overrides = [f"--set={key}={value}" for key, value in {**edge, "hub.root_fillet_radius": 0.5}.items()]
+    done = subprocess.run([sys.executable, "-m", "torus_cad", "check", *overrides], capture_output=True, text=True,
+                          cwd=ROOT, check=False)
+    assert done.returncode == 0, done.stderr
+    lines = done.stdout.strip().splitlines()
+    assert lines[0].startswith("feasible:") and lines[1].startswith("note: ") and words in lines[1]
+    assert "note" not in subprocess.run([sys.executable, "-m", "torus_cad", "check"], capture_output=True, text=True,
+                                        cwd=ROOT, check=True).stdout

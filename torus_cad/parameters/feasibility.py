@@ -34,11 +34,25 @@ from torus_cad.geometry.analysis.printability import Printability
 from torus_cad.geometry.blade.surface import BladeSurface
 from torus_cad.geometry.hub.mounting import HubMounting, place_mounting
 from torus_cad.geometry.section.section_fit import SectionFit, fit_sections
-from torus_cad.parameters.design import PropellerParameters
+from torus_cad.parameters.design import PropellerParameters, TrailingEdgeShape
 from torus_cad.parameters.design_targets import resolve_design_targets
 from torus_cad.parameters.stl_budget import check_stl_budget
 
 __all__ = ["Feasibility", "check_design", "placed_mounting", "section_chords"]
+
+#: What check cannot say without the kernel: a root fillet round a knife trailing edge builds on some designs
+#: (prop_10x5_2blade, marine_3blade_loop at 0.5 mm) and on others leaves a corner face that crosses itself, which
+#: only the build's strict check (BRepAlgoAPI_Check) finds; round a flat blunt edge the fillet's ball is stopped
+#: by the base's corners at one radius and not at a smaller one (the default with a 0.4 mm flat edge: 0.5 mm
+#: fails, 0.25 mm builds), which only OpenCascade's fillet finds.
+#: Round a round blunt edge the fillet's ball may still not fit a thin root or a tight bend (the APC 10x7 SF's
+#: 0.9 mm root takes 0.05 mm).
+EDGE_FILLET_NOTE = ("the root fillet round a {edge} trailing edge is decided by the kernel (build): OpenCascade's fillet "
+                    "{why} on some designs and radii; a round blunt edge (airfoil.trailing_edge_thickness > 0, "
+                    "airfoil.trailing_edge_shape = 'round') is the one it rolls round")
+ROUND_EDGE_FILLET_NOTE = ("the root fillet is made by the kernel (build): whether OpenCascade's rolling ball fits the "
+                          "blade roots (a thin root, a tight bend) is known only when the build makes it; the build "
+                          "names a radius that fits if this one does not")
 
 #: Sampling of the blade surface for the mounting checks (the check uses the points as they are).
 MOUNTING_SECTIONS, MOUNTING_POINTS = 200, 160
@@ -69,6 +83,18 @@ class Feasibility:
     def tip_diameter_mm(self) -> float:
         """Twice the largest distance of the sampled blade surface from the spin axis, mm."""
         return 2.0 * float(np.hypot(self.surface.points[..., 0], self.surface.points[..., 1]).max())
+
+    @property
+    def undecided(self) -> list[str]:
+        """What only the kernel can decide about this design (one line each; empty for most designs)."""
+        params = self.parameters
+        if params.hub.root_fillet_radius == 0.0:
+            return []
+        if params.airfoil.trailing_edge_thickness == 0.0:
+            return [EDGE_FILLET_NOTE.format(edge="knife", why="leaves a self-crossing corner face there")]
+        if params.airfoil.trailing_edge_shape == TrailingEdgeShape.FLAT:
+            return [EDGE_FILLET_NOTE.format(edge="flat", why="is stopped by the base's corners")]
+        return [ROUND_EDGE_FILLET_NOTE]
 
     def summary(self) -> str:
         """One line: the design, its size, the margins to the limits, its walls and the check's time."""
