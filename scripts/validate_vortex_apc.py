@@ -49,7 +49,7 @@ def main(argv: list[str] | None = None) -> int:
                                     viscous=not args.inviscid)
         print(f"{rpm:.0f} rpm, J {advance:.2f}: {time.perf_counter() - start:.1f} s", file=sys.stderr, flush=True)
         comparisons.append(Comparison(measured, result.report["ct"], result.report["cp"]))
-    print(markdown_table(comparisons))
+    print(markdown_table(comparisons, "vortex"))
     return 0
 
 

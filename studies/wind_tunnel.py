@@ -180,9 +180,11 @@ class Comparison:
                 and (eta_error is None or abs(eta_error) <= TARGETS["eta_absolute"]))
 
 
-def markdown_table(comparisons: Sequence[Comparison]) -> str:
-    """The comparison as a Markdown table (one row per point), as the docs show it."""
-    lines = ["| rpm | J | CT meas. | CT CFD | ΔCT | CP meas. | CP CFD | ΔCP | η meas. | η CFD | Δη | within |",
+def markdown_table(comparisons: Sequence[Comparison], solver: str = "CFD") -> str:
+    """The comparison as a Markdown table (one row per point), as the docs show it; ``solver`` heads the computed
+    columns."""
+    lines = [f"| rpm | J | CT meas. | CT {solver} | ΔCT | CP meas. | CP {solver} | ΔCP | η meas. | η {solver} | Δη | "
+             "within |",
              "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for item in comparisons:
         measured, eta, eta_error = item.measured, item.efficiency, item.efficiency_error

@@ -246,8 +246,20 @@ def test_check_and_the_build_give_the_same_answer_on_random_workshop_designs():
     assert answers["built"] >= 4 and answers["refused by both"] >= 2, answers
 
 
+def test_a_root_fillet_round_a_knife_edge_is_refused_by_check_as_by_the_build(tmp_path):
+    """OpenCascade's fillet round a knife trailing edge leaves a self-crossing corner face (measured on every
+    design tried): check and build refuse it before the kernel, exit 2, the same line, nothing written."""
+    args = ["--set", "hub.root_fillet_radius=0.2"]
+    check = subprocess.run([sys.executable, "-m", "torus_cad", "check", *args], capture_output=True, text=True,
+                           cwd=ROOT, check=False)
+    build = subprocess.run([sys.executable, "-m", "torus_cad", "build", *args, "--out", str(tmp_path / "out")],
+                           capture_output=True, text=True, cwd=ROOT, check=False)
+    assert check.returncode == build.returncode == 2 and check.stderr == build.stderr
+    assert "hub.root_fillet_radius = 0.2 mm round a knife trailing edge" in check.stderr
+    assert len(check.stderr.strip().splitlines()) == 1 and not (tmp_path / "out").exists()
+
+
 @pytest.mark.parametrize(("edge", "words"), [
-    ({}, "knife trailing edge"),
     ({"airfoil.trailing_edge_thickness": 0.4, "airfoil.trailing_edge_shape": "flat"}, "flat trailing edge"),
     ({"airfoil.trailing_edge_thickness": 0.4}, "rolling ball fits"),
 ])

@@ -228,7 +228,8 @@ def test_root_fillet_has_the_requested_radius_and_gives_one_valid_solid():
 
 
 def test_root_fillet_failure_exits_1_naming_the_fillet_and_writes_nothing(tmp_path, capsys):
-    assert main(["build", "--set", "hub.root_fillet_radius=4", "--out", str(tmp_path)]) == 1
+    assert main(["build", "--set", "hub.root_fillet_radius=4", "--set", "airfoil.trailing_edge_thickness=0.3",
+                 "--out", str(tmp_path)]) == 1
     error = capsys.readouterr().err
     assert "root fillet failed" in error and "hub.root_fillet_radius" in error
     assert not any(tmp_path.iterdir())
@@ -295,9 +296,12 @@ def fillet_stage(monkeypatch):
 
     On the knife-edged fuzz designs below, OpenCascade's self-interference test finds faults in
     the fillet's corner faces at the trailing edge, or does not finish within
-    STRICT_CHECK_TIME_LIMIT_S, so the build refuses them (test_a_knife_edge_fillet_the_check_cannot_certify_is_not_published);
+    STRICT_CHECK_TIME_LIMIT_S, so the build refuses them (test_a_knife_edge_fillet_the_check_cannot_certify_is_not_published)
+    and, since issue 47, refuses a fillet round a knife edge before the kernel (that refusal is lifted here too);
     what the fillet stage itself guarantees (one BRepCheck-valid solid, the radius, the extent) is tested here."""
     import torus_cad.propeller as pipeline
+
+    monkeypatch.setattr("torus_cad.parameters.design.check_root_fillet_edge", lambda *args: None)
 
     monkeypatch.setattr(pipeline, "_strictly_valid", lambda solid, sharp_edge_fillet: (solid, None))
     return pipeline.build_propeller
@@ -394,15 +398,28 @@ def test_root_fillet_is_reduced_only_where_the_blade_bends_too_tightly_and_says_
     assert report["constant_radius"] is False and report["smallest_radius_mm"] == fillet.smallest_radius_mm
 
 
-def test_tight_bend_fails_naming_the_reduce_choice(tmp_path, capsys):
+def test_tight_bend_fails_naming_the_reduce_choice(tmp_path, capsys, monkeypatch):
     """By default a fillet that cannot have its radius everywhere is not made (exit 1, nothing
-    written, the message says why and names the choice)."""
+    written, the message says why and names the choice). The design's knife edge, refused before the kernel
+    since issue 47, is let through: the fillet stage's own refusal is tested."""
+    monkeypatch.setattr("torus_cad.parameters.design.check_root_fillet_edge", lambda *args: None)
     design = tmp_path / "tight.toml"
     design.write_text(PropellerParameters.from_dict({**TIGHT_BEND, "name": "tight"}).to_toml())
     assert main(["build", str(design), "--set", "hub.root_fillet_radius=0.5", "--out", str(tmp_path / "failed")]) == 1
     error = capsys.readouterr().err
     assert "root fillet failed" in error and "too tight for the ball" in error and "hub.root_fillet_tight_bends" in error
     assert not (tmp_path / "failed").exists() or not any((tmp_path / "failed").iterdir())
+
+
+def test_a_knife_edge_fillet_is_refused_before_the_kernel(tmp_path, capsys):
+    """A fuzz design whose knife-edge fillet the strict check refuses (below) is refused before the kernel: exit 2,
+    one line naming the fillet, the knife edge and the round edge that takes it, nothing written."""
+    path = tmp_path / "knife.toml"
+    path.write_text(PropellerParameters.from_dict({**REPAIRED, "name": "knife"}).to_toml())
+    assert main(["build", str(path), "--set", "hub.root_fillet_radius=0.5", "--out", str(tmp_path / "out")]) == 2
+    error = capsys.readouterr().err
+    assert "round a knife trailing edge" in error and "airfoil.trailing_edge_shape = 'round'" in error
+    assert len(error.strip().splitlines()) == 1 and not (tmp_path / "out").exists()
 
 
 @pytest.mark.parametrize("design, check_limit_s", [pytest.param(REPAIRED, None, id="faults found"),
@@ -414,6 +431,8 @@ def test_a_knife_edge_fillet_the_check_cannot_certify_is_not_published(design, c
     BRepAlgoAPI_Check and the round blunt edge that avoids it, nothing written."""
     if check_limit_s is not None:
         monkeypatch.setattr("torus_cad.kernel.strict.STRICT_CHECK_TIME_LIMIT_S", check_limit_s)
+    # the kernel's own refusal, behind the one before the kernel (test_a_knife_edge_fillet_is_refused_before_the_kernel)
+    monkeypatch.setattr("torus_cad.parameters.design.check_root_fillet_edge", lambda *args: None)
     path = tmp_path / "knife.toml"
     path.write_text(PropellerParameters.from_dict({**design, "name": "knife"}).to_toml())
     assert main(["build", str(path), "--set", "hub.root_fillet_radius=0.5", "--out", str(tmp_path / "out")]) == 1

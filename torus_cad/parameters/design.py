@@ -25,7 +25,7 @@ from pydantic import AfterValidator, BeforeValidator, Field, model_validator
 
 from torus_cad.errors import GeometryError, ParameterError, shown
 from torus_cad.formats import ExportFormat, StepSchema
-from torus_cad.geometry.analysis.feasibility import Margins, check_feasible
+from torus_cad.geometry.analysis.feasibility import Margins, check_feasible, check_root_fillet_edge
 from torus_cad.geometry.analysis.printability import Printability, conventional_printability, printability
 from torus_cad.geometry.blade.conventional_blade import (
     ConventionalBlade,
@@ -558,7 +558,9 @@ class PropellerParameters(Document):
         """The pre-kernel checks of the design's kind on blade 0's ``surface`` (GeometryError naming the
         problem): :func:`torus_cad.geometry.analysis.feasibility.check_feasible` (its margins to the fold
         and resolution limits returned) or :func:`torus_cad.geometry.blade.conventional_blade.check_conventional_feasible`
-        (None)."""
+        (None); first, a root fillet round a knife trailing edge
+        (:func:`torus_cad.geometry.analysis.feasibility.check_root_fillet_edge`)."""
+        check_root_fillet_edge(self.hub.root_fillet_radius, self.airfoil.trailing_edge_thickness)
         if self.kind == DesignKind.CONVENTIONAL:
             check_conventional_feasible(self.conventional_blade(), surface, self.blades)
             return None

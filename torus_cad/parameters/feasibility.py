@@ -40,10 +40,9 @@ from torus_cad.parameters.stl_budget import check_stl_budget
 
 __all__ = ["Feasibility", "check_design", "placed_mounting", "section_chords"]
 
-#: What check cannot say without the kernel: a root fillet round a knife trailing edge builds on some designs
-#: (prop_10x5_2blade, marine_3blade_loop at 0.5 mm) and on others leaves a corner face that crosses itself, which
-#: only the build's strict check (BRepAlgoAPI_Check) finds; round a flat blunt edge the fillet's ball is stopped
-#: by the base's corners at one radius and not at a smaller one (the default with a 0.4 mm flat edge: 0.5 mm
+#: What check cannot say without the kernel (a knife edge's fillet is refused before it:
+#: torus_cad.geometry.analysis.feasibility.check_root_fillet_edge): round a flat blunt edge the fillet's ball is
+#: stopped by the base's corners at one radius and not at a smaller one (the default with a 0.4 mm flat edge: 0.5 mm
 #: fails, 0.25 mm builds), which only OpenCascade's fillet finds.
 #: Round a round blunt edge the fillet's ball may still not fit a thin root or a tight bend (the APC 10x7 SF's
 #: 0.9 mm root takes 0.05 mm).
@@ -90,8 +89,6 @@ class Feasibility:
         params = self.parameters
         if params.hub.root_fillet_radius == 0.0:
             return []
-        if params.airfoil.trailing_edge_thickness == 0.0:
-            return [EDGE_FILLET_NOTE.format(edge="knife", why="leaves a self-crossing corner face there")]
         if params.airfoil.trailing_edge_shape == TrailingEdgeShape.FLAT:
             return [EDGE_FILLET_NOTE.format(edge="flat", why="is stopped by the base's corners")]
         return [ROUND_EDGE_FILLET_NOTE]
