@@ -326,3 +326,18 @@ def test_with_openfoam_a_pruned_trial_never_reaches_the_medium_level(tmp_path):
         if trial.state is TrialState.COMPLETE:
             assert json.loads(medium.read_text())["level"] == "medium"
             assert trial.values[0] == pytest.approx(json.loads(medium.read_text())["thrust_n"])
+
+
+def test_a_study_on_a_terminal_shows_its_trials_and_each_better_one(tmp_path, capsys):
+    """Issue 47: optimize is not silent for minutes: a bar of the trials (finished of all, by state) and a line each
+    time a one-objective study finds a better trial, on stderr (drawn on a terminal; forced on here)."""
+    spec = read_study_file(_levels_study(tmp_path, 'kind = "none"', trials=4, thickness="[0.5, 0.9]", seed=3))
+    run_study(spec, tmp_path / "out", workers=1, trial_job=stand_in_without_build, progress=True)
+    error = capsys.readouterr().err
+    assert "trials" in error and "4/4" in error and "complete 4" in error
+    best = [line for line in error.splitlines() if "best so far, performance.power_w = " in line]
+    assert best and all(line.startswith("trial ") for line in best)  # the first complete trial, then each better one
+    values = [float(line.rsplit("= ", 1)[1]) for line in best]
+    assert values == sorted(values, reverse=True)  # power is minimised: each line lower than the last
+    run_study(spec, tmp_path / "quiet", workers=1, trial_job=stand_in_without_build, progress=False)
+    assert capsys.readouterr().err == ""

@@ -69,8 +69,9 @@ from torus_cad.optimize.storage import (
     storage_url,
     trial_result,
 )
-from torus_cad.optimize.study_file import Objective, PrunerKind, Sampler, StudySpec
+from torus_cad.optimize.study_file import Direction, Objective, PrunerKind, Sampler, StudySpec
 from torus_cad.optimize.trial_job import PERFORMANCE_DIR, TRIALS_DIR, TrialTask, performance_dir, run_trial, trial_name
+from torus_cad.runtime.progress import BatchProgress
 from torus_cad.tolerances import MAX_STUDY_TRIALS
 
 if TYPE_CHECKING:  # optuna is imported where it is used (the optimize extra)
@@ -155,7 +156,7 @@ def available_workers() -> int:
 
 def run_study(spec: StudySpec, out_dir: str | Path, *, trials: int | None = None, workers: int | None = None,
               scheduler: str | None = None, storage: str | None = None, write_results: bool = True,
-              trial_job: Job = run_trial) -> StudyResult:
+              trial_job: Job = run_trial, progress: bool | None = None) -> StudyResult:
     """Run ``spec`` until it holds ``trials`` (default ``spec.trials``) finished trials, then write its results.
 
     Args:
@@ -169,6 +170,8 @@ def run_study(spec: StudySpec, out_dir: str | Path, *, trials: int | None = None
         write_results: write the table, the history picture and the best designs at the end.
         trial_job: what a worker runs for each stage of a trial (default :func:`run_trial`: the build and
             ``torus-cad simulate``); a top-level function of a :class:`TrialTask` giving a DesignResult.
+        progress: draw a bar of the trials (finished of all, by state, per minute, time left) and a line each
+            time a one-objective study finds a better trial, on stderr; None: only when stderr is a terminal.
 
     Raises ParameterError for bad options or a study whose stored definition differs,
     StorageError / BatchError when the storage or the executor cannot be used, and
@@ -194,7 +197,7 @@ def run_study(spec: StudySpec, out_dir: str | Path, *, trials: int | None = None
         with interrupts_raised(), storage_failures_named(url):
             try:
                 try:
-                    runner = _Runner(spec, out, url, total, trial_job)
+                    runner = _Runner(spec, out, url, total, trial_job, progress)
                     raise_if_interrupted()
                     runner.run(result, workers, scheduler)
                 except Interrupted as interrupt:
@@ -218,7 +221,8 @@ def run_study(spec: StudySpec, out_dir: str | Path, *, trials: int | None = None
 class _Runner:
     """One process's part of a study: its storage, sampler, trials in flight."""
 
-    def __init__(self, spec: StudySpec, out: Path, url: str, total: int, job: Job = run_trial) -> None:
+    def __init__(self, spec: StudySpec, out: Path, url: str, total: int, job: Job = run_trial,
+                 progress: bool | None = None) -> None:
         import optuna
 
         optuna.logging.set_verbosity(optuna.logging.WARNING)
@@ -238,6 +242,9 @@ class _Runner:
         self.heartbeat = Heartbeat(self.rdb, self.study)
         self.job = job
         self.climbs: deque[TrialTask] = deque()  # trials the pruner let climb, ahead of new trials
+        self.progress_enabled = progress
+        self.progress: BatchProgress | None = None
+        self.best: tuple[int, float] | None = None  # a one-objective study's best trial so far: (number, value)
         self.seconds: dict[str, float] = {}  # design id -> worker seconds of its stages so far
 
     # -- the loop --------------------------------------------------------------------------------
@@ -246,8 +253,11 @@ class _Runner:
         start, cpu_start = time.perf_counter(), time.process_time()
         _remove_staging_debris((self.out / TRIALS_DIR).glob("*/"))  # of workers killed in earlier runs
         own_client = own_cluster = None
+        finished, _ = count_trials(self.rdb, self.study_id)
+        self.progress = BatchProgress(self.total, min(finished, self.total), enabled=self.progress_enabled,
+                                      label="trials")
         try:
-            with self.heartbeat:
+            with self.heartbeat, self.progress:
                 if scheduler is not None:
                     own_client, own_cluster = cluster.connect(scheduler, workers)
                     executor = own_client.get_executor(pure=False)
@@ -352,6 +362,20 @@ class _Runner:
                 self.study.tell(trial, values)
         self._forget(task.design_id, trial)
         self.ran += 1
+        self._show_progress(trial.number, values, PRUNED_AT in record)
+
+    def _show_progress(self, number: int, values: list[float] | None, pruned: bool) -> None:
+        """One finished trial on the bar, and a line when a one-objective study's best improves."""
+        if self.progress is None:
+            return
+        self.progress.update("failed" if values is None else "pruned" if pruned else "complete")
+        if values is None or pruned or len(values) != 1:
+            return
+        objective = self.spec.objectives[0]
+        sign = 1.0 if objective.direction is Direction.MINIMIZE else -1.0
+        if self.best is None or sign * values[0] < sign * self.best[1]:
+            self.best = (number, values[0])
+            self.progress.message(f"trial {number}: best so far, {objective.metric} = {values[0]:.6g}")
 
     def _forget(self, design_id: str, trial: Trial) -> None:
         """The trial is no longer this process's to run: out of the trials in flight and the heartbeat."""

@@ -28,7 +28,7 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.out) if args.out else Path("optimize_out") / Path(args.study).stem
     try:
         result = run_study(spec, out, trials=args.trials, workers=args.workers, scheduler=args.scheduler,
-                           storage=args.storage)
+                           storage=args.storage, progress=False if args.quiet else None)
     except StudyInterrupted as interrupt:
         print(f"torus-cad: optimize interrupted by {interrupt.signal_name}: {interrupt.result.ran} trials finished "
               "in this run; rerun the same command to continue", file=sys.stderr)
