@@ -199,6 +199,18 @@ def test_the_local_b_spline_basis_is_scipys(degree):
     assert np.allclose(dense, BSpline.design_matrix(x, knots, degree).toarray(), rtol=0.0, atol=1e-14)
 
 
+def test_a_bored_hub_takes_the_fast_route_and_agrees(light_params):
+    """A plain through-bore (the multirotor example's kind): the hub is a tube, integrated in closed form."""
+    from torus_cad.propeller import build_propeller
+
+    bored = build_propeller(light_params.with_values({"hub.bore_diameter": 5.0}))
+    assert hub_with_blade_integrals(bored.solid.wrapped).volume_mm3 < hub_with_blade_integrals(
+        build_propeller(light_params).solid.wrapped).volume_mm3  # the bore is taken out
+    _assert_agrees_with_the_reference(bored.solid)
+    flatted = build_propeller(light_params.with_values({"hub.bore_diameter": 5.0, "hub.bore_flat_depth": 0.5}))
+    assert hub_with_blade_integrals(flatted.solid.wrapped) is None  # a D-flat: OpenCascade's integration
+
+
 def test_a_mirrored_propeller_takes_the_fast_route_and_agrees(light_params):
     from torus_cad.propeller import build_propeller
 

@@ -97,10 +97,22 @@ class MassProperties:
 
 def volume_properties(shape: AnyShape, relative_precision: float = MASS_PROPERTIES_RELATIVE_PRECISION
                       ) -> GProp_GProps:
-    """OpenCascade volume properties by adaptive integration (not cadquery's coarse default)."""
+    """OpenCascade volume properties by adaptive integration (not cadquery's coarse default). The last shape's
+    answer is kept and given again for a request no more precise: the JSON report asks for the mass properties
+    (1e-6) and then the balance (1e-4) of the same solid, seconds each on a bored hub."""
+    solid = occ(shape)
+    last_shape, last_precision, last_answer = _LAST_VOLUME[0]
+    if last_shape is not None and last_answer is not None and last_precision <= relative_precision \
+            and last_shape.IsEqual(solid):
+        return last_answer
     properties = GProp_GProps()
-    BRepGProp.VolumeProperties_s(occ(shape), properties, relative_precision, False)
+    BRepGProp.VolumeProperties_s(solid, properties, relative_precision, False)
+    _LAST_VOLUME[0] = (solid, relative_precision, properties)
     return properties
+
+
+#: The last (shape, relative precision, answer) of :func:`volume_properties`.
+_LAST_VOLUME: list[tuple[TopoDS_Shape | None, float, GProp_GProps | None]] = [(None, 0.0, None)]
 
 
 def precise_volume(shape: AnyShape, relative_precision: float = MASS_PROPERTIES_RELATIVE_PRECISION) -> float:

@@ -98,12 +98,12 @@ def _integrate(shape: TopoDS_Shape, gauss_points: int) -> HubWithBladeIntegrals 
     hub = recognise(shape)
     if hub is None:
         return None
-    radius, length = hub.radius, hub.z_top - hub.z_bottom
-    volume = math.pi * radius**2 * length
+    radius, bore, length = hub.radius, hub.bore_radius, hub.z_top - hub.z_bottom
+    volume = math.pi * (radius**2 - bore**2) * length  # a tube round a plain bore (bore 0: a cylinder)
     moment = np.array([0.0, 0.0, volume * (hub.z_top + hub.z_bottom) / 2.0])
-    inertia = math.pi * radius**4 * length / 2.0
+    inertia = math.pi * (radius**4 - bore**4) * length / 2.0
     products = np.zeros(3)  # the hub's are 0: it is symmetric about its axis
-    area = 2.0 * math.pi * radius**2 + 2.0 * math.pi * radius * length
+    area = 2.0 * math.pi * (radius**2 - bore**2) + 2.0 * math.pi * (radius + bore) * length
     box_max = np.array([radius, radius, radius, radius, -hub.z_bottom, hub.z_top])  # along BOX_DIRECTIONS
     groups: dict[tuple[int, bool], list[tuple[TopoDS_Face, float]]] = {}
     surfaces: dict[tuple[int, bool], Geom_BSplineSurface] = {}

@@ -1,5 +1,5 @@
-"""Recognising a hub with blade faces: one solid made of z-axis cylinder faces of one radius, two
-whole end discs and non-rational B-spline blade faces bounded only by the cylinder's edges, their
+"""Recognising a hub with blade faces: one solid made of z-axis cylinder faces of one radius (and of a smaller
+one: a plain through-bore), two whole end discs (annuli round the bore) and non-rational B-spline blade faces bounded only by the cylinder's edges, their
 own seam and the edges between two of them; each blade face's untransformed surface and its
 rotation about z."""
 
@@ -31,6 +31,7 @@ class RecognisedHub:
     z_bottom: float
     z_top: float
     blade_faces: list[TopoDS_Face]
+    bore_radius: float = 0.0
 
 
 def recognise(shape: TopoDS_Shape) -> RecognisedHub | None:
@@ -48,10 +49,11 @@ def recognise(shape: TopoDS_Shape) -> RecognisedHub | None:
                                                                      GeomAbs_BSplineSurface))
     if by_kind or not cylinders or len(planes) != 2 or not blades:
         return None
-    radius = _z_axis_cylinder_radius(cylinders)
-    if radius is None:
+    radii = _z_axis_cylinder_radii(cylinders)
+    if radii is None:
         return None
-    ends = [z for z in (_end_disc_z(face, radius) for face in planes) if z is not None]
+    radius, bore_radius = radii
+    ends = [z for z in (_end_disc_z(face, radius, bore_radius) for face in planes) if z is not None]
     if len(ends) != 2:
         return None
     z_bottom, z_top = sorted(ends)
@@ -65,7 +67,7 @@ def recognise(shape: TopoDS_Shape) -> RecognisedHub | None:
                 cylinder_edges.Contains(edge) or BRep_Tool.IsClosed_s(TopoDS.Edge_s(edge), face)
                 or _between_blade_faces(edge, blades) for edge in explore(face, TopAbs_EDGE)):
             return None
-    return RecognisedHub(radius, z_bottom, z_top, blades)
+    return RecognisedHub(radius, z_bottom, z_top, blades, bore_radius)
 
 
 def _between_blade_faces(edge: TopoDS_Shape, blades: list[TopoDS_Face]) -> bool:
@@ -73,7 +75,8 @@ def _between_blade_faces(edge: TopoDS_Shape, blades: list[TopoDS_Face]) -> bool:
     return sum(1 for face in blades if any(edge.IsSame(own) for own in explore(face, TopAbs_EDGE))) == 2
 
 
-def _z_axis_cylinder_radius(faces: list[TopoDS_Face]) -> float | None:
+def _z_axis_cylinder_radii(faces: list[TopoDS_Face]) -> tuple[float, float] | None:
+    """(the hub's radius, the bore's radius or 0) of z-axis cylinder faces of one or two radii, else None."""
     radii = []
     for face in faces:
         cylinder = BRepAdaptor_Surface(face).Cylinder()
@@ -81,13 +84,17 @@ def _z_axis_cylinder_radius(faces: list[TopoDS_Face]) -> float | None:
         if abs(abs(direction.Z()) - 1.0) > 1e-12 or math.hypot(origin.X(), origin.Y()) > RECOGNITION_TOLERANCE_MM:
             return None
         radii.append(cylinder.Radius())
-    return radii[0] if max(radii) - min(radii) <= RECOGNITION_TOLERANCE_MM else None
+    outer, inner = max(radii), min(radii)
+    if any(min(abs(value - outer), abs(value - inner)) > RECOGNITION_TOLERANCE_MM for value in radii):
+        return None  # a third radius
+    return (outer, 0.0) if outer - inner <= RECOGNITION_TOLERANCE_MM else (outer, inner)
 
 
-def _end_disc_z(face: TopoDS_Face, radius: float) -> float | None:
-    """z of a plane face that is a whole disc of ``radius`` about the z axis, else None."""
+def _end_disc_z(face: TopoDS_Face, radius: float, bore_radius: float = 0.0) -> float | None:
+    """z of a plane face that is a whole disc of ``radius`` about the z axis (an annulus round a bore of
+    ``bore_radius``), else None."""
     plane = BRepAdaptor_Surface(face).Plane()
-    if abs(abs(plane.Axis().Direction().Z()) - 1.0) > 1e-12 or count(face, TopAbs_WIRE) != 1:
+    if abs(abs(plane.Axis().Direction().Z()) - 1.0) > 1e-12 or count(face, TopAbs_WIRE) != (2 if bore_radius else 1):
         return None
     for edge in explore(face, TopAbs_EDGE):
         curve = BRepAdaptor_Curve(TopoDS.Edge_s(edge))
@@ -95,8 +102,8 @@ def _end_disc_z(face: TopoDS_Face, radius: float) -> float | None:
             return None
         circle = curve.Circle()
         centre = circle.Location()
-        if (abs(circle.Radius() - radius) > RECOGNITION_TOLERANCE_MM
-                or math.hypot(centre.X(), centre.Y()) > RECOGNITION_TOLERANCE_MM):
+        if (min(abs(circle.Radius() - radius), abs(circle.Radius() - bore_radius) if bore_radius else math.inf)
+                > RECOGNITION_TOLERANCE_MM or math.hypot(centre.X(), centre.Y()) > RECOGNITION_TOLERANCE_MM):
             return None
     return float(plane.Location().Z())
 
