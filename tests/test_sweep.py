@@ -435,12 +435,12 @@ def test_a_sweep_over_the_budget_is_refused_before_any_design_is_made(tmp_path, 
 
 
 @pytest.mark.parametrize("vary, mode, expected", [
-    ('"hub.radius" = {start = 9.0, stop = nan, step = 0.5}', "", "'hub.radius' stop must be a finite number, got nan"),
-    ('"hub.radius" = {start = 9.0, stop = inf, step = 0.5}', "", "'hub.radius' stop must be a finite number, got inf"),
-    ("blades = {start = 2, stop = nan, step = 1}", "", "'blades' stop must be a whole number, got nan"),
-    ('"hub.radius" = [9.0, nan]', "", "'hub.radius' item 1 must be a finite number, got nan"),
+    ('"hub.radius" = {start = 9.0, stop = nan, step = 0.5}', "", "'hub.radius' stop must be a finite number in [0.5, 1000] mm, got nan"),
+    ('"hub.radius" = {start = 9.0, stop = inf, step = 0.5}', "", "'hub.radius' stop must be a finite number in [0.5, 1000] mm, got inf"),
+    ("blades = {start = 2, stop = nan, step = 1}", "", "'blades' stop must be a whole number in [1, 12], got nan"),
+    ('"hub.radius" = [9.0, nan]', "", "'hub.radius' item 1 must be a finite number in [0.5, 1000] mm, got nan"),
     ('"hub.radius" = {low = -inf, high = inf}', 'mode = "random"\nsamples = 4',
-     "'hub.radius' low must be a finite number, got -inf"),
+     "'hub.radius' low must be a finite number in [0.5, 1000] mm, got -inf"),
     ('"centerline.p2" = [[25.0, 3.0, inf]]', "", "must be a list of 3 finite numbers"),
 ])
 def test_not_a_number_in_a_sweep_is_bad_input(tmp_path, vary, mode, expected):

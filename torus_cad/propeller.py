@@ -46,12 +46,20 @@ from torus_cad.parameters.design import TightBends
 from torus_cad.parameters.design_targets import DesignTargets, resolve_design_targets
 from torus_cad.parameters.feasibility import placed_mounting, section_chords
 from torus_cad.runtime.stages import Stage, StageTimer
-from torus_cad.tolerances import ROUND_EDGE_FILLET_PIECES, VOLUME_CHECK_RELATIVE_PRECISION
+from torus_cad.tolerances import VOLUME_CHECK_RELATIVE_PRECISION
 
 if TYPE_CHECKING:
     import cadquery as cq
 
     from torus_cad.kernel.fillet import RootFillet
+
+#: Pieces the blade's airfoil face is split into (in equal ranges of its section curves' parameter)
+#: for the root fillet when the trailing edge is round (torus_cad.kernel.wires): the airfoil face is
+#: then open, so the fillet's split of closed side faces does not apply. Fifths (split points at 20,
+#: 40, 60, 80 % of the way from the lower to the upper end, none at the leading edge, near 50 %) fillet
+#: round edges that fewer pieces do not (measured: the docs' measurements page).
+ROUND_EDGE_FILLET_PIECES = 5
+
 
 #: Default density for mass: PLA, a common printing plastic (g/cm^3).
 DEFAULT_DENSITY_G_CM3 = 1.24

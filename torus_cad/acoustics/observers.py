@@ -12,10 +12,14 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from torus_cad.errors import ParameterError
-from torus_cad.tolerances import NOISE_OBSERVER_DISTANCE_M
 
 if TYPE_CHECKING:
     import numpy as np
+
+#: simulate --observer: an observer's distance from the hub, m (open below, closed above). It must also lie
+#: outside the blade tips' circle (torus_cad.acoustics.observers.check_observers).
+NOISE_OBSERVER_DISTANCE_M = (0.0, 1.0e4)
+
 
 #: The option that names an observer on the command line.
 OPTION = "--observer"

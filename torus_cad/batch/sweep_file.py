@@ -24,7 +24,7 @@
 
 The [sweep] table is a pydantic model (:class:`SweepTable`), like the parameters. Everything is checked
 here, before any design is generated: keys, types, finite values, and
-the number of designs against :data:`torus_cad.tolerances.MAX_SWEEP_DESIGNS`, estimated
+the number of designs against :data:`torus_cad.batch.sweep_file.MAX_SWEEP_DESIGNS`, estimated
 from the axis sizes without listing them. Every problem is a one-line ParameterError that
 names the key (exit code 2 at the command line).
 """
@@ -46,7 +46,13 @@ from torus_cad.errors import ParameterError, shown
 from torus_cad.parameters import ParameterSpec, PropellerParameters, parameter_specs
 from torus_cad.parameters.config_file import read_config_table
 from torus_cad.parameters.schema import Bounds, Section, check_in_bounds, closest_key, param, parameter_error
-from torus_cad.tolerances import DENSITY_LIMIT_G_CM3, DESIGN_TIME_LIMIT_MAX_S, MAX_SWEEP_DESIGNS
+from torus_cad.tolerances import DENSITY_LIMIT_G_CM3, DESIGN_TIME_LIMIT_MAX_S
+
+#: Most designs one sweep may hold (grid product or samples), checked from the axis sizes before
+#: any design is generated. Beyond it the design list and table alone take gigabytes, and at
+#: ~2 designs/s per machine the sweep would run for weeks.
+MAX_SWEEP_DESIGNS = 1_000_000
+
 
 __all__ = ["SweepMode", "SweepSpec", "VaryAxis", "estimate_designs", "load_sweep", "parse_sweep"]
 

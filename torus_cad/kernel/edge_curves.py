@@ -12,9 +12,9 @@ So every such edge is built again from exact intersection points: each point sol
 method on both surfaces (in the plane normal to the old curve through its old point), the 3D curve
 and both p-curves interpolated through them at the same parameters (so the edge stays same-range
 and same-parameter), and points added half way wherever the curves part by more than
-:data:`~torus_cad.tolerances.EDGE_CURVE_FIT_MM`, then where OpenCascade's measure finds them parting
-most, until it finds at most :data:`~torus_cad.tolerances.EDGE_CURVE_ACCEPT_MM`. An edge is replaced only when the new curves part by
-less than :data:`~torus_cad.tolerances.EDGE_CURVE_REFIT_ABOVE_MM` (by OpenCascade's own measure,
+:data:`~torus_cad.kernel.edge_curves.EDGE_CURVE_FIT_MM`, then where OpenCascade's measure finds them parting
+most, until it finds at most :data:`~torus_cad.kernel.edge_curves.EDGE_CURVE_ACCEPT_MM`. An edge is replaced only when the new curves part by
+less than :data:`~torus_cad.kernel.edge_curves.EDGE_CURVE_REFIT_ABOVE_MM` (by OpenCascade's own measure,
 ``GeomLib_CheckCurveOnSurface``, the one the argument analyzer uses) and less than before;
 otherwise (surfaces that touch rather than cross, as a fillet's) it keeps its curves.
 """
@@ -45,15 +45,32 @@ from OCP.TopExp import TopExp
 from OCP.TopoDS import TopoDS, TopoDS_Edge, TopoDS_Face, TopoDS_Shape
 from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape
 
-from torus_cad.tolerances import (
-    EDGE_CURVE_ACCEPT_MM,
-    EDGE_CURVE_FIT_MM,
-    EDGE_CURVE_MAX_POINTS,
-    EDGE_CURVE_NEWTON_STEPS,
-    EDGE_CURVE_REACH_TOLERANCES,
-    EDGE_CURVE_REFIT_ABOVE_MM,
-    EDGE_CURVE_WORST_POINT_ROUNDS,
-)
+#: ... and then until OpenCascade's own measure (GeomLib_CheckCurveOnSurface) finds them parting by at
+#: most this (mm), below EDGE_CURVE_REFIT_ABOVE_MM and 2.5 times below the reader's 1e-7 mm.
+EDGE_CURVE_ACCEPT_MM = 4e-8
+
+#: The rebuilt curves are refined until, half way between their points, they part by at most this (mm).
+EDGE_CURVE_FIT_MM = 2e-8
+
+#: Most points one rebuilt edge may need (the default's worst edge needs a few hundred); beyond, it is kept.
+EDGE_CURVE_MAX_POINTS = 4000
+
+#: Newton steps for one intersection point (it converges in 2-4 from the boolean's curves).
+EDGE_CURVE_NEWTON_STEPS = 12
+
+#: An exact intersection point farther than this many edge tolerances from the boolean's curve is
+#: another branch of the intersection (or surfaces that touch): the edge keeps its curves.
+EDGE_CURVE_REACH_TOLERANCES = 10.0
+
+#: An intersection edge whose 3D curve and p-curves part by more than this (mm) is rebuilt: half of
+#: what OpenCascade's STEP reader gives an edge at least (Precision::Confusion, 1e-7 mm), since a STEP
+#: file carries no tolerance per edge (torus_cad.kernel.step_readback).
+EDGE_CURVE_REFIT_ABOVE_MM = 5e-8
+
+#: Times a point is added where OpenCascade's measure finds the rebuilt curves parting most, after the
+#: half-way refinement (the interpolating spline can part between the half-way points).
+EDGE_CURVE_WORST_POINT_ROUNDS = 20
+
 
 #: Newton's method stops when both surfaces' points agree and lie in the plane to this (mm).
 _NEWTON_RESIDUAL_MM = 1e-12

@@ -26,10 +26,10 @@ from OCP.TopoDS import TopoDS, TopoDS_Edge, TopoDS_Face
 from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape
 
 from torus_cad.kernel.topology import BLADE_SURFACES
-from torus_cad.tolerances import (
-    REDUCED_FILLET_FRACTION,
-    REDUCED_FILLET_SAMPLES,
-)
+from torus_cad.tolerances import REDUCED_FILLET_FRACTION
+
+#: Points per junction edge at which the blade face's bend is measured for the reduced fillet.
+REDUCED_FILLET_SAMPLES = 40
 
 
 def reduced_edge_radii(solid: cq.Solid, edges: Sequence[TopoDS_Edge], radius_mm: float) -> list[float]:

@@ -24,7 +24,10 @@ from scipy.interpolate import make_interp_spline
 from torus_cad.errors import KernelError
 from torus_cad.kernel.topology import ShapeT, like, occ, solids
 from torus_cad.kernel.wires import knot_arrays
-from torus_cad.tolerances import LOFT_PRECISION
+
+#: Precision of the loft (BRepOffsetAPI_ThruSections pres3d), mm.
+LOFT_PRECISION = 1e-6
+
 
 #: Sewing tolerance of the blade's side face and end caps (mm); their shared edges are the same
 #: curves (the side surface interpolates the end sections exactly), so a tight value suffices.

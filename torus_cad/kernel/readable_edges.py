@@ -24,21 +24,21 @@ per edge, and OpenCascade's reader (FreeCAD's too) gives each edge what it sampl
 So, before the file is written:
 
 0. every edge's 3D curve (a B-spline) that ends farther than
-   :data:`~torus_cad.tolerances.READBACK_VERTEX_GAP_MM` from its vertex is moved to end on it (a
+   :data:`~torus_cad.kernel.readable_edges.READBACK_VERTEX_GAP_MM` from its vertex is moved to end on it (a
    shift varying linearly along the edge added to it): face curves made square to the surfaces then
    end on the feet of the vertex, and meet on every face;
-1. every p-curve whose curves part by more than :data:`~torus_cad.tolerances.READBACK_MIN_TOLERANCE_MM`,
+1. every p-curve whose curves part by more than :data:`~torus_cad.kernel.readable_edges.READBACK_MIN_TOLERANCE_MM`,
    and that is askew, is replaced by the curve of the feet of the perpendiculars from the 3D curve to
    the surface, at the same parameters (points solved by Gauss-Newton, the p-curve fitted by least
    squares in a B-spline basis holding the old 3D curve and p-curve and the surface's knot lines they
    cross, refined until it misses the feet half way between them by at most
-   :data:`~torus_cad.tolerances.READBACK_PCURVE_FIT_MM` or
-   :data:`~torus_cad.tolerances.READBACK_PCURVE_FIT_GAP` of the gap), its ends on the feet of the 3D
+   :data:`~torus_cad.kernel.readable_edges.READBACK_PCURVE_FIT_MM` or
+   :data:`~torus_cad.kernel.readable_edges.READBACK_PCURVE_FIT_GAP` of the gap), its ends on the feet of the 3D
    curve's ends: the curves then part square to the surface everywhere, by the real gap only, and the
    reader's projection of the end points lands where the file says. A new p-curve that would make its
    face's wire cross itself (two edges meeting at a sliver) is undone;
 2. every edge whose largest distance (looked for on
-   :data:`~torus_cad.tolerances.READBACK_WORST_SAMPLES` points and refined by Brent's method:
+   :data:`~torus_cad.kernel.readable_edges.READBACK_WORST_SAMPLES` points and refined by Brent's method:
    GeomLib_CheckCurveOnSurface can put it a fraction of a percent off next to an end) lies between
    the reader's samples is split there: each piece then parts most at an end, which the reader
    samples. The pieces get the tolerance their curves need, not the fillet's.
@@ -86,18 +86,48 @@ from torus_cad.kernel import face_provenance
 from torus_cad.kernel.checks import single_valid_solid
 from torus_cad.kernel.edge_curves import distinct_faces
 from torus_cad.kernel.topology import copied, explore
-from torus_cad.tolerances import (
-    READBACK_MIN_TOLERANCE_MM,
-    READBACK_PCURVE_FIT_GAP,
-    READBACK_PCURVE_FIT_LOOSE_MM,
-    READBACK_PCURVE_FIT_MM,
-    READBACK_PCURVE_FIT_ROUNDS,
-    READBACK_SAMPLES,
-    READBACK_SPLIT_MARGIN_MM,
-    READBACK_TOLERANCE_FACTOR,
-    READBACK_VERTEX_GAP_MM,
-    READBACK_WORST_SAMPLES,
-)
+
+#: The least tolerance OpenCascade's STEP reader gives an edge (Precision::Confusion, mm): an edge whose
+#: curves part by no more than this reads back valid whatever they do.
+READBACK_MIN_TOLERANCE_MM = 1e-7
+
+READBACK_PCURVE_FIT_GAP = 1e-3
+
+#: After those rounds, the closest fit is taken if it misses the feet by no more than this (mm): still
+#: square to well within the reader's least tolerance (a 3D curve moved onto its vertices can leave
+#: feet whose refinement stalls near 1e-9 mm).
+READBACK_PCURVE_FIT_LOOSE_MM = 1e-8
+
+#: A p-curve rebuilt from the feet of perpendiculars misses them, half way between its points, by at
+#: most this (mm) or this fraction of the largest gap between the 3D curve and the surface, whichever
+#: is larger: a miss along the curve of e moves the reader's projection of an end point, and the
+#: largest distance it reads, by about e^2 / gap, well within its factor of 1.00001.
+READBACK_PCURVE_FIT_MM = 1e-9
+
+#: Rounds of knots added where the rebuilt p-curve misses; beyond, the p-curve is kept.
+READBACK_PCURVE_FIT_ROUNDS = 10
+
+#: The reader samples an edge's curves at this many points at equal parameters, ends included
+#: (ShapeAnalysis_Edge::CheckSameParameter's 23) ...
+READBACK_SAMPLES = 23
+
+#: A split edge's pieces are moved this far (mm) from their face at the split, so that their largest
+#: distance is there by more than the evaluation's rounding (about 1e-12 mm): a 1.1e-7 mm gap is within
+#: the reader's factor of 1.00001 of it.
+READBACK_SPLIT_MARGIN_MM = 1e-10
+
+#: ... and gives the edge the largest distance times this (BRepLib_ValidateEdge).
+READBACK_TOLERANCE_FACTOR = 1.00001
+
+#: An edge's 3D curve ending farther than this from its vertex (mm; the vertex's tolerance covers it in
+#: memory) is moved to end on it: the reader closes the gap its p-curves then leave on a face by bending
+#: them, its neighbour's too, whose edge may have no tolerance for it.
+READBACK_VERTEX_GAP_MM = 1e-9
+
+#: Points at equal parameters on which the largest distance between an edge's curves is looked for
+#: before refining (GeomLib_CheckCurveOnSurface's own can be a fraction of a percent off next to an end).
+READBACK_WORST_SAMPLES = 129
+
 
 __all__ = ["ReadableEdges", "readable_copy", "readable_edges"]
 

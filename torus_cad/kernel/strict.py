@@ -44,7 +44,13 @@ from torus_cad.errors import KernelError
 from torus_cad.kernel.checks import compound, single_valid_solid
 from torus_cad.kernel.topology import ShapeT, occ
 from torus_cad.runtime.isolation import IsolatedTimeout, run_isolated
-from torus_cad.tolerances import STRICT_AXIS_TOLERANCE, STRICT_BLADE_SEPARATION_MM, STRICT_CHECK_TIME_LIMIT_S
+from torus_cad.tolerances import STRICT_CHECK_TIME_LIMIT_S
+
+#: Axis directions and positions within this of the z axis (unit vector components, mm) count as on it.
+STRICT_AXIS_TOLERANCE = 1e-9
+
+#: Two blade copies closer than this (mm) count as interfering (their faces' tolerances are ~1e-7 mm).
+STRICT_BLADE_SEPARATION_MM = 1e-4
 
 
 class CheckScope(StrEnum):

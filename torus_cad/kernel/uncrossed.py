@@ -42,12 +42,21 @@ from torus_cad.geometry.blade.mesh import side_use_counts
 from torus_cad.kernel.mesh_check import crossing_pairs, meshlib_mesh
 from torus_cad.kernel.tessellation import face_triangulation
 from torus_cad.kernel.topology import AnyShape, copied, faces_in_order, occ, surface_kind
-from torus_cad.tolerances import (
-    MESH_MERGE_DISTANCE_MM,
-    MESH_REFINE_HALVINGS,
-    MESH_REPAIR_MAX_DEVIATION_MM,
-    MESH_REPAIR_PASSES,
-)
+from torus_cad.tolerances import MESH_REPAIR_MAX_DEVIATION_MM
+
+#: Tessellation nodes closer than this (mm) are one vertex of the written mesh (the faces store their
+#: shared boundary nodes each in its own placement, equal to the last bits).
+MESH_MERGE_DISTANCE_MM = 1e-6
+
+#: A repair that would move the tessellation further is tried again on a finer one: the linear
+#: deflection halved, at most this many times (a user's coarse deflection crosses far: the docs'
+#: measurements page).
+MESH_REFINE_HALVINGS = 3
+
+#: meshlib's SelfIntersections.fix passes tried in turn on a crossing tessellation, each on the last
+#: one's result, until no triangle crosses.
+MESH_REPAIR_PASSES = ("Relax", "Relax", "Relax", "CutAndFill", "Relax", "CutAndFill")
+
 
 __all__ = ["UncrossedMesh", "uncrossed_mesh"]
 

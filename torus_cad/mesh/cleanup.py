@@ -20,7 +20,10 @@ from numpy.typing import NDArray
 
 from torus_cad.mesh.quality import corner_measures, triangle_measures
 from torus_cad.mesh.union import LabeledMesh
-from torus_cad.tolerances import MESH_NEEDLE_EDGE_RATIO
+
+#: Surface meshes: at the blade-hub junctions, a triangle edge shorter than this fraction of its
+#: triangle's longest edge is a needle the cleanup collapses (torus_cad.mesh.cleanup).
+MESH_NEEDLE_EDGE_RATIO = 0.1
 
 
 @dataclass

@@ -48,7 +48,14 @@ from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.design import Handedness, SectionSpacing
 from torus_cad.runtime.isolation import IsolatedCall, fork_is_safe_for_opencascade
 from torus_cad.runtime.stages import StageTimer
-from torus_cad.tolerances import MESH_COMPARISON_TIME_LIMIT_S, MESH_JUNCTION_MARGIN_RELATIVE
+
+#: Longest wait (s) for the B-rep that ``torus-cad mesh`` compares its mesh with (built in a child
+#: beside the mesh): a build, its strict check (STRICT_CHECK_TIME_LIMIT_S) included, and one tessellation.
+MESH_COMPARISON_TIME_LIMIT_S = 900.0
+
+#: Surface meshes: triangles with every corner at least this fraction of the hub radius outside
+#: the hub count as "away from the junctions" in the quality report.
+MESH_JUNCTION_MARGIN_RELATIVE = 0.05
 
 
 class MeshStage(StrEnum):

@@ -28,7 +28,12 @@ from torus_cad.geometry.section.arc_length import equal_arc_length_section
 from torus_cad.geometry.section.section import max_thickness
 from torus_cad.mesh.grids import blade_grid, blade_triangle_count, cell_size, hub_layout, section_parameters
 from torus_cad.parameters.design import SectionSpacing
-from torus_cad.tolerances import MESH_SAG_LIMIT
+
+#: Surface meshes (torus_cad.mesh): largest sag of the flat faces from the analytic blade, as a
+#: fraction of the local section thickness, above which a resolution is refused. The default design
+#: needs 15 sections (any allowed points); a 6 % thick section needs 31 points (its leading edge).
+MESH_SAG_LIMIT = 0.10
+
 
 #: Sections at which the sag around the section is measured.
 AROUND_CHECK_SECTIONS = 33

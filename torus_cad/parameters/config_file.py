@@ -9,7 +9,7 @@ forever.
 the program (designs on disk or uploaded to the studio, sweep files, study files) and ``--set``
 values alike: UTF-8 with or without a byte order mark, then a scan (:func:`check_toml_shape`) that
 refuses values nested deeper than :data:`~torus_cad.tolerances.TOML_NESTING_LIMIT` or numbers
-longer than :data:`~torus_cad.tolerances.TOML_NUMBER_DIGITS_LIMIT` naming their key, before the
+longer than :data:`~torus_cad.parameters.config_file.TOML_NUMBER_DIGITS_LIMIT` naming their key, before the
 TOML reader (which recurses on nesting and refuses integers over 4300 digits without saying where)
 sees them, and after it a walk (:func:`check_table_depth`) that refuses tables nested deeper than
 the same limit through dotted keys or headers (``a.b.c.… = 1``, ``[a.b.c.…]``), which the readers
@@ -25,7 +25,11 @@ from typing import Any
 
 from torus_cad.errors import ParameterError, cut
 from torus_cad.runtime.input_files import decode_text, read_untrusted_bytes, read_untrusted_text
-from torus_cad.tolerances import CONFIG_FILE_MAX_BYTES, TOML_NESTING_LIMIT, TOML_NUMBER_DIGITS_LIMIT
+from torus_cad.tolerances import CONFIG_FILE_MAX_BYTES, TOML_NESTING_LIMIT
+
+#: Most digits one number in a TOML file may have (Python refuses integers of more than 4300).
+TOML_NUMBER_DIGITS_LIMIT = 400
+
 
 _DIGITS = re.compile(r"[0-9][0-9_]*")
 _STRING_OPENERS = ('"""', "'''", '"', "'")

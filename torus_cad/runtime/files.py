@@ -26,7 +26,11 @@ from itertools import count
 from pathlib import Path
 
 from torus_cad.runtime.processes import host_tag, process_alive
-from torus_cad.tolerances import DISK_FULL_FREE_BYTES
+
+#: A writer that fails while its file system has less free space than this (bytes) failed for
+#: lack of space: OpenCascade's writers report only that they could not write.
+DISK_FULL_FREE_BYTES = 1 << 20
+
 
 #: Files and folders being written now, by a registration number: what a signal handler removes.
 IN_FLIGHT: dict[int, Path] = {}

@@ -24,7 +24,11 @@ import numpy as np
 from torus_cad.parameters.design import Handedness
 from torus_cad.simulate.history import History
 from torus_cad.simulate.settings import OperatingPoint
-from torus_cad.tolerances import SIMULATE_CONVERGED_VARIATION
+
+#: Simulations: a run counts as converged when thrust and torque vary by at most this fraction of
+#: their mean over the last 10 % of its iterations.
+SIMULATE_CONVERGED_VARIATION = 0.02
+
 
 #: The share of the last iterations whose force variation decides convergence.
 CONVERGENCE_WINDOW = 0.1

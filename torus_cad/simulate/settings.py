@@ -17,7 +17,11 @@ from torus_cad.errors import ParameterError
 from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.design import Handedness, InletSide
 from torus_cad.runtime.cpus import available_cpus
-from torus_cad.tolerances import SIMULATE_AIRSPEED_LIMIT_M_S, SIMULATE_TIP_MACH_LIMIT
+from torus_cad.tolerances import SIMULATE_AIRSPEED_LIMIT_M_S
+
+#: Simulations (torus_cad.simulate): the incompressible solver is trusted up to this helical tip
+#: Mach number (tip speed with the airspeed, over the speed of sound); faster rpm are refused.
+SIMULATE_TIP_MACH_LIMIT = 0.6
 
 
 class Level(StrEnum):

@@ -17,7 +17,7 @@ sweep it lies on the x axis; with a sweep (APC's definition) the section moves a
 leading edge lies ``sweep`` ahead (toward -y) of the x axis.
 
 Root: stations below the table's first radius r_1 hold the first station's beta and thickness; the
-blade continues down to r_0 = :data:`~torus_cad.tolerances.CONVENTIONAL_ROOT_RADIUS_FRACTION` x the
+blade continues down to r_0 = :data:`~torus_cad.geometry.blade.conventional_blade.CONVENTIONAL_ROOT_RADIUS_FRACTION` x the
 hub radius, with the chord blended (smoothstep in r on [r_0, max(r_1, R_hub)]) to a root chord that
 fits inside the hub, and the section's mid chord blended onto the x axis there. The hub swallows
 that blend. Tip: the last section (r = R, the table's tip chord) is the blade's open end; the
@@ -25,7 +25,7 @@ kernel caps it with a planar face.
 
 Laws in r are monotone cubic (PCHIP, scipy) through the stations; the sections are spaced in
 r(s) = r_0 + (R - r_0) ((1 - a) s + a sin(pi s / 2)), s uniform in [0, 1], a =
-:data:`~torus_cad.tolerances.CONVENTIONAL_TIP_CLUSTERING`, densest at the tip.
+:data:`~torus_cad.geometry.blade.conventional_blade.CONVENTIONAL_TIP_CLUSTERING`, densest at the tip.
 """
 
 from __future__ import annotations
@@ -46,11 +46,19 @@ from torus_cad.geometry.blade.trailing_edge import TRAILING_EDGE_THICKNESS_LIMIT
 from torus_cad.geometry.section.airfoil import Naca5Airfoil, NacaAirfoil
 from torus_cad.geometry.section.arc_length import equal_arc_length_section
 from torus_cad.geometry.section.section import RoundTrailingEdge, Section, closed_points, max_thickness
-from torus_cad.tolerances import (
-    CONVENTIONAL_ROOT_FIT_MARGIN,
-    CONVENTIONAL_ROOT_RADIUS_FRACTION,
-    CONVENTIONAL_TIP_CLUSTERING,
-)
+
+#: The blended root section fits inside this fraction of the hub's half-width and half-length.
+CONVENTIONAL_ROOT_FIT_MARGIN = 0.8
+
+#: The root section of a conventional blade sits at this fraction of the hub's radius (well inside the
+#: hub, so that the hub swallows the root's blend); the stations below the table's first one are blended
+#: down to it.
+CONVENTIONAL_ROOT_RADIUS_FRACTION = 0.5
+
+#: Share of sine clustering in the conventional blade's section radii (0: uniform in r; 1: a quarter
+#: sine, sections densest at the tip).
+CONVENTIONAL_TIP_CLUSTERING = 0.6
+
 
 #: Step in the half parameter u of the central difference that gives a scaled section's speed.
 _SPEED_STEP = 1e-6

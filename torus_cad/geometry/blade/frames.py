@@ -17,7 +17,13 @@ from numpy.typing import ArrayLike, NDArray
 
 from torus_cad.errors import GeometryError
 from torus_cad.geometry.blade.centerline import Centerline
-from torus_cad.tolerances import FRAME_SCAN_SAMPLES, FRENET_MIN_CURVATURE
+
+#: Samples on s in [0, 1] used to scan the centerline for vanishing curvature, flips of N,
+#: and to step the rotation-minimising frame.
+FRAME_SCAN_SAMPLES = 401
+
+#: Curvature |T'(s)| / |C'(s)| below which the Frenet normal counts as undefined (1/mm).
+FRENET_MIN_CURVATURE = 1e-6
 
 
 class FrameKind(StrEnum):

@@ -15,7 +15,7 @@ File layouts (detected by content):
   leading edge's distance ahead of the blade's axis in the plane of rotation.
 
 A station file is untrusted input, read through :mod:`torus_cad.runtime.input_files` (a regular
-file, at most :data:`~torus_cad.tolerances.STATION_FILE_MAX_BYTES`). Malformed tables raise
+file, at most :data:`~torus_cad.geometry.blade.station_table.STATION_FILE_MAX_BYTES`). Malformed tables raise
 ParameterError naming the file and the line, never quoting it: a row that is not numbers, missing
 columns, r/R not increasing or out of (0, 1], a chord <= 0 or absurdly large, a beta out of range,
 too many rows (:data:`~torus_cad.tolerances.STATION_MAX_ROWS`).
@@ -33,14 +33,23 @@ from numpy.typing import NDArray
 
 from torus_cad.errors import ParameterError
 from torus_cad.runtime.input_files import decode_text, is_number_text, read_untrusted_bytes
-from torus_cad.tolerances import (
-    STATION_BETA_LIMIT_DEG,
-    STATION_FILE_MAX_BYTES,
-    STATION_MAX_CHORD_OVER_R,
-    STATION_MAX_RADIUS_IN,
-    STATION_MAX_ROWS,
-    STATION_MAX_SWEEP_OVER_R,
-)
+from torus_cad.tolerances import STATION_MAX_ROWS
+
+#: Allowed local pitch angle beta of a station (deg): a propeller blade's sections, not a feathered one.
+STATION_BETA_LIMIT_DEG = 85.0
+
+#: Largest station file (a UIUC geometry file is < 1 kB, an APC PE0 file with its performance tables ~ 100 kB).
+STATION_FILE_MAX_BYTES = 1_000_000
+
+#: Largest chord of a station as a fraction of the tip radius (c/R; real propellers: < 0.4).
+STATION_MAX_CHORD_OVER_R = 2.0
+
+#: Largest propeller radius an APC PE0 file may give (inches; 100 in = 5 m across).
+STATION_MAX_RADIUS_IN = 100.0
+
+#: Largest |sweep| of a station's leading edge as a fraction of the tip radius.
+STATION_MAX_SWEEP_OVER_R = 2.0
+
 
 #: What a station file is called in messages.
 _WHAT = "station file"
@@ -91,7 +100,6 @@ def _numbers(fields: list[str], source: str, line: int) -> list[float]:
             raise ParameterError(f"{_where(source, line)}: field {position} is not a finite number")
         values.append(value)
     return values
-
 
 
 def read_station_file(path: str | Path) -> StationTable:

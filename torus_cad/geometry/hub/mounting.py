@@ -17,7 +17,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from torus_cad.errors import GeometryError
-from torus_cad.tolerances import MOUNTING_CLEARANCE_MM
+
+#: Smallest gap (mm) the hub's mounting features (bore, chamfer, set-screw hole) must keep from
+#: any sampled blade point; covers the blade surface between its samples.
+MOUNTING_CLEARANCE_MM = 0.05
+
 
 #: Candidate angles of the set-screw hole in the coarse scan (one per degree; then refined to 0.05 degrees).
 _SCREW_ANGLE_SAMPLES = 360

@@ -14,7 +14,12 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from torus_cad.tolerances import HUB_FOOTPRINT_MARGIN_DEG, HUB_FOOTPRINT_NEAR_RELATIVE
+from torus_cad.tolerances import HUB_FOOTPRINT_MARGIN_DEG
+
+#: Sections whose nearest point is within this fraction of the hub radius count as meeting
+#: the hub when the kernel looks for a place for the hub's seam (geometry.hub).
+HUB_FOOTPRINT_NEAR_RELATIVE = 0.02
+
 
 #: Resolution of the angular scan for a free seam angle (bins around the axis).
 _SEAM_SCAN_BINS = 3600

@@ -36,10 +36,10 @@ A coordinate file is untrusted input, read by torus_cad.runtime.input_files like
 a regular file only (no device, named pipe, socket or folder), at most
 :data:`~torus_cad.tolerances.AIRFOIL_FILE_MAX_BYTES`, at most
 :data:`~torus_cad.tolerances.AIRFOIL_FILE_MAX_POINTS` points, and the parsing and the crossing
-checks within :data:`~torus_cad.tolerances.AIRFOIL_FILE_TIME_LIMIT_S`. Malformed files raise
+checks within :data:`~torus_cad.geometry.section.airfoil_file.AIRFOIL_FILE_TIME_LIMIT_S`. Malformed files raise
 ParameterError naming the file, the line and what was expected there, never quoting the line
 (the path may name any file the user can read): no coordinates, a line that is not two numbers,
-a coordinate that is not finite or beyond :data:`~torus_cad.tolerances.AIRFOIL_COORDINATE_LIMIT`,
+a coordinate that is not finite or beyond :data:`~torus_cad.geometry.section.airfoil_file.AIRFOIL_COORDINATE_LIMIT`,
 one surface only, surfaces that cross, a chord of zero. The crossing test compares only segments whose
 bounding boxes overlap (a sort and sweep over x), O(n log n) for a section, not all O(n^2) pairs.
 """
@@ -58,12 +58,15 @@ from scipy.optimize import minimize_scalar
 
 from torus_cad.errors import BudgetError, ParameterError
 from torus_cad.runtime.input_files import TimeBudget, decode_text, read_untrusted_bytes
-from torus_cad.tolerances import (
-    AIRFOIL_COORDINATE_LIMIT,
-    AIRFOIL_FILE_MAX_BYTES,
-    AIRFOIL_FILE_MAX_POINTS,
-    AIRFOIL_FILE_TIME_LIMIT_S,
-)
+from torus_cad.tolerances import AIRFOIL_FILE_MAX_BYTES, AIRFOIL_FILE_MAX_POINTS
+
+#: Largest magnitude of a coordinate in an airfoil file (any length unit: the section is scaled to
+#: chord units); larger values overflow the chord and area computations.
+AIRFOIL_COORDINATE_LIMIT = 1e6
+
+#: Seconds the parsing and checks of one airfoil coordinate file may take before it is refused.
+AIRFOIL_FILE_TIME_LIMIT_S = 10.0
+
 
 #: Largest distance (chord units) between a file's spline and the analytic NACA section it was
 #: written from, at 81 cosine-spaced stations per surface (measured: at most 3.0e-6; module docstring).

@@ -19,7 +19,16 @@ from scipy.interpolate import BSpline, make_lsq_spline
 
 from torus_cad.errors import GeometryError
 from torus_cad.geometry.section.section import ROUND_CAP_HANDLE_FRACTION, round_cap_poles
-from torus_cad.tolerances import WIRE_FIT_INITIAL_KNOTS, WIRE_FIT_MAXIMUM_KNOTS, WIRE_FIT_RELATIVE_TOLERANCE
+
+#: Interior knots of the first section fit; doubled while the fit is too coarse (at most the maximum).
+WIRE_FIT_INITIAL_KNOTS = 24
+
+WIRE_FIT_MAXIMUM_KNOTS = 384
+
+#: Largest allowed deviation of a section's B-spline from its sampled points, as a fraction
+#: of the section's chord. Interior knots are doubled until every section meets it.
+WIRE_FIT_RELATIVE_TOLERANCE = 2e-4
+
 
 DEGREE = 3
 
