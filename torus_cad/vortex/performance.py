@@ -71,20 +71,21 @@ class VortexResult:
 
     report: dict[str, Any]
     strips: StripLoads = field(repr=False)
-    blade: RotorBlade | None = field(repr=False, default=None)
-    inviscid: Inviscid | None = field(repr=False, default=None)
-    ring_force_n: NDArray[np.float64] | None = field(repr=False, default=None)
+    blade: RotorBlade = field(repr=False)
+    inviscid: Inviscid = field(repr=False)
+    ring_force_n: NDArray[np.float64] = field(repr=False)
 
 
 def vortex_performance(params: PropellerParameters, rpm: float, airspeed_m_s: float = 0.0,
                        discretisation: Discretisation | None = None, viscous: bool = True) -> VortexResult:
     """The performance of ``params`` at ``rpm`` and axial ``airspeed_m_s`` (module doc)."""
     point = OperatingPoint(rpm=rpm, airspeed_m_s=airspeed_m_s)
-    blade = rotor_blade(params, discretisation or Discretisation())
+    discretisation = discretisation or Discretisation()
+    blade = rotor_blade(params, discretisation)
     density = point.fluid.density_kg_m3
     omega = rpm * np.pi / 30.0
     inviscid = solve_inviscid(blade.camber_m, blade.blades, blade.spin, omega, airspeed_m_s, density,
-                              blade.tip_radius_m, (discretisation or Discretisation()).wake)
+                              blade.tip_radius_m, discretisation.wake)
     force, moment, strips, ratio = _strip_forces(blade, inviscid, omega, airspeed_m_s, point, viscous)
     thrust = blade.blades * float(force[:, 2].sum())
     torque = blade.spin * blade.blades * float(moment[:, 2].sum())

@@ -6,6 +6,7 @@ the blade as CSV and picture, a picture of the wake and the tonal noise, written
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from collections.abc import Callable
@@ -105,29 +106,24 @@ def vortex_thrust_search(request: VortexRequest, thrust_n: float, out_dir: str |
     while True:
         results.append(vortex_performance(request.params, rpm, request.point.airspeed_m_s, request.discretisation,
                                           request.viscous))
-        report = results[-1].report
-        runs.append((ThrustRun(rpm, float(report["thrust_n"])), report))
+        runs.append(ThrustRun(rpm, float(results[-1].report["thrust_n"])))
         if stage:
-            stage(f"run {len(runs)}: {rpm:.0f} rpm, thrust {report['thrust_n']:.4g} N")
-        state = search_state([run for run, _ in runs], thrust_n, tolerance, max_runs, limit)
+            stage(f"run {len(runs)}: {rpm:.0f} rpm, thrust {runs[-1].thrust_n:.4g} N")
+        state = search_state(runs, thrust_n, tolerance, max_runs, limit)
         if state.done:
             break
-        rpm = next_rpm([run for run, _ in runs], thrust_n, limit)
-    chosen = [run for run, _ in runs].index(state.best)
+        rpm = next_rpm(runs, thrust_n, limit)
+    chosen = runs.index(state.best)
     search = {"target_thrust_n": thrust_n, "tolerance": tolerance, "max_runs": max_runs, "rpm": state.best.rpm,
               "thrust_n": state.best.thrust_n, "within_tolerance": state.within_tolerance, "rpm_limit": limit,
               "chosen_run": chosen,
-              "runs": [{"rpm": run.rpm, "thrust_n": run.thrust_n, "torque_nm": report["torque_nm"],
-                        "power_w": report["power_w"], "figure_of_merit": report["figure_of_merit"],
-                        "efficiency": report["efficiency"], "converged": True} for run, report in runs],
+              "runs": [{"rpm": run.rpm, "thrust_n": run.thrust_n,
+                        **{key: result.report[key] for key in ("torque_nm", "power_w", "figure_of_merit", "efficiency")},
+                        "converged": True} for run, result in zip(runs, results, strict=True)],
               "method": "secant on sqrt(thrust) over rpm; the first rpm from CT = the OpenFOAM route's"}
     best_point = OperatingPoint(state.best.rpm, request.point.airspeed_m_s, request.point.fluid)
-    return _published(_with_point(request, best_point), results[chosen], Path(out_dir), start, stage,
+    return _published(dataclasses.replace(request, point=best_point), results[chosen], Path(out_dir), start, stage,
                       search)
-
-
-def _with_point(request: VortexRequest, point: OperatingPoint) -> VortexRequest:
-    return VortexRequest(request.params, point, request.discretisation, request.observers, request.viscous)
 
 
 def _solved(request: VortexRequest, stage: Callable[[str], None] | None) -> VortexResult:
@@ -139,7 +135,7 @@ def _solved(request: VortexRequest, stage: Callable[[str], None] | None) -> Vort
 
 def _noise(request: VortexRequest, result: VortexResult, stage: Callable[[str], None] | None) -> Noise | None:
     """The tonal noise at the request's observers (None when the rotor does not turn)."""
-    if request.point.rpm == 0.0 or result.blade is None or result.inviscid is None or result.ring_force_n is None:
+    if request.point.rpm == 0.0:
         return None
     if stage:
         stage("noise")
@@ -168,10 +164,9 @@ def _publish(request: VortexRequest, result: VortexResult, noise: Noise | None, 
 
 def _files(result: VortexResult, noise: Noise | None, folder: Path, name: str, title: str) -> dict[str, Path]:
     paths = {"loading_csv": write_loading_csv(result.strips, folder / f"{name}_loading.csv"),
-             "loading_png": write_loading_plot(result.strips, folder / f"{name}_loading.png", f"loading, {title}")}
-    if result.inviscid is not None and result.blade is not None:
-        paths["wake_png"] = write_wake_plot(result.blade, result.inviscid.lattice, folder / f"{name}_wake.png",
-                                            f"wake, {title}")
+             "loading_png": write_loading_plot(result.strips, folder / f"{name}_loading.png", f"loading, {title}"),
+             "wake_png": write_wake_plot(result.blade, result.inviscid.lattice, folder / f"{name}_wake.png",
+                                         f"wake, {title}")}
     if noise is not None:
         paths["noise_png"] = write_noise_plot(noise, folder / f"{name}_noise.png", f"tonal noise, {title}")
         paths["noise_csv"] = write_noise_csv(noise, folder / f"{name}_noise.csv")
@@ -182,11 +177,10 @@ def _report(request: VortexRequest, result: VortexResult, start: float) -> dict[
     params, point, fluid = request.params, request.point, request.point.fluid
     strips = result.strips
     doubtful = np.flatnonzero(strips.confidence < LOW_CONFIDENCE)
-    inviscid = result.inviscid
     return {
         "name": params.name, "handedness": params.handedness.value, "solver": "vortex",
         "rpm": point.rpm, "airspeed_m_s": point.airspeed_m_s, "omega_rad_s": point.omega_rad_s(params.handedness),
-        "tip_diameter_m": 2.0 * result.blade.tip_radius_m if result.blade is not None else None,
+        "tip_diameter_m": 2.0 * result.blade.tip_radius_m,
         **{key: result.report[key] for key in ("thrust_n", "torque_nm", "power_w", "advance_ratio", "ct", "cp",
                                                 "efficiency", "figure_of_merit")},
         "converged": True,
@@ -195,7 +189,7 @@ def _report(request: VortexRequest, result: VortexResult, start: float) -> dict[
                     "wake_diameters": request.discretisation.wake.length_diameters,
                     "wake_steps_per_turn": request.discretisation.wake.steps_per_turn,
                     "relaxed_first_turn": request.discretisation.wake.free_turns,
-                    "iterations": inviscid.iterations if inviscid is not None else 0},
+                    "iterations": result.inviscid.iterations},
         "polars": {"viscous": request.viscous, "source": "NeuralFoil (large) at each strip's Reynolds number",
                    "lift_ratio_bounds": list(LIFT_RATIO_BOUNDS), "low_confidence_below": LOW_CONFIDENCE,
                    "low_confidence_strips": [float(strips.s[j]) for j in doubtful],

@@ -65,7 +65,7 @@ class RotorBlade:
     blades: int
     spin: float
     tip_radius_m: float
-    surface_m: NDArray[np.float64] = field(repr=False, default_factory=lambda: np.zeros((0, 0, 3)))
+    surface_m: NDArray[np.float64] = field(repr=False)
 
 
 def rotor_blade(params: PropellerParameters, discretisation: Discretisation) -> RotorBlade:

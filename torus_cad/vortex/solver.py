@@ -139,8 +139,7 @@ def solve_inviscid(camber_m: NDArray[np.float64], blades: int, spin: float, omeg
         relaxed = _relaxed(strips, lines.reshape(len(strips), 2, *lines.shape[1:]), (lattice, circulation, blade_part),
                            blades, spin, omega_rad_s, airspeed_m_s, wake, mean_chord)
         circulation, lattice, change, sweeps = relaxed
-        force, moment = _forces(lattice, circulation, spin, omega_rad_s, airspeed_m_s, density,
-                                BOUND_CORE_CHORDS * mean_chord)
+        force, moment = _forces(lattice, circulation, spin, omega_rad_s, airspeed_m_s, density, bound_core)
         iteration += sweeps
         thrust = blades * float(force[..., 2].sum())
     torque = spin * blades * float(moment[..., 2].sum())
@@ -217,16 +216,17 @@ def _circulation(lattice: Lattice, spin: float, omega: float, airspeed: float,
 
 
 def _forces(lattice: Lattice, circulation: NDArray[np.float64], spin: float, omega: float, airspeed: float,
-            density: float, bound_core_m: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+            density: float, bound_core_m: float, induced: bool = True) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """The Kutta-Joukowski force on each ring's bound segments and its moment about the origin ``(K - 1, C, 3)``
-    (blade 0), at the velocity the whole lattice induces at each segment's middle."""
+    (blade 0), at the velocity the whole lattice induces at each segment's middle (the kinematic velocity alone
+    without ``induced``: no Biot-Savart sum)."""
     shape = circulation.shape
     bound = lattice.bound_segments
     starts, ends = lattice.starts[:bound], lattice.ends[:bound]
     middle = 0.5 * (starts + ends)
     strengths = lattice.incidence @ circulation.ravel()
     velocity = kinematic_velocity(middle, omega, spin, airspeed)
-    if circulation.any():
+    if induced and circulation.any():
         cores = lattice.core_m.copy()
         cores[cores == 0.0] = bound_core_m  # neighbours' segments on a shared section line (module doc)
         velocity = velocity + induced_velocity(middle, lattice.starts, lattice.ends, strengths, cores)
@@ -242,9 +242,6 @@ def _forces(lattice: Lattice, circulation: NDArray[np.float64], spin: float, ome
 def _kinematic_thrust(lattice: Lattice, circulation: NDArray[np.float64], blades: int, spin: float, omega: float,
                       airspeed: float) -> float:
     """The rotor's thrust (per unit density) from the Kutta-Joukowski force at the kinematic velocity alone: no
-    Biot-Savart sum, so it is cheap; the relaxed wake's sweeps watch it settle."""
-    bound = lattice.bound_segments
-    starts, ends = lattice.starts[:bound], lattice.ends[:bound]
-    strengths = (lattice.incidence @ circulation.ravel())[:bound]
-    velocity = kinematic_velocity(0.5 * (starts + ends), omega, spin, airspeed)
-    return blades * float((strengths[:, None] * np.cross(velocity, ends - starts))[:, 2].sum())
+    Biot-Savart sum, so it is cheap; the wake iterations and the relaxed wake's sweeps watch it settle."""
+    force, _ = _forces(lattice, circulation, spin, omega, airspeed, 1.0, 0.0, induced=False)
+    return blades * float(force[..., 2].sum())
