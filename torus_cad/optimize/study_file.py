@@ -59,6 +59,7 @@ from torus_cad.batch.sweep_file import (
 )
 from torus_cad.errors import ParameterError, shown
 from torus_cad.optimize.metrics import PERFORMANCE_PREFIX, check_metric, is_performance, noise_observers
+from torus_cad.optimize.performance import VORTEX_LEVEL
 from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.config_file import read_config_table
 from torus_cad.parameters.schema import Section, param, parameter_error
@@ -144,7 +145,7 @@ class StudyLevel(StrEnum):
     """The fidelity a trial is evaluated at, cheapest first: the vortex solver (``simulate --solver vortex``,
     seconds) or one of OpenFOAM's mesh levels (``simulate --level``)."""
 
-    VORTEX = "vortex"
+    VORTEX = VORTEX_LEVEL
     COARSE = Level.COARSE.value
     MEDIUM = Level.MEDIUM.value
     FINE = Level.FINE.value
