@@ -131,6 +131,12 @@ READBACK_WORST_SAMPLES = 129
 
 __all__ = ["ReadableEdges", "readable_copy", "readable_edges"]
 
+#: A B-spline curve or p-curve of a degree above this is evaluated by OpenCascade's span cache (a Taylor
+#: polynomial about the span's start) with a rounding that grows with the degree and the span: a fillet
+#: edge's degree-14 single span reads 2.6e-5 of its gap off near its end (more than the reader's factor) ...
+_NOISY_DEGREE = 5
+#: ... so its spans are cut (knots inserted, the curve unchanged) to at most this share of the edge's range.
+_NOISY_SPAN_SHARE = 1.0 / 8.0
 #: Gauss-Newton steps for one foot point (it converges in 2-3 from the old p-curve's point).
 _FOOT_STEPS = 8
 #: A foot point has converged when its step moves it by less than this (mm) ...
@@ -190,6 +196,7 @@ def readable_edges(solid: cq.Solid, face_parts: Sequence[int]) -> ReadableEdges:
     replaced, worst_before, worst_after = 0, 0.0, 0.0
     splits: list[tuple[TopoDS_Edge, list[TopoDS_Face], float, float]] = []  # (edge, faces, where, the tolerance needed)
     for edge, faces in edges:
+        _shorter_spans(edge, faces)
         hints = []
         for face in faces:
             before, after = _square_pcurve(edge, face)
@@ -318,6 +325,45 @@ def _close_ends(edge: TopoDS_Edge) -> int:
     builder.UpdateEdge(edge, moved, BRep_Tool.Tolerance_s(edge))
     builder.Range(edge, first, last)
     return 1
+
+
+def _shorter_spans(edge: TopoDS_Edge, faces: Sequence[TopoDS_Face]) -> None:
+    """Cut the spans of ``edge``'s high-degree B-spline 3D curve and p-curves to at most _NOISY_SPAN_SHARE of
+    its range (knots inserted: the same curves, each evaluated as OpenCascade's span cache evaluates it
+    to within the reader's factor; the module's _NOISY_DEGREE)."""
+    first, last = BRep_Tool.Range_s(edge)
+    builder = BRep_Builder()
+    curve = _shiftable_bspline(BRep_Tool.Curve_s(edge, 0.0, 0.0))
+    if curve is not None and curve.Degree() > _NOISY_DEGREE:
+        finer = curve.Copy()
+        if _insert_knots(finer, first, last):
+            builder.UpdateEdge(edge, finer, BRep_Tool.Tolerance_s(edge))
+            builder.Range(edge, first, last)
+    for face in faces:
+        pcurve = BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0)
+        if isinstance(pcurve, Geom2d_BSplineCurve) and not pcurve.IsPeriodic() and pcurve.Degree() > _NOISY_DEGREE:
+            finer2d = pcurve.Copy()
+            if _insert_knots(finer2d, first, last):
+                builder.UpdateEdge(edge, finer2d, face, BRep_Tool.Tolerance_s(edge))
+
+
+def _insert_knots(bspline: Geom_BSplineCurve | Geom2d_BSplineCurve, first: float, last: float) -> bool:
+    """Insert simple knots into ``bspline`` so that no span inside [first, last] is longer than
+    _NOISY_SPAN_SHARE of it; whether any was inserted."""
+    count = bspline.NbKnots()
+    knots = np.array([bspline.Knot(index) for index in range(1, count + 1)])
+    inside = np.unique(np.clip(np.concatenate([knots, [first, last]]), first, last))
+    longest = _NOISY_SPAN_SHARE * (last - first)
+    new = [float(k) for low, high in zip(inside[:-1], inside[1:], strict=True)
+           for k in np.linspace(low, high, int(math.ceil((high - low) / longest - 1e-9)) + 1)[1:-1]]
+    if not new:
+        return False
+    added, multiplicities = TColStd_Array1OfReal(1, len(new)), TColStd_Array1OfInteger(1, len(new))
+    for index, knot in enumerate(new, 1):
+        added.SetValue(index, knot)
+        multiplicities.SetValue(index, 1)
+    bspline.InsertKnots(added, multiplicities, 1e-12 * (last - first), False)
+    return True
 
 
 def _shiftable_bspline(curve: Geom_Curve) -> Geom_BSplineCurve | None:
