@@ -53,6 +53,7 @@ distance, 0 after; the rest, and what it costs: docs/explanation/how-the-solid-i
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -67,11 +68,13 @@ from OCP.Geom import Geom_BSplineCurve, Geom_BSplineSurface, Geom_Curve, Geom_Su
 from OCP.Geom2d import Geom2d_BSplineCurve, Geom2d_Curve, Geom2d_TrimmedCurve
 from OCP.Geom2dAdaptor import Geom2dAdaptor_Curve
 from OCP.Geom2dConvert import Geom2dConvert
+from OCP.GeomAbs import GeomAbs_C0, GeomAbs_C1
 from OCP.GeomAdaptor import GeomAdaptor_Curve, GeomAdaptor_Surface
 from OCP.GeomLib import GeomLib_CheckCurveOnSurface
 from OCP.gp import gp_Pnt, gp_Pnt2d, gp_Vec
 from OCP.ShapeBuild import ShapeBuild_ReShape
 from OCP.ShapeFix import ShapeFix_ShapeTolerance
+from OCP.ShapeUpgrade import ShapeUpgrade_ShapeDivideContinuity
 from OCP.TColgp import TColgp_Array1OfPnt2d
 from OCP.TColStd import TColStd_Array1OfInteger, TColStd_Array1OfReal
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_FORWARD, TopAbs_REVERSED, TopAbs_VERTEX, TopAbs_WIRE
@@ -272,11 +275,22 @@ def _fault_free(analyzer: BRepCheck_Analyzer, part: TopoDS_Shape) -> bool:
 def readable_copy(shape: TopoDS_Shape) -> TopoDS_Shape:
     """A copy of the solid ``shape`` whose edges read back from STEP as they are (:func:`readable_edges`);
     the copy as it is where making them readable would not give a valid solid. ``shape`` is not changed."""
-    solid = cq.Solid(copied(shape))
+    solid = cq.Solid(_split_at_corners(copied(shape)))
     try:
         return readable_edges(solid, [0] * len(solid.Faces())).solid.wrapped
     except KernelError:
         return solid.wrapped
+
+
+def _split_at_corners(shape: TopoDS_Shape) -> TopoDS_Shape:
+    """``shape`` with every edge whose 3D curve or p-curve has a corner (a knot of full multiplicity: only C0)
+    inside its range split there, its surfaces as they are: BOPAlgo_ArgumentAnalyzer (FreeCAD's check with
+    BOP) faults a C0 edge (a blade's intersection with the hub's end face inside a root fillet's run-out)."""
+    divide = ShapeUpgrade_ShapeDivideContinuity(shape)
+    divide.SetBoundaryCriterion(GeomAbs_C1)
+    divide.SetPCurveCriterion(GeomAbs_C1)
+    divide.SetSurfaceCriterion(GeomAbs_C0)
+    return divide.Result() if divide.Perform() else shape
 
 
 def _edges_and_faces(shape: TopoDS_Shape) -> list[tuple[TopoDS_Edge, list[TopoDS_Face]]]:
@@ -354,8 +368,8 @@ def _insert_knots(bspline: Geom_BSplineCurve | Geom2d_BSplineCurve, first: float
     knots = np.array([bspline.Knot(index) for index in range(1, count + 1)])
     inside = np.unique(np.clip(np.concatenate([knots, [first, last]]), first, last))
     longest = _NOISY_SPAN_SHARE * (last - first)
-    new = [float(k) for low, high in zip(inside[:-1], inside[1:], strict=True)
-           for k in np.linspace(low, high, int(math.ceil((high - low) / longest - 1e-9)) + 1)[1:-1]]
+    new = [float(k) for low, high in itertools.pairwise(inside)
+           for k in np.linspace(low, high, math.ceil((high - low) / longest - 1e-9) + 1)[1:-1]]
     if not new:
         return False
     added, multiplicities = TColStd_Array1OfReal(1, len(new)), TColStd_Array1OfInteger(1, len(new))

@@ -34,6 +34,13 @@ _STEP_SCHEMAS = {StepSchema.AP214: "AP214IS", StepSchema.AP242: "AP242DIS"}
 #: edges: two or three tries).
 READABLE_REWRITES = 3
 
+#: write.precision.mode 1: the file's uncertainty is the solid's greatest tolerance. OpenCascade's reader (FreeCAD's
+#: too) takes the file's uncertainty as its precision and re-approximates, as cubics, the p-curves of every
+#: edge whose curves part by more (a root fillet's contact edges, a few 1e-6 mm): near their ends those cubics
+#: part from the 3D curve by up to 10 % more than the edge's sampled tolerance. With the greatest tolerance
+#: as the uncertainty the p-curves are read as written (the default, 0, writes the average).
+_PRECISION_MODE_GREATEST = 1
+
 #: The STEP file's last line: a writer can lose its tail without saying so.
 _STEP_END_MARKER = b"END-ISO-10303-21;"
 
@@ -102,6 +109,8 @@ def _write(shape: TopoDS_Shape, temp: Path, path: Path, product_name: str, schem
     for key, value in (("write.step.schema", _STEP_SCHEMAS[schema]), ("write.step.unit", "MM")):
         if not Interface_Static.SetCVal_s(key, value):
             raise KernelError(f"OpenCascade refused the STEP setting {key} = {value!r}")
+    if not Interface_Static.SetIVal_s("write.precision.mode", _PRECISION_MODE_GREATEST):
+        raise KernelError("OpenCascade refused the STEP setting write.precision.mode")
     if not writer.Transfer(document, STEPControl_AsIs):
         raise KernelError("OpenCascade could not translate the solid to STEP")
     _name_the_author(writer, product_name, program)
