@@ -8,7 +8,8 @@ rank_levels.py at 10,000 rpm in still air, Spearman's rho of thrust and of figur
 
 Prints one markdown table (thrust and figure of merit: fine CFD, the vortex solver with its polars and the
 inviscid lattice, and the differences) and Spearman's rho (scipy.stats.spearmanr) for each pair; writes
-nothing. Each design is solved in this process (torus_cad.vortex.performance.vortex_performance).
+nothing. Each design is solved in this process (torus_cad.vortex.performance.vortex_performance); a design whose
+solve does not converge is left out of the table and the ranks, with a line on stderr.
 """
 
 from __future__ import annotations
@@ -49,6 +50,7 @@ def main(argv: list[str] | None = None) -> int:
     from scipy.stats import spearmanr
 
     from torus_cad.cli.design_input import load_parameters
+    from torus_cad.errors import KernelError
     from torus_cad.vortex.performance import vortex_performance
     from torus_cad.vortex.rotor import Discretisation
 
@@ -57,7 +59,11 @@ def main(argv: list[str] | None = None) -> int:
     for name, overrides in DESIGNS.items():
         params = load_parameters(None, overrides)
         start = time.perf_counter()
-        report = vortex_performance(params, args.rpm, 0.0, Discretisation(args.chordwise, args.spanwise)).report
+        try:
+            report = vortex_performance(params, args.rpm, 0.0, Discretisation(args.chordwise, args.spanwise)).report
+        except KernelError as error:  # ranked without it, and said so
+            print(f"{name}: left out, {error}", file=sys.stderr, flush=True)
+            continue
         rows[name] = report
         print(f"{name}: {time.perf_counter() - start:.1f} s", file=sys.stderr, flush=True)
     print("| design | thrust N, fine CFD | thrust N, vortex | Δ | inviscid thrust N | Δ | FM, fine CFD | FM, vortex |")
