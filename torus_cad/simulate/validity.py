@@ -40,13 +40,13 @@ if TYPE_CHECKING:
 #: STL_LINEAR_DEFLECTION (an absolute 0.05 mm) already gives 294k triangles, 0.8 GB and 9 s on the default
 #: design's shape (it grows with D: 10 m segfaulted under 3 GB, 1 km took 22 GB).
 STEP_DIAMETER_RANGE_MM = (5.0, 2000.0)
-#: The most cells the estimate may give a layered mesh: it errs 1.7x to 2.3x high on the measured meshes, so
-#: the largest let through is about the APC's --surface-refinement 4 mesh (966,950 cells, 1.9 GB, 18 min),
-#: near the 2.6 GB of ``cfd``'s CFD_TETRAHEDRA_LIMIT.
+#: The most cells the estimate may give a layered mesh: it errs 1.0x to 2.4x high on the seven measured meshes,
+#: so the largest let through is about the APC's --surface-refinement 4 mesh (966,950 cells, estimated 1.66M;
+#: 1.9 GB, 18 min), near the 2.6 GB of ``cfd``'s CFD_TETRAHEDRA_LIMIT.
 LAYERED_CELL_LIMIT = 2_000_000
 #: Cells per surface face (the solid's area over the level's surface cell squared): the APC 10x7 SF's coarse
-#: mesh, 20,006 cells, the higher of the two fits (the default design's 51,822 give 12).
-CELLS_PER_SURFACE_FACE = 30.0
+#: mesh, 20,006 cells, rounded up, the higher of the two fits (the default design's 51,822 give 12).
+CELLS_PER_SURFACE_FACE = 31.0
 #: Each --surface-refinement step multiplies the cells near the surface by this: the most the APC's series
 #: grew per step (1.9, 2.5, 3.1, 3.3; the default's 3.2 and 3.8 with its lower CELLS_PER_SURFACE_FACE).
 SURFACE_REFINEMENT_GROWTH = 3.3
