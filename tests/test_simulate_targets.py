@@ -477,6 +477,7 @@ def test_the_design_s_step_gives_the_design_s_thrust(design_step, tmp_path):
                     for kind in ("step", "design"))
     assert step["step"]["tip_diameter_mm"] == pytest.approx(design["tip_diameter_m"] * 1000.0, rel=0.005)
     assert step["omega_rad_s"] == design["omega_rad_s"]
+    assert step["validity"] == [] and design["validity"] == []  # the default design is within the physics' range
     # the two meshes differ (the STEP has no trailing-edge size field: docs/how-to/simulate.md)
     assert step["thrust_n"] == pytest.approx(design["thrust_n"], rel=0.05)
     assert step["torque_nm"] == pytest.approx(design["torque_nm"], rel=0.05)
