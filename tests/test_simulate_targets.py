@@ -345,6 +345,101 @@ def test_case_only_from_the_design_step_on_the_layered_route_meshes_the_step_s_o
     assert (case / "Allrun").is_file()
 
 
+def _scaled_step(source, factor, path):
+    """The STEP ``source`` scaled by ``factor`` about the origin, written to ``path``."""
+    import cadquery as cq
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_Transform
+    from OCP.gp import gp_Pnt, gp_Trsf
+
+    from torus_cad.cfd.step_body import read_step_solid
+    from torus_cad.kernel.writers.step import write_step
+
+    scale = gp_Trsf()
+    scale.SetScale(gp_Pnt(0.0, 0.0, 0.0), factor)
+    solid = cq.Solid(BRepBuilderAPI_Transform(read_step_solid(source).wrapped, scale, True).Shape())
+    return write_step(solid, path, path.stem, check_readback=False)  # 1 km: edge tolerances read back too coarse
+
+
+@pytest.mark.parametrize("diameter_mm", [1.0e6, 0.1])
+def test_a_step_part_of_a_size_the_mesher_cannot_serve_is_refused_before_any_work(design_step, tmp_path, capsys,
+                                                                                   diameter_mm):
+    path = _scaled_step(design_step[0], diameter_mm / 45.1004, tmp_path / "scaled.step")
+    out = tmp_path / "out"
+    capsys.readouterr()
+    assert main(["simulate", "--step", str(path), "--rpm", "1", "--case-only", "--out", str(out)]) == 2
+    error = capsys.readouterr().err
+    shown = re.search(r": tip diameter ([\d,.]+) mm is out of range; allowed \[5, 2000\] mm", error)
+    assert error.count("\n") == 1 and shown and float(shown.group(1).replace(",", "")) == pytest.approx(diameter_mm,
+                                                                                                        rel=1e-3)
+    assert repr(str(path)) in error and not out.exists()
+
+
+def test_a_step_mesh_estimated_over_the_cell_limit_is_refused_with_the_estimate_and_the_limit(design_step, tmp_path,
+                                                                                               capsys):
+    out = tmp_path / "out"
+    capsys.readouterr()
+    assert main(["simulate", "--step", str(design_step[0]), "--rpm", "10000", "--case-only", "--level", "fine",
+                 "--surface-refinement", "4", "--out", str(out)]) == 2
+    error = capsys.readouterr().err
+    assert error.count("\n") == 1 and not out.exists()
+    assert re.search(r"the layered mesh would have about [\d,]+ cells and need about [\d.]+ GB of memory \(fine "
+                     r"level, --surface-refinement 4, a surface of 1.61 D\^2\), over the limit of 2,000,000 cells; "
+                     r"lower --surface-refinement or --level", error)
+
+
+def test_the_layered_estimate_errs_high_but_within_two_and_a_half_times_on_the_measured_meshes():
+    from torus_cad.parameters import PropellerParameters
+    from torus_cad.simulate.settings import Level, with_level
+    from torus_cad.simulate.validity import estimate_layered_cells
+
+    cfd = with_level(PropellerParameters(), Level.COARSE).cfd
+    fine = with_level(PropellerParameters(), Level.FINE).cfd
+    # the default design (area 3280 mm^2, 20 mm long, D 45.1 mm) and the APC 10x7 SF E63 (12,616 mm^2, 15.9 mm,
+    # 254 mm): their measured cells (docs/explanation/simulation-accuracy.md)
+    for area, length, diameter, level, refinement, settings, measured in (
+            (3280.0, 20.0, 45.1, Level.COARSE, 0, cfd, 51_822), (3280.0, 20.0, 45.1, Level.FINE, 0, fine, 131_098),
+            (3280.0, 20.0, 45.1, Level.COARSE, 2, cfd, 628_012), (12_616.0, 15.9, 254.0, Level.COARSE, 0, cfd, 20_006),
+            (12_616.0, 15.9, 254.0, Level.COARSE, 3, cfd, 289_804), (12_616.0, 15.9, 254.0, Level.COARSE, 4, cfd, 966_950)):
+        estimate = estimate_layered_cells(area, length, diameter, level, refinement, settings)
+        assert 1.0 <= estimate / measured <= 2.5, (level, refinement, estimate, measured)
+        # the same part at any size has the same cells
+        assert estimate_layered_cells(area * 100.0, length * 10.0, diameter * 10.0, level, refinement,
+                                      settings) == pytest.approx(estimate, rel=1e-9)
+
+
+def test_validity_flags_a_tiny_part_s_first_layer_and_leaves_the_default_design_alone():
+    from torus_cad.simulate.settings import OperatingPoint
+    from torus_cad.simulate.snappy import first_cell_height_m
+    from torus_cad.simulate.validity import validity_flags
+
+    point = OperatingPoint(10_000.0)
+    # the default design at 10,000 rpm: first layer 13.4 um, y+ min 0.001, mean 1.13, max 17.8 measured
+    default = first_cell_height_m(0.0451, 10_000.0, 0.0)
+    assert default == pytest.approx(13.4e-6, rel=0.02)
+    assert validity_flags(0.0451, point, default, {"min": 0.001, "mean": 1.13, "max": 17.8}) == []
+    assert validity_flags(0.0451, point, default, None) == []
+    # the issue's 0.1 mm part at 1 rpm: a 4.8 mm first layer, y+ max 1.7e-5
+    tiny = first_cell_height_m(1e-4, 1.0, 0.0)
+    flags = validity_flags(1e-4, OperatingPoint(1.0), tiny, {"min": 1e-7, "mean": 5e-6, "max": 1.7e-5})
+    assert len(flags) == 3
+    assert flags[0].startswith(f"the first prism layer, {tiny * 1e3:.3g} mm, is ") and "over 0.01" in flags[0]
+    assert "Reynolds number at 0.75 R is" in flags[1] and "[1e+03, 1e+07]" in flags[1]
+    assert "mean y+ on the propeller is 5e-06, outside [0.1, 30]" in flags[2]
+    # a 2 m part at its tip Mach limit: still inside the model's range; a mean y+ of 40 is not
+    assert validity_flags(2.0, OperatingPoint(1900.0), 1e-5, {"min": 1.0, "mean": 40.0, "max": 300.0}) == [
+        "the mean y+ on the propeller is 40, outside [0.1, 30] around the first layer's target 1: the wall is not "
+        "resolved as sized"]
+
+
+def test_the_validity_flags_are_printed_as_warnings():
+    from torus_cad.simulate.cli_output import summary_lines
+    from torus_cad.simulate.pipeline import Result
+
+    report = {"cells": None, "level": "coarse", "validity": ["the first prism layer is thick"]}
+    assert summary_lines(Result({}, report))[-1] == "warning: the first prism layer is thick"
+    assert not any(line.startswith("warning") for line in summary_lines(Result({}, {**report, "validity": []})))
+
+
 # -- runs (OpenFOAM) --------------------------------------------------------------------------------------
 
 #: Iterations of the runs here: the coarse mesh's thrust settles within ~2 % by 120.
@@ -382,6 +477,7 @@ def test_the_design_s_step_gives_the_design_s_thrust(design_step, tmp_path):
                     for kind in ("step", "design"))
     assert step["step"]["tip_diameter_mm"] == pytest.approx(design["tip_diameter_m"] * 1000.0, rel=0.005)
     assert step["omega_rad_s"] == design["omega_rad_s"]
+    assert step["validity"] == [] and design["validity"] == []  # the default design is within the physics' range
     # the two meshes differ (the STEP has no trailing-edge size field: docs/how-to/simulate.md)
     assert step["thrust_n"] == pytest.approx(design["thrust_n"], rel=0.05)
     assert step["torque_nm"] == pytest.approx(design["torque_nm"], rel=0.05)

@@ -235,17 +235,25 @@ def _surface_triangles(params: PropellerParameters, domain: Domain, blade_points
     return int((blade + hub + cylinders) / _EQUILATERAL_AREA)
 
 
+def over_limit_error(mesh: str, count: int, unit: str, needs: str, limit: int, advice: str) -> BudgetError:
+    """The BudgetError (exit 2) of a mesh estimated over its limit: ``mesh`` would have about ``count`` ``unit``
+    (cells, tetrahedra) and need ``needs`` (memory, time, the settings that set it), over ``limit`` ``unit``;
+    ``advice`` says what lowers it. ``cfd`` and ``simulate --step`` refuse with it."""
+    return BudgetError(f"{mesh} would have about {count:,} {unit} and need about {needs}, over the limit of "
+                       f"{limit:,} {unit}; {advice}")
+
+
 def check_cfd_budget(params: PropellerParameters, limit: int = CFD_TETRAHEDRA_LIMIT) -> CfdEstimate:
     """The CFD mesh's estimate, or BudgetError (exit 2) naming it, the sizes that set it and the limit
     when its tetrahedra are over ``limit``."""
     estimate = estimate_cfd_mesh(params)
     if estimate.tetrahedra > limit:
         cfd = params.cfd
-        raise BudgetError(
-            f"the CFD mesh would have about {estimate.tetrahedra:,} tetrahedra and need about "
+        raise over_limit_error(
+            "the CFD mesh", estimate.tetrahedra, "tetrahedra",
             f"{estimate.memory_mb / 1000.0:.1f} GB of memory and {_duration(estimate.wall_seconds)} "
             f"(cfd.cells_per_chord = {cfd.cells_per_chord:g}, "
             f"cfd.curvature_cells = {cfd.curvature_cells:g}, cfd.growth_rate = {cfd.growth_rate:g}, cfd.far_size = "
-            f"{cfd.far_size:g} D, cfd.domain_radius = {cfd.domain_radius:g} D), over the limit of {limit:,} "
-            f"tetrahedra; lower cfd.cells_per_chord or raise cfd.far_size or cfd.growth_rate")
+            f"{cfd.far_size:g} D, cfd.domain_radius = {cfd.domain_radius:g} D)", limit,
+            "lower cfd.cells_per_chord or raise cfd.far_size or cfd.growth_rate")
     return estimate

@@ -61,7 +61,9 @@ def summary_lines(result: Result, convergence: bool = False) -> list[str]:
     lines = [f"wrote {path}" for path in result.paths.values()]
     report = result.report
     if convergence:
-        return lines + convergence_lines(report)
+        return lines + convergence_lines(report) + [
+            f"warning: {level} level: {flag}" for level, values in report.get("levels", {}).items()
+            for flag in values.get("validity") or []]
     if "step" in report:
         step = report["step"]
         lines.append(f"STEP {step['file']}: axis {step['axis']}, turning {step['turning']}; tip diameter "
@@ -70,7 +72,7 @@ def summary_lines(result: Result, convergence: bool = False) -> list[str]:
     if "thrust_n" not in report:  # --case-only
         cells = f"{report['cells']:,} cells" if report.get("cells") else "meshed by Allrun"
         lines.append(f"case written ({cells}, level {report['level']}); run it with its Allrun")
-        return lines
+        return lines + warning_lines(report)
     if "thrust_search" in report:
         lines += thrust_search_lines(report["thrust_search"])
     variation = report["force_variation_last_10_percent"]
@@ -99,7 +101,12 @@ def summary_lines(result: Result, convergence: bool = False) -> list[str]:
                      f"{_percent(viscous['thrust_share'])} of the thrust (the rest is pressure)")
     if report.get("noise"):
         lines.append(noise_line(report["noise"]))
-    return lines
+    return lines + warning_lines(report)
+
+
+def warning_lines(report: dict[str, Any]) -> list[str]:
+    """``warning: ...`` for each of the report's ``validity`` flags (torus_cad.simulate.validity)."""
+    return [f"warning: {flag}" for flag in report.get("validity") or []]
 
 
 def _level(value: float | None) -> str:

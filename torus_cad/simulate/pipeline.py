@@ -81,6 +81,7 @@ from torus_cad.simulate.thrust_target import (
     next_rpm,
     search_state,
 )
+from torus_cad.simulate.validity import check_step_propeller, validity_flags
 from torus_cad.tolerances import (
     NOISE_MAX_OBSERVERS,
     REPORT_FILE_MAX_BYTES,
@@ -154,8 +155,9 @@ class Result:
 
 
 def check_request(request: Request) -> float:
-    """ParameterError (exit 2) for a value out of range; returns the tip diameter in m (of the design as built:
-    its ``diameter`` / ``pitch`` / ``airfoil.naca`` targets applied)."""
+    """ParameterError (exit 2) for a value out of range (a ``--step`` propeller: its size and its mesh's estimate,
+    torus_cad.simulate.validity); returns the tip diameter in m (of the design as built: its ``diameter`` /
+    ``pitch`` / ``airfoil.naca`` targets applied)."""
     from torus_cad.cfd.sizes import tip_radius
     from torus_cad.parameters.design_targets import resolve_design_targets
 
@@ -169,6 +171,8 @@ def check_request(request: Request) -> float:
         raise ParameterError(f"--time-limit = {request.time_limit_s:g} s is out of range; allowed "
                              f"(0, {SIMULATE_TIME_LIMIT_MAX_S:g}] s")
     if request.step is not None:
+        check_step_propeller(request.step, request.level, request.surface_refinement, request.mesher,
+                             with_level(request.params, request.level).cfd)
         diameter_m = request.step.body.tip_diameter_mm / 1000.0
     else:
         diameter_m = 2.0 * tip_radius(resolve_design_targets(request.params).parameters) / 1000.0
@@ -370,7 +374,8 @@ async def simulate_async(request: Request, out_dir: str | Path, progress: Progre
             _remove_stale_report(out, name)
             report = {"cells": mesh_report["cells"] or mesh_report.get("gmsh_tetrahedra"),
                       "level": request.level.value, "mesher": request.mesher.value,
-                      "tip_diameter_m": diameter_m, **_step_entry(request)}
+                      "tip_diameter_m": diameter_m, **_step_entry(request),
+                      "validity": validity_flags(diameter_m, request.point, mesh_report.get("first_layer_m"), None)}
             return Result({"case": out / f"{name}_case"}, report)
         run = await _run_case(request, case, out, spec, mesh_report, diameter_m, start, stage, progress,
                               runner, convert=request.mesh_from is None, mesh_s=time.perf_counter() - start)
@@ -510,6 +515,7 @@ def _report(request: Request, spec: CaseSpec, mesh_report: dict[str, Any], histo
         "final_residuals": history.last_residuals(), "level": request.level.value,
         "processes": request.processes, "mesher": request.mesher.value, "mesh": mesh_report,
         "y_plus": y_plus,
+        "validity": validity_flags(diameter_m, point, mesh_report.get("first_layer_m"), y_plus),
         "fluid": {"name": fluid.name, "density_kg_m3": fluid.density_kg_m3, "viscosity_m2_s": fluid.viscosity_m2_s},
         "turbulence": {"model": f"{request.turbulence.value}, wall functions", "inflow_intensity": TURBULENCE_INTENSITY,
                        "inflow_length_scale_m": TURBULENCE_LENGTH_D * diameter_m, "inflow_k_m2_s2": k,
@@ -653,6 +659,7 @@ def convergence_study(request: Request, out_dir: str | Path, progress: ProgressC
     ``spread`` and ``uncertainty_fine`` (GCI_fine, or three times the spread where there is no GCI;
     ``uncertainty_method`` says which), fractions of the fine value (Extrapolation.report)."""
     out = Path(out_dir)
+    check_request(dataclasses.replace(request, level=Level.FINE))  # the finest mesh refused before the coarse runs
     runs = {}
     for level in Level:
         level_request = dataclasses.replace(request, level=level, case_only=False, mesh_from=None)
@@ -661,7 +668,7 @@ def convergence_study(request: Request, out_dir: str | Path, progress: ProgressC
                               "airspeed_m_s": request.point.airspeed_m_s, "refinement_ratio": REFINEMENT_RATIO,
                               "levels": {level.value: {key: run.report[key] for key in
                                                        ("cells", "thrust_n", "torque_nm", "ct", "cp", "converged",
-                                                        "y_plus", "wall_seconds")}
+                                                        "y_plus", "validity", "wall_seconds")}
                                          for level, run in runs.items()}}
     for key in ("thrust_n", "torque_nm"):
         coarse, medium, fine = (float(runs[level].report[key]) for level in Level)

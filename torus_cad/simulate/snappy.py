@@ -83,18 +83,33 @@ def skin_friction(reynolds: float) -> float:
     return 0.026 * reynolds ** (-1.0 / 7.0)
 
 
+#: The length the blade's Reynolds number is taken over at ``Y_PLUS_REFERENCE_RADIUS``, in tip diameters: a
+#: typical chord there (the default design's 6.0 mm is 0.133 D, the APC's about 0.11 D).
+REFERENCE_CHORD_D = 0.1
+
+
+def reference_speed_m_s(diameter_m: float, rpm: float, airspeed_m_s: float) -> float:
+    """The speed (m/s) the blade meets at r = ``Y_PLUS_REFERENCE_RADIUS`` x R: sqrt((omega r)^2 + airspeed^2)."""
+    omega = rpm * 2.0 * math.pi / 60.0
+    return math.hypot(omega * Y_PLUS_REFERENCE_RADIUS * diameter_m / 2.0, airspeed_m_s)
+
+
+def reference_reynolds(diameter_m: float, rpm: float, airspeed_m_s: float, fluid: Fluid = AIR_15C) -> float:
+    """The blade's Reynolds number at r = ``Y_PLUS_REFERENCE_RADIUS`` x R over ``REFERENCE_CHORD_D`` x D
+    (dimensionless): :func:`reference_speed_m_s` times that chord over the fluid's viscosity."""
+    return reference_speed_m_s(diameter_m, rpm, airspeed_m_s) * REFERENCE_CHORD_D * diameter_m / fluid.viscosity_m2_s
+
+
 def first_cell_height_m(diameter_m: float, rpm: float, airspeed_m_s: float, y_plus: float = Y_PLUS_TARGET,
                         fluid: Fluid = AIR_15C, reference_length_m: float | None = None) -> float:
     """Height of the first prism layer on the propeller, in m, for a wall y+ of ``y_plus``.
 
     Flat-plate estimate at the blade's reference station r = ``Y_PLUS_REFERENCE_RADIUS`` x R: speed
     V = sqrt((omega r)^2 + airspeed^2) (m/s), Reynolds number V L / nu with L = ``reference_length_m``
-    (default 0.1 D, a typical chord there), u_tau = V sqrt(Cf / 2), height = y+ nu / u_tau. At 0 rpm
-    and no airspeed the tip speed of 1000 rpm stands in (a still propeller still gets a layer)."""
-    radius = Y_PLUS_REFERENCE_RADIUS * diameter_m / 2.0
-    omega = max(rpm, 1000.0 if airspeed_m_s == 0.0 else 0.0) * 2.0 * math.pi / 60.0
-    speed = math.hypot(omega * radius, airspeed_m_s)
-    length = reference_length_m if reference_length_m is not None else 0.1 * diameter_m
+    (default ``REFERENCE_CHORD_D`` x D, a typical chord there), u_tau = V sqrt(Cf / 2), height = y+ nu / u_tau.
+    At 0 rpm and no airspeed the tip speed of 1000 rpm stands in (a still propeller still gets a layer)."""
+    speed = reference_speed_m_s(diameter_m, max(rpm, 1000.0 if airspeed_m_s == 0.0 else 0.0), airspeed_m_s)
+    length = reference_length_m if reference_length_m is not None else REFERENCE_CHORD_D * diameter_m
     reynolds = speed * length / fluid.viscosity_m2_s
     u_tau = speed * math.sqrt(skin_friction(reynolds) / 2.0)
     return y_plus * fluid.viscosity_m2_s / u_tau
