@@ -312,6 +312,97 @@ def test_a_build_over_its_memory_limit_fails_in_its_process_not_the_server(light
     assert "ran out of memory" in messages[0][2] or "stopped unexpectedly" in messages[0][2]
 
 
+# -- the vortex solver's numbers ---------------------------------------------------------------------
+
+def _performance_state():
+    """A trame state holding the performance card's keys (no server started, no page)."""
+    from trame.app import get_server
+
+    from torus_cad.studio.performance import state_defaults
+
+    state = get_server("studio_performance_test", client_type="vue3").state
+    state.update(state_defaults())
+    return state
+
+
+async def _numbers_shown(state, performance, timeout_s=600.0):
+    """Wait until the latest solve's numbers (or failure) are shown; the thrust readout, N."""
+    from torus_cad.studio.performance import COMPUTING
+
+    deadline = asyncio.get_running_loop().time() + timeout_s
+    while performance.running or state.perf_thrust_text == COMPUTING:
+        assert asyncio.get_running_loop().time() < deadline, "the vortex solve did not finish"
+        await asyncio.sleep(0.1)
+    assert not state.perf_failure, state.perf_failure
+    return float(state.perf_thrust_text.removesuffix(" N"))
+
+
+def test_a_higher_rpm_raises_the_thrust_shown_and_a_bad_rpm_keeps_the_last_numbers(tmp_path):
+    from torus_cad.studio.performance import COMPUTING, Performance
+
+    state = _performance_state()
+
+    async def run() -> None:
+        performance = Performance(state, tmp_path)
+        performance.set_design(PropellerParameters())
+        assert state.perf_thrust_text == COMPUTING
+        thrust_10k = await _numbers_shown(state, performance)
+        assert state.perf_merit_label == "figure of merit" and 0.0 < float(state.perf_merit_text) < 1.0
+        assert state.perf_point_text.startswith("at 10000 rpm, 0 m/s")
+        assert state.perf_power_text.endswith(" W") and state.perf_plot.startswith("data:image/png;base64,")
+        for rpm in ("11000", "12000"):  # typed in a row: the 11000 rpm solve is killed, never shown
+            state.perf_rpm = rpm
+            performance.on_operating_point()
+        thrust_12k = await _numbers_shown(state, performance)
+        assert state.perf_point_text.startswith("at 12000 rpm, 0 m/s")
+        assert thrust_12k > 1.2 * thrust_10k  # thrust ~ rpm^2: (12/10)^2 = 1.44
+        shown = {name: state[name] for name in ("perf_thrust_text", "perf_power_text", "perf_plot")}
+        state.perf_rpm = "99999"
+        performance.on_operating_point()
+        assert state.perf_rpm_error.startswith("rpm = 99999 is out of range; allowed [0, ")
+        assert "helical tip Mach" in state.perf_rpm_error and not state.perf_airspeed_error
+        assert not performance.running
+        assert {name: state[name] for name in shown} == shown  # the last numbers stay
+        state.perf_rpm, state.perf_airspeed = "12000", "-1"
+        performance.on_operating_point()
+        assert state.perf_airspeed_error.startswith("airspeed = -1 m/s is out of range; allowed [0, 100] m/s")
+        assert not state.perf_rpm_error and not performance.running
+        performance.cancel()
+
+    asyncio.run(run())
+
+
+def test_a_solve_that_does_not_converge_shows_its_one_line_instead_of_numbers(tmp_path, monkeypatch):
+    import multiprocessing
+
+    from torus_cad.errors import KernelError
+    from torus_cad.studio import vortex_run
+    from torus_cad.studio.performance import NO_NUMBER, Performance, PerformanceRequest
+
+    reason = "the vortex solve did not converge: the thrust still changed by 3.5 % a sweep after 30 sweeps"
+
+    def diverging(*_, **__):
+        raise KernelError(reason)
+
+    monkeypatch.setattr(vortex_run, "vortex_performance", diverging)
+    receiver, sender = multiprocessing.Pipe(duplex=False)
+    vortex_run.run_vortex(PerformanceRequest(7, PropellerParameters().to_dict(), 10000.0, 0.0, tmp_path), sender)
+    assert receiver.recv() == ("failed", 7, reason)
+
+    state = _performance_state()
+
+    async def run() -> None:
+        performance = Performance(state, tmp_path)
+        performance._request_id, performance._solving = 7, (10000.0, 0.0)
+        performance._on_message("failed", 6, "an older request's")  # superseded: dropped
+        assert not state.perf_failure
+        performance._on_message("failed", 7, reason)
+        assert state.perf_failure == f"{reason} (at 10000 rpm, 0 m/s)"
+        assert state.perf_thrust_text == state.perf_power_text == state.perf_merit_text == NO_NUMBER
+
+    asyncio.run(run())
+
+
 def test_an_upload_holds_one_design_and_plainly_named_files():
     from torus_cad.studio.uploads import MAX_UPLOAD_BYTES, upload_files
 

@@ -9,6 +9,9 @@ next to the field that was changed.
 The studio is a service on a network: an uploaded design is read off the event loop, as
 ``torus-cad build FILE`` reads it, and may name only files uploaded with it or in ``--files``
 (torus_cad.studio.uploads); the server's start and stop are torus_cad.studio.server's.
+
+Once a design's exact solid is built, the vortex solver's numbers at the rpm and airspeed entered are
+solved in a process of their own (torus_cad.studio.performance); a newer design or point supersedes them.
 """
 
 from __future__ import annotations
@@ -35,6 +38,7 @@ from torus_cad.studio.panel import (
     schema_groups,
     state_values,
 )
+from torus_cad.studio.performance import Performance, state_defaults
 from torus_cad.studio.scene import PreviewScene, preview_scene
 from torus_cad.studio.uploads import is_design, read_upload
 from torus_cad.studio.worker import BuildRunner
@@ -83,6 +87,7 @@ class Studio:
         self.exact: _Exact | None = None  # the newest exact build of a good design
         self._shown_exact: _Exact | None = None  # the exact build whose files the downloads give
         self._runner = BuildRunner(self._on_build_message)
+        self.performance = Performance(self.state, workdir)
         self._previewer = ThreadPoolExecutor(max_workers=1, thread_name_prefix="torus-cad-preview")
         self._changed: set[str] = set()  # keys edited since the last good design
         self._last_changes: set[str] = set()  # the keys edited into the last good design
@@ -107,6 +112,7 @@ class Studio:
             "volume_text": "…", "mass_text": "…", "area_text": "…", "tip_text": "…", "valid_text": "…",
             "route_text": "", "stage_rows": [], "preview_ms": 0.0, "exact_ms": 0.0,
             "preview_stamp": 0, "preview_detail": "", "exact_stamp": 0, "failure": "",
+            **state_defaults(),
         })
 
     def _bind(self) -> None:
@@ -115,6 +121,7 @@ class Studio:
                 self.state.change(name)(self._change_handler(panel_field.key))
         self.state.change("show_sections")(self._on_sections_toggle)
         self.state.change("density_g_cm3")(self._on_density)
+        self.state.change("perf_rpm", "perf_airspeed")(self.performance.on_operating_point)
         self.state.change("upload_file")(self._on_upload)
         self.ctrl.trigger("download_file")(self._download)
         self.ctrl.trigger("download_toml")(self._download_toml)
@@ -139,6 +146,7 @@ class Studio:
 
     def _on_exit(self, **_: Any) -> None:
         self._runner.cancel()
+        self.performance.cancel()
         self._previewer.shutdown(wait=False, cancel_futures=True)
 
     # -- a change: validate, preview, build --------------------------------------------------------
@@ -210,6 +218,7 @@ class Studio:
         build_id = self._build_counter
         self.exact = _Exact(build_id, params, started, changed=set(self._last_changes))
         self._runner.submit(BuildRequest(build_id, params.to_dict(), self.workdir / "builds" / str(build_id)))
+        self.performance.hold()  # solved once the build is done: the build keeps the CPU
         with self.state:
             self.state.building = True
             for name in ("volume_text", "mass_text", "area_text", "valid_text"):
@@ -260,6 +269,7 @@ class Studio:
         self.state.building = False
         self.state.downloads = [{"kind": kind, "label": DOWNLOAD_LABELS.get(kind, kind), "file": path.name}
                                 for kind, path in exact.files.items()]
+        self.performance.set_design(exact.design)
 
     def _on_refused(self, exact: _Exact, message: str) -> None:
         """A check only the build makes (e.g. the hub's mounting features) refused the design: as a
@@ -273,11 +283,13 @@ class Studio:
             self._displayed = None  # the view no longer shows the refused design's preview
             self.view.show_parts(solid.parts, design.blades)
             self.ctrl.view_update()
+            self.performance.set_design(design)  # the numbers of the propeller back on screen
 
     def _on_failed(self, exact: _Exact, message: str) -> None:
         self.state.building = False
         self.state.status = "failed"
         self.state.failure = message
+        self.performance.set_design(exact.design)  # the design passed every check before the kernel
 
     # -- readouts, toggles, files -----------------------------------------------------------------
     def _update_mass(self) -> None:

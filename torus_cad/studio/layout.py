@@ -14,6 +14,7 @@ from trame.widgets import vtk as vtk_widgets
 from trame.widgets import vuetify3 as v3
 
 from torus_cad.studio.panel import FieldKind, PanelField, PanelGroup
+from torus_cad.studio.performance import SOLVER_LABEL
 
 
 class Studio(Protocol):
@@ -169,6 +170,34 @@ def _readouts() -> None:
                     click="utils.download(file_stem + '.toml', trigger('download_toml'), 'application/toml')")
 
 
+def _operating_point_field(name: str, label: str, unit: str) -> None:
+    """An rpm or airspeed input of the performance card, its refusal under it (as the density's)."""
+    v3.VTextField(v_model=(name,), label=label, suffix=unit, type="number", step="any", min=0, density="compact",
+                  variant="outlined", classes="mx-3 mt-2", error_messages=(f"{name}_error || []",),
+                  hide_details="auto", id=field_id(name))
+
+
+def _performance() -> None:
+    """The vortex solver's numbers at the rpm and airspeed entered, and its loading plot (torus_cad.studio.performance)."""
+    with v3.VCard(classes="ma-2", elevation=2, id="performance"):
+        v3.VCardTitle("Performance (vortex solver)", classes="text-subtitle-1")
+        _operating_point_field("perf_rpm", "rpm", "rpm")
+        _operating_point_field("perf_airspeed", "airspeed", "m/s")
+        with v3.VTable(density="compact", classes="studio-readouts mt-1"), html.Tbody():
+            for label, variable, element_id in (("thrust", "perf_thrust_text", "readout-thrust"),
+                                                ("power", "perf_power_text", "readout-power"),
+                                                ("{{ perf_merit_label }}", "perf_merit_text", "readout-merit")):
+                with html.Tr():
+                    html.Td(label)
+                    html.Td(f"{{{{ {variable} }}}}", id=element_id)
+        html.Div("{{ perf_point_text }}", classes="text-caption text-medium-emphasis mx-3", id="readout-point")
+        html.Div("{{ perf_failure }}", v_if=("perf_failure",), classes="text-caption text-error mx-3 studio-refusal",
+                 id="performance-failure")
+        html.Img(src=("perf_plot",), v_if=("perf_plot",), id="performance-plot", alt="loading along the blade",
+                 style=("perf_computing ? 'width: 100%; opacity: 0.35' : 'width: 100%'",))
+        html.Div(SOLVER_LABEL, classes="text-caption text-medium-emphasis mx-3 mb-2", id="performance-label")
+
+
 def _toolbar(studio: Studio, layout: SinglePageWithDrawerLayout) -> None:
     layout.title.set_text("torus_cad studio")
     with layout.toolbar:
@@ -216,3 +245,4 @@ def build_layout(studio: Studio) -> None:
             _view_area(studio)
             with html.Div(style="flex: 0 0 330px; overflow-y: auto;", id="readouts-column"):
                 _readouts()
+                _performance()

@@ -41,16 +41,21 @@ BUILD_MEMORY_LIMIT_BYTES = 3 << 30
 
 # -- parent side -----------------------------------------------------------------------------------
 
-class BuildRunner:
-    """Runs at most one build process at a time; a new request kills the one running.
+class ProcessRunner:
+    """Runs at most one request at a time, each in its own process; a new request kills the one running.
 
-    ``on_message(kind, build_id, payload)`` is called on the event loop for every message, and
-    with ``("failed", build_id, reason)`` if the process dies without finishing.
+    ``on_message(kind, request_id, payload)`` is called on the event loop for every message the child
+    sends, and with ``("failed", request_id, reason)`` if the process dies without finishing (a message of
+    one of ``final_kinds``) or outlives ``time_limit_s`` seconds (``time_out_reason(time_limit_s)`` says so).
+    ``target(request, connection, memory_limit_bytes)`` runs in the child: a module-level function that
+    imports what it needs (the server side imports no kernel and no solver).
     """
 
-    def __init__(self, on_message: Callable[[str, int, Any], None], time_limit_s: float = BUILD_TIME_LIMIT_S,
-                 memory_limit_bytes: int = BUILD_MEMORY_LIMIT_BYTES) -> None:
-        self._on_message = on_message
+    def __init__(self, on_message: Callable[[str, int, Any], None], target: Callable[..., None],
+                 final_kinds: tuple[str, ...], time_out_reason: Callable[[float], str], name: str,
+                 time_limit_s: float, memory_limit_bytes: int) -> None:
+        self._on_message, self._target, self._final_kinds = on_message, target, final_kinds
+        self._time_out_reason, self._name = time_out_reason, name
         self.time_limit_s, self.memory_limit_bytes = time_limit_s, memory_limit_bytes
         self._timer: asyncio.TimerHandle | None = None
         self._context = multiprocessing.get_context("forkserver")
@@ -60,35 +65,36 @@ class BuildRunner:
         self._process: multiprocessing.process.BaseProcess | None = None
         self._connection: multiprocessing.connection.Connection | None = None
         self._loop: asyncio.AbstractEventLoop | None = None
-        self._build_id = -1
+        self._request_id = -1
         self._finished = True
 
-    def submit(self, request: BuildRequest) -> None:
-        """Start ``request``, killing any build still running (it is superseded)."""
+    def start(self, request_id: int, request: Any) -> None:
+        """Run ``request`` in a new process, killing any still running (it is superseded)."""
         self.cancel()
-        request.out_dir.mkdir(parents=True, exist_ok=True)
         receiver, sender = self._context.Pipe(duplex=False)
-        process = self._context.Process(target=_child_main, args=(request, sender, self.memory_limit_bytes),
-                                        daemon=True,
-                                        name=f"torus-cad-studio-build-{request.build_id}")
+        process = self._context.Process(target=self._target, args=(request, sender, self.memory_limit_bytes),
+                                        daemon=True, name=f"torus-cad-studio-{self._name.replace(' ', '-')}-{request_id}")
         process.start()
         sender.close()  # the child holds the only writer: its death ends our reads with EOF
         self._process, self._connection = process, receiver
-        self._build_id, self._finished = request.build_id, False
+        self._request_id, self._finished = request_id, False
         self._loop = asyncio.get_running_loop()
         self._loop.add_reader(receiver.fileno(), self._readable)
-        self._timer = self._loop.call_later(self.time_limit_s, self._time_out, request.build_id)
+        self._timer = self._loop.call_later(self.time_limit_s, self._time_out, request_id)
 
-    def _time_out(self, build_id: int) -> None:
-        if build_id != self._build_id or self._finished:
+    @property
+    def running(self) -> bool:
+        """A request's process is running and has not finished."""
+        return not self._finished
+
+    def _time_out(self, request_id: int) -> None:
+        if request_id != self._request_id or self._finished:
             return
         self.cancel()
-        self._on_message("failed", build_id, f"the exact build took longer than {self.time_limit_s:g} s, the limit "
-                         "for a build in the studio, and was stopped; lower resolution.sections / "
-                         "resolution.points or build it with torus-cad build")
+        self._on_message("failed", request_id, self._time_out_reason(self.time_limit_s))
 
     def cancel(self) -> None:
-        """Kill the running build, if any; its messages are dropped."""
+        """Kill the running process, if any; its messages are dropped."""
         if self._timer is not None:
             self._timer.cancel()
             self._timer = None
@@ -105,22 +111,47 @@ class BuildRunner:
         self._finished = True
 
     def _readable(self) -> None:
-        connection, build_id = self._connection, self._build_id
+        connection, request_id = self._connection, self._request_id
         if connection is None:
             return
         try:
             while connection.poll():
                 kind, message_id, payload = connection.recv()
-                self._on_message(kind, message_id, payload)
-                if kind in ("files", "refused", "failed"):
+                if kind in self._final_kinds:
                     self._finished = True
+                self._on_message(kind, message_id, payload)
+                if self._connection is not connection:
+                    return  # the handler cancelled this request or started another
         except (EOFError, OSError):
+            if self._connection is not connection:
+                return
             if not self._finished:
                 code = self._process.exitcode if self._process is not None else None
                 self._finished = True
-                self._on_message("failed", build_id, f"the build process stopped unexpectedly (exit code {code})")
+                self._on_message("failed", request_id, f"the {self._name} process stopped unexpectedly "
+                                                       f"(exit code {code})")
             if self._connection is connection:
                 self.cancel()
+
+
+class BuildRunner(ProcessRunner):
+    """The exact builds (module doc): ``submit`` a :class:`BuildRequest`; its messages in the module doc's order."""
+
+    def __init__(self, on_message: Callable[[str, int, Any], None], time_limit_s: float = BUILD_TIME_LIMIT_S,
+                 memory_limit_bytes: int = BUILD_MEMORY_LIMIT_BYTES) -> None:
+        super().__init__(on_message, _child_main, ("files", "refused", "failed"), _build_time_out, "build",
+                         time_limit_s, memory_limit_bytes)
+
+    def submit(self, request: BuildRequest) -> None:
+        """Start ``request``, killing any build still running (it is superseded)."""
+        self.cancel()
+        request.out_dir.mkdir(parents=True, exist_ok=True)
+        self.start(request.build_id, request)
+
+
+def _build_time_out(limit_s: float) -> str:
+    return (f"the exact build took longer than {limit_s:g} s, the limit for a build in the studio, and was "
+            "stopped; lower resolution.sections / resolution.points or build it with torus-cad build")
 
 
 def _child_main(request: BuildRequest, connection: multiprocessing.connection.Connection,

@@ -64,13 +64,18 @@ class VortexRun:
     report: dict[str, Any]
 
 
-def check_vortex_request(request: VortexRequest) -> float:
-    """ParameterError (exit 2) naming the option, the value and the range; the design's tip diameter, m."""
+def tip_diameter_m(params: PropellerParameters) -> float:
+    """The tip diameter of ``params`` with its design targets applied, m: the one the rpm's range is set by."""
     from torus_cad.cfd.sizes import tip_radius
 
+    return 2.0 * tip_radius(resolve_design_targets(params).parameters) / 1000.0
+
+
+def check_vortex_request(request: VortexRequest) -> float:
+    """ParameterError (exit 2) naming the option, the value and the range; the design's tip diameter, m."""
     check_count("--chordwise", request.discretisation.chordwise, *CHORDWISE_RANGE)
     check_count("--spanwise", request.discretisation.spanwise, *SPANWISE_RANGE)
-    diameter_m = 2.0 * tip_radius(resolve_design_targets(request.params).parameters) / 1000.0
+    diameter_m = tip_diameter_m(request.params)
     check_operating_point(request.point, diameter_m, request.params)
     check_observers(request.observers, diameter_m / 2.0)
     return diameter_m
