@@ -89,6 +89,32 @@ def test_page_shows_every_parameter_and_the_default_propeller(page):
     assert page.text("readout-valid") == "valid: 1 closed solid"
 
 
+#: Seconds to wait for the vortex solver's numbers: one point is ~5 s of CPU, several times that on a loaded machine.
+PERFORMANCE_WAIT_S = 120.0
+
+
+def _thrust_at(page, rpm: str) -> float:
+    """The thrust readout, N, once the numbers of ``rpm`` (and the loading plot) are shown."""
+    page.wait(lambda: page.text("readout-point").startswith(f"at {rpm} rpm, 0 m/s") and
+              page.text("readout-thrust").endswith(" N") and page.exists("performance-plot"),
+              f"the vortex solver's numbers at {rpm} rpm", PERFORMANCE_WAIT_S)
+    return float(page.text("readout-thrust").removesuffix(" N"))
+
+
+def test_the_vortex_solvers_thrust_shows_for_the_default_design_and_follows_the_rpm(page):
+    page.change("blades", "3")  # the default design
+    thrust_10k = _thrust_at(page, "10000")
+    assert page.text("readout-power").endswith(" W") and 0.0 < float(page.text("readout-merit")) < 1.0
+    assert "vortex solver" in page.text("performance-label")
+    page.set_field("perf_rpm", "12000")  # typed key by key: each keystroke supersedes the solve before
+    assert _thrust_at(page, "12000") > 1.2 * thrust_10k  # thrust ~ rpm^2
+    page.set_field("perf_rpm", "99999")
+    page.wait(lambda: "rpm = 99999 is out of range; allowed [0, " in page.message_of(field_id("perf_rpm")),
+              "the rpm's refusal")
+    page.set_field("perf_rpm", "10000")
+    assert _thrust_at(page, "10000") == thrust_10k
+
+
 def test_four_blades_change_the_volume_readout(page):
     page.change("blades", "3")
     three_blades = page.text("readout-volume")

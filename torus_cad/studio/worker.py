@@ -17,7 +17,10 @@ memory (``RLIMIT_DATA``, set in the child before it builds: an allocation beyond
 the child, never in the server) and is killed after :data:`BUILD_TIME_LIMIT_S` seconds
 (a "failed" message says so). Whatever a design asks for, the server only waits on a pipe.
 
-Only the parent side (:class:`BuildRunner`) runs in the server process; it imports no kernel.
+The machinery (one process per request, the newest killing the older, a time and memory limit) is
+:class:`ProcessRunner`'s; the studio's vortex solves (torus_cad.studio.performance) run through it too.
+Only the parent side (:class:`ProcessRunner`, :class:`BuildRunner`) runs in the server process; it
+imports no kernel.
 """
 
 from __future__ import annotations
