@@ -19,7 +19,7 @@ import numpy as np
 
 from torus_cad.batch.sweep_file import SweepMode, SweepSpec, VaryAxis
 
-__all__ = ["ID_LENGTH", "Design", "design_id", "generate_designs", "unit_samples"]
+__all__ = ["ID_LENGTH", "Design", "apply_axis_values", "design_id", "generate_designs", "unit_samples"]
 
 ID_LENGTH = 12  #: hex digits of the SHA-256 kept as the design id (48 bits)
 
@@ -78,8 +78,18 @@ def _combinations(spec: SweepSpec) -> Iterator[tuple[Any, ...]]:
         yield tuple(axis.pick(float(u)) for axis, u in zip(spec.axes, row))
 
 
-def _apply(base: Mapping[str, Any], axes: Iterable[VaryAxis], combination: tuple[Any, ...]) -> dict[str, Any]:
-    """A deep copy of ``base`` with each axis's value set."""
+def apply_axis_values(base: Mapping[str, Any], axes: Iterable[VaryAxis],
+                      combination: tuple[Any, ...]) -> dict[str, Any]:
+    """A deep copy of ``base`` with each axis's value set.
+
+    Args:
+        base: a design's parameters as nested tables (:meth:`PropellerParameters.to_dict`); not changed.
+        axes: the varied parameters, each naming its table path (and vector element, if any).
+        combination: one value per axis, in the order of ``axes``.
+
+    Returns:
+        The new parameters: ``base`` copied, with each axis's parameter (or vector element) set to its value.
+    """
     parameters = copy.deepcopy(dict(base))
     for axis, value in zip(axes, combination):
         table = parameters
@@ -98,7 +108,7 @@ def generate_designs(spec: SweepSpec) -> list[Design]:
     designs: list[Design] = []
     seen: set[str] = set()
     for combination in _combinations(spec):
-        parameters = _apply(base, spec.axes, combination)
+        parameters = apply_axis_values(base, spec.axes, combination)
         ident = design_id(parameters)
         if ident in seen:
             continue

@@ -180,6 +180,7 @@ class LocalPool:
         worker still starting (reading its start-up data from the fork server) then fails to open them
         with a FileNotFoundError traceback. Uses pebble 5's internals (constraints.txt pins it); where
         they differ, pebble's own order is kept."""
+        # private: pebble has no public way to stop its workers before join; read as of Pebble==5.2.3 (constraints.txt)
         manager = getattr(getattr(self._pool, "_pool_manager", None), "worker_manager", None)
         workers = getattr(manager, "workers", None)
         loop = getattr(self._pool, "_pool_manager_loop", None)

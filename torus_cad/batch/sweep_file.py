@@ -54,7 +54,8 @@ from torus_cad.tolerances import DENSITY_LIMIT_G_CM3, DESIGN_TIME_LIMIT_MAX_S
 MAX_SWEEP_DESIGNS = 1_000_000
 
 
-__all__ = ["SweepMode", "SweepSpec", "VaryAxis", "estimate_designs", "load_sweep", "parse_sweep"]
+__all__ = ["Fail", "Leaf", "SweepMode", "SweepSpec", "VaryAxis", "axis_paths_relative_to", "check_distinct_axes",
+           "checked_value", "estimate_designs", "flatten_vary", "load_sweep", "parse_sweep", "resolve_leaf"]
 
 
 class SweepMode(StrEnum):
@@ -183,8 +184,8 @@ def parse_sweep(data: Mapping[str, Any], base_dir: str | Path = ".", name: str =
     vary = data.get("vary", {})
     if not isinstance(vary, Mapping):
         raise fail("[vary] must be a table of parameter keys")
-    axes = tuple(_paths_relative_to(_parse_axis(key, spec, mode, fail), folder) for key, spec in _flatten_vary(vary))
-    _check_distinct(axes, fail)
+    axes = tuple(axis_paths_relative_to(_parse_axis(key, spec, mode, fail), folder) for key, spec in flatten_vary(vary))
+    check_distinct_axes(axes, fail)
     if mode is SweepMode.GRID:
         _check_budget(math.prod(len(axis.values) for axis in axes), [(axis.key, len(axis.values)) for axis in axes],
                       fail)
@@ -269,9 +270,17 @@ def _parse_base(table: Any, base_dir: Path, fail: Fail) -> PropellerParameters:
         raise fail(f"[base] {error}") from None
 
 
-def _paths_relative_to(axis: VaryAxis, folder: Path) -> VaryAxis:
+def axis_paths_relative_to(axis: VaryAxis, folder: Path) -> VaryAxis:
     """``axis`` with each value that is a file path (``airfoil.file``) made relative to ``folder``,
-    by the rule of a design file (:meth:`PropellerParameters.paths_relative_to`)."""
+    by the rule of a design file (:meth:`PropellerParameters.paths_relative_to`).
+
+    Args:
+        axis: a varied parameter with its values (a vector element or bounds are returned as they are).
+        folder: the folder of the file that gave the values.
+
+    Returns:
+        ``axis``, or a copy whose file-path values are resolved against ``folder``.
+    """
     if axis.index is not None or axis.is_bounds:
         return axis
 
@@ -295,17 +304,33 @@ def _deep_merge(target: dict[str, Any], changes: Mapping[str, Any]) -> None:
             target[key] = value
 
 
-def _flatten_vary(vary: Mapping[str, Any], prefix: str = "") -> Iterable[tuple[str, Any]]:
-    """``hub.radius = [..]`` (a nested TOML table) and ``"hub.radius" = [..]`` mean the same."""
+def flatten_vary(vary: Mapping[str, Any], prefix: str = "") -> Iterable[tuple[str, Any]]:
+    """``hub.radius = [..]`` (a nested TOML table) and ``"hub.radius" = [..]`` mean the same.
+
+    Args:
+        vary: a ``[vary]`` table as read, its keys dotted or nested.
+        prefix: the dotted key of the tables ``vary`` is inside (for the recursion).
+
+    Returns:
+        ``(dotted key, spec)`` pairs, one per varied parameter, in the table's order.
+    """
     for key, value in vary.items():
         if isinstance(value, Mapping) and not set(value) <= _SPEC_KEYS:
-            yield from _flatten_vary(value, f"{prefix}{key}.")
+            yield from flatten_vary(value, f"{prefix}{key}.")
         else:
             yield f"{prefix}{key}", value
 
 
-def _check_distinct(axes: tuple[VaryAxis, ...], fail: Fail) -> None:
-    """No two axes may set the same parameter (or the same element of a vector)."""
+def check_distinct_axes(axes: tuple[VaryAxis, ...], fail: Fail) -> None:
+    """No two axes may set the same parameter (or the same element of a vector).
+
+    Args:
+        axes: the varied parameters.
+        fail: makes the error raised for two axes that set the same parameter.
+
+    Returns:
+        None; raises ``fail``'s error naming both keys when two axes overlap.
+    """
     seen: dict[tuple[str, ...], list[VaryAxis]] = {}
     for axis in axes:
         for other in seen.get(axis.path, []):
@@ -315,7 +340,7 @@ def _check_distinct(axes: tuple[VaryAxis, ...], fail: Fail) -> None:
 
 
 @dataclass(frozen=True)
-class _Leaf:
+class Leaf:
     """What one axis sets, as the schema declares it: a whole parameter or one element of a vector.
 
     Attributes:
@@ -344,8 +369,17 @@ def _specs() -> dict[str, ParameterSpec]:
     return {spec.key: spec for spec in parameter_specs()}
 
 
-def _resolve_leaf(key: str, fail: Fail) -> tuple[tuple[str, ...], int | None, _Leaf]:
-    """The parameter path, vector index and schema entry that ``key`` names."""
+def resolve_leaf(key: str, fail: Fail) -> tuple[tuple[str, ...], int | None, Leaf]:
+    """The parameter path, vector index and schema entry that ``key`` names.
+
+    Args:
+        key: a varied key, e.g. ``"hub.radius"`` or ``"centerline.p2[2]"``.
+        fail: makes the error raised for a key that names no parameter that can be varied.
+
+    Returns:
+        ``(path, index, leaf)``: the table path, the vector element (None for a whole parameter) and what the
+        schema declares for it.
+    """
     where = f"vary.{shown(key)}"
     match = _KEY_PATTERN.match(key)
     if not match:
@@ -364,20 +398,20 @@ def _resolve_leaf(key: str, fail: Fail) -> tuple[tuple[str, ...], int | None, _L
     path = tuple(dotted.split("."))
     if index is None:  # a choice is one of its Enum's values, as written in a design file
         choices = tuple(str(choice.value) for choice in spec.choices)
-        return path, index, _Leaf(dotted, str if choices else spec.kind, spec.length, spec.bounds, spec.unit, choices)
+        return path, index, Leaf(dotted, str if choices else spec.kind, spec.length, spec.bounds, spec.unit, choices)
     if spec.kind is not tuple:
         raise fail(f"{where}: {dotted} is not a vector, so [{index}] does not apply")
     if index >= spec.length:
         raise fail(f"{where}: index {index} is out of range; {dotted} has {spec.length} elements")
-    return path, index, _Leaf(key, float, 0, spec.bounds, spec.unit)
+    return path, index, Leaf(key, float, 0, spec.bounds, spec.unit)
 
 
 def _parse_axis(key: str, spec: Any, mode: SweepMode, fail: Fail) -> VaryAxis:
     where = f"vary.{shown(key)}"
-    path, index, leaf = _resolve_leaf(key, fail)
+    path, index, leaf = resolve_leaf(key, fail)
 
     def value_of(item: Any, what: str) -> Any:
-        return _checked_value(item, leaf, f"{where} {what}", fail)
+        return checked_value(item, leaf, f"{where} {what}", fail)
 
     integer = leaf.kind is int
     if isinstance(spec, list):
@@ -406,7 +440,7 @@ def _parse_axis(key: str, spec: Any, mode: SweepMode, fail: Fail) -> VaryAxis:
     raise fail(f"{where} has keys {sorted(keys)}; use {{start, stop, step}}, {{start, stop, num}} or {{low, high}}")
 
 
-def _range_values(spec: Mapping[str, Any], start: Any, stop: Any, leaf: _Leaf, where: str,
+def _range_values(spec: Mapping[str, Any], start: Any, stop: Any, leaf: Leaf, where: str,
                   fail: Fail) -> tuple[Any, ...]:
     """The values of ``{start, stop, step}`` (stop included when it falls on a step) or ``{start, stop, num}``.
 
@@ -434,8 +468,18 @@ def _range_values(spec: Mapping[str, Any], start: Any, stop: Any, leaf: _Leaf, w
                  for i in range(count))
 
 
-def _checked_value(item: Any, leaf: _Leaf, where: str, fail: Fail) -> Any:
-    """``item`` of the parameter's type and inside its range (each element of a vector)."""
+def checked_value(item: Any, leaf: Leaf, where: str, fail: Fail) -> Any:
+    """``item`` of the parameter's type and inside its range (each element of a vector).
+
+    Args:
+        item: a value as read from the file.
+        leaf: the parameter (or vector element) it is for (:func:`resolve_leaf`).
+        where: names the value in a message, e.g. ``"vary.hub.radius item 0"``.
+        fail: makes the error raised for a value of the wrong type, out of range or not a choice.
+
+    Returns:
+        The value as the parameter's type (an int as float for a float parameter, a vector as a list).
+    """
     value = _checked_type(item, leaf, where, fail)
     if leaf.choices:
         if value not in leaf.choices:
@@ -451,7 +495,7 @@ def _checked_value(item: Any, leaf: _Leaf, where: str, fail: Fail) -> Any:
     return value
 
 
-def _checked_type(item: Any, leaf: _Leaf, where: str, fail: Fail) -> Any:
+def _checked_type(item: Any, leaf: Leaf, where: str, fail: Fail) -> Any:
     """``item`` as the parameter's type: ints stay ints, ints become floats for float keys, no NaN or inf."""
     if leaf.kind is bool:
         if not isinstance(item, bool):
@@ -477,7 +521,7 @@ def _checked_type(item: Any, leaf: _Leaf, where: str, fail: Fail) -> Any:
     raise fail(f"{where}: cannot vary this parameter")  # pragma: no cover - the schema has no other kinds
 
 
-def _within(leaf: _Leaf) -> str:
+def _within(leaf: Leaf) -> str:
     """`` in [low, high] unit`` of a numeric parameter, for a message; empty for the others."""
     return f" in {leaf.bounds}{' ' + leaf.unit if leaf.unit else ''}" if leaf.numeric else ""
 

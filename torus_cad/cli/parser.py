@@ -72,9 +72,9 @@ class _Parser(argparse.ArgumentParser):
     """
 
     table: str = ""
-    #: Options that set a design parameter (dest -> dotted schema key): their range, the schema's, is
+    #: Options that set a design parameter (their action -> dotted schema key): their range, the schema's, is
     #: checked as they are parsed and shown in --help, once the subcommand is used (as ``table``).
-    schema_ranges: dict[str, str] = {}  # noqa: RUF012 - replaced, never mutated
+    schema_ranges: dict[argparse.Action, str] = {}  # noqa: RUF012 - replaced, never mutated
 
     #: A progress line printed (on a terminal, without -q) as soon as the subcommand is chosen, before its
     #: schema options load the schema: the command says what it does within its first second.
@@ -98,7 +98,7 @@ class _Parser(argparse.ArgumentParser):
             _add_table_arguments(self, table)
         if self.schema_ranges:
             ranges, self.schema_ranges = self.schema_ranges, {}
-            _bind_schema_ranges(self, ranges)
+            _bind_schema_ranges(ranges)
 
     def error(self, message: str) -> None:  # type: ignore[override]
         """One line (a long value in it cut short), exit 2: argparse's messages quote what was typed."""
@@ -162,15 +162,13 @@ def _add_table_arguments(parser: argparse.ArgumentParser, table: str) -> None:
                                 metavar="X", help=f"{spec.doc}{unit}; {spec.bounds} (default {spec.default:g})")
 
 
-def _bind_schema_ranges(parser: argparse.ArgumentParser, ranges: dict[str, str]) -> None:
-    """Give each option of ``ranges`` (dest -> dotted schema key) its parameter's range: checked as parsed, in --help."""
+def _bind_schema_ranges(ranges: dict[argparse.Action, str]) -> None:
+    """Give each option of ``ranges`` (action -> dotted schema key) its parameter's range: checked as parsed, in
+    --help."""
     from torus_cad.parameters import parameter_specs
 
     specs = {spec.key: spec for spec in parameter_specs()}
-    for action in parser._actions:
-        key = ranges.get(action.dest)
-        if key is None:
-            continue
+    for action, key in ranges.items():
         spec = specs[key]
         action.type = _option_type(key, spec.kind, spec.bounds, spec.unit)
         action.help = f"{action.help}; {range_help(spec.bounds, spec.unit)}"
@@ -188,10 +186,11 @@ def _add_mesh_parser(commands: Any) -> None:
         "<name>_mesh.<format> files and <name>_mesh.json, a quality report. The options override the design's "
         "[mesh] table. A mesh whose estimated memory is over the limit, a resolution too coarse for the blade "
         "and a root fillet are refused before anything is built.")
-    mesh.add_argument("--sections", metavar="N", help="sections along each blade (mesh.sections, default 100)")
-    mesh.add_argument("--points", metavar="M",
-                      help="points around each section, equal arc length (mesh.points, default 400)")
-    mesh.schema_ranges = {"sections": "mesh.sections", "points": "mesh.points"}  # the schema's ranges, when used
+    sections = mesh.add_argument("--sections", metavar="N",
+                                 help="sections along each blade (mesh.sections, default 100)")
+    points = mesh.add_argument("--points", metavar="M",
+                               help="points around each section, equal arc length (mesh.points, default 400)")
+    mesh.schema_ranges = {sections: "mesh.sections", points: "mesh.points"}  # the schema's ranges, when used
     mesh.add_argument("--spacing", choices=["arc_length", "parameter"],
                       help="sections evenly in the centerline's arc length or in its parameter s "
                            "(mesh.spacing, default arc_length)")
@@ -326,6 +325,17 @@ def _add_out_and_quiet(parser: argparse.ArgumentParser, default_out: str) -> Non
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with every subcommand."""
+    return build_parser_and_commands()[0]
+
+
+def build_parser_and_commands() -> tuple[argparse.ArgumentParser, dict[str, argparse.ArgumentParser]]:
+    """The argument parser with every subcommand, and the subcommands' own parsers (argparse keeps them
+    nowhere public).
+
+    Returns:
+        ``(parser, commands)``: the program's parser (:func:`build_parser`), and each subcommand's parser by its
+        name, in the order of ``--help``.
+    """
     parser = _Parser(prog="torus-cad", description=DESCRIPTION, epilog=EPILOG,
                      formatter_class=argparse.RawDescriptionHelpFormatter)
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=_Parser)
@@ -475,4 +485,4 @@ def build_parser() -> argparse.ArgumentParser:
     _add_mesh_parser(commands)
     _add_cfd_parser(commands)
     _add_simulate_parser(commands)
-    return parser
+    return parser, dict(commands.choices)

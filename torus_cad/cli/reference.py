@@ -22,14 +22,12 @@ def _help_of(parser: argparse.ArgumentParser, title: str) -> list[str]:
 def cli_reference() -> str:
     """Markdown of ``torus-cad --help`` and every subcommand's ``--help`` (options loaded from the schema
     included), between the page's markers."""
-    from torus_cad.cli.parser import build_parser
+    from torus_cad.cli.parser import build_parser_and_commands
 
-    parser = build_parser()
+    parser, commands = build_parser_and_commands()
     lines = [BEGIN, ""] + _help_of(parser, "torus-cad")
-    for action in parser._actions:  # argparse keeps its subcommands here and nowhere public
-        if isinstance(action, argparse._SubParsersAction):
-            for name, sub in action.choices.items():  # format_help adds a subcommand's schema options
-                lines += _help_of(sub, f"torus-cad {name}")
+    for name, sub in commands.items():  # format_help adds a subcommand's schema options
+        lines += _help_of(sub, f"torus-cad {name}")
     return "\n".join([*lines, END])
 
 

@@ -324,6 +324,7 @@ def _trial_tables() -> tuple[Any, Any]:
     The one private name of optuna this package uses, read as of optuna 5.0.0 (constraints.txt): the
     public API has no aggregate over a study's trials. A new optuna: check the models' names and columns
     (``trial_id``, ``study_id``, ``state``; ``trial_id``, ``key``)."""
+    # private: optuna's public API counts no trials in one query; read as of optuna==5.0.0 (constraints.txt)
     from optuna.storages._rdb import models
 
     return models.TrialModel, models.TrialUserAttributeModel

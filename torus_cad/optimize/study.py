@@ -264,12 +264,12 @@ class _Runner:
                     window = _TASKS_PER_WORKER * max(1, len(own_client.scheduler_info().get("workers", {}))
                                                      or workers or 1)
                     result.backend = f"dask: {cluster.client_label(own_client)}"
-                    run_tasks(_Tasks(self, result), self._on_result, lambda: executor, window=window, job=self.job,
+                    run_tasks(_Tasks(self, result), self.on_result, lambda: executor, window=window, job=self.job,
                               check_visible=True)
                 else:
                     count = min(workers or available_workers(), available_workers())
                     result.backend = f"local pool, {count} worker{'s' if count > 1 else ''}"
-                    run_tasks(_Tasks(self, result), self._on_result,
+                    run_tasks(_Tasks(self, result), self.on_result,
                               lambda: LocalPool(count, self.spec.time_limit_s), window=_TASKS_PER_WORKER * count,
                               job=self.job)
         except BaseException:
@@ -281,8 +281,15 @@ class _Runner:
             if own_client is not None:
                 cluster.close_client(own_client, own_cluster)
 
-    def _claim(self) -> Trial | None:
-        """Ask for a trial (an enqueued retry first), or None when the study is full."""
+    def claim_trial(self) -> Trial | None:
+        """Ask for a trial (an enqueued retry first), or None when the study is full.
+
+        Called by the runner's tasks (:class:`_Tasks`) under the claim lock. The trial is this process's from
+        here: in flight, owned, on the heartbeat.
+
+        Returns:
+            The new trial, or None when the study holds its trials and no retry waits.
+        """
         counted, waiting = count_trials(self.rdb, self.study_id)
         if not self.seeded:  # distinct seeds for processes sharing a study, reproducible for one process
             self.study.sampler = _sampler(self.spec, self.spec.seed + counted)
@@ -297,8 +304,16 @@ class _Runner:
         self.heartbeat.add(trial)
         return trial
 
-    def _task(self, trial: Trial, stage: int = 0) -> TrialTask:
-        """Trial ``trial``'s task at ``stage`` (0: build it and simulate it at the first level)."""
+    def trial_task(self, trial: Trial, stage: int = 0) -> TrialTask:
+        """Trial ``trial``'s task at ``stage`` (0: build it and simulate it at the first level).
+
+        Args:
+            trial: a trial this process claimed (:meth:`claim_trial`).
+            stage: the index of the simulation level the task runs.
+
+        Returns:
+            The task, its folder made.
+        """
         name = trial_name(trial.number)
         folder = self.out / TRIALS_DIR / str(trial.number)
         folder.mkdir(parents=True, exist_ok=True)
@@ -308,11 +323,16 @@ class _Runner:
         return TrialTask(name, parameters, str(folder), stl=self.spec.stl, simulate=self.spec.stage_settings(stage),
                          simulate_time_limit_s=self.spec.time_limit_s, simulate_dir=report_dir, stage=stage)
 
-    def _on_result(self, task: DesignTask, result: DesignResult) -> None:
+    def on_result(self, task: DesignTask, result: DesignResult) -> None:
         """Tell optuna what the trial gave: its objective values and constraints, or FAIL with the reason; at a
         screening level, climb (queue the next stage) or PRUNED.
 
-        The trial's record (outcome, reason, metrics, violations) is one user attr, one write."""
+        The trial's record (outcome, reason, metrics, violations) is one user attr, one write.
+
+        Args:
+            task: the trial's task that ran (or was refused before it ran).
+            result: what it gave.
+        """
         import optuna
         from optuna.trial import TrialState
 
@@ -344,7 +364,7 @@ class _Runner:
                     return
                 if not stops:
                     self.seconds[task.design_id] = seconds
-                    self.climbs.append(self._task(trial, stage + 1))
+                    self.climbs.append(self.trial_task(trial, stage + 1))
                     return
                 record[PRUNED_AT] = levels[stage]
         record.update({OUTCOME: outcome.value, REASON: reason})
@@ -484,15 +504,15 @@ class _Tasks:
                 if time.monotonic() - self.checked >= HEARTBEAT_S:  # at the start, then once per heartbeat
                     self.result.retried += retry_stale_trials(runner.study, runner.rdb)
                     self.checked = time.monotonic()
-                trial = runner._claim()
+                trial = runner.claim_trial()
             if trial is None:
                 self.full = True
                 continue
-            task = runner._task(trial)
+            task = runner.trial_task(trial)
             refusal = prescreen(task)  # refused by the kernel-free checks: told at once, no worker needed
             if refusal is None:
                 return task
-            runner._on_result(task, refusal)
+            runner.on_result(task, refusal)
 
 
 def _step(kind: PrunerKind, reduction_factor: int, stage: int) -> int:

@@ -48,14 +48,14 @@ from typing import Annotated, Any
 
 from pydantic import Field, ValidationError
 
-from torus_cad.batch.designs import _apply
+from torus_cad.batch.designs import apply_axis_values
 from torus_cad.batch.sweep_file import (
     VaryAxis,
-    _check_distinct,
-    _checked_value,
-    _flatten_vary,
-    _paths_relative_to,
-    _resolve_leaf,
+    axis_paths_relative_to,
+    check_distinct_axes,
+    checked_value,
+    flatten_vary,
+    resolve_leaf,
 )
 from torus_cad.errors import ParameterError, shown
 from torus_cad.optimize.metrics import PERFORMANCE_PREFIX, check_metric, is_performance, noise_observers
@@ -280,7 +280,7 @@ class StudySpec:
 
     def parameters(self, values: Mapping[str, Any], name: str) -> dict[str, Any]:
         """The full design (TOML layout) of the trial with ``values`` by vary key, named ``name``."""
-        parameters = _apply(self.base.to_dict(), self.axes, tuple(values[axis.key] for axis in self.axes))
+        parameters = apply_axis_values(self.base.to_dict(), self.axes, tuple(values[axis.key] for axis in self.axes))
         parameters["name"] = name
         return parameters
 
@@ -311,7 +311,7 @@ def parse_study(data: Mapping[str, Any], base_dir: str | Path = ".", name: str =
 
     data = dict(data)
     if isinstance(data.get("vary"), Mapping):
-        data["vary"] = dict(_flatten_vary(data["vary"]))
+        data["vary"] = dict(flatten_vary(data["vary"]))
         _refuse_non_finite(data["vary"], fail)
     if isinstance(data.get("constraints"), Mapping):
         data["constraints"] = dict(_flatten_bounds(data["constraints"]))
@@ -330,7 +330,7 @@ def parse_study(data: Mapping[str, Any], base_dir: str | Path = ".", name: str =
     axes = tuple(_axis(key, values, folder, fail) for key, values in model.vary.items())
     if not axes:
         raise fail("[vary] is empty; name at least one design key to vary, e.g. \"airfoil.thickness\" = [0.2, 0.6]")
-    _check_distinct(axes, fail)
+    check_distinct_axes(axes, fail)
     objectives, constraints = _goals(model, fail)
     metrics = tuple(o.metric for o in objectives) + tuple(c.metric for c in constraints)
     base = _base(table.base, folder, fail)
@@ -376,28 +376,28 @@ def _refuse_non_finite(vary: Mapping[str, Any], fail: Any) -> None:
             continue
         for end, value in zip(("low", "high"), values):
             if isinstance(value, float) and not math.isfinite(value):
-                _, _, leaf = _resolve_leaf(key, fail)
-                _checked_value(value, leaf, f"vary.{shown(key)} {end}", fail)
+                _, _, leaf = resolve_leaf(key, fail)
+                checked_value(value, leaf, f"vary.{shown(key)} {end}", fail)
 
 
 def _axis(key: str, values: list[Any], folder: Path, fail: Any) -> VaryAxis:
     """A range (two numbers) or a choice (strings or booleans), checked against the schema's ranges."""
     where = f"vary.{shown(key)}"
-    path, index, leaf = _resolve_leaf(key, fail)
+    path, index, leaf = resolve_leaf(key, fail)
     numbers = [v for v in values if isinstance(v, (int, float)) and not isinstance(v, bool)]
     if numbers and len(numbers) == len(values):
         if len(values) != 2:
             raise fail(f"{where} must be [low, high], two numbers (a range), got {len(values)} numbers")
-        low, high = (_checked_value(value, leaf, f"{where} {end}", fail) for value, end in zip(values, ("low", "high")))
+        low, high = (checked_value(value, leaf, f"{where} {end}", fail) for value, end in zip(values, ("low", "high")))
         if isinstance(low, list) or not low < high:
             raise fail(f"{where}: low = {low!r} must be below high = {high!r}")
         return VaryAxis(key, path, index, low=low, high=high, integer=leaf.kind is int)
     if numbers or not values:
         raise fail(f"{where} must be two numbers (a range) or a list of strings or booleans (a choice), got {shown(values)}")
-    checked = tuple(_checked_value(value, leaf, f"{where} item {i}", fail) for i, value in enumerate(values))
+    checked = tuple(checked_value(value, leaf, f"{where} item {i}", fail) for i, value in enumerate(values))
     if len(set(map(repr, checked))) != len(checked):
         raise fail(f"{where} lists a choice twice")
-    return _paths_relative_to(VaryAxis(key, path, index, values=checked), folder)
+    return axis_paths_relative_to(VaryAxis(key, path, index, values=checked), folder)
 
 
 def _goals(model: StudyFile, fail: Any) -> tuple[tuple[Objective, ...], tuple[Constraint, ...]]:

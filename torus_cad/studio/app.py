@@ -126,7 +126,7 @@ class Studio:
         self.ctrl.trigger("download_file")(self._download)
         self.ctrl.trigger("download_toml")(self._download_toml)
         self.ctrl.on_server_ready.add(self._on_ready)
-        self.ctrl.on_server_exited.add(self._on_exit)
+        self.ctrl.on_server_exited.add(self.shut_down)
 
     def _change_handler(self, key: str) -> Any:
         def changed(**_: Any) -> None:
@@ -144,7 +144,15 @@ class Studio:
     def _on_ready(self, **_: Any) -> None:
         self._schedule_refresh()
 
-    def _on_exit(self, **_: Any) -> None:
+    def shut_down(self, **_: Any) -> None:
+        """Stop the studio's work: cancel the build in progress and the previews not yet started.
+
+        Called when the server exits, and by :func:`torus_cad.studio.server.serve` on its way out; a second
+        call does nothing more.
+
+        Args:
+            **_: what the server's exit event passes; not used.
+        """
         self._runner.cancel()
         self.performance.cancel()
         self._previewer.shutdown(wait=False, cancel_futures=True)

@@ -98,5 +98,5 @@ def serve(design: PropellerParameters, port: int = 8080, host: str = "127.0.0.1"
             raise
         finally:
             exit_on_signals()  # the loop's handlers are gone: a signal while cleaning up ends with one line
-            studio._on_exit()
+            studio.shut_down()
     return EXIT_SIGNALS[stopped[0]] if stopped else 0
