@@ -44,8 +44,10 @@ class WakeShape:
         core_chords: the wake lines' vortex core radius, in mean chords, reached one mean chord behind
             the blade: a line that passes a blade downstream (a toroidal loop's return leg) induces a
             finite velocity there.
-        free_turns: the wake's first turn follows the flow (relaxed, :mod:`.solver`); False keeps the
-            whole wake prescribed.
+        free_turns: the wake's first turn follows the flow (relaxed, :mod:`.solver`); False (the default)
+            keeps the whole wake prescribed, its pitch from the momentum-theory inflow: measured, the
+            relaxed turn does not settle on every design (a 4-blade toroidal one) and ranks the toroidal
+            designs and the APC 10x7 SF's static thrust worse (docs/explanation/simulation-accuracy.md).
     """
 
     length_diameters: float = 4.0
@@ -54,7 +56,7 @@ class WakeShape:
     longest_step_deg: float = 60.0
     max_turns: float = 40.0
     core_chords: float = 0.1
-    free_turns: bool = True
+    free_turns: bool = False
 
 
 @dataclass(frozen=True)

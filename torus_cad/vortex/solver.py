@@ -120,15 +120,15 @@ def solve_inviscid(camber_m: NDArray[np.float64], blades: int, spin: float, omeg
         if ratio is None:
             force, moment = _forces(lattice, circulation, spin, omega_rad_s, airspeed_m_s, density, bound_core)
             ratio = blades * float(force[..., 2].sum()) / kinematic if kinematic else 1.0
-        thrust = kinematic * ratio
-        momentum = -airspeed_m_s / 2.0 + np.sqrt((airspeed_m_s / 2.0) ** 2 + max(thrust, 0.0) / (2.0 * density * area))
+        momentum = _momentum_inflow(kinematic * ratio, airspeed_m_s, density, area)
         change = abs(momentum - induced) / scale
         if change < INDUCED_TOLERANCE:  # settled on the ratio of the last full sum: check it on this wake
             force, moment = _forces(lattice, circulation, spin, omega_rad_s, airspeed_m_s, density, bound_core)
-            full = blades * float(force[..., 2].sum()) / kinematic if kinematic else 1.0
-            if abs(full - ratio) <= INDUCED_TOLERANCE:
+            ratio = blades * float(force[..., 2].sum()) / kinematic if kinematic else 1.0
+            momentum = _momentum_inflow(kinematic * ratio, airspeed_m_s, density, area)
+            change = abs(momentum - induced) / scale
+            if change < INDUCED_TOLERANCE:  # the full sum's thrust gives this wake's inflow too
                 break
-            ratio = full
         induced = (1.0 - WAKE_RELAXATION) * induced + WAKE_RELAXATION * momentum
     else:
         raise KernelError(f"the vortex solve did not converge: the wake's induced velocity still changed by "
@@ -144,6 +144,11 @@ def solve_inviscid(camber_m: NDArray[np.float64], blades: int, spin: float, omeg
         thrust = blades * float(force[..., 2].sum())
     torque = spin * blades * float(moment[..., 2].sum())
     return Inviscid(circulation, force, moment, thrust, torque, induced, iteration, change, lattice)
+
+
+def _momentum_inflow(thrust_n: float, airspeed_m_s: float, density: float, area_m2: float) -> float:
+    """Momentum theory's induced velocity at the disk (m/s) for ``thrust_n`` on ``area_m2`` in axial ``airspeed_m_s``."""
+    return float(-airspeed_m_s / 2.0 + np.sqrt((airspeed_m_s / 2.0) ** 2 + max(thrust_n, 0.0) / (2.0 * density * area_m2)))
 
 
 def _relaxed(strips: NDArray[np.float64], lines: NDArray[np.float64], prescribed: tuple[Any, ...], blades: int,
