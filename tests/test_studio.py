@@ -303,7 +303,7 @@ def test_a_build_over_its_time_limit_is_stopped_and_reported(light_params, tmp_p
     heavy = light_params.with_values({"resolution.sections": 200, "resolution.points": 400}).to_dict()
     messages = _collect([heavy], tmp_path, time_limit_s=1.0)
     assert [kind for kind, _, _ in messages] == ["failed"], messages
-    assert "took longer than 1 s, the limit for a build in the studio" in messages[0][2]
+    assert "the exact build took longer than 1 s, the limit in the studio" in messages[0][2]
 
 
 def test_a_build_over_its_memory_limit_fails_in_its_process_not_the_server(light_params, tmp_path):

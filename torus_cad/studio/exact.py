@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import multiprocessing.connection
 import time
-import traceback
 
 import numpy as np
 from OCP.Bnd import Bnd_Box
@@ -21,6 +20,7 @@ from torus_cad.kernel.tessellation import tessellate_faces
 from torus_cad.propeller import Propeller, build_propeller
 from torus_cad.studio.build_messages import BuildRequest, SolidResult
 from torus_cad.studio.scene import PartMesh, tip_diameter_mm
+from torus_cad.studio.worker import failures_reported
 
 #: Chordal deviation of the exact solid's display mesh, as a fraction of its bounding-box diagonal.
 DISPLAY_RELATIVE_DEFLECTION = 1.0 / 1000.0
@@ -58,32 +58,31 @@ def run_build(request: BuildRequest, connection: multiprocessing.connection.Conn
     ``memory_limit_bytes``: the process's memory limit, named when an allocation fails.
     """
     build_id = request.build_id
-    try:
-        propeller = build_propeller(PropellerParameters.from_dict(request.design))
-        params = propeller.parameters  # with the design targets (diameter, pitch, naca) applied
-        start = time.perf_counter()
-        parts = tessellate_parts(propeller)
-        stages = {**propeller.stage_seconds, "display_mesh": time.perf_counter() - start}
-        connection.send(("solid", build_id, SolidResult(parts, stages, propeller.fuse_route.description)))
-        start = time.perf_counter()
-        properties = mass_properties(propeller.solid, 1.0).to_dict()
-        properties["seconds"] = time.perf_counter() - start
-        properties["tip_diameter_mm"] = tip_diameter_mm(params)
-        connection.send(("properties", build_id, properties))
-        start = time.perf_counter()
-        # The files `torus-cad build` writes: export.formats (STEP, STL, 3MF), the blade-element table, the report.
-        paths = propeller.write(request.out_dir, stl=True, sections_table=True)
-        connection.send(("files", build_id, {"paths": paths, "seconds": time.perf_counter() - start}))
-    except (ParameterError, GeometryError) as error:
-        connection.send(("refused", build_id, str(error)))
-    except MemoryError:
-        limit = f", the limit of {memory_limit_bytes / 2**30:g} GiB for a build in the studio" if memory_limit_bytes else ""
-        connection.send(("failed", build_id, f"the exact build ran out of memory{limit}; lower resolution.sections / "
-                                             "resolution.points"))
-    except TorusCadError as error:
-        connection.send(("failed", build_id, f"OpenCascade failed: {error}"))
-    except Exception as error:  # reported on the page, never a crashed server
-        traceback.print_exc()
-        connection.send(("failed", build_id, f"internal error ({type(error).__name__}): {error}"))
-    finally:
-        connection.close()
+    with failures_reported(connection, build_id, "the exact build", memory_limit_bytes,
+                           "; lower resolution.sections / resolution.points"):
+        try:
+            _build_and_send(request, connection)
+        except (ParameterError, GeometryError) as error:
+            connection.send(("refused", build_id, str(error)))
+        except TorusCadError as error:
+            connection.send(("failed", build_id, f"OpenCascade failed: {error}"))
+
+
+def _build_and_send(request: BuildRequest, connection: multiprocessing.connection.Connection) -> None:
+    """The solid, its mass properties and its files, each sent as soon as it exists."""
+    build_id = request.build_id
+    propeller = build_propeller(PropellerParameters.from_dict(request.design))
+    params = propeller.parameters  # with the design targets (diameter, pitch, naca) applied
+    start = time.perf_counter()
+    parts = tessellate_parts(propeller)
+    stages = {**propeller.stage_seconds, "display_mesh": time.perf_counter() - start}
+    connection.send(("solid", build_id, SolidResult(parts, stages, propeller.fuse_route.description)))
+    start = time.perf_counter()
+    properties = mass_properties(propeller.solid, 1.0).to_dict()
+    properties["seconds"] = time.perf_counter() - start
+    properties["tip_diameter_mm"] = tip_diameter_mm(params)
+    connection.send(("properties", build_id, properties))
+    start = time.perf_counter()
+    # The files `torus-cad build` writes: export.formats (STEP, STL, 3MF), the blade-element table, the report.
+    paths = propeller.write(request.out_dir, stl=True, sections_table=True)
+    connection.send(("files", build_id, {"paths": paths, "seconds": time.perf_counter() - start}))

@@ -28,7 +28,7 @@ from typing import Any
 
 from torus_cad.errors import GeometryError, ParameterError
 from torus_cad.parameters import PropellerParameters
-from torus_cad.studio.worker import BUILD_MEMORY_LIMIT_BYTES, ProcessRunner
+from torus_cad.studio.worker import BUILD_MEMORY_LIMIT_BYTES, ProcessRunner, run_bounded, time_out_reason
 
 #: The operating point the studio starts with: the one the docs' vortex measurements use (rpm, m/s).
 DEFAULT_RPM = 10000.0
@@ -207,17 +207,12 @@ class Performance:
             self.state.perf_failure, self.state.perf_computing = message, False
 
 
-def _time_out_reason(limit_s: float) -> str:
-    return (f"the vortex solve took longer than {limit_s:g} s, the limit in the studio, and was stopped; "
-            "run it with torus-cad simulate --solver vortex")
+_time_out_reason = time_out_reason("the vortex solve", "run it with torus-cad simulate --solver vortex")
 
 
 def _child_main(request: PerformanceRequest, connection: multiprocessing.connection.Connection,
                 memory_limit_bytes: int) -> None:
     """The solve's process (forked from the forkserver): bounded in data memory as a build is."""
-    import resource
-
     from torus_cad.studio.vortex_run import run_vortex
 
-    resource.setrlimit(resource.RLIMIT_DATA, (memory_limit_bytes, memory_limit_bytes))
-    run_vortex(request, connection, memory_limit_bytes)
+    run_bounded(run_vortex, request, connection, memory_limit_bytes)

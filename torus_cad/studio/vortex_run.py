@@ -6,11 +6,11 @@ draws, sent back over a pipe. Runs in the worker process, never in the server: i
 from __future__ import annotations
 
 import multiprocessing.connection
-import traceback
 
 from torus_cad import PropellerParameters
 from torus_cad.errors import TorusCadError
 from torus_cad.studio.performance import REPORT_KEYS, PerformanceRequest
+from torus_cad.studio.worker import failures_reported
 from torus_cad.vortex.loading_files import write_loading_plot
 from torus_cad.vortex.performance import vortex_performance
 
@@ -23,22 +23,20 @@ def run_vortex(request: PerformanceRequest, connection: multiprocessing.connecti
     ``memory_limit_bytes``: the process's memory limit, named when an allocation fails.
     """
     request_id = request.request_id
-    try:
-        params = PropellerParameters.from_dict(request.design)
-        result = vortex_performance(params, request.rpm, request.airspeed_m_s)
-        title = f"loading, {params.name}: {request.rpm:.0f} rpm, {request.airspeed_m_s:g} m/s, vortex lattice"
-        path = write_loading_plot(result.strips, request.out_dir / f"loading_{request_id}.png", title)
-        png = path.read_bytes()
-        path.unlink()
-        report = {key: result.report[key] for key in REPORT_KEYS}
-        connection.send(("result", request_id, {"report": report, "strips": len(result.strips.s), "png": png}))
-    except TorusCadError as error:
-        connection.send(("failed", request_id, str(error)))
-    except MemoryError:
-        limit = f", the limit of {memory_limit_bytes / 2**30:g} GiB in the studio" if memory_limit_bytes else ""
-        connection.send(("failed", request_id, f"the vortex solve ran out of memory{limit}"))
-    except Exception as error:  # reported on the page, never a crashed server
-        traceback.print_exc()
-        connection.send(("failed", request_id, f"internal error ({type(error).__name__}): {error}"))
-    finally:
-        connection.close()
+    with failures_reported(connection, request_id, "the vortex solve", memory_limit_bytes):
+        try:
+            connection.send(("result", request_id, _solved(request)))
+        except TorusCadError as error:
+            connection.send(("failed", request_id, str(error)))
+
+
+def _solved(request: PerformanceRequest) -> dict[str, object]:
+    """The report's numbers, the strip count and the loading plot's PNG bytes of ``request``."""
+    params = PropellerParameters.from_dict(request.design)
+    result = vortex_performance(params, request.rpm, request.airspeed_m_s)
+    title = f"loading, {params.name}: {request.rpm:.0f} rpm, {request.airspeed_m_s:g} m/s, vortex lattice"
+    path = write_loading_plot(result.strips, request.out_dir / f"loading_{request.request_id}.png", title)
+    png = path.read_bytes()
+    path.unlink()
+    report = {key: result.report[key] for key in REPORT_KEYS}
+    return {"report": report, "strips": len(result.strips.s), "png": png}

@@ -29,7 +29,9 @@ import asyncio
 import multiprocessing
 import multiprocessing.connection
 import multiprocessing.forkserver
-from collections.abc import Callable
+import traceback
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from typing import Any
 
 from torus_cad.studio.build_messages import BuildRequest
@@ -152,16 +154,45 @@ class BuildRunner(ProcessRunner):
         self.start(request.build_id, request)
 
 
-def _build_time_out(limit_s: float) -> str:
-    return (f"the exact build took longer than {limit_s:g} s, the limit for a build in the studio, and was "
-            "stopped; lower resolution.sections / resolution.points or build it with torus-cad build")
+def time_out_reason(what: str, advice: str) -> Callable[[float], str]:
+    """The page's line for ``what`` ("the exact build") stopped at its time limit (s), with ``advice``."""
+    return lambda limit_s: f"{what} took longer than {limit_s:g} s, the limit in the studio, and was stopped; {advice}"
+
+
+_build_time_out = time_out_reason("the exact build",
+                                  "lower resolution.sections / resolution.points or build it with torus-cad build")
 
 
 def _child_main(request: BuildRequest, connection: multiprocessing.connection.Connection,
                 memory_limit_bytes: int) -> None:
-    import resource
-
     from torus_cad.studio.exact import run_build  # preloaded by the forkserver
 
+    run_bounded(run_build, request, connection, memory_limit_bytes)
+
+
+def run_bounded(run: Callable[[Any, multiprocessing.connection.Connection, int], None], request: Any,
+                connection: multiprocessing.connection.Connection, memory_limit_bytes: int) -> None:
+    """``run(request, connection, memory_limit_bytes)`` in this child process, its data memory bounded to
+    ``memory_limit_bytes`` (bytes) first."""
+    import resource
+
     resource.setrlimit(resource.RLIMIT_DATA, (memory_limit_bytes, memory_limit_bytes))
-    run_build(request, connection, memory_limit_bytes)
+    run(request, connection, memory_limit_bytes)
+
+
+@contextmanager
+def failures_reported(connection: multiprocessing.connection.Connection, request_id: int, what: str,
+                      memory_limit_bytes: int | None, memory_advice: str = "") -> Iterator[None]:
+    """Inside the block, an allocation that fails or an unexpected error is sent as ``("failed", request_id,
+    reason)`` (the page shows it; the child never dies silently); ``connection`` is closed after it.
+    ``what`` names the work ("the exact build"), ``memory_advice`` what to lower when memory runs out."""
+    try:
+        yield
+    except MemoryError:
+        limit = f", the limit of {memory_limit_bytes / 2**30:g} GiB in the studio" if memory_limit_bytes else ""
+        connection.send(("failed", request_id, f"{what} ran out of memory{limit}{memory_advice}"))
+    except Exception as error:  # reported on the page, never a crashed server
+        traceback.print_exc()
+        connection.send(("failed", request_id, f"internal error ({type(error).__name__}): {error}"))
+    finally:
+        connection.close()
