@@ -73,7 +73,7 @@ from OCP.GeomAdaptor import GeomAdaptor_Curve, GeomAdaptor_Surface
 from OCP.GeomLib import GeomLib_CheckCurveOnSurface
 from OCP.gp import gp_Pnt, gp_Pnt2d, gp_Vec
 from OCP.ShapeBuild import ShapeBuild_ReShape
-from OCP.ShapeFix import ShapeFix_ShapeTolerance
+from OCP.ShapeFix import ShapeFix_ShapeTolerance, ShapeFix_Wireframe
 from OCP.ShapeUpgrade import ShapeUpgrade_ShapeDivideContinuity
 from OCP.TColgp import TColgp_Array1OfPnt2d
 from OCP.TColStd import TColStd_Array1OfInteger, TColStd_Array1OfReal
@@ -140,6 +140,8 @@ __all__ = ["ReadableEdges", "readable_copy", "readable_edges"]
 _NOISY_DEGREE = 5
 #: ... so its spans are cut (knots inserted, the curve unchanged) to at most this share of the edge's range.
 _NOISY_SPAN_SHARE = 1.0 / 8.0
+#: An edge shorter than this (mm) is no feature of a propeller but a fillet's sliver (:func:`_without_micro_edges`).
+_MICRO_EDGE_MM = 1e-5
 #: Gauss-Newton steps for one foot point (it converges in 2-3 from the old p-curve's point).
 _FOOT_STEPS = 8
 #: A foot point has converged when its step moves it by less than this (mm) ...
@@ -275,7 +277,7 @@ def _fault_free(analyzer: BRepCheck_Analyzer, part: TopoDS_Shape) -> bool:
 def readable_copy(shape: TopoDS_Shape) -> TopoDS_Shape:
     """A copy of the solid ``shape`` whose edges read back from STEP as they are (:func:`readable_edges`);
     the copy as it is where making them readable would not give a valid solid. ``shape`` is not changed."""
-    solid = cq.Solid(_split_at_corners(copied(shape)))
+    solid = cq.Solid(_without_micro_edges(_split_at_corners(copied(shape))))
     try:
         return readable_edges(solid, [0] * len(solid.Faces())).solid.wrapped
     except KernelError:
@@ -291,6 +293,16 @@ def _split_at_corners(shape: TopoDS_Shape) -> TopoDS_Shape:
     divide.SetPCurveCriterion(GeomAbs_C1)
     divide.SetSurfaceCriterion(GeomAbs_C0)
     return divide.Result() if divide.Perform() else shape
+
+
+def _without_micro_edges(shape: TopoDS_Shape) -> TopoDS_Shape:
+    """``shape`` with every edge shorter than _MICRO_EDGE_MM dropped, its neighbours joined over it: a root
+    fillet can leave a 6e-7 mm edge on the hub, which reads back from STEP as a TooSmallEdge fault."""
+    fix = ShapeFix_Wireframe(shape)
+    fix.SetPrecision(_MICRO_EDGE_MM)
+    fix.SetLimitAngle(-1.0)  # no angle spared: every such edge goes
+    fix.ModeDropSmallEdges = True
+    return fix.Shape() if fix.FixSmallEdges() else shape
 
 
 def _edges_and_faces(shape: TopoDS_Shape) -> list[tuple[TopoDS_Edge, list[TopoDS_Face]]]:
