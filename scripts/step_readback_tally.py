@@ -30,6 +30,7 @@ from __future__ import annotations
 import argparse
 import collections
 import json
+import subprocess
 import sys
 import tempfile
 import time
@@ -104,7 +105,11 @@ def _freecad(rows: list[dict[str, Any]], folder: Path) -> None:
     paths = [Path(row["path"]) for row in rows if "path" in row]
     verdicts: dict[str, dict[str, object]] = {}
     for start in range(0, len(paths), _FREECAD_BATCH):  # one freecadcmd a batch, within its time limit
-        verdicts.update(freecad_verdicts(paths[start:start + _FREECAD_BATCH], folder / f"freecad_{start}"))
+        batch = paths[start:start + _FREECAD_BATCH]
+        try:
+            verdicts.update(freecad_verdicts(batch, folder / f"freecad_{start}"))
+        except subprocess.TimeoutExpired:  # a loaded machine: the batch is counted, not the run lost
+            verdicts.update({str(path): {"solids": 0, "valid": False, "faults": "FreeCAD timed out"} for path in batch})
         print(f"FreeCAD: {len(verdicts)} of {len(paths)} files checked", file=sys.stderr, flush=True)
     for row in rows:
         if "path" in row:

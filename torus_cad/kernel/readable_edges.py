@@ -43,6 +43,11 @@ So, before the file is written:
    the reader's samples is split there: each piece then parts most at an end, which the reader
    samples. The pieces get the tolerance their curves need, not the fillet's.
 
+Before step 1 a high-degree B-spline curve or p-curve gets knots (the same curve) so that OpenCascade's
+span-cache evaluation reads its gap as exactly as the reader's samples do; and :func:`readable_copy`, the
+writer's rewrite, first splits edges at corners inside their range (C0) and drops edges shorter than
+1e-5 mm, each of which BOPAlgo_ArgumentAnalyzer faults in the file read back.
+
 The faces stay as they are (only edges are split and curves replaced); the solid is checked
 (BRepCheck_Analyzer) and its faces keep their parts. Measured on ``workshop_fillet`` (``python
 scripts/step_readback_check.py examples/workshop_fillet.toml``): 93 ``InvalidCurveOnSurface`` faults
