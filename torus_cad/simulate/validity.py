@@ -90,8 +90,7 @@ def check_step_propeller(step: StepPropeller, level: Level, surface_refinement: 
     """ParameterError (exit 2) when the STEP propeller's tip diameter is outside :data:`STEP_DIAMETER_RANGE_MM`;
     BudgetError (exit 2) when its layered mesh (``mesher`` snappy) is estimated over :data:`LAYERED_CELL_LIMIT`.
     ``cfd`` holds the level's domain (D units). Nothing is meshed or written."""
-    from OCP.BRepGProp import BRepGProp
-    from OCP.GProp import GProp_GProps
+    from torus_cad.kernel.checks import surface_area_mm2
 
     low, high = STEP_DIAMETER_RANGE_MM
     diameter = step.body.tip_diameter_mm
@@ -100,9 +99,7 @@ def check_step_propeller(step: StepPropeller, level: Level, surface_refinement: 
                              f"allowed [{low:g}, {high:g}] mm (the sizes the mesher and the flow model serve)")
     if mesher != Mesher.SNAPPY:
         return
-    properties = GProp_GProps()
-    BRepGProp.SurfaceProperties_s(step.body.solid.wrapped, properties)
-    area = properties.Mass()
+    area = surface_area_mm2(step.body.solid)
     cells = estimate_layered_cells(area, step.body.solid.BoundingBox().zlen, diameter, level, surface_refinement, cfd)
     if cells > LAYERED_CELL_LIMIT:
         memory = MEMORY_BASE_GB + MEMORY_PER_CELL_KB * cells / 1.0e6
