@@ -120,3 +120,11 @@ def test_the_section_polars_take_thrust_and_add_power_at_every_strips_own_reynol
     assert (strips.cd > 0.0).all() and (np.diff(strips.radius_m) > 0.0).all()  # root to tip
     # the Reynolds number of a strip is its own: V c / nu with the strip's flow (tens of thousands here)
     assert 5e3 < np.median(strips.reynolds) < 2e5
+
+
+def test_the_vortex_blade_is_the_built_blade_when_the_design_asks_for_a_diameter_and_pitch() -> None:
+    # examples/optimize/quiet_prop.toml asks for a 127 mm, 114 mm-pitch propeller: the build scales and
+    # re-twists the loop to meet both, and the vortex solver must solve that blade, not the unscaled one
+    params = PropellerParameters.from_toml("examples/optimize/quiet_prop.toml")
+    blade = rotor_blade(params, SMALL)
+    assert 2000.0 * blade.tip_radius_m == pytest.approx(127.0, rel=0.01)

@@ -18,6 +18,7 @@ from torus_cad.geometry.analysis.camber_surface import camber_surface, cosine_fr
 from torus_cad.geometry.blade.handedness import Handedness
 from torus_cad.geometry.blade.surface import BladeSurface, blade_surface_at
 from torus_cad.parameters.design import DesignKind, PropellerParameters
+from torus_cad.parameters.design_targets import resolve_design_targets
 from torus_cad.tolerances import VORTEX_CHORDWISE_DEFAULT, VORTEX_SPANWISE_DEFAULT
 from torus_cad.vortex.lattice import WakeShape
 
@@ -69,7 +70,9 @@ class RotorBlade:
 
 
 def rotor_blade(params: PropellerParameters, discretisation: Discretisation) -> RotorBlade:
-    """Blade 0 of ``params`` sampled for ``discretisation`` (module doc)."""
+    """Blade 0 of ``params`` sampled for ``discretisation`` (module doc), with its design targets
+    (``diameter``, ``pitch``, ``airfoil.naca``) applied as the build applies them: the blade that is built."""
+    params = resolve_design_targets(params).parameters
     sections = discretisation.spanwise + 1
     surface = _surface(params, sections)
     camber = camber_surface(surface, cosine_fractions(discretisation.chordwise))
