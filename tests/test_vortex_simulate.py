@@ -107,3 +107,11 @@ def test_a_study_level_vortex_runs_simulate_with_the_vortex_solver_and_levels_go
     assert spec.levels == ("vortex", "medium")
     with pytest.raises(ParameterError, match="cheapest to the finest"):
         parse_study({**data, "simulate": {"rpm": 8000.0, "levels": ["coarse", "vortex"]}})
+
+
+def test_the_shipped_quiet_study_on_the_vortex_solver_runs_every_trial_on_it():
+    from torus_cad.optimize import read_study_file
+
+    spec = read_study_file(Path(__file__).resolve().parent.parent / "examples" / "optimize_quiet_vortex.toml")
+    assert spec.levels == ("vortex",) and spec.trials >= 300
+    assert spec.simulate["thrust"] == 1.0 and spec.simulate["observers"] == ["1:90"]

@@ -73,8 +73,11 @@ def run_simulate(config: Path, name: str, settings: Mapping[str, Any], out_dir: 
     ``thrust`` N with ``thrust_tolerance`` and ``thrust_runs``; ``airspeed`` m/s, ``level``, and ``iterations``,
     ``processes``, ``observers`` when given), simulated into ``out_dir`` within ``time_limit_s``.
 
-    Raises ParameterError when simulate refuses the design (exit 2), SimulateError when it fails.
+    Raises ParameterError when simulate refuses the design (exit 2), SimulateError when it fails. The vortex
+    level runs in this process (:func:`_run_vortex`): the same solver and report as ``simulate --solver vortex``.
     """
+    if str(settings.get("level", "")) == VORTEX_LEVEL:
+        return _run_vortex(config, settings, out_dir)
     try:
         done = subprocess.run(_command(config, settings, out_dir, time_limit_s), capture_output=True, text=True,
                               timeout=time_limit_s, preexec_fn=_die_with_parent, check=False)
@@ -93,6 +96,32 @@ def run_simulate(config: Path, name: str, settings: Mapping[str, Any], out_dir: 
     if not isinstance(report, dict):
         raise SimulateError(f"{report_path.name} is not a JSON object")
     return report
+
+
+def _run_vortex(config: Path, settings: Mapping[str, Any], out_dir: Path) -> dict[str, Any]:
+    """``simulate --solver vortex`` on the design file ``config`` as a Python call, without its pictures: a trial
+    takes seconds, and a new process would add the imports' seconds to each (the trial's worker has its own time
+    limit). The report published into ``out_dir`` is returned."""
+    from torus_cad.acoustics.observers import parse_observer
+    from torus_cad.parameters import PropellerParameters
+    from torus_cad.simulate.settings import OperatingPoint
+    from torus_cad.vortex.pipeline import VortexRequest, simulate_vortex, vortex_thrust_search
+
+    observers = tuple(parse_observer(str(text)) for text in settings.get("observers", ()))
+    point = OperatingPoint(float(settings.get("rpm", 0.0)), float(settings.get("airspeed", 0.0)))
+    try:
+        request = VortexRequest(PropellerParameters.from_toml(config), point, observers=observers, pictures=False)
+        if settings.get("thrust"):
+            run = vortex_thrust_search(request, float(settings["thrust"]), out_dir,
+                                       tolerance=float(settings.get("thrust_tolerance", DEFAULT_TOLERANCE)),
+                                       max_runs=int(settings.get("thrust_runs", DEFAULT_MAX_RUNS)))
+        else:
+            run = simulate_vortex(request, out_dir)
+    except ParameterError as error:
+        raise ParameterError(f"the vortex solver refused the design: {error}") from None
+    except TorusCadError as error:
+        raise SimulateError(f"the vortex solver failed: {error}") from None
+    return run.report
 
 
 def simulate_unavailable() -> str:

@@ -77,15 +77,17 @@ class VortexResult:
 
 
 def vortex_performance(params: PropellerParameters, rpm: float, airspeed_m_s: float = 0.0,
-                       discretisation: Discretisation | None = None, viscous: bool = True) -> VortexResult:
-    """The performance of ``params`` at ``rpm`` and axial ``airspeed_m_s`` (module doc)."""
+                       discretisation: Discretisation | None = None, viscous: bool = True,
+                       induced_guess: float | None = None) -> VortexResult:
+    """The performance of ``params`` at ``rpm`` and axial ``airspeed_m_s`` (module doc); ``induced_guess``:
+    where the wake's iteration starts (:func:`~torus_cad.vortex.solver.solve_inviscid`)."""
     point = OperatingPoint(rpm=rpm, airspeed_m_s=airspeed_m_s)
     discretisation = discretisation or Discretisation()
     blade = rotor_blade(params, discretisation)
     density = point.fluid.density_kg_m3
     omega = rpm * np.pi / 30.0
     inviscid = solve_inviscid(blade.camber_m, blade.blades, blade.spin, omega, airspeed_m_s, density,
-                              blade.tip_radius_m, discretisation.wake)
+                              blade.tip_radius_m, discretisation.wake, induced_guess=induced_guess)
     force, moment, strips, ratio = _strip_forces(blade, inviscid, omega, airspeed_m_s, point, viscous)
     thrust = blade.blades * float(force[:, 2].sum())
     torque = blade.spin * blade.blades * float(moment[:, 2].sum())

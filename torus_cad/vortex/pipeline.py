@@ -54,6 +54,7 @@ class VortexRequest:
     discretisation: Discretisation = field(default_factory=Discretisation)
     observers: tuple[Observer, ...] = DEFAULT_OBSERVERS
     viscous: bool = True
+    pictures: bool = True  #: False: the report and CSVs only (an optimiser's trial), no PNG nor directivity sweep
 
 
 @dataclass
@@ -85,9 +86,23 @@ def simulate_vortex(request: VortexRequest, out_dir: str | Path, stage: Callable
                     search: dict[str, Any] | None = None) -> VortexRun:
     """Solve ``request`` and publish its set into ``out_dir`` (module doc); ``search``: a thrust search's record,
     kept in the report."""
+    request = _with_targets_met(request)
     check_vortex_request(request)
     start = time.perf_counter()
     return _published(request, _solved(request, stage), Path(out_dir), start, stage, search)
+
+
+def _induced_share(result: VortexResult, rpm: float) -> float | None:
+    """``result``'s (at ``rpm``) wake inflow as a share of its tip speed: where the next run of a thrust search
+    starts its wake iteration (the share hardly moves with the rpm); None for a rotor at rest."""
+    tip_speed = rpm * math.pi / 30.0 * result.blade.tip_radius_m
+    return result.inviscid.induced_m_s / tip_speed if tip_speed > 0.0 else None
+
+
+def _with_targets_met(request: VortexRequest) -> VortexRequest:
+    """``request`` with its design's targets (diameter, pitch, airfoil.naca) applied once, not at every run of a
+    thrust search (the refit takes about a second)."""
+    return dataclasses.replace(request, params=resolve_design_targets(request.params).parameters)
 
 
 def _published(request: VortexRequest, result: VortexResult, out: Path, start: float,
@@ -102,6 +117,7 @@ def vortex_thrust_search(request: VortexRequest, thrust_n: float, out_dir: str |
     """The rpm at which ``request``'s design gives ``thrust_n`` N within ``tolerance`` of it, found by the OpenFOAM
     route's search (torus_cad.simulate.thrust_target: the first rpm from a plausible CT, then secant steps on
     sqrt(thrust)), published as :func:`simulate_vortex` publishes one run, the search in its report."""
+    request = _with_targets_met(request)
     diameter_m = check_vortex_request(request)
     density = request.point.fluid.density_kg_m3
     limit = rpm_limit(diameter_m, request.point.airspeed_m_s, request.point.fluid)
@@ -110,7 +126,7 @@ def vortex_thrust_search(request: VortexRequest, thrust_n: float, out_dir: str |
     rpm, runs, results = first_rpm(thrust_n, limit, diameter_m, density), [], []
     while True:
         results.append(vortex_performance(request.params, rpm, request.point.airspeed_m_s, request.discretisation,
-                                          request.viscous))
+                                          request.viscous, _induced_share(results[-1], runs[-1].rpm) if results else None))
         runs.append(ThrustRun(rpm, float(results[-1].report["thrust_n"])))
         if stage:
             stage(f"run {len(runs)}: {rpm:.0f} rpm, thrust {runs[-1].thrust_n:.4g} N")
@@ -148,7 +164,7 @@ def _noise(request: VortexRequest, result: VortexResult, stage: Callable[[str], 
     surface = rotor_surface(result.blade, result.inviscid.lattice, result.ring_force_n)
     omega = -result.blade.spin * request.point.rpm * math.pi / 30.0  # FW-H: positive counter-clockwise from +z
     noise = evaluate_noise(surface, omega, result.blade.blades, Medium(fluid.density_kg_m3, fluid.speed_of_sound_m_s),
-                           request.observers)
+                           request.observers, directivity=request.pictures)
     noise.report["harmonics_of"] = "the blade-passing frequency"
     noise.report["source"] = ("the vortex lattice's pressure jump (loading) and the blade's surface (thickness); "
                               "profile drag and leading-edge suction left out")
@@ -160,21 +176,24 @@ def _publish(request: VortexRequest, result: VortexResult, noise: Noise | None, 
     name = request.params.name
     title = f"{name}: {request.point.rpm:.0f} rpm, {request.point.airspeed_m_s:g} m/s, vortex lattice"
     with OutputSet(out, f"{name}_performance") as output:
-        output.write_files(lambda folder: _files(result, noise, folder, name, title))
+        output.write_files(lambda folder: _files(result, noise, folder, name, title if request.pictures else None))
         report = {**_report(request, result, start), "noise": noise.report if noise is not None else None,
                   **({"thrust_search": search} if search is not None else {})}
         paths = output.publish(report)
         return VortexRun(paths, output.sealed_report)
 
 
-def _files(result: VortexResult, noise: Noise | None, folder: Path, name: str, title: str) -> dict[str, Path]:
-    paths = {"loading_csv": write_loading_csv(result.strips, folder / f"{name}_loading.csv"),
-             "loading_png": write_loading_plot(result.strips, folder / f"{name}_loading.png", f"loading, {title}"),
-             "wake_png": write_wake_plot(result.blade, result.inviscid.lattice, folder / f"{name}_wake.png",
-                                         f"wake, {title}")}
+def _files(result: VortexResult, noise: Noise | None, folder: Path, name: str, title: str | None) -> dict[str, Path]:
+    """The loading and noise CSVs, and with a ``title`` the pictures (loading, wake, noise)."""
+    paths = {"loading_csv": write_loading_csv(result.strips, folder / f"{name}_loading.csv")}
+    if noise is not None:
+        paths["noise_csv"] = write_noise_csv(noise, folder / f"{name}_noise.csv")
+    if title is None:
+        return paths
+    paths["loading_png"] = write_loading_plot(result.strips, folder / f"{name}_loading.png", f"loading, {title}")
+    paths["wake_png"] = write_wake_plot(result.blade, result.inviscid.lattice, folder / f"{name}_wake.png", f"wake, {title}")
     if noise is not None:
         paths["noise_png"] = write_noise_plot(noise, folder / f"{name}_noise.png", f"tonal noise, {title}")
-        paths["noise_csv"] = write_noise_csv(noise, folder / f"{name}_noise.csv")
     return paths
 
 

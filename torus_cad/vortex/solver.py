@@ -82,7 +82,7 @@ def kinematic_velocity(points: NDArray[np.float64], omega_rad_s: float, spin: fl
 
 def solve_inviscid(camber_m: NDArray[np.float64], blades: int, spin: float, omega_rad_s: float,
                    airspeed_m_s: float, density: float, tip_radius_m: float, wake: WakeShape,
-                   momentum_wake: bool = True) -> Inviscid:
+                   momentum_wake: bool = True, induced_guess: float | None = None) -> Inviscid:
     """Circulations and forces of the rotor whose blade 0 has the camber grid ``camber_m`` (module doc).
 
     Args:
@@ -93,6 +93,9 @@ def solve_inviscid(camber_m: NDArray[np.float64], blades: int, spin: float, omeg
         density: kg/m^3; tip_radius_m: the disk's radius (momentum theory, the wake's length).
         wake: the wake's layout.
         momentum_wake: iterate the wake's induced velocity (a rotor); False leaves it at 0 (a wing).
+        induced_guess: the induced velocity to start that iteration from, as a fraction of the tip speed
+            ``omega_rad_s * tip_radius_m`` (default STATIC_INDUCED_GUESS in still air, else 0): a thrust
+            search passes its last run's, which the next rpm's is close to (the same answer, fewer iterations).
 
     Raises:
         KernelError: the wake iteration did not converge (naming the change reached).
@@ -102,7 +105,8 @@ def solve_inviscid(camber_m: NDArray[np.float64], blades: int, spin: float, omeg
     chord = (camber_m[:-1, -1] + camber_m[1:, -1] - camber_m[:-1, 0] - camber_m[1:, 0])
     downstream_first = np.einsum("jk,jk->j", kinematic_velocity(middle, omega_rad_s, spin, airspeed_m_s), chord) < 0.0
     strips = strip_edges(camber_m, downstream_first)
-    induced = STATIC_INDUCED_GUESS * omega_rad_s * tip_radius_m if airspeed_m_s == 0.0 and momentum_wake else 0.0
+    guess = STATIC_INDUCED_GUESS if airspeed_m_s == 0.0 else 0.0
+    induced = (guess if induced_guess is None else induced_guess) * omega_rad_s * tip_radius_m if momentum_wake else 0.0
     scale = airspeed_m_s + omega_rad_s * tip_radius_m
     mean_chord = float(np.linalg.norm(chord, axis=1).mean()) / 2.0
     change, blade_part, bound_core = np.inf, BladePart(), BOUND_CORE_CHORDS * mean_chord
