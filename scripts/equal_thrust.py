@@ -3,6 +3,7 @@
 
     python scripts/equal_thrust.py                          # 0.05 N, coarse level, still air
     python scripts/equal_thrust.py --thrust 0.08 --level medium --out equal_out
+    python scripts/equal_thrust.py --solver vortex --out equal_vortex  # the vortex solver (seconds, no mesh)
 
 Runs ``torus-cad simulate --thrust N`` on the default toroidal design (no design file) and on
 ``examples/compare/conventional_45mm_3blade.toml`` (a conventional propeller of the same tip diameter,
@@ -51,8 +52,7 @@ def search(label: str, design: Path | None, args: argparse.Namespace) -> dict[st
     """One ``torus-cad simulate --thrust`` process; its performance report with the process's wall seconds."""
     out = args.out / ("toroidal" if design is None else design.stem)
     command = [sys.executable, "-m", "torus_cad", "simulate", *([str(design)] if design else []),
-               "--thrust", f"{args.thrust:g}", "--level", args.level, "--processes", str(args.processes),
-               "--out", str(out), "-q"]
+               "--thrust", f"{args.thrust:g}", *_fidelity(args), "--out", str(out), "-q"]
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
     start = time.perf_counter()
     completed = subprocess.run(command, env=env, capture_output=True, text=True, check=False)
@@ -60,6 +60,13 @@ def search(label: str, design: Path | None, args: argparse.Namespace) -> dict[st
         raise SystemExit(f"{label}: simulate failed (exit {completed.returncode}): {completed.stderr.strip()[-400:]}")
     report = json.loads(next(out.glob("*_performance.json")).read_text(encoding="utf-8"))
     return {**report, "process_wall_seconds": time.perf_counter() - start}
+
+
+def _fidelity(args: argparse.Namespace) -> list[str]:
+    """simulate's options for the solver: the vortex solver, or OpenFOAM at a mesh level on some processes."""
+    if args.solver == "vortex":
+        return ["--solver", "vortex"]
+    return ["--level", args.level, "--processes", str(args.processes)]
 
 
 def table(results: dict[str, dict[str, Any]]) -> str:
@@ -70,7 +77,8 @@ def table(results: dict[str, dict[str, Any]]) -> str:
     for label, report in results.items():
         cells = [f"{report[key] * scale:.4g}" for key, (_, scale, _) in QUANTITIES.items()]
         cells += [f"{value:.1f}" for value in noise_levels(report).values()]
-        lines.append(f"| {label} | " + " | ".join(cells) + f" | {report['cells']:,} | {report['y_plus']['mean']:.3g} |")
+        mesh = f" | {report['cells']:,} | {report['y_plus']['mean']:.3g} |" if "cells" in report else " | – | – |"
+        lines.append(f"| {label} | " + " | ".join(cells) + mesh)
     toroidal, conventional = results.values()
     change = [f"{100.0 * (conventional[key] / toroidal[key] - 1.0):+.1f} %" for key in QUANTITIES]
     change += [f"{noise_levels(conventional)[key] - noise_levels(toroidal)[key]:+.1f} dB" for key in NOISE]
@@ -78,7 +86,7 @@ def table(results: dict[str, dict[str, Any]]) -> str:
     return "\n".join(lines)
 
 
-def write_picture(results: dict[str, dict[str, Any]], path: Path, thrust_n: float) -> None:
+def write_picture(results: dict[str, dict[str, Any]], path: Path, thrust_n: float, solver: str = "coarse RANS") -> None:
     """Bars of rpm, power, figure of merit and the tonal dB(A) at 1 m in the rotor's plane, one colour per design."""
     import matplotlib
 
@@ -100,7 +108,7 @@ def write_picture(results: dict[str, dict[str, Any]], path: Path, thrust_n: floa
         axis.set_xticks(range(len(values)), [label.split(" (")[0] for label in results], fontsize=8)
         axis.set_title(title)
         axis.grid(axis="y", alpha=0.3)
-    figure.suptitle(f"At {thrust_n:g} N of static thrust (torus-cad simulate --thrust, coarse RANS)")
+    figure.suptitle(f"At {thrust_n:g} N of static thrust (torus-cad simulate --thrust, {solver})")
     figure.tight_layout()
     figure.savefig(path, dpi=110)
     plt.close(figure)
@@ -111,6 +119,8 @@ def main() -> int:
     parser.add_argument("--thrust", type=float, default=0.05, help="target static thrust, N (default 0.05)")
     parser.add_argument("--level", default="coarse", choices=("coarse", "medium", "fine"))
     parser.add_argument("--processes", type=int, default=2)
+    parser.add_argument("--solver", default="openfoam", choices=("openfoam", "vortex"),
+                        help="OpenFOAM at --level (default), or the vortex solver (--level and --processes unused)")
     parser.add_argument("--out", type=Path, default=ROOT / "equal_thrust_out")
     parser.add_argument("--picture", type=Path, help="where the bar chart goes (default OUT/equal_thrust.png)")
     args = parser.parse_args()
@@ -120,8 +130,9 @@ def main() -> int:
         print(label, {key: results[label][key] for key in QUANTITIES}, flush=True)
     print(table(results))
     args.out.mkdir(parents=True, exist_ok=True)
-    write_picture(results, args.picture or args.out / "equal_thrust.png", args.thrust)
-    keep = (*QUANTITIES, "cells", "y_plus", "process_wall_seconds", "thrust_search", "level", "noise")
+    solver = "vortex lattice" if args.solver == "vortex" else f"{args.level} RANS"
+    write_picture(results, args.picture or args.out / "equal_thrust.png", args.thrust, solver)
+    keep = (*QUANTITIES, "cells", "y_plus", "process_wall_seconds", "thrust_search", "level", "solver", "noise")
     summary = {label: {key: report.get(key) for key in keep} for label, report in results.items()}
     (args.out / "equal_thrust.json").write_text(json.dumps(summary, indent=2), encoding="utf-8")
     return 0

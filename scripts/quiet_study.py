@@ -5,12 +5,14 @@ target thrust, and what the study cost.
 
     torus-cad optimize examples/optimize_quiet.toml --out OUT --workers 2     # the study itself, first
     python scripts/quiet_study.py OUT                                          # then this
+    python scripts/quiet_study.py OUT --levels vortex medium                   # both solvers side by side
 
 Reads ``OUT/<name>_study.json`` (the Pareto designs and the worker seconds of each mesh level) and
 ``OUT/results.csv`` (every trial at the level it reached). The chosen design is the Pareto design nearest
 the ideal point once both objectives are scaled to the front's range (the knee of the front: neither the
-loudest nor the hungriest). Each of the three designs is solved to the target thrust on ``--level`` by
-``torus-cad simulate --thrust`` (a report already in ``OUT/<level>/<label>/`` is reused). Prints Markdown
+loudest nor the hungriest). Each of the three designs is solved to the target thrust at each of ``--levels``
+(a mesh level, or ``vortex``: the vortex solver) by ``torus-cad simulate --thrust`` (a report already in
+``OUT/<level>/<label>/`` is reused), and whether the levels rank the three alike is printed. Prints Markdown
 tables and writes ``OUT/quiet_study.png`` (the trials and front; the three designs' rpm, power, figure of
 merit and dB(A)). Never part of the test suite (CPU hours of OpenFOAM).
 """
@@ -51,15 +53,15 @@ def knee(front: list[dict[str, Any]]) -> dict[str, Any]:
     return min(front, key=lambda entry: sum(((entry["values"][i] - lows[i]) / spans[i]) ** 2 for i in (0, 1)))
 
 
-def solve(label: str, design: Path, args: argparse.Namespace) -> dict[str, Any]:
-    """The design solved to the target thrust on ``args.level``: a report in OUT/<level>/<label>/ reused,
-    else one ``torus-cad simulate --thrust`` process."""
-    out = args.out / args.level / label
+def solve(label: str, design: Path, level: str, args: argparse.Namespace) -> dict[str, Any]:
+    """The design solved to the target thrust at ``level`` (a mesh level, or ``vortex``): a report in
+    OUT/<level>/<label>/ reused, else one ``torus-cad simulate --thrust`` process."""
+    out = args.out / level / label
     found = sorted(out.glob("*_performance.json"))
     if not found:
+        fidelity = ["--solver", "vortex"] if level == "vortex" else ["--level", level, "--processes", str(args.processes)]
         command = [sys.executable, "-m", "torus_cad", "simulate", str(design), "--thrust", f"{args.thrust:g}",
-                   "--thrust-tolerance", f"{args.tolerance:g}", "--level", args.level,
-                   "--processes", str(args.processes), "--out", str(out), "-q"]
+                   "--thrust-tolerance", f"{args.tolerance:g}", *fidelity, "--out", str(out), "-q"]
         env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
         completed = subprocess.run(command, env=env, capture_output=True, text=True, check=False)
         if completed.returncode != 0:
@@ -97,7 +99,7 @@ def comparison_table(results: dict[str, dict[str, Any]]) -> str:
              "|---|---|---|---|---|---|---|---|"]
     for label, report in results.items():
         lines.append(f"| {label} | {report['rpm']:,.0f} | {report['thrust_n']:.4f} | {report['power_w']:.2f} | "
-                     f"{report['figure_of_merit']:.3f} | {dba(report):.1f} | {report['cells']:,} | "
+                     f"{report['figure_of_merit']:.3f} | {dba(report):.1f} | {report.get('cells', 0):,} | "
                      f"{report['wall_seconds']:.0f} |")
     base = next(iter(results.values()))
     for label, report in list(results.items())[1:]:
@@ -114,8 +116,19 @@ def cost_lines(summary: dict[str, Any], results: dict[str, dict[str, Any]]) -> l
     for level, entry in summary.get("level_seconds", {}).items():
         study_s += entry["seconds"]
         lines.append(f"  {level}: {entry['trials']} trials, {entry['seconds'] / 3600:.2f} worker hours")
-    fine_s = sum(report["wall_seconds"] * report["processes"] for report in results.values())
+    fine_s = sum(report["wall_seconds"] * report.get("processes", 1) for report in results.values())
     lines.append(f"  study: {study_s / 3600:.2f} CPU hours; the {len(results)} re-simulations: {fine_s / 3600:.2f}")
+    return lines
+
+
+def ranking_lines(by_level: dict[str, dict[str, dict[str, Any]]]) -> list[str]:
+    """Each level's order of the designs by power and by dB(A) at the target thrust, and whether the levels agree."""
+    lines = []
+    for key, value in (("power", lambda report: report["power_w"]), ("dB(A)", dba)):
+        orders = {level: sorted(results, key=lambda label: value(results[label])) for level, results in by_level.items()}
+        for level, order in orders.items():
+            lines.append(f"  {key}, {level}: " + " < ".join(label.split(" (")[0] for label in order))
+        lines.append(f"  {key}: the levels {'agree' if len({tuple(o) for o in orders.values()}) == 1 else 'disagree'}")
     return lines
 
 
@@ -130,10 +143,12 @@ def write_picture(rows: list[dict[str, str]], summary: dict[str, Any], chosen: d
 
     figure, axes = plt.subplots(1, 5, figsize=(17, 3.8), gridspec_kw={"width_ratios": [2.2, 1, 1, 1, 1]})
     valued = [row for row in rows if row[POWER] and row[NOISE]]
-    for level_name, style in (("coarse", {"marker": "^", "color": "0.7"}), ("medium", {"color": "tab:blue"})):
+    for level_name, style in (("vortex", {"marker": "s", "color": "0.6", "s": 8}), ("coarse", {"marker": "^", "color": "0.7"}),
+                              ("medium", {"color": "tab:blue"})):
         group = [row for row in valued if row["level"] == level_name]
-        axes[0].scatter([float(r[POWER]) for r in group], [float(r[NOISE]) for r in group],
-                        label=f"trials, {level_name} mesh", **style)
+        if group:
+            axes[0].scatter([float(r[POWER]) for r in group], [float(r[NOISE]) for r in group],
+                            label=f"trials, {level_name}" + ("" if level_name == "vortex" else " mesh"), **style)
     front = sorted(summary["best"], key=lambda entry: entry["values"][0])
     axes[0].plot([e["values"][0] for e in front], [e["values"][1] for e in front], "o-", color="tab:red",
                  label="Pareto front")
@@ -165,7 +180,8 @@ def main() -> int:
                         default=ROOT / "examples" / "compare" / "conventional_127mm_3blade.toml")
     parser.add_argument("--thrust", type=float, default=1.0, help="target static thrust, N (the study's)")
     parser.add_argument("--tolerance", type=float, default=0.02, help="thrust tolerance (the study's)")
-    parser.add_argument("--level", default="fine", choices=("coarse", "medium", "fine"))
+    parser.add_argument("--levels", nargs="+", default=["fine"], choices=("vortex", "coarse", "medium", "fine"),
+                        help="where the three designs are solved (default fine); the first is pictured")
     parser.add_argument("--processes", type=int, default=2)
     args = parser.parse_args()
     summary, rows = read_study(args.out)
@@ -175,10 +191,13 @@ def main() -> int:
     print(front_table(summary, rows, chosen))
     designs = {"base design": args.base, f"chosen (trial {chosen['number']})": Path(chosen["design"]),
                "conventional (same D, blades, hub)": args.conventional}
-    results = {label: solve(label.split(" (")[0].replace(" ", "_"), design, args) for label, design in designs.items()}
-    print(comparison_table(results))
-    print("\n".join(cost_lines(summary, results)))
-    write_picture(rows, summary, chosen, results, args.out / "quiet_study.png", args.level)
+    by_level = {level: {label: solve(label.split(" (")[0].replace(" ", "_"), design, level, args)
+                        for label, design in designs.items()} for level in args.levels}
+    for level, results in by_level.items():
+        print(f"\n{level}:\n" + comparison_table(results))
+        print("\n".join(cost_lines(summary, results)))
+    print("\n".join(ranking_lines(by_level)))
+    write_picture(rows, summary, chosen, by_level[args.levels[0]], args.out / "quiet_study.png", args.levels[0])
     print(f"wrote {args.out / 'quiet_study.png'}")
     return 0
 

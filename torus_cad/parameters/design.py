@@ -27,6 +27,7 @@ from torus_cad.errors import GeometryError, ParameterError, shown
 from torus_cad.formats import ExportFormat, StepSchema
 from torus_cad.geometry.analysis.feasibility import Margins, check_feasible, check_root_fillet_edge
 from torus_cad.geometry.analysis.printability import Printability, conventional_printability, printability
+from torus_cad.geometry.blade.centerline import hub_inset_radius_mm
 from torus_cad.geometry.blade.conventional_blade import (
     ConventionalBlade,
     check_conventional_feasible,
@@ -512,7 +513,7 @@ class PropellerParameters(Document):
         """Ranges of the control points that depend on the hub's size (toroidal designs; a conventional one has none)."""
         if self.kind == DesignKind.CONVENTIONAL:
             return self
-        length, inset = self.hub.length, self.hub.radius - self.hub.radius / 8.0
+        length, inset = self.hub.length, hub_inset_radius_mm(self.hub.radius)
         for key in ("p2", "p3", "p4"):
             point = getattr(self.centerline, key)
             check_in_bounds(f"centerline.{key}[0]", point[0], Bounds(-360.0, 360.0), "deg")

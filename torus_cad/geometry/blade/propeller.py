@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from torus_cad.geometry.blade.centerline import Centerline
+from torus_cad.geometry.blade.centerline import Centerline, hub_inset_radius_mm
 from torus_cad.geometry.blade.frames import FrameKind
 from torus_cad.geometry.blade.transforms import SectionLaws
 from torus_cad.geometry.section.section import Section
@@ -31,7 +31,7 @@ class HubGeometry:
     @property
     def inset_radius_mm(self) -> float:
         """R_inset = R - R/8 (spec §3.2), mm: the radius of the blade's ends."""
-        return self.radius_mm - self.radius_mm / 8.0
+        return hub_inset_radius_mm(self.radius_mm)
 
 
 @dataclass(frozen=True)
