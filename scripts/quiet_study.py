@@ -77,8 +77,9 @@ def dba(report: dict[str, Any]) -> float:
     return metric_value(NOISE, {}, report)
 
 
-def front_table(summary: dict[str, Any], rows: list[dict[str, str]], chosen: dict[str, Any]) -> str:
-    """The Pareto designs: their varied parameters and their values at the level they reached."""
+def front_table(summary: dict[str, Any], rows: list[dict[str, str]], chosen: dict[str, Any], study_level: str) -> str:
+    """The Pareto designs: their varied parameters and their values at the level they reached (``study_level``
+    for a study of one level, whose table has no level column)."""
     by_number = {int(row["number"]): row for row in rows}
     keys = list(summary["best"][0]["params"]) if summary["best"] else []
     lines = ["| trial | " + " | ".join(keys) + " | level | rpm | power (W) | dB(A) 1 m, 90° |",
@@ -87,7 +88,7 @@ def front_table(summary: dict[str, Any], rows: list[dict[str, str]], chosen: dic
         row = by_number[entry["number"]]
         mark = " (chosen)" if entry["number"] == chosen["number"] else ""
         cells = [f"{float(entry['params'][key]):.1f}" for key in keys]
-        lines.append(f"| {entry['number']}{mark} | " + " | ".join(cells) + f" | {row['level']} | "
+        lines.append(f"| {entry['number']}{mark} | " + " | ".join(cells) + f" | {row.get('level', study_level)} | "
                      f"{float(row['performance.rpm']):,.0f} | {entry['values'][0]:.2f} | {entry['values'][1]:.1f} |")
     return "\n".join(lines)
 
@@ -133,7 +134,7 @@ def ranking_lines(by_level: dict[str, dict[str, dict[str, Any]]]) -> list[str]:
 
 
 def write_picture(rows: list[dict[str, str]], summary: dict[str, Any], chosen: dict[str, Any],
-                  results: dict[str, dict[str, Any]], path: Path, level: str) -> None:
+                  results: dict[str, dict[str, Any]], path: Path, level: str, study_level: str) -> None:
     """Left: every valued trial (power against dB(A)) at the level it reached, the front and the chosen design;
     right: the three designs' numbers on ``level``."""
     import matplotlib
@@ -145,7 +146,7 @@ def write_picture(rows: list[dict[str, str]], summary: dict[str, Any], chosen: d
     valued = [row for row in rows if row[POWER] and row[NOISE]]
     for level_name, style in (("vortex", {"marker": "s", "color": "0.6", "s": 8}), ("coarse", {"marker": "^", "color": "0.7"}),
                               ("medium", {"color": "tab:blue"})):
-        group = [row for row in valued if row["level"] == level_name]
+        group = [row for row in valued if row.get("level", study_level) == level_name]
         if group:
             axes[0].scatter([float(r[POWER]) for r in group], [float(r[NOISE]) for r in group],
                             label=f"trials, {level_name}" + ("" if level_name == "vortex" else " mesh"), **style)
@@ -183,12 +184,14 @@ def main() -> int:
     parser.add_argument("--levels", nargs="+", default=["fine"], choices=("vortex", "coarse", "medium", "fine"),
                         help="where the three designs are solved (default fine); the first is pictured")
     parser.add_argument("--processes", type=int, default=2)
+    parser.add_argument("--study-level", default="coarse", choices=("vortex", "coarse", "medium", "fine"),
+                        help="the level of a study of one level (its table names none; default coarse)")
     args = parser.parse_args()
     summary, rows = read_study(args.out)
     if not summary["best"]:
         raise SystemExit(f"{args.out}: the study has no Pareto design")
     chosen = knee(summary["best"])
-    print(front_table(summary, rows, chosen))
+    print(front_table(summary, rows, chosen, args.study_level))
     designs = {"base design": args.base, f"chosen (trial {chosen['number']})": Path(chosen["design"]),
                "conventional (same D, blades, hub)": args.conventional}
     by_level = {level: {label: solve(label.split(" (")[0].replace(" ", "_"), design, level, args)
@@ -197,7 +200,8 @@ def main() -> int:
         print(f"\n{level}:\n" + comparison_table(results))
         print("\n".join(cost_lines(summary, results)))
     print("\n".join(ranking_lines(by_level)))
-    write_picture(rows, summary, chosen, by_level[args.levels[0]], args.out / "quiet_study.png", args.levels[0])
+    write_picture(rows, summary, chosen, by_level[args.levels[0]], args.out / "quiet_study.png", args.levels[0],
+                  args.study_level)
     print(f"wrote {args.out / 'quiet_study.png'}")
     return 0
 
