@@ -101,7 +101,7 @@ def timed_build_and_write(params, out_dir: Path) -> dict[str, float]:
     """One build plus STEP and STL writes (the JSON report separately); seconds per stage."""
     from torus_cad.kernel.writers.step import write_step
     from torus_cad.kernel.writers.stl import write_stl
-    from torus_cad.outputs.report import build_report
+    from torus_cad.outputs.build_report import build_report
     from torus_cad.propeller import build_propeller
 
     start = time.perf_counter()
@@ -239,7 +239,7 @@ def _growth(rows: list[dict[str, Any]]) -> dict[str, Any]:
 
 def accuracy_samples(params, per_gap: int = 3, limit: int = 400) -> np.ndarray:
     """Analytic surface points at s half-way between sections and t between samples, away from the hub."""
-    from torus_cad.geometry.blade.surface import surface_points
+    from torus_cad.geometry.blade.blade_surface import surface_points
 
     surface = params.blade_surface()
     s = 0.5 * (surface.s[:-1] + surface.s[1:])
@@ -291,7 +291,7 @@ def child_mesh_route(payload: dict[str, Any]) -> dict[str, Any]:
     """Child: the mesh-boolean route on the default (or ``changes``), timed; closedness and accuracy."""
     import pyvista as pv
 
-    from torus_cad.geometry.blade.mesh import blade_mesh
+    from torus_cad.geometry.blade.triangle_mesh import blade_mesh
 
 
     params = _params(payload.get("changes"))
@@ -346,7 +346,8 @@ def child_mesh_route(payload: dict[str, Any]) -> dict[str, Any]:
 
 
 def brep_accuracy(params) -> dict[str, Any]:
-    from torus_cad.kernel.checks import distances_to_shape, precise_volume
+    from torus_cad.kernel.checks import distances_to_shape
+    from torus_cad.kernel.mass_properties import precise_volume
     from torus_cad.propeller import build_propeller
 
     propeller = build_propeller(params)
@@ -401,7 +402,13 @@ def mass_properties_bench(runs: int, designs: int) -> dict[str, Any]:
     at 1e-9 on the default and ``designs`` random designs (worst relative errors)."""
     import torus_cad.kernel.blade_integrals as blade_integrals
     from torus_cad.errors import GeometryError, ParameterError
-    from torus_cad.kernel.checks import balance, balance_of, mass_properties, occt_mass_properties, volume_properties
+    from torus_cad.kernel.mass_properties import (
+        balance,
+        balance_of,
+        mass_properties,
+        occt_mass_properties,
+        volume_properties,
+    )
     from torus_cad.propeller import build_propeller
     sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # studies/ sits beside torus_cad, outside it
     from studies.fuzz import random_design

@@ -97,7 +97,7 @@ def reference_design() -> dict[str, Any]:
     the build lofts, from the geometry layer), its blade count, hub and STL deflections (mm, rad)."""
     from torus_cad.geometry.section.section_fit import DEGREE, fit_sections
     from torus_cad.parameters import PropellerParameters
-    from torus_cad.parameters.feasibility import section_chords
+    from torus_cad.parameters.design_checks import section_chords
 
     params = PropellerParameters()
     surface = params.blade_surface()

@@ -95,7 +95,7 @@ def child_pyvista(sections: int, points: int) -> None:
     import numpy as np
     import pyvista as pv
 
-    from torus_cad.geometry.blade.mesh import blade_mesh
+    from torus_cad.geometry.blade.triangle_mesh import blade_mesh
     from torus_cad.mesh.grids import cell_size, hub_mesh
     from torus_cad.parameters import PropellerParameters
 
@@ -133,7 +133,7 @@ def convergence(levels: int) -> list[dict[str, Any]]:
     sys.path.insert(0, str(ROOT))
     import numpy as np
 
-    from torus_cad.kernel.checks import precise_volume
+    from torus_cad.kernel.mass_properties import precise_volume
     from torus_cad.mesh.pipeline import build_surface_mesh
     from torus_cad.parameters import PropellerParameters
     from torus_cad.propeller import build_propeller

@@ -30,7 +30,7 @@ def _plain_write(propeller, out_dir: Path, density_g_cm3: float) -> None:
     from torus_cad import __version__
     from torus_cad.kernel.writers.step import write_step
     from torus_cad.kernel.writers.stl import write_stl
-    from torus_cad.outputs.report import build_report
+    from torus_cad.outputs.build_report import build_report
     from torus_cad.outputs.sections_table import write_sections_table
     from torus_cad.runtime.files import atomic_path
 

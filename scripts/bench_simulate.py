@@ -10,7 +10,7 @@ Never part of the test suite. Each level is a fresh `torus-cad simulate` process
 outside: cells, wall time, peak memory (the largest sum of resident memory over the process and
 every program it starts, snappyHexMesh and the MPI solvers included, sampled by psutil every
 0.2 s), thrust, torque, CT, CP, convergence and the stage times from its report. With all three levels, the Richardson-extrapolated thrust and torque and the observed
-order (torus_cad.simulate.performance.richardson, refinement ratio 2^(1/3) in element size).
+order (torus_cad.simulate.coefficients.richardson, refinement ratio 2^(1/3) in element size).
 
 Results go to ``bench_out/bench_simulate.json`` and a table on stdout.
 """
@@ -91,7 +91,7 @@ def main() -> int:
     parser.add_argument("--out", default="bench_out")
     args = parser.parse_args()
     sys.path.insert(0, str(ROOT))
-    from torus_cad.simulate.performance import richardson
+    from torus_cad.simulate.coefficients import richardson
     from torus_cad.simulate.settings import REFINEMENT_RATIO
 
     results = []

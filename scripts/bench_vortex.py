@@ -37,7 +37,7 @@ def solver_stages(design: Path | None, rpm: float) -> dict[str, float]:
     """CPU seconds of each stage of one point in this process (one core), and the thrust found."""
     from torus_cad.parameters import PropellerParameters
     from torus_cad.simulate.settings import OperatingPoint
-    from torus_cad.vortex import performance as vortex
+    from torus_cad.vortex import vortex_performance as vortex
     from torus_cad.vortex.rotor import Discretisation, rotor_blade
     from torus_cad.vortex.solver import solve_inviscid
 

@@ -23,9 +23,9 @@ from pathlib import Path
 from foamlib import FoamFile
 
 from torus_cad.acoustics.fwh import Medium
+from torus_cad.acoustics.noise_report import evaluate_noise
 from torus_cad.acoustics.observers import DEFAULT_OBSERVERS
-from torus_cad.acoustics.report import evaluate_noise
-from torus_cad.acoustics.surface import read_surface, surface_pressure_file
+from torus_cad.acoustics.pressure_surface import read_surface, surface_pressure_file
 from torus_cad.parameters.design import Handedness
 from torus_cad.simulate import case as foam_case
 from torus_cad.simulate.settings import AIR_15C, OperatingPoint

@@ -5,7 +5,7 @@
     python scripts/fillet_examples.py --radius 0.25
 
 Prints one line per design and radius: ``ok``, ``reduced`` (made, but with a smaller radius
-along junction edges where the blade bends too tightly for it: torus_cad.kernel.fillet.RootFillet), ``refused`` (exit-2 input, e.g. a chamfer the
+along junction edges where the blade bends too tightly for it: torus_cad.kernel.fillet.root_fillet.RootFillet), ``refused`` (exit-2 input, e.g. a chamfer the
 fillet's spread would cut into) or ``failed`` (OpenCascade could not make the fillet), and the
 build time. Only the requested radius is tried (no search for a smaller one that works).
 """
@@ -16,7 +16,7 @@ import argparse
 import time
 from pathlib import Path
 
-import torus_cad.kernel.fillet as fillet
+import torus_cad.kernel.fillet.root_fillet as fillet
 from torus_cad.errors import GeometryError, KernelError, ParameterError
 from torus_cad.parameters import PropellerParameters
 from torus_cad.propeller import build_propeller

@@ -9,7 +9,7 @@ Each design comes from the fuzz sampler (:func:`studies.fuzz.random_design_dict`
 designs ``scripts/fuzz.py`` draws) with ``hub.root_fillet_radius`` set. Designs refused before
 the kernel, or whose fuse fails, are not counted; the others either get their fillet (one
 valid solid: ``ok`` with the requested radius everywhere, ``reduced`` with a smaller one along
-junction edges where the blade bends too tightly for it, see torus_cad.kernel.fillet.RootFillet)
+junction edges where the blade bends too tightly for it, see torus_cad.kernel.fillet.root_fillet.RootFillet)
 or fail with "root fillet failed". The fillet runs in a forked child process,
 so a crash in OpenCascade counts as a failure. Prints one line per design and the rate;
 writes ``fillet_rate_out/fillet_rate.json``.
@@ -25,8 +25,8 @@ from pathlib import Path
 
 from OCP.ChFi3d import ChFi3d_Polynomial, ChFi3d_QuasiAngular, ChFi3d_Rational
 
-import torus_cad.kernel.fillet as fillet
-import torus_cad.kernel.fillet_edges as fillet_edges
+import torus_cad.kernel.fillet.one_fillet as fillet_edges
+import torus_cad.kernel.fillet.root_fillet as fillet
 from torus_cad.errors import GeometryError, KernelError, ParameterError
 from torus_cad.kernel.checks import is_valid_closed_solid
 from torus_cad.parameters import PropellerParameters

@@ -34,8 +34,9 @@ VOLUME_PRECISION = 1e-7
 
 def compare(seed: int) -> dict[str, Any]:
     """Build design ``seed`` and fuse it again the general way; volumes, faces and times of both."""
-    from torus_cad.kernel.checks import precise_volume, single_valid_solid
+    from torus_cad.kernel.checks import single_valid_solid
     from torus_cad.kernel.fuse import fuse_all
+    from torus_cad.kernel.mass_properties import precise_volume
     from torus_cad.propeller import build_propeller
 
     try:

@@ -8,7 +8,7 @@ rank_levels.py at 10,000 rpm in still air, Spearman's rho of thrust and of figur
 
 Prints one markdown table (thrust and figure of merit: fine CFD, the vortex solver with its polars and the
 inviscid lattice, and the differences) and Spearman's rho (scipy.stats.spearmanr) for each pair; writes
-nothing. Each design is solved in this process (torus_cad.vortex.performance.vortex_performance); a design whose
+nothing. Each design is solved in this process (torus_cad.vortex.vortex_performance.vortex_performance); a design whose
 solve does not converge is left out of the table and the ranks, with a line on stderr.
 """
 
@@ -51,8 +51,8 @@ def main(argv: list[str] | None = None) -> int:
 
     from torus_cad.cli.design_input import load_parameters
     from torus_cad.errors import KernelError
-    from torus_cad.vortex.performance import vortex_performance
     from torus_cad.vortex.rotor import Discretisation
+    from torus_cad.vortex.vortex_performance import vortex_performance
 
     cfd = _fine_cfd(args.cfd)
     rows: dict[str, Any] = {}

@@ -13,7 +13,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from torus_cad.cli.reference import replace_reference
-from torus_cad.parameters.reference import replace_table
+from torus_cad.parameters.parameter_reference import replace_table
 
 REFERENCE = Path(__file__).resolve().parent.parent / "docs" / "reference"
 #: page -> the function that returns its text with the generated part made anew.

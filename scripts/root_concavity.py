@@ -12,7 +12,7 @@ radii of the hub's cylinder; the tightest concave radius is printed, with the de
 outcome from ``scripts/fillet_rate.py`` JSON files when given. Designs refused before the
 kernel are skipped.
 
-Next to it, the same measure on the analytic blade (:func:`torus_cad.geometry.blade.surface.surface_points`,
+Next to it, the same measure on the analytic blade (:func:`torus_cad.geometry.blade.blade_surface.surface_points`,
 principal curvatures by finite differences on a 1000 s x 1000 t grid, where the surface lies within the
 band above the hub's cylinder and between its end planes): whether the bend is the design's or the
 loft's. Of the 11 failing seeds (0-129) with a bend tighter than 0.5 mm on the face, 9 bend as
@@ -37,8 +37,8 @@ from OCP.gp import gp_Pnt2d
 from OCP.TopAbs import TopAbs_IN
 
 from torus_cad.errors import GeometryError, KernelError, ParameterError
-from torus_cad.geometry.blade.surface import surface_points
-from torus_cad.kernel.fillet_tight_bends import concave_bend_radius_mm
+from torus_cad.geometry.blade.blade_surface import surface_points
+from torus_cad.kernel.fillet.tight_bends import concave_bend_radius_mm
 from torus_cad.kernel.fuse import fuse_pattern
 from torus_cad.kernel.topology import BLADE_SURFACES
 from torus_cad.parameters import PropellerParameters

@@ -34,8 +34,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--inviscid", action="store_true", help="no section polars")
     args = parser.parse_args(argv)
     from torus_cad.parameters import PropellerParameters
-    from torus_cad.vortex.performance import vortex_performance
     from torus_cad.vortex.rotor import Discretisation
+    from torus_cad.vortex.vortex_performance import vortex_performance
 
     params = PropellerParameters.from_toml(args.design)
     data = read_wind_tunnel()

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The vortex solver's discretisation study: three lattices, each finer than the last by one ratio in every
 direction (rings across the chord, strips along the blade, wake steps a turn), the thrust and torque of each,
-Richardson's extrapolation and Roache's GCI_fine (torus_cad.simulate.performance.richardson, as simulate
+Richardson's extrapolation and Roache's GCI_fine (torus_cad.simulate.coefficients.richardson, as simulate
 --convergence does for OpenFOAM's levels).
 
     python scripts/vortex_convergence.py                                   # the default design, 10000 rpm
@@ -32,9 +32,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--inviscid", action="store_true", help="no section polars")
     args = parser.parse_args(argv)
     from torus_cad.parameters import PropellerParameters
-    from torus_cad.simulate.performance import richardson
-    from torus_cad.vortex.performance import vortex_performance
+    from torus_cad.simulate.coefficients import richardson
     from torus_cad.vortex.rotor import Discretisation
+    from torus_cad.vortex.vortex_performance import vortex_performance
 
     params = PropellerParameters.from_toml(args.design) if args.design else PropellerParameters()
     rows = []

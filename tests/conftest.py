@@ -47,8 +47,9 @@ VOLUME_PRECISION = 1e-8
 
 def assert_same_volume_as_general_fuse(propeller) -> None:
     """The propeller's solid has the volume of one general fuse of its hub and blades; same faces too."""
-    from torus_cad.kernel.checks import precise_volume, single_valid_solid
+    from torus_cad.kernel.checks import single_valid_solid
     from torus_cad.kernel.fuse import fuse_all
+    from torus_cad.kernel.mass_properties import precise_volume
 
     general = single_valid_solid(fuse_all(propeller.hub, propeller.blades).shape, "the general fuse")
     assert precise_volume(propeller.solid, VOLUME_PRECISION) == pytest.approx(

@@ -8,7 +8,7 @@ from OCP.BRepAdaptor import BRepAdaptor_Surface
 from OCP.BRepLProp import BRepLProp_SLProps
 from OCP.BRepTools import BRepTools
 
-from torus_cad.geometry.blade.propeller import HUB_PART
+from torus_cad.geometry.blade.propeller_geometry import HUB_PART
 from torus_cad.kernel.checks import distances_to_shape
 
 #: A face's tessellation vertices lie on its own part to this (mm); at least half of them are

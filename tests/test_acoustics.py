@@ -133,7 +133,7 @@ def test_the_vtk_surface_reader_gives_areas_normals_into_the_fluid_and_pressure_
     from vtkmodules.vtkCommonDataModel import vtkCellArray, vtkPolyData
     from vtkmodules.vtkIOXML import vtkXMLPolyDataWriter
 
-    from torus_cad.acoustics.surface import read_surface
+    from torus_cad.acoustics.pressure_surface import read_surface
 
     corners = [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (0, 0, 1), (1, 0, 1), (1, 1, 1), (0, 1, 1), (0.5, 1, 1)]
     inward = [[0, 1, 2, 3], [4, 7, 8, 6, 5], [0, 4, 5, 1], [1, 5, 6, 2], [2, 6, 8, 7, 3], [0, 3, 7, 4]]
@@ -178,7 +178,7 @@ def test_an_observer_inside_the_rotor_is_refused_naming_the_tip_radius():
 
 
 def test_an_observer_that_hears_no_tone_is_printed_and_reported_as_silent():
-    from torus_cad.acoustics.report import SILENT_BELOW_DB, _level_db
+    from torus_cad.acoustics.noise_report import SILENT_BELOW_DB, _level_db
     from torus_cad.simulate.cli_output import noise_line
 
     assert _level_db(-261.0) is None and _level_db(float("-inf")) is None  # round-off of a cancelled sound

@@ -21,8 +21,8 @@ import numpy as np
 import pytest
 from cli_exit import exit_code
 
-from torus_cad.cfd.domain import SURFACE_GROUPS, VOLUME_GROUPS, tetrahedra_volume
-from torus_cad.cfd.readme import openfoam_block
+from torus_cad.cfd_domain.domain import SURFACE_GROUPS, VOLUME_GROUPS, tetrahedra_volume
+from torus_cad.cfd_domain.readme import openfoam_block
 from torus_cad.cli import main
 from torus_cad.outputs.output_set import verify_set
 from torus_cad.tolerances import CFD_TETRAHEDRA_LIMIT
@@ -153,7 +153,7 @@ def test_the_coarse_propeller_wall_has_no_crossing_triangles_and_the_estimate_is
 
 
 def test_the_estimate_is_printed_with_its_factor_and_time_and_the_mesh_falls_within_it(cfd_run):
-    from torus_cad.cfd.estimate import REAL_OVER_ESTIMATE, TETS_PER_SECOND
+    from torus_cad.cfd_domain.estimate import REAL_OVER_ESTIMATE, TETS_PER_SECOND
 
     out, stderr = cfd_run
     report = json.loads((out / "torus_propeller_cfd.json").read_text())
@@ -167,7 +167,7 @@ def test_the_estimate_is_printed_with_its_factor_and_time_and_the_mesh_falls_wit
 
 
 def test_a_long_stage_prints_a_heartbeat_with_its_time():
-    from torus_cad.cfd.worker import run_in_worker
+    from torus_cad.cfd_domain.interruptible import run_in_worker
     from torus_cad.runtime.progress import StageProgress
 
     stream = io.StringIO()
@@ -230,7 +230,7 @@ def test_a_mesh_over_the_budget_is_refused_before_any_work(tmp_path, capsys):
 
 
 def test_the_estimate_grows_with_finer_sizes():
-    from torus_cad.cfd.estimate import estimate_cfd_mesh
+    from torus_cad.cfd_domain.estimate import estimate_cfd_mesh
     from torus_cad.parameters import PropellerParameters
 
     base = PropellerParameters()

@@ -18,7 +18,7 @@ from scipy.spatial import ConvexHull
 
 from torus_cad.errors import ParameterError
 from torus_cad.geometry.blade.station_table import read_station_file
-from torus_cad.kernel.checks import precise_volume
+from torus_cad.kernel.mass_properties import precise_volume
 from torus_cad.kernel.measure import contour_through, edge_points, max_radius_mm, plane_section_edges
 from torus_cad.kernel.step_readback import read_step
 from torus_cad.kernel.strict import boolean_check_faults
@@ -236,8 +236,8 @@ def test_apc_sweep_puts_the_leading_edge_ahead_of_the_axis():
 
 
 def test_cfd_sizes_the_apc_domain_from_its_own_blade():
-    from torus_cad.cfd.estimate import estimate_cfd_mesh
-    from torus_cad.cfd.sizes import smallest_chord, tip_radius
+    from torus_cad.cfd_domain.estimate import estimate_cfd_mesh
+    from torus_cad.cfd_domain.sizes import smallest_chord, tip_radius
 
     params = PropellerParameters.from_toml(DESIGN)
     assert 2.0 * tip_radius(params) == pytest.approx(254.0, rel=0.01)

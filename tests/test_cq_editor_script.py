@@ -10,7 +10,8 @@ from pathlib import Path
 import cadquery as cq
 import pytest
 
-from torus_cad.kernel.checks import is_valid_closed_solid, precise_volume
+from torus_cad.kernel.checks import is_valid_closed_solid
+from torus_cad.kernel.mass_properties import precise_volume
 from torus_cad.kernel.step_readback import read_step
 from torus_cad.parameters import PropellerParameters
 from torus_cad.tolerances import READ_BACK_RELATIVE_TOLERANCE

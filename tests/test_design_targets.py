@@ -10,7 +10,7 @@ import pytest
 from torus_cad.cli import main
 from torus_cad.cli.design_input import load_parameters
 from torus_cad.geometry.analysis.diameter import DIAMETER_TOLERANCE_MM
-from torus_cad.geometry.blade.surface import blade_frames
+from torus_cad.geometry.blade.blade_surface import blade_frames
 from torus_cad.kernel.measure import (
     contour_through,
     max_radius_mm,

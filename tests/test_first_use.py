@@ -38,7 +38,7 @@ def test_allrun_starts_mpiexec_as_root(tmp_path):
 
 
 def _cfd_readme() -> str:
-    from torus_cad.cfd.readme import openfoam_block, readme_text
+    from torus_cad.cfd_domain.readme import openfoam_block, readme_text
 
     report = {"gmsh_version": "4.13.1", "tetrahedra_total": 3, "tetrahedra": {"rotating_zone": 1, "fluid": 2},
               "sicn_min": 0.2, "triangles": {"rotating_interface": 4},

@@ -17,9 +17,10 @@ from hypothesis import strategies as st
 import torus_cad.propeller as pipeline
 from torus_cad.errors import KernelError
 from torus_cad.geometry.hub.seam import footprint_arcs_deg, seam_angle_deg
-from torus_cad.kernel.checks import is_valid_closed_solid, precise_volume, single_valid_solid
+from torus_cad.kernel.checks import is_valid_closed_solid, single_valid_solid
 from torus_cad.kernel.fuse import FuseRoute, fuse_all, fuse_pattern
 from torus_cad.kernel.hub import hub_solid
+from torus_cad.kernel.mass_properties import precise_volume
 from torus_cad.propeller import build_propeller
 from torus_cad.tolerances import HUB_FOOTPRINT_MARGIN_DEG
 

@@ -12,8 +12,9 @@ import pytest
 
 from torus_cad.cli import EXIT_BAD_INPUT, EXIT_OK, main
 from torus_cad.kernel.blade_integrals import hub_with_blade_integrals
-from torus_cad.kernel.checks import is_valid_closed_solid, mass_properties, occt_mass_properties, precise_volume
+from torus_cad.kernel.checks import is_valid_closed_solid
 from torus_cad.kernel.hub import hub_solid
+from torus_cad.kernel.mass_properties import mass_properties, occt_mass_properties, precise_volume
 from torus_cad.kernel.step_readback import read_step
 from torus_cad.parameters import PropellerParameters
 from torus_cad.propeller import DEFAULT_DENSITY_G_CM3, propeller_objects
@@ -221,7 +222,7 @@ def test_a_mirrored_propeller_takes_the_fast_route_and_agrees(light_params):
 
 @pytest.mark.parametrize("overrides", [{"blades": 1}, {"blades": 2, "phase_deg": 17.0}, {}], ids=["1", "2", "3"])
 def test_the_balance_from_the_blade_faces_agrees_with_the_reference(light_params, overrides):
-    from torus_cad.kernel.checks import balance, balance_of, volume_properties
+    from torus_cad.kernel.mass_properties import balance, balance_of, volume_properties
     from torus_cad.propeller import build_propeller
 
     solid = build_propeller(light_params.with_values(overrides)).solid

@@ -13,13 +13,13 @@ from hypothesis import strategies as st
 
 from torus_cad.cli import main
 from torus_cad.errors import ParameterError
-from torus_cad.geometry.blade.mesh import TriangleMesh
+from torus_cad.geometry.blade.triangle_mesh import TriangleMesh
 from torus_cad.mesh.cleanup import collapse_junction_needles
 from torus_cad.mesh.grids import blade_grid, blade_meshes, cell_size, hub_layout, hub_mesh, section_parameters
+from torus_cad.mesh.mesh_formats import MeshFormat
 from torus_cad.mesh.pipeline import build_surface_mesh
 from torus_cad.mesh.quality import aspect_ratios, edge_topology
 from torus_cad.mesh.resolution import check_resolution
-from torus_cad.mesh.settings import MeshFormat
 from torus_cad.mesh.union import MeshBooleanError, unite
 from torus_cad.mesh.writers import write_mesh_files
 from torus_cad.parameters import PropellerParameters
@@ -56,7 +56,7 @@ def test_mesh_is_one_closed_two_manifold_with_every_part(sections, points, spaci
 
 
 def test_volume_converges_to_the_brep_at_second_order(default_propeller):
-    from torus_cad.kernel.checks import precise_volume
+    from torus_cad.kernel.mass_properties import precise_volume
 
     brep = precise_volume(default_propeller.solid)
     errors = [abs(build_surface_mesh(_params(24 * k, 48 * k)).mesh.triangle_mesh.volume / brep - 1.0)

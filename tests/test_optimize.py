@@ -24,8 +24,8 @@ from optuna.trial import TrialState  # noqa: E402
 from torus_cad.errors import ParameterError  # noqa: E402
 from torus_cad.optimize import parse_study, read_study_file, run_study  # noqa: E402
 from torus_cad.optimize.metrics import REPORT_METRICS, metric_value  # noqa: E402
-from torus_cad.optimize.performance import simulate_unavailable  # noqa: E402
 from torus_cad.optimize.storage import RETRY_OF, open_storage, owner_record, retry_stale_trials  # noqa: E402
+from torus_cad.optimize.trial_simulation import simulate_unavailable  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLE = ROOT / "examples" / "optimize_light.toml"
@@ -134,7 +134,7 @@ def test_the_cli_refuses_a_bad_study_with_exit_2_and_writes_nothing(tmp_path):
 
 
 def test_every_number_of_a_real_build_report_is_a_metric():
-    from torus_cad.outputs.report import build_report
+    from torus_cad.outputs.build_report import build_report
     from torus_cad.propeller import build_propeller
 
     report = build_report(build_propeller(BASE), 1.24)
@@ -230,7 +230,7 @@ def test_the_geometric_study_improves_on_its_base_and_its_best_design_rebuilds(t
     """The shipped example: a lighter 100 mm propeller whose thinnest wall stays >= 0.8 mm within 30 trials."""
     from matplotlib.image import imread
 
-    from torus_cad.outputs.report import build_report
+    from torus_cad.outputs.build_report import build_report
     from torus_cad.propeller import build_propeller
 
     base = build_report(build_propeller(BASE), 1.24)

@@ -27,11 +27,11 @@ from torus_cad.batch.outcome import DesignResult, Outcome  # noqa: E402
 from torus_cad.errors import ParameterError  # noqa: E402
 from torus_cad.optimize import parse_study, read_study_file, run_study  # noqa: E402
 from torus_cad.optimize.metrics import metric_value  # noqa: E402
-from torus_cad.optimize.performance import simulate_unavailable  # noqa: E402
 from torus_cad.optimize.storage import open_storage  # noqa: E402
 from torus_cad.optimize.study import dominated_at_level  # noqa: E402
 from torus_cad.optimize.study_file import Direction, Objective  # noqa: E402
 from torus_cad.optimize.trial_job import TrialTask  # noqa: E402
+from torus_cad.optimize.trial_simulation import simulate_unavailable  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 BASE = ROOT / "examples" / "optimize" / "light_prop.toml"

@@ -15,8 +15,8 @@ from PIL import Image
 from torus_cad.cli import EXIT_BAD_INPUT, EXIT_OK, main
 from torus_cad.colors import HUB_COLOR, blade_color
 from torus_cad.errors import ParameterError
-from torus_cad.geometry.blade.propeller import HUB_PART
-from torus_cad.kernel.checks import mass_properties
+from torus_cad.geometry.blade.propeller_geometry import HUB_PART
+from torus_cad.kernel.mass_properties import mass_properties
 from torus_cad.preview.picture import (
     AXIAL_VIEW,
     ISOMETRIC_ELEVATION_DEG,

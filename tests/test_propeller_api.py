@@ -11,7 +11,8 @@ import pytest
 
 from torus_cad.colors import blade_color
 from torus_cad.errors import ParameterError
-from torus_cad.kernel.checks import is_valid_closed_solid, precise_volume
+from torus_cad.kernel.checks import is_valid_closed_solid
+from torus_cad.kernel.mass_properties import precise_volume
 from torus_cad.parameters import PropellerParameters, resolve_parameters
 from torus_cad.propeller import Propeller, propeller_objects
 

@@ -6,9 +6,10 @@ import numpy as np
 import pytest
 from conftest import assert_same_volume_as_general_fuse, read_binary_stl
 
-from torus_cad.geometry.blade.surface import surface_points
-from torus_cad.kernel.checks import distances_to_shape, is_valid_closed_solid, precise_volume
+from torus_cad.geometry.blade.blade_surface import surface_points
+from torus_cad.kernel.checks import distances_to_shape, is_valid_closed_solid
 from torus_cad.kernel.fuse import FuseRoute
+from torus_cad.kernel.mass_properties import precise_volume
 from torus_cad.kernel.step_readback import read_step
 from torus_cad.propeller import build_propeller
 from torus_cad.tolerances import READ_BACK_RELATIVE_TOLERANCE, SURFACE_ACCURACY_RELATIVE

@@ -141,7 +141,7 @@ def test_python_examples_run_in_order(workdir: Path, monkeypatch):
 
 
 def test_parameter_table_is_current():
-    from torus_cad.parameters.reference import replace_table
+    from torus_cad.parameters.parameter_reference import replace_table
 
     text = PARAMETERS_PAGE.read_text()
     assert replace_table(text) == text, "docs/reference/parameters.md is stale: run python scripts/reference_pages.py"

@@ -9,7 +9,7 @@ import pytest
 from face_measures import principal_curvatures
 from scipy.interpolate import BSpline
 
-from torus_cad.geometry.blade.surface import blade_frames
+from torus_cad.geometry.blade.blade_surface import blade_frames
 from torus_cad.kernel.checks import is_valid_closed_solid
 from torus_cad.kernel.measure import contour_through, farthest_middle_edge, plane_section_edges, straight_edges
 from torus_cad.parameters import PropellerParameters

@@ -12,7 +12,7 @@ from pydantic import Field
 from torus_cad.errors import ParameterError
 from torus_cad.parameters import PropellerParameters, parameter_specs
 from torus_cad.parameters.document import Document
-from torus_cad.parameters.reference import markdown_table
+from torus_cad.parameters.parameter_reference import markdown_table
 from torus_cad.parameters.schema import Section, iter_parameter_specs, param
 
 

@@ -26,8 +26,8 @@ pytest.importorskip("gmsh")
 
 from torus_cad.parameters import PropellerParameters  # noqa: E402
 from torus_cad.parameters.design import Handedness  # noqa: E402
+from torus_cad.simulate.coefficients import force_variation, performance, richardson  # noqa: E402
 from torus_cad.simulate.history import History  # noqa: E402
-from torus_cad.simulate.performance import force_variation, performance, richardson  # noqa: E402
 from torus_cad.simulate.pipeline import Request, simulate  # noqa: E402
 from torus_cad.simulate.run import divergence  # noqa: E402
 from torus_cad.simulate.settings import Level, Mesher, OperatingPoint, TurbulenceModel  # noqa: E402

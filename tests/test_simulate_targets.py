@@ -20,7 +20,7 @@ from openfoam_marks import needs_openfoam
 
 from torus_cad.cli import main
 from torus_cad.errors import ParameterError
-from torus_cad.simulate.performance import GCI_SAFETY_FACTOR, SPREAD_SAFETY_FACTOR, UncertaintyMethod, richardson
+from torus_cad.simulate.coefficients import GCI_SAFETY_FACTOR, SPREAD_SAFETY_FACTOR, UncertaintyMethod, richardson
 from torus_cad.simulate.thrust_target import (
     ThrustRun,
     check_target,
@@ -256,7 +256,7 @@ def test_a_bad_step_file_exits_2_with_one_line_naming_it_and_writes_nothing(tmp_
 
 
 def test_a_step_over_the_size_limit_is_refused(tmp_path, capsys, monkeypatch):
-    import torus_cad.cfd.step_body as step_body
+    import torus_cad.cfd_domain.step_body as step_body
 
     monkeypatch.setattr(step_body, "STEP_FILE_MAX_BYTES", 100)
     path = tmp_path / "big.step"
@@ -266,7 +266,7 @@ def test_a_step_over_the_size_limit_is_refused(tmp_path, capsys, monkeypatch):
 
 
 def test_step_names_are_sanitised():
-    from torus_cad.cfd.step_body import step_name
+    from torus_cad.cfd_domain.step_body import step_name
 
     assert step_name("dir/My prop (v2).step") == "My_prop__v2_"
     assert step_name("/x/..step") == "step_propeller"
@@ -283,7 +283,7 @@ def test_step_names_are_sanitised():
 def test_each_axis_is_turned_onto_plus_z(axis):
     import cadquery as cq
 
-    from torus_cad.cfd.step_body import Axis, place_on_z
+    from torus_cad.cfd_domain.step_body import Axis, place_on_z
 
     # a cylinder of radius 5 and length 2 along ``axis``, moved off the origin
     sign = -1.0 if axis[0] == "-" else 1.0
@@ -297,7 +297,7 @@ def test_each_axis_is_turned_onto_plus_z(axis):
 
 
 def test_the_design_step_measures_its_diameter_and_hub(design_step):
-    from torus_cad.cfd.step_body import load_step_propeller
+    from torus_cad.cfd_domain.step_body import load_step_propeller
 
     path, _ = design_step
     step = load_step_propeller(path)
@@ -308,7 +308,7 @@ def test_the_design_step_measures_its_diameter_and_hub(design_step):
 
 
 def test_case_only_from_the_design_step_has_a_propeller_patch_and_its_diameter(design_step, tmp_path):
-    from torus_cad.cfd.sizes import tip_radius
+    from torus_cad.cfd_domain.sizes import tip_radius
     from torus_cad.parameters import PropellerParameters
 
     path, _ = design_step
@@ -328,7 +328,7 @@ def test_case_only_from_the_design_step_has_a_propeller_patch_and_its_diameter(d
 def test_case_only_from_the_design_step_on_the_layered_route_meshes_the_step_s_own_surface(design_step, tmp_path):
     import trimesh
 
-    from torus_cad.cfd.sizes import tip_radius
+    from torus_cad.cfd_domain.sizes import tip_radius
     from torus_cad.parameters import PropellerParameters
     from torus_cad.simulate.snappy import SURFACE_MM
 
@@ -351,7 +351,7 @@ def _scaled_step(source, factor, path):
     from OCP.BRepBuilderAPI import BRepBuilderAPI_Transform
     from OCP.gp import gp_Pnt, gp_Trsf
 
-    from torus_cad.cfd.step_body import read_step_solid
+    from torus_cad.cfd_domain.step_body import read_step_solid
     from torus_cad.kernel.writers.step import write_step
 
     scale = gp_Trsf()

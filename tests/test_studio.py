@@ -14,8 +14,8 @@ import pytest
 
 from torus_cad import PropellerParameters
 from torus_cad.errors import GeometryError, ParameterError
-from torus_cad.geometry.blade.mesh import TriangleMesh
-from torus_cad.geometry.blade.propeller import HUB_PART
+from torus_cad.geometry.blade.propeller_geometry import HUB_PART
+from torus_cad.geometry.blade.triangle_mesh import TriangleMesh
 from torus_cad.studio.panel import (
     FieldKind,
     design_from_state,
@@ -247,7 +247,7 @@ def test_tip_diameter_reaches_the_exact_solids_outermost_point(light_params, lig
 def _collect(requests, tmp_path, kill_after_start=False, timeout_s=240.0, **limits):
     """Run requests through a BuildRunner (each superseding the one before); the messages received.
     ``limits``: the runner's time_limit_s and memory_limit_bytes."""
-    from torus_cad.studio.build_messages import BuildRequest
+    from torus_cad.studio.messages import BuildRequest
     from torus_cad.studio.worker import BuildRunner
 
     messages: list[tuple[str, int, object]] = []
@@ -318,7 +318,7 @@ def _performance_state():
     """A trame state holding the performance card's keys (no server started, no page)."""
     from trame.app import get_server
 
-    from torus_cad.studio.performance import state_defaults
+    from torus_cad.studio.performance_card import state_defaults
 
     state = get_server("studio_performance_test", client_type="vue3").state
     state.update(state_defaults())
@@ -327,7 +327,7 @@ def _performance_state():
 
 async def _numbers_shown(state, performance, timeout_s=600.0):
     """Wait until the latest solve's numbers (or failure) are shown; the thrust readout, N."""
-    from torus_cad.studio.performance import COMPUTING
+    from torus_cad.studio.performance_card import COMPUTING
 
     deadline = asyncio.get_running_loop().time() + timeout_s
     while performance.running or state.perf_thrust_text == COMPUTING:
@@ -338,7 +338,7 @@ async def _numbers_shown(state, performance, timeout_s=600.0):
 
 
 def test_a_higher_rpm_raises_the_thrust_shown_and_a_bad_rpm_keeps_the_last_numbers(tmp_path):
-    from torus_cad.studio.performance import COMPUTING, Performance
+    from torus_cad.studio.performance_card import COMPUTING, Performance
 
     state = _performance_state()
 
@@ -377,7 +377,7 @@ def test_a_solve_that_does_not_converge_shows_its_one_line_instead_of_numbers(tm
 
     from torus_cad.errors import KernelError
     from torus_cad.studio import vortex_run
-    from torus_cad.studio.performance import NO_NUMBER, Performance, PerformanceRequest
+    from torus_cad.studio.performance_card import NO_NUMBER, Performance, PerformanceRequest
 
     reason = "the vortex solve did not converge: the thrust still changed by 3.5 % a sweep after 30 sweeps"
 

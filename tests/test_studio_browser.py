@@ -185,7 +185,8 @@ def test_orbiting_turns_the_view_and_a_change_keeps_the_viewpoint(page):
 
 
 def test_downloaded_step_is_one_valid_solid_with_the_readout_volume(page, downloads):
-    from torus_cad.kernel.checks import is_valid_closed_solid, precise_volume
+    from torus_cad.kernel.checks import is_valid_closed_solid
+    from torus_cad.kernel.mass_properties import precise_volume
     from torus_cad.kernel.step_readback import read_step
 
     page.change("blades", "4")

@@ -5,8 +5,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from torus_cad.geometry.blade.mesh import blade_mesh
-from torus_cad.geometry.blade.surface import surface_points
+from torus_cad.geometry.blade.blade_surface import surface_points
+from torus_cad.geometry.blade.triangle_mesh import blade_mesh
 from torus_cad.parameters import PropellerParameters
 
 

@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from torus_cad.geometry.analysis.printability import printability
-from torus_cad.geometry.blade.surface import sections_along
+from torus_cad.geometry.blade.blade_surface import sections_along
 from torus_cad.geometry.blade.trailing_edge import (
     blunt_sections,
     section_matrices,

@@ -109,7 +109,7 @@ def test_the_mirror_image_turning_the_other_way_gives_the_same_thrust_and_torque
 
 def test_the_section_polars_take_thrust_and_add_power_at_every_strips_own_reynolds_number() -> None:
     pytest.importorskip("neuralfoil", reason="the simulate extra is not installed")
-    from torus_cad.vortex.performance import vortex_performance
+    from torus_cad.vortex.vortex_performance import vortex_performance
 
     result = vortex_performance(PropellerParameters.from_toml(APC), 5000.0, 0.0, SMALL)
     report = result.report

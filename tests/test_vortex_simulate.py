@@ -96,7 +96,7 @@ def test_the_vortex_thrust_search_finds_the_rpm_for_the_thrust(tmp_path):
 def test_a_study_level_vortex_runs_simulate_with_the_vortex_solver_and_levels_go_cheapest_first(tmp_path):
     from torus_cad.errors import ParameterError
     from torus_cad.optimize import parse_study
-    from torus_cad.optimize.performance import _command
+    from torus_cad.optimize.trial_simulation import _command
 
     command = _command(Path("d.toml"), {"rpm": 8000.0, "level": "vortex", "iterations": 50}, tmp_path, None)
     assert command[command.index("--solver") + 1] == "vortex" and "--level" not in command

@@ -18,7 +18,8 @@ from torus_cad.cli import main
 from torus_cad.geometry.analysis.printability import printability, wall_mm
 from torus_cad.geometry.blade.handedness import Handedness, air_push_z
 from torus_cad.geometry.hub.mounting import HubMounting
-from torus_cad.kernel.checks import balance, is_valid_closed_solid, precise_volume
+from torus_cad.kernel.checks import is_valid_closed_solid
+from torus_cad.kernel.mass_properties import balance, precise_volume
 from torus_cad.kernel.step_readback import read_step
 from torus_cad.parameters import PropellerParameters
 from torus_cad.propeller import build_propeller
@@ -120,7 +121,7 @@ def test_mirror_turns_the_air_push_around():
 def test_wall_is_the_distance_between_the_surfaces_at_a_chord_station():
     params = PropellerParameters()
     blade = params.geometry().blade
-    from torus_cad.geometry.blade.surface import surface_points
+    from torus_cad.geometry.blade.blade_surface import surface_points
 
     for s, x in ((0.0, 0.3), (0.37, 0.6), (0.8, 0.95)):
         upper, lower = surface_points(blade, params.geometry().centerline(0), [s], [x, 2.0 - x])[0]
@@ -236,7 +237,7 @@ def test_root_fillet_failure_exits_1_naming_the_fillet_and_writes_nothing(tmp_pa
 
 
 #: A fuzz design (seed 14) whose blade root comes within 0.34 mm of the hub's end face: a 0.5 mm
-#: fillet there has to run out past the hub's end (torus_cad.kernel.fillet_pattern.fillet_pattern).
+#: fillet there has to run out past the hub's end (torus_cad.kernel.fillet.pattern.fillet_pattern).
 NEAR_THE_END = {
     "blades": 3, "phase_deg": 50.874293083739275, "hub": {"radius": 13.61708909652224, "length": 34.609812248156054},
     "airfoil": {"max_camber": 0.07241977514046337, "camber_position": 0.6730515061120323,
@@ -340,7 +341,7 @@ def test_repaired_root_fillet_is_one_valid_solid_with_a_fillets_volume(fillet_st
 
 #: A fuzz design (seed 51) whose blade sections are about 1.2 x 0.55 mm where they meet the hub: the
 #: section's own concave stretch there (the analytic surface's, not the loft fit's) bends with a
-#: radius of about 0.19 mm, so a 0.5 mm ball cannot roll along it (torus_cad.kernel.fillet_tight_bends.reduced_edge_radii).
+#: radius of about 0.19 mm, so a 0.5 mm ball cannot roll along it (torus_cad.kernel.fillet.tight_bends.reduced_edge_radii).
 TIGHT_BEND = {
     "blades": 3, "phase_deg": 103.0335194469152, "hub": {"radius": 6.548816038721474, "length": 12.387236822421597},
     "airfoil": {"max_camber": 0.07654401786205449, "camber_position": 0.6861265172037483,
@@ -360,7 +361,7 @@ TIGHT_BEND = {
 
 def _tightest_analytic_concave_bend_mm(params, s, t, step=1e-4):
     """The smallest concave (seen from outside) radius of the analytic sections at ``s`` over ``t`` (mm)."""
-    from torus_cad.geometry.blade.surface import surface_points
+    from torus_cad.geometry.blade.blade_surface import surface_points
 
     geometry = params.geometry()
     rings = surface_points(geometry.blade, geometry.centerline(0), s, np.concatenate([t - step, t, t + step]))
@@ -392,7 +393,7 @@ def test_root_fillet_is_reduced_only_where_the_blade_bends_too_tightly_and_says_
     assert any(curvature == pytest.approx(1 / 0.5, rel=1e-3) for curvature in curvatures)  # the requested radius elsewhere
     # the reduced edges (OpenCascade blends the radius into the neighbouring edges)
     assert any(curvature == pytest.approx(1 / fillet.smallest_radius_mm, rel=1e-2) for curvature in curvatures)
-    from torus_cad.outputs.report import build_report
+    from torus_cad.outputs.build_report import build_report
 
     report = build_report(filleted, 1.0)["root_fillet"]
     assert report["constant_radius"] is False and report["smallest_radius_mm"] == fillet.smallest_radius_mm

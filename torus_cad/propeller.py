@@ -23,19 +23,15 @@ from OCP.TopoDS import TopoDS_Shape
 from torus_cad.colors import HUB_COLOR, blade_color
 from torus_cad.errors import KernelError
 from torus_cad.geometry.analysis.printability import Printability
+from torus_cad.geometry.blade.blade_surface import BladeSurface
 from torus_cad.geometry.blade.handedness import Handedness, spin_to_push_air_down
-from torus_cad.geometry.blade.surface import BladeSurface
 from torus_cad.geometry.hub.mounting import HubMounting, set_screw_arc_deg
 from torus_cad.geometry.hub.seam import seam_angle_deg
-from torus_cad.kernel.checks import (
-    MassProperties,
-    mass_properties,
-    precise_volume,
-    single_valid_solid,
-)
+from torus_cad.kernel.checks import single_valid_solid
 from torus_cad.kernel.fuse import Fused, FuseRoute, fuse_all, fuse_pattern, pattern_blades
 from torus_cad.kernel.hub import hub_shape, run_out_hub
 from torus_cad.kernel.loft import loft_solid
+from torus_cad.kernel.mass_properties import MassProperties, mass_properties, precise_volume
 from torus_cad.kernel.mirror import mirrored
 from torus_cad.kernel.strict import StrictCheck, strict_valid_solid
 from torus_cad.kernel.topology import shape_bytes, shape_from_bytes
@@ -43,15 +39,15 @@ from torus_cad.kernel.wires import SectionCurves, fit_section_curves
 from torus_cad.outputs.output_set import write_output_set
 from torus_cad.parameters import PropellerParameters, resolve_parameters
 from torus_cad.parameters.design import TightBends
+from torus_cad.parameters.design_checks import placed_mounting, section_chords
 from torus_cad.parameters.design_targets import DesignTargets, resolve_design_targets
-from torus_cad.parameters.feasibility import placed_mounting, section_chords
 from torus_cad.runtime.stages import Stage, StageTimer
 from torus_cad.tolerances import VOLUME_CHECK_RELATIVE_PRECISION
 
 if TYPE_CHECKING:
     import cadquery as cq
 
-    from torus_cad.kernel.fillet import RootFillet
+    from torus_cad.kernel.fillet.root_fillet import RootFillet
 
 #: Pieces the blade's airfoil face is split into (in equal ranges of its section curves' parameter)
 #: for the root fillet when the trailing edge is round (torus_cad.kernel.wires): the airfoil face is
@@ -87,11 +83,11 @@ class Propeller:
             ``parameters`` are already the resolved spec parameters.
         mounting: the hub's bore, flat, set screw and chamfer, with the set screw's direction.
         face_parts: the part each face of ``solid`` came from, in the order of ``solid.Faces()``:
-            -1 (:data:`torus_cad.geometry.blade.propeller.HUB_PART`) the hub, i blade i; a root fillet's
+            -1 (:data:`torus_cad.geometry.blade.propeller_geometry.HUB_PART`) the hub, i blade i; a root fillet's
             faces are their blade's (:mod:`torus_cad.kernel.face_provenance`).
         root_fillet: the radii the root fillet has (None without one): the requested radius
             everywhere, or smaller along junction edges where the blade bends too tightly for it
-            (:class:`torus_cad.kernel.fillet.RootFillet`).
+            (:class:`torus_cad.kernel.fillet.root_fillet.RootFillet`).
         checks: the strict validity check ``solid`` passed (BRepCheck_Analyzer and
             BRepAlgoAPI_Check's small-edge and self-interference tests, :mod:`torus_cad.kernel.strict`).
     """
@@ -179,7 +175,7 @@ class Propeller:
 
     def mass_properties(self, density_g_cm3: float = DEFAULT_DENSITY_G_CM3) -> MassProperties:
         """Volume (mm^3), area (mm^2), centroid (mm), spin-axis inertia and mass (g) for a density in
-        g/cm^3 (default 1.24, PLA), to 1e-6 relative (see :func:`torus_cad.kernel.checks.mass_properties`)."""
+        g/cm^3 (default 1.24, PLA), to 1e-6 relative (see :func:`torus_cad.kernel.mass_properties.mass_properties`)."""
         return mass_properties(self.shape, density_g_cm3)
 
     def write(self, out_dir: str | Path, density_g_cm3: float = DEFAULT_DENSITY_G_CM3,
@@ -244,16 +240,16 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
         angles_deg = [params.blade_angle_deg(i) for i in range(params.blades)]
         blades = pattern_blades(blade, angles_deg)
     root_fillet: RootFillet | None = None
-    if fillet_radius > 0.0:  # blade 0 filleted once, then patterned (torus_cad.kernel.fillet)
+    if fillet_radius > 0.0:  # blade 0 filleted once, then patterned (torus_cad.kernel.fillet.root_fillet)
         with timer.stage(Stage.FILLET):
             run_out = None if mounting.chamfer_mm > 0.0 else functools.partial(
                 run_out_hub, hub_geometry.radius_mm, hub_geometry.length_mm, 0.0 if seam_deg is None else seam_deg,
                 mounting, reach=hub_geometry.radius_mm + 4.0 * fillet_radius)
             # A sharp edge's side as one closed face: the fillet splits it in its own pieces (kernel.fillet).
             closed = blade if surface.lower_corner_index is not None else loft_solid(curves.occ_wires(1, False), surface.s)
-            import cadquery as cq  # the root fillet's route is cadquery's (torus_cad.kernel.fillet_pattern)
+            import cadquery as cq  # the root fillet's route is cadquery's (torus_cad.kernel.fillet.pattern)
 
-            from torus_cad.kernel.fillet_pattern import fillet_pattern
+            from torus_cad.kernel.fillet.pattern import fillet_pattern
             try:
                 filleted = fillet_pattern(cq.Solid(hub), cq.Solid(closed), angles_deg, fillet_radius, run_out,
                                           reduce_where_tight=params.hub.root_fillet_tight_bends == TightBends.REDUCE)

@@ -129,9 +129,9 @@ SIMULATE_DIVERGENCE_RESIDUAL = 1e3
 GMSH_REPRODUCIBLE_THREADS = 1
 
 #: Largest CFD mesh ``torus-cad cfd`` starts, in tetrahedra (estimated from the settings before any
-#: meshing, torus_cad.cfd.estimate): about 2.6 GB and 13 times the default design's work, 33 minutes of one
-#: core at torus_cad.cfd.estimate.TETS_PER_SECOND (measured: the docs' measurements page). The estimate is of
-#: the propeller as built (design targets met) and within torus_cad.cfd.estimate.REAL_OVER_ESTIMATE of the real count.
+#: meshing, torus_cad.cfd_domain.estimate): about 2.6 GB and 13 times the default design's work, 33 minutes of one
+#: core at torus_cad.cfd_domain.estimate.TETS_PER_SECOND (measured: the docs' measurements page). The estimate is of
+#: the propeller as built (design targets met) and within torus_cad.cfd_domain.estimate.REAL_OVER_ESTIMATE of the real count.
 CFD_TETRAHEDRA_LIMIT = 3_000_000
 
 # -- the strict validity check (torus_cad.kernel.strict) ---------------------------------------------

@@ -175,7 +175,7 @@ def _bind_schema_ranges(ranges: dict[argparse.Action, str]) -> None:
 
 
 def _add_mesh_parser(commands: Any) -> None:
-    from torus_cad.mesh.settings import MeshFormat
+    from torus_cad.mesh.mesh_formats import MeshFormat
 
     mesh = _design_command(
         commands, "mesh", help="closed triangle mesh straight from the spec's math (STL, OBJ groups, PLY, VTK)",

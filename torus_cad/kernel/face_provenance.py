@@ -25,7 +25,7 @@ from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Shape
 from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape, TopTools_IndexedMapOfShape
 
 from torus_cad.errors import KernelError
-from torus_cad.geometry.blade.propeller import HUB_PART
+from torus_cad.geometry.blade.propeller_geometry import HUB_PART
 from torus_cad.kernel.checks import distances_to_shape
 from torus_cad.kernel.topology import explore, faces
 

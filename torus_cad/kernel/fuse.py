@@ -35,7 +35,7 @@ from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Shape, TopoDS_Shell, TopoDS_Solid
 
 from torus_cad.errors import KernelError
-from torus_cad.geometry.blade.propeller import HUB_PART
+from torus_cad.geometry.blade.propeller_geometry import HUB_PART
 from torus_cad.kernel.edge_curves import refit_intersection_edges
 from torus_cad.kernel.face_provenance import Origins, face_parts, through_history
 from torus_cad.kernel.topology import (

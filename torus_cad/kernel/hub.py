@@ -83,7 +83,7 @@ def run_out_hub(radius: float, length: float, seam_angle_deg: float, mounting: H
 
     The tools: two end slabs (radius ``reach``, beyond |z| = length / 2) first, then the bore and
     set-screw hole of ``mounting`` (no chamfer: a chamfered hub has no run-out). For the root
-    fillet's run-out (torus_cad.kernel.fillet_pattern.fillet_pattern).
+    fillet's run-out (torus_cad.kernel.fillet.pattern.fillet_pattern).
     """
     if mounting.chamfer_mm > 0.0:
         raise KernelError("a chamfered hub has no run-out for the root fillet")

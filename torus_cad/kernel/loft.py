@@ -43,7 +43,7 @@ def loft_solid(wires: Sequence[ShapeT], parameters: Sequence[float] | NDArray[np
     makes them; each edge position gets its own side face (a blunt trailing edge's base and
     the airfoil). The side surface interpolates every pole across the sections with a cubic
     (not-a-knot) spline in the sections' own parameters ``parameters`` (default: uniform in
-    [0, 1], the s of :func:`torus_cad.geometry.blade.surface.blade_surface`), so it follows the
+    [0, 1], the s of :func:`torus_cad.geometry.blade.blade_surface.blade_surface`), so it follows the
     design between sections. BRepOffsetAPI_ThruSections, used before and kept as a fallback,
     chooses its own chord-length parametrisation; on sparse, strongly changing blades it missed
     the design by up to ~40 % of the chord next to the hub and the fuse then failed or hung

@@ -2,7 +2,7 @@
 ``findSelfCollidingTriangles`` (:func:`crossing_pairs`; its meshes hold single-precision coordinates,
 the precision of a binary STL). Triangles that only share an edge or a vertex do not count. The
 tessellation's repair (torus_cad.kernel.uncrossed), the surface mesh of ``torus-cad mesh``
-(torus_cad.mesh.crossings) and the CFD domain's surface (torus_cad.cfd.surface_check) all use it.
+(torus_cad.mesh.crossings) and the CFD domain's surface (torus_cad.cfd_domain.surface_check) all use it.
 
 Every mesh the build writes (STL, 3MF) is the uncrossed tessellation
 (torus_cad.kernel.uncrossed: OpenCascade's, any crossing triangles repaired by meshlib),

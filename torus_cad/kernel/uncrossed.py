@@ -38,7 +38,7 @@ from OCP.TopoDS import TopoDS_Face
 from scipy.spatial import cKDTree
 
 from torus_cad.errors import KernelError
-from torus_cad.geometry.blade.mesh import side_use_counts
+from torus_cad.geometry.blade.triangle_mesh import side_use_counts
 from torus_cad.kernel.mesh_check import crossing_pairs, meshlib_mesh
 from torus_cad.kernel.tessellation import face_triangulation
 from torus_cad.kernel.topology import AnyShape, copied, faces_in_order, occ, surface_kind

@@ -31,7 +31,7 @@ split there into two edges, the base and the airfoil, so the loft gives the base
 For the root fillet, :meth:`SectionCurves.wires` can also split the airfoil edge into equal
 pieces in parameter (exact copies of its spans, :meth:`Geom_BSplineCurve.Segment`): with a
 round cap the blade's airfoil face is not closed, so the fillet's split of closed side faces
-(:mod:`torus_cad.kernel.fillet`) does not apply, and the fillet rolls round the cap only with
+(:mod:`torus_cad.kernel.fillet.root_fillet`) does not apply, and the fillet rolls round the cap only with
 the airfoil face in pieces (measured: README, "Root fillet").
 """
 
@@ -75,7 +75,7 @@ class SectionCurves(SectionFit):
 
         Sharp trailing edge: with ``airfoil_pieces`` 1, two edges (lower and upper surface, split
         at the leading edge; one closed edge with ``split_sharp`` False, for the root fillet, which
-        splits the closed face itself: torus_cad.kernel.fillet); otherwise ``airfoil_pieces`` edges
+        splits the closed face itself: torus_cad.kernel.fillet.root_fillet); otherwise ``airfoil_pieces`` edges
         of equal parameter ranges. Blunt: the base and the airfoil edge, the latter split into
         ``airfoil_pieces`` equal ranges.
         """

@@ -16,9 +16,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from torus_cad.geometry.blade.mesh import TriangleMesh
-from torus_cad.geometry.blade.propeller import PropellerGeometry
-from torus_cad.geometry.blade.surface import BladeSurface
+from torus_cad.geometry.blade.blade_surface import BladeSurface
+from torus_cad.geometry.blade.propeller_geometry import PropellerGeometry
+from torus_cad.geometry.blade.triangle_mesh import TriangleMesh
 from torus_cad.mesh.cleanup import Cleanup, collapse_keeping
 from torus_cad.mesh.grids import BladePieces, blade_pieces, rotated_about_axis
 from torus_cad.mesh.quality import find_rows

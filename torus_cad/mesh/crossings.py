@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from torus_cad.geometry.blade.mesh import TriangleMesh
+from torus_cad.geometry.blade.triangle_mesh import TriangleMesh
 from torus_cad.kernel.mesh_check import crossing_pairs as mesh_crossing_pairs
 
 #: Surface meshes (``torus-cad mesh``) up to this many triangles are checked whole for intersecting

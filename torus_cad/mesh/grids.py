@@ -17,10 +17,16 @@ from itertools import pairwise
 import numpy as np
 from numpy.typing import NDArray
 
+from torus_cad.geometry.blade.blade_surface import (
+    BladeSurface,
+    blade_frames,
+    place_sections,
+    sections_along,
+    sections_at,
+)
 from torus_cad.geometry.blade.centerline import Centerline
-from torus_cad.geometry.blade.mesh import TriangleMesh
-from torus_cad.geometry.blade.propeller import PropellerGeometry
-from torus_cad.geometry.blade.surface import BladeSurface, blade_frames, place_sections, sections_along, sections_at
+from torus_cad.geometry.blade.propeller_geometry import PropellerGeometry
+from torus_cad.geometry.blade.triangle_mesh import TriangleMesh
 from torus_cad.geometry.section.arc_length import equal_arc_length_section
 from torus_cad.geometry.section.section import RoundTrailingEdge
 from torus_cad.parameters.design import SectionSpacing

@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from torus_cad.errors import ParameterError
-from torus_cad.geometry.blade.mesh import TriangleMesh
+from torus_cad.geometry.blade.triangle_mesh import TriangleMesh
 from torus_cad.geometry.hub.mounting import SET_SCREW_OVERSHOOT_MM, HubMounting, place_mounting
 from torus_cad.parameters import PropellerParameters
 

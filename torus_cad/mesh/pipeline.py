@@ -23,9 +23,15 @@ from numpy.typing import NDArray
 
 from torus_cad.errors import ParameterError
 from torus_cad.geometry.analysis import feasibility
-from torus_cad.geometry.blade.mesh import TriangleMesh
-from torus_cad.geometry.blade.propeller import PropellerGeometry
-from torus_cad.geometry.blade.surface import BladeSurface, blade_frames, place_sections, sections_along, sections_at
+from torus_cad.geometry.blade.blade_surface import (
+    BladeSurface,
+    blade_frames,
+    place_sections,
+    sections_along,
+    sections_at,
+)
+from torus_cad.geometry.blade.propeller_geometry import PropellerGeometry
+from torus_cad.geometry.blade.triangle_mesh import TriangleMesh
 from torus_cad.geometry.hub.mounting import HubMounting
 from torus_cad.mesh import quality
 from torus_cad.mesh.assembly import assemble
@@ -40,8 +46,8 @@ from torus_cad.mesh.grids import (
     split_along_a_d,
 )
 from torus_cad.mesh.hub_features import check_meshable, cut_features, feature_surface_distance, placed_mounting
+from torus_cad.mesh.mesh_formats import MeshFormat, selected_formats
 from torus_cad.mesh.resolution import check_budget, check_resolution, estimate_triangles
-from torus_cad.mesh.settings import MeshFormat, selected_formats
 from torus_cad.mesh.union import LabeledMesh, MeshBooleanError
 from torus_cad.mesh.writers import write_mesh_files
 from torus_cad.parameters import PropellerParameters
@@ -286,7 +292,7 @@ def blade_cell_sag(result: SurfaceMesh) -> tuple[float, float]:
 
 def opencascade_comparison(params: PropellerParameters, margin: float) -> dict[str, Any]:
     """B-rep volume and the evenness of OpenCascade's STL tessellation of the same design."""
-    from torus_cad.kernel.checks import precise_volume
+    from torus_cad.kernel.mass_properties import precise_volume
     from torus_cad.kernel.tessellation import tessellate_faces
     from torus_cad.propeller import build_propeller
 

@@ -19,7 +19,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from torus_cad.geometry.blade.mesh import MEASURE_BLOCK_TRIANGLES
+from torus_cad.geometry.blade.triangle_mesh import MEASURE_BLOCK_TRIANGLES
 
 
 @dataclass(frozen=True)

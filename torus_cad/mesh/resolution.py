@@ -20,8 +20,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from torus_cad.errors import BudgetError, ParameterError
-from torus_cad.geometry.blade.propeller import PropellerGeometry
-from torus_cad.geometry.blade.surface import blade_frames, place_on_frames
+from torus_cad.geometry.blade.blade_surface import blade_frames, place_on_frames
+from torus_cad.geometry.blade.propeller_geometry import PropellerGeometry
 from torus_cad.geometry.blade.transforms import evaluate_quartic
 from torus_cad.geometry.section.airfoil import airfoil_points
 from torus_cad.geometry.section.arc_length import equal_arc_length_section

@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from torus_cad.errors import KernelError
-from torus_cad.geometry.blade.mesh import TriangleMesh
+from torus_cad.geometry.blade.triangle_mesh import TriangleMesh
 
 
 class MeshBooleanError(KernelError):

@@ -20,7 +20,7 @@ from typing import IO
 import numpy as np
 from numpy.typing import NDArray
 
-from torus_cad.mesh.settings import SUFFIXES, MeshFormat
+from torus_cad.mesh.mesh_formats import SUFFIXES, MeshFormat
 from torus_cad.mesh.union import LabeledMesh
 from torus_cad.runtime.files import atomic_path
 

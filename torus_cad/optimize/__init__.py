@@ -3,7 +3,7 @@
 * :mod:`~torus_cad.optimize.study_file` reads and checks a study file (vary, objectives, constraints);
 * :mod:`~torus_cad.optimize.metrics` names the numbers a study can use (build report, ``performance.*``);
 * :mod:`~torus_cad.optimize.trial_job` is what a worker does with one trial;
-* :mod:`~torus_cad.optimize.performance` runs ``torus-cad simulate`` for ``performance.*`` metrics;
+* :mod:`~torus_cad.optimize.trial_simulation` runs ``torus-cad simulate`` for ``performance.*`` metrics;
 * :mod:`~torus_cad.optimize.storage` holds the study (SQLite or PostgreSQL), shared by processes;
 * :mod:`~torus_cad.optimize.study` runs the trials; :mod:`~torus_cad.optimize.results` writes
   the table, the pictures and the best designs.

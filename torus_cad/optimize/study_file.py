@@ -59,7 +59,7 @@ from torus_cad.batch.sweep_file import (
 )
 from torus_cad.errors import ParameterError, shown
 from torus_cad.optimize.metrics import PERFORMANCE_PREFIX, check_metric, is_performance, noise_observers
-from torus_cad.optimize.performance import VORTEX_LEVEL
+from torus_cad.optimize.trial_simulation import VORTEX_LEVEL
 from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.config_file import read_config_table
 from torus_cad.parameters.schema import Section, param, parameter_error

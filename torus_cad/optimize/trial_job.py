@@ -68,7 +68,7 @@ def run_trial(task: DesignTask) -> DesignResult:
     try:
         config = folder / f"{task.design_id}.toml" if climb else _write_design_file(task, folder)
         if simulate is not None:
-            from torus_cad.optimize.performance import run_simulate
+            from torus_cad.optimize.trial_simulation import run_simulate
 
             report_dir = task.simulate_dir if isinstance(task, TrialTask) else PERFORMANCE_DIR
             run_simulate(config, task.design_id, simulate, folder / report_dir, time_limit_s)

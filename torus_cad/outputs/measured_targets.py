@@ -9,8 +9,8 @@ from typing import Any
 import numpy as np
 
 from torus_cad.geometry.analysis.blade_elements import blade_angles
+from torus_cad.geometry.blade.blade_surface import blade_frames
 from torus_cad.geometry.blade.handedness import Handedness
-from torus_cad.geometry.blade.surface import blade_frames
 from torus_cad.geometry.blade.transforms import evaluate_quartic
 from torus_cad.outputs.sections_table import elements_of
 

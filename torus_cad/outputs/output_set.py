@@ -50,7 +50,7 @@ from torus_cad.runtime.interrupts import deferred
 from torus_cad.tolerances import REPORT_FILE_MAX_BYTES
 
 if TYPE_CHECKING:
-    from torus_cad.outputs.report import BuiltPropeller
+    from torus_cad.outputs.build_report import BuiltPropeller
     from torus_cad.runtime.isolation import IsolatedCall
 
 #: Key of the report that lists the set's other files: ``{kind: {"file", "bytes", "sha256"}}``.
@@ -438,7 +438,7 @@ def write_output_set(propeller: BuiltPropeller, out_dir: str | Path, density_g_c
     from torus_cad import __version__
     from torus_cad.kernel.uncrossed import UncrossedMesh, uncrossed_mesh
     from torus_cad.kernel.writers import WRITERS, ExportJob
-    from torus_cad.outputs.report import build_report
+    from torus_cad.outputs.build_report import build_report
     from torus_cad.outputs.sections_table import sections_table_files, write_files
     from torus_cad.parameters.design import ExportFormat
     from torus_cad.parameters.stl_budget import check_stl_budget

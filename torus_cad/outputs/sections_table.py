@@ -19,8 +19,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from torus_cad.geometry.analysis.blade_elements import NEARLY_RADIAL_FRACTION, BladeElements, blade_elements
+from torus_cad.geometry.blade.blade_surface import BladeSurface, sections_along
 from torus_cad.geometry.blade.handedness import Handedness
-from torus_cad.geometry.blade.surface import BladeSurface, sections_along
 from torus_cad.geometry.blade.trailing_edge import trailing_edge_thickness_mm
 from torus_cad.geometry.blade.transforms import evaluate_quartic
 from torus_cad.geometry.section.section import has_base

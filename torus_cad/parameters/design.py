@@ -27,6 +27,7 @@ from torus_cad.errors import GeometryError, ParameterError, shown
 from torus_cad.formats import ExportFormat, StepSchema
 from torus_cad.geometry.analysis.feasibility import Margins, check_feasible, check_root_fillet_edge
 from torus_cad.geometry.analysis.printability import Printability, conventional_printability, printability
+from torus_cad.geometry.blade.blade_surface import BladeSurface, blade_surface, with_thin_file_edge_closed
 from torus_cad.geometry.blade.centerline import hub_inset_radius_mm
 from torus_cad.geometry.blade.conventional_blade import (
     ConventionalBlade,
@@ -36,9 +37,8 @@ from torus_cad.geometry.blade.conventional_blade import (
 )
 from torus_cad.geometry.blade.frames import FrameKind
 from torus_cad.geometry.blade.handedness import Handedness
-from torus_cad.geometry.blade.propeller import BladeGeometry, HubGeometry, PropellerGeometry
+from torus_cad.geometry.blade.propeller_geometry import BladeGeometry, HubGeometry, PropellerGeometry
 from torus_cad.geometry.blade.station_table import StationTable, checked, read_station_file
-from torus_cad.geometry.blade.surface import BladeSurface, blade_surface, with_thin_file_edge_closed
 from torus_cad.geometry.blade.transforms import SectionLaws, quartic_minimum
 from torus_cad.geometry.hub.mounting import HubMounting
 from torus_cad.geometry.section.airfoil import Naca5Airfoil, NacaAirfoil, naca4_numbers, naca_section
@@ -537,7 +537,7 @@ class PropellerParameters(Document):
     def blade_surface(self, blade_index: int = 0, sections: int | None = None, points: int | None = None
                       ) -> BladeSurface:
         """Blade ``blade_index`` sampled at ``sections`` x ``points`` (default: ``resolution``):
-        a :class:`~torus_cad.geometry.blade.surface.BladeSurface`, whose ``points`` are ``(sections, points, 3)`` mm.
+        a :class:`~torus_cad.geometry.blade.blade_surface.BladeSurface`, whose ``points`` are ``(sections, points, 3)`` mm.
 
         A conventional blade is blade 0 rotated about +z to blade ``blade_index``'s angle."""
         sections = self.resolution.sections if sections is None else sections

@@ -33,16 +33,16 @@ from torus_cad.geometry.analysis.pitch import (
     fit_pitch,
     pitch_report,
 )
-from torus_cad.geometry.blade.centerline import Centerline
-from torus_cad.geometry.blade.frames import FrameKind, Frames, frenet_from_derivatives
-from torus_cad.geometry.blade.handedness import Handedness
-from torus_cad.geometry.blade.propeller import PropellerGeometry
-from torus_cad.geometry.blade.surface import (
+from torus_cad.geometry.blade.blade_surface import (
     blade_frames,
     place_sections,
     sections_along,
     sections_at,
 )
+from torus_cad.geometry.blade.centerline import Centerline
+from torus_cad.geometry.blade.frames import FrameKind, Frames, frenet_from_derivatives
+from torus_cad.geometry.blade.handedness import Handedness
+from torus_cad.geometry.blade.propeller_geometry import PropellerGeometry
 from torus_cad.geometry.blade.transforms import Quartic, evaluate_quartic
 from torus_cad.geometry.section.airfoil import naca4_numbers
 from torus_cad.geometry.section.section import closed_points, parameter_end

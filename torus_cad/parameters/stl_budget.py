@@ -4,7 +4,7 @@ The count is estimated from the blade surface and the deflections
 (torus_cad.geometry.analysis.triangle_estimate, a few milliseconds, no tessellation) and refused
 above :data:`torus_cad.tolerances.STL_TRIANGLE_LIMIT`, with the estimate, the deflections and the
 limit. (The other budgets sit with their inputs too: the surface mesh's memory in
-torus_cad.mesh.resolution, the CFD mesh's tetrahedra in torus_cad.cfd.estimate; the B-rep itself is
+torus_cad.mesh.resolution, the CFD mesh's tetrahedra in torus_cad.cfd_domain.estimate; the B-rep itself is
 bounded by the resolution ranges.)
 """
 
@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from torus_cad.errors import BudgetError
 from torus_cad.geometry.analysis.triangle_estimate import estimate_stl_triangles
-from torus_cad.geometry.blade.surface import BladeSurface
+from torus_cad.geometry.blade.blade_surface import BladeSurface
 from torus_cad.parameters.design import PropellerParameters
 from torus_cad.tolerances import STL_TRIANGLE_LIMIT
 

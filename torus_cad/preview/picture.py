@@ -31,8 +31,8 @@ from numpy.typing import NDArray
 
 from torus_cad.colors import HUB_COLOR, blade_color
 from torus_cad.errors import TorusCadError
-from torus_cad.geometry.blade.propeller import HUB_PART
-from torus_cad.kernel.checks import mass_properties
+from torus_cad.geometry.blade.propeller_geometry import HUB_PART
+from torus_cad.kernel.mass_properties import mass_properties
 from torus_cad.parameters import PropellerParameters
 from torus_cad.preview.size import checked_size
 from torus_cad.runtime.files import atomic_path

@@ -41,14 +41,14 @@ from torus_cad.simulate.settings import (
 )
 from torus_cad.simulate.snappy import MESH_COMMANDS as LAYERED_MESH_COMMANDS
 
-#: Patches of the cfd mesh (torus_cad.cfd.domain.SURFACE_GROUPS) as the case types them.
+#: Patches of the cfd mesh (torus_cad.cfd_domain.domain.SURFACE_GROUPS) as the case types them.
 WALL, OUTER_PATCHES, INTERFACE = "propeller", ("inlet", "outlet", "farfield"), "rotating_interface"
 ZONE = "rotating_zone"
 MM_TO_M = "(0.001 0.001 0.001)"
 #: Names of the function objects (their folders under postProcessing/).
 FORCES, RESIDUALS, OUTER_FORCES, Y_PLUS = "propeller_forces", "residuals", "outer_forces", "yPlus"
 #: The function object that writes the propeller's surface pressure (face values, kinematic p in m^2/s^2) at the
-#: last time as VTK PolyData: ``postProcessing/<BLADE_PRESSURE>/<time>/<WALL>.vtp`` (torus_cad.acoustics.surface).
+#: last time as VTK PolyData: ``postProcessing/<BLADE_PRESSURE>/<time>/<WALL>.vtp`` (torus_cad.acoustics.pressure_surface).
 BLADE_PRESSURE = "blade_pressure"
 MOMENTUM_FLUX = {patch: f"momentum_flux_{patch}" for patch in OUTER_PATCHES}
 FIELDS = ("U", "p", "k", "omega")

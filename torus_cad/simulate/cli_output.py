@@ -6,7 +6,7 @@ import sys
 from typing import Any, TextIO
 
 from torus_cad.runtime.progress import is_terminal
-from torus_cad.simulate.performance import SPREAD_SAFETY_FACTOR
+from torus_cad.simulate.coefficients import SPREAD_SAFETY_FACTOR
 from torus_cad.simulate.pipeline import Result
 from torus_cad.simulate.run import Status
 

@@ -40,8 +40,8 @@ from torus_cad.runtime.files import owner_tag
 from torus_cad.runtime.input_files import read_untrusted_bytes
 from torus_cad.runtime.interrupts import deferred
 from torus_cad.simulate.case import BLADE_PRESSURE, WALL, CaseSpec, mesh_commands, solve_commands, write_case
+from torus_cad.simulate.coefficients import GCI_SAFETY_FACTOR, richardson, run_summary
 from torus_cad.simulate.history import History, momentum_balance_force_n, read_y_plus
-from torus_cad.simulate.performance import GCI_SAFETY_FACTOR, richardson, run_summary
 from torus_cad.simulate.plot import write_history_plot
 from torus_cad.simulate.run import (
     ProgressCallback,
@@ -91,8 +91,8 @@ from torus_cad.tolerances import (
 )
 
 if TYPE_CHECKING:
-    from torus_cad.acoustics.report import Noise
-    from torus_cad.cfd.step_body import StepPropeller
+    from torus_cad.acoustics.noise_report import Noise
+    from torus_cad.cfd_domain.step_body import StepPropeller
 
 #: CPU seconds simpleFoam takes per cell and iteration (the default design's coarse layered mesh, 51,845 cells:
 #: 300 iterations in 85 CPU seconds on each of 2 processes): the estimate a run's time budget is checked against
@@ -158,7 +158,7 @@ def check_request(request: Request) -> float:
     """ParameterError (exit 2) for a value out of range (a ``--step`` propeller: its size and its mesh's estimate,
     torus_cad.simulate.validity); returns the tip diameter in m (of the design as built: its ``diameter`` /
     ``pitch`` / ``airfoil.naca`` targets applied)."""
-    from torus_cad.cfd.sizes import tip_radius
+    from torus_cad.cfd_domain.sizes import tip_radius
     from torus_cad.parameters.design_targets import resolve_design_targets
 
     check_count("--iterations", request.run_iterations, 1, MAX_ITERATIONS)
@@ -210,7 +210,7 @@ async def _mesh_and_write(request: Request, case: Path, diameter_m: float,
     """Write the case and what its mesh is made from; the mesh report so far (``cells`` None until checkMesh)."""
     if request.mesher == Mesher.SNAPPY:
         return await _layered_and_write(request, case, diameter_m, stage)
-    from torus_cad.cfd.domain import CfdStage, write_body_domain, write_cfd_domain
+    from torus_cad.cfd_domain.domain import CfdStage, write_body_domain, write_cfd_domain
     from torus_cad.runtime.stages import StageTimer
     from torus_cad.tolerances import GMSH_REPRODUCIBLE_THREADS
 
@@ -439,8 +439,8 @@ async def _run_case(request: Request, case: Path, out: Path, spec: CaseSpec, mes
 async def _noise(request: Request, case: Path, stage: Callable[[str], None] | None) -> Noise | None:
     """The tonal noise of the finished ``case`` at ``request.observers`` (None when the propeller does not turn)."""
     from torus_cad.acoustics.fwh import Medium
-    from torus_cad.acoustics.report import evaluate_noise
-    from torus_cad.acoustics.surface import read_surface, surface_pressure_file
+    from torus_cad.acoustics.noise_report import evaluate_noise
+    from torus_cad.acoustics.pressure_surface import read_surface, surface_pressure_file
 
     omega = request.point.omega_rad_s(request.params.handedness)
     if omega == 0.0:
@@ -482,7 +482,7 @@ def _publish(output: OutputSet, request: Request, case: Path, out: Path, run: _R
 
 
 def _noise_files(noise: Noise, folder: Path, name: str, title: str) -> dict[str, Path]:
-    from torus_cad.acoustics.report import write_noise_csv, write_noise_plot
+    from torus_cad.acoustics.noise_report import write_noise_csv, write_noise_plot
 
     return {"noise_png": write_noise_plot(noise, folder / f"{name}_noise.png", f"tonal noise, {title}"),
             "noise_csv": write_noise_csv(noise, folder / f"{name}_noise.csv")}

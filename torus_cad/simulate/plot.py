@@ -5,8 +5,8 @@ from __future__ import annotations
 from pathlib import Path
 
 from torus_cad.parameters.design import Handedness
+from torus_cad.simulate.coefficients import thrust_and_torque
 from torus_cad.simulate.history import History
-from torus_cad.simulate.performance import thrust_and_torque
 
 
 def write_history_plot(history: History, handedness: Handedness, path: Path, title: str) -> Path:

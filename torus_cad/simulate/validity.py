@@ -3,7 +3,7 @@
 Before any work (ParameterError / BudgetError, exit 2, nothing written): a ``--step`` propeller's tip
 diameter must lie in :data:`STEP_DIAMETER_RANGE_MM`, and its layered (snappyHexMesh) mesh, estimated from
 the solid's surface area by :func:`estimate_layered_cells`, must stay under :data:`LAYERED_CELL_LIMIT`
-(the refusal is worded as ``cfd``'s, :func:`torus_cad.cfd.estimate.over_limit_error`).
+(the refusal is worded as ``cfd``'s, :func:`torus_cad.cfd_domain.estimate.over_limit_error`).
 
 After the mesh is written and after a run, :func:`validity_flags` lists what lies outside the physics
 the case was set up for: a first prism layer that is not thin against the blade, a chord Reynolds number
@@ -16,7 +16,7 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING, Any
 
-from torus_cad.cfd.estimate import over_limit_error
+from torus_cad.cfd_domain.estimate import over_limit_error
 from torus_cad.errors import ParameterError
 from torus_cad.simulate.settings import (
     BACKGROUND_CELLS_PER_D,
@@ -31,7 +31,7 @@ from torus_cad.simulate.settings import (
 from torus_cad.simulate.snappy import REFERENCE_CHORD_D, level_scale, reference_reynolds
 
 if TYPE_CHECKING:
-    from torus_cad.cfd.step_body import StepPropeller
+    from torus_cad.cfd_domain.step_body import StepPropeller
     from torus_cad.parameters.design import Cfd
 
 #: --step tip diameters (mm): from 5 mm, where the smallest prism cell (fine level, --surface-refinement 4,
@@ -90,7 +90,7 @@ def check_step_propeller(step: StepPropeller, level: Level, surface_refinement: 
     """ParameterError (exit 2) when the STEP propeller's tip diameter is outside :data:`STEP_DIAMETER_RANGE_MM`;
     BudgetError (exit 2) when its layered mesh (``mesher`` snappy) is estimated over :data:`LAYERED_CELL_LIMIT`.
     ``cfd`` holds the level's domain (D units). Nothing is meshed or written."""
-    from torus_cad.kernel.checks import surface_area_mm2
+    from torus_cad.kernel.mass_properties import surface_area_mm2
 
     low, high = STEP_DIAMETER_RANGE_MM
     diameter = step.body.tip_diameter_mm

@@ -11,7 +11,7 @@ The studio is a service on a network: an uploaded design is read off the event l
 (torus_cad.studio.uploads); the server's start and stop are torus_cad.studio.server's.
 
 Once a design's exact solid is built, the vortex solver's numbers at the rpm and airspeed entered are
-solved in a process of their own (torus_cad.studio.performance); a newer design or point supersedes them.
+solved in a process of their own (torus_cad.studio.performance_card); a newer design or point supersedes them.
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ from typing import Any
 from torus_cad.errors import GeometryError, ParameterError
 from torus_cad.parameters import PropellerParameters
 from torus_cad.runtime.stages import Stage
-from torus_cad.studio.build_messages import BuildRequest, SolidResult
+from torus_cad.studio.messages import BuildRequest, SolidResult
 from torus_cad.studio.panel import (
     PanelField,
     PanelGroup,
@@ -38,7 +38,7 @@ from torus_cad.studio.panel import (
     schema_groups,
     state_values,
 )
-from torus_cad.studio.performance import Performance, state_defaults
+from torus_cad.studio.performance_card import Performance, state_defaults
 from torus_cad.studio.scene import PreviewScene, preview_scene
 from torus_cad.studio.uploads import is_design, read_upload
 from torus_cad.studio.worker import BuildRunner

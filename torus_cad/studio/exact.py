@@ -14,13 +14,12 @@ from OCP.BRepBndLib import BRepBndLib
 
 from torus_cad import PropellerParameters
 from torus_cad.errors import GeometryError, ParameterError, TorusCadError
-from torus_cad.geometry.blade.propeller import HUB_PART
-from torus_cad.kernel.checks import mass_properties
+from torus_cad.geometry.blade.propeller_geometry import HUB_PART
+from torus_cad.kernel.mass_properties import mass_properties
 from torus_cad.kernel.tessellation import tessellate_faces
 from torus_cad.propeller import Propeller, build_propeller
-from torus_cad.studio.build_messages import BuildRequest, SolidResult
+from torus_cad.studio.messages import BuildRequest, SolidResult, failures_reported
 from torus_cad.studio.scene import PartMesh, tip_diameter_mm
-from torus_cad.studio.worker import failures_reported
 
 #: Chordal deviation of the exact solid's display mesh, as a fraction of its bounding-box diagonal.
 DISPLAY_RELATIVE_DEFLECTION = 1.0 / 1000.0

@@ -14,7 +14,7 @@ from trame.widgets import vtk as vtk_widgets
 from trame.widgets import vuetify3 as v3
 
 from torus_cad.studio.panel import FieldKind, PanelField, PanelGroup
-from torus_cad.studio.performance import SOLVER_LABEL
+from torus_cad.studio.performance_card import SOLVER_LABEL
 
 
 class Studio(Protocol):
@@ -178,7 +178,7 @@ def _operating_point_field(name: str, label: str, unit: str) -> None:
 
 
 def _performance() -> None:
-    """The vortex solver's numbers at the rpm and airspeed entered, and its loading plot (torus_cad.studio.performance)."""
+    """The vortex solver's numbers at the rpm and airspeed entered, and its loading plot (torus_cad.studio.performance_card)."""
     with v3.VCard(classes="ma-2", elevation=2, id="performance"):
         v3.VCardTitle("Performance (vortex solver)", classes="text-subtitle-1")
         _operating_point_field("perf_rpm", "rpm", "rpm")

@@ -15,8 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from torus_cad.geometry.blade.mesh import blade_mesh
-from torus_cad.geometry.blade.propeller import HUB_PART
+from torus_cad.geometry.blade.propeller_geometry import HUB_PART
+from torus_cad.geometry.blade.triangle_mesh import blade_mesh
 from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.design import Handedness
 from torus_cad.parameters.design_targets import resolve_design_targets

@@ -17,7 +17,7 @@ from numpy.typing import NDArray
 from vtkmodules.vtkRenderingCore import vtkActor, vtkPolyDataMapper, vtkRenderer, vtkRenderWindow
 
 from torus_cad.colors import HUB_COLOR, blade_color
-from torus_cad.geometry.blade.propeller import HUB_PART
+from torus_cad.geometry.blade.propeller_geometry import HUB_PART
 from torus_cad.preview.vtk_scene import add_lights, polyline_polydata, surface_actor, triangle_polydata
 from torus_cad.studio.scene import PartMesh
 

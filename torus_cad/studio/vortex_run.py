@@ -1,5 +1,5 @@
 """One operating point of the vortex solver for the studio, in the solve's process
-(torus_cad.studio.performance starts it): the numbers and the loading plot ``simulate --solver vortex``
+(torus_cad.studio.performance_card starts it): the numbers and the loading plot ``simulate --solver vortex``
 draws, sent back over a pipe. Runs in the worker process, never in the server: it imports the solver.
 """
 
@@ -9,10 +9,9 @@ import multiprocessing.connection
 
 from torus_cad import PropellerParameters
 from torus_cad.errors import TorusCadError
-from torus_cad.studio.performance import REPORT_KEYS, PerformanceRequest
-from torus_cad.studio.worker import failures_reported
+from torus_cad.studio.messages import REPORT_KEYS, PerformanceRequest, failures_reported
 from torus_cad.vortex.loading_files import write_loading_plot
-from torus_cad.vortex.performance import vortex_performance
+from torus_cad.vortex.vortex_performance import vortex_performance
 
 
 def run_vortex(request: PerformanceRequest, connection: multiprocessing.connection.Connection,

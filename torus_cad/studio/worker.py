@@ -18,7 +18,7 @@ the child, never in the server) and is killed after :data:`BUILD_TIME_LIMIT_S` s
 (a "failed" message says so). Whatever a design asks for, the server only waits on a pipe.
 
 The machinery (one process per request, the newest killing the older, a time and memory limit) is
-:class:`ProcessRunner`'s; the studio's vortex solves (torus_cad.studio.performance) run through it too.
+:class:`ProcessRunner`'s; the studio's vortex solves (torus_cad.studio.performance_card) run through it too.
 Only the parent side (:class:`ProcessRunner`, :class:`BuildRunner`) runs in the server process; it
 imports no kernel.
 """
@@ -29,12 +29,10 @@ import asyncio
 import multiprocessing
 import multiprocessing.connection
 import multiprocessing.forkserver
-import traceback
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from collections.abc import Callable
 from typing import Any
 
-from torus_cad.studio.build_messages import BuildRequest
+from torus_cad.studio.messages import BuildRequest
 
 #: Seconds an exact build may run in the studio before its process is killed (the default design
 #: takes about 2 s here; the largest resolutions a design may ask for take minutes).
@@ -178,21 +176,3 @@ def run_bounded(run: Callable[[Any, multiprocessing.connection.Connection, int],
 
     resource.setrlimit(resource.RLIMIT_DATA, (memory_limit_bytes, memory_limit_bytes))
     run(request, connection, memory_limit_bytes)
-
-
-@contextmanager
-def failures_reported(connection: multiprocessing.connection.Connection, request_id: int, what: str,
-                      memory_limit_bytes: int | None, memory_advice: str = "") -> Iterator[None]:
-    """Inside the block, an allocation that fails or an unexpected error is sent as ``("failed", request_id,
-    reason)`` (the page shows it; the child never dies silently); ``connection`` is closed after it.
-    ``what`` names the work ("the exact build"), ``memory_advice`` what to lower when memory runs out."""
-    try:
-        yield
-    except MemoryError:
-        limit = f", the limit of {memory_limit_bytes / 2**30:g} GiB in the studio" if memory_limit_bytes else ""
-        connection.send(("failed", request_id, f"{what} ran out of memory{limit}{memory_advice}"))
-    except Exception as error:  # reported on the page, never a crashed server
-        traceback.print_exc()
-        connection.send(("failed", request_id, f"internal error ({type(error).__name__}): {error}"))
-    finally:
-        connection.close()

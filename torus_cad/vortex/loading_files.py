@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 
 from torus_cad.vortex.lattice import Lattice
-from torus_cad.vortex.performance import StripLoads
 from torus_cad.vortex.rotor import RotorBlade
+from torus_cad.vortex.vortex_performance import StripLoads
 
 #: The CSV's columns (SI units; s is the centerline parameter, 0..1).
 LOADING_COLUMNS = ("s", "radius_m", "circulation_m2_s", "thrust_n_per_m", "torque_nm_per_m", "reynolds", "cl", "cd",

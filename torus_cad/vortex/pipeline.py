@@ -17,8 +17,8 @@ from typing import Any
 import numpy as np
 
 from torus_cad.acoustics.fwh import Medium
+from torus_cad.acoustics.noise_report import Noise, evaluate_noise, write_noise_csv, write_noise_plot
 from torus_cad.acoustics.observers import DEFAULT_OBSERVERS, Observer, check_observers
-from torus_cad.acoustics.report import Noise, evaluate_noise, write_noise_csv, write_noise_plot
 from torus_cad.outputs.output_set import OutputSet
 from torus_cad.parameters.design import PropellerParameters
 from torus_cad.parameters.design_targets import resolve_design_targets
@@ -35,9 +35,9 @@ from torus_cad.simulate.thrust_target import (
 from torus_cad.tolerances import VORTEX_CHORDWISE_RANGE, VORTEX_SPANWISE_RANGE
 from torus_cad.vortex.loading_files import write_loading_csv, write_loading_plot, write_wake_plot
 from torus_cad.vortex.noise_surface import rotor_surface
-from torus_cad.vortex.performance import LIFT_RATIO_BOUNDS, VortexResult, vortex_performance
 from torus_cad.vortex.polars import LOW_CONFIDENCE
 from torus_cad.vortex.rotor import Discretisation
+from torus_cad.vortex.vortex_performance import LIFT_RATIO_BOUNDS, VortexResult, vortex_performance
 
 #: Rings across the chord, and strips along the blade, a run may ask for (--chordwise, --spanwise).
 CHORDWISE_RANGE = VORTEX_CHORDWISE_RANGE
@@ -67,7 +67,7 @@ class VortexRun:
 
 def tip_diameter_m(params: PropellerParameters) -> float:
     """The tip diameter of ``params`` with its design targets applied, m: the one the rpm's range is set by."""
-    from torus_cad.cfd.sizes import tip_radius
+    from torus_cad.cfd_domain.sizes import tip_radius
 
     return 2.0 * tip_radius(resolve_design_targets(params).parameters) / 1000.0
 

@@ -15,8 +15,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from torus_cad.geometry.analysis.camber_surface import camber_surface, cosine_fractions, section_coordinates
+from torus_cad.geometry.blade.blade_surface import BladeSurface, blade_surface_at
 from torus_cad.geometry.blade.handedness import Handedness
-from torus_cad.geometry.blade.surface import BladeSurface, blade_surface_at
 from torus_cad.parameters.design import DesignKind, PropellerParameters
 from torus_cad.parameters.design_targets import resolve_design_targets
 from torus_cad.tolerances import VORTEX_CHORDWISE_DEFAULT, VORTEX_SPANWISE_DEFAULT

@@ -6,9 +6,9 @@ import argparse
 import sys
 from pathlib import Path
 
-from torus_cad.cfd.domain import gmsh_library, import_gmsh, summary_line, write_cfd_domain
-from torus_cad.cfd.estimate import check_cfd_budget
-from torus_cad.cfd.worker import run_in_worker
+from torus_cad.cfd_domain.domain import gmsh_library, import_gmsh, summary_line, write_cfd_domain
+from torus_cad.cfd_domain.estimate import check_cfd_budget
+from torus_cad.cfd_domain.interruptible import run_in_worker
 from torus_cad.cli.design_input import load_parameters, table_overrides
 from torus_cad.cli.exits import print_written
 from torus_cad.kernel.mesh_check import import_meshlib

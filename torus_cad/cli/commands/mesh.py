@@ -8,8 +8,8 @@ from typing import Any
 
 from torus_cad.cli.design_input import load_parameters
 from torus_cad.cli.exits import print_written
+from torus_cad.mesh.mesh_formats import format_overrides
 from torus_cad.mesh.pipeline import summary_line, write_surface_mesh
-from torus_cad.mesh.settings import format_overrides
 from torus_cad.outputs.output_set import check_writable_folder
 from torus_cad.runtime.progress import StageProgress
 

@@ -28,7 +28,7 @@ def run(args: argparse.Namespace) -> int:
         return _run_vortex(args, params, progress)
     step = None
     if args.step is not None:
-        from torus_cad.cfd.step_body import Axis, load_step_propeller  # cadquery: only for a STEP file
+        from torus_cad.cfd_domain.step_body import Axis, load_step_propeller  # cadquery: only for a STEP file
 
         step = load_step_propeller(args.step, Axis(args.axis), Handedness(args.turning))
         params = params.with_values({"name": step.body.name, "handedness": args.turning})

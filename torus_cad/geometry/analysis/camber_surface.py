@@ -1,6 +1,6 @@
 """The blade's camber surface and its sections' own shapes, from the sampled blade (kernel-free).
 
-Each section of a :class:`~torus_cad.geometry.blade.surface.BladeSurface` is a closed curve that starts
+Each section of a :class:`~torus_cad.geometry.blade.blade_surface.BladeSurface` is a closed curve that starts
 at the leading edge, runs along the upper surface to the trailing edge and back along the lower one.
 Its **chord line** runs from the leading edge to the trailing edge (the middle of a blunt edge's base,
 as :func:`torus_cad.geometry.analysis.blade_elements.chord_lines`). The **camber point** at chord
@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from torus_cad.geometry.analysis.blade_elements import chord_lines
-from torus_cad.geometry.blade.surface import BladeSurface
+from torus_cad.geometry.blade.blade_surface import BladeSurface
 
 
 @dataclass(frozen=True)

@@ -26,10 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from torus_cad.errors import GeometryError
-from torus_cad.geometry.blade.centerline import Centerline
-from torus_cad.geometry.blade.frames import Frames
-from torus_cad.geometry.blade.propeller import HubGeometry, PropellerGeometry
-from torus_cad.geometry.blade.surface import (
+from torus_cad.geometry.blade.blade_surface import (
     BladeSurface,
     blade_frames,
     check_trailing_edge,
@@ -37,6 +34,9 @@ from torus_cad.geometry.blade.surface import (
     sections_along,
     sections_at,
 )
+from torus_cad.geometry.blade.centerline import Centerline
+from torus_cad.geometry.blade.frames import Frames
+from torus_cad.geometry.blade.propeller_geometry import HubGeometry, PropellerGeometry
 
 #: A section may reach at most this fraction of the way to the centre of curvature (check 3).
 FOLD_LIMIT = 1.0
@@ -143,7 +143,7 @@ def sample_tube(geometry: PropellerGeometry, centerline: Centerline, s: NDArray[
                 t: NDArray[np.float64]) -> Tube:
     """Blade 0's analytic surface at every (s, t) of the grid, with frames and curvature.
 
-    The frames are the blade's own kind (:func:`torus_cad.geometry.blade.surface.blade_frames`).
+    The frames are the blade's own kind (:func:`torus_cad.geometry.blade.blade_surface.blade_frames`).
     """
     derivatives = centerline.derivatives(s, order=2)
     first, second = derivatives[:, 1], derivatives[:, 2]

@@ -41,9 +41,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import brentq, minimize_scalar
 
+from torus_cad.geometry.blade.blade_surface import sections_along
 from torus_cad.geometry.blade.conventional_blade import ConventionalBlade
-from torus_cad.geometry.blade.propeller import BladeGeometry, PropellerGeometry
-from torus_cad.geometry.blade.surface import sections_along
+from torus_cad.geometry.blade.propeller_geometry import BladeGeometry, PropellerGeometry
 from torus_cad.geometry.blade.transforms import SectionLaws, evaluate_quartic, rotation_matrices
 
 #: A wall equal to min_wall up to this relative rounding counts as reaching it (a 0.8 mm blunt edge

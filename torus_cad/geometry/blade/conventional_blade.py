@@ -38,10 +38,10 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.interpolate import PchipInterpolator
 
 from torus_cad.errors import GeometryError
+from torus_cad.geometry.blade.blade_surface import BladeSurface, place_on_frames
 from torus_cad.geometry.blade.frames import Frames
-from torus_cad.geometry.blade.propeller import HubGeometry
+from torus_cad.geometry.blade.propeller_geometry import HubGeometry
 from torus_cad.geometry.blade.station_table import StationTable
-from torus_cad.geometry.blade.surface import BladeSurface, place_on_frames
 from torus_cad.geometry.blade.trailing_edge import TRAILING_EDGE_THICKNESS_LIMIT, blunt_sections
 from torus_cad.geometry.section.airfoil import Naca5Airfoil, NacaAirfoil
 from torus_cad.geometry.section.arc_length import equal_arc_length_section

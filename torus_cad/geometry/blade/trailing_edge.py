@@ -120,7 +120,7 @@ def round_cap_handles(ends: NDArray[np.float64], derivatives: NDArray[np.float64
 def _family_ends(section: Section) -> tuple[tuple[NDArray[np.float64], NDArray[np.float64]],
                                              tuple[NDArray[np.float64], NDArray[np.float64]]]:
     """:func:`half_ends` and :func:`end_derivatives` of ``section`` opened by 0 and by 1, remembered
-    (every call of :func:`torus_cad.geometry.blade.surface.sections_along` makes a new family)."""
+    (every call of :func:`torus_cad.geometry.blade.blade_surface.sections_along` makes a new family)."""
     family = _opened_by_0_and_1(section)
     return ((half_ends(family[0]), half_ends(family[1])),
             (end_derivatives(family[0]), end_derivatives(family[1])))

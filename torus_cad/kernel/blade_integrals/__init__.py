@@ -1,5 +1,5 @@
 """Mass properties of a hub with blades from the blade faces alone: the fast route of
-:func:`torus_cad.kernel.checks.mass_properties`.
+:func:`torus_cad.kernel.mass_properties.mass_properties`.
 
 A propeller joined by the shared-intersection fuse is a cylinder (radius R, axis z, ends at
 z_bottom and z_top) plus blade faces, each a non-rational B-spline surface trimmed by its

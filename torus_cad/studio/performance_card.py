@@ -22,12 +22,12 @@ import base64
 import math
 import multiprocessing.connection
 import re
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from torus_cad.errors import GeometryError, ParameterError
 from torus_cad.parameters import PropellerParameters
+from torus_cad.studio.messages import PerformanceRequest
 from torus_cad.studio.worker import BUILD_MEMORY_LIMIT_BYTES, ProcessRunner, run_bounded, time_out_reason
 
 #: The operating point the studio starts with: the one the docs' vortex measurements use (rpm, m/s).
@@ -48,23 +48,8 @@ NO_NUMBER = "–"
 SOLVER_LABEL = ("vortex solver: a screening estimate, not validated to 10 % "
                 "(see docs/explanation/simulation-accuracy.md)")
 
-#: The report's keys the page shows or words.
-REPORT_KEYS = ("thrust_n", "power_w", "figure_of_merit", "efficiency", "low_confidence_strips")
-
 #: The command-line option names in check_operating_point's messages, worded as the studio's fields.
 _OPTION = re.compile(r"--(rpm|airspeed)\b")
-
-
-@dataclass(frozen=True)
-class PerformanceRequest:
-    """One operating point of one design: the design (``PropellerParameters.to_dict()``), rpm, airspeed
-    m/s, and the folder the loading plot is drawn in."""
-
-    request_id: int
-    design: dict[str, Any]
-    rpm: float
-    airspeed_m_s: float
-    out_dir: Path
 
 
 class PointRefused(ParameterError):

@@ -39,7 +39,7 @@ from torus_cad.kernel.topology import explore
 
 #: A root-fillet edge whose 3D curve leaves a face's p-curve by more than its tolerance (as
 #: BOPAlgo_ArgumentAnalyzer measures; 1.4e-4 mm against 1e-4 mm on workshop_fillet) gets this many
-#: times that deviation as tolerance (torus_cad.kernel.fillet_continuity).
+#: times that deviation as tolerance (torus_cad.kernel.fillet.continuity).
 FILLET_EDGE_TOLERANCE_MARGIN = 1.1
 
 

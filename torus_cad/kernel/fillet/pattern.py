@@ -32,11 +32,12 @@ from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Shape, TopoDS_Solid, TopoDS_W
 from OCP.TopTools import TopTools_IndexedMapOfShape
 
 from torus_cad.errors import KernelError
-from torus_cad.geometry.blade.propeller import HUB_PART
+from torus_cad.geometry.blade.propeller_geometry import HUB_PART
 from torus_cad.kernel import face_provenance
 from torus_cad.kernel.checks import single_valid_solid
 from torus_cad.kernel.face_provenance import Origins
-from torus_cad.kernel.fillet import (
+from torus_cad.kernel.fillet.one_fillet import FilletParams
+from torus_cad.kernel.fillet.root_fillet import (
     FILLET_TRIES,
     SIDE_FACE_PIECES,
     RootFillet,
@@ -46,8 +47,7 @@ from torus_cad.kernel.fillet import (
     made_readable,
     prepare_blade_for_fillet,
 )
-from torus_cad.kernel.fillet_edges import FilletParams
-from torus_cad.kernel.fillet_tight_bends import reduced_edge_radii
+from torus_cad.kernel.fillet.tight_bends import reduced_edge_radii
 from torus_cad.kernel.fuse import fuse_pattern, pattern_blades, solid_of_faces
 from torus_cad.kernel.topology import BLADE_SURFACES, boolean, explore, faces, result
 from torus_cad.tolerances import (

@@ -12,17 +12,17 @@ from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any, Protocol
 
 from torus_cad.geometry.blade.handedness import Handedness
-from torus_cad.kernel.checks import balance
+from torus_cad.kernel.mass_properties import balance
 
 if TYPE_CHECKING:
     from OCP.TopoDS import TopoDS_Shape
 
     from torus_cad.geometry.analysis.printability import Printability
-    from torus_cad.geometry.blade.surface import BladeSurface
+    from torus_cad.geometry.blade.blade_surface import BladeSurface
     from torus_cad.geometry.hub.mounting import HubMounting
-    from torus_cad.kernel.checks import MassProperties
-    from torus_cad.kernel.fillet import RootFillet
+    from torus_cad.kernel.fillet.root_fillet import RootFillet
     from torus_cad.kernel.fuse import FuseRoute
+    from torus_cad.kernel.mass_properties import MassProperties
     from torus_cad.kernel.strict import StrictCheck
     from torus_cad.kernel.wires import SectionCurves
     from torus_cad.parameters import PropellerParameters

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from torus_cad.geometry.blade.surface import BladeSurface
+from torus_cad.geometry.blade.blade_surface import BladeSurface
 from torus_cad.geometry.section.section import chord_positions
 
 #: Triangles measured at a time over a large mesh: the temporaries stay in the processor's cache,

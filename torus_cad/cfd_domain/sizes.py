@@ -1,7 +1,7 @@
 """The fluid domain's sizes and the propeller's trailing-edge lines, kernel-free (numpy only).
 
-The gmsh mesher (torus_cad.cfd.domain) builds and sizes the domain from these; the estimate
-(torus_cad.cfd.estimate) counts its tetrahedra from the same numbers before any work.
+The gmsh mesher (torus_cad.cfd_domain.domain) builds and sizes the domain from these; the estimate
+(torus_cad.cfd_domain.estimate) counts its tetrahedra from the same numbers before any work.
 """
 
 from __future__ import annotations

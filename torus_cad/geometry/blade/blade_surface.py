@@ -2,7 +2,7 @@
 
 X_final(s, t) = C(s) + X_scaled(s, t) N(s) + Y_scaled(s, t) B(s), evaluated exactly at any
 resolution; blade i is built on its own centerline at theta_0 + 360 i / n (spec §6.1), which
-:meth:`torus_cad.geometry.blade.propeller.PropellerGeometry.centerline` gives.
+:meth:`torus_cad.geometry.blade.propeller_geometry.PropellerGeometry.centerline` gives.
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from torus_cad.geometry.blade.centerline import Centerline
 from torus_cad.geometry.blade.frames import Frames, section_frames
-from torus_cad.geometry.blade.propeller import BladeGeometry, PropellerGeometry
+from torus_cad.geometry.blade.propeller_geometry import BladeGeometry, PropellerGeometry
 from torus_cad.geometry.blade.trailing_edge import (
     TRAILING_EDGE_CHECK_SECTIONS,
     BluntSections,

@@ -1,4 +1,4 @@
-"""A user's own propeller from a STEP file, as a :class:`~torus_cad.cfd.domain.PropellerBody` (``simulate --step``).
+"""A user's own propeller from a STEP file, as a :class:`~torus_cad.cfd_domain.domain.PropellerBody` (``simulate --step``).
 
 The file is untrusted input: it is read by :func:`torus_cad.runtime.input_files.read_untrusted_bytes`
 (a regular file, at most ``STEP_FILE_MAX_BYTES``), must start with the STEP header
@@ -45,8 +45,8 @@ from typing import Any
 
 import numpy as np
 
-from torus_cad.cfd.domain import PropellerBody
-from torus_cad.cfd.sizes import TrailingEdges
+from torus_cad.cfd_domain.domain import PropellerBody
+from torus_cad.cfd_domain.sizes import TrailingEdges
 from torus_cad.errors import KernelError, ParameterError
 from torus_cad.parameters.design import Handedness
 from torus_cad.runtime.input_files import read_untrusted_bytes

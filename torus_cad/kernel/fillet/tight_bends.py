@@ -3,7 +3,7 @@
 Where a blade face bends concavely (seen from outside) tighter than the radius along a junction
 edge, a ball of that radius cannot stay in contact along the whole bend (its centre path would
 have a cusp). The bend is the design's (the analytic surface bends so, not only the loft), so no
-try of torus_cad.kernel.fillet helps; with ``hub.root_fillet_tight_bends = 'reduce'`` those edges
+try of torus_cad.kernel.fillet.root_fillet helps; with ``hub.root_fillet_tight_bends = 'reduce'`` those edges
 get REDUCED_FILLET_FRACTION of the bend's radius and OpenCascade blends it with the requested
 radius along the rest of that junction loop.
 """
@@ -41,7 +41,7 @@ def reduced_edge_radii(solid: cq.Solid, edges: Sequence[TopoDS_Edge], radius_mm:
     than r (its centre path would have a cusp; a short enough bend is bridged). On fuzz designs whose blade sections are a
     millimetre or two long where they meet the hub, a cambered section's own concave stretch is
     that tight (the analytic surface, not the loft's fit, bends so: measured against
-    :func:`torus_cad.geometry.blade.surface.surface_points`)."""
+    :func:`torus_cad.geometry.blade.blade_surface.surface_points`)."""
     ancestors = TopTools_IndexedDataMapOfShapeListOfShape()
     TopExp.MapShapesAndAncestors_s(solid.wrapped, TopAbs_EDGE, TopAbs_FACE, ancestors)
     radii = []

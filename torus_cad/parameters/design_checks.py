@@ -31,7 +31,7 @@ from numpy.typing import NDArray
 from torus_cad.errors import GeometryError
 from torus_cad.geometry.analysis.feasibility import FOLD_LIMIT, RESOLUTION_DEVIATION_LIMIT, Margins
 from torus_cad.geometry.analysis.printability import Printability
-from torus_cad.geometry.blade.surface import BladeSurface
+from torus_cad.geometry.blade.blade_surface import BladeSurface
 from torus_cad.geometry.hub.mounting import HubMounting, place_mounting
 from torus_cad.geometry.section.section_fit import SectionFit, fit_sections
 from torus_cad.parameters.design import PropellerParameters, TrailingEdgeShape

@@ -23,7 +23,8 @@ from OCP.TopoDS import TopoDS_Edge
 
 from torus_cad.errors import KernelError
 from torus_cad.kernel import face_provenance
-from torus_cad.kernel.checks import precise_volume, single_valid_solid
+from torus_cad.kernel.checks import single_valid_solid
+from torus_cad.kernel.mass_properties import precise_volume
 from torus_cad.kernel.topology import shape_bytes, shape_from_bytes
 from torus_cad.runtime.isolation import IsolatedCrash, IsolatedTimeout, run_isolated
 from torus_cad.tolerances import FILLET_TIME_LIMIT_S, VOLUME_CHECK_RELATIVE_PRECISION

@@ -1,6 +1,6 @@
 """How many tetrahedra, and how much memory, ``torus-cad cfd`` will need: from the settings, before any meshing.
 
-The mesh follows the size field of :func:`torus_cad.cfd.domain.set_sizes`: ``h(x) = min(far_size,
+The mesh follows the size field of :func:`torus_cad.cfd_domain.domain.set_sizes`: ``h(x) = min(far_size,
 h_s + (growth_rate - 1) d(x))`` with ``d`` the distance from the propeller and ``h_s`` the size on
 its surface (``surface_size``, smaller where the surface curves when ``curvature_cells`` is on). A
 tetrahedral mesh of that field has about ``∫ dV / h³`` elements times a constant, and its surfaces
@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from torus_cad.cfd.sizes import (
+from torus_cad.cfd_domain.sizes import (
     CYLINDER_SEGMENTS,
     MIN_SIZE_FRACTION,
     TRAILING_EDGE_SIZE_PER_THICKNESS,

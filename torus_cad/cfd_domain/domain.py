@@ -35,9 +35,9 @@ from typing import Any
 
 import numpy as np
 
-from torus_cad.cfd.estimate import CfdEstimate, check_cfd_budget
-from torus_cad.cfd.readme import readme_text
-from torus_cad.cfd.sizes import (
+from torus_cad.cfd_domain.estimate import CfdEstimate, check_cfd_budget
+from torus_cad.cfd_domain.readme import readme_text
+from torus_cad.cfd_domain.sizes import (
     CYLINDER_SEGMENTS,
     MIN_SIZE_FRACTION,
     TRAILING_EDGE_SIZE_PER_THICKNESS,
@@ -122,7 +122,7 @@ def gmsh_library(gmsh: Any) -> Iterator[None]:
     gmsh's initialize and finalize put the default handlers of SIGTERM and its kin back at the C
     level (Python still reports its own): here Python's handlers are set again after each, so a
     signal during meshing still ends the command with one line (torus_cad.runtime.interrupts). Only the
-    main thread can do that; call this there, and mesh in a worker (torus_cad.cfd.worker)."""
+    main thread can do that; call this there, and mesh in a worker (torus_cad.cfd_domain.interruptible)."""
     gmsh.initialize(readConfigFiles=False, interruptible=False)
     _reassert_signal_handlers()
     try:
@@ -285,7 +285,7 @@ def mesh_surfaces(gmsh: Any, domain: Domain, entities: DomainEntities, backgroun
     ``REFINE_FACTOR`` of that edge, and the surfaces holding them are meshed again, up to
     ``REFINE_ROUNDS`` times. KernelError naming the settings that help if crossings remain.
     """
-    from torus_cad.cfd.surface_check import find_crossings
+    from torus_cad.cfd_domain.surface_check import find_crossings
 
     surfaces = sorted({tag for tags in entities.surfaces.values() for tag in tags})
     result = SurfaceRefinement(smallest_size_mm=MIN_SIZE_FRACTION * domain.surface_size)
@@ -411,7 +411,7 @@ class PropellerBody:
 
 def design_body(params: PropellerParameters) -> PropellerBody:
     """The built B-rep of ``params`` as a :class:`PropellerBody` (the analytic tip radius and smallest chord)."""
-    from torus_cad.cfd.sizes import smallest_chord, tip_radius
+    from torus_cad.cfd_domain.sizes import smallest_chord, tip_radius
     from torus_cad.propeller import build_propeller
 
     edges = trailing_edges(params) if params.cfd.curvature_cells == 0.0 else None
@@ -458,7 +458,7 @@ def write_body_domain(body: PropellerBody, settings: Cfd, out_dir: str | Path,
     written and the final paths (the report last).
     """
     from torus_cad import __version__
-    from torus_cad.kernel.checks import precise_volume
+    from torus_cad.kernel.mass_properties import precise_volume
     from torus_cad.kernel.writers.step import write_step
     from torus_cad.outputs.output_set import OutputSet
 

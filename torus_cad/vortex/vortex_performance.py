@@ -11,7 +11,7 @@ takes from the thrust.
 
 The coefficients follow UIUC's convention (n in rev/s, D the tip diameter): CT = T / (rho n^2 D^4),
 CP = P / (rho n^3 D^5), J = V / (n D), efficiency J CT / CP, and at J = 0 the figure of merit
-(momentum theory's ideal power over the power), as :mod:`torus_cad.simulate.performance` reports them.
+(momentum theory's ideal power over the power), as :mod:`torus_cad.simulate.coefficients` reports them.
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from torus_cad.parameters.design import PropellerParameters
-from torus_cad.simulate.performance import performance
+from torus_cad.simulate.coefficients import performance
 from torus_cad.simulate.settings import OperatingPoint
 from torus_cad.vortex.biot_savart import induced_velocity
 from torus_cad.vortex.polars import LOW_CONFIDENCE, strip_polars

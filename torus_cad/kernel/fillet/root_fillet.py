@@ -6,8 +6,8 @@ face fails, so the face is split (ShapeUpgrade_ShapeDivideClosed, in thirds firs
 Further tries split it otherwise or tighten the approximation; each stops at
 FILLET_RETRY_TIME_LIMIT_S, all together at FILLET_TRIES_TIME_LIMIT_S. When every try fails, smaller
 radii are tried to name one that works in the error. Beside this module: one fillet in a child
-process and its repair (``fillet_edges``), the blade bends too tight for the ball
-(``fillet_tight_bends``) and the pattern trick that fillets one blade for all (``fillet_pattern``).
+process and its repair (``one_fillet``), the blade bends too tight for the ball
+(``tight_bends``) and the pattern trick that fillets one blade for all (``pattern``).
 Why each step is there: docs/explanation/how-the-solid-is-built.md.
 """
 
@@ -27,9 +27,9 @@ from OCP.TopoDS import TopoDS, TopoDS_Edge
 from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape
 
 from torus_cad.errors import KernelError
-from torus_cad.kernel.fillet_continuity import c1_fillet
-from torus_cad.kernel.fillet_edges import FilletParams, fillet_in_child
-from torus_cad.kernel.fillet_tight_bends import reduced_edge_radii, varying_junction_mm
+from torus_cad.kernel.fillet.continuity import c1_fillet
+from torus_cad.kernel.fillet.one_fillet import FilletParams, fillet_in_child
+from torus_cad.kernel.fillet.tight_bends import reduced_edge_radii, varying_junction_mm
 from torus_cad.kernel.readable_edges import readable_edges
 from torus_cad.kernel.topology import BLADE_SURFACES
 
