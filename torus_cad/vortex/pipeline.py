@@ -123,7 +123,9 @@ def vortex_thrust_search(request: VortexRequest, thrust_n: float, out_dir: str |
     limit = rpm_limit(diameter_m, request.point.airspeed_m_s, request.point.fluid)
     check_target(thrust_n, limit, diameter_m, density)
     start = time.perf_counter()
-    rpm, runs, results = first_rpm(thrust_n, limit, diameter_m, density), [], []
+    rpm = first_rpm(thrust_n, limit, diameter_m, density)
+    runs: list[ThrustRun] = []
+    results: list[VortexResult] = []
     while True:
         results.append(vortex_performance(request.params, rpm, request.point.airspeed_m_s, request.discretisation,
                                           request.viscous, _induced_share(results[-1], runs[-1].rpm) if results else None))
