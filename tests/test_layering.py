@@ -137,7 +137,7 @@ def test_nothing_imports_the_cli():
 
 
 #: The applications on top of the core, each a package by concept.
-APPS = ("cli", "preview", "studio", "mesh", "cfd", "batch", "simulate", "optimize", "vortex")
+APPS = ("cli", "preview", "studio", "mesh", "cfd_domain", "batch", "simulate", "optimize", "vortex")
 
 
 def test_the_core_imports_no_app():

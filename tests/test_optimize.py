@@ -4,6 +4,7 @@ best designs that ``torus-cad build`` rebuilds with the same numbers."""
 
 from __future__ import annotations
 
+import csv
 import json
 import math
 import os
@@ -428,3 +429,33 @@ def test_optuna_dashboard_shows_the_study(tmp_path):
     finally:
         server.terminate()
         server.wait(timeout=30)
+
+
+def test_a_trial_repeating_an_earlier_ones_parameters_takes_its_values_and_files_without_a_build(tmp_path):
+    """A genetic sampler's offspring can repeat a parent: the study answers it from the complete trial it repeats
+    (the same parameters give the same design), so a worker never builds or simulates that design again."""
+    shutil.copy(BASE, tmp_path / "light_prop.toml")
+    study_path = tmp_path / "study.toml"
+    study_path.write_text('[study]\nname = "twins"\nbase = "light_prop.toml"\ntrials = 6\nsampler = "random"\n'
+                          'seed = 0\n\n[vary]\n"blades" = [2, 3]\n\n[[objective]]\nmetric = "mass_g"\n'
+                          'direction = "minimize"\n\n[[objective]]\nmetric = "spin_axis_inertia_g_mm2"\n'
+                          'direction = "maximize"\n')
+    out = tmp_path / "out"
+    result = run_study(read_study_file(study_path), out, workers=1)
+    trials = {trial.number: trial for trial in _load(f"sqlite:///{out / 'twins.db'}", "twins").get_trials()}
+    _check_whole(list(trials.values()), 6)
+    assert result.ran == 6 and all(trial.state is TrialState.COMPLETE for trial in trials.values())
+    with (out / "results.csv").open(newline="") as handle:
+        rows = {int(row["number"]): row for row in csv.DictReader(handle)}
+    twins = [number for number, row in rows.items() if row["same_as"]]
+    assert twins, rows  # two designs, six trials: the later ones repeat a complete one
+    for number in twins:
+        original = trials[int(rows[number]["same_as"])]
+        assert "same_as" not in original.user_attrs["result"] and original.params == trials[number].params
+        assert trials[number].values == original.values
+        assert rows[number]["folder"] == f"trials/{original.number}" and (out / rows[number]["folder"]).is_dir()
+        assert not (out / "trials" / str(number)).exists()  # nothing was built for it
+    # the lighter design has less inertia: both designs are on the front, published from the trials that ran
+    published = sorted(path.name for path in (out / "best").glob("*.toml"))
+    ran = sorted(int(path.name) for path in (out / "trials").iterdir())
+    assert published == sorted(f"twins_pareto_{number}.toml" for number in ran), published

@@ -33,6 +33,7 @@ from torus_cad.optimize.storage import (
     PRUNED_AT,
     REASON,
     RETRY_OF,
+    SAME_AS,
     SECONDS,
     trial_result,
     was_stopped,
@@ -139,9 +140,11 @@ def _count(items: Any) -> dict[str, int]:
 
 
 def best_trials(spec: StudySpec, study: optuna.Study) -> list[FrozenTrial]:
-    """The best feasible trial (one objective) or the feasible Pareto front (several), by trial number."""
+    """The best feasible trial (one objective) or the feasible Pareto front (several), by trial number; a trial
+    that repeats another's parameters (``same_as``) is left to the trial it repeats, which has its values."""
     if len(spec.objectives) > 1:
-        return sorted(study.best_trials, key=lambda trial: trial.number)
+        return sorted((trial for trial in study.best_trials if SAME_AS not in trial_result(trial)),
+                      key=lambda trial: trial.number)
     try:
         return [study.best_trial]
     except ValueError:  # no feasible complete trial yet
@@ -153,7 +156,7 @@ def trial_rows(spec: StudySpec, trials: Sequence[FrozenTrial]) -> tuple[list[dic
     metrics = list(dict.fromkeys(spec.metrics))
     levels = ["level"] if len(spec.levels) > 1 else []  # the level of the row's metrics
     columns = (["number", "state", "outcome", "feasible", "reason", "prescreened"] + [axis.key for axis in spec.axes]
-               + levels + metrics + ["violation", "retry_of", "seconds", "folder"])
+               + levels + metrics + ["violation", "retry_of", "same_as", "seconds", "folder"])
     retried_by = {trial.user_attrs[RETRY_OF]: trial.number for trial in trials if RETRY_OF in trial.user_attrs}
     rows = []
     for trial in trials:
@@ -170,6 +173,7 @@ def trial_rows(spec: StudySpec, trials: Sequence[FrozenTrial]) -> tuple[list[dic
                    prescreened=record.get(PRESCREENED) is True,
                    feasible=state == "complete" and all(v <= 0.0 for v in violations),
                    violation=max(violations) if violations else None, retry_of=attrs.get(RETRY_OF),
+                   same_as=record.get(SAME_AS),
                    seconds=record.get(SECONDS), folder=record.get(FOLDER))
         if levels:
             row["level"] = record.get(LEVEL)
@@ -380,7 +384,7 @@ def _copy_trial_set(trial: FrozenTrial, parameters: PropellerParameters, name: s
     from torus_cad.outputs.output_set import FILES_KEY, OutputSet, file_entry, verify_set
 
     source = out / str(trial_result(trial).get(FOLDER, f"{TRIALS_DIR}/{trial.number}"))
-    design = trial_name(trial.number)
+    design = trial_name(int(trial_result(trial).get(SAME_AS, trial.number)))  # a trial's twin's files are its own
     report = json.loads(verify_set(source, design).report.read_text(encoding="utf-8"))
     files: dict[str, dict[str, Any]] = report[FILES_KEY]
     formats = {fmt.value for fmt in parameters.export.formats if stl or fmt.value != "stl"}

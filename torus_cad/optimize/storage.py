@@ -65,6 +65,9 @@ OUTCOME, REASON, METRICS, CONSTRAINT, FOLDER, SECONDS = "outcome", "reason", "me
     "seconds"  #: the keys of :data:`RESULT`
 #: Key of :data:`RESULT`, True when the kernel-free checks refused the trial before any worker built it.
 PRESCREENED = "prescreened"
+#: Key of :data:`RESULT` of a trial whose parameters an earlier complete trial had (a genetic sampler's offspring
+#: can repeat a parent): that trial's number, whose values, metrics and files (``folder``) it takes.
+SAME_AS = "same_as"
 #: Keys of :data:`RESULT` in a study of several mesh levels: the level of the trial's metrics (the finest it
 #: reached), and the screening level at which the pruner stopped it (absent when it was not pruned).
 LEVEL, PRUNED_AT = "level", "pruned_at"

@@ -56,6 +56,7 @@ from torus_cad.optimize.storage import (
     PRUNED_AT,
     REASON,
     RESULT,
+    SAME_AS,
     SECONDS,
     Heartbeat,
     claim_lock,
@@ -246,6 +247,11 @@ class _Runner:
         self.progress: BatchProgress | None = None
         self.best: tuple[int, float] | None = None  # a one-objective study's best trial so far: (number, value)
         self.seconds: dict[str, float] = {}  # design id -> worker seconds of its stages so far
+        self.answered: dict[str, tuple[int, dict[str, Any], list[float]]] = {}  # parameters -> a complete trial
+        from optuna.trial import TrialState
+
+        for done in self.study.get_trials(deepcopy=False, states=(TrialState.COMPLETE,)):
+            self._remember(done.params, done.number, trial_result(done), list(done.values))
 
     # -- the loop --------------------------------------------------------------------------------
 
@@ -303,6 +309,34 @@ class _Runner:
         trial.set_user_attr(OWNER, self.owner)
         self.heartbeat.add(trial)
         return trial
+
+    def answered_by_twin(self, trial: Trial) -> bool:
+        """Whether a complete trial this process knows had exactly ``trial``'s parameters; if so, ``trial`` is told
+        that trial's values and takes its record (metrics, constraints, folder; ``same_as`` names it), and no
+        worker builds or simulates the design again (the same parameters give the same design and numbers).
+
+        Args:
+            trial: a trial this process claimed (:meth:`claim_trial`).
+
+        Returns:
+            True when the trial was answered so; False when it must run.
+        """
+        twin = self.answered.get(_parameters_key(trial.params))
+        if twin is None:
+            return False
+        number, record, values = twin
+        record = {**record, SAME_AS: record.get(SAME_AS, number), SECONDS: 0.0}
+        with contextlib.suppress(_update_finished()):  # a process took it as stale
+            trial.set_user_attr(RESULT, record)
+            self.study.tell(trial, values)
+        self._forget(trial_name(trial.number), trial)
+        self.ran += 1
+        self._show_progress(trial.number, values, False)
+        return True
+
+    def _remember(self, params: dict[str, Any], number: int, record: dict[str, Any], values: list[float]) -> None:
+        """A complete trial's values and record, for a later trial with the same parameters."""
+        self.answered.setdefault(_parameters_key(params), (number, record, values))
 
     def trial_task(self, trial: Trial, stage: int = 0) -> TrialTask:
         """Trial ``trial``'s task at ``stage`` (0: build it and simulate it at the first level).
@@ -380,6 +414,7 @@ class _Runner:
                 self.study.tell(trial, state=TrialState.PRUNED)
             else:
                 self.study.tell(trial, values)
+                self._remember(trial.params, trial.number, record, values)
         self._forget(task.design_id, trial)
         self.ran += 1
         self._show_progress(trial.number, values, PRUNED_AT in record)
@@ -508,11 +543,25 @@ class _Tasks:
             if trial is None:
                 self.full = True
                 continue
+            if runner.answered_by_twin(trial):
+                continue
             task = runner.trial_task(trial)
             refusal = prescreen(task)  # refused by the kernel-free checks: told at once, no worker needed
             if refusal is None:
                 return task
             runner.on_result(task, refusal)
+
+
+def _parameters_key(params: dict[str, Any]) -> str:
+    """A trial's parameters as one comparable text (values as optuna holds them)."""
+    return json.dumps(params, sort_keys=True)
+
+
+def _update_finished() -> type[Exception]:
+    """optuna's error for telling a trial another process already finished (imported when first needed)."""
+    import optuna
+
+    return optuna.exceptions.UpdateFinishedTrialError
 
 
 def _step(kind: PrunerKind, reduction_factor: int, stage: int) -> int:
