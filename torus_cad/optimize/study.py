@@ -321,17 +321,17 @@ class _Runner:
         Returns:
             True when the trial was answered so; False when it must run.
         """
+        import optuna
+
         twin = self.answered.get(_parameters_key(trial.params))
         if twin is None:
             return False
         number, record, values = twin
         record = {**record, SAME_AS: record.get(SAME_AS, number), SECONDS: 0.0}
-        with contextlib.suppress(_update_finished()):  # a process took it as stale
+        with contextlib.suppress(optuna.exceptions.UpdateFinishedTrialError):  # a process took it as stale
             trial.set_user_attr(RESULT, record)
             self.study.tell(trial, values)
-        self._forget(trial_name(trial.number), trial)
-        self.ran += 1
-        self._show_progress(trial.number, values, False)
+        self._finished(trial_name(trial.number), trial, values, pruned=False)
         return True
 
     def _remember(self, params: dict[str, Any], number: int, record: dict[str, Any], values: list[float]) -> None:
@@ -415,9 +415,13 @@ class _Runner:
             else:
                 self.study.tell(trial, values)
                 self._remember(trial.params, trial.number, record, values)
-        self._forget(task.design_id, trial)
+        self._finished(task.design_id, trial, values, pruned=PRUNED_AT in record)
+
+    def _finished(self, design_id: str, trial: Trial, values: list[float] | None, pruned: bool) -> None:
+        """A trial told to optuna: no longer in flight, counted, shown."""
+        self._forget(design_id, trial)
         self.ran += 1
-        self._show_progress(trial.number, values, PRUNED_AT in record)
+        self._show_progress(trial.number, values, pruned)
 
     def _show_progress(self, number: int, values: list[float] | None, pruned: bool) -> None:
         """One finished trial on the bar, and a line when a one-objective study's best improves."""
@@ -555,13 +559,6 @@ class _Tasks:
 def _parameters_key(params: dict[str, Any]) -> str:
     """A trial's parameters as one comparable text (values as optuna holds them)."""
     return json.dumps(params, sort_keys=True)
-
-
-def _update_finished() -> type[Exception]:
-    """optuna's error for telling a trial another process already finished (imported when first needed)."""
-    import optuna
-
-    return optuna.exceptions.UpdateFinishedTrialError
 
 
 def _step(kind: PrunerKind, reduction_factor: int, stage: int) -> int:
