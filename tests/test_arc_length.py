@@ -8,8 +8,8 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from torus_cad.geometry.section.airfoil import NacaAirfoil, airfoil_points
-from torus_cad.geometry.section.arc_length import equal_arc_length_section, spacing_deviation
-from torus_cad.tolerances import ARC_LENGTH_QUAD_ABS, FOLD_RATIO_LIMIT
+from torus_cad.geometry.section.arc_length import ARC_LENGTH_QUAD_ABS, equal_arc_length_section, spacing_deviation
+from torus_cad.tolerances import FOLD_RATIO_LIMIT
 
 
 def dense_perimeter(airfoil: NacaAirfoil, samples: int = 400001) -> float:

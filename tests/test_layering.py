@@ -163,3 +163,25 @@ def test_importing_a_kernel_free_layer_loads_no_kernel_module(package):
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
                             cwd=PACKAGE.parent)
     assert result.stdout.strip() == ""
+
+
+def test_every_constant_of_the_tolerances_module_is_read_in_two_places_at_least():
+    """tolerances.py holds what two or more places share (modules of the package, or a module and
+    the tests or scripts that hold it to them); a constant one module alone reads lives beside it."""
+    root = PACKAGE.parent
+    tree = ast.parse((PACKAGE / "tolerances.py").read_text())
+    names = [target.id for node in tree.body if isinstance(node, (ast.Assign, ast.AnnAssign))
+             for target in ([node.target] if isinstance(node, ast.AnnAssign) else node.targets)
+             if isinstance(target, ast.Name) and target.id.isupper()]
+    sources = [path for folder in ("torus_cad", "tests", "scripts", "studies")
+               for path in (root / folder).rglob("*.py") if path != PACKAGE / "tolerances.py"]
+    words = {path: set(ast.walk(ast.parse(path.read_text()))) for path in sources}
+    readers = {name: [path for path, nodes in words.items()
+                      if any((isinstance(node, ast.Name) and node.id == name)
+                             or (isinstance(node, ast.Attribute) and node.attr == name)
+                             or (isinstance(node, ast.alias) and node.name == name)
+                             or (isinstance(node, ast.Constant) and node.value == name) for node in nodes)]
+               for name in names}
+    lonely = {name: [str(path.relative_to(root)) for path in paths] for name, paths in readers.items()
+              if len(paths) < 2}
+    assert names and not lonely, f"constants read in fewer than two places: {lonely}"

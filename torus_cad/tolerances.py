@@ -8,14 +8,7 @@ simulation's levels, fluid and layers in torus_cad.simulate.settings). The measu
 the docs' measurements page.
 """
 
-#: Gauss-Legendre nodes per interval of the arc-length table (torus_cad.geometry.section.arc_length): 10 keep
-#: the table within 1.1e-11 chord of adaptive Gauss-Kronrod quadrature at ARC_LENGTH_QUAD_ABS on
-#: coordinate files (2e-16 on NACA sections), where 5 leave 1.3e-10 (tests/test_arc_length.py).
-ARC_LENGTH_GAUSS_POINTS = 10
 
-#: Absolute tolerance of the arc-length quadrature of |f'(t)| (chord units): the table agrees within it
-#: with QUADPACK's adaptive Gauss-Kronrod quadrature run to it (tests/test_arc_length.py).
-ARC_LENGTH_QUAD_ABS = 1e-10
 
 
 #: Relative tolerance of read-back comparisons (a STEP file read back keeps its volume to this).
@@ -33,9 +26,6 @@ MIN_BLUNT_TRAILING_EDGE_MM = 0.05
 #: Relative precision of the volume sanity check after the fuse (hub < fused <= hub + n blades);
 #: the blades' overlap with the hub keeps the bounds far apart, so a coarse, fast integral suffices.
 VOLUME_CHECK_RELATIVE_PRECISION = 1e-3
-
-#: Analytic surface points must lie on the B-rep within this fraction of the local chord.
-SURFACE_ACCURACY_RELATIVE = 1e-3
 
 #: Largest allowed y_t * kappa_c of a cambered section (1 = the lower surface folds over);
 #: kept below 1 so the surface keeps a usable radius of curvature.
@@ -87,19 +77,8 @@ STL_TRIANGLE_LIMIT = 2_000_000
 #: per machine, days of work; the sampler's own cost grows with the number of trials.
 MAX_STUDY_TRIALS = 100_000
 
-#: Seconds the root fillet may take (in its child process) before it counts as failed.
-FILLET_TIME_LIMIT_S = 60.0
 
-#: Seconds each of the root fillet's further tries (after the first, which has
-#: FILLET_TIME_LIMIT_S) may take in its child: the tries that save a design take under a second,
-#: the ones that fail either fail as fast or hang until their limit (``scripts/fillet_rate.py``).
-FILLET_RETRY_TIME_LIMIT_S = 15.0
 
-#: Seconds the root fillet's further tries together may take (counted from the end of the first);
-#: when it runs out, the remaining tries are skipped and the fillet fails. With the first try and
-#: the search for a smaller radius to suggest (up to 3 children of FILLET_TIME_LIMIT_S), a failing
-#: fillet takes at most about 60 + 60 + 3 x 60 s.
-FILLET_TRIES_TIME_LIMIT_S = 60.0
 
 #: Where the constant-radius root fillet fails and a blade face bends concavely (seen from outside)
 #: along a junction edge tighter than the fillet radius / this fraction, a last round of tries gives
@@ -120,8 +99,6 @@ SIMULATE_AIRSPEED_LIMIT_M_S = 100.0
 #: ``--surface-refinement`` takes (each about triples the cells near the blade).
 SIMULATE_MAX_SURFACE_REFINEMENT = 4
 
-#: Simulations: an initial residual above this, or any non-finite residual or force, is divergence.
-SIMULATE_DIVERGENCE_RESIDUAL = 1e3
 
 #: gmsh threads that give the same CFD mesh, byte for byte, on every run of one design: with more,
 #: gmsh's parallel meshing orders its work differently from run to run, so the tetrahedra (and the
@@ -140,11 +117,6 @@ CFD_TETRAHEDRA_LIMIT = 3_000_000
 #: build is refused: the shipped examples take seconds (a fuzz design that took far longer: the docs'
 #: measurements page).
 STRICT_CHECK_TIME_LIMIT_S = 300.0
-#: Longest wait (s) for the blade-element table (CSV and PNG), drawn in a child beside the build's files.
-SECTIONS_TABLE_TIME_LIMIT_S = 120.0
-#: Longest wait (s) for the STEP file, written and read back in a child beside the STL: the default's
-#: takes under a second, and its read-back check leaves out the costly self-interference test.
-STEP_WRITE_TIME_LIMIT_S = 900.0
 
 #: Largest distance (mm) of an STL or 3MF tessellation from its mesh repaired free of crossing
 #: triangles by meshlib (torus_cad.kernel.uncrossed); a repair that moves it further is refused

@@ -57,6 +57,11 @@ if TYPE_CHECKING:
 FILES_KEY = "files"
 
 _STAGING_MARK = ".staging-"
+#: Longest wait (s) for the blade-element table (CSV and PNG), drawn in a child beside the build's files.
+SECTIONS_TABLE_TIME_LIMIT_S = 120.0
+#: Longest wait (s) for the STEP file, written and read back in a child beside the STL: the default's
+#: takes under a second, and its read-back check leaves out the costly self-interference test.
+STEP_WRITE_TIME_LIMIT_S = 900.0
 _HASH_CHUNK_BYTES = 1 << 20
 
 #: Writes one file of a set to the path it is given.
@@ -418,8 +423,6 @@ class PublishedSet:
 
 def _collected(call: IsolatedCall[dict[str, Any] | None]) -> Callable[[Path], dict[str, Any] | None]:
     """A writer that collects ``call``'s result: the child wrote the file at its staging path already."""
-    from torus_cad.tolerances import STEP_WRITE_TIME_LIMIT_S
-
     return lambda _path: call.result(STEP_WRITE_TIME_LIMIT_S)
 
 
@@ -444,7 +447,6 @@ def write_output_set(propeller: BuiltPropeller, out_dir: str | Path, density_g_c
     from torus_cad.parameters.stl_budget import check_stl_budget
     from torus_cad.runtime.isolation import IsolatedCall
     from torus_cad.runtime.stages import Stage, StageTimer
-    from torus_cad.tolerances import SECTIONS_TABLE_TIME_LIMIT_S
 
     params = propeller.parameters
     export = params.export

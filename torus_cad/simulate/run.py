@@ -33,7 +33,9 @@ from foamlib import AsyncFoamCase, CalledProcessError
 from torus_cad.errors import KernelError, TorusCadError
 from torus_cad.runtime.interrupts import EXIT_SIGNALS
 from torus_cad.simulate.history import History, read_history
-from torus_cad.tolerances import SIMULATE_DIVERGENCE_RESIDUAL
+
+#: Simulations: an initial residual above this, or any non-finite residual or force, is divergence.
+SIMULATE_DIVERGENCE_RESIDUAL = 1e3
 
 POLL_SECONDS = 0.5
 #: Seconds a stopped solver gets to exit after SIGTERM before SIGKILL.

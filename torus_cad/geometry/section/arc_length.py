@@ -38,7 +38,14 @@ from torus_cad.geometry.section.section import (
     cap_points,
     has_base,
 )
-from torus_cad.tolerances import ARC_LENGTH_GAUSS_POINTS
+
+#: Gauss-Legendre nodes per interval of the arc-length table: 10 keep
+#: the table within 1.1e-11 chord of adaptive Gauss-Kronrod quadrature at ARC_LENGTH_QUAD_ABS on
+#: coordinate files (2e-16 on NACA sections), where 5 leave 1.3e-10 (tests/test_arc_length.py).
+ARC_LENGTH_GAUSS_POINTS = 10
+#: Absolute tolerance of the arc-length quadrature of |f'(t)| (chord units): the table agrees within it
+#: with QUADPACK's adaptive Gauss-Kronrod quadrature run to it (tests/test_arc_length.py).
+ARC_LENGTH_QUAD_ABS = 1e-10
 
 #: Fine grid of the arc-length table, both surfaces together (spec §5.2: n_fine, whose default
 #: is 1000); 4000 keeps the spacing even for strongly cambered sections (cost and spacing measured:

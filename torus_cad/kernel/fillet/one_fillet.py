@@ -27,7 +27,10 @@ from torus_cad.kernel.checks import single_valid_solid
 from torus_cad.kernel.mass_properties import precise_volume
 from torus_cad.kernel.topology import shape_bytes, shape_from_bytes
 from torus_cad.runtime.isolation import IsolatedCrash, IsolatedTimeout, run_isolated
-from torus_cad.tolerances import FILLET_TIME_LIMIT_S, VOLUME_CHECK_RELATIVE_PRECISION
+from torus_cad.tolerances import VOLUME_CHECK_RELATIVE_PRECISION
+
+#: Seconds the root fillet may take (in its child process) before it counts as failed.
+FILLET_TIME_LIMIT_S = 60.0
 
 #: A repaired root fillet (ShapeFix) is accepted only if it adds at most this many r^2 of volume
 #: per mm of junction: a rolling-ball fillet between faces meeting at 30 degrees adds 2.4 r^2,

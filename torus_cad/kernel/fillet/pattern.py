@@ -50,11 +50,17 @@ from torus_cad.kernel.fillet.root_fillet import (
 from torus_cad.kernel.fillet.tight_bends import reduced_edge_radii
 from torus_cad.kernel.fuse import fuse_pattern, pattern_blades, solid_of_faces
 from torus_cad.kernel.topology import BLADE_SURFACES, boolean, explore, faces, result
-from torus_cad.tolerances import (
-    FILLET_RETRY_TIME_LIMIT_S,
-    FILLET_TRIES_TIME_LIMIT_S,
-    REDUCED_FILLET_FRACTION,
-)
+from torus_cad.tolerances import REDUCED_FILLET_FRACTION
+
+#: Seconds each of the root fillet's further tries (after the first, which has
+#: FILLET_TIME_LIMIT_S) may take in its child: the tries that save a design take under a second,
+#: the ones that fail either fail as fast or hang until their limit (``scripts/fillet_rate.py``).
+FILLET_RETRY_TIME_LIMIT_S = 15.0
+#: Seconds the root fillet's further tries together may take (counted from the end of the first);
+#: when it runs out, the remaining tries are skipped and the fillet fails. With the first try and
+#: the search for a smaller radius to suggest (up to 3 children of FILLET_TIME_LIMIT_S), a failing
+#: fillet takes at most about 60 + 60 + 3 x 60 s.
+FILLET_TRIES_TIME_LIMIT_S = 60.0
 
 #: Builds the run-out hub for a given extension (mm): a plain hub that much longer at each end,
 #: and the tools that cut it back to the real hub afterwards (see :func:`fillet_pattern`).
