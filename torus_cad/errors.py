@@ -23,7 +23,17 @@ _LONG_WORD = re.compile(rf"\S{{{MESSAGE_WORD_MAX_CHARS + 1},}}")
 
 
 def cut(text: str, limit: int = MESSAGE_VALUE_MAX_CHARS) -> str:
-    """``text`` whole if it has at most ``limit`` characters, else its start and end around ``...`` (``limit`` in all)."""
+    """``text`` whole if it has at most ``limit`` characters, else its start and end around ``...``
+    (``limit`` in all).
+
+    Args:
+        text: the text to shorten.
+        limit: the most characters to return, ``...`` included.
+
+    Returns:
+        ``text`` itself, or its first and last characters joined by ``...`` (at least two of
+        ``text`` kept even when ``limit`` is smaller than that).
+    """
     if len(text) <= limit:
         return text
     keep = max(limit - len(_CUT), 2)
@@ -32,8 +42,16 @@ def cut(text: str, limit: int = MESSAGE_VALUE_MAX_CHARS) -> str:
 
 
 def shown(value: Any, limit: int = MESSAGE_VALUE_MAX_CHARS) -> str:
-    """``repr(value)`` for a message, :func:`cut` to ``limit`` characters ("a huge number" for an int Python
-    will not print, > 4300 digits)."""
+    """``repr(value)`` for a message, :func:`cut` to ``limit`` characters ("a huge number" for an
+    int Python will not print, > 4300 digits).
+
+    Args:
+        value: any value to quote in a message.
+        limit: the most characters to return.
+
+    Returns:
+        The value's repr, cut to ``limit`` characters, or "a huge number".
+    """
     try:
         text = repr(value)
     except ValueError:
@@ -42,8 +60,16 @@ def shown(value: Any, limit: int = MESSAGE_VALUE_MAX_CHARS) -> str:
 
 
 def bounded_message(message: str) -> str:
-    """``message`` on one line, each word of more than MESSAGE_WORD_MAX_CHARS characters and then the whole
-    beyond MESSAGE_MAX_CHARS cut in the middle (:func:`cut`); a short message is returned unchanged."""
+    """``message`` on one line, each word of more than MESSAGE_WORD_MAX_CHARS characters and then
+    the whole beyond MESSAGE_MAX_CHARS cut in the middle (:func:`cut`); a short message is returned
+    unchanged.
+
+    Args:
+        message: an error message of any length, possibly over several lines.
+
+    Returns:
+        The message on one line, at most MESSAGE_MAX_CHARS characters.
+    """
     if "\n" in message or "\r" in message:
         message = " ".join(message.splitlines())
     if len(message) > MESSAGE_WORD_MAX_CHARS:
@@ -52,7 +78,13 @@ def bounded_message(message: str) -> str:
 
 
 class TorusCadError(Exception):
-    """Base of every error torus_cad raises on purpose; its message is bounded (:func:`bounded_message`)."""
+    """Base of every error torus_cad raises on purpose; its message is bounded
+    (:func:`bounded_message`).
+
+    Args:
+        *args: the exception's arguments; a single string is the message, passed through
+            :func:`bounded_message`.
+    """
 
     def __init__(self, *args: object) -> None:
         if len(args) == 1 and isinstance(args[0], str):
@@ -65,11 +97,13 @@ class ParameterError(TorusCadError, ValueError):
 
 
 class BudgetError(ParameterError):
-    """The parameters ask for work over a documented limit (e.g. an STL of too many triangles); refused before it starts."""
+    """The parameters ask for work over a documented limit (e.g. an STL of too many triangles);
+    refused before it starts."""
 
 
 class GeometryError(TorusCadError):
-    """The parameters are valid one by one but describe no sound propeller (e.g. a Frenet frame is undefined)."""
+    """The parameters are valid one by one but describe no sound propeller (e.g. a Frenet frame is
+    undefined)."""
 
 
 class KernelError(TorusCadError):
@@ -77,13 +111,18 @@ class KernelError(TorusCadError):
 
 
 class OutputError(TorusCadError):
-    """An output file or folder could not be written (no space left, permission denied); the message names the file."""
+    """An output file or folder could not be written (no space left, permission denied); the
+    message names the file."""
 
 
 class IncompleteOutputError(OutputError):
     """An output set on disk is incomplete or mixed: a file is missing or belongs to another build.
 
-    ``problems``: every problem found, one sentence each (the message joins them with "; ").
+    Args:
+        *problems: every problem found, one sentence each (the message joins them with "; ").
+
+    Attributes:
+        problems: every problem found, one sentence each (the message joins them with "; ").
     """
 
     def __init__(self, *problems: str) -> None:
@@ -92,5 +131,5 @@ class IncompleteOutputError(OutputError):
 
 
 class MissingExtraError(TorusCadError):
-    """An optional dependency is not installed; the message names the extra and the line that installs it
-    (see :mod:`torus_cad.runtime.extras`)."""
+    """An optional dependency is not installed; the message names the extra and the line that
+    installs it (see :mod:`torus_cad.runtime.extras`)."""

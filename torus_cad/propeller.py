@@ -108,7 +108,12 @@ class Propeller:
 
     def __getstate__(self) -> dict[str, Any]:
         """Pickled with its shapes as OpenCascade's binary BRep (as cadquery pickles its shapes); the
-        cadquery wrappers are made again when asked for."""
+        cadquery wrappers are made again when asked for.
+
+        Returns:
+            The instance's fields by name, with ``shape``, ``hub_shape`` and each of
+            ``blade_shapes`` as BRep bytes and without the cached cadquery views.
+        """
         state = {name: value for name, value in self.__dict__.items() if name not in _CADQUERY_VIEWS}
         state["shape"], state["hub_shape"] = shape_bytes(self.shape), shape_bytes(self.hub_shape)
         state["blade_shapes"] = [shape_bytes(blade) for blade in self.blade_shapes]
@@ -120,28 +125,45 @@ class Propeller:
 
     @functools.cached_property
     def solid(self) -> cq.Solid:
-        """The fused propeller as a ``cq.Solid`` (the same OpenCascade solid as ``shape``)."""
+        """The fused propeller as a ``cq.Solid`` (the same OpenCascade solid as ``shape``).
+
+        Returns:
+            The fused solid, mm, spin axis z; made once, on first access (imports cadquery).
+        """
         import cadquery as cq
 
         return cq.Solid(self.shape)
 
     @functools.cached_property
     def hub(self) -> cq.Solid:
-        """The hub alone as a ``cq.Solid`` (``hub_shape``)."""
+        """The hub alone as a ``cq.Solid`` (``hub_shape``).
+
+        Returns:
+            The hub cylinder before the fuse, mm; made once, on first access (imports cadquery).
+        """
         import cadquery as cq
 
         return cq.Solid(self.hub_shape)
 
     @functools.cached_property
     def blades(self) -> list[cq.Solid]:
-        """Each blade alone as a ``cq.Solid`` (``blade_shapes``)."""
+        """Each blade alone as a ``cq.Solid`` (``blade_shapes``).
+
+        Returns:
+            One solid per blade, blade i at ``phase_deg + 360 i / n`` degrees, mm, before the
+            fuse; made once, on first access (imports cadquery).
+        """
         import cadquery as cq
 
         return [cq.Solid(blade) for blade in self.blade_shapes]
 
     @property
     def workplane(self) -> cq.Workplane:
-        """A ``cq.Workplane`` on XY holding the fused solid; chain CadQuery operations on it."""
+        """A ``cq.Workplane`` on XY holding the fused solid; chain CadQuery operations on it.
+
+        Returns:
+            A new workplane on XY (mm) holding :attr:`solid`, each time it is asked for.
+        """
         import cadquery as cq
 
         return cq.Workplane("XY").add(self.solid)
@@ -151,6 +173,13 @@ class Propeller:
 
         With ``fused=True`` it holds the single fused solid instead, named ``propeller``.
         The assembly's name defaults to the design's name.
+
+        Args:
+            name: the assembly's name; None (or "") for ``parameters.name``.
+            fused: hold the one fused solid (named ``propeller``) instead of the hub and blades.
+
+        Returns:
+            The assembly (mm; spin axis z), parts coloured as in the preview.
         """
         import cadquery as cq
 
@@ -163,11 +192,25 @@ class Propeller:
         return assembly
 
     def printability(self) -> Printability:
-        """Thinnest blade wall and trailing-edge thickness against ``manufacturing.min_wall`` (from the analytic section)."""
+        """Thinnest blade wall and trailing-edge thickness against ``manufacturing.min_wall``
+        (from the analytic section).
+
+        Returns:
+            The thinnest wall and trailing edge (mm), where along the blade (s) they are, and
+            whether they reach ``manufacturing.min_wall``.
+        """
         return design_printability(self.parameters)
 
     def spin_to_push_air_down(self) -> Handedness:
-        """The turn, seen from +z, that pushes air toward -z: a flat-plate estimate (torus_cad.geometry.blade.handedness)."""
+        """The turn, seen from +z, that pushes air toward -z: a flat-plate estimate
+        (torus_cad.geometry.blade.handedness).
+
+        Returns:
+            CW or CCW, seen from +z, for the built blade (the mirror of a 'ccw' design included).
+
+        Raises:
+            ValueError: the surface was sampled without its trailing edge as a point.
+        """
         spin = spin_to_push_air_down(self.surface.points, self.surface.trailing_edge_column)
         if self.parameters.handedness == Handedness.CCW:  # the surface is the spec's blade, before the mirror
             return spin.opposite
@@ -175,14 +218,44 @@ class Propeller:
 
     def mass_properties(self, density_g_cm3: float = DEFAULT_DENSITY_G_CM3) -> MassProperties:
         """Volume (mm^3), area (mm^2), centroid (mm), spin-axis inertia and mass (g) for a density in
-        g/cm^3 (default 1.24, PLA), to 1e-6 relative (see :func:`torus_cad.kernel.mass_properties.mass_properties`)."""
+        g/cm^3 (default 1.24, PLA), to 1e-6 relative
+        (see :func:`torus_cad.kernel.mass_properties.mass_properties`).
+
+        Args:
+            density_g_cm3: the material's density, g/cm^3.
+
+        Returns:
+            The fused solid's volume (mm^3), surface area (mm^2), centroid (mm), inertia about
+            the spin axis (mm^5, and g mm^2 with the density), mass (g) and bounding box (mm).
+        """
         return mass_properties(self.shape, density_g_cm3)
 
     def write(self, out_dir: str | Path, density_g_cm3: float = DEFAULT_DENSITY_G_CM3,
               stl: bool = True, sections_table: bool = False) -> dict[str, Path]:
         """Write ``<name>.step``, ``<name>.stl`` (unless ``stl`` is False), the blade-element table
         ``<name>_sections.csv`` and ``<name>_sections.png`` (if ``sections_table``) and ``<name>.json``
-        into ``out_dir``."""
+        into ``out_dir``.
+
+        The files are the formats of ``export.formats``, published together as one output set
+        (torus_cad.outputs.output_set): all of them or none.
+
+        Args:
+            out_dir: the folder to write into; made if missing.
+            density_g_cm3: the material's density for the report's mass, g/cm^3.
+            stl: False leaves the STL out even if ``export.formats`` lists it.
+            sections_table: also write the blade-element table (CSV and PNG).
+
+        Returns:
+            The written files' final paths by kind (e.g. ``"step"``, ``"stl"``, ``"json"``).
+
+        Raises:
+            BudgetError: the STL or 3MF would exceed its triangle budget (refused before writing).
+            KernelError: OpenCascade could not export the solid, or a written file failed its
+                read-back check.
+            OutputError: an output file could not be written or published; the message names it.
+            MissingExtraError: a library an export needs is not installed.
+            OSError: ``out_dir`` cannot be made or written to.
+        """
         return write_outputs(self, Path(out_dir), density_g_cm3, stl, sections_table)
 
 
@@ -207,10 +280,15 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
             units (mm, degrees), e.g. ``{"blades": 4, "hub.radius": 12.0}``.
         progress: optional callback, called with each :class:`Stage` as it starts.
 
+    Returns:
+        The built propeller: one valid closed solid in mm, spin axis z, with its hub, blades,
+        sampled surface and the seconds each stage took.
+
     Raises:
-        ParameterError: a bad parameter or design file (the message names the field).
-        GeometryError: valid parameters that describe no sound propeller (refused before the kernel runs).
-        KernelError: OpenCascade failed.
+        ParameterError: a bad parameter, override or design file (the message names the field).
+        GeometryError: valid parameters that describe no sound propeller (refused before the
+            kernel runs).
+        KernelError: OpenCascade failed to loft, fuse, fillet or check the solid.
     """
     timer = StageTimer[Stage](progress)
     with timer.stage(Stage.PARAMETERS):

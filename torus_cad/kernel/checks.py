@@ -35,8 +35,21 @@ def single_valid_solid(shape: TopoDS_Shape, what: str) -> TopoDS_Shape: ...
 
 
 def single_valid_solid(shape: AnyShape, what: str) -> TopoDS_Shape | cq.Solid:
-    """The one solid of ``shape`` (of its kind: OpenCascade's or cadquery's); raise KernelError unless it is
-    one solid, one closed shell, valid."""
+    """The one solid of ``shape`` (of its kind: OpenCascade's or cadquery's); raise KernelError
+    unless it is one solid, one closed shell, valid.
+
+    Args:
+        shape: a kernel result (OpenCascade's ``TopoDS_Shape`` or a ``cq.Shape``), mm.
+        what: what made the shape, for the message (e.g. "fusing the blades with the hub").
+
+    Returns:
+        The solid, of the same kind as ``shape``: ``TopoDS_Shape`` in, ``TopoDS_Shape`` out;
+        cadquery's in, ``cq.Solid`` out.
+
+    Raises:
+        KernelError: ``shape`` holds no solid or several, a solid of several shells, an open
+            shell, or a solid BRepCheck_Analyzer finds invalid; the message starts with ``what``.
+    """
     found = solids(occ(shape))
     if len(found) != 1:
         raise KernelError(f"{what} gave {len(found)} solids instead of 1")
@@ -52,7 +65,14 @@ def single_valid_solid(shape: AnyShape, what: str) -> TopoDS_Shape | cq.Solid:
 
 
 def is_valid_closed_solid(shape: AnyShape) -> bool:
-    """True when ``shape`` holds exactly one valid solid with one closed shell."""
+    """True when ``shape`` holds exactly one valid solid with one closed shell.
+
+    Args:
+        shape: OpenCascade's ``TopoDS_Shape`` or a ``cq.Shape``.
+
+    Returns:
+        True if :func:`single_valid_solid` accepts it, else False.
+    """
     try:
         single_valid_solid(shape, "the shape")
     except KernelError:
@@ -63,7 +83,14 @@ def is_valid_closed_solid(shape: AnyShape) -> bool:
 
 
 def compound(shapes: Sequence[TopoDS_Shape]) -> TopoDS_Compound:
-    """One compound of ``shapes`` (as cadquery's ``Compound.makeCompound``)."""
+    """One compound of ``shapes`` (as cadquery's ``Compound.makeCompound``).
+
+    Args:
+        shapes: OpenCascade's shapes to hold; not copied.
+
+    Returns:
+        A ``TopoDS_Compound`` holding them all, in order.
+    """
     builder, made = BRep_Builder(), TopoDS_Compound()
     builder.MakeCompound(made)
     for shape in shapes:
@@ -72,7 +99,19 @@ def compound(shapes: Sequence[TopoDS_Shape]) -> TopoDS_Compound:
 
 
 def distances_to_shape(shape: AnyShape, points: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Distance (mm) from each of ``(k, 3)`` points to the boundary of ``shape``: ``(k,)``."""
+    """Distance (mm) from each of ``(k, 3)`` points to the boundary of ``shape``: ``(k,)``.
+
+    Args:
+        shape: OpenCascade's ``TopoDS_Shape`` or a ``cq.Shape``, mm.
+        points: ``(k, 3)`` float array, mm.
+
+    Returns:
+        ``(k,)`` float array, mm: each point's distance to the nearest face of ``shape``
+        (0 on the boundary; unsigned, inside or outside).
+
+    Raises:
+        KernelError: OpenCascade could not measure a distance.
+    """
     faces = compound(faces_in_order(occ(shape)))
     distances = np.empty(len(points))
     for index, point in enumerate(np.asarray(points, dtype=float)):

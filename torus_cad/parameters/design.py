@@ -450,7 +450,41 @@ class Conventional(Section):
 
 
 class PropellerParameters(Document):
-    """Every input of a toroidal propeller; frozen and validated on construction."""
+    """Every input of a toroidal propeller; frozen and validated on construction.
+
+    Build it from keywords, :meth:`from_dict`, :meth:`from_toml` or :meth:`with_values`; every
+    field's unit, default and range are in the parameters reference. An invalid value raises
+    :class:`~torus_cad.errors.ParameterError` naming the field.
+
+    Attributes:
+        name: names the output files ``<name>.step/.stl/.json`` and the STEP product.
+        kind: 'toroidal' (the spec's looped blades) or 'conventional' (open-tip blades from the
+            ``conventional`` station table; ``centerline`` and ``transforms`` unused).
+        blades: number of blades n; blade i sits at ``phase_deg + 360 i / n`` degrees.
+        phase_deg: theta_0, the angle of blade 0 around the spin axis z, degrees.
+        diameter: tip diameter to reach by scaling z_L of ``centerline.p2`` and ``p3``, mm
+            (0 = as the control points give).
+        pitch: geometric pitch of the outer half to reach by refitting
+            ``transforms.angle_of_attack``, mm (0 = as the quartic gives).
+        handedness: 'cw' (the spec's blade, turning clockwise seen from +z to push air toward
+            -z) or 'ccw' (its mirror image).
+        hub: the hub cylinder and its mounting (radius, length, bore, flat, set screw,
+            chamfer, root fillet), mm.
+        airfoil: the section: NACA numbers (fractions of the chord), a NACA designation or a
+            coordinate file, and the blunt trailing edge (mm).
+        centerline: the blade's control points p2, p3, p4 in the hub's frame L
+            (degrees around the axis, mm down the axis, mm radially out) and the frame kind.
+        transforms: quartics in s of the angle of attack (degrees) and the section's scales
+            (mm).
+        resolution: sampling of the blade surface for the solid (sections x points).
+        export: output formats, STEP schema and STL deflections (mm, rad).
+        mesh: the surface mesh of ``torus-cad mesh`` (grid sizes, spacing, file formats).
+        cfd: the fluid domain and tetrahedral mesh of ``torus-cad cfd`` (lengths in tip
+            diameters D).
+        conventional: the station table of a conventional blade (diameter in mm, beta in
+            degrees, the rest fractions of R or of the chord).
+        manufacturing: what the workshop can make (``min_wall``, mm).
+    """
 
     name: Annotated[str, AfterValidator(_checked_name)] = param(
         "torus_propeller", doc="names the output files <name>.step/.stl/.json and the STEP product")
@@ -537,9 +571,29 @@ class PropellerParameters(Document):
     def blade_surface(self, blade_index: int = 0, sections: int | None = None, points: int | None = None
                       ) -> BladeSurface:
         """Blade ``blade_index`` sampled at ``sections`` x ``points`` (default: ``resolution``):
-        a :class:`~torus_cad.geometry.blade.blade_surface.BladeSurface`, whose ``points`` are ``(sections, points, 3)`` mm.
+        a :class:`~torus_cad.geometry.blade.blade_surface.BladeSurface`, whose ``points`` are
+        ``(sections, points, 3)`` mm.
 
-        A conventional blade is blade 0 rotated about +z to blade ``blade_index``'s angle."""
+        A conventional blade is blade 0 rotated about +z to blade ``blade_index``'s angle.
+
+        Args:
+            blade_index: which blade, 0 to ``blades - 1``; blade i sits at
+                ``phase_deg + 360 i / n`` degrees.
+            sections: sections along the blade (s uniform in [0, 1]); None for
+                ``resolution.sections``.
+            points: points around each section, equally spaced in arc length, at least 8;
+                None for ``resolution.points``.
+
+        Returns:
+            The sampled surface: ``points`` ``(sections, points, 3)`` float array, mm; ``s``
+            ``(sections,)``; ``t`` ``(points,)``; the frames and the trailing edge's columns.
+
+        Raises:
+            GeometryError: the blade's frames are undefined (a Frenet frame where the
+                centerline's curvature vanishes or its normal flips).
+            ParameterError: ``points`` is below 8, or a blunt trailing edge is thinner than the
+                coordinate file's own trailing-edge offset.
+        """
         sections = self.resolution.sections if sections is None else sections
         points = self.resolution.points if points is None else points
         if self.kind == DesignKind.CONVENTIONAL:
@@ -584,7 +638,18 @@ class PropellerParameters(Document):
 
     def geometry(self) -> PropellerGeometry:
         """The kernel-free geometry these parameters describe (mm, degrees); toroidal designs only
-        (a conventional one has :meth:`conventional_blade`)."""
+        (a conventional one has :meth:`conventional_blade`).
+
+        A coordinate file's open trailing edge that is too thin to mesh outside the hub is
+        closed here (``BladeGeometry.closed_file_edge_mm`` says so).
+
+        Returns:
+            The hub (mm), the blade (section, quartic laws, control points in frame L, frame
+            kind, trailing edge in mm), the number of blades and the phase (degrees).
+
+        Raises:
+            GeometryError: ``kind`` is 'conventional' (it has no centerline).
+        """
         if self.kind == DesignKind.CONVENTIONAL:
             raise GeometryError("this step is toroidal-only (it needs the blade's centerline); "
                                 "kind = 'conventional' has none")

@@ -57,7 +57,19 @@ class Document(Section):
         return _to_toml(self.to_dict(), notes)
 
     def with_values(self, changes: Mapping[str, Any]) -> Self:
-        """A copy with dotted-key changes applied, e.g. ``{"hub.radius": 12.0}``; validated."""
+        """A copy with dotted-key changes applied, e.g. ``{"hub.radius": 12.0}``; validated.
+
+        Args:
+            changes: dotted key (``"blades"``, ``"hub.radius"``) to new value, in the
+                parameters' units (mm, degrees); the rest of the document is kept.
+
+        Returns:
+            A new, validated document; ``self`` is not changed (it is frozen).
+
+        Raises:
+            ParameterError: an unknown key, a key that runs through a value that is not a
+                table, or a value out of its range (the message names the field).
+        """
         data = self.to_dict()
         for dotted, value in changes.items():
             *parents, leaf = dotted.split(".")

@@ -163,7 +163,27 @@ def blade_surface(blade: BladeGeometry, centerline: Centerline, sections: int, p
     (spec §5), with the trailing edge kept as a point unless ``anchor_trailing_edge`` is False.
     With a blunt trailing edge of constant thickness in mm the chord-unit sections differ
     along s: all of them are sampled at the parameters ``t`` of the section in the middle
-    (s = 0.5), which are spaced equally on it (and nearly so on the others), both ends of the base included.
+    (s = 0.5), which are spaced equally on it (and nearly so on the others), both ends of the base
+    included.
+
+    Args:
+        blade: the blade's section, quartic laws (degrees, mm), frame kind and trailing edge (mm).
+        centerline: the blade's centerline in mm (blade i's from
+            :meth:`~torus_cad.geometry.blade.propeller_geometry.PropellerGeometry.centerline`).
+        sections: number of sections, s uniform in [0, 1], both ends included.
+        points: points around each closed section, at least 8.
+        anchor_trailing_edge: keep the trailing edge (and a blunt edge's corners) as points;
+            False gives the spec's single uniform spacing.
+
+    Returns:
+        The sampled surface: ``points`` ``(sections, points, 3)`` float array, mm; ``s``
+        ``(sections,)``; ``t`` ``(points,)``; the frames and the trailing edge's columns.
+
+    Raises:
+        GeometryError: the blade's Frenet frame is undefined on the centerline (its curvature
+            vanishes or its normal flips; ``centerline.frame = 'rotation_minimizing'`` avoids it).
+        ParameterError: ``points`` is below 8, or a blunt trailing edge is thinner than a
+            coordinate file's own trailing-edge offset.
     """
     return blade_surface_at(blade, centerline, np.linspace(0.0, 1.0, sections), points, anchor_trailing_edge)
 

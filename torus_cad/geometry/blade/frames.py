@@ -54,7 +54,14 @@ class Frames:
     binormal: NDArray[np.float64]
 
     def take(self, rows: NDArray[np.int64]) -> Frames:
-        """The frames at the given row indices."""
+        """The frames at the given row indices.
+
+        Args:
+            rows: ``(m,)`` int array of indices into the k frames.
+
+        Returns:
+            The m frames at those rows (``s`` ``(m,)``, the vectors ``(m, 3)``).
+        """
         return Frames(self.s[rows], self.origin[rows], self.tangent[rows], self.normal[rows], self.binormal[rows])
 
 
@@ -63,13 +70,30 @@ def _unit(vectors: NDArray[np.float64]) -> NDArray[np.float64]:
 
 
 def curvature(first: NDArray[np.float64], second: NDArray[np.float64]) -> NDArray[np.float64]:
-    """kappa = |C' x C''| / |C'|^3 (1/mm) from ``(k, 3)`` derivatives."""
+    """kappa = |C' x C''| / |C'|^3 (1/mm) from ``(k, 3)`` derivatives.
+
+    Args:
+        first: ``(k, 3)`` float array, C'(s), mm per unit s.
+        second: ``(k, 3)`` float array, C''(s), mm per unit s squared.
+
+    Returns:
+        ``(k,)`` float array, the curvature, 1/mm.
+    """
     return np.linalg.norm(np.cross(first, second), axis=-1) / np.linalg.norm(first, axis=-1) ** 3
 
 
 def frenet_from_derivatives(first: NDArray[np.float64], second: NDArray[np.float64]
                             ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-    """Unit T, N, B ``(k, 3)`` from C' and C'' ``(k, 3)`` (spec §4.1)."""
+    """Unit T, N, B ``(k, 3)`` from C' and C'' ``(k, 3)`` (spec §4.1).
+
+    Args:
+        first: ``(k, 3)`` float array, C'(s), mm per unit s.
+        second: ``(k, 3)`` float array, C''(s), mm per unit s squared.
+
+    Returns:
+        The unit tangent T, normal N and binormal B = T x N, each a ``(k, 3)`` float array (NaN
+        where C'' is parallel to C').
+    """
     tangent = _unit(first)
     # T' is parallel to the part of C'' normal to T; B = T x N.
     along = np.sum(second * tangent, axis=-1, keepdims=True)
@@ -78,7 +102,17 @@ def frenet_from_derivatives(first: NDArray[np.float64], second: NDArray[np.float
 
 
 def check_frenet_defined(centerline: Centerline, samples: int = FRAME_SCAN_SAMPLES) -> None:
-    """Raise GeometryError if the curvature vanishes or N flips anywhere on s in [0, 1]."""
+    """Raise GeometryError if the curvature vanishes or N flips anywhere on s in [0, 1].
+
+    Args:
+        centerline: the blade's centerline, mm.
+        samples: number of equally spaced s in [0, 1] scanned.
+
+    Raises:
+        GeometryError: the centerline stops (C'(s) = 0), its curvature is below
+            FRENET_MIN_CURVATURE (1/mm), or its Frenet normal flips at an inflection; the
+            message names the s.
+    """
     s = np.linspace(0.0, 1.0, samples)
     derivatives = centerline.derivatives(s, order=2)
     if np.any(np.linalg.norm(derivatives[:, 1], axis=-1) < 1e-9):
@@ -101,7 +135,19 @@ def check_frenet_defined(centerline: Centerline, samples: int = FRAME_SCAN_SAMPL
 
 
 def frenet_frames(centerline: Centerline, s: ArrayLike) -> Frames:
-    """Frenet-Serret frames at ``s`` (spec §4.1), after checking they exist on the whole curve."""
+    """Frenet-Serret frames at ``s`` (spec §4.1), after checking they exist on the whole curve.
+
+    Args:
+        centerline: the blade's centerline, mm.
+        s: ``(k,)`` float array (or a scalar) of curve parameters in [0, 1].
+
+    Returns:
+        The k frames: origins C(s) ``(k, 3)`` mm and unit T, N, B ``(k, 3)``.
+
+    Raises:
+        GeometryError: the Frenet frame is undefined somewhere on the curve
+            (:func:`check_frenet_defined`).
+    """
     check_frenet_defined(centerline)
     s = np.atleast_1d(np.asarray(s, dtype=float))
     derivatives = centerline.derivatives(s, order=2)
@@ -116,6 +162,18 @@ def rotation_minimizing_frames(centerline: Centerline, s: ArrayLike,
     The first frame equals the Frenet frame at s = 0 where that exists (so a curve with
     curvature everywhere starts like the spec), otherwise any normal perpendicular to T.
     The reflection is stepped on a grid of at least ``substeps`` points that contains ``s``.
+
+    Args:
+        centerline: the blade's centerline, mm.
+        s: ``(k,)`` float array (or a scalar) of curve parameters in [0, 1], non-decreasing.
+        substeps: number of equally spaced s in [0, 1] the reflection steps through,
+            besides ``s``.
+
+    Returns:
+        The k frames: origins C(s) ``(k, 3)`` mm and unit T, N, B ``(k, 3)``.
+
+    Raises:
+        ValueError: ``s`` decreases somewhere.
     """
     s = np.atleast_1d(np.asarray(s, dtype=float))
     if np.any(np.diff(s) < 0):
@@ -154,7 +212,21 @@ def _initial_normal(tangent: NDArray[np.float64], second: NDArray[np.float64]) -
 
 
 def section_frames(centerline: Centerline, s: ArrayLike, frame: FrameKind) -> Frames:
-    """Frames of the given kind at ``s``."""
+    """Frames of the given kind at ``s``.
+
+    Args:
+        centerline: the blade's centerline, mm.
+        s: ``(k,)`` float array (or a scalar) of curve parameters in [0, 1] (non-decreasing for
+            the rotation-minimising frame).
+        frame: Frenet-Serret (the spec's) or rotation-minimising.
+
+    Returns:
+        The k frames: origins C(s) ``(k, 3)`` mm and unit T, N, B ``(k, 3)``.
+
+    Raises:
+        GeometryError: a Frenet frame is undefined somewhere on the curve.
+        ValueError: ``s`` decreases somewhere (rotation-minimising frame).
+    """
     if frame is FrameKind.FRENET:
         return frenet_frames(centerline, s)
     return rotation_minimizing_frames(centerline, s)

@@ -81,7 +81,20 @@ def _zipper_cap(chord: NDArray[np.float64], trailing_edge_index: int) -> NDArray
 
 
 def blade_mesh(surface: BladeSurface) -> TriangleMesh:
-    """Closed triangle mesh of one blade from its sampled surface, outward normals."""
+    """Closed triangle mesh of one blade from its sampled surface, outward normals.
+
+    The ``(sections, points)`` grid is split into two triangles per quad and both end sections
+    are capped; the faces are flipped if needed so that the enclosed volume is positive.
+
+    Args:
+        surface: the blade's sampled surface, ``points`` ``(sections, points, 3)`` float array,
+            mm.
+
+    Returns:
+        The mesh: ``vertices`` ``(sections * points, 3)`` float array, mm (the surface's points,
+        row by row), and ``faces`` ``(f, 3)`` int array of vertex indices, counter-clockwise
+        seen from outside.
+    """
     sections, count, _ = surface.points.shape
     vertices = surface.points.reshape(-1, 3)
     section_index, point_index = np.meshgrid(np.arange(sections - 1), np.arange(count), indexing="ij")

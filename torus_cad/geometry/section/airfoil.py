@@ -274,6 +274,15 @@ def airfoil_points(airfoil: Section, t: ArrayLike) -> NDArray[np.float64]:
     t in (1, 2]: lower surface at chord 2 - t (trailing edge -> leading edge).
     Any :class:`~torus_cad.geometry.section.section.Section` works (a blunt one with the extended
     parameter of :func:`torus_cad.geometry.section.section.closed_points`).
+
+    Args:
+        airfoil: the section, in chord units.
+        t: ``(n,)`` float array of closed-curve parameters, in [0, 2] (in [0, 3] for a blunt
+            section).
+
+    Returns:
+        ``(n, 2)`` float array, chord units: x along the chord from the leading edge, y normal
+        to it.
     """
     from torus_cad.geometry.section.section import closed_points
 

@@ -71,7 +71,16 @@ class ArcLengthTable:
         return float(self.arc_length[-1])
 
     def root_chord_at(self, arc_length: NDArray[np.float64]) -> NDArray[np.float64]:
-        """u at the given arc lengths from the leading edge (linear interpolation, spec §5.2 step 4)."""
+        """u at the given arc lengths from the leading edge (linear interpolation, spec §5.2
+        step 4).
+
+        Args:
+            arc_length: float array of any shape, arc lengths from the leading edge, chord units
+                (clamped to [0, :attr:`total`]).
+
+        Returns:
+            u = sqrt(chord position), in [0, 1], the shape of ``arc_length``.
+        """
         return np.interp(arc_length, self.arc_length, self.root_chord)
 
 
@@ -102,7 +111,18 @@ class SectionSampling:
 
 def surface_arc_length_table(airfoil: Section, upper: bool,
                              fine_samples: int = ARC_LENGTH_FINE_SAMPLES // 2) -> ArcLengthTable:
-    """Tabulate the arc length of the upper or lower surface on ``fine_samples`` intervals in u."""
+    """Tabulate the arc length of the upper or lower surface on ``fine_samples`` intervals in u.
+
+    Args:
+        airfoil: the section, in chord units.
+        upper: the upper surface (True) or the lower one (False).
+        fine_samples: intervals of the table in u = sqrt(chord position); each of the
+            section's kinks becomes a grid point as well.
+
+    Returns:
+        The table: ``root_chord`` and ``arc_length``, ``(k,)`` float arrays with k about
+        ``fine_samples + 1``; arc lengths in chord units from the leading edge.
+    """
     edges = np.linspace(0.0, 1.0, fine_samples + 1)
     for kink in airfoil.kinks:
         # E.g. the camber line's curvature jumps at p: make sqrt(p) a grid point so that no
@@ -133,6 +153,22 @@ def equal_arc_length_section(airfoil: Section, count: int, anchor_trailing_edge:
     trailing edge) in proportion to their arc lengths, each piece is spaced equally, and the
     trailing edge's corners are always points, so the section never cuts a corner. The two
     spacings then differ by less than 1/count.
+
+    Args:
+        airfoil: the section, in chord units (any
+            :class:`~torus_cad.geometry.section.section.Section`, blunt or sharp).
+        count: number of points around the closed section, at least 8.
+        anchor_trailing_edge: share the points between the pieces and keep the trailing edge's
+            corners as points (True), or one uniform spacing, the spec's (False).
+        fine_samples: intervals of each surface's arc-length table.
+
+    Returns:
+        The sampling: ``t`` ``(count,)`` float array of closed-curve parameters, ``points``
+        ``(count, 2)`` float array in chord units, upper surface first, the perimeter (chord
+        units) and the trailing edge's indices.
+
+    Raises:
+        ParameterError: ``count`` is below 8.
     """
     if count < 8:
         raise ParameterError(f"points = {count} is out of range; allowed [8, inf)")
@@ -190,7 +226,16 @@ def _shares(count: int, lengths: NDArray[np.float64], minimum: NDArray[np.int64]
 
 
 def spacing_deviation(points: NDArray[np.float64]) -> float:
-    """Max relative deviation of consecutive chord lengths of a closed polygon ``(n, 2)``: max |d/mean(d) - 1|."""
+    """Max relative deviation of consecutive chord lengths of a closed polygon ``(n, 2)``:
+    max |d/mean(d) - 1|.
+
+    Args:
+        points: ``(n, 2)`` float array, the polygon's vertices in order (any length unit; the
+            last joins the first).
+
+    Returns:
+        The largest |d / mean(d) - 1| over the n sides, dimensionless (0 for equal spacing).
+    """
     gaps = np.linalg.norm(np.roll(points, -1, axis=0) - points, axis=1)
     return float(np.max(np.abs(gaps / gaps.mean() - 1.0)))
 

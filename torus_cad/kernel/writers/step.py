@@ -60,19 +60,23 @@ def write_step(shape: AnyShape, path: str | Path, product_name: str, schema: Ste
     file still reads back with faults, KernelError naming the kind of edge and the gap, and no file.
 
     Args:
-        shape: the solid (OpenCascade's or cadquery's); not changed.
-        path: the file to write (atomically: nothing at ``path`` unless the whole file is written and checked).
+        shape: the solid (OpenCascade's or cadquery's), mm; not changed.
+        path: the file to write (atomically: nothing at ``path`` unless the whole file is
+            written and checked); its folder is made if missing.
         product_name: the STEP PRODUCT's name and the header's FILE_NAME.
-        schema: AP214 or AP242.
-        program: the header's author, organisation and originating system.
+        schema: the application protocol, AP214 or AP242.
+        program: the header's author, organisation and originating system (e.g.
+            "torus_cad 1.2").
         check_readback: read the file back and check it (above).
 
     Returns:
-        ``path``.
+        ``path``, as a ``Path``.
 
     Raises:
-        KernelError: OpenCascade could not translate or write the solid, or the file reads back invalid.
-        OSError: the file system refused the file (full disk, size limit), naming ``path``.
+        KernelError: OpenCascade could not translate or write the solid, or the file reads
+            back with faults (naming the kind of edge and the gap).
+        OSError: the file system refused the file (full disk, size limit) or its folder,
+            naming ``path``.
     """
     path = Path(path)
     with atomic_path(path) as temp:
@@ -86,9 +90,25 @@ def write_step(shape: AnyShape, path: str | Path, product_name: str, schema: Ste
 
 
 def rewritten_until_readable(shape: TopoDS_Shape, path: Path, write: Callable[[TopoDS_Shape], None]) -> ArgumentFaults:
-    """The faults of the STEP file ``path`` (``shape`` as ``write`` wrote it there) read back, after writing it
-    again while it has any, up to READABLE_REWRITES times: first from a copy of ``shape`` with readable edges,
-    then from the shape read back from the last file, made readable (the module's READABLE_REWRITES)."""
+    """The faults of the STEP file ``path`` (``shape`` as ``write`` wrote it there) read back, after
+    writing it again while it has any, up to READABLE_REWRITES times: first from a copy of ``shape``
+    with readable edges, then from the shape read back from the last file, made readable (the
+    module's READABLE_REWRITES).
+
+    Args:
+        shape: the solid ``write`` wrote to ``path``, mm; not changed.
+        path: the STEP file, rewritten in place.
+        write: writes a given solid as STEP at ``path``.
+
+    Returns:
+        The faults BOPAlgo_ArgumentAnalyzer (all tests but self-interference) finds in the last
+        file read back; ``counts`` is empty when it reads back clean.
+
+    Raises:
+        KernelError: OpenCascade cannot read ``path`` back or finds no shape in it; or
+            ``write`` failed.
+        OSError: ``write`` could not write the file.
+    """
     source = shape
     faults = step_readback_faults(path, self_interference=False)
     for _ in range(READABLE_REWRITES):

@@ -37,7 +37,25 @@ def _not_written(path: Path) -> KernelError:
 
 
 def write_stl(shape: AnyShape, path: str | Path, linear_deflection: float, angular_deflection: float) -> Path:
-    """Tessellate ``shape`` (deflections in mm and radians) and write a binary STL."""
+    """Tessellate ``shape`` (deflections in mm and radians) and write a binary STL.
+
+    The file is written atomically: nothing appears at ``path`` unless it is written whole.
+
+    Args:
+        shape: the solid (OpenCascade's or cadquery's), mm; OpenCascade's tessellation is
+            stored on it.
+        path: the STL file to write; its folder is made if missing.
+        linear_deflection: the tessellation's largest distance from the surface, mm.
+        angular_deflection: the tessellation's largest angle between neighbouring facets, rad.
+
+    Returns:
+        ``path``, as a ``Path``.
+
+    Raises:
+        KernelError: OpenCascade could not tessellate the solid or write the file.
+        OSError: the file system refused the file (full disk, size limit) or its folder,
+            naming ``path``.
+    """
     path = Path(path)
     with atomic_path(path) as temp:
         _write_stl_to(shape, temp, path, linear_deflection, angular_deflection)
@@ -46,10 +64,30 @@ def write_stl(shape: AnyShape, path: str | Path, linear_deflection: float, angul
 
 def write_checked_stl(shape: AnyShape, path: str | Path, linear_deflection: float,
                       angular_deflection: float, mesh: UncrossedMesh | None = None) -> MeshCheck:
-    """Write the uncrossed tessellation of ``shape`` (``mesh`` if given, else made at the deflections,
-    mm and rad) as a binary STL, read it back with meshlib and check that no two triangles intersect.
+    """Write the uncrossed tessellation of ``shape`` (``mesh`` if given, else made at the
+    deflections, mm and rad) as a binary STL, read it back with meshlib and check that no two
+    triangles intersect.
 
-    Raises KernelError when the mesh cannot be made uncrossed (naming the face and where)."""
+    Raises KernelError when the mesh cannot be made uncrossed (naming the face and where).
+
+    Args:
+        shape: the solid (OpenCascade's or cadquery's), mm; used only when ``mesh`` is None.
+        path: the STL file to write (atomically); its folder is made if missing.
+        linear_deflection: the tessellation's largest distance from the surface, mm.
+        angular_deflection: the tessellation's largest angle between neighbouring facets, rad.
+        mesh: an uncrossed tessellation already made (``vertices`` ``(v, 3)`` mm,
+            ``triangles`` ``(t, 3)`` int); None to make it here.
+
+    Returns:
+        The check of the written file: its deflections (mm, rad), triangle count, and the
+        repair meshlib made (pairs, method, deviation in mm).
+
+    Raises:
+        KernelError: the tessellation cannot be made uncrossed (naming the face and where), or
+            the written file has intersecting triangles.
+        MissingExtraError: meshlib is not installed.
+        OSError: the file system refused the file (full disk, size limit) or its folder.
+    """
     mesh = uncrossed_mesh(shape, linear_deflection, angular_deflection) if mesh is None else mesh
     path = Path(path)
     with atomic_path(path) as temp:
