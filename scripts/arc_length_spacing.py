@@ -23,12 +23,20 @@ from torus_cad.geometry.section.arc_length import equal_arc_length_section, spac
 def arc_gaps(airfoil: NacaAirfoil, t: np.ndarray, fine: int = 2000) -> np.ndarray:
     """Arc length between consecutive parameters of the closed section, from fine polylines."""
     closed = np.append(t, 2.0)
-    return np.array([np.linalg.norm(np.diff(airfoil_points(airfoil, np.linspace(a, b, fine)), axis=0), axis=1).sum()
-                     for a, b in pairwise(closed)])
+    return np.array(
+        [
+            np.linalg.norm(
+                np.diff(airfoil_points(airfoil, np.linspace(a, b, fine)), axis=0), axis=1
+            ).sum()
+            for a, b in pairwise(closed)
+        ]
+    )
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     parser.add_argument("--points", type=int, default=200)
     parser.add_argument("--repeats", type=int, default=5)
     args = parser.parse_args(argv)
@@ -42,8 +50,10 @@ def main(argv: list[str] | None = None) -> int:
             times.append(time.perf_counter() - start)
         gaps = arc_gaps(airfoil, sampling.t)
         chords = np.linalg.norm(np.roll(sampling.points, -1, axis=0) - sampling.points, axis=1)
-        line = (f"{label:<24} n = {args.points}: arc-length spacing max |d/mean - 1| = "
-                f"{np.abs(gaps / gaps.mean() - 1).max():.2e}, chord-length {spacing_deviation(sampling.points):.2e}")
+        line = (
+            f"{label:<24} n = {args.points}: arc-length spacing max |d/mean - 1| = "
+            f"{np.abs(gaps / gaps.mean() - 1).max():.2e}, chord-length {spacing_deviation(sampling.points):.2e}"
+        )
         if not anchor:  # one chord cuts the sharp trailing-edge corner: report the rest too
             keep = np.ones(len(chords), dtype=bool)
             keep[np.searchsorted(sampling.t, 1.0) - 1] = False

@@ -21,7 +21,11 @@ import numpy as np
 
 from torus_cad.errors import ParameterError
 from torus_cad.geometry.section.airfoil import NacaAirfoil
-from torus_cad.geometry.section.airfoil_file import _first_crossing, read_airfoil_file, write_selig_file
+from torus_cad.geometry.section.airfoil_file import (
+    _first_crossing,
+    read_airfoil_file,
+    write_selig_file,
+)
 
 
 def _loop(points: int) -> np.ndarray:
@@ -37,16 +41,23 @@ def _all_pairs_first_crossing(polygon: np.ndarray, rows: int = 256) -> tuple[int
     count = len(start)
 
     def orientation(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
-        return np.sign((b[..., 0] - a[..., 0]) * (c[..., 1] - a[..., 1]) - (b[..., 1] - a[..., 1]) * (c[..., 0] - a[..., 0]))
+        return np.sign(
+            (b[..., 0] - a[..., 0]) * (c[..., 1] - a[..., 1])
+            - (b[..., 1] - a[..., 1]) * (c[..., 0] - a[..., 0])
+        )
 
     index = np.arange(count)
     for first in range(0, count, rows):
-        block = index[first:first + rows]
+        block = index[first : first + rows]
         p, q = start[block][:, None], end[block][:, None]
         r, s = start[None, :], end[None, :]
-        crossing = (orientation(p, q, r) * orientation(p, q, s) < 0) & (orientation(r, s, p) * orientation(r, s, q) < 0)
+        crossing = (orientation(p, q, r) * orientation(p, q, s) < 0) & (
+            orientation(r, s, p) * orientation(r, s, q) < 0
+        )
         gap = np.abs(block[:, None] - index[None, :])
-        pairs = np.argwhere(crossing & ~((gap <= 1) | (gap == count - 1)) & (block[:, None] < index[None, :]))
+        pairs = np.argwhere(
+            crossing & ~((gap <= 1) | (gap == count - 1)) & (block[:, None] < index[None, :])
+        )
         if len(pairs):
             return int(block[pairs[0, 0]]), int(pairs[0, 1])
     return None
@@ -61,7 +72,9 @@ def _time(function, *args) -> float:  # type: ignore[no-untyped-def]
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--points", type=int, nargs="*", default=[200, 1000, 5000, 20000])
-    parser.add_argument("--reference-max", type=int, default=20000, help="largest size timed all-pairs")
+    parser.add_argument(
+        "--reference-max", type=int, default=20000, help="largest size timed all-pairs"
+    )
     args = parser.parse_args()
     print(f"{'points':>8} {'read s':>9} {'sweep s':>10} {'all-pairs s':>12} {'ratio':>7}  result")
     with tempfile.TemporaryDirectory() as folder:
@@ -76,8 +89,14 @@ def main() -> None:
                 result = f"refused: {error}"
             read_s = time.perf_counter() - start
             kd_s = _time(_first_crossing, loop, True)
-            reference = _time(_all_pairs_first_crossing, loop) if points <= args.reference_max else float("nan")
-            print(f"{len(loop):>8} {read_s:>9.3f} {kd_s:>10.4f} {reference:>12.3f} {reference / kd_s:>7.0f}  {result}")
+            reference = (
+                _time(_all_pairs_first_crossing, loop)
+                if points <= args.reference_max
+                else float("nan")
+            )
+            print(
+                f"{len(loop):>8} {read_s:>9.3f} {kd_s:>10.4f} {reference:>12.3f} {reference / kd_s:>7.0f}  {result}"
+            )
 
 
 if __name__ == "__main__":

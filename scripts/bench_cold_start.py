@@ -32,7 +32,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-REFERENCE_SCRIPT = r'''
+REFERENCE_SCRIPT = r"""
 import json, math, sys
 from OCP.BRepAlgoAPI import BRepAlgoAPI_Fuse
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge, BRepBuilderAPI_MakeWire, BRepBuilderAPI_Transform
@@ -89,7 +89,7 @@ BRepMesh_IncrementalMesh(shape, design["stl_linear_deflection_mm"], False, desig
 stl = StlAPI_Writer()
 stl.ASCIIMode = False
 stl.Write(shape, out + "/reference.stl")
-'''
+"""
 
 
 def reference_design() -> dict[str, Any]:
@@ -101,13 +101,25 @@ def reference_design() -> dict[str, Any]:
 
     params = PropellerParameters()
     surface = params.blade_surface()
-    fit = fit_sections(surface.points, surface.trailing_edge_column, section_chords(surface),
-                       surface.lower_corner_index, surface.round_trailing_edge)
-    return {"poles_mm": fit.poles.tolist(), "knots": fit.knots.tolist(), "degree": DEGREE,
-            "sections": int(surface.points.shape[0]), "points": int(surface.points.shape[1]),
-            "blades": params.blades, "hub_radius_mm": params.hub.radius, "hub_length_mm": params.hub.length,
-            "stl_linear_deflection_mm": params.export.stl_linear_deflection,
-            "stl_angular_deflection_rad": params.export.stl_angular_deflection}
+    fit = fit_sections(
+        surface.points,
+        surface.trailing_edge_column,
+        section_chords(surface),
+        surface.lower_corner_index,
+        surface.round_trailing_edge,
+    )
+    return {
+        "poles_mm": fit.poles.tolist(),
+        "knots": fit.knots.tolist(),
+        "degree": DEGREE,
+        "sections": int(surface.points.shape[0]),
+        "points": int(surface.points.shape[1]),
+        "blades": params.blades,
+        "hub_radius_mm": params.hub.radius,
+        "hub_length_mm": params.hub.length,
+        "stl_linear_deflection_mm": params.export.stl_linear_deflection,
+        "stl_angular_deflection_rad": params.export.stl_angular_deflection,
+    }
 
 
 def write_reference(folder: Path) -> tuple[Path, Path]:
@@ -121,7 +133,9 @@ def write_reference(folder: Path) -> tuple[Path, Path]:
 
 
 #: The reference script's import lines alone: the floor of any OCP program that makes the part.
-REFERENCE_IMPORTS = "\n".join(line for line in REFERENCE_SCRIPT.splitlines() if line.startswith(("import", "from")))
+REFERENCE_IMPORTS = "\n".join(
+    line for line in REFERENCE_SCRIPT.splitlines() if line.startswith(("import", "from"))
+)
 
 
 def _timed(command: list[str], cpu: list[float] | None = None) -> float:
@@ -137,9 +151,15 @@ def _timed(command: list[str], cpu: list[float] | None = None) -> float:
     return wall
 
 
-#: The build's import groups in the order the build loads them, each timed in CPU seconds after the ones before.
-IMPORT_GROUPS = ("torus_cad.cli.design_input", "torus_cad.propeller", "torus_cad.outputs.output_set",
-                 "meshlib.mrmeshpy", "matplotlib.figure")
+#: The build's import groups in the order the build loads them, each timed in CPU seconds after the
+#: ones before.
+IMPORT_GROUPS = (
+    "torus_cad.cli.design_input",
+    "torus_cad.propeller",
+    "torus_cad.outputs.output_set",
+    "meshlib.mrmeshpy",
+    "matplotlib.figure",
+)
 
 _IMPORT_CPU = """
 import importlib, json, resource, sys
@@ -158,22 +178,41 @@ print(json.dumps({"seconds": seconds, "cadquery": "cadquery" in sys.modules}))
 def import_cpu_seconds() -> tuple[dict[str, float], bool]:
     """CPU seconds (user + sys) of importing each of :data:`IMPORT_GROUPS` in a new process, each after the
     ones before it (what it adds), and whether cadquery got loaded."""
-    done = subprocess.run([sys.executable, "-c", _IMPORT_CPU, *IMPORT_GROUPS], capture_output=True, text=True,
-                          check=True)
+    done = subprocess.run(
+        [sys.executable, "-c", _IMPORT_CPU, *IMPORT_GROUPS],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
     outcome = json.loads(done.stdout)
     return outcome["seconds"], outcome["cadquery"]
 
 
 def _heaviest_imports(count: int, folder: Path) -> list[tuple[float, str]]:
     """The ``count`` top-level imports of ``torus-cad build`` with the largest cumulative time (s)."""
-    done = subprocess.run([sys.executable, "-X", "importtime", "-m", "torus_cad", "build", "--out", str(folder), "-q"],
-                          capture_output=True, text=True, check=True)
+    done = subprocess.run(
+        [
+            sys.executable,
+            "-X",
+            "importtime",
+            "-m",
+            "torus_cad",
+            "build",
+            "--out",
+            str(folder),
+            "-q",
+        ],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
     rows = []
     for line in done.stderr.splitlines():
         if not line.startswith("import time:") or "|" not in line:
             continue
         _, cumulative, name = line.split("|")
-        if cumulative.strip().isdigit() and not name.startswith("   "):  # top level: one leading space
+        # top level: one leading space
+        if cumulative.strip().isdigit() and not name.startswith("   "):
             rows.append((int(cumulative) / 1e6, name.strip()))
     return sorted(rows, reverse=True)[:count]
 
@@ -181,8 +220,12 @@ def _heaviest_imports(count: int, folder: Path) -> list[tuple[float, str]]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=5)
-    parser.add_argument("--write-reference", metavar="FOLDER", type=Path,
-                        help="only write the reference script and its data into FOLDER (to time it with other tools)")
+    parser.add_argument(
+        "--write-reference",
+        metavar="FOLDER",
+        type=Path,
+        help="only write the reference script and its data into FOLDER (to time it with other tools)",
+    )
     args = parser.parse_args()
     if args.write_reference:
         script, data = write_reference(args.write_reference)
@@ -194,32 +237,62 @@ def main() -> None:
         folder = Path(scratch)
         script, data = write_reference(folder / "reference")
         for _ in range(args.runs):
-            build_s.append(_timed([sys.executable, "-m", "torus_cad", "build", "--out", str(folder / "build"), "-q"],
-                                  build_cpu))
-            reference_s.append(_timed([sys.executable, str(script), str(data), scratch], reference_cpu))
+            build_s.append(
+                _timed(
+                    [
+                        sys.executable,
+                        "-m",
+                        "torus_cad",
+                        "build",
+                        "--out",
+                        str(folder / "build"),
+                        "-q",
+                    ],
+                    build_cpu,
+                )
+            )
+            reference_s.append(
+                _timed([sys.executable, str(script), str(data), scratch], reference_cpu)
+            )
             floor_s.append(_timed([sys.executable, "-c", REFERENCE_IMPORTS]))
         imports = _heaviest_imports(8, folder / "imports")
-    build, reference, floor = statistics.median(build_s), statistics.median(reference_s), statistics.median(floor_s)
+    build, reference, floor = (
+        statistics.median(build_s),
+        statistics.median(reference_s),
+        statistics.median(floor_s),
+    )
     pairs = statistics.median(b / r for b, r in zip(build_s, reference_s))
-    print(f"torus-cad build (default, STEP + STL + sections table + JSON), median of {args.runs}: {build:.2f} s "
-          f"(runs {', '.join(f'{value:.2f}' for value in build_s)})")
-    print(f"reference OCP script (the default's sections lofted, fused, STEP + STL), median of {args.runs}: "
-          f"{reference:.2f} s (runs {', '.join(f'{value:.2f}' for value in reference_s)})")
-    print(f"ratio build / reference: {build / reference:.2f} of the medians, {pairs:.2f} the median of the pairs "
-          "(target <= 1.0)")
-    print(f"CPU (user + sys, children included), median of {args.runs}: build {statistics.median(build_cpu):.2f} s "
-          f"(runs {', '.join(f'{value:.2f}' for value in build_cpu)}), reference {statistics.median(reference_cpu):.2f} s "
-          f"(runs {', '.join(f'{value:.2f}' for value in reference_cpu)}); ratio "
-          f"{statistics.median(build_cpu) / statistics.median(reference_cpu):.2f} of the medians, "
-          f"{statistics.median(b / r for b, r in zip(build_cpu, reference_cpu)):.2f} the median of the pairs")
-    print(f"floor: the reference script's imports alone, median of {args.runs}: {floor:.2f} s = "
-          f"{floor / reference:.2f} x the reference (runs {', '.join(f'{value:.2f}' for value in floor_s)})")
+    print(
+        f"torus-cad build (default, STEP + STL + sections table + JSON), median of {args.runs}: {build:.2f} s "
+        f"(runs {', '.join(f'{value:.2f}' for value in build_s)})"
+    )
+    print(
+        f"reference OCP script (the default's sections lofted, fused, STEP + STL), median of {args.runs}: "
+        f"{reference:.2f} s (runs {', '.join(f'{value:.2f}' for value in reference_s)})"
+    )
+    print(
+        f"ratio build / reference: {build / reference:.2f} of the medians, {pairs:.2f} the median of the pairs "
+        "(target <= 1.0)"
+    )
+    print(
+        f"CPU (user + sys, children included), median of {args.runs}: build {statistics.median(build_cpu):.2f} s "
+        f"(runs {', '.join(f'{value:.2f}' for value in build_cpu)}), reference {statistics.median(reference_cpu):.2f} s "
+        f"(runs {', '.join(f'{value:.2f}' for value in reference_cpu)}); ratio "
+        f"{statistics.median(build_cpu) / statistics.median(reference_cpu):.2f} of the medians, "
+        f"{statistics.median(b / r for b, r in zip(build_cpu, reference_cpu)):.2f} the median of the pairs"
+    )
+    print(
+        f"floor: the reference script's imports alone, median of {args.runs}: {floor:.2f} s = "
+        f"{floor / reference:.2f} x the reference (runs {', '.join(f'{value:.2f}' for value in floor_s)})"
+    )
     print("heaviest top-level imports of torus-cad build (cumulative s):")
     for seconds, name in imports:
         print(f"  {seconds:6.2f}  {name}")
     runs = [import_cpu_seconds() for _ in range(args.runs)]
-    print(f"CPU of the build's imports, each group after the ones before (median of {args.runs}; cadquery loaded: "
-          f"{runs[0][1]}):")
+    print(
+        f"CPU of the build's imports, each group after the ones before (median of {args.runs}; cadquery loaded: "
+        f"{runs[0][1]}):"
+    )
     for name in IMPORT_GROUPS:
         print(f"  {statistics.median(seconds[name] for seconds, _ in runs):6.2f}  {name}")
 

@@ -60,12 +60,28 @@ def _sweep(spec, parameter_sets, out: Path, workers: int) -> Run:
     from torus_cad.runtime.progress import BatchProgress
 
     sweep = SweepSpec(name="bench", base=spec.base)
-    designs = [Design(index, parameters["name"], {}, parameters) for index, parameters in enumerate(parameter_sets)]
-    pending = [DesignTask(d.design_id, d.parameters, str(out / "designs" / d.design_id), stl=spec.stl)
-               for d in designs]  # the files the trials write
+    designs = [
+        Design(index, parameters["name"], {}, parameters)
+        for index, parameters in enumerate(parameter_sets)
+    ]
+    pending = [
+        DesignTask(d.design_id, d.parameters, str(out / "designs" / d.design_id), stl=spec.stl)
+        for d in designs
+    ]  # the files the trials write
     cpu_start = time.process_time()  # the sweep's own loop, its table included
-    result = _run(sweep, out, designs, pending, False, workers=workers, scheduler=None, client=None,
-                  time_limit_s=300.0, bar=BatchProgress(len(designs), 0, enabled=False), job=None)
+    result = _run(
+        sweep,
+        out,
+        designs,
+        pending,
+        False,
+        workers=workers,
+        scheduler=None,
+        client=None,
+        time_limit_s=300.0,
+        bar=BatchProgress(len(designs), 0, enabled=False),
+        job=None,
+    )
     worker_s = sum(row.get("time_total_s") or 0.0 for row in result.rows)
     return Run(len(designs), result.seconds, worker_s, time.process_time() - cpu_start, workers)
 
@@ -78,7 +94,9 @@ def _study(spec, folder: Path, trials: int, workers: int) -> tuple[Run, list[Any
     from torus_cad.optimize.storage import SECONDS, trial_result
 
     result = run_study(spec, folder, trials=trials, workers=workers, write_results=False)
-    study = optuna.load_study(study_name=spec.name, storage=f"sqlite:///{folder / f'{spec.name}.db'}")
+    study = optuna.load_study(
+        study_name=spec.name, storage=f"sqlite:///{folder / f'{spec.name}.db'}"
+    )
     done = sorted(study.get_trials(), key=lambda trial: trial.number)
     worker_s = sum(trial_result(trial).get(SECONDS) or 0.0 for trial in done)
     return Run(result.ran, result.seconds, worker_s, result.cpu_seconds, workers), done
@@ -102,8 +120,12 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--trials", type=int, default=30)
     parser.add_argument("--workers", type=int, default=2)
-    parser.add_argument("--repeat", type=int, default=3,
-                        help="study/sweep pairs, run one after the other; the overhead is their median")
+    parser.add_argument(
+        "--repeat",
+        type=int,
+        default=3,
+        help="study/sweep pairs, run one after the other; the overhead is their median",
+    )
     args = parser.parse_args()
 
     from torus_cad.optimize import read_study_file
@@ -112,34 +134,58 @@ def main() -> None:
     wall, inside, cpu_ms = [], [], []
     with tempfile.TemporaryDirectory(prefix="bench_optimize_") as scratch:
         start = time.perf_counter()
-        _sweep(spec, [spec.parameters({"airfoil.thickness": 0.4, "transforms.scale_x[4]": 5.0}, f"warm_{i}")
-                      for i in range(args.workers)], Path(scratch) / "warm", args.workers)
-        print(f"warm-up (pool start, kernel import in the fork server): {time.perf_counter() - start:.1f} s")
+        _sweep(
+            spec,
+            [
+                spec.parameters(
+                    {"airfoil.thickness": 0.4, "transforms.scale_x[4]": 5.0}, f"warm_{i}"
+                )
+                for i in range(args.workers)
+            ],
+            Path(scratch) / "warm",
+            args.workers,
+        )
+        print(
+            f"warm-up (pool start, kernel import in the fork server): {time.perf_counter() - start:.1f} s"
+        )
         for repeat in range(args.repeat):
             folder = Path(scratch) / f"pair_{repeat}"
             study, trials = _study(spec, folder / "study", args.trials, args.workers)
             designs = [spec.parameters(trial.params, f"design_{trial.number}") for trial in trials]
             sweep = _sweep(spec, designs, folder / "sweep", args.workers)
             wall.append(100.0 * (sweep.per_minute() / study.per_minute() - 1.0))
-            inside.append(100.0 * (study.cpu_share() - sweep.cpu_share() + sweep.busy() - study.busy()))
+            inside.append(
+                100.0 * (study.cpu_share() - sweep.cpu_share() + sweep.busy() - study.busy())
+            )
             cpu_ms.append(1000.0 * study.main_cpu_s / max(1, study.designs))
-            print(f"pair {repeat + 1}: optimize {study.designs} trials in {study.wall_s:.1f} s = "
-                  f"{study.per_minute():.1f}/min, workers busy {100 * study.busy():.1f} %, main CPU "
-                  f"{100 * study.cpu_share():.1f} % of their cores ({cpu_ms[-1]:.0f} ms/trial); sweep "
-                  f"{sweep.per_minute():.1f}/min, busy {100 * sweep.busy():.1f} %, main CPU "
-                  f"{100 * sweep.cpu_share():.1f} %; overhead by wall clock {wall[-1]:+.1f} %, "
-                  f"from inside the run {inside[-1]:+.1f} %", flush=True)
+            print(
+                f"pair {repeat + 1}: optimize {study.designs} trials in {study.wall_s:.1f} s = "
+                f"{study.per_minute():.1f}/min, workers busy {100 * study.busy():.1f} %, main CPU "
+                f"{100 * study.cpu_share():.1f} % of their cores ({cpu_ms[-1]:.0f} ms/trial); sweep "
+                f"{sweep.per_minute():.1f}/min, busy {100 * sweep.busy():.1f} %, main CPU "
+                f"{100 * sweep.cpu_share():.1f} %; overhead by wall clock {wall[-1]:+.1f} %, "
+                f"from inside the run {inside[-1]:+.1f} %",
+                flush=True,
+            )
             if repeat == 0:
                 again = _sweep(spec, designs, folder / "sweep_again", args.workers)
-                print(f"noise floor: the same sweep again {again.per_minute():.1f}/min, "
-                      f"{100.0 * (sweep.per_minute() / again.per_minute() - 1.0):+.1f} % against the first",
-                      flush=True)
-    print(f"optimiser's own CPU (sampler, storage, loop), median: {statistics.median(cpu_ms):.0f} ms per trial")
-    print(f"optimiser overhead from inside the runs (extra main CPU + extra worker idle), median of "
-          f"{args.repeat}: {statistics.median(inside):+.1f} % (range {min(inside):+.1f} to {max(inside):+.1f} %; "
-          "target <= 5 %)")
-    print(f"optimiser overhead by wall clock, median of {args.repeat}: {statistics.median(wall):+.1f} % "
-          f"(range {min(wall):+.1f} to {max(wall):+.1f} %)")
+                print(
+                    f"noise floor: the same sweep again {again.per_minute():.1f}/min, "
+                    f"{100.0 * (sweep.per_minute() / again.per_minute() - 1.0):+.1f} % against the first",
+                    flush=True,
+                )
+    print(
+        f"optimiser's own CPU (sampler, storage, loop), median: {statistics.median(cpu_ms):.0f} ms per trial"
+    )
+    print(
+        f"optimiser overhead from inside the runs (extra main CPU + extra worker idle), median of "
+        f"{args.repeat}: {statistics.median(inside):+.1f} % (range {min(inside):+.1f} to {max(inside):+.1f} %; "
+        "target <= 5 %)"
+    )
+    print(
+        f"optimiser overhead by wall clock, median of {args.repeat}: {statistics.median(wall):+.1f} % "
+        f"(range {min(wall):+.1f} to {max(wall):+.1f} %)"
+    )
     _print_best(spec, trials, args.trials)
 
 

@@ -35,10 +35,19 @@ def _plain_write(propeller, out_dir: Path, density_g_cm3: float) -> None:
     from torus_cad.runtime.files import atomic_path
 
     params = propeller.parameters
-    write_step(propeller.solid, out_dir / f"{params.name}.step", params.name, params.export.step_schema,
-               program=f"torus_cad {__version__}")
-    write_stl(propeller.solid, out_dir / f"{params.name}.stl", params.export.stl_linear_deflection,
-              params.export.stl_angular_deflection)
+    write_step(
+        propeller.solid,
+        out_dir / f"{params.name}.step",
+        params.name,
+        params.export.step_schema,
+        program=f"torus_cad {__version__}",
+    )
+    write_stl(
+        propeller.solid,
+        out_dir / f"{params.name}.stl",
+        params.export.stl_linear_deflection,
+        params.export.stl_angular_deflection,
+    )
     write_sections_table(propeller.surface, params, out_dir)
     with atomic_path(out_dir / f"{params.name}.json") as temp:
         temp.write_text(json.dumps(build_report(propeller, density_g_cm3), indent=2) + "\n")
@@ -77,9 +86,11 @@ def main() -> int:
     print(f"build (median of 3)              {build_s * 1000:8.1f} ms")
     print(f"plain writes (median of {args.runs})      {plain_s * 1000:8.1f} ms")
     print(f"output set (median of {args.runs})        {set_s * 1000:8.1f} ms")
-    print(f"difference                       {(set_s - plain_s) * 1000:8.1f} ms = "
-          f"{(set_s - plain_s) / (build_s + plain_s) * 100:+.1f} % of build + write "
-          f"({(build_s + plain_s) * 1000:.0f} -> {(build_s + set_s) * 1000:.0f} ms)")
+    print(
+        f"difference                       {(set_s - plain_s) * 1000:8.1f} ms = "
+        f"{(set_s - plain_s) / (build_s + plain_s) * 100:+.1f} % of build + write "
+        f"({(build_s + plain_s) * 1000:.0f} -> {(build_s + set_s) * 1000:.0f} ms)"
+    )
     return 0
 
 

@@ -31,7 +31,9 @@ ROOT = Path(__file__).resolve().parent.parent
 LEVELS = ("coarse", "medium", "fine")
 
 
-def run_with_peak_memory(command: list[str], env: dict[str, str]) -> tuple[subprocess.CompletedProcess[str], int]:
+def run_with_peak_memory(
+    command: list[str], env: dict[str, str]
+) -> tuple[subprocess.CompletedProcess[str], int]:
     """Run ``command``; its result and the peak of its process tree's summed resident memory, bytes
     (sampled: psutil has no tree-wide high-water mark, and getrusage keeps only the largest single child)."""
     import psutil
@@ -48,7 +50,9 @@ def run_with_peak_memory(command: list[str], env: dict[str, str]) -> tuple[subpr
             time.sleep(0.2)
         stdout.seek(0)
         stderr.seek(0)
-        return subprocess.CompletedProcess(command, process.returncode, stdout.read(), stderr.read()), peak
+        return subprocess.CompletedProcess(
+            command, process.returncode, stdout.read(), stderr.read()
+        ), peak
 
 
 def _rss(process: Any) -> int:
@@ -62,26 +66,71 @@ def _rss(process: Any) -> int:
 
 
 def run_level(level: str, args: argparse.Namespace, out: Path) -> dict[str, Any]:
-    command = [sys.executable, "-m", "torus_cad", "simulate", *([args.design] if args.design else []), "--rpm", f"{args.rpm:g}", "--airspeed",
-               f"{args.airspeed:g}", "--level", level, "--processes", str(args.processes), "--out", str(out), "-q"]
+    command = [
+        sys.executable,
+        "-m",
+        "torus_cad",
+        "simulate",
+        *([args.design] if args.design else []),
+        "--rpm",
+        f"{args.rpm:g}",
+        "--airspeed",
+        f"{args.airspeed:g}",
+        "--level",
+        level,
+        "--processes",
+        str(args.processes),
+        "--out",
+        str(out),
+        "-q",
+    ]
     if args.iterations:
         command += ["--iterations", str(args.iterations)]
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
+    env = {
+        **os.environ,
+        "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]),
+    }
     start = time.perf_counter()
     completed, peak_bytes = run_with_peak_memory(command, env)
     wall = time.perf_counter() - start
     if completed.returncode != 0:
-        return {"level": level, "exit_code": completed.returncode, "error": completed.stderr.strip()[-500:],
-                "wall_seconds": wall}
+        return {
+            "level": level,
+            "exit_code": completed.returncode,
+            "error": completed.stderr.strip()[-500:],
+            "wall_seconds": wall,
+        }
     report = json.loads(next(out.glob("*_performance.json")).read_text())
-    keys = ("cells", "mesher", "y_plus", "iterations", "thrust_n", "torque_nm", "power_w", "ct", "cp", "figure_of_merit", "efficiency",
-            "converged", "force_variation_last_10_percent", "momentum_balance", "stage_seconds")
-    return {"level": level, "exit_code": 0, "wall_seconds": wall, "peak_memory_gb": peak_bytes / 1e9,
-            **{key: report[key] for key in keys}}
+    keys = (
+        "cells",
+        "mesher",
+        "y_plus",
+        "iterations",
+        "thrust_n",
+        "torque_nm",
+        "power_w",
+        "ct",
+        "cp",
+        "figure_of_merit",
+        "efficiency",
+        "converged",
+        "force_variation_last_10_percent",
+        "momentum_balance",
+        "stage_seconds",
+    )
+    return {
+        "level": level,
+        "exit_code": 0,
+        "wall_seconds": wall,
+        "peak_memory_gb": peak_bytes / 1e9,
+        **{key: report[key] for key in keys},
+    }
 
 
 def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     parser.add_argument("--design", help="design file (default: the default toroidal design)")
     parser.add_argument("--rpm", type=float, default=10000.0)
     parser.add_argument("--airspeed", type=float, default=0.0)
@@ -100,25 +149,39 @@ def main() -> int:
             result = run_level(level, args, Path(scratch) / level)
             results.append(result)
             print(json.dumps(result), flush=True)
-    summary: dict[str, Any] = {"design": args.design or "default", "rpm": args.rpm, "airspeed_m_s": args.airspeed, "processes": args.processes,
-                               "load_average": os.getloadavg(), "levels": results}
+    summary: dict[str, Any] = {
+        "design": args.design or "default",
+        "rpm": args.rpm,
+        "airspeed_m_s": args.airspeed,
+        "processes": args.processes,
+        "load_average": os.getloadavg(),
+        "levels": results,
+    }
     done = {result["level"]: result for result in results if result["exit_code"] == 0}
     if all(level in done for level in LEVELS):
         for key in ("thrust_n", "torque_nm"):
-            summary[key] = richardson(*(float(done[level][key]) for level in LEVELS), REFINEMENT_RATIO).report()
-    print(f"{'level':<8}{'cells':>9}{'wall s':>9}{'peak GB':>9}{'thrust N':>11}{'torque N m':>12}{'CT':>9}{'CP':>9}  converged")
+            summary[key] = richardson(
+                *(float(done[level][key]) for level in LEVELS), REFINEMENT_RATIO
+            ).report()
+    print(
+        f"{'level':<8}{'cells':>9}{'wall s':>9}{'peak GB':>9}{'thrust N':>11}{'torque N m':>12}{'CT':>9}{'CP':>9}  converged"
+    )
     for result in results:
         if result["exit_code"]:
             print(f"{result['level']:<8} failed: {result['error']}")
             continue
-        print(f"{result['level']:<8}{result['cells']:>9,}{result['wall_seconds']:>9.0f}"
-              f"{result['peak_memory_gb']:>9.2f}{result['thrust_n']:>11.4g}"
-              f"{result['torque_nm']:>12.4g}{result['ct']:>9.4f}{result['cp']:>9.4f}  {result['converged']}")
+        print(
+            f"{result['level']:<8}{result['cells']:>9,}{result['wall_seconds']:>9.0f}"
+            f"{result['peak_memory_gb']:>9.2f}{result['thrust_n']:>11.4g}"
+            f"{result['torque_nm']:>12.4g}{result['ct']:>9.4f}{result['cp']:>9.4f}  {result['converged']}"
+        )
     for key in ("thrust_n", "torque_nm"):
         if key in summary:
             entry = summary[key]
-            print(f"{key}: Richardson {entry['extrapolated']}, observed order {entry['observed_order']}, "
-                  f"uncertainty of the fine level {entry['uncertainty_fine']} ({entry['uncertainty_method']})")
+            print(
+                f"{key}: Richardson {entry['extrapolated']}, observed order {entry['observed_order']}, "
+                f"uncertainty of the fine level {entry['uncertainty_fine']} ({entry['uncertainty_method']})"
+            )
     out = Path(args.out)
     out.mkdir(exist_ok=True)
     (out / "bench_simulate.json").write_text(json.dumps(summary, indent=2) + "\n")

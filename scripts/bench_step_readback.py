@@ -43,10 +43,17 @@ def _timed(module: Any) -> list[float]:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     parser.add_argument("design", nargs="?", help="design file (default: the default design)")
-    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                        help="change a parameter (TOML value), e.g. --set blades=5; may be repeated")
+    parser.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="change a parameter (TOML value), e.g. --set blades=5; may be repeated",
+    )
     args = parser.parse_args()
     import tomllib
 
@@ -60,27 +67,47 @@ def main() -> None:
 
     refit_seconds = _timed(fuse)
     hub_seconds = _timed(hub)
-    params = PropellerParameters() if args.design is None else PropellerParameters.from_toml(args.design)
-    params = params.with_values({key: tomllib.loads(f"v = {value}")["v"]
-                                 for key, value in (item.split("=", 1) for item in args.set)})
+    params = (
+        PropellerParameters() if args.design is None else PropellerParameters.from_toml(args.design)
+    )
+    params = params.with_values(
+        {
+            key: tomllib.loads(f"v = {value}")["v"]
+            for key, value in (item.split("=", 1) for item in args.set)
+        }
+    )
     build_propeller(params)  # warm-up: imports, caches
     refit_seconds.clear()
     hub_seconds.clear()
     propeller, build_s = _cpu(lambda: build_propeller(params))
-    rows = {"build (strict check in a child, not counted)": build_s, "  of which rebuilt edges": sum(refit_seconds),
-            "  of which the hub's rebuilt edges (bore, set screw)": sum(hub_seconds)}
+    rows = {
+        "build (strict check in a child, not counted)": build_s,
+        "  of which rebuilt edges": sum(refit_seconds),
+        "  of which the hub's rebuilt edges (bore, set screw)": sum(hub_seconds),
+    }
     with tempfile.TemporaryDirectory() as folder:
         path = Path(folder) / "design.step"
-        rows["STEP write"] = _cpu(lambda: write_step(propeller.solid, path, propeller.parameters.name, check_readback=False))[1]
+        rows["STEP write"] = _cpu(
+            lambda: write_step(
+                propeller.solid, path, propeller.parameters.name, check_readback=False
+            )
+        )[1]
         rows["read back alone"] = _cpu(lambda: read_step(path))[1]
         rows["read-back check (the build's: all but self-interference)"] = _cpu(
-            lambda: check_step_readback(path, "the design", self_interference=False))[1]
-        rows["read back, every test (self-interference included)"] = _cpu(lambda: step_readback_faults(path))[1]
+            lambda: check_step_readback(path, "the design", self_interference=False)
+        )[1]
+        rows["read back, every test (self-interference included)"] = _cpu(
+            lambda: step_readback_faults(path)
+        )[1]
         copy, rows["edges made readable (the writer's second try, on a faulty file only)"] = _cpu(
-            lambda: readable_copy(propeller.solid.wrapped))
-        rows["  its file written and checked again"] = _cpu(lambda: (
-            write_step(copy, path, propeller.parameters.name, check_readback=False),
-            check_step_readback(path, "the design", self_interference=False)))[1]
+            lambda: readable_copy(propeller.solid.wrapped)
+        )
+        rows["  its file written and checked again"] = _cpu(
+            lambda: (
+                write_step(copy, path, propeller.parameters.name, check_readback=False),
+                check_step_readback(path, "the design", self_interference=False),
+            )
+        )[1]
     for name, seconds in rows.items():
         print(f"{seconds:7.3f} s  {name}")
 

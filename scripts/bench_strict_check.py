@@ -45,17 +45,29 @@ def _one_run(design: str) -> dict[str, tuple[float, float]]:
     strict = propeller.stage_seconds.get("strict_check", 0.0)
     times = {"build without strict check": (wall - strict, float("nan")), "build": (wall, cpu)}
     if propeller.parameters.handedness.value == "ccw":
-        print("  (ccw: the build checks the solid before its mirror; timed here on the mirrored solid)")
+        print(
+            "  (ccw: the build checks the solid before its mirror; timed here on the mirrored solid)"
+        )
     _, wall, cpu = _timed(lambda: strict_valid_solid(propeller.solid, "the propeller"))
     times["strict check (build's scope)"] = (wall, cpu)
-    valid, wall, cpu = _timed(lambda: BRepAlgoAPI_Check(propeller.solid.wrapped, True, True).IsValid())
+    valid, wall, cpu = _timed(
+        lambda: BRepAlgoAPI_Check(propeller.solid.wrapped, True, True).IsValid()
+    )
     times[f"BRepAlgoAPI_Check whole solid ({'valid' if valid else 'FAULTS'})"] = (wall, cpu)
-    valid, wall, cpu = _timed(lambda: BRepAlgoAPI_Check(propeller.blades[0].wrapped, True, True).IsValid())
+    valid, wall, cpu = _timed(
+        lambda: BRepAlgoAPI_Check(propeller.blades[0].wrapped, True, True).IsValid()
+    )
     times[f"BRepAlgoAPI_Check blade 0 ({'valid' if valid else 'FAULTS'})"] = (wall, cpu)
     export = propeller.parameters.export
     with tempfile.TemporaryDirectory() as folder:
-        _, wall, cpu = _timed(lambda: write_checked_stl(propeller.solid.copy(), Path(folder) / "p.stl",
-                                                        export.stl_linear_deflection, export.stl_angular_deflection))
+        _, wall, cpu = _timed(
+            lambda: write_checked_stl(
+                propeller.solid.copy(),
+                Path(folder) / "p.stl",
+                export.stl_linear_deflection,
+                export.stl_angular_deflection,
+            )
+        )
     times["STL write + meshlib check"] = (wall, cpu)
     return times
 
@@ -63,8 +75,13 @@ def _one_run(design: str) -> dict[str, tuple[float, float]]:
 def bench(design: str, runs: int) -> None:
     results = [_one_run(design) for _ in range(runs)]
     print(f"{design} (median of {runs}):")
-    medians = {key: (statistics.median(r[key][0] for r in results), statistics.median(r[key][1] for r in results))
-               for key in results[0]}
+    medians = {
+        key: (
+            statistics.median(r[key][0] for r in results),
+            statistics.median(r[key][1] for r in results),
+        )
+        for key in results[0]
+    }
     build_wall = medians["build without strict check"][0]
     for key, (wall, cpu) in medians.items():
         print(f"  {key:42s} {wall:7.2f} s wall {cpu:7.2f} s cpu   {wall / build_wall:5.2f} x build")
@@ -73,26 +90,33 @@ def bench(design: str, runs: int) -> None:
 def fuzz(count: int) -> None:
     from collections import Counter
 
-    sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # studies/ sits beside torus_cad, outside it
+    # studies/ sits beside torus_cad, outside it
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
     from studies.strict_fuzz import fuzz_many
 
     start = time.perf_counter()
     outcomes = fuzz_many(range(count), workers=2)
     built = [outcome for outcome in outcomes if outcome.status == "built"]
-    print(f"fuzz seeds 0-{count - 1}: {dict(Counter(outcome.status for outcome in outcomes))}; built and "
-          f"strict-valid (whole-solid BRepAlgoAPI_Check): {sum(outcome.strict_valid for outcome in built)} of "
-          f"{len(built)}; STL with 0 crossing pairs: {sum(outcome.stl_pairs == 0 for outcome in built)}; "
-          f"{time.perf_counter() - start:.0f} s")
+    print(
+        f"fuzz seeds 0-{count - 1}: {dict(Counter(outcome.status for outcome in outcomes))}; built and "
+        f"strict-valid (whole-solid BRepAlgoAPI_Check): {sum(outcome.strict_valid for outcome in built)} of "
+        f"{len(built)}; STL with 0 crossing pairs: {sum(outcome.stl_pairs == 0 for outcome in built)}; "
+        f"{time.perf_counter() - start:.0f} s"
+    )
     for outcome in outcomes:
         if outcome.status == "failed":
             print(f"  seed {outcome.seed} failed: {outcome.reason}")
     if built:
-        print(f"  median build {statistics.median(o.build_s for o in built):.2f} s, median whole-solid check "
-              f"{statistics.median(o.check_s for o in built):.2f} s")
+        print(
+            f"  median build {statistics.median(o.build_s for o in built):.2f} s, median whole-solid check "
+            f"{statistics.median(o.check_s for o in built):.2f} s"
+        )
 
 
 def main(argv: list[str]) -> int:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     parser.add_argument("designs", nargs="*", default=list(DEFAULT_DESIGNS))
     parser.add_argument("--runs", type=int, default=3)
     parser.add_argument("--fuzz", type=int, default=0, help="run this many fuzz designs instead")

@@ -41,30 +41,42 @@ def summarise(out: Path) -> list[str]:
     summary = json.loads(summary_files[0].read_text()) if summary_files else {}
     spent = summary.get("level_seconds", {})
     pruned = summary.get("pruned", {})
-    lines = [f"study {summary.get('name', out.name)}: {summary.get('trials', '?')} trials, states "
-             f"{summary.get('states', {})}",
-             "level   trials pruned  worker s | per simulation, mean s: mesh  convert   solve   (runs)   noise   wall"]
+    lines = [
+        f"study {summary.get('name', out.name)}: {summary.get('trials', '?')} trials, states "
+        f"{summary.get('states', {})}",
+        "level   trials pruned  worker s | per simulation, mean s: mesh  convert   solve   (runs)   noise   wall",
+    ]
     noise_share = []
     for level, reports in _reports(out).items():
         stages = [report.get("stage_seconds", {}) for report in reports]
-        runs = [len(report["thrust_search"]["runs"]) for report in reports if report.get("thrust_search")]
+        runs = [
+            len(report["thrust_search"]["runs"])
+            for report in reports
+            if report.get("thrust_search")
+        ]
         noise = [float(report["noise"]["seconds"]) for report in reports if report.get("noise")]
         walls = [float(report.get("wall_seconds", 0.0)) for report in reports]
         solve = [float(stage.get("solve", 0.0)) for stage in stages]
         entry = spent.get(level, {"trials": len(reports), "seconds": sum(walls)})
-        lines.append(f"{level:8s}{entry['trials']:6.0f}{pruned.get(level, 0):7d}{entry['seconds']:10.0f} | "
-                     f"{_mean([float(s.get('mesh', 0.0)) for s in stages])}{_mean([float(s.get('convert', 0.0)) for s in stages])}"
-                     f"{_mean(solve)}   ({statistics.fmean(runs) if runs else 1:.1f}){_mean(noise)}{_mean(walls)}")
+        lines.append(
+            f"{level:8s}{entry['trials']:6.0f}{pruned.get(level, 0):7d}{entry['seconds']:10.0f} | "
+            f"{_mean([float(s.get('mesh', 0.0)) for s in stages])}{_mean([float(s.get('convert', 0.0)) for s in stages])}"
+            f"{_mean(solve)}   ({statistics.fmean(runs) if runs else 1:.1f}){_mean(noise)}{_mean(walls)}"
+        )
         noise_share += [n / w for n, w in zip(noise, walls) if w > 0]
     if noise_share:
-        lines.append(f"noise: {100 * statistics.fmean(noise_share):.1f} % of a simulation's wall time on average")
+        lines.append(
+            f"noise: {100 * statistics.fmean(noise_share):.1f} % of a simulation's wall time on average"
+        )
     return lines
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("out", type=Path, help="the study's output folder")
-    parser.add_argument("--study", type=Path, help="run (or continue) this study file into OUT first")
+    parser.add_argument(
+        "--study", type=Path, help="run (or continue) this study file into OUT first"
+    )
     parser.add_argument("--trials", type=int, help="trials in all (default: the study file's)")
     args = parser.parse_args()
     if args.study is not None:

@@ -48,13 +48,24 @@ def run_configuration(label: str, sweep_path: Path, out: Path, **kwargs: Any) ->
     seconds = time.perf_counter() - start
     busy = (_cpu_seconds() - cpu_before) / seconds  # CPUs busy on the whole machine, any process
     counts = result.counts()
-    figures = {"configuration": label, "designs": len(result.designs), "built": result.built,
-               "valid": counts[Outcome.VALID], "refused": counts[Outcome.REFUSED], "problems": result.problems,
-               "wall_s": round(seconds, 2), "designs_per_minute": round(60.0 * result.built / seconds, 2),
-               "machine_cpus_busy": round(busy, 2), "backend": result.backend}
-    print(f"{label:<28} {result.built:3d} designs in {seconds:7.1f} s  ->  "
-          f"{figures['designs_per_minute']:6.1f} designs/min   ({counts[Outcome.VALID]} valid; "
-          f"machine busy {busy:.2f} of {os.cpu_count()} CPUs)", flush=True)
+    figures = {
+        "configuration": label,
+        "designs": len(result.designs),
+        "built": result.built,
+        "valid": counts[Outcome.VALID],
+        "refused": counts[Outcome.REFUSED],
+        "problems": result.problems,
+        "wall_s": round(seconds, 2),
+        "designs_per_minute": round(60.0 * result.built / seconds, 2),
+        "machine_cpus_busy": round(busy, 2),
+        "backend": result.backend,
+    }
+    print(
+        f"{label:<28} {result.built:3d} designs in {seconds:7.1f} s  ->  "
+        f"{figures['designs_per_minute']:6.1f} designs/min   ({counts[Outcome.VALID]} valid; "
+        f"machine busy {busy:.2f} of {os.cpu_count()} CPUs)",
+        flush=True,
+    )
     return figures
 
 
@@ -70,8 +81,12 @@ def _cpu_seconds() -> float:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--sweep", type=Path, help="sweep file (default: a built-in 12-design sweep)")
-    parser.add_argument("--out", type=Path, default=Path("bench_out"), help="output folder (default bench_out)")
+    parser.add_argument(
+        "--sweep", type=Path, help="sweep file (default: a built-in 12-design sweep)"
+    )
+    parser.add_argument(
+        "--out", type=Path, default=Path("bench_out"), help="output folder (default bench_out)"
+    )
     parser.add_argument("--skip-dask", action="store_true", help="local pool only")
     args = parser.parse_args(argv)
 
@@ -82,35 +97,61 @@ def main(argv: list[str] | None = None) -> int:
         sweep_path = work / "bench_sweep.toml"
         sweep_path.write_text(BENCH_SWEEP)
     load_before = os.getloadavg()
-    print(f"sweep {sweep_path}; {os.cpu_count()} CPUs; load average {load_before[0]:.2f} (1 min)", flush=True)
+    print(
+        f"sweep {sweep_path}; {os.cpu_count()} CPUs; load average {load_before[0]:.2f} (1 min)",
+        flush=True,
+    )
 
-    # Start-up, once per process: the pool's fork server imports cadquery; timed apart from the sweeps.
+    # Start-up, once per process: the pool's fork server imports cadquery; timed apart from the
+    # sweeps.
     warm_up = work / "warm_up.toml"
-    warm_up.write_text('[base.resolution]\nsections = 16\npoints = 32\n[sweep]\nstl = false\n')
+    warm_up.write_text("[base.resolution]\nsections = 16\npoints = 32\n[sweep]\nstl = false\n")
     start = time.perf_counter()
     run_sweep(load_sweep(warm_up), work / "warm_up", workers=1, rebuild=True, progress=False)
     startup = {"local_pool_first_use_s": round(time.perf_counter() - start, 2)}
-    print(f"local pool start-up (first use in this process, one small design): "
-          f"{startup['local_pool_first_use_s']:.1f} s", flush=True)
+    print(
+        f"local pool start-up (first use in this process, one small design): "
+        f"{startup['local_pool_first_use_s']:.1f} s",
+        flush=True,
+    )
 
-    runs = [run_configuration("local pool, 1 worker", sweep_path, work / "local1", workers=1),
-            run_configuration("local pool, 2 workers", sweep_path, work / "local2", workers=2)]
+    runs = [
+        run_configuration("local pool, 1 worker", sweep_path, work / "local1", workers=1),
+        run_configuration("local pool, 2 workers", sweep_path, work / "local2", workers=2),
+    ]
     if not args.skip_dask:
         from dask.distributed import Client, LocalCluster
 
         start = time.perf_counter()
-        with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
-                Client(cluster) as client:
+        with (
+            LocalCluster(
+                n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+            ) as cluster,
+            Client(cluster) as client,
+        ):
             client.run(__import__, "torus_cad.propeller")  # each worker imports cadquery once
             startup["dask_local_cluster_s"] = round(time.perf_counter() - start, 2)
-            print(f"Dask LocalCluster start-up (2 worker processes, cadquery imported): "
-                  f"{startup['dask_local_cluster_s']:.1f} s", flush=True)
-            runs.append(run_configuration("Dask LocalCluster, 2 workers", sweep_path, work / "dask2",
-                                          client=client))
+            print(
+                f"Dask LocalCluster start-up (2 worker processes, cadquery imported): "
+                f"{startup['dask_local_cluster_s']:.1f} s",
+                flush=True,
+            )
+            runs.append(
+                run_configuration(
+                    "Dask LocalCluster, 2 workers", sweep_path, work / "dask2", client=client
+                )
+            )
 
-    report = {"sweep": str(sweep_path), "cpus": os.cpu_count(), "python": sys.version.split()[0],
-              "platform": platform.platform(), "load_average_before": load_before,
-              "load_average_after": os.getloadavg(), "startup": startup, "runs": runs}
+    report = {
+        "sweep": str(sweep_path),
+        "cpus": os.cpu_count(),
+        "python": sys.version.split()[0],
+        "platform": platform.platform(),
+        "load_average_before": load_before,
+        "load_average_after": os.getloadavg(),
+        "startup": startup,
+        "runs": runs,
+    }
     path = args.out / "sweep_bench.json"
     path.write_text(json.dumps(report, indent=2) + "\n")
     print(f"wrote {path}")

@@ -25,7 +25,8 @@ import time
 from pathlib import Path
 from typing import Any
 
-for _variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):  # one core, before numpy loads
+# one core, before numpy loads
+for _variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_variable, "1")
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "scripts"))
@@ -49,13 +50,26 @@ def solver_stages(design: Path | None, rpm: float) -> dict[str, float]:
     blade = rotor_blade(params, discretisation)
     lattice_s = time.process_time() - start
     point = OperatingPoint(rpm)
-    inviscid = solve_inviscid(blade.camber_m, blade.blades, blade.spin, rpm * math.pi / 30.0, 0.0,
-                              point.fluid.density_kg_m3, blade.tip_radius_m, discretisation.wake)
+    inviscid = solve_inviscid(
+        blade.camber_m,
+        blade.blades,
+        blade.spin,
+        rpm * math.pi / 30.0,
+        0.0,
+        point.fluid.density_kg_m3,
+        blade.tip_radius_m,
+        discretisation.wake,
+    )
     solve_s = time.process_time() - start - lattice_s
     result = vortex.vortex_performance(params, rpm)
     whole_s = time.process_time() - start - lattice_s - solve_s
-    return {"blade lattice": lattice_s, "inviscid solve": solve_s, "whole point (again, with polars)": whole_s,
-            "thrust_n": result.report["thrust_n"], "iterations": inviscid.iterations}
+    return {
+        "blade lattice": lattice_s,
+        "inviscid solve": solve_s,
+        "whole point (again, with polars)": whole_s,
+        "thrust_n": result.report["thrust_n"],
+        "iterations": inviscid.iterations,
+    }
 
 
 def timed(command: list[str]) -> dict[str, Any]:
@@ -68,10 +82,14 @@ def timed(command: list[str]) -> dict[str, Any]:
 
 
 def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     parser.add_argument("--design", type=Path)
     parser.add_argument("--rpm", type=float, default=10000.0)
-    parser.add_argument("--cfd", action="store_true", help="also time OpenFOAM's coarse level of the same point")
+    parser.add_argument(
+        "--cfd", action="store_true", help="also time OpenFOAM's coarse level of the same point"
+    )
     args = parser.parse_args()
     stages = solver_stages(args.design, args.rpm)
     for name in ("blade lattice", "inviscid solve", "whole point (again, with polars)"):
@@ -80,16 +98,45 @@ def main() -> int:
     design = [str(args.design)] if args.design else []
     base = [sys.executable, "-m", "torus_cad", "simulate", *design, "--quiet"]
     with tempfile.TemporaryDirectory() as folder:
-        runs = {"vortex --rpm": timed(base + ["--solver", "vortex", "--rpm", f"{args.rpm:g}", "--out", f"{folder}/a"]),
-                "vortex --thrust": timed(base + ["--solver", "vortex", "--thrust", f"{stages['thrust_n']:.6g}",
-                                                 "--out", f"{folder}/b"])}
+        runs = {
+            "vortex --rpm": timed(
+                base + ["--solver", "vortex", "--rpm", f"{args.rpm:g}", "--out", f"{folder}/a"]
+            ),
+            "vortex --thrust": timed(
+                base
+                + [
+                    "--solver",
+                    "vortex",
+                    "--thrust",
+                    f"{stages['thrust_n']:.6g}",
+                    "--out",
+                    f"{folder}/b",
+                ]
+            ),
+        }
         if args.cfd:
-            runs["openfoam coarse"] = timed(base + ["--rpm", f"{args.rpm:g}", "--level", "coarse", "--processes", "1",
-                                                    "--out", f"{folder}/c"])
+            runs["openfoam coarse"] = timed(
+                base
+                + [
+                    "--rpm",
+                    f"{args.rpm:g}",
+                    "--level",
+                    "coarse",
+                    "--processes",
+                    "1",
+                    "--out",
+                    f"{folder}/c",
+                ]
+            )
     for name, run in runs.items():
-        ratio = (f", {run['wall_s'] / runs['openfoam coarse']['wall_s']:.3f} of the CFD's"
-                 if "openfoam coarse" in runs and name != "openfoam coarse" else "")
-        print(f"{name:34s} {run['wall_s']:7.1f} s wall, {run['peak_gb']:.2f} GB peak, exit {run['exit']}{ratio}")
+        ratio = (
+            f", {run['wall_s'] / runs['openfoam coarse']['wall_s']:.3f} of the CFD's"
+            if "openfoam coarse" in runs and name != "openfoam coarse"
+            else ""
+        )
+        print(
+            f"{name:34s} {run['wall_s']:7.1f} s wall, {run['peak_gb']:.2f} GB peak, exit {run['exit']}{ratio}"
+        )
     print(json.dumps({"stages": stages, "runs": runs}))
     return 0
 

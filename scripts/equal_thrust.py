@@ -30,12 +30,21 @@ ROOT = Path(__file__).resolve().parent.parent
 #: label -> design file (None: the default toroidal design).
 DESIGNS: dict[str, Path | None] = {
     "toroidal (default)": None,
-    "conventional (same D, blades, hub)": ROOT / "examples" / "compare" / "conventional_45mm_3blade.toml",
+    "conventional (same D, blades, hub)": ROOT
+    / "examples"
+    / "compare"
+    / "conventional_45mm_3blade.toml",
 }
 #: What the table and the picture show: report key -> (heading, scale, unit).
-QUANTITIES = {"rpm": ("rpm", 1.0, ""), "thrust_n": ("thrust", 1.0, "N"), "power_w": ("power", 1.0, "W"),
-              "torque_nm": ("torque", 1000.0, "N mm"), "figure_of_merit": ("figure of merit", 1.0, "")}
-#: The observer of the noise columns: 1 m from the hub in the rotor's plane (one of simulate's defaults).
+QUANTITIES = {
+    "rpm": ("rpm", 1.0, ""),
+    "thrust_n": ("thrust", 1.0, "N"),
+    "power_w": ("power", 1.0, "W"),
+    "torque_nm": ("torque", 1000.0, "N mm"),
+    "figure_of_merit": ("figure of merit", 1.0, ""),
+}
+#: The observer of the noise columns: 1 m from the hub in the rotor's plane (one of simulate's
+#: defaults).
 NOISE_OBSERVER = (1.0, 90.0)
 #: Noise columns: the observer entry's key -> heading (differences in dB, not percent).
 NOISE = {"oaspl_db": "tonal SPL 1 m, 90° (dB)", "oaspl_dba": "tonal 1 m, 90° (dB(A))"}
@@ -43,21 +52,40 @@ NOISE = {"oaspl_db": "tonal SPL 1 m, 90° (dB)", "oaspl_dba": "tonal 1 m, 90° (
 
 def noise_levels(report: dict[str, Any]) -> dict[str, float]:
     """The NOISE columns of a performance report, at NOISE_OBSERVER."""
-    entry = next(entry for entry in report["noise"]["observers"]
-                 if (entry["distance_m"], entry["angle_deg"]) == NOISE_OBSERVER)
+    entry = next(
+        entry
+        for entry in report["noise"]["observers"]
+        if (entry["distance_m"], entry["angle_deg"]) == NOISE_OBSERVER
+    )
     return {key: entry[key] for key in NOISE}
 
 
 def search(label: str, design: Path | None, args: argparse.Namespace) -> dict[str, Any]:
     """One ``torus-cad simulate --thrust`` process; its performance report with the process's wall seconds."""
     out = args.out / ("toroidal" if design is None else design.stem)
-    command = [sys.executable, "-m", "torus_cad", "simulate", *([str(design)] if design else []),
-               "--thrust", f"{args.thrust:g}", *_fidelity(args), "--out", str(out), "-q"]
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
+    command = [
+        sys.executable,
+        "-m",
+        "torus_cad",
+        "simulate",
+        *([str(design)] if design else []),
+        "--thrust",
+        f"{args.thrust:g}",
+        *_fidelity(args),
+        "--out",
+        str(out),
+        "-q",
+    ]
+    env = {
+        **os.environ,
+        "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]),
+    }
     start = time.perf_counter()
     completed = subprocess.run(command, env=env, capture_output=True, text=True, check=False)
     if completed.returncode != 0:
-        raise SystemExit(f"{label}: simulate failed (exit {completed.returncode}): {completed.stderr.strip()[-400:]}")
+        raise SystemExit(
+            f"{label}: simulate failed (exit {completed.returncode}): {completed.stderr.strip()[-400:]}"
+        )
     report = json.loads(next(out.glob("*_performance.json")).read_text(encoding="utf-8"))
     return {**report, "process_wall_seconds": time.perf_counter() - start}
 
@@ -71,22 +99,34 @@ def _fidelity(args: argparse.Namespace) -> list[str]:
 
 def table(results: dict[str, dict[str, Any]]) -> str:
     """A Markdown table: one row per design, then the conventional's difference from the toroidal in %."""
-    headings = [f"{name} ({unit})" if unit else name for name, _, unit in QUANTITIES.values()] + list(NOISE.values())
-    lines = ["| design | " + " | ".join(headings) + " | cells | y+ mean |",
-             "|---" * (len(QUANTITIES) + len(NOISE) + 3) + "|"]
+    headings = [
+        f"{name} ({unit})" if unit else name for name, _, unit in QUANTITIES.values()
+    ] + list(NOISE.values())
+    lines = [
+        "| design | " + " | ".join(headings) + " | cells | y+ mean |",
+        "|---" * (len(QUANTITIES) + len(NOISE) + 3) + "|",
+    ]
     for label, report in results.items():
         cells = [f"{report[key] * scale:.4g}" for key, (_, scale, _) in QUANTITIES.items()]
         cells += [f"{value:.1f}" for value in noise_levels(report).values()]
-        mesh = f" | {report['cells']:,} | {report['y_plus']['mean']:.3g} |" if "cells" in report else " | – | – |"
+        mesh = (
+            f" | {report['cells']:,} | {report['y_plus']['mean']:.3g} |"
+            if "cells" in report
+            else " | – | – |"
+        )
         lines.append(f"| {label} | " + " | ".join(cells) + mesh)
     toroidal, conventional = results.values()
     change = [f"{100.0 * (conventional[key] / toroidal[key] - 1.0):+.1f} %" for key in QUANTITIES]
-    change += [f"{noise_levels(conventional)[key] - noise_levels(toroidal)[key]:+.1f} dB" for key in NOISE]
+    change += [
+        f"{noise_levels(conventional)[key] - noise_levels(toroidal)[key]:+.1f} dB" for key in NOISE
+    ]
     lines.append("| conventional against toroidal | " + " | ".join(change) + " | | |")
     return "\n".join(lines)
 
 
-def write_picture(results: dict[str, dict[str, Any]], path: Path, thrust_n: float, solver: str = "coarse RANS") -> None:
+def write_picture(
+    results: dict[str, dict[str, Any]], path: Path, thrust_n: float, solver: str = "coarse RANS"
+) -> None:
     """Bars of rpm, power, figure of merit and the tonal dB(A) at 1 m in the rotor's plane, one colour per design."""
     import matplotlib
 
@@ -116,13 +156,21 @@ def write_picture(results: dict[str, dict[str, Any]], path: Path, thrust_n: floa
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--thrust", type=float, default=0.05, help="target static thrust, N (default 0.05)")
+    parser.add_argument(
+        "--thrust", type=float, default=0.05, help="target static thrust, N (default 0.05)"
+    )
     parser.add_argument("--level", default="coarse", choices=("coarse", "medium", "fine"))
     parser.add_argument("--processes", type=int, default=2)
-    parser.add_argument("--solver", default="openfoam", choices=("openfoam", "vortex"),
-                        help="OpenFOAM at --level (default), or the vortex solver (--level and --processes unused)")
+    parser.add_argument(
+        "--solver",
+        default="openfoam",
+        choices=("openfoam", "vortex"),
+        help="OpenFOAM at --level (default), or the vortex solver (--level and --processes unused)",
+    )
     parser.add_argument("--out", type=Path, default=ROOT / "equal_thrust_out")
-    parser.add_argument("--picture", type=Path, help="where the bar chart goes (default OUT/equal_thrust.png)")
+    parser.add_argument(
+        "--picture", type=Path, help="where the bar chart goes (default OUT/equal_thrust.png)"
+    )
     args = parser.parse_args()
     results = {}
     for label, design in DESIGNS.items():
@@ -132,7 +180,16 @@ def main() -> int:
     args.out.mkdir(parents=True, exist_ok=True)
     solver = "vortex lattice" if args.solver == "vortex" else f"{args.level} RANS"
     write_picture(results, args.picture or args.out / "equal_thrust.png", args.thrust, solver)
-    keep = (*QUANTITIES, "cells", "y_plus", "process_wall_seconds", "thrust_search", "level", "solver", "noise")
+    keep = (
+        *QUANTITIES,
+        "cells",
+        "y_plus",
+        "process_wall_seconds",
+        "thrust_search",
+        "level",
+        "solver",
+        "noise",
+    )
     summary = {label: {key: report.get(key) for key in keep} for label, report in results.items()}
     (args.out / "equal_thrust.json").write_text(json.dumps(summary, indent=2), encoding="utf-8")
     return 0

@@ -32,7 +32,8 @@ from torus_cad.parameters.design_checks import check_design
 ROOT = Path(__file__).resolve().parent.parent
 X_KEY, Y_KEY = "centerline height (z_L of P2 and P3)", "transforms.scale_x[4]"
 
-#: What refused a design, matched in the refusal's line, in the legend's order (the first is "feasible").
+#: What refused a design, matched in the refusal's line, in the legend's order (the first is
+#: "feasible").
 KINDS = (
     ("feasible", "", "#4caf50"),
     ("folds over inside its bend", "folds over itself", "#e53935"),
@@ -50,8 +51,13 @@ def design_at(height_mm: float, chord_mm: float) -> PropellerParameters:
     p2, p3 = base.centerline.p2, base.centerline.p3
     scale_x = list(base.transforms.scale_x)
     scale_x[4] = chord_mm
-    return base.with_values({"centerline.p2": [p2[0], p2[1], height_mm], "centerline.p3": [p3[0], p3[1], height_mm],
-                             "transforms.scale_x": scale_x})
+    return base.with_values(
+        {
+            "centerline.p2": [p2[0], p2[1], height_mm],
+            "centerline.p3": [p3[0], p3[1], height_mm],
+            "transforms.scale_x": scale_x,
+        }
+    )
 
 
 def classify(point: tuple[float, float]) -> tuple[int, float]:
@@ -62,20 +68,47 @@ def classify(point: tuple[float, float]) -> tuple[int, float]:
         kind = 0
     except (ParameterError, GeometryError) as error:
         message = str(error)
-        kind = next((index for index, (_, words, _) in enumerate(KINDS) if index and words and words in message),
-                    len(KINDS) - 1)
+        kind = next(
+            (
+                index
+                for index, (_, words, _) in enumerate(KINDS)
+                if index and words and words in message
+            ),
+            len(KINDS) - 1,
+        )
     return kind, time.process_time() - start
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     parser.add_argument("--grid", type=int, default=41, help="points along each axis (default 41)")
-    parser.add_argument("--heights", type=float, nargs=2, default=(4.0, 60.0), metavar=("LOW", "HIGH"),
-                        help="range of the centerline height, mm (default 4 60; the default design: 22)")
-    parser.add_argument("--chords", type=float, nargs=2, default=(0.5, 16.0), metavar=("LOW", "HIGH"),
-                        help="range of transforms.scale_x[4], mm (default 0.5 16; the default design: 6)")
-    parser.add_argument("--workers", type=int, default=len(os.sched_getaffinity(0)), help="processes (default: cores)")
-    parser.add_argument("--out", type=Path, default=ROOT / "docs" / "images" / "feasible_region.png")
+    parser.add_argument(
+        "--heights",
+        type=float,
+        nargs=2,
+        default=(4.0, 60.0),
+        metavar=("LOW", "HIGH"),
+        help="range of the centerline height, mm (default 4 60; the default design: 22)",
+    )
+    parser.add_argument(
+        "--chords",
+        type=float,
+        nargs=2,
+        default=(0.5, 16.0),
+        metavar=("LOW", "HIGH"),
+        help="range of transforms.scale_x[4], mm (default 0.5 16; the default design: 6)",
+    )
+    parser.add_argument(
+        "--workers",
+        type=int,
+        default=len(os.sched_getaffinity(0)),
+        help="processes (default: cores)",
+    )
+    parser.add_argument(
+        "--out", type=Path, default=ROOT / "docs" / "images" / "feasible_region.png"
+    )
     args = parser.parse_args(argv)
     if args.grid < 2:
         parser.error("--grid must be at least 2")
@@ -99,29 +132,57 @@ def main(argv: list[str] | None = None) -> int:
 
     colours = ListedColormap([colour for _, _, colour in KINDS])
     figure, axis = plt.subplots(figsize=(8.0, 5.6))
-    axis.pcolormesh(heights, chords, kinds, cmap=colours, norm=BoundaryNorm(np.arange(len(KINDS) + 1) - 0.5,
-                                                                           len(KINDS)), shading="nearest")
+    axis.pcolormesh(
+        heights,
+        chords,
+        kinds,
+        cmap=colours,
+        norm=BoundaryNorm(np.arange(len(KINDS) + 1) - 0.5, len(KINDS)),
+        shading="nearest",
+    )
     default = PropellerParameters()
-    axis.plot(default.centerline.p2[2], default.transforms.scale_x[4], marker="*", markersize=16,
-              color="white", markeredgecolor="black", linestyle="none")
-    axis.annotate("default design", (default.centerline.p2[2], default.transforms.scale_x[4]),
-                  textcoords="offset points", xytext=(10, 8), fontsize=9)
+    axis.plot(
+        default.centerline.p2[2],
+        default.transforms.scale_x[4],
+        marker="*",
+        markersize=16,
+        color="white",
+        markeredgecolor="black",
+        linestyle="none",
+    )
+    axis.annotate(
+        "default design",
+        (default.centerline.p2[2], default.transforms.scale_x[4]),
+        textcoords="offset points",
+        xytext=(10, 8),
+        fontsize=9,
+    )
     axis.set_xlabel(f"{X_KEY}, mm")
     axis.set_ylabel(f"{Y_KEY}: the chord law's constant term, mm")
     axis.set_title("The default design's feasible region (torus-cad check, no kernel)", fontsize=11)
     present = sorted(set(kinds.ravel().tolist()))
-    axis.legend(handles=[Patch(color=KINDS[i][2], label=KINDS[i][0]) for i in present], loc="upper left",
-                bbox_to_anchor=(1.01, 1.0), fontsize=9, title="first refusal", title_fontsize=9)
+    axis.legend(
+        handles=[Patch(color=KINDS[i][2], label=KINDS[i][0]) for i in present],
+        loc="upper left",
+        bbox_to_anchor=(1.01, 1.0),
+        fontsize=9,
+        title="first refusal",
+        title_fontsize=9,
+    )
     figure.tight_layout()
     args.out.parent.mkdir(parents=True, exist_ok=True)
     figure.savefig(args.out, dpi=100)
     plt.close(figure)
 
-    print(f"{len(points)} designs in {elapsed:.1f} s on {args.workers} processes; check CPU per design median "
-          f"{1000 * statistics.median(cpu):.0f} ms, max {1000 * max(cpu):.0f} ms")
+    print(
+        f"{len(points)} designs in {elapsed:.1f} s on {args.workers} processes; check CPU per design median "
+        f"{1000 * statistics.median(cpu):.0f} ms, max {1000 * max(cpu):.0f} ms"
+    )
     for index in present:
         times = [seconds for (kind, seconds) in answers if kind == index]
-        print(f"  {len(times):5d}  {KINDS[index][0]:<40s} check CPU median {1000 * statistics.median(times):.0f} ms")
+        print(
+            f"  {len(times):5d}  {KINDS[index][0]:<40s} check CPU median {1000 * statistics.median(times):.0f} ms"
+        )
     print(f"wrote {args.out}")
     return 0
 

@@ -33,14 +33,20 @@ def outcome(params: PropellerParameters) -> str:
     except KernelError as error:
         return f"failed: {error}"
     if made is not None and not made.constant_radius:
-        return (f"reduced: down to {made.smallest_radius_mm:.3g} mm along {made.varying_junction_mm:.2f} mm "
-                "of each blade's junction")
+        return (
+            f"reduced: down to {made.smallest_radius_mm:.3g} mm along {made.varying_junction_mm:.2f} mm "
+            "of each blade's junction"
+        )
     return "ok"
 
 
 def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--radius", type=float, action="append", help="fillet radius, mm (default 0.5 and 1.0)")
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    parser.add_argument(
+        "--radius", type=float, action="append", help="fillet radius, mm (default 0.5 and 1.0)"
+    )
     args = parser.parse_args()
     fillet._FALLBACK_FRACTIONS = ()  # the requested radius only
     designs = {"default": PropellerParameters()}
@@ -51,7 +57,10 @@ def main() -> int:
         for radius in args.radius or [0.5, 1.0]:
             start = time.perf_counter()
             result = outcome(params.with_values({"hub.root_fillet_radius": radius}))
-            print(f"{name:<28} {radius:4.2f} mm  {result[:110]}  ({time.perf_counter() - start:.1f} s)", flush=True)
+            print(
+                f"{name:<28} {radius:4.2f} mm  {result[:110]}  ({time.perf_counter() - start:.1f} s)",
+                flush=True,
+            )
     return 0
 
 

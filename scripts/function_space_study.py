@@ -20,7 +20,8 @@ import sys
 from pathlib import Path
 from typing import Any, NoReturn
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # studies/ sits beside torus_cad, outside it
+# studies/ sits beside torus_cad, outside it
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from studies import function_space as study
 from torus_cad.errors import ParameterError
 
@@ -40,17 +41,39 @@ def build_parser() -> argparse.ArgumentParser:
         prog="function_space_study.py",
         description="Monte Carlo function-space study of spec 2.4-2.5 (which transform family fits best).",
     )
-    parser.add_argument("--samples", type=int, default=defaults.samples, help="N, number of random functions")
-    parser.add_argument("--points", type=int, default=defaults.points, help="n, evenly spaced points on [0, 1]")
-    parser.add_argument("--seed", type=int, default=defaults.seed, help="seed of numpy.random.default_rng")
-    parser.add_argument("--sinusoid-start", choices=study.SINUSOID_STARTS, default=defaults.sinusoid_start,
-                        help="start of the A sin(Bs+C)+D fit: fft (sound) or ones (the spec author's)")
-    parser.add_argument("--generator-draw", choices=study.GENERATOR_DRAWS, default=defaults.generator_draw,
-                        help="random: generator uniform per sample (as the original); balanced: generators in turn")
-    parser.add_argument("--knot-placement", choices=study.KNOT_PLACEMENTS, default=defaults.knot_placement,
-                        help="piecewise-linear knots: even over [0, 1] or random sorted U(0, 1) positions")
-    parser.add_argument("--sinusoid-max-evaluations", type=int, default=defaults.sinusoid_max_evaluations,
-                        help="Levenberg-Marquardt evaluation budget per sinusoid fit")
+    parser.add_argument(
+        "--samples", type=int, default=defaults.samples, help="N, number of random functions"
+    )
+    parser.add_argument(
+        "--points", type=int, default=defaults.points, help="n, evenly spaced points on [0, 1]"
+    )
+    parser.add_argument(
+        "--seed", type=int, default=defaults.seed, help="seed of numpy.random.default_rng"
+    )
+    parser.add_argument(
+        "--sinusoid-start",
+        choices=study.SINUSOID_STARTS,
+        default=defaults.sinusoid_start,
+        help="start of the A sin(Bs+C)+D fit: fft (sound) or ones (the spec author's)",
+    )
+    parser.add_argument(
+        "--generator-draw",
+        choices=study.GENERATOR_DRAWS,
+        default=defaults.generator_draw,
+        help="random: generator uniform per sample (as the original); balanced: generators in turn",
+    )
+    parser.add_argument(
+        "--knot-placement",
+        choices=study.KNOT_PLACEMENTS,
+        default=defaults.knot_placement,
+        help="piecewise-linear knots: even over [0, 1] or random sorted U(0, 1) positions",
+    )
+    parser.add_argument(
+        "--sinusoid-max-evaluations",
+        type=int,
+        default=defaults.sinusoid_max_evaluations,
+        help="Levenberg-Marquardt evaluation budget per sinusoid fit",
+    )
     parser.add_argument("--out", type=Path, default=Path("study_out"), help="output directory")
     return parser
 
@@ -99,7 +122,9 @@ def main(argv: list[str] | None = None) -> int:
         csv_path = study.write_fits_csv(result, out / "fits.csv")
         png_path = study.plot_errors(result, out / "errors.png")
         json_path = out / "summary.json"
-        json_path.write_text(json.dumps(_json_ready(result.summary()), indent=2) + "\n", encoding="utf-8")
+        json_path.write_text(
+            json.dumps(_json_ready(result.summary()), indent=2) + "\n", encoding="utf-8"
+        )
     except OSError as error:
         sys.stderr.write(f"{parser.prog}: error: cannot write to {out}: {error}\n")
         return 1

@@ -32,7 +32,11 @@ NOT_IN_GALLERY = ("sweep_*.toml", "workshop_*.toml")
 
 def gallery_designs(folder: Path = EXAMPLES) -> list[Path]:
     """The gallery's design files, in name order."""
-    return sorted(path for path in folder.glob("*.toml") if not any(path.match(skip) for skip in NOT_IN_GALLERY))
+    return sorted(
+        path
+        for path in folder.glob("*.toml")
+        if not any(path.match(skip) for skip in NOT_IN_GALLERY)
+    )
 
 
 def caption(propeller) -> str:
@@ -42,19 +46,29 @@ def caption(propeller) -> str:
     elements = elements_of(params.blade_surface(sections=201))
     radius = 0.375 * diameter
     pitch = elements.pitch_at_radius(radius)
-    radial = np.interp(radius, np.sort(elements.radius_mm), elements.radial_fraction[np.argsort(elements.radius_mm)])
+    radial = np.interp(
+        radius,
+        np.sort(elements.radius_mm),
+        elements.radial_fraction[np.argsort(elements.radius_mm)],
+    )
     if not len(pitch) or radial > NEARLY_RADIAL_FRACTION:
         pitch_text = "- (chords nearly radial there)"
     else:
         pitch_text = " / ".join(f"{value:.0f}" for value in pitch) + " mm"
-    return f"{params.name}: {params.blades} blades, D {diameter:.0f} mm, pitch at 0.75 R {pitch_text}"
+    return (
+        f"{params.name}: {params.blades} blades, D {diameter:.0f} mm, pitch at 0.75 R {pitch_text}"
+    )
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("designs", nargs="*", type=Path, help="design files (default: examples/*.toml)")
+    parser.add_argument(
+        "designs", nargs="*", type=Path, help="design files (default: examples/*.toml)"
+    )
     parser.add_argument("--out", type=Path, default=Path("docs/images/gallery.png"))
-    parser.add_argument("--tile", default="1000x420", help="size of each design's picture, WxH pixels")
+    parser.add_argument(
+        "--tile", default="1000x420", help="size of each design's picture, WxH pixels"
+    )
     args = parser.parse_args(argv)
     width, height = parse_size(args.tile, "--tile")
     tiles = []
@@ -68,7 +82,7 @@ def main(argv: list[str] | None = None) -> int:
     sheet = np.full((rows * height, columns * width, tiles[0].shape[2]), 255, dtype=np.uint8)
     for index, tile in enumerate(tiles):
         row, column = divmod(index, columns)
-        sheet[row * height:(row + 1) * height, column * width:(column + 1) * width] = tile
+        sheet[row * height : (row + 1) * height, column * width : (column + 1) * width] = tile
     args.out.parent.mkdir(parents=True, exist_ok=True)
     write_png(sheet, args.out)
     print(f"wrote {args.out} ({sheet.shape[1]}x{sheet.shape[0]} px, {len(tiles)} designs)")

@@ -20,7 +20,9 @@ from torus_cad.propeller import build_propeller
 
 
 def main(paths: list[Path]) -> int:
-    print("| design | diameter asked | B-rep diameter | pitch asked | reported at 0.75 R | B-rep at 0.75 R |")
+    print(
+        "| design | diameter asked | B-rep diameter | pitch asked | reported at 0.75 R | B-rep at 0.75 R |"
+    )
     print("| --- | --- | --- | --- | --- | --- |")
     for path in paths:
         asked = PropellerParameters.from_toml(path)
@@ -32,14 +34,26 @@ def main(paths: list[Path]) -> int:
         reported = measured = "-"
         if targets is not None and targets.pitch_fit is not None:
             reported = " / ".join(f"{value:.1f}" for value in targets.pitch_fit.pitch_at_75_mm)
-            crossings = radius_crossings(propeller.parameters, 0.375 * (targets.tip_diameter_mm or diameter))
+            crossings = radius_crossings(
+                propeller.parameters, 0.375 * (targets.tip_diameter_mm or diameter)
+            )
             measured = " / ".join(f"{pitch_on_solid(propeller, s):.1f}" for s, _ in crossings)
-        print(f"| {asked.name} | {asked.diameter:g} | {diameter:.3f} | {asked.pitch:g} | {reported} | {measured} |",
-              flush=True)
+        print(
+            f"| {asked.name} | {asked.diameter:g} | {diameter:.3f} | {asked.pitch:g} | {reported} | {measured} |",
+            flush=True,
+        )
     return 0
 
 
 if __name__ == "__main__":
     arguments = [Path(arg) for arg in sys.argv[1:]]
-    raise SystemExit(main(arguments or sorted(path for path in Path("examples").glob("*.toml")
-                                              if not path.name.startswith(("sweep", "workshop")))))
+    raise SystemExit(
+        main(
+            arguments
+            or sorted(
+                path
+                for path in Path("examples").glob("*.toml")
+                if not path.name.startswith(("sweep", "workshop"))
+            )
+        )
+    )

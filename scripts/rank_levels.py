@@ -47,19 +47,43 @@ def run(name: str, overrides: list[str], level: str, args: argparse.Namespace) -
     """One design at one level: its performance report and the process's wall seconds."""
     out = args.out / f"{name}_{level}"
     done, cost = out / f"{name}_performance.json", args.out / f"{name}_{level}_cost.json"
-    if done.is_file():  # the sealed report is left as simulate wrote it; the process's cost sits beside it
+    # the sealed report is left as simulate wrote it; the process's cost sits beside it
+    if done.is_file():
         measured = json.loads(cost.read_text(encoding="utf-8")) if cost.is_file() else {}
         return {**json.loads(done.read_text(encoding="utf-8")), **measured}
-    command = [sys.executable, "-m", "torus_cad", "simulate", "--rpm", f"{args.rpm:g}", "--level", level,
-               "--processes", str(args.processes), "--out", str(out), "-q", "--set", f"name={name}"]
+    command = [
+        sys.executable,
+        "-m",
+        "torus_cad",
+        "simulate",
+        "--rpm",
+        f"{args.rpm:g}",
+        "--level",
+        level,
+        "--processes",
+        str(args.processes),
+        "--out",
+        str(out),
+        "-q",
+        "--set",
+        f"name={name}",
+    ]
     for override in overrides:
         command += ["--set", override]
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
+    env = {
+        **os.environ,
+        "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]),
+    }
     start = time.perf_counter()
     completed, peak_bytes = run_with_peak_memory(command, env)
     if completed.returncode != 0:
-        raise SystemExit(f"{name} at {level} failed (exit {completed.returncode}): {completed.stderr.strip()[-400:]}")
-    measured = {"process_wall_seconds": time.perf_counter() - start, "peak_memory_gb": peak_bytes / 1e9}
+        raise SystemExit(
+            f"{name} at {level} failed (exit {completed.returncode}): {completed.stderr.strip()[-400:]}"
+        )
+    measured = {
+        "process_wall_seconds": time.perf_counter() - start,
+        "peak_memory_gb": peak_bytes / 1e9,
+    }
     cost.write_text(json.dumps(measured), encoding="utf-8")
     return {**json.loads(done.read_text(encoding="utf-8")), **measured}
 
@@ -68,7 +92,9 @@ def main() -> int:
     from scipy.stats import spearmanr
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--levels", nargs=2, default=["coarse", "fine"], metavar=("CHEAP", "REFERENCE"))
+    parser.add_argument(
+        "--levels", nargs=2, default=["coarse", "fine"], metavar=("CHEAP", "REFERENCE")
+    )
     parser.add_argument("--rpm", type=float, default=10000.0)
     parser.add_argument("--processes", type=int, default=2)
     parser.add_argument("--out", type=Path, default=ROOT / "rank_out")
@@ -78,20 +104,50 @@ def main() -> int:
     results: dict[str, dict[str, dict[str, Any]]] = {}
     for name, overrides in designs.items():
         results[name] = {level: run(name, overrides, level, args) for level in args.levels}
-        print(name, {level: (round(report["thrust_n"], 5), report["figure_of_merit"])
-                     for level, report in results[name].items()}, flush=True)
-    summary: dict[str, Any] = {"levels": args.levels, "rpm": args.rpm, "designs": designs, "rho": {}}
+        print(
+            name,
+            {
+                level: (round(report["thrust_n"], 5), report["figure_of_merit"])
+                for level, report in results[name].items()
+            },
+            flush=True,
+        )
+    summary: dict[str, Any] = {
+        "levels": args.levels,
+        "rpm": args.rpm,
+        "designs": designs,
+        "rho": {},
+    }
     for key in ("thrust_n", "figure_of_merit"):
-        cheap, reference = ([results[name][level][key] for name in designs] for level in args.levels)
+        cheap, reference = (
+            [results[name][level][key] for name in designs] for level in args.levels
+        )
         rho = float(spearmanr(cheap, reference).statistic)
         summary["rho"][key] = rho
         print(f"Spearman rho of {key}, {args.levels[0]} against {args.levels[1]}: {rho:.3f}")
-    summary["results"] = {name: {level: {key: report[key] for key in
-                                         ("thrust_n", "torque_nm", "figure_of_merit", "cells", "wall_seconds",
-                                                  "process_wall_seconds", "peak_memory_gb") if key in report}
-                                 for level, report in levels.items()} for name, levels in results.items()}
+    summary["results"] = {
+        name: {
+            level: {
+                key: report[key]
+                for key in (
+                    "thrust_n",
+                    "torque_nm",
+                    "figure_of_merit",
+                    "cells",
+                    "wall_seconds",
+                    "process_wall_seconds",
+                    "peak_memory_gb",
+                )
+                if key in report
+            }
+            for level, report in levels.items()
+        }
+        for name, levels in results.items()
+    }
     args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "rank_levels.json").write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
+    (args.out / "rank_levels.json").write_text(
+        json.dumps(summary, indent=2) + "\n", encoding="utf-8"
+    )
     return 0
 
 

@@ -26,23 +26,38 @@ sys.path.insert(0, str(ROOT / "scripts"))
 
 from rank_levels import DESIGNS  # noqa: E402
 
-#: The fine level's thrust (N) and figure of merit of each design, measured by ``python scripts/rank_levels.py``
-#: (docs/how-to/simulate.md, "Does the coarse level rank designs as the fine one does?").
-FINE_CFD = {"default": (0.06364, 0.1944), "pitch_low": (0.06217, 0.1893), "pitch_high": (0.06427, 0.1941),
-            "chord_narrow": (0.05788, 0.1824), "chord_wide": (0.06385, 0.1908), "two_blades": (0.05358, 0.1914),
-            "four_blades": (0.07318, 0.1947), "chord_very_narrow": (0.05223, 0.1701)}
+#: The fine level's thrust (N) and figure of merit of each design, measured by ``python
+#: scripts/rank_levels.py`` (docs/how-to/simulate.md, "Does the coarse level rank designs as the
+#: fine one does?").
+FINE_CFD = {
+    "default": (0.06364, 0.1944),
+    "pitch_low": (0.06217, 0.1893),
+    "pitch_high": (0.06427, 0.1941),
+    "chord_narrow": (0.05788, 0.1824),
+    "chord_wide": (0.06385, 0.1908),
+    "two_blades": (0.05358, 0.1914),
+    "four_blades": (0.07318, 0.1947),
+    "chord_very_narrow": (0.05223, 0.1701),
+}
 
 
 def _fine_cfd(path: Path | None) -> dict[str, tuple[float, float]]:
     if path is None:
         return FINE_CFD
     designs = json.loads(path.read_text())["designs"]
-    return {name: (entry["fine"]["thrust_n"], entry["fine"]["figure_of_merit"]) for name, entry in designs.items()}
+    return {
+        name: (entry["fine"]["thrust_n"], entry["fine"]["figure_of_merit"])
+        for name, entry in designs.items()
+    }
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--cfd", type=Path, help="rank_levels.py's rank_levels.json (default: the documented runs)")
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    parser.add_argument(
+        "--cfd", type=Path, help="rank_levels.py's rank_levels.json (default: the documented runs)"
+    )
     parser.add_argument("--rpm", type=float, default=10000.0)
     parser.add_argument("--chordwise", type=int, default=8)
     parser.add_argument("--spanwise", type=int, default=30)
@@ -60,24 +75,36 @@ def main(argv: list[str] | None = None) -> int:
         params = load_parameters(None, overrides)
         start = time.perf_counter()
         try:
-            report = vortex_performance(params, args.rpm, 0.0, Discretisation(args.chordwise, args.spanwise)).report
+            report = vortex_performance(
+                params, args.rpm, 0.0, Discretisation(args.chordwise, args.spanwise)
+            ).report
         except KernelError as error:  # ranked without it, and said so
             print(f"{name}: left out, {error}", file=sys.stderr, flush=True)
             continue
         rows[name] = report
         print(f"{name}: {time.perf_counter() - start:.1f} s", file=sys.stderr, flush=True)
-    print("| design | thrust N, fine CFD | thrust N, vortex | Δ | inviscid thrust N | Δ | FM, fine CFD | FM, vortex |")
+    print(
+        "| design | thrust N, fine CFD | thrust N, vortex | Δ | inviscid thrust N | Δ | FM, fine CFD | FM, vortex |"
+    )
     print("|---|---|---|---|---|---|---|---|")
     for name, report in rows.items():
         thrust, merit = cfd[name]
         inviscid = report["inviscid_thrust_n"]
-        print(f"| {name} | {thrust:.5f} | {report['thrust_n']:.5f} | {report['thrust_n'] / thrust - 1:+.1%} | "
-              f"{inviscid:.5f} | {inviscid / thrust - 1:+.1%} | {merit:.4f} | {report['figure_of_merit']:.4f} |")
+        print(
+            f"| {name} | {thrust:.5f} | {report['thrust_n']:.5f} | {report['thrust_n'] / thrust - 1:+.1%} | "
+            f"{inviscid:.5f} | {inviscid / thrust - 1:+.1%} | {merit:.4f} | {report['figure_of_merit']:.4f} |"
+        )
     names = list(rows)
-    for label, values in (("thrust (vortex)", [rows[n]["thrust_n"] for n in names]),
-                          ("thrust (inviscid lattice)", [rows[n]["inviscid_thrust_n"] for n in names])):
-        print(f"Spearman's rho, {label} against fine CFD: {spearmanr(values, [cfd[n][0] for n in names])[0]:.3f}")
-    merit_rho = spearmanr([rows[n]["figure_of_merit"] for n in names], [cfd[n][1] for n in names])[0]
+    for label, values in (
+        ("thrust (vortex)", [rows[n]["thrust_n"] for n in names]),
+        ("thrust (inviscid lattice)", [rows[n]["inviscid_thrust_n"] for n in names]),
+    ):
+        print(
+            f"Spearman's rho, {label} against fine CFD: {spearmanr(values, [cfd[n][0] for n in names])[0]:.3f}"
+        )
+    merit_rho = spearmanr([rows[n]["figure_of_merit"] for n in names], [cfd[n][1] for n in names])[
+        0
+    ]
     print(f"Spearman's rho, figure of merit (vortex) against fine CFD: {merit_rho:.3f}")
     return 0
 

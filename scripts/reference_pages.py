@@ -17,13 +17,17 @@ from torus_cad.parameters.parameter_reference import replace_table
 
 REFERENCE = Path(__file__).resolve().parent.parent / "docs" / "reference"
 #: page -> the function that returns its text with the generated part made anew.
-PAGES: dict[Path, Callable[[str], str]] = {REFERENCE / "cli.md": replace_reference,
-                                           REFERENCE / "parameters.md": replace_table}
+PAGES: dict[Path, Callable[[str], str]] = {
+    REFERENCE / "cli.md": replace_reference,
+    REFERENCE / "parameters.md": replace_table,
+}
 
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--check", action="store_true", help="only check that the pages are up to date")
+    parser.add_argument(
+        "--check", action="store_true", help="only check that the pages are up to date"
+    )
     args = parser.parse_args()
     stale = []
     for page, regenerate in PAGES.items():
@@ -36,7 +40,10 @@ def main() -> int:
             page.write_text(updated)
             print(f"wrote {page}")
     if args.check and stale:
-        print(f"stale: {', '.join(str(page) for page in stale)}: run python scripts/reference_pages.py", file=sys.stderr)
+        print(
+            f"stale: {', '.join(str(page) for page in stale)}: run python scripts/reference_pages.py",
+            file=sys.stderr,
+        )
         return 1
     return 0
 

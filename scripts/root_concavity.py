@@ -44,7 +44,8 @@ from torus_cad.kernel.topology import BLADE_SURFACES
 from torus_cad.parameters import PropellerParameters
 from torus_cad.propeller import build_propeller
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # studies/ sits beside torus_cad, outside it
+# studies/ sits beside torus_cad, outside it
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from studies.fuzz import random_design_dict
 
 #: Samples per face direction.
@@ -65,14 +66,22 @@ def tightest_concave_radius_mm(hub_radius_mm: float, solid: cq.Solid, band_mm: f
                 point = surface.Value(u, v)
                 if not 0.0 < math.hypot(point.X(), point.Y()) - hub_radius_mm < band_mm:
                     continue
-                if BRepClass_FaceClassifier(face.wrapped, gp_Pnt2d(u, v), 1e-6).State() != TopAbs_IN:
+                if (
+                    BRepClass_FaceClassifier(face.wrapped, gp_Pnt2d(u, v), 1e-6).State()
+                    != TopAbs_IN
+                ):
                     continue
                 tightest = min(tightest, concave_bend_radius_mm(face.wrapped, surface, u, v))
     return tightest
 
 
-def analytic_tightest_concave_radius_mm(params: PropellerParameters, band_mm: float, samples: int = 1000,
-                                        step_s: float = 1e-3, step_t: float = 1e-4) -> float:
+def analytic_tightest_concave_radius_mm(
+    params: PropellerParameters,
+    band_mm: float,
+    samples: int = 1000,
+    step_s: float = 1e-3,
+    step_t: float = 1e-4,
+) -> float:
     """The smallest concave radius (mm, seen from outside) of blade 0's analytic surface where it lies
     within ``band_mm`` above the hub's cylinder and between the hub's end planes; inf when none."""
     geometry = params.geometry()
@@ -80,37 +89,70 @@ def analytic_tightest_concave_radius_mm(params: PropellerParameters, band_mm: fl
     s = np.linspace(step_s, 1.0 - step_s, samples)
     t = np.linspace(0.0, 2.0, samples, endpoint=False) + 1e-3 / samples
     columns = np.concatenate([t - step_t, t, t + step_t])
-    rows = [surface_points(blade, centerline, s + shift, columns) for shift in (-step_s, 0.0, step_s)]
-    (s_minus, s_plus), (t_minus, at, t_plus) = (rows[0][:, samples:2 * samples], rows[2][:, samples:2 * samples]), \
-        np.split(rows[1], 3, axis=1)
+    rows = [
+        surface_points(blade, centerline, s + shift, columns) for shift in (-step_s, 0.0, step_s)
+    ]
+    (s_minus, s_plus), (t_minus, at, t_plus) = (
+        (rows[0][:, samples : 2 * samples], rows[2][:, samples : 2 * samples]),
+        np.split(rows[1], 3, axis=1),
+    )
     d_s, d_t = (s_plus - s_minus) / (2 * step_s), (t_plus - t_minus) / (2 * step_t)
-    d_ss, d_tt = (s_plus - 2 * at + s_minus) / step_s ** 2, (t_plus - 2 * at + t_minus) / step_t ** 2
-    d_st = ((rows[2][:, 2 * samples:] - rows[2][:, :samples]) - (rows[0][:, 2 * samples:] - rows[0][:, :samples])) \
-        / (4 * step_s * step_t)
+    d_ss, d_tt = (s_plus - 2 * at + s_minus) / step_s**2, (t_plus - 2 * at + t_minus) / step_t**2
+    d_st = (
+        (rows[2][:, 2 * samples :] - rows[2][:, :samples])
+        - (rows[0][:, 2 * samples :] - rows[0][:, :samples])
+    ) / (4 * step_s * step_t)
     normal = np.cross(d_t, d_s)
     normal /= np.linalg.norm(normal, axis=-1, keepdims=True)
     outward = np.sign(np.sum(normal * (at - at.mean(axis=1, keepdims=True)), axis=-1).mean(axis=1))
     normal *= outward[:, None, None]
     e, f, g = (np.sum(a * b, axis=-1) for a, b in ((d_s, d_s), (d_s, d_t), (d_t, d_t)))
     l_, m, n = (np.sum(a * normal, axis=-1) for a in (d_ss, d_st, d_tt))
-    gauss, mean = (l_ * n - m * m) / (e * g - f * f), (e * n - 2 * f * m + g * l_) / (2 * (e * g - f * f))
+    gauss, mean = (
+        (l_ * n - m * m) / (e * g - f * f),
+        (e * n - 2 * f * m + g * l_) / (2 * (e * g - f * f)),
+    )
     concave = mean + np.sqrt(np.maximum(mean * mean - gauss, 0.0))  # the larger principal curvature
     height = np.hypot(at[..., 0], at[..., 1]) - params.hub.radius
-    near = (height > 0.0) & (height < band_mm) & (np.abs(at[..., 2]) < params.hub.length / 2.0) & (concave > 0.0)
+    near = (
+        (height > 0.0)
+        & (height < band_mm)
+        & (np.abs(at[..., 2]) < params.hub.length / 2.0)
+        & (concave > 0.0)
+    )
     return float(1.0 / concave[near].max()) if np.any(near) else math.inf
 
 
 def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("count", nargs="?", type=int, default=130, help="number of seeds (default 130)")
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    parser.add_argument(
+        "count", nargs="?", type=int, default=130, help="number of seeds (default 130)"
+    )
     parser.add_argument("--seed", type=int, default=0, help="first seed")
-    parser.add_argument("--radius", type=float, default=0.5, help="root fillet radius, mm (default 0.5)")
-    parser.add_argument("--band", type=float, default=2.0, help="height above the hub looked at, in radii (default 2)")
-    parser.add_argument("--rate", type=Path, action="append", default=[],
-                        help="a fillet_rate.json to take outcomes from (repeatable)")
+    parser.add_argument(
+        "--radius", type=float, default=0.5, help="root fillet radius, mm (default 0.5)"
+    )
+    parser.add_argument(
+        "--band",
+        type=float,
+        default=2.0,
+        help="height above the hub looked at, in radii (default 2)",
+    )
+    parser.add_argument(
+        "--rate",
+        type=Path,
+        action="append",
+        default=[],
+        help="a fillet_rate.json to take outcomes from (repeatable)",
+    )
     args = parser.parse_args()
-    outcomes = {row["seed"]: row["outcome"] for path in args.rate
-                for row in json.loads(path.read_text())["designs"]}
+    outcomes = {
+        row["seed"]: row["outcome"]
+        for path in args.rate
+        for row in json.loads(path.read_text())["designs"]
+    }
     tally: dict[tuple[str, bool], int] = {}
     for seed in range(args.seed, args.seed + args.count):
         if outcomes.get(seed) == "refused":
@@ -120,16 +162,25 @@ def main() -> int:
             joined = fuse_pattern(propeller.hub, propeller.blades[0], [0.0]).shape.Solids()[0]
         except (ParameterError, GeometryError, KernelError):
             continue
-        radius = tightest_concave_radius_mm(propeller.parameters.hub.radius, joined, args.band * args.radius)
-        analytic = analytic_tightest_concave_radius_mm(propeller.parameters, args.band * args.radius)
+        radius = tightest_concave_radius_mm(
+            propeller.parameters.hub.radius, joined, args.band * args.radius
+        )
+        analytic = analytic_tightest_concave_radius_mm(
+            propeller.parameters, args.band * args.radius
+        )
         outcome = outcomes.get(seed, "?")
         tighter = radius < args.radius
         tally[outcome, tighter] = tally.get((outcome, tighter), 0) + 1
-        print(f"seed {seed:5d}  tightest concave radius {radius:8.3f} mm (analytic blade {analytic:8.3f} mm)  "
-              f"fillet {outcome}", flush=True)
+        print(
+            f"seed {seed:5d}  tightest concave radius {radius:8.3f} mm (analytic blade {analytic:8.3f} mm)  "
+            f"fillet {outcome}",
+            flush=True,
+        )
     for (outcome, tighter), designs in sorted(tally.items()):
-        print(f"fillet {outcome}: {designs} designs bend concavely {'tighter' if tighter else 'no tighter'} "
-              f"than {args.radius:g} mm near the hub")
+        print(
+            f"fillet {outcome}: {designs} designs bend concavely {'tighter' if tighter else 'no tighter'} "
+            f"than {args.radius:g} mm near the hub"
+        )
     return 0
 
 

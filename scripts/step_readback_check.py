@@ -31,8 +31,11 @@ ROOT = Path(__file__).resolve().parent.parent
 def _designs() -> list[str]:
     import tomllib
 
-    shipped = [path for path in sorted((ROOT / "examples").glob("*.toml"))
-               if not ({"sweep", "study"} & tomllib.loads(path.read_text(encoding="utf-8")).keys())]
+    shipped = [
+        path
+        for path in sorted((ROOT / "examples").glob("*.toml"))
+        if not ({"sweep", "study"} & tomllib.loads(path.read_text(encoding="utf-8")).keys())
+    ]
     return ["default", *(str(path.relative_to(ROOT)) for path in shipped)]
 
 
@@ -47,8 +50,11 @@ def _build(design: str, fillet_mm: float | None) -> Propeller:
     from torus_cad.parameters import PropellerParameters
     from torus_cad.propeller import build_propeller
 
-    params = (PropellerParameters() if design == "default"
-              else PropellerParameters.from_toml(design if Path(design).exists() else ROOT / design))
+    params = (
+        PropellerParameters()
+        if design == "default"
+        else PropellerParameters.from_toml(design if Path(design).exists() else ROOT / design)
+    )
     if fillet_mm is None:
         return build_propeller(params)
     params = params.with_values({"hub.root_fillet_radius": fillet_mm})
@@ -61,12 +67,24 @@ def _build(design: str, fillet_mm: float | None) -> Propeller:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("designs", nargs="*", help="design files (default: the default and every shipped example)")
-    parser.add_argument("--fillet", type=float, default=None, metavar="R",
-                        help="build each design with a root fillet of R mm (without its chamfer if that is refused)")
-    parser.add_argument("--fast", action="store_true",
-                        help="no self-interference test and no analysis in memory (what the build checks)")
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    parser.add_argument(
+        "designs", nargs="*", help="design files (default: the default and every shipped example)"
+    )
+    parser.add_argument(
+        "--fillet",
+        type=float,
+        default=None,
+        metavar="R",
+        help="build each design with a root fillet of R mm (without its chamfer if that is refused)",
+    )
+    parser.add_argument(
+        "--fast",
+        action="store_true",
+        help="no self-interference test and no analysis in memory (what the build checks)",
+    )
     args = parser.parse_args(argv)
     from torus_cad.errors import TorusCadError
     from torus_cad.kernel.step_readback import ArgumentFaults, argument_faults, step_readback_faults
@@ -84,17 +102,28 @@ def main(argv: list[str] | None = None) -> int:
         memory = ArgumentFaults() if args.fast else argument_faults(propeller.solid.wrapped)
         with tempfile.TemporaryDirectory() as folder:
             path = Path(folder) / "design.step"
-            write_step(propeller.solid, path, propeller.parameters.name, propeller.parameters.export.step_schema,
-                       check_readback=False)
+            write_step(
+                propeller.solid,
+                path,
+                propeller.parameters.name,
+                propeller.parameters.export.step_schema,
+                check_readback=False,
+            )
             readback = step_readback_faults(path, self_interference=not args.fast)
         rows.append((design, build_s, memory, readback))
-        print(f"{design}: build {build_s:.1f} s; in memory {_counts(memory.counts)} ({memory.seconds:.1f} s); "
-              f"read back {_counts(readback.counts)} ({readback.seconds:.1f} s)", file=sys.stderr, flush=True)
+        print(
+            f"{design}: build {build_s:.1f} s; in memory {_counts(memory.counts)} ({memory.seconds:.1f} s); "
+            f"read back {_counts(readback.counts)} ({readback.seconds:.1f} s)",
+            file=sys.stderr,
+            flush=True,
+        )
     print("| design | build s | faults in memory | faults read back | analysis s (read back) |")
     print("|---|---|---|---|---|")
     for design, build_s, memory, readback in rows:
-        print(f"| {design} | {build_s:.1f} | {_counts(memory.counts)} | {_counts(readback.counts)} "
-              f"| {readback.seconds:.1f} |")
+        print(
+            f"| {design} | {build_s:.1f} | {_counts(memory.counts)} | {_counts(readback.counts)} "
+            f"| {readback.seconds:.1f} |"
+        )
     return 1 if any(readback.counts for *_, readback in rows) else 0
 
 

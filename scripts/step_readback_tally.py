@@ -55,8 +55,11 @@ def tally_one(seed: int, folder: str, fillet_share: float) -> dict[str, Any]:
     from torus_cad.kernel.writers.step import rewritten_until_readable, write_step
 
     design = tally_design_dict(seed, fillet_share)
-    row: dict[str, Any] = {"seed": seed, "kind": design.get("kind", "toroidal"),
-                           "fillet": design.get("hub", {}).get("root_fillet_radius", 0.0) > 0.0}
+    row: dict[str, Any] = {
+        "seed": seed,
+        "kind": design.get("kind", "toroidal"),
+        "fillet": design.get("hub", {}).get("root_fillet_radius", 0.0) > 0.0,
+    }
     start = time.perf_counter()
     try:
         propeller = built_tally_design(seed, fillet_share)
@@ -71,31 +74,58 @@ def tally_one(seed: int, folder: str, fillet_share: float) -> dict[str, Any]:
     faults = classified_faults(read_step_shape(path))
     remaining = []
     if faults:  # what write_step does with such a file: written again with readable edges
-        rewritten_until_readable(propeller.solid.wrapped, path,
-                                 lambda shape: write_step(shape, path, f"tally_{seed}", check_readback=False))
+        rewritten_until_readable(
+            propeller.solid.wrapped,
+            path,
+            lambda shape: write_step(shape, path, f"tally_{seed}", check_readback=False),
+        )
         remaining = classified_faults(read_step_shape(path))
     row["readback_s"] = time.perf_counter() - start
     outcome = "faulty" if remaining else "made readable" if faults else "valid"
-    return {**row, "outcome": outcome, "path": str(path), "faults": [fault.as_dict() for fault in faults],
-            "remaining": [fault.as_dict() for fault in remaining]}
+    return {
+        **row,
+        "outcome": outcome,
+        "path": str(path),
+        "faults": [fault.as_dict() for fault in faults],
+        "remaining": [fault.as_dict() for fault in remaining],
+    }
 
 
-def _run(seeds: list[int], folder: Path, workers: int, time_limit_s: float, fillet_share: float) -> list[dict[str, Any]]:
+def _run(
+    seeds: list[int], folder: Path, workers: int, time_limit_s: float, fillet_share: float
+) -> list[dict[str, Any]]:
     from pebble import ProcessPool
 
     rows = []
     with ProcessPool(max_workers=workers, max_tasks=20) as pool:
-        futures = [(seed, pool.schedule(tally_one, (seed, str(folder), fillet_share), timeout=time_limit_s)) for seed in seeds]
+        futures = [
+            (
+                seed,
+                pool.schedule(tally_one, (seed, str(folder), fillet_share), timeout=time_limit_s),
+            )
+            for seed in seeds
+        ]
         for seed, future in futures:
             try:
                 row = future.result()
             except FutureTimeout:
                 row = {"seed": seed, "outcome": "timeout"}
             except Exception as error:  # a crash is counted, the tally goes on
-                row = {"seed": seed, "outcome": "error", "reason": f"{type(error).__name__}: {error}"[:160]}
+                row = {
+                    "seed": seed,
+                    "outcome": "error",
+                    "reason": f"{type(error).__name__}: {error}"[:160],
+                }
             rows.append(row)
-            faults = ", ".join(f"{f['edge_kind']} {f['gap_mm']:.2g}>{f['tolerance_mm']:.2g}" for f in row.get("remaining", []))
-            print(f"seed {seed}: {row['outcome']} {row.get('reason', '')}{faults}", file=sys.stderr, flush=True)
+            faults = ", ".join(
+                f"{f['edge_kind']} {f['gap_mm']:.2g}>{f['tolerance_mm']:.2g}"
+                for f in row.get("remaining", [])
+            )
+            print(
+                f"seed {seed}: {row['outcome']} {row.get('reason', '')}{faults}",
+                file=sys.stderr,
+                flush=True,
+            )
     return rows
 
 
@@ -104,18 +134,30 @@ def _freecad(rows: list[dict[str, Any]], folder: Path) -> None:
 
     paths = [Path(row["path"]) for row in rows if "path" in row]
     verdicts: dict[str, dict[str, object]] = {}
-    for start in range(0, len(paths), _FREECAD_BATCH):  # one freecadcmd a batch, within its time limit
-        batch = paths[start:start + _FREECAD_BATCH]
+    # one freecadcmd a batch, within its time limit
+    for start in range(0, len(paths), _FREECAD_BATCH):
+        batch = paths[start : start + _FREECAD_BATCH]
         try:
             verdicts.update(freecad_verdicts(batch, folder / f"freecad_{start}"))
-        except subprocess.TimeoutExpired:  # a loaded machine: the batch is counted, not the run lost
-            verdicts.update({str(path): {"solids": 0, "valid": False, "faults": "FreeCAD timed out"} for path in batch})
-        print(f"FreeCAD: {len(verdicts)} of {len(paths)} files checked", file=sys.stderr, flush=True)
+        # a loaded machine: the batch is counted, not the run lost
+        except subprocess.TimeoutExpired:
+            verdicts.update(
+                {
+                    str(path): {"solids": 0, "valid": False, "faults": "FreeCAD timed out"}
+                    for path in batch
+                }
+            )
+        print(
+            f"FreeCAD: {len(verdicts)} of {len(paths)} files checked", file=sys.stderr, flush=True
+        )
     for row in rows:
         if "path" in row:
             verdict = verdicts[row["path"]]
-            row["freecad"] = "" if verdict["valid"] and not verdict["faults"] and verdict["solids"] == 1 \
+            row["freecad"] = (
+                ""
+                if verdict["valid"] and not verdict["faults"] and verdict["solids"] == 1
                 else str(verdict["faults"] or verdict)[:160]
+            )
 
 
 def _gmsh(rows: list[dict[str, Any]]) -> None:
@@ -143,29 +185,56 @@ def _table(rows: list[dict[str, Any]], key: str) -> str:
     for row in rows:
         for fault in row.get(key, []):
             by_kind[fault["edge_kind"], fault["surfaces"]].append({**fault, "seed": row["seed"]})
-    lines = ["| edge kind | surfaces | faults | designs | largest gap (mm) | tolerance read back (mm) |",
-             "|---|---|---|---|---|---|"]
+    lines = [
+        "| edge kind | surfaces | faults | designs | largest gap (mm) | tolerance read back (mm) |",
+        "|---|---|---|---|---|---|",
+    ]
     for (kind, surfaces), faults in sorted(by_kind.items(), key=lambda item: -len(item[1])):
         worst = max(faults, key=lambda fault: fault["gap_mm"])
         designs = len({fault["seed"] for fault in faults})
-        lines.append(f"| {kind} | {surfaces} | {len(faults)} | {designs} | {worst['gap_mm']:.2g} "
-                     f"| {worst['tolerance_mm']:.2g} |")
+        lines.append(
+            f"| {kind} | {surfaces} | {len(faults)} | {designs} | {worst['gap_mm']:.2g} "
+            f"| {worst['tolerance_mm']:.2g} |"
+        )
     return "\n".join(lines)
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("count", nargs="?", type=int, default=300, help="number of seeds (default 300)")
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    parser.add_argument(
+        "count", nargs="?", type=int, default=300, help="number of seeds (default 300)"
+    )
     parser.add_argument("--seed", type=int, default=0, help="first seed")
-    parser.add_argument("--replay", type=int, nargs="+", default=None, metavar="SEED", help="only these seeds")
+    parser.add_argument(
+        "--replay", type=int, nargs="+", default=None, metavar="SEED", help="only these seeds"
+    )
     parser.add_argument("--workers", type=int, default=2)
-    parser.add_argument("--time-limit", type=float, default=120.0, help="seconds per design before it counts as a hang")
-    parser.add_argument("--fillet-share", type=float, default=0.25,
-                        help="share of the designs drawn with a root fillet (default 0.25; 0 for none, 1 for all)")
-    parser.add_argument("--freecad", action="store_true", help="also check each file with FreeCAD's check(True)")
-    parser.add_argument("--gmsh", action="store_true", help="also import each file into gmsh and count its warnings")
-    parser.add_argument("--json", type=Path, default=None, help="write every design's row to this file")
-    parser.add_argument("--keep", type=Path, default=None, help="keep the STEP files in this folder")
+    parser.add_argument(
+        "--time-limit",
+        type=float,
+        default=120.0,
+        help="seconds per design before it counts as a hang",
+    )
+    parser.add_argument(
+        "--fillet-share",
+        type=float,
+        default=0.25,
+        help="share of the designs drawn with a root fillet (default 0.25; 0 for none, 1 for all)",
+    )
+    parser.add_argument(
+        "--freecad", action="store_true", help="also check each file with FreeCAD's check(True)"
+    )
+    parser.add_argument(
+        "--gmsh", action="store_true", help="also import each file into gmsh and count its warnings"
+    )
+    parser.add_argument(
+        "--json", type=Path, default=None, help="write every design's row to this file"
+    )
+    parser.add_argument(
+        "--keep", type=Path, default=None, help="keep the STEP files in this folder"
+    )
     args = parser.parse_args(argv)
     seeds = args.replay or list(range(args.seed, args.seed + args.count))
     start = time.perf_counter()
@@ -191,20 +260,31 @@ def main(argv: list[str] | None = None) -> int:
     gmsh = sum(bool(row.get("gmsh")) for row in written)
     build = sorted(row["build_s"] for row in written)
     readback = sorted(row["readback_s"] for row in written)
-    print(f"\n{len(seeds)} designs in {time.perf_counter() - start:.0f} s: {len(written)} valid built "
-          f"({outcomes['made readable'] + outcomes['faulty']} read back with faults as first written, "
-          f"{outcomes['faulty']} still once made readable), {outcomes['refused']} refused, "
-          f"{outcomes['kernel']} kernel failures, {outcomes['timeout']} timeouts, {outcomes['error']} errors; "
-          f"conventional {sum(row.get('kind') == 'conventional' for row in written)}, "
-          f"root fillet {sum(bool(row.get('fillet')) for row in written)}"
-          + (f"; FreeCAD check(True) faults: {freecad}" if args.freecad else "")
-          + (f"; gmsh warnings: {gmsh}" if args.gmsh else "")
-          + (f"; median build {build[len(build) // 2]:.1f} s, write + read back {readback[len(readback) // 2]:.2f} s"
-             if build else ""))
+    print(
+        f"\n{len(seeds)} designs in {time.perf_counter() - start:.0f} s: {len(written)} valid built "
+        f"({outcomes['made readable'] + outcomes['faulty']} read back with faults as first written, "
+        f"{outcomes['faulty']} still once made readable), {outcomes['refused']} refused, "
+        f"{outcomes['kernel']} kernel failures, {outcomes['timeout']} timeouts, {outcomes['error']} errors; "
+        f"conventional {sum(row.get('kind') == 'conventional' for row in written)}, "
+        f"root fillet {sum(bool(row.get('fillet')) for row in written)}"
+        + (f"; FreeCAD check(True) faults: {freecad}" if args.freecad else "")
+        + (f"; gmsh warnings: {gmsh}" if args.gmsh else "")
+        + (
+            f"; median build {build[len(build) // 2]:.1f} s, write + read back {readback[len(readback) // 2]:.2f} s"
+            if build
+            else ""
+        )
+    )
     for row in rows:
         if row.get("freecad") or row.get("gmsh"):
-            print(f"seed {row['seed']}: FreeCAD {row.get('freecad') or 'ok'}; gmsh {row.get('gmsh') or 'ok'}")
-    return 1 if outcomes["faulty"] or freecad or gmsh or outcomes["error"] or outcomes["timeout"] else 0
+            print(
+                f"seed {row['seed']}: FreeCAD {row.get('freecad') or 'ok'}; gmsh {row.get('gmsh') or 'ok'}"
+            )
+    return (
+        1
+        if outcomes["faulty"] or freecad or gmsh or outcomes["error"] or outcomes["timeout"]
+        else 0
+    )
 
 
 if __name__ == "__main__":

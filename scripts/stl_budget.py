@@ -22,10 +22,21 @@ DESIGNS = {
     "6 blades, hub 16": {"blades": 6, "hub.radius": 16.0},
     "thin": {"airfoil.thickness": 0.12, "airfoil.max_camber": 0.06},
     "wide chord": {"transforms.scale_x": [0.0, 0.0, -24.0, 24.0, 7.0], "hub.radius": 14.0},
-    "twisted": {"transforms.angle_of_attack": [0.0, 0.0, 0.0, 60.0, -10.0], "centerline.frame": "rotation_minimizing"},
+    "twisted": {
+        "transforms.angle_of_attack": [0.0, 0.0, 0.0, 60.0, -10.0],
+        "centerline.frame": "rotation_minimizing",
+    },
     "fine sampling": {"resolution.sections": 100, "resolution.points": 400},
 }
-SETTINGS = [(0.5, 0.5), (0.1, 0.2), (0.05, 0.1), (0.01, 0.2), (0.5, 0.1), (0.002, 0.5), (0.05, 0.05)]
+SETTINGS = [
+    (0.5, 0.5),
+    (0.1, 0.2),
+    (0.05, 0.1),
+    (0.01, 0.2),
+    (0.5, 0.1),
+    (0.002, 0.5),
+    (0.05, 0.05),
+]
 QUICK_DESIGNS = ("default", "1 blade", "thin")
 QUICK_SETTINGS = [(0.5, 0.5), (0.1, 0.3), (0.05, 0.2), (0.01, 0.2), (0.05, 0.1), (0.002, 0.5)]
 
@@ -50,8 +61,12 @@ def real_triangles(solid, linear: float, angular: float) -> tuple[int, float]:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--quick", action="store_true", help="3 designs x 6 settings")
-    parser.add_argument("--design", action="append", choices=list(DESIGNS), help="only these designs (repeatable)")
-    parser.add_argument("--max-estimate", type=float, default=400_000, help="skip settings estimated above this")
+    parser.add_argument(
+        "--design", action="append", choices=list(DESIGNS), help="only these designs (repeatable)"
+    )
+    parser.add_argument(
+        "--max-estimate", type=float, default=400_000, help="skip settings estimated above this"
+    )
     args = parser.parse_args()
     from torus_cad.parameters import PropellerParameters
     from torus_cad.parameters.stl_budget import estimated_stl_triangles
@@ -59,23 +74,31 @@ def main() -> int:
 
     names = args.design or (QUICK_DESIGNS if args.quick else tuple(DESIGNS))
     settings = QUICK_SETTINGS if args.quick else SETTINGS
-    print(f"{'design':<18} {'linear':>7} {'angular':>7} {'estimate':>9} {'real':>9} {'ratio':>6} {'mesh s':>7}")
+    print(
+        f"{'design':<18} {'linear':>7} {'angular':>7} {'estimate':>9} {'real':>9} {'ratio':>6} {'mesh s':>7}"
+    )
     ratios = []
     for name in names:
         params = PropellerParameters().with_values(DESIGNS[name])
         propeller = build_propeller(params)
         for linear, angular in settings:
-            design = params.with_values({"export.stl_linear_deflection": linear,
-                                         "export.stl_angular_deflection": angular})
+            design = params.with_values(
+                {"export.stl_linear_deflection": linear, "export.stl_angular_deflection": angular}
+            )
             estimate = estimated_stl_triangles(design)
             if estimate > args.max_estimate:
                 print(f"{name:<18} {linear:>7g} {angular:>7g} {estimate:>9} {'skipped':>9}")
                 continue
             count, seconds = real_triangles(propeller.solid, linear, angular)
             ratios.append(estimate / count)
-            print(f"{name:<18} {linear:>7g} {angular:>7g} {estimate:>9} {count:>9} {estimate / count:>6.2f} "
-                  f"{seconds:>7.2f}", flush=True)
-    print(f"estimate / real: min {min(ratios):.2f}, max {max(ratios):.2f} over {len(ratios)} settings")
+            print(
+                f"{name:<18} {linear:>7g} {angular:>7g} {estimate:>9} {count:>9} {estimate / count:>6.2f} "
+                f"{seconds:>7.2f}",
+                flush=True,
+            )
+    print(
+        f"estimate / real: min {min(ratios):.2f}, max {max(ratios):.2f} over {len(ratios)} settings"
+    )
     return 0
 
 

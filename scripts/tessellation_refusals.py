@@ -35,28 +35,43 @@ def _one(label: str, load) -> str:
     export = propeller.parameters.export
     with tempfile.TemporaryDirectory() as folder:
         try:
-            check = write_checked_stl(propeller.solid, Path(folder) / "p.stl", export.stl_linear_deflection,
-                                      export.stl_angular_deflection)
+            check = write_checked_stl(
+                propeller.solid,
+                Path(folder) / "p.stl",
+                export.stl_linear_deflection,
+                export.stl_angular_deflection,
+            )
         except KernelError as error:
             return f"{label}: REFUSED for its tessellation: {str(error).splitlines()[0]}"
-    pairs = getattr(check, "repaired_pairs", 0)  # a checkout before the uncrossed tessellation has none
-    repair = (f", {pairs} crossing pairs repaired ({check.repair}, moved <= {check.repair_deviation_mm:.3f} mm)"
-              if pairs else "")
+    # a checkout before the uncrossed tessellation has none
+    pairs = getattr(check, "repaired_pairs", 0)
+    repair = (
+        f", {pairs} crossing pairs repaired ({check.repair}, moved <= {check.repair_deviation_mm:.3f} mm)"
+        if pairs
+        else ""
+    )
     return f"{label}: written, {check.triangles} triangles{repair}, {time.perf_counter() - start:.1f} s"
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     parser.add_argument("--seeds", type=int, nargs="*", default=[7, 55, 106])
     parser.add_argument("--no-examples", action="store_true")
     args = parser.parse_args(argv)
     from studies.fuzz import random_design
 
-    jobs = [(f"fuzz seed {seed}", lambda seed=seed: random_design(seed, workshop=True)) for seed in args.seeds]
+    jobs = [
+        (f"fuzz seed {seed}", lambda seed=seed: random_design(seed, workshop=True))
+        for seed in args.seeds
+    ]
     if not args.no_examples:
-        jobs += [(f"example {path.name}", lambda path=path: path)
-                 for path in sorted((ROOT / "examples").glob("*.toml"))
-                 if not path.name.startswith(("optimize", "sweep"))]
+        jobs += [
+            (f"example {path.name}", lambda path=path: path)
+            for path in sorted((ROOT / "examples").glob("*.toml"))
+            if not path.name.startswith(("optimize", "sweep"))
+        ]
     refused = 0
     for label, load in jobs:
         line = _one(label, load)

@@ -37,9 +37,11 @@ FAST_CANDIDATE_SECONDS = 2.0
 #: Modules whose tests share one stateful page, in file order (each starts where the one before left
 #: it): only a run of tests at the end of such a module may go to the long tier.
 CHAINED_MODULES = ("tests/test_studio_browser.py",)
-#: Modules that CI runs whole however long they take: the simulation's physics checks (coarse level).
+#: Modules that CI runs whole however long they take: the simulation's physics checks (coarse
+#: level).
 ALWAYS_IN_CI = ("tests/test_simulate.py",)
-#: The sum of the fast tier's test times is kept under this share of FAST_TIER_SECONDS (the rest is start-up).
+#: The sum of the fast tier's test times is kept under this share of FAST_TIER_SECONDS (the rest is
+#: start-up).
 FAST_SUM_SHARE = 0.25
 
 
@@ -60,21 +62,40 @@ def _run_pytest(arguments: list[str]) -> tuple[dict[str, float], float]:
     with tempfile.TemporaryDirectory() as folder:
         junit = Path(folder) / "run.xml"
         start = time.monotonic()
-        subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", f"--junitxml={junit}",
-                        *arguments], cwd=ROOT, check=False)
+        subprocess.run(
+            [
+                sys.executable,
+                "-m",
+                "pytest",
+                "-q",
+                "-p",
+                "no:cacheprovider",
+                f"--junitxml={junit}",
+                *arguments,
+            ],
+            cwd=ROOT,
+            check=False,
+        )
         return _durations(junit), time.monotonic() - start
 
 
 def _collected() -> list[str]:
     """Every test's node id, in collection order."""
-    listing = subprocess.run([sys.executable, "-m", "pytest", "--collect-only", "-q", "-p", "no:cacheprovider"],
-                             cwd=ROOT, check=False, capture_output=True, text=True).stdout
+    listing = subprocess.run(
+        [sys.executable, "-m", "pytest", "--collect-only", "-q", "-p", "no:cacheprovider"],
+        cwd=ROOT,
+        check=False,
+        capture_output=True,
+        text=True,
+    ).stdout
     return [line.strip() for line in listing.splitlines() if "::" in line]
 
 
 def _long_tier(durations: dict[str, float], unfinished: set[str]) -> list[str]:
     """Tests of LONG_TEST_SECONDS or more (and the unfinished ones); in a chained module only its tail."""
-    long = {node for node, seconds in durations.items() if seconds >= LONG_TEST_SECONDS} | unfinished
+    long = {
+        node for node, seconds in durations.items() if seconds >= LONG_TEST_SECONDS
+    } | unfinished
     long = {node for node in long if _module(node) not in ALWAYS_IN_CI}
     for module in CHAINED_MODULES:
         in_order = [node for node in _collected() if _module(node) == module]
@@ -121,10 +142,16 @@ def _prune(fast: list[str], measured: dict[str, float]) -> list[str]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--junit", type=Path, help="a junit XML of a whole-suite run to take the durations from")
+    parser.add_argument(
+        "--junit", type=Path, help="a junit XML of a whole-suite run to take the durations from"
+    )
     args = parser.parse_args()
     durations = _durations(args.junit) if args.junit else _run_pytest(["-n", "2", "-m", ""])[0]
-    unfinished = set(json.loads(TIERS_FILE.read_text())["long"]) - durations.keys() if TIERS_FILE.exists() else set()
+    unfinished = (
+        set(json.loads(TIERS_FILE.read_text())["long"]) - durations.keys()
+        if TIERS_FILE.exists()
+        else set()
+    )
     long = _long_tier(durations, unfinished)
     fast = _fast_candidates(durations)
     TIERS_FILE.write_text(json.dumps({"fast": fast, "long": long}, indent=1) + "\n")
@@ -133,12 +160,18 @@ def main() -> None:
     TIERS_FILE.write_text(json.dumps({"fast": fast, "long": long}, indent=1) + "\n")
     _, wall = _run_pytest(["-m", "fast"])
     modules = {_module(node) for node in durations}
-    print(f"fast tier: {len(fast)} tests of {len({_module(node) for node in fast})}/{len(modules)} modules, "
-          f"{wall:.1f} s wall (limit {FAST_TIER_SECONDS:g} s)")
-    print(f"long tier: {len(long)} tests, {sum(durations.get(node, 0.0) for node in long):.0f} s of test time in the "
-          f"suite run ({len(unfinished)} more that did not finish in it)")
+    print(
+        f"fast tier: {len(fast)} tests of {len({_module(node) for node in fast})}/{len(modules)} modules, "
+        f"{wall:.1f} s wall (limit {FAST_TIER_SECONDS:g} s)"
+    )
+    print(
+        f"long tier: {len(long)} tests, {sum(durations.get(node, 0.0) for node in long):.0f} s of test time in the "
+        f"suite run ({len(unfinished)} more that did not finish in it)"
+    )
     rest = sum(seconds for node, seconds in durations.items() if node not in long)
-    print(f"the rest (CI): {len(durations) - len(long)} tests, {rest:.0f} s of test time in the suite run")
+    print(
+        f"the rest (CI): {len(durations) - len(long)} tests, {rest:.0f} s of test time in the suite run"
+    )
 
 
 if __name__ == "__main__":

@@ -41,28 +41,53 @@ from studies.wind_tunnel import (  # noqa: E402  (the checkout's studies/, besid
     read_wind_tunnel,
 )
 
-#: The descriptions of the propeller: APC's station table (PE0) with the NACA 4412 stand-in or with the E63 section
-#: APC names, and UIUC's measured geometry.
-DESIGNS = {"pe0": ROOT / "examples" / "apc_10x7sf_pe0.toml", "e63": ROOT / "examples" / "apc_10x7sf_e63.toml",
-           "uiuc": ROOT / "examples" / "apc_10x7sf.toml"}
+#: The descriptions of the propeller: APC's station table (PE0) with the NACA 4412 stand-in or with
+#: the E63 section APC names, and UIUC's measured geometry.
+DESIGNS = {
+    "pe0": ROOT / "examples" / "apc_10x7sf_pe0.toml",
+    "e63": ROOT / "examples" / "apc_10x7sf_e63.toml",
+    "uiuc": ROOT / "examples" / "apc_10x7sf.toml",
+}
 
 
-def simulate_point(rpm: float, advance_ratio: float, args: argparse.Namespace, out: Path,
-                   mesh_from: Path | None) -> dict[str, Any]:
+def simulate_point(
+    rpm: float, advance_ratio: float, args: argparse.Namespace, out: Path, mesh_from: Path | None
+) -> dict[str, Any]:
     """One ``torus-cad simulate`` run; its performance report with the process's wall seconds."""
     airspeed = advance_ratio * rpm / 60.0 * APC_10X7SF_DIAMETER_M
-    command = [sys.executable, "-m", "torus_cad", "simulate", str(DESIGNS[args.geometry]), "--rpm", f"{rpm:g}",
-               "--airspeed", f"{airspeed:.6g}", "--level", args.level, "--processes", str(args.processes),
-               "--out", str(out), "-q", *args.simulate_args]
+    command = [
+        sys.executable,
+        "-m",
+        "torus_cad",
+        "simulate",
+        str(DESIGNS[args.geometry]),
+        "--rpm",
+        f"{rpm:g}",
+        "--airspeed",
+        f"{airspeed:.6g}",
+        "--level",
+        args.level,
+        "--processes",
+        str(args.processes),
+        "--out",
+        str(out),
+        "-q",
+        *args.simulate_args,
+    ]
     if mesh_from is not None:
         command += ["--mesh-from", str(mesh_from)]
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
+    env = {
+        **os.environ,
+        "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]),
+    }
     start = time.perf_counter()
     completed = subprocess.run(command, env=env, capture_output=True, text=True, check=False)
     wall = time.perf_counter() - start
     if completed.returncode != 0:
-        raise SystemExit(f"simulate failed at {rpm:g} rpm, J = {advance_ratio:g} (exit {completed.returncode}): "
-                         f"{completed.stderr.strip().splitlines()[-1:]}")
+        raise SystemExit(
+            f"simulate failed at {rpm:g} rpm, J = {advance_ratio:g} (exit {completed.returncode}): "
+            f"{completed.stderr.strip().splitlines()[-1:]}"
+        )
     report = json.loads(next(out.glob("*_performance.json")).read_text(encoding="utf-8"))
     return {**report, "process_wall_seconds": wall}
 
@@ -85,8 +110,18 @@ def write_picture(rows: list[dict[str, Any]], data: Any, path: Path) -> None:
     static_axes.plot(table.column("RPM"), table.column("CT"), "C0-", label="CT measured (UIUC)")
     static_axes.plot(table.column("RPM"), table.column("CP"), "C1-", label="CP measured (UIUC)")
     computed = [row for row in rows if row["advance_ratio"] == 0.0]
-    static_axes.plot([row["rpm"] for row in computed], [row["ct"] for row in computed], "C0o", label="CT simulate")
-    static_axes.plot([row["rpm"] for row in computed], [row["cp"] for row in computed], "C1s", label="CP simulate")
+    static_axes.plot(
+        [row["rpm"] for row in computed],
+        [row["ct"] for row in computed],
+        "C0o",
+        label="CT simulate",
+    )
+    static_axes.plot(
+        [row["rpm"] for row in computed],
+        [row["cp"] for row in computed],
+        "C1s",
+        label="CP simulate",
+    )
     static_axes.set(xlabel="rpm", ylabel="coefficient", title="static (J = 0)")
     sweep = [row for row in rows if row["advance_ratio"] > 0.0]
     if sweep:
@@ -94,11 +129,27 @@ def write_picture(rows: list[dict[str, Any]], data: Any, path: Path) -> None:
         j = measured.column("J")
         for column, style in (("CT", "C0"), ("CP", "C1"), ("eta", "C2")):
             sweep_axes.plot(j, measured.column(column), f"{style}-", label=f"{column} measured")
-        sweep_axes.plot([row["advance_ratio"] for row in sweep], [row["ct"] for row in sweep], "C0o", label="CT simulate")
-        sweep_axes.plot([row["advance_ratio"] for row in sweep], [row["cp"] for row in sweep], "C1s", label="CP simulate")
-        sweep_axes.plot([row["advance_ratio"] for row in sweep], [row["efficiency"] for row in sweep], "C2^",
-                        label="eta simulate")
-        sweep_axes.set(xlabel="advance ratio J", ylim=(0.0, 0.9), title=f"{sweep[0]['rpm']:.0f} rpm")
+        sweep_axes.plot(
+            [row["advance_ratio"] for row in sweep],
+            [row["ct"] for row in sweep],
+            "C0o",
+            label="CT simulate",
+        )
+        sweep_axes.plot(
+            [row["advance_ratio"] for row in sweep],
+            [row["cp"] for row in sweep],
+            "C1s",
+            label="CP simulate",
+        )
+        sweep_axes.plot(
+            [row["advance_ratio"] for row in sweep],
+            [row["efficiency"] for row in sweep],
+            "C2^",
+            label="eta simulate",
+        )
+        sweep_axes.set(
+            xlabel="advance ratio J", ylim=(0.0, 0.9), title=f"{sweep[0]['rpm']:.0f} rpm"
+        )
     for axes in (static_axes, sweep_axes):
         axes.grid(alpha=0.3)
         axes.legend(fontsize=7)
@@ -111,17 +162,30 @@ def write_picture(rows: list[dict[str, Any]], data: Any, path: Path) -> None:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--level", default="coarse", choices=("coarse", "medium", "fine"))
-    parser.add_argument("--geometry", default="pe0", choices=sorted(DESIGNS),
-                        help="the blade from APC's station table with a NACA 4412 (pe0, default) or with the E63 (e63), or "
-                             "UIUC's measured geometry (uiuc)")
+    parser.add_argument(
+        "--geometry",
+        default="pe0",
+        choices=sorted(DESIGNS),
+        help="the blade from APC's station table with a NACA 4412 (pe0, default) or with the E63 (e63), or "
+        "UIUC's measured geometry (uiuc)",
+    )
     parser.add_argument("--processes", type=int, default=2)
-    parser.add_argument("--static", type=float, nargs="*", default=[5000.0, 4000.0, 5987.0],
-                        help="rpm at J = 0 (UIUC measured up to 5987)")
+    parser.add_argument(
+        "--static",
+        type=float,
+        nargs="*",
+        default=[5000.0, 4000.0, 5987.0],
+        help="rpm at J = 0 (UIUC measured up to 5987)",
+    )
     parser.add_argument("--sweep-rpm", type=float, default=5000.0)
     parser.add_argument("--advance-ratios", type=float, nargs="*", default=[0.2, 0.4, 0.6])
     parser.add_argument("--out", type=Path, default=ROOT / "validation_out")
-    parser.add_argument("--simulate-args", nargs=argparse.REMAINDER, default=[],
-                        help="passed on to every torus-cad simulate (e.g. --iterations 400)")
+    parser.add_argument(
+        "--simulate-args",
+        nargs=argparse.REMAINDER,
+        default=[],
+        help="passed on to every torus-cad simulate (e.g. --iterations 400)",
+    )
     args = parser.parse_args()
     data = read_wind_tunnel(APC_10X7SF)
     args.out.mkdir(parents=True, exist_ok=True)
@@ -135,19 +199,37 @@ def main() -> int:
         measured = data.static_point(rpm) if j == 0.0 else data.sweep_point(rpm, j)
         comparison = Comparison(measured, float(report["ct"]), float(report["cp"]))
         comparisons.append(comparison)
-        rows.append({"rpm": rpm, "advance_ratio": j, "ct": comparison.ct, "cp": comparison.cp,
-                     "efficiency": comparison.efficiency, "measured": measured.__dict__,
-                     "ct_error": comparison.ct_error, "cp_error": comparison.cp_error,
-                     "efficiency_error": comparison.efficiency_error, "within_targets": comparison.within_targets,
-                     "cells": report.get("cells"), "y_plus": report.get("y_plus"),
-                     "converged": report.get("converged"), "thrust_n": report["thrust_n"],
-                     "torque_nm": report["torque_nm"], "process_wall_seconds": report["process_wall_seconds"]})
-        print(f"{rpm:.0f} rpm, J = {j:.2f}: CT {comparison.ct:.4f} ({100 * comparison.ct_error:+.1f} %), "
-              f"CP {comparison.cp:.4f} ({100 * comparison.cp_error:+.1f} %), {report['process_wall_seconds']:.0f} s",
-              flush=True)
+        rows.append(
+            {
+                "rpm": rpm,
+                "advance_ratio": j,
+                "ct": comparison.ct,
+                "cp": comparison.cp,
+                "efficiency": comparison.efficiency,
+                "measured": measured.__dict__,
+                "ct_error": comparison.ct_error,
+                "cp_error": comparison.cp_error,
+                "efficiency_error": comparison.efficiency_error,
+                "within_targets": comparison.within_targets,
+                "cells": report.get("cells"),
+                "y_plus": report.get("y_plus"),
+                "converged": report.get("converged"),
+                "thrust_n": report["thrust_n"],
+                "torque_nm": report["torque_nm"],
+                "process_wall_seconds": report["process_wall_seconds"],
+            }
+        )
+        print(
+            f"{rpm:.0f} rpm, J = {j:.2f}: CT {comparison.ct:.4f} ({100 * comparison.ct_error:+.1f} %), "
+            f"CP {comparison.cp:.4f} ({100 * comparison.cp_error:+.1f} %), {report['process_wall_seconds']:.0f} s",
+            flush=True,
+        )
     table = markdown_table(comparisons)
-    (args.out / "validation.json").write_text(json.dumps({"level": args.level, "geometry": args.geometry, "points": rows}, indent=2) + "\n",
-                                              encoding="utf-8")
+    (args.out / "validation.json").write_text(
+        json.dumps({"level": args.level, "geometry": args.geometry, "points": rows}, indent=2)
+        + "\n",
+        encoding="utf-8",
+    )
     (args.out / "validation.md").write_text(table + "\n", encoding="utf-8")
     write_picture(rows, data, args.out / "validation_apc_10x7sf.png")
     print(table)

@@ -27,7 +27,9 @@ POINTS = ((4000.0, 0.0), (5000.0, 0.0), (5987.0, 0.0), (5000.0, 0.2), (5000.0, 0
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     parser.add_argument("--design", type=Path, default=ROOT / "examples" / "apc_10x7sf.toml")
     parser.add_argument("--chordwise", type=int, default=8)
     parser.add_argument("--spanwise", type=int, default=24)
@@ -45,9 +47,18 @@ def main(argv: list[str] | None = None) -> int:
         diameter_m = 2.0 * params.conventional.diameter / 2000.0
         airspeed = advance * rpm / 60.0 * diameter_m
         start = time.perf_counter()
-        result = vortex_performance(params, rpm, airspeed, Discretisation(args.chordwise, args.spanwise),
-                                    viscous=not args.inviscid)
-        print(f"{rpm:.0f} rpm, J {advance:.2f}: {time.perf_counter() - start:.1f} s", file=sys.stderr, flush=True)
+        result = vortex_performance(
+            params,
+            rpm,
+            airspeed,
+            Discretisation(args.chordwise, args.spanwise),
+            viscous=not args.inviscid,
+        )
+        print(
+            f"{rpm:.0f} rpm, J {advance:.2f}: {time.perf_counter() - start:.1f} s",
+            file=sys.stderr,
+            flush=True,
+        )
         comparisons.append(Comparison(measured, result.report["ct"], result.report["cp"]))
     print(markdown_table(comparisons, "vortex"))
     return 0

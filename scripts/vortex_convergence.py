@@ -22,13 +22,26 @@ from pathlib import Path
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     parser.add_argument("--design", type=Path)
     parser.add_argument("--rpm", type=float, default=10000.0)
     parser.add_argument("--airspeed", type=float, default=0.0)
-    parser.add_argument("--coarsest", type=int, nargs=3, default=(4, 15, 12), metavar=("CHORDWISE", "SPANWISE", "STEPS"),
-                        help="the coarsest lattice: rings across the chord, strips, wake steps a turn (default 4 15 12)")
-    parser.add_argument("--ratio", type=float, default=2.0 ** 0.5, help="refinement ratio between lattices (default sqrt 2)")
+    parser.add_argument(
+        "--coarsest",
+        type=int,
+        nargs=3,
+        default=(4, 15, 12),
+        metavar=("CHORDWISE", "SPANWISE", "STEPS"),
+        help="the coarsest lattice: rings across the chord, strips, wake steps a turn (default 4 15 12)",
+    )
+    parser.add_argument(
+        "--ratio",
+        type=float,
+        default=2.0**0.5,
+        help="refinement ratio between lattices (default sqrt 2)",
+    )
     parser.add_argument("--inviscid", action="store_true", help="no section polars")
     args = parser.parse_args(argv)
     from torus_cad.parameters import PropellerParameters
@@ -42,16 +55,34 @@ def main(argv: list[str] | None = None) -> int:
         scale = args.ratio**level
         chordwise, spanwise, steps = (max(2, round(value * scale)) for value in args.coarsest)
         lattice = Discretisation(chordwise, spanwise)
-        lattice = dataclasses.replace(lattice, wake=dataclasses.replace(lattice.wake, steps_per_turn=steps))
+        lattice = dataclasses.replace(
+            lattice, wake=dataclasses.replace(lattice.wake, steps_per_turn=steps)
+        )
         start = time.process_time()
-        report = vortex_performance(params, args.rpm, args.airspeed, lattice, viscous=not args.inviscid).report
-        rows.append((chordwise, spanwise, steps, report["thrust_n"], report["torque_nm"], time.process_time() - start))
-        print(f"| {chordwise} | {spanwise} | {steps} | {report['thrust_n']:.6g} | {report['torque_nm'] * 1000:.6g} | "
-              f"{rows[-1][-1]:.1f} |", flush=True)
+        report = vortex_performance(
+            params, args.rpm, args.airspeed, lattice, viscous=not args.inviscid
+        ).report
+        rows.append(
+            (
+                chordwise,
+                spanwise,
+                steps,
+                report["thrust_n"],
+                report["torque_nm"],
+                time.process_time() - start,
+            )
+        )
+        print(
+            f"| {chordwise} | {spanwise} | {steps} | {report['thrust_n']:.6g} | {report['torque_nm'] * 1000:.6g} | "
+            f"{rows[-1][-1]:.1f} |",
+            flush=True,
+        )
     for name, column in (("thrust", 3), ("torque", 4)):
         study = richardson(rows[0][column], rows[1][column], rows[2][column], args.ratio)
         if study.converges_monotonically:
-            print(f"{name}: monotonic, observed order {study.order:.2f}, GCI_fine {study.gci_fine:.2%}")
+            print(
+                f"{name}: monotonic, observed order {study.order:.2f}, GCI_fine {study.gci_fine:.2%}"
+            )
         else:
             print(f"{name}: not monotonic ({', '.join(f'{row[column]:.6g}' for row in rows)})")
     return 0

@@ -105,12 +105,18 @@ CANDIDATES: Final[tuple[Candidate, ...]] = (
     Candidate("poly6", "6th-Degree Polynomial", tuple(f"a{i}" for i in range(7)), True, 0.845),
     Candidate("fourier2", "Fourier Series (Order 2)", ("A0", "A1", "B1", "A2", "B2"), True, 2.441),
     Candidate(
-        "fourier3", "Fourier Series (Order 3)", ("A0", "A1", "B1", "A2", "B2", "A3", "B3"), True, 1.193
+        "fourier3",
+        "Fourier Series (Order 3)",
+        ("A0", "A1", "B1", "A2", "B2", "A3", "B3"),
+        True,
+        1.193,
     ),
     Candidate("sinusoid", "Sinusoidal Function", ("A", "B", "C", "D"), False, 5.748),
 )
 CANDIDATE_NAMES: Final[tuple[str, ...]] = tuple(candidate.name for candidate in CANDIDATES)
-_CANDIDATE_BY_NAME: Final[dict[str, Candidate]] = {candidate.name: candidate for candidate in CANDIDATES}
+_CANDIDATE_BY_NAME: Final[dict[str, Candidate]] = {
+    candidate.name: candidate for candidate in CANDIDATES
+}
 
 
 def candidate_by_name(name: str) -> Candidate:
@@ -118,7 +124,9 @@ def candidate_by_name(name: str) -> Candidate:
     try:
         return _CANDIDATE_BY_NAME[name]
     except KeyError:
-        raise ParameterError(f"candidate = {name!r} is unknown; allowed: {', '.join(CANDIDATE_NAMES)}") from None
+        raise ParameterError(
+            f"candidate = {name!r} is unknown; allowed: {', '.join(CANDIDATE_NAMES)}"
+        ) from None
 
 
 # --------------------------------------------------------------------------------------------
@@ -159,7 +167,9 @@ class StudyConfig:
         _check_choice("sinusoid_start", self.sinusoid_start, SINUSOID_STARTS)
         _check_choice("generator_draw", self.generator_draw, GENERATOR_DRAWS)
         _check_choice("knot_placement", self.knot_placement, KNOT_PLACEMENTS)
-        _check_int("sinusoid_max_evaluations", self.sinusoid_max_evaluations, 1, MAX_SINUSOID_EVALUATIONS)
+        _check_int(
+            "sinusoid_max_evaluations", self.sinusoid_max_evaluations, 1, MAX_SINUSOID_EVALUATIONS
+        )
 
     def describe(self) -> str:
         """One line per choice, for printing above the tables."""
@@ -181,8 +191,10 @@ class StudyConfig:
                 f"points n = {self.points}, evenly spaced on [0, 1]",
                 f"generator draw: {draw}",
                 f"piecewise-linear: {knots}",
-                (f"sinusoid fit: Levenberg-Marquardt, start = {self.sinusoid_start}: {start}; "
-                 f"budget {self.sinusoid_max_evaluations} evaluations"),
+                (
+                    f"sinusoid fit: Levenberg-Marquardt, start = {self.sinusoid_start}: {start}; "
+                    f"budget {self.sinusoid_max_evaluations} evaluations"
+                ),
             ]
         )
 
@@ -191,12 +203,16 @@ def _check_int(field_name: str, value: object, low: int, high: int) -> None:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
         raise ParameterError(f"{field_name} = {value!r} must be an integer in [{low}, {high}]")
     if not low <= int(value) <= high:
-        raise ParameterError(f"{field_name} = {value} is out of range; allowed: integer in [{low}, {high}]")
+        raise ParameterError(
+            f"{field_name} = {value} is out of range; allowed: integer in [{low}, {high}]"
+        )
 
 
 def _check_choice(field_name: str, value: object, allowed: Sequence[str]) -> None:
     if value not in allowed:
-        raise ParameterError(f"{field_name} = {value!r} is not allowed; allowed: {', '.join(allowed)}")
+        raise ParameterError(
+            f"{field_name} = {value!r} is not allowed; allowed: {', '.join(allowed)}"
+        )
 
 
 def sample_grid(points: int) -> FloatArray:
@@ -212,7 +228,9 @@ def sample_grid(points: int) -> FloatArray:
 GeneratorParameters = dict[str, Any]
 
 
-def random_sinusoid(rng: np.random.Generator, s: FloatArray) -> tuple[FloatArray, GeneratorParameters]:
+def random_sinusoid(
+    rng: np.random.Generator, s: FloatArray
+) -> tuple[FloatArray, GeneratorParameters]:
     """A sin(2π F s + φ), A ~ U(0.5, 2), F ~ U(1, 3), φ ~ U(0, π); values of shape (n,)."""
     amplitude = rng.uniform(0.5, 2.0)
     frequency = rng.uniform(1.0, 3.0)
@@ -221,7 +239,9 @@ def random_sinusoid(rng: np.random.Generator, s: FloatArray) -> tuple[FloatArray
     return values, {"A": amplitude, "F": frequency, "phi": phase}
 
 
-def random_polynomial(rng: np.random.Generator, s: FloatArray) -> tuple[FloatArray, GeneratorParameters]:
+def random_polynomial(
+    rng: np.random.Generator, s: FloatArray
+) -> tuple[FloatArray, GeneratorParameters]:
     """Σ_{i=0}^{d} c_i s^i, d ~ U{1, …, 8}, c_i ~ U(−2, 2); values of shape (n,)."""
     degree = int(rng.integers(1, 9))
     coefficients = rng.uniform(-2.0, 2.0, size=degree + 1)
@@ -229,7 +249,9 @@ def random_polynomial(rng: np.random.Generator, s: FloatArray) -> tuple[FloatArr
     return values, {"degree": degree, "c": coefficients.tolist()}
 
 
-def random_logistic(rng: np.random.Generator, s: FloatArray) -> tuple[FloatArray, GeneratorParameters]:
+def random_logistic(
+    rng: np.random.Generator, s: FloatArray
+) -> tuple[FloatArray, GeneratorParameters]:
     """L / (1 + exp(−k (s − s0))), L ~ U(1, 50), k ~ U(8, 100), s0 ~ U(0.1, 0.9); shape (n,)."""
     capacity = rng.uniform(1.0, 50.0)
     growth_rate = rng.uniform(8.0, 100.0)
@@ -254,7 +276,11 @@ def random_piecewise_linear(
         knot_positions = np.sort(rng.uniform(0.0, 1.0, size=knot_count))
     knot_values = rng.uniform(-1.0, 1.0, size=knot_count)
     values = np.interp(s, knot_positions, knot_values)
-    return values, {"knots": knot_count, "s_i": knot_positions.tolist(), "y_i": knot_values.tolist()}
+    return values, {
+        "knots": knot_count,
+        "s_i": knot_positions.tolist(),
+        "y_i": knot_values.tolist(),
+    }
 
 
 @dataclass(frozen=True)
@@ -276,11 +302,15 @@ def draw_random_functions(config: StudyConfig) -> RandomFunctionBatch:
     config.validate()
     rng = np.random.default_rng(config.seed)
     s = sample_grid(config.points)
-    generators: tuple[Callable[[np.random.Generator, FloatArray], tuple[FloatArray, GeneratorParameters]], ...] = (
+    generators: tuple[
+        Callable[[np.random.Generator, FloatArray], tuple[FloatArray, GeneratorParameters]], ...
+    ] = (
         random_sinusoid,
         random_polynomial,
         random_logistic,
-        lambda generator_rng, grid: random_piecewise_linear(generator_rng, grid, config.knot_placement),
+        lambda generator_rng, grid: random_piecewise_linear(
+            generator_rng, grid, config.knot_placement
+        ),
     )
     values = np.empty((config.samples, config.points))
     generator_index = np.empty(config.samples, dtype=np.int64)
@@ -293,7 +323,9 @@ def draw_random_functions(config: StudyConfig) -> RandomFunctionBatch:
         values[sample], drawn = generators[index](rng, s)
         generator_index[sample] = index
         parameters.append(drawn)
-    return RandomFunctionBatch(s=s, values=values, generator_index=generator_index, generator_parameters=parameters)
+    return RandomFunctionBatch(
+        s=s, values=values, generator_index=generator_index, generator_parameters=parameters
+    )
 
 
 # --------------------------------------------------------------------------------------------
@@ -317,10 +349,14 @@ def design_matrix(candidate: str, s: FloatArray) -> FloatArray:
         for k in range(1, order + 1):
             columns += [np.cos(2.0 * math.pi * k * s), np.sin(2.0 * math.pi * k * s)]
         return np.column_stack(columns)
-    raise ParameterError(f"candidate = {candidate!r} is not linear; allowed: poly4, poly6, fourier2, fourier3")
+    raise ParameterError(
+        f"candidate = {candidate!r} is not linear; allowed: poly4, poly6, fourier2, fourier3"
+    )
 
 
-def fit_linear_candidate(candidate: str, s: FloatArray, values: FloatArray) -> tuple[FloatArray, FloatArray]:
+def fit_linear_candidate(
+    candidate: str, s: FloatArray, values: FloatArray
+) -> tuple[FloatArray, FloatArray]:
     """Least-squares fit of a linear candidate to all samples in one batched ``lstsq`` call.
 
     ``s`` has shape (n,), ``values`` shape (N, n).  Returns ``(coefficients, residuals)``
@@ -353,14 +389,25 @@ def _sinusoid_linear_solve(
     coefficients = np.einsum("nkij,nj->nki", np.linalg.pinv(basis), values)  # (N, K, 3)
     residuals = values[:, None, :] - np.einsum("nkij,nkj->nki", basis, coefficients)
     sse = np.einsum("nki,nki->nk", residuals, residuals)
-    sin_weight, cos_weight, offset = coefficients[..., 0], coefficients[..., 1], coefficients[..., 2]
+    sin_weight, cos_weight, offset = (
+        coefficients[..., 0],
+        coefficients[..., 1],
+        coefficients[..., 2],
+    )
     parameters = np.stack(
-        [np.hypot(sin_weight, cos_weight), angular_frequency, np.arctan2(cos_weight, sin_weight), offset], axis=-1
+        [
+            np.hypot(sin_weight, cos_weight),
+            angular_frequency,
+            np.arctan2(cos_weight, sin_weight),
+            offset,
+        ],
+        axis=-1,
     )
     return parameters, sse
 
 
-#: Trial frequencies of the FFT start: offsets (cycles) around the FFT peak, and low frequencies always tried.
+#: Trial frequencies of the FFT start: offsets (cycles) around the FFT peak, and low frequencies
+#: always tried.
 FFT_START_PEAK_OFFSETS: Final[tuple[float, ...]] = (-0.75, -0.5, -0.25, 0.0, 0.25, 0.5, 0.75)
 FFT_START_LOW_FREQUENCIES: Final[tuple[float, ...]] = (0.25, 0.5, 0.75)
 _FFT_START_CHUNK: Final[int] = 1000
@@ -384,13 +431,16 @@ def fft_start_parameters(s: FloatArray, values: FloatArray) -> FloatArray:
     trial = np.concatenate(
         [
             peak_frequency[:, None] + np.asarray(FFT_START_PEAK_OFFSETS)[None, :],
-            np.broadcast_to(np.asarray(FFT_START_LOW_FREQUENCIES), (len(values), len(FFT_START_LOW_FREQUENCIES))),
+            np.broadcast_to(
+                np.asarray(FFT_START_LOW_FREQUENCIES), (len(values), len(FFT_START_LOW_FREQUENCIES))
+            ),
         ],
         axis=1,
     )
     trial = np.maximum(trial, FFT_START_LOW_FREQUENCIES[0])  # peak bin 1 minus 0.75 would be ≤ 0
     starts = np.empty((len(values), 4))
-    for first in range(0, len(values), _FFT_START_CHUNK):  # chunks bound the (chunk, K, n, 3) basis array
+    # chunks bound the (chunk, K, n, 3) basis array
+    for first in range(0, len(values), _FFT_START_CHUNK):
         chunk = slice(first, first + _FFT_START_CHUNK)
         parameters, sse = _sinusoid_linear_solve(s, values[chunk], 2.0 * math.pi * trial[chunk])
         best = np.argmin(sse, axis=1)
@@ -454,7 +504,11 @@ def fit_sinusoid(
 
         with np.errstate(all="ignore"):
             result = least_squares(
-                residual, starts[sample], jac=residual_jacobian, method="lm", max_nfev=max_evaluations
+                residual,
+                starts[sample],
+                jac=residual_jacobian,
+                method="lm",
+                max_nfev=max_evaluations,
             )
         finite = bool(np.all(np.isfinite(result.x)) and np.isfinite(result.cost))
         parameters[sample] = result.x if finite else starts[sample]
@@ -462,7 +516,11 @@ def fit_sinusoid(
         evaluations[sample] = result.nfev
         converged[sample] = finite and result.status > 0
     return SinusoidFits(
-        parameters=parameters, start_parameters=starts, converged=converged, status=status, evaluations=evaluations
+        parameters=parameters,
+        start_parameters=starts,
+        converged=converged,
+        status=status,
+        evaluations=evaluations,
     )
 
 
@@ -548,7 +606,9 @@ class StudyResult:
                     "median_range_normalised_sse": _median_or_nan(normalised),
                     "spec_table_1": candidate.spec_table_value,
                     "not_converged": (
-                        int(np.count_nonzero(~self.sinusoid.converged[mask])) if candidate.name == "sinusoid" else 0
+                        int(np.count_nonzero(~self.sinusoid.converged[mask]))
+                        if candidate.name == "sinusoid"
+                        else 0
                     ),
                 }
             )
@@ -628,13 +688,17 @@ def run_study(config: StudyConfig | None = None) -> StudyResult:
     for column, candidate in enumerate(CANDIDATES):
         if not candidate.is_linear:
             continue
-        coefficients, residuals = fit_linear_candidate(candidate.name, functions.s, functions.values)
+        coefficients, residuals = fit_linear_candidate(
+            candidate.name, functions.s, functions.values
+        )
         fitted[candidate.name] = coefficients
         mse[:, column] = mean_squared_error(residuals)
         normalised[:, column] = range_normalised_sse(residuals, functions.values)
     clock_linear = time.perf_counter()
 
-    sinusoid = fit_sinusoid(functions.s, functions.values, config.sinusoid_start, config.sinusoid_max_evaluations)
+    sinusoid = fit_sinusoid(
+        functions.s, functions.values, config.sinusoid_start, config.sinusoid_max_evaluations
+    )
     residuals = functions.values - sinusoid_values(sinusoid.parameters, functions.s)
     column = CANDIDATE_NAMES.index("sinusoid")
     fitted["sinusoid"] = sinusoid.parameters
@@ -678,17 +742,29 @@ def _render_table(headers: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
 
     def render(cells: Sequence[str]) -> str:
         return "  ".join(
-            cell.ljust(width) if i == 0 else cell.rjust(width) for i, (cell, width) in enumerate(zip(cells, widths))
+            cell.ljust(width) if i == 0 else cell.rjust(width)
+            for i, (cell, width) in enumerate(zip(cells, widths))
         )
 
-    return "\n".join([render(headers), "  ".join("-" * width for width in widths), *(render(row) for row in rows)])
+    return "\n".join(
+        [
+            render(headers),
+            "  ".join("-" * width for width in widths),
+            *(render(row) for row in rows),
+        ]
+    )
 
 
 def format_overall_table(result: StudyResult) -> str:
     """Text table: per candidate, parameters, mean (± standard error) and median of both errors, spec value."""
     headers = [
-        "candidate", "params", "mean MSE ± s.e.", "median MSE",
-        "mean norm-SSE ± s.e.", "median norm-SSE", "spec Table 1",
+        "candidate",
+        "params",
+        "mean MSE ± s.e.",
+        "median MSE",
+        "mean norm-SSE ± s.e.",
+        "median norm-SSE",
+        "spec Table 1",
     ]
     rows = [
         [
@@ -696,8 +772,10 @@ def format_overall_table(result: StudyResult) -> str:
             str(row["parameters"]),
             f"{_format_number(row['mean_mse'])} ± {_format_number(row['standard_error_mse'])}",
             _format_number(row["median_mse"]),
-            (f"{_format_number(row['mean_range_normalised_sse'])} ± "
-             f"{_format_number(row['standard_error_range_normalised_sse'])}"),
+            (
+                f"{_format_number(row['mean_range_normalised_sse'])} ± "
+                f"{_format_number(row['standard_error_range_normalised_sse'])}"
+            ),
             _format_number(row["median_range_normalised_sse"]),
             f"{row['spec_table_1']:.3f}",
         ]
@@ -720,8 +798,14 @@ def format_overall_table(result: StudyResult) -> str:
 def format_generator_table(result: StudyResult) -> str:
     """Text table: the overall table broken down by generator."""
     headers = [
-        "generator / candidate", "N", "params", "mean MSE", "median MSE",
-        "mean norm-SSE", "median norm-SSE", "not conv.",
+        "generator / candidate",
+        "N",
+        "params",
+        "mean MSE",
+        "median MSE",
+        "mean norm-SSE",
+        "median norm-SSE",
+        "not conv.",
     ]
     rows = []
     for generator in GENERATOR_NAMES:
@@ -784,7 +868,11 @@ def write_fits_csv(result: StudyResult, path: str | Path) -> Path:
             generator_text = _format_parameters(result.functions.generator_parameters[sample])
             for column, candidate in enumerate(CANDIDATES):
                 fitted = result.fitted_parameters[candidate.name][sample]
-                converged = bool(result.sinusoid.converged[sample]) if candidate.name == "sinusoid" else True
+                converged = (
+                    bool(result.sinusoid.converged[sample])
+                    if candidate.name == "sinusoid"
+                    else True
+                )
                 writer.writerow(
                     [
                         sample,
@@ -796,7 +884,8 @@ def write_fits_csv(result: StudyResult, path: str | Path) -> Path:
                         repr(float(result.range_normalised_sse[sample, column])),
                         converged,
                         ";".join(
-                            f"{name}={value!r}" for name, value in zip(candidate.parameter_names, fitted.tolist())
+                            f"{name}={value!r}"
+                            for name, value in zip(candidate.parameter_names, fitted.tolist())
                         ),
                     ]
                 )
@@ -864,11 +953,23 @@ def plot_errors(result: StudyResult, path: str | Path) -> Path:
             for median in boxes["medians"]:
                 median.set_color("black")
             axis.scatter(
-                positions, means, marker="D", s=22, color="white", edgecolors="black", zorder=3,
+                positions,
+                means,
+                marker="D",
+                s=22,
+                color="white",
+                edgecolors="black",
+                zorder=3,
                 label=None,
             )
-            axis.plot([], [], color=colours[column], linewidth=8, alpha=0.75,
-                      label=f"{candidate.label} ({candidate.parameter_count} p.)")
+            axis.plot(
+                [],
+                [],
+                color=colours[column],
+                linewidth=8,
+                alpha=0.75,
+                label=f"{candidate.label} ({candidate.parameter_count} p.)",
+            )
         axis.set_yscale("log")
         axis.set_ylabel(label)
         axis.grid(True, axis="y", which="major", alpha=0.3)
@@ -877,7 +978,10 @@ def plot_errors(result: StudyResult, path: str | Path) -> Path:
     axes[0].scatter([], [], marker="D", s=22, color="white", edgecolors="black", label="mean")
     handles, labels = axes[0].get_legend_handles_labels()
     figure.legend(handles, labels, loc="lower center", ncol=len(labels), fontsize=8, frameon=False)
-    counts = [int(np.count_nonzero(result.functions.generator_index == i)) for i in range(len(GENERATOR_NAMES))]
+    counts = [
+        int(np.count_nonzero(result.functions.generator_index == i))
+        for i in range(len(GENERATOR_NAMES))
+    ]
     axes[1].set_xticks(range(len(groups)))
     axes[1].set_xticklabels(
         [f"{name}\n(N={count})" for name, count in zip(groups, [*counts, result.config.samples])]

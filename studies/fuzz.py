@@ -30,7 +30,9 @@ def fuzz_range(key: str) -> tuple[float, float]:
     (its allowed range unless the declaration narrows it with ``param(..., fuzz=(low, high))``)."""
     bounds = _SPECS[key].fuzz
     if bounds is None or bounds.low is None or bounds.high is None:
-        raise ValueError(f"{key} has no finite fuzz range; declare one with param(..., fuzz=(low, high))")
+        raise ValueError(
+            f"{key} has no finite fuzz range; declare one with param(..., fuzz=(low, high))"
+        )
     return float(bounds.low), float(bounds.high)
 
 
@@ -52,6 +54,7 @@ def _whole(u: float, key: str) -> int:
 
 # -- sampling --------------------------------------------------------------------------------
 
+
 def _lerp(u: float, low: float, high: float) -> float:
     return low + (high - low) * float(u)
 
@@ -60,7 +63,9 @@ def _log_lerp(u: float, low: float, high: float) -> float:
     return math.exp(_lerp(u, math.log(low), math.log(high)))
 
 
-def _positive_quartic(ends: tuple[float, float], bulge: float, wiggle: float, floor: float) -> tuple[float, ...]:
+def _positive_quartic(
+    ends: tuple[float, float], bulge: float, wiggle: float, floor: float
+) -> tuple[float, ...]:
     """A scale quartic (mm) that stays positive on [0, 1].
 
     S(s) = v0 (1 - s) + v1 s + 4 h s (1 - s) + 16 w s^2 (1 - s)^2 with end values ``ends``,
@@ -77,8 +82,12 @@ def _positive_quartic(ends: tuple[float, float], bulge: float, wiggle: float, fl
     return tuple(float(value) for value in coefficients)
 
 
-def design_dict_from_unit(u: Sequence[float], name: str = "fuzz", sections: tuple[int, int] | None = None,
-                          points: tuple[int, int] | None = None) -> dict[str, Any]:
+def design_dict_from_unit(
+    u: Sequence[float],
+    name: str = "fuzz",
+    sections: tuple[int, int] | None = None,
+    points: tuple[int, int] | None = None,
+) -> dict[str, Any]:
     """Map ``u`` in [0, 1]^UNIT_DIMENSION to a design as a nested dict (the TOML layout).
 
     The first number sets a *wildness* w in [0, 1]: every geometric quantity is the default
@@ -98,7 +107,9 @@ def design_dict_from_unit(u: Sequence[float], name: str = "fuzz", sections: tupl
     """
     u = np.clip(np.asarray(u, dtype=float), 0.0, 1.0)
     if u.shape != (UNIT_DIMENSION,):
-        raise ValueError(f"design_dict_from_unit needs {UNIT_DIMENSION} numbers in [0, 1], got shape {u.shape}")
+        raise ValueError(
+            f"design_dict_from_unit needs {UNIT_DIMENSION} numbers in [0, 1], got shape {u.shape}"
+        )
     it: Iterator[float] = iter(u.tolist())
 
     def take() -> float:
@@ -127,12 +138,16 @@ def design_dict_from_unit(u: Sequence[float], name: str = "fuzz", sections: tupl
     symmetric, camber = take() < 0.2, take()  # one design in five has a symmetric section
     max_camber = 0.0 if symmetric else _lerp(camber, *fuzz_range("airfoil.max_camber"))
     camber_position = _lerp(take(), *fuzz_range("airfoil.camber_position"))
-    thickness = float(np.clip(vary(_default("airfoil.thickness"), 8.0), *fuzz_range("airfoil.thickness")))
+    thickness = float(
+        np.clip(vary(_default("airfoil.thickness"), 8.0), *fuzz_range("airfoil.thickness"))
+    )
     camber_normal = take() < 0.5
     pivot = float(np.clip(wild * take(), *fuzz_range("airfoil.pivot")))
 
     pitch = 360.0 if blades == 1 else 360.0 / blades
-    span = pitch * (0.83 if blades > 1 else 100.0 / 360.0) * math.exp(wild * _lerp(take(), -1.0, 0.33))
+    span = (
+        pitch * (0.83 if blades > 1 else 100.0 / 360.0) * math.exp(wild * _lerp(take(), -1.0, 0.33))
+    )
     span = float(np.clip(span, 10.0, 1.15 * pitch if blades > 1 else 340.0))
     x2 = span * shift(0.25, 0.6)
     x3 = span * shift(0.75, 0.6)
@@ -147,33 +162,62 @@ def design_dict_from_unit(u: Sequence[float], name: str = "fuzz", sections: tupl
     x2, x3 = (float(np.clip(x, -359.0, 359.0)) for x in (x2, x3))
     frame = _choice(take(), "centerline.frame")
 
-    alpha = (shift(0.0, 250.0), shift(0.0, 250.0), shift(0.0, 250.0), shift(0.0, 250.0), shift(20.0, 90.0))
-    # Sections shrink with the span (a shorter blade bends tighter); ends start at half the default's.
+    alpha = (
+        shift(0.0, 250.0),
+        shift(0.0, 250.0),
+        shift(0.0, 250.0),
+        shift(0.0, 250.0),
+        shift(20.0, 90.0),
+    )
+    # Sections shrink with the span (a shorter blade bends tighter); ends start at half the
+    # default's.
     chord = size * min(1.0, span / 100.0)
-    scale_x = _positive_quartic((vary(3.0 * chord, 3.0), vary(3.0 * chord, 3.0)), vary(5.0 * chord, 3.0),
-                                shift(0.0, 3.0 * chord), 0.02 * radius)
-    scale_y = _positive_quartic((vary(1.0 * chord, 3.0), vary(1.0 * chord, 3.0)), vary(1.5 * chord, 3.0),
-                                shift(0.0, 1.0 * chord), 0.02 * radius)
+    scale_x = _positive_quartic(
+        (vary(3.0 * chord, 3.0), vary(3.0 * chord, 3.0)),
+        vary(5.0 * chord, 3.0),
+        shift(0.0, 3.0 * chord),
+        0.02 * radius,
+    )
+    scale_y = _positive_quartic(
+        (vary(1.0 * chord, 3.0), vary(1.0 * chord, 3.0)),
+        vary(1.5 * chord, 3.0),
+        shift(0.0, 1.0 * chord),
+        0.02 * radius,
+    )
 
     section_count = round(_lerp(take(), *(sections or fuzz_range("resolution.sections"))))
     point_count = round(_lerp(take(), *(points or fuzz_range("resolution.points"))))
     linear_deflection = _log_lerp(take(), *fuzz_range("export.stl_linear_deflection"))
     angular_deflection = _lerp(take(), *fuzz_range("export.stl_angular_deflection"))
     schema = _choice(take(), "export.step_schema")
-    assert next(it, None) is None, "UNIT_DIMENSION does not match the numbers design_dict_from_unit takes"
+    assert next(it, None) is None, (
+        "UNIT_DIMENSION does not match the numbers design_dict_from_unit takes"
+    )
 
     return {
         "name": name,
         "blades": blades,
         "phase_deg": phase,
         "hub": {"radius": radius, "length": length},
-        "airfoil": {"max_camber": max_camber, "camber_position": camber_position, "thickness": thickness,
-                    "camber_normal": camber_normal, "pivot": pivot},
+        "airfoil": {
+            "max_camber": max_camber,
+            "camber_position": camber_position,
+            "thickness": thickness,
+            "camber_normal": camber_normal,
+            "pivot": pivot,
+        },
         "centerline": {"p2": [x2, y2, z2], "p3": [x3, y3, z3], "p4": [x4, y4], "frame": frame},
-        "transforms": {"angle_of_attack": list(alpha), "scale_x": list(scale_x), "scale_y": list(scale_y)},
+        "transforms": {
+            "angle_of_attack": list(alpha),
+            "scale_x": list(scale_x),
+            "scale_y": list(scale_y),
+        },
         "resolution": {"sections": section_count, "points": point_count},
-        "export": {"stl_linear_deflection": linear_deflection, "stl_angular_deflection": angular_deflection,
-                   "step_schema": schema},
+        "export": {
+            "stl_linear_deflection": linear_deflection,
+            "stl_angular_deflection": angular_deflection,
+            "step_schema": schema,
+        },
     }
 
 
@@ -226,8 +270,18 @@ def random_design(seed: int, **kwargs: Any) -> PropellerParameters:
     return PropellerParameters.from_dict(random_design_dict(seed, **kwargs))
 
 
-def fuzz_tasks(designs: Sequence[dict[str, Any]], write: bool = True, stl: bool = True) -> list[DesignTask]:
+def fuzz_tasks(
+    designs: Sequence[dict[str, Any]], write: bool = True, stl: bool = True
+) -> list[DesignTask]:
     """Batch tasks for ``designs`` (dicts): built, written to a temporary folder and read back (``write``)."""
-    return [DesignTask(str(design.get("name", f"design_{index}")), design, folder=None, write=write, stl=stl,
-                       verify=write)
-            for index, design in enumerate(designs)]
+    return [
+        DesignTask(
+            str(design.get("name", f"design_{index}")),
+            design,
+            folder=None,
+            write=write,
+            stl=stl,
+            verify=write,
+        )
+        for index, design in enumerate(designs)
+    ]

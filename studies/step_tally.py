@@ -33,17 +33,26 @@ def tally_design_dict(seed: int, fillet_share: float = FILLET_SHARE) -> dict[str
     """The design of ``seed`` as a nested dict (the TOML layout), named ``tally_<seed>``; a root fillet on
     ``fillet_share`` of the designs."""
     rng = np.random.default_rng([seed, 45])
-    design = _conventional(seed, rng) if rng.random() < CONVENTIONAL_SHARE else random_design_dict(seed, workshop=True)
+    design = (
+        _conventional(seed, rng)
+        if rng.random() < CONVENTIONAL_SHARE
+        else random_design_dict(seed, workshop=True)
+    )
     design["name"] = f"tally_{seed}"
     airfoil = design.setdefault("airfoil", {})
-    if airfoil.get("trailing_edge_thickness", 0.0) > 0.0 and rng.random() < FLAT_TRAILING_EDGE_SHARE:
+    if (
+        airfoil.get("trailing_edge_thickness", 0.0) > 0.0
+        and rng.random() < FLAT_TRAILING_EDGE_SHARE
+    ):
         airfoil["trailing_edge_shape"] = "flat"
     if rng.random() < fillet_share:
         hub = design.setdefault("hub", {})
         hub["root_fillet_radius"] = float(rng.uniform(0.2, 1.0))
         hub["root_fillet_tight_bends"] = "reduce" if rng.random() < 0.5 else "fail"
         airfoil["trailing_edge_shape"] = "round"
-        airfoil["trailing_edge_thickness"] = max(airfoil.get("trailing_edge_thickness", 0.0), float(rng.uniform(0.2, 0.8)))
+        airfoil["trailing_edge_thickness"] = max(
+            airfoil.get("trailing_edge_thickness", 0.0), float(rng.uniform(0.2, 0.8))
+        )
     return design
 
 
@@ -59,8 +68,14 @@ def _conventional(seed: int, rng: np.random.Generator) -> dict[str, Any]:
     design: dict[str, Any] = {
         "kind": "conventional",
         "blades": int(rng.integers(2, 7)),
-        "conventional": {"diameter": diameter, "r_over_R": list(_R_OVER_R), "c_over_R": [c * chord for c in _C_OVER_R],
-                         "beta": beta, "thickness_ratio": list(_THICKNESS), "stacking": float(rng.uniform(0.2, 0.4))},
+        "conventional": {
+            "diameter": diameter,
+            "r_over_R": list(_R_OVER_R),
+            "c_over_R": [c * chord for c in _C_OVER_R],
+            "beta": beta,
+            "thickness_ratio": list(_THICKNESS),
+            "stacking": float(rng.uniform(0.2, 0.4)),
+        },
         "airfoil": {"naca": "4412"},
         "resolution": {"sections": int(rng.integers(20, 41)), "points": int(rng.integers(48, 97))},
     }
@@ -69,7 +84,9 @@ def _conventional(seed: int, rng: np.random.Generator) -> dict[str, Any]:
             design.setdefault(table, {}).update(values)
         else:
             design[table] = values
-    design["hub"].update({"radius": hub_radius, "length": float(rng.uniform(0.8, 1.6)) * hub_radius})
+    design["hub"].update(
+        {"radius": hub_radius, "length": float(rng.uniform(0.8, 1.6)) * hub_radius}
+    )
     return design
 
 

@@ -61,7 +61,9 @@ def fuzz_one(seed: int, workshop: bool = True) -> FuzzOutcome:
     with tempfile.TemporaryDirectory() as folder:
         path = Path(folder) / "fuzz.stl"
         try:
-            write_checked_stl(propeller.solid, path, export.stl_linear_deflection, export.stl_angular_deflection)
+            write_checked_stl(
+                propeller.solid, path, export.stl_linear_deflection, export.stl_angular_deflection
+            )
         except KernelError as error:  # the build refuses to publish such an STL (exit 1)
             return FuzzOutcome(seed, "failed", str(error).splitlines()[0][:300], valid)
         pairs = intersecting_pairs_in_file(path)[0]
@@ -76,12 +78,16 @@ def fuzz_many(seeds: Sequence[int], workers: int = 2, workshop: bool = True) -> 
     """:func:`fuzz_one` of every seed in ``workers`` spawned processes (OpenCascade's threads do not
     survive a fork); a worker that crashes or overruns FUZZ_DESIGN_TIME_LIMIT_S is a 'failed' design."""
     with ProcessPool(max_workers=workers, context=get_context("spawn")) as pool:
-        futures = [(seed, pool.schedule(fuzz_one, (seed, workshop), timeout=FUZZ_DESIGN_TIME_LIMIT_S))
-                   for seed in seeds]
+        futures = [
+            (seed, pool.schedule(fuzz_one, (seed, workshop), timeout=FUZZ_DESIGN_TIME_LIMIT_S))
+            for seed in seeds
+        ]
         outcomes = []
         for seed, future in futures:
             try:
                 outcomes.append(future.result())
             except Exception as error:  # the worker died (a crash in OpenCascade) or timed out
-                outcomes.append(FuzzOutcome(seed, "failed", f"worker: {type(error).__name__}: {error}"[:300]))
+                outcomes.append(
+                    FuzzOutcome(seed, "failed", f"worker: {type(error).__name__}: {error}"[:300])
+                )
         return outcomes

@@ -78,7 +78,9 @@ def read_table(path: Path, columns: Sequence[str]) -> Table:
         if not words:
             continue
         if len(words) != len(columns):
-            raise WindTunnelFormatError(f"{path.name} line {number}: {len(words)} values, expected {len(columns)}")
+            raise WindTunnelFormatError(
+                f"{path.name} line {number}: {len(words)} values, expected {len(columns)}"
+            )
         try:
             values = [float(word) for word in words]
         except ValueError:
@@ -108,16 +110,24 @@ class WindTunnelData:
     def static_point(self, rpm: float) -> Measured:
         """CT and CP of the static test at ``rpm`` (interpolated between the measured rpm)."""
         rpms = self.static.column("RPM")
-        return Measured(rpm, 0.0, _interpolate(rpms, self.static.column("CT"), rpm, "rpm"),
-                        _interpolate(rpms, self.static.column("CP"), rpm, "rpm"))
+        return Measured(
+            rpm,
+            0.0,
+            _interpolate(rpms, self.static.column("CT"), rpm, "rpm"),
+            _interpolate(rpms, self.static.column("CP"), rpm, "rpm"),
+        )
 
     def sweep_point(self, rpm: float, advance_ratio: float) -> Measured:
         """CT and CP at ``advance_ratio`` from the sweep whose rpm (to the nearest 100) is nearest ``rpm``."""
         nominal = min(self.sweeps, key=lambda key: abs(key - rpm))
         table = self.sweeps[nominal]
         js = table.column("J")
-        return Measured(float(nominal), advance_ratio, _interpolate(js, table.column("CT"), advance_ratio, "J"),
-                        _interpolate(js, table.column("CP"), advance_ratio, "J"))
+        return Measured(
+            float(nominal),
+            advance_ratio,
+            _interpolate(js, table.column("CT"), advance_ratio, "J"),
+            _interpolate(js, table.column("CP"), advance_ratio, "J"),
+        )
 
 
 def read_wind_tunnel(folder: Path = APC_10X7SF) -> WindTunnelData:
@@ -127,7 +137,9 @@ def read_wind_tunnel(folder: Path = APC_10X7SF) -> WindTunnelData:
     runs whose rpm rounds to the same hundred are one sweep, their rows merged in order of J."""
     statics = sorted(folder.glob("*_static_*.txt"))
     if len(statics) != 1:
-        raise WindTunnelFormatError(f"{folder.name}: expected one *_static_*.txt file, found {len(statics)}")
+        raise WindTunnelFormatError(
+            f"{folder.name}: expected one *_static_*.txt file, found {len(statics)}"
+        )
     runs: dict[int, list[NDArray[np.float64]]] = {}
     columns = ("J", "CT", "CP", "eta")
     for path in sorted(folder.glob("*.txt")):
@@ -176,21 +188,31 @@ class Comparison:
     def within_targets(self) -> bool:
         """Every error within :data:`TARGETS`."""
         eta_error = self.efficiency_error
-        return (abs(self.ct_error) <= TARGETS["ct_relative"] and abs(self.cp_error) <= TARGETS["cp_relative"]
-                and (eta_error is None or abs(eta_error) <= TARGETS["eta_absolute"]))
+        return (
+            abs(self.ct_error) <= TARGETS["ct_relative"]
+            and abs(self.cp_error) <= TARGETS["cp_relative"]
+            and (eta_error is None or abs(eta_error) <= TARGETS["eta_absolute"])
+        )
 
 
 def markdown_table(comparisons: Sequence[Comparison], solver: str = "CFD") -> str:
     """The comparison as a Markdown table (one row per point), as the docs show it; ``solver`` heads the computed
     columns."""
-    lines = [f"| rpm | J | CT meas. | CT {solver} | ΔCT | CP meas. | CP {solver} | ΔCP | η meas. | η {solver} | Δη | "
-             "within |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    lines = [
+        f"| rpm | J | CT meas. | CT {solver} | ΔCT | CP meas. | CP {solver} | ΔCP | η meas. | η {solver} | Δη | "
+        "within |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
     for item in comparisons:
         measured, eta, eta_error = item.measured, item.efficiency, item.efficiency_error
-        eta_cells = ("–", "–", "–") if eta is None or eta_error is None or measured.efficiency is None else (
-            f"{measured.efficiency:.3f}", f"{eta:.3f}", f"{eta_error:+.3f}")
-        lines.append(f"| {measured.rpm:.0f} | {measured.advance_ratio:.2f} | {measured.ct:.4f} | {item.ct:.4f} | "
-                     f"{100 * item.ct_error:+.1f} % | {measured.cp:.4f} | {item.cp:.4f} | {100 * item.cp_error:+.1f} % | "
-                     f"{' | '.join(eta_cells)} | {'yes' if item.within_targets else 'no'} |")
+        eta_cells = (
+            ("–", "–", "–")
+            if eta is None or eta_error is None or measured.efficiency is None
+            else (f"{measured.efficiency:.3f}", f"{eta:.3f}", f"{eta_error:+.3f}")
+        )
+        lines.append(
+            f"| {measured.rpm:.0f} | {measured.advance_ratio:.2f} | {measured.ct:.4f} | {item.ct:.4f} | "
+            f"{100 * item.ct_error:+.1f} % | {measured.cp:.4f} | {item.cp:.4f} | {100 * item.cp_error:+.1f} % | "
+            f"{' | '.join(eta_cells)} | {'yes' if item.within_targets else 'no'} |"
+        )
     return "\n".join(lines)

@@ -26,18 +26,33 @@ def _is_design(path: Path) -> bool:
 #: Every design file shipped in examples/ (sweeps and studies left out), sorted.
 SHIPPED_DESIGNS = sorted(path for path in EXAMPLES_DIR.glob("*.toml") if _is_design(path))
 
-#: Camber far aft on a thin, flattened section: with 25 points its curve crosses itself at the trailing
-#: edge (scripts/fuzz.py design fuzz_334); the section fit refuses it before the kernel.
+#: Camber far aft on a thin, flattened section: with 25 points its curve crosses itself at the
+#: trailing edge (scripts/fuzz.py design fuzz_334); the section fit refuses it before the kernel.
 HOOKED_TRAILING_EDGE_DESIGN: dict = {
-    "name": "hooked", "blades": 4, "phase_deg": -66.88, "hub": {"radius": 6.9435, "length": 17.2294},
-    "airfoil": {"max_camber": 0.0553, "camber_position": 0.8961, "thickness": 0.2224, "camber_normal": False,
-                "pivot": 0.2828},
-    "centerline": {"p2": [6.6187, 6.5621, 11.7937], "p3": [60.9186, 17.2106, 13.0448], "p4": [70.0547, 11.1791],
-                   "frame": "rotation_minimizing"},
-    "transforms": {"angle_of_attack": [-13.8302, 16.3106, 20.0189, 0.0671, 47.4585],
-                   "scale_x": [6.2055, -12.411, -0.8573, 6.5329, 1.9422],
-                   "scale_y": [-2.5747, 5.1495, -6.3959, 4.1085, 0.3264]},
-    "resolution": {"sections": 40, "points": 25}}
+    "name": "hooked",
+    "blades": 4,
+    "phase_deg": -66.88,
+    "hub": {"radius": 6.9435, "length": 17.2294},
+    "airfoil": {
+        "max_camber": 0.0553,
+        "camber_position": 0.8961,
+        "thickness": 0.2224,
+        "camber_normal": False,
+        "pivot": 0.2828,
+    },
+    "centerline": {
+        "p2": [6.6187, 6.5621, 11.7937],
+        "p3": [60.9186, 17.2106, 13.0448],
+        "p4": [70.0547, 11.1791],
+        "frame": "rotation_minimizing",
+    },
+    "transforms": {
+        "angle_of_attack": [-13.8302, 16.3106, 20.0189, 0.0671, 47.4585],
+        "scale_x": [6.2055, -12.411, -0.8573, 6.5329, 1.9422],
+        "scale_y": [-2.5747, 5.1495, -6.3959, 4.1085, 0.3264],
+    },
+    "resolution": {"sections": 40, "points": 25},
+}
 
 #: The shared-intersection fuse and one general fuse integrate the same surfaces; their volumes,
 #: each integrated to VOLUME_PRECISION, agree far below this (measured ~1e-9).
@@ -51,9 +66,12 @@ def assert_same_volume_as_general_fuse(propeller) -> None:
     from torus_cad.kernel.fuse import fuse_all
     from torus_cad.kernel.mass_properties import precise_volume
 
-    general = single_valid_solid(fuse_all(propeller.hub, propeller.blades).shape, "the general fuse")
+    general = single_valid_solid(
+        fuse_all(propeller.hub, propeller.blades).shape, "the general fuse"
+    )
     assert precise_volume(propeller.solid, VOLUME_PRECISION) == pytest.approx(
-        precise_volume(general, VOLUME_PRECISION), rel=ROUTE_VOLUME_TOLERANCE)
+        precise_volume(general, VOLUME_PRECISION), rel=ROUTE_VOLUME_TOLERANCE
+    )
     assert len(propeller.solid.Faces()) == len(general.Faces())
 
 
@@ -62,8 +80,12 @@ def read_binary_stl(path: Path) -> np.ndarray:
     data = path.read_bytes()
     count = int(np.frombuffer(data, dtype="<u4", count=1, offset=80)[0])
     assert len(data) == 84 + 50 * count, "binary STL length does not match its triangle count"
-    records = np.frombuffer(data, dtype=np.dtype([("normal", "<f4", 3), ("vertices", "<f4", (3, 3)),
-                                                  ("attribute", "<u2")]), count=count, offset=84)
+    records = np.frombuffer(
+        data,
+        dtype=np.dtype([("normal", "<f4", 3), ("vertices", "<f4", (3, 3)), ("attribute", "<u2")]),
+        count=count,
+        offset=84,
+    )
     return records["vertices"].copy()
 
 
@@ -76,8 +98,12 @@ def tmpfs(tmp_path) -> Iterator[Callable[[int], Path]]:
     def mount(size_kb: int) -> Path:
         mount_point = tmp_path / f"disk{len(mounted)}"
         mount_point.mkdir()
-        result = subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={size_kb}k", "tmpfs", str(mount_point)],
-                                check=False, capture_output=True, text=True)
+        result = subprocess.run(
+            ["mount", "-t", "tmpfs", "-o", f"size={size_kb}k", "tmpfs", str(mount_point)],
+            check=False,
+            capture_output=True,
+            text=True,
+        )
         if result.returncode != 0:
             pytest.skip(f"cannot mount a small tmpfs: {result.stderr.strip()}")
         mounted.append(mount_point)
@@ -96,13 +122,15 @@ def default_params() -> PropellerParameters:
 @pytest.fixture(scope="session")
 def light_params() -> PropellerParameters:
     """A coarser default, for kernel tests that need a real solid but not the full resolution."""
-    return PropellerParameters().with_values({"resolution.sections": 16, "resolution.points": 48,
-                                              "name": "light"})
+    return PropellerParameters().with_values(
+        {"resolution.sections": 16, "resolution.points": 48, "name": "light"}
+    )
 
 
 @pytest.fixture(scope="session")
 def default_propeller(default_params):
     from torus_cad.propeller import build_propeller
+
     return build_propeller(default_params)
 
 
@@ -111,8 +139,9 @@ def default_files(default_propeller, tmp_path_factory) -> dict[str, Path]:
     return default_propeller.write(tmp_path_factory.mktemp("default_build"))
 
 
-#: The test tiers, chosen by measured duration (scripts/test_tiers.py writes the file): ``pytest -m fast``
-#: is the quick tier that touches every module, ``pytest -m long`` the multi-minute tests CI leaves out.
+#: The test tiers, chosen by measured duration (scripts/test_tiers.py writes the file): ``pytest -m
+#: fast`` is the quick tier that touches every module, ``pytest -m long`` the multi-minute tests CI
+#: leaves out.
 TIERS = json.loads((Path(__file__).resolve().parent / "tiers.json").read_text(encoding="utf-8"))
 
 
@@ -123,15 +152,21 @@ def pytest_configure(config):
         signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
-def stale_tier_ids(tier_ids: set[str], collected: set[str], whole_files: set[str], root: Path) -> list[str]:
+def stale_tier_ids(
+    tier_ids: set[str], collected: set[str], whole_files: set[str], root: Path
+) -> list[str]:
     """The ids of ``tier_ids`` that name no test: their file is gone, or it was collected whole (listed in
     ``whole_files``) and holds no test ``collected`` under that id (a test renamed, removed or re-parametrised)."""
-    return sorted(nodeid for nodeid in tier_ids
-                  if not (root / nodeid.split("::")[0]).is_file()
-                  or (nodeid.split("::")[0] in whole_files and nodeid not in collected))
+    return sorted(
+        nodeid
+        for nodeid in tier_ids
+        if not (root / nodeid.split("::")[0]).is_file()
+        or (nodeid.split("::")[0] in whole_files and nodeid not in collected)
+    )
 
 
-@pytest.hookimpl(tryfirst=True)  # before -k, -m and --deselect leave tests out: every test of a file is here
+# before -k, -m and --deselect leave tests out: every test of a file is here
+@pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(config, items):
     fast, long = set(TIERS["fast"]), set(TIERS["long"])
     for item in items:
@@ -141,9 +176,14 @@ def pytest_collection_modifyitems(config, items):
             item.add_marker(pytest.mark.long)
     root = Path(str(config.rootpath))
     named = {str((Path.cwd() / arg.split("::")[0]).resolve()) for arg in config.args if "::" in arg}
-    whole = {item.nodeid.split("::")[0] for item in items  # files of which every test was collected
-             if str((root / item.nodeid.split("::")[0]).resolve()) not in named}
-    config.stale_tier_ids = stale_tier_ids(fast | long, {item.nodeid for item in items}, whole, root)
+    whole = {
+        item.nodeid.split("::")[0]
+        for item in items  # files of which every test was collected
+        if str((root / item.nodeid.split("::")[0]).resolve()) not in named
+    }
+    config.stale_tier_ids = stale_tier_ids(
+        fast | long, {item.nodeid for item in items}, whole, root
+    )
 
 
 def pytest_runtest_setup(item):
@@ -151,5 +191,8 @@ def pytest_runtest_setup(item):
     collection error would not name the ids)."""
     stale = getattr(item.config, "stale_tier_ids", [])
     if stale:
-        pytest.fail(f"tests/tiers.json names {len(stale)} test(s) that do not exist: {', '.join(stale[:5])}"
-                    f"{' ...' if len(stale) > 5 else ''} (scripts/test_tiers.py writes the file again)", pytrace=False)
+        pytest.fail(
+            f"tests/tiers.json names {len(stale)} test(s) that do not exist: {', '.join(stale[:5])}"
+            f"{' ...' if len(stale) > 5 else ''} (scripts/test_tiers.py writes the file again)",
+            pytrace=False,
+        )

@@ -20,12 +20,15 @@ def principal_curvatures(face: cq.Face) -> list[float]:
     """|k_min|, |k_max| (1/mm, ascending) at the middle of ``face``'s parameter box: a fillet face
     of radius r has 1/r as the larger one."""
     u_min, u_max, v_min, v_max = BRepTools.UVBounds_s(face.wrapped)
-    properties = BRepLProp_SLProps(BRepAdaptor_Surface(face.wrapped), (u_min + u_max) / 2, (v_min + v_max) / 2,
-                                   2, 1e-9)
+    properties = BRepLProp_SLProps(
+        BRepAdaptor_Surface(face.wrapped), (u_min + u_max) / 2, (v_min + v_max) / 2, 2, 1e-9
+    )
     return sorted((abs(properties.MinCurvature()), abs(properties.MaxCurvature())))
 
 
-def assert_faces_come_from_their_parts(solid, face_parts, propeller, fillet_radius_mm: float = 0.0) -> None:
+def assert_faces_come_from_their_parts(
+    solid, face_parts, propeller, fillet_radius_mm: float = 0.0
+) -> None:
     """Every face of ``solid`` lies on the part ``face_parts`` names (``propeller.hub`` or
     ``propeller.blades[i]``, as built before the fuse) and off every other; every part shows. With
     a root fillet, a face lies within two radii of its part and nearer it than any other blade."""
@@ -38,11 +41,22 @@ def assert_faces_come_from_their_parts(solid, face_parts, propeller, fillet_radi
         vertices, _ = face.tessellate(0.2, 0.5)
         points = np.array([vertex.toTuple() for vertex in vertices])
         points = points[np.linspace(0, len(points) - 1, min(8, len(points))).astype(int)]
-        distance = {other: float(np.median(distances_to_shape(shape, points))) for other, shape in parts.items()}
+        distance = {
+            other: float(np.median(distances_to_shape(shape, points)))
+            for other, shape in parts.items()
+        }
         if fillet_radius_mm == 0.0:
             assert distance[part] < ON_PART_MM, (part, distance)
-            assert all(distance[other] > OFF_OTHER_PART_MM for other in parts if other != part), (part, distance)
-        else:  # a hub end face cut back through the fillet's run-out reaches into the fillet's section too
-            rivals = range(blades) if part == HUB_PART else [other for other in range(blades) if other != part]
+            assert all(distance[other] > OFF_OTHER_PART_MM for other in parts if other != part), (
+                part,
+                distance,
+            )
+        # a hub end face cut back through the fillet's run-out reaches into the fillet's section too
+        else:
+            rivals = (
+                range(blades)
+                if part == HUB_PART
+                else [other for other in range(blades) if other != part]
+            )
             assert distance[part] < 2.0 * fillet_radius_mm + ON_PART_MM, (part, distance)
             assert all(distance[part] < distance[other] for other in rivals), (part, distance)

@@ -15,8 +15,9 @@ from pathlib import Path
 
 FREECADCMD = shutil.which("freecadcmd")
 
-#: The script freecadcmd runs: paths from a JSON file beside it, one JSON verdict per file to another.
-_SCRIPT = '''
+#: The script freecadcmd runs: paths from a JSON file beside it, one JSON verdict per file to
+#: another.
+_SCRIPT = """
 import json, Part
 folder = "{folder}"
 verdicts = {{}}
@@ -30,7 +31,7 @@ for path in json.load(open(folder + "/paths.json")):
         faults = str(error)
     verdicts[path] = {{"solids": len(shape.Solids), "valid": shape.isValid(), "faults": faults}}
 json.dump(verdicts, open(folder + "/verdicts.json", "w"))
-'''
+"""
 
 
 def freecad_verdicts(paths: Sequence[Path], folder: Path) -> dict[str, dict[str, object]]:

@@ -8,4 +8,6 @@ import pytest
 
 #: simpleFoam and snappyHexMesh on PATH: the solver and the layered mesher.
 HAS_OPENFOAM = all(shutil.which(program) is not None for program in ("simpleFoam", "snappyHexMesh"))
-needs_openfoam = pytest.mark.skipif(not HAS_OPENFOAM, reason="OpenFOAM (simpleFoam, snappyHexMesh) is not installed")
+needs_openfoam = pytest.mark.skipif(
+    not HAS_OPENFOAM, reason="OpenFOAM (simpleFoam, snappyHexMesh) is not installed"
+)

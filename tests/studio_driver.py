@@ -35,9 +35,18 @@ CHROMIUM = Path("/usr/bin/chromium")
 
 #: Chromium switches for a headless run on a machine without a GPU, a display or the internet
 #: (SwiftShader: WebGL on the CPU, for the studio's 3D view).
-CHROMIUM_ARGUMENTS = ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-                      "--disable-background-networking", "--disable-component-update", "--disable-sync",
-                      "--disable-dev-shm-usage", "--enable-unsafe-swiftshader")
+CHROMIUM_ARGUMENTS = (
+    "--headless=new",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--disable-dev-shm-usage",
+    "--enable-unsafe-swiftshader",
+)
 
 #: Seconds to wait for the studio to start (its first start imports the kernel on a busy machine).
 START_TIMEOUT_S = 180.0
@@ -59,8 +68,14 @@ class StudioProcess:
 
     def __enter__(self) -> Self:
         command = [sys.executable, "-m", "torus_cad", "studio", *self.arguments, "--port", "0"]
-        self._process = subprocess.Popen(command, cwd=self.cwd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                                         text=True, start_new_session=True)
+        self._process = subprocess.Popen(
+            command,
+            cwd=self.cwd,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            text=True,
+            start_new_session=True,
+        )
         deadline = time.monotonic() + START_TIMEOUT_S
         assert self._process.stdout is not None
         while time.monotonic() < deadline:
@@ -73,7 +88,9 @@ class StudioProcess:
                 self.url = match.group(1)
                 return self
         self.__exit__(None, None, None)
-        raise TimeoutError(f"the studio did not start within {START_TIMEOUT_S} s:\n{''.join(self.output)}")
+        raise TimeoutError(
+            f"the studio did not start within {START_TIMEOUT_S} s:\n{''.join(self.output)}"
+        )
 
     def __exit__(self, *_: object) -> None:
         process = self._process
@@ -102,11 +119,21 @@ def chromium(download_dir: Path, size: tuple[int, int] = (1500, 950)) -> Iterato
     options = webdriver.ChromeOptions()
     options.binary_location = str(CHROMIUM)
     with tempfile.TemporaryDirectory(prefix="torus-cad-chromium-") as profile:
-        for argument in (*CHROMIUM_ARGUMENTS, f"--user-data-dir={profile}", f"--window-size={size[0]},{size[1]}"):
+        for argument in (
+            *CHROMIUM_ARGUMENTS,
+            f"--user-data-dir={profile}",
+            f"--window-size={size[0]},{size[1]}",
+        ):
             options.add_argument(argument)
-        options.add_experimental_option("prefs", {
-            "download.default_directory": str(download_dir), "download.prompt_for_download": False,
-            "download.directory_upgrade": True, "safebrowsing.enabled": False})
+        options.add_experimental_option(
+            "prefs",
+            {
+                "download.default_directory": str(download_dir),
+                "download.prompt_for_download": False,
+                "download.directory_upgrade": True,
+                "safebrowsing.enabled": False,
+            },
+        )
         driver = webdriver.Chrome(service=Service(str(CHROMEDRIVER)), options=options)
         try:
             yield driver
@@ -135,7 +162,10 @@ class StudioPage:
     def __init__(self, driver: Any, url: str, timeout_s: float = 120.0) -> None:
         self.driver, self.timeout_s = driver, timeout_s
         driver.get(url)
-        self.wait(lambda: self.text("status") in ("exact", "preview", "refused", "failed"), "the page to load")
+        self.wait(
+            lambda: self.text("status") in ("exact", "preview", "refused", "failed"),
+            "the page to load",
+        )
 
     # -- reading -----------------------------------------------------------------------------------
     def element(self, element_id: str) -> Any:
@@ -173,7 +203,9 @@ class StudioPage:
 
         try:
             container = self.element(element_id).find_element(
-                By.XPATH, "./ancestor::div[contains(concat(' ', normalize-space(@class), ' '), ' v-input ')][1]")
+                By.XPATH,
+                "./ancestor::div[contains(concat(' ', normalize-space(@class), ' '), ' v-input ')][1]",
+            )
         except NoSuchElementException:
             return ""
         return container.text
@@ -188,7 +220,10 @@ class StudioPage:
             return
         before = self.stamp("exact-stamp")
         self.set_field(key, text)
-        self.wait(lambda: self.stamp("exact-stamp") > before and self.idle(), f"the exact solid after {key} = {text}")
+        self.wait(
+            lambda: self.stamp("exact-stamp") > before and self.idle(),
+            f"the exact solid after {key} = {text}",
+        )
 
     def wait(self, condition: Callable[[], T], what: str, timeout_s: float | None = None) -> T:
         """Poll ``condition`` until it returns something truthy; fail naming ``what`` and the page state."""
@@ -198,22 +233,29 @@ class StudioPage:
         while True:
             try:
                 result = condition()
-            except StaleElementReferenceException:  # Vue re-rendered the element between finding and reading it
+            # Vue re-rendered the element between finding and reading it
+            except StaleElementReferenceException:
                 result = None
             if result:
                 return result
             if time.monotonic() > deadline:
-                raise TimeoutError(f"timed out waiting for {what}; status {self.text('status')!r}, "
-                                   f"refusal {self.text('refusal')!r}, failure {self.text('failure')!r}")
+                raise TimeoutError(
+                    f"timed out waiting for {what}; status {self.text('status')!r}, "
+                    f"refusal {self.text('refusal')!r}, failure {self.text('failure')!r}"
+                )
             time.sleep(0.05)
 
     def idle(self) -> bool:
         """The exact solid is on screen and its files are ready."""
-        from selenium.common.exceptions import NoSuchElementException, StaleElementReferenceException
+        from selenium.common.exceptions import (
+            NoSuchElementException,
+            StaleElementReferenceException,
+        )
 
         try:
             return self.text("status") == "exact" and self.element("download-step").is_enabled()
-        except (NoSuchElementException, StaleElementReferenceException):  # the buttons appear with the files
+        # the buttons appear with the files
+        except (NoSuchElementException, StaleElementReferenceException):
             return False
 
     def wait_idle(self) -> None:
@@ -233,18 +275,25 @@ class StudioPage:
         from selenium.webdriver.common.by import By
 
         field = self.element(field_id(key))
-        control = field.find_element(By.XPATH, "./ancestor::div[contains(concat(' ', normalize-space(@class), ' '), "
-                                               "' v-field ')][1]")
+        control = field.find_element(
+            By.XPATH,
+            "./ancestor::div[contains(concat(' ', normalize-space(@class), ' '), ' v-field ')][1]",
+        )
         self.driver.execute_script("arguments[0].scrollIntoView({block: 'center'});", control)
         self._click(control)
         xpath = f"//div[contains(@class, 'v-overlay--active')]//div[@role = 'option'][normalize-space(.) = '{option}']"
-        item = self.wait(lambda: self.driver.find_elements(By.XPATH, xpath), f"the menu item {option!r}")[0]
+        item = self.wait(
+            lambda: self.driver.find_elements(By.XPATH, xpath), f"the menu item {option!r}"
+        )[0]
         self._click(item)
 
     def _click(self, element: Any) -> None:
         """Click ``element``; while an overlay is still animating over it (Vuetify's menus fade in and
         out), the browser's click hits the overlay, so the click event is sent to the element itself."""
-        from selenium.common.exceptions import ElementClickInterceptedException, ElementNotInteractableException
+        from selenium.common.exceptions import (
+            ElementClickInterceptedException,
+            ElementNotInteractableException,
+        )
 
         try:
             element.click()
@@ -283,14 +332,27 @@ class StudioPage:
 
         box = self.element("view").rect
         image = Image.open(io.BytesIO(self.driver.get_screenshot_as_png())).convert("RGB")
-        return np.asarray(image.crop((int(box["x"]), int(box["y"]), int(box["x"] + box["width"]),
-                                      int(box["y"] + box["height"]))), dtype=float)
+        return np.asarray(
+            image.crop(
+                (
+                    int(box["x"]),
+                    int(box["y"]),
+                    int(box["x"] + box["width"]),
+                    int(box["y"] + box["height"]),
+                )
+            ),
+            dtype=float,
+        )
 
     def drag_view(self, dx: int, dy: int, steps: int = 10) -> None:
         """Drag across the 3D view with the left button (orbit), in ``steps`` moves as a hand would."""
         from selenium.webdriver.common.action_chains import ActionChains
 
-        chain = ActionChains(self.driver, duration=50).move_to_element(self.element("view")).click_and_hold()
+        chain = (
+            ActionChains(self.driver, duration=50)
+            .move_to_element(self.element("view"))
+            .click_and_hold()
+        )
         for _ in range(steps):
             chain = chain.move_by_offset(dx // steps, dy // steps)
         chain.release().perform()
@@ -302,18 +364,24 @@ class StudioPage:
         """Milliseconds from the last typed change to the preview's and the exact solid's display."""
         times = self.driver.execute_script("return window.__studioTimes;")
         start = times["input"]
-        return {key: (None if times[key] is None or start is None else times[key] - start)
-                for key in ("preview", "exact")}
+        return {
+            key: (None if times[key] is None or start is None else times[key] - start)
+            for key in ("preview", "exact")
+        }
 
     def screenshot(self, path: Path) -> None:
         """Save the page as PNG, scrolled to the top (clicks may have scrolled it)."""
-        self.driver.execute_script("window.scrollTo(0, 0); for (const element of document.querySelectorAll("
-                                   "'#readouts-column, .v-navigation-drawer__content')) { element.scrollTop = 0; }")
+        self.driver.execute_script(
+            "window.scrollTo(0, 0); for (const element of document.querySelectorAll("
+            "'#readouts-column, .v-navigation-drawer__content')) { element.scrollTop = 0; }"
+        )
         path.parent.mkdir(parents=True, exist_ok=True)
         self.driver.save_screenshot(str(path))
 
 
-def wait_for_download(directory: Path, suffix: str, timeout_s: float = 60.0, known: Sequence[Path] = ()) -> Path:
+def wait_for_download(
+    directory: Path, suffix: str, timeout_s: float = 60.0, known: Sequence[Path] = ()
+) -> Path:
     """The first new, complete file ending in ``suffix`` in ``directory``."""
     deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline:

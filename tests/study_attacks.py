@@ -38,17 +38,21 @@ def study_file(folder: Path, trials: int) -> Path:
     """A small study (the shipped example's base design at its coarse resolution)."""
     shutil.copy(BASE, folder / "light_prop.toml")
     path = folder / "study.toml"
-    path.write_text(f'[study]\nname = "{NAME}"\nbase = "light_prop.toml"\ntrials = {trials}\nsampler = "tpe"\n'
-                    'seed = 0\n\n[vary]\n"airfoil.thickness" = [0.2, 0.6]\n"transforms.scale_x[4]" = [4.0, 6.5]\n\n'
-                    '[[objective]]\nmetric = "mass_g"\ndirection = "minimize"\n\n'
-                    '[constraints]\n"printability.thinnest_wall_mm" = { min = 0.8 }\n')
+    path.write_text(
+        f'[study]\nname = "{NAME}"\nbase = "light_prop.toml"\ntrials = {trials}\nsampler = "tpe"\n'
+        'seed = 0\n\n[vary]\n"airfoil.thickness" = [0.2, 0.6]\n"transforms.scale_x[4]" = [4.0, 6.5]\n\n'
+        '[[objective]]\nmetric = "mass_g"\ndirection = "minimize"\n\n'
+        '[constraints]\n"printability.thinnest_wall_mm" = { min = 0.8 }\n'
+    )
     return path
 
 
 def sweep_file(folder: Path) -> Path:
     path = folder / "sweep.toml"
-    path.write_text('[base.resolution]\nsections = 10\npoints = 32\n[sweep]\nstl = false\n'
-                    '[vary]\nblades = [2, 3]\n"airfoil.max_camber" = [0.0, 0.02]\n')
+    path.write_text(
+        "[base.resolution]\nsections = 10\npoints = 32\n[sweep]\nstl = false\n"
+        '[vary]\nblades = [2, 3]\n"airfoil.max_camber" = [0.0, 0.02]\n'
+    )
     return path
 
 
@@ -72,24 +76,51 @@ def _moment_reached(moment: str, out: Path, trials: int) -> Callable[[], bool]:
     if moment == "storage":  # the storage is made: the pool starts next
         return lambda: (out / f"{NAME}.db").is_file() or (out / "sweep.json").is_file()
     if moment == "trials":  # a first trial or design is written: the others are running
-        return lambda: any((out / "trials").glob("*/trial_*.json")) or any((out / "designs").glob("*/*.json"))
+        return lambda: (
+            any((out / "trials").glob("*/trial_*.json")) or any((out / "designs").glob("*/*.json"))
+        )
     if moment == "finish":
         return lambda: (out / "results.csv").is_file()
     raise ValueError(moment)
 
 
-def attack(command: str, moment: str, delay_s: float, folder: Path, trials: int = 2, signum: int = signal.SIGTERM,
-           timeout_s: float = 600.0, group: bool = False) -> Outcome:
+def attack(
+    command: str,
+    moment: str,
+    delay_s: float,
+    folder: Path,
+    trials: int = 2,
+    signum: int = signal.SIGTERM,
+    timeout_s: float = 600.0,
+    group: bool = False,
+) -> Outcome:
     """Run ``command`` in ``folder``, send ``signum`` ``delay_s`` after ``moment``, check what it left; with
     ``group`` the run is started in a session of its own and the signal goes to its whole process group
     (the workers too, as ``timeout`` and job schedulers send it)."""
     out = folder / "out"
     source = study_file(folder, trials) if command == "optimize" else sweep_file(folder)
-    argv = [sys.executable, "-m", "torus_cad", command, str(source), "--out", str(out), "--workers", "2", "-q"]
+    argv = [
+        sys.executable,
+        "-m",
+        "torus_cad",
+        command,
+        str(source),
+        "--out",
+        str(out),
+        "--workers",
+        "2",
+        "-q",
+    ]
     outcome = Outcome(command, moment, delay_s)
     reached = _moment_reached(moment, out, trials)
-    process = subprocess.Popen(argv, env=env(), text=True, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                               start_new_session=group)
+    process = subprocess.Popen(
+        argv,
+        env=env(),
+        text=True,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        start_new_session=group,
+    )
     try:
         deadline = time.monotonic() + timeout_s
         while process.poll() is None and not reached() and time.monotonic() < deadline:
@@ -110,7 +141,9 @@ def attack(command: str, moment: str, delay_s: float, folder: Path, trials: int 
     return outcome
 
 
-def check(command: str, out: Path, returncode: int | None, stderr: str, signum: int, trials: int) -> list[str]:
+def check(
+    command: str, out: Path, returncode: int | None, stderr: str, signum: int, trials: int
+) -> list[str]:
     """Everything wrong with what the run left in ``out`` (empty: all is well)."""
     problems = []
     if returncode not in (0, 128 + signum):
@@ -122,13 +155,20 @@ def check(command: str, out: Path, returncode: int | None, stderr: str, signum: 
         problems.append(f"{len(stderr.strip().splitlines())} lines on stderr")
     if not out.exists():
         return problems
-    debris = [str(path.relative_to(out)) for path in out.rglob("*")
-              if path.name.endswith(("-wal", "-shm", "-journal"))]
+    debris = [
+        str(path.relative_to(out))
+        for path in out.rglob("*")
+        if path.name.endswith(("-wal", "-shm", "-journal"))
+    ]
     if debris:
         problems.append(f"left {debris}")
     for folder in [out / "best"] if (out / "best").is_dir() else []:
-        verified = subprocess.run([sys.executable, "-m", "torus_cad", "verify", str(folder)], env=env(),
-                                  capture_output=True, text=True)
+        verified = subprocess.run(
+            [sys.executable, "-m", "torus_cad", "verify", str(folder)],
+            env=env(),
+            capture_output=True,
+            text=True,
+        )
         if verified.returncode != 0 and "no output set" not in verified.stderr:
             problems.append(f"verify best/: {verified.stderr.strip()}")
     if command == "optimize" and (out / f"{NAME}.db").is_file():
@@ -155,11 +195,23 @@ def _check_storage(database: Path, total: int) -> list[str]:
             storage.engine.dispose()
         except Exception as error:  # any failure to read it is the finding
             return [f"the storage does not open with optuna: {type(error).__name__}: {error}"]
-    problems = [f"trial {t.number} recorded as a crash" for t in trials
-                if "crash" in str(t.user_attrs.get("result", "")) or "crash" in str(t.user_attrs.get("outcome", ""))]
-    stopped = [t for t in trials if t.state is TrialState.FAIL and
-               ("result" not in t.user_attrs or "stopped" in t.user_attrs)]
-    finished = [t for t in trials if t.state is TrialState.COMPLETE or (t.state is TrialState.FAIL and t not in stopped)]
+    problems = [
+        f"trial {t.number} recorded as a crash"
+        for t in trials
+        if "crash" in str(t.user_attrs.get("result", ""))
+        or "crash" in str(t.user_attrs.get("outcome", ""))
+    ]
+    stopped = [
+        t
+        for t in trials
+        if t.state is TrialState.FAIL
+        and ("result" not in t.user_attrs or "stopped" in t.user_attrs)
+    ]
+    finished = [
+        t
+        for t in trials
+        if t.state is TrialState.COMPLETE or (t.state is TrialState.FAIL and t not in stopped)
+    ]
     if len(finished) > total:
         problems.append(f"{len(finished)} trials counted for --trials {total}")
     if [t for t in trials if t.state is TrialState.RUNNING]:
@@ -172,8 +224,13 @@ def _check_storage(database: Path, total: int) -> list[str]:
 
 
 def main() -> int:
-    command, moment, low, high, count = sys.argv[1], sys.argv[2], float(sys.argv[3]), float(sys.argv[4]), \
-        int(sys.argv[5])
+    command, moment, low, high, count = (
+        sys.argv[1],
+        sys.argv[2],
+        float(sys.argv[3]),
+        float(sys.argv[4]),
+        int(sys.argv[5]),
+    )
     seed = int(os.environ.get("ATTACK_SEED", "0"))
     generator = random.Random(seed)
     bad = 0

@@ -21,8 +21,13 @@ def terminal_text_until(arguments: list[str], marker: bytes, timeout_s: float = 
     until ``timeout_s``; without the ANSI sequences. A pseudo-terminal is the only way to see the progress
     lines, which are written only to a terminal."""
     controller, terminal = pty.openpty()
-    process = subprocess.Popen([sys.executable, *arguments], stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                               stderr=terminal, env={**os.environ, "PYTHONPATH": str(ROOT)})
+    process = subprocess.Popen(
+        [sys.executable, *arguments],
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.DEVNULL,
+        stderr=terminal,
+        env={**os.environ, "PYTHONPATH": str(ROOT)},
+    )
     os.close(terminal)
     shown = b""
     try:

@@ -8,19 +8,27 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from torus_cad.geometry.section.airfoil import NacaAirfoil, airfoil_points
-from torus_cad.geometry.section.arc_length import ARC_LENGTH_QUAD_ABS, equal_arc_length_section, spacing_deviation
+from torus_cad.geometry.section.arc_length import (
+    ARC_LENGTH_QUAD_ABS,
+    equal_arc_length_section,
+    spacing_deviation,
+)
 from torus_cad.tolerances import FOLD_RATIO_LIMIT
 
 
 def dense_perimeter(airfoil: NacaAirfoil, samples: int = 400001) -> float:
     u = np.linspace(0.0, 1.0, samples)  # t = u^2 resolves the leading edge
     upper, lower = airfoil.surfaces(u * u)
-    return sum(float(np.linalg.norm(np.diff(side, axis=0), axis=1).sum()) for side in (upper, lower))
+    return sum(
+        float(np.linalg.norm(np.diff(side, axis=0), axis=1).sum()) for side in (upper, lower)
+    )
 
 
 def test_perimeter_matches_a_dense_polyline():
     airfoil = NacaAirfoil()
-    assert equal_arc_length_section(airfoil, 200).perimeter == pytest.approx(dense_perimeter(airfoil), rel=1e-8)
+    assert equal_arc_length_section(airfoil, 200).perimeter == pytest.approx(
+        dense_perimeter(airfoil), rel=1e-8
+    )
 
 
 def arc_gaps(airfoil: NacaAirfoil, t: np.ndarray) -> np.ndarray:
@@ -43,16 +51,24 @@ def test_spec_procedure_spaces_points_equally_in_arc_length():
 def test_anchored_sampling_keeps_the_trailing_edge_and_near_equal_spacing():
     sampling = equal_arc_length_section(NacaAirfoil(), 200)
     assert sampling.t[sampling.trailing_edge_index] == pytest.approx(1.0)
-    np.testing.assert_allclose(sampling.points[sampling.trailing_edge_index], [1.0, 0.0], atol=1e-12)
+    np.testing.assert_allclose(
+        sampling.points[sampling.trailing_edge_index], [1.0, 0.0], atol=1e-12
+    )
     assert spacing_deviation(sampling.points) < 1.0 / 200
 
 
 @settings(max_examples=25, deadline=None)
-@given(m=st.floats(0.0, 0.09), p=st.floats(0.1, 0.9), thickness=st.floats(0.02, 0.6),
-       camber_normal=st.booleans(), count=st.integers(40, 400))
+@given(
+    m=st.floats(0.0, 0.09),
+    p=st.floats(0.1, 0.9),
+    thickness=st.floats(0.02, 0.6),
+    camber_normal=st.booleans(),
+    count=st.integers(40, 400),
+)
 def test_spacing_is_equal_on_each_surface_for_any_section(m, p, thickness, camber_normal, count):
     airfoil = NacaAirfoil(m, p, thickness, camber_normal)
-    assume(airfoil.fold_ratio()[0] < FOLD_RATIO_LIMIT)  # folded sections are refused by the parameters
+    # folded sections are refused by the parameters
+    assume(airfoil.fold_ratio()[0] < FOLD_RATIO_LIMIT)
     sampling = equal_arc_length_section(airfoil, count)
     te = sampling.trailing_edge_index
     gaps = arc_gaps(airfoil, sampling.t)
@@ -67,8 +83,14 @@ def _adaptive_table(airfoil, upper: bool, edges: np.ndarray) -> np.ndarray:
     from scipy.integrate import quad_vec
 
     starts, widths = edges[:-1], np.diff(edges)
-    pieces, _ = quad_vec(lambda f: airfoil.speed_on_half(starts + f * widths, upper) * widths, 0.0, 1.0,
-                         epsabs=ARC_LENGTH_QUAD_ABS, epsrel=1e-10, norm="max")
+    pieces, _ = quad_vec(
+        lambda f: airfoil.speed_on_half(starts + f * widths, upper) * widths,
+        0.0,
+        1.0,
+        epsabs=ARC_LENGTH_QUAD_ABS,
+        epsrel=1e-10,
+        norm="max",
+    )
     return np.concatenate([[0.0], np.cumsum(pieces)])
 
 
@@ -82,13 +104,25 @@ def test_gauss_legendre_table_agrees_with_adaptive_quadrature_within_its_toleran
     from torus_cad.geometry.section.airfoil_file import load_airfoil_file
     from torus_cad.geometry.section.arc_length import surface_arc_length_table
 
-    nacas = [NacaAirfoil(), NacaAirfoil(0.04, 0.4, 0.15, True), NacaAirfoil(0.09, 0.9, 0.6, False),
-             NacaAirfoil(0.0, 0.5, 0.02, True), NacaAirfoil(0.06, 0.2, 0.3, False)]
-    files = [load_airfoil_file(path) for path in sorted((Path(__file__).parents[1] / "examples" / "airfoils").iterdir())]
-    sections = nacas + files + [section.with_trailing_edge_gap(0.01) for section in (nacas[1], files[0])]
+    nacas = [
+        NacaAirfoil(),
+        NacaAirfoil(0.04, 0.4, 0.15, True),
+        NacaAirfoil(0.09, 0.9, 0.6, False),
+        NacaAirfoil(0.0, 0.5, 0.02, True),
+        NacaAirfoil(0.06, 0.2, 0.3, False),
+    ]
+    files = [
+        load_airfoil_file(path)
+        for path in sorted((Path(__file__).parents[1] / "examples" / "airfoils").iterdir())
+    ]
+    sections = (
+        nacas + files + [section.with_trailing_edge_gap(0.01) for section in (nacas[1], files[0])]
+    )
     assert len(files) >= 3
     for section in sections:
         for upper in (True, False):
             table = surface_arc_length_table(section, upper)
-            difference = np.abs(table.arc_length - _adaptive_table(section, upper, table.root_chord)).max()
+            difference = np.abs(
+                table.arc_length - _adaptive_table(section, upper, table.root_chord)
+            ).max()
             assert difference <= ARC_LENGTH_QUAD_ABS, (section, upper, difference)

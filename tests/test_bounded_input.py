@@ -36,24 +36,75 @@ SWEEP_VARY = "[vary]\nblades = [2, 3]\n"
 
 #: (file kind, attack, file text, words of the one line)
 FILE_ATTACKS = [
-    ("study", "digits", '[study]\nname = "s"\ntrials = ' + HUGE + "\n" + VARY + OBJECTIVE,
-     ["line 3: study.trials holds a number of 5001 digits"]),
-    ("study", "nesting in [vary]", STUDY_HEAD + '[vary]\n"airfoil.thickness" = ' + DEEP + "\n" + OBJECTIVE,
-     ['line 5: vary."airfoil.thickness" is nested more than']),
-    ("study", "nesting in [constraints]", STUDY_HEAD + VARY + OBJECTIVE + "[constraints]\n"
-     '"printability.thinnest_wall_mm" = ' + DEEP_TABLE + "\n", ['constraints."printability.thinnest_wall_mm" is nested']),
-    ("study", "nesting in trials", '[study]\nname = "s"\ntrials = ' + DEEP + "\n" + VARY + OBJECTIVE,
-     ["line 3: study.trials is nested more than"]),
-    ("study", "dotted key", STUDY_HEAD + "[vary]\n" + DOTTED + " = [1, 2]\n" + OBJECTIVE, ["vary.a.a.a", "is nested"]),
-    ("study", "table header", STUDY_HEAD + VARY + OBJECTIVE + "[constraints." + DOTTED + "]\nmin = 1\n",
-     ["constraints.a.a.a", "is nested"]),
-    ("study", "size", STUDY_HEAD + VARY + OBJECTIVE + "# " + "x" * (2 << 20) + "\n", ["over the limit of 1,048,576 bytes"]),
-    ("sweep", "digits", "[sweep]\nseed = " + HUGE + "\n" + SWEEP_VARY, ["line 2: sweep.seed holds a number of 5001"]),
-    ("sweep", "nesting in [vary]", "[vary]\nblades = " + DEEP + "\n", ["line 2: vary.blades is nested more than"]),
-    ("sweep", "nesting in [base]", "[base]\nname = " + DEEP_TABLE + "\n" + SWEEP_VARY, ["base.name is nested"]),
+    (
+        "study",
+        "digits",
+        '[study]\nname = "s"\ntrials = ' + HUGE + "\n" + VARY + OBJECTIVE,
+        ["line 3: study.trials holds a number of 5001 digits"],
+    ),
+    (
+        "study",
+        "nesting in [vary]",
+        STUDY_HEAD + '[vary]\n"airfoil.thickness" = ' + DEEP + "\n" + OBJECTIVE,
+        ['line 5: vary."airfoil.thickness" is nested more than'],
+    ),
+    (
+        "study",
+        "nesting in [constraints]",
+        STUDY_HEAD + VARY + OBJECTIVE + "[constraints]\n"
+        '"printability.thinnest_wall_mm" = ' + DEEP_TABLE + "\n",
+        ['constraints."printability.thinnest_wall_mm" is nested'],
+    ),
+    (
+        "study",
+        "nesting in trials",
+        '[study]\nname = "s"\ntrials = ' + DEEP + "\n" + VARY + OBJECTIVE,
+        ["line 3: study.trials is nested more than"],
+    ),
+    (
+        "study",
+        "dotted key",
+        STUDY_HEAD + "[vary]\n" + DOTTED + " = [1, 2]\n" + OBJECTIVE,
+        ["vary.a.a.a", "is nested"],
+    ),
+    (
+        "study",
+        "table header",
+        STUDY_HEAD + VARY + OBJECTIVE + "[constraints." + DOTTED + "]\nmin = 1\n",
+        ["constraints.a.a.a", "is nested"],
+    ),
+    (
+        "study",
+        "size",
+        STUDY_HEAD + VARY + OBJECTIVE + "# " + "x" * (2 << 20) + "\n",
+        ["over the limit of 1,048,576 bytes"],
+    ),
+    (
+        "sweep",
+        "digits",
+        "[sweep]\nseed = " + HUGE + "\n" + SWEEP_VARY,
+        ["line 2: sweep.seed holds a number of 5001"],
+    ),
+    (
+        "sweep",
+        "nesting in [vary]",
+        "[vary]\nblades = " + DEEP + "\n",
+        ["line 2: vary.blades is nested more than"],
+    ),
+    (
+        "sweep",
+        "nesting in [base]",
+        "[base]\nname = " + DEEP_TABLE + "\n" + SWEEP_VARY,
+        ["base.name is nested"],
+    ),
     ("sweep", "dotted key", "[vary]\n" + DOTTED + " = [1, 2]\n", ["vary.a.a.a", "is nested"]),
     ("sweep", "table header", "[vary." + DOTTED + "]\nb = [1, 2]\n", ["vary.a.a.a", "is nested"]),
-    ("sweep", "size", SWEEP_VARY + "# " + "x" * (2 << 20) + "\n", ["over the limit of 1,048,576 bytes"]),
+    (
+        "sweep",
+        "size",
+        SWEEP_VARY + "# " + "x" * (2 << 20) + "\n",
+        ["over the limit of 1,048,576 bytes"],
+    ),
     ("design", "dotted key", DOTTED + " = 1\n", ["a.a.a", "is nested"]),
     ("design", "table header", "[" + DOTTED + "]\nb = 1\n", ["a.a.a", "is nested"]),
 ]
@@ -67,10 +118,14 @@ def _one_line(capsys: pytest.CaptureFixture[str]) -> str:
     return lines[0]
 
 
-@pytest.mark.parametrize(("kind", "attack", "text", "words"), FILE_ATTACKS,
-                         ids=[f"{kind}-{attack}" for kind, attack, _, _ in FILE_ATTACKS])
-def test_a_study_sweep_or_design_file_out_of_shape_exits_2_naming_the_key(tmp_path, capsys, kind, attack, text,
-                                                                         words):
+@pytest.mark.parametrize(
+    ("kind", "attack", "text", "words"),
+    FILE_ATTACKS,
+    ids=[f"{kind}-{attack}" for kind, attack, _, _ in FILE_ATTACKS],
+)
+def test_a_study_sweep_or_design_file_out_of_shape_exits_2_naming_the_key(
+    tmp_path, capsys, kind, attack, text, words
+):
     """Today a study's 5001-digit trials was "internal error (ValueError)", its 500-deep nesting and the
     dotted keys and headers of both were "internal error (RecursionError)"."""
     path = tmp_path / f"{kind}.toml"
@@ -97,6 +152,7 @@ def test_tables_nested_up_to_the_limit_are_read():
 
 # -- numeric options ------------------------------------------------------------------------------
 
+
 def _subparsers() -> dict[str, argparse.ArgumentParser]:
     parser = build_parser()
     action = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
@@ -109,25 +165,36 @@ def _help_of(name: str, sub: argparse.ArgumentParser, capsys: pytest.CaptureFixt
     return " ".join(capsys.readouterr().out.split())
 
 
-def _bounded_options(capsys: pytest.CaptureFixture[str]) -> list[tuple[str, str, argparse.Action, str]]:
+def _bounded_options(
+    capsys: pytest.CaptureFixture[str],
+) -> list[tuple[str, str, argparse.Action, str]]:
     """(command, option, action, its --help text) of every numeric option of every command."""
     options = []
     for name, sub in _subparsers().items():
         text = _help_of(name, sub, capsys)
         for action in sub._actions:
-            if action.option_strings and action.type is not None and not hasattr(action.type, "ranges"):
+            if (
+                action.option_strings
+                and action.type is not None
+                and not hasattr(action.type, "ranges")
+            ):
                 options.append((name, action.option_strings[-1], action, text))
     return options
 
 
-def _compound_options(capsys: pytest.CaptureFixture[str]) -> list[tuple[str, str, argparse.Action, str]]:
+def _compound_options(
+    capsys: pytest.CaptureFixture[str],
+) -> list[tuple[str, str, argparse.Action, str]]:
     """(command, option, action, its --help text) of every option whose value holds several numbers
     (``--observer DIST_M:ANGLE_DEG``): its type carries its ranges as text and values outside them."""
     options = []
     for name, sub in _subparsers().items():
         text = _help_of(name, sub, capsys)
-        options += [(name, action.option_strings[-1], action, text) for action in sub._actions
-                    if action.option_strings and hasattr(action.type, "ranges")]
+        options += [
+            (name, action.option_strings[-1], action, text)
+            for action in sub._actions
+            if action.option_strings and hasattr(action.type, "ranges")
+        ]
     return options
 
 
@@ -136,7 +203,9 @@ def test_every_option_of_several_numbers_shows_its_ranges_and_refuses_values_out
     options = _compound_options(capsys)
     assert {option for _, option, _, _ in options} >= {"--observer"}
     for command, option, action, text in options:
-        assert " ".join(action.type.ranges.split()) in text, f"{command} {option}: its ranges not in its --help"
+        assert " ".join(action.type.ranges.split()) in text, (
+            f"{command} {option}: its ranges not in its --help"
+        )
         for value in action.type.outside:
             with pytest.raises(SystemExit) as stopped:
                 parser.parse_args(_arguments(command, option, value))
@@ -148,18 +217,39 @@ def test_every_option_of_several_numbers_shows_its_ranges_and_refuses_values_out
 def test_every_numeric_option_has_a_range_shown_in_its_help(capsys):
     options = _bounded_options(capsys)
     assert {option for _, option, _, _ in options} >= {
-        "--threads", "--workers", "--processes", "--iterations", "--trials", "--sections", "--points", "--density",
-        "--time-limit", "--rpm", "--thrust", "--airspeed", "--thrust-runs", "--thrust-tolerance", "--port",
-        "--far-size", "--growth-rate"}
+        "--threads",
+        "--workers",
+        "--processes",
+        "--iterations",
+        "--trials",
+        "--sections",
+        "--points",
+        "--density",
+        "--time-limit",
+        "--rpm",
+        "--thrust",
+        "--airspeed",
+        "--thrust-runs",
+        "--thrust-tolerance",
+        "--port",
+        "--far-size",
+        "--growth-rate",
+    }
     for command, option, action, text in options:
-        assert action.type not in (int, float), f"{command} {option} takes any {action.type.__name__}"
+        assert action.type not in (int, float), (
+            f"{command} {option} takes any {action.type.__name__}"
+        )
         bounds = getattr(action.type, "bounds", None)
-        assert bounds is not None and bounds.low is not None and bounds.high is not None, f"{command} {option}"
+        assert bounds is not None and bounds.low is not None and bounds.high is not None, (
+            f"{command} {option}"
+        )
         assert str(bounds) in text, f"{command} {option}: {bounds} not in its --help"
 
 
 def _arguments(command: str, option: str, value: str) -> list[str]:
-    positional = {"sweep": ["s.toml"], "optimize": ["s.toml"], "verify": ["folder"]}.get(command, [])
+    positional = {"sweep": ["s.toml"], "optimize": ["s.toml"], "verify": ["folder"]}.get(
+        command, []
+    )
     speed = ["--rpm", "1"] if command == "simulate" and option not in ("--rpm", "--thrust") else []
     return [command, *positional, *speed, option, value]
 
@@ -184,12 +274,21 @@ def test_every_numeric_option_refuses_values_outside_its_range_with_one_line(cap
             assert len(line) < 300, line
 
 
-@pytest.mark.parametrize("arguments", [
-    ["cfd", "--threads", "1000000000"], ["cfd", "--threads", "100000"], ["cfd", "--far-size", HUGE],
-    ["mesh", "--sections", "1000000000"], ["simulate", "--rpm", "1000", "--processes", "100000"],
-    ["simulate", "--rpm", "1000", "--iterations", "1000000000"], ["sweep", "s.toml", "--workers", "100000"],
-    ["optimize", "s.toml", "--trials", "1000000000"], ["build", "--density", "nan"],
-], ids=lambda arguments: " ".join(arguments)[:40])
+@pytest.mark.parametrize(
+    "arguments",
+    [
+        ["cfd", "--threads", "1000000000"],
+        ["cfd", "--threads", "100000"],
+        ["cfd", "--far-size", HUGE],
+        ["mesh", "--sections", "1000000000"],
+        ["simulate", "--rpm", "1000", "--processes", "100000"],
+        ["simulate", "--rpm", "1000", "--iterations", "1000000000"],
+        ["sweep", "s.toml", "--workers", "100000"],
+        ["optimize", "s.toml", "--trials", "1000000000"],
+        ["build", "--density", "nan"],
+    ],
+    ids=lambda arguments: " ".join(arguments)[:40],
+)
 def test_an_option_out_of_range_makes_no_output_folder(tmp_path, capsys, monkeypatch, arguments):
     monkeypatch.chdir(tmp_path)  # each command's default output folder would go here
     assert exit_code(arguments) == 2
@@ -199,22 +298,34 @@ def test_an_option_out_of_range_makes_no_output_folder(tmp_path, capsys, monkeyp
 
 def test_cfd_with_100000_threads_exits_2_not_a_crash(tmp_path):
     """Today: libgomp 'Thread creation failed', SIGSEGV (exit 139 from a shell), a staging folder left."""
-    result = subprocess.run([sys.executable, "-m", "torus_cad", "cfd", "--threads", "100000"], cwd=tmp_path,
-                            capture_output=True, text=True, timeout=120)
+    result = subprocess.run(
+        [sys.executable, "-m", "torus_cad", "cfd", "--threads", "100000"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert result.returncode == 2, result.stderr
-    assert result.stderr.count("\n") == 1 and "--threads = 100000 is out of range; allowed [0, " in result.stderr
+    assert (
+        result.stderr.count("\n") == 1
+        and "--threads = 100000 is out of range; allowed [0, " in result.stderr
+    )
     assert list(tmp_path.iterdir()) == []
 
 
 @pytest.mark.parametrize("source", ["/etc", "/dev/zero"])
 def test_simulate_mesh_from_a_wrong_case_makes_no_output_folder(tmp_path, capsys, source):
     out = tmp_path / "out"
-    assert main(["simulate", "--rpm", "3000", "--case-only", "--mesh-from", source, "--out", str(out)]) == 2
+    assert (
+        main(["simulate", "--rpm", "3000", "--case-only", "--mesh-from", source, "--out", str(out)])
+        == 2
+    )
     assert f"--mesh-from {source!r} is not a meshed case" in _one_line(capsys)
     assert not out.exists()
 
 
-# -- long values in messages ----------------------------------------------------------------------------
+# -- long values in messages
+# ----------------------------------------------------------------------------
 
 LONG_VALUES = [
     ("name", 'name = "{}"\n', "n"),
@@ -226,7 +337,9 @@ LONG_VALUES = [
 
 
 @pytest.mark.parametrize("length", [10_000, 900_000])
-@pytest.mark.parametrize(("key", "template", "letter"), LONG_VALUES, ids=[key for key, _, _ in LONG_VALUES])
+@pytest.mark.parametrize(
+    ("key", "template", "letter"), LONG_VALUES, ids=[key for key, _, _ in LONG_VALUES]
+)
 def test_a_long_value_is_cut_in_the_message(tmp_path, capsys, key, template, letter, length):
     """Today the whole value was echoed: a 900 kB line."""
     design = tmp_path / "long.toml"
@@ -239,10 +352,16 @@ def test_a_long_value_is_cut_in_the_message(tmp_path, capsys, key, template, let
     assert not out.exists()
 
 
-@pytest.mark.parametrize("arguments", [
-    ["build", "--set", "name=" + "x" * 100_000], ["build", "--format", "x" * 100_000],
-    ["simulate", "--rpm", "1", "--level", "x" * 100_000], ["build", "x" * 100_000],
-], ids=["--set", "--format", "--level choice", "config path"])
+@pytest.mark.parametrize(
+    "arguments",
+    [
+        ["build", "--set", "name=" + "x" * 100_000],
+        ["build", "--format", "x" * 100_000],
+        ["simulate", "--rpm", "1", "--level", "x" * 100_000],
+        ["build", "x" * 100_000],
+    ],
+    ids=["--set", "--format", "--level choice", "config path"],
+)
 def test_a_long_command_line_value_is_cut_in_the_message(tmp_path, capsys, monkeypatch, arguments):
     monkeypatch.chdir(tmp_path)
     assert exit_code(arguments) == 2
@@ -250,7 +369,9 @@ def test_a_long_command_line_value_is_cut_in_the_message(tmp_path, capsys, monke
     assert "..." in line and len(line) < 600, line[:300]
 
 
-@pytest.mark.parametrize("text", ["", "short", "x" * 79, "x" * 80, "x" * 81, "é" * 1000, "x" * 900_000])
+@pytest.mark.parametrize(
+    "text", ["", "short", "x" * 79, "x" * 80, "x" * 81, "é" * 1000, "x" * 900_000]
+)
 def test_cut_keeps_both_ends_within_the_limit(text):
     result = cut(text)
     assert len(result) <= MESSAGE_VALUE_MAX_CHARS
@@ -263,7 +384,7 @@ def test_cut_keeps_both_ends_within_the_limit(text):
 
 
 def test_shown_and_bounded_message_bound_any_value():
-    assert shown(10 ** 5000) == "a huge number"
+    assert shown(10**5000) == "a huge number"
     assert shown("short") == "'short'"
     message = bounded_message("a = " + "x" * 900_000 + " is wrong\nsecond line " + "y " * 5000)
     assert "\n" not in message and len(message) <= MESSAGE_MAX_CHARS

@@ -29,9 +29,24 @@ from torus_cad.tolerances import CFD_TETRAHEDRA_LIMIT
 
 gmsh = pytest.importorskip("gmsh")
 
-#: Coarse sizes, so the test meshes in seconds (the default sizes are measured by scripts/bench_mesh.py).
-COARSE = ["--cells-per-chord", "4", "--curvature-cells", "0", "--growth-rate", "1.6", "--far-size", "0.3",
-          "--domain-radius", "2", "--upstream", "1.5", "--downstream", "2"]
+#: Coarse sizes, so the test meshes in seconds (the default sizes are measured by
+#: scripts/bench_mesh.py).
+COARSE = [
+    "--cells-per-chord",
+    "4",
+    "--curvature-cells",
+    "0",
+    "--growth-rate",
+    "1.6",
+    "--far-size",
+    "0.3",
+    "--domain-radius",
+    "2",
+    "--upstream",
+    "1.5",
+    "--downstream",
+    "2",
+]
 
 
 @pytest.fixture(scope="module")
@@ -51,8 +66,14 @@ def cfd_out(cfd_run):
 
 def cli(*args: str, **kwargs) -> subprocess.CompletedProcess:
     """``python -m torus_cad ARGS`` in a new process."""
-    return subprocess.run([sys.executable, "-m", "torus_cad", *args], check=False, capture_output=True, text=True,
-                          timeout=1200, **kwargs)
+    return subprocess.run(
+        [sys.executable, "-m", "torus_cad", *args],
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=1200,
+        **kwargs,
+    )
 
 
 def _read_back(path) -> tuple[dict[str, int], dict[str, float]]:
@@ -61,16 +82,21 @@ def _read_back(path) -> tuple[dict[str, int], dict[str, float]]:
     try:
         gmsh.option.setNumber("General.Terminal", 0)
         gmsh.open(str(path))
-        groups = {gmsh.model.getPhysicalName(dim, tag): dim for dim, tag in gmsh.model.getPhysicalGroups()}
+        groups = {
+            gmsh.model.getPhysicalName(dim, tag): dim for dim, tag in gmsh.model.getPhysicalGroups()
+        }
         node_tags, coordinates, _ = gmsh.model.mesh.getNodes()
         nodes = np.zeros((int(node_tags.max()) + 1, 3))
         nodes[node_tags.astype(np.int64)] = coordinates.reshape(-1, 3)
         volumes = {}
         for dim, tag in gmsh.model.getPhysicalGroups(3):
-            tets = [gmsh.model.mesh.getElementsByType(4, entity)[1] for entity in
-                    gmsh.model.getEntitiesForPhysicalGroup(dim, tag)]
+            tets = [
+                gmsh.model.mesh.getElementsByType(4, entity)[1]
+                for entity in gmsh.model.getEntitiesForPhysicalGroup(dim, tag)
+            ]
             volumes[gmsh.model.getPhysicalName(dim, tag)] = tetrahedra_volume(
-                nodes, np.concatenate(tets).astype(np.int64).reshape(-1, 4))
+                nodes, np.concatenate(tets).astype(np.int64).reshape(-1, 4)
+            )
         return groups, volumes
     finally:
         gmsh.finalize()
@@ -96,23 +122,41 @@ def test_meshio_reads_the_gmshtofoam_file_and_the_report_and_readme_agree(cfd_ou
     mesh = meshio.read(cfd_out / "torus_propeller_cfd_v2.msh")
     assert set(SURFACE_GROUPS) | set(VOLUME_GROUPS) <= set(mesh.field_data)
     report = json.loads((cfd_out / "torus_propeller_cfd.json").read_text())
-    assert sum(len(block.data) for block in mesh.cells if block.type == "tetra") == report["tetrahedra_total"]
+    assert (
+        sum(len(block.data) for block in mesh.cells if block.type == "tetra")
+        == report["tetrahedra_total"]
+    )
     assert report["sicn_min"] > 0.0  # no inverted element
     assert all(count > 0 for count in report["triangles"].values())
     readme = (cfd_out / "README.txt").read_text()
-    assert 'gmshToFoam "$MESH/torus_propeller_cfd_v2.msh"' in readme and "rotating_interface" in readme
+    assert (
+        'gmshToFoam "$MESH/torus_propeller_cfd_v2.msh"' in readme and "rotating_interface" in readme
+    )
     assert sorted(path.name for path in cfd_out.iterdir()) == [
-        "README.txt", "torus_propeller_cfd.json", "torus_propeller_cfd.msh", "torus_propeller_cfd.step",
-        "torus_propeller_cfd_v2.msh"]
+        "README.txt",
+        "torus_propeller_cfd.json",
+        "torus_propeller_cfd.msh",
+        "torus_propeller_cfd.step",
+        "torus_propeller_cfd_v2.msh",
+    ]
 
 
-@pytest.mark.parametrize("arguments, fragment", [
-    (["--zone-radius", "0.4"], "cfd.zone_radius = 0.4 is out of range"),
-    (["--growth-rate", "1"], "cfd.growth_rate = 1 is out of range"),
-    (["--domain-radius", "1", "--zone-radius", "0.9"], "must be at least 1.5 x cfd.zone_radius"),
-    (["--upstream", "0.5", "--zone-clearance", "1"], "put an end of the domain inside the rotating zone"),
-    (["--threads", "-1"], "--threads = -1 is out of range"),
-])
+@pytest.mark.parametrize(
+    "arguments, fragment",
+    [
+        (["--zone-radius", "0.4"], "cfd.zone_radius = 0.4 is out of range"),
+        (["--growth-rate", "1"], "cfd.growth_rate = 1 is out of range"),
+        (
+            ["--domain-radius", "1", "--zone-radius", "0.9"],
+            "must be at least 1.5 x cfd.zone_radius",
+        ),
+        (
+            ["--upstream", "0.5", "--zone-clearance", "1"],
+            "put an end of the domain inside the rotating zone",
+        ),
+        (["--threads", "-1"], "--threads = -1 is out of range"),
+    ],
+)
 def test_bad_input_exits_2_with_one_line_and_writes_nothing(tmp_path, capsys, arguments, fragment):
     out = tmp_path / "out"
     assert exit_code(["cfd", *arguments, "--out", str(out)]) == 2
@@ -122,10 +166,15 @@ def test_bad_input_exits_2_with_one_line_and_writes_nothing(tmp_path, capsys, ar
 
 
 def test_without_gmsh_one_line_names_the_extra(tmp_path, capsys, monkeypatch):
-    monkeypatch.setitem(sys.modules, "gmsh", None)  # what Python does when the package is absent: ImportError
+    # what Python does when the package is absent: ImportError
+    monkeypatch.setitem(sys.modules, "gmsh", None)
     assert main(["cfd", "--out", str(tmp_path / "out")]) == 2
     error = capsys.readouterr().err
-    assert error.count("\n") == 1 and "the cfd extra" in error and "pip install -c constraints.txt -e '.[cfd]'" in error
+    assert (
+        error.count("\n") == 1
+        and "the cfd extra" in error
+        and "pip install -c constraints.txt -e '.[cfd]'" in error
+    )
     assert not (tmp_path / "out").exists()
 
 
@@ -137,11 +186,18 @@ def _crossing_pairs(msh_path, group: str) -> int:
 
     mesh = meshio.read(msh_path)
     tag = mesh.field_data[group][0]
-    triangles = np.concatenate([block.data[tags == tag] for block, tags in zip(mesh.cells, mesh.cell_data["gmsh:physical"])
-                                if block.type == "triangle"])
+    triangles = np.concatenate(
+        [
+            block.data[tags == tag]
+            for block, tags in zip(mesh.cells, mesh.cell_data["gmsh:physical"])
+            if block.type == "triangle"
+        ]
+    )
     used, inverse = np.unique(triangles, return_inverse=True)
-    surface = mrmeshnumpy.meshFromFacesVerts(np.ascontiguousarray(inverse.reshape(-1, 3), dtype=np.int32),
-                                             np.ascontiguousarray(mesh.points[used], dtype=np.float64))
+    surface = mrmeshnumpy.meshFromFacesVerts(
+        np.ascontiguousarray(inverse.reshape(-1, 3), dtype=np.int32),
+        np.ascontiguousarray(mesh.points[used], dtype=np.float64),
+    )
     return len(mr.findSelfCollidingTriangles(surface))
 
 
@@ -159,8 +215,13 @@ def test_the_estimate_is_printed_with_its_factor_and_time_and_the_mesh_falls_wit
     report = json.loads((out / "torus_propeller_cfd.json").read_text())
     (line,) = [text for text in stderr.splitlines() if text.startswith("torus-cad cfd: estimate")]
     estimate = report["estimate"]["tetrahedra"]
-    assert line.startswith(f"torus-cad cfd: estimate: about {estimate:,} tetrahedra") and "tetrahedra/s" in line
-    low, high = (int(text.replace(",", "")) for text in re.search(r": ([\d,]+) to ([\d,]+)\)", line).groups())
+    assert (
+        line.startswith(f"torus-cad cfd: estimate: about {estimate:,} tetrahedra")
+        and "tetrahedra/s" in line
+    )
+    low, high = (
+        int(text.replace(",", "")) for text in re.search(r": ([\d,]+) to ([\d,]+)\)", line).groups()
+    )
     assert low <= report["tetrahedra_total"] <= high  # the stated range holds on this mesh
     assert low == pytest.approx(REAL_OVER_ESTIMATE[0] * estimate, abs=500)
     assert report["estimate"]["wall_seconds"] == pytest.approx(estimate / TETS_PER_SECOND)
@@ -173,16 +234,22 @@ def test_a_long_stage_prints_a_heartbeat_with_its_time():
     stream = io.StringIO()
     progress = StageProgress(enabled=True, stream=stream)
     progress("volume_mesh")
-    assert run_in_worker(lambda: time.sleep(1.2) or 7, on_wait=lambda: progress.heartbeat(every_s=0.4)) == 7
+    assert (
+        run_in_worker(lambda: time.sleep(1.2) or 7, on_wait=lambda: progress.heartbeat(every_s=0.4))
+        == 7
+    )
     lines = stream.getvalue().splitlines()
     assert lines[0].endswith("] volume mesh") and len(lines) >= 2
-    assert all(re.search(r"volume mesh: still running, \d+ s in this stage$", line) for line in lines[1:])
+    assert all(
+        re.search(r"volume mesh: still running, \d+ s in this stage$", line) for line in lines[1:]
+    )
     progress.heartbeat(every_s=3600.0)  # no line unless the last one is that old
     assert stream.getvalue().splitlines() == lines
 
 
 def test_the_same_design_gives_the_same_mesh_on_every_run(cfd_out, tmp_path):
-    # A CFD engineer compares designs, not mesh noise: gmsh on one thread repeats itself byte for byte.
+    # A CFD engineer compares designs, not mesh noise: gmsh on one thread repeats itself byte for
+    # byte.
     assert main(["cfd", *COARSE, "--out", str(tmp_path), "-q"]) == 0
     for name in ("torus_propeller_cfd.msh", "torus_propeller_cfd_v2.msh"):
         assert (tmp_path / name).read_bytes() == (cfd_out / name).read_bytes(), name
@@ -191,7 +258,9 @@ def test_the_same_design_gives_the_same_mesh_on_every_run(cfd_out, tmp_path):
 def test_a_blunt_trailing_edge_meshes_at_coarse_sizes(tmp_path):
     """A 0.1 mm edge (thinner than the coarse triangles) meshes; its wall has no crossing triangles."""
     out = tmp_path / "out"
-    result = cli("cfd", *COARSE, "--set", "airfoil.trailing_edge_thickness=0.1", "--out", str(out), "-q")
+    result = cli(
+        "cfd", *COARSE, "--set", "airfoil.trailing_edge_thickness=0.1", "--out", str(out), "-q"
+    )
     assert result.returncode == 0, result.stderr
     assert _crossing_pairs(out / "torus_propeller_cfd_v2.msh", "propeller") == 0
 
@@ -206,8 +275,14 @@ def test_readme_txt_openfoam_steps_give_mesh_ok_and_no_empty_patch(cfd_out, tmp_
     case = moved / "case"
     case.mkdir()
     script = openfoam_block((moved / "README.txt").read_text())
-    result = subprocess.run(["sh", "-e", "-c", script], cwd=case, check=False, capture_output=True, text=True,
-                            timeout=600)
+    result = subprocess.run(
+        ["sh", "-e", "-c", script],
+        cwd=case,
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert result.returncode == 0, result.stdout + result.stderr
     assert "Mesh OK" in (case / "log.checkMesh").read_text()
     boundary = (case / "constant" / "polyMesh" / "boundary").read_text()
@@ -224,7 +299,11 @@ def test_a_mesh_over_the_budget_is_refused_before_any_work(tmp_path, capsys):
     out = tmp_path / "out"
     assert main(["cfd", "--cells-per-chord", "200", "--far-size", "0.01", "--out", str(out)]) == 2
     error = capsys.readouterr().err
-    assert error.count("\n") == 1 and "tetrahedra" in error and f"limit of {CFD_TETRAHEDRA_LIMIT:,}" in error
+    assert (
+        error.count("\n") == 1
+        and "tetrahedra" in error
+        and f"limit of {CFD_TETRAHEDRA_LIMIT:,}" in error
+    )
     assert "cfd.cells_per_chord = 200" in error and "cfd.far_size = 0.01" in error
     assert not out.exists()
 
@@ -234,7 +313,10 @@ def test_the_estimate_grows_with_finer_sizes():
     from torus_cad.parameters import PropellerParameters
 
     base = PropellerParameters()
-    counts = [estimate_cfd_mesh(base.with_values({"cfd.cells_per_chord": cells})).tetrahedra for cells in (4, 10, 20)]
+    counts = [
+        estimate_cfd_mesh(base.with_values({"cfd.cells_per_chord": cells})).tetrahedra
+        for cells in (4, 10, 20)
+    ]
     assert counts == sorted(counts) and counts[2] > 3 * counts[0]
     coarser = estimate_cfd_mesh(base.with_values({"cfd.growth_rate": 1.6})).tetrahedra
     assert coarser < counts[1]
@@ -263,15 +345,20 @@ def test_sigterm_at_a_random_moment_leaves_the_old_set_or_the_new_one(tmp_path):
     duration = time.perf_counter() - start
     moments = random.Random(7).sample(range(1, 100), 3)
     for percent in moments:
-        process = subprocess.Popen([sys.executable, "-m", "torus_cad", "cfd", *COARSE, "--out", str(tmp_path), "-q"],
-                                   stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        process = subprocess.Popen(
+            [sys.executable, "-m", "torus_cad", "cfd", *COARSE, "--out", str(tmp_path), "-q"],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
         time.sleep(duration * percent / 100.0)
         process.send_signal(signal.SIGTERM)
         _, stderr = process.communicate(timeout=600)
         assert process.returncode in (0, 143), (percent, stderr)
         if process.returncode == 143:
             assert stderr.strip().splitlines() == [
-                "torus-cad: interrupted by SIGTERM; staged files removed, published output sets are complete"]
+                "torus-cad: interrupted by SIGTERM; staged files removed, published output sets are complete"
+            ]
         assert cli("verify", str(tmp_path)).returncode == 0
         blades = _blades(tmp_path)
         assert blades == 3 if process.returncode == 0 else blades in (3, 4)
@@ -288,9 +375,14 @@ def test_a_file_size_limit_names_the_file_and_keeps_the_old_set(cfd_out, tmp_pat
     def limit_file_size() -> None:
         resource.setrlimit(resource.RLIMIT_FSIZE, (1_200_000, 1_200_000))
 
-    result = cli("cfd", *COARSE, "--set", "blades=4", "--out", str(folder), "-q", preexec_fn=limit_file_size)
+    result = cli(
+        "cfd", *COARSE, "--set", "blades=4", "--out", str(folder), "-q", preexec_fn=limit_file_size
+    )
     assert result.returncode == 1
     assert result.stderr.strip().splitlines() == [result.stderr.strip()]
-    assert "file size limit exceeded writing" in result.stderr and "torus_propeller_cfd.msh" in result.stderr
+    assert (
+        "file size limit exceeded writing" in result.stderr
+        and "torus_propeller_cfd.msh" in result.stderr
+    )
     assert _blades(folder) == 3
     assert sorted(p.name for p in folder.iterdir() if p.name.startswith(".")) == []

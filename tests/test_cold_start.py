@@ -21,13 +21,22 @@ print(json.dumps({"code": code, "loaded": sorted({name.split(".")[0] for name in
 
 def test_the_build_loads_no_cadquery_and_writes_its_files(tmp_path):
     """A coarse default (12 sections of 40 points: the same path, a quarter of the work)."""
-    done = subprocess.run([sys.executable, "-c", _BUILD, str(tmp_path)], capture_output=True, text=True, check=True,
-                          cwd=Path(__file__).resolve().parent.parent)
+    done = subprocess.run(
+        [sys.executable, "-c", _BUILD, str(tmp_path)],
+        capture_output=True,
+        text=True,
+        check=True,
+        cwd=Path(__file__).resolve().parent.parent,
+    )
     outcome = json.loads(done.stdout.strip().splitlines()[-1])
     assert outcome["code"] == 0
     assert [name for name in NOT_LOADED if name in outcome["loaded"]] == []
     assert "OCP" in outcome["loaded"]  # the kernel did run
     report = json.loads((tmp_path / "torus_propeller.json").read_text())
     assert set(report["files"]) == {"step", "stl", "sections_csv", "sections_png"}
-    assert report["checks"]["boolean_check_self_intersection"] and report["checks"]["stl_self_intersections"]
-    assert done.stderr.count("Statistics on Transfer") == 0 and "Statistics" not in done.stdout  # OpenCascade quiet
+    assert (
+        report["checks"]["boolean_check_self_intersection"]
+        and report["checks"]["stl_self_intersections"]
+    )
+    # OpenCascade quiet
+    assert done.stderr.count("Statistics on Transfer") == 0 and "Statistics" not in done.stdout

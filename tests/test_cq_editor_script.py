@@ -25,7 +25,9 @@ class ShowObjectRecorder:
     def __init__(self) -> None:
         self.calls: list[tuple[object, str | None, dict]] = []
 
-    def __call__(self, obj: object, name: str | None = None, options: dict | None = None, **kwargs: object) -> None:
+    def __call__(
+        self, obj: object, name: str | None = None, options: dict | None = None, **kwargs: object
+    ) -> None:
         self.calls.append((obj, name, {**(options or {}), **kwargs}))
 
 
@@ -44,7 +46,9 @@ def _run_with_runpy(recorder: ShowObjectRecorder) -> dict:
     return runpy.run_path(str(SCRIPT), init_globals={"show_object": recorder})
 
 
-@pytest.mark.parametrize("runner", [_run_like_cq_editor, _run_with_runpy], ids=["cq-editor-exec", "runpy"])
+@pytest.mark.parametrize(
+    "runner", [_run_like_cq_editor, _run_with_runpy], ids=["cq-editor-exec", "runpy"]
+)
 def test_script_shows_one_valid_solid(runner, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     recorder = ShowObjectRecorder()
@@ -67,21 +71,32 @@ def test_plain_python_run_writes_the_files(tmp_path, monkeypatch, capsys):
     namespace = runpy.run_path(str(SCRIPT), run_name="__main__")
     out = tmp_path / "step_out"
     names = sorted(path.name for path in out.iterdir())
-    assert names == ["torus_propeller.json", "torus_propeller.png", "torus_propeller.step", "torus_propeller.stl",
-                     "torus_propeller_sections.csv", "torus_propeller_sections.png"]
+    assert names == [
+        "torus_propeller.json",
+        "torus_propeller.png",
+        "torus_propeller.step",
+        "torus_propeller.stl",
+        "torus_propeller_sections.csv",
+        "torus_propeller_sections.png",
+    ]
     printed = capsys.readouterr().out
     assert "wrote step_out/torus_propeller.step" in printed and "mass" in printed
     shape = read_step(out / "torus_propeller.step")
     assert is_valid_closed_solid(shape)
-    assert precise_volume(shape) == pytest.approx(precise_volume(namespace["result"].solid),
-                                                  rel=READ_BACK_RELATIVE_TOLERANCE)
+    assert precise_volume(shape) == pytest.approx(
+        precise_volume(namespace["result"].solid), rel=READ_BACK_RELATIVE_TOLERANCE
+    )
 
 
 def _top_constants() -> dict[str, object]:
     tree = ast.parse(SCRIPT.read_text())
     constants: dict[str, object] = {}
     for node in tree.body:
-        if isinstance(node, ast.Assign) and len(node.targets) == 1 and isinstance(node.targets[0], ast.Name):
+        if (
+            isinstance(node, ast.Assign)
+            and len(node.targets) == 1
+            and isinstance(node.targets[0], ast.Name)
+        ):
             try:
                 constants[node.targets[0].id] = ast.literal_eval(node.value)
             except ValueError:
@@ -105,7 +120,11 @@ def test_edited_parameters_change_the_shown_propeller(tmp_path, monkeypatch):
     text = SCRIPT.read_text().replace('"blades": 3,', '"blades": 2,')
     text = text.replace('"resolution.sections": 25,', '"resolution.sections": 12,')
     text = text.replace('"resolution.points": 80,', '"resolution.points": 40,')
-    assert '"blades": 2,' in text and '"resolution.sections": 12,' in text and '"resolution.points": 40,' in text
+    assert (
+        '"blades": 2,' in text
+        and '"resolution.sections": 12,' in text
+        and '"resolution.points": 40,' in text
+    )
     recorder = ShowObjectRecorder()
     namespace: dict = {"show_object": recorder, "__name__": "temp"}
     exec(compile(text, "<string>", "exec"), namespace)

@@ -38,7 +38,8 @@ def multirotor():
 def test_the_solid_has_the_requested_tip_diameter(multirotor):
     measured = 2.0 * max_radius_mm(multirotor.solid)  # BRepExtrema against a coaxial cylinder
     assert measured == pytest.approx(127.0, abs=DIAMETER_TOLERANCE_MM)
-    assert 2.0 * vertex_radius_mm(multirotor.solid) <= measured + 1e-6  # the extremum bounds every vertex
+    # the extremum bounds every vertex
+    assert 2.0 * vertex_radius_mm(multirotor.solid) <= measured + 1e-6
     assert multirotor.design_targets.tip_diameter_mm == pytest.approx(127.0, abs=1e-3)
 
 
@@ -58,7 +59,8 @@ def test_the_solid_has_the_requested_pitch_at_75_percent_radius(handed, request)
     for (s, model_pitch), reported in zip(crossings, fit.pitch_at_75_mm):
         measured = pitch_on_solid(multirotor, s)
         assert measured == pytest.approx(reported, rel=0.01)  # the report tells what the solid has
-        assert measured == pytest.approx(114.0, rel=0.03)  # and that is the target, to the quartic's fit
+        # and that is the target, to the quartic's fit
+        assert measured == pytest.approx(114.0, rel=0.03)
         assert model_pitch == pytest.approx(reported, rel=1e-3)
 
 
@@ -84,21 +86,40 @@ def test_defaults_resolved_prints_the_spec_parameters(capsys, tmp_path):
 
 
 def test_an_unreachable_diameter_is_refused_with_the_reachable_range(tmp_path, capsys):
-    code = main(["build", "--set", "diameter=5000", *[f"--set={k}={v}" for k, v in LIGHT.items()],
-                 "--out", str(tmp_path / "out")])
+    code = main(
+        [
+            "build",
+            "--set",
+            "diameter=5000",
+            *[f"--set={k}={v}" for k, v in LIGHT.items()],
+            "--out",
+            str(tmp_path / "out"),
+        ]
+    )
     error = capsys.readouterr().err
     assert code == EXIT_BAD_INPUT
     assert "diameter = 5000 mm is out of reach" in error and "gives tip diameters" in error
     assert error.count("\n") == 1 and not (tmp_path / "out").exists()
 
 
-@pytest.mark.parametrize("overrides, words", [
-    ({"airfoil.naca": "2412", "airfoil.max_camber": 0.04}, "airfoil.naca = '2412' conflicts with airfoil.max_camber"),
-    ({"airfoil.naca": "2412", "airfoil.file": str(EXAMPLES / "airfoils" / "clarky.dat")}, "conflicts with airfoil.file"),
-    ({"airfoil.file": str(EXAMPLES / "airfoils" / "clarky.dat"), "airfoil.thickness": 0.12},
-     "conflicts with airfoil.thickness"),
-    ({"airfoil.naca": "9x12"}, "airfoil.naca = '9x12'"),
-])
+@pytest.mark.parametrize(
+    "overrides, words",
+    [
+        (
+            {"airfoil.naca": "2412", "airfoil.max_camber": 0.04},
+            "airfoil.naca = '2412' conflicts with airfoil.max_camber",
+        ),
+        (
+            {"airfoil.naca": "2412", "airfoil.file": str(EXAMPLES / "airfoils" / "clarky.dat")},
+            "conflicts with airfoil.file",
+        ),
+        (
+            {"airfoil.file": str(EXAMPLES / "airfoils" / "clarky.dat"), "airfoil.thickness": 0.12},
+            "conflicts with airfoil.thickness",
+        ),
+        ({"airfoil.naca": "9x12"}, "airfoil.naca = '9x12'"),
+    ],
+)
 def test_conflicting_airfoil_inputs_exit_2(tmp_path, capsys, overrides, words):
     arguments = [f"--set={key}={json.dumps(value)}" for key, value in overrides.items()]
     assert main(["build", *arguments, "--out", str(tmp_path / "out")]) == EXIT_BAD_INPUT
@@ -107,9 +128,15 @@ def test_conflicting_airfoil_inputs_exit_2(tmp_path, capsys, overrides, words):
 
 
 def test_a_malformed_airfoil_file_exits_2_naming_file_and_line(tmp_path, capsys):
-    (tmp_path / "crossed.dat").write_text("crossed\n1 0\n0.5 -0.05\n0 0\n0.5 0.05\n0.25 -0.04\n0.75 0.04\n1 0\n")
-    (tmp_path / "design.toml").write_text('[airfoil]\nfile = "crossed.dat"\n')  # relative to the design file
-    assert main(["build", str(tmp_path / "design.toml"), "--out", str(tmp_path / "out")]) == EXIT_BAD_INPUT
+    (tmp_path / "crossed.dat").write_text(
+        "crossed\n1 0\n0.5 -0.05\n0 0\n0.5 0.05\n0.25 -0.04\n0.75 0.04\n1 0\n"
+    )
+    # relative to the design file
+    (tmp_path / "design.toml").write_text('[airfoil]\nfile = "crossed.dat"\n')
+    assert (
+        main(["build", str(tmp_path / "design.toml"), "--out", str(tmp_path / "out")])
+        == EXIT_BAD_INPUT
+    )
     error = capsys.readouterr().err
     assert "airfoil.file" in error and str(tmp_path / "crossed.dat") in error and "line " in error
     assert not (tmp_path / "out").exists()
@@ -117,17 +144,32 @@ def test_a_malformed_airfoil_file_exits_2_naming_file_and_line(tmp_path, capsys)
 
 def test_a_naca_designation_builds_the_numbers_solid():
     by_name = PropellerParameters().with_values({"airfoil.naca": "2450", **LIGHT})
-    by_numbers = PropellerParameters().with_values({"airfoil.max_camber": 0.02, "airfoil.camber_position": 0.4,
-                                                     "airfoil.thickness": 0.5, **LIGHT})
+    by_numbers = PropellerParameters().with_values(
+        {
+            "airfoil.max_camber": 0.02,
+            "airfoil.camber_position": 0.4,
+            "airfoil.thickness": 0.5,
+            **LIGHT,
+        }
+    )
     resolved = resolve_design_targets(by_name).parameters
-    np.testing.assert_array_equal(resolved.blade_surface().points, by_numbers.blade_surface().points)
+    np.testing.assert_array_equal(
+        resolved.blade_surface().points, by_numbers.blade_surface().points
+    )
 
 
-@pytest.mark.parametrize("airfoil", [{"airfoil.file": str(EXAMPLES / "airfoils" / "clarky.dat")},
-                                     {"airfoil.file": str(EXAMPLES / "airfoils" / "naca2412_lednicer.dat")},
-                                     {"airfoil.naca": "23012"}])
+@pytest.mark.parametrize(
+    "airfoil",
+    [
+        {"airfoil.file": str(EXAMPLES / "airfoils" / "clarky.dat")},
+        {"airfoil.file": str(EXAMPLES / "airfoils" / "naca2412_lednicer.dat")},
+        {"airfoil.naca": "23012"},
+    ],
+)
 def test_other_airfoils_build_one_valid_solid(airfoil):
-    params = PropellerParameters().with_values({**airfoil, **LIGHT, "transforms.scale_y": [0, 0, -16, 16, 6]})
+    params = PropellerParameters().with_values(
+        {**airfoil, **LIGHT, "transforms.scale_y": [0, 0, -16, 16, 6]}
+    )
     propeller = build_propeller(params)
     assert propeller.solid.isValid() and len(propeller.solid.Solids()) == 1
 
@@ -135,12 +177,14 @@ def test_other_airfoils_build_one_valid_solid(airfoil):
 def test_blunt_trailing_edge_measured_on_the_solid():
     """A 0.4 mm flat base on every section: the straight edge where a section plane cuts the solid
     (the round cap: tests/test_round_trailing_edge.py)."""
-    params = PropellerParameters().with_values({"airfoil.trailing_edge_thickness": 0.4,
-                                                "airfoil.trailing_edge_shape": "flat", **LIGHT})
+    params = PropellerParameters().with_values(
+        {"airfoil.trailing_edge_thickness": 0.4, "airfoil.trailing_edge_shape": "flat", **LIGHT}
+    )
     propeller = build_propeller(params)
     assert propeller.solid.isValid() and len(propeller.solid.Solids()) == 1
     sharp_faces = len(build_propeller(PropellerParameters().with_values(LIGHT)).solid.Faces())
-    # each blade's side is two faces either way: the sharp edge's lower and upper, the blunt one's base and airfoil
+    # each blade's side is two faces either way: the sharp edge's lower and upper, the blunt one's
+    # base and airfoil
     assert len(propeller.solid.Faces()) == sharp_faces
     geometry = params.geometry()
     s_values = [0.5, 0.5 + 0.5 / 15.0]  # on a section, and half-way between two sections
@@ -153,18 +197,39 @@ def test_blunt_trailing_edge_measured_on_the_solid():
 
 
 def test_sections_table_is_written_beside_the_step(tmp_path):
-    code = main(["build", *[f"--set={k}={v}" for k, v in LIGHT.items()], "--set", "airfoil.trailing_edge_thickness=0.3",
-                 "--no-stl", "--out", str(tmp_path)])
+    code = main(
+        [
+            "build",
+            *[f"--set={k}={v}" for k, v in LIGHT.items()],
+            "--set",
+            "airfoil.trailing_edge_thickness=0.3",
+            "--no-stl",
+            "--out",
+            str(tmp_path),
+        ]
+    )
     assert code == 0
     with open(tmp_path / "torus_propeller_sections.csv") as stream:
         rows = list(csv.DictReader(stream))
     assert len(rows) == 16
-    assert list(rows[0]) == ["s", "r_mm", "axial_mm", "chord_mm", "max_thickness_mm", "thickness_to_chord", "beta_deg",
-                             "geometric_pitch_mm", "position_angle_deg", "radial_fraction", "trailing_edge_mm"]
+    assert list(rows[0]) == [
+        "s",
+        "r_mm",
+        "axial_mm",
+        "chord_mm",
+        "max_thickness_mm",
+        "thickness_to_chord",
+        "beta_deg",
+        "geometric_pitch_mm",
+        "position_angle_deg",
+        "radial_fraction",
+        "trailing_edge_mm",
+    ]
     for row in rows:
         assert float(row["trailing_edge_mm"]) == pytest.approx(0.3, rel=1e-4)
         assert float(row["thickness_to_chord"]) == pytest.approx(
-            float(row["max_thickness_mm"]) / float(row["chord_mm"]), rel=1e-4)
+            float(row["max_thickness_mm"]) / float(row["chord_mm"]), rel=1e-4
+        )
     assert (tmp_path / "torus_propeller_sections.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 

@@ -25,16 +25,21 @@ def test_a_signal_in_the_first_milliseconds_ends_with_one_line_when_started_bloc
     command = ["env", "--block-signal=INT,TERM,HUP", sys.executable, "-m", "torus_cad", "defaults"]
     handled = 0
     for attempt in range(24):
-        process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        process = subprocess.Popen(
+            command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True
+        )
         time.sleep(0.0005 * attempt)  # 0 to 11.5 ms after the start
         process.send_signal(signum)
         _, stderr = process.communicate(timeout=120)
         assert "Fatal Python error" not in stderr and "Traceback" not in stderr, stderr
-        if process.returncode == -signum:  # it arrived before env had blocked it: the default action, no message
+        # it arrived before env had blocked it: the default action, no message
+        if process.returncode == -signum:
             continue
         assert process.returncode == EXPECTED[signum], stderr
         name = signal.Signals(signum).name
-        assert stderr.strip().splitlines() == [f"torus-cad: interrupted by {name}; staged files removed, published "
-                                               "output sets are complete"]
+        assert stderr.strip().splitlines() == [
+            f"torus-cad: interrupted by {name}; staged files removed, published "
+            "output sets are complete"
+        ]
         handled += 1
     assert handled >= 12  # most signals arrive after env blocked them

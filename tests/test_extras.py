@@ -16,8 +16,8 @@ import pytest
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = ROOT / "examples"
 
-#: ``python -c`` body: hide the modules named in argv[1] (as an absent package looks: ModuleNotFoundError
-#: from the import system), then run torus-cad with the rest of argv.
+#: ``python -c`` body: hide the modules named in argv[1] (as an absent package looks:
+#: ModuleNotFoundError from the import system), then run torus-cad with the rest of argv.
 HIDING_RUNNER = """
 import importlib.abc, sys
 hidden = set(sys.argv[1].split(","))
@@ -39,21 +39,41 @@ CASES = [
     ("gmsh", ["simulate", "--rpm", "5000"], "simulate"),
     ("foamlib", ["simulate", "--rpm", "5000", "--case-only"], "simulate"),
     ("optuna", ["optimize", str(EXAMPLES / "optimize_light.toml")], "optimize"),
-    ("dask,distributed", ["optimize", str(EXAMPLES / "optimize_light.toml"), "--scheduler", "local"], "optimize"),
-    ("dask,distributed", ["sweep", str(EXAMPLES / "sweep_example.toml"), "--scheduler", "local"], "sweep"),
+    (
+        "dask,distributed",
+        ["optimize", str(EXAMPLES / "optimize_light.toml"), "--scheduler", "local"],
+        "optimize",
+    ),
+    (
+        "dask,distributed",
+        ["sweep", str(EXAMPLES / "sweep_example.toml"), "--scheduler", "local"],
+        "sweep",
+    ),
     ("trame", ["studio", "--port", "0"], "studio"),
     ("trame_vuetify", ["studio", "--port", "0"], "studio"),
 ]
 
 
 @pytest.mark.parametrize("hidden, command, extra", CASES, ids=[f"{c[1][0]}-{c[0]}" for c in CASES])
-def test_a_missing_extra_is_one_line_with_its_install_command_exit_2_and_nothing_written(tmp_path, hidden, command,
-                                                                                          extra):
+def test_a_missing_extra_is_one_line_with_its_install_command_exit_2_and_nothing_written(
+    tmp_path, hidden, command, extra
+):
     out = tmp_path / "out"
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
-    out_option = [] if command[0] == "studio" else ["--out", str(out)]  # studio writes nothing anyway
-    result = subprocess.run([sys.executable, "-c", HIDING_RUNNER, hidden, *command, *out_option],
-                            cwd=tmp_path, env=env, capture_output=True, text=True, timeout=120, check=False)
+    env = {
+        **os.environ,
+        "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]),
+    }
+    # studio writes nothing anyway
+    out_option = [] if command[0] == "studio" else ["--out", str(out)]
+    result = subprocess.run(
+        [sys.executable, "-c", HIDING_RUNNER, hidden, *command, *out_option],
+        cwd=tmp_path,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
     assert result.returncode == 2, result.stderr
     assert result.stderr.count("\n") == 1, result.stderr
     assert f"needs the {extra} extra" in result.stderr
@@ -67,7 +87,9 @@ def test_every_module_named_for_an_extra_is_installed_by_that_extra_in_pyproject
     distribution provides a module, by importlib.metadata)."""
     from torus_cad.runtime.extras import EXTRA_MODULES, OPTIONAL_MODULES, extra_of_module
 
-    extras = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["optional-dependencies"]
+    extras = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"][
+        "optional-dependencies"
+    ]
     providers = importlib.metadata.packages_distributions()
 
     def names(extra: str) -> set[str]:
@@ -80,7 +102,9 @@ def test_every_module_named_for_an_extra_is_installed_by_that_extra_in_pyproject
     modules = [(extra, module) for extra, listed in EXTRA_MODULES.items() for module in listed]
     modules += [(extra, module) for module, extra in OPTIONAL_MODULES.items()]
     for extra, module in modules:
-        distributions = {name.lower().replace("_", "-") for name in providers.get(module.split(".")[0], [])}
+        distributions = {
+            name.lower().replace("_", "-") for name in providers.get(module.split(".")[0], [])
+        }
         if not distributions:
             continue  # not installed here (e.g. the docs extra): nothing to compare
         assert distributions & names(extra), (extra, module, distributions)

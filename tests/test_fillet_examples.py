@@ -21,24 +21,31 @@ from torus_cad.kernel.checks import is_valid_closed_solid
 from torus_cad.parameters import PropellerParameters
 from torus_cad.propeller import build_propeller
 
-#: Examples whose fillet at that radius OpenCascade makes with faces that cross (BRepAlgoAPI_Check), so
-#: the build refuses it although the trailing edge is round.
-STRICTLY_REFUSED = {("multirotor_5in_3blade", 1.0), ("multirotor_5in_3blade_ccw", 1.0), ("prop_10x5_2blade", 1.0)}
+#: Examples whose fillet at that radius OpenCascade makes with faces that cross (BRepAlgoAPI_Check),
+#: so the build refuses it although the trailing edge is round.
+STRICTLY_REFUSED = {
+    ("multirotor_5in_3blade", 1.0),
+    ("multirotor_5in_3blade_ccw", 1.0),
+    ("prop_10x5_2blade", 1.0),
+}
 
 EXAMPLES = SHIPPED_DESIGNS
 
-#: Designs whose blade roots are too thin for these radii: OpenCascade finds no fillet, and the build exits 1
-#: naming a radius that works or the concave bend that stops it (measured: the APC 10x7 SF's thin cambered
-#: root, 0.9 mm thick at the hub, takes 0.05 mm, with a sharp or a 0.2 mm round trailing edge, with or
-#: without root_fillet_tight_bends = 'reduce').
+#: Designs whose blade roots are too thin for these radii: OpenCascade finds no fillet, and the
+#: build exits 1 naming a radius that works or the concave bend that stops it (measured: the APC
+#: 10x7 SF's thin cambered root, 0.9 mm thick at the hub, takes 0.05 mm, with a sharp or a 0.2 mm
+#: round trailing edge, with or without root_fillet_tight_bends = 'reduce').
 TOO_THIN_FOR_THE_FILLET = {"apc_10x7sf", "apc_10x7sf_pe0", "apc_10x7sf_e63"}
 
 
 @pytest.mark.parametrize("radius_mm", [0.5, 1.0])
 @pytest.mark.parametrize("example", EXAMPLES, ids=lambda path: path.stem)
 def test_root_fillet_works_on_every_shipped_example(example, radius_mm):
-    params = PropellerParameters.from_toml(example).with_values({"hub.root_fillet_radius": radius_mm})
-    if params.airfoil.trailing_edge_thickness == 0.0:  # refused before the kernel (check refuses it alike)
+    params = PropellerParameters.from_toml(example).with_values(
+        {"hub.root_fillet_radius": radius_mm}
+    )
+    # refused before the kernel (check refuses it alike)
+    if params.airfoil.trailing_edge_thickness == 0.0:
         with pytest.raises(GeometryError, match="round a knife trailing edge"):
             build_propeller(params)
         return
@@ -48,17 +55,23 @@ def test_root_fillet_works_on_every_shipped_example(example, radius_mm):
         except (ParameterError, GeometryError) as refusal:
             assert params.hub.chamfer > 0.0 and "hub.chamfer" in str(refusal)
             propeller = build_propeller(params.with_values({"hub.chamfer": 0.0}))
-    except KernelError as error:  # the strict check refuses the fillet's crossing faces: never published
+    # the strict check refuses the fillet's crossing faces: never published
+    except KernelError as error:
         if example.stem in TOO_THIN_FOR_THE_FILLET:
             assert "could not fillet the blade roots" in str(error), error
             return
         assert "BRepAlgoAPI_Check" in str(error), error
-        # measured: multirotor_5in_3blade at 1.0 mm (a 0.1 mm round edge) leaves 3 crossing fillet faces
+        # measured: multirotor_5in_3blade at 1.0 mm (a 0.1 mm round edge) leaves 3 crossing fillet
+        # faces
         assert (example.stem, radius_mm) in STRICTLY_REFUSED, error
         return
     assert is_valid_closed_solid(propeller.solid)
-    assert propeller.root_fillet is not None and propeller.root_fillet.constant_radius  # no reduced radius anywhere
-    assert len(propeller.solid.Faces()) > len(build_propeller(params.with_values({"hub.root_fillet_radius": 0.0,
-                                                                                  "hub.chamfer": 0.0})).solid.Faces())
+    # no reduced radius anywhere
+    assert propeller.root_fillet is not None and propeller.root_fillet.constant_radius
+    assert len(propeller.solid.Faces()) > len(
+        build_propeller(
+            params.with_values({"hub.root_fillet_radius": 0.0, "hub.chamfer": 0.0})
+        ).solid.Faces()
+    )
     # each face's part comes through the fillet's history: the preview's and the studio's colours
     assert_faces_come_from_their_parts(propeller.solid, propeller.face_parts, propeller, radius_mm)

@@ -16,7 +16,7 @@ def _fill(disk: Path) -> None:
                 handle.write(b"\0" * 65536)
         except OSError:
             pass
-    (disk / "fill").write_bytes((disk / "fill").read_bytes()[: -8192])
+    (disk / "fill").write_bytes((disk / "fill").read_bytes()[:-8192])
 
 
 def test_a_picture_on_a_full_disk_is_one_line_naming_the_file(tmpfs, capsys, tmp_path) -> None:
@@ -30,8 +30,10 @@ def test_a_picture_on_a_full_disk_is_one_line_naming_the_file(tmpfs, capsys, tmp
 
 def test_a_quiet_sweep_on_a_full_disk_prints_why_it_failed(tmpfs, capsys, tmp_path) -> None:
     sweep = tmp_path / "one.toml"
-    sweep.write_text('[base.resolution]\nsections = 12\npoints = 32\n\n[sweep]\nmode = "grid"\n\n'
-                     '[vary]\nblades = [2]\n')
+    sweep.write_text(
+        '[base.resolution]\nsections = 12\npoints = 32\n\n[sweep]\nmode = "grid"\n\n'
+        "[vary]\nblades = [2]\n"
+    )
     disk = tmpfs(512)
     _fill(disk)
     assert main(["sweep", str(sweep), "-q", "--workers", "1", "--out", str(disk / "sweep")]) == 1

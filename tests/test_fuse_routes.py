@@ -25,7 +25,9 @@ from torus_cad.propeller import build_propeller
 from torus_cad.tolerances import HUB_FOOTPRINT_MARGIN_DEG
 
 
-def _synthetic_blade(root_deg: float, tip_deg: float, width_deg: float, hub_radius: float = 10.0) -> np.ndarray:
+def _synthetic_blade(
+    root_deg: float, tip_deg: float, width_deg: float, hub_radius: float = 10.0
+) -> np.ndarray:
     """(12, 20, 3) points: 3 sections inside the hub at root_deg, 6 far out, 3 inside at tip_deg."""
     sections = []
     for index in range(12):
@@ -33,7 +35,9 @@ def _synthetic_blade(root_deg: float, tip_deg: float, width_deg: float, hub_radi
         centre = root_deg if index < 6 else tip_deg
         radius = 0.6 * hub_radius if inside else 3.0 * hub_radius
         angles = np.radians(centre + np.linspace(-width_deg / 2, width_deg / 2, 20))
-        sections.append(np.stack([radius * np.cos(angles), radius * np.sin(angles), np.zeros(20)], axis=1))
+        sections.append(
+            np.stack([radius * np.cos(angles), radius * np.sin(angles), np.zeros(20)], axis=1)
+        )
     return np.array(sections)
 
 
@@ -43,9 +47,14 @@ def _angular_distance_deg(a: float, b: float) -> float:
 
 # -- where the seam goes (geometry layer) ----------------------------------------------------------
 
+
 @settings(max_examples=60, deadline=None, derandomize=True)
-@given(root=st.floats(-180.0, 180.0), span=st.floats(20.0, 160.0), width=st.floats(2.0, 40.0),
-       blades=st.integers(1, 8))
+@given(
+    root=st.floats(-180.0, 180.0),
+    span=st.floats(20.0, 160.0),
+    width=st.floats(2.0, 40.0),
+    blades=st.integers(1, 8),
+)
 def test_the_seam_misses_every_blade_footprint(root, span, width, blades):
     points = _synthetic_blade(root, root + span, width)
     arcs = footprint_arcs_deg(points, 10.0)
@@ -54,7 +63,10 @@ def test_the_seam_misses_every_blade_footprint(root, span, width, blades):
     for low, high in arcs:
         for blade in range(blades):
             start = low + 360.0 * blade / blades
-            covered[(np.arange(int(np.floor(start * 10)), int(np.ceil((start + high - low) * 10)) + 1)) % 3600] = True
+            covered[
+                (np.arange(int(np.floor(start * 10)), int(np.ceil((start + high - low) * 10)) + 1))
+                % 3600
+            ] = True
             if seam is not None:
                 middle = (low + high) / 2 + 360.0 * blade / blades
                 assert _angular_distance_deg(seam, middle) > (high - low) / 2
@@ -77,7 +89,9 @@ def test_no_seam_when_the_footprints_close_the_circle():
 
 
 def test_default_seam_lies_between_blade_roots(default_propeller, default_params):
-    seam = seam_angle_deg(default_propeller.surface.points, default_params.hub.radius, default_params.blades)
+    seam = seam_angle_deg(
+        default_propeller.surface.points, default_params.hub.radius, default_params.blades
+    )
     assert seam is not None
     lateral = [face for face in default_propeller.solid.Faces() if face.geomType() == "CYLINDER"]
     assert len(lateral) == 1
@@ -86,6 +100,7 @@ def test_default_seam_lies_between_blade_roots(default_propeller, default_params
 
 
 # -- the kernel's two routes -----------------------------------------------------------------------
+
 
 def test_hub_seam_angle_moves_the_seam_not_the_solid():
     turned = hub_solid(10.0, 20.0, 75.0)
@@ -109,13 +124,18 @@ def test_the_report_gives_the_route_and_the_spin_as_codes(default_files):
     assert report["spin_to_push_air_down"] == report["parameters"]["handedness"] == "cw"
 
 
-@pytest.mark.parametrize("seam_deg, join", [(20.0, FuseRoute.GLUED), (90.0, FuseRoute.GLUED), (None, FuseRoute.ASSEMBLED)])
+@pytest.mark.parametrize(
+    "seam_deg, join",
+    [(20.0, FuseRoute.GLUED), (90.0, FuseRoute.GLUED), (None, FuseRoute.ASSEMBLED)],
+)
 def test_any_seam_angle_gives_the_same_solid(default_propeller, seam_deg, join):
     # A seam through a blade root splits that root's patch; the split pieces are shifted on
     # their own and glued. The seam the pipeline picks (None here) lets the shell be assembled.
     params = default_propeller.parameters
     if seam_deg is None:
-        seam_deg = seam_angle_deg(default_propeller.surface.points, params.hub.radius, params.blades)
+        seam_deg = seam_angle_deg(
+            default_propeller.surface.points, params.hub.radius, params.blades
+        )
     hub = hub_solid(params.hub.radius, params.hub.length, seam_deg)
     angles = [360.0 * index / params.blades for index in range(params.blades)]
     fused = fuse_pattern(hub, default_propeller.blades[0], angles)
@@ -123,7 +143,8 @@ def test_any_seam_angle_gives_the_same_solid(default_propeller, seam_deg, join):
     assert fused.route == join
     assert_faces_come_from_their_parts(solid, fused.face_parts, default_propeller)
     assert precise_volume(solid, VOLUME_PRECISION) == pytest.approx(
-        precise_volume(default_propeller.solid, VOLUME_PRECISION), rel=ROUTE_VOLUME_TOLERANCE)
+        precise_volume(default_propeller.solid, VOLUME_PRECISION), rel=ROUTE_VOLUME_TOLERANCE
+    )
     assert len(solid.Faces()) == len(default_propeller.solid.Faces())
 
 
@@ -138,7 +159,8 @@ def test_when_the_shared_route_fails_the_general_fuse_builds_it(light_params, mo
     assert (shared.fuse_route, fallback.fuse_route) == (FuseRoute.ASSEMBLED, FuseRoute.GENERAL)
     assert is_valid_closed_solid(fallback.solid)
     assert precise_volume(fallback.solid, VOLUME_PRECISION) == pytest.approx(
-        precise_volume(shared.solid, VOLUME_PRECISION), rel=ROUTE_VOLUME_TOLERANCE)
+        precise_volume(shared.solid, VOLUME_PRECISION), rel=ROUTE_VOLUME_TOLERANCE
+    )
 
 
 def test_a_wrong_curve_on_the_hub_is_caught_not_shipped(light_params, monkeypatch):
@@ -153,19 +175,24 @@ def test_a_wrong_curve_on_the_hub_is_caught_not_shipped(light_params, monkeypatc
     assert is_valid_closed_solid(propeller.solid)
 
 
-# -- which part each face came from ------------------------------------------------------------------
+# -- which part each face came from
+# ------------------------------------------------------------------
+
 
 def test_the_default_propeller_knows_each_faces_part(default_propeller):
     assert default_propeller.fuse_route == FuseRoute.ASSEMBLED
-    assert_faces_come_from_their_parts(default_propeller.solid, default_propeller.face_parts, default_propeller)
+    assert_faces_come_from_their_parts(
+        default_propeller.solid, default_propeller.face_parts, default_propeller
+    )
 
 
 def test_the_general_fuse_knows_each_faces_part(light_params):
     propeller = build_propeller(light_params)
     fused = fuse_all(propeller.hub, propeller.blades)
     assert fused.route == FuseRoute.GENERAL
-    assert_faces_come_from_their_parts(single_valid_solid(fused.shape, "the general fuse"), fused.face_parts,
-                                       propeller)
+    assert_faces_come_from_their_parts(
+        single_valid_solid(fused.shape, "the general fuse"), fused.face_parts, propeller
+    )
 
 
 def test_a_mirrored_propeller_keeps_each_faces_part(light_params):

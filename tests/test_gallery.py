@@ -1,6 +1,5 @@
 """The gallery: every example design builds to one valid solid; its note is there."""
 
-
 import pytest
 from conftest import EXAMPLES_DIR as EXAMPLES
 from conftest import SHIPPED_DESIGNS
@@ -14,8 +13,14 @@ GALLERY = [path.name for path in SHIPPED_DESIGNS if not path.match("workshop_*.t
 
 
 def test_the_gallery_has_the_designs_the_issue_asks_for():
-    assert {"multirotor_5in_3blade.toml", "multirotor_5in_3blade_ccw.toml", "prop_10x5_2blade.toml",
-            "marine_3blade_loop.toml", "cooling_fan_7blade.toml", "spec_default.toml"} <= set(GALLERY)
+    assert {
+        "multirotor_5in_3blade.toml",
+        "multirotor_5in_3blade_ccw.toml",
+        "prop_10x5_2blade.toml",
+        "marine_3blade_loop.toml",
+        "cooling_fan_7blade.toml",
+        "spec_default.toml",
+    } <= set(GALLERY)
 
 
 def test_the_multirotor_pair_is_a_cw_ccw_pair_with_a_5_mm_bore():
@@ -23,7 +28,8 @@ def test_the_multirotor_pair_is_a_cw_ccw_pair_with_a_5_mm_bore():
     ccw = PropellerParameters.from_toml(EXAMPLES / "multirotor_5in_3blade_ccw.toml")
     assert (cw.handedness.value, ccw.handedness.value) == ("cw", "ccw")
     assert cw.hub.bore_diameter == ccw.hub.bore_diameter == 5.0
-    assert cw.with_values({"name": ccw.name, "handedness": "ccw"}) == ccw  # the same design otherwise
+    # the same design otherwise
+    assert cw.with_values({"name": ccw.name, "handedness": "ccw"}) == ccw
 
 
 @pytest.mark.parametrize("name", GALLERY)

@@ -40,10 +40,14 @@ def test_every_dependency_is_pinned_within_its_range():
     for requirement in _requirements():
         name = _normalised(requirement.name)
         assert name in pins, f"{requirement.name} (pyproject.toml) is not pinned in constraints.txt"
-        assert requirement.specifier.contains(pins[name]), \
+        assert requirement.specifier.contains(pins[name]), (
             f"constraints.txt pins {requirement.name}=={pins[name]} outside pyproject's {requirement.specifier}"
+        )
 
 
 def test_readme_command_and_ci_install_through_the_constraints():
     assert "pip install -c constraints.txt -e ." in (ROOT / "README.md").read_text()
-    assert re.search(r"pip install .*-c constraints\.txt -e \"\.\[test,docs\]\"", (ROOT / ".ci" / "run").read_text())
+    assert re.search(
+        r"pip install .*-c constraints\.txt -e \"\.\[test,docs\]\"",
+        (ROOT / ".ci" / "run").read_text(),
+    )

@@ -22,7 +22,9 @@ def _crash() -> None:
 def test_a_result_an_exception_a_hang_and_a_crash():
     assert run_isolated(sum, [1, 2, 3], timeout_s=30.0, what="a sum") == 6
     with pytest.raises(KernelError, match="boom"):
-        run_isolated(lambda: (_ for _ in ()).throw(KernelError("boom")), timeout_s=30.0, what="a raise")
+        run_isolated(
+            lambda: (_ for _ in ()).throw(KernelError("boom")), timeout_s=30.0, what="a raise"
+        )
     start = time.monotonic()
     with pytest.raises(IsolatedTimeout, match=r"a sleep did not finish within 0\.5 s"):
         run_isolated(time.sleep, 30.0, timeout_s=0.5, what="a sleep")
@@ -59,8 +61,10 @@ def test_it_runs_in_a_pool_worker_which_is_a_daemonic_process():
 
 
 def test_a_killed_parent_leaves_no_child_running():
-    script = ("import time; from torus_cad.runtime.isolation import run_isolated; "
-              "print('started', flush=True); run_isolated(time.sleep, 120.0, timeout_s=120.0, what='a sleep')")
+    script = (
+        "import time; from torus_cad.runtime.isolation import run_isolated; "
+        "print('started', flush=True); run_isolated(time.sleep, 120.0, timeout_s=120.0, what='a sleep')"
+    )
     parent = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True)
     try:
         assert parent.stdout is not None and parent.stdout.readline().strip() == "started"
@@ -83,5 +87,7 @@ def test_a_strict_check_over_its_time_limit_refuses_the_build(light_params, monk
     from torus_cad.propeller import build_propeller
 
     monkeypatch.setattr(strict, "STRICT_CHECK_TIME_LIMIT_S", 0.01)
-    with pytest.raises(KernelError, match=r"BRepAlgoAPI_Check .* did not finish within 0.01 s \(the limit\)"):
+    with pytest.raises(
+        KernelError, match=r"BRepAlgoAPI_Check .* did not finish within 0.01 s \(the limit\)"
+    ):
         build_propeller(light_params)

@@ -36,15 +36,31 @@ TEXT_CASES = [
     ("inf_length", "[hub]\nlength = inf\n", ["hub.length", "finite"]),
     ("minus_inf_phase", "phase_deg = -inf\n", ["phase_deg", "finite"]),
     ("nan_in_list", "[centerline]\np2 = [25.0, nan, 22.0]\n", ["centerline.p2[1]", "finite"]),
-    ("nan_quartic", "[transforms]\nangle_of_attack = [0.0, 0.0, 0.0, 0.0, nan]\n", ["angle_of_attack", "finite"]),
+    (
+        "nan_quartic",
+        "[transforms]\nangle_of_attack = [0.0, 0.0, 0.0, 0.0, nan]\n",
+        ["angle_of_attack", "finite"],
+    ),
     ("negative_radius", "[hub]\nradius = -5.0\n", ["hub.radius"]),
     ("negative_length", "[hub]\nlength = -20.0\n", ["hub.length"]),
     ("zero_radius", "[hub]\nradius = 0.0\n", ["hub.radius"]),
     ("negative_thickness", "[airfoil]\nthickness = -0.1\n", ["airfoil.thickness"]),
     ("negative_sections", "[resolution]\nsections = -3\n", ["resolution.sections"]),
-    ("negative_scale", "[transforms]\nscale_x = [0.0, 0.0, 0.0, 0.0, -6.0]\n", ["transforms.scale_x", "positive"]),
-    ("scale_crossing_zero", "[transforms]\nscale_y = [0.0, 0.0, 0.0, -4.0, 2.0]\n", ["transforms.scale_y"]),
-    ("negative_deflection", "[export]\nstl_linear_deflection = -0.1\n", ["export.stl_linear_deflection"]),
+    (
+        "negative_scale",
+        "[transforms]\nscale_x = [0.0, 0.0, 0.0, 0.0, -6.0]\n",
+        ["transforms.scale_x", "positive"],
+    ),
+    (
+        "scale_crossing_zero",
+        "[transforms]\nscale_y = [0.0, 0.0, 0.0, -4.0, 2.0]\n",
+        ["transforms.scale_y"],
+    ),
+    (
+        "negative_deflection",
+        "[export]\nstl_linear_deflection = -0.1\n",
+        ["export.stl_linear_deflection"],
+    ),
     ("zero_blades", "blades = 0\n", ["blades"]),
     ("negative_blades", "blades = -2\n", ["blades"]),
     ("too_many_blades", "blades = 1000\n", ["blades"]),
@@ -102,7 +118,9 @@ def test_binary_config(tmp_path, capsys, case, content):
 
 def test_missing_file(tmp_path, capsys):
     out_dir = tmp_path / "out"
-    _assert_refused(*_run_cli(capsys, tmp_path / "nowhere.toml", out_dir), out_dir, ["nowhere.toml"])
+    _assert_refused(
+        *_run_cli(capsys, tmp_path / "nowhere.toml", out_dir), out_dir, ["nowhere.toml"]
+    )
 
 
 def test_directory_as_config(tmp_path, capsys):
@@ -112,13 +130,17 @@ def test_directory_as_config(tmp_path, capsys):
     _assert_refused(*_run_cli(capsys, folder, out_dir), out_dir, ["a_folder.toml"])
 
 
-@pytest.mark.parametrize("override, words", [
-    ("hub.radius=nan", ["hub.radius"]),
-    ("blades=0", ["blades"]),
-    ("hub.radiuss=3", ["hub.radiuss"]),
-    ("hub.radius", ["key=value"]),
-    ("centerline.p2=[1,2]", ["centerline.p2"]),
-], ids=["nan", "zero_blades", "unknown", "no_value", "short_list"])
+@pytest.mark.parametrize(
+    "override, words",
+    [
+        ("hub.radius=nan", ["hub.radius"]),
+        ("blades=0", ["blades"]),
+        ("hub.radiuss=3", ["hub.radiuss"]),
+        ("hub.radius", ["key=value"]),
+        ("centerline.p2=[1,2]", ["centerline.p2"]),
+    ],
+    ids=["nan", "zero_blades", "unknown", "no_value", "short_list"],
+)
 def test_malformed_override(tmp_path, capsys, override, words):
     out_dir = tmp_path / "out"
     code = main(["build", "--set", override, "--out", str(out_dir)])
@@ -126,15 +148,23 @@ def test_malformed_override(tmp_path, capsys, override, words):
     _assert_refused(code, captured.out, captured.err, out_dir, words)
 
 
-@pytest.mark.parametrize("content", [b"\xff\xfe\x00garbage\x00", b"[hub]\nradius = nan\n", b"blades = 0\n"],
-                         ids=["binary", "nan", "zero_blades"])
+@pytest.mark.parametrize(
+    "content",
+    [b"\xff\xfe\x00garbage\x00", b"[hub]\nradius = nan\n", b"blades = 0\n"],
+    ids=["binary", "nan", "zero_blades"],
+)
 def test_command_line_prints_no_traceback(tmp_path, content):
     """The real entry point, in a new process: exit 2, one line, no traceback, nothing written."""
     config = tmp_path / "design.toml"
     config.write_bytes(content)
     out_dir = tmp_path / "out"
-    result = subprocess.run([sys.executable, "-m", "torus_cad", "build", str(config), "--out", str(out_dir)],
-                            check=False, capture_output=True, text=True, timeout=120)
+    result = subprocess.run(
+        [sys.executable, "-m", "torus_cad", "build", str(config), "--out", str(out_dir)],
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert result.returncode == 2, result.stderr
     assert "Traceback" not in result.stderr + result.stdout
     assert len(result.stderr.strip().splitlines()) == 1, result.stderr
@@ -143,21 +173,43 @@ def test_command_line_prints_no_traceback(tmp_path, content):
 
 def test_subnormal_quartic_coefficient_is_not_a_traceback(tmp_path, capsys):
     out_dir = tmp_path / "out"
-    code = main(["build", "--set", "transforms.scale_x=[1e-310, 1.0, 0.0, 0.0, 5.0]", "--out", str(out_dir),
-                 "--no-stl"])
+    code = main(
+        [
+            "build",
+            "--set",
+            "transforms.scale_x=[1e-310, 1.0, 0.0, 0.0, 5.0]",
+            "--out",
+            str(out_dir),
+            "--no-stl",
+        ]
+    )
     assert code in (0, 2)
 
 
-# -- issue 17: files that are not design files, sizes, encodings, numbers too big for anything ------
+# -- issue 17: files that are not design files, sizes, encodings, numbers too big for anything
+# ------
+
 
 def _run_new_process(*args: str, timeout: float = 120) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "torus_cad", *args], check=False, capture_output=True, text=True, timeout=timeout)
+    return subprocess.run(
+        [sys.executable, "-m", "torus_cad", *args],
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+    )
 
 
-def _assert_one_line_refusal(result: subprocess.CompletedProcess, out_dir: Path, words: list[str]) -> None:
+def _assert_one_line_refusal(
+    result: subprocess.CompletedProcess, out_dir: Path, words: list[str]
+) -> None:
     assert result.returncode == 2, result.stderr
     line = result.stderr.strip()
-    assert line.splitlines() == [line] and line.startswith("torus-cad: error: ") and "Traceback" not in line
+    assert (
+        line.splitlines() == [line]
+        and line.startswith("torus-cad: error: ")
+        and "Traceback" not in line
+    )
     for word in words:
         assert word in line, f"{word!r} not in {line!r}"
     assert not out_dir.exists() or not any(out_dir.iterdir())
@@ -167,7 +219,9 @@ def test_dev_zero_is_refused_at_once_without_reading_it(tmp_path):
     """Case 3: ``torus-cad build /dev/zero`` read 2.2 GB."""
     start = time.monotonic()
     result = _run_new_process("build", "/dev/zero", "--out", str(tmp_path / "out"))
-    _assert_one_line_refusal(result, tmp_path / "out", ["/dev/zero", "character device", "not a regular file"])
+    _assert_one_line_refusal(
+        result, tmp_path / "out", ["/dev/zero", "character device", "not a regular file"]
+    )
     assert time.monotonic() - start < 60
 
 
@@ -185,7 +239,11 @@ def test_a_config_over_the_size_limit_is_refused(tmp_path, capsys):
     big = tmp_path / "big.toml"
     big.write_text("blades = 3\n" + "# padding\n" * (CONFIG_FILE_MAX_BYTES // 10 + 1))
     out_dir = tmp_path / "out"
-    _assert_refused(*_run_cli(capsys, big, out_dir), out_dir, ["big.toml", "over the limit", f"{CONFIG_FILE_MAX_BYTES:,}"])
+    _assert_refused(
+        *_run_cli(capsys, big, out_dir),
+        out_dir,
+        ["big.toml", "over the limit", f"{CONFIG_FILE_MAX_BYTES:,}"],
+    )
 
 
 def test_a_utf8_bom_is_accepted(tmp_path, capsys):
@@ -196,12 +254,18 @@ def test_a_utf8_bom_is_accepted(tmp_path, capsys):
     config.write_bytes("\ufeffblades = 4\n[resolution]\nsections = 16\npoints = 48\n".encode())
     assert PropellerParameters.from_toml(config).blades == 4
     out_dir = tmp_path / "out"
-    assert main(["build", str(config), "--out", str(out_dir), "--no-stl", "-q"]) == 0, capsys.readouterr().err
+    assert main(["build", str(config), "--out", str(out_dir), "--no-stl", "-q"]) == 0, (
+        capsys.readouterr().err
+    )
     from torus_cad.outputs.output_set import verify_set
 
-    assert [path.name for path in verify_set(out_dir, "torus_propeller").files][-2:] == \
-        ["torus_propeller_sections.png", "torus_propeller.json"]
-    assert (out_dir / "torus_propeller.step").is_file() and not (out_dir / "torus_propeller.stl").exists()
+    assert [path.name for path in verify_set(out_dir, "torus_propeller").files][-2:] == [
+        "torus_propeller_sections.png",
+        "torus_propeller.json",
+    ]
+    assert (out_dir / "torus_propeller.step").is_file() and not (
+        out_dir / "torus_propeller.stl"
+    ).exists()
 
 
 @pytest.mark.parametrize("digits", [401, 5001])
@@ -210,10 +274,13 @@ def test_huge_integers_are_bad_input(tmp_path, digits):
     number = "1" + "0" * (digits - 1)
     config = tmp_path / "huge.toml"
     config.write_text(f"blades = {number}\n")
-    for result in (_run_new_process("build", str(config), "--out", str(tmp_path / "out")),
-                   _run_new_process("build", "--set", f"blades={number}", "--out", str(tmp_path / "out"))):
+    for result in (
+        _run_new_process("build", str(config), "--out", str(tmp_path / "out")),
+        _run_new_process("build", "--set", f"blades={number}", "--out", str(tmp_path / "out")),
+    ):
         _assert_one_line_refusal(result, tmp_path / "out", [])
-        # the field where the schema sees the number; the file or --set where the TOML reader cannot read it
+        # the field where the schema sees the number; the file or --set where the TOML reader cannot
+        # read it
         assert "blades" in result.stderr or "huge.toml" in result.stderr, result.stderr
 
 

@@ -22,7 +22,8 @@ from torus_cad.tolerances import READ_BACK_RELATIVE_TOLERANCE
 
 FAST = ["--set", "resolution.sections=16", "--set", "resolution.points=40"]
 
-#: The reference: BRepGProp's adaptive integration at this relative precision (and BRepBndLib's box).
+#: The reference: BRepGProp's adaptive integration at this relative precision (and BRepBndLib's
+#: box).
 REFERENCE_PRECISION = 1e-9
 
 #: What the reported figures must agree with the reference to: relative for volume, area and
@@ -32,29 +33,50 @@ AGREEMENT = 1e-6
 
 @pytest.fixture(scope="module")
 def objects():
-    return propeller_objects(overrides={"resolution.sections": 16, "resolution.points": 40, "name": "mass_fast"})
+    return propeller_objects(
+        overrides={"resolution.sections": 16, "resolution.points": 40, "name": "mass_fast"}
+    )
 
 
 @pytest.fixture(scope="module")
 def cli_build(tmp_path_factory):
     """``torus-cad build`` with the same design and --density 7.85 (steel); returns (out_dir, report)."""
     out = tmp_path_factory.mktemp("cli_mass")
-    code = main(["build", *FAST, "--set", "name=mass_fast", "--density", "7.85", "--no-stl", "-q", "--out", str(out)])
+    code = main(
+        [
+            "build",
+            *FAST,
+            "--set",
+            "name=mass_fast",
+            "--density",
+            "7.85",
+            "--no-stl",
+            "-q",
+            "--out",
+            str(out),
+        ]
+    )
     assert code == EXIT_OK
     return out, json.loads((out / "mass_fast.json").read_text())
 
 
-@pytest.mark.parametrize(("radius", "length", "density"), [(10.0, 20.0, 1.24), (7.5, 13.0, 7.85), (0.5, 2.5, 1.0),
-                                                            (250.0, 40.0, 2.7)])
+@pytest.mark.parametrize(
+    ("radius", "length", "density"),
+    [(10.0, 20.0, 1.24), (7.5, 13.0, 7.85), (0.5, 2.5, 1.0), (250.0, 40.0, 2.7)],
+)
 def test_hub_inertia_matches_the_analytic_cylinder(radius, length, density):
     properties = mass_properties(hub_solid(radius, length), density)
     inertia_mm5 = math.pi * radius**4 * length / 2.0  # integral of r^2 dV about the axis
     assert properties.spin_axis_inertia_mm5 == pytest.approx(inertia_mm5, rel=1e-6)
-    assert properties.spin_axis_inertia_g_mm2 == pytest.approx(inertia_mm5 * density * 1e-3, rel=1e-6)
+    assert properties.spin_axis_inertia_g_mm2 == pytest.approx(
+        inertia_mm5 * density * 1e-3, rel=1e-6
+    )
     volume = math.pi * radius**2 * length
     assert properties.volume_mm3 == pytest.approx(volume, rel=1e-6)
     assert properties.mass_g == pytest.approx(volume * density * 1e-3, rel=1e-6)
-    assert properties.surface_area_mm2 == pytest.approx(2 * math.pi * radius * (radius + length), rel=1e-6)
+    assert properties.surface_area_mm2 == pytest.approx(
+        2 * math.pi * radius * (radius + length), rel=1e-6
+    )
     assert properties.centroid_mm == pytest.approx((0.0, 0.0, 0.0), abs=1e-9 * max(radius, length))
 
 
@@ -71,7 +93,8 @@ def test_mass_is_density_times_volume(objects):
         assert properties.density_g_cm3 == density
         assert properties.mass_g == pytest.approx(density * 1e-3 * properties.volume_mm3, rel=1e-12)
         assert properties.spin_axis_inertia_g_mm2 == pytest.approx(
-            density * 1e-3 * properties.spin_axis_inertia_mm5, rel=1e-12)
+            density * 1e-3 * properties.spin_axis_inertia_mm5, rel=1e-12
+        )
 
 
 def test_propeller_mass_properties_are_physically_sound(objects):
@@ -107,8 +130,12 @@ def test_json_report_holds_every_mass_property(objects, cli_build):
     assert report["mass_g"] == pytest.approx(7.85e-3 * report["volume_mm3"], rel=1e-12)
     assert report["surface_area_mm2"] == pytest.approx(expected.surface_area_mm2, rel=1e-6)
     assert report["centroid_mm"] == pytest.approx(list(expected.centroid_mm), abs=1e-6)
-    assert report["spin_axis_inertia_mm5"] == pytest.approx(expected.spin_axis_inertia_mm5, rel=1e-6)
-    assert report["spin_axis_inertia_g_mm2"] == pytest.approx(expected.spin_axis_inertia_g_mm2, rel=1e-6)
+    assert report["spin_axis_inertia_mm5"] == pytest.approx(
+        expected.spin_axis_inertia_mm5, rel=1e-6
+    )
+    assert report["spin_axis_inertia_g_mm2"] == pytest.approx(
+        expected.spin_axis_inertia_g_mm2, rel=1e-6
+    )
 
 
 def test_default_density_is_pla(tmp_path):
@@ -119,13 +146,25 @@ def test_default_density_is_pla(tmp_path):
 
 
 def test_verbose_prints_mass_properties_and_stays_quiet_on_stderr(tmp_path, capsys):
-    assert main(["build", *FAST, "--no-stl", "-v", "--density", "2.7", "--out", str(tmp_path)]) == EXIT_OK
+    assert (
+        main(["build", *FAST, "--no-stl", "-v", "--density", "2.7", "--out", str(tmp_path)])
+        == EXIT_OK
+    )
     captured = capsys.readouterr()
-    for words in ("volume", "mm^3", "area", "mm^2", "mass", "g at 2.7 g/cm^3", "centroid", "spin-axis inertia",
-                  "g mm^2"):
+    for words in (
+        "volume",
+        "mm^3",
+        "area",
+        "mm^2",
+        "mass",
+        "g at 2.7 g/cm^3",
+        "centroid",
+        "spin-axis inertia",
+        "g mm^2",
+    ):
         assert words in captured.out
-    # progress only on a terminal (capsys is not one): stderr holds the warnings alone (the default's sharp
-    # trailing edge is not printable), one line each
+    # progress only on a terminal (capsys is not one): stderr holds the warnings alone (the
+    # default's sharp trailing edge is not printable), one line each
     assert all(line.startswith("warning: ") for line in captured.err.splitlines()), captured.err
 
 
@@ -140,15 +179,20 @@ def test_bad_density_is_refused(tmp_path, density, capsys):
 
 # -- the fast route: blade faces alone, against BRepGProp at 1e-9 ----------------------------------
 
+
 def _assert_agrees_with_the_reference(solid: cq.Solid) -> None:
     fast = mass_properties(solid, 1.0)
     reference = occt_mass_properties(solid, 1.0, REFERENCE_PRECISION)
     size = float(np.linalg.norm(np.subtract(*reference.bounding_box_mm)))
     assert fast.volume_mm3 == pytest.approx(reference.volume_mm3, rel=AGREEMENT)
     assert fast.surface_area_mm2 == pytest.approx(reference.surface_area_mm2, rel=AGREEMENT)
-    assert fast.spin_axis_inertia_mm5 == pytest.approx(reference.spin_axis_inertia_mm5, rel=AGREEMENT)
+    assert fast.spin_axis_inertia_mm5 == pytest.approx(
+        reference.spin_axis_inertia_mm5, rel=AGREEMENT
+    )
     assert fast.centroid_mm == pytest.approx(reference.centroid_mm, abs=AGREEMENT * size)
-    assert np.allclose(fast.bounding_box_mm, reference.bounding_box_mm, rtol=0.0, atol=AGREEMENT * size)
+    assert np.allclose(
+        fast.bounding_box_mm, reference.bounding_box_mm, rtol=0.0, atol=AGREEMENT * size
+    )
 
 
 def test_the_default_takes_the_fast_route_and_agrees_with_the_reference(default_propeller):
@@ -169,16 +213,25 @@ def test_the_fast_route_agrees_with_the_reference_on_random_designs():
         except (ParameterError, GeometryError):
             continue  # refused before the kernel: nothing to integrate
         built += 1
-        assert hub_with_blade_integrals(propeller.solid.wrapped) is not None, f"seed {seed} fell back"
+        assert hub_with_blade_integrals(propeller.solid.wrapped) is not None, (
+            f"seed {seed} fell back"
+        )
         _assert_agrees_with_the_reference(propeller.solid)
 
 
-@pytest.mark.parametrize("shape", [
-    pytest.param(lambda: cq.Solid.makeBox(3.0, 4.0, 5.0), id="box"),
-    pytest.param(lambda: hub_solid(10.0, 20.0), id="hub without blades"),
-    pytest.param(lambda: hub_solid(10.0, 20.0).fuse(cq.Solid.makeBox(4.0, 4.0, 30.0, cq.Vector(-2, -2, -15))),
-                 id="end faces with holes"),
-])
+@pytest.mark.parametrize(
+    "shape",
+    [
+        pytest.param(lambda: cq.Solid.makeBox(3.0, 4.0, 5.0), id="box"),
+        pytest.param(lambda: hub_solid(10.0, 20.0), id="hub without blades"),
+        pytest.param(
+            lambda: hub_solid(10.0, 20.0).fuse(
+                cq.Solid.makeBox(4.0, 4.0, 30.0, cq.Vector(-2, -2, -15))
+            ),
+            id="end faces with holes",
+        ),
+    ],
+)
 def test_other_shapes_fall_back_to_opencascade(shape):
     solid = shape()
     assert hub_with_blade_integrals(solid.wrapped) is None
@@ -197,7 +250,9 @@ def test_the_local_b_spline_basis_is_scipys(degree):
     columns, values = local_basis(x, knots, degree)
     dense = np.zeros((len(x), len(knots) - degree - 1))
     np.put_along_axis(dense, columns, values, axis=1)
-    assert np.allclose(dense, BSpline.design_matrix(x, knots, degree).toarray(), rtol=0.0, atol=1e-14)
+    assert np.allclose(
+        dense, BSpline.design_matrix(x, knots, degree).toarray(), rtol=0.0, atol=1e-14
+    )
 
 
 def test_a_bored_hub_takes_the_fast_route_and_agrees(light_params):
@@ -205,11 +260,16 @@ def test_a_bored_hub_takes_the_fast_route_and_agrees(light_params):
     from torus_cad.propeller import build_propeller
 
     bored = build_propeller(light_params.with_values({"hub.bore_diameter": 5.0}))
-    assert hub_with_blade_integrals(bored.solid.wrapped).volume_mm3 < hub_with_blade_integrals(
-        build_propeller(light_params).solid.wrapped).volume_mm3  # the bore is taken out
+    assert (
+        hub_with_blade_integrals(bored.solid.wrapped).volume_mm3
+        < hub_with_blade_integrals(build_propeller(light_params).solid.wrapped).volume_mm3
+    )  # the bore is taken out
     _assert_agrees_with_the_reference(bored.solid)
-    flatted = build_propeller(light_params.with_values({"hub.bore_diameter": 5.0, "hub.bore_flat_depth": 0.5}))
-    assert hub_with_blade_integrals(flatted.solid.wrapped) is None  # a D-flat: OpenCascade's integration
+    flatted = build_propeller(
+        light_params.with_values({"hub.bore_diameter": 5.0, "hub.bore_flat_depth": 0.5})
+    )
+    # a D-flat: OpenCascade's integration
+    assert hub_with_blade_integrals(flatted.solid.wrapped) is None
 
 
 def test_a_mirrored_propeller_takes_the_fast_route_and_agrees(light_params):
@@ -220,7 +280,9 @@ def test_a_mirrored_propeller_takes_the_fast_route_and_agrees(light_params):
     _assert_agrees_with_the_reference(mirrored.solid)
 
 
-@pytest.mark.parametrize("overrides", [{"blades": 1}, {"blades": 2, "phase_deg": 17.0}, {}], ids=["1", "2", "3"])
+@pytest.mark.parametrize(
+    "overrides", [{"blades": 1}, {"blades": 2, "phase_deg": 17.0}, {}], ids=["1", "2", "3"]
+)
 def test_the_balance_from_the_blade_faces_agrees_with_the_reference(light_params, overrides):
     from torus_cad.kernel.mass_properties import balance, balance_of, volume_properties
     from torus_cad.propeller import build_propeller
@@ -229,15 +291,25 @@ def test_the_balance_from_the_blade_faces_agrees_with_the_reference(light_params
     assert hub_with_blade_integrals(solid.wrapped) is not None
     fast = balance(solid, 1.0)
     reference = balance_of(volume_properties(solid, REFERENCE_PRECISION), 1.0)
-    spin_inertia_g_mm2 = mass_properties(solid, 1.0).spin_axis_inertia_g_mm2  # the scale of the products
+    # the scale of the products
+    spin_inertia_g_mm2 = mass_properties(solid, 1.0).spin_axis_inertia_g_mm2
     mass_g = mass_properties(solid, 1.0).mass_g
     size = float(np.linalg.norm(np.subtract(*reference_box(solid))))
-    assert fast.centroid_offset_mm == pytest.approx(reference.centroid_offset_mm, abs=AGREEMENT * size)
-    assert fast.static_imbalance_g_mm == pytest.approx(reference.static_imbalance_g_mm, abs=AGREEMENT * mass_g * size)
+    assert fast.centroid_offset_mm == pytest.approx(
+        reference.centroid_offset_mm, abs=AGREEMENT * size
+    )
+    assert fast.static_imbalance_g_mm == pytest.approx(
+        reference.static_imbalance_g_mm, abs=AGREEMENT * mass_g * size
+    )
     for name, value in reference.products_of_inertia_g_mm2.items():
-        assert fast.products_of_inertia_g_mm2[name] == pytest.approx(value, abs=AGREEMENT * spin_inertia_g_mm2)
+        assert fast.products_of_inertia_g_mm2[name] == pytest.approx(
+            value, abs=AGREEMENT * spin_inertia_g_mm2
+        )
     if overrides.get("blades", 3) >= 3:  # 3-fold symmetry or more: no imbalance, no products
-        assert fast.static_imbalance_g_mm < 1e-6 and max(map(abs, fast.products_of_inertia_g_mm2.values())) < 1e-3
+        assert (
+            fast.static_imbalance_g_mm < 1e-6
+            and max(map(abs, fast.products_of_inertia_g_mm2.values())) < 1e-3
+        )
 
 
 def reference_box(solid: cq.Solid) -> tuple:

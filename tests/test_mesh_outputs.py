@@ -19,8 +19,14 @@ SET = "torus_propeller_mesh"
 
 
 def cli(*args: str, timeout: float = 600, **kwargs) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "torus_cad", *args], check=False, capture_output=True, text=True,
-                          timeout=timeout, **kwargs)
+    return subprocess.run(
+        [sys.executable, "-m", "torus_cad", *args],
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        **kwargs,
+    )
 
 
 def members(folder: Path) -> set[str]:
@@ -36,7 +42,9 @@ def test_verify_accepts_a_mesh_set_and_a_new_set_replaces_the_old_one_whole(tmp_
     assert cli("mesh", *NEW, "--out", str(tmp_path), "-q").returncode == 0
     assert cli("verify", str(tmp_path)).returncode == 0
     # the old OBJ is gone with the old set; the ASCII STL is a member, not a set of its own
-    assert sorted(path.name for path in tmp_path.iterdir()) == sorted([f"{SET}.json", *members(tmp_path)])
+    assert sorted(path.name for path in tmp_path.iterdir()) == sorted(
+        [f"{SET}.json", *members(tmp_path)]
+    )
     assert members(tmp_path) == {f"{SET}.stl", f"{SET}.ply", f"{SET}_ascii.stl"}
 
 
@@ -74,23 +82,31 @@ def test_sigterm_at_random_moments_leaves_the_old_set_or_the_new_one_whole(tmp_p
     chooser = random.Random(20261201)
     outcomes = []
     for delay in sorted(chooser.uniform(0.3 * startup, 1.1 * whole_s) for _ in range(6)):
-        process = subprocess.Popen([sys.executable, "-m", "torus_cad", "mesh", *NEW, "--out", str(tmp_path), "-q"],
-                                   stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        process = subprocess.Popen(
+            [sys.executable, "-m", "torus_cad", "mesh", *NEW, "--out", str(tmp_path), "-q"],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
         time.sleep(delay)
         process.send_signal(signal.SIGTERM)
         code = process.wait(600)
         error = process.stderr.read()
         assert code in (0, 143), error
         if code == 143:
-            assert error.strip().splitlines() == ["torus-cad: interrupted by SIGTERM; staged files removed, "
-                                                  "published output sets are complete"]
+            assert error.strip().splitlines() == [
+                "torus-cad: interrupted by SIGTERM; staged files removed, "
+                "published output sets are complete"
+            ]
         verified = cli("verify", str(tmp_path))
         assert verified.returncode == 0, (delay, verified.stderr)
         assert members(tmp_path) in (old, {f"{SET}.stl", f"{SET}.ply", f"{SET}_ascii.stl"})
         assert sorted(path.name for path in tmp_path.iterdir() if path.name != "timing") == sorted(
-            [f"{SET}.json", *members(tmp_path)])  # no staging folder, no stray file
+            [f"{SET}.json", *members(tmp_path)]
+        )  # no staging folder, no stray file
         outcomes.append(code)
-        if members(tmp_path) != old:  # the new set is published: put the old one back for the next try
+        # the new set is published: put the old one back for the next try
+        if members(tmp_path) != old:
             assert cli("mesh", *OLD, "--out", str(tmp_path), "-q").returncode == 0
     assert 143 in outcomes
 
@@ -124,7 +140,10 @@ def test_a_full_disk_names_the_mesh_file_and_keeps_the_old_set(small_disk):
     result = cli("mesh", *NEW, "--out", str(small_disk), "-q")
     assert result.returncode == 1
     assert result.stderr.strip().splitlines() == [result.stderr.strip()]
-    assert "no space left on device writing" in result.stderr and str(small_disk / SET) in result.stderr
+    assert (
+        "no space left on device writing" in result.stderr
+        and str(small_disk / SET) in result.stderr
+    )
     assert "requested and" not in result.stderr and ".staging-" not in result.stderr
     assert cli("verify", str(small_disk)).returncode == 0 and members(small_disk) == old
     assert not [path for path in small_disk.iterdir() if path.name.startswith(".")]

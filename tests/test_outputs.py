@@ -29,19 +29,38 @@ from torus_cad.outputs.output_set import (
 from torus_cad.runtime.files import owner_tag
 
 #: Low resolution and a coarse STL keep each build short; the transaction does not depend on them.
-FAST = ["--set", "resolution.sections=16", "--set", "resolution.points=48",
-        "--set", "export.stl_linear_deflection=0.2", "--set", "export.stl_angular_deflection=0.5"]
+FAST = [
+    "--set",
+    "resolution.sections=16",
+    "--set",
+    "resolution.points=48",
+    "--set",
+    "export.stl_linear_deflection=0.2",
+    "--set",
+    "export.stl_angular_deflection=0.5",
+]
 
 
 def cli(*args: str, timeout: float = 600, **kwargs) -> subprocess.CompletedProcess:
     """Run ``python -m torus_cad ARGS`` in a new process."""
-    return subprocess.run([sys.executable, "-m", "torus_cad", *args], check=False, capture_output=True, text=True,
-                          timeout=timeout, **kwargs)
+    return subprocess.run(
+        [sys.executable, "-m", "torus_cad", *args],
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        **kwargs,
+    )
 
 
 def start_cli(*args: str, **kwargs) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-m", "torus_cad", *args], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, **kwargs)
+    return subprocess.Popen(
+        [sys.executable, "-m", "torus_cad", *args],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        **kwargs,
+    )
 
 
 def hidden_entries(folder: Path) -> list[str]:
@@ -72,6 +91,7 @@ def _text_writer(text: str):
 
 # -- the transaction, without a kernel -------------------------------------------------------------
 
+
 def test_published_set_lists_every_file_with_its_hash(tmp_path):
     with OutputSet(tmp_path, "part") as output:
         output.write("step", _text_writer("solid"))
@@ -82,7 +102,11 @@ def test_published_set_lists_every_file_with_its_hash(tmp_path):
     assert set(report[FILES_KEY]) == {"step", "stl"}
     assert report[FILES_KEY]["stl"]["bytes"] == 4 and len(report[FILES_KEY]["stl"]["sha256"]) == 64
     assert sorted(p.name for p in tmp_path.iterdir()) == ["part.json", "part.step", "part.stl"]
-    assert verify_set(tmp_path, "part").files == (tmp_path / "part.step", tmp_path / "part.stl", tmp_path / "part.json")
+    assert verify_set(tmp_path, "part").files == (
+        tmp_path / "part.step",
+        tmp_path / "part.stl",
+        tmp_path / "part.json",
+    )
 
 
 def test_verify_names_a_file_of_another_build(tmp_path):
@@ -96,7 +120,10 @@ def test_verify_names_a_file_of_another_build(tmp_path):
         verify_set(tmp_path / "first", "part")
     result = cli("verify", str(tmp_path / "first"))
     assert result.returncode == 1
-    assert result.stderr.strip().splitlines() == [result.stderr.strip()] and "part.stl" in result.stderr
+    assert (
+        result.stderr.strip().splitlines() == [result.stderr.strip()]
+        and "part.stl" in result.stderr
+    )
     assert cli("verify", str(tmp_path / "second"), "part").returncode == 0
 
 
@@ -136,8 +163,10 @@ def test_a_failed_write_keeps_the_previous_set_and_leaves_nothing_staged(tmp_pat
         path.write_text("half")
         raise OSError(28, "No space left on device")
 
-    with pytest.raises(OutputError, match=r"no space left on device writing .*part\.step'"), \
-            OutputSet(tmp_path, "part") as output:
+    with (
+        pytest.raises(OutputError, match=r"no space left on device writing .*part\.step'"),
+        OutputSet(tmp_path, "part") as output,
+    ):
         output.write("step", fails)
     assert (tmp_path / "part.step").read_text() == "old solid"
     verify_set(tmp_path, "part")
@@ -157,12 +186,14 @@ def test_stale_staging_of_a_dead_process_is_removed_and_a_live_ones_kept(tmp_pat
 
         with atomic_path(output.stage("step")) as temp:
             temp.write_text("solid")
-        assert (tmp_path / f".part.step.tmp-{dead_tag}x1y2").exists()  # atomic_path cleans its own folder
+        # atomic_path cleans its own folder
+        assert (tmp_path / f".part.step.tmp-{dead_tag}x1y2").exists()
         with atomic_path(tmp_path / "part.step") as temp:
             temp.write_text("solid")
         output.publish({})
-    assert hidden_entries(tmp_path) == sorted([f".part.staging-{owner_tag()}0000beef",
-                                               ".part.staging-otherhost-1-0000cafe"])
+    assert hidden_entries(tmp_path) == sorted(
+        [f".part.staging-{owner_tag()}0000beef", ".part.staging-otherhost-1-0000cafe"]
+    )
 
 
 def test_an_unwritable_output_folder_is_refused_before_building(tmp_path):
@@ -174,11 +205,16 @@ def test_an_unwritable_output_folder_is_refused_before_building(tmp_path):
     assert not (tmp_path / "new").exists()
 
 
-# -- real builds --------------------------------------------------------------------------------------
+# -- real builds
+# --------------------------------------------------------------------------------------
+
 
 def test_same_name_builds_in_one_folder_all_succeed_and_publish_whole_sets(tmp_path):
     """Case 1: ``for b in 2 3 4 5; do torus-cad build --out D --set blades=$b & done``."""
-    processes = [start_cli("build", "--out", str(tmp_path), "-q", "--set", f"blades={b}", *FAST) for b in (2, 3, 4, 5)]
+    processes = [
+        start_cli("build", "--out", str(tmp_path), "-q", "--set", f"blades={b}", *FAST)
+        for b in (2, 3, 4, 5)
+    ]
     results = [(process.wait(600), process.stderr.read()) for process in processes]
     assert [code for code, _ in results] == [0, 0, 0, 0], results
     assert assert_consistent_set(tmp_path) in (2, 3, 4, 5)
@@ -207,13 +243,30 @@ def test_a_signal_between_the_renames_never_leaves_a_silent_mix(tmp_path, signal
     assert cli("build", "--out", str(out), "-q", "--set", "blades=4", *FAST).returncode == 0
     script = tmp_path / "killer.py"
     script.write_text(_KILL_DURING_PUBLISH)
-    result = subprocess.run([sys.executable, str(script), signal_name, "build", "--out", str(out), "-q",
-                             "--set", "blades=3", *FAST], check=False, capture_output=True, text=True, timeout=600)
+    result = subprocess.run(
+        [
+            sys.executable,
+            str(script),
+            signal_name,
+            "build",
+            "--out",
+            str(out),
+            "-q",
+            "--set",
+            "blades=3",
+            *FAST,
+        ],
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     if signal_name == "SIGKILL":  # nothing can wait for SIGKILL: the set is visibly incomplete
         assert result.returncode == -signal.SIGKILL
         verified = cli("verify", str(out))
         assert verified.returncode == 1 and "torus_propeller.json is missing" in verified.stderr
-        assert cli("build", "--out", str(out), "-q", "--set", "blades=3", *FAST).returncode == 0  # repaired
+        # repaired
+        assert cli("build", "--out", str(out), "-q", "--set", "blades=3", *FAST).returncode == 0
     else:  # the signal waits until the new set is complete
         assert result.returncode == {"SIGTERM": 143, "SIGINT": 130}[signal_name], result.stderr
         assert result.stderr.strip().splitlines() == [result.stderr.strip()]
@@ -225,7 +278,8 @@ def test_a_signal_between_the_renames_never_leaves_a_silent_mix(tmp_path, signal
 @pytest.mark.parametrize("delay_s", [0.5, 2.0, 4.0, 6.0])
 @pytest.mark.parametrize("signal_name", ["SIGKILL", "SIGTERM", "SIGINT"])
 def test_a_signal_at_any_moment_leaves_the_old_set_the_new_set_or_a_reported_incomplete_one(
-        tmp_path, signal_name, delay_s):
+    tmp_path, signal_name, delay_s
+):
     """Case 2: SIGKILL, SIGTERM or SIGINT at some moment of a build over an older 4-blade build."""
     import time
 
@@ -238,7 +292,9 @@ def test_a_signal_at_any_moment_leaves_the_old_set_the_new_set_or_a_reported_inc
     verified = cli("verify", str(tmp_path))
     if verified.returncode == 0:
         assert assert_consistent_set(tmp_path) in (3, 4)
-    else:  # only SIGKILL can leave this: inside the publishing renames an incomplete set, anywhere its staging
+    # only SIGKILL can leave this: inside the publishing renames an incomplete set, anywhere its
+    # staging
+    else:
         # folder (no process left to remove it; the next build there does): verify says which
         assert signal_name == "SIGKILL"
         assert "incomplete set" in verified.stderr or "left by a stopped process" in verified.stderr
@@ -246,8 +302,12 @@ def test_a_signal_at_any_moment_leaves_the_old_set_the_new_set_or_a_reported_inc
         assert hidden_entries(tmp_path) == []
 
 
-DESIGNS = [["--set", "blades=2"], ["--set", "blades=3", "--set", "hub.radius=11"],
-           ["--set", "blades=4", "--set", "phase_deg=10"], ["--set", "blades=5", "--set", "hub.length=24"]]
+DESIGNS = [
+    ["--set", "blades=2"],
+    ["--set", "blades=3", "--set", "hub.radius=11"],
+    ["--set", "blades=4", "--set", "phase_deg=10"],
+    ["--set", "blades=5", "--set", "hub.length=24"],
+]
 
 
 def test_stress_eight_same_name_builds_of_four_designs_twice(tmp_path):
@@ -275,7 +335,10 @@ def test_stress_eight_same_name_builds_of_four_designs_twice(tmp_path):
     thread.start()
     try:
         for round_index in range(2):
-            processes = [start_cli("build", "--out", str(tmp_path), "-q", *FAST, *DESIGNS[i % 4]) for i in range(8)]
+            processes = [
+                start_cli("build", "--out", str(tmp_path), "-q", *FAST, *DESIGNS[i % 4])
+                for i in range(8)
+            ]
             results = [(process.wait(900), process.stderr.read()) for process in processes]
             assert [code for code, _ in results] == [0] * 8, (round_index, results)
             assert assert_consistent_set(tmp_path) in (2, 3, 4, 5)
@@ -288,6 +351,7 @@ def test_stress_eight_same_name_builds_of_four_designs_twice(tmp_path):
 
 # -- the disk and the folder fail -----------------------------------------------------------------
 
+
 @pytest.fixture
 def small_disk(tmpfs):
     """A 3200 KB disk: room for an old set without STL (1.1 MB) and a new 4-blade STEP (1.4 MB; the
@@ -299,12 +363,28 @@ def test_a_full_disk_keeps_the_old_set_and_says_no_space_left(small_disk):
     """Cases 2 and 6: the disk fills up after the STEP; the old set stays, the message names the cause."""
     old = cli("build", "--out", str(small_disk), "-q", "--no-stl", *FAST)
     assert old.returncode == 0, old.stderr
-    result = cli("build", "--out", str(small_disk), "-q", "--set", "blades=4",
-                 "--set", "export.stl_linear_deflection=0.01", "--set", "export.stl_angular_deflection=0.2",
-                 "--set", "resolution.sections=16", "--set", "resolution.points=48")
+    result = cli(
+        "build",
+        "--out",
+        str(small_disk),
+        "-q",
+        "--set",
+        "blades=4",
+        "--set",
+        "export.stl_linear_deflection=0.01",
+        "--set",
+        "export.stl_angular_deflection=0.2",
+        "--set",
+        "resolution.sections=16",
+        "--set",
+        "resolution.points=48",
+    )
     assert result.returncode == 1
     assert result.stderr.strip().splitlines() == [result.stderr.strip()]
-    assert "no space left on device writing" in result.stderr and "torus_propeller.stl" in result.stderr
+    assert (
+        "no space left on device writing" in result.stderr
+        and "torus_propeller.stl" in result.stderr
+    )
     assert "OpenCascade" not in result.stderr and ".staging-" not in result.stderr
     assert assert_consistent_set(small_disk) == 3
     assert hidden_entries(small_disk) == []
@@ -319,7 +399,16 @@ def test_a_file_size_limit_is_named_and_keeps_the_old_set(tmp_path):
     def limit_file_size() -> None:
         resource.setrlimit(resource.RLIMIT_FSIZE, (200_000, 200_000))
 
-    result = cli("build", "--out", str(tmp_path), "-q", "--set", "blades=4", *FAST, preexec_fn=limit_file_size)
+    result = cli(
+        "build",
+        "--out",
+        str(tmp_path),
+        "-q",
+        "--set",
+        "blades=4",
+        *FAST,
+        preexec_fn=limit_file_size,
+    )
     assert result.returncode == 1
     assert "file size limit" in result.stderr and "torus_propeller.st" in result.stderr
     assert assert_consistent_set(tmp_path) == 3
@@ -346,14 +435,31 @@ def test_permission_denied_on_the_output_folder_is_found_before_building(tmp_pat
     locked.mkdir()
     locked.chmod(0o555)
     try:
-        result = subprocess.run([*prefix, sys.executable, "-m", "torus_cad", "build", "--out", str(locked),
-                                 "--set", "transforms.scale_x=[0, 0, 0, 0, 40.0]"],
-                                check=False, capture_output=True, text=True, timeout=600)
+        result = subprocess.run(
+            [
+                *prefix,
+                sys.executable,
+                "-m",
+                "torus_cad",
+                "build",
+                "--out",
+                str(locked),
+                "--set",
+                "transforms.scale_x=[0, 0, 0, 0, 40.0]",
+            ],
+            check=False,
+            capture_output=True,
+            text=True,
+            timeout=600,
+        )
     finally:
         locked.chmod(0o755)
     assert result.returncode == 1, result.stderr
-    assert result.stderr.strip() == f"torus-cad: build failed: cannot write to output folder {str(locked)!r}: " \
-                                    f"permission denied"
+    assert (
+        result.stderr.strip()
+        == f"torus-cad: build failed: cannot write to output folder {str(locked)!r}: "
+        f"permission denied"
+    )
     assert list(locked.iterdir()) == []
 
 
@@ -378,9 +484,17 @@ def test_verify_walks_sub_folders_and_names_every_problem_of_a_tampered_copy(tmp
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 4, lines
     assert any("mixed set: part.stl" in line and "ply/" not in line for line in lines)
-    assert any(line.startswith("torus-cad: verify: ply/part: incomplete set: part.step is missing") for line in lines)
-    assert any(line.startswith("torus-cad: verify: ply/part: mixed set: part.stl") for line in lines)
-    assert any(line.startswith("torus-cad: verify: ply/deeper/other: incomplete set: other.stl") for line in lines)
+    assert any(
+        line.startswith("torus-cad: verify: ply/part: incomplete set: part.step is missing")
+        for line in lines
+    )
+    assert any(
+        line.startswith("torus-cad: verify: ply/part: mixed set: part.stl") for line in lines
+    )
+    assert any(
+        line.startswith("torus-cad: verify: ply/deeper/other: incomplete set: other.stl")
+        for line in lines
+    )
     with pytest.raises(IncompleteOutputError) as raised:
         verify_set(top / "ply", "part")
     assert len(raised.value.problems) == 2

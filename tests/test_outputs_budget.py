@@ -20,18 +20,37 @@ from torus_cad.tolerances import STL_TRIANGLE_LIMIT
 
 
 def _with_deflections(linear: float, angular: float, **changes) -> PropellerParameters:
-    return PropellerParameters().with_values({"export.stl_linear_deflection": linear,
-                                              "export.stl_angular_deflection": angular, **changes})
+    return PropellerParameters().with_values(
+        {
+            "export.stl_linear_deflection": linear,
+            "export.stl_angular_deflection": angular,
+            **changes,
+        }
+    )
 
 
 @pytest.mark.parametrize("linear, angular", [(0.0001, 0.001), (0.000001, 0.01)])
 def test_an_absurd_stl_is_refused_before_tessellating(tmp_path, linear, angular):
     out = tmp_path / "out"
     start = time.monotonic()
-    result = subprocess.run([sys.executable, "-m", "torus_cad", "build", "--out", str(out),
-                             "--set", f"export.stl_linear_deflection={linear}",
-                             "--set", f"export.stl_angular_deflection={angular}"],
-                            check=False, capture_output=True, text=True, timeout=600)
+    result = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "torus_cad",
+            "build",
+            "--out",
+            str(out),
+            "--set",
+            f"export.stl_linear_deflection={linear}",
+            "--set",
+            f"export.stl_angular_deflection={angular}",
+        ],
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     seconds = time.monotonic() - start
     assert result.returncode == 2, result.stderr
     line = result.stderr.strip()
@@ -46,7 +65,9 @@ def test_an_absurd_stl_is_refused_before_tessellating(tmp_path, linear, angular)
 
 def test_the_budget_is_the_stls_only(tmp_path):
     """--no-stl writes no STL: the same deflections are fine then."""
-    params = _with_deflections(0.0001, 0.001, **{"resolution.sections": 16, "resolution.points": 48})
+    params = _with_deflections(
+        0.0001, 0.001, **{"resolution.sections": 16, "resolution.points": 48}
+    )
     from torus_cad.propeller import build_propeller
 
     propeller = build_propeller(params)
@@ -63,22 +84,29 @@ def test_the_estimate_grows_as_the_deflections_shrink():
     by_linear = [estimated_stl_triangles(_with_deflections(d, 0.5)) for d in linear]
     by_angular = [estimated_stl_triangles(_with_deflections(0.05, a)) for a in angular]
     assert by_linear == sorted(by_linear) and by_angular == sorted(by_angular)
-    assert estimated_stl_triangles(_with_deflections(0.05, 0.2, blades=6)) > \
-        estimated_stl_triangles(_with_deflections(0.05, 0.2, blades=3))
+    assert estimated_stl_triangles(
+        _with_deflections(0.05, 0.2, blades=6)
+    ) > estimated_stl_triangles(_with_deflections(0.05, 0.2, blades=3))
 
 
 def test_the_estimate_does_not_depend_on_how_the_surface_is_sampled():
     """The surface the build sampled is used as it is; one too coarse to show the curvature is sampled again."""
     params = _with_deflections(0.05, 0.1)
-    estimates = [estimated_stl_triangles(params, params.blade_surface(sections=sections, points=points), (25, 52))
-                 for sections, points in ((4, 16), (25, 80), (60, 200))]
+    estimates = [
+        estimated_stl_triangles(
+            params, params.blade_surface(sections=sections, points=points), (25, 52)
+        )
+        for sections, points in ((4, 16), (25, 80), (60, 200))
+    ]
     assert max(estimates) / min(estimates) < 1.1, estimates
 
 
 def test_more_sections_make_a_larger_estimate():
     """The mesher starts from the B-spline's grid of poles: 3 x 28 000 triangles at 200 x 800 samples."""
-    coarse, fine = (estimated_stl_triangles(_with_deflections(0.5, 0.5, **{"resolution.sections": sections}))
-                    for sections in (25, 200))
+    coarse, fine = (
+        estimated_stl_triangles(_with_deflections(0.5, 0.5, **{"resolution.sections": sections}))
+        for sections in (25, 200)
+    )
     assert fine > coarse + 3 * 2 * (200 - 25) * 50
 
 
@@ -89,11 +117,22 @@ def _real_triangles(solid, linear: float, angular: float) -> int:
 
     shape = solid.copy()
     BRepMesh_IncrementalMesh(shape.wrapped, linear, False, angular, True)
-    return sum(BRep_Tool.Triangulation_s(face.wrapped, TopLoc_Location()).NbTriangles() for face in shape.Faces())
+    return sum(
+        BRep_Tool.Triangulation_s(face.wrapped, TopLoc_Location()).NbTriangles()
+        for face in shape.Faces()
+    )
 
 
-@pytest.mark.parametrize("design", [{}, {"blades": 1}, {"airfoil.thickness": 0.12, "airfoil.max_camber": 0.06},
-                                    {"blades": 6, "hub.radius": 16.0}], ids=["default", "1 blade", "thin", "6 blades"])
+@pytest.mark.parametrize(
+    "design",
+    [
+        {},
+        {"blades": 1},
+        {"airfoil.thickness": 0.12, "airfoil.max_camber": 0.06},
+        {"blades": 6, "hub.radius": 16.0},
+    ],
+    ids=["default", "1 blade", "thin", "6 blades"],
+)
 def test_the_estimate_is_an_upper_bound_of_opencascades_count_within_a_small_factor(design):
     """Against BRepMesh's real triangle counts (scripts/stl_budget.py runs a wider range).
 
@@ -107,4 +146,9 @@ def test_the_estimate_is_an_upper_bound_of_opencascades_count_within_a_small_fac
         estimate = estimated_stl_triangles(_with_deflections(linear, angular, **design))
         real = _real_triangles(solid, linear, angular)
         assert real <= estimate, (linear, angular, estimate, real)
-        assert estimate <= 5 * real or estimate < STL_TRIANGLE_LIMIT / 20, (linear, angular, estimate, real)
+        assert estimate <= 5 * real or estimate < STL_TRIANGLE_LIMIT / 20, (
+            linear,
+            angular,
+            estimate,
+            real,
+        )

@@ -25,35 +25,47 @@ def test_toml_round_trip_is_exact(tmp_path, default_params):
 
 
 @settings(max_examples=30, deadline=None)
-@given(radius=st.floats(8.0, 30.0), blades=st.integers(1, 6), camber=st.floats(0.0, 0.09),
-       chord=st.floats(0.5, 10.0))
+@given(
+    radius=st.floats(8.0, 30.0),
+    blades=st.integers(1, 6),
+    camber=st.floats(0.0, 0.09),
+    chord=st.floats(0.5, 10.0),
+)
 def test_any_valid_design_survives_toml(tmp_path_factory, radius, blades, camber, chord):
-    params = PropellerParameters().with_values({"hub.radius": radius, "blades": blades,
-                                                "airfoil.max_camber": camber,
-                                                "transforms.scale_x": [0.0, 0.0, 0.0, 0.0, chord]})
+    params = PropellerParameters().with_values(
+        {
+            "hub.radius": radius,
+            "blades": blades,
+            "airfoil.max_camber": camber,
+            "transforms.scale_x": [0.0, 0.0, 0.0, 0.0, chord],
+        }
+    )
     path = tmp_path_factory.mktemp("toml") / "design.toml"
     path.write_text(params.to_toml(comments=False))
     assert PropellerParameters.from_toml(path) == params
 
 
-@pytest.mark.parametrize("changes, field", [
-    ({"hub.radius": -1.0}, "hub.radius"),
-    ({"hub.length": 2.0}, "hub.length"),
-    ({"blades": 0}, "blades"),
-    ({"blades": 2.5}, "blades"),
-    ({"airfoil.thickness": 0.0}, "airfoil.thickness"),
-    ({"airfoil.camber_position": 1.0}, "airfoil.camber_position"),
-    ({"airfoil.pivot": 1.5}, "airfoil.pivot"),
-    ({"centerline.p2": [1.0, 2.0]}, "centerline.p2"),
-    ({"centerline.p4": [10.0, 25.0]}, "centerline.p4[1]"),
-    ({"centerline.frame": "bishop"}, "centerline.frame"),
-    ({"phase_deg": math.nan}, "phase_deg"),
-    ({"hub.radius": math.inf}, "hub.radius"),
-    ({"hub.radius": "ten"}, "hub.radius"),
-    ({"airfoil.camber_normal": 1}, "airfoil.camber_normal"),
-    ({"name": "a/b"}, "name"),
-    ({"resolution.points": 4}, "resolution.points"),
-])
+@pytest.mark.parametrize(
+    "changes, field",
+    [
+        ({"hub.radius": -1.0}, "hub.radius"),
+        ({"hub.length": 2.0}, "hub.length"),
+        ({"blades": 0}, "blades"),
+        ({"blades": 2.5}, "blades"),
+        ({"airfoil.thickness": 0.0}, "airfoil.thickness"),
+        ({"airfoil.camber_position": 1.0}, "airfoil.camber_position"),
+        ({"airfoil.pivot": 1.5}, "airfoil.pivot"),
+        ({"centerline.p2": [1.0, 2.0]}, "centerline.p2"),
+        ({"centerline.p4": [10.0, 25.0]}, "centerline.p4[1]"),
+        ({"centerline.frame": "bishop"}, "centerline.frame"),
+        ({"phase_deg": math.nan}, "phase_deg"),
+        ({"hub.radius": math.inf}, "hub.radius"),
+        ({"hub.radius": "ten"}, "hub.radius"),
+        ({"airfoil.camber_normal": 1}, "airfoil.camber_normal"),
+        ({"name": "a/b"}, "name"),
+        ({"resolution.points": 4}, "resolution.points"),
+    ],
+)
 def test_bad_values_name_the_field(changes, field):
     with pytest.raises(ParameterError) as raised:
         PropellerParameters().with_values(changes)
@@ -63,7 +75,9 @@ def test_bad_values_name_the_field(changes, field):
 
 
 def test_out_of_range_message_gives_value_and_range():
-    with pytest.raises(ParameterError, match=r"hub.radius = -1 is out of range; allowed \[0.5, 1000\]"):
+    with pytest.raises(
+        ParameterError, match=r"hub.radius = -1 is out of range; allowed \[0.5, 1000\]"
+    ):
         PropellerParameters().with_values({"hub.radius": -1.0})
 
 
@@ -80,23 +94,30 @@ def test_quartic_minimum_is_exact():
 
 
 def test_symmetric_section_accepts_any_camber_position():
-    params = PropellerParameters().with_values({"airfoil.max_camber": 0.0, "airfoil.camber_position": 0.0})
+    params = PropellerParameters().with_values(
+        {"airfoil.max_camber": 0.0, "airfoil.camber_position": 0.0}
+    )
     assert params.airfoil.max_camber == 0.0
 
 
 def test_unknown_key_suggests_the_closest(tmp_path):
     path = tmp_path / "typo.toml"
     path.write_text("[hub]\nraduis = 3.0\n")
-    with pytest.raises(ParameterError, match=r"unknown key 'hub.raduis'; did you mean 'hub.radius'\?"):
+    with pytest.raises(
+        ParameterError, match=r"unknown key 'hub.raduis'; did you mean 'hub.radius'\?"
+    ):
         PropellerParameters.from_toml(path)
 
 
-@pytest.mark.parametrize("content, fragment", [
-    (b"", "is empty"),
-    (b"\x00\xff\xfe binary", "not a UTF-8 text file"),
-    (b"blades = [", "not valid TOML"),
-    (b"hub = 3", "hub must be a table"),
-])
+@pytest.mark.parametrize(
+    "content, fragment",
+    [
+        (b"", "is empty"),
+        (b"\x00\xff\xfe binary", "not a UTF-8 text file"),
+        (b"blades = [", "not valid TOML"),
+        (b"hub = 3", "hub must be a table"),
+    ],
+)
 def test_unreadable_files_are_refused(tmp_path, content, fragment):
     path = tmp_path / "bad.toml"
     path.write_bytes(content)
@@ -110,5 +131,9 @@ def test_parameters_are_frozen(default_params):
 
 
 def test_a_section_that_folds_over_is_refused():
-    with pytest.raises(ParameterError, match=r"airfoil.thickness = 0.5 is too thick .* folds over itself"):
-        PropellerParameters().with_values({"airfoil.max_camber": 0.0625, "airfoil.camber_position": 0.125})
+    with pytest.raises(
+        ParameterError, match=r"airfoil.thickness = 0.5 is too thick .* folds over itself"
+    ):
+        PropellerParameters().with_values(
+            {"airfoil.max_camber": 0.0625, "airfoil.camber_position": 0.125}
+        )

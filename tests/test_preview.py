@@ -40,7 +40,9 @@ PIXEL_STD_FLOOR = 0.08
 
 @pytest.fixture(scope="module")
 def objects():
-    return propeller_objects(overrides={"resolution.sections": 16, "resolution.points": 40, "name": "preview_fast"})
+    return propeller_objects(
+        overrides={"resolution.sections": 16, "resolution.points": 40, "name": "preview_fast"}
+    )
 
 
 def _read_png(path) -> np.ndarray:
@@ -63,7 +65,9 @@ def _assert_a_real_picture(rgb: np.ndarray, blades: int) -> None:
     drawn = np.count_nonzero(grey < 0.97)  # not background
     assert drawn > 0.08 * grey.size
     for index in range(blades):  # every blade shows, in its own colour
-        assert _hue_pixels(rgb, blade_color(index, blades)) > 0.004 * grey.size, f"blade {index} not visible"
+        assert _hue_pixels(rgb, blade_color(index, blades)) > 0.004 * grey.size, (
+            f"blade {index} not visible"
+        )
     hsv = rgb_to_hsv(rgb)
     hub_like = (hsv[..., 1] < 0.2) & (grey > 0.25) & (grey < 0.9)  # the hub is a neutral grey
     assert np.count_nonzero(hub_like) > 0.01 * grey.size
@@ -95,7 +99,9 @@ def test_the_two_views_both_show_the_propeller(objects):
 
 
 def test_a_four_blade_design_shows_four_colours(tmp_path):
-    four = propeller_objects(overrides={"resolution.sections": 12, "resolution.points": 40, "blades": 4})
+    four = propeller_objects(
+        overrides={"resolution.sections": 12, "resolution.points": 40, "blades": 4}
+    )
     rgb = _read_png(write_preview(four, tmp_path / "four.png", size=(800, 400)))
     _assert_a_real_picture(rgb, 4)
 
@@ -107,15 +113,25 @@ def test_propeller_mesh_covers_the_solid_and_colours_every_part(objects):
     for blade in range(3):
         assert np.allclose(mesh.colors[mesh.parts == blade], blade_color(blade, 3), atol=1e-12)
     corners = mesh.vertices[mesh.triangles]
-    area = 0.5 * np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1).sum()
+    area = (
+        0.5
+        * np.linalg.norm(
+            np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1
+        ).sum()
+    )
     assert area == pytest.approx(mass_properties(objects.solid, 1.0).surface_area_mm2, rel=0.01)
-    # Outward normals: the enclosed volume (divergence theorem) is positive and close to the solid's.
-    volume = np.einsum("ij,ij->i", corners[:, 0], np.cross(corners[:, 1], corners[:, 2])).sum() / 6.0
+    # Outward normals: the enclosed volume (divergence theorem) is positive and close to the
+    # solid's.
+    volume = (
+        np.einsum("ij,ij->i", corners[:, 0], np.cross(corners[:, 1], corners[:, 2])).sum() / 6.0
+    )
     assert volume == pytest.approx(mass_properties(objects.solid, 1.0).volume_mm3, rel=0.01)
     # The preview tessellates a copy: the caller's solid gets no triangulation from it (which would
     # otherwise be reused by a later STL export at a different deflection).
     location = TopLoc_Location()
-    assert all(BRep_Tool.Triangulation_s(face.wrapped, location) is None for face in objects.solid.Faces())
+    assert all(
+        BRep_Tool.Triangulation_s(face.wrapped, location) is None for face in objects.solid.Faces()
+    )
 
 
 def test_propeller_mesh_refuses_parts_that_do_not_match_the_faces(objects):
@@ -125,10 +141,15 @@ def test_propeller_mesh_refuses_parts_that_do_not_match_the_faces(objects):
 
 # -- the renderer: depth order, and the view that shows every blade ------------------------------
 
-def _box(low: tuple[float, float, float], high: tuple[float, float, float]) -> tuple[np.ndarray, np.ndarray]:
+
+def _box(
+    low: tuple[float, float, float], high: tuple[float, float, float]
+) -> tuple[np.ndarray, np.ndarray]:
     """An axis-aligned box as 8 vertices and 12 outward (counter-clockwise) triangles."""
     x, y, z = zip(low, high, strict=True)
-    vertices = np.array([[x[i], y[j], z[k]] for i in (0, 1) for j in (0, 1) for k in (0, 1)], dtype=float)
+    vertices = np.array(
+        [[x[i], y[j], z[k]] for i in (0, 1) for j in (0, 1) for k in (0, 1)], dtype=float
+    )
     quads = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
     triangles = np.array([t for a, b, c, d in quads for t in ((a, b, c), (a, c, d))])
     return vertices, triangles
@@ -140,21 +161,31 @@ def test_the_near_box_hides_the_far_box_whatever_the_drawing_order(near_first):
     # drawn in order: with the near box's first, a renderer without a depth test would let the
     # far box paint over it; with the far box's first, a renderer that drew back faces or ignored
     # the near box would fail the other way.
-    boxes = [(_box((-1.0, -1.0, 2.0), (0.2, 1.0, 3.0)), (0.9, 0.1, 0.1), 0),   # near, red
-             (_box((-1.0, -1.0, -3.0), (1.0, 1.0, -2.0)), (0.1, 0.1, 0.9), 1)]  # far, blue
+    boxes = [
+        (_box((-1.0, -1.0, 2.0), (0.2, 1.0, 3.0)), (0.9, 0.1, 0.1), 0),  # near, red
+        (_box((-1.0, -1.0, -3.0), (1.0, 1.0, -2.0)), (0.1, 0.1, 0.9), 1),
+    ]  # far, blue
     if not near_first:
         boxes.reverse()
     (first_vertices, first_triangles), first_colour, first_part = boxes[0]
     (second_vertices, second_triangles), second_colour, second_part = boxes[1]
-    scene = SceneMesh(np.concatenate([first_vertices, second_vertices]),
-                      np.concatenate([first_triangles, second_triangles + len(first_vertices)]),
-                      np.array([first_colour] * len(first_triangles) + [second_colour] * len(second_triangles)),
-                      np.array([first_part] * len(first_triangles) + [second_part] * len(second_triangles)))
-    image = render_views(scene, [View((0.0, 0.0, 1.0), (0.0, 1.0, 0.0), "")], (200, 200)).astype(float)
+    scene = SceneMesh(
+        np.concatenate([first_vertices, second_vertices]),
+        np.concatenate([first_triangles, second_triangles + len(first_vertices)]),
+        np.array([first_colour] * len(first_triangles) + [second_colour] * len(second_triangles)),
+        np.array([first_part] * len(first_triangles) + [second_part] * len(second_triangles)),
+    )
+    image = render_views(scene, [View((0.0, 0.0, 1.0), (0.0, 1.0, 0.0), "")], (200, 200)).astype(
+        float
+    )
     # x in [-1, 1] spans the middle of the 200 px view (the camera frames the scene with a margin).
     overlap, far_only = image[100, 70], image[100, 150]
-    assert overlap[0] > 2.0 * overlap[2], f"the near red box should cover the far blue one, got {overlap}"
-    assert far_only[2] > 2.0 * far_only[0], f"the far blue box should show beside the near one, got {far_only}"
+    assert overlap[0] > 2.0 * overlap[2], (
+        f"the near red box should cover the far blue one, got {overlap}"
+    )
+    assert far_only[2] > 2.0 * far_only[0], (
+        f"the far blue box should show beside the near one, got {far_only}"
+    )
 
 
 def _worst_blade_fraction(mesh: SceneMesh, direction: np.ndarray, reference: np.ndarray) -> float:
@@ -163,24 +194,42 @@ def _worst_blade_fraction(mesh: SceneMesh, direction: np.ndarray, reference: np.
 
 def test_the_oblique_view_shows_every_blade_of_the_default(default_propeller):
     mesh = propeller_mesh(default_propeller.solid, default_propeller.face_parts, 3, tolerance=0.1)
-    largest = blade_silhouettes(mesh, np.array([[0.0, 0.0, 1.0]]))[:, 0].max()  # the loops open upward
+    # the loops open upward
+    largest = blade_silhouettes(mesh, np.array([[0.0, 0.0, 1.0]]))[:, 0].max()
     view = oblique_view(mesh)
     chosen = _worst_blade_fraction(mesh, np.array(view.toward_camera), largest)
     # The classic isometric corner (elevation 35.26°, azimuth 45°) shows one blade nearly edge-on.
     e, a = np.radians(ISOMETRIC_ELEVATION_DEG), np.radians(45.0)
-    corner = _worst_blade_fraction(mesh, np.array([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)]), largest)
+    corner = _worst_blade_fraction(
+        mesh, np.array([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)]), largest
+    )
     assert chosen > 0.5 and chosen > 1.5 * corner
     assert view.toward_camera[2] > 0.5  # from above
     assert AXIAL_VIEW.toward_camera == (0.0, 0.0, 1.0)
 
 
-@pytest.mark.parametrize(("text", "size"), [("1200x600", (1200, 600)), ("64X64", (64, 64)), (" 800 x 300 ", (800, 300))])
+@pytest.mark.parametrize(
+    ("text", "size"), [("1200x600", (1200, 600)), ("64X64", (64, 64)), (" 800 x 300 ", (800, 300))]
+)
 def test_parse_size(text, size):
     assert parse_size(text) == size
 
 
-@pytest.mark.parametrize("text", ["1200", "x600", "12.5x600", "-5x5", "63x100", "100x9000", "axb", "",
-                                  pytest.param("9" * 5001 + "x600", id="5001_digits")])  # was an internal error
+@pytest.mark.parametrize(
+    "text",
+    [
+        "1200",
+        "x600",
+        "12.5x600",
+        "-5x5",
+        "63x100",
+        "100x9000",
+        "axb",
+        "",
+        # was an internal error
+        pytest.param("9" * 5001 + "x600", id="5001_digits"),
+    ],
+)
 def test_parse_size_refuses_bad_sizes(text):
     with pytest.raises(ParameterError) as refused:
         parse_size(text)
@@ -188,6 +237,7 @@ def test_parse_size_refuses_bad_sizes(text):
 
 
 # -- command line ---------------------------------------------------------------------------------
+
 
 def test_cli_preview_writes_the_requested_picture(tmp_path, capsys):
     out = tmp_path / "pictures" / "prop.png"
@@ -217,17 +267,39 @@ def test_cli_preview_refuses_a_bad_size_before_building(tmp_path, size, capsys):
 
 
 def test_cli_build_preview_writes_the_picture_beside_the_files(tmp_path, capsys):
-    assert main(["build", *FAST, "--no-stl", "--preview", "--preview-size", "400x200", "--out", str(tmp_path)]) == EXIT_OK
+    assert (
+        main(
+            [
+                "build",
+                *FAST,
+                "--no-stl",
+                "--preview",
+                "--preview-size",
+                "400x200",
+                "--out",
+                str(tmp_path),
+            ]
+        )
+        == EXIT_OK
+    )
     name = "torus_propeller"
-    assert sorted(path.name for path in tmp_path.iterdir()) == [f"{name}.json", f"{name}.png", f"{name}.step",
-                                                                f"{name}_sections.csv", f"{name}_sections.png"]
+    assert sorted(path.name for path in tmp_path.iterdir()) == [
+        f"{name}.json",
+        f"{name}.png",
+        f"{name}.step",
+        f"{name}_sections.csv",
+        f"{name}_sections.png",
+    ]
     assert f"wrote {tmp_path / (name + '.png')}" in capsys.readouterr().out
     assert _read_png(tmp_path / f"{name}.png").shape == (200, 400, 3)
     assert json.loads((tmp_path / f"{name}.json").read_text())["valid"] is True
 
 
 def test_cli_build_refuses_a_bad_preview_size_and_writes_nothing(tmp_path, capsys):
-    assert main(["build", "--preview", "--preview-size", "5x5", "--out", str(tmp_path)]) == EXIT_BAD_INPUT
+    assert (
+        main(["build", "--preview", "--preview-size", "5x5", "--out", str(tmp_path)])
+        == EXIT_BAD_INPUT
+    )
     assert "--preview-size 5x5: width 5 px is out of range" in capsys.readouterr().err
     assert not any(tmp_path.iterdir())
 
@@ -239,7 +311,9 @@ def test_the_oblique_view_faces_every_blades_window(default_propeller):
     geometry = default_propeller.parameters.geometry()
     s = np.linspace(0.0, 1.0, 64)
     loops = [geometry.centerline(index).points(s) for index in range(geometry.blades)]
-    areas = np.array([0.5 * np.cross(loop, np.roll(loop, -1, axis=0)).sum(axis=0) for loop in loops])
+    areas = np.array(
+        [0.5 * np.cross(loop, np.roll(loop, -1, axis=0)).sum(axis=0) for loop in loops]
+    )
     unit = areas / np.linalg.norm(areas, axis=1, keepdims=True)
     mesh = propeller_mesh(default_propeller.solid, default_propeller.face_parts, 3, tolerance=0.1)
     view = np.array(oblique_view(mesh).toward_camera)
@@ -251,13 +325,20 @@ def test_the_oblique_view_faces_every_blades_window(default_propeller):
 def test_a_filleted_propeller_shows_every_part(tmp_path):
     # The root fillet's build reports each face's part from the fillet's history.
     filleted = propeller_objects("examples/workshop_fillet.toml")
-    _assert_a_real_picture(_read_png(write_preview(filleted, tmp_path / "fillet.png", size=(800, 400))), 3)
+    _assert_a_real_picture(
+        _read_png(write_preview(filleted, tmp_path / "fillet.png", size=(800, 400))), 3
+    )
 
 
 def test_build_preview_and_preview_show_the_same_picture(tmp_path):
-    assert main(["build", "--preview", "--no-stl", "-q", "--out", str(tmp_path / "built")]) == EXIT_OK
+    assert (
+        main(["build", "--preview", "--no-stl", "-q", "--out", str(tmp_path / "built")]) == EXIT_OK
+    )
     assert main(["preview", "-q", "--out", str(tmp_path / "preview.png")]) == EXIT_OK
-    built = np.asarray(Image.open(tmp_path / "built" / "torus_propeller.png").convert("RGB"), dtype=int)
+    built = np.asarray(
+        Image.open(tmp_path / "built" / "torus_propeller.png").convert("RGB"), dtype=int
+    )
     alone = np.asarray(Image.open(tmp_path / "preview.png").convert("RGB"), dtype=int)
     assert built.shape == alone.shape
-    assert (np.abs(built - alone).sum(axis=-1) > 30).mean() < 0.01  # the same camera: rendering noise only
+    # the same camera: rendering noise only
+    assert (np.abs(built - alone).sum(axis=-1) > 30).mean() < 0.01

@@ -33,7 +33,12 @@ def test_stage_lines_with_elapsed_time_on_a_terminal():
     progress.finish()
     lines = _text(stream).splitlines()
     assert len(lines) == 4
-    assert "CAD kernel" in lines[0] and "fusing" in lines[1] and "my stage" in lines[2] and "done" in lines[3]
+    assert (
+        "CAD kernel" in lines[0]
+        and "fusing" in lines[1]
+        and "my stage" in lines[2]
+        and "done" in lines[3]
+    )
     assert all(re.match(r"torus-cad: \[ +\d+\.\d s\] ", line) for line in lines)
 
 
@@ -63,7 +68,13 @@ def test_batch_bar_counts_outcomes_on_a_terminal_only():
     shown = _text(terminal)
     assert "a line above the bar" in shown
     last = shown.rstrip().splitlines()[-1]
-    assert "4/4" in last and "valid 1" in last and "refused 1" in last and "failed 1" in last and "/min" in last
+    assert (
+        "4/4" in last
+        and "valid 1" in last
+        and "refused 1" in last
+        and "failed 1" in last
+        and "/min" in last
+    )
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="a pseudo-terminal")
@@ -73,8 +84,12 @@ def test_build_shows_a_line_before_the_kernel_is_imported(tmp_path):
     Python's -X importtime reports each module on stderr as its import ends; the first progress
     line must come before any line of cadquery, OCP, pydantic or scipy.
     """
-    text = terminal_text_until(["-X", "importtime", "-m", "torus_cad", "build", "--out", str(tmp_path), "--no-stl"],
-                               b"CAD kernel")
+    text = terminal_text_until(
+        ["-X", "importtime", "-m", "torus_cad", "build", "--out", str(tmp_path), "--no-stl"],
+        b"CAD kernel",
+    )
     assert "CAD kernel" in text
-    before = text[:text.index("CAD kernel")]
-    assert not any(module in before for module in ("cadquery", "OCP", "pydantic", "scipy")), before[-500:]
+    before = text[: text.index("CAD kernel")]
+    assert not any(module in before for module in ("cadquery", "OCP", "pydantic", "scipy")), before[
+        -500:
+    ]

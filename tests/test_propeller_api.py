@@ -41,15 +41,22 @@ def test_returns_cadquery_objects(objects, fast_params):
 
 def test_the_cadquery_solids_wrap_the_opencascade_shapes(objects):
     """``shape``, ``hub_shape``, ``blade_shapes`` are the solids the cadquery objects hold."""
-    assert objects.solid.wrapped.IsSame(objects.shape) and objects.hub.wrapped.IsSame(objects.hub_shape)
-    assert all(blade.wrapped.IsSame(shape) for blade, shape in zip(objects.blades, objects.blade_shapes, strict=True))
+    assert objects.solid.wrapped.IsSame(objects.shape) and objects.hub.wrapped.IsSame(
+        objects.hub_shape
+    )
+    assert all(
+        blade.wrapped.IsSame(shape)
+        for blade, shape in zip(objects.blades, objects.blade_shapes, strict=True)
+    )
 
 
 def test_a_built_propeller_pickles_with_its_solids(objects):
     copy = pickle.loads(pickle.dumps(objects))
     assert copy.parameters == objects.parameters and copy.face_parts == objects.face_parts
     assert copy.solid.Volume() == pytest.approx(objects.solid.Volume(), rel=1e-12)
-    assert [len(blade.Faces()) for blade in copy.blades] == [len(blade.Faces()) for blade in objects.blades]
+    assert [len(blade.Faces()) for blade in copy.blades] == [
+        len(blade.Faces()) for blade in objects.blades
+    ]
     assert is_valid_closed_solid(copy.solid) and len(copy.hub.Faces()) == len(objects.hub.Faces())
 
 
@@ -61,8 +68,9 @@ def test_solid_hub_and_blades_are_valid_closed_solids(objects):
 def test_hub_is_the_parameters_cylinder(objects, fast_params):
     box = objects.hub.BoundingBox()
     radius, length = fast_params.hub.radius, fast_params.hub.length
-    assert (box.xmin, box.xmax, box.zmin, box.zmax) == pytest.approx((-radius, radius, -length / 2, length / 2),
-                                                                    abs=1e-6)
+    assert (box.xmin, box.xmax, box.zmin, box.zmax) == pytest.approx(
+        (-radius, radius, -length / 2, length / 2), abs=1e-6
+    )
     assert precise_volume(objects.hub) == pytest.approx(math.pi * radius**2 * length, rel=1e-9)
 
 
@@ -73,7 +81,13 @@ def test_blades_are_rotated_copies_at_the_pattern_angles(objects, fast_params):
     first = np.array(objects.blades[0].Center().toTuple())
     for index, blade in enumerate(objects.blades):
         angle = math.radians(360.0 * index / fast_params.blades)
-        turn = np.array([[math.cos(angle), -math.sin(angle), 0], [math.sin(angle), math.cos(angle), 0], [0, 0, 1]])
+        turn = np.array(
+            [
+                [math.cos(angle), -math.sin(angle), 0],
+                [math.sin(angle), math.cos(angle), 0],
+                [0, 0, 1],
+            ]
+        )
         assert np.array(blade.Center().toTuple()) == pytest.approx(turn @ first, abs=1e-6)
 
 
@@ -106,7 +120,9 @@ def test_assembly_has_named_coloured_parts(objects):
     assert part_volume == pytest.approx(expected, rel=1e-9)
     fused = objects.assembly(name="one", fused=True)
     assert [child.name for child in fused.children] == ["propeller"]
-    assert precise_volume(fused.children[0].obj) == pytest.approx(precise_volume(objects.solid), rel=1e-12)
+    assert precise_volume(fused.children[0].obj) == pytest.approx(
+        precise_volume(objects.solid), rel=1e-12
+    )
 
 
 def test_assembly_exports_as_step(objects, tmp_path):
@@ -132,7 +148,9 @@ def test_resolve_parameters_accepts_none_parameters_and_paths(tmp_path):
     path = tmp_path / "d.toml"
     path.write_text(custom.to_toml())
     assert resolve_parameters(path) == custom
-    assert resolve_parameters(str(path), {"phase_deg": 10.0}) == custom.with_values({"phase_deg": 10.0})
+    assert resolve_parameters(str(path), {"phase_deg": 10.0}) == custom.with_values(
+        {"phase_deg": 10.0}
+    )
 
 
 def test_bad_overrides_raise_parameter_errors_naming_the_key():
@@ -145,13 +163,23 @@ def test_bad_overrides_raise_parameter_errors_naming_the_key():
 def test_progress_callback_sees_every_stage_in_order(fast_params):
     seen: list[str] = []
     built = propeller_objects(fast_params, progress=seen.append)
-    assert seen == ["parameters", "design_targets", "section_math", "wires", "loft", "fuse", "check", "strict_check"]
+    assert seen == [
+        "parameters",
+        "design_targets",
+        "section_math",
+        "wires",
+        "loft",
+        "fuse",
+        "check",
+        "strict_check",
+    ]
     assert list(built.stage_seconds) == seen
 
 
 def test_mass_properties_and_write_delegate_to_the_pipeline(objects, tmp_path):
     properties = objects.mass_properties(2.0)
-    assert properties.volume_mm3 == pytest.approx(precise_volume(objects.solid), rel=1e-6)  # both to 1e-6
+    # both to 1e-6
+    assert properties.volume_mm3 == pytest.approx(precise_volume(objects.solid), rel=1e-6)
     assert properties.mass_g == pytest.approx(2.0e-3 * properties.volume_mm3, rel=1e-12)
     paths = objects.write(tmp_path, stl=False)
     assert sorted(paths) == ["json", "step"]

@@ -36,8 +36,9 @@ def test_volume_lies_between_hub_and_hub_plus_blades(default_propeller):
 def test_step_reads_back_as_the_same_solid(default_propeller, default_files):
     shape = read_step(default_files["step"])
     assert is_valid_closed_solid(shape)
-    assert precise_volume(shape) == pytest.approx(precise_volume(default_propeller.solid),
-                                                  rel=READ_BACK_RELATIVE_TOLERANCE)
+    assert precise_volume(shape) == pytest.approx(
+        precise_volume(default_propeller.solid), rel=READ_BACK_RELATIVE_TOLERANCE
+    )
 
 
 def test_step_names_the_product_and_uses_millimetres(default_files):
@@ -64,18 +65,33 @@ def test_analytic_surface_lies_on_the_brep(default_propeller, default_params):
     sections = default_params.resolution.sections
     s = (np.arange(4, sections - 5) + 0.5) / (sections - 1)
     t = np.linspace(0.03, 1.97, 9)
-    points = surface_points(default_params.geometry().blade, default_params.geometry().centerline(), s, t)
-    chord = np.linalg.norm(surface_points(default_params.geometry().blade, default_params.geometry().centerline(), s, [1.0])[:, 0] - surface_points(default_params.geometry().blade, default_params.geometry().centerline(), s, [0.0])[:, 0],
-                           axis=-1)
-    distances = distances_to_shape(default_propeller.blades[0], points.reshape(-1, 3)).reshape(points.shape[:2])
+    points = surface_points(
+        default_params.geometry().blade, default_params.geometry().centerline(), s, t
+    )
+    chord = np.linalg.norm(
+        surface_points(
+            default_params.geometry().blade, default_params.geometry().centerline(), s, [1.0]
+        )[:, 0]
+        - surface_points(
+            default_params.geometry().blade, default_params.geometry().centerline(), s, [0.0]
+        )[:, 0],
+        axis=-1,
+    )
+    distances = distances_to_shape(default_propeller.blades[0], points.reshape(-1, 3)).reshape(
+        points.shape[:2]
+    )
     assert np.all(distances <= SURFACE_ACCURACY_RELATIVE * chord[:, None])
 
 
 def test_stl_deflection_is_user_settable(light_params, tmp_path):
-    coarse = light_params.with_values({"export.stl_linear_deflection": 0.5, "export.stl_angular_deflection": 0.8})
+    coarse = light_params.with_values(
+        {"export.stl_linear_deflection": 0.5, "export.stl_angular_deflection": 0.8}
+    )
     fine = light_params.with_values({"export.stl_linear_deflection": 0.02})
-    sizes = [build_propeller(p).write(tmp_path / p.name / str(i))["stl"].stat().st_size
-             for i, p in enumerate((coarse, fine))]
+    sizes = [
+        build_propeller(p).write(tmp_path / p.name / str(i))["stl"].stat().st_size
+        for i, p in enumerate((coarse, fine))
+    ]
     assert sizes[0] < sizes[1]
 
 
@@ -91,10 +107,17 @@ def test_any_blade_count_fuses_into_one_solid(light_params, blades):
     # Narrow the angular sweep so that neighbours stay clear, and the chord so that the tighter
     # loop does not fold over (both are refused before the kernel otherwise).
     sweep = min(1.0, 3.0 / blades)
-    propeller = build_propeller(light_params.with_values({"blades": blades, "centerline.p2": [25 * sweep, 3.0, 22.0],
-                                                          "centerline.p3": [75 * sweep, 15.0, 22.0],
-                                                          "centerline.p4": [100 * sweep, 18.0],
-                                                          "transforms.scale_x": [0.0, 0.0, -8.0, 8.0, 5.0]}))
+    propeller = build_propeller(
+        light_params.with_values(
+            {
+                "blades": blades,
+                "centerline.p2": [25 * sweep, 3.0, 22.0],
+                "centerline.p3": [75 * sweep, 15.0, 22.0],
+                "centerline.p4": [100 * sweep, 18.0],
+                "transforms.scale_x": [0.0, 0.0, -8.0, 8.0, 5.0],
+            }
+        )
+    )
     assert is_valid_closed_solid(propeller.solid)
     assert len(propeller.blades) == blades
     assert precise_volume(propeller.solid) > precise_volume(propeller.hub)

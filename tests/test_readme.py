@@ -21,12 +21,14 @@ import pytest
 ROOT = Path(__file__).resolve().parent.parent
 README = ROOT / "README.md"
 DOCS = ROOT / "docs"
-#: The pages whose examples run: the README, then the documentation site's pages (the spec is quoted, not run).
-PAGES = [README] + sorted(path for path in DOCS.rglob("*.md") if "spec" not in path.relative_to(DOCS).parts)
+#: The pages whose examples run: the README, then the documentation site's pages (the spec is
+#: quoted, not run).
+PAGES = [README] + sorted(
+    path for path in DOCS.rglob("*.md") if "spec" not in path.relative_to(DOCS).parts
+)
 PARAMETERS_PAGE = DOCS / "reference" / "parameters.md"
 FENCE = re.compile(r"^```(\w*)\s*$")
 NOT_RUN = "<!-- not-run:"
-
 
 
 @dataclass(frozen=True)
@@ -59,8 +61,16 @@ def page_blocks(page: Path) -> list[Block]:
         if match and match.group(1):
             end = next(j for j in range(index + 1, len(lines)) if lines[j].startswith("```"))
             skipped = index > 0 and lines[index - 1].strip().startswith(NOT_RUN)
-            blocks.append(Block(match.group(1), "\n".join(lines[index + 1:end]), index + 1, skipped, name,
-                                len(blocks) + 1))
+            blocks.append(
+                Block(
+                    match.group(1),
+                    "\n".join(lines[index + 1 : end]),
+                    index + 1,
+                    skipped,
+                    name,
+                    len(blocks) + 1,
+                )
+            )
             index = end
         index += 1
     return blocks
@@ -77,7 +87,11 @@ def shell_commands(block: Block) -> list[str]:
     for raw in block.code.splitlines():
         line = raw.split(" #")[0].strip()
         for part in (piece.strip() for piece in line.split("&&")):
-            if part.startswith("torus-cad ") or part.startswith("python3 -m torus_cad") or part.startswith("python scripts/"):
+            if (
+                part.startswith("torus-cad ")
+                or part.startswith("python3 -m torus_cad")
+                or part.startswith("python scripts/")
+            ):
                 commands.append(part)
     return commands
 
@@ -86,7 +100,8 @@ def shell_commands(block: Block) -> list[str]:
 def workdir(tmp_path_factory) -> Path:
     """A scratch folder laid out like the repository for the examples."""
     folder = tmp_path_factory.mktemp("readme")
-    for name in ("examples", "scripts", "validation"):  # validation/: the APC example's station table
+    # validation/: the APC example's station table
+    for name in ("examples", "scripts", "validation"):
         shutil.copytree(ROOT / name, folder / name)
     return folder
 
@@ -101,8 +116,15 @@ def _run_shell(command: str, cwd: Path) -> subprocess.CompletedProcess[str]:
     python = sys.executable
     command = re.sub(r"^torus-cad ", f"{python} -m torus_cad ", command)
     command = re.sub(r"^python3? ", f"{python} ", command)
-    return subprocess.run(command, shell=True, cwd=cwd, env=_environment(), capture_output=True, text=True,
-                          timeout=600)
+    return subprocess.run(
+        command,
+        shell=True,
+        cwd=cwd,
+        env=_environment(),
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
 
 
 BLOCKS = readme_blocks()
@@ -120,8 +142,9 @@ def test_shell_example_runs(block: Block, workdir: Path):
         pytest.skip("marked not-run in the README")
     for command in shell_commands(block):
         result = _run_shell(command, workdir)
-        assert result.returncode == 0, f"{block.where}: {command!r} exited {result.returncode}: " \
-                                       f"{result.stderr[-2000:]}"
+        assert result.returncode == 0, (
+            f"{block.where}: {command!r} exited {result.returncode}: {result.stderr[-2000:]}"
+        )
 
 
 def test_python_examples_run_in_order(workdir: Path, monkeypatch):
@@ -144,11 +167,15 @@ def test_parameter_table_is_current():
     from torus_cad.parameters.parameter_reference import replace_table
 
     text = PARAMETERS_PAGE.read_text()
-    assert replace_table(text) == text, "docs/reference/parameters.md is stale: run python scripts/reference_pages.py"
+    assert replace_table(text) == text, (
+        "docs/reference/parameters.md is stale: run python scripts/reference_pages.py"
+    )
 
 
 def test_readme_links_stay_inside_the_repository():
     for target in re.findall(r"\]\(([^)]+)\)", README.read_text()):
         if not target.startswith(("http://", "https://", "#")):
             assert not target.startswith(".."), target
-            assert (ROOT / target.split("#")[0]).exists(), f"README links to a missing file: {target}"
+            assert (ROOT / target.split("#")[0]).exists(), (
+                f"README links to a missing file: {target}"
+            )

@@ -18,7 +18,14 @@ from torus_cad.cli import main
 from torus_cad.kernel.step_readback import read_step
 
 LIGHT = ["--set", "resolution.sections=16", "--set", "resolution.points=48"]
-MOUNT = ["--set", "hub.bore_diameter=5.0", "--set", "hub.bore_flat_depth=0.5", "--set", "hub.set_screw_diameter=3.0"]
+MOUNT = [
+    "--set",
+    "hub.bore_diameter=5.0",
+    "--set",
+    "hub.bore_flat_depth=0.5",
+    "--set",
+    "hub.set_screw_diameter=3.0",
+]
 
 
 def _hole_angle_deg(step_path) -> float:
@@ -27,8 +34,12 @@ def _hole_angle_deg(step_path) -> float:
     points = []
     for face in shape.Faces():
         surface = BRepAdaptor_Surface(face.wrapped)
-        if surface.GetType() == GeomAbs_Cylinder and surface.Cylinder().Radius() == pytest.approx(1.5, abs=1e-9):
-            for u in np.linspace(surface.FirstUParameter(), surface.LastUParameter(), 24, endpoint=False):
+        if surface.GetType() == GeomAbs_Cylinder and surface.Cylinder().Radius() == pytest.approx(
+            1.5, abs=1e-9
+        ):
+            for u in np.linspace(
+                surface.FirstUParameter(), surface.LastUParameter(), 24, endpoint=False
+            ):
                 for v in np.linspace(surface.FirstVParameter(), surface.LastVParameter(), 5):
                     points.append(surface.Value(u, v).Coord())
     assert points, "no set-screw hole on the solid"
@@ -39,8 +50,22 @@ def _hole_angle_deg(step_path) -> float:
 @pytest.mark.parametrize("handedness", ["cw", "ccw"])
 def test_the_reported_set_screw_angle_is_where_the_hole_is(tmp_path, capsys, handedness):
     out = tmp_path / handedness
-    assert main(["build", "--out", str(out), "--no-stl", "-q", "--set", f"handedness={handedness}", *LIGHT, *MOUNT]) == 0, \
-        capsys.readouterr().err
+    assert (
+        main(
+            [
+                "build",
+                "--out",
+                str(out),
+                "--no-stl",
+                "-q",
+                "--set",
+                f"handedness={handedness}",
+                *LIGHT,
+                *MOUNT,
+            ]
+        )
+        == 0
+    ), capsys.readouterr().err
     report = json.loads((out / "torus_propeller.json").read_text())
     measured = _hole_angle_deg(out / "torus_propeller.step")
     difference = (report["set_screw_angle_deg"] - measured + 180.0) % 360.0 - 180.0

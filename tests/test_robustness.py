@@ -27,7 +27,13 @@ from hypothesis import strategies as st
 
 import torus_cad
 from studies import fuzz as fuzz_module
-from studies.fuzz import UNIT_DIMENSION, design_from_unit, fuzz_range, fuzz_tasks, random_design_dict
+from studies.fuzz import (
+    UNIT_DIMENSION,
+    design_from_unit,
+    fuzz_range,
+    fuzz_tasks,
+    random_design_dict,
+)
 from torus_cad.batch import DesignResult, DesignTask, LocalPool, Outcome, run_design, run_tasks
 from torus_cad.cli import main
 from torus_cad.errors import GeometryError, ParameterError
@@ -55,7 +61,10 @@ class _Watchdog:
 
 # -- properties over random designs ------------------------------------------------------------
 
-@settings(max_examples=10, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
+
+@settings(
+    max_examples=10, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow]
+)
 @given(unit_vectors)
 def test_every_design_is_a_valid_solid_or_a_clear_refusal(u):
     try:
@@ -70,8 +79,12 @@ def test_every_design_is_a_valid_solid_or_a_clear_refusal(u):
         assert result.reason and "\n" not in result.reason
 
 
-@settings(max_examples=3, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow,
-                                                                                   HealthCheck.function_scoped_fixture])
+@settings(
+    max_examples=3,
+    deadline=None,
+    derandomize=True,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
+)
 @given(unit_vectors)
 def test_cli_gives_files_or_exit_2_never_a_traceback(tmp_path_factory, u):
     folder = tmp_path_factory.mktemp("cli")
@@ -111,11 +124,20 @@ def test_sampler_stays_in_range_and_is_reproducible():
 
 def test_workshop_draws_add_only_workshop_features_and_stay_in_range():
     """``fuzz.py --workshop``: the same design as without, plus in-range workshop features."""
-    workshop_keys = {"handedness", "hub.bore_diameter", "hub.bore_flat_depth", "hub.set_screw_diameter",
-                     "hub.chamfer", "airfoil.trailing_edge_thickness"}
+    workshop_keys = {
+        "handedness",
+        "hub.bore_diameter",
+        "hub.bore_flat_depth",
+        "hub.set_screw_diameter",
+        "hub.chamfer",
+        "airfoil.trailing_edge_thickness",
+    }
     drawn = set()
     for seed in range(100):
-        plain, design = _flat(random_design_dict(seed)), _flat(random_design_dict(seed, workshop=True))
+        plain, design = (
+            _flat(random_design_dict(seed)),
+            _flat(random_design_dict(seed, workshop=True)),
+        )
         changed = {key for key in design if design[key] != plain.get(key)}
         assert changed <= workshop_keys, changed
         drawn |= changed
@@ -127,15 +149,28 @@ def test_workshop_draws_add_only_workshop_features_and_stay_in_range():
 
 
 #: The fields the sampler draws directly, each within the schema's fuzz range.
-FUZZED = ("blades", "phase_deg", "hub.radius", "hub.length", "airfoil.max_camber", "airfoil.camber_position",
-          "airfoil.thickness", "airfoil.pivot", "resolution.sections", "resolution.points",
-          "export.stl_linear_deflection", "export.stl_angular_deflection")
+FUZZED = (
+    "blades",
+    "phase_deg",
+    "hub.radius",
+    "hub.length",
+    "airfoil.max_camber",
+    "airfoil.camber_position",
+    "airfoil.thickness",
+    "airfoil.pivot",
+    "resolution.sections",
+    "resolution.points",
+    "export.stl_linear_deflection",
+    "export.stl_angular_deflection",
+)
 
 
 def _flat(design: dict, prefix: str = "") -> dict:
     flat = {}
     for key, value in design.items():
-        flat.update(_flat(value, f"{prefix}{key}.") if isinstance(value, dict) else {prefix + key: value})
+        flat.update(
+            _flat(value, f"{prefix}{key}.") if isinstance(value, dict) else {prefix + key: value}
+        )
     return flat
 
 
@@ -148,8 +183,12 @@ def test_sampler_ranges_come_from_the_schema(monkeypatch):
         assert max(values) - min(values) > 0.5 * (high - low), key  # the sampler covers the range
     # narrowing a field's fuzz range in its declaration narrows what the sampler draws
     spec = fuzz_module._SPECS["hub.radius"]
-    monkeypatch.setitem(fuzz_module._SPECS, "hub.radius", dataclasses.replace(spec, fuzz=Bounds(11.0, 12.0)))
-    assert {11.0 <= _flat(random_design_dict(seed))["hub.radius"] <= 12.0 for seed in range(50)} == {True}
+    monkeypatch.setitem(
+        fuzz_module._SPECS, "hub.radius", dataclasses.replace(spec, fuzz=Bounds(11.0, 12.0))
+    )
+    assert {
+        11.0 <= _flat(random_design_dict(seed))["hub.radius"] <= 12.0 for seed in range(50)
+    } == {True}
 
 
 def _process_gone(pid: int) -> bool:
@@ -163,8 +202,13 @@ def _process_gone(pid: int) -> bool:
 
 def _outcomes(designs: list[dict], pool: Callable[[], LocalPool]) -> dict[str, DesignResult]:
     results: dict[str, DesignResult] = {}
-    run_tasks(fuzz_tasks(designs, write=True, stl=True), lambda task, result: results.__setitem__(task.design_id, result),
-              pool, window=2, job=faulty)
+    run_tasks(
+        fuzz_tasks(designs, write=True, stl=True),
+        lambda task, result: results.__setitem__(task.design_id, result),
+        pool,
+        window=2,
+        job=faulty,
+    )
     return results
 
 
@@ -178,20 +222,31 @@ def test_the_runner_counts_a_hang_and_a_crash_and_goes_on(tmp_path):
     must end as a timeout with its worker killed.
     """
     good = PropellerParameters().with_values({"resolution.points": 24, "name": "good"}).to_dict()
-    baseline = _outcomes([good], lambda: LocalPool(1))["good"]  # also starts the fork server (imports the kernel)
+    # also starts the fork server (imports the kernel)
+    baseline = _outcomes([good], lambda: LocalPool(1))["good"]
     assert baseline.outcome is Outcome.VALID
     limit_s = max(20.0, 10.0 * baseline.seconds)
     pid_file = tmp_path / "hang.pid"
-    designs = [{"name": "hang", FAULT_KEY: "hang", PID_FILE_KEY: str(pid_file)}, {"name": "crash", FAULT_KEY: "crash"},
-               {"name": "bad", "blades": "x"}, good]
-    with _Watchdog(limit_s + 600.0):  # a hang the pool does not stop fails the run instead of stalling it
+    designs = [
+        {"name": "hang", FAULT_KEY: "hang", PID_FILE_KEY: str(pid_file)},
+        {"name": "crash", FAULT_KEY: "crash"},
+        {"name": "bad", "blades": "x"},
+        good,
+    ]
+    # a hang the pool does not stop fails the run instead of stalling it
+    with _Watchdog(limit_s + 600.0):
         results = _outcomes(designs, lambda: LocalPool(1, time_limit_s=limit_s))
     assert {name: result.outcome for name, result in results.items()} == {
-        "hang": Outcome.TIMEOUT, "crash": Outcome.CRASH, "bad": Outcome.REFUSED, "good": Outcome.VALID}
+        "hang": Outcome.TIMEOUT,
+        "crash": Outcome.CRASH,
+        "bad": Outcome.REFUSED,
+        "good": Outcome.VALID,
+    }
     assert f"({limit_s} s)" in results["hang"].reason
     hung_pid = int(pid_file.read_text())
     deadline = time.monotonic() + 60.0
-    while not _process_gone(hung_pid) and time.monotonic() < deadline:  # killed; reaping may lag a little
+    # killed; reaping may lag a little
+    while not _process_gone(hung_pid) and time.monotonic() < deadline:
         time.sleep(0.1)
     assert _process_gone(hung_pid), f"the hung worker {hung_pid} is still running"
 
@@ -200,12 +255,20 @@ def test_the_runner_counts_a_hang_and_a_crash_and_goes_on(tmp_path):
 
 REFUSALS = {
     "fold": ({"transforms.scale_x": [0.0, 0.0, -32.0, 32.0, 6.0]}, "folds over itself"),
-    "root_outside_inset": ({"transforms.scale_x": [0.0, 0.0, -16.0, 16.0, 20.0]}, "root (s = 0) section leaves"),
+    "root_outside_inset": (
+        {"transforms.scale_x": [0.0, 0.0, -16.0, 16.0, 20.0]},
+        "root (s = 0) section leaves",
+    ),
     "end_face": ({"centerline.p2": [25.0, -15.0, 2.0]}, "leaves the hub through an end face"),
     "sparse_sections": ({"resolution.sections": 4}, "resolution.sections = 4 is too few"),
     # alpha = 20 + 1600 s^2 (1 - s)^2 degrees: 100 degrees of twist at mid-span, ends unchanged
-    "twist_between_sections": ({"resolution.sections": 8,
-                                "transforms.angle_of_attack": [1600.0, -3200.0, 1600.0, 0.0, 20.0]}, "too few"),
+    "twist_between_sections": (
+        {
+            "resolution.sections": 8,
+            "transforms.angle_of_attack": [1600.0, -3200.0, 1600.0, 0.0, 20.0],
+        },
+        "too few",
+    ),
 }
 
 
@@ -238,9 +301,14 @@ def test_default_design_passes_every_check_with_margin():
     surface = params.blade_surface()
     feasibility.check_feasible(params.geometry(), surface)
     grid, step = feasibility.tube_grid(len(surface.s))
-    fine = feasibility.sample_tube(params.geometry(), params.geometry().centerline(), grid, surface.t)
+    fine = feasibility.sample_tube(
+        params.geometry(), params.geometry().centerline(), grid, surface.t
+    )
     assert feasibility.fold_ratio(fine)[0] < 0.95
-    assert feasibility.resolution_deviation(surface, fine, step)[0] < feasibility.RESOLUTION_DEVIATION_LIMIT / 3
+    assert (
+        feasibility.resolution_deviation(surface, fine, step)[0]
+        < feasibility.RESOLUTION_DEVIATION_LIMIT / 3
+    )
 
 
 def test_interleaved_blades_are_not_refused():
@@ -258,29 +326,42 @@ def _circle_tube(centers: np.ndarray, radius: float, points: int = 24) -> feasib
     normal /= np.linalg.norm(normal, axis=1, keepdims=True)
     binormal = np.cross(tangent, normal)
     angle = np.linspace(0.0, 2 * np.pi, points, endpoint=False)
-    planar = np.broadcast_to(np.stack([radius * np.cos(angle), radius * np.sin(angle)], -1),
-                             (len(centers), points, 2)).copy()
-    surface = centers[:, None] + planar[..., :1] * normal[:, None] + planar[..., 1:] * binormal[:, None]
+    planar = np.broadcast_to(
+        np.stack([radius * np.cos(angle), radius * np.sin(angle)], -1), (len(centers), points, 2)
+    ).copy()
+    surface = (
+        centers[:, None] + planar[..., :1] * normal[:, None] + planar[..., 1:] * binormal[:, None]
+    )
     arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(centers, axis=0), axis=1))])
     frames = Frames(np.linspace(0, 1, len(centers)), centers, tangent, normal, binormal)
     return feasibility.Tube(frames, planar, surface, np.zeros_like(centers), arc)
 
 
 def test_self_intersection_is_found():
-    turns = np.linspace(0.0, 2.5 * np.pi, 160)  # a helix that climbs less than its tube's width per turn
+    # a helix that climbs less than its tube's width per turn
+    turns = np.linspace(0.0, 2.5 * np.pi, 160)
     helix = np.stack([30 * np.cos(turns), 30 * np.sin(turns), 0.5 * turns], -1)
     with pytest.raises(GeometryError, match="intersects itself"):
-        feasibility.check_no_self_intersection(PropellerParameters().geometry().hub, _circle_tube(helix, 3.0))
-    apart = np.stack([30 * np.cos(turns), 30 * np.sin(turns), 8.0 * turns], -1)  # well apart per turn
-    feasibility.check_no_self_intersection(PropellerParameters().geometry().hub, _circle_tube(apart, 3.0))
+        feasibility.check_no_self_intersection(
+            PropellerParameters().geometry().hub, _circle_tube(helix, 3.0)
+        )
+    # well apart per turn
+    apart = np.stack([30 * np.cos(turns), 30 * np.sin(turns), 8.0 * turns], -1)
+    feasibility.check_no_self_intersection(
+        PropellerParameters().geometry().hub, _circle_tube(apart, 3.0)
+    )
 
 
 def test_blades_running_into_each_other_are_found():
-    rod = np.stack([np.linspace(12.0, 30.0, 40), np.zeros(40), np.zeros(40)], -1)  # radial rods, 8 mm thick
-    crowded = PropellerParameters().with_values({"blades": 12})  # 30 degrees apart: axes 6.2 mm apart at r = 12
+    # radial rods, 8 mm thick
+    rod = np.stack([np.linspace(12.0, 30.0, 40), np.zeros(40), np.zeros(40)], -1)
+    # 30 degrees apart: axes 6.2 mm apart at r = 12
+    crowded = PropellerParameters().with_values({"blades": 12})
     with pytest.raises(GeometryError, match="intersect each other"):
         feasibility.check_blades_clear(crowded.geometry(), _circle_tube(rod, 4.0))
-    feasibility.check_blades_clear(PropellerParameters().with_values({"blades": 3}).geometry(), _circle_tube(rod, 4.0))
+    feasibility.check_blades_clear(
+        PropellerParameters().with_values({"blades": 3}).geometry(), _circle_tube(rod, 4.0)
+    )
 
 
 def test_hooked_trailing_edge_with_too_few_points_is_refused():
@@ -319,14 +400,20 @@ def test_killed_mid_write_leaves_no_partial_file(tmp_path, kind):
     target = tmp_path / f"propeller.{kind}"
     script = tmp_path / "writer.py"
     script.write_text(_WRITER)
-    process = subprocess.Popen([sys.executable, str(script), kind, str(target)], stdout=subprocess.PIPE, text=True)
+    process = subprocess.Popen(
+        [sys.executable, str(script), kind, str(target)], stdout=subprocess.PIPE, text=True
+    )
     try:
         assert process.stdout.readline().strip() == "built"
         deadline = time.monotonic() + 120
         caught_mid_write = False
         while time.monotonic() < deadline:
             temps = list(tmp_path.glob(f".{target.name}.tmp-*"))
-            if temps and not target.exists() and any(t.exists() and t.stat().st_size > 0 for t in temps):
+            if (
+                temps
+                and not target.exists()
+                and any(t.exists() and t.stat().st_size > 0 for t in temps)
+            ):
                 caught_mid_write = True
                 break
             if target.exists():  # a write finished: remove it and catch the next one in flight
@@ -358,8 +445,12 @@ def test_killed_mid_write_leaves_no_partial_file(tmp_path, kind):
 
 def test_the_product_never_imports_the_studies():
     """The fuzz sampler and the function-space study live in studies/, outside the installed package."""
-    code = ("import sys, torus_cad.cli, torus_cad.batch, torus_cad.propeller, torus_cad.preview.picture; "
-            "print(sorted(name for name in sys.modules if name.startswith('studies')))")
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, check=True)
+    code = (
+        "import sys, torus_cad.cli, torus_cad.batch, torus_cad.propeller, torus_cad.preview.picture; "
+        "print(sorted(name for name in sys.modules if name.startswith('studies')))"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=300, check=True
+    )
     assert done.stdout.strip() == "[]"
     assert not (Path(torus_cad.__file__).parent / "studies").exists()

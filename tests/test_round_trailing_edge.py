@@ -11,7 +11,12 @@ from scipy.interpolate import BSpline
 
 from torus_cad.geometry.blade.blade_surface import blade_frames
 from torus_cad.kernel.checks import is_valid_closed_solid
-from torus_cad.kernel.measure import contour_through, farthest_middle_edge, plane_section_edges, straight_edges
+from torus_cad.kernel.measure import (
+    contour_through,
+    farthest_middle_edge,
+    plane_section_edges,
+    straight_edges,
+)
 from torus_cad.parameters import PropellerParameters
 from torus_cad.propeller import build_propeller
 
@@ -31,7 +36,8 @@ def test_section_curves_are_g1_at_the_round_cap():
     curves = propeller.section_curves
     assert curves.round_trailing_edge
     distinct, multiplicities = np.unique(curves.knots, return_counts=True)
-    lower_joint = distinct[1:-1][multiplicities[1:-1] == 3][0]  # the cap ends at L, a knot of multiplicity 3
+    # the cap ends at L, a knot of multiplicity 3
+    lower_joint = distinct[1:-1][multiplicities[1:-1] == 3][0]
     for section in range(curves.poles.shape[0]):
         before, after = _section_curve_tangents(curves, section, lower_joint)
         assert np.linalg.norm(np.cross(before, after)) < 1e-9 and before @ after > 0.0
@@ -68,11 +74,15 @@ def test_round_edge_measured_on_the_solid():
 def test_root_fillet_rolls_round_the_round_edge(thickness_mm, radius_mm):
     """The default with a round blunt edge and a root fillet: one valid solid, a fillet face of the
     requested radius, and the edge still the requested thickness."""
-    propeller = build_propeller(None, {"airfoil.trailing_edge_thickness": thickness_mm,
-                                       "hub.root_fillet_radius": radius_mm})
+    propeller = build_propeller(
+        None, {"airfoil.trailing_edge_thickness": thickness_mm, "hub.root_fillet_radius": radius_mm}
+    )
     assert is_valid_closed_solid(propeller.solid)
-    fillet_faces = [face for face in propeller.solid.Faces()
-                    if principal_curvatures(face)[1] == pytest.approx(1 / radius_mm, rel=1e-3)]
+    fillet_faces = [
+        face
+        for face in propeller.solid.Faces()
+        if principal_curvatures(face)[1] == pytest.approx(1 / radius_mm, rel=1e-3)
+    ]
     assert len(fillet_faces) >= 3  # at least one per blade
     assert _cap_chords_mm(propeller, [0.5])[0] == pytest.approx(thickness_mm, rel=0.01)
 
@@ -82,8 +92,22 @@ def test_flat_edge_fillet_failure_names_the_round_edge(tmp_path, capsys):
     shape takes it."""
     from torus_cad.cli import main
 
-    assert main(["build", "--set", "airfoil.trailing_edge_thickness=0.3", "--set", "airfoil.trailing_edge_shape=flat",
-                 "--set", "hub.root_fillet_radius=0.5", "--out", str(tmp_path / "out")]) == 1
+    assert (
+        main(
+            [
+                "build",
+                "--set",
+                "airfoil.trailing_edge_thickness=0.3",
+                "--set",
+                "airfoil.trailing_edge_shape=flat",
+                "--set",
+                "hub.root_fillet_radius=0.5",
+                "--out",
+                str(tmp_path / "out"),
+            ]
+        )
+        == 1
+    )
     error = capsys.readouterr().err
     assert "root fillet failed" in error and "airfoil.trailing_edge_shape = 'round'" in error
     assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())

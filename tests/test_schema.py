@@ -19,7 +19,9 @@ from torus_cad.parameters.schema import Section, iter_parameter_specs, param
 class Mounting(Section):
     """A made-up table."""
 
-    bore_diameter: float = param(0.0, unit="mm", ge=0.0, le=50.0, fuzz=(0.0, 8.0), doc="coaxial through-bore")
+    bore_diameter: float = param(
+        0.0, unit="mm", ge=0.0, le=50.0, fuzz=(0.0, 8.0), doc="coaxial through-bore"
+    )
 
 
 class Extended(Document):
@@ -31,7 +33,9 @@ class Extended(Document):
 
 def test_one_declaration_gives_validation_with_field_value_and_range():
     assert Extended().with_values({"mounting.bore_diameter": 5.0}).mounting.bore_diameter == 5.0
-    with pytest.raises(ParameterError, match=r"^mounting.bore_diameter = 60 is out of range; allowed \[0, 50\] mm$"):
+    with pytest.raises(
+        ParameterError, match=r"^mounting.bore_diameter = 60 is out of range; allowed \[0, 50\] mm$"
+    ):
         Extended().with_values({"mounting.bore_diameter": 60.0})
 
 
@@ -44,23 +48,37 @@ def test_one_declaration_gives_the_commented_toml_and_its_round_trip(tmp_path):
 
 
 def test_one_declaration_gives_a_reference_row_and_fuzz_range():
-    assert "| `mounting.bore_diameter` | `0` | mm | [0, 50] | coaxial through-bore |" in markdown_table(Extended)
-    spec = next(spec for spec in iter_parameter_specs(Extended) if spec.key == "mounting.bore_diameter")
+    assert (
+        "| `mounting.bore_diameter` | `0` | mm | [0, 50] | coaxial through-bore |"
+        in markdown_table(Extended)
+    )
+    spec = next(
+        spec for spec in iter_parameter_specs(Extended) if spec.key == "mounting.bore_diameter"
+    )
     assert (spec.fuzz.low, spec.fuzz.high) == (0.0, 8.0) and spec.section == "mounting"
 
 
 def test_unknown_keys_suggest_the_closest_in_any_table():
-    with pytest.raises(ParameterError, match=r"unknown key 'mounting.bore_diamter'; did you mean 'mounting.bore_diameter'\?"):
+    with pytest.raises(
+        ParameterError,
+        match=r"unknown key 'mounting.bore_diamter'; did you mean 'mounting.bore_diameter'\?",
+    ):
         Extended().with_values({"mounting.bore_diamter": 1.0})
 
 
-@pytest.mark.parametrize("changes, message", [
-    ({"blades": 10**401}, r"^blades = a huge number is out of range; allowed \[1, 12\]$"),
-    ({"blades": 10**5001}, r"^blades = a huge number is out of range; allowed \[1, 12\]$"),
-    ({"hub.radius": 10**401}, r"^hub.radius "),
-    ({"name": "abc\n"}, r"^name = 'abc\\n' must be 1-64 letters"),
-    ({"centerline.frame": "bishop"}, r"^centerline.frame = 'bishop' is not allowed; choose one of frenet, rotation_minimizing$"),
-])
+@pytest.mark.parametrize(
+    "changes, message",
+    [
+        ({"blades": 10**401}, r"^blades = a huge number is out of range; allowed \[1, 12\]$"),
+        ({"blades": 10**5001}, r"^blades = a huge number is out of range; allowed \[1, 12\]$"),
+        ({"hub.radius": 10**401}, r"^hub.radius "),
+        ({"name": "abc\n"}, r"^name = 'abc\\n' must be 1-64 letters"),
+        (
+            {"centerline.frame": "bishop"},
+            r"^centerline.frame = 'bishop' is not allowed; choose one of frenet, rotation_minimizing$",
+        ),
+    ],
+)
 def test_hostile_values_are_one_line_parameter_errors(changes, message):
     with pytest.raises(ParameterError, match=message) as raised:
         PropellerParameters().with_values(changes)
@@ -96,7 +114,9 @@ def test_only_regular_files_are_read_as_configuration(tmp_path, special):
 
 
 class Undocumented(Section):
-    spacer_length: float = param(1.0, unit="mm", ge=0.0, le=20.0, doc="spacer between hub and mount")
+    spacer_length: float = param(
+        1.0, unit="mm", ge=0.0, le=20.0, doc="spacer between hub and mount"
+    )
 
 
 class WithUndocumentedTable(Document):
@@ -111,4 +131,7 @@ def test_a_table_without_docstring_has_an_empty_description_and_still_writes_tom
     assert section_docs(WithUndocumentedTable) == {"spacer": ""}
     text = WithUndocumentedTable().to_toml()
     assert "\n[spacer]\n" in text and "spacer between hub and mount (mm); [0, 20]" in text
-    assert WithUndocumentedTable.from_dict(WithUndocumentedTable().to_dict()).spacer.spacer_length == 1.0
+    assert (
+        WithUndocumentedTable.from_dict(WithUndocumentedTable().to_dict()).spacer.spacer_length
+        == 1.0
+    )

@@ -16,8 +16,16 @@ import pytest
 
 from torus_cad.outputs.output_set import verify_set
 
-FAST = ["--set", "resolution.sections=16", "--set", "resolution.points=48",
-        "--set", "export.stl_linear_deflection=0.2", "--set", "export.stl_angular_deflection=0.5"]
+FAST = [
+    "--set",
+    "resolution.sections=16",
+    "--set",
+    "resolution.points=48",
+    "--set",
+    "export.stl_linear_deflection=0.2",
+    "--set",
+    "export.stl_angular_deflection=0.5",
+]
 EXIT_CODES = {signal.SIGINT: 130, signal.SIGTERM: 143}
 
 
@@ -46,9 +54,13 @@ def _block_ending_signals() -> None:
 
 
 def _interrupt_build(out: Path, signum: int, delay_s: float) -> subprocess.CompletedProcess:
-    process = subprocess.Popen([sys.executable, "-m", "torus_cad", "build", "--out", str(out), "-q", *FAST],
-                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                               preexec_fn=_block_ending_signals)
+    process = subprocess.Popen(
+        [sys.executable, "-m", "torus_cad", "build", "--out", str(out), "-q", *FAST],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=_block_ending_signals,
+    )
     time.sleep(delay_s)
     process.send_signal(signum)
     stdout, stderr = process.communicate(timeout=600)
@@ -70,8 +82,12 @@ def _assert_clean_end(result: subprocess.CompletedProcess, signum: int, out: Pat
 
 
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
-@pytest.mark.parametrize("after_startup_s", [0.0, 0.03, 0.1, 0.2, 0.35, 0.5, 0.7, 1.0, 1.3, 1.7, 2.5, 4.0])
-def test_a_signal_at_any_moment_ends_the_build_with_one_line(tmp_path, startup_s, signum, after_startup_s):
+@pytest.mark.parametrize(
+    "after_startup_s", [0.0, 0.03, 0.1, 0.2, 0.35, 0.5, 0.7, 1.0, 1.3, 1.7, 2.5, 4.0]
+)
+def test_a_signal_at_any_moment_ends_the_build_with_one_line(
+    tmp_path, startup_s, signum, after_startup_s
+):
     out = tmp_path / "out"
     result = _interrupt_build(out, signum, startup_s + after_startup_s)
     _assert_clean_end(result, signum, out)
@@ -89,11 +105,16 @@ def test_a_signal_while_cadquery_loads_ends_with_one_line(tmp_path, startup_s, s
 
 def test_an_ignored_sigint_stays_ignored(tmp_path):
     """``torus-cad build &`` in a script ignores SIGINT (the shell sets SIG_IGN); so does the build."""
+
     def ignore_sigint() -> None:
         signal.signal(signal.SIGINT, signal.SIG_IGN)
 
-    process = subprocess.Popen([sys.executable, "-m", "torus_cad", "build", "--out", str(tmp_path), "-q", *FAST],
-                               stderr=subprocess.PIPE, text=True, preexec_fn=ignore_sigint)
+    process = subprocess.Popen(
+        [sys.executable, "-m", "torus_cad", "build", "--out", str(tmp_path), "-q", *FAST],
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=ignore_sigint,
+    )
     time.sleep(_startup_seconds() + 0.5)
     process.send_signal(signal.SIGINT)
     assert process.wait(600) == 0, process.stderr.read()

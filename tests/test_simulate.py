@@ -40,11 +40,16 @@ PROCESSES = 2 if len(os.sched_getaffinity(0)) > 1 else 1
 
 # -- numbers without OpenFOAM ---------------------------------------------------------------------
 
+
 def test_richardson_recovers_the_order_and_limit_of_an_exact_power_series():
     ratio, order, limit = 2.0 ** (1.0 / 3.0), 1.7, 0.25
     coarse, medium, fine = (limit + 0.04 * (ratio**power) ** order for power in (2, 1, 0))
     result = richardson(coarse, medium, fine, ratio)
-    assert result.converges_monotonically and result.order == pytest.approx(order) and result.extrapolated == pytest.approx(limit)
+    assert (
+        result.converges_monotonically
+        and result.order == pytest.approx(order)
+        and result.extrapolated == pytest.approx(limit)
+    )
     assert richardson(1.0, 2.0, 1.5, ratio).extrapolated is None  # oscillating: no extrapolation
 
 
@@ -56,11 +61,17 @@ def test_coefficients_follow_the_propeller_convention():
     assert result.ct == pytest.approx(1.0 / (1.225 * n**2 * 0.1**4))
     assert result.cp == pytest.approx(result.power_w / (1.225 * n**3 * 0.1**5))
     assert result.advance_ratio == pytest.approx(0.5)
-    assert result.efficiency == pytest.approx(0.5 * result.ct / result.cp) and result.figure_of_merit is None
+    assert (
+        result.efficiency == pytest.approx(0.5 * result.ct / result.cp)
+        and result.figure_of_merit is None
+    )
     hover = performance(1.0, 0.02, OperatingPoint(6000.0), 0.1)
-    # the figure of merit is momentum theory's ideal power T^1.5 / sqrt(2 rho A) over the power, A the tip circle
+    # the figure of merit is momentum theory's ideal power T^1.5 / sqrt(2 rho A) over the power, A
+    # the tip circle
     ideal_w = 1.0**1.5 / math.sqrt(2.0 * 1.225 * math.pi * 0.1**2 / 4.0)
-    assert hover.efficiency is None and hover.figure_of_merit == pytest.approx(ideal_w / hover.power_w)
+    assert hover.efficiency is None and hover.figure_of_merit == pytest.approx(
+        ideal_w / hover.power_w
+    )
 
 
 def test_omega_is_negative_about_z_for_cw_and_positive_for_its_mirror_image():
@@ -70,25 +81,44 @@ def test_omega_is_negative_about_z_for_cw_and_positive_for_its_mirror_image():
 
 
 def test_divergence_names_the_iteration_and_the_residual():
-    history = History(iterations=np.arange(1, 4), force_n=np.ones((3, 3)), moment_nm=np.ones((3, 3)),
-                      residual_iterations=np.arange(1, 4), residuals={"p": np.array([1.0, 0.5, 4e5])})
+    history = History(
+        iterations=np.arange(1, 4),
+        force_n=np.ones((3, 3)),
+        moment_nm=np.ones((3, 3)),
+        residual_iterations=np.arange(1, 4),
+        residuals={"p": np.array([1.0, 0.5, 4e5])},
+    )
     assert divergence(history) == "iteration 3: p residual 4e+05 (limit 1000)"
     history.residuals["p"][2] = 0.1
     history.force_n[1, 2] = math.nan
     assert divergence(history) == "iteration 2: the propeller's force is not finite"
-    assert force_variation(np.r_[np.zeros(90), np.full(5, 2.0), np.full(5, 2.02)]) == pytest.approx(0.02 / 2.01)
+    assert force_variation(np.r_[np.zeros(90), np.full(5, 2.0), np.full(5, 2.02)]) == pytest.approx(
+        0.02 / 2.01
+    )
 
 
-@pytest.mark.parametrize("arguments, fragment", [
-    (["--rpm", "-1"], "--rpm = -1 is out of range; allowed [0, "),
-    (["--rpm", "1e6"], "--rpm = 1e+06 is out of range"),
-    (["--rpm", "nan"], "--rpm = nan is out of range"),
-    (["--rpm", "1000", "--airspeed", "500"], "--airspeed = 500 m/s is out of range; allowed [0, 100] m/s"),
-    (["--rpm", "1000", "--iterations", "0"], "--iterations = 0 is out of range; allowed [1, 20000]"),
-    (["--rpm", "1000", "--processes", "999"], "--processes = 999 is out of range"),
-    (["--rpm", "1000", "--time-limit", "0"], "--time-limit = 0 s is out of range"),
-    (["--rpm", "1000", "--airspeed", "5", "--set", "cfd.inlet_side='-z'"], "cfd.inlet_side = '-z'"),
-])
+@pytest.mark.parametrize(
+    "arguments, fragment",
+    [
+        (["--rpm", "-1"], "--rpm = -1 is out of range; allowed [0, "),
+        (["--rpm", "1e6"], "--rpm = 1e+06 is out of range"),
+        (["--rpm", "nan"], "--rpm = nan is out of range"),
+        (
+            ["--rpm", "1000", "--airspeed", "500"],
+            "--airspeed = 500 m/s is out of range; allowed [0, 100] m/s",
+        ),
+        (
+            ["--rpm", "1000", "--iterations", "0"],
+            "--iterations = 0 is out of range; allowed [1, 20000]",
+        ),
+        (["--rpm", "1000", "--processes", "999"], "--processes = 999 is out of range"),
+        (["--rpm", "1000", "--time-limit", "0"], "--time-limit = 0 s is out of range"),
+        (
+            ["--rpm", "1000", "--airspeed", "5", "--set", "cfd.inlet_side='-z'"],
+            "cfd.inlet_side = '-z'",
+        ),
+    ],
+)
 def test_bad_input_exits_2_with_one_line_and_writes_nothing(tmp_path, capsys, arguments, fragment):
     out = tmp_path / "out"
     assert exit_code(["simulate", *arguments, "--out", str(out)]) == 2
@@ -106,12 +136,18 @@ def test_without_openfoam_one_line_says_how_to_install_it(tmp_path, capsys, monk
     assert not out.exists()
 
 
-# -- the case ---------------------------------------------------------------------------------------
+# -- the case
+# ---------------------------------------------------------------------------------------
+
 
 def test_case_only_writes_a_case_foamlib_reads_back_with_the_mirror_rotation(tmp_path):
     params = PropellerParameters(handedness=Handedness.CCW)
-    result = simulate(Request(params, OperatingPoint(RPM), Level.COARSE, iterations=50, processes=2,
-                              case_only=True), tmp_path)
+    result = simulate(
+        Request(
+            params, OperatingPoint(RPM), Level.COARSE, iterations=50, processes=2, case_only=True
+        ),
+        tmp_path,
+    )
     case = foamlib.FoamCase(result.paths["case"])
     mrf = case.file("constant/MRFProperties")["MRF1"]
     assert mrf["cellZone"] == "rotating_zone" and mrf["omega"] == pytest.approx(RPM * math.pi / 30)
@@ -132,14 +168,31 @@ def test_case_only_writes_a_case_foamlib_reads_back_with_the_mirror_rotation(tmp
 
 
 def test_the_transition_model_case_carries_its_two_fields_from_the_inflow_turbulence(tmp_path):
-    result = simulate(Request(PropellerParameters(), OperatingPoint(RPM), Level.COARSE, iterations=50, processes=1,
-                              case_only=True, turbulence=TurbulenceModel.K_OMEGA_SST_LM), tmp_path)
+    result = simulate(
+        Request(
+            PropellerParameters(),
+            OperatingPoint(RPM),
+            Level.COARSE,
+            iterations=50,
+            processes=1,
+            case_only=True,
+            turbulence=TurbulenceModel.K_OMEGA_SST_LM,
+        ),
+        tmp_path,
+    )
     case = foamlib.FoamCase(result.paths["case"])
     assert case.turbulence_properties["RAS"]["RASModel"] == "kOmegaSSTLM"
     re_theta, gamma = case[0]["ReThetat"], case[0]["gammaInt"]
-    # Langtry and Menter's onset correlation at 1 % inflow turbulence: Re_theta_t = 1173.51 - 589.428 + 0.2196
-    assert re_theta.internal_field == pytest.approx(584.30, abs=0.01) and gamma.internal_field == 1.0
-    assert re_theta.boundary_field["propeller"]["type"] == gamma.boundary_field["propeller"]["type"] == "zeroGradient"
+    # Langtry and Menter's onset correlation at 1 % inflow turbulence: Re_theta_t = 1173.51 -
+    # 589.428 + 0.2196
+    assert (
+        re_theta.internal_field == pytest.approx(584.30, abs=0.01) and gamma.internal_field == 1.0
+    )
+    assert (
+        re_theta.boundary_field["propeller"]["type"]
+        == gamma.boundary_field["propeller"]["type"]
+        == "zeroGradient"
+    )
     schemes, solution = case.fv_schemes, case.fv_solution
     assert {"div(phi,ReThetat)", "div(phi,gammaInt)"} <= set(schemes["divSchemes"])
     assert "ReThetat" in case.control_dict["functions"]["residuals"]["fields"]
@@ -147,25 +200,54 @@ def test_the_transition_model_case_carries_its_two_fields_from_the_inflow_turbul
 
 
 def test_the_tet_mesher_stays_reachable(tmp_path):
-    result = simulate(Request(PropellerParameters(), OperatingPoint(RPM), Level.COARSE, iterations=50, processes=1,
-                              case_only=True, mesher=Mesher.TET), tmp_path)
+    result = simulate(
+        Request(
+            PropellerParameters(),
+            OperatingPoint(RPM),
+            Level.COARSE,
+            iterations=50,
+            processes=1,
+            case_only=True,
+            mesher=Mesher.TET,
+        ),
+        tmp_path,
+    )
     allrun = (result.paths["case"] / "Allrun").read_text()
     assert "gmshToFoam cfd/torus_propeller_cfd_v2.msh" in allrun and "snappyHexMesh" not in allrun
     assert 0 < result.report["cells"] <= 60_000
 
 
-# -- physics on the coarse level --------------------------------------------------------------------
+# -- physics on the coarse level
+# --------------------------------------------------------------------
+
 
 def _run(out, params, rpm, mesh_from=None, iterations=ITERATIONS):
-    request = Request(params, OperatingPoint(rpm), Level.COARSE, iterations, PROCESSES, mesh_from=mesh_from)
+    request = Request(
+        params, OperatingPoint(rpm), Level.COARSE, iterations, PROCESSES, mesh_from=mesh_from
+    )
     return simulate(request, out).report
 
 
 @pytest.fixture(scope="module")
 def cw(tmp_path_factory):
     out = tmp_path_factory.mktemp("cw")
-    assert main(["simulate", "--rpm", f"{RPM:g}", "--iterations", str(ITERATIONS), "--processes", str(PROCESSES),
-                 "--out", str(out), "-q"]) == 0
+    assert (
+        main(
+            [
+                "simulate",
+                "--rpm",
+                f"{RPM:g}",
+                "--iterations",
+                str(ITERATIONS),
+                "--processes",
+                str(PROCESSES),
+                "--out",
+                str(out),
+                "-q",
+            ]
+        )
+        == 0
+    )
     return out, json.loads((out / "torus_propeller_performance.json").read_text())
 
 
@@ -175,7 +257,9 @@ def test_the_published_set_verifies_and_thrust_is_positive_for_the_design_rotati
     assert main(["verify", str(out), "torus_propeller_performance", "-q"]) == 0
     assert report["thrust_n"] > 0.0 and report["torque_nm"] > 0.0 and report["power_w"] > 0.0
     assert report["cells"] <= 60_000 and report["level"] == "coarse"
-    assert report["fluid"]["density_kg_m3"] == 1.225 and report["fluid"]["viscosity_m2_s"] == 1.46e-5
+    assert (
+        report["fluid"]["density_kg_m3"] == 1.225 and report["fluid"]["viscosity_m2_s"] == 1.46e-5
+    )
     assert report["efficiency"] is None and report["figure_of_merit"] > 0.0
     assert (out / "torus_propeller_case" / "Allrun").is_file()
 
@@ -190,7 +274,8 @@ def test_the_default_mesh_has_prism_layers_checkmesh_accepts_and_y_plus_is_repor
     y_plus = report["y_plus"]
     assert all(math.isfinite(y_plus[key]) for key in ("min", "mean", "max"))
     assert 0.0 <= y_plus["min"] <= y_plus["mean"] <= y_plus["max"]
-    # the first layer is sized for y+ 1 where layers were added; the mean stays in the viscous sublayer
+    # the first layer is sized for y+ 1 where layers were added; the mean stays in the viscous
+    # sublayer
     assert y_plus["mean"] < 5.0
 
 
@@ -208,7 +293,9 @@ def test_the_wall_shear_part_is_reported_and_the_rest_is_the_blade_surfaces_pres
 
 
 @needs_openfoam
-def test_the_report_gives_finite_tonal_noise_at_the_default_observers_and_the_set_holds_its_signals(cw):
+def test_the_report_gives_finite_tonal_noise_at_the_default_observers_and_the_set_holds_its_signals(
+    cw,
+):
     """The noise entry (torus_cad.acoustics, from the blade surface pressure the case wrote): finite levels at 1 m,
     0 / 30 / 60 / 90 degrees, no tone on the axis, the loudest in the rotor's plane; the surface's pressure
     thrust is the forces function object's thrust less its small viscous part; the signals CSV (read by numpy)
@@ -216,14 +303,23 @@ def test_the_report_gives_finite_tonal_noise_at_the_default_observers_and_the_se
     out, report = cw
     noise = report["noise"]
     assert [(entry["distance_m"], entry["angle_deg"]) for entry in noise["observers"]] == [
-        (1.0, 0.0), (1.0, 30.0), (1.0, 60.0), (1.0, 90.0)]
-    assert noise["blades"] == 3 and noise["blade_passing_frequency_hz"] == pytest.approx(3 * RPM / 60.0)
+        (1.0, 0.0),
+        (1.0, 30.0),
+        (1.0, 60.0),
+        (1.0, 90.0),
+    ]
+    assert noise["blades"] == 3 and noise["blade_passing_frequency_hz"] == pytest.approx(
+        3 * RPM / 60.0
+    )
     off_axis = noise["observers"][1:]
     for entry in off_axis:
         assert math.isfinite(entry["oaspl_db"]) and math.isfinite(entry["oaspl_dba"])
-        assert len(entry["harmonics"]) == 10 and all(math.isfinite(row["spl_db"]) for row in entry["harmonics"][:3])
+        assert len(entry["harmonics"]) == 10 and all(
+            math.isfinite(row["spl_db"]) for row in entry["harmonics"][:3]
+        )
         assert entry["oaspl_dba"] < entry["oaspl_db"]  # the blade-passing tones lie below 1 kHz
-    on_axis = noise["observers"][0]  # a steady rotor's tones cancel there: silent, not a round-off level
+    # a steady rotor's tones cancel there: silent, not a round-off level
+    on_axis = noise["observers"][0]
     assert on_axis["silent"] and on_axis["oaspl_db"] is None and on_axis["oaspl_dba"] is None
     assert not any(entry["silent"] for entry in off_axis)
     assert off_axis[0]["oaspl_db"] < off_axis[1]["oaspl_db"] < off_axis[2]["oaspl_db"]
@@ -263,29 +359,44 @@ def test_doubling_the_rpm_in_still_air_scales_thrust_by_4(cw, tmp_path):
 @needs_openfoam
 def test_a_still_propeller_in_still_air_gives_no_thrust(cw, tmp_path):
     out, report = cw
-    still = _run(tmp_path, PropellerParameters(), 0.0, mesh_from=out / "torus_propeller_case", iterations=20)
+    still = _run(
+        tmp_path, PropellerParameters(), 0.0, mesh_from=out / "torus_propeller_case", iterations=20
+    )
     assert abs(still["thrust_n"]) < 0.01 * report["thrust_n"]
     assert still["ct"] is None and still["advance_ratio"] is None
 
 
-# -- faults -------------------------------------------------------------------------------------------
+# -- faults
+# -------------------------------------------------------------------------------------------
+
 
 def _again(out, *arguments):
-    return ["simulate", "--rpm", f"{RPM:g}", "--processes", "1", "--mesh-from", str(out / "torus_propeller_case"),
-            *arguments]
+    return [
+        "simulate",
+        "--rpm",
+        f"{RPM:g}",
+        "--processes",
+        "1",
+        "--mesh-from",
+        str(out / "torus_propeller_case"),
+        *arguments,
+    ]
 
 
 @needs_openfoam
-def test_a_diverging_run_exits_1_naming_the_iteration_and_residual_and_keeps_the_case(cw, tmp_path, capsys,
-                                                                                     monkeypatch):
+def test_a_diverging_run_exits_1_naming_the_iteration_and_residual_and_keeps_the_case(
+    cw, tmp_path, capsys, monkeypatch
+):
     out, _ = cw
-    # every residual above 1e-12 counts as divergence: the watcher stops the solver at its first iteration
+    # every residual above 1e-12 counts as divergence: the watcher stops the solver at its first
+    # iteration
     monkeypatch.setattr("torus_cad.simulate.run.SIMULATE_DIVERGENCE_RESIDUAL", 1e-12)
     target = tmp_path / "diverged"
     assert main(_again(out, "--iterations", "50", "--out", str(target))) == 1
     error = capsys.readouterr().err
-    assert error.count("\n") == 1 and re.search(r"simpleFoam diverged at iteration \d+: \w+ residual \S+ \(limit 1e-12\)",
-                                                error), error
+    assert error.count("\n") == 1 and re.search(
+        r"simpleFoam diverged at iteration \d+: \w+ residual \S+ \(limit 1e-12\)", error
+    ), error
     assert f"the case is kept in {target / 'torus_propeller_case_failed'}" in error
     assert (target / "torus_propeller_case_failed" / "log.simpleFoam").is_file()
     assert [path.name for path in target.iterdir()] == ["torus_propeller_case_failed"]
@@ -295,9 +406,15 @@ def test_a_diverging_run_exits_1_naming_the_iteration_and_residual_and_keeps_the
 def test_a_run_over_its_time_budget_is_refused_before_the_solver_starts(cw, tmp_path, capsys):
     out, _ = cw
     target = tmp_path / "refused"
-    assert main(_again(out, "--iterations", "20000", "--time-limit", "10", "--out", str(target))) == 2
+    assert (
+        main(_again(out, "--iterations", "20000", "--time-limit", "10", "--out", str(target))) == 2
+    )
     error = capsys.readouterr().err
-    assert error.count("\n") == 1 and "the solver would take about" in error and "--time-limit = 10 s" in error
+    assert (
+        error.count("\n") == 1
+        and "the solver would take about" in error
+        and "--time-limit = 10 s" in error
+    )
     assert not target.exists() or not list(target.iterdir())
 
 
@@ -306,14 +423,31 @@ def test_sigterm_stops_the_solver_and_publishes_nothing(cw, tmp_path):
     psutil = pytest.importorskip("psutil")
     out, _ = cw
     target = tmp_path / "stopped"
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(Path(__file__).resolve().parent.parent),
-                                                        os.environ.get("PYTHONPATH", "")])}
-    process = subprocess.Popen([sys.executable, "-m", "torus_cad", *_again(out, "--iterations", "2000", "--out",
-                                                                           str(target))],
-                               env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    env = {
+        **os.environ,
+        "PYTHONPATH": os.pathsep.join(
+            [str(Path(__file__).resolve().parent.parent), os.environ.get("PYTHONPATH", "")]
+        ),
+    }
+    process = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "torus_cad",
+            *_again(out, "--iterations", "2000", "--out", str(target)),
+        ],
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     deadline = time.monotonic() + 180
-    while not list(target.glob(".*staging*/torus_propeller_case/postProcessing/residuals/0/solverInfo.dat")):
-        assert process.poll() is None and time.monotonic() < deadline, process.stderr.read() if process.stderr else ""
+    while not list(
+        target.glob(".*staging*/torus_propeller_case/postProcessing/residuals/0/solverInfo.dat")
+    ):
+        assert process.poll() is None and time.monotonic() < deadline, (
+            process.stderr.read() if process.stderr else ""
+        )
         time.sleep(0.5)
     solvers = psutil.Process(process.pid).children(recursive=True)
     assert any(child.name() == "simpleFoam" for child in solvers)

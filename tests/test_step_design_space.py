@@ -18,19 +18,40 @@ from torus_cad.kernel.writers.step import write_step
 from torus_cad.parameters import PropellerParameters
 from torus_cad.propeller import build_propeller
 
-#: Seeds of studies.step_tally (no root fillet) whose STEP files read back with InvalidCurveOnSurface faults
-#: before this fix (``python scripts/step_readback_tally.py --replay SEED --fillet-share 0``): the set
-#: screw's intersection with the bore (a cylinder on a cylinder, its curves 1.0-1.4e-7 mm apart where the
-#: reader gives 1e-7 mm: the first twelve), a blade crossing the hub's chamfer (a cone: 14, 54, 621, 1033),
-#: a blade's intersection with the hub's cylinder (833) and one of the general fuse's (889, conventional).
-FAULTY_BEFORE = (10, 23, 106, 138, 144, 172, 279, 280, 293, 368, 433, 470, 14, 54, 621, 833, 889, 1033)
+#: Seeds of studies.step_tally (no root fillet) whose STEP files read back with
+#: InvalidCurveOnSurface faults before this fix (``python scripts/step_readback_tally.py --replay
+#: SEED --fillet-share 0``): the set screw's intersection with the bore (a cylinder on a cylinder,
+#: its curves 1.0-1.4e-7 mm apart where the reader gives 1e-7 mm: the first twelve), a blade
+#: crossing the hub's chamfer (a cone: 14, 54, 621, 1033), a blade's intersection with the hub's
+#: cylinder (833) and one of the general fuse's (889, conventional).
+FAULTY_BEFORE = (
+    10,
+    23,
+    106,
+    138,
+    144,
+    172,
+    279,
+    280,
+    293,
+    368,
+    433,
+    470,
+    14,
+    54,
+    621,
+    833,
+    889,
+    1033,
+)
 
-#: Seeds of studies.step_tally with a root fillet whose STEP files still read back faulty after the writer's
-#: tries before this fix (``python scripts/step_readback_tally.py --replay SEED --fillet-share 1``): the fillet's
-#: contact edges on the hub read 2.6e-5 of their gap above the reader's samples (their degree-14 curves'
-#: single span, evaluated by OpenCascade's span cache: 2039, 2068), and the blade's intersection with the
-#: hub's end face is only C0 inside its range and the fillet's blade-side p-curves were read back as cubics
-#: that part 10 % more near their ends (2031).
+#: Seeds of studies.step_tally with a root fillet whose STEP files still read back faulty after the
+#: writer's tries before this fix (``python scripts/step_readback_tally.py --replay SEED
+#: --fillet-share 1``): the fillet's contact edges on the hub read 2.6e-5 of their gap above the
+#: reader's samples (their degree-14 curves' single span, evaluated by OpenCascade's span cache:
+#: 2039, 2068), and the blade's intersection with the hub's end face is only C0 inside its range and
+#: the fillet's blade-side p-curves were read back as cubics that part 10 % more near their ends
+#: (2031).
 FILLET_FAULTY_BEFORE = (2031, 2039, 2068)
 
 
@@ -46,23 +67,38 @@ def written(tmp_path_factory: pytest.TempPathFactory) -> dict[int, Path]:
 
 
 @pytest.mark.parametrize("seed", FAULTY_BEFORE)
-def test_a_random_designs_step_file_reads_back_with_no_fault(written: dict[int, Path], seed: int) -> None:
-    faults = step_readback_faults(written[seed], self_interference=False)  # the build ran that one on the solid
+def test_a_random_designs_step_file_reads_back_with_no_fault(
+    written: dict[int, Path], seed: int
+) -> None:
+    # the build ran that one on the solid
+    faults = step_readback_faults(written[seed], self_interference=False)
     assert faults.counts == {}, faults.first
 
 
-@pytest.mark.long  # about a minute; scripts/step_readback_tally.py --freecad checks hundreds of designs
-@pytest.mark.skipif(FREECADCMD is None, reason="freecadcmd is not installed (.ci/run installs Debian's freecad)")
-def test_freecads_check_with_bop_passes_every_random_designs_step_file(written: dict[int, Path], tmp_path: Path) -> None:
+# about a minute; scripts/step_readback_tally.py --freecad checks hundreds of designs
+@pytest.mark.long
+@pytest.mark.skipif(
+    FREECADCMD is None, reason="freecadcmd is not installed (.ci/run installs Debian's freecad)"
+)
+def test_freecads_check_with_bop_passes_every_random_designs_step_file(
+    written: dict[int, Path], tmp_path: Path
+) -> None:
     verdicts = freecad_verdicts(list(written.values()), tmp_path / "freecad")
-    bad = {path: verdict for path, verdict in verdicts.items() if verdict != {"solids": 1, "valid": True, "faults": ""}}
+    bad = {
+        path: verdict
+        for path, verdict in verdicts.items()
+        if verdict != {"solids": 1, "valid": True, "faults": ""}
+    }
     assert not bad
 
 
 @pytest.mark.parametrize("seed", FILLET_FAULTY_BEFORE)
-def test_a_random_filleted_designs_step_file_reads_back_with_no_fault(tmp_path: Path, seed: int) -> None:
+def test_a_random_filleted_designs_step_file_reads_back_with_no_fault(
+    tmp_path: Path, seed: int
+) -> None:
     propeller = built_tally_design(seed, fillet_share=1.0)
-    path = write_step(propeller.solid, tmp_path / f"tally_{seed}.step", f"tally_{seed}")  # the build's writer
+    # the build's writer
+    path = write_step(propeller.solid, tmp_path / f"tally_{seed}.step", f"tally_{seed}")
     assert step_readback_faults(path, self_interference=False).counts == {}
 
 
@@ -74,7 +110,8 @@ def test_a_high_degree_curves_spans_are_cut_without_moving_it() -> None:
 
     from torus_cad.kernel.readable_edges import _NOISY_SPAN_SHARE, _insert_knots
 
-    poles = TColgp_Array1OfPnt(1, 15)  # a degree-14 single span, as OpenCascade's fillet makes its edges
+    # a degree-14 single span, as OpenCascade's fillet makes its edges
+    poles = TColgp_Array1OfPnt(1, 15)
     for index in range(1, 16):
         poles.SetValue(index, gp_Pnt(index, (index * 7) % 5, (index * 3) % 4))
     curve = GeomConvert.CurveToBSplineCurve_s(Geom_BezierCurve(poles))
@@ -82,36 +119,52 @@ def test_a_high_degree_curves_spans_are_cut_without_moving_it() -> None:
     assert _insert_knots(curve, 0.0, 1.0)
     knots = [curve.Knot(index) for index in range(1, curve.NbKnots() + 1)]
     assert max(np.diff(knots)) <= _NOISY_SPAN_SHARE + 1e-12
-    assert max(p.Distance(curve.Value(t)) for p, t in zip(before, np.linspace(0.0, 1.0, 101), strict=True)) < 1e-12
+    assert (
+        max(
+            p.Distance(curve.Value(t))
+            for p, t in zip(before, np.linspace(0.0, 1.0, 101), strict=True)
+        )
+        < 1e-12
+    )
 
 
 def test_the_step_files_uncertainty_covers_every_tolerance_of_the_solid(tmp_path: Path) -> None:
-    # the reader takes it as its precision; an edge whose curves part by more gets its p-curves re-approximated
+    # the reader takes it as its precision; an edge whose curves part by more gets its p-curves
+    # re-approximated
     import re
 
     from OCP.ShapeAnalysis import ShapeAnalysis_ShapeTolerance
 
     solid = _cylinder_with_a_bumped_edge("out")
     path = write_step(solid, tmp_path / "bumped.step", "bumped", check_readback=False)
-    uncertainty = float(re.search(rb"UNCERTAINTY_MEASURE_WITH_UNIT\(LENGTH_MEASURE\(([^)]+)\)", path.read_bytes())[1])
+    uncertainty = float(
+        re.search(rb"UNCERTAINTY_MEASURE_WITH_UNIT\(LENGTH_MEASURE\(([^)]+)\)", path.read_bytes())[
+            1
+        ]
+    )
     greatest = ShapeAnalysis_ShapeTolerance().Tolerance(solid.wrapped, 1)
     assert greatest > 1e-7 and uncertainty >= 0.5 * greatest  # the writer rounds it to one digit
 
 
 def test_a_hub_with_a_set_screw_into_its_bore_reads_back_valid_by_itself(tmp_path: Path) -> None:
-    # its set screw's edges on the bore read back 1.0e-7 and 1.03e-7 mm apart before they were rebuilt
+    # its set screw's edges on the bore read back 1.0e-7 and 1.03e-7 mm apart before they were
+    # rebuilt
     propeller = build_propeller(PropellerParameters.from_dict(tally_design_dict(172)))
     path = write_step(propeller.hub_shape, tmp_path / "hub.step", "hub", check_readback=False)
     assert classified_faults(read_step_shape(path)) == []  # written without the writer's second try
 
 
 def test_the_writer_writes_a_faulty_file_again_with_readable_edges(tmp_path: Path) -> None:
-    solid = _cylinder_with_a_bumped_edge("out")  # its file reads back with one InvalidCurveOnSurface fault
+    # its file reads back with one InvalidCurveOnSurface fault
+    solid = _cylinder_with_a_bumped_edge("out")
     first = write_step(solid, tmp_path / "first.step", "bumped", check_readback=False)
     faults = classified_faults(read_step_shape(first))
-    assert [(fault.status, fault.edge_kind) for fault in faults] == [("InvalidCurveOnSurface", "hub feature")]
+    assert [(fault.status, fault.edge_kind) for fault in faults] == [
+        ("InvalidCurveOnSurface", "hub feature")
+    ]
     assert faults[0].gap_mm > faults[0].tolerance_mm
-    path = write_step(solid, tmp_path / "bumped.step", "bumped")  # the build's writer: its second try is valid
+    # the build's writer: its second try is valid
+    path = write_step(solid, tmp_path / "bumped.step", "bumped")
     assert step_readback_faults(path).counts == {}
     assert solid.isValid()  # the caller's solid is not changed
 
@@ -129,4 +182,5 @@ def test_every_export_format_has_one_writer_in_the_registry() -> None:
     from torus_cad.kernel.writers import WRITERS
 
     assert set(WRITERS) == set(ExportFormat)
-    assert len({writer.stage for writer in WRITERS.values()}) == len(WRITERS)  # each timed as its own stage
+    # each timed as its own stage
+    assert len({writer.stage for writer in WRITERS.values()}) == len(WRITERS)

@@ -11,7 +11,11 @@ from freecad_check import FREECADCMD, freecad_verdicts
 
 from torus_cad.errors import KernelError
 from torus_cad.kernel.readable_edges import readable_edges
-from torus_cad.kernel.step_readback import argument_faults, check_step_readback, step_readback_faults
+from torus_cad.kernel.step_readback import (
+    argument_faults,
+    check_step_readback,
+    step_readback_faults,
+)
 from torus_cad.kernel.writers.step import write_step
 
 
@@ -40,7 +44,10 @@ def test_a_step_file_that_reads_back_faulty_is_not_written(tmp_path: Path) -> No
 def test_the_read_back_check_names_a_c0_surface_in_the_file(tmp_path: Path) -> None:
     path = write_step(_c0_face(), tmp_path / "c0.step", "c0", check_readback=False)
     assert step_readback_faults(path).counts == {"GeomAbs_C0": 5}  # the face and its four edges
-    with pytest.raises(KernelError, match=r"the C0 face: the STEP file read back fails .*: 5 GeomAbs_C0; first: GeomAbs_C0"):
+    with pytest.raises(
+        KernelError,
+        match=r"the C0 face: the STEP file read back fails .*: 5 GeomAbs_C0; first: GeomAbs_C0",
+    ):
         check_step_readback(path, "the C0 face")
 
 
@@ -51,7 +58,8 @@ def test_the_default_solid_passes_every_analyzer_test_in_memory(default_propelle
 
 
 def test_the_default_step_file_read_back_passes_every_analyzer_test(default_files) -> None:
-    # every test, self-interference included (the build leaves that one to its strict check of the solid)
+    # every test, self-interference included (the build leaves that one to its strict check of the
+    # solid)
     faults = step_readback_faults(default_files["step"])
     assert faults.counts == {}, faults.first
 
@@ -66,16 +74,23 @@ def test_every_shipped_design_reads_back_from_step_valid(design: Path, tmp_path:
     path = write_step(propeller.solid, tmp_path / "design.step", propeller.parameters.name)
     check_step_readback(path, design.stem)
     if FREECADCMD:  # and FreeCAD's "Check geometry" with BOP check, as a CAD user runs it
-        assert freecad_verdicts([path], tmp_path / "freecad")[str(path)] == {"solids": 1, "valid": True, "faults": ""}
+        assert freecad_verdicts([path], tmp_path / "freecad")[str(path)] == {
+            "solids": 1,
+            "valid": True,
+            "faults": "",
+        }
 
 
-def test_a_root_fillet_passes_the_analyzer_in_memory_and_read_back_from_step(tmp_path: Path) -> None:
+def test_a_root_fillet_passes_the_analyzer_in_memory_and_read_back_from_step(
+    tmp_path: Path,
+) -> None:
     from torus_cad.propeller import build_propeller
 
     propeller = build_propeller(EXAMPLES_DIR / "workshop_fillet.toml")
     # every test but self-interference, which the build's strict check runs on the solid
     faults = argument_faults(propeller.solid.wrapped, self_interference=False)
-    assert faults.counts == {}, faults.first  # were 18 GeomAbs_C0 (6 faces, 12 edges) and 3 InvalidCurveOnSurface
+    # were 18 GeomAbs_C0 (6 faces, 12 edges) and 3 InvalidCurveOnSurface
+    assert faults.counts == {}, faults.first
     path = write_step(propeller.solid, tmp_path / "design.step", propeller.parameters.name)
     faults = step_readback_faults(path, self_interference=False)
     assert faults.counts == {}, faults.first  # were 93 InvalidCurveOnSurface (issue 33)
@@ -83,18 +98,22 @@ def test_a_root_fillet_passes_the_analyzer_in_memory_and_read_back_from_step(tmp
 
 @pytest.mark.long
 def test_a_looped_blades_root_fillet_reads_back_from_step_valid(tmp_path: Path) -> None:
-    # prop_10x5_2blade with a 0.5 mm root fillet (not shipped that way): 4 InvalidCurveOnSurface faults read
-    # back before its fillet's edges were made to end on their vertices (the reader bent the blade's
-    # trailing-edge curve to close the gap they left on its face) and split where OpenCascade's own
-    # measure misplaced their largest distance by a fraction of a percent next to an end (issue 33)
+    # prop_10x5_2blade with a 0.5 mm root fillet (not shipped that way): 4 InvalidCurveOnSurface
+    # faults read back before its fillet's edges were made to end on their vertices (the reader bent
+    # the blade's trailing-edge curve to close the gap they left on its face) and split where
+    # OpenCascade's own measure misplaced their largest distance by a fraction of a percent next to
+    # an end (issue 33)
     from torus_cad.errors import GeometryError, ParameterError
     from torus_cad.parameters import PropellerParameters
     from torus_cad.propeller import build_propeller
 
-    params = PropellerParameters.from_toml(EXAMPLES_DIR / "prop_10x5_2blade.toml").with_values({"hub.root_fillet_radius": 0.5})
+    params = PropellerParameters.from_toml(EXAMPLES_DIR / "prop_10x5_2blade.toml").with_values(
+        {"hub.root_fillet_radius": 0.5}
+    )
     try:
         propeller = build_propeller(params)
-    except (ParameterError, GeometryError) as refusal:  # the fillet's spread reaching the hub's chamfer
+    # the fillet's spread reaching the hub's chamfer
+    except (ParameterError, GeometryError) as refusal:
         assert "hub.chamfer" in str(refusal)
         propeller = build_propeller(params.with_values({"hub.chamfer": 0.0}))
     assert propeller.root_fillet is not None and propeller.root_fillet.constant_radius
@@ -102,11 +121,16 @@ def test_a_looped_blades_root_fillet_reads_back_from_step_valid(tmp_path: Path) 
     faults = step_readback_faults(path)  # OpenCascade's STEP reader, every analyzer test
     assert faults.counts == {}, faults.first
     if FREECADCMD:  # FreeCAD's own reader and check found the 4 faults too (tests/freecad_check.py)
-        assert freecad_verdicts([path], tmp_path / "freecad")[str(path)] == {"solids": 1, "valid": True, "faults": ""}
+        assert freecad_verdicts([path], tmp_path / "freecad")[str(path)] == {
+            "solids": 1,
+            "valid": True,
+            "faults": "",
+        }
 
 
-def _cylinder_with_a_bumped_edge(bump: str, height_mm: float = 10.0, radius_mm: float = 10.0,
-                                 bump_mm: float = 2e-5) -> cq.Solid:
+def _cylinder_with_a_bumped_edge(
+    bump: str, height_mm: float = 10.0, radius_mm: float = 10.0, bump_mm: float = 2e-5
+) -> cq.Solid:
     """A cylinder whose top edge's 3D curve is moved by up to ``bump_mm``, most between two of the STEP
     reader's 23 samples: ``"out"`` radially (off the side face: a real gap, which the edge's
     tolerance covers) or ``"along"`` the circle (on both faces, but askew to their curves)."""
@@ -121,17 +145,28 @@ def _cylinder_with_a_bumped_edge(bump: str, height_mm: float = 10.0, radius_mm: 
     from OCP.TColStd import TColStd_HArray1OfReal
 
     solid = cq.Solid(BRepPrimAPI_MakeCylinder(radius_mm, height_mm).Shape())
-    top = next(edge for edge in solid.Edges()
-               if edge.geomType() == "CIRCLE" and BRepAdaptor_Curve(edge.wrapped).Value(0.0).Z() > height_mm / 2)
+    top = next(
+        edge
+        for edge in solid.Edges()
+        if edge.geomType() == "CIRCLE"
+        and BRepAdaptor_Curve(edge.wrapped).Value(0.0).Z() > height_mm / 2
+    )
     first, last = BRep_Tool.Range_s(top.wrapped)
-    peak = first + (last - first) * 8.5 / 22  # the bump's largest is between the reader's 11th and 12th samples
-    count = 1000  # the interpolated circle leaves the side face by under 1e-9 mm (200 points: 4e-7 mm)
+    # the bump's largest is between the reader's 11th and 12th samples
+    peak = first + (last - first) * 8.5 / 22
+    # the interpolated circle leaves the side face by under 1e-9 mm (200 points: 4e-7 mm)
+    count = 1000
     points, parameters = TColgp_HArray1OfPnt(1, count), TColStd_HArray1OfReal(1, count + 1)
     for index in range(count):
         t = first + (last - first) * index / count
-        shift = bump_mm * math.sin(t / 2.0) ** 2 * (1.0 + math.cos(t - peak)) / 2.0  # none at the vertex (t = 0)
-        radius, angle = (radius_mm + shift, t) if bump == "out" else (radius_mm, t + shift / radius_mm)
-        points.SetValue(index + 1, gp_Pnt(radius * math.cos(angle), radius * math.sin(angle), height_mm))
+        # none at the vertex (t = 0)
+        shift = bump_mm * math.sin(t / 2.0) ** 2 * (1.0 + math.cos(t - peak)) / 2.0
+        radius, angle = (
+            (radius_mm + shift, t) if bump == "out" else (radius_mm, t + shift / radius_mm)
+        )
+        points.SetValue(
+            index + 1, gp_Pnt(radius * math.cos(angle), radius * math.sin(angle), height_mm)
+        )
         parameters.SetValue(index + 1, t)
     parameters.SetValue(count + 1, last)
     interpolation = GeomAPI_Interpolate(points, parameters, True, 1e-12)
@@ -145,15 +180,18 @@ def _cylinder_with_a_bumped_edge(bump: str, height_mm: float = 10.0, radius_mm: 
 
 
 @pytest.mark.parametrize(("bump", "squared", "split"), [("out", 1, 1), ("along", 2, 0)])
-def test_edges_made_readable_read_back_from_step_as_valid_as_in_memory(bump: str, squared: int, split: int,
-                                                                       tmp_path: Path) -> None:
+def test_edges_made_readable_read_back_from_step_as_valid_as_in_memory(
+    bump: str, squared: int, split: int, tmp_path: Path
+) -> None:
     solid = _cylinder_with_a_bumped_edge(bump)
-    assert argument_faults(solid.wrapped).counts == {}  # valid in memory: the edge's tolerance covers the bump
+    # valid in memory: the edge's tolerance covers the bump
+    assert argument_faults(solid.wrapped).counts == {}
     before = write_step(solid, tmp_path / "before.step", "bumped", check_readback=False)
-    assert step_readback_faults(before).counts == {"InvalidCurveOnSurface": 1}  # the reader's samples miss it
+    # the reader's samples miss it
+    assert step_readback_faults(before).counts == {"InvalidCurveOnSurface": 1}
     made = readable_edges(solid, (7, 8, 9))
-    # out: the side face's curve stays (the gap is real), the top's is squared, the edge split at the bump;
-    # along: both face curves squared (the curves then meet), nothing to split
+    # out: the side face's curve stays (the gap is real), the top's is squared, the edge split at
+    # the bump; along: both face curves squared (the curves then meet), nothing to split
     assert (made.pcurves, made.split) == (squared, split)
     assert made.face_parts == (7, 8, 9) and len(made.solid.Faces()) == 3
     assert argument_faults(made.solid.wrapped).counts == {}

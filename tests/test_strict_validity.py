@@ -33,7 +33,9 @@ EXAMPLES = SHIPPED_DESIGNS
 def _assert_whole_solid_valid(solid: cq.Solid) -> None:
     assert BRepCheck_Analyzer(solid.wrapped).IsValid()
     check = BRepAlgoAPI_Check(solid.wrapped, True, True)
-    faults = [str(fault.GetCheckStatus()) for fault in check.Result()] if not check.IsValid() else []
+    faults = (
+        [str(fault.GetCheckStatus()) for fault in check.Result()] if not check.IsValid() else []
+    )
     assert check.IsValid(), faults
 
 
@@ -48,7 +50,9 @@ def _tetgen_finds_no_crossing(stl: Path, folder: Path) -> bool:
 
     off = folder / "mesh.off"
     trimesh.load(stl).export(off)
-    run = subprocess.run(["tetgen", "-d", str(off)], capture_output=True, text=True, timeout=300, check=False)
+    run = subprocess.run(
+        ["tetgen", "-d", str(off)], capture_output=True, text=True, timeout=300, check=False
+    )
     return "No faces are intersecting" in run.stdout
 
 
@@ -56,8 +60,15 @@ def _3mf_pairs(path: Path) -> int:
     with zipfile.ZipFile(path) as package:
         model = etree.fromstring(package.read("3D/3dmodel.model"))
     ns = {"m": "http://schemas.microsoft.com/3dmanufacturing/core/2015/02"}
-    vertices = np.array([[float(v.get(axis)) for axis in "xyz"] for v in model.iterfind(".//m:vertex", ns)])
-    triangles = np.array([[int(t.get(key)) for key in ("v1", "v2", "v3")] for t in model.iterfind(".//m:triangle", ns)])
+    vertices = np.array(
+        [[float(v.get(axis)) for axis in "xyz"] for v in model.iterfind(".//m:vertex", ns)]
+    )
+    triangles = np.array(
+        [
+            [int(t.get(key)) for key in ("v1", "v2", "v3")]
+            for t in model.iterfind(".//m:triangle", ns)
+        ]
+    )
     return intersecting_pairs(vertices, triangles)
 
 
@@ -66,7 +77,10 @@ def _assert_published_set_valid(propeller, folder: Path) -> dict:
     _assert_whole_solid_valid(propeller.solid)
     report = json.loads(paths["json"].read_text())
     assert report["checks"]["brepcheck"] and report["checks"]["boolean_check_self_intersection"]
-    assert report["checks"]["stl_self_intersections"] and report["stl_mesh"]["self_intersecting_pairs"] == 0
+    assert (
+        report["checks"]["stl_self_intersections"]
+        and report["stl_mesh"]["self_intersecting_pairs"] == 0
+    )
     assert _meshlib_pairs(paths["stl"]) == 0
     if shutil.which("tetgen"):
         assert _tetgen_finds_no_crossing(paths["stl"], folder)
@@ -77,8 +91,12 @@ def _assert_published_set_valid(propeller, folder: Path) -> dict:
 
 def test_the_default_is_strictly_valid_and_its_stl_intersection_free(default_propeller, tmp_path):
     report = _assert_published_set_valid(default_propeller, tmp_path)
-    assert report["checks"]["scope"] == CheckScope.PATTERN.value  # the build's cheaper exact test was used
-    assert report["stl_mesh"]["linear_deflection_mm"] <= default_propeller.parameters.export.stl_linear_deflection
+    # the build's cheaper exact test was used
+    assert report["checks"]["scope"] == CheckScope.PATTERN.value
+    assert (
+        report["stl_mesh"]["linear_deflection_mm"]
+        <= default_propeller.parameters.export.stl_linear_deflection
+    )
 
 
 @pytest.mark.parametrize("example", EXAMPLES, ids=lambda path: path.stem)
@@ -86,7 +104,9 @@ def test_every_shipped_example_is_strictly_valid(example, tmp_path):
     _assert_published_set_valid(build_propeller(example), tmp_path)
 
 
-def test_a_sharp_edge_in_one_closed_face_is_refused_naming_the_check_and_the_blade(default_propeller):
+def test_a_sharp_edge_in_one_closed_face_is_refused_naming_the_check_and_the_blade(
+    default_propeller,
+):
     """The blade the build made before its sharp trailing edge became a true edge: the side as one
     face closed in u, its crease inside. BRepCheck accepts it; the strict check must not."""
     curves = default_propeller.section_curves
@@ -106,15 +126,21 @@ def test_a_sharp_edge_in_one_closed_face_is_refused_naming_the_check_and_the_bla
 def test_the_default_blade_is_two_side_faces_meeting_at_the_trailing_edge(default_propeller):
     side = [face for face in default_propeller.blades[0].Faces() if face.geomType() == "BSPLINE"]
     assert len(side) == 2
-    shared = {edge.hashCode() for edge in side[0].Edges()} & {edge.hashCode() for edge in side[1].Edges()}
+    shared = {edge.hashCode() for edge in side[0].Edges()} & {
+        edge.hashCode() for edge in side[1].Edges()
+    }
     assert len(shared) == 2  # the trailing edge and the leading edge
 
 
 def test_meshlib_sees_two_crossing_triangles_and_none_in_a_tetrahedron():
-    crossing = np.array([[0, 0, 0], [2, 0, 0], [0, 2, 0], [0.5, 0.5, -1], [0.5, 0.5, 1], [1.5, 1.5, 0.2]], float)
+    crossing = np.array(
+        [[0, 0, 0], [2, 0, 0], [0, 2, 0], [0.5, 0.5, -1], [0.5, 0.5, 1], [1.5, 1.5, 0.2]], float
+    )
     assert intersecting_pairs(crossing, np.array([[0, 1, 2], [3, 4, 5]])) == 1
     tetrahedron = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float)
-    assert intersecting_pairs(tetrahedron, np.array([[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]])) == 0
+    assert (
+        intersecting_pairs(tetrahedron, np.array([[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]])) == 0
+    )
 
 
 def test_fuzz_designs_that_build_are_strictly_valid_with_intersection_free_stls():
@@ -125,8 +151,18 @@ def test_fuzz_designs_that_build_are_strictly_valid_with_intersection_free_stls(
     built = [outcome for outcome in outcomes if outcome.status == "built"]
     failed = [outcome for outcome in outcomes if outcome.status == "failed"]
     # a failure is the build refusing to publish, naming the check: never a crash or a silent flaw
-    assert all("BRepAlgoAPI_Check" in outcome.reason or "intersecting triangles" in outcome.reason
-               or "OpenCascade" in outcome.reason for outcome in failed), [(o.seed, o.reason) for o in failed]
-    assert len(built) >= 30, [outcome.reason for outcome in outcomes if outcome.status != "built"][:5]
-    assert all(outcome.strict_valid for outcome in built), [outcome.seed for outcome in built if not outcome.strict_valid]
-    assert all(outcome.stl_pairs == 0 for outcome in built), [(o.seed, o.stl_pairs) for o in built if o.stl_pairs]
+    assert all(
+        "BRepAlgoAPI_Check" in outcome.reason
+        or "intersecting triangles" in outcome.reason
+        or "OpenCascade" in outcome.reason
+        for outcome in failed
+    ), [(o.seed, o.reason) for o in failed]
+    assert len(built) >= 30, [outcome.reason for outcome in outcomes if outcome.status != "built"][
+        :5
+    ]
+    assert all(outcome.strict_valid for outcome in built), [
+        outcome.seed for outcome in built if not outcome.strict_valid
+    ]
+    assert all(outcome.stl_pairs == 0 for outcome in built), [
+        (o.seed, o.stl_pairs) for o in built if o.stl_pairs
+    ]

@@ -36,18 +36,27 @@ def _closed(mesh) -> bool:
     return TriangleMesh(mesh.vertices, mesh.triangles).is_watertight()
 
 
-# -- panel -------------------------------------------------------------------------------------------
+# -- panel
+# -------------------------------------------------------------------------------------------
+
 
 def test_panel_has_one_field_per_schema_parameter_grouped_by_toml_table(groups):
     from torus_cad.parameters import parameter_specs
 
     specs = parameter_specs()
     assert [field.key for group in groups for field in group.fields] == [spec.key for spec in specs]
-    tables = [key for key, value in PropellerParameters().to_dict().items() if isinstance(value, dict)]
+    tables = [
+        key for key, value in PropellerParameters().to_dict().items() if isinstance(value, dict)
+    ]
     assert [group.section for group in groups] == ["", *tables]
     fields = {field.key: field for group in groups for field in group.fields}
     radius = fields["hub.radius"]
-    assert (radius.unit, radius.low, radius.high, radius.kind) == ("mm", 0.5, 1000.0, FieldKind.NUMBER)
+    assert (radius.unit, radius.low, radius.high, radius.kind) == (
+        "mm",
+        0.5,
+        1000.0,
+        FieldKind.NUMBER,
+    )
     assert radius.range_text == "[0.5, 1000] mm"
     assert fields["centerline.p2"].element_units == ("deg", "mm", "mm")
     assert fields["centerline.frame"].choices == ("frenet", "rotation_minimizing")
@@ -57,7 +66,8 @@ def test_panel_has_one_field_per_schema_parameter_grouped_by_toml_table(groups):
 def test_file_paths_are_read_only_in_the_panel(groups):
     fields = {field.key: field for group in groups for field in group.fields}
     paths = ("airfoil.file", "conventional.stations_file")
-    assert all(fields[key].read_only for key in paths)  # the server would read them: never taken from the page
+    # the server would read them: never taken from the page
+    assert all(fields[key].read_only for key in paths)
     assert not any(field.read_only for key, field in fields.items() if key not in paths)
     assert fields["export.formats"].kind is FieldKind.CHOICES
 
@@ -72,7 +82,9 @@ def _bored_schema():
     class BoredHub(Hub):
         """Cylinder on the z axis, with a bore."""
 
-        bore_diameter: float = param(0.0, unit="mm", ge=0.0, le=500.0, doc="coaxial through-bore; 0 = solid hub")
+        bore_diameter: float = param(
+            0.0, unit="mm", ge=0.0, le=500.0, doc="coaxial through-bore; 0 = solid hub"
+        )
 
     class BoredPropeller(PropellerParameters):
         """A propeller with a bored hub."""
@@ -108,10 +120,19 @@ def test_a_parameter_added_to_the_schema_appears_in_the_panel_by_itself():
     page = layout.html
     assert 'id="field-hub-bore-diameter"' in page and 'max="500.0"' in page
 
+
 def test_state_round_trip_gives_the_same_design(groups):
-    design = PropellerParameters().with_values({"blades": 5, "hub.radius": 12.5, "centerline.p2": [20.0, 4.0, 24.0],
-                                                "airfoil.camber_normal": False, "centerline.frame": "rotation_minimizing",
-                                                "export.formats": ["step", "3mf"], "handedness": "ccw"})
+    design = PropellerParameters().with_values(
+        {
+            "blades": 5,
+            "hub.radius": 12.5,
+            "centerline.p2": [20.0, 4.0, 24.0],
+            "airfoil.camber_normal": False,
+            "centerline.frame": "rotation_minimizing",
+            "export.formats": ["step", "3mf"],
+            "handedness": "ccw",
+        }
+    )
     values = state_values(design.to_dict(), groups)
     assert values[state_name("blades")] == 5
     assert values[state_name("centerline.p2", 1)] == 4.0
@@ -128,11 +149,14 @@ def test_typed_text_becomes_numbers_and_whole_numbers_stay_whole(groups):
     assert isinstance(design.hub.radius, float)
 
 
-@pytest.mark.parametrize(("key", "text", "expected"), [
-    ("hub.radius", "abc", "hub.radius must be a number, got 'abc'"),
-    ("hub.radius", "", "hub.radius needs a value"),
-    ("centerline.p3", "1e", "centerline.p3[2] must be a number, got '1e'"),
-])
+@pytest.mark.parametrize(
+    ("key", "text", "expected"),
+    [
+        ("hub.radius", "abc", "hub.radius must be a number, got 'abc'"),
+        ("hub.radius", "", "hub.radius needs a value"),
+        ("centerline.p3", "1e", "centerline.p3[2] must be a number, got '1e'"),
+    ],
+)
 def test_text_that_is_not_a_number_is_refused_naming_the_field(groups, key, text, expected):
     values = state_values(PropellerParameters().to_dict(), groups)
     field = next(f for group in groups for f in group.fields if f.key == key)
@@ -150,11 +174,21 @@ def test_a_fraction_of_a_blade_is_refused_by_the_schema_itself(groups):
 
 
 def test_refusals_are_placed_at_the_field_they_name(groups):
-    assert field_of_message("hub.radius = 0.1 is out of range; allowed [0.5, 1000]", groups) == ("hub.radius", None)
-    assert field_of_message("centerline.p4[1] = 18 is out of range; allowed (-1, 9)", groups) == ("centerline.p4", 1)
-    assert field_of_message("transforms.scale_x must stay positive on s in [0, 1]", groups) == \
-        ("transforms.scale_x", None)
-    assert field_of_message("the blade's root (s = 0) section leaves the hub's inset", groups) is None
+    assert field_of_message("hub.radius = 0.1 is out of range; allowed [0.5, 1000]", groups) == (
+        "hub.radius",
+        None,
+    )
+    assert field_of_message("centerline.p4[1] = 18 is out of range; allowed (-1, 9)", groups) == (
+        "centerline.p4",
+        1,
+    )
+    assert field_of_message("transforms.scale_x must stay positive on s in [0, 1]", groups) == (
+        "transforms.scale_x",
+        None,
+    )
+    assert (
+        field_of_message("the blade's root (s = 0) section leaves the hub's inset", groups) is None
+    )
 
 
 def test_integer_fields_with_a_range_get_a_slider(groups):
@@ -163,7 +197,9 @@ def test_integer_fields_with_a_range_get_a_slider(groups):
     assert blades.slider is not None and blades.slider[2] == 1.0
 
 
-# -- preview -----------------------------------------------------------------------------------------
+# -- preview
+# -----------------------------------------------------------------------------------------
+
 
 def test_hub_cylinder_mesh_is_closed_with_the_hub_volume():
     mesh = cylinder_mesh(10.0, 20.0, segments=256)
@@ -185,11 +221,15 @@ def test_preview_draws_every_blade_closed_and_rotated_about_the_axis():
 
 def test_preview_of_the_mirror_image_is_the_mirrored_preview():
     clockwise = preview_scene(PropellerParameters().with_values({"phase_deg": 20.0}))
-    counter = preview_scene(PropellerParameters().with_values({"phase_deg": 20.0, "handedness": "ccw"}))
+    counter = preview_scene(
+        PropellerParameters().with_values({"phase_deg": 20.0, "handedness": "ccw"})
+    )
     for cw_part, ccw_part in zip(clockwise.parts[1:], counter.parts[1:]):
         cw_mesh = TriangleMesh(cw_part.vertices, cw_part.triangles)
         ccw_mesh = TriangleMesh(ccw_part.vertices, ccw_part.triangles)
-        assert ccw_mesh.is_watertight() and ccw_mesh.volume == pytest.approx(cw_mesh.volume, rel=1e-12)
+        assert ccw_mesh.is_watertight() and ccw_mesh.volume == pytest.approx(
+            cw_mesh.volume, rel=1e-12
+        )
     # Some blade of the mirror image is the mirror of blade 0 (which one depends on the angles).
     mirrored_blade_0 = clockwise.parts[1].vertices * np.array([1.0, -1.0, 1.0])
     assert min(np.abs(part.vertices - mirrored_blade_0).max() for part in counter.parts[1:]) < 1e-9
@@ -205,7 +245,9 @@ def test_preview_refuses_what_the_build_refuses():
         preview_scene(PropellerParameters().with_values({"hub.radius": 3.0}))
 
 
-# -- exact build ------------------------------------------------------------------------------------
+# -- exact build
+# ------------------------------------------------------------------------------------
+
 
 @pytest.fixture(scope="module")
 def light_propeller(light_params):
@@ -222,7 +264,8 @@ def test_exact_tessellation_splits_the_solid_into_hub_and_blades(light_propeller
     vertices = np.concatenate([part.vertices for part in parts])
     offsets = np.cumsum([0] + [len(part.vertices) for part in parts[:-1]])
     triangles = np.concatenate([part.triangles + offset for part, offset in zip(parts, offsets)])
-    volume = TriangleMesh(vertices, triangles).volume  # faces are outward, so the parts enclose the solid
+    # faces are outward, so the parts enclose the solid
+    volume = TriangleMesh(vertices, triangles).volume
     assert volume == pytest.approx(light_propeller.mass_properties().volume_mm3, rel=0.01)
     # Each blade sits a quarter turn from the one before: compare the blades' centres' angles.
     angles = [np.degrees(np.arctan2(*part.vertices.mean(axis=0)[1::-1])) for part in parts[1:]]
@@ -235,14 +278,18 @@ def test_tip_diameter_reaches_the_exact_solids_outermost_point(light_params, lig
     from torus_cad.studio.scene import tip_diameter_mm
 
     exact_vertices = np.concatenate([part.vertices for part in tessellate_parts(light_propeller)])
-    reach = 2.0 * np.hypot(exact_vertices[:, 0], exact_vertices[:, 1]).max()  # vertices lie on the solid
+    # vertices lie on the solid
+    reach = 2.0 * np.hypot(exact_vertices[:, 0], exact_vertices[:, 1]).max()
     tip = tip_diameter_mm(light_params.with_values({"blades": 4}))
-    assert reach - 1e-3 <= tip <= reach + 0.1  # the display mesh's chords may cut inside by < 0.1 mm
+    # the display mesh's chords may cut inside by < 0.1 mm
+    assert reach - 1e-3 <= tip <= reach + 0.1
     preview = preview_scene(light_params.with_values({"blades": 4}))
     assert tip * (1 - 5e-3) <= preview.tip_diameter_mm <= tip
 
 
-# -- the worker process ------------------------------------------------------------------------------
+# -- the worker process
+# ------------------------------------------------------------------------------
+
 
 def _collect(requests, tmp_path, kill_after_start=False, timeout_s=240.0, **limits):
     """Run requests through a BuildRunner (each superseding the one before); the messages received.
@@ -294,13 +341,17 @@ def test_a_refused_design_and_a_crashed_build_are_reported_not_raised(light_para
     assert [(kind, build_id) for kind, build_id, _ in messages] == [("refused", 1)]
     assert "hub's inset" in messages[0][2]
 
-    heavy = light_params.with_values({"resolution.sections": 200, "resolution.points": 400}).to_dict()
+    heavy = light_params.with_values(
+        {"resolution.sections": 200, "resolution.points": 400}
+    ).to_dict()
     messages = _collect([heavy], tmp_path / "crash", kill_after_start=True)
     assert messages[-1][0] == "failed" and "stopped unexpectedly" in messages[-1][2]
 
 
 def test_a_build_over_its_time_limit_is_stopped_and_reported(light_params, tmp_path):
-    heavy = light_params.with_values({"resolution.sections": 200, "resolution.points": 400}).to_dict()
+    heavy = light_params.with_values(
+        {"resolution.sections": 200, "resolution.points": 400}
+    ).to_dict()
     messages = _collect([heavy], tmp_path, time_limit_s=1.0)
     assert [kind for kind, _, _ in messages] == ["failed"], messages
     assert "the exact build took longer than 1 s, the limit in the studio" in messages[0][2]
@@ -312,7 +363,9 @@ def test_a_build_over_its_memory_limit_fails_in_its_process_not_the_server(light
     assert "ran out of memory" in messages[0][2] or "stopped unexpectedly" in messages[0][2]
 
 
-# -- the vortex solver's numbers ---------------------------------------------------------------------
+# -- the vortex solver's numbers
+# ---------------------------------------------------------------------
+
 
 def _performance_state():
     """A trame state holding the performance card's keys (no server started, no page)."""
@@ -347,9 +400,13 @@ def test_a_higher_rpm_raises_the_thrust_shown_and_a_bad_rpm_keeps_the_last_numbe
         performance.set_design(PropellerParameters())
         assert state.perf_thrust_text == COMPUTING
         thrust_10k = await _numbers_shown(state, performance)
-        assert state.perf_merit_label == "figure of merit" and 0.0 < float(state.perf_merit_text) < 1.0
+        assert (
+            state.perf_merit_label == "figure of merit" and 0.0 < float(state.perf_merit_text) < 1.0
+        )
         assert state.perf_point_text.startswith("at 10000 rpm, 0 m/s")
-        assert state.perf_power_text.endswith(" W") and state.perf_plot.startswith("data:image/png;base64,")
+        assert state.perf_power_text.endswith(" W") and state.perf_plot.startswith(
+            "data:image/png;base64,"
+        )
         for rpm in ("11000", "12000"):  # typed in a row: the 11000 rpm solve is killed, never shown
             state.perf_rpm = rpm
             performance.on_operating_point()
@@ -365,14 +422,18 @@ def test_a_higher_rpm_raises_the_thrust_shown_and_a_bad_rpm_keeps_the_last_numbe
         assert {name: state[name] for name in shown} == shown  # the last numbers stay
         state.perf_rpm, state.perf_airspeed = "12000", "-1"
         performance.on_operating_point()
-        assert state.perf_airspeed_error.startswith("airspeed = -1 m/s is out of range; allowed [0, 100] m/s")
+        assert state.perf_airspeed_error.startswith(
+            "airspeed = -1 m/s is out of range; allowed [0, 100] m/s"
+        )
         assert not state.perf_rpm_error and not performance.running
         performance.cancel()
 
     asyncio.run(run())
 
 
-def test_a_solve_that_does_not_converge_shows_its_one_line_instead_of_numbers(tmp_path, monkeypatch):
+def test_a_solve_that_does_not_converge_shows_its_one_line_instead_of_numbers(
+    tmp_path, monkeypatch
+):
     import multiprocessing
 
     from torus_cad.errors import KernelError
@@ -386,7 +447,9 @@ def test_a_solve_that_does_not_converge_shows_its_one_line_instead_of_numbers(tm
 
     monkeypatch.setattr(vortex_run, "vortex_performance", diverging)
     receiver, sender = multiprocessing.Pipe(duplex=False)
-    vortex_run.run_vortex(PerformanceRequest(7, PropellerParameters().to_dict(), 10000.0, 0.0, tmp_path), sender)
+    vortex_run.run_vortex(
+        PerformanceRequest(7, PropellerParameters().to_dict(), 10000.0, 0.0, tmp_path), sender
+    )
     assert receiver.recv() == ("failed", 7, reason)
 
     state = _performance_state()
@@ -407,33 +470,49 @@ def test_an_upload_holds_one_design_and_plainly_named_files():
     from torus_cad.studio.uploads import MAX_UPLOAD_BYTES, upload_files
 
     design = {"name": "d.toml", "content": b"blades = 3\n"}
-    assert upload_files([design, {"name": "foil.dat", "content": b"x"}]) == {"d.toml": b"blades = 3\n",
-                                                                                "foil.dat": b"x"}
+    assert upload_files([design, {"name": "foil.dat", "content": b"x"}]) == {
+        "d.toml": b"blades = 3\n",
+        "foil.dat": b"x",
+    }
     for uploads, reason in [
         ([{"name": "foil.dat", "content": b"x"}], "holds 0 .toml files"),
         ([design, {"name": "e.toml", "content": b""}], "holds 2 .toml files"),
         ([design, {"name": ".hidden", "content": b""}], "name must be letters"),
         ([design, {"name": "d.toml", "content": b""}], "each name once"),
-        ([{"name": "d.toml", "content": b" " * (MAX_UPLOAD_BYTES + 1)}], f"at most {MAX_UPLOAD_BYTES:,} bytes"),
+        (
+            [{"name": "d.toml", "content": b" " * (MAX_UPLOAD_BYTES + 1)}],
+            f"at most {MAX_UPLOAD_BYTES:,} bytes",
+        ),
         ([{"name": "d.toml", "content": "text"}], "could not be read"),
     ]:
         with pytest.raises(ParameterError, match=reason):
             upload_files(uploads)
-    assert list(upload_files([{"name": "../../etc/d.toml", "content": b""}])) == ["d.toml"]  # base names only
+    # base names only
+    assert list(upload_files([{"name": "../../etc/d.toml", "content": b""}])) == ["d.toml"]
 
 
-# -- command line --------------------------------------------------------------------------------------
+# -- command line
+# --------------------------------------------------------------------------------------
 
-@pytest.mark.parametrize(("arguments", "expected"), [
-    (["--port", "70000"], "--port = 70000 is out of range"),
-    (["--set", "hub.radius=0.1"], "hub.radius = 0.1 is out of range"),
-    (["--host", ""], "--host must name an address to listen on"),
-    (["--host", "  "], "--host must name an address to listen on"),
-    (["--files", "/nonexistent-folder"], "--files '/nonexistent-folder' is not a folder"),
-])
+
+@pytest.mark.parametrize(
+    ("arguments", "expected"),
+    [
+        (["--port", "70000"], "--port = 70000 is out of range"),
+        (["--set", "hub.radius=0.1"], "hub.radius = 0.1 is out of range"),
+        (["--host", ""], "--host must name an address to listen on"),
+        (["--host", "  "], "--host must name an address to listen on"),
+        (["--files", "/nonexistent-folder"], "--files '/nonexistent-folder' is not a folder"),
+    ],
+)
 def test_studio_refuses_bad_input_before_serving(arguments, expected):
-    result = subprocess.run([sys.executable, "-m", "torus_cad", "studio", *arguments], capture_output=True,
-                            text=True, timeout=120, check=False)
+    result = subprocess.run(
+        [sys.executable, "-m", "torus_cad", "studio", *arguments],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
     assert result.returncode == 2
     assert expected in result.stderr and result.stdout == ""
 
@@ -453,14 +532,23 @@ def test_a_busy_port_is_reported_as_such():
         taken.bind(("127.0.0.1", 0))
         taken.listen()
         port = taken.getsockname()[1]
-        result = subprocess.run([sys.executable, "-m", "torus_cad", "studio", "--port", str(port)],
-                                capture_output=True, text=True, timeout=300, check=False)
+        result = subprocess.run(
+            [sys.executable, "-m", "torus_cad", "studio", "--port", str(port)],
+            capture_output=True,
+            text=True,
+            timeout=300,
+            check=False,
+        )
     assert result.returncode == 1
-    assert result.stderr.strip() == (f"torus-cad: studio: port {port} on 127.0.0.1 is already in use (another studio "
-                                     "or server?); choose another with --port, or --port 0 for any free one")
+    assert result.stderr.strip() == (
+        f"torus-cad: studio: port {port} on 127.0.0.1 is already in use (another studio "
+        "or server?); choose another with --port, or --port 0 for any free one"
+    )
 
 
-@pytest.mark.parametrize(("signum", "code"), [(signal.SIGINT, 130), (signal.SIGTERM, 143)], ids=["SIGINT", "SIGTERM"])
+@pytest.mark.parametrize(
+    ("signum", "code"), [(signal.SIGINT, 130), (signal.SIGTERM, 143)], ids=["SIGINT", "SIGTERM"]
+)
 def test_a_signal_stops_the_studio_with_its_exit_code_and_one_line(signum, code):
     from studio_driver import StudioProcess
 
@@ -469,4 +557,7 @@ def test_a_signal_stops_the_studio_with_its_exit_code_and_one_line(signum, code)
         assert process is not None
         process.send_signal(signum)
         assert process.wait(timeout=60) == code
-    assert studio.output[-1].strip().splitlines()[-1] == f"torus-cad: studio stopped by {signal.Signals(signum).name}"
+    assert (
+        studio.output[-1].strip().splitlines()[-1]
+        == f"torus-cad: studio stopped by {signal.Signals(signum).name}"
+    )

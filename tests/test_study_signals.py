@@ -19,7 +19,10 @@ from pathlib import Path
 
 import pytest
 
-pytest.importorskip("optuna", reason="the optimize extra is not installed: pip install -c constraints.txt -e '.[optimize]'")
+pytest.importorskip(
+    "optuna",
+    reason="the optimize extra is not installed: pip install -c constraints.txt -e '.[optimize]'",
+)
 
 from study_attacks import NAME, attack, env, study_file
 
@@ -27,8 +30,13 @@ from torus_cad.runtime.processes import host_tag
 
 
 def _torus_cad(*args: str, timeout: float = 600) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "torus_cad", *args], env=env(), capture_output=True, text=True,
-                          timeout=timeout)
+    return subprocess.run(
+        [sys.executable, "-m", "torus_cad", *args],
+        env=env(),
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+    )
 
 
 def _dead_pid() -> int:
@@ -39,7 +47,12 @@ def _dead_pid() -> int:
 
 
 def _assert_clean(outcome) -> None:
-    assert not outcome.problems, (outcome.moment, outcome.delay_s, outcome.returncode, outcome.stderr)
+    assert not outcome.problems, (
+        outcome.moment,
+        outcome.delay_s,
+        outcome.returncode,
+        outcome.stderr,
+    )
 
 
 def _assert_no_staging_left(out: Path) -> None:
@@ -47,16 +60,25 @@ def _assert_no_staging_left(out: Path) -> None:
     assert not left, left
 
 
-# -- signals (item 2) ----------------------------------------------------------------------------------
+# -- signals (item 2)
+# ----------------------------------------------------------------------------------
 
-@pytest.mark.parametrize(("moment", "delay_s", "trials"), [
-    ("storage", 0.3, 1),   # the pool is starting (forkserver, its workers)
-    pytest.param("trials", 0.0, 2, marks=pytest.mark.long),  # a first trial is written, the other one running
-    pytest.param("finish", 0.0, 1, marks=pytest.mark.long),  # the table is written; the picture, best/ and
-    # the summary are being written (34 s: the long tier; the random-moments test there covers it 7 times)
-])
+
+@pytest.mark.parametrize(
+    ("moment", "delay_s", "trials"),
+    [
+        ("storage", 0.3, 1),  # the pool is starting (forkserver, its workers)
+        # a first trial is written, the other one running
+        pytest.param("trials", 0.0, 2, marks=pytest.mark.long),
+        # the table is written; the picture, best/ and
+        pytest.param("finish", 0.0, 1, marks=pytest.mark.long),
+        # the summary are being written (34 s: the long tier; the random-moments test there covers it 7
+        # times)
+    ],
+)
 def test_a_sigterm_while_the_pool_starts_trials_run_or_the_results_are_written_is_one_line_and_leaves_all_whole(
-        tmp_path, moment, delay_s, trials):
+    tmp_path, moment, delay_s, trials
+):
     outcome = attack("optimize", moment, delay_s, tmp_path, trials=trials)
     _assert_clean(outcome)
     if outcome.returncode == 143:
@@ -80,19 +102,29 @@ def test_sigterm_at_random_moments_of_optimize_and_sweep_always_ends_cleanly(tmp
     trials run, 7 while the results are written), 6 for sweep. Each run is checked on its own."""
     seed = int(os.environ.get("ATTACK_SEED", random.randrange(1 << 16)))
     generator = random.Random(seed)
-    plan = ([("optimize", "startup", generator.uniform(0.5, 6.0)) for _ in range(7)]
-            + [("optimize", "trials", generator.uniform(0.0, 3.0)) for _ in range(7)]
-            + [("optimize", "finish", generator.uniform(0.0, 3.0)) for _ in range(7)]
-            + [("sweep", "storage", generator.uniform(0.0, 3.0)) for _ in range(3)]
-            + [("sweep", "trials", generator.uniform(0.0, 2.0)) for _ in range(3)])
+    plan = (
+        [("optimize", "startup", generator.uniform(0.5, 6.0)) for _ in range(7)]
+        + [("optimize", "trials", generator.uniform(0.0, 3.0)) for _ in range(7)]
+        + [("optimize", "finish", generator.uniform(0.0, 3.0)) for _ in range(7)]
+        + [("sweep", "storage", generator.uniform(0.0, 3.0)) for _ in range(3)]
+        + [("sweep", "trials", generator.uniform(0.0, 2.0)) for _ in range(3)]
+    )
     failures = []
     for index, (command, moment, delay_s) in enumerate(plan):
         folder = tmp_path / str(index)
         folder.mkdir()
         outcome = attack(command, moment, delay_s, folder)
         if outcome.problems:
-            failures.append((command, moment, round(delay_s, 2), outcome.returncode, outcome.problems,
-                             outcome.stderr[-400:]))
+            failures.append(
+                (
+                    command,
+                    moment,
+                    round(delay_s, 2),
+                    outcome.returncode,
+                    outcome.problems,
+                    outcome.stderr[-400:],
+                )
+            )
         elif (folder / "out" / "trials").is_dir() or (folder / "out" / "designs").is_dir():
             verified = _torus_cad("verify", str(folder / "out"))
             if verified.returncode != 0:
@@ -121,11 +153,14 @@ def test_a_pool_stopped_while_its_workers_start_leaves_no_traceback(tmp_path):
     with a fork-server traceback (FileNotFoundError in SemLock._rebuild) on the command's stderr."""
     script = tmp_path / "stop_as_workers_start.py"
     script.write_text(_STOP_AS_WORKERS_START)
-    run = subprocess.run([sys.executable, str(script)], env=env(), capture_output=True, text=True, timeout=600)
+    run = subprocess.run(
+        [sys.executable, str(script)], env=env(), capture_output=True, text=True, timeout=600
+    )
     assert run.returncode == 0 and run.stderr == "", run.stderr[-3000:]
 
 
-# -- storage and disk failures (item 3) --------------------------------------------------------------------
+# -- storage and disk failures (item 3)
+# --------------------------------------------------------------------
 
 _FILL_STORAGE = textwrap.dedent("""
     import resource, signal, sys
@@ -144,8 +179,13 @@ _FILL_STORAGE = textwrap.dedent("""
 
 def test_a_storage_that_cannot_grow_is_a_storage_error_naming_the_file_and_the_cause(tmp_path):
     database = tmp_path / "full.db"
-    run = subprocess.run([sys.executable, "-c", _FILL_STORAGE, str(database)], env=env(), capture_output=True,
-                         text=True, timeout=300)
+    run = subprocess.run(
+        [sys.executable, "-c", _FILL_STORAGE, str(database)],
+        env=env(),
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     last = run.stderr.strip().splitlines()[-1]
     assert last.startswith("torus_cad.optimize.storage.StorageError: "), run.stderr[-2000:]
     assert str(database) in last and ("disk" in last or "full" in last), last
@@ -153,10 +193,25 @@ def test_a_storage_that_cannot_grow_is_a_storage_error_naming_the_file_and_the_c
 
 def _in_small_disk(size: str, script: str, *args: str) -> subprocess.CompletedProcess[str]:
     """Run ``script`` with a tmpfs of ``size`` at its first argument, in a mount namespace of its own."""
-    return subprocess.run(["unshare", "--map-root-user", "--mount", "sh", "-c",
-                           f'mount -t tmpfs -o size={size} tmpfs {shlex.quote(args[0])} && exec "$@"', "sh",
-                           sys.executable, "-c", script, *args], env=env(), capture_output=True, text=True,
-                          timeout=900)
+    return subprocess.run(
+        [
+            "unshare",
+            "--map-root-user",
+            "--mount",
+            "sh",
+            "-c",
+            f'mount -t tmpfs -o size={size} tmpfs {shlex.quote(args[0])} && exec "$@"',
+            "sh",
+            sys.executable,
+            "-c",
+            script,
+            *args,
+        ],
+        env=env(),
+        capture_output=True,
+        text=True,
+        timeout=900,
+    )
 
 
 _FULL_DISK_STUDY = textwrap.dedent("""
@@ -186,7 +241,9 @@ _FULL_DISK_STUDY = textwrap.dedent("""
 
 
 @pytest.mark.long
-@pytest.mark.skipif(shutil.which("unshare") is None, reason="needs unshare (util-linux) for a small tmpfs")
+@pytest.mark.skipif(
+    shutil.which("unshare") is None, reason="needs unshare (util-linux) for a small tmpfs"
+)
 def test_a_disk_that_fills_up_during_a_study_is_one_line_naming_the_file_and_the_cause(tmp_path):
     import json
 
@@ -199,13 +256,22 @@ def test_a_disk_that_fills_up_during_a_study_is_one_line_naming_the_file_and_the
     result = json.loads(run.stdout.strip().splitlines()[-1])
     stderr = result["stderr"]
     assert result["code"] == 1, stderr
-    assert len(stderr.strip().splitlines()) == 1 and "internal error" not in stderr and "Traceback" not in stderr
-    assert ("no space left" in stderr or "database or disk is full" in stderr) and str(disk) in stderr, stderr
-    assert result["verify"] == 0, result["verify_stderr"]  # every set published is whole, no staging left
+    assert (
+        len(stderr.strip().splitlines()) == 1
+        and "internal error" not in stderr
+        and "Traceback" not in stderr
+    )
+    assert ("no space left" in stderr or "database or disk is full" in stderr) and str(
+        disk
+    ) in stderr, stderr
+    # every set published is whole, no staging left
+    assert result["verify"] == 0, result["verify_stderr"]
     assert not result["left"], result["left"]
 
 
-# -- staging folders of stopped workers (item 5) ---------------------------------------------------------
+# -- staging folders of stopped workers (item 5)
+# ---------------------------------------------------------
+
 
 @pytest.mark.long
 def test_verify_names_a_staging_folder_left_in_a_study_and_the_next_run_removes_it(tmp_path):
@@ -214,13 +280,19 @@ def test_verify_names_a_staging_folder_left_in_a_study_and_the_next_run_removes_
 
     def left_by_a_killed_worker(number: int) -> Path:
         """What a worker killed mid-write leaves (its trial is asked again under a new number, in a new folder)."""
-        debris = out / "trials" / str(number) / f".trial_{number}.staging-{host_tag()}-{_dead_pid()}-0a1b2c3d"
+        debris = (
+            out
+            / "trials"
+            / str(number)
+            / f".trial_{number}.staging-{host_tag()}-{_dead_pid()}-0a1b2c3d"
+        )
         debris.mkdir(parents=True)
         (debris / f"trial_{number}.step").write_text("partial")
         return debris
 
     earlier = left_by_a_killed_worker(7)  # by an earlier run of the study
-    run = _torus_cad("optimize", str(study), "--out", str(out), "--workers", "1", "-q")  # the study continues
+    # the study continues
+    run = _torus_cad("optimize", str(study), "--out", str(out), "--workers", "1", "-q")
     assert run.returncode == 0, run.stderr
     assert not earlier.exists()
     verified = _torus_cad("verify", str(out))
@@ -228,7 +300,9 @@ def test_verify_names_a_staging_folder_left_in_a_study_and_the_next_run_removes_
     assert (out / f"{NAME}.db").is_file() and not list(out.glob(f"{NAME}.db-*"))
     left = left_by_a_killed_worker(0)
     verified = _torus_cad("verify", str(out))
-    assert verified.returncode == 1 and "trials/0/.trial_0.staging-" in verified.stderr, verified.stderr
+    assert verified.returncode == 1 and "trials/0/.trial_0.staging-" in verified.stderr, (
+        verified.stderr
+    )
     assert len(verified.stderr.strip().splitlines()) == 1
     assert left.exists()  # verify only reads
 
@@ -239,5 +313,6 @@ def test_a_staging_folder_of_a_running_process_is_not_reported_as_left(tmp_path)
     folder.mkdir(parents=True)
     (folder / f".trial_3.staging-{host_tag()}-{os.getpid()}-0a1b2c3d").mkdir()
     verified = _torus_cad("verify", str(tmp_path / "study"))
-    assert verified.returncode == 0 and "1 staging folder of running processes" in verified.stdout, verified.stderr
-
+    assert (
+        verified.returncode == 0 and "1 staging folder of running processes" in verified.stdout
+    ), verified.stderr

@@ -26,22 +26,36 @@ def test_blade_i_is_blade_0_rotated(blades):
 
 def test_leading_edge_sits_on_the_centerline(default_params):
     surface = default_params.blade_surface()
-    np.testing.assert_allclose(surface.points[:, 0], default_params.geometry().centerline().points(surface.s),
-                               atol=1e-12)
+    np.testing.assert_allclose(
+        surface.points[:, 0], default_params.geometry().centerline().points(surface.s), atol=1e-12
+    )
 
 
 def test_pivot_puts_that_chord_point_on_the_centerline():
     params = PropellerParameters().with_values({"airfoil.max_camber": 0.0, "airfoil.pivot": 0.5})
     s = np.linspace(0, 1, 7)
-    upper, lower = surface_points(params.geometry().blade, params.geometry().centerline(), s, [0.5, 1.5])[:, 0], surface_points(params.geometry().blade, params.geometry().centerline(), s, [0.5, 1.5])[:, 1]
-    np.testing.assert_allclose(0.5 * (upper + lower), params.geometry().centerline().points(s), atol=1e-12)
+    upper, lower = (
+        surface_points(params.geometry().blade, params.geometry().centerline(), s, [0.5, 1.5])[
+            :, 0
+        ],
+        surface_points(params.geometry().blade, params.geometry().centerline(), s, [0.5, 1.5])[
+            :, 1
+        ],
+    )
+    np.testing.assert_allclose(
+        0.5 * (upper + lower), params.geometry().centerline().points(s), atol=1e-12
+    )
 
 
 def test_section_is_transformed_then_placed_on_n_and_b():
-    params = PropellerParameters().with_values({"airfoil.max_camber": 0.0,
-                                                "transforms.angle_of_attack": [0, 0, 0, 0, 0.0],
-                                                "transforms.scale_x": [0, 0, 0, 0, 5.0],
-                                                "transforms.scale_y": [0, 0, 0, 0, 2.0]})
+    params = PropellerParameters().with_values(
+        {
+            "airfoil.max_camber": 0.0,
+            "transforms.angle_of_attack": [0, 0, 0, 0, 0.0],
+            "transforms.scale_x": [0, 0, 0, 0, 5.0],
+            "transforms.scale_y": [0, 0, 0, 0, 2.0],
+        }
+    )
     surface = params.blade_surface(sections=5, points=40)
     trailing_edge = surface.points[:, surface.trailing_edge_index]
     expected = surface.frames.origin + 5.0 * surface.frames.normal  # chord 1 along N, scaled by Sx
@@ -56,17 +70,30 @@ def test_mesh_is_closed_and_outward(default_params):
 
 
 def test_mesh_volume_converges_with_resolution(default_params):
-    volumes = [blade_mesh(default_params.blade_surface(sections=k, points=4 * k)).volume for k in (20, 40, 80)]
+    volumes = [
+        blade_mesh(default_params.blade_surface(sections=k, points=4 * k)).volume
+        for k in (20, 40, 80)
+    ]
     assert volumes[0] < volumes[1] < volumes[2]  # inscribed polyhedra grow toward the surface
     assert (volumes[2] - volumes[1]) < 0.3 * (volumes[1] - volumes[0])  # second-order convergence
 
 
 @settings(max_examples=15, deadline=None)
-@given(sections=st.integers(4, 30), points=st.integers(16, 120), camber=st.floats(0.0, 0.05),
-       thickness=st.floats(0.05, 0.5), camber_normal=st.booleans())
+@given(
+    sections=st.integers(4, 30),
+    points=st.integers(16, 120),
+    camber=st.floats(0.0, 0.05),
+    thickness=st.floats(0.05, 0.5),
+    camber_normal=st.booleans(),
+)
 def test_mesh_is_closed_for_any_sampling(sections, points, camber, thickness, camber_normal):
-    params = PropellerParameters().with_values({"airfoil.max_camber": camber, "airfoil.thickness": thickness,
-                                                "airfoil.camber_normal": camber_normal})
+    params = PropellerParameters().with_values(
+        {
+            "airfoil.max_camber": camber,
+            "airfoil.thickness": thickness,
+            "airfoil.camber_normal": camber_normal,
+        }
+    )
     mesh = blade_mesh(params.blade_surface(sections=sections, points=points))
     assert mesh.is_watertight() and mesh.volume > 0
     assert mesh.faces.shape[0] == 2 * (sections - 1) * points + 2 * (points - 2)

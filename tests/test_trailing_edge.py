@@ -37,14 +37,22 @@ EXAMPLES = AIRFOILS.parent
 
 
 @settings(max_examples=40, deadline=None)
-@given(thickness_mm=st.floats(0.05, 2.0), angle=st.floats(-180.0, 180.0), scale_x=st.floats(2.0, 60.0),
-       scale_y=st.floats(0.5, 60.0), camber_normal=st.booleans())
-def test_every_transformed_section_gets_the_absolute_thickness(thickness_mm, angle, scale_x, scale_y, camber_normal):
+@given(
+    thickness_mm=st.floats(0.05, 2.0),
+    angle=st.floats(-180.0, 180.0),
+    scale_x=st.floats(2.0, 60.0),
+    scale_y=st.floats(0.5, 60.0),
+    camber_normal=st.booleans(),
+)
+def test_every_transformed_section_gets_the_absolute_thickness(
+    thickness_mm, angle, scale_x, scale_y, camber_normal
+):
     airfoil = NacaAirfoil(0.04, 0.4, 0.12, camber_normal)
     sections = blunt_sections(airfoil, thickness_mm, [angle, 0.0], [scale_x, 10.0], [scale_y, 3.0])
     measured = trailing_edge_thickness_mm(sections, [angle, 0.0], [scale_x, 10.0], [scale_y, 3.0])
     np.testing.assert_allclose(measured, thickness_mm, rtol=1e-10)
-    # The same, measured on the transformed corner points themselves (spec §2.3 applied to the section).
+    # The same, measured on the transformed corner points themselves (spec §2.3 applied to the
+    # section).
     corners = closed_points(sections[0], [1.0, 2.0])
     placed = transform_sections(corners, [angle], [scale_x], [scale_y])[0]
     assert np.linalg.norm(placed[0] - placed[1]) == pytest.approx(thickness_mm, rel=1e-10)
@@ -55,7 +63,9 @@ def test_a_file_airfoil_gets_the_absolute_thickness_too():
     s = np.linspace(0.0, 1.0, 7)
     angle, scale_x, scale_y = 20.0 + 30.0 * s, 8.0 + 4.0 * s, 2.0 + s
     sections = blunt_sections(clark, 0.6, angle, scale_x, scale_y)
-    np.testing.assert_allclose(trailing_edge_thickness_mm(sections, angle, scale_x, scale_y), 0.6, rtol=1e-10)
+    np.testing.assert_allclose(
+        trailing_edge_thickness_mm(sections, angle, scale_x, scale_y), 0.6, rtol=1e-10
+    )
 
 
 def test_the_sampling_covers_the_base_and_keeps_both_corners():
@@ -63,14 +73,20 @@ def test_the_sampling_covers_the_base_and_keeps_both_corners():
     sampling = equal_arc_length_section(airfoil, 120)
     assert sampling.base and has_base(airfoil)
     upper_corner, lower_corner = closed_points(airfoil, [1.0, 2.0])
-    np.testing.assert_allclose(sampling.points[sampling.trailing_edge_index], upper_corner, atol=1e-14)
-    np.testing.assert_allclose(sampling.points[sampling.lower_corner_index], lower_corner, atol=1e-14)
-    base = sampling.points[sampling.trailing_edge_index:sampling.lower_corner_index + 1]
+    np.testing.assert_allclose(
+        sampling.points[sampling.trailing_edge_index], upper_corner, atol=1e-14
+    )
+    np.testing.assert_allclose(
+        sampling.points[sampling.lower_corner_index], lower_corner, atol=1e-14
+    )
+    base = sampling.points[sampling.trailing_edge_index : sampling.lower_corner_index + 1]
     assert len(base) >= 3  # the base has points of its own, equally spaced on the straight edge
     steps = np.linalg.norm(np.diff(base, axis=0), axis=1)
     np.testing.assert_allclose(steps, steps.mean(), rtol=1e-12)
     # Spacing around the closed section: equal within 1 / count (the base's share is rounded).
-    gaps = np.linalg.norm(np.diff(np.vstack([sampling.points, sampling.points[:1]]), axis=0), axis=1)
+    gaps = np.linalg.norm(
+        np.diff(np.vstack([sampling.points, sampling.points[:1]]), axis=0), axis=1
+    )
     assert np.abs(gaps / np.median(gaps) - 1).max() < 0.25
 
 
@@ -79,7 +95,8 @@ def test_a_blunt_section_stays_closed_and_simple():
     t = np.linspace(0.0, 3.0, 3001)
     points = closed_points(airfoil, t)
     assert np.linalg.norm(points[0] - points[-1]) < 1e-14  # closed at the leading edge
-    assert np.max(np.linalg.norm(np.diff(points, axis=0), axis=1)) < 0.01  # no jump: the base joins the corners
+    # no jump: the base joins the corners
+    assert np.max(np.linalg.norm(np.diff(points, axis=0), axis=1)) < 0.01
     upper, lower = airfoil.surfaces(np.linspace(0.0, 1.0, 1001))
     assert np.all(upper[1:, 1] - lower[1:, 1] > 0.0)  # the surfaces never cross
 
@@ -88,7 +105,9 @@ def test_a_trailing_edge_thicker_than_the_sections_is_refused(tmp_path, capsys):
     from torus_cad.cli import main
 
     # The default's sections are 1.0-1.6 mm thick (Sy 2-3 mm x thickness 0.5).
-    code = main(["build", "--set", "airfoil.trailing_edge_thickness=1.2", "--out", str(tmp_path / "out")])
+    code = main(
+        ["build", "--set", "airfoil.trailing_edge_thickness=1.2", "--out", str(tmp_path / "out")]
+    )
     error = capsys.readouterr().err
     assert code == 2 and "airfoil.trailing_edge_thickness = 1.2 mm is too thick" in error
     assert not (tmp_path / "out").exists()
@@ -117,19 +136,24 @@ def test_round_cap_leaves_each_surface_along_its_tangent():
         assert leaving @ tangents[0] > 0.0
         assert abs(_cross(arriving / np.linalg.norm(arriving), -tangents[1])) < 1e-12
         # closed_points runs through the cap between t = 1 and 2, from U to L
-        np.testing.assert_allclose(closed_points(section, [1.0, 2.0]), half_ends(section), atol=1e-14)
+        np.testing.assert_allclose(
+            closed_points(section, [1.0, 2.0]), half_ends(section), atol=1e-14
+        )
 
 
 def test_round_cap_keeps_the_thickness_and_is_a_near_half_circle_in_mm():
     sections = _round_sections(0.4)
-    np.testing.assert_allclose(trailing_edge_thickness_mm(sections, ANGLE, SCALE_X, SCALE_Y), 0.4, rtol=1e-10)
+    np.testing.assert_allclose(
+        trailing_edge_thickness_mm(sections, ANGLE, SCALE_X, SCALE_Y), 0.4, rtol=1e-10
+    )
     matrices = section_matrices(ANGLE, SCALE_X, SCALE_Y)
     for matrix, section in zip(matrices, sections):
         poles_mm = section.cap_poles() @ matrix.T
         handles_mm = np.linalg.norm(poles_mm[[1, 2]] - poles_mm[[0, 3]], axis=1)
         np.testing.assert_allclose(handles_mm, ROUND_CAP_HANDLE_FRACTION * 0.4, rtol=1e-9)
         cap_mm = cap_points(section, np.linspace(0.0, 1.0, 201)) @ matrix.T
-        # it reaches aft of its ends by about a radius (a half circle: 0.2 mm; less where the surfaces converge)
+        # it reaches aft of its ends by about a radius (a half circle: 0.2 mm; less where the
+        # surfaces converge)
         across = (poles_mm[0] - poles_mm[3]) / 0.4
         aft = np.array([across[1], -across[0]])
         reach = np.max(np.abs((cap_mm - 0.5 * (poles_mm[0] + poles_mm[3])) @ aft))
@@ -141,19 +165,23 @@ def test_equal_arc_length_sampling_covers_the_cap():
     sampling = equal_arc_length_section(section, 200)
     te, lower = sampling.trailing_edge_index, sampling.lower_corner_index
     assert lower - te >= ROUND_CAP_MINIMUM_POINTS
-    cap = sampling.points[te:lower + 1]
+    cap = sampling.points[te : lower + 1]
     np.testing.assert_allclose(cap[[0, -1]], half_ends(section), atol=1e-14)
     # the points lie on the cap and are equally spaced in its arc length
-    np.testing.assert_allclose(closed_points(section, sampling.t[te:lower + 1]), cap, atol=1e-14)
-    cap_t = sampling.t[te:lower + 1] - 1.0
-    arcs = [np.linalg.norm(np.diff(cap_points(section, np.linspace(a, b, 2001)), axis=0), axis=1).sum()
-            for a, b in itertools.pairwise(cap_t)]
+    np.testing.assert_allclose(closed_points(section, sampling.t[te : lower + 1]), cap, atol=1e-14)
+    cap_t = sampling.t[te : lower + 1] - 1.0
+    arcs = [
+        np.linalg.norm(np.diff(cap_points(section, np.linspace(a, b, 2001)), axis=0), axis=1).sum()
+        for a, b in itertools.pairwise(cap_t)
+    ]
     assert max(arcs) / min(arcs) < 1.001
 
 
 def test_sharp_default_is_the_same_whatever_the_shape():
     round_surface = PropellerParameters().blade_surface()
-    flat_surface = PropellerParameters().with_values({"airfoil.trailing_edge_shape": "flat"}).blade_surface()
+    flat_surface = (
+        PropellerParameters().with_values({"airfoil.trailing_edge_shape": "flat"}).blade_surface()
+    )
     assert np.array_equal(round_surface.points, flat_surface.points)
     assert round_surface.lower_corner_index is None and not round_surface.round_trailing_edge
 
@@ -169,10 +197,15 @@ def test_shape_choice_is_validated():
 def test_coordinate_file_with_an_open_edge_gets_a_round_cap(tmp_path):
     published = (AIRFOILS / "clarky.dat").read_text()
     assert " 1.00000  0.00120\n" in published
-    (tmp_path / "open.dat").write_text(published.replace(" 1.00000  0.00120\n", " 1.00000  0.02000\n"))
+    (tmp_path / "open.dat").write_text(
+        published.replace(" 1.00000  0.00120\n", " 1.00000  0.02000\n")
+    )
     params = PropellerParameters.from_toml(EXAMPLES / "prop_10x5_2blade.toml").with_values(
-        {"airfoil.trailing_edge_thickness": 0.0, "airfoil.file": str(tmp_path / "open.dat")})  # the file's own edge
-    assert params.geometry().blade.closed_file_edge_mm is None  # over 0.05 mm thick everywhere: kept
+        # the file's own edge
+        {"airfoil.trailing_edge_thickness": 0.0, "airfoil.file": str(tmp_path / "open.dat")}
+    )
+    # over 0.05 mm thick everywhere: kept
+    assert params.geometry().blade.closed_file_edge_mm is None
     blade = params.geometry().blade
     sections = sections_along(blade, [0.2, 0.5])
     assert all(isinstance(section, RoundTrailingEdge) for section in sections)
@@ -182,7 +215,9 @@ def test_coordinate_file_with_an_open_edge_gets_a_round_cap(tmp_path):
 
 
 def test_printability_reports_the_round_edge_thickness():
-    geometry = PropellerParameters().with_values({"airfoil.trailing_edge_thickness": 0.9}).geometry()
+    geometry = (
+        PropellerParameters().with_values({"airfoil.trailing_edge_thickness": 0.9}).geometry()
+    )
     assert geometry.blade.round_trailing_edge
     result = printability(geometry, 0.8)
     assert result.trailing_edge_thickness_mm == pytest.approx(0.9, rel=1e-6)
@@ -194,7 +229,9 @@ def test_a_sharpened_file_section_meets_at_the_trailing_edge_and_keeps_its_surfa
     assert has_base(clark) and not has_base(sharp)
     u = np.linspace(0.0, 1.0, 201)
     for upper in (True, False):
-        change = np.linalg.norm(sharp.points_on_half(u, upper) - clark.points_on_half(u, upper), axis=1)
+        change = np.linalg.norm(
+            sharp.points_on_half(u, upper) - clark.points_on_half(u, upper), axis=1
+        )
         assert change.max() < 0.002  # at most half the published 0.0012 gap, plus the chord's tilt
         assert np.all(change[u < 0.5] < 1e-5)  # the u^8 law leaves the front half as published
 
@@ -202,7 +239,9 @@ def test_a_sharpened_file_section_meets_at_the_trailing_edge_and_keeps_its_surfa
 def test_a_blunt_trailing_edge_thinner_than_meshable_is_refused(tmp_path, capsys):
     from torus_cad.cli import main
 
-    code = main(["build", "--set", "airfoil.trailing_edge_thickness=0.02", "--out", str(tmp_path / "out")])
+    code = main(
+        ["build", "--set", "airfoil.trailing_edge_thickness=0.02", "--out", str(tmp_path / "out")]
+    )
     error = capsys.readouterr().err
     assert code == 2 and "airfoil.trailing_edge_thickness = 0.02 mm is too thin" in error
     assert "allowed 0 (sharp) or 0.05 to 50 mm" in error and not (tmp_path / "out").exists()

@@ -13,8 +13,14 @@ from torus_cad.runtime.files import host_tag
 
 def _case(folder: Path) -> Path:
     """A case folder as ``simulate --case-only`` writes it, with the surface STL in constant/triSurface."""
-    for entry in ("system/controlDict", "system/fvSchemes", "system/fvSolution", "Allrun",
-                  "constant/triSurface/propeller_mm.stl", "0/U"):
+    for entry in (
+        "system/controlDict",
+        "system/fvSchemes",
+        "system/fvSolution",
+        "Allrun",
+        "constant/triSurface/propeller_mm.stl",
+        "0/U",
+    ):
         (folder / entry).parent.mkdir(parents=True, exist_ok=True)
         (folder / entry).write_text("x\n")
     return folder
@@ -30,7 +36,10 @@ def test_an_incomplete_case_folder_is_named(tmp_path: Path, capsys) -> None:
     (_case(tmp_path / "prop_case") / "system" / "fvSolution").unlink()
     assert main(["verify", str(tmp_path)]) == 1
     err = capsys.readouterr().err
-    assert "prop_case: incomplete OpenFOAM case: system/fvSolution missing" in err and err.count("\n") == 1
+    assert (
+        "prop_case: incomplete OpenFOAM case: system/fvSolution missing" in err
+        and err.count("\n") == 1
+    )
 
 
 def test_staging_debris_is_found_at_any_depth(tmp_path: Path, default_files, capsys) -> None:
@@ -39,7 +48,14 @@ def test_staging_debris_is_found_at_any_depth(tmp_path: Path, default_files, cap
     assert main(["verify", str(tmp_path)]) == 0
     dead_pid = 2**22 + 12345  # above any pid this machine hands out
     assert not os.path.exists(f"/proc/{dead_pid}")
-    debris = tmp_path / "trials" / "0" / "simulate" / "coarse" / f".x.staging-{host_tag()}-{dead_pid}-abcd"
+    debris = (
+        tmp_path
+        / "trials"
+        / "0"
+        / "simulate"
+        / "coarse"
+        / f".x.staging-{host_tag()}-{dead_pid}-abcd"
+    )
     debris.mkdir(parents=True)
     capsys.readouterr()
     assert main(["verify", str(tmp_path)]) == 1

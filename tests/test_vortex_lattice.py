@@ -19,7 +19,9 @@ APC = "examples/apc_10x7sf.toml"
 SMALL = Discretisation(chordwise=6, spanwise=20)
 
 
-def _elliptic_wing(aspect_ratio: float, alpha_rad: float, spanwise: int = 40, chordwise: int = 6) -> np.ndarray:
+def _elliptic_wing(
+    aspect_ratio: float, alpha_rad: float, spanwise: int = 40, chordwise: int = 6
+) -> np.ndarray:
     """A flat elliptic wing of span 1 m in the flow along -z: its span along x, its chord along -z turned
     by ``alpha_rad`` about x (leading edge at the top). ``(K, C + 1, 3)``."""
     theta = np.linspace(0.0, math.pi, spanwise + 1)
@@ -44,37 +46,64 @@ def _helmbold(aspect_ratio: float) -> float:
     return 2.0 * math.pi * aspect_ratio / (2.0 + math.sqrt(aspect_ratio**2 + 4.0))
 
 
-@pytest.mark.parametrize(("aspect_ratio", "closed_form"), [(8.0, _lifting_line), (12.0, _lifting_line),
-                                                            (4.0, _helmbold)])
-def test_a_planar_elliptic_wing_has_the_lifting_line_lift_slope(aspect_ratio: float, closed_form) -> None:
+@pytest.mark.parametrize(
+    ("aspect_ratio", "closed_form"), [(8.0, _lifting_line), (12.0, _lifting_line), (4.0, _helmbold)]
+)
+def test_a_planar_elliptic_wing_has_the_lifting_line_lift_slope(
+    aspect_ratio: float, closed_form
+) -> None:
     alpha = math.radians(2.0)
-    result = solve_inviscid(_elliptic_wing(aspect_ratio, alpha), 1, 1.0, 0.0, 10.0, 1.225, 0.5,
-                            WakeShape(length_diameters=20.0), momentum_wake=False)
+    result = solve_inviscid(
+        _elliptic_wing(aspect_ratio, alpha),
+        1,
+        1.0,
+        0.0,
+        10.0,
+        1.225,
+        0.5,
+        WakeShape(length_diameters=20.0),
+        momentum_wake=False,
+    )
     lift = -float(result.force_n[..., 1].sum())  # the flow runs along -z, the wing lifts toward -y
     slope = lift / (0.5 * 1.225 * 10.0**2 * (1.0 / aspect_ratio)) / alpha
     assert slope == pytest.approx(closed_form(aspect_ratio), rel=0.03)
 
 
-def _naca_mean_line(fractions: np.ndarray, camber: float = 0.04, position: float = 0.4) -> np.ndarray:
+def _naca_mean_line(
+    fractions: np.ndarray, camber: float = 0.04, position: float = 0.4
+) -> np.ndarray:
     """The NACA four-digit mean line's height (a fraction of the chord) at the chord ``fractions``."""
     front = camber / position**2 * (2.0 * position * fractions - fractions**2)
-    back = camber / (1.0 - position) ** 2 * ((1.0 - 2.0 * position) + 2.0 * position * fractions - fractions**2)
+    back = (
+        camber
+        / (1.0 - position) ** 2
+        * ((1.0 - 2.0 * position) + 2.0 * position * fractions - fractions**2)
+    )
     return np.where(fractions < position, front, back)
 
 
 @pytest.mark.parametrize("chordwise", [6, 8, 12])
-def test_a_cambered_elliptic_wing_lifts_at_zero_incidence_as_thin_airfoil_theory_says(chordwise: int) -> None:
+def test_a_cambered_elliptic_wing_lifts_at_zero_incidence_as_thin_airfoil_theory_says(
+    chordwise: int,
+) -> None:
     """A NACA 4412 mean line on an elliptic wing of aspect ratio 8 at zero incidence: the lifting line's
     slope times the mean line's zero-lift angle of thin-airfoil theory (-4.15 deg), within 3 %."""
     aspect_ratio, spanwise = 8.0, 40
     grid = _elliptic_wing(aspect_ratio, 0.0, spanwise, chordwise)
     theta = np.linspace(0.0, math.pi, spanwise + 1)
-    chord = 4.0 / (math.pi * aspect_ratio) * np.sqrt(np.clip(1.0 - np.cos(theta) ** 2, 0.0, None)) + 1e-6
-    grid[..., 1] -= _naca_mean_line(cosine_fractions(chordwise))[None, :] * chord[:, None]  # toward the lift
-    result = solve_inviscid(grid, 1, 1.0, 0.0, 10.0, 1.225, 0.5, WakeShape(length_diameters=20.0),
-                            momentum_wake=False)
+    chord = (
+        4.0 / (math.pi * aspect_ratio) * np.sqrt(np.clip(1.0 - np.cos(theta) ** 2, 0.0, None))
+        + 1e-6
+    )
+    # toward the lift
+    grid[..., 1] -= _naca_mean_line(cosine_fractions(chordwise))[None, :] * chord[:, None]
+    result = solve_inviscid(
+        grid, 1, 1.0, 0.0, 10.0, 1.225, 0.5, WakeShape(length_diameters=20.0), momentum_wake=False
+    )
     lift_coefficient = -float(result.force_n[..., 1].sum()) / (0.5 * 1.225 * 10.0**2 / aspect_ratio)
-    assert lift_coefficient == pytest.approx(_lifting_line(aspect_ratio) * math.radians(4.15), rel=0.03)
+    assert lift_coefficient == pytest.approx(
+        _lifting_line(aspect_ratio) * math.radians(4.15), rel=0.03
+    )
 
 
 @pytest.fixture(scope="module")
@@ -83,8 +112,16 @@ def apc_blade():
 
 
 def _solve(blade, rpm: float, airspeed: float = 0.0):
-    return solve_inviscid(blade.camber_m, blade.blades, blade.spin, rpm * math.pi / 30.0, airspeed, 1.225,
-                          blade.tip_radius_m, WakeShape())
+    return solve_inviscid(
+        blade.camber_m,
+        blade.blades,
+        blade.spin,
+        rpm * math.pi / 30.0,
+        airspeed,
+        1.225,
+        blade.tip_radius_m,
+        WakeShape(),
+    )
 
 
 def test_zero_rpm_in_still_air_gives_exactly_no_force(apc_blade) -> None:
@@ -92,7 +129,9 @@ def test_zero_rpm_in_still_air_gives_exactly_no_force(apc_blade) -> None:
     assert result.thrust_n == 0.0 and result.torque_nm == 0.0 and not result.circulation.any()
 
 
-def test_inviscid_thrust_and_torque_scale_with_the_square_of_the_speed_at_fixed_advance_ratio(apc_blade) -> None:
+def test_inviscid_thrust_and_torque_scale_with_the_square_of_the_speed_at_fixed_advance_ratio(
+    apc_blade,
+) -> None:
     slow, fast = _solve(apc_blade, 4000.0, 4.0), _solve(apc_blade, 8000.0, 8.0)
     assert fast.thrust_n == pytest.approx(4.0 * slow.thrust_n, rel=0.01)
     assert fast.torque_nm == pytest.approx(4.0 * slow.torque_nm, rel=0.01)
@@ -118,13 +157,17 @@ def test_the_section_polars_take_thrust_and_add_power_at_every_strips_own_reynol
     assert report["figure_of_merit"] is not None and 0.0 < report["figure_of_merit"] < 1.0
     strips = result.strips
     assert (strips.cd > 0.0).all() and (np.diff(strips.radius_m) > 0.0).all()  # root to tip
-    # the Reynolds number of a strip is its own: V c / nu with the strip's flow (tens of thousands here)
+    # the Reynolds number of a strip is its own: V c / nu with the strip's flow (tens of thousands
+    # here)
     assert 5e3 < np.median(strips.reynolds) < 2e5
 
 
-def test_the_vortex_blade_is_the_built_blade_when_the_design_asks_for_a_diameter_and_pitch() -> None:
-    # examples/optimize/quiet_prop.toml asks for a 127 mm, 114 mm-pitch propeller: the build scales and
-    # re-twists the loop to meet both, and the vortex solver must solve that blade, not the unscaled one
+def test_the_vortex_blade_is_the_built_blade_when_the_design_asks_for_a_diameter_and_pitch() -> (
+    None
+):
+    # examples/optimize/quiet_prop.toml asks for a 127 mm, 114 mm-pitch propeller: the build scales
+    # and re-twists the loop to meet both, and the vortex solver must solve that blade, not the
+    # unscaled one
     params = PropellerParameters.from_toml("examples/optimize/quiet_prop.toml")
     blade = rotor_blade(params, SMALL)
     assert 2000.0 * blade.tip_radius_m == pytest.approx(127.0, rel=0.01)

@@ -12,18 +12,33 @@ from torus_cad.errors import GeometryError, KernelError, ParameterError, TorusCa
 
 __version__ = "0.2.1"
 
-__all__ = ["GeometryError", "KernelError", "ParameterError", "Propeller", "PropellerParameters", "TorusCadError",
-           "build_propeller", "propeller_objects", "resolve_parameters"]
+__all__ = [
+    "GeometryError",
+    "KernelError",
+    "ParameterError",
+    "Propeller",
+    "PropellerParameters",
+    "TorusCadError",
+    "build_propeller",
+    "propeller_objects",
+    "resolve_parameters",
+]
 
 # Each loads when first asked for: the kernel (cadquery / OCP) takes seconds, the schema (pydantic,
-# scipy through the geometry) most of a second, and `torus-cad build` shows its first line before either.
-_LAZY = {"build_propeller": "torus_cad.propeller", "Propeller": "torus_cad.propeller",
-         "propeller_objects": "torus_cad.propeller", "PropellerParameters": "torus_cad.parameters",
-         "resolve_parameters": "torus_cad.parameters"}
+# scipy through the geometry) most of a second, and `torus-cad build` shows its first line before
+# either.
+_LAZY = {
+    "build_propeller": "torus_cad.propeller",
+    "Propeller": "torus_cad.propeller",
+    "propeller_objects": "torus_cad.propeller",
+    "PropellerParameters": "torus_cad.parameters",
+    "resolve_parameters": "torus_cad.parameters",
+}
 
 
 def __getattr__(name: str) -> Any:
     if name in _LAZY:
         import importlib
+
         return getattr(importlib.import_module(_LAZY[name]), name)
     raise AttributeError(f"module 'torus_cad' has no attribute {name!r}")

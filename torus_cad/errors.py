@@ -38,7 +38,7 @@ def cut(text: str, limit: int = MESSAGE_VALUE_MAX_CHARS) -> str:
         return text
     keep = max(limit - len(_CUT), 2)
     head = (keep + 1) // 2
-    return text[:head] + _CUT + text[len(text) - (keep - head):]
+    return text[:head] + _CUT + text[len(text) - (keep - head) :]
 
 
 def shown(value: Any, limit: int = MESSAGE_VALUE_MAX_CHARS) -> str:

@@ -52,8 +52,8 @@ if TYPE_CHECKING:
 #: Pieces the blade's airfoil face is split into (in equal ranges of its section curves' parameter)
 #: for the root fillet when the trailing edge is round (torus_cad.kernel.wires): the airfoil face is
 #: then open, so the fillet's split of closed side faces does not apply. Fifths (split points at 20,
-#: 40, 60, 80 % of the way from the lower to the upper end, none at the leading edge, near 50 %) fillet
-#: round edges that fewer pieces do not (measured: the docs' measurements page).
+#: 40, 60, 80 % of the way from the lower to the upper end, none at the leading edge, near 50 %)
+#: fillet round edges that fewer pieces do not (measured: the docs' measurements page).
 ROUND_EDGE_FILLET_PIECES = 5
 
 
@@ -114,14 +114,20 @@ class Propeller:
             The instance's fields by name, with ``shape``, ``hub_shape`` and each of
             ``blade_shapes`` as BRep bytes and without the cached cadquery views.
         """
-        state = {name: value for name, value in self.__dict__.items() if name not in _CADQUERY_VIEWS}
+        state = {
+            name: value for name, value in self.__dict__.items() if name not in _CADQUERY_VIEWS
+        }
         state["shape"], state["hub_shape"] = shape_bytes(self.shape), shape_bytes(self.hub_shape)
         state["blade_shapes"] = [shape_bytes(blade) for blade in self.blade_shapes]
         return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:
-        self.__dict__.update(state, shape=shape_from_bytes(state["shape"]), hub_shape=shape_from_bytes(state["hub_shape"]),
-                             blade_shapes=[shape_from_bytes(blade) for blade in state["blade_shapes"]])
+        self.__dict__.update(
+            state,
+            shape=shape_from_bytes(state["shape"]),
+            hub_shape=shape_from_bytes(state["hub_shape"]),
+            blade_shapes=[shape_from_bytes(blade) for blade in state["blade_shapes"]],
+        )
 
     @functools.cached_property
     def solid(self) -> cq.Solid:
@@ -188,7 +194,9 @@ class Propeller:
             return assembly.add(self.solid, name="propeller", color=cq.Color(*HUB_COLOR))
         assembly.add(self.hub, name="hub", color=cq.Color(*HUB_COLOR))
         for index, blade in enumerate(self.blades):
-            assembly.add(blade, name=f"blade_{index}", color=cq.Color(*blade_color(index, len(self.blades))))
+            assembly.add(
+                blade, name=f"blade_{index}", color=cq.Color(*blade_color(index, len(self.blades)))
+            )
         return assembly
 
     def printability(self) -> Printability:
@@ -212,7 +220,8 @@ class Propeller:
             ValueError: the surface was sampled without its trailing edge as a point.
         """
         spin = spin_to_push_air_down(self.surface.points, self.surface.trailing_edge_column)
-        if self.parameters.handedness == Handedness.CCW:  # the surface is the spec's blade, before the mirror
+        # the surface is the spec's blade, before the mirror
+        if self.parameters.handedness == Handedness.CCW:
             return spin.opposite
         return spin
 
@@ -230,8 +239,13 @@ class Propeller:
         """
         return mass_properties(self.shape, density_g_cm3)
 
-    def write(self, out_dir: str | Path, density_g_cm3: float = DEFAULT_DENSITY_G_CM3,
-              stl: bool = True, sections_table: bool = False) -> dict[str, Path]:
+    def write(
+        self,
+        out_dir: str | Path,
+        density_g_cm3: float = DEFAULT_DENSITY_G_CM3,
+        stl: bool = True,
+        sections_table: bool = False,
+    ) -> dict[str, Path]:
         """Write ``<name>.step``, ``<name>.stl`` (unless ``stl`` is False), the blade-element table
         ``<name>_sections.csv`` and ``<name>_sections.png`` (if ``sections_table``) and ``<name>.json``
         into ``out_dir``.
@@ -268,9 +282,11 @@ def design_printability(params: PropellerParameters) -> Printability:
     return params.printability()
 
 
-def build_propeller(design: PropellerParameters | str | Path | None = None,
-                    overrides: Mapping[str, Any] | None = None,
-                    progress: Callable[[Stage], None] | None = None) -> Propeller:
+def build_propeller(
+    design: PropellerParameters | str | Path | None = None,
+    overrides: Mapping[str, Any] | None = None,
+    progress: Callable[[Stage], None] | None = None,
+) -> Propeller:
     """Build the fused propeller of ``design``.
 
     Args:
@@ -294,83 +310,156 @@ def build_propeller(design: PropellerParameters | str | Path | None = None,
     with timer.stage(Stage.PARAMETERS):
         params = resolve_parameters(design, overrides)
     with timer.stage(Stage.DESIGN_TARGETS):
-        targets = resolve_design_targets(params)  # airfoil.naca, diameter, pitch -> the spec's parameters
+        # airfoil.naca, diameter, pitch -> the spec's parameters
+        targets = resolve_design_targets(params)
         params = targets.parameters
         hub_geometry = params.hub_geometry()
     with timer.stage(Stage.SECTION_MATH):
         surface = params.blade_surface()
         params.check_feasible(surface)
         mounting = placed_mounting(params)
-        # The hub is symmetric about its axis; its seam goes where it crosses no blade root (nor the set screw).
+        # The hub is symmetric about its axis; its seam goes where it crosses no blade root (nor the
+        # set screw).
         screw_arc = set_screw_arc_deg(mounting, hub_geometry.radius_mm)
-        seam_deg = seam_angle_deg(surface.points, hub_geometry.radius_mm, params.blades,
-                                  () if screw_arc is None else (screw_arc,))
+        seam_deg = seam_angle_deg(
+            surface.points,
+            hub_geometry.radius_mm,
+            params.blades,
+            () if screw_arc is None else (screw_arc,),
+        )
     with timer.stage(Stage.WIRES):
-        curves = fit_section_curves(surface.points, surface.trailing_edge_column, section_chords(surface),
-                                    surface.lower_corner_index, surface.round_trailing_edge)
+        curves = fit_section_curves(
+            surface.points,
+            surface.trailing_edge_column,
+            section_chords(surface),
+            surface.lower_corner_index,
+            surface.round_trailing_edge,
+        )
         fillet_radius = params.hub.root_fillet_radius
         # A round trailing edge leaves the blade's airfoil face open: the fillet needs it in pieces.
-        wires = curves.occ_wires(ROUND_EDGE_FILLET_PIECES if fillet_radius > 0.0 and curves.round_trailing_edge else 1)
+        wires = curves.occ_wires(
+            ROUND_EDGE_FILLET_PIECES if fillet_radius > 0.0 and curves.round_trailing_edge else 1
+        )
     with timer.stage(Stage.LOFT):
         blade = loft_solid(wires, surface.s)
-        hub = hub_shape(hub_geometry.radius_mm, hub_geometry.length_mm, 0.0 if seam_deg is None else seam_deg,
-                        mounting)
+        hub = hub_shape(
+            hub_geometry.radius_mm,
+            hub_geometry.length_mm,
+            0.0 if seam_deg is None else seam_deg,
+            mounting,
+        )
         angles_deg = [params.blade_angle_deg(i) for i in range(params.blades)]
         blades = pattern_blades(blade, angles_deg)
     root_fillet: RootFillet | None = None
-    if fillet_radius > 0.0:  # blade 0 filleted once, then patterned (torus_cad.kernel.fillet.root_fillet)
+    # blade 0 filleted once, then patterned (torus_cad.kernel.fillet.root_fillet)
+    if fillet_radius > 0.0:
         with timer.stage(Stage.FILLET):
-            run_out = None if mounting.chamfer_mm > 0.0 else functools.partial(
-                run_out_hub, hub_geometry.radius_mm, hub_geometry.length_mm, 0.0 if seam_deg is None else seam_deg,
-                mounting, reach=hub_geometry.radius_mm + 4.0 * fillet_radius)
-            # A sharp edge's side as one closed face: the fillet splits it in its own pieces (kernel.fillet).
-            closed = blade if surface.lower_corner_index is not None else loft_solid(curves.occ_wires(1, False), surface.s)
-            import cadquery as cq  # the root fillet's route is cadquery's (torus_cad.kernel.fillet.pattern)
+            run_out = (
+                None
+                if mounting.chamfer_mm > 0.0
+                else functools.partial(
+                    run_out_hub,
+                    hub_geometry.radius_mm,
+                    hub_geometry.length_mm,
+                    0.0 if seam_deg is None else seam_deg,
+                    mounting,
+                    reach=hub_geometry.radius_mm + 4.0 * fillet_radius,
+                )
+            )
+            # A sharp edge's side as one closed face: the fillet splits it in its own pieces
+            # (kernel.fillet).
+            closed = (
+                blade
+                if surface.lower_corner_index is not None
+                else loft_solid(curves.occ_wires(1, False), surface.s)
+            )
+            # the root fillet's route is cadquery's (torus_cad.kernel.fillet.pattern)
+            import cadquery as cq
 
             from torus_cad.kernel.fillet.pattern import fillet_pattern
+
             try:
-                filleted = fillet_pattern(cq.Solid(hub), cq.Solid(closed), angles_deg, fillet_radius, run_out,
-                                          reduce_where_tight=params.hub.root_fillet_tight_bends == TightBends.REDUCE)
+                filleted = fillet_pattern(
+                    cq.Solid(hub),
+                    cq.Solid(closed),
+                    angles_deg,
+                    fillet_radius,
+                    run_out,
+                    reduce_where_tight=params.hub.root_fillet_tight_bends == TightBends.REDUCE,
+                )
             except KernelError as error:
                 if surface.lower_corner_index is None or surface.round_trailing_edge:
                     raise
-                # The flat base's two corners stop OpenCascade's fillet; the round cap has none (README).
-                raise KernelError(f"{error}; a flat trailing edge's corners stop the fillet: "
-                                  f"airfoil.trailing_edge_shape = 'round' takes it") from None
+                # The flat base's two corners stop OpenCascade's fillet; the round cap has none
+                # (README).
+                raise KernelError(
+                    f"{error}; a flat trailing edge's corners stop the fillet: "
+                    f"airfoil.trailing_edge_shape = 'round' takes it"
+                ) from None
             solid, root_fillet = filleted.solid.wrapped, filleted
             route, face_parts = FuseRoute.ASSEMBLED, filleted.face_parts
     else:
         solid, fused = _join_blades_to_hub(hub, blade, blades, angles_deg, timer)
         route, face_parts = fused.route, fused.face_parts
-    with timer.stage(Stage.STRICT_CHECK):  # before the mirror, which copies the faces and loses the pattern
-        solid, checks = _strictly_valid(solid, root_fillet is not None and surface.lower_corner_index is None)
-    if params.handedness == Handedness.CCW:  # the spec's blade is 'cw'; 'ccw' is its mirror image (an isometry)
+    # before the mirror, which copies the faces and loses the pattern
+    with timer.stage(Stage.STRICT_CHECK):
+        solid, checks = _strictly_valid(
+            solid, root_fillet is not None and surface.lower_corner_index is None
+        )
+    # the spec's blade is 'cw'; 'ccw' is its mirror image (an isometry)
+    if params.handedness == Handedness.CCW:
         with timer.stage(Stage.MIRROR):
             solid = mirrored(solid)  # a transformed copy: the same faces in the same order
-            hub, blades = mirrored(hub, check=False), [mirrored(part, check=False) for part in blades]
-    return Propeller(params, solid, hub, blades, surface, curves, timer.seconds, route, targets, mounting,
-                     face_parts, root_fillet, checks)
+            hub, blades = (
+                mirrored(hub, check=False),
+                [mirrored(part, check=False) for part in blades],
+            )
+    return Propeller(
+        params,
+        solid,
+        hub,
+        blades,
+        surface,
+        curves,
+        timer.seconds,
+        route,
+        targets,
+        mounting,
+        face_parts,
+        root_fillet,
+        checks,
+    )
 
 
-def _strictly_valid(solid: TopoDS_Shape, fillet_on_sharp_edge: bool) -> tuple[TopoDS_Shape, StrictCheck]:
+def _strictly_valid(
+    solid: TopoDS_Shape, fillet_on_sharp_edge: bool
+) -> tuple[TopoDS_Shape, StrictCheck]:
     """:func:`torus_cad.kernel.strict.strict_valid_solid`, its error with the way out for a filleted knife edge."""
     try:
         return strict_valid_solid(solid, "the propeller")
     except KernelError as error:
         if not fillet_on_sharp_edge:
             raise
-        # OpenCascade's rolling ball turns round the zero-thickness edge in one degenerate corner face.
-        raise KernelError(f"{error}; a root fillet round a sharp trailing edge can leave a self-intersecting "
-                          "corner face there: airfoil.trailing_edge_thickness > 0 with "
-                          "airfoil.trailing_edge_shape = 'round' takes it") from None
+        # OpenCascade's rolling ball turns round the zero-thickness edge in one degenerate corner
+        # face.
+        raise KernelError(
+            f"{error}; a root fillet round a sharp trailing edge can leave a self-intersecting "
+            "corner face there: airfoil.trailing_edge_thickness > 0 with "
+            "airfoil.trailing_edge_shape = 'round' takes it"
+        ) from None
 
 
 #: Another name for :func:`build_propeller`, for people who continue in CadQuery.
 propeller_objects = build_propeller
 
 
-def _join_blades_to_hub(hub: TopoDS_Shape, blade: TopoDS_Shape, blades: list[TopoDS_Shape], angles_deg: list[float],
-                        timer: StageTimer[Stage]) -> tuple[TopoDS_Shape, Fused[TopoDS_Shape]]:
+def _join_blades_to_hub(
+    hub: TopoDS_Shape,
+    blade: TopoDS_Shape,
+    blades: list[TopoDS_Shape],
+    angles_deg: list[float],
+    timer: StageTimer[Stage],
+) -> tuple[TopoDS_Shape, Fused[TopoDS_Shape]]:
     """The fused, checked propeller and how it was made (route, each face's part).
 
     The shared-intersection route's result is checked for validity, which includes every
@@ -394,16 +483,30 @@ def _join_blades_to_hub(hub: TopoDS_Shape, blade: TopoDS_Shape, blades: list[Top
 
 def _check_volume(solid: TopoDS_Shape, hub: TopoDS_Shape, blade: TopoDS_Shape, blades: int) -> None:
     """hub < fused <= hub + n x blade: a fuse that lost or doubled material is an error."""
-    volume, hub_volume, blade_volume = (precise_volume(shape, VOLUME_CHECK_RELATIVE_PRECISION)
-                                        for shape in (solid, hub, blade))
-    if not hub_volume < volume <= (hub_volume + blades * blade_volume) * (1 + 10 * VOLUME_CHECK_RELATIVE_PRECISION):
-        raise KernelError(f"the fused volume {volume:.3f} mm^3 is outside (hub {hub_volume:.3f}, "
-                          f"hub + {blades} blades {hub_volume + blades * blade_volume:.3f}] mm^3")
+    volume, hub_volume, blade_volume = (
+        precise_volume(shape, VOLUME_CHECK_RELATIVE_PRECISION) for shape in (solid, hub, blade)
+    )
+    if (
+        not hub_volume
+        < volume
+        <= (hub_volume + blades * blade_volume) * (1 + 10 * VOLUME_CHECK_RELATIVE_PRECISION)
+    ):
+        raise KernelError(
+            f"the fused volume {volume:.3f} mm^3 is outside (hub {hub_volume:.3f}, "
+            f"hub + {blades} blades {hub_volume + blades * blade_volume:.3f}] mm^3"
+        )
 
 
-def write_outputs(propeller: Propeller, out_dir: Path, density_g_cm3: float = DEFAULT_DENSITY_G_CM3,
-                  stl: bool = True, sections_table: bool = False) -> dict[str, Path]:
+def write_outputs(
+    propeller: Propeller,
+    out_dir: Path,
+    density_g_cm3: float = DEFAULT_DENSITY_G_CM3,
+    stl: bool = True,
+    sections_table: bool = False,
+) -> dict[str, Path]:
     """Write the files of ``export.formats`` (STEP, STL, 3MF; ``stl=False`` drops the STL), the
     blade-element table (``<name>_sections.csv`` and ``.png``, when ``sections_table``; ``torus-cad
     build`` writes it) and the JSON report as one output set (torus_cad.outputs.output_set); return the paths by kind."""
-    return write_output_set(propeller, out_dir, density_g_cm3, stl=stl, sections_table=sections_table).paths
+    return write_output_set(
+        propeller, out_dir, density_g_cm3, stl=stl, sections_table=sections_table
+    ).paths

@@ -27,7 +27,8 @@ from numpy.typing import NDArray
 
 Array = NDArray[np.float64]
 
-#: Newton's method on the retarded-time equation stops when every residual is below this fraction of a period.
+#: Newton's method on the retarded-time equation stops when every residual is below this fraction of
+#: a period.
 RETARDED_TIME_TOLERANCE = 1e-12
 RETARDED_TIME_MAX_STEPS = 50
 #: Faces evaluated at once (bounds the memory: a few arrays of FACE_CHUNK x samples floats).
@@ -46,7 +47,11 @@ class RotatingSurface:
 
     def __post_init__(self) -> None:
         count = len(self.areas_m2)
-        if self.centroids_m.shape != (count, 3) or self.normals.shape != (count, 3) or self.pressure_pa.shape != (count,):
+        if (
+            self.centroids_m.shape != (count, 3)
+            or self.normals.shape != (count, 3)
+            or self.pressure_pa.shape != (count,)
+        ):
             raise ValueError("centroids and normals must be (N, 3), areas and pressure (N,)")
 
     @property
@@ -84,8 +89,13 @@ def _rotate(vectors: Array, angle: Array) -> tuple[Array, Array, Array]:
     return x * cos - y * sin, x * sin + y * cos, np.broadcast_to(vectors[:, 2:3], angle.shape)
 
 
-def retarded_times(centroids_m: Array, omega_rad_s: float, observer_m: Array, time_s: Array,
-                   speed_of_sound_m_s: float) -> Array:
+def retarded_times(
+    centroids_m: Array,
+    omega_rad_s: float,
+    observer_m: Array,
+    time_s: Array,
+    speed_of_sound_m_s: float,
+) -> Array:
     """Emission times tau (n, S) s at which sound from each source (rotating with ``omega``, at ``centroids_m`` at
     tau = 0) reaches ``observer_m`` at ``time_s``: Newton's method on ``tau + |x - y(tau)| / c - t = 0``."""
     c = speed_of_sound_m_s
@@ -104,12 +114,19 @@ def retarded_times(centroids_m: Array, omega_rad_s: float, observer_m: Array, ti
     raise ArithmeticError("the retarded-time equation did not converge (a supersonic source?)")
 
 
-def observer_signal(surface: RotatingSurface, omega_rad_s: float, observer_m: Array | tuple[float, float, float],
-                    medium: Medium, samples: int) -> ObserverSignal:
+def observer_signal(
+    surface: RotatingSurface,
+    omega_rad_s: float,
+    observer_m: Array | tuple[float, float, float],
+    medium: Medium,
+    samples: int,
+) -> ObserverSignal:
     """The thickness and loading noise of ``surface`` turning at ``omega_rad_s`` (rad/s about +z, nonzero) at
     ``observer_m`` (m, at rest relative to the hub), on ``samples`` uniform observer times over one revolution."""
     if omega_rad_s == 0.0 or not math.isfinite(omega_rad_s):
-        raise ValueError(f"omega = {omega_rad_s!r} rad/s: a steady rotor's tones need a nonzero, finite rotation")
+        raise ValueError(
+            f"omega = {omega_rad_s!r} rad/s: a steady rotor's tones need a nonzero, finite rotation"
+        )
     observer = np.asarray(observer_m, dtype=float)
     c, rho = medium.speed_of_sound_m_s, medium.density_kg_m3
     period = 2.0 * math.pi / abs(omega_rad_s)
@@ -123,9 +140,9 @@ def observer_signal(surface: RotatingSurface, omega_rad_s: float, observer_m: Ar
         angle = omega_rad_s * tau
         yx, yy, yz = _rotate(centroids, angle)
         nx, ny, nz = _rotate(normals, angle)
-        vx, vy = -omega_rad_s * yy, omega_rad_s * yx            # v = omega z x y
-        ax, ay = -omega_rad_s * vy, omega_rad_s * vx            # dv/dtau = omega z x v
-        ndx, ndy = -omega_rad_s * ny, omega_rad_s * nx          # dn/dtau = omega z x n
+        vx, vy = -omega_rad_s * yy, omega_rad_s * yx  # v = omega z x y
+        ax, ay = -omega_rad_s * vy, omega_rad_s * vx  # dv/dtau = omega z x v
+        ndx, ndy = -omega_rad_s * ny, omega_rad_s * nx  # dn/dtau = omega z x n
         rx, ry, rz = observer[0] - yx, observer[1] - yy, observer[2] - yz
         r = np.sqrt(rx * rx + ry * ry + rz * rz)
         ux, uy, uz = rx / r, ry / r, rz / r
@@ -133,17 +150,22 @@ def observer_signal(surface: RotatingSurface, omega_rad_s: float, observer_m: Ar
         mach_sq = (vx * vx + vy * vy) / (c * c)
         mach_r_dot = (ax * ux + ay * uy) / c
         doppler = 1.0 - mach_r
-        # thickness: rho0 [U_n_dot / (r D^2) + U_n (r Mr_dot + c (Mr - M^2)) / (r^2 D^3)], U_n = v . n
+        # thickness: rho0 [U_n_dot / (r D^2) + U_n (r Mr_dot + c (Mr - M^2)) / (r^2 D^3)], U_n = v .
+        # n
         u_n = vx * nx + vy * ny
         u_n_dot = ax * nx + ay * ny + vx * ndx + vy * ndy
         common = r * mach_r_dot + c * (mach_r - mach_sq)
         thickness_terms = rho * (u_n_dot / (r * doppler**2) + u_n * common / (r * r * doppler**3))
-        # loading: L = p n, L_r = L . r_hat, L_M = L . M, L_dot = p dn/dtau (p steady in the rotating frame)
+        # loading: L = p n, L_r = L . r_hat, L_M = L . M, L_dot = p dn/dtau (p steady in the
+        # rotating frame)
         l_r = pressure * (nx * ux + ny * uy + nz * uz)
         l_r_dot = pressure * (ndx * ux + ndy * uy)
         l_m = pressure * (nx * vx + ny * vy) / c
-        loading_terms = (l_r_dot / (c * r * doppler**2) + (l_r - l_m) / (r * r * doppler**2)
-                         + l_r * common / (c * r * r * doppler**3))
+        loading_terms = (
+            l_r_dot / (c * r * doppler**2)
+            + (l_r - l_m) / (r * r * doppler**2)
+            + l_r * common / (c * r * r * doppler**3)
+        )
         thickness += np.sum(thickness_terms * areas, axis=0)
         loading += np.sum(loading_terms * areas, axis=0)
     scale = 1.0 / (4.0 * math.pi)

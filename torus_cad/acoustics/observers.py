@@ -16,8 +16,8 @@ from torus_cad.errors import ParameterError
 if TYPE_CHECKING:
     import numpy as np
 
-#: simulate --observer: an observer's distance from the hub, m (open below, closed above). It must also lie
-#: outside the blade tips' circle (torus_cad.acoustics.observers.check_observers).
+#: simulate --observer: an observer's distance from the hub, m (open below, closed above). It must
+#: also lie outside the blade tips' circle (torus_cad.acoustics.observers.check_observers).
 NOISE_OBSERVER_DISTANCE_M = (0.0, 1.0e4)
 
 
@@ -52,8 +52,10 @@ DEFAULT_OBSERVERS = tuple(Observer(1.0, angle) for angle in (0.0, 30.0, 60.0, 90
 def observer_ranges() -> str:
     """The allowed form and ranges of ``--observer``, as its help and its refusal say them."""
     low, high = NOISE_OBSERVER_DISTANCE_M
-    return (f"DIST_M:ANGLE_DEG with DIST_M in ({low:g}, {high:g}] m and ANGLE_DEG in "
-            f"[{ANGLE_RANGE_DEG[0]:g}, {ANGLE_RANGE_DEG[1]:g}] degrees from the +z axis")
+    return (
+        f"DIST_M:ANGLE_DEG with DIST_M in ({low:g}, {high:g}] m and ANGLE_DEG in "
+        f"[{ANGLE_RANGE_DEG[0]:g}, {ANGLE_RANGE_DEG[1]:g}] degrees from the +z axis"
+    )
 
 
 def parse_observer(text: str) -> Observer:
@@ -63,12 +65,20 @@ def parse_observer(text: str) -> Observer:
     shown = text if len(text) <= 40 else text[:37] + "..."
     parts = text.split(":")
     try:
-        distance, angle = (float(part) for part in parts) if len(parts) == 2 else (math.nan, math.nan)
+        distance, angle = (
+            (float(part) for part in parts) if len(parts) == 2 else (math.nan, math.nan)
+        )
     except ValueError:
         distance = angle = math.nan
-    if not (math.isfinite(distance) and math.isfinite(angle) and low < distance <= high
-            and ANGLE_RANGE_DEG[0] <= angle <= ANGLE_RANGE_DEG[1]):
-        raise ParameterError(f"{OPTION} = {shown!r} is out of range or malformed; allowed {observer_ranges()}")
+    if not (
+        math.isfinite(distance)
+        and math.isfinite(angle)
+        and low < distance <= high
+        and ANGLE_RANGE_DEG[0] <= angle <= ANGLE_RANGE_DEG[1]
+    ):
+        raise ParameterError(
+            f"{OPTION} = {shown!r} is out of range or malformed; allowed {observer_ranges()}"
+        )
     return Observer(distance, angle)
 
 
@@ -96,5 +106,7 @@ def check_observers(observers: tuple[Observer, ...], tip_radius_m: float) -> Non
     """ParameterError for an observer inside the sphere the blade tips sweep (the formula holds outside it)."""
     for observer in observers:
         if observer.distance_m <= tip_radius_m:
-            raise ParameterError(f"{OPTION} = {observer.distance_m:g}:{observer.angle_deg:g} is inside the rotor; "
-                                 f"allowed a distance above the tip radius {tip_radius_m:g} m")
+            raise ParameterError(
+                f"{OPTION} = {observer.distance_m:g}:{observer.angle_deg:g} is inside the rotor; "
+                f"allowed a distance above the tip radius {tip_radius_m:g} m"
+            )

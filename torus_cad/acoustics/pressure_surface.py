@@ -33,13 +33,17 @@ def _time_value(folder: Path) -> float:
 def surface_pressure_file(case: Path, function_object: str, patch: str) -> Path:
     """``postProcessing/<function_object>/<latest time>/<patch>.vtp`` of ``case``; SurfacePressureError if none."""
     root = Path(case) / "postProcessing" / function_object
-    times = sorted((folder for folder in root.glob("*") if _time_value(folder) >= 0.0), key=_time_value)
+    times = sorted(
+        (folder for folder in root.glob("*") if _time_value(folder) >= 0.0), key=_time_value
+    )
     for folder in reversed(times):
         path = folder / f"{patch}{SURFACE_FILE_SUFFIX}"
         if path.is_file():
             return path
-    raise SurfacePressureError(f"no blade surface pressure in {str(root)!r} (the case's {function_object!r} "
-                               f"function object wrote no {patch}{SURFACE_FILE_SUFFIX})")
+    raise SurfacePressureError(
+        f"no blade surface pressure in {str(root)!r} (the case's {function_object!r} "
+        f"function object wrote no {patch}{SURFACE_FILE_SUFFIX})"
+    )
 
 
 def read_surface(path: Path, density_kg_m3: float, field: str = "p") -> RotatingSurface:
@@ -50,6 +54,7 @@ def read_surface(path: Path, density_kg_m3: float, field: str = "p") -> Rotating
 
     def vtk_to_numpy(array: Any) -> np.ndarray:
         return np.asarray(untyped_vtk_to_numpy(array))  # type: ignore[no-untyped-call]
+
     from vtkmodules.vtkIOXML import vtkXMLPolyDataReader
 
     reader = vtkXMLPolyDataReader()
@@ -64,7 +69,8 @@ def read_surface(path: Path, density_kg_m3: float, field: str = "p") -> Rotating
     offsets = vtk_to_numpy(polys.GetOffsetsArray()).astype(np.int64)
     connectivity = vtk_to_numpy(polys.GetConnectivityArray()).astype(np.int64)
     counts = np.diff(offsets)
-    first = np.repeat(offsets[:-1], counts - 2)             # one fan triangle per polygon vertex beyond two
+    # one fan triangle per polygon vertex beyond two
+    first = np.repeat(offsets[:-1], counts - 2)
     within = np.arange(len(first)) - np.repeat(np.cumsum(counts - 2) - (counts - 2), counts - 2)
     corner0 = points[connectivity[first]]
     corner1 = points[connectivity[first + within + 1]]
@@ -82,5 +88,9 @@ def read_surface(path: Path, density_kg_m3: float, field: str = "p") -> Rotating
     weights = np.zeros(len(counts))
     np.add.at(weights, owner, weight)
     kinematic = vtk_to_numpy(values).astype(float).reshape(len(counts), -1)[:, 0]
-    return RotatingSurface(centre[keep] / weights[keep, None], -area_vector[keep] / areas[keep, None], areas[keep],
-                           density_kg_m3 * kinematic[keep])
+    return RotatingSurface(
+        centre[keep] / weights[keep, None],
+        -area_vector[keep] / areas[keep, None],
+        areas[keep],
+        density_kg_m3 * kinematic[keep],
+    )

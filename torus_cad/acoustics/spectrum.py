@@ -25,7 +25,7 @@ def harmonic_rms(signal_pa: NDArray[np.float64]) -> NDArray[np.float64]:
     (index 0 is harmonic 1)."""
     samples = len(signal_pa)
     spectrum = np.fft.rfft(signal_pa) / samples
-    return np.asarray(math.sqrt(2.0) * np.abs(spectrum[1: (samples + 1) // 2]))
+    return np.asarray(math.sqrt(2.0) * np.abs(spectrum[1 : (samples + 1) // 2]))
 
 
 def spl_db(rms_pa: float | NDArray[np.float64]) -> NDArray[np.float64]:
@@ -37,11 +37,15 @@ def spl_db(rms_pa: float | NDArray[np.float64]) -> NDArray[np.float64]:
 def a_weighting_db(frequency_hz: float | NDArray[np.float64]) -> NDArray[np.float64]:
     """A-weighting in dB at ``frequency_hz`` (> 0), IEC 61672-1 closed form."""
     f2 = np.asarray(frequency_hz, dtype=float) ** 2
-    gain = (_F4**2 * f2**2) / ((f2 + _F1**2) * np.sqrt((f2 + _F2**2) * (f2 + _F3**2)) * (f2 + _F4**2))
+    gain = (_F4**2 * f2**2) / (
+        (f2 + _F1**2) * np.sqrt((f2 + _F2**2) * (f2 + _F3**2)) * (f2 + _F4**2)
+    )
     return np.asarray(20.0 * np.log10(gain) + _A_1000_DB)
 
 
-def overall_db(rms_pa: NDArray[np.float64], frequency_hz: NDArray[np.float64] | None = None) -> float:
+def overall_db(
+    rms_pa: NDArray[np.float64], frequency_hz: NDArray[np.float64] | None = None
+) -> float:
     """Overall SPL (dB) of harmonics of rms pressures ``rms_pa``; A-weighted (dB(A)) when their frequencies
     (Hz) are given. -inf when all are 0."""
     energy = np.asarray(rms_pa, dtype=float) ** 2

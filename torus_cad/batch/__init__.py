@@ -25,6 +25,24 @@ from torus_cad.batch.runner import BatchError, Interrupted, LocalPool, run_tasks
 from torus_cad.batch.sweep import SweepInterrupted, SweepResult, run_sweep
 from torus_cad.batch.sweep_file import SweepMode, SweepSpec, VaryAxis, load_sweep, parse_sweep
 
-__all__ = ["BatchError", "Design", "DesignResult", "DesignTask", "Interrupted", "LocalPool", "Outcome",
-           "SweepInterrupted", "SweepMode", "SweepResult", "SweepSpec", "VaryAxis", "design_id", "generate_designs",
-           "load_sweep", "parse_sweep", "run_design", "run_sweep", "run_tasks"]
+__all__ = [
+    "BatchError",
+    "Design",
+    "DesignResult",
+    "DesignTask",
+    "Interrupted",
+    "LocalPool",
+    "Outcome",
+    "SweepInterrupted",
+    "SweepMode",
+    "SweepResult",
+    "SweepSpec",
+    "VaryAxis",
+    "design_id",
+    "generate_designs",
+    "load_sweep",
+    "parse_sweep",
+    "run_design",
+    "run_sweep",
+    "run_tasks",
+]

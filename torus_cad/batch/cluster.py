@@ -29,15 +29,23 @@ def connect(scheduler: str, workers: int | None) -> tuple[Any, Any]:
     except ImportError:
         from torus_cad.runtime.extras import missing_extra_message
 
-        raise BatchError(missing_extra_message("--scheduler", "sweep", "dask.distributed")) from None
+        raise BatchError(
+            missing_extra_message("--scheduler", "sweep", "dask.distributed")
+        ) from None
     try:
         if scheduler == "local":
-            cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1,  # type: ignore[no-untyped-call]
-                                   threads_per_worker=1, processes=True, dashboard_address=None)
+            cluster = LocalCluster(
+                n_workers=workers or os.cpu_count() or 1,  # type: ignore[no-untyped-call]
+                threads_per_worker=1,
+                processes=True,
+                dashboard_address=None,
+            )
             return Client(cluster), cluster  # type: ignore[no-untyped-call]
         return Client(scheduler, timeout=f"{CONNECT_TIMEOUT_S}s"), None  # type: ignore[no-untyped-call]
     except (OSError, TimeoutError, ValueError) as error:
-        raise BatchError(f"cannot connect to the Dask scheduler at {scheduler!r}: {error}") from None
+        raise BatchError(
+            f"cannot connect to the Dask scheduler at {scheduler!r}: {error}"
+        ) from None
 
 
 def close_client(client: Any, cluster: Any) -> None:

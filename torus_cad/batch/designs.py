@@ -19,7 +19,14 @@ import numpy as np
 
 from torus_cad.batch.sweep_file import SweepMode, SweepSpec, VaryAxis
 
-__all__ = ["ID_LENGTH", "Design", "apply_axis_values", "design_id", "generate_designs", "unit_samples"]
+__all__ = [
+    "ID_LENGTH",
+    "Design",
+    "apply_axis_values",
+    "design_id",
+    "generate_designs",
+    "unit_samples",
+]
 
 ID_LENGTH = 12  #: hex digits of the SHA-256 kept as the design id (48 bits)
 
@@ -78,8 +85,9 @@ def _combinations(spec: SweepSpec) -> Iterator[tuple[Any, ...]]:
         yield tuple(axis.pick(float(u)) for axis, u in zip(spec.axes, row))
 
 
-def apply_axis_values(base: Mapping[str, Any], axes: Iterable[VaryAxis],
-                      combination: tuple[Any, ...]) -> dict[str, Any]:
+def apply_axis_values(
+    base: Mapping[str, Any], axes: Iterable[VaryAxis], combination: tuple[Any, ...]
+) -> dict[str, Any]:
     """A deep copy of ``base`` with each axis's value set.
 
     Args:
@@ -114,6 +122,12 @@ def generate_designs(spec: SweepSpec) -> list[Design]:
             continue
         seen.add(ident)
         parameters["name"] = ident
-        designs.append(Design(len(designs), ident, {axis.key: value for axis, value in zip(spec.axes, combination)},
-                              parameters))
+        designs.append(
+            Design(
+                len(designs),
+                ident,
+                {axis.key: value for axis, value in zip(spec.axes, combination)},
+                parameters,
+            )
+        )
     return designs

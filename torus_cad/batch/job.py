@@ -26,8 +26,16 @@ from torus_cad.batch.outcome import DesignResult, Outcome
 from torus_cad.errors import GeometryError, KernelError, ParameterError
 from torus_cad.parameters import PropellerParameters
 
-__all__ = ["FAILURE_FILE", "REFUSAL_FILE", "DesignTask", "prescreen", "read_design_status", "record_result",
-           "run_design", "verify_files"]
+__all__ = [
+    "FAILURE_FILE",
+    "REFUSAL_FILE",
+    "DesignTask",
+    "prescreen",
+    "read_design_status",
+    "record_result",
+    "run_design",
+    "verify_files",
+]
 
 REFUSAL_FILE = "refusal.json"
 FAILURE_FILE = "failure.json"
@@ -66,7 +74,11 @@ def run_design(task: DesignTask) -> DesignResult:
     from torus_cad.propeller import build_propeller  # once per process, not timed
 
     start = time.perf_counter()
-    scratch = Path(tempfile.mkdtemp(prefix="torus_batch_")) if task.write and task.folder is None else None
+    scratch = (
+        Path(tempfile.mkdtemp(prefix="torus_batch_"))
+        if task.write and task.folder is None
+        else None
+    )
     folder = scratch if scratch is not None else (Path(task.folder) if task.folder else None)
     outcome, reason, detail, error_type = Outcome.VALID, "", "", ""
     try:
@@ -79,7 +91,9 @@ def run_design(task: DesignTask) -> DesignResult:
     finally:
         if scratch is not None:
             shutil.rmtree(scratch, ignore_errors=True)
-    result = DesignResult(task.design_id, outcome, reason, time.perf_counter() - start, detail, error_type)
+    result = DesignResult(
+        task.design_id, outcome, reason, time.perf_counter() - start, detail, error_type
+    )
     if task.folder is not None:
         result = record_result(task, result)
     return result
@@ -98,11 +112,19 @@ def prescreen(task: DesignTask) -> DesignResult | None:
     try:
         params = PropellerParameters.from_dict(task.parameters)
         formats = params.export.formats
-        mesh = task.write and ((task.stl and ExportFormat.STL in formats) or ExportFormat.THREE_MF in formats)
+        mesh = task.write and (
+            (task.stl and ExportFormat.STL in formats) or ExportFormat.THREE_MF in formats
+        )
         check_design(params, mesh=mesh)  # the mesh's budget as the write checks it (output_set)
     except (ParameterError, GeometryError) as error:
-        result = DesignResult(task.design_id, Outcome.REFUSED, str(error), time.perf_counter() - start,
-                              error=type(error).__name__, prescreened=True)
+        result = DesignResult(
+            task.design_id,
+            Outcome.REFUSED,
+            str(error),
+            time.perf_counter() - start,
+            error=type(error).__name__,
+            prescreened=True,
+        )
         return record_result(task, result) if task.folder is not None else result
     except Exception:  # a bug is the worker's to record, with its traceback
         return None
@@ -164,12 +186,17 @@ def _stl_problem(data: bytes) -> str:
     count = int(np.frombuffer(data, dtype="<u4", count=1, offset=80)[0]) if len(data) >= 84 else -1
     if count <= 0 or len(data) != 84 + 50 * count:
         return f"the STL file is truncated or empty ({len(data)} bytes for {count} triangles)"
-    vertices = np.frombuffer(data, dtype=np.dtype([("n", "<f4", 3), ("v", "<f4", (3, 3)), ("a", "<u2")]),
-                             count=count, offset=84)["v"]
+    vertices = np.frombuffer(
+        data,
+        dtype=np.dtype([("n", "<f4", 3), ("v", "<f4", (3, 3)), ("a", "<u2")]),
+        count=count,
+        offset=84,
+    )["v"]
     return "" if np.all(np.isfinite(vertices)) else "the STL file holds non-finite coordinates"
 
 
 # -- status files ------------------------------------------------------------------------------
+
 
 def record_result(task: DesignTask, result: DesignResult) -> DesignResult:
     """Leave exactly one status file in the task's folder; a folder that cannot be written is noted in the reason.
@@ -187,16 +214,24 @@ def record_result(task: DesignTask, result: DesignResult) -> DesignResult:
             status_file = REFUSAL_FILE if result.outcome is Outcome.REFUSED else FAILURE_FILE
             stale = [folder / name for name in (REFUSAL_FILE, FAILURE_FILE) if name != status_file]
             stale += [folder / f"{task.design_id}.{suffix}" for suffix in ("json", "step", "stl")]
-            record = {"id": task.design_id, "status": result.outcome.value, "error": result.error,
-                      "reason": result.reason, "seconds": result.seconds, "prescreened": result.prescreened,
-                      "parameters": task.parameters}
+            record = {
+                "id": task.design_id,
+                "status": result.outcome.value,
+                "error": result.error,
+                "reason": result.reason,
+                "seconds": result.seconds,
+                "prescreened": result.prescreened,
+                "parameters": task.parameters,
+            }
             with atomic_path(folder / status_file) as temp:
                 temp.write_text(json.dumps(record, indent=2, allow_nan=False) + "\n")
         for path in stale:
             path.unlink(missing_ok=True)
     except (OSError, ValueError) as error:  # the outcome still reaches the parent and its table
         note = f"could not record the outcome in {folder}: {error}"
-        return dataclasses.replace(result, reason=f"{result.reason}; {note}" if result.reason else note)
+        return dataclasses.replace(
+            result, reason=f"{result.reason}; {note}" if result.reason else note
+        )
     return result
 
 
@@ -208,8 +243,9 @@ def _read_json(path: Path) -> dict[str, Any] | None:
     return data if isinstance(data, dict) else None
 
 
-def read_design_status(folder: Path, design_id: str, parameters: Mapping[str, Any],
-                       stl: bool) -> tuple[Outcome, dict[str, Any]] | None:
+def read_design_status(
+    folder: Path, design_id: str, parameters: Mapping[str, Any], stl: bool
+) -> tuple[Outcome, dict[str, Any]] | None:
     """The outcome recorded in a design's folder and its record (the report for a valid design), or None.
 
     Valid: the report ``<id>.json`` (for exactly these parameters) with its STEP file, and its

@@ -44,15 +44,27 @@ from torus_cad.batch.outcome import DesignResult, Outcome
 from torus_cad.errors import TorusCadError
 from torus_cad.runtime.processes import process_identity
 
-__all__ = ["BatchError", "Executor", "Interrupted", "Job", "LocalPool", "available_cores", "capped_workers",
-           "default_workers", "interrupts_raised", "raise_if_interrupted", "run_tasks"]
+__all__ = [
+    "BatchError",
+    "Executor",
+    "Interrupted",
+    "Job",
+    "LocalPool",
+    "available_cores",
+    "capped_workers",
+    "default_workers",
+    "interrupts_raised",
+    "raise_if_interrupted",
+    "run_tasks",
+]
 
 Job = Callable[[DesignTask], DesignResult]
 
 _POLL_SECONDS = 0.5  #: how often the loop wakes up when nothing finishes
 _WATCHDOG_SECONDS = 1.0  #: how often a worker checks that its parent is alive
 _PR_SET_PDEATHSIG = 1  #: prctl option (linux/prctl.h)
-_MAX_POOL_RESTARTS = 3  #: pool breaks in a row, with no design finishing between them, before giving up
+# : pool breaks in a row, with no design finishing between them, before giving up
+_MAX_POOL_RESTARTS = 3
 _WORKER_STOP_S = 5.0  #: how long a stopped worker may take to exit before pebble kills it, s
 
 
@@ -97,8 +109,12 @@ def default_workers() -> int:
     return available_cores()
 
 
-def capped_workers(requested: int | None, tasks: int, oversubscribe: bool = False,
-                   warn: Callable[[str], None] | None = None) -> int:
+def capped_workers(
+    requested: int | None,
+    tasks: int,
+    oversubscribe: bool = False,
+    warn: Callable[[str], None] | None = None,
+) -> int:
     """Worker processes to start for ``tasks`` designs: ``requested`` (default: one per core), never more
     than the tasks, and never more than the available cores unless ``oversubscribe``.
 
@@ -109,13 +125,17 @@ def capped_workers(requested: int | None, tasks: int, oversubscribe: bool = Fals
     count = max(1, min(requested or cores, tasks))
     if count > cores and not oversubscribe:
         if warn is not None:
-            warn(f"--workers {requested} capped at the {cores} core{'s' if cores > 1 else ''} available "
-                 f"(--oversubscribe to start {count})")
+            warn(
+                f"--workers {requested} capped at the {cores} core{'s' if cores > 1 else ''} available "
+                f"(--oversubscribe to start {count})"
+            )
         count = cores
     return count
 
 
-# -- worker processes -------------------------------------------------------------------------------
+# -- worker processes
+# -------------------------------------------------------------------------------
+
 
 def _worker_started(batch_pid: int) -> None:
     """Initialiser of every local worker: die with the batch's process; SIGTERM ends the worker at once.
@@ -131,8 +151,12 @@ def _worker_started(batch_pid: int) -> None:
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     with contextlib.suppress(OSError, AttributeError):  # not Linux: the watchdog below still works
         ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0)
-    threading.Thread(target=_watch_parents, args=(os.getppid(), batch_pid, process_identity(batch_pid)),
-                     name="torus-cad parent watchdog", daemon=True).start()
+    threading.Thread(
+        target=_watch_parents,
+        args=(os.getppid(), batch_pid, process_identity(batch_pid)),
+        name="torus-cad parent watchdog",
+        daemon=True,
+    ).start()
 
 
 def _watch_parents(worker_parent: int, batch_pid: int, batch_identity: str | None) -> None:
@@ -156,14 +180,19 @@ class LocalPool:
 
         self.workers = workers
         self.time_limit_s = time_limit_s
-        self._pool: Any = pebble.ProcessPool(max_workers=workers, initializer=_worker_started, initargs=(os.getpid(),),
-                                        context=_worker_context())
+        self._pool: Any = pebble.ProcessPool(
+            max_workers=workers,
+            initializer=_worker_started,
+            initargs=(os.getpid(),),
+            context=_worker_context(),
+        )
 
     def submit(self, fn: Callable[..., Any], /, *args: Any) -> Future[Any]:
         """Run ``fn(*args)`` in a worker; its future raises TimeoutError past the limit, ProcessExpired on a crash."""
         try:
             return self._pool.schedule(fn, args=args, timeout=self.time_limit_s)
-        except RuntimeError as error:  # pebble: "Unexpected error within the Pool" once it is broken
+        # pebble: "Unexpected error within the Pool" once it is broken
+        except RuntimeError as error:
             raise BrokenProcessPool(str(error)) from error
 
     def shutdown(self, wait: bool = True) -> None:
@@ -180,7 +209,8 @@ class LocalPool:
         worker still starting (reading its start-up data from the fork server) then fails to open them
         with a FileNotFoundError traceback. Uses pebble 5's internals (constraints.txt pins it); where
         they differ, pebble's own order is kept."""
-        # private: pebble has no public way to stop its workers before join; read as of Pebble==5.2.3 (constraints.txt)
+        # private: pebble has no public way to stop its workers before join; read as of
+        # Pebble==5.2.3 (constraints.txt)
         manager = getattr(getattr(self._pool, "_pool_manager", None), "worker_manager", None)
         workers = getattr(manager, "workers", None)
         loop = getattr(self._pool, "_pool_manager_loop", None)
@@ -206,7 +236,9 @@ def _worker_context() -> Any:
     return context
 
 
-# -- signals ----------------------------------------------------------------------------------------
+# -- signals
+# ----------------------------------------------------------------------------------------
+
 
 class _Latch:
     """The first signal of an :func:`interrupts_raised` block, until :func:`raise_if_interrupted` raises it."""
@@ -220,7 +252,9 @@ _latches: list[_Latch] = []  #: the open interrupts_raised blocks of the main th
 
 
 @contextmanager
-def interrupts_raised(signals: Iterable[int] = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)) -> Iterator[None]:
+def interrupts_raised(
+    signals: Iterable[int] = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP),
+) -> Iterator[None]:
     """Within the block, the first SIGINT, SIGTERM or SIGHUP is recorded, and :func:`raise_if_interrupted`
     raises it as :class:`Interrupted` at the caller's next safe point; later signals are ignored.
 
@@ -244,8 +278,11 @@ def interrupts_raised(signals: Iterable[int] = (signal.SIGINT, signal.SIGTERM, s
         if latch.signum is None:
             latch.signum = signum
 
-    previous = {signum: signal.signal(signum, handler) for signum in signals
-                if signal.getsignal(signum) is not signal.SIG_IGN}
+    previous = {
+        signum: signal.signal(signum, handler)
+        for signum in signals
+        if signal.getsignal(signum) is not signal.SIG_IGN
+    }
     _latches.append(latch)
     try:
         yield
@@ -253,7 +290,8 @@ def interrupts_raised(signals: Iterable[int] = (signal.SIGINT, signal.SIGTERM, s
         _latches.remove(latch)
         for signum, old in previous.items():
             signal.signal(signum, old)
-    if latch.signum is not None and not latch.raised:  # it arrived after the block's last safe point
+    # it arrived after the block's last safe point
+    if latch.signum is not None and not latch.raised:
         latch.raised = True
         raise Interrupted(latch.signum)
 
@@ -269,7 +307,9 @@ def raise_if_interrupted() -> None:
         raise Interrupted(latch.signum)
 
 
-# -- the loop ---------------------------------------------------------------------------------------
+# -- the loop
+# ---------------------------------------------------------------------------------------
+
 
 def _result_of(future: Future[Any], task: DesignTask, check_visible: bool) -> DesignResult:
     """The design's result, or the outcome the executor's exception stands for (recorded in its folder)."""
@@ -278,11 +318,19 @@ def _result_of(future: Future[Any], task: DesignTask, check_visible: bool) -> De
         result = _failure(error, task.design_id)
     else:
         result = future.result()
-        if not (check_visible and result.outcome is Outcome.VALID and task.folder is not None
-                and not (Path(task.folder) / f"{task.design_id}.json").is_file()):
+        if not (
+            check_visible
+            and result.outcome is Outcome.VALID
+            and task.folder is not None
+            and not (Path(task.folder) / f"{task.design_id}.json").is_file()
+        ):
             return result
-        result = DesignResult(task.design_id, Outcome.ERROR, f"the worker wrote {task.folder} but it is not visible "
-                              "here; the output folder must be on a file system shared by the workers and this machine")
+        result = DesignResult(
+            task.design_id,
+            Outcome.ERROR,
+            f"the worker wrote {task.folder} but it is not visible "
+            "here; the output folder must be on a file system shared by the workers and this machine",
+        )
     return record_result(task, result) if task.folder is not None else result
 
 
@@ -290,18 +338,32 @@ def _failure(error: BaseException, design_id: str) -> DesignResult:
     """The outcome of a design whose future failed: pebble's time-out or dead worker, Dask's killed worker."""
     if isinstance(error, TimeoutError):
         limit = error.args[1] if len(error.args) > 1 else "?"
-        return DesignResult(design_id, Outcome.TIMEOUT, f"no result within the time limit ({limit} s); "
-                            "the worker was stopped")
+        return DesignResult(
+            design_id,
+            Outcome.TIMEOUT,
+            f"no result within the time limit ({limit} s); the worker was stopped",
+        )
     if type(error).__name__ in ("ProcessExpired", "KilledWorker"):
         code = getattr(error, "exitcode", None)
-        return DesignResult(design_id, Outcome.CRASH, "the worker process died while running this design"
-                            + (f" (exit code {code})" if code is not None else "") + " (a crash inside OpenCascade?)")
-    return DesignResult(design_id, Outcome.ERROR, f"{type(error).__name__}: {error}")  # e.g. not sent to a worker
+        return DesignResult(
+            design_id,
+            Outcome.CRASH,
+            "the worker process died while running this design"
+            + (f" (exit code {code})" if code is not None else "")
+            + " (a crash inside OpenCascade?)",
+        )
+    # e.g. not sent to a worker
+    return DesignResult(design_id, Outcome.ERROR, f"{type(error).__name__}: {error}")
 
 
-def run_tasks(tasks: Iterable[DesignTask], on_result: Callable[[DesignTask, DesignResult], None],
-              make_executor: Callable[[], Executor], window: int | None, job: Job | None = None,
-              check_visible: bool = False) -> None:
+def run_tasks(
+    tasks: Iterable[DesignTask],
+    on_result: Callable[[DesignTask, DesignResult], None],
+    make_executor: Callable[[], Executor],
+    window: int | None,
+    job: Job | None = None,
+    check_visible: bool = False,
+) -> None:
     """Run ``tasks`` on executors from ``make_executor``, calling ``on_result`` as each one finishes.
 
     Args:
@@ -342,20 +404,24 @@ def run_tasks(tasks: Iterable[DesignTask], on_result: Callable[[DesignTask, Desi
                 in_flight[future] = queue.popleft()
                 raise_if_interrupted()
             done, _ = wait(list(in_flight), timeout=_POLL_SECONDS, return_when=FIRST_COMPLETED)
-            # A signal to the whole process group (what `timeout` and job schedulers send) ends the workers too:
-            # their futures fail with it, and the interruption is this run's, not a crash of those designs.
+            # A signal to the whole process group (what `timeout` and job schedulers send) ends the
+            # workers too: their futures fail with it, and the interruption is this run's, not a
+            # crash of those designs.
             raise_if_interrupted()
             broken = [in_flight.pop(future) for future in list(done) if _broke(future)]
-            for future in [future for future in in_flight if future in done]:  # found done together: as submitted
+            # found done together: as submitted
+            for future in [future for future in in_flight if future in done]:
                 task = in_flight.pop(future)
                 on_result(task, _result_of(future, task, check_visible))
                 restarts = 0
             if broken or refused:  # the pool broke (e.g. its workers cannot start): a new one
                 restarts += 1
                 if restarts > _MAX_POOL_RESTARTS:
-                    raise BatchError("the worker processes cannot start or keep dying before finishing a design "
-                                     "(a script that runs a batch needs an `if __name__ == \"__main__\":` guard, "
-                                     "as the workers re-import it)")
+                    raise BatchError(
+                        "the worker processes cannot start or keep dying before finishing a design "
+                        '(a script that runs a batch needs an `if __name__ == "__main__":` guard, '
+                        "as the workers re-import it)"
+                    )
                 queue.extendleft(reversed(broken + list(in_flight.values())))
                 in_flight.clear()
                 executor.shutdown(wait=False)

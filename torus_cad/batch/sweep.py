@@ -48,7 +48,8 @@ __all__ = ["MANIFEST_FILE", "SweepInterrupted", "SweepResult", "run_sweep"]
 
 MANIFEST_FILE = "sweep.json"
 
-_OTHER_OUTCOMES = (Outcome.BAD_FILE, Outcome.TIMEOUT, Outcome.CRASH, Outcome.PENDING)  # named in the summary if any
+# named in the summary if any
+_OTHER_OUTCOMES = (Outcome.BAD_FILE, Outcome.TIMEOUT, Outcome.CRASH, Outcome.PENDING)
 
 #: Exit code of a sweep in which a design failed, errored, crashed or timed out (refusals alone: 0).
 EXIT_DESIGNS_FAILED = 1
@@ -112,24 +113,40 @@ class SweepResult:
         """``"9 valid, 1 refused, 0 failed, 0 errors"``, any other outcome that occurred, and how many of the
         refused were pre-screened (``"; 1 refused before the kernel (pre-screened)"``)."""
         counts = self.counts()
-        text = (f"{counts[Outcome.VALID]} valid, {counts[Outcome.REFUSED]} refused, {counts[Outcome.FAILED]} failed, "
-                f"{counts[Outcome.ERROR]} errors")
-        others = [f"{counts[outcome]} {outcome.value}" for outcome in _OTHER_OUTCOMES
-                  if counts[outcome]]
-        screened = f"; {self.prescreened} refused before the kernel (pre-screened)" if self.prescreened else ""
+        text = (
+            f"{counts[Outcome.VALID]} valid, {counts[Outcome.REFUSED]} refused, {counts[Outcome.FAILED]} failed, "
+            f"{counts[Outcome.ERROR]} errors"
+        )
+        others = [
+            f"{counts[outcome]} {outcome.value}" for outcome in _OTHER_OUTCOMES if counts[outcome]
+        ]
+        screened = (
+            f"; {self.prescreened} refused before the kernel (pre-screened)"
+            if self.prescreened
+            else ""
+        )
         return ", ".join([text, *others]) + screened
 
     def summary(self) -> str:
         """A few lines for the terminal: counts, rate, the table, the first problems."""
-        lines = [f"sweep {self.spec.name!r}: {len(self.designs)} designs in {self.out_dir}"
-                 + (f" (INTERRUPTED by {self.interrupted_by}; rerun the same command to resume)"
-                    if self.interrupted_by else ""),
-                 f"  {self.counts_text()}",
-                 (f"  {self.built} built in {_duration(self.seconds)} ({self.designs_per_minute():.1f} designs/min, "
-                  f"{self.backend}); {self.skipped} already done")]
+        lines = [
+            f"sweep {self.spec.name!r}: {len(self.designs)} designs in {self.out_dir}"
+            + (
+                f" (INTERRUPTED by {self.interrupted_by}; rerun the same command to resume)"
+                if self.interrupted_by
+                else ""
+            ),
+            f"  {self.counts_text()}",
+            (
+                f"  {self.built} built in {_duration(self.seconds)} ({self.designs_per_minute():.1f} designs/min, "
+                f"{self.backend}); {self.skipped} already done"
+            ),
+        ]
         if self.tables:
             lines.append("  table: " + ", ".join(str(path) for path in self.tables.values()))
-        problems = [row for row in self.rows if row["status"] not in (Outcome.VALID, Outcome.PENDING)]
+        problems = [
+            row for row in self.rows if row["status"] not in (Outcome.VALID, Outcome.PENDING)
+        ]
         for row in problems[:5]:
             lines.append(f"  {row['status']} {row['id']}: {row['reason']}")
         if len(problems) > 5:
@@ -149,13 +166,27 @@ def _duration(seconds: float) -> str:
     seconds = max(0, round(seconds))
     hours, rest = divmod(seconds, 3600)
     minutes, secs = divmod(rest, 60)
-    return f"{hours}h{minutes:02d}m" if hours else f"{minutes}m{secs:02d}s" if minutes else f"{secs}s"
+    return (
+        f"{hours}h{minutes:02d}m" if hours else f"{minutes}m{secs:02d}s" if minutes else f"{secs}s"
+    )
 
 
-def run_sweep(spec: SweepSpec, out_dir: str | Path, *, workers: int | None = None, scheduler: str | None = None,
-              client: Any = None, stl: bool | None = None, density_g_cm3: float | None = None,
-              time_limit_s: float | None = None, rebuild: bool = False, progress: bool | None = None,
-              stream: TextIO | None = None, job: Job | None = None, oversubscribe: bool = False) -> SweepResult:
+def run_sweep(
+    spec: SweepSpec,
+    out_dir: str | Path,
+    *,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    client: Any = None,
+    stl: bool | None = None,
+    density_g_cm3: float | None = None,
+    time_limit_s: float | None = None,
+    rebuild: bool = False,
+    progress: bool | None = None,
+    stream: TextIO | None = None,
+    job: Job | None = None,
+    oversubscribe: bool = False,
+) -> SweepResult:
     """Run every design of ``spec`` that is not done yet and write the results table.
 
     Args:
@@ -178,10 +209,14 @@ def run_sweep(spec: SweepSpec, out_dir: str | Path, *, workers: int | None = Non
     ``pending``) and :class:`SweepInterrupted` is raised. Raises BatchError when the Dask
     scheduler or the worker processes cannot be used.
     """
-    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
+    if workers is not None and (
+        isinstance(workers, bool) or not isinstance(workers, int) or workers < 1
+    ):
         raise ParameterError(f"--workers must be a whole number >= 1, got {workers!r}")
     if time_limit_s is not None and not 0.0 < time_limit_s <= DESIGN_TIME_LIMIT_MAX_S:
-        raise ParameterError(f"--time-limit = {time_limit_s!r} is out of range; allowed (0, {DESIGN_TIME_LIMIT_MAX_S:g}] s")
+        raise ParameterError(
+            f"--time-limit = {time_limit_s!r} is out of range; allowed (0, {DESIGN_TIME_LIMIT_MAX_S:g}] s"
+        )
     out_dir = Path(out_dir).resolve()
     stl = spec.stl if stl is None else stl
     density = spec.density_g_cm3 if density_g_cm3 is None else density_g_cm3
@@ -191,23 +226,40 @@ def run_sweep(spec: SweepSpec, out_dir: str | Path, *, workers: int | None = Non
             designs, pending = _plan(spec, out_dir, stl, density, rebuild)
             raise_if_interrupted()  # before anything was built: no table to write
             if scheduler in (None, "local") and client is None and pending:
-                workers = capped_workers(workers, len(pending), oversubscribe,
-                                         lambda line: print(f"torus-cad: {line}", file=stream or sys.stderr))
-            result = _run(spec, out_dir, designs, pending, stl, workers=workers, scheduler=scheduler, client=client,
-                          time_limit_s=spec.time_limit_s if time_limit_s is None else time_limit_s,
-                          bar=BatchProgress(len(designs), len(designs) - len(pending), enabled=progress,
-                                            stream=stream), job=job)
+                workers = capped_workers(
+                    workers,
+                    len(pending),
+                    oversubscribe,
+                    lambda line: print(f"torus-cad: {line}", file=stream or sys.stderr),
+                )
+            result = _run(
+                spec,
+                out_dir,
+                designs,
+                pending,
+                stl,
+                workers=workers,
+                scheduler=scheduler,
+                client=client,
+                time_limit_s=spec.time_limit_s if time_limit_s is None else time_limit_s,
+                bar=BatchProgress(
+                    len(designs), len(designs) - len(pending), enabled=progress, stream=stream
+                ),
+                job=job,
+            )
     except SweepInterrupted:
         raise
-    except Interrupted as interrupt:  # before the first design, or while the table was written at the end
+    # before the first design, or while the table was written at the end
+    except Interrupted as interrupt:
         partial = result if result is not None else SweepResult(spec, out_dir, [])
         partial.interrupted_by = interrupt.signal_name
         raise SweepInterrupted(interrupt.signum, partial) from None
     return result
 
 
-def _plan(spec: SweepSpec, out_dir: Path, stl: bool, density: float | None,
-          rebuild: bool) -> tuple[list[Design], list[DesignTask]]:
+def _plan(
+    spec: SweepSpec, out_dir: Path, stl: bool, density: float | None, rebuild: bool
+) -> tuple[list[Design], list[DesignTask]]:
     """Every design (listed in ``sweep.json``) and the tasks of those not done yet."""
     designs = generate_designs(spec)
     _write_manifest(spec, designs, out_dir, stl, density)
@@ -215,14 +267,32 @@ def _plan(spec: SweepSpec, out_dir: Path, stl: bool, density: float | None,
     for design in designs:
         raise_if_interrupted()  # a large sweep's designs take a while to look up
         if rebuild or not _is_done(out_dir, design, stl):
-            pending.append(DesignTask(design.design_id, design.parameters,
-                                      str(out_dir / DESIGNS_DIR / design.design_id), stl=stl, density_g_cm3=density))
+            pending.append(
+                DesignTask(
+                    design.design_id,
+                    design.parameters,
+                    str(out_dir / DESIGNS_DIR / design.design_id),
+                    stl=stl,
+                    density_g_cm3=density,
+                )
+            )
     return designs, pending
 
 
-def _run(spec: SweepSpec, out_dir: Path, designs: list[Design], pending: list[DesignTask], stl: bool, *,
-         workers: int | None, scheduler: str | None, client: Any, time_limit_s: float, bar: BatchProgress,
-         job: Job | None) -> SweepResult:
+def _run(
+    spec: SweepSpec,
+    out_dir: Path,
+    designs: list[Design],
+    pending: list[DesignTask],
+    stl: bool,
+    *,
+    workers: int | None,
+    scheduler: str | None,
+    client: Any,
+    time_limit_s: float,
+    bar: BatchProgress,
+    job: Job | None,
+) -> SweepResult:
     """Run ``pending`` on the local pool or Dask; the table is written whatever happens."""
     result = SweepResult(spec, out_dir, designs, skipped=len(designs) - len(pending))
     results: dict[str, DesignResult] = {}
@@ -231,7 +301,8 @@ def _run(spec: SweepSpec, out_dir: Path, designs: list[Design], pending: list[De
         results[task.design_id] = design_result
         bar.update(design_result.outcome)
         if design_result.outcome is not Outcome.VALID and task.folder is not None:
-            remove_stale_staging(Path(task.folder))  # of a worker stopped at its time limit, or killed
+            # of a worker stopped at its time limit, or killed
+            remove_stale_staging(Path(task.folder))
 
     own_client = own_cluster = None
     start = time.perf_counter()
@@ -249,11 +320,18 @@ def _run(spec: SweepSpec, out_dir: Path, designs: list[Design], pending: list[De
         else:
             count = max(1, min(workers or default_workers(), len(pending)))
             result.backend = f"local pool, {count} worker{'s' if count > 1 else ''}"
-            run_tasks(tasks, on_result, lambda: LocalPool(count, time_limit_s), window=2 * count, job=job)
+            run_tasks(
+                tasks, on_result, lambda: LocalPool(count, time_limit_s), window=2 * count, job=job
+            )
     except Interrupted as interrupt:
         result.interrupted_by = interrupt.signal_name
-        for task in pending:  # the pool is stopped: the staging folders its workers had open are debris now
-            if task.design_id not in results and task.folder is not None and os.path.isdir(task.folder):
+        # the pool is stopped: the staging folders its workers had open are debris now
+        for task in pending:
+            if (
+                task.design_id not in results
+                and task.folder is not None
+                and os.path.isdir(task.folder)
+            ):
                 remove_stale_staging(Path(task.folder))
         raise SweepInterrupted(interrupt.signum, result) from None
     finally:
@@ -268,8 +346,9 @@ def _run(spec: SweepSpec, out_dir: Path, designs: list[Design], pending: list[De
     return result
 
 
-def _prescreened(tasks: Iterable[DesignTask], on_result: Callable[[DesignTask, DesignResult], None]
-                 ) -> Iterator[DesignTask]:
+def _prescreened(
+    tasks: Iterable[DesignTask], on_result: Callable[[DesignTask, DesignResult], None]
+) -> Iterator[DesignTask]:
     """The tasks that pass the kernel-free checks (:func:`torus_cad.batch.job.prescreen`), taken one at a time
     as workers free up; the others' refusals go to ``on_result`` at once, without a worker."""
     for task in tasks:
@@ -281,18 +360,31 @@ def _prescreened(tasks: Iterable[DesignTask], on_result: Callable[[DesignTask, D
 
 
 def _is_done(out_dir: Path, design: Design, stl: bool) -> bool:
-    status = read_design_status(out_dir / DESIGNS_DIR / design.design_id, design.design_id, design.parameters, stl)
+    status = read_design_status(
+        out_dir / DESIGNS_DIR / design.design_id, design.design_id, design.parameters, stl
+    )
     return status is not None and status[0].done
 
 
-def _write_manifest(spec: SweepSpec, designs: Sequence[Design], out_dir: Path, stl: bool,
-                    density_g_cm3: float | None) -> None:
+def _write_manifest(
+    spec: SweepSpec,
+    designs: Sequence[Design],
+    out_dir: Path,
+    stl: bool,
+    density_g_cm3: float | None,
+) -> None:
     """``sweep.json``: the sweep's settings and every design's id and varied values (strict JSON: no NaN)."""
     from torus_cad.runtime.files import atomic_path
 
     manifest = {
-        "name": spec.name, "source": spec.source, "mode": spec.mode.value, "samples": spec.samples,
-        "seed": spec.seed, "stl": stl, "density_g_cm3": density_g_cm3, "time_limit_s": spec.time_limit_s,
+        "name": spec.name,
+        "source": spec.source,
+        "mode": spec.mode.value,
+        "samples": spec.samples,
+        "seed": spec.seed,
+        "stl": stl,
+        "density_g_cm3": density_g_cm3,
+        "time_limit_s": spec.time_limit_s,
         "vary": {axis.key: axis.describe() for axis in spec.axes},
         "base": spec.base.to_dict(),
         "designs": [{"index": d.index, "id": d.design_id, "varied": d.varied} for d in designs],

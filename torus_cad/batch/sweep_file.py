@@ -45,7 +45,14 @@ from pydantic import Field, ValidationError
 from torus_cad.errors import ParameterError, shown
 from torus_cad.parameters import ParameterSpec, PropellerParameters, parameter_specs
 from torus_cad.parameters.config_file import read_config_table
-from torus_cad.parameters.schema import Bounds, Section, check_in_bounds, closest_key, param, parameter_error
+from torus_cad.parameters.schema import (
+    Bounds,
+    Section,
+    check_in_bounds,
+    closest_key,
+    param,
+    parameter_error,
+)
 from torus_cad.tolerances import DENSITY_LIMIT_G_CM3, DESIGN_TIME_LIMIT_MAX_S
 
 #: Most designs one sweep may hold (grid product or samples), checked from the axis sizes before
@@ -54,8 +61,21 @@ from torus_cad.tolerances import DENSITY_LIMIT_G_CM3, DESIGN_TIME_LIMIT_MAX_S
 MAX_SWEEP_DESIGNS = 1_000_000
 
 
-__all__ = ["Fail", "Leaf", "SweepMode", "SweepSpec", "VaryAxis", "axis_paths_relative_to", "check_distinct_axes",
-           "checked_value", "estimate_designs", "flatten_vary", "load_sweep", "parse_sweep", "resolve_leaf"]
+__all__ = [
+    "Fail",
+    "Leaf",
+    "SweepMode",
+    "SweepSpec",
+    "VaryAxis",
+    "axis_paths_relative_to",
+    "check_distinct_axes",
+    "checked_value",
+    "estimate_designs",
+    "flatten_vary",
+    "load_sweep",
+    "parse_sweep",
+    "resolve_leaf",
+]
 
 
 class SweepMode(StrEnum):
@@ -66,13 +86,17 @@ class SweepMode(StrEnum):
     LATIN_HYPERCUBE = "latin_hypercube"  #: a Latin hypercube (scipy.stats.qmc)
 
 
-#: Default per-design time limit of a sweep, s (a design takes about a second at the default resolution).
+#: Default per-design time limit of a sweep, s (a design takes about a second at the default
+#: resolution).
 DEFAULT_TIME_LIMIT_S = 300.0
 
 _TOP_KEYS = ("base", "sweep", "vary")
 _SPEC_KEYS = {"low", "high", "start", "stop", "step", "num"}
-_KEY_PATTERN = re.compile(r"^(?P<path>[A-Za-z_][A-Za-z0-9_]*(?:\.[A-Za-z_][A-Za-z0-9_]*)*)(?:\[(?P<index>\d+)\])?$")
-_RANGE_DIGITS = 12  # range values are rounded to 12 decimals so 0.1 steps give 0.3, not 0.30000000000000004
+_KEY_PATTERN = re.compile(
+    r"^(?P<path>[A-Za-z_][A-Za-z0-9_]*(?:\.[A-Za-z_][A-Za-z0-9_]*)*)(?:\[(?P<index>\d+)\])?$"
+)
+# range values are rounded to 12 decimals so 0.1 steps give 0.3, not 0.30000000000000004
+_RANGE_DIGITS = 12
 
 Fail = Callable[[str], ParameterError]
 
@@ -160,12 +184,14 @@ def load_sweep(path: str | Path) -> SweepSpec:
     """Read and check a sweep file; any problem raises a one-line ParameterError naming the key."""
     path = Path(path)
     source = f"sweep file {str(path)!r}"
-    data = read_config_table(path, "sweep file")  # untrusted like a design: regular file, capped, BOM allowed
+    # untrusted like a design: regular file, capped, BOM allowed
+    data = read_config_table(path, "sweep file")
     return parse_sweep(data, base_dir=path.parent, name=path.stem, source=source)
 
 
-def parse_sweep(data: Mapping[str, Any], base_dir: str | Path = ".", name: str = "sweep",
-                source: str = "sweep") -> SweepSpec:
+def parse_sweep(
+    data: Mapping[str, Any], base_dir: str | Path = ".", name: str = "sweep", source: str = "sweep"
+) -> SweepSpec:
     """Check a sweep given as a mapping (the parsed TOML); ``base.config`` and file paths in the design
     (``airfoil.file``, inline or varied) are relative to ``base_dir``, the sweep file's folder."""
 
@@ -184,11 +210,17 @@ def parse_sweep(data: Mapping[str, Any], base_dir: str | Path = ".", name: str =
     vary = data.get("vary", {})
     if not isinstance(vary, Mapping):
         raise fail("[vary] must be a table of parameter keys")
-    axes = tuple(axis_paths_relative_to(_parse_axis(key, spec, mode, fail), folder) for key, spec in flatten_vary(vary))
+    axes = tuple(
+        axis_paths_relative_to(_parse_axis(key, spec, mode, fail), folder)
+        for key, spec in flatten_vary(vary)
+    )
     check_distinct_axes(axes, fail)
     if mode is SweepMode.GRID:
-        _check_budget(math.prod(len(axis.values) for axis in axes), [(axis.key, len(axis.values)) for axis in axes],
-                      fail)
+        _check_budget(
+            math.prod(len(axis.values) for axis in axes),
+            [(axis.key, len(axis.values)) for axis in axes],
+            fail,
+        )
     return SweepSpec(base=base, axes=axes, source=source, **settings)
 
 
@@ -202,8 +234,10 @@ def _check_budget(count: float, sizes: list[tuple[str, float]], fail: Fail) -> N
     if count <= MAX_SWEEP_DESIGNS:
         return
     product = " x ".join(f"{_count(size)} ({key})" for key, size in sizes) if len(sizes) > 1 else ""
-    raise fail(f"the sweep has {_count(count)} designs{' = ' + product if product else ''}; the limit is "
-               f"{MAX_SWEEP_DESIGNS:,} designs per sweep; use coarser steps or fewer values")
+    raise fail(
+        f"the sweep has {_count(count)} designs{' = ' + product if product else ''}; the limit is "
+        f"{MAX_SWEEP_DESIGNS:,} designs per sweep; use coarser steps or fewer values"
+    )
 
 
 def _count(value: float) -> str:
@@ -218,13 +252,25 @@ class SweepTable(Section):
 
     mode: SweepMode = param(SweepMode.GRID, strict=False, doc="grid | random | latin_hypercube")
     samples: int | None = param(None, ge=1, doc="random / latin_hypercube only: how many designs")
-    seed: int = param(0, ge=0, le=2**63 - 1, doc="random / latin_hypercube only: the sampler's seed")
+    seed: int = param(
+        0, ge=0, le=2**63 - 1, doc="random / latin_hypercube only: the sampler's seed"
+    )
     name: str = param("", doc="the sweep's name (default: the file's stem)")
     stl: bool = param(True, doc="write each design's STL too")
-    density_g_cm3: float | None = param(None, unit="g/cm^3", gt=0.0, le=DENSITY_LIMIT_G_CM3,
-                                        doc="material density for the mass (default: PLA, 1.24)")
-    time_limit_s: float = param(DEFAULT_TIME_LIMIT_S, unit="s", gt=0.0, le=DESIGN_TIME_LIMIT_MAX_S,
-                                doc="a design running longer is stopped and recorded as 'timeout'")
+    density_g_cm3: float | None = param(
+        None,
+        unit="g/cm^3",
+        gt=0.0,
+        le=DENSITY_LIMIT_G_CM3,
+        doc="material density for the mass (default: PLA, 1.24)",
+    )
+    time_limit_s: float = param(
+        DEFAULT_TIME_LIMIT_S,
+        unit="s",
+        gt=0.0,
+        le=DESIGN_TIME_LIMIT_MAX_S,
+        doc="a design running longer is stopped and recorded as 'timeout'",
+    )
 
 
 class _SettingsTable(Section):
@@ -241,18 +287,28 @@ def _parse_settings(settings: Any, name: str, fail: Fail) -> dict[str, Any]:
         raise fail("sweep.samples applies to mode = 'random' or 'latin_hypercube', not 'grid'")
     if table.mode is not SweepMode.GRID:
         if table.samples is None:
-            raise fail(f"sweep.samples must be a whole number >= 1 for mode = {table.mode.value!r}, got None")
+            raise fail(
+                f"sweep.samples must be a whole number >= 1 for mode = {table.mode.value!r}, got None"
+            )
         _check_budget(table.samples, [], fail)
-    return {"name": table.name or name, "mode": table.mode, "samples": table.samples, "seed": table.seed,
-            "stl": table.stl, "density_g_cm3": table.density_g_cm3, "time_limit_s": table.time_limit_s}
+    return {
+        "name": table.name or name,
+        "mode": table.mode,
+        "samples": table.samples,
+        "seed": table.seed,
+        "stl": table.stl,
+        "density_g_cm3": table.density_g_cm3,
+        "time_limit_s": table.time_limit_s,
+    }
 
 
 def _parse_base(table: Any, base_dir: Path, fail: Fail) -> PropellerParameters:
     if not isinstance(table, Mapping):
-        raise fail("[base] must be a table of design parameters (or config = \"path.toml\")")
+        raise fail('[base] must be a table of design parameters (or config = "path.toml")')
     inline = dict(table)
     config = inline.pop("config", None)
-    inline = PropellerParameters.paths_relative_to(inline, base_dir)  # as the build reads a design file
+    # as the build reads a design file
+    inline = PropellerParameters.paths_relative_to(inline, base_dir)
     if config is None:
         merged: dict[str, Any] = PropellerParameters().to_dict()
     elif isinstance(config, str):
@@ -383,7 +439,7 @@ def resolve_leaf(key: str, fail: Fail) -> tuple[tuple[str, ...], int | None, Lea
     where = f"vary.{shown(key)}"
     match = _KEY_PATTERN.match(key)
     if not match:
-        raise fail(f"{where} is not a parameter key; write e.g. \"hub.radius\" or \"centerline.p2[2]\"")
+        raise fail(f'{where} is not a parameter key; write e.g. "hub.radius" or "centerline.p2[2]"')
     dotted = match["path"]
     index = None if match["index"] is None else int(match["index"])
     if dotted == "name":
@@ -398,7 +454,13 @@ def resolve_leaf(key: str, fail: Fail) -> tuple[tuple[str, ...], int | None, Lea
     path = tuple(dotted.split("."))
     if index is None:  # a choice is one of its Enum's values, as written in a design file
         choices = tuple(str(choice.value) for choice in spec.choices)
-        return path, index, Leaf(dotted, str if choices else spec.kind, spec.length, spec.bounds, spec.unit, choices)
+        return (
+            path,
+            index,
+            Leaf(
+                dotted, str if choices else spec.kind, spec.length, spec.bounds, spec.unit, choices
+            ),
+        )
     if spec.kind is not tuple:
         raise fail(f"{where}: {dotted} is not a vector, so [{index}] does not apply")
     if index >= spec.length:
@@ -420,28 +482,40 @@ def _parse_axis(key: str, spec: Any, mode: SweepMode, fail: Fail) -> VaryAxis:
         values = tuple(value_of(item, f"item {i}") for i, item in enumerate(spec))
         return VaryAxis(key, path, index, values=values, integer=integer)
     if not isinstance(spec, Mapping):
-        raise fail(f"{where} must be a list, {{start, stop, step}} / {{start, stop, num}} or {{low, high}}, "
-                   f"got {shown(spec)}")
+        raise fail(
+            f"{where} must be a list, {{start, stop, step}} / {{start, stop, num}} or {{low, high}}, "
+            f"got {shown(spec)}"
+        )
     keys = set(spec)
     if not leaf.numeric:
         raise fail(f"{where}: ranges and bounds need a number parameter; give a list of values")
     if keys == {"low", "high"}:
         if mode is SweepMode.GRID:
-            raise fail(f"{where}: bounds {{low, high}} need sweep.mode = 'random' or 'latin_hypercube'; "
-                       "a grid takes a list or {start, stop, step}")
+            raise fail(
+                f"{where}: bounds {{low, high}} need sweep.mode = 'random' or 'latin_hypercube'; "
+                "a grid takes a list or {start, stop, step}"
+            )
         low, high = value_of(spec["low"], "low"), value_of(spec["high"], "high")
         if not low < high:
             raise fail(f"{where}: low = {low!r} must be below high = {high!r}")
         return VaryAxis(key, path, index, low=low, high=high, integer=integer)
     if keys in ({"start", "stop", "step"}, {"start", "stop", "num"}):
         start, stop = value_of(spec["start"], "start"), value_of(spec["stop"], "stop")
-        return VaryAxis(key, path, index, values=_range_values(spec, start, stop, leaf, where, fail),
-                        integer=integer)
-    raise fail(f"{where} has keys {sorted(keys)}; use {{start, stop, step}}, {{start, stop, num}} or {{low, high}}")
+        return VaryAxis(
+            key,
+            path,
+            index,
+            values=_range_values(spec, start, stop, leaf, where, fail),
+            integer=integer,
+        )
+    raise fail(
+        f"{where} has keys {sorted(keys)}; use {{start, stop, step}}, {{start, stop, num}} or {{low, high}}"
+    )
 
 
-def _range_values(spec: Mapping[str, Any], start: Any, stop: Any, leaf: Leaf, where: str,
-                  fail: Fail) -> tuple[Any, ...]:
+def _range_values(
+    spec: Mapping[str, Any], start: Any, stop: Any, leaf: Leaf, where: str, fail: Fail
+) -> tuple[Any, ...]:
     """The values of ``{start, stop, step}`` (stop included when it falls on a step) or ``{start, stop, num}``.
 
     The number of values is checked against the budget before any value is made; ``start``
@@ -454,18 +528,27 @@ def _range_values(spec: Mapping[str, Any], start: Any, stop: Any, leaf: Leaf, wh
         if not _is_int(num) or num < 1:
             raise fail(f"{where}: num must be a whole number >= 1, got {shown(num)}")
         if leaf.kind is int:
-            raise fail(f"{where}: {{start, stop, num}} is for float parameters; use {{start, stop, step}}")
+            raise fail(
+                f"{where}: {{start, stop, num}} is for float parameters; use {{start, stop, step}}"
+            )
         _check_budget(num, [], lambda message: fail(f"{where}: {message}"))
-        return (start,) if num == 1 else tuple(round(start + (stop - start) * i / (num - 1), _RANGE_DIGITS)
-                                               for i in range(num))
+        return (
+            (start,)
+            if num == 1
+            else tuple(
+                round(start + (stop - start) * i / (num - 1), _RANGE_DIGITS) for i in range(num)
+            )
+        )
     step = _checked_type(spec["step"], leaf, f"{where} step", fail)
     if not step > 0:
         raise fail(f"{where}: step must be positive, got {shown(step)}")
     spans = (stop - start) / step  # a float even for ints: inf when step is tiny
     _check_budget(spans + 1.0, [], lambda message: fail(f"{where}: {message}"))
     count = math.floor(spans + 1e-9) + 1
-    return tuple(start + i * step if leaf.kind is int else round(start + i * step, _RANGE_DIGITS)
-                 for i in range(count))
+    return tuple(
+        start + i * step if leaf.kind is int else round(start + i * step, _RANGE_DIGITS)
+        for i in range(count)
+    )
 
 
 def checked_value(item: Any, leaf: Leaf, where: str, fail: Fail) -> Any:
@@ -483,7 +566,9 @@ def checked_value(item: Any, leaf: Leaf, where: str, fail: Fail) -> Any:
     value = _checked_type(item, leaf, where, fail)
     if leaf.choices:
         if value not in leaf.choices:
-            raise fail(f"{where} = {shown(value)} is not allowed; choose one of {', '.join(leaf.choices)}")
+            raise fail(
+                f"{where} = {shown(value)} is not allowed; choose one of {', '.join(leaf.choices)}"
+            )
         return value
     numbers = value if isinstance(value, list) else [value] if leaf.numeric else []
     for position, number in enumerate(numbers):
@@ -514,11 +599,18 @@ def _checked_type(item: Any, leaf: Leaf, where: str, fail: Fail) -> Any:
             raise fail(f"{where} must be a string, got {shown(item)}")
         return item
     if leaf.kind is tuple:
-        if not isinstance(item, list) or len(item) != leaf.length or not all(
-                _is_number(x) and math.isfinite(x) for x in item):
-            raise fail(f"{where} must be a list of {leaf.length} finite numbers (a whole vector), got {shown(item)}")
+        if (
+            not isinstance(item, list)
+            or len(item) != leaf.length
+            or not all(_is_number(x) and math.isfinite(x) for x in item)
+        ):
+            raise fail(
+                f"{where} must be a list of {leaf.length} finite numbers (a whole vector), got {shown(item)}"
+            )
         return [float(x) for x in item]
-    raise fail(f"{where}: cannot vary this parameter")  # pragma: no cover - the schema has no other kinds
+    raise fail(
+        f"{where}: cannot vary this parameter"
+    )  # pragma: no cover - the schema has no other kinds
 
 
 def _within(leaf: Leaf) -> str:

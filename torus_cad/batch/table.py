@@ -20,7 +20,15 @@ from torus_cad.batch.job import read_design_status
 from torus_cad.batch.outcome import DesignResult, Outcome
 from torus_cad.runtime.stages import Stage
 
-__all__ = ["DESIGNS_DIR", "STAGES", "TABLE_CSV", "TABLE_PARQUET", "collect_rows", "table_columns", "write_table"]
+__all__ = [
+    "DESIGNS_DIR",
+    "STAGES",
+    "TABLE_CSV",
+    "TABLE_PARQUET",
+    "collect_rows",
+    "table_columns",
+    "write_table",
+]
 
 DESIGNS_DIR = "designs"
 TABLE_CSV = "results.csv"
@@ -29,20 +37,39 @@ TABLE_PARQUET = "results.parquet"
 #: Stage columns of the table (``time_<stage>_s``), in pipeline order.
 STAGES = tuple(stage.value for stage in Stage)
 
-_PROPERTY_COLUMNS = ("volume_mm3", "surface_area_mm2", "mass_g", "density_g_cm3", "spin_axis_inertia_g_mm2",
-                     "spin_axis_inertia_mm5", "centroid_x_mm", "centroid_y_mm", "centroid_z_mm",
-                     "section_fit_error_mm")
+_PROPERTY_COLUMNS = (
+    "volume_mm3",
+    "surface_area_mm2",
+    "mass_g",
+    "density_g_cm3",
+    "spin_axis_inertia_g_mm2",
+    "spin_axis_inertia_mm5",
+    "centroid_x_mm",
+    "centroid_y_mm",
+    "centroid_z_mm",
+    "section_fit_error_mm",
+)
 
 
 def table_columns(varied_keys: Sequence[str]) -> list[str]:
     """The columns: id and status (``prescreened``: refused before any worker built it), the varied keys, mass
     properties, stage times (s), folder."""
-    return (["index", "id", "status", "valid", "reason", "prescreened"] + list(varied_keys) + list(_PROPERTY_COLUMNS)
-            + [f"time_{stage}_s" for stage in STAGES] + ["time_total_s", "folder"])
+    return (
+        ["index", "id", "status", "valid", "reason", "prescreened"]
+        + list(varied_keys)
+        + list(_PROPERTY_COLUMNS)
+        + [f"time_{stage}_s" for stage in STAGES]
+        + ["time_total_s", "folder"]
+    )
 
 
-def collect_rows(designs: Sequence[Design], varied_keys: Sequence[str], out_dir: str | Path, stl: bool = True,
-                 results: Mapping[str, DesignResult] | None = None) -> list[dict[str, Any]]:
+def collect_rows(
+    designs: Sequence[Design],
+    varied_keys: Sequence[str],
+    out_dir: str | Path,
+    stl: bool = True,
+    results: Mapping[str, DesignResult] | None = None,
+) -> list[dict[str, Any]]:
     """The table, rebuilt from the per-design files (``results`` fill in designs with no file).
 
     Vector values of varied keys are JSON strings (``"[25.0, 3.0, 22.0]"``); numbers stay numbers;
@@ -53,18 +80,30 @@ def collect_rows(designs: Sequence[Design], varied_keys: Sequence[str], out_dir:
     rows = []
     for design in designs:
         row: dict[str, Any] = dict.fromkeys(columns)
-        row.update(index=design.index, id=design.design_id, status=Outcome.PENDING.value, valid=False,
-                   prescreened=False, reason="", folder=f"{DESIGNS_DIR}/{design.design_id}")
+        row.update(
+            index=design.index,
+            id=design.design_id,
+            status=Outcome.PENDING.value,
+            valid=False,
+            prescreened=False,
+            reason="",
+            folder=f"{DESIGNS_DIR}/{design.design_id}",
+        )
         for key, value in design.varied.items():
             row[key] = json.dumps(value) if isinstance(value, list) else value
-        status = read_design_status(out_dir / DESIGNS_DIR / design.design_id, design.design_id, design.parameters,
-                                    stl)
+        status = read_design_status(
+            out_dir / DESIGNS_DIR / design.design_id, design.design_id, design.parameters, stl
+        )
         if status is not None:
             _fill_recorded(row, *status)
         elif results and design.design_id in results:
             result = results[design.design_id]
-            row.update(status=result.outcome.value, reason=result.reason, time_total_s=result.seconds,
-                       prescreened=result.prescreened)
+            row.update(
+                status=result.outcome.value,
+                reason=result.reason,
+                time_total_s=result.seconds,
+                prescreened=result.prescreened,
+            )
         rows.append(row)
     return rows
 
@@ -81,15 +120,18 @@ def _fill_recorded(row: dict[str, Any], outcome: Outcome, record: Mapping[str, A
     for column in _PROPERTY_COLUMNS:
         if column in record:
             row[column] = record[column]
-    row["centroid_x_mm"], row["centroid_y_mm"], row["centroid_z_mm"] = record.get("centroid_mm") or [None] * 3
+    row["centroid_x_mm"], row["centroid_y_mm"], row["centroid_z_mm"] = (
+        record.get("centroid_mm") or [None] * 3
+    )
     stages = record.get("stage_seconds", {})
     for stage in STAGES:
         row[f"time_{stage}_s"] = stages.get(stage)
     row["time_total_s"] = float(sum(stages.values()))
 
 
-def write_table(rows: Sequence[Mapping[str, Any]], out_dir: str | Path,
-                columns: Sequence[str] | None = None) -> dict[str, Path]:
+def write_table(
+    rows: Sequence[Mapping[str, Any]], out_dir: str | Path, columns: Sequence[str] | None = None
+) -> dict[str, Path]:
     """Write ``results.csv`` (and ``results.parquet`` when pyarrow is installed) atomically; paths by format."""
     from torus_cad.runtime.files import atomic_path
 
@@ -107,8 +149,11 @@ def write_table(rows: Sequence[Mapping[str, Any]], out_dir: str | Path,
     except ImportError:
         return paths
     paths["parquet"] = out_dir / TABLE_PARQUET
-    table = pyarrow.Table.from_pylist([{key: row.get(key) for key in columns} for row in rows]) if rows \
+    table = (
+        pyarrow.Table.from_pylist([{key: row.get(key) for key in columns} for row in rows])
+        if rows
         else pyarrow.table({key: [] for key in columns})
+    )
     with atomic_path(paths["parquet"]) as temp:
         pyarrow.parquet.write_table(table, temp)
     return paths

@@ -67,8 +67,10 @@ TRAILING_EDGE_SAMPLING = 400
 #: crossing triangle, new element size as a fraction of that edge.
 REFINE_ROUNDS, REFINE_RADIUS_EDGES, REFINE_FACTOR = 4, 2.0, 0.35
 #: What to change when gmsh cannot mesh the domain (a crossing surface mesh, a volume mesher stop).
-CROSSING_ADVICE = ("Finer sizes near the trailing edge help: raise cfd.curvature_cells (the default 8 refines "
-                   "the trailing edge) or cfd.cells_per_chord (default 10)")
+CROSSING_ADVICE = (
+    "Finer sizes near the trailing edge help: raise cfd.curvature_cells (the default 8 refines "
+    "the trailing edge) or cfd.cells_per_chord (default 10)"
+)
 #: gmsh algorithms: 2D Frontal-Delaunay (gmsh falls back to MeshAdapt per face), 3D Delaunay.
 ALGORITHM_2D, ALGORITHM_3D = 6, 1
 
@@ -82,9 +84,11 @@ def import_gmsh() -> Any:
     except ImportError:
         raise MissingExtraError(missing_extra_message("cfd", "cfd", "gmsh")) from None
     except OSError as error:
-        raise MissingExtraError(f"gmsh's library does not load ({error}); install the cfd extra "
-                                f"({install_line('cfd')}) and the system libraries it links, on Debian: "
-                                "apt-get install libglu1-mesa libxcursor1 libxft2 libxinerama1 libgl1") from None
+        raise MissingExtraError(
+            f"gmsh's library does not load ({error}); install the cfd extra "
+            f"({install_line('cfd')}) and the system libraries it links, on Debian: "
+            "apt-get install libglu1-mesa libxcursor1 libxft2 libxinerama1 libgl1"
+        ) from None
     return gmsh
 
 
@@ -103,7 +107,10 @@ def gmsh_session(gmsh: Any, threads: int) -> Iterator[None]:
     """gmsh initialised quietly for one model; finalised afterwards (unless the caller had it running)."""
     owner = not gmsh.isInitialized()
     if owner:
-        gmsh.initialize(readConfigFiles=False, interruptible=threading.current_thread() is threading.main_thread())
+        gmsh.initialize(
+            readConfigFiles=False,
+            interruptible=threading.current_thread() is threading.main_thread(),
+        )
     gmsh.option.setNumber("General.Terminal", 0)
     gmsh.option.setNumber("General.NumThreads", threads or (os.cpu_count() or 1))
     gmsh.model.add("torus_cad_cfd")
@@ -171,26 +178,44 @@ def build_domain(gmsh: Any, step_path: Path, domain: Domain) -> DomainEntities:
         imported = occ.importShapes(str(step_path))
         solids = [tag for dim, tag in imported if dim == 3]
         if len(solids) != 1:
-            raise KernelError(f"gmsh failed at step 'import the propeller STEP': expected one solid, got {len(solids)}")
+            raise KernelError(
+                f"gmsh failed at step 'import the propeller STEP': expected one solid, got {len(solids)}"
+            )
     with gmsh_step("fragment the domain"):
-        zone = occ.addCylinder(0, 0, domain.zone_z[0], 0, 0, domain.zone_z[1] - domain.zone_z[0], domain.zone_radius)
-        outer = occ.addCylinder(0, 0, domain.outer_z[0], 0, 0, domain.outer_z[1] - domain.outer_z[0],
-                                domain.outer_radius)
+        zone = occ.addCylinder(
+            0, 0, domain.zone_z[0], 0, 0, domain.zone_z[1] - domain.zone_z[0], domain.zone_radius
+        )
+        outer = occ.addCylinder(
+            0,
+            0,
+            domain.outer_z[0],
+            0,
+            0,
+            domain.outer_z[1] - domain.outer_z[0],
+            domain.outer_radius,
+        )
         _, pieces = occ.fragment([(3, outer)], [(3, zone), (3, solids[0])])
         occ.synchronize()
         propeller = {tag for _, tag in pieces[2]}
         rotating = {tag for _, tag in pieces[1]} - propeller
         fluid = {tag for _, tag in pieces[0]} - rotating - propeller
         if not (propeller and rotating and fluid):
-            raise KernelError("gmsh failed at step 'fragment the domain': the propeller, rotating zone and outer "
-                              "region did not come out as separate volumes")
+            raise KernelError(
+                "gmsh failed at step 'fragment the domain': the propeller, rotating zone and outer "
+                "region did not come out as separate volumes"
+            )
         wall = _boundary(gmsh, propeller)
         occ.remove([(3, tag) for tag in sorted(propeller)])
         occ.synchronize()
     zone_faces, fluid_faces = _boundary(gmsh, rotating), _boundary(gmsh, fluid)
     interface = zone_faces & fluid_faces
-    surfaces = {"propeller": sorted(wall), "rotating_interface": sorted(interface),
-                "inlet": [], "outlet": [], "farfield": []}
+    surfaces = {
+        "propeller": sorted(wall),
+        "rotating_interface": sorted(interface),
+        "inlet": [],
+        "outlet": [],
+        "farfield": [],
+    }
     for tag in sorted(fluid_faces - interface):
         _, _, zmin, _, _, zmax = gmsh.model.getBoundingBox(2, tag)
         flat = zmax - zmin < 1e-6 * domain.outer_radius
@@ -202,25 +227,37 @@ def build_domain(gmsh: Any, step_path: Path, domain: Domain) -> DomainEntities:
             surfaces["farfield"].append(tag)
     empty = [name for name, tags in surfaces.items() if not tags]
     if empty:
-        raise KernelError(f"gmsh failed at step 'find the boundaries': no faces for {', '.join(empty)}")
+        raise KernelError(
+            f"gmsh failed at step 'find the boundaries': no faces for {', '.join(empty)}"
+        )
     return DomainEntities(surfaces, {"rotating_zone": sorted(rotating), "fluid": sorted(fluid)})
 
 
 def _boundary(gmsh: Any, volumes: set[int]) -> set[int]:
-    faces = gmsh.model.getBoundary([(3, tag) for tag in sorted(volumes)], combined=False, oriented=False)
+    faces = gmsh.model.getBoundary(
+        [(3, tag) for tag in sorted(volumes)], combined=False, oriented=False
+    )
     return {abs(tag) for _, tag in faces}
 
 
-def _trailing_edge_field(gmsh: Any, edges: TrailingEdges, domain: Domain, growth_rate: float) -> int:
+def _trailing_edge_field(
+    gmsh: Any, edges: TrailingEdges, domain: Domain, growth_rate: float
+) -> int:
     """A size field around the trailing edges: ``TRAILING_EDGE_SIZE_PER_THICKNESS`` x their thickness
     (at least MIN_SIZE_FRACTION of the surface size) on them, growing by ``growth_rate`` away.
 
     The edges are added to the model as free splines (in no physical group, not written), only for
     gmsh's distance field."""
     occ, fields = gmsh.model.occ, gmsh.model.mesh.field
-    splines = [occ.addSpline([occ.addPoint(*map(float, point)) for point in curve]) for curve in edges.curves_mm]
+    splines = [
+        occ.addSpline([occ.addPoint(*map(float, point)) for point in curve])
+        for curve in edges.curves_mm
+    ]
     occ.synchronize()
-    size = max(TRAILING_EDGE_SIZE_PER_THICKNESS * edges.thickness_mm, MIN_SIZE_FRACTION * domain.surface_size)
+    size = max(
+        TRAILING_EDGE_SIZE_PER_THICKNESS * edges.thickness_mm,
+        MIN_SIZE_FRACTION * domain.surface_size,
+    )
     distance = fields.add("Distance")
     fields.setNumbers(distance, "CurvesList", splines)
     fields.setNumber(distance, "Sampling", TRAILING_EDGE_SAMPLING)
@@ -229,8 +266,13 @@ def _trailing_edge_field(gmsh: Any, edges: TrailingEdges, domain: Domain, growth
     return int(field)
 
 
-def set_sizes(gmsh: Any, domain: Domain, settings: Cfd, entities: DomainEntities,
-              edges: TrailingEdges | None = None) -> int:
+def set_sizes(
+    gmsh: Any,
+    domain: Domain,
+    settings: Cfd,
+    entities: DomainEntities,
+    edges: TrailingEdges | None = None,
+) -> int:
     """Element sizes: ``surface_size`` on the propeller growing linearly with the distance from it
     (neighbours differ by about ``growth_rate``), capped at ``far_size``; on the two cylinders at most
     1/CYLINDER_SEGMENTS of their circumference (so their facets keep the volumes within ~0.1 %);
@@ -246,12 +288,19 @@ def set_sizes(gmsh: Any, domain: Domain, settings: Cfd, entities: DomainEntities
     fields.setNumbers(distance, "SurfacesList", entities.surfaces["propeller"])
     fields.setNumber(distance, "Sampling", DISTANCE_SAMPLING)
     growth = fields.add("MathEval")
-    fields.setString(growth, "F", f"Min({domain.far_size!r}, {domain.surface_size!r} + "
-                                 f"{settings.growth_rate - 1.0!r} * F{distance})")
+    fields.setString(
+        growth,
+        "F",
+        f"Min({domain.far_size!r}, {domain.surface_size!r} + "
+        f"{settings.growth_rate - 1.0!r} * F{distance})",
+    )
     limits = [growth]
     if edges is not None:
         limits.append(_trailing_edge_field(gmsh, edges, domain, settings.growth_rate))
-    for group, radius in (("rotating_interface", domain.zone_radius), ("farfield", domain.outer_radius)):
+    for group, radius in (
+        ("rotating_interface", domain.zone_radius),
+        ("farfield", domain.outer_radius),
+    ):
         cap = fields.add("Constant")
         fields.setNumbers(cap, "SurfacesList", entities.surfaces[group])
         fields.setNumber(cap, "VIn", 2.0 * np.pi * radius / CYLINDER_SEGMENTS)
@@ -259,10 +308,16 @@ def set_sizes(gmsh: Any, domain: Domain, settings: Cfd, entities: DomainEntities
     smallest = fields.add("Min")
     fields.setNumbers(smallest, "FieldsList", limits)
     fields.setAsBackgroundMesh(smallest)
-    options = {"Mesh.MeshSizeExtendFromBoundary": 0, "Mesh.MeshSizeFromPoints": 0,
-               "Mesh.MeshSizeFromCurvature": settings.curvature_cells,
-               "Mesh.MeshSizeMin": MIN_SIZE_FRACTION * domain.surface_size, "Mesh.MeshSizeMax": domain.far_size,
-               "Mesh.Algorithm": ALGORITHM_2D, "Mesh.Algorithm3D": ALGORITHM_3D, "Mesh.Optimize": 1}
+    options = {
+        "Mesh.MeshSizeExtendFromBoundary": 0,
+        "Mesh.MeshSizeFromPoints": 0,
+        "Mesh.MeshSizeFromCurvature": settings.curvature_cells,
+        "Mesh.MeshSizeMin": MIN_SIZE_FRACTION * domain.surface_size,
+        "Mesh.MeshSizeMax": domain.far_size,
+        "Mesh.Algorithm": ALGORITHM_2D,
+        "Mesh.Algorithm3D": ALGORITHM_3D,
+        "Mesh.Optimize": 1,
+    }
     for name, value in options.items():
         gmsh.option.setNumber(name, value)
     return smallest
@@ -277,7 +332,9 @@ class SurfaceRefinement:
     smallest_size_mm: float = 0.0
 
 
-def mesh_surfaces(gmsh: Any, domain: Domain, entities: DomainEntities, background: int) -> SurfaceRefinement:
+def mesh_surfaces(
+    gmsh: Any, domain: Domain, entities: DomainEntities, background: int
+) -> SurfaceRefinement:
     """The 2D mesh of every surface, free of crossing triangles.
 
     Where triangles cross (a coarse mesh across a trailing edge thinner than its triangles), a
@@ -301,8 +358,10 @@ def mesh_surfaces(gmsh: Any, domain: Domain, entities: DomainEntities, backgroun
             break
         result.rounds += 1
         sizes = REFINE_FACTOR * crossings.edge_mm
-        balls += [_ball(gmsh, centre, REFINE_RADIUS_EDGES * edge, size)
-                  for centre, edge, size in zip(crossings.centres_mm, crossings.edge_mm, sizes)]
+        balls += [
+            _ball(gmsh, centre, REFINE_RADIUS_EDGES * edge, size)
+            for centre, edge, size in zip(crossings.centres_mm, crossings.edge_mm, sizes)
+        ]
         combined = gmsh.model.mesh.field.add("Min")
         gmsh.model.mesh.field.setNumbers(combined, "FieldsList", [background, *balls])
         gmsh.model.mesh.field.setAsBackgroundMesh(combined)
@@ -315,14 +374,21 @@ def mesh_surfaces(gmsh: Any, domain: Domain, entities: DomainEntities, backgroun
     raise KernelError(
         f"gmsh's surface mesh still crosses itself near ({centre[0]:.2f}, {centre[1]:.2f}, {centre[2]:.2f}) mm "
         f"({len(crossings)} triangles) after {REFINE_ROUNDS} local refinements; the volume mesh would fail. "
-        f"{CROSSING_ADVICE}")
+        f"{CROSSING_ADVICE}"
+    )
 
 
 def _ball(gmsh: Any, centre: np.ndarray, radius: float, size: float) -> int:
     """A gmsh Ball field: ``size`` (mm) within ``radius`` (mm) of ``centre``, no limit outside."""
     ball = gmsh.model.mesh.field.add("Ball")
-    for key, value in (("XCenter", centre[0]), ("YCenter", centre[1]), ("ZCenter", centre[2]),
-                       ("Radius", radius), ("VIn", size), ("VOut", 1e22)):
+    for key, value in (
+        ("XCenter", centre[0]),
+        ("YCenter", centre[1]),
+        ("ZCenter", centre[2]),
+        ("Radius", radius),
+        ("VIn", size),
+        ("VOut", 1e22),
+    ):
         gmsh.model.mesh.field.setNumber(ball, key, float(value))
     return int(ball)
 
@@ -355,12 +421,21 @@ def mesh_statistics(gmsh: Any, entities: DomainEntities) -> dict[str, Any]:
             volume += tetrahedra_volume(nodes, tets)
             all_tags.append(element_tags)
         tetrahedra[name], volumes[name] = count, volume
-    triangles = {name: sum(len(gmsh.model.mesh.getElementsByType(2, tag)[0]) for tag in tags)
-                 for name, tags in entities.surfaces.items()}
+    triangles = {
+        name: sum(len(gmsh.model.mesh.getElementsByType(2, tag)[0]) for tag in tags)
+        for name, tags in entities.surfaces.items()
+    }
     quality = gmsh.model.mesh.getElementQualities(np.concatenate(all_tags), "minSICN")
-    return {"nodes": len(node_tags), "tetrahedra": tetrahedra, "tetrahedra_total": sum(tetrahedra.values()),
-            "triangles": triangles, "sicn_min": float(quality.min()), "sicn_mean": float(quality.mean()),
-            "sicn_below_0_1": int(np.sum(quality < 0.1)), "meshed_volume_mm3": volumes}
+    return {
+        "nodes": len(node_tags),
+        "tetrahedra": tetrahedra,
+        "tetrahedra_total": sum(tetrahedra.values()),
+        "triangles": triangles,
+        "sicn_min": float(quality.min()),
+        "sicn_mean": float(quality.mean()),
+        "sicn_below_0_1": int(np.sum(quality < 0.1)),
+        "meshed_volume_mm3": volumes,
+    }
 
 
 def write_msh(gmsh: Any, path: Path, version: float) -> Path:
@@ -415,13 +490,24 @@ def design_body(params: PropellerParameters) -> PropellerBody:
     from torus_cad.propeller import build_propeller
 
     edges = trailing_edges(params) if params.cfd.curvature_cells == 0.0 else None
-    return PropellerBody(build_propeller(params).solid, params.name, 2.0 * tip_radius(params),
-                         smallest_chord(params), edges, params.blades, params.export.step_schema)
+    return PropellerBody(
+        build_propeller(params).solid,
+        params.name,
+        2.0 * tip_radius(params),
+        smallest_chord(params),
+        edges,
+        params.blades,
+        params.export.step_schema,
+    )
 
 
-def write_cfd_domain(params: PropellerParameters, out_dir: str | Path, threads: int = GMSH_REPRODUCIBLE_THREADS,
-                     progress: Callable[[str], None] | None = None, estimate: CfdEstimate | None = None
-                     ) -> tuple[dict[str, Any], dict[str, Path]]:
+def write_cfd_domain(
+    params: PropellerParameters,
+    out_dir: str | Path,
+    threads: int = GMSH_REPRODUCIBLE_THREADS,
+    progress: Callable[[str], None] | None = None,
+    estimate: CfdEstimate | None = None,
+) -> tuple[dict[str, Any], dict[str, Path]]:
     """Build the B-rep of ``params`` and mesh its domain (:func:`write_body_domain` with ``params.cfd``);
     ``estimate``: the budget's, if already checked (else checked here: BudgetError over the element budget).
 
@@ -434,7 +520,8 @@ def write_cfd_domain(params: PropellerParameters, out_dir: str | Path, threads: 
 
     import_gmsh()
     import_meshlib()
-    # the domain's sizes from the propeller as built: diameter and pitch met (else D is the control points')
+    # the domain's sizes from the propeller as built: diameter and pitch met (else D is the control
+    # points')
     params = resolve_design_targets(params).parameters
     estimate = check_cfd_budget(params) if estimate is None else estimate
     timer = StageTimer[CfdStage](progress)
@@ -444,10 +531,15 @@ def write_cfd_domain(params: PropellerParameters, out_dir: str | Path, threads: 
     return write_body_domain(body, params.cfd, out_dir, threads, estimate, timer, started)
 
 
-def write_body_domain(body: PropellerBody, settings: Cfd, out_dir: str | Path,
-                      threads: int = GMSH_REPRODUCIBLE_THREADS, estimate: CfdEstimate | None = None,
-                      timer: StageTimer[CfdStage] | None = None, started: tuple[float, float] | None = None
-                      ) -> tuple[dict[str, Any], dict[str, Path]]:
+def write_body_domain(
+    body: PropellerBody,
+    settings: Cfd,
+    out_dir: str | Path,
+    threads: int = GMSH_REPRODUCIBLE_THREADS,
+    estimate: CfdEstimate | None = None,
+    timer: StageTimer[CfdStage] | None = None,
+    started: tuple[float, float] | None = None,
+) -> tuple[dict[str, Any], dict[str, Path]]:
     """The domain of ``settings`` around ``body`` and its mesh (gmsh with ``threads`` threads, 0 = one
     per CPU; one thread gives the same mesh on every run, see
     :data:`torus_cad.tolerances.GMSH_REPRODUCIBLE_THREADS`); publish ``<name>_cfd.step``,
@@ -462,22 +554,41 @@ def write_body_domain(body: PropellerBody, settings: Cfd, out_dir: str | Path,
     from torus_cad.kernel.writers.step import write_step
     from torus_cad.outputs.output_set import OutputSet
 
-    if isinstance(threads, bool) or not isinstance(threads, int) or not 0 <= threads <= max_cfd_threads():
-        raise ParameterError(f"threads = {threads!r} is out of range; allowed [0, {max_cfd_threads()}] (0 = one per CPU)")
+    if (
+        isinstance(threads, bool)
+        or not isinstance(threads, int)
+        or not 0 <= threads <= max_cfd_threads()
+    ):
+        raise ParameterError(
+            f"threads = {threads!r} is out of range; allowed [0, {max_cfd_threads()}] (0 = one per CPU)"
+        )
     gmsh = import_gmsh()
     timer = timer if timer is not None else StageTimer[CfdStage](None)
     name = f"{body.name}_cfd"
-    cpu_start, wall_start = started if started is not None else (time.process_time(), time.perf_counter())
+    cpu_start, wall_start = (
+        started if started is not None else (time.process_time(), time.perf_counter())
+    )
     with OutputSet(out_dir, name) as output:
         with gmsh_session(gmsh, threads):
             with timer.stage(CfdStage.DOMAIN):
                 box = body.solid.BoundingBox()
-                domain = domain_from_sizes(body.tip_diameter_mm, body.chord_mm, settings, (box.zmin, box.zmax))
-                # gmsh's input, not the design's file (build checks that one): a user's own STEP solid
-                # (simulate --step) is meshed as it comes, without a read-back check of its copy.
-                step = output.write("step", lambda path: write_step(body.solid, path, body.name, body.step_schema,
-                                                                     program=f"torus_cad {__version__}",
-                                                                     check_readback=False))
+                domain = domain_from_sizes(
+                    body.tip_diameter_mm, body.chord_mm, settings, (box.zmin, box.zmax)
+                )
+                # gmsh's input, not the design's file (build checks that one): a user's own STEP
+                # solid (simulate --step) is meshed as it comes, without a read-back check of its
+                # copy.
+                step = output.write(
+                    "step",
+                    lambda path: write_step(
+                        body.solid,
+                        path,
+                        body.name,
+                        body.step_schema,
+                        program=f"torus_cad {__version__}",
+                        check_readback=False,
+                    ),
+                )
                 propeller_volume = precise_volume(body.solid)
                 entities = build_domain(gmsh, step, domain)
                 edges = body.trailing_edges if settings.curvature_cells == 0.0 else None
@@ -490,29 +601,45 @@ def write_body_domain(body: PropellerBody, settings: Cfd, out_dir: str | Path,
             statistics = mesh_statistics(gmsh, entities)
             with timer.stage(CfdStage.WRITE):
                 output.write("msh", lambda path: write_msh(gmsh, path, 4.1))
-                output.write_files(lambda folder: {"msh_v2": write_msh(gmsh, folder / f"{name}_v2.msh", 2.2)})
+                output.write_files(
+                    lambda folder: {"msh_v2": write_msh(gmsh, folder / f"{name}_v2.msh", 2.2)}
+                )
                 gmsh_version = gmsh.__version__
-        expected = {"rotating_zone": domain.zone_volume - propeller_volume,
-                    "fluid": domain.outer_volume - domain.zone_volume}
+        expected = {
+            "rotating_zone": domain.zone_volume - propeller_volume,
+            "fluid": domain.outer_volume - domain.zone_volume,
+        }
         meshed = statistics["meshed_volume_mm3"]
         report: dict[str, Any] = {
-            "name": body.name, "blades": body.blades, "gmsh_version": gmsh_version, "threads": threads,
+            "name": body.name,
+            "blades": body.blades,
+            "gmsh_version": gmsh_version,
+            "threads": threads,
             "settings": settings.model_dump(mode="json"),
-            "domain_mm": {**asdict(domain), "outer_volume_mm3": domain.outer_volume,
-                          "zone_volume_mm3": domain.zone_volume},
+            "domain_mm": {
+                **asdict(domain),
+                "outer_volume_mm3": domain.outer_volume,
+                "zone_volume_mm3": domain.zone_volume,
+            },
             "propeller_volume_mm3": propeller_volume,
             "physical_groups": {"surfaces": list(SURFACE_GROUPS), "volumes": list(VOLUME_GROUPS)},
             "estimate": asdict(estimate) if estimate is not None else None,
             "surface_refinement": asdict(refinement),
             **statistics,
             "expected_volume_mm3": expected,
-            "volume_relative_difference": {key: meshed[key] / expected[key] - 1.0 for key in expected},
+            "volume_relative_difference": {
+                key: meshed[key] / expected[key] - 1.0 for key in expected
+            },
             "fluid_total_relative_difference": sum(meshed.values()) / sum(expected.values()) - 1.0,
             "stage_seconds": timer.seconds,
-            "wall_seconds": time.perf_counter() - wall_start, "cpu_seconds": time.process_time() - cpu_start,
+            "wall_seconds": time.perf_counter() - wall_start,
+            "cpu_seconds": time.process_time() - cpu_start,
         }
-        output.write_files(lambda folder: {"readme": _write_text(folder / "README.txt",
-                                                                   readme_text(body.name, report))})
+        output.write_files(
+            lambda folder: {
+                "readme": _write_text(folder / "README.txt", readme_text(body.name, report))
+            }
+        )
         paths = output.publish(report)
         return output.sealed_report, paths
 
@@ -527,13 +654,17 @@ def mesh_volumes(gmsh: Any) -> None:
     try:
         gmsh.model.mesh.generate(3)
     except Exception as error:  # gmsh raises plain Exception with its last error message
-        raise KernelError(f"gmsh failed at step 'volume mesh': {error}. {CROSSING_ADVICE}") from None
+        raise KernelError(
+            f"gmsh failed at step 'volume mesh': {error}. {CROSSING_ADVICE}"
+        ) from None
 
 
 def summary_line(report: dict[str, Any]) -> str:
     """One terminal line: element counts, worst SICN, volume check, time."""
     tets = report["tetrahedra"]
-    return (f"cfd: {report['tetrahedra_total']:,} tetrahedra (rotating_zone {tets['rotating_zone']:,}, fluid "
-            f"{tets['fluid']:,}), {report['triangles']['propeller']:,} triangles on the propeller; worst SICN "
-            f"{report['sicn_min']:.3f}; fluid volume {report['fluid_total_relative_difference']:+.3%} of the "
-            f"domain minus the propeller; {report['wall_seconds']:.1f} s")
+    return (
+        f"cfd: {report['tetrahedra_total']:,} tetrahedra (rotating_zone {tets['rotating_zone']:,}, fluid "
+        f"{tets['fluid']:,}), {report['triangles']['propeller']:,} triangles on the propeller; worst SICN "
+        f"{report['sicn_min']:.3f}; fluid volume {report['fluid_total_relative_difference']:+.3%} of the "
+        f"domain minus the propeller; {report['wall_seconds']:.1f} s"
+    )

@@ -94,15 +94,25 @@ def readme_text(name: str, report: dict[str, Any]) -> str:
     no absolute path, so the folder can move."""
     domain = report["domain_mm"]
     return _TEMPLATE.format(
-        name=name, gmsh_version=report["gmsh_version"], inlet_z=domain["inlet_z"], outlet_z=domain["outlet_z"],
-        diameter=domain["tip_diameter"], outer_radius=domain["outer_radius"], zone_radius=domain["zone_radius"],
-        zone_low=domain["zone_z"][0], zone_high=domain["zone_z"][1], tets=report["tetrahedra_total"],
-        zone_tets=report["tetrahedra"]["rotating_zone"], fluid_tets=report["tetrahedra"]["fluid"],
-        sicn=report["sicn_min"], interface=report["triangles"]["rotating_interface"])
+        name=name,
+        gmsh_version=report["gmsh_version"],
+        inlet_z=domain["inlet_z"],
+        outlet_z=domain["outlet_z"],
+        diameter=domain["tip_diameter"],
+        outer_radius=domain["outer_radius"],
+        zone_radius=domain["zone_radius"],
+        zone_low=domain["zone_z"][0],
+        zone_high=domain["zone_z"][1],
+        tets=report["tetrahedra_total"],
+        zone_tets=report["tetrahedra"]["rotating_zone"],
+        fluid_tets=report["tetrahedra"]["fluid"],
+        sicn=report["sicn_min"],
+        interface=report["triangles"]["rotating_interface"],
+    )
 
 
 def openfoam_block(text: str) -> str:
     """The shell lines of a README.txt's OpenFOAM block (between BEGIN and END, unindented)."""
     lines = text.splitlines()
     start, end = lines.index(BLOCK_BEGIN), lines.index(BLOCK_END)
-    return "\n".join(line[4:] for line in lines[start + 1:end]) + "\n"
+    return "\n".join(line[4:] for line in lines[start + 1 : end]) + "\n"

@@ -76,15 +76,23 @@ def smallest_chord(params: PropellerParameters) -> float:
     if params.kind == DesignKind.CONVENTIONAL:
         blade = params.conventional_blade()
         return float(blade.chord_mm(blade.section_radii_mm(201)[1]).min())
-    return float(evaluate_quartic(params.geometry().blade.laws.scale_x_mm, np.linspace(0.0, 1.0, 201)).min())
+    return float(
+        evaluate_quartic(params.geometry().blade.laws.scale_x_mm, np.linspace(0.0, 1.0, 201)).min()
+    )
 
 
-def domain_for(params: PropellerParameters, settings: Cfd, propeller_z: tuple[float, float]) -> Domain:
+def domain_for(
+    params: PropellerParameters, settings: Cfd, propeller_z: tuple[float, float]
+) -> Domain:
     """The domain's sizes for a designed propeller spanning ``propeller_z`` (mm) axially."""
-    return domain_from_sizes(2.0 * tip_radius(params), smallest_chord(params), settings, propeller_z)
+    return domain_from_sizes(
+        2.0 * tip_radius(params), smallest_chord(params), settings, propeller_z
+    )
 
 
-def domain_from_sizes(diameter: float, chord: float, settings: Cfd, propeller_z: tuple[float, float]) -> Domain:
+def domain_from_sizes(
+    diameter: float, chord: float, settings: Cfd, propeller_z: tuple[float, float]
+) -> Domain:
     """The domain's sizes for a propeller of tip diameter ``diameter`` (mm) whose smallest chord is
     ``chord`` (mm; sets the surface size, ``chord / cells_per_chord``), spanning ``propeller_z`` (mm) along +z."""
     centre = 0.5 * (propeller_z[0] + propeller_z[1])
@@ -100,11 +108,20 @@ def domain_from_sizes(diameter: float, chord: float, settings: Cfd, propeller_z:
         raise ParameterError(
             f"cfd.upstream = {settings.upstream:g} / cfd.downstream = {settings.downstream:g} put an end of the domain "
             f"inside the rotating zone (it spans z = {zone_z[0]:.1f} .. {zone_z[1]:.1f} mm, D = {diameter:.1f} mm); "
-            "make them larger")
-    return Domain(tip_diameter=diameter, propeller_z=propeller_z, outer_radius=settings.domain_radius * diameter,
-                  outer_z=outer_z, zone_radius=settings.zone_radius * diameter, zone_z=zone_z, inlet_z=inlet_z,
-                  outlet_z=outlet_z, surface_size=chord / settings.cells_per_chord,
-                  far_size=settings.far_size * diameter)
+            "make them larger"
+        )
+    return Domain(
+        tip_diameter=diameter,
+        propeller_z=propeller_z,
+        outer_radius=settings.domain_radius * diameter,
+        outer_z=outer_z,
+        zone_radius=settings.zone_radius * diameter,
+        zone_z=zone_z,
+        inlet_z=inlet_z,
+        outlet_z=outlet_z,
+        surface_size=chord / settings.cells_per_chord,
+        far_size=settings.far_size * diameter,
+    )
 
 
 @dataclass(frozen=True)

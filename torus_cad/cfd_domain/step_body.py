@@ -59,10 +59,12 @@ STEP_MAGIC = b"ISO-10303-21;"
 HUB_RING_POINTS = 16
 HUB_RADIAL_STEPS = 24
 HUB_BISECTIONS = 8
-#: An edge whose two faces' normals differ by more than this (degrees) is a knife (trailing) edge; samples along it.
+#: An edge whose two faces' normals differ by more than this (degrees) is a knife (trailing) edge;
+#: samples along it.
 KNIFE_EDGE_NORMAL_ANGLE_DEG = 135.0
 KNIFE_EDGE_SAMPLES = 41
-#: The smallest chord of a STEP propeller as a fraction of its tip diameter (the default design's 6.0 / 45.1).
+#: The smallest chord of a STEP propeller as a fraction of its tip diameter (the default design's
+#: 6.0 / 45.1).
 CHORD_PER_DIAMETER = 0.133
 #: What a STEP propeller's name is made of; everything else becomes '_'.
 _NAME_CHARACTERS = re.compile(r"[^A-Za-z0-9_.-]")
@@ -82,9 +84,12 @@ class Axis(StrEnum):
 
 #: The rotation (about a coordinate axis, degrees) that turns each axis into +z.
 _ROTATIONS: dict[Axis, tuple[tuple[float, float, float], float]] = {
-    Axis.PLUS_Z: ((1.0, 0.0, 0.0), 0.0), Axis.MINUS_Z: ((1.0, 0.0, 0.0), 180.0),
-    Axis.PLUS_X: ((0.0, 1.0, 0.0), -90.0), Axis.MINUS_X: ((0.0, 1.0, 0.0), 90.0),
-    Axis.PLUS_Y: ((1.0, 0.0, 0.0), 90.0), Axis.MINUS_Y: ((1.0, 0.0, 0.0), -90.0),
+    Axis.PLUS_Z: ((1.0, 0.0, 0.0), 0.0),
+    Axis.MINUS_Z: ((1.0, 0.0, 0.0), 180.0),
+    Axis.PLUS_X: ((0.0, 1.0, 0.0), -90.0),
+    Axis.MINUS_X: ((0.0, 1.0, 0.0), 90.0),
+    Axis.PLUS_Y: ((1.0, 0.0, 0.0), 90.0),
+    Axis.MINUS_Y: ((1.0, 0.0, 0.0), -90.0),
 }
 
 
@@ -110,13 +115,19 @@ class StepPropeller:
 
     def report(self) -> dict[str, Any]:
         """The report's ``step`` entry (lengths in mm)."""
-        return {"file": self.source, "axis": self.axis.value, "turning": self.turning.value,
-                "tip_diameter_mm": self.body.tip_diameter_mm, "hub_radius_mm": self.hub_radius_mm,
-                "hub_length_mm": self.hub_length_mm, "chord_mm": self.body.chord_mm,
-                "centroid_mm": list(self.centroid_mm),
-                "measures": "D: twice the largest distance from the axis (BRepExtrema); hub: the largest ring about "
-                            "the axis through the centroid lying wholly inside the solid, and the axial extent of a "
-                            "ring inside its wall; chord: CHORD_PER_DIAMETER x D"}
+        return {
+            "file": self.source,
+            "axis": self.axis.value,
+            "turning": self.turning.value,
+            "tip_diameter_mm": self.body.tip_diameter_mm,
+            "hub_radius_mm": self.hub_radius_mm,
+            "hub_length_mm": self.hub_length_mm,
+            "chord_mm": self.body.chord_mm,
+            "centroid_mm": list(self.centroid_mm),
+            "measures": "D: twice the largest distance from the axis (BRepExtrema); hub: the largest ring about "
+            "the axis through the centroid lying wholly inside the solid, and the axial extent of a "
+            "ring inside its wall; chord: CHORD_PER_DIAMETER x D",
+        }
 
 
 def step_name(path: str | Path) -> str:
@@ -135,8 +146,9 @@ def read_step_solid(path: str | Path) -> Any:
     source = str(path)
     raw = read_untrusted_bytes(path, _WHAT, STEP_FILE_MAX_BYTES)
     if not raw.lstrip().startswith(STEP_MAGIC):
-        raise ParameterError(f"{_WHAT} {source!r} is not a STEP file (it does not start with "
-                             f"{STEP_MAGIC.decode()})")
+        raise ParameterError(
+            f"{_WHAT} {source!r} is not a STEP file (it does not start with {STEP_MAGIC.decode()})"
+        )
     with tempfile.TemporaryDirectory(prefix="torus_cad_step_") as folder:
         copy = Path(folder) / "input.step"  # the bytes checked above, not the path again
         copy.write_bytes(raw)
@@ -148,11 +160,15 @@ def read_step_solid(path: str | Path) -> Any:
             raise ParameterError(f"{_WHAT} {source!r} {what}") from None
     solids = shape.Solids() if shape is not None and not shape.wrapped.IsNull() else []
     if len(solids) != 1:
-        raise ParameterError(f"{_WHAT} {source!r} holds {len(solids)} solids; it must hold exactly one (the propeller)")
+        raise ParameterError(
+            f"{_WHAT} {source!r} holds {len(solids)} solids; it must hold exactly one (the propeller)"
+        )
     try:
         return single_valid_solid(solids[0], f"{_WHAT} {source!r}")
     except KernelError as error:
-        raise ParameterError(f"{error} (OpenCascade's checks); repair it in the CAD program") from None
+        raise ParameterError(
+            f"{error} (OpenCascade's checks); repair it in the CAD program"
+        ) from None
 
 
 class _quiet_stdout:
@@ -215,7 +231,9 @@ def hub_measures(solid: Any, diameter_mm: float) -> tuple[float, float]:
 
     def ring_inside(radius: float, z: float) -> bool:
         for angle in angles:
-            classifier.Perform(gp_Pnt(radius * math.cos(angle), radius * math.sin(angle), z), tolerance)
+            classifier.Perform(
+                gp_Pnt(radius * math.cos(angle), radius * math.sin(angle), z), tolerance
+            )
             if classifier.State() != TopAbs_IN:
                 return False
         return True
@@ -224,7 +242,9 @@ def hub_measures(solid: Any, diameter_mm: float) -> tuple[float, float]:
     full = [index for index in range(1, HUB_RADIAL_STEPS) if ring_inside(index * step, z_centre)]
     if not full:
         return 0.0, 0.0
-    hub_radius = _bisect(lambda radius: ring_inside(radius, z_centre), max(full) * step, (max(full) + 1) * step)
+    hub_radius = _bisect(
+        lambda radius: ring_inside(radius, z_centre), max(full) * step, (max(full) + 1) * step
+    )
     wall = 0.5 * (min(full) * step + hub_radius)
     if not ring_inside(wall, z_centre):
         return hub_radius, 0.0
@@ -263,17 +283,26 @@ def knife_edges(solid: Any) -> TrailingEdges | None:
         middle = edge.positionAt(0.5)
         normals = [cq.Face(TopoDS.Face_s(face)).normalAt(middle) for face in faces]
         if normals[0].dot(normals[1]) < limit:
-            curves.append(np.array([edge.positionAt(t).toTuple()
-                                    for t in np.linspace(0.0, 1.0, KNIFE_EDGE_SAMPLES)]))
+            curves.append(
+                np.array(
+                    [
+                        edge.positionAt(t).toTuple()
+                        for t in np.linspace(0.0, 1.0, KNIFE_EDGE_SAMPLES)
+                    ]
+                )
+            )
     return TrailingEdges(tuple(curves), 0.0) if curves else None
 
 
-def load_step_propeller(path: str | Path, axis: Axis = Axis.PLUS_Z, turning: Handedness = Handedness.CW
-                        ) -> StepPropeller:
+def load_step_propeller(
+    path: str | Path, axis: Axis = Axis.PLUS_Z, turning: Handedness = Handedness.CW
+) -> StepPropeller:
     """Read, check, place and measure the STEP propeller at ``path`` (ParameterError for a bad file)."""
     solid = read_step_solid(path)
     placed, centroid = place_on_z(solid, axis)
     diameter = tip_diameter_mm(placed)
     hub_radius, hub_length = hub_measures(placed, diameter)
-    body = PropellerBody(placed, step_name(path), diameter, CHORD_PER_DIAMETER * diameter, knife_edges(placed))
+    body = PropellerBody(
+        placed, step_name(path), diameter, CHORD_PER_DIAMETER * diameter, knife_edges(placed)
+    )
     return StepPropeller(str(path), axis, turning, body, hub_radius, hub_length, centroid)

@@ -57,6 +57,13 @@ def find_crossings(gmsh: Any, surfaces: list[int]) -> Crossings:
     points, triangles, owners = surface_triangles(gmsh, surfaces)
     crossing = np.unique(crossing_pairs(points, triangles)).astype(np.int64)
     corners = points[triangles[crossing]]  # (k, 3 corners, 3)
-    edges = np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2).max(axis=1) if len(crossing) else np.zeros(0)
-    return Crossings(corners.mean(axis=1).reshape(-1, 3), edges,
-                     tuple(sorted({int(tag) for tag in owners[crossing]})))
+    edges = (
+        np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2).max(axis=1)
+        if len(crossing)
+        else np.zeros(0)
+    )
+    return Crossings(
+        corners.mean(axis=1).reshape(-1, 3),
+        edges,
+        tuple(sorted({int(tag) for tag in owners[crossing]})),
+    )

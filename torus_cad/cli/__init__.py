@@ -36,14 +36,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``torus-cad``; returns the exit code."""
     restore_signals = exit_on_signals()  # first: an interrupt while importing is clean too
     try:
-        args = build_parser().parse_args(_joined_signed_values(sys.argv[1:] if argv is None else list(argv)))
+        args = build_parser().parse_args(
+            _joined_signed_values(sys.argv[1:] if argv is None else list(argv))
+        )
         handler: Callable[[argparse.Namespace], int] = args.handler
         return _run(handler, args)
     finally:
         restore_signals()
 
 
-#: Options whose values start with '-' ('--axis -x'): argparse would take such a value for an option.
+#: Options whose values start with '-' ('--axis -x'): argparse would take such a value for an
+#: option.
 _SIGNED_VALUE_OPTIONS = ("--axis",)
 
 
@@ -51,7 +54,12 @@ def _joined_signed_values(argv: list[str]) -> list[str]:
     """``argv`` with ``--axis -x`` written as ``--axis=-x``, which argparse reads as the value."""
     joined: list[str] = []
     for word in argv:
-        if joined and joined[-1] in _SIGNED_VALUE_OPTIONS and word.startswith("-") and word[1:] in ("x", "y", "z"):
+        if (
+            joined
+            and joined[-1] in _SIGNED_VALUE_OPTIONS
+            and word.startswith("-")
+            and word[1:] in ("x", "y", "z")
+        ):
             joined[-1] = f"{joined[-1]}={word}"
         else:
             joined.append(word)
@@ -73,18 +81,26 @@ def _run(handler: Callable[[argparse.Namespace], int], args: argparse.Namespace)
     except TorusCadError as error:
         return report_error(f"kernel failure: {error}", EXIT_KERNEL_FAILURE)
     except MemoryError:
-        return report_error("out of memory; lower resolution.sections / resolution.points or raise the STL deflections",
-                      EXIT_KERNEL_FAILURE)
+        return report_error(
+            "out of memory; lower resolution.sections / resolution.points or raise the STL deflections",
+            EXIT_KERNEL_FAILURE,
+        )
     except OSError as error:
         where = f" {error.filename!r}" if error.filename else ""
-        return report_error(f"cannot write output{where}: {error.strerror or error}", EXIT_KERNEL_FAILURE)
-    except KeyboardInterrupt:  # main() called outside the main thread, where no handler could be installed
+        return report_error(
+            f"cannot write output{where}: {error.strerror or error}", EXIT_KERNEL_FAILURE
+        )
+    # main() called outside the main thread, where no handler could be installed
+    except KeyboardInterrupt:
         return report_error("interrupted", 130)
-    except ModuleNotFoundError as error:  # an import that require_extra did not foresee: still named, with its extra
+    # an import that require_extra did not foresee: still named, with its extra
+    except ModuleNotFoundError as error:
         return report_error(_missing_module_message(args.command, error), EXIT_BAD_INPUT)
     except Exception as error:
-        return report_error(f"internal error ({type(error).__name__}): {error}; please report it with the design file",
-                      EXIT_KERNEL_FAILURE)
+        return report_error(
+            f"internal error ({type(error).__name__}): {error}; please report it with the design file",
+            EXIT_KERNEL_FAILURE,
+        )
 
 
 def _missing_module_message(command: str, error: ModuleNotFoundError) -> str:

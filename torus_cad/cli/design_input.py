@@ -20,7 +20,8 @@ def _parse_override(text: str) -> tuple[str, Any]:
     if "=" not in text:
         raise ParameterError(f"--set {text!r} must look like key=value, e.g. hub.radius=12")
     key, raw = text.split("=", 1)
-    check_toml_shape(f"{key.strip()} = {raw}", "--set", lines=False)  # too deep or too long: named, not a crash
+    # too deep or too long: named, not a crash
+    check_toml_shape(f"{key.strip()} = {raw}", "--set", lines=False)
     try:
         value = tomllib.loads(f"value = {raw}")["value"]
     except tomllib.TOMLDecodeError:
@@ -34,8 +35,12 @@ def _as_declared_strings(changes: dict[str, Any]) -> dict[str, Any]:
     """``changes`` with a number given to a text parameter taken as its text: ``--set airfoil.naca=4415``
     means the designation '4415', as a user types it, not the integer TOML reads."""
     text_keys = {spec.key for spec in iter_parameter_specs(PropellerParameters) if spec.kind is str}
-    return {key: str(value) if key in text_keys and isinstance(value, int | float) and not isinstance(value, bool)
-            else value for key, value in changes.items()}
+    return {
+        key: str(value)
+        if key in text_keys and isinstance(value, int | float) and not isinstance(value, bool)
+        else value
+        for key, value in changes.items()
+    }
 
 
 def _first_clause(error: BaseException) -> str:
@@ -50,9 +55,12 @@ def load_parameters(config: str | None, overrides: Sequence[str] = ()) -> Propel
         return resolve_parameters(config or None, changes)
     except ParameterError:
         raise
-    except (OverflowError, ValueError) as error:  # reading input only: whatever fails here is bad input
+    # reading input only: whatever fails here is bad input
+    except (OverflowError, ValueError) as error:
         source = f"configuration {config!r}" if config else "a --set value"
-        raise ParameterError(f"{source} holds a value that cannot be used: {_first_clause(error)}") from None
+        raise ParameterError(
+            f"{source} holds a value that cannot be used: {_first_clause(error)}"
+        ) from None
 
 
 def require(command: str, extra: str, modules: Sequence[str] | None = None) -> None:
@@ -81,5 +89,8 @@ def table_specs(table: str) -> list[ParameterSpec]:
 
 def table_overrides(args: Any, table: str) -> dict[str, Any]:
     """The values of ``table``'s options given on the command line (dotted key -> value)."""
-    return {spec.key: getattr(args, spec.key.rpartition(".")[2]) for spec in table_specs(table)
-            if getattr(args, spec.key.rpartition(".")[2]) is not None}
+    return {
+        spec.key: getattr(args, spec.key.rpartition(".")[2])
+        for spec in table_specs(table)
+        if getattr(args, spec.key.rpartition(".")[2]) is not None
+    }

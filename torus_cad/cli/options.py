@@ -26,18 +26,28 @@ def range_help(bounds: Bounds, unit: str = "") -> str:
     return f"{bounds}{' ' + unit if unit else ''}"
 
 
-def _refused(option: str, value: object, bounds: Bounds, unit: str, note: str) -> argparse.ArgumentTypeError:
+def _refused(
+    option: str, value: object, bounds: Bounds, unit: str, note: str
+) -> argparse.ArgumentTypeError:
     """``--time-limit = 0 s is out of range; ...``; an option that sets a design parameter is named by its key,
     as the design file's checks name it: ``cfd.growth_rate = 1 is out of range; ...``."""
     shown_value = f"{value}{' ' + unit if unit and option.startswith('-') else ''}"
-    return argparse.ArgumentTypeError(f"{option} = {shown_value} is out of range; allowed {range_help(bounds, unit)}"
-                                      f"{' (' + note + ')' if note else ''}")
+    return argparse.ArgumentTypeError(
+        f"{option} = {shown_value} is out of range; allowed {range_help(bounds, unit)}"
+        f"{' (' + note + ')' if note else ''}"
+    )
 
 
 def in_range(option: str, value: float, bounds: Bounds, unit: str = "", note: str = "") -> None:
     """argparse.ArgumentTypeError (one line: option, value, range) unless ``value`` lies in ``bounds``."""
     if not bounds.contains(value):
-        raise _refused(option, f"{value:g}" if isinstance(value, float) else cut(str(value)), bounds, unit, note)
+        raise _refused(
+            option,
+            f"{value:g}" if isinstance(value, float) else cut(str(value)),
+            bounds,
+            unit,
+            note,
+        )
 
 
 def integer(option: str, bounds: Bounds, unit: str = "", note: str = "") -> Callable[[str], int]:
@@ -50,8 +60,9 @@ def integer(option: str, bounds: Bounds, unit: str = "", note: str = "") -> Call
         except ValueError:
             if _WHOLE_NUMBER.fullmatch(text):  # more than 4300 digits: out of range, not malformed
                 raise _refused(option, cut(text.strip()), bounds, unit, note) from None
-            raise argparse.ArgumentTypeError(f"{option} must be a whole number in {range_help(bounds, unit)}, "
-                                             f"got {shown(text)}") from None
+            raise argparse.ArgumentTypeError(
+                f"{option} must be a whole number in {range_help(bounds, unit)}, got {shown(text)}"
+            ) from None
         in_range(option, value, bounds, unit, note)
         return value
 
@@ -67,8 +78,9 @@ def number(option: str, bounds: Bounds, unit: str = "", note: str = "") -> Calla
         try:
             value = float(text)
         except ValueError:
-            raise argparse.ArgumentTypeError(f"{option} must be a number in {range_help(bounds, unit)}, "
-                                             f"got {shown(text)}") from None
+            raise argparse.ArgumentTypeError(
+                f"{option} must be a number in {range_help(bounds, unit)}, got {shown(text)}"
+            ) from None
         if not math.isfinite(value):
             raise _refused(option, cut(text.strip()), bounds, unit, note)
         in_range(option, value, bounds, unit, note)

@@ -9,13 +9,17 @@ import argparse
 BEGIN = "<!-- BEGIN cli reference: generated from the parser by scripts/reference_pages.py; do not edit -->"
 END = "<!-- END cli reference -->"
 
-#: Help is wrapped at this width, whatever the terminal, so the page does not depend on who generated it.
+#: Help is wrapped at this width, whatever the terminal, so the page does not depend on who
+#: generated it.
 HELP_WIDTH = 100
 
 
 def _help_of(parser: argparse.ArgumentParser, title: str) -> list[str]:
-    parser.formatter_class = lambda prog: argparse.RawDescriptionHelpFormatter(prog, width=HELP_WIDTH) \
-        if parser.epilog else argparse.HelpFormatter(prog, width=HELP_WIDTH)
+    parser.formatter_class = lambda prog: (
+        argparse.RawDescriptionHelpFormatter(prog, width=HELP_WIDTH)
+        if parser.epilog
+        else argparse.HelpFormatter(prog, width=HELP_WIDTH)
+    )
     return [f"## `{title}`", "", "```text", parser.format_help().rstrip(), "```", ""]
 
 

@@ -80,8 +80,6 @@ def is_valid_closed_solid(shape: AnyShape) -> bool:
     return True
 
 
-
-
 def compound(shapes: Sequence[TopoDS_Shape]) -> TopoDS_Compound:
     """One compound of ``shapes`` (as cadquery's ``Compound.makeCompound``).
 
@@ -121,5 +119,3 @@ def distances_to_shape(shape: AnyShape, points: NDArray[np.float64]) -> NDArray[
             raise KernelError("OpenCascade could not measure a point's distance to the solid")
         distances[index] = extrema.Value()
     return distances
-
-

@@ -45,14 +45,16 @@ from OCP.TopExp import TopExp
 from OCP.TopoDS import TopoDS, TopoDS_Edge, TopoDS_Face, TopoDS_Shape
 from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape
 
-#: ... and then until OpenCascade's own measure (GeomLib_CheckCurveOnSurface) finds them parting by at
-#: most this (mm), below EDGE_CURVE_REFIT_ABOVE_MM and 2.5 times below the reader's 1e-7 mm.
+#: ... and then until OpenCascade's own measure (GeomLib_CheckCurveOnSurface) finds them parting by
+#: at most this (mm), below EDGE_CURVE_REFIT_ABOVE_MM and 2.5 times below the reader's 1e-7 mm.
 EDGE_CURVE_ACCEPT_MM = 4e-8
 
-#: The rebuilt curves are refined until, half way between their points, they part by at most this (mm).
+#: The rebuilt curves are refined until, half way between their points, they part by at most this
+#: (mm).
 EDGE_CURVE_FIT_MM = 2e-8
 
-#: Most points one rebuilt edge may need (the default's worst edge needs a few hundred); beyond, it is kept.
+#: Most points one rebuilt edge may need (the default's worst edge needs a few hundred); beyond, it
+#: is kept.
 EDGE_CURVE_MAX_POINTS = 4000
 
 #: Newton steps for one intersection point (it converges in 2-4 from the boolean's curves).
@@ -63,12 +65,12 @@ EDGE_CURVE_NEWTON_STEPS = 12
 EDGE_CURVE_REACH_TOLERANCES = 10.0
 
 #: An intersection edge whose 3D curve and p-curves part by more than this (mm) is rebuilt: half of
-#: what OpenCascade's STEP reader gives an edge at least (Precision::Confusion, 1e-7 mm), since a STEP
-#: file carries no tolerance per edge (torus_cad.kernel.step_readback).
+#: what OpenCascade's STEP reader gives an edge at least (Precision::Confusion, 1e-7 mm), since a
+#: STEP file carries no tolerance per edge (torus_cad.kernel.step_readback).
 EDGE_CURVE_REFIT_ABOVE_MM = 5e-8
 
-#: Times a point is added where OpenCascade's measure finds the rebuilt curves parting most, after the
-#: half-way refinement (the interpolating spline can part between the half-way points).
+#: Times a point is added where OpenCascade's measure finds the rebuilt curves parting most, after
+#: the half-way refinement (the interpolating spline can part between the half-way points).
 EDGE_CURVE_WORST_POINT_ROUNDS = 20
 
 
@@ -126,9 +128,13 @@ def refit_intersection_edges(shape: TopoDS_Shape, on_faces: Sequence[TopoDS_Face
         for index in range(1, ancestors.Extent() + 1):
             edge = TopoDS.Edge_s(ancestors.FindKey(index))
             adjacent = distinct_faces(ancestors.FindFromIndex(index))
-            if (BRep_Tool.Degenerated_s(edge) or any(edge.IsSame(other) for other in seen)
-                    or len(adjacent) != 2 or not any(other.IsSame(face) for other in adjacent)
-                    or any(BRep_Tool.IsClosed_s(edge, other) for other in adjacent)):
+            if (
+                BRep_Tool.Degenerated_s(edge)
+                or any(edge.IsSame(other) for other in seen)
+                or len(adjacent) != 2
+                or not any(other.IsSame(face) for other in adjacent)
+                or any(BRep_Tool.IsClosed_s(edge, other) for other in adjacent)
+            ):
                 continue
             seen.append(edge)
             before = max(curve_on_surface_deviation(edge, other) for other in adjacent)
@@ -154,15 +160,22 @@ def distinct_faces(faces: object) -> list[TopoDS_Face]:
     return distinct
 
 
-def _deviation(curve: Geom_Curve, pcurve: Geom2d_Curve, surface: Geom_Surface, first: float, last: float) -> float:
+def _deviation(
+    curve: Geom_Curve, pcurve: Geom2d_Curve, surface: Geom_Surface, first: float, last: float
+) -> float:
     return _deviation_at(curve, pcurve, surface, first, last)[0]
 
 
-def _deviation_at(curve: Geom_Curve, pcurve: Geom2d_Curve, surface: Geom_Surface, first: float, last: float
-                  ) -> tuple[float, float]:
+def _deviation_at(
+    curve: Geom_Curve, pcurve: Geom2d_Curve, surface: Geom_Surface, first: float, last: float
+) -> tuple[float, float]:
     """The largest distance between ``curve`` and ``surface(pcurve)`` at equal parameters (mm), and where."""
     check = GeomLib_CheckCurveOnSurface(GeomAdaptor_Curve(curve, first, last), 1e-9)
-    check.Perform(Adaptor3d_CurveOnSurface(Geom2dAdaptor_Curve(pcurve, first, last), GeomAdaptor_Surface(surface)))
+    check.Perform(
+        Adaptor3d_CurveOnSurface(
+            Geom2dAdaptor_Curve(pcurve, first, last), GeomAdaptor_Surface(surface)
+        )
+    )
     return (check.MaxDistance(), check.MaxParameter()) if check.IsDone() else (float("inf"), first)
 
 
@@ -185,13 +198,17 @@ class _Fitted:
 class _IntersectionFit:
     """Exact intersection points of an edge's two surfaces, and curves interpolated through them."""
 
-    def __init__(self, edge: TopoDS_Edge, first_face: TopoDS_Face, second_face: TopoDS_Face) -> None:
+    def __init__(
+        self, edge: TopoDS_Edge, first_face: TopoDS_Face, second_face: TopoDS_Face
+    ) -> None:
         self.curve = BRep_Tool.Curve_s(edge, 0.0, 0.0)
         self.reach = EDGE_CURVE_REACH_TOLERANCES * BRep_Tool.Tolerance_s(edge)
         self.first, self.last = BRep_Tool.Range_s(edge)
         self.surfaces = (BRep_Tool.Surface_s(first_face), BRep_Tool.Surface_s(second_face))
-        self.pcurves = (BRep_Tool.CurveOnSurface_s(edge, first_face, 0.0, 0.0),
-                        BRep_Tool.CurveOnSurface_s(edge, second_face, 0.0, 0.0))
+        self.pcurves = (
+            BRep_Tool.CurveOnSurface_s(edge, first_face, 0.0, 0.0),
+            BRep_Tool.CurveOnSurface_s(edge, second_face, 0.0, 0.0),
+        )
 
     def fit(self) -> _Fitted | None:
         """The interpolated curves, refined until they part by at most EDGE_CURVE_FIT_MM half way
@@ -206,7 +223,10 @@ class _IntersectionFit:
         unchecked = set(range(len(parameters) - 1))
         for _ in range(EDGE_CURVE_WORST_POINT_ROUNDS):
             while unchecked:
-                if any(point is None for point in points) or len(parameters) > EDGE_CURVE_MAX_POINTS:
+                if (
+                    any(point is None for point in points)
+                    or len(parameters) > EDGE_CURVE_MAX_POINTS
+                ):
                     return None
                 curves = self._interpolate(parameters, points)  # type: ignore[arg-type]
                 parameters, points, unchecked = self._refined(curves, parameters, points, unchecked)
@@ -223,8 +243,13 @@ class _IntersectionFit:
             unchecked = {index - 1, index}
         return fitted
 
-    def _refined(self, curves: tuple[Geom_Curve, Geom2d_Curve, Geom2d_Curve], parameters: list[float],
-                 points: list[_Point | None], unchecked: set[int]) -> tuple[list[float], list[_Point | None], set[int]]:
+    def _refined(
+        self,
+        curves: tuple[Geom_Curve, Geom2d_Curve, Geom2d_Curve],
+        parameters: list[float],
+        points: list[_Point | None],
+        unchecked: set[int],
+    ) -> tuple[list[float], list[_Point | None], set[int]]:
         """A point added half way along every unchecked interval where the curves miss it by more
         than EDGE_CURVE_FIT_MM; the new intervals are the unchecked ones of the next round."""
         new_parameters, new_points, new_unchecked = [parameters[0]], [points[0]], set[int]()
@@ -243,8 +268,13 @@ class _IntersectionFit:
 
     def _fitted(self, parameters: list[float], points: list[_Point]) -> _Fitted:
         curve, first_pcurve, second_pcurve = self._interpolate(parameters, points)
-        measured = [_deviation_at(curve, pcurve, surface, self.first, self.last)
-                    for pcurve, surface in ((first_pcurve, self.surfaces[0]), (second_pcurve, self.surfaces[1]))]
+        measured = [
+            _deviation_at(curve, pcurve, surface, self.first, self.last)
+            for pcurve, surface in (
+                (first_pcurve, self.surfaces[0]),
+                (second_pcurve, self.surfaces[1]),
+            )
+        ]
         deviation, worst = max(measured)
         return _Fitted(curve, (first_pcurve, second_pcurve), deviation, worst)
 
@@ -253,7 +283,9 @@ class _IntersectionFit:
         knots = [self.first, self.last]
         if isinstance(basis, Geom_BSplineCurve):
             inside = (basis.Knot(i) for i in range(1, basis.NbKnots() + 1))
-            knots = sorted({self.first, self.last, *(knot for knot in inside if self.first < knot < self.last)})
+            knots = sorted(
+                {self.first, self.last, *(knot for knot in inside if self.first < knot < self.last)}
+            )
         spans = [np.linspace(a, b, _POINTS_PER_SPAN + 1)[:-1] for a, b in itertools.pairwise(knots)]
         return [*(float(t) for t in np.concatenate(spans)), self.last]
 
@@ -277,16 +309,28 @@ class _IntersectionFit:
         for _ in range(EDGE_CURVE_NEWTON_STEPS):
             if not len(active):
                 break
-            first, first_u, first_v, second, second_u, second_v = (np.empty((len(active), 3)) for _ in range(6))
+            first, first_u, first_v, second, second_u, second_v = (
+                np.empty((len(active), 3)) for _ in range(6)
+            )
             for row, index in enumerate(active.tolist()):
-                first[row], first_u[row], first_v[row] = _d1(self.surfaces[0], uv[index, 0], uv[index, 1])
-                second[row], second_u[row], second_v[row] = _d1(self.surfaces[1], uv[index, 2], uv[index, 3])
-            residual = np.concatenate([first - second, np.einsum("ij,ij->i", first - origins[active],
-                                                                 normals[active])[:, None]], axis=1)
+                first[row], first_u[row], first_v[row] = _d1(
+                    self.surfaces[0], uv[index, 0], uv[index, 1]
+                )
+                second[row], second_u[row], second_v[row] = _d1(
+                    self.surfaces[1], uv[index, 2], uv[index, 3]
+                )
+            residual = np.concatenate(
+                [
+                    first - second,
+                    np.einsum("ij,ij->i", first - origins[active], normals[active])[:, None],
+                ],
+                axis=1,
+            )
             converged = np.abs(residual).max(axis=1) < _NEWTON_RESIDUAL_MM
             for row in np.flatnonzero(converged).tolist():
                 index = int(active[row])
-                exact = 0.5 * (first[row] + second[row])  # the old curves are within tolerance of it: farther is another branch
+                # the old curves are within tolerance of it: farther is another branch
+                exact = 0.5 * (first[row] + second[row])
                 if float(np.linalg.norm(exact - origins[index])) <= self.reach:
                     found[index] = (uv[index].copy(), exact)
             going = ~converged
@@ -296,14 +340,19 @@ class _IntersectionFit:
             jacobian[:, :3, 2], jacobian[:, :3, 3] = -second_u[going], -second_v[going]
             jacobian[:, 3, 0] = np.einsum("ij,ij->i", first_u[going], normals[active])
             jacobian[:, 3, 1] = np.einsum("ij,ij->i", first_v[going], normals[active])
-            solvable = np.abs(np.linalg.det(jacobian)) > 0.0 if len(active) else np.zeros(0, dtype=bool)
+            solvable = (
+                np.abs(np.linalg.det(jacobian)) > 0.0 if len(active) else np.zeros(0, dtype=bool)
+            )
             if len(active) and solvable.any():
-                uv[active[solvable]] -= np.linalg.solve(jacobian[solvable], residual[going][solvable][:, :, None])[:, :, 0]
+                uv[active[solvable]] -= np.linalg.solve(
+                    jacobian[solvable], residual[going][solvable][:, :, None]
+                )[:, :, 0]
             active = active[solvable]  # a singular step ends that point: None
         return found
 
-    def _interpolate(self, parameters: list[float], points: list[_Point]
-                     ) -> tuple[Geom_Curve, Geom2d_Curve, Geom2d_Curve]:
+    def _interpolate(
+        self, parameters: list[float], points: list[_Point]
+    ) -> tuple[Geom_Curve, Geom2d_Curve, Geom2d_Curve]:
         count = len(parameters)
         values = TColStd_HArray1OfReal(1, count)
         in_space = TColgp_HArray1OfPnt(1, count)
@@ -315,24 +364,34 @@ class _IntersectionFit:
             on_surfaces[1].SetValue(index, gp_Pnt2d(uv[2], uv[3]))
         curve = GeomAPI_Interpolate(in_space, values, False, _NEWTON_RESIDUAL_MM)
         curve.Perform()
-        pcurves = [Geom2dAPI_Interpolate(points_2d, values, False, _NEWTON_RESIDUAL_MM) for points_2d in on_surfaces]
+        pcurves = [
+            Geom2dAPI_Interpolate(points_2d, values, False, _NEWTON_RESIDUAL_MM)
+            for points_2d in on_surfaces
+        ]
         for pcurve in pcurves:
             pcurve.Perform()
         return curve.Curve(), pcurves[0].Curve(), pcurves[1].Curve()
 
-    def _error(self, curves: tuple[Geom_Curve, Geom2d_Curve, Geom2d_Curve], t: float,
-               exact: _Point) -> float:
+    def _error(
+        self, curves: tuple[Geom_Curve, Geom2d_Curve, Geom2d_Curve], t: float, exact: _Point
+    ) -> float:
         """How far the interpolated curves at ``t`` are from the exact point and from each other (mm)."""
         curve, first_pcurve, second_pcurve = curves
         target = gp_Pnt(*exact[1])
         on_curve = curve.Value(t)
         on_first = self.surfaces[0].Value(first_pcurve.Value(t).X(), first_pcurve.Value(t).Y())
         on_second = self.surfaces[1].Value(second_pcurve.Value(t).X(), second_pcurve.Value(t).Y())
-        return max(on_curve.Distance(target), on_curve.Distance(on_first), on_curve.Distance(on_second))
+        return max(
+            on_curve.Distance(target), on_curve.Distance(on_first), on_curve.Distance(on_second)
+        )
 
 
 def _d1(surface: Geom_Surface, u: float, v: float) -> tuple[tuple[float, float, float], ...]:
     """The point and its two first derivatives of ``surface`` at (u, v)."""
     point, d_u, d_v = gp_Pnt(), gp_Vec(), gp_Vec()
     surface.D1(u, v, point, d_u, d_v)
-    return (point.X(), point.Y(), point.Z()), (d_u.X(), d_u.Y(), d_u.Z()), (d_v.X(), d_v.Y(), d_v.Z())
+    return (
+        (point.X(), point.Y(), point.Z()),
+        (d_u.X(), d_u.Y(), d_u.Z()),
+        (d_v.X(), d_v.Y(), d_v.Z()),
+    )

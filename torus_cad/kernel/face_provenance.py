@@ -37,11 +37,15 @@ def labelled_faces(shape: TopoDS_Shape, face_parts: Sequence[int]) -> Origins:
     """``shape``'s faces with their parts (``face_parts`` in the order of :func:`face_parts`)."""
     indexed = _indexed_faces(shape)
     if indexed.Extent() != len(face_parts):
-        raise KernelError(f"{len(face_parts)} face parts given for a shape of {indexed.Extent()} faces")
+        raise KernelError(
+            f"{len(face_parts)} face parts given for a shape of {indexed.Extent()} faces"
+        )
     return [(indexed.FindKey(index + 1), part) for index, part in enumerate(face_parts)]
 
 
-def through_history(operation: BRepBuilderAPI_MakeShape, origins: Iterable[tuple[TopoDS_Shape, int]]) -> Origins:
+def through_history(
+    operation: BRepBuilderAPI_MakeShape, origins: Iterable[tuple[TopoDS_Shape, int]]
+) -> Origins:
     """Where each (input face, part) went in ``operation``'s result: its pieces if the operation
     changed it (``Modified``), itself if it kept it, nothing if it removed it (``IsDeleted``)."""
     found: Origins = []
@@ -53,7 +57,9 @@ def through_history(operation: BRepBuilderAPI_MakeShape, origins: Iterable[tuple
     return found
 
 
-def fillet_faces(fillet: BRepFilletAPI_MakeFillet, solid: TopoDS_Shape, face_parts: Sequence[int]) -> Origins:
+def fillet_faces(
+    fillet: BRepFilletAPI_MakeFillet, solid: TopoDS_Shape, face_parts: Sequence[int]
+) -> Origins:
     """The faces a fillet of ``solid`` (faces labelled ``face_parts``) generated, each with its
     junction's blade: the part of the edge's faces that is not the hub, for the faces
     ``Generated`` by every edge of the fillet's contours (the edges it was given and those it
@@ -65,17 +71,24 @@ def fillet_faces(fillet: BRepFilletAPI_MakeFillet, solid: TopoDS_Shape, face_par
     for contour in range(1, fillet.NbContours() + 1):
         for index in range(1, fillet.NbEdges(contour) + 1):
             edge = fillet.Edge(contour, index)
-            parts = {face_parts[indexed.FindIndex(face) - 1] for face in ancestors.FindFromKey(edge)} - {HUB_PART}
+            parts = {
+                face_parts[indexed.FindIndex(face) - 1] for face in ancestors.FindFromKey(edge)
+            } - {HUB_PART}
             if len(parts) != 1:
                 raise KernelError(f"a filleted edge lies between {len(parts)} blades instead of 1")
             part = parts.pop()
             for generator in [edge, *explore(edge, TopAbs_VERTEX)]:
-                found.extend((face, part) for face in fillet.Generated(generator) if face.ShapeType() == TopAbs_FACE)
+                found.extend(
+                    (face, part)
+                    for face in fillet.Generated(generator)
+                    if face.ShapeType() == TopAbs_FACE
+                )
     return found
 
 
-def through_reshape(context: ShapeBuild_ReShape, origins: Iterable[tuple[TopoDS_Shape, int]],
-                    mended: TopoDS_Shape) -> Origins:
+def through_reshape(
+    context: ShapeBuild_ReShape, origins: Iterable[tuple[TopoDS_Shape, int]], mended: TopoDS_Shape
+) -> Origins:
     """Where each (face, part) went when ShapeFix mended the shape into ``mended``: the faces its
     re-shape context's history made of the face, itself when it kept it, nothing when it removed it.
 
@@ -96,7 +109,9 @@ def through_reshape(context: ShapeBuild_ReShape, origins: Iterable[tuple[TopoDS_
         if index not in reached:
             face = TopoDS.Face_s(indexed.FindKey(index))
             middle = _middle(face)
-            found.append((face, min(origins, key=lambda origin: distances_to_shape(origin[0], middle)[0])[1]))
+            found.append(
+                (face, min(origins, key=lambda origin: distances_to_shape(origin[0], middle)[0])[1])
+            )
     return found
 
 
@@ -111,7 +126,9 @@ def face_parts(shape: TopoDS_Shape, origins: Iterable[tuple[TopoDS_Shape, int]])
             parts[index - 1] = part
     known = [part for part in parts if part is not None]
     if len(known) != len(parts):
-        raise KernelError(f"{len(parts) - len(known)} faces of the propeller came from no known part")
+        raise KernelError(
+            f"{len(parts) - len(known)} faces of the propeller came from no known part"
+        )
     return tuple(known)
 
 

@@ -67,14 +67,18 @@ def pattern_blades(blade: ShapeT, angles_deg: Sequence[float]) -> list[ShapeT]:
     rotating the solid gives exactly the solid built from blade i's own control points.
     """
     first = angles_deg[0]
-    return [blade if angle == first else like(blade, transformed(occ(blade), _turn(angle - first)))
-            for angle in angles_deg]
+    return [
+        blade if angle == first else like(blade, transformed(occ(blade), _turn(angle - first)))
+        for angle in angles_deg
+    ]
 
 
 def _turn(angle_deg: float) -> gp_Trsf:
     """The rotation by ``angle_deg`` about +z."""
     rotation = gp_Trsf()
-    rotation.SetRotation(gp_Ax1(gp_Pnt(0.0, 0.0, 0.0), gp_Dir(0.0, 0.0, 1.0)), math.radians(angle_deg))
+    rotation.SetRotation(
+        gp_Ax1(gp_Pnt(0.0, 0.0, 0.0), gp_Dir(0.0, 0.0, 1.0)), math.radians(angle_deg)
+    )
     return rotation
 
 
@@ -85,9 +89,16 @@ def fuse_all(hub: ShapeT, blades: Sequence[AnyShape]) -> Fused[ShapeT]:
     shape = result(fuse, "fuse the blades with the hub")
     parts = [(occ(hub), HUB_PART), *((occ(blade), index) for index, blade in enumerate(blades))]
     labels = face_parts(shape, _history(fuse, parts))
-    # As on the shared route: the intersection edges rebuilt to 4e-8 mm, for the STEP file (kernel.edge_curves).
-    refit_intersection_edges(shape, [face for face, part in zip(faces_in_order(shape), labels, strict=True)
-                                     if part == HUB_PART])
+    # As on the shared route: the intersection edges rebuilt to 4e-8 mm, for the STEP file
+    # (kernel.edge_curves).
+    refit_intersection_edges(
+        shape,
+        [
+            face
+            for face, part in zip(faces_in_order(shape), labels, strict=True)
+            if part == HUB_PART
+        ],
+    )
     return Fused(like(hub, shape), FuseRoute.GENERAL, labels)
 
 
@@ -104,8 +115,11 @@ class FuseRoute(StrEnum):
     @property
     def description(self) -> str:
         """The route in words, for people (the studio's readout)."""
-        return {FuseRoute.ASSEMBLED: "shared intersection, assembled", FuseRoute.GLUED: "shared intersection, glued",
-                FuseRoute.GENERAL: "one general fuse"}[self]
+        return {
+            FuseRoute.ASSEMBLED: "shared intersection, assembled",
+            FuseRoute.GLUED: "shared intersection, glued",
+            FuseRoute.GENERAL: "one general fuse",
+        }[self]
 
 
 @dataclass(frozen=True)
@@ -124,8 +138,9 @@ class Fused(Generic[ShapeT]):
     face_parts: tuple[int, ...]
 
 
-def fuse_pattern(hub: ShapeT, blade: AnyShape, angles_deg: Sequence[float], refit_edges: bool = True
-                 ) -> Fused[ShapeT]:
+def fuse_pattern(
+    hub: ShapeT, blade: AnyShape, angles_deg: Sequence[float], refit_edges: bool = True
+) -> Fused[ShapeT]:
     """Hub and copies of ``blade`` at every angle, with one blade-hub intersection for all of them.
 
     1. Cut the blade (built at ``angles_deg[0]``) by the hub: its part outside the hub, whose
@@ -158,20 +173,29 @@ def fuse_pattern(hub: ShapeT, blade: AnyShape, angles_deg: Sequence[float], refi
     hub_pieces = _modified_faces_of_shape(cut, hub_shape)
     if refit_edges:  # to 4e-8 mm: a STEP file keeps no edge tolerance (kernel.edge_curves)
         refit_intersection_edges(outside, hub_pieces)
-    copies = [_rotated_with_hub_curves(outside, patches, lateral, math.radians(angle - angles_deg[0]))
-              for angle in angles_deg]
+    copies = [
+        _rotated_with_hub_curves(outside, patches, lateral, math.radians(angle - angles_deg[0]))
+        for angle in angles_deg
+    ]
     whole_patches = len(hub_pieces) == len(patches) and not any(
-        BRep_Tool.IsClosed_s(edge, patch) for patch in patches for edge in edges(patch))
+        BRep_Tool.IsClosed_s(edge, patch) for patch in patches for edge in edges(patch)
+    )
     if whole_patches:
         solid, origins = _assemble(hub_shape, lateral, copies, patches)
         return Fused(like(hub, solid), FuseRoute.ASSEMBLED, face_parts(solid, origins))
     blade_faces = count(outside, TopAbs_FACE) - len(hub_pieces)
-    glued, origins = _glue(hub_shape, copies, count(hub_shape, TopAbs_FACE) + len(copies) * blade_faces)
+    glued, origins = _glue(
+        hub_shape, copies, count(hub_shape, TopAbs_FACE) + len(copies) * blade_faces
+    )
     return Fused(like(hub, glued), FuseRoute.GLUED, face_parts(glued, origins))
 
 
-def _assemble(hub: TopoDS_Shape, lateral: TopoDS_Face, copies: Sequence[TopoDS_Shape],
-              patches: Sequence[TopoDS_Face]) -> tuple[TopoDS_Solid, Origins]:
+def _assemble(
+    hub: TopoDS_Shape,
+    lateral: TopoDS_Face,
+    copies: Sequence[TopoDS_Shape],
+    patches: Sequence[TopoDS_Face],
+) -> tuple[TopoDS_Solid, Origins]:
     """The propeller's solid put together from known faces, with no boolean, and each face's part.
 
     Its shell: the hub's end faces, a new lateral face (the hub's surface and outer wire) with
@@ -195,7 +219,10 @@ def _assemble(hub: TopoDS_Shape, lateral: TopoDS_Face, copies: Sequence[TopoDS_S
                 origins.append((face, index))
     if not lateral_with_holes.IsDone():
         raise KernelError("OpenCascade could not cut the blade roots out of the hub's lateral face")
-    hub_faces = [lateral_with_holes.Face(), *(face for face in faces(hub) if not face.IsSame(lateral))]
+    hub_faces = [
+        lateral_with_holes.Face(),
+        *(face for face in faces(hub) if not face.IsSame(lateral)),
+    ]
     origins.extend((face, HUB_PART) for face in hub_faces)
     return solid_of_faces(origins), origins
 
@@ -215,8 +242,9 @@ def solid_of_faces(origins: Origins) -> TopoDS_Solid:
     return solid
 
 
-def _glue(hub: TopoDS_Shape, copies: Sequence[TopoDS_Shape], expected_faces: int
-          ) -> tuple[TopoDS_Shape, Origins]:
+def _glue(
+    hub: TopoDS_Shape, copies: Sequence[TopoDS_Shape], expected_faces: int
+) -> tuple[TopoDS_Shape, Origins]:
     """Hub and copies fused with BOPAlgo_GlueShift (they only touch along faces of the hub's
     surfaces), and where each of their faces went."""
     glue = BRepAlgoAPI_Fuse()
@@ -224,17 +252,26 @@ def _glue(hub: TopoDS_Shape, copies: Sequence[TopoDS_Shape], expected_faces: int
     fused = result(boolean(glue, [hub], copies), "glue the blades to the hub")
     faces = count(fused, TopAbs_FACE)
     if faces != expected_faces:
-        raise KernelError(f"gluing the blades to the hub gave {faces} faces instead of {expected_faces}")
-    return fused, _history(glue, [(hub, HUB_PART), *((copy, index) for index, copy in enumerate(copies))])
+        raise KernelError(
+            f"gluing the blades to the hub gave {faces} faces instead of {expected_faces}"
+        )
+    return fused, _history(
+        glue, [(hub, HUB_PART), *((copy, index) for index, copy in enumerate(copies))]
+    )
 
 
-def _history(operation: BRepAlgoAPI_BooleanOperation, arguments: Iterable[tuple[TopoDS_Shape, int]]) -> Origins:
+def _history(
+    operation: BRepAlgoAPI_BooleanOperation, arguments: Iterable[tuple[TopoDS_Shape, int]]
+) -> Origins:
     """(result face, part) for every face of every (argument, part), through the boolean's history."""
-    return through_history(operation, [(face, part) for argument, part in arguments for face in faces(argument)])
+    return through_history(
+        operation, [(face, part) for argument, part in arguments for face in faces(argument)]
+    )
 
 
-def _rotated_with_hub_curves(outside: TopoDS_Shape, patches: list[TopoDS_Face], lateral: TopoDS_Face,
-                             angle_rad: float) -> TopoDS_Shape:
+def _rotated_with_hub_curves(
+    outside: TopoDS_Shape, patches: list[TopoDS_Face], lateral: TopoDS_Face, angle_rad: float
+) -> TopoDS_Shape:
     """``outside`` rotated by ``angle_rad`` about +z, its patch edges given curves on ``lateral``.
 
     The copy shares its edges with ``outside`` (only the location differs); each edge keeps one
@@ -246,8 +283,11 @@ def _rotated_with_hub_curves(outside: TopoDS_Shape, patches: list[TopoDS_Face], 
     builder = BRep_Builder()
     for patch in patches:
         u_min, u_max, _, _ = BRepTools.UVBounds_s(patch)
-        # a patch starting at the seam may start a parametric hair before it (u = -1e-13 after kernel.edge_curves)
-        shift = angle_rad - _FULL_TURN * math.floor((u_min + angle_rad + Precision.PConfusion_s()) / _FULL_TURN)
+        # a patch starting at the seam may start a parametric hair before it (u = -1e-13 after
+        # kernel.edge_curves)
+        shift = angle_rad - _FULL_TURN * math.floor(
+            (u_min + angle_rad + Precision.PConfusion_s()) / _FULL_TURN
+        )
         if u_max + shift > _FULL_TURN:
             raise KernelError("a blade's footprint on the hub crosses the hub's seam")
         for edge in edges(patch):
@@ -255,35 +295,32 @@ def _rotated_with_hub_curves(outside: TopoDS_Shape, patches: list[TopoDS_Face], 
             if curve is None:
                 raise KernelError("an intersection edge has no curve on the hub")
             moved = TopoDS.Edge_s(edge.Moved(location))
-            builder.UpdateEdge(moved, curve.Translated(gp_Vec2d(shift, 0.0)), lateral, BRep_Tool.Tolerance_s(edge))
+            builder.UpdateEdge(
+                moved, curve.Translated(gp_Vec2d(shift, 0.0)), lateral, BRep_Tool.Tolerance_s(edge)
+            )
     return outside.Moved(location)
 
 
 def _lateral_face(hub: TopoDS_Shape) -> TopoDS_Face:
     """The hub's outer cylindrical face (a bore or a set-screw hole is a smaller cylinder)."""
-    cylinders = [(BRepAdaptor_Surface(face).Cylinder().Radius(), index, face)
-                 for index, face in enumerate(faces_in_order(hub))
-                 if BRepAdaptor_Surface(face).GetType() == GeomAbs_Cylinder]
+    cylinders = [
+        (BRepAdaptor_Surface(face).Cylinder().Radius(), index, face)
+        for index, face in enumerate(faces_in_order(hub))
+        if BRepAdaptor_Surface(face).GetType() == GeomAbs_Cylinder
+    ]
     if not cylinders:
         raise KernelError("the hub has no cylindrical face")
     return max(cylinders, key=lambda item: item[:2])[2]
 
 
-def _modified_faces(operation: BRepAlgoAPI_BooleanOperation, face: TopoDS_Face) -> list[TopoDS_Face]:
+def _modified_faces(
+    operation: BRepAlgoAPI_BooleanOperation, face: TopoDS_Face
+) -> list[TopoDS_Face]:
     """The pieces of an argument's ``face`` that bound the result (from the operation's history)."""
     return [TopoDS.Face_s(piece) for piece in operation.Modified(face)]
 
 
-def _modified_faces_of_shape(operation: BRepAlgoAPI_BooleanOperation, shape: TopoDS_Shape) -> list[TopoDS_Face]:
+def _modified_faces_of_shape(
+    operation: BRepAlgoAPI_BooleanOperation, shape: TopoDS_Shape
+) -> list[TopoDS_Face]:
     return [piece for face in faces(shape) for piece in _modified_faces(operation, face)]
-
-
-
-
-
-
-
-
-
-
-

@@ -38,16 +38,18 @@ if TYPE_CHECKING:
 _Z = gp_Dir(0.0, 0.0, 1.0)
 
 
-def hub_solid(radius: float, length: float, seam_angle_deg: float = 0.0,
-              mounting: HubMounting | None = None) -> cq.Solid:
+def hub_solid(
+    radius: float, length: float, seam_angle_deg: float = 0.0, mounting: HubMounting | None = None
+) -> cq.Solid:
     """:func:`hub_shape` as cadquery's solid."""
     import cadquery as cq
 
     return cq.Solid(hub_shape(radius, length, seam_angle_deg, mounting))
 
 
-def hub_shape(radius: float, length: float, seam_angle_deg: float = 0.0,
-              mounting: HubMounting | None = None) -> TopoDS_Shape:
+def hub_shape(
+    radius: float, length: float, seam_angle_deg: float = 0.0, mounting: HubMounting | None = None
+) -> TopoDS_Shape:
     """Cylinder r <= radius, |z| <= length / 2 (mm), its lateral face's seam at ``seam_angle_deg``.
 
     The seam (u = 0 of the lateral face) lies in the half-plane at ``seam_angle_deg`` about +z
@@ -59,7 +61,9 @@ def hub_shape(radius: float, length: float, seam_angle_deg: float = 0.0,
     if mounting.chamfer_mm > 0.0:
         outer = _chamfered_cylinder(radius, length, mounting.chamfer_mm, angle)
     else:
-        frame = gp_Ax2(gp_Pnt(0.0, 0.0, -length / 2.0), _Z, gp_Dir(math.cos(angle), math.sin(angle), 0.0))
+        frame = gp_Ax2(
+            gp_Pnt(0.0, 0.0, -length / 2.0), _Z, gp_Dir(math.cos(angle), math.sin(angle), 0.0)
+        )
         outer = BRepPrimAPI_MakeCylinder(frame, radius, length).Solid()
     tools = []
     if mounting.bore_diameter_mm > 0.0:
@@ -70,15 +74,24 @@ def hub_shape(radius: float, length: float, seam_angle_deg: float = 0.0,
         return outer
     made = solids(cut(outer, tools, "cut the bore and set-screw hole into the hub"))
     if len(made) != 1:
-        raise KernelError(f"cutting the bore and set-screw hole into the hub gave {len(made)} solids instead of 1")
-    # The set screw's intersection curves with the bore (B-splines) part from a cylinder by up to about
-    # 1.4e-7 mm, more than a STEP file's 1e-7 mm reads back: rebuilt from exact points (kernel.edge_curves).
+        raise KernelError(
+            f"cutting the bore and set-screw hole into the hub gave {len(made)} solids instead of 1"
+        )
+    # The set screw's intersection curves with the bore (B-splines) part from a cylinder by up to
+    # about 1.4e-7 mm, more than a STEP file's 1e-7 mm reads back: rebuilt from exact points
+    # (kernel.edge_curves).
     refit_intersection_edges(made[0], faces(made[0]))
     return made[0]
 
 
-def run_out_hub(radius: float, length: float, seam_angle_deg: float, mounting: HubMounting, extension: float,
-                reach: float) -> tuple[cq.Solid, list[TopoDS_Shape]]:
+def run_out_hub(
+    radius: float,
+    length: float,
+    seam_angle_deg: float,
+    mounting: HubMounting,
+    extension: float,
+    reach: float,
+) -> tuple[cq.Solid, list[TopoDS_Shape]]:
     """A plain hub ``extension`` mm longer at each end, and the tools that cut it back to the real one.
 
     The tools: two end slabs (radius ``reach``, beyond |z| = length / 2) first, then the bore and
@@ -89,8 +102,10 @@ def run_out_hub(radius: float, length: float, seam_angle_deg: float, mounting: H
         raise KernelError("a chamfered hub has no run-out for the root fillet")
     extended = hub_solid(radius, length + 2.0 * extension, seam_angle_deg)
     half, depth = length / 2.0, extension + 1.0
-    slabs = [BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(0.0, 0.0, z), _Z), reach, depth).Solid()
-             for z in (half, -half - depth)]
+    slabs = [
+        BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(0.0, 0.0, z), _Z), reach, depth).Solid()
+        for z in (half, -half - depth)
+    ]
     tools = list(slabs)
     if mounting.bore_diameter_mm > 0.0:
         tools.append(_bore(mounting, length))
@@ -99,12 +114,20 @@ def run_out_hub(radius: float, length: float, seam_angle_deg: float, mounting: H
     return extended, tools
 
 
-def _chamfered_cylinder(radius: float, length: float, chamfer: float, seam_angle_rad: float) -> TopoDS_Shape:
+def _chamfered_cylinder(
+    radius: float, length: float, chamfer: float, seam_angle_rad: float
+) -> TopoDS_Shape:
     """The hub's (r, z) profile with 45-degree chamfers, revolved about z starting at the seam angle."""
     half = length / 2.0
     direction = (math.cos(seam_angle_rad), math.sin(seam_angle_rad))
-    profile = [(0.0, -half), (radius - chamfer, -half), (radius, -half + chamfer), (radius, half - chamfer),
-               (radius - chamfer, half), (0.0, half)]
+    profile = [
+        (0.0, -half),
+        (radius - chamfer, -half),
+        (radius, -half + chamfer),
+        (radius, half - chamfer),
+        (radius - chamfer, half),
+        (0.0, half),
+    ]
     wire = BRepBuilderAPI_MakeWire()
     corners = [gp_Pnt(r * direction[0], r * direction[1], z) for r, z in profile]
     for start, end in zip(corners, corners[1:] + corners[:1]):
@@ -132,9 +155,13 @@ def _bore(mounting: HubMounting, length: float) -> TopoDS_Shape:
     def point(along: float, side: float) -> gp_Pnt:
         return gp_Pnt(along * toward[0] + side * across[0], along * toward[1] + side * across[1], z)
 
-    arc = GC_MakeArcOfCircle(point(flat, -half_chord), point(-bore_radius, 0.0), point(flat, half_chord)).Value()
-    wire = BRepBuilderAPI_MakeWire(BRepBuilderAPI_MakeEdge(arc).Edge(),
-                                   BRepBuilderAPI_MakeEdge(point(flat, half_chord), point(flat, -half_chord)).Edge())
+    arc = GC_MakeArcOfCircle(
+        point(flat, -half_chord), point(-bore_radius, 0.0), point(flat, half_chord)
+    ).Value()
+    wire = BRepBuilderAPI_MakeWire(
+        BRepBuilderAPI_MakeEdge(arc).Edge(),
+        BRepBuilderAPI_MakeEdge(point(flat, half_chord), point(flat, -half_chord)).Edge(),
+    )
     face = BRepBuilderAPI_MakeFace(wire.Wire(), True).Face()
     return BRepPrimAPI_MakePrism(face, gp_Vec(0.0, 0.0, length + 2.0)).Shape()
 
@@ -143,5 +170,6 @@ def _set_screw_hole(mounting: HubMounting, radius: float) -> TopoDS_Shape:
     """A cylinder on the radial line at ``set_screw_angle_deg``, z = 0, from the axis to just outside the hub."""
     angle = math.radians(mounting.set_screw_angle_deg)
     axis = gp_Ax2(gp_Pnt(0.0, 0.0, 0.0), gp_Dir(math.cos(angle), math.sin(angle), 0.0))
-    return BRepPrimAPI_MakeCylinder(axis, mounting.set_screw_diameter_mm / 2.0, radius + SET_SCREW_OVERSHOOT_MM).Solid()
-
+    return BRepPrimAPI_MakeCylinder(
+        axis, mounting.set_screw_diameter_mm / 2.0, radius + SET_SCREW_OVERSHOOT_MM
+    ).Solid()

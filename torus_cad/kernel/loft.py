@@ -7,7 +7,11 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 from OCP.BRep import BRep_Tool
-from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace, BRepBuilderAPI_MakeSolid, BRepBuilderAPI_Sewing
+from OCP.BRepBuilderAPI import (
+    BRepBuilderAPI_MakeFace,
+    BRepBuilderAPI_MakeSolid,
+    BRepBuilderAPI_Sewing,
+)
 from OCP.BRepCheck import BRepCheck_Analyzer
 from OCP.BRepGProp import BRepGProp
 from OCP.BRepOffsetAPI import BRepOffsetAPI_ThruSections
@@ -34,7 +38,9 @@ LOFT_PRECISION = 1e-6
 LOFT_SEWING_TOLERANCE = 1e-6
 
 
-def loft_solid(wires: Sequence[ShapeT], parameters: Sequence[float] | NDArray[np.float64] | None = None) -> ShapeT:
+def loft_solid(
+    wires: Sequence[ShapeT], parameters: Sequence[float] | NDArray[np.float64] | None = None
+) -> ShapeT:
     """A smooth closed solid through ``wires``, capped by planar end faces (OpenCascade's wires give
     OpenCascade's solid, cadquery's a ``cq.Solid``).
 
@@ -72,13 +78,18 @@ def _bsplines_of(wire: TopoDS_Shape) -> list[Geom_BSplineCurve]:
     return curves
 
 
-def _loft_through_poles(wires: Sequence[TopoDS_Shape], parameters: Sequence[float] | NDArray[np.float64] | None
-                        ) -> TopoDS_Shape:
+def _loft_through_poles(
+    wires: Sequence[TopoDS_Shape], parameters: Sequence[float] | NDArray[np.float64] | None
+) -> TopoDS_Shape:
     """One side face per edge position (one for a sharp trailing edge; base and airfoil for a blunt one)."""
     edges = [_bsplines_of(wire) for wire in wires]
     if len({len(curves) for curves in edges}) != 1:
         raise KernelError("the section wires have different numbers of edges")
-    s = np.linspace(0.0, 1.0, len(wires)) if parameters is None else np.asarray(parameters, dtype=float)
+    s = (
+        np.linspace(0.0, 1.0, len(wires))
+        if parameters is None
+        else np.asarray(parameters, dtype=float)
+    )
     faces = [_side_face([curves[index] for curves in edges], s) for index in range(len(edges[0]))]
     return _closed_solid(faces, wires)
 
@@ -87,12 +98,18 @@ def _side_face(curves: Sequence[Geom_BSplineCurve], s: NDArray[np.float64]) -> T
     """A B-spline face through compatible curves: every pole column interpolated by a cubic in s."""
     first = curves[0]
     degree, count = first.Degree(), first.NbPoles()
-    knots = np.concatenate([[first.Knot(i)] * first.Multiplicity(i) for i in range(1, first.NbKnots() + 1)])
+    knots = np.concatenate(
+        [[first.Knot(i)] * first.Multiplicity(i) for i in range(1, first.NbKnots() + 1)]
+    )
     for curve in curves[1:]:
         if curve.Degree() != degree or curve.NbPoles() != count or curve.IsRational():
             raise KernelError("the section B-splines are not compatible")
-    poles = np.array([[(p.X(), p.Y(), p.Z()) for p in (curve.Pole(i) for i in range(1, count + 1))]
-                      for curve in curves])
+    poles = np.array(
+        [
+            [(p.X(), p.Y(), p.Z()) for p in (curve.Pole(i) for i in range(1, count + 1))]
+            for curve in curves
+        ]
+    )
     along = make_interp_spline(s, poles, k=3)  # not-a-knot cubic through every pole column
     surface_poles = TColgp_Array2OfPnt(1, count, 1, along.c.shape[0])
     for j, column in enumerate(along.c, start=1):
@@ -100,7 +117,9 @@ def _side_face(curves: Sequence[Geom_BSplineCurve], s: NDArray[np.float64]) -> T
             surface_poles.SetValue(i, j, gp_Pnt(float(x), float(y), float(z)))
     u_knots, u_multiplicities = knot_arrays(knots)
     v_knots, v_multiplicities = knot_arrays(along.t)
-    surface = Geom_BSplineSurface(surface_poles, u_knots, v_knots, u_multiplicities, v_multiplicities, degree, 3)
+    surface = Geom_BSplineSurface(
+        surface_poles, u_knots, v_knots, u_multiplicities, v_multiplicities, degree, 3
+    )
     face = BRepBuilderAPI_MakeFace(surface, LOFT_PRECISION)
     if not face.IsDone():
         raise KernelError("OpenCascade could not make the blade's side face")
@@ -146,7 +165,9 @@ def thru_sections_solid(wires: Sequence[ShapeT]) -> ShapeT:
         builder.AddWire(TopoDS.Wire_s(occ(wire)))
     builder.Build()
     if not builder.IsDone():
-        raise KernelError("the loft of the blade sections failed in OpenCascade (BRepOffsetAPI_ThruSections)")
+        raise KernelError(
+            "the loft of the blade sections failed in OpenCascade (BRepOffsetAPI_ThruSections)"
+        )
     made = solids(builder.Shape())
     if len(made) != 1:
         raise KernelError(f"the loft of the blade sections gave {len(made)} solids instead of 1")

@@ -56,15 +56,20 @@ class MassProperties:
         return asdict(self)
 
 
-def volume_properties(shape: AnyShape, relative_precision: float = MASS_PROPERTIES_RELATIVE_PRECISION
-                      ) -> GProp_GProps:
+def volume_properties(
+    shape: AnyShape, relative_precision: float = MASS_PROPERTIES_RELATIVE_PRECISION
+) -> GProp_GProps:
     """OpenCascade volume properties by adaptive integration (not cadquery's coarse default). The last shape's
     answer is kept and given again for a request no more precise: the JSON report asks for the mass properties
     (1e-6) and then the balance (1e-4) of the same solid, seconds each on a bored hub."""
     solid = occ(shape)
     last_shape, last_precision, last_answer = _LAST_VOLUME[0]
-    if last_shape is not None and last_answer is not None and last_precision <= relative_precision \
-            and last_shape.IsEqual(solid):
+    if (
+        last_shape is not None
+        and last_answer is not None
+        and last_precision <= relative_precision
+        and last_shape.IsEqual(solid)
+    ):
         return last_answer
     properties = GProp_GProps()
     BRepGProp.VolumeProperties_s(solid, properties, relative_precision, False)
@@ -72,7 +77,9 @@ def volume_properties(shape: AnyShape, relative_precision: float = MASS_PROPERTI
     return properties
 
 
-def precise_volume(shape: AnyShape, relative_precision: float = MASS_PROPERTIES_RELATIVE_PRECISION) -> float:
+def precise_volume(
+    shape: AnyShape, relative_precision: float = MASS_PROPERTIES_RELATIVE_PRECISION
+) -> float:
     """Volume in mm^3 by adaptive integration to ``relative_precision``."""
     return float(volume_properties(shape, relative_precision).Mass())
 
@@ -87,13 +94,21 @@ def mass_properties(shape: AnyShape, density_g_cm3: float) -> MassProperties:
     integrals = hub_with_blade_integrals(occ(shape))
     if integrals is None:
         return occt_mass_properties(shape, density_g_cm3)
-    return _with_density(integrals.volume_mm3, integrals.area_mm2, integrals.centroid_mm.tolist(),
-                         integrals.spin_inertia_mm5, density_g_cm3,
-                         (integrals.box_min_mm.tolist(), integrals.box_max_mm.tolist()))
+    return _with_density(
+        integrals.volume_mm3,
+        integrals.area_mm2,
+        integrals.centroid_mm.tolist(),
+        integrals.spin_inertia_mm5,
+        density_g_cm3,
+        (integrals.box_min_mm.tolist(), integrals.box_max_mm.tolist()),
+    )
 
 
-def occt_mass_properties(shape: AnyShape, density_g_cm3: float,
-                         relative_precision: float = MASS_PROPERTIES_RELATIVE_PRECISION) -> MassProperties:
+def occt_mass_properties(
+    shape: AnyShape,
+    density_g_cm3: float,
+    relative_precision: float = MASS_PROPERTIES_RELATIVE_PRECISION,
+) -> MassProperties:
     """:func:`mass_properties` of any shape by OpenCascade: BRepGProp's adaptive integration to
     ``relative_precision`` and BRepBndLib's optimal box (which adds 1e-7 mm on every side)."""
     volume = volume_properties(shape, relative_precision)
@@ -102,9 +117,14 @@ def occt_mass_properties(shape: AnyShape, density_g_cm3: float,
     BRepBndLib.AddOptimal_s(occ(shape), box, False, False)
     xmin, ymin, zmin, xmax, ymax, zmax = box.Get()
     area = surface_area_mm2(shape, relative_precision)
-    return _with_density(float(volume.Mass()), area, (centre.X(), centre.Y(), centre.Z()),
-                         float(volume.MomentOfInertia(gp_Ax1(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1)))), density_g_cm3,
-                         ((xmin, ymin, zmin), (xmax, ymax, zmax)))
+    return _with_density(
+        float(volume.Mass()),
+        area,
+        (centre.X(), centre.Y(), centre.Z()),
+        float(volume.MomentOfInertia(gp_Ax1(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1)))),
+        density_g_cm3,
+        ((xmin, ymin, zmin), (xmax, ymax, zmax)),
+    )
 
 
 def surface_area_mm2(shape: AnyShape, relative_precision: float | None = None) -> float:
@@ -118,15 +138,32 @@ def surface_area_mm2(shape: AnyShape, relative_precision: float | None = None) -
     return float(surface.Mass())
 
 
-def _with_density(volume_mm3: float, area_mm2: float, centroid_mm: Sequence[float], inertia_mm5: float,
-                  density_g_cm3: float, box_mm: Sequence[Sequence[float]]) -> MassProperties:
+def _with_density(
+    volume_mm3: float,
+    area_mm2: float,
+    centroid_mm: Sequence[float],
+    inertia_mm5: float,
+    density_g_cm3: float,
+    box_mm: Sequence[Sequence[float]],
+) -> MassProperties:
     density_g_mm3 = density_g_cm3 * 1e-3
-    (x, y, z), ((x_min, y_min, z_min), (x_max, y_max, z_max)) = (float(value) for value in centroid_mm), box_mm
+    (x, y, z), ((x_min, y_min, z_min), (x_max, y_max, z_max)) = (
+        (float(value) for value in centroid_mm),
+        box_mm,
+    )
     return MassProperties(
-        volume_mm3=float(volume_mm3), surface_area_mm2=float(area_mm2), centroid_mm=(x, y, z),
-        spin_axis_inertia_mm5=float(inertia_mm5), density_g_cm3=density_g_cm3, mass_g=float(volume_mm3) * density_g_mm3,
+        volume_mm3=float(volume_mm3),
+        surface_area_mm2=float(area_mm2),
+        centroid_mm=(x, y, z),
+        spin_axis_inertia_mm5=float(inertia_mm5),
+        density_g_cm3=density_g_cm3,
+        mass_g=float(volume_mm3) * density_g_mm3,
         spin_axis_inertia_g_mm2=float(inertia_mm5) * density_g_mm3,
-        bounding_box_mm=((float(x_min), float(y_min), float(z_min)), (float(x_max), float(y_max), float(z_max))))
+        bounding_box_mm=(
+            (float(x_min), float(y_min), float(z_min)),
+            (float(x_max), float(y_max), float(z_max)),
+        ),
+    )
 
 
 @dataclass(frozen=True)
@@ -155,13 +192,18 @@ def balance_of(properties: GProp_GProps, density_g_cm3: float) -> Balance:
     density_g_mm3 = density_g_cm3 * 1e-3
     centre = properties.CentreOfMass()
     offset = float(np.hypot(centre.X(), centre.Y()))
-    matrix = properties.MatrixOfInertia()  # about the centroid; off-diagonal terms are minus the products
-    products = {name: -float(matrix.Value(row, column)) * density_g_mm3
-                for name, (row, column) in (("xz", (1, 3)), ("yz", (2, 3)), ("xy", (1, 2)))}
+    # about the centroid; off-diagonal terms are minus the products
+    matrix = properties.MatrixOfInertia()
+    products = {
+        name: -float(matrix.Value(row, column)) * density_g_mm3
+        for name, (row, column) in (("xz", (1, 3)), ("yz", (2, 3)), ("xy", (1, 2)))
+    }
     return Balance(float(properties.Mass()) * density_g_mm3 * offset, offset, products)
 
 
-def balance(shape: AnyShape, density_g_cm3: float, relative_precision: float = BALANCE_RELATIVE_PRECISION) -> Balance:
+def balance(
+    shape: AnyShape, density_g_cm3: float, relative_precision: float = BALANCE_RELATIVE_PRECISION
+) -> Balance:
     """Static imbalance and products of inertia of ``shape``: from the blade faces alone for a hub
     with blades (as :func:`mass_properties`), else by OpenCascade's adaptive integration to
     ``relative_precision``."""
@@ -170,7 +212,11 @@ def balance(shape: AnyShape, density_g_cm3: float, relative_precision: float = B
         return balance_of(volume_properties(shape, relative_precision), density_g_cm3)
     density_g_mm3 = density_g_cm3 * 1e-3
     (cx, cy, cz), volume = integrals.centroid_mm, integrals.volume_mm3
-    about_centroid = integrals.products_mm5 - volume * np.array([cx * cz, cy * cz, cx * cy])  # parallel axes
+    # parallel axes
+    about_centroid = integrals.products_mm5 - volume * np.array([cx * cz, cy * cz, cx * cy])
     offset = float(np.hypot(cx, cy))
-    products = {name: float(value) * density_g_mm3 for name, value in zip(("xz", "yz", "xy"), about_centroid, strict=True)}
+    products = {
+        name: float(value) * density_g_mm3
+        for name, value in zip(("xz", "yz", "xy"), about_centroid, strict=True)
+    }
     return Balance(volume * density_g_mm3 * offset, offset, products)

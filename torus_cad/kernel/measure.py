@@ -26,7 +26,9 @@ def max_radius_mm(solid: cq.Shape) -> float:
     lateral = next(face for face in cylinder.Faces() if face.geomType() == "CYLINDER")
     extrema = BRepExtrema_DistShapeShape(solid.wrapped, lateral.wrapped)
     if not extrema.IsDone():
-        raise KernelError("BRepExtrema could not measure the solid's distance from a coaxial cylinder")
+        raise KernelError(
+            "BRepExtrema could not measure the solid's distance from a coaxial cylinder"
+        )
     return float(outer - extrema.Value())
 
 
@@ -36,7 +38,9 @@ def vertex_radius_mm(solid: cq.Shape, tolerance: float = 0.05) -> float:
     return float(np.hypot(vertices[:, 0], vertices[:, 1]).max())
 
 
-def plane_section_edges(solid: cq.Shape, origin: ArrayLike, normal: ArrayLike, half_size: float) -> list[cq.Edge]:
+def plane_section_edges(
+    solid: cq.Shape, origin: ArrayLike, normal: ArrayLike, half_size: float
+) -> list[cq.Edge]:
     """Edges where the solid meets a square of ``2 half_size`` around ``origin`` normal to ``normal``."""
     x, y, z = (float(value) for value in np.asarray(origin, dtype=float))
     u, v, w = (float(value) for value in np.asarray(normal, dtype=float))
@@ -76,7 +80,9 @@ def edge_points(edges: list[cq.Edge], per_edge: int = 2000) -> NDArray[np.float6
     return np.array(points)
 
 
-def contour_through(edges: list[cq.Edge], point: ArrayLike, tolerance: float = 1e-3) -> list[cq.Edge]:
+def contour_through(
+    edges: list[cq.Edge], point: ArrayLike, tolerance: float = 1e-3
+) -> list[cq.Edge]:
     """The edges of the closed contour (wire) among ``edges`` that passes nearest ``point``."""
     wires = cq.Wire.combine(edges, tol=tolerance)
     x, y, z = (float(value) for value in np.asarray(point, dtype=float))

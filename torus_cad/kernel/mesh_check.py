@@ -47,11 +47,16 @@ class MeshCheck:
 
     def to_dict(self) -> dict[str, Any]:
         """For the JSON report."""
-        return {"linear_deflection_mm": self.linear_deflection_mm, "angular_deflection_rad": self.angular_deflection_rad,
-                "triangles": self.triangles, "self_intersecting_pairs": self.self_intersecting_pairs,
-                "repaired_pairs": self.repaired_pairs, "repair": self.repair,
-                "repair_deviation_mm": self.repair_deviation_mm,
-                "checker": "meshlib findSelfCollidingTriangles"}
+        return {
+            "linear_deflection_mm": self.linear_deflection_mm,
+            "angular_deflection_rad": self.angular_deflection_rad,
+            "triangles": self.triangles,
+            "self_intersecting_pairs": self.self_intersecting_pairs,
+            "repaired_pairs": self.repaired_pairs,
+            "repair": self.repair,
+            "repair_deviation_mm": self.repair_deviation_mm,
+            "checker": "meshlib findSelfCollidingTriangles",
+        }
 
 
 def import_meshlib() -> Any:
@@ -72,12 +77,17 @@ def meshlib_mesh(vertices: NDArray[np.float64], triangles: NDArray[np.int64]) ->
     import meshlib.mrmeshnumpy as mrn
 
     import_meshlib()
-    return mrn.meshFromFacesVerts(np.ascontiguousarray(triangles, dtype=np.int32),
-                                  np.ascontiguousarray(vertices, dtype=np.float64))
+    return mrn.meshFromFacesVerts(
+        np.ascontiguousarray(triangles, dtype=np.int32),
+        np.ascontiguousarray(vertices, dtype=np.float64),
+    )
 
 
-def crossing_pairs(vertices: NDArray[np.float64], triangles: NDArray[np.int64],
-                   region: NDArray[np.bool_] | None = None) -> NDArray[np.int64]:
+def crossing_pairs(
+    vertices: NDArray[np.float64],
+    triangles: NDArray[np.int64],
+    region: NDArray[np.bool_] | None = None,
+) -> NDArray[np.int64]:
     """``(p, 2)`` indices of the triangle pairs that cross among the ``(t, 3)`` ``triangles`` over ``(v, 3)``
     ``vertices`` (mm), or among the triangles where ``region`` ``(t,)`` is True (indices into ``triangles``)."""
     mr = import_meshlib()
@@ -86,8 +96,10 @@ def crossing_pairs(vertices: NDArray[np.float64], triangles: NDArray[np.int64],
         used = np.unique(triangles[chosen])
         vertices, triangles = vertices[used], np.searchsorted(used, triangles[chosen])
     mesh = meshlib_mesh(vertices, triangles)
-    pairs = np.array([(pair.aFace.get(), pair.bFace.get()) for pair in mr.findSelfCollidingTriangles(mesh)],
-                     dtype=np.int64).reshape(-1, 2)
+    pairs = np.array(
+        [(pair.aFace.get(), pair.bFace.get()) for pair in mr.findSelfCollidingTriangles(mesh)],
+        dtype=np.int64,
+    ).reshape(-1, 2)
     return chosen[pairs]
 
 
@@ -99,7 +111,8 @@ def intersecting_pairs(vertices: NDArray[np.float64], triangles: NDArray[np.int6
 def intersecting_pairs_in_file(path: str | Path) -> tuple[int, int]:
     """(crossing triangle pairs, triangles) of a binary STL file, read and checked by meshlib."""
     mr = import_meshlib()
-    mesh = mr.MeshLoad.fromBinaryStl(str(path))  # by its content: a staged file's name has no .stl suffix
+    # by its content: a staged file's name has no .stl suffix
+    mesh = mr.MeshLoad.fromBinaryStl(str(path))
     return len(mr.findSelfCollidingTriangles(mesh)), int(mesh.topology.numValidFaces())
 
 
@@ -107,7 +120,16 @@ def checked(pairs: int, triangles: int, what: str, mesh: Any) -> MeshCheck:
     """The MeshCheck of a written ``what`` mesh (an UncrossedMesh) whose read-back check found ``pairs``;
     KernelError if any."""
     if pairs:
-        raise KernelError(f"the written {what} file has {pairs} pairs of intersecting triangles (meshlib) "
-                          "although its tessellation had none")
-    return MeshCheck(mesh.linear_deflection_mm, mesh.angular_deflection_rad, triangles, 0, mesh.repaired_pairs,
-                     mesh.repair, mesh.repair_deviation_mm)
+        raise KernelError(
+            f"the written {what} file has {pairs} pairs of intersecting triangles (meshlib) "
+            "although its tessellation had none"
+        )
+    return MeshCheck(
+        mesh.linear_deflection_mm,
+        mesh.angular_deflection_rad,
+        triangles,
+        0,
+        mesh.repaired_pairs,
+        mesh.repair,
+        mesh.repair_deviation_mm,
+    )

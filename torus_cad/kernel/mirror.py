@@ -32,4 +32,6 @@ def mirrored(solid: ShapeT, check: bool = True) -> ShapeT:
         raise KernelError("OpenCascade could not mirror the propeller")
     if not check:
         return like(solid, solids(transform.Shape())[0])
-    return like(solid, single_valid_solid(transform.Shape(), "mirroring the propeller (handedness cw)"))
+    return like(
+        solid, single_valid_solid(transform.Shape(), "mirroring the propeller (handedness cw)")
+    )

@@ -56,8 +56,17 @@ if TYPE_CHECKING:
 TANGENT_FACES_DEG = 1.0
 
 #: Every test of BOPAlgo_ArgumentAnalyzer, as FreeCAD's check with BOP turns them on.
-ANALYZER_TESTS = ("ArgumentTypeMode", "SelfInterMode", "SmallEdgeMode", "RebuildFaceMode", "TangentMode",
-                  "MergeVertexMode", "MergeEdgeMode", "ContinuityMode", "CurveOnSurfaceMode")
+ANALYZER_TESTS = (
+    "ArgumentTypeMode",
+    "SelfInterMode",
+    "SmallEdgeMode",
+    "RebuildFaceMode",
+    "TangentMode",
+    "MergeVertexMode",
+    "MergeEdgeMode",
+    "ContinuityMode",
+    "CurveOnSurfaceMode",
+)
 
 
 @dataclass(frozen=True)
@@ -117,7 +126,8 @@ def _analyzer(shape: TopoDS_Shape, self_interference: bool) -> BOPAlgo_ArgumentA
     analyzer = BOPAlgo_ArgumentAnalyzer()
     analyzer.SetShape1(shape)
     for test in ANALYZER_TESTS:
-        setattr(analyzer, test, self_interference or test != "SelfInterMode")  # OCP binds the modes as properties
+        # OCP binds the modes as properties
+        setattr(analyzer, test, self_interference or test != "SelfInterMode")
     analyzer.SetRunParallel(False)
     analyzer.Perform()
     return analyzer
@@ -128,7 +138,9 @@ def step_readback_faults(path: str | Path, self_interference: bool = True) -> Ar
     return argument_faults(read_step_shape(path), self_interference)
 
 
-def check_step_readback(path: str | Path, what: str, self_interference: bool = True) -> ArgumentFaults:
+def check_step_readback(
+    path: str | Path, what: str, self_interference: bool = True
+) -> ArgumentFaults:
     """The faults of ``path`` read back (none); KernelError naming the first fault otherwise.
 
     ``self_interference=False`` leaves out the one costly test (on the default's file read back 1.3 s
@@ -140,11 +152,19 @@ def check_step_readback(path: str | Path, what: str, self_interference: bool = T
     if faults.counts:
         listed = ", ".join(f"{count} {status}" for status, count in faults.counts.items())
         on_edges = [fault for fault in classified_faults(shape) if fault.gap_mm > 0.0]
-        worst = max(on_edges, key=lambda fault: fault.gap_mm / max(fault.tolerance_mm, 1e-300), default=None)
-        where = (f"; worst on a {worst.edge_kind} edge ({worst.surfaces}): curves {worst.gap_mm:.2g} mm apart, "
-                 f"tolerance read back {worst.tolerance_mm:.2g} mm" if worst is not None else "")
-        raise KernelError(f"{what}: the STEP file read back fails BOPAlgo_ArgumentAnalyzer (every test, as "
-                          f"FreeCAD's check with BOP): {listed}; first: {faults.first}{where}")
+        worst = max(
+            on_edges, key=lambda fault: fault.gap_mm / max(fault.tolerance_mm, 1e-300), default=None
+        )
+        where = (
+            f"; worst on a {worst.edge_kind} edge ({worst.surfaces}): curves {worst.gap_mm:.2g} mm apart, "
+            f"tolerance read back {worst.tolerance_mm:.2g} mm"
+            if worst is not None
+            else ""
+        )
+        raise KernelError(
+            f"{what}: the STEP file read back fails BOPAlgo_ArgumentAnalyzer (every test, as "
+            f"FreeCAD's check with BOP): {listed}; first: {faults.first}{where}"
+        )
     return faults
 
 
@@ -168,8 +188,13 @@ class EdgeFault:
 
     def as_dict(self) -> dict[str, str | float]:
         """For a JSON row."""
-        return {"status": self.status, "edge_kind": self.edge_kind, "surfaces": self.surfaces,
-                "gap_mm": self.gap_mm, "tolerance_mm": self.tolerance_mm}
+        return {
+            "status": self.status,
+            "edge_kind": self.edge_kind,
+            "surfaces": self.surfaces,
+            "gap_mm": self.gap_mm,
+            "tolerance_mm": self.tolerance_mm,
+        }
 
 
 def classified_faults(shape: TopoDS_Shape) -> list[EdgeFault]:
@@ -181,14 +206,27 @@ def classified_faults(shape: TopoDS_Shape) -> list[EdgeFault]:
     fillet_faces = _fillet_faces(ancestors)
     found = []
     for result in analyzer.GetCheckResult():
-        edge = next((TopoDS.Edge_s(part) for part in [*result.GetFaultyShapes1(), *result.GetFaultyShapes2()]
-                     if part.ShapeType() == TopAbs_EDGE), None)
+        edge = next(
+            (
+                TopoDS.Edge_s(part)
+                for part in [*result.GetFaultyShapes1(), *result.GetFaultyShapes2()]
+                if part.ShapeType() == TopAbs_EDGE
+            ),
+            None,
+        )
         if edge is None:
             continue
         faces = distinct_faces(ancestors.FindFromKey(edge))
         surfaces = ", ".join(sorted(_surface_name(face) for face in faces))
-        found.append(EdgeFault(_status(result), edge_kind(edge, faces, fillet_faces), surfaces,
-                               max(result.GetMaxDistance1(), result.GetMaxDistance2()), BRep_Tool.Tolerance_s(edge)))
+        found.append(
+            EdgeFault(
+                _status(result),
+                edge_kind(edge, faces, fillet_faces),
+                surfaces,
+                max(result.GetMaxDistance1(), result.GetMaxDistance2()),
+                BRep_Tool.Tolerance_s(edge),
+            )
+        )
     return found
 
 
@@ -221,7 +259,11 @@ def _fillet_faces(ancestors: TopTools_IndexedDataMapOfShapeListOfShape) -> list[
     for index in range(1, ancestors.Extent() + 1):
         faces = distinct_faces(ancestors.FindFromIndex(index))
         kinds = [BRepAdaptor_Surface(face).GetType() in BLADE_SURFACES for face in faces]
-        if len(faces) == 2 and kinds[0] != kinds[1] and _tangent(TopoDS.Edge_s(ancestors.FindKey(index)), faces):
+        if (
+            len(faces) == 2
+            and kinds[0] != kinds[1]
+            and _tangent(TopoDS.Edge_s(ancestors.FindKey(index)), faces)
+        ):
             found.append(faces[0] if kinds[0] else faces[1])
     return found
 

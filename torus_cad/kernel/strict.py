@@ -46,10 +46,12 @@ from torus_cad.kernel.topology import ShapeT, occ
 from torus_cad.runtime.isolation import IsolatedTimeout, run_isolated
 from torus_cad.tolerances import STRICT_CHECK_TIME_LIMIT_S
 
-#: Axis directions and positions within this of the z axis (unit vector components, mm) count as on it.
+#: Axis directions and positions within this of the z axis (unit vector components, mm) count as on
+#: it.
 STRICT_AXIS_TOLERANCE = 1e-9
 
-#: Two blade copies closer than this (mm) count as interfering (their faces' tolerances are ~1e-7 mm).
+#: Two blade copies closer than this (mm) count as interfering (their faces' tolerances are ~1e-7
+#: mm).
 STRICT_BLADE_SEPARATION_MM = 1e-4
 
 
@@ -76,8 +78,14 @@ class StrictCheck:
 
     def to_dict(self) -> dict[str, Any]:
         """For the JSON report's ``checks`` block: every check named is one the solid passed."""
-        return {"brepcheck": True, "boolean_check_small_edges": True, "boolean_check_self_intersection": True,
-                "scope": self.scope.value, "blades_checked": self.blades_checked, "seconds": self.seconds}
+        return {
+            "brepcheck": True,
+            "boolean_check_small_edges": True,
+            "boolean_check_self_intersection": True,
+            "scope": self.scope.value,
+            "blades_checked": self.blades_checked,
+            "seconds": self.seconds,
+        }
 
 
 @dataclass(frozen=True)
@@ -101,7 +109,9 @@ def strict_valid_solid(shape: ShapeT, what: str) -> tuple[ShapeT, StrictCheck]:
     pattern = blade_pattern(occ_solid)
     if pattern is None or len(pattern.copies) < 2:
         _raise_on_faults(occ_solid, occ_solid, pattern, what)
-        return solid, StrictCheck(CheckScope.WHOLE, len(pattern.copies) if pattern else 0, time.perf_counter() - start)
+        return solid, StrictCheck(
+            CheckScope.WHOLE, len(pattern.copies) if pattern else 0, time.perf_counter() - start
+        )
     checked = [0, *_copies_near_asymmetric_hub_faces(pattern)]
     scope = compound([*pattern.hub, *(face for k in checked for face in pattern.copies[k])])
     _raise_on_faults(scope, occ_solid, pattern, what)
@@ -120,11 +130,17 @@ def boolean_check_faults(shape: TopoDS_Shape) -> list[tuple[str, list[TopoDS_Sha
     check.Perform()
     if check.IsValid():
         return []
-    return [(str(fault.GetCheckStatus()).rsplit(".", 1)[-1].removeprefix("BOPAlgo_"),
-             [*fault.GetFaultyShapes1(), *fault.GetFaultyShapes2()]) for fault in check.Result()]
+    return [
+        (
+            str(fault.GetCheckStatus()).rsplit(".", 1)[-1].removeprefix("BOPAlgo_"),
+            [*fault.GetFaultyShapes1(), *fault.GetFaultyShapes2()],
+        )
+        for fault in check.Result()
+    ]
 
 
-#: A faulty sub-shape as the child reports it: the index of a face in the solid's faces, or a shape type's name.
+#: A faulty sub-shape as the child reports it: the index of a face in the solid's faces, or a shape
+#: type's name.
 _Where = int | str
 
 
@@ -132,24 +148,43 @@ def _indexed_faults(shape: TopoDS_Shape, solid: TopoDS_Shape) -> list[tuple[str,
     """:func:`boolean_check_faults` as plain data (what a child process can send back)."""
     faces = TopTools_IndexedMapOfShape()
     TopExp.MapShapes_s(solid, TopAbs_FACE, faces)
-    return [(status, [faces.FindIndex(found) - 1 if found.ShapeType() == TopAbs_FACE
-                      else str(found.ShapeType()).rsplit(".", 1)[-1].removeprefix("TopAbs_").lower()
-                      for found in shapes])
-            for status, shapes in boolean_check_faults(shape)]
+    return [
+        (
+            status,
+            [
+                faces.FindIndex(found) - 1
+                if found.ShapeType() == TopAbs_FACE
+                else str(found.ShapeType()).rsplit(".", 1)[-1].removeprefix("TopAbs_").lower()
+                for found in shapes
+            ],
+        )
+        for status, shapes in boolean_check_faults(shape)
+    ]
 
 
-def _raise_on_faults(shape: TopoDS_Shape, solid: TopoDS_Shape, pattern: _Pattern | None, what: str) -> None:
+def _raise_on_faults(
+    shape: TopoDS_Shape, solid: TopoDS_Shape, pattern: _Pattern | None, what: str
+) -> None:
     try:
-        faults = run_isolated(_indexed_faults, shape, solid, timeout_s=STRICT_CHECK_TIME_LIMIT_S,
-                              what=f"{what}: BRepAlgoAPI_Check (self-interference / small-edge test)")
+        faults = run_isolated(
+            _indexed_faults,
+            shape,
+            solid,
+            timeout_s=STRICT_CHECK_TIME_LIMIT_S,
+            what=f"{what}: BRepAlgoAPI_Check (self-interference / small-edge test)",
+        )
     except IsolatedTimeout as error:
-        raise KernelError(f"{error} (the limit); the solid is not known to be free of self-intersections, so "
-                          "nothing is written: a simpler design (fewer sections, no root fillet) checks faster") from None
+        raise KernelError(
+            f"{error} (the limit); the solid is not known to be free of self-intersections, so "
+            "nothing is written: a simpler design (fewer sections, no root fillet) checks faster"
+        ) from None
     if faults:
         status, found = faults[0]
         where = ", ".join(_describe(item, solid, pattern) for item in found) or "the shape"
-        raise KernelError(f"{what}: BRepAlgoAPI_Check finds {len(faults)} fault(s), first {status} "
-                          f"(self-interference / small-edge test) on {where}")
+        raise KernelError(
+            f"{what}: BRepAlgoAPI_Check finds {len(faults)} fault(s), first {status} "
+            f"(self-interference / small-edge test) on {where}"
+        )
 
 
 def _describe(where: _Where, solid: TopoDS_Shape, pattern: _Pattern | None) -> str:
@@ -161,7 +196,9 @@ def _describe(where: _Where, solid: TopoDS_Shape, pattern: _Pattern | None) -> s
     face = TopoDS.Face_s(faces.FindKey(where + 1))
     part = "hub or blade"
     if pattern is not None:
-        blades = [k for k, copy in enumerate(pattern.copies) if any(face.IsSame(other) for other in copy)]
+        blades = [
+            k for k, copy in enumerate(pattern.copies) if any(face.IsSame(other) for other in copy)
+        ]
         part = f"blade {blades[0]}" if blades else "hub"
     kind = str(BRepAdaptor_Surface(face).GetType()).rsplit(".", 1)[-1].removeprefix("GeomAbs_")
     return f"face {where} of solid.Faces() ({part}, {kind})"
@@ -190,8 +227,17 @@ def blade_pattern(solid: TopoDS_Shape) -> _Pattern | None:
         return None
     copies: list[list[TopoDS_Face]] = [[] for _ in locations]
     for group in shared:
-        indices = [next((k for k, location in enumerate(locations) if _same_placement(face.Location(), location)), -1)
-                   for face in group]
+        indices = [
+            next(
+                (
+                    k
+                    for k, location in enumerate(locations)
+                    if _same_placement(face.Location(), location)
+                ),
+                -1,
+            )
+            for face in group
+        ]
         if sorted(indices) != list(range(len(locations))):
             return None  # not one face per copy
         for face, index in zip(group, indices, strict=True):
@@ -203,8 +249,11 @@ def _same_placement(first: TopLoc_Location, second: TopLoc_Location) -> bool:
     """Whether two locations move points the same way (a chain with a zero rotation in it is not
     IsEqual to the chain without, and places the face the same)."""
     a, b = first.Transformation(), second.Transformation()
-    return all(abs(a.Value(row, column) - b.Value(row, column)) <= STRICT_AXIS_TOLERANCE
-               for row in range(1, 4) for column in range(1, 5))
+    return all(
+        abs(a.Value(row, column) - b.Value(row, column)) <= STRICT_AXIS_TOLERANCE
+        for row in range(1, 4)
+        for column in range(1, 5)
+    )
 
 
 def _face_list(shape: TopoDS_Shape) -> list[TopoDS_Shape]:
@@ -216,8 +265,11 @@ def _face_list(shape: TopoDS_Shape) -> list[TopoDS_Shape]:
 def _is_rotation_about_z(transformation: Any) -> bool:
     axis = gp_Dir(0.0, 0.0, 1.0).Transformed(transformation)
     origin = gp_Pnt(0.0, 0.0, 0.0).Transformed(transformation)
-    return (axis.Z() > 1.0 - STRICT_AXIS_TOLERANCE and origin.Distance(gp_Pnt(0.0, 0.0, 0.0)) < STRICT_AXIS_TOLERANCE
-            and not transformation.IsNegative())
+    return (
+        axis.Z() > 1.0 - STRICT_AXIS_TOLERANCE
+        and origin.Distance(gp_Pnt(0.0, 0.0, 0.0)) < STRICT_AXIS_TOLERANCE
+        and not transformation.IsNegative()
+    )
 
 
 def _axisymmetric_surface(face: TopoDS_Face) -> bool:
@@ -230,8 +282,11 @@ def _axisymmetric_surface(face: TopoDS_Face) -> bool:
         return False
     axis = surface.Cylinder().Axis() if kind == GeomAbs_Cylinder else surface.Cone().Axis()
     location = axis.Location()
-    return (abs(axis.Direction().Z()) > 1.0 - STRICT_AXIS_TOLERANCE
-            and abs(location.X()) < STRICT_AXIS_TOLERANCE and abs(location.Y()) < STRICT_AXIS_TOLERANCE)
+    return (
+        abs(axis.Direction().Z()) > 1.0 - STRICT_AXIS_TOLERANCE
+        and abs(location.X()) < STRICT_AXIS_TOLERANCE
+        and abs(location.Y()) < STRICT_AXIS_TOLERANCE
+    )
 
 
 def _box(shapes: Sequence[TopoDS_Shape]) -> Bnd_Box:
@@ -248,8 +303,11 @@ def _copies_near_asymmetric_hub_faces(pattern: _Pattern) -> list[int]:
     if not asymmetric:
         return []
     boxes = [_box([face]) for face in asymmetric]
-    return [k for k in range(1, len(pattern.copies))
-            if any(not _box(pattern.copies[k]).IsOut(box) for box in boxes)]
+    return [
+        k
+        for k in range(1, len(pattern.copies))
+        if any(not _box(pattern.copies[k]).IsOut(box) for box in boxes)
+    ]
 
 
 def _check_blade_separation(pattern: _Pattern, solid: TopoDS_Shape, what: str) -> None:
@@ -260,7 +318,11 @@ def _check_blade_separation(pattern: _Pattern, solid: TopoDS_Shape, what: str) -
             continue
         distance = BRepExtrema_DistShapeShape(first, other)
         if not distance.IsDone():
-            raise KernelError(f"{what}: OpenCascade could not measure the distance between blade 0 and blade {k}")
+            raise KernelError(
+                f"{what}: OpenCascade could not measure the distance between blade 0 and blade {k}"
+            )
         if distance.Value() <= STRICT_BLADE_SEPARATION_MM:
-            raise KernelError(f"{what}: blade 0 and blade {k} touch or cross (distance {distance.Value():.2g} mm, "
-                              f"at least {STRICT_BLADE_SEPARATION_MM:g} mm required; self-interference test)")
+            raise KernelError(
+                f"{what}: blade 0 and blade {k} touch or cross (distance {distance.Value():.2g} mm, "
+                f"at least {STRICT_BLADE_SEPARATION_MM:g} mm required; self-interference test)"
+            )

@@ -34,13 +34,15 @@ class FaceTriangles:
     face_index: int
 
 
-def tessellate_faces(shape: AnyShape, linear_deflection: float, angular_deflection: float,
-                     parallel: bool = True) -> list[FaceTriangles]:
+def tessellate_faces(
+    shape: AnyShape, linear_deflection: float, angular_deflection: float, parallel: bool = True
+) -> list[FaceTriangles]:
     """Tessellate a copy of ``shape`` exactly as ``write_stl`` does (absolute deflection in mm,
     angular in radians; the shape's own triangulation is left alone) and return the triangles of
     every face that has some, in ``shape.Faces()`` order. ``parallel``: OpenCascade's mesher threads."""
     copy = copied(occ(shape))
-    mesher = BRepMesh_IncrementalMesh(copy, linear_deflection, False, angular_deflection, parallel)  # meshes here
+    # meshes here
+    mesher = BRepMesh_IncrementalMesh(copy, linear_deflection, False, angular_deflection, parallel)
     if not mesher.IsDone():
         raise KernelError("OpenCascade could not tessellate the solid")
     faces = []
@@ -58,10 +60,16 @@ def face_triangulation(face: TopoDS_Face) -> tuple[NDArray[np.float64], NDArray[
     if mesh is None or mesh.NbTriangles() == 0:
         return np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64)
     transform = location.Transformation()
-    vertices = np.array([mesh.Node(i).Transformed(transform).Coord() for i in range(1, mesh.NbNodes() + 1)],
-                        dtype=float)
-    triangles = np.array([mesh.Triangle(i).Get() for i in range(1, mesh.NbTriangles() + 1)],
-                         dtype=np.int64).reshape(-1, 3) - 1
+    vertices = np.array(
+        [mesh.Node(i).Transformed(transform).Coord() for i in range(1, mesh.NbNodes() + 1)],
+        dtype=float,
+    )
+    triangles = (
+        np.array(
+            [mesh.Triangle(i).Get() for i in range(1, mesh.NbTriangles() + 1)], dtype=np.int64
+        ).reshape(-1, 3)
+        - 1
+    )
     if face.Orientation() == TopAbs_REVERSED:
         triangles = triangles[:, ::-1]  # outward for a reversed face
     return vertices, triangles

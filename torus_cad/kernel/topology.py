@@ -55,11 +55,21 @@ AnyShape = Union[TopoDS_Shape, "cq.Shape"]
 #: The kind of shape a kernel function was given, and gives back (:func:`like`).
 ShapeT = TypeVar("ShapeT", bound="TopoDS_Shape | cq.Shape")
 
-#: cadquery's names of the surface kinds (``Face.geomType()``), for messages and the tessellation's faces.
-_SURFACE_KINDS = {GeomAbs_Plane: "PLANE", GeomAbs_Cylinder: "CYLINDER", GeomAbs_Cone: "CONE", GeomAbs_Sphere: "SPHERE",
-                  GeomAbs_Torus: "TORUS", GeomAbs_BezierSurface: "BEZIER", GeomAbs_BSplineSurface: "BSPLINE",
-                  GeomAbs_SurfaceOfRevolution: "REVOLUTION", GeomAbs_SurfaceOfExtrusion: "EXTRUSION",
-                  GeomAbs_OffsetSurface: "OFFSET", GeomAbs_OtherSurface: "OTHER"}
+#: cadquery's names of the surface kinds (``Face.geomType()``), for messages and the tessellation's
+#: faces.
+_SURFACE_KINDS = {
+    GeomAbs_Plane: "PLANE",
+    GeomAbs_Cylinder: "CYLINDER",
+    GeomAbs_Cone: "CONE",
+    GeomAbs_Sphere: "SPHERE",
+    GeomAbs_Torus: "TORUS",
+    GeomAbs_BezierSurface: "BEZIER",
+    GeomAbs_BSplineSurface: "BSPLINE",
+    GeomAbs_SurfaceOfRevolution: "REVOLUTION",
+    GeomAbs_SurfaceOfExtrusion: "EXTRUSION",
+    GeomAbs_OffsetSurface: "OFFSET",
+    GeomAbs_OtherSurface: "OTHER",
+}
 
 
 def occ(shape: AnyShape) -> TopoDS_Shape:
@@ -123,7 +133,9 @@ def surface_kind(face: TopoDS_Face) -> str:
     """The face's surface kind as cadquery names it ("PLANE", "CYLINDER", "BSPLINE", ...)."""
     return _SURFACE_KINDS.get(BRepAdaptor_Surface(face).GetType(), "OTHER")
 
-#: Faces of these surface types belong to a blade; every other face (plane, cylinder, cone) to the hub.
+
+#: Faces of these surface types belong to a blade; every other face (plane, cylinder, cone) to the
+#: hub.
 BLADE_SURFACES = (GeomAbs_BSplineSurface, GeomAbs_BezierSurface, GeomAbs_OffsetSurface)
 
 
@@ -157,8 +169,11 @@ def count(shape: TopoDS_Shape, kind: TopAbs_ShapeEnum) -> int:
     return len(explore(shape, kind))
 
 
-def boolean(operation: BRepAlgoAPI_BooleanOperation, arguments: Sequence[TopoDS_Shape],
-            tools: Sequence[TopoDS_Shape]) -> BRepAlgoAPI_BooleanOperation:
+def boolean(
+    operation: BRepAlgoAPI_BooleanOperation,
+    arguments: Sequence[TopoDS_Shape],
+    tools: Sequence[TopoDS_Shape],
+) -> BRepAlgoAPI_BooleanOperation:
     """Run ``operation`` on ``arguments`` and ``tools`` (parallel, oriented bounding boxes)."""
     argument_list, tool_list = TopTools_ListOfShape(), TopTools_ListOfShape()
     for shape in arguments:

@@ -44,8 +44,8 @@ from torus_cad.kernel.tessellation import face_triangulation
 from torus_cad.kernel.topology import AnyShape, copied, faces_in_order, occ, surface_kind
 from torus_cad.tolerances import MESH_REPAIR_MAX_DEVIATION_MM
 
-#: Tessellation nodes closer than this (mm) are one vertex of the written mesh (the faces store their
-#: shared boundary nodes each in its own placement, equal to the last bits).
+#: Tessellation nodes closer than this (mm) are one vertex of the written mesh (the faces store
+#: their shared boundary nodes each in its own placement, equal to the last bits).
 MESH_MERGE_DISTANCE_MM = 1e-6
 
 #: A repair that would move the tessellation further is tried again on a finer one: the linear
@@ -84,7 +84,9 @@ class UncrossedMesh:
     repair_deviation_mm: float = 0.0
 
 
-def uncrossed_mesh(shape: AnyShape, linear_deflection: float, angular_deflection: float) -> UncrossedMesh:
+def uncrossed_mesh(
+    shape: AnyShape, linear_deflection: float, angular_deflection: float
+) -> UncrossedMesh:
     """OpenCascade's tessellation of a copy of ``shape`` (absolute deflection, mm; angular, rad), its faces'
     shared nodes merged, with any crossing triangles repaired by meshlib (see the module doc). Where the
     repair would move a coarse tessellation further than MESH_REPAIR_MAX_DEVIATION_MM (a user's large
@@ -98,8 +100,10 @@ def uncrossed_mesh(shape: AnyShape, linear_deflection: float, angular_deflection
             return _uncrossed_at(shape, linear_deflection / 2.0**halving, angular_deflection)
         except _TooCoarse as error:
             too_far = error
-    raise KernelError(f"{too_far} (also at linear deflection {linear_deflection / 2.0**MESH_REFINE_HALVINGS:g} mm, "
-                      f"{MESH_REFINE_HALVINGS} halvings of {linear_deflection:g} mm)")
+    raise KernelError(
+        f"{too_far} (also at linear deflection {linear_deflection / 2.0**MESH_REFINE_HALVINGS:g} mm, "
+        f"{MESH_REFINE_HALVINGS} halvings of {linear_deflection:g} mm)"
+    )
 
 
 class _TooCoarse(KernelError):
@@ -114,11 +118,14 @@ class _Open(_TooCoarse):
     """BRepMesh left the tessellation open (module doc)."""
 
 
-def _uncrossed_at(shape: AnyShape, linear_deflection: float, angular_deflection: float) -> UncrossedMesh:
+def _uncrossed_at(
+    shape: AnyShape, linear_deflection: float, angular_deflection: float
+) -> UncrossedMesh:
     """:func:`uncrossed_mesh` at one linear deflection; _TooCoarse when the tessellation is open or the repair
     moves it too far."""
     copy = copied(occ(shape))
-    mesher = BRepMesh_IncrementalMesh(copy, linear_deflection, False, angular_deflection, True)  # meshes here
+    # meshes here
+    mesher = BRepMesh_IncrementalMesh(copy, linear_deflection, False, angular_deflection, True)
     if not mesher.IsDone():
         raise KernelError("OpenCascade could not tessellate the solid")
     faces = faces_in_order(copy)
@@ -126,29 +133,45 @@ def _uncrossed_at(shape: AnyShape, linear_deflection: float, angular_deflection:
     open_faces = _faces_with_holes(triangles, owner)
     if open_faces:
         named = ", ".join(f"{index} ({surface_kind(faces[index])})" for index in open_faces)
-        raise _Open(f"OpenCascade's tessellation at linear deflection {linear_deflection:g} mm is open "
-                    f"(holes beside faces {named}: boundary edges closer to each other than the deflection)")
+        raise _Open(
+            f"OpenCascade's tessellation at linear deflection {linear_deflection:g} mm is open "
+            f"(holes beside faces {named}: boundary edges closer to each other than the deflection)"
+        )
     pairs = crossing_pairs(points, triangles)
     if not len(pairs):
         return UncrossedMesh(points, triangles, linear_deflection, angular_deflection)
     first, other = (int(index) for index in pairs[0])
-    where = (f"{len(pairs)} pairs of intersecting triangles (meshlib), the first on face {owner[first]} "
-             f"({surface_kind(faces[owner[first]])}) against face {owner[other]} at "
-             f"({', '.join(f'{value:.3f}' for value in points[triangles[first]].mean(axis=0))}) mm")
+    where = (
+        f"{len(pairs)} pairs of intersecting triangles (meshlib), the first on face {owner[first]} "
+        f"({surface_kind(faces[owner[first]])}) against face {owner[other]} at "
+        f"({', '.join(f'{value:.3f}' for value in points[triangles[first]].mean(axis=0))}) mm"
+    )
     repaired = _repaired(points, triangles)
     if repaired is None:
-        raise KernelError(f"the tessellation has {where}; meshlib's repair ({', '.join(MESH_REPAIR_PASSES)}) "
-                          "leaves crossing triangles or an open mesh")
+        raise KernelError(
+            f"the tessellation has {where}; meshlib's repair ({', '.join(MESH_REPAIR_PASSES)}) "
+            "leaves crossing triangles or an open mesh"
+        )
     vertices, fixed, passes, deviation = repaired
     if deviation > MESH_REPAIR_MAX_DEVIATION_MM:
-        raise _RepairTooFar(f"the tessellation has {where}; meshlib's repair moves it by {deviation:.3f} mm, over "
-                          f"the {MESH_REPAIR_MAX_DEVIATION_MM} mm allowed")
-    return UncrossedMesh(vertices, fixed, linear_deflection, angular_deflection, len(pairs), "+".join(passes),
-                         deviation)
+        raise _RepairTooFar(
+            f"the tessellation has {where}; meshlib's repair moves it by {deviation:.3f} mm, over "
+            f"the {MESH_REPAIR_MAX_DEVIATION_MM} mm allowed"
+        )
+    return UncrossedMesh(
+        vertices,
+        fixed,
+        linear_deflection,
+        angular_deflection,
+        len(pairs),
+        "+".join(passes),
+        deviation,
+    )
 
 
-def _repaired(points: NDArray[np.float64], triangles: NDArray[np.int64]
-              ) -> tuple[NDArray[np.float64], NDArray[np.int64], list[str], float] | None:
+def _repaired(
+    points: NDArray[np.float64], triangles: NDArray[np.int64]
+) -> tuple[NDArray[np.float64], NDArray[np.int64], list[str], float] | None:
     """meshlib's SelfIntersections.fix of the mesh, pass after pass of MESH_REPAIR_PASSES until nothing
     crosses: the vertices, triangles, the passes used and the largest distance (mm) of the tessellation
     from the result; None unless the result is closed and free of crossings."""
@@ -170,8 +193,12 @@ def _repaired(points: NDArray[np.float64], triangles: NDArray[np.int64]
     if mesh.topology.findNumHoles() != 0:
         return None
     deviation = float(np.sqrt(mr.findMaxDistanceSqOneWay(mesh, original)))
-    return (np.asarray(mrn.getNumpyVerts(mesh), dtype=float),
-            np.asarray(mrn.getNumpyFaces(mesh.topology), dtype=np.int64), passes, deviation)
+    return (
+        np.asarray(mrn.getNumpyVerts(mesh), dtype=float),
+        np.asarray(mrn.getNumpyFaces(mesh.topology), dtype=np.int64),
+        passes,
+        deviation,
+    )
 
 
 def _faces_with_holes(triangles: NDArray[np.int64], owner: NDArray[np.int64]) -> list[int]:
@@ -181,8 +208,9 @@ def _faces_with_holes(triangles: NDArray[np.int64], owner: NDArray[np.int64]) ->
     return sorted({int(face) for face in np.repeat(owner, 3)[rim]})
 
 
-def _merged_tessellation(faces: list[TopoDS_Face]
-                         ) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]]:
+def _merged_tessellation(
+    faces: list[TopoDS_Face],
+) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]]:
     """The meshed faces' nodes merged (points ``(v, 3)`` mm), their outward triangles ``(t, 3)`` and
     each triangle's face index."""
     points, triangles, owner = [], [], []
@@ -200,7 +228,11 @@ def _merged_tessellation(faces: list[TopoDS_Face]
     all_points = np.concatenate(points)
     merged, unique = _merge(all_points)
     corners = merged[np.concatenate(triangles)]
-    keep = (corners[:, 0] != corners[:, 1]) & (corners[:, 1] != corners[:, 2]) & (corners[:, 0] != corners[:, 2])
+    keep = (
+        (corners[:, 0] != corners[:, 1])
+        & (corners[:, 1] != corners[:, 2])
+        & (corners[:, 0] != corners[:, 2])
+    )
     return all_points[unique], corners[keep], np.concatenate(owner)[keep]
 
 

@@ -56,7 +56,14 @@ from torus_cad.geometry.section.section_fit import DEGREE, SectionFit, corner_kn
 if TYPE_CHECKING:
     import cadquery as cq
 
-__all__ = ["DEGREE", "SectionCurves", "bspline_wire", "fit_section_curves", "knot_arrays", "occ_bspline_wire"]
+__all__ = [
+    "DEGREE",
+    "SectionCurves",
+    "bspline_wire",
+    "fit_section_curves",
+    "knot_arrays",
+    "occ_bspline_wire",
+]
 
 
 @dataclass(frozen=True)
@@ -83,12 +90,18 @@ class SectionCurves(SectionFit):
         return [occ_bspline_wire(poles, self.knots, airfoil_pieces, split) for poles in self.poles]
 
 
-def fit_section_curves(section_points: NDArray[np.float64], trailing_edge_index: int,
-                       chord_lengths: NDArray[np.float64], lower_corner_index: int | None = None,
-                       round_trailing_edge: bool = False) -> SectionCurves:
+def fit_section_curves(
+    section_points: NDArray[np.float64],
+    trailing_edge_index: int,
+    chord_lengths: NDArray[np.float64],
+    lower_corner_index: int | None = None,
+    round_trailing_edge: bool = False,
+) -> SectionCurves:
     """:func:`torus_cad.geometry.section.section_fit.fit_sections` (its arguments, its GeometryError), as curves that
     make wires."""
-    fit = fit_sections(section_points, trailing_edge_index, chord_lengths, lower_corner_index, round_trailing_edge)
+    fit = fit_sections(
+        section_points, trailing_edge_index, chord_lengths, lower_corner_index, round_trailing_edge
+    )
     return SectionCurves(**{field.name: getattr(fit, field.name) for field in fields(fit)})
 
 
@@ -127,16 +140,24 @@ def _edge(curve: Geom_BSplineCurve) -> TopoDS_Edge:
     return edge.Edge()
 
 
-def bspline_wire(poles: NDArray[np.float64], knots: NDArray[np.float64], last_pieces: int = 1,
-                 closed_split: float | None = 0.5) -> cq.Wire:
+def bspline_wire(
+    poles: NDArray[np.float64],
+    knots: NDArray[np.float64],
+    last_pieces: int = 1,
+    closed_split: float | None = 0.5,
+) -> cq.Wire:
     """:func:`occ_bspline_wire` as cadquery's wire."""
     import cadquery as cq
 
     return cq.Wire(occ_bspline_wire(poles, knots, last_pieces, closed_split))
 
 
-def occ_bspline_wire(poles: NDArray[np.float64], knots: NDArray[np.float64], last_pieces: int = 1,
-                     closed_split: float | None = 0.5) -> TopoDS_Wire:
+def occ_bspline_wire(
+    poles: NDArray[np.float64],
+    knots: NDArray[np.float64],
+    last_pieces: int = 1,
+    closed_split: float | None = 0.5,
+) -> TopoDS_Wire:
     """A closed wire (OpenCascade's) from ``(m, 3)`` poles and a full knot vector of a non-rational cubic B-spline.
 
     One edge per piece between C0 corner knots (see :func:`_corner_knots`), so that each piece
@@ -154,15 +175,18 @@ def occ_bspline_wire(poles: NDArray[np.float64], knots: NDArray[np.float64], las
         if len(pieces) == 1 and count == 1 and closed_split is not None:
             bounds = np.array([piece_knots[0], closed_split, piece_knots[-1]])
         for first, last in itertools.pairwise(bounds):
-            segment = edge_curve if len(bounds) == 2 else _segment(edge_curve, float(first), float(last))
+            segment = (
+                edge_curve if len(bounds) == 2 else _segment(edge_curve, float(first), float(last))
+            )
             builder.Add(_edge(segment))
     if not builder.IsDone():
         raise KernelError("OpenCascade could not make a closed section wire")
     return builder.Wire()
 
 
-def _pieces(poles: NDArray[np.float64], knots: NDArray[np.float64]
-            ) -> list[tuple[NDArray[np.float64], NDArray[np.float64]]]:
+def _pieces(
+    poles: NDArray[np.float64], knots: NDArray[np.float64]
+) -> list[tuple[NDArray[np.float64], NDArray[np.float64]]]:
     """The curve split at its C0 corner knots: ``(poles, knots)`` per piece, pieces share their corner pole."""
     pieces = []
     start_pole, start_knot = 0, knots[0]
@@ -170,10 +194,22 @@ def _pieces(poles: NDArray[np.float64], knots: NDArray[np.float64]
         first = int(np.searchsorted(knots, corner, side="left"))  # index of the corner's first copy
         pole = first - 1  # the one basis function alive at a knot of multiplicity DEGREE
         inner = knots[(knots > start_knot) & (knots < corner)]
-        pieces.append((poles[start_pole:pole + 1],
-                       np.concatenate([np.full(DEGREE + 1, start_knot), inner, np.full(DEGREE + 1, corner)])))
+        pieces.append(
+            (
+                poles[start_pole : pole + 1],
+                np.concatenate(
+                    [np.full(DEGREE + 1, start_knot), inner, np.full(DEGREE + 1, corner)]
+                ),
+            )
+        )
         start_pole, start_knot = pole, corner
     inner = knots[(knots > start_knot) & (knots < knots[-1])]
-    pieces.append((poles[start_pole:], np.concatenate([np.full(DEGREE + 1, start_knot), inner,
-                                                       np.full(DEGREE + 1, knots[-1])])))
+    pieces.append(
+        (
+            poles[start_pole:],
+            np.concatenate(
+                [np.full(DEGREE + 1, start_knot), inner, np.full(DEGREE + 1, knots[-1])]
+            ),
+        )
+    )
     return pieces

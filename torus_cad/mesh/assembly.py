@@ -53,14 +53,20 @@ def _compact(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> Triangl
     return TriangleMesh(vertices[used], np.searchsorted(used, faces))
 
 
-def assemble(geometry: PropellerGeometry, grid: BladeSurface, hub: TriangleMesh, cell_mm: float) -> Assembled:
+def assemble(
+    geometry: PropellerGeometry, grid: BladeSurface, hub: TriangleMesh, cell_mm: float
+) -> Assembled:
     """Hub and every blade (blade 0's grid turned to theta_i) as one closed, labelled mesh."""
     names = ("hub", *(f"blade_{index}" for index in range(geometry.blades)))
-    pieces = blade_pieces(grid, geometry.hub.radius_mm, geometry.hub.length_mm, CUT_MARGIN_CELLS * cell_mm)
+    pieces = blade_pieces(
+        grid, geometry.hub.radius_mm, geometry.hub.length_mm, CUT_MARGIN_CELLS * cell_mm
+    )
     first = geometry.blade_angle_deg(0)
     grid_vertices = grid.points.reshape(-1, 3)
-    turned = [rotated_about_axis(grid_vertices, geometry.blade_angle_deg(index) - first)
-              for index in range(geometry.blades)]
+    turned = [
+        rotated_about_axis(grid_vertices, geometry.blade_angle_deg(index) - first)
+        for index in range(geometry.blades)
+    ]
     inputs, part_of = [hub], [0]
     dropped: list[NDArray[np.bool_] | None] = [None]
     for index, vertices in enumerate(turned):
@@ -73,15 +79,23 @@ def assemble(geometry: PropellerGeometry, grid: BladeSurface, hub: TriangleMesh,
     united, cleanup, kept = collapse_keeping(united)
     cut_caps = cut_caps[kept]
     if cut_caps.any():  # the caps at the cuts go; the bands close the rings again
-        united = LabeledMesh(united.vertices, united.faces[~cut_caps], united.part[~cut_caps], united.part_names)
+        united = LabeledMesh(
+            united.vertices, united.faces[~cut_caps], united.part[~cut_caps], united.part_names
+        )
     if pieces.far is None:
         return Assembled(united, len(united.faces), len(united.vertices), cleanup, None)
-    return Assembled(_join_bands(united, pieces, turned, grid.points.shape[1]), len(united.faces),
-                     len(united.vertices), cleanup, pieces.cut)
+    return Assembled(
+        _join_bands(united, pieces, turned, grid.points.shape[1]),
+        len(united.faces),
+        len(united.vertices),
+        cleanup,
+        pieces.cut,
+    )
 
 
-def _join_bands(united: LabeledMesh, pieces: BladePieces, turned: list[NDArray[np.float64]], count: int
-                ) -> LabeledMesh:
+def _join_bands(
+    united: LabeledMesh, pieces: BladePieces, turned: list[NDArray[np.float64]], count: int
+) -> LabeledMesh:
     """``united`` with every blade's open band between the cuts joined at its two end rings."""
     assert pieces.far is not None and pieces.cut is not None
     first, last = pieces.cut
@@ -89,19 +103,23 @@ def _join_bands(united: LabeledMesh, pieces: BladePieces, turned: list[NDArray[n
     interior = np.arange((first + 1) * count, last * count)
     found = find_rows(np.concatenate([vertices[rings] for vertices in turned]), united.vertices)
     if np.any(found < 0):
-        raise MeshBooleanError(f"mesh union, step 'join': {int(np.sum(found < 0))} vertices of the cut rings are "
-                               "not in the union's result")
+        raise MeshBooleanError(
+            f"mesh union, step 'join': {int(np.sum(found < 0))} vertices of the cut rings are "
+            "not in the union's result"
+        )
     vertices, faces, parts = [united.vertices], [united.faces], [united.part]
     offset = len(united.vertices)
     index_of = np.empty(len(turned[0]), dtype=np.int64)
     for blade, blade_vertices in enumerate(turned):
-        index_of[rings] = found[blade * len(rings):(blade + 1) * len(rings)]
+        index_of[rings] = found[blade * len(rings) : (blade + 1) * len(rings)]
         index_of[interior] = offset + np.arange(len(interior))
         vertices.append(blade_vertices[interior])
         faces.append(index_of[pieces.far])
         parts.append(np.full(len(pieces.far), blade + 1, dtype=np.int16))
         offset += len(interior)
-    return LabeledMesh(np.concatenate(vertices), np.concatenate(faces), np.concatenate(parts), united.part_names)
+    return LabeledMesh(
+        np.concatenate(vertices), np.concatenate(faces), np.concatenate(parts), united.part_names
+    )
 
 
 __all__ = ["CUT_MARGIN_CELLS", "Assembled", "assemble"]

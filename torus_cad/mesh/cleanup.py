@@ -44,7 +44,9 @@ class _Adjacency:
 
     def around(self, vertex: int) -> set[int]:
         if vertex not in self.edited:
-            self.edited[vertex] = set(self.order[self.starts[vertex]:self.starts[vertex + 1]].tolist())
+            self.edited[vertex] = set(
+                self.order[self.starts[vertex] : self.starts[vertex + 1]].tolist()
+            )
         return self.edited[vertex]
 
     def neighbours(self, vertex: int) -> set[int]:
@@ -96,8 +98,9 @@ def collapse_keeping(mesh: LabeledMesh) -> tuple[LabeledMesh, Cleanup, NDArray[n
         return mesh, Cleanup(0, *before), np.ones(len(faces), dtype=bool)
     ends = np.stack([near[rows, shortest[rows]], near[rows, (shortest[rows] + 1) % 3]], axis=1)
     candidates = np.unique(np.sort(ends, axis=1), axis=0)
-    candidates = candidates[np.argsort(np.linalg.norm(vertices[candidates[:, 0]] - vertices[candidates[:, 1]],
-                                                      axis=1))]
+    candidates = candidates[
+        np.argsort(np.linalg.norm(vertices[candidates[:, 0]] - vertices[candidates[:, 1]], axis=1))
+    ]
     adjacency = _Adjacency.of(faces, len(vertices))
     removed_faces = np.zeros(len(faces), dtype=bool)
     gone: set[int] = set()
@@ -116,9 +119,11 @@ def collapse_keeping(mesh: LabeledMesh) -> tuple[LabeledMesh, Cleanup, NDArray[n
         old = faces[moved]
         after = np.where(old == mover, keeper, old)
         count = len(moved)  # the moved triangles before and after, and the needles, in one pass
-        _, normals, ratios = corner_measures(vertices[np.concatenate([old, after, faces[sorted(shared)]])])
-        turned = (normals[count:2 * count] * normals[:count]).sum(1)
-        if turned.min() <= 0.0 or ratios[count:2 * count].max() >= ratios[2 * count:].max():
+        _, normals, ratios = corner_measures(
+            vertices[np.concatenate([old, after, faces[sorted(shared)]])]
+        )
+        turned = (normals[count : 2 * count] * normals[:count]).sum(1)
+        if turned.min() <= 0.0 or ratios[count : 2 * count].max() >= ratios[2 * count :].max():
             continue  # a triangle would flip, or the moved ones would be no better than the needle
         faces[moved] = after
         removed_faces[list(shared)] = True

@@ -49,14 +49,17 @@ class CrossingCheck:
     scope: str
 
 
-def crossing_pairs(vertices: NDArray[np.float64], faces: NDArray[np.int64],
-                   region: NDArray[np.bool_] | None = None) -> int:
+def crossing_pairs(
+    vertices: NDArray[np.float64], faces: NDArray[np.int64], region: NDArray[np.bool_] | None = None
+) -> int:
     """How many intersecting pairs among the ``(f, 3)`` faces over ``(v, 3)`` vertices (mm), or among the
     faces where ``region`` ``(f,)`` is True (torus_cad.kernel.mesh_check.crossing_pairs)."""
     return len(mesh_crossing_pairs(vertices, faces, region))
 
 
-def edge_band_faces(sections: int, count: int, trailing_edge: int, lower_corner: int | None) -> NDArray[np.bool_]:
+def edge_band_faces(
+    sections: int, count: int, trailing_edge: int, lower_corner: int | None
+) -> NDArray[np.bool_]:
     """``(f,)`` True for the side faces of a structured blade mesh (``grids.mirrored_diagonal_mesh``
     layout: both triangles of every cell, then the caps, which are included) near the edges."""
     band = max(8, int(np.ceil(EDGE_BAND_FRACTION * count)))
@@ -72,16 +75,27 @@ def edge_band_faces(sections: int, count: int, trailing_edge: int, lower_corner:
     return np.concatenate([cells, cells, caps])
 
 
-def blade_crossings(blade: TriangleMesh, sections: int, count: int, trailing_edge: int,
-                    lower_corner: int | None, whole: bool) -> CrossingCheck:
+def blade_crossings(
+    blade: TriangleMesh,
+    sections: int,
+    count: int,
+    trailing_edge: int,
+    lower_corner: int | None,
+    whole: bool,
+) -> CrossingCheck:
     """Intersecting pairs of blade 0's closed mesh, whole or in its edge bands."""
     if whole:
-        return CrossingCheck(crossing_pairs(blade.vertices, blade.faces), len(blade.faces), "whole mesh")
+        return CrossingCheck(
+            crossing_pairs(blade.vertices, blade.faces), len(blade.faces), "whole mesh"
+        )
     region = edge_band_faces(sections, count, trailing_edge, lower_corner)
     if len(region) != len(blade.faces):
         region = np.ones(len(blade.faces), dtype=bool)
-    return CrossingCheck(crossing_pairs(blade.vertices, blade.faces, region), int(region.sum()),
-                         "blade 0's leading- and trailing-edge bands")
+    return CrossingCheck(
+        crossing_pairs(blade.vertices, blade.faces, region),
+        int(region.sum()),
+        "blade 0's leading- and trailing-edge bands",
+    )
 
 
 __all__ = ["CrossingCheck", "blade_crossings", "crossing_pairs", "edge_band_faces"]

@@ -64,7 +64,9 @@ class CellSize:
         return max(self.around, self.along)
 
 
-def section_parameters(centerline: Centerline, sections: int, spacing: SectionSpacing) -> NDArray[np.float64]:
+def section_parameters(
+    centerline: Centerline, sections: int, spacing: SectionSpacing
+) -> NDArray[np.float64]:
     """``(sections,)`` centerline parameters s in [0, 1], 0 and 1 included, spread as ``spacing`` says."""
     if spacing == SectionSpacing.PARAMETER:
         return np.linspace(0.0, 1.0, sections)
@@ -76,7 +78,9 @@ def section_parameters(centerline: Centerline, sections: int, spacing: SectionSp
     return s
 
 
-def blade_grid(geometry: PropellerGeometry, sections: int, points: int, spacing: SectionSpacing) -> BladeSurface:
+def blade_grid(
+    geometry: PropellerGeometry, sections: int, points: int, spacing: SectionSpacing
+) -> BladeSurface:
     """Blade 0 sampled on ``sections`` x ``points``: sections spread by ``spacing``, points equally
     spaced in arc length around each section with the trailing edge's corners kept as points (spec §5).
 
@@ -85,15 +89,23 @@ def blade_grid(geometry: PropellerGeometry, sections: int, points: int, spacing:
     of the middle one, so the mesh and the B-rep have the same edge.
     """
     centerline = geometry.centerline(0)
-    frames = blade_frames(geometry.blade, centerline, section_parameters(centerline, sections, spacing))
+    frames = blade_frames(
+        geometry.blade, centerline, section_parameters(centerline, sections, spacing)
+    )
     along = sections_along(geometry.blade, frames.s)
     shared = all(section is along[0] for section in along)
     reference = along[0] if shared else sections_along(geometry.blade, [0.5])[0]
     sampling = equal_arc_length_section(reference, points)
     planar = sampling.points if shared else sections_at(along, sampling.t)
-    return BladeSurface(place_sections(geometry.blade, frames, planar), frames.s, sampling.t,
-                        sampling.trailing_edge_index, frames, sampling.lower_corner_index,
-                        isinstance(reference, RoundTrailingEdge))
+    return BladeSurface(
+        place_sections(geometry.blade, frames, planar),
+        frames.s,
+        sampling.t,
+        sampling.trailing_edge_index,
+        frames,
+        sampling.lower_corner_index,
+        isinstance(reference, RoundTrailingEdge),
+    )
 
 
 def cell_size(surface: BladeSurface) -> CellSize:
@@ -112,8 +124,12 @@ def rotated_about_axis(vertices: NDArray[np.float64], angle_deg: float) -> NDArr
     return vertices @ rotation.T
 
 
-def _cap(ring: NDArray[np.float64], frame_normal: NDArray[np.float64], frame_binormal: NDArray[np.float64],
-         outward: NDArray[np.float64]) -> NDArray[np.int64]:
+def _cap(
+    ring: NDArray[np.float64],
+    frame_normal: NDArray[np.float64],
+    frame_binormal: NDArray[np.float64],
+    outward: NDArray[np.float64],
+) -> NDArray[np.int64]:
     """Triangles ``(p - 2, 3)`` (indices into the ring) filling one planar section ring ``(p, 3)`` mm,
     facing ``outward``: manifold3d's polygon triangulation of the ring in its section plane, so no
     triangle leaves the section (a zipper from the upper to the lower surface can, across a blunt
@@ -137,7 +153,9 @@ def split_along_a_d(surface: BladeSurface) -> NDArray[np.bool_]:
     """``(points,)`` True for the columns whose cells :func:`mirrored_diagonal_mesh` splits along a-d:
     the upper surface, up to the trailing edge (or the middle of a blunt edge's base)."""
     count = surface.points.shape[1]
-    upper_end = surface.trailing_edge_index if surface.trailing_edge_index is not None else count // 2
+    upper_end = (
+        surface.trailing_edge_index if surface.trailing_edge_index is not None else count // 2
+    )
     if surface.lower_corner_index is not None:
         upper_end = (upper_end + surface.lower_corner_index + 1) // 2
     return np.arange(count) < upper_end
@@ -187,7 +205,11 @@ def mirrored_diagonal_mesh(surface: BladeSurface) -> TriangleMesh:
     by a triangulation of its polygon in its plane (:func:`_cap`). Faces outward.
     """
     sections = len(surface.points)
-    faces = [side_faces(surface, 0, sections - 1), cap_faces(surface, 0, 1), cap_faces(surface, sections - 1, sections - 2)]
+    faces = [
+        side_faces(surface, 0, sections - 1),
+        cap_faces(surface, 0, 1),
+        cap_faces(surface, sections - 1, sections - 2),
+    ]
     return TriangleMesh(surface.points.reshape(-1, 3), np.concatenate(faces))
 
 
@@ -211,7 +233,9 @@ class BladePieces:
     cut: tuple[int, int] | None
 
 
-def blade_pieces(surface: BladeSurface, hub_radius_mm: float, hub_length_mm: float, margin_mm: float) -> BladePieces:
+def blade_pieces(
+    surface: BladeSurface, hub_radius_mm: float, hub_length_mm: float, margin_mm: float
+) -> BladePieces:
     """Cut blade 0's mesh at the first and last sections lying wholly more than ``margin_mm`` outside the hub."""
     grid = surface.points
     sections = len(grid)
@@ -219,12 +243,19 @@ def blade_pieces(surface: BladeSurface, hub_radius_mm: float, hub_length_mm: flo
     axial = np.abs(grid[..., 2]) - hub_length_mm / 2.0
     clear = np.flatnonzero((np.maximum(radial, axial) > margin_mm).all(axis=1))
     whole = mirrored_diagonal_mesh(surface).faces
-    if len(clear) < 2 or clear[-1] - clear[0] + 1 != len(clear) or clear[0] == 0 or clear[-1] == sections - 1:
+    if (
+        len(clear) < 2
+        or clear[-1] - clear[0] + 1 != len(clear)
+        or clear[0] == 0
+        or clear[-1] == sections - 1
+    ):
         return BladePieces((whole,), (np.zeros(len(whole), dtype=bool),), None, None)
     first, last = int(clear[0]), int(clear[-1])
     start = np.concatenate([side_faces(surface, 0, first), cap_faces(surface, 0, 1)])
     start_cut = cap_faces(surface, first, first - 1)
-    end = np.concatenate([side_faces(surface, last, sections - 1), cap_faces(surface, sections - 1, sections - 2)])
+    end = np.concatenate(
+        [side_faces(surface, last, sections - 1), cap_faces(surface, sections - 1, sections - 2)]
+    )
     end_cut = cap_faces(surface, last, last + 1)
     near = (np.concatenate([start, start_cut]), np.concatenate([end, end_cut]))
     flags = (np.arange(len(near[0])) >= len(start), np.arange(len(near[1])) >= len(end))
@@ -235,8 +266,12 @@ def blade_meshes(geometry: PropellerGeometry, surface: BladeSurface) -> list[Tri
     """Every blade's closed mesh: blade 0's capped grid rotated to theta_i (spec §6.1), outward faces."""
     mesh = mirrored_diagonal_mesh(surface)
     first = geometry.blade_angle_deg(0)
-    return [TriangleMesh(rotated_about_axis(mesh.vertices, geometry.blade_angle_deg(index) - first), mesh.faces)
-            for index in range(geometry.blades)]
+    return [
+        TriangleMesh(
+            rotated_about_axis(mesh.vertices, geometry.blade_angle_deg(index) - first), mesh.faces
+        )
+        for index in range(geometry.blades)
+    ]
 
 
 def blade_triangle_count(sections: int, points: int) -> int:
@@ -284,16 +319,26 @@ def _polyline(corners: NDArray[np.float64], cell: float) -> NDArray[np.float64]:
 def hub_layout(radius: float, length: float, cell: float, chamfer: float = 0.0) -> HubLayout:
     """Grid counts of a hub of ``radius`` x ``length`` (mm), its end edges chamfered by ``chamfer``
     mm at 45 degrees, with cells of about ``cell`` mm."""
-    # Cells no larger than the hub's length and a fraction of its circumference, so they stay square.
+    # Cells no larger than the hub's length and a fraction of its circumference, so they stay
+    # square.
     cell = min(cell, length, 2.0 * np.pi * radius / (3 * CAP_INNER_RING_POINTS))
     around = int(np.ceil(2.0 * np.pi * radius / cell))
     half, cap_radius = length / 2.0, radius - chamfer
-    corners = np.array([(cap_radius, -half), (radius, -half + chamfer), (radius, half - chamfer), (cap_radius, half)])
+    corners = np.array(
+        [
+            (cap_radius, -half),
+            (radius, -half + chamfer),
+            (radius, half - chamfer),
+            (cap_radius, half),
+        ]
+    )
     if chamfer == 0.0:
         corners = corners[1:3]
     rings = max(1, int(np.ceil(cap_radius / cell)))
     ring_radius = cap_radius * np.arange(1, rings + 1) / rings
-    counts = np.maximum(CAP_INNER_RING_POINTS, np.ceil(2.0 * np.pi * ring_radius / cell)).astype(np.int64)
+    counts = np.maximum(CAP_INNER_RING_POINTS, np.ceil(2.0 * np.pi * ring_radius / cell)).astype(
+        np.int64
+    )
     counts[-1] = around
     counts = np.minimum(counts, around)
     return HubLayout(around, _polyline(corners, cell), np.concatenate([[1], counts]))
@@ -319,8 +364,8 @@ def zip_rings(inner: NDArray[np.int64], outer: NDArray[np.int64]) -> NDArray[np.
     from_inner = np.concatenate([np.ones(n_in, bool), np.zeros(n_out, bool)])
     order = np.argsort(next_angle, kind="stable")
     step_inner = from_inner[order]
-    i = np.cumsum(step_inner) - step_inner       # inner points passed before each step
-    j = np.cumsum(~step_inner) - ~step_inner     # outer points passed before each step
+    i = np.cumsum(step_inner) - step_inner  # inner points passed before each step
+    j = np.cumsum(~step_inner) - ~step_inner  # outer points passed before each step
     a, b = inner[i % n_in], outer[j % n_out]
     third = np.where(step_inner, inner[(i + 1) % n_in], outer[(j + 1) % n_out])
     return np.stack([a, b, third], axis=-1)
@@ -351,7 +396,7 @@ def hub_mesh(radius: float, length: float, cell: float, chamfer: float = 0.0) ->
         faces.append(zip_rings(inner, outer)[:, ::-1])  # seen from -z: clockwise from +z
     for inner, outer in pairwise(top):
         faces.append(zip_rings(inner, outer))
-    rows = np.stack(side)                                # (along + 1, around)
+    rows = np.stack(side)  # (along + 1, around)
     a, b = rows[:-1], np.roll(rows[:-1], -1, axis=1)
     c, d = rows[1:], np.roll(rows[1:], -1, axis=1)
     faces.append(np.stack([a, b, d], axis=-1).reshape(-1, 3))

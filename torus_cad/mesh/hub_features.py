@@ -36,13 +36,17 @@ def check_meshable(params: PropellerParameters) -> None:
     """ParameterError (exit 2) naming a feature the structured mesh cannot carry: the root fillet, or the
     conventional kind (its grids follow the toroidal blade's centerline, and the open tip needs a cap)."""
     if params.kind.value == "conventional":
-        raise ParameterError("kind = 'conventional': torus-cad mesh makes the toroidal kind's structured grids only; "
-                             "use the STL of 'torus-cad build' or the tetrahedral mesh of 'torus-cad cfd'")
+        raise ParameterError(
+            "kind = 'conventional': torus-cad mesh makes the toroidal kind's structured grids only; "
+            "use the STL of 'torus-cad build' or the tetrahedral mesh of 'torus-cad cfd'"
+        )
     radius = params.hub.root_fillet_radius
     if radius > 0.0:
-        raise ParameterError(f"hub.root_fillet_radius = {radius:g} mm: torus-cad mesh cannot mesh the root fillet "
-                             "(its surface is OpenCascade's, not the spec's); set hub.root_fillet_radius = 0 for "
-                             "the mesh, or use the STL of 'torus-cad build'")
+        raise ParameterError(
+            f"hub.root_fillet_radius = {radius:g} mm: torus-cad mesh cannot mesh the root fillet "
+            "(its surface is OpenCascade's, not the spec's); set hub.root_fillet_radius = 0 for "
+            "the mesh, or use the STL of 'torus-cad build'"
+        )
 
 
 def placed_mounting(params: PropellerParameters) -> HubMounting:
@@ -51,10 +55,18 @@ def placed_mounting(params: PropellerParameters) -> HubMounting:
     mounting = params.hub.mounting()
     if not mounting.any:
         return mounting
-    dense = params.blade_surface(sections=max(params.resolution.sections, MOUNTING_SAMPLES[0]),
-                                 points=max(params.resolution.points, MOUNTING_SAMPLES[1]))
-    return place_mounting(mounting, dense.points, params.blades, params.hub.radius, params.hub.length,
-                          params.hub.root_fillet_radius)
+    dense = params.blade_surface(
+        sections=max(params.resolution.sections, MOUNTING_SAMPLES[0]),
+        points=max(params.resolution.points, MOUNTING_SAMPLES[1]),
+    )
+    return place_mounting(
+        mounting,
+        dense.points,
+        params.blades,
+        params.hub.radius,
+        params.hub.length,
+        params.hub.root_fillet_radius,
+    )
 
 
 def _segments(radius_mm: float, cell_mm: float, minimum: int) -> int:
@@ -76,13 +88,16 @@ def bore_outline(mounting: HubMounting, cell_mm: float) -> NDArray[np.float64]:
     return np.stack([radius * np.cos(theta), radius * np.sin(theta)], axis=-1)
 
 
-def _tools(mounting: HubMounting, hub_radius_mm: float, hub_length_mm: float, cell_mm: float) -> list[object]:
+def _tools(
+    mounting: HubMounting, hub_radius_mm: float, hub_length_mm: float, cell_mm: float
+) -> list[object]:
     """manifold3d solids to subtract: the bore prism past both ends, the set-screw cylinder from the axis out."""
     import manifold3d as mf
 
     tools = []
     if mounting.bore_diameter_mm > 0.0:
-        # Rows of about a cell along the axis, half a row past each end face: no long sliver where the ends cut the wall.
+        # Rows of about a cell along the axis, half a row past each end face: no long sliver where
+        # the ends cut the wall.
         rows = math.ceil(hub_length_mm / cell_mm)
         step = hub_length_mm / rows
         section = mf.CrossSection([bore_outline(mounting, cell_mm)])
@@ -97,8 +112,13 @@ def _tools(mounting: HubMounting, hub_radius_mm: float, hub_length_mm: float, ce
     return tools
 
 
-def cut_features(hub: TriangleMesh, mounting: HubMounting, hub_radius_mm: float, hub_length_mm: float,
-                 cell_mm: float) -> TriangleMesh:
+def cut_features(
+    hub: TriangleMesh,
+    mounting: HubMounting,
+    hub_radius_mm: float,
+    hub_length_mm: float,
+    cell_mm: float,
+) -> TriangleMesh:
     """The hub's closed mesh with the bore and the set-screw hole of ``mounting`` cut out (manifold3d),
     the needle triangles where the holes' rims cross the grid collapsed (torus_cad.mesh.cleanup)."""
     import manifold3d as mf
@@ -109,24 +129,38 @@ def cut_features(hub: TriangleMesh, mounting: HubMounting, hub_radius_mm: float,
     tools = _tools(mounting, hub_radius_mm, hub_length_mm, cell_mm)
     if not tools:
         return hub
-    grid_mark = np.uint64(1 << _GRID_BIT)  # the grid's faces: distinct IDs (no merging) with this bit set
+    # the grid's faces: distinct IDs (no merging) with this bit set
+    grid_mark = np.uint64(1 << _GRID_BIT)
     face_id = (np.arange(len(hub.faces), dtype=np.uint64) % grid_mark) | grid_mark
-    body = mf.Manifold(mf.Mesh64(vert_properties=np.ascontiguousarray(hub.vertices, dtype=np.float64),
-                                 tri_verts=np.ascontiguousarray(hub.faces, dtype=np.uint64), face_id=face_id))
+    body = mf.Manifold(
+        mf.Mesh64(
+            vert_properties=np.ascontiguousarray(hub.vertices, dtype=np.float64),
+            tri_verts=np.ascontiguousarray(hub.faces, dtype=np.uint64),
+            face_id=face_id,
+        )
+    )
     for tool in tools:
         body = body - tool
     if body.status() != mf.Error.NoError or body.is_empty():
-        raise MeshBooleanError(f"mesh union, step 'hub features': manifold3d failed ({body.status().name})")
+        raise MeshBooleanError(
+            f"mesh union, step 'hub features': manifold3d failed ({body.status().name})"
+        )
     result = body.to_mesh64()
     from_tool = (np.asarray(result.face_id, dtype=np.uint64) & grid_mark) == 0
-    cut = LabeledMesh(np.array(result.vert_properties, dtype=np.float64)[:, :3].copy(),
-                      np.array(result.tri_verts, dtype=np.int64), from_tool.astype(np.int16), ("grid", "features"))
-    cleaned, _ = collapse_junction_needles(cut)  # the needles where the features' rims cross the grid
+    cut = LabeledMesh(
+        np.array(result.vert_properties, dtype=np.float64)[:, :3].copy(),
+        np.array(result.tri_verts, dtype=np.int64),
+        from_tool.astype(np.int16),
+        ("grid", "features"),
+    )
+    # the needles where the features' rims cross the grid
+    cleaned, _ = collapse_junction_needles(cut)
     return cleaned.triangle_mesh
 
 
-def feature_surface_distance(points: NDArray[np.float64], mounting: HubMounting, hub_radius_mm: float,
-                             hub_length_mm: float) -> NDArray[np.float64]:
+def feature_surface_distance(
+    points: NDArray[np.float64], mounting: HubMounting, hub_radius_mm: float, hub_length_mm: float
+) -> NDArray[np.float64]:
     """``(k,)`` mm: distance of each point from the nearest of the hub's surfaces, each taken unbounded
     (cylinder r = R, end planes, chamfer cones, bore cylinder, D-flat plane, set-screw cylinder).
 
@@ -138,17 +172,29 @@ def feature_surface_distance(points: NDArray[np.float64], mounting: HubMounting,
     half = hub_length_mm / 2.0
     candidates = [np.abs(r - hub_radius_mm), np.abs(z - half)]
     if mounting.chamfer_mm > 0.0:  # the cone r + |z| = R + L/2 - c, at 45 degrees
-        candidates.append(np.abs(r + z - (hub_radius_mm + half - mounting.chamfer_mm)) / math.sqrt(2.0))
+        candidates.append(
+            np.abs(r + z - (hub_radius_mm + half - mounting.chamfer_mm)) / math.sqrt(2.0)
+        )
     angle = math.radians(mounting.set_screw_angle_deg)
     toward = points[:, 0] * math.cos(angle) + points[:, 1] * math.sin(angle)
     if mounting.bore_diameter_mm > 0.0:
         candidates.append(np.abs(r - mounting.bore_diameter_mm / 2.0))
     if mounting.bore_flat_depth_mm > 0.0:
-        candidates.append(np.abs(toward - (mounting.bore_diameter_mm / 2.0 - mounting.bore_flat_depth_mm)))
+        candidates.append(
+            np.abs(toward - (mounting.bore_diameter_mm / 2.0 - mounting.bore_flat_depth_mm))
+        )
     if mounting.set_screw_diameter_mm > 0.0:
         across = -points[:, 0] * math.sin(angle) + points[:, 1] * math.cos(angle)
-        candidates.append(np.abs(np.hypot(across, points[:, 2]) - mounting.set_screw_diameter_mm / 2.0))
+        candidates.append(
+            np.abs(np.hypot(across, points[:, 2]) - mounting.set_screw_diameter_mm / 2.0)
+        )
     return np.asarray(np.min(np.stack(candidates), axis=0))
 
 
-__all__ = ["bore_outline", "check_meshable", "cut_features", "feature_surface_distance", "placed_mounting"]
+__all__ = [
+    "bore_outline",
+    "check_meshable",
+    "cut_features",
+    "feature_surface_distance",
+    "placed_mounting",
+]

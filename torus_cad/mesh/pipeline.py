@@ -36,7 +36,12 @@ from torus_cad.geometry.hub.mounting import HubMounting
 from torus_cad.mesh import quality
 from torus_cad.mesh.assembly import assemble
 from torus_cad.mesh.cleanup import Cleanup
-from torus_cad.mesh.crossings import MESH_WHOLE_CROSSING_CHECK_TRIANGLES, CrossingCheck, blade_crossings, crossing_pairs
+from torus_cad.mesh.crossings import (
+    MESH_WHOLE_CROSSING_CHECK_TRIANGLES,
+    CrossingCheck,
+    blade_crossings,
+    crossing_pairs,
+)
 from torus_cad.mesh.grids import (
     blade_grid,
     cell_size,
@@ -45,7 +50,12 @@ from torus_cad.mesh.grids import (
     rotated_about_axis,
     split_along_a_d,
 )
-from torus_cad.mesh.hub_features import check_meshable, cut_features, feature_surface_distance, placed_mounting
+from torus_cad.mesh.hub_features import (
+    check_meshable,
+    cut_features,
+    feature_surface_distance,
+    placed_mounting,
+)
 from torus_cad.mesh.mesh_formats import MeshFormat, selected_formats
 from torus_cad.mesh.resolution import check_budget, check_resolution, estimate_triangles
 from torus_cad.mesh.union import LabeledMesh, MeshBooleanError
@@ -56,7 +66,8 @@ from torus_cad.runtime.isolation import IsolatedCall, fork_is_safe_for_opencasca
 from torus_cad.runtime.stages import StageTimer
 
 #: Longest wait (s) for the B-rep that ``torus-cad mesh`` compares its mesh with (built in a child
-#: beside the mesh): a build, its strict check (STRICT_CHECK_TIME_LIMIT_S) included, and one tessellation.
+#: beside the mesh): a build, its strict check (STRICT_CHECK_TIME_LIMIT_S) included, and one
+#: tessellation.
 MESH_COMPARISON_TIME_LIMIT_S = 900.0
 
 #: Surface meshes: triangles with every corner at least this fraction of the hub radius outside
@@ -135,15 +146,18 @@ JUNCTION_CHECK_CELLS = 3.0
 _CROSSING_FREE_SCALES = (1.25, 1.5, 2.0, 3.0, 4.0)
 
 
-def _blade_check(geometry: PropellerGeometry, grid: BladeSurface, mesh: TriangleMesh) -> CrossingCheck:
+def _blade_check(
+    geometry: PropellerGeometry, grid: BladeSurface, mesh: TriangleMesh
+) -> CrossingCheck:
     sections, count, _ = grid.points.shape
     whole = geometry.blades * len(mesh.faces) <= MESH_WHOLE_CROSSING_CHECK_TRIANGLES
     trailing_edge = grid.trailing_edge_index if grid.trailing_edge_index is not None else count // 2
     return blade_crossings(mesh, sections, count, trailing_edge, grid.lower_corner_index, whole)
 
 
-def check_blade_crossings(geometry: PropellerGeometry, grid: BladeSurface, mesh: TriangleMesh,
-                          spacing: SectionSpacing) -> CrossingCheck:
+def check_blade_crossings(
+    geometry: PropellerGeometry, grid: BladeSurface, mesh: TriangleMesh, spacing: SectionSpacing
+) -> CrossingCheck:
     """Blade 0's crossing check; ParameterError (exit 2) when its mesh crosses itself, naming the
     smallest of the counts scaled by :data:`_CROSSING_FREE_SCALES` whose mesh does not."""
     from torus_cad.parameters.design import Mesh
@@ -153,16 +167,24 @@ def check_blade_crossings(geometry: PropellerGeometry, grid: BladeSurface, mesh:
     if found == 0:
         return check
     sections, points, _ = grid.points.shape
-    most = (Mesh.model_fields["sections"].metadata[-1].le, Mesh.model_fields["points"].metadata[-1].le)
+    most = (
+        Mesh.model_fields["sections"].metadata[-1].le,
+        Mesh.model_fields["points"].metadata[-1].le,
+    )
     advice = "no allowed resolution up to 4 times finer avoids it"
     for scale in _CROSSING_FREE_SCALES:
-        finer = (min(int(np.ceil(sections * scale)), most[0]), min(int(np.ceil(points * scale)), most[1]))
+        finer = (
+            min(int(np.ceil(sections * scale)), most[0]),
+            min(int(np.ceil(points * scale)), most[1]),
+        )
         finer_grid = blade_grid(geometry, *finer, spacing)
         if _blade_check(geometry, finer_grid, mirrored_diagonal_mesh(finer_grid)).pairs == 0:
             advice = f"use --sections {finer[0]} --points {finer[1]} (mesh.sections, mesh.points) or finer"
             break
-    raise ParameterError(f"mesh.sections = {sections}, mesh.points = {points} is too coarse for this blade: its "
-                         f"mesh crosses itself at {found} triangle pairs; {advice}")
+    raise ParameterError(
+        f"mesh.sections = {sections}, mesh.points = {points} is too coarse for this blade: its "
+        f"mesh crosses itself at {found} triangle pairs; {advice}"
+    )
 
 
 def _hub(geometry: PropellerGeometry, mounting: HubMounting, cell: float) -> TriangleMesh:
@@ -170,25 +192,39 @@ def _hub(geometry: PropellerGeometry, mounting: HubMounting, cell: float) -> Tri
     return cut_features(hub, mounting, geometry.hub.radius_mm, geometry.hub.length_mm, cell)
 
 
-def united_crossings(mesh: LabeledMesh, united_faces: int, blade: CrossingCheck, geometry: PropellerGeometry,
-                     margin_mm: float) -> CrossingCheck:
+def united_crossings(
+    mesh: LabeledMesh,
+    united_faces: int,
+    blade: CrossingCheck,
+    geometry: PropellerGeometry,
+    margin_mm: float,
+) -> CrossingCheck:
     """Intersecting pairs of the assembled mesh: all of it when blade 0 was checked whole, else the hub
     and every triangle that went through the union within ``margin_mm`` of the hub (the junctions,
     where the union and the cleanup made new triangles), blade 0's edge bands having been checked already."""
     if blade.scope == "whole mesh":
-        return CrossingCheck(crossing_pairs(mesh.vertices, mesh.faces), len(mesh.faces), "whole mesh")
+        return CrossingCheck(
+            crossing_pairs(mesh.vertices, mesh.faces), len(mesh.faces), "whole mesh"
+        )
     faces = mesh.faces[:united_faces]
     hub = geometry.hub
-    near = (mesh.part[:united_faces] == 0) | ~quality.faces_away_from_hub(mesh.vertices, faces, hub.radius_mm,
-                                                                          hub.length_mm, margin_mm)
+    near = (mesh.part[:united_faces] == 0) | ~quality.faces_away_from_hub(
+        mesh.vertices, faces, hub.radius_mm, hub.length_mm, margin_mm
+    )
     used = np.unique(faces[near])
     pairs = crossing_pairs(mesh.vertices[used], np.searchsorted(used, faces[near]))
-    return CrossingCheck(blade.pairs + pairs, blade.checked_triangles + int(near.sum()),
-                         f"the hub and every triangle within {margin_mm:.3g} mm of it (the junctions), {blade.scope}")
+    return CrossingCheck(
+        blade.pairs + pairs,
+        blade.checked_triangles + int(near.sum()),
+        f"the hub and every triangle within {margin_mm:.3g} mm of it (the junctions), {blade.scope}",
+    )
 
 
-def build_surface_mesh(params: PropellerParameters, progress: Callable[[str], None] | None = None,
-                       compare: bool = False) -> SurfaceMesh:
+def build_surface_mesh(
+    params: PropellerParameters,
+    progress: Callable[[str], None] | None = None,
+    compare: bool = False,
+) -> SurfaceMesh:
     """Check, grid and unite at ``params.mesh``'s resolution: the propeller's closed, labelled surface mesh
     with the hub's features, checked for intersecting triangles.
 
@@ -201,7 +237,8 @@ def build_surface_mesh(params: PropellerParameters, progress: Callable[[str], No
 
     timer = StageTimer[MeshStage](progress)
     with timer.stage(MeshStage.CHECKS):
-        params = resolve_design_targets(params).parameters  # airfoil.naca, diameter, pitch, as the B-rep's
+        # airfoil.naca, diameter, pitch, as the B-rep's
+        params = resolve_design_targets(params).parameters
         check_meshable(params)
         geometry, table = params.geometry(), params.mesh
         estimate = estimate_triangles(geometry, table.sections, table.points, table.spacing)
@@ -221,21 +258,40 @@ def build_surface_mesh(params: PropellerParameters, progress: Callable[[str], No
     mesh = assembled.mesh
     topology = quality.edge_topology(mesh.faces)
     if not topology.closed:
-        raise MeshBooleanError(f"mesh union, step 'join': the mesh is not closed ({topology.open_edges} open, "
-                               f"{topology.non_manifold_edges} non-manifold, {topology.inconsistent_edges} "
-                               "inconsistently oriented edges)")
+        raise MeshBooleanError(
+            f"mesh union, step 'join': the mesh is not closed ({topology.open_edges} open, "
+            f"{topology.non_manifold_edges} non-manifold, {topology.inconsistent_edges} "
+            "inconsistently oriented edges)"
+        )
     with timer.stage(MeshStage.CROSSINGS):
-        margin = max(_junction_margin(geometry.hub.radius_mm), JUNCTION_CHECK_CELLS * max(cells.around, cells.along))
+        margin = max(
+            _junction_margin(geometry.hub.radius_mm),
+            JUNCTION_CHECK_CELLS * max(cells.around, cells.along),
+        )
         crossings = united_crossings(mesh, assembled.united_faces, blade_check, geometry, margin)
         if crossings.pairs:
             raise ParameterError(
                 f"mesh.sections = {table.sections}, mesh.points = {table.points}: the united mesh crosses itself at "
-                f"{crossings.pairs} triangle pairs where the blades meet the hub; use finer --sections and --points")
-    return SurfaceMesh(params, mesh, grid, cells.hub, estimate.total, assembled.cleanup, mounting, crossings,
-                       topology, assembled.united_vertices, timer.seconds)
+                f"{crossings.pairs} triangle pairs where the blades meet the hub; use finer --sections and --points"
+            )
+    return SurfaceMesh(
+        params,
+        mesh,
+        grid,
+        cells.hub,
+        estimate.total,
+        assembled.cleanup,
+        mounting,
+        crossings,
+        topology,
+        assembled.united_vertices,
+        timer.seconds,
+    )
 
 
-# -- quality report ---------------------------------------------------------------------------------
+# -- quality report
+# ---------------------------------------------------------------------------------
+
 
 def _junction_margin(hub_radius_mm: float) -> float:
     """How far outside the hub (mm) a triangle counts as away from the junctions."""
@@ -256,12 +312,20 @@ def vertex_distances(result: SurfaceMesh) -> NDArray[np.float64]:
     on_hub = np.zeros(len(mesh.vertices), dtype=bool)
     on_hub[mesh.faces_of(0).ravel()] = True
     distance = np.zeros(len(mesh.vertices))
-    distance[on_hub] = feature_surface_distance(mesh.vertices[on_hub], result.mounting, hub.radius_mm, hub.length_mm)
-    others = np.flatnonzero(~on_hub[:result.united_vertices])  # the rest are the blades' joined bands: grid vertices
+    distance[on_hub] = feature_surface_distance(
+        mesh.vertices[on_hub], result.mounting, hub.radius_mm, hub.length_mm
+    )
+    # the rest are the blades' joined bands: grid vertices
+    others = np.flatnonzero(~on_hub[: result.united_vertices])
     geometry, grid_vertices = result.geometry, result.blade_grid.points.reshape(-1, 3)
-    blade_vertices = np.concatenate([
-        rotated_about_axis(grid_vertices, geometry.blade_angle_deg(index) - geometry.blade_angle_deg(0))
-        for index in range(geometry.blades)])
+    blade_vertices = np.concatenate(
+        [
+            rotated_about_axis(
+                grid_vertices, geometry.blade_angle_deg(index) - geometry.blade_angle_deg(0)
+            )
+            for index in range(geometry.blades)
+        ]
+    )
     exact = quality.rows_in(mesh.vertices[others], blade_vertices)
     strays = others[~exact]
     if len(strays):
@@ -276,13 +340,20 @@ def blade_cell_sag(result: SurfaceMesh) -> tuple[float, float]:
     cells' parameter midpoints from the cells' triangles, over the cells outside the hub."""
     geometry, grid = result.geometry, result.blade_grid
     s_mid = 0.5 * (grid.s[:-1] + grid.s[1:])
-    period = 3.0 if grid.lower_corner_index is not None else 2.0  # closed parameters of blunt sections run to 3
+    # closed parameters of blunt sections run to 3
+    period = 3.0 if grid.lower_corner_index is not None else 2.0
     t_mid = 0.5 * (grid.t + np.append(grid.t[1:], period))
     frames = blade_frames(geometry.blade, geometry.centerline(0), s_mid)
-    centres = place_sections(geometry.blade, frames, sections_at(sections_along(geometry.blade, frames.s), t_mid))
+    centres = place_sections(
+        geometry.blade, frames, sections_at(sections_along(geometry.blade, frames.s), t_mid)
+    )
     sag = quality.cell_deviation(grid.points, centres, split_along_a_d(grid))
-    outside = quality.outside_hub(centres.reshape(-1, 3), geometry.hub.radius_mm, geometry.hub.length_mm,
-                                  _junction_margin(geometry.hub.radius_mm)).reshape(sag.shape)
+    outside = quality.outside_hub(
+        centres.reshape(-1, 3),
+        geometry.hub.radius_mm,
+        geometry.hub.length_mm,
+        _junction_margin(geometry.hub.radius_mm),
+    ).reshape(sag.shape)
     chord = 2.0 * np.linalg.norm(centres - frames.origin[:, None, :], axis=-1).max(axis=1)
     if not outside.any():
         return 0.0, 0.0
@@ -297,23 +368,34 @@ def opencascade_comparison(params: PropellerParameters, margin: float) -> dict[s
     from torus_cad.propeller import build_propeller
 
     propeller = build_propeller(params)
-    faces = tessellate_faces(propeller.shape, params.export.stl_linear_deflection,
-                             params.export.stl_angular_deflection)
+    faces = tessellate_faces(
+        propeller.shape, params.export.stl_linear_deflection, params.export.stl_angular_deflection
+    )
     offsets = np.cumsum([0] + [len(face.vertices) for face in faces[:-1]])
     vertices = np.concatenate([face.vertices for face in faces])
     triangles = np.concatenate([face.triangles + offset for face, offset in zip(faces, offsets)])
-    on_blade = np.concatenate([np.full(len(face.triangles), face.surface_type not in ("PLANE", "CYLINDER"))
-                               for face in faces])
+    on_blade = np.concatenate(
+        [
+            np.full(len(face.triangles), face.surface_type not in ("PLANE", "CYLINDER"))
+            for face in faces
+        ]
+    )
     blade = triangles[on_blade]
-    away = blade[quality.faces_away_from_hub(vertices, blade, params.hub.radius, params.hub.length, margin)]
+    away = blade[
+        quality.faces_away_from_hub(vertices, blade, params.hub.radius, params.hub.length, margin)
+    ]
     ratios = quality.aspect_ratios(vertices, triangles)
-    return {"brep_volume_mm3": precise_volume(propeller.shape),
-            "opencascade_stl": {"linear_deflection_mm": params.export.stl_linear_deflection,
-                                "angular_deflection_rad": params.export.stl_angular_deflection,
-                                "triangles": len(triangles),
-                                "aspect_ratio_max": float(ratios.max()),
-                                "triangles_aspect_ratio_over_100": int(np.sum(ratios > 100.0)),
-                                "blades_away_from_junctions": quality.evenness(vertices, away).to_dict()}}
+    return {
+        "brep_volume_mm3": precise_volume(propeller.shape),
+        "opencascade_stl": {
+            "linear_deflection_mm": params.export.stl_linear_deflection,
+            "angular_deflection_rad": params.export.stl_angular_deflection,
+            "triangles": len(triangles),
+            "aspect_ratio_max": float(ratios.max()),
+            "triangles_aspect_ratio_over_100": int(np.sum(ratios > 100.0)),
+            "blades_away_from_junctions": quality.evenness(vertices, away).to_dict(),
+        },
+    }
 
 
 def quality_report(result: SurfaceMesh, comparison: dict[str, Any] | None = None) -> dict[str, Any]:
@@ -323,49 +405,75 @@ def quality_report(result: SurfaceMesh, comparison: dict[str, Any] | None = None
     margin = _junction_margin(result.geometry.hub.radius_mm)
     topology = result.topology
     blade = np.flatnonzero(mesh.part > 0)
-    away = blade[quality.faces_away_from_hub(mesh.vertices, mesh.faces[blade], params.hub.radius,
-                                             params.hub.length, margin)]
+    away = blade[
+        quality.faces_away_from_hub(
+            mesh.vertices, mesh.faces[blade], params.hub.radius, params.hub.length, margin
+        )
+    ]
     lengths, ratios = quality.triangle_measures(mesh.vertices, mesh.faces)
     sag_mm, sag_relative = blade_cell_sag(result)
     grid_cell = cell_size(result.blade_grid)
     report: dict[str, Any] = {
         "name": params.name,
-        "settings": {"sections": table.sections, "points": table.points, "spacing": table.spacing.value,
-                     "formats": [item.value for item in selected_formats(table)]},
-        "triangles": len(mesh.faces), "vertices": len(mesh.vertices),
+        "settings": {
+            "sections": table.sections,
+            "points": table.points,
+            "spacing": table.spacing.value,
+            "formats": [item.value for item in selected_formats(table)],
+        },
+        "triangles": len(mesh.faces),
+        "vertices": len(mesh.vertices),
         "estimated_triangles": result.estimated_triangles,
         "junction_cleanup": asdict(result.cleanup),
-        "triangles_per_part": dict(zip(mesh.part_names, np.bincount(mesh.part, minlength=len(mesh.part_names))
-                                       .tolist())),
+        "triangles_per_part": dict(
+            zip(mesh.part_names, np.bincount(mesh.part, minlength=len(mesh.part_names)).tolist())
+        ),
         "topology": topology.to_dict(),
-        "blade_cell_mm": {"around": grid_cell.around, "along": grid_cell.along}, "hub_cell_mm": result.hub_cell_mm,
+        "blade_cell_mm": {"around": grid_cell.around, "along": grid_cell.along},
+        "hub_cell_mm": result.hub_cell_mm,
         "junction_margin_mm": margin,
-        "blades_away_from_junctions": quality.evenness(mesh.vertices, mesh.faces[away], (lengths[away], ratios[away])).to_dict(),
+        "blades_away_from_junctions": quality.evenness(
+            mesh.vertices, mesh.faces[away], (lengths[away], ratios[away])
+        ).to_dict(),
         "aspect_ratio_max": float(ratios.max()),
         "triangles_aspect_ratio_over_100": int(np.sum(ratios > 100.0)),
         "aspect_ratio_max_hub": float(ratios[mesh.part == 0].max()),
         "volume_mm3": mesh.triangle_mesh.volume,
         "vertex_distance_max_mm": float(vertex_distances(result).max()),
-        "cell_sag_max_mm": sag_mm, "cell_sag_max_relative_chord": sag_relative,
+        "cell_sag_max_mm": sag_mm,
+        "cell_sag_max_relative_chord": sag_relative,
         "self_intersections": result.crossings.pairs,
-        "self_intersection_check": {"scope": result.crossings.scope,
-                                    "checked_triangles": result.crossings.checked_triangles, "library": "meshlib"},
+        "self_intersection_check": {
+            "scope": result.crossings.scope,
+            "checked_triangles": result.crossings.checked_triangles,
+            "library": "meshlib",
+        },
         "hub_features": _features(result),
     }
     if comparison is not None:
         report.update(comparison)
-        report["volume_relative_difference"] = report["volume_mm3"] / report["brep_volume_mm3"] - 1.0
+        report["volume_relative_difference"] = (
+            report["volume_mm3"] / report["brep_volume_mm3"] - 1.0
+        )
     return report
 
 
 def _features(result: SurfaceMesh) -> dict[str, Any]:
     mounting, blade = result.mounting, result.parameters.airfoil
-    return {"bore_diameter_mm": mounting.bore_diameter_mm, "bore_flat_depth_mm": mounting.bore_flat_depth_mm,
-            "set_screw_diameter_mm": mounting.set_screw_diameter_mm,
-            "set_screw_angle_deg": mounting.set_screw_angle_deg if mounting.set_screw_diameter_mm else None,
-            "chamfer_mm": mounting.chamfer_mm, "trailing_edge_thickness_mm": blade.trailing_edge_thickness,
-            "trailing_edge_shape": blade.trailing_edge_shape.value if result.blade_grid.lower_corner_index is not None
-            else "sharp", "handedness": result.parameters.handedness.value}
+    return {
+        "bore_diameter_mm": mounting.bore_diameter_mm,
+        "bore_flat_depth_mm": mounting.bore_flat_depth_mm,
+        "set_screw_diameter_mm": mounting.set_screw_diameter_mm,
+        "set_screw_angle_deg": mounting.set_screw_angle_deg
+        if mounting.set_screw_diameter_mm
+        else None,
+        "chamfer_mm": mounting.chamfer_mm,
+        "trailing_edge_thickness_mm": blade.trailing_edge_thickness,
+        "trailing_edge_shape": blade.trailing_edge_shape.value
+        if result.blade_grid.lower_corner_index is not None
+        else "sharp",
+        "handedness": result.parameters.handedness.value,
+    }
 
 
 def summary_line(report: dict[str, Any]) -> str:
@@ -373,35 +481,57 @@ def summary_line(report: dict[str, Any]) -> str:
     topology = report["topology"]
     away = report["blades_away_from_junctions"]
     closed = "closed 2-manifold" if topology["closed_2_manifold"] else "NOT CLOSED"
-    crossing = ("no intersecting triangles" if report["self_intersections"] == 0
-                else f"{report['self_intersections']} INTERSECTING TRIANGLE PAIRS")
-    line = (f"mesh: {report['triangles']:,} triangles, {closed} ({topology['open_edges']} open, "
-            f"{topology['non_manifold_edges']} non-manifold edges), {crossing}; blade edge ratio "
-            f"{away['edge_ratio']:.2f}")
+    crossing = (
+        "no intersecting triangles"
+        if report["self_intersections"] == 0
+        else f"{report['self_intersections']} INTERSECTING TRIANGLE PAIRS"
+    )
+    line = (
+        f"mesh: {report['triangles']:,} triangles, {closed} ({topology['open_edges']} open, "
+        f"{topology['non_manifold_edges']} non-manifold edges), {crossing}; blade edge ratio "
+        f"{away['edge_ratio']:.2f}"
+    )
     if "opencascade_stl" in report:
         line += f" (OpenCascade STL {report['opencascade_stl']['blades_away_from_junctions']['edge_ratio']:.1f})"
-    line += (f", worst aspect ratio {report['aspect_ratio_max']:.3g} ({report['triangles_aspect_ratio_over_100']} "
-             f"triangles over 100), volume {report['volume_mm3']:.2f} mm^3")
+    line += (
+        f", worst aspect ratio {report['aspect_ratio_max']:.3g} ({report['triangles_aspect_ratio_over_100']} "
+        f"triangles over 100), volume {report['volume_mm3']:.2f} mm^3"
+    )
     if "brep_volume_mm3" in report:
-        line += f" (B-rep {report['brep_volume_mm3']:.2f}, {report['volume_relative_difference']:+.3%})"
-    line += (f", vertices within {report['vertex_distance_max_mm']:.2g} mm and cells within "
-             f"{report['cell_sag_max_mm']:.2g} mm of the surface")
+        line += (
+            f" (B-rep {report['brep_volume_mm3']:.2f}, {report['volume_relative_difference']:+.3%})"
+        )
+    line += (
+        f", vertices within {report['vertex_distance_max_mm']:.2g} mm and cells within "
+        f"{report['cell_sag_max_mm']:.2g} mm of the surface"
+    )
     return line
 
 
 def mirrored_mesh(mesh: LabeledMesh) -> LabeledMesh:
     """``mesh`` reflected through the XZ plane (the 'ccw' propeller, as torus_cad.kernel.mirror makes the
     B-rep's), faces turned to stay outward."""
-    return LabeledMesh(mesh.vertices * np.array([1.0, -1.0, 1.0]), mesh.faces[:, ::-1], mesh.part, mesh.part_names)
+    return LabeledMesh(
+        mesh.vertices * np.array([1.0, -1.0, 1.0]), mesh.faces[:, ::-1], mesh.part, mesh.part_names
+    )
 
 
-def _write_one(mesh: LabeledMesh, name: str, file_format: MeshFormat, folder: Path) -> dict[str, Path]:
+def _write_one(
+    mesh: LabeledMesh, name: str, file_format: MeshFormat, folder: Path
+) -> dict[str, Path]:
     """One mesh file into an output set's staging ``folder``: ``{format: path}``."""
-    return {item.value: path for item, path in write_mesh_files(mesh, folder, name, (file_format,), atomic=False).items()}
+    return {
+        item.value: path
+        for item, path in write_mesh_files(mesh, folder, name, (file_format,), atomic=False).items()
+    }
 
 
-def write_surface_mesh(params: PropellerParameters, out_dir: str | Path, compare: bool = True,
-                       progress: Callable[[str], None] | None = None) -> tuple[dict[str, Any], dict[str, Path]]:
+def write_surface_mesh(
+    params: PropellerParameters,
+    out_dir: str | Path,
+    compare: bool = True,
+    progress: Callable[[str], None] | None = None,
+) -> tuple[dict[str, Any], dict[str, Path]]:
     """Build, measure and write at ``params.mesh``: the mesh files and ``<name>_mesh.json`` as one output
     set (torus_cad.outputs.output_set: staged, sealed by the report, published whole or not at all).
 
@@ -413,15 +543,31 @@ def write_surface_mesh(params: PropellerParameters, out_dir: str | Path, compare
     formats = selected_formats(params.mesh)
     margin_mm = _junction_margin(params.hub.radius)
     with contextlib.ExitStack() as stack:
-        # The B-rep to compare with is built in a child meanwhile, on the second core, where that is safe.
+        # The B-rep to compare with is built in a child meanwhile, on the second core, where that is
+        # safe.
         beside = compare and fork_is_safe_for_opencascade()
-        child = stack.enter_context(IsolatedCall(opencascade_comparison, params, margin_mm,
-                                                 what="the B-rep to compare the mesh with")) if beside else None
+        child = (
+            stack.enter_context(
+                IsolatedCall(
+                    opencascade_comparison,
+                    params,
+                    margin_mm,
+                    what="the B-rep to compare the mesh with",
+                )
+            )
+            if beside
+            else None
+        )
         result = build_surface_mesh(params, progress, compare)
         timer = StageTimer[MeshStage](progress)
         with timer.stage(MeshStage.QUALITY):
-            comparison = (child.result(MESH_COMPARISON_TIME_LIMIT_S) if child is not None
-                          else opencascade_comparison(params, margin_mm) if compare else None)
+            comparison = (
+                child.result(MESH_COMPARISON_TIME_LIMIT_S)
+                if child is not None
+                else opencascade_comparison(params, margin_mm)
+                if compare
+                else None
+            )
             report = quality_report(result, comparison)
     mesh = mirrored_mesh(result.mesh) if params.handedness == Handedness.CCW else result.mesh
     with OutputSet(out_dir, f"{params.name}_mesh") as output:
@@ -435,5 +581,12 @@ def write_surface_mesh(params: PropellerParameters, out_dir: str | Path, compare
     return report, {str(kind): path for kind, path in paths.items()}
 
 
-__all__ = ["MeshFormat", "MeshStage", "SurfaceMesh", "build_surface_mesh", "quality_report", "summary_line",
-           "write_surface_mesh"]
+__all__ = [
+    "MeshFormat",
+    "MeshStage",
+    "SurfaceMesh",
+    "build_surface_mesh",
+    "quality_report",
+    "summary_line",
+    "write_surface_mesh",
+]

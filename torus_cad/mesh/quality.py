@@ -34,7 +34,9 @@ class Topology:
     @property
     def closed(self) -> bool:
         """A closed, consistently oriented 2-manifold surface."""
-        return self.open_edges == 0 and self.non_manifold_edges == 0 and self.inconsistent_edges == 0
+        return (
+            self.open_edges == 0 and self.non_manifold_edges == 0 and self.inconsistent_edges == 0
+        )
 
     def to_dict(self) -> dict[str, int | bool]:
         return {**asdict(self), "closed_2_manifold": self.closed}
@@ -45,20 +47,28 @@ def edge_topology(faces: NDArray[np.int64]) -> Topology:
     faces = np.asarray(faces, dtype=np.int64)
     start = faces.reshape(-1)
     end = faces[:, [1, 2, 0]].reshape(-1)
-    # One sort of (edge key, direction bit): the users of an edge are a run of equal keys, and walking
-    # each triangle counter-clockwise, the two users of a good edge traverse it in opposite directions.
-    keys = (np.minimum(start, end) * (int(faces.max()) + 1) + np.maximum(start, end)) * 2 + (start < end)
+    # One sort of (edge key, direction bit): the users of an edge are a run of equal keys, and
+    # walking each triangle counter-clockwise, the two users of a good edge traverse it in opposite
+    # directions.
+    keys = (np.minimum(start, end) * (int(faces.max()) + 1) + np.maximum(start, end)) * 2 + (
+        start < end
+    )
     keys.sort()
     edge = keys >> 1
     first = np.flatnonzero(np.concatenate([[True], edge[1:] != edge[:-1]]))
     counts = np.diff(np.append(first, len(edge)))
     forward = np.add.reduceat(keys & 1, first)
-    return Topology(edges=len(counts), open_edges=int(np.sum(counts == 1)), non_manifold_edges=int(np.sum(counts > 2)),
-                    inconsistent_edges=int(np.sum((counts == 2) & (forward != 1))))
+    return Topology(
+        edges=len(counts),
+        open_edges=int(np.sum(counts == 1)),
+        non_manifold_edges=int(np.sum(counts > 2)),
+        inconsistent_edges=int(np.sum((counts == 2) & (forward != 1))),
+    )
 
 
-def corner_measures(corners: NDArray[np.float64]
-                    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+def corner_measures(
+    corners: NDArray[np.float64],
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """Of triangles given by their corners ``(k, 3, 3)``: ``(k, 3)`` lengths of the edges 01, 12, 20
     (mm), ``(k, 3)`` normals (01 x 02, twice the area long) and ``(k,)`` aspect ratios (longest edge x
     perimeter / (4 sqrt(3) area): 1 for equilateral, inf for degenerate).
@@ -67,18 +77,29 @@ def corner_measures(corners: NDArray[np.float64]
     the handful of triangles around one edge that the junction cleanup measures."""
     a, b, c = corners[:, 0], corners[:, 1], corners[:, 2]
     u, w, v = b - a, c - b, c - a
-    normal = np.stack([u[:, 1] * v[:, 2] - u[:, 2] * v[:, 1], u[:, 2] * v[:, 0] - u[:, 0] * v[:, 2],
-                       u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]], axis=1)
-    lengths = np.sqrt(np.stack([np.einsum("kj,kj->k", u, u), np.einsum("kj,kj->k", w, w),
-                                np.einsum("kj,kj->k", v, v)], axis=1))
+    normal = np.stack(
+        [
+            u[:, 1] * v[:, 2] - u[:, 2] * v[:, 1],
+            u[:, 2] * v[:, 0] - u[:, 0] * v[:, 2],
+            u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0],
+        ],
+        axis=1,
+    )
+    lengths = np.sqrt(
+        np.stack(
+            [np.einsum("kj,kj->k", u, u), np.einsum("kj,kj->k", w, w), np.einsum("kj,kj->k", v, v)],
+            axis=1,
+        )
+    )
     area = 0.5 * np.sqrt(np.einsum("kj,kj->k", normal, normal))
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = lengths.max(axis=1) * lengths.sum(axis=1) / (4.0 * np.sqrt(3.0) * area)
     return lengths, normal, np.where(area > 0.0, ratio, np.inf)
 
 
-def triangle_measures(vertices: NDArray[np.float64], faces: NDArray[np.int64]
-                      ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def triangle_measures(
+    vertices: NDArray[np.float64], faces: NDArray[np.int64]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """``(f, 3)`` edge lengths (mm) and ``(f,)`` aspect ratios of ``(f, 3)`` faces (:func:`corner_measures`).
 
     Measured in blocks of MEASURE_BLOCK_TRIANGLES triangles."""
@@ -94,11 +115,13 @@ def aspect_ratios(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> ND
     return triangle_measures(vertices, faces)[1]
 
 
-def outside_hub(points: NDArray[np.float64], radius: float, length: float, margin: float) -> NDArray[np.bool_]:
+def outside_hub(
+    points: NDArray[np.float64], radius: float, length: float, margin: float
+) -> NDArray[np.bool_]:
     """``(k,)`` True where a point lies more than ``margin`` mm outside the hub."""
     radial = np.hypot(points[:, 0], points[:, 1]) - radius
     axial = np.abs(points[:, 2]) - length / 2.0
-    return (np.maximum(radial, axial) > margin)
+    return np.maximum(radial, axial) > margin
 
 
 @dataclass(frozen=True)
@@ -118,8 +141,11 @@ class Evenness:
         return {**asdict(self), "edge_ratio": self.edge_ratio}
 
 
-def evenness(vertices: NDArray[np.float64], faces: NDArray[np.int64],
-             measures: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None) -> Evenness:
+def evenness(
+    vertices: NDArray[np.float64],
+    faces: NDArray[np.int64],
+    measures: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
+) -> Evenness:
     """Shortest and longest edge and worst aspect ratio of ``(f, 3)`` faces (``measures``: their
     :func:`triangle_measures`, if already computed)."""
     if len(faces) == 0:
@@ -128,15 +154,23 @@ def evenness(vertices: NDArray[np.float64], faces: NDArray[np.int64],
     return Evenness(len(faces), float(lengths.min()), float(lengths.max()), float(ratios.max()))
 
 
-def faces_away_from_hub(vertices: NDArray[np.float64], faces: NDArray[np.int64], radius: float, length: float,
-                        margin: float) -> NDArray[np.bool_]:
+def faces_away_from_hub(
+    vertices: NDArray[np.float64],
+    faces: NDArray[np.int64],
+    radius: float,
+    length: float,
+    margin: float,
+) -> NDArray[np.bool_]:
     """``(f,)`` True for triangles whose three corners all lie more than ``margin`` outside the hub."""
     outside = outside_hub(vertices, radius, length, margin)
     return np.asarray(outside[faces].all(axis=1))
 
 
-def cell_deviation(grid: NDArray[np.float64], centres: NDArray[np.float64],
-                   split_a_d: NDArray[np.bool_] | None = None) -> NDArray[np.float64]:
+def cell_deviation(
+    grid: NDArray[np.float64],
+    centres: NDArray[np.float64],
+    split_a_d: NDArray[np.bool_] | None = None,
+) -> NDArray[np.float64]:
     """Distance (mm) of the analytic surface at each cell's centre from the cell's two triangles' planes.
 
     ``grid`` is a ``(m, p, 3)`` blade grid (closed around axis 1) whose cell (a, b on one section,
@@ -148,8 +182,9 @@ def cell_deviation(grid: NDArray[np.float64], centres: NDArray[np.float64],
     a, b = grid[:-1], np.roll(grid[:-1], -1, axis=1)
     c, d = grid[1:], np.roll(grid[1:], -1, axis=1)
 
-    def plane_distance(p: NDArray[np.float64], q: NDArray[np.float64], r: NDArray[np.float64]
-                       ) -> NDArray[np.float64]:
+    def plane_distance(
+        p: NDArray[np.float64], q: NDArray[np.float64], r: NDArray[np.float64]
+    ) -> NDArray[np.float64]:
         normal = np.cross(q - p, r - p)
         norm = np.linalg.norm(normal, axis=-1)
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -170,11 +205,15 @@ def find_rows(query: NDArray[np.float64], reference: NDArray[np.float64]) -> NDA
     Rows are hashed to one int64 each (sorted once, looked up with searchsorted), and every hit is
     confirmed by comparing the coordinates, so a hash collision cannot give a false match.
     """
+
     def keys(rows: NDArray[np.float64]) -> NDArray[np.int64]:
         bits = np.ascontiguousarray(rows, dtype=np.float64).view(np.int64)
         with np.errstate(over="ignore"):
-            return np.asarray(bits[:, 0] * np.int64(0x9E3779B97F4A7C15 - (1 << 64)) ^ bits[:, 1] * np.int64(
-                0xC2B2AE3D27D4EB4F - (1 << 64)) ^ bits[:, 2])
+            return np.asarray(
+                bits[:, 0] * np.int64(0x9E3779B97F4A7C15 - (1 << 64))
+                ^ bits[:, 1] * np.int64(0xC2B2AE3D27D4EB4F - (1 << 64))
+                ^ bits[:, 2]
+            )
 
     reference_keys = keys(reference)
     order = np.argsort(reference_keys, kind="stable")

@@ -26,7 +26,13 @@ from torus_cad.geometry.blade.transforms import evaluate_quartic
 from torus_cad.geometry.section.airfoil import airfoil_points
 from torus_cad.geometry.section.arc_length import equal_arc_length_section
 from torus_cad.geometry.section.section import max_thickness
-from torus_cad.mesh.grids import blade_grid, blade_triangle_count, cell_size, hub_layout, section_parameters
+from torus_cad.mesh.grids import (
+    blade_grid,
+    blade_triangle_count,
+    cell_size,
+    hub_layout,
+    section_parameters,
+)
 from torus_cad.parameters.design import SectionSpacing
 
 #: Surface meshes (torus_cad.mesh): largest sag of the flat faces from the analytic blade, as a
@@ -44,8 +50,9 @@ ESTIMATE_GRID = (41, 160)
 
 
 #: Peak resident memory of ``torus-cad mesh`` (binary STL, --no-compare) grows by this much per
-#: triangle of its estimate (:func:`estimate_triangles`), bytes, over a fixed :data:`MESH_BASE_BYTES`
-#: (Python, numpy, manifold3d, meshlib); both measured (the docs' measurements page).
+#: triangle of its estimate (:func:`estimate_triangles`), bytes, over a fixed
+#: :data:`MESH_BASE_BYTES` (Python, numpy, manifold3d, meshlib); both measured (the docs'
+#: measurements page).
 MESH_BYTES_PER_TRIANGLE = 290.0
 MESH_BASE_BYTES = 0.70e9
 #: The B-rep built for the comparison (``--no-compare`` skips it) adds about this much, bytes.
@@ -54,16 +61,23 @@ MESH_COMPARE_BYTES = 0.5e9
 #: several jobs use at once.
 MESH_MEMORY_LIMIT_BYTES = 4.0e9
 #: The triangles that fit :data:`MESH_MEMORY_LIMIT_BYTES` with the comparison on.
-MESH_TRIANGLE_LIMIT = math.floor((MESH_MEMORY_LIMIT_BYTES - MESH_BASE_BYTES - MESH_COMPARE_BYTES)
-                                 / MESH_BYTES_PER_TRIANGLE)
+MESH_TRIANGLE_LIMIT = math.floor(
+    (MESH_MEMORY_LIMIT_BYTES - MESH_BASE_BYTES - MESH_COMPARE_BYTES) / MESH_BYTES_PER_TRIANGLE
+)
 
 
 def mesh_memory_bytes(triangles: int, compare: bool = True) -> float:
     """Estimated peak memory of ``torus-cad mesh`` for a mesh estimated at ``triangles``, bytes."""
-    return MESH_BASE_BYTES + (MESH_COMPARE_BYTES if compare else 0.0) + MESH_BYTES_PER_TRIANGLE * triangles
+    return (
+        MESH_BASE_BYTES
+        + (MESH_COMPARE_BYTES if compare else 0.0)
+        + MESH_BYTES_PER_TRIANGLE * triangles
+    )
 
 
-def check_mesh_memory(triangles: int, compare: bool = True, limit_bytes: float = MESH_MEMORY_LIMIT_BYTES) -> None:
+def check_mesh_memory(
+    triangles: int, compare: bool = True, limit_bytes: float = MESH_MEMORY_LIMIT_BYTES
+) -> None:
     """BudgetError (exit 2) with the estimate and the limit when the mesh would need more than ``limit_bytes``."""
     need = mesh_memory_bytes(triangles, compare)
     if need > limit_bytes:
@@ -71,7 +85,8 @@ def check_mesh_memory(triangles: int, compare: bool = True, limit_bytes: float =
         raise BudgetError(
             f"the mesh would have about {triangles:,} triangles and need about {need / 1e9:.1f} GB of memory, over "
             f"the limit of {limit_bytes / 1e9:.1f} GB (about {fits:,} triangles); lower mesh.sections or "
-            "mesh.points (--sections, --points)")
+            "mesh.points (--sections, --points)"
+        )
 
 
 @dataclass(frozen=True)
@@ -89,8 +104,9 @@ class Sag:
     chord_position: float
 
 
-def _line_distance(point: NDArray[np.float64], start: NDArray[np.float64], end: NDArray[np.float64]
-                   ) -> NDArray[np.float64]:
+def _line_distance(
+    point: NDArray[np.float64], start: NDArray[np.float64], end: NDArray[np.float64]
+) -> NDArray[np.float64]:
     """Distance of ``point`` from the infinite line through ``start`` and ``end`` (any matching shapes ``(..., d)``)."""
     direction = end - start
     length2 = np.einsum("...k,...k->...", direction, direction)
@@ -101,7 +117,9 @@ def _line_distance(point: NDArray[np.float64], start: NDArray[np.float64], end: 
 
 def local_thickness(geometry: PropellerGeometry, s: NDArray[np.float64]) -> NDArray[np.float64]:
     """``(k,)`` section thickness at ``s``: the airfoil's maximum thickness times Sy(s), mm."""
-    return max_thickness(geometry.blade.airfoil) * evaluate_quartic(geometry.blade.laws.scale_y_mm, s)
+    return max_thickness(geometry.blade.airfoil) * evaluate_quartic(
+        geometry.blade.laws.scale_y_mm, s
+    )
 
 
 def _worst(relative: NDArray[np.float64], s: NDArray[np.float64], t: NDArray[np.float64]) -> Sag:
@@ -122,19 +140,25 @@ def around_sag(geometry: PropellerGeometry, points: int) -> Sag:
     return _worst(sag / local_thickness(geometry, s)[:, None], s, t_mid)
 
 
-def along_sag(geometry: PropellerGeometry, sections: int, points: int, spacing: SectionSpacing) -> Sag:
+def along_sag(
+    geometry: PropellerGeometry, sections: int, points: int, spacing: SectionSpacing
+) -> Sag:
     """Sag of the straight edges between neighbouring sections, over the blade."""
     centerline = geometry.centerline(0)
     s = section_parameters(centerline, sections, spacing)
     sampling = equal_arc_length_section(geometry.blade.airfoil, points)
-    columns = np.unique(np.linspace(0, len(sampling.t) - 1, min(ALONG_CHECK_POINTS, len(sampling.t))).astype(int))
+    columns = np.unique(
+        np.linspace(0, len(sampling.t) - 1, min(ALONG_CHECK_POINTS, len(sampling.t))).astype(int)
+    )
     s_all = np.concatenate([s, 0.5 * (s[:-1] + s[1:])])
     order = np.argsort(s_all, kind="stable")
     frames = blade_frames(geometry.blade, centerline, s_all[order])
     surface = np.empty((len(s_all), len(columns), 3))
-    surface[order] = place_on_frames(frames, geometry.blade.laws.apply(sampling.points[columns], frames.s))
-    grid, middle = surface[: len(s)], surface[len(s):]
-    s_mid = s_all[len(s):]
+    surface[order] = place_on_frames(
+        frames, geometry.blade.laws.apply(sampling.points[columns], frames.s)
+    )
+    grid, middle = surface[: len(s)], surface[len(s) :]
+    s_mid = s_all[len(s) :]
     sag = _line_distance(middle, grid[:-1], grid[1:])
     return _worst(sag / local_thickness(geometry, s_mid)[:, None], s_mid, sampling.t[columns])
 
@@ -156,8 +180,13 @@ def smallest_count(passes: Callable[[int], bool], start: int, high: int) -> int 
     return count
 
 
-def check_resolution(geometry: PropellerGeometry, sections: int, points: int, spacing: SectionSpacing,
-                     limit: float | None = None) -> None:
+def check_resolution(
+    geometry: PropellerGeometry,
+    sections: int,
+    points: int,
+    spacing: SectionSpacing,
+    limit: float | None = None,
+) -> None:
     """Refuse (ParameterError) a resolution whose flat faces leave the blade by more than ``limit`` of the
     local section thickness (default MESH_SAG_LIMIT); the message gives the smallest ``mesh.points`` /
     ``mesh.sections`` that would do."""
@@ -169,22 +198,39 @@ def check_resolution(geometry: PropellerGeometry, sections: int, points: int, sp
     problems = []
     around = around_sag(geometry, points)
     if around.relative > limit:
-        needed = smallest_count(lambda count: around_sag(geometry, count).relative <= limit, points, most_points)
+        needed = smallest_count(
+            lambda count: around_sag(geometry, count).relative <= limit, points, most_points
+        )
         problems.append(
             f"mesh.points = {points} cuts the sections by {around.relative:.1%} of their thickness near chord "
             f"position {around.chord_position:.2f} (s = {around.s:.2f}); "
-            + (f"use mesh.points >= {needed} (--points)" if needed else "no allowed mesh.points resolves them"))
+            + (
+                f"use mesh.points >= {needed} (--points)"
+                if needed
+                else "no allowed mesh.points resolves them"
+            )
+        )
     along = along_sag(geometry, sections, points, spacing)
     if along.relative > limit:
-        needed = smallest_count(lambda count: along_sag(geometry, count, points, spacing).relative <= limit,
-                                sections, most_sections)
+        needed = smallest_count(
+            lambda count: along_sag(geometry, count, points, spacing).relative <= limit,
+            sections,
+            most_sections,
+        )
         problems.append(
             f"mesh.sections = {sections} cuts the blade's bends by {along.relative:.1%} of the section thickness "
             f"near s = {along.s:.2f}; "
-            + (f"use mesh.sections >= {needed} (--sections)" if needed else "no allowed mesh.sections resolves them"))
+            + (
+                f"use mesh.sections >= {needed} (--sections)"
+                if needed
+                else "no allowed mesh.sections resolves them"
+            )
+        )
     if problems:
-        raise ParameterError(f"mesh resolution too coarse for this blade (limit {limit:.0%} of the section "
-                             "thickness): " + "; ".join(problems))
+        raise ParameterError(
+            f"mesh resolution too coarse for this blade (limit {limit:.0%} of the section "
+            "thickness): " + "; ".join(problems)
+        )
 
 
 @dataclass(frozen=True)
@@ -200,8 +246,9 @@ class TriangleEstimate:
         return self.blades + self.hub
 
 
-def estimate_triangles(geometry: PropellerGeometry, sections: int, points: int, spacing: SectionSpacing
-                       ) -> TriangleEstimate:
+def estimate_triangles(
+    geometry: PropellerGeometry, sections: int, points: int, spacing: SectionSpacing
+) -> TriangleEstimate:
     """Estimate the triangle count from a cheap coarse grid, without building the mesh."""
     coarse_sections, coarse_points = ESTIMATE_GRID
     coarse = cell_size(blade_grid(geometry, coarse_sections, coarse_points, spacing))

@@ -49,7 +49,8 @@ class LabeledMesh:
         return self.faces[self.part == index]
 
 
-#: Face ID = (triangle mod 2^23) << 8 | part << 1 | marked: manifold3d keeps face IDs as 32-bit ints.
+#: Face ID = (triangle mod 2^23) << 8 | part << 1 | marked: manifold3d keeps face IDs as 32-bit
+#: ints.
 _PART_BITS = 7
 _TRIANGLE_BITS = 23
 
@@ -61,16 +62,27 @@ def _manifold(mesh: TriangleMesh, name: str, part: int, dropped: NDArray[np.bool
     face_id = (triangle << np.uint64(_PART_BITS + 1)) | np.uint64(part << 1)
     if dropped is not None:
         face_id |= dropped.astype(np.uint64)
-    body = mf.Manifold(mf.Mesh64(vert_properties=np.ascontiguousarray(mesh.vertices, dtype=np.float64),
-                                 tri_verts=np.ascontiguousarray(mesh.faces, dtype=np.uint64), face_id=face_id))
+    body = mf.Manifold(
+        mf.Mesh64(
+            vert_properties=np.ascontiguousarray(mesh.vertices, dtype=np.float64),
+            tri_verts=np.ascontiguousarray(mesh.faces, dtype=np.uint64),
+            face_id=face_id,
+        )
+    )
     if body.status() != mf.Error.NoError:
-        raise MeshBooleanError(f"mesh union, step 'load {name}': manifold3d refused the {name} mesh "
-                               f"({body.status().name})")
+        raise MeshBooleanError(
+            f"mesh union, step 'load {name}': manifold3d refused the {name} mesh "
+            f"({body.status().name})"
+        )
     return body
 
 
-def unite(parts: Sequence[TriangleMesh], names: Sequence[str], part_of: Sequence[int] | None = None,
-          marked: Sequence[NDArray[np.bool_] | None] | None = None) -> tuple[LabeledMesh, NDArray[np.bool_]]:
+def unite(
+    parts: Sequence[TriangleMesh],
+    names: Sequence[str],
+    part_of: Sequence[int] | None = None,
+    marked: Sequence[NDArray[np.bool_] | None] | None = None,
+) -> tuple[LabeledMesh, NDArray[np.bool_]]:
     """Union of closed, outward ``parts`` as one labelled mesh whose part names are ``names``, and
     ``(f,)`` True for its faces that come from faces where ``marked`` (one mask per input, or None) is True.
 
@@ -83,15 +95,23 @@ def unite(parts: Sequence[TriangleMesh], names: Sequence[str], part_of: Sequence
     part_of = list(range(len(parts))) if part_of is None else list(part_of)
     dropped = [None] * len(parts) if marked is None else list(marked)
     if len(names) >= 1 << _PART_BITS:
-        raise MeshBooleanError(f"mesh union, step 'labels': {len(names)} parts, more than {(1 << _PART_BITS) - 1}")
-    bodies = [_manifold(mesh, names[part], part, mask)
-              for mesh, part, mask in zip(parts, part_of, dropped, strict=True)]
+        raise MeshBooleanError(
+            f"mesh union, step 'labels': {len(names)} parts, more than {(1 << _PART_BITS) - 1}"
+        )
+    bodies = [
+        _manifold(mesh, names[part], part, mask)
+        for mesh, part, mask in zip(parts, part_of, dropped, strict=True)
+    ]
     union = mf.Manifold.batch_boolean(bodies, mf.OpType.Add)
     if union.status() != mf.Error.NoError or union.is_empty():
-        raise MeshBooleanError(f"mesh union, step 'union': manifold3d failed ({union.status().name})")
+        raise MeshBooleanError(
+            f"mesh union, step 'union': manifold3d failed ({union.status().name})"
+        )
     result = union.to_mesh64()
     face_id = np.asarray(result.face_id, dtype=np.uint64)
     part = ((face_id >> np.uint64(1)) & np.uint64((1 << _PART_BITS) - 1)).astype(np.int16)
     vertices = np.array(result.vert_properties, dtype=np.float64)[:, :3]
     faces = np.array(result.tri_verts, dtype=np.int64)
-    return LabeledMesh(np.ascontiguousarray(vertices), faces, part, tuple(names)), (face_id & np.uint64(1)) == 1
+    return LabeledMesh(np.ascontiguousarray(vertices), faces, part, tuple(names)), (
+        face_id & np.uint64(1)
+    ) == 1

@@ -28,8 +28,10 @@ from torus_cad.runtime.files import atomic_path
 CHUNK_TRIANGLES = 100_000
 
 _STL_RECORD = np.dtype([("normal", "<f4", (3,)), ("vertices", "<f4", (3, 3)), ("attribute", "<u2")])
-_ASCII_FACET = ("facet normal %.7e %.7e %.7e\n  outer loop\n    vertex %.9e %.9e %.9e\n"
-                "    vertex %.9e %.9e %.9e\n    vertex %.9e %.9e %.9e\n  endloop\nendfacet\n")
+_ASCII_FACET = (
+    "facet normal %.7e %.7e %.7e\n  outer loop\n    vertex %.9e %.9e %.9e\n"
+    "    vertex %.9e %.9e %.9e\n    vertex %.9e %.9e %.9e\n  endloop\nendfacet\n"
+)
 
 
 def unit_normals(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> NDArray[np.float64]:
@@ -49,7 +51,9 @@ def _chunks(count: int) -> Iterator[slice]:
         yield slice(start, min(start + CHUNK_TRIANGLES, count))
 
 
-def _write_rows(handle: IO[str], template: str, rows: NDArray[np.float64] | NDArray[np.int64]) -> None:
+def _write_rows(
+    handle: IO[str], template: str, rows: NDArray[np.float64] | NDArray[np.int64]
+) -> None:
     """Write ``template % row`` for every row of a 2-D array, a chunk at a time."""
     for part in _chunks(len(rows)):
         block = rows[part]
@@ -77,7 +81,9 @@ def write_ascii_stl(mesh: LabeledMesh, path: Path, name: str) -> None:
     with path.open("w", encoding="ascii") as handle:
         for index, part_name in enumerate(mesh.part_names):
             chosen = mesh.part == index
-            rows = np.concatenate([normals[chosen], mesh.vertices[mesh.faces[chosen]].reshape(-1, 9)], axis=1)
+            rows = np.concatenate(
+                [normals[chosen], mesh.vertices[mesh.faces[chosen]].reshape(-1, 9)], axis=1
+            )
             handle.write(f"solid {part_name}\n")
             _write_rows(handle, _ASCII_FACET, rows)
             handle.write(f"endsolid {part_name}\n")
@@ -86,8 +92,10 @@ def write_ascii_stl(mesh: LabeledMesh, path: Path, name: str) -> None:
 def write_obj(mesh: LabeledMesh, path: Path, name: str) -> None:
     """Wavefront OBJ: shared vertices, then one group ``g <part>`` of faces per part (1-based indices)."""
     with path.open("w", encoding="ascii") as handle:
-        handle.write(f"# torus_cad surface mesh {name}: {len(mesh.vertices)} vertices, {len(mesh.faces)} triangles, "
-                     f"mm; groups {' '.join(mesh.part_names)}\n")
+        handle.write(
+            f"# torus_cad surface mesh {name}: {len(mesh.vertices)} vertices, {len(mesh.faces)} triangles, "
+            f"mm; groups {' '.join(mesh.part_names)}\n"
+        )
         handle.write(f"o {name}\n")
         _write_rows(handle, "v %.10g %.10g %.10g\n", mesh.vertices)
         for index, part_name in enumerate(mesh.part_names):
@@ -97,17 +105,22 @@ def write_obj(mesh: LabeledMesh, path: Path, name: str) -> None:
 
 def write_ply(mesh: LabeledMesh, path: Path, name: str) -> None:
     """Binary little-endian PLY: float64 vertices, triangles with an int ``part`` property per face (0 = hub)."""
-    header = (f"ply\nformat binary_little_endian 1.0\ncomment torus_cad surface mesh {name}, mm; part: "
-              + ", ".join(f"{index} = {part_name}" for index, part_name in enumerate(mesh.part_names))
-              + f"\nelement vertex {len(mesh.vertices)}\nproperty double x\nproperty double y\nproperty double z\n"
-              f"element face {len(mesh.faces)}\nproperty list uchar int vertex_indices\nproperty int part\n"
-              "end_header\n")
+    header = (
+        f"ply\nformat binary_little_endian 1.0\ncomment torus_cad surface mesh {name}, mm; part: "
+        + ", ".join(f"{index} = {part_name}" for index, part_name in enumerate(mesh.part_names))
+        + f"\nelement vertex {len(mesh.vertices)}\nproperty double x\nproperty double y\nproperty double z\n"
+        f"element face {len(mesh.faces)}\nproperty list uchar int vertex_indices\nproperty int part\n"
+        "end_header\n"
+    )
     with path.open("wb") as handle:
         handle.write(header.encode("ascii"))
         for part in _chunks(len(mesh.vertices)):
             handle.write(np.ascontiguousarray(mesh.vertices[part], dtype="<f8").tobytes())
         for part in _chunks(len(mesh.faces)):
-            faces = np.empty(part.stop - part.start, dtype=[("count", "u1"), ("vertices", "<i4", (3,)), ("part", "<i4")])
+            faces = np.empty(
+                part.stop - part.start,
+                dtype=[("count", "u1"), ("vertices", "<i4", (3,)), ("part", "<i4")],
+            )
             faces["count"], faces["vertices"], faces["part"] = 3, mesh.faces[part], mesh.part[part]
             handle.write(faces.tobytes())
 
@@ -116,8 +129,14 @@ def write_vtk(mesh: LabeledMesh, path: Path, name: str) -> None:
     """Legacy VTK (binary) through meshio, with a per-face ``part`` index (0 = hub)."""
     import meshio
 
-    meshio.write_points_cells(str(path), mesh.vertices, [("triangle", mesh.faces.astype(np.int64))],
-                              cell_data={"part": [mesh.part.astype(np.int32)]}, file_format="vtk", binary=True)
+    meshio.write_points_cells(
+        str(path),
+        mesh.vertices,
+        [("triangle", mesh.faces.astype(np.int64))],
+        cell_data={"part": [mesh.part.astype(np.int32)]},
+        file_format="vtk",
+        binary=True,
+    )
 
 
 WRITERS: dict[MeshFormat, Callable[[LabeledMesh, Path, str], None]] = {
@@ -134,8 +153,13 @@ def mesh_path(out_dir: Path, name: str, file_format: MeshFormat) -> Path:
     return out_dir / f"{name}_mesh{SUFFIXES[file_format]}"
 
 
-def write_mesh_files(mesh: LabeledMesh, out_dir: str | Path, name: str,
-                     formats: tuple[MeshFormat, ...], atomic: bool = True) -> dict[MeshFormat, Path]:
+def write_mesh_files(
+    mesh: LabeledMesh,
+    out_dir: str | Path,
+    name: str,
+    formats: tuple[MeshFormat, ...],
+    atomic: bool = True,
+) -> dict[MeshFormat, Path]:
     """Write ``mesh`` in every format into ``out_dir`` (an existing folder); the paths by format.
 
     ``atomic``: each file through a temp file and a rename (off inside an output set's staging

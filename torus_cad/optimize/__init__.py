@@ -22,4 +22,11 @@ Needs the ``optimize`` extra (optuna, cmaes, psycopg2-binary): ``pip install -c 
 from torus_cad.optimize.study import StudyInterrupted, StudyResult, run_study
 from torus_cad.optimize.study_file import StudySpec, parse_study, read_study_file
 
-__all__ = ["StudyInterrupted", "StudyResult", "StudySpec", "parse_study", "read_study_file", "run_study"]
+__all__ = [
+    "StudyInterrupted",
+    "StudyResult",
+    "StudySpec",
+    "parse_study",
+    "read_study_file",
+    "run_study",
+]

@@ -20,28 +20,58 @@ from typing import Any
 
 from torus_cad.errors import ParameterError, shown
 
-__all__ = ["NOISE_METRICS", "PERFORMANCE_METRICS", "PERFORMANCE_PREFIX", "REPORT_METRICS", "check_metric",
-           "is_performance", "metric_value", "noise_observers"]
+__all__ = [
+    "NOISE_METRICS",
+    "PERFORMANCE_METRICS",
+    "PERFORMANCE_PREFIX",
+    "REPORT_METRICS",
+    "check_metric",
+    "is_performance",
+    "metric_value",
+    "noise_observers",
+]
 
 #: Numbers every build report holds (dotted keys; ``printability.printable`` is 1 or 0).
 REPORT_METRICS = (
-    "volume_mm3", "surface_area_mm2", "mass_g", "density_g_cm3", "spin_axis_inertia_g_mm2", "spin_axis_inertia_mm5",
+    "volume_mm3",
+    "surface_area_mm2",
+    "mass_g",
+    "density_g_cm3",
+    "spin_axis_inertia_g_mm2",
+    "spin_axis_inertia_mm5",
     "section_fit_error_mm",
-    "balance.static_imbalance_g_mm", "balance.centroid_offset_mm", "balance.products_of_inertia_g_mm2.xz",
-    "balance.products_of_inertia_g_mm2.yz", "balance.products_of_inertia_g_mm2.xy",
-    "printability.thinnest_wall_mm", "printability.thinnest_wall_s", "printability.thinnest_wall_chord_fraction",
-    "printability.trailing_edge_thickness_mm", "printability.trailing_edge_thinnest_s", "printability.min_wall_mm",
+    "balance.static_imbalance_g_mm",
+    "balance.centroid_offset_mm",
+    "balance.products_of_inertia_g_mm2.xz",
+    "balance.products_of_inertia_g_mm2.yz",
+    "balance.products_of_inertia_g_mm2.xy",
+    "printability.thinnest_wall_mm",
+    "printability.thinnest_wall_s",
+    "printability.thinnest_wall_chord_fraction",
+    "printability.trailing_edge_thickness_mm",
+    "printability.trailing_edge_thinnest_s",
+    "printability.min_wall_mm",
     "printability.printable",
 )
 
 PERFORMANCE_PREFIX = "performance."
 
-#: Numbers of ``torus-cad simulate``'s performance report (N, N m, W; ct, cp, efficiency and figure of merit
-#: dimensionless; ``converged`` is 1 or 0).
-PERFORMANCE_METRICS = ("thrust_n", "torque_nm", "power_w", "ct", "cp", "efficiency", "figure_of_merit", "converged",
-                       "rpm")
+#: Numbers of ``torus-cad simulate``'s performance report (N, N m, W; ct, cp, efficiency and figure
+#: of merit dimensionless; ``converged`` is 1 or 0).
+PERFORMANCE_METRICS = (
+    "thrust_n",
+    "torque_nm",
+    "power_w",
+    "ct",
+    "cp",
+    "efficiency",
+    "figure_of_merit",
+    "converged",
+    "rpm",
+)
 
-#: Numbers of one observer's entry of the performance report's ``noise.observers`` (dB re 20 uPa; Pa).
+#: Numbers of one observer's entry of the performance report's ``noise.observers`` (dB re 20 uPa;
+#: Pa).
 NOISE_METRICS = ("oaspl_db", "oaspl_dba", "other_harmonics_spl_db", "peak_to_peak_pa")
 _NOISE = re.compile(r"^performance\.noise\[(?P<observer>[^\]]*)\]\.(?P<key>[A-Za-z0-9_]+)$")
 _NOISE_EXAMPLE = "performance.noise[1:90].oaspl_dba"
@@ -70,12 +100,16 @@ def _check_noise_metric(metric: str, observer: str, key: str, where: str) -> Non
     if key not in NOISE_METRICS:
         close = difflib.get_close_matches(key, NOISE_METRICS, n=1, cutoff=0.5)
         hint = f"did you mean {close[0]!r}?" if close else f"known: {', '.join(NOISE_METRICS)}"
-        raise ParameterError(f"{where} = {shown(metric)}: {key!r} is not a number of an observer's noise; {hint}")
+        raise ParameterError(
+            f"{where} = {shown(metric)}: {key!r} is not a number of an observer's noise; {hint}"
+        )
     try:
         parse_observer(observer)
     except ParameterError:
-        raise ParameterError(f"{where} = {shown(metric)}: the observer {observer!r} is out of range or malformed; "
-                             f"allowed {observer_ranges()}, e.g. {_NOISE_EXAMPLE}") from None
+        raise ParameterError(
+            f"{where} = {shown(metric)}: the observer {observer!r} is out of range or malformed; "
+            f"allowed {observer_ranges()}, e.g. {_NOISE_EXAMPLE}"
+        ) from None
 
 
 def check_metric(metric: str, where: str) -> None:
@@ -85,18 +119,36 @@ def check_metric(metric: str, where: str) -> None:
         _check_noise_metric(metric, *noise, where)
         return
     if metric.startswith(PERFORMANCE_PREFIX + "noise"):
-        raise ParameterError(f"{where} = {shown(metric)} is not a noise number; name the observer as "
-                             f"simulate --observer does, e.g. {_NOISE_EXAMPLE} (keys: {', '.join(NOISE_METRICS)})")
-    known = [PERFORMANCE_PREFIX + key for key in PERFORMANCE_METRICS] if is_performance(metric) else list(REPORT_METRICS)
+        raise ParameterError(
+            f"{where} = {shown(metric)} is not a noise number; name the observer as "
+            f"simulate --observer does, e.g. {_NOISE_EXAMPLE} (keys: {', '.join(NOISE_METRICS)})"
+        )
+    known = (
+        [PERFORMANCE_PREFIX + key for key in PERFORMANCE_METRICS]
+        if is_performance(metric)
+        else list(REPORT_METRICS)
+    )
     if metric in known:
         return
-    close = difflib.get_close_matches(metric, known + [PERFORMANCE_PREFIX + k for k in PERFORMANCE_METRICS]
-                                      + list(REPORT_METRICS), n=1, cutoff=0.5)
-    hint = f"; did you mean {close[0]!r}?" if close else f"; known: {', '.join(REPORT_METRICS)}, performance.*"
-    raise ParameterError(f"{where} = {shown(metric)} is not a number of the build report nor performance.*{hint}")
+    close = difflib.get_close_matches(
+        metric,
+        known + [PERFORMANCE_PREFIX + k for k in PERFORMANCE_METRICS] + list(REPORT_METRICS),
+        n=1,
+        cutoff=0.5,
+    )
+    hint = (
+        f"; did you mean {close[0]!r}?"
+        if close
+        else f"; known: {', '.join(REPORT_METRICS)}, performance.*"
+    )
+    raise ParameterError(
+        f"{where} = {shown(metric)} is not a number of the build report nor performance.*{hint}"
+    )
 
 
-def metric_value(metric: str, report: Mapping[str, Any], performance: Mapping[str, Any] | None) -> float:
+def metric_value(
+    metric: str, report: Mapping[str, Any], performance: Mapping[str, Any] | None
+) -> float:
     """The finite number ``metric`` names in ``report`` (or ``performance`` for ``performance.*``).
 
     Raises KeyError naming the metric when it is absent, not a number or not finite.
@@ -105,7 +157,11 @@ def metric_value(metric: str, report: Mapping[str, Any], performance: Mapping[st
     if noise is not None:
         return _noise_value(metric, *noise, performance)
     source: Any = performance if is_performance(metric) else report
-    parts = metric.removeprefix(PERFORMANCE_PREFIX).split(".") if is_performance(metric) else metric.split(".")
+    parts = (
+        metric.removeprefix(PERFORMANCE_PREFIX).split(".")
+        if is_performance(metric)
+        else metric.split(".")
+    )
     for part in parts:
         source = source.get(part) if isinstance(source, Mapping) else None
     if isinstance(source, bool):
@@ -115,7 +171,9 @@ def metric_value(metric: str, report: Mapping[str, Any], performance: Mapping[st
     return float(source)
 
 
-def _noise_value(metric: str, observer: str, key: str, performance: Mapping[str, Any] | None) -> float:
+def _noise_value(
+    metric: str, observer: str, key: str, performance: Mapping[str, Any] | None
+) -> float:
     """The ``key`` of the entry of ``performance["noise"]["observers"]`` at the observer ``DIST_M:ANGLE_DEG``."""
     from torus_cad.acoustics.observers import parse_observer
 
@@ -126,10 +184,18 @@ def _noise_value(metric: str, observer: str, key: str, performance: Mapping[str,
         if not isinstance(entry, Mapping):
             continue
         distance, angle = entry.get("distance_m"), entry.get("angle_deg")
-        if (isinstance(distance, (int, float)) and isinstance(angle, (int, float))
-                and math.isclose(distance, wanted.distance_m) and math.isclose(angle, wanted.angle_deg, abs_tol=1e-9)):
+        if (
+            isinstance(distance, (int, float))
+            and isinstance(angle, (int, float))
+            and math.isclose(distance, wanted.distance_m)
+            and math.isclose(angle, wanted.angle_deg, abs_tol=1e-9)
+        ):
             value = entry.get(key)
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            if (
+                isinstance(value, bool)
+                or not isinstance(value, (int, float))
+                or not math.isfinite(value)
+            ):
                 raise KeyError(f"{metric} is not a finite number in the report (got {value!r})")
             return float(value)
     raise KeyError(f"{metric}: the performance report has no noise at the observer {observer}")

@@ -55,8 +55,9 @@ MAX_PARETO_BUILDS = 20  #: Pareto designs built with their files (every one gets
 INTERRUPTED = "interrupted"
 
 
-def write_results(spec: StudySpec, study: optuna.Study, out: Path, checkpoint: Callable[[], None] | None = None
-                  ) -> tuple[dict[str, Path], list[str]]:
+def write_results(
+    spec: StudySpec, study: optuna.Study, out: Path, checkpoint: Callable[[], None] | None = None
+) -> tuple[dict[str, Path], list[str]]:
     """Write the table, the pictures, the best designs and the summary JSON; the paths and summary lines.
 
     ``checkpoint`` is called before each of them: it may raise (a signal arrived) to stop there, each file
@@ -78,16 +79,35 @@ def write_results(spec: StudySpec, study: optuna.Study, out: Path, checkpoint: C
     lines, built = _publish_best(spec, trials, best, out / BEST_DIR, out)
     check()
     spent = _level_seconds(trials)
-    pruned = _count(str(record[PRUNED_AT]) for record in map(trial_result, trials) if PRUNED_AT in record)
-    lines = [_outcomes_line(rows), *_level_lines(spec, spent, pruned), *unvalued_lines(rows), *lines]
+    pruned = _count(
+        str(record[PRUNED_AT]) for record in map(trial_result, trials) if PRUNED_AT in record
+    )
+    lines = [
+        _outcomes_line(rows),
+        *_level_lines(spec, spent, pruned),
+        *unvalued_lines(rows),
+        *lines,
+    ]
     published = [trial for trial in trials if trial.number in built]
-    summary = {"name": spec.name, "trials": len(trials), "states": _count(row["state"] for row in rows),
-               "outcomes": _count(row["outcome"] for row in rows),
-               "prescreened": sum(1 for row in rows if row["prescreened"]),
-               "pruned": pruned, "level_seconds": spent,
-               "best": [{"number": trial.number, "values": list(trial.values), "params": dict(trial.params),
-                         "design": str(built[trial.number])} for trial in published],
-               "not_published": [trial.number for trial in best if trial.number not in built]}
+    summary = {
+        "name": spec.name,
+        "trials": len(trials),
+        "states": _count(row["state"] for row in rows),
+        "outcomes": _count(row["outcome"] for row in rows),
+        "prescreened": sum(1 for row in rows if row["prescreened"]),
+        "pruned": pruned,
+        "level_seconds": spent,
+        "best": [
+            {
+                "number": trial.number,
+                "values": list(trial.values),
+                "params": dict(trial.params),
+                "design": str(built[trial.number]),
+            }
+            for trial in published
+        ],
+        "not_published": [trial.number for trial in best if trial.number not in built],
+    }
     files["summary"] = out / f"{spec.name}_study.json"
     with atomic_path(files["summary"]) as temp:
         temp.write_text(json.dumps(summary, indent=2, allow_nan=False, default=str) + "\n")
@@ -105,7 +125,9 @@ def _outcomes_line(rows: Sequence[dict[str, Any]]) -> str:
         parts[0] += f" ({pruned} pruned at a screening level)"
     if screened:
         parts[1] += f" ({screened} before the kernel, pre-screened)"
-    return "  trials: " + ", ".join(parts + [f"{count} {name}" for name, count in sorted(counts.items())])
+    return "  trials: " + ", ".join(
+        parts + [f"{count} {name}" for name, count in sorted(counts.items())]
+    )
 
 
 def _level_seconds(trials: Sequence[FrozenTrial]) -> dict[str, dict[str, float]]:
@@ -119,7 +141,9 @@ def _level_seconds(trials: Sequence[FrozenTrial]) -> dict[str, dict[str, float]]
     return spent
 
 
-def _level_lines(spec: StudySpec, spent: Mapping[str, Mapping[str, float]], pruned: Mapping[str, int]) -> list[str]:
+def _level_lines(
+    spec: StudySpec, spent: Mapping[str, Mapping[str, float]], pruned: Mapping[str, int]
+) -> list[str]:
     """``"  coarse: 12 trials, 1430 s (5 pruned); medium: 7 trials, 2210 s"``: what each mesh level cost
     (``spent``: :func:`_level_seconds`; ``pruned``: trials stopped at each level)."""
     if len(spec.levels) < 2:
@@ -143,21 +167,32 @@ def best_trials(spec: StudySpec, study: optuna.Study) -> list[FrozenTrial]:
     """The best feasible trial (one objective) or the feasible Pareto front (several), by trial number; a trial
     that repeats another's parameters (``same_as``) is left to the trial it repeats, which has its values."""
     if len(spec.objectives) > 1:
-        return sorted((trial for trial in study.best_trials if SAME_AS not in trial_result(trial)),
-                      key=lambda trial: trial.number)
+        return sorted(
+            (trial for trial in study.best_trials if SAME_AS not in trial_result(trial)),
+            key=lambda trial: trial.number,
+        )
     try:
         return [study.best_trial]
     except ValueError:  # no feasible complete trial yet
         return []
 
 
-def trial_rows(spec: StudySpec, trials: Sequence[FrozenTrial]) -> tuple[list[dict[str, Any]], list[str]]:
+def trial_rows(
+    spec: StudySpec, trials: Sequence[FrozenTrial]
+) -> tuple[list[dict[str, Any]], list[str]]:
     """One row per trial and the columns, in table order."""
     metrics = list(dict.fromkeys(spec.metrics))
     levels = ["level"] if len(spec.levels) > 1 else []  # the level of the row's metrics
-    columns = (["number", "state", "outcome", "feasible", "reason", "prescreened"] + [axis.key for axis in spec.axes]
-               + levels + metrics + ["violation", "retry_of", "same_as", "seconds", "folder"])
-    retried_by = {trial.user_attrs[RETRY_OF]: trial.number for trial in trials if RETRY_OF in trial.user_attrs}
+    columns = (
+        ["number", "state", "outcome", "feasible", "reason", "prescreened"]
+        + [axis.key for axis in spec.axes]
+        + levels
+        + metrics
+        + ["violation", "retry_of", "same_as", "seconds", "folder"]
+    )
+    retried_by = {
+        trial.user_attrs[RETRY_OF]: trial.number for trial in trials if RETRY_OF in trial.user_attrs
+    }
     rows = []
     for trial in trials:
         attrs, record = trial.user_attrs, trial_result(trial)
@@ -167,14 +202,23 @@ def trial_rows(spec: StudySpec, trials: Sequence[FrozenTrial]) -> tuple[list[dic
         if was_stopped(trial):
             outcome = INTERRUPTED
             again = retried_by.get(trial.number)
-            reason = "its run stopped" + (f"; asked again as trial {again}" if again is not None else "")
+            reason = "its run stopped" + (
+                f"; asked again as trial {again}" if again is not None else ""
+            )
         violations = record.get(CONSTRAINT, [])
-        row.update(number=trial.number, state=state, outcome=outcome or "", reason=reason,
-                   prescreened=record.get(PRESCREENED) is True,
-                   feasible=state == "complete" and all(v <= 0.0 for v in violations),
-                   violation=max(violations) if violations else None, retry_of=attrs.get(RETRY_OF),
-                   same_as=record.get(SAME_AS),
-                   seconds=record.get(SECONDS), folder=record.get(FOLDER))
+        row.update(
+            number=trial.number,
+            state=state,
+            outcome=outcome or "",
+            reason=reason,
+            prescreened=record.get(PRESCREENED) is True,
+            feasible=state == "complete" and all(v <= 0.0 for v in violations),
+            violation=max(violations) if violations else None,
+            retry_of=attrs.get(RETRY_OF),
+            same_as=record.get(SAME_AS),
+            seconds=record.get(SECONDS),
+            folder=record.get(FOLDER),
+        )
         if levels:
             row["level"] = record.get(LEVEL)
             if PRUNED_AT in record:
@@ -190,22 +234,32 @@ def trial_rows(spec: StudySpec, trials: Sequence[FrozenTrial]) -> tuple[list[dic
     return rows, columns
 
 
-#: Trials without a value (refused, failed) the terminal summary names one by one; the rest are counted.
+#: Trials without a value (refused, failed) the terminal summary names one by one; the rest are
+#: counted.
 MAX_UNVALUED_LINES = 5
 
 
 def unvalued_lines(rows: Sequence[dict[str, Any]]) -> list[str]:
     """Summary lines for the finished trials that have no objective value (a refused or failed design, not
     one whose run stopped): number, outcome and reason, so a refused design is not silently missing."""
-    unvalued = [row for row in rows if row["state"] == "fail" and row["outcome"] not in ("", INTERRUPTED)]
-    lines = [f"  trial {row['number']} {row['outcome']}: {row['reason']}" for row in unvalued[:MAX_UNVALUED_LINES]]
+    unvalued = [
+        row for row in rows if row["state"] == "fail" and row["outcome"] not in ("", INTERRUPTED)
+    ]
+    lines = [
+        f"  trial {row['number']} {row['outcome']}: {row['reason']}"
+        for row in unvalued[:MAX_UNVALUED_LINES]
+    ]
     if len(unvalued) > MAX_UNVALUED_LINES:
-        lines.append(f"  and {len(unvalued) - MAX_UNVALUED_LINES} more trials without a value (see results.csv)")
+        lines.append(
+            f"  and {len(unvalued) - MAX_UNVALUED_LINES} more trials without a value (see results.csv)"
+        )
     return lines
 
 
 def _feasible(trial: FrozenTrial) -> bool:
-    return trial.state.name == "COMPLETE" and all(v <= 0.0 for v in trial_result(trial).get(CONSTRAINT, []))
+    return trial.state.name == "COMPLETE" and all(
+        v <= 0.0 for v in trial_result(trial).get(CONSTRAINT, [])
+    )
 
 
 def _history_picture(spec: StudySpec, trials: Sequence[FrozenTrial], path: Path) -> Path:
@@ -223,19 +277,33 @@ def history_figure(spec: StudySpec, trials: Sequence[FrozenTrial]) -> Figure:
     import matplotlib.pyplot as plt
     from matplotlib.ticker import MaxNLocator
 
-    unvalued = [trial.number for trial in trials if trial.state.name == "FAIL" and not was_stopped(trial)
-                and trial_result(trial).get(OUTCOME)]
+    unvalued = [
+        trial.number
+        for trial in trials
+        if trial.state.name == "FAIL"
+        and not was_stopped(trial)
+        and trial_result(trial).get(OUTCOME)
+    ]
 
-    figure, axes = plt.subplots(len(spec.objectives), 1, figsize=(8, 3.2 * len(spec.objectives)), squeeze=False)
+    figure, axes = plt.subplots(
+        len(spec.objectives), 1, figsize=(8, 3.2 * len(spec.objectives)), squeeze=False
+    )
     complete = [trial for trial in trials if trial.state.name == "COMPLETE"]
     for index, (objective, axis) in enumerate(zip(spec.objectives, axes[:, 0])):
         good = [(t.number, t.values[index]) for t in complete if _feasible(t)]
         bad = [(t.number, t.values[index]) for t in complete if not _feasible(t)]
         pruned = [(t.number, value[index]) for t, value in _pruned_values(spec, trials)]
         if pruned:
-            axis.scatter(*zip(*pruned), marker="^", color="0.75", label="pruned (its value at a screening level)")
+            axis.scatter(
+                *zip(*pruned),
+                marker="^",
+                color="0.75",
+                label="pruned (its value at a screening level)",
+            )
         if bad:
-            axis.scatter(*zip(*bad), marker="x", color="0.6", label="infeasible (a constraint is broken)")
+            axis.scatter(
+                *zip(*bad), marker="x", color="0.6", label="infeasible (a constraint is broken)"
+            )
         if good:
             axis.scatter(*zip(*good), color="tab:blue", label="feasible")
             pick = min if objective.direction.value == "minimize" else max
@@ -245,8 +313,14 @@ def history_figure(spec: StudySpec, trials: Sequence[FrozenTrial]) -> Figure:
                 steps.append((number, best))
             axis.step(*zip(*steps), where="post", color="tab:red", label="best so far")
         if unvalued:  # no value to plot: a mark at the bottom of the panel, at its trial number
-            axis.plot(unvalued, [0.02] * len(unvalued), "v", color="tab:orange", transform=axis.get_xaxis_transform(),
-                      label="refused or failed (no value; see results.csv)")
+            axis.plot(
+                unvalued,
+                [0.02] * len(unvalued),
+                "v",
+                color="tab:orange",
+                transform=axis.get_xaxis_transform(),
+                label="refused or failed (no value; see results.csv)",
+            )
         axis.set_xlabel("trial")
         axis.xaxis.set_major_locator(MaxNLocator(integer=True))
         axis.set_ylabel(objective.metric)
@@ -257,13 +331,17 @@ def history_figure(spec: StudySpec, trials: Sequence[FrozenTrial]) -> Figure:
     return figure
 
 
-def _pruned_values(spec: StudySpec, trials: Sequence[FrozenTrial]) -> list[tuple[FrozenTrial, list[float]]]:
+def _pruned_values(
+    spec: StudySpec, trials: Sequence[FrozenTrial]
+) -> list[tuple[FrozenTrial, list[float]]]:
     """The pruned trials with their objective values at the screening level they stopped at."""
     pruned = []
     for trial in trials:
         metrics = trial_result(trial).get(METRICS, {}) if trial.state.name == "PRUNED" else {}
         try:
-            pruned.append((trial, [float(metrics[objective.metric]) for objective in spec.objectives]))
+            pruned.append(
+                (trial, [float(metrics[objective.metric]) for objective in spec.objectives])
+            )
         except (KeyError, TypeError, ValueError):
             continue
     return pruned
@@ -282,27 +360,36 @@ def _save_png(figure: Figure, path: Path) -> Path:
     return path
 
 
-def _pareto_picture(spec: StudySpec, trials: Sequence[FrozenTrial], front: Sequence[FrozenTrial], path: Path) -> Path:
+def _pareto_picture(
+    spec: StudySpec, trials: Sequence[FrozenTrial], front: Sequence[FrozenTrial], path: Path
+) -> Path:
     """The two objectives of every complete trial, the feasible Pareto front highlighted."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-
     figure, axis = plt.subplots(figsize=(6, 5))
     complete = [trial for trial in trials if trial.state.name == "COMPLETE"]
     pruned = _pruned_values(spec, trials)
     if pruned:
-        axis.scatter([v[0] for _, v in pruned], [v[1] for _, v in pruned], marker="^", color="0.75",
-                     label=f"pruned (at {'/'.join(spec.levels[:-1])})")
+        axis.scatter(
+            [v[0] for _, v in pruned],
+            [v[1] for _, v in pruned],
+            marker="^",
+            color="0.75",
+            label=f"pruned (at {'/'.join(spec.levels[:-1])})",
+        )
     styles: list[tuple[str, list[Any], dict[str, Any]]] = [
         ("infeasible", [t for t in complete if not _feasible(t)], {"marker": "x", "color": "0.6"}),
         ("feasible", [t for t in complete if _feasible(t)], {"color": "tab:blue"}),
-        ("Pareto front", sorted(front, key=lambda t: t.values[0]), {"color": "tab:red"})]
+        ("Pareto front", sorted(front, key=lambda t: t.values[0]), {"color": "tab:red"}),
+    ]
     for label, group, style in styles:
         if group:
-            axis.scatter([t.values[0] for t in group], [t.values[1] for t in group], label=label, **style)
+            axis.scatter(
+                [t.values[0] for t in group], [t.values[1] for t in group], label=label, **style
+            )
     first, second = spec.objectives
     axis.set_xlabel(f"{first.metric} ({first.direction.value})")
     axis.set_ylabel(f"{second.metric} ({second.direction.value})")
@@ -313,8 +400,13 @@ def _pareto_picture(spec: StudySpec, trials: Sequence[FrozenTrial], front: Seque
     return _save_png(figure, path)
 
 
-def _publish_best(spec: StudySpec, trials: Sequence[FrozenTrial], best: Sequence[FrozenTrial], folder: Path, out: Path
-                  ) -> tuple[list[str], dict[int, Path]]:
+def _publish_best(
+    spec: StudySpec,
+    trials: Sequence[FrozenTrial],
+    best: Sequence[FrozenTrial],
+    folder: Path,
+    out: Path,
+) -> tuple[list[str], dict[int, Path]]:
     """Write each best design's TOML and publish beside it, as an output set, the files its trial wrote
     (copied, not rebuilt: the study judged the trial on them). A trial whose set cannot be published
     is named in one line; for one objective the next best feasible trial takes its place."""
@@ -325,7 +417,9 @@ def _publish_best(spec: StudySpec, trials: Sequence[FrozenTrial], best: Sequence
     folder.mkdir(parents=True, exist_ok=True)
     single = len(spec.objectives) == 1
     if single:
-        ranked = [best[0]] + [trial for trial in _ranked_feasible(spec, trials) if trial.number != best[0].number]
+        ranked = [best[0]] + [
+            trial for trial in _ranked_feasible(spec, trials) if trial.number != best[0].number
+        ]
         slots = [(f"{spec.name}_best", ranked)]
     else:
         slots = [(f"{spec.name}_pareto_{trial.number}", [trial]) for trial in best]
@@ -334,12 +428,18 @@ def _publish_best(spec: StudySpec, trials: Sequence[FrozenTrial], best: Sequence
     for position, (name, candidates) in enumerate(slots):
         for rank, trial in enumerate(candidates):
             try:
-                path = _publish_trial(spec, trial, name, folder, out, with_files=position < MAX_PARETO_BUILDS)
+                path = _publish_trial(
+                    spec, trial, name, folder, out, with_files=position < MAX_PARETO_BUILDS
+                )
             except (TorusCadError, OSError) as error:
-                lines.append(f"  trial {trial.number} is not published: {' '.join(str(error).split())}")
+                lines.append(
+                    f"  trial {trial.number} is not published: {' '.join(str(error).split())}"
+                )
                 continue
             built[trial.number] = path
-            values = ", ".join(f"{o.metric} = {v:.6g}" for o, v in zip(spec.objectives, trial.values))
+            values = ", ".join(
+                f"{o.metric} = {v:.6g}" for o, v in zip(spec.objectives, trial.values)
+            )
             which = "best" if rank == 0 else "next best"
             lines.append(f"  {which} trial {trial.number}: {values}; design {path}")
             break
@@ -349,11 +449,15 @@ def _publish_best(spec: StudySpec, trials: Sequence[FrozenTrial], best: Sequence
 def _ranked_feasible(spec: StudySpec, trials: Sequence[FrozenTrial]) -> list[FrozenTrial]:
     """The feasible complete trials of a one-objective study, best first."""
     sign = -1.0 if spec.objectives[0].direction.value == "maximize" else 1.0
-    return sorted((trial for trial in trials if _feasible(trial)), key=lambda trial: (sign * trial.values[0],
-                                                                                      trial.number))
+    return sorted(
+        (trial for trial in trials if _feasible(trial)),
+        key=lambda trial: (sign * trial.values[0], trial.number),
+    )
 
 
-def _publish_trial(spec: StudySpec, trial: FrozenTrial, name: str, folder: Path, out: Path, with_files: bool = True) -> Path:
+def _publish_trial(
+    spec: StudySpec, trial: FrozenTrial, name: str, folder: Path, out: Path, with_files: bool = True
+) -> Path:
     """``folder/<name>.toml`` (the trial's design under ``name``) and, with ``with_files``, the trial's
     own output set copied beside it as the set ``name`` (unless that set is already current).
 
@@ -374,7 +478,14 @@ def _publish_trial(spec: StudySpec, trial: FrozenTrial, name: str, folder: Path,
     return path
 
 
-def _copy_trial_set(trial: FrozenTrial, parameters: PropellerParameters, name: str, folder: Path, out: Path, stl: bool = True) -> None:
+def _copy_trial_set(
+    trial: FrozenTrial,
+    parameters: PropellerParameters,
+    name: str,
+    folder: Path,
+    out: Path,
+    stl: bool = True,
+) -> None:
     """Publish the trial's verified output set (renamed ``name``: its files and its report, which names
     the trial it came from) in ``folder``; the copies are checked against the trial's SHA-256. The set
     must hold every format of the design's ``export.formats`` (STL only if ``stl``)."""
@@ -384,7 +495,8 @@ def _copy_trial_set(trial: FrozenTrial, parameters: PropellerParameters, name: s
     from torus_cad.outputs.output_set import FILES_KEY, OutputSet, file_entry, verify_set
 
     source = out / str(trial_result(trial).get(FOLDER, f"{TRIALS_DIR}/{trial.number}"))
-    design = trial_name(int(trial_result(trial).get(SAME_AS, trial.number)))  # a trial's twin's files are its own
+    # a trial's twin's files are its own
+    design = trial_name(int(trial_result(trial).get(SAME_AS, trial.number)))
     report = json.loads(verify_set(source, design).report.read_text(encoding="utf-8"))
     files: dict[str, dict[str, Any]] = report[FILES_KEY]
     formats = {fmt.value for fmt in parameters.export.formats if stl or fmt.value != "stl"}
@@ -393,21 +505,34 @@ def _copy_trial_set(trial: FrozenTrial, parameters: PropellerParameters, name: s
         raise IncompleteOutputError(f"{design}: its output set has no {', '.join(missing)} file")
 
     def copy(kind: str, entry: dict[str, Any]) -> Any:
-        renamed = name + entry["file"][len(design):] if entry["file"].startswith(design) else entry["file"]
+        renamed = (
+            name + entry["file"][len(design) :]
+            if entry["file"].startswith(design)
+            else entry["file"]
+        )
 
         def write(staging: Path) -> dict[str, Path]:
             copied = Path(shutil.copyfile(source / entry["file"], staging / renamed))
             if file_entry(copied)["sha256"] != entry["sha256"]:
-                raise IncompleteOutputError(f"{design}: the copy of {entry['file']} differs from the trial's")
+                raise IncompleteOutputError(
+                    f"{design}: the copy of {entry['file']} differs from the trial's"
+                )
             return {kind: copied}
+
         return write
 
     with OutputSet(folder, name) as output:
         for kind, entry in files.items():
             output.write_files(copy(kind, entry))
         sealed = {key: value for key, value in report.items() if key != FILES_KEY}
-        sealed.update(name=name, study_trial={"number": trial.number, "design": design,
-                                              "folder": source.relative_to(out).as_posix()})
+        sealed.update(
+            name=name,
+            study_trial={
+                "number": trial.number,
+                "design": design,
+                "folder": source.relative_to(out).as_posix(),
+            },
+        )
         output.publish(sealed)
 
 

@@ -43,39 +43,70 @@ if TYPE_CHECKING:  # optuna and SQLAlchemy are imported where they are used (the
     from optuna.storages import RDBStorage
     from optuna.trial import FrozenTrial, Trial
 
-__all__ = ["GRACE_S", "HEARTBEAT_S", "LEVEL", "LEVELS", "LEVEL_SECONDS", "PRESCREENED", "PRUNED_AT", "Heartbeat",
-           "StorageError", "claim_lock", "count_trials", "fail_and_retry", "open_storage", "owner_record", "public_url", "retry_failed_trial", "retry_stale_trials",
-           "storage_failures_named", "storage_url", "trial_result"]
+__all__ = [
+    "GRACE_S",
+    "HEARTBEAT_S",
+    "LEVEL",
+    "LEVELS",
+    "LEVEL_SECONDS",
+    "PRESCREENED",
+    "PRUNED_AT",
+    "Heartbeat",
+    "StorageError",
+    "claim_lock",
+    "count_trials",
+    "fail_and_retry",
+    "open_storage",
+    "owner_record",
+    "public_url",
+    "retry_failed_trial",
+    "retry_stale_trials",
+    "storage_failures_named",
+    "storage_url",
+    "trial_result",
+]
 
 HEARTBEAT_S = 10  #: how often a running process records that its trials are alive, s
 GRACE_S = 120  #: a RUNNING trial without a heartbeat for this long belongs to a dead process, s
-_SQLITE_TIMEOUT_S = 120  #: how long a writer waits for SQLite's lock (several processes share one file)
+# : how long a writer waits for SQLite's lock (several processes share one file)
+_SQLITE_TIMEOUT_S = 120
 _SCHEMES = ("sqlite", "postgresql")
-_OPEN_ATTEMPTS = 5  #: tries to open a storage whose tables another process is creating at the same moment
+# : tries to open a storage whose tables another process is creating at the same moment
+_OPEN_ATTEMPTS = 5
 
 RETRY_OF = "retry_of"  #: user attr of a trial that repeats an interrupted one: that trial's number
 #: User attr of a trial failed because its run stopped (set before the FAIL, so that a run stopped
 #: between recording a trial's outcome and telling it is still known as stopped, not as done).
 STOPPED = "stopped"
-#: User attr of a finished trial, written in one transaction: ``{"outcome", "reason", "seconds", "folder",
-#: "metrics", "constraint"}`` (the outcome's value, the refusal's reason, the worker's s, the trial's folder
-#: under the study's out folder, the metrics by name, the constraint violations); read with :func:`trial_result`.
+#: User attr of a finished trial, written in one transaction: ``{"outcome", "reason", "seconds",
+#: "folder", "metrics", "constraint"}`` (the outcome's value, the refusal's reason, the worker's s,
+#: the trial's folder under the study's out folder, the metrics by name, the constraint violations);
+#: read with :func:`trial_result`.
 RESULT = "result"
-OUTCOME, REASON, METRICS, CONSTRAINT, FOLDER, SECONDS = "outcome", "reason", "metrics", "constraint", "folder", \
-    "seconds"  #: the keys of :data:`RESULT`
-#: Key of :data:`RESULT`, True when the kernel-free checks refused the trial before any worker built it.
+OUTCOME, REASON, METRICS, CONSTRAINT, FOLDER, SECONDS = (
+    "outcome",
+    "reason",
+    "metrics",
+    "constraint",
+    "folder",
+    "seconds",
+)  #: the keys of :data:`RESULT`
+#: Key of :data:`RESULT`, True when the kernel-free checks refused the trial before any worker built
+#: it.
 PRESCREENED = "prescreened"
-#: Key of :data:`RESULT` of a trial whose parameters an earlier complete trial had (a genetic sampler's offspring
-#: can repeat a parent): that trial's number, whose values, metrics and files (``folder``) it takes.
+#: Key of :data:`RESULT` of a trial whose parameters an earlier complete trial had (a genetic
+#: sampler's offspring can repeat a parent): that trial's number, whose values, metrics and files
+#: (``folder``) it takes.
 SAME_AS = "same_as"
-#: Keys of :data:`RESULT` in a study of several mesh levels: the level of the trial's metrics (the finest it
-#: reached), and the screening level at which the pruner stopped it (absent when it was not pruned).
+#: Keys of :data:`RESULT` in a study of several mesh levels: the level of the trial's metrics (the
+#: finest it reached), and the screening level at which the pruner stopped it (absent when it was
+#: not pruned).
 LEVEL, PRUNED_AT = "level", "pruned_at"
-#: Key of :data:`RESULT` in a study of several mesh levels: the worker's seconds at each level the trial ran, by
-#: level (the first level's include the build).
+#: Key of :data:`RESULT` in a study of several mesh levels: the worker's seconds at each level the
+#: trial ran, by level (the first level's include the build).
 LEVEL_SECONDS = "level_seconds"
-#: User attr of a trial of a study of several mesh levels, written as each level finishes (other processes'
-#: pruners read it): ``{level: {"metrics": {...}, "feasible": bool, "seconds": s}}``.
+#: User attr of a trial of a study of several mesh levels, written as each level finishes (other
+#: processes' pruners read it): ``{level: {"metrics": {...}, "feasible": bool, "seconds": s}}``.
 LEVELS = "levels"
 OWNER = "owner"  #: user attr: ``{"host", "pid", "start"}`` of the process that runs the trial
 
@@ -90,8 +121,10 @@ def storage_url(given: str, out_dir: Path, name: str) -> str:
         return f"sqlite:///{out_dir / f'{name}.db'}"
     scheme = urlsplit(given).scheme.split("+")[0]
     if scheme not in _SCHEMES:
-        raise ParameterError(f"storage = {public_url(given)!r} is not allowed; use '' (SQLite in the output folder), "
-                             "sqlite:///path.db or postgresql://user@host/database")
+        raise ParameterError(
+            f"storage = {public_url(given)!r} is not allowed; use '' (SQLite in the output folder), "
+            "sqlite:///path.db or postgresql://user@host/database"
+        )
     return given
 
 
@@ -125,26 +158,38 @@ def open_storage(url: str) -> RDBStorage:
     import optuna
     import sqlalchemy.exc
 
-    kwargs: dict[str, Any] = {"connect_args": {"timeout": _SQLITE_TIMEOUT_S}} if _is_sqlite(url) else \
-        {"pool_pre_ping": True}
+    kwargs: dict[str, Any] = (
+        {"connect_args": {"timeout": _SQLITE_TIMEOUT_S}}
+        if _is_sqlite(url)
+        else {"pool_pre_ping": True}
+    )
     for attempt in range(_OPEN_ATTEMPTS):
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")  # optuna's ExperimentalWarning for the heartbeat
-                storage = optuna.storages.RDBStorage(_with_driver(url), engine_kwargs=kwargs,
-                                                     heartbeat_interval=HEARTBEAT_S, grace_period=GRACE_S,
-                                                     heartbeat_stale_trial_callback=_Retries())
+                storage = optuna.storages.RDBStorage(
+                    _with_driver(url),
+                    engine_kwargs=kwargs,
+                    heartbeat_interval=HEARTBEAT_S,
+                    grace_period=GRACE_S,
+                    heartbeat_stale_trial_callback=_Retries(),
+                )
             if _is_sqlite(url):
                 _write_ahead_log(storage.engine)
             return storage
-        except sqlalchemy.exc.IntegrityError:  # another process created the tables at the same moment
+        # another process created the tables at the same moment
+        except sqlalchemy.exc.IntegrityError:
             if attempt == _OPEN_ATTEMPTS - 1:
-                raise StorageError(f"cannot create the study tables in {public_url(url)!r}: other processes "
-                                   "keep creating them") from None
+                raise StorageError(
+                    f"cannot create the study tables in {public_url(url)!r}: other processes "
+                    "keep creating them"
+                ) from None
             time.sleep(0.5)
         except (sqlalchemy.exc.SQLAlchemyError, ImportError, ValueError) as error:
             cause = " ".join(str(error).split("\n")[0].split())[:300]
-            raise StorageError(f"cannot open the study storage {public_url(url)!r}: {cause}") from None
+            raise StorageError(
+                f"cannot open the study storage {public_url(url)!r}: {cause}"
+            ) from None
     raise AssertionError("unreachable")  # pragma: no cover
 
 
@@ -173,7 +218,9 @@ def storage_failures_named(url: str) -> Iterator[None]:
     try:
         yield
     except (optuna.exceptions.StorageInternalError, sqlalchemy.exc.SQLAlchemyError) as error:
-        raise StorageError(f"the study storage {public_url(url)!r} failed: {_storage_cause(error)}") from None
+        raise StorageError(
+            f"the study storage {public_url(url)!r} failed: {_storage_cause(error)}"
+        ) from None
 
 
 def _write_ahead_log(engine: sqlalchemy.engine.Engine) -> None:
@@ -216,7 +263,9 @@ def claim_lock(storage: RDBStorage | None, url: str, name: str) -> Iterator[None
         return
     import sqlalchemy
 
-    key = int.from_bytes(hashlib.sha256(f"torus_cad optimize {name}".encode()).digest()[:8], "big", signed=True)
+    key = int.from_bytes(
+        hashlib.sha256(f"torus_cad optimize {name}".encode()).digest()[:8], "big", signed=True
+    )
     with storage.engine.connect() as connection:
         connection.execute(sqlalchemy.text("SELECT pg_advisory_lock(:key)"), {"key": key})
         connection.commit()
@@ -234,7 +283,11 @@ def owner_record() -> dict[str, Any]:
 
 def _owner_gone(owner: object) -> bool:
     """Whether ``owner`` (an :func:`owner_record`) is a process of this host that no longer runs."""
-    if not isinstance(owner, dict) or owner.get("host") != host_tag() or not isinstance(owner.get("pid"), int):
+    if (
+        not isinstance(owner, dict)
+        or owner.get("host") != host_tag()
+        or not isinstance(owner.get("pid"), int)
+    ):
         return False
     return process_identity(owner["pid"]) != owner.get("start")
 
@@ -252,8 +305,11 @@ def retry_stale_trials(study: optuna.Study, rdb: RDBStorage) -> list[int]:
 
     # Every process asks for a trial and records its owner under the claim lock, so a RUNNING trial
     # without an owner, seen under that lock, was being claimed by a process that died in between.
-    stale = [trial.number for trial in study.get_trials(deepcopy=False, states=(TrialState.RUNNING,))
-             if OWNER not in trial.user_attrs or _owner_gone(trial.user_attrs[OWNER])]
+    stale = [
+        trial.number
+        for trial in study.get_trials(deepcopy=False, states=(TrialState.RUNNING,))
+        if OWNER not in trial.user_attrs or _owner_gone(trial.user_attrs[OWNER])
+    ]
     retried = fail_and_retry(study, rdb, stale)
     recorder = rdb.get_heartbeat_stale_trial_callback()
     seen = len(recorder.numbers) if isinstance(recorder, _Retries) else 0
@@ -309,9 +365,12 @@ def count_trials(rdb: RDBStorage, study_id: int) -> tuple[int, bool]:
     def has_attr(key: str) -> sqlalchemy.Exists:
         return sqlalchemy.exists().where(attr.trial_id == trial.trial_id, attr.key == key)
 
-    counted = sqlalchemy.or_(trial.state.in_([TrialState.COMPLETE, TrialState.PRUNED, TrialState.RUNNING,
-                                              TrialState.WAITING]),
-                             sqlalchemy.and_(trial.state == TrialState.FAIL, has_attr(RESULT), ~has_attr(STOPPED)))
+    counted = sqlalchemy.or_(
+        trial.state.in_(
+            [TrialState.COMPLETE, TrialState.PRUNED, TrialState.RUNNING, TrialState.WAITING]
+        ),
+        sqlalchemy.and_(trial.state == TrialState.FAIL, has_attr(RESULT), ~has_attr(STOPPED)),
+    )
     query = sqlalchemy.select(
         sqlalchemy.func.count().filter(counted),
         sqlalchemy.func.count().filter(trial.state == TrialState.WAITING),
@@ -327,7 +386,8 @@ def _trial_tables() -> tuple[Any, Any]:
     The one private name of optuna this package uses, read as of optuna 5.0.0 (constraints.txt): the
     public API has no aggregate over a study's trials. A new optuna: check the models' names and columns
     (``trial_id``, ``study_id``, ``state``; ``trial_id``, ``key``)."""
-    # private: optuna's public API counts no trials in one query; read as of optuna==5.0.0 (constraints.txt)
+    # private: optuna's public API counts no trials in one query; read as of optuna==5.0.0
+    # (constraints.txt)
     from optuna.storages._rdb import models
 
     return models.TrialModel, models.TrialUserAttributeModel
@@ -337,7 +397,9 @@ def was_stopped(trial: FrozenTrial) -> bool:
     """A FAIL trial whose run stopped (asked again), not one failed for a reason of its design."""
     from optuna.trial import TrialState
 
-    return trial.state is TrialState.FAIL and (RESULT not in trial.user_attrs or STOPPED in trial.user_attrs)
+    return trial.state is TrialState.FAIL and (
+        RESULT not in trial.user_attrs or STOPPED in trial.user_attrs
+    )
 
 
 def fail_and_retry(study: optuna.Study, rdb: RDBStorage, trial_numbers: Iterable[int]) -> list[int]:
@@ -372,7 +434,9 @@ class Heartbeat:
         self._trial_ids: dict[int, int] = {}  # trial number -> trial id
         self._lock = threading.Lock()
         self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._run, name="torus-cad study heartbeat", daemon=True)
+        self._thread = threading.Thread(
+            target=self._run, name="torus-cad study heartbeat", daemon=True
+        )
 
     def __enter__(self) -> Heartbeat:
         self._thread.start()
@@ -383,7 +447,9 @@ class Heartbeat:
         self._thread.join(timeout=5.0)
 
     def add(self, trial: Trial) -> None:
-        trial_id = self._storage.get_trial_id_from_study_id_trial_number(self._study_id, trial.number)
+        trial_id = self._storage.get_trial_id_from_study_id_trial_number(
+            self._study_id, trial.number
+        )
         with self._lock:
             self._trial_ids[trial.number] = trial_id
         self._beat([trial_id])
@@ -402,4 +468,3 @@ class Heartbeat:
             with self._lock:
                 trial_ids = sorted(self._trial_ids.values())
             self._beat(trial_ids)
-

@@ -38,7 +38,14 @@ from typing import TYPE_CHECKING, Any
 from torus_cad.batch import cluster
 from torus_cad.batch.job import DesignTask, prescreen
 from torus_cad.batch.outcome import DesignResult, Outcome
-from torus_cad.batch.runner import Interrupted, Job, LocalPool, interrupts_raised, raise_if_interrupted, run_tasks
+from torus_cad.batch.runner import (
+    Interrupted,
+    Job,
+    LocalPool,
+    interrupts_raised,
+    raise_if_interrupted,
+    run_tasks,
+)
 from torus_cad.errors import ParameterError
 from torus_cad.optimize.metrics import metric_value
 from torus_cad.optimize.results import write_results
@@ -71,7 +78,14 @@ from torus_cad.optimize.storage import (
     trial_result,
 )
 from torus_cad.optimize.study_file import Direction, Objective, PrunerKind, Sampler, StudySpec
-from torus_cad.optimize.trial_job import PERFORMANCE_DIR, TRIALS_DIR, TrialTask, performance_dir, run_trial, trial_name
+from torus_cad.optimize.trial_job import (
+    PERFORMANCE_DIR,
+    TRIALS_DIR,
+    TrialTask,
+    performance_dir,
+    run_trial,
+    trial_name,
+)
 from torus_cad.runtime.progress import BatchProgress
 from torus_cad.tolerances import MAX_STUDY_TRIALS
 
@@ -85,9 +99,11 @@ if TYPE_CHECKING:  # optuna is imported where it is used (the optimize extra)
 
 __all__ = ["DEFINITION_ATTR", "StudyInterrupted", "StudyResult", "dominated_at_level", "run_study"]
 
-DEFINITION_ATTR = "torus_cad_definition"  #: study user attr: the digest of what must not change between runs
-#: Trials in flight per worker: one running and one queued, so that a worker never waits for the sampler
-#: and the storage between two trials (the sweep's window too); constant_liar keeps the sampler off both.
+# : study user attr: the digest of what must not change between runs
+DEFINITION_ATTR = "torus_cad_definition"
+#: Trials in flight per worker: one running and one queued, so that a worker never waits for the
+#: sampler and the storage between two trials (the sweep's window too); constant_liar keeps the
+#: sampler off both.
 _TASKS_PER_WORKER = 2
 
 
@@ -128,12 +144,22 @@ class StudyResult:
         return 60.0 * self.ran / self.seconds if self.seconds > 0 else 0.0
 
     def summary(self) -> str:
-        head = (f"study {self.spec.name!r}: {self.ran} trials run in {self.seconds:.1f} s "
-                f"({self.trials_per_minute():.1f} trials/min, {self.backend}); storage {self.storage}")
-        lines = [head + (f" (INTERRUPTED by {self.interrupted_by}; rerun the same command to continue)"
-                         if self.interrupted_by else "")]
+        head = (
+            f"study {self.spec.name!r}: {self.ran} trials run in {self.seconds:.1f} s "
+            f"({self.trials_per_minute():.1f} trials/min, {self.backend}); storage {self.storage}"
+        )
+        lines = [
+            head
+            + (
+                f" (INTERRUPTED by {self.interrupted_by}; rerun the same command to continue)"
+                if self.interrupted_by
+                else ""
+            )
+        ]
         if self.retried:
-            lines.append(f"  trials {', '.join(map(str, self.retried))} of a stopped run were asked again")
+            lines.append(
+                f"  trials {', '.join(map(str, self.retried))} of a stopped run were asked again"
+            )
         lines += self.summary_lines
         lines += [f"  {kind}: {path}" for kind, path in self.files.items()]
         return "\n".join(lines)
@@ -155,9 +181,18 @@ def available_workers() -> int:
         return max(1, os.cpu_count() or 1)
 
 
-def run_study(spec: StudySpec, out_dir: str | Path, *, trials: int | None = None, workers: int | None = None,
-              scheduler: str | None = None, storage: str | None = None, write_results: bool = True,
-              trial_job: Job = run_trial, progress: bool | None = None) -> StudyResult:
+def run_study(
+    spec: StudySpec,
+    out_dir: str | Path,
+    *,
+    trials: int | None = None,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    storage: str | None = None,
+    write_results: bool = True,
+    trial_job: Job = run_trial,
+    progress: bool | None = None,
+) -> StudyResult:
     """Run ``spec`` until it holds ``trials`` (default ``spec.trials``) finished trials, then write its results.
 
     Args:
@@ -180,8 +215,12 @@ def run_study(spec: StudySpec, out_dir: str | Path, *, trials: int | None = None
     """
     total = spec.trials if trials is None else trials
     if isinstance(total, bool) or not isinstance(total, int) or not 1 <= total <= MAX_STUDY_TRIALS:
-        raise ParameterError(f"--trials = {total!r} is out of range; allowed [1, {MAX_STUDY_TRIALS}]")
-    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
+        raise ParameterError(
+            f"--trials = {total!r} is out of range; allowed [1, {MAX_STUDY_TRIALS}]"
+        )
+    if workers is not None and (
+        isinstance(workers, bool) or not isinstance(workers, int) or workers < 1
+    ):
         raise ParameterError(f"--workers must be a whole number >= 1, got {workers!r}")
     out = Path(out_dir).resolve()
     url = storage_url(spec.storage if storage is None else storage, out, spec.name)
@@ -192,9 +231,10 @@ def run_study(spec: StudySpec, out_dir: str | Path, *, trials: int | None = None
     result = StudyResult(spec, out, public_url(url), total)
     runner: _Runner | None = None
     try:
-        # From opening the storage to closing it, a signal only takes effect at a safe point (between two
-        # trials' bookkeeping, between two files of the results): never inside a commit, an import or the
-        # pool's start-up; the storage is closed on every way out (no -wal / -shm left beside an SQLite file).
+        # From opening the storage to closing it, a signal only takes effect at a safe point
+        # (between two trials' bookkeeping, between two files of the results): never inside a
+        # commit, an import or the pool's start-up; the storage is closed on every way out (no -wal
+        # / -shm left beside an SQLite file).
         with interrupts_raised(), storage_failures_named(url):
             try:
                 try:
@@ -222,13 +262,21 @@ def run_study(spec: StudySpec, out_dir: str | Path, *, trials: int | None = None
 class _Runner:
     """One process's part of a study: its storage, sampler, trials in flight."""
 
-    def __init__(self, spec: StudySpec, out: Path, url: str, total: int, job: Job = run_trial,
-                 progress: bool | None = None) -> None:
+    def __init__(
+        self,
+        spec: StudySpec,
+        out: Path,
+        url: str,
+        total: int,
+        job: Job = run_trial,
+        progress: bool | None = None,
+    ) -> None:
         import optuna
 
         optuna.logging.set_verbosity(optuna.logging.WARNING)
         self.spec, self.out, self.url, self.total = spec, out, url, total
-        with claim_lock(None, url, spec.name):  # SQLite: one process at a time creates the tables and the study
+        # SQLite: one process at a time creates the tables and the study
+        with claim_lock(None, url, spec.name):
             self.rdb = open_storage(url)
             try:
                 self.study = _load_study(spec, self.rdb)
@@ -245,9 +293,11 @@ class _Runner:
         self.climbs: deque[TrialTask] = deque()  # trials the pruner let climb, ahead of new trials
         self.progress_enabled = progress
         self.progress: BatchProgress | None = None
-        self.best: tuple[int, float] | None = None  # a one-objective study's best trial so far: (number, value)
+        # a one-objective study's best trial so far: (number, value)
+        self.best: tuple[int, float] | None = None
         self.seconds: dict[str, float] = {}  # design id -> worker seconds of its stages so far
-        self.answered: dict[str, tuple[int, dict[str, Any], list[float]]] = {}  # parameters -> a complete trial
+        # parameters -> a complete trial
+        self.answered: dict[str, tuple[int, dict[str, Any], list[float]]] = {}
         from optuna.trial import TrialState
 
         for done in self.study.get_trials(deepcopy=False, states=(TrialState.COMPLETE,)):
@@ -257,27 +307,40 @@ class _Runner:
 
     def run(self, result: StudyResult, workers: int | None, scheduler: str | None) -> None:
         start, cpu_start = time.perf_counter(), time.process_time()
-        _remove_staging_debris((self.out / TRIALS_DIR).glob("*/"))  # of workers killed in earlier runs
+        # of workers killed in earlier runs
+        _remove_staging_debris((self.out / TRIALS_DIR).glob("*/"))
         own_client = own_cluster = None
         finished, _ = count_trials(self.rdb, self.study_id)
-        self.progress = BatchProgress(self.total, min(finished, self.total), enabled=self.progress_enabled,
-                                      label="trials")
+        self.progress = BatchProgress(
+            self.total, min(finished, self.total), enabled=self.progress_enabled, label="trials"
+        )
         try:
             with self.heartbeat, self.progress:
                 if scheduler is not None:
                     own_client, own_cluster = cluster.connect(scheduler, workers)
                     executor = own_client.get_executor(pure=False)
-                    window = _TASKS_PER_WORKER * max(1, len(own_client.scheduler_info().get("workers", {}))
-                                                     or workers or 1)
+                    window = _TASKS_PER_WORKER * max(
+                        1, len(own_client.scheduler_info().get("workers", {})) or workers or 1
+                    )
                     result.backend = f"dask: {cluster.client_label(own_client)}"
-                    run_tasks(_Tasks(self, result), self.on_result, lambda: executor, window=window, job=self.job,
-                              check_visible=True)
+                    run_tasks(
+                        _Tasks(self, result),
+                        self.on_result,
+                        lambda: executor,
+                        window=window,
+                        job=self.job,
+                        check_visible=True,
+                    )
                 else:
                     count = min(workers or available_workers(), available_workers())
                     result.backend = f"local pool, {count} worker{'s' if count > 1 else ''}"
-                    run_tasks(_Tasks(self, result), self.on_result,
-                              lambda: LocalPool(count, self.spec.time_limit_s), window=_TASKS_PER_WORKER * count,
-                              job=self.job)
+                    run_tasks(
+                        _Tasks(self, result),
+                        self.on_result,
+                        lambda: LocalPool(count, self.spec.time_limit_s),
+                        window=_TASKS_PER_WORKER * count,
+                        job=self.job,
+                    )
         except BaseException:
             self._retry_in_flight()
             raise
@@ -297,15 +360,18 @@ class _Runner:
             The new trial, or None when the study holds its trials and no retry waits.
         """
         counted, waiting = count_trials(self.rdb, self.study_id)
-        if not self.seeded:  # distinct seeds for processes sharing a study, reproducible for one process
+        # distinct seeds for processes sharing a study, reproducible for one process
+        if not self.seeded:
             self.study.sampler = _sampler(self.spec, self.spec.seed + counted)
             self.seeded = True
         if not waiting and counted >= self.total:
             return None
         with warnings.catch_warnings():
-            warnings.simplefilter("ignore")  # optuna's ExperimentalWarning for constraints_func etc.
+            # optuna's ExperimentalWarning for constraints_func etc.
+            warnings.simplefilter("ignore")
             trial = self.study.ask(_distributions(self.spec))
-        self.in_flight[trial_name(trial.number)] = trial  # from here an interrupt fails it and asks it again
+        # from here an interrupt fails it and asks it again
+        self.in_flight[trial_name(trial.number)] = trial
         trial.set_user_attr(OWNER, self.owner)
         self.heartbeat.add(trial)
         return trial
@@ -328,13 +394,16 @@ class _Runner:
             return False
         number, record, values = twin
         record = {**record, SAME_AS: record.get(SAME_AS, number), SECONDS: 0.0}
-        with contextlib.suppress(optuna.exceptions.UpdateFinishedTrialError):  # a process took it as stale
+        # a process took it as stale
+        with contextlib.suppress(optuna.exceptions.UpdateFinishedTrialError):
             trial.set_user_attr(RESULT, record)
             self.study.tell(trial, values)
         self._finished(trial_name(trial.number), trial, values, pruned=False)
         return True
 
-    def _remember(self, params: dict[str, Any], number: int, record: dict[str, Any], values: list[float]) -> None:
+    def _remember(
+        self, params: dict[str, Any], number: int, record: dict[str, Any], values: list[float]
+    ) -> None:
         """A complete trial's values and record, for a later trial with the same parameters."""
         self.answered.setdefault(_parameters_key(params), (number, record, values))
 
@@ -354,8 +423,16 @@ class _Runner:
         parameters = self.spec.parameters(trial.params, name)
         levels = self.spec.levels
         report_dir = performance_dir(levels[stage], len(levels)) if levels else PERFORMANCE_DIR
-        return TrialTask(name, parameters, str(folder), stl=self.spec.stl, simulate=self.spec.stage_settings(stage),
-                         simulate_time_limit_s=self.spec.time_limit_s, simulate_dir=report_dir, stage=stage)
+        return TrialTask(
+            name,
+            parameters,
+            str(folder),
+            stl=self.spec.stl,
+            simulate=self.spec.stage_settings(stage),
+            simulate_time_limit_s=self.spec.time_limit_s,
+            simulate_dir=report_dir,
+            stage=stage,
+        )
 
     def on_result(self, task: DesignTask, result: DesignResult) -> None:
         """Tell optuna what the trial gave: its objective values and constraints, or FAIL with the reason; at a
@@ -388,12 +465,15 @@ class _Runner:
         if len(levels) > 1 and outcome is Outcome.VALID:
             record[LEVEL] = levels[stage]
             earlier = trial.user_attrs.get(LEVELS, {})
-            record[LEVEL_SECONDS] = {**{name: entry.get(SECONDS) for name, entry in earlier.items()},
-                                     levels[stage]: result.seconds}
+            record[LEVEL_SECONDS] = {
+                **{name: entry.get(SECONDS) for name, entry in earlier.items()},
+                levels[stage]: result.seconds,
+            }
             if stage + 1 < len(levels) and values is not None:
                 try:
                     stops = self._stops_here(trial, stage, values, record, result.seconds)
-                except optuna.exceptions.UpdateFinishedTrialError:  # a process took it as stale: asked again
+                # a process took it as stale: asked again
+                except optuna.exceptions.UpdateFinishedTrialError:
                     self._forget(task.design_id, trial)
                     return
                 if not stops:
@@ -404,9 +484,11 @@ class _Runner:
         record.update({OUTCOME: outcome.value, REASON: reason})
         if result.prescreened:
             record[PRESCREENED] = True
-        if outcome is not Outcome.VALID:  # a worker stopped at its time limit, or killed, leaves its staging folder
+        # a worker stopped at its time limit, or killed, leaves its staging folder
+        if outcome is not Outcome.VALID:
             _remove_staging_debris([Path(str(task.folder))])
-        with contextlib.suppress(optuna.exceptions.UpdateFinishedTrialError):  # a process took it as stale
+        # a process took it as stale
+        with contextlib.suppress(optuna.exceptions.UpdateFinishedTrialError):
             trial.set_user_attr(RESULT, record)
             if values is None:
                 self.study.tell(trial, state=TrialState.FAIL)
@@ -417,7 +499,9 @@ class _Runner:
                 self._remember(trial.params, trial.number, record, values)
         self._finished(task.design_id, trial, values, pruned=PRUNED_AT in record)
 
-    def _finished(self, design_id: str, trial: Trial, values: list[float] | None, pruned: bool) -> None:
+    def _finished(
+        self, design_id: str, trial: Trial, values: list[float] | None, pruned: bool
+    ) -> None:
         """A trial told to optuna: no longer in flight, counted, shown."""
         self._forget(design_id, trial)
         self.ran += 1
@@ -434,7 +518,9 @@ class _Runner:
         sign = 1.0 if objective.direction is Direction.MINIMIZE else -1.0
         if self.best is None or sign * values[0] < sign * self.best[1]:
             self.best = (number, values[0])
-            self.progress.message(f"trial {number}: best so far, {objective.metric} = {values[0]:.6g}")
+            self.progress.message(
+                f"trial {number}: best so far, {objective.metric} = {values[0]:.6g}"
+            )
 
     def _forget(self, design_id: str, trial: Trial) -> None:
         """The trial is no longer this process's to run: out of the trials in flight and the heartbeat."""
@@ -442,13 +528,15 @@ class _Runner:
         self.seconds.pop(design_id, None)
         self.heartbeat.discard(trial)
 
-    def _stops_here(self, trial: Trial, stage: int, values: list[float], record: dict[str, Any],
-                    seconds: float) -> bool:
+    def _stops_here(
+        self, trial: Trial, stage: int, values: list[float], record: dict[str, Any], seconds: float
+    ) -> bool:
         """Whether the trial stops at screening level ``stage`` (the pruner's word, or a broken constraint); its
         values there are recorded with the trial first (``LEVELS``), where other processes' pruners read them."""
         level = self.spec.levels[stage]
         feasible = all(v <= 0.0 for v in record.get(CONSTRAINT, []))
-        done = dict(trial.user_attrs.get(LEVELS, {}))  # this process's own trial: its attrs are current
+        # this process's own trial: its attrs are current
+        done = dict(trial.user_attrs.get(LEVELS, {}))
         done[level] = {METRICS: record[METRICS], "feasible": feasible, SECONDS: seconds}
         trial.set_user_attr(LEVELS, done)
         pruner = self.spec.pruner
@@ -461,21 +549,33 @@ class _Runner:
         if pruner.kind in (PrunerKind.MEDIAN, PrunerKind.HALVING):
             return bool(trial.should_prune())
         if pruner.kind is PrunerKind.DOMINATED:
-            others = [other for other in self.study.get_trials(deepcopy=False) if other.number != trial.number]
-            return dominated_at_level(values, self.spec.objectives, level, others, pruner.startup_trials)
+            others = [
+                other
+                for other in self.study.get_trials(deepcopy=False)
+                if other.number != trial.number
+            ]
+            return dominated_at_level(
+                values, self.spec.objectives, level, others, pruner.startup_trials
+            )
         return False
 
-    def _evaluate(self, folder: Path, name: str, record: dict[str, Any], report_dir: str = PERFORMANCE_DIR
-                  ) -> list[float]:
+    def _evaluate(
+        self, folder: Path, name: str, record: dict[str, Any], report_dir: str = PERFORMANCE_DIR
+    ) -> list[float]:
         """The objective values; the metrics and the constraint violations go into the trial's ``record``."""
         report = json.loads((folder / f"{name}.json").read_text())
         performance = None
         if self.spec.simulate is not None:
             performance = json.loads((folder / report_dir / f"{name}_performance.json").read_text())
-        metrics = {metric: metric_value(metric, report, performance) for metric in dict.fromkeys(self.spec.metrics)}
+        metrics = {
+            metric: metric_value(metric, report, performance)
+            for metric in dict.fromkeys(self.spec.metrics)
+        }
         record[METRICS] = metrics
         if self.spec.constraints:
-            record[CONSTRAINT] = [v for c in self.spec.constraints for v in c.violations(metrics[c.metric])]
+            record[CONSTRAINT] = [
+                v for c in self.spec.constraints for v in c.violations(metrics[c.metric])
+            ]
         return [metrics[objective.metric] for objective in self.spec.objectives]
 
     def _retry_in_flight(self) -> None:
@@ -484,13 +584,19 @@ class _Runner:
         from optuna.trial import TrialState
 
         mine = {trial.number for trial in self.in_flight.values()}
-        with contextlib.suppress(Exception):  # the storage is gone: the next run finds them by their owner
-            mine |= {trial.number for trial in self.study.get_trials(deepcopy=False, states=(TrialState.RUNNING,))
-                     if trial.user_attrs.get(OWNER) == self.owner}
+        # the storage is gone: the next run finds them by their owner
+        with contextlib.suppress(Exception):
+            mine |= {
+                trial.number
+                for trial in self.study.get_trials(deepcopy=False, states=(TrialState.RUNNING,))
+                if trial.user_attrs.get(OWNER) == self.owner
+            }
             fail_and_retry(self.study, self.rdb, mine)
-        # the pool is stopped: the staging folders its workers had open are debris now (their trials are
-        # asked again under new numbers, in new folders)
-        _remove_staging_debris(self.out / TRIALS_DIR / str(trial.number) for trial in self.in_flight.values())
+        # the pool is stopped: the staging folders its workers had open are debris now (their trials
+        # are asked again under new numbers, in new folders)
+        _remove_staging_debris(
+            self.out / TRIALS_DIR / str(trial.number) for trial in self.in_flight.values()
+        )
         self.in_flight.clear()
         self.climbs.clear()
         self.seconds.clear()
@@ -502,8 +608,11 @@ class _Runner:
         from torus_cad.outputs.output_set import describe_os_error
 
         try:
-            result.files, result.summary_lines = write_results(self.spec, self.study, self.out, checkpoint=checkpoint)
-        except OSError as error:  # a full disk: name the file as the user knows it, not its temp name
+            result.files, result.summary_lines = write_results(
+                self.spec, self.study, self.out, checkpoint=checkpoint
+            )
+        # a full disk: name the file as the user knows it, not its temp name
+        except OSError as error:
             named = Path(error.filename) if isinstance(error.filename, str) else self.out
             raise OutputError(describe_os_error(error, _final_name(named))) from None
 
@@ -511,7 +620,8 @@ class _Runner:
         """Close the storage's connections: SQLite's last connection folds its write-ahead log into the
         database and removes ``-wal`` and ``-shm``. The study is read from the storage once more to write
         the results, which opens a connection again; this is called after that too."""
-        with contextlib.suppress(Exception):  # a storage that already failed: its error is the one reported
+        # a storage that already failed: its error is the one reported
+        with contextlib.suppress(Exception):
             self.rdb.remove_session()
         with contextlib.suppress(Exception):
             self.rdb.engine.dispose()
@@ -540,7 +650,8 @@ class _Tasks:
             if self.full:
                 raise StopIteration
             with claim_lock(runner.rdb, runner.url, runner.spec.name):
-                if time.monotonic() - self.checked >= HEARTBEAT_S:  # at the start, then once per heartbeat
+                # at the start, then once per heartbeat
+                if time.monotonic() - self.checked >= HEARTBEAT_S:
                     self.result.retried += retry_stale_trials(runner.study, runner.rdb)
                     self.checked = time.monotonic()
                 trial = runner.claim_trial()
@@ -550,7 +661,8 @@ class _Tasks:
             if runner.answered_by_twin(trial):
                 continue
             task = runner.trial_task(trial)
-            refusal = prescreen(task)  # refused by the kernel-free checks: told at once, no worker needed
+            # refused by the kernel-free checks: told at once, no worker needed
+            refusal = prescreen(task)
             if refusal is None:
                 return task
             runner.on_result(task, refusal)
@@ -568,8 +680,13 @@ def _step(kind: PrunerKind, reduction_factor: int, stage: int) -> int:
     return reduction_factor**stage if kind is PrunerKind.HALVING else stage
 
 
-def dominated_at_level(values: Sequence[float], objectives: Sequence[Objective], level: str,
-                       others: Iterable[FrozenTrial], startup_trials: int) -> bool:
+def dominated_at_level(
+    values: Sequence[float],
+    objectives: Sequence[Objective],
+    level: str,
+    others: Iterable[FrozenTrial],
+    startup_trials: int,
+) -> bool:
     """The pruner of several objectives: whether ``values`` (a trial's at ``level``) are dominated by the values
     at ``level`` of a feasible one of ``others`` (no worse in every objective, better in one), once at least
     ``startup_trials`` of them have values there. optuna's pruners take one value; this is the Pareto
@@ -579,15 +696,23 @@ def dominated_at_level(values: Sequence[float], objectives: Sequence[Objective],
     seen = []
     for other in others:
         entry = other.user_attrs.get(LEVELS, {}).get(level)
-        if isinstance(entry, dict) and entry.get("feasible") and isinstance(entry.get(METRICS), dict):
+        if (
+            isinstance(entry, dict)
+            and entry.get("feasible")
+            and isinstance(entry.get(METRICS), dict)
+        ):
             try:
-                seen.append([sign * float(entry[METRICS][o.metric]) for sign, o in zip(signs, objectives)])
+                seen.append(
+                    [sign * float(entry[METRICS][o.metric]) for sign, o in zip(signs, objectives)]
+                )
             except (KeyError, TypeError, ValueError):
                 continue
     if len(seen) < startup_trials:
         return False
-    return any(all(a <= b for a, b in zip(point, mine)) and any(a < b for a, b in zip(point, mine))
-               for point in seen)
+    return any(
+        all(a <= b for a, b in zip(point, mine)) and any(a < b for a, b in zip(point, mine))
+        for point in seen
+    )
 
 
 def _pruner(spec: StudySpec) -> BasePruner | None:
@@ -601,8 +726,11 @@ def _pruner(spec: StudySpec) -> BasePruner | None:
     if pruner.kind is PrunerKind.MEDIAN:
         return optuna.pruners.MedianPruner(n_startup_trials=pruner.startup_trials, n_warmup_steps=0)
     if pruner.kind is PrunerKind.HALVING:
-        return optuna.pruners.SuccessiveHalvingPruner(min_resource=1, reduction_factor=pruner.reduction_factor,
-                                                      bootstrap_count=pruner.startup_trials)
+        return optuna.pruners.SuccessiveHalvingPruner(
+            min_resource=1,
+            reduction_factor=pruner.reduction_factor,
+            bootstrap_count=pruner.startup_trials,
+        )
     return optuna.pruners.NopPruner()
 
 
@@ -630,7 +758,9 @@ def _distributions(spec: StudySpec) -> dict[str, BaseDistribution]:
         elif axis.integer:
             distributions[axis.key] = IntDistribution(int(axis.low or 0), int(axis.high or 0))
         else:
-            distributions[axis.key] = FloatDistribution(float(axis.low or 0.0), float(axis.high or 0.0))
+            distributions[axis.key] = FloatDistribution(
+                float(axis.low or 0.0), float(axis.high or 0.0)
+            )
     return distributions
 
 
@@ -646,12 +776,15 @@ def _sampler(spec: StudySpec, seed: int) -> BaseSampler:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # ExperimentalWarning: constraints_func, constant_liar
         if spec.sampler is Sampler.TPE:
-            return optuna.samplers.TPESampler(seed=seed, constraints_func=constraints, constant_liar=True)
+            return optuna.samplers.TPESampler(
+                seed=seed, constraints_func=constraints, constant_liar=True
+            )
         if spec.sampler is Sampler.CMAES:
             return optuna.samplers.CmaEsSampler(seed=seed, warn_independent_sampling=False)
         if spec.sampler is Sampler.NSGA2:
-            return optuna.samplers.NSGAIISampler(seed=seed, constraints_func=constraints,
-                                                 population_size=spec.population)
+            return optuna.samplers.NSGAIISampler(
+                seed=seed, constraints_func=constraints, population_size=spec.population
+            )
         return optuna.samplers.RandomSampler(seed=seed)
 
 
@@ -663,17 +796,25 @@ def _load_study(spec: StudySpec, rdb: RDBStorage) -> optuna.Study:
         warnings.simplefilter("ignore")
         try:
             directions: Any = spec.directions
-            study = optuna.create_study(storage=rdb, study_name=spec.name, directions=directions,
-                                        load_if_exists=True, sampler=_sampler(spec, spec.seed), pruner=_pruner(spec))
+            study = optuna.create_study(
+                storage=rdb,
+                study_name=spec.name,
+                directions=directions,
+                load_if_exists=True,
+                sampler=_sampler(spec, spec.seed),
+                pruner=_pruner(spec),
+            )
         except ValueError as error:  # e.g. directions differ from the stored study's
-            raise ParameterError(f"study {spec.name!r} in the storage does not match the study file: {error}") from None
+            raise ParameterError(
+                f"study {spec.name!r} in the storage does not match the study file: {error}"
+            ) from None
     definition = spec.definition()
     stored = study.user_attrs.get(DEFINITION_ATTR)
     if stored is None:
         study.set_user_attr(DEFINITION_ATTR, definition)
     elif stored != definition:
-        raise ParameterError(f"study {spec.name!r} in the storage was made from another base, [vary], objectives, "
-                             "constraints or [simulate]; give the study a new name (study.name) or another --out")
+        raise ParameterError(
+            f"study {spec.name!r} in the storage was made from another base, [vary], objectives, "
+            "constraints or [simulate]; give the study a new name (study.name) or another --out"
+        )
     return study
-
-

@@ -58,7 +58,12 @@ from torus_cad.batch.sweep_file import (
     resolve_leaf,
 )
 from torus_cad.errors import ParameterError, shown
-from torus_cad.optimize.metrics import PERFORMANCE_PREFIX, check_metric, is_performance, noise_observers
+from torus_cad.optimize.metrics import (
+    PERFORMANCE_PREFIX,
+    check_metric,
+    is_performance,
+    noise_observers,
+)
 from torus_cad.optimize.trial_simulation import VORTEX_LEVEL
 from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.config_file import read_config_table
@@ -77,7 +82,16 @@ from torus_cad.tolerances import (
     THRUST_TOLERANCE_RANGE,
 )
 
-__all__ = ["Direction", "Objective", "Pruner", "PrunerKind", "Sampler", "StudySpec", "parse_study", "read_study_file"]
+__all__ = [
+    "Direction",
+    "Objective",
+    "Pruner",
+    "PrunerKind",
+    "Sampler",
+    "StudySpec",
+    "parse_study",
+    "read_study_file",
+]
 
 _NAME_PATTERN = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.-]{0,99}$")
 
@@ -99,9 +113,12 @@ class Direction(StrEnum):
 class PrunerKind(StrEnum):
     """Which trials of a study of several mesh levels climb from one level to the next."""
 
-    MEDIAN = "median"  #: optuna's MedianPruner: worse than the median of the complete trials at that level stops
-    HALVING = "halving"  #: optuna's SuccessiveHalvingPruner: the best 1/reduction_factor at each level climb
-    DOMINATED = "dominated"  #: several objectives: stops when another trial's values at that level dominate its own
+    # : optuna's MedianPruner: worse than the median of the complete trials at that level stops
+    MEDIAN = "median"
+    # : optuna's SuccessiveHalvingPruner: the best 1/reduction_factor at each level climb
+    HALVING = "halving"
+    # : several objectives: stops when another trial's values at that level dominate its own
+    DOMINATED = "dominated"
     NONE = "none"  #: every trial climbs (the screening levels' values are only recorded)
 
 
@@ -114,17 +131,33 @@ _THRUST_KEYS = ("thrust_tolerance", "thrust_runs")
 class StudyTable(Section):
     """[study]: the study's name, size, sampler and storage."""
 
-    name: str = param("", doc="the study's name (files OUT/<name>.db, OUT/best/<name>_best.toml); default: the file's stem")
-    base: str = param("", doc="the design file every trial starts from, relative to the study file ('' = defaults)")
-    trials: int = param(20, ge=1, le=MAX_STUDY_TRIALS, doc="trials in the study in all (--trials overrides it)")
+    name: str = param(
+        "",
+        doc="the study's name (files OUT/<name>.db, OUT/best/<name>_best.toml); default: the file's stem",
+    )
+    base: str = param(
+        "",
+        doc="the design file every trial starts from, relative to the study file ('' = defaults)",
+    )
+    trials: int = param(
+        20, ge=1, le=MAX_STUDY_TRIALS, doc="trials in the study in all (--trials overrides it)"
+    )
     sampler: Sampler = param(Sampler.TPE, strict=False, doc="tpe | cmaes | nsga2 | random")
     seed: int = param(0, ge=0, le=2**31 - 1, doc="the sampler's random seed")
     storage: str = param("", doc="'' = SQLite file OUT/<name>.db; or a postgresql:// URL")
     population: int = param(20, ge=2, le=10000, doc="nsga2: designs per generation")
-    stl: bool = param(True, doc="each trial writes its STL, so it is judged on every file its best set holds "
-                                "(false: trials and best sets without STL)")
-    time_limit_s: float = param(0.0, unit="s", ge=0.0, le=DESIGN_TIME_LIMIT_MAX_S,
-                                doc="per trial on the local pool (0 = 300 s, or 3600 s with simulate)")
+    stl: bool = param(
+        True,
+        doc="each trial writes its STL, so it is judged on every file its best set holds "
+        "(false: trials and best sets without STL)",
+    )
+    time_limit_s: float = param(
+        0.0,
+        unit="s",
+        ge=0.0,
+        le=DESIGN_TIME_LIMIT_MAX_S,
+        doc="per trial on the local pool (0 = 300 s, or 3600 s with simulate)",
+    )
 
 
 class ObjectiveTable(Section):
@@ -155,32 +188,67 @@ class SimulateTable(Section):
     """[simulate]: how ``torus-cad simulate`` runs each trial."""
 
     rpm: float = param(0.0, ge=0.0, le=SIMULATE_RPM_LIMIT, doc="rotational speed, rpm (or thrust)")
-    thrust: float = param(0.0, unit="N", ge=0.0, le=SIMULATE_THRUST_LIMIT_N,
-                          doc="target thrust: each trial solved to it as simulate --thrust does (or rpm)")
-    thrust_tolerance: float = param(DEFAULT_TOLERANCE, ge=THRUST_TOLERANCE_RANGE[0], le=THRUST_TOLERANCE_RANGE[1],
-                                    doc="the target thrust's tolerance, a fraction (simulate --thrust-tolerance)")
-    thrust_runs: int = param(DEFAULT_MAX_RUNS, ge=THRUST_RUNS_RANGE[0], le=THRUST_RUNS_RANGE[1],
-                             doc="solver runs of a trial's rpm search at most (simulate --thrust-runs)")
-    airspeed: float = param(0.0, unit="m/s", ge=0.0, le=SIMULATE_AIRSPEED_LIMIT_M_S,
-                            doc="axial inflow speed (simulate --airspeed's range)")
-    level: StudyLevel = param(StudyLevel.COARSE, strict=False,
-                              doc="vortex (the vortex solver) or the mesh level of the simulation")
+    thrust: float = param(
+        0.0,
+        unit="N",
+        ge=0.0,
+        le=SIMULATE_THRUST_LIMIT_N,
+        doc="target thrust: each trial solved to it as simulate --thrust does (or rpm)",
+    )
+    thrust_tolerance: float = param(
+        DEFAULT_TOLERANCE,
+        ge=THRUST_TOLERANCE_RANGE[0],
+        le=THRUST_TOLERANCE_RANGE[1],
+        doc="the target thrust's tolerance, a fraction (simulate --thrust-tolerance)",
+    )
+    thrust_runs: int = param(
+        DEFAULT_MAX_RUNS,
+        ge=THRUST_RUNS_RANGE[0],
+        le=THRUST_RUNS_RANGE[1],
+        doc="solver runs of a trial's rpm search at most (simulate --thrust-runs)",
+    )
+    airspeed: float = param(
+        0.0,
+        unit="m/s",
+        ge=0.0,
+        le=SIMULATE_AIRSPEED_LIMIT_M_S,
+        doc="axial inflow speed (simulate --airspeed's range)",
+    )
+    level: StudyLevel = param(
+        StudyLevel.COARSE,
+        strict=False,
+        doc="vortex (the vortex solver) or the mesh level of the simulation",
+    )
     levels: list[Annotated[StudyLevel, Field(strict=False)]] = Field(
-        default_factory=list, json_schema_extra={"unit": ""},
+        default_factory=list,
+        json_schema_extra={"unit": ""},
         description="levels, cheapest first (vortex, coarse, medium, fine): every trial runs the first, those the "
-                    "pruner keeps climb to the next (instead of level)")
-    iterations: int = param(0, ge=0, le=SIMULATE_MAX_ITERATIONS, doc="SIMPLE iterations (0: the level's own)")
+        "pruner keeps climb to the next (instead of level)",
+    )
+    iterations: int = param(
+        0, ge=0, le=SIMULATE_MAX_ITERATIONS, doc="SIMPLE iterations (0: the level's own)"
+    )
     processes: int = param(0, ge=0, le=2, doc="MPI processes of each simulation (0: one per CPU)")
 
 
 class PrunerTable(Section):
     """[pruner]: which trials climb from one mesh level to the next."""
 
-    kind: PrunerKind | None = param(None, strict=False, doc="median | halving (one objective) | dominated | none; "
-                                    "default median for one objective, dominated for several")
-    startup_trials: int = param(4, ge=0, le=MAX_STUDY_TRIALS, doc="trials that reach a level before any is "
-                                "stopped there (median: complete trials)")
-    reduction_factor: int = param(3, ge=2, le=100, doc="halving: 1 in this many trials climbs at each level")
+    kind: PrunerKind | None = param(
+        None,
+        strict=False,
+        doc="median | halving (one objective) | dominated | none; "
+        "default median for one objective, dominated for several",
+    )
+    startup_trials: int = param(
+        4,
+        ge=0,
+        le=MAX_STUDY_TRIALS,
+        doc="trials that reach a level before any is stopped there (median: complete trials)",
+    )
+    reduction_factor: int = param(
+        3, ge=2, le=100, doc="halving: 1 in this many trials climbs at each level"
+    )
 
 
 class StudyFile(Section):
@@ -220,8 +288,9 @@ class Constraint:
 
     def violations(self, value: float) -> list[float]:
         """optuna's convention: a number per bound, feasible when <= 0."""
-        return ([self.low - value] if self.low is not None else []) + ([value - self.high] if self.high is not None
-                                                                      else [])
+        return ([self.low - value] if self.low is not None else []) + (
+            [value - self.high] if self.high is not None else []
+        )
 
 
 @dataclass(frozen=True)
@@ -280,16 +349,22 @@ class StudySpec:
 
     def parameters(self, values: Mapping[str, Any], name: str) -> dict[str, Any]:
         """The full design (TOML layout) of the trial with ``values`` by vary key, named ``name``."""
-        parameters = apply_axis_values(self.base.to_dict(), self.axes, tuple(values[axis.key] for axis in self.axes))
+        parameters = apply_axis_values(
+            self.base.to_dict(), self.axes, tuple(values[axis.key] for axis in self.axes)
+        )
         parameters["name"] = name
         return parameters
 
     def definition(self) -> str:
         """What must not change between runs of one study: a digest of base, axes, objectives, constraints and
         [simulate] (the [pruner] may change: it only decides which trials climb)."""
-        data = {"base": self.base.to_dict(), "axes": [[a.key, a.low, a.high, list(a.values)] for a in self.axes],
-                "objectives": [[o.metric, o.direction.value] for o in self.objectives],
-                "constraints": [[c.metric, c.low, c.high] for c in self.constraints], "simulate": self.simulate}
+        data = {
+            "base": self.base.to_dict(),
+            "axes": [[a.key, a.low, a.high, list(a.values)] for a in self.axes],
+            "objectives": [[o.metric, o.direction.value] for o in self.objectives],
+            "constraints": [[c.metric, c.low, c.high] for c in self.constraints],
+            "simulate": self.simulate,
+        }
         text = json.dumps(data, sort_keys=True, default=str, allow_nan=False)
         return hashlib.sha256(text.encode()).hexdigest()[:16]
 
@@ -298,12 +373,14 @@ def read_study_file(path: str | Path) -> StudySpec:
     """Read and check a study file; any problem is a one-line ParameterError naming the key."""
     path = Path(path)
     source = f"study file {str(path)!r}"
-    data = read_config_table(path, "study file")  # the readers of every file: shape, size, nesting, digits
+    # the readers of every file: shape, size, nesting, digits
+    data = read_config_table(path, "study file")
     return parse_study(data, base_dir=path.parent, name=path.stem, source=source)
 
 
-def parse_study(data: Mapping[str, Any], base_dir: str | Path = ".", name: str = "study",
-                source: str = "study") -> StudySpec:
+def parse_study(
+    data: Mapping[str, Any], base_dir: str | Path = ".", name: str = "study", source: str = "study"
+) -> StudySpec:
     """Check a study given as the parsed TOML; ``study.base`` and file values are relative to ``base_dir``."""
 
     def fail(message: str) -> ParameterError:
@@ -317,7 +394,9 @@ def parse_study(data: Mapping[str, Any], base_dir: str | Path = ".", name: str =
         data["constraints"] = dict(_flatten_bounds(data["constraints"]))
         for key, bound in data["constraints"].items():
             if isinstance(bound, Mapping) and not set(bound) <= {"min", "max"}:
-                raise fail(f"constraints.{shown(key)} has keys {sorted(bound)}; give min, max or both, e.g. {{ min = 0.8 }}")
+                raise fail(
+                    f"constraints.{shown(key)} has keys {sorted(bound)}; give min, max or both, e.g. {{ min = 0.8 }}"
+                )
     try:
         model = StudyFile.model_validate(data)
     except ValidationError as error:
@@ -326,33 +405,58 @@ def parse_study(data: Mapping[str, Any], base_dir: str | Path = ".", name: str =
     table = model.study
     study_name = table.name or name
     if not _NAME_PATTERN.match(study_name):
-        raise fail(f"study.name = {study_name!r} must be 1-100 letters, digits, '_', '.' or '-' (it names files)")
+        raise fail(
+            f"study.name = {study_name!r} must be 1-100 letters, digits, '_', '.' or '-' (it names files)"
+        )
     axes = tuple(_axis(key, values, folder, fail) for key, values in model.vary.items())
     if not axes:
-        raise fail("[vary] is empty; name at least one design key to vary, e.g. \"airfoil.thickness\" = [0.2, 0.6]")
+        raise fail(
+            '[vary] is empty; name at least one design key to vary, e.g. "airfoil.thickness" = [0.2, 0.6]'
+        )
     check_distinct_axes(axes, fail)
     objectives, constraints = _goals(model, fail)
     metrics = tuple(o.metric for o in objectives) + tuple(c.metric for c in constraints)
     base = _base(table.base, folder, fail)
-    simulate = _simulate(model, any(is_performance(metric) for metric in metrics), metrics, base, fail)
+    simulate = _simulate(
+        model, any(is_performance(metric) for metric in metrics), metrics, base, fail
+    )
     levels = _levels(model, simulate, fail)
     pruner = _pruner(model, levels, len(objectives), fail)
     if simulate is not None and simulate.get("thrust"):
         if table.sampler is Sampler.CMAES:
-            raise fail("study.sampler = 'cmaes' cannot take [simulate] thrust (each trial's thrust is constrained to "
-                       "the target within thrust_tolerance, and optuna's CMA-ES has no constraints_func); use 'tpe'")
+            raise fail(
+                "study.sampler = 'cmaes' cannot take [simulate] thrust (each trial's thrust is constrained to "
+                "the target within thrust_tolerance, and optuna's CMA-ES has no constraints_func); use 'tpe'"
+            )
         target, tolerance = simulate["thrust"], simulate["thrust_tolerance"]
-        constraints += (Constraint(THRUST_METRIC, target * (1.0 - tolerance), target * (1.0 + tolerance)),)
+        constraints += (
+            Constraint(THRUST_METRIC, target * (1.0 - tolerance), target * (1.0 + tolerance)),
+        )
         metrics += (THRUST_METRIC, RPM_METRIC)
     _check_sampler(table.sampler, objectives, constraints, fail)
-    return StudySpec(name=study_name, base=base, axes=axes, objectives=objectives,
-                     constraints=constraints, trials=table.trials, sampler=table.sampler, seed=table.seed,
-                     population=table.population, storage=table.storage, simulate=simulate, stl=table.stl,
-                     time_limit_s=table.time_limit_s or (3600.0 if simulate else 300.0), source=source,
-                     metrics=metrics, levels=levels, pruner=pruner)
+    return StudySpec(
+        name=study_name,
+        base=base,
+        axes=axes,
+        objectives=objectives,
+        constraints=constraints,
+        trials=table.trials,
+        sampler=table.sampler,
+        seed=table.seed,
+        population=table.population,
+        storage=table.storage,
+        simulate=simulate,
+        stl=table.stl,
+        time_limit_s=table.time_limit_s or (3600.0 if simulate else 300.0),
+        source=source,
+        metrics=metrics,
+        levels=levels,
+        pruner=pruner,
+    )
 
 
-#: With a target thrust: the metrics every trial records (the thrust at the rpm found, and that rpm).
+#: With a target thrust: the metrics every trial records (the thrust at the rpm found, and that
+#: rpm).
 THRUST_METRIC = PERFORMANCE_PREFIX + "thrust_n"
 RPM_METRIC = PERFORMANCE_PREFIX + "rpm"
 
@@ -361,7 +465,11 @@ def _flatten_bounds(table: Mapping[str, Any], prefix: str = "") -> list[tuple[st
     """``a.b = {min = 1}`` unquoted (nested tables) means ``"a.b" = {min = 1}``."""
     items: list[tuple[str, Any]] = []
     for key, value in table.items():
-        if isinstance(value, Mapping) and value and all(isinstance(item, Mapping) for item in value.values()):
+        if (
+            isinstance(value, Mapping)
+            and value
+            and all(isinstance(item, Mapping) for item in value.values())
+        ):
             items += _flatten_bounds(value, f"{prefix}{key}.")
         else:
             items.append((f"{prefix}{key}", value))
@@ -387,14 +495,23 @@ def _axis(key: str, values: list[Any], folder: Path, fail: Any) -> VaryAxis:
     numbers = [v for v in values if isinstance(v, (int, float)) and not isinstance(v, bool)]
     if numbers and len(numbers) == len(values):
         if len(values) != 2:
-            raise fail(f"{where} must be [low, high], two numbers (a range), got {len(values)} numbers")
-        low, high = (checked_value(value, leaf, f"{where} {end}", fail) for value, end in zip(values, ("low", "high")))
+            raise fail(
+                f"{where} must be [low, high], two numbers (a range), got {len(values)} numbers"
+            )
+        low, high = (
+            checked_value(value, leaf, f"{where} {end}", fail)
+            for value, end in zip(values, ("low", "high"))
+        )
         if isinstance(low, list) or not low < high:
             raise fail(f"{where}: low = {low!r} must be below high = {high!r}")
         return VaryAxis(key, path, index, low=low, high=high, integer=leaf.kind is int)
     if numbers or not values:
-        raise fail(f"{where} must be two numbers (a range) or a list of strings or booleans (a choice), got {shown(values)}")
-    checked = tuple(checked_value(value, leaf, f"{where} item {i}", fail) for i, value in enumerate(values))
+        raise fail(
+            f"{where} must be two numbers (a range) or a list of strings or booleans (a choice), got {shown(values)}"
+        )
+    checked = tuple(
+        checked_value(value, leaf, f"{where} item {i}", fail) for i, value in enumerate(values)
+    )
     if len(set(map(repr, checked))) != len(checked):
         raise fail(f"{where} lists a choice twice")
     return axis_paths_relative_to(VaryAxis(key, path, index, values=checked), folder)
@@ -402,7 +519,9 @@ def _axis(key: str, values: list[Any], folder: Path, fail: Any) -> VaryAxis:
 
 def _goals(model: StudyFile, fail: Any) -> tuple[tuple[Objective, ...], tuple[Constraint, ...]]:
     if not model.objective:
-        raise fail("no [[objective]]; add one, e.g. [[objective]] metric = \"mass_g\" direction = \"minimize\"")
+        raise fail(
+            'no [[objective]]; add one, e.g. [[objective]] metric = "mass_g" direction = "minimize"'
+        )
     objectives = []
     for number, item in enumerate(model.objective):
         try:
@@ -421,36 +540,57 @@ def _goals(model: StudyFile, fail: Any) -> tuple[tuple[Objective, ...], tuple[Co
         if bound.min is None and bound.max is None:
             raise fail(f"constraints.{metric!r} needs min, max or both, e.g. {{ min = 0.8 }}")
         if bound.min is not None and bound.max is not None and not bound.min <= bound.max:
-            raise fail(f"constraints.{metric!r}: min = {bound.min:g} must not be above max = {bound.max:g}")
+            raise fail(
+                f"constraints.{metric!r}: min = {bound.min:g} must not be above max = {bound.max:g}"
+            )
         constraints.append(Constraint(metric, bound.min, bound.max))
     return tuple(objectives), tuple(constraints)
 
 
-def _simulate(model: StudyFile, needed: bool, metrics: tuple[str, ...], base: PropellerParameters,
-              fail: Any) -> dict[str, Any] | None:
+def _simulate(
+    model: StudyFile, needed: bool, metrics: tuple[str, ...], base: PropellerParameters, fail: Any
+) -> dict[str, Any] | None:
     given = "simulate" in model.model_fields_set
     if not needed:
         if given:
-            raise fail("[simulate] applies only when an objective or constraint is a performance.* metric")
+            raise fail(
+                "[simulate] applies only when an objective or constraint is a performance.* metric"
+            )
         return None
     table = model.simulate
     keys = table.model_fields_set
     if not given or (table.rpm <= 0.0 and table.thrust <= 0.0):
-        raise fail("a performance.* metric runs torus-cad simulate: give [simulate] rpm = ... (> 0) or "
-                   "thrust = ... (N, > 0)")
+        raise fail(
+            "a performance.* metric runs torus-cad simulate: give [simulate] rpm = ... (> 0) or "
+            "thrust = ... (N, > 0)"
+        )
     if table.rpm > 0.0 and table.thrust > 0.0:
-        raise fail(f"simulate.rpm = {table.rpm:g} and simulate.thrust = {table.thrust:g} N: give one (thrust finds "
-                   "each trial's rpm)")
+        raise fail(
+            f"simulate.rpm = {table.rpm:g} and simulate.thrust = {table.thrust:g} N: give one (thrust finds "
+            "each trial's rpm)"
+        )
     if table.thrust <= 0.0 and keys & set(_THRUST_KEYS):
-        raise fail(f"simulate.{sorted(keys & set(_THRUST_KEYS))[0]} applies only with simulate.thrust (a target thrust)")
+        raise fail(
+            f"simulate.{sorted(keys & set(_THRUST_KEYS))[0]} applies only with simulate.thrust (a target thrust)"
+        )
     if "level" in keys and "levels" in keys:
-        raise fail("simulate.level and simulate.levels: give one (levels = [\"coarse\", \"medium\"] climbs)")
-    settings: dict[str, Any] = {"rpm": table.rpm, "airspeed": table.airspeed, "level": table.level.value}
+        raise fail(
+            'simulate.level and simulate.levels: give one (levels = ["coarse", "medium"] climbs)'
+        )
+    settings: dict[str, Any] = {
+        "rpm": table.rpm,
+        "airspeed": table.airspeed,
+        "level": table.level.value,
+    }
     if table.rpm > 0.0:
         _check_rpm(table.rpm, table.airspeed, base, fail)
     if table.thrust > 0.0:
         _check_thrust(table.thrust, table.airspeed, base, fail)
-        settings.update(thrust=table.thrust, thrust_tolerance=table.thrust_tolerance, thrust_runs=table.thrust_runs)
+        settings.update(
+            thrust=table.thrust,
+            thrust_tolerance=table.thrust_tolerance,
+            thrust_runs=table.thrust_runs,
+        )
     if table.iterations:
         settings["iterations"] = table.iterations
     if table.processes:
@@ -473,8 +613,10 @@ def _check_rpm(rpm: float, airspeed_m_s: float, base: PropellerParameters, fail:
     diameter_mm = base.diameter if base.diameter > 0.0 else _tip_diameter_mm(base)
     limit = rpm_limit(diameter_mm / 1000.0, airspeed_m_s, AIR_15C)
     if rpm > limit:
-        raise fail(f"simulate.rpm = {rpm:g} is out of range; allowed (0, {limit:.0f}] rpm (simulate's helical tip "
-                   f"Mach limit for the base's D = {diameter_mm:.1f} mm at {airspeed_m_s:g} m/s)")
+        raise fail(
+            f"simulate.rpm = {rpm:g} is out of range; allowed (0, {limit:.0f}] rpm (simulate's helical tip "
+            f"Mach limit for the base's D = {diameter_mm:.1f} mm at {airspeed_m_s:g} m/s)"
+        )
 
 
 def _tip_diameter_mm(base: PropellerParameters) -> float:
@@ -485,7 +627,9 @@ def _tip_diameter_mm(base: PropellerParameters) -> float:
     return 2.0 * float(np.hypot(points[..., 0], points[..., 1]).max())
 
 
-def _check_thrust(target_n: float, airspeed_m_s: float, base: PropellerParameters, fail: Any) -> None:
+def _check_thrust(
+    target_n: float, airspeed_m_s: float, base: PropellerParameters, fail: Any
+) -> None:
     """A target no propeller of the base's diameter reaches (CT 1 at the rpm limit) is refused here, once,
     not in every trial (a base without a ``diameter`` target: each trial's simulate checks its own)."""
     from torus_cad.simulate.settings import AIR_15C, rpm_limit
@@ -497,8 +641,10 @@ def _check_thrust(target_n: float, airspeed_m_s: float, base: PropellerParameter
     limit = rpm_limit(diameter_m, airspeed_m_s, AIR_15C)
     ceiling = thrust_ceiling(limit, diameter_m, AIR_15C.density_kg_m3)
     if target_n > ceiling:
-        raise fail(f"simulate.thrust = {target_n:g} N is out of range; allowed (0, {ceiling:.4g}] N (CT "
-                   f"{PLAUSIBLE_CT_LIMIT:g} at the rpm limit {limit:.0f} rpm for the base's D = {base.diameter:g} mm)")
+        raise fail(
+            f"simulate.thrust = {target_n:g} N is out of range; allowed (0, {ceiling:.4g}] N (CT "
+            f"{PLAUSIBLE_CT_LIMIT:g} at the rpm limit {limit:.0f} rpm for the base's D = {base.diameter:g} mm)"
+        )
 
 
 def _check_observers(observers: tuple[str, ...], base: PropellerParameters, fail: Any) -> None:
@@ -506,12 +652,16 @@ def _check_observers(observers: tuple[str, ...], base: PropellerParameters, fail
     from torus_cad.acoustics.observers import parse_observer
 
     if len(observers) > NOISE_MAX_OBSERVERS:
-        raise fail(f"the metrics name {len(observers)} noise observers; allowed at most {NOISE_MAX_OBSERVERS}")
+        raise fail(
+            f"the metrics name {len(observers)} noise observers; allowed at most {NOISE_MAX_OBSERVERS}"
+        )
     for text in observers:
         observer = parse_observer(text)
         if base.diameter > 0.0 and observer.distance_m * 1000.0 <= base.diameter / 2.0:
-            raise fail(f"performance.noise[{text}]: the observer is inside the rotor; allowed a distance above the "
-                       f"base's tip radius {base.diameter / 2000.0:g} m")
+            raise fail(
+                f"performance.noise[{text}]: the observer is inside the rotor; allowed a distance above the "
+                f"base's tip radius {base.diameter / 2000.0:g} m"
+            )
 
 
 def _levels(model: StudyFile, simulate: dict[str, Any] | None, fail: Any) -> tuple[str, ...]:
@@ -523,8 +673,10 @@ def _levels(model: StudyFile, simulate: dict[str, Any] | None, fail: Any) -> tup
     levels = tuple(simulate["levels"])
     order = [level.value for level in StudyLevel]
     if not levels or list(levels) != sorted(set(levels), key=order.index):
-        raise fail(f"simulate.levels = {list(levels)!r} must name levels from the cheapest to the finest (vortex, "
-                   "coarse, medium, fine), each once, e.g. [\"vortex\", \"medium\"]")
+        raise fail(
+            f"simulate.levels = {list(levels)!r} must name levels from the cheapest to the finest (vortex, "
+            'coarse, medium, fine), each once, e.g. ["vortex", "medium"]'
+        )
     return levels
 
 
@@ -533,23 +685,35 @@ def _pruner(model: StudyFile, levels: tuple[str, ...], objectives: int, fail: An
     table = model.pruner
     if len(levels) < 2:
         if "pruner" in model.model_fields_set:
-            raise fail("[pruner] applies only with [simulate] levels of two or more, e.g. levels = [\"coarse\", "
-                       "\"medium\"]")
+            raise fail(
+                '[pruner] applies only with [simulate] levels of two or more, e.g. levels = ["coarse", '
+                '"medium"]'
+            )
         return None
     kind = table.kind or (PrunerKind.MEDIAN if objectives == 1 else PrunerKind.DOMINATED)
     if kind in ONE_OBJECTIVE_PRUNERS and objectives > 1:
-        raise fail(f"pruner.kind = {kind.value!r} judges one objective (optuna's pruners take one value); with "
-                   f"{objectives} objectives use 'dominated' or 'none'")
+        raise fail(
+            f"pruner.kind = {kind.value!r} judges one objective (optuna's pruners take one value); with "
+            f"{objectives} objectives use 'dominated' or 'none'"
+        )
     return Pruner(kind, table.startup_trials, table.reduction_factor)
 
 
-def _check_sampler(sampler: Sampler, objectives: tuple[Objective, ...], constraints: tuple[Constraint, ...],
-                   fail: Any) -> None:
+def _check_sampler(
+    sampler: Sampler,
+    objectives: tuple[Objective, ...],
+    constraints: tuple[Constraint, ...],
+    fail: Any,
+) -> None:
     if sampler is Sampler.CMAES and len(objectives) > 1:
-        raise fail("study.sampler = 'cmaes' takes one objective; use 'nsga2' (or 'tpe') for several")
+        raise fail(
+            "study.sampler = 'cmaes' takes one objective; use 'nsga2' (or 'tpe') for several"
+        )
     if sampler is Sampler.CMAES and constraints:
-        raise fail("study.sampler = 'cmaes' takes no [constraints] (optuna's CMA-ES has no constraints_func); "
-                   "use 'tpe'")
+        raise fail(
+            "study.sampler = 'cmaes' takes no [constraints] (optuna's CMA-ES has no constraints_func); "
+            "use 'tpe'"
+        )
 
 
 def _base(base: str, folder: Path, fail: Any) -> PropellerParameters:

@@ -24,7 +24,14 @@ from torus_cad.batch.job import DesignTask, record_result, run_design
 from torus_cad.batch.outcome import DesignResult, Outcome
 from torus_cad.errors import ParameterError, TorusCadError
 
-__all__ = ["PERFORMANCE_DIR", "TRIALS_DIR", "TrialTask", "performance_dir", "run_trial", "trial_name"]
+__all__ = [
+    "PERFORMANCE_DIR",
+    "TRIALS_DIR",
+    "TrialTask",
+    "performance_dir",
+    "run_trial",
+    "trial_name",
+]
 
 PERFORMANCE_DIR = "simulate"
 TRIALS_DIR = "trials"  #: the trials' folders under the study's out folder: ``OUT/trials/<number>/``
@@ -73,13 +80,21 @@ def run_trial(task: DesignTask) -> DesignResult:
             report_dir = task.simulate_dir if isinstance(task, TrialTask) else PERFORMANCE_DIR
             run_simulate(config, task.design_id, simulate, folder / report_dir, time_limit_s)
     except ParameterError as error:
-        failed = dataclasses.replace(result, outcome=Outcome.REFUSED, reason=str(error), error="ParameterError")
+        failed = dataclasses.replace(
+            result, outcome=Outcome.REFUSED, reason=str(error), error="ParameterError"
+        )
     except (TorusCadError, OSError) as error:
-        failed = dataclasses.replace(result, outcome=Outcome.FAILED, reason=" ".join(str(error).split()),
-                                     error=type(error).__name__)
+        failed = dataclasses.replace(
+            result,
+            outcome=Outcome.FAILED,
+            reason=" ".join(str(error).split()),
+            error=type(error).__name__,
+        )
     else:
         return dataclasses.replace(result, seconds=result.seconds + time.perf_counter() - start)
-    return record_result(task, dataclasses.replace(failed, seconds=result.seconds + time.perf_counter() - start))
+    return record_result(
+        task, dataclasses.replace(failed, seconds=result.seconds + time.perf_counter() - start)
+    )
 
 
 def _write_design_file(task: DesignTask, folder: Path) -> Path:

@@ -31,7 +31,8 @@ _REPORT_MAX_BYTES = 1 << 20  #: a performance report is a few kB
 _PR_SET_PDEATHSIG = 1
 
 
-#: The study level (``[simulate] level`` or ``levels``) that runs ``simulate --solver vortex`` instead of a mesh level.
+#: The study level (``[simulate] level`` or ``levels``) that runs ``simulate --solver vortex``
+#: instead of a mesh level.
 VORTEX_LEVEL = "vortex"
 
 
@@ -39,23 +40,32 @@ class SimulateError(TorusCadError):
     """``torus-cad simulate`` failed on a design (exit 1, a crash, a time-out, no report)."""
 
 
-def _command(config: Path, settings: Mapping[str, Any], out_dir: Path, time_limit_s: float | None) -> list[str]:
+def _command(
+    config: Path, settings: Mapping[str, Any], out_dir: Path, time_limit_s: float | None
+) -> list[str]:
     command = [sys.executable, "-m", "torus_cad", "simulate", str(config)]
     if settings.get("thrust"):
-        command += ["--thrust", repr(float(settings["thrust"])),
-                    "--thrust-tolerance", repr(float(settings.get("thrust_tolerance", DEFAULT_TOLERANCE))),
-                    "--thrust-runs", str(int(settings.get("thrust_runs", DEFAULT_MAX_RUNS)))]
+        command += [
+            "--thrust",
+            repr(float(settings["thrust"])),
+            "--thrust-tolerance",
+            repr(float(settings.get("thrust_tolerance", DEFAULT_TOLERANCE))),
+            "--thrust-runs",
+            str(int(settings.get("thrust_runs", DEFAULT_MAX_RUNS))),
+        ]
     else:
         command += ["--rpm", repr(float(settings["rpm"]))]
     if settings.get("airspeed"):
         command += ["--airspeed", repr(float(settings["airspeed"]))]
     level = str(settings.get("level", "coarse"))
     for key, option in (("iterations", "--iterations"), ("processes", "--processes")):
-        if settings.get(key) and level != VORTEX_LEVEL:  # OpenFOAM's; the vortex solver takes neither
+        # OpenFOAM's; the vortex solver takes neither
+        if settings.get(key) and level != VORTEX_LEVEL:
             command += [option, str(int(settings[key]))]
     for observer in settings.get("observers", ()):
         command += ["--observer", str(observer)]
-    if time_limit_s:  # the study's limit for the whole run (a thrust search's runs included), not simulate's default
+    # the study's limit for the whole run (a thrust search's runs included), not simulate's default
+    if time_limit_s:
         command += ["--time-limit", repr(float(time_limit_s))]
     fidelity = ["--solver", "vortex"] if level == VORTEX_LEVEL else ["--level", level]
     return command + fidelity + ["--out", str(out_dir), "--quiet"]
@@ -67,8 +77,13 @@ def _die_with_parent() -> None:
         ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0)
 
 
-def run_simulate(config: Path, name: str, settings: Mapping[str, Any], out_dir: Path,
-                 time_limit_s: float | None = None) -> dict[str, Any]:
+def run_simulate(
+    config: Path,
+    name: str,
+    settings: Mapping[str, Any],
+    out_dir: Path,
+    time_limit_s: float | None = None,
+) -> dict[str, Any]:
     """The performance report of the design file ``config`` (named ``name``) at ``settings`` (``rpm`` or a target
     ``thrust`` N with ``thrust_tolerance`` and ``thrust_runs``; ``airspeed`` m/s, ``level``, and ``iterations``,
     ``processes``, ``observers`` when given), simulated into ``out_dir`` within ``time_limit_s``.
@@ -79,8 +94,14 @@ def run_simulate(config: Path, name: str, settings: Mapping[str, Any], out_dir: 
     if str(settings.get("level", "")) == VORTEX_LEVEL:
         return _run_vortex(config, settings, out_dir)
     try:
-        done = subprocess.run(_command(config, settings, out_dir, time_limit_s), capture_output=True, text=True,
-                              timeout=time_limit_s, preexec_fn=_die_with_parent, check=False)
+        done = subprocess.run(
+            _command(config, settings, out_dir, time_limit_s),
+            capture_output=True,
+            text=True,
+            timeout=time_limit_s,
+            preexec_fn=_die_with_parent,
+            check=False,
+        )
     except subprocess.TimeoutExpired:
         raise SimulateError(f"torus-cad simulate ran past {time_limit_s:g} s") from None
     last = (done.stderr.strip().splitlines() or done.stdout.strip().splitlines() or [""])[-1][:300]
@@ -92,7 +113,9 @@ def run_simulate(config: Path, name: str, settings: Mapping[str, Any], out_dir: 
     try:
         report = json.loads(read_config_text(report_path, "performance report", _REPORT_MAX_BYTES))
     except (ParameterError, ValueError) as error:
-        raise SimulateError(f"torus-cad simulate exited 0 but its report is unusable: {error}") from None
+        raise SimulateError(
+            f"torus-cad simulate exited 0 but its report is unusable: {error}"
+        ) from None
     if not isinstance(report, dict):
         raise SimulateError(f"{report_path.name} is not a JSON object")
     return report
@@ -110,11 +133,17 @@ def _run_vortex(config: Path, settings: Mapping[str, Any], out_dir: Path) -> dic
     observers = tuple(parse_observer(str(text)) for text in settings.get("observers", ()))
     point = OperatingPoint(float(settings.get("rpm", 0.0)), float(settings.get("airspeed", 0.0)))
     try:
-        request = VortexRequest(PropellerParameters.from_toml(config), point, observers=observers, pictures=False)
+        request = VortexRequest(
+            PropellerParameters.from_toml(config), point, observers=observers, pictures=False
+        )
         if settings.get("thrust"):
-            run = vortex_thrust_search(request, float(settings["thrust"]), out_dir,
-                                       tolerance=float(settings.get("thrust_tolerance", DEFAULT_TOLERANCE)),
-                                       max_runs=int(settings.get("thrust_runs", DEFAULT_MAX_RUNS)))
+            run = vortex_thrust_search(
+                request,
+                float(settings["thrust"]),
+                out_dir,
+                tolerance=float(settings.get("thrust_tolerance", DEFAULT_TOLERANCE)),
+                max_runs=int(settings.get("thrust_runs", DEFAULT_MAX_RUNS)),
+            )
         else:
             run = simulate_vortex(request, out_dir)
     except ParameterError as error:
@@ -129,8 +158,13 @@ def simulate_unavailable() -> str:
     if not Path("/usr/bin/simpleFoam").is_file():
         return "OpenFOAM's simpleFoam is not installed (/usr/bin/simpleFoam)"
     try:
-        done = subprocess.run([sys.executable, "-m", "torus_cad", "simulate", "--help"], capture_output=True,
-                              text=True, timeout=120, check=False)
+        done = subprocess.run(
+            [sys.executable, "-m", "torus_cad", "simulate", "--help"],
+            capture_output=True,
+            text=True,
+            timeout=120,
+            check=False,
+        )
     except (OSError, subprocess.TimeoutExpired) as error:
         return f"python -m torus_cad simulate --help did not run: {error}"
     if done.returncode != 0:

@@ -50,8 +50,11 @@ class BuiltPropeller(Protocol):
     def spin_to_push_air_down(self) -> Handedness: ...
 
 
-def build_report(propeller: BuiltPropeller, density_g_cm3: float,
-                 meshes: Mapping[str, dict[str, Any]] | None = None) -> dict[str, Any]:
+def build_report(
+    propeller: BuiltPropeller,
+    density_g_cm3: float,
+    meshes: Mapping[str, dict[str, Any]] | None = None,
+) -> dict[str, Any]:
     """The JSON report: parameters, mass properties, balance, printability, validity and stage times.
 
     ``checks`` names every check the solid (and each written mesh, ``meshes``: {"stl" or "3mf":
@@ -79,8 +82,11 @@ def build_report(propeller: BuiltPropeller, density_g_cm3: float,
         "kind": propeller.parameters.kind.value,
         "closed_file_trailing_edge_mm": _closed_file_edge_mm(propeller.parameters),
         "root_fillet": None if propeller.root_fillet is None else propeller.root_fillet.to_dict(),
-        **({"design_targets": propeller.design_targets.to_dict()}
-           if propeller.design_targets is not None and propeller.design_targets.requested else {}),
+        **(
+            {"design_targets": propeller.design_targets.to_dict()}
+            if propeller.design_targets is not None and propeller.design_targets.requested
+            else {}
+        ),
     }
 
 

@@ -15,14 +15,20 @@ from torus_cad.geometry.blade.transforms import evaluate_quartic
 from torus_cad.outputs.sections_table import elements_of
 
 
-def radius_crossings(params: Any, radius_mm: float, sections: int = 801) -> list[tuple[float, float]]:
+def radius_crossings(
+    params: Any, radius_mm: float, sections: int = 801
+) -> list[tuple[float, float]]:
     """``(s, geometric pitch mm)`` where blade 0 passes ``radius_mm`` (analytic, ``sections`` samples)."""
     fine = elements_of(params.blade_surface(sections=sections, points=48))
     found = []
     for i in np.flatnonzero(np.diff(np.sign(fine.radius_mm - radius_mm))):
         w = (radius_mm - fine.radius_mm[i]) / (fine.radius_mm[i + 1] - fine.radius_mm[i])
-        found.append((float(fine.s[i] + w * (fine.s[i + 1] - fine.s[i])),
-                      float(fine.pitch_mm[i] + w * (fine.pitch_mm[i + 1] - fine.pitch_mm[i]))))
+        found.append(
+            (
+                float(fine.s[i] + w * (fine.s[i + 1] - fine.s[i])),
+                float(fine.pitch_mm[i] + w * (fine.pitch_mm[i + 1] - fine.pitch_mm[i])),
+            )
+        )
     return found
 
 
@@ -48,12 +54,15 @@ def pitch_on_solid(propeller: Any, s: float, spin: Handedness = Handedness.CW) -
     frames = blade_frames(geometry.blade, geometry.centerline(0), [s])
     # A ccw solid is the spec's blade mirrored (y -> -y, kernel/mirror.py): cut it in the mirrored
     # plane, and mirror what is measured back, so the pitch is the spec blade's, as designed.
-    from torus_cad.parameters.design import Handedness  # here: the schema resolves design targets itself
+    # here: the schema resolves design targets itself
+    from torus_cad.parameters.design import Handedness
 
     flip = np.array([1.0, -1.0 if propeller.parameters.handedness == Handedness.CCW else 1.0, 1.0])
     origin = frames.origin[0] * flip
     reach = 2.0 * float(np.max(evaluate_quartic(geometry.blade.laws.scale_x_mm, [s])))
-    edges = contour_through(plane_section_edges(propeller.solid, origin, frames.tangent[0] * flip, reach), origin)
+    edges = contour_through(
+        plane_section_edges(propeller.solid, origin, frames.tangent[0] * flip, reach), origin
+    )
     points = edge_points(edges, 1000)
     leading = points[int(np.argmin(np.linalg.norm(points - origin, axis=1)))]
     bases = straight_edges(edges)

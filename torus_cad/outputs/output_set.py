@@ -57,10 +57,12 @@ if TYPE_CHECKING:
 FILES_KEY = "files"
 
 _STAGING_MARK = ".staging-"
-#: Longest wait (s) for the blade-element table (CSV and PNG), drawn in a child beside the build's files.
+#: Longest wait (s) for the blade-element table (CSV and PNG), drawn in a child beside the build's
+#: files.
 SECTIONS_TABLE_TIME_LIMIT_S = 120.0
-#: Longest wait (s) for the STEP file, written and read back in a child beside the STL: the default's
-#: takes under a second, and its read-back check leaves out the costly self-interference test.
+#: Longest wait (s) for the STEP file, written and read back in a child beside the STL: the
+#: default's takes under a second, and its read-back check leaves out the costly self-interference
+#: test.
 STEP_WRITE_TIME_LIMIT_S = 900.0
 _HASH_CHUNK_BYTES = 1 << 20
 
@@ -77,7 +79,11 @@ def remove_stale_staging(out_dir: Path) -> list[Path]:
     with contextlib.suppress(OSError):
         for entry in os.scandir(out_dir):
             prefix = entry.name[: entry.name.find(_STAGING_MARK) + len(_STAGING_MARK)]
-            if entry.name.startswith(".") and _STAGING_MARK in entry.name and left_by_dead_process(entry.name, prefix):
+            if (
+                entry.name.startswith(".")
+                and _STAGING_MARK in entry.name
+                and left_by_dead_process(entry.name, prefix)
+            ):
                 shutil.rmtree(entry.path, ignore_errors=True)
                 removed.append(Path(entry.path))
     return removed
@@ -93,15 +99,22 @@ def staging_folders(out_dir: Path) -> tuple[list[Path], list[Path]]:
         for entry in sorted(os.scandir(out_dir), key=lambda entry: entry.name):
             if entry.name.startswith(".") and _STAGING_MARK in entry.name:
                 prefix = entry.name[: entry.name.find(_STAGING_MARK) + len(_STAGING_MARK)]
-                (left if left_by_dead_process(entry.name, prefix) else other).append(Path(entry.path))
+                (left if left_by_dead_process(entry.name, prefix) else other).append(
+                    Path(entry.path)
+                )
     return left, other
 
 
 def describe_os_error(error: OSError, path: Path) -> str:
     """One line naming the cause and the file the user knows (the final name, not a staged one)."""
-    causes = {errno.ENOSPC: "no space left on device", errno.EDQUOT: "disk quota exceeded",
-              errno.EACCES: "permission denied", errno.EPERM: "permission denied",
-              errno.EROFS: "read-only file system", errno.EFBIG: "file size limit exceeded"}
+    causes = {
+        errno.ENOSPC: "no space left on device",
+        errno.EDQUOT: "disk quota exceeded",
+        errno.EACCES: "permission denied",
+        errno.EPERM: "permission denied",
+        errno.EROFS: "read-only file system",
+        errno.EFBIG: "file size limit exceeded",
+    }
     cause = causes.get(error.errno or 0, error.strerror or str(error))
     return f"{cause} writing {str(path)!r}"
 
@@ -114,7 +127,9 @@ def check_writable_folder(out_dir: str | Path) -> None:
     while not existing.exists() and existing != existing.parent:
         existing = existing.parent
     if not existing.is_dir():
-        raise OutputError(f"cannot write to output folder {str(out_dir)!r}: {str(existing)!r} is not a folder")
+        raise OutputError(
+            f"cannot write to output folder {str(out_dir)!r}: {str(existing)!r} is not a folder"
+        )
     try:
         probe = tempfile.mkdtemp(prefix=".torus-cad-probe-", dir=existing)
         os.rmdir(probe)
@@ -158,7 +173,9 @@ def _read_report(path: Path) -> dict[str, Any] | None:
     """The JSON report at ``path``, or None if it is not one (not a regular file, over the limit, not
     JSON, nested too deep for the JSON reader)."""
     try:
-        report = json.loads(read_untrusted_bytes(path, "report", REPORT_FILE_MAX_BYTES).decode("utf-8"))
+        report = json.loads(
+            read_untrusted_bytes(path, "report", REPORT_FILE_MAX_BYTES).decode("utf-8")
+        )
     except (ParameterError, ValueError, RecursionError):
         return None
     return report if isinstance(report, dict) else None
@@ -188,15 +205,20 @@ class OutputSet:
     def __enter__(self) -> Self:
         try:
             self._cleanup = contextlib.ExitStack()
-            # a folder made here and left empty (an error, a signal) is removed again: no empty --out
+            # a folder made here and left empty (an error, a signal) is removed again: no empty
+            # --out
             self._cleanup.enter_context(removed_if_left_empty(make_folders(self.out_dir)))
             remove_stale_staging(self.out_dir)
-            self.staging = self.out_dir / f".{self.name}{_STAGING_MARK}{owner_tag()}{secrets.token_hex(4)}"
+            self.staging = (
+                self.out_dir / f".{self.name}{_STAGING_MARK}{owner_tag()}{secrets.token_hex(4)}"
+            )
             self._cleanup.enter_context(removed_on_exit(self.staging))
             self.staging.mkdir()
         except OSError:
             self._discard()
-            raise  # the folder itself: checked before the build on the command line (check_writable_folder)
+            # the folder itself: checked before the build on the command line
+            # (check_writable_folder)
+            raise
         return self
 
     def __exit__(self, *exc_info: object) -> None:
@@ -244,7 +266,9 @@ class OutputSet:
             written = writer(self.staging)
         for kind, path in written.items():
             if Path(path).parent != self.staging or not Path(path).is_file() or kind == "json":
-                raise OutputError(f"{str(self.out_dir / Path(path).name)!r} was not written into the set")
+                raise OutputError(
+                    f"{str(self.out_dir / Path(path).name)!r} was not written into the set"
+                )
             self._staged[kind] = Path(path)
 
     @contextlib.contextmanager
@@ -253,7 +277,9 @@ class OutputSet:
             yield
         except OSError as error:
             named = Path(error.filename).name if error.filename else None
-            raise OutputError(describe_os_error(error, self.out_dir / named if named else final)) from None
+            raise OutputError(
+                describe_os_error(error, self.out_dir / named if named else final)
+            ) from None
 
     def publish(self, report: Mapping[str, Any]) -> dict[str, Path]:
         """Seal the staged files into ``report`` (as its ``"files"``), write it, publish the set; return
@@ -264,28 +290,40 @@ class OutputSet:
         self.sealed_report = {**report, FILES_KEY: files}
         staged_report = self.staging / f"{self.name}.json"
         try:
-            staged_report.write_text(json.dumps(self.sealed_report, indent=2, allow_nan=False) + "\n",
-                                     encoding="utf-8")
+            staged_report.write_text(
+                json.dumps(self.sealed_report, indent=2, allow_nan=False) + "\n", encoding="utf-8"
+            )
         except OSError as error:
             raise OutputError(describe_os_error(error, self.final_path("json"))) from None
         with deferred(), _folder_lock(self.out_dir):
             self._swap_in(staged_report)
-        return {**{kind: self.final_path(kind) for kind in self._staged}, "json": self.final_path("json")}
+        return {
+            **{kind: self.final_path(kind) for kind in self._staged},
+            "json": self.final_path("json"),
+        }
 
     def _old_members_left(self, old_files: Mapping[str, Any]) -> list[str]:
         """Files of the old set that the new one does not have (only names of this set: a report
         cannot make us remove anything else)."""
         new_names = {path.name for path in self._staged.values()}
         names = [entry.get("file") for entry in old_files.values() if isinstance(entry, dict)]
-        return [name for name in names if isinstance(name, str) and name not in new_names and "/" not in name
-                and name.startswith((f"{self.name}.", f"{self.name}_")) and name != f"{self.name}.json"]
+        return [
+            name
+            for name in names
+            if isinstance(name, str)
+            and name not in new_names
+            and "/" not in name
+            and name.startswith((f"{self.name}.", f"{self.name}_"))
+            and name != f"{self.name}.json"
+        ]
 
     def _swap_in(self, staged_report: Path) -> None:
         report_path = self.final_path("json")
         old = _read_report(report_path)
         old_files = old.get(FILES_KEY) if old else None
         try:
-            report_path.unlink(missing_ok=True)  # from here until the last rename the set is visibly incomplete
+            # from here until the last rename the set is visibly incomplete
+            report_path.unlink(missing_ok=True)
             for kind, path in self._staged.items():
                 os.replace(path, self.final_path(kind))
             if isinstance(old_files, dict):
@@ -293,11 +331,14 @@ class OutputSet:
                     (self.out_dir / stale).unlink(missing_ok=True)
             os.replace(staged_report, report_path)
         except OSError as error:
-            raise OutputError(f"publishing the output set {self.name!r} in {str(self.out_dir)!r} failed: "
-                              f"{error.strerror}; 'torus-cad verify' reports what is there") from None
+            raise OutputError(
+                f"publishing the output set {self.name!r} in {str(self.out_dir)!r} failed: "
+                f"{error.strerror}; 'torus-cad verify' reports what is there"
+            ) from None
 
 
 # -- checking a published set ---------------------------------------------------------------------
+
 
 @dataclass(frozen=True)
 class VerifiedSet:
@@ -317,19 +358,29 @@ def verify_set(out_dir: str | Path, name: str) -> VerifiedSet:
     report_path = out_dir / f"{name}.json"
     with _folder_lock(out_dir, shared=True):
         if not report_path.is_file():
-            orphans = sorted(p.name for p in out_dir.glob(f"{glob_escape(name)}.*")
-                             if "." not in p.name[len(name) + 1:])  # not a set whose name goes on, "a.v2"
+            orphans = sorted(
+                p.name
+                for p in out_dir.glob(f"{glob_escape(name)}.*")
+                # not a set whose name goes on, "a.v2"
+                if "." not in p.name[len(name) + 1 :]
+            )
             if orphans:
-                raise IncompleteOutputError(f"{name}: incomplete set: {report_path.name} is missing beside "
-                                            f"{', '.join(orphans)}")
-            raise IncompleteOutputError(f"{name}: no output set {report_path.name} in {str(out_dir)!r}")
+                raise IncompleteOutputError(
+                    f"{name}: incomplete set: {report_path.name} is missing beside "
+                    f"{', '.join(orphans)}"
+                )
+            raise IncompleteOutputError(
+                f"{name}: no output set {report_path.name} in {str(out_dir)!r}"
+            )
         report = _read_report(report_path)
         if report is None:
             raise IncompleteOutputError(f"{name}: {report_path.name} is not a readable JSON report")
         files = report.get(FILES_KEY)
         if not isinstance(files, dict) or not files:
-            raise IncompleteOutputError(f"{name}: {report_path.name} lists no files (written before "
-                                        f"output sets were sealed?)")
+            raise IncompleteOutputError(
+                f"{name}: {report_path.name} lists no files (written before "
+                f"output sets were sealed?)"
+            )
         checked: list[Path] = []
         problems: list[str] = []
         for entry in files.values():
@@ -343,16 +394,24 @@ def verify_set(out_dir: str | Path, name: str) -> VerifiedSet:
 
 
 def _check_entry(out_dir: Path, name: str, report_name: str, entry: Any) -> Path:
-    if not isinstance(entry, dict) or not isinstance(entry.get("file"), str) or "/" in entry["file"]:
-        raise IncompleteOutputError(f"{name}: {report_name} has a malformed file entry (expected a table of "
-                                    "file, bytes and sha256)")
+    if (
+        not isinstance(entry, dict)
+        or not isinstance(entry.get("file"), str)
+        or "/" in entry["file"]
+    ):
+        raise IncompleteOutputError(
+            f"{name}: {report_name} has a malformed file entry (expected a table of "
+            "file, bytes and sha256)"
+        )
     path = out_dir / entry["file"]
     if not path.is_file():
         raise IncompleteOutputError(f"{name}: incomplete set: {path.name} is missing")
     actual = file_entry(path)
     if actual["bytes"] != entry.get("bytes") or actual["sha256"] != entry.get("sha256"):
-        raise IncompleteOutputError(f"{name}: mixed set: {path.name} is not the file {report_name} was "
-                                    f"written with (size or SHA-256 differs)")
+        raise IncompleteOutputError(
+            f"{name}: mixed set: {path.name} is not the file {report_name} was "
+            f"written with (size or SHA-256 differs)"
+        )
     return path
 
 
@@ -370,8 +429,11 @@ def set_names(out_dir: str | Path) -> list[str]:
         if report is not None and FILES_KEY in report:
             names.add(path.stem)
             files = report[FILES_KEY]
-            members.update(entry.get("file") for entry in (files.values() if isinstance(files, dict) else ())
-                           if isinstance(entry, dict))
+            members.update(
+                entry.get("file")
+                for entry in (files.values() if isinstance(files, dict) else ())
+                if isinstance(entry, dict)
+            )
         elif path.suffix in (".step", ".stl"):
             loose.add(path)
     names.update(path.stem for path in loose if path.name not in members)
@@ -386,8 +448,11 @@ def set_folders(root: str | Path) -> list[Path]:
     """
     found = []
     for folder, subfolders, _ in os.walk(root):
-        subfolders[:] = sorted(name for name in subfolders if not name.startswith(".")
-                               and not is_case_folder(Path(folder) / name))
+        subfolders[:] = sorted(
+            name
+            for name in subfolders
+            if not name.startswith(".") and not is_case_folder(Path(folder) / name)
+        )
         if set_names(folder):
             found.append(Path(folder))
     return found
@@ -410,6 +475,7 @@ def folders_under(root: str | Path) -> list[Path]:
 
 # -- the propeller's set --------------------------------------------------------------------------
 
+
 @dataclass(frozen=True)
 class PublishedSet:
     """What a build published: the final paths by kind (the report last) and the report as written.
@@ -421,14 +487,21 @@ class PublishedSet:
     report: dict[str, Any]
 
 
-def _collected(call: IsolatedCall[dict[str, Any] | None]) -> Callable[[Path], dict[str, Any] | None]:
+def _collected(
+    call: IsolatedCall[dict[str, Any] | None],
+) -> Callable[[Path], dict[str, Any] | None]:
     """A writer that collects ``call``'s result: the child wrote the file at its staging path already."""
     return lambda _path: call.result(STEP_WRITE_TIME_LIMIT_S)
 
 
-def write_output_set(propeller: BuiltPropeller, out_dir: str | Path, density_g_cm3: float, stl: bool = True,
-                     sections_table: bool | IsolatedCall[dict[str, tuple[str, bytes]]] = False,
-                     extra_files: Mapping[str, FileWriter] | None = None) -> PublishedSet:
+def write_output_set(
+    propeller: BuiltPropeller,
+    out_dir: str | Path,
+    density_g_cm3: float,
+    stl: bool = True,
+    sections_table: bool | IsolatedCall[dict[str, tuple[str, bytes]]] = False,
+    extra_files: Mapping[str, FileWriter] | None = None,
+) -> PublishedSet:
     """Write the files of ``export.formats`` (STEP, STL unless ``stl`` is False, 3MF), the
     blade-element table (``<name>_sections.csv`` and ``.png``, if ``sections_table``: True, or its
     files' call already started, :func:`torus_cad.outputs.sections_table.design_sections_table_files`), any
@@ -460,47 +533,78 @@ def write_output_set(propeller: BuiltPropeller, out_dir: str | Path, density_g_c
     def mesh() -> UncrossedMesh:
         """The uncrossed tessellation that the STL and the 3MF both write, made once."""
         if not made:
-            made.append(uncrossed_mesh(propeller.shape, export.stl_linear_deflection, export.stl_angular_deflection))
+            made.append(
+                uncrossed_mesh(
+                    propeller.shape, export.stl_linear_deflection, export.stl_angular_deflection
+                )
+            )
         return made[0]
 
-    job = ExportJob(propeller.shape, params.name, export.step_schema, export.stl_linear_deflection,
-                    export.stl_angular_deflection, __version__, mesh)
+    job = ExportJob(
+        propeller.shape,
+        params.name,
+        export.step_schema,
+        export.stl_linear_deflection,
+        export.stl_angular_deflection,
+        __version__,
+        mesh,
+    )
 
     def recorded(fmt: ExportFormat, write: Callable[[Path], dict[str, Any] | None]) -> FileWriter:
         """``write``, its mesh check (if it returns one) kept for the report."""
+
         def written(path: Path) -> Path:
             check = write(path)
             if check is not None:
                 meshes[fmt.value] = check
             return path
+
         return written
 
     with OutputSet(out_dir, params.name) as output, contextlib.ExitStack() as children:
-        # The blade-element table (matplotlib) is drawn in a child meanwhile, on the second core; the child
-        # returns the files' contents and this process writes them (a signal here then leaves nothing behind).
+        # The blade-element table (matplotlib) is drawn in a child meanwhile, on the second core;
+        # the child returns the files' contents and this process writes them (a signal here then
+        # leaves nothing behind).
         table: IsolatedCall[dict[str, tuple[str, bytes]]] | None = None
         if isinstance(sections_table, IsolatedCall):
             table = sections_table
         elif sections_table:
-            table = children.enter_context(IsolatedCall(sections_table_files, propeller.surface, params,
-                                                        what="the blade-element table"))
-        # A writer that runs in a child (the STEP file, written and read back into its staging path) starts
-        # first, while this process writes the others (a signal kills the child before the staging folder
-        # goes). Every design's STEP file is checked as OpenCascade's reader gives it back
-        # (kernel.writers.step writes it again with readable edges where it reads back faulty).
-        started = {fmt: children.enter_context(IsolatedCall(WRITERS[fmt].write, job, output.stage(fmt.value),
-                                                            what=f"writing the {fmt.name} file"))
-                   for fmt in formats if WRITERS[fmt].in_child}
+            table = children.enter_context(
+                IsolatedCall(
+                    sections_table_files, propeller.surface, params, what="the blade-element table"
+                )
+            )
+        # A writer that runs in a child (the STEP file, written and read back into its staging path)
+        # starts first, while this process writes the others (a signal kills the child before the
+        # staging folder goes). Every design's STEP file is checked as OpenCascade's reader gives it
+        # back (kernel.writers.step writes it again with readable edges where it reads back faulty).
+        started = {
+            fmt: children.enter_context(
+                IsolatedCall(
+                    WRITERS[fmt].write,
+                    job,
+                    output.stage(fmt.value),
+                    what=f"writing the {fmt.name} file",
+                )
+            )
+            for fmt in formats
+            if WRITERS[fmt].in_child
+        }
         for fmt in formats:
             if not WRITERS[fmt].in_child:
                 with timer.stage(WRITERS[fmt].stage):
-                    output.write(fmt.value, recorded(fmt, functools.partial(WRITERS[fmt].write, job)))
+                    output.write(
+                        fmt.value, recorded(fmt, functools.partial(WRITERS[fmt].write, job))
+                    )
         for fmt, call in started.items():
             with timer.stage(WRITERS[fmt].stage):  # what is left of it once the others are written
                 output.write(fmt.value, recorded(fmt, _collected(call)))
         if table is not None:
-            with timer.stage(Stage.SECTIONS_TABLE):  # what is left of it once the meshes are written
-                output.write_files(lambda folder: write_files(table.result(SECTIONS_TABLE_TIME_LIMIT_S), folder))
+            # what is left of it once the meshes are written
+            with timer.stage(Stage.SECTIONS_TABLE):
+                output.write_files(
+                    lambda folder: write_files(table.result(SECTIONS_TABLE_TIME_LIMIT_S), folder)
+                )
         for kind, writer in (extra_files or {}).items():
             output.write(kind, writer)
         propeller.stage_seconds.update(timer.seconds)

@@ -18,7 +18,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from torus_cad.geometry.analysis.blade_elements import NEARLY_RADIAL_FRACTION, BladeElements, blade_elements
+from torus_cad.geometry.analysis.blade_elements import (
+    NEARLY_RADIAL_FRACTION,
+    BladeElements,
+    blade_elements,
+)
 from torus_cad.geometry.blade.blade_surface import BladeSurface, sections_along
 from torus_cad.geometry.blade.handedness import Handedness
 from torus_cad.geometry.blade.trailing_edge import trailing_edge_thickness_mm
@@ -47,11 +51,19 @@ def sections_csv_text(elements: BladeElements, trailing_edge_mm: np.ndarray | No
     buffer = io.StringIO()
     writer = csv.writer(buffer, lineterminator="\n")
     writer.writerow(CSV_COLUMNS)
-    edge = np.zeros(len(elements.s)) if trailing_edge_mm is None else np.asarray(trailing_edge_mm, float)
+    edge = (
+        np.zeros(len(elements.s))
+        if trailing_edge_mm is None
+        else np.asarray(trailing_edge_mm, float)
+    )
     for index in range(len(elements.s)):
         row = []
         for attribute in CSV_COLUMNS.values():
-            value = edge[index] if attribute == "trailing_edge_mm" else getattr(elements, attribute)[index]
+            value = (
+                edge[index]
+                if attribute == "trailing_edge_mm"
+                else getattr(elements, attribute)[index]
+            )
             row.append(f"{float(value):.6g}")
         writer.writerow(row)
     return buffer.getvalue()
@@ -68,7 +80,9 @@ def plotted_beta_deg(elements: BladeElements) -> NDArray[np.float64]:
     return np.unwrap(np.asarray(elements.beta_deg, dtype=float), period=BETA_PERIOD_DEG)
 
 
-def sections_png(elements: BladeElements, title: str = "", size_px: tuple[int, int] = (1500, 500)) -> bytes:
+def sections_png(
+    elements: BladeElements, title: str = "", size_px: tuple[int, int] = (1500, 500)
+) -> bytes:
     """Chord, beta and thickness against r, three panels side by side, as PNG bytes (matplotlib, off-screen)."""
     from matplotlib.figure import Figure  # no pyplot: no global state, no display
 
@@ -77,18 +91,30 @@ def sections_png(elements: BladeElements, title: str = "", size_px: tuple[int, i
     figure.subplots_adjust(left=0.06, right=0.99, bottom=0.13, top=0.88, wspace=0.3)
     axes = figure.subplots(1, 3)
     tip = int(np.argmax(elements.radius_mm))
-    halves = ((slice(0, tip + 1), "-", "outgoing (s up to the tip)"),
-              (slice(tip, None), "--", "returning (s from the tip)"))
+    halves = (
+        (slice(0, tip + 1), "-", "outgoing (s up to the tip)"),
+        (slice(tip, None), "--", "returning (s from the tip)"),
+    )
     radial = elements.radial_fraction > NEARLY_RADIAL_FRACTION
-    panels = (("chord_mm", "chord (mm)"), ("beta_deg", "blade angle beta (deg, unwrapped mod 180)"),
-              ("thickness_mm", "max thickness (mm)"))
+    panels = (
+        ("chord_mm", "chord (mm)"),
+        ("beta_deg", "blade angle beta (deg, unwrapped mod 180)"),
+        ("thickness_mm", "max thickness (mm)"),
+    )
     for axis, (attribute, label) in zip(axes, panels):
-        values = plotted_beta_deg(elements) if attribute == "beta_deg" else getattr(elements, attribute)
+        values = (
+            plotted_beta_deg(elements) if attribute == "beta_deg" else getattr(elements, attribute)
+        )
         for part, style, legend in halves:
             axis.plot(elements.radius_mm[part], values[part], style, color="tab:blue", label=legend)
         if attribute == "beta_deg" and np.any(radial):
-            axis.plot(elements.radius_mm[radial], values[radial], "x", color="tab:red",
-                      label="chord nearly radial: beta says little")
+            axis.plot(
+                elements.radius_mm[radial],
+                values[radial],
+                "x",
+                color="tab:red",
+                label="chord nearly radial: beta says little",
+            )
         axis.set_xlabel("r (mm)")
         axis.set_ylabel(label)
         axis.grid(True, alpha=0.3)
@@ -103,8 +129,16 @@ def sections_png(elements: BladeElements, title: str = "", size_px: tuple[int, i
 def elements_of(surface: BladeSurface, spin: Handedness = Handedness.CW) -> BladeElements:
     """The blade-element table of a sampled blade surface."""
     frames = surface.frames
-    return blade_elements(surface.s, surface.points, frames.origin, frames.normal, frames.binormal,
-                          surface.trailing_edge_index or 0, surface.lower_corner_index, spin)
+    return blade_elements(
+        surface.s,
+        surface.points,
+        frames.origin,
+        frames.normal,
+        frames.binormal,
+        surface.trailing_edge_index or 0,
+        surface.lower_corner_index,
+        spin,
+    )
 
 
 def trailing_edge_of(params: Any, s: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -116,12 +150,17 @@ def trailing_edge_of(params: Any, s: NDArray[np.float64]) -> NDArray[np.float64]
     sections = sections_along(blade, s)
     if not any(has_base(section) for section in sections):
         return np.zeros(len(s))
-    return trailing_edge_thickness_mm(sections, evaluate_quartic(laws.angle_of_attack_deg, s),
-                                      evaluate_quartic(laws.scale_x_mm, s), evaluate_quartic(laws.scale_y_mm, s))
+    return trailing_edge_thickness_mm(
+        sections,
+        evaluate_quartic(laws.angle_of_attack_deg, s),
+        evaluate_quartic(laws.scale_x_mm, s),
+        evaluate_quartic(laws.scale_y_mm, s),
+    )
 
 
-def sections_table_files(surface: BladeSurface, params: Any, spin: Handedness = Handedness.CW
-                         ) -> dict[str, tuple[str, bytes]]:
+def sections_table_files(
+    surface: BladeSurface, params: Any, spin: Handedness = Handedness.CW
+) -> dict[str, tuple[str, bytes]]:
     """The blade-element table of the built blade ``surface``: ``{kind: (file name, content)}`` for
     ``<name>_sections.csv`` (``sections_csv``) and ``<name>_sections.png`` (``sections_png``).
 
@@ -132,12 +171,19 @@ def sections_table_files(surface: BladeSurface, params: Any, spin: Handedness = 
     touching the disk, so that it can run in a child process beside the build's other files.
     """
     elements = elements_of(surface, spin)
-    if str(getattr(params, "handedness", "cw")) == "ccw":  # the part is the surface's mirror image (y -> -y)
-        elements = dataclasses.replace(elements, position_angle_deg=-elements.position_angle_deg,
-                                       spin=elements.spin.opposite)
+    # the part is the surface's mirror image (y -> -y)
+    if str(getattr(params, "handedness", "cw")) == "ccw":
+        elements = dataclasses.replace(
+            elements, position_angle_deg=-elements.position_angle_deg, spin=elements.spin.opposite
+        )
     csv_text = sections_csv_text(elements, trailing_edge_of(params, elements.s))
-    return {"sections_csv": (f"{params.name}_sections.csv", csv_text.encode()),
-            "sections_png": (f"{params.name}_sections.png", sections_png(elements, f"{params.name}: blade elements"))}
+    return {
+        "sections_csv": (f"{params.name}_sections.csv", csv_text.encode()),
+        "sections_png": (
+            f"{params.name}_sections.png",
+            sections_png(elements, f"{params.name}: blade elements"),
+        ),
+    }
 
 
 def design_sections_table_files(params: Any) -> dict[str, tuple[str, bytes]]:
@@ -161,7 +207,8 @@ def write_files(files: dict[str, tuple[str, bytes]], out_dir: Path) -> dict[str,
     return paths
 
 
-def write_sections_table(surface: BladeSurface, params: Any, out_dir: Path, spin: Handedness = Handedness.CW
-                         ) -> dict[str, Path]:
+def write_sections_table(
+    surface: BladeSurface, params: Any, out_dir: Path, spin: Handedness = Handedness.CW
+) -> dict[str, Path]:
     """Write ``<name>_sections.csv`` and ``<name>_sections.png`` into ``out_dir``; their paths by kind."""
     return write_files(sections_table_files(surface, params, spin), out_dir)

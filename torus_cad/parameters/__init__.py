@@ -17,7 +17,13 @@ from typing import Any
 from torus_cad.parameters.design import PropellerParameters, StepSchema
 from torus_cad.parameters.schema import ParameterSpec, iter_parameter_specs
 
-__all__ = ["ParameterSpec", "PropellerParameters", "StepSchema", "parameter_specs", "resolve_parameters"]
+__all__ = [
+    "ParameterSpec",
+    "PropellerParameters",
+    "StepSchema",
+    "parameter_specs",
+    "resolve_parameters",
+]
 
 
 def parameter_specs() -> list[ParameterSpec]:
@@ -25,8 +31,10 @@ def parameter_specs() -> list[ParameterSpec]:
     return list(iter_parameter_specs(PropellerParameters))
 
 
-def resolve_parameters(design: PropellerParameters | str | Path | None = None,
-                       overrides: Mapping[str, Any] | None = None) -> PropellerParameters:
+def resolve_parameters(
+    design: PropellerParameters | str | Path | None = None,
+    overrides: Mapping[str, Any] | None = None,
+) -> PropellerParameters:
     """The parameters of ``design`` (parameters, a TOML path, or None for the default) with
     dotted-key ``overrides`` applied, e.g. ``{"blades": 4, "hub.radius": 12.0}`` (validated)."""
     if design is None:

@@ -35,7 +35,9 @@ _DIGITS = re.compile(r"[0-9][0-9_]*")
 _STRING_OPENERS = ('"""', "'''", '"', "'")
 
 
-def read_config_text(path: str | Path, what: str = "configuration", max_bytes: int = CONFIG_FILE_MAX_BYTES) -> str:
+def read_config_text(
+    path: str | Path, what: str = "configuration", max_bytes: int = CONFIG_FILE_MAX_BYTES
+) -> str:
     """The text of the configuration file ``path``, or ParameterError (exit 2) naming it and the reason.
 
     Refused: anything but a regular file (folder, device, named pipe, socket), a file over
@@ -46,8 +48,9 @@ def read_config_text(path: str | Path, what: str = "configuration", max_bytes: i
     return read_untrusted_text(path, what, max_bytes)
 
 
-def read_config_table(path: str | Path, what: str = "configuration",
-                      max_bytes: int = CONFIG_FILE_MAX_BYTES) -> dict[str, Any]:
+def read_config_table(
+    path: str | Path, what: str = "configuration", max_bytes: int = CONFIG_FILE_MAX_BYTES
+) -> dict[str, Any]:
     """The TOML table of the file ``path``: :func:`read_config_text` then :func:`parse_config_bytes`'s checks."""
     return parse_config_bytes(read_untrusted_bytes(path, what, max_bytes), str(path), what)
 
@@ -77,12 +80,18 @@ def check_table_depth(table: dict[str, Any], where: str) -> None:
     """
     stack: list[tuple[Any, str, int]] = [(table, "", 0)]
     while stack:
-        value, key, depth = stack.pop()  # a table or list at depth d sits within d - 1 others (the file's not counted)
+        # a table or list at depth d sits within d - 1 others (the file's not counted)
+        value, key, depth = stack.pop()
         if depth > TOML_NESTING_LIMIT and isinstance(value, dict | list):
-            raise ParameterError(f"{where}: {cut(key)} is nested more than {TOML_NESTING_LIMIT} levels deep "
-                                 "(lists or tables within each other)")
+            raise ParameterError(
+                f"{where}: {cut(key)} is nested more than {TOML_NESTING_LIMIT} levels deep "
+                "(lists or tables within each other)"
+            )
         if isinstance(value, dict):
-            stack.extend((item, f"{key}.{name}" if key else str(name), depth + 1) for name, item in value.items())
+            stack.extend(
+                (item, f"{key}.{name}" if key else str(name), depth + 1)
+                for name, item in value.items()
+            )
         elif isinstance(value, list):
             stack.extend((item, f"{key}[{index}]", depth + 1) for index, item in enumerate(value))
 
@@ -127,8 +136,10 @@ def check_toml_shape(text: str, where: str, key_prefix: str = "", lines: bool = 
         if char in "[{":
             depth += 1
             if depth > TOML_NESTING_LIMIT:
-                raise ParameterError(f"{where}{f' line {line}' if lines else ''}: {key or 'a value'} is nested more than "
-                                     f"{TOML_NESTING_LIMIT} levels deep (lists or tables within each other)")
+                raise ParameterError(
+                    f"{where}{f' line {line}' if lines else ''}: {key or 'a value'} is nested more than "
+                    f"{TOML_NESTING_LIMIT} levels deep (lists or tables within each other)"
+                )
         elif char in "]}":
             depth = max(depth - 1, 0)
         elif char.isdigit():
@@ -136,8 +147,10 @@ def check_toml_shape(text: str, where: str, key_prefix: str = "", lines: bool = 
             assert run is not None
             digits = len(run.group().replace("_", ""))
             if digits > TOML_NUMBER_DIGITS_LIMIT:
-                raise ParameterError(f"{where}{f' line {line}' if lines else ''}: {key or 'a value'} holds a number of {digits} digits; "
-                                     f"at most {TOML_NUMBER_DIGITS_LIMIT} are allowed")
+                raise ParameterError(
+                    f"{where}{f' line {line}' if lines else ''}: {key or 'a value'} holds a number of {digits} digits; "
+                    f"at most {TOML_NUMBER_DIGITS_LIMIT} are allowed"
+                )
             index = run.end()
             continue
         index += 1

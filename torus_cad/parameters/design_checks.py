@@ -41,17 +41,21 @@ from torus_cad.parameters.stl_budget import check_stl_budget
 __all__ = ["Feasibility", "check_design", "placed_mounting", "section_chords"]
 
 #: What check cannot say without the kernel (a knife edge's fillet is refused before it:
-#: torus_cad.geometry.analysis.feasibility.check_root_fillet_edge): round a flat blunt edge the fillet's ball is
-#: stopped by the base's corners at one radius and not at a smaller one (the default with a 0.4 mm flat edge: 0.5 mm
-#: fails, 0.25 mm builds), which only OpenCascade's fillet finds.
-#: Round a round blunt edge the fillet's ball may still not fit a thin root or a tight bend (the APC 10x7 SF's
-#: 0.9 mm root takes 0.05 mm).
-EDGE_FILLET_NOTE = ("the root fillet round a {edge} trailing edge is decided by the kernel (build): OpenCascade's fillet "
-                    "{why} on some designs and radii; a round blunt edge (airfoil.trailing_edge_thickness > 0, "
-                    "airfoil.trailing_edge_shape = 'round') is the one it rolls round")
-ROUND_EDGE_FILLET_NOTE = ("the root fillet is made by the kernel (build): whether OpenCascade's rolling ball fits the "
-                          "blade roots (a thin root, a tight bend) is known only when the build makes it; the build "
-                          "names a radius that fits if this one does not")
+#: torus_cad.geometry.analysis.feasibility.check_root_fillet_edge): round a flat blunt edge the
+#: fillet's ball is stopped by the base's corners at one radius and not at a smaller one (the
+#: default with a 0.4 mm flat edge: 0.5 mm fails, 0.25 mm builds), which only OpenCascade's fillet
+#: finds. Round a round blunt edge the fillet's ball may still not fit a thin root or a tight bend
+#: (the APC 10x7 SF's 0.9 mm root takes 0.05 mm).
+EDGE_FILLET_NOTE = (
+    "the root fillet round a {edge} trailing edge is decided by the kernel (build): OpenCascade's fillet "
+    "{why} on some designs and radii; a round blunt edge (airfoil.trailing_edge_thickness > 0, "
+    "airfoil.trailing_edge_shape = 'round') is the one it rolls round"
+)
+ROUND_EDGE_FILLET_NOTE = (
+    "the root fillet is made by the kernel (build): whether OpenCascade's rolling ball fits the "
+    "blade roots (a thin root, a tight bend) is known only when the build makes it; the build "
+    "names a radius that fits if this one does not"
+)
 
 #: Sampling of the blade surface for the mounting checks (the check uses the points as they are).
 MOUNTING_SECTIONS, MOUNTING_POINTS = 200, 160
@@ -96,30 +100,44 @@ class Feasibility:
     def summary(self) -> str:
         """One line: the design, its size, the margins to the limits, its walls and the check's time."""
         params = self.parameters
-        parts = [f"feasible: {params.name}, {params.blades} blade{'s' if params.blades > 1 else ''}, "
-                 f"tip diameter {self.tip_diameter_mm:.1f} mm"]
+        parts = [
+            f"feasible: {params.name}, {params.blades} blade{'s' if params.blades > 1 else ''}, "
+            f"tip diameter {self.tip_diameter_mm:.1f} mm"
+        ]
         if self.margins is not None:
-            parts.append(f"fold ratio {self.margins.fold_ratio:.2f} (limit {FOLD_LIMIT:g}), section sag "
-                         f"{self.margins.resolution_deviation:.1%} of the chord (limit {RESOLUTION_DEVIATION_LIMIT:.0%})")
+            parts.append(
+                f"fold ratio {self.margins.fold_ratio:.2f} (limit {FOLD_LIMIT:g}), section sag "
+                f"{self.margins.resolution_deviation:.1%} of the chord (limit {RESOLUTION_DEVIATION_LIMIT:.0%})"
+            )
         if self.stl_triangles is not None:
             parts.append(f"about {self.stl_triangles:,} STL triangles")
         wall = self.printability
         if wall is not None:
-            parts.append(f"walls: thinnest {wall.thinnest_wall_mm:.2f} mm, trailing edge {wall.trailing_edge_thickness_mm:.2f} "
-                         f"mm (manufacturing.min_wall {wall.min_wall_mm:g} mm" + ("" if wall.printable else
-                                                                                   ": not printable") + ")")
+            parts.append(
+                f"walls: thinnest {wall.thinnest_wall_mm:.2f} mm, trailing edge {wall.trailing_edge_thickness_mm:.2f} "
+                f"mm (manufacturing.min_wall {wall.min_wall_mm:g} mm"
+                + ("" if wall.printable else ": not printable")
+                + ")"
+            )
         return "; ".join(parts) + f"; checked without the kernel in {self.cpu_seconds:.2f} s of CPU"
 
 
 def section_chords(surface: BladeSurface) -> NDArray[np.float64]:
     """``(sections,)`` chord of each sampled section, mm: trailing edge to the ring's first point."""
-    return np.linalg.norm(surface.points[:, surface.trailing_edge_column] - surface.points[:, 0], axis=-1)
+    return np.linalg.norm(
+        surface.points[:, surface.trailing_edge_column] - surface.points[:, 0], axis=-1
+    )
 
 
 def fitted_sections(surface: BladeSurface) -> SectionFit:
     """The section curves the kernel lofts, as arrays (GeometryError for a trailing edge they cannot resolve)."""
-    return fit_sections(surface.points, surface.trailing_edge_column, section_chords(surface),
-                        surface.lower_corner_index, surface.round_trailing_edge)
+    return fit_sections(
+        surface.points,
+        surface.trailing_edge_column,
+        section_chords(surface),
+        surface.lower_corner_index,
+        surface.round_trailing_edge,
+    )
 
 
 def placed_mounting(params: PropellerParameters) -> HubMounting:
@@ -128,14 +146,28 @@ def placed_mounting(params: PropellerParameters) -> HubMounting:
     if not mounting.any:
         return mounting
     resolution = params.resolution
-    dense = params.blade_surface(sections=max(resolution.sections, MOUNTING_SECTIONS),
-                                 points=max(resolution.points, MOUNTING_POINTS))
-    return place_mounting(mounting, dense.points, params.blades, params.hub.radius, params.hub.length,
-                          params.hub.root_fillet_radius)
+    dense = params.blade_surface(
+        sections=max(resolution.sections, MOUNTING_SECTIONS),
+        points=max(resolution.points, MOUNTING_POINTS),
+    )
+    return place_mounting(
+        mounting,
+        dense.points,
+        params.blades,
+        params.hub.radius,
+        params.hub.length,
+        params.hub.root_fillet_radius,
+    )
 
 
-def check_design(params: PropellerParameters, *, mesh: bool = False, walls: bool = False,
-                 require_printable: bool = False, estimate_mesh_first: bool = False) -> Feasibility:
+def check_design(
+    params: PropellerParameters,
+    *,
+    mesh: bool = False,
+    walls: bool = False,
+    require_printable: bool = False,
+    estimate_mesh_first: bool = False,
+) -> Feasibility:
     """Every check the build makes before the kernel, in its order; the first refusal raises.
 
     Args:
@@ -153,7 +185,8 @@ def check_design(params: PropellerParameters, *, mesh: bool = False, walls: bool
         GeometryError: valid parameters that describe no sound propeller (the line names the check).
     """
     start = time.process_time()
-    printability = params.printability() if require_printable else None  # first, as the build command
+    # first, as the build command
+    printability = params.printability() if require_printable else None
     if printability is not None and printability.problem():
         raise GeometryError(f"not printable (--require-printable): {printability.problem()}")
     if mesh and estimate_mesh_first:
@@ -168,4 +201,6 @@ def check_design(params: PropellerParameters, *, mesh: bool = False, walls: bool
         triangles = check_stl_budget(params, surface, fit.poles.shape[:2])
     if walls and printability is None:
         printability = params.printability()
-    return Feasibility(params, surface, margins, printability, triangles, time.process_time() - start)
+    return Feasibility(
+        params, surface, margins, printability, triangles, time.process_time() - start
+    )

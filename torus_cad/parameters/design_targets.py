@@ -48,7 +48,8 @@ from torus_cad.geometry.section.airfoil import naca4_numbers
 from torus_cad.geometry.section.section import closed_points, parameter_end
 from torus_cad.parameters.schema import Bounds, check_in_bounds
 
-#: At most this many rounds of (pitch fit, diameter fit); they stop when the diameter fit no longer moves.
+#: At most this many rounds of (pitch fit, diameter fit); they stop when the diameter fit no longer
+#: moves.
 TARGET_ROUNDS = 4
 
 
@@ -73,14 +74,18 @@ class DesignTargets:
 
     def to_dict(self) -> dict[str, Any]:
         """For the JSON report: the targets, what was achieved, and the spec values that resulted."""
-        report: dict[str, Any] = {"requested": dict(self.requested),
-                                  "tip_diameter_mm": self.tip_diameter_mm}
+        report: dict[str, Any] = {
+            "requested": dict(self.requested),
+            "tip_diameter_mm": self.tip_diameter_mm,
+        }
         if self.radial_scale is not None:
             report["radial_scale"] = self.radial_scale
             report["centerline_p2"] = list(self.parameters.centerline.p2)
             report["centerline_p3"] = list(self.parameters.centerline.p3)
         if self.pitch_fit is not None:
-            report["pitch_at_75_percent_radius_mm"] = [float(v) for v in self.pitch_fit.pitch_at_75_mm]
+            report["pitch_at_75_percent_radius_mm"] = [
+                float(v) for v in self.pitch_fit.pitch_at_75_mm
+            ]
             report["pitch_rms_beta_error_deg"] = self.pitch_fit.rms_beta_error_deg
             report["angle_of_attack"] = list(self.pitch_fit.angle_of_attack)
         return report
@@ -97,7 +102,10 @@ def _value(params: Any, dotted: str, default: Any) -> Any:
 
 def requested_targets(params: Any) -> dict[str, Any]:
     """The designer's inputs set in ``params`` (empty when none is)."""
-    requested = {key: _value(params, key, None) for key in ("airfoil.naca", "airfoil.file", "diameter", "pitch")}
+    requested = {
+        key: _value(params, key, None)
+        for key in ("airfoil.naca", "airfoil.file", "diameter", "pitch")
+    }
     return {key: value for key, value in requested.items() if value not in (None, "", 0, 0.0)}
 
 
@@ -117,7 +125,8 @@ CONVENTIONAL_TIP_GRID = (21, 400)
 def tip_radius_of(geometry: PropellerGeometry) -> float:
     """Largest distance of blade 0's analytic surface from the spin axis (mm)."""
     blade, centerline = geometry.blade, geometry.centerline(0)
-    blade_frames(blade, centerline, [0.0])  # checks once that the frame exists on the whole centerline
+    # checks once that the frame exists on the whole centerline
+    blade_frames(blade, centerline, [0.0])
     end = parameter_end(sections_along(blade, [0.5])[0])
 
     def surface_at(s: NDArray[np.float64], t: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -132,11 +141,16 @@ def section_frames_unchecked(blade: Any, centerline: Centerline, s: NDArray[np.f
     if blade.frame != FrameKind.FRENET:
         return blade_frames(blade, centerline, s)
     derivatives = centerline.derivatives(np.asarray(s, dtype=float), order=2)
-    return Frames(np.asarray(s, dtype=float), derivatives[:, 0],
-                  *frenet_from_derivatives(derivatives[:, 1], derivatives[:, 2]))
+    return Frames(
+        np.asarray(s, dtype=float),
+        derivatives[:, 0],
+        *frenet_from_derivatives(derivatives[:, 1], derivatives[:, 2]),
+    )
 
 
-def with_radial_scale(geometry: PropellerGeometry, scale: float, hub_radius_mm: float) -> PropellerGeometry:
+def with_radial_scale(
+    geometry: PropellerGeometry, scale: float, hub_radius_mm: float
+) -> PropellerGeometry:
     """``geometry`` with z_L of the free control points p2 and p3 multiplied by ``scale``; GeometryError
     (not reachable) when a scaled point leaves the range the parameters allow it."""
     p1, p2, p3, p4 = geometry.blade.local_control_points
@@ -144,18 +158,22 @@ def with_radial_scale(geometry: PropellerGeometry, scale: float, hub_radius_mm: 
     inset = hub_radius_mm - hub_radius_mm / 8.0  # as PropellerParameters checks the control points
     for name, point in zip(("p2", "p3"), scaled, strict=True):
         try:
-            check_in_bounds(f"centerline.{name}[2]", point[2], Bounds(-inset, 100.0 * hub_radius_mm, True), "mm")
+            check_in_bounds(
+                f"centerline.{name}[2]", point[2], Bounds(-inset, 100.0 * hub_radius_mm, True), "mm"
+            )
         except ParameterError as error:
             raise GeometryError(str(error)) from None
     blade = dataclasses.replace(geometry.blade, local_control_points=(p1, scaled[0], scaled[1], p4))
     return dataclasses.replace(geometry, blade=blade)
 
 
-def fit_diameter(geometry: PropellerGeometry, diameter_mm: float, hub_radius_mm: float
-                 ) -> tuple[PropellerGeometry, float]:
+def fit_diameter(
+    geometry: PropellerGeometry, diameter_mm: float, hub_radius_mm: float
+) -> tuple[PropellerGeometry, float]:
     """``geometry`` scaled radially to the tip diameter ``diameter_mm``, and the scale."""
     scale = radial_scale_for_diameter(
-        lambda k: tip_radius_of(with_radial_scale(geometry, k, hub_radius_mm)), diameter_mm)
+        lambda k: tip_radius_of(with_radial_scale(geometry, k, hub_radius_mm)), diameter_mm
+    )
     return with_radial_scale(geometry, scale, hub_radius_mm), scale
 
 
@@ -168,20 +186,32 @@ def _pitch_model(geometry: PropellerGeometry) -> tuple[NDArray[np.float64], Chor
     base = parameter_end(section) == 3.0
     leading = np.repeat(closed_points(section, [0.0], base), len(s), axis=0)
     ends = closed_points(section, [1.0, 2.0] if base else [1.0], base)
-    trailing = np.repeat(ends.mean(axis=0, keepdims=True), len(s), axis=0)  # the chord line ignores the base's size
+    # the chord line ignores the base's size
+    trailing = np.repeat(ends.mean(axis=0, keepdims=True), len(s), axis=0)
     laws = blade.laws
-    return s, chord_model(frames.origin, frames.normal, frames.binormal, leading, trailing,
-                          evaluate_quartic(laws.scale_x_mm, s), evaluate_quartic(laws.scale_y_mm, s), laws.pivot)
+    return s, chord_model(
+        frames.origin,
+        frames.normal,
+        frames.binormal,
+        leading,
+        trailing,
+        evaluate_quartic(laws.scale_x_mm, s),
+        evaluate_quartic(laws.scale_y_mm, s),
+        laws.pivot,
+    )
 
 
-def fit_angle_of_attack(geometry: PropellerGeometry, pitch_mm: float, spin: Handedness = Handedness.CW
-                        ) -> tuple[PropellerGeometry, PitchFit]:
+def fit_angle_of_attack(
+    geometry: PropellerGeometry, pitch_mm: float, spin: Handedness = Handedness.CW
+) -> tuple[PropellerGeometry, PitchFit]:
     """``geometry`` with alpha(s) refitted so the outer half has geometric pitch ``pitch_mm``."""
     s, model = _pitch_model(geometry)
     laws = geometry.blade.laws
     fit = fit_pitch(model, s, laws.angle_of_attack_deg, pitch_mm, tip_radius_of(geometry), spin)
-    blade = dataclasses.replace(geometry.blade, laws=dataclasses.replace(
-        laws, angle_of_attack_deg=_quartic(fit.angle_of_attack)))
+    blade = dataclasses.replace(
+        geometry.blade,
+        laws=dataclasses.replace(laws, angle_of_attack_deg=_quartic(fit.angle_of_attack)),
+    )
     return dataclasses.replace(geometry, blade=blade), fit
 
 
@@ -190,17 +220,24 @@ def _quartic(values: Any) -> Quartic:
     return (a, b, c, d, e)
 
 
-def achieved_pitch(geometry: PropellerGeometry, pitch_mm: float, spin: Handedness = Handedness.CW) -> PitchFit:
+def achieved_pitch(
+    geometry: PropellerGeometry, pitch_mm: float, spin: Handedness = Handedness.CW
+) -> PitchFit:
     """How well ``geometry``'s own alpha(s) meets ``pitch_mm`` (no fit)."""
     s, model = _pitch_model(geometry)
-    return pitch_report(model, s, geometry.blade.laws.angle_of_attack_deg, pitch_mm, tip_radius_of(geometry), spin)
+    return pitch_report(
+        model, s, geometry.blade.laws.angle_of_attack_deg, pitch_mm, tip_radius_of(geometry), spin
+    )
 
 
 def _without_targets(params: Any, geometry: PropellerGeometry) -> Any:
     """``params`` with the fitted control points and alpha(s) of ``geometry``, and the targets removed."""
     _, p2, p3, _ = geometry.blade.local_control_points
-    changes: dict[str, Any] = {"centerline.p2": list(p2), "centerline.p3": list(p3),
-                               "transforms.angle_of_attack": list(geometry.blade.laws.angle_of_attack_deg)}
+    changes: dict[str, Any] = {
+        "centerline.p2": list(p2),
+        "centerline.p3": list(p3),
+        "transforms.angle_of_attack": list(geometry.blade.laws.angle_of_attack_deg),
+    }
     for key, empty in (("diameter", 0.0), ("pitch", 0.0)):
         if _value(params, key, None):
             changes[key] = empty
@@ -215,16 +252,25 @@ def resolve_design_targets(params: Any, spin: Handedness = Handedness.CW) -> Des
     naca = requested.get("airfoil.naca", "")
     if naca and len(str(naca).strip()) == 4:
         m, p, thickness = naca4_numbers(naca)
-        params = params.with_values({"airfoil.naca": "", "airfoil.max_camber": m,
-                                     "airfoil.camber_position": p if m > 0 else params.airfoil.camber_position,
-                                     "airfoil.thickness": thickness})
-    diameter_mm, pitch_mm = float(requested.get("diameter", 0.0)), float(requested.get("pitch", 0.0))
+        params = params.with_values(
+            {
+                "airfoil.naca": "",
+                "airfoil.max_camber": m,
+                "airfoil.camber_position": p if m > 0 else params.airfoil.camber_position,
+                "airfoil.thickness": thickness,
+            }
+        )
+    diameter_mm, pitch_mm = (
+        float(requested.get("diameter", 0.0)),
+        float(requested.get("pitch", 0.0)),
+    )
     if not (diameter_mm or pitch_mm):
         return DesignTargets(params, requested=requested)
     scale = 1.0
-    # Fitted on the geometry objects, validated once at the end. alpha turns the sections, which moves
-    # the outermost point, and the radius sets the pitch's beta targets: alternate the fits, and end
-    # with the diameter (met exactly; the pitch the last alpha gives is reported on the final geometry).
+    # Fitted on the geometry objects, validated once at the end. alpha turns the sections, which
+    # moves the outermost point, and the radius sets the pitch's beta targets: alternate the fits,
+    # and end with the diameter (met exactly; the pitch the last alpha gives is reported on the
+    # final geometry).
     geometry = params.geometry()
     for _ in range(TARGET_ROUNDS if pitch_mm and diameter_mm else 1):
         if pitch_mm:

@@ -26,7 +26,9 @@ class Document(Section):
     def from_dict(cls, data: Mapping[str, Any]) -> Self:
         """Build from a nested mapping (missing keys take defaults; unknown keys are refused)."""
         if not isinstance(data, Mapping):
-            raise ParameterError(f"configuration must be a table of keys, got {type(data).__name__}")
+            raise ParameterError(
+                f"configuration must be a table of keys, got {type(data).__name__}"
+            )
         try:
             return cls.model_validate(dict(data))
         except ValidationError as error:
@@ -77,7 +79,9 @@ class Document(Section):
             for depth, part in enumerate(parents):
                 table = table.setdefault(part, {}) if isinstance(table, dict) else table
                 if not isinstance(table, dict):
-                    raise ParameterError(f"unknown key {dotted!r}: {'.'.join(parents[:depth + 1])} is not a table")
+                    raise ParameterError(
+                        f"unknown key {dotted!r}: {'.'.join(parents[: depth + 1])} is not a table"
+                    )
             table[leaf] = value
         return type(self).from_dict(data)
 

@@ -26,7 +26,13 @@ def _default_text(value: Any) -> str:
     if isinstance(value, bool):
         return f"`{str(value).lower()}`"
     if isinstance(value, (tuple, list)):
-        return "`[" + ", ".join(f'"{item.value}"' if isinstance(item, Enum) else f"{item:g}" for item in value) + "]`"
+        return (
+            "`["
+            + ", ".join(
+                f'"{item.value}"' if isinstance(item, Enum) else f"{item:g}" for item in value
+            )
+            + "]`"
+        )
     if isinstance(value, float):
         return f"`{value:g}`"
     return f"`{value}`"

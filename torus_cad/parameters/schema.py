@@ -20,7 +20,9 @@ from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationEr
 from pydantic.fields import FieldInfo
 
 from torus_cad.errors import ParameterError, shown
-from torus_cad.runtime.bounds import Bounds as Bounds  # declared beside the command line's option ranges
+
+# declared beside the command line's option ranges
+from torus_cad.runtime.bounds import Bounds as Bounds
 
 
 def _list_to_tuple(value: Any) -> Any:
@@ -35,9 +37,18 @@ Vector2 = Annotated[tuple[float, float], AS_TUPLE]
 Vector3 = Annotated[tuple[float, float, float], AS_TUPLE]
 
 
-def param(default: Any, *, doc: str, unit: str = "", ge: float | None = None, gt: float | None = None,
-          le: float | None = None, lt: float | None = None, fuzz: tuple[float, float] | None = None,
-          strict: bool | None = None) -> Any:
+def param(
+    default: Any,
+    *,
+    doc: str,
+    unit: str = "",
+    ge: float | None = None,
+    gt: float | None = None,
+    le: float | None = None,
+    lt: float | None = None,
+    fuzz: tuple[float, float] | None = None,
+    strict: bool | None = None,
+) -> Any:
     """Declare a parameter: its default, unit (``"mm"``, ``"deg"``, ...), allowed range and one-line doc.
 
     ``fuzz`` narrows the range the fuzz sampler draws from (default: the allowed range), for
@@ -46,26 +57,39 @@ def param(default: Any, *, doc: str, unit: str = "", ge: float | None = None, gt
     extra: dict[str, Any] = {"unit": unit}
     if fuzz is not None:
         extra["fuzz"] = list(fuzz)
-    return Field(default, description=doc, ge=ge, gt=gt, le=le, lt=lt, json_schema_extra=extra, strict=strict)
+    return Field(
+        default, description=doc, ge=ge, gt=gt, le=le, lt=lt, json_schema_extra=extra, strict=strict
+    )
 
 
 class Section(BaseModel):
     """Base of every table of parameters: frozen, strict types, no unknown keys, finite numbers."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False,
-                              use_enum_values=False, validate_default=False)
+    model_config = ConfigDict(
+        extra="forbid",
+        frozen=True,
+        strict=True,
+        allow_inf_nan=False,
+        use_enum_values=False,
+        validate_default=False,
+    )
 
     def __setattr__(self, name: str, value: Any) -> None:
-        raise AttributeError(f"parameters are frozen: make a changed copy with "
-                             f"with_values({{{name!r}: {value!r}}}) instead of setting {name}")
+        raise AttributeError(
+            f"parameters are frozen: make a changed copy with "
+            f"with_values({{{name!r}: {value!r}}}) instead of setting {name}"
+        )
 
 
 # -- describing the declarations -------------------------------------------------------------------
 
+
 def check_in_bounds(dotted: str, value: float, bounds: Bounds, unit: str = "") -> None:
     """Raise ValueError naming the field, the value and the interval when ``value`` lies outside."""
     if not bounds.contains(value):
-        raise ValueError(f"{dotted} = {_value_text(value)} is out of range; allowed {bounds}{' ' + unit if unit else ''}")
+        raise ValueError(
+            f"{dotted} = {_value_text(value)} is out of range; allowed {bounds}{' ' + unit if unit else ''}"
+        )
 
 
 def bounds_of(metadata: Sequence[Any]) -> Bounds:
@@ -145,13 +169,19 @@ def _spec(key: str, info: FieldInfo) -> ParameterSpec:
     fuzz = Bounds(*extra["fuzz"]) if "fuzz" in extra else None  # type: ignore[misc]
     if get_origin(kind) is tuple and get_args(kind)[-1] is Ellipsis and _is_enum(get_args(kind)[0]):
         # a list of choices (export.formats): each element one of the Enum's values
-        return ParameterSpec(key, tuple, info.default, unit, doc, Bounds(), choices=tuple(get_args(kind)[0]))
+        return ParameterSpec(
+            key, tuple, info.default, unit, doc, Bounds(), choices=tuple(get_args(kind)[0])
+        )
     if get_origin(kind) is tuple and get_args(kind)[-1] is Ellipsis:
         # a list of numbers of any length (a station table's column): length 0, no fuzz range
-        return ParameterSpec(key, tuple, info.default, unit, doc, bounds_of(_element_metadata(kind)))
+        return ParameterSpec(
+            key, tuple, info.default, unit, doc, bounds_of(_element_metadata(kind))
+        )
     if get_origin(kind) is tuple:
         bounds = bounds_of(_element_metadata(kind))
-        return ParameterSpec(key, tuple, info.default, unit, doc, bounds, len(get_args(kind)), fuzz or bounds)
+        return ParameterSpec(
+            key, tuple, info.default, unit, doc, bounds, len(get_args(kind)), fuzz or bounds
+        )
     bounds = bounds_of([*info.metadata, *metadata])
     if isinstance(kind, type) and issubclass(kind, Enum):
         return ParameterSpec(key, kind, info.default, unit, doc, bounds, choices=tuple(kind))
@@ -184,9 +214,15 @@ def section_docs(model: type[BaseModel], prefix: str = "") -> dict[str, str]:
 # -- one-line messages from pydantic's errors ------------------------------------------------------
 
 _TYPE_WORDS = {
-    "int_type": "a whole number", "int_from_float": "a whole number", "float_type": "a number",
-    "bool_type": "true or false", "string_type": "a string", "dict_type": "a table",
-    "model_type": "a table", "tuple_type": "a list", "list_type": "a list",
+    "int_type": "a whole number",
+    "int_from_float": "a whole number",
+    "float_type": "a number",
+    "bool_type": "true or false",
+    "string_type": "a string",
+    "dict_type": "a table",
+    "model_type": "a table",
+    "tuple_type": "a list",
+    "list_type": "a list",
 }
 
 
@@ -198,8 +234,15 @@ def _dotted(location: Sequence[Any]) -> str:
 
 
 #: What a TOML file calls the Python types its values arrive as (a message speaks TOML, not Python).
-_TOML_WORDS: dict[type, str] = {bool: "boolean", int: "integer", float: "float", str: "string", list: "array",
-                                tuple: "array", dict: "table"}
+_TOML_WORDS: dict[type, str] = {
+    bool: "boolean",
+    int: "integer",
+    float: "float",
+    str: "string",
+    list: "array",
+    tuple: "array",
+    dict: "table",
+}
 
 
 def _as_toml_lists(value: Any) -> Any:
@@ -214,7 +257,9 @@ def _as_toml_lists(value: Any) -> Any:
 def _describe(value: Any) -> str:
     """The value in the words of a TOML file, its text cut short (40 characters): ``array of 25 items [[1, 2,
     3], ...``, ``string 'x'``."""
-    word = next((name for kind, name in _TOML_WORDS.items() if type(value) is kind), type(value).__name__)
+    word = next(
+        (name for kind, name in _TOML_WORDS.items() if type(value) is kind), type(value).__name__
+    )
     if isinstance(value, list | tuple):
         word += f" of {len(value)} item{'s' if len(value) != 1 else ''}"
     return f"{word} {shown(_as_toml_lists(value), 40)}"
@@ -224,7 +269,13 @@ def _value_text(value: Any) -> str:
     if isinstance(value, float):
         return f"{value:g}"
     if isinstance(value, int) and not isinstance(value, bool):
-        text = str(value) if abs(value) < 10**15 else f"{float(value):g}" if abs(value) < 10**300 else "a huge number"
+        text = (
+            str(value)
+            if abs(value) < 10**15
+            else f"{float(value):g}"
+            if abs(value) < 10**300
+            else "a huge number"
+        )
         return text
     return shown(value)
 
@@ -276,7 +327,10 @@ def _message(model: type[BaseModel], error: Any) -> str:
         return f"{field} must be a table ([{field}]), got {_describe(value)}"
     if kind in ("finite_number",):
         return f"{field} = {shown(value)} must be a finite number"
-    if kind in ("greater_than", "greater_than_equal", "less_than", "less_than_equal") and spec is not None:
+    if (
+        kind in ("greater_than", "greater_than_equal", "less_than", "less_than_equal")
+        and spec is not None
+    ):
         try:
             check_in_bounds(field, value, spec.bounds, spec.unit)
         except ValueError as out_of_range:
@@ -284,7 +338,11 @@ def _message(model: type[BaseModel], error: Any) -> str:
     if kind in ("enum", "is_instance_of") and spec is not None and spec.choices:
         choices = ", ".join(str(choice.value) for choice in spec.choices)
         return f"{field} = {shown(value)} is not allowed; choose one of {choices}"
-    if kind in ("tuple_type", "too_short", "too_long", "missing") and spec is not None and spec.length:
+    if (
+        kind in ("tuple_type", "too_short", "too_long", "missing")
+        and spec is not None
+        and spec.length
+    ):
         vector_field = _dotted([part for part in location if not isinstance(part, int)])
         return f"{vector_field} must be a list of {spec.length} numbers, got {_describe(value)}"
     if kind in _TYPE_WORDS:

@@ -27,25 +27,41 @@ _ESTIMATE_SAMPLES = (25, 80)
 _USUAL_POLES_AROUND = 56
 
 
-def estimated_stl_triangles(params: PropellerParameters, surface: BladeSurface | None = None,
-                            pole_grid: tuple[int, int] | None = None) -> int:
+def estimated_stl_triangles(
+    params: PropellerParameters,
+    surface: BladeSurface | None = None,
+    pole_grid: tuple[int, int] | None = None,
+) -> int:
     """The STL triangle estimate of ``params``.
 
     ``surface`` is blade 0's sampled surface and ``pole_grid`` its B-spline's (sections, poles
     around), if the blade is already built; otherwise the surface is sampled here and the pole grid
     taken as the section fit's usual one.
     """
-    if surface is None or any(have < need for have, need in zip(surface.points.shape, _ESTIMATE_MIN_SAMPLES)):
+    if surface is None or any(
+        have < need for have, need in zip(surface.points.shape, _ESTIMATE_MIN_SAMPLES)
+    ):
         surface = params.blade_surface(sections=_ESTIMATE_SAMPLES[0], points=_ESTIMATE_SAMPLES[1])
     if pole_grid is None:
         pole_grid = (params.resolution.sections, min(params.resolution.points, _USUAL_POLES_AROUND))
     export = params.export
-    return estimate_stl_triangles(surface.points, surface.trailing_edge_index, params.blades, params.hub.radius,
-                                  export.stl_linear_deflection, export.stl_angular_deflection, pole_grid)
+    return estimate_stl_triangles(
+        surface.points,
+        surface.trailing_edge_index,
+        params.blades,
+        params.hub.radius,
+        export.stl_linear_deflection,
+        export.stl_angular_deflection,
+        pole_grid,
+    )
 
 
-def check_stl_budget(params: PropellerParameters, surface: BladeSurface | None = None,
-                     pole_grid: tuple[int, int] | None = None, limit: int = STL_TRIANGLE_LIMIT) -> int:
+def check_stl_budget(
+    params: PropellerParameters,
+    surface: BladeSurface | None = None,
+    pole_grid: tuple[int, int] | None = None,
+    limit: int = STL_TRIANGLE_LIMIT,
+) -> int:
     """The estimate, or BudgetError (exit 2) naming it, the deflections and the limit when it is over ``limit``."""
     estimate = estimated_stl_triangles(params, surface, pole_grid)
     if estimate > limit:
@@ -53,5 +69,6 @@ def check_stl_budget(params: PropellerParameters, surface: BladeSurface | None =
         raise BudgetError(
             f"the STL would have about {estimate:,} triangles (export.stl_linear_deflection = "
             f"{export.stl_linear_deflection:g} mm, export.stl_angular_deflection = {export.stl_angular_deflection:g} "
-            f"rad), over the limit of {limit:,}; raise the deflections or build with --no-stl")
+            f"rad), over the limit of {limit:,}; raise the deflections or build with --no-stl"
+        )
     return estimate

@@ -98,8 +98,14 @@ AXIAL_VIEW = View((0.0, 0.0, 1.0), (0.0, 1.0, 0.0), "along the spin axis (+z tow
 
 # -- the scene ------------------------------------------------------------------------------------
 
-def propeller_mesh(solid: cq.Shape, face_parts: Sequence[int], blades: int, tolerance: float,
-                   angular_tolerance: float = 0.3) -> SceneMesh:
+
+def propeller_mesh(
+    solid: cq.Shape,
+    face_parts: Sequence[int],
+    blades: int,
+    tolerance: float,
+    angular_tolerance: float = 0.3,
+) -> SceneMesh:
     """OpenCascade's tessellation of ``solid`` (of a copy: the caller's triangulation is left
     alone), each face coloured by its part: ``face_parts[k]`` for ``solid.Faces()[k]``.
 
@@ -109,7 +115,9 @@ def propeller_mesh(solid: cq.Shape, face_parts: Sequence[int], blades: int, tole
 
     faces = solid.Faces()
     if len(face_parts) != len(faces):
-        raise ValueError(f"face_parts has {len(face_parts)} entries for a solid of {len(faces)} faces")
+        raise ValueError(
+            f"face_parts has {len(face_parts)} entries for a solid of {len(faces)} faces"
+        )
     palette = np.array([HUB_COLOR] + [blade_color(index, blades) for index in range(blades)])
     vertices, triangles, parts = [], [], []
     offset = 0
@@ -121,12 +129,17 @@ def propeller_mesh(solid: cq.Shape, face_parts: Sequence[int], blades: int, tole
     if not triangles:
         raise ValueError("the solid has no triangulated faces to draw")
     all_parts = np.concatenate(parts)
-    return SceneMesh(np.concatenate(vertices), np.concatenate(triangles),
-                     palette[np.where(all_parts == HUB_PART, 0, all_parts + 1)], all_parts)
+    return SceneMesh(
+        np.concatenate(vertices),
+        np.concatenate(triangles),
+        palette[np.where(all_parts == HUB_PART, 0, all_parts + 1)],
+        all_parts,
+    )
 
 
-def blade_silhouettes(mesh: SceneMesh, directions: NDArray[np.float64], most_triangles: int = 3000
-                      ) -> NDArray[np.float64]:
+def blade_silhouettes(
+    mesh: SceneMesh, directions: NDArray[np.float64], most_triangles: int = 3000
+) -> NDArray[np.float64]:
     """``(blades, d)``: each blade's projected area (mm^2) seen along each of ``(d, 3)`` unit
     ``directions``, as half the sum of its triangles' |projected area| (exact for a convex body,
     close for a blade). At most ``most_triangles`` evenly picked triangles per blade are summed,
@@ -136,7 +149,9 @@ def blade_silhouettes(mesh: SceneMesh, directions: NDArray[np.float64], most_tri
     silhouettes = []
     for part in sorted(set(mesh.parts.tolist()) - {HUB_PART}):
         normals = weighted_normals[mesh.parts == part]
-        picked = normals[np.linspace(0, len(normals) - 1, min(most_triangles, len(normals))).astype(int)]
+        picked = normals[
+            np.linspace(0, len(normals) - 1, min(most_triangles, len(normals))).astype(int)
+        ]
         scale = np.linalg.norm(normals, axis=1).sum() / np.linalg.norm(picked, axis=1).sum()
         silhouettes.append(0.5 * scale * np.abs(picked @ directions.T).sum(axis=0))
     return np.array(silhouettes).reshape(-1, len(directions))
@@ -161,23 +176,36 @@ def oblique_view(mesh: SceneMesh) -> View:
     azimuths = np.radians(np.arange(0.0, 360.0 / blades - 1e-9, 2.0))
     elevations = np.radians(np.array(VIEW_ELEVATIONS_DEG))
     e, a = np.meshgrid(elevations, azimuths, indexing="ij")
-    directions = np.column_stack([(np.cos(e) * np.cos(a)).ravel(), (np.cos(e) * np.sin(a)).ravel(),
-                                  np.sin(e).ravel()])
+    directions = np.column_stack(
+        [(np.cos(e) * np.cos(a)).ravel(), (np.cos(e) * np.sin(a)).ravel(), np.sin(e).ravel()]
+    )
     silhouettes = blade_silhouettes(mesh, directions)
     if silhouettes.size:
         worst = (silhouettes / silhouettes.max()).min(axis=0)
-        best = int(np.argmax(worst > worst.max() - 1e-3))  # first within 0.1 % of the best: lowest elevation
+        # first within 0.1 % of the best: lowest elevation
+        best = int(np.argmax(worst > worst.max() - 1e-3))
     else:
         best = int(np.argmin(np.abs(e.ravel() - math.radians(ISOMETRIC_ELEVATION_DEG))))
     elevation, azimuth = math.degrees(e.ravel()[best]), math.degrees(a.ravel()[best])
     x, y, z = (float(value) for value in directions[best])
-    return View((x, y, z), (0.0, 0.0, 1.0), f"from above: elevation {elevation:.0f}°, azimuth {azimuth:.0f}°")
+    return View(
+        (x, y, z),
+        (0.0, 0.0, 1.0),
+        f"from above: elevation {elevation:.0f}°, azimuth {azimuth:.0f}°",
+    )
 
 
-# -- rendering ---------------------------------------------------------------------------------------
+# -- rendering
+# ---------------------------------------------------------------------------------------
 
-def render_views(mesh: SceneMesh, views: Sequence[View], size: Sequence[int], title: str = "",
-                 smooth: bool = True) -> NDArray[np.uint8]:
+
+def render_views(
+    mesh: SceneMesh,
+    views: Sequence[View],
+    size: Sequence[int],
+    title: str = "",
+    smooth: bool = True,
+) -> NDArray[np.uint8]:
     """``mesh`` seen in each of ``views``, side by side, under ``title``: an ``(height, width, 3)``
     RGB uint8 array of exactly ``size`` = (width, height) pixels."""
     from vtkmodules.vtkRenderingCore import vtkRenderer
@@ -205,8 +233,14 @@ def render_views(mesh: SceneMesh, views: Sequence[View], size: Sequence[int], ti
         overlay = vtkRenderer()
         overlay.SetViewport(0.0, view_top, 1.0, 1.0)
         overlay.SetBackground(*BACKGROUND_RGB)
-        overlay.AddViewProp(_text(title, _fitting_font_px(title, round(title_px * 0.5), width), (0.5, 0.45),
-                                  vertical="center"))
+        overlay.AddViewProp(
+            _text(
+                title,
+                _fitting_font_px(title, round(title_px * 0.5), width),
+                (0.5, 0.45),
+                vertical="center",
+            )
+        )
         window.AddRenderer(overlay)
     window.Render()
     image = _pixels(window, width, height)
@@ -214,8 +248,12 @@ def render_views(mesh: SceneMesh, views: Sequence[View], size: Sequence[int], ti
     return image
 
 
-def render_preview(propeller: _HasParts, size: Sequence[int] = DEFAULT_SIZE, title: str | None = None,
-                   progress: Callable[[Stage], None] | None = None) -> NDArray[np.uint8]:
+def render_preview(
+    propeller: _HasParts,
+    size: Sequence[int] = DEFAULT_SIZE,
+    title: str | None = None,
+    progress: Callable[[Stage], None] | None = None,
+) -> NDArray[np.uint8]:
     """The preview picture as an ``(height, width, 3)`` RGB uint8 array of exactly ``size`` pixels.
 
     Args:
@@ -233,18 +271,27 @@ def render_preview(propeller: _HasParts, size: Sequence[int] = DEFAULT_SIZE, tit
     # smooth normals hide the facets; only the outline shows them).
     diagonal = propeller.solid.BoundingBox().DiagonalLength
     view_px = min(width / 2.0, height)
-    mesh = propeller_mesh(propeller.solid, propeller.face_parts, blades, max(diagonal / (3.0 * view_px), 1e-3))
+    mesh = propeller_mesh(
+        propeller.solid, propeller.face_parts, blades, max(diagonal / (3.0 * view_px), 1e-3)
+    )
     if title is None:
         volume = mass_properties(propeller.solid, 1.0).volume_mm3
-        title = (f"{propeller.parameters.name}: {blades} blade{'s' if blades != 1 else ''}, "
-                 f"volume {volume:,.0f} mm³")
+        title = (
+            f"{propeller.parameters.name}: {blades} blade{'s' if blades != 1 else ''}, "
+            f"volume {volume:,.0f} mm³"
+        )
     if progress:
         progress(Stage.PREVIEW_RENDER)
     return render_views(mesh, (oblique_view(mesh), AXIAL_VIEW), (width, height), title)
 
 
-def write_preview(propeller: _HasParts, path: str | Path, size: Sequence[int] = DEFAULT_SIZE,
-                  title: str | None = None, progress: Callable[[Stage], None] | None = None) -> Path:
+def write_preview(
+    propeller: _HasParts,
+    path: str | Path,
+    size: Sequence[int] = DEFAULT_SIZE,
+    title: str | None = None,
+    progress: Callable[[Stage], None] | None = None,
+) -> Path:
     """Render the preview (see :func:`render_preview`) and write it as a PNG, atomically; return the path."""
     return write_png(render_preview(propeller, size, title, progress), path)
 
@@ -262,7 +309,8 @@ def write_png(image: NDArray[np.uint8], path: str | Path) -> Path:
     data.GetPointData().SetScalars(scalars)
     path = Path(path)
     writer = vtkPNGWriter()
-    writer.SetWriteToMemory(True)  # encoded here, written by Python: a full disk is an OSError naming the file
+    # encoded here, written by Python: a full disk is an OSError naming the file
+    writer.SetWriteToMemory(True)
     writer.SetInputData(data)
     writer.Write()
     if writer.GetErrorCode():
@@ -286,6 +334,7 @@ def _offscreen_window(width: int, height: int) -> vtkRenderWindow:
     window: vtkRenderWindow
     if sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
         from vtkmodules.vtkRenderingOpenGL2 import vtkEGLRenderWindow
+
         window = vtkEGLRenderWindow()
     else:
         window = vtkRenderWindow()
@@ -306,11 +355,14 @@ def _pixels(window: vtkRenderWindow, width: int, height: int) -> NDArray[np.uint
     grab.Update()
     output = grab.GetOutput()
     got_width, got_height, _ = output.GetDimensions()
-    pixels = vtk_to_numpy(output.GetPointData().GetScalars()).reshape(got_height, got_width, -1)[::-1]  # type: ignore[no-untyped-call]
+    scalars = vtk_to_numpy(output.GetPointData().GetScalars())  # type: ignore[no-untyped-call]
+    pixels = scalars.reshape(got_height, got_width, -1)[::-1]
     corner = pixels[0, 0, :3].astype(float) / 255.0
     if (got_width, got_height) != (width, height) or np.abs(corner - BACKGROUND_RGB).max() > 0.02:
-        raise TorusCadError("off-screen OpenGL did not render the preview (no EGL or OSMesa? on Debian: "
-                            "apt-get install libegl1 libegl-mesa0 libgl1-mesa-dri)")
+        raise TorusCadError(
+            "off-screen OpenGL did not render the preview (no EGL or OSMesa? on Debian: "
+            "apt-get install libegl1 libegl-mesa0 libgl1-mesa-dri)"
+        )
     return np.ascontiguousarray(pixels[..., :3], dtype=np.uint8)
 
 
@@ -323,10 +375,16 @@ def _place_camera(renderer: Any, vertices: NDArray[np.float64], view: View, aspe
     up /= np.linalg.norm(up)
     right = np.cross(up, toward)
     across, along = vertices @ right, vertices @ up
-    centre_screen = np.array([(across.min() + across.max()) / 2.0, (along.min() + along.max()) / 2.0])
+    centre_screen = np.array(
+        [(across.min() + across.max()) / 2.0, (along.min() + along.max()) / 2.0]
+    )
     half = max((across.max() - across.min()) / 2.0 / aspect, (along.max() - along.min()) / 2.0)
     depth = vertices @ toward
-    focal = centre_screen[0] * right + centre_screen[1] * up + ((depth.min() + depth.max()) / 2.0) * toward
+    focal = (
+        centre_screen[0] * right
+        + centre_screen[1] * up
+        + ((depth.min() + depth.max()) / 2.0) * toward
+    )
     distance = float(depth.max() - depth.min()) + 10.0 * half + 1.0
     camera = renderer.GetActiveCamera()
     camera.ParallelProjectionOn()
@@ -347,8 +405,10 @@ def _text(text: str, size_px: int, position: tuple[float, float], vertical: str)
     style.SetColor(*_TEXT_RGB)
     style.SetFontFamilyToArial()
     style.SetJustificationToCentered()
-    {"bottom": style.SetVerticalJustificationToBottom,
-     "center": style.SetVerticalJustificationToCentered}[vertical]()
+    {
+        "bottom": style.SetVerticalJustificationToBottom,
+        "center": style.SetVerticalJustificationToCentered,
+    }[vertical]()
     actor.GetPositionCoordinate().SetCoordinateSystemToNormalizedViewport()
     actor.SetPosition(*position)
     return actor

@@ -20,7 +20,13 @@ from vtkmodules.vtkCommonDataModel import vtkCellArray, vtkPolyData
 from vtkmodules.vtkFiltersCore import vtkPolyDataNormals
 from vtkmodules.vtkRenderingCore import vtkActor, vtkLightKit, vtkPolyDataMapper, vtkRenderer
 
-__all__ = ["FEATURE_ANGLE_DEG", "add_lights", "polyline_polydata", "surface_actor", "triangle_polydata"]
+__all__ = [
+    "FEATURE_ANGLE_DEG",
+    "add_lights",
+    "polyline_polydata",
+    "surface_actor",
+    "triangle_polydata",
+]
 
 #: Smooth shading across edges where triangles meet at less than this angle (degrees); sharper
 #: edges (the trailing edge, the hub's rims) stay sharp.
@@ -36,20 +42,30 @@ def _points(vertices: NDArray[np.float64]) -> vtkPoints:
 def _cells(connectivity: NDArray[np.int64], sizes: NDArray[np.int64]) -> vtkCellArray:
     offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
     cells = vtkCellArray()
-    cells.SetData(numpy_to_vtkIdTypeArray(offsets, deep=True),  # type: ignore[no-untyped-call]
-                  numpy_to_vtkIdTypeArray(np.ascontiguousarray(connectivity, dtype=np.int64), deep=True))  # type: ignore[no-untyped-call]
+    cells.SetData(
+        numpy_to_vtkIdTypeArray(offsets, deep=True),  # type: ignore[no-untyped-call]
+        numpy_to_vtkIdTypeArray(  # type: ignore[no-untyped-call]
+            np.ascontiguousarray(connectivity, dtype=np.int64), deep=True
+        ),
+    )
     return cells
 
 
 def _cell_colors(polydata: vtkPolyData, rgb: NDArray[np.float64]) -> None:
     """``rgb`` ``(cells, 3)`` in 0..1 as the polydata's cell colours."""
-    colors = numpy_to_vtk(np.ascontiguousarray(np.round(np.asarray(rgb) * 255.0), dtype=np.uint8), deep=True)  # type: ignore[no-untyped-call]
+    colors = numpy_to_vtk(
+        np.ascontiguousarray(np.round(np.asarray(rgb) * 255.0), dtype=np.uint8), deep=True
+    )  # type: ignore[no-untyped-call]
     colors.SetName("colors")
     polydata.GetCellData().SetScalars(colors)
 
 
-def triangle_polydata(vertices: NDArray[np.float64], triangles: NDArray[np.int64],
-                      cell_rgb: NDArray[np.float64] | None = None, smooth: bool = True) -> vtkPolyData:
+def triangle_polydata(
+    vertices: NDArray[np.float64],
+    triangles: NDArray[np.int64],
+    cell_rgb: NDArray[np.float64] | None = None,
+    smooth: bool = True,
+) -> vtkPolyData:
     """Triangles as a vtkPolyData, with smooth vertex normals split at sharp edges.
 
     Args:
@@ -78,17 +94,22 @@ def triangle_polydata(vertices: NDArray[np.float64], triangles: NDArray[np.int64
     return output
 
 
-def polyline_polydata(curves: Sequence[NDArray[np.float64]], cell_rgb: NDArray[np.float64] | None = None
-                      ) -> vtkPolyData:
+def polyline_polydata(
+    curves: Sequence[NDArray[np.float64]], cell_rgb: NDArray[np.float64] | None = None
+) -> vtkPolyData:
     """Closed polylines, one per ``(p, 3)`` curve (mm), with an optional ``(curves, 3)`` RGB 0..1 colour each."""
     polydata = vtkPolyData()
     if not curves:
         return polydata
     vertices = np.concatenate(curves)
     starts = np.cumsum([0] + [len(curve) for curve in curves[:-1]])
-    connectivity = np.concatenate([np.r_[np.arange(len(curve)), 0] + start for curve, start in zip(curves, starts)])
+    connectivity = np.concatenate(
+        [np.r_[np.arange(len(curve)), 0] + start for curve, start in zip(curves, starts)]
+    )
     polydata.SetPoints(_points(vertices))
-    polydata.SetLines(_cells(connectivity.astype(np.int64), np.array([len(curve) + 1 for curve in curves])))
+    polydata.SetLines(
+        _cells(connectivity.astype(np.int64), np.array([len(curve) + 1 for curve in curves]))
+    )
     if cell_rgb is not None:
         _cell_colors(polydata, cell_rgb)
     return polydata

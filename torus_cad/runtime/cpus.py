@@ -8,7 +8,12 @@ from __future__ import annotations
 
 import os
 
-from torus_cad.tolerances import CFD_THREADS_LIMIT, CFD_THREADS_PER_CPU, WORKERS_LIMIT, WORKERS_PER_CPU
+from torus_cad.tolerances import (
+    CFD_THREADS_LIMIT,
+    CFD_THREADS_PER_CPU,
+    WORKERS_LIMIT,
+    WORKERS_PER_CPU,
+)
 
 
 def available_cpus() -> int:

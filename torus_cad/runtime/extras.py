@@ -13,9 +13,10 @@ from collections.abc import Iterable
 
 from torus_cad.errors import MissingExtraError
 
-#: The modules a command needs from each extra of pyproject.toml (import names, not distribution names).
-#: Modules an extra installs for one option only (cmaes for the CMA-ES sampler, psycopg2 for PostgreSQL,
-#: dask.distributed for --scheduler, pyarrow for Parquet tables) are required where that option is chosen.
+#: The modules a command needs from each extra of pyproject.toml (import names, not distribution
+#: names). Modules an extra installs for one option only (cmaes for the CMA-ES sampler, psycopg2 for
+#: PostgreSQL, dask.distributed for --scheduler, pyarrow for Parquet tables) are required where that
+#: option is chosen.
 EXTRA_MODULES: dict[str, tuple[str, ...]] = {
     "mesh": ("manifold3d", "meshio"),
     "cfd": ("gmsh",),
@@ -26,9 +27,16 @@ EXTRA_MODULES: dict[str, tuple[str, ...]] = {
     "docs": ("mkdocs", "material", "mkdocstrings_handlers"),
 }
 
-#: Modules an extra installs that only some options use: their extra, for the message of a late import.
-OPTIONAL_MODULES: dict[str, str] = {"cmaes": "optimize", "psycopg2": "optimize", "optuna_dashboard": "optimize",
-                                    "pyarrow": "sweep", "dask": "sweep", "distributed": "sweep"}
+#: Modules an extra installs that only some options use: their extra, for the message of a late
+#: import.
+OPTIONAL_MODULES: dict[str, str] = {
+    "cmaes": "optimize",
+    "psycopg2": "optimize",
+    "optuna_dashboard": "optimize",
+    "pyarrow": "sweep",
+    "dask": "sweep",
+    "distributed": "sweep",
+}
 
 
 def install_line(extra: str | None = None) -> str:
@@ -47,7 +55,8 @@ def is_installed(module: str) -> bool:
     is imported for a dotted name)."""
     try:
         return importlib.util.find_spec(module) is not None
-    except (ImportError, ValueError):  # a parent package missing, or a module set to None in sys.modules
+    # a parent package missing, or a module set to None in sys.modules
+    except (ImportError, ValueError):
         return False
 
 

@@ -69,8 +69,8 @@ def removed_on_exit(path: str | Path) -> Iterator[Path]:
         IN_FLIGHT.pop(key, None)
 
 
-#: Folders this process made for output (outermost first), by a registration number: a signal handler
-#: removes those still empty, so an interrupted command leaves no empty --out folder behind.
+#: Folders this process made for output (outermost first), by a registration number: a signal
+#: handler removes those still empty, so an interrupted command leaves no empty --out folder behind.
 MADE_FOLDERS: dict[int, tuple[Path, ...]] = {}
 
 
@@ -131,7 +131,8 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
     with removed_on_exit(temp):
         try:
             yield temp
-            os.chmod(temp, 0o666 & ~_current_umask())  # mkstemp makes 0600; give the file normal permissions
+            # mkstemp makes 0600; give the file normal permissions
+            os.chmod(temp, 0o666 & ~_current_umask())
             os.replace(temp, path)
         finally:
             temp.unlink(missing_ok=True)
@@ -148,7 +149,9 @@ def file_ends_with(path: Path, marker: bytes, tail: int = 256) -> bool:
         return False
 
 
-def write_failure(path: Path, written: Path | None = None, otherwise: Exception | None = None) -> Exception:
+def write_failure(
+    path: Path, written: Path | None = None, otherwise: Exception | None = None
+) -> Exception:
     """Why a writer that reports only that it failed (OpenCascade, gmsh) could not write ``written`` (the
     temp file published as ``path``; default ``path`` itself).
 

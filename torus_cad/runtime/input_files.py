@@ -26,8 +26,13 @@ from pathlib import Path
 
 from torus_cad.errors import BudgetError, ParameterError
 
-_KINDS = ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a named pipe"), (stat.S_ISCHR, "a character device"),
-          (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket"))
+_KINDS = (
+    (stat.S_ISDIR, "a folder"),
+    (stat.S_ISFIFO, "a named pipe"),
+    (stat.S_ISCHR, "a character device"),
+    (stat.S_ISBLK, "a block device"),
+    (stat.S_ISSOCK, "a socket"),
+)
 
 #: Bytes asked of the kernel per read call.
 _CHUNK_BYTES = 1 << 16
@@ -39,10 +44,14 @@ def _kind(mode: int) -> str:
 
 def _check_regular(path: Path, status: os.stat_result, what: str, max_bytes: int) -> None:
     if not stat.S_ISREG(status.st_mode):
-        raise ParameterError(f"{what} {str(path)!r} is not a regular file ({_kind(status.st_mode)})")
+        raise ParameterError(
+            f"{what} {str(path)!r} is not a regular file ({_kind(status.st_mode)})"
+        )
     if status.st_size > max_bytes:
-        raise ParameterError(f"{what} {str(path)!r} is {status.st_size:,} bytes, over the limit of "
-                             f"{max_bytes:,} bytes")
+        raise ParameterError(
+            f"{what} {str(path)!r} is {status.st_size:,} bytes, over the limit of "
+            f"{max_bytes:,} bytes"
+        )
 
 
 def read_untrusted_bytes(path: str | Path, what: str, max_bytes: int) -> bytes:
@@ -85,10 +94,10 @@ def decode_text(raw: bytes, source: str, what: str, empty_ok: bool = False) -> s
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as error:
-        line = raw[:error.start].count(b"\n") + 1
+        line = raw[: error.start].count(b"\n") + 1
         raise ParameterError(f"{what} {source!r} line {line}: not a UTF-8 text file") from None
     if "\x00" in text:
-        line = text[:text.index("\x00")].count("\n") + 1
+        line = text[: text.index("\x00")].count("\n") + 1
         raise ParameterError(f"{what} {source!r} line {line}: not a text file (binary data)")
     if not empty_ok and not text.strip():
         raise ParameterError(f"{what} {source!r} is empty")
@@ -115,8 +124,10 @@ class TimeBudget:
         """BudgetError if the budget is spent; ``step`` says what was being done."""
         spent = time.monotonic() - self._start
         if spent > self.limit_s:
-            raise BudgetError(f"{self.what} {self.source!r}: {step} took {spent:.1f} s, over the limit of "
-                              f"{self.limit_s:g} s")
+            raise BudgetError(
+                f"{self.what} {self.source!r}: {step} took {spent:.1f} s, over the limit of "
+                f"{self.limit_s:g} s"
+            )
 
 
 def is_number_text(text: str) -> bool:

@@ -62,8 +62,10 @@ def _exit_now(signum: int) -> None:
     try:
         for stream in (sys.stdout, sys.stderr):
             stream.flush()
-        sys.stderr.write(f"{_program}: interrupted by {name}; staged files removed, "
-                         f"published output sets are complete\n")
+        sys.stderr.write(
+            f"{_program}: interrupted by {name}; staged files removed, "
+            f"published output sets are complete\n"
+        )
         sys.stderr.flush()
     except (OSError, ValueError):
         pass  # a closed or broken stderr must not stop the exit
@@ -88,7 +90,8 @@ def exit_on_signals(program: str = "torus-cad") -> Callable[[], None]:
     previous: dict[int, _Handler] = {}
     try:
         for signum in EXIT_SIGNALS:
-            if signal.getsignal(signum) is not signal.SIG_IGN:  # ignored by the caller (nohup, `cmd &`): keep it so
+            # ignored by the caller (nohup, `cmd &`): keep it so
+            if signal.getsignal(signum) is not signal.SIG_IGN:
                 previous[signum] = signal.signal(signum, _handler)
     except ValueError:  # not the main thread: signals are not ours to handle
         pass

@@ -47,7 +47,8 @@ def prefetch_modules(*names: str) -> None:
 def _import_prefetched() -> None:
     while _PREFETCH:
         name = _PREFETCH.pop(0)
-        with contextlib.suppress(ImportError):  # its first use raises the error that names the missing package
+        # its first use raises the error that names the missing package
+        with contextlib.suppress(ImportError):
             importlib.import_module(name)
 
 
@@ -94,7 +95,11 @@ class IsolatedCall(Generic[T]):
         if data is None:
             raise IsolatedTimeout(f"{self.what} did not finish within {timeout_s:g} s")
         if not data:
-            ended = f"signal {os.WTERMSIG(status)}" if os.WIFSIGNALED(status) else f"exit {os.WEXITSTATUS(status)}"
+            ended = (
+                f"signal {os.WTERMSIG(status)}"
+                if os.WIFSIGNALED(status)
+                else f"exit {os.WEXITSTATUS(status)}"
+            )
             raise IsolatedCrash(f"{self.what} crashed (its process ended with {ended})")
         succeeded, value = pickle.loads(data)
         if succeeded:
@@ -133,17 +138,20 @@ def run_isolated(function: Callable[..., T], *args: Any, timeout_s: float, what:
         return call.result(timeout_s)
 
 
-def _run_child(function: Callable[..., Any], args: tuple[Any, ...], write_end: int, parent_pid: int,
-               what: str) -> None:
+def _run_child(
+    function: Callable[..., Any], args: tuple[Any, ...], write_end: int, parent_pid: int, what: str
+) -> None:
     """The child's side: die with the parent, run, send (succeeded, result or exception), leave at once."""
     status = 1
     try:
-        for signum in _CHILD_DEFAULT_SIGNALS:  # the parent's handlers print the command's one line; not here
+        # the parent's handlers print the command's one line; not here
+        for signum in _CHILD_DEFAULT_SIGNALS:
             signal.signal(signum, signal.SIG_DFL)
         ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGKILL)
         if os.getppid() != parent_pid:
             return
-        faulthandler.disable()  # a crash here is an expected outcome, reported by the parent; no dump
+        # a crash here is an expected outcome, reported by the parent; no dump
+        faulthandler.disable()
         try:
             outcome: tuple[bool, Any] = (True, function(*args))
         except Exception as error:

@@ -58,8 +58,9 @@ class StageProgress:
         prefix: text before each line.
     """
 
-    def __init__(self, enabled: bool | None = None, stream: TextIO | None = None,
-                 prefix: str = "torus-cad") -> None:
+    def __init__(
+        self, enabled: bool | None = None, stream: TextIO | None = None, prefix: str = "torus-cad"
+    ) -> None:
         self.stream = stream if stream is not None else sys.stderr
         self.enabled = is_terminal(self.stream) if enabled is None else bool(enabled)
         self.prefix = prefix
@@ -96,7 +97,9 @@ class StageProgress:
         now = time.perf_counter()
         if not self.stages or now - self._last_line < every_s:
             return
-        self._print(f"{self._label(self.stages[-1])}: still running, {now - self._stage_start:.0f} s in this stage")
+        self._print(
+            f"{self._label(self.stages[-1])}: still running, {now - self._stage_start:.0f} s in this stage"
+        )
 
     def finish(self, message: str = "done") -> None:
         """Announce the end (with the total elapsed time)."""
@@ -108,7 +111,9 @@ class StageProgress:
             return
         from rich.text import Text
 
-        self._console.print(Text.assemble(f"{self.prefix}: ", (f"[{self.elapsed:6.1f} s]", "dim"), f" {text}"))
+        self._console.print(
+            Text.assemble(f"{self.prefix}: ", (f"[{self.elapsed:6.1f} s]", "dim"), f" {text}")
+        )
 
 
 class BatchProgress:
@@ -124,8 +129,14 @@ class BatchProgress:
     Use as a context manager, or call :meth:`close` at the end.
     """
 
-    def __init__(self, total: int, already_done: int = 0, enabled: bool | None = None,
-                 stream: TextIO | None = None, label: str = "designs") -> None:
+    def __init__(
+        self,
+        total: int,
+        already_done: int = 0,
+        enabled: bool | None = None,
+        stream: TextIO | None = None,
+        label: str = "designs",
+    ) -> None:
         self.stream = stream if stream is not None else sys.stderr
         self.enabled = is_terminal(self.stream) if enabled is None else bool(enabled)
         self.total, self.already_done = total, already_done
@@ -136,12 +147,27 @@ class BatchProgress:
             self._bar, self._task = self._make_bar(label)
 
     def _make_bar(self, label: str) -> tuple[Any, Any]:
-        from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+        from rich.progress import (
+            BarColumn,
+            MofNCompleteColumn,
+            Progress,
+            TextColumn,
+            TimeRemainingColumn,
+        )
 
-        bar = Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
-                       TextColumn("{task.fields[counts]}"), TextColumn("{task.fields[rate]}"),
-                       TimeRemainingColumn(), console=_console(self.stream), refresh_per_second=4)
-        task = bar.add_task(label, total=self.total, completed=self.already_done, counts="", rate="")
+        bar = Progress(
+            TextColumn("{task.description}"),
+            BarColumn(),
+            MofNCompleteColumn(),
+            TextColumn("{task.fields[counts]}"),
+            TextColumn("{task.fields[rate]}"),
+            TimeRemainingColumn(),
+            console=_console(self.stream),
+            refresh_per_second=4,
+        )
+        task = bar.add_task(
+            label, total=self.total, completed=self.already_done, counts="", rate=""
+        )
         bar.start()
         return bar, task
 
@@ -159,8 +185,12 @@ class BatchProgress:
         """Count one finished design (``outcome`` is its status name) and redraw."""
         self.counts[str(outcome)] = self.counts.get(str(outcome), 0) + 1
         if self._bar is not None:
-            self._bar.update(self._task, advance=1, counts=_counts_text(self.counts),
-                             rate=f"{self.rate_per_minute():.1f}/min")
+            self._bar.update(
+                self._task,
+                advance=1,
+                counts=_counts_text(self.counts),
+                rate=f"{self.rate_per_minute():.1f}/min",
+            )
 
     def message(self, text: str) -> None:
         """Print one line above the bar (only when the bar is drawn)."""

@@ -77,7 +77,8 @@ class StageTimer(Generic[StageT]):
 
     def __init__(self, on_start: Callable[[StageT], None] | None = None) -> None:
         self.seconds: dict[str, float] = {}
-        self.on_start = on_start  # called with each stage (a str: its value) as it starts (progress display)
+        # called with each stage (a str: its value) as it starts (progress display)
+        self.on_start = on_start
 
     @contextmanager
     def stage(self, stage: StageT) -> Iterator[None]:
@@ -88,4 +89,6 @@ class StageTimer(Generic[StageT]):
         try:
             yield
         finally:
-            self.seconds[stage.value] = self.seconds.get(stage.value, 0.0) + time.perf_counter() - start
+            self.seconds[stage.value] = (
+                self.seconds.get(stage.value, 0.0) + time.perf_counter() - start
+            )

@@ -34,9 +34,12 @@ SIMULATE_CONVERGED_VARIATION = 0.02
 CONVERGENCE_WINDOW = 0.1
 
 
-def thrust_and_torque(force_n: np.ndarray, moment_nm: np.ndarray, handedness: Handedness) -> tuple[Any, Any]:
+def thrust_and_torque(
+    force_n: np.ndarray, moment_nm: np.ndarray, handedness: Handedness
+) -> tuple[Any, Any]:
     """(thrust N, torque N m) from the propeller's force and moment (..., 3) about the origin."""
-    rotation = -1.0 if handedness == Handedness.CW else 1.0  # the design's sense of rotation about +z
+    # the design's sense of rotation about +z
+    rotation = -1.0 if handedness == Handedness.CW else 1.0
     return force_n[..., 2], -rotation * moment_nm[..., 2]
 
 
@@ -65,7 +68,9 @@ class Performance:
     figure_of_merit: float | None
 
 
-def performance(thrust_n: float, torque_nm: float, point: OperatingPoint, diameter_m: float) -> Performance:
+def performance(
+    thrust_n: float, torque_nm: float, point: OperatingPoint, diameter_m: float
+) -> Performance:
     """Coefficients of ``thrust_n`` and ``torque_nm`` at ``point`` for tip diameter ``diameter_m``."""
     rho, n = point.fluid.density_kg_m3, point.rpm / 60.0
     power = torque_nm * 2.0 * math.pi * n
@@ -75,38 +80,59 @@ def performance(thrust_n: float, torque_nm: float, point: OperatingPoint, diamet
     ct = thrust_n / (rho * n**2 * diameter_m**4)
     cp = power / (rho * n**3 * diameter_m**5)
     efficiency = advance * ct / cp if advance > 0.0 and cp != 0.0 else None
-    merit = ct**1.5 / (math.sqrt(math.pi / 2.0) * cp) if advance == 0.0 and ct > 0.0 and cp > 0.0 else None
+    merit = (
+        ct**1.5 / (math.sqrt(math.pi / 2.0) * cp)
+        if advance == 0.0 and ct > 0.0 and cp > 0.0
+        else None
+    )
     return Performance(thrust_n, torque_nm, power, advance, ct, cp, efficiency, merit)
 
 
-def viscous_part(history: History, handedness: Handedness, thrust_n: float, torque_nm: float
-                 ) -> dict[str, float | None] | None:
+def viscous_part(
+    history: History, handedness: Handedness, thrust_n: float, torque_nm: float
+) -> dict[str, float | None] | None:
     """The wall shear's part of the last iteration's thrust (N) and torque (N m), and its share of the totals
     ``thrust_n`` and ``torque_nm`` (None where a total is zero): how much a skin-friction error (a laminar or
     turbulent boundary layer, the wall treatment) can move the result. None when the history has no viscous
     columns."""
     if not len(history.viscous_force_n):
         return None
-    viscous_thrust, viscous_torque = thrust_and_torque(history.viscous_force_n[-1], history.viscous_moment_nm[-1],
-                                                       handedness)
-    return {"thrust_n": float(viscous_thrust), "torque_nm": float(viscous_torque),
-            "thrust_share": float(viscous_thrust / thrust_n) if thrust_n else None,
-            "torque_share": float(viscous_torque / torque_nm) if torque_nm else None}
+    viscous_thrust, viscous_torque = thrust_and_torque(
+        history.viscous_force_n[-1], history.viscous_moment_nm[-1], handedness
+    )
+    return {
+        "thrust_n": float(viscous_thrust),
+        "torque_nm": float(viscous_torque),
+        "thrust_share": float(viscous_thrust / thrust_n) if thrust_n else None,
+        "torque_share": float(viscous_torque / torque_nm) if torque_nm else None,
+    }
 
 
-def run_summary(history: History, point: OperatingPoint, handedness: Handedness, diameter_m: float,
-                window: float = CONVERGENCE_WINDOW) -> dict[str, Any]:
+def run_summary(
+    history: History,
+    point: OperatingPoint,
+    handedness: Handedness,
+    diameter_m: float,
+    window: float = CONVERGENCE_WINDOW,
+) -> dict[str, Any]:
     """The report's numbers: the last iteration's performance, the force variation over the last
     ``window`` of the run and whether it is within ``SIMULATE_CONVERGED_VARIATION``."""
     thrust, torque = thrust_and_torque(history.force_n, history.moment_nm, handedness)
-    variation = {"thrust": force_variation(thrust, window), "torque": force_variation(torque, window)}
+    variation = {
+        "thrust": force_variation(thrust, window),
+        "torque": force_variation(torque, window),
+    }
     result = performance(float(thrust[-1]), float(torque[-1]), point, diameter_m)
     converged = max(variation.values()) <= SIMULATE_CONVERGED_VARIATION
-    return {**result.__dict__, "converged": converged,
-            "viscous": viscous_part(history, handedness, result.thrust_n, result.torque_nm),
-            "force_variation_last_10_percent": {key: (value if math.isfinite(value) else None)
-                                                for key, value in variation.items()},
-            "convergence_limit": SIMULATE_CONVERGED_VARIATION}
+    return {
+        **result.__dict__,
+        "converged": converged,
+        "viscous": viscous_part(history, handedness, result.thrust_n, result.torque_nm),
+        "force_variation_last_10_percent": {
+            key: (value if math.isfinite(value) else None) for key, value in variation.items()
+        },
+        "convergence_limit": SIMULATE_CONVERGED_VARIATION,
+    }
 
 
 #: Roache's factor of safety of the grid convergence index for three grids (an observed order).
@@ -176,11 +202,18 @@ class Extrapolation:
 
     def report(self) -> dict[str, Any]:
         """The study's JSON entry of one force (fractions for the GCIs, the spread and the uncertainty)."""
-        return {"extrapolated": self.extrapolated, "observed_order": self.order,
-                "converges_monotonically": self.converges_monotonically, "gci_fine": self.gci_fine,
-                "gci_medium": self.gci_medium, "gci_asymptotic_ratio": self.asymptotic_ratio,
-                "in_asymptotic_range": self.in_asymptotic_range, "spread": self.spread,
-                "uncertainty_fine": self.uncertainty_fine, "uncertainty_method": self.uncertainty_method.value}
+        return {
+            "extrapolated": self.extrapolated,
+            "observed_order": self.order,
+            "converges_monotonically": self.converges_monotonically,
+            "gci_fine": self.gci_fine,
+            "gci_medium": self.gci_medium,
+            "gci_asymptotic_ratio": self.asymptotic_ratio,
+            "in_asymptotic_range": self.in_asymptotic_range,
+            "spread": self.spread,
+            "uncertainty_fine": self.uncertainty_fine,
+            "uncertainty_method": self.uncertainty_method.value,
+        }
 
 
 def richardson(coarse: float, medium: float, fine: float, ratio: float) -> Extrapolation:
@@ -197,6 +230,11 @@ def richardson(coarse: float, medium: float, fine: float, ratio: float) -> Extra
     growth = ratio**order - 1.0
     gci_fine = GCI_SAFETY_FACTOR * abs(second / fine) / growth if fine != 0.0 else None
     gci_medium = GCI_SAFETY_FACTOR * abs(first / medium) / growth if medium != 0.0 else None
-    asymptotic = (gci_medium / (ratio**order * gci_fine) if gci_fine is not None and gci_medium is not None
-                  else None)
-    return Extrapolation(values, ratio, order, fine + second / growth, True, gci_fine, gci_medium, asymptotic)
+    asymptotic = (
+        gci_medium / (ratio**order * gci_fine)
+        if gci_fine is not None and gci_medium is not None
+        else None
+    )
+    return Extrapolation(
+        values, ratio, order, fine + second / growth, True, gci_fine, gci_medium, asymptotic
+    )

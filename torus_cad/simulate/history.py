@@ -44,9 +44,11 @@ def _rows(path: Path) -> tuple[list[str], list[list[str]]]:
 def _time_folder(root: Path, name: str) -> Path:
     """The function object's folder of the first time (``0``)."""
     folder = root / "postProcessing" / name
-    times = sorted(folder.glob("*"), key=lambda path: float(path.name) if is_number_text(path.name) else math.inf)
+    times = sorted(
+        folder.glob("*"),
+        key=lambda path: float(path.name) if is_number_text(path.name) else math.inf,
+    )
     return times[0] if times else folder / "0"
-
 
 
 #: The forces function object's columns after the time (OpenFOAM v1912): total, pressure and viscous
@@ -61,7 +63,7 @@ def _vectors(path: Path, columns: int = 3) -> tuple[np.ndarray, np.ndarray]:
     if not rows:
         return np.zeros(0, dtype=int), np.zeros((0, columns))
     iterations = np.array([int(float(row[0])) for row in rows])
-    return iterations, np.array([[float(value) for value in row[1:1 + columns]] for row in rows])
+    return iterations, np.array([[float(value) for value in row[1 : 1 + columns]] for row in rows])
 
 
 @dataclass
@@ -83,7 +85,9 @@ class History:
 
     @property
     def last_iteration(self) -> int:
-        counts = [int(array[-1]) for array in (self.iterations, self.residual_iterations) if len(array)]
+        counts = [
+            int(array[-1]) for array in (self.iterations, self.residual_iterations) if len(array)
+        ]
         return min(counts) if counts else 0
 
     def last_residuals(self) -> dict[str, float]:
@@ -95,11 +99,18 @@ def read_residuals(case: Path) -> tuple[np.ndarray, dict[str, np.ndarray]]:
     header, rows = _rows(_time_folder(case, RESIDUALS) / "solverInfo.dat")
     if not header or not rows:
         return np.zeros(0, dtype=int), {}
-    columns = {name[: -len("_initial")]: index for index, name in enumerate(header) if name.endswith("_initial")}
+    columns = {
+        name[: -len("_initial")]: index
+        for index, name in enumerate(header)
+        if name.endswith("_initial")
+    }
     rows = [row for row in rows if len(row) == len(header)]
     iterations = np.array([int(float(row[0])) for row in rows], dtype=int)
-    residuals = {name: np.array([float(row[columns[name]]) for row in rows])
-                 for name in RESIDUAL_NAMES if name in columns}
+    residuals = {
+        name: np.array([float(row[columns[name]]) for row in rows])
+        for name in RESIDUAL_NAMES
+        if name in columns
+    }
     return iterations, residuals
 
 
@@ -109,13 +120,20 @@ def read_history(case: str | Path, balance: bool = False) -> History:
     iterations, force = _vectors(_time_folder(case, FORCES) / "force.dat", FORCE_COLUMNS)
     moment_iterations, moment = _vectors(_time_folder(case, FORCES) / "moment.dat", FORCE_COLUMNS)
     count = min(len(iterations), len(moment_iterations))
-    history = History(iterations[:count], force[:count, :3], moment[:count, :3],
-                      force[:count, VISCOUS_COLUMNS], moment[:count, VISCOUS_COLUMNS])
+    history = History(
+        iterations[:count],
+        force[:count, :3],
+        moment[:count, :3],
+        force[:count, VISCOUS_COLUMNS],
+        moment[:count, VISCOUS_COLUMNS],
+    )
     history.residual_iterations, history.residuals = read_residuals(case)
     if balance:
         _, history.outer_force_n = _vectors(_time_folder(case, OUTER_FORCES) / "force.dat")
         for patch, name in MOMENTUM_FLUX.items():
-            _, history.momentum_flux_m4_s2[patch] = _vectors(_time_folder(case, name) / "surfaceFieldValue.dat")
+            _, history.momentum_flux_m4_s2[patch] = _vectors(
+                _time_folder(case, name) / "surfaceFieldValue.dat"
+            )
     return history
 
 

@@ -40,10 +40,13 @@ SIMULATE_DIVERGENCE_RESIDUAL = 1e3
 POLL_SECONDS = 0.5
 #: Seconds a stopped solver gets to exit after SIGTERM before SIGKILL.
 STOP_GRACE_SECONDS = 3.0
-#: Where Debian's openfoam package keeps OpenFOAM's etc/ (its programs need WM_PROJECT_DIR to find it).
+#: Where Debian's openfoam package keeps OpenFOAM's etc/ (its programs need WM_PROJECT_DIR to find
+#: it).
 DEBIAN_PROJECT_DIR = Path("/usr/share/openfoam")
-INSTALL_HINT = ("OpenFOAM is not installed (simpleFoam not found on PATH); on Debian or Ubuntu: "
-                "sudo apt-get install --no-install-recommends openfoam (OpenFOAM v1912)")
+INSTALL_HINT = (
+    "OpenFOAM is not installed (simpleFoam not found on PATH); on Debian or Ubuntu: "
+    "sudo apt-get install --no-install-recommends openfoam (OpenFOAM v1912)"
+)
 
 
 class MissingOpenFoamError(TorusCadError):
@@ -64,8 +67,17 @@ class TimeBudgetError(SolverError):
 
 def check_openfoam() -> None:
     """MissingOpenFoamError unless simpleFoam, snappyHexMesh, gmshToFoam and the other programs are on PATH."""
-    for program in ("simpleFoam", "blockMesh", "surfaceTransformPoints", "surfaceFeatureExtract", "snappyHexMesh",
-                    "gmshToFoam", "transformPoints", "foamDictionary", "checkMesh"):
+    for program in (
+        "simpleFoam",
+        "blockMesh",
+        "surfaceTransformPoints",
+        "surfaceFeatureExtract",
+        "snappyHexMesh",
+        "gmshToFoam",
+        "transformPoints",
+        "foamDictionary",
+        "checkMesh",
+    ):
         if shutil.which(program) is None:
             raise MissingOpenFoamError(INSTALL_HINT.replace("simpleFoam", program, 1))
 
@@ -74,7 +86,10 @@ def openfoam_environment() -> dict[str, str]:
     """Environment variables OpenFOAM's programs need that are not set: WM_PROJECT_DIR for Debian's
     package, and OpenMPI's consent to run as root (containers)."""
     extra = {}
-    if "WM_PROJECT_DIR" not in os.environ and (DEBIAN_PROJECT_DIR / "etc" / "controlDict").is_file():
+    if (
+        "WM_PROJECT_DIR" not in os.environ
+        and (DEBIAN_PROJECT_DIR / "etc" / "controlDict").is_file()
+    ):
         extra["WM_PROJECT_DIR"] = str(DEBIAN_PROJECT_DIR)
     if hasattr(os, "geteuid") and os.geteuid() == 0:
         extra.setdefault("OMPI_ALLOW_RUN_AS_ROOT", "1")
@@ -101,6 +116,7 @@ def openfoam_environ() -> Iterator[None]:
 
 
 # -- the solver's processes -----------------------------------------------------------------------
+
 
 def _descendants() -> list[Any]:
     import psutil
@@ -162,6 +178,7 @@ def solvers_stopped_on_signals() -> Iterator[None]:
 
 # -- watching the solver --------------------------------------------------------------------------
 
+
 @dataclass(frozen=True)
 class Status:
     """One iteration as the watcher saw it: the iteration, of ``total``, the initial residuals and the
@@ -180,18 +197,28 @@ ProgressCallback = Callable[[Status], None]
 def _status(history: History, total: int) -> Status | None:
     if not len(history.iterations) or not history.residuals:
         return None
-    return Status(history.last_iteration, total, history.last_residuals(),
-                  tuple(history.force_n[-1].tolist()), tuple(history.moment_nm[-1].tolist()))
+    return Status(
+        history.last_iteration,
+        total,
+        history.last_residuals(),
+        tuple(history.force_n[-1].tolist()),
+        tuple(history.moment_nm[-1].tolist()),
+    )
 
 
 def divergence(history: History) -> str | None:
     """Why the history shows divergence ("iteration N: p residual 3.2e+05"), or None."""
     for name, values in history.residuals.items():
-        bad = [index for index, value in enumerate(values)
-               if not math.isfinite(value) or value > SIMULATE_DIVERGENCE_RESIDUAL]
+        bad = [
+            index
+            for index, value in enumerate(values)
+            if not math.isfinite(value) or value > SIMULATE_DIVERGENCE_RESIDUAL
+        ]
         if bad:
-            return (f"iteration {int(history.residual_iterations[bad[0]])}: {name} residual {values[bad[0]]:.3g} "
-                    f"(limit {SIMULATE_DIVERGENCE_RESIDUAL:g})")
+            return (
+                f"iteration {int(history.residual_iterations[bad[0]])}: {name} residual {values[bad[0]]:.3g} "
+                f"(limit {SIMULATE_DIVERGENCE_RESIDUAL:g})"
+            )
     for label, values in (("force", history.force_n), ("moment", history.moment_nm)):
         finite = [bool(row.all()) for row in (abs(values) < 1e30)]
         if not all(finite):
@@ -203,7 +230,9 @@ class Watcher:
     """Reads the histories while the solver runs; reports progress; stops the solver on divergence or
     over its time budget (``deadline``, time.monotonic())."""
 
-    def __init__(self, case: Path, total: int, deadline: float, progress: ProgressCallback | None) -> None:
+    def __init__(
+        self, case: Path, total: int, deadline: float, progress: ProgressCallback | None
+    ) -> None:
         self.case, self.total, self.deadline, self.progress = case, total, deadline, progress
         self.failure: SolverError | None = None
         self._reported = 0
@@ -218,8 +247,10 @@ class Watcher:
         if reason is not None:
             self.failure = DivergedError(f"simpleFoam diverged at {reason}")
         elif timed and time.monotonic() > self.deadline:
-            self.failure = TimeBudgetError(f"simpleFoam ran over its time budget at iteration "
-                                           f"{history.last_iteration} of {self.total}")
+            self.failure = TimeBudgetError(
+                f"simpleFoam ran over its time budget at iteration "
+                f"{history.last_iteration} of {self.total}"
+            )
 
     async def watch(self) -> None:
         while self.failure is None:
@@ -236,7 +267,7 @@ def _log_cause(case: Path, program: str) -> str:
         return "no log"
     for index, line in enumerate(lines):
         if "FOAM FATAL" in line:
-            words = [part.strip() for part in lines[index:index + 4] if part.strip()]
+            words = [part.strip() for part in lines[index : index + 4] if part.strip()]
             return " ".join(words).replace("--> ", "")[:300]
     if any("sigFpe::sigHandler" in line or "Floating point exception" in line for line in lines):
         return "floating point exception"
@@ -248,13 +279,22 @@ async def run_command(case: AsyncFoamCase, command: Sequence[str], processes: in
     ``processes`` > 1. SolverError names the program and the cause."""
     parallel = processes > 1 and command[0] == "simpleFoam"
     try:
-        await case.run(list(command), parallel=parallel, cpus=processes if parallel else 1, log=True)
+        await case.run(
+            list(command), parallel=parallel, cpus=processes if parallel else 1, log=True
+        )
     except CalledProcessError:
-        raise SolverError(f"{command[0]} failed in {case.path}: {_log_cause(case.path, command[0])}") from None
+        raise SolverError(
+            f"{command[0]} failed in {case.path}: {_log_cause(case.path, command[0])}"
+        ) from None
 
 
-async def run_solver(case: AsyncFoamCase, iterations: int, processes: int, deadline: float,
-                     progress: ProgressCallback | None = None) -> History:
+async def run_solver(
+    case: AsyncFoamCase,
+    iterations: int,
+    processes: int,
+    deadline: float,
+    progress: ProgressCallback | None = None,
+) -> History:
     """simpleFoam (watched, see :class:`Watcher`); the final history. DivergedError naming the iteration and
     residual, TimeBudgetError, SolverError."""
     path = Path(case.path)
@@ -272,8 +312,10 @@ async def run_solver(case: AsyncFoamCase, iterations: int, processes: int, deadl
         if watcher.failure is not None:
             raise watcher.failure from None
         if "floating point" in str(error):
-            raise DivergedError(f"simpleFoam diverged at iteration {_log_iteration(path) or history.last_iteration}: "
-                                f"floating point exception; last residuals {_residual_text(history)}") from None
+            raise DivergedError(
+                f"simpleFoam diverged at iteration {_log_iteration(path) or history.last_iteration}: "
+                f"floating point exception; last residuals {_residual_text(history)}"
+            ) from None
         raise
     finally:
         watch.cancel()
@@ -298,4 +340,7 @@ def _log_iteration(case: Path) -> int | None:
 
 
 def _residual_text(history: History) -> str:
-    return ", ".join(f"{name} {value:.3g}" for name, value in history.last_residuals().items()) or "none"
+    return (
+        ", ".join(f"{name} {value:.3g}" for name, value in history.last_residuals().items())
+        or "none"
+    )

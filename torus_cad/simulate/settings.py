@@ -64,8 +64,8 @@ REFINEMENT_RATIO = 2.0 ** (1.0 / 3.0)
 #: The domain every level uses, in tip diameters D (``[cfd]`` keys).
 DOMAIN_D = {"domain_radius": 3.0, "upstream": 2.0, "downstream": 4.0}
 
-#: The coarse level's sizes: at most 60,000 tetrahedra on the default design (trailing edges with their own
-#: size field, as curvature sizing is off; the estimate: the docs' measurements page).
+#: The coarse level's sizes: at most 60,000 tetrahedra on the default design (trailing edges with
+#: their own size field, as curvature sizing is off; the estimate: the docs' measurements page).
 _COARSE_SIZES = {"cells_per_chord": 4.0, "growth_rate": 1.6, "far_size": 0.4}
 
 
@@ -73,35 +73,39 @@ def level_cfd(level: Level) -> dict[str, float]:
     """The ``[cfd]`` values of ``level`` (curvature refinement off: the sizes alone set the mesh)."""
     steps = list(Level).index(level)
     scale = REFINEMENT_RATIO**steps
-    sizes = {"cells_per_chord": round(_COARSE_SIZES["cells_per_chord"] * scale, 3),
-             "growth_rate": round(1.0 + (_COARSE_SIZES["growth_rate"] - 1.0) / scale, 4),
-             "far_size": round(_COARSE_SIZES["far_size"] / scale, 4), "curvature_cells": 0.0}
+    sizes = {
+        "cells_per_chord": round(_COARSE_SIZES["cells_per_chord"] * scale, 3),
+        "growth_rate": round(1.0 + (_COARSE_SIZES["growth_rate"] - 1.0) / scale, 4),
+        "far_size": round(_COARSE_SIZES["far_size"] / scale, 4),
+        "curvature_cells": 0.0,
+    }
     return {**DOMAIN_D, **sizes}
 
 
-#: The boundary-layer mesh (torus_cad.simulate.snappy) of the coarse level; the finer levels divide the
-#: background cell and the first layer's height by REFINEMENT_RATIO per step (the refinement levels below
-#: are counted from the background cell, so every size follows).
+#: The boundary-layer mesh (torus_cad.simulate.snappy) of the coarse level; the finer levels divide
+#: the background cell and the first layer's height by REFINEMENT_RATIO per step (the refinement
+#: levels below are counted from the background cell, so every size follows).
 #: Background cubes per tip diameter D.
 BACKGROUND_CELLS_PER_D = 3.0
-#: snappyHexMesh refinement levels (each halves the background cell): inside the rotating zone, on the
-#: propeller's surface, on its sharp edges (leading and trailing edges, hub rims).
+#: snappyHexMesh refinement levels (each halves the background cell): inside the rotating zone, on
+#: the propeller's surface, on its sharp edges (leading and trailing edges, hub rims).
 ZONE_LEVEL, SURFACE_LEVEL, FEATURE_LEVEL = 2, 4, 5
 #: Prism layers on the propeller and the thickness ratio of neighbouring layers.
 LAYERS = 8
 LAYER_EXPANSION_RATIO = 1.3
-#: The layers' total height is at most this many of the propeller's surface cells: on a finer surface
-#: (``--surface-refinement``) fewer layers are asked for, as snappyHexMesh drops most of a taller stack
-#: (the simulate how-to's surface series).
+#: The layers' total height is at most this many of the propeller's surface cells: on a finer
+#: surface (``--surface-refinement``) fewer layers are asked for, as snappyHexMesh drops most of a
+#: taller stack (the simulate how-to's surface series).
 LAYER_STACK_MAX_SURFACE_CELLS = 2.5
-#: The y+ the first layer is sized for (the viscous sublayer: the blades' Reynolds number, about 1e4 at
-#: 0.75 R, leaves little log layer for a wall function to model), and where on the blade it is estimated
-#: (a fraction of the tip radius).
+#: The y+ the first layer is sized for (the viscous sublayer: the blades' Reynolds number, about 1e4
+#: at 0.75 R, leaves little log layer for a wall function to model), and where on the blade it is
+#: estimated (a fraction of the tip radius).
 Y_PLUS_TARGET = 1.0
 Y_PLUS_REFERENCE_RADIUS = 0.75
-#: The last layer is at least this fraction of the propeller's surface cell: across a larger jump the
-#: face-weight check drops every layer (the docs' measurements page); where the
-#: y+ target asks for thinner layers, the first layer is thickened to this and y+ comes out above the target.
+#: The last layer is at least this fraction of the propeller's surface cell: across a larger jump
+#: the face-weight check drops every layer (the docs' measurements page); where the
+#: y+ target asks for thinner layers, the first layer is thickened to this and y+ comes out above
+#: the target.
 LAST_LAYER_MIN_FRACTION = 0.08
 
 #: Default iterations of each level (steady SIMPLE).
@@ -152,30 +156,45 @@ class OperatingPoint:
 
     def inflow_turbulence(self, diameter_m: float) -> tuple[float, float]:
         """(k m^2/s^2, omega 1/s) of the inflow from ``TURBULENCE_INTENSITY`` and ``TURBULENCE_LENGTH_D``."""
-        speed = max(self.airspeed_m_s, TURBULENCE_TIP_SPEED_FRACTION * self.tip_speed_m_s(diameter_m), 1.0)
+        speed = max(
+            self.airspeed_m_s, TURBULENCE_TIP_SPEED_FRACTION * self.tip_speed_m_s(diameter_m), 1.0
+        )
         k = 1.5 * (TURBULENCE_INTENSITY * speed) ** 2
         return k, math.sqrt(k) / (_CMU**0.25 * TURBULENCE_LENGTH_D * diameter_m)
 
 
 def rpm_limit(diameter_m: float, airspeed_m_s: float, fluid: Fluid = AIR_15C) -> float:
     """Highest rpm at which the helical tip Mach number stays within ``SIMULATE_TIP_MACH_LIMIT``."""
-    tip_speed = math.sqrt(max((SIMULATE_TIP_MACH_LIMIT * fluid.speed_of_sound_m_s) ** 2 - airspeed_m_s**2, 0.0))
+    tip_speed = math.sqrt(
+        max((SIMULATE_TIP_MACH_LIMIT * fluid.speed_of_sound_m_s) ** 2 - airspeed_m_s**2, 0.0)
+    )
     return tip_speed * 60.0 / (math.pi * diameter_m)
 
 
-def check_operating_point(point: OperatingPoint, diameter_m: float, params: PropellerParameters) -> None:
+def check_operating_point(
+    point: OperatingPoint, diameter_m: float, params: PropellerParameters
+) -> None:
     """ParameterError naming the field, the value and the allowed range."""
-    if not (math.isfinite(point.airspeed_m_s) and 0.0 <= point.airspeed_m_s <= SIMULATE_AIRSPEED_LIMIT_M_S):
-        raise ParameterError(f"--airspeed = {point.airspeed_m_s:g} m/s is out of range; allowed "
-                             f"[0, {SIMULATE_AIRSPEED_LIMIT_M_S:g}] m/s (the solver is incompressible)")
+    if not (
+        math.isfinite(point.airspeed_m_s)
+        and 0.0 <= point.airspeed_m_s <= SIMULATE_AIRSPEED_LIMIT_M_S
+    ):
+        raise ParameterError(
+            f"--airspeed = {point.airspeed_m_s:g} m/s is out of range; allowed "
+            f"[0, {SIMULATE_AIRSPEED_LIMIT_M_S:g}] m/s (the solver is incompressible)"
+        )
     limit = rpm_limit(diameter_m, point.airspeed_m_s, point.fluid)
     if not (math.isfinite(point.rpm) and 0.0 <= point.rpm <= limit):
-        raise ParameterError(f"--rpm = {point.rpm:g} is out of range; allowed [0, {limit:.0f}] rpm (helical tip Mach "
-                             f"{SIMULATE_TIP_MACH_LIMIT:g} for D = {diameter_m * 1000:.1f} mm at "
-                             f"{point.airspeed_m_s:g} m/s; the solver is incompressible)")
+        raise ParameterError(
+            f"--rpm = {point.rpm:g} is out of range; allowed [0, {limit:.0f}] rpm (helical tip Mach "
+            f"{SIMULATE_TIP_MACH_LIMIT:g} for D = {diameter_m * 1000:.1f} mm at "
+            f"{point.airspeed_m_s:g} m/s; the solver is incompressible)"
+        )
     if point.airspeed_m_s > 0.0 and params.cfd.inlet_side != InletSide.PLUS_Z:
-        raise ParameterError(f"cfd.inlet_side = '{params.cfd.inlet_side.value}' puts the inlet behind the propeller "
-                             "(it pushes air toward -z); with --airspeed > 0 use '+z'")
+        raise ParameterError(
+            f"cfd.inlet_side = '{params.cfd.inlet_side.value}' puts the inlet behind the propeller "
+            "(it pushes air toward -z); with --airspeed > 0 use '+z'"
+        )
 
 
 def check_count(name: str, value: int, low: int, high: int) -> int:

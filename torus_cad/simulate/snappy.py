@@ -58,8 +58,12 @@ SURFACE_MM = "constant/triSurface/propeller_mm.stl"
 SURFACE_M = "constant/triSurface/propeller.stl"
 #: The commands that make the mesh from the dictionaries, in the case folder.
 MESH_COMMANDS: tuple[tuple[str, ...], ...] = (
-    ("blockMesh",), ("surfaceTransformPoints", "-scale", "(0.001 0.001 0.001)", SURFACE_MM, SURFACE_M),
-    ("surfaceFeatureExtract",), ("snappyHexMesh", "-overwrite"), ("checkMesh",))
+    ("blockMesh",),
+    ("surfaceTransformPoints", "-scale", "(0.001 0.001 0.001)", SURFACE_MM, SURFACE_M),
+    ("surfaceFeatureExtract",),
+    ("snappyHexMesh", "-overwrite"),
+    ("checkMesh",),
+)
 
 
 @dataclass(frozen=True)
@@ -83,8 +87,9 @@ def skin_friction(reynolds: float) -> float:
     return 0.026 * reynolds ** (-1.0 / 7.0)
 
 
-#: The length the blade's Reynolds number is taken over at ``Y_PLUS_REFERENCE_RADIUS``, in tip diameters: a
-#: typical chord there (the default design's 6.0 mm is 0.133 D, the APC's about 0.11 D).
+#: The length the blade's Reynolds number is taken over at ``Y_PLUS_REFERENCE_RADIUS``, in tip
+#: diameters: a typical chord there (the default design's 6.0 mm is 0.133 D, the APC's about 0.11
+#: D).
 REFERENCE_CHORD_D = 0.1
 
 
@@ -94,22 +99,39 @@ def reference_speed_m_s(diameter_m: float, rpm: float, airspeed_m_s: float) -> f
     return math.hypot(omega * Y_PLUS_REFERENCE_RADIUS * diameter_m / 2.0, airspeed_m_s)
 
 
-def reference_reynolds(diameter_m: float, rpm: float, airspeed_m_s: float, fluid: Fluid = AIR_15C) -> float:
+def reference_reynolds(
+    diameter_m: float, rpm: float, airspeed_m_s: float, fluid: Fluid = AIR_15C
+) -> float:
     """The blade's Reynolds number at r = ``Y_PLUS_REFERENCE_RADIUS`` x R over ``REFERENCE_CHORD_D`` x D
     (dimensionless): :func:`reference_speed_m_s` times that chord over the fluid's viscosity."""
-    return reference_speed_m_s(diameter_m, rpm, airspeed_m_s) * REFERENCE_CHORD_D * diameter_m / fluid.viscosity_m2_s
+    return (
+        reference_speed_m_s(diameter_m, rpm, airspeed_m_s)
+        * REFERENCE_CHORD_D
+        * diameter_m
+        / fluid.viscosity_m2_s
+    )
 
 
-def first_cell_height_m(diameter_m: float, rpm: float, airspeed_m_s: float, y_plus: float = Y_PLUS_TARGET,
-                        fluid: Fluid = AIR_15C, reference_length_m: float | None = None) -> float:
+def first_cell_height_m(
+    diameter_m: float,
+    rpm: float,
+    airspeed_m_s: float,
+    y_plus: float = Y_PLUS_TARGET,
+    fluid: Fluid = AIR_15C,
+    reference_length_m: float | None = None,
+) -> float:
     """Height of the first prism layer on the propeller, in m, for a wall y+ of ``y_plus``.
 
     Flat-plate estimate at the blade's reference station r = ``Y_PLUS_REFERENCE_RADIUS`` x R: speed
     V = sqrt((omega r)^2 + airspeed^2) (m/s), Reynolds number V L / nu with L = ``reference_length_m``
     (default ``REFERENCE_CHORD_D`` x D, a typical chord there), u_tau = V sqrt(Cf / 2), height = y+ nu / u_tau.
     At 0 rpm and no airspeed the tip speed of 1000 rpm stands in (a still propeller still gets a layer)."""
-    speed = reference_speed_m_s(diameter_m, max(rpm, 1000.0 if airspeed_m_s == 0.0 else 0.0), airspeed_m_s)
-    length = reference_length_m if reference_length_m is not None else REFERENCE_CHORD_D * diameter_m
+    speed = reference_speed_m_s(
+        diameter_m, max(rpm, 1000.0 if airspeed_m_s == 0.0 else 0.0), airspeed_m_s
+    )
+    length = (
+        reference_length_m if reference_length_m is not None else REFERENCE_CHORD_D * diameter_m
+    )
     reynolds = speed * length / fluid.viscosity_m2_s
     u_tau = speed * math.sqrt(skin_friction(reynolds) / 2.0)
     return y_plus * fluid.viscosity_m2_s / u_tau
@@ -126,14 +148,26 @@ def read_stl_points_mm(path: Path) -> np.ndarray:
     if len(data) >= 84:
         count = struct.unpack_from("<I", data, 80)[0]
         if len(data) == 84 + 50 * count:
-            record = np.dtype([("normal", "<f4", 3), ("vertices", "<f4", (3, 3)), ("attribute", "<u2")])
-            return np.frombuffer(data, dtype=record, offset=84, count=count)["vertices"].reshape(-1, 3).astype(float)
+            record = np.dtype(
+                [("normal", "<f4", 3), ("vertices", "<f4", (3, 3)), ("attribute", "<u2")]
+            )
+            return (
+                np.frombuffer(data, dtype=record, offset=84, count=count)["vertices"]
+                .reshape(-1, 3)
+                .astype(float)
+            )
     numbers = re.findall(rb"vertex\s+(\S+)\s+(\S+)\s+(\S+)", data)
     return np.array(numbers, dtype=float).reshape(-1, 3)
 
 
-def domain_around(points_mm: np.ndarray, diameter_mm: float, flow_sign: float, domain_d: dict[str, float],
-                  zone_radius_d: float, zone_clearance_d: float) -> Domain:
+def domain_around(
+    points_mm: np.ndarray,
+    diameter_mm: float,
+    flow_sign: float,
+    domain_d: dict[str, float],
+    zone_radius_d: float,
+    zone_clearance_d: float,
+) -> Domain:
     """The box and the rotating zone (m) around a propeller whose surface has ``points_mm``.
 
     ``flow_sign`` is -1 when the flow goes toward -z (inlet at +z). ``domain_d`` holds
@@ -143,8 +177,13 @@ def domain_around(points_mm: np.ndarray, diameter_mm: float, flow_sign: float, d
     up, down = domain_d["upstream"] * d, domain_d["downstream"] * d
     inlet, outlet = (up, -down) if flow_sign < 0 else (-up, down)
     clearance = zone_clearance_d * d
-    return Domain(domain_d["domain_radius"] * d, inlet, outlet, zone_radius_d * d,
-                  (z_low - clearance, z_high + clearance))
+    return Domain(
+        domain_d["domain_radius"] * d,
+        inlet,
+        outlet,
+        zone_radius_d * d,
+        (z_low - clearance, z_high + clearance),
+    )
 
 
 def _write(path: Path, entries: dict[str, Any]) -> None:
@@ -163,17 +202,34 @@ def block_mesh_dict(domain: Domain, cell_m: float) -> dict[str, Any]:
     n_z = math.ceil(abs(domain.inlet_z_m - domain.outlet_z_m) / cell_m - 1e-9)
     outlet = domain.inlet_z_m + math.copysign(n_z * cell_m, domain.outlet_z_m - domain.inlet_z_m)
     z0, z1 = min(domain.inlet_z_m, outlet), max(domain.inlet_z_m, outlet)
-    vertices = [[-w, -w, z0], [w, -w, z0], [w, w, z0], [-w, w, z0], [-w, -w, z1], [w, -w, z1], [w, w, z1], [-w, w, z1]]
+    vertices = [
+        [-w, -w, z0],
+        [w, -w, z0],
+        [w, w, z0],
+        [-w, w, z0],
+        [-w, -w, z1],
+        [w, -w, z1],
+        [w, w, z1],
+        [-w, w, z1],
+    ]
     low, high = [0, 3, 2, 1], [4, 5, 6, 7]
-    ends = {"inlet": high if domain.inlet_z_m > outlet else low, "outlet": low if domain.inlet_z_m > outlet else high}
+    ends = {
+        "inlet": high if domain.inlet_z_m > outlet else low,
+        "outlet": low if domain.inlet_z_m > outlet else high,
+    }
     sides = [[0, 1, 5, 4], [1, 2, 6, 5], [2, 3, 7, 6], [3, 0, 4, 7]]
-    return {"scale": 1, "vertices": vertices,
-            "blocks": ["hex", [0, 1, 2, 3, 4, 5, 6, 7], [n_xy, n_xy, n_z], "simpleGrading", [1, 1, 1]],
-            "edges": [],
-            "boundary": [("inlet", {"type": "patch", "faces": [ends["inlet"]]}),
-                         ("outlet", {"type": "patch", "faces": [ends["outlet"]]}),
-                         ("farfield", {"type": "patch", "faces": sides})],
-            "mergePatchPairs": []}
+    return {
+        "scale": 1,
+        "vertices": vertices,
+        "blocks": ["hex", [0, 1, 2, 3, 4, 5, 6, 7], [n_xy, n_xy, n_z], "simpleGrading", [1, 1, 1]],
+        "edges": [],
+        "boundary": [
+            ("inlet", {"type": "patch", "faces": [ends["inlet"]]}),
+            ("outlet", {"type": "patch", "faces": [ends["outlet"]]}),
+            ("farfield", {"type": "patch", "faces": sides}),
+        ],
+        "mergePatchPairs": [],
+    }
 
 
 def layer_stack_m(first_layer_m: float, layers: int) -> float:
@@ -185,68 +241,143 @@ def layer_count(first_layer_m: float, surface_cell_m: float) -> int:
     """The prism layers asked of snappyHexMesh: ``LAYERS``, or the most (at least 1) whose stack is at most
     ``LAYER_STACK_MAX_SURFACE_CELLS`` surface cells (m), the first layer kept."""
     limit_m = LAYER_STACK_MAX_SURFACE_CELLS * surface_cell_m
-    return next((count for count in range(LAYERS, 0, -1) if layer_stack_m(first_layer_m, count) <= limit_m), 1)
+    return next(
+        (count for count in range(LAYERS, 0, -1) if layer_stack_m(first_layer_m, count) <= limit_m),
+        1,
+    )
 
 
-def snappy_dict(domain: Domain, cell_m: float, first_layer_m: float, surface_refinement: int = 0) -> dict[str, Any]:
+def snappy_dict(
+    domain: Domain, cell_m: float, first_layer_m: float, surface_refinement: int = 0
+) -> dict[str, Any]:
     """snappyHexMeshDict: refinement, the rotating cellZone / faceZone, prism layers on the propeller; the
     propeller's surface and edges refined ``surface_refinement`` levels beyond ``SURFACE_LEVEL`` and
     ``FEATURE_LEVEL``."""
-    surface_level, feature_level = SURFACE_LEVEL + surface_refinement, FEATURE_LEVEL + surface_refinement
+    surface_level, feature_level = (
+        SURFACE_LEVEL + surface_refinement,
+        FEATURE_LEVEL + surface_refinement,
+    )
     layers = layer_count(first_layer_m, cell_m / 2.0**surface_level)
-    point = [0.5 * (domain.zone_radius_m + domain.half_width_m) + 0.1234 * cell_m, 0.0321 * cell_m,
-             0.5 * sum(domain.zone_z_m) + 0.0213 * cell_m]
+    point = [
+        0.5 * (domain.zone_radius_m + domain.half_width_m) + 0.1234 * cell_m,
+        0.0321 * cell_m,
+        0.5 * sum(domain.zone_z_m) + 0.0213 * cell_m,
+    ]
     zone_half = 0.5 * (domain.zone_z_m[1] - domain.zone_z_m[0])
     zone_mid = 0.5 * sum(domain.zone_z_m)
     return {
-        "castellatedMesh": True, "snap": True, "addLayers": True,
+        "castellatedMesh": True,
+        "snap": True,
+        "addLayers": True,
         "geometry": {
             "propeller.stl": {"type": "triSurfaceMesh", "name": WALL},
-            ZONE: {"type": "searchableCylinder", "point1": [0, 0, zone_mid - zone_half],
-                   "point2": [0, 0, zone_mid + zone_half], "radius": domain.zone_radius_m},
+            ZONE: {
+                "type": "searchableCylinder",
+                "point1": [0, 0, zone_mid - zone_half],
+                "point2": [0, 0, zone_mid + zone_half],
+                "radius": domain.zone_radius_m,
+            },
         },
         "castellatedMeshControls": {
-            "maxLocalCells": 2_000_000, "maxGlobalCells": 20_000_000, "minRefinementCells": 0,
-            "maxLoadUnbalance": 0.1, "nCellsBetweenLevels": 2, "resolveFeatureAngle": 30,
+            "maxLocalCells": 2_000_000,
+            "maxGlobalCells": 20_000_000,
+            "minRefinementCells": 0,
+            "maxLoadUnbalance": 0.1,
+            "nCellsBetweenLevels": 2,
+            "resolveFeatureAngle": 30,
             "allowFreeStandingZoneFaces": True,
             "features": [{"file": '"propeller.eMesh"', "level": feature_level}],
             "refinementSurfaces": {
                 WALL: {"level": [surface_level, surface_level], "patchInfo": {"type": "wall"}},
-                ZONE: {"level": [ZONE_LEVEL, ZONE_LEVEL], "faceZone": ZONE, "cellZone": ZONE,
-                       "cellZoneInside": "inside"},
+                ZONE: {
+                    "level": [ZONE_LEVEL, ZONE_LEVEL],
+                    "faceZone": ZONE,
+                    "cellZone": ZONE,
+                    "cellZoneInside": "inside",
+                },
             },
             "refinementRegions": {ZONE: {"mode": "inside", "levels": [[1e15, ZONE_LEVEL]]}},
             "locationInMesh": point,
         },
-        "snapControls": {"nSmoothPatch": 3, "tolerance": 2.0, "nSolveIter": 100, "nRelaxIter": 5,
-                         "nFeatureSnapIter": 10, "implicitFeatureSnap": False, "explicitFeatureSnap": True,
-                         "multiRegionFeatureSnap": False},
+        "snapControls": {
+            "nSmoothPatch": 3,
+            "tolerance": 2.0,
+            "nSolveIter": 100,
+            "nRelaxIter": 5,
+            "nFeatureSnapIter": 10,
+            "implicitFeatureSnap": False,
+            "explicitFeatureSnap": True,
+            "multiRegionFeatureSnap": False,
+        },
         "addLayersControls": {
-            "relativeSizes": False, "layers": {WALL: {"nSurfaceLayers": layers}},
-            "expansionRatio": LAYER_EXPANSION_RATIO, "firstLayerThickness": first_layer_m,
-            "minThickness": 0.1 * first_layer_m, "nGrow": 0, "featureAngle": 60, "slipFeatureAngle": 30,
-            "nRelaxIter": 5, "nSmoothSurfaceNormals": 1, "nSmoothNormals": 3, "nSmoothThickness": 10,
-            "maxFaceThicknessRatio": 0.5, "maxThicknessToMedialRatio": 0.8, "minMedialAxisAngle": 130,
-            "nBufferCellsNoExtrude": 0, "nLayerIter": 50, "nRelaxedIter": 20,
+            "relativeSizes": False,
+            "layers": {WALL: {"nSurfaceLayers": layers}},
+            "expansionRatio": LAYER_EXPANSION_RATIO,
+            "firstLayerThickness": first_layer_m,
+            "minThickness": 0.1 * first_layer_m,
+            "nGrow": 0,
+            "featureAngle": 60,
+            "slipFeatureAngle": 30,
+            "nRelaxIter": 5,
+            "nSmoothSurfaceNormals": 1,
+            "nSmoothNormals": 3,
+            "nSmoothThickness": 10,
+            "maxFaceThicknessRatio": 0.5,
+            "maxThicknessToMedialRatio": 0.8,
+            "minMedialAxisAngle": 130,
+            "nBufferCellsNoExtrude": 0,
+            "nLayerIter": 50,
+            "nRelaxedIter": 20,
         },
         "meshQualityControls": {
-            "maxNonOrtho": 65, "maxBoundarySkewness": 3.5, "maxInternalSkewness": 3.5, "maxConcave": 80,
-            "minVol": 1e-18, "minTetQuality": -1e30, "minArea": -1, "minTwist": 0.01, "minDeterminant": 0.001,
-            "minFaceWeight": 0.05, "minVolRatio": 0.01, "minTriangleTwist": -1, "nSmoothScale": 4,
-            "errorReduction": 0.75, "relaxed": {"maxNonOrtho": 70, "minTetQuality": -1e30, "minTwist": 0.01,
-                                               "minDeterminant": 1e-4, "minFaceWeight": 0.02, "minVolRatio": 0.005},
+            "maxNonOrtho": 65,
+            "maxBoundarySkewness": 3.5,
+            "maxInternalSkewness": 3.5,
+            "maxConcave": 80,
+            "minVol": 1e-18,
+            "minTetQuality": -1e30,
+            "minArea": -1,
+            "minTwist": 0.01,
+            "minDeterminant": 0.001,
+            "minFaceWeight": 0.05,
+            "minVolRatio": 0.01,
+            "minTriangleTwist": -1,
+            "nSmoothScale": 4,
+            "errorReduction": 0.75,
+            "relaxed": {
+                "maxNonOrtho": 70,
+                "minTetQuality": -1e30,
+                "minTwist": 0.01,
+                "minDeterminant": 1e-4,
+                "minFaceWeight": 0.02,
+                "minVolRatio": 0.005,
+            },
         },
-        "writeFlags": [], "mergeTolerance": 1e-6,
+        "writeFlags": [],
+        "mergeTolerance": 1e-6,
     }
 
 
 #: What the meshing programs need of a case when :func:`write_layered_mesh` is used alone.
 _UTILITY_DICTIONARIES: dict[str, dict[str, Any]] = {
-    "controlDict": {"application": "simpleFoam", "startFrom": "startTime", "startTime": 0, "stopAt": "endTime",
-                    "endTime": 1, "deltaT": 1, "writeControl": "timeStep", "writeInterval": 1},
-    "fvSchemes": {"ddtSchemes": {"default": "steadyState"}, "gradSchemes": {"default": ("Gauss", "linear")},
-                  "divSchemes": {"default": "none"}, "laplacianSchemes": {"default": ("Gauss", "linear", "corrected")},
-                  "interpolationSchemes": {"default": "linear"}, "snGradSchemes": {"default": "corrected"}},
+    "controlDict": {
+        "application": "simpleFoam",
+        "startFrom": "startTime",
+        "startTime": 0,
+        "stopAt": "endTime",
+        "endTime": 1,
+        "deltaT": 1,
+        "writeControl": "timeStep",
+        "writeInterval": 1,
+    },
+    "fvSchemes": {
+        "ddtSchemes": {"default": "steadyState"},
+        "gradSchemes": {"default": ("Gauss", "linear")},
+        "divSchemes": {"default": "none"},
+        "laplacianSchemes": {"default": ("Gauss", "linear", "corrected")},
+        "interpolationSchemes": {"default": "linear"},
+        "snGradSchemes": {"default": "corrected"},
+    },
     "fvSolution": {"solvers": {}},
 }
 
@@ -269,10 +400,18 @@ class LayeredMesh:
     commands: list[list[str]]
 
 
-def write_layered_mesh(surface_stl_path_mm: str | Path, diameter_mm: float, level: Level, out_case_dir: str | Path,
-                       first_layer_m: float, flow_sign: float = -1.0, domain_d: dict[str, float] | None = None,
-                       zone_radius_d: float = 0.6, zone_clearance_d: float = 0.1,
-                       surface_refinement: int = 0) -> LayeredMesh:
+def write_layered_mesh(
+    surface_stl_path_mm: str | Path,
+    diameter_mm: float,
+    level: Level,
+    out_case_dir: str | Path,
+    first_layer_m: float,
+    flow_sign: float = -1.0,
+    domain_d: dict[str, float] | None = None,
+    zone_radius_d: float = 0.6,
+    zone_clearance_d: float = 0.1,
+    surface_refinement: int = 0,
+) -> LayeredMesh:
     """Write the dictionaries that mesh the propeller whose closed surface is ``surface_stl_path_mm``
     (STL, mm, spin axis +z through the origin) with prism layers, into ``out_case_dir``; the commands
     to run (blockMesh, surfaceTransformPoints, surfaceFeatureExtract, snappyHexMesh, checkMesh) are
@@ -296,10 +435,14 @@ def write_layered_mesh(surface_stl_path_mm: str | Path, diameter_mm: float, leve
         raise ParameterError(f"surface {source.name!r} has no triangles or a non-finite vertex")
     reach = float(np.hypot(points[:, 0], points[:, 1]).max())
     if reach >= zone_radius_d * diameter_mm:
-        raise ParameterError(f"surface {source.name!r} reaches {reach:.2f} mm from the axis, outside the rotating "
-                             f"zone's radius {zone_radius_d * diameter_mm:.2f} mm ({zone_radius_d:g} D): is D = "
-                             f"{diameter_mm:g} mm and the spin axis +z through the origin?")
-    domain = domain_around(points, diameter_mm, flow_sign, domain_d or DOMAIN_D, zone_radius_d, zone_clearance_d)
+        raise ParameterError(
+            f"surface {source.name!r} reaches {reach:.2f} mm from the axis, outside the rotating "
+            f"zone's radius {zone_radius_d * diameter_mm:.2f} mm ({zone_radius_d:g} D): is D = "
+            f"{diameter_mm:g} mm and the spin axis +z through the origin?"
+        )
+    domain = domain_around(
+        points, diameter_mm, flow_sign, domain_d or DOMAIN_D, zone_radius_d, zone_clearance_d
+    )
     scale = level_scale(level)
     cell = diameter_mm * MM_TO_M / BACKGROUND_CELLS_PER_D / scale
     first = max(first_layer_m / scale, thinnest_first_layer_m(cell))
@@ -307,12 +450,22 @@ def write_layered_mesh(surface_stl_path_mm: str | Path, diameter_mm: float, leve
     if source.resolve() != (case / SURFACE_MM).resolve():
         (case / SURFACE_MM).write_bytes(source.read_bytes())
     _write(case / "system" / "blockMeshDict", block_mesh_dict(domain, cell))
-    _write(case / "system" / "surfaceFeatureExtractDict", {
-        "propeller.stl": {"extractionMethod": "extractFromSurface", "includedAngle": 150,
-                          "subsetFeatures": {"nonManifoldEdges": False, "openEdges": True},
-                          "writeObj": False}})
-    _write(case / "system" / "snappyHexMeshDict", snappy_dict(domain, cell, first, surface_refinement))
-    for name, entries in _UTILITY_DICTIONARIES.items():  # the meshing programs read them; the case's own win
+    _write(
+        case / "system" / "surfaceFeatureExtractDict",
+        {
+            "propeller.stl": {
+                "extractionMethod": "extractFromSurface",
+                "includedAngle": 150,
+                "subsetFeatures": {"nonManifoldEdges": False, "openEdges": True},
+                "writeObj": False,
+            }
+        },
+    )
+    _write(
+        case / "system" / "snappyHexMeshDict", snappy_dict(domain, cell, first, surface_refinement)
+    )
+    # the meshing programs read them; the case's own win
+    for name, entries in _UTILITY_DICTIONARIES.items():
         if not (case / "system" / name).exists():
             _write(case / "system" / name, entries)
     return LayeredMesh(domain, cell, first, [list(command) for command in MESH_COMMANDS])
@@ -333,14 +486,24 @@ class MeshCheck:
 
 def parse_check_mesh(log: str) -> MeshCheck:
     """Read checkMesh's output (v1912)."""
-    types = {name: int(count) for name, count in
-             re.findall(r"^\s+(hexahedra|prisms|wedges|pyramids|tet wedges|tetrahedra|polyhedra):\s+(\d+)", log,
-                        re.MULTILINE)}
+    types = {
+        name: int(count)
+        for name, count in re.findall(
+            r"^\s+(hexahedra|prisms|wedges|pyramids|tet wedges|tetrahedra|polyhedra):\s+(\d+)",
+            log,
+            re.MULTILINE,
+        )
+    }
     cells = re.search(r"^\s+cells:\s+(\d+)", log, re.MULTILINE)
     ortho = re.search(r"Mesh non-orthogonality Max:\s+(\S+)", log)
     failures = [line.strip() for line in log.splitlines() if line.lstrip().startswith("***")]
-    return MeshCheck("Mesh OK." in log, int(cells.group(1)) if cells else 0, types,
-                     float(ortho.group(1)) if ortho else None, failures)
+    return MeshCheck(
+        "Mesh OK." in log,
+        int(cells.group(1)) if cells else 0,
+        types,
+        float(ortho.group(1)) if ortho else None,
+        failures,
+    )
 
 
 def layer_coverage(log: str) -> dict[str, float] | None:
@@ -353,6 +516,11 @@ def layer_coverage(log: str) -> dict[str, float] | None:
         return None
     wanted = float(matches[0][1])  # the first table: the layers asked for
     faces, layers, thickness, percent = matches[-1]  # the last table: the layers kept
-    return {"faces": float(faces), "wanted_layers": wanted, "mean_layers": float(layers),
-            "thickness_m": float(thickness), "thickness_fraction": float(percent) / 100.0,
-            "coverage": float(layers) / wanted}
+    return {
+        "faces": float(faces),
+        "wanted_layers": wanted,
+        "mean_layers": float(layers),
+        "thickness_m": float(thickness),
+        "thickness_fraction": float(percent) / 100.0,
+        "coverage": float(layers) / wanted,
+    }

@@ -30,9 +30,11 @@ from dataclasses import dataclass
 from torus_cad.errors import ParameterError
 from torus_cad.tolerances import THRUST_RUNS_RANGE, THRUST_TOLERANCE_RANGE
 
-#: The thrust coefficient CT = T / (rho n^2 D^4) of the first guess (the default design's is about 0.29).
+#: The thrust coefficient CT = T / (rho n^2 D^4) of the first guess (the default design's is about
+#: 0.29).
 INITIAL_CT = 0.25
-#: No propeller gets near this CT: a target over the thrust at the rpm limit with it is refused before any run.
+#: No propeller gets near this CT: a target over the thrust at the rpm limit with it is refused
+#: before any run.
 PLAUSIBLE_CT_LIMIT = 1.0
 #: Default stopping rule: within 1 % of the target, at most 5 runs.
 DEFAULT_TOLERANCE = 0.01
@@ -65,14 +67,18 @@ def thrust_ceiling(rpm_limit: float, diameter_m: float, density_kg_m3: float) ->
     return thrust_at(PLAUSIBLE_CT_LIMIT, rpm_limit, diameter_m, density_kg_m3)
 
 
-def check_target(target_n: float, rpm_limit: float, diameter_m: float, density_kg_m3: float) -> None:
+def check_target(
+    target_n: float, rpm_limit: float, diameter_m: float, density_kg_m3: float
+) -> None:
     """ParameterError (exit 2) naming ``--thrust``, the value and the allowed range for a target that is
     not a positive finite number or is over :func:`thrust_ceiling`."""
     ceiling = thrust_ceiling(rpm_limit, diameter_m, density_kg_m3)
     if not (math.isfinite(target_n) and 0.0 < target_n <= ceiling):
-        raise ParameterError(f"--thrust = {target_n:g} N is out of range; allowed (0, {ceiling:.4g}] N (CT "
-                             f"{PLAUSIBLE_CT_LIMIT:g} at the rpm limit {rpm_limit:.0f} rpm for D = "
-                             f"{diameter_m * 1000:.1f} mm)")
+        raise ParameterError(
+            f"--thrust = {target_n:g} N is out of range; allowed (0, {ceiling:.4g}] N (CT "
+            f"{PLAUSIBLE_CT_LIMIT:g} at the rpm limit {rpm_limit:.0f} rpm for D = "
+            f"{diameter_m * 1000:.1f} mm)"
+        )
 
 
 def first_rpm(target_n: float, rpm_limit: float, diameter_m: float, density_kg_m3: float) -> float:
@@ -101,8 +107,10 @@ def next_rpm(runs: Sequence[ThrustRun], target_n: float, rpm_limit: float) -> fl
     or not at all: nothing to scale)."""
     last = runs[-1]
     if not (math.isfinite(last.thrust_n) and last.thrust_n > 0.0):
-        raise ParameterError(f"--thrust: the propeller gives {last.thrust_n:.4g} N at {last.rpm:g} rpm, no thrust "
-                             "in the design's direction to scale (for --step, check --axis and --turning)")
+        raise ParameterError(
+            f"--thrust: the propeller gives {last.thrust_n:.4g} N at {last.rpm:g} rpm, no thrust "
+            "in the design's direction to scale (for --step, check --axis and --turning)"
+        )
     step = None
     if len(runs) >= 2:
         previous = runs[-2]
@@ -118,13 +126,17 @@ def next_rpm(runs: Sequence[ThrustRun], target_n: float, rpm_limit: float) -> fl
     return min(step, rpm_limit)
 
 
-def check_reachable(runs: Sequence[ThrustRun], target_n: float, tolerance: float, rpm_limit: float) -> None:
+def check_reachable(
+    runs: Sequence[ThrustRun], target_n: float, tolerance: float, rpm_limit: float
+) -> None:
     """ParameterError naming ``--thrust`` when a run at ``rpm_limit`` fell short of the target by more than
     ``tolerance``: the range is (0, that run's thrust]."""
     at_limit = [run for run in runs if run.rpm >= rpm_limit * (1.0 - 1e-9)]
     if at_limit and at_limit[-1].thrust_n < target_n * (1.0 - tolerance):
-        raise ParameterError(f"--thrust = {target_n:g} N is out of range; allowed (0, {at_limit[-1].thrust_n:.4g}] N "
-                             f"(the thrust at the rpm limit {rpm_limit:.0f} rpm, simulated)")
+        raise ParameterError(
+            f"--thrust = {target_n:g} N is out of range; allowed (0, {at_limit[-1].thrust_n:.4g}] N "
+            f"(the thrust at the rpm limit {rpm_limit:.0f} rpm, simulated)"
+        )
 
 
 @dataclass(frozen=True)
@@ -136,8 +148,9 @@ class SearchState:
     within_tolerance: bool
 
 
-def search_state(runs: Sequence[ThrustRun], target_n: float, tolerance: float, max_runs: int,
-                 rpm_limit: float) -> SearchState:
+def search_state(
+    runs: Sequence[ThrustRun], target_n: float, tolerance: float, max_runs: int, rpm_limit: float
+) -> SearchState:
     """The stopping rule: done when the last run is within ``tolerance`` of ``target_n`` or ``max_runs``
     are done; ParameterError when the rpm limit cannot reach the target (:func:`check_reachable`)."""
     best = closest(runs, target_n)

@@ -52,8 +52,14 @@ DEFAULT_DENSITY_G_CM3 = 1.24
 DENSITY_RANGE_G_CM3 = (0.0, 25.0)
 
 #: The download buttons' names of the files a build writes (keys of Propeller.write's paths).
-DOWNLOAD_LABELS = {"step": "STEP", "stl": "STL", "3mf": "3MF", "sections_csv": "sections CSV",
-                   "sections_png": "sections PNG", "json": "report JSON"}
+DOWNLOAD_LABELS = {
+    "step": "STEP",
+    "stl": "STL",
+    "3mf": "3MF",
+    "sections_csv": "sections CSV",
+    "sections_png": "sections PNG",
+    "json": "report JSON",
+}
 
 
 @dataclass
@@ -71,8 +77,13 @@ class _Exact:
 class Studio:
     """State, callbacks and layout of one studio page, bound to a trame server."""
 
-    def __init__(self, server: Any, design: PropellerParameters, workdir: Path, files_folder: Path | None = None
-                 ) -> None:
+    def __init__(
+        self,
+        server: Any,
+        design: PropellerParameters,
+        workdir: Path,
+        files_folder: Path | None = None,
+    ) -> None:
         from torus_cad.studio.view import PropellerView
 
         self.server, self.state, self.ctrl = server, server.state, server.controller
@@ -80,7 +91,9 @@ class Studio:
         self.files_folder = files_folder.resolve() if files_folder is not None else None
         self._uploads = 0
         self.groups: list[PanelGroup] = schema_groups()
-        self.fields: dict[str, PanelField] = {f.key: f for group in self.groups for f in group.fields}
+        self.fields: dict[str, PanelField] = {
+            f.key: f for group in self.groups for f in group.fields
+        }
         self.view = PropellerView()
         self.design = design  # the last good design (on screen once the first preview is drawn)
         self._displayed: PropellerParameters | None = None  # the design drawn in the view
@@ -95,25 +108,50 @@ class Studio:
         self._refresh_task: asyncio.Task[None] | None = None
         self._build_counter = 0
         self._change_time = time.perf_counter()
-        self._trusted_paths = {name: value for name, value in state_values(design.to_dict(), self.groups).items()
-                               if any(name in f.state_names for f in self.fields.values() if f.read_only)}
-        self._last_good: tuple[PropellerParameters, SolidResult] | None = None  # the newest exact solid shown
+        self._trusted_paths = {
+            name: value
+            for name, value in state_values(design.to_dict(), self.groups).items()
+            if any(name in f.state_names for f in self.fields.values() if f.read_only)
+        }
+        # the newest exact solid shown
+        self._last_good: tuple[PropellerParameters, SolidResult] | None = None
         self._init_state()
         self._bind()
 
     # -- state ----------------------------------------------------------------------------------
     def _init_state(self) -> None:
-        self.state.update({
-            **state_values(self.design.to_dict(), self.groups),
-            "field_errors": {}, "element_errors": {}, "refusal": "", "status": "starting",
-            "building": False, "downloads": [], "show_sections": False,
-            "density_g_cm3": DEFAULT_DENSITY_G_CM3, "density_error": "", "upload_file": None,
-            "upload_message": "", "upload_error": "", "file_stem": self.design.name,
-            "volume_text": "…", "mass_text": "…", "area_text": "…", "tip_text": "…", "valid_text": "…",
-            "route_text": "", "stage_rows": [], "preview_ms": 0.0, "exact_ms": 0.0,
-            "preview_stamp": 0, "preview_detail": "", "exact_stamp": 0, "failure": "",
-            **state_defaults(),
-        })
+        self.state.update(
+            {
+                **state_values(self.design.to_dict(), self.groups),
+                "field_errors": {},
+                "element_errors": {},
+                "refusal": "",
+                "status": "starting",
+                "building": False,
+                "downloads": [],
+                "show_sections": False,
+                "density_g_cm3": DEFAULT_DENSITY_G_CM3,
+                "density_error": "",
+                "upload_file": None,
+                "upload_message": "",
+                "upload_error": "",
+                "file_stem": self.design.name,
+                "volume_text": "…",
+                "mass_text": "…",
+                "area_text": "…",
+                "tip_text": "…",
+                "valid_text": "…",
+                "route_text": "",
+                "stage_rows": [],
+                "preview_ms": 0.0,
+                "exact_ms": 0.0,
+                "preview_stamp": 0,
+                "preview_detail": "",
+                "exact_stamp": 0,
+                "failure": "",
+                **state_defaults(),
+            }
+        )
 
     def _bind(self) -> None:
         for panel_field in self.fields.values():
@@ -132,6 +170,7 @@ class Studio:
         def changed(**_: Any) -> None:
             self._changed.add(key)
             self._schedule_refresh()
+
         return changed
 
     def _schedule_refresh(self) -> None:
@@ -160,7 +199,11 @@ class Studio:
     # -- a change: validate, preview, build --------------------------------------------------------
     def _values(self) -> dict[str, Any]:
         """The panel's values; file paths always the trusted design's, whatever the page sends."""
-        values = {name: self.state[name] for panel_field in self.fields.values() for name in panel_field.state_names}
+        values = {
+            name: self.state[name]
+            for panel_field in self.fields.values()
+            for name in panel_field.state_names
+        }
         return {**values, **self._trusted_paths}
 
     async def _refresh(self) -> None:
@@ -170,7 +213,9 @@ class Studio:
             started = self._change_time
             times = {"wait": time.perf_counter() - started}
             try:
-                params = PropellerParameters.from_dict(design_from_state(self._values(), self.groups))
+                params = PropellerParameters.from_dict(
+                    design_from_state(self._values(), self.groups)
+                )
                 if params == self._displayed and not self.state.refusal:
                     continue
                 times["validate"] = time.perf_counter() - started - sum(times.values())
@@ -192,17 +237,29 @@ class Studio:
         target = field_of_message(message, self.groups)
         # The reason goes next to the fields just changed and the field it names, if another.
         keys = sorted(self._changed | ({target[0]} if target is not None else set())) or ["name"]
-        element_errors = {f"{target[0]}[{target[1]}]": True} if target is not None and target[1] is not None else {}
+        element_errors = (
+            {f"{target[0]}[{target[1]}]": True}
+            if target is not None and target[1] is not None
+            else {}
+        )
         with self.state:
             self.state.field_errors = {key: message for key in keys}
             sections = [key.rpartition(".")[0] or "propeller" for key in keys if key in self.fields]
-            self.state.open_groups = list(dict.fromkeys([*(self.state.open_groups or []), *sections]))  # show them
+            # show them
+            self.state.open_groups = list(
+                dict.fromkeys([*(self.state.open_groups or []), *sections])
+            )
             self.state.element_errors = element_errors
             self.state.refusal = message
             self.state.status = "refused"
 
-    def _show_preview(self, params: PropellerParameters, scene: PreviewScene, started: float,
-                      times: dict[str, float]) -> None:
+    def _show_preview(
+        self,
+        params: PropellerParameters,
+        scene: PreviewScene,
+        started: float,
+        times: dict[str, float],
+    ) -> None:
         self.design = self._displayed = params
         self._last_changes, self._changed = self._changed, set()
         self.view.show_parts(scene.parts, params.blades)
@@ -214,18 +271,23 @@ class Studio:
             self.state.refusal, self.state.failure = "", ""
             self.state.status = "preview"
             self.state.file_stem = params.name
-            self.state.tip_text = f"≈ {scene.tip_diameter_mm:.2f} mm"  # sampled at the design's resolution
+            # sampled at the design's resolution
+            self.state.tip_text = f"≈ {scene.tip_diameter_mm:.2f} mm"
             self.ctrl.view_update()
             times["view update"] = time.perf_counter() - started - sum(times.values())
             self.state.preview_ms = round((time.perf_counter() - started) * 1000.0, 1)
-            self.state.preview_detail = ", ".join(f"{name} {seconds * 1000.0:.0f}" for name, seconds in times.items())
+            self.state.preview_detail = ", ".join(
+                f"{name} {seconds * 1000.0:.0f}" for name, seconds in times.items()
+            )
             self.state.preview_stamp += 1
 
     def _start_build(self, params: PropellerParameters, started: float) -> None:
         self._build_counter += 1
         build_id = self._build_counter
         self.exact = _Exact(build_id, params, started, changed=set(self._last_changes))
-        self._runner.submit(BuildRequest(build_id, params.to_dict(), self.workdir / "builds" / str(build_id)))
+        self._runner.submit(
+            BuildRequest(build_id, params.to_dict(), self.workdir / "builds" / str(build_id))
+        )
         self.performance.hold()  # solved once the build is done: the build keeps the CPU
         with self.state:
             self.state.building = True
@@ -253,8 +315,11 @@ class Studio:
             self.state.status = "exact"
         self.state.valid_text = "valid: 1 closed solid"  # the build fails on anything else
         self.state.route_text = solid.fuse_route
-        self.state.stage_rows = [{"stage": _stage_label(name), "ms": f"{seconds * 1000.0:.0f}"}
-                                 for name, seconds in solid.stage_seconds.items() if name != Stage.PARAMETERS]
+        self.state.stage_rows = [
+            {"stage": _stage_label(name), "ms": f"{seconds * 1000.0:.0f}"}
+            for name, seconds in solid.stage_seconds.items()
+            if name != Stage.PARAMETERS
+        ]
         self.state.exact_ms = round((time.perf_counter() - exact.started) * 1000.0, 1)
         self.state.exact_stamp += 1
 
@@ -263,8 +328,10 @@ class Studio:
         self.state.volume_text = f"{properties['volume_mm3']:.2f} mm³"
         self.state.area_text = f"{properties['surface_area_mm2']:.2f} mm²"
         self.state.tip_text = f"{properties['tip_diameter_mm']:.3f} mm"
-        self.state.stage_rows = [*self.state.stage_rows, {"stage": "mass properties",
-                                                          "ms": f"{properties['seconds'] * 1000.0:.0f}"}]
+        self.state.stage_rows = [
+            *self.state.stage_rows,
+            {"stage": "mass properties", "ms": f"{properties['seconds'] * 1000.0:.0f}"},
+        ]
         self._update_mass()
 
     def _on_files(self, exact: _Exact, files: dict[str, Any]) -> None:
@@ -272,11 +339,15 @@ class Studio:
         previous, self._shown_exact = self._shown_exact, exact
         if previous is not None and previous.files:
             shutil.rmtree(next(iter(previous.files.values())).parent, ignore_errors=True)
-        self.state.stage_rows = [*self.state.stage_rows, {"stage": "files (as torus-cad build)",
-                                                          "ms": f"{files['seconds'] * 1000.0:.0f}"}]
+        self.state.stage_rows = [
+            *self.state.stage_rows,
+            {"stage": "files (as torus-cad build)", "ms": f"{files['seconds'] * 1000.0:.0f}"},
+        ]
         self.state.building = False
-        self.state.downloads = [{"kind": kind, "label": DOWNLOAD_LABELS.get(kind, kind), "file": path.name}
-                                for kind, path in exact.files.items()]
+        self.state.downloads = [
+            {"kind": kind, "label": DOWNLOAD_LABELS.get(kind, kind), "file": path.name}
+            for kind, path in exact.files.items()
+        ]
         self.performance.set_design(exact.design)
 
     def _on_refused(self, exact: _Exact, message: str) -> None:
@@ -316,8 +387,11 @@ class Studio:
             self.state.density_error = f"density must be a number in g/cm^3, got {density_g_cm3!r}"
         else:
             ok = low < value <= high
-            self.state.density_error = "" if ok else \
-                f"density = {value:g} is out of range; allowed ({low:g}, {high:g}] g/cm^3"
+            self.state.density_error = (
+                ""
+                if ok
+                else f"density = {value:g} is out of range; allowed ({low:g}, {high:g}] g/cm^3"
+            )
         self._update_mass()
 
     def reset_view(self) -> None:
@@ -370,8 +444,13 @@ class Studio:
     def _read_upload(self, uploads: Sequence[Any]) -> PropellerParameters:
         """The design of an upload, in a new folder of the studio's (:func:`torus_cad.studio.uploads.read_upload`)."""
         self._uploads += 1
-        read_only = [panel_field.key for panel_field in self.fields.values() if panel_field.read_only]
-        return read_upload(uploads, self.workdir / "uploads" / str(self._uploads), read_only, self.files_folder)
+        read_only = [
+            panel_field.key for panel_field in self.fields.values() if panel_field.read_only
+        ]
+        return read_upload(
+            uploads, self.workdir / "uploads" / str(self._uploads), read_only, self.files_folder
+        )
+
 
 def _stage_label(name: str) -> str:
     """Words for a stage of the build (torus_cad.runtime.stages), or the name of the studio's own step."""

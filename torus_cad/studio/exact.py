@@ -35,30 +35,50 @@ def tessellate_parts(propeller: Propeller) -> list[PartMesh]:
     BRepBndLib.Add_s(propeller.solid.wrapped, box)
     tolerance = max(np.sqrt(box.SquareExtent()) * DISPLAY_RELATIVE_DEFLECTION, 1e-3)
     # Not in parallel: on a busy 2-core machine the mesher's threads only contend with the server.
-    tessellated = tessellate_faces(propeller.solid, tolerance, DISPLAY_ANGULAR_DEFLECTION, parallel=False)
+    tessellated = tessellate_faces(
+        propeller.solid, tolerance, DISPLAY_ANGULAR_DEFLECTION, parallel=False
+    )
     face_vertices = [face.vertices for face in tessellated]
     face_triangles = [face.triangles for face in tessellated]
-    parts = [propeller.face_parts[face.face_index] for face in tessellated]  # from the build's history
+    # from the build's history
+    parts = [propeller.face_parts[face.face_index] for face in tessellated]
     meshes = []
     for part in [HUB_PART, *range(propeller.parameters.blades)]:
         chosen = [index for index, owner in enumerate(parts) if owner == part]
         offsets = np.cumsum([0] + [len(face_vertices[index]) for index in chosen])
-        vertices = np.concatenate([face_vertices[index] for index in chosen]) if chosen else np.zeros((0, 3))
-        triangles = (np.concatenate([face_triangles[index] + offset for index, offset in zip(chosen, offsets)])
-                     if chosen else np.zeros((0, 3), dtype=np.int64))
+        vertices = (
+            np.concatenate([face_vertices[index] for index in chosen])
+            if chosen
+            else np.zeros((0, 3))
+        )
+        triangles = (
+            np.concatenate(
+                [face_triangles[index] + offset for index, offset in zip(chosen, offsets)]
+            )
+            if chosen
+            else np.zeros((0, 3), dtype=np.int64)
+        )
         meshes.append(PartMesh(part, vertices, triangles))
     return meshes
 
 
-def run_build(request: BuildRequest, connection: multiprocessing.connection.Connection,
-              memory_limit_bytes: int | None = None) -> None:
+def run_build(
+    request: BuildRequest,
+    connection: multiprocessing.connection.Connection,
+    memory_limit_bytes: int | None = None,
+) -> None:
     """Build, tessellate, measure and export ``request``, sending each result as soon as it exists.
 
     ``memory_limit_bytes``: the process's memory limit, named when an allocation fails.
     """
     build_id = request.build_id
-    with failures_reported(connection, build_id, "the exact build", memory_limit_bytes,
-                           "; lower resolution.sections / resolution.points"):
+    with failures_reported(
+        connection,
+        build_id,
+        "the exact build",
+        memory_limit_bytes,
+        "; lower resolution.sections / resolution.points",
+    ):
         try:
             _build_and_send(request, connection)
         except (ParameterError, GeometryError) as error:
@@ -67,7 +87,9 @@ def run_build(request: BuildRequest, connection: multiprocessing.connection.Conn
             connection.send(("failed", build_id, f"OpenCascade failed: {error}"))
 
 
-def _build_and_send(request: BuildRequest, connection: multiprocessing.connection.Connection) -> None:
+def _build_and_send(
+    request: BuildRequest, connection: multiprocessing.connection.Connection
+) -> None:
     """The solid, its mass properties and its files, each sent as soon as it exists."""
     build_id = request.build_id
     propeller = build_propeller(PropellerParameters.from_dict(request.design))
@@ -75,13 +97,16 @@ def _build_and_send(request: BuildRequest, connection: multiprocessing.connectio
     start = time.perf_counter()
     parts = tessellate_parts(propeller)
     stages = {**propeller.stage_seconds, "display_mesh": time.perf_counter() - start}
-    connection.send(("solid", build_id, SolidResult(parts, stages, propeller.fuse_route.description)))
+    connection.send(
+        ("solid", build_id, SolidResult(parts, stages, propeller.fuse_route.description))
+    )
     start = time.perf_counter()
     properties = mass_properties(propeller.solid, 1.0).to_dict()
     properties["seconds"] = time.perf_counter() - start
     properties["tip_diameter_mm"] = tip_diameter_mm(params)
     connection.send(("properties", build_id, properties))
     start = time.perf_counter()
-    # The files `torus-cad build` writes: export.formats (STEP, STL, 3MF), the blade-element table, the report.
+    # The files `torus-cad build` writes: export.formats (STEP, STL, 3MF), the blade-element table,
+    # the report.
     paths = propeller.write(request.out_dir, stl=True, sections_table=True)
     connection.send(("files", build_id, {"paths": paths, "seconds": time.perf_counter() - start}))

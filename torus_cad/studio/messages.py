@@ -58,15 +58,24 @@ class PerformanceRequest:
 
 
 @contextmanager
-def failures_reported(connection: multiprocessing.connection.Connection, request_id: int, what: str,
-                      memory_limit_bytes: int | None, memory_advice: str = "") -> Iterator[None]:
+def failures_reported(
+    connection: multiprocessing.connection.Connection,
+    request_id: int,
+    what: str,
+    memory_limit_bytes: int | None,
+    memory_advice: str = "",
+) -> Iterator[None]:
     """Inside the block, an allocation that fails or an unexpected error is sent as ``("failed", request_id,
     reason)`` (the page shows it; the child never dies silently); ``connection`` is closed after it.
     ``what`` names the work ("the exact build"), ``memory_advice`` what to lower when memory runs out."""
     try:
         yield
     except MemoryError:
-        limit = f", the limit of {memory_limit_bytes / 2**30:g} GiB in the studio" if memory_limit_bytes else ""
+        limit = (
+            f", the limit of {memory_limit_bytes / 2**30:g} GiB in the studio"
+            if memory_limit_bytes
+            else ""
+        )
         connection.send(("failed", request_id, f"{what} ran out of memory{limit}{memory_advice}"))
     except Exception as error:  # reported on the page, never a crashed server
         traceback.print_exc()

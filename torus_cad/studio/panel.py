@@ -35,7 +35,8 @@ class FieldKind(StrEnum):
     BOOLEAN = "boolean"
     CHOICE = "choice"
     CHOICES = "choices"  # several of the choices (e.g. export.formats)
-    NUMBERS = "numbers"  # a list of numbers of any length (a station table's column), typed as "1, 2.5, 3"
+    # a list of numbers of any length (a station table's column), typed as "1, 2.5, 3"
+    NUMBERS = "numbers"
     TEXT = "text"
 
 
@@ -85,8 +86,10 @@ class PanelField:
             return ""
         low = "-inf" if self.low is None else f"{self.low:g}"
         high = "inf" if self.high is None else f"{self.high:g}"
-        text = f"{'(' if self.low_open or self.low is None else '['}{low}, {high}" \
-               f"{')' if self.high_open or self.high is None else ']'}"
+        text = (
+            f"{'(' if self.low_open or self.low is None else '['}{low}, {high}"
+            f"{')' if self.high_open or self.high is None else ']'}"
+        )
         return f"{text} {self.unit}".strip()
 
     @property
@@ -121,7 +124,12 @@ def _nice_step(span: float) -> float:
 
 def _slider(kind: FieldKind, explore: Bounds | None) -> tuple[float, float, float] | None:
     """A slider over the range worth exploring (the schema's fuzz range), when it is finite."""
-    if explore is None or explore.low is None or explore.high is None or explore.high <= explore.low:
+    if (
+        explore is None
+        or explore.low is None
+        or explore.high is None
+        or explore.high <= explore.low
+    ):
         return None
     if kind is FieldKind.INTEGER:
         return (float(math.ceil(explore.low)), float(math.floor(explore.high)), 1.0)
@@ -147,14 +155,33 @@ def _kind(spec: ParameterSpec) -> FieldKind:
 def panel_field(spec: ParameterSpec, read_only: bool = False) -> PanelField:
     """The panel field of one schema parameter (``read_only`` for a file path)."""
     kind = _kind(spec)
-    names = tuple(state_name(spec.key, i) for i in range(spec.length)) if spec.length else (state_name(spec.key),)
+    names = (
+        tuple(state_name(spec.key, i) for i in range(spec.length))
+        if spec.length
+        else (state_name(spec.key),)
+    )
     bounds = spec.bounds
-    choices = tuple(str(choice.value if isinstance(choice, Enum) else choice) for choice in spec.choices)
+    choices = tuple(
+        str(choice.value if isinstance(choice, Enum) else choice) for choice in spec.choices
+    )
     numeric_scalar = kind in (FieldKind.INTEGER, FieldKind.NUMBER) and not spec.length
     slider = _slider(kind, spec.fuzz or bounds) if numeric_scalar else None
-    return PanelField(spec.key, kind, spec.key.rpartition(".")[2], spec.unit, spec.doc, names,
-                      bounds.low, bounds.high, bounds.low_open, bounds.high_open, slider, choices,
-                      _element_units(spec.unit, len(names)), read_only)
+    return PanelField(
+        spec.key,
+        kind,
+        spec.key.rpartition(".")[2],
+        spec.unit,
+        spec.doc,
+        names,
+        bounds.low,
+        bounds.high,
+        bounds.low_open,
+        bounds.high_open,
+        slider,
+        choices,
+        _element_units(spec.unit, len(names)),
+        read_only,
+    )
 
 
 def _element_units(unit: str, count: int) -> tuple[str, ...]:
@@ -163,18 +190,25 @@ def _element_units(unit: str, count: int) -> tuple[str, ...]:
     return tuple(parts) if len(parts) == count else (unit,) * count
 
 
-def panel_groups(specs: Iterable[ParameterSpec], section_docs: Mapping[str, str] | None = None,
-                 path_keys: Iterable[str] = ()) -> list[PanelGroup]:
+def panel_groups(
+    specs: Iterable[ParameterSpec],
+    section_docs: Mapping[str, str] | None = None,
+    path_keys: Iterable[str] = (),
+) -> list[PanelGroup]:
     """The panel's groups in the schema's order: top-level keys first, then one group per table;
     the fields of ``path_keys`` (file paths) read-only."""
     fields: dict[str, list[PanelField]] = {}
     paths = set(path_keys)
     for spec in specs:
-        fields.setdefault(spec.key.rpartition(".")[0], []).append(panel_field(spec, spec.key in paths))
+        fields.setdefault(spec.key.rpartition(".")[0], []).append(
+            panel_field(spec, spec.key in paths)
+        )
     docs = dict(section_docs or {})
     order = ([""] if "" in fields else []) + [section for section in fields if section]
-    return [PanelGroup(section, section or "propeller", docs.get(section, ""), tuple(fields[section]))
-            for section in order]
+    return [
+        PanelGroup(section, section or "propeller", docs.get(section, ""), tuple(fields[section]))
+        for section in order
+    ]
 
 
 def schema_groups() -> list[PanelGroup]:
@@ -183,7 +217,9 @@ def schema_groups() -> list[PanelGroup]:
     from torus_cad.parameters.schema import iter_parameter_specs, section_docs
 
     specs = list(iter_parameter_specs(PropellerParameters))
-    return panel_groups(specs, section_docs(PropellerParameters), path_keys(PropellerParameters, specs))
+    return panel_groups(
+        specs, section_docs(PropellerParameters), path_keys(PropellerParameters, specs)
+    )
 
 
 def path_keys(model: Any, specs: Iterable[ParameterSpec]) -> set[str]:
@@ -242,7 +278,9 @@ def _number(field: PanelField, label: str, raw: Any) -> Any:
     else:
         text = str(raw).strip()
         if not _NUMBER.match(text):
-            raise ParameterError(f"{label} must be a number, got {text!r}" if text else f"{label} needs a value")
+            raise ParameterError(
+                f"{label} must be a number, got {text!r}" if text else f"{label} needs a value"
+            )
         value = float(text)
     if field.kind is FieldKind.INTEGER and float(value).is_integer():
         return int(value)
@@ -254,8 +292,10 @@ def _number(field: PanelField, label: str, raw: Any) -> Any:
 def _value(field: PanelField, values: Mapping[str, Any]) -> Any:
     if field.kind in (FieldKind.INTEGER, FieldKind.NUMBER):
         if field.is_vector:
-            return [_number(field, f"{field.key}[{index}]", values[name])
-                    for index, name in enumerate(field.state_names)]
+            return [
+                _number(field, f"{field.key}[{index}]", values[name])
+                for index, name in enumerate(field.state_names)
+            ]
         return _number(field, field.key, values[field.state_names[0]])
     raw = values[field.state_names[0]]
     if field.kind is FieldKind.BOOLEAN:
@@ -263,7 +303,9 @@ def _value(field: PanelField, values: Mapping[str, Any]) -> Any:
     if field.kind is FieldKind.CHOICES:
         return [str(item) for item in raw or []]
     if field.kind is FieldKind.NUMBERS:
-        items = [item for item in re.split(r"[,\s]+", "" if raw is None else str(raw).strip()) if item]
+        items = [
+            item for item in re.split(r"[,\s]+", "" if raw is None else str(raw).strip()) if item
+        ]
         return [_number(field, f"{field.key}[{index}]", item) for index, item in enumerate(items)]
     return "" if raw is None else str(raw)
 

@@ -28,7 +28,12 @@ from typing import Any
 from torus_cad.errors import GeometryError, ParameterError
 from torus_cad.parameters import PropellerParameters
 from torus_cad.studio.messages import PerformanceRequest
-from torus_cad.studio.worker import BUILD_MEMORY_LIMIT_BYTES, ProcessRunner, run_bounded, time_out_reason
+from torus_cad.studio.worker import (
+    BUILD_MEMORY_LIMIT_BYTES,
+    ProcessRunner,
+    run_bounded,
+    time_out_reason,
+)
 
 #: The operating point the studio starts with: the one the docs' vortex measurements use (rpm, m/s).
 DEFAULT_RPM = 10000.0
@@ -45,8 +50,10 @@ COMPUTING = "computing…"
 NO_NUMBER = "–"
 
 #: The honest label under the numbers (the accuracy page holds the measurements).
-SOLVER_LABEL = ("vortex solver: a screening estimate, not validated to 10 % "
-                "(see docs/explanation/simulation-accuracy.md)")
+SOLVER_LABEL = (
+    "vortex solver: a screening estimate, not validated to 10 % "
+    "(see docs/explanation/simulation-accuracy.md)"
+)
 
 #: The command-line option names in check_operating_point's messages, worded as the studio's fields.
 _OPTION = re.compile(r"--(rpm|airspeed)\b")
@@ -62,10 +69,20 @@ class PointRefused(ParameterError):
 
 def state_defaults() -> dict[str, Any]:
     """The page state of the performance card before anything is solved."""
-    return {"perf_rpm": DEFAULT_RPM, "perf_airspeed": DEFAULT_AIRSPEED_M_S, "perf_rpm_error": "",
-            "perf_airspeed_error": "", "perf_thrust_text": "…", "perf_power_text": "…",
-            "perf_merit_label": "figure of merit", "perf_merit_text": "…", "perf_point_text": "",
-            "perf_failure": "", "perf_plot": "", "perf_computing": False}
+    return {
+        "perf_rpm": DEFAULT_RPM,
+        "perf_airspeed": DEFAULT_AIRSPEED_M_S,
+        "perf_rpm_error": "",
+        "perf_airspeed_error": "",
+        "perf_thrust_text": "…",
+        "perf_power_text": "…",
+        "perf_merit_label": "figure of merit",
+        "perf_merit_text": "…",
+        "perf_point_text": "",
+        "perf_failure": "",
+        "perf_plot": "",
+        "perf_computing": False,
+    }
 
 
 def check_point(rpm: Any, airspeed: Any, params: PropellerParameters) -> tuple[float, float]:
@@ -74,10 +91,14 @@ def check_point(rpm: Any, airspeed: Any, params: PropellerParameters) -> tuple[f
     from torus_cad.simulate.settings import OperatingPoint, check_operating_point
     from torus_cad.vortex.pipeline import tip_diameter_m
 
-    values = {name: _number(name, value, unit) for name, value, unit in (("rpm", rpm, "rpm"),
-                                                                         ("airspeed", airspeed, "m/s"))}
+    values = {
+        name: _number(name, value, unit)
+        for name, value, unit in (("rpm", rpm, "rpm"), ("airspeed", airspeed, "m/s"))
+    }
     try:
-        check_operating_point(OperatingPoint(values["rpm"], values["airspeed"]), tip_diameter_m(params), params)
+        check_operating_point(
+            OperatingPoint(values["rpm"], values["airspeed"]), tip_diameter_m(params), params
+        )
     except ParameterError as error:
         message = _OPTION.sub(r"\1", str(error))
         raise PointRefused("rpm" if message.startswith("rpm") else "airspeed", message) from None
@@ -91,7 +112,9 @@ def _number(name: str, value: Any, unit: str) -> float:
         raise PointRefused(name, f"{name} must be a number in {unit}, got {value!r}") from None
 
 
-def readouts(report: dict[str, Any], rpm: float, airspeed_m_s: float, strips: int) -> dict[str, Any]:
+def readouts(
+    report: dict[str, Any], rpm: float, airspeed_m_s: float, strips: int
+) -> dict[str, Any]:
     """The card's texts for a solved point: thrust N, power W, figure of merit (still air) or efficiency."""
     axial = airspeed_m_s > 0.0
     merit = report["efficiency"] if axial else report["figure_of_merit"]
@@ -99,10 +122,15 @@ def readouts(report: dict[str, Any], rpm: float, airspeed_m_s: float, strips: in
     point = f"at {rpm:g} rpm, {airspeed_m_s:g} m/s"
     if doubtful:
         point += f"; NeuralFoil unsure of its polars on {doubtful} of {strips} strips"
-    return {"perf_thrust_text": f"{report['thrust_n']:.4g} N", "perf_power_text": f"{report['power_w']:.4g} W",
-            "perf_merit_label": "efficiency" if axial else "figure of merit",
-            "perf_merit_text": NO_NUMBER if merit is None or not math.isfinite(merit) else f"{merit:.3f}",
-            "perf_point_text": point}
+    return {
+        "perf_thrust_text": f"{report['thrust_n']:.4g} N",
+        "perf_power_text": f"{report['power_w']:.4g} W",
+        "perf_merit_label": "efficiency" if axial else "figure of merit",
+        "perf_merit_text": NO_NUMBER
+        if merit is None or not math.isfinite(merit)
+        else f"{merit:.3f}",
+        "perf_point_text": point,
+    }
 
 
 class Performance:
@@ -113,8 +141,15 @@ class Performance:
 
     def __init__(self, state: Any, workdir: Path) -> None:
         self.state, self.workdir = state, workdir
-        self._runner = ProcessRunner(self._on_message, _child_main, ("result", "failed"), _time_out_reason,
-                                     "vortex solver", PERFORMANCE_TIME_LIMIT_S, BUILD_MEMORY_LIMIT_BYTES)
+        self._runner = ProcessRunner(
+            self._on_message,
+            _child_main,
+            ("result", "failed"),
+            _time_out_reason,
+            "vortex solver",
+            PERFORMANCE_TIME_LIMIT_S,
+            BUILD_MEMORY_LIMIT_BYTES,
+        )
         self._design: PropellerParameters | None = None
         self._request_id = 0
         self._solving: tuple[float, float] | None = None  # the point of the request running
@@ -149,13 +184,15 @@ class Performance:
                 self.state.perf_rpm_error = str(refusal) if refusal.field == "rpm" else ""
                 self.state.perf_airspeed_error = str(refusal) if refusal.field == "airspeed" else ""
             return
-        except (ParameterError, GeometryError) as error:  # the design itself; the build would refuse it
+        # the design itself; the build would refuse it
+        except (ParameterError, GeometryError) as error:
             self._show_failure(str(error))
             return
         self._request_id += 1
         self._solving = (rpm, airspeed)
-        request = PerformanceRequest(self._request_id, self._design.to_dict(), rpm, airspeed,
-                                     self.workdir / "performance")
+        request = PerformanceRequest(
+            self._request_id, self._design.to_dict(), rpm, airspeed, self.workdir / "performance"
+        )
         request.out_dir.mkdir(parents=True, exist_ok=True)
         self._runner.start(self._request_id, request)
         with self.state:
@@ -192,11 +229,16 @@ class Performance:
             self.state.perf_failure, self.state.perf_computing = message, False
 
 
-_time_out_reason = time_out_reason("the vortex solve", "run it with torus-cad simulate --solver vortex")
+_time_out_reason = time_out_reason(
+    "the vortex solve", "run it with torus-cad simulate --solver vortex"
+)
 
 
-def _child_main(request: PerformanceRequest, connection: multiprocessing.connection.Connection,
-                memory_limit_bytes: int) -> None:
+def _child_main(
+    request: PerformanceRequest,
+    connection: multiprocessing.connection.Connection,
+    memory_limit_bytes: int,
+) -> None:
     """The solve's process (forked from the forkserver): bounded in data memory as a build is."""
     from torus_cad.studio.vortex_run import run_vortex
 

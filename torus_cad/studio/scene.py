@@ -29,11 +29,14 @@ HUB_SEGMENTS = 96
 #: limit on the default design (25 x 80 is 0.008 mm short), in ~0.1 s.
 TIP_SAMPLES = (400, 400)
 
-#: Most (sections, points) of a blade's drawn preview (the default design's 25 x 80 is drawn as it is).
+#: Most (sections, points) of a blade's drawn preview (the default design's 25 x 80 is drawn as it
+#: is).
 PREVIEW_MAX_SAMPLES = (60, 240)
 
-#: Handedness 'ccw' is the spec's propeller reflected through the XZ plane (torus_cad.kernel.mirror).
+#: Handedness 'ccw' is the spec's propeller reflected through the XZ plane
+#: (torus_cad.kernel.mirror).
 MIRROR = np.array([1.0, -1.0, 1.0])
+
 
 @dataclass(frozen=True)
 class PartMesh:
@@ -69,7 +72,9 @@ class PreviewScene:
 def rotation_about_z(angle_deg: float) -> NDArray[np.float64]:
     """The ``(3, 3)`` rotation by ``angle_deg`` degrees about the spin axis."""
     turn = np.radians(angle_deg)
-    return np.array([[np.cos(turn), -np.sin(turn), 0.0], [np.sin(turn), np.cos(turn), 0.0], [0.0, 0.0, 1.0]])
+    return np.array(
+        [[np.cos(turn), -np.sin(turn), 0.0], [np.sin(turn), np.cos(turn), 0.0], [0.0, 0.0, 1.0]]
+    )
 
 
 def cylinder_mesh(radius: float, length: float, segments: int = HUB_SEGMENTS) -> PartMesh:
@@ -82,11 +87,16 @@ def cylinder_mesh(radius: float, length: float, segments: int = HUB_SEGMENTS) ->
     i = np.arange(segments)
     j = (i + 1) % segments
     bottom_centre, top_centre = 2 * segments, 2 * segments + 1
-    triangles = np.concatenate([
-        np.column_stack([i, j, j + segments]), np.column_stack([i, j + segments, i + segments]),  # side
-        np.column_stack([np.full(segments, bottom_centre), j, i]),  # bottom, facing -z
-        np.column_stack([np.full(segments, top_centre), i + segments, j + segments]),  # top, facing +z
-    ])
+    triangles = np.concatenate(
+        [
+            # side
+            np.column_stack([i, j, j + segments]),
+            np.column_stack([i, j + segments, i + segments]),
+            np.column_stack([np.full(segments, bottom_centre), j, i]),  # bottom, facing -z
+            # top, facing +z
+            np.column_stack([np.full(segments, top_centre), i + segments, j + segments]),
+        ]
+    )
     return PartMesh(HUB_PART, vertices, triangles.astype(np.int64))
 
 
@@ -104,8 +114,12 @@ def preview_scene(params: PropellerParameters) -> PreviewScene:
     surface = params.blade_surface()
     params.check_feasible(surface)
     tip = _tip_diameter(surface.points)  # at the design's sampling (a mirror keeps the radii)
-    sections, points = (min(wanted, most) for wanted, most in zip((params.resolution.sections,
-                                                                   params.resolution.points), PREVIEW_MAX_SAMPLES))
+    sections, points = (
+        min(wanted, most)
+        for wanted, most in zip(
+            (params.resolution.sections, params.resolution.points), PREVIEW_MAX_SAMPLES
+        )
+    )
     if (sections, points) != (params.resolution.sections, params.resolution.points):
         surface = params.blade_surface(sections=sections, points=points)
     mesh = blade_mesh(surface)
@@ -116,7 +130,8 @@ def preview_scene(params: PropellerParameters) -> PreviewScene:
     curves = []
     for index in range(params.blades):  # blade i is blade 0 turned about the axis (spec §6.1)
         rotation = rotation_about_z(params.blade_angle_deg(index) - params.blade_angle_deg(0))
-        turn = rotation if params.handedness == Handedness.CW else rotation.T  # mirrored angles turn back
+        # mirrored angles turn back
+        turn = rotation if params.handedness == Handedness.CW else rotation.T
         parts.append(PartMesh(index, vertices @ turn.T, faces))
         curves.append(section_points @ turn.T)
     return PreviewScene(parts, curves, tip)

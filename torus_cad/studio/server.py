@@ -20,6 +20,7 @@ from torus_cad.studio.app import Studio
 #: Hosts that only this machine can reach.
 LOCAL_HOSTS = ("127.0.0.1", "localhost", "::1")
 
+
 @contextlib.contextmanager
 def _trame_ignores_command_line() -> Iterator[None]:
     """trame parses sys.argv (and $TRAME_ARGS) itself on start; the studio passes everything explicitly."""
@@ -40,7 +41,9 @@ def start_message(host: str, port: int) -> str:
     if host in LOCAL_HOSTS:
         reach = "only this machine can connect (use --host to serve other machines)"
     else:
-        reach = f"listening on {host}: other machines that can reach it can use it, without a password"
+        reach = (
+            f"listening on {host}: other machines that can reach it can use it, without a password"
+        )
     return f"torus-cad studio: open http://{url_host}:{port}/ ; {reach}; Ctrl-C stops it"
 
 
@@ -48,13 +51,19 @@ def check_host(host: str) -> str:
     """``host`` if it names an address to listen on; ParameterError for an empty one (it would bind every
     interface while the start line showed none)."""
     if not host.strip():
-        raise ParameterError("--host must name an address to listen on, e.g. 127.0.0.1 (this machine only) or "
-                             "0.0.0.0 (every network); got an empty one")
+        raise ParameterError(
+            "--host must name an address to listen on, e.g. 127.0.0.1 (this machine only) or "
+            "0.0.0.0 (every network); got an empty one"
+        )
     return host.strip()
 
 
-def serve(design: PropellerParameters, port: int = 8080, host: str = "127.0.0.1",
-          files_folder: Path | None = None) -> int:
+def serve(
+    design: PropellerParameters,
+    port: int = 8080,
+    host: str = "127.0.0.1",
+    files_folder: Path | None = None,
+) -> int:
     """Serve the studio for ``design`` until a signal stops it (blocking); the exit code, 128 + the signal.
 
     ``files_folder``: a folder whose files uploaded designs may name (besides the files uploaded with them).
@@ -89,14 +98,24 @@ def serve(design: PropellerParameters, port: int = 8080, host: str = "127.0.0.1"
         try:
             with _trame_ignores_command_line():
                 # thread=True: the server installs no signal handlers of its own (see ready()).
-                server.start(port=port, host=host, open_browser=False, show_connection_info=False,
-                             disable_logging=True, timeout=0, thread=True)
+                server.start(
+                    port=port,
+                    host=host,
+                    open_browser=False,
+                    show_connection_info=False,
+                    disable_logging=True,
+                    timeout=0,
+                    thread=True,
+                )
         except OSError as error:
             if error.errno == errno.EADDRINUSE:
-                raise OutputError(f"port {port} on {host} is already in use (another studio or server?); "
-                                  "choose another with --port, or --port 0 for any free one") from None
+                raise OutputError(
+                    f"port {port} on {host} is already in use (another studio or server?); "
+                    "choose another with --port, or --port 0 for any free one"
+                ) from None
             raise
         finally:
-            exit_on_signals()  # the loop's handlers are gone: a signal while cleaning up ends with one line
+            # the loop's handlers are gone: a signal while cleaning up ends with one line
+            exit_on_signals()
             studio.shut_down()
     return EXIT_SIGNALS[stopped[0]] if stopped else 0

@@ -40,8 +40,10 @@ def upload_files(uploads: Sequence[Any]) -> dict[str, bytes]:
     """The uploaded files by base name; ParameterError unless there is one design (.toml) and every
     file has a plain name and is within its size limit."""
     if len(uploads) > MAX_UPLOAD_FILES:
-        raise ParameterError(f"the upload holds {len(uploads)} files; at most {MAX_UPLOAD_FILES} (a design and the "
-                             "files it names)")
+        raise ParameterError(
+            f"the upload holds {len(uploads)} files; at most {MAX_UPLOAD_FILES} (a design and the "
+            "files it names)"
+        )
     files: dict[str, bytes] = {}
     for upload in uploads:
         content = upload.get("content") if isinstance(upload, Mapping) else None
@@ -49,21 +51,28 @@ def upload_files(uploads: Sequence[Any]) -> dict[str, bytes]:
             raise ParameterError("the uploaded file could not be read")
         name = Path(str(upload.get("name", ""))).name
         if not UPLOAD_NAME.fullmatch(name) or name in files:
-            raise ParameterError(f"an uploaded file's name must be letters, digits, '.', '_' or '-' (at most 100, "
-                                 f"each name once), got {name[:100]!r}")
+            raise ParameterError(
+                f"an uploaded file's name must be letters, digits, '.', '_' or '-' (at most 100, "
+                f"each name once), got {name[:100]!r}"
+            )
         limit = MAX_UPLOAD_BYTES if is_design(upload) else MAX_UPLOAD_FILE_BYTES
         if len(content) > limit:
-            raise ParameterError(f"the uploaded file {name!r} is {len(content):,} bytes; at most {limit:,} bytes")
+            raise ParameterError(
+                f"the uploaded file {name!r} is {len(content):,} bytes; at most {limit:,} bytes"
+            )
         files[name] = bytes(content)
     designs = [name for name in files if name.lower().endswith(".toml")]
     if len(designs) != 1:
-        raise ParameterError(f"an upload holds one design (.toml) and the files it names; this one holds "
-                             f"{len(designs)} .toml files")
+        raise ParameterError(
+            f"an upload holds one design (.toml) and the files it names; this one holds "
+            f"{len(designs)} .toml files"
+        )
     return files
 
 
-def read_upload(uploads: Sequence[Any], folder: Path, file_keys: Sequence[str], files_folder: Path | None
-                ) -> PropellerParameters:
+def read_upload(
+    uploads: Sequence[Any], folder: Path, file_keys: Sequence[str], files_folder: Path | None
+) -> PropellerParameters:
     """The design of an upload (one TOML file and the files it names), read as ``torus-cad build FILE`` reads it.
 
     The files are written to ``folder`` (new) under their base names; the design may name, in its
@@ -74,13 +83,18 @@ def read_upload(uploads: Sequence[Any], folder: Path, file_keys: Sequence[str], 
     folder.mkdir(parents=True)
     try:
         for name, data in files.items():
-            with open(os.open(folder / name, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600), "wb") as handle:
+            with open(
+                os.open(folder / name, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600), "wb"
+            ) as handle:
                 handle.write(data)
         design_name = next(name for name in files if name.lower().endswith(".toml"))
         table = parse_config_bytes(files[design_name], design_name, "uploaded design")
-        table = _only_uploaded_files(table, folder, set(files) - {design_name}, file_keys, files_folder)
+        table = _only_uploaded_files(
+            table, folder, set(files) - {design_name}, file_keys, files_folder
+        )
         return PropellerParameters.from_table(table, folder)
-    except ParameterError as error:  # named by the uploaded file's own name, not the server's folder
+    # named by the uploaded file's own name, not the server's folder
+    except ParameterError as error:
         shutil.rmtree(folder, ignore_errors=True)
         raise ParameterError(str(error).replace(f"{folder}{os.sep}", "")) from None
     except BaseException:
@@ -88,8 +102,13 @@ def read_upload(uploads: Sequence[Any], folder: Path, file_keys: Sequence[str], 
         raise
 
 
-def _only_uploaded_files(table: dict[str, Any], folder: Path, uploaded: set[str], file_keys: Sequence[str],
-                         files_folder: Path | None) -> dict[str, Any]:
+def _only_uploaded_files(
+    table: dict[str, Any],
+    folder: Path,
+    uploaded: set[str],
+    file_keys: Sequence[str],
+    files_folder: Path | None,
+) -> dict[str, Any]:
     """``table`` with each file it names made the path of an uploaded file (or one in ``files_folder``);
     ParameterError for any other path, before anything opens it."""
     table = {**table}
@@ -104,7 +123,9 @@ def _only_uploaded_files(table: dict[str, Any], folder: Path, uploaded: set[str]
     return table
 
 
-def _allowed_file(key: str, value: Any, folder: Path, uploaded: set[str], files_folder: Path | None) -> Path:
+def _allowed_file(
+    key: str, value: Any, folder: Path, uploaded: set[str], files_folder: Path | None
+) -> Path:
     if isinstance(value, str) and value in uploaded:
         return folder / value
     if isinstance(value, str) and files_folder is not None and not value.startswith("~"):
@@ -113,5 +134,7 @@ def _allowed_file(key: str, value: Any, folder: Path, uploaded: set[str], files_
             return candidate
     shown = repr(value)[:120]
     where = f" or files in {str(files_folder)!r}" if files_folder is not None else ""
-    raise ParameterError(f"{key} = {shown}: a design opened in the page may name only files uploaded with it"
-                         f"{where}, never a path on this machine; choose the design and the file together")
+    raise ParameterError(
+        f"{key} = {shown}: a design opened in the page may name only files uploaded with it"
+        f"{where}, never a path on this machine; choose the design and the file together"
+    )

@@ -18,7 +18,12 @@ from vtkmodules.vtkRenderingCore import vtkActor, vtkPolyDataMapper, vtkRenderer
 
 from torus_cad.colors import HUB_COLOR, blade_color
 from torus_cad.geometry.blade.propeller_geometry import HUB_PART
-from torus_cad.preview.vtk_scene import add_lights, polyline_polydata, surface_actor, triangle_polydata
+from torus_cad.preview.vtk_scene import (
+    add_lights,
+    polyline_polydata,
+    surface_actor,
+    triangle_polydata,
+)
 from torus_cad.studio.scene import PartMesh
 
 #: Background of the view, RGB 0..1.
@@ -26,6 +31,7 @@ BACKGROUND = (0.90, 0.92, 0.95)
 
 #: Section curves are drawn darker than their blade's colour, by this factor.
 SECTION_SHADE = 0.45
+
 
 def part_color(part: int, blades: int) -> tuple[float, float, float]:
     """RGB 0..1 of a part: the hub grey, blade i its own colour."""
@@ -58,7 +64,9 @@ class PropellerView:
         for mesh in parts:
             if not len(mesh.triangles):
                 continue
-            actor = surface_actor(triangle_polydata(mesh.vertices, mesh.triangles), part_color(mesh.part, blades))
+            actor = surface_actor(
+                triangle_polydata(mesh.vertices, mesh.triangles), part_color(mesh.part, blades)
+            )
             self.renderer.AddActor(actor)
             self._part_actors.append(actor)
         if not self._framed:
@@ -69,8 +77,16 @@ class PropellerView:
         """Replace the section curves: ``sections[i]`` is blade i's ``(sections, points, 3)`` array."""
         curves = [ring for blade in sections for ring in blade]
         counts = [len(blade) for blade in sections]
-        colors = np.concatenate([np.tile(np.array(blade_color(index, blades)) * SECTION_SHADE, (count, 1))
-                                 for index, count in enumerate(counts)]) if counts else np.zeros((0, 3))
+        colors = (
+            np.concatenate(
+                [
+                    np.tile(np.array(blade_color(index, blades)) * SECTION_SHADE, (count, 1))
+                    for index, count in enumerate(counts)
+                ]
+            )
+            if counts
+            else np.zeros((0, 3))
+        )
         polydata = polyline_polydata(curves, colors)
         mapper = self._section_mapper
         mapper.SetInputData(polydata)

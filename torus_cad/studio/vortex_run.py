@@ -14,8 +14,11 @@ from torus_cad.vortex.loading_files import write_loading_plot
 from torus_cad.vortex.vortex_performance import vortex_performance
 
 
-def run_vortex(request: PerformanceRequest, connection: multiprocessing.connection.Connection,
-               memory_limit_bytes: int | None = None) -> None:
+def run_vortex(
+    request: PerformanceRequest,
+    connection: multiprocessing.connection.Connection,
+    memory_limit_bytes: int | None = None,
+) -> None:
     """Solve ``request`` and send ``("result", id, {"report", "strips", "png"})``, or ``("failed", id, reason)``
     with the one line of the error (a solve that does not converge raises KernelError).
 
@@ -34,7 +37,9 @@ def _solved(request: PerformanceRequest) -> dict[str, object]:
     params = PropellerParameters.from_dict(request.design)
     result = vortex_performance(params, request.rpm, request.airspeed_m_s)
     title = f"loading, {params.name}: {request.rpm:.0f} rpm, {request.airspeed_m_s:g} m/s, vortex lattice"
-    path = write_loading_plot(result.strips, request.out_dir / f"loading_{request.request_id}.png", title)
+    path = write_loading_plot(
+        result.strips, request.out_dir / f"loading_{request.request_id}.png", title
+    )
     png = path.read_bytes()
     path.unlink()
     report = {key: result.report[key] for key in REPORT_KEYS}

@@ -44,6 +44,7 @@ BUILD_MEMORY_LIMIT_BYTES = 3 << 30
 
 # -- parent side -----------------------------------------------------------------------------------
 
+
 class ProcessRunner:
     """Runs at most one request at a time, each in its own process; a new request kills the one running.
 
@@ -54,9 +55,16 @@ class ProcessRunner:
     imports what it needs (the server side imports no kernel and no solver).
     """
 
-    def __init__(self, on_message: Callable[[str, int, Any], None], target: Callable[..., None],
-                 final_kinds: tuple[str, ...], time_out_reason: Callable[[float], str], name: str,
-                 time_limit_s: float, memory_limit_bytes: int) -> None:
+    def __init__(
+        self,
+        on_message: Callable[[str, int, Any], None],
+        target: Callable[..., None],
+        final_kinds: tuple[str, ...],
+        time_out_reason: Callable[[float], str],
+        name: str,
+        time_limit_s: float,
+        memory_limit_bytes: int,
+    ) -> None:
         self._on_message, self._target, self._final_kinds = on_message, target, final_kinds
         self._time_out_reason, self._name = time_out_reason, name
         self.time_limit_s, self.memory_limit_bytes = time_limit_s, memory_limit_bytes
@@ -75,8 +83,12 @@ class ProcessRunner:
         """Run ``request`` in a new process, killing any still running (it is superseded)."""
         self.cancel()
         receiver, sender = self._context.Pipe(duplex=False)
-        process = self._context.Process(target=self._target, args=(request, sender, self.memory_limit_bytes),
-                                        daemon=True, name=f"torus-cad-studio-{self._name.replace(' ', '-')}-{request_id}")
+        process = self._context.Process(
+            target=self._target,
+            args=(request, sender, self.memory_limit_bytes),
+            daemon=True,
+            name=f"torus-cad-studio-{self._name.replace(' ', '-')}-{request_id}",
+        )
         process.start()
         sender.close()  # the child holds the only writer: its death ends our reads with EOF
         self._process, self._connection = process, receiver
@@ -131,8 +143,11 @@ class ProcessRunner:
             if not self._finished:
                 code = self._process.exitcode if self._process is not None else None
                 self._finished = True
-                self._on_message("failed", request_id, f"the {self._name} process stopped unexpectedly "
-                                                       f"(exit code {code})")
+                self._on_message(
+                    "failed",
+                    request_id,
+                    f"the {self._name} process stopped unexpectedly (exit code {code})",
+                )
             if self._connection is connection:
                 self.cancel()
 
@@ -140,10 +155,21 @@ class ProcessRunner:
 class BuildRunner(ProcessRunner):
     """The exact builds (module doc): ``submit`` a :class:`BuildRequest`; its messages in the module doc's order."""
 
-    def __init__(self, on_message: Callable[[str, int, Any], None], time_limit_s: float = BUILD_TIME_LIMIT_S,
-                 memory_limit_bytes: int = BUILD_MEMORY_LIMIT_BYTES) -> None:
-        super().__init__(on_message, _child_main, ("files", "refused", "failed"), _build_time_out, "build",
-                         time_limit_s, memory_limit_bytes)
+    def __init__(
+        self,
+        on_message: Callable[[str, int, Any], None],
+        time_limit_s: float = BUILD_TIME_LIMIT_S,
+        memory_limit_bytes: int = BUILD_MEMORY_LIMIT_BYTES,
+    ) -> None:
+        super().__init__(
+            on_message,
+            _child_main,
+            ("files", "refused", "failed"),
+            _build_time_out,
+            "build",
+            time_limit_s,
+            memory_limit_bytes,
+        )
 
     def submit(self, request: BuildRequest) -> None:
         """Start ``request``, killing any build still running (it is superseded)."""
@@ -154,22 +180,33 @@ class BuildRunner(ProcessRunner):
 
 def time_out_reason(what: str, advice: str) -> Callable[[float], str]:
     """The page's line for ``what`` ("the exact build") stopped at its time limit (s), with ``advice``."""
-    return lambda limit_s: f"{what} took longer than {limit_s:g} s, the limit in the studio, and was stopped; {advice}"
+    return lambda limit_s: (
+        f"{what} took longer than {limit_s:g} s, the limit in the studio, and was stopped; {advice}"
+    )
 
 
-_build_time_out = time_out_reason("the exact build",
-                                  "lower resolution.sections / resolution.points or build it with torus-cad build")
+_build_time_out = time_out_reason(
+    "the exact build",
+    "lower resolution.sections / resolution.points or build it with torus-cad build",
+)
 
 
-def _child_main(request: BuildRequest, connection: multiprocessing.connection.Connection,
-                memory_limit_bytes: int) -> None:
+def _child_main(
+    request: BuildRequest,
+    connection: multiprocessing.connection.Connection,
+    memory_limit_bytes: int,
+) -> None:
     from torus_cad.studio.exact import run_build  # preloaded by the forkserver
 
     run_bounded(run_build, request, connection, memory_limit_bytes)
 
 
-def run_bounded(run: Callable[[Any, multiprocessing.connection.Connection, int], None], request: Any,
-                connection: multiprocessing.connection.Connection, memory_limit_bytes: int) -> None:
+def run_bounded(
+    run: Callable[[Any, multiprocessing.connection.Connection, int], None],
+    request: Any,
+    connection: multiprocessing.connection.Connection,
+    memory_limit_bytes: int,
+) -> None:
     """``run(request, connection, memory_limit_bytes)`` in this child process, its data memory bounded to
     ``memory_limit_bytes`` (bytes) first."""
     import resource

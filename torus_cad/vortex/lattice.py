@@ -27,7 +27,8 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.sparse import csr_matrix
 
-#: Ring segments: corners (first, second) of each of a ring's four sides, as (section, chord) offsets.
+#: Ring segments: corners (first, second) of each of a ring's four sides, as (section, chord)
+#: offsets.
 _SIDES = (((0, 0), (1, 0)), ((1, 0), (1, 1)), ((1, 1), (0, 1)), ((0, 1), (0, 0)))
 
 
@@ -98,7 +99,9 @@ def ring_grid(camber_m: NDArray[np.float64]) -> NDArray[np.float64]:
     return grid
 
 
-def control_points(camber_m: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def control_points(
+    camber_m: NDArray[np.float64],
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Each panel's three-quarter point (mean of its two section lines) and unit normal there: ``(K - 1, C, 3)``
     each. The normal is square to the span and to the camber line's tangent at the point (the derivative of
     the parabola through the panel's and a neighbour's nodes), not to the panel's chord: on a curved camber
@@ -106,10 +109,13 @@ def control_points(camber_m: NDArray[np.float64]) -> tuple[NDArray[np.float64], 
     tenth of the camber's lift at 8 panels (a NACA 4412 mean line on an elliptic wing; tested)."""
     three_quarter = camber_m[:, :-1] + 0.75 * (camber_m[:, 1:] - camber_m[:, :-1])
     points = 0.5 * (three_quarter[:-1] + three_quarter[1:])
-    diagonal_normals = np.cross(camber_m[1:, 1:] - camber_m[:-1, :-1], camber_m[:-1, 1:] - camber_m[1:, :-1])
+    diagonal_normals = np.cross(
+        camber_m[1:, 1:] - camber_m[:-1, :-1], camber_m[:-1, 1:] - camber_m[1:, :-1]
+    )
     tangents = _camber_tangents(0.5 * (camber_m[:-1] + camber_m[1:]))
     normals = np.cross(tangents, three_quarter[1:] - three_quarter[:-1])
-    normals *= np.sign(np.einsum("jik,jik->ji", normals, diagonal_normals))[..., None]  # the same side as before
+    # the same side as before
+    normals *= np.sign(np.einsum("jik,jik->ji", normals, diagonal_normals))[..., None]
     return points, normals / np.linalg.norm(normals, axis=2, keepdims=True)
 
 
@@ -121,19 +127,29 @@ def _camber_tangents(line: NDArray[np.float64]) -> NDArray[np.float64]:
         return np.diff(line, axis=1)
     steps = np.linalg.norm(np.diff(line, axis=1), axis=2)
     t = np.concatenate([np.zeros((len(line), 1)), np.cumsum(steps, axis=1)], axis=1)
-    first = np.clip(np.arange(chordwise) - 1, 0, chordwise - 2)  # the parabola's first node, each panel
-    nodes = first[:, None] + np.arange(3)[None, :]                # (C, 3)
-    where = t[:, :-1] + 0.75 * steps                              # (K - 1, C)
-    tn = t[:, nodes]                                              # (K - 1, C, 3)
+    # the parabola's first node, each panel
+    first = np.clip(np.arange(chordwise) - 1, 0, chordwise - 2)
+    nodes = first[:, None] + np.arange(3)[None, :]  # (C, 3)
+    where = t[:, :-1] + 0.75 * steps  # (K - 1, C)
+    tn = t[:, nodes]  # (K - 1, C, 3)
     weights = np.empty_like(tn)
     for a in range(3):
         b, c = (a + 1) % 3, (a + 2) % 3
-        weights[..., a] = ((where - tn[..., b]) + (where - tn[..., c])) / ((tn[..., a] - tn[..., b]) * (tn[..., a] - tn[..., c]))
+        weights[..., a] = ((where - tn[..., b]) + (where - tn[..., c])) / (
+            (tn[..., a] - tn[..., b]) * (tn[..., a] - tn[..., c])
+        )
     return np.einsum("jca,jcak->jck", weights, line[:, nodes])
 
 
-def wake_lines(trailing_edge_m: NDArray[np.float64], omega_rad_s: float, spin: float, inflow_m_s: float,
-               induced_m_s: float, radius_m: float, shape: WakeShape) -> NDArray[np.float64]:
+def wake_lines(
+    trailing_edge_m: NDArray[np.float64],
+    omega_rad_s: float,
+    spin: float,
+    inflow_m_s: float,
+    induced_m_s: float,
+    radius_m: float,
+    shape: WakeShape,
+) -> NDArray[np.float64]:
     """``(N, M + 1, 3)``: the helical lines shed from the trailing-edge nodes ``(N, 3)`` (module doc), in
     the blade's frame; ``spin`` +1 where the air seems to turn the +theta way past the blade (cw)."""
     length = shape.length_diameters * 2.0 * radius_m
@@ -145,13 +161,16 @@ def wake_lines(trailing_edge_m: NDArray[np.float64], omega_rad_s: float, spin: f
         times = _wake_angles(turns, shape) / omega_rad_s
     travelled = _travelled(times, inflow_m_s, induced_m_s, radius_m)
     far = inflow_m_s + induced_m_s * (1.0 + travelled / np.hypot(travelled, radius_m))
-    contraction = np.sqrt(max(base, 1e-12) / np.maximum(far, 1e-12)) if base > 0.0 else np.ones_like(times)
+    contraction = (
+        np.sqrt(max(base, 1e-12) / np.maximum(far, 1e-12)) if base > 0.0 else np.ones_like(times)
+    )
     angle = spin * omega_rad_s * times
     x, y, z = trailing_edge_m[:, 0:1], trailing_edge_m[:, 1:2], trailing_edge_m[:, 2:3]
     cos, sin = np.cos(angle)[None, :], np.sin(angle)[None, :]
     scale = contraction[None, :]
-    return np.stack([(x * cos - y * sin) * scale, (x * sin + y * cos) * scale,
-                     z - travelled[None, :]], axis=2)
+    return np.stack(
+        [(x * cos - y * sin) * scale, (x * sin + y * cos) * scale, z - travelled[None, :]], axis=2
+    )
 
 
 def _wake_angles(turns: float, shape: WakeShape) -> NDArray[np.float64]:
@@ -167,7 +186,9 @@ def _wake_angles(turns: float, shape: WakeShape) -> NDArray[np.float64]:
     return np.array(angles)
 
 
-def _travelled(times: NDArray[np.float64], inflow: float, induced: float, radius: float) -> NDArray[np.float64]:
+def _travelled(
+    times: NDArray[np.float64], inflow: float, induced: float, radius: float
+) -> NDArray[np.float64]:
     """Distance downstream at ``times`` of a point leaving the disk (explicit midpoint steps)."""
     travelled = np.zeros_like(times)
     for step in range(1, len(times)):
@@ -181,7 +202,9 @@ def _travelled(times: NDArray[np.float64], inflow: float, induced: float, radius
     return travelled
 
 
-def strip_edges(camber_m: NDArray[np.float64], downstream_first: NDArray[np.bool_]) -> NDArray[np.float64]:
+def strip_edges(
+    camber_m: NDArray[np.float64], downstream_first: NDArray[np.bool_]
+) -> NDArray[np.float64]:
     """``(K - 1, 2, C + 1, 3)``: each strip's two section lines ordered from the edge the flow meets first
     to the edge it leaves (the trailing edge, or the leading edge where ``downstream_first`` says the
     flow runs from the trailing edge to the leading edge there: a loop's return leg)."""
@@ -189,8 +212,13 @@ def strip_edges(camber_m: NDArray[np.float64], downstream_first: NDArray[np.bool
     return np.where(downstream_first[:, None, None, None], pairs[:, :, ::-1], pairs)
 
 
-def rotor_lattice(strips_m: NDArray[np.float64], blades: int, wake: NDArray[np.float64], core_m: float,
-                  core_growth_m: float) -> Lattice:
+def rotor_lattice(
+    strips_m: NDArray[np.float64],
+    blades: int,
+    wake: NDArray[np.float64],
+    core_m: float,
+    core_growth_m: float,
+) -> Lattice:
     """The lattice of ``blades`` blades whose blade 0 has the strips ``strips_m`` ``(K - 1, 2, C + 1, 3)``
     (:func:`strip_edges`) and whose strips shed the lines ``wake`` ``(K - 1, 2, M + 1, 3)`` from the
     last nodes of their two lines (blade 0's; the others are blade 0's turned by 360 / blades degrees
@@ -223,11 +251,13 @@ def rotor_lattice(strips_m: NDArray[np.float64], blades: int, wake: NDArray[np.f
     bound = len(starts)
     cores: list[float] = [0.0] * bound
     shed: dict[tuple[float, ...], int] = {}  # a line's first node -> its first segment's row
-    for j in range(strips):  # the horseshoe's two legs: out of the second line's node, into the first's
+    # the horseshoe's two legs: out of the second line's node, into the first's
+    for j in range(strips):
         last = j * chordwise + chordwise - 1
         for line, sign in ((wake[j, 1], 1.0), (wake[j, 0], -1.0)):
             key = tuple(line[0].tolist())
-            if key in shed:  # a neighbour's leg from the same node: the same line, both circulations on it
+            # a neighbour's leg from the same node: the same line, both circulations on it
+            if key in shed:
                 first = shed[key]
                 for step in range(len(line) - 1):
                     rows.append(first + step)
@@ -242,15 +272,40 @@ def rotor_lattice(strips_m: NDArray[np.float64], blades: int, wake: NDArray[np.f
                 add(start, end, last, sign)
     one_start, one_end = np.array(starts), np.array(ends)
     count = len(starts)
-    all_starts = np.concatenate([_turned(one_start, 2.0 * np.pi * b / blades) for b in range(blades)])
+    all_starts = np.concatenate(
+        [_turned(one_start, 2.0 * np.pi * b / blades) for b in range(blades)]
+    )
     all_ends = np.concatenate([_turned(one_end, 2.0 * np.pi * b / blades) for b in range(blades)])
-    incidence = csr_matrix((np.tile(signs, blades), (np.concatenate([np.array(rows) + b * count for b in range(blades)]),
-                                                     np.tile(columns, blades))), shape=(count * blades, strips * chordwise))
-    return Lattice(grid, points[None], normals[None], all_starts, all_ends, incidence, bound,
-                   np.tile(np.array(cores), blades), np.tile(np.arange(count) < bound, blades))
+    incidence = csr_matrix(
+        (
+            np.tile(signs, blades),
+            (
+                np.concatenate([np.array(rows) + b * count for b in range(blades)]),
+                np.tile(columns, blades),
+            ),
+        ),
+        shape=(count * blades, strips * chordwise),
+    )
+    return Lattice(
+        grid,
+        points[None],
+        normals[None],
+        all_starts,
+        all_ends,
+        incidence,
+        bound,
+        np.tile(np.array(cores), blades),
+        np.tile(np.arange(count) < bound, blades),
+    )
 
 
 def _turned(points: NDArray[np.float64], angle_rad: float) -> NDArray[np.float64]:
     cos, sin = np.cos(angle_rad), np.sin(angle_rad)
-    return np.stack([cos * points[:, 0] - sin * points[:, 1], sin * points[:, 0] + cos * points[:, 1],
-                     points[:, 2]], axis=1)
+    return np.stack(
+        [
+            cos * points[:, 0] - sin * points[:, 1],
+            sin * points[:, 0] + cos * points[:, 1],
+            points[:, 2],
+        ],
+        axis=1,
+    )

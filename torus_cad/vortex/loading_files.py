@@ -12,16 +12,34 @@ from torus_cad.vortex.rotor import RotorBlade
 from torus_cad.vortex.vortex_performance import StripLoads
 
 #: The CSV's columns (SI units; s is the centerline parameter, 0..1).
-LOADING_COLUMNS = ("s", "radius_m", "circulation_m2_s", "thrust_n_per_m", "torque_nm_per_m", "reynolds", "cl", "cd",
-                   "polar_confidence")
+LOADING_COLUMNS = (
+    "s",
+    "radius_m",
+    "circulation_m2_s",
+    "thrust_n_per_m",
+    "torque_nm_per_m",
+    "reynolds",
+    "cl",
+    "cd",
+    "polar_confidence",
+)
 #: Wake segments drawn at most (every n-th, evenly), so that the picture stays light.
 WAKE_SEGMENTS_DRAWN = 20000
 
 
 def write_loading_csv(strips: StripLoads, path: Path) -> Path:
     """One row a strip of blade 0, columns LOADING_COLUMNS; return ``path``."""
-    columns = (strips.s, strips.radius_m, strips.circulation_m2_s, strips.thrust_n_per_m, strips.torque_nm_per_m,
-               strips.reynolds, strips.cl, strips.cd, strips.confidence)
+    columns = (
+        strips.s,
+        strips.radius_m,
+        strips.circulation_m2_s,
+        strips.thrust_n_per_m,
+        strips.torque_nm_per_m,
+        strips.reynolds,
+        strips.cl,
+        strips.cd,
+        strips.confidence,
+    )
     with path.open("w", newline="") as handle:
         writer = csv.writer(handle)
         writer.writerow(LOADING_COLUMNS)
@@ -42,8 +60,17 @@ def write_loading_plot(strips: StripLoads, path: Path, title: str) -> Path:
         upper.plot(strips.s, strips.circulation_m2_s, "o-", ms=3, color="tab:purple")
         upper.set_ylabel("circulation, m^2/s")
         upper.set_title(title)
-        lower.plot(strips.s, strips.thrust_n_per_m, "o-", ms=3, color="tab:blue", label="thrust, N/m")
-        lower.plot(strips.s, strips.torque_nm_per_m * 1000.0, "s-", ms=3, color="tab:red", label="torque, N mm/m")
+        lower.plot(
+            strips.s, strips.thrust_n_per_m, "o-", ms=3, color="tab:blue", label="thrust, N/m"
+        )
+        lower.plot(
+            strips.s,
+            strips.torque_nm_per_m * 1000.0,
+            "s-",
+            ms=3,
+            color="tab:red",
+            label="torque, N mm/m",
+        )
         lower.set_xlabel("centerline parameter s")
         lower.legend(loc="best")
         for axes in (upper, lower):
@@ -69,8 +96,14 @@ def write_wake_plot(blade: RotorBlade, lattice: Lattice, path: Path, title: str)
     figure = plt.figure(figsize=(8, 8))
     try:
         axes = figure.add_subplot(projection="3d")
-        axes.add_collection3d(Line3DCollection(np.stack([starts[::step], ends[::step]], axis=1), linewidths=0.3,
-                                               colors="tab:blue", alpha=0.5))
+        axes.add_collection3d(
+            Line3DCollection(
+                np.stack([starts[::step], ends[::step]], axis=1),
+                linewidths=0.3,
+                colors="tab:blue",
+                alpha=0.5,
+            )
+        )
         camber = blade.camber_m * 1000.0
         axes.plot_surface(camber[..., 0], camber[..., 1], camber[..., 2], color="tab:orange")
         every = np.concatenate([starts, ends, camber.reshape(-1, 3)])

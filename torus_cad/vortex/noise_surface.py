@@ -17,26 +17,34 @@ from torus_cad.acoustics.fwh import RotatingSurface
 from torus_cad.vortex.lattice import Lattice
 from torus_cad.vortex.rotor import RotorBlade
 
-#: Every this many of a section's points make the thickness noise's faces: a face stays far smaller than the
-#: wavelength of the highest harmonic reported, and the noise's cost goes with the faces.
+#: Every this many of a section's points make the thickness noise's faces: a face stays far smaller
+#: than the wavelength of the highest harmonic reported, and the noise's cost goes with the faces.
 THICKNESS_POINT_STRIDE = 4
 
 
-def rotor_surface(blade: RotorBlade, lattice: Lattice, ring_force_n: NDArray[np.float64]) -> RotatingSurface:
+def rotor_surface(
+    blade: RotorBlade, lattice: Lattice, ring_force_n: NDArray[np.float64]
+) -> RotatingSurface:
     """Every blade's surface and lattice (blade 0's ``ring_force_n`` ``(K - 1, C, 3)`` N on its rings, the
     others' turned round the axis) as FW-H faces; module doc."""
     centroids, normals, areas, pressure = _blade_faces(blade.surface_m[:, ::THICKNESS_POINT_STRIDE])
     ring_centroids, ring_normals, ring_areas = _ring_faces(lattice.grid)
-    jump = np.einsum("ik,ik->i", ring_force_n.reshape(-1, 3), ring_normals) / np.maximum(ring_areas, 1e-300)
-    one_blade = (np.concatenate([centroids, ring_centroids, ring_centroids]),
-                 np.concatenate([normals, ring_normals, -ring_normals]),
-                 np.concatenate([areas, ring_areas, ring_areas]),
-                 np.concatenate([pressure, -0.5 * jump, 0.5 * jump]))
+    jump = np.einsum("ik,ik->i", ring_force_n.reshape(-1, 3), ring_normals) / np.maximum(
+        ring_areas, 1e-300
+    )
+    one_blade = (
+        np.concatenate([centroids, ring_centroids, ring_centroids]),
+        np.concatenate([normals, ring_normals, -ring_normals]),
+        np.concatenate([areas, ring_areas, ring_areas]),
+        np.concatenate([pressure, -0.5 * jump, 0.5 * jump]),
+    )
     blades = [_turned(one_blade, 2.0 * np.pi * k / blade.blades) for k in range(blade.blades)]
     return RotatingSurface(*(np.concatenate([part[i] for part in blades]) for i in range(4)))
 
 
-def _turned(faces: tuple[NDArray[np.float64], ...], angle: float) -> tuple[NDArray[np.float64], ...]:
+def _turned(
+    faces: tuple[NDArray[np.float64], ...], angle: float
+) -> tuple[NDArray[np.float64], ...]:
     """``faces`` turned by ``angle`` (rad) about +z."""
     cos, sin = np.cos(angle), np.sin(angle)
     rotation = np.array([[cos, -sin, 0.0], [sin, cos, 0.0], [0.0, 0.0, 1.0]])
@@ -51,7 +59,8 @@ def _blade_faces(surface_m: NDArray[np.float64]) -> tuple[NDArray[np.float64], .
     area_vector = 0.5 * np.cross(c - a, d - b)
     centroid = 0.25 * (a + b + c + d)
     middle = 0.5 * (a.mean(axis=1, keepdims=True) + b.mean(axis=1, keepdims=True))
-    if np.einsum("jik,jik->", area_vector, centroid - middle) < 0.0:  # the faces' normals point into the blade
+    # the faces' normals point into the blade
+    if np.einsum("jik,jik->", area_vector, centroid - middle) < 0.0:
         area_vector = -area_vector
     area = np.linalg.norm(area_vector, axis=2).ravel()
     keep = area > 0.0
@@ -65,4 +74,8 @@ def _ring_faces(grid: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
     c, d = grid[:, 1, 1:], grid[:, 0, 1:]
     area_vector = (0.5 * np.cross(c - a, d - b)).reshape(-1, 3)
     area = np.linalg.norm(area_vector, axis=1)
-    return (0.25 * (a + b + c + d)).reshape(-1, 3), area_vector / np.maximum(area, 1e-300)[:, None], area
+    return (
+        (0.25 * (a + b + c + d)).reshape(-1, 3),
+        area_vector / np.maximum(area, 1e-300)[:, None],
+        area,
+    )

@@ -17,12 +17,22 @@ from typing import Any
 import numpy as np
 
 from torus_cad.acoustics.fwh import Medium
-from torus_cad.acoustics.noise_report import Noise, evaluate_noise, write_noise_csv, write_noise_plot
+from torus_cad.acoustics.noise_report import (
+    Noise,
+    evaluate_noise,
+    write_noise_csv,
+    write_noise_plot,
+)
 from torus_cad.acoustics.observers import DEFAULT_OBSERVERS, Observer, check_observers
 from torus_cad.outputs.output_set import OutputSet
 from torus_cad.parameters.design import PropellerParameters
 from torus_cad.parameters.design_targets import resolve_design_targets
-from torus_cad.simulate.settings import OperatingPoint, check_count, check_operating_point, rpm_limit
+from torus_cad.simulate.settings import (
+    OperatingPoint,
+    check_count,
+    check_operating_point,
+    rpm_limit,
+)
 from torus_cad.simulate.thrust_target import (
     DEFAULT_MAX_RUNS,
     DEFAULT_TOLERANCE,
@@ -54,7 +64,8 @@ class VortexRequest:
     discretisation: Discretisation = field(default_factory=Discretisation)
     observers: tuple[Observer, ...] = DEFAULT_OBSERVERS
     viscous: bool = True
-    pictures: bool = True  #: False: the report and CSVs only (an optimiser's trial), no PNG nor directivity sweep
+    # : False: the report and CSVs only (an optimiser's trial), no PNG nor directivity sweep
+    pictures: bool = True
 
 
 @dataclass
@@ -82,8 +93,12 @@ def check_vortex_request(request: VortexRequest) -> float:
     return diameter_m
 
 
-def simulate_vortex(request: VortexRequest, out_dir: str | Path, stage: Callable[[str], None] | None = None,
-                    search: dict[str, Any] | None = None) -> VortexRun:
+def simulate_vortex(
+    request: VortexRequest,
+    out_dir: str | Path,
+    stage: Callable[[str], None] | None = None,
+    search: dict[str, Any] | None = None,
+) -> VortexRun:
     """Solve ``request`` and publish its set into ``out_dir`` (module doc); ``search``: a thrust search's record,
     kept in the report."""
     request = _with_targets_met(request)
@@ -105,15 +120,26 @@ def _with_targets_met(request: VortexRequest) -> VortexRequest:
     return dataclasses.replace(request, params=resolve_design_targets(request.params).parameters)
 
 
-def _published(request: VortexRequest, result: VortexResult, out: Path, start: float,
-               stage: Callable[[str], None] | None, search: dict[str, Any] | None) -> VortexRun:
+def _published(
+    request: VortexRequest,
+    result: VortexResult,
+    out: Path,
+    start: float,
+    stage: Callable[[str], None] | None,
+    search: dict[str, Any] | None,
+) -> VortexRun:
     """``result`` (of ``request``) with its noise, published into ``out``."""
     return _publish(request, result, _noise(request, result, stage), out, start, search)
 
 
-def vortex_thrust_search(request: VortexRequest, thrust_n: float, out_dir: str | Path,
-                         stage: Callable[[str], None] | None = None, tolerance: float = DEFAULT_TOLERANCE,
-                         max_runs: int = DEFAULT_MAX_RUNS) -> VortexRun:
+def vortex_thrust_search(
+    request: VortexRequest,
+    thrust_n: float,
+    out_dir: str | Path,
+    stage: Callable[[str], None] | None = None,
+    tolerance: float = DEFAULT_TOLERANCE,
+    max_runs: int = DEFAULT_MAX_RUNS,
+) -> VortexRun:
     """The rpm at which ``request``'s design gives ``thrust_n`` N within ``tolerance`` of it, found by the OpenFOAM
     route's search (torus_cad.simulate.thrust_target: the first rpm from a plausible CT, then secant steps on
     sqrt(thrust)), published as :func:`simulate_vortex` publishes one run, the search in its report."""
@@ -127,8 +153,16 @@ def vortex_thrust_search(request: VortexRequest, thrust_n: float, out_dir: str |
     runs: list[ThrustRun] = []
     results: list[VortexResult] = []
     while True:
-        results.append(vortex_performance(request.params, rpm, request.point.airspeed_m_s, request.discretisation,
-                                          request.viscous, _induced_share(results[-1], runs[-1].rpm) if results else None))
+        results.append(
+            vortex_performance(
+                request.params,
+                rpm,
+                request.point.airspeed_m_s,
+                request.discretisation,
+                request.viscous,
+                _induced_share(results[-1], runs[-1].rpm) if results else None,
+            )
+        )
         runs.append(ThrustRun(rpm, float(results[-1].report["thrust_n"])))
         if stage:
             stage(f"run {len(runs)}: {rpm:.0f} rpm, thrust {runs[-1].thrust_n:.4g} N")
@@ -137,26 +171,55 @@ def vortex_thrust_search(request: VortexRequest, thrust_n: float, out_dir: str |
             break
         rpm = next_rpm(runs, thrust_n, limit)
     chosen = runs.index(state.best)
-    search = {"target_thrust_n": thrust_n, "tolerance": tolerance, "max_runs": max_runs, "rpm": state.best.rpm,
-              "thrust_n": state.best.thrust_n, "within_tolerance": state.within_tolerance, "rpm_limit": limit,
-              "chosen_run": chosen,
-              "runs": [{"rpm": run.rpm, "thrust_n": run.thrust_n,
-                        **{key: result.report[key] for key in ("torque_nm", "power_w", "figure_of_merit", "efficiency")},
-                        "converged": True} for run, result in zip(runs, results, strict=True)],
-              "method": "secant on sqrt(thrust) over rpm; the first rpm from CT = the OpenFOAM route's"}
+    search = {
+        "target_thrust_n": thrust_n,
+        "tolerance": tolerance,
+        "max_runs": max_runs,
+        "rpm": state.best.rpm,
+        "thrust_n": state.best.thrust_n,
+        "within_tolerance": state.within_tolerance,
+        "rpm_limit": limit,
+        "chosen_run": chosen,
+        "runs": [
+            {
+                "rpm": run.rpm,
+                "thrust_n": run.thrust_n,
+                **{
+                    key: result.report[key]
+                    for key in ("torque_nm", "power_w", "figure_of_merit", "efficiency")
+                },
+                "converged": True,
+            }
+            for run, result in zip(runs, results, strict=True)
+        ],
+        "method": "secant on sqrt(thrust) over rpm; the first rpm from CT = the OpenFOAM route's",
+    }
     best_point = OperatingPoint(state.best.rpm, request.point.airspeed_m_s, request.point.fluid)
-    return _published(dataclasses.replace(request, point=best_point), results[chosen], Path(out_dir), start, stage,
-                      search)
+    return _published(
+        dataclasses.replace(request, point=best_point),
+        results[chosen],
+        Path(out_dir),
+        start,
+        stage,
+        search,
+    )
 
 
 def _solved(request: VortexRequest, stage: Callable[[str], None] | None) -> VortexResult:
     if stage:
         stage("vortex lattice")
-    return vortex_performance(request.params, request.point.rpm, request.point.airspeed_m_s, request.discretisation,
-                              request.viscous)
+    return vortex_performance(
+        request.params,
+        request.point.rpm,
+        request.point.airspeed_m_s,
+        request.discretisation,
+        request.viscous,
+    )
 
 
-def _noise(request: VortexRequest, result: VortexResult, stage: Callable[[str], None] | None) -> Noise | None:
+def _noise(
+    request: VortexRequest, result: VortexResult, stage: Callable[[str], None] | None
+) -> Noise | None:
     """The tonal noise at the request's observers (None when the rotor does not turn)."""
     if request.point.rpm == 0.0:
         return None
@@ -164,38 +227,68 @@ def _noise(request: VortexRequest, result: VortexResult, stage: Callable[[str], 
         stage("noise")
     fluid = request.point.fluid
     surface = rotor_surface(result.blade, result.inviscid.lattice, result.ring_force_n)
-    omega = -result.blade.spin * request.point.rpm * math.pi / 30.0  # FW-H: positive counter-clockwise from +z
-    noise = evaluate_noise(surface, omega, result.blade.blades, Medium(fluid.density_kg_m3, fluid.speed_of_sound_m_s),
-                           request.observers, directivity=request.pictures)
+    # FW-H: positive counter-clockwise from +z
+    omega = -result.blade.spin * request.point.rpm * math.pi / 30.0
+    noise = evaluate_noise(
+        surface,
+        omega,
+        result.blade.blades,
+        Medium(fluid.density_kg_m3, fluid.speed_of_sound_m_s),
+        request.observers,
+        directivity=request.pictures,
+    )
     noise.report["harmonics_of"] = "the blade-passing frequency"
-    noise.report["source"] = ("the vortex lattice's pressure jump (loading) and the blade's surface (thickness); "
-                              "profile drag and leading-edge suction left out")
+    noise.report["source"] = (
+        "the vortex lattice's pressure jump (loading) and the blade's surface (thickness); "
+        "profile drag and leading-edge suction left out"
+    )
     return noise
 
 
-def _publish(request: VortexRequest, result: VortexResult, noise: Noise | None, out: Path, start: float,
-             search: dict[str, Any] | None) -> VortexRun:
+def _publish(
+    request: VortexRequest,
+    result: VortexResult,
+    noise: Noise | None,
+    out: Path,
+    start: float,
+    search: dict[str, Any] | None,
+) -> VortexRun:
     name = request.params.name
-    title = f"{name}: {request.point.rpm:.0f} rpm, {request.point.airspeed_m_s:g} m/s, vortex lattice"
+    title = (
+        f"{name}: {request.point.rpm:.0f} rpm, {request.point.airspeed_m_s:g} m/s, vortex lattice"
+    )
     with OutputSet(out, f"{name}_performance") as output:
-        output.write_files(lambda folder: _files(result, noise, folder, name, title if request.pictures else None))
-        report = {**_report(request, result, start), "noise": noise.report if noise is not None else None,
-                  **({"thrust_search": search} if search is not None else {})}
+        output.write_files(
+            lambda folder: _files(result, noise, folder, name, title if request.pictures else None)
+        )
+        report = {
+            **_report(request, result, start),
+            "noise": noise.report if noise is not None else None,
+            **({"thrust_search": search} if search is not None else {}),
+        }
         paths = output.publish(report)
         return VortexRun(paths, output.sealed_report)
 
 
-def _files(result: VortexResult, noise: Noise | None, folder: Path, name: str, title: str | None) -> dict[str, Path]:
+def _files(
+    result: VortexResult, noise: Noise | None, folder: Path, name: str, title: str | None
+) -> dict[str, Path]:
     """The loading and noise CSVs, and with a ``title`` the pictures (loading, wake, noise)."""
     paths = {"loading_csv": write_loading_csv(result.strips, folder / f"{name}_loading.csv")}
     if noise is not None:
         paths["noise_csv"] = write_noise_csv(noise, folder / f"{name}_noise.csv")
     if title is None:
         return paths
-    paths["loading_png"] = write_loading_plot(result.strips, folder / f"{name}_loading.png", f"loading, {title}")
-    paths["wake_png"] = write_wake_plot(result.blade, result.inviscid.lattice, folder / f"{name}_wake.png", f"wake, {title}")
+    paths["loading_png"] = write_loading_plot(
+        result.strips, folder / f"{name}_loading.png", f"loading, {title}"
+    )
+    paths["wake_png"] = write_wake_plot(
+        result.blade, result.inviscid.lattice, folder / f"{name}_wake.png", f"wake, {title}"
+    )
     if noise is not None:
-        paths["noise_png"] = write_noise_plot(noise, folder / f"{name}_noise.png", f"tonal noise, {title}")
+        paths["noise_png"] = write_noise_plot(
+            noise, folder / f"{name}_noise.png", f"tonal noise, {title}"
+        )
     return paths
 
 
@@ -204,28 +297,57 @@ def _report(request: VortexRequest, result: VortexResult, start: float) -> dict[
     strips = result.strips
     doubtful = np.flatnonzero(strips.confidence < LOW_CONFIDENCE)
     return {
-        "name": params.name, "handedness": params.handedness.value, "solver": "vortex",
-        "rpm": point.rpm, "airspeed_m_s": point.airspeed_m_s, "omega_rad_s": point.omega_rad_s(params.handedness),
+        "name": params.name,
+        "handedness": params.handedness.value,
+        "solver": "vortex",
+        "rpm": point.rpm,
+        "airspeed_m_s": point.airspeed_m_s,
+        "omega_rad_s": point.omega_rad_s(params.handedness),
         "tip_diameter_m": 2.0 * result.blade.tip_radius_m,
-        **{key: result.report[key] for key in ("thrust_n", "torque_nm", "power_w", "advance_ratio", "ct", "cp",
-                                                "efficiency", "figure_of_merit")},
+        **{
+            key: result.report[key]
+            for key in (
+                "thrust_n",
+                "torque_nm",
+                "power_w",
+                "advance_ratio",
+                "ct",
+                "cp",
+                "efficiency",
+                "figure_of_merit",
+            )
+        },
         "converged": True,
-        "inviscid": {"thrust_n": result.report["inviscid_thrust_n"], "power_w": result.report["inviscid_power_w"]},
-        "lattice": {"chordwise": request.discretisation.chordwise, "spanwise": request.discretisation.spanwise,
-                    "wake_diameters": request.discretisation.wake.length_diameters,
-                    "wake_steps_per_turn": request.discretisation.wake.steps_per_turn,
-                    "relaxed_first_turn": request.discretisation.wake.free_turns,
-                    "iterations": result.inviscid.iterations},
-        "polars": {"viscous": request.viscous, "source": "NeuralFoil (large) at each strip's Reynolds number",
-                   "lift_ratio_bounds": list(LIFT_RATIO_BOUNDS), "low_confidence_below": LOW_CONFIDENCE,
-                   "low_confidence_strips": [float(strips.s[j]) for j in doubtful],
-                   "reynolds_range": [float(strips.reynolds.min()), float(strips.reynolds.max())]},
-        "fluid": {"name": fluid.name, "density_kg_m3": fluid.density_kg_m3, "viscosity_m2_s": fluid.viscosity_m2_s},
+        "inviscid": {
+            "thrust_n": result.report["inviscid_thrust_n"],
+            "power_w": result.report["inviscid_power_w"],
+        },
+        "lattice": {
+            "chordwise": request.discretisation.chordwise,
+            "spanwise": request.discretisation.spanwise,
+            "wake_diameters": request.discretisation.wake.length_diameters,
+            "wake_steps_per_turn": request.discretisation.wake.steps_per_turn,
+            "relaxed_first_turn": request.discretisation.wake.free_turns,
+            "iterations": result.inviscid.iterations,
+        },
+        "polars": {
+            "viscous": request.viscous,
+            "source": "NeuralFoil (large) at each strip's Reynolds number",
+            "lift_ratio_bounds": list(LIFT_RATIO_BOUNDS),
+            "low_confidence_below": LOW_CONFIDENCE,
+            "low_confidence_strips": [float(strips.s[j]) for j in doubtful],
+            "reynolds_range": [float(strips.reynolds.min()), float(strips.reynolds.max())],
+        },
+        "fluid": {
+            "name": fluid.name,
+            "density_kg_m3": fluid.density_kg_m3,
+            "viscosity_m2_s": fluid.viscosity_m2_s,
+        },
         "wall_seconds": time.perf_counter() - start,
         "conventions": "thrust > 0 pushes the air toward -z (the design's way); torque > 0 resists the design's "
-                       "rotation; CT = T/(rho n^2 D^4), CP = P/(rho n^3 D^5), n in rev/s, D the tip diameter; "
-                       "polars.low_confidence_strips: the centerline parameters s of strips whose polar NeuralFoil "
-                       "trusts less than low_confidence_below (stall, very low Reynolds number)",
+        "rotation; CT = T/(rho n^2 D^4), CP = P/(rho n^3 D^5), n in rev/s, D the tip diameter; "
+        "polars.low_confidence_strips: the centerline parameters s of strips whose polar NeuralFoil "
+        "trusts less than low_confidence_below (stall, very low Reynolds number)",
     }
 
 
@@ -238,20 +360,31 @@ def vortex_summary_lines(run: VortexRun) -> list[str]:
     lines = [f"wrote {path}" for path in run.paths.values()]
     if "thrust_search" in report:
         lines += thrust_search_lines(report["thrust_search"])
-    merit = (f"efficiency {report['efficiency']:.3f}" if report["efficiency"] is not None
-             else f"figure of merit {report['figure_of_merit']:.3f}" if report["figure_of_merit"] is not None else "")
-    lines.append(f"thrust {report['thrust_n']:.4g} N, torque {report['torque_nm'] * 1000.0:.4g} N mm, power "
-                 f"{report['power_w']:.4g} W at {report['rpm']:g} rpm, {report['airspeed_m_s']:g} m/s: CT "
-                 f"{report['ct']:.4g}, CP {report['cp']:.4g}, {merit}")
+    merit = (
+        f"efficiency {report['efficiency']:.3f}"
+        if report["efficiency"] is not None
+        else f"figure of merit {report['figure_of_merit']:.3f}"
+        if report["figure_of_merit"] is not None
+        else ""
+    )
+    lines.append(
+        f"thrust {report['thrust_n']:.4g} N, torque {report['torque_nm'] * 1000.0:.4g} N mm, power "
+        f"{report['power_w']:.4g} W at {report['rpm']:g} rpm, {report['airspeed_m_s']:g} m/s: CT "
+        f"{report['ct']:.4g}, CP {report['cp']:.4g}, {merit}"
+    )
     lattice = report["lattice"]
-    lines.append(f"vortex lattice {lattice['chordwise']} x {lattice['spanwise']} a blade, wake "
-                 f"{lattice['wake_diameters']:g} D, {report['wall_seconds']:.1f} s; inviscid thrust "
-                 f"{report['inviscid']['thrust_n']:.4g} N, power {report['inviscid']['power_w']:.4g} W")
+    lines.append(
+        f"vortex lattice {lattice['chordwise']} x {lattice['spanwise']} a blade, wake "
+        f"{lattice['wake_diameters']:g} D, {report['wall_seconds']:.1f} s; inviscid thrust "
+        f"{report['inviscid']['thrust_n']:.4g} N, power {report['inviscid']['power_w']:.4g} W"
+    )
     doubtful = report["polars"]["low_confidence_strips"]
     if doubtful:
-        lines.append(f"warning: NeuralFoil's polars are not confident on {len(doubtful)} strip(s), at s = "
-                     f"{', '.join(f'{s:.2f}' for s in doubtful[:8])}{' ...' if len(doubtful) > 8 else ''} (stall or "
-                     "very low Reynolds number): the numbers there are rough")
+        lines.append(
+            f"warning: NeuralFoil's polars are not confident on {len(doubtful)} strip(s), at s = "
+            f"{', '.join(f'{s:.2f}' for s in doubtful[:8])}{' ...' if len(doubtful) > 8 else ''} (stall or "
+            "very low Reynolds number): the numbers there are rough"
+        )
     if report.get("noise"):
         lines.append(noise_line(report["noise"]))
     return lines

@@ -17,7 +17,8 @@ from numpy.typing import NDArray
 ALPHA_DEG = np.linspace(-12.0, 20.0, 65)
 #: NeuralFoil's network size ("large" is its most accurate, a few ms a polar).
 MODEL_SIZE = "large"
-#: The window above the zero-lift angle (deg) over which a polar's lift slope is fitted (its linear range).
+#: The window above the zero-lift angle (deg) over which a polar's lift slope is fitted (its linear
+#: range).
 LINEAR_RANGE_DEG = 6.0
 #: Below this confidence (NeuralFoil's analysis_confidence, 0 to 1) a strip's polar is flagged.
 LOW_CONFIDENCE = 0.5
@@ -43,7 +44,7 @@ class Polar:
         if not len(rising):
             return float(self.alpha_deg[np.argmin(np.abs(self.cl))])
         i = int(rising[0])
-        return float(np.interp(0.0, self.cl[i:i + 2], self.alpha_deg[i:i + 2]))
+        return float(np.interp(0.0, self.cl[i : i + 2], self.alpha_deg[i : i + 2]))
 
     @property
     def stall_deg(self) -> float:
@@ -57,7 +58,11 @@ class Polar:
         zero = self.zero_lift_deg
         window = (self.alpha_deg >= zero) & (self.alpha_deg <= zero + LINEAR_RANGE_DEG)
         offset = self.alpha_deg[window] - zero
-        slope = float(offset @ self.cl[window] / max(float(offset @ offset), 1e-300)) if window.any() else 0.0
+        slope = (
+            float(offset @ self.cl[window] / max(float(offset @ offset), 1e-300))
+            if window.any()
+            else 0.0
+        )
         return max(slope, 0.1 * 2.0 * np.pi * np.pi / 180.0)
 
 
@@ -70,8 +75,11 @@ def turned_round(coordinates: NDArray[np.float64]) -> NDArray[np.float64]:
     return turned
 
 
-def strip_polars(sections: tuple[NDArray[np.float64], ...], reynolds: NDArray[np.float64],
-                 turned: NDArray[np.bool_]) -> list[Polar]:
+def strip_polars(
+    sections: tuple[NDArray[np.float64], ...],
+    reynolds: NDArray[np.float64],
+    turned: NDArray[np.bool_],
+) -> list[Polar]:
     """The polar of each strip ``j`` (between sections ``j`` and ``j + 1``) at ``reynolds[j]``."""
     import neuralfoil
 
@@ -80,9 +88,19 @@ def strip_polars(sections: tuple[NDArray[np.float64], ...], reynolds: NDArray[np
         tables = []
         for shape in (sections[j], sections[j + 1]):
             coordinates = turned_round(shape) if turned[j] else shape
-            aero = neuralfoil.get_aero_from_coordinates(coordinates, alpha=ALPHA_DEG,
-                                                        Re=np.full(len(ALPHA_DEG), max(re, 1e3)), model_size=MODEL_SIZE)
-            tables.append((np.asarray(aero["CL"]), np.asarray(aero["CD"]), np.asarray(aero["analysis_confidence"])))
+            aero = neuralfoil.get_aero_from_coordinates(
+                coordinates,
+                alpha=ALPHA_DEG,
+                Re=np.full(len(ALPHA_DEG), max(re, 1e3)),
+                model_size=MODEL_SIZE,
+            )
+            tables.append(
+                (
+                    np.asarray(aero["CL"]),
+                    np.asarray(aero["CD"]),
+                    np.asarray(aero["analysis_confidence"]),
+                )
+            )
         cl, cd, confidence = (0.5 * (tables[0][k] + tables[1][k]) for k in range(3))
         polars.append(Polar(ALPHA_DEG, cl, cd, confidence))
     return polars

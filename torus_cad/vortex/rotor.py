@@ -14,7 +14,11 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from torus_cad.geometry.analysis.camber_surface import camber_surface, cosine_fractions, section_coordinates
+from torus_cad.geometry.analysis.camber_surface import (
+    camber_surface,
+    cosine_fractions,
+    section_coordinates,
+)
 from torus_cad.geometry.blade.blade_surface import BladeSurface, blade_surface_at
 from torus_cad.geometry.blade.handedness import Handedness
 from torus_cad.parameters.design import DesignKind, PropellerParameters
@@ -85,7 +89,9 @@ def rotor_blade(params: PropellerParameters, discretisation: Discretisation) -> 
         spin = -1.0
     shapes = tuple(section_coordinates(surface, k) for k in range(sections))
     tip = float(np.hypot(surface.points[..., 0], surface.points[..., 1]).max()) / 1000.0
-    return RotorBlade(points, camber.chord_mm / 1000.0, shapes, camber.s, params.blades, spin, tip, outline)
+    return RotorBlade(
+        points, camber.chord_mm / 1000.0, shapes, camber.s, params.blades, spin, tip, outline
+    )
 
 
 def _surface(params: PropellerParameters, sections: int) -> BladeSurface:
@@ -95,7 +101,9 @@ def _surface(params: PropellerParameters, sections: int) -> BladeSurface:
     centerline = geometry.centerline(0)
     hub = params.hub_geometry()
     first, last = _outside_the_hub(centerline.points, hub.radius_mm)
-    return blade_surface_at(geometry.blade, centerline, np.linspace(first, last, sections), SECTION_POINTS)
+    return blade_surface_at(
+        geometry.blade, centerline, np.linspace(first, last, sections), SECTION_POINTS
+    )
 
 
 def _outside_the_hub(points: object, hub_radius_mm: float) -> tuple[float, float]:
@@ -111,8 +119,10 @@ def _outside_the_hub(points: object, hub_radius_mm: float) -> tuple[float, float
     if not len(where):
         return 0.0, 1.0
     low, high = where[0], where[-1]
-    return (_crossing(outside, s[max(low - 1, 0)], s[low]) if low > 0 else 0.0,
-            _crossing(outside, s[min(high + 1, len(s) - 1)], s[high]) if high < len(s) - 1 else 1.0)
+    return (
+        _crossing(outside, s[max(low - 1, 0)], s[low]) if low > 0 else 0.0,
+        _crossing(outside, s[min(high + 1, len(s) - 1)], s[high]) if high < len(s) - 1 else 1.0,
+    )
 
 
 def _crossing(outside: object, inside_s: float, outside_s: float) -> float:

@@ -23,22 +23,23 @@ from torus_cad.errors import KernelError
 from torus_cad.vortex.biot_savart import induced_velocity, normal_influence
 from torus_cad.vortex.lattice import Lattice, WakeShape, rotor_lattice, strip_edges, wake_lines
 
-#: The wake iteration stops when its induced velocity changes by less than this fraction of the tip speed
-#: (plus the airspeed).
+#: The wake iteration stops when its induced velocity changes by less than this fraction of the tip
+#: speed (plus the airspeed).
 INDUCED_TOLERANCE = 1e-5
 #: Wake iterations at most; a solve that has not converged then raises.
 MAX_WAKE_ITERATIONS = 40
 #: Under-relaxation of the wake's induced velocity between iterations.
 WAKE_RELAXATION = 1.0
-#: The blade's own segments get a vortex core of this many mean chords where the force on a bound segment
-#: is evaluated: where a loop's flow turns round, two strips' rings meet on one section line at different
-#: nodes, and a segment's midpoint lies a hair from its neighbour's segment.
+#: The blade's own segments get a vortex core of this many mean chords where the force on a bound
+#: segment is evaluated: where a loop's flow turns round, two strips' rings meet on one section line
+#: at different nodes, and a segment's midpoint lies a hair from its neighbour's segment.
 BOUND_CORE_CHORDS = 0.02
 #: The relaxed wake: each sweep moves its first turn this share of the way to the streamlines ...
 WAKE_SWEEP_RELAXATION = 0.3
 #: ... halved, down to this, after a sweep whose change grew (the wake swinging round its shape) ...
 WAKE_SWEEP_RELAXATION_MIN = 0.05
-#: ... until the thrust changes by less than this fraction of itself between sweeps (scaled to a full step) ...
+#: ... until the thrust changes by less than this fraction of itself between sweeps (scaled to a
+#: full step) ...
 RELAXED_THRUST_TOLERANCE = 5e-3
 #: ... in this many sweeps at most (each a solve after the prescribed wake's).
 RELAXATION_SWEEPS_MAX = 30
@@ -70,8 +71,9 @@ class Inviscid:
     lattice: Lattice = field(repr=False)
 
 
-def kinematic_velocity(points: NDArray[np.float64], omega_rad_s: float, spin: float,
-                       airspeed_m_s: float) -> NDArray[np.float64]:
+def kinematic_velocity(
+    points: NDArray[np.float64], omega_rad_s: float, spin: float, airspeed_m_s: float
+) -> NDArray[np.float64]:
     """``(P, 3)`` the air's velocity at ``points`` seen from the turning blade (module doc)."""
     velocity = np.zeros_like(points)
     velocity[:, 0] = -spin * omega_rad_s * points[:, 1]
@@ -80,9 +82,18 @@ def kinematic_velocity(points: NDArray[np.float64], omega_rad_s: float, spin: fl
     return velocity
 
 
-def solve_inviscid(camber_m: NDArray[np.float64], blades: int, spin: float, omega_rad_s: float,
-                   airspeed_m_s: float, density: float, tip_radius_m: float, wake: WakeShape,
-                   momentum_wake: bool = True, induced_guess: float | None = None) -> Inviscid:
+def solve_inviscid(
+    camber_m: NDArray[np.float64],
+    blades: int,
+    spin: float,
+    omega_rad_s: float,
+    airspeed_m_s: float,
+    density: float,
+    tip_radius_m: float,
+    wake: WakeShape,
+    momentum_wake: bool = True,
+    induced_guess: float | None = None,
+) -> Inviscid:
     """Circulations and forces of the rotor whose blade 0 has the camber grid ``camber_m`` (module doc).
 
     Args:
@@ -102,32 +113,54 @@ def solve_inviscid(camber_m: NDArray[np.float64], blades: int, spin: float, omeg
     """
     area = np.pi * tip_radius_m**2
     middle = 0.5 * (camber_m[:-1] + camber_m[1:]).mean(axis=1)
-    chord = (camber_m[:-1, -1] + camber_m[1:, -1] - camber_m[:-1, 0] - camber_m[1:, 0])
-    downstream_first = np.einsum("jk,jk->j", kinematic_velocity(middle, omega_rad_s, spin, airspeed_m_s), chord) < 0.0
+    chord = camber_m[:-1, -1] + camber_m[1:, -1] - camber_m[:-1, 0] - camber_m[1:, 0]
+    downstream_first = (
+        np.einsum("jk,jk->j", kinematic_velocity(middle, omega_rad_s, spin, airspeed_m_s), chord)
+        < 0.0
+    )
     strips = strip_edges(camber_m, downstream_first)
     guess = STATIC_INDUCED_GUESS if airspeed_m_s == 0.0 else 0.0
-    induced = (guess if induced_guess is None else induced_guess) * omega_rad_s * tip_radius_m if momentum_wake else 0.0
+    induced = (
+        (guess if induced_guess is None else induced_guess) * omega_rad_s * tip_radius_m
+        if momentum_wake
+        else 0.0
+    )
     scale = airspeed_m_s + omega_rad_s * tip_radius_m
     mean_chord = float(np.linalg.norm(chord, axis=1).mean()) / 2.0
     change, blade_part, bound_core = np.inf, BladePart(), BOUND_CORE_CHORDS * mean_chord
-    ratio: float | None = None  # the full Kutta-Joukowski thrust over the kinematic one (module doc)
+    # the full Kutta-Joukowski thrust over the kinematic one (module doc)
+    ratio: float | None = None
     for iteration in range(1, MAX_WAKE_ITERATIONS + 1):  # noqa: B007 (the count is reported)
         edges = strips[:, :, -1].reshape(-1, 3)
         lines = wake_lines(edges, omega_rad_s, spin, airspeed_m_s, induced, tip_radius_m, wake)
-        lattice = rotor_lattice(strips, blades, lines.reshape(len(strips), 2, *lines.shape[1:]),
-                                wake.core_chords * mean_chord, mean_chord)
+        lattice = rotor_lattice(
+            strips,
+            blades,
+            lines.reshape(len(strips), 2, *lines.shape[1:]),
+            wake.core_chords * mean_chord,
+            mean_chord,
+        )
         circulation = _circulation(lattice, spin, omega_rad_s, airspeed_m_s, blade_part)
         if scale == 0.0 or not momentum_wake:
-            force, moment = _forces(lattice, circulation, spin, omega_rad_s, airspeed_m_s, density, bound_core)
+            force, moment = _forces(
+                lattice, circulation, spin, omega_rad_s, airspeed_m_s, density, bound_core
+            )
             break
-        kinematic = density * _kinematic_thrust(lattice, circulation, blades, spin, omega_rad_s, airspeed_m_s)
+        kinematic = density * _kinematic_thrust(
+            lattice, circulation, blades, spin, omega_rad_s, airspeed_m_s
+        )
         if ratio is None:
-            force, moment = _forces(lattice, circulation, spin, omega_rad_s, airspeed_m_s, density, bound_core)
+            force, moment = _forces(
+                lattice, circulation, spin, omega_rad_s, airspeed_m_s, density, bound_core
+            )
             ratio = blades * float(force[..., 2].sum()) / kinematic if kinematic else 1.0
         momentum = _momentum_inflow(kinematic * ratio, airspeed_m_s, density, area)
         change = abs(momentum - induced) / scale
-        if change < INDUCED_TOLERANCE:  # settled on the ratio of the last full sum: check it on this wake
-            force, moment = _forces(lattice, circulation, spin, omega_rad_s, airspeed_m_s, density, bound_core)
+        # settled on the ratio of the last full sum: check it on this wake
+        if change < INDUCED_TOLERANCE:
+            force, moment = _forces(
+                lattice, circulation, spin, omega_rad_s, airspeed_m_s, density, bound_core
+            )
             ratio = blades * float(force[..., 2].sum()) / kinematic if kinematic else 1.0
             momentum = _momentum_inflow(kinematic * ratio, airspeed_m_s, density, area)
             change = abs(momentum - induced) / scale
@@ -135,15 +168,28 @@ def solve_inviscid(camber_m: NDArray[np.float64], blades: int, spin: float, omeg
                 break
         induced = (1.0 - WAKE_RELAXATION) * induced + WAKE_RELAXATION * momentum
     else:
-        raise KernelError(f"the vortex solve did not converge: the wake's induced velocity still changed by "
-                          f"{change:.2g} of the tip speed after {MAX_WAKE_ITERATIONS} wake iterations "
-                          f"(tolerance {INDUCED_TOLERANCE:g})")
+        raise KernelError(
+            f"the vortex solve did not converge: the wake's induced velocity still changed by "
+            f"{change:.2g} of the tip speed after {MAX_WAKE_ITERATIONS} wake iterations "
+            f"(tolerance {INDUCED_TOLERANCE:g})"
+        )
     thrust = blades * float(force[..., 2].sum())
     if momentum_wake and omega_rad_s > 0.0 and wake.free_turns:
-        relaxed = _relaxed(strips, lines.reshape(len(strips), 2, *lines.shape[1:]), (lattice, circulation, blade_part),
-                           blades, spin, omega_rad_s, airspeed_m_s, wake, mean_chord)
+        relaxed = _relaxed(
+            strips,
+            lines.reshape(len(strips), 2, *lines.shape[1:]),
+            (lattice, circulation, blade_part),
+            blades,
+            spin,
+            omega_rad_s,
+            airspeed_m_s,
+            wake,
+            mean_chord,
+        )
         circulation, lattice, change, sweeps = relaxed
-        force, moment = _forces(lattice, circulation, spin, omega_rad_s, airspeed_m_s, density, bound_core)
+        force, moment = _forces(
+            lattice, circulation, spin, omega_rad_s, airspeed_m_s, density, bound_core
+        )
         iteration += sweeps
         thrust = blades * float(force[..., 2].sum())
     torque = spin * blades * float(moment[..., 2].sum())
@@ -152,11 +198,23 @@ def solve_inviscid(camber_m: NDArray[np.float64], blades: int, spin: float, omeg
 
 def _momentum_inflow(thrust_n: float, airspeed_m_s: float, density: float, area_m2: float) -> float:
     """Momentum theory's induced velocity at the disk (m/s) for ``thrust_n`` on ``area_m2`` in axial ``airspeed_m_s``."""
-    return float(-airspeed_m_s / 2.0 + np.sqrt((airspeed_m_s / 2.0) ** 2 + max(thrust_n, 0.0) / (2.0 * density * area_m2)))
+    return float(
+        -airspeed_m_s / 2.0
+        + np.sqrt((airspeed_m_s / 2.0) ** 2 + max(thrust_n, 0.0) / (2.0 * density * area_m2))
+    )
 
 
-def _relaxed(strips: NDArray[np.float64], lines: NDArray[np.float64], prescribed: tuple[Any, ...], blades: int,
-             spin: float, omega: float, airspeed: float, wake: WakeShape, mean_chord: float) -> tuple[Any, ...]:
+def _relaxed(
+    strips: NDArray[np.float64],
+    lines: NDArray[np.float64],
+    prescribed: tuple[Any, ...],
+    blades: int,
+    spin: float,
+    omega: float,
+    airspeed: float,
+    wake: WakeShape,
+    mean_chord: float,
+) -> tuple[Any, ...]:
     """The solve on a wake whose first turn follows the flow (module doc), from the solve on the prescribed
     ``lines`` (``prescribed``: its lattice, circulations and the blades' part of the influence matrix): each
     sweep retraces the first turn as streamlines of the blade frame's velocity (kinematic plus induced, the
@@ -173,27 +231,40 @@ def _relaxed(strips: NDArray[np.float64], lines: NDArray[np.float64], prescribed
     for sweep in range(1, RELAXATION_SWEEPS_MAX + 1):
         nodes = lines[:, :, : free + 1].reshape(-1, 3)
         velocity = kinematic_velocity(nodes, omega, spin, airspeed) + induced_velocity(
-            nodes, lattice.starts, lattice.ends, lattice.incidence @ circulation.ravel(), np.maximum(lattice.core_m, core))
+            nodes,
+            lattice.starts,
+            lattice.ends,
+            lattice.incidence @ circulation.ravel(),
+            np.maximum(lattice.core_m, core),
+        )
         velocity = velocity.reshape(*lines.shape[:2], free + 1, 3)
         traced = lines.copy()
         for node in range(free):
-            traced[:, :, node + 1] = traced[:, :, node] + step_s * 0.5 * (velocity[:, :, node] + velocity[:, :, node + 1])
-        traced[:, :, free + 1:] += (traced[:, :, free] - lines[:, :, free])[:, :, None, :]
+            traced[:, :, node + 1] = traced[:, :, node] + step_s * 0.5 * (
+                velocity[:, :, node] + velocity[:, :, node + 1]
+            )
+        traced[:, :, free + 1 :] += (traced[:, :, free] - lines[:, :, free])[:, :, None, :]
         lines = (1.0 - blend) * lines + blend * traced
         lattice = rotor_lattice(strips, blades, lines, core, mean_chord)
         circulation = _circulation(lattice, spin, omega, airspeed, blade_part)
         new_thrust = _kinematic_thrust(lattice, circulation, blades, spin, omega, airspeed)
         previous = change
-        # the change a full WAKE_SWEEP_RELAXATION step would make: a smaller blend moves the wake less
-        change = abs(new_thrust - thrust) / max(abs(new_thrust), 1e-300) * WAKE_SWEEP_RELAXATION / blend
+        # the change a full WAKE_SWEEP_RELAXATION step would make: a smaller blend moves the wake
+        # less
+        change = (
+            abs(new_thrust - thrust) / max(abs(new_thrust), 1e-300) * WAKE_SWEEP_RELAXATION / blend
+        )
         thrust = new_thrust
-        if change > previous:  # the sweeps overshoot (the wake swings round its shape): smaller steps
+        # the sweeps overshoot (the wake swings round its shape): smaller steps
+        if change > previous:
             blend = max(0.5 * blend, WAKE_SWEEP_RELAXATION_MIN)
         if change < RELAXED_THRUST_TOLERANCE:
             return circulation, lattice, change, sweep
-    raise KernelError(f"the vortex solve did not converge: with its first wake turn following the flow the thrust "
-                      f"still changed by {change:.2g} of itself after {RELAXATION_SWEEPS_MAX} sweeps "
-                      f"(tolerance {RELAXED_THRUST_TOLERANCE:g})")
+    raise KernelError(
+        f"the vortex solve did not converge: with its first wake turn following the flow the thrust "
+        f"still changed by {change:.2g} of itself after {RELAXATION_SWEEPS_MAX} sweeps "
+        f"(tolerance {RELAXED_THRUST_TOLERANCE:g})"
+    )
 
 
 class BladePart:
@@ -204,8 +275,13 @@ class BladePart:
         self.matrix: NDArray[np.float64] | None = None
 
 
-def _circulation(lattice: Lattice, spin: float, omega: float, airspeed: float,
-                 blade_part: BladePart | None = None) -> NDArray[np.float64]:
+def _circulation(
+    lattice: Lattice,
+    spin: float,
+    omega: float,
+    airspeed: float,
+    blade_part: BladePart | None = None,
+) -> NDArray[np.float64]:
     """The rings' circulations ``(K - 1, C)`` that let no flow through the control points."""
     points = lattice.collocation.reshape(-1, 3)
     normals = lattice.normals.reshape(-1, 3)
@@ -213,19 +289,34 @@ def _circulation(lattice: Lattice, spin: float, omega: float, airspeed: float,
     if blade_part is None:
         blade_part = BladePart()
     if blade_part.matrix is None:
-        influence = normal_influence(points, normals, lattice.starts[on_blades], lattice.ends[on_blades],
-                                     lattice.core_m[on_blades])
+        influence = normal_influence(
+            points,
+            normals,
+            lattice.starts[on_blades],
+            lattice.ends[on_blades],
+            lattice.core_m[on_blades],
+        )
         blade_part.matrix = np.asarray(influence @ lattice.incidence[on_blades])
     wake = ~on_blades
-    influence = normal_influence(points, normals, lattice.starts[wake], lattice.ends[wake], lattice.core_m[wake])
+    influence = normal_influence(
+        points, normals, lattice.starts[wake], lattice.ends[wake], lattice.core_m[wake]
+    )
     matrix = blade_part.matrix + np.asarray(influence @ lattice.incidence[wake])
     rhs = -np.einsum("pk,pk->p", kinematic_velocity(points, omega, spin, airspeed), normals)
     circulation = np.linalg.solve(matrix, rhs) if rhs.any() else np.zeros(lattice.rings)
     return circulation.reshape(-1, lattice.grid.shape[2] - 1)
 
 
-def _forces(lattice: Lattice, circulation: NDArray[np.float64], spin: float, omega: float, airspeed: float,
-            density: float, bound_core_m: float, induced: bool = True) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def _forces(
+    lattice: Lattice,
+    circulation: NDArray[np.float64],
+    spin: float,
+    omega: float,
+    airspeed: float,
+    density: float,
+    bound_core_m: float,
+    induced: bool = True,
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """The Kutta-Joukowski force on each ring's bound segments and its moment about the origin ``(K - 1, C, 3)``
     (blade 0), at the velocity the whole lattice induces at each segment's middle (the kinematic velocity alone
     without ``induced``: no Biot-Savart sum)."""
@@ -237,8 +328,11 @@ def _forces(lattice: Lattice, circulation: NDArray[np.float64], spin: float, ome
     velocity = kinematic_velocity(middle, omega, spin, airspeed)
     if induced and circulation.any():
         cores = lattice.core_m.copy()
-        cores[cores == 0.0] = bound_core_m  # neighbours' segments on a shared section line (module doc)
-        velocity = velocity + induced_velocity(middle, lattice.starts, lattice.ends, strengths, cores)
+        # neighbours' segments on a shared section line (module doc)
+        cores[cores == 0.0] = bound_core_m
+        velocity = velocity + induced_velocity(
+            middle, lattice.starts, lattice.ends, strengths, cores
+        )
     force = density * strengths[:bound, None] * np.cross(velocity, ends - starts)
     ring = lattice.incidence[:bound].indices  # each bound segment carries one ring's circulation
     per_ring = np.zeros((lattice.rings, 3))
@@ -248,8 +342,14 @@ def _forces(lattice: Lattice, circulation: NDArray[np.float64], spin: float, ome
     return per_ring.reshape(*shape, 3), moment.reshape(*shape, 3)
 
 
-def _kinematic_thrust(lattice: Lattice, circulation: NDArray[np.float64], blades: int, spin: float, omega: float,
-                      airspeed: float) -> float:
+def _kinematic_thrust(
+    lattice: Lattice,
+    circulation: NDArray[np.float64],
+    blades: int,
+    spin: float,
+    omega: float,
+    airspeed: float,
+) -> float:
     """The rotor's thrust (per unit density) from the Kutta-Joukowski force at the kinematic velocity alone: no
     Biot-Savart sum, so it is cheap; the wake iterations and the relaxed wake's sweeps watch it settle."""
     force, _ = _forces(lattice, circulation, spin, omega, airspeed, 1.0, 0.0, induced=False)

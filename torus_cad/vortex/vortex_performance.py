@@ -30,7 +30,8 @@ from torus_cad.vortex.polars import LOW_CONFIDENCE, strip_polars
 from torus_cad.vortex.rotor import Discretisation, RotorBlade, rotor_blade
 from torus_cad.vortex.solver import Inviscid, kinematic_velocity, solve_inviscid
 
-#: The lattice's lift over the polar's is taken within these bounds (a stalled strip keeps some lift).
+#: The lattice's lift over the polar's is taken within these bounds (a stalled strip keeps some
+#: lift).
 LIFT_RATIO_BOUNDS = (0.0, 1.5)
 
 
@@ -76,9 +77,14 @@ class VortexResult:
     ring_force_n: NDArray[np.float64] = field(repr=False)
 
 
-def vortex_performance(params: PropellerParameters, rpm: float, airspeed_m_s: float = 0.0,
-                       discretisation: Discretisation | None = None, viscous: bool = True,
-                       induced_guess: float | None = None) -> VortexResult:
+def vortex_performance(
+    params: PropellerParameters,
+    rpm: float,
+    airspeed_m_s: float = 0.0,
+    discretisation: Discretisation | None = None,
+    viscous: bool = True,
+    induced_guess: float | None = None,
+) -> VortexResult:
     """The performance of ``params`` at ``rpm`` and axial ``airspeed_m_s`` (module doc); ``induced_guess``:
     where the wake's iteration starts (:func:`~torus_cad.vortex.solver.solve_inviscid`)."""
     point = OperatingPoint(rpm=rpm, airspeed_m_s=airspeed_m_s)
@@ -86,22 +92,47 @@ def vortex_performance(params: PropellerParameters, rpm: float, airspeed_m_s: fl
     blade = rotor_blade(params, discretisation)
     density = point.fluid.density_kg_m3
     omega = rpm * np.pi / 30.0
-    inviscid = solve_inviscid(blade.camber_m, blade.blades, blade.spin, omega, airspeed_m_s, density,
-                              blade.tip_radius_m, discretisation.wake, induced_guess=induced_guess)
-    force, moment, strips, ratio = _strip_forces(blade, inviscid, omega, airspeed_m_s, point, viscous)
+    inviscid = solve_inviscid(
+        blade.camber_m,
+        blade.blades,
+        blade.spin,
+        omega,
+        airspeed_m_s,
+        density,
+        blade.tip_radius_m,
+        discretisation.wake,
+        induced_guess=induced_guess,
+    )
+    force, moment, strips, ratio = _strip_forces(
+        blade, inviscid, omega, airspeed_m_s, point, viscous
+    )
     thrust = blade.blades * float(force[:, 2].sum())
     torque = blade.spin * blade.blades * float(moment[:, 2].sum())
     coefficients = performance(thrust, torque, point, 2.0 * blade.tip_radius_m)
-    report = {"thrust_n": thrust, "torque_nm": torque, "power_w": coefficients.power_w,
-              "advance_ratio": coefficients.advance_ratio, "ct": coefficients.ct, "cp": coefficients.cp,
-              "efficiency": coefficients.efficiency, "figure_of_merit": coefficients.figure_of_merit,
-              "inviscid_thrust_n": inviscid.thrust_n, "inviscid_power_w": inviscid.torque_nm * omega,
-              "low_confidence_strips": int((strips.confidence < LOW_CONFIDENCE).sum())}
+    report = {
+        "thrust_n": thrust,
+        "torque_nm": torque,
+        "power_w": coefficients.power_w,
+        "advance_ratio": coefficients.advance_ratio,
+        "ct": coefficients.ct,
+        "cp": coefficients.cp,
+        "efficiency": coefficients.efficiency,
+        "figure_of_merit": coefficients.figure_of_merit,
+        "inviscid_thrust_n": inviscid.thrust_n,
+        "inviscid_power_w": inviscid.torque_nm * omega,
+        "low_confidence_strips": int((strips.confidence < LOW_CONFIDENCE).sum()),
+    }
     return VortexResult(report, strips, blade, inviscid, inviscid.force_n * ratio[:, None, None])
 
 
-def _strip_forces(blade: RotorBlade, inviscid: Inviscid, omega: float, airspeed: float, point: OperatingPoint,
-                  viscous: bool) -> tuple[NDArray[np.float64], NDArray[np.float64], StripLoads, NDArray[np.float64]]:
+def _strip_forces(
+    blade: RotorBlade,
+    inviscid: Inviscid,
+    omega: float,
+    airspeed: float,
+    point: OperatingPoint,
+    viscous: bool,
+) -> tuple[NDArray[np.float64], NDArray[np.float64], StripLoads, NDArray[np.float64]]:
     """Each strip's force and moment ``(K - 1, 3)`` on blade 0 with the polars' corrections, its loading, and
     its lift's ratio to the lattice's ``(K - 1,)``."""
     lattice = inviscid.lattice
@@ -117,8 +148,13 @@ def _strip_forces(blade: RotorBlade, inviscid: Inviscid, omega: float, airspeed:
     points = lattice.collocation.reshape(-1, 3)
     velocity = kinematic_velocity(points, omega, blade.spin, airspeed)
     if inviscid.circulation.any():
-        velocity = velocity + induced_velocity(points, lattice.starts, lattice.ends,
-                                               lattice.incidence @ inviscid.circulation.ravel(), lattice.core_m)
+        velocity = velocity + induced_velocity(
+            points,
+            lattice.starts,
+            lattice.ends,
+            lattice.incidence @ inviscid.circulation.ravel(),
+            lattice.core_m,
+        )
     flow = velocity.reshape(strips, -1, 3).mean(axis=1)
     flow = flow - np.einsum("jk,jk->j", flow, along)[:, None] * along
     speed = np.linalg.norm(flow, axis=1)
@@ -131,10 +167,16 @@ def _strip_forces(blade: RotorBlade, inviscid: Inviscid, omega: float, airspeed:
     confidence = np.ones(strips)
     ratios = np.ones(strips)
     if viscous and speed.any():
-        turned = np.einsum("jk,jk->j", flow, camber[:-1, -1] + camber[1:, -1] - camber[:-1, 0] - camber[1:, 0]) < 0.0
+        turned = (
+            np.einsum(
+                "jk,jk->j", flow, camber[:-1, -1] + camber[1:, -1] - camber[:-1, 0] - camber[1:, 0]
+            )
+            < 0.0
+        )
         for j, polar in enumerate(strip_polars(blade.sections, reynolds, turned)):
             alpha = polar.zero_lift_deg + cl[j] / polar.lift_slope_per_deg
-            past_stall = alpha > polar.stall_deg  # before stall the lattice's lift stands (module doc)
+            # before stall the lattice's lift stands (module doc)
+            past_stall = alpha > polar.stall_deg
             viscous_cl = float(np.interp(alpha, polar.alpha_deg, polar.cl)) if past_stall else cl[j]
             cd[j] = float(np.interp(alpha, polar.alpha_deg, polar.cd))
             confidence[j] = float(np.interp(alpha, polar.alpha_deg, polar.confidence))
@@ -144,13 +186,23 @@ def _strip_forces(blade: RotorBlade, inviscid: Inviscid, omega: float, airspeed:
             force[j] = ratio * force[j] + drag
             moment[j] = ratio * moment[j] + np.cross(middle[j], drag)
             cl[j] = cl[j] * ratio
-    loads = StripLoads(0.5 * (blade.s[:-1] + blade.s[1:]), np.hypot(middle[:, 0], middle[:, 1]),
-                       inviscid.circulation[:, -1], force[:, 2] / width, blade.spin * moment[:, 2] / width,
-                       reynolds, cl, cd, confidence)
+    loads = StripLoads(
+        0.5 * (blade.s[:-1] + blade.s[1:]),
+        np.hypot(middle[:, 0], middle[:, 1]),
+        inviscid.circulation[:, -1],
+        force[:, 2] / width,
+        blade.spin * moment[:, 2] / width,
+        reynolds,
+        cl,
+        cd,
+        confidence,
+    )
     return force, moment, loads, ratios
 
 
-def _lift(force: NDArray[np.float64], flow: NDArray[np.float64], speed: NDArray[np.float64]) -> NDArray[np.float64]:
+def _lift(
+    force: NDArray[np.float64], flow: NDArray[np.float64], speed: NDArray[np.float64]
+) -> NDArray[np.float64]:
     """The part of each strip's force ``(K - 1, 3)`` across its flow, N."""
     unit = flow / np.maximum(speed, 1e-300)[:, None]
     return np.linalg.norm(force - np.einsum("jk,jk->j", force, unit)[:, None] * unit, axis=1)

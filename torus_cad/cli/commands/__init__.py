@@ -35,7 +35,8 @@ class Command:
     loading: Stage | None = None
 
 
-#: Every subcommand, by the name typed after ``torus-cad``; its module is ``torus_cad.cli.commands.<name>``.
+#: Every subcommand, by the name typed after ``torus-cad``; its module is
+#: ``torus_cad.cli.commands.<name>``.
 COMMANDS: dict[str, Command] = {
     "build": Command(loading=Stage.KERNEL_IMPORT),
     "check": Command(),

@@ -23,15 +23,20 @@ def run(args: argparse.Namespace) -> int:
     gmsh = import_gmsh()  # MissingExtraError (exit 2) when gmsh's library does not load
     import_meshlib()
     params = resolve_design_targets(params).parameters  # once, for the estimate and the mesh
-    estimate = check_cfd_budget(params)  # a mesh that would blow up is refused before any work (a few s)
+    # a mesh that would blow up is refused before any work (a few s)
+    estimate = check_cfd_budget(params)
     check_writable_folder(args.out)
     if not args.quiet:
         print(f"torus-cad cfd: {estimate.line()}", file=sys.stderr, flush=True)
-    # gmsh set up here, meshing in a worker thread: a signal during a long gmsh call ends the command
-    # at once (cfd.worker, cfd.domain.gmsh_library); the waiting thread prints the heartbeat of a long stage
+    # gmsh set up here, meshing in a worker thread: a signal during a long gmsh call ends the
+    # command at once (cfd.worker, cfd.domain.gmsh_library); the waiting thread prints the heartbeat
+    # of a long stage
     with gmsh_library(gmsh):
-        report, paths = run_in_worker(lambda: write_cfd_domain(params, Path(args.out), threads=args.threads,
-                                                               progress=progress, estimate=estimate),
-                                      on_wait=progress.heartbeat)
+        report, paths = run_in_worker(
+            lambda: write_cfd_domain(
+                params, Path(args.out), threads=args.threads, progress=progress, estimate=estimate
+            ),
+            on_wait=progress.heartbeat,
+        )
     progress.finish()
     return print_written(paths, summary_line(report), args.quiet)

@@ -14,8 +14,13 @@ def run(args: argparse.Namespace) -> int:
     for what only the kernel decides: a root fillet round a knife trailing edge); 2 with the build's own one-line
     refusal otherwise. OpenCascade is never loaded (torus_cad.parameters.design_checks)."""
     params = load_parameters(args.config, args.overrides + format_overrides(args.formats))
-    feasible = check_design(params, mesh=writes_a_mesh(params, args.no_stl), walls=not args.quiet,
-                            require_printable=args.require_printable, estimate_mesh_first=True)
+    feasible = check_design(
+        params,
+        mesh=writes_a_mesh(params, args.no_stl),
+        walls=not args.quiet,
+        require_printable=args.require_printable,
+        estimate_mesh_first=True,
+    )
     if not args.quiet:
         print(feasible.summary())
         for note in feasible.undecided:

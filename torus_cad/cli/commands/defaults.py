@@ -15,15 +15,25 @@ from torus_cad.parameters.design_targets import resolve_design_targets
 def run(args: argparse.Namespace) -> int:
     if not args.resolved:
         if args.config or args.overrides:
-            raise ParameterError("torus-cad defaults takes a design file or --set only with --resolved")
-        sys.stdout.write("# torus_cad design file: every key is optional and defaults to the value below.\n")
+            raise ParameterError(
+                "torus-cad defaults takes a design file or --set only with --resolved"
+            )
+        sys.stdout.write(
+            "# torus_cad design file: every key is optional and defaults to the value below.\n"
+        )
         sys.stdout.write(PropellerParameters().to_toml(comments=True))
         return EXIT_OK
     params = load_parameters(args.config, args.overrides)
     targets = resolve_design_targets(params)
-    sys.stdout.write("# torus_cad design file: the spec's parameters that the design's airfoil.naca, diameter and\n"
-                     "# pitch resolved to (" + (", ".join(f"{key} = {value!r}" for key, value in targets.requested.items())
-                                                or "none set") + "); it builds the same propeller.\n")
+    sys.stdout.write(
+        "# torus_cad design file: the spec's parameters that the design's airfoil.naca, diameter and\n"
+        "# pitch resolved to ("
+        + (
+            ", ".join(f"{key} = {value!r}" for key, value in targets.requested.items())
+            or "none set"
+        )
+        + "); it builds the same propeller.\n"
+    )
     if targets.tip_diameter_mm is not None:
         sys.stdout.write(f"# tip diameter {targets.tip_diameter_mm:.3f} mm")
         if targets.pitch_fit is not None:

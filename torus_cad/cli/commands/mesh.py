@@ -16,17 +16,25 @@ from torus_cad.runtime.progress import StageProgress
 
 def _mesh_overrides(args: argparse.Namespace) -> dict[str, Any]:
     """``[mesh]`` values given on the command line (they override the design file's)."""
-    overrides: dict[str, Any] = {f"mesh.{key}": getattr(args, key) for key in ("sections", "points", "spacing")
-                                 if getattr(args, key) is not None}
+    overrides: dict[str, Any] = {
+        f"mesh.{key}": getattr(args, key)
+        for key in ("sections", "points", "spacing")
+        if getattr(args, key) is not None
+    }
     if args.formats:
-        overrides.update(format_overrides(name for text in args.formats for name in text.split(",")))
+        overrides.update(
+            format_overrides(name for text in args.formats for name in text.split(","))
+        )
     return overrides
 
 
 def run(args: argparse.Namespace) -> int:
     params = load_parameters(args.config, args.overrides).with_values(_mesh_overrides(args))
-    check_writable_folder(args.out)  # a folder the set cannot go into is refused before the mesh is built
+    # a folder the set cannot go into is refused before the mesh is built
+    check_writable_folder(args.out)
     progress = StageProgress.for_terminal(quiet=args.quiet)
-    report, paths = write_surface_mesh(params, Path(args.out), compare=not args.no_compare, progress=progress)
+    report, paths = write_surface_mesh(
+        params, Path(args.out), compare=not args.no_compare, progress=progress
+    )
     progress.finish()
     return print_written(paths, summary_line(report), args.quiet)

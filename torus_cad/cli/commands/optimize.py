@@ -27,11 +27,21 @@ def run(args: argparse.Namespace) -> int:
         require("optimize --scheduler", "optimize", ["dask.distributed"])
     out = Path(args.out) if args.out else Path("optimize_out") / Path(args.study).stem
     try:
-        result = run_study(spec, out, trials=args.trials, workers=args.workers, scheduler=args.scheduler,
-                           storage=args.storage, progress=False if args.quiet else None)
+        result = run_study(
+            spec,
+            out,
+            trials=args.trials,
+            workers=args.workers,
+            scheduler=args.scheduler,
+            storage=args.storage,
+            progress=False if args.quiet else None,
+        )
     except StudyInterrupted as interrupt:
-        print(f"torus-cad: optimize interrupted by {interrupt.signal_name}: {interrupt.result.ran} trials finished "
-              "in this run; rerun the same command to continue", file=sys.stderr)
+        print(
+            f"torus-cad: optimize interrupted by {interrupt.signal_name}: {interrupt.result.ran} trials finished "
+            "in this run; rerun the same command to continue",
+            file=sys.stderr,
+        )
         return interrupt.exit_code
     except (BatchError, StorageError, OutputError) as error:
         print(f"torus-cad: optimize failed: {error}", file=sys.stderr)

@@ -12,7 +12,8 @@ from torus_cad.preview.size import parse_size
 
 
 def run(args: argparse.Namespace) -> int:
-    progress = args.progress  # its first line, the loading stage, is out already (torus_cad.cli.commands)
+    # its first line, the loading stage, is out already (torus_cad.cli.commands)
+    progress = args.progress
     params = load_parameters(args.config, args.overrides)
     size = parse_size(args.size, "--size")
     out = Path(args.out) if args.out else Path("step_out") / f"{params.name}.png"

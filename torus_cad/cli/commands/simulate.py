@@ -13,9 +13,21 @@ from torus_cad.errors import ParameterError
 from torus_cad.parameters.design import Handedness
 from torus_cad.runtime.progress import StageProgress
 from torus_cad.simulate.cli_output import IterationLine, summary_lines
-from torus_cad.simulate.pipeline import Request, ThrustTarget, convergence_study, simulate, thrust_search
+from torus_cad.simulate.pipeline import (
+    Request,
+    ThrustTarget,
+    convergence_study,
+    simulate,
+    thrust_search,
+)
 from torus_cad.simulate.run import MissingOpenFoamError
-from torus_cad.simulate.settings import Level, Mesher, OperatingPoint, TurbulenceModel, max_processes
+from torus_cad.simulate.settings import (
+    Level,
+    Mesher,
+    OperatingPoint,
+    TurbulenceModel,
+    max_processes,
+)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -28,17 +40,27 @@ def run(args: argparse.Namespace) -> int:
         return _run_vortex(args, params, progress)
     step = None
     if args.step is not None:
-        from torus_cad.cfd_domain.step_body import Axis, load_step_propeller  # cadquery: only for a STEP file
+        # cadquery: only for a STEP file
+        from torus_cad.cfd_domain.step_body import Axis, load_step_propeller
 
         step = load_step_propeller(args.step, Axis(args.axis), Handedness(args.turning))
         params = params.with_values({"name": step.body.name, "handedness": args.turning})
     rpm = args.rpm if args.thrust is None else 0.0  # --thrust: the search sets each run's rpm
-    request = Request(params, OperatingPoint(rpm, args.airspeed), Level(args.level or Level.COARSE.value),
-                      args.iterations, max_processes() if args.processes is None else args.processes, args.case_only,
-                      args.time_limit, Path(args.mesh_from) if args.mesh_from else None,
-                      Mesher(args.mesher or Mesher.SNAPPY.value), step,
-                      TurbulenceModel(args.turbulence or TurbulenceModel.K_OMEGA_SST.value), _observers(args.observer),
-                      args.surface_refinement or 0)
+    request = Request(
+        params,
+        OperatingPoint(rpm, args.airspeed),
+        Level(args.level or Level.COARSE.value),
+        args.iterations,
+        max_processes() if args.processes is None else args.processes,
+        args.case_only,
+        args.time_limit,
+        Path(args.mesh_from) if args.mesh_from else None,
+        Mesher(args.mesher or Mesher.SNAPPY.value),
+        step,
+        TurbulenceModel(args.turbulence or TurbulenceModel.K_OMEGA_SST.value),
+        _observers(args.observer),
+        args.surface_refinement or 0,
+    )
     line = IterationLine.for_terminal(quiet=args.quiet)
     try:
         if args.convergence:
@@ -59,25 +81,48 @@ def run(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-#: Options of the OpenFOAM route that the vortex solver does not take (argparse's destination, the option).
-_OPENFOAM_ONLY = (("step", "--step"), ("level", "--level"), ("mesher", "--mesher"), ("turbulence", "--turbulence"),
-                  ("surface_refinement", "--surface-refinement"), ("iterations", "--iterations"),
-                  ("processes", "--processes"), ("mesh_from", "--mesh-from"))
+#: Options of the OpenFOAM route that the vortex solver does not take (argparse's destination, the
+#: option).
+_OPENFOAM_ONLY = (
+    ("step", "--step"),
+    ("level", "--level"),
+    ("mesher", "--mesher"),
+    ("turbulence", "--turbulence"),
+    ("surface_refinement", "--surface-refinement"),
+    ("iterations", "--iterations"),
+    ("processes", "--processes"),
+    ("mesh_from", "--mesh-from"),
+)
 #: Options of the vortex solver alone.
 _VORTEX_ONLY = (("chordwise", "--chordwise"), ("spanwise", "--spanwise"))
 
 
 def _run_vortex(args: argparse.Namespace, params: Any, progress: StageProgress) -> int:
     """``--solver vortex``: one point, or the rpm for ``--thrust``, published as the OpenFOAM route publishes."""
-    from torus_cad.vortex.pipeline import VortexRequest, simulate_vortex, vortex_summary_lines, vortex_thrust_search
+    from torus_cad.vortex.pipeline import (
+        VortexRequest,
+        simulate_vortex,
+        vortex_summary_lines,
+        vortex_thrust_search,
+    )
     from torus_cad.vortex.rotor import Discretisation
 
     defaults = Discretisation()
-    lattice = Discretisation(args.chordwise or defaults.chordwise, args.spanwise or defaults.spanwise)
-    request = VortexRequest(params, OperatingPoint(args.rpm or 0.0, args.airspeed), lattice, _observers(args.observer))
+    lattice = Discretisation(
+        args.chordwise or defaults.chordwise, args.spanwise or defaults.spanwise
+    )
+    request = VortexRequest(
+        params, OperatingPoint(args.rpm or 0.0, args.airspeed), lattice, _observers(args.observer)
+    )
     if args.thrust is not None:
-        result = vortex_thrust_search(request, args.thrust, Path(args.out), stage=progress,
-                                      tolerance=args.thrust_tolerance, max_runs=args.thrust_runs)
+        result = vortex_thrust_search(
+            request,
+            args.thrust,
+            Path(args.out),
+            stage=progress,
+            tolerance=args.thrust_tolerance,
+            max_runs=args.thrust_runs,
+        )
     else:
         result = simulate_vortex(request, Path(args.out), stage=progress)
     progress.finish()
@@ -95,17 +140,26 @@ def _observers(given: list[Any] | None) -> tuple[Any, ...]:
 def _check_simulate_options(args: argparse.Namespace) -> None:
     """ParameterError (exit 2) for options that do not go together."""
     if args.convergence and (args.case_only or args.mesh_from):
-        raise ParameterError("--convergence meshes and runs all three levels; it takes neither --case-only nor --mesh-from")
+        raise ParameterError(
+            "--convergence meshes and runs all three levels; it takes neither --case-only nor --mesh-from"
+        )
     if args.thrust is not None and (args.convergence or args.case_only or args.mesh_from):
-        raise ParameterError("--thrust meshes once and runs the solver a few times; it takes none of --convergence, "
-                             "--case-only, --mesh-from")
+        raise ParameterError(
+            "--thrust meshes once and runs the solver a few times; it takes none of --convergence, "
+            "--case-only, --mesh-from"
+        )
     if args.solver == "vortex":
         given = [option for key, option in _OPENFOAM_ONLY if getattr(args, key) is not None]
-        given += [option for key, option in (("case_only", "--case-only"), ("convergence", "--convergence"))
-                  if getattr(args, key)]
+        given += [
+            option
+            for key, option in (("case_only", "--case-only"), ("convergence", "--convergence"))
+            if getattr(args, key)
+        ]
         if given:
-            raise ParameterError(f"{given[0]} belongs to OpenFOAM; --solver vortex takes none of the mesh and "
-                                 "OpenFOAM options")
+            raise ParameterError(
+                f"{given[0]} belongs to OpenFOAM; --solver vortex takes none of the mesh and "
+                "OpenFOAM options"
+            )
     else:
         given = [option for key, option in _VORTEX_ONLY if getattr(args, key) is not None]
         if given:

@@ -20,13 +20,18 @@ def run(args: argparse.Namespace) -> int:
     files = Path(args.files) if args.files else None
     if files is not None and not files.is_dir():
         raise ParameterError(f"--files {args.files!r} is not a folder")
-    params = load_parameters(args.config, args.overrides)  # a bad design exits 2 before the server starts
+    # a bad design exits 2 before the server starts
+    params = load_parameters(args.config, args.overrides)
     try:
         code = serve(params, port=args.port, host=args.host, files_folder=files)
     except OutputError as error:  # the port is in use: not a build that failed
         print(f"torus-cad: studio: {error}", file=sys.stderr)
         return EXIT_KERNEL_FAILURE
     if code:
-        name = next(signal.Signals(signum).name for signum, exit_code in EXIT_SIGNALS.items() if exit_code == code)
+        name = next(
+            signal.Signals(signum).name
+            for signum, exit_code in EXIT_SIGNALS.items()
+            if exit_code == code
+        )
         print(f"torus-cad: studio stopped by {name}", file=sys.stderr)
     return code

@@ -20,22 +20,36 @@ def run(args: argparse.Namespace) -> int:
     spec = load_sweep(args.sweep)  # a bad sweep file raises ParameterError: exit 2
     out = Path(args.out) if args.out else Path("sweep_out") / Path(args.sweep).stem
     try:
-        result = run_sweep(spec, out, workers=args.workers, scheduler=args.scheduler,
-                           stl=False if args.no_stl else None, density_g_cm3=args.density,
-                           time_limit_s=args.time_limit, rebuild=args.rebuild, progress=False if args.quiet else None,
-                           oversubscribe=args.oversubscribe)
+        result = run_sweep(
+            spec,
+            out,
+            workers=args.workers,
+            scheduler=args.scheduler,
+            stl=False if args.no_stl else None,
+            density_g_cm3=args.density,
+            time_limit_s=args.time_limit,
+            rebuild=args.rebuild,
+            progress=False if args.quiet else None,
+            oversubscribe=args.oversubscribe,
+        )
     except SweepInterrupted as interrupt:
         partial = interrupt.result
-        done = (f"{partial.counts_text()}; table written to {partial.tables['csv']}" if partial.tables
-                else "nothing was built")
-        print(f"torus-cad: sweep interrupted by {interrupt.signal_name}: {done}; rerun the same command to resume",
-              file=sys.stderr)
+        done = (
+            f"{partial.counts_text()}; table written to {partial.tables['csv']}"
+            if partial.tables
+            else "nothing was built"
+        )
+        print(
+            f"torus-cad: sweep interrupted by {interrupt.signal_name}: {done}; rerun the same command to resume",
+            file=sys.stderr,
+        )
         return interrupt.exit_code
     except BatchError as error:
         print(f"torus-cad: sweep failed: {error}", file=sys.stderr)
         return EXIT_KERNEL_FAILURE
     if not args.quiet:
         print(result.summary())
-    elif result.exit_code != EXIT_OK:  # -q keeps a run quiet, not its failures: their causes go to stderr
+    # -q keeps a run quiet, not its failures: their causes go to stderr
+    elif result.exit_code != EXIT_OK:
         print(result.summary(), file=sys.stderr)
     return result.exit_code

@@ -35,8 +35,10 @@ from numpy.typing import NDArray
 from torus_cad.geometry.blade.handedness import Handedness
 from torus_cad.geometry.section.section import section_thickness
 
-#: Above this |c_r| / h the chord runs more radially than around the axis: beta and the pitch say little.
+#: Above this |c_r| / h the chord runs more radially than around the axis: beta and the pitch say
+#: little.
 NEARLY_RADIAL_FRACTION = float(np.sqrt(0.5))
+
 
 @dataclass(frozen=True)
 class BladeElements:
@@ -65,12 +67,25 @@ class BladeElements:
     radial_fraction: NDArray[np.float64]
     spin: Handedness = Handedness.CW
 
-    COLUMNS = ("s", "radius_mm", "axial_mm", "chord_mm", "thickness_mm", "thickness_ratio", "beta_deg",
-               "pitch_mm", "position_angle_deg", "radial_fraction")
+    COLUMNS = (
+        "s",
+        "radius_mm",
+        "axial_mm",
+        "chord_mm",
+        "thickness_mm",
+        "thickness_ratio",
+        "beta_deg",
+        "pitch_mm",
+        "position_angle_deg",
+        "radial_fraction",
+    )
 
     def rows(self) -> list[dict[str, float]]:
         """The table as a list of ``{column: value}``, columns in :attr:`COLUMNS` order."""
-        return [{name: float(getattr(self, name)[index]) for name in self.COLUMNS} for index in range(len(self.s))]
+        return [
+            {name: float(getattr(self, name)[index]) for name in self.COLUMNS}
+            for index in range(len(self.s))
+        ]
 
     def pitch_at_radius(self, radius_mm: float) -> NDArray[np.float64]:
         """Geometric pitch where r(s) crosses ``radius_mm``, linearly interpolated: ``(c,)``, one per crossing.
@@ -85,8 +100,9 @@ class BladeElements:
         return np.array(values)
 
 
-def chord_lines(points: NDArray[np.float64], trailing_edge_index: int, lower_corner_index: int | None
-                ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def chord_lines(
+    points: NDArray[np.float64], trailing_edge_index: int, lower_corner_index: int | None
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Leading-edge points and chord vectors (leading -> trailing edge) of sections ``(k, p, 3)``: two ``(k, 3)``."""
     leading = points[:, 0]
     trailing = points[:, trailing_edge_index]
@@ -95,8 +111,9 @@ def chord_lines(points: NDArray[np.float64], trailing_edge_index: int, lower_cor
     return leading, trailing - leading
 
 
-def blade_angles(middle: NDArray[np.float64], chord: NDArray[np.float64], spin: Handedness = Handedness.CW
-                 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def blade_angles(
+    middle: NDArray[np.float64], chord: NDArray[np.float64], spin: Handedness = Handedness.CW
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """beta (degrees) and the radial fraction |c_r| / h of chords ``(k, 3)`` whose mid points are ``middle``."""
     radial = middle[:, :2] / np.linalg.norm(middle[:, :2], axis=1, keepdims=True)
     tangential = np.stack([-radial[:, 1], radial[:, 0]], axis=1)  # ccw direction
@@ -109,9 +126,16 @@ def blade_angles(middle: NDArray[np.float64], chord: NDArray[np.float64], spin: 
     return beta, np.abs(c_r) / np.maximum(horizontal, 1e-300)
 
 
-def blade_elements(s: NDArray[np.float64], points: NDArray[np.float64], origin: NDArray[np.float64],
-                   normal: NDArray[np.float64], binormal: NDArray[np.float64], trailing_edge_index: int,
-                   lower_corner_index: int | None = None, spin: Handedness = Handedness.CW) -> BladeElements:
+def blade_elements(
+    s: NDArray[np.float64],
+    points: NDArray[np.float64],
+    origin: NDArray[np.float64],
+    normal: NDArray[np.float64],
+    binormal: NDArray[np.float64],
+    trailing_edge_index: int,
+    lower_corner_index: int | None = None,
+    spin: Handedness = Handedness.CW,
+) -> BladeElements:
     """The blade-element table of sampled sections.
 
     Args:
@@ -126,12 +150,23 @@ def blade_elements(s: NDArray[np.float64], points: NDArray[np.float64], origin: 
     radius = np.hypot(middle[:, 0], middle[:, 1])
     beta, radial_fraction = blade_angles(middle, chord, spin)
     relative = points - origin[:, None, :]
-    planar = np.stack([np.einsum("kpj,kj->kp", relative, normal), np.einsum("kpj,kj->kp", relative, binormal)], -1)
+    planar = np.stack(
+        [np.einsum("kpj,kj->kp", relative, normal), np.einsum("kpj,kj->kp", relative, binormal)], -1
+    )
     chord_mm = np.linalg.norm(chord, axis=1)
     thickness = section_thickness(planar, trailing_edge_index, lower_corner_index)
     with np.errstate(over="ignore", invalid="ignore"):
         pitch = 2.0 * np.pi * radius * np.tan(np.radians(beta))
-    return BladeElements(s=np.asarray(s, float), radius_mm=radius, axial_mm=middle[:, 2],
-                         position_angle_deg=np.degrees(np.arctan2(middle[:, 1], middle[:, 0])), chord_mm=chord_mm,
-                         thickness_mm=thickness, thickness_ratio=thickness / chord_mm, beta_deg=beta, pitch_mm=pitch,
-                         radial_fraction=radial_fraction, spin=spin)
+    return BladeElements(
+        s=np.asarray(s, float),
+        radius_mm=radius,
+        axial_mm=middle[:, 2],
+        position_angle_deg=np.degrees(np.arctan2(middle[:, 1], middle[:, 0])),
+        chord_mm=chord_mm,
+        thickness_mm=thickness,
+        thickness_ratio=thickness / chord_mm,
+        beta_deg=beta,
+        pitch_mm=pitch,
+        radial_fraction=radial_fraction,
+        spin=spin,
+    )

@@ -51,8 +51,10 @@ def camber_surface(surface: BladeSurface, fractions: NDArray[np.float64]) -> Cam
     points = np.empty((len(surface.points), len(fractions), 3))
     for k, section in enumerate(surface.points):
         upper, lower = _sides(section, te, surface.lower_corner_index)
-        points[k] = 0.5 * (_at_fractions(upper, leading[k], chord[k], fractions)
-                           + _at_fractions(lower, leading[k], chord[k], fractions))
+        points[k] = 0.5 * (
+            _at_fractions(upper, leading[k], chord[k], fractions)
+            + _at_fractions(lower, leading[k], chord[k], fractions)
+        )
     return CamberSurface(points, np.asarray(fractions, dtype=float), length, surface.s)
 
 
@@ -73,17 +75,26 @@ def section_coordinates(surface: BladeSurface, k: int) -> NDArray[np.float64]:
     return xy
 
 
-def _sides(section: NDArray[np.float64], te: int, lower_corner: int | None
-           ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def _sides(
+    section: NDArray[np.float64], te: int, lower_corner: int | None
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """The upper and the lower surface of a closed section, each from the leading edge to the trailing edge."""
     upper = section[: te + 1]
-    lower = np.concatenate([section[(lower_corner if lower_corner is not None else te):], section[:1]])[::-1]
+    lower = np.concatenate(
+        [section[(lower_corner if lower_corner is not None else te) :], section[:1]]
+    )[::-1]
     return upper, lower
 
 
-def _at_fractions(side: NDArray[np.float64], leading: NDArray[np.float64], chord: NDArray[np.float64],
-                  fractions: NDArray[np.float64]) -> NDArray[np.float64]:
+def _at_fractions(
+    side: NDArray[np.float64],
+    leading: NDArray[np.float64],
+    chord: NDArray[np.float64],
+    fractions: NDArray[np.float64],
+) -> NDArray[np.float64]:
     """``side``'s points (``(p, 3)``, leading to trailing edge) at ``fractions`` of the chord, each
     coordinate interpolated linearly in the points' projection on the chord line."""
-    along = np.maximum.accumulate(np.clip((side - leading) @ chord / np.dot(chord, chord), 0.0, 1.0))
+    along = np.maximum.accumulate(
+        np.clip((side - leading) @ chord / np.dot(chord, chord), 0.0, 1.0)
+    )
     return np.stack([np.interp(fractions, along, side[:, axis]) for axis in range(3)], axis=1)

@@ -50,7 +50,8 @@ def tip_radius(surface_at: SurfaceAt, t_end: float) -> tuple[float, float, float
         i, j = np.unravel_index(int(np.argmax(radius)), radius.shape)
         if radius[i, j] > best[0]:
             best = (float(radius[i, j]), float(s[i]), float(t[j]))
-        # Zoom: two cells either side of the best point, 11 x 11 samples (the maximum is smooth there).
+        # Zoom: two cells either side of the best point, 11 x 11 samples (the maximum is smooth
+        # there).
         ds, dt = ds / 5.0, dt / 5.0
         s = np.clip(best[1] + ds * np.arange(-10, 11), 0.0, 1.0)
         t = np.clip(best[2] + dt * np.arange(-10, 11), 0.0, t_end)
@@ -58,8 +59,11 @@ def tip_radius(surface_at: SurfaceAt, t_end: float) -> tuple[float, float, float
     return best
 
 
-def radial_scale_for_diameter(tip_radius_of_scale: Callable[[float], float], diameter_mm: float,
-                              scale_range: tuple[float, float] = RADIAL_SCALE_RANGE) -> float:
+def radial_scale_for_diameter(
+    tip_radius_of_scale: Callable[[float], float],
+    diameter_mm: float,
+    scale_range: tuple[float, float] = RADIAL_SCALE_RANGE,
+) -> float:
     """The scale k of the free control points' z_L that makes the tip diameter ``diameter_mm``.
 
     ``tip_radius_of_scale(k)`` builds the surface for scale k and returns its tip radius (mm);
@@ -70,16 +74,27 @@ def radial_scale_for_diameter(tip_radius_of_scale: Callable[[float], float], dia
     target = diameter_mm / 2.0
     radius_at = _Memo(tip_radius_of_scale)
     if radius_at(1.0) is None:
-        raise ParameterError("diameter: the design cannot be evaluated at its own control points; fix the centerline first")
+        raise ParameterError(
+            "diameter: the design cannot be evaluated at its own control points; fix the centerline first"
+        )
     low, high = _last_sound(radius_at, scale_range[0]), _last_sound(radius_at, scale_range[1])
     radius_low, radius_high = radius_at.sound(low), radius_at.sound(high)
     if not min(radius_low, radius_high) <= target <= max(radius_low, radius_high):
         raise ParameterError(
             f"diameter = {diameter_mm:g} mm is out of reach for this design: scaling the radial coordinates z_L "
             f"of centerline.p2 and p3 by {low:.3g}..{high:.3g} gives tip diameters {2 * radius_low:.2f}.."
-            f"{2 * radius_high:.2f} mm; change the hub radius, the control points or the section sizes")
-    return float(brentq(lambda scale: radius_at.sound(scale) - target, low, high, xtol=1e-12, rtol=1e-12,
-                        maxiter=200))
+            f"{2 * radius_high:.2f} mm; change the hub radius, the control points or the section sizes"
+        )
+    return float(
+        brentq(
+            lambda scale: radius_at.sound(scale) - target,
+            low,
+            high,
+            xtol=1e-12,
+            rtol=1e-12,
+            maxiter=200,
+        )
+    )
 
 
 class _Memo:

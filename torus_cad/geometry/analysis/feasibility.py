@@ -51,7 +51,8 @@ CHECK_POINTS = 48
 #: (how it was set: the measurements page of the docs).
 RESOLUTION_DEVIATION_LIMIT = 0.10
 
-#: Check 5: parts of one blade closer than this many grid steps along s are neighbours, not overlaps.
+#: Check 5: parts of one blade closer than this many grid steps along s are neighbours, not
+#: overlaps.
 SELF_NEIGHBOUR_STEPS = 2
 
 
@@ -65,6 +66,7 @@ def _outside_hub(hub: HubGeometry, points: NDArray[np.float64]) -> NDArray[np.bo
 
 # -- 1, 2: ends and centerline ----------------------------------------------------------------
 
+
 def check_root_fillet_edge(root_fillet_radius_mm: float, trailing_edge_thickness_mm: float) -> None:
     """GeometryError for a root fillet round a knife trailing edge: OpenCascade's rolling ball turns round the
     zero-thickness edge in one degenerate corner face that crosses itself, which the build's strict check
@@ -72,27 +74,34 @@ def check_root_fillet_edge(root_fillet_radius_mm: float, trailing_edge_thickness
     prop_10x5_2blade and marine_3blade_loop with their edges made sharp, 0.5 mm: every one refused), so it is
     refused before the kernel, by ``check`` as by the build."""
     if root_fillet_radius_mm > 0.0 and trailing_edge_thickness_mm == 0.0:
-        raise GeometryError(f"hub.root_fillet_radius = {root_fillet_radius_mm:g} mm round a knife trailing edge "
-                            "(airfoil.trailing_edge_thickness = 0) leaves a corner face that crosses itself; give "
-                            "the blade a round blunt edge: airfoil.trailing_edge_thickness > 0 with "
-                            "airfoil.trailing_edge_shape = 'round'")
+        raise GeometryError(
+            f"hub.root_fillet_radius = {root_fillet_radius_mm:g} mm round a knife trailing edge "
+            "(airfoil.trailing_edge_thickness = 0) leaves a corner face that crosses itself; give "
+            "the blade a round blunt edge: airfoil.trailing_edge_thickness > 0 with "
+            "airfoil.trailing_edge_shape = 'round'"
+        )
 
 
 def check_ends_inside_hub(hub: HubGeometry, surface: BladeSurface) -> None:
     """The first and last sections must lie inside the hub (r < R, |z| < L/2) so the fuse hides them."""
     radius, half_length = hub.radius_mm, hub.length_mm / 2.0
-    for label, section in (("root (s = 0)", surface.points[0]), ("tip end (s = 1)", surface.points[-1])):
+    for label, section in (
+        ("root (s = 0)", surface.points[0]),
+        ("tip end (s = 1)", surface.points[-1]),
+    ):
         outside_radius = _radius(section).max()
         outside_axis = np.abs(section[:, 2]).max()
         if outside_radius >= radius or outside_axis >= half_length:
             raise GeometryError(
                 f"the blade's {label} section leaves the hub's inset (reaches r = {outside_radius:.3f} mm of "
                 f"R = {radius:g}, |z| = {outside_axis:.3f} mm of L/2 = {half_length:g}); "
-                "make transforms.scale_x / scale_y smaller at that end or the hub larger")
+                "make transforms.scale_x / scale_y smaller at that end or the hub larger"
+            )
 
 
-def check_centerline_leaves_through_side(hub: HubGeometry, centerline: Centerline,
-                                         samples: int = 401) -> None:
+def check_centerline_leaves_through_side(
+    hub: HubGeometry, centerline: Centerline, samples: int = 401
+) -> None:
     """Inside the hub's radius the centerline must stay between the end faces (|z| < L/2)."""
     points = centerline.points(np.linspace(0.0, 1.0, samples))
     inside = _radius(points) < hub.radius_mm
@@ -101,10 +110,12 @@ def check_centerline_leaves_through_side(hub: HubGeometry, centerline: Centerlin
         where = np.linspace(0.0, 1.0, samples)[np.argmax(crossing)]
         raise GeometryError(
             f"the centerline leaves the hub through an end face near s = {where:.3f}; it must leave through "
-            "the hub's side (keep y_L of the control points near the ends between 0 and L - 2)")
+            "the hub's side (keep y_L of the control points near the ends between 0 and L - 2)"
+        )
 
 
 # -- the analytic tube the remaining checks sample ----------------------------------------------
+
 
 @dataclass(frozen=True)
 class Tube:
@@ -139,8 +150,12 @@ def tube_grid(sections: int, at_least: int = CHECK_SECTIONS) -> tuple[NDArray[np
     return np.linspace(0.0, 1.0, k * (sections - 1) + 1), k
 
 
-def sample_tube(geometry: PropellerGeometry, centerline: Centerline, s: NDArray[np.float64],
-                t: NDArray[np.float64]) -> Tube:
+def sample_tube(
+    geometry: PropellerGeometry,
+    centerline: Centerline,
+    s: NDArray[np.float64],
+    t: NDArray[np.float64],
+) -> Tube:
     """Blade 0's analytic surface at every (s, t) of the grid, with frames and curvature.
 
     The frames are the blade's own kind (:func:`torus_cad.geometry.blade.blade_surface.blade_frames`).
@@ -149,7 +164,9 @@ def sample_tube(geometry: PropellerGeometry, centerline: Centerline, s: NDArray[
     first, second = derivatives[:, 1], derivatives[:, 2]
     speed = np.linalg.norm(first, axis=-1)
     tangent = first / speed[:, None]
-    curvature = (second - np.sum(second * tangent, axis=-1, keepdims=True) * tangent) / speed[:, None] ** 2
+    curvature = (second - np.sum(second * tangent, axis=-1, keepdims=True) * tangent) / speed[
+        :, None
+    ] ** 2
     frames = blade_frames(geometry.blade, centerline, s)
     planar = geometry.blade.laws.apply(sections_at(sections_along(geometry.blade, s), t), s)
     surface = place_on_frames(frames, planar)
@@ -163,11 +180,17 @@ def coarsen(tube: Tube, sections: int = CHECK_SECTIONS, points: int = CHECK_POIN
     m, p, _ = tube.points.shape
     rows = np.unique(np.concatenate([np.arange(0, m, max(1, m // sections)), [m - 1]]))
     columns = np.arange(0, p, max(1, int(np.ceil(p / points))))
-    return Tube(tube.frames.take(rows), tube.planar[rows][:, columns], tube.points[rows][:, columns], tube.curvature[rows],
-                tube.arc_length[rows])
+    return Tube(
+        tube.frames.take(rows),
+        tube.planar[rows][:, columns],
+        tube.points[rows][:, columns],
+        tube.curvature[rows],
+        tube.arc_length[rows],
+    )
 
 
 # -- 3: folding where the centerline bends -----------------------------------------------------
+
 
 def fold_ratio(tube: Tube) -> tuple[float, float]:
     """Largest kappa . offset over the surface (>= 1: the section reaches the centre of curvature) and its s.
@@ -192,10 +215,12 @@ def check_no_fold(tube: Tube, limit: float | None = None) -> None:
         raise GeometryError(
             f"the blade folds over itself near s = {where:.3f}: its section reaches {ratio:.2f} x the "
             f"centerline's bend radius ({bend_radius:.3g} mm) on the inside of the bend (limit {limit:g}); "
-            "make transforms.scale_x / scale_y smaller there or bend the centerline less")
+            "make transforms.scale_x / scale_y smaller there or bend the centerline less"
+        )
 
 
 # -- 4: sections dense enough for the loft ------------------------------------------------------
+
 
 def resolution_deviation(surface: BladeSurface, fine: Tube, step: int) -> tuple[float, float]:
     """Largest sag between neighbouring sections, as a fraction of the local chord; and its s.
@@ -207,18 +232,19 @@ def resolution_deviation(surface: BladeSurface, fine: Tube, step: int) -> tuple[
     sparse sections of a strongly changing blade misses the design badly, can come out
     inside out, and the fuse then fails or hangs (found by ``scripts/fuzz.py``).
     """
-    middle = fine.frames.s[step // 2::step]
-    exact = fine.points[step // 2::step]
+    middle = fine.frames.s[step // 2 :: step]
+    exact = fine.points[step // 2 :: step]
     straight = 0.5 * (surface.points[:-1] + surface.points[1:])
     sag = np.linalg.norm(straight - exact, axis=-1).max(axis=1)
-    chord = 2.0 * np.linalg.norm(fine.planar[step // 2::step], axis=-1).max(axis=1)
+    chord = 2.0 * np.linalg.norm(fine.planar[step // 2 :: step], axis=-1).max(axis=1)
     relative = sag / np.maximum(chord, 1e-12)
     worst = int(np.argmax(relative))
     return float(relative[worst]), float(middle[worst])
 
 
-def check_sections_resolved(surface: BladeSurface, fine: Tube, step: int,
-                            limit: float | None = None) -> None:
+def check_sections_resolved(
+    surface: BladeSurface, fine: Tube, step: int, limit: float | None = None
+) -> None:
     """Refuse a blade whose sections are too sparse for how fast it bends, twists or tapers.
 
     The default limit is RESOLUTION_DEVIATION_LIMIT (read at call time).
@@ -232,20 +258,27 @@ def check_sections_resolved(surface: BladeSurface, fine: Tube, step: int,
         raise GeometryError(
             f"resolution.sections = {sections} is too few for this blade: between sections near s = {where:.3f} "
             f"it bends, twists or tapers by {relative:.1%} of the chord (limit {limit:.1%}); use "
-            f"resolution.sections >= {min(needed, 400)} or make the blade change more gently")
+            f"resolution.sections >= {min(needed, 400)} or make the blade change more gently"
+        )
 
 
-# -- 5, 6, 7: leaving the hub, overlaps --------------------------------------------------------------------------------
+# -- 5, 6, 7: leaving the hub, overlaps
+# --------------------------------------------------------------------------------
 
-def _points_inside(tube: Tube, query: NDArray[np.float64], allowed: NDArray[np.bool_] | None = None
-                   ) -> tuple[NDArray[np.bool_], NDArray[np.int64]]:
+
+def _points_inside(
+    tube: Tube, query: NDArray[np.float64], allowed: NDArray[np.bool_] | None = None
+) -> tuple[NDArray[np.bool_], NDArray[np.int64]]:
     """Which ``(q, 3)`` points lie inside the tube, and in which slab (section k to k + 1) each does.
 
     A point is inside slab k when it lies on the forward side of section k's plane and the
     backward side of section k + 1's, and inside the section interpolated to its position.
     ``allowed`` ``(q, m - 1)`` masks the slabs tested per point (e.g. to skip a point's neighbours).
     """
-    heights = query @ tube.frames.tangent.T - np.sum(tube.frames.origin * tube.frames.tangent, axis=-1)  # (q, m)
+    # (q, m)
+    heights = query @ tube.frames.tangent.T - np.sum(
+        tube.frames.origin * tube.frames.tangent, axis=-1
+    )
     in_slab = (heights[:, :-1] >= 0.0) & (heights[:, 1:] < 0.0)
     if allowed is not None:
         in_slab &= allowed
@@ -254,27 +287,35 @@ def _points_inside(tube: Tube, query: NDArray[np.float64], allowed: NDArray[np.b
     where = np.full(len(query), -1, dtype=np.int64)
     # A point inside slab k lies within the larger section radius (plus the slab's length) of C_k.
     radius = tube.section_radius
-    reach = np.maximum(radius[:-1], radius[1:]) + np.linalg.norm(np.diff(tube.frames.origin, axis=0), axis=-1)
+    reach = np.maximum(radius[:-1], radius[1:]) + np.linalg.norm(
+        np.diff(tube.frames.origin, axis=0), axis=-1
+    )
     near = np.linalg.norm(query[point_index] - tube.frames.origin[slab], axis=-1) <= reach[slab]
     point_index, slab = point_index[near], slab[near]
     if point_index.size == 0:
         return inside, where
     h0, h1 = heights[point_index, slab], heights[point_index, slab + 1]
     weight = (h0 / (h0 - h1))[:, None]
-    polygon = (1.0 - weight[:, :, None]) * tube.planar[slab] + weight[:, :, None] * tube.planar[slab + 1]
+    polygon = (1.0 - weight[:, :, None]) * tube.planar[slab] + weight[:, :, None] * tube.planar[
+        slab + 1
+    ]
     relative0 = query[point_index] - tube.frames.origin[slab]
     relative1 = query[point_index] - tube.frames.origin[slab + 1]
-    x = (1.0 - weight[:, 0]) * np.sum(relative0 * tube.frames.normal[slab], -1) + weight[:, 0] * np.sum(
-        relative1 * tube.frames.normal[slab + 1], -1)
-    y = (1.0 - weight[:, 0]) * np.sum(relative0 * tube.frames.binormal[slab], -1) + weight[:, 0] * np.sum(
-        relative1 * tube.frames.binormal[slab + 1], -1)
+    x = (1.0 - weight[:, 0]) * np.sum(relative0 * tube.frames.normal[slab], -1) + weight[
+        :, 0
+    ] * np.sum(relative1 * tube.frames.normal[slab + 1], -1)
+    y = (1.0 - weight[:, 0]) * np.sum(relative0 * tube.frames.binormal[slab], -1) + weight[
+        :, 0
+    ] * np.sum(relative1 * tube.frames.binormal[slab + 1], -1)
     hit = _in_polygons(polygon, x, y)
     inside[point_index[hit]] = True
     where[point_index[hit]] = slab[hit]
     return inside, where
 
 
-def _in_polygons(polygons: NDArray[np.float64], x: NDArray[np.float64], y: NDArray[np.float64]) -> NDArray[np.bool_]:
+def _in_polygons(
+    polygons: NDArray[np.float64], x: NDArray[np.float64], y: NDArray[np.float64]
+) -> NDArray[np.bool_]:
     """Even-odd test of points (x[i], y[i]) against closed polygons ``(i, p, 2)``."""
     start = polygons
     end = np.roll(polygons, -1, axis=1)
@@ -304,7 +345,8 @@ def check_no_self_intersection(hub: HubGeometry, tube: Tube) -> None:
         low, high = sorted((s_point, s_slab))
         raise GeometryError(
             f"the blade intersects itself: its part near s = {low:.3f} runs into its part near s = {high:.3f} "
-            f"({place} the hub); move the centerline's control points apart or make the sections smaller")
+            f"({place} the hub); move the centerline's control points apart or make the sections smaller"
+        )
 
 
 def check_leaves_hub(hub: HubGeometry, tube: Tube) -> None:
@@ -312,7 +354,8 @@ def check_leaves_hub(hub: HubGeometry, tube: Tube) -> None:
     if not np.any(_outside_hub(hub, tube.points)):
         raise GeometryError(
             "the blade never leaves the hub (all of it lies within r < R and |z| < L/2); raise the centerline's "
-            "control points (z_L of p2 / p3) or make the hub smaller")
+            "control points (z_L of p2 / p3) or make the hub smaller"
+        )
 
 
 def check_blades_clear(geometry: PropellerGeometry, tube: Tube) -> None:
@@ -345,10 +388,13 @@ def check_blades_clear(geometry: PropellerGeometry, tube: Tube) -> None:
                 f"the blades would intersect each other outside the hub: blade 1's part near s = {s_here:.3f} "
                 f"meets blade {1 + blade}'s part near s = {s_other:.3f} ({gap} blade pitch{'es' if gap > 1 else ''}"
                 f" = {360.0 * gap / geometry.blades:.1f} degrees apart); reduce the centerline's angular span x_L, "
-                "the section sizes or the number of blades")
+                "the section sizes or the number of blades"
+            )
 
 
-# -- all checks --------------------------------------------------------------------------------------
+# -- all checks
+# --------------------------------------------------------------------------------------
+
 
 @dataclass(frozen=True)
 class Margins:

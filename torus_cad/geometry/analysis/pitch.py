@@ -70,9 +70,16 @@ class PitchFit:
 ChordModel = Callable[[NDArray[np.float64]], tuple[NDArray[np.float64], NDArray[np.float64]]]
 
 
-def chord_model(origin: NDArray[np.float64], normal: NDArray[np.float64], binormal: NDArray[np.float64],
-                leading: NDArray[np.float64], trailing: NDArray[np.float64], scale_x: ArrayLike,
-                scale_y: ArrayLike, pivot: float = 0.0) -> ChordModel:
+def chord_model(
+    origin: NDArray[np.float64],
+    normal: NDArray[np.float64],
+    binormal: NDArray[np.float64],
+    leading: NDArray[np.float64],
+    trailing: NDArray[np.float64],
+    scale_x: ArrayLike,
+    scale_y: ArrayLike,
+    pivot: float = 0.0,
+) -> ChordModel:
     """A function alpha (k,) degrees -> (chord mid points (k, 3), chord vectors (k, 3)) in mm.
 
     Args:
@@ -83,7 +90,9 @@ def chord_model(origin: NDArray[np.float64], normal: NDArray[np.float64], binorm
     scales = np.stack([np.asarray(scale_x, float), np.asarray(scale_y, float)], axis=-1)
     shift = np.array([pivot, 0.0])
 
-    def placed(planar_points: NDArray[np.float64], angle: NDArray[np.float64]) -> NDArray[np.float64]:
+    def placed(
+        planar_points: NDArray[np.float64], angle: NDArray[np.float64]
+    ) -> NDArray[np.float64]:
         cos, sin = np.cos(angle), np.sin(angle)
         x, y = (planar_points - shift).T
         rotated = np.stack([cos * x - sin * y, sin * x + cos * y], axis=-1) * scales
@@ -97,13 +106,21 @@ def chord_model(origin: NDArray[np.float64], normal: NDArray[np.float64], binorm
     return model
 
 
-def fit_pitch(model: ChordModel, s: NDArray[np.float64], initial_quartic: ArrayLike, pitch_mm: float,
-              tip_radius_mm: float, spin: Handedness = Handedness.CW) -> PitchFit:
+def fit_pitch(
+    model: ChordModel,
+    s: NDArray[np.float64],
+    initial_quartic: ArrayLike,
+    pitch_mm: float,
+    tip_radius_mm: float,
+    spin: Handedness = Handedness.CW,
+) -> PitchFit:
     """Fit alpha(s) (a quartic) so the outer sections' geometric pitch is ``pitch_mm`` (module docstring)."""
     initial = np.asarray(initial_quartic, dtype=float)
     alpha0 = _quartic_at(initial, s)
 
-    def evaluate(alpha_deg: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    def evaluate(
+        alpha_deg: NDArray[np.float64],
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
         middle, chord = model(alpha_deg)
         radius = np.hypot(middle[:, 0], middle[:, 1])
         beta, radial = blade_angles(middle, chord, spin)
@@ -114,14 +131,19 @@ def fit_pitch(model: ChordModel, s: NDArray[np.float64], initial_quartic: ArrayL
     radius0, _, _ = evaluate(alpha0)
     outer = radius0 >= PITCH_FIT_RADIUS_FRACTION * tip_radius_mm
     if not np.any(outer):
-        raise GeometryError("no section lies in the outer half of the radius; the pitch cannot be fitted")
+        raise GeometryError(
+            "no section lies in the outer half of the radius; the pitch cannot be fitted"
+        )
     best_alpha, sensitivity = _best_angles(evaluate, alpha0)
     # Stage 2: a linear least-squares quartic through the best angles, each weighted by how much
-    # alpha moves beta there; unconstrained (inner, insensitive) sections stay near the design's alpha.
+    # alpha moves beta there; unconstrained (inner, insensitive) sections stay near the design's
+    # alpha.
     weight = np.where(outer, sensitivity, 0.0) + INNER_ALPHA_WEIGHT
     goal = np.where(outer & (sensitivity > 0.0), best_alpha, alpha0)
     powers = np.vander(s, 5)
-    coefficients = np.asarray(np.linalg.lstsq(powers * weight[:, None], goal * weight, rcond=None)[0], dtype=float)
+    coefficients = np.asarray(
+        np.linalg.lstsq(powers * weight[:, None], goal * weight, rcond=None)[0], dtype=float
+    )
     stage_two = _quartic_at(coefficients, s)
 
     def residuals(candidate: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -130,15 +152,24 @@ def fit_pitch(model: ChordModel, s: NDArray[np.float64], initial_quartic: ArrayL
         keep = INNER_ALPHA_WEIGHT * np.radians(alpha - stage_two)
         return np.concatenate([(tangential * miss)[outer], keep])
 
-    # Stage 3: polish the quartic on beta itself, held near stage 2 so it cannot wander off in turns.
-    solution = least_squares(residuals, coefficients, x_scale=np.full(5, 10.0), method="trf", max_nfev=200)
+    # Stage 3: polish the quartic on beta itself, held near stage 2 so it cannot wander off in
+    # turns.
+    solution = least_squares(
+        residuals, coefficients, x_scale=np.full(5, 10.0), method="trf", max_nfev=200
+    )
     if np.sum(solution.fun**2) < np.sum(residuals(coefficients) ** 2):
         coefficients = np.asarray(solution.x, dtype=float)
     return pitch_report(model, s, coefficients, pitch_mm, tip_radius_mm, spin)
 
 
-def pitch_report(model: ChordModel, s: NDArray[np.float64], quartic: ArrayLike, pitch_mm: float,
-                 tip_radius_mm: float, spin: Handedness = Handedness.CW) -> PitchFit:
+def pitch_report(
+    model: ChordModel,
+    s: NDArray[np.float64],
+    quartic: ArrayLike,
+    pitch_mm: float,
+    tip_radius_mm: float,
+    spin: Handedness = Handedness.CW,
+) -> PitchFit:
     """How well the alpha(s) ``quartic`` meets ``pitch_mm`` (nothing is fitted): a :class:`PitchFit`."""
     coefficients = np.asarray(quartic, dtype=float)
     alpha = _quartic_at(coefficients, s)
@@ -148,7 +179,9 @@ def pitch_report(model: ChordModel, s: NDArray[np.float64], quartic: ArrayLike, 
     outer = radius >= PITCH_FIT_RADIUS_FRACTION * tip_radius_mm
     miss = np.angle(np.exp(1j * (np.radians(beta) - np.arctan2(pitch_mm, 2.0 * np.pi * radius))))
     used = np.clip(1.0 - radial**2, 0.0, 1.0)[outer]
-    rms = float(np.degrees(np.sqrt(np.sum(used * miss[outer] ** 2) / max(float(np.sum(used)), 1e-300))))
+    rms = float(
+        np.degrees(np.sqrt(np.sum(used * miss[outer] ** 2) / max(float(np.sum(used)), 1e-300)))
+    )
     pitch = 2.0 * np.pi * radius * np.tan(np.radians(beta))
     at_75 = _values_at_radius(radius, pitch, PITCH_REPORT_RADIUS_FRACTION * tip_radius_mm)
     a, b, c, d, e = (float(value) for value in coefficients)
@@ -159,11 +192,17 @@ def _quartic_at(coefficients: NDArray[np.float64], s: NDArray[np.float64]) -> ND
     return evaluate_quartic([float(value) for value in coefficients], s)
 
 
-Evaluation = Callable[[NDArray[np.float64]], tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]]
+Evaluation = Callable[
+    [NDArray[np.float64]], tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]
+]
 
 
-def _best_angles(evaluate: Evaluation, alpha0: NDArray[np.float64], half_range_deg: float = 90.0, steps: int = 361
-                 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def _best_angles(
+    evaluate: Evaluation,
+    alpha0: NDArray[np.float64],
+    half_range_deg: float = 90.0,
+    steps: int = 361,
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Per section, the alpha within +-half_range of alpha0 that brings beta closest to its target,
     and |d beta / d alpha| there (0 where alpha cannot move beta)."""
     offsets = np.linspace(-half_range_deg, half_range_deg, steps)
@@ -174,11 +213,15 @@ def _best_angles(evaluate: Evaluation, alpha0: NDArray[np.float64], half_range_d
     columns = np.arange(len(alpha0))
     step = offsets[1] - offsets[0]
     ahead, behind = np.clip(index + 1, 0, steps - 1), np.clip(index - 1, 0, steps - 1)
-    slope = np.abs(misses[ahead, columns] - misses[behind, columns]) / np.radians((ahead - behind) * step)
+    slope = np.abs(misses[ahead, columns] - misses[behind, columns]) / np.radians(
+        (ahead - behind) * step
+    )
     return alpha0 + offsets[index], np.clip(slope, 0.0, 1.0)
 
 
-def _values_at_radius(radius: NDArray[np.float64], values: NDArray[np.float64], at: float) -> NDArray[np.float64]:
+def _values_at_radius(
+    radius: NDArray[np.float64], values: NDArray[np.float64], at: float
+) -> NDArray[np.float64]:
     """``values`` linearly interpolated where ``radius`` crosses ``at`` (one per crossing)."""
     found = []
     for index in np.flatnonzero(np.diff(np.sign(radius - at)) != 0):

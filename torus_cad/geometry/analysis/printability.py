@@ -76,14 +76,18 @@ class Printability:
         if self.printable:
             return ""
         if self.thinnest_wall_mm < self.min_wall_mm * (1.0 - _ROUNDING):
-            return (f"the blade section at s = {self.thinnest_wall_s:.3f} is at most {self.thinnest_wall_mm:.3f} mm "
-                    f"thick (at chord fraction {self.thinnest_wall_chord_fraction:.3f}), thinner than "
-                    f"manufacturing.min_wall = {self.min_wall_mm:g} mm")
+            return (
+                f"the blade section at s = {self.thinnest_wall_s:.3f} is at most {self.thinnest_wall_mm:.3f} mm "
+                f"thick (at chord fraction {self.thinnest_wall_chord_fraction:.3f}), thinner than "
+                f"manufacturing.min_wall = {self.min_wall_mm:g} mm"
+            )
         if self.trailing_edge_thickness_mm < self.min_wall_mm * (1.0 - _ROUNDING):
-            return (f"the trailing edge of the section at s = {self.trailing_edge_thinnest_s:.3f} is "
-                    f"{self.trailing_edge_thickness_mm:.3f} mm thick, thinner than manufacturing.min_wall = "
-                    f"{self.min_wall_mm:g} mm (a blunt trailing edge at least as thick makes it printable: "
-                    f"airfoil.trailing_edge_thickness = {self.min_wall_mm:g})")
+            return (
+                f"the trailing edge of the section at s = {self.trailing_edge_thinnest_s:.3f} is "
+                f"{self.trailing_edge_thickness_mm:.3f} mm thick, thinner than manufacturing.min_wall = "
+                f"{self.min_wall_mm:g} mm (a blunt trailing edge at least as thick makes it printable: "
+                f"airfoil.trailing_edge_thickness = {self.min_wall_mm:g})"
+            )
         return ""
 
 
@@ -94,8 +98,12 @@ def wall_mm(blade: BladeGeometry, s: ArrayLike, u: ArrayLike) -> NDArray[np.floa
     chord position is u^2 for NACA sections).
     """
     s, u = np.atleast_1d(np.asarray(s, float)), np.atleast_1d(np.asarray(u, float))
-    across = np.stack([section.points_on_half(u, True) - section.points_on_half(u, False)
-                       for section in sections_along(blade, s)])  # (len(s), len(u), 2), chord units
+    across = np.stack(
+        [
+            section.points_on_half(u, True) - section.points_on_half(u, False)
+            for section in sections_along(blade, s)
+        ]
+    )  # (len(s), len(u), 2), chord units
     matrices = _section_matrices(blade.laws, s)
     return np.linalg.norm(np.einsum("kij,kuj->kui", matrices, across), axis=-1)
 
@@ -103,12 +111,16 @@ def wall_mm(blade: BladeGeometry, s: ArrayLike, u: ArrayLike) -> NDArray[np.floa
 def chord_fraction(blade: BladeGeometry, s: float, u: float) -> float:
     """Chord position (x in chord units) of the middle of the chord station ``u`` of the section at ``s``."""
     section = sections_along(blade, [s])[0]
-    return float(0.5 * (section.points_on_half([u], True)[0, 0] + section.points_on_half([u], False)[0, 0]))
+    return float(
+        0.5 * (section.points_on_half([u], True)[0, 0] + section.points_on_half([u], False)[0, 0])
+    )
 
 
 def _section_matrices(laws: SectionLaws, s: NDArray[np.float64]) -> NDArray[np.float64]:
     """diag(Sx, Sy) R(alpha) for every s: ``(k, 2, 2)`` (the pivot's shift cancels in a difference)."""
-    scales = np.stack([evaluate_quartic(laws.scale_x_mm, s), evaluate_quartic(laws.scale_y_mm, s)], axis=-1)
+    scales = np.stack(
+        [evaluate_quartic(laws.scale_x_mm, s), evaluate_quartic(laws.scale_y_mm, s)], axis=-1
+    )
     return scales[:, :, None] * rotation_matrices(evaluate_quartic(laws.angle_of_attack_deg, s))
 
 
@@ -122,7 +134,10 @@ def exposed_span(geometry: PropellerGeometry) -> tuple[float, float]:
     def outside_mm(s: ArrayLike) -> NDArray[np.float64]:
         """Positive outside the hub: max(r - R, |z| - L/2), mm, per s."""
         points = centerline.points(s)
-        return np.maximum(np.hypot(points[:, 0], points[:, 1]) - hub.radius_mm, np.abs(points[:, 2]) - hub.length_mm / 2)
+        return np.maximum(
+            np.hypot(points[:, 0], points[:, 1]) - hub.radius_mm,
+            np.abs(points[:, 2]) - hub.length_mm / 2,
+        )
 
     grid = np.linspace(0.0, 1.0, _S_SAMPLES)
     out = outside_mm(grid) > 0.0
@@ -150,9 +165,17 @@ def printability(geometry: PropellerGeometry, min_wall_mm: float) -> Printabilit
         walls = wall_mm(blade, [s], u_grid)[0]
         index = int(np.argmax(walls))
         low, high = u_grid[max(index - 1, 0)], u_grid[min(index + 1, len(u_grid) - 1)]
-        best = minimize_scalar(lambda u: -wall_mm(blade, [s], [u])[0, 0], bounds=(low, high),
-                               method="bounded", options={"xatol": 1e-10})
-        return (-float(best.fun), float(best.x)) if -best.fun >= walls[index] else (float(walls[index]), float(u_grid[index]))
+        best = minimize_scalar(
+            lambda u: -wall_mm(blade, [s], [u])[0, 0],
+            bounds=(low, high),
+            method="bounded",
+            options={"xatol": 1e-10},
+        )
+        return (
+            (-float(best.fun), float(best.x))
+            if -best.fun >= walls[index]
+            else (float(walls[index]), float(u_grid[index]))
+        )
 
     section_walls = wall_mm(blade, s_grid, u_grid).max(axis=1)
     s_wall = _polish_minimum(lambda s: thickest(s)[0], s_grid, section_walls)
@@ -160,9 +183,18 @@ def printability(geometry: PropellerGeometry, min_wall_mm: float) -> Printabilit
     edge = wall_mm(blade, s_grid, [1.0])[:, 0]
     s_edge = _polish_minimum(lambda s: float(wall_mm(blade, [s], [1.0])[0, 0]), s_grid, edge)
     edge_thickness = float(wall_mm(blade, [s_edge], [1.0])[0, 0])
-    edge_thickness = 0.0 if edge_thickness < 1e-12 else edge_thickness  # the spec's sharp edge: exactly 0
-    return Printability(wall, s_wall, chord_fraction(blade, s_wall, u_wall), edge_thickness, s_edge, span,
-                        min_wall_mm, bool(min(wall, edge_thickness) >= min_wall_mm * (1.0 - _ROUNDING)))
+    # the spec's sharp edge: exactly 0
+    edge_thickness = 0.0 if edge_thickness < 1e-12 else edge_thickness
+    return Printability(
+        wall,
+        s_wall,
+        chord_fraction(blade, s_wall, u_wall),
+        edge_thickness,
+        s_edge,
+        span,
+        min_wall_mm,
+        bool(min(wall, edge_thickness) >= min_wall_mm * (1.0 - _ROUNDING)),
+    )
 
 
 def _polish_minimum(function: Any, grid: NDArray[np.float64], values: NDArray[np.float64]) -> float:
@@ -188,18 +220,37 @@ def conventional_printability(blade: ConventionalBlade, min_wall_mm: float) -> P
     s, r_mm = s[exposed], r_mm[exposed]
     u = np.sin(np.linspace(0.0, 0.5 * np.pi, _PRINT_CHORD_STATIONS))
     chord = blade.chord_mm(r_mm)
-    walls = np.stack([np.linalg.norm(section.points_on_half(u, True) - section.points_on_half(u, False), axis=-1)
-                      for section in (blade.section_at(float(r)) for r in r_mm)])
+    walls = np.stack(
+        [
+            np.linalg.norm(
+                section.points_on_half(u, True) - section.points_on_half(u, False), axis=-1
+            )
+            for section in (blade.section_at(float(r)) for r in r_mm)
+        ]
+    )
     walls *= chord[:, None]
     thickest = walls.max(axis=1)
     row = int(np.argmin(thickest))
     column = int(np.argmax(walls[row]))
     section = blade.section_at(float(r_mm[row]))
-    fraction = float(0.5 * (section.points_on_half(u[column : column + 1], True)[0, 0]
-                            + section.points_on_half(u[column : column + 1], False)[0, 0]))
+    fraction = float(
+        0.5
+        * (
+            section.points_on_half(u[column : column + 1], True)[0, 0]
+            + section.points_on_half(u[column : column + 1], False)[0, 0]
+        )
+    )
     edge = walls[:, -1]
     edge_row = int(np.argmin(edge))
     edge_mm = 0.0 if edge[edge_row] < 1e-12 else float(edge[edge_row])
     wall_mm = float(thickest[row])
-    return Printability(wall_mm, float(s[row]), fraction, edge_mm, float(s[edge_row]), (float(s[0]), 1.0),
-                        min_wall_mm, bool(min(wall_mm, edge_mm) >= min_wall_mm * (1.0 - 1e-9)))
+    return Printability(
+        wall_mm,
+        float(s[row]),
+        fraction,
+        edge_mm,
+        float(s[edge_row]),
+        (float(s[0]), 1.0),
+        min_wall_mm,
+        bool(min(wall_mm, edge_mm) >= min_wall_mm * (1.0 - 1e-9)),
+    )

@@ -66,8 +66,11 @@ class BladeSurface:
 
 def place_on_frames(frames: Frames, planar: NDArray[np.float64]) -> NDArray[np.float64]:
     """X along N, Y along B (spec §4.2): ``(k, p, 2)`` section coordinates -> ``(k, p, 3)`` mm."""
-    return (frames.origin[:, None, :] + planar[..., 0:1] * frames.normal[:, None, :]
-            + planar[..., 1:2] * frames.binormal[:, None, :])
+    return (
+        frames.origin[:, None, :]
+        + planar[..., 0:1] * frames.normal[:, None, :]
+        + planar[..., 1:2] * frames.binormal[:, None, :]
+    )
 
 
 @lru_cache(maxsize=16)
@@ -88,17 +91,26 @@ def sections_along(blade: BladeGeometry, s: ArrayLike) -> Sequence[Section]:
     if thickness <= 0.0 and not own_round:
         return [blade.airfoil] * len(s)
     laws = blade.laws
-    return blunt_sections(blade.airfoil, thickness if thickness > 0.0 else None,
-                          evaluate_quartic(laws.angle_of_attack_deg, s), evaluate_quartic(laws.scale_x_mm, s),
-                          evaluate_quartic(laws.scale_y_mm, s), blade.round_trailing_edge)
+    return blunt_sections(
+        blade.airfoil,
+        thickness if thickness > 0.0 else None,
+        evaluate_quartic(laws.angle_of_attack_deg, s),
+        evaluate_quartic(laws.scale_x_mm, s),
+        evaluate_quartic(laws.scale_y_mm, s),
+        blade.round_trailing_edge,
+    )
 
 
-def s_outside_the_hub(centerline: Centerline, hub_radius_mm: float, hub_length_mm: float) -> NDArray[np.float64]:
+def s_outside_the_hub(
+    centerline: Centerline, hub_radius_mm: float, hub_length_mm: float
+) -> NDArray[np.float64]:
     """The s of TRAILING_EDGE_CHECK_SECTIONS equally spaced sections whose centre is outside the hub
     (inside, the hub swallows the section and its trailing edge): ``(k,)``."""
     s = np.linspace(0.0, 1.0, TRAILING_EDGE_CHECK_SECTIONS)
     points = centerline.points(s)
-    outside = (np.hypot(points[:, 0], points[:, 1]) > hub_radius_mm) | (np.abs(points[:, 2]) > hub_length_mm / 2.0)
+    outside = (np.hypot(points[:, 0], points[:, 1]) > hub_radius_mm) | (
+        np.abs(points[:, 2]) > hub_length_mm / 2.0
+    )
     return s[outside]
 
 
@@ -112,11 +124,14 @@ def with_thin_file_edge_closed(geometry: PropellerGeometry) -> PropellerGeometry
     section, closed_mm = closed_if_too_thin(blade.airfoil, blade.laws, s)
     if closed_mm is None:
         return geometry
-    return dataclasses.replace(geometry, blade=dataclasses.replace(blade, airfoil=section, closed_file_edge_mm=closed_mm))
+    return dataclasses.replace(
+        geometry, blade=dataclasses.replace(blade, airfoil=section, closed_file_edge_mm=closed_mm)
+    )
 
 
-def check_trailing_edge(blade: BladeGeometry, centerline: Centerline, hub_radius_mm: float, hub_length_mm: float
-                        ) -> None:
+def check_trailing_edge(
+    blade: BladeGeometry, centerline: Centerline, hub_radius_mm: float, hub_length_mm: float
+) -> None:
     """Refuse a blunt trailing edge thicker than the blade's sections where the blade is outside the hub
     (:func:`.trailing_edge.check_trailing_edge_fits`; inside, the hub swallows the sections)."""
     if blade.trailing_edge_thickness_mm <= 0.0:
@@ -124,8 +139,14 @@ def check_trailing_edge(blade: BladeGeometry, centerline: Centerline, hub_radius
     s, laws = s_outside_the_hub(centerline, hub_radius_mm, hub_length_mm), blade.laws
     if not len(s):
         return
-    check_trailing_edge_fits(blade.airfoil, blade.trailing_edge_thickness_mm, evaluate_quartic(laws.angle_of_attack_deg, s),
-                             evaluate_quartic(laws.scale_x_mm, s), evaluate_quartic(laws.scale_y_mm, s), s)
+    check_trailing_edge_fits(
+        blade.airfoil,
+        blade.trailing_edge_thickness_mm,
+        evaluate_quartic(laws.angle_of_attack_deg, s),
+        evaluate_quartic(laws.scale_x_mm, s),
+        evaluate_quartic(laws.scale_y_mm, s),
+        s,
+    )
 
 
 def sections_at(sections: Sequence[Section], t: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -138,7 +159,9 @@ def sections_at(sections: Sequence[Section], t: NDArray[np.float64]) -> NDArray[
     return np.stack([closed_points(section, t, base) for section in sections])
 
 
-def place_sections(blade: BladeGeometry, frames: Frames, section: NDArray[np.float64]) -> NDArray[np.float64]:
+def place_sections(
+    blade: BladeGeometry, frames: Frames, section: NDArray[np.float64]
+) -> NDArray[np.float64]:
     """Transform chord-unit sections, ``(p, 2)`` for all frames or ``(k, p, 2)`` one each, and place
     them: ``(k, p, 3)`` mm."""
     return place_on_frames(frames, blade.laws.apply(section, frames.s))
@@ -149,14 +172,23 @@ def blade_frames(blade: BladeGeometry, centerline: Centerline, s: ArrayLike) -> 
     return section_frames(centerline, s, blade.frame)
 
 
-def surface_points(blade: BladeGeometry, centerline: Centerline, s: ArrayLike, t: ArrayLike) -> NDArray[np.float64]:
+def surface_points(
+    blade: BladeGeometry, centerline: Centerline, s: ArrayLike, t: ArrayLike
+) -> NDArray[np.float64]:
     """The analytic surface at every (s, t) pair of the grid: ``(len(s), len(t), 3)`` mm."""
     frames = blade_frames(blade, centerline, np.atleast_1d(np.asarray(s, dtype=float)))
-    return place_sections(blade, frames, sections_at(sections_along(blade, frames.s), np.asarray(t, dtype=float)))
+    return place_sections(
+        blade, frames, sections_at(sections_along(blade, frames.s), np.asarray(t, dtype=float))
+    )
 
 
-def blade_surface(blade: BladeGeometry, centerline: Centerline, sections: int, points: int,
-                  anchor_trailing_edge: bool = True) -> BladeSurface:
+def blade_surface(
+    blade: BladeGeometry,
+    centerline: Centerline,
+    sections: int,
+    points: int,
+    anchor_trailing_edge: bool = True,
+) -> BladeSurface:
     """Sample the blade on ``centerline`` at ``sections`` x ``points``.
 
     Sections are uniform in s; points are equally spaced in arc length around the airfoil
@@ -185,11 +217,18 @@ def blade_surface(blade: BladeGeometry, centerline: Centerline, sections: int, p
         ParameterError: ``points`` is below 8, or a blunt trailing edge is thinner than a
             coordinate file's own trailing-edge offset.
     """
-    return blade_surface_at(blade, centerline, np.linspace(0.0, 1.0, sections), points, anchor_trailing_edge)
+    return blade_surface_at(
+        blade, centerline, np.linspace(0.0, 1.0, sections), points, anchor_trailing_edge
+    )
 
 
-def blade_surface_at(blade: BladeGeometry, centerline: Centerline, s: ArrayLike, points: int,
-                     anchor_trailing_edge: bool = True) -> BladeSurface:
+def blade_surface_at(
+    blade: BladeGeometry,
+    centerline: Centerline,
+    s: ArrayLike,
+    points: int,
+    anchor_trailing_edge: bool = True,
+) -> BladeSurface:
     """:func:`blade_surface` with its sections at the centerline parameters ``s`` ``(k,)`` (increasing)."""
     frames = blade_frames(blade, centerline, s)
     along = sections_along(blade, frames.s)
@@ -197,6 +236,12 @@ def blade_surface_at(blade: BladeGeometry, centerline: Centerline, s: ArrayLike,
     reference = along[0] if shared else sections_along(blade, [0.5])[0]
     sampling = equal_arc_length_section(reference, points, anchor_trailing_edge)
     planar = sampling.points if shared else sections_at(along, sampling.t)
-    return BladeSurface(place_sections(blade, frames, planar), frames.s, sampling.t,
-                        sampling.trailing_edge_index, frames, sampling.lower_corner_index,
-                        isinstance(reference, RoundTrailingEdge))
+    return BladeSurface(
+        place_sections(blade, frames, planar),
+        frames.s,
+        sampling.t,
+        sampling.trailing_edge_index,
+        frames,
+        sampling.lower_corner_index,
+        isinstance(reference, RoundTrailingEdge),
+    )

@@ -22,8 +22,9 @@ def hub_inset_radius_mm(hub_radius_mm: float) -> float:
     return hub_radius_mm - hub_radius_mm / 8.0
 
 
-def local_to_cylindrical(local: ArrayLike, hub_radius: float, hub_length: float,
-                         blade_angle_deg: float) -> NDArray[np.float64]:
+def local_to_cylindrical(
+    local: ArrayLike, hub_radius: float, hub_length: float, blade_angle_deg: float
+) -> NDArray[np.float64]:
     """Frame L -> global cylindrical (r mm, theta deg, z mm), ``(k, 3)`` (spec §3.3: M . P_L + P1_C)."""
     local = np.atleast_2d(np.asarray(local, dtype=float))
     change_of_basis = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
@@ -61,17 +62,26 @@ class Centerline:
         self._derivatives = [spline] + [spline.derivative(k) for k in range(1, curve.degree + 1)]
 
     @classmethod
-    def in_hub_frame(cls, local_control_points: ArrayLike, hub_radius_mm: float, hub_length_mm: float,
-                     blade_angle_deg: float) -> "Centerline":
+    def in_hub_frame(
+        cls,
+        local_control_points: ArrayLike,
+        hub_radius_mm: float,
+        hub_length_mm: float,
+        blade_angle_deg: float,
+    ) -> "Centerline":
         """The centerline whose control points ``(4, 3)`` are given in frame L of a blade at ``blade_angle_deg``."""
-        cylindrical = local_to_cylindrical(local_control_points, hub_radius_mm, hub_length_mm, blade_angle_deg)
+        cylindrical = local_to_cylindrical(
+            local_control_points, hub_radius_mm, hub_length_mm, blade_angle_deg
+        )
         return cls(cylindrical_to_cartesian(cylindrical))
 
     def derivatives(self, s: ArrayLike, order: int = 3) -> NDArray[np.float64]:
         """C and its derivatives d^k C / ds^k, k = 0..order: ``(len(s), order + 1, 3)`` mm."""
         s = np.atleast_1d(np.asarray(s, dtype=float))
-        values = [self._derivatives[k](s) if k < len(self._derivatives) else np.zeros((len(s), 3))
-                  for k in range(order + 1)]
+        values = [
+            self._derivatives[k](s) if k < len(self._derivatives) else np.zeros((len(s), 3))
+            for k in range(order + 1)
+        ]
         return np.stack(values, axis=1)
 
     def points(self, s: ArrayLike) -> NDArray[np.float64]:

@@ -45,14 +45,19 @@ from torus_cad.geometry.blade.station_table import StationTable
 from torus_cad.geometry.blade.trailing_edge import TRAILING_EDGE_THICKNESS_LIMIT, blunt_sections
 from torus_cad.geometry.section.airfoil import Naca5Airfoil, NacaAirfoil
 from torus_cad.geometry.section.arc_length import equal_arc_length_section
-from torus_cad.geometry.section.section import RoundTrailingEdge, Section, closed_points, max_thickness
+from torus_cad.geometry.section.section import (
+    RoundTrailingEdge,
+    Section,
+    closed_points,
+    max_thickness,
+)
 
 #: The blended root section fits inside this fraction of the hub's half-width and half-length.
 CONVENTIONAL_ROOT_FIT_MARGIN = 0.8
 
-#: The root section of a conventional blade sits at this fraction of the hub's radius (well inside the
-#: hub, so that the hub swallows the root's blend); the stations below the table's first one are blended
-#: down to it.
+#: The root section of a conventional blade sits at this fraction of the hub's radius (well inside
+#: the hub, so that the hub swallows the root's blend); the stations below the table's first one are
+#: blended down to it.
 CONVENTIONAL_ROOT_RADIUS_FRACTION = 0.5
 
 #: Share of sine clustering in the conventional blade's section radii (0: uniform in r; 1: a quarter
@@ -81,14 +86,18 @@ class ScaledThickness:
         u = np.atleast_1d(np.asarray(root_chord, dtype=float))
         top, bottom = self.section.points_on_half(u, True), self.section.points_on_half(u, False)
         sign = 1.0 if upper else -1.0
-        return np.asarray(0.5 * (top + bottom) + sign * self.factor * 0.5 * (top - bottom), dtype=float)
+        return np.asarray(
+            0.5 * (top + bottom) + sign * self.factor * 0.5 * (top - bottom), dtype=float
+        )
 
     def speed_on_half(self, root_chord: ArrayLike, upper: bool) -> NDArray[np.float64]:
         """|d f / du| by a central difference (one-sided at the ends), shape of ``u``."""
         u = np.asarray(root_chord, dtype=float)
         low, high = np.clip(u - _SPEED_STEP, 0.0, 1.0), np.clip(u + _SPEED_STEP, 0.0, 1.0)
         step = np.maximum(high - low, 1e-300)
-        difference = self.points_on_half(high.ravel(), upper) - self.points_on_half(low.ravel(), upper)
+        difference = self.points_on_half(high.ravel(), upper) - self.points_on_half(
+            low.ravel(), upper
+        )
         return np.asarray(np.linalg.norm(difference, axis=-1).reshape(u.shape) / step, dtype=float)
 
     @property
@@ -228,8 +237,9 @@ class ConventionalBlade:
         if self.trailing_edge_thickness_mm <= 0.0:
             return section
         chord = self.chord_mm([r_mm])
-        return blunt_sections(section, self.trailing_edge_thickness_mm, [0.0], chord, chord,
-                              self.round_trailing_edge)[0]
+        return blunt_sections(
+            section, self.trailing_edge_thickness_mm, [0.0], chord, chord, self.round_trailing_edge
+        )[0]
 
     def check_trailing_edge(self, r_mm: NDArray[np.float64]) -> None:
         """GeometryError when the blunt trailing edge is thicker than TRAILING_EDGE_THICKNESS_LIMIT x a
@@ -240,9 +250,11 @@ class ConventionalBlade:
         thin = own_mm * TRAILING_EDGE_THICKNESS_LIMIT < self.trailing_edge_thickness_mm
         if np.any(thin):
             where = float(r_mm[int(np.argmax(thin))])
-            raise GeometryError(f"airfoil.trailing_edge_thickness = {self.trailing_edge_thickness_mm:g} mm is thicker "
-                                f"than {TRAILING_EDGE_THICKNESS_LIMIT:g} x the section's own thickness near r = "
-                                f"{where:.1f} mm ({float(own_mm[int(np.argmax(thin))]):.3f} mm); make it thinner")
+            raise GeometryError(
+                f"airfoil.trailing_edge_thickness = {self.trailing_edge_thickness_mm:g} mm is thicker "
+                f"than {TRAILING_EDGE_THICKNESS_LIMIT:g} x the section's own thickness near r = "
+                f"{where:.1f} mm ({float(own_mm[int(np.argmax(thin))]):.3f} mm); make it thinner"
+            )
 
 
 def conventional_surface(blade: ConventionalBlade, sections: int, points: int) -> BladeSurface:
@@ -254,15 +266,28 @@ def conventional_surface(blade: ConventionalBlade, sections: int, points: int) -
     s, r_mm = blade.section_radii_mm(sections)
     reference = blade.section_at(0.75 * blade.tip_radius_mm)
     sampling = equal_arc_length_section(reference, points)
-    planar = np.stack([closed_points(blade.section_at(float(r)), sampling.t, sampling.base) for r in r_mm])
+    planar = np.stack(
+        [closed_points(blade.section_at(float(r)), sampling.t, sampling.base) for r in r_mm]
+    )
     chord = blade.chord_mm(r_mm)
-    scaled = np.stack([(planar[..., 0] - 0.5) * chord[:, None], planar[..., 1] * chord[:, None]], axis=-1)
+    scaled = np.stack(
+        [(planar[..., 0] - 0.5) * chord[:, None], planar[..., 1] * chord[:, None]], axis=-1
+    )
     frames = blade.frames(s, r_mm)
-    return BladeSurface(place_on_frames(frames, scaled), s, sampling.t, sampling.trailing_edge_index, frames,
-                        sampling.lower_corner_index, isinstance(reference, RoundTrailingEdge))
+    return BladeSurface(
+        place_on_frames(frames, scaled),
+        s,
+        sampling.t,
+        sampling.trailing_edge_index,
+        frames,
+        sampling.lower_corner_index,
+        isinstance(reference, RoundTrailingEdge),
+    )
 
 
-def check_conventional_feasible(blade: ConventionalBlade, surface: BladeSurface, blades: int) -> None:
+def check_conventional_feasible(
+    blade: ConventionalBlade, surface: BladeSurface, blades: int
+) -> None:
     """Refuse a blade whose root section leaves the hub, whose blunt trailing edge is too thick, or whose
     neighbours would meet outside the hub (``surface``: blade 0, at any angle about the axis).
 
@@ -276,21 +301,28 @@ def check_conventional_feasible(blade: ConventionalBlade, surface: BladeSurface,
     root = surface.points[0]
     reach, height = float(np.hypot(root[:, 0], root[:, 1]).max()), float(np.abs(root[:, 2]).max())
     if reach >= blade.hub.radius_mm or height >= blade.hub.length_mm / 2.0:
-        raise GeometryError(f"the conventional blade's root section leaves the hub (reaches r = {reach:.3f} mm of "
-                            f"R = {blade.hub.radius_mm:g}, |z| = {height:.3f} mm of L/2 = {blade.hub.length_mm / 2:g}); "
-                            "make the hub larger")
+        raise GeometryError(
+            f"the conventional blade's root section leaves the hub (reaches r = {reach:.3f} mm of "
+            f"R = {blade.hub.radius_mm:g}, |z| = {height:.3f} mm of L/2 = {blade.hub.length_mm / 2:g}); "
+            "make the hub larger"
+        )
     if blades < 2:
         return
     origin = surface.frames.origin
-    turned = ((surface.points[..., 0] + 1j * surface.points[..., 1])
-              * np.exp(-1j * np.arctan2(origin[:, 1], origin[:, 0]))[:, None])  # each section's centre at angle 0
+    turned = (
+        (surface.points[..., 0] + 1j * surface.points[..., 1])
+        # each section's centre at angle 0
+        * np.exp(-1j * np.arctan2(origin[:, 1], origin[:, 0]))[:, None]
+    )
     angles = np.degrees(np.angle(turned))
     spans = angles.max(axis=1) - angles.min(axis=1)
     if np.any(spans[outside] >= 360.0 / blades):
         where = float(radius_mm[outside][int(np.argmax(spans[outside]))])
-        raise GeometryError(f"the conventional blades would meet each other near r = {where:.1f} mm: a section spans "
-                            f"{spans[outside].max():.1f} degrees about the axis, more than the blade spacing "
-                            f"{360.0 / blades:.1f} degrees; use fewer blades or smaller chords")
+        raise GeometryError(
+            f"the conventional blades would meet each other near r = {where:.1f} mm: a section spans "
+            f"{spans[outside].max():.1f} degrees about the axis, more than the blade spacing "
+            f"{360.0 / blades:.1f} degrees; use fewer blades or smaller chords"
+        )
 
 
 def rotated_surface(surface: BladeSurface, angle_deg: float) -> BladeSurface:
@@ -305,5 +337,11 @@ def rotated_surface(surface: BladeSurface, angle_deg: float) -> BladeSurface:
         return np.asarray(vectors @ rows.T, dtype=float)
 
     frames = surface.frames
-    turned = Frames(frames.s, turn(frames.origin), turn(frames.tangent), turn(frames.normal), turn(frames.binormal))
+    turned = Frames(
+        frames.s,
+        turn(frames.origin),
+        turn(frames.tangent),
+        turn(frames.normal),
+        turn(frames.binormal),
+    )
     return dataclasses.replace(surface, points=turn(surface.points), frames=turned)

@@ -62,7 +62,13 @@ class Frames:
         Returns:
             The m frames at those rows (``s`` ``(m,)``, the vectors ``(m, 3)``).
         """
-        return Frames(self.s[rows], self.origin[rows], self.tangent[rows], self.normal[rows], self.binormal[rows])
+        return Frames(
+            self.s[rows],
+            self.origin[rows],
+            self.tangent[rows],
+            self.normal[rows],
+            self.binormal[rows],
+        )
 
 
 def _unit(vectors: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -82,8 +88,9 @@ def curvature(first: NDArray[np.float64], second: NDArray[np.float64]) -> NDArra
     return np.linalg.norm(np.cross(first, second), axis=-1) / np.linalg.norm(first, axis=-1) ** 3
 
 
-def frenet_from_derivatives(first: NDArray[np.float64], second: NDArray[np.float64]
-                            ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+def frenet_from_derivatives(
+    first: NDArray[np.float64], second: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """Unit T, N, B ``(k, 3)`` from C' and C'' ``(k, 3)`` (spec §4.1).
 
     Args:
@@ -117,21 +124,25 @@ def check_frenet_defined(centerline: Centerline, samples: int = FRAME_SCAN_SAMPL
     derivatives = centerline.derivatives(s, order=2)
     if np.any(np.linalg.norm(derivatives[:, 1], axis=-1) < 1e-9):
         where = s[np.argmin(np.linalg.norm(derivatives[:, 1], axis=-1))]
-        raise GeometryError(f"the centerline stops (C'(s) = 0) near s = {where:.3f}; move its control points apart")
+        raise GeometryError(
+            f"the centerline stops (C'(s) = 0) near s = {where:.3f}; move its control points apart"
+        )
     kappa = curvature(derivatives[:, 1], derivatives[:, 2])
     weakest = int(np.argmin(kappa))
     if kappa[weakest] < FRENET_MIN_CURVATURE:
         raise GeometryError(
             f"the Frenet frame is undefined: the centerline's curvature vanishes near s = {s[weakest]:.3f} "
             f"(kappa = {kappa[weakest]:.2e} 1/mm); bend the centerline or set centerline.frame = "
-            "'rotation_minimizing'")
+            "'rotation_minimizing'"
+        )
     _, normal, _ = frenet_from_derivatives(derivatives[:, 1], derivatives[:, 2])
     flips = np.nonzero(np.sum(normal[:-1] * normal[1:], axis=-1) < 0.0)[0]
     if flips.size:
         where = 0.5 * (s[flips[0]] + s[flips[0] + 1])
         raise GeometryError(
             f"the Frenet normal flips at an inflection of the centerline near s = {where:.3f}; "
-            "change the control points or set centerline.frame = 'rotation_minimizing'")
+            "change the control points or set centerline.frame = 'rotation_minimizing'"
+        )
 
 
 def frenet_frames(centerline: Centerline, s: ArrayLike) -> Frames:
@@ -155,8 +166,9 @@ def frenet_frames(centerline: Centerline, s: ArrayLike) -> Frames:
     return Frames(s, derivatives[:, 0], tangent, normal, binormal)
 
 
-def rotation_minimizing_frames(centerline: Centerline, s: ArrayLike,
-                               substeps: int = FRAME_SCAN_SAMPLES) -> Frames:
+def rotation_minimizing_frames(
+    centerline: Centerline, s: ArrayLike, substeps: int = FRAME_SCAN_SAMPLES
+) -> Frames:
     """Rotation-minimising frames at ``s`` by double reflection (beyond the spec).
 
     The first frame equals the Frenet frame at s = 0 where that exists (so a curve with
@@ -179,7 +191,8 @@ def rotation_minimizing_frames(centerline: Centerline, s: ArrayLike,
     if np.any(np.diff(s) < 0):
         raise ValueError("s must be increasing")
     dense = np.linspace(0.0, 1.0, substeps)
-    # Drop dense points that nearly coincide with a requested s: a near-zero step breaks the reflection.
+    # Drop dense points that nearly coincide with a requested s: a near-zero step breaks the
+    # reflection.
     distance = np.abs(dense[:, None] - s[None, :]).min(axis=1)
     grid = np.union1d(dense[distance > 1e-9], s)
     derivatives = centerline.derivatives(grid, order=2)
@@ -194,7 +207,9 @@ def rotation_minimizing_frames(centerline: Centerline, s: ArrayLike,
         second_axis = tangents[i + 1] - reflected_tangent
         norm2 = np.dot(second_axis, second_axis)
         if norm2 > 0.0:
-            reflected_normal = reflected_normal - 2 * np.dot(second_axis, reflected_normal) / norm2 * second_axis
+            reflected_normal = (
+                reflected_normal - 2 * np.dot(second_axis, reflected_normal) / norm2 * second_axis
+            )
         # Re-orthonormalise against drift.
         reflected_normal -= np.dot(reflected_normal, tangents[i + 1]) * tangents[i + 1]
         normals[i + 1] = reflected_normal / np.linalg.norm(reflected_normal)
@@ -203,7 +218,9 @@ def rotation_minimizing_frames(centerline: Centerline, s: ArrayLike,
     return Frames(s, points[pick], tangent, normal, np.cross(tangent, normal))
 
 
-def _initial_normal(tangent: NDArray[np.float64], second: NDArray[np.float64]) -> NDArray[np.float64]:
+def _initial_normal(
+    tangent: NDArray[np.float64], second: NDArray[np.float64]
+) -> NDArray[np.float64]:
     candidate = second - np.dot(second, tangent) * tangent
     if np.linalg.norm(candidate) < 1e-9 * max(1.0, float(np.linalg.norm(second))):
         helper = np.eye(3)[int(np.argmin(np.abs(tangent)))]

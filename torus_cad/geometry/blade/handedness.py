@@ -43,8 +43,9 @@ class Handedness(StrEnum):
         return Handedness.CCW if self is Handedness.CW else Handedness.CW
 
 
-def air_push_z(blade_points: NDArray[np.float64], trailing_edge_index: int,
-               spin: Handedness = Handedness.CCW) -> float:
+def air_push_z(
+    blade_points: NDArray[np.float64], trailing_edge_index: int, spin: Handedness = Handedness.CCW
+) -> float:
     """z push on the air (arbitrary units) when the blade turns ``spin`` about +z.
 
     ``blade_points`` is a sampled blade ``(sections, points, 3)`` mm with the leading edge in
@@ -60,9 +61,19 @@ def air_push_z(blade_points: NDArray[np.float64], trailing_edge_index: int,
     normal /= np.linalg.norm(normal, axis=1)[:, None]
     wind = -spin.sign * np.stack([-middle[:, 1], middle[:, 0], np.zeros(len(middle))], axis=1)
     across = np.einsum("ij,ij->i", wind, normal)
-    return float(np.sum(-across * np.abs(across) * normal[:, 2] * np.linalg.norm(chord_vector, axis=1) * step))
+    return float(
+        np.sum(
+            -across * np.abs(across) * normal[:, 2] * np.linalg.norm(chord_vector, axis=1) * step
+        )
+    )
 
 
-def spin_to_push_air_down(blade_points: NDArray[np.float64], trailing_edge_index: int) -> Handedness:
+def spin_to_push_air_down(
+    blade_points: NDArray[np.float64], trailing_edge_index: int
+) -> Handedness:
     """The turn, seen from +z, that pushes air toward -z (module docstring)."""
-    return Handedness.CCW if air_push_z(blade_points, trailing_edge_index, Handedness.CCW) < 0.0 else Handedness.CW
+    return (
+        Handedness.CCW
+        if air_push_z(blade_points, trailing_edge_index, Handedness.CCW) < 0.0
+        else Handedness.CW
+    )

@@ -17,7 +17,8 @@ from torus_cad.geometry.blade.frames import FrameKind
 from torus_cad.geometry.blade.transforms import SectionLaws
 from torus_cad.geometry.section.section import Section
 
-#: The hub's number where the propeller's parts are numbered (a face's part, a scene's part); blade i is i.
+#: The hub's number where the propeller's parts are numbered (a face's part, a scene's part); blade
+#: i is i.
 HUB_PART = -1
 
 
@@ -77,8 +78,12 @@ class PropellerGeometry:
 
     def centerline(self, blade_index: int = 0) -> Centerline:
         """Blade ``blade_index``'s centerline in global Cartesian coordinates (mm)."""
-        return Centerline.in_hub_frame(self.local_control_points, self.hub.radius_mm, self.hub.length_mm,
-                                       self.blade_angle_deg(blade_index))
+        return Centerline.in_hub_frame(
+            self.local_control_points,
+            self.hub.radius_mm,
+            self.hub.length_mm,
+            self.blade_angle_deg(blade_index),
+        )
 
     @property
     def local_control_points(self) -> NDArray[np.float64]:

@@ -35,10 +35,12 @@ from torus_cad.errors import ParameterError
 from torus_cad.runtime.input_files import decode_text, is_number_text, read_untrusted_bytes
 from torus_cad.tolerances import STATION_MAX_ROWS
 
-#: Allowed local pitch angle beta of a station (deg): a propeller blade's sections, not a feathered one.
+#: Allowed local pitch angle beta of a station (deg): a propeller blade's sections, not a feathered
+#: one.
 STATION_BETA_LIMIT_DEG = 85.0
 
-#: Largest station file (a UIUC geometry file is < 1 kB, an APC PE0 file with its performance tables ~ 100 kB).
+#: Largest station file (a UIUC geometry file is < 1 kB, an APC PE0 file with its performance tables
+#: ~ 100 kB).
 STATION_FILE_MAX_BYTES = 1_000_000
 
 #: Largest chord of a station as a fraction of the tip radius (c/R; real propellers: < 0.4).
@@ -54,8 +56,8 @@ STATION_MAX_SWEEP_OVER_R = 2.0
 #: What a station file is called in messages.
 _WHAT = "station file"
 
-#: Columns of an APC PE0 station row: station, chord, quoted pitch, LE-TE pitch, Prather pitch, sweep,
-#: thickness ratio, twist (all rows have 13; the first 8 are read).
+#: Columns of an APC PE0 station row: station, chord, quoted pitch, LE-TE pitch, Prather pitch,
+#: sweep, thickness ratio, twist (all rows have 13; the first 8 are read).
 _PE0_COLUMNS = 8
 _PE0_RADIUS = re.compile(r"^\s*RADIUS:\s*(\S+)")
 
@@ -95,7 +97,9 @@ def _numbers(fields: list[str], source: str, line: int) -> list[float]:
         try:
             value = float(text)
         except ValueError:
-            raise ParameterError(f"{_where(source, line)}: field {position} is not a number") from None
+            raise ParameterError(
+                f"{_where(source, line)}: field {position} is not a number"
+            ) from None
         if not math.isfinite(value):
             raise ParameterError(f"{_where(source, line)}: field {position} is not a finite number")
         values.append(value)
@@ -123,14 +127,20 @@ def _uiuc_table(lines: list[str], source: str) -> StationTable:
         if not rows and not is_number_text(fields[0]):
             continue  # a header line
         if len(fields) != 3:
-            raise ParameterError(f"{_where(source, number)}: expected 3 columns (r/R c/R beta), got {len(fields)}")
+            raise ParameterError(
+                f"{_where(source, number)}: expected 3 columns (r/R c/R beta), got {len(fields)}"
+            )
         rows.append(_numbers(fields, source, number))
         numbers.append(number)
         _check_row_count(len(rows), source, number)
     if not rows:
-        raise ParameterError(f"{_WHAT} {source!r}: no station rows (expected 'r/R c/R beta' rows, or an APC PE0 table)")
+        raise ParameterError(
+            f"{_WHAT} {source!r}: no station rows (expected 'r/R c/R beta' rows, or an APC PE0 table)"
+        )
     table = np.array(rows)
-    return StationTable(table[:, 0], table[:, 1], table[:, 2], lines=np.array(numbers), source=source)
+    return StationTable(
+        table[:, 0], table[:, 1], table[:, 2], lines=np.array(numbers), source=source
+    )
 
 
 def _check_row_count(rows: int, source: str, line: int) -> None:
@@ -144,8 +154,10 @@ def _pe0_radius_in(lines: list[str], source: str) -> float:
         if match:
             (radius,) = _numbers([match.group(1)], source, number)
             if not 0.0 < radius <= STATION_MAX_RADIUS_IN:
-                raise ParameterError(f"{_where(source, number)}: the RADIUS is out of range; allowed "
-                                     f"(0, {STATION_MAX_RADIUS_IN:g}] in")
+                raise ParameterError(
+                    f"{_where(source, number)}: the RADIUS is out of range; allowed "
+                    f"(0, {STATION_MAX_RADIUS_IN:g}] in"
+                )
             return radius
     raise ParameterError(f"{_WHAT} {source!r}: an APC PE0 table without a 'RADIUS:' line")
 
@@ -155,7 +167,7 @@ def _pe0_table(lines: list[str], source: str) -> StationTable:
     start = next(index for index, line in enumerate(lines) if line.split()[:1] == ["STATION"])
     rows: list[list[float]] = []
     numbers: list[int] = []
-    for number, line in enumerate(lines[start + 1:], start=start + 2):
+    for number, line in enumerate(lines[start + 1 :], start=start + 2):
         fields = line.split()
         if not fields:
             if rows:
@@ -164,8 +176,10 @@ def _pe0_table(lines: list[str], source: str) -> StationTable:
         if not rows and not is_number_text(fields[0]):
             continue  # the units line
         if len(fields) < _PE0_COLUMNS:
-            raise ParameterError(f"{_where(source, number)}: expected at least {_PE0_COLUMNS} columns (STATION CHORD "
-                                 f"PITCH x3 SWEEP THICKNESS-RATIO TWIST), got {len(fields)}")
+            raise ParameterError(
+                f"{_where(source, number)}: expected at least {_PE0_COLUMNS} columns (STATION CHORD "
+                f"PITCH x3 SWEEP THICKNESS-RATIO TWIST), got {len(fields)}"
+            )
         rows.append(_numbers(fields[:_PE0_COLUMNS], source, number))
         numbers.append(number)
         _check_row_count(len(rows), source, number)
@@ -176,8 +190,15 @@ def _pe0_table(lines: list[str], source: str) -> StationTable:
     station = table[:, 0]
     with np.errstate(divide="ignore", invalid="ignore"):
         beta = np.degrees(np.arctan2(table[:, 2], 2.0 * np.pi * station))
-    return StationTable(station / radius, table[:, 1] / radius, beta, thickness_ratio=table[:, 6],
-                        sweep_over_r=table[:, 5] / radius, lines=np.array(numbers), source=source)
+    return StationTable(
+        station / radius,
+        table[:, 1] / radius,
+        beta,
+        thickness_ratio=table[:, 6],
+        sweep_over_r=table[:, 5] / radius,
+        lines=np.array(numbers),
+        source=source,
+    )
 
 
 def _fail(table: StationTable, index: int, reason: str) -> ParameterError:
@@ -208,14 +229,27 @@ def _check_station(table: StationTable, index: int) -> None:
     if not 0.0 < r <= 1.0:
         raise _fail(table, index, "r/R is out of range; allowed (0, 1]")
     if index and not r > table.r_over_r[index - 1]:
-        raise _fail(table, index, "r/R does not increase (r/R must grow strictly from station to station)")
+        raise _fail(
+            table, index, "r/R does not increase (r/R must grow strictly from station to station)"
+        )
     if not 0.0 < chord <= STATION_MAX_CHORD_OVER_R:
         raise _fail(table, index, f"c/R is out of range; allowed (0, {STATION_MAX_CHORD_OVER_R:g}]")
     if not abs(beta) <= STATION_BETA_LIMIT_DEG:
-        raise _fail(table, index, f"beta is out of range; allowed [-{STATION_BETA_LIMIT_DEG:g}, "
-                                  f"{STATION_BETA_LIMIT_DEG:g}] deg")
+        raise _fail(
+            table,
+            index,
+            f"beta is out of range; allowed [-{STATION_BETA_LIMIT_DEG:g}, "
+            f"{STATION_BETA_LIMIT_DEG:g}] deg",
+        )
     if table.thickness_ratio is not None and not 0.0 < table.thickness_ratio[index] <= 0.5:
         raise _fail(table, index, "the thickness ratio is out of range; allowed (0, 0.5]")
-    if table.sweep_over_r is not None and not abs(table.sweep_over_r[index]) <= STATION_MAX_SWEEP_OVER_R:
-        raise _fail(table, index, f"sweep/R is out of range; allowed [-{STATION_MAX_SWEEP_OVER_R:g}, "
-                                  f"{STATION_MAX_SWEEP_OVER_R:g}]")
+    if (
+        table.sweep_over_r is not None
+        and not abs(table.sweep_over_r[index]) <= STATION_MAX_SWEEP_OVER_R
+    ):
+        raise _fail(
+            table,
+            index,
+            f"sweep/R is out of range; allowed [-{STATION_MAX_SWEEP_OVER_R:g}, "
+            f"{STATION_MAX_SWEEP_OVER_R:g}]",
+        )

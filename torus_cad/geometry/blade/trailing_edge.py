@@ -58,14 +58,21 @@ from torus_cad.geometry.section.section import (
 from torus_cad.tolerances import MIN_BLUNT_TRAILING_EDGE_MM
 
 
-def section_matrices(angle_deg: ArrayLike, scale_x: ArrayLike, scale_y: ArrayLike) -> NDArray[np.float64]:
+def section_matrices(
+    angle_deg: ArrayLike, scale_x: ArrayLike, scale_y: ArrayLike
+) -> NDArray[np.float64]:
     """S(s) R(s) of spec §2.3 for every s: ``(k, 2, 2)``, chord units -> mm in the section plane."""
     scales = np.stack([np.asarray(scale_x, float), np.asarray(scale_y, float)], axis=-1)
     return scales[:, :, None] * rotation_matrices(np.asarray(angle_deg, float))
 
 
-def trailing_edge_gaps(section: Section, thickness_mm: float, angle_deg: ArrayLike, scale_x: ArrayLike,
-                       scale_y: ArrayLike) -> NDArray[np.float64]:
+def trailing_edge_gaps(
+    section: Section,
+    thickness_mm: float,
+    angle_deg: ArrayLike,
+    scale_x: ArrayLike,
+    scale_y: ArrayLike,
+) -> NDArray[np.float64]:
     """The chord-unit gap g(s) that makes the base ``thickness_mm`` long at every s: ``(k,)``.
 
     The base vector is d(g) = d0 + g e (d0 at g = 0, e its change per unit gap);
@@ -81,8 +88,10 @@ def trailing_edge_gaps(section: Section, thickness_mm: float, angle_deg: ArrayLi
     c = np.sum(mapped_start**2, axis=-1) - thickness_mm**2
     discriminant = b * b - 4.0 * a * c
     if np.any(discriminant < 0.0):  # only when the file's own offset already exceeds the thickness
-        raise ParameterError(f"airfoil.trailing_edge_thickness = {thickness_mm:g} mm is thinner than this airfoil's "
-                             "trailing edge offset along the chord; use a larger value")
+        raise ParameterError(
+            f"airfoil.trailing_edge_thickness = {thickness_mm:g} mm is thinner than this airfoil's "
+            "trailing edge offset along the chord; use a larger value"
+        )
     return (-b + np.sqrt(discriminant)) / (2.0 * a)
 
 
@@ -99,8 +108,9 @@ def own_gap(section: Section) -> float:
     return float((trailing_edge_vector(section) - start) @ change / (change @ change))
 
 
-def round_cap_handles(ends: NDArray[np.float64], derivatives: NDArray[np.float64],
-                      matrices: NDArray[np.float64]) -> NDArray[np.float64]:
+def round_cap_handles(
+    ends: NDArray[np.float64], derivatives: NDArray[np.float64], matrices: NDArray[np.float64]
+) -> NDArray[np.float64]:
     """Handle lengths h_u, h_l (chord units) of round caps that are near half circles in mm: ``(k, 2)``.
 
     Args:
@@ -111,19 +121,26 @@ def round_cap_handles(ends: NDArray[np.float64], derivatives: NDArray[np.float64
     Each handle, mapped to mm, is ROUND_CAP_HANDLE_FRACTION x the mapped |U - L| long.
     """
     tangents = derivatives / np.linalg.norm(derivatives, axis=-1, keepdims=True)
-    thickness_mm = np.linalg.norm(np.einsum("kij,kj->ki", matrices, ends[:, 0] - ends[:, 1]), axis=-1)
+    thickness_mm = np.linalg.norm(
+        np.einsum("kij,kj->ki", matrices, ends[:, 0] - ends[:, 1]), axis=-1
+    )
     mapped_tangent_mm = np.linalg.norm(np.einsum("kij,ksj->ksi", matrices, tangents), axis=-1)
     return ROUND_CAP_HANDLE_FRACTION * thickness_mm[:, None] / mapped_tangent_mm
 
 
 @lru_cache(maxsize=16)
-def _family_ends(section: Section) -> tuple[tuple[NDArray[np.float64], NDArray[np.float64]],
-                                             tuple[NDArray[np.float64], NDArray[np.float64]]]:
+def _family_ends(
+    section: Section,
+) -> tuple[
+    tuple[NDArray[np.float64], NDArray[np.float64]], tuple[NDArray[np.float64], NDArray[np.float64]]
+]:
     """:func:`half_ends` and :func:`end_derivatives` of ``section`` opened by 0 and by 1, remembered
     (every call of :func:`torus_cad.geometry.blade.blade_surface.sections_along` makes a new family)."""
     family = _opened_by_0_and_1(section)
-    return ((half_ends(family[0]), half_ends(family[1])),
-            (end_derivatives(family[0]), end_derivatives(family[1])))
+    return (
+        (half_ends(family[0]), half_ends(family[1])),
+        (end_derivatives(family[0]), end_derivatives(family[1])),
+    )
 
 
 class BluntSections(Sequence[Section]):
@@ -135,8 +152,12 @@ class BluntSections(Sequence[Section]):
     g times a fixed shape), so the whole family is evaluated from two sections: see :meth:`points_at`.
     """
 
-    def __init__(self, section: Section, gaps: NDArray[np.float64],
-                 round_cap_matrices: NDArray[np.float64] | None = None) -> None:
+    def __init__(
+        self,
+        section: Section,
+        gaps: NDArray[np.float64],
+        round_cap_matrices: NDArray[np.float64] | None = None,
+    ) -> None:
         self.section = section
         self.gaps = np.asarray(gaps, dtype=float)
         self.round_cap_matrices = round_cap_matrices
@@ -149,7 +170,9 @@ class BluntSections(Sequence[Section]):
         if self.round_cap_matrices is None:
             return None
         if self._handles is None:
-            self._handles = round_cap_handles(self.ends(), self.end_derivatives(), self.round_cap_matrices)
+            self._handles = round_cap_handles(
+                self.ends(), self.end_derivatives(), self.round_cap_matrices
+            )
         return self._handles
 
     def ends(self) -> NDArray[np.float64]:
@@ -168,7 +191,9 @@ class BluntSections(Sequence[Section]):
         if lengths is None:
             raise ValueError("these sections have a flat trailing edge")
         derivatives = self.end_derivatives()
-        return round_cap_poles(self.ends(), derivatives / np.linalg.norm(derivatives, axis=-1, keepdims=True), lengths)
+        return round_cap_poles(
+            self.ends(), derivatives / np.linalg.norm(derivatives, axis=-1, keepdims=True), lengths
+        )
 
     def __len__(self) -> int:
         return len(self.gaps)
@@ -182,7 +207,9 @@ class BluntSections(Sequence[Section]):
     def __getitem__(self, index: int | slice) -> Section | Sequence[Section]:
         if isinstance(index, slice):
             matrices = self.round_cap_matrices
-            return BluntSections(self.section, self.gaps[index], None if matrices is None else matrices[index])
+            return BluntSections(
+                self.section, self.gaps[index], None if matrices is None else matrices[index]
+            )
         opened = self.section.with_trailing_edge_gap(float(self.gaps[index]))
         lengths = self.handles
         if lengths is None:
@@ -192,26 +219,41 @@ class BluntSections(Sequence[Section]):
     def points_at(self, t: ArrayLike) -> NDArray[np.float64]:
         """Every section at the closed parameters ``t`` (with a base): ``(len(self), len(t), 2)`` chord units."""
         t = np.atleast_1d(np.asarray(t, dtype=float))
-        start, unit = (closed_points(section, t, base=True) for section in _opened_by_0_and_1(self.section))
+        start, unit = (
+            closed_points(section, t, base=True) for section in _opened_by_0_and_1(self.section)
+        )
         points = start[None] + self.gaps[:, None, None] * (unit - start)[None]
         on_cap = (t > 1.0) & (t < 2.0)
-        if self.round_cap_matrices is not None and np.any(on_cap):  # the cap is not affine in the gap
+        # the cap is not affine in the gap
+        if self.round_cap_matrices is not None and np.any(on_cap):
             points[:, on_cap] = bezier_points(self.cap_poles(), t[on_cap] - 1.0)
         return points
 
 
-def blunt_sections(section: Section, thickness_mm: float | None, angle_deg: ArrayLike, scale_x: ArrayLike,
-                   scale_y: ArrayLike, round_cap: bool = False) -> BluntSections:
+def blunt_sections(
+    section: Section,
+    thickness_mm: float | None,
+    angle_deg: ArrayLike,
+    scale_x: ArrayLike,
+    scale_y: ArrayLike,
+    round_cap: bool = False,
+) -> BluntSections:
     """One section per s whose trailing edge is ``thickness_mm`` thick once transformed (spec §2.3),
     or, with None, ``section``'s own (a coordinate file's open edge); flat, or round with ``round_cap``."""
     count = len(np.atleast_1d(np.asarray(angle_deg, dtype=float)))
-    gaps = (np.full(count, own_gap(section)) if thickness_mm is None
-            else trailing_edge_gaps(section, thickness_mm, angle_deg, scale_x, scale_y))
-    return BluntSections(section, gaps, section_matrices(angle_deg, scale_x, scale_y) if round_cap else None)
+    gaps = (
+        np.full(count, own_gap(section))
+        if thickness_mm is None
+        else trailing_edge_gaps(section, thickness_mm, angle_deg, scale_x, scale_y)
+    )
+    return BluntSections(
+        section, gaps, section_matrices(angle_deg, scale_x, scale_y) if round_cap else None
+    )
 
 
-def trailing_edge_thickness_mm(sections: Sequence[Section], angle_deg: ArrayLike, scale_x: ArrayLike,
-                               scale_y: ArrayLike) -> NDArray[np.float64]:
+def trailing_edge_thickness_mm(
+    sections: Sequence[Section], angle_deg: ArrayLike, scale_x: ArrayLike, scale_y: ArrayLike
+) -> NDArray[np.float64]:
     """Length of each transformed section's base (mm): ``(k,)``; 0 for sharp sections."""
     matrices = section_matrices(angle_deg, scale_x, scale_y)
     vectors = np.array([trailing_edge_vector(section) for section in sections])
@@ -226,8 +268,15 @@ TRAILING_EDGE_THICKNESS_LIMIT = 0.9
 TRAILING_EDGE_CHECK_SECTIONS = 41
 
 
-def check_trailing_edge_fits(section: Section, thickness_mm: float, angle_deg: ArrayLike, scale_x: ArrayLike,
-                             scale_y: ArrayLike, s: ArrayLike, points: int = 200) -> None:
+def check_trailing_edge_fits(
+    section: Section,
+    thickness_mm: float,
+    angle_deg: ArrayLike,
+    scale_x: ArrayLike,
+    scale_y: ArrayLike,
+    s: ArrayLike,
+    points: int = 200,
+) -> None:
     """Refuse a blunt trailing edge thicker than TRAILING_EDGE_THICKNESS_LIMIT x a section's largest thickness.
 
     The thickness is the section's own (without the base), measured perpendicular to its chord
@@ -243,24 +292,32 @@ def check_trailing_edge_fits(section: Section, thickness_mm: float, angle_deg: A
     sharp = section.with_trailing_edge_gap(0.0)
     sampling = equal_arc_length_section(sharp, points)
     planar = transform_sections(sampling.points, angle_deg, scale_x, scale_y)
-    thickest = section_thickness(planar, sampling.trailing_edge_index or 0, sampling.lower_corner_index)
+    thickest = section_thickness(
+        planar, sampling.trailing_edge_index or 0, sampling.lower_corner_index
+    )
     worst = int(np.argmin(thickest))
     if thickness_mm > TRAILING_EDGE_THICKNESS_LIMIT * thickest[worst]:
         raise GeometryError(
             f"airfoil.trailing_edge_thickness = {thickness_mm:g} mm is too thick for the blade: near s = "
             f"{float(np.asarray(s, dtype=float)[worst]):.3f} the section is only {thickest[worst]:.3g} mm thick "
-            f"(limit {TRAILING_EDGE_THICKNESS_LIMIT:g} x that); make the edge thinner or the sections thicker")
+            f"(limit {TRAILING_EDGE_THICKNESS_LIMIT:g} x that); make the edge thinner or the sections thicker"
+        )
 
 
-def closed_if_too_thin(section: Section, laws: SectionLaws, s: ArrayLike) -> tuple[Section, tuple[float, float] | None]:
+def closed_if_too_thin(
+    section: Section, laws: SectionLaws, s: ArrayLike
+) -> tuple[Section, tuple[float, float] | None]:
     """``section`` itself, or, when its own base (a coordinate file's open trailing edge) is thinner
     than MIN_BLUNT_TRAILING_EDGE_MM at one of the ``s`` given (the sections outside the hub), the
     section closed to a sharp edge and the (thinnest, thickest) base it had there, mm (module docstring)."""
     s = np.atleast_1d(np.asarray(s, dtype=float))
-    if not isinstance(section, AirfoilFile) or not has_base(section) or not len(s):  # only a file has its own
+    # only a file has its own
+    if not isinstance(section, AirfoilFile) or not has_base(section) or not len(s):
         return section, None
-    angle, scale_x, scale_y = (evaluate_quartic(law, s) for law in (laws.angle_of_attack_deg, laws.scale_x_mm,
-                                                                     laws.scale_y_mm))
+    angle, scale_x, scale_y = (
+        evaluate_quartic(law, s)
+        for law in (laws.angle_of_attack_deg, laws.scale_x_mm, laws.scale_y_mm)
+    )
     base_mm = trailing_edge_thickness_mm([section] * len(s), angle, scale_x, scale_y)
     if base_mm.min() >= MIN_BLUNT_TRAILING_EDGE_MM:
         return section, None

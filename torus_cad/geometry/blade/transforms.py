@@ -34,9 +34,12 @@ def quartic_minimum(coefficients: Sequence[float]) -> tuple[float, float]:
     # np.roots divides by the leading coefficient: drop leading terms that are negligible
     # (e.g. subnormal) against the largest, or it overflows.
     significant = np.nonzero(np.abs(derivative) > 1e-12 * np.abs(derivative).max(initial=0.0))[0]
-    derivative_roots = np.roots(derivative[significant[0]:]) if significant.size else np.array([])
-    candidates = [0.0, 1.0] + [r.real for r in np.atleast_1d(derivative_roots)
-                               if abs(r.imag) < 1e-12 and 0.0 <= r.real <= 1.0]
+    derivative_roots = np.roots(derivative[significant[0] :]) if significant.size else np.array([])
+    candidates = [0.0, 1.0] + [
+        r.real
+        for r in np.atleast_1d(derivative_roots)
+        if abs(r.imag) < 1e-12 and 0.0 <= r.real <= 1.0
+    ]
     values = np.polyval(coefficients, candidates)
     index = int(np.argmin(values))
     return float(values[index]), float(candidates[index])
@@ -62,9 +65,13 @@ class SectionLaws:
         """A chord-unit section ``(p, 2)`` (or one per s, ``(len(s), p, 2)``) rotated and scaled for
         every s: ``(len(s), p, 2)`` mm."""
         s = np.atleast_1d(np.asarray(s, dtype=float))
-        return transform_sections(section, evaluate_quartic(self.angle_of_attack_deg, s),
-                                  evaluate_quartic(self.scale_x_mm, s), evaluate_quartic(self.scale_y_mm, s),
-                                  self.pivot)
+        return transform_sections(
+            section,
+            evaluate_quartic(self.angle_of_attack_deg, s),
+            evaluate_quartic(self.scale_x_mm, s),
+            evaluate_quartic(self.scale_y_mm, s),
+            self.pivot,
+        )
 
 
 def rotation_matrices(angle_deg: ArrayLike) -> NDArray[np.float64]:
@@ -74,8 +81,13 @@ def rotation_matrices(angle_deg: ArrayLike) -> NDArray[np.float64]:
     return np.stack([np.stack([cos, -sin], -1), np.stack([sin, cos], -1)], -2)
 
 
-def transform_sections(section: NDArray[np.float64], angle_deg: ArrayLike, scale_x: ArrayLike,
-                       scale_y: ArrayLike, pivot: float = 0.0) -> NDArray[np.float64]:
+def transform_sections(
+    section: NDArray[np.float64],
+    angle_deg: ArrayLike,
+    scale_x: ArrayLike,
+    scale_y: ArrayLike,
+    pivot: float = 0.0,
+) -> NDArray[np.float64]:
     """Rotate, then scale, one section for every s (spec §2.3).
 
     Args:

@@ -37,7 +37,9 @@ class TriangleMesh:
         """Signed enclosed volume (mm^3), positive when the faces point outward."""
         total = 0.0
         for start in range(0, len(self.faces), MEASURE_BLOCK_TRIANGLES):
-            a, b, c = np.moveaxis(self.vertices[self.faces[start:start + MEASURE_BLOCK_TRIANGLES]], 1, 0)
+            a, b, c = np.moveaxis(
+                self.vertices[self.faces[start : start + MEASURE_BLOCK_TRIANGLES]], 1, 0
+            )
             total += float(np.einsum("ij,ij->", a, np.cross(b, c)))
         return total / 6.0
 
@@ -68,7 +70,9 @@ def _zipper_cap(chord: NDArray[np.float64], trailing_edge_index: int) -> NDArray
     triangles: list[tuple[int, int, int]] = []
     i = j = 0
     while i < len(upper) - 1 or j < len(lower) - 1:
-        advance_upper = j == len(lower) - 1 or (i < len(upper) - 1 and chord[upper[i + 1]] <= chord[lower[j + 1]])
+        advance_upper = j == len(lower) - 1 or (
+            i < len(upper) - 1 and chord[upper[i + 1]] <= chord[lower[j + 1]]
+        )
         if advance_upper:
             triangles.append((upper[i], upper[i + 1], lower[j]))
             i += 1
@@ -97,11 +101,15 @@ def blade_mesh(surface: BladeSurface) -> TriangleMesh:
     """
     sections, count, _ = surface.points.shape
     vertices = surface.points.reshape(-1, 3)
-    section_index, point_index = np.meshgrid(np.arange(sections - 1), np.arange(count), indexing="ij")
+    section_index, point_index = np.meshgrid(
+        np.arange(sections - 1), np.arange(count), indexing="ij"
+    )
     a = section_index * count + point_index
     b = section_index * count + (point_index + 1) % count
     c, d = a + count, b + count
-    sides = np.concatenate([np.stack([a, b, d], -1).reshape(-1, 3), np.stack([a, d, c], -1).reshape(-1, 3)])
+    sides = np.concatenate(
+        [np.stack([a, b, d], -1).reshape(-1, 3), np.stack([a, d, c], -1).reshape(-1, 3)]
+    )
     chord = chord_positions(surface.t, surface.lower_corner_index is not None)
     trailing_edge_index = surface.trailing_edge_index
     if trailing_edge_index is None:

@@ -23,7 +23,8 @@ from torus_cad.errors import GeometryError
 MOUNTING_CLEARANCE_MM = 0.05
 
 
-#: Candidate angles of the set-screw hole in the coarse scan (one per degree; then refined to 0.05 degrees).
+#: Candidate angles of the set-screw hole in the coarse scan (one per degree; then refined to 0.05
+#: degrees).
 _SCREW_ANGLE_SAMPLES = 360
 
 #: The set-screw hole's cutting tool reaches this far beyond the hub's surface (mm), so that
@@ -56,14 +57,21 @@ class HubMounting:
     @property
     def any(self) -> bool:
         """Whether the hub has any feature (else it is the spec's plain cylinder)."""
-        return any(value > 0.0 for value in (self.bore_diameter_mm, self.set_screw_diameter_mm, self.chamfer_mm))
+        return any(
+            value > 0.0
+            for value in (self.bore_diameter_mm, self.set_screw_diameter_mm, self.chamfer_mm)
+        )
 
     def removed_volume_mm3(self, hub_radius_mm: float, hub_length_mm: float) -> float:
         """Volume the bore (with its flat) and the chamfers remove from the plain cylinder, mm^3.
 
         The set-screw hole is left out (its ends are curved); exact for the rest.
         """
-        bore_radius, depth, chamfer = self.bore_diameter_mm / 2.0, self.bore_flat_depth_mm, self.chamfer_mm
+        bore_radius, depth, chamfer = (
+            self.bore_diameter_mm / 2.0,
+            self.bore_flat_depth_mm,
+            self.chamfer_mm,
+        )
         segment = 0.0
         if depth > 0.0:  # the circular segment the flat leaves as material
             half_angle = math.acos((bore_radius - depth) / bore_radius)
@@ -74,8 +82,14 @@ class HubMounting:
         return bore + rings
 
 
-def place_mounting(mounting: HubMounting, blade_points: NDArray[np.float64], blades: int, hub_radius_mm: float,
-                   hub_length_mm: float, root_fillet_radius_mm: float = 0.0) -> HubMounting:
+def place_mounting(
+    mounting: HubMounting,
+    blade_points: NDArray[np.float64],
+    blades: int,
+    hub_radius_mm: float,
+    hub_length_mm: float,
+    root_fillet_radius_mm: float = 0.0,
+) -> HubMounting:
     """Check ``mounting`` against the blades and return it with the set screw's angle chosen.
 
     ``blade_points`` is blade 0's sampled surface ``(sections, points, 3)`` mm (densely enough
@@ -96,14 +110,17 @@ def place_mounting(mounting: HubMounting, blade_points: NDArray[np.float64], bla
     diameter = max(mounting.set_screw_diameter_mm, 1.0)
     # Choose the direction on every 4th sample each way, then measure its clearance on all of them.
     angle, _ = set_screw_angle_deg(grid[::4, ::4].reshape(-1, 3), blades, hub_radius_mm, diameter)
-    _, clearance = set_screw_angle_deg(points, blades, hub_radius_mm, diameter, candidates_deg=(angle,))
+    _, clearance = set_screw_angle_deg(
+        points, blades, hub_radius_mm, diameter, candidates_deg=(angle,)
+    )
     needed = mounting.set_screw_diameter_mm / 2.0 + MOUNTING_CLEARANCE_MM
     if mounting.set_screw_diameter_mm > 0.0 and clearance < needed:
         limit = max(2.0 * (clearance - MOUNTING_CLEARANCE_MM), 0.0)
         raise GeometryError(
             f"hub.set_screw_diameter = {mounting.set_screw_diameter_mm:g} mm does not fit between the blades at "
             f"mid-length: the best direction ({angle:.1f} deg) leaves {clearance:.3g} mm from its axis to a blade; "
-            f"allowed less than {limit:.3g} mm")
+            f"allowed less than {limit:.3g} mm"
+        )
     return replace(mounting, set_screw_angle_deg=angle)
 
 
@@ -112,11 +129,16 @@ def _check_bore(mounting: HubMounting, blade_min_radius_mm: float) -> None:
     if mounting.bore_diameter_mm > 0.0 and mounting.bore_diameter_mm >= limit:
         raise GeometryError(
             f"hub.bore_diameter = {mounting.bore_diameter_mm:g} mm cuts the blade roots buried in the hub, which "
-            f"reach down to radius {blade_min_radius_mm:.3f} mm; allowed less than {max(limit, 0.0):.3f} mm")
+            f"reach down to radius {blade_min_radius_mm:.3f} mm; allowed less than {max(limit, 0.0):.3f} mm"
+        )
 
 
-def chamfer_limit_mm(points: NDArray[np.float64], radius: NDArray[np.float64], hub_radius_mm: float,
-                     hub_length_mm: float) -> float:
+def chamfer_limit_mm(
+    points: NDArray[np.float64],
+    radius: NDArray[np.float64],
+    hub_radius_mm: float,
+    hub_length_mm: float,
+) -> float:
     """Largest chamfer (mm) whose cut, (R - r) + (L/2 - |z|) < c, misses every blade point inside the hub."""
     inside = radius <= hub_radius_mm
     if not np.any(inside):
@@ -125,22 +147,42 @@ def chamfer_limit_mm(points: NDArray[np.float64], radius: NDArray[np.float64], h
     return float(depth.min())
 
 
-def _check_chamfer(mounting: HubMounting, points: NDArray[np.float64], radius: NDArray[np.float64],
-                   hub_radius_mm: float, hub_length_mm: float, root_fillet_radius_mm: float) -> None:
+def _check_chamfer(
+    mounting: HubMounting,
+    points: NDArray[np.float64],
+    radius: NDArray[np.float64],
+    hub_radius_mm: float,
+    hub_length_mm: float,
+    root_fillet_radius_mm: float,
+) -> None:
     if mounting.chamfer_mm == 0.0:
         return
     fillet_reach = FILLET_REACH_RADII * root_fillet_radius_mm
-    limit = chamfer_limit_mm(points, radius, hub_radius_mm, hub_length_mm) - MOUNTING_CLEARANCE_MM - fillet_reach
+    limit = (
+        chamfer_limit_mm(points, radius, hub_radius_mm, hub_length_mm)
+        - MOUNTING_CLEARANCE_MM
+        - fillet_reach
+    )
     if mounting.chamfer_mm >= limit:
-        fillet = (f" with hub.root_fillet_radius = {root_fillet_radius_mm:g} mm (the fillet spreads about "
-                  f"{fillet_reach:g} mm over the hub)" if root_fillet_radius_mm > 0.0 else "")
+        fillet = (
+            f" with hub.root_fillet_radius = {root_fillet_radius_mm:g} mm (the fillet spreads about "
+            f"{fillet_reach:g} mm over the hub)"
+            if root_fillet_radius_mm > 0.0
+            else ""
+        )
         raise GeometryError(
             f"hub.chamfer = {mounting.chamfer_mm:g} mm cuts into a blade root near the hub's end{fillet}; "
-            f"allowed less than {max(limit, 0.0):.3f} mm")
+            f"allowed less than {max(limit, 0.0):.3f} mm"
+        )
 
 
-def set_screw_angle_deg(blade_points: NDArray[np.float64], blades: int, hub_radius_mm: float,
-                        diameter_mm: float, candidates_deg: Sequence[float] | None = None) -> tuple[float, float]:
+def set_screw_angle_deg(
+    blade_points: NDArray[np.float64],
+    blades: int,
+    hub_radius_mm: float,
+    diameter_mm: float,
+    candidates_deg: Sequence[float] | None = None,
+) -> tuple[float, float]:
     """The direction of a radial hole at z = 0 whose line stays farthest from every blade, and that distance.
 
     The line is the ray from the z axis outward at z = 0: the hole, and the way a screw and
@@ -151,20 +193,26 @@ def set_screw_angle_deg(blade_points: NDArray[np.float64], blades: int, hub_radi
     ``candidates_deg``: the directions to try (default: a scan of the circle, refined).
     """
     points = np.asarray(blade_points, dtype=float).reshape(-1, 3)
-    band = diameter_mm + 2.0 * MOUNTING_CLEARANCE_MM + 1.0  # farther points cannot decide the direction
+    # farther points cannot decide the direction
+    band = diameter_mm + 2.0 * MOUNTING_CLEARANCE_MM + 1.0
     near = points[np.abs(points[:, 2]) < band]
-    reach = float(np.hypot(near[:, 0], near[:, 1]).max(initial=hub_radius_mm)) + SET_SCREW_OVERSHOOT_MM
+    reach = (
+        float(np.hypot(near[:, 0], near[:, 1]).max(initial=hub_radius_mm)) + SET_SCREW_OVERSHOOT_MM
+    )
     if len(near) == 0:
         return (180.0 / blades if candidates_deg is None else float(candidates_deg[0])), math.inf
     turns = np.radians(360.0 * np.arange(blades) / blades)
-    angle = (np.arctan2(near[:, 1], near[:, 0])[None, :] + turns[:, None]).ravel()  # every blade's points
+    # every blade's points
+    angle = (np.arctan2(near[:, 1], near[:, 0])[None, :] + turns[:, None]).ravel()
     r = np.tile(np.hypot(near[:, 0], near[:, 1]), blades)
     z = np.tile(near[:, 2], blades)
 
     def clearance(candidates_deg: NDArray[np.float64]) -> NDArray[np.float64]:
         offset = angle[None, :] - np.radians(candidates_deg)[:, None]
         along = np.clip(r * np.cos(offset), 0.0, reach)  # the nearest point of the hole's axis
-        return np.sqrt(np.maximum(r**2 + along**2 - 2.0 * r * along * np.cos(offset) + z**2, 0.0)).min(axis=1)
+        return np.sqrt(
+            np.maximum(r**2 + along**2 - 2.0 * r * along * np.cos(offset) + z**2, 0.0)
+        ).min(axis=1)
 
     if candidates_deg is not None:
         distances = clearance(np.asarray(candidates_deg, dtype=float))
@@ -183,5 +231,8 @@ def set_screw_arc_deg(mounting: HubMounting, hub_radius_mm: float) -> tuple[floa
     """Angular arc (start, end) degrees the set-screw hole takes on the hub's surface (plus a margin), or None."""
     if mounting.set_screw_diameter_mm == 0.0:
         return None
-    half = math.degrees(math.asin(min(1.0, mounting.set_screw_diameter_mm / 2.0 / hub_radius_mm))) + 2.0
+    half = (
+        math.degrees(math.asin(min(1.0, mounting.set_screw_diameter_mm / 2.0 / hub_radius_mm)))
+        + 2.0
+    )
     return (mounting.set_screw_angle_deg - half, mounting.set_screw_angle_deg + half)

@@ -25,7 +25,9 @@ HUB_FOOTPRINT_NEAR_RELATIVE = 0.02
 _SEAM_SCAN_BINS = 3600
 
 
-def footprint_arcs_deg(blade_points: NDArray[np.float64], hub_radius: float) -> list[tuple[float, float]]:
+def footprint_arcs_deg(
+    blade_points: NDArray[np.float64], hub_radius: float
+) -> list[tuple[float, float]]:
     """Angular arcs (start, end) in degrees, start < end, that cover where blade 0 meets the hub.
 
     ``blade_points`` is the sampled blade surface, ``(sections, points, 3)`` float, mm, blade 0.
@@ -54,8 +56,12 @@ def footprint_arcs_deg(blade_points: NDArray[np.float64], hub_radius: float) -> 
     return arcs
 
 
-def seam_angle_deg(blade_points: NDArray[np.float64], hub_radius: float, blades: int,
-                   reserved_arcs_deg: Sequence[tuple[float, float]] = ()) -> float | None:
+def seam_angle_deg(
+    blade_points: NDArray[np.float64],
+    hub_radius: float,
+    blades: int,
+    reserved_arcs_deg: Sequence[tuple[float, float]] = (),
+) -> float | None:
     """An angle (degrees about +z, from +x) where the hub's seam meets no blade, or None.
 
     Blade i's footprint is blade 0's rotated by 360 i / n (spec §6.1). The seam goes to the
@@ -64,8 +70,11 @@ def seam_angle_deg(blade_points: NDArray[np.float64], hub_radius: float, blades:
     """
     occupied = np.zeros(_SEAM_SCAN_BINS, dtype=bool)
     bin_deg = 360.0 / _SEAM_SCAN_BINS
-    arcs = [(low + 360.0 * blade / blades, high + 360.0 * blade / blades)
-            for low, high in footprint_arcs_deg(blade_points, hub_radius) for blade in range(blades)]
+    arcs = [
+        (low + 360.0 * blade / blades, high + 360.0 * blade / blades)
+        for low, high in footprint_arcs_deg(blade_points, hub_radius)
+        for blade in range(blades)
+    ]
     for low, high in [*arcs, *reserved_arcs_deg]:
         first = int(np.floor(low / bin_deg))
         last = int(np.ceil(high / bin_deg))

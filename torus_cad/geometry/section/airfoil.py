@@ -46,7 +46,9 @@ class _ThicknessOnCamberLine:
     camber_normal: bool
     trailing_edge_gap: float
 
-    def _mean_line(self, t: NDArray[np.float64], order: int) -> NDArray[np.float64]:  # pragma: no cover - abstract
+    def _mean_line(
+        self, t: NDArray[np.float64], order: int
+    ) -> NDArray[np.float64]:  # pragma: no cover - abstract
         """The ``order``-th t derivative (0, 1 or 2) of the mean camber line y_c at ``t``, shape of ``t``."""
         raise NotImplementedError
 
@@ -71,7 +73,8 @@ class _ThicknessOnCamberLine:
 
     def with_trailing_edge_gap(self, gap: float) -> Self:
         """The same section with a base of ``gap`` (chord units) at the trailing edge (module docstring)."""
-        changed: Self = dataclasses.replace(cast(Any, self), trailing_edge_gap=float(gap))  # subclasses are dataclasses
+        # subclasses are dataclasses
+        changed: Self = dataclasses.replace(cast(Any, self), trailing_edge_gap=float(gap))
         return changed
 
     def fold_ratio(self, samples: int = 2001) -> tuple[float, float]:
@@ -89,7 +92,9 @@ class _ThicknessOnCamberLine:
         worst = int(np.argmax(ratio))
         return float(ratio[worst]), float(t[worst])
 
-    def surfaces(self, chord_position: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    def surfaces(
+        self, chord_position: ArrayLike
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Upper and lower surface points at chord positions ``t``, each ``(len(t), 2)`` (spec §1.2)."""
         t = np.asarray(chord_position, dtype=float)
         y_c = self.camber(t)
@@ -115,8 +120,10 @@ class _ThicknessOnCamberLine:
         t = u * u
         a0, a1, a2, a3, a4 = THICKNESS_COEFFICIENTS
         # d y_t / du = 2u * d y_t / dt; the sqrt term gives 0.2969 * 5 * thickness exactly.
-        dyt_du = (5 * self.thickness * (a0 + 2 * u * (a1 + t * (2 * a2 + t * (3 * a3 + t * 4 * a4))))
-                  + 4.0 * self.trailing_edge_gap * u**7)
+        dyt_du = (
+            5 * self.thickness * (a0 + 2 * u * (a1 + t * (2 * a2 + t * (3 * a3 + t * 4 * a4))))
+            + 4.0 * self.trailing_edge_gap * u**7
+        )
         slope = self.camber_slope(t)
         dyc_du = 2 * u * slope
         y_t = self.half_thickness(t)
@@ -177,10 +184,19 @@ class NacaAirfoil(_ThicknessOnCamberLine):
 #: Standard NACA 5-digit mean lines for a design lift coefficient of 0.3, by the P digit:
 #: (r, k1) for Q = 0 and (r, k1, k2/k1) for the reflexed Q = 1 (Abbott & von Doenhoff,
 #: "Theory of Wing Sections", 1959, §6.5; NASA TM X-3284).
-NACA5_STANDARD = {1: (0.0580, 361.40), 2: (0.1260, 51.640), 3: (0.2025, 15.957), 4: (0.2900, 6.643),
-                  5: (0.3910, 3.230)}
-NACA5_REFLEXED = {2: (0.1300, 51.990, 0.000764), 3: (0.2170, 15.793, 0.00677), 4: (0.3180, 6.520, 0.0303),
-                  5: (0.4410, 3.191, 0.1355)}
+NACA5_STANDARD = {
+    1: (0.0580, 361.40),
+    2: (0.1260, 51.640),
+    3: (0.2025, 15.957),
+    4: (0.2900, 6.643),
+    5: (0.3910, 3.230),
+}
+NACA5_REFLEXED = {
+    2: (0.1300, 51.990, 0.000764),
+    3: (0.2170, 15.793, 0.00677),
+    4: (0.3180, 6.520, 0.0303),
+    5: (0.4410, 3.191, 0.1355),
+}
 
 
 @dataclass(frozen=True)
@@ -209,14 +225,26 @@ class Naca5Airfoil(_ThicknessOnCamberLine):
     def from_designation(cls, designation: str, camber_normal: bool = True) -> Naca5Airfoil:
         """The section of a 5-digit designation such as "23012" (L = 2, P = 3, Q = 0, TT = 12)."""
         digits = _digits(designation, 5)
-        lift, position, reflex, thickness = digits[0], digits[1], digits[2], int(designation.strip()[-2:])
+        lift, position, reflex, thickness = (
+            digits[0],
+            digits[1],
+            digits[2],
+            int(designation.strip()[-2:]),
+        )
         table = NACA5_REFLEXED if reflex else NACA5_STANDARD
         if reflex > 1 or position not in table or lift == 0 or thickness == 0:
             raise ParameterError(
                 f"airfoil.naca = {designation!r} is not a known 5-digit section; allowed: L 1-9, P "
-                f"{min(table)}-{max(table)} ({'reflexed' if reflex else 'standard'} mean line), Q 0 or 1, TT 01-99")
+                f"{min(table)}-{max(table)} ({'reflexed' if reflex else 'standard'} mean line), Q 0 or 1, TT 01-99"
+            )
         r, k1, *ratio = table[position]
-        return cls(r, k1 * (0.15 * lift) / 0.3, ratio[0] if ratio else 0.0, thickness / 100.0, camber_normal)
+        return cls(
+            r,
+            k1 * (0.15 * lift) / 0.3,
+            ratio[0] if ratio else 0.0,
+            thickness / 100.0,
+            camber_normal,
+        )
 
     @property
     def kinks(self) -> tuple[float, ...]:
@@ -227,14 +255,20 @@ class Naca5Airfoil(_ThicknessOnCamberLine):
         """The cubic (then linear) mean line of the class docstring."""
         r, k1, ratio = self.r, self.k1, self.k2_over_k1
         if ratio == 0.0:
-            front = [(t**3 - 3 * r * t**2 + r**2 * (3 - r) * t), (3 * t**2 - 6 * r * t + r**2 * (3 - r)),
-                     (6 * t - 6 * r)][order]
+            front = [
+                (t**3 - 3 * r * t**2 + r**2 * (3 - r) * t),
+                (3 * t**2 - 6 * r * t + r**2 * (3 - r)),
+                (6 * t - 6 * r),
+            ][order]
             back = [r**3 * (1 - t), -(r**3) * np.ones_like(t), np.zeros_like(t)][order]
             return k1 / 6 * np.where(t < r, front, back)
         linear = ratio * (1 - r) ** 3 + r**3
         front = [(t - r) ** 3 - linear * t + r**3, 3 * (t - r) ** 2 - linear, 6 * (t - r)][order]
-        back = [ratio * (t - r) ** 3 - linear * t + r**3, 3 * ratio * (t - r) ** 2 - linear,
-                6 * ratio * (t - r)][order]
+        back = [
+            ratio * (t - r) ** 3 - linear * t + r**3,
+            3 * ratio * (t - r) ** 2 - linear,
+            6 * ratio * (t - r),
+        ][order]
         return k1 / 6 * np.where(t < r, front, back)
 
 
@@ -252,7 +286,9 @@ def naca4_numbers(designation: str) -> tuple[float, float, float]:
     if thickness == 0.0:
         raise ParameterError(f"airfoil.naca = {designation!r} has zero thickness; TT must be 01-99")
     if (m == 0.0) != (p == 0.0):
-        raise ParameterError(f"airfoil.naca = {designation!r}: M and P must both be 0 (symmetric) or both non-zero")
+        raise ParameterError(
+            f"airfoil.naca = {designation!r}: M and P must both be 0 (symmetric) or both non-zero"
+        )
     return m, p, thickness
 
 
@@ -263,8 +299,10 @@ def naca_section(designation: str, camber_normal: bool = True) -> NacaAirfoil | 
         return Naca5Airfoil.from_designation(text, camber_normal)
     if len(text) == 4:
         return NacaAirfoil.from_designation(text, camber_normal)
-    raise ParameterError(f"airfoil.naca = {shown(designation)} must be a 4-digit (e.g. \"2412\") or "
-                         "5-digit (e.g. \"23012\") NACA designation")
+    raise ParameterError(
+        f'airfoil.naca = {shown(designation)} must be a 4-digit (e.g. "2412") or '
+        '5-digit (e.g. "23012") NACA designation'
+    )
 
 
 def airfoil_points(airfoil: Section, t: ArrayLike) -> NDArray[np.float64]:

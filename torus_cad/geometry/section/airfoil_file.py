@@ -69,7 +69,8 @@ AIRFOIL_FILE_TIME_LIMIT_S = 10.0
 
 
 #: Largest distance (chord units) between a file's spline and the analytic NACA section it was
-#: written from, at 81 cosine-spaced stations per surface (measured: at most 3.0e-6; module docstring).
+#: written from, at 81 cosine-spaced stations per surface (measured: at most 3.0e-6; module
+#: docstring).
 INTERPOLATION_ERROR_LIMIT = 1e-5
 
 #: A file with a point within this of the origin and its trailing edge's mid point within this of
@@ -82,9 +83,9 @@ MINIMUM_POINTS_PER_SURFACE = 4
 #: Files larger than this are refused (a coordinate file is a few kB).
 MAXIMUM_FILE_BYTES = AIRFOIL_FILE_MAX_BYTES
 
-#: Points closer than this (times the largest coordinate, at least 1) are one point: a repeated point
-#: of a file, and the trailing-edge ends of a closed section, which the spline's two ends reproduce only
-#: to round-off (~1e-19 chord).
+#: Points closer than this (times the largest coordinate, at least 1) are one point: a repeated
+#: point of a file, and the trailing-edge ends of a closed section, which the spline's two ends
+#: reproduce only to round-off (~1e-19 chord).
 COINCIDENT_RELATIVE = 1e-12
 
 #: What the file is called in messages.
@@ -107,7 +108,9 @@ class AirfoilFile:
         trailing_edge_shift_x: the same law's offset in x (chord units; nonzero only once sharpened).
     """
 
-    def __init__(self, name: str, source: str, loop: NDArray[np.float64], lines: NDArray[np.int64]) -> None:
+    def __init__(
+        self, name: str, source: str, loop: NDArray[np.float64], lines: NDArray[np.int64]
+    ) -> None:
         self.name = name
         self.source = source
         self.lines = lines
@@ -120,8 +123,10 @@ class AirfoilFile:
         chord_vector = trailing_middle - leading
         chord = float(np.linalg.norm(chord_vector))
         if not chord > 1e-9 * max(1.0, float(np.abs(loop).max())):
-            raise ParameterError(f"{_WHAT} {source!r} line {int(lines[0])}: the chord is zero "
-                                 "(leading and trailing edge coincide)")
+            raise ParameterError(
+                f"{_WHAT} {source!r} line {int(lines[0])}: the chord is zero "
+                "(leading and trailing edge coincide)"
+            )
         cos, sin = chord_vector / chord
         # Rows map a file point p to chord units: A (p - leading), A = rotation to +x / chord.
         self._matrix = np.array([[cos, sin], [-sin, cos]]) / chord
@@ -142,7 +147,9 @@ class AirfoilFile:
     def _sigma(self, u: NDArray[np.float64], upper: bool) -> tuple[NDArray[np.float64], float]:
         if upper:
             return self._sigma_le * (1.0 - u), -self._sigma_le
-        return self._sigma_le + u * (self._sigma_end - self._sigma_le), self._sigma_end - self._sigma_le
+        return self._sigma_le + u * (
+            self._sigma_end - self._sigma_le
+        ), self._sigma_end - self._sigma_le
 
     def _to_chord_units(self, points: NDArray[np.float64]) -> NDArray[np.float64]:
         return (points - self._leading) @ self._matrix.T
@@ -153,7 +160,11 @@ class AirfoilFile:
         sigma, _ = self._sigma(u, upper)
         points = self._to_chord_units(self._spline(sigma))
         half = 0.5 if upper else -0.5
-        points += half * np.array([self.trailing_edge_shift_x, self.trailing_edge_extra]) * (u**8)[:, None]
+        points += (
+            half
+            * np.array([self.trailing_edge_shift_x, self.trailing_edge_extra])
+            * (u**8)[:, None]
+        )
         return points
 
     def speed_on_half(self, root_chord: ArrayLike, upper: bool) -> NDArray[np.float64]:
@@ -161,7 +172,11 @@ class AirfoilFile:
         u = np.atleast_1d(np.asarray(root_chord, dtype=float))
         sigma, rate = self._sigma(u, upper)
         velocity = self._spline(sigma, 1) @ self._matrix.T * rate
-        velocity += (4.0 if upper else -4.0) * np.array([self.trailing_edge_shift_x, self.trailing_edge_extra]) * (u**7)[:, None]
+        velocity += (
+            (4.0 if upper else -4.0)
+            * np.array([self.trailing_edge_shift_x, self.trailing_edge_extra])
+            * (u**7)[:, None]
+        )
         return np.linalg.norm(velocity, axis=-1)
 
     def with_trailing_edge_gap(self, gap: float) -> AirfoilFile:
@@ -184,8 +199,12 @@ class AirfoilFile:
         return f"AirfoilFile({self.name!r}, source={self.source!r}, points={len(self.loop)})"
 
 
-def _leading_edge_parameter(spline: CubicSpline, sigma: NDArray[np.float64], loop: NDArray[np.float64],
-                            trailing_middle: NDArray[np.float64]) -> float:
+def _leading_edge_parameter(
+    spline: CubicSpline,
+    sigma: NDArray[np.float64],
+    loop: NDArray[np.float64],
+    trailing_middle: NDArray[np.float64],
+) -> float:
     """The spline parameter of the leading edge.
 
     A file already in chord units (a point at the origin, the trailing edge's mid point at
@@ -196,22 +215,31 @@ def _leading_edge_parameter(spline: CubicSpline, sigma: NDArray[np.float64], loo
     """
     at_origin = np.linalg.norm(loop, axis=1)
     index = int(np.argmin(at_origin))
-    if at_origin[index] < NORMALISED_TOLERANCE and np.linalg.norm(trailing_middle - (1.0, 0.0)) < NORMALISED_TOLERANCE:
+    if (
+        at_origin[index] < NORMALISED_TOLERANCE
+        and np.linalg.norm(trailing_middle - (1.0, 0.0)) < NORMALISED_TOLERANCE
+    ):
         return float(sigma[index])
     index = int(np.argmax(np.linalg.norm(loop - trailing_middle, axis=1)))
     low, high = sigma[max(index - 1, 0)], sigma[min(index + 1, len(sigma) - 1)]
-    found = minimize_scalar(lambda value: -float(np.linalg.norm(spline(value) - trailing_middle)),
-                            bounds=(low, high), method="bounded", options={"xatol": 1e-13})
+    found = minimize_scalar(
+        lambda value: -float(np.linalg.norm(spline(value) - trailing_middle)),
+        bounds=(low, high),
+        method="bounded",
+        options={"xatol": 1e-13},
+    )
     return float(found.x)
 
 
 # -- reading -------------------------------------------------------------------------------------
 
+
 def load_airfoil_file(path: str | Path) -> AirfoilFile:
     """:func:`read_airfoil_file`, read once per file version (path, size, modification time)."""
     path = Path(path)
     try:
-        status = path.stat()  # never blocks, not even on a named pipe; the reader checks the file it opens
+        # never blocks, not even on a named pipe; the reader checks the file it opens
+        status = path.stat()
     except OSError as error:
         raise ParameterError(f"cannot read {_WHAT} {str(path)!r}: {error.strerror}") from None
     return _load_cached(str(path.resolve()), status.st_size, status.st_mtime_ns, str(path))
@@ -230,7 +258,8 @@ def read_airfoil_file(path: str | Path) -> AirfoilFile:
     """
     raw = read_untrusted_bytes(path, _WHAT, AIRFOIL_FILE_MAX_BYTES)
     try:
-        text = decode_text(raw, str(path), _WHAT, empty_ok=True)  # empty: "no coordinates", naming line 1
+        # empty: "no coordinates", naming line 1
+        text = decode_text(raw, str(path), _WHAT, empty_ok=True)
     except ParameterError:
         if b"\x00" in raw:
             raise
@@ -243,11 +272,17 @@ def parse_airfoil_text(text: str, source: str = "<text>") -> AirfoilFile:
     budget = TimeBudget(source, _WHAT, AIRFOIL_FILE_TIME_LIMIT_S)
     name, rows = _numeric_rows(text, source, budget)
     if not rows:
-        raise ParameterError(f"{_WHAT} {source!r} line 1: no coordinates found (expected lines of 'x y')")
+        raise ParameterError(
+            f"{_WHAT} {source!r} line 1: no coordinates found (expected lines of 'x y')"
+        )
     _, (first_x, first_y) = rows[0]
     coordinates = np.array([values for _, values in rows], dtype=float)
-    if np.linalg.norm(np.ptp(coordinates, axis=0)) <= 1e-12 * max(1.0, float(np.abs(coordinates).max())):
-        raise ParameterError(f"{_WHAT} {source!r} line {rows[0][0]}: the chord is zero (every point is the same)")
+    if np.linalg.norm(np.ptp(coordinates, axis=0)) <= 1e-12 * max(
+        1.0, float(np.abs(coordinates).max())
+    ):
+        raise ParameterError(
+            f"{_WHAT} {source!r} line {rows[0][0]}: the chord is zero (every point is the same)"
+        )
     if first_x >= 2.0 and first_y >= 2.0 and first_x.is_integer() and first_y.is_integer():
         loop, lines = _lednicer_loop(rows, source)
     else:
@@ -262,8 +297,9 @@ def parse_airfoil_text(text: str, source: str = "<text>") -> AirfoilFile:
     return section
 
 
-def _numeric_rows(text: str, source: str, budget: TimeBudget
-                  ) -> tuple[str, list[tuple[int, tuple[float, float]]]]:
+def _numeric_rows(
+    text: str, source: str, budget: TimeBudget
+) -> tuple[str, list[tuple[int, tuple[float, float]]]]:
     """The name line and every ``(line number, (x, y))`` row; other lines after the data are errors.
 
     Refused (naming the line, never quoting it): a line that is not two numbers after the first
@@ -281,17 +317,25 @@ def _numeric_rows(text: str, source: str, budget: TimeBudget
             if not rows and not name:
                 name = content
                 continue
-            raise ParameterError(f"{_WHAT} {source!r} line {number}: expected two numbers 'x y' (only the first "
-                                 "line before the coordinates may be a name)")
+            raise ParameterError(
+                f"{_WHAT} {source!r} line {number}: expected two numbers 'x y' (only the first "
+                "line before the coordinates may be a name)"
+            )
         if not all(math.isfinite(value) for value in values):
-            raise ParameterError(f"{_WHAT} {source!r} line {number}: coordinates must be finite numbers")
+            raise ParameterError(
+                f"{_WHAT} {source!r} line {number}: coordinates must be finite numbers"
+            )
         if max(abs(values[0]), abs(values[1])) > AIRFOIL_COORDINATE_LIMIT:
-            raise ParameterError(f"{_WHAT} {source!r} line {number}: a coordinate is out of range; allowed "
-                                 f"[-{AIRFOIL_COORDINATE_LIMIT:g}, {AIRFOIL_COORDINATE_LIMIT:g}]")
+            raise ParameterError(
+                f"{_WHAT} {source!r} line {number}: a coordinate is out of range; allowed "
+                f"[-{AIRFOIL_COORDINATE_LIMIT:g}, {AIRFOIL_COORDINATE_LIMIT:g}]"
+            )
         rows.append((number, values))
         if len(rows) > AIRFOIL_FILE_MAX_POINTS:
-            raise BudgetError(f"{_WHAT} {source!r} line {number}: more than {AIRFOIL_FILE_MAX_POINTS:,} points, the "
-                              f"limit for a coordinate file (the checks of a section grow with its points)")
+            raise BudgetError(
+                f"{_WHAT} {source!r} line {number}: more than {AIRFOIL_FILE_MAX_POINTS:,} points, the "
+                f"limit for a coordinate file (the checks of a section grow with its points)"
+            )
         if not len(rows) % 4096:
             budget.check("reading the coordinates")
     budget.check("reading the coordinates")
@@ -308,8 +352,9 @@ def _two_numbers(content: str) -> tuple[float, float] | None:
         return None
 
 
-def _lednicer_loop(rows: list[tuple[int, tuple[float, float]]], source: str
-                   ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+def _lednicer_loop(
+    rows: list[tuple[int, tuple[float, float]]], source: str
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
     header_line, (upper_count, lower_count) = rows[0]
     upper_count, lower_count = int(upper_count), int(lower_count)
     data = rows[1:]
@@ -319,44 +364,67 @@ def _lednicer_loop(rows: list[tuple[int, tuple[float, float]]], source: str
         raise ParameterError(
             f"airfoil file {source!r} line {where}: Lednicer layout promises {upper_count} upper and {lower_count} "
             f"lower points (line {header_line}) but the file ends after {min(len(data), upper_count)} upper and "
-            f"{have} lower points" + ("; only one surface is given" if have == 0 else ""))
+            f"{have} lower points" + ("; only one surface is given" if have == 0 else "")
+        )
     if len(data) > upper_count + lower_count:
-        raise ParameterError(f"{_WHAT} {source!r} line {data[upper_count + lower_count][0]}: more points than "
-                             f"the {upper_count} + {lower_count} promised on line {header_line}")
+        raise ParameterError(
+            f"{_WHAT} {source!r} line {data[upper_count + lower_count][0]}: more points than "
+            f"the {upper_count} + {lower_count} promised on line {header_line}"
+        )
     for count, label in ((upper_count, "upper"), (lower_count, "lower")):
         if count < MINIMUM_POINTS_PER_SURFACE:
-            raise ParameterError(f"{_WHAT} {source!r} line {header_line}: the {label} surface has {count} points; "
-                                 f"at least {MINIMUM_POINTS_PER_SURFACE} are needed")
+            raise ParameterError(
+                f"{_WHAT} {source!r} line {header_line}: the {label} surface has {count} points; "
+                f"at least {MINIMUM_POINTS_PER_SURFACE} are needed"
+            )
     upper, lower = data[:upper_count], data[upper_count:]
-    ordered = upper[::-1] + lower  # trailing edge -> upper -> leading edge -> lower -> trailing edge
-    return (np.array([values for _, values in ordered], dtype=float),
-            np.array([number for number, _ in ordered], dtype=np.int64))
+    # trailing edge -> upper -> leading edge -> lower -> trailing edge
+    ordered = upper[::-1] + lower
+    return (
+        np.array([values for _, values in ordered], dtype=float),
+        np.array([number for number, _ in ordered], dtype=np.int64),
+    )
 
 
-def _selig_loop(rows: list[tuple[int, tuple[float, float]]], source: str
-                ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+def _selig_loop(
+    rows: list[tuple[int, tuple[float, float]]], source: str
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
     loop = np.array([values for _, values in rows], dtype=float)
     lines = np.array([number for number, _ in rows], dtype=np.int64)
     if len(loop) < 2 * MINIMUM_POINTS_PER_SURFACE - 1:
-        raise ParameterError(f"{_WHAT} {source!r} line {lines[-1]}: {len(loop)} points are too few for two "
-                             f"surfaces (at least {2 * MINIMUM_POINTS_PER_SURFACE - 1})")
+        raise ParameterError(
+            f"{_WHAT} {source!r} line {lines[-1]}: {len(loop)} points are too few for two "
+            f"surfaces (at least {2 * MINIMUM_POINTS_PER_SURFACE - 1})"
+        )
     trailing_middle = 0.5 * (loop[0] + loop[-1])
     leading = int(np.argmax(np.linalg.norm(loop - trailing_middle, axis=1)))
     extent = float(np.linalg.norm(loop.max(axis=0) - loop.min(axis=0)))
-    ends_apart = np.linalg.norm(loop[0] - loop[-1]) > 0.5 * extent  # a loop starts and ends at the trailing edge
-    if ends_apart or leading < MINIMUM_POINTS_PER_SURFACE - 1 or leading > len(loop) - MINIMUM_POINTS_PER_SURFACE:
+    # a loop starts and ends at the trailing edge
+    ends_apart = np.linalg.norm(loop[0] - loop[-1]) > 0.5 * extent
+    if (
+        ends_apart
+        or leading < MINIMUM_POINTS_PER_SURFACE - 1
+        or leading > len(loop) - MINIMUM_POINTS_PER_SURFACE
+    ):
         raise ParameterError(
             f"airfoil file {source!r} line {lines[-1]}: only one surface is given (the coordinates end here; a Selig "
             "loop runs from the trailing edge over one surface to the leading edge and back over the other, "
-            f"at least {MINIMUM_POINTS_PER_SURFACE} points on each)")
+            f"at least {MINIMUM_POINTS_PER_SURFACE} points on each)"
+        )
     return loop, lines
 
 
-def _without_repeats(loop: NDArray[np.float64], lines: NDArray[np.int64]
-                     ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+def _without_repeats(
+    loop: NDArray[np.float64], lines: NDArray[np.int64]
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
     """Drop points equal to their predecessor (Lednicer's doubled leading edge)."""
-    keep = np.concatenate([[True], np.linalg.norm(np.diff(loop, axis=0), axis=1)
-                           > COINCIDENT_RELATIVE * max(1.0, np.abs(loop).max())])
+    keep = np.concatenate(
+        [
+            [True],
+            np.linalg.norm(np.diff(loop, axis=0), axis=1)
+            > COINCIDENT_RELATIVE * max(1.0, np.abs(loop).max()),
+        ]
+    )
     return loop[keep], lines[keep]
 
 
@@ -365,14 +433,18 @@ def _signed_area(loop: NDArray[np.float64]) -> float:
     return 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
 
 
-def _segments(polygon: NDArray[np.float64], closed: bool) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def _segments(
+    polygon: NDArray[np.float64], closed: bool
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Start and end points ``(m, 2)`` of the polygon's segments (m = n closed, n - 1 open)."""
     if closed:
         return polygon, np.roll(polygon, -1, axis=0)
     return polygon[:-1], polygon[1:]
 
 
-def _candidate_pairs(start: NDArray[np.float64], end: NDArray[np.float64], limit: int) -> NDArray[np.int64]:
+def _candidate_pairs(
+    start: NDArray[np.float64], end: NDArray[np.float64], limit: int
+) -> NDArray[np.int64]:
     """Pairs ``(k, 2)`` (i < j) of segments whose bounding boxes overlap: every crossing pair is among them.
 
     Sort and sweep: with the segments sorted by their smallest x, the ones whose x-range overlaps
@@ -388,13 +460,17 @@ def _candidate_pairs(start: NDArray[np.float64], end: NDArray[np.float64], limit
     run = np.maximum(run, 0)
     total = int(run.sum())
     if total > limit:
-        raise BudgetError(f"the surfaces cannot be checked for crossings within the budget: {total:,} segment "
-                          f"pairs overlap in x, over the limit of {limit:,}")
+        raise BudgetError(
+            f"the surfaces cannot be checked for crossings within the budget: {total:,} segment "
+            f"pairs overlap in x, over the limit of {limit:,}"
+        )
     first = np.repeat(np.arange(len(order)), run)
     offset = np.arange(total) - np.repeat(np.cumsum(run) - run, run)
     pairs = np.sort(np.stack([order[first], order[first + 1 + offset]], axis=1), axis=1)
     low_y, high_y = np.minimum(start[:, 1], end[:, 1]), np.maximum(start[:, 1], end[:, 1])
-    overlap_y = (low_y[pairs[:, 0]] <= high_y[pairs[:, 1]]) & (low_y[pairs[:, 1]] <= high_y[pairs[:, 0]])
+    overlap_y = (low_y[pairs[:, 0]] <= high_y[pairs[:, 1]]) & (
+        low_y[pairs[:, 1]] <= high_y[pairs[:, 0]]
+    )
     return pairs[overlap_y]
 
 
@@ -406,8 +482,14 @@ def _first_crossing(polygon: NDArray[np.float64], closed: bool) -> tuple[int, in
     round-off, would otherwise make a bow-tie of size ~1e-19 whose two sides "cross" (a closed ellipse
     was refused so). Indices refer to ``polygon`` as given.
     """
-    if closed and len(polygon) > 3 and (np.linalg.norm(polygon[-1] - polygon[0])
-                                        <= COINCIDENT_RELATIVE * max(1.0, float(np.abs(polygon).max()))):
+    if (
+        closed
+        and len(polygon) > 3
+        and (
+            np.linalg.norm(polygon[-1] - polygon[0])
+            <= COINCIDENT_RELATIVE * max(1.0, float(np.abs(polygon).max()))
+        )
+    ):
         polygon = polygon[:-1]
     start, end = _segments(polygon, closed)
     count = len(start)
@@ -417,11 +499,17 @@ def _first_crossing(polygon: NDArray[np.float64], closed: bool) -> tuple[int, in
     gap = pairs[:, 1] - pairs[:, 0]
     pairs = pairs[(gap > 1) & ~(closed & (gap == count - 1))]
 
-    def orientation(a: NDArray[np.float64], b: NDArray[np.float64], c: NDArray[np.float64]) -> NDArray[np.float64]:
-        return np.sign((b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]))
+    def orientation(
+        a: NDArray[np.float64], b: NDArray[np.float64], c: NDArray[np.float64]
+    ) -> NDArray[np.float64]:
+        return np.sign(
+            (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
+        )
 
     p, q, r, s = start[pairs[:, 0]], end[pairs[:, 0]], start[pairs[:, 1]], end[pairs[:, 1]]
-    crossing = (orientation(p, q, r) * orientation(p, q, s) < 0) & (orientation(r, s, p) * orientation(r, s, q) < 0)
+    crossing = (orientation(p, q, r) * orientation(p, q, s) < 0) & (
+        orientation(r, s, p) * orientation(r, s, q) < 0
+    )
     found = pairs[crossing]
     if not len(found):
         return None
@@ -429,8 +517,9 @@ def _first_crossing(polygon: NDArray[np.float64], closed: bool) -> tuple[int, in
     return int(i), int(j)
 
 
-def _check_no_crossing(loop: NDArray[np.float64], lines: NDArray[np.int64], source: str,
-                       budget: TimeBudget) -> None:
+def _check_no_crossing(
+    loop: NDArray[np.float64], lines: NDArray[np.int64], source: str, budget: TimeBudget
+) -> None:
     try:
         crossing = _first_crossing(loop, closed=True)
     except BudgetError as error:
@@ -438,25 +527,34 @@ def _check_no_crossing(loop: NDArray[np.float64], lines: NDArray[np.int64], sour
     budget.check("checking the surfaces for crossings")
     if crossing is not None:
         i, j = crossing
-        raise ParameterError(f"{_WHAT} {source!r} line {lines[i]}: the surfaces cross (the segment from line "
-                             f"{lines[i]} crosses the one from line {lines[j]})")
+        raise ParameterError(
+            f"{_WHAT} {source!r} line {lines[i]}: the surfaces cross (the segment from line "
+            f"{lines[i]} crosses the one from line {lines[j]})"
+        )
 
 
-def _check_smooth_section(section: AirfoilFile, source: str, budget: TimeBudget, samples: int = 400) -> None:
+def _check_smooth_section(
+    section: AirfoilFile, source: str, budget: TimeBudget, samples: int = 400
+) -> None:
     """The spline through the points must not cross itself either (an overshoot between sparse points)."""
     u = np.linspace(0.0, 1.0, samples)
     upper, lower = section.points_on_half(u, True), section.points_on_half(u, False)
-    polygon = np.concatenate([upper[::-1], lower[1:]])  # trailing edge -> upper -> leading edge -> lower
+    # trailing edge -> upper -> leading edge -> lower
+    polygon = np.concatenate([upper[::-1], lower[1:]])
     crossing = _first_crossing(polygon, closed=True)
     budget.check("checking the smooth curve for crossings")
     if crossing is not None:
         point = polygon[crossing[0]]
         nearest = int(np.argmin(np.linalg.norm(section.loop - point, axis=1)))
-        raise ParameterError(f"{_WHAT} {source!r} line {section.lines[nearest]}: the surfaces cross (the smooth "
-                             "curve through the points runs into itself near this point; check the coordinates)")
+        raise ParameterError(
+            f"{_WHAT} {source!r} line {section.lines[nearest]}: the surfaces cross (the smooth "
+            "curve through the points runs into itself near this point; check the coordinates)"
+        )
     if upper[-1, 1] < lower[-1, 1] - 1e-12:
-        raise ParameterError(f"{_WHAT} {source!r} line {section.lines[0]}: the surfaces cross at the trailing "
-                             "edge (the upper surface ends below the lower one)")
+        raise ParameterError(
+            f"{_WHAT} {source!r} line {section.lines[0]}: the surfaces cross at the trailing "
+            "edge (the upper surface ends below the lower one)"
+        )
 
 
 def write_selig_file(path: str | Path, name: str, loop: ArrayLike, digits: int = 7) -> Path:
@@ -467,7 +565,9 @@ def write_selig_file(path: str | Path, name: str, loop: ArrayLike, digits: int =
     return path
 
 
-def write_lednicer_file(path: str | Path, name: str, upper: ArrayLike, lower: ArrayLike, digits: int = 7) -> Path:
+def write_lednicer_file(
+    path: str | Path, name: str, upper: ArrayLike, lower: ArrayLike, digits: int = 7
+) -> Path:
     """Write a Lednicer-layout file: upper and lower ``(k, 2)`` both from the leading edge to the trailing edge."""
     path = Path(path)
     upper, lower = np.asarray(upper, dtype=float), np.asarray(lower, dtype=float)

@@ -43,8 +43,8 @@ from torus_cad.geometry.section.section import (
 #: the table within 1.1e-11 chord of adaptive Gauss-Kronrod quadrature at ARC_LENGTH_QUAD_ABS on
 #: coordinate files (2e-16 on NACA sections), where 5 leave 1.3e-10 (tests/test_arc_length.py).
 ARC_LENGTH_GAUSS_POINTS = 10
-#: Absolute tolerance of the arc-length quadrature of |f'(t)| (chord units): the table agrees within it
-#: with QUADPACK's adaptive Gauss-Kronrod quadrature run to it (tests/test_arc_length.py).
+#: Absolute tolerance of the arc-length quadrature of |f'(t)| (chord units): the table agrees within
+#: it with QUADPACK's adaptive Gauss-Kronrod quadrature run to it (tests/test_arc_length.py).
 ARC_LENGTH_QUAD_ABS = 1e-10
 
 #: Fine grid of the arc-length table, both surfaces together (spec §5.2: n_fine, whose default
@@ -109,8 +109,9 @@ class SectionSampling:
     base: bool = False
 
 
-def surface_arc_length_table(airfoil: Section, upper: bool,
-                             fine_samples: int = ARC_LENGTH_FINE_SAMPLES // 2) -> ArcLengthTable:
+def surface_arc_length_table(
+    airfoil: Section, upper: bool, fine_samples: int = ARC_LENGTH_FINE_SAMPLES // 2
+) -> ArcLengthTable:
     """Tabulate the arc length of the upper or lower surface on ``fine_samples`` intervals in u.
 
     Args:
@@ -130,7 +131,9 @@ def surface_arc_length_table(airfoil: Section, upper: bool,
         edges = np.union1d(edges[np.abs(edges - kink) > 0.25 / fine_samples], kink)
     starts, widths = edges[:-1], np.diff(edges)
     nodes, weights = _gauss_legendre(ARC_LENGTH_GAUSS_POINTS)
-    speeds = airfoil.speed_on_half((starts[:, None] + nodes[None, :] * widths[:, None]).ravel(), upper)
+    speeds = airfoil.speed_on_half(
+        (starts[:, None] + nodes[None, :] * widths[:, None]).ravel(), upper
+    )
     pieces = (speeds.reshape(len(starts), len(nodes)) @ weights) * widths
     return ArcLengthTable(edges, np.concatenate([[0.0], np.cumsum(pieces)]))
 
@@ -143,8 +146,12 @@ def _gauss_legendre(count: int) -> tuple[NDArray[np.float64], NDArray[np.float64
 
 
 @lru_cache(maxsize=64)
-def equal_arc_length_section(airfoil: Section, count: int, anchor_trailing_edge: bool = True,
-                             fine_samples: int = ARC_LENGTH_FINE_SAMPLES // 2) -> SectionSampling:
+def equal_arc_length_section(
+    airfoil: Section,
+    count: int,
+    anchor_trailing_edge: bool = True,
+    fine_samples: int = ARC_LENGTH_FINE_SAMPLES // 2,
+) -> SectionSampling:
     """``count`` points around the closed section, equally spaced in arc length (spec §5).
 
     With ``anchor_trailing_edge=False`` this is the spec's procedure exactly: one spacing
@@ -175,11 +182,14 @@ def equal_arc_length_section(airfoil: Section, count: int, anchor_trailing_edge:
     upper = surface_arc_length_table(airfoil, True, fine_samples)
     lower = surface_arc_length_table(airfoil, False, fine_samples)
     base = has_base(airfoil)
-    base_length = cap_length(airfoil)  # |U - L| unless round: below SHARP_TRAILING_EDGE_GAP when sharp
+    # |U - L| unless round: below SHARP_TRAILING_EDGE_GAP when sharp
+    base_length = cap_length(airfoil)
     perimeter = upper.total + base_length + lower.total
     if anchor_trailing_edge:
         lengths = np.array([upper.total, base_length, lower.total])
-        counts = _shares(count, lengths, minimum=np.array([2, _base_minimum(airfoil) if base else 0, 2]))
+        counts = _shares(
+            count, lengths, minimum=np.array([2, _base_minimum(airfoil) if base else 0, 2])
+        )
         upper_arc = np.arange(counts[0]) * upper.total / counts[0]
         base_fraction = np.arange(counts[1]) / max(counts[1], 1)
         lower_arc = lower.total - np.arange(counts[2]) * lower.total / counts[2]
@@ -196,10 +206,21 @@ def equal_arc_length_section(airfoil: Section, count: int, anchor_trailing_edge:
     lower_start = 2.0 if base else 1.0
     base_parameter = cap_parameter_at(airfoil, base_fraction)  # = the fraction on a flat base
     t = np.concatenate([upper_u**2, 1.0 + base_parameter, lower_start + 1.0 - lower_u**2])
-    points = np.concatenate([airfoil.points_on_half(upper_u, True), cap_points(airfoil, base_parameter),
-                             airfoil.points_on_half(lower_u, False)])
-    return SectionSampling(t=t, points=points, perimeter=perimeter, trailing_edge_index=trailing_edge_index,
-                           lower_corner_index=lower_corner_index, base=base)
+    points = np.concatenate(
+        [
+            airfoil.points_on_half(upper_u, True),
+            cap_points(airfoil, base_parameter),
+            airfoil.points_on_half(lower_u, False),
+        ]
+    )
+    return SectionSampling(
+        t=t,
+        points=points,
+        perimeter=perimeter,
+        trailing_edge_index=trailing_edge_index,
+        lower_corner_index=lower_corner_index,
+        base=base,
+    )
 
 
 #: Fewest points on a round cap: its polygon (the mesh's, the plots') then turns round the edge in
@@ -211,7 +232,9 @@ def _base_minimum(airfoil: Section) -> int:
     return ROUND_CAP_MINIMUM_POINTS if isinstance(airfoil, RoundTrailingEdge) else 1
 
 
-def _shares(count: int, lengths: NDArray[np.float64], minimum: NDArray[np.int64]) -> NDArray[np.int64]:
+def _shares(
+    count: int, lengths: NDArray[np.float64], minimum: NDArray[np.int64]
+) -> NDArray[np.int64]:
     """``count`` points split between pieces in proportion to their lengths (largest remainders), each >= its minimum."""
     exact = count * lengths / lengths.sum()
     shares = np.maximum(np.floor(exact).astype(int), minimum)
@@ -240,5 +263,11 @@ def spacing_deviation(points: NDArray[np.float64]) -> float:
     return float(np.max(np.abs(gaps / gaps.mean() - 1.0)))
 
 
-__all__ = ["ArcLengthTable", "SectionSampling", "airfoil_points", "equal_arc_length_section",
-           "spacing_deviation", "surface_arc_length_table"]
+__all__ = [
+    "ArcLengthTable",
+    "SectionSampling",
+    "airfoil_points",
+    "equal_arc_length_section",
+    "spacing_deviation",
+    "surface_arc_length_table",
+]

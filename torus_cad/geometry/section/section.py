@@ -167,15 +167,22 @@ class RoundTrailingEdge:
 
     def with_trailing_edge_gap(self, gap: float) -> RoundTrailingEdge:
         """:attr:`section` opened by ``gap``, capped with the same handle lengths."""
-        return RoundTrailingEdge(self.section.with_trailing_edge_gap(gap), self.upper_handle, self.lower_handle)
+        return RoundTrailingEdge(
+            self.section.with_trailing_edge_gap(gap), self.upper_handle, self.lower_handle
+        )
 
     def cap_poles(self) -> NDArray[np.float64]:
         """The cap's Bezier poles U, U + h_u T_u, L + h_l T_l, L: ``(4, 2)`` chord units."""
-        return round_cap_poles(half_ends(self.section), end_tangents(self.section),
-                               np.array([self.upper_handle, self.lower_handle]))
+        return round_cap_poles(
+            half_ends(self.section),
+            end_tangents(self.section),
+            np.array([self.upper_handle, self.lower_handle]),
+        )
 
 
-def round_cap_poles(ends: ArrayLike, tangents: ArrayLike, handles: ArrayLike) -> NDArray[np.float64]:
+def round_cap_poles(
+    ends: ArrayLike, tangents: ArrayLike, handles: ArrayLike
+) -> NDArray[np.float64]:
     """A round cap's Bezier poles U, U + h_u T_u, L + h_l T_l, L (module docstring): ``(..., 4, d)``.
 
     ``ends`` ``(..., 2, d)`` are U and L, ``tangents`` ``(..., 2, d)`` the unit T_u, T_l (pointing
@@ -209,7 +216,9 @@ def bezier_points(poles: ArrayLike, parameter: ArrayLike) -> NDArray[np.float64]
     """A cubic Bezier curve of ``poles`` ``(..., 4, d)`` at ``parameter`` ``(n,)``: ``(..., n, d)``."""
     poles = np.asarray(poles, dtype=float)
     w = np.atleast_1d(np.asarray(parameter, dtype=float))[:, None]
-    bernstein = np.concatenate([(1 - w) ** 3, 3 * (1 - w) ** 2 * w, 3 * (1 - w) * w**2, w**3], axis=1)
+    bernstein = np.concatenate(
+        [(1 - w) ** 3, 3 * (1 - w) ** 2 * w, 3 * (1 - w) * w**2, w**3], axis=1
+    )
     return np.einsum("nj,...jd->...nd", bernstein, poles)
 
 
@@ -226,15 +235,22 @@ def cap_points(section: Section, parameter: ArrayLike) -> NDArray[np.float64]:
     return (1.0 - fraction) * upper_end + fraction * lower_end
 
 
-def _cap_arc_length_table(poles: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def _cap_arc_length_table(
+    poles: NDArray[np.float64],
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Bezier parameters ``(k,)`` and the cap's arc length from U at each ``(k,)``."""
     parameters = np.linspace(0.0, 1.0, _CAP_TABLE_SAMPLES)
     nodes, weights = np.polynomial.legendre.leggauss(_CAP_QUADRATURE_NODES)
     starts, width = parameters[:-1], parameters[1] - parameters[0]
     at = (starts[:, None] + 0.5 * width * (nodes + 1.0)[None]).ravel()
-    derivative_poles = 3.0 * np.diff(poles, axis=0)  # the derivative is the quadratic Bezier of these
+    # the derivative is the quadratic Bezier of these
+    derivative_poles = 3.0 * np.diff(poles, axis=0)
     w = at[:, None]
-    velocity = (1 - w) ** 2 * derivative_poles[0] + 2 * (1 - w) * w * derivative_poles[1] + w**2 * derivative_poles[2]
+    velocity = (
+        (1 - w) ** 2 * derivative_poles[0]
+        + 2 * (1 - w) * w * derivative_poles[1]
+        + w**2 * derivative_poles[2]
+    )
     speed = np.linalg.norm(velocity, axis=-1).reshape(len(starts), -1)
     pieces = 0.5 * width * speed @ weights
     return parameters, np.concatenate([[0.0], np.cumsum(pieces)])
@@ -256,8 +272,12 @@ def cap_parameter_at(section: Section, arc_fraction: ArrayLike) -> NDArray[np.fl
     return np.interp(arc_fraction * arc[-1], arc, parameters)
 
 
-def section_thickness(planar: NDArray[np.float64], trailing_edge_index: int, lower_corner_index: int | None,
-                      stations: int = THICKNESS_STATIONS) -> NDArray[np.float64]:
+def section_thickness(
+    planar: NDArray[np.float64],
+    trailing_edge_index: int,
+    lower_corner_index: int | None,
+    stations: int = THICKNESS_STATIONS,
+) -> NDArray[np.float64]:
     """Largest thickness perpendicular to the chord of sections in their planes ``(k, p, 2)``: ``(k,)``.
 
     The upper surface is points 0..trailing_edge_index, the lower one from the lower corner
@@ -269,14 +289,19 @@ def section_thickness(planar: NDArray[np.float64], trailing_edge_index: int, low
     grid = np.linspace(0.0, 1.0, stations)
     for index, ring in enumerate(planar):
         leading = ring[0]
-        trailing = ring[trailing_edge_index] if lower_corner_index is None else 0.5 * (
-            ring[trailing_edge_index] + ring[lower_corner_index])
+        trailing = (
+            ring[trailing_edge_index]
+            if lower_corner_index is None
+            else 0.5 * (ring[trailing_edge_index] + ring[lower_corner_index])
+        )
         chord = trailing - leading
         length = float(np.linalg.norm(chord))
         axis = chord / length
         normal = np.array([-axis[1], axis[0]])
         along, across = (ring - leading) @ axis / length, (ring - leading) @ normal
-        upper = np.interp(grid, *_sorted(along[: trailing_edge_index + 1], across[: trailing_edge_index + 1]))
+        upper = np.interp(
+            grid, *_sorted(along[: trailing_edge_index + 1], across[: trailing_edge_index + 1])
+        )
         lower_along = np.append(along[lower_start:], along[0])
         lower_across = np.append(across[lower_start:], across[0])
         lower = np.interp(grid, *_sorted(lower_along, lower_across))
@@ -284,6 +309,8 @@ def section_thickness(planar: NDArray[np.float64], trailing_edge_index: int, low
     return result
 
 
-def _sorted(x: NDArray[np.float64], y: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def _sorted(
+    x: NDArray[np.float64], y: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     order = np.argsort(x, kind="stable")
     return x[order], y[order]

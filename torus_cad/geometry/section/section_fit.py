@@ -20,7 +20,8 @@ from scipy.interpolate import BSpline, make_lsq_spline
 from torus_cad.errors import GeometryError
 from torus_cad.geometry.section.section import ROUND_CAP_HANDLE_FRACTION, round_cap_poles
 
-#: Interior knots of the first section fit; doubled while the fit is too coarse (at most the maximum).
+#: Interior knots of the first section fit; doubled while the fit is too coarse (at most the
+#: maximum).
 WIRE_FIT_INITIAL_KNOTS = 24
 
 WIRE_FIT_MAXIMUM_KNOTS = 384
@@ -61,27 +62,39 @@ def corner_knots(knots: NDArray[np.float64]) -> NDArray[np.float64]:
     return distinct[1:-1][multiplicities[1:-1] >= DEGREE]
 
 
-def _closed_from_trailing_edge(section_points: NDArray[np.float64], trailing_edge_index: int) -> NDArray[np.float64]:
+def _closed_from_trailing_edge(
+    section_points: NDArray[np.float64], trailing_edge_index: int
+) -> NDArray[np.float64]:
     """Reorder ``(sections, p, 3)`` rings to start at the trailing edge and repeat it at the end."""
     rolled = np.roll(section_points, -trailing_edge_index, axis=1)
     return np.concatenate([rolled, rolled[:, :1]], axis=1)
 
 
-def _fit(points: NDArray[np.float64], parameters: NDArray[np.float64], interior_knots: int
-         ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+def _fit(
+    points: NDArray[np.float64], parameters: NDArray[np.float64], interior_knots: int
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """Open clamped cubic least-squares fits of ``(sections, q, 3)`` with pinned ends: poles, knots, errors."""
     inner = np.quantile(parameters[1:-1], np.linspace(0.0, 1.0, interior_knots + 2)[1:-1])
-    knots = np.concatenate([np.full(DEGREE + 1, parameters[0]), inner, np.full(DEGREE + 1, parameters[-1])])
+    knots = np.concatenate(
+        [np.full(DEGREE + 1, parameters[0]), inner, np.full(DEGREE + 1, parameters[-1])]
+    )
     weights = np.ones(len(parameters))
     weights[[0, -1]] = 1e4  # pull the ends onto the trailing edge; they are then set exactly
-    poles = np.stack([make_lsq_spline(parameters, ring, knots, k=DEGREE, w=weights).c for ring in points])
+    poles = np.stack(
+        [make_lsq_spline(parameters, ring, knots, k=DEGREE, w=weights).c for ring in points]
+    )
     poles[:, 0], poles[:, -1] = points[:, 0], points[:, -1]
     fitted = np.stack([_evaluate(ring_poles, knots, parameters) for ring_poles in poles])
     return poles, knots, np.linalg.norm(fitted - points, axis=-1)
 
 
-def _fit_with_base(points: NDArray[np.float64], parameters: NDArray[np.float64], corner: int, interior_knots: int,
-                   round_cap: bool = False) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+def _fit_with_base(
+    points: NDArray[np.float64],
+    parameters: NDArray[np.float64],
+    corner: int,
+    interior_knots: int,
+    round_cap: bool = False,
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """Like :func:`_fit`, with columns 0..corner the base (one Bezier span) before the airfoil:
     straight, or a round cap (module docstring)."""
     poles, knots, error = _fit(points[:, corner:], parameters[corner:], interior_knots)
@@ -89,16 +102,25 @@ def _fit_with_base(points: NDArray[np.float64], parameters: NDArray[np.float64],
     if round_cap:
         base_poles = _round_cap_poles(start, end, poles[:, -2], poles[:, 1])
     else:
-        base_poles = np.stack([start + fraction * (end - start) for fraction in (0.0, 1 / 3, 2 / 3)], axis=1)
+        base_poles = np.stack(
+            [start + fraction * (end - start) for fraction in (0.0, 1 / 3, 2 / 3)], axis=1
+        )
     all_poles = np.concatenate([base_poles, poles], axis=1)
-    all_knots = np.concatenate([np.zeros(DEGREE + 1), knots[1:]])  # knots[:4] = the corner's parameter
-    base_fit = np.stack([_evaluate(ring, all_knots, parameters[:corner + 1]) for ring in all_poles])
-    base_error = np.linalg.norm(base_fit - points[:, :corner + 1], axis=-1)
+    # knots[:4] = the corner's parameter
+    all_knots = np.concatenate([np.zeros(DEGREE + 1), knots[1:]])
+    base_fit = np.stack(
+        [_evaluate(ring, all_knots, parameters[: corner + 1]) for ring in all_poles]
+    )
+    base_error = np.linalg.norm(base_fit - points[:, : corner + 1], axis=-1)
     return all_poles, all_knots, np.concatenate([base_error[:, :-1], error], axis=1)
 
 
-def _round_cap_poles(upper: NDArray[np.float64], lower: NDArray[np.float64], before_upper: NDArray[np.float64],
-                     after_lower: NDArray[np.float64]) -> NDArray[np.float64]:
+def _round_cap_poles(
+    upper: NDArray[np.float64],
+    lower: NDArray[np.float64],
+    before_upper: NDArray[np.float64],
+    after_lower: NDArray[np.float64],
+) -> NDArray[np.float64]:
     """The cap's first three poles U, U + h T_u, L + h T_l: ``(sections, 3, 3)`` mm.
 
     ``before_upper`` and ``after_lower`` are the airfoil curve's poles next to U and L, so that
@@ -107,16 +129,24 @@ def _round_cap_poles(upper: NDArray[np.float64], lower: NDArray[np.float64], bef
     handle = ROUND_CAP_HANDLE_FRACTION * np.linalg.norm(upper - lower, axis=-1)
     tangents = np.stack([upper - before_upper, lower - after_lower], axis=1)
     tangents /= np.linalg.norm(tangents, axis=-1, keepdims=True)
-    return round_cap_poles(np.stack([upper, lower], axis=1), tangents, np.stack([handle, handle], axis=1))[:, :3]
+    return round_cap_poles(
+        np.stack([upper, lower], axis=1), tangents, np.stack([handle, handle], axis=1)
+    )[:, :3]
 
 
-def _evaluate(poles: NDArray[np.float64], knots: NDArray[np.float64], parameters: NDArray[np.float64]) -> NDArray[np.float64]:
+def _evaluate(
+    poles: NDArray[np.float64], knots: NDArray[np.float64], parameters: NDArray[np.float64]
+) -> NDArray[np.float64]:
     return BSpline(knots, poles, DEGREE)(parameters)
 
 
-def fit_sections(section_points: NDArray[np.float64], trailing_edge_index: int,
-                       chord_lengths: NDArray[np.float64], lower_corner_index: int | None = None,
-                       round_trailing_edge: bool = False) -> SectionFit:
+def fit_sections(
+    section_points: NDArray[np.float64],
+    trailing_edge_index: int,
+    chord_lengths: NDArray[np.float64],
+    lower_corner_index: int | None = None,
+    round_trailing_edge: bool = False,
+) -> SectionFit:
     """Fit compatible closed B-splines to sampled sections (kernel-free; the kernel makes wires of them).
 
     Args:
@@ -134,7 +164,11 @@ def fit_sections(section_points: NDArray[np.float64], trailing_edge_index: int,
     within WIRE_FIT_RELATIVE_TOLERANCE x chord of its curve.
     """
     points = _closed_from_trailing_edge(section_points, trailing_edge_index)
-    corner = None if lower_corner_index is None else (lower_corner_index - trailing_edge_index) % section_points.shape[1]
+    corner = (
+        None
+        if lower_corner_index is None
+        else (lower_corner_index - trailing_edge_index) % section_points.shape[1]
+    )
     steps = np.linalg.norm(np.diff(points, axis=1), axis=-1)
     cumulative = np.concatenate([np.zeros((len(points), 1)), np.cumsum(steps, axis=1)], axis=1)
     parameters = (cumulative / cumulative[:, -1:]).mean(axis=0)
@@ -145,17 +179,27 @@ def fit_sections(section_points: NDArray[np.float64], trailing_edge_index: int,
         if corner is None:
             poles, knots, error = _fit(points, parameters, interior)
         else:
-            poles, knots, error = _fit_with_base(points, parameters, corner, interior, round_trailing_edge)
+            poles, knots, error = _fit_with_base(
+                points, parameters, corner, interior, round_trailing_edge
+            )
         if np.all(error <= allowed) or interior >= min(WIRE_FIT_MAXIMUM_KNOTS, most):
             _check_trailing_edge_resolved(poles, knots, len(parameters) - 1)
-            leading_edge = float(parameters[(len(parameters) - 1 - trailing_edge_index) % (len(parameters) - 1)])
-            return SectionFit(poles, knots, float(error.max()), corner is not None and round_trailing_edge,
-                                 leading_edge)
+            leading_edge = float(
+                parameters[(len(parameters) - 1 - trailing_edge_index) % (len(parameters) - 1)]
+            )
+            return SectionFit(
+                poles,
+                knots,
+                float(error.max()),
+                corner is not None and round_trailing_edge,
+                leading_edge,
+            )
         interior = min(2 * interior, WIRE_FIT_MAXIMUM_KNOTS, most)
 
 
-def _check_trailing_edge_resolved(poles: NDArray[np.float64], knots: NDArray[np.float64], points: int,
-                                  samples: int = 150) -> None:
+def _check_trailing_edge_resolved(
+    poles: NDArray[np.float64], knots: NDArray[np.float64], points: int, samples: int = 150
+) -> None:
     """Refuse sections whose curve crosses itself next to the sharp trailing edge.
 
     With few points around a thin, strongly hooked trailing edge (camber far aft) the cubic
@@ -163,7 +207,8 @@ def _check_trailing_edge_resolved(poles: NDArray[np.float64], knots: NDArray[np.
     loft and the fuse then fail (found by scripts/fuzz.py). Tests, in each section's plane,
     the first tenth of the curve against the last tenth.
     """
-    first = float(corner_knots(knots)[-1]) if len(corner_knots(knots)) else 0.0  # after a blunt edge's base
+    # after a blunt edge's base
+    first = float(corner_knots(knots)[-1]) if len(corner_knots(knots)) else 0.0
     u = np.linspace(0.0, 0.1, samples) * (1.0 - first)
     for ring in poles[:: max(1, len(poles) // 4)]:  # the sections are affine images of one airfoil
         curve = BSpline(knots, ring, DEGREE)
@@ -175,7 +220,8 @@ def _check_trailing_edge_resolved(poles: NDArray[np.float64], knots: NDArray[np.
             raise GeometryError(
                 f"resolution.points = {points} is too few for this airfoil's trailing edge: the section curve "
                 "crosses itself there (a thin, hooked trailing edge); raise resolution.points "
-                f"(e.g. to {max(2 * points, 48)}), the thickness, or move camber_position forward")
+                f"(e.g. to {max(2 * points, 48)}), the thickness, or move camber_position forward"
+            )
 
 
 def _polylines_cross(first: NDArray[np.float64], second: NDArray[np.float64]) -> bool:
@@ -183,7 +229,14 @@ def _polylines_cross(first: NDArray[np.float64], second: NDArray[np.float64]) ->
     p, q = first[:-1, None, :], first[1:, None, :]
     r, t = second[None, :-1, :], second[None, 1:, :]
 
-    def orient(a: NDArray[np.float64], b: NDArray[np.float64], c: NDArray[np.float64]) -> NDArray[np.float64]:
-        return np.sign((b[..., 0] - a[..., 0]) * (c[..., 1] - a[..., 1]) - (b[..., 1] - a[..., 1]) * (c[..., 0] - a[..., 0]))
+    def orient(
+        a: NDArray[np.float64], b: NDArray[np.float64], c: NDArray[np.float64]
+    ) -> NDArray[np.float64]:
+        return np.sign(
+            (b[..., 0] - a[..., 0]) * (c[..., 1] - a[..., 1])
+            - (b[..., 1] - a[..., 1]) * (c[..., 0] - a[..., 0])
+        )
 
-    return bool(np.any((orient(p, q, r) * orient(p, q, t) < 0) & (orient(r, t, p) * orient(r, t, q) < 0)))
+    return bool(
+        np.any((orient(p, q, r) * orient(p, q, t) < 0) & (orient(r, t, p) * orient(r, t, q) < 0))
+    )

@@ -48,7 +48,11 @@ from OCP.Geom import Geom_BSplineSurface
 from OCP.TopAbs import TopAbs_REVERSED
 from OCP.TopoDS import TopoDS_Face, TopoDS_Shape
 
-from torus_cad.kernel.blade_integrals.quadrature import GAUSS_POINTS_PER_SPAN, bounds_match, face_integrals
+from torus_cad.kernel.blade_integrals.quadrature import (
+    GAUSS_POINTS_PER_SPAN,
+    bounds_match,
+    face_integrals,
+)
 from torus_cad.kernel.blade_integrals.recognition import base_surface_and_angle, recognise
 
 
@@ -74,8 +78,9 @@ class HubWithBladeIntegrals:
     products_mm5: NDArray[np.float64]
 
 
-def hub_with_blade_integrals(shape: TopoDS_Shape,
-                             gauss_points: int = GAUSS_POINTS_PER_SPAN) -> HubWithBladeIntegrals | None:
+def hub_with_blade_integrals(
+    shape: TopoDS_Shape, gauss_points: int = GAUSS_POINTS_PER_SPAN
+) -> HubWithBladeIntegrals | None:
     """Volume, centroid, spin-axis inertia, area, box and products of a hub-with-blades solid, or
     None when ``shape`` is not one (see the module's docstring).
 
@@ -99,12 +104,14 @@ def _integrate(shape: TopoDS_Shape, gauss_points: int) -> HubWithBladeIntegrals 
     if hub is None:
         return None
     radius, bore, length = hub.radius, hub.bore_radius, hub.z_top - hub.z_bottom
-    volume = math.pi * (radius**2 - bore**2) * length  # a tube round a plain bore (bore 0: a cylinder)
+    # a tube round a plain bore (bore 0: a cylinder)
+    volume = math.pi * (radius**2 - bore**2) * length
     moment = np.array([0.0, 0.0, volume * (hub.z_top + hub.z_bottom) / 2.0])
     inertia = math.pi * (radius**4 - bore**4) * length / 2.0
     products = np.zeros(3)  # the hub's are 0: it is symmetric about its axis
     area = 2.0 * math.pi * (radius**2 - bore**2) + 2.0 * math.pi * (radius + bore) * length
-    box_max = np.array([radius, radius, radius, radius, -hub.z_bottom, hub.z_top])  # along BOX_DIRECTIONS
+    # along BOX_DIRECTIONS
+    box_max = np.array([radius, radius, radius, radius, -hub.z_bottom, hub.z_top])
     groups: dict[tuple[int, bool], list[tuple[TopoDS_Face, float]]] = {}
     surfaces: dict[tuple[int, bool], Geom_BSplineSurface] = {}
     footprints = np.zeros(2)  # one blade's, summed over its faces (signed)
@@ -121,9 +128,12 @@ def _integrate(shape: TopoDS_Shape, gauss_points: int) -> HubWithBladeIntegrals 
         if part is None or not all(bounds_match(face, part) for face, _ in members):
             return None
         count, (cos, sin) = len(members), (np.cos(angles).sum(), np.sin(angles).sum())
-        moment_x, moment_y, moment_z = part.first_moment_mm4  # rotating a copy rotates its x, y moment
+        # rotating a copy rotates its x, y moment
+        moment_x, moment_y, moment_z = part.first_moment_mm4
         volume += count * part.volume_mm3
-        moment += np.array([cos * moment_x - sin * moment_y, sin * moment_x + cos * moment_y, count * moment_z])
+        moment += np.array(
+            [cos * moment_x - sin * moment_y, sin * moment_x + cos * moment_y, count * moment_z]
+        )
         inertia += count * part.spin_inertia_mm5
         area += count * part.area_mm2
         footprints += part.footprints_mm2
@@ -132,13 +142,19 @@ def _integrate(shape: TopoDS_Shape, gauss_points: int) -> HubWithBladeIntegrals 
     if len({len(members) for members in groups.values()}) != 1:
         return None  # not every face has a copy on every blade
     area -= len(next(iter(groups.values()))) * float(np.abs(footprints).sum())
-    return HubWithBladeIntegrals(volume, moment / volume, inertia, area, -box_max[0::2], box_max[1::2], products)
+    return HubWithBladeIntegrals(
+        volume, moment / volume, inertia, area, -box_max[0::2], box_max[1::2], products
+    )
 
 
-def _rotated_products(second_moments: NDArray[np.float64], angles: NDArray[np.float64]) -> NDArray[np.float64]:
+def _rotated_products(
+    second_moments: NDArray[np.float64], angles: NDArray[np.float64]
+) -> NDArray[np.float64]:
     """(∫xz, ∫yz, ∫xy) summed over copies rotated by ``angles`` about z, from one copy's
     (∫xz, ∫yz, ∫xy, ∫(x² - y²)): (xz, yz) turns by the angle, (x² - y², 2 xy) by twice it."""
     xz, yz, xy, difference = second_moments
     cos, sin = np.cos(angles).sum(), np.sin(angles).sum()
     cos2, sin2 = np.cos(2.0 * angles).sum(), np.sin(2.0 * angles).sum()
-    return np.array([cos * xz - sin * yz, sin * xz + cos * yz, (sin2 * difference + cos2 * 2.0 * xy) / 2.0])
+    return np.array(
+        [cos * xz - sin * yz, sin * xz + cos * yz, (sin2 * difference + cos2 * 2.0 * xy) / 2.0]
+    )

@@ -20,12 +20,22 @@ BOX_REFINE_MARGIN, BOX_START_NODES = 0.02, 8000
 ASCENT_ITERATIONS = 100
 
 
-#: The six box directions, in the order of :attr:`~torus_cad.kernel.blade_integrals.quadrature.FaceIntegrals.extremes_mm`: -x, x, -y, y, -z, z.
-BOX_DIRECTIONS = np.array([[-1, 0, 0], [1, 0, 0], [0, -1, 0], [0, 1, 0], [0, 0, -1], [0, 0, 1]], dtype=float)
+#: The six box directions, in the order of
+#: :attr:`~torus_cad.kernel.blade_integrals.quadrature.FaceIntegrals.extremes_mm`: -x, x, -y, y, -z,
+#: z.
+BOX_DIRECTIONS = np.array(
+    [[-1, 0, 0], [1, 0, 0], [0, -1, 0], [0, 1, 0], [0, 0, -1], [0, 0, 1]], dtype=float
+)
 
 
-def box_extremes(surface: SurfaceArrays, points: NDArray[np.float64], u: NDArray[np.float64], v: NDArray[np.float64],
-              radius: float, angles: NDArray[np.float64]) -> NDArray[np.float64]:
+def box_extremes(
+    surface: SurfaceArrays,
+    points: NDArray[np.float64],
+    u: NDArray[np.float64],
+    v: NDArray[np.float64],
+    radius: float,
+    angles: NDArray[np.float64],
+) -> NDArray[np.float64]:
     """``(6,)``: the largest -x, x, -y, y, -z, z over the copies of the face rotated by ``angles``.
 
     A copy's extreme along a direction is the face's support along that direction rotated
@@ -35,28 +45,39 @@ def box_extremes(surface: SurfaceArrays, points: NDArray[np.float64], u: NDArray
     cylinder, inside the hub's box."""
     cos, sin = np.cos(angles)[:, None], np.sin(angles)[:, None]
     x, y, z = BOX_DIRECTIONS.T
-    directions = np.stack([cos * x + sin * y, -sin * x + cos * y, np.broadcast_to(z, (len(angles), 6))],
-                          axis=-1)  # (copies, 6, 3): each box direction rotated by -angle
-    step = max(1, len(points) // BOX_START_NODES)  # the nodes are far denser than the refinement needs
+    directions = np.stack(
+        [cos * x + sin * y, -sin * x + cos * y, np.broadcast_to(z, (len(angles), 6))], axis=-1
+    )  # (copies, 6, 3): each box direction rotated by -angle
+    # the nodes are far denser than the refinement needs
+    step = max(1, len(points) // BOX_START_NODES)
     points, u, v = points[::step], u[::step], v[::step]
     values = points @ directions.reshape(-1, 3).T  # (nodes, copies * 6)
     best = values.argmax(axis=0).reshape(len(angles), 6)
     best_values = values[best.ravel(), np.arange(values.shape[1])].reshape(len(angles), 6)
     margin = BOX_REFINE_MARGIN * float((points.max(axis=0) - points.min(axis=0)).max())
-    bounds = ((float(surface.u_knots[0]), float(surface.u_knots[-1])),
-              (float(surface.v_knots[0]), float(surface.v_knots[-1])))
+    bounds = (
+        (float(surface.u_knots[0]), float(surface.u_knots[-1])),
+        (float(surface.v_knots[0]), float(surface.v_knots[-1])),
+    )
     extremes = best_values.max(axis=0)
     for copy, side in zip(*np.nonzero(best_values >= extremes - margin), strict=True):
         start = best[copy, side]
-        refined = _refined_maximum(surface.geom, directions[copy, side], float(u[start]), float(v[start]), bounds,
-                                   radius)
+        refined = _refined_maximum(
+            surface.geom, directions[copy, side], float(u[start]), float(v[start]), bounds, radius
+        )
         if refined is not None:
             extremes[side] = max(extremes[side], refined)
     return extremes
 
 
-def _refined_maximum(geom: Geom_BSplineSurface, direction: NDArray[np.float64], u: float, v: float,
-                     bounds: tuple[tuple[float, float], tuple[float, float]], radius: float) -> float | None:
+def _refined_maximum(
+    geom: Geom_BSplineSurface,
+    direction: NDArray[np.float64],
+    u: float,
+    v: float,
+    bounds: tuple[tuple[float, float], tuple[float, float]],
+    radius: float,
+) -> float | None:
     """The local maximum of direction . S(u, v) from (u, v) in the surface's parameter box, if
     it lies outside the cylinder; else None.
 
@@ -102,7 +123,13 @@ def _refined_maximum(geom: Geom_BSplineSurface, direction: NDArray[np.float64], 
     return _support_outside(geom, axis, uv, radius)
 
 
-def _support_outside(geom: Geom_BSplineSurface, axis: gp_Vec, uv: NDArray[np.float64], radius: float) -> float | None:
+def _support_outside(
+    geom: Geom_BSplineSurface, axis: gp_Vec, uv: NDArray[np.float64], radius: float
+) -> float | None:
     point = gp_Pnt()
     geom.D0(float(uv[0]), float(uv[1]), point)
-    return None if point.X() ** 2 + point.Y() ** 2 < radius**2 else float(gp_Vec(point.XYZ()).Dot(axis))
+    return (
+        None
+        if point.X() ** 2 + point.Y() ** 2 < radius**2
+        else float(gp_Vec(point.XYZ()).Dot(axis))
+    )

@@ -97,8 +97,13 @@ class FaceIntegrals:
     u_range: NDArray[np.float64]
 
 
-def face_integrals(geom: Geom_BSplineSurface, reversed_face: bool, radius: float, angles: NDArray[np.float64],
-                    gauss_points: int) -> FaceIntegrals | None:
+def face_integrals(
+    geom: Geom_BSplineSurface,
+    reversed_face: bool,
+    radius: float,
+    angles: NDArray[np.float64],
+    gauss_points: int,
+) -> FaceIntegrals | None:
     """Integrals of the face on ``geom`` trimmed to r > ``radius``, for copies rotated by
     ``angles`` (radians) about z; None unless every v line crosses r = radius exactly twice."""
     surface = surface_arrays(geom)
@@ -109,37 +114,62 @@ def face_integrals(geom: Geom_BSplineSurface, reversed_face: bool, radius: float
     volume, moment_x, moment_y, moment_z, inertia, area, root_footprint, tip_footprint = totals[:8]
     points = np.concatenate([sample.points for sample in samples])
     return FaceIntegrals(
-        volume_mm3=float(volume), first_moment_mm4=np.array([moment_x, moment_y, moment_z]),
-        spin_inertia_mm5=float(inertia), second_moments_mm5=totals[8:].copy(), area_mm2=float(area),
+        volume_mm3=float(volume),
+        first_moment_mm4=np.array([moment_x, moment_y, moment_z]),
+        spin_inertia_mm5=float(inertia),
+        second_moments_mm5=totals[8:].copy(),
+        area_mm2=float(area),
         footprints_mm2=np.array([root_footprint, tip_footprint]),
-        extremes_mm=box_extremes(surface, points, np.concatenate([sample.u for sample in samples]),
-                              np.concatenate([sample.v for sample in samples]), radius, angles),
-        v_range=np.array([min(sample.roots[:, 0].min() for sample in samples),
-                          max(sample.roots[:, 1].max() for sample in samples)]),
-        u_range=np.array([surface.u_knots[0], surface.u_knots[-1]]))
+        extremes_mm=box_extremes(
+            surface,
+            points,
+            np.concatenate([sample.u for sample in samples]),
+            np.concatenate([sample.v for sample in samples]),
+            radius,
+            angles,
+        ),
+        v_range=np.array(
+            [
+                min(sample.roots[:, 0].min() for sample in samples),
+                max(sample.roots[:, 1].max() for sample in samples),
+            ]
+        ),
+        u_range=np.array([surface.u_knots[0], surface.u_knots[-1]]),
+    )
 
 
-def _integrate_over_u(surface: SurfaceArrays, radius: float, reversed_face: bool, gauss_points: int
-                      ) -> tuple[NDArray[np.float64], list[_LineSamples]] | None:
+def _integrate_over_u(
+    surface: SurfaceArrays, radius: float, reversed_face: bool, gauss_points: int
+) -> tuple[NDArray[np.float64], list[_LineSamples]] | None:
     """∫ over u of :func:`_line_densities`, adaptively: on each interval (at first the knot
     spans) Gauss rules of ``gauss_points`` and one point less; where they differ by more than
     U_RELATIVE_TOLERANCE the interval is halved. The v integral at fixed u is smooth, but where
     a crossing curve runs nearly along v (a blade entering the hub at a grazing angle) the
     domain's edge b(u) is steep, and so is the integral as a function of u."""
-    spans = np.unique(surface.u_knots[surface.u_degree:-surface.u_degree])
+    spans = np.unique(surface.u_knots[surface.u_degree : -surface.u_degree])
     low, high = spans[:-1], spans[1:]
     rules = [np.polynomial.legendre.leggauss(points) for points in (gauss_points, gauss_points - 1)]
     totals, scale, kept = np.zeros(QUANTITIES), None, []
     for _ in range(U_MAX_HALVINGS + 1):
         nodes = [(low[:, None] + (high - low)[:, None] * (x + 1.0) / 2.0).ravel() for x, _ in rules]
-        sample = _line_densities(surface, np.concatenate(nodes), radius, reversed_face, gauss_points)
+        sample = _line_densities(
+            surface, np.concatenate(nodes), radius, reversed_face, gauss_points
+        )
         if sample is None:
             return None
         kept.append(sample)
         fine_count = nodes[0].size
-        estimates = [((high - low)[:, None, None] * w[None, :, None] / 2.0
-                      * values.reshape(len(low), len(w), QUANTITIES)).sum(axis=1)
-                     for (_, w), values in zip(rules, (sample.densities[:fine_count], sample.densities[fine_count:]))]
+        estimates = [
+            (
+                (high - low)[:, None, None]
+                * w[None, :, None]
+                / 2.0
+                * values.reshape(len(low), len(w), QUANTITIES)
+            ).sum(axis=1)
+            for (_, w), values in zip(
+                rules, (sample.densities[:fine_count], sample.densities[fine_count:])
+            )
+        ]
         if scale is None:  # the size of each quantity, for relative errors (moments may sum to ~0)
             scale = np.maximum(np.abs(estimates[0]).sum(axis=0), np.finfo(float).tiny)
         error = (np.abs(estimates[0] - estimates[1]) / scale).max(axis=1)
@@ -165,8 +195,13 @@ class _LineSamples:
     v: NDArray[np.float64]
 
 
-def _line_densities(surface: SurfaceArrays, u: NDArray[np.float64], radius: float, reversed_face: bool,
-                    gauss_points: int) -> _LineSamples | None:
+def _line_densities(
+    surface: SurfaceArrays,
+    u: NDArray[np.float64],
+    radius: float,
+    reversed_face: bool,
+    gauss_points: int,
+) -> _LineSamples | None:
     """Along the v line at each ``u``, the integrals over v in [a(u), b(u)] of the volume, the
     x, y, z moments, the spin inertia and the area densities (see the module), and the two
     footprints' line densities R z dθ/du at a(u) and b(u). None unless every line crosses
@@ -176,8 +211,13 @@ def _line_densities(surface: SurfaceArrays, u: NDArray[np.float64], radius: floa
     if roots is None:
         return None
     sign = -1.0 if reversed_face else 1.0
-    integrals = _v_integrals(lines, surface, roots, lambda point, d_u, d_v: _integrands(point, d_u, d_v, radius, sign),
-                             gauss_points)
+    integrals = _v_integrals(
+        lines,
+        surface,
+        roots,
+        lambda point, d_u, d_v: _integrands(point, d_u, d_v, radius, sign),
+        gauss_points,
+    )
     if integrals is None:
         return None
     line_integrals, points, rows, v_nodes = integrals
@@ -194,22 +234,35 @@ def bounds_match(face: TopoDS_Face, part: FaceIntegrals) -> bool:
     u_min, u_max, v_min, v_max = BRepTools.UVBounds_s(face)
     u_span = part.u_range[1] - part.u_range[0]
     v_span = part.v_range[1] - part.v_range[0]
-    return (abs(u_min - part.u_range[0]) <= U_BOUNDS_RELATIVE * u_span
-            and abs(u_max - part.u_range[1]) <= U_BOUNDS_RELATIVE * u_span
-            and abs(v_min - part.v_range[0]) <= V_BOUNDS_RELATIVE * v_span
-            and abs(v_max - part.v_range[1]) <= V_BOUNDS_RELATIVE * v_span)
+    return (
+        abs(u_min - part.u_range[0]) <= U_BOUNDS_RELATIVE * u_span
+        and abs(u_max - part.u_range[1]) <= U_BOUNDS_RELATIVE * u_span
+        and abs(v_min - part.v_range[0]) <= V_BOUNDS_RELATIVE * v_span
+        and abs(v_max - part.v_range[1]) <= V_BOUNDS_RELATIVE * v_span
+    )
 
 
-def _crossings(lines: VLines, knots: NDArray[np.float64], degree: int, radius: float) -> NDArray[np.float64] | None:
+def _crossings(
+    lines: VLines, knots: NDArray[np.float64], degree: int, radius: float
+) -> NDArray[np.float64] | None:
     """``(U, 2)``: the two v where each v line crosses r = ``radius``; None unless every line
     starts and ends inside (r < radius) and crosses exactly twice."""
     spans = np.unique(knots[degree:-degree])
-    grid = np.concatenate([np.linspace(low, high, ROOT_SAMPLES_PER_SPAN, endpoint=False)
-                           for low, high in itertools.pairwise(spans)] + [spans[-1:]])
+    grid = np.concatenate(
+        [
+            np.linspace(low, high, ROOT_SAMPLES_PER_SPAN, endpoint=False)
+            for low, high in itertools.pairwise(spans)
+        ]
+        + [spans[-1:]]
+    )
     samples = np.matmul(basis(grid, knots, degree), lines.poles[..., :2])  # (U, samples, 2)
     excess = (samples**2).sum(axis=-1) - radius**2  # r^2 - R^2
     change = np.signbit(excess[:, :-1]) != np.signbit(excess[:, 1:])
-    if not (np.all(change.sum(axis=1) == 2) and np.all(excess[:, 0] < 0.0) and np.all(excess[:, -1] < 0.0)):
+    if not (
+        np.all(change.sum(axis=1) == 2)
+        and np.all(excess[:, 0] < 0.0)
+        and np.all(excess[:, -1] < 0.0)
+    ):
         return None
     rows, columns = np.nonzero(change)  # row-major: each line's lower crossing first
     low, high = grid[columns], grid[columns + 1]
@@ -230,8 +283,13 @@ def _crossings(lines: VLines, knots: NDArray[np.float64], degree: int, radius: f
     return None
 
 
-def _integrands(points: NDArray[np.float64], d_u: NDArray[np.float64], d_v: NDArray[np.float64], radius: float,
-                sign: float) -> NDArray[np.float64]:
+def _integrands(
+    points: NDArray[np.float64],
+    d_u: NDArray[np.float64],
+    d_v: NDArray[np.float64],
+    radius: float,
+    sign: float,
+) -> NDArray[np.float64]:
     """``(n, _INTEGRANDS)``: the volume, x, y, z moment, spin inertia, area, xz, yz, xy and
     x² - y² integrands per du dv at surface points with these derivatives (``sign`` -1 for a
     reversed face)."""
@@ -242,14 +300,29 @@ def _integrands(points: NDArray[np.float64], d_u: NDArray[np.float64], d_v: NDAr
     volume_k = 0.5 - radius**2 / (2.0 * r2)
     moment_k = (1.0 - radius**3 / (r2 * np.sqrt(r2))) / 3.0
     second_k = (1.0 - radius**4 / (r2 * r2)) / 4.0
-    return np.column_stack([radial * volume_k, radial * x * moment_k, radial * y * moment_k,
-                            radial * z * volume_k, radial * r2 * second_k, np.linalg.norm(normal, axis=1),
-                            radial * x * z * moment_k, radial * y * z * moment_k, radial * x * y * second_k,
-                            radial * (x * x - y * y) * second_k])
+    return np.column_stack(
+        [
+            radial * volume_k,
+            radial * x * moment_k,
+            radial * y * moment_k,
+            radial * z * volume_k,
+            radial * r2 * second_k,
+            np.linalg.norm(normal, axis=1),
+            radial * x * z * moment_k,
+            radial * y * z * moment_k,
+            radial * x * y * second_k,
+            radial * (x * x - y * y) * second_k,
+        ]
+    )
 
 
-def _v_integrals(lines: VLines, surface: SurfaceArrays, roots: NDArray[np.float64], integrands: _Integrands,
-                 gauss_points: int) -> tuple[_Array, _Array, NDArray[np.int64], _Array] | None:
+def _v_integrals(
+    lines: VLines,
+    surface: SurfaceArrays,
+    roots: NDArray[np.float64],
+    integrands: _Integrands,
+    gauss_points: int,
+) -> tuple[_Array, _Array, NDArray[np.int64], _Array] | None:
     """The integrals over v in [a(u), b(u)] of ``integrands`` on every line, adaptively.
 
     The pieces are the v knot spans clipped to [a, b] (a smooth integrand on each); each gets
@@ -282,7 +355,9 @@ def _v_integrals(lines: VLines, surface: SurfaceArrays, roots: NDArray[np.float6
             rows = np.repeat(row, len(x))
             if round_ == 0:  # whole spans: a tensor product, the rest node by node
                 split = len(lines_whole) * len(x)
-                point, d_u, d_v = tensor_evaluate(lines, spans, x, knots, degree, lines_whole, spans_whole)
+                point, d_u, d_v = tensor_evaluate(
+                    lines, spans, x, knots, degree, lines_whole, spans_whole
+                )
                 cut = evaluate(lines, rows[split:], v[split:], knots, degree)
                 point, d_u, d_v = (np.concatenate(pair) for pair in zip((point, d_u, d_v), cut))
             else:
@@ -298,16 +373,19 @@ def _v_integrals(lines: VLines, surface: SurfaceArrays, roots: NDArray[np.float6
         error = (np.abs(estimates[0] - estimates[1]) / scale[row]).max(axis=1)
         done = error <= V_RELATIVE_TOLERANCE * length / domain[row]
         np.add.at(totals, row[done], estimates[0][done])
-        row, start, length = (np.concatenate([values[~done]] * 2) for values in (row, start, length / 2.0))
-        start[len(start) // 2:] += length[len(start) // 2:]
+        row, start, length = (
+            np.concatenate([values[~done]] * 2) for values in (row, start, length / 2.0)
+        )
+        start[len(start) // 2 :] += length[len(start) // 2 :]
         if not len(row):
             points, rows, v = (np.concatenate(parts) for parts in zip(*kept))
             return totals, points, rows, v
     return None
 
 
-def _footprint_density(lines: VLines, root: NDArray[np.float64], surface: SurfaceArrays,
-                       radius: float) -> NDArray[np.float64]:
+def _footprint_density(
+    lines: VLines, root: NDArray[np.float64], surface: SurfaceArrays, radius: float
+) -> NDArray[np.float64]:
     """R z dθ/du along a crossing curve v = root(u): integrated over u, ± the area of the hole
     the curve cuts in the cylinder (R ∮ z dθ; the curve is closed, u runs once around the
     section and both ends are at the trailing edge). Along the curve v'(u) = -∂u(r²)/∂v(r²),

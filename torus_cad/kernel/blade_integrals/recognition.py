@@ -45,8 +45,9 @@ def recognise(shape: TopoDS_Shape) -> RecognisedHub | None:
     by_kind: dict[object, list[TopoDS_Face]] = {}
     for face in faces(shape):
         by_kind.setdefault(BRepAdaptor_Surface(face).GetType(), []).append(face)
-    cylinders, planes, blades = (by_kind.pop(kind, []) for kind in (GeomAbs_Cylinder, GeomAbs_Plane,
-                                                                     GeomAbs_BSplineSurface))
+    cylinders, planes, blades = (
+        by_kind.pop(kind, []) for kind in (GeomAbs_Cylinder, GeomAbs_Plane, GeomAbs_BSplineSurface)
+    )
     if by_kind or not cylinders or len(planes) != 2 or not blades:
         return None
     radii = _z_axis_cylinder_radii(cylinders)
@@ -64,15 +65,21 @@ def recognise(shape: TopoDS_Shape) -> RecognisedHub | None:
         TopExp.MapShapes_s(face, TopAbs_EDGE, cylinder_edges)
     for face in blades:
         if count(face, TopAbs_WIRE) != 1 or not all(
-                cylinder_edges.Contains(edge) or BRep_Tool.IsClosed_s(TopoDS.Edge_s(edge), face)
-                or _between_blade_faces(edge, blades) for edge in explore(face, TopAbs_EDGE)):
+            cylinder_edges.Contains(edge)
+            or BRep_Tool.IsClosed_s(TopoDS.Edge_s(edge), face)
+            or _between_blade_faces(edge, blades)
+            for edge in explore(face, TopAbs_EDGE)
+        ):
             return None
     return RecognisedHub(radius, z_bottom, z_top, blades, bore_radius)
 
 
 def _between_blade_faces(edge: TopoDS_Shape, blades: list[TopoDS_Face]) -> bool:
     """Whether ``edge`` bounds two of the blade faces (the side's faces meet there, inside the blade's boundary)."""
-    return sum(1 for face in blades if any(edge.IsSame(own) for own in explore(face, TopAbs_EDGE))) == 2
+    return (
+        sum(1 for face in blades if any(edge.IsSame(own) for own in explore(face, TopAbs_EDGE)))
+        == 2
+    )
 
 
 def _z_axis_cylinder_radii(faces: list[TopoDS_Face]) -> tuple[float, float] | None:
@@ -81,11 +88,16 @@ def _z_axis_cylinder_radii(faces: list[TopoDS_Face]) -> tuple[float, float] | No
     for face in faces:
         cylinder = BRepAdaptor_Surface(face).Cylinder()
         direction, origin = cylinder.Axis().Direction(), cylinder.Axis().Location()
-        if abs(abs(direction.Z()) - 1.0) > 1e-12 or math.hypot(origin.X(), origin.Y()) > RECOGNITION_TOLERANCE_MM:
+        if (
+            abs(abs(direction.Z()) - 1.0) > 1e-12
+            or math.hypot(origin.X(), origin.Y()) > RECOGNITION_TOLERANCE_MM
+        ):
             return None
         radii.append(cylinder.Radius())
     outer, inner = max(radii), min(radii)
-    if any(min(abs(value - outer), abs(value - inner)) > RECOGNITION_TOLERANCE_MM for value in radii):
+    if any(
+        min(abs(value - outer), abs(value - inner)) > RECOGNITION_TOLERANCE_MM for value in radii
+    ):
         return None  # a third radius
     return (outer, 0.0) if outer - inner <= RECOGNITION_TOLERANCE_MM else (outer, inner)
 
@@ -94,7 +106,9 @@ def _end_disc_z(face: TopoDS_Face, radius: float, bore_radius: float = 0.0) -> f
     """z of a plane face that is a whole disc of ``radius`` about the z axis (an annulus round a bore of
     ``bore_radius``), else None."""
     plane = BRepAdaptor_Surface(face).Plane()
-    if abs(abs(plane.Axis().Direction().Z()) - 1.0) > 1e-12 or count(face, TopAbs_WIRE) != (2 if bore_radius else 1):
+    if abs(abs(plane.Axis().Direction().Z()) - 1.0) > 1e-12 or count(face, TopAbs_WIRE) != (
+        2 if bore_radius else 1
+    ):
         return None
     for edge in explore(face, TopAbs_EDGE):
         curve = BRepAdaptor_Curve(TopoDS.Edge_s(edge))
@@ -102,8 +116,14 @@ def _end_disc_z(face: TopoDS_Face, radius: float, bore_radius: float = 0.0) -> f
             return None
         circle = curve.Circle()
         centre = circle.Location()
-        if (min(abs(circle.Radius() - radius), abs(circle.Radius() - bore_radius) if bore_radius else math.inf)
-                > RECOGNITION_TOLERANCE_MM or math.hypot(centre.X(), centre.Y()) > RECOGNITION_TOLERANCE_MM):
+        if (
+            min(
+                abs(circle.Radius() - radius),
+                abs(circle.Radius() - bore_radius) if bore_radius else math.inf,
+            )
+            > RECOGNITION_TOLERANCE_MM
+            or math.hypot(centre.X(), centre.Y()) > RECOGNITION_TOLERANCE_MM
+        ):
             return None
     return float(plane.Location().Z())
 
@@ -113,12 +133,26 @@ def base_surface_and_angle(face: TopoDS_Face) -> tuple[Geom_BSplineSurface | Non
     None for a surface that is not a plain B-spline or a location that is not such a rotation."""
     location = TopLoc_Location()
     surface = BRep_Tool.Surface_s(face, location)
-    if not isinstance(surface, Geom_BSplineSurface) or surface.IsURational() or surface.IsVRational() \
-            or surface.IsUPeriodic() or surface.IsVPeriodic():
+    if (
+        not isinstance(surface, Geom_BSplineSurface)
+        or surface.IsURational()
+        or surface.IsVRational()
+        or surface.IsUPeriodic()
+        or surface.IsVPeriodic()
+    ):
         return None, None
-    matrix = np.array([[location.Transformation().Value(row, column) for column in range(1, 5)]
-                       for row in range(1, 4)])
+    matrix = np.array(
+        [
+            [location.Transformation().Value(row, column) for column in range(1, 5)]
+            for row in range(1, 4)
+        ]
+    )
     angle = math.atan2(matrix[1, 0], matrix[0, 0])
-    rotation = np.array([[math.cos(angle), -math.sin(angle), 0.0, 0.0],
-                         [math.sin(angle), math.cos(angle), 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]])
+    rotation = np.array(
+        [
+            [math.cos(angle), -math.sin(angle), 0.0, 0.0],
+            [math.sin(angle), math.cos(angle), 0.0, 0.0],
+            [0.0, 0.0, 1.0, 0.0],
+        ]
+    )
     return surface, (angle if np.abs(matrix - rotation).max() <= 1e-12 else None)

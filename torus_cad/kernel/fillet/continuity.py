@@ -56,9 +56,12 @@ def c1_fillet(solid: cq.Solid, face_parts: Sequence[int]) -> tuple[cq.Solid, tup
     divide = ShapeUpgrade_ShapeDivideContinuity(solid.wrapped)
     divide.SetSurfaceCriterion(GeomAbs_C1)
     divide.SetBoundaryCriterion(GeomAbs_C1)
-    divide.SetPCurveCriterion(GeomAbs_C0)  # p-curves' own knots are no fault: splitting them makes tiny edges
+    # p-curves' own knots are no fault: splitting them makes tiny edges
+    divide.SetPCurveCriterion(GeomAbs_C0)
     if not divide.Perform():
-        raise KernelError("OpenCascade could not split the root fillet's C0 faces (ShapeUpgrade_ShapeDivideContinuity)")
+        raise KernelError(
+            "OpenCascade could not split the root fillet's C0 faces (ShapeUpgrade_ShapeDivideContinuity)"
+        )
     divided = divide.Result()
     context = divide.GetContext()
     fixer = ShapeFix_Edge()
@@ -68,16 +71,22 @@ def c1_fillet(solid: cq.Solid, face_parts: Sequence[int]) -> tuple[cq.Solid, tup
             fixer.FixSameParameter(edge)
     _cover_deviations(divided)
     checked = single_valid_solid(cq.Shape.cast(divided), "splitting the root fillet's C0 faces")
-    origins = face_provenance.through_reshape(context, face_provenance.labelled_faces(solid.wrapped, face_parts),
-                                              checked.wrapped)
+    origins = face_provenance.through_reshape(
+        context, face_provenance.labelled_faces(solid.wrapped, face_parts), checked.wrapped
+    )
     return checked, face_provenance.face_parts(checked.wrapped, origins)
 
 
 def _has_c0(shape: TopoDS_Shape) -> bool:
-    return (any(BRep_Tool.Surface_s(TopoDS.Face_s(face)).Continuity() == GeomAbs_C0
-                for face in explore(shape, TopAbs_FACE))
-            or any(curve is not None and curve.Continuity() == GeomAbs_C0
-                   for curve in (BRep_Tool.Curve_s(TopoDS.Edge_s(edge), 0.0, 0.0) for edge in explore(shape, TopAbs_EDGE))))
+    return any(
+        BRep_Tool.Surface_s(TopoDS.Face_s(face)).Continuity() == GeomAbs_C0
+        for face in explore(shape, TopAbs_FACE)
+    ) or any(
+        curve is not None and curve.Continuity() == GeomAbs_C0
+        for curve in (
+            BRep_Tool.Curve_s(TopoDS.Edge_s(edge), 0.0, 0.0) for edge in explore(shape, TopAbs_EDGE)
+        )
+    )
 
 
 def _cover_deviations(shape: TopoDS_Shape) -> None:
@@ -92,7 +101,10 @@ def _cover_deviations(shape: TopoDS_Shape) -> None:
         if BRep_Tool.Degenerated_s(edge):
             continue
         tolerance = BRep_Tool.Tolerance_s(edge)
-        deviation = max(curve_on_surface_deviation(edge, face) for face in distinct_faces(ancestors.FindFromIndex(index)))
+        deviation = max(
+            curve_on_surface_deviation(edge, face)
+            for face in distinct_faces(ancestors.FindFromIndex(index))
+        )
         if deviation > tolerance:
             covered = deviation * FILLET_EDGE_TOLERANCE_MARGIN
             builder.UpdateEdge(edge, covered)

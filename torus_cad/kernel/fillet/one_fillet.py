@@ -8,7 +8,6 @@ less volume) and add no more volume than a fillet's cross-section along the junc
 (REPAIRED_FILLET_MAX_AREA_RADII2 x r^2 per mm).
 """
 
-
 from __future__ import annotations
 
 import time
@@ -56,9 +55,14 @@ class Filleted(NamedTuple):
     face_parts: tuple[int, ...]
 
 
-def fillet_edges(solid: cq.Solid, edges: list[TopoDS_Edge], radius_mm: float,
-                 params: FilletParams | None = None, edge_radii: Sequence[float] | None = None,
-                 face_parts: Sequence[int] | None = None) -> Filleted | None:
+def fillet_edges(
+    solid: cq.Solid,
+    edges: list[TopoDS_Edge],
+    radius_mm: float,
+    params: FilletParams | None = None,
+    edge_radii: Sequence[float] | None = None,
+    face_parts: Sequence[int] | None = None,
+) -> Filleted | None:
     """The fillet in this process: the checked solid, or None when OpenCascade fails or the result is unsound.
 
     ``params``: BRepFilletAPI_MakeFillet.SetParams values (default: OpenCascade's). ``edge_radii``:
@@ -73,7 +77,11 @@ def fillet_edges(solid: cq.Solid, edges: list[TopoDS_Edge], radius_mm: float,
     for edge, radius in zip(edges, edge_radii or ()):
         if radius < radius_mm:
             contour = fillet.Contour(edge)
-            index = next(i for i in range(1, fillet.NbEdges(contour) + 1) if fillet.Edge(contour, i).IsSame(edge))
+            index = next(
+                i
+                for i in range(1, fillet.NbEdges(contour) + 1)
+                if fillet.Edge(contour, i).IsSame(edge)
+            )
             fillet.SetRadius(radius, contour, index)
     try:
         fillet.Build()
@@ -91,39 +99,56 @@ def fillet_edges(solid: cq.Solid, edges: list[TopoDS_Edge], radius_mm: float,
             result = single_valid_solid(cq.Shape.cast(fix.Shape()), "the repaired root fillet")
         except KernelError:
             return None
-    added_mm3 = (precise_volume(result, VOLUME_CHECK_RELATIVE_PRECISION)
-                 - precise_volume(solid, VOLUME_CHECK_RELATIVE_PRECISION))
+    added_mm3 = precise_volume(result, VOLUME_CHECK_RELATIVE_PRECISION) - precise_volume(
+        solid, VOLUME_CHECK_RELATIVE_PRECISION
+    )
     # A concave fillet only adds material: a smaller volume means a wrong result. A repaired one
     # must also add no more than a fillet's cross-section along the junction.
     if added_mm3 < 0.0:
         return None
-    if fix is not None and added_mm3 > REPAIRED_FILLET_MAX_AREA_RADII2 * radius_mm ** 2 * sum(
-            cq.Edge(edge).Length() for edge in edges):
+    if fix is not None and added_mm3 > REPAIRED_FILLET_MAX_AREA_RADII2 * radius_mm**2 * sum(
+        cq.Edge(edge).Length() for edge in edges
+    ):
         return None
     if face_parts is None:
         return Filleted(result, ())
     return Filleted(result, _filleted_face_parts(fillet, fix, solid, face_parts, result))
 
 
-def _filleted_face_parts(fillet: BRepFilletAPI_MakeFillet, fix: ShapeFix_Shape | None, solid: cq.Solid,
-                         face_parts: Sequence[int], result: cq.Solid) -> tuple[int, ...]:
+def _filleted_face_parts(
+    fillet: BRepFilletAPI_MakeFillet,
+    fix: ShapeFix_Shape | None,
+    solid: cq.Solid,
+    face_parts: Sequence[int],
+    result: cq.Solid,
+) -> tuple[int, ...]:
     """The part of each face of ``result`` through the fillet's history (and ShapeFix's, if it mended it)."""
-    origins = (face_provenance.through_history(fillet, face_provenance.labelled_faces(solid.wrapped, face_parts))
-               + face_provenance.fillet_faces(fillet, solid.wrapped, face_parts))
+    origins = face_provenance.through_history(
+        fillet, face_provenance.labelled_faces(solid.wrapped, face_parts)
+    ) + face_provenance.fillet_faces(fillet, solid.wrapped, face_parts)
     if fix is not None:
         origins = face_provenance.through_reshape(fix.Context(), origins, result.wrapped)
     return face_provenance.face_parts(result.wrapped, origins)
 
 
-def fillet_in_child(solid: cq.Solid, edges: list[TopoDS_Edge], radius_mm: float,
-                    params: FilletParams | None = None, deadline: float | None = None,
-                    edge_radii: Sequence[float] | None = None, face_parts: Sequence[int] | None = None
-                    ) -> Filleted | None:
+def fillet_in_child(
+    solid: cq.Solid,
+    edges: list[TopoDS_Edge],
+    radius_mm: float,
+    params: FilletParams | None = None,
+    deadline: float | None = None,
+    edge_radii: Sequence[float] | None = None,
+    face_parts: Sequence[int] | None = None,
+) -> Filleted | None:
     """:func:`fillet_edges` in a forked child (torus_cad.runtime.isolation): a crash or a hang there is
     a failed fillet, not a dead process. The child sends the solid as a BRep string, with its face parts.
 
     The child gets FILLET_TIME_LIMIT_S, or what is left until ``deadline`` (time.monotonic()) if less."""
-    limit_s = FILLET_TIME_LIMIT_S if deadline is None else min(FILLET_TIME_LIMIT_S, deadline - time.monotonic())
+    limit_s = (
+        FILLET_TIME_LIMIT_S
+        if deadline is None
+        else min(FILLET_TIME_LIMIT_S, deadline - time.monotonic())
+    )
     if limit_s <= 0.0:
         return None
 
@@ -141,5 +166,6 @@ def fillet_in_child(solid: cq.Solid, edges: list[TopoDS_Edge], radius_mm: float,
     if not data:
         return None
     brep, parts = data
-    return Filleted(single_valid_solid(cq.Shape.cast(shape_from_bytes(brep)), "the root fillet"), parts)
-
+    return Filleted(
+        single_valid_solid(cq.Shape.cast(shape_from_bytes(brep)), "the root fillet"), parts
+    )

@@ -8,7 +8,6 @@ roll over the hub's edge, the tries are made on a hub longer at both ends (the r
 the result is cut back to the hub's length, sparing a blade that itself passes the hub's end.
 """
 
-
 from __future__ import annotations
 
 import dataclasses
@@ -71,8 +70,14 @@ RunOutHub = Callable[[float], tuple[cq.Solid, list[TopoDS_Shape]]]
 _RUN_OUT_RADII = 3.0
 
 
-def fillet_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], radius_mm: float,
-                   run_out: RunOutHub | None = None, reduce_where_tight: bool = False) -> RootFillet:
+def fillet_pattern(
+    hub: cq.Solid,
+    blade: cq.Solid,
+    angles_deg: Sequence[float],
+    radius_mm: float,
+    run_out: RunOutHub | None = None,
+    reduce_where_tight: bool = False,
+) -> RootFillet:
     """The filleted propeller from one filleted blade: blade 0 joined to ``hub``, filleted, patterned.
 
     ``blade`` is built at ``angles_deg[0]``; its side face is split as
@@ -102,18 +107,26 @@ def fillet_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], 
         pass
     deadline = time.monotonic() + FILLET_TRIES_TIME_LIMIT_S  # the further tries' shared time
     attempt = _RunOut(blade, angles_deg, radius_mm, run_out)
-    filleted = _first_that_works(hub, split, angles_deg, radius_mm, FILLET_TRIES[1:], deadline, reduce=False)
+    filleted = _first_that_works(
+        hub, split, angles_deg, radius_mm, FILLET_TRIES[1:], deadline, reduce=False
+    )
     if filleted is None:
         filleted = attempt.tries(split, deadline, reduce=False)
     if filleted is not None:
         return filleted
-    joined = single_valid_solid(fuse_pattern(hub, split[0], angles_deg[:1], refit_edges=False).shape, "joining blade 0 to the hub")
+    joined = single_valid_solid(
+        fuse_pattern(hub, split[0], angles_deg[:1], refit_edges=False).shape,
+        "joining blade 0 to the hub",
+    )
     smallest_mm = min(reduced_edge_radii(joined, junction_edges(joined), radius_mm))
     if smallest_mm < radius_mm and not reduce_where_tight:
         raise fillet_failure(joined, radius_mm, tight_bend_mm=smallest_mm / REDUCED_FILLET_FRACTION)
     if smallest_mm < radius_mm:
-        deadline = time.monotonic() + FILLET_TRIES_TIME_LIMIT_S  # the reduced tries get the same time again
-        filleted = _first_that_works(hub, split, angles_deg, radius_mm, FILLET_TRIES, deadline, reduce=True)
+        # the reduced tries get the same time again
+        deadline = time.monotonic() + FILLET_TRIES_TIME_LIMIT_S
+        filleted = _first_that_works(
+            hub, split, angles_deg, radius_mm, FILLET_TRIES, deadline, reduce=True
+        )
         if filleted is None:
             filleted = attempt.tries(split, deadline, reduce=True)
         if filleted is not None:
@@ -122,18 +135,33 @@ def fillet_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], 
     raise fillet_failure(joined, radius_mm)
 
 
-def _first_that_works(hub: cq.Solid, split: _LazySplits, angles_deg: Sequence[float], radius_mm: float,
-                      tries: Sequence[tuple[int, FilletParams | None]], deadline: float, reduce: bool,
-                      finish: Callable[[RootFillet], RootFillet] | None = None) -> RootFillet | None:
+def _first_that_works(
+    hub: cq.Solid,
+    split: _LazySplits,
+    angles_deg: Sequence[float],
+    radius_mm: float,
+    tries: Sequence[tuple[int, FilletParams | None]],
+    deadline: float,
+    reduce: bool,
+    finish: Callable[[RootFillet], RootFillet] | None = None,
+) -> RootFillet | None:
     """The first of ``tries`` (as :data:`FILLET_TRIES`) that works on ``hub``, passed through ``finish``
     (a KernelError there counts as a failed try; the edges are made readable from STEP after it, not
     before); None if none does. Each try stops at FILLET_RETRY_TIME_LIMIT_S (one that saves a design
     does so in under a second), all by ``deadline``."""
     for index, params in tries:
         try:
-            made = _fillet_and_pattern(hub, split[index], angles_deg, radius_mm, suggest=False, params=params,
-                                       deadline=min(deadline, time.monotonic() + FILLET_RETRY_TIME_LIMIT_S),
-                                       reduce=reduce, readable=finish is None)
+            made = _fillet_and_pattern(
+                hub,
+                split[index],
+                angles_deg,
+                radius_mm,
+                suggest=False,
+                params=params,
+                deadline=min(deadline, time.monotonic() + FILLET_RETRY_TIME_LIMIT_S),
+                reduce=reduce,
+                readable=finish is None,
+            )
             return made if finish is None else finish(made)
         except KernelError:
             pass
@@ -143,8 +171,19 @@ def _first_that_works(hub: cq.Solid, split: _LazySplits, angles_deg: Sequence[fl
 class _RunOut:
     """The tries on the run-out hub (see :func:`fillet_pattern`), made when first needed."""
 
-    def __init__(self, blade: cq.Solid, angles_deg: Sequence[float], radius_mm: float, run_out: RunOutHub | None) -> None:
-        self.blade, self.angles_deg, self.radius_mm, self.run_out = blade, angles_deg, radius_mm, run_out
+    def __init__(
+        self,
+        blade: cq.Solid,
+        angles_deg: Sequence[float],
+        radius_mm: float,
+        run_out: RunOutHub | None,
+    ) -> None:
+        self.blade, self.angles_deg, self.radius_mm, self.run_out = (
+            blade,
+            angles_deg,
+            radius_mm,
+            run_out,
+        )
         self.made: tuple[cq.Solid, list[TopoDS_Shape], Origins] | None = None
 
     def _hub_and_tools(self) -> tuple[cq.Solid, list[TopoDS_Shape], Origins]:
@@ -155,14 +194,21 @@ class _RunOut:
             extended, tools = self.run_out(_RUN_OUT_RADII * self.radius_mm)
             slabs, others = tools[:2], tools[2:]
             origins: Origins = [(face, HUB_PART) for tool in others for face in faces(tool)]
-            if _touches(self.blade, slabs):  # the blade itself reaches past a hub end: the cut-back keeps it there
+            # the blade itself reaches past a hub end: the cut-back keeps it there
+            if _touches(self.blade, slabs):
                 blades = [copy.wrapped for copy in pattern_blades(self.blade, self.angles_deg)]
-                blade_faces = [(face, index) for index, copy in enumerate(blades) for face in faces(copy)]
+                blade_faces = [
+                    (face, index) for index, copy in enumerate(blades) for face in faces(copy)
+                ]
                 cut_slabs = []
                 for slab in slabs:
                     operation = boolean(BRepAlgoAPI_Cut(), [slab], blades)
-                    cut_slabs.append(result(operation, "keep the blades out of the run-out's cut-back"))
-                    origins += face_provenance.through_history(operation, [(f, HUB_PART) for f in faces(slab)] + blade_faces)
+                    cut_slabs.append(
+                        result(operation, "keep the blades out of the run-out's cut-back")
+                    )
+                    origins += face_provenance.through_history(
+                        operation, [(f, HUB_PART) for f in faces(slab)] + blade_faces
+                    )
                 slabs = cut_slabs
             else:
                 origins += [(face, HUB_PART) for slab in slabs for face in faces(slab)]
@@ -179,12 +225,25 @@ class _RunOut:
             operation = boolean(BRepAlgoAPI_Cut(), [made.solid.wrapped], tools)
             shape = result(operation, "cut the run-out hub back to the hub's length")
             solid = single_valid_solid(cq.Shape.cast(shape), "cutting the run-out hub back")
-            origins = face_provenance.labelled_faces(made.solid.wrapped, made.face_parts) + tool_faces
-            parts = face_provenance.face_parts(solid.wrapped, face_provenance.through_history(operation, origins))
+            origins = (
+                face_provenance.labelled_faces(made.solid.wrapped, made.face_parts) + tool_faces
+            )
+            parts = face_provenance.face_parts(
+                solid.wrapped, face_provenance.through_history(operation, origins)
+            )
             solid, parts = made_readable(solid, parts)  # the cut's new edges too
             return dataclasses.replace(made, solid=solid, face_parts=parts)
 
-        return _first_that_works(extended, split, self.angles_deg, self.radius_mm, FILLET_TRIES, deadline, reduce, cut_back)
+        return _first_that_works(
+            extended,
+            split,
+            self.angles_deg,
+            self.radius_mm,
+            FILLET_TRIES,
+            deadline,
+            reduce,
+            cut_back,
+        )
 
 
 class _LazySplits:
@@ -204,24 +263,52 @@ class _LazySplits:
         return (self[index] for index in range(len(SIDE_FACE_PIECES)))
 
 
-def _fillet_and_pattern(hub: cq.Solid, blade: cq.Solid, angles_deg: Sequence[float], radius_mm: float,
-                        suggest: bool = True, params: FilletParams | None = None,
-                        deadline: float | None = None, reduce: bool = False, readable: bool = True) -> RootFillet:
+def _fillet_and_pattern(
+    hub: cq.Solid,
+    blade: cq.Solid,
+    angles_deg: Sequence[float],
+    radius_mm: float,
+    suggest: bool = True,
+    params: FilletParams | None = None,
+    deadline: float | None = None,
+    reduce: bool = False,
+    readable: bool = True,
+) -> RootFillet:
     single = fuse_pattern(hub, blade, angles_deg[:1], refit_edges=False)
-    filleted = fillet_blade_roots(single_valid_solid(single.shape, "joining blade 0 to the hub"), single.face_parts,
-                                  radius_mm, suggest, params, deadline, reduce, readable)
+    filleted = fillet_blade_roots(
+        single_valid_solid(single.shape, "joining blade 0 to the hub"),
+        single.face_parts,
+        radius_mm,
+        suggest,
+        params,
+        deadline,
+        reduce,
+        readable,
+    )
     if len(angles_deg) == 1:
         return filleted
     try:
         assembled, origins = _assemble_filleted(filleted.solid.wrapped, angles_deg)
         solid = single_valid_solid(cq.Shape.cast(assembled), "patterning the filleted blade")
-        return dataclasses.replace(filleted, solid=solid, face_parts=face_provenance.face_parts(solid.wrapped, origins))
+        return dataclasses.replace(
+            filleted, solid=solid, face_parts=face_provenance.face_parts(solid.wrapped, origins)
+        )
     except KernelError:
         whole = fuse_pattern(hub, blade, angles_deg, refit_edges=False)
-        everywhere = fillet_blade_roots(single_valid_solid(whole.shape, "joining the blades to the hub"),
-                                        whole.face_parts, radius_mm, suggest, params, deadline, reduce, readable)
+        everywhere = fillet_blade_roots(
+            single_valid_solid(whole.shape, "joining the blades to the hub"),
+            whole.face_parts,
+            radius_mm,
+            suggest,
+            params,
+            deadline,
+            reduce,
+            readable,
+        )
         # every blade's junction is the same: report blade 0's share
-        return dataclasses.replace(everywhere, varying_junction_mm=everywhere.varying_junction_mm / len(angles_deg))
+        return dataclasses.replace(
+            everywhere, varying_junction_mm=everywhere.varying_junction_mm / len(angles_deg)
+        )
 
 
 def _touches(shape: cq.Solid, tools: Sequence[TopoDS_Shape]) -> bool:
@@ -233,7 +320,9 @@ def _touches(shape: cq.Solid, tools: Sequence[TopoDS_Shape]) -> bool:
     return False
 
 
-def _assemble_filleted(filleted: TopoDS_Shape, angles_deg: Sequence[float]) -> tuple[TopoDS_Solid, Origins]:
+def _assemble_filleted(
+    filleted: TopoDS_Shape, angles_deg: Sequence[float]
+) -> tuple[TopoDS_Solid, Origins]:
     """The shell of the hub with every blade: blade 0's blade and fillet faces rotated to each
     angle (blade i's by construction, as each face's part), the hub's faces the hub's.
 
@@ -249,8 +338,12 @@ def _assemble_filleted(filleted: TopoDS_Shape, angles_deg: Sequence[float]) -> t
     for face in blade_faces:
         TopExp.MapShapes_s(face, TopAbs_EDGE, blade_edges)
     outer_wire = BRepTools.OuterWire_s(lateral)
-    inner_wires = [TopoDS.Wire_s(wire) for wire in explore(lateral, TopAbs_WIRE) if not wire.IsSame(outer_wire)]
-    blade_holes = [wire for wire in inner_wires if blade_edges.Contains(explore(wire, TopAbs_EDGE)[0])]
+    inner_wires = [
+        TopoDS.Wire_s(wire) for wire in explore(lateral, TopAbs_WIRE) if not wire.IsSame(outer_wire)
+    ]
+    blade_holes = [
+        wire for wire in inner_wires if blade_edges.Contains(explore(wire, TopAbs_EDGE)[0])
+    ]
     lateral_with_holes = BRepBuilderAPI_MakeFace(BRep_Tool.Surface_s(lateral), outer_wire, True)
     for wire in inner_wires:
         if not any(wire.IsSame(hole) for hole in blade_holes):
@@ -262,20 +355,32 @@ def _assemble_filleted(filleted: TopoDS_Shape, angles_deg: Sequence[float]) -> t
             lateral_with_holes.Add(TopoDS.Wire_s(wire.Moved(location)))
         origins.extend((face.Moved(location), index) for face in blade_faces)
     if not lateral_with_holes.IsDone():
-        raise KernelError("OpenCascade could not cut the filleted blade roots out of the hub's lateral face")
+        raise KernelError(
+            "OpenCascade could not cut the filleted blade roots out of the hub's lateral face"
+        )
     new_lateral = lateral_with_holes.Face()
     new_lateral.Orientation(lateral.Orientation())
-    hub_faces = [new_lateral, *(face for face in faces
-                                if not face.IsSame(lateral) and BRepAdaptor_Surface(face).GetType() not in BLADE_SURFACES)]
+    hub_faces = [
+        new_lateral,
+        *(
+            face
+            for face in faces
+            if not face.IsSame(lateral)
+            and BRepAdaptor_Surface(face).GetType() not in BLADE_SURFACES
+        ),
+    ]
     origins.extend((face, HUB_PART) for face in hub_faces)
     return solid_of_faces(origins), origins
 
 
-def _shift_hole_curves(holes: Sequence[TopoDS_Wire], lateral: TopoDS_Face, angle_rad: float) -> TopLoc_Location:
+def _shift_hole_curves(
+    holes: Sequence[TopoDS_Wire], lateral: TopoDS_Face, angle_rad: float
+) -> TopLoc_Location:
     """The rotation by ``angle_rad`` about +z; the rotated hole edges get their curves on ``lateral`` shifted in u."""
     rotation = gp_Trsf()
     rotation.SetRotation(gp_Ax1(gp_Pnt(0.0, 0.0, 0.0), gp_Dir(0.0, 0.0, 1.0)), angle_rad)
-    location = TopLoc_Location(rotation)  # not the empty location even at 0: every copy gets its curves
+    # not the empty location even at 0: every copy gets its curves
+    location = TopLoc_Location(rotation)
     builder = BRep_Builder()
     for wire in holes:
         u_min, u_max, _, _ = BRepTools.UVBounds_s(lateral, wire)
@@ -288,13 +393,18 @@ def _shift_hole_curves(holes: Sequence[TopoDS_Wire], lateral: TopoDS_Face, angle
             if curve is None:
                 raise KernelError("a fillet contact edge has no curve on the hub")
             moved = TopoDS.Edge_s(edge.Moved(location))
-            builder.UpdateEdge(moved, curve.Translated(gp_Vec2d(shift, 0.0)), lateral, BRep_Tool.Tolerance_s(edge))
+            builder.UpdateEdge(
+                moved, curve.Translated(gp_Vec2d(shift, 0.0)), lateral, BRep_Tool.Tolerance_s(edge)
+            )
     return location
 
 
 def _outer_cylinder(faces: Sequence[TopoDS_Face]) -> TopoDS_Face:
-    cylinders = [(BRepAdaptor_Surface(face).Cylinder().Radius(), index, face) for index, face in enumerate(faces)
-                 if BRepAdaptor_Surface(face).GetType() == GeomAbs_Cylinder]
+    cylinders = [
+        (BRepAdaptor_Surface(face).Cylinder().Radius(), index, face)
+        for index, face in enumerate(faces)
+        if BRepAdaptor_Surface(face).GetType() == GeomAbs_Cylinder
+    ]
     if not cylinders:
         raise KernelError("the filleted hub has no cylindrical face")
     return max(cylinders, key=lambda item: item[:2])[2]

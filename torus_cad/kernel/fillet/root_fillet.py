@@ -11,7 +11,6 @@ process and its repair (``one_fillet``), the blade bends too tight for the ball
 Why each step is there: docs/explanation/how-the-solid-is-built.md.
 """
 
-
 from __future__ import annotations
 
 from collections.abc import Sequence
@@ -50,10 +49,11 @@ TIGHT_FILLET_PARAMS = (1e-3, 1e-5, 1e-6, 1e-5, 1e-6, 1e-4)
 FILLET_TRIES = ((0, None), (1, None), (0, TIGHT_FILLET_PARAMS), (2, None), (3, None))
 
 
-#: A fillet whose solid has a tolerance over this (mm) counts as failed, so the next try is made: OpenCascade
-#: can return a fillet whose surfaces part from the blade by up to 0.07 mm (an 8-blade design with 45 %
-#: thick sections and a 0.5 mm fillet), valid in memory but not once a STEP reader gives its edges what it
-#: samples (edges shorter than that, curves parting more); good fillets stay under 2e-3 mm.
+#: A fillet whose solid has a tolerance over this (mm) counts as failed, so the next try is made:
+#: OpenCascade can return a fillet whose surfaces part from the blade by up to 0.07 mm (an 8-blade
+#: design with 45 % thick sections and a 0.5 mm fillet), valid in memory but not once a STEP reader
+#: gives its edges what it samples (edges shorter than that, curves parting more); good fillets stay
+#: under 2e-3 mm.
 FILLET_TOLERANCE_MAX_MM = 0.01
 
 #: Radii tried, as fractions of the requested one, to suggest a radius that works.
@@ -67,7 +67,9 @@ def prepare_blade_for_fillet(blade: cq.Solid, pieces: int = SIDE_FACE_PIECES[0])
     divide.Perform()
     solids = cq.Shape.cast(divide.Result()).Solids()
     if len(solids) != 1:
-        raise KernelError("splitting the blade's side face for the root fillet did not give one solid")
+        raise KernelError(
+            "splitting the blade's side face for the root fillet did not give one solid"
+        )
     return solids[0]
 
 
@@ -77,8 +79,10 @@ def junction_edges(solid: cq.Solid) -> list[TopoDS_Edge]:
     TopExp.MapShapesAndAncestors_s(solid.wrapped, TopAbs_EDGE, TopAbs_FACE, ancestors)
     edges = []
     for index in range(1, ancestors.Extent() + 1):
-        kinds = {BRepAdaptor_Surface(TopoDS.Face_s(face)).GetType() in BLADE_SURFACES
-                 for face in ancestors.FindFromIndex(index)}
+        kinds = {
+            BRepAdaptor_Surface(TopoDS.Face_s(face)).GetType() in BLADE_SURFACES
+            for face in ancestors.FindFromIndex(index)
+        }
         if kinds == {True, False}:
             edges.append(TopoDS.Edge_s(ancestors.FindKey(index)))
     return edges
@@ -114,14 +118,24 @@ class RootFillet:
 
     def to_dict(self) -> dict[str, float | bool]:
         """For the JSON report."""
-        return {"radius_mm": self.radius_mm, "constant_radius": self.constant_radius,
-                "smallest_radius_mm": self.smallest_radius_mm,
-                "varying_junction_per_blade_mm": self.varying_junction_mm}
+        return {
+            "radius_mm": self.radius_mm,
+            "constant_radius": self.constant_radius,
+            "smallest_radius_mm": self.smallest_radius_mm,
+            "varying_junction_per_blade_mm": self.varying_junction_mm,
+        }
 
 
-def fillet_blade_roots(solid: cq.Solid, face_parts: Sequence[int], radius_mm: float, suggest: bool = True,
-                       params: FilletParams | None = None, deadline: float | None = None,
-                       reduce: bool = False, readable: bool = True) -> RootFillet:
+def fillet_blade_roots(
+    solid: cq.Solid,
+    face_parts: Sequence[int],
+    radius_mm: float,
+    suggest: bool = True,
+    params: FilletParams | None = None,
+    deadline: float | None = None,
+    reduce: bool = False,
+    readable: bool = True,
+) -> RootFillet:
     """``solid`` (its faces' parts ``face_parts``) with a fillet of ``radius_mm`` along every
     blade-hub junction; one valid solid, with its faces' parts.
 
@@ -136,16 +150,25 @@ def fillet_blade_roots(solid: cq.Solid, face_parts: Sequence[int], radius_mm: fl
     if not edges:
         raise KernelError("root fillet failed: no blade-hub junction edges found")
     radii = reduced_edge_radii(solid, edges, radius_mm) if reduce else [radius_mm] * len(edges)
-    filleted = fillet_in_child(solid, edges, radius_mm, params, deadline, radii if reduce else None, face_parts)
+    filleted = fillet_in_child(
+        solid, edges, radius_mm, params, deadline, radii if reduce else None, face_parts
+    )
     if filleted is not None:
         try:  # no C0 face or edge (kernel.fillet_continuity)
             smooth, parts = c1_fillet(filleted.solid, filleted.face_parts)
-        except KernelError:  # the split would not give a valid solid: the fillet as OpenCascade made it
+        # the split would not give a valid solid: the fillet as OpenCascade made it
+        except KernelError:
             smooth, parts = filleted.solid, tuple(filleted.face_parts)
         if readable:
             smooth, parts = made_readable(smooth, parts)
         _check_tolerance(smooth, radius_mm)
-        return RootFillet(smooth, radius_mm, min(radii), varying_junction_mm(solid, edges, radii, radius_mm), parts)
+        return RootFillet(
+            smooth,
+            radius_mm,
+            min(radii),
+            varying_junction_mm(solid, edges, radii, radius_mm),
+            parts,
+        )
     if not suggest:
         raise KernelError(f"root fillet failed at hub.root_fillet_radius = {radius_mm:g} mm")
     raise fillet_failure(solid, radius_mm)
@@ -156,8 +179,10 @@ def _check_tolerance(solid: cq.Solid, radius_mm: float) -> None:
     ``radius_mm`` is then only near its blade and hub: the module's FILLET_TOLERANCE_MAX_MM)."""
     greatest = ShapeAnalysis_ShapeTolerance().Tolerance(solid.wrapped, 1)
     if greatest > FILLET_TOLERANCE_MAX_MM:
-        raise KernelError(f"root fillet failed at hub.root_fillet_radius = {radius_mm:g} mm: OpenCascade's fillet "
-                          f"parts from the blade or hub by up to {greatest:.2g} mm (over {FILLET_TOLERANCE_MAX_MM:g} mm)")
+        raise KernelError(
+            f"root fillet failed at hub.root_fillet_radius = {radius_mm:g} mm: OpenCascade's fillet "
+            f"parts from the blade or hub by up to {greatest:.2g} mm (over {FILLET_TOLERANCE_MAX_MM:g} mm)"
+        )
 
 
 def made_readable(solid: cq.Solid, face_parts: Sequence[int]) -> tuple[cq.Solid, tuple[int, ...]]:
@@ -171,18 +196,34 @@ def made_readable(solid: cq.Solid, face_parts: Sequence[int]) -> tuple[cq.Solid,
     return readable.solid, readable.face_parts
 
 
-def fillet_failure(solid: cq.Solid, radius_mm: float, tight_bend_mm: float | None = None) -> KernelError:
+def fillet_failure(
+    solid: cq.Solid, radius_mm: float, tight_bend_mm: float | None = None
+) -> KernelError:
     """The error for a fillet of ``radius_mm`` that failed on ``solid``; it names a smaller radius
     that works on ``solid`` if one of :data:`_FALLBACK_FRACTIONS` of it does, and, with
     ``tight_bend_mm`` (the tightest concave bend of a blade face along the junction, mm), says that
     the blade bends too tightly for a ball of ``radius_mm`` and how to get a reduced fillet."""
     edges = junction_edges(solid)
-    works = next((radius_mm * fraction for fraction in _FALLBACK_FRACTIONS
-                  if fillet_in_child(solid, edges, radius_mm * fraction) is not None), None)
+    works = next(
+        (
+            radius_mm * fraction
+            for fraction in _FALLBACK_FRACTIONS
+            if fillet_in_child(solid, edges, radius_mm * fraction) is not None
+        ),
+        None,
+    )
     smallest = radius_mm * min(_FALLBACK_FRACTIONS, default=1.0)
-    hint = f"; hub.root_fillet_radius = {works:.3g} mm works" if works is not None else f"; {smallest:.3g} mm fails as well"
+    hint = (
+        f"; hub.root_fillet_radius = {works:.3g} mm works"
+        if works is not None
+        else f"; {smallest:.3g} mm fails as well"
+    )
     if tight_bend_mm is not None:
-        hint += (f"; a blade bends concavely with a {tight_bend_mm:.3g} mm radius at the hub, too tight for the ball: "
-                 f"hub.root_fillet_tight_bends = 'reduce' makes the fillet smaller there")
-    return KernelError(f"root fillet failed: OpenCascade could not fillet the blade roots at "
-                       f"hub.root_fillet_radius = {radius_mm:g} mm{hint}")
+        hint += (
+            f"; a blade bends concavely with a {tight_bend_mm:.3g} mm radius at the hub, too tight for the ball: "
+            f"hub.root_fillet_tight_bends = 'reduce' makes the fillet smaller there"
+        )
+    return KernelError(
+        f"root fillet failed: OpenCascade could not fillet the blade roots at "
+        f"hub.root_fillet_radius = {radius_mm:g} mm{hint}"
+    )

@@ -8,7 +8,6 @@ get REDUCED_FILLET_FRACTION of the bend's radius and OpenCascade blends it with 
 radius along the rest of that junction loop.
 """
 
-
 from __future__ import annotations
 
 import math
@@ -32,7 +31,9 @@ from torus_cad.tolerances import REDUCED_FILLET_FRACTION
 REDUCED_FILLET_SAMPLES = 40
 
 
-def reduced_edge_radii(solid: cq.Solid, edges: Sequence[TopoDS_Edge], radius_mm: float) -> list[float]:
+def reduced_edge_radii(
+    solid: cq.Solid, edges: Sequence[TopoDS_Edge], radius_mm: float
+) -> list[float]:
     """A fillet radius per junction edge (mm): ``radius_mm``, or, where the edge's blade face bends
     concavely (seen from outside) tighter than ``radius_mm`` / REDUCED_FILLET_FRACTION along the
     edge, REDUCED_FILLET_FRACTION x the tightest bend's radius there.
@@ -47,14 +48,17 @@ def reduced_edge_radii(solid: cq.Solid, edges: Sequence[TopoDS_Edge], radius_mm:
     radii = []
     for edge in edges:
         faces = [TopoDS.Face_s(face) for face in ancestors.FindFromKey(edge)]
-        blade_face = next(face for face in faces if BRepAdaptor_Surface(face).GetType() in BLADE_SURFACES)
+        blade_face = next(
+            face for face in faces if BRepAdaptor_Surface(face).GetType() in BLADE_SURFACES
+        )
         bend_mm = _tightest_concave_radius_along(edge, blade_face)
         radii.append(min(radius_mm, REDUCED_FILLET_FRACTION * bend_mm))
     return radii
 
 
-def varying_junction_mm(solid: cq.Solid, edges: Sequence[TopoDS_Edge], radii: Sequence[float], radius_mm: float
-                         ) -> float:
+def varying_junction_mm(
+    solid: cq.Solid, edges: Sequence[TopoDS_Edge], radii: Sequence[float], radius_mm: float
+) -> float:
     """Length (mm) of the fillet contours (chains of tangent junction edges, as OpenCascade forms
     them) that hold an edge whose radius is below ``radius_mm``."""
     if min(radii, default=radius_mm) >= radius_mm:
@@ -66,7 +70,9 @@ def varying_junction_mm(solid: cq.Solid, edges: Sequence[TopoDS_Edge], radii: Se
     return sum(cq.Edge(edge).Length() for edge in edges if contours.Contour(edge) in varying)
 
 
-def concave_bend_radius_mm(face: TopoDS_Face, surface: BRepAdaptor_Surface, u: float, v: float) -> float:
+def concave_bend_radius_mm(
+    face: TopoDS_Face, surface: BRepAdaptor_Surface, u: float, v: float
+) -> float:
     """Radius (mm) of ``face``'s tightest concave bend (seen from outside, from the material's
     outward side) at surface parameters (u, v); inf where it bends only convexly there or its
     curvature is not defined. ``surface`` is ``BRepAdaptor_Surface(face)``."""
@@ -85,6 +91,12 @@ def _tightest_concave_radius_along(edge: TopoDS_Edge, face: TopoDS_Face) -> floa
     projector = ShapeAnalysis_Surface(BRep_Tool.Surface_s(face))
     curve = BRepAdaptor_Curve(edge)
     first, last = curve.FirstParameter(), curve.LastParameter()
-    uvs = (projector.ValueOfUV(curve.Value(first + (last - first) * index / (REDUCED_FILLET_SAMPLES - 1)), 1e-7)
-           for index in range(REDUCED_FILLET_SAMPLES))
-    return min((concave_bend_radius_mm(face, surface, uv.X(), uv.Y()) for uv in uvs), default=math.inf)
+    uvs = (
+        projector.ValueOfUV(
+            curve.Value(first + (last - first) * index / (REDUCED_FILLET_SAMPLES - 1)), 1e-7
+        )
+        for index in range(REDUCED_FILLET_SAMPLES)
+    )
+    return min(
+        (concave_bend_radius_mm(face, surface, uv.X(), uv.Y()) for uv in uvs), default=math.inf
+    )

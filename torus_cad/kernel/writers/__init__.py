@@ -77,15 +77,23 @@ def _step(job: ExportJob, path: Path) -> None:
 def _stl(job: ExportJob, path: Path) -> dict[str, Any]:
     from torus_cad.kernel.writers.stl import write_checked_stl
 
-    return write_checked_stl(job.shape, path, job.linear_deflection_mm, job.angular_deflection_rad,
-                             mesh=job.mesh()).to_dict()
+    return write_checked_stl(
+        job.shape, path, job.linear_deflection_mm, job.angular_deflection_rad, mesh=job.mesh()
+    ).to_dict()
 
 
 def _three_mf(job: ExportJob, path: Path) -> dict[str, Any]:
     from torus_cad.kernel.writers.threemf import write_3mf
 
-    return write_3mf(job.shape, path, job.name, job.linear_deflection_mm, job.angular_deflection_rad,
-                     version=job.version, mesh=job.mesh()).to_dict()
+    return write_3mf(
+        job.shape,
+        path,
+        job.name,
+        job.linear_deflection_mm,
+        job.angular_deflection_rad,
+        version=job.version,
+        mesh=job.mesh(),
+    ).to_dict()
 
 
 #: Every file format the build writes, by format.

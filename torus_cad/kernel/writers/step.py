@@ -1,7 +1,6 @@
 """STEP writer (AP214 or AP242, with the product's name and author); the reader, and the check of the file
 read back, are torus_cad.kernel.step_readback."""
 
-
 from __future__ import annotations
 
 from collections.abc import Callable
@@ -21,32 +20,44 @@ from OCP.XCAFDoc import XCAFDoc_DocumentTool
 from torus_cad.errors import KernelError
 from torus_cad.formats import StepSchema
 from torus_cad.kernel.readable_edges import readable_copy
-from torus_cad.kernel.step_readback import ArgumentFaults, check_step_readback, read_step_shape, step_readback_faults
+from torus_cad.kernel.step_readback import (
+    ArgumentFaults,
+    check_step_readback,
+    read_step_shape,
+    step_readback_faults,
+)
 from torus_cad.kernel.topology import AnyShape, occ
 from torus_cad.runtime.files import atomic_path, file_ends_with, write_failure
 
 #: OpenCascade's write.step.schema value of each protocol.
 _STEP_SCHEMAS = {StepSchema.AP214: "AP214IS", StepSchema.AP242: "AP242DIS"}
 
-#: Times a file that reads back faulty is written again, each time from the solid the reader made of the
-#: last file with its edges made readable: the reader moves some edges' curves (its reparametrisation,
-#: the gaps it closes at vertices), so the file converges on the reader's own curves (a root fillet's
-#: edges: two or three tries).
+#: Times a file that reads back faulty is written again, each time from the solid the reader made of
+#: the last file with its edges made readable: the reader moves some edges' curves (its
+#: reparametrisation, the gaps it closes at vertices), so the file converges on the reader's own
+#: curves (a root fillet's edges: two or three tries).
 READABLE_REWRITES = 3
 
-#: write.precision.mode 1: the file's uncertainty is the solid's greatest tolerance. OpenCascade's reader (FreeCAD's
-#: too) takes the file's uncertainty as its precision and re-approximates, as cubics, the p-curves of every
-#: edge whose curves part by more (a root fillet's contact edges, a few 1e-6 mm): near their ends those cubics
-#: part from the 3D curve by up to 10 % more than the edge's sampled tolerance. With the greatest tolerance
-#: as the uncertainty the p-curves are read as written (the default, 0, writes the average).
+#: write.precision.mode 1: the file's uncertainty is the solid's greatest tolerance. OpenCascade's
+#: reader (FreeCAD's too) takes the file's uncertainty as its precision and re-approximates, as
+#: cubics, the p-curves of every edge whose curves part by more (a root fillet's contact edges, a
+#: few 1e-6 mm): near their ends those cubics part from the 3D curve by up to 10 % more than the
+#: edge's sampled tolerance. With the greatest tolerance as the uncertainty the p-curves are read as
+#: written (the default, 0, writes the average).
 _PRECISION_MODE_GREATEST = 1
 
 #: The STEP file's last line: a writer can lose its tail without saying so.
 _STEP_END_MARKER = b"END-ISO-10303-21;"
 
 
-def write_step(shape: AnyShape, path: str | Path, product_name: str, schema: StepSchema = StepSchema.AP214,
-               program: str = "torus_cad", check_readback: bool = True) -> Path:
+def write_step(
+    shape: AnyShape,
+    path: str | Path,
+    product_name: str,
+    schema: StepSchema = StepSchema.AP214,
+    program: str = "torus_cad",
+    check_readback: bool = True,
+) -> Path:
     """Write ``shape`` as STEP (application protocol ``schema``, millimetres, product named ``product_name``).
 
     The shape goes through an XCAF document so that the STEP PRODUCT carries exactly the
@@ -80,16 +91,20 @@ def write_step(shape: AnyShape, path: str | Path, product_name: str, schema: Ste
     """
     path = Path(path)
     with atomic_path(path) as temp:
+
         def write(source: TopoDS_Shape) -> None:
             _write(source, temp, path, product_name, schema, program)
 
         write(occ(shape))
         if check_readback and rewritten_until_readable(occ(shape), temp, write).counts:
-            check_step_readback(temp, f"{product_name}.step", self_interference=False)  # raises, naming the edge
+            # raises, naming the edge
+            check_step_readback(temp, f"{product_name}.step", self_interference=False)
     return path
 
 
-def rewritten_until_readable(shape: TopoDS_Shape, path: Path, write: Callable[[TopoDS_Shape], None]) -> ArgumentFaults:
+def rewritten_until_readable(
+    shape: TopoDS_Shape, path: Path, write: Callable[[TopoDS_Shape], None]
+) -> ArgumentFaults:
     """The faults of the STEP file ``path`` (``shape`` as ``write`` wrote it there) read back, after
     writing it again while it has any, up to READABLE_REWRITES times: first from a copy of ``shape``
     with readable edges, then from the shape read back from the last file, made readable (the
@@ -120,7 +135,9 @@ def rewritten_until_readable(shape: TopoDS_Shape, path: Path, write: Callable[[T
     return faults
 
 
-def _write(shape: TopoDS_Shape, temp: Path, path: Path, product_name: str, schema: StepSchema, program: str) -> None:
+def _write(
+    shape: TopoDS_Shape, temp: Path, path: Path, product_name: str, schema: StepSchema, program: str
+) -> None:
     """``shape`` as STEP at ``temp`` (the staging file of ``path``), checked whole."""
     document = TDocStd_Document(TCollection_ExtendedString("torus_cad"))
     label = XCAFDoc_DocumentTool.ShapeTool_s(document.Main()).AddShape(shape, False)
@@ -135,7 +152,9 @@ def _write(shape: TopoDS_Shape, temp: Path, path: Path, product_name: str, schem
         raise KernelError("OpenCascade could not translate the solid to STEP")
     _name_the_author(writer, product_name, program)
     if writer.Write(str(temp)) != IFSelect_RetDone or not file_ends_with(temp, _STEP_END_MARKER):
-        raise write_failure(path, temp, KernelError(f"OpenCascade could not write STEP file {str(path)!r}"))
+        raise write_failure(
+            path, temp, KernelError(f"OpenCascade could not write STEP file {str(path)!r}")
+        )
 
 
 def _name_the_author(writer: STEPCAFControl_Writer, product_name: str, program: str) -> None:

@@ -3,7 +3,6 @@ simulation's own use), and the build's STL, the uncrossed tessellation (torus_ca
 read back and checked by meshlib (``write_checked_stl``).
 """
 
-
 from __future__ import annotations
 
 from pathlib import Path
@@ -36,7 +35,9 @@ def _not_written(path: Path) -> KernelError:
     return KernelError(f"OpenCascade could not write STL file {str(path)!r}")
 
 
-def write_stl(shape: AnyShape, path: str | Path, linear_deflection: float, angular_deflection: float) -> Path:
+def write_stl(
+    shape: AnyShape, path: str | Path, linear_deflection: float, angular_deflection: float
+) -> Path:
     """Tessellate ``shape`` (deflections in mm and radians) and write a binary STL.
 
     The file is written atomically: nothing appears at ``path`` unless it is written whole.
@@ -62,8 +63,13 @@ def write_stl(shape: AnyShape, path: str | Path, linear_deflection: float, angul
     return path
 
 
-def write_checked_stl(shape: AnyShape, path: str | Path, linear_deflection: float,
-                      angular_deflection: float, mesh: UncrossedMesh | None = None) -> MeshCheck:
+def write_checked_stl(
+    shape: AnyShape,
+    path: str | Path,
+    linear_deflection: float,
+    angular_deflection: float,
+    mesh: UncrossedMesh | None = None,
+) -> MeshCheck:
     """Write the uncrossed tessellation of ``shape`` (``mesh`` if given, else made at the
     deflections, mm and rad) as a binary STL, read it back with meshlib and check that no two
     triangles intersect.
@@ -112,8 +118,13 @@ def _write_binary_stl(temp: Path, path: Path, vertices: np.ndarray, triangles: n
         raise write_failure(path, temp, _not_written(path))
 
 
-def _write_stl_to(shape: AnyShape, temp: Path, path: Path, linear_deflection: float, angular_deflection: float) -> None:
-    mesher = BRepMesh_IncrementalMesh(occ(shape), linear_deflection, False, angular_deflection, True)  # meshes here
+def _write_stl_to(
+    shape: AnyShape, temp: Path, path: Path, linear_deflection: float, angular_deflection: float
+) -> None:
+    # meshes here
+    mesher = BRepMesh_IncrementalMesh(
+        occ(shape), linear_deflection, False, angular_deflection, True
+    )
     if not mesher.IsDone():
         raise KernelError("OpenCascade could not tessellate the solid for STL")
     writer = StlAPI_Writer()

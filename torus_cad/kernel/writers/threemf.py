@@ -60,8 +60,15 @@ _MODEL_TAIL = """   </mesh>
 """
 
 
-def write_3mf(shape: AnyShape, path: str | Path, name: str, linear_deflection: float,
-              angular_deflection: float, version: str, mesh: UncrossedMesh | None = None) -> MeshCheck:
+def write_3mf(
+    shape: AnyShape,
+    path: str | Path,
+    name: str,
+    linear_deflection: float,
+    angular_deflection: float,
+    version: str,
+    mesh: UncrossedMesh | None = None,
+) -> MeshCheck:
     """Write the uncrossed tessellation of ``shape`` (``mesh`` if given, else made at the deflections,
     mm and rad) as a 3MF package with one mesh object named ``name`` (millimetres), checked again with
     meshlib at the precision written; return its check."""
@@ -72,15 +79,35 @@ def write_3mf(shape: AnyShape, path: str | Path, name: str, linear_deflection: f
     return check
 
 
-def _write_package(path: str | Path, name: str, version: str, vertices: NDArray[np.float64],
-                   triangles: NDArray[np.int64]) -> Path:
-    vertex_lines = "".join(f'    <vertex x="{x:.{_DECIMALS}f}" y="{y:.{_DECIMALS}f}" z="{z:.{_DECIMALS}f}"/>\n' for x, y, z in vertices.tolist())
-    triangle_lines = "".join(f'    <triangle v1="{a}" v2="{b}" v3="{c}"/>\n' for a, b, c in triangles.tolist())
-    model = (_MODEL_HEAD.format(name=name, version=version) + "    <vertices>\n" + vertex_lines + "    </vertices>\n"
-             + "    <triangles>\n" + triangle_lines + "    </triangles>\n" + _MODEL_TAIL)
+def _write_package(
+    path: str | Path,
+    name: str,
+    version: str,
+    vertices: NDArray[np.float64],
+    triangles: NDArray[np.int64],
+) -> Path:
+    vertex_lines = "".join(
+        f'    <vertex x="{x:.{_DECIMALS}f}" y="{y:.{_DECIMALS}f}" z="{z:.{_DECIMALS}f}"/>\n'
+        for x, y, z in vertices.tolist()
+    )
+    triangle_lines = "".join(
+        f'    <triangle v1="{a}" v2="{b}" v3="{c}"/>\n' for a, b, c in triangles.tolist()
+    )
+    model = (
+        _MODEL_HEAD.format(name=name, version=version)
+        + "    <vertices>\n"
+        + vertex_lines
+        + "    </vertices>\n"
+        + "    <triangles>\n"
+        + triangle_lines
+        + "    </triangles>\n"
+        + _MODEL_TAIL
+    )
     path = Path(path)
-    with atomic_path(path) as temp, zipfile.ZipFile(temp, "w", compression=zipfile.ZIP_DEFLATED,
-                                                    compresslevel=6) as package:
+    with (
+        atomic_path(path) as temp,
+        zipfile.ZipFile(temp, "w", compression=zipfile.ZIP_DEFLATED, compresslevel=6) as package,
+    ):
         package.writestr("[Content_Types].xml", _CONTENT_TYPES)
         package.writestr("_rels/.rels", _RELATIONSHIPS)
         package.writestr("3D/3dmodel.model", model)
