@@ -151,7 +151,14 @@ READBACK_VERTEX_GAP_MM = 1e-9
 READBACK_WORST_SAMPLES = 129
 
 
-__all__ = ["ReadableEdges", "readable_copy", "readable_edges"]
+__all__ = [
+    "ReadableEdges",
+    "SquareFit",
+    "curves_apart",
+    "readable_copy",
+    "readable_edges",
+    "shifted_pcurve",
+]
 
 #: A B-spline curve or p-curve of a degree above this is evaluated by OpenCascade's span cache (a
 #: Taylor polynomial about the span's start) with a rounding that grows with the degree and the
@@ -383,7 +390,7 @@ def _edges_and_faces(shape: TopoDS_Shape) -> list[tuple[TopoDS_Edge, list[TopoDS
     return found
 
 
-def _deviation(
+def curves_apart(
     curve: Geom_Curve, pcurve: Geom2d_Curve, surface: Geom_Surface, first: float, last: float
 ) -> tuple[float, float]:
     """The largest distance between ``curve`` and ``surface(pcurve)`` at equal parameters (mm), and
@@ -523,14 +530,14 @@ def _square_pcurve(edge: TopoDS_Edge, face: TopoDS_Face) -> tuple[float, tuple[f
     if pcurve is None:
         return 0.0, (0.0, first)
     surface = BRep_Tool.Surface_s(face)
-    before = _deviation(curve, pcurve, surface, first, last)
+    before = curves_apart(curve, pcurve, surface, first, last)
     if before[0] <= READBACK_MIN_TOLERANCE_MM:
         return before[0], before
-    fit = _SquareFit(curve, pcurve, surface, first, last)
+    fit = SquareFit(curve, pcurve, surface, first, last)
     ends = fit.feet(np.array([first, last]))
     candidates = [
         fit.fit(),
-        _shifted_pcurve(pcurve, first, last, ends) if ends is not None else None,
+        shifted_pcurve(pcurve, first, last, ends) if ends is not None else None,
     ]
     builder = BRep_Builder()
     for square in candidates:
@@ -540,7 +547,7 @@ def _square_pcurve(edge: TopoDS_Edge, face: TopoDS_Face) -> tuple[float, tuple[f
         if ends is not None:
             square.SetPole(1, gp_Pnt2d(*ends[0]))
             square.SetPole(square.NbPoles(), gp_Pnt2d(*ends[1]))
-        after = _deviation(curve, square, surface, first, last)
+        after = curves_apart(curve, square, surface, first, last)
         if after[0] >= before[0]:
             continue
         tolerance = max(BRep_Tool.Tolerance_s(edge), after[0] * READBACK_TOLERANCE_FACTOR)
@@ -552,7 +559,7 @@ def _square_pcurve(edge: TopoDS_Edge, face: TopoDS_Face) -> tuple[float, tuple[f
     return before[0], before
 
 
-def _shifted_pcurve(
+def shifted_pcurve(
     pcurve: Geom2d_Curve, first: float, last: float, ends: NDArray[np.float64]
 ) -> Geom2d_BSplineCurve:
     """``pcurve`` on [first, last] as a B-spline, shifted linearly in (u, v) to run from ``ends[0]`` to ``ends[1]``."""
@@ -575,7 +582,7 @@ def _wires_cross(edge: TopoDS_Edge, face: TopoDS_Face) -> bool:
     )
 
 
-class _SquareFit:
+class SquareFit:
     """The feet of the perpendiculars from a 3D curve to a surface, and a p-curve fitted through them."""
 
     def __init__(

@@ -19,6 +19,7 @@ from OCP.XCAFDoc import XCAFDoc_DocumentTool
 
 from torus_cad.errors import KernelError
 from torus_cad.formats import StepSchema
+from torus_cad.kernel.iso_line_edges import iso_line_copy
 from torus_cad.kernel.readable_edges import readable_copy
 from torus_cad.kernel.step_readback import (
     ArgumentFaults,
@@ -67,8 +68,10 @@ def write_step(
     before it is published. A file that reads back with faults is written again from a copy of ``shape``
     whose edges are made readable (torus_cad.kernel.readable_edges: p-curves square to their surfaces,
     edges split where the reader's samples would miss how far their curves part), then up to
-    READABLE_REWRITES - 1 times more from the shape read back from the last file, made readable; if the
-    file still reads back with faults, KernelError naming the kind of edge and the gap, and no file.
+    READABLE_REWRITES - 1 times more from the shape read back from the last file, made readable; then,
+    if it still has faults, the same from a copy whose root fillet's contact edges are rebuilt on the
+    fillet surface's iso-lines (torus_cad.kernel.iso_line_edges); if the file still reads back with
+    faults, KernelError naming the kind of edge and the gap, and no file.
 
     Args:
         shape: the solid (OpenCascade's or cadquery's), mm; not changed.
@@ -108,7 +111,9 @@ def rewritten_until_readable(
     """The faults of the STEP file ``path`` (``shape`` as ``write`` wrote it there) read back, after
     writing it again while it has any, up to READABLE_REWRITES times: first from a copy of ``shape``
     with readable edges, then from the shape read back from the last file, made readable (the
-    module's READABLE_REWRITES).
+    module's READABLE_REWRITES). If it still has faults, the same again from a copy of ``shape``
+    whose root fillet's contact edges are rebuilt on the fillet surface's iso-lines
+    (torus_cad.kernel.iso_line_edges), when it has such edges.
 
     Args:
         shape: the solid ``write`` wrote to ``path``, mm; not changed.
@@ -124,8 +129,23 @@ def rewritten_until_readable(
             ``write`` failed.
         OSError: ``write`` could not write the file.
     """
+    faults = _rewritten(shape, path, write, step_readback_faults(path, self_interference=False))
+    if faults.counts:  # the fillet's contact edges rebuilt on its surface's iso-lines, and again
+        rebuilt = iso_line_copy(shape)
+        if rebuilt is not None:
+            write(rebuilt)
+            faults = _rewritten(
+                rebuilt, path, write, step_readback_faults(path, self_interference=False)
+            )
+    return faults
+
+
+def _rewritten(
+    shape: TopoDS_Shape, path: Path, write: Callable[[TopoDS_Shape], None], faults: ArgumentFaults
+) -> ArgumentFaults:
+    """The faults of ``path`` after writing it again from readable copies while it has ``faults``
+    (up to READABLE_REWRITES times), each try from the shape the reader made of the last file."""
     source = shape
-    faults = step_readback_faults(path, self_interference=False)
     for _ in range(READABLE_REWRITES):
         if not faults.counts:
             break
