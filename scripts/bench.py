@@ -181,7 +181,8 @@ WORKSHOP_CHANGES = {
 
 
 def workshop_stage_times(runs: int) -> dict[str, Any]:
-    """Stage times of the workshop scenario, build to a valid STEP (median of ``runs`` warm runs)."""
+    """Stage times of the workshop scenario, build to a valid STEP (median of ``runs`` warm
+    runs)."""
     params = _params(WORKSHOP_CHANGES)
     with tempfile.TemporaryDirectory() as folder:
         timed_build_and_write(params, Path(folder))  # warm-up
@@ -303,7 +304,8 @@ def _growth(rows: list[dict[str, Any]]) -> dict[str, Any]:
 
 
 def accuracy_samples(params, per_gap: int = 3, limit: int = 400) -> np.ndarray:
-    """Analytic surface points at s half-way between sections and t between samples, away from the hub."""
+    """Analytic surface points at s half-way between sections and t between samples, away from the
+    hub."""
     from torus_cad.geometry.blade.blade_surface import surface_points
 
     surface = params.blade_surface()
@@ -329,7 +331,8 @@ def _chord(params) -> float:
 
 
 def hub_grid_mesh(radius: float, length: float, around: int, along: int, rings: int):
-    """Spec §6.2 hub as a structured grid: ``around`` x ``along`` on the side, caps of ``rings`` rings."""
+    """Spec §6.2 hub as a structured grid: ``around`` x ``along`` on the side, caps of ``rings``
+    rings."""
     theta = np.linspace(0.0, 2.0 * np.pi, around, endpoint=False)
     cap_radii = np.linspace(radius, 0.0, rings + 1)[:-1]
     loops = (
@@ -366,7 +369,8 @@ def _polydata(vertices: np.ndarray, faces: np.ndarray):
 
 
 def child_mesh_route(payload: dict[str, Any]) -> dict[str, Any]:
-    """Child: the mesh-boolean route on the default (or ``changes``), timed; closedness and accuracy."""
+    """Child: the mesh-boolean route on the default (or ``changes``), timed; closedness and
+    accuracy."""
     import pyvista as pv
 
     from torus_cad.geometry.blade.triangle_mesh import blade_mesh

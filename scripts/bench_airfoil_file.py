@@ -5,9 +5,10 @@
     python scripts/bench_airfoil_file.py --points 94000  # one size (above the limit: refused, timed)
 
 Each file is a NACA 2412 in Selig order with cosine-spaced stations, written to a temp folder and
-read with :func:`torus_cad.geometry.section.airfoil_file.read_airfoil_file`. The reference column times the
-all-pairs segment test (every segment against every other, blocks of 256 rows) that the sort-and-sweep
-search replaced, on the same loop; the ratio is reference / sweep. Never part of the test suite.
+read with :func:`torus_cad.geometry.section.airfoil_file.read_airfoil_file`. The reference column
+times the all-pairs segment test (every segment against every other, blocks of 256 rows) that the
+sort-and-sweep search replaced, on the same loop; the ratio is reference / sweep. Never part of the
+test suite.
 """
 
 from __future__ import annotations

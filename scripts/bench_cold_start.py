@@ -1,21 +1,23 @@
-"""Benchmark the cold start of ``torus-cad build`` (the default design, a new process each run) against
-a bare OCP script that makes the same part and writes STEP + STL, in the same run::
+"""Benchmark the cold start of ``torus-cad build`` (the default design, a new process each run)
+against a bare OCP script that makes the same part and writes STEP + STL, in the same run::
 
     python scripts/bench_cold_start.py --runs 5
     python scripts/bench_cold_start.py --write-reference /tmp/reference   # the script and its data alone
 
 The reference script (:data:`REFERENCE_SCRIPT`) imports only the OCP modules it uses and lofts the
-default design's own sections: the 25 section B-splines the build lofts (their poles and shared knots,
-fitted by the geometry layer to the 25 x 80 points of ``resolution``, read from a JSON file that this
-script writes before the runs, untimed) through BRepOffsetAPI_ThruSections, turns the blade to the
-design's 3 angles, fuses them with the hub cylinder (radius and length of the design) in one
-BRepAlgoAPI_Fuse, writes STEP (AP214) and a binary STL meshed at the design's deflections (0.05 mm,
-0.2 rad). It checks nothing: it is the least any program pays for this OpenCascade part. Runs
-alternate (build, script, build, ...) so that a change of the machine's speed touches both; the
-medians and their ratio are printed, wall and CPU (user + sys of the process and the children it waited
-for: on a shared machine the CPU ratio is the steadier one), then the floor: the reference script's own imports alone
-(:data:`REFERENCE_IMPORTS`), as a share of the whole script; and the heaviest imports of
-``torus-cad build`` (``python -X importtime``, wall) and the CPU seconds of its import groups
+default design's own sections: the 25 section B-splines the build lofts (their poles and shared
+knots, fitted by the geometry layer to the 25 x 80 points of ``resolution``, read from a JSON file
+that this script writes before the runs, untimed) through BRepOffsetAPI_ThruSections, turns the
+blade to the design's 3 angles, fuses them with the hub cylinder (radius and length of the design)
+in one BRepAlgoAPI_Fuse, writes STEP (AP214) and a binary STL meshed at the design's deflections
+(0.05 mm, 0.2 rad). It checks nothing: it is the least any program pays for this OpenCascade part.
+Runs alternate (build, script, build, ...) so that a change of the machine's speed touches both; the
+medians and their ratio are printed, wall and CPU (user + sys of the process and the children it
+waited
+for: on a shared machine the CPU ratio is the steadier one), then the floor: the reference script's
+own imports alone (:data:`REFERENCE_IMPORTS`), as a share of the whole script; and the heaviest
+imports of ``torus-cad build`` (``python -X importtime``, wall) and the CPU seconds of its import
+groups
 (:data:`IMPORT_GROUPS`).
 """
 
@@ -93,8 +95,9 @@ stl.Write(shape, out + "/reference.stl")
 
 
 def reference_design() -> dict[str, Any]:
-    """What the reference script builds, as JSON data: the default design's section B-splines (the fit
-    the build lofts, from the geometry layer), its blade count, hub and STL deflections (mm, rad)."""
+    """What the reference script builds, as JSON data: the default design's section B-splines (the
+    fit the build lofts, from the geometry layer), its blade count, hub and STL deflections (mm,
+    rad)."""
     from torus_cad.geometry.section.section_fit import DEGREE, fit_sections
     from torus_cad.parameters import PropellerParameters
     from torus_cad.parameters.design_checks import section_chords
@@ -123,8 +126,8 @@ def reference_design() -> dict[str, Any]:
 
 
 def write_reference(folder: Path) -> tuple[Path, Path]:
-    """``folder/reference.py`` (:data:`REFERENCE_SCRIPT`) and ``folder/design.json``, its data; run it as
-    ``python folder/reference.py folder/design.json OUT``."""
+    """``folder/reference.py`` (:data:`REFERENCE_SCRIPT`) and ``folder/design.json``, its data; run
+    it as ``python folder/reference.py folder/design.json OUT``."""
     folder.mkdir(parents=True, exist_ok=True)
     script, data = folder / "reference.py", folder / "design.json"
     script.write_text(REFERENCE_SCRIPT)
@@ -139,7 +142,8 @@ REFERENCE_IMPORTS = "\n".join(
 
 
 def _timed(command: list[str], cpu: list[float] | None = None) -> float:
-    """Wall seconds of ``command``; its CPU seconds (user + sys, with the children it waited for) appended to
+    """Wall seconds of ``command``; its CPU seconds (user + sys, with the children it waited for)
+    appended to
     ``cpu``."""
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
@@ -176,8 +180,8 @@ print(json.dumps({"seconds": seconds, "cadquery": "cadquery" in sys.modules}))
 
 
 def import_cpu_seconds() -> tuple[dict[str, float], bool]:
-    """CPU seconds (user + sys) of importing each of :data:`IMPORT_GROUPS` in a new process, each after the
-    ones before it (what it adds), and whether cadquery got loaded."""
+    """CPU seconds (user + sys) of importing each of :data:`IMPORT_GROUPS` in a new process, each
+    after the ones before it (what it adds), and whether cadquery got loaded."""
     done = subprocess.run(
         [sys.executable, "-c", _IMPORT_CPU, *IMPORT_GROUPS],
         capture_output=True,
@@ -189,7 +193,8 @@ def import_cpu_seconds() -> tuple[dict[str, float], bool]:
 
 
 def _heaviest_imports(count: int, folder: Path) -> list[tuple[float, str]]:
-    """The ``count`` top-level imports of ``torus-cad build`` with the largest cumulative time (s)."""
+    """The ``count`` top-level imports of ``torus-cad build`` with the largest cumulative time
+    (s)."""
     done = subprocess.run(
         [
             sys.executable,

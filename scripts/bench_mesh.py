@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Benchmark `torus-cad mesh` against the spec's PyVista route, and `torus-cad cfd`, on the default design.
+"""Benchmark `torus-cad mesh` against the spec's PyVista route, and `torus-cad cfd`, on the default
+design.
 
     python scripts/bench_mesh.py              # 100 x 400 and 400 x 2000, PyVista at both, cfd: ~15-40 min
     python scripts/bench_mesh.py --quick      # 100 x 400 only (PyVista too), and cfd
@@ -15,7 +16,8 @@ timed from outside; its peak memory is the child's maximum resident set (``wait4
   size, united one body at a time with PyVista's ``boolean_union``; then PyVista's ``clean`` and
   its count of open edges and manifoldness. PyVista's boolean can crash or run for hours, so it has
   a time limit (``--pyvista-timeout``).
-- ``torus-cad cfd`` at the default sizes: wall and CPU time, peak memory, element counts, worst SICN.
+- ``torus-cad cfd`` at the default sizes: wall and CPU time, peak memory, element counts, worst
+  SICN.
 
 Results go to ``bench_out/bench_mesh.json`` and a table on stdout.
 """
@@ -37,7 +39,8 @@ ROOT = Path(__file__).resolve().parent.parent
 
 
 def run_measured(command: list[str], timeout: float) -> dict[str, Any]:
-    """Run ``command``; wall seconds, the child's CPU seconds and peak RSS (MB), exit code, last stdout line."""
+    """Run ``command``; wall seconds, the child's CPU seconds and peak RSS (MB), exit code, last
+    stdout line."""
     start = time.perf_counter()
     with tempfile.TemporaryFile("w+") as out, tempfile.TemporaryFile("w+") as err:
         process = subprocess.Popen(command, stdout=out, stderr=err, cwd=ROOT)
@@ -122,7 +125,8 @@ def torus_cad_mesh(sections: int, points: int, timeout: float) -> dict[str, Any]
 
 
 def child_pyvista(sections: int, points: int) -> None:
-    """Child process: the spec's §7 route with PyVista at ``sections`` x ``points``; prints one JSON line."""
+    """Child process: the spec's §7 route with PyVista at ``sections`` x ``points``; prints one JSON
+    line."""
     # this checkout's torus_cad, as `python -m torus_cad` from ROOT uses
     sys.path.insert(0, str(ROOT))
     import numpy as np
@@ -180,7 +184,8 @@ def pyvista_route(sections: int, points: int, timeout: float) -> dict[str, Any]:
 
 
 def convergence(levels: int) -> list[dict[str, Any]]:
-    """Volume of the mesh against the B-rep's as both counts double from 24 x 48 (in this process)."""
+    """Volume of the mesh against the B-rep's as both counts double from 24 x 48 (in this
+    process)."""
     sys.path.insert(0, str(ROOT))
     import numpy as np
 

@@ -1,4 +1,5 @@
-"""Benchmark of ``torus-cad optimize``: trials per minute against ``torus-cad sweep`` on the same designs.
+"""Benchmark of ``torus-cad optimize``: trials per minute against ``torus-cad sweep`` on the same
+designs.
 
 Runs the shipped geometric study (examples/optimize_light.toml) with ``--workers`` local workers,
 then builds exactly the designs its trials asked for through the sweep's runner (same pool, same
@@ -31,7 +32,8 @@ EXAMPLE = ROOT / "examples" / "optimize_light.toml"
 
 @dataclass
 class Run:
-    """One run on the pool: its wall s, its designs' summed worker s and its main process's CPU s."""
+    """One run on the pool: its wall s, its designs' summed worker s and its main process's CPU
+    s."""
 
     designs: int
     wall_s: float

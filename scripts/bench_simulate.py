@@ -9,8 +9,9 @@
 Never part of the test suite. Each level is a fresh `torus-cad simulate` process timed from
 outside: cells, wall time, peak memory (the largest sum of resident memory over the process and
 every program it starts, snappyHexMesh and the MPI solvers included, sampled by psutil every
-0.2 s), thrust, torque, CT, CP, convergence and the stage times from its report. With all three levels, the Richardson-extrapolated thrust and torque and the observed
-order (torus_cad.simulate.coefficients.richardson, refinement ratio 2^(1/3) in element size).
+0.2 s), thrust, torque, CT, CP, convergence and the stage times from its report. With all three
+levels, the Richardson-extrapolated thrust and torque and the observed order
+(torus_cad.simulate.coefficients.richardson, refinement ratio 2^(1/3) in element size).
 
 Results go to ``bench_out/bench_simulate.json`` and a table on stdout.
 """
@@ -35,7 +36,8 @@ def run_with_peak_memory(
     command: list[str], env: dict[str, str]
 ) -> tuple[subprocess.CompletedProcess[str], int]:
     """Run ``command``; its result and the peak of its process tree's summed resident memory, bytes
-    (sampled: psutil has no tree-wide high-water mark, and getrusage keeps only the largest single child)."""
+    (sampled: psutil has no tree-wide high-water mark, and getrusage keeps only the largest single
+    child)."""
     import psutil
 
     with tempfile.TemporaryFile("w+") as stdout, tempfile.TemporaryFile("w+") as stderr:

@@ -29,7 +29,8 @@ def _cpu(work: Callable[[], Any]) -> tuple[Any, float]:
 
 
 def _timed(module: Any) -> list[float]:
-    """Wrap ``module.refit_intersection_edges`` so that each call's CPU seconds land in the list returned."""
+    """Wrap ``module.refit_intersection_edges`` so that each call's CPU seconds land in the list
+    returned."""
     seconds: list[float] = []
     refit = module.refit_intersection_edges
 

@@ -1,4 +1,5 @@
-"""Studio latency, measured in the browser: from a typed change to the preview and to the exact solid.
+"""Studio latency, measured in the browser: from a typed change to the preview and to the exact
+solid.
 
 Starts ``torus-cad studio`` (default design) and headless Chromium, then alternates the blade
 count between 3 and 4 ``--changes`` times, each time waiting for the exact solid and its files.

@@ -1,15 +1,17 @@
-"""Benchmark of a ``torus-cad optimize`` study with ``performance.*`` metrics: its cost by mesh level, and the
-time of each noise evaluation against the solver's.
+"""Benchmark of a ``torus-cad optimize`` study with ``performance.*`` metrics: its cost by mesh
+level, and the time of each noise evaluation against the solver's.
 
-Reads a study's output folder (``OUT/trials/<n>/simulate[/<level>]/trial_<n>_performance.json`` and the
-study's storage) and prints, by mesh level: the trials that ran it, the pruned ones, the worker seconds
-(the first level's include the build), and the mean of each simulation's stages (mesh, conversion,
-solver, noise) with the solver runs of a thrust search; then the noise's share of a simulation::
+Reads a study's output folder (``OUT/trials/<n>/simulate[/<level>]/trial_<n>_performance.json`` and
+the study's storage) and prints, by mesh level: the trials that ran it, the pruned ones, the worker
+seconds (the first level's include the build), and the mean of each simulation's stages (mesh,
+conversion, solver, noise) with the solver runs of a thrust search; then the noise's share of a
+simulation::
 
     python scripts/bench_study_levels.py OUT
     python scripts/bench_study_levels.py OUT --study STUDY.toml --trials 3   # run (or continue) the study first
 
-A study run here uses one local worker (one CFD at a time on a shared machine); run it under ``nice``.
+A study run here uses one local worker (one CFD at a time on a shared machine); run it under
+``nice``.
 """
 
 from __future__ import annotations

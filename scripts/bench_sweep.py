@@ -1,4 +1,5 @@
-"""Benchmark (not a test): designs per minute of a sweep with 1 and 2 local workers and a 2-worker Dask LocalCluster.
+"""Benchmark (not a test): designs per minute of a sweep with 1 and 2 local workers and a 2-worker
+Dask LocalCluster.
 
     python scripts/bench_sweep.py                       # the built-in 12-design sweep, full resolution, STEP + STL
     python scripts/bench_sweep.py --sweep examples/sweep_example.toml

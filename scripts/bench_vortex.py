@@ -1,16 +1,18 @@
 #!/usr/bin/env python3
-"""Benchmark the vortex solver (``simulate --solver vortex``) on the default design, beside OpenFOAM's coarse level.
+"""Benchmark the vortex solver (``simulate --solver vortex``) on the default design, beside
+OpenFOAM's coarse level.
 
     python scripts/bench_vortex.py                 # one point, the solver in this process and the whole command
     python scripts/bench_vortex.py --cfd           # and `torus-cad simulate --level coarse` of the same point
     python scripts/bench_vortex.py --design examples/apc_10x7sf.toml --rpm 5000
 
-Never part of the test suite. Prints, for one operating point at the default lattice: the solver's stage times
-in this process (the blade's lattice, the inviscid solve, the polars and strip forces: CPU seconds on one core:
-the BLAS libraries' threads are set to 1 before numpy loads, for the commands too),
-then each command as a fresh process timed from outside (wall seconds and peak memory of its process tree):
-``simulate --solver vortex --rpm``, ``simulate --solver vortex --thrust`` (the thrust of that point) and, with
-``--cfd``, ``simulate --level coarse --processes 1``; and the ratios of the vortex commands to the CFD one.
+Never part of the test suite. Prints, for one operating point at the default lattice: the solver's
+stage times in this process (the blade's lattice, the inviscid solve, the polars and strip forces:
+CPU seconds on one core: the BLAS libraries' threads are set to 1 before numpy loads, for the
+commands too), then each command as a fresh process timed from outside (wall seconds and peak memory
+of its process tree): ``simulate --solver vortex --rpm``, ``simulate --solver vortex --thrust`` (the
+thrust of that point) and, with ``--cfd``, ``simulate --level coarse --processes 1``; and the ratios
+of the vortex commands to the CFD one.
 """
 
 from __future__ import annotations

@@ -1,4 +1,5 @@
-"""Calibrate and check the CFD budget's estimate (torus_cad/cfd_domain/estimate.py) against real runs.
+"""Calibrate and check the CFD budget's estimate (torus_cad/cfd_domain/estimate.py) against real
+runs.
 
     python scripts/cfd_budget.py                 # the default design at a few [cfd] settings (~10-20 min)
     python scripts/cfd_budget.py --quick         # the two coarsest settings only
@@ -94,7 +95,8 @@ def shipped_designs() -> list[Path]:
 
 
 def measure_examples(names: list[str], json_path: str | None) -> None:
-    """The estimate against a real run for each shipped example (or those named), at its own [cfd]."""
+    """The estimate against a real run for each shipped example (or those named), at its own
+    [cfd]."""
     from torus_cad.cfd_domain.estimate import estimate_cfd_mesh
     from torus_cad.parameters import resolve_parameters
 

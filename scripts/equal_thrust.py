@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Toroidal against conventional at the same thrust: rpm, power, figure of merit and tonal noise of each.
+"""Toroidal against conventional at the same thrust: rpm, power, figure of merit and tonal noise of
+each.
 
     python scripts/equal_thrust.py                          # 0.05 N, coarse level, still air
     python scripts/equal_thrust.py --thrust 0.08 --level medium --out equal_out
@@ -7,9 +8,9 @@
 
 Runs ``torus-cad simulate --thrust N`` on the default toroidal design (no design file) and on
 ``examples/compare/conventional_45mm_3blade.toml`` (a conventional propeller of the same tip diameter,
-blade count and hub), each as a fresh process; prints a Markdown table (the noise columns: overall SPL and
-dB(A) of the steady-loading and thickness tones at 1 m in the rotor's plane, from the report's ``noise``)
-and writes ``OUT/equal_thrust.json``
+blade count and hub), each as a fresh process; prints a Markdown table (the noise columns: overall
+SPL and dB(A) of the steady-loading and thickness tones at 1 m in the rotor's plane, from the
+report's ``noise``) and writes ``OUT/equal_thrust.json``
 and a bar chart (``--picture``, default ``OUT/equal_thrust.png``). Never part of the test suite
 (two thrust searches, a few solver runs each).
 """
@@ -61,7 +62,8 @@ def noise_levels(report: dict[str, Any]) -> dict[str, float]:
 
 
 def search(label: str, design: Path | None, args: argparse.Namespace) -> dict[str, Any]:
-    """One ``torus-cad simulate --thrust`` process; its performance report with the process's wall seconds."""
+    """One ``torus-cad simulate --thrust`` process; its performance report with the process's wall
+    seconds."""
     out = args.out / ("toroidal" if design is None else design.stem)
     command = [
         sys.executable,
@@ -91,14 +93,16 @@ def search(label: str, design: Path | None, args: argparse.Namespace) -> dict[st
 
 
 def _fidelity(args: argparse.Namespace) -> list[str]:
-    """simulate's options for the solver: the vortex solver, or OpenFOAM at a mesh level on some processes."""
+    """simulate's options for the solver: the vortex solver, or OpenFOAM at a mesh level on some
+    processes."""
     if args.solver == "vortex":
         return ["--solver", "vortex"]
     return ["--level", args.level, "--processes", str(args.processes)]
 
 
 def table(results: dict[str, dict[str, Any]]) -> str:
-    """A Markdown table: one row per design, then the conventional's difference from the toroidal in %."""
+    """A Markdown table: one row per design, then the conventional's difference from the toroidal in
+    %."""
     headings = [
         f"{name} ({unit})" if unit else name for name, _, unit in QUANTITIES.values()
     ] + list(NOISE.values())
@@ -127,7 +131,8 @@ def table(results: dict[str, dict[str, Any]]) -> str:
 def write_picture(
     results: dict[str, dict[str, Any]], path: Path, thrust_n: float, solver: str = "coarse RANS"
 ) -> None:
-    """Bars of rpm, power, figure of merit and the tonal dB(A) at 1 m in the rotor's plane, one colour per design."""
+    """Bars of rpm, power, figure of merit and the tonal dB(A) at 1 m in the rotor's plane, one
+    colour per design."""
     import matplotlib
 
     matplotlib.use("Agg")

@@ -1,14 +1,15 @@
 #!/usr/bin/env python3
-"""The tonal noise of the runs of an earlier ``scripts/equal_thrust.py --out OUT``, made before simulate's cases
-wrote their blade surface pressure.
+"""The tonal noise of the runs of an earlier ``scripts/equal_thrust.py --out OUT``, made before
+simulate's cases wrote their blade surface pressure.
 
     python scripts/equal_thrust_noise.py OUT SCRATCH
 
 For each ``OUT/*/<name>_performance.json``: copies its case's mesh, dictionaries and last time into
-``SCRATCH/<name>_case``, adds the ``blade_pressure`` function object of today's cases to its controlDict, has
-``simpleFoam -postProcess -latestTime`` write the propeller's surface pressure (a second, no solver iteration),
-and prints the noise at simulate's default observers (torus_cad.acoustics). A run of ``equal_thrust.py`` with
-today's simulate has these numbers in its reports already. Never part of the test suite (needs the cases).
+``SCRATCH/<name>_case``, adds the ``blade_pressure`` function object of today's cases to its
+controlDict, has ``simpleFoam -postProcess -latestTime`` write the propeller's surface pressure (a
+second, no solver iteration), and prints the noise at simulate's default observers
+(torus_cad.acoustics). A run of ``equal_thrust.py`` with today's simulate has these numbers in its
+reports already. Never part of the test suite (needs the cases).
 """
 
 from __future__ import annotations
@@ -32,7 +33,8 @@ from torus_cad.simulate.settings import AIR_15C, OperatingPoint
 
 
 def case_noise(report_path: Path, scratch: Path, blades: int) -> None:
-    """Write the surface pressure of the run of ``report_path`` into a copy of its case; print its noise."""
+    """Write the surface pressure of the run of ``report_path`` into a copy of its case; print its
+    noise."""
     report = json.loads(report_path.read_text(encoding="utf-8"))
     source, case = report_path.parent / report["case"], scratch / report["case"]
     shutil.rmtree(case, ignore_errors=True)

@@ -8,9 +8,9 @@ Every point of the grid is the default propeller with the centerline's height (z
 mm: how far the blade reaches out from the hub) and the chord law's constant term
 (``transforms.scale_x[4]``, mm: the chord at the blade's two ends, which the mid-span chord
 exceeds by 4 mm) set to the point's values, checked by
-:func:`torus_cad.parameters.design_checks.check_design` (what ``torus-cad check`` and the sweep's and
-study's pre-screen run; no kernel). Each point is coloured by the first check that refuses it, the
-default design is marked, and the command prints the counts and the check's CPU time per design.
+:func:`torus_cad.parameters.design_checks.check_design` (what ``torus-cad check`` and the sweep's
+and study's pre-screen run; no kernel). Each point is coloured by the first check that refuses it,
+the default design is marked, and the command prints the counts and the check's CPU time per design.
 """
 
 from __future__ import annotations
@@ -46,7 +46,8 @@ KINDS = (
 
 
 def design_at(height_mm: float, chord_mm: float) -> PropellerParameters:
-    """The default design with both free control points at ``height_mm`` and the chord law's constant term."""
+    """The default design with both free control points at ``height_mm`` and the chord law's
+    constant term."""
     base = PropellerParameters()
     p2, p3 = base.centerline.p2, base.centerline.p3
     scale_x = list(base.transforms.scale_x)

@@ -5,9 +5,10 @@
     python scripts/fillet_examples.py --radius 0.25
 
 Prints one line per design and radius: ``ok``, ``reduced`` (made, but with a smaller radius
-along junction edges where the blade bends too tightly for it: torus_cad.kernel.fillet.root_fillet.RootFillet), ``refused`` (exit-2 input, e.g. a chamfer the
-fillet's spread would cut into) or ``failed`` (OpenCascade could not make the fillet), and the
-build time. Only the requested radius is tried (no search for a smaller one that works).
+along junction edges where the blade bends too tightly for it:
+torus_cad.kernel.fillet.root_fillet.RootFillet), ``refused`` (exit-2 input, e.g. a chamfer the
+fillet's spread would cut into) or ``failed`` (OpenCascade could not make the fillet), and the build
+time. Only the requested radius is tried (no search for a smaller one that works).
 """
 
 from __future__ import annotations

@@ -9,10 +9,10 @@ Each design comes from the fuzz sampler (:func:`studies.fuzz.random_design_dict`
 designs ``scripts/fuzz.py`` draws) with ``hub.root_fillet_radius`` set. Designs refused before
 the kernel, or whose fuse fails, are not counted; the others either get their fillet (one
 valid solid: ``ok`` with the requested radius everywhere, ``reduced`` with a smaller one along
-junction edges where the blade bends too tightly for it, see torus_cad.kernel.fillet.root_fillet.RootFillet)
-or fail with "root fillet failed". The fillet runs in a forked child process,
-so a crash in OpenCascade counts as a failure. Prints one line per design and the rate;
-writes ``fillet_rate_out/fillet_rate.json``.
+junction edges where the blade bends too tightly for it, see
+torus_cad.kernel.fillet.root_fillet.RootFillet) or fail with "root fillet failed". The fillet runs
+in a forked child process, so a crash in OpenCascade counts as a failure. Prints one line per design
+and the rate; writes ``fillet_rate_out/fillet_rate.json``.
 """
 
 from __future__ import annotations

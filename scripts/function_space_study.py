@@ -35,7 +35,8 @@ class _OneLineErrorParser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    """The command-line options; defaults are those of :class:`studies.function_space.StudyConfig`."""
+    """The command-line options; defaults are those of
+    :class:`studies.function_space.StudyConfig`."""
     defaults = study.StudyConfig()
     parser = _OneLineErrorParser(
         prog="function_space_study.py",
@@ -90,7 +91,8 @@ def _json_ready(value: Any) -> Any:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Parse ``argv``, run the study, print the tables and write the outputs; return the exit code."""
+    """Parse ``argv``, run the study, print the tables and write the outputs; return the exit
+    code."""
     parser = build_parser()
     try:
         arguments = parser.parse_args(argv)

@@ -162,7 +162,8 @@ def main(argv: list[str] | None = None) -> int:
     check_cpu: list[float] = []  # CPU seconds of the pre-screen per design
 
     def prescreened(all_tasks: list[DesignTask]) -> Iterator[DesignTask]:
-        """The tasks the pre-screen passes (all of them with --build-all), checked as workers free up."""
+        """The tasks the pre-screen passes (all of them with --build-all), checked as workers free
+        up."""
         for task in all_tasks:
             cpu = time.process_time()
             refusal = prescreen(task)

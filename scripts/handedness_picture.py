@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Render the README's picture of a cw / ccw pair: the spec's blade and its mirror image, side by side.
+"""Render the README's picture of a cw / ccw pair: the spec's blade and its mirror image, side by
+side.
 
 python scripts/handedness_picture.py             # docs/images/handedness_pair.png
 """

@@ -81,7 +81,8 @@ CLARK_Y_LOWER = (
 
 
 def naca_surfaces(airfoil: NacaAirfoil, stations: int = 81) -> tuple[np.ndarray, np.ndarray]:
-    """Upper and lower surfaces ``(stations, 2)`` at cosine-spaced chord positions, leading edge first."""
+    """Upper and lower surfaces ``(stations, 2)`` at cosine-spaced chord positions, leading edge
+    first."""
     chord = 0.5 * (1.0 - np.cos(np.linspace(0.0, np.pi, stations)))
     return airfoil.surfaces(chord)
 

@@ -1,20 +1,21 @@
 #!/usr/bin/env python3
 """The worked quiet study's report: its Pareto designs, the chosen one re-simulated on the fine mesh
-against the study's base design and a conventional propeller of the same diameter, all at the study's
-target thrust, and what the study cost.
+against the study's base design and a conventional propeller of the same diameter, all at the
+study's target thrust, and what the study cost.
 
     torus-cad optimize examples/optimize_quiet.toml --out OUT --workers 2     # the study itself, first
     python scripts/quiet_study.py OUT                                          # then this
     python scripts/quiet_study.py OUT --levels vortex medium                   # both solvers side by side
 
 Reads ``OUT/<name>_study.json`` (the Pareto designs and the worker seconds of each mesh level) and
-``OUT/results.csv`` (every trial at the level it reached). The chosen design is the Pareto design nearest
-the ideal point once both objectives are scaled to the front's range (the knee of the front: neither the
-loudest nor the hungriest). Each of the three designs is solved to the target thrust at each of ``--levels``
-(a mesh level, or ``vortex``: the vortex solver) by ``torus-cad simulate --thrust`` (a report already in
-``OUT/<level>/<label>/`` is reused), and whether the levels rank the three alike is printed. Prints Markdown
-tables and writes ``OUT/quiet_study.png`` (the trials and front; the three designs' rpm, power, figure of
-merit and dB(A)). Never part of the test suite (CPU hours of OpenFOAM).
+``OUT/results.csv`` (every trial at the level it reached). The chosen design is the Pareto design
+nearest the ideal point once both objectives are scaled to the front's range (the knee of the front:
+neither the loudest nor the hungriest). Each of the three designs is solved to the target thrust at
+each of ``--levels`` (a mesh level, or ``vortex``: the vortex solver) by ``torus-cad simulate
+--thrust`` (a report already in ``OUT/<level>/<label>/`` is reused), and whether the levels rank the
+three alike is printed. Prints Markdown tables and writes ``OUT/quiet_study.png`` (the trials and
+front; the three designs' rpm, power, figure of merit and dB(A)). Never part of the test suite (CPU
+hours of OpenFOAM).
 """
 
 from __future__ import annotations
@@ -46,8 +47,8 @@ def read_study(out: Path) -> tuple[dict[str, Any], list[dict[str, str]]]:
 
 
 def knee(front: list[dict[str, Any]]) -> dict[str, Any]:
-    """The Pareto design nearest the ideal point (each objective's best on the front), both objectives
-    scaled to the front's range."""
+    """The Pareto design nearest the ideal point (each objective's best on the front), both
+    objectives scaled to the front's range."""
     lows = [min(entry["values"][i] for entry in front) for i in (0, 1)]
     spans = [max(entry["values"][i] for entry in front) - lows[i] or 1.0 for i in (0, 1)]
     return min(
@@ -57,8 +58,8 @@ def knee(front: list[dict[str, Any]]) -> dict[str, Any]:
 
 
 def solve(label: str, design: Path, level: str, args: argparse.Namespace) -> dict[str, Any]:
-    """The design solved to the target thrust at ``level`` (a mesh level, or ``vortex``): a report in
-    OUT/<level>/<label>/ reused, else one ``torus-cad simulate --thrust`` process."""
+    """The design solved to the target thrust at ``level`` (a mesh level, or ``vortex``): a report
+    in OUT/<level>/<label>/ reused, else one ``torus-cad simulate --thrust`` process."""
     out = args.out / level / label
     found = sorted(out.glob("*_performance.json"))
     if not found:
@@ -96,7 +97,8 @@ def solve(label: str, design: Path, level: str, args: argparse.Namespace) -> dic
 
 
 def dba(report: dict[str, Any]) -> float:
-    """The performance report's A-weighted tonal level at the study's observer, dB(A), as the study reads it."""
+    """The performance report's A-weighted tonal level at the study's observer, dB(A), as the study
+    reads it."""
     from torus_cad.optimize.metrics import metric_value
 
     return metric_value(NOISE, {}, report)
@@ -105,8 +107,8 @@ def dba(report: dict[str, Any]) -> float:
 def front_table(
     summary: dict[str, Any], rows: list[dict[str, str]], chosen: dict[str, Any], study_level: str
 ) -> str:
-    """The Pareto designs: their varied parameters and their values at the level they reached (``study_level``
-    for a study of one level, whose table has no level column)."""
+    """The Pareto designs: their varied parameters and their values at the level they reached
+    (``study_level`` for a study of one level, whose table has no level column)."""
     by_number = {int(row["number"]): row for row in rows}
     keys = list(summary["best"][0]["params"]) if summary["best"] else []
     lines = [
@@ -127,8 +129,8 @@ def front_table(
 
 
 def comparison_table(results: dict[str, dict[str, Any]]) -> str:
-    """One row per design at the target thrust, then the chosen design's and the conventional's differences
-    from the base design."""
+    """One row per design at the target thrust, then the chosen design's and the conventional's
+    differences from the base design."""
     lines = [
         "| design | rpm | thrust (N) | power (W) | figure of merit | dB(A) 1 m, 90° | cells | wall (s) |",
         "|---|---|---|---|---|---|---|---|",
@@ -154,8 +156,8 @@ def comparison_table(results: dict[str, dict[str, Any]]) -> str:
 
 
 def cost_lines(summary: dict[str, Any], results: dict[str, dict[str, Any]]) -> list[str]:
-    """The study's worker time by level and the fine runs' wall time, in CPU hours (one process each in the
-    study; the fine runs' processes times their wall time)."""
+    """The study's worker time by level and the fine runs' wall time, in CPU hours (one process each
+    in the study; the fine runs' processes times their wall time)."""
     lines, study_s = [], 0.0
     for level, entry in summary.get("level_seconds", {}).items():
         study_s += entry["seconds"]
@@ -170,7 +172,8 @@ def cost_lines(summary: dict[str, Any], results: dict[str, dict[str, Any]]) -> l
 
 
 def ranking_lines(by_level: dict[str, dict[str, dict[str, Any]]]) -> list[str]:
-    """Each level's order of the designs by power and by dB(A) at the target thrust, and whether the levels agree."""
+    """Each level's order of the designs by power and by dB(A) at the target thrust, and whether the
+    levels agree."""
     lines = []
     for key, value in (("power", lambda report: report["power_w"]), ("dB(A)", dba)):
         orders = {
@@ -196,7 +199,8 @@ def write_picture(
     level: str,
     study_level: str,
 ) -> None:
-    """Left: every valued trial (power against dB(A)) at the level it reached, the front and the chosen design;
+    """Left: every valued trial (power against dB(A)) at the level it reached, the front and the
+    chosen design;
     right: the three designs' numbers on ``level``."""
     import matplotlib
 

@@ -6,13 +6,13 @@
     python scripts/rank_levels.py --designs default pitch_low two_blades   # a subset
 
 Never part of the test suite (16 simulations). A run whose report is already in OUT is read, not
-repeated, so an interrupted study resumes where it stopped. The designs are the default toroidal propeller and
-variations of its pitch (the angle-of-attack law's constant term), chord (the scale_x law's
-constant term) and blade count, each a ``--set`` on the default; every design runs at each
+repeated, so an interrupted study resumes where it stopped. The designs are the default toroidal
+propeller and variations of its pitch (the angle-of-attack law's constant term), chord (the scale_x
+law's constant term) and blade count, each a ``--set`` on the default; every design runs at each
 level as a fresh ``torus-cad simulate`` process. Prints, for thrust and for figure of merit, the
 value per design and level and Spearman's rank correlation between the two levels
-(scipy.stats.spearmanr); writes ``OUT/rank_levels.json`` with each run's cells, wall seconds and peak
-memory (bench_simulate.run_with_peak_memory).
+(scipy.stats.spearmanr); writes ``OUT/rank_levels.json`` with each run's cells, wall seconds and
+peak memory (bench_simulate.run_with_peak_memory).
 """
 
 from __future__ import annotations

@@ -6,10 +6,11 @@ rank_levels.py at 10,000 rpm in still air, Spearman's rho of thrust and of figur
     python scripts/rank_vortex.py --cfd rank_out/rank_levels.json   # or those of your own rank_levels.py run
     python scripts/rank_vortex.py --chordwise 6 --spanwise 20
 
-Prints one markdown table (thrust and figure of merit: fine CFD, the vortex solver with its polars and the
-inviscid lattice, and the differences) and Spearman's rho (scipy.stats.spearmanr) for each pair; writes
-nothing. Each design is solved in this process (torus_cad.vortex.vortex_performance.vortex_performance); a design whose
-solve does not converge is left out of the table and the ranks, with a line on stderr.
+Prints one markdown table (thrust and figure of merit: fine CFD, the vortex solver with its polars
+and the inviscid lattice, and the differences) and Spearman's rho (scipy.stats.spearmanr) for each
+pair; writes nothing. Each design is solved in this process
+(torus_cad.vortex.vortex_performance.vortex_performance); a design whose solve does not converge is
+left out of the table and the ranks, with a line on stderr.
 """
 
 from __future__ import annotations

@@ -1,5 +1,6 @@
-"""Write the generated reference pages: the command-line reference (from torus-cad's own parser) into
-docs/reference/cli.md and the configuration table (from the parameter schema) into docs/reference/parameters.md.
+"""Write the generated reference pages: the command-line reference (from torus-cad's own parser)
+into docs/reference/cli.md and the configuration table (from the parameter schema) into
+docs/reference/parameters.md.
 
     python scripts/reference_pages.py          # rewrite both pages in place
     python scripts/reference_pages.py --check  # exit 1 if a page is stale

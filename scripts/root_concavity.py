@@ -12,12 +12,13 @@ radii of the hub's cylinder; the tightest concave radius is printed, with the de
 outcome from ``scripts/fillet_rate.py`` JSON files when given. Designs refused before the
 kernel are skipped.
 
-Next to it, the same measure on the analytic blade (:func:`torus_cad.geometry.blade.blade_surface.surface_points`,
-principal curvatures by finite differences on a 1000 s x 1000 t grid, where the surface lies within the
-band above the hub's cylinder and between its end planes): whether the bend is the design's or the
-loft's. Of the 11 failing seeds (0-129) with a bend tighter than 0.5 mm on the face, 9 bend as
-tightly on the analytic blade (0.001-0.24 mm against 0.02-0.31 mm), along the section, never along
-s; on 2 (64, 98) it is the section fit's wiggle next to the leading edge (analytic 10.3 and 0.86 mm).
+Next to it, the same measure on the analytic blade
+(:func:`torus_cad.geometry.blade.blade_surface.surface_points`, principal curvatures by finite
+differences on a 1000 s x 1000 t grid, where the surface lies within the band above the hub's
+cylinder and between its end planes): whether the bend is the design's or the loft's. Of the 11
+failing seeds (0-129) with a bend tighter than 0.5 mm on the face, 9 bend as tightly on the analytic
+blade (0.001-0.24 mm against 0.02-0.31 mm), along the section, never along s; on 2 (64, 98) it is
+the section fit's wiggle next to the leading edge (analytic 10.3 and 0.86 mm).
 """
 
 from __future__ import annotations
@@ -82,8 +83,9 @@ def analytic_tightest_concave_radius_mm(
     step_s: float = 1e-3,
     step_t: float = 1e-4,
 ) -> float:
-    """The smallest concave radius (mm, seen from outside) of blade 0's analytic surface where it lies
-    within ``band_mm`` above the hub's cylinder and between the hub's end planes; inf when none."""
+    """The smallest concave radius (mm, seen from outside) of blade 0's analytic surface where it
+    lies within ``band_mm`` above the hub's cylinder and between the hub's end planes; inf when
+    none."""
     geometry = params.geometry()
     blade, centerline = geometry.blade, geometry.centerline(0)
     s = np.linspace(step_s, 1.0 - step_s, samples)

@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Faults of every shipped design's STEP file read back, by BOPAlgo_ArgumentAnalyzer with every test.
+"""Faults of every shipped design's STEP file read back, by BOPAlgo_ArgumentAnalyzer with every
+test.
 
     python scripts/step_readback_check.py                       # the default and every examples/*.toml design
     python scripts/step_readback_check.py examples/workshop_fillet.toml
@@ -8,9 +9,10 @@
 For each design: the build's wall time, the faults of the solid in memory and of its STEP file as
 OpenCascade's STEP reader gives it back (torus_cad.kernel.step_readback: every test on, as FreeCAD's
 "Check geometry" with BOP check), by status, and the seconds each analysis took. Prints a table.
-``--fillet R`` builds each design with ``hub.root_fillet_radius = R`` (and, where the fillet's spread
-refuses the hub's chamfer, without the chamfer); ``--fast`` leaves out the self-interference test
-(the build's own read-back check does: its strict check ran it on the solid) and the analysis in memory.
+``--fillet R`` builds each design with ``hub.root_fillet_radius = R`` (and, where the fillet's
+spread refuses the hub's chamfer, without the chamfer); ``--fast`` leaves out the self-interference
+test (the build's own read-back check does: its strict check ran it on the solid) and the analysis
+in memory.
 """
 
 from __future__ import annotations
@@ -44,8 +46,9 @@ def _counts(counts: dict[str, int]) -> str:
 
 
 def _build(design: str, fillet_mm: float | None) -> Propeller:
-    """The design (the default for ``default``) built, with a root fillet of ``fillet_mm`` if given: without
-    the hub's chamfer when the fillet's spread refuses it (as tests/test_fillet_examples.py does)."""
+    """The design (the default for ``default``) built, with a root fillet of ``fillet_mm`` if given:
+    without the hub's chamfer when the fillet's spread refuses it (as tests/test_fillet_examples.py
+    does)."""
     from torus_cad.errors import GeometryError, ParameterError
     from torus_cad.parameters import PropellerParameters
     from torus_cad.propeller import build_propeller

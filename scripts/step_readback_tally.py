@@ -1,24 +1,26 @@
 #!/usr/bin/env python3
-"""Which kinds of edge read back invalid from STEP, over the design space: a tally of random valid designs.
+"""Which kinds of edge read back invalid from STEP, over the design space: a tally of random valid
+designs.
 
     python scripts/step_readback_tally.py 300                 # seeds 0..299, two workers
     python scripts/step_readback_tally.py 40 --seed 1000 --freecad --gmsh
     python scripts/step_readback_tally.py --replay 17 203     # just these seeds, one line each
     python scripts/step_readback_tally.py 1100 --fillet-share 0 --freecad --gmsh   # no root fillets
 
-Each seed is one design (:func:`studies.step_tally.tally_design_dict`): a toroidal design from the fuzz
-sampler with the workshop features (bores, D-flats, set screws, chamfers, blunt flat or round trailing
-edges, ccw), a root fillet on one design in four, and a conventional station-table design on one in five.
-A design the build refuses is built again as a user would change it on reading the refusal (a
-trailing edge too thick for the blade halved, a root fillet given the radius the message says works);
-one the build still refuses (ParameterError, GeometryError, or KernelError before the STEP file) is not
-a valid design and is left out of the tally; every other design's STEP file is written without
-the build's own read-back check, read back by OpenCascade's STEP reader, and put through
-BOPAlgo_ArgumentAnalyzer (every test but self-interference, as the build checks it), and each fault
-is classified by the kind of edge it sits on (:func:`torus_cad.kernel.step_readback.edge_kind`), the
-surfaces on its two sides, and its gap against the tolerance the reader gave it. With ``--freecad``
-each file is also checked by FreeCAD's ``Part.Shape.check(True)`` (Debian's freecadcmd), and with
-``--gmsh`` imported into gmsh, whose warnings about the geometry are counted.
+Each seed is one design (:func:`studies.step_tally.tally_design_dict`): a toroidal design from the
+fuzz sampler with the workshop features (bores, D-flats, set screws, chamfers, blunt flat or round
+trailing edges, ccw), a root fillet on one design in four, and a conventional station-table design
+on one in five. A design the build refuses is built again as a user would change it on reading the
+refusal (a trailing edge too thick for the blade halved, a root fillet given the radius the message
+says works); one the build still refuses (ParameterError, GeometryError, or KernelError before the
+STEP file) is not a valid design and is left out of the tally; every other design's STEP file is
+written without the build's own read-back check, read back by OpenCascade's STEP reader, and put
+through BOPAlgo_ArgumentAnalyzer (every test but self-interference, as the build checks it), and
+each fault is classified by the kind of edge it sits on
+(:func:`torus_cad.kernel.step_readback.edge_kind`), the surfaces on its two sides, and its gap
+against the tolerance the reader gave it. With ``--freecad`` each file is also checked by FreeCAD's
+``Part.Shape.check(True)`` (Debian's freecadcmd), and with ``--gmsh`` imported into gmsh, whose
+warnings about the geometry are counted.
 
 Prints two markdown tables of faults by edge kind (as first written; left after the writer's
 second try), then one line of totals; exit status 1 if any valid design's STEP file still reads back

@@ -5,9 +5,9 @@
     python scripts/stl_budget.py --design thin --design "1 blade"
 
 For each design and (linear, angular) deflection it prints the estimate that the build checks
-against the limit before tessellating (torus_cad.parameters.stl_budget), the triangles BRepMesh really makes,
-their ratio and the tessellation time. Settings whose estimate is above --max-estimate are skipped
-(BRepMesh's time grows faster than its triangle count on the lofted blades).
+against the limit before tessellating (torus_cad.parameters.stl_budget), the triangles BRepMesh
+really makes, their ratio and the tessellation time. Settings whose estimate is above --max-estimate
+are skipped (BRepMesh's time grows faster than its triangle count on the lofted blades).
 """
 
 from __future__ import annotations

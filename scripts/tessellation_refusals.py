@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Count the designs refused for their tessellation alone: built strictly valid, then their STL refused.
+"""Count the designs refused for their tessellation alone: built strictly valid, then their STL
+refused.
 
     python scripts/tessellation_refusals.py                       # the fuzz seeds of the notes and every example
     python scripts/tessellation_refusals.py --seeds 0 1 2 --no-examples

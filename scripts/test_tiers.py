@@ -92,7 +92,8 @@ def _collected() -> list[str]:
 
 
 def _long_tier(durations: dict[str, float], unfinished: set[str]) -> list[str]:
-    """Tests of LONG_TEST_SECONDS or more (and the unfinished ones); in a chained module only its tail."""
+    """Tests of LONG_TEST_SECONDS or more (and the unfinished ones); in a chained module only its
+    tail."""
     long = {
         node for node, seconds in durations.items() if seconds >= LONG_TEST_SECONDS
     } | unfinished
@@ -113,7 +114,8 @@ def _module(node_id: str) -> str:
 
 
 def _fast_candidates(durations: dict[str, float]) -> list[str]:
-    """Per module, its tests quicker than FAST_CANDIDATE_SECONDS, quickest first, within the time share."""
+    """Per module, its tests quicker than FAST_CANDIDATE_SECONDS, quickest first, within the time
+    share."""
     by_module: dict[str, list[str]] = defaultdict(list)
     for node, seconds in sorted(durations.items(), key=lambda item: item[1]):
         if seconds < FAST_CANDIDATE_SECONDS:
@@ -122,7 +124,8 @@ def _fast_candidates(durations: dict[str, float]) -> list[str]:
 
 
 def _within_budget(by_module: dict[str, list[str]], durations: dict[str, float]) -> list[str]:
-    """Round-robin over the modules (one test each, then a second ...) until the time share is spent."""
+    """Round-robin over the modules (one test each, then a second ...) until the time share is
+    spent."""
     budget, chosen, spent = FAST_SUM_SHARE * FAST_TIER_SECONDS, [], 0.0
     for rank in range(max((len(nodes) for nodes in by_module.values()), default=0)):
         for nodes in by_module.values():

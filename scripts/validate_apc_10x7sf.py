@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Validate ``torus-cad simulate`` against the wind tunnel: the APC 10x7 Slow Flyer beside UIUC's measurements.
+"""Validate ``torus-cad simulate`` against the wind tunnel: the APC 10x7 Slow Flyer beside UIUC's
+measurements.
 
     python scripts/validate_apc_10x7sf.py                          # coarse level, every point, 2 processes
     python scripts/validate_apc_10x7sf.py --level medium --out validation_out
@@ -99,7 +100,8 @@ def points(args: argparse.Namespace) -> list[tuple[float, float]]:
 
 
 def write_picture(rows: list[dict[str, Any]], data: Any, path: Path) -> None:
-    """CT and CP against rpm (J = 0) and CT, CP, eta against J at the sweep's rpm, measured as lines."""
+    """CT and CP against rpm (J = 0) and CT, CP, eta against J at the sweep's rpm, measured as
+    lines."""
     import matplotlib
 
     matplotlib.use("Agg")

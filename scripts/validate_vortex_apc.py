@@ -1,14 +1,15 @@
 #!/usr/bin/env python3
-"""The vortex solver (torus_cad.vortex) against UIUC's wind tunnel: the APC 10x7 Slow Flyer, static at 4000,
-5000 and 5987 rpm (the last static point measured) and the 5000 rpm sweep at J = 0.2, 0.4 and 0.6, as validate_apc_10x7sf.py does for
+"""The vortex solver (torus_cad.vortex) against UIUC's wind tunnel: the APC 10x7 Slow Flyer, static
+at 4000, 5000 and 5987 rpm (the last static point measured) and the 5000 rpm sweep at J = 0.2, 0.4
+and 0.6, as validate_apc_10x7sf.py does for
 OpenFOAM.
 
     python scripts/validate_vortex_apc.py                                   # UIUC's blade, NACA 4412
     python scripts/validate_vortex_apc.py --design examples/apc_10x7sf_e63.toml
     python scripts/validate_vortex_apc.py --inviscid --chordwise 8 --spanwise 30
 
-Prints the markdown table of studies/wind_tunnel.py (CT, CP and eta measured and computed, the errors,
-whether each is within the targets) and each point's seconds.
+Prints the markdown table of studies/wind_tunnel.py (CT, CP and eta measured and computed, the
+errors, whether each is within the targets) and each point's seconds.
 """
 
 from __future__ import annotations

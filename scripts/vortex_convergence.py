@@ -1,15 +1,16 @@
 #!/usr/bin/env python3
-"""The vortex solver's discretisation study: three lattices, each finer than the last by one ratio in every
-direction (rings across the chord, strips along the blade, wake steps a turn), the thrust and torque of each,
-Richardson's extrapolation and Roache's GCI_fine (torus_cad.simulate.coefficients.richardson, as simulate
---convergence does for OpenFOAM's levels).
+"""The vortex solver's discretisation study: three lattices, each finer than the last by one ratio
+in every direction (rings across the chord, strips along the blade, wake steps a turn), the thrust
+and torque of each, Richardson's extrapolation and Roache's GCI_fine
+(torus_cad.simulate.coefficients.richardson, as simulate --convergence does for OpenFOAM's levels).
 
     python scripts/vortex_convergence.py                                   # the default design, 10000 rpm
     python scripts/vortex_convergence.py --design examples/apc_10x7sf.toml --rpm 5000
     python scripts/vortex_convergence.py --coarsest 4 15 12 --ratio 1.5 --inviscid
 
-Prints one row a lattice (rings, strips, wake steps, thrust N, torque N mm, CPU seconds) and, for thrust and
-torque, whether they change monotonically, the observed order and GCI_fine; writes nothing.
+Prints one row a lattice (rings, strips, wake steps, thrust N, torque N mm, CPU seconds) and, for
+thrust and torque, whether they change monotonically, the observed order and GCI_fine; writes
+nothing.
 """
 
 from __future__ import annotations

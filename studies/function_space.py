@@ -136,7 +136,8 @@ def candidate_by_name(name: str) -> Candidate:
 
 @dataclass(frozen=True)
 class StudyConfig:
-    """Every choice of one study run; :meth:`validate` checks it and raises :class:`ParameterError`."""
+    """Every choice of one study run; :meth:`validate` checks it and raises
+    :class:`ParameterError`."""
 
     samples: int = 10_000
     """N, the number of random functions."""
@@ -298,7 +299,8 @@ class RandomFunctionBatch:
 
 
 def draw_random_functions(config: StudyConfig) -> RandomFunctionBatch:
-    """Draw ``config.samples`` random functions on ``config.points`` points, seeded by ``config.seed``."""
+    """Draw ``config.samples`` random functions on ``config.points`` points, seeded by
+    ``config.seed``."""
     config.validate()
     rng = np.random.default_rng(config.seed)
     s = sample_grid(config.points)
@@ -756,7 +758,8 @@ def _render_table(headers: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
 
 
 def format_overall_table(result: StudyResult) -> str:
-    """Text table: per candidate, parameters, mean (± standard error) and median of both errors, spec value."""
+    """Text table: per candidate, parameters, mean (± standard error) and median of both errors,
+    spec value."""
     headers = [
         "candidate",
         "params",
@@ -905,7 +908,8 @@ def _format_parameters(parameters: GeneratorParameters) -> str:
 
 
 def plot_errors(result: StudyResult, path: str | Path) -> Path:
-    """Box plots of both errors per candidate per generator (log scale), saved as PNG; returns the path.
+    """Box plots of both errors per candidate per generator (log scale), saved as PNG; returns the
+    path.
 
     Boxes span the quartiles, whiskers the 5th–95th percentiles, diamonds mark the means;
     values below :data:`PLOT_ERROR_FLOOR` (exact fits) are drawn at the floor.

@@ -26,8 +26,9 @@ _SPECS: dict[str, ParameterSpec] = {spec.key: spec for spec in parameter_specs()
 
 
 def fuzz_range(key: str) -> tuple[float, float]:
-    """The interval the sampler draws parameter ``key`` from: the schema's ``fuzz`` range of the field
-    (its allowed range unless the declaration narrows it with ``param(..., fuzz=(low, high))``)."""
+    """The interval the sampler draws parameter ``key`` from: the schema's ``fuzz`` range of the
+    field (its allowed range unless the declaration narrows it with ``param(..., fuzz=(low,
+    high))``)."""
     bounds = _SPECS[key].fuzz
     if bounds is None or bounds.low is None or bounds.high is None:
         raise ValueError(
@@ -227,7 +228,8 @@ def design_from_unit(u: Sequence[float], name: str = "fuzz", **kwargs: Any) -> P
 
 
 def random_design_dict(seed: int, workshop: bool = False, **kwargs: Any) -> dict[str, Any]:
-    """The design of ``seed`` as a dict: unit vector from numpy's default_rng(seed); named fuzz_<seed>.
+    """The design of ``seed`` as a dict: unit vector from numpy's default_rng(seed); named
+    fuzz_<seed>.
 
     ``workshop``: also draw the workshop features (:func:`workshop_features`) from a stream of
     their own, so the design's other parameters are those of the plain design of ``seed``."""
@@ -273,7 +275,8 @@ def random_design(seed: int, **kwargs: Any) -> PropellerParameters:
 def fuzz_tasks(
     designs: Sequence[dict[str, Any]], write: bool = True, stl: bool = True
 ) -> list[DesignTask]:
-    """Batch tasks for ``designs`` (dicts): built, written to a temporary folder and read back (``write``)."""
+    """Batch tasks for ``designs`` (dicts): built, written to a temporary folder and read back
+    (``write``)."""
     return [
         DesignTask(
             str(design.get("name", f"design_{index}")),

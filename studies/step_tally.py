@@ -1,11 +1,13 @@
-"""Random designs over the whole design space for the STEP read-back tally (``scripts/step_readback_tally.py``).
+"""Random designs over the whole design space for the STEP read-back tally
+(``scripts/step_readback_tally.py``).
 
 Every option that changes the solid's topology is drawn: the fuzz sampler's toroidal designs
 (:func:`studies.fuzz.random_design_dict`, any blade count, both frames) with the workshop features
 (bores, D-flats, set screws, chamfers, blunt trailing edges, ccw), a flat or round blunt trailing
-edge, a root fillet on one design in four (on a round trailing edge, which the fillet needs, and half
-of them with ``root_fillet_tight_bends = 'reduce'``), and a conventional station-table design on one
-in five (diameter, blade count, chord and pitch drawn around ``examples/compare/conventional_45mm_3blade``'s).
+edge, a root fillet on one design in four (on a round trailing edge, which the fillet needs, and
+half of them with ``root_fillet_tight_bends = 'reduce'``), and a conventional station-table design
+on one in five (diameter, blade count, chord and pitch drawn around
+``examples/compare/conventional_45mm_3blade``'s).
 """
 
 from __future__ import annotations
@@ -30,8 +32,8 @@ _THICKNESS = (0.10, 0.095, 0.09, 0.085, 0.08, 0.08, 0.08)
 
 
 def tally_design_dict(seed: int, fillet_share: float = FILLET_SHARE) -> dict[str, Any]:
-    """The design of ``seed`` as a nested dict (the TOML layout), named ``tally_<seed>``; a root fillet on
-    ``fillet_share`` of the designs."""
+    """The design of ``seed`` as a nested dict (the TOML layout), named ``tally_<seed>``; a root
+    fillet on ``fillet_share`` of the designs."""
     rng = np.random.default_rng([seed, 45])
     design = (
         _conventional(seed, rng)
@@ -57,8 +59,8 @@ def tally_design_dict(seed: int, fillet_share: float = FILLET_SHARE) -> dict[str
 
 
 def _conventional(seed: int, rng: np.random.Generator) -> dict[str, Any]:
-    """A conventional design: the base table's chord scaled by 0.6-1.5, a constant geometric pitch of
-    0.3-1.2 D, 2-6 blades, a tip diameter of 30-300 mm and a hub just inside the root station."""
+    """A conventional design: the base table's chord scaled by 0.6-1.5, a constant geometric pitch
+    of 0.3-1.2 D, 2-6 blades, a tip diameter of 30-300 mm and a hub just inside the root station."""
     diameter = float(math.exp(rng.uniform(math.log(30.0), math.log(300.0))))
     radius = diameter / 2.0
     pitch = float(rng.uniform(0.3, 1.2)) * diameter
@@ -95,9 +97,9 @@ RETRIES = 3
 
 
 def follow_advice(design: dict[str, Any], refusal: str) -> bool:
-    """Change ``design`` as a user would on reading ``refusal``: a trailing edge too thick for the blade
-    halved, a root fillet that fails at its radius given the radius the message says works; False when
-    the refusal gives no such way on."""
+    """Change ``design`` as a user would on reading ``refusal``: a trailing edge too thick for the
+    blade halved, a root fillet that fails at its radius given the radius the message says works;
+    False when the refusal gives no such way on."""
     works = re.search(r"hub.root_fillet_radius = ([0-9.e-]+) mm works", refusal)
     if works:
         design["hub"]["root_fillet_radius"] = float(works.group(1))
@@ -109,8 +111,8 @@ def follow_advice(design: dict[str, Any], refusal: str) -> bool:
 
 
 def built_tally_design(seed: int, fillet_share: float = FILLET_SHARE) -> Any:
-    """The propeller of ``seed`` (:func:`tally_design_dict`), built again after each refusal whose advice
-    :func:`follow_advice` follows, up to RETRIES builds; the last refusal is raised."""
+    """The propeller of ``seed`` (:func:`tally_design_dict`), built again after each refusal whose
+    advice :func:`follow_advice` follows, up to RETRIES builds; the last refusal is raised."""
     from torus_cad.errors import GeometryError, KernelError, ParameterError
     from torus_cad.parameters import PropellerParameters
     from torus_cad.propeller import build_propeller

@@ -76,7 +76,8 @@ FUZZ_DESIGN_TIME_LIMIT_S = 600.0
 
 def fuzz_many(seeds: Sequence[int], workers: int = 2, workshop: bool = True) -> list[FuzzOutcome]:
     """:func:`fuzz_one` of every seed in ``workers`` spawned processes (OpenCascade's threads do not
-    survive a fork); a worker that crashes or overruns FUZZ_DESIGN_TIME_LIMIT_S is a 'failed' design."""
+    survive a fork); a worker that crashes or overruns FUZZ_DESIGN_TIME_LIMIT_S is a 'failed'
+    design."""
     with ProcessPool(max_workers=workers, context=get_context("spawn")) as pool:
         futures = [
             (seed, pool.schedule(fuzz_one, (seed, workshop), timeout=FUZZ_DESIGN_TIME_LIMIT_S))

@@ -1,4 +1,5 @@
-"""Wind-tunnel measurements (UIUC Propeller Data Site format) and the comparison of ``simulate`` against them.
+"""Wind-tunnel measurements (UIUC Propeller Data Site format) and the comparison of ``simulate``
+against them.
 
 The UIUC files are plain columns after a one-line header: a static test ``RPM CT CP`` (J = 0) and
 advance-ratio sweeps ``J CT CP eta`` at about one rpm each. Coefficients follow UIUC's convention,
@@ -65,7 +66,8 @@ class Table:
 
 
 def read_table(path: Path, columns: Sequence[str]) -> Table:
-    """Read a UIUC column file whose header names ``columns`` (in that order), rows sorted by the first column.
+    """Read a UIUC column file whose header names ``columns`` (in that order), rows sorted by the
+    first column.
 
     Raises WindTunnelFormatError naming the file and line for another header, a row of another
     width, or a value that is not a finite number.
@@ -118,7 +120,8 @@ class WindTunnelData:
         )
 
     def sweep_point(self, rpm: float, advance_ratio: float) -> Measured:
-        """CT and CP at ``advance_ratio`` from the sweep whose rpm (to the nearest 100) is nearest ``rpm``."""
+        """CT and CP at ``advance_ratio`` from the sweep whose rpm (to the nearest 100) is nearest
+        ``rpm``."""
         nominal = min(self.sweeps, key=lambda key: abs(key - rpm))
         table = self.sweeps[nominal]
         js = table.column("J")
@@ -156,7 +159,8 @@ def read_wind_tunnel(folder: Path = APC_10X7SF) -> WindTunnelData:
 
 @dataclass(frozen=True)
 class Comparison:
-    """A computed point beside its measurement: errors and whether each is within :data:`TARGETS`."""
+    """A computed point beside its measurement: errors and whether each is within
+    :data:`TARGETS`."""
 
     measured: Measured
     ct: float
@@ -196,7 +200,8 @@ class Comparison:
 
 
 def markdown_table(comparisons: Sequence[Comparison], solver: str = "CFD") -> str:
-    """The comparison as a Markdown table (one row per point), as the docs show it; ``solver`` heads the computed
+    """The comparison as a Markdown table (one row per point), as the docs show it; ``solver`` heads
+    the computed
     columns."""
     lines = [
         f"| rpm | J | CT meas. | CT {solver} | ΔCT | CP meas. | CP {solver} | ΔCP | η meas. | η {solver} | Δη | "

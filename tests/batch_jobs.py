@@ -23,8 +23,8 @@ PID_FILE_KEY = "pid_file"
 
 
 def faulty(task: DesignTask) -> DesignResult:
-    """``fault = "hang"``: never finishes (writing its worker's pid to ``pid_file`` if given); ``"crash"``: kills
-    its worker (like a segfault); else built as usual."""
+    """``fault = "hang"``: never finishes (writing its worker's pid to ``pid_file`` if given);
+    ``"crash"``: kills its worker (like a segfault); else built as usual."""
     fault = task.parameters.get(FAULT_KEY)
     if fault == "hang":
         if PID_FILE_KEY in task.parameters:
@@ -43,7 +43,8 @@ def crash_on_four_or_six_blades(task: DesignTask) -> DesignResult:
 
 
 def announce_and_sleep(task: DesignTask) -> DesignResult:
-    """Write ``<folder>.started`` holding this worker's pid, then sleep for ten minutes (a long design)."""
+    """Write ``<folder>.started`` holding this worker's pid, then sleep for ten minutes (a long
+    design)."""
     assert task.folder is not None
     marker = Path(f"{task.folder}.started")
     marker.parent.mkdir(parents=True, exist_ok=True)

@@ -8,8 +8,8 @@ from torus_cad.cli import main
 
 
 def exit_code(argv: Sequence[str]) -> int:
-    """``main(argv)``'s exit code, also when the parser refuses the command line (argparse exits: an option out
-    of its range, an unknown option, --help)."""
+    """``main(argv)``'s exit code, also when the parser refuses the command line (argparse exits: an
+    option out of its range, an unknown option, --help)."""
     try:
         return main(list(argv))
     except SystemExit as stop:

@@ -1,4 +1,5 @@
-"""Shared fixtures: the default design, a light design for fast kernel tests, and built propellers."""
+"""Shared fixtures: the default design, a light design for fast kernel tests, and built
+propellers."""
 
 from __future__ import annotations
 
@@ -61,7 +62,8 @@ VOLUME_PRECISION = 1e-8
 
 
 def assert_same_volume_as_general_fuse(propeller) -> None:
-    """The propeller's solid has the volume of one general fuse of its hub and blades; same faces too."""
+    """The propeller's solid has the volume of one general fuse of its hub and blades; same faces
+    too."""
     from torus_cad.kernel.checks import single_valid_solid
     from torus_cad.kernel.fuse import fuse_all
     from torus_cad.kernel.mass_properties import precise_volume
@@ -91,8 +93,8 @@ def read_binary_stl(path: Path) -> np.ndarray:
 
 @pytest.fixture
 def tmpfs(tmp_path) -> Iterator[Callable[[int], Path]]:
-    """``tmpfs(size_kb)``: a small tmpfs mounted in ``tmp_path`` (needs root; the test is skipped where
-    it cannot be mounted), unmounted afterwards: a disk that fills up."""
+    """``tmpfs(size_kb)``: a small tmpfs mounted in ``tmp_path`` (needs root; the test is skipped
+    where it cannot be mounted), unmounted afterwards: a disk that fills up."""
     mounted: list[Path] = []
 
     def mount(size_kb: int) -> Path:
@@ -146,8 +148,9 @@ TIERS = json.loads((Path(__file__).resolve().parent / "tiers.json").read_text(en
 
 
 def pytest_configure(config):
-    """pytest-xdist's workers start with SIGINT ignored, and an ignored signal stays ignored in every
-    program they start; the signal tests need what a shell gives a command: SIGINT's default."""
+    """pytest-xdist's workers start with SIGINT ignored, and an ignored signal stays ignored in
+    every program they start; the signal tests need what a shell gives a command: SIGINT's
+    default."""
     if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
         signal.signal(signal.SIGINT, signal.default_int_handler)
 
@@ -155,8 +158,9 @@ def pytest_configure(config):
 def stale_tier_ids(
     tier_ids: set[str], collected: set[str], whole_files: set[str], root: Path
 ) -> list[str]:
-    """The ids of ``tier_ids`` that name no test: their file is gone, or it was collected whole (listed in
-    ``whole_files``) and holds no test ``collected`` under that id (a test renamed, removed or re-parametrised)."""
+    """The ids of ``tier_ids`` that name no test: their file is gone, or it was collected whole
+    (listed in ``whole_files``) and holds no test ``collected`` under that id (a test renamed,
+    removed or re-parametrised)."""
     return sorted(
         nodeid
         for nodeid in tier_ids
@@ -187,8 +191,8 @@ def pytest_collection_modifyitems(config, items):
 
 
 def pytest_runtest_setup(item):
-    """Every test fails while tests/tiers.json names a test that does not exist (under pytest-xdist a
-    collection error would not name the ids)."""
+    """Every test fails while tests/tiers.json names a test that does not exist (under pytest-xdist
+    a collection error would not name the ids)."""
     stale = getattr(item.config, "stale_tier_ids", [])
     if stale:
         pytest.fail(

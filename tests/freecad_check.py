@@ -1,4 +1,5 @@
-"""FreeCAD's own verdict on STEP files: what a CAD user sees with "Check geometry" and its BOP check.
+"""FreeCAD's own verdict on STEP files: what a CAD user sees with "Check geometry" and its BOP
+check.
 
 Runs ``freecadcmd`` (Debian's FreeCAD) on a script that reads each file with FreeCAD's STEP import
 (``Part.Shape.read``) and calls ``Shape.check(True)``, which raises with the list of faults that
@@ -35,7 +36,8 @@ json.dump(verdicts, open(folder + "/verdicts.json", "w"))
 
 
 def freecad_verdicts(paths: Sequence[Path], folder: Path) -> dict[str, dict[str, object]]:
-    """By path: FreeCAD's solid count, ``isValid()`` and the text of ``check(True)``'s faults ("" for none)."""
+    """By path: FreeCAD's solid count, ``isValid()`` and the text of ``check(True)``'s faults (""
+    for none)."""
     assert FREECADCMD is not None, "freecadcmd is not installed (.ci/run installs Debian's freecad)"
     folder.mkdir(parents=True, exist_ok=True)
     (folder / "paths.json").write_text(json.dumps([str(path) for path in paths]))

@@ -1,4 +1,5 @@
-"""The one skip mark of the tests that run OpenFOAM's programs (Debian's openfoam package; .ci/run installs it)."""
+"""The one skip mark of the tests that run OpenFOAM's programs (Debian's openfoam package; .ci/run
+installs it)."""
 
 from __future__ import annotations
 

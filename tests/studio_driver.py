@@ -57,7 +57,8 @@ _URL = re.compile(r"open (http://\S+/)")
 
 
 class StudioProcess:
-    """``python -m torus_cad studio [ARGS] --port 0`` in its own process group; ``url`` once it serves."""
+    """``python -m torus_cad studio [ARGS] --port 0`` in its own process group; ``url`` once it
+    serves."""
 
     def __init__(self, arguments: Sequence[str] = (), cwd: Path | None = None) -> None:
         self.arguments = list(arguments)
@@ -197,7 +198,8 @@ class StudioPage:
         return int(self.element(element_id).get_attribute("textContent") or 0)
 
     def message_of(self, element_id: str) -> str:
-        """The text of the Vuetify input holding ``element_id``: its label and messages (error or hint)."""
+        """The text of the Vuetify input holding ``element_id``: its label and messages (error or
+        hint)."""
         from selenium.common.exceptions import NoSuchElementException
         from selenium.webdriver.common.by import By
 
@@ -211,7 +213,8 @@ class StudioPage:
         return container.text
 
     def field_message(self, key: str) -> str:
-        """The text under a parameter's input (its error message or hint), or its vector's error line."""
+        """The text under a parameter's input (its error message or hint), or its vector's error
+        line."""
         return self.text(field_id(key) + "-error") or self.message_of(field_id(key))
 
     def change(self, key: str, text: str) -> None:
@@ -226,7 +229,8 @@ class StudioPage:
         )
 
     def wait(self, condition: Callable[[], T], what: str, timeout_s: float | None = None) -> T:
-        """Poll ``condition`` until it returns something truthy; fail naming ``what`` and the page state."""
+        """Poll ``condition`` until it returns something truthy; fail naming ``what`` and the page
+        state."""
         from selenium.common.exceptions import StaleElementReferenceException
 
         deadline = time.monotonic() + (self.timeout_s if timeout_s is None else timeout_s)
@@ -271,7 +275,8 @@ class StudioPage:
         field.send_keys(text)
 
     def choose(self, key: str, option: str) -> None:
-        """Pick ``option`` in a parameter's menu (a choice), as a user would: open it, click the item."""
+        """Pick ``option`` in a parameter's menu (a choice), as a user would: open it, click the
+        item."""
         from selenium.webdriver.common.by import By
 
         field = self.element(field_id(key))
@@ -288,8 +293,9 @@ class StudioPage:
         self._click(item)
 
     def _click(self, element: Any) -> None:
-        """Click ``element``; while an overlay is still animating over it (Vuetify's menus fade in and
-        out), the browser's click hits the overlay, so the click event is sent to the element itself."""
+        """Click ``element``; while an overlay is still animating over it (Vuetify's menus fade in
+        and out), the browser's click hits the overlay, so the click event is sent to the element
+        itself."""
         from selenium.common.exceptions import (
             ElementClickInterceptedException,
             ElementNotInteractableException,
@@ -301,7 +307,8 @@ class StudioPage:
             self.driver.execute_script("arguments[0].click();", element)
 
     def open_all_groups(self) -> None:
-        """Expand every group of the parameters panel (only the first few start open), one at a time."""
+        """Expand every group of the parameters panel (only the first few start open), one at a
+        time."""
         from selenium.webdriver.common.by import By
 
         closed = ".v-expansion-panel:not(.v-expansion-panel--active) > .v-expansion-panel-title"
@@ -345,7 +352,8 @@ class StudioPage:
         )
 
     def drag_view(self, dx: int, dy: int, steps: int = 10) -> None:
-        """Drag across the 3D view with the left button (orbit), in ``steps`` moves as a hand would."""
+        """Drag across the 3D view with the left button (orbit), in ``steps`` moves as a hand
+        would."""
         from selenium.webdriver.common.action_chains import ActionChains
 
         chain = (
@@ -361,7 +369,8 @@ class StudioPage:
         self.driver.execute_script(_LATENCY_PROBE)
 
     def latencies_ms(self) -> dict[str, float | None]:
-        """Milliseconds from the last typed change to the preview's and the exact solid's display."""
+        """Milliseconds from the last typed change to the preview's and the exact solid's
+        display."""
         times = self.driver.execute_script("return window.__studioTimes;")
         start = times["input"]
         return {

@@ -1,6 +1,6 @@
-"""SIGTERM (or another signal) at a chosen moment of ``torus-cad optimize`` / ``torus-cad sweep``, and what
-the run left behind, checked through readers we did not write (optuna's own storage reader, the
-``torus-cad verify`` command, the file system).
+"""SIGTERM (or another signal) at a chosen moment of ``torus-cad optimize`` / ``torus-cad sweep``,
+and what the run left behind, checked through readers we did not write (optuna's own storage reader,
+the ``torus-cad verify`` command, the file system).
 
 Used by tests/test_study_signals.py, and as a script for the attack table::
 
@@ -58,7 +58,8 @@ def sweep_file(folder: Path) -> Path:
 
 @dataclass
 class Outcome:
-    """What one attacked run gave, and what is wrong with it (``problems``, empty when all is well)."""
+    """What one attacked run gave, and what is wrong with it (``problems``, empty when all is
+    well)."""
 
     command: str
     moment: str
@@ -69,8 +70,8 @@ class Outcome:
 
 
 def _moment_reached(moment: str, out: Path, trials: int) -> Callable[[], bool]:
-    """When the clock for the delay starts: the process start, the storage made, a first trial written, or the
-    results table."""
+    """When the clock for the delay starts: the process start, the storage made, a first trial
+    written, or the results table."""
     if moment == "startup":
         return lambda: True
     if moment == "storage":  # the storage is made: the pool starts next
@@ -94,9 +95,9 @@ def attack(
     timeout_s: float = 600.0,
     group: bool = False,
 ) -> Outcome:
-    """Run ``command`` in ``folder``, send ``signum`` ``delay_s`` after ``moment``, check what it left; with
-    ``group`` the run is started in a session of its own and the signal goes to its whole process group
-    (the workers too, as ``timeout`` and job schedulers send it)."""
+    """Run ``command`` in ``folder``, send ``signum`` ``delay_s`` after ``moment``, check what it
+    left; with ``group`` the run is started in a session of its own and the signal goes to its whole
+    process group (the workers too, as ``timeout`` and job schedulers send it)."""
     out = folder / "out"
     source = study_file(folder, trials) if command == "optimize" else sweep_file(folder)
     argv = [
@@ -177,7 +178,8 @@ def check(
 
 
 def _check_storage(database: Path, total: int) -> list[str]:
-    """The storage opens with optuna; nothing left RUNNING, no trial counted twice, none retried twice."""
+    """The storage opens with optuna; nothing left RUNNING, no trial counted twice, none retried
+    twice."""
     import optuna
     from optuna.trial import TrialState
 

@@ -1,4 +1,5 @@
-"""Run a torus-cad process on a pseudo-terminal and read what it shows (its stderr), for the progress tests."""
+"""Run a torus-cad process on a pseudo-terminal and read what it shows (its stderr), for the
+progress tests."""
 
 from __future__ import annotations
 
@@ -17,9 +18,9 @@ ANSI = re.compile(r"\x1b\[[0-9;?]*[A-Za-z]")
 
 
 def terminal_text_until(arguments: list[str], marker: bytes, timeout_s: float = 120.0) -> str:
-    """What ``python ARGUMENTS`` prints on a pseudo-terminal until ``marker`` appears (then it is killed), or
-    until ``timeout_s``; without the ANSI sequences. A pseudo-terminal is the only way to see the progress
-    lines, which are written only to a terminal."""
+    """What ``python ARGUMENTS`` prints on a pseudo-terminal until ``marker`` appears (then it is
+    killed), or until ``timeout_s``; without the ANSI sequences. A pseudo-terminal is the only way
+    to see the progress lines, which are written only to a terminal."""
     controller, terminal = pty.openpty()
     process = subprocess.Popen(
         [sys.executable, *arguments],

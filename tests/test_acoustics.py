@@ -1,6 +1,7 @@
-"""Tonal noise (torus_cad.acoustics): Farassat 1A on rotating sources against the closed forms (Gutin's rotating
-point force, a rotating monopole for the thickness of a small body), the far-field distance law, the blade
-count's harmonics, IEC 61672-1 A-weighting, the VTK surface reader and the --observer option."""
+"""Tonal noise (torus_cad.acoustics): Farassat 1A on rotating sources against the closed forms
+(Gutin's rotating point force, a rotating monopole for the thickness of a small body), the far-field
+distance law, the blade count's harmonics, IEC 61672-1 A-weighting, the VTK surface reader and the
+--observer option."""
 
 from __future__ import annotations
 
@@ -25,7 +26,8 @@ SAMPLES = 64
 
 
 def rotating_forces(axial_n: float, tangential_n: float, blades: int = 1) -> RotatingSurface:
-    """``blades`` point forces on the fluid (each one tiny face) on the circle of RADIUS_M, evenly spaced."""
+    """``blades`` point forces on the fluid (each one tiny face) on the circle of RADIUS_M, evenly
+    spaced."""
     size = math.hypot(axial_n, tangential_n)
     area = 1e-6
     angles = 2.0 * math.pi * np.arange(blades) / blades
@@ -46,7 +48,8 @@ def at(distance_m: float, angle_deg: float) -> np.ndarray:
 def gutin_rms(
     axial_n: float, tangential_n: float, angle_deg: float, harmonics: np.ndarray
 ) -> np.ndarray:
-    """Gutin's far-field rms pressure (Pa) of harmonic k of a point force on the fluid rotating at OMEGA on
+    """Gutin's far-field rms pressure (Pa) of harmonic k of a point force on the fluid rotating at
+    OMEGA on
     RADIUS_M: k Omega / (2 sqrt(2) pi c r) |F_z cos(theta) + F_phi / M| |J_k(k M sin(theta))|."""
     theta = math.radians(angle_deg)
     c = AIR.speed_of_sound_m_s
@@ -88,8 +91,8 @@ def test_on_the_axis_a_steady_rotating_force_makes_no_tone():
 def small_sphere(
     radius_m: float, points: int = 400
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
-    """Centroids, outward unit normals, areas of a convex-hull triangulation of a sphere about the origin; its
-    volume (divergence theorem)."""
+    """Centroids, outward unit normals, areas of a convex-hull triangulation of a sphere about the
+    origin; its volume (divergence theorem)."""
     index = np.arange(points) + 0.5
     polar, azimuth = np.arccos(1.0 - 2.0 * index / points), math.pi * (1.0 + math.sqrt(5.0)) * index
     vertices = (
@@ -112,8 +115,9 @@ def small_sphere(
 
 @pytest.mark.parametrize("angle_deg", [90.0, 30.0])
 def test_thickness_noise_of_a_small_rotating_body_is_the_rotating_monopoles_within_1_db(angle_deg):
-    """A rigid body of volume V (compact) on the circle radiates as a rotating monopole of strength rho V with
-    two time derivatives: p_rms,k = sqrt(2) rho V (k Omega)^2 |J_k(k M sin(theta))| / (4 pi r)."""
+    """A rigid body of volume V (compact) on the circle radiates as a rotating monopole of strength
+    rho V with two time derivatives: p_rms,k = sqrt(2) rho V (k Omega)^2 |J_k(k M sin(theta))| / (4
+    pi r)."""
     centroids, normals, areas, volume = small_sphere(RADIUS_M / 20.0)
     body = RotatingSurface(centroids + [RADIUS_M, 0.0, 0.0], normals, areas, np.zeros(len(areas)))
     signal = observer_signal(body, OMEGA, at(FAR_M, angle_deg), AIR, SAMPLES)
@@ -165,8 +169,8 @@ def test_a_uniformly_loaded_rotor_sounds_only_at_multiples_of_its_blade_count(bl
 
 
 def test_a_weighting_is_iec_61672s_at_the_table_frequencies():
-    """IEC 61672-1 Table 3, rounded to 0.1 dB, at the exact base-10 frequencies 1 kHz x 10^(n/10) of the
-    nominal 31.5 Hz ... 16 kHz."""
+    """IEC 61672-1 Table 3, rounded to 0.1 dB, at the exact base-10 frequencies 1 kHz x 10^(n/10) of
+    the nominal 31.5 Hz ... 16 kHz."""
     table = {
         -15: -39.4,
         -12: -26.2,
@@ -184,8 +188,9 @@ def test_a_weighting_is_iec_61672s_at_the_table_frequencies():
 
 
 def test_the_vtk_surface_reader_gives_areas_normals_into_the_fluid_and_pressure_in_pa(tmp_path):
-    """A unit cube (m) written as OpenFOAM writes a wall patch (faces ordered so that their normals point out of
-    the fluid, into the body; one pentagon among the quads), kinematic p 1 m^2/s^2 on its top face only."""
+    """A unit cube (m) written as OpenFOAM writes a wall patch (faces ordered so that their normals
+    point out of the fluid, into the body; one pentagon among the quads), kinematic p 1 m^2/s^2 on
+    its top face only."""
     from vtkmodules.util.numpy_support import numpy_to_vtk
     from vtkmodules.vtkCommonCore import vtkPoints
     from vtkmodules.vtkCommonDataModel import vtkCellArray, vtkPolyData

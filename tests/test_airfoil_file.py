@@ -38,7 +38,8 @@ def selig_loop(upper: np.ndarray, lower: np.ndarray) -> np.ndarray:
 
 
 def distance_to_curve(points: np.ndarray, curve: np.ndarray) -> np.ndarray:
-    """Distance of each point to a dense polyline ``curve`` (nearest vertex, then its two segments)."""
+    """Distance of each point to a dense polyline ``curve`` (nearest vertex, then its two
+    segments)."""
     _, nearest = cKDTree(curve).query(points)
     best = np.full(len(points), np.inf)
     for offset in (-1, 0):
@@ -75,7 +76,8 @@ def test_selig_and_lednicer_layouts_of_the_same_points_agree(tmp_path, designati
 
 @pytest.mark.parametrize("designation", ["2412", "0012", "4412", "2415"])
 def test_a_file_written_from_the_naca_formulas_reproduces_the_naca_section(designation):
-    """81 cosine-spaced stations per surface (the density of the database's files): within the stated error."""
+    """81 cosine-spaced stations per surface (the density of the database's files): within the
+    stated error."""
     airfoil = NacaAirfoil.from_designation(designation)
     upper, lower = naca_points(airfoil, 81)
     text = "\n".join([designation] + [f"{x:.9f} {y:.9f}" for x, y in selig_loop(upper, lower)])
@@ -214,16 +216,17 @@ def test_binary_and_missing_files_are_refused(tmp_path):
 
 
 def ellipse_text(points: int, thickness: float) -> str:
-    """A Selig file of a closed ellipse of chord 1: ``points`` points from (1, 0) round and back to (1, 0)."""
+    """A Selig file of a closed ellipse of chord 1: ``points`` points from (1, 0) round and back to
+    (1, 0)."""
     angle = np.linspace(0.0, 2.0 * np.pi, points)
     loop = np.stack([0.5 + 0.5 * np.cos(angle), 0.5 * thickness * np.sin(angle)], axis=1)
     return "ellipse\n" + "\n".join(f"{x:.7f} {y:.7f}" for x, y in loop) + "\n"
 
 
 def test_a_closed_ellipse_is_a_section_at_every_point_count():
-    """A closed smooth loop's two spline ends meet only to round-off (~1e-19 chord); the crossing check took that
-    for a crossing and refused 206 of 1448 closed ellipses of 20-200 points (80 points, thickness 0.12 among them:
-    'line 2: the surfaces cross')."""
+    """A closed smooth loop's two spline ends meet only to round-off (~1e-19 chord); the crossing
+    check took that for a crossing and refused 206 of 1448 closed ellipses of 20-200 points (80
+    points, thickness 0.12 among them: 'line 2: the surfaces cross')."""
     for points in range(20, 201):
         for thickness in (0.08, 0.12):
             section = parse_airfoil_text(ellipse_text(points, thickness), "ellipse.dat")
@@ -235,7 +238,8 @@ def test_a_closed_ellipse_is_a_section_at_every_point_count():
 
 
 def test_a_smooth_curve_that_runs_into_the_other_surface_is_still_refused():
-    """The points do not cross, but the spline's overshoot next to a spike on the upper surface does."""
+    """The points do not cross, but the spline's overshoot next to a spike on the upper surface
+    does."""
     upper = [
         (1, 0),
         (0.8, 0.002),

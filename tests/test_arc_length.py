@@ -78,8 +78,9 @@ def test_spacing_is_equal_on_each_surface_for_any_section(m, p, thickness, cambe
 
 
 def _adaptive_table(airfoil, upper: bool, edges: np.ndarray) -> np.ndarray:
-    """The arc-length table of the same grid by QUADPACK's adaptive Gauss-Kronrod quadrature (scipy's
-    ``quad_vec``, run to ARC_LENGTH_QUAD_ABS): the method the table used before Gauss-Legendre."""
+    """The arc-length table of the same grid by QUADPACK's adaptive Gauss-Kronrod quadrature
+    (scipy's ``quad_vec``, run to ARC_LENGTH_QUAD_ABS): the method the table used before
+    Gauss-Legendre."""
     from scipy.integrate import quad_vec
 
     starts, widths = edges[:-1], np.diff(edges)
@@ -95,9 +96,10 @@ def _adaptive_table(airfoil, upper: bool, edges: np.ndarray) -> np.ndarray:
 
 
 def test_gauss_legendre_table_agrees_with_adaptive_quadrature_within_its_tolerance():
-    """The arc-length table (ARC_LENGTH_GAUSS_POINTS per interval) within ARC_LENGTH_QUAD_ABS of adaptive
-    Gauss-Kronrod at every grid point: NACA 4-digit sections from thin to thick and strongly cambered,
-    blunt trailing edges, and the coordinate files of examples/airfoils (whose speed is only piecewise
+    """The arc-length table (ARC_LENGTH_GAUSS_POINTS per interval) within ARC_LENGTH_QUAD_ABS of
+    adaptive Gauss-Kronrod at every grid point: NACA 4-digit sections from thin to thick and
+    strongly cambered, blunt trailing edges, and the coordinate files of examples/airfoils (whose
+    speed is only piecewise
     smooth)."""
     from pathlib import Path
 

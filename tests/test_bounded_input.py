@@ -1,6 +1,6 @@
-"""Bounded input (issue 34): every file a person hands the program goes through the design file's shape
-limits, every numeric option has a range (in its --help, checked as it is parsed), and error messages
-cut long values short.
+"""Bounded input (issue 34): every file a person hands the program goes through the design file's
+shape limits, every numeric option has a range (in its --help, checked as it is parsed), and error
+messages cut long values short.
 
 Each refusal is exit 2, one line on stderr naming the key or option, and no output folder.
 """
@@ -126,8 +126,8 @@ def _one_line(capsys: pytest.CaptureFixture[str]) -> str:
 def test_a_study_sweep_or_design_file_out_of_shape_exits_2_naming_the_key(
     tmp_path, capsys, kind, attack, text, words
 ):
-    """Today a study's 5001-digit trials was "internal error (ValueError)", its 500-deep nesting and the
-    dotted keys and headers of both were "internal error (RecursionError)"."""
+    """Today a study's 5001-digit trials was "internal error (ValueError)", its 500-deep nesting and
+    the dotted keys and headers of both were "internal error (RecursionError)"."""
     path = tmp_path / f"{kind}.toml"
     path.write_text(text)
     out = tmp_path / "out"
@@ -186,7 +186,8 @@ def _compound_options(
     capsys: pytest.CaptureFixture[str],
 ) -> list[tuple[str, str, argparse.Action, str]]:
     """(command, option, action, its --help text) of every option whose value holds several numbers
-    (``--observer DIST_M:ANGLE_DEG``): its type carries its ranges as text and values outside them."""
+    (``--observer DIST_M:ANGLE_DEG``): its type carries its ranges as text and values outside
+    them."""
     options = []
     for name, sub in _subparsers().items():
         text = _help_of(name, sub, capsys)
@@ -260,7 +261,8 @@ def _outside(bounds) -> list[str]:
 
 
 def test_every_numeric_option_refuses_values_outside_its_range_with_one_line(capsys):
-    """Out of range, not finite, 5001 digits or 100,000 characters: exit 2 while parsing, one short line."""
+    """Out of range, not finite, 5001 digits or 100,000 characters: exit 2 while parsing, one short
+    line."""
     parser = build_parser()
     for command, option, action, _ in _bounded_options(capsys):
         for value in _outside(action.type.bounds):
@@ -297,7 +299,8 @@ def test_an_option_out_of_range_makes_no_output_folder(tmp_path, capsys, monkeyp
 
 
 def test_cfd_with_100000_threads_exits_2_not_a_crash(tmp_path):
-    """Today: libgomp 'Thread creation failed', SIGSEGV (exit 139 from a shell), a staging folder left."""
+    """Today: libgomp 'Thread creation failed', SIGSEGV (exit 139 from a shell), a staging folder
+    left."""
     result = subprocess.run(
         [sys.executable, "-m", "torus_cad", "cfd", "--threads", "100000"],
         cwd=tmp_path,

@@ -1,7 +1,7 @@
-"""`torus-cad cfd`: the .msh files read back (in gmsh and in meshio) with every physical group, and the
-meshed fluid fills the domain minus the propeller; coarse sizes and a blunt trailing edge mesh (no
-crossing triangles, by meshlib); README.txt's OpenFOAM steps give "Mesh OK" and no empty patch; a
-mesh over the budget is refused before any work; the files are one output set (verify, signals,
+"""`torus-cad cfd`: the .msh files read back (in gmsh and in meshio) with every physical group, and
+the meshed fluid fills the domain minus the propeller; coarse sizes and a blunt trailing edge mesh
+(no crossing triangles, by meshlib); README.txt's OpenFOAM steps give "Mesh OK" and no empty patch;
+a mesh over the budget is refused before any work; the files are one output set (verify, signals,
 a file size limit); bad input and a missing gmsh are one clear line."""
 
 from __future__ import annotations
@@ -51,7 +51,8 @@ COARSE = [
 
 @pytest.fixture(scope="module")
 def cfd_run(tmp_path_factory):
-    """The coarse mesh's folder and what the command printed on stderr (not a terminal: no stage lines)."""
+    """The coarse mesh's folder and what the command printed on stderr (not a terminal: no stage
+    lines)."""
     out = tmp_path_factory.mktemp("cfd")
     stderr = io.StringIO()
     with contextlib.redirect_stderr(stderr), contextlib.redirect_stdout(io.StringIO()):
@@ -77,7 +78,8 @@ def cli(*args: str, **kwargs) -> subprocess.CompletedProcess:
 
 
 def _read_back(path) -> tuple[dict[str, int], dict[str, float]]:
-    """Physical groups (name -> dim) and meshed volume per physical volume, as gmsh reads the file."""
+    """Physical groups (name -> dim) and meshed volume per physical volume, as gmsh reads the
+    file."""
     gmsh.initialize(readConfigFiles=False)
     try:
         gmsh.option.setNumber("General.Terminal", 0)
@@ -179,7 +181,8 @@ def test_without_gmsh_one_line_names_the_extra(tmp_path, capsys, monkeypatch):
 
 
 def _crossing_pairs(msh_path, group: str) -> int:
-    """Intersecting triangle pairs of one physical surface group of a .msh file (meshio reads it, meshlib checks)."""
+    """Intersecting triangle pairs of one physical surface group of a .msh file (meshio reads it,
+    meshlib checks)."""
     meshio = pytest.importorskip("meshio")
     mr = pytest.importorskip("meshlib.mrmeshpy")
     from meshlib import mrmeshnumpy
@@ -256,7 +259,8 @@ def test_the_same_design_gives_the_same_mesh_on_every_run(cfd_out, tmp_path):
 
 
 def test_a_blunt_trailing_edge_meshes_at_coarse_sizes(tmp_path):
-    """A 0.1 mm edge (thinner than the coarse triangles) meshes; its wall has no crossing triangles."""
+    """A 0.1 mm edge (thinner than the coarse triangles) meshes; its wall has no crossing
+    triangles."""
     out = tmp_path / "out"
     result = cli(
         "cfd", *COARSE, "--set", "airfoil.trailing_edge_thickness=0.1", "--out", str(out), "-q"
@@ -267,9 +271,9 @@ def test_a_blunt_trailing_edge_meshes_at_coarse_sizes(tmp_path):
 
 @pytest.mark.skipif(shutil.which("gmshToFoam") is None, reason="OpenFOAM is not installed")
 def test_readme_txt_openfoam_steps_give_mesh_ok_and_no_empty_patch(cfd_out, tmp_path):
-    """README.txt's OpenFOAM lines, as written, in a fresh case folder inside the output folder after the
-    folder was moved: checkMesh says "Mesh OK", every patch has faces, the propeller is a wall, the zones
-    are there."""
+    """README.txt's OpenFOAM lines, as written, in a fresh case folder inside the output folder
+    after the folder was moved: checkMesh says "Mesh OK", every patch has faces, the propeller is a
+    wall, the zones are there."""
     moved = tmp_path / "moved"
     shutil.copytree(cfd_out, moved)
     case = moved / "case"

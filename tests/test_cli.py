@@ -1,4 +1,5 @@
-"""The torus-cad command: files written, exit codes, one-line errors, nothing left behind on bad input."""
+"""The torus-cad command: files written, exit codes, one-line errors, nothing left behind on bad
+input."""
 
 import json
 import subprocess
@@ -207,7 +208,8 @@ def test_out_of_memory_is_one_line_and_exit_1(tmp_path):
 
 
 def test_verify_exit_codes(tmp_path):
-    """0 for a complete set, 1 naming the file for an incomplete one, 2 for a folder that is not one."""
+    """0 for a complete set, 1 naming the file for an incomplete one, 2 for a folder that is not
+    one."""
     out = tmp_path / "out"
     assert (
         main(
@@ -298,7 +300,8 @@ def test_build_says_on_the_terminal_when_the_part_is_not_printable(tmp_path, cap
 
 
 def test_each_subcommand_is_its_own_module_loaded_only_when_it_runs():
-    """Parsing loads no command's module; running ``defaults`` loads its module and no other command's."""
+    """Parsing loads no command's module; running ``defaults`` loads its module and no other
+    command's."""
     import argparse
     import importlib.util
 

@@ -68,8 +68,9 @@ def _farthest_pair(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _section_at(solid, radius_mm: float, spin: str = "cw") -> tuple[np.ndarray, np.ndarray]:
-    """Leading and trailing edge ``(3,)`` of blade 0's cut by the plane x = radius_mm (the farthest pair);
-    turning ``spin`` seen from +z, blade 0 moves toward -y ('cw') or +y ('ccw'), its leading edge first."""
+    """Leading and trailing edge ``(3,)`` of blade 0's cut by the plane x = radius_mm (the farthest
+    pair); turning ``spin`` seen from +z, blade 0 moves toward -y ('cw') or +y ('ccw'), its leading
+    edge first."""
     edges = plane_section_edges(solid, (radius_mm, 0.0, 0.0), (1.0, 0.0, 0.0), 60.0)
     points = edge_points(contour_through(edges, (radius_mm, 0.0, 0.0)), 400)
     first, second = _farthest_pair(points)
@@ -97,13 +98,15 @@ def test_step_and_stl_are_whole(apc, apc_files):
 
 
 def _hole_areas_mm2(triangles: np.ndarray) -> np.ndarray:
-    """Areas of the triangular holes the STL's edges used once bound (``(f, 3, 3)`` triangles), mm^2.
+    """Areas of the triangular holes the STL's edges used once bound (``(f, 3, 3)`` triangles),
+    mm^2.
 
-    OpenCascade's tessellation of the APC leaves one sliver-shaped gap at blade 1's root, where it meets
-    the hub: three nodes, one of them 6 um off the line through the other two (0.0018 mm^2; the B-rep's
-    edge tolerances there are below 3e-5 mm, and the toroidal examples' STLs have no such gap). It is the
-    assembled fuse route's (kernel.fuse.fuse_pattern): blade 1's face has a node on the junction edge that
-    the hub face's polygon lacks; the general fuse (fuse_all) of the same parts tessellates closed."""
+    OpenCascade's tessellation of the APC leaves one sliver-shaped gap at blade 1's root, where it
+    meets the hub: three nodes, one of them 6 um off the line through the other two (0.0018 mm^2;
+    the B-rep's edge tolerances there are below 3e-5 mm, and the toroidal examples' STLs have no
+    such gap). It is the assembled fuse route's (kernel.fuse.fuse_pattern): blade 1's face has a
+    node on the junction edge that the hub face's polygon lacks; the general fuse (fuse_all) of the
+    same parts tessellates closed."""
     # shared corners: equal
     corners_mm, vertex = np.unique(triangles.reshape(-1, 3), axis=0, return_inverse=True)
     corners = vertex.reshape(-1, 3)
@@ -363,10 +366,10 @@ def test_the_pre_kernel_checks_hold_at_any_phase_and_refuse_crowded_blades():
 
 
 def test_the_comparison_propeller_has_the_default_designs_tip_diameter_blades_and_hub():
-    """docs/how-to/compare.md compares the default toroidal design with this one at equal thrust: the
-    comparison is fair only while both have the same tip diameter, blade count and hub. The conventional
-    one's D = 45.1 mm is the tip station's radius; the ends of its 4.5 mm tip chord lie off the radial line,
-    so the circle its tips sweep is 1.1 % larger (45.59 mm)."""
+    """docs/how-to/compare.md compares the default toroidal design with this one at equal thrust:
+    the comparison is fair only while both have the same tip diameter, blade count and hub. The
+    conventional one's D = 45.1 mm is the tip station's radius; the ends of its 4.5 mm tip chord lie
+    off the radial line, so the circle its tips sweep is 1.1 % larger (45.59 mm)."""
     from torus_cad.parameters import PropellerParameters, resolve_parameters
     from torus_cad.parameters.design_targets import tip_radius_mm
 
@@ -383,9 +386,9 @@ def test_the_comparison_propeller_has_the_default_designs_tip_diameter_blades_an
 
 
 def test_the_quiet_studys_conventional_reference_has_its_base_designs_diameter_blades_and_hub():
-    """scripts/quiet_study.py compares the quiet study's chosen design with its base and with this conventional
-    propeller at the same thrust (docs/how-to/optimize.md): fair only with the same tip diameter, blade count
-    and hub, bore included."""
+    """scripts/quiet_study.py compares the quiet study's chosen design with its base and with this
+    conventional propeller at the same thrust (docs/how-to/optimize.md): fair only with the same tip
+    diameter, blade count and hub, bore included."""
     from torus_cad.parameters import resolve_parameters
     from torus_cad.parameters.design_targets import resolve_design_targets, tip_radius_mm
 

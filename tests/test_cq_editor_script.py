@@ -1,4 +1,5 @@
-"""scripts/cq_editor_propeller.py: shows one valid solid in cq-editor, writes files as plain python."""
+"""scripts/cq_editor_propeller.py: shows one valid solid in cq-editor, writes files as plain
+python."""
 
 from __future__ import annotations
 

@@ -234,8 +234,8 @@ def test_sections_table_is_written_beside_the_step(tmp_path):
 
 
 def test_targets_are_fitted_on_geometry_objects_with_few_validations(monkeypatch):
-    """A diameter + pitch design validates its document at most 3 times while its targets are fitted,
-    and builds its geometry a few times, not once per step of the fits."""
+    """A diameter + pitch design validates its document at most 3 times while its targets are
+    fitted, and builds its geometry a few times, not once per step of the fits."""
     from torus_cad.parameters import PropellerParameters
     from torus_cad.parameters.design_targets import resolve_design_targets
 

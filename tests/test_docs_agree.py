@@ -1,6 +1,6 @@
-"""The documentation agrees with the program: the files a build writes, the command-line reference (generated
-from the parser, current in the repository), the getting-started synopsis, and every install line of an
-extra pinned by constraints.txt."""
+"""The documentation agrees with the program: the files a build writes, the command-line reference
+(generated from the parser, current in the repository), the getting-started synopsis, and every
+install line of an extra pinned by constraints.txt."""
 
 from __future__ import annotations
 

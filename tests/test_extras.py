@@ -1,5 +1,6 @@
-"""A command whose extra is not installed says so in one line (the extra, the install command with the
-repository's constraints), exits 2 and writes nothing: the module is hidden from a real ``torus-cad`` process."""
+"""A command whose extra is not installed says so in one line (the extra, the install command with
+the repository's constraints), exits 2 and writes nothing: the module is hidden from a real
+``torus-cad`` process."""
 
 from __future__ import annotations
 
@@ -93,7 +94,8 @@ def test_every_module_named_for_an_extra_is_installed_by_that_extra_in_pyproject
     providers = importlib.metadata.packages_distributions()
 
     def names(extra: str) -> set[str]:
-        """The distributions an extra installs, with those of its requirements' own extras (dask[distributed])."""
+        """The distributions an extra installs, with those of its requirements' own extras
+        (dask[distributed])."""
         found = set()
         for requirement in extras[extra]:
             found.update(re.findall(r"[A-Za-z0-9_.-]+", re.split(r"[<>=!~ ]", requirement)[0]))

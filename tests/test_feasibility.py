@@ -1,6 +1,6 @@
-"""Feasibility before the kernel (issue 33): ``torus-cad check`` answers with the build's own refusal or one line,
-without OpenCascade; the build refuses nothing geometric that ``check`` passed; sweeps and studies refuse such
-designs in their own process and count them apart."""
+"""Feasibility before the kernel (issue 33): ``torus-cad check`` answers with the build's own
+refusal or one line, without OpenCascade; the build refuses nothing geometric that ``check`` passed;
+sweeps and studies refuse such designs in their own process and count them apart."""
 
 from __future__ import annotations
 
@@ -95,8 +95,8 @@ def test_check_refuses_with_exit_2_and_the_build_s_own_line(capsys, tmp_path, na
 def test_check_refuses_a_trailing_edge_the_section_fit_cannot_resolve_before_the_kernel(
     capsys, tmp_path
 ):
-    """The hooked trailing edge of tests/test_robustness.py (25 points): refused by the section fit, which is
-    kernel-free now, with the build's line."""
+    """The hooked trailing edge of tests/test_robustness.py (25 points): refused by the section fit,
+    which is kernel-free now, with the build's line."""
     design = copy.deepcopy(HOOKED_TRAILING_EDGE_DESIGN)
     path = tmp_path / "hooked.toml"
     path.write_text(PropellerParameters.from_dict(design).to_toml())
@@ -131,7 +131,8 @@ def test_check_takes_a_design_file_with_set_overrides_and_require_printable(caps
 
 
 def test_a_closed_elliptical_coordinate_file_passes(capsys, tmp_path):
-    """80 points round a closed ellipse: refused by round-off as 'line 2: the surfaces cross' before issue 33."""
+    """80 points round a closed ellipse: refused by round-off as 'line 2: the surfaces cross' before
+    issue 33."""
     angle = np.linspace(0.0, 2.0 * np.pi, 80)
     path = tmp_path / "ellipse.dat"
     path.write_text(
@@ -181,8 +182,8 @@ def _verdict(design: dict) -> str:
 
 
 def test_what_check_refuses_the_build_refuses_with_the_same_line():
-    """The fuzz sampler's designs 0-29: each one check refuses, build_propeller refuses with the same message
-    before the kernel builds anything (cheap: no design here is built)."""
+    """The fuzz sampler's designs 0-29: each one check refuses, build_propeller refuses with the
+    same message before the kernel builds anything (cheap: no design here is built)."""
     from torus_cad.propeller import build_propeller
 
     refused = 0
@@ -200,8 +201,9 @@ def test_what_check_refuses_the_build_refuses_with_the_same_line():
 
 @pytest.mark.long
 def test_what_check_passes_the_build_and_its_files_refuse_nothing_geometric(tmp_path):
-    """The fuzz sampler's designs 0-29, built and written as a sweep writes them (STEP and STL): no design check
-    passed is refused by the build or the write (a kernel failure is not a refusal and is not judged here)."""
+    """The fuzz sampler's designs 0-29, built and written as a sweep writes them (STEP and STL): no
+    design check passed is refused by the build or the write (a kernel failure is not a refusal and
+    is not judged here)."""
     from torus_cad.errors import KernelError
     from torus_cad.propeller import build_propeller
 
@@ -294,8 +296,9 @@ AGREEMENT_SEEDS = range(100, 116)
 
 
 def test_check_and_the_build_give_the_same_answer_on_random_workshop_designs():
-    """Issue 47: check is "would it build?". On seeded random workshop designs, every design check refuses the build
-    refuses with the same line before the kernel, and every design check passes builds (no kernel failure)."""
+    """Issue 47: check is "would it build?". On seeded random workshop designs, every design check
+    refuses the build refuses with the same line before the kernel, and every design check passes
+    builds (no kernel failure)."""
     sys.path.insert(0, str(ROOT))
     from studies.fuzz import random_design_dict
     from torus_cad.propeller import build_propeller
@@ -322,8 +325,9 @@ def test_check_and_the_build_give_the_same_answer_on_random_workshop_designs():
 
 
 def test_a_root_fillet_round_a_knife_edge_is_refused_by_check_as_by_the_build(tmp_path):
-    """OpenCascade's fillet round a knife trailing edge leaves a self-crossing corner face (measured on every
-    design tried): check and build refuse it before the kernel, exit 2, the same line, nothing written."""
+    """OpenCascade's fillet round a knife trailing edge leaves a self-crossing corner face (measured
+    on every design tried): check and build refuse it before the kernel, exit 2, the same line,
+    nothing written."""
     args = ["--set", "hub.root_fillet_radius=0.2"]
     check = subprocess.run(
         [sys.executable, "-m", "torus_cad", "check", *args],
@@ -355,7 +359,8 @@ def test_a_root_fillet_round_a_knife_edge_is_refused_by_check_as_by_the_build(tm
     ],
 )
 def test_check_says_the_root_fillet_is_the_kernels_to_decide(edge, words):
-    """What check cannot know without the kernel it says on a note line (exit 0): a root fillet's outcome."""
+    """What check cannot know without the kernel it says on a note line (exit 0): a root fillet's
+    outcome."""
     overrides = [
         f"--set={key}={value}" for key, value in {**edge, "hub.root_fillet_radius": 0.5}.items()
     ]

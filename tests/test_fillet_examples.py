@@ -1,13 +1,13 @@
 """The root fillet on every shipped example at 0.5 and 1 mm.
 
 Each example gets one valid closed solid with the fillet, of the requested radius everywhere
-(no edge reduced where a blade bends tightly, torus_cad.kernel.fillet.root_fillet.RootFillet), every face
-knowing the part it came from (torus_cad.kernel.face_provenance); an example whose hub chamfer the
-fillet's spread would cut into gets the exit-2 refusal naming ``hub.chamfer`` instead, and
+(no edge reduced where a blade bends tightly, torus_cad.kernel.fillet.root_fillet.RootFillet), every
+face knowing the part it came from (torus_cad.kernel.face_provenance); an example whose hub chamfer
+the fillet's spread would cut into gets the exit-2 refusal naming ``hub.chamfer`` instead, and
 then, with the chamfer taken off, the fillet. Round a sharp (knife) trailing edge OpenCascade's
 fillet leaves a corner face that crosses itself, so the design is refused before the kernel, naming
-the round trailing edge that takes the fillet; with the 0.1 mm round edge of the multirotor examples,
-the 1 mm fillet's faces cross and the build's strict check refuses it.
+the round trailing edge that takes the fillet; with the 0.1 mm round edge of the multirotor
+examples, the 1 mm fillet's faces cross and the build's strict check refuses it.
 """
 
 from __future__ import annotations

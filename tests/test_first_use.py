@@ -1,6 +1,7 @@
-"""What a new user trips over first (issue 35, item 7): the case's Allrun as root, the cfd README's steps
-that survive moving the folder, the default output folders ignored by git, an empty --out removed after
-Ctrl-C, the first line of ``cfd``, TOML arrays called arrays, the sections picture's beta panel."""
+"""What a new user trips over first (issue 35, item 7): the case's Allrun as root, the cfd README's
+steps that survive moving the folder, the default output folders ignored by git, an empty --out
+removed after Ctrl-C, the first line of ``cfd``, TOML arrays called arrays, the sections picture's
+beta panel."""
 
 from __future__ import annotations
 
@@ -21,8 +22,8 @@ ROOT = Path(__file__).resolve().parent.parent
     shutil.which("mpiexec") is None or os.geteuid() != 0, reason="needs OpenMPI's mpiexec, as root"
 )
 def test_allrun_starts_mpiexec_as_root(tmp_path):
-    """OpenMPI refuses root unless two variables are set: the Allrun sets them itself (the lines before
-    its first OpenFOAM command, then mpiexec, run as the script runs)."""
+    """OpenMPI refuses root unless two variables are set: the Allrun sets them itself (the lines
+    before its first OpenFOAM command, then mpiexec, run as the script runs)."""
     pytest.importorskip("foamlib")
     from torus_cad.parameters.design import Handedness
     from torus_cad.simulate.case import CaseSpec, allrun_text
@@ -85,8 +86,9 @@ def test_the_cfd_readme_points_to_a_runnable_case_and_names_no_absolute_path():
 
 
 def _default_out_folders() -> set[str]:
-    """The first path part of every subcommand's default --out (from the parser itself), with the folders
-    sweep and optimize default to (sweep_out/<file>, optimize_out/<file>) and preview (step_out/<name>.png)."""
+    """The first path part of every subcommand's default --out (from the parser itself), with the
+    folders sweep and optimize default to (sweep_out/<file>, optimize_out/<file>) and preview
+    (step_out/<name>.png)."""
     import argparse
 
     from torus_cad.cli import build_parser
@@ -167,7 +169,8 @@ def test_sigint_while_a_set_is_written_removes_the_out_folder_the_command_made(t
 
 @pytest.mark.long
 def test_sigint_during_cfd_removes_the_out_folder_it_made(tmp_path):
-    """Ctrl-C while cfd meshes (its output folder already made): exit 130 and no empty folder left."""
+    """Ctrl-C while cfd meshes (its output folder already made): exit 130 and no empty folder
+    left."""
     pytest.importorskip("gmsh")
     import signal
     import time
@@ -193,8 +196,8 @@ def test_sigint_during_cfd_removes_the_out_folder_it_made(tmp_path):
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="a pseudo-terminal")
 def test_cfd_says_what_it_does_before_loading_anything_heavy(tmp_path):
-    """The first progress line of cfd comes before the schema (pydantic), the CAD kernel and gmsh load:
-    -X importtime reports each module on stderr as its import ends."""
+    """The first progress line of cfd comes before the schema (pydantic), the CAD kernel and gmsh
+    load: -X importtime reports each module on stderr as its import ends."""
     text = terminal_text_until(
         ["-X", "importtime", "-m", "torus_cad", "cfd", "--out", str(tmp_path / "out")],
         b"building the propeller",
@@ -232,7 +235,8 @@ def test_a_wrong_value_is_described_in_toml_words_not_python_type_names(
 
 def test_the_sections_picture_plots_beta_without_the_jump_at_the_tip(default_params):
     """The default blade's beta jumps from about -5 to -172 degrees at the tip (the chord line turns
-    back): the picture's curve continues instead, the same line's angle (mod 180), and spans tens of degrees."""
+    back): the picture's curve continues instead, the same line's angle (mod 180), and spans tens of
+    degrees."""
     from torus_cad.outputs.sections_table import elements_of, plotted_beta_deg
 
     elements = elements_of(default_params.blade_surface(points=400))
@@ -246,8 +250,8 @@ def test_the_sections_picture_plots_beta_without_the_jump_at_the_tip(default_par
 
 
 def test_a_refused_trial_appears_in_the_optimize_summary_and_the_history_picture():
-    """The optimize example's refused trial (a design over a limit: no objective value) is named in the
-    terminal summary and marked in the history picture, not silently missing."""
+    """The optimize example's refused trial (a design over a limit: no objective value) is named in
+    the terminal summary and marked in the history picture, not silently missing."""
     optuna = pytest.importorskip("optuna")
     from optuna.distributions import FloatDistribution
     from optuna.trial import TrialState, create_trial

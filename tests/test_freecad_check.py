@@ -1,4 +1,5 @@
-"""Every STEP file the project writes passes FreeCAD's "Check geometry" with BOP check, read back by FreeCAD."""
+"""Every STEP file the project writes passes FreeCAD's "Check geometry" with BOP check, read back by
+FreeCAD."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
-"""A full disk while writing a picture or a sweep's designs: one line naming the file and the cause, even
-with -q (the disks are small tmpfs mounts, tests/conftest.py)."""
+"""A full disk while writing a picture or a sweep's designs: one line naming the file and the cause,
+even with -q (the disks are small tmpfs mounts, tests/conftest.py)."""
 
 from __future__ import annotations
 

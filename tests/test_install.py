@@ -1,5 +1,5 @@
-"""The install is the same everywhere: every dependency of every extra is pinned in constraints.txt, and
-README command 1 and .ci/run install through it."""
+"""The install is the same everywhere: every dependency of every extra is pinned in constraints.txt,
+and README command 1 and .ci/run install through it."""
 
 from __future__ import annotations
 

@@ -1,4 +1,5 @@
-"""Kernel calls in a child process (torus_cad.runtime.isolation): a time limit, a crash, and no child left behind."""
+"""Kernel calls in a child process (torus_cad.runtime.isolation): a time limit, a crash, and no
+child left behind."""
 
 from __future__ import annotations
 

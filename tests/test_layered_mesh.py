@@ -1,7 +1,7 @@
-"""The boundary-layer mesh route of `torus-cad simulate` (torus_cad.simulate.snappy): the first layer's
-height from the y+ target, the levels' sizes, checkMesh's and snappyHexMesh's reports read back, a
-failed checkMesh is one named line with exit 1, and any closed surface (not only a toroidal design)
-meshes with prism layers."""
+"""The boundary-layer mesh route of `torus-cad simulate` (torus_cad.simulate.snappy): the first
+layer's height from the y+ target, the levels' sizes, checkMesh's and snappyHexMesh's reports read
+back, a failed checkMesh is one named line with exit 1, and any closed surface (not only a toroidal
+design) meshes with prism layers."""
 
 from __future__ import annotations
 
@@ -348,8 +348,9 @@ def test_surface_refinement_halves_the_propellers_cells_and_keeps_the_levels_lay
 
 
 def test_the_layers_fit_the_refined_surface_with_the_first_layer_kept(tmp_path):
-    """Each surface refinement halves the surface cell; from the step where the level's eight layers would
-    stand taller than LAYER_STACK_MAX_SURFACE_CELLS cells, fewer are asked for, the first layer unchanged."""
+    """Each surface refinement halves the surface cell; from the step where the level's eight layers
+    would stand taller than LAYER_STACK_MAX_SURFACE_CELLS cells, fewer are asked for, the first
+    layer unchanged."""
     stl = _box_stl(tmp_path / "box.stl", (20.0, 3.0, 1.0))
     asked, first = [], set()
     for refinement in range(SIMULATE_MAX_SURFACE_REFINEMENT + 1):

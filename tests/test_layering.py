@@ -1,8 +1,8 @@
-"""The import layers: the runtime (the ground floor) imports nothing of the package but the errors and the
-tolerances; geometry imports no CAD kernel and nothing above it, and inside it section, hub, blade and
-analysis each import only the layers below; the kernel imports no pipeline or app; nothing imports the
-CLI. Read from the sources' import statements, and checked once more in a fresh interpreter for the
-geometry layer."""
+"""The import layers: the runtime (the ground floor) imports nothing of the package but the errors
+and the tolerances; geometry imports no CAD kernel and nothing above it, and inside it section, hub,
+blade and analysis each import only the layers below; the kernel imports no pipeline or app; nothing
+imports the CLI. Read from the sources' import statements, and checked once more in a fresh
+interpreter for the geometry layer."""
 
 from __future__ import annotations
 
@@ -71,7 +71,8 @@ def test_geometry_imports_no_kernel_and_nothing_above_it():
 
 
 def test_the_runtime_imports_only_the_errors_and_the_tolerances():
-    """torus_cad.runtime is the ground floor: files, processes, isolation, signals, extras, progress."""
+    """torus_cad.runtime is the ground floor: files, processes, isolation, signals, extras,
+    progress."""
 
     def forbidden(name: str) -> bool:
         return name.split(".")[0] in KERNEL_PACKAGES or (
@@ -190,7 +191,8 @@ APPS = ("cli", "preview", "studio", "mesh", "cfd_domain", "batch", "simulate", "
 
 
 def test_the_core_imports_no_app():
-    """geometry, kernel, parameters, outputs, runtime and the pipeline are usable without any command."""
+    """geometry, kernel, parameters, outputs, runtime and the pipeline are usable without any
+    command."""
     core = [
         path
         for path in _sources()
@@ -203,7 +205,8 @@ def test_the_core_imports_no_app():
 
 
 def test_the_package_root_holds_only_the_core_s_face():
-    """The pipeline, the exceptions, the tolerances, the shared enums and colours; the rest lives in packages."""
+    """The pipeline, the exceptions, the tolerances, the shared enums and colours; the rest lives in
+    packages."""
     loose = sorted(path.name for path in PACKAGE.glob("*.py"))
     assert loose == [
         "__init__.py",
@@ -234,7 +237,8 @@ def test_importing_a_kernel_free_layer_loads_no_kernel_module(package):
 
 def test_every_constant_of_the_tolerances_module_is_read_in_two_places_at_least():
     """tolerances.py holds what two or more places share (modules of the package, or a module and
-    the tests or scripts that hold it to them); a constant one module alone reads lives beside it."""
+    the tests or scripts that hold it to them); a constant one module alone reads lives beside
+    it."""
     root = PACKAGE.parent
     tree = ast.parse((PACKAGE / "tolerances.py").read_text())
     names = [

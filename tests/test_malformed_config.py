@@ -1,4 +1,5 @@
-"""Malformed configuration files: each is refused with exit 2, one line naming the problem, no file written.
+"""Malformed configuration files: each is refused with exit 2, one line naming the problem, no file
+written.
 
 Every key of a design file is optional (a missing key takes its default, as ``torus-cad
 defaults`` documents), so "missing" here means a key without a value, a list missing an
@@ -247,7 +248,8 @@ def test_a_config_over_the_size_limit_is_refused(tmp_path, capsys):
 
 
 def test_a_utf8_bom_is_accepted(tmp_path, capsys):
-    """Case 4: a file with a UTF-8 byte-order mark (Windows editors write one) was refused as invalid TOML."""
+    """Case 4: a file with a UTF-8 byte-order mark (Windows editors write one) was refused as
+    invalid TOML."""
     from torus_cad.parameters import PropellerParameters
 
     config = tmp_path / "windows.toml"
@@ -270,7 +272,8 @@ def test_a_utf8_bom_is_accepted(tmp_path, capsys):
 
 @pytest.mark.parametrize("digits", [401, 5001])
 def test_huge_integers_are_bad_input(tmp_path, digits):
-    """Case 4: a 401-digit integer gave "internal error (OverflowError)", a 5001-digit one a ValueError."""
+    """Case 4: a 401-digit integer gave "internal error (OverflowError)", a 5001-digit one a
+    ValueError."""
     number = "1" + "0" * (digits - 1)
     config = tmp_path / "huge.toml"
     config.write_text(f"blades = {number}\n")

@@ -1,5 +1,6 @@
 """Mass properties: analytic checks, the fast route over the blade faces
-against OpenCascade's adaptive integration at 1e-9, the fallback, the JSON report, --density, --verbose."""
+against OpenCascade's adaptive integration at 1e-9, the fallback, the JSON report, --density,
+--verbose."""
 
 from __future__ import annotations
 
@@ -40,7 +41,8 @@ def objects():
 
 @pytest.fixture(scope="module")
 def cli_build(tmp_path_factory):
-    """``torus-cad build`` with the same design and --density 7.85 (steel); returns (out_dir, report)."""
+    """``torus-cad build`` with the same design and --density 7.85 (steel); returns (out_dir,
+    report)."""
     out = tmp_path_factory.mktemp("cli_mass")
     code = main(
         [
@@ -256,7 +258,8 @@ def test_the_local_b_spline_basis_is_scipys(degree):
 
 
 def test_a_bored_hub_takes_the_fast_route_and_agrees(light_params):
-    """A plain through-bore (the multirotor example's kind): the hub is a tube, integrated in closed form."""
+    """A plain through-bore (the multirotor example's kind): the hub is a tube, integrated in closed
+    form."""
     from torus_cad.propeller import build_propeller
 
     bored = build_propeller(light_params.with_values({"hub.bore_diameter": 5.0}))

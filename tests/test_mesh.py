@@ -1,5 +1,5 @@
-"""`torus-cad mesh`: a closed 2-manifold at any resolution, converging to the B-rep, parts named in every
-file as other readers see them, bad resolutions refused with the minimum that works."""
+"""`torus-cad mesh`: a closed 2-manifold at any resolution, converging to the B-rep, parts named in
+every file as other readers see them, bad resolutions refused with the minimum that works."""
 
 from __future__ import annotations
 
@@ -220,7 +220,8 @@ def test_cli_writes_files_report_and_one_line(tmp_path, capsys):
 
 
 def test_mesh_stages_are_announced_in_order_and_timed_by_the_build_stage_timer(tmp_path):
-    """One StageTimer (torus_cad.runtime.stages) for the build, mesh and CFD pipelines: the mesh's own copy is gone."""
+    """One StageTimer (torus_cad.runtime.stages) for the build, mesh and CFD pipelines: the mesh's
+    own copy is gone."""
     from torus_cad.mesh.pipeline import MeshStage, write_surface_mesh
 
     seen: list[str] = []

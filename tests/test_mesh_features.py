@@ -1,4 +1,5 @@
-"""`torus-cad mesh` carries every feature of the design and never crosses itself: read back by trimesh and meshlib."""
+"""`torus-cad mesh` carries every feature of the design and never crosses itself: read back by
+trimesh and meshlib."""
 
 from __future__ import annotations
 
@@ -80,7 +81,8 @@ def test_the_hub_features_are_in_the_mesh_with_the_breps_volume(workshop_mesh):
 
 
 def test_without_the_features_the_volume_is_the_plain_hubs(workshop_mesh, tmp_path):
-    """The features' volume is really gone: the plain design's mesh is larger by what they remove."""
+    """The features' volume is really gone: the plain design's mesh is larger by what they
+    remove."""
     from torus_cad.geometry.hub.mounting import HubMounting
 
     report, _ = workshop_mesh
@@ -150,8 +152,9 @@ def test_blunt_trailing_edges_are_meshed_with_the_breps_volume(tmp_path):
 def test_a_coarse_resolution_whose_blade_crosses_itself_is_refused_naming_one_that_works(
     capsys, tmp_path
 ):
-    """A 60 mm propeller (diameter target) at 30 x 80: its blade's mesh crosses itself; the resolution the
-    refusal names is meshed without intersecting triangles (meshlib reading the STL)."""
+    """A 60 mm propeller (diameter target) at 30 x 80: its blade's mesh crosses itself; the
+    resolution the refusal names is meshed without intersecting triangles (meshlib reading the
+    STL)."""
     design = ["--set", "diameter=60"]
     assert (
         main(
@@ -181,8 +184,9 @@ def test_a_coarse_resolution_whose_blade_crosses_itself_is_refused_naming_one_th
 def test_a_resolution_whose_blade_crosses_itself_is_refused_naming_one_that_does_not(
     monkeypatch, capsys, tmp_path
 ):
-    """With one diagonal direction everywhere (the layout before the mirrored diagonals) the blade's mesh
-    at 20 x 64 crosses itself at its trailing edge; the refusal names a finer resolution that meshlib passes."""
+    """With one diagonal direction everywhere (the layout before the mirrored diagonals) the blade's
+    mesh at 20 x 64 crosses itself at its trailing edge; the refusal names a finer resolution that
+    meshlib passes."""
     import torus_cad.mesh.grids as grids
     from torus_cad.mesh.crossings import crossing_pairs
     from torus_cad.parameters import PropellerParameters

@@ -1,5 +1,6 @@
-"""`torus-cad mesh` publishes one output set (torus_cad.outputs.output_set): whole or absent after any signal, checked
-by `torus-cad verify`, which also catches tampering; write failures name the file."""
+"""`torus-cad mesh` publishes one output set (torus_cad.outputs.output_set): whole or absent after
+any signal, checked by `torus-cad verify`, which also catches tampering; write failures name the
+file."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
-"""torus-cad optimize: study files checked like designs, studies that improve on their base, survive a
-SIGKILL, share one storage (SQLite between processes, a real PostgreSQL server), run on Dask, and give
-best designs that ``torus-cad build`` rebuilds with the same numbers."""
+"""torus-cad optimize: study files checked like designs, studies that improve on their base, survive
+a SIGKILL, share one storage (SQLite between processes, a real PostgreSQL server), run on Dask, and
+give best designs that ``torus-cad build`` rebuilds with the same numbers."""
 
 from __future__ import annotations
 
@@ -86,7 +86,8 @@ def _finished(trials) -> list:
 
 
 def _check_whole(trials, total: int) -> None:
-    """Exactly ``total`` finished trials, nothing left running, every interrupted trial asked again once."""
+    """Exactly ``total`` finished trials, nothing left running, every interrupted trial asked again
+    once."""
     assert len(_finished(trials)) == total
     assert not [t.number for t in trials if t.state in (TrialState.RUNNING, TrialState.WAITING)]
     interrupted = [t for t in trials if _stopped(t)]
@@ -254,7 +255,8 @@ def test_a_dead_processs_running_trial_is_failed_and_asked_again(tmp_path):
 def test_a_trial_of_another_host_whose_heartbeat_stopped_is_failed_and_asked_again(
     tmp_path, monkeypatch
 ):
-    """Owners on other hosts are judged by optuna's heartbeat (fail_stale_trials) once it is GRACE_S old."""
+    """Owners on other hosts are judged by optuna's heartbeat (fail_stale_trials) once it is GRACE_S
+    old."""
     from torus_cad.optimize import storage
 
     monkeypatch.setattr(storage, "GRACE_S", 1)
@@ -280,8 +282,9 @@ def test_a_trial_of_another_host_whose_heartbeat_stopped_is_failed_and_asked_aga
 def test_a_trial_left_without_an_owner_by_a_process_killed_while_claiming_it_is_asked_again(
     tmp_path,
 ):
-    """Trials are asked for and given their owner under the claim lock: one seen there without an owner
-    belongs to a process killed between the two, and is failed and asked again (not counted forever)."""
+    """Trials are asked for and given their owner under the claim lock: one seen there without an
+    owner belongs to a process killed between the two, and is failed and asked again (not counted
+    forever)."""
     url = f"sqlite:///{tmp_path / 'x.db'}"
     rdb = open_storage(url)
     study = optuna.create_study(storage=rdb, study_name="x")
@@ -307,7 +310,8 @@ def test_a_study_made_from_another_file_is_refused(tmp_path):
 
 
 def test_the_geometric_study_improves_on_its_base_and_its_best_design_rebuilds(tmp_path):
-    """The shipped example: a lighter 100 mm propeller whose thinnest wall stays >= 0.8 mm within 30 trials."""
+    """The shipped example: a lighter 100 mm propeller whose thinnest wall stays >= 0.8 mm within 30
+    trials."""
     from matplotlib.image import imread
 
     from torus_cad.outputs.build_report import build_report
@@ -432,7 +436,8 @@ def test_two_processes_share_one_sqlite_study(tmp_path):
 
 @pytest.fixture(scope="module")
 def postgres_url():
-    """A PostgreSQL 15 server of its own on a unix socket in a temporary folder, stopped afterwards."""
+    """A PostgreSQL 15 server of its own on a unix socket in a temporary folder, stopped
+    afterwards."""
     bindir = Path("/usr/lib/postgresql/15/bin")
     if not (bindir / "initdb").is_file():
         pytest.skip(
@@ -600,8 +605,9 @@ def test_optuna_dashboard_shows_the_study(tmp_path):
 def test_a_trial_repeating_an_earlier_ones_parameters_takes_its_values_and_files_without_a_build(
     tmp_path,
 ):
-    """A genetic sampler's offspring can repeat a parent: the study answers it from the complete trial it repeats
-    (the same parameters give the same design), so a worker never builds or simulates that design again."""
+    """A genetic sampler's offspring can repeat a parent: the study answers it from the complete
+    trial it repeats (the same parameters give the same design), so a worker never builds or
+    simulates that design again."""
     shutil.copy(BASE, tmp_path / "light_prop.toml")
     study_path = tmp_path / "study.toml"
     study_path.write_text(

@@ -1,6 +1,7 @@
-"""A study's best design is what its trial wrote: every trial writes the files its best set would hold
-(the STL included), the best set is the trial's own files copied and ``torus-cad verify`` accepts it,
-and a best trial whose files are gone gives way to the next best with one line and exit 0."""
+"""A study's best design is what its trial wrote: every trial writes the files its best set would
+hold (the STL included), the best set is the trial's own files copied and ``torus-cad verify``
+accepts it, and a best trial whose files are gone gives way to the next best with one line and exit
+0."""
 
 from __future__ import annotations
 
@@ -40,8 +41,8 @@ def _cli(*args: str) -> subprocess.CompletedProcess[str]:
 def _run_study(
     folder: Path, trials: int, workers: int
 ) -> tuple[Path, Path, subprocess.CompletedProcess[str]]:
-    """The issue's study, few trials: minimise mass_g over airfoil.thickness 0.2-0.6 and hub.radius 8-12
-    with the thinnest wall >= 0.8 mm."""
+    """The issue's study, few trials: minimise mass_g over airfoil.thickness 0.2-0.6 and hub.radius
+    8-12 with the thinnest wall >= 0.8 mm."""
     shutil.copy(BASE, folder / "light_prop.toml")
     (folder / "study.toml").write_text(
         f'[study]\nname = "light"\nbase = "light_prop.toml"\ntrials = {trials}\nsampler = "random"\nseed = 3\n\n'

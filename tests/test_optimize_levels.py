@@ -1,10 +1,11 @@
-"""Studies that find better propellers: a target thrust, noise at an observer and mass as objectives and
-constraints, checked when the study file is read; multi-fidelity studies whose cheap level screens and whose
-good designs climb to a finer one, a pruned trial recorded as pruned and never simulated at the finer level.
+"""Studies that find better propellers: a target thrust, noise at an observer and mass as objectives
+and constraints, checked when the study file is read; multi-fidelity studies whose cheap level
+screens and whose good designs climb to a finer one, a pruned trial recorded as pruned and never
+simulated at the finer level.
 
 The fast tests run the study loop with a stand-in for the build and ``torus-cad simulate``
-(:func:`stand_in_without_build`: a performance report made up from the design) so that the loop's bookkeeping
-costs seconds; the long ones run OpenFOAM."""
+(:func:`stand_in_without_build`: a performance report made up from the design) so that the loop's
+bookkeeping costs seconds; the long ones run OpenFOAM."""
 
 from __future__ import annotations
 
@@ -45,9 +46,9 @@ LEVEL_FACTOR = {"coarse": 1.0, "medium": 1.1, "fine": 1.2}
 
 
 def stand_in_without_build(task: TrialTask) -> DesignResult:
-    """A worker's job for the fast tests, in place of the build and OpenFOAM: stage 0 writes a build report
-    holding only ``mass_g`` (the loop's bookkeeping in a second per trial; the trials have no output set to
-    publish), and every stage :func:`_stand_in_report` at its level."""
+    """A worker's job for the fast tests, in place of the build and OpenFOAM: stage 0 writes a build
+    report holding only ``mass_g`` (the loop's bookkeeping in a second per trial; the trials have no
+    output set to publish), and every stage :func:`_stand_in_report` at its level."""
     folder = Path(str(task.folder))
     if task.stage == 0:
         (folder / f"{task.design_id}.json").write_text(json.dumps({"mass_g": 1.0}))
@@ -56,8 +57,9 @@ def stand_in_without_build(task: TrialTask) -> DesignResult:
 
 
 def _stand_in_report(task: TrialTask) -> None:
-    """A performance report at the stage's level, made up from the design: power 1 + 10 t W (t the airfoil
-    thickness) times the level's factor, the target thrust met at 5000 / t rpm, 30 + 5 t dB(A) at 1 m, 90 deg."""
+    """A performance report at the stage's level, made up from the design: power 1 + 10 t W (t the
+    airfoil thickness) times the level's factor, the target thrust met at 5000 / t rpm, 30 + 5 t
+    dB(A) at 1 m, 90 deg."""
     settings = task.simulate or {}
     folder = Path(str(task.folder)) / task.simulate_dir
     folder.mkdir(parents=True, exist_ok=True)
@@ -329,8 +331,8 @@ def _levels_study(
     thickness: str = "[0.5, 0.6]",
     seed: int = 1,
 ) -> Path:
-    """A study of the light example's base over the airfoil thickness (from 0.5, thick enough for its 0.8 mm
-    trailing edge), solved to 1 N, coarse then medium."""
+    """A study of the light example's base over the airfoil thickness (from 0.5, thick enough for
+    its 0.8 mm trailing edge), solved to 1 N, coarse then medium."""
     shutil.copy(BASE, folder / "light_prop.toml")
     objectives = (
         objectives or '[[objective]]\nmetric = "performance.power_w"\ndirection = "minimize"\n'
@@ -489,7 +491,8 @@ def _needs_simulate() -> None:
 
 @pytest.mark.long
 def test_a_target_thrust_trial_carries_the_rpm_found_and_the_thrust_within_tolerance(tmp_path):
-    """One trial of the default design solved to 0.05 N (coarse level, 60 iterations per run, one process)."""
+    """One trial of the default design solved to 0.05 N (coarse level, 60 iterations per run, one
+    process)."""
     _needs_simulate()
     path = tmp_path / "thrust.toml"
     path.write_text(
@@ -524,8 +527,8 @@ def test_a_target_thrust_trial_carries_the_rpm_found_and_the_thrust_within_toler
 
 @pytest.mark.long
 def test_with_openfoam_a_pruned_trial_never_reaches_the_medium_level(tmp_path):
-    """Three trials of the default design at 10,000 rpm, coarse then medium (40 iterations, one process): the
-    median pruner after one complete trial."""
+    """Three trials of the default design at 10,000 rpm, coarse then medium (40 iterations, one
+    process): the median pruner after one complete trial."""
     _needs_simulate()
     path = tmp_path / "levels.toml"
     path.write_text(
@@ -559,8 +562,9 @@ def test_with_openfoam_a_pruned_trial_never_reaches_the_medium_level(tmp_path):
 
 
 def test_a_study_on_a_terminal_shows_its_trials_and_each_better_one(tmp_path, capsys):
-    """Issue 47: optimize is not silent for minutes: a bar of the trials (finished of all, by state) and a line each
-    time a one-objective study finds a better trial, on stderr (drawn on a terminal; forced on here)."""
+    """Issue 47: optimize is not silent for minutes: a bar of the trials (finished of all, by state)
+    and a line each time a one-objective study finds a better trial, on stderr (drawn on a terminal;
+    forced on here)."""
     spec = read_study_file(
         _levels_study(tmp_path, 'kind = "none"', trials=4, thickness="[0.5, 0.9]", seed=3)
     )

@@ -1,4 +1,5 @@
-"""Output sets: a build's files appear together or not at all, and ``torus-cad verify`` tells a complete set.
+"""Output sets: a build's files appear together or not at all, and ``torus-cad verify`` tells a
+complete set.
 
 Issue 17, cases 1, 2 and 6: same-name builds clobbered each other's temp files and published
 the STEP of one design with the JSON of another; a full disk or a kill between the renames left a
@@ -78,7 +79,8 @@ def step_blade_count(path: Path) -> int:
 
 
 def assert_consistent_set(folder: Path, name: str = "torus_propeller") -> int:
-    """The set verifies and its STEP (read back) has the blades its report says; return that count."""
+    """The set verifies and its STEP (read back) has the blades its report says; return that
+    count."""
     verified = verify_set(folder, name)
     report = json.loads(verified.report.read_text())
     assert step_blade_count(folder / f"{name}.step") == report["parameters"]["blades"]
@@ -311,9 +313,9 @@ DESIGNS = [
 
 
 def test_stress_eight_same_name_builds_of_four_designs_twice(tmp_path):
-    """8 concurrent builds of one name (4 designs, twice each) into one folder, 2 rounds: every build
-    succeeds, a reader verifying the folder all along never sees an incomplete or mixed set, and each
-    round's set has the STEP its report describes."""
+    """8 concurrent builds of one name (4 designs, twice each) into one folder, 2 rounds: every
+    build succeeds, a reader verifying the folder all along never sees an incomplete or mixed set,
+    and each round's set has the STEP its report describes."""
     import threading
 
     assert cli("build", "--out", str(tmp_path), "-q", *FAST).returncode == 0
@@ -355,12 +357,14 @@ def test_stress_eight_same_name_builds_of_four_designs_twice(tmp_path):
 @pytest.fixture
 def small_disk(tmpfs):
     """A 3200 KB disk: room for an old set without STL (1.1 MB) and a new 4-blade STEP (1.4 MB; the
-    blade-hub edges rebuilt from exact points, torus_cad.kernel.edge_curves), not for its 2.8 MB STL too."""
+    blade-hub edges rebuilt from exact points, torus_cad.kernel.edge_curves), not for its 2.8 MB STL
+    too."""
     return tmpfs(3200)
 
 
 def test_a_full_disk_keeps_the_old_set_and_says_no_space_left(small_disk):
-    """Cases 2 and 6: the disk fills up after the STEP; the old set stays, the message names the cause."""
+    """Cases 2 and 6: the disk fills up after the STEP; the old set stays, the message names the
+    cause."""
     old = cli("build", "--out", str(small_disk), "-q", "--no-stl", *FAST)
     assert old.returncode == 0, old.stderr
     result = cli(
@@ -426,8 +430,8 @@ def _without_dac_override() -> list[str] | None:
 
 
 def test_permission_denied_on_the_output_folder_is_found_before_building(tmp_path):
-    """Case 6: the error names the folder (not a hidden temp file) and comes before the build: here the
-    design would be refused by the geometry checks (exit 2) if it were built first."""
+    """Case 6: the error names the folder (not a hidden temp file) and comes before the build: here
+    the design would be refused by the geometry checks (exit 2) if it were built first."""
     prefix = _without_dac_override()
     if prefix is None:
         pytest.skip("running as root without setpriv: permissions are not enforced")
@@ -464,8 +468,8 @@ def test_permission_denied_on_the_output_folder_is_found_before_building(tmp_pat
 
 
 def test_verify_walks_sub_folders_and_names_every_problem_of_a_tampered_copy(tmp_path):
-    """A folder with sets in sub-folders (as the mesh how-to makes): verify checks them all, and on a
-    tampered copy it reports each problem, one line each, not only the first."""
+    """A folder with sets in sub-folders (as the mesh how-to makes): verify checks them all, and on
+    a tampered copy it reports each problem, one line each, not only the first."""
     for folder, name in (("top", "part"), ("top/ply", "part"), ("top/ply/deeper", "other")):
         with OutputSet(tmp_path / folder, name) as output:
             output.write("step", _text_writer(f"{folder} solid"))

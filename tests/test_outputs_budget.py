@@ -1,4 +1,5 @@
-"""Budgets: an STL that would blow up is refused before tessellating, with the estimate and the limit.
+"""Budgets: an STL that would blow up is refused before tessellating, with the estimate and the
+limit.
 
 Issue 17, case 3: allowed STL settings (``export.stl_linear_deflection=0.0001`` with
 ``stl_angular_deflection=0.001``, or ``0.000001`` with ``0.01``) ran past 3 minutes at 5-11 GB or
@@ -90,7 +91,8 @@ def test_the_estimate_grows_as_the_deflections_shrink():
 
 
 def test_the_estimate_does_not_depend_on_how_the_surface_is_sampled():
-    """The surface the build sampled is used as it is; one too coarse to show the curvature is sampled again."""
+    """The surface the build sampled is used as it is; one too coarse to show the curvature is
+    sampled again."""
     params = _with_deflections(0.05, 0.1)
     estimates = [
         estimated_stl_triangles(
@@ -102,7 +104,8 @@ def test_the_estimate_does_not_depend_on_how_the_surface_is_sampled():
 
 
 def test_more_sections_make_a_larger_estimate():
-    """The mesher starts from the B-spline's grid of poles: 3 x 28 000 triangles at 200 x 800 samples."""
+    """The mesher starts from the B-spline's grid of poles: 3 x 28 000 triangles at 200 x 800
+    samples."""
     coarse, fine = (
         estimated_stl_triangles(_with_deflections(0.5, 0.5, **{"resolution.sections": sections}))
         for sections in (25, 200)

@@ -52,7 +52,8 @@ def _read_png(path) -> np.ndarray:
 
 
 def _hue_pixels(rgb: np.ndarray, colour: tuple[float, float, float]) -> int:
-    """Pixels of ``colour``'s hue (any brightness, as shading changes it), saturated enough to count."""
+    """Pixels of ``colour``'s hue (any brightness, as shading changes it), saturated enough to
+    count."""
     hsv = rgb_to_hsv(rgb)
     hue = rgb_to_hsv(np.array(colour))[0]
     distance = np.minimum(abs(hsv[..., 0] - hue), 1.0 - abs(hsv[..., 0] - hue))

@@ -1,10 +1,11 @@
 """No module of the package reaches another module's private names.
 
-(a) No ``from torus_cad.x import _name`` (nor a relative one): a name another module needs is public, with a
-docstring. (b) No ``obj._name`` on anything but ``self`` or ``cls`` where ``_name`` is a function or method the
-package defines: outside code calls a class's public methods. The standard library's public underscore names
-(``os._exit``, a named tuple's ``_replace`` ...) are allowed; a third-party private name stays in its one adapter
-(optuna's trial tables in torus_cad/optimize/storage.py), pinned to the version in constraints.txt.
+(a) No ``from torus_cad.x import _name`` (nor a relative one): a name another module needs is
+public, with a docstring. (b) No ``obj._name`` on anything but ``self`` or ``cls`` where ``_name``
+is a function or method the package defines: outside code calls a class's public methods. The
+standard library's public underscore names (``os._exit``, a named tuple's ``_replace`` ...) are
+allowed; a third-party private name stays in its one adapter (optuna's trial tables in
+torus_cad/optimize/storage.py), pinned to the version in constraints.txt.
 """
 
 from __future__ import annotations

@@ -1,4 +1,5 @@
-"""The progress display (torus_cad.runtime.progress): build stages and the batch bar, drawn only on a terminal."""
+"""The progress display (torus_cad.runtime.progress): build stages and the batch bar, drawn only on
+a terminal."""
 
 from __future__ import annotations
 
@@ -79,7 +80,8 @@ def test_batch_bar_counts_outcomes_on_a_terminal_only():
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="a pseudo-terminal")
 def test_build_shows_a_line_before_the_kernel_is_imported(tmp_path):
-    """On a terminal, `torus-cad build` says what it does before the seconds of importing the schema and cadquery.
+    """On a terminal, `torus-cad build` says what it does before the seconds of importing the schema
+    and cadquery.
 
     Python's -X importtime reports each module on stderr as its import ends; the first progress
     line must come before any line of cadquery, OCP, pydantic or scipy.

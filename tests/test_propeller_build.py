@@ -1,4 +1,5 @@
-"""The B-rep propeller and its files: what a CAD user relies on (issue: loft, pattern, fuse, STEP + STL)."""
+"""The B-rep propeller and its files: what a CAD user relies on (issue: loft, pattern, fuse, STEP +
+STL)."""
 
 import re
 

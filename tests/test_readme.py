@@ -1,5 +1,6 @@
-"""Every example in README.md and the documentation (docs/) runs: ```python blocks as they are, and every
-``torus-cad`` line of the ```sh / ```bash blocks, in a scratch folder with the repository's examples/ and scripts/.
+"""Every example in README.md and the documentation (docs/) runs: ```python blocks as they are, and
+every ``torus-cad`` line of the ```sh / ```bash blocks, in a scratch folder with the repository's
+examples/ and scripts/.
 
 A block preceded by a ``<!-- not-run: reason -->`` line is skipped (an example that needs a cluster,
 say); the README says so next to it. ``pip install``, ``pytest`` and ``bash .ci/run`` (the README's
@@ -47,8 +48,8 @@ class Block:
 
     @property
     def key(self) -> str:
-        """The page and the block's place among the page's blocks: the test id, which an edit above the block
-        on its page does not change (tests/tiers.json names tests by it)."""
+        """The page and the block's place among the page's blocks: the test id, which an edit above
+        the block on its page does not change (tests/tiers.json names tests by it)."""
         return f"{self.page}#{self.number}"
 
 
@@ -82,7 +83,8 @@ def readme_blocks() -> list[Block]:
 
 
 def shell_commands(block: Block) -> list[str]:
-    """The torus-cad commands of a shell block (comments dropped; pip and pytest steps left to CI)."""
+    """The torus-cad commands of a shell block (comments dropped; pip and pytest steps left to
+    CI)."""
     commands = []
     for raw in block.code.splitlines():
         line = raw.split(" #")[0].strip()

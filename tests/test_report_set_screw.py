@@ -1,4 +1,5 @@
-"""The report's ``set_screw_angle_deg`` is where the hole of the part as built points, for cw and ccw parts.
+"""The report's ``set_screw_angle_deg`` is where the hole of the part as built points, for cw and
+ccw parts.
 
 The hole is found on the solid (its cylindrical faces of the set screw's radius, read back from
 the STEP file the build wrote), not from the parameters.
@@ -29,7 +30,8 @@ MOUNT = [
 
 
 def _hole_angle_deg(step_path) -> float:
-    """The direction (deg about +z) of the mean of points spread over the solid's 1.5 mm-radius cylinder faces."""
+    """The direction (deg about +z) of the mean of points spread over the solid's 1.5 mm-radius
+    cylinder faces."""
     shape = read_step(step_path)
     points = []
     for face in shape.Faces():

@@ -47,7 +47,8 @@ unit_vectors = st.lists(st.floats(0.0, 1.0), min_size=UNIT_DIMENSION, max_size=U
 
 
 class _Watchdog:
-    """Kill the test process (with a traceback dump) if one design hangs: a hang must fail, not stall CI."""
+    """Kill the test process (with a traceback dump) if one design hangs: a hang must fail, not
+    stall CI."""
 
     def __init__(self, seconds: float) -> None:
         self.seconds = seconds
@@ -213,7 +214,8 @@ def _outcomes(designs: list[dict], pool: Callable[[], LocalPool]) -> dict[str, D
 
 
 def test_the_runner_counts_a_hang_and_a_crash_and_goes_on(tmp_path):
-    """The fuzz runner survives a design that never finishes and a worker that dies; files are read back.
+    """The fuzz runner survives a design that never finishes and a worker that dies; files are read
+    back.
 
     The time limit is a wide multiple of what the good design takes here and now (its wall time in a
     worker of a pool without a limit), with a floor: the good design runs in a worker that replaced
@@ -312,7 +314,8 @@ def test_default_design_passes_every_check_with_margin():
 
 
 def test_interleaved_blades_are_not_refused():
-    """Toroidal blades nest: six default blades clear each other although each spans 100 > 60 degrees."""
+    """Toroidal blades nest: six default blades clear each other although each spans 100 > 60
+    degrees."""
     params = PropellerParameters().with_values({"blades": 6})
     feasibility.check_feasible(params.geometry(), params.blade_surface())
 
@@ -444,7 +447,8 @@ def test_killed_mid_write_leaves_no_partial_file(tmp_path, kind):
 
 
 def test_the_product_never_imports_the_studies():
-    """The fuzz sampler and the function-space study live in studies/, outside the installed package."""
+    """The fuzz sampler and the function-space study live in studies/, outside the installed
+    package."""
     code = (
         "import sys, torus_cad.cli, torus_cad.batch, torus_cad.propeller, torus_cad.preview.picture; "
         "print(sorted(name for name in sys.modules if name.startswith('studies')))"

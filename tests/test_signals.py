@@ -1,4 +1,5 @@
-"""SIGINT and SIGTERM at any moment of ``torus-cad build``: one line, exit 130 / 143, nothing staged left.
+"""SIGINT and SIGTERM at any moment of ``torus-cad build``: one line, exit 130 / 143, nothing staged
+left.
 
 Issue 17, case 5: Ctrl-C in the first ~1.3 s (while CadQuery is imported) printed "internal error
 (ImportError) ... please report" or segfaulted, and SIGTERM printed nothing.
@@ -30,7 +31,8 @@ EXIT_CODES = {signal.SIGINT: 130, signal.SIGTERM: 143}
 
 
 def _startup_seconds() -> float:
-    """How long this machine takes to start Python up to torus_cad's handlers (measured, worst of 3).
+    """How long this machine takes to start Python up to torus_cad's handlers (measured, worst of
+    3).
 
     Before that, no program can handle a signal: Python itself is still starting.
     """
@@ -48,8 +50,10 @@ def startup_s() -> float:
 
 
 def _block_ending_signals() -> None:
-    """In the child before exec: the documented way to start a command that must end cleanly at every
-    moment (torus_cad.runtime.interrupts): a signal during Python's own start waits for the handlers."""
+    """In the child before exec: the documented way to start a command that must end cleanly at
+    every
+    moment (torus_cad.runtime.interrupts): a signal during Python's own start waits for the
+    handlers."""
     signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM, signal.SIGHUP})
 
 
@@ -95,7 +99,8 @@ def test_a_signal_at_any_moment_ends_the_build_with_one_line(
 
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
 def test_a_signal_while_cadquery_loads_ends_with_one_line(tmp_path, startup_s, signum):
-    """The moment of the issue's "internal error (ImportError)": imports under way (before the build)."""
+    """The moment of the issue's "internal error (ImportError)": imports under way (before the
+    build)."""
     out = tmp_path / "out"
     result = _interrupt_build(out, signum, startup_s + 0.2)
     _assert_clean_end(result, signum, out)
@@ -104,7 +109,8 @@ def test_a_signal_while_cadquery_loads_ends_with_one_line(tmp_path, startup_s, s
 
 
 def test_an_ignored_sigint_stays_ignored(tmp_path):
-    """``torus-cad build &`` in a script ignores SIGINT (the shell sets SIG_IGN); so does the build."""
+    """``torus-cad build &`` in a script ignores SIGINT (the shell sets SIG_IGN); so does the
+    build."""
 
     def ignore_sigint() -> None:
         signal.signal(signal.SIGINT, signal.SIG_IGN)

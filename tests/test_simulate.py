@@ -1,6 +1,6 @@
-"""`torus-cad simulate`: the OpenFOAM case reads back through foamlib with the right rotation; the physics
-checks on the coarse level (mirror pair, rpm scaling, still propeller, momentum balance); bad input,
-a missing OpenFOAM and a diverging run are one clear line with the right exit code."""
+"""`torus-cad simulate`: the OpenFOAM case reads back through foamlib with the right rotation; the
+physics checks on the coarse level (mirror pair, rpm scaling, still propeller, momentum balance);
+bad input, a missing OpenFOAM and a diverging run are one clear line with the right exit code."""
 
 from __future__ import annotations
 
@@ -281,9 +281,10 @@ def test_the_default_mesh_has_prism_layers_checkmesh_accepts_and_y_plus_is_repor
 
 @needs_openfoam
 def test_the_wall_shear_part_is_reported_and_the_rest_is_the_blade_surfaces_pressure_thrust(cw):
-    """The report's viscous part: the shear resists the rotation and is a minor share of the torque on a
-    lifting blade; thrust less its viscous part equals the pressure integrated over the blade surface
-    the case wrote (the noise model's own reading of the VTK surface, not the forces function object)."""
+    """The report's viscous part: the shear resists the rotation and is a minor share of the torque
+    on a lifting blade; thrust less its viscous part equals the pressure integrated over the blade
+    surface the case wrote (the noise model's own reading of the VTK surface, not the forces
+    function object)."""
     _, report = cw
     viscous = report["viscous"]
     assert 0.0 < viscous["torque_share"] < 0.5 and abs(viscous["thrust_share"]) < 0.2
@@ -296,10 +297,10 @@ def test_the_wall_shear_part_is_reported_and_the_rest_is_the_blade_surfaces_pres
 def test_the_report_gives_finite_tonal_noise_at_the_default_observers_and_the_set_holds_its_signals(
     cw,
 ):
-    """The noise entry (torus_cad.acoustics, from the blade surface pressure the case wrote): finite levels at 1 m,
-    0 / 30 / 60 / 90 degrees, no tone on the axis, the loudest in the rotor's plane; the surface's pressure
-    thrust is the forces function object's thrust less its small viscous part; the signals CSV (read by numpy)
-    covers one revolution."""
+    """The noise entry (torus_cad.acoustics, from the blade surface pressure the case wrote): finite
+    levels at 1 m, 0 / 30 / 60 / 90 degrees, no tone on the axis, the loudest in the rotor's plane;
+    the surface's pressure thrust is the forces function object's thrust less its small viscous
+    part; the signals CSV (read by numpy) covers one revolution."""
     out, report = cw
     noise = report["noise"]
     assert [(entry["distance_m"], entry["angle_deg"]) for entry in noise["observers"]] == [

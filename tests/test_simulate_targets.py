@@ -1,5 +1,5 @@
-"""``simulate --thrust`` (the rpm search), ``simulate --step`` (a user's STEP propeller) and the grid
-convergence index of the convergence study.
+"""``simulate --thrust`` (the rpm search), ``simulate --step`` (a user's STEP propeller) and the
+grid convergence index of the convergence study.
 
 The search's arithmetic, the GCI and the refusals run without OpenFOAM; the runs need it (and
 the thrust search and the STEP-against-design comparison are in the long tier).
@@ -131,7 +131,8 @@ def test_the_uncertainty_band_of_levels_without_a_gci_holds_every_level(values):
 
 
 def _propeller(ct: float, offset: float = 0.0):
-    """Thrust of a propeller whose CT drifts with rpm (``offset`` per 10,000 rpm): not exactly rpm^2."""
+    """Thrust of a propeller whose CT drifts with rpm (``offset`` per 10,000 rpm): not exactly
+    rpm^2."""
     return lambda rpm: thrust_at(ct * (1.0 + offset * rpm / 10000.0), rpm, 0.0451, 1.225)
 
 

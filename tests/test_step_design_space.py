@@ -1,6 +1,6 @@
-"""The STEP file of random valid designs reads back valid: seeded designs whose files read back faulty
-before the writer made their edges readable (issue 45), checked by OpenCascade's reader with every
-analyzer test and by FreeCAD's own reader and check."""
+"""The STEP file of random valid designs reads back valid: seeded designs whose files read back
+faulty before the writer made their edges readable (issue 45), checked by OpenCascade's reader with
+every analyzer test and by FreeCAD's own reader and check."""
 
 from __future__ import annotations
 
@@ -65,7 +65,8 @@ ISO_LINE_FAULTY_BEFORE = (3580,)
 
 @pytest.fixture(scope="module")
 def written(tmp_path_factory: pytest.TempPathFactory) -> dict[int, Path]:
-    """Each seed's design built and its STEP file written as the build writes it (read-back check on)."""
+    """Each seed's design built and its STEP file written as the build writes it (read-back check
+    on)."""
     folder = tmp_path_factory.mktemp("design_space")
     paths = {}
     for seed in FAULTY_BEFORE:

@@ -1,4 +1,5 @@
-"""The full boolean-argument analysis (FreeCAD's check with BOP) of the solid and of its STEP file read back."""
+"""The full boolean-argument analysis (FreeCAD's check with BOP) of the solid and of its STEP file
+read back."""
 
 from __future__ import annotations
 
@@ -20,7 +21,8 @@ from torus_cad.kernel.writers.step import write_step
 
 
 def _c0_face() -> cq.Face:
-    """A face on a degree-1 B-spline surface with an interior knot: only C0 there (a GeomAbs_C0 fault)."""
+    """A face on a degree-1 B-spline surface with an interior knot: only C0 there (a GeomAbs_C0
+    fault)."""
     from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
     from OCP.GeomAbs import GeomAbs_C0
     from OCP.GeomAPI import GeomAPI_PointsToBSplineSurface
@@ -131,8 +133,8 @@ def test_a_looped_blades_root_fillet_reads_back_from_step_valid(tmp_path: Path) 
 def _cylinder_with_a_bumped_edge(
     bump: str, height_mm: float = 10.0, radius_mm: float = 10.0, bump_mm: float = 2e-5
 ) -> cq.Solid:
-    """A cylinder whose top edge's 3D curve is moved by up to ``bump_mm``, most between two of the STEP
-    reader's 23 samples: ``"out"`` radially (off the side face: a real gap, which the edge's
+    """A cylinder whose top edge's 3D curve is moved by up to ``bump_mm``, most between two of the
+    STEP reader's 23 samples: ``"out"`` radially (off the side face: a real gap, which the edge's
     tolerance covers) or ``"along"`` the circle (on both faces, but askew to their curves)."""
     import math
 

@@ -144,7 +144,8 @@ def test_meshlib_sees_two_crossing_triangles_and_none_in_a_tetrahedron():
 
 
 def test_fuzz_designs_that_build_are_strictly_valid_with_intersection_free_stls():
-    """>= 100 fuzz designs (workshop features included) at the default resolution, 2 worker processes."""
+    """>= 100 fuzz designs (workshop features included) at the default resolution, 2 worker
+    processes."""
     from studies.strict_fuzz import fuzz_many
 
     outcomes = fuzz_many(range(100), workers=2)

@@ -32,8 +32,8 @@ UPDATE_IMAGES = "TORUS_CAD_UPDATE_IMAGES"  # =1: the screenshot test rewrites SC
 
 
 def screenshot_path(scratch: Path) -> Path:
-    """Where the screenshot test saves the page: the README's picture with TORUS_CAD_UPDATE_IMAGES=1, else
-    ``scratch`` (running the tests leaves the git tree clean)."""
+    """Where the screenshot test saves the page: the README's picture with
+    TORUS_CAD_UPDATE_IMAGES=1, else ``scratch`` (running the tests leaves the git tree clean)."""
     return SCREENSHOT if os.environ.get(UPDATE_IMAGES) == "1" else scratch / SCREENSHOT.name
 
 
@@ -278,8 +278,8 @@ def test_downloaded_design_builds_unchanged_with_the_cli(page, downloads, tmp_pa
 
 
 def test_screenshot_of_the_studio(page, tmp_path):
-    """The README's picture (docs/images/studio.png, rewritten only with TORUS_CAD_UPDATE_IMAGES=1): the page
-    with a four-blade propeller, each blade in its colour."""
+    """The README's picture (docs/images/studio.png, rewritten only with TORUS_CAD_UPDATE_IMAGES=1):
+    the page with a four-blade propeller, each blade in its colour."""
     from PIL import Image
 
     from torus_cad.colors import blade_color
@@ -470,7 +470,8 @@ def _hostile_uploads(folder: Path) -> list[tuple[str, list[Path], str]]:
 
 
 class _Prober:
-    """Another client: fetches the page again and again while an upload is handled; the slowest answer, s."""
+    """Another client: fetches the page again and again while an upload is handled; the slowest
+    answer, s."""
 
     def __init__(self, url: str) -> None:
         self.url, self.slowest_s, self.answers = url, 0.0, 0
@@ -496,8 +497,9 @@ class _Prober:
 
 
 def test_hostile_uploads_are_refused_and_the_server_keeps_answering(page, studio, tmp_path):
-    """Every attack of the issue, through the page's own upload: refused with its reason, no content of any
-    server file on the page, and another client answered within a second while the upload is handled."""
+    """Every attack of the issue, through the page's own upload: refused with its reason, no content
+    of any server file on the page, and another client answered within a second while the upload is
+    handled."""
     page.change("blades", "3")
     volume = page.text("readout-volume")
     for case, files, reason in _hostile_uploads(tmp_path):

@@ -1,9 +1,10 @@
-"""``torus-cad optimize`` and ``torus-cad sweep`` against signals at any moment, a full disk and a failing
-storage, and the staging folders of stopped workers (issue 34, items 2, 3 and 5).
+"""``torus-cad optimize`` and ``torus-cad sweep`` against signals at any moment, a full disk and a
+failing storage, and the staging folders of stopped workers (issue 34, items 2, 3 and 5).
 
-Each attacked run is checked through readers we did not write (tests/study_attacks.py): the exit code,
-stderr, the files beside the SQLite database, ``torus-cad verify`` on ``best/`` and on the study folder,
-and optuna opening a copy of the storage (nothing RUNNING, no trial counted twice or asked again twice).
+Each attacked run is checked through readers we did not write (tests/study_attacks.py): the exit
+code, stderr, the files beside the SQLite database, ``torus-cad verify`` on ``best/`` and on the
+study folder, and optuna opening a copy of the storage (nothing RUNNING, no trial counted twice or
+asked again twice).
 """
 
 from __future__ import annotations
@@ -98,8 +99,9 @@ def test_a_sigterm_to_the_whole_process_group_is_an_interruption_not_a_crash(tmp
 
 @pytest.mark.long
 def test_sigterm_at_random_moments_of_optimize_and_sweep_always_ends_cleanly(tmp_path):
-    """27 SIGTERMs at random moments: 21 for optimize (7 over the start-up and the pool's start, 7 while
-    trials run, 7 while the results are written), 6 for sweep. Each run is checked on its own."""
+    """27 SIGTERMs at random moments: 21 for optimize (7 over the start-up and the pool's start, 7
+    while trials run, 7 while the results are written), 6 for sweep. Each run is checked on its
+    own."""
     seed = int(os.environ.get("ATTACK_SEED", random.randrange(1 << 16)))
     generator = random.Random(seed)
     plan = (
@@ -149,8 +151,9 @@ _STOP_AS_WORKERS_START = textwrap.dedent("""
 
 
 def test_a_pool_stopped_while_its_workers_start_leaves_no_traceback(tmp_path):
-    """pebble removes a pool's semaphores before it stops the workers; a worker still starting then failed
-    with a fork-server traceback (FileNotFoundError in SemLock._rebuild) on the command's stderr."""
+    """pebble removes a pool's semaphores before it stops the workers; a worker still starting then
+    failed with a fork-server traceback (FileNotFoundError in SemLock._rebuild) on the command's
+    stderr."""
     script = tmp_path / "stop_as_workers_start.py"
     script.write_text(_STOP_AS_WORKERS_START)
     run = subprocess.run(
@@ -192,7 +195,8 @@ def test_a_storage_that_cannot_grow_is_a_storage_error_naming_the_file_and_the_c
 
 
 def _in_small_disk(size: str, script: str, *args: str) -> subprocess.CompletedProcess[str]:
-    """Run ``script`` with a tmpfs of ``size`` at its first argument, in a mount namespace of its own."""
+    """Run ``script`` with a tmpfs of ``size`` at its first argument, in a mount namespace of its
+    own."""
     return subprocess.run(
         [
             "unshare",
@@ -279,7 +283,8 @@ def test_verify_names_a_staging_folder_left_in_a_study_and_the_next_run_removes_
     out = tmp_path / "out"
 
     def left_by_a_killed_worker(number: int) -> Path:
-        """What a worker killed mid-write leaves (its trial is asked again under a new number, in a new folder)."""
+        """What a worker killed mid-write leaves (its trial is asked again under a new number, in a
+        new folder)."""
         debris = (
             out
             / "trials"
@@ -308,7 +313,8 @@ def test_verify_names_a_staging_folder_left_in_a_study_and_the_next_run_removes_
 
 
 def test_a_staging_folder_of_a_running_process_is_not_reported_as_left(tmp_path):
-    """A study folder being written: the staging folder of a live worker is work in progress, not debris."""
+    """A study folder being written: the staging folder of a live worker is work in progress, not
+    debris."""
     folder = tmp_path / "study" / "trials" / "3"
     folder.mkdir(parents=True)
     (folder / f".trial_3.staging-{host_tag()}-{os.getpid()}-0a1b2c3d").mkdir()

@@ -1,5 +1,5 @@
-"""Design sweeps (torus_cad.batch): the sweep file, design ids, the local pool and Dask, resuming, failures,
-budgets, exit codes and signals."""
+"""Design sweeps (torus_cad.batch): the sweep file, design ids, the local pool and Dask, resuming,
+failures, budgets, exit codes and signals."""
 
 from __future__ import annotations
 
@@ -225,7 +225,8 @@ stl = false
 
 @pytest.fixture
 def airfoil_project(tmp_path, monkeypatch) -> Path:
-    """A project folder with airfoils/*.dat, a design file and sweep files; the working directory elsewhere."""
+    """A project folder with airfoils/*.dat, a design file and sweep files; the working directory
+    elsewhere."""
     project = tmp_path / "project"
     shutil.copytree(EXAMPLE_AIRFOILS, project / "airfoils")
     write(project / "prop.toml", '[airfoil]\nfile = "airfoils/naca2412.dat"\n')
@@ -237,7 +238,8 @@ def airfoil_project(tmp_path, monkeypatch) -> Path:
 
 
 def test_airfoil_files_in_a_sweep_are_relative_to_the_file_naming_them(airfoil_project):
-    """As ``torus-cad build CONFIG`` reads a config's airfoil.file, whatever the working directory."""
+    """As ``torus-cad build CONFIG`` reads a config's airfoil.file, whatever the working
+    directory."""
     clarky, naca2412 = (
         str(airfoil_project / "airfoils" / name) for name in ("clarky.dat", "naca2412.dat")
     )
@@ -748,7 +750,8 @@ if __name__ == "__main__":
 
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads /proc")
 def test_sweep_workers_die_with_the_sweep_when_it_is_killed(tmp_path):
-    """SIGKILL to the sweep's process: its fork server and workers (each in a ten-minute design) go too."""
+    """SIGKILL to the sweep's process: its fork server and workers (each in a ten-minute design) go
+    too."""
     driver = write(tmp_path / "driver.py", _DRIVER.format(tests=str(Path(__file__).parent)))
     sweep = write(tmp_path / "s.toml", "[vary]\nblades = [2, 3, 4, 5]\n")
     out = tmp_path / "out"

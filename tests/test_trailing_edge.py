@@ -249,7 +249,8 @@ def test_a_blunt_trailing_edge_thinner_than_meshable_is_refused(tmp_path, capsys
 
 def test_a_files_hair_thin_open_edge_is_closed_and_the_build_says_so(tmp_path, capsys):
     """Clark Y's published 0.0012-chord gap is a few micrometres on this blade: its faces' triangles
-    would cross, so the build makes the edge sharp, warns, and its STL (read by meshlib) is clean."""
+    would cross, so the build makes the edge sharp, warns, and its STL (read by meshlib) is
+    clean."""
     import json
 
     from torus_cad.cli import main

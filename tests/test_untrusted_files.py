@@ -62,7 +62,8 @@ def _build(capsys: pytest.CaptureFixture[str], design: Path, out: Path) -> tuple
 
 
 def _build_in_new_process(design: Path, out: Path) -> tuple[int, str]:
-    """In a process of its own with a timeout: a reader that blocks or reads forever fails the test, not the suite."""
+    """In a process of its own with a timeout: a reader that blocks or reads forever fails the test,
+    not the suite."""
     result = subprocess.run(
         [sys.executable, "-m", "torus_cad", "build", str(design), "--out", str(out), "-q"],
         capture_output=True,
@@ -128,7 +129,8 @@ def test_a_file_over_the_size_limit_is_refused(tmp_path, capsys):
 
 
 def test_a_file_that_grows_past_the_limit_while_read_is_cut_off(tmp_path, monkeypatch):
-    """The read is capped: a size reported small (as /proc files report 0) does not let a long file through."""
+    """The read is capped: a size reported small (as /proc files report 0) does not let a long file
+    through."""
     path = tmp_path / "grows.dat"
     path.write_bytes(b"x" * 4096)
     with pytest.raises(ValueError, match="over the limit of 1,000 bytes"):
@@ -145,7 +147,8 @@ def test_a_file_that_grows_past_the_limit_while_read_is_cut_off(tmp_path, monkey
 def test_a_huge_coordinate_file_under_the_size_limit_is_refused_by_the_point_budget(
     tmp_path, capsys
 ):
-    """94,000 points (1.3 MB, under the size limit) took 8.5 minutes in an all-pairs crossing test."""
+    """94,000 points (1.3 MB, under the size limit) took 8.5 minutes in an all-pairs crossing
+    test."""
     u = 0.5 * (1.0 - np.cos(np.linspace(0.0, np.pi, 47_000)))
     loop = np.concatenate(
         [
@@ -165,7 +168,8 @@ def test_a_huge_coordinate_file_under_the_size_limit_is_refused_by_the_point_bud
 
 
 def test_a_dense_file_within_the_point_limit_is_read(tmp_path):
-    """The crossing tests compare only nearby segments: a file at the point limit is read, and still checked."""
+    """The crossing tests compare only nearby segments: a file at the point limit is read, and still
+    checked."""
     u = 0.5 * (1.0 - np.cos(np.linspace(0.0, np.pi, AIRFOIL_FILE_MAX_POINTS // 2)))
     upper, lower = (
         np.stack([u, 0.06 * np.sin(np.pi * u)], axis=1),

@@ -1,4 +1,5 @@
-"""simulate held against the wind tunnel: the APC 10x7 Slow Flyer's static test (UIUC) at the coarse level."""
+"""simulate held against the wind tunnel: the APC 10x7 Slow Flyer's static test (UIUC) at the coarse
+level."""
 
 from __future__ import annotations
 

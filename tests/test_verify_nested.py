@@ -12,7 +12,8 @@ from torus_cad.runtime.files import host_tag
 
 
 def _case(folder: Path) -> Path:
-    """A case folder as ``simulate --case-only`` writes it, with the surface STL in constant/triSurface."""
+    """A case folder as ``simulate --case-only`` writes it, with the surface STL in
+    constant/triSurface."""
     for entry in (
         "system/controlDict",
         "system/fvSchemes",

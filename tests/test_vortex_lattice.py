@@ -1,6 +1,6 @@
-"""The lifting-surface vortex lattice (torus_cad.vortex) against closed forms and symmetries: a planar
-elliptic wing's lift slope, a rotor's thrust scaling with the square of its speed, the mirror image, and
-no force without motion. Inviscid: the section polars are not in these."""
+"""The lifting-surface vortex lattice (torus_cad.vortex) against closed forms and symmetries: a
+planar elliptic wing's lift slope, a rotor's thrust scaling with the square of its speed, the mirror
+image, and no force without motion. Inviscid: the section polars are not in these."""
 
 from __future__ import annotations
 
@@ -22,8 +22,8 @@ SMALL = Discretisation(chordwise=6, spanwise=20)
 def _elliptic_wing(
     aspect_ratio: float, alpha_rad: float, spanwise: int = 40, chordwise: int = 6
 ) -> np.ndarray:
-    """A flat elliptic wing of span 1 m in the flow along -z: its span along x, its chord along -z turned
-    by ``alpha_rad`` about x (leading edge at the top). ``(K, C + 1, 3)``."""
+    """A flat elliptic wing of span 1 m in the flow along -z: its span along x, its chord along -z
+    turned by ``alpha_rad`` about x (leading edge at the top). ``(K, C + 1, 3)``."""
     theta = np.linspace(0.0, math.pi, spanwise + 1)
     x = -0.5 * np.cos(theta)  # cosine spacing: finer at the tips
     root_chord = 4.0 / (math.pi * aspect_ratio)  # area pi b c0 / 4 = b^2 / AR
@@ -42,7 +42,8 @@ def _lifting_line(aspect_ratio: float) -> float:
 
 
 def _helmbold(aspect_ratio: float) -> float:
-    """Helmbold's lift slope of a low-aspect-ratio wing (the lifting line's with the chord's own effect)."""
+    """Helmbold's lift slope of a low-aspect-ratio wing (the lifting line's with the chord's own
+    effect)."""
     return 2.0 * math.pi * aspect_ratio / (2.0 + math.sqrt(aspect_ratio**2 + 4.0))
 
 
@@ -72,7 +73,8 @@ def test_a_planar_elliptic_wing_has_the_lifting_line_lift_slope(
 def _naca_mean_line(
     fractions: np.ndarray, camber: float = 0.04, position: float = 0.4
 ) -> np.ndarray:
-    """The NACA four-digit mean line's height (a fraction of the chord) at the chord ``fractions``."""
+    """The NACA four-digit mean line's height (a fraction of the chord) at the chord
+    ``fractions``."""
     front = camber / position**2 * (2.0 * position * fractions - fractions**2)
     back = (
         camber
@@ -86,8 +88,9 @@ def _naca_mean_line(
 def test_a_cambered_elliptic_wing_lifts_at_zero_incidence_as_thin_airfoil_theory_says(
     chordwise: int,
 ) -> None:
-    """A NACA 4412 mean line on an elliptic wing of aspect ratio 8 at zero incidence: the lifting line's
-    slope times the mean line's zero-lift angle of thin-airfoil theory (-4.15 deg), within 3 %."""
+    """A NACA 4412 mean line on an elliptic wing of aspect ratio 8 at zero incidence: the lifting
+    line's slope times the mean line's zero-lift angle of thin-airfoil theory (-4.15 deg), within 3
+    %."""
     aspect_ratio, spanwise = 8.0, 40
     grid = _elliptic_wing(aspect_ratio, 0.0, spanwise, chordwise)
     theta = np.linspace(0.0, math.pi, spanwise + 1)

@@ -1,7 +1,9 @@
-"""``simulate --solver vortex``: the vortex solver behind the same command, report and study levels as OpenFOAM.
+"""``simulate --solver vortex``: the vortex solver behind the same command, report and study levels
+as OpenFOAM.
 
-Run as a user runs it (a fresh ``python -m torus_cad`` process), the files read back by readers we did not write
-(json, csv, Pillow), a small lattice (4 x 12) where the test is about the plumbing, not the numbers."""
+Run as a user runs it (a fresh ``python -m torus_cad`` process), the files read back by readers we
+did not write (json, csv, Pillow), a small lattice (4 x 12) where the test is about the plumbing,
+not the numbers."""
 
 from __future__ import annotations
 
@@ -82,7 +84,8 @@ def test_the_vortex_run_writes_the_openfoam_routes_numbers_the_loading_the_wake_
 
 
 def test_both_solvers_answer_a_study_through_the_same_report_keys(vortex_run):
-    """The seam: every performance metric a study may name reads from the vortex report as from OpenFOAM's."""
+    """The seam: every performance metric a study may name reads from the vortex report as from
+    OpenFOAM's."""
     from torus_cad.optimize.metrics import metric_value
 
     out, _ = vortex_run

@@ -1,4 +1,5 @@
-"""The wind-tunnel data reader and the comparison that validation runs are judged by (studies/wind_tunnel.py)."""
+"""The wind-tunnel data reader and the comparison that validation runs are judged by
+(studies/wind_tunnel.py)."""
 
 from __future__ import annotations
 

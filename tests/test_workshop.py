@@ -443,9 +443,11 @@ def fillet_stage(monkeypatch):
 
     On the knife-edged fuzz designs below, OpenCascade's self-interference test finds faults in
     the fillet's corner faces at the trailing edge, or does not finish within
-    STRICT_CHECK_TIME_LIMIT_S, so the build refuses them (test_a_knife_edge_fillet_the_check_cannot_certify_is_not_published)
-    and, since issue 47, refuses a fillet round a knife edge before the kernel (that refusal is lifted here too);
-    what the fillet stage itself guarantees (one BRepCheck-valid solid, the radius, the extent) is tested here."""
+    STRICT_CHECK_TIME_LIMIT_S, so the build refuses them
+    (test_a_knife_edge_fillet_the_check_cannot_certify_is_not_published) and, since issue 47,
+    refuses a fillet round a knife edge before the kernel (that refusal is lifted here too); what
+    the fillet stage itself guarantees (one BRepCheck-valid solid, the radius, the extent) is tested
+    here."""
     import torus_cad.propeller as pipeline
 
     monkeypatch.setattr("torus_cad.parameters.design.check_root_fillet_edge", lambda *args: None)
@@ -549,7 +551,8 @@ TIGHT_BEND = {
 
 
 def _tightest_analytic_concave_bend_mm(params, s, t, step=1e-4):
-    """The smallest concave (seen from outside) radius of the analytic sections at ``s`` over ``t`` (mm)."""
+    """The smallest concave (seen from outside) radius of the analytic sections at ``s`` over ``t``
+    (mm)."""
     from torus_cad.geometry.blade.blade_surface import surface_points
 
     geometry = params.geometry()
@@ -571,9 +574,9 @@ def _tightest_analytic_concave_bend_mm(params, s, t, step=1e-4):
 
 
 def test_root_fillet_is_reduced_only_where_the_blade_bends_too_tightly_and_says_so(fillet_stage):
-    """Where the blade's own section bends concavely tighter than the ball near the hub, the fillet is
-    made with a smaller radius along those junction edges, the requested one elsewhere; the solid is
-    one valid solid, and the report says the radius is not constant."""
+    """Where the blade's own section bends concavely tighter than the ball near the hub, the fillet
+    is made with a smaller radius along those junction edges, the requested one elsewhere; the solid
+    is one valid solid, and the report says the radius is not constant."""
     params = PropellerParameters.from_dict(TIGHT_BEND)
     root_s = np.linspace(0.96, 0.999, 40)  # where the blade's second end meets the hub
     assert _tightest_analytic_concave_bend_mm(params, root_s, np.linspace(1.01, 1.99, 981)) < 0.25
@@ -605,8 +608,8 @@ def test_root_fillet_is_reduced_only_where_the_blade_bends_too_tightly_and_says_
 
 def test_tight_bend_fails_naming_the_reduce_choice(tmp_path, capsys, monkeypatch):
     """By default a fillet that cannot have its radius everywhere is not made (exit 1, nothing
-    written, the message says why and names the choice). The design's knife edge, refused before the kernel
-    since issue 47, is let through: the fillet stage's own refusal is tested."""
+    written, the message says why and names the choice). The design's knife edge, refused before the
+    kernel since issue 47, is let through: the fillet stage's own refusal is tested."""
     monkeypatch.setattr("torus_cad.parameters.design.check_root_fillet_edge", lambda *args: None)
     design = tmp_path / "tight.toml"
     design.write_text(PropellerParameters.from_dict({**TIGHT_BEND, "name": "tight"}).to_toml())
@@ -633,8 +636,9 @@ def test_tight_bend_fails_naming_the_reduce_choice(tmp_path, capsys, monkeypatch
 
 
 def test_a_knife_edge_fillet_is_refused_before_the_kernel(tmp_path, capsys):
-    """A fuzz design whose knife-edge fillet the strict check refuses (below) is refused before the kernel: exit 2,
-    one line naming the fillet, the knife edge and the round edge that takes it, nothing written."""
+    """A fuzz design whose knife-edge fillet the strict check refuses (below) is refused before the
+    kernel: exit 2, one line naming the fillet, the knife edge and the round edge that takes it,
+    nothing written."""
     path = tmp_path / "knife.toml"
     path.write_text(PropellerParameters.from_dict({**REPAIRED, "name": "knife"}).to_toml())
     assert (
@@ -667,9 +671,9 @@ def test_a_knife_edge_fillet_is_refused_before_the_kernel(tmp_path, capsys):
 def test_a_knife_edge_fillet_the_check_cannot_certify_is_not_published(
     design, check_limit_s, tmp_path, capsys, monkeypatch
 ):
-    """The strict check finds faults in the fillet's corner face at a sharp trailing edge, or does not
-    finish in time (the limit lowered here from STRICT_CHECK_TIME_LIMIT_S): exit 1, one line naming
-    BRepAlgoAPI_Check and the round blunt edge that avoids it, nothing written."""
+    """The strict check finds faults in the fillet's corner face at a sharp trailing edge, or does
+    not finish in time (the limit lowered here from STRICT_CHECK_TIME_LIMIT_S): exit 1, one line
+    naming BRepAlgoAPI_Check and the round blunt edge that avoids it, nothing written."""
     if check_limit_s is not None:
         monkeypatch.setattr("torus_cad.kernel.strict.STRICT_CHECK_TIME_LIMIT_S", check_limit_s)
     # the kernel's own refusal, behind the one before the kernel

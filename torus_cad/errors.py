@@ -1,8 +1,9 @@
 """The package's exceptions: one base, one subclass per kind of failure.
 
 The CLI maps :class:`ParameterError` (with :class:`BudgetError`) and :class:`GeometryError` to
-exit code 2 (bad input), :class:`MissingExtraError` to exit code 2 as well (nothing was tried), every other :class:`TorusCadError` to exit code 1 (the kernel or the
-file system failed; :class:`IncompleteOutputError` is ``torus-cad verify`` finding a broken set).
+exit code 2 (bad input), :class:`MissingExtraError` to exit code 2 as well (nothing was tried),
+every other :class:`TorusCadError` to exit code 1 (the kernel or the file system failed;
+:class:`IncompleteOutputError` is ``torus-cad verify`` finding a broken set).
 
 Messages stay short whatever the input: :func:`shown` quotes a value cut to
 :data:`~torus_cad.tolerances.MESSAGE_VALUE_MAX_CHARS` characters, and every error's message passes

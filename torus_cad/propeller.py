@@ -72,9 +72,11 @@ class Propeller:
     Attributes:
         parameters: the design.
         shape: the fused propeller, one valid closed solid (OpenCascade's ``TopoDS_Shape``).
-        hub_shape: the hub cylinder alone (radius R, length L, centred at the origin), before the fuse.
-        blade_shapes: each blade alone, before the fuse, blade i at ``phase_deg + 360 i / n`` degrees.
-            The blades' ends reach into the hub, so hub and blades overlap; ``shape`` is the union.
+        hub_shape: the hub cylinder alone (radius R, length L, centred at the origin), before the
+            fuse.
+        blade_shapes: each blade alone, before the fuse, blade i at ``phase_deg + 360 i / n``
+            degrees. The blades' ends reach into the hub, so hub and blades overlap; ``shape`` is
+            the union.
         surface: blade 0's sampled surface from the geometry layer.
         section_curves: blade 0's section B-splines (plain arrays).
         stage_seconds: seconds per stage (keys: :class:`torus_cad.runtime.stages.Stage` values).
@@ -83,13 +85,14 @@ class Propeller:
             ``parameters`` are already the resolved spec parameters.
         mounting: the hub's bore, flat, set screw and chamfer, with the set screw's direction.
         face_parts: the part each face of ``solid`` came from, in the order of ``solid.Faces()``:
-            -1 (:data:`torus_cad.geometry.blade.propeller_geometry.HUB_PART`) the hub, i blade i; a root fillet's
-            faces are their blade's (:mod:`torus_cad.kernel.face_provenance`).
+            -1 (:data:`torus_cad.geometry.blade.propeller_geometry.HUB_PART`) the hub, i blade i; a
+            root fillet's faces are their blade's (:mod:`torus_cad.kernel.face_provenance`).
         root_fillet: the radii the root fillet has (None without one): the requested radius
             everywhere, or smaller along junction edges where the blade bends too tightly for it
             (:class:`torus_cad.kernel.fillet.root_fillet.RootFillet`).
         checks: the strict validity check ``solid`` passed (BRepCheck_Analyzer and
-            BRepAlgoAPI_Check's small-edge and self-interference tests, :mod:`torus_cad.kernel.strict`).
+            BRepAlgoAPI_Check's small-edge and self-interference tests,
+            :mod:`torus_cad.kernel.strict`).
     """
 
     parameters: PropellerParameters
@@ -107,8 +110,8 @@ class Propeller:
     checks: StrictCheck | None = None
 
     def __getstate__(self) -> dict[str, Any]:
-        """Pickled with its shapes as OpenCascade's binary BRep (as cadquery pickles its shapes); the
-        cadquery wrappers are made again when asked for.
+        """Pickled with its shapes as OpenCascade's binary BRep (as cadquery pickles its shapes);
+        the cadquery wrappers are made again when asked for.
 
         Returns:
             The instance's fields by name, with ``shape``, ``hub_shape`` and each of
@@ -226,8 +229,8 @@ class Propeller:
         return spin
 
     def mass_properties(self, density_g_cm3: float = DEFAULT_DENSITY_G_CM3) -> MassProperties:
-        """Volume (mm^3), area (mm^2), centroid (mm), spin-axis inertia and mass (g) for a density in
-        g/cm^3 (default 1.24, PLA), to 1e-6 relative
+        """Volume (mm^3), area (mm^2), centroid (mm), spin-axis inertia and mass (g) for a density
+        in g/cm^3 (default 1.24, PLA), to 1e-6 relative
         (see :func:`torus_cad.kernel.mass_properties.mass_properties`).
 
         Args:
@@ -247,8 +250,8 @@ class Propeller:
         sections_table: bool = False,
     ) -> dict[str, Path]:
         """Write ``<name>.step``, ``<name>.stl`` (unless ``stl`` is False), the blade-element table
-        ``<name>_sections.csv`` and ``<name>_sections.png`` (if ``sections_table``) and ``<name>.json``
-        into ``out_dir``.
+        ``<name>_sections.csv`` and ``<name>_sections.png`` (if ``sections_table``) and
+        ``<name>.json`` into ``out_dir``.
 
         The files are the formats of ``export.formats``, published together as one output set
         (torus_cad.outputs.output_set): all of them or none.
@@ -278,7 +281,8 @@ _CADQUERY_VIEWS = ("solid", "hub", "blades")
 
 
 def design_printability(params: PropellerParameters) -> Printability:
-    """The blade's printability from the analytic section alone (no kernel): see torus_cad.geometry.analysis.printability."""
+    """The blade's printability from the analytic section alone (no kernel): see
+    torus_cad.geometry.analysis.printability."""
     return params.printability()
 
 
@@ -434,7 +438,8 @@ def build_propeller(
 def _strictly_valid(
     solid: TopoDS_Shape, fillet_on_sharp_edge: bool
 ) -> tuple[TopoDS_Shape, StrictCheck]:
-    """:func:`torus_cad.kernel.strict.strict_valid_solid`, its error with the way out for a filleted knife edge."""
+    """:func:`torus_cad.kernel.strict.strict_valid_solid`, its error with the way out for a filleted
+    knife edge."""
     try:
         return strict_valid_solid(solid, "the propeller")
     except KernelError as error:
@@ -506,7 +511,8 @@ def write_outputs(
 ) -> dict[str, Path]:
     """Write the files of ``export.formats`` (STEP, STL, 3MF; ``stl=False`` drops the STL), the
     blade-element table (``<name>_sections.csv`` and ``.png``, when ``sections_table``; ``torus-cad
-    build`` writes it) and the JSON report as one output set (torus_cad.outputs.output_set); return the paths by kind."""
+    build`` writes it) and the JSON report as one output set (torus_cad.outputs.output_set); return
+    the paths by kind."""
     return write_output_set(
         propeller, out_dir, density_g_cm3, stl=stl, sections_table=sections_table
     ).paths

@@ -1,11 +1,11 @@
-"""The tolerances, time limits, input limits and option ranges that two or more places read: modules of the
-package, or a module and the tests or scripts that hold it to them (lengths in mm).
+"""The tolerances, time limits, input limits and option ranges that two or more places read: modules
+of the package, or a module and the tests or scripts that hold it to them (lengths in mm).
 
-A constant that one module alone reads lives beside it, at module level with its unit and why (for example
-the Frenet frame's curvature floor in torus_cad.geometry.blade.frames, the STEP read-back's tolerances in
-torus_cad.kernel.readable_edges, the station table's limits in torus_cad.geometry.blade.station_table, the
-simulation's levels, fluid and layers in torus_cad.simulate.settings). The measurements behind the limits:
-the docs' measurements page.
+A constant that one module alone reads lives beside it, at module level with its unit and why (for
+example the Frenet frame's curvature floor in torus_cad.geometry.blade.frames, the STEP read-back's
+tolerances in torus_cad.kernel.readable_edges, the station table's limits in
+torus_cad.geometry.blade.station_table, the simulation's levels, fluid and layers in
+torus_cad.simulate.settings). The measurements behind the limits: the docs' measurements page.
 """
 
 #: Relative tolerance of read-back comparisons (a STEP file read back keeps its volume to this).

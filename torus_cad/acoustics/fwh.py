@@ -1,20 +1,24 @@
-"""Farassat's formulation 1A of the Ffowcs Williams-Hawkings equation on an impermeable surface turning about +z.
+"""Farassat's formulation 1A of the Ffowcs Williams-Hawkings equation on an impermeable surface
+turning about +z.
 
-Written here: no maintained Python FW-H code exists (PyPI has none; the maintained solvers are Julia, Fortran or
-OpenFOAM libraries that the v1912 build here lacks), and the steady rotating case is a hundred lines of numpy.
+Written here: no maintained Python FW-H code exists (PyPI has none; the maintained solvers are
+Julia, Fortran or OpenFOAM libraries that the v1912 build here lacks), and the steady rotating case
+is a hundred lines of numpy.
 
-The surface is a set of flat faces (centroid, unit normal into the fluid, area), each a compact source that
-turns with the rotor on its circle about the +z axis through the origin at the signed angular velocity
-``omega`` (rad/s; positive counter-clockwise seen from +z). Its gauge pressure is steady in the rotating frame
-(a frozen-rotor solution), so the signal repeats every revolution. For each observer time ``t`` on a uniform
-grid over one revolution and each face, Newton's method solves the retarded-time equation
-``t = tau + |x - y(tau)| / c`` (its derivative ``1 - M_r`` is near 1 for a subsonic source, so it converges in
-a few steps); the thickness (monopole, from the normal velocity ``v . n`` of the moving surface) and loading
-(dipole, ``p n``) terms are then evaluated with every time derivative in closed form (the motion is a rotation)
-and summed over the faces. The medium is at rest relative to the hub (hover, or an observer flying with the
-rotor with the flight speed's convection neglected); viscous stresses are left out of the loading.
+The surface is a set of flat faces (centroid, unit normal into the fluid, area), each a compact
+source that turns with the rotor on its circle about the +z axis through the origin at the signed
+angular velocity ``omega`` (rad/s; positive counter-clockwise seen from +z). Its gauge pressure is
+steady in the rotating frame (a frozen-rotor solution), so the signal repeats every revolution. For
+each observer time ``t`` on a uniform grid over one revolution and each face, Newton's method solves
+the retarded-time equation ``t = tau + |x - y(tau)| / c`` (its derivative ``1 - M_r`` is near 1 for
+a subsonic source, so it converges in a few steps); the thickness (monopole, from the normal
+velocity ``v . n`` of the moving surface) and loading (dipole, ``p n``) terms are then evaluated
+with every time derivative in closed form (the motion is a rotation) and summed over the faces. The
+medium is at rest relative to the hub (hover, or an observer flying with the rotor with the flight
+speed's convection neglected); viscous stresses are left out of the loading.
 
-Farassat, F. (2007), Derivation of Formulations 1 and 1A of Farassat, NASA/TM-2007-214853, eqs. 36 and 37.
+Farassat, F. (2007), Derivation of Formulations 1 and 1A of Farassat, NASA/TM-2007-214853, eqs. 36
+and 37.
 """
 
 from __future__ import annotations
@@ -37,8 +41,8 @@ FACE_CHUNK = 2048
 
 @dataclass(frozen=True)
 class RotatingSurface:
-    """Flat faces at rotor angle 0: centroids (N, 3) m, unit normals (N, 3) pointing into the fluid, areas (N,)
-    m^2, gauge pressure (N,) Pa (steady in the rotating frame)."""
+    """Flat faces at rotor angle 0: centroids (N, 3) m, unit normals (N, 3) pointing into the fluid,
+    areas (N,) m^2, gauge pressure (N,) Pa (steady in the rotating frame)."""
 
     centroids_m: Array
     normals: Array
@@ -70,8 +74,8 @@ class Medium:
 
 @dataclass(frozen=True)
 class ObserverSignal:
-    """The acoustic pressure at one observer over one revolution: observer times (S,) s from 0 (uniform, one
-    period ``2 pi / |omega|``), thickness and loading parts (S,) Pa."""
+    """The acoustic pressure at one observer over one revolution: observer times (S,) s from 0
+    (uniform, one period ``2 pi / |omega|``), thickness and loading parts (S,) Pa."""
 
     time_s: Array
     thickness_pa: Array
@@ -83,7 +87,8 @@ class ObserverSignal:
 
 
 def _rotate(vectors: Array, angle: Array) -> tuple[Array, Array, Array]:
-    """Components x, y, z of ``vectors`` (n, 3) turned by ``angle`` (n, S) rad about +z: each (n, S)."""
+    """Components x, y, z of ``vectors`` (n, 3) turned by ``angle`` (n, S) rad about +z: each (n,
+    S)."""
     cos, sin = np.cos(angle), np.sin(angle)
     x, y = vectors[:, 0:1], vectors[:, 1:2]
     return x * cos - y * sin, x * sin + y * cos, np.broadcast_to(vectors[:, 2:3], angle.shape)
@@ -96,8 +101,9 @@ def retarded_times(
     time_s: Array,
     speed_of_sound_m_s: float,
 ) -> Array:
-    """Emission times tau (n, S) s at which sound from each source (rotating with ``omega``, at ``centroids_m`` at
-    tau = 0) reaches ``observer_m`` at ``time_s``: Newton's method on ``tau + |x - y(tau)| / c - t = 0``."""
+    """Emission times tau (n, S) s at which sound from each source (rotating with ``omega``, at
+    ``centroids_m`` at tau = 0) reaches ``observer_m`` at ``time_s``: Newton's method on
+    ``tau + |x - y(tau)| / c - t = 0``."""
     c = speed_of_sound_m_s
     period = 2.0 * math.pi / abs(omega_rad_s)
     x0 = np.linalg.norm(observer_m[None, :] - centroids_m, axis=1)[:, None]
@@ -121,8 +127,9 @@ def observer_signal(
     medium: Medium,
     samples: int,
 ) -> ObserverSignal:
-    """The thickness and loading noise of ``surface`` turning at ``omega_rad_s`` (rad/s about +z, nonzero) at
-    ``observer_m`` (m, at rest relative to the hub), on ``samples`` uniform observer times over one revolution."""
+    """The thickness and loading noise of ``surface`` turning at ``omega_rad_s`` (rad/s about +z,
+    nonzero) at ``observer_m`` (m, at rest relative to the hub), on ``samples`` uniform observer
+    times over one revolution."""
     if omega_rad_s == 0.0 or not math.isfinite(omega_rad_s):
         raise ValueError(
             f"omega = {omega_rad_s!r} rad/s: a steady rotor's tones need a nonzero, finite rotation"

@@ -1,5 +1,5 @@
-"""The noise entry of a simulation's report, its pressure signals (CSV) and its picture (directivity, spectrum,
-signal over one revolution)."""
+"""The noise entry of a simulation's report, its pressure signals (CSV) and its picture
+(directivity, spectrum, signal over one revolution)."""
 
 from __future__ import annotations
 
@@ -40,14 +40,15 @@ METHOD = (
 
 
 def samples_per_revolution(blades: int, harmonics: int = HARMONICS) -> int:
-    """A power of two, at least MIN_SAMPLES and 4 samples per period of harmonic ``harmonics`` x ``blades``."""
+    """A power of two, at least MIN_SAMPLES and 4 samples per period of harmonic ``harmonics`` x
+    ``blades``."""
     return max(MIN_SAMPLES, 1 << math.ceil(math.log2(4 * harmonics * blades)))
 
 
 @dataclass(frozen=True)
 class Noise:
-    """The report entry (``report``), each observer's signal, and the directivity sweep (angle deg, OASPL dB,
-    dB(A)) at the first observer's distance."""
+    """The report entry (``report``), each observer's signal, and the directivity sweep (angle deg,
+    OASPL dB, dB(A)) at the first observer's distance."""
 
     report: dict[str, Any]
     observers: tuple[Observer, ...]
@@ -62,13 +63,14 @@ SILENT_BELOW_DB = -200.0
 
 
 def _level_db(value: float) -> float | None:
-    """``value`` (dB) if it is a level; None for silence (-inf) and for round-off below SILENT_BELOW_DB."""
+    """``value`` (dB) if it is a level; None for silence (-inf) and for round-off below
+    SILENT_BELOW_DB."""
     return float(value) if math.isfinite(value) and value > SILENT_BELOW_DB else None
 
 
 def _overall(rms: np.ndarray, blades: int, rotation_hz: float) -> tuple[float, float, float]:
-    """(OASPL dB, dB(A)) of the blade-passing harmonics among the rotation harmonics ``rms`` (Pa; index 0 the
-    first), and the overall SPL dB of the others."""
+    """(OASPL dB, dB(A)) of the blade-passing harmonics among the rotation harmonics ``rms`` (Pa;
+    index 0 the first), and the overall SPL dB of the others."""
     frequency = rotation_hz * np.arange(1, len(rms) + 1)
     passing = np.arange(1, len(rms) + 1) % blades == 0
     return (
@@ -119,7 +121,8 @@ def evaluate_noise(
     harmonics: int = HARMONICS,
     directivity: bool = True,
 ) -> Noise:
-    """The tonal noise of ``surface`` (``blades`` blades, turning at ``omega_rad_s`` about +z) at ``observers``."""
+    """The tonal noise of ``surface`` (``blades`` blades, turning at ``omega_rad_s`` about +z) at
+    ``observers``."""
     start = time.perf_counter()
     samples = samples_per_revolution(blades, harmonics)
     rotation_hz = abs(omega_rad_s) / (2.0 * math.pi)
@@ -168,7 +171,8 @@ def evaluate_noise(
 
 
 def write_noise_csv(noise: Noise, path: Path) -> Path:
-    """The acoustic pressure (Pa) at each observer over one revolution: time_s, then one column per observer."""
+    """The acoustic pressure (Pa) at each observer over one revolution: time_s, then one column per
+    observer."""
     with path.open("w", newline="", encoding="utf-8") as stream:
         writer = csv.writer(stream)
         writer.writerow(
@@ -182,9 +186,10 @@ def write_noise_csv(noise: Noise, path: Path) -> Path:
 
 
 def write_noise_plot(noise: Noise, path: Path, title: str) -> Path:
-    """The picture (matplotlib, Agg): directivity (OASPL and dB(A) against the angle from the axis), SPL per
-    blade-passing harmonic at each observer (both down to PICTURE_RANGE_DB below the loudest), and the signal
-    over one revolution (less its mean: the steady near field of the thrust)."""
+    """The picture (matplotlib, Agg): directivity (OASPL and dB(A) against the angle from the axis),
+    SPL per blade-passing harmonic at each observer (both down to PICTURE_RANGE_DB below the
+    loudest), and the signal over one revolution (less its mean: the steady near field of the
+    thrust)."""
     import matplotlib
 
     matplotlib.use("Agg")

@@ -1,7 +1,8 @@
 """Where the noise is heard: observers at a distance from the hub and an angle from the spin axis.
 
-The angle is measured from +z, the direction the thrust pushes the propeller (ahead of it; 90 degrees is the
-rotor's plane, 180 behind it), in the plane x-z (for a steady rotor the azimuth changes only the phase).
+The angle is measured from +z, the direction the thrust pushes the propeller (ahead of it; 90
+degrees is the rotor's plane, 180 behind it), in the plane x-z (for a steady rotor the azimuth
+changes only the phase).
 """
 
 from __future__ import annotations
@@ -59,8 +60,9 @@ def observer_ranges() -> str:
 
 
 def parse_observer(text: str) -> Observer:
-    """``DIST_M:ANGLE_DEG`` (e.g. ``2:45``) as an Observer; ParameterError naming the option, the value and the
-    allowed ranges (distance in ``NOISE_OBSERVER_DISTANCE_M``, angle in [0, 180] degrees)."""
+    """``DIST_M:ANGLE_DEG`` (e.g. ``2:45``) as an Observer; ParameterError naming the option, the
+    value and the allowed ranges (distance in ``NOISE_OBSERVER_DISTANCE_M``, angle in [0, 180]
+    degrees)."""
     low, high = NOISE_OBSERVER_DISTANCE_M
     shown = text if len(text) <= 40 else text[:37] + "..."
     parts = text.split(":")
@@ -83,10 +85,12 @@ def parse_observer(text: str) -> Observer:
 
 
 class ObserverOption:
-    """The argparse ``type`` of ``--observer``: :func:`parse_observer`, its refusal as argparse's error (exit 2).
+    """The argparse ``type`` of ``--observer``: :func:`parse_observer`, its refusal as argparse's
+    error (exit 2).
 
-    A value of two numbers has two ranges, so it carries them as text (``ranges``, in its help) and values
-    outside them (``outside``, for the tests) instead of the one-number options' ``bounds``."""
+    A value of two numbers has two ranges, so it carries them as text (``ranges``, in its help) and
+    values outside them (``outside``, for the tests) instead of the one-number options'
+    ``bounds``."""
 
     __name__ = "observer"
     ranges = observer_ranges()
@@ -103,7 +107,8 @@ observer_option = ObserverOption()
 
 
 def check_observers(observers: tuple[Observer, ...], tip_radius_m: float) -> None:
-    """ParameterError for an observer inside the sphere the blade tips sweep (the formula holds outside it)."""
+    """ParameterError for an observer inside the sphere the blade tips sweep (the formula holds
+    outside it)."""
     for observer in observers:
         if observer.distance_m <= tip_radius_m:
             raise ParameterError(

@@ -1,9 +1,11 @@
-"""A finished simulation's blade surface pressure as a :class:`~torus_cad.acoustics.fwh.RotatingSurface`.
+"""A finished simulation's blade surface pressure as a
+:class:`~torus_cad.acoustics.fwh.RotatingSurface`.
 
-The case's ``surfaces`` function object (torus_cad.simulate.case.BLADE_PRESSURE) writes the propeller patch at
-the last time as VTK XML PolyData (m; face values of simpleFoam's kinematic pressure p / rho, m^2/s^2), read
-here with VTK's own reader. OpenFOAM orders a boundary face's points so that its normal points out of the fluid
-domain (into the blade); the acoustic surface's normal points into the fluid, so it is reversed.
+The case's ``surfaces`` function object (torus_cad.simulate.case.BLADE_PRESSURE) writes the
+propeller patch at the last time as VTK XML PolyData (m; face values of simpleFoam's kinematic
+pressure p / rho, m^2/s^2), read here with VTK's own reader. OpenFOAM orders a boundary face's
+points so that its normal points out of the fluid domain (into the blade); the acoustic surface's
+normal points into the fluid, so it is reversed.
 """
 
 from __future__ import annotations
@@ -31,7 +33,8 @@ def _time_value(folder: Path) -> float:
 
 
 def surface_pressure_file(case: Path, function_object: str, patch: str) -> Path:
-    """``postProcessing/<function_object>/<latest time>/<patch>.vtp`` of ``case``; SurfacePressureError if none."""
+    """``postProcessing/<function_object>/<latest time>/<patch>.vtp`` of ``case``;
+    SurfacePressureError if none."""
     root = Path(case) / "postProcessing" / function_object
     times = sorted(
         (folder for folder in root.glob("*") if _time_value(folder) >= 0.0), key=_time_value
@@ -47,9 +50,9 @@ def surface_pressure_file(case: Path, function_object: str, patch: str) -> Path:
 
 
 def read_surface(path: Path, density_kg_m3: float, field: str = "p") -> RotatingSurface:
-    """The faces of the VTK PolyData file ``path`` (points in m) with the gauge pressure ``density_kg_m3`` times
-    the face field ``field`` (kinematic, m^2/s^2), normals reversed into the fluid. Polygons are split into fans
-    for their area vector and centroid."""
+    """The faces of the VTK PolyData file ``path`` (points in m) with the gauge pressure
+    ``density_kg_m3`` times the face field ``field`` (kinematic, m^2/s^2), normals reversed into the
+    fluid. Polygons are split into fans for their area vector and centroid."""
     from vtkmodules.util.numpy_support import vtk_to_numpy as untyped_vtk_to_numpy
 
     def vtk_to_numpy(array: Any) -> np.ndarray:

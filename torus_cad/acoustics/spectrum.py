@@ -1,9 +1,10 @@
 """Levels of a periodic signal: SPL per harmonic, overall SPL and A-weighted level (dB re 20 uPa).
 
-A signal sampled uniformly over one period T has harmonics at k / T (k = 1, 2, ...); the rms pressure of
-harmonic k is sqrt(2) |X_k| / S, with X the discrete Fourier transform of the S samples. The overall SPL
-sums the squares of every harmonic the samples resolve (below the Nyquist frequency); the A-weighted level
-weights each harmonic by A(f) of IEC 61672-1 (closed form, A(1 kHz) = 0 dB).
+A signal sampled uniformly over one period T has harmonics at k / T (k = 1, 2, ...); the rms
+pressure of harmonic k is sqrt(2) |X_k| / S, with X the discrete Fourier transform of the S samples.
+The overall SPL sums the squares of every harmonic the samples resolve (below the Nyquist
+frequency); the A-weighted level weights each harmonic by A(f) of IEC 61672-1 (closed form, A(1
+kHz) = 0 dB).
 """
 
 from __future__ import annotations
@@ -21,8 +22,8 @@ _A_1000_DB = 2.0
 
 
 def harmonic_rms(signal_pa: NDArray[np.float64]) -> NDArray[np.float64]:
-    """The rms pressure (Pa) of harmonics 1 .. S/2 - 1 of a signal sampled at S uniform times over one period
-    (index 0 is harmonic 1)."""
+    """The rms pressure (Pa) of harmonics 1 .. S/2 - 1 of a signal sampled at S uniform times over
+    one period (index 0 is harmonic 1)."""
     samples = len(signal_pa)
     spectrum = np.fft.rfft(signal_pa) / samples
     return np.asarray(math.sqrt(2.0) * np.abs(spectrum[1 : (samples + 1) // 2]))
@@ -46,8 +47,8 @@ def a_weighting_db(frequency_hz: float | NDArray[np.float64]) -> NDArray[np.floa
 def overall_db(
     rms_pa: NDArray[np.float64], frequency_hz: NDArray[np.float64] | None = None
 ) -> float:
-    """Overall SPL (dB) of harmonics of rms pressures ``rms_pa``; A-weighted (dB(A)) when their frequencies
-    (Hz) are given. -inf when all are 0."""
+    """Overall SPL (dB) of harmonics of rms pressures ``rms_pa``; A-weighted (dB(A)) when their
+    frequencies (Hz) are given. -inf when all are 0."""
     energy = np.asarray(rms_pa, dtype=float) ** 2
     if frequency_hz is not None:
         energy = energy * 10.0 ** (a_weighting_db(frequency_hz) / 10.0)

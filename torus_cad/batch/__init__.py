@@ -14,7 +14,8 @@
     from torus_cad.batch import load_sweep, run_sweep
 
     if __name__ == "__main__":          # needed: the worker processes re-import this script
-        result = run_sweep(load_sweep("examples/sweep_example.toml"), "sweep_out/example", workers=2)
+        result = run_sweep(load_sweep("examples/sweep_example.toml"), "sweep_out/example",
+        workers=2)
         print(result.summary())
 """
 

@@ -19,7 +19,8 @@ CONNECT_TIMEOUT_S = 20.0  #: how long to wait for a Dask scheduler, s
 
 
 def connect(scheduler: str, workers: int | None) -> tuple[Any, Any]:
-    """A client of the scheduler at ``scheduler``, or of a new LocalCluster of ``workers`` processes (``"local"``).
+    """A client of the scheduler at ``scheduler``, or of a new LocalCluster of ``workers`` processes
+    (``"local"``).
 
     Returns the client and the LocalCluster it started (None for a remote scheduler); close
     both with :func:`close_client`.

@@ -1,4 +1,5 @@
-"""The designs of a sweep: a grid, random samples or a Latin hypercube, each named by a hash of its parameters.
+"""The designs of a sweep: a grid, random samples or a Latin hypercube, each named by a hash of its
+parameters.
 
 Every design gets an id, the first :data:`ID_LENGTH` hex digits of the SHA-256 of its
 canonical JSON parameter dict (sorted keys, without ``name``, which is set to the id), so the
@@ -61,7 +62,8 @@ def design_id(parameters: Mapping[str, Any]) -> str:
 
 
 def unit_samples(mode: SweepMode, samples: int, dimensions: int, seed: int) -> np.ndarray:
-    """``(samples, dimensions)`` points in [0, 1): uniform (random) or a Latin hypercube, from ``seed``."""
+    """``(samples, dimensions)`` points in [0, 1): uniform (random) or a Latin hypercube, from
+    ``seed``."""
     rng = np.random.default_rng(seed)
     if mode is SweepMode.RANDOM:
         return rng.random((samples, dimensions))
@@ -91,12 +93,14 @@ def apply_axis_values(
     """A deep copy of ``base`` with each axis's value set.
 
     Args:
-        base: a design's parameters as nested tables (:meth:`PropellerParameters.to_dict`); not changed.
+        base: a design's parameters as nested tables (:meth:`PropellerParameters.to_dict`); not
+            changed.
         axes: the varied parameters, each naming its table path (and vector element, if any).
         combination: one value per axis, in the order of ``axes``.
 
     Returns:
-        The new parameters: ``base`` copied, with each axis's parameter (or vector element) set to its value.
+        The new parameters: ``base`` copied, with each axis's parameter (or vector element) set to
+            its value.
     """
     parameters = copy.deepcopy(dict(base))
     for axis, value in zip(axes, combination):
@@ -111,7 +115,8 @@ def apply_axis_values(
 
 
 def generate_designs(spec: SweepSpec) -> list[Design]:
-    """Every design of the sweep, in order, duplicates (same id) dropped after their first appearance."""
+    """Every design of the sweep, in order, duplicates (same id) dropped after their first
+    appearance."""
     base = spec.base.to_dict()
     designs: list[Design] = []
     seen: set[str] = set()

@@ -100,11 +100,12 @@ def run_design(task: DesignTask) -> DesignResult:
 
 
 def prescreen(task: DesignTask) -> DesignResult | None:
-    """The design's refusal by the checks the build makes before the kernel, run here, in the batch's own
-    process, before a worker is given it (:func:`torus_cad.parameters.design_checks.check_design`, tens of ms,
-    no kernel); None when it passes, and the worker builds it. The refusal is recorded in the task's folder
-    (``refusal.json``, ``"prescreened": true``) as a worker records one. Never raises for a bad design: an
-    unexpected exception is left for the worker to meet and classify."""
+    """The design's refusal by the checks the build makes before the kernel, run here, in the
+    batch's own process, before a worker is given it
+    (:func:`torus_cad.parameters.design_checks.check_design`, tens of ms, no kernel); None when it
+    passes, and the worker builds it. The refusal is recorded in the task's folder
+    (``refusal.json``, ``"prescreened": true``) as a worker records one. Never raises for a bad
+    design: an unexpected exception is left for the worker to meet and classify."""
     from torus_cad.parameters.design import ExportFormat
     from torus_cad.parameters.design_checks import check_design
 
@@ -132,7 +133,8 @@ def prescreen(task: DesignTask) -> DesignResult | None:
 
 
 def _classify(error: Exception) -> tuple[Outcome, str, str]:
-    """The outcome, one-line reason and traceback of what a design raised (call inside ``except``)."""
+    """The outcome, one-line reason and traceback of what a design raised (call inside
+    ``except``)."""
     if isinstance(error, (ParameterError, GeometryError)):  # the package's own refusal
         return Outcome.REFUSED, str(error), ""
     if isinstance(error, KernelError):  # OpenCascade failed on a design the checks let through
@@ -199,7 +201,8 @@ def _stl_problem(data: bytes) -> str:
 
 
 def record_result(task: DesignTask, result: DesignResult) -> DesignResult:
-    """Leave exactly one status file in the task's folder; a folder that cannot be written is noted in the reason.
+    """Leave exactly one status file in the task's folder; a folder that cannot be written is noted
+    in the reason.
 
     Called in the worker after a design ran, and in the parent for outcomes only it sees
     (a time-out, a crashed worker).
@@ -246,7 +249,8 @@ def _read_json(path: Path) -> dict[str, Any] | None:
 def read_design_status(
     folder: Path, design_id: str, parameters: Mapping[str, Any], stl: bool
 ) -> tuple[Outcome, dict[str, Any]] | None:
-    """The outcome recorded in a design's folder and its record (the report for a valid design), or None.
+    """The outcome recorded in a design's folder and its record (the report for a valid design), or
+    None.
 
     Valid: the report ``<id>.json`` (for exactly these parameters) with its STEP file, and its
     STL when ``stl``. Otherwise ``refusal.json`` or ``failure.json`` for these parameters.

@@ -54,8 +54,8 @@ class DesignResult:
         seconds: wall time of the build, the writes and the checks, s.
         detail: a traceback or other text for a problem outcome ('' otherwise).
         error: the exception's class name (``GeometryError``, ``KernelError``, ...), '' when none.
-        prescreened: refused by the kernel-free checks in the batch's own process, before any worker built it
-            (:func:`torus_cad.batch.job.prescreen`); False for every other outcome.
+        prescreened: refused by the kernel-free checks in the batch's own process, before any worker
+            built it (:func:`torus_cad.batch.job.prescreen`); False for every other outcome.
     """
 
     design_id: str

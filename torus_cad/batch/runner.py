@@ -1,4 +1,5 @@
-"""The batch runner: designs on a local process pool or a Dask cluster, one outcome each, whatever happens.
+"""The batch runner: designs on a local process pool or a Dask cluster, one outcome each, whatever
+happens.
 
 One loop (:func:`run_tasks`) drives any executor with the ``concurrent.futures`` shape
 (``submit`` / futures / ``shutdown``): :class:`LocalPool` on this machine, or
@@ -69,11 +70,13 @@ _WORKER_STOP_S = 5.0  #: how long a stopped worker may take to exit before pebbl
 
 
 class BatchError(TorusCadError):
-    """The batch machinery failed (the pool's workers cannot start, the Dask scheduler is unreachable)."""
+    """The batch machinery failed (the pool's workers cannot start, the Dask scheduler is
+    unreachable)."""
 
 
 class Interrupted(KeyboardInterrupt):
-    """SIGINT, SIGTERM or SIGHUP arrived during a batch; ``signum`` says which (exit code 128 + signum)."""
+    """SIGINT, SIGTERM or SIGHUP arrived during a batch; ``signum`` says which (exit code 128 +
+    signum)."""
 
     def __init__(self, signum: int) -> None:
         super().__init__(f"interrupted by {signal.Signals(signum).name}")
@@ -115,8 +118,8 @@ def capped_workers(
     oversubscribe: bool = False,
     warn: Callable[[str], None] | None = None,
 ) -> int:
-    """Worker processes to start for ``tasks`` designs: ``requested`` (default: one per core), never more
-    than the tasks, and never more than the available cores unless ``oversubscribe``.
+    """Worker processes to start for ``tasks`` designs: ``requested`` (default: one per core), never
+    more than the tasks, and never more than the available cores unless ``oversubscribe``.
 
     ``warn`` gets one line when the request is capped at the cores (a process per design of a large
     sweep would only thrash the machine).
@@ -138,7 +141,8 @@ def capped_workers(
 
 
 def _worker_started(batch_pid: int) -> None:
-    """Initialiser of every local worker: die with the batch's process; SIGTERM ends the worker at once.
+    """Initialiser of every local worker: die with the batch's process; SIGTERM ends the worker at
+    once.
 
     A worker's parent is the fork server, which lives as long as any worker does (each holds
     its lifeline), so two guards: the kernel's parent-death signal for when the fork server
@@ -160,7 +164,8 @@ def _worker_started(batch_pid: int) -> None:
 
 
 def _watch_parents(worker_parent: int, batch_pid: int, batch_identity: str | None) -> None:
-    """SIGKILL this worker once its parent changed or the batch's process is no longer the one it was."""
+    """SIGKILL this worker once its parent changed or the batch's process is no longer the one it
+    was."""
     while True:
         time.sleep(_WATCHDOG_SECONDS)
         if os.getppid() != worker_parent or process_identity(batch_pid) != batch_identity:
@@ -168,11 +173,13 @@ def _watch_parents(worker_parent: int, batch_pid: int, batch_identity: str | Non
 
 
 class LocalPool:
-    """A local process pool with a per-design time limit, behind the shape of a concurrent.futures executor.
+    """A local process pool with a per-design time limit, behind the shape of a concurrent.futures
+    executor.
 
     Args:
         workers: worker processes.
-        time_limit_s: wall-clock limit per design, s (None: none); counted from when a worker starts it.
+        time_limit_s: wall-clock limit per design, s (None: none); counted from when a worker starts
+            it.
     """
 
     def __init__(self, workers: int, time_limit_s: float | None = None) -> None:
@@ -188,7 +195,8 @@ class LocalPool:
         )
 
     def submit(self, fn: Callable[..., Any], /, *args: Any) -> Future[Any]:
-        """Run ``fn(*args)`` in a worker; its future raises TimeoutError past the limit, ProcessExpired on a crash."""
+        """Run ``fn(*args)`` in a worker; its future raises TimeoutError past the limit,
+        ProcessExpired on a crash."""
         try:
             return self._pool.schedule(fn, args=args, timeout=self.time_limit_s)
         # pebble: "Unexpected error within the Pool" once it is broken
@@ -196,7 +204,8 @@ class LocalPool:
             raise BrokenProcessPool(str(error)) from error
 
     def shutdown(self, wait: bool = True) -> None:
-        """``wait``: let the queued designs finish; otherwise stop the workers now (their designs are lost)."""
+        """``wait``: let the queued designs finish; otherwise stop the workers now (their designs
+        are lost)."""
         if wait:
             self._pool.close()
         else:
@@ -205,10 +214,10 @@ class LocalPool:
         self._pool.join()
 
     def _stop_workers(self) -> None:
-        """Stop the workers before pebble's ``join`` does: it removes the pool's semaphores first, and a
-        worker still starting (reading its start-up data from the fork server) then fails to open them
-        with a FileNotFoundError traceback. Uses pebble 5's internals (constraints.txt pins it); where
-        they differ, pebble's own order is kept."""
+        """Stop the workers before pebble's ``join`` does: it removes the pool's semaphores first,
+        and a worker still starting (reading its start-up data from the fork server) then fails to
+        open them with a FileNotFoundError traceback. Uses pebble 5's internals (constraints.txt
+        pins it); where they differ, pebble's own order is kept."""
         # private: pebble has no public way to stop its workers before join; read as of
         # Pebble==5.2.3 (constraints.txt)
         manager = getattr(getattr(self._pool, "_pool_manager", None), "worker_manager", None)
@@ -228,7 +237,8 @@ class LocalPool:
 
 
 def _worker_context() -> Any:
-    """The fork server (kernel imported once, no fork of a threaded process); spawn where there is none."""
+    """The fork server (kernel imported once, no fork of a threaded process); spawn where there is
+    none."""
     if "forkserver" not in multiprocessing.get_all_start_methods():  # pragma: no cover - Windows
         return multiprocessing.get_context("spawn")
     context = multiprocessing.get_context("forkserver")
@@ -241,7 +251,8 @@ def _worker_context() -> Any:
 
 
 class _Latch:
-    """The first signal of an :func:`interrupts_raised` block, until :func:`raise_if_interrupted` raises it."""
+    """The first signal of an :func:`interrupts_raised` block, until :func:`raise_if_interrupted`
+    raises it."""
 
     def __init__(self) -> None:
         self.signum: int | None = None
@@ -255,8 +266,9 @@ _latches: list[_Latch] = []  #: the open interrupts_raised blocks of the main th
 def interrupts_raised(
     signals: Iterable[int] = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP),
 ) -> Iterator[None]:
-    """Within the block, the first SIGINT, SIGTERM or SIGHUP is recorded, and :func:`raise_if_interrupted`
-    raises it as :class:`Interrupted` at the caller's next safe point; later signals are ignored.
+    """Within the block, the first SIGINT, SIGTERM or SIGHUP is recorded, and
+    :func:`raise_if_interrupted` raises it as :class:`Interrupted` at the caller's next safe point;
+    later signals are ignored.
 
     The handler itself never raises: an exception injected between two arbitrary bytecodes can
     land inside an import (leaving a half-initialised extension module: "initialization
@@ -297,8 +309,9 @@ def interrupts_raised(
 
 
 def raise_if_interrupted() -> None:
-    """Raise :class:`Interrupted` if a signal arrived within the innermost :func:`interrupts_raised` block
-    and has not been raised yet (once: the cleanup it starts runs without further interrupts)."""
+    """Raise :class:`Interrupted` if a signal arrived within the innermost :func:`interrupts_raised`
+    block and has not been raised yet (once: the cleanup it starts runs without further
+    interrupts)."""
     if not _latches or threading.current_thread() is not threading.main_thread():
         return
     latch = _latches[-1]
@@ -312,7 +325,8 @@ def raise_if_interrupted() -> None:
 
 
 def _result_of(future: Future[Any], task: DesignTask, check_visible: bool) -> DesignResult:
-    """The design's result, or the outcome the executor's exception stands for (recorded in its folder)."""
+    """The design's result, or the outcome the executor's exception stands for (recorded in its
+    folder)."""
     error = future.exception()
     if error is not None:
         result = _failure(error, task.design_id)
@@ -335,7 +349,8 @@ def _result_of(future: Future[Any], task: DesignTask, check_visible: bool) -> De
 
 
 def _failure(error: BaseException, design_id: str) -> DesignResult:
-    """The outcome of a design whose future failed: pebble's time-out or dead worker, Dask's killed worker."""
+    """The outcome of a design whose future failed: pebble's time-out or dead worker, Dask's killed
+    worker."""
     if isinstance(error, TimeoutError):
         limit = error.args[1] if len(error.args) > 1 else "?"
         return DesignResult(
@@ -364,14 +379,15 @@ def run_tasks(
     job: Job | None = None,
     check_visible: bool = False,
 ) -> None:
-    """Run ``tasks`` on executors from ``make_executor``, calling ``on_result`` as each one finishes.
+    """Run ``tasks`` on executors from ``make_executor``, calling ``on_result`` as each one
+    finishes.
 
     Args:
         tasks: the designs to run; taken from the iterable only when a slot is free, so a
             generator may decide each next task from the results so far (an optimiser does).
         on_result: called in this thread with each task and its result, in finishing order; tasks
-            found finished at the same poll in the order they were submitted (an optimiser's pruner then
-            judges a trial after the ones asked before it, however busy the machine).
+            found finished at the same poll in the order they were submitted (an optimiser's pruner
+            then judges a trial after the ones asked before it, however busy the machine).
         make_executor: makes the executor (again, when a local pool breaks).
         window: most tasks in flight (None: submit all at once, for Dask's scheduler).
         job: the function a worker runs per task (default :func:`run_design`); any top-level
@@ -436,7 +452,8 @@ def run_tasks(
 
 
 def _refilled(queue: deque[DesignTask], source: Iterator[DesignTask]) -> bool:
-    """Whether a task is waiting in ``queue``, taking the next one from ``source`` if it is empty."""
+    """Whether a task is waiting in ``queue``, taking the next one from ``source`` if it is
+    empty."""
     if not queue:
         task = next(source, None)
         if task is not None:

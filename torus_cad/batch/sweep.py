@@ -63,13 +63,16 @@ class SweepResult:
         spec: the sweep.
         out_dir: its output folder.
         designs: every design, in order.
-        rows: the results table, one dict per design (see :func:`torus_cad.batch.table.collect_rows`).
-        tables: the written table files by format (``csv``, and ``parquet`` when pyarrow is present).
+        rows: the results table, one dict per design (see
+            :func:`torus_cad.batch.table.collect_rows`).
+        tables: the written table files by format (``csv``, and ``parquet`` when pyarrow is
+            present).
         skipped: designs already done before this run.
         built: designs run in this run.
         seconds: wall time of this run, s.
         backend: ``"local pool, N workers"`` or ``"dask: ADDRESS, ..."``.
-        interrupted_by: the signal's name (``"SIGINT"``, ``"SIGTERM"``) when the run was stopped, else ''.
+        interrupted_by: the signal's name (``"SIGINT"``, ``"SIGTERM"``) when the run was stopped,
+            else ''.
     """
 
     spec: SweepSpec
@@ -110,8 +113,9 @@ class SweepResult:
         return sum(1 for row in self.rows if row.get("prescreened"))
 
     def counts_text(self) -> str:
-        """``"9 valid, 1 refused, 0 failed, 0 errors"``, any other outcome that occurred, and how many of the
-        refused were pre-screened (``"; 1 refused before the kernel (pre-screened)"``)."""
+        """``"9 valid, 1 refused, 0 failed, 0 errors"``, any other outcome that occurred, and how
+        many of the refused were pre-screened (``"; 1 refused before the kernel
+        (pre-screened)"``)."""
         counts = self.counts()
         text = (
             f"{counts[Outcome.VALID]} valid, {counts[Outcome.REFUSED]} refused, {counts[Outcome.FAILED]} failed, "
@@ -155,7 +159,8 @@ class SweepResult:
 
 
 class SweepInterrupted(Interrupted):
-    """SIGINT or SIGTERM during :func:`run_sweep`; ``result`` is the partial run (its table is written)."""
+    """SIGINT or SIGTERM during :func:`run_sweep`; ``result`` is the partial run (its table is
+    written)."""
 
     def __init__(self, signum: int, result: SweepResult) -> None:
         super().__init__(signum)
@@ -193,7 +198,8 @@ def run_sweep(
         spec: the sweep (see :func:`torus_cad.batch.sweep_file.load_sweep`).
         out_dir: output folder; ``designs/<id>/`` per design, ``results.csv``, ``sweep.json``.
         workers: local processes (default: one per available core; more than the cores are capped at
-            them, with one line on ``stream``, unless ``oversubscribe``); ignored with a scheduler or client.
+            them, with one line on ``stream``, unless ``oversubscribe``); ignored with a scheduler
+            or client.
         scheduler: a Dask scheduler address (``"tcp://host:8786"``), or ``"local"`` for a
             LocalCluster of ``workers`` single-threaded processes on this machine.
         client: an existing ``dask.distributed.Client`` to use instead of ``scheduler``.
@@ -349,8 +355,9 @@ def _run(
 def _prescreened(
     tasks: Iterable[DesignTask], on_result: Callable[[DesignTask, DesignResult], None]
 ) -> Iterator[DesignTask]:
-    """The tasks that pass the kernel-free checks (:func:`torus_cad.batch.job.prescreen`), taken one at a time
-    as workers free up; the others' refusals go to ``on_result`` at once, without a worker."""
+    """The tasks that pass the kernel-free checks (:func:`torus_cad.batch.job.prescreen`), taken one
+    at a time as workers free up; the others' refusals go to ``on_result`` at once, without a
+    worker."""
     for task in tasks:
         refusal = prescreen(task)
         if refusal is None:
@@ -373,7 +380,8 @@ def _write_manifest(
     stl: bool,
     density_g_cm3: float | None,
 ) -> None:
-    """``sweep.json``: the sweep's settings and every design's id and varied values (strict JSON: no NaN)."""
+    """``sweep.json``: the sweep's settings and every design's id and varied values (strict JSON: no
+    NaN)."""
     from torus_cad.runtime.files import atomic_path
 
     manifest = {

@@ -22,8 +22,8 @@
     blades = {start = 2, stop = 4, step = 1}       # a range, stop included (any mode)
     "centerline.p2[2]" = {low = 18.0, high = 26.0} # bounds (random / latin_hypercube only)
 
-The [sweep] table is a pydantic model (:class:`SweepTable`), like the parameters. Everything is checked
-here, before any design is generated: keys, types, finite values, and
+The [sweep] table is a pydantic model (:class:`SweepTable`), like the parameters. Everything is
+checked here, before any design is generated: keys, types, finite values, and
 the number of designs against :data:`torus_cad.batch.sweep_file.MAX_SWEEP_DESIGNS`, estimated
 from the axis sizes without listing them. Every problem is a one-line ParameterError that
 names the key (exit code 2 at the command line).
@@ -112,7 +112,8 @@ class VaryAxis:
         values: the candidate values of a list or range (empty for bounds).
         low, high: the bounds for random / Latin-hypercube sampling (None for lists and ranges),
             in the parameter's unit (mm, degrees, ...).
-        integer: True when the parameter is a whole number (bounds then give ints, ``high`` included).
+        integer: True when the parameter is a whole number (bounds then give ints, ``high``
+            included).
     """
 
     key: str
@@ -192,8 +193,9 @@ def load_sweep(path: str | Path) -> SweepSpec:
 def parse_sweep(
     data: Mapping[str, Any], base_dir: str | Path = ".", name: str = "sweep", source: str = "sweep"
 ) -> SweepSpec:
-    """Check a sweep given as a mapping (the parsed TOML); ``base.config`` and file paths in the design
-    (``airfoil.file``, inline or varied) are relative to ``base_dir``, the sweep file's folder."""
+    """Check a sweep given as a mapping (the parsed TOML); ``base.config`` and file paths in the
+    design (``airfoil.file``, inline or varied) are relative to ``base_dir``, the sweep file's
+    folder."""
 
     def fail(message: str) -> ParameterError:
         return ParameterError(f"{source}: {message}")
@@ -331,7 +333,8 @@ def axis_paths_relative_to(axis: VaryAxis, folder: Path) -> VaryAxis:
     by the rule of a design file (:meth:`PropellerParameters.paths_relative_to`).
 
     Args:
-        axis: a varied parameter with its values (a vector element or bounds are returned as they are).
+        axis: a varied parameter with its values (a vector element or bounds are returned as they
+            are).
         folder: the folder of the file that gave the values.
 
     Returns:
@@ -433,7 +436,8 @@ def resolve_leaf(key: str, fail: Fail) -> tuple[tuple[str, ...], int | None, Lea
         fail: makes the error raised for a key that names no parameter that can be varied.
 
     Returns:
-        ``(path, index, leaf)``: the table path, the vector element (None for a whole parameter) and what the
+        ``(path, index, leaf)``: the table path, the vector element (None for a whole parameter) and
+            what the
         schema declares for it.
     """
     where = f"vary.{shown(key)}"
@@ -516,7 +520,8 @@ def _parse_axis(key: str, spec: Any, mode: SweepMode, fail: Fail) -> VaryAxis:
 def _range_values(
     spec: Mapping[str, Any], start: Any, stop: Any, leaf: Leaf, where: str, fail: Fail
 ) -> tuple[Any, ...]:
-    """The values of ``{start, stop, step}`` (stop included when it falls on a step) or ``{start, stop, num}``.
+    """The values of ``{start, stop, step}`` (stop included when it falls on a step) or ``{start,
+    stop, num}``.
 
     The number of values is checked against the budget before any value is made; ``start``
     and ``stop`` are in range, so every value between them is.
@@ -561,7 +566,8 @@ def checked_value(item: Any, leaf: Leaf, where: str, fail: Fail) -> Any:
         fail: makes the error raised for a value of the wrong type, out of range or not a choice.
 
     Returns:
-        The value as the parameter's type (an int as float for a float parameter, a vector as a list).
+        The value as the parameter's type (an int as float for a float parameter, a vector as a
+            list).
     """
     value = _checked_type(item, leaf, where, fail)
     if leaf.choices:
@@ -581,7 +587,8 @@ def checked_value(item: Any, leaf: Leaf, where: str, fail: Fail) -> Any:
 
 
 def _checked_type(item: Any, leaf: Leaf, where: str, fail: Fail) -> Any:
-    """``item`` as the parameter's type: ints stay ints, ints become floats for float keys, no NaN or inf."""
+    """``item`` as the parameter's type: ints stay ints, ints become floats for float keys, no NaN
+    or inf."""
     if leaf.kind is bool:
         if not isinstance(item, bool):
             raise fail(f"{where} must be true or false, got {shown(item)}")

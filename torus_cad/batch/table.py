@@ -52,8 +52,8 @@ _PROPERTY_COLUMNS = (
 
 
 def table_columns(varied_keys: Sequence[str]) -> list[str]:
-    """The columns: id and status (``prescreened``: refused before any worker built it), the varied keys, mass
-    properties, stage times (s), folder."""
+    """The columns: id and status (``prescreened``: refused before any worker built it), the varied
+    keys, mass properties, stage times (s), folder."""
     return (
         ["index", "id", "status", "valid", "reason", "prescreened"]
         + list(varied_keys)
@@ -132,7 +132,8 @@ def _fill_recorded(row: dict[str, Any], outcome: Outcome, record: Mapping[str, A
 def write_table(
     rows: Sequence[Mapping[str, Any]], out_dir: str | Path, columns: Sequence[str] | None = None
 ) -> dict[str, Path]:
-    """Write ``results.csv`` (and ``results.parquet`` when pyarrow is installed) atomically; paths by format."""
+    """Write ``results.csv`` (and ``results.parquet`` when pyarrow is installed) atomically; paths
+    by format."""
     from torus_cad.runtime.files import atomic_path
 
     out_dir = Path(out_dir)

@@ -76,7 +76,8 @@ ALGORITHM_2D, ALGORITHM_3D = 6, 1
 
 
 def import_gmsh() -> Any:
-    """The gmsh module, or MissingExtraError naming the extra (and the system libraries it needs)."""
+    """The gmsh module, or MissingExtraError naming the extra (and the system libraries it
+    needs)."""
     from torus_cad.runtime.extras import install_line, missing_extra_message
 
     try:
@@ -104,7 +105,8 @@ class CfdStage(StrEnum):
 
 @contextmanager
 def gmsh_session(gmsh: Any, threads: int) -> Iterator[None]:
-    """gmsh initialised quietly for one model; finalised afterwards (unless the caller had it running)."""
+    """gmsh initialised quietly for one model; finalised afterwards (unless the caller had it
+    running)."""
     owner = not gmsh.isInitialized()
     if owner:
         gmsh.initialize(
@@ -124,12 +126,14 @@ def gmsh_session(gmsh: Any, threads: int) -> Iterator[None]:
 
 @contextmanager
 def gmsh_library(gmsh: Any) -> Iterator[None]:
-    """gmsh initialised by the main thread for the block (a :func:`gmsh_session` inside then uses it).
+    """gmsh initialised by the main thread for the block (a :func:`gmsh_session` inside then uses
+    it).
 
     gmsh's initialize and finalize put the default handlers of SIGTERM and its kin back at the C
     level (Python still reports its own): here Python's handlers are set again after each, so a
-    signal during meshing still ends the command with one line (torus_cad.runtime.interrupts). Only the
-    main thread can do that; call this there, and mesh in a worker (torus_cad.cfd_domain.interruptible)."""
+    signal during meshing still ends the command with one line (torus_cad.runtime.interrupts). Only
+    the main thread can do that; call this there, and mesh in a worker
+    (torus_cad.cfd_domain.interruptible)."""
     gmsh.initialize(readConfigFiles=False, interruptible=False)
     _reassert_signal_handlers()
     try:
@@ -172,7 +176,8 @@ class DomainEntities:
 
 
 def build_domain(gmsh: Any, step_path: Path, domain: Domain) -> DomainEntities:
-    """Import the propeller, add the two cylinders, fragment, drop the propeller's volume, find the groups."""
+    """Import the propeller, add the two cylinders, fragment, drop the propeller's volume, find the
+    groups."""
     occ = gmsh.model.occ
     with gmsh_step("import the propeller STEP"):
         imported = occ.importShapes(str(step_path))
@@ -243,8 +248,9 @@ def _boundary(gmsh: Any, volumes: set[int]) -> set[int]:
 def _trailing_edge_field(
     gmsh: Any, edges: TrailingEdges, domain: Domain, growth_rate: float
 ) -> int:
-    """A size field around the trailing edges: ``TRAILING_EDGE_SIZE_PER_THICKNESS`` x their thickness
-    (at least MIN_SIZE_FRACTION of the surface size) on them, growing by ``growth_rate`` away.
+    """A size field around the trailing edges: ``TRAILING_EDGE_SIZE_PER_THICKNESS`` x their
+    thickness (at least MIN_SIZE_FRACTION of the surface size) on them, growing by ``growth_rate``
+    away.
 
     The edges are added to the model as free splines (in no physical group, not written), only for
     gmsh's distance field."""
@@ -274,9 +280,9 @@ def set_sizes(
     edges: TrailingEdges | None = None,
 ) -> int:
     """Element sizes: ``surface_size`` on the propeller growing linearly with the distance from it
-    (neighbours differ by about ``growth_rate``), capped at ``far_size``; on the two cylinders at most
-    1/CYLINDER_SEGMENTS of their circumference (so their facets keep the volumes within ~0.1 %);
-    curvature refinement on top; around the trailing ``edges`` (if given) sizes scaled to their
+    (neighbours differ by about ``growth_rate``), capped at ``far_size``; on the two cylinders at
+    most 1/CYLINDER_SEGMENTS of their circumference (so their facets keep the volumes within ~0.1
+    %); curvature refinement on top; around the trailing ``edges`` (if given) sizes scaled to their
     thickness (:func:`_trailing_edge_field`). Returns the background field's tag.
 
     The edges are needed only without curvature refinement: with it, gmsh already gives the
@@ -325,7 +331,8 @@ def set_sizes(
 
 @dataclass
 class SurfaceRefinement:
-    """What :func:`mesh_surfaces` did: rounds of local refinement and the crossing triangles each found."""
+    """What :func:`mesh_surfaces` did: rounds of local refinement and the crossing triangles each
+    found."""
 
     rounds: int = 0
     crossing_triangles: list[int] = field(default_factory=list)
@@ -463,14 +470,17 @@ MSH_LAST_LINE = b"$EndElements"
 
 @dataclass(frozen=True)
 class PropellerBody:
-    """What the fluid domain starts from: a propeller solid whose spin axis is +z through the origin (mm).
+    """What the fluid domain starts from: a propeller solid whose spin axis is +z through the origin
+    (mm).
 
     Attributes:
         solid: the one valid solid (a cadquery Shape).
         name: names the files (``<name>_cfd.*``) and the STEP product.
         tip_diameter_mm: D, twice the largest distance of the solid from the axis.
-        chord_mm: the smallest chord, which sets the element size on the propeller (``chord / cells_per_chord``).
-        trailing_edges: lines for the trailing-edge size field (used when curvature sizing is off), or None.
+        chord_mm: the smallest chord, which sets the element size on the propeller (``chord /
+            cells_per_chord``).
+        trailing_edges: lines for the trailing-edge size field (used when curvature sizing is off),
+            or None.
         blades: the blade count for the report, or None if unknown.
         step_schema: the protocol of the STEP the domain writes.
     """
@@ -485,7 +495,8 @@ class PropellerBody:
 
 
 def design_body(params: PropellerParameters) -> PropellerBody:
-    """The built B-rep of ``params`` as a :class:`PropellerBody` (the analytic tip radius and smallest chord)."""
+    """The built B-rep of ``params`` as a :class:`PropellerBody` (the analytic tip radius and
+    smallest chord)."""
     from torus_cad.cfd_domain.sizes import smallest_chord, tip_radius
     from torus_cad.propeller import build_propeller
 
@@ -508,8 +519,9 @@ def write_cfd_domain(
     progress: Callable[[str], None] | None = None,
     estimate: CfdEstimate | None = None,
 ) -> tuple[dict[str, Any], dict[str, Path]]:
-    """Build the B-rep of ``params`` and mesh its domain (:func:`write_body_domain` with ``params.cfd``);
-    ``estimate``: the budget's, if already checked (else checked here: BudgetError over the element budget).
+    """Build the B-rep of ``params`` and mesh its domain (:func:`write_body_domain` with
+    ``params.cfd``); ``estimate``: the budget's, if already checked (else checked here: BudgetError
+    over the element budget).
 
     Raises MissingExtraError without gmsh or meshlib, BudgetError over the element budget,
     ParameterError / GeometryError for bad input (nothing written), KernelError naming the step when
@@ -540,14 +552,14 @@ def write_body_domain(
     timer: StageTimer[CfdStage] | None = None,
     started: tuple[float, float] | None = None,
 ) -> tuple[dict[str, Any], dict[str, Path]]:
-    """The domain of ``settings`` around ``body`` and its mesh (gmsh with ``threads`` threads, 0 = one
-    per CPU; one thread gives the same mesh on every run, see
+    """The domain of ``settings`` around ``body`` and its mesh (gmsh with ``threads`` threads, 0 =
+    one per CPU; one thread gives the same mesh on every run, see
     :data:`torus_cad.tolerances.GMSH_REPRODUCIBLE_THREADS`); publish ``<name>_cfd.step``,
-    ``<name>_cfd.msh``, ``<name>_cfd_v2.msh``, ``README.txt`` and the sealed report ``<name>_cfd.json``
-    as one output set (torus_cad.outputs.output_set). ``estimate`` (if any) goes into the report;
-    ``timer`` times the stages (and reports them to its progress callback); ``started``: the CPU and wall
-    clock (time.process_time, time.perf_counter) the report's seconds count from (default: now). Returns the report as
-    written and the final paths (the report last).
+    ``<name>_cfd.msh``, ``<name>_cfd_v2.msh``, ``README.txt`` and the sealed report
+    ``<name>_cfd.json`` as one output set (torus_cad.outputs.output_set). ``estimate`` (if any) goes
+    into the report; ``timer`` times the stages (and reports them to its progress callback);
+    ``started``: the CPU and wall clock (time.process_time, time.perf_counter) the report's seconds
+    count from (default: now). Returns the report as written and the final paths (the report last).
     """
     from torus_cad import __version__
     from torus_cad.kernel.mass_properties import precise_volume

@@ -1,13 +1,14 @@
-"""How many tetrahedra, and how much memory, ``torus-cad cfd`` will need: from the settings, before any meshing.
+"""How many tetrahedra, and how much memory, ``torus-cad cfd`` will need: from the settings, before
+any meshing.
 
-The mesh follows the size field of :func:`torus_cad.cfd_domain.domain.set_sizes`: ``h(x) = min(far_size,
-h_s + (growth_rate - 1) d(x))`` with ``d`` the distance from the propeller and ``h_s`` the size on
-its surface (``surface_size``, smaller where the surface curves when ``curvature_cells`` is on). A
-tetrahedral mesh of that field has about ``∫ dV / h³`` elements times a constant, and its surfaces
-add triangles ``∫ dA / h²`` that each bring a few more. Both integrals are taken numerically
-(no kernel, no gmsh): the propeller as a cloud of analytic surface points (blades and hub, with
-outward normals, each carrying its own ``h_s``), the domain sampled at random points (a fixed
-seed) whose distance to the cloud comes from a k-d tree; without curvature sizing the trailing
+The mesh follows the size field of :func:`torus_cad.cfd_domain.domain.set_sizes`: ``h(x) =
+min(far_size, h_s + (growth_rate - 1) d(x))`` with ``d`` the distance from the propeller and ``h_s``
+the size on its surface (``surface_size``, smaller where the surface curves when ``curvature_cells``
+is on). A tetrahedral mesh of that field has about ``∫ dV / h³`` elements times a constant, and its
+surfaces add triangles ``∫ dA / h²`` that each bring a few more. Both integrals are taken
+numerically (no kernel, no gmsh): the propeller as a cloud of analytic surface points (blades and
+hub, with outward normals, each carrying its own ``h_s``), the domain sampled at random points (a
+fixed seed) whose distance to the cloud comes from a k-d tree; without curvature sizing the trailing
 edges' own size field adds a band around them (closed form). The two constants, and the memory
 per element, are fitted to measured runs (``scripts/cfd_budget.py``): within 0.8x to 1.15x of
 the real count on the default design at four settings; the shipped examples at their own ``[cfd]``
@@ -81,7 +82,8 @@ class CfdEstimate:
     wall_seconds: float
 
     def line(self) -> str:
-        """One line for the terminal: the count with the factor it is within, the memory and the time."""
+        """One line for the terminal: the count with the factor it is within, the memory and the
+        time."""
         low, high = (round(factor * self.tetrahedra, -3) for factor in REAL_OVER_ESTIMATE)
         return (
             f"estimate: about {self.tetrahedra:,} tetrahedra (real counts {REAL_OVER_ESTIMATE[0]:g}x to "
@@ -106,7 +108,8 @@ def _duration(seconds: float) -> str:
 
 
 def _section_curvature(points: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Curvature (1/mm) of each point of ``(sections, points, 3)`` closed rows, from its two neighbours."""
+    """Curvature (1/mm) of each point of ``(sections, points, 3)`` closed rows, from its two
+    neighbours."""
     before, after = np.roll(points, 1, axis=1), np.roll(points, -1, axis=1)
     a, b, c = (
         np.linalg.norm(u - v, axis=-1)
@@ -258,9 +261,10 @@ def size_integrals(params: PropellerParameters) -> tuple[float, int]:
 def _trailing_edge_band(
     edges: TrailingEdges, edge_size: float, surface_size: float, growth: float
 ) -> tuple[float, int]:
-    """``∫ dV / h³`` and the triangles added around the trailing ``edges`` by sizes ``h = edge_size +
-    growth r`` at a distance ``r`` from edges of total length ``L``, up to the surface size, on the two
-    faces that meet there (triangles) and in the half space beside them (volume)."""
+    """``∫ dV / h³`` and the triangles added around the trailing ``edges`` by sizes ``h =
+    edge_size + growth r`` at a distance ``r`` from edges of total length ``L``, up to the surface
+    size, on the two faces that meet there (triangles) and in the half space beside them
+    (volume)."""
     length = sum(
         float(np.linalg.norm(np.diff(curve, axis=0), axis=1).sum()) for curve in edges.curves_mm
     )
@@ -279,7 +283,8 @@ def _surface_triangles(
     blade_count: int,
     segments: int,
 ) -> int:
-    """Triangles on the propeller (its area over its local sizes) and on the cylinders (their caps' sizes)."""
+    """Triangles on the propeller (its area over its local sizes) and on the cylinders (their caps'
+    sizes)."""
     grid = blade_points.reshape(params.blades, *CLOUD_GRID, 3)
     along = np.linalg.norm(np.gradient(grid, axis=1), axis=-1)
     around = np.linalg.norm(np.roll(grid, -1, axis=2) - grid, axis=-1)
@@ -304,9 +309,10 @@ def _surface_triangles(
 def over_limit_error(
     mesh: str, count: int, unit: str, needs: str, limit: int, advice: str
 ) -> BudgetError:
-    """The BudgetError (exit 2) of a mesh estimated over its limit: ``mesh`` would have about ``count`` ``unit``
-    (cells, tetrahedra) and need ``needs`` (memory, time, the settings that set it), over ``limit`` ``unit``;
-    ``advice`` says what lowers it. ``cfd`` and ``simulate --step`` refuse with it."""
+    """The BudgetError (exit 2) of a mesh estimated over its limit: ``mesh`` would have about
+    ``count`` ``unit`` (cells, tetrahedra) and need ``needs`` (memory, time, the settings that set
+    it), over ``limit`` ``unit``; ``advice`` says what lowers it. ``cfd`` and ``simulate --step``
+    refuse with it."""
     return BudgetError(
         f"{mesh} would have about {count:,} {unit} and need about {needs}, over the limit of "
         f"{limit:,} {unit}; {advice}"
@@ -314,8 +320,8 @@ def over_limit_error(
 
 
 def check_cfd_budget(params: PropellerParameters, limit: int = CFD_TETRAHEDRA_LIMIT) -> CfdEstimate:
-    """The CFD mesh's estimate, or BudgetError (exit 2) naming it, the sizes that set it and the limit
-    when its tetrahedra are over ``limit``."""
+    """The CFD mesh's estimate, or BudgetError (exit 2) naming it, the sizes that set it and the
+    limit when its tetrahedra are over ``limit``."""
     estimate = estimate_cfd_mesh(params)
     if estimate.tetrahedra > limit:
         cfd = params.cfd

@@ -3,8 +3,8 @@
 Python runs signal handlers in the main thread, between bytecodes: during one long gmsh call
 (a volume mesh takes minutes) a SIGTERM would wait for the call to return. gmsh's Python API
 calls its library through ctypes, which releases the GIL, so with the work in a worker thread
-the main thread, waiting on it, runs torus_cad.runtime.interrupts' handler at once: it removes the staged
-files and ends the process (``os._exit``, which ends the worker too).
+the main thread, waiting on it, runs torus_cad.runtime.interrupts' handler at once: it removes the
+staged files and ends the process (``os._exit``, which ends the worker too).
 """
 
 from __future__ import annotations
@@ -20,8 +20,9 @@ _POLL_S = 0.5
 
 
 def run_in_worker(work: Callable[[], T], on_wait: Callable[[], None] | None = None) -> T:
-    """``work()``'s result, computed in a worker thread while this thread waits (calling ``on_wait``, if
-    given, every :data:`_POLL_S` seconds: a progress heartbeat); its exception re-raised here."""
+    """``work()``'s result, computed in a worker thread while this thread waits (calling
+    ``on_wait``, if given, every :data:`_POLL_S` seconds: a progress heartbeat); its exception
+    re-raised here."""
     outcome: dict[str, Any] = {}
 
     def target() -> None:

@@ -90,8 +90,8 @@ BLOCK_BEGIN, BLOCK_END = "  BEGIN", "  END"
 
 
 def readme_text(name: str, report: dict[str, Any]) -> str:
-    """The README.txt for a CFD mesh, from its report (see ``cfd.domain.write_cfd_domain``); it names
-    no absolute path, so the folder can move."""
+    """The README.txt for a CFD mesh, from its report (see ``cfd.domain.write_cfd_domain``); it
+    names no absolute path, so the folder can move."""
     domain = report["domain_mm"]
     return _TEMPLATE.format(
         name=name,

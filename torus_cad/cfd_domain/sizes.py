@@ -32,7 +32,8 @@ class Domain:
     Attributes:
         tip_diameter: D, twice the largest distance of the blade surface from the axis.
         propeller_z: (low, high) axial extent of the propeller.
-        outer_radius, outer_z: the outer cylinder; inlet at one end of ``outer_z``, outlet at the other.
+        outer_radius, outer_z: the outer cylinder; inlet at one end of ``outer_z``, outlet at the
+            other.
         zone_radius, zone_z: the rotating-zone cylinder.
         inlet_z, outlet_z: axial positions of the inlet and outlet caps.
         surface_size: element size on the propeller (smallest chord / cells_per_chord).
@@ -66,13 +67,15 @@ TIP_RADIUS_GRID = (201, 200)
 
 
 def tip_radius(params: PropellerParameters) -> float:
-    """Largest distance of the blade surface from the spin axis, mm (analytic surface, sampled densely)."""
+    """Largest distance of the blade surface from the spin axis, mm (analytic surface, sampled
+    densely)."""
     points = params.blade_surface(0, *TIP_RADIUS_GRID).points
     return float(max(np.hypot(points[..., 0], points[..., 1]).max(), params.hub.radius))
 
 
 def smallest_chord(params: PropellerParameters) -> float:
-    """Smallest chord over the blade, mm: Sx(s) of a toroidal blade, c(r) of a conventional one (root blend included)."""
+    """Smallest chord over the blade, mm: Sx(s) of a toroidal blade, c(r) of a conventional one
+    (root blend included)."""
     if params.kind == DesignKind.CONVENTIONAL:
         blade = params.conventional_blade()
         return float(blade.chord_mm(blade.section_radii_mm(201)[1]).min())
@@ -94,7 +97,8 @@ def domain_from_sizes(
     diameter: float, chord: float, settings: Cfd, propeller_z: tuple[float, float]
 ) -> Domain:
     """The domain's sizes for a propeller of tip diameter ``diameter`` (mm) whose smallest chord is
-    ``chord`` (mm; sets the surface size, ``chord / cells_per_chord``), spanning ``propeller_z`` (mm) along +z."""
+    ``chord`` (mm; sets the surface size, ``chord / cells_per_chord``), spanning ``propeller_z``
+    (mm) along +z."""
     centre = 0.5 * (propeller_z[0] + propeller_z[1])
     clearance = settings.zone_clearance * diameter
     zone_z = (propeller_z[0] - clearance, propeller_z[1] + clearance)
@@ -138,7 +142,8 @@ class TrailingEdges:
 
 
 def trailing_edges(params: PropellerParameters) -> TrailingEdges:
-    """The trailing edges of every blade of ``params`` from the analytic surface (mirrored for 'ccw')."""
+    """The trailing edges of every blade of ``params`` from the analytic surface (mirrored for
+    'ccw')."""
     curves = []
     for index in range(params.blades):
         surface = params.blade_surface(index, sections=TRAILING_EDGE_SECTIONS)

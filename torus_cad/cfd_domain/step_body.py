@@ -1,17 +1,19 @@
-"""A user's own propeller from a STEP file, as a :class:`~torus_cad.cfd_domain.domain.PropellerBody` (``simulate --step``).
+"""A user's own propeller from a STEP file, as a :class:`~torus_cad.cfd_domain.domain.PropellerBody`
+(``simulate --step``).
 
-The file is untrusted input: it is read by :func:`torus_cad.runtime.input_files.read_untrusted_bytes`
-(a regular file, at most ``STEP_FILE_MAX_BYTES``), must start with the STEP header
-``ISO-10303-21;``, must hold exactly one solid, and that solid must pass OpenCascade's
-``BRepCheck_Analyzer`` with one closed shell (:func:`torus_cad.kernel.checks.single_valid_solid`).
-Every refusal is a ParameterError (exit 2) naming the path as given, never the content.
+The file is untrusted input: it is read by
+:func:`torus_cad.runtime.input_files.read_untrusted_bytes` (a regular file, at most
+``STEP_FILE_MAX_BYTES``), must start with the STEP header ``ISO-10303-21;``, must hold exactly one
+solid, and that solid must pass OpenCascade's ``BRepCheck_Analyzer`` with one closed shell
+(:func:`torus_cad.kernel.checks.single_valid_solid`). Every refusal is a ParameterError (exit 2)
+naming the path as given, never the content.
 
 The solid is placed so that its spin axis is +z: the axis is the line along ``axis`` (one of
-``+z -z +x -x +y -y`` in the file's coordinates) through the solid's centroid (a balanced propeller's
-centroid is on its axis); the solid is rotated so that this direction becomes +z and moved so the
-line is the z axis (its axial position is kept). ``turning`` is the sense of rotation seen from the
-+ end of the axis (``cw`` like the built designs: the air is pushed toward −axis, the thrust points
-along +axis).
+``+z -z +x -x +y -y`` in the file's coordinates) through the solid's centroid (a balanced
+propeller's centroid is on its axis); the solid is rotated so that this direction becomes +z and
+moved so the line is the z axis (its axial position is kept). ``turning`` is the sense of rotation
+seen from the + end of the axis (``cw`` like the built designs: the air is pushed toward −axis, the
+thrust points along +axis).
 
 Measures, from the placed solid:
 
@@ -99,9 +101,11 @@ class StepPropeller:
 
     Attributes:
         source: the path as given.
-        axis: its spin axis in the file's coordinates; turning: its sense of rotation seen from + of the axis.
+        axis: its spin axis in the file's coordinates; turning: its sense of rotation seen from + of
+            the axis.
         body: the placed solid, its tip diameter (mm) and chord (mm) for the domain.
-        hub_radius_mm, hub_length_mm: the central cylinder (see the module doc); 0 when none is found.
+        hub_radius_mm, hub_length_mm: the central cylinder (see the module doc); 0 when none is
+            found.
         centroid_mm: the solid's centroid in the file's coordinates, mm.
     """
 
@@ -132,14 +136,15 @@ class StepPropeller:
 
 def step_name(path: str | Path) -> str:
     """The output name from the file's stem: characters other than letters, digits, '_', '-' and '.'
-    become '_', leading ones other than a letter or digit are dropped (a name starts with one), at most
-    64 characters ('step_propeller' when nothing is left)."""
+    become '_', leading ones other than a letter or digit are dropped (a name starts with one), at
+    most 64 characters ('step_propeller' when nothing is left)."""
     name = _NAME_CHARACTERS.sub("_", Path(path).stem).lstrip("_.-")[:64].rstrip(".")
     return name or "step_propeller"
 
 
 def read_step_solid(path: str | Path) -> Any:
-    """The one valid solid of the STEP file ``path`` (a cadquery Solid), or ParameterError naming the path."""
+    """The one valid solid of the STEP file ``path`` (a cadquery Solid), or ParameterError naming
+    the path."""
     from torus_cad.kernel.checks import single_valid_solid
     from torus_cad.kernel.step_readback import read_step
 
@@ -172,7 +177,8 @@ def read_step_solid(path: str | Path) -> Any:
 
 
 class _quiet_stdout:
-    """OpenCascade's STEP reader prints its parse errors on the C-level stdout: send them to /dev/null."""
+    """OpenCascade's STEP reader prints its parse errors on the C-level stdout: send them to
+    /dev/null."""
 
     def __enter__(self) -> None:
         import sys
@@ -189,8 +195,8 @@ class _quiet_stdout:
 
 
 def place_on_z(solid: Any, axis: Axis) -> tuple[Any, tuple[float, float, float]]:
-    """``solid`` turned so ``axis`` is +z and moved so the line along it through the centroid is the z axis;
-    and the centroid in the file's coordinates (mm)."""
+    """``solid`` turned so ``axis`` is +z and moved so the line along it through the centroid is the
+    z axis; and the centroid in the file's coordinates (mm)."""
     import cadquery as cq
 
     centre = solid.Center()
@@ -201,8 +207,9 @@ def place_on_z(solid: Any, axis: Axis) -> tuple[Any, tuple[float, float, float]]
 
 
 def tip_diameter_mm(solid: Any) -> float:
-    """Twice the largest distance of ``solid`` from the z axis, mm: a cylinder about z enclosing the solid,
-    less its shortest distance to the solid (OpenCascade's BRepExtrema, exact on the B-rep)."""
+    """Twice the largest distance of ``solid`` from the z axis, mm: a cylinder about z enclosing the
+    solid, less its shortest distance to the solid (OpenCascade's BRepExtrema, exact on the
+    B-rep)."""
     import cadquery as cq
     from OCP.BRepExtrema import BRepExtrema_DistShapeShape
 
@@ -218,7 +225,8 @@ def tip_diameter_mm(solid: Any) -> float:
 
 
 def hub_measures(solid: Any, diameter_mm: float) -> tuple[float, float]:
-    """(hub radius, hub length) in mm of ``solid`` about the z axis (see the module doc); (0, 0) without a hub."""
+    """(hub radius, hub length) in mm of ``solid`` about the z axis (see the module doc); (0, 0)
+    without a hub."""
     from OCP.BRepClass3d import BRepClass3d_SolidClassifier
     from OCP.gp import gp_Pnt
     from OCP.TopAbs import TopAbs_IN
@@ -254,7 +262,8 @@ def hub_measures(solid: Any, diameter_mm: float) -> tuple[float, float]:
 
 
 def _bisect(inside: Any, good: float, bad: float) -> float:
-    """The boundary between ``good`` (where ``inside`` holds) and ``bad``, to ``HUB_BISECTIONS`` halvings."""
+    """The boundary between ``good`` (where ``inside`` holds) and ``bad``, to ``HUB_BISECTIONS``
+    halvings."""
     for _ in range(HUB_BISECTIONS):
         middle = 0.5 * (good + bad)
         good, bad = (middle, bad) if inside(middle) else (good, middle)
@@ -262,9 +271,10 @@ def _bisect(inside: Any, good: float, bad: float) -> float:
 
 
 def knife_edges(solid: Any) -> TrailingEdges | None:
-    """The solid's knife edges (edges between two faces whose normals, at the edge's middle, differ by more
-    than ``KNIFE_EDGE_NORMAL_ANGLE_DEG``: a sharp trailing edge), each sampled at ``KNIFE_EDGE_SAMPLES``
-    points, as trailing edges of thickness 0 mm for the size field; None when there are none."""
+    """The solid's knife edges (edges between two faces whose normals, at the edge's middle, differ
+    by more than ``KNIFE_EDGE_NORMAL_ANGLE_DEG``: a sharp trailing edge), each sampled at
+    ``KNIFE_EDGE_SAMPLES`` points, as trailing edges of thickness 0 mm for the size field; None when
+    there are none."""
     import cadquery as cq
     from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE
     from OCP.TopExp import TopExp
@@ -297,7 +307,8 @@ def knife_edges(solid: Any) -> TrailingEdges | None:
 def load_step_propeller(
     path: str | Path, axis: Axis = Axis.PLUS_Z, turning: Handedness = Handedness.CW
 ) -> StepPropeller:
-    """Read, check, place and measure the STEP propeller at ``path`` (ParameterError for a bad file)."""
+    """Read, check, place and measure the STEP propeller at ``path`` (ParameterError for a bad
+    file)."""
     solid = read_step_solid(path)
     placed, centroid = place_on_z(solid, axis)
     diameter = tip_diameter_mm(placed)

@@ -1,4 +1,5 @@
-"""Crossing triangles of the domain's surface mesh, found before the volume mesher is asked to fill it.
+"""Crossing triangles of the domain's surface mesh, found before the volume mesher is asked to fill
+it.
 
 gmsh's 3D Delaunay mesher stops with "PLC Error: A segment and a facet intersect" when the
 surface mesh crosses itself. A coarse mesh does that where the propeller is thinner than its
@@ -37,8 +38,8 @@ class Crossings:
 
 
 def surface_triangles(gmsh: Any, surfaces: list[int]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The triangles of gmsh ``surfaces``: ``(n, 3)`` points (mm), ``(t, 3)`` 0-based point indices and
-    ``(t,)`` the surface tag of each triangle."""
+    """The triangles of gmsh ``surfaces``: ``(n, 3)`` points (mm), ``(t, 3)`` 0-based point indices
+    and ``(t,)`` the surface tag of each triangle."""
     node_tags, coordinates, _ = gmsh.model.mesh.getNodes()
     order = np.argsort(node_tags)
     blocks, owners = [], []

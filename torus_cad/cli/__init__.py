@@ -1,4 +1,5 @@
-"""Command line: ``torus-cad build | defaults | verify | ...``. Thin: parse, call the package, map errors to exit codes.
+"""Command line: ``torus-cad build | defaults | verify | ...``. Thin: parse, call the package, map
+errors to exit codes.
 
 Exit codes: 0 success; 2 bad input (a one-line message naming the field, no traceback, no
 file written); 1 the kernel or the file system failed (the cause named: OpenCascade, no space
@@ -7,8 +8,8 @@ interrupted by SIGINT / SIGTERM / SIGHUP (torus_cad.runtime.interrupts).
 
 The signal handlers are installed before anything heavy is imported (this module imports only
 the standard library and torus_cad's light modules at the top; numpy, CadQuery and the rest load
-with the command's own module, torus_cad.cli.commands.<name>), so an interrupt at any moment ends the
-command with one line.
+with the command's own module, torus_cad.cli.commands.<name>), so an interrupt at any moment ends
+the command with one line.
 """
 
 from __future__ import annotations
@@ -104,7 +105,8 @@ def _run(handler: Callable[[argparse.Namespace], int], args: argparse.Namespace)
 
 
 def _missing_module_message(command: str, error: ModuleNotFoundError) -> str:
-    """One line for a module missing at run time: the extra that installs it and the install command."""
+    """One line for a module missing at run time: the extra that installs it and the install
+    command."""
     from torus_cad.runtime.extras import extra_of_module, install_line, missing_extra_message
 
     module = error.name or str(error)

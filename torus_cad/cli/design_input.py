@@ -1,6 +1,6 @@
-"""The design a command reads: a TOML file (or the defaults) with ``--set key=value`` overrides, and the
-command-line options that stand for schema keys. Loaded by the commands that read a design (the schema
-takes most of a second), never by the parser's start-up."""
+"""The design a command reads: a TOML file (or the defaults) with ``--set key=value`` overrides, and
+the command-line options that stand for schema keys. Loaded by the commands that read a design (the
+schema takes most of a second), never by the parser's start-up."""
 
 from __future__ import annotations
 
@@ -32,8 +32,9 @@ def _parse_override(text: str) -> tuple[str, Any]:
 
 
 def _as_declared_strings(changes: dict[str, Any]) -> dict[str, Any]:
-    """``changes`` with a number given to a text parameter taken as its text: ``--set airfoil.naca=4415``
-    means the designation '4415', as a user types it, not the integer TOML reads."""
+    """``changes`` with a number given to a text parameter taken as its text: ``--set
+    airfoil.naca=4415`` means the designation '4415', as a user types it, not the integer TOML
+    reads."""
     text_keys = {spec.key for spec in iter_parameter_specs(PropellerParameters) if spec.kind is str}
     return {
         key: str(value)
@@ -64,12 +65,14 @@ def load_parameters(config: str | None, overrides: Sequence[str] = ()) -> Propel
 
 
 def require(command: str, extra: str, modules: Sequence[str] | None = None) -> None:
-    """MissingExtraError (exit 2, one line: the extra and its install command) unless ``extra`` is installed."""
+    """MissingExtraError (exit 2, one line: the extra and its install command) unless ``extra`` is
+    installed."""
     require_extra(command, extra, modules)
 
 
 def format_overrides(formats: Sequence[str] | None) -> list[str]:
-    """``--format step,3mf`` as the ``--set export.formats=[...]`` it stands for (the schema checks the names)."""
+    """``--format step,3mf`` as the ``--set export.formats=[...]`` it stands for (the schema checks
+    the names)."""
     if not formats:
         return []
     names = [name.strip() for item in formats for name in item.split(",") if name.strip()]
@@ -77,7 +80,8 @@ def format_overrides(formats: Sequence[str] | None) -> list[str]:
 
 
 def writes_a_mesh(params: PropellerParameters, no_stl: bool) -> bool:
-    """Whether the build tessellates the solid for a file (STL, 3MF): then its triangle budget applies."""
+    """Whether the build tessellates the solid for a file (STL, 3MF): then its triangle budget
+    applies."""
     formats = params.export.formats
     return (ExportFormat.STL in formats and not no_stl) or ExportFormat.THREE_MF in formats
 

@@ -1,4 +1,5 @@
-"""Numeric command-line options: each has a range (shown in its ``--help``) and is checked as it is parsed.
+"""Numeric command-line options: each has a range (shown in its ``--help``) and is checked as it is
+parsed.
 
 A value outside its range, or not a number, is refused by the parser with one line naming the
 option, the value (cut short, torus_cad.errors.shown) and the range, exit code 2, before the command
@@ -29,8 +30,9 @@ def range_help(bounds: Bounds, unit: str = "") -> str:
 def _refused(
     option: str, value: object, bounds: Bounds, unit: str, note: str
 ) -> argparse.ArgumentTypeError:
-    """``--time-limit = 0 s is out of range; ...``; an option that sets a design parameter is named by its key,
-    as the design file's checks name it: ``cfd.growth_rate = 1 is out of range; ...``."""
+    """``--time-limit = 0 s is out of range; ...``; an option that sets a design parameter is named
+    by its key, as the design file's checks name it: ``cfd.growth_rate = 1 is out of range;
+    ...``."""
     shown_value = f"{value}{' ' + unit if unit and option.startswith('-') else ''}"
     return argparse.ArgumentTypeError(
         f"{option} = {shown_value} is out of range; allowed {range_help(bounds, unit)}"
@@ -39,7 +41,8 @@ def _refused(
 
 
 def in_range(option: str, value: float, bounds: Bounds, unit: str = "", note: str = "") -> None:
-    """argparse.ArgumentTypeError (one line: option, value, range) unless ``value`` lies in ``bounds``."""
+    """argparse.ArgumentTypeError (one line: option, value, range) unless ``value`` lies in
+    ``bounds``."""
     if not bounds.contains(value):
         raise _refused(
             option,
@@ -51,8 +54,9 @@ def in_range(option: str, value: float, bounds: Bounds, unit: str = "", note: st
 
 
 def integer(option: str, bounds: Bounds, unit: str = "", note: str = "") -> Callable[[str], int]:
-    """The ``type`` of an option taking a whole number in ``bounds`` (``note`` explains the range). ``option``
-    names it in messages: ``--threads``, or the design key it sets (``mesh.sections``)."""
+    """The ``type`` of an option taking a whole number in ``bounds`` (``note`` explains the range).
+    ``option`` names it in messages: ``--threads``, or the design key it sets
+    (``mesh.sections``)."""
 
     def parse(text: str) -> int:
         try:
@@ -72,7 +76,8 @@ def integer(option: str, bounds: Bounds, unit: str = "", note: str = "") -> Call
 
 
 def number(option: str, bounds: Bounds, unit: str = "", note: str = "") -> Callable[[str], float]:
-    """The ``type`` of an option taking a finite number in ``bounds`` (``note`` explains the range)."""
+    """The ``type`` of an option taking a finite number in ``bounds`` (``note`` explains the
+    range)."""
 
     def parse(text: str) -> float:
         try:

@@ -103,7 +103,8 @@ class _Parser(argparse.ArgumentParser):
             _bind_schema_ranges(ranges)
 
     def error(self, message: str) -> None:  # type: ignore[override]
-        """One line (a long value in it cut short), exit 2: argparse's messages quote what was typed."""
+        """One line (a long value in it cut short), exit 2: argparse's messages quote what was
+        typed."""
         self.exit(
             EXIT_BAD_INPUT,
             bounded_message(f"torus-cad: error: {message} (see {self.prog} --help)") + "\n",
@@ -150,8 +151,8 @@ _THREADS_NOTE = f"{CFD_THREADS_PER_CPU} per CPU, at most {CFD_THREADS_LIMIT}"
 
 
 def _option_type(key: str, kind: Any, bounds: Bounds, unit: str) -> Callable[[str], Any]:
-    """The bounded parser of the option that sets the schema parameter ``key`` (``kind`` int or float: messages
-    name the key, as the design file's do), else ``kind`` itself."""
+    """The bounded parser of the option that sets the schema parameter ``key`` (``kind`` int or
+    float: messages name the key, as the design file's do), else ``kind`` itself."""
     if kind is int:
         return integer(key, bounds, unit)
     if kind is float:
@@ -160,8 +161,8 @@ def _option_type(key: str, kind: Any, bounds: Bounds, unit: str) -> Callable[[st
 
 
 def _add_table_arguments(parser: argparse.ArgumentParser, table: str) -> None:
-    """One ``--name`` option per parameter of a schema table (default None: keep the design's value), a number
-    checked against the parameter's range as it is parsed."""
+    """One ``--name`` option per parameter of a schema table (default None: keep the design's
+    value), a number checked against the parameter's range as it is parsed."""
     # the schema: loaded once the subcommand is used
     from torus_cad.cli.design_input import table_specs
 
@@ -187,7 +188,8 @@ def _add_table_arguments(parser: argparse.ArgumentParser, table: str) -> None:
 
 
 def _bind_schema_ranges(ranges: dict[argparse.Action, str]) -> None:
-    """Give each option of ``ranges`` (action -> dotted schema key) its parameter's range: checked as parsed, in
+    """Give each option of ``ranges`` (action -> dotted schema key) its parameter's range: checked
+    as parsed, in
     --help."""
     from torus_cad.parameters import parameter_specs
 
@@ -488,11 +490,12 @@ def build_parser() -> argparse.ArgumentParser:
 def build_parser_and_commands() -> tuple[
     argparse.ArgumentParser, dict[str, argparse.ArgumentParser]
 ]:
-    """The argument parser with every subcommand, and the subcommands' own parsers (argparse keeps them
-    nowhere public).
+    """The argument parser with every subcommand, and the subcommands' own parsers (argparse keeps
+    them nowhere public).
 
     Returns:
-        ``(parser, commands)``: the program's parser (:func:`build_parser`), and each subcommand's parser by its
+        ``(parser, commands)``: the program's parser (:func:`build_parser`), and each subcommand's
+            parser by its
         name, in the order of ``--help``.
     """
     parser = _Parser(

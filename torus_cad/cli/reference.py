@@ -1,6 +1,7 @@
-"""The command-line reference page (docs/reference/cli.md): ``torus-cad --help`` and every subcommand's,
-generated from the program's own parser and written into the page by ``scripts/reference_pages.py``, so the
-page reads the same in the repository and on the site; a test checks that it is current."""
+"""The command-line reference page (docs/reference/cli.md): ``torus-cad --help`` and every
+subcommand's, generated from the program's own parser and written into the page by
+``scripts/reference_pages.py``, so the page reads the same in the repository and on the site; a test
+checks that it is current."""
 
 from __future__ import annotations
 
@@ -24,8 +25,8 @@ def _help_of(parser: argparse.ArgumentParser, title: str) -> list[str]:
 
 
 def cli_reference() -> str:
-    """Markdown of ``torus-cad --help`` and every subcommand's ``--help`` (options loaded from the schema
-    included), between the page's markers."""
+    """Markdown of ``torus-cad --help`` and every subcommand's ``--help`` (options loaded from the
+    schema included), between the page's markers."""
     from torus_cad.cli.parser import build_parser_and_commands
 
     parser, commands = build_parser_and_commands()

@@ -1,5 +1,5 @@
-"""Checks on kernel results (one valid closed solid), and the shapes the checks work with; mass properties
-are in :mod:`torus_cad.kernel.mass_properties`.
+"""Checks on kernel results (one valid closed solid), and the shapes the checks work with; mass
+properties are in :mod:`torus_cad.kernel.mass_properties`.
 
 A boolean can "succeed" with several solids, an open shell or an invalid topology; every
 result is checked here and a KernelError says what failed.

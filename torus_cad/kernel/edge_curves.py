@@ -12,11 +12,12 @@ So every such edge is built again from exact intersection points: each point sol
 method on both surfaces (in the plane normal to the old curve through its old point), the 3D curve
 and both p-curves interpolated through them at the same parameters (so the edge stays same-range
 and same-parameter), and points added half way wherever the curves part by more than
-:data:`~torus_cad.kernel.edge_curves.EDGE_CURVE_FIT_MM`, then where OpenCascade's measure finds them parting
-most, until it finds at most :data:`~torus_cad.kernel.edge_curves.EDGE_CURVE_ACCEPT_MM`. An edge is replaced only when the new curves part by
-less than :data:`~torus_cad.kernel.edge_curves.EDGE_CURVE_REFIT_ABOVE_MM` (by OpenCascade's own measure,
-``GeomLib_CheckCurveOnSurface``, the one the argument analyzer uses) and less than before;
-otherwise (surfaces that touch rather than cross, as a fillet's) it keeps its curves.
+:data:`~torus_cad.kernel.edge_curves.EDGE_CURVE_FIT_MM`, then where OpenCascade's measure finds them
+parting most, until it finds at most :data:`~torus_cad.kernel.edge_curves.EDGE_CURVE_ACCEPT_MM`. An
+edge is replaced only when the new curves part by less than
+:data:`~torus_cad.kernel.edge_curves.EDGE_CURVE_REFIT_ABOVE_MM` (by OpenCascade's own measure,
+``GeomLib_CheckCurveOnSurface``, the one the argument analyzer uses) and less than before; otherwise
+(surfaces that touch rather than cross, as a fillet's) it keeps its curves.
 """
 
 from __future__ import annotations
@@ -101,8 +102,9 @@ class EdgeRefit:
 
 
 def curve_on_surface_deviation(edge: TopoDS_Edge, face: TopoDS_Face) -> float:
-    """Largest distance (mm) between ``edge``'s 3D curve and its p-curve on ``face`` at equal parameters,
-    as the argument analyzer measures it (GeomLib_CheckCurveOnSurface); 0 for an edge without curves."""
+    """Largest distance (mm) between ``edge``'s 3D curve and its p-curve on ``face`` at equal
+    parameters, as the argument analyzer measures it (GeomLib_CheckCurveOnSurface); 0 for an edge
+    without curves."""
     curve = BRep_Tool.Curve_s(edge, 0.0, 0.0)
     pcurve = BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0)
     if curve is None or pcurve is None:
@@ -113,7 +115,8 @@ def curve_on_surface_deviation(edge: TopoDS_Edge, face: TopoDS_Face) -> float:
 
 def refit_intersection_edges(shape: TopoDS_Shape, on_faces: Sequence[TopoDS_Face]) -> EdgeRefit:
     """Rebuild, in place, every edge of ``shape`` bounding one of ``on_faces`` (and one other face)
-    whose curves part by more than EDGE_CURVE_REFIT_ABOVE_MM, from exact intersection points (module doc).
+    whose curves part by more than EDGE_CURVE_REFIT_ABOVE_MM, from exact intersection points (module
+    doc).
 
     In place: the edges are changed in every shape that shares them (copies moved from ``shape``
     included), which is the point: done on the blade once, before it is patterned.
@@ -151,7 +154,8 @@ def refit_intersection_edges(shape: TopoDS_Shape, on_faces: Sequence[TopoDS_Face
 
 
 def distinct_faces(faces: object) -> list[TopoDS_Face]:
-    """The faces of an OCP shape list (an edge's ancestors), each once: a seam edge lists its face twice."""
+    """The faces of an OCP shape list (an edge's ancestors), each once: a seam edge lists its face
+    twice."""
     distinct: list[TopoDS_Face] = []
     for shape in faces:  # type: ignore[attr-defined]
         face = TopoDS.Face_s(shape)
@@ -169,7 +173,8 @@ def _deviation(
 def _deviation_at(
     curve: Geom_Curve, pcurve: Geom2d_Curve, surface: Geom_Surface, first: float, last: float
 ) -> tuple[float, float]:
-    """The largest distance between ``curve`` and ``surface(pcurve)`` at equal parameters (mm), and where."""
+    """The largest distance between ``curve`` and ``surface(pcurve)`` at equal parameters (mm), and
+    where."""
     check = GeomLib_CheckCurveOnSurface(GeomAdaptor_Curve(curve, first, last), 1e-9)
     check.Perform(
         Adaptor3d_CurveOnSurface(
@@ -187,7 +192,8 @@ class _Fitted:
     worst_parameter: float
 
     def apply(self, edge: TopoDS_Edge, faces: Sequence[TopoDS_Face]) -> None:
-        """Replace the edge's 3D curve and its two p-curves (same range; the tolerance stays, it covers them)."""
+        """Replace the edge's 3D curve and its two p-curves (same range; the tolerance stays, it
+        covers them)."""
         builder = BRep_Builder()
         tolerance = BRep_Tool.Tolerance_s(edge)
         builder.UpdateEdge(edge, self.curve, tolerance)
@@ -213,8 +219,8 @@ class _IntersectionFit:
     def fit(self) -> _Fitted | None:
         """The interpolated curves, refined until they part by at most EDGE_CURVE_FIT_MM half way
         between points, then until OpenCascade's measure finds them parting by at most
-        EDGE_CURVE_ACCEPT_MM (a point added where they part most, up to EDGE_CURVE_WORST_POINT_ROUNDS
-        times); None when a point does not
+        EDGE_CURVE_ACCEPT_MM (a point added where they part most, up to
+        EDGE_CURVE_WORST_POINT_ROUNDS times); None when a point does not
         converge or the points run out."""
         if self.curve is None or any(pcurve is None for pcurve in self.pcurves):
             return None
@@ -290,10 +296,11 @@ class _IntersectionFit:
         return [*(float(t) for t in np.concatenate(spans)), self.last]
 
     def _solve_all(self, parameters: Sequence[float]) -> list[_Point | None]:
-        """For each ``t`` of ``parameters``: (u1, v1, u2, v2) and the 3D point where both surfaces meet in the
-        plane normal to the old curve at ``t``, by Newton's method from the old p-curves' points; None if it
-        does not converge or converges farther from the old point than EDGE_CURVE_REACH_TOLERANCES edge
-        tolerances. The points' Newton steps are taken together (one batched linear solve a step)."""
+        """For each ``t`` of ``parameters``: (u1, v1, u2, v2) and the 3D point where both surfaces
+        meet in the plane normal to the old curve at ``t``, by Newton's method from the old
+        p-curves' points; None if it does not converge or converges farther from the old point than
+        EDGE_CURVE_REACH_TOLERANCES edge tolerances. The points' Newton steps are taken together
+        (one batched linear solve a step)."""
         count = len(parameters)
         origins, normals, uv = np.empty((count, 3)), np.empty((count, 3)), np.empty((count, 4))
         point, tangent = gp_Pnt(), gp_Vec()
@@ -375,7 +382,8 @@ class _IntersectionFit:
     def _error(
         self, curves: tuple[Geom_Curve, Geom2d_Curve, Geom2d_Curve], t: float, exact: _Point
     ) -> float:
-        """How far the interpolated curves at ``t`` are from the exact point and from each other (mm)."""
+        """How far the interpolated curves at ``t`` are from the exact point and from each other
+        (mm)."""
         curve, first_pcurve, second_pcurve = curves
         target = gp_Pnt(*exact[1])
         on_curve = curve.Value(t)

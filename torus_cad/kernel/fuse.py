@@ -60,8 +60,8 @@ _FULL_TURN = 2.0 * math.pi
 
 
 def pattern_blades(blade: ShapeT, angles_deg: Sequence[float]) -> list[ShapeT]:
-    """Copies of ``blade`` (built for angle ``angles_deg[0]``) rotated about z to every angle (of the kind
-    ``blade`` is: OpenCascade's shape or cadquery's).
+    """Copies of ``blade`` (built for angle ``angles_deg[0]``) rotated about z to every angle (of
+    the kind ``blade`` is: OpenCascade's shape or cadquery's).
 
     Blade i's centerline is blade 0's rotated by theta_i - theta_0 (spec §3.3 and §6.1), so
     rotating the solid gives exactly the solid built from blade i's own control points.
@@ -83,8 +83,8 @@ def _turn(angle_deg: float) -> gp_Trsf:
 
 
 def fuse_all(hub: ShapeT, blades: Sequence[AnyShape]) -> Fused[ShapeT]:
-    """Hub and all blades fused in one BRepAlgoAPI_Fuse call (parallel, oriented bounding boxes); the
-    result of the kind ``hub`` is."""
+    """Hub and all blades fused in one BRepAlgoAPI_Fuse call (parallel, oriented bounding boxes);
+    the result of the kind ``hub`` is."""
     fuse = boolean(BRepAlgoAPI_Fuse(), [occ(hub)], [occ(blade) for blade in blades])
     shape = result(fuse, "fuse the blades with the hub")
     parts = [(occ(hub), HUB_PART), *((occ(blade), index) for index, blade in enumerate(blades))]
@@ -154,13 +154,14 @@ def fuse_pattern(
        end face, or a patch straddles the hub's seam, the copies are glued to the hub with a
        fuse that needs no surface-surface intersection (:func:`_glue`).
 
-    ``refit_edges=False`` keeps the boolean's own intersection curves: the root fillet's route, whose
-    rolling ball fails on the refitted curves (prop_10x5_2blade at 0.5 mm) and whose STEP file is not
-    read back (its fillet faces carry their own curve-on-surface gaps).
+    ``refit_edges=False`` keeps the boolean's own intersection curves: the root fillet's route,
+    whose rolling ball fails on the refitted curves (prop_10x5_2blade at 0.5 mm) and whose STEP file
+    is not read back (its fillet faces carry their own curve-on-surface gaps).
 
-    Returns the shape, how it was joined (ASSEMBLED or GLUED) and each face's part. The caller checks the result (validity covers each edge's curve on the hub against its 3D
-    curve) and falls back to :func:`fuse_all` on a KernelError or an invalid solid. The
-    propeller's hub has its seam beside every footprint, see
+    Returns the shape, how it was joined (ASSEMBLED or GLUED) and each face's part. The caller
+    checks the result (validity covers each edge's curve on the hub against its 3D curve) and falls
+    back to :func:`fuse_all` on a KernelError or an invalid solid. The propeller's hub has its seam
+    beside every footprint, see
     :func:`torus_cad.geometry.hub.seam.seam_angle_deg`.
     """
     hub_shape = occ(hub)
@@ -228,8 +229,8 @@ def _assemble(
 
 
 def solid_of_faces(origins: Origins) -> TopoDS_Solid:
-    """The solid bounded by one shell of the faces of ``origins`` (each face with its part), in that order,
-    sewn by their shared edges (no boolean): the assembled routes' last step."""
+    """The solid bounded by one shell of the faces of ``origins`` (each face with its part), in that
+    order, sewn by their shared edges (no boolean): the assembled routes' last step."""
     builder = BRep_Builder()
     shell = TopoDS_Shell()
     builder.MakeShell(shell)
@@ -263,7 +264,8 @@ def _glue(
 def _history(
     operation: BRepAlgoAPI_BooleanOperation, arguments: Iterable[tuple[TopoDS_Shape, int]]
 ) -> Origins:
-    """(result face, part) for every face of every (argument, part), through the boolean's history."""
+    """(result face, part) for every face of every (argument, part), through the boolean's
+    history."""
     return through_history(
         operation, [(face, part) for argument, part in arguments for face in faces(argument)]
     )

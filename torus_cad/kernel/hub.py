@@ -92,7 +92,8 @@ def run_out_hub(
     extension: float,
     reach: float,
 ) -> tuple[cq.Solid, list[TopoDS_Shape]]:
-    """A plain hub ``extension`` mm longer at each end, and the tools that cut it back to the real one.
+    """A plain hub ``extension`` mm longer at each end, and the tools that cut it back to the real
+    one.
 
     The tools: two end slabs (radius ``reach``, beyond |z| = length / 2) first, then the bore and
     set-screw hole of ``mounting`` (no chamfer: a chamfered hub has no run-out). For the root
@@ -117,7 +118,8 @@ def run_out_hub(
 def _chamfered_cylinder(
     radius: float, length: float, chamfer: float, seam_angle_rad: float
 ) -> TopoDS_Shape:
-    """The hub's (r, z) profile with 45-degree chamfers, revolved about z starting at the seam angle."""
+    """The hub's (r, z) profile with 45-degree chamfers, revolved about z starting at the seam
+    angle."""
     half = length / 2.0
     direction = (math.cos(seam_angle_rad), math.sin(seam_angle_rad))
     profile = [
@@ -167,7 +169,8 @@ def _bore(mounting: HubMounting, length: float) -> TopoDS_Shape:
 
 
 def _set_screw_hole(mounting: HubMounting, radius: float) -> TopoDS_Shape:
-    """A cylinder on the radial line at ``set_screw_angle_deg``, z = 0, from the axis to just outside the hub."""
+    """A cylinder on the radial line at ``set_screw_angle_deg``, z = 0, from the axis to just
+    outside the hub."""
     angle = math.radians(mounting.set_screw_angle_deg)
     axis = gp_Ax2(gp_Pnt(0.0, 0.0, 0.0), gp_Dir(math.cos(angle), math.sin(angle), 0.0))
     return BRepPrimAPI_MakeCylinder(

@@ -12,12 +12,12 @@ the tolerance it samples (design 3580 of the design-space tally: 21 faults).
 
 So, for such an edge, the construction is turned round: its 3D curve *is* the fillet surface's
 iso-curve at the face curve's parameters (the same curve, exactly: no refit), its face curve on the
-fillet the iso-line as a straight line, and its face curve on the other face (the hub's cylinder, the
-blade) the feet of the perpendiculars from it. The gap then lies across the contact, on the other
-face only, where the surfaces touch tangentially (under 1e-6 mm). A fillet surface that an edge's face
-curve runs past (a contact edge ending a few 1e-5 mm beyond the surface, at its vertex) is first
-extended there (BRepLib::ExtendFace, the original part's parametrisation kept), and a vertex all of
-whose edges were rebuilt moves to where their new curves end.
+fillet the iso-line as a straight line, and its face curve on the other face (the hub's cylinder,
+the blade) the feet of the perpendiculars from it. The gap then lies across the contact, on the
+other face only, where the surfaces touch tangentially (under 1e-6 mm). A fillet surface that an
+edge's face curve runs past (a contact edge ending a few 1e-5 mm beyond the surface, at its vertex)
+is first extended there (BRepLib::ExtendFace, the original part's parametrisation kept), and a
+vertex all of whose edges were rebuilt moves to where their new curves end.
 """
 
 from __future__ import annotations
@@ -69,7 +69,8 @@ def iso_line_copy(shape: TopoDS_Shape) -> TopoDS_Shape | None:
         shape: the solid; not changed.
 
     Returns:
-        The rebuilt copy, or None if no edge qualifies or the copy is not valid (BRepCheck_Analyzer).
+        The rebuilt copy, or None if no edge qualifies or the copy is not valid
+            (BRepCheck_Analyzer).
     """
     copy = copied(shape)
     _extend_surfaces_past_their_ends(copy)
@@ -241,7 +242,8 @@ def _iso_curve(
 def _straight_face_curve(
     axis: int, constant: float, start: float, end: float, first: float, last: float
 ) -> Geom2d_BSplineCurve:
-    """The iso-line from ``start`` to ``end`` at ``constant`` as a degree-1 face curve on [first, last]."""
+    """The iso-line from ``start`` to ``end`` at ``constant`` as a degree-1 face curve on [first,
+    last]."""
     poles = TColgp_Array1OfPnt2d(1, 2)
     for index, along in ((1, start), (2, end)):
         poles.SetValue(index, gp_Pnt2d(*((constant, along) if axis == 0 else (along, constant))))
@@ -256,7 +258,8 @@ def _square_on(
     curve: Geom_BSplineCurve, pcurve: Geom2d_Curve, surface: Geom_Surface, first: float, last: float
 ) -> Geom2d_BSplineCurve | None:
     """The face curve on ``surface`` of the feet of the perpendiculars from ``curve`` (fitted, its
-    ends on the feet of the curve's ends; the old ``pcurve`` shifted onto them where no fit holds)."""
+    ends on the feet of the curve's ends; the old ``pcurve`` shifted onto them where no fit
+    holds)."""
     fit = SquareFit(curve, pcurve, surface, first, last)
     ends = fit.feet(np.array([first, last]))
     if ends is None:

@@ -1,4 +1,5 @@
-"""Loft: compatible section wires -> one closed blade solid (poles interpolated in s; ThruSections fallback)."""
+"""Loft: compatible section wires -> one closed blade solid (poles interpolated in s; ThruSections
+fallback)."""
 
 from __future__ import annotations
 
@@ -49,8 +50,8 @@ def loft_solid(
     makes them; each edge position gets its own side face (a blunt trailing edge's base and
     the airfoil). The side surface interpolates every pole across the sections with a cubic
     (not-a-knot) spline in the sections' own parameters ``parameters`` (default: uniform in
-    [0, 1], the s of :func:`torus_cad.geometry.blade.blade_surface.blade_surface`), so it follows the
-    design between sections. BRepOffsetAPI_ThruSections, used before and kept as a fallback,
+    [0, 1], the s of :func:`torus_cad.geometry.blade.blade_surface.blade_surface`), so it follows
+    the design between sections. BRepOffsetAPI_ThruSections, used before and kept as a fallback,
     chooses its own chord-length parametrisation; on sparse, strongly changing blades it missed
     the design by up to ~40 % of the chord next to the hub and the fuse then failed or hung
     (found by scripts/fuzz.py).
@@ -81,7 +82,8 @@ def _bsplines_of(wire: TopoDS_Shape) -> list[Geom_BSplineCurve]:
 def _loft_through_poles(
     wires: Sequence[TopoDS_Shape], parameters: Sequence[float] | NDArray[np.float64] | None
 ) -> TopoDS_Shape:
-    """One side face per edge position (one for a sharp trailing edge; base and airfoil for a blunt one)."""
+    """One side face per edge position (one for a sharp trailing edge; base and airfoil for a blunt
+    one)."""
     edges = [_bsplines_of(wire) for wire in wires]
     if len({len(curves) for curves in edges}) != 1:
         raise KernelError("the section wires have different numbers of edges")
@@ -152,7 +154,8 @@ def _closed_solid(faces: Sequence[TopoDS_Face], wires: Sequence[TopoDS_Shape]) -
 
 
 def thru_sections_solid(wires: Sequence[ShapeT]) -> ShapeT:
-    """The loft by BRepOffsetAPI_ThruSections (smooth, not ruled); the fallback of :func:`loft_solid`.
+    """The loft by BRepOffsetAPI_ThruSections (smooth, not ruled); the fallback of
+    :func:`loft_solid`.
 
     The compatibility search of ThruSections is switched off (the wires are already
     compatible; it would only re-align start points).
@@ -175,7 +178,8 @@ def thru_sections_solid(wires: Sequence[ShapeT]) -> ShapeT:
 
 
 def _volume(shape: TopoDS_Shape) -> float:
-    """OpenCascade's volume of ``shape`` at its default precision (mm^3), as cadquery's ``Shape.Volume()``."""
+    """OpenCascade's volume of ``shape`` at its default precision (mm^3), as cadquery's
+    ``Shape.Volume()``."""
     properties = GProp_GProps()
     BRepGProp.VolumeProperties_s(shape, properties)
     return float(properties.Mass())

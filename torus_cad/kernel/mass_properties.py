@@ -1,5 +1,5 @@
-"""Mass properties computed by OpenCascade: volume, area, centre of mass, inertia, mass and the balance
-about the axis, each by adaptive integration (BRepGProp) to a stated relative precision."""
+"""Mass properties computed by OpenCascade: volume, area, centre of mass, inertia, mass and the
+balance about the axis, each by adaptive integration (BRepGProp) to a stated relative precision."""
 
 from __future__ import annotations
 
@@ -59,9 +59,10 @@ class MassProperties:
 def volume_properties(
     shape: AnyShape, relative_precision: float = MASS_PROPERTIES_RELATIVE_PRECISION
 ) -> GProp_GProps:
-    """OpenCascade volume properties by adaptive integration (not cadquery's coarse default). The last shape's
-    answer is kept and given again for a request no more precise: the JSON report asks for the mass properties
-    (1e-6) and then the balance (1e-4) of the same solid, seconds each on a bored hub."""
+    """OpenCascade volume properties by adaptive integration (not cadquery's coarse default). The
+    last shape's answer is kept and given again for a request no more precise: the JSON report asks
+    for the mass properties (1e-6) and then the balance (1e-4) of the same solid, seconds each on a
+    bored hub."""
     solid = occ(shape)
     last_shape, last_precision, last_answer = _LAST_VOLUME[0]
     if (
@@ -85,7 +86,8 @@ def precise_volume(
 
 
 def mass_properties(shape: AnyShape, density_g_cm3: float) -> MassProperties:
-    """Volume, area, centroid, inertia about the z axis, mass and box of ``shape`` for a density in g/cm^3.
+    """Volume, area, centroid, inertia about the z axis, mass and box of ``shape`` for a density in
+    g/cm^3.
 
     A hub with blades (what the shared-intersection fuse makes) is integrated over its blade
     faces alone (:mod:`torus_cad.kernel.blade_integrals`, ~4e-10 relative, a fraction of the
@@ -128,8 +130,9 @@ def occt_mass_properties(
 
 
 def surface_area_mm2(shape: AnyShape, relative_precision: float | None = None) -> float:
-    """The area of ``shape``'s faces, mm^2: BRepGProp's adaptive integration to ``relative_precision``, or
-    with None its fixed Gauss rule (enough for an estimate, and faster)."""
+    """The area of ``shape``'s faces, mm^2: BRepGProp's adaptive integration to
+    ``relative_precision``, or with None its fixed Gauss rule (enough for an estimate, and
+    faster)."""
     surface = GProp_GProps()
     if relative_precision is None:
         BRepGProp.SurfaceProperties_s(occ(shape), surface)

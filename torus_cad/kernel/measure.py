@@ -19,7 +19,8 @@ from torus_cad.kernel.tessellation import tessellate_faces
 
 
 def max_radius_mm(solid: cq.Shape) -> float:
-    """Largest distance of the solid from the z axis, by BRepExtrema against a coaxial cylinder around it."""
+    """Largest distance of the solid from the z axis, by BRepExtrema against a coaxial cylinder
+    around it."""
     box = solid.BoundingBox()
     outer = 2.0 * max(abs(box.xmin), abs(box.xmax), abs(box.ymin), abs(box.ymax)) + 10.0
     cylinder = cq.Solid.makeCylinder(outer, box.zlen + 20.0, cq.Vector(0, 0, box.zmin - 10.0))
@@ -33,7 +34,8 @@ def max_radius_mm(solid: cq.Shape) -> float:
 
 
 def vertex_radius_mm(solid: cq.Shape, tolerance: float = 0.05) -> float:
-    """Largest radius of a tessellation's vertices: a lower bound of :func:`max_radius_mm` within ~``tolerance``."""
+    """Largest radius of a tessellation's vertices: a lower bound of :func:`max_radius_mm` within
+    ~``tolerance``."""
     vertices = np.concatenate([face.vertices for face in tessellate_faces(solid, tolerance, 0.2)])
     return float(np.hypot(vertices[:, 0], vertices[:, 1]).max())
 
@@ -41,7 +43,8 @@ def vertex_radius_mm(solid: cq.Shape, tolerance: float = 0.05) -> float:
 def plane_section_edges(
     solid: cq.Shape, origin: ArrayLike, normal: ArrayLike, half_size: float
 ) -> list[cq.Edge]:
-    """Edges where the solid meets a square of ``2 half_size`` around ``origin`` normal to ``normal``."""
+    """Edges where the solid meets a square of ``2 half_size`` around ``origin`` normal to
+    ``normal``."""
     x, y, z = (float(value) for value in np.asarray(origin, dtype=float))
     u, v, w = (float(value) for value in np.asarray(normal, dtype=float))
     plane = gp_Pln(gp_Ax3(gp_Pnt(x, y, z), gp_Dir(u, v, w)))
@@ -65,7 +68,8 @@ def straight_edges(edges: list[cq.Edge], relative: float = 1e-6) -> list[cq.Edge
 
 def farthest_middle_edge(edges: list[cq.Edge], point: ArrayLike) -> cq.Edge:
     """The edge whose middle (half its parameter range) is farthest from ``point``: in a section
-    plane's cut of a blade with a round trailing edge, measured from the leading edge, the cap's cut."""
+    plane's cut of a blade with a round trailing edge, measured from the leading edge, the cap's
+    cut."""
     x, y, z = (float(value) for value in np.asarray(point, dtype=float))
     return max(edges, key=lambda edge: (edge.positionAt(0.5) - cq.Vector(x, y, z)).Length)
 

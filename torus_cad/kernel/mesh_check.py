@@ -1,8 +1,9 @@
 """The one crossing check of the package: the triangle pairs of a mesh that intersect, by meshlib's
-``findSelfCollidingTriangles`` (:func:`crossing_pairs`; its meshes hold single-precision coordinates,
-the precision of a binary STL). Triangles that only share an edge or a vertex do not count. The
-tessellation's repair (torus_cad.kernel.uncrossed), the surface mesh of ``torus-cad mesh``
-(torus_cad.mesh.crossings) and the CFD domain's surface (torus_cad.cfd_domain.surface_check) all use it.
+``findSelfCollidingTriangles`` (:func:`crossing_pairs`; its meshes hold single-precision
+coordinates, the precision of a binary STL). Triangles that only share an edge or a vertex do not
+count. The tessellation's repair (torus_cad.kernel.uncrossed), the surface mesh of ``torus-cad
+mesh`` (torus_cad.mesh.crossings) and the CFD domain's surface (torus_cad.cfd_domain.surface_check)
+all use it.
 
 Every mesh the build writes (STL, 3MF) is the uncrossed tessellation
 (torus_cad.kernel.uncrossed: OpenCascade's, any crossing triangles repaired by meshlib),
@@ -72,8 +73,8 @@ def import_meshlib() -> Any:
 
 
 def meshlib_mesh(vertices: NDArray[np.float64], triangles: NDArray[np.int64]) -> Any:
-    """meshlib's mesh of ``(t, 3)`` ``triangles`` over ``(v, 3)`` ``vertices`` (mm; meshlib stores them in
-    single precision)."""
+    """meshlib's mesh of ``(t, 3)`` ``triangles`` over ``(v, 3)`` ``vertices`` (mm; meshlib stores
+    them in single precision)."""
     import meshlib.mrmeshnumpy as mrn
 
     import_meshlib()
@@ -88,8 +89,9 @@ def crossing_pairs(
     triangles: NDArray[np.int64],
     region: NDArray[np.bool_] | None = None,
 ) -> NDArray[np.int64]:
-    """``(p, 2)`` indices of the triangle pairs that cross among the ``(t, 3)`` ``triangles`` over ``(v, 3)``
-    ``vertices`` (mm), or among the triangles where ``region`` ``(t,)`` is True (indices into ``triangles``)."""
+    """``(p, 2)`` indices of the triangle pairs that cross among the ``(t, 3)`` ``triangles`` over
+    ``(v, 3)`` ``vertices`` (mm), or among the triangles where ``region`` ``(t,)`` is True (indices
+    into ``triangles``)."""
     mr = import_meshlib()
     chosen = np.arange(len(triangles)) if region is None else np.flatnonzero(region)
     if region is not None:  # a mesh of the region alone: meshlib's tree would cover the whole mesh
@@ -117,8 +119,8 @@ def intersecting_pairs_in_file(path: str | Path) -> tuple[int, int]:
 
 
 def checked(pairs: int, triangles: int, what: str, mesh: Any) -> MeshCheck:
-    """The MeshCheck of a written ``what`` mesh (an UncrossedMesh) whose read-back check found ``pairs``;
-    KernelError if any."""
+    """The MeshCheck of a written ``what`` mesh (an UncrossedMesh) whose read-back check found
+    ``pairs``; KernelError if any."""
     if pairs:
         raise KernelError(
             f"the written {what} file has {pairs} pairs of intersecting triangles (meshlib) "

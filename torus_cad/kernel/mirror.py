@@ -18,7 +18,8 @@ def mirror_trsf() -> gp_Trsf:
 
 
 def mirrored(solid: ShapeT, check: bool = True) -> ShapeT:
-    """``solid`` reflected through the XZ plane, as a new valid solid with outward faces (of the kind ``solid``
+    """``solid`` reflected through the XZ plane, as a new valid solid with outward faces (of the
+    kind ``solid``
     is: OpenCascade's or cadquery's).
 
     The geometry is copied and transformed (not just given a negative location), so the

@@ -1,8 +1,8 @@
 """The root fillet's edges made to read back from a STEP file as valid as they are in memory.
 
 A fillet face's contact edge lies on the fillet surface (its 3D curve is the surface's boundary, to
-1e-13 mm) but only near the blade or hub surface the fillet rolls on: OpenCascade's fillet surface is
-an approximation. In memory the edge's tolerance covers the gap; a STEP file carries no tolerance
+1e-13 mm) but only near the blade or hub surface the fillet rolls on: OpenCascade's fillet surface
+is an approximation. In memory the edge's tolerance covers the gap; a STEP file carries no tolerance
 per edge, and OpenCascade's reader (FreeCAD's too) gives each edge what it samples (mm):
 
 - it finds where each p-curve starts and ends by projecting the 3D curve's end points onto the
@@ -16,37 +16,39 @@ per edge, and OpenCascade's reader (FreeCAD's too) gives each edge what it sampl
   ``InvalidCurveOnSurface`` fault in ``BOPAlgo_ArgumentAnalyzer`` (FreeCAD's check with BOP),
   whose measure (``GeomLib_CheckCurveOnSurface``) finds the largest distance;
 - it closes a gap between the face curves of two edges meeting at a vertex on a face by bending
-  both to meet half way: a fillet contact edge's 3D curve can end up to a few 1e-4 mm from its vertex
-  (its tolerance covers it in memory), so its face curve, square to the surface, ends that far from
-  its neighbour's, and a neighbour that is exact (the blade's trailing-edge curve, tolerance 1e-7 mm)
-  reads back bent, parting from its face most between two samples.
+  both to meet half way: a fillet contact edge's 3D curve can end up to a few 1e-4 mm from its
+  vertex (its tolerance covers it in memory), so its face curve, square to the surface, ends that
+  far from its neighbour's, and a neighbour that is exact (the blade's trailing-edge curve,
+  tolerance 1e-7 mm) reads back bent, parting from its face most between two samples.
 
 So, before the file is written:
 
 0. every edge's 3D curve (a B-spline) that ends farther than
-   :data:`~torus_cad.kernel.readable_edges.READBACK_VERTEX_GAP_MM` from its vertex is moved to end on it (a
-   shift varying linearly along the edge added to it): face curves made square to the surfaces then
-   end on the feet of the vertex, and meet on every face;
-1. every p-curve whose curves part by more than :data:`~torus_cad.kernel.readable_edges.READBACK_MIN_TOLERANCE_MM`,
-   and that is askew, is replaced by the curve of the feet of the perpendiculars from the 3D curve to
-   the surface, at the same parameters (points solved by Gauss-Newton, the p-curve fitted by least
-   squares in a B-spline basis holding the old 3D curve and p-curve and the surface's knot lines they
-   cross, refined until it misses the feet half way between them by at most
+   :data:`~torus_cad.kernel.readable_edges.READBACK_VERTEX_GAP_MM` from its vertex is moved to end
+   on it (a shift varying linearly along the edge added to it): face curves made square to the
+   surfaces then end on the feet of the vertex, and meet on every face;
+1. every p-curve whose curves part by more than
+   :data:`~torus_cad.kernel.readable_edges.READBACK_MIN_TOLERANCE_MM`, and that is askew, is
+   replaced by the curve of the feet of the perpendiculars from the 3D curve to the surface, at the
+   same parameters (points solved by Gauss-Newton, the p-curve fitted by least squares in a B-spline
+   basis holding the old 3D curve and p-curve and the surface's knot lines they cross, refined until
+   it misses the feet half way between them by at most
    :data:`~torus_cad.kernel.readable_edges.READBACK_PCURVE_FIT_MM` or
-   :data:`~torus_cad.kernel.readable_edges.READBACK_PCURVE_FIT_GAP` of the gap), its ends on the feet of the 3D
-   curve's ends: the curves then part square to the surface everywhere, by the real gap only, and the
-   reader's projection of the end points lands where the file says. A new p-curve that would make its
-   face's wire cross itself (two edges meeting at a sliver) is undone;
+   :data:`~torus_cad.kernel.readable_edges.READBACK_PCURVE_FIT_GAP` of the gap), its ends on the
+   feet of the 3D curve's ends: the curves then part square to the surface everywhere, by the real
+   gap only, and the reader's projection of the end points lands where the file says. A new p-curve
+   that would make its face's wire cross itself (two edges meeting at a sliver) is undone;
 2. every edge whose largest distance (looked for on
-   :data:`~torus_cad.kernel.readable_edges.READBACK_WORST_SAMPLES` points and refined by Brent's method:
-   GeomLib_CheckCurveOnSurface can put it a fraction of a percent off next to an end) lies between
-   the reader's samples is split there: each piece then parts most at an end, which the reader
-   samples. The pieces get the tolerance their curves need, not the fillet's.
+   :data:`~torus_cad.kernel.readable_edges.READBACK_WORST_SAMPLES` points and refined by Brent's
+   method: GeomLib_CheckCurveOnSurface can put it a fraction of a percent off next to an end) lies
+   between the reader's samples is split there: each piece then parts most at an end, which the
+   reader samples. The pieces get the tolerance their curves need, not the fillet's.
 
-Before step 1 a high-degree B-spline curve or p-curve gets knots (the same curve) so that OpenCascade's
-span-cache evaluation reads its gap as exactly as the reader's samples do; and :func:`readable_copy`, the
-writer's rewrite, first splits edges at corners inside their range (C0) and drops edges shorter than
-1e-5 mm, each of which BOPAlgo_ArgumentAnalyzer faults in the file read back.
+Before step 1 a high-degree B-spline curve or p-curve gets knots (the same curve) so that
+OpenCascade's span-cache evaluation reads its gap as exactly as the reader's samples do; and
+:func:`readable_copy`, the writer's rewrite, first splits edges at corners inside their range (C0)
+and drops edges shorter than 1e-5 mm, each of which BOPAlgo_ArgumentAnalyzer faults in the file read
+back.
 
 The faces stay as they are (only edges are split and curves replaced); the solid is checked
 (BRepCheck_Analyzer) and its faces keep their parts. Measured on ``workshop_fillet`` (``python
@@ -202,7 +204,8 @@ class ReadableEdges:
 
     Attributes:
         solid: the solid, checked; face_parts: its faces' parts.
-        pcurves: p-curves replaced by the feet of perpendiculars; split: edges split where their curves part most.
+        pcurves: p-curves replaced by the feet of perpendiculars; split: edges split where their
+            curves part most.
         worst_before_mm / worst_after_mm: the largest distance between an edge's 3D curve and a
             p-curve (GeomLib_CheckCurveOnSurface) before and after the p-curves were replaced, mm.
         closed: edges whose 3D curve was moved to end on its vertices.
@@ -218,9 +221,9 @@ class ReadableEdges:
 
 
 def readable_edges(solid: cq.Solid, face_parts: Sequence[int]) -> ReadableEdges:
-    """``solid`` (its faces' parts ``face_parts``) with its edges' curves ending on their vertices, its
-    p-curves square to their surfaces and its edges split where the STEP reader would miss how far
-    their curves part (module doc).
+    """``solid`` (its faces' parts ``face_parts``) with its edges' curves ending on their vertices,
+    its p-curves square to their surfaces and its edges split where the STEP reader would miss how
+    far their curves part (module doc).
 
     The curves are replaced in place (in every shape that shares the edges); the edges' tolerances
     are raised to cover the new curves where needed. Raises KernelError if the result is not one
@@ -302,9 +305,9 @@ def _splits_on_valid_parts(
     result: TopoDS_Shape,
     splits: list[tuple[TopoDS_Edge, list[TopoDS_Face], float, float]],
 ) -> list[tuple[TopoDS_Edge, list[TopoDS_Face], float, float]]:
-    """The ``splits`` none of whose pieces BRepCheck_Analyzer faults in ``result`` (on the piece, its
-    vertices or a face holding it): a split that leaves its neighbourhood invalid is left out, and its
-    edge reads back as it would have without one."""
+    """The ``splits`` none of whose pieces BRepCheck_Analyzer faults in ``result`` (on the piece,
+    its vertices or a face holding it): a split that leaves its neighbourhood invalid is left out,
+    and its edge reads back as it would have without one."""
     analyzer = BRepCheck_Analyzer(result)
     faulty = [
         part
@@ -327,7 +330,8 @@ def _splits_on_valid_parts(
 
 
 def _fault_free(analyzer: BRepCheck_Analyzer, part: TopoDS_Shape) -> bool:
-    """Whether BRepCheck_Analyzer finds no fault on ``part`` itself nor on it in the context of its faces."""
+    """Whether BRepCheck_Analyzer finds no fault on ``part`` itself nor on it in the context of its
+    faces."""
     result = analyzer.Result(part)
     if result is None:
         return True
@@ -342,8 +346,9 @@ def _fault_free(analyzer: BRepCheck_Analyzer, part: TopoDS_Shape) -> bool:
 
 
 def readable_copy(shape: TopoDS_Shape) -> TopoDS_Shape:
-    """A copy of the solid ``shape`` whose edges read back from STEP as they are (:func:`readable_edges`);
-    the copy as it is where making them readable would not give a valid solid. ``shape`` is not changed."""
+    """A copy of the solid ``shape`` whose edges read back from STEP as they are
+    (:func:`readable_edges`); the copy as it is where making them readable would not give a valid
+    solid. ``shape`` is not changed."""
     solid = cq.Solid(_without_micro_edges(_split_at_corners(copied(shape))))
     try:
         return readable_edges(solid, [0] * len(solid.Faces())).solid.wrapped
@@ -352,9 +357,10 @@ def readable_copy(shape: TopoDS_Shape) -> TopoDS_Shape:
 
 
 def _split_at_corners(shape: TopoDS_Shape) -> TopoDS_Shape:
-    """``shape`` with every edge whose 3D curve or p-curve has a corner (a knot of full multiplicity: only C0)
-    inside its range split there, its surfaces as they are: BOPAlgo_ArgumentAnalyzer (FreeCAD's check with
-    BOP) faults a C0 edge (a blade's intersection with the hub's end face inside a root fillet's run-out)."""
+    """``shape`` with every edge whose 3D curve or p-curve has a corner (a knot of full
+    multiplicity: only C0) inside its range split there, its surfaces as they are:
+    BOPAlgo_ArgumentAnalyzer (FreeCAD's check with BOP) faults a C0 edge (a blade's intersection
+    with the hub's end face inside a root fillet's run-out)."""
     divide = ShapeUpgrade_ShapeDivideContinuity(shape)
     divide.SetBoundaryCriterion(GeomAbs_C1)
     divide.SetPCurveCriterion(GeomAbs_C1)
@@ -363,8 +369,9 @@ def _split_at_corners(shape: TopoDS_Shape) -> TopoDS_Shape:
 
 
 def _without_micro_edges(shape: TopoDS_Shape) -> TopoDS_Shape:
-    """``shape`` with every edge shorter than _MICRO_EDGE_MM dropped, its neighbours joined over it: a root
-    fillet can leave a 6e-7 mm edge on the hub, which reads back from STEP as a TooSmallEdge fault."""
+    """``shape`` with every edge shorter than _MICRO_EDGE_MM dropped, its neighbours joined over it:
+    a root fillet can leave a 6e-7 mm edge on the hub, which reads back from STEP as a TooSmallEdge
+    fault."""
     fix = ShapeFix_Wireframe(shape)
     fix.SetPrecision(_MICRO_EDGE_MM)
     fix.SetLimitAngle(-1.0)  # no angle spared: every such edge goes
@@ -373,7 +380,8 @@ def _without_micro_edges(shape: TopoDS_Shape) -> TopoDS_Shape:
 
 
 def _edges_and_faces(shape: TopoDS_Shape) -> list[tuple[TopoDS_Edge, list[TopoDS_Face]]]:
-    """Each edge of ``shape`` with a 3D curve, not degenerated and no seam, with its distinct faces."""
+    """Each edge of ``shape`` with a 3D curve, not degenerated and no seam, with its distinct
+    faces."""
     ancestors = TopTools_IndexedDataMapOfShapeListOfShape()
     TopExp.MapShapesAndAncestors_s(shape, TopAbs_EDGE, TopAbs_FACE, ancestors)
     found = []
@@ -407,10 +415,11 @@ def curves_apart(
 def _close_ends(edge: TopoDS_Edge) -> int:
     """Move ``edge``'s 3D curve to end on its vertices (module doc, step 0) where an end is farther
     from its vertex than READBACK_VERTEX_GAP_MM: the curve (a B-spline; others stay) is cut to the
-    edge's range and a linear shift from the gap at one end to the gap at the other added to it (each
-    pole moved by the shift at its Greville abscissa, which adds the linear function itself to a
-    non-rational curve, a smooth blend of it to a rational one; either way the ends land on the
-    vertices). Returns 1 if the curve was moved, else 0; the p-curves are made to follow afterwards."""
+    edge's range and a linear shift from the gap at one end to the gap at the other added to it
+    (each pole moved by the shift at its Greville abscissa, which adds the linear function itself to
+    a non-rational curve, a smooth blend of it to a rational one; either way the ends land on the
+    vertices). Returns 1 if the curve was moved, else 0; the p-curves are made to follow
+    afterwards."""
     forward = TopoDS.Edge_s(edge.Oriented(TopAbs_FORWARD))
     first, last = BRep_Tool.Range_s(forward)
     curve = BRep_Tool.Curve_s(forward, 0.0, 0.0)
@@ -429,9 +438,9 @@ def _close_ends(edge: TopoDS_Edge) -> int:
 
 
 def _shorter_spans(edge: TopoDS_Edge, faces: Sequence[TopoDS_Face]) -> None:
-    """Cut the spans of ``edge``'s high-degree B-spline 3D curve and p-curves to at most _NOISY_SPAN_SHARE of
-    its range (knots inserted: the same curves, each evaluated as OpenCascade's span cache evaluates it
-    to within the reader's factor; the module's _NOISY_DEGREE)."""
+    """Cut the spans of ``edge``'s high-degree B-spline 3D curve and p-curves to at most
+    _NOISY_SPAN_SHARE of its range (knots inserted: the same curves, each evaluated as OpenCascade's
+    span cache evaluates it to within the reader's factor; the module's _NOISY_DEGREE)."""
     first, last = BRep_Tool.Range_s(edge)
     builder = BRep_Builder()
     curve = _shiftable_bspline(BRep_Tool.Curve_s(edge, 0.0, 0.0))
@@ -477,8 +486,8 @@ def _insert_knots(
 
 
 def _shiftable_bspline(curve: Geom_Curve) -> Geom_BSplineCurve | None:
-    """The non-periodic B-spline under ``curve``'s trims, which :func:`_shifted_curve` can move; None for
-    any other curve (a line, a circle, a periodic B-spline stay as they are)."""
+    """The non-periodic B-spline under ``curve``'s trims, which :func:`_shifted_curve` can move;
+    None for any other curve (a line, a circle, a periodic B-spline stay as they are)."""
     while isinstance(curve, Geom_TrimmedCurve):
         curve = curve.BasisCurve()
     return curve if isinstance(curve, Geom_BSplineCurve) and not curve.IsPeriodic() else None
@@ -487,8 +496,9 @@ def _shiftable_bspline(curve: Geom_Curve) -> Geom_BSplineCurve | None:
 def _shifted_curve(
     basis: Geom_BSplineCurve, first: float, last: float, start: gp_Vec, end: gp_Vec
 ) -> Geom_BSplineCurve:
-    """``basis`` cut to [first, last] with a shift from ``start`` at ``first`` to ``end`` at ``last``
-    added (each pole moved by the shift at its Greville abscissa, so the ends move by exactly those)."""
+    """``basis`` cut to [first, last] with a shift from ``start`` at ``first`` to ``end`` at
+    ``last`` added (each pole moved by the shift at its Greville abscissa, so the ends move by
+    exactly those)."""
     moved = basis.Copy()
     if first > moved.FirstParameter() or last < moved.LastParameter():
         moved.Segment(first, last)
@@ -505,9 +515,9 @@ def _shifted_curve(
 def _greville_shares(
     bspline: Geom_BSplineCurve | Geom2d_BSplineCurve, first: float, last: float
 ) -> list[float]:
-    """Where each pole of ``bspline`` acts along [first, last], as a fraction in [0, 1]: its Greville
-    abscissa (the mean of the ``degree`` knots after the pole's own), which a linear shift of the
-    poles by that fraction turns into the same linear shift of the curve."""
+    """Where each pole of ``bspline`` acts along [first, last], as a fraction in [0, 1]: its
+    Greville abscissa (the mean of the ``degree`` knots after the pole's own), which a linear shift
+    of the poles by that fraction turns into the same linear shift of the curve."""
     count, degree = bspline.NbPoles(), bspline.Degree()
     flat = TColStd_Array1OfReal(1, count + degree + 1)
     bspline.KnotSequence(flat)
@@ -519,11 +529,11 @@ def _greville_shares(
 
 
 def _square_pcurve(edge: TopoDS_Edge, face: TopoDS_Face) -> tuple[float, tuple[float, float]]:
-    """Replace ``edge``'s p-curve on ``face`` by the feet of the perpendiculars from its 3D curve (module
-    doc, step 1), its ends on the feet of the 3D curve's ends, if its curves part by more than
-    READBACK_MIN_TOLERANCE_MM and the new one parts by less; failing that, by the old p-curve shifted
-    linearly to end on those feet. Returns the largest distance before (mm), and after with its
-    parameter. The edge's tolerance is raised to cover the new curve."""
+    """Replace ``edge``'s p-curve on ``face`` by the feet of the perpendiculars from its 3D curve
+    (module doc, step 1), its ends on the feet of the 3D curve's ends, if its curves part by more
+    than READBACK_MIN_TOLERANCE_MM and the new one parts by less; failing that, by the old p-curve
+    shifted linearly to end on those feet. Returns the largest distance before (mm), and after with
+    its parameter. The edge's tolerance is raised to cover the new curve."""
     curve = BRep_Tool.Curve_s(edge, 0.0, 0.0)
     pcurve = BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0)
     first, last = BRep_Tool.Range_s(edge)
@@ -562,7 +572,8 @@ def _square_pcurve(edge: TopoDS_Edge, face: TopoDS_Face) -> tuple[float, tuple[f
 def shifted_pcurve(
     pcurve: Geom2d_Curve, first: float, last: float, ends: NDArray[np.float64]
 ) -> Geom2d_BSplineCurve:
-    """``pcurve`` on [first, last] as a B-spline, shifted linearly in (u, v) to run from ``ends[0]`` to ``ends[1]``."""
+    """``pcurve`` on [first, last] as a B-spline, shifted linearly in (u, v) to run from ``ends[0]``
+    to ``ends[1]``."""
     bspline = Geom2dConvert.CurveToBSplineCurve_s(Geom2d_TrimmedCurve(pcurve, first, last))
     start = ends[0] - np.array(_uv(bspline.Value(first)))
     end = ends[1] - np.array(_uv(bspline.Value(last)))
@@ -583,7 +594,8 @@ def _wires_cross(edge: TopoDS_Edge, face: TopoDS_Face) -> bool:
 
 
 class SquareFit:
-    """The feet of the perpendiculars from a 3D curve to a surface, and a p-curve fitted through them."""
+    """The feet of the perpendiculars from a 3D curve to a surface, and a p-curve fitted through
+    them."""
 
     def __init__(
         self,
@@ -599,9 +611,10 @@ class SquareFit:
 
     def fit(self) -> Geom2d_BSplineCurve | None:
         """The fitted p-curve, refined (a knot added half way along each span where it misses a foot
-        half way between points by more than READBACK_PCURVE_FIT_MM, or READBACK_PCURVE_FIT_GAP of the
-        gap) for READBACK_PCURVE_FIT_ROUNDS at most. None when the old p-curve is as square as that
-        already, or the fit still misses, a foot does not converge or the least squares cannot be solved."""
+        half way between points by more than READBACK_PCURVE_FIT_MM, or READBACK_PCURVE_FIT_GAP of
+        the gap) for READBACK_PCURVE_FIT_ROUNDS at most. None when the old p-curve is as square as
+        that already, or the fit still misses, a foot does not converge or the least squares cannot
+        be solved."""
         try:
             return self._fit()
         # a singular system (scipy's, numpy's): the old p-curve stays
@@ -649,8 +662,9 @@ class SquareFit:
         return best[1]
 
     def feet(self, parameters: NDArray[np.float64]) -> NDArray[np.float64] | None:
-        """``(n, 2)``: (u, v) of the foot of the perpendicular from the 3D curve at each parameter to the
-        surface, by Gauss-Newton from the old p-curve's point; None if one does not converge."""
+        """``(n, 2)``: (u, v) of the foot of the perpendicular from the 3D curve at each parameter
+        to the surface, by Gauss-Newton from the old p-curve's point; None if one does not
+        converge."""
         targets = np.array([_xyz(self.curve.Value(t)) for t in parameters])
         uv = np.array([_uv(self.pcurve.Value(t)) for t in parameters])
         point, d_u, d_v = gp_Pnt(), gp_Vec(), gp_Vec()
@@ -673,7 +687,8 @@ class SquareFit:
         return uv if moved < _FOOT_NOISE_MM else None
 
     def _gap(self, parameters: NDArray[np.float64], feet: NDArray[np.float64]) -> float:
-        """The largest distance (mm) from the 3D curve at ``parameters`` to the surface at ``feet``."""
+        """The largest distance (mm) from the 3D curve at ``parameters`` to the surface at
+        ``feet``."""
         return max(
             self.curve.Value(t).Distance(self.surface.Value(u, v))
             for t, (u, v) in zip(parameters.tolist(), feet.tolist(), strict=True)
@@ -682,7 +697,8 @@ class SquareFit:
     def _misses(
         self, fitted: NDArray[np.float64], exact: NDArray[np.float64]
     ) -> NDArray[np.float64]:
-        """How far (mm) the surface's points at ``fitted`` (u, v) are from its points at ``exact``."""
+        """How far (mm) the surface's points at ``fitted`` (u, v) are from its points at
+        ``exact``."""
         return np.array(
             [
                 self.surface.Value(*a).Distance(self.surface.Value(*b))
@@ -697,8 +713,9 @@ def _basis(
     """A B-spline basis on [first, last] that holds the curve of feet: the higher of the curves'
     degrees (at least 3); the knots of both curves and the parameters where the p-curve crosses a
     knot line of the surface (where the feet, which follow the surface's normal, are one degree less
-    smooth than the surface), close ones merged, each with the multiplicity that keeps the continuity
-    there. Returns the degree, the distinct knots (both ends included) and the inner ones' multiplicities."""
+    smooth than the surface), close ones merged, each with the multiplicity that keeps the
+    continuity there. Returns the degree, the distinct knots (both ends included) and the inner
+    ones' multiplicities."""
     found: list[tuple[float, int]] = []  # (knot, continuity)
     degree = 3
     for geometry in (curve, pcurve):
@@ -761,7 +778,8 @@ def _knot_line_crossings(
 def _flat(
     knots: NDArray[np.float64], multiplicities: NDArray[np.int64], degree: int
 ) -> NDArray[np.float64]:
-    """Clamped flat knots of the distinct ``knots`` (ends included) and the inner ones' multiplicities."""
+    """Clamped flat knots of the distinct ``knots`` (ends included) and the inner ones'
+    multiplicities."""
     return np.concatenate(
         [
             [knots[0]] * (degree + 1),
@@ -774,9 +792,10 @@ def _flat(
 def _sample_parameters(
     knots: NDArray[np.float64], multiplicities: NDArray[np.int64], degree: int
 ) -> NDArray[np.float64]:
-    """Points for a least-squares fit in the basis of distinct ``knots``: in each span, evenly, twice the
-    number of basis functions that start there (its first knot's multiplicity, degree + 1 in the
-    first), and at least degree + 1 (a span a refinement added holds a whole polynomial piece)."""
+    """Points for a least-squares fit in the basis of distinct ``knots``: in each span, evenly,
+    twice the number of basis functions that start there (its first knot's multiplicity, degree + 1
+    in the first), and at least degree + 1 (a span a refinement added holds a whole polynomial
+    piece)."""
     starting = np.concatenate([[degree + 1], multiplicities])
     inside = [
         np.linspace(a, b, max(degree + 1, 2 * int(count)) + 1)[:-1]
@@ -810,7 +829,8 @@ def _true_worst(
     """The largest distance between ``edge``'s 3D curve and its p-curves (mm), and where: on
     READBACK_WORST_SAMPLES points at equal parameters and at ``hints`` (where
     GeomLib_CheckCurveOnSurface found the largest, which it can miss by a fraction of a percent next
-    to an end), each of the largest local maxima refined by Brent's method between its neighbours."""
+    to an end), each of the largest local maxima refined by Brent's method between its
+    neighbours."""
     curve = BRep_Tool.Curve_s(edge, 0.0, 0.0)
     first, last = BRep_Tool.Range_s(edge)
     worst = (0.0, first)
@@ -861,8 +881,9 @@ def _cover(edge: TopoDS_Edge, worst_mm: float) -> None:
 def _split_parameter(
     edge: TopoDS_Edge, faces: Sequence[TopoDS_Face], worst: float, where: float
 ) -> float | None:
-    """``where`` (the parameter at which ``edge``'s curves part most, by ``worst`` mm) if that is more
-    than the reader would give the edge and not at an end (module doc, step 2); None otherwise."""
+    """``where`` (the parameter at which ``edge``'s curves part most, by ``worst`` mm) if that is
+    more than the reader would give the edge and not at an end (module doc, step 2); None
+    otherwise."""
     if worst <= READBACK_MIN_TOLERANCE_MM:
         return None
     curve = BRep_Tool.Curve_s(edge, 0.0, 0.0)
@@ -884,14 +905,15 @@ def _split_parameter(
 def _split(
     edge: TopoDS_Edge, faces: Sequence[TopoDS_Face], parameter: float, needed: float | None
 ) -> TopoDS_Wire:
-    """``edge`` (forward) as two edges meeting at ``parameter``, with the same p-curves, as a wire. Each
-    piece's 3D curve is moved by READBACK_SPLIT_MARGIN_MM at the split, away from the face it parts
-    most from there (a shift fading linearly to nothing at its other end): its largest distance is then
-    at the split by more than the rounding of the curves' evaluation (measured: 1.2e-12 mm between
-    GeomLib_CheckCurveOnSurface's value and the point's, 1e-5 of a 1.1e-7 mm gap, as much as the
-    reader's factor). A piece shorter than :data:`_SHORT_PIECE` times the largest tolerance at it gets
-    ``needed`` (mm, what its curves need) if given, not the fillet's tolerance, which would leave it
-    inside its vertices' spheres (a TooSmallEdge fault); so does the vertex between the pieces."""
+    """``edge`` (forward) as two edges meeting at ``parameter``, with the same p-curves, as a wire.
+    Each piece's 3D curve is moved by READBACK_SPLIT_MARGIN_MM at the split, away from the face it
+    parts most from there (a shift fading linearly to nothing at its other end): its largest
+    distance is then at the split by more than the rounding of the curves' evaluation (measured:
+    1.2e-12 mm between GeomLib_CheckCurveOnSurface's value and the point's, 1e-5 of a 1.1e-7 mm gap,
+    as much as the reader's factor). A piece shorter than :data:`_SHORT_PIECE` times the largest
+    tolerance at it gets ``needed`` (mm, what its curves need) if given, not the fillet's tolerance,
+    which would leave it inside its vertices' spheres (a TooSmallEdge fault); so does the vertex
+    between the pieces."""
     builder = BRep_Builder()
     forward = TopoDS.Edge_s(edge.Oriented(TopAbs_FORWARD))
     first, last = BRep_Tool.Range_s(forward)

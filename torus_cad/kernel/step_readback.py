@@ -13,16 +13,17 @@ points along the edge at equal parameters, times 1.00001, at least 1e-7 mm), wha
 give the same edge tolerances read back). It also finds where each p-curve starts and ends by
 projecting the 3D curve's end points onto it, and reparametrizes a p-curve whose curve the 3D curve
 leaves askew. An edge whose curves part most between those samples, or whose p-curve is askew, reads
-back with a tolerance that does not cover them. So a solid valid in memory can read back invalid, and
-the file is checked as read, not the solid. What the kernel does about it: the blade-hub
+back with a tolerance that does not cover them. So a solid valid in memory can read back invalid,
+and the file is checked as read, not the solid. What the kernel does about it: the blade-hub
 intersection edges are rebuilt to 4e-8 mm (torus_cad.kernel.edge_curves), a root fillet's edges
 moved to end on their vertices, its p-curves squared and its edges split where the largest distance
 falls between samples
-(torus_cad.kernel.readable_edges). Measured, every test on (``python scripts/step_readback_check.py``,
-``examples/workshop_fillet.toml`` as argument for the root fillet): every shipped design reads back
-with 0 faults; ``workshop_fillet`` had 93 ``InvalidCurveOnSurface`` faults before the fillet's edges
-were made readable, ``prop_10x5_2blade`` and ``marine_3blade_loop`` with a 0.5 mm fillet (``--fillet
-0.5 --fast``) 4 and 6 before the edges' 3D curves were also moved to end on their vertices.
+(torus_cad.kernel.readable_edges). Measured, every test on (``python
+scripts/step_readback_check.py``, ``examples/workshop_fillet.toml`` as argument for the root
+fillet): every shipped design reads back with 0 faults; ``workshop_fillet`` had 93
+``InvalidCurveOnSurface`` faults before the fillet's edges were made readable, ``prop_10x5_2blade``
+and ``marine_3blade_loop`` with a 0.5 mm fillet (``--fillet 0.5 --fast``) 4 and 6 before the edges'
+3D curves were also moved to end on their vertices.
 """
 
 from __future__ import annotations
@@ -99,8 +100,8 @@ def read_step(path: str | Path) -> cq.Shape:
 
 
 def read_step_shape(path: str | Path) -> TopoDS_Shape:
-    """:func:`read_step` as OpenCascade's shape (no cadquery); KernelError for a file that does not read
-    or holds no shape."""
+    """:func:`read_step` as OpenCascade's shape (no cadquery); KernelError for a file that does not
+    read or holds no shape."""
     reader = STEPControl_Reader()
     if reader.ReadFile(str(path)) != IFSelect_RetDone:
         raise KernelError(f"cannot read STEP file {str(path)!r}")
@@ -112,8 +113,9 @@ def read_step_shape(path: str | Path) -> TopoDS_Shape:
 
 
 def argument_faults(shape: TopoDS_Shape, self_interference: bool = True) -> ArgumentFaults:
-    """BOPAlgo_ArgumentAnalyzer with every test of :data:`ANALYZER_TESTS` on ``shape`` (single-threaded);
-    without the self-interference test if ``self_interference`` is False (see :func:`check_step_readback`)."""
+    """BOPAlgo_ArgumentAnalyzer with every test of :data:`ANALYZER_TESTS` on ``shape``
+    (single-threaded); without the self-interference test if ``self_interference`` is False (see
+    :func:`check_step_readback`)."""
     start = time.perf_counter()
     results = list(_analyzer(shape, self_interference).GetCheckResult())
     counts = Counter(_status(result) for result in results)
@@ -122,7 +124,8 @@ def argument_faults(shape: TopoDS_Shape, self_interference: bool = True) -> Argu
 
 
 def _analyzer(shape: TopoDS_Shape, self_interference: bool) -> BOPAlgo_ArgumentAnalyzer:
-    """The analyzer run on ``shape`` with every test (but self-interference unless ``self_interference``)."""
+    """The analyzer run on ``shape`` with every test (but self-interference unless
+    ``self_interference``)."""
     analyzer = BOPAlgo_ArgumentAnalyzer()
     analyzer.SetShape1(shape)
     for test in ANALYZER_TESTS:
@@ -134,7 +137,8 @@ def _analyzer(shape: TopoDS_Shape, self_interference: bool) -> BOPAlgo_ArgumentA
 
 
 def step_readback_faults(path: str | Path, self_interference: bool = True) -> ArgumentFaults:
-    """:func:`argument_faults` of the shape OpenCascade's STEP reader (default settings) makes of ``path``."""
+    """:func:`argument_faults` of the shape OpenCascade's STEP reader (default settings) makes of
+    ``path``."""
     return argument_faults(read_step_shape(path), self_interference)
 
 
@@ -143,9 +147,9 @@ def check_step_readback(
 ) -> ArgumentFaults:
     """The faults of ``path`` read back (none); KernelError naming the first fault otherwise.
 
-    ``self_interference=False`` leaves out the one costly test (on the default's file read back 1.3 s
-    of CPU, the other tests together 0.2 s): the build runs it, on the blade pattern, on the solid the
-    file is written from (torus_cad.kernel.strict), whose faces the file carries unchanged.
+    ``self_interference=False`` leaves out the one costly test (on the default's file read back 1.3
+    s of CPU, the other tests together 0.2 s): the build runs it, on the blade pattern, on the solid
+    the file is written from (torus_cad.kernel.strict), whose faces the file carries unchanged.
     """
     shape = read_step_shape(path)
     faults = argument_faults(shape, self_interference)
@@ -175,8 +179,10 @@ class EdgeFault:
     Attributes:
         status: the analyzer's status name (``InvalidCurveOnSurface``, ...).
         edge_kind: what the edge is in the propeller (:func:`edge_kind`).
-        surfaces: the surface types on its sides, sorted, joined by ", " ("BSplineSurface, Cylinder").
-        gap_mm: how far the edge's curves part (the analyzer's largest distance), mm; 0 if not measured.
+        surfaces: the surface types on its sides, sorted, joined by ", " ("BSplineSurface,
+            Cylinder").
+        gap_mm: how far the edge's curves part (the analyzer's largest distance), mm; 0 if not
+            measured.
         tolerance_mm: the edge's tolerance (as the reader gave it, for a file read back), mm.
     """
 
@@ -198,8 +204,8 @@ class EdgeFault:
 
 
 def classified_faults(shape: TopoDS_Shape) -> list[EdgeFault]:
-    """The argument analyzer's faults on ``shape``'s edges (every test but self-interference), each with
-    its edge's kind (:func:`edge_kind`)."""
+    """The argument analyzer's faults on ``shape``'s edges (every test but self-interference), each
+    with its edge's kind (:func:`edge_kind`)."""
     analyzer = _analyzer(shape, self_interference=False)
     ancestors = TopTools_IndexedDataMapOfShapeListOfShape()
     TopExp.MapShapesAndAncestors_s(shape, TopAbs_EDGE, TopAbs_FACE, ancestors)
@@ -231,10 +237,11 @@ def classified_faults(shape: TopoDS_Shape) -> list[EdgeFault]:
 
 
 def edge_kind(edge: TopoDS_Edge, faces: list[TopoDS_Face], fillet_faces: list[TopoDS_Face]) -> str:
-    """What ``edge`` (between ``faces``) is in a propeller: 'blade-hub intersection', 'root fillet on the
-    hub', 'root fillet on the blade', 'root fillet seam', 'trailing edge' (a crease between blade faces),
-    'blade face seam' (blade faces meeting tangentially), 'hub feature' (bore, D-flat, set screw, chamfer,
-    end faces) or 'face seam' (an edge of one face only). ``fillet_faces``: the root fillet's faces.
+    """What ``edge`` (between ``faces``) is in a propeller: 'blade-hub intersection', 'root fillet
+    on the hub', 'root fillet on the blade', 'root fillet seam', 'trailing edge' (a crease between
+    blade faces), 'blade face seam' (blade faces meeting tangentially), 'hub feature' (bore, D-flat,
+    set screw, chamfer, end faces) or 'face seam' (an edge of one face only). ``fillet_faces``: the
+    root fillet's faces.
 
     Blade and fillet faces are B-spline surfaces, the hub's analytic (plane, cylinder, cone)."""
     if len(faces) != 2:
@@ -253,8 +260,8 @@ def edge_kind(edge: TopoDS_Edge, faces: list[TopoDS_Face], fillet_faces: list[To
 
 
 def _fillet_faces(ancestors: TopTools_IndexedDataMapOfShapeListOfShape) -> list[TopoDS_Face]:
-    """The B-spline faces that meet a hub face tangentially: the root fillet's (a blade crosses the hub
-    at an angle)."""
+    """The B-spline faces that meet a hub face tangentially: the root fillet's (a blade crosses the
+    hub at an angle)."""
     found: list[TopoDS_Face] = []
     for index in range(1, ancestors.Extent() + 1):
         faces = distinct_faces(ancestors.FindFromIndex(index))
@@ -269,7 +276,8 @@ def _fillet_faces(ancestors: TopTools_IndexedDataMapOfShapeListOfShape) -> list[
 
 
 def _tangent(edge: TopoDS_Edge, faces: list[TopoDS_Face]) -> bool:
-    """Whether the two faces' outward normals agree to within TANGENT_FACES_DEG at the edge's middle."""
+    """Whether the two faces' outward normals agree to within TANGENT_FACES_DEG at the edge's
+    middle."""
     first, last = BRep_Tool.Range_s(edge)
     normals = []
     for face in faces:
@@ -294,7 +302,8 @@ def _status(result: object) -> str:
 
 
 def _describe(result: object) -> str:
-    """'InvalidCurveOnSurface: edge (tolerance 1e-07 mm) on a BSplineSurface face, 2.1e-06 mm apart'."""
+    """'InvalidCurveOnSurface: edge (tolerance 1e-07 mm) on a BSplineSurface face, 2.1e-06 mm
+    apart'."""
     shapes = [*result.GetFaultyShapes1(), *result.GetFaultyShapes2()]  # type: ignore[attr-defined]
     parts = []
     for shape in shapes:

@@ -1,4 +1,5 @@
-"""The strict validity check: BRepCheck_Analyzer and BRepAlgoAPI_Check (small edges, self-interference).
+"""The strict validity check: BRepCheck_Analyzer and BRepAlgoAPI_Check (small edges,
+self-interference).
 
 ``BRepCheck_Analyzer`` checks topology and tolerances only; ``BRepAlgoAPI_Check(shape, True, True)``
 (what FreeCAD's "Check geometry" runs) also intersects every pair of sub-shapes whose boxes
@@ -90,18 +91,20 @@ class StrictCheck:
 
 @dataclass(frozen=True)
 class _Pattern:
-    """A solid's faces as hub faces and n copies of blade 0's faces (copy k's faces in blade 0's order)."""
+    """A solid's faces as hub faces and n copies of blade 0's faces (copy k's faces in blade 0's
+    order)."""
 
     hub: list[TopoDS_Face]
     copies: list[list[TopoDS_Face]]
 
 
 def strict_valid_solid(shape: ShapeT, what: str) -> tuple[ShapeT, StrictCheck]:
-    """The one solid of ``shape`` (of its kind: OpenCascade's or cadquery's) and what it passed; KernelError naming the check and the face otherwise.
+    """The one solid of ``shape`` (of its kind: OpenCascade's or cadquery's) and what it passed;
+    KernelError naming the check and the face otherwise.
 
-    :func:`torus_cad.kernel.checks.single_valid_solid` (one solid, one closed shell, BRepCheck_Analyzer),
-    then BRepAlgoAPI_Check with the small-edge and self-interference tests, on the scope the module
-    docstring describes.
+    :func:`torus_cad.kernel.checks.single_valid_solid` (one solid, one closed shell,
+    BRepCheck_Analyzer), then BRepAlgoAPI_Check with the small-edge and self-interference tests, on
+    the scope the module docstring describes.
     """
     start = time.perf_counter()
     solid = single_valid_solid(shape, what)
@@ -120,7 +123,8 @@ def strict_valid_solid(shape: ShapeT, what: str) -> tuple[ShapeT, StrictCheck]:
 
 
 def boolean_check_faults(shape: TopoDS_Shape) -> list[tuple[str, list[TopoDS_Shape]]]:
-    """BRepAlgoAPI_Check(shape, small edges, self-interference): (status name, faulty shapes) per fault.
+    """BRepAlgoAPI_Check(shape, small edges, self-interference): (status name, faulty shapes) per
+    fault.
 
     Without OpenCascade's thread pool: the check runs in a forked child, where the parent's pool
     threads are not, and a parallel check waits for them forever."""
@@ -188,7 +192,8 @@ def _raise_on_faults(
 
 
 def _describe(where: _Where, solid: TopoDS_Shape, pattern: _Pattern | None) -> str:
-    """'face 7 of solid.Faces() (blade 0, BSplineSurface)' for a face index; the shape type otherwise."""
+    """'face 7 of solid.Faces() (blade 0, BSplineSurface)' for a face index; the shape type
+    otherwise."""
     if isinstance(where, str) or where < 0:
         return str(where) if isinstance(where, str) else "a face of the checked shape"
     faces = TopTools_IndexedMapOfShape()
@@ -273,7 +278,8 @@ def _is_rotation_about_z(transformation: Any) -> bool:
 
 
 def _axisymmetric_surface(face: TopoDS_Face) -> bool:
-    """Whether ``face``'s surface is symmetric about the z axis: a plane normal to it, a cylinder or cone about it."""
+    """Whether ``face``'s surface is symmetric about the z axis: a plane normal to it, a cylinder or
+    cone about it."""
     surface = BRepAdaptor_Surface(face)
     kind = surface.GetType()
     if kind == GeomAbs_Plane:
@@ -298,7 +304,8 @@ def _box(shapes: Sequence[TopoDS_Shape]) -> Bnd_Box:
 
 
 def _copies_near_asymmetric_hub_faces(pattern: _Pattern) -> list[int]:
-    """Copies other than blade 0 whose box meets the box of a hub face that is not symmetric about z."""
+    """Copies other than blade 0 whose box meets the box of a hub face that is not symmetric about
+    z."""
     asymmetric = [face for face in pattern.hub if not _axisymmetric_surface(face)]
     if not asymmetric:
         return []

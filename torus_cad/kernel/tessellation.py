@@ -1,5 +1,6 @@
-"""OpenCascade's tessellation of a shape as arrays, face by face: the one tessellation of the package
-(the STL's comparison, the 3MF file, the preview picture and the studio's display all read it)."""
+"""OpenCascade's tessellation of a shape as arrays, face by face: the one tessellation of the
+package (the STL's comparison, the 3MF file, the preview picture and the studio's display all read
+it)."""
 
 from __future__ import annotations
 
@@ -24,7 +25,8 @@ class FaceTriangles:
     Attributes:
         vertices: ``(v, 3)`` float, mm.
         triangles: ``(f, 3)`` int vertex indices, counter-clockwise seen from outside the solid.
-        surface_type: the face's surface kind as cadquery names it ("PLANE", "CYLINDER", "BSPLINE", ...).
+        surface_type: the face's surface kind as cadquery names it ("PLANE", "CYLINDER", "BSPLINE",
+            ...).
         face_index: the face's position in ``shape.Faces()``.
     """
 
@@ -39,7 +41,8 @@ def tessellate_faces(
 ) -> list[FaceTriangles]:
     """Tessellate a copy of ``shape`` exactly as ``write_stl`` does (absolute deflection in mm,
     angular in radians; the shape's own triangulation is left alone) and return the triangles of
-    every face that has some, in ``shape.Faces()`` order. ``parallel``: OpenCascade's mesher threads."""
+    every face that has some, in ``shape.Faces()`` order. ``parallel``: OpenCascade's mesher
+    threads."""
     copy = copied(occ(shape))
     # meshes here
     mesher = BRepMesh_IncrementalMesh(copy, linear_deflection, False, angular_deflection, parallel)
@@ -54,7 +57,8 @@ def tessellate_faces(
 
 
 def face_triangulation(face: TopoDS_Face) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
-    """The vertices ``(k, 3)`` and outward triangles ``(m, 3)`` of a meshed face (empty if unmeshed)."""
+    """The vertices ``(k, 3)`` and outward triangles ``(m, 3)`` of a meshed face (empty if
+    unmeshed)."""
     location = TopLoc_Location()
     mesh = BRep_Tool.Triangulation_s(face, location)
     if mesh is None or mesh.NbTriangles() == 0:

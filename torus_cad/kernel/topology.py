@@ -1,5 +1,5 @@
-"""Small OpenCascade helpers shared by the kernel: walking a shape's sub-shapes, running booleans, and
-taking a shape either as OpenCascade's own (``TopoDS_Shape``) or as cadquery's wrapper of one.
+"""Small OpenCascade helpers shared by the kernel: walking a shape's sub-shapes, running booleans,
+and taking a shape either as OpenCascade's own (``TopoDS_Shape``) or as cadquery's wrapper of one.
 
 The build's own path (``torus-cad build``) works on OpenCascade's shapes and never imports cadquery,
 whose import loads VTK (through ``OCP.IVtkOCC``), ezdxf and more: over a second of a cold start
@@ -78,8 +78,8 @@ def occ(shape: AnyShape) -> TopoDS_Shape:
 
 
 def like(template: ShapeT, shape: TopoDS_Shape) -> ShapeT:
-    """``shape`` as the kind ``template`` is: itself for an OpenCascade shape, cadquery's wrapper of it
-    (the subclass of its type: Solid, Compound, ...) for a cadquery shape."""
+    """``shape`` as the kind ``template`` is: itself for an OpenCascade shape, cadquery's wrapper of
+    it (the subclass of its type: Solid, Compound, ...) for a cadquery shape."""
     if isinstance(template, TopoDS_Shape):
         return cast(ShapeT, shape)
     import cadquery as cq
@@ -96,7 +96,8 @@ def distinct(shape: TopoDS_Shape, kind: TopAbs_ShapeEnum) -> list[TopoDS_Shape]:
 
 
 def solids(shape: TopoDS_Shape) -> list[TopoDS_Shape]:
-    """The solids of ``shape`` (itself if it is one), as cadquery's ``Shape.Solids()`` lists them."""
+    """The solids of ``shape`` (itself if it is one), as cadquery's ``Shape.Solids()`` lists
+    them."""
     return distinct(shape, TopAbs_SOLID)
 
 
@@ -106,12 +107,14 @@ def shells(shape: TopoDS_Shape) -> list[TopoDS_Shape]:
 
 
 def copied(shape: TopoDS_Shape) -> TopoDS_Shape:
-    """A deep copy of ``shape`` (geometry copied, no triangulation), as cadquery's ``Shape.copy()``."""
+    """A deep copy of ``shape`` (geometry copied, no triangulation), as cadquery's
+    ``Shape.copy()``."""
     return BRepBuilderAPI_Copy(shape, True, False).Shape()
 
 
 def transformed(shape: TopoDS_Shape, transform: gp_Trsf) -> TopoDS_Shape:
-    """``shape`` transformed into a new shape (its geometry copied), as cadquery's ``rotate`` / ``mirror`` do."""
+    """``shape`` transformed into a new shape (its geometry copied), as cadquery's ``rotate`` /
+    ``mirror`` do."""
     return BRepBuilderAPI_Transform(shape, transform, True).Shape()
 
 
@@ -155,7 +158,8 @@ def faces(shape: TopoDS_Shape) -> list[TopoDS_Face]:
 
 
 def faces_in_order(shape: TopoDS_Shape) -> list[TopoDS_Face]:
-    """The distinct faces of ``shape`` in the order of cadquery's ``Shape.Faces()`` (TopExp's indexed map)."""
+    """The distinct faces of ``shape`` in the order of cadquery's ``Shape.Faces()`` (TopExp's
+    indexed map)."""
     return [TopoDS.Face_s(face) for face in distinct(shape, TopAbs_FACE)]
 
 

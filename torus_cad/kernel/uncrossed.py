@@ -1,5 +1,5 @@
-"""The uncrossed tessellation: one closed triangle mesh of a solid whose triangles intersect nowhere,
-which the STL and the 3MF writers both write.
+"""The uncrossed tessellation: one closed triangle mesh of a solid whose triangles intersect
+nowhere, which the STL and the 3MF writers both write.
 
 OpenCascade's mesher (BRepMesh) triangulates face by face within the linear and angular
 deflections. Two faces that meet at a knife edge (a sharp trailing edge: zero thickness) share
@@ -70,7 +70,8 @@ class UncrossedMesh:
         triangles: ``(t, 3)`` int vertex indices, counter-clockwise seen from outside.
         linear_deflection_mm: the mesher's linear deflection, mm.
         angular_deflection_rad: its angular deflection, rad.
-        repaired_pairs: crossing triangle pairs of the tessellation that meshlib repaired (0: none crossed).
+        repaired_pairs: crossing triangle pairs of the tessellation that meshlib repaired (0: none
+            crossed).
         repair: meshlib's passes that repaired them (e.g. "Relax+Relax"; "" if none).
         repair_deviation_mm: the largest distance of the tessellation from the repaired mesh, mm.
     """
@@ -87,11 +88,13 @@ class UncrossedMesh:
 def uncrossed_mesh(
     shape: AnyShape, linear_deflection: float, angular_deflection: float
 ) -> UncrossedMesh:
-    """OpenCascade's tessellation of a copy of ``shape`` (absolute deflection, mm; angular, rad), its faces'
-    shared nodes merged, with any crossing triangles repaired by meshlib (see the module doc). Where the
-    repair would move a coarse tessellation further than MESH_REPAIR_MAX_DEVIATION_MM (a user's large
-    deflection: long triangles cross far), or where OpenCascade's tessellation is open (module doc), the
-    linear deflection is halved, up to MESH_REFINE_HALVINGS times, and the finer tessellation used instead.
+    """OpenCascade's tessellation of a copy of ``shape`` (absolute deflection, mm; angular, rad),
+    its faces' shared nodes merged, with any crossing triangles repaired by meshlib (see the module
+    doc). Where the repair would move a coarse tessellation further than
+    MESH_REPAIR_MAX_DEVIATION_MM (a user's large
+    deflection: long triangles cross far), or where OpenCascade's tessellation is open (module doc),
+    the linear deflection is halved, up to MESH_REFINE_HALVINGS times, and the finer tessellation
+    used instead.
 
     Raises KernelError when OpenCascade cannot tessellate the solid or the crossings cannot be
     repaired into a closed mesh within MESH_REPAIR_MAX_DEVIATION_MM (naming the face and where)."""
@@ -121,8 +124,8 @@ class _Open(_TooCoarse):
 def _uncrossed_at(
     shape: AnyShape, linear_deflection: float, angular_deflection: float
 ) -> UncrossedMesh:
-    """:func:`uncrossed_mesh` at one linear deflection; _TooCoarse when the tessellation is open or the repair
-    moves it too far."""
+    """:func:`uncrossed_mesh` at one linear deflection; _TooCoarse when the tessellation is open or
+    the repair moves it too far."""
     copy = copied(occ(shape))
     # meshes here
     mesher = BRepMesh_IncrementalMesh(copy, linear_deflection, False, angular_deflection, True)
@@ -172,9 +175,10 @@ def _uncrossed_at(
 def _repaired(
     points: NDArray[np.float64], triangles: NDArray[np.int64]
 ) -> tuple[NDArray[np.float64], NDArray[np.int64], list[str], float] | None:
-    """meshlib's SelfIntersections.fix of the mesh, pass after pass of MESH_REPAIR_PASSES until nothing
-    crosses: the vertices, triangles, the passes used and the largest distance (mm) of the tessellation
-    from the result; None unless the result is closed and free of crossings."""
+    """meshlib's SelfIntersections.fix of the mesh, pass after pass of MESH_REPAIR_PASSES until
+    nothing
+    crosses: the vertices, triangles, the passes used and the largest distance (mm) of the
+    tessellation from the result; None unless the result is closed and free of crossings."""
     import meshlib.mrmeshnumpy as mrn
     import meshlib.mrmeshpy as mr
 
@@ -202,8 +206,8 @@ def _repaired(
 
 
 def _faces_with_holes(triangles: NDArray[np.int64], owner: NDArray[np.int64]) -> list[int]:
-    """The faces (indices) owning a triangle side that no other triangle shares (a hole's rim), or that
-    more than two share; empty for a closed, manifold tessellation."""
+    """The faces (indices) owning a triangle side that no other triangle shares (a hole's rim), or
+    that more than two share; empty for a closed, manifold tessellation."""
     rim = side_use_counts(triangles) != 2
     return sorted({int(face) for face in np.repeat(owner, 3)[rim]})
 
@@ -237,8 +241,8 @@ def _merged_tessellation(
 
 
 def _merge(points: NDArray[np.float64]) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
-    """Each point's index among the merged ones (nodes closer than MESH_MERGE_DISTANCE_MM are one: faces
-    store their boundary nodes each in its own placement), and the points kept."""
+    """Each point's index among the merged ones (nodes closer than MESH_MERGE_DISTANCE_MM are one:
+    faces store their boundary nodes each in its own placement), and the points kept."""
     representative = np.arange(len(points))
     pairs = cKDTree(points).query_pairs(MESH_MERGE_DISTANCE_MM, output_type="ndarray")
     for first, second in pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))].tolist():

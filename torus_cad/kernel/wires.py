@@ -5,7 +5,8 @@ values, so all section curves are compatible and the loft needs no knot insertio
 keeps the blade surface light and the boolean fast). Each curve starts and ends exactly at
 the sharp trailing edge: the corner is the curve's end point, a C0 joint, so the spline
 never has to turn through it and cannot overshoot or self-intersect there. The fit itself is
-kernel-free (:mod:`torus_cad.geometry.section.section_fit`), so that its refusals come before the kernel loads.
+kernel-free (:mod:`torus_cad.geometry.section.section_fit`), so that its refusals come before the
+kernel loads.
 
 The wire of a sharp section is two edges, the lower surface (trailing edge to leading edge)
 and the upper one (back to the trailing edge), split at the leading edge's curve parameter
@@ -31,8 +32,8 @@ split there into two edges, the base and the airfoil, so the loft gives the base
 For the root fillet, :meth:`SectionCurves.wires` can also split the airfoil edge into equal
 pieces in parameter (exact copies of its spans, :meth:`Geom_BSplineCurve.Segment`): with a
 round cap the blade's airfoil face is not closed, so the fillet's split of closed side faces
-(:mod:`torus_cad.kernel.fillet.root_fillet`) does not apply, and the fillet rolls round the cap only with
-the airfoil face in pieces (measured: README, "Root fillet").
+(:mod:`torus_cad.kernel.fillet.root_fillet`) does not apply, and the fillet rolls round the cap only
+with the airfoil face in pieces (measured: README, "Root fillet").
 """
 
 from __future__ import annotations
@@ -68,8 +69,9 @@ __all__ = [
 
 @dataclass(frozen=True)
 class SectionCurves(SectionFit):
-    """Compatible cubic B-splines of all sections (:class:`torus_cad.geometry.section.section_fit.SectionFit`:
-    plain arrays), and the section wires the loft takes."""
+    """Compatible cubic B-splines of all sections
+    (:class:`torus_cad.geometry.section.section_fit.SectionFit`: plain arrays), and the section
+    wires the loft takes."""
 
     def wires(self, airfoil_pieces: int = 1, split_sharp: bool = True) -> list[cq.Wire]:
         """:meth:`occ_wires` as cadquery's wires."""
@@ -82,9 +84,9 @@ class SectionCurves(SectionFit):
 
         Sharp trailing edge: with ``airfoil_pieces`` 1, two edges (lower and upper surface, split
         at the leading edge; one closed edge with ``split_sharp`` False, for the root fillet, which
-        splits the closed face itself: torus_cad.kernel.fillet.root_fillet); otherwise ``airfoil_pieces`` edges
-        of equal parameter ranges. Blunt: the base and the airfoil edge, the latter split into
-        ``airfoil_pieces`` equal ranges.
+        splits the closed face itself: torus_cad.kernel.fillet.root_fillet); otherwise
+        ``airfoil_pieces`` edges of equal parameter ranges. Blunt: the base and the airfoil edge,
+        the latter split into ``airfoil_pieces`` equal ranges.
         """
         split = self.leading_edge_parameter if split_sharp else None
         return [occ_bspline_wire(poles, self.knots, airfoil_pieces, split) for poles in self.poles]
@@ -97,8 +99,8 @@ def fit_section_curves(
     lower_corner_index: int | None = None,
     round_trailing_edge: bool = False,
 ) -> SectionCurves:
-    """:func:`torus_cad.geometry.section.section_fit.fit_sections` (its arguments, its GeometryError), as curves that
-    make wires."""
+    """:func:`torus_cad.geometry.section.section_fit.fit_sections` (its arguments, its
+    GeometryError), as curves that make wires."""
     fit = fit_sections(
         section_points, trailing_edge_index, chord_lengths, lower_corner_index, round_trailing_edge
     )
@@ -125,7 +127,8 @@ def _bspline_curve(poles: NDArray[np.float64], knots: NDArray[np.float64]) -> Ge
 
 
 def _segment(curve: Geom_BSplineCurve, first: float, last: float) -> Geom_BSplineCurve:
-    """The part of ``curve`` on [first, last], as a B-spline of its own (the same spans, clamped there)."""
+    """The part of ``curve`` on [first, last], as a B-spline of its own (the same spans, clamped
+    there)."""
     piece = curve.Copy()  # OCP hands back the copy as a Geom_BSplineCurve
     if not isinstance(piece, Geom_BSplineCurve):
         raise KernelError("OpenCascade did not copy a section's B-spline as a B-spline")
@@ -158,7 +161,8 @@ def occ_bspline_wire(
     last_pieces: int = 1,
     closed_split: float | None = 0.5,
 ) -> TopoDS_Wire:
-    """A closed wire (OpenCascade's) from ``(m, 3)`` poles and a full knot vector of a non-rational cubic B-spline.
+    """A closed wire (OpenCascade's) from ``(m, 3)`` poles and a full knot vector of a non-rational
+    cubic B-spline.
 
     One edge per piece between C0 corner knots (see :func:`_corner_knots`), so that each piece
     lofts into its own face; the last piece (the airfoil) is further split into ``last_pieces``
@@ -187,7 +191,8 @@ def occ_bspline_wire(
 def _pieces(
     poles: NDArray[np.float64], knots: NDArray[np.float64]
 ) -> list[tuple[NDArray[np.float64], NDArray[np.float64]]]:
-    """The curve split at its C0 corner knots: ``(poles, knots)`` per piece, pieces share their corner pole."""
+    """The curve split at its C0 corner knots: ``(poles, knots)`` per piece, pieces share their
+    corner pole."""
     pieces = []
     start_pole, start_knot = 0, knots[0]
     for corner in corner_knots(knots):

@@ -1,4 +1,5 @@
-"""Assemble the propeller's mesh: only what meets the hub goes through the union, the rest is joined back.
+"""Assemble the propeller's mesh: only what meets the hub goes through the union, the rest is joined
+back.
 
 Most of a blade lies well clear of the hub, and the union would copy it triangle for triangle.
 So each blade's grid is cut at the first and last sections wholly clear of the hub

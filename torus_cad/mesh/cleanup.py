@@ -28,7 +28,8 @@ MESH_NEEDLE_EDGE_RATIO = 0.1
 
 @dataclass
 class _Adjacency:
-    """Faces around each vertex, built for the whole mesh at once (CSR), edited locally as edges collapse."""
+    """Faces around each vertex, built for the whole mesh at once (CSR), edited locally as edges
+    collapse."""
 
     faces: NDArray[np.int64]
     starts: NDArray[np.int64]
@@ -55,7 +56,8 @@ class _Adjacency:
 
 
 def junction_vertices(mesh: LabeledMesh) -> NDArray[np.bool_]:
-    """``(v,)`` True for vertices used by faces of two different parts (the union's intersection curves)."""
+    """``(v,)`` True for vertices used by faces of two different parts (the union's intersection
+    curves)."""
     low = np.full(len(mesh.vertices), np.iinfo(np.int16).max, dtype=np.int16)
     high = np.full(len(mesh.vertices), -1, dtype=np.int16)
     labels = np.repeat(mesh.part, 3)
@@ -86,7 +88,8 @@ def collapse_junction_needles(mesh: LabeledMesh) -> tuple[LabeledMesh, Cleanup]:
 
 
 def collapse_keeping(mesh: LabeledMesh) -> tuple[LabeledMesh, Cleanup, NDArray[np.bool_]]:
-    """:func:`collapse_junction_needles`, and ``(f,)`` True for the input faces still in the result (in order)."""
+    """:func:`collapse_junction_needles`, and ``(f,)`` True for the input faces still in the result
+    (in order)."""
     vertices, faces = mesh.vertices, mesh.faces.copy()
     junction = junction_vertices(mesh)
     near = faces[junction[faces].any(axis=1)]

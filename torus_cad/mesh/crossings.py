@@ -2,7 +2,8 @@
 
 The check is the package's one crossing check (torus_cad.kernel.mesh_check.crossing_pairs, meshlib's
 ``findSelfCollidingTriangles`` on single-precision coordinates, the precision of a binary STL: the
-check is of the mesh as the STL stores it). Triangles that only share an edge or a vertex do not count.
+check is of the mesh as the STL stores it). Triangles that only share an edge or a vertex do not
+count.
 
 Checking every triangle costs time in proportion (the docs' measurements page). Meshes up to
 :data:`MESH_WHOLE_CROSSING_CHECK_TRIANGLES` are checked whole. Larger ones
@@ -52,8 +53,9 @@ class CrossingCheck:
 def crossing_pairs(
     vertices: NDArray[np.float64], faces: NDArray[np.int64], region: NDArray[np.bool_] | None = None
 ) -> int:
-    """How many intersecting pairs among the ``(f, 3)`` faces over ``(v, 3)`` vertices (mm), or among the
-    faces where ``region`` ``(f,)`` is True (torus_cad.kernel.mesh_check.crossing_pairs)."""
+    """How many intersecting pairs among the ``(f, 3)`` faces over ``(v, 3)`` vertices (mm), or
+    among the faces where ``region`` ``(f,)`` is True
+    (torus_cad.kernel.mesh_check.crossing_pairs)."""
     return len(mesh_crossing_pairs(vertices, faces, region))
 
 

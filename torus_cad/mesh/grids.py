@@ -57,17 +57,18 @@ class CellSize:
 
     @property
     def hub(self) -> float:
-        """The hub grid's cell size, mm: the longer edge of a blade cell. The cylinder is flat along its
-        axis and its polygon's sag around it is (cell)^2 / (8 R), so it needs no finer cells; square
-        cells of the blade cell's area would put most of a fine mesh's triangles on the hub (4.8 of
-        8.9 million at 400 x 2000)."""
+        """The hub grid's cell size, mm: the longer edge of a blade cell. The cylinder is flat along
+        its axis and its polygon's sag around it is (cell)^2 / (8 R), so it needs no finer cells;
+        square cells of the blade cell's area would put most of a fine mesh's triangles on the hub
+        (4.8 of 8.9 million at 400 x 2000)."""
         return max(self.around, self.along)
 
 
 def section_parameters(
     centerline: Centerline, sections: int, spacing: SectionSpacing
 ) -> NDArray[np.float64]:
-    """``(sections,)`` centerline parameters s in [0, 1], 0 and 1 included, spread as ``spacing`` says."""
+    """``(sections,)`` centerline parameters s in [0, 1], 0 and 1 included, spread as ``spacing``
+    says."""
     if spacing == SectionSpacing.PARAMETER:
         return np.linspace(0.0, 1.0, sections)
     fine = np.linspace(0.0, 1.0, CENTERLINE_LENGTH_SAMPLES)
@@ -82,7 +83,8 @@ def blade_grid(
     geometry: PropellerGeometry, sections: int, points: int, spacing: SectionSpacing
 ) -> BladeSurface:
     """Blade 0 sampled on ``sections`` x ``points``: sections spread by ``spacing``, points equally
-    spaced in arc length around each section with the trailing edge's corners kept as points (spec §5).
+    spaced in arc length around each section with the trailing edge's corners kept as points (spec
+    §5).
 
     A blunt trailing edge (flat or round, ``airfoil.trailing_edge_*``) is sampled as
     ``geometry.blade.surface.blade_surface`` samples it for the solid: every section at the parameters
@@ -130,9 +132,9 @@ def _cap(
     frame_binormal: NDArray[np.float64],
     outward: NDArray[np.float64],
 ) -> NDArray[np.int64]:
-    """Triangles ``(p - 2, 3)`` (indices into the ring) filling one planar section ring ``(p, 3)`` mm,
-    facing ``outward``: manifold3d's polygon triangulation of the ring in its section plane, so no
-    triangle leaves the section (a zipper from the upper to the lower surface can, across a blunt
+    """Triangles ``(p - 2, 3)`` (indices into the ring) filling one planar section ring ``(p, 3)``
+    mm, facing ``outward``: manifold3d's polygon triangulation of the ring in its section plane, so
+    no triangle leaves the section (a zipper from the upper to the lower surface can, across a blunt
     edge's base or a concave lower surface)."""
     import manifold3d as mf
 
@@ -150,8 +152,8 @@ def _cap(
 
 
 def split_along_a_d(surface: BladeSurface) -> NDArray[np.bool_]:
-    """``(points,)`` True for the columns whose cells :func:`mirrored_diagonal_mesh` splits along a-d:
-    the upper surface, up to the trailing edge (or the middle of a blunt edge's base)."""
+    """``(points,)`` True for the columns whose cells :func:`mirrored_diagonal_mesh` splits along
+    a-d: the upper surface, up to the trailing edge (or the middle of a blunt edge's base)."""
     count = surface.points.shape[1]
     upper_end = (
         surface.trailing_edge_index if surface.trailing_edge_index is not None else count // 2
@@ -162,7 +164,8 @@ def split_along_a_d(surface: BladeSurface) -> NDArray[np.bool_]:
 
 
 def _outward(surface: BladeSurface, split: NDArray[np.bool_]) -> bool:
-    """Whether a cell's (a, b, d) points away from its section's centre (then the grid's faces are outward as made)."""
+    """Whether a cell's (a, b, d) points away from its section's centre (then the grid's faces are
+    outward as made)."""
     grid = surface.points
     k, j = (len(grid) - 1) // 2, max(int(split.sum()) // 3, 0)
     normal = np.cross(grid[k, j + 1] - grid[k, j], grid[k + 1, j + 1] - grid[k, j])
@@ -171,8 +174,8 @@ def _outward(surface: BladeSurface, split: NDArray[np.bool_]) -> bool:
 
 def side_faces(surface: BladeSurface, first_row: int, last_row: int) -> NDArray[np.int64]:
     """``(2 (last - first) p, 3)`` outward triangles of the cells between sections ``first_row`` and
-    ``last_row`` (indices into the grid's ``(sections * p, 3)`` vertices): every cell's first triangle,
-    then every cell's second, split as :func:`mirrored_diagonal_mesh` says."""
+    ``last_row`` (indices into the grid's ``(sections * p, 3)`` vertices): every cell's first
+    triangle, then every cell's second, split as :func:`mirrored_diagonal_mesh` says."""
     count = surface.points.shape[1]
     column = np.arange(count)
     split = split_along_a_d(surface)
@@ -187,14 +190,16 @@ def side_faces(surface: BladeSurface, first_row: int, last_row: int) -> NDArray[
 
 
 def cap_faces(surface: BladeSurface, row: int, toward_row: int) -> NDArray[np.int64]:
-    """Triangles closing the grid at section ``row``, facing away from section ``toward_row`` (grid vertex indices)."""
+    """Triangles closing the grid at section ``row``, facing away from section ``toward_row`` (grid
+    vertex indices)."""
     grid, frames = surface.points, surface.frames
     inward = grid[toward_row].mean(axis=0) - grid[row].mean(axis=0)
     return _cap(grid[row], frames.normal[row], frames.binormal[row], -inward) + row * grid.shape[1]
 
 
 def mirrored_diagonal_mesh(surface: BladeSurface) -> TriangleMesh:
-    """Blade 0's closed mesh: its grid's cells split along diagonals mirrored about the chord, capped.
+    """Blade 0's closed mesh: its grid's cells split along diagonals mirrored about the chord,
+    capped.
 
     Each cell (a, b on one section, c, d on the next) is split along a-d on the upper surface
     and along b-c on the lower one (the trailing edge's base counts half to each), so the two
@@ -215,8 +220,8 @@ def mirrored_diagonal_mesh(surface: BladeSurface) -> TriangleMesh:
 
 @dataclass(frozen=True)
 class BladePieces:
-    """Blade 0's mesh cut where it is well clear of the hub, so that only the pieces that meet the hub
-    go through the union (the rest is joined back afterwards, vertex for vertex).
+    """Blade 0's mesh cut where it is well clear of the hub, so that only the pieces that meet the
+    hub go through the union (the rest is joined back afterwards, vertex for vertex).
 
     Attributes:
         near: closed pieces that meet the hub (grid vertex indices): sections 0 to ``cut[0]`` and
@@ -236,7 +241,8 @@ class BladePieces:
 def blade_pieces(
     surface: BladeSurface, hub_radius_mm: float, hub_length_mm: float, margin_mm: float
 ) -> BladePieces:
-    """Cut blade 0's mesh at the first and last sections lying wholly more than ``margin_mm`` outside the hub."""
+    """Cut blade 0's mesh at the first and last sections lying wholly more than ``margin_mm``
+    outside the hub."""
     grid = surface.points
     sections = len(grid)
     radial = np.hypot(grid[..., 0], grid[..., 1]) - hub_radius_mm
@@ -263,7 +269,8 @@ def blade_pieces(
 
 
 def blade_meshes(geometry: PropellerGeometry, surface: BladeSurface) -> list[TriangleMesh]:
-    """Every blade's closed mesh: blade 0's capped grid rotated to theta_i (spec §6.1), outward faces."""
+    """Every blade's closed mesh: blade 0's capped grid rotated to theta_i (spec §6.1), outward
+    faces."""
     mesh = mirrored_diagonal_mesh(surface)
     first = geometry.blade_angle_deg(0)
     return [
@@ -308,7 +315,8 @@ class HubLayout:
 
 
 def _polyline(corners: NDArray[np.float64], cell: float) -> NDArray[np.float64]:
-    """Points ``(k, 2)`` along a polyline ``(c, 2)``, its corners included, each piece cut into steps of at most ``cell``."""
+    """Points ``(k, 2)`` along a polyline ``(c, 2)``, its corners included, each piece cut into
+    steps of at most ``cell``."""
     pieces = [corners[:1]]
     for start, end in pairwise(corners):
         steps = max(1, int(np.ceil(np.linalg.norm(end - start) / cell)))

@@ -1,5 +1,6 @@
 """The hub's mounting features in the mesh: chamfers in the hub's grid, the bore (with its D-flat)
-and the set-screw hole cut out of it with manifold3d, as the B-rep's hub (torus_cad.kernel.hub) has them.
+and the set-screw hole cut out of it with manifold3d, as the B-rep's hub (torus_cad.kernel.hub) has
+them.
 
 The features are placed and checked against the blades exactly as for the B-rep
 (torus_cad.geometry.hub.mounting.place_mounting on the same dense sampling), so the set screw
@@ -33,8 +34,9 @@ MOUNTING_SAMPLES = (200, 160)
 
 
 def check_meshable(params: PropellerParameters) -> None:
-    """ParameterError (exit 2) naming a feature the structured mesh cannot carry: the root fillet, or the
-    conventional kind (its grids follow the toroidal blade's centerline, and the open tip needs a cap)."""
+    """ParameterError (exit 2) naming a feature the structured mesh cannot carry: the root fillet,
+    or the conventional kind (its grids follow the toroidal blade's centerline, and the open tip
+    needs a cap)."""
     if params.kind.value == "conventional":
         raise ParameterError(
             "kind = 'conventional': torus-cad mesh makes the toroidal kind's structured grids only; "
@@ -50,8 +52,8 @@ def check_meshable(params: PropellerParameters) -> None:
 
 
 def placed_mounting(params: PropellerParameters) -> HubMounting:
-    """The hub's features checked against the blades and the set screw's direction chosen, as for the
-    B-rep (GeometryError naming the field when a feature reaches a blade)."""
+    """The hub's features checked against the blades and the set screw's direction chosen, as for
+    the B-rep (GeometryError naming the field when a feature reaches a blade)."""
     mounting = params.hub.mounting()
     if not mounting.any:
         return mounting
@@ -75,7 +77,8 @@ def _segments(radius_mm: float, cell_mm: float, minimum: int) -> int:
 
 def bore_outline(mounting: HubMounting, cell_mm: float) -> NDArray[np.float64]:
     """``(k, 2)`` mm, counter-clockwise: the bore's cross-section, a circle's inscribed polygon cut
-    straight by the D-flat, which faces the set screw's direction at ``bore_flat_depth_mm`` into the circle."""
+    straight by the D-flat, which faces the set screw's direction at ``bore_flat_depth_mm`` into the
+    circle."""
     radius = mounting.bore_diameter_mm / 2.0
     count = _segments(radius, cell_mm, BORE_MIN_SEGMENTS)
     if mounting.bore_flat_depth_mm == 0.0:
@@ -91,7 +94,8 @@ def bore_outline(mounting: HubMounting, cell_mm: float) -> NDArray[np.float64]:
 def _tools(
     mounting: HubMounting, hub_radius_mm: float, hub_length_mm: float, cell_mm: float
 ) -> list[object]:
-    """manifold3d solids to subtract: the bore prism past both ends, the set-screw cylinder from the axis out."""
+    """manifold3d solids to subtract: the bore prism past both ends, the set-screw cylinder from the
+    axis out."""
     import manifold3d as mf
 
     tools = []
@@ -119,8 +123,9 @@ def cut_features(
     hub_length_mm: float,
     cell_mm: float,
 ) -> TriangleMesh:
-    """The hub's closed mesh with the bore and the set-screw hole of ``mounting`` cut out (manifold3d),
-    the needle triangles where the holes' rims cross the grid collapsed (torus_cad.mesh.cleanup)."""
+    """The hub's closed mesh with the bore and the set-screw hole of ``mounting`` cut out
+    (manifold3d), the needle triangles where the holes' rims cross the grid collapsed
+    (torus_cad.mesh.cleanup)."""
     import manifold3d as mf
 
     from torus_cad.mesh.cleanup import collapse_junction_needles
@@ -161,8 +166,9 @@ def cut_features(
 def feature_surface_distance(
     points: NDArray[np.float64], mounting: HubMounting, hub_radius_mm: float, hub_length_mm: float
 ) -> NDArray[np.float64]:
-    """``(k,)`` mm: distance of each point from the nearest of the hub's surfaces, each taken unbounded
-    (cylinder r = R, end planes, chamfer cones, bore cylinder, D-flat plane, set-screw cylinder).
+    """``(k,)`` mm: distance of each point from the nearest of the hub's surfaces, each taken
+    unbounded (cylinder r = R, end planes, chamfer cones, bore cylinder, D-flat plane, set-screw
+    cylinder).
 
     A lower bound of the distance from the hub's surface; for a vertex made on one of those
     surfaces (every hub vertex of the mesh), 0 up to rounding, which is what the report checks.

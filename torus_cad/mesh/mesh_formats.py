@@ -1,4 +1,5 @@
-"""Mesh file formats and how the ``[mesh]`` table (``torus_cad.parameters.design.Mesh``) selects them."""
+"""Mesh file formats and how the ``[mesh]`` table (``torus_cad.parameters.design.Mesh``) selects
+them."""
 
 from __future__ import annotations
 
@@ -45,8 +46,8 @@ def selected_formats(table: Mesh) -> tuple[MeshFormat, ...]:
 
 
 def format_overrides(names: Iterable[str]) -> dict[str, Any]:
-    """``{"mesh.<format>": bool}`` that switches exactly ``names`` on (for ``--format``); ParameterError
-    naming the allowed formats for an unknown one."""
+    """``{"mesh.<format>": bool}`` that switches exactly ``names`` on (for ``--format``);
+    ParameterError naming the allowed formats for an unknown one."""
     chosen = []
     for name in names:
         try:

@@ -100,7 +100,8 @@ class SurfaceMesh:
         mounting: the hub's features as meshed (set screw placed).
         crossings: intersecting triangle pairs of the united mesh (meshlib) and what was checked.
         topology: the united mesh's edge counts (closed, checked before anything is written).
-        united_vertices: the first vertices, those of the union's result; the others are blade grid vertices.
+        united_vertices: the first vertices, those of the union's result; the others are blade grid
+            vertices.
         stage_seconds: seconds per stage (keys: MeshStage values).
     """
 
@@ -122,7 +123,8 @@ class SurfaceMesh:
 
 
 def check_design(params: PropellerParameters) -> None:
-    """The pre-kernel design checks of ``geometry.feasibility`` about the shape (not the loft's resolution)."""
+    """The pre-kernel design checks of ``geometry.feasibility`` about the shape (not the loft's
+    resolution)."""
     geometry = params.geometry()
     surface = params.blade_surface()
     centerline = geometry.centerline(0)
@@ -199,9 +201,10 @@ def united_crossings(
     geometry: PropellerGeometry,
     margin_mm: float,
 ) -> CrossingCheck:
-    """Intersecting pairs of the assembled mesh: all of it when blade 0 was checked whole, else the hub
-    and every triangle that went through the union within ``margin_mm`` of the hub (the junctions,
-    where the union and the cleanup made new triangles), blade 0's edge bands having been checked already."""
+    """Intersecting pairs of the assembled mesh: all of it when blade 0 was checked whole, else the
+    hub and every triangle that went through the union within ``margin_mm`` of the hub (the
+    junctions, where the union and the cleanup made new triangles), blade 0's edge bands having been
+    checked already."""
     if blade.scope == "whole mesh":
         return CrossingCheck(
             crossing_pairs(mesh.vertices, mesh.faces), len(mesh.faces), "whole mesh"
@@ -225,13 +228,13 @@ def build_surface_mesh(
     progress: Callable[[str], None] | None = None,
     compare: bool = False,
 ) -> SurfaceMesh:
-    """Check, grid and unite at ``params.mesh``'s resolution: the propeller's closed, labelled surface mesh
-    with the hub's features, checked for intersecting triangles.
+    """Check, grid and unite at ``params.mesh``'s resolution: the propeller's closed, labelled
+    surface mesh with the hub's features, checked for intersecting triangles.
 
     ``compare``: the B-rep will be built too (the memory budget counts it).
 
-    Raises ParameterError (memory budget, resolution, a crossing mesh, the root fillet), GeometryError
-    (design, hub features), MeshBooleanError (union).
+    Raises ParameterError (memory budget, resolution, a crossing mesh, the root fillet),
+    GeometryError (design, hub features), MeshBooleanError (union).
     """
     from torus_cad.parameters.design_targets import resolve_design_targets
 
@@ -299,7 +302,8 @@ def _junction_margin(hub_radius_mm: float) -> float:
 
 
 def vertex_distances(result: SurfaceMesh) -> NDArray[np.float64]:
-    """``(v,)`` distance (mm) of each mesh vertex from the analytic surface, or an upper bound of it.
+    """``(v,)`` distance (mm) of each mesh vertex from the analytic surface, or an upper bound of
+    it.
 
     Hub vertices and the junction vertices the union created lie on hub triangles: their distance
     from the nearest of the hub's surfaces (with its features, each surface taken unbounded:
@@ -400,7 +404,8 @@ def opencascade_comparison(params: PropellerParameters, margin: float) -> dict[s
 
 def quality_report(result: SurfaceMesh, comparison: dict[str, Any] | None = None) -> dict[str, Any]:
     """The mesh's quality as a JSON-ready dict (see docs, 'Mesh for CFD'), with ``comparison`` (the
-    :func:`opencascade_comparison` of the same design) and the volume difference from it, if given."""
+    :func:`opencascade_comparison` of the same design) and the volume difference from it, if
+    given."""
     mesh, params, table = result.mesh, result.parameters, result.parameters.mesh
     margin = _junction_margin(result.geometry.hub.radius_mm)
     topology = result.topology
@@ -509,8 +514,8 @@ def summary_line(report: dict[str, Any]) -> str:
 
 
 def mirrored_mesh(mesh: LabeledMesh) -> LabeledMesh:
-    """``mesh`` reflected through the XZ plane (the 'ccw' propeller, as torus_cad.kernel.mirror makes the
-    B-rep's), faces turned to stay outward."""
+    """``mesh`` reflected through the XZ plane (the 'ccw' propeller, as torus_cad.kernel.mirror
+    makes the B-rep's), faces turned to stay outward."""
     return LabeledMesh(
         mesh.vertices * np.array([1.0, -1.0, 1.0]), mesh.faces[:, ::-1], mesh.part, mesh.part_names
     )
@@ -532,8 +537,9 @@ def write_surface_mesh(
     compare: bool = True,
     progress: Callable[[str], None] | None = None,
 ) -> tuple[dict[str, Any], dict[str, Path]]:
-    """Build, measure and write at ``params.mesh``: the mesh files and ``<name>_mesh.json`` as one output
-    set (torus_cad.outputs.output_set: staged, sealed by the report, published whole or not at all).
+    """Build, measure and write at ``params.mesh``: the mesh files and ``<name>_mesh.json`` as one
+    output set (torus_cad.outputs.output_set: staged, sealed by the report, published whole or not
+    at all).
 
     Returns the report as sealed and the published paths by format (and ``"json"``, last).
     Nothing is written when a check refuses the design or the resolution.

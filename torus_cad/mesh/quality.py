@@ -1,4 +1,5 @@
-"""Mesh quality measures, all vectorised: topology, edge evenness, aspect ratio, distance to the surface.
+"""Mesh quality measures, all vectorised: topology, edge evenness, aspect ratio, distance to the
+surface.
 
 Definitions used in the report:
 
@@ -70,8 +71,8 @@ def corner_measures(
     corners: NDArray[np.float64],
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """Of triangles given by their corners ``(k, 3, 3)``: ``(k, 3)`` lengths of the edges 01, 12, 20
-    (mm), ``(k, 3)`` normals (01 x 02, twice the area long) and ``(k,)`` aspect ratios (longest edge x
-    perimeter / (4 sqrt(3) area): 1 for equilateral, inf for degenerate).
+    (mm), ``(k, 3)`` normals (01 x 02, twice the area long) and ``(k,)`` aspect ratios (longest edge
+    x perimeter / (4 sqrt(3) area): 1 for equilateral, inf for degenerate).
 
     Written out by components: faster than numpy's general ``cross`` for the whole mesh and for
     the handful of triangles around one edge that the junction cleanup measures."""
@@ -100,7 +101,8 @@ def corner_measures(
 def triangle_measures(
     vertices: NDArray[np.float64], faces: NDArray[np.int64]
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """``(f, 3)`` edge lengths (mm) and ``(f,)`` aspect ratios of ``(f, 3)`` faces (:func:`corner_measures`).
+    """``(f, 3)`` edge lengths (mm) and ``(f,)`` aspect ratios of ``(f, 3)`` faces
+    (:func:`corner_measures`).
 
     Measured in blocks of MEASURE_BLOCK_TRIANGLES triangles."""
     lengths, ratios = np.empty((len(faces), 3)), np.empty(len(faces))
@@ -111,7 +113,8 @@ def triangle_measures(
 
 
 def aspect_ratios(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> NDArray[np.float64]:
-    """``(f,)`` longest edge x perimeter / (4 sqrt(3) area): 1 for equilateral, inf for degenerate."""
+    """``(f,)`` longest edge x perimeter / (4 sqrt(3) area): 1 for equilateral, inf for
+    degenerate."""
     return triangle_measures(vertices, faces)[1]
 
 
@@ -161,7 +164,8 @@ def faces_away_from_hub(
     length: float,
     margin: float,
 ) -> NDArray[np.bool_]:
-    """``(f,)`` True for triangles whose three corners all lie more than ``margin`` outside the hub."""
+    """``(f,)`` True for triangles whose three corners all lie more than ``margin`` outside the
+    hub."""
     outside = outside_hub(vertices, radius, length, margin)
     return np.asarray(outside[faces].all(axis=1))
 
@@ -171,13 +175,14 @@ def cell_deviation(
     centres: NDArray[np.float64],
     split_a_d: NDArray[np.bool_] | None = None,
 ) -> NDArray[np.float64]:
-    """Distance (mm) of the analytic surface at each cell's centre from the cell's two triangles' planes.
+    """Distance (mm) of the analytic surface at each cell's centre from the cell's two triangles'
+    planes.
 
     ``grid`` is a ``(m, p, 3)`` blade grid (closed around axis 1) whose cell (a, b on one section,
     c, d on the next) is cut into a-b-d and a-d-c where ``split_a_d`` ``(p,)`` is True (default:
     everywhere) and into a-b-c and b-d-c elsewhere, as ``grids.mirrored_diagonal_mesh`` does;
-    ``centres`` ``(m - 1, p, 3)`` holds the analytic surface at the parameter midpoints of the cells.
-    Returns ``(m - 1, p)``: the smaller distance to the two planes.
+    ``centres`` ``(m - 1, p, 3)`` holds the analytic surface at the parameter midpoints of the
+    cells. Returns ``(m - 1, p)``: the smaller distance to the two planes.
     """
     a, b = grid[:-1], np.roll(grid[:-1], -1, axis=1)
     c, d = grid[1:], np.roll(grid[1:], -1, axis=1)
@@ -199,8 +204,8 @@ def cell_deviation(
 
 
 def find_rows(query: NDArray[np.float64], reference: NDArray[np.float64]) -> NDArray[np.int64]:
-    """``(q,)`` index of a row of ``reference`` ``(r, 3)`` equal bit for bit to each row of ``query``
-    ``(q, 3)``, or -1.
+    """``(q,)`` index of a row of ``reference`` ``(r, 3)`` equal bit for bit to each row of
+    ``query`` ``(q, 3)``, or -1.
 
     Rows are hashed to one int64 each (sorted once, looked up with searchsorted), and every hit is
     confirmed by comparing the coordinates, so a hash collision cannot give a false match.
@@ -226,5 +231,6 @@ def find_rows(query: NDArray[np.float64], reference: NDArray[np.float64]) -> NDA
 
 
 def rows_in(query: NDArray[np.float64], reference: NDArray[np.float64]) -> NDArray[np.bool_]:
-    """``(q,)`` True where a row of ``query`` ``(q, 3)`` equals a row of ``reference`` ``(r, 3)`` bit for bit."""
+    """``(q,)`` True where a row of ``query`` ``(q, 3)`` equals a row of ``reference`` ``(r, 3)``
+    bit for bit."""
     return np.asarray(find_rows(query, reference) >= 0)

@@ -1,4 +1,5 @@
-"""Is a mesh resolution fine enough for the blade, and small enough for the machine? Checked before building.
+"""Is a mesh resolution fine enough for the blade, and small enough for the machine? Checked before
+building.
 
 A flat-faced mesh leaves the surface between its points. Its sag (largest distance from the
 analytic surface to the straight edges) is measured around the sections (set by ``points``)
@@ -7,7 +8,8 @@ and along the blade (set by ``sections``), as a fraction of the local section th
 (spec §5) are sparsest for its radius, needs the most points. Above :data:`MESH_SAG_LIMIT`
 the resolution is refused with the smallest count that meets the limit, found by search.
 The triangle count is estimated from the grid counts and refused when the command's memory at that
-count (a fixed base plus bytes per triangle, measured) would be over :data:`MESH_MEMORY_LIMIT_BYTES`.
+count (a fixed base plus bytes per triangle, measured) would be over
+:data:`MESH_MEMORY_LIMIT_BYTES`.
 """
 
 from __future__ import annotations
@@ -78,7 +80,8 @@ def mesh_memory_bytes(triangles: int, compare: bool = True) -> float:
 def check_mesh_memory(
     triangles: int, compare: bool = True, limit_bytes: float = MESH_MEMORY_LIMIT_BYTES
 ) -> None:
-    """BudgetError (exit 2) with the estimate and the limit when the mesh would need more than ``limit_bytes``."""
+    """BudgetError (exit 2) with the estimate and the limit when the mesh would need more than
+    ``limit_bytes``."""
     need = mesh_memory_bytes(triangles, compare)
     if need > limit_bytes:
         fits = math.floor((limit_bytes - mesh_memory_bytes(0, compare)) / MESH_BYTES_PER_TRIANGLE)
@@ -107,7 +110,8 @@ class Sag:
 def _line_distance(
     point: NDArray[np.float64], start: NDArray[np.float64], end: NDArray[np.float64]
 ) -> NDArray[np.float64]:
-    """Distance of ``point`` from the infinite line through ``start`` and ``end`` (any matching shapes ``(..., d)``)."""
+    """Distance of ``point`` from the infinite line through ``start`` and ``end`` (any matching
+    shapes ``(..., d)``)."""
     direction = end - start
     length2 = np.einsum("...k,...k->...", direction, direction)
     offset = point - start
@@ -164,8 +168,8 @@ def along_sag(
 
 
 def smallest_count(passes: Callable[[int], bool], start: int, high: int) -> int | None:
-    """Smallest count in (start, high] for which ``passes`` holds (sag falls as counts grow): doubling,
-    then bisection; None if even ``high`` fails."""
+    """Smallest count in (start, high] for which ``passes`` holds (sag falls as counts grow):
+    doubling, then bisection; None if even ``high`` fails."""
     low, count = start, start
     while True:
         count = min(2 * count, high)
@@ -187,9 +191,9 @@ def check_resolution(
     spacing: SectionSpacing,
     limit: float | None = None,
 ) -> None:
-    """Refuse (ParameterError) a resolution whose flat faces leave the blade by more than ``limit`` of the
-    local section thickness (default MESH_SAG_LIMIT); the message gives the smallest ``mesh.points`` /
-    ``mesh.sections`` that would do."""
+    """Refuse (ParameterError) a resolution whose flat faces leave the blade by more than ``limit``
+    of the local section thickness (default MESH_SAG_LIMIT); the message gives the smallest
+    ``mesh.points`` / ``mesh.sections`` that would do."""
     from torus_cad.parameters.design import Mesh
 
     limit = MESH_SAG_LIMIT if limit is None else limit
@@ -235,7 +239,8 @@ def check_resolution(
 
 @dataclass(frozen=True)
 class TriangleEstimate:
-    """Triangles the parts will have before the union (the union only removes some), and the hub's cell size."""
+    """Triangles the parts will have before the union (the union only removes some), and the hub's
+    cell size."""
 
     blades: int
     hub: int
@@ -260,5 +265,6 @@ def estimate_triangles(
 
 
 def check_budget(estimate: TriangleEstimate, compare: bool = True) -> None:
-    """Refuse (BudgetError, exit 2) meshes whose estimated memory is over :data:`MESH_MEMORY_LIMIT_BYTES`."""
+    """Refuse (BudgetError, exit 2) meshes whose estimated memory is over
+    :data:`MESH_MEMORY_LIMIT_BYTES`."""
     check_mesh_memory(estimate.total, compare)

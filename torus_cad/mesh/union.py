@@ -84,7 +84,8 @@ def unite(
     marked: Sequence[NDArray[np.bool_] | None] | None = None,
 ) -> tuple[LabeledMesh, NDArray[np.bool_]]:
     """Union of closed, outward ``parts`` as one labelled mesh whose part names are ``names``, and
-    ``(f,)`` True for its faces that come from faces where ``marked`` (one mask per input, or None) is True.
+    ``(f,)`` True for its faces that come from faces where ``marked`` (one mask per input, or None)
+    is True.
 
     ``part_of`` gives each input's index into ``names`` (default: one input per name).
 

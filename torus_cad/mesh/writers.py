@@ -1,14 +1,16 @@
-"""Write a labelled surface mesh: binary STL, ASCII STL (one solid per part), OBJ (one group per part), PLY, VTK.
+"""Write a labelled surface mesh: binary STL, ASCII STL (one solid per part), OBJ (one group per
+part), PLY, VTK.
 
 Every writer works on whole arrays (text is formatted in chunks of :data:`CHUNK_TRIANGLES`
 with one C-level ``%`` per chunk, binary records are built and written a chunk at a time), so
 millions of triangles need no Python loop per triangle and no full-size copy. ``torus-cad mesh``
-writes into its output set's staging folder (torus_cad.outputs.output_set); elsewhere each file is written
+writes into its output set's staging folder (torus_cad.outputs.output_set); elsewhere each file is
+written
 atomically (``runtime.files.atomic_path``): a temp file, then a rename. A failed write raises
 OSError naming the file it was writing.
 
-Hand-written for STL, OBJ and PLY rather than meshio's (used for VTK): meshio's STL and OBJ writers are
-4-7 times slower on a mesh of millions of triangles and write no per-part solids or groups.
+Hand-written for STL, OBJ and PLY rather than meshio's (used for VTK): meshio's STL and OBJ writers
+are 4-7 times slower on a mesh of millions of triangles and write no per-part solids or groups.
 """
 
 from __future__ import annotations
@@ -61,7 +63,8 @@ def _write_rows(
 
 
 def write_binary_stl(mesh: LabeledMesh, path: Path, name: str) -> None:
-    """Binary STL of the whole surface (float32, as the format requires), a chunk of records at a time."""
+    """Binary STL of the whole surface (float32, as the format requires), a chunk of records at a
+    time."""
     header = f"torus_cad surface mesh {name}".encode("ascii", "replace")[:80].ljust(80, b" ")
     with path.open("wb") as handle:
         handle.write(header)
@@ -90,7 +93,8 @@ def write_ascii_stl(mesh: LabeledMesh, path: Path, name: str) -> None:
 
 
 def write_obj(mesh: LabeledMesh, path: Path, name: str) -> None:
-    """Wavefront OBJ: shared vertices, then one group ``g <part>`` of faces per part (1-based indices)."""
+    """Wavefront OBJ: shared vertices, then one group ``g <part>`` of faces per part (1-based
+    indices)."""
     with path.open("w", encoding="ascii") as handle:
         handle.write(
             f"# torus_cad surface mesh {name}: {len(mesh.vertices)} vertices, {len(mesh.faces)} triangles, "
@@ -104,7 +108,8 @@ def write_obj(mesh: LabeledMesh, path: Path, name: str) -> None:
 
 
 def write_ply(mesh: LabeledMesh, path: Path, name: str) -> None:
-    """Binary little-endian PLY: float64 vertices, triangles with an int ``part`` property per face (0 = hub)."""
+    """Binary little-endian PLY: float64 vertices, triangles with an int ``part`` property per face
+    (0 = hub)."""
     header = (
         f"ply\nformat binary_little_endian 1.0\ncomment torus_cad surface mesh {name}, mm; part: "
         + ", ".join(f"{index} = {part_name}" for index, part_name in enumerate(mesh.part_names))

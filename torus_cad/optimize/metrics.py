@@ -1,13 +1,15 @@
-"""The numbers a study can optimise or constrain: those of the build's JSON report, and ``performance.*``.
+"""The numbers a study can optimise or constrain: those of the build's JSON report, and
+``performance.*``.
 
 A metric is a dotted key of the report that ``torus-cad build`` writes (``mass_g``,
 ``printability.thinnest_wall_mm``, ``balance.static_imbalance_g_mm``), or ``performance.<key>``,
 a number of the ``<name>_performance.json`` that ``torus-cad simulate`` writes (thrust in N,
-torque in N m, power in W, the dimensionless coefficients, and ``rpm``: the one asked for, or the one
-found for a target thrust). ``performance.noise[DIST_M:ANGLE_DEG].<key>`` is a number of the tonal noise
-at one observer (the ``noise.observers`` entry of that distance and angle, spelt as ``simulate
---observer`` spells it): ``oaspl_db``, ``oaspl_dba`` (dB re 20 uPa), ``other_harmonics_spl_db``,
-``peak_to_peak_pa``. Units are the report's: mm, mm^2, mm^3, g, g mm^2, s, dB, Pa.
+torque in N m, power in W, the dimensionless coefficients, and ``rpm``: the one asked for, or the
+one found for a target thrust). ``performance.noise[DIST_M:ANGLE_DEG].<key>`` is a number of the
+tonal noise at one observer (the ``noise.observers`` entry of that distance and angle, spelt as
+``simulate --observer`` spells it): ``oaspl_db``, ``oaspl_dba`` (dB re 20 uPa),
+``other_harmonics_spl_db``, ``peak_to_peak_pa``. Units are the report's: mm, mm^2, mm^3, g, g mm^2,
+s, dB, Pa.
 """
 
 from __future__ import annotations
@@ -83,13 +85,15 @@ def is_performance(metric: str) -> bool:
 
 
 def _noise_parts(metric: str) -> tuple[str, str] | None:
-    """(observer text, key) of a ``performance.noise[DIST_M:ANGLE_DEG].<key>`` metric; None for any other metric."""
+    """(observer text, key) of a ``performance.noise[DIST_M:ANGLE_DEG].<key>`` metric; None for any
+    other metric."""
     match = _NOISE.match(metric)
     return (match["observer"], match["key"]) if match else None
 
 
 def noise_observers(metrics: Iterable[str]) -> tuple[str, ...]:
-    """The observers (``DIST_M:ANGLE_DEG``, as ``simulate --observer`` takes them) that ``metrics`` name, in order."""
+    """The observers (``DIST_M:ANGLE_DEG``, as ``simulate --observer`` takes them) that ``metrics``
+    name, in order."""
     named = (_noise_parts(metric) for metric in metrics)
     return tuple(dict.fromkeys(parts[0] for parts in named if parts is not None))
 
@@ -174,7 +178,8 @@ def metric_value(
 def _noise_value(
     metric: str, observer: str, key: str, performance: Mapping[str, Any] | None
 ) -> float:
-    """The ``key`` of the entry of ``performance["noise"]["observers"]`` at the observer ``DIST_M:ANGLE_DEG``."""
+    """The ``key`` of the entry of ``performance["noise"]["observers"]`` at the observer
+    ``DIST_M:ANGLE_DEG``."""
     from torus_cad.acoustics.observers import parse_observer
 
     wanted = parse_observer(observer)

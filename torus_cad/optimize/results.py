@@ -2,7 +2,8 @@
 
 * ``OUT/results.csv`` and ``OUT/results.parquet`` (the batch table code): one row per trial with
   its state, outcome and reason, varied values, metrics, constraint violations and folder (and, in a
-  study of several mesh levels, the level of its metrics: state ``pruned`` for a trial stopped there);
+  study of several mesh levels, the level of its metrics: state ``pruned`` for a trial stopped
+  there);
 * ``OUT/<name>_history.png``: each objective against the trial number with the best feasible
   value so far, and ``OUT/<name>_pareto.png`` for two objectives;
 * ``OUT/best/<name>_best.toml`` (one objective) or ``OUT/best/<name>_pareto_<number>.toml``
@@ -58,10 +59,11 @@ INTERRUPTED = "interrupted"
 def write_results(
     spec: StudySpec, study: optuna.Study, out: Path, checkpoint: Callable[[], None] | None = None
 ) -> tuple[dict[str, Path], list[str]]:
-    """Write the table, the pictures, the best designs and the summary JSON; the paths and summary lines.
+    """Write the table, the pictures, the best designs and the summary JSON; the paths and summary
+    lines.
 
-    ``checkpoint`` is called before each of them: it may raise (a signal arrived) to stop there, each file
-    or set written so far being whole."""
+    ``checkpoint`` is called before each of them: it may raise (a signal arrived) to stop there,
+    each file or set written so far being whole."""
     from torus_cad.runtime.files import atomic_path
 
     check = checkpoint or (lambda: None)
@@ -131,7 +133,8 @@ def _outcomes_line(rows: Sequence[dict[str, Any]]) -> str:
 
 
 def _level_seconds(trials: Sequence[FrozenTrial]) -> dict[str, dict[str, float]]:
-    """By mesh level: the trials that ran it and their worker seconds there (a study of several levels)."""
+    """By mesh level: the trials that ran it and their worker seconds there (a study of several
+    levels)."""
     spent: dict[str, dict[str, float]] = {}
     for trial in trials:
         for level, seconds in trial_result(trial).get(LEVEL_SECONDS, {}).items():
@@ -164,8 +167,9 @@ def _count(items: Any) -> dict[str, int]:
 
 
 def best_trials(spec: StudySpec, study: optuna.Study) -> list[FrozenTrial]:
-    """The best feasible trial (one objective) or the feasible Pareto front (several), by trial number; a trial
-    that repeats another's parameters (``same_as``) is left to the trial it repeats, which has its values."""
+    """The best feasible trial (one objective) or the feasible Pareto front (several), by trial
+    number; a trial that repeats another's parameters (``same_as``) is left to the trial it repeats,
+    which has its values."""
     if len(spec.objectives) > 1:
         return sorted(
             (trial for trial in study.best_trials if SAME_AS not in trial_result(trial)),
@@ -240,8 +244,9 @@ MAX_UNVALUED_LINES = 5
 
 
 def unvalued_lines(rows: Sequence[dict[str, Any]]) -> list[str]:
-    """Summary lines for the finished trials that have no objective value (a refused or failed design, not
-    one whose run stopped): number, outcome and reason, so a refused design is not silently missing."""
+    """Summary lines for the finished trials that have no objective value (a refused or failed
+    design, not one whose run stopped): number, outcome and reason, so a refused design is not
+    silently missing."""
     unvalued = [
         row for row in rows if row["state"] == "fail" and row["outcome"] not in ("", INTERRUPTED)
     ]
@@ -269,8 +274,8 @@ def _history_picture(spec: StudySpec, trials: Sequence[FrozenTrial], path: Path)
 
 def history_figure(spec: StudySpec, trials: Sequence[FrozenTrial]) -> Figure:
     """The history picture's matplotlib figure: each objective against the trial number (feasible,
-    infeasible, the best so far), and the trials without a value (refused, failed) as marks along the
-    bottom of each panel."""
+    infeasible, the best so far), and the trials without a value (refused, failed) as marks along
+    the bottom of each panel."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -407,9 +412,10 @@ def _publish_best(
     folder: Path,
     out: Path,
 ) -> tuple[list[str], dict[int, Path]]:
-    """Write each best design's TOML and publish beside it, as an output set, the files its trial wrote
-    (copied, not rebuilt: the study judged the trial on them). A trial whose set cannot be published
-    is named in one line; for one objective the next best feasible trial takes its place."""
+    """Write each best design's TOML and publish beside it, as an output set, the files its trial
+    wrote (copied, not rebuilt: the study judged the trial on them). A trial whose set cannot be
+    published is named in one line; for one objective the next best feasible trial takes its
+    place."""
     from torus_cad.errors import TorusCadError
 
     if not best:
@@ -458,8 +464,9 @@ def _ranked_feasible(spec: StudySpec, trials: Sequence[FrozenTrial]) -> list[Fro
 def _publish_trial(
     spec: StudySpec, trial: FrozenTrial, name: str, folder: Path, out: Path, with_files: bool = True
 ) -> Path:
-    """``folder/<name>.toml`` (the trial's design under ``name``) and, with ``with_files``, the trial's
-    own output set copied beside it as the set ``name`` (unless that set is already current).
+    """``folder/<name>.toml`` (the trial's design under ``name``) and, with ``with_files``, the
+    trial's own output set copied beside it as the set ``name`` (unless that set is already
+    current).
 
     Raises IncompleteOutputError when the trial's set is incomplete or lacks a format its design
     writes (a trial run before trials wrote every format), OSError when a copy cannot be written."""
@@ -486,9 +493,9 @@ def _copy_trial_set(
     out: Path,
     stl: bool = True,
 ) -> None:
-    """Publish the trial's verified output set (renamed ``name``: its files and its report, which names
-    the trial it came from) in ``folder``; the copies are checked against the trial's SHA-256. The set
-    must hold every format of the design's ``export.formats`` (STL only if ``stl``)."""
+    """Publish the trial's verified output set (renamed ``name``: its files and its report, which
+    names the trial it came from) in ``folder``; the copies are checked against the trial's SHA-256.
+    The set must hold every format of the design's ``export.formats`` (STL only if ``stl``)."""
     import shutil
 
     from torus_cad.errors import IncompleteOutputError

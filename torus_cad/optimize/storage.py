@@ -1,4 +1,5 @@
-"""Where a study lives: an SQLite file (one machine) or a PostgreSQL server (workers on many machines).
+"""Where a study lives: an SQLite file (one machine) or a PostgreSQL server (workers on many
+machines).
 
 Every process that runs trials of a study takes :func:`claim_lock` to count the trials and ask
 for the next one, so that processes sharing a study never ask for more than ``--trials`` in all:
@@ -116,7 +117,8 @@ class StorageError(TorusCadError):
 
 
 def storage_url(given: str, out_dir: Path, name: str) -> str:
-    """The storage URL: ``given`` (``--storage`` or ``study.storage``), or SQLite ``OUT/<name>.db``."""
+    """The storage URL: ``given`` (``--storage`` or ``study.storage``), or SQLite
+    ``OUT/<name>.db``."""
     if not given:
         return f"sqlite:///{out_dir / f'{name}.db'}"
     scheme = urlsplit(given).scheme.split("+")[0]
@@ -129,8 +131,8 @@ def storage_url(given: str, out_dir: Path, name: str) -> str:
 
 
 def _with_driver(url: str) -> str:
-    """``postgresql://`` with the driver that is installed named (psycopg2 from the optimize extra, else
-    psycopg): SQLAlchemy's default driver changed between versions."""
+    """``postgresql://`` with the driver that is installed named (psycopg2 from the optimize extra,
+    else psycopg): SQLAlchemy's default driver changed between versions."""
     if not url.startswith("postgresql://"):
         return url
     import importlib.util
@@ -153,8 +155,8 @@ def _is_sqlite(url: str) -> bool:
 
 
 def open_storage(url: str) -> RDBStorage:
-    """optuna's RDBStorage at ``url`` with heartbeats, a stale trial asked again by :func:`retry_failed_trial`;
-    StorageError naming the (password-free) URL."""
+    """optuna's RDBStorage at ``url`` with heartbeats, a stale trial asked again by
+    :func:`retry_failed_trial`; StorageError naming the (password-free) URL."""
     import optuna
     import sqlalchemy.exc
 
@@ -194,8 +196,9 @@ def open_storage(url: str) -> RDBStorage:
 
 
 def _storage_cause(error: BaseException) -> str:
-    """The cause of a storage failure in the database's own words ("database or disk is full"), from the
-    driver's exception that optuna and SQLAlchemy wrap, on one line and cut to 300 characters."""
+    """The cause of a storage failure in the database's own words ("database or disk is full"), from
+    the driver's exception that optuna and SQLAlchemy wrap, on one line and cut to 300
+    characters."""
     seen: set[int] = set()
     current: BaseException | None = error
     while current is not None and id(current) not in seen:
@@ -209,9 +212,10 @@ def _storage_cause(error: BaseException) -> str:
 
 @contextlib.contextmanager
 def storage_failures_named(url: str) -> Iterator[None]:
-    """Within the block, a failure of the study storage (optuna's StorageInternalError, any SQLAlchemy error:
-    a full disk, a file that became unwritable, a server that went away) becomes a :class:`StorageError`
-    naming the storage (its URL, password hidden: for SQLite, the database file) and the cause."""
+    """Within the block, a failure of the study storage (optuna's StorageInternalError, any
+    SQLAlchemy error: a full disk, a file that became unwritable, a server that went away) becomes a
+    :class:`StorageError` naming the storage (its URL, password hidden: for SQLite, the database
+    file) and the cause."""
     import optuna
     import sqlalchemy.exc
 
@@ -224,9 +228,10 @@ def storage_failures_named(url: str) -> Iterator[None]:
 
 
 def _write_ahead_log(engine: sqlalchemy.engine.Engine) -> None:
-    """SQLite in write-ahead-log mode with NORMAL synchronisation on every connection of ``engine``: a
-    commit then costs no fsync (a trial's records take several), and a killed process still loses
-    nothing it committed; only a power cut can undo the last commits (those trials are asked again)."""
+    """SQLite in write-ahead-log mode with NORMAL synchronisation on every connection of ``engine``:
+    a commit then costs no fsync (a trial's records take several), and a killed process still loses
+    nothing it committed; only a power cut can undo the last commits (those trials are asked
+    again)."""
     import sqlalchemy
 
     def configure(connection: Any, _record: Any) -> None:
@@ -241,7 +246,8 @@ def _write_ahead_log(engine: sqlalchemy.engine.Engine) -> None:
 
 @contextlib.contextmanager
 def claim_lock(storage: RDBStorage | None, url: str, name: str) -> Iterator[None]:
-    """Hold the study's lock (flock beside an SQLite file, an advisory lock on PostgreSQL) in the block.
+    """Hold the study's lock (flock beside an SQLite file, an advisory lock on PostgreSQL) in the
+    block.
 
     ``storage`` (the RDBStorage) is needed for PostgreSQL only; without it there is no lock there.
     """
@@ -293,12 +299,14 @@ def _owner_gone(owner: object) -> bool:
 
 
 def retry_stale_trials(study: optuna.Study, rdb: RDBStorage) -> list[int]:
-    """Fail the RUNNING trials of dead processes and ask their parameters again; the failed trials' numbers.
+    """Fail the RUNNING trials of dead processes and ask their parameters again; the failed trials'
+    numbers.
 
-    Call under :func:`claim_lock`; ``rdb`` is the study's RDBStorage (:func:`open_storage`). A first,
-    fast pass finds dead owners on this host by their pid, and a trial with no owner (its process died
-    while claiming it); then optuna's ``fail_stale_trials`` fails the trials whose heartbeat is
-    :data:`GRACE_S` old (owners on other hosts) and asks them again through :func:`retry_failed_trial`.
+    Call under :func:`claim_lock`; ``rdb`` is the study's RDBStorage (:func:`open_storage`). A
+    first, fast pass finds dead owners on this host by their pid, and a trial with no owner (its
+    process died while claiming it); then optuna's ``fail_stale_trials`` fails the trials whose
+    heartbeat is :data:`GRACE_S` old (owners on other hosts) and asks them again through
+    :func:`retry_failed_trial`.
     """
     from optuna.storages import fail_stale_trials
     from optuna.trial import TrialState
@@ -320,9 +328,9 @@ def retry_stale_trials(study: optuna.Study, rdb: RDBStorage) -> list[int]:
 
 
 def retry_failed_trial(study: optuna.Study, trial: FrozenTrial) -> None:
-    """Ask a failed trial's parameters again as a new WAITING trial that records ``retry_of`` (optuna's
-    ``RetryHeartbeatStaleTrialCallback``, given the trial with that one user attr: the failed run's own
-    records, owner, result and stopped, stay with the failed trial)."""
+    """Ask a failed trial's parameters again as a new WAITING trial that records ``retry_of``
+    (optuna's ``RetryHeartbeatStaleTrialCallback``, given the trial with that one user attr: the
+    failed run's own records, owner, result and stopped, stay with the failed trial)."""
     from optuna.storages import RetryHeartbeatStaleTrialCallback
 
     retry = copy.copy(trial)
@@ -333,8 +341,8 @@ def retry_failed_trial(study: optuna.Study, trial: FrozenTrial) -> None:
 
 
 class _Retries:
-    """The storage's ``heartbeat_stale_trial_callback``: :func:`retry_failed_trial`, keeping the numbers of
-    the trials it asked again (``fail_stale_trials`` returns none)."""
+    """The storage's ``heartbeat_stale_trial_callback``: :func:`retry_failed_trial`, keeping the
+    numbers of the trials it asked again (``fail_stale_trials`` returns none)."""
 
     def __init__(self) -> None:
         self.numbers: list[int] = []
@@ -345,17 +353,18 @@ class _Retries:
 
 
 def trial_result(trial: FrozenTrial) -> dict[str, Any]:
-    """The :data:`RESULT` record of a (frozen) trial; empty while it runs or when its run stopped first."""
+    """The :data:`RESULT` record of a (frozen) trial; empty while it runs or when its run stopped
+    first."""
     record = trial.user_attrs.get(RESULT)
     return record if isinstance(record, dict) else {}
 
 
 def count_trials(rdb: RDBStorage, study_id: int) -> tuple[int, bool]:
-    """The trials that count toward ``--trials`` (COMPLETE, PRUNED, RUNNING, WAITING, and FAIL with a recorded
-    result and not stopped) and whether any is WAITING, in one query.
+    """The trials that count toward ``--trials`` (COMPLETE, PRUNED, RUNNING, WAITING, and FAIL with
+    a recorded result and not stopped) and whether any is WAITING, in one query.
 
-    One aggregate over optuna's tables, not a read of every trial: asking for a trial reads them anyway,
-    and this count is made under :func:`claim_lock` before every ask. The FAIL rule is
+    One aggregate over optuna's tables, not a read of every trial: asking for a trial reads them
+    anyway, and this count is made under :func:`claim_lock` before every ask. The FAIL rule is
     :func:`was_stopped`'s, in SQL: change them together."""
     import sqlalchemy
     from optuna.trial import TrialState
@@ -384,8 +393,8 @@ def _trial_tables() -> tuple[Any, Any]:
     """optuna's trial and trial-user-attribute tables (SQLAlchemy models), for :func:`count_trials`.
 
     The one private name of optuna this package uses, read as of optuna 5.0.0 (constraints.txt): the
-    public API has no aggregate over a study's trials. A new optuna: check the models' names and columns
-    (``trial_id``, ``study_id``, ``state``; ``trial_id``, ``key``)."""
+    public API has no aggregate over a study's trials. A new optuna: check the models' names and
+    columns (``trial_id``, ``study_id``, ``state``; ``trial_id``, ``key``)."""
     # private: optuna's public API counts no trials in one query; read as of optuna==5.0.0
     # (constraints.txt)
     from optuna.storages._rdb import models
@@ -403,9 +412,9 @@ def was_stopped(trial: FrozenTrial) -> bool:
 
 
 def fail_and_retry(study: optuna.Study, rdb: RDBStorage, trial_numbers: Iterable[int]) -> list[int]:
-    """Fail each of these trials that is still RUNNING, marked :data:`STOPPED` first, and ask its parameters
-    again (:func:`retry_failed_trial`); the numbers of the trials failed (one that another process
-    finished is skipped)."""
+    """Fail each of these trials that is still RUNNING, marked :data:`STOPPED` first, and ask its
+    parameters again (:func:`retry_failed_trial`); the numbers of the trials failed (one that
+    another process finished is skipped)."""
     import optuna
     from optuna.trial import TrialState
 
@@ -425,8 +434,9 @@ def fail_and_retry(study: optuna.Study, rdb: RDBStorage, trial_numbers: Iterable
 
 
 class Heartbeat:
-    """A thread that records the heartbeat of the trials this process runs, every :data:`HEARTBEAT_S` s
-    (optuna's ``RDBStorage.record_heartbeat``; optuna's own thread runs inside ``Study.optimize`` only)."""
+    """A thread that records the heartbeat of the trials this process runs, every
+    :data:`HEARTBEAT_S` s (optuna's ``RDBStorage.record_heartbeat``; optuna's own thread runs inside
+    ``Study.optimize`` only)."""
 
     def __init__(self, storage: RDBStorage, study: optuna.Study) -> None:
         self._storage = storage

@@ -118,8 +118,8 @@ class StudyResult:
         total: the trials asked for in all.
         ran: trials this process ran (finished) in this run.
         seconds: wall time of the trial loop, s.
-        cpu_seconds: CPU time of this process (all its threads) in the trial loop, s: the sampler, the
-            storage and the loop, which take their share of the cores the workers run on.
+        cpu_seconds: CPU time of this process (all its threads) in the trial loop, s: the sampler,
+            the storage and the loop, which take their share of the cores the workers run on.
         backend: ``"local pool, N workers"`` or ``"dask: ..."``.
         retried: numbers of trials of dead processes that were failed and asked again.
         files: what :func:`torus_cad.optimize.results.write_results` wrote, by kind.
@@ -166,7 +166,8 @@ class StudyResult:
 
 
 class StudyInterrupted(Interrupted):
-    """SIGINT, SIGTERM or SIGHUP during :func:`run_study`; ``result`` is the partial run (its outputs written)."""
+    """SIGINT, SIGTERM or SIGHUP during :func:`run_study`; ``result`` is the partial run (its
+    outputs written)."""
 
     def __init__(self, signum: int, result: StudyResult) -> None:
         super().__init__(signum)
@@ -193,7 +194,8 @@ def run_study(
     trial_job: Job = run_trial,
     progress: bool | None = None,
 ) -> StudyResult:
-    """Run ``spec`` until it holds ``trials`` (default ``spec.trials``) finished trials, then write its results.
+    """Run ``spec`` until it holds ``trials`` (default ``spec.trials``) finished trials, then write
+    its results.
 
     Args:
         spec: the study (:func:`torus_cad.optimize.study_file.read_study_file`).
@@ -201,13 +203,16 @@ def run_study(
         trials: trials in all (over every run and process of the study).
         workers: local worker processes (default and cap: the CPUs available), or a LocalCluster's
             size with ``scheduler="local"``.
-        scheduler: a Dask scheduler address, or ``"local"``; ``out_dir`` must be shared with its workers.
+        scheduler: a Dask scheduler address, or ``"local"``; ``out_dir`` must be shared with its
+            workers.
         storage: the storage URL (default ``spec.storage``, else SQLite ``OUT/<name>.db``).
         write_results: write the table, the history picture and the best designs at the end.
-        trial_job: what a worker runs for each stage of a trial (default :func:`run_trial`: the build and
-            ``torus-cad simulate``); a top-level function of a :class:`TrialTask` giving a DesignResult.
-        progress: draw a bar of the trials (finished of all, by state, per minute, time left) and a line each
-            time a one-objective study finds a better trial, on stderr; None: only when stderr is a terminal.
+        trial_job: what a worker runs for each stage of a trial (default :func:`run_trial`: the
+            build and ``torus-cad simulate``); a top-level function of a :class:`TrialTask` giving a
+            DesignResult.
+        progress: draw a bar of the trials (finished of all, by state, per minute, time left) and a
+            line each time a one-objective study finds a better trial, on stderr; None: only when
+            stderr is a terminal.
 
     Raises ParameterError for bad options or a study whose stored definition differs,
     StorageError / BatchError when the storage or the executor cannot be used, and
@@ -353,7 +358,8 @@ class _Runner:
     def claim_trial(self) -> Trial | None:
         """Ask for a trial (an enqueued retry first), or None when the study is full.
 
-        Called by the runner's tasks (:class:`_Tasks`) under the claim lock. The trial is this process's from
+        Called by the runner's tasks (:class:`_Tasks`) under the claim lock. The trial is this
+        process's from
         here: in flight, owned, on the heartbeat.
 
         Returns:
@@ -377,9 +383,10 @@ class _Runner:
         return trial
 
     def answered_by_twin(self, trial: Trial) -> bool:
-        """Whether a complete trial this process knows had exactly ``trial``'s parameters; if so, ``trial`` is told
-        that trial's values and takes its record (metrics, constraints, folder; ``same_as`` names it), and no
-        worker builds or simulates the design again (the same parameters give the same design and numbers).
+        """Whether a complete trial this process knows had exactly ``trial``'s parameters; if so,
+        ``trial`` is told that trial's values and takes its record (metrics, constraints, folder;
+        ``same_as`` names it), and no worker builds or simulates the design again (the same
+        parameters give the same design and numbers).
 
         Args:
             trial: a trial this process claimed (:meth:`claim_trial`).
@@ -435,8 +442,8 @@ class _Runner:
         )
 
     def on_result(self, task: DesignTask, result: DesignResult) -> None:
-        """Tell optuna what the trial gave: its objective values and constraints, or FAIL with the reason; at a
-        screening level, climb (queue the next stage) or PRUNED.
+        """Tell optuna what the trial gave: its objective values and constraints, or FAIL with the
+        reason; at a screening level, climb (queue the next stage) or PRUNED.
 
         The trial's record (outcome, reason, metrics, violations) is one user attr, one write.
 
@@ -523,7 +530,8 @@ class _Runner:
             )
 
     def _forget(self, design_id: str, trial: Trial) -> None:
-        """The trial is no longer this process's to run: out of the trials in flight and the heartbeat."""
+        """The trial is no longer this process's to run: out of the trials in flight and the
+        heartbeat."""
         del self.in_flight[design_id]
         self.seconds.pop(design_id, None)
         self.heartbeat.discard(trial)
@@ -531,8 +539,9 @@ class _Runner:
     def _stops_here(
         self, trial: Trial, stage: int, values: list[float], record: dict[str, Any], seconds: float
     ) -> bool:
-        """Whether the trial stops at screening level ``stage`` (the pruner's word, or a broken constraint); its
-        values there are recorded with the trial first (``LEVELS``), where other processes' pruners read them."""
+        """Whether the trial stops at screening level ``stage`` (the pruner's word, or a broken
+        constraint); its values there are recorded with the trial first (``LEVELS``), where other
+        processes' pruners read them."""
         level = self.spec.levels[stage]
         feasible = all(v <= 0.0 for v in record.get(CONSTRAINT, []))
         # this process's own trial: its attrs are current
@@ -562,7 +571,8 @@ class _Runner:
     def _evaluate(
         self, folder: Path, name: str, record: dict[str, Any], report_dir: str = PERFORMANCE_DIR
     ) -> list[float]:
-        """The objective values; the metrics and the constraint violations go into the trial's ``record``."""
+        """The objective values; the metrics and the constraint violations go into the trial's
+        ``record``."""
         report = json.loads((folder / f"{name}.json").read_text())
         performance = None
         if self.spec.simulate is not None:
@@ -579,8 +589,8 @@ class _Runner:
         return [metrics[objective.metric] for objective in self.spec.objectives]
 
     def _retry_in_flight(self) -> None:
-        """After an interrupt: fail the trials this process was running and ask their parameters again
-        (those it holds, and any RUNNING trial that records this process as its owner)."""
+        """After an interrupt: fail the trials this process was running and ask their parameters
+        again (those it holds, and any RUNNING trial that records this process as its owner)."""
         from optuna.trial import TrialState
 
         mine = {trial.number for trial in self.in_flight.values()}
@@ -602,8 +612,8 @@ class _Runner:
         self.seconds.clear()
 
     def write(self, result: StudyResult, checkpoint: Callable[[], None] | None = None) -> None:
-        """The table, the pictures, the best designs and the summary; ``checkpoint`` is called between two of
-        them (it raises to stop there)."""
+        """The table, the pictures, the best designs and the summary; ``checkpoint`` is called
+        between two of them (it raises to stop there)."""
         from torus_cad.errors import OutputError
         from torus_cad.outputs.output_set import describe_os_error
 
@@ -617,9 +627,9 @@ class _Runner:
             raise OutputError(describe_os_error(error, _final_name(named))) from None
 
     def close(self) -> None:
-        """Close the storage's connections: SQLite's last connection folds its write-ahead log into the
-        database and removes ``-wal`` and ``-shm``. The study is read from the storage once more to write
-        the results, which opens a connection again; this is called after that too."""
+        """Close the storage's connections: SQLite's last connection folds its write-ahead log into
+        the database and removes ``-wal`` and ``-shm``. The study is read from the storage once more
+        to write the results, which opens a connection again; this is called after that too."""
         # a storage that already failed: its error is the one reported
         with contextlib.suppress(Exception):
             self.rdb.remove_session()
@@ -628,11 +638,12 @@ class _Runner:
 
 
 class _Tasks:
-    """The runner's tasks: a trial that climbs to its next level first, else a new trial whenever a worker is
-    free, until the study holds its trials.
+    """The runner's tasks: a trial that climbs to its next level first, else a new trial whenever a
+    worker is free, until the study holds its trials.
 
-    An iterator that may end and go on again: while trials in flight may still climb, it stops when it has
-    nothing to give now, and :func:`~torus_cad.batch.runner.run_tasks` asks it again after each result."""
+    An iterator that may end and go on again: while trials in flight may still climb, it stops when
+    it has nothing to give now, and :func:`~torus_cad.batch.runner.run_tasks` asks it again after
+    each result."""
 
     def __init__(self, runner: _Runner, result: StudyResult) -> None:
         self.runner, self.result = runner, result
@@ -674,8 +685,9 @@ def _parameters_key(params: dict[str, Any]) -> str:
 
 
 def _step(kind: PrunerKind, reduction_factor: int, stage: int) -> int:
-    """The step at which a trial reports its value at level ``stage``: ``reduction_factor ** stage`` for
-    successive halving (level i is its rung i: a resource that grows by the reduction factor per level), else
+    """The step at which a trial reports its value at level ``stage``: ``reduction_factor ** stage``
+    for successive halving (level i is its rung i: a resource that grows by the reduction factor per
+    level), else
     ``stage``."""
     return reduction_factor**stage if kind is PrunerKind.HALVING else stage
 
@@ -687,10 +699,10 @@ def dominated_at_level(
     others: Iterable[FrozenTrial],
     startup_trials: int,
 ) -> bool:
-    """The pruner of several objectives: whether ``values`` (a trial's at ``level``) are dominated by the values
-    at ``level`` of a feasible one of ``others`` (no worse in every objective, better in one), once at least
-    ``startup_trials`` of them have values there. optuna's pruners take one value; this is the Pareto
-    front's own test, on the screening level."""
+    """The pruner of several objectives: whether ``values`` (a trial's at ``level``) are dominated
+    by the values at ``level`` of a feasible one of ``others`` (no worse in every objective, better
+    in one), once at least ``startup_trials`` of them have values there. optuna's pruners take one
+    value; this is the Pareto front's own test, on the screening level."""
     signs = [1.0 if objective.direction.value == "minimize" else -1.0 for objective in objectives]
     mine = [sign * value for sign, value in zip(signs, values)]
     seen = []
@@ -716,8 +728,8 @@ def dominated_at_level(
 
 
 def _pruner(spec: StudySpec) -> BasePruner | None:
-    """optuna's pruner of a one-objective study of several levels; None otherwise (the study's default,
-    never consulted: trials report no values)."""
+    """optuna's pruner of a one-objective study of several levels; None otherwise (the study's
+    default, never consulted: trials report no values)."""
     import optuna
 
     pruner = spec.pruner
@@ -735,7 +747,8 @@ def _pruner(spec: StudySpec) -> BasePruner | None:
 
 
 def _final_name(path: Path) -> Path:
-    """The file a temp file of :func:`torus_cad.runtime.files.atomic_path` stands for (``.x.png.tmp-...`` -> ``x.png``)."""
+    """The file a temp file of :func:`torus_cad.runtime.files.atomic_path` stands for
+    (``.x.png.tmp-...`` -> ``x.png``)."""
     name, marker, _ = path.name.partition(".tmp-")
     return path.with_name(name[1:]) if marker and name.startswith(".") else path
 
@@ -765,7 +778,8 @@ def _distributions(spec: StudySpec) -> dict[str, BaseDistribution]:
 
 
 def _constraints(trial: FrozenTrial) -> list[float]:
-    """optuna's constraints_func: the violations recorded with the trial (feasible when all <= 0)."""
+    """optuna's constraints_func: the violations recorded with the trial (feasible when all <=
+    0)."""
     return list(trial_result(trial).get(CONSTRAINT, [math.inf]))
 
 
@@ -789,7 +803,8 @@ def _sampler(spec: StudySpec, seed: int) -> BaseSampler:
 
 
 def _load_study(spec: StudySpec, rdb: RDBStorage) -> optuna.Study:
-    """The study in the storage (created on the first run); ParameterError if it was created from another file."""
+    """The study in the storage (created on the first run); ParameterError if it was created from
+    another file."""
     import optuna
 
     with warnings.catch_warnings():

@@ -175,8 +175,8 @@ class BoundTable(Section):
 
 
 class StudyLevel(StrEnum):
-    """The fidelity a trial is evaluated at, cheapest first: the vortex solver (``simulate --solver vortex``,
-    seconds) or one of OpenFOAM's mesh levels (``simulate --level``)."""
+    """The fidelity a trial is evaluated at, cheapest first: the vortex solver (``simulate --solver
+    vortex``, seconds) or one of OpenFOAM's mesh levels (``simulate --level``)."""
 
     VORTEX = VORTEX_LEVEL
     COARSE = Level.COARSE.value
@@ -264,8 +264,8 @@ class StudyFile(Section):
 
 @dataclass(frozen=True)
 class Pruner:
-    """Which trials climb from one mesh level to the next (:class:`PrunerKind`); ``startup_trials``: trials that
-    reach a level before any is stopped there; ``reduction_factor``: halving's."""
+    """Which trials climb from one mesh level to the next (:class:`PrunerKind`); ``startup_trials``:
+    trials that reach a level before any is stopped there; ``reduction_factor``: halving's."""
 
     kind: PrunerKind
     startup_trials: int = 4
@@ -300,17 +300,19 @@ class StudySpec:
     Attributes:
         name: the study's name (storage and file names).
         base: the design every trial starts from.
-        axes: the varied keys: ``low``/``high`` for a range (``integer`` for whole numbers), ``values``
-            for a choice.
+        axes: the varied keys: ``low``/``high`` for a range (``integer`` for whole numbers),
+            ``values`` for a choice.
         objectives: what to optimise, in order.
         constraints: the allowed intervals of metrics.
         trials: trials in all.
         sampler, seed, population: the search.
         storage: the storage URL from the file ('' = SQLite in the output folder).
-        simulate: ``{"rpm", "airspeed", "level"}`` when a metric is ``performance.*``, else None; with
-            ``"thrust"`` (N, rpm 0), ``"thrust_tolerance"``, ``"thrust_runs"`` for a target thrust, and
-            ``"iterations"``, ``"processes"``, ``"observers"`` (``DIST_M:ANGLE_DEG`` texts) when given.
-        levels: the mesh levels a trial climbs, coarse to fine (one: no climbing); () without simulate.
+        simulate: ``{"rpm", "airspeed", "level"}`` when a metric is ``performance.*``, else None;
+            with ``"thrust"`` (N, rpm 0), ``"thrust_tolerance"``, ``"thrust_runs"`` for a target
+            thrust, and ``"iterations"``, ``"processes"``, ``"observers"`` (``DIST_M:ANGLE_DEG``
+            texts) when given.
+        levels: the mesh levels a trial climbs, coarse to fine (one: no climbing); () without
+            simulate.
         pruner: which trials climb (two or more levels), else None.
         stl: trials (and so the best sets copied from them) write STL files.
         time_limit_s: per trial, s.
@@ -336,7 +338,8 @@ class StudySpec:
     pruner: Pruner | None = None
 
     def stage_settings(self, stage: int) -> dict[str, Any] | None:
-        """The simulation settings of stage ``stage`` (its level ``levels[stage]``); None without simulate."""
+        """The simulation settings of stage ``stage`` (its level ``levels[stage]``); None without
+        simulate."""
         if self.simulate is None:
             return None
         settings = {key: value for key, value in self.simulate.items() if key != "levels"}
@@ -348,7 +351,8 @@ class StudySpec:
         return [objective.direction.value for objective in self.objectives]
 
     def parameters(self, values: Mapping[str, Any], name: str) -> dict[str, Any]:
-        """The full design (TOML layout) of the trial with ``values`` by vary key, named ``name``."""
+        """The full design (TOML layout) of the trial with ``values`` by vary key, named
+        ``name``."""
         parameters = apply_axis_values(
             self.base.to_dict(), self.axes, tuple(values[axis.key] for axis in self.axes)
         )
@@ -356,8 +360,8 @@ class StudySpec:
         return parameters
 
     def definition(self) -> str:
-        """What must not change between runs of one study: a digest of base, axes, objectives, constraints and
-        [simulate] (the [pruner] may change: it only decides which trials climb)."""
+        """What must not change between runs of one study: a digest of base, axes, objectives,
+        constraints and [simulate] (the [pruner] may change: it only decides which trials climb)."""
         data = {
             "base": self.base.to_dict(),
             "axes": [[a.key, a.low, a.high, list(a.values)] for a in self.axes],
@@ -381,7 +385,8 @@ def read_study_file(path: str | Path) -> StudySpec:
 def parse_study(
     data: Mapping[str, Any], base_dir: str | Path = ".", name: str = "study", source: str = "study"
 ) -> StudySpec:
-    """Check a study given as the parsed TOML; ``study.base`` and file values are relative to ``base_dir``."""
+    """Check a study given as the parsed TOML; ``study.base`` and file values are relative to
+    ``base_dir``."""
 
     def fail(message: str) -> ParameterError:
         return ParameterError(f"{source}: {message}")
@@ -477,8 +482,8 @@ def _flatten_bounds(table: Mapping[str, Any], prefix: str = "") -> list[tuple[st
 
 
 def _refuse_non_finite(vary: Mapping[str, Any], fail: Any) -> None:
-    """A NaN or infinite bound of a [vary] range, named with the parameter's range (before the file's schema,
-    whose own message would name only the type it tried)."""
+    """A NaN or infinite bound of a [vary] range, named with the parameter's range (before the
+    file's schema, whose own message would name only the type it tried)."""
     for key, values in vary.items():
         if not isinstance(values, list):
             continue
@@ -489,7 +494,8 @@ def _refuse_non_finite(vary: Mapping[str, Any], fail: Any) -> None:
 
 
 def _axis(key: str, values: list[Any], folder: Path, fail: Any) -> VaryAxis:
-    """A range (two numbers) or a choice (strings or booleans), checked against the schema's ranges."""
+    """A range (two numbers) or a choice (strings or booleans), checked against the schema's
+    ranges."""
     where = f"vary.{shown(key)}"
     path, index, leaf = resolve_leaf(key, fail)
     numbers = [v for v in values if isinstance(v, (int, float)) and not isinstance(v, bool)]
@@ -606,8 +612,9 @@ def _simulate(
 
 
 def _check_rpm(rpm: float, airspeed_m_s: float, base: PropellerParameters, fail: Any) -> None:
-    """An rpm above simulate's tip-Mach limit for the base design's tip diameter is refused here, before
-    the first trial, with simulate's own range (each trial's simulate checks its own design again)."""
+    """An rpm above simulate's tip-Mach limit for the base design's tip diameter is refused here,
+    before the first trial, with simulate's own range (each trial's simulate checks its own design
+    again)."""
     from torus_cad.simulate.settings import AIR_15C, rpm_limit
 
     diameter_mm = base.diameter if base.diameter > 0.0 else _tip_diameter_mm(base)
@@ -630,8 +637,9 @@ def _tip_diameter_mm(base: PropellerParameters) -> float:
 def _check_thrust(
     target_n: float, airspeed_m_s: float, base: PropellerParameters, fail: Any
 ) -> None:
-    """A target no propeller of the base's diameter reaches (CT 1 at the rpm limit) is refused here, once,
-    not in every trial (a base without a ``diameter`` target: each trial's simulate checks its own)."""
+    """A target no propeller of the base's diameter reaches (CT 1 at the rpm limit) is refused here,
+    once, not in every trial (a base without a ``diameter`` target: each trial's simulate checks its
+    own)."""
     from torus_cad.simulate.settings import AIR_15C, rpm_limit
     from torus_cad.simulate.thrust_target import PLAUSIBLE_CT_LIMIT, thrust_ceiling
 
@@ -648,7 +656,8 @@ def _check_thrust(
 
 
 def _check_observers(observers: tuple[str, ...], base: PropellerParameters, fail: Any) -> None:
-    """At most NOISE_MAX_OBSERVERS, each outside the base's tip radius (when it has a ``diameter`` target)."""
+    """At most NOISE_MAX_OBSERVERS, each outside the base's tip radius (when it has a ``diameter``
+    target)."""
     from torus_cad.acoustics.observers import parse_observer
 
     if len(observers) > NOISE_MAX_OBSERVERS:
@@ -681,7 +690,8 @@ def _levels(model: StudyFile, simulate: dict[str, Any] | None, fail: Any) -> tup
 
 
 def _pruner(model: StudyFile, levels: tuple[str, ...], objectives: int, fail: Any) -> Pruner | None:
-    """The pruner of a study of two or more levels (default median for one objective, dominated for several)."""
+    """The pruner of a study of two or more levels (default median for one objective, dominated for
+    several)."""
     table = model.pruner
     if len(levels) < 2:
         if "pruner" in model.model_fields_set:

@@ -1,4 +1,5 @@
-"""One trial, as a worker runs it: the sweep's design job, then (for ``performance.*``) the simulation.
+"""One trial, as a worker runs it: the sweep's design job, then (for ``performance.*``) the
+simulation.
 
 The trial's folder ``OUT/trials/<number>/`` holds the build's output set (``trial_<number>.step``,
 ``.json``, ``.stl`` unless the study says ``stl = false``, ``.3mf`` when the design asks): every
@@ -6,9 +7,9 @@ file its best set would hold, so that the trial is judged on them; the design fi
 ``trial_<number>.toml`` that rebuilds it, and ``simulate/`` with the performance report; or the
 sweep's ``refusal.json`` / ``failure.json`` naming the reason.
 
-A study of several mesh levels runs a trial in stages, one task each: the first builds the design and
-simulates it at the coarsest level into ``simulate/<level>/``; each further stage (a trial the pruner
-let climb) simulates the design file already written at the next level, into its own
+A study of several mesh levels runs a trial in stages, one task each: the first builds the design
+and simulates it at the coarsest level into ``simulate/<level>/``; each further stage (a trial the
+pruner let climb) simulates the design file already written at the next level, into its own
 ``simulate/<level>/``, without building it again.
 """
 
@@ -43,17 +44,17 @@ def trial_name(number: int) -> str:
 
 
 def performance_dir(level: str, levels: int) -> str:
-    """The folder, under a trial's, of its simulation at ``level`` in a study of ``levels`` mesh levels:
-    ``simulate`` (one level), ``simulate/<level>`` (several)."""
+    """The folder, under a trial's, of its simulation at ``level`` in a study of ``levels`` mesh
+    levels: ``simulate`` (one level), ``simulate/<level>`` (several)."""
     return PERFORMANCE_DIR if levels <= 1 else f"{PERFORMANCE_DIR}/{level}"
 
 
 @dataclass(frozen=True)
 class TrialTask(DesignTask):
-    """A design task with the simulation settings (``{"rpm", "airspeed", "level", ...}``; None: geometry only),
-    the simulation's time limit, s, the folder of its report under the trial's (``simulate_dir``), and the
-    trial's stage: 0 builds the design, a later one (a climb to a finer level) simulates the design file
-    the first wrote."""
+    """A design task with the simulation settings (``{"rpm", "airspeed", "level", ...}``; None:
+    geometry only), the simulation's time limit, s, the folder of its report under the trial's
+    (``simulate_dir``), and the trial's stage: 0 builds the design, a later one (a climb to a finer
+    level) simulates the design file the first wrote."""
 
     simulate: dict[str, Any] | None = None
     simulate_time_limit_s: float | None = None
@@ -62,8 +63,9 @@ class TrialTask(DesignTask):
 
 
 def run_trial(task: DesignTask) -> DesignResult:
-    """Build and write the design, write its TOML, simulate a :class:`TrialTask` if asked; never raises for a
-    bad design. A later stage of a trial (``stage`` > 0) only simulates the design file its first stage wrote."""
+    """Build and write the design, write its TOML, simulate a :class:`TrialTask` if asked; never
+    raises for a bad design. A later stage of a trial (``stage`` > 0) only simulates the design file
+    its first stage wrote."""
     climb = isinstance(task, TrialTask) and task.stage > 0
     result = DesignResult(task.design_id, Outcome.VALID) if climb else run_design(task)
     if result.outcome is not Outcome.VALID or task.folder is None:

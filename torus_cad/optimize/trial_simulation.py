@@ -1,11 +1,12 @@
-"""A trial's performance: ``torus-cad simulate`` run on the trial's design file, behind one function.
+"""A trial's performance: ``torus-cad simulate`` run on the trial's design file, behind one
+function.
 
-The contract: ``python -m torus_cad simulate CONFIG.toml (--rpm RPM | --thrust N --thrust-tolerance F
---thrust-runs K) [--airspeed M_S] [--iterations N] [--processes N] [--observer D:A ...] [--time-limit S]
---level LEVEL --out DIR --quiet`` writes ``DIR/<name>_performance.json`` (thrust_n, torque_nm, power_w, ct, cp,
-efficiency, figure_of_merit, converged, ...) and exits 0; 2 for bad input (the design is refused),
-1 for a failure. :func:`run_simulate` is the only place that knows it, so that it can become a
-Python call later.
+The contract: ``python -m torus_cad simulate CONFIG.toml (--rpm RPM | --thrust N --thrust-tolerance
+F --thrust-runs K) [--airspeed M_S] [--iterations N] [--processes N] [--observer D:A ...]
+[--time-limit S] --level LEVEL --out DIR --quiet`` writes ``DIR/<name>_performance.json`` (thrust_n,
+torque_nm, power_w, ct, cp, efficiency, figure_of_merit, converged, ...) and exits 0; 2 for bad
+input (the design is refused), 1 for a failure. :func:`run_simulate` is the only place that knows
+it, so that it can become a Python call later.
 """
 
 from __future__ import annotations
@@ -84,12 +85,14 @@ def run_simulate(
     out_dir: Path,
     time_limit_s: float | None = None,
 ) -> dict[str, Any]:
-    """The performance report of the design file ``config`` (named ``name``) at ``settings`` (``rpm`` or a target
-    ``thrust`` N with ``thrust_tolerance`` and ``thrust_runs``; ``airspeed`` m/s, ``level``, and ``iterations``,
-    ``processes``, ``observers`` when given), simulated into ``out_dir`` within ``time_limit_s``.
+    """The performance report of the design file ``config`` (named ``name``) at ``settings``
+    (``rpm`` or a target ``thrust`` N with ``thrust_tolerance`` and ``thrust_runs``; ``airspeed``
+    m/s, ``level``, and ``iterations``, ``processes``, ``observers`` when given), simulated into
+    ``out_dir`` within ``time_limit_s``.
 
-    Raises ParameterError when simulate refuses the design (exit 2), SimulateError when it fails. The vortex
-    level runs in this process (:func:`_run_vortex`): the same solver and report as ``simulate --solver vortex``.
+    Raises ParameterError when simulate refuses the design (exit 2), SimulateError when it fails.
+    The vortex level runs in this process (:func:`_run_vortex`): the same solver and report as
+    ``simulate --solver vortex``.
     """
     if str(settings.get("level", "")) == VORTEX_LEVEL:
         return _run_vortex(config, settings, out_dir)
@@ -122,9 +125,9 @@ def run_simulate(
 
 
 def _run_vortex(config: Path, settings: Mapping[str, Any], out_dir: Path) -> dict[str, Any]:
-    """``simulate --solver vortex`` on the design file ``config`` as a Python call, without its pictures: a trial
-    takes seconds, and a new process would add the imports' seconds to each (the trial's worker has its own time
-    limit). The report published into ``out_dir`` is returned."""
+    """``simulate --solver vortex`` on the design file ``config`` as a Python call, without its
+    pictures: a trial takes seconds, and a new process would add the imports' seconds to each (the
+    trial's worker has its own time limit). The report published into ``out_dir`` is returned."""
     from torus_cad.acoustics.observers import parse_observer
     from torus_cad.parameters import PropellerParameters
     from torus_cad.simulate.settings import OperatingPoint
@@ -154,7 +157,8 @@ def _run_vortex(config: Path, settings: Mapping[str, Any], out_dir: Path) -> dic
 
 
 def simulate_unavailable() -> str:
-    """'' when ``torus-cad simulate`` can run here; otherwise why not (for a test's skip, a clear error)."""
+    """'' when ``torus-cad simulate`` can run here; otherwise why not (for a test's skip, a clear
+    error)."""
     if not Path("/usr/bin/simpleFoam").is_file():
         return "OpenFOAM's simpleFoam is not installed (/usr/bin/simpleFoam)"
     try:

@@ -30,7 +30,8 @@ if TYPE_CHECKING:
 
 
 class BuiltPropeller(Protocol):
-    """What the report and the output set read of a built propeller (:class:`torus_cad.propeller.Propeller`)."""
+    """What the report and the output set read of a built propeller
+    (:class:`torus_cad.propeller.Propeller`)."""
 
     parameters: PropellerParameters
     shape: TopoDS_Shape
@@ -55,7 +56,8 @@ def build_report(
     density_g_cm3: float,
     meshes: Mapping[str, dict[str, Any]] | None = None,
 ) -> dict[str, Any]:
-    """The JSON report: parameters, mass properties, balance, printability, validity and stage times.
+    """The JSON report: parameters, mass properties, balance, printability, validity and stage
+    times.
 
     ``checks`` names every check the solid (and each written mesh, ``meshes``: {"stl" or "3mf":
     :meth:`torus_cad.kernel.mesh_check.MeshCheck.to_dict`}) passed."""
@@ -91,14 +93,16 @@ def build_report(
 
 
 def _closed_file_edge_mm(params: PropellerParameters) -> tuple[float, float] | None:
-    """The coordinate file's trailing edge closed because too thin to mesh (toroidal designs; None otherwise)."""
+    """The coordinate file's trailing edge closed because too thin to mesh (toroidal designs; None
+    otherwise)."""
     if params.kind.value != "toroidal":
         return None
     return params.geometry().blade.closed_file_edge_mm
 
 
 def _set_screw_angle_on_the_part_deg(propeller: BuiltPropeller) -> float | None:
-    """Where the set-screw hole of the part as built points, degrees about +z from +x (None: no set screw).
+    """Where the set-screw hole of the part as built points, degrees about +z from +x (None: no set
+    screw).
 
     The mounting is chosen on the spec's (cw) blades; a ccw part is their mirror image through the
     XZ plane, which takes the direction at angle a to -a.

@@ -18,7 +18,8 @@ from torus_cad.outputs.sections_table import elements_of
 def radius_crossings(
     params: Any, radius_mm: float, sections: int = 801
 ) -> list[tuple[float, float]]:
-    """``(s, geometric pitch mm)`` where blade 0 passes ``radius_mm`` (analytic, ``sections`` samples)."""
+    """``(s, geometric pitch mm)`` where blade 0 passes ``radius_mm`` (analytic, ``sections``
+    samples)."""
     fine = elements_of(params.blade_surface(sections=sections, points=48))
     found = []
     for i in np.flatnonzero(np.diff(np.sign(fine.radius_mm - radius_mm))):

@@ -1,4 +1,5 @@
-"""Output sets: the files of one build (STEP, STL, picture, JSON report) appear together or not at all.
+"""Output sets: the files of one build (STEP, STL, picture, JSON report) appear together or not at
+all.
 
 A build is a transaction on its output folder ``OUT``:
 
@@ -90,9 +91,9 @@ def remove_stale_staging(out_dir: Path) -> list[Path]:
 
 
 def staging_folders(out_dir: Path) -> tuple[list[Path], list[Path]]:
-    """The staging folders in ``out_dir``: those left by dead processes of this host (debris, removed by the
-    next build there or by :func:`remove_stale_staging`), and the others (a build in progress, or one of
-    another host sharing the folder)."""
+    """The staging folders in ``out_dir``: those left by dead processes of this host (debris,
+    removed by the next build there or by :func:`remove_stale_staging`), and the others (a build in
+    progress, or one of another host sharing the folder)."""
     left: list[Path] = []
     other: list[Path] = []
     with contextlib.suppress(OSError):
@@ -121,7 +122,8 @@ def describe_os_error(error: OSError, path: Path) -> str:
 
 def check_writable_folder(out_dir: str | Path) -> None:
     """OutputError unless files can be created in ``out_dir`` (or, if it does not exist yet, in the
-    nearest folder above it, where it would be made). Checked before building, leaves nothing behind."""
+    nearest folder above it, where it would be made). Checked before building, leaves nothing
+    behind."""
     out_dir = Path(out_dir)
     existing = out_dir
     while not existing.exists() and existing != existing.parent:
@@ -170,8 +172,8 @@ def _folder_lock(out_dir: Path, shared: bool = False) -> Iterator[None]:
 
 
 def _read_report(path: Path) -> dict[str, Any] | None:
-    """The JSON report at ``path``, or None if it is not one (not a regular file, over the limit, not
-    JSON, nested too deep for the JSON reader)."""
+    """The JSON report at ``path``, or None if it is not one (not a regular file, over the limit,
+    not JSON, nested too deep for the JSON reader)."""
     try:
         report = json.loads(
             read_untrusted_bytes(path, "report", REPORT_FILE_MAX_BYTES).decode("utf-8")
@@ -232,8 +234,8 @@ class OutputSet:
         self.staging, self._cleanup = None, None
 
     def final_path(self, kind: str) -> Path:
-        """Where the file of ``kind`` is published: ``<name>.<kind>`` ("step", "stl", "3mf", "png"), or
-        the name it was staged under (see :meth:`write_files`)."""
+        """Where the file of ``kind`` is published: ``<name>.<kind>`` ("step", "stl", "3mf", "png"),
+        or the name it was staged under (see :meth:`write_files`)."""
         if kind in self._staged:
             return self.out_dir / self._staged[kind].name
         return self.out_dir / f"{self.name}.{kind}"
@@ -248,8 +250,8 @@ class OutputSet:
         return self._staged[kind]
 
     def write(self, kind: str, writer: FileWriter) -> Path:
-        """Stage the file of ``kind`` with ``writer(path)``; an OSError (no space left, permission denied,
-        file size limit) becomes an OutputError naming the final file and the cause."""
+        """Stage the file of ``kind`` with ``writer(path)``; an OSError (no space left, permission
+        denied, file size limit) becomes an OutputError naming the final file and the cause."""
         path = self.stage(kind)
         with self._naming_failures(self.final_path(kind)):
             writer(path)
@@ -282,8 +284,8 @@ class OutputSet:
             ) from None
 
     def publish(self, report: Mapping[str, Any]) -> dict[str, Path]:
-        """Seal the staged files into ``report`` (as its ``"files"``), write it, publish the set; return
-        ``{kind: final path}`` with ``"json"`` last."""
+        """Seal the staged files into ``report`` (as its ``"files"``), write it, publish the set;
+        return ``{kind: final path}`` with ``"json"`` last."""
         if self.staging is None:
             raise RuntimeError("OutputSet.publish() outside its with-block")
         files = {kind: file_entry(path) for kind, path in self._staged.items()}
@@ -350,7 +352,8 @@ class VerifiedSet:
 
 
 def verify_set(out_dir: str | Path, name: str) -> VerifiedSet:
-    """Check that ``out_dir/<name>.json`` and every file it lists are there, whole and of the same build.
+    """Check that ``out_dir/<name>.json`` and every file it lists are there, whole and of the same
+    build.
 
     Raises IncompleteOutputError naming every file that is missing or different (its ``problems``).
     """
@@ -443,8 +446,8 @@ def set_names(out_dir: str | Path) -> list[str]:
 def set_folders(root: str | Path) -> list[Path]:
     """``root`` and every folder under it, sorted, that holds an output set (see :func:`set_names`).
 
-    Hidden folders (a build's ``.<name>.staging-...``) and OpenFOAM case folders (:func:`is_case_folder`)
-    are not entered; symbolic links to folders are not followed.
+    Hidden folders (a build's ``.<name>.staging-...``) and OpenFOAM case folders
+    (:func:`is_case_folder`) are not entered; symbolic links to folders are not followed.
     """
     found = []
     for folder, subfolders, _ in os.walk(root):
@@ -459,13 +462,14 @@ def set_folders(root: str | Path) -> list[Path]:
 
 
 def is_case_folder(folder: str | Path) -> bool:
-    """Whether ``folder`` is an OpenFOAM case (it holds ``system/controlDict``): its files (the surface's
-    STL among them) belong to the case, not to output sets of their own."""
+    """Whether ``folder`` is an OpenFOAM case (it holds ``system/controlDict``): its files (the
+    surface's STL among them) belong to the case, not to output sets of their own."""
     return (Path(folder) / "system" / "controlDict").is_file()
 
 
 def folders_under(root: str | Path) -> list[Path]:
-    """``root`` and every folder under it but hidden ones (staging folders), sorted; links not followed."""
+    """``root`` and every folder under it but hidden ones (staging folders), sorted; links not
+    followed."""
     found = []
     for folder, subfolders, _ in os.walk(root):
         subfolders[:] = sorted(name for name in subfolders if not name.startswith("."))
@@ -490,7 +494,8 @@ class PublishedSet:
 def _collected(
     call: IsolatedCall[dict[str, Any] | None],
 ) -> Callable[[Path], dict[str, Any] | None]:
-    """A writer that collects ``call``'s result: the child wrote the file at its staging path already."""
+    """A writer that collects ``call``'s result: the child wrote the file at its staging path
+    already."""
     return lambda _path: call.result(STEP_WRITE_TIME_LIMIT_S)
 
 
@@ -504,10 +509,11 @@ def write_output_set(
 ) -> PublishedSet:
     """Write the files of ``export.formats`` (STEP, STL unless ``stl`` is False, 3MF), the
     blade-element table (``<name>_sections.csv`` and ``.png``, if ``sections_table``: True, or its
-    files' call already started, :func:`torus_cad.outputs.sections_table.design_sections_table_files`), any
-    ``extra_files`` (``{suffix: writer(path)}``, e.g. a preview picture) and the sealed
-    ``<name>.json`` report as one output set (see the module doc); return the final paths by kind
-    (the report last) and the report.
+    files' call already started,
+    :func:`torus_cad.outputs.sections_table.design_sections_table_files`), any ``extra_files``
+    (``{suffix: writer(path)}``, e.g. a preview picture) and the sealed ``<name>.json`` report as
+    one output set (see the module doc); return the final paths by kind (the report last) and the
+    report.
 
     A mesh (STL, 3MF) over its triangle budget is refused before anything is written.
     """

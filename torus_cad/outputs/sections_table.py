@@ -1,10 +1,11 @@
 """The blade-element table beside the STEP: ``<name>_sections.csv`` and ``<name>_sections.png``.
 
 One row per section of the design (``resolution.sections``), columns as
-:data:`CSV_COLUMNS` (mm and degrees; definitions in :mod:`torus_cad.geometry.analysis.blade_elements`).
-The picture plots chord, beta and thickness against r, so designers see what their quartics
-do; a loop blade passes each radius twice, so each quantity is drawn as one line along the
-blade with the outgoing half solid and the returning half dashed.
+:data:`CSV_COLUMNS` (mm and degrees; definitions in
+:mod:`torus_cad.geometry.analysis.blade_elements`). The picture plots chord, beta and thickness
+against r, so designers see what their quartics do; a loop blade passes each radius twice, so each
+quantity is drawn as one line along the blade with the outgoing half solid and the returning half
+dashed.
 """
 
 from __future__ import annotations
@@ -74,16 +75,18 @@ BETA_PERIOD_DEG = 180.0
 
 
 def plotted_beta_deg(elements: BladeElements) -> NDArray[np.float64]:
-    """beta along s as the picture plots it: unwrapped with the 180-degree period of a line's angle, so the
-    returning half of a toroidal blade (whose chord points back, e.g. -172 deg for +8 deg) continues the
-    curve instead of jumping by about 175 degrees at the tip and dwarfing the rest. The table keeps the raw values."""
+    """beta along s as the picture plots it: unwrapped with the 180-degree period of a line's angle,
+    so the returning half of a toroidal blade (whose chord points back, e.g. -172 deg for +8 deg)
+    continues the curve instead of jumping by about 175 degrees at the tip and dwarfing the rest.
+    The table keeps the raw values."""
     return np.unwrap(np.asarray(elements.beta_deg, dtype=float), period=BETA_PERIOD_DEG)
 
 
 def sections_png(
     elements: BladeElements, title: str = "", size_px: tuple[int, int] = (1500, 500)
 ) -> bytes:
-    """Chord, beta and thickness against r, three panels side by side, as PNG bytes (matplotlib, off-screen)."""
+    """Chord, beta and thickness against r, three panels side by side, as PNG bytes (matplotlib,
+    off-screen)."""
     from matplotlib.figure import Figure  # no pyplot: no global state, no display
 
     dpi = 100
@@ -142,7 +145,8 @@ def elements_of(surface: BladeSurface, spin: Handedness = Handedness.CW) -> Blad
 
 
 def trailing_edge_of(params: Any, s: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Thickness of the trailing edge (mm) of the sections at ``s`` (0 where sharp; a conventional blade's is sharp)."""
+    """Thickness of the trailing edge (mm) of the sections at ``s`` (0 where sharp; a conventional
+    blade's is sharp)."""
     if str(getattr(params, "kind", "toroidal")) == "conventional":
         return np.zeros(len(s))
     blade = params.geometry().blade
@@ -187,10 +191,11 @@ def sections_table_files(
 
 
 def design_sections_table_files(params: Any) -> dict[str, tuple[str, bytes]]:
-    """:func:`sections_table_files` of the blade that the build of ``params`` lofts (its design targets
-    resolved, its surface sampled, as torus_cad.propeller.build_propeller does), from the parameters
-    alone: ``torus-cad build`` starts it in a child before the kernel loads, so that the picture is drawn
-    on the second core while this process loads OpenCascade and builds."""
+    """:func:`sections_table_files` of the blade that the build of ``params`` lofts (its design
+    targets resolved, its surface sampled, as torus_cad.propeller.build_propeller does), from the
+    parameters
+    alone: ``torus-cad build`` starts it in a child before the kernel loads, so that the picture is
+    drawn on the second core while this process loads OpenCascade and builds."""
     from torus_cad.parameters.design_targets import resolve_design_targets
 
     resolved = resolve_design_targets(params).parameters
@@ -210,5 +215,6 @@ def write_files(files: dict[str, tuple[str, bytes]], out_dir: Path) -> dict[str,
 def write_sections_table(
     surface: BladeSurface, params: Any, out_dir: Path, spin: Handedness = Handedness.CW
 ) -> dict[str, Path]:
-    """Write ``<name>_sections.csv`` and ``<name>_sections.png`` into ``out_dir``; their paths by kind."""
+    """Write ``<name>_sections.csv`` and ``<name>_sections.png`` into ``out_dir``; their paths by
+    kind."""
     return write_files(sections_table_files(surface, params, spin), out_dir)

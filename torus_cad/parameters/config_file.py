@@ -1,4 +1,5 @@
-"""Reading a configuration file safely: only a regular file, only up to a size limit, UTF-8 (BOM allowed).
+"""Reading a configuration file safely: only a regular file, only up to a size limit, UTF-8 (BOM
+allowed).
 
 The reading itself is torus_cad.runtime.input_files's, shared with every other file a design names
 (airfoil coordinate files): ``/dev/zero``, a named pipe, a socket or a folder is refused at once
@@ -9,11 +10,11 @@ forever.
 the program (designs on disk or uploaded to the studio, sweep files, study files) and ``--set``
 values alike: UTF-8 with or without a byte order mark, then a scan (:func:`check_toml_shape`) that
 refuses values nested deeper than :data:`~torus_cad.tolerances.TOML_NESTING_LIMIT` or numbers
-longer than :data:`~torus_cad.parameters.config_file.TOML_NUMBER_DIGITS_LIMIT` naming their key, before the
-TOML reader (which recurses on nesting and refuses integers over 4300 digits without saying where)
-sees them, and after it a walk (:func:`check_table_depth`) that refuses tables nested deeper than
-the same limit through dotted keys or headers (``a.b.c.… = 1``, ``[a.b.c.…]``), which the readers
-of sweeps and studies would otherwise follow down until Python's recursion limit.
+longer than :data:`~torus_cad.parameters.config_file.TOML_NUMBER_DIGITS_LIMIT` naming their key,
+before the TOML reader (which recurses on nesting and refuses integers over 4300 digits without
+saying where) sees them, and after it a walk (:func:`check_table_depth`) that refuses tables nested
+deeper than the same limit through dotted keys or headers (``a.b.c.… = 1``, ``[a.b.c.…]``), which
+the readers of sweeps and studies would otherwise follow down until Python's recursion limit.
 """
 
 from __future__ import annotations
@@ -38,7 +39,8 @@ _STRING_OPENERS = ('"""', "'''", '"', "'")
 def read_config_text(
     path: str | Path, what: str = "configuration", max_bytes: int = CONFIG_FILE_MAX_BYTES
 ) -> str:
-    """The text of the configuration file ``path``, or ParameterError (exit 2) naming it and the reason.
+    """The text of the configuration file ``path``, or ParameterError (exit 2) naming it and the
+    reason.
 
     Refused: anything but a regular file (folder, device, named pipe, socket), a file over
     ``max_bytes``, text that is not UTF-8, and an empty (or whitespace-only) file. A UTF-8 byte
@@ -51,12 +53,14 @@ def read_config_text(
 def read_config_table(
     path: str | Path, what: str = "configuration", max_bytes: int = CONFIG_FILE_MAX_BYTES
 ) -> dict[str, Any]:
-    """The TOML table of the file ``path``: :func:`read_config_text` then :func:`parse_config_bytes`'s checks."""
+    """The TOML table of the file ``path``: :func:`read_config_text` then
+    :func:`parse_config_bytes`'s checks."""
     return parse_config_bytes(read_untrusted_bytes(path, what, max_bytes), str(path), what)
 
 
 def parse_config_bytes(raw: bytes, source: str, what: str = "configuration") -> dict[str, Any]:
-    """The TOML table in ``raw`` (UTF-8, a byte order mark allowed), or ParameterError naming ``source``."""
+    """The TOML table in ``raw`` (UTF-8, a byte order mark allowed), or ParameterError naming
+    ``source``."""
     return parse_config_text(decode_text(raw, source, what), source, what)
 
 
@@ -97,7 +101,8 @@ def check_table_depth(table: dict[str, Any], where: str) -> None:
 
 
 def check_toml_shape(text: str, where: str, key_prefix: str = "", lines: bool = True) -> None:
-    """Refuse nesting deeper than TOML_NESTING_LIMIT and numbers of more than TOML_NUMBER_DIGITS_LIMIT digits.
+    """Refuse nesting deeper than TOML_NESTING_LIMIT and numbers of more than
+    TOML_NUMBER_DIGITS_LIMIT digits.
 
     A light scan of the TOML text (strings and comments skipped, table headers followed) that
     names the key whose value breaks a limit (``hub.radius``; ``key_prefix`` is put before it).
@@ -157,7 +162,8 @@ def check_toml_shape(text: str, where: str, key_prefix: str = "", lines: bool = 
 
 
 def _skip_string(text: str, index: int, quote: str, line: int) -> tuple[int, int]:
-    """The index after the string that opens at ``index`` with ``quote``, and the line it ends on."""
+    """The index after the string that opens at ``index`` with ``quote``, and the line it ends
+    on."""
     position = index + len(quote)
     while position < len(text):
         if text[position] == "\\" and quote.startswith('"'):

@@ -1,4 +1,5 @@
-"""Every parameter of a toroidal propeller, each declared once (key, type, unit, default, range, doc).
+"""Every parameter of a toroidal propeller, each declared once (key, type, unit, default, range,
+doc).
 
 Units: lengths in mm, angles in degrees, airfoil quantities as fractions of the chord. The
 centerline's control points live in the hub's local frame L (spec §3.1): ``x_L`` is the
@@ -100,10 +101,11 @@ def _checked_name(name: str) -> str:
 
 class TightBends(StrEnum):
     """What the root fillet does where a blade face bends concavely, seen from outside, tighter than
-    its radius near the hub (a rolling ball of that radius does not fit along it, and OpenCascade finds
-    no constant-radius fillet): 'fail' (exit 1 naming a radius that works; the fillet has the requested radius
-    everywhere or is not made) or 'reduce' (the radius is reduced there to half the bend's radius
-    and blended along that junction loop; a warning and the report's root_fillet say so)."""
+    its radius near the hub (a rolling ball of that radius does not fit along it, and OpenCascade
+    finds no constant-radius fillet): 'fail' (exit 1 naming a radius that works; the fillet has the
+    requested radius everywhere or is not made) or 'reduce' (the radius is reduced there to half the
+    bend's radius and blended along that junction loop; a warning and the report's root_fillet say
+    so)."""
 
     FAIL = "fail"
     REDUCE = "reduce"
@@ -169,7 +171,8 @@ class Hub(Section):
 
     @model_validator(mode="after")
     def _mounting_fits(self) -> Self:
-        """Limits that follow from the hub's own size (the blades' limits are checked with the geometry)."""
+        """Limits that follow from the hub's own size (the blades' limits are checked with the
+        geometry)."""
         bore_radius = self.bore_diameter / 2.0
         if self.bore_flat_depth > 0.0 and self.bore_diameter == 0.0:
             raise ValueError(
@@ -198,7 +201,8 @@ class Hub(Section):
         return self
 
     def mounting(self) -> HubMounting:
-        """The mounting features as geometry (the set screw's direction is chosen later, from the blades)."""
+        """The mounting features as geometry (the set screw's direction is chosen later, from the
+        blades)."""
         return HubMounting(
             self.bore_diameter, self.bore_flat_depth, self.set_screw_diameter, self.chamfer
         )
@@ -209,8 +213,8 @@ _NUMBERS = ("max_camber", "camber_position", "thickness")
 
 
 class TrailingEdgeShape(StrEnum):
-    """The end of a blunt trailing edge (``airfoil.trailing_edge_thickness`` > 0, or a coordinate file's
-    open edge): torus_cad.geometry.blade.trailing_edge."""
+    """The end of a blunt trailing edge (``airfoil.trailing_edge_thickness`` > 0, or a coordinate
+    file's open edge): torus_cad.geometry.blade.trailing_edge."""
 
     # a round cap tangent to both surfaces: no sharp edge (the root fillet rolls round it)
     ROUND = "round"
@@ -218,7 +222,8 @@ class TrailingEdgeShape(StrEnum):
 
 
 class Airfoil(Section):
-    """The section (spec §1): NACA 4-digit numbers (fractions of the chord), a NACA designation, or a coordinate file."""
+    """The section (spec §1): NACA 4-digit numbers (fractions of the chord), a NACA designation, or
+    a coordinate file."""
 
     max_camber: float = param(0.02, ge=0.0, le=0.095, doc="m (0 = symmetric section)")
     camber_position: float = param(
@@ -341,7 +346,8 @@ class Airfoil(Section):
 
 
 class Centerline(Section):
-    """Frame L: [x_L deg around the axis, y_L mm down the axis, z_L mm radially out]; P1 = origin."""
+    """Frame L: [x_L deg around the axis, y_L mm down the axis, z_L mm radially out]; P1 =
+    origin."""
 
     p2: Vector3 = param(
         (25.0, 3.0, 22.0), unit="deg, mm, mm", doc="free control point [x2, y2, z2]"
@@ -470,7 +476,8 @@ class InletSide(StrEnum):
 
 
 class Mesh(Section):
-    """Surface mesh of `torus-cad mesh`: structured grids united into one closed mesh (spec §5, §7)."""
+    """Surface mesh of `torus-cad mesh`: structured grids united into one closed mesh (spec §5,
+    §7)."""
 
     sections: int = param(
         100, ge=4, le=20000, fuzz=(16, 40), doc="sections along each blade (grid rows)"
@@ -666,8 +673,8 @@ class Conventional(Section):
         )
 
     def stations(self) -> StationTable:
-        """The checked station table, with the thickness law of thickness_r_over_R applied (ParameterError naming
-        the file's line or the inline station)."""
+        """The checked station table, with the thickness law of thickness_r_over_R applied
+        (ParameterError naming the file's line or the inline station)."""
         table = (
             read_station_file(self.stations_file) if self.stations_file else checked(self._inline())
         )
@@ -788,7 +795,8 @@ class PropellerParameters(Document):
 
     @model_validator(mode="after")
     def _hub_wall(self) -> Self:
-        """The hub's wall around the bore (at the chamfered ends too) must be at least manufacturing.min_wall."""
+        """The hub's wall around the bore (at the chamfered ends too) must be at least
+        manufacturing.min_wall."""
         if self.hub.bore_diameter == 0.0:
             return self
         wall = self.hub.radius - self.hub.chamfer - self.hub.bore_diameter / 2.0
@@ -803,7 +811,8 @@ class PropellerParameters(Document):
 
     @model_validator(mode="after")
     def _kind_has_its_inputs(self) -> Self:
-        """A conventional design needs stations and has no toroidal targets; a toroidal one no stations."""
+        """A conventional design needs stations and has no toroidal targets; a toroidal one no
+        stations."""
         if self.kind == DesignKind.TOROIDAL:
             if self.conventional.given():
                 raise ValueError(
@@ -825,7 +834,8 @@ class PropellerParameters(Document):
 
     @model_validator(mode="after")
     def _control_points_fit_the_hub(self) -> Self:
-        """Ranges of the control points that depend on the hub's size (toroidal designs; a conventional one has none)."""
+        """Ranges of the control points that depend on the hub's size (toroidal designs; a
+        conventional one has none)."""
         if self.kind == DesignKind.CONVENTIONAL:
             return self
         length, inset = self.hub.length, hub_inset_radius_mm(self.hub.radius)
@@ -899,17 +909,18 @@ class PropellerParameters(Document):
         return blade_surface(geometry.blade, geometry.centerline(blade_index), sections, points)
 
     def printability(self) -> Printability:
-        """The blade's thinnest wall and trailing edge against ``manufacturing.min_wall``, from the analytic
-        section (:mod:`torus_cad.geometry.analysis.printability`), of either kind."""
+        """The blade's thinnest wall and trailing edge against ``manufacturing.min_wall``, from the
+        analytic section (:mod:`torus_cad.geometry.analysis.printability`), of either kind."""
         if self.kind == DesignKind.CONVENTIONAL:
             return conventional_printability(self.conventional_blade(), self.manufacturing.min_wall)
         return printability(self.geometry(), self.manufacturing.min_wall)
 
     def check_feasible(self, surface: BladeSurface) -> Margins | None:
-        """The pre-kernel checks of the design's kind on blade 0's ``surface`` (GeometryError naming the
-        problem): :func:`torus_cad.geometry.analysis.feasibility.check_feasible` (its margins to the fold
-        and resolution limits returned) or :func:`torus_cad.geometry.blade.conventional_blade.check_conventional_feasible`
-        (None); first, a root fillet round a knife trailing edge
+        """The pre-kernel checks of the design's kind on blade 0's ``surface`` (GeometryError naming
+        the problem): :func:`torus_cad.geometry.analysis.feasibility.check_feasible` (its margins to
+        the fold and resolution limits returned) or
+        :func:`torus_cad.geometry.blade.conventional_blade.check_conventional_feasible` (None);
+        first, a root fillet round a knife trailing edge
         (:func:`torus_cad.geometry.analysis.feasibility.check_root_fillet_edge`)."""
         check_root_fillet_edge(self.hub.root_fillet_radius, self.airfoil.trailing_edge_thickness)
         if self.kind == DesignKind.CONVENTIONAL:

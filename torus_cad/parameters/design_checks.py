@@ -6,12 +6,13 @@ their cross-field rules, the design targets (``diameter``, ``pitch``), blade 0's
 surface, the geometric checks (:mod:`torus_cad.geometry.analysis.feasibility`: the ends
 inside the hub's inset, the centerline leaving through the hub's side, the trailing edge, no
 fold-over inside a bend, sections dense enough, no self-intersection, blades clear of each
-other; for a conventional blade :func:`~torus_cad.geometry.blade.conventional_blade.check_conventional_feasible`),
-the hub's mounting features against the blades (:mod:`torus_cad.geometry.hub.mounting`),
-the section fit and its trailing edge (:mod:`torus_cad.geometry.section.section_fit`) and, when the
-design writes a mesh, the STL's triangle budget. The blade's walls against
-``manufacturing.min_wall`` (:mod:`torus_cad.geometry.analysis.printability`) are measured too;
-they refuse the design only when asked (``--require-printable``), as in the build.
+other; for a conventional blade
+:func:`~torus_cad.geometry.blade.conventional_blade.check_conventional_feasible`), the hub's
+mounting features against the blades (:mod:`torus_cad.geometry.hub.mounting`), the section fit and
+its trailing edge (:mod:`torus_cad.geometry.section.section_fit`) and, when the design writes a
+mesh, the STL's triangle budget. The blade's walls against ``manufacturing.min_wall``
+(:mod:`torus_cad.geometry.analysis.printability`) are measured too; they refuse the design only when
+asked (``--require-printable``), as in the build.
 
 Nothing here imports the kernel (numpy, scipy and the geometry layer only), so ``torus-cad
 check`` answers without loading OpenCascade, and sweeps and studies refuse such designs in
@@ -68,11 +69,13 @@ class Feasibility:
     Attributes:
         parameters: the spec parameters the design resolved to (design targets applied).
         surface: blade 0's sampled surface at ``resolution``.
-        margins: the largest fold ratio and section sag (toroidal designs; None for a conventional one).
-        printability: the blade's thinnest wall and trailing edge against ``manufacturing.min_wall`` (None
-            unless asked for: the analytic walls take longer than the checks).
+        margins: the largest fold ratio and section sag (toroidal designs; None for a conventional
+            one).
+        printability: the blade's thinnest wall and trailing edge against ``manufacturing.min_wall``
+            (None unless asked for: the analytic walls take longer than the checks).
         stl_triangles: the STL's estimated triangles (None when the design writes no mesh).
-        cpu_seconds: CPU time of the checks in this process, s (what they cost, however busy the machine).
+        cpu_seconds: CPU time of the checks in this process, s (what they cost, however busy the
+            machine).
     """
 
     parameters: PropellerParameters
@@ -89,7 +92,8 @@ class Feasibility:
 
     @property
     def undecided(self) -> list[str]:
-        """What only the kernel can decide about this design (one line each; empty for most designs)."""
+        """What only the kernel can decide about this design (one line each; empty for most
+        designs)."""
         params = self.parameters
         if params.hub.root_fillet_radius == 0.0:
             return []
@@ -98,7 +102,8 @@ class Feasibility:
         return [ROUND_EDGE_FILLET_NOTE]
 
     def summary(self) -> str:
-        """One line: the design, its size, the margins to the limits, its walls and the check's time."""
+        """One line: the design, its size, the margins to the limits, its walls and the check's
+        time."""
         params = self.parameters
         parts = [
             f"feasible: {params.name}, {params.blades} blade{'s' if params.blades > 1 else ''}, "
@@ -123,14 +128,16 @@ class Feasibility:
 
 
 def section_chords(surface: BladeSurface) -> NDArray[np.float64]:
-    """``(sections,)`` chord of each sampled section, mm: trailing edge to the ring's first point."""
+    """``(sections,)`` chord of each sampled section, mm: trailing edge to the ring's first
+    point."""
     return np.linalg.norm(
         surface.points[:, surface.trailing_edge_column] - surface.points[:, 0], axis=-1
     )
 
 
 def fitted_sections(surface: BladeSurface) -> SectionFit:
-    """The section curves the kernel lofts, as arrays (GeometryError for a trailing edge they cannot resolve)."""
+    """The section curves the kernel lofts, as arrays (GeometryError for a trailing edge they cannot
+    resolve)."""
     return fit_sections(
         surface.points,
         surface.trailing_edge_column,
@@ -141,7 +148,8 @@ def fitted_sections(surface: BladeSurface) -> SectionFit:
 
 
 def placed_mounting(params: PropellerParameters) -> HubMounting:
-    """The hub's mounting features checked against the blades (densely sampled), the set screw placed."""
+    """The hub's mounting features checked against the blades (densely sampled), the set screw
+    placed."""
     mounting = params.hub.mounting()
     if not mounting.any:
         return mounting
@@ -175,13 +183,15 @@ def check_design(
         mesh: the design writes a mesh (STL or 3MF): its triangle budget is checked on the fitted
             section curves, as the write does.
         walls: measure the blade's walls (:attr:`Feasibility.printability`).
-        require_printable: refuse a blade thinner than ``manufacturing.min_wall`` (``--require-printable``), first,
-            as the build command does.
-        estimate_mesh_first: with ``mesh``, also check the budget before the geometry, from the usual pole grid,
-            as the build command does before it builds (a batch's build checks it only when it writes).
+        require_printable: refuse a blade thinner than ``manufacturing.min_wall``
+            (``--require-printable``), first, as the build command does.
+        estimate_mesh_first: with ``mesh``, also check the budget before the geometry, from the
+            usual pole grid, as the build command does before it builds (a batch's build checks it
+            only when it writes).
 
     Raises:
-        ParameterError: a rule between fields, a design target that cannot be met, a mesh over its budget.
+        ParameterError: a rule between fields, a design target that cannot be met, a mesh over its
+            budget.
         GeometryError: valid parameters that describe no sound propeller (the line names the check).
     """
     start = time.process_time()

@@ -73,7 +73,8 @@ class DesignTargets:
     requested: dict[str, Any] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
-        """For the JSON report: the targets, what was achieved, and the spec values that resulted."""
+        """For the JSON report: the targets, what was achieved, and the spec values that
+        resulted."""
         report: dict[str, Any] = {
             "requested": dict(self.requested),
             "tip_diameter_mm": self.tip_diameter_mm,
@@ -110,8 +111,9 @@ def requested_targets(params: Any) -> dict[str, Any]:
 
 
 def tip_radius_mm(params: Any) -> float:
-    """Largest distance of blade 0's analytic surface from the spin axis (mm); a conventional blade's
-    sampled densely (its sections are planar, x = r: the tip section's points are the farthest)."""
+    """Largest distance of blade 0's analytic surface from the spin axis (mm); a conventional
+    blade's sampled densely (its sections are planar, x = r: the tip section's points are the
+    farthest)."""
     if str(params.kind) == "conventional":
         points = params.blade_surface(0, CONVENTIONAL_TIP_GRID[0], CONVENTIONAL_TIP_GRID[1]).points
         return float(np.hypot(points[..., 0], points[..., 1]).max())
@@ -151,8 +153,8 @@ def section_frames_unchecked(blade: Any, centerline: Centerline, s: NDArray[np.f
 def with_radial_scale(
     geometry: PropellerGeometry, scale: float, hub_radius_mm: float
 ) -> PropellerGeometry:
-    """``geometry`` with z_L of the free control points p2 and p3 multiplied by ``scale``; GeometryError
-    (not reachable) when a scaled point leaves the range the parameters allow it."""
+    """``geometry`` with z_L of the free control points p2 and p3 multiplied by ``scale``;
+    GeometryError (not reachable) when a scaled point leaves the range the parameters allow it."""
     p1, p2, p3, p4 = geometry.blade.local_control_points
     scaled = [(point[0], point[1], point[2] * scale) for point in (p2, p3)]
     inset = hub_radius_mm - hub_radius_mm / 8.0  # as PropellerParameters checks the control points
@@ -231,7 +233,8 @@ def achieved_pitch(
 
 
 def _without_targets(params: Any, geometry: PropellerGeometry) -> Any:
-    """``params`` with the fitted control points and alpha(s) of ``geometry``, and the targets removed."""
+    """``params`` with the fitted control points and alpha(s) of ``geometry``, and the targets
+    removed."""
     _, p2, p3, _ = geometry.blade.local_control_points
     changes: dict[str, Any] = {
         "centerline.p2": list(p2),
@@ -245,7 +248,8 @@ def _without_targets(params: Any, geometry: PropellerGeometry) -> Any:
 
 
 def resolve_design_targets(params: Any, spin: Handedness = Handedness.CW) -> DesignTargets:
-    """Apply ``airfoil.naca`` (4-digit), ``diameter`` and ``pitch`` (module docstring) to ``params``."""
+    """Apply ``airfoil.naca`` (4-digit), ``diameter`` and ``pitch`` (module docstring) to
+    ``params``."""
     requested = requested_targets(params)
     if not requested:
         return DesignTargets(params)

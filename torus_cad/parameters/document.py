@@ -35,7 +35,8 @@ class Document(Section):
             raise parameter_error(cls, error) from None
 
     def to_dict(self) -> dict[str, Any]:
-        """Plain nested dict (lists for vectors, strings for choices): the layout of the TOML file."""
+        """Plain nested dict (lists for vectors, strings for choices): the layout of the TOML
+        file."""
         return _plain(self.model_dump())
 
     @classmethod
@@ -45,16 +46,19 @@ class Document(Section):
 
     @classmethod
     def from_table(cls, data: dict[str, Any], folder: Path) -> Self:
-        """Build from a parsed design file's table whose relative file paths are relative to ``folder``."""
+        """Build from a parsed design file's table whose relative file paths are relative to
+        ``folder``."""
         return cls.from_dict(cls.paths_relative_to(data, folder))
 
     @classmethod
     def paths_relative_to(cls, data: dict[str, Any], folder: Path) -> dict[str, Any]:
-        """``data`` with its file paths (relative to the design file's ``folder``) made absolute; none here."""
+        """``data`` with its file paths (relative to the design file's ``folder``) made absolute;
+        none here."""
         return data
 
     def to_toml(self, comments: bool = True) -> str:
-        """The document as TOML that :meth:`from_toml` reads back unchanged (commented from the schema)."""
+        """The document as TOML that :meth:`from_toml` reads back unchanged (commented from the
+        schema)."""
         notes = _comments(type(self)) if comments else {}
         return _to_toml(self.to_dict(), notes)
 

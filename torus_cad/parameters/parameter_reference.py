@@ -1,7 +1,7 @@
 """The configuration reference as Markdown, generated from the schema (the documentation's table).
 
-``python scripts/reference_pages.py`` writes it into docs/reference/parameters.md between the markers
-:data:`BEGIN` and :data:`END`; a test fails when the page is stale.
+``python scripts/reference_pages.py`` writes it into docs/reference/parameters.md between the
+markers :data:`BEGIN` and :data:`END`; a test fails when the page is stale.
 """
 
 from __future__ import annotations
@@ -58,7 +58,8 @@ def _row(spec: ParameterSpec) -> str:
 
 
 def markdown_table(model: type[BaseModel] = PropellerParameters) -> str:
-    """Every parameter of ``model`` as a Markdown table: key, default, unit, allowed values, meaning."""
+    """Every parameter of ``model`` as a Markdown table: key, default, unit, allowed values,
+    meaning."""
     rows = [_row(spec) for spec in iter_parameter_specs(model)]
     header = ["| key | default | unit | allowed | meaning |", "| --- | --- | --- | --- | --- |"]
     return "\n".join([BEGIN, *header, *rows, END])

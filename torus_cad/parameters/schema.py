@@ -49,7 +49,8 @@ def param(
     fuzz: tuple[float, float] | None = None,
     strict: bool | None = None,
 ) -> Any:
-    """Declare a parameter: its default, unit (``"mm"``, ``"deg"``, ...), allowed range and one-line doc.
+    """Declare a parameter: its default, unit (``"mm"``, ``"deg"``, ...), allowed range and one-line
+    doc.
 
     ``fuzz`` narrows the range the fuzz sampler draws from (default: the allowed range), for
     parameters whose allowed range is wider than the designs worth fuzzing.
@@ -113,7 +114,8 @@ class ParameterSpec:
 
     Attributes:
         key: dotted key, e.g. ``"hub.radius"``.
-        kind: ``bool``, ``int``, ``float``, ``str``, an Enum class, or ``tuple`` (a vector of floats).
+        kind: ``bool``, ``int``, ``float``, ``str``, an Enum class, or ``tuple`` (a vector of
+            floats).
         default: the default value (tuples for vectors, Enum members for choices).
         unit: ``"mm"``, ``"deg"``, ... or ``""``.
         doc: one-line description.
@@ -246,7 +248,8 @@ _TOML_WORDS: dict[type, str] = {
 
 
 def _as_toml_lists(value: Any) -> Any:
-    """``value`` with every tuple (what validation turns an array into) as a list, so it prints as ``[...]``."""
+    """``value`` with every tuple (what validation turns an array into) as a list, so it prints as
+    ``[...]``."""
     if isinstance(value, list | tuple):
         return [_as_toml_lists(item) for item in value]
     if isinstance(value, dict):
@@ -255,8 +258,8 @@ def _as_toml_lists(value: Any) -> Any:
 
 
 def _describe(value: Any) -> str:
-    """The value in the words of a TOML file, its text cut short (40 characters): ``array of 25 items [[1, 2,
-    3], ...``, ``string 'x'``."""
+    """The value in the words of a TOML file, its text cut short (40 characters): ``array of 25
+    items [[1, 2, 3], ...``, ``string 'x'``."""
     word = next(
         (name for kind, name in _TOML_WORDS.items() if type(value) is kind), type(value).__name__
     )
@@ -281,7 +284,8 @@ def _value_text(value: Any) -> str:
 
 
 def closest_key(key: str, known: Sequence[str], prefix: str = "") -> str:
-    """``"; did you mean 'prefix.key'?"`` for the known key closest to ``key``, else the known keys."""
+    """``"; did you mean 'prefix.key'?"`` for the known key closest to ``key``, else the known
+    keys."""
     close = difflib.get_close_matches(key, list(known), n=1, cutoff=0.5)
     if close:
         return f"; did you mean {prefix + close[0]!r}?"
@@ -351,5 +355,6 @@ def _message(model: type[BaseModel], error: Any) -> str:
 
 
 def parameter_error(model: type[BaseModel], error: ValidationError) -> ParameterError:
-    """The first of pydantic's errors as one ParameterError line naming the field, value and range."""
+    """The first of pydantic's errors as one ParameterError line naming the field, value and
+    range."""
     return ParameterError(_message(model, error.errors(include_url=False)[0]))

@@ -1,11 +1,12 @@
-"""The STL budget: a design whose STL would have too many triangles is refused before anything is built.
+"""The STL budget: a design whose STL would have too many triangles is refused before anything is
+built.
 
 The count is estimated from the blade surface and the deflections
 (torus_cad.geometry.analysis.triangle_estimate, a few milliseconds, no tessellation) and refused
 above :data:`torus_cad.tolerances.STL_TRIANGLE_LIMIT`, with the estimate, the deflections and the
 limit. (The other budgets sit with their inputs too: the surface mesh's memory in
-torus_cad.mesh.resolution, the CFD mesh's tetrahedra in torus_cad.cfd_domain.estimate; the B-rep itself is
-bounded by the resolution ranges.)
+torus_cad.mesh.resolution, the CFD mesh's tetrahedra in torus_cad.cfd_domain.estimate; the B-rep
+itself is bounded by the resolution ranges.)
 """
 
 from __future__ import annotations
@@ -62,7 +63,8 @@ def check_stl_budget(
     pole_grid: tuple[int, int] | None = None,
     limit: int = STL_TRIANGLE_LIMIT,
 ) -> int:
-    """The estimate, or BudgetError (exit 2) naming it, the deflections and the limit when it is over ``limit``."""
+    """The estimate, or BudgetError (exit 2) naming it, the deflections and the limit when it is
+    over ``limit``."""
     estimate = estimated_stl_triangles(params, surface, pole_grid)
     if estimate > limit:
         export = params.export

@@ -1,1 +1,2 @@
-"""The preview picture (``picture``: VTK, off-screen), of ``build --preview`` and ``torus-cad preview``."""
+"""The preview picture (``picture``: VTK, off-screen), of ``build --preview`` and ``torus-cad
+preview``."""

@@ -261,7 +261,8 @@ def render_preview(
             (each face's colour) and ``blades``.
         size: (width, height) in pixels, each 64..8000.
         title: text above the views (default: the name, blade count and volume in mm^3).
-        progress: optional callback, called with ``Stage.PREVIEW_TESSELLATE`` and ``Stage.PREVIEW_RENDER``.
+        progress: optional callback, called with ``Stage.PREVIEW_TESSELLATE`` and
+            ``Stage.PREVIEW_RENDER``.
     """
     width, height = checked_size(size)
     if progress:
@@ -292,12 +293,14 @@ def write_preview(
     title: str | None = None,
     progress: Callable[[Stage], None] | None = None,
 ) -> Path:
-    """Render the preview (see :func:`render_preview`) and write it as a PNG, atomically; return the path."""
+    """Render the preview (see :func:`render_preview`) and write it as a PNG, atomically; return the
+    path."""
     return write_png(render_preview(propeller, size, title, progress), path)
 
 
 def write_png(image: NDArray[np.uint8], path: str | Path) -> Path:
-    """Write an ``(height, width, 3 or 4)`` uint8 picture as a PNG (VTK's writer), atomically; return the path."""
+    """Write an ``(height, width, 3 or 4)`` uint8 picture as a PNG (VTK's writer), atomically;
+    return the path."""
     from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
     from vtkmodules.vtkCommonDataModel import vtkImageData
     from vtkmodules.vtkIOImage import vtkPNGWriter

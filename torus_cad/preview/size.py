@@ -1,5 +1,6 @@
 """The picture size of ``preview`` and ``build --preview``: ``WIDTHxHEIGHT`` in pixels, each side in
-torus_cad.tolerances.PREVIEW_EDGE_RANGE. Apart from the renderer, so a bad size is refused before the kernel loads."""
+torus_cad.tolerances.PREVIEW_EDGE_RANGE. Apart from the renderer, so a bad size is refused before
+the kernel loads."""
 
 from __future__ import annotations
 
@@ -14,7 +15,8 @@ MIN_EDGE, MAX_EDGE = PREVIEW_EDGE_RANGE
 
 
 def parse_size(text: str, option: str = "--size") -> tuple[int, int]:
-    """``"1200x600"`` -> ``(1200, 600)``; raise ParameterError (naming ``option``) for anything else."""
+    """``"1200x600"`` -> ``(1200, 600)``; raise ParameterError (naming ``option``) for anything
+    else."""
     # 9 digits: far over MAX_EDGE, an int
     match = re.fullmatch(r"\s*(\d{1,9})\s*[xX×]\s*(\d{1,9})\s*", text)
     if not match:
@@ -26,7 +28,8 @@ def parse_size(text: str, option: str = "--size") -> tuple[int, int]:
 
 
 def checked_size(size: Sequence[int], what: str = "preview size") -> tuple[int, int]:
-    """``size`` (width, height) as ints; ParameterError naming ``what`` when a side is out of range."""
+    """``size`` (width, height) as ints; ParameterError naming ``what`` when a side is out of
+    range."""
     width, height = (int(value) for value in size)
     for label, value in (("width", width), ("height", height)):
         if not MIN_EDGE <= value <= MAX_EDGE:

@@ -70,7 +70,8 @@ def triangle_polydata(
 
     Args:
         vertices: ``(k, 3)`` points, mm.
-        triangles: ``(m, 3)`` vertex indices, counter-clockwise seen from outside (kept as they are).
+        triangles: ``(m, 3)`` vertex indices, counter-clockwise seen from outside (kept as they
+            are).
         cell_rgb: optional ``(m, 3)`` colour per triangle, RGB 0..1.
         smooth: compute the vertex normals (off: flat facets).
     """
@@ -97,7 +98,8 @@ def triangle_polydata(
 def polyline_polydata(
     curves: Sequence[NDArray[np.float64]], cell_rgb: NDArray[np.float64] | None = None
 ) -> vtkPolyData:
-    """Closed polylines, one per ``(p, 3)`` curve (mm), with an optional ``(curves, 3)`` RGB 0..1 colour each."""
+    """Closed polylines, one per ``(p, 3)`` curve (mm), with an optional ``(curves, 3)`` RGB 0..1
+    colour each."""
     polydata = vtkPolyData()
     if not curves:
         return polydata
@@ -116,7 +118,8 @@ def polyline_polydata(
 
 
 def surface_actor(polydata: vtkPolyData, rgb: tuple[float, float, float] | None = None) -> vtkActor:
-    """The propeller's material on ``polydata``: one colour ``rgb`` (0..1), else its cell colours."""
+    """The propeller's material on ``polydata``: one colour ``rgb`` (0..1), else its cell
+    colours."""
     mapper = vtkPolyDataMapper()
     mapper.SetInputData(polydata)
     if rgb is None:

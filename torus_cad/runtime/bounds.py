@@ -1,4 +1,5 @@
-"""An interval of allowed values: the parameter schema's ranges and the command line's option ranges.
+"""An interval of allowed values: the parameter schema's ranges and the command line's option
+ranges.
 
 Standard library only: the command line shows its options' ranges in ``--help`` before the schema
 (pydantic) is loaded.

@@ -17,7 +17,8 @@ from torus_cad.tolerances import (
 
 
 def available_cpus() -> int:
-    """The CPUs this process may run on: its affinity mask (a container's or taskset's share), else all."""
+    """The CPUs this process may run on: its affinity mask (a container's or taskset's share), else
+    all."""
     try:
         return max(1, len(os.sched_getaffinity(0)))
     except (AttributeError, OSError):  # not Linux
@@ -25,10 +26,12 @@ def available_cpus() -> int:
 
 
 def max_cfd_threads() -> int:
-    """Most gmsh threads (``cfd --threads``): CFD_THREADS_PER_CPU per CPU, at most CFD_THREADS_LIMIT."""
+    """Most gmsh threads (``cfd --threads``): CFD_THREADS_PER_CPU per CPU, at most
+    CFD_THREADS_LIMIT."""
     return min(CFD_THREADS_LIMIT, CFD_THREADS_PER_CPU * available_cpus())
 
 
 def max_workers() -> int:
-    """Most worker processes (``sweep`` / ``optimize --workers``): WORKERS_PER_CPU per CPU, at most WORKERS_LIMIT."""
+    """Most worker processes (``sweep`` / ``optimize --workers``): WORKERS_PER_CPU per CPU, at most
+    WORKERS_LIMIT."""
     return min(WORKERS_LIMIT, WORKERS_PER_CPU * available_cpus())

@@ -1,8 +1,8 @@
 """Optional extras: the modules each one installs, and the one line that names a missing one.
 
-Every command that needs an extra calls :func:`require_extra` before it reads or writes anything, so a
-machine without the extra gets one line (the extra and its install command), exit code 2 and no file,
-instead of a ``ModuleNotFoundError`` half-way through. The install line pins versions with the
+Every command that needs an extra calls :func:`require_extra` before it reads or writes anything, so
+a machine without the extra gets one line (the extra and its install command), exit code 2 and no
+file, instead of a ``ModuleNotFoundError`` half-way through. The install line pins versions with the
 repository's ``constraints.txt``, as the README's own install line does.
 """
 
@@ -51,8 +51,8 @@ def missing_extra_message(command: str, extra: str, module: str) -> str:
 
 
 def is_installed(module: str) -> bool:
-    """Whether ``module`` (dotted names allowed) can be found, without importing it (its parent package
-    is imported for a dotted name)."""
+    """Whether ``module`` (dotted names allowed) can be found, without importing it (its parent
+    package is imported for a dotted name)."""
     try:
         return importlib.util.find_spec(module) is not None
     # a parent package missing, or a module set to None in sys.modules
@@ -61,9 +61,11 @@ def is_installed(module: str) -> bool:
 
 
 def require_extra(command: str, extra: str, modules: Iterable[str] | None = None) -> None:
-    """MissingExtraError (exit 2, one line) unless every module of ``extra`` (or ``modules``) is installed.
+    """MissingExtraError (exit 2, one line) unless every module of ``extra`` (or ``modules``) is
+    installed.
 
-    ``command``: how the message names what needs them, e.g. ``"mesh"`` (the line starts "torus-cad: ").
+    ``command``: how the message names what needs them, e.g. ``"mesh"`` (the line starts "torus-cad:
+    ").
     """
     for module in EXTRA_MODULES[extra] if modules is None else modules:
         if not is_installed(module):
@@ -71,7 +73,8 @@ def require_extra(command: str, extra: str, modules: Iterable[str] | None = None
 
 
 def extra_of_module(module: str) -> str | None:
-    """The extra that installs ``module`` (a top-level or dotted import name), or None for the base package."""
+    """The extra that installs ``module`` (a top-level or dotted import name), or None for the base
+    package."""
     top = module.split(".")[0]
     for extra, modules in EXTRA_MODULES.items():
         if any(name.split(".")[0] == top for name in modules):

@@ -44,7 +44,8 @@ def owner_tag() -> str:
 
 
 def left_by_dead_process(name: str, prefix: str) -> bool:
-    """Whether the file ``name`` (``prefix`` + owner tag + ...) belongs to a process of this host that is gone."""
+    """Whether the file ``name`` (``prefix`` + owner tag + ...) belongs to a process of this host
+    that is gone."""
     if not name.startswith(prefix):
         return False
     owner = _OWNER.match(name, len(prefix))
@@ -83,8 +84,8 @@ def make_folders(path: str | Path) -> tuple[Path, ...]:
 
 
 def remove_if_empty(folders: tuple[Path, ...]) -> None:
-    """Remove each of ``folders`` (outermost first, as :func:`make_folders` returns them) that is empty,
-    innermost first; a folder something was put into stays."""
+    """Remove each of ``folders`` (outermost first, as :func:`make_folders` returns them) that is
+    empty, innermost first; a folder something was put into stays."""
     for folder in reversed(folders):
         with contextlib.suppress(OSError):
             os.rmdir(folder)
@@ -92,8 +93,8 @@ def remove_if_empty(folders: tuple[Path, ...]) -> None:
 
 @contextlib.contextmanager
 def removed_if_left_empty(folders: tuple[Path, ...]) -> Iterator[None]:
-    """Within the block, ``folders`` are listed in :data:`MADE_FOLDERS` (removed by a signal handler if
-    empty); leaving the block removes those still empty (an error: nothing was published)."""
+    """Within the block, ``folders`` are listed in :data:`MADE_FOLDERS` (removed by a signal handler
+    if empty); leaving the block removes those still empty (an error: nothing was published)."""
     key = next(_registrations)
     MADE_FOLDERS[key] = folders
     try:
@@ -119,7 +120,8 @@ def _current_umask() -> int:
 
 @contextlib.contextmanager
 def atomic_path(path: str | Path) -> Iterator[Path]:
-    """Yield a temp path beside ``path``; on success rename it onto ``path``, on failure delete it."""
+    """Yield a temp path beside ``path``; on success rename it onto ``path``, on failure delete
+    it."""
     import tempfile
 
     path = Path(path)
@@ -139,8 +141,8 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
 
 
 def file_ends_with(path: Path, marker: bytes, tail: int = 256) -> bool:
-    """Whether ``path``'s last ``tail`` bytes hold ``marker`` (a format's end line: a writer can lose its
-    tail without saying so); False if it cannot be read."""
+    """Whether ``path``'s last ``tail`` bytes hold ``marker`` (a format's end line: a writer can
+    lose its tail without saying so); False if it cannot be read."""
     try:
         with open(path, "rb") as handle:
             handle.seek(max(0, path.stat().st_size - tail))
@@ -152,8 +154,8 @@ def file_ends_with(path: Path, marker: bytes, tail: int = 256) -> bool:
 def write_failure(
     path: Path, written: Path | None = None, otherwise: Exception | None = None
 ) -> Exception:
-    """Why a writer that reports only that it failed (OpenCascade, gmsh) could not write ``written`` (the
-    temp file published as ``path``; default ``path`` itself).
+    """Why a writer that reports only that it failed (OpenCascade, gmsh) could not write ``written``
+    (the temp file published as ``path``; default ``path`` itself).
 
     Looked at while the partial file is still there: a full file system (less than
     DISK_FULL_FREE_BYTES free) or the process's file size limit (``ulimit -f``) is an OSError naming

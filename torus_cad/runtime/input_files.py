@@ -1,4 +1,5 @@
-"""Files a design names, read as untrusted input: configuration files, sweep files, airfoil coordinate files.
+"""Files a design names, read as untrusted input: configuration files, sweep files, airfoil
+coordinate files.
 
 One reader for all of them (:func:`read_untrusted_bytes`):
 
@@ -55,7 +56,8 @@ def _check_regular(path: Path, status: os.stat_result, what: str, max_bytes: int
 
 
 def read_untrusted_bytes(path: str | Path, what: str, max_bytes: int) -> bytes:
-    """The bytes of the regular file ``path`` (at most ``max_bytes``), or ParameterError naming it and the reason.
+    """The bytes of the regular file ``path`` (at most ``max_bytes``), or ParameterError naming it
+    and the reason.
 
     ``what`` names the file's role in messages ("configuration", "airfoil file"). Refused: a path
     that cannot be opened, anything but a regular file, and a file over ``max_bytes`` (by its size
@@ -86,7 +88,8 @@ def read_untrusted_bytes(path: str | Path, what: str, max_bytes: int) -> bytes:
 
 
 def decode_text(raw: bytes, source: str, what: str, empty_ok: bool = False) -> str:
-    """``raw`` as UTF-8 text (a leading byte order mark dropped), or ParameterError naming ``source``.
+    """``raw`` as UTF-8 text (a leading byte order mark dropped), or ParameterError naming
+    ``source``.
 
     Refused: bytes that are not UTF-8, a NUL byte (binary data), and (unless ``empty_ok``) empty
     or whitespace-only text.
@@ -110,7 +113,8 @@ def read_untrusted_text(path: str | Path, what: str, max_bytes: int) -> str:
 
 
 class TimeBudget:
-    """A deadline for the work one input file causes; :meth:`check` refuses the file once it has passed.
+    """A deadline for the work one input file causes; :meth:`check` refuses the file once it has
+    passed.
 
     ``limit_s`` seconds from construction. The message names the file, the step under way and the
     limit (the estimate is the time spent so far, which already exceeds it).

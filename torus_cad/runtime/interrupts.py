@@ -1,4 +1,5 @@
-"""Signals: SIGINT, SIGTERM and SIGHUP end a command at any moment with one line and exit 128 + signal.
+"""Signals: SIGINT, SIGTERM and SIGHUP end a command at any moment with one line and exit 128 +
+signal.
 
 The command line installs :func:`exit_on_signals` before it imports anything heavy, so a Ctrl-C
 while CadQuery is still loading is as clean as one during the build. The handler does not raise
@@ -14,8 +15,8 @@ handlers are installed, so one that arrived during the start is handled then, wi
 
 A signal that arrives while an output set is being published (:func:`deferred`) waits until the
 set is complete. Python runs signal handlers between bytecodes, so a signal during one long
-OpenCascade call takes effect when that call returns (the budgets checked before the work starts, such as
-torus_cad.parameters.stl_budget, keep such calls short).
+OpenCascade call takes effect when that call returns (the budgets checked before the work starts,
+such as torus_cad.parameters.stl_budget, keep such calls short).
 """
 
 from __future__ import annotations
@@ -80,8 +81,8 @@ def _handler(signum: int, frame: FrameType | None) -> None:
 
 
 def exit_on_signals(program: str = "torus-cad") -> Callable[[], None]:
-    """Make SIGINT, SIGTERM and SIGHUP end the process cleanly (see the module doc); return a function
-    that restores the previous handlers. Does nothing outside the main thread.
+    """Make SIGINT, SIGTERM and SIGHUP end the process cleanly (see the module doc); return a
+    function that restores the previous handlers. Does nothing outside the main thread.
 
     The signals it handles are then unblocked: one that arrived while they were blocked (a caller
     that blocks them over the interpreter's start-up) takes effect now, through the handler."""
@@ -106,13 +107,13 @@ def exit_on_signals(program: str = "torus-cad") -> Callable[[], None]:
 
 
 def hold_signals_until_exit() -> None:
-    """Ignore SIGINT, SIGTERM and SIGHUP for the rest of the process: call it when the command's work is
-    done and its exit code decided.
+    """Ignore SIGINT, SIGTERM and SIGHUP for the rest of the process: call it when the command's
+    work is done and its exit code decided.
 
     Python puts the default handlers back while it shuts down (which takes a moment once CadQuery is
     loaded), so a signal then would end a finished, successful command as "killed by SIGTERM".
-    Python leaves an ignored signal ignored. Ignoring, unlike blocking, is process-wide: OpenCascade's
-    worker threads would still take a signal that only the main thread blocks."""
+    Python leaves an ignored signal ignored. Ignoring, unlike blocking, is process-wide:
+    OpenCascade's worker threads would still take a signal that only the main thread blocks."""
     with suppress(ValueError, OSError):  # not the main thread
         for signum in EXIT_SIGNALS:
             signal.signal(signum, signal.SIG_IGN)
@@ -120,7 +121,8 @@ def hold_signals_until_exit() -> None:
 
 @contextmanager
 def deferred() -> Iterator[None]:
-    """Signals that arrive within the block take effect when it ends (used while publishing a set)."""
+    """Signals that arrive within the block take effect when it ends (used while publishing a
+    set)."""
     global _deferred_depth
     _deferred_depth += 1
     try:

@@ -1,10 +1,10 @@
 """Calls that can hang or crash (OpenCascade's), run in a forked child process with a time limit.
 
 A hang or a crash there then costs that one call, never the command: the parent waits in Python
-(``select``), so a signal ends it at once (torus_cad.runtime.interrupts), and the child dies with its
-parent (Linux ``PR_SET_PDEATHSIG``), so a stopped command leaves no OpenCascade call running behind
-it. The child is forked, so it has the shapes in memory already; what it returns is pickled back
-(plain data: BRep text, face indices, status names).
+(``select``), so a signal ends it at once (torus_cad.runtime.interrupts), and the child dies with
+its parent (Linux ``PR_SET_PDEATHSIG``), so a stopped command leaves no OpenCascade call running
+behind it. The child is forked, so it has the shapes in memory already; what it returns is pickled
+back (plain data: BRep text, face indices, status names).
 
 Hand-written with ``os.fork``: multiprocessing, and pebble on top of it, refuse to start a child
 from a daemonic process, which the sweep's and the optimiser's pool workers are.
@@ -37,10 +37,10 @@ _PREFETCH: list[str] = []
 
 
 def prefetch_modules(*names: str) -> None:
-    """Import the modules ``names`` the next time this process waits for a child's result, instead of
-    when they are first used: the wait is time this process would otherwise sleep (``torus-cad build``
-    imports the mesh checker while the strict check runs in its child). A module that does not import
-    is left for its first use to report."""
+    """Import the modules ``names`` the next time this process waits for a child's result, instead
+    of when they are first used: the wait is time this process would otherwise sleep (``torus-cad
+    build`` imports the mesh checker while the strict check runs in its child). A module that does
+    not import is left for its first use to report."""
     _PREFETCH.extend(names)
 
 
@@ -61,9 +61,10 @@ class IsolatedCrash(KernelError):
 
 
 class IsolatedCall(Generic[T]):
-    """``function(*args)`` started now in a forked child, its result collected later by :meth:`result`,
-    so the parent can work meanwhile (the child has a core of its own). As a context manager, the
-    child is killed on leaving if its result was not collected (the parent raised meanwhile)."""
+    """``function(*args)`` started now in a forked child, its result collected later by
+    :meth:`result`, so the parent can work meanwhile (the child has a core of its own). As a context
+    manager, the child is killed on leaving if its result was not collected (the parent raised
+    meanwhile)."""
 
     def __init__(self, function: Callable[..., T], *args: Any, what: str) -> None:
         self.what = what
@@ -83,8 +84,8 @@ class IsolatedCall(Generic[T]):
         return self._pid
 
     def result(self, timeout_s: float) -> T:
-        """The call's value; IsolatedTimeout after ``timeout_s`` more seconds, IsolatedCrash if the child
-        died, and the child's own exception (pickled back) if it raised."""
+        """The call's value; IsolatedTimeout after ``timeout_s`` more seconds, IsolatedCrash if the
+        child died, and the child's own exception (pickled back) if it raised."""
         pid = self._pid
         if pid is None:
             raise KernelError(f"{self.what}: its result was collected already")
@@ -123,15 +124,15 @@ class IsolatedCall(Generic[T]):
 
 
 def fork_is_safe_for_opencascade() -> bool:
-    """Whether a forked child may run OpenCascade's parallel algorithms (a boolean, the mesher): only
-    when this process has not loaded OpenCascade, since a forked copy of its running thread pool
-    can deadlock (seen in the fuse). The time-limited calls of the kernel run serial ones."""
+    """Whether a forked child may run OpenCascade's parallel algorithms (a boolean, the mesher):
+    only when this process has not loaded OpenCascade, since a forked copy of its running thread
+    pool can deadlock (seen in the fuse). The time-limited calls of the kernel run serial ones."""
     return "OCP" not in sys.modules
 
 
 def run_isolated(function: Callable[..., T], *args: Any, timeout_s: float, what: str) -> T:
-    """``function(*args)`` in a forked child; IsolatedTimeout after ``timeout_s`` seconds, IsolatedCrash
-    if the child dies, and the child's own exception (pickled back) if it raises."""
+    """``function(*args)`` in a forked child; IsolatedTimeout after ``timeout_s`` seconds,
+    IsolatedCrash if the child dies, and the child's own exception (pickled back) if it raises."""
     if timeout_s <= 0.0:
         raise IsolatedTimeout(f"{what}: no time left to run it")
     with IsolatedCall(function, *args, what=what) as call:
@@ -141,7 +142,8 @@ def run_isolated(function: Callable[..., T], *args: Any, timeout_s: float, what:
 def _run_child(
     function: Callable[..., Any], args: tuple[Any, ...], write_end: int, parent_pid: int, what: str
 ) -> None:
-    """The child's side: die with the parent, run, send (succeeded, result or exception), leave at once."""
+    """The child's side: die with the parent, run, send (succeeded, result or exception), leave at
+    once."""
     status = 1
     try:
         # the parent's handlers print the command's one line; not here
@@ -168,7 +170,8 @@ def _run_child(
 
 
 def _read_with_limit(descriptor: int, pid: int, limit_s: float) -> bytes | None:
-    """Everything the child writes, or None (the child killed) when it takes longer than ``limit_s``."""
+    """Everything the child writes, or None (the child killed) when it takes longer than
+    ``limit_s``."""
     chunks: list[bytes] = []
     deadline = time.monotonic() + limit_s
     with os.fdopen(descriptor, "rb") as pipe:

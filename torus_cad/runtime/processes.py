@@ -1,5 +1,5 @@
-"""Which process is which: this host's name, whether a pid runs, and what tells a live process from a
-successor that was given its pid. Plain ``os`` and psutil; shared by the files written whole
+"""Which process is which: this host's name, whether a pid runs, and what tells a live process from
+a successor that was given its pid. Plain ``os`` and psutil; shared by the files written whole
 (torus_cad.runtime.files), the batch's worker watchdog and the optimiser's trial owners."""
 
 from __future__ import annotations

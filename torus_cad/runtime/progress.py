@@ -81,8 +81,9 @@ class StageProgress:
         return time.perf_counter() - self.start
 
     def __call__(self, stage: str) -> None:
-        """Announce that ``stage`` starts now: a :class:`Stage` in its words; another pipeline's stage
-        (``MeshStage``, ``CfdStage``) or an OpenFOAM command of ``simulate`` as its name, with spaces."""
+        """Announce that ``stage`` starts now: a :class:`Stage` in its words; another pipeline's
+        stage (``MeshStage``, ``CfdStage``) or an OpenFOAM command of ``simulate`` as its name, with
+        spaces."""
         self.stages.append(stage)
         self._stage_start = time.perf_counter()
         self._print(self._label(stage))
@@ -92,8 +93,9 @@ class StageProgress:
         return stage.label if isinstance(stage, Stage) else str(stage).replace("_", " ")
 
     def heartbeat(self, every_s: float = HEARTBEAT_S) -> None:
-        """When no line came for ``every_s`` seconds: one line saying the current stage still runs and
-        for how long (a long gmsh call prints nothing itself). Call it often; it prints at most every ``every_s``."""
+        """When no line came for ``every_s`` seconds: one line saying the current stage still runs
+        and for how long (a long gmsh call prints nothing itself). Call it often; it prints at most
+        every ``every_s``."""
         now = time.perf_counter()
         if not self.stages or now - self._last_line < every_s:
             return

@@ -1,11 +1,13 @@
-"""The OpenFOAM case of a simulation, written through foamlib's FoamFile / FoamFieldFile dictionaries.
+"""The OpenFOAM case of a simulation, written through foamlib's FoamFile / FoamFieldFile
+dictionaries.
 
-A steady frozen-rotor (MRF) run of simpleFoam with k-omega SST and wall functions, on a snappyHexMesh
-mesh with prism layers on the propeller (torus_cad.simulate.snappy, the default) or on the ``cfd``
-command's tetrahedra (mm, converted with gmshToFoam and scaled to m; ``Mesher.TET``). The first layer
-is sized for y+ 1, where OpenFOAM v1912's ``nutkWallFunction`` gives nut = 0 and ``omegaWallFunction``
-the viscous-sublayer omega: the wall functions then act as the low-Reynolds-number wall condition
-(they switch to the log law where y+ is above about 11, e.g. where snappyHexMesh left out layers).
+A steady frozen-rotor (MRF) run of simpleFoam with k-omega SST and wall functions, on a
+snappyHexMesh mesh with prism layers on the propeller (torus_cad.simulate.snappy, the default) or on
+the ``cfd`` command's tetrahedra (mm, converted with gmshToFoam and scaled to m; ``Mesher.TET``).
+The first layer is sized for y+ 1, where OpenFOAM v1912's ``nutkWallFunction`` gives nut = 0 and
+``omegaWallFunction`` the viscous-sublayer omega: the wall functions then act as the
+low-Reynolds-number wall condition (they switch to the log law where y+ is above about 11, e.g.
+where snappyHexMesh left out layers).
 Boundaries:
 
 * still air (airspeed 0): inlet and far field take in air at total pressure 0
@@ -15,9 +17,10 @@ Boundaries:
 
 The propeller is a wall that turns with the MRF zone (its velocity is set by the zone). Function
 objects record the propeller's force and moment about the spin axis (``forces``), the residuals
-(``solverInfo``), y+ on the walls at the last iteration (``yPlus``), the propeller's surface pressure at the
-last iteration (``surfaces``, VTK PolyData, for the tonal noise of torus_cad.acoustics) and, for the momentum balance, the momentum flux (``surfaceFieldValue``:
-sum of U phi) and the pressure and viscous force (``forces``) on each outer patch.
+(``solverInfo``), y+ on the walls at the last iteration (``yPlus``), the propeller's surface
+pressure at the last iteration (``surfaces``, VTK PolyData, for the tonal noise of
+torus_cad.acoustics) and, for the momentum balance, the momentum flux (``surfaceFieldValue``: sum of
+U phi) and the pressure and viscous force (``forces``) on each outer patch.
 
 The commands that mesh and run the case are :func:`commands`; ``Allrun`` lists the same ones.
 """
@@ -59,9 +62,9 @@ TRANSITION_FIELDS = ("gammaInt", "ReThetat")
 
 @dataclass(frozen=True)
 class CaseSpec:
-    """What the dictionaries need: the operating point, handedness, D (m), flow direction (+1/-1 along z
-    from inlet to outlet), iterations, processes, the gmsh mesh file relative to the case (``tet`` route)
-    the mesher and the turbulence model."""
+    """What the dictionaries need: the operating point, handedness, D (m), flow direction (+1/-1
+    along z from inlet to outlet), iterations, processes, the gmsh mesh file relative to the case
+    (``tet`` route) the mesher and the turbulence model."""
 
     point: OperatingPoint
     handedness: Handedness
@@ -228,7 +231,8 @@ def mrf_properties(spec: CaseSpec) -> dict[str, Any]:
 
 
 def _boundaries(spec: CaseSpec, field: str, inflow_value: Any) -> dict[str, Any]:
-    """boundaryField of ``field`` ("U", "p", "k", "omega", "nut", "gammaInt", "ReThetat") on every patch."""
+    """boundaryField of ``field`` ("U", "p", "k", "omega", "nut", "gammaInt", "ReThetat") on every
+    patch."""
     zero_gradient = {"type": "zeroGradient"}
     inlet_outlet = {"type": "inletOutlet", "inletValue": inflow_value, "value": inflow_value}
     if field == "U":
@@ -285,7 +289,8 @@ def _write_field(
 
 
 def write_fields(case: Path, spec: CaseSpec) -> None:
-    """0/U, p, k, omega, nut (and gammaInt, ReThetat for kOmegaSSTLM): the inflow everywhere to start from."""
+    """0/U, p, k, omega, nut (and gammaInt, ReThetat for kOmegaSSTLM): the inflow everywhere to
+    start from."""
     k, omega = spec.point.inflow_turbulence(spec.diameter_m)
     inflow = list(spec.inflow)
     values = {
@@ -303,7 +308,8 @@ def write_fields(case: Path, spec: CaseSpec) -> None:
 
 
 def write_operating_point(case: Path, spec: CaseSpec) -> None:
-    """The files that depend on the operating point: MRFProperties, 0/ and controlDict (iterations)."""
+    """The files that depend on the operating point: MRFProperties, 0/ and controlDict
+    (iterations)."""
     _write(case / "constant" / "MRFProperties", mrf_properties(spec))
     _write(case / "system" / "controlDict", control_dict(spec))
     write_fields(case, spec)
@@ -343,8 +349,9 @@ def write_dictionaries(case: Path, spec: CaseSpec) -> None:
 
 
 def mesh_commands(spec: CaseSpec) -> list[list[str]]:
-    """The ``snappy`` route: torus_cad.simulate.snappy.MESH_COMMANDS (blockMesh ... snappyHexMesh, checkMesh).
-    The ``tet`` route: convert the gmsh mesh, scale it to metres, make the propeller a wall, check it."""
+    """The ``snappy`` route: torus_cad.simulate.snappy.MESH_COMMANDS (blockMesh ... snappyHexMesh,
+    checkMesh). The ``tet`` route: convert the gmsh mesh, scale it to metres, make the propeller a
+    wall, check it."""
     if spec.mesher == Mesher.SNAPPY:
         return [list(command) for command in LAYERED_MESH_COMMANDS]
     return [
@@ -363,7 +370,8 @@ def mesh_commands(spec: CaseSpec) -> list[list[str]]:
 
 
 def solve_commands(spec: CaseSpec) -> list[list[str]]:
-    """The solver (with decomposePar / reconstructPar around it in parallel); mpiexec is added by the runner."""
+    """The solver (with decomposePar / reconstructPar around it in parallel); mpiexec is added by
+    the runner."""
     if spec.processes == 1:
         return [["simpleFoam"]]
     return [["decomposePar", "-force"], ["simpleFoam"], ["reconstructPar", "-latestTime"]]

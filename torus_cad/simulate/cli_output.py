@@ -12,7 +12,8 @@ from torus_cad.simulate.run import Status
 
 
 class IterationLine:
-    """One line on a terminal (stderr), rewritten at each iteration: iteration, residuals, thrust, torque."""
+    """One line on a terminal (stderr), rewritten at each iteration: iteration, residuals, thrust,
+    torque."""
 
     def __init__(self, enabled: bool, stream: TextIO | None = None) -> None:
         self.enabled, self.stream = enabled, stream if stream is not None else sys.stderr
@@ -128,7 +129,8 @@ def summary_lines(result: Result, convergence: bool = False) -> list[str]:
 
 
 def warning_lines(report: dict[str, Any]) -> list[str]:
-    """``warning: ...`` for each of the report's ``validity`` flags (torus_cad.simulate.validity)."""
+    """``warning: ...`` for each of the report's ``validity`` flags
+    (torus_cad.simulate.validity)."""
     return [f"warning: {flag}" for flag in report.get("validity") or []]
 
 
@@ -157,7 +159,8 @@ def noise_line(noise: dict[str, Any]) -> str:
 
 
 def thrust_search_lines(search: dict[str, Any]) -> list[str]:
-    """``--thrust``: every run, then the rpm found (or the closest run, when none was within the tolerance)."""
+    """``--thrust``: every run, then the rpm found (or the closest run, when none was within the
+    tolerance)."""
     runs = "; ".join(f"{run['rpm']:.0f} rpm {run['thrust_n']:.4g} N" for run in search["runs"])
     verdict = (
         f"within {_percent(search['tolerance'])}"
@@ -172,7 +175,8 @@ def thrust_search_lines(search: dict[str, Any]) -> list[str]:
 
 
 def _spread_bound(entry: dict[str, Any]) -> str:
-    """The uncertainty a study without a GCI still has: a multiple of the levels' spread (empty if unknown)."""
+    """The uncertainty a study without a GCI still has: a multiple of the levels' spread (empty if
+    unknown)."""
     if entry.get("uncertainty_fine") is None or entry.get("spread") is None:
         return ""
     return (
@@ -183,8 +187,8 @@ def _spread_bound(entry: dict[str, Any]) -> str:
 
 
 def convergence_lines(report: dict[str, Any]) -> list[str]:
-    """The convergence study: each force on the three levels, Richardson's extrapolation, the observed
-    order and Roache's grid convergence index (or why there is none)."""
+    """The convergence study: each force on the three levels, Richardson's extrapolation, the
+    observed order and Roache's grid convergence index (or why there is none)."""
     lines = []
     for key, (label, factor, unit) in _SHOWN.items():
         entry = report[key]

@@ -1,10 +1,11 @@
-"""The numbers a designer uses, from a run's force history: thrust, torque, power and their coefficients.
+"""The numbers a designer uses, from a run's force history: thrust, torque, power and their
+coefficients.
 
-Propeller convention: n in rev/s, D the tip diameter, CT = T / (rho n^2 D^4), CP = P / (rho n^3 D^5),
-advance ratio J = V / (n D), efficiency J CT / CP (undefined at J = 0), figure of merit (the ideal
-power of momentum theory over the power, at J = 0): T^1.5 / sqrt(2 rho A) / P with A = pi D^2 / 4, which in
-these coefficients is CT^1.5 / (sqrt(pi / 2) CP) (the helicopter form CT^1.5 / (sqrt(2) CP) holds for
-coefficients on rho A (Omega R)^2, not on rho n^2 D^4).
+Propeller convention: n in rev/s, D the tip diameter, CT = T / (rho n^2 D^4), CP = P / (rho n^3
+D^5), advance ratio J = V / (n D), efficiency J CT / CP (undefined at J = 0), figure of merit (the
+ideal power of momentum theory over the power, at J = 0): T^1.5 / sqrt(2 rho A) / P with A = pi D^2
+/ 4, which in these coefficients is CT^1.5 / (sqrt(pi / 2) CP) (the helicopter form CT^1.5 /
+(sqrt(2) CP) holds for coefficients on rho A (Omega R)^2, not on rho n^2 D^4).
 
 Signs: thrust is positive when the propeller pushes the fluid the way the design means to (toward
 -z for both 'cw' and its mirror image 'ccw', which turn opposite ways): the fluid pushes the
@@ -44,7 +45,8 @@ def thrust_and_torque(
 
 
 def force_variation(values: np.ndarray, window: float = CONVERGENCE_WINDOW) -> float:
-    """(max - min) / |mean| over the last ``window`` of ``values`` (at least 2 samples); 0 when all are 0."""
+    """(max - min) / |mean| over the last ``window`` of ``values`` (at least 2 samples); 0 when all
+    are 0."""
     count = max(2, math.ceil(window * len(values)))
     tail = np.asarray(values[-count:], dtype=float)
     spread = float(tail.max() - tail.min()) if len(tail) else 0.0
@@ -71,7 +73,8 @@ class Performance:
 def performance(
     thrust_n: float, torque_nm: float, point: OperatingPoint, diameter_m: float
 ) -> Performance:
-    """Coefficients of ``thrust_n`` and ``torque_nm`` at ``point`` for tip diameter ``diameter_m``."""
+    """Coefficients of ``thrust_n`` and ``torque_nm`` at ``point`` for tip diameter
+    ``diameter_m``."""
     rho, n = point.fluid.density_kg_m3, point.rpm / 60.0
     power = torque_nm * 2.0 * math.pi * n
     if n == 0.0:
@@ -91,9 +94,10 @@ def performance(
 def viscous_part(
     history: History, handedness: Handedness, thrust_n: float, torque_nm: float
 ) -> dict[str, float | None] | None:
-    """The wall shear's part of the last iteration's thrust (N) and torque (N m), and its share of the totals
-    ``thrust_n`` and ``torque_nm`` (None where a total is zero): how much a skin-friction error (a laminar or
-    turbulent boundary layer, the wall treatment) can move the result. None when the history has no viscous
+    """The wall shear's part of the last iteration's thrust (N) and torque (N m), and its share of
+    the totals ``thrust_n`` and ``torque_nm`` (None where a total is zero): how much a skin-friction
+    error (a laminar or turbulent boundary layer, the wall treatment) can move the result. None when
+    the history has no viscous
     columns."""
     if not len(history.viscous_force_n):
         return None
@@ -154,12 +158,12 @@ class UncertaintyMethod(StrEnum):
 
 @dataclass(frozen=True)
 class Extrapolation:
-    """Richardson extrapolation and Roache's grid convergence index over three levels (coarse, medium,
-    fine) refined by ``ratio`` r (element size divided by r from one level to the next).
+    """Richardson extrapolation and Roache's grid convergence index over three levels (coarse,
+    medium, fine) refined by ``ratio`` r (element size divided by r from one level to the next).
 
     ``order`` (observed order p), ``extrapolated`` (the value at zero element size, the unit of the
-    values), ``gci_fine`` and ``gci_medium`` (GCI = Fs |e| / (r^p - 1), e the relative change to the next
-    coarser level, Fs = ``GCI_SAFETY_FACTOR``: a fraction of the value, an error band) and
+    values), ``gci_fine`` and ``gci_medium`` (GCI = Fs |e| / (r^p - 1), e the relative change to the
+    next coarser level, Fs = ``GCI_SAFETY_FACTOR``: a fraction of the value, an error band) and
     ``asymptotic_ratio`` (GCI_medium / (r^p GCI_fine), 1 in the asymptotic range) are None unless
     ``converges_monotonically``: both changes (coarse to medium, medium to fine) of one sign, the
     second the smaller. :attr:`spread` is always given, so that levels which do not converge still
@@ -187,8 +191,9 @@ class Extrapolation:
 
     @property
     def uncertainty_fine(self) -> float | None:
-        """The fine value's numerical uncertainty, a fraction of it: GCI_fine where the levels converge
-        monotonically, else ``SPREAD_SAFETY_FACTOR`` x ``spread`` (a band that holds every level)."""
+        """The fine value's numerical uncertainty, a fraction of it: GCI_fine where the levels
+        converge monotonically, else ``SPREAD_SAFETY_FACTOR`` x ``spread`` (a band that holds every
+        level)."""
         if self.converges_monotonically:
             return self.gci_fine
         return None if self.spread is None else SPREAD_SAFETY_FACTOR * self.spread
@@ -201,7 +206,8 @@ class Extrapolation:
         return abs(self.asymptotic_ratio - 1.0) <= ASYMPTOTIC_RANGE_TOLERANCE
 
     def report(self) -> dict[str, Any]:
-        """The study's JSON entry of one force (fractions for the GCIs, the spread and the uncertainty)."""
+        """The study's JSON entry of one force (fractions for the GCIs, the spread and the
+        uncertainty)."""
         return {
             "extrapolated": self.extrapolated,
             "observed_order": self.order,
@@ -217,10 +223,10 @@ class Extrapolation:
 
 
 def richardson(coarse: float, medium: float, fine: float, ratio: float) -> Extrapolation:
-    """Observed order p = ln((f_c - f_m) / (f_m - f_f)) / ln r, f = f_f + (f_f - f_m) / (r^p - 1), and
-    Roache's GCI: GCI_fine = Fs |(f_m - f_f) / f_f| / (r^p - 1), GCI_medium = Fs |(f_c - f_m) / f_m| /
-    (r^p - 1), asymptotic ratio GCI_medium / (r^p GCI_fine); all undefined (None) unless the three
-    converge monotonically (a GCI also needs nonzero f_f and f_m)."""
+    """Observed order p = ln((f_c - f_m) / (f_m - f_f)) / ln r, f = f_f + (f_f - f_m) / (r^p - 1),
+    and Roache's GCI: GCI_fine = Fs |(f_m - f_f) / f_f| / (r^p - 1), GCI_medium = Fs |(f_c - f_m) /
+    f_m| / (r^p - 1), asymptotic ratio GCI_medium / (r^p GCI_fine); all undefined (None) unless the
+    three converge monotonically (a GCI also needs nonzero f_f and f_m)."""
     values = (coarse, medium, fine)
     first, second = medium - coarse, fine - medium
     monotone = first != 0.0 and second != 0.0 and first * second > 0.0 and abs(second) < abs(first)

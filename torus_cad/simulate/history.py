@@ -1,4 +1,5 @@
-"""Histories a run writes under ``postProcessing/``: residuals, forces, moments, momentum fluxes, by iteration.
+"""Histories a run writes under ``postProcessing/``: residuals, forces, moments, momentum fluxes, by
+iteration.
 
 OpenFOAM's function objects write one line per iteration (``Time`` = iteration for a steady
 run); vectors are written as ``(x y z)``. Files are read whole: a few hundred lines.
@@ -20,7 +21,8 @@ RESIDUAL_NAMES = ("Ux", "Uy", "Uz", "p", "k", "omega")
 
 
 def _rows(path: Path) -> tuple[list[str], list[list[str]]]:
-    """(header words of the last '# Time' line, data rows split on whitespace with parentheses removed)."""
+    """(header words of the last '# Time' line, data rows split on whitespace with parentheses
+    removed)."""
     header: list[str] = []
     rows: list[list[str]] = []
     try:
@@ -68,10 +70,11 @@ def _vectors(path: Path, columns: int = 3) -> tuple[np.ndarray, np.ndarray]:
 
 @dataclass
 class History:
-    """A run's histories by iteration. Arrays: ``iterations`` (n,), ``force_n`` / ``moment_nm`` (n, 3)
-    on the propeller (pressure and viscous), ``viscous_force_n`` / ``viscous_moment_nm`` (n, 3) their
-    viscous part (wall shear), ``residuals`` {name: (n,)}; the outer patches' ``outer_force_n`` (n, 3)
-    (pressure and viscous) and ``momentum_flux_m4_s2`` {patch: (n, 3)} (sum of U phi, kinematic)."""
+    """A run's histories by iteration. Arrays: ``iterations`` (n,), ``force_n`` / ``moment_nm``
+    (n, 3) on the propeller (pressure and viscous), ``viscous_force_n`` / ``viscous_moment_nm``
+    (n, 3) their viscous part (wall shear), ``residuals`` {name: (n,)}; the outer patches'
+    ``outer_force_n`` (n, 3) (pressure and viscous) and ``momentum_flux_m4_s2`` {patch: (n, 3)} (sum
+    of U phi, kinematic)."""
 
     iterations: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
     force_n: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
@@ -115,7 +118,8 @@ def read_residuals(case: Path) -> tuple[np.ndarray, dict[str, np.ndarray]]:
 
 
 def read_history(case: str | Path, balance: bool = False) -> History:
-    """The histories of ``case``; with ``balance`` also the outer patches' forces and momentum fluxes."""
+    """The histories of ``case``; with ``balance`` also the outer patches' forces and momentum
+    fluxes."""
     case = Path(case)
     iterations, force = _vectors(_time_folder(case, FORCES) / "force.dat", FORCE_COLUMNS)
     moment_iterations, moment = _vectors(_time_folder(case, FORCES) / "moment.dat", FORCE_COLUMNS)
@@ -138,21 +142,24 @@ def read_history(case: str | Path, balance: bool = False) -> History:
 
 
 def momentum_balance_force_n(history: History, density_kg_m3: float) -> np.ndarray:
-    """Force of the fluid on the propeller from the momentum balance over the whole domain, N, (3,), last iteration.
+    """Force of the fluid on the propeller from the momentum balance over the whole domain, N, (3,),
+    last iteration.
 
     Steady flow, control volume = the fluid: the momentum leaving through the outer patches plus
     the pressure and viscous force on them equals the force on the propeller with the sign reversed,
-    F = -(sum over inlet, outlet, far field of rho U phi + the forces function object's force there).
-    With MRF the axial balance holds unchanged: the zone's frame term Omega x U is perpendicular to
-    the axis, and on the zone's surfaces of revolution the relative and absolute fluxes are equal.
+    F = -(sum over inlet, outlet, far field of rho U phi + the forces function object's force
+    there). With MRF the axial balance holds unchanged: the zone's frame term Omega x U is
+    perpendicular to the axis, and on the zone's surfaces of revolution the relative and absolute
+    fluxes are equal.
     """
     flux = sum(values[-1] for values in history.momentum_flux_m4_s2.values())
     return -(density_kg_m3 * np.asarray(flux) + history.outer_force_n[-1])
 
 
 def read_y_plus(case: str | Path, patch: str = WALL) -> dict[str, float] | None:
-    """y+ on ``patch`` at the last time the ``yPlus`` function object wrote: ``{"min", "mean", "max"}`` (the
-    mean weighted by face area, as OpenFOAM's ``average`` column is); None when it wrote nothing."""
+    """y+ on ``patch`` at the last time the ``yPlus`` function object wrote: ``{"min", "mean",
+    "max"}`` (the mean weighted by face area, as OpenFOAM's ``average`` column is); None when it
+    wrote nothing."""
     _, rows = _rows(_time_folder(Path(case), Y_PLUS) / "yPlus.dat")
     values = [row for row in rows if len(row) >= 5 and row[1] == patch]
     if not values:

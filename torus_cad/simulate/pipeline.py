@@ -1,11 +1,11 @@
-"""``torus-cad simulate``: mesh the design (snappyHexMesh with prism layers, or ``cfd``'s tetrahedra), write
-its OpenFOAM case, run it, publish the numbers.
+"""``torus-cad simulate``: mesh the design (snappyHexMesh with prism layers, or ``cfd``'s
+tetrahedra), write its OpenFOAM case, run it, publish the numbers.
 
-One run is one output set in ``OUT`` (torus_cad.outputs.output_set): the case is built and run inside the
-set's staging folder; on success the case folder ``<name>_case/`` is renamed into place, then
-``<name>_performance.png``, the tonal noise's picture ``<name>_noise.png`` and signals ``<name>_noise.csv``
-(torus_cad.acoustics, from the blade surface pressure at the last iteration) and the sealed
-``<name>_performance.json`` are published; an error or
+One run is one output set in ``OUT`` (torus_cad.outputs.output_set): the case is built and run
+inside the set's staging folder; on success the case folder ``<name>_case/`` is renamed into place,
+then ``<name>_performance.png``, the tonal noise's picture ``<name>_noise.png`` and signals
+``<name>_noise.csv`` (torus_cad.acoustics, from the blade surface pressure at the last iteration)
+and the sealed ``<name>_performance.json`` are published; an error or
 an interrupt publishes nothing (the staging folder is removed). A case whose solver failed
 (diverged, over its time budget) is kept as ``<name>_case_failed/`` for inspection.
 
@@ -129,11 +129,11 @@ class Request:
     """One simulation: the design, where it runs, the mesh level, iterations (None: the level's),
     MPI processes, whether to stop after writing the case, the time budget in seconds, and a case
     folder of an earlier run of the same design and level whose mesh to reuse (another rpm or
-    airspeed without meshing again), the mesher (``snappy``: prism layers; ``tet``: gmsh tetrahedra), and a
-    STEP propeller (``--step``) to simulate instead of building ``params`` (then ``params`` gives only the name,
-    the sense of rotation and ``[cfd]``), the turbulence model, the observers of the tonal noise and the
-    propeller's surface refinement beyond the level's (snappy mesher: its surface and edge cells halved that
-    many times more)."""
+    airspeed without meshing again), the mesher (``snappy``: prism layers; ``tet``: gmsh
+    tetrahedra), and a STEP propeller (``--step``) to simulate instead of building ``params`` (then
+    ``params`` gives only the name, the sense of rotation and ``[cfd]``), the turbulence model, the
+    observers of the tonal noise and the propeller's surface refinement beyond the level's (snappy
+    mesher: its surface and edge cells halved that many times more)."""
 
     params: PropellerParameters
     point: OperatingPoint
@@ -163,9 +163,9 @@ class Result:
 
 
 def check_request(request: Request) -> float:
-    """ParameterError (exit 2) for a value out of range (a ``--step`` propeller: its size and its mesh's estimate,
-    torus_cad.simulate.validity); returns the tip diameter in m (of the design as built: its ``diameter`` /
-    ``pitch`` / ``airfoil.naca`` targets applied)."""
+    """ParameterError (exit 2) for a value out of range (a ``--step`` propeller: its size and its
+    mesh's estimate, torus_cad.simulate.validity); returns the tip diameter in m (of the design as
+    built: its ``diameter`` / ``pitch`` / ``airfoil.naca`` targets applied)."""
     from torus_cad.cfd_domain.sizes import tip_radius
     from torus_cad.parameters.design_targets import resolve_design_targets
 
@@ -209,7 +209,8 @@ def _flow_sign(params: PropellerParameters) -> float:
 
 
 def _swap_folder(staged: Path, final: Path) -> None:
-    """Rename ``staged`` onto ``final``, replacing a folder there (signals wait until it is done)."""
+    """Rename ``staged`` onto ``final``, replacing a folder there (signals wait until it is
+    done)."""
     trash = final.with_name(f".{final.name}.old-{owner_tag()}{secrets.token_hex(4)}")
     with deferred():
         if final.exists():
@@ -230,7 +231,8 @@ def _remove_stale_report(out: Path, name: str) -> None:
 async def _mesh_and_write(
     request: Request, case: Path, diameter_m: float, stage: Callable[[str], None] | None
 ) -> tuple[dict[str, Any], CaseSpec]:
-    """Write the case and what its mesh is made from; the mesh report so far (``cells`` None until checkMesh)."""
+    """Write the case and what its mesh is made from; the mesh report so far (``cells`` None until
+    checkMesh)."""
     if request.mesher == Mesher.SNAPPY:
         return await _layered_and_write(request, case, diameter_m, stage)
     from torus_cad.cfd_domain.domain import CfdStage, write_body_domain, write_cfd_domain
@@ -279,8 +281,8 @@ def _mesh_report(request: Request, extra: dict[str, Any]) -> dict[str, Any]:
 
 
 def surface_stl(request: Request, path: Path) -> Path:
-    """The propeller's closed surface as a binary STL in mm: the design's B-rep (or the ``--step`` solid, placed on
-    +z) triangulated at the export deflections."""
+    """The propeller's closed surface as a binary STL in mm: the design's B-rep (or the ``--step``
+    solid, placed on +z) triangulated at the export deflections."""
     from torus_cad.kernel.writers.stl import write_stl
     from torus_cad.propeller import build_propeller
     from torus_cad.tolerances import STL_ANGULAR_DEFLECTION, STL_LINEAR_DEFLECTION
@@ -360,8 +362,8 @@ def _case_spec(request: Request, diameter_m: float, msh_file: str) -> CaseSpec:
 
 
 def _checked_mesh(case: Path, mesh_report: dict[str, Any]) -> dict[str, Any]:
-    """``mesh_report`` with checkMesh's verdict, cells, cell types and largest non-orthogonality (and
-    snappyHexMesh's layer report); MeshCheckError (exit 1) unless checkMesh said "Mesh OK"."""
+    """``mesh_report`` with checkMesh's verdict, cells, cell types and largest non-orthogonality
+    (and snappyHexMesh's layer report); MeshCheckError (exit 1) unless checkMesh said "Mesh OK"."""
     from torus_cad.simulate.snappy import layer_coverage, parse_check_mesh
 
     check = parse_check_mesh((case / "log.checkMesh").read_text(errors="replace"))
@@ -386,9 +388,9 @@ def _checked_mesh(case: Path, mesh_report: dict[str, Any]) -> dict[str, Any]:
 
 
 def _mesh_source_report(request: Request) -> dict[str, Any]:
-    """The mesh report of ``request.mesh_from``; ParameterError unless it is a checked case of the same design
-    name, mesher and level (and ``[cfd]`` for the tet mesher). Nothing is written: checked before the output
-    folder is made."""
+    """The mesh report of ``request.mesh_from``; ParameterError unless it is a checked case of the
+    same design name, mesher and level (and ``[cfd]`` for the tet mesher). Nothing is written:
+    checked before the output folder is made."""
     source, name = Path(request.mesh_from or ""), request.params.name
     report_path = source / MESH_REPORT
     if not ((source / "constant" / "polyMesh" / "boundary").is_file() and report_path.is_file()):
@@ -425,8 +427,9 @@ def _mesh_source_report(request: Request) -> dict[str, Any]:
 
 
 def _reuse_mesh(request: Request, case: Path, diameter_m: float) -> tuple[dict[str, Any], CaseSpec]:
-    """Copy the mesh (constant/polyMesh) and its report of ``request.mesh_from`` into ``case`` and write the
-    dictionaries; ParameterError unless it is a checked case of the same design name, mesher and level."""
+    """Copy the mesh (constant/polyMesh) and its report of ``request.mesh_from`` into ``case`` and
+    write the dictionaries; ParameterError unless it is a checked case of the same design name,
+    mesher and level."""
     mesh_report = _mesh_source_report(request)
     source, name = Path(request.mesh_from or ""), request.params.name
     report_path = source / MESH_REPORT
@@ -545,10 +548,11 @@ async def _run_case(
     convert: bool,
     mesh_s: float,
 ) -> _Run:
-    """Run the mesh commands (if ``convert``: snappyHexMesh or gmshToFoam, then checkMesh, which must say
-    "Mesh OK") and the solver in ``case``; the report of the run (``mesh_s``: the seconds its mesh took before
-    OpenFOAM, meshed or copied; ``convert``: OpenFOAM's meshing and checking). The time budget counts from
-    ``start`` (time.perf_counter). A failed solver's or mesh check's case is kept as ``OUT/<name>_case_failed``."""
+    """Run the mesh commands (if ``convert``: snappyHexMesh or gmshToFoam, then checkMesh, which
+    must say "Mesh OK") and the solver in ``case``; the report of the run (``mesh_s``: the seconds
+    its mesh took before OpenFOAM, meshed or copied; ``convert``: OpenFOAM's meshing and checking).
+    The time budget counts from ``start`` (time.perf_counter). A failed solver's or mesh check's
+    case is kept as ``OUT/<name>_case_failed``."""
     from foamlib import AsyncFoamCase
 
     run_start = time.perf_counter()
@@ -586,7 +590,8 @@ async def _run_case(
 
 
 async def _noise(request: Request, case: Path, stage: Callable[[str], None] | None) -> Noise | None:
-    """The tonal noise of the finished ``case`` at ``request.observers`` (None when the propeller does not turn)."""
+    """The tonal noise of the finished ``case`` at ``request.observers`` (None when the propeller
+    does not turn)."""
     from torus_cad.acoustics.fwh import Medium
     from torus_cad.acoustics.noise_report import evaluate_noise
     from torus_cad.acoustics.pressure_surface import read_surface, surface_pressure_file
@@ -629,8 +634,8 @@ def _publish(
     extra: dict[str, Any] | None = None,
     noise: Noise | None = None,
 ) -> Result:
-    """Publish ``case`` (as ``OUT/<name>_case``), the history plot, the noise picture and signals and the sealed
-    report of ``run``."""
+    """Publish ``case`` (as ``OUT/<name>_case``), the history plot, the noise picture and signals
+    and the sealed report of ``run``."""
     params, name = request.params, request.params.name
     cells = run.report["cells"]
     title = (
@@ -734,8 +739,8 @@ def simulate(
     progress: ProgressCallback | None = None,
     stage: Callable[[str], None] | None = None,
 ) -> Result:
-    """:func:`simulate_async` in its own event loop, with OpenFOAM's environment and SIGINT / SIGTERM
-    stopping the solver."""
+    """:func:`simulate_async` in its own event loop, with OpenFOAM's environment and SIGINT /
+    SIGTERM stopping the solver."""
     with openfoam_environ(), solvers_stopped_on_signals():
         return asyncio.run(simulate_async(request, out_dir, progress, stage))
 
@@ -757,7 +762,8 @@ async def simulate_many(
 
 @dataclass(frozen=True)
 class ThrustTarget:
-    """``--thrust``: the target thrust N, the tolerance (a fraction of it) and the most solver runs."""
+    """``--thrust``: the target thrust N, the tolerance (a fraction of it) and the most solver
+    runs."""
 
     thrust_n: float
     tolerance: float = DEFAULT_TOLERANCE
@@ -765,7 +771,8 @@ class ThrustTarget:
 
 
 def check_thrust_target(request: Request, target: ThrustTarget) -> tuple[float, float]:
-    """ParameterError (exit 2) for a bad target, tolerance or run count; (tip diameter m, rpm limit)."""
+    """ParameterError (exit 2) for a bad target, tolerance or run count; (tip diameter m, rpm
+    limit)."""
     check_count("--thrust-runs", target.max_runs, *MAX_RUNS_RANGE)
     low, high = TOLERANCE_RANGE
     if not (math.isfinite(target.tolerance) and low <= target.tolerance <= high):
@@ -787,11 +794,12 @@ async def thrust_search_async(
     stage: Callable[[str], None] | None = None,
     runner: type | None = None,
 ) -> Result:
-    """The rpm at which the propeller gives ``target.thrust_n`` (torus_cad.simulate.thrust_target): one mesh,
-    then one solver run per rpm on it (each a case of its own in the staging folder, the mesh copied from the
-    first), at most ``target.max_runs``. Publishes one set: the case, plot and report of the run closest to
-    the target, the report's ``thrust_search`` listing every run. ``request.point.rpm`` is ignored (the
-    first run's rpm comes from the target); the time budget covers the whole search.
+    """The rpm at which the propeller gives ``target.thrust_n`` (torus_cad.simulate.thrust_target):
+    one mesh, then one solver run per rpm on it (each a case of its own in the staging folder, the
+    mesh copied from the first), at most ``target.max_runs``. Publishes one set: the case, plot and
+    report of the run closest to the target, the report's ``thrust_search`` listing every run.
+    ``request.point.rpm`` is ignored (the first run's rpm comes from the target); the time budget
+    covers the whole search.
 
     Raises what :func:`simulate_async` raises, and ParameterError for a target out of reach."""
     start = time.perf_counter()
@@ -824,7 +832,8 @@ async def _thrust_search(
     stage: Callable[[str], None] | None,
     runner: type | None,
 ) -> Result:
-    """The search of :func:`thrust_search_async` into the output set ``out`` (rpm limit ``limit`` in rpm)."""
+    """The search of :func:`thrust_search_async` into the output set ``out`` (rpm limit ``limit`` in
+    rpm)."""
     fluid = request.point.fluid
     rpm = first_rpm(target.thrust_n, limit, diameter_m, fluid.density_kg_m3)
     name = request.params.name
@@ -926,8 +935,8 @@ def thrust_search(
     progress: ProgressCallback | None = None,
     stage: Callable[[str], None] | None = None,
 ) -> Result:
-    """:func:`thrust_search_async` in its own event loop, with OpenFOAM's environment and SIGINT / SIGTERM
-    stopping the solver."""
+    """:func:`thrust_search_async` in its own event loop, with OpenFOAM's environment and SIGINT /
+    SIGTERM stopping the solver."""
     with openfoam_environ(), solvers_stopped_on_signals():
         return asyncio.run(thrust_search_async(request, target, out_dir, progress, stage))
 
@@ -939,12 +948,13 @@ def convergence_study(
     stage: Callable[[str], None] | None = None,
 ) -> Result:
     """The three levels (each a full run in ``OUT/<level>/``) and ``<name>_convergence.json``:
-    Richardson-extrapolated thrust and torque, their observed order and Roache's grid convergence index
-    (``gci_fine``, ``gci_medium``: fractions of the fine and medium values, safety factor 1.25;
-    ``gci_asymptotic_ratio`` GCI_medium / (r^p GCI_fine), ``in_asymptotic_range`` when it is within
-    ``ASYMPTOTIC_RANGE_TOLERANCE`` of 1); all null unless the levels converge monotonically. Always:
-    ``spread`` and ``uncertainty_fine`` (GCI_fine, or three times the spread where there is no GCI;
-    ``uncertainty_method`` says which), fractions of the fine value (Extrapolation.report)."""
+    Richardson-extrapolated thrust and torque, their observed order and Roache's grid convergence
+    index (``gci_fine``, ``gci_medium``: fractions of the fine and medium values, safety factor
+    1.25; ``gci_asymptotic_ratio`` GCI_medium / (r^p GCI_fine), ``in_asymptotic_range`` when it is
+    within ``ASYMPTOTIC_RANGE_TOLERANCE`` of 1); all null unless the levels converge monotonically.
+    Always: ``spread`` and ``uncertainty_fine`` (GCI_fine, or three times the spread where there is
+    no GCI; ``uncertainty_method`` says which), fractions of the fine value
+    (Extrapolation.report)."""
     out = Path(out_dir)
     # the finest mesh refused before the coarse runs
     check_request(dataclasses.replace(request, level=Level.FINE))

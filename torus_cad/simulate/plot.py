@@ -1,4 +1,5 @@
-"""The PNG beside a simulation's report: thrust and torque by iteration above, residuals (log) below."""
+"""The PNG beside a simulation's report: thrust and torque by iteration above, residuals (log)
+below."""
 
 from __future__ import annotations
 

@@ -66,7 +66,8 @@ class TimeBudgetError(SolverError):
 
 
 def check_openfoam() -> None:
-    """MissingOpenFoamError unless simpleFoam, snappyHexMesh, gmshToFoam and the other programs are on PATH."""
+    """MissingOpenFoamError unless simpleFoam, snappyHexMesh, gmshToFoam and the other programs are
+    on PATH."""
     for program in (
         "simpleFoam",
         "blockMesh",
@@ -99,8 +100,9 @@ def openfoam_environment() -> dict[str, str]:
 
 @contextlib.contextmanager
 def openfoam_environ() -> Iterator[None]:
-    """For the block: os.environ with :func:`openfoam_environment` (foamlib passes os.environ on), and
-    rich's global console quiet (foamlib draws a bar per command on it; the caller reports progress)."""
+    """For the block: os.environ with :func:`openfoam_environment` (foamlib passes os.environ on),
+    and rich's global console quiet (foamlib draws a bar per command on it; the caller reports
+    progress)."""
     import rich
 
     extra = openfoam_environment()
@@ -128,8 +130,8 @@ def _descendants() -> list[Any]:
 
 
 def stop_processes(case: Path | None = None) -> None:
-    """SIGTERM the processes this process started (only those working in ``case``, if given), then SIGKILL
-    what is left after ``STOP_GRACE_SECONDS``."""
+    """SIGTERM the processes this process started (only those working in ``case``, if given), then
+    SIGKILL what is left after ``STOP_GRACE_SECONDS``."""
     import psutil
 
     chosen = []
@@ -150,8 +152,9 @@ def stop_processes(case: Path | None = None) -> None:
 
 @contextlib.contextmanager
 def solvers_stopped_on_signals() -> Iterator[None]:
-    """Within the block, SIGINT / SIGTERM / SIGHUP first stop every process this one started, then go
-    to the handler that was there before (torus_cad.runtime.interrupts' on the command line). Main thread only."""
+    """Within the block, SIGINT / SIGTERM / SIGHUP first stop every process this one started, then
+    go to the handler that was there before (torus_cad.runtime.interrupts' on the command line).
+    Main thread only."""
     previous: dict[int, Any] = {}
 
     def handler(signum: int, frame: FrameType | None) -> None:
@@ -181,8 +184,8 @@ def solvers_stopped_on_signals() -> Iterator[None]:
 
 @dataclass(frozen=True)
 class Status:
-    """One iteration as the watcher saw it: the iteration, of ``total``, the initial residuals and the
-    propeller's force (N) and moment (N m) about the origin."""
+    """One iteration as the watcher saw it: the iteration, of ``total``, the initial residuals and
+    the propeller's force (N) and moment (N m) about the origin."""
 
     iteration: int
     total: int
@@ -227,8 +230,8 @@ def divergence(history: History) -> str | None:
 
 
 class Watcher:
-    """Reads the histories while the solver runs; reports progress; stops the solver on divergence or
-    over its time budget (``deadline``, time.monotonic())."""
+    """Reads the histories while the solver runs; reports progress; stops the solver on divergence
+    or over its time budget (``deadline``, time.monotonic())."""
 
     def __init__(
         self, case: Path, total: int, deadline: float, progress: ProgressCallback | None
@@ -260,7 +263,8 @@ class Watcher:
 
 
 def _log_cause(case: Path, program: str) -> str:
-    """The FATAL ERROR's first lines in log.<program>, or "floating point exception" for a crash in sigFpe."""
+    """The FATAL ERROR's first lines in log.<program>, or "floating point exception" for a crash in
+    sigFpe."""
     try:
         lines = (case / f"log.{program}").read_text(errors="replace").splitlines()
     except OSError:
@@ -275,8 +279,8 @@ def _log_cause(case: Path, program: str) -> str:
 
 
 async def run_command(case: AsyncFoamCase, command: Sequence[str], processes: int = 1) -> None:
-    """One OpenFOAM program in ``case`` (log.<program>); in parallel through MPI if it is the solver and
-    ``processes`` > 1. SolverError names the program and the cause."""
+    """One OpenFOAM program in ``case`` (log.<program>); in parallel through MPI if it is the solver
+    and ``processes`` > 1. SolverError names the program and the cause."""
     parallel = processes > 1 and command[0] == "simpleFoam"
     try:
         await case.run(
@@ -295,8 +299,8 @@ async def run_solver(
     deadline: float,
     progress: ProgressCallback | None = None,
 ) -> History:
-    """simpleFoam (watched, see :class:`Watcher`); the final history. DivergedError naming the iteration and
-    residual, TimeBudgetError, SolverError."""
+    """simpleFoam (watched, see :class:`Watcher`); the final history. DivergedError naming the
+    iteration and residual, TimeBudgetError, SolverError."""
     path = Path(case.path)
     watcher = Watcher(path, iterations, deadline, progress)
     watch = asyncio.ensure_future(watcher.watch())

@@ -1,4 +1,5 @@
-"""What ``torus-cad simulate`` runs: mesh levels, the fluid, inflow turbulence, the operating point's ranges.
+"""What ``torus-cad simulate`` runs: mesh levels, the fluid, inflow turbulence, the operating
+point's ranges.
 
 Levels map to ``[cfd]`` sizes. All three share one domain (radius 3 D, inlet 2 D upstream and
 outlet 4 D downstream of the propeller's centre) and differ only in element size: every size
@@ -33,17 +34,19 @@ class Level(StrEnum):
 
 
 class Mesher(StrEnum):
-    """How ``simulate`` meshes the fluid (``--mesher``): ``snappy`` (snappyHexMesh, prism layers on the
-    propeller sized from a y+ target; the default) or ``tet`` (the ``cfd`` command's gmsh tetrahedra, no layers)."""
+    """How ``simulate`` meshes the fluid (``--mesher``): ``snappy`` (snappyHexMesh, prism layers on
+    the propeller sized from a y+ target; the default) or ``tet`` (the ``cfd`` command's gmsh
+    tetrahedra, no layers)."""
 
     SNAPPY = "snappy"
     TET = "tet"
 
 
 class TurbulenceModel(StrEnum):
-    """RANS model of ``simulate`` (``--turbulence``): ``kOmegaSST`` (the default), or ``kOmegaSSTLM``:
-    the same model with Langtry and Menter's gamma-ReThetat transition equations (laminar boundary
-    layers up to a predicted transition; two more transported fields, ``gammaInt`` and ``ReThetat``)."""
+    """RANS model of ``simulate`` (``--turbulence``): ``kOmegaSST`` (the default), or
+    ``kOmegaSSTLM``: the same model with Langtry and Menter's gamma-ReThetat transition equations
+    (laminar boundary layers up to a predicted transition; two more transported fields, ``gammaInt``
+    and ``ReThetat``)."""
 
     K_OMEGA_SST = "kOmegaSST"
     K_OMEGA_SST_LM = "kOmegaSSTLM"
@@ -70,7 +73,8 @@ _COARSE_SIZES = {"cells_per_chord": 4.0, "growth_rate": 1.6, "far_size": 0.4}
 
 
 def level_cfd(level: Level) -> dict[str, float]:
-    """The ``[cfd]`` values of ``level`` (curvature refinement off: the sizes alone set the mesh)."""
+    """The ``[cfd]`` values of ``level`` (curvature refinement off: the sizes alone set the
+    mesh)."""
     steps = list(Level).index(level)
     scale = REFINEMENT_RATIO**steps
     sizes = {
@@ -147,7 +151,8 @@ class OperatingPoint:
     fluid: Fluid = AIR_15C
 
     def omega_rad_s(self, handedness: Handedness) -> float:
-        """Angular velocity about +z, rad/s: negative for 'cw' (clockwise seen from +z), positive for 'ccw'."""
+        """Angular velocity about +z, rad/s: negative for 'cw' (clockwise seen from +z), positive
+        for 'ccw'."""
         sign = -1.0 if handedness == Handedness.CW else 1.0
         return sign * self.rpm * 2.0 * math.pi / 60.0
 
@@ -155,7 +160,8 @@ class OperatingPoint:
         return self.rpm * math.pi * diameter_m / 60.0
 
     def inflow_turbulence(self, diameter_m: float) -> tuple[float, float]:
-        """(k m^2/s^2, omega 1/s) of the inflow from ``TURBULENCE_INTENSITY`` and ``TURBULENCE_LENGTH_D``."""
+        """(k m^2/s^2, omega 1/s) of the inflow from ``TURBULENCE_INTENSITY`` and
+        ``TURBULENCE_LENGTH_D``."""
         speed = max(
             self.airspeed_m_s, TURBULENCE_TIP_SPEED_FRACTION * self.tip_speed_m_s(diameter_m), 1.0
         )

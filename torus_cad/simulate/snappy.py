@@ -7,13 +7,16 @@ conventional propeller or a user's own STEP (triangulated) goes through the same
 The case gets (all lengths in metres inside the case):
 
 * ``constant/triSurface/propeller.stl``: the surface scaled from mm (``surfaceTransformPoints``);
-* ``system/blockMeshDict``: a background box of cubes of edge ``D / BACKGROUND_CELLS_PER_D`` (divided
-  by the level's scale), its ends the ``inlet`` and ``outlet``, its four sides the ``farfield``;
-* ``system/surfaceFeatureExtractDict``: the surface's sharp edges (leading and trailing edges, hub rims);
+* ``system/blockMeshDict``: a background box of cubes of edge ``D / BACKGROUND_CELLS_PER_D``
+  (divided by the level's scale), its ends the ``inlet`` and ``outlet``, its four sides the
+  ``farfield``;
+* ``system/surfaceFeatureExtractDict``: the surface's sharp edges (leading and trailing edges, hub
+  rims);
 * ``system/snappyHexMeshDict``: the propeller refined to ``SURFACE_LEVEL`` (its edges to
   ``FEATURE_LEVEL``), a ``searchableCylinder`` around it made the MRF ``cellZone`` / ``faceZone``
-  ``rotating_zone`` (snapped to the cylinder, refined to ``ZONE_LEVEL``), and ``LAYERS`` prism layers on
-  the propeller whose first-cell height comes from a y+ target (:func:`first_cell_height_m`);
+  ``rotating_zone`` (snapped to the cylinder, refined to ``ZONE_LEVEL``), and ``LAYERS`` prism
+  layers on the propeller whose first-cell height comes from a y+ target
+  (:func:`first_cell_height_m`);
 * ``checkMesh``, whose verdict and cell-type counts :func:`parse_check_mesh` reads.
 
 Levels divide every length of the mesh (background cells, hence every refinement level, and the
@@ -68,8 +71,8 @@ MESH_COMMANDS: tuple[tuple[str, ...], ...] = (
 
 @dataclass(frozen=True)
 class Domain:
-    """The fluid domain in metres, around a propeller on +z: the box's half width, the inlet's and outlet's
-    z, the rotating zone (cylinder radius and z range)."""
+    """The fluid domain in metres, around a propeller on +z: the box's half width, the inlet's and
+    outlet's z, the rotating zone (cylinder radius and z range)."""
 
     half_width_m: float
     inlet_z_m: float
@@ -79,7 +82,8 @@ class Domain:
 
 
 def skin_friction(reynolds: float) -> float:
-    """Local skin-friction coefficient of a turbulent flat plate at ``reynolds`` (White: 0.026 Re_x^-1/7).
+    """Local skin-friction coefficient of a turbulent flat plate at ``reynolds`` (White: 0.026
+    Re_x^-1/7).
 
     Used at any Reynolds number: at the blades' Re of a few thousand the laminar 0.664 Re_x^-1/2 is
     about 20 % higher (a cell about 8 % thinner); the y+ measured on the default design's coarse
@@ -94,7 +98,8 @@ REFERENCE_CHORD_D = 0.1
 
 
 def reference_speed_m_s(diameter_m: float, rpm: float, airspeed_m_s: float) -> float:
-    """The speed (m/s) the blade meets at r = ``Y_PLUS_REFERENCE_RADIUS`` x R: sqrt((omega r)^2 + airspeed^2)."""
+    """The speed (m/s) the blade meets at r = ``Y_PLUS_REFERENCE_RADIUS`` x R: sqrt((omega r)^2 +
+    airspeed^2)."""
     omega = rpm * 2.0 * math.pi / 60.0
     return math.hypot(omega * Y_PLUS_REFERENCE_RADIUS * diameter_m / 2.0, airspeed_m_s)
 
@@ -102,8 +107,8 @@ def reference_speed_m_s(diameter_m: float, rpm: float, airspeed_m_s: float) -> f
 def reference_reynolds(
     diameter_m: float, rpm: float, airspeed_m_s: float, fluid: Fluid = AIR_15C
 ) -> float:
-    """The blade's Reynolds number at r = ``Y_PLUS_REFERENCE_RADIUS`` x R over ``REFERENCE_CHORD_D`` x D
-    (dimensionless): :func:`reference_speed_m_s` times that chord over the fluid's viscosity."""
+    """The blade's Reynolds number at r = ``Y_PLUS_REFERENCE_RADIUS`` x R over ``REFERENCE_CHORD_D``
+    x D (dimensionless): :func:`reference_speed_m_s` times that chord over the fluid's viscosity."""
     return (
         reference_speed_m_s(diameter_m, rpm, airspeed_m_s)
         * REFERENCE_CHORD_D
@@ -123,9 +128,10 @@ def first_cell_height_m(
     """Height of the first prism layer on the propeller, in m, for a wall y+ of ``y_plus``.
 
     Flat-plate estimate at the blade's reference station r = ``Y_PLUS_REFERENCE_RADIUS`` x R: speed
-    V = sqrt((omega r)^2 + airspeed^2) (m/s), Reynolds number V L / nu with L = ``reference_length_m``
-    (default ``REFERENCE_CHORD_D`` x D, a typical chord there), u_tau = V sqrt(Cf / 2), height = y+ nu / u_tau.
-    At 0 rpm and no airspeed the tip speed of 1000 rpm stands in (a still propeller still gets a layer)."""
+    V = sqrt((omega r)^2 + airspeed^2) (m/s), Reynolds number V L / nu with L =
+    ``reference_length_m`` (default ``REFERENCE_CHORD_D`` x D, a typical chord there), u_tau = V
+    sqrt(Cf / 2), height = y+ nu / u_tau. At 0 rpm and no airspeed the tip speed of 1000 rpm stands
+    in (a still propeller still gets a layer)."""
     speed = reference_speed_m_s(
         diameter_m, max(rpm, 1000.0 if airspeed_m_s == 0.0 else 0.0), airspeed_m_s
     )
@@ -194,9 +200,9 @@ def _write(path: Path, entries: dict[str, Any]) -> None:
 
 
 def block_mesh_dict(domain: Domain, cell_m: float) -> dict[str, Any]:
-    """A box of cubes of edge ``cell_m`` exactly (so the levels' cells keep the refinement ratio): the box
-    reaches at least ``domain``'s half width and inlet, its outlet end as far as the whole cubes take it;
-    patches inlet, outlet (the z ends) and farfield (the sides)."""
+    """A box of cubes of edge ``cell_m`` exactly (so the levels' cells keep the refinement ratio):
+    the box reaches at least ``domain``'s half width and inlet, its outlet end as far as the whole
+    cubes take it; patches inlet, outlet (the z ends) and farfield (the sides)."""
     n_xy = math.ceil(2.0 * domain.half_width_m / cell_m - 1e-9)
     w = 0.5 * n_xy * cell_m
     n_z = math.ceil(abs(domain.inlet_z_m - domain.outlet_z_m) / cell_m - 1e-9)
@@ -233,13 +239,14 @@ def block_mesh_dict(domain: Domain, cell_m: float) -> dict[str, Any]:
 
 
 def layer_stack_m(first_layer_m: float, layers: int) -> float:
-    """Total height (m) of ``layers`` prism layers growing by ``LAYER_EXPANSION_RATIO`` from ``first_layer_m``."""
+    """Total height (m) of ``layers`` prism layers growing by ``LAYER_EXPANSION_RATIO`` from
+    ``first_layer_m``."""
     return first_layer_m * (LAYER_EXPANSION_RATIO**layers - 1.0) / (LAYER_EXPANSION_RATIO - 1.0)
 
 
 def layer_count(first_layer_m: float, surface_cell_m: float) -> int:
-    """The prism layers asked of snappyHexMesh: ``LAYERS``, or the most (at least 1) whose stack is at most
-    ``LAYER_STACK_MAX_SURFACE_CELLS`` surface cells (m), the first layer kept."""
+    """The prism layers asked of snappyHexMesh: ``LAYERS``, or the most (at least 1) whose stack is
+    at most ``LAYER_STACK_MAX_SURFACE_CELLS`` surface cells (m), the first layer kept."""
     limit_m = LAYER_STACK_MAX_SURFACE_CELLS * surface_cell_m
     return next(
         (count for count in range(LAYERS, 0, -1) if layer_stack_m(first_layer_m, count) <= limit_m),
@@ -250,8 +257,9 @@ def layer_count(first_layer_m: float, surface_cell_m: float) -> int:
 def snappy_dict(
     domain: Domain, cell_m: float, first_layer_m: float, surface_refinement: int = 0
 ) -> dict[str, Any]:
-    """snappyHexMeshDict: refinement, the rotating cellZone / faceZone, prism layers on the propeller; the
-    propeller's surface and edges refined ``surface_refinement`` levels beyond ``SURFACE_LEVEL`` and
+    """snappyHexMeshDict: refinement, the rotating cellZone / faceZone, prism layers on the
+    propeller; the propeller's surface and edges refined ``surface_refinement`` levels beyond
+    ``SURFACE_LEVEL`` and
     ``FEATURE_LEVEL``."""
     surface_level, feature_level = (
         SURFACE_LEVEL + surface_refinement,
@@ -383,16 +391,16 @@ _UTILITY_DICTIONARIES: dict[str, dict[str, Any]] = {
 
 
 def thinnest_first_layer_m(background_cell_m: float) -> float:
-    """The thinnest first layer (m) whose last layer is ``LAST_LAYER_MIN_FRACTION`` of the propeller's surface
-    cell (the background cell halved ``SURFACE_LEVEL`` times)."""
+    """The thinnest first layer (m) whose last layer is ``LAST_LAYER_MIN_FRACTION`` of the
+    propeller's surface cell (the background cell halved ``SURFACE_LEVEL`` times)."""
     surface_cell = background_cell_m / 2.0**SURFACE_LEVEL
     return LAST_LAYER_MIN_FRACTION * surface_cell / LAYER_EXPANSION_RATIO ** (LAYERS - 1)
 
 
 @dataclass(frozen=True)
 class LayeredMesh:
-    """What :func:`write_layered_mesh` wrote: the domain (m), the background cell and the first layer's
-    height (m), the commands that make the mesh (run in the case folder)."""
+    """What :func:`write_layered_mesh` wrote: the domain (m), the background cell and the first
+    layer's height (m), the commands that make the mesh (run in the case folder)."""
 
     domain: Domain
     background_cell_m: float
@@ -412,18 +420,19 @@ def write_layered_mesh(
     zone_clearance_d: float = 0.1,
     surface_refinement: int = 0,
 ) -> LayeredMesh:
-    """Write the dictionaries that mesh the propeller whose closed surface is ``surface_stl_path_mm``
-    (STL, mm, spin axis +z through the origin) with prism layers, into ``out_case_dir``; the commands
-    to run (blockMesh, surfaceTransformPoints, surfaceFeatureExtract, snappyHexMesh, checkMesh) are
-    returned, not run.
+    """Write the dictionaries that mesh the propeller whose closed surface is
+    ``surface_stl_path_mm`` (STL, mm, spin axis +z through the origin) with prism layers, into
+    ``out_case_dir``; the commands to run (blockMesh, surfaceTransformPoints, surfaceFeatureExtract,
+    snappyHexMesh, checkMesh) are returned, not run.
 
-    ``diameter_mm`` is the tip diameter D; ``first_layer_m`` the coarse level's first-layer height in m
-    (:func:`first_cell_height_m`; divided by the level's scale, and raised to :func:`thinnest_first_layer_m`
-    where it is thinner); ``flow_sign`` -1 puts the inlet at +z;
+    ``diameter_mm`` is the tip diameter D; ``first_layer_m`` the coarse level's first-layer height
+    in m (:func:`first_cell_height_m`; divided by the level's scale, and raised to
+    :func:`thinnest_first_layer_m` where it is thinner); ``flow_sign`` -1 puts the inlet at +z;
     ``domain_d`` the box in D (``domain_radius``, ``upstream``, ``downstream``; default
-    settings.DOMAIN_D); the rotating zone's radius and axial clearance are in D. ``surface_refinement``
-    halves the propeller's surface and edge cells that many times more; the layers stay the level's (sized
-    on its own surface cell), as thinner ones were dropped or made the E63 blade diverge (the simulate how-to).
+    settings.DOMAIN_D); the rotating zone's radius and axial clearance are in D.
+    ``surface_refinement`` halves the propeller's surface and edge cells that many times more; the
+    layers stay the level's (sized on its own surface cell), as thinner ones were dropped or made
+    the E63 blade diverge (the simulate how-to).
     """
     from torus_cad.simulate.settings import DOMAIN_D
 
@@ -473,9 +482,9 @@ def write_layered_mesh(
 
 @dataclass(frozen=True)
 class MeshCheck:
-    """checkMesh's verdict: ``ok`` (it printed "Mesh OK"), cells, cell types by name (hexahedra, prisms,
-    wedges, pyramids, tet wedges, tetrahedra, polyhedra), the largest non-orthogonality (degrees) and
-    the failed checks' lines."""
+    """checkMesh's verdict: ``ok`` (it printed "Mesh OK"), cells, cell types by name (hexahedra,
+    prisms, wedges, pyramids, tet wedges, tetrahedra, polyhedra), the largest non-orthogonality
+    (degrees) and the failed checks' lines."""
 
     ok: bool
     cells: int
@@ -507,10 +516,10 @@ def parse_check_mesh(log: str) -> MeshCheck:
 
 
 def layer_coverage(log: str) -> dict[str, float] | None:
-    """snappyHexMesh's layer report on the propeller: its face count, their mean layer count, the layers'
-    mean overall thickness (m) and the share of the wanted thickness reached (0..1), the layers asked for
-    (:func:`layer_count`) and ``coverage``, the mean layer count over them (0..1); None when the log has
-    no report."""
+    """snappyHexMesh's layer report on the propeller: its face count, their mean layer count, the
+    layers' mean overall thickness (m) and the share of the wanted thickness reached (0..1), the
+    layers asked for (:func:`layer_count`) and ``coverage``, the mean layer count over them (0..1);
+    None when the log has no report."""
     matches = re.findall(rf"^{WALL}\s+(\d+)\s+(\S+)\s+(\S+)\s+(\S+)\s*$", log, re.MULTILINE)
     if not matches:
         return None

@@ -15,10 +15,11 @@ is about linear in rpm:
 
 A target beyond reach is refused (:class:`~torus_cad.errors.ParameterError`, exit 2): before any run
 when it is over the thrust at the rpm limit with CT = ``PLAUSIBLE_CT_LIMIT``; after a run, when the
-thrust at the rpm limit extrapolated from it (as rpm^2) is below the target by more than the tolerance
-and a run at the limit confirms it.
+thrust at the rpm limit extrapolated from it (as rpm^2) is below the target by more than the
+tolerance and a run at the limit confirms it.
 
-:func:`torus_cad.simulate.pipeline.thrust_search` runs the search (one mesh, one solver run per rpm).
+:func:`torus_cad.simulate.pipeline.thrust_search` runs the search (one mesh, one solver run per
+rpm).
 """
 
 from __future__ import annotations
@@ -58,7 +59,8 @@ def thrust_at(ct: float, rpm: float, diameter_m: float, density_kg_m3: float) ->
 
 
 def rpm_for(ct: float, thrust_n: float, diameter_m: float, density_kg_m3: float) -> float:
-    """The rpm at which a propeller of thrust coefficient ``ct`` gives ``thrust_n`` N (inverse of :func:`thrust_at`)."""
+    """The rpm at which a propeller of thrust coefficient ``ct`` gives ``thrust_n`` N (inverse of
+    :func:`thrust_at`)."""
     return 60.0 * math.sqrt(thrust_n / (ct * density_kg_m3 * diameter_m**4))
 
 
@@ -70,8 +72,8 @@ def thrust_ceiling(rpm_limit: float, diameter_m: float, density_kg_m3: float) ->
 def check_target(
     target_n: float, rpm_limit: float, diameter_m: float, density_kg_m3: float
 ) -> None:
-    """ParameterError (exit 2) naming ``--thrust``, the value and the allowed range for a target that is
-    not a positive finite number or is over :func:`thrust_ceiling`."""
+    """ParameterError (exit 2) naming ``--thrust``, the value and the allowed range for a target
+    that is not a positive finite number or is over :func:`thrust_ceiling`."""
     ceiling = thrust_ceiling(rpm_limit, diameter_m, density_kg_m3)
     if not (math.isfinite(target_n) and 0.0 < target_n <= ceiling):
         raise ParameterError(
@@ -82,7 +84,8 @@ def check_target(
 
 
 def first_rpm(target_n: float, rpm_limit: float, diameter_m: float, density_kg_m3: float) -> float:
-    """The first run's rpm: what CT = ``INITIAL_CT`` needs for ``target_n``, at most ``rpm_limit``."""
+    """The first run's rpm: what CT = ``INITIAL_CT`` needs for ``target_n``, at most
+    ``rpm_limit``."""
     return min(rpm_for(INITIAL_CT, target_n, diameter_m, density_kg_m3), rpm_limit)
 
 
@@ -101,7 +104,8 @@ def _through_origin(run: ThrustRun, target_n: float) -> float:
 
 
 def next_rpm(runs: Sequence[ThrustRun], target_n: float, rpm_limit: float) -> float:
-    """The next rpm to run: the secant on sqrt(T) (see the module doc), clipped to (0, ``rpm_limit``].
+    """The next rpm to run: the secant on sqrt(T) (see the module doc), clipped to (0,
+    ``rpm_limit``].
 
     ParameterError when the last run gives no positive thrust (the propeller pushes the other way
     or not at all: nothing to scale)."""
@@ -129,8 +133,8 @@ def next_rpm(runs: Sequence[ThrustRun], target_n: float, rpm_limit: float) -> fl
 def check_reachable(
     runs: Sequence[ThrustRun], target_n: float, tolerance: float, rpm_limit: float
 ) -> None:
-    """ParameterError naming ``--thrust`` when a run at ``rpm_limit`` fell short of the target by more than
-    ``tolerance``: the range is (0, that run's thrust]."""
+    """ParameterError naming ``--thrust`` when a run at ``rpm_limit`` fell short of the target by
+    more than ``tolerance``: the range is (0, that run's thrust]."""
     at_limit = [run for run in runs if run.rpm >= rpm_limit * (1.0 - 1e-9)]
     if at_limit and at_limit[-1].thrust_n < target_n * (1.0 - tolerance):
         raise ParameterError(
@@ -141,7 +145,8 @@ def check_reachable(
 
 @dataclass(frozen=True)
 class SearchState:
-    """Where the search is: ``done``, the run to report (the closest), and whether it is within the tolerance."""
+    """Where the search is: ``done``, the run to report (the closest), and whether it is within the
+    tolerance."""
 
     done: bool
     best: ThrustRun
@@ -151,8 +156,9 @@ class SearchState:
 def search_state(
     runs: Sequence[ThrustRun], target_n: float, tolerance: float, max_runs: int, rpm_limit: float
 ) -> SearchState:
-    """The stopping rule: done when the last run is within ``tolerance`` of ``target_n`` or ``max_runs``
-    are done; ParameterError when the rpm limit cannot reach the target (:func:`check_reachable`)."""
+    """The stopping rule: done when the last run is within ``tolerance`` of ``target_n`` or
+    ``max_runs`` are done; ParameterError when the rpm limit cannot reach the target
+    (:func:`check_reachable`)."""
     best = closest(runs, target_n)
     if within(runs[-1], target_n, tolerance):
         return SearchState(True, runs[-1], True)

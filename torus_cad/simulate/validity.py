@@ -1,14 +1,15 @@
 """What ``torus-cad simulate`` can serve, and how far a result stays within its physics.
 
-Before any work (ParameterError / BudgetError, exit 2, nothing written): a ``--step`` propeller's tip
-diameter must lie in :data:`STEP_DIAMETER_RANGE_MM`, and its layered (snappyHexMesh) mesh, estimated from
-the solid's surface area by :func:`estimate_layered_cells`, must stay under :data:`LAYERED_CELL_LIMIT`
-(the refusal is worded as ``cfd``'s, :func:`torus_cad.cfd_domain.estimate.over_limit_error`).
+Before any work (ParameterError / BudgetError, exit 2, nothing written): a ``--step`` propeller's
+tip diameter must lie in :data:`STEP_DIAMETER_RANGE_MM`, and its layered (snappyHexMesh) mesh,
+estimated from the solid's surface area by :func:`estimate_layered_cells`, must stay under
+:data:`LAYERED_CELL_LIMIT` (the refusal is worded as ``cfd``'s,
+:func:`torus_cad.cfd_domain.estimate.over_limit_error`).
 
-After the mesh is written and after a run, :func:`validity_flags` lists what lies outside the physics
-the case was set up for: a first prism layer that is not thin against the blade, a chord Reynolds number
-outside the turbulence model's range, a mean y+ far from the one the first layer was sized for. They go
-into the report's ``validity`` and onto the terminal as ``warning:`` lines.
+After the mesh is written and after a run, :func:`validity_flags` lists what lies outside the
+physics the case was set up for: a first prism layer that is not thin against the blade, a chord
+Reynolds number outside the turbulence model's range, a mean y+ far from the one the first layer was
+sized for. They go into the report's ``validity`` and onto the terminal as ``warning:`` lines.
 """
 
 from __future__ import annotations
@@ -86,10 +87,11 @@ def estimate_layered_cells(
     surface_refinement: int,
     cfd: Cfd,
 ) -> int:
-    """The cells of the snappyHexMesh mesh of a propeller of surface ``area_mm2`` (mm^2), axial extent
-    ``z_extent_mm`` and tip diameter ``diameter_mm`` (mm) at ``level`` and ``surface_refinement``, in the domain
-    of ``cfd`` (D units): the background box, the rotating zone at ``ZONE_LEVEL`` and the cells near the surface
-    (:data:`CELLS_PER_SURFACE_FACE` per surface face, x :data:`SURFACE_REFINEMENT_GROWTH` per refinement)."""
+    """The cells of the snappyHexMesh mesh of a propeller of surface ``area_mm2`` (mm^2), axial
+    extent ``z_extent_mm`` and tip diameter ``diameter_mm`` (mm) at ``level`` and
+    ``surface_refinement``, in the domain of ``cfd`` (D units): the background box, the rotating
+    zone at ``ZONE_LEVEL`` and the cells near the surface (:data:`CELLS_PER_SURFACE_FACE` per
+    surface face, x :data:`SURFACE_REFINEMENT_GROWTH` per refinement)."""
     cell = diameter_mm / BACKGROUND_CELLS_PER_D / level_scale(level)
     box = (
         (2.0 * cfd.domain_radius * diameter_mm / cell) ** 2
@@ -110,9 +112,10 @@ def estimate_layered_cells(
 def check_step_propeller(
     step: StepPropeller, level: Level, surface_refinement: int, mesher: Mesher, cfd: Cfd
 ) -> None:
-    """ParameterError (exit 2) when the STEP propeller's tip diameter is outside :data:`STEP_DIAMETER_RANGE_MM`;
-    BudgetError (exit 2) when its layered mesh (``mesher`` snappy) is estimated over :data:`LAYERED_CELL_LIMIT`.
-    ``cfd`` holds the level's domain (D units). Nothing is meshed or written."""
+    """ParameterError (exit 2) when the STEP propeller's tip diameter is outside
+    :data:`STEP_DIAMETER_RANGE_MM`; BudgetError (exit 2) when its layered mesh (``mesher`` snappy)
+    is estimated over :data:`LAYERED_CELL_LIMIT`. ``cfd`` holds the level's domain (D units).
+    Nothing is meshed or written."""
     from torus_cad.kernel.mass_properties import surface_area_mm2
 
     low, high = STEP_DIAMETER_RANGE_MM
@@ -147,9 +150,10 @@ def validity_flags(
     first_layer_m: float | None,
     y_plus: dict[str, Any] | None,
 ) -> list[str]:
-    """What lies outside the physics the case was set up for, one sentence each (empty: nothing). ``diameter_m``
-    the tip diameter (m); ``first_layer_m`` the first prism layer asked of the mesher (m; None: no layers);
-    ``y_plus`` the run's y+ (``min``, ``mean``, ``max``; None before a run)."""
+    """What lies outside the physics the case was set up for, one sentence each (empty: nothing).
+    ``diameter_m`` the tip diameter (m); ``first_layer_m`` the first prism layer asked of the mesher
+    (m; None: no layers); ``y_plus`` the run's y+ (``min``, ``mean``, ``max``; None before a
+    run)."""
     flags = []
     chord = REFERENCE_CHORD_D * diameter_m
     if first_layer_m is not None and first_layer_m > FIRST_LAYER_MAX_CHORD_FRACTION * chord:

@@ -10,8 +10,9 @@ The studio is a service on a network: an uploaded design is read off the event l
 ``torus-cad build FILE`` reads it, and may name only files uploaded with it or in ``--files``
 (torus_cad.studio.uploads); the server's start and stop are torus_cad.studio.server's.
 
-Once a design's exact solid is built, the vortex solver's numbers at the rpm and airspeed entered are
-solved in a process of their own (torus_cad.studio.performance_card); a newer design or point supersedes them.
+Once a design's exact solid is built, the vortex solver's numbers at the rpm and airspeed entered
+are solved in a process of their own (torus_cad.studio.performance_card); a newer design or point
+supersedes them.
 """
 
 from __future__ import annotations
@@ -186,8 +187,8 @@ class Studio:
     def shut_down(self, **_: Any) -> None:
         """Stop the studio's work: cancel the build in progress and the previews not yet started.
 
-        Called when the server exits, and by :func:`torus_cad.studio.server.serve` on its way out; a second
-        call does nothing more.
+        Called when the server exits, and by :func:`torus_cad.studio.server.serve` on its way out; a
+        second call does nothing more.
 
         Args:
             **_: what the server's exit event passes; not used.
@@ -425,7 +426,8 @@ class Studio:
         task.add_done_callback(_log_failure)
 
     async def _open_upload(self, uploads: Sequence[Any]) -> None:
-        """Read the upload in the preview's thread: the event loop keeps serving every other client."""
+        """Read the upload in the preview's thread: the event loop keeps serving every other
+        client."""
         loop = asyncio.get_running_loop()
         try:
             params = await loop.run_in_executor(self._previewer, self._read_upload, uploads)
@@ -442,7 +444,8 @@ class Studio:
             self.state.update(values)
 
     def _read_upload(self, uploads: Sequence[Any]) -> PropellerParameters:
-        """The design of an upload, in a new folder of the studio's (:func:`torus_cad.studio.uploads.read_upload`)."""
+        """The design of an upload, in a new folder of the studio's
+        (:func:`torus_cad.studio.uploads.read_upload`)."""
         self._uploads += 1
         read_only = [
             panel_field.key for panel_field in self.fields.values() if panel_field.read_only
@@ -453,7 +456,8 @@ class Studio:
 
 
 def _stage_label(name: str) -> str:
-    """Words for a stage of the build (torus_cad.runtime.stages), or the name of the studio's own step."""
+    """Words for a stage of the build (torus_cad.runtime.stages), or the name of the studio's own
+    step."""
     return Stage(name).label if name in Stage.__members__.values() else name.replace("_", " ")
 
 

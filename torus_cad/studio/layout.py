@@ -1,4 +1,5 @@
-"""The studio page's layout (Vuetify 3 widgets): panel on the left, the 3D view, readouts and downloads.
+"""The studio page's layout (Vuetify 3 widgets): panel on the left, the 3D view, readouts and
+downloads.
 
 The parameter fields are generated from the panel's groups (torus_cad.studio.panel), so every
 parameter of the schema gets a field without being listed here.
@@ -48,7 +49,8 @@ def _js_key(text: str) -> str:
 
 
 def _js_list(items: tuple[str, ...]) -> str:
-    """A JavaScript array literal of strings (trame reads a Python list as a state name and default)."""
+    """A JavaScript array literal of strings (trame reads a Python list as a state name and
+    default)."""
     return "[" + ", ".join(f"'{_js_key(item)}'" for item in items) + "]"
 
 
@@ -289,7 +291,8 @@ def _operating_point_field(name: str, label: str, unit: str) -> None:
 
 
 def _performance() -> None:
-    """The vortex solver's numbers at the rpm and airspeed entered, and its loading plot (torus_cad.studio.performance_card)."""
+    """The vortex solver's numbers at the rpm and airspeed entered, and its loading plot
+    (torus_cad.studio.performance_card)."""
     with v3.VCard(classes="ma-2", elevation=2, id="performance"):
         v3.VCardTitle("Performance (vortex solver)", classes="text-subtitle-1")
         _operating_point_field("perf_rpm", "rpm", "rpm")

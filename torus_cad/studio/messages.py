@@ -1,6 +1,6 @@
 """The messages between the studio and its child processes (torus_cad.studio.worker starts them;
-torus_cad.studio.exact builds in them, torus_cad.studio.vortex_run solves in them), and how a child reports
-its own failure: kernel-free, so that the server side imports no kernel."""
+torus_cad.studio.exact builds in them, torus_cad.studio.vortex_run solves in them), and how a child
+reports its own failure: kernel-free, so that the server side imports no kernel."""
 
 from __future__ import annotations
 
@@ -31,7 +31,8 @@ class SolidResult:
     Attributes:
         parts: one mesh per part (the hub first, then blade 0, 1, ...).
         stage_seconds: seconds per pipeline stage, plus ``display_mesh`` (the tessellation above).
-        fuse_route: how the blades were joined, in words (torus_cad.kernel.fuse.FuseRoute.description).
+        fuse_route: how the blades were joined, in words
+            (torus_cad.kernel.fuse.FuseRoute.description).
 
     The solid is valid: a build that is not one valid, closed solid fails instead.
     """
@@ -47,8 +48,8 @@ REPORT_KEYS = ("thrust_n", "power_w", "figure_of_merit", "efficiency", "low_conf
 
 @dataclass(frozen=True)
 class PerformanceRequest:
-    """One operating point of one design: the design (``PropellerParameters.to_dict()``), rpm, airspeed
-    m/s, and the folder the loading plot is drawn in."""
+    """One operating point of one design: the design (``PropellerParameters.to_dict()``), rpm,
+    airspeed m/s, and the folder the loading plot is drawn in."""
 
     request_id: int
     design: dict[str, Any]
@@ -65,9 +66,10 @@ def failures_reported(
     memory_limit_bytes: int | None,
     memory_advice: str = "",
 ) -> Iterator[None]:
-    """Inside the block, an allocation that fails or an unexpected error is sent as ``("failed", request_id,
-    reason)`` (the page shows it; the child never dies silently); ``connection`` is closed after it.
-    ``what`` names the work ("the exact build"), ``memory_advice`` what to lower when memory runs out."""
+    """Inside the block, an allocation that fails or an unexpected error is sent as ``("failed",
+    request_id, reason)`` (the page shows it; the child never dies silently); ``connection`` is
+    closed after it. ``what`` names the work ("the exact build"), ``memory_advice`` what to lower
+    when memory runs out."""
     try:
         yield
     except MemoryError:

@@ -110,13 +110,15 @@ class PanelGroup:
 
 
 def state_name(key: str, element: int | None = None) -> str:
-    """The page's state name of a dotted key (and vector element): ``hub.radius`` -> ``p_hub__radius``."""
+    """The page's state name of a dotted key (and vector element): ``hub.radius`` ->
+    ``p_hub__radius``."""
     name = STATE_PREFIX + key.replace(".", "__")
     return name if element is None else f"{name}__{element}"
 
 
 def _nice_step(span: float) -> float:
-    """A round step (1, 2 or 5 times a power of ten) giving at most SLIDER_STEPS steps over ``span``."""
+    """A round step (1, 2 or 5 times a power of ten) giving at most SLIDER_STEPS steps over
+    ``span``."""
     raw = span / SLIDER_STEPS
     power = 10.0 ** math.floor(math.log10(raw))
     return next(factor * power for factor in (1.0, 2.0, 5.0, 10.0) if factor * power >= raw)

@@ -2,18 +2,19 @@
 efficiency) at the rpm and airspeed entered, and its loading plot.
 
 The rpm and airspeed are checked as ``simulate --solver vortex`` checks them
-(:func:`torus_cad.simulate.settings.check_operating_point`, the design's tip diameter with its targets);
-a refused value puts the one-line reason under its field and keeps the last numbers. A good point is
-solved in its own process (:class:`torus_cad.studio.worker.ProcessRunner`, forked from the builds'
-forkserver, running :func:`torus_cad.studio.vortex_run.run_vortex`): the event loop only waits on a
-pipe, a newer request kills the process of the one it supersedes, and a message of an older request
-is dropped, so only the latest point's numbers are ever shown. Its messages::
+(:func:`torus_cad.simulate.settings.check_operating_point`, the design's tip diameter with its
+targets); a refused value puts the one-line reason under its field and keeps the last numbers. A
+good point is solved in its own process (:class:`torus_cad.studio.worker.ProcessRunner`, forked from
+the builds' forkserver, running :func:`torus_cad.studio.vortex_run.run_vortex`): the event loop only
+waits on a pipe, a newer request kills the process of the one it supersedes, and a message of an
+older request is dropped, so only the latest point's numbers are ever shown. Its messages::
 
     ("result", request_id, {"report": {...}, "png": bytes})   the numbers and the loading plot (PNG)
     ("failed", request_id, "one-line reason")                 e.g. KernelError: the solve did not converge
 
-The solve starts once the design's exact solid is built (the studio calls :meth:`Performance.set_design`),
-so it never competes with the build for the CPU, and never before the page is served.
+The solve starts once the design's exact solid is built (the studio calls
+:meth:`Performance.set_design`), so it never competes with the build for the CPU, and never before
+the page is served.
 """
 
 from __future__ import annotations
@@ -86,8 +87,9 @@ def state_defaults() -> dict[str, Any]:
 
 
 def check_point(rpm: Any, airspeed: Any, params: PropellerParameters) -> tuple[float, float]:
-    """(rpm, airspeed m/s) from the page's values, in ``simulate --solver vortex``'s ranges for ``params``;
-    :class:`PointRefused` naming the field, the value and the allowed range otherwise."""
+    """(rpm, airspeed m/s) from the page's values, in ``simulate --solver vortex``'s ranges for
+    ``params``; :class:`PointRefused` naming the field, the value and the allowed range
+    otherwise."""
     from torus_cad.simulate.settings import OperatingPoint, check_operating_point
     from torus_cad.vortex.pipeline import tip_diameter_m
 
@@ -115,7 +117,8 @@ def _number(name: str, value: Any, unit: str) -> float:
 def readouts(
     report: dict[str, Any], rpm: float, airspeed_m_s: float, strips: int
 ) -> dict[str, Any]:
-    """The card's texts for a solved point: thrust N, power W, figure of merit (still air) or efficiency."""
+    """The card's texts for a solved point: thrust N, power W, figure of merit (still air) or
+    efficiency."""
     axial = airspeed_m_s > 0.0
     merit = report["efficiency"] if axial else report["figure_of_merit"]
     doubtful = report["low_confidence_strips"]
@@ -136,7 +139,8 @@ def readouts(
 class Performance:
     """The performance card's state and its solves, for one studio page (module doc).
 
-    ``state``: the trame state holding :func:`state_defaults`' keys; ``workdir``: the studio's folder.
+    ``state``: the trame state holding :func:`state_defaults`' keys; ``workdir``: the studio's
+    folder.
     """
 
     def __init__(self, state: Any, workdir: Path) -> None:
@@ -165,7 +169,8 @@ class Performance:
         self.solve()
 
     def hold(self) -> None:
-        """A new design is being built: stop the solve of the old one and show that numbers are coming."""
+        """A new design is being built: stop the solve of the old one and show that numbers are
+        coming."""
         self._runner.cancel()
         self._show_computing()
 

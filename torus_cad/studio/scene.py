@@ -1,4 +1,5 @@
-"""What the studio draws, as plain arrays: the kernel-free preview of a design and the parts' meshes.
+"""What the studio draws, as plain arrays: the kernel-free preview of a design and the parts'
+meshes.
 
 The preview is the spec's own surface (torus_cad.geometry) at the design's resolution, run
 through the same pre-kernel checks as a build, so a design the build would refuse is refused
@@ -101,8 +102,8 @@ def cylinder_mesh(radius: float, length: float, segments: int = HUB_SEGMENTS) ->
 
 
 def preview_scene(params: PropellerParameters) -> PreviewScene:
-    """The preview of ``params``: hub cylinder and every blade's surface mesh, checked at the design's
-    resolution and drawn at most at :data:`PREVIEW_MAX_SAMPLES`.
+    """The preview of ``params``: hub cylinder and every blade's surface mesh, checked at the
+    design's resolution and drawn at most at :data:`PREVIEW_MAX_SAMPLES`.
 
     The design targets (diameter, pitch, NACA designation) are applied and the blade checked as a
     build does them, so a design the build refuses raises the build's one-line GeometryError or

@@ -23,7 +23,8 @@ LOCAL_HOSTS = ("127.0.0.1", "localhost", "::1")
 
 @contextlib.contextmanager
 def _trame_ignores_command_line() -> Iterator[None]:
-    """trame parses sys.argv (and $TRAME_ARGS) itself on start; the studio passes everything explicitly."""
+    """trame parses sys.argv (and $TRAME_ARGS) itself on start; the studio passes everything
+    explicitly."""
     saved = os.environ.get("TRAME_ARGS")
     os.environ["TRAME_ARGS"] = ""
     try:
@@ -48,8 +49,8 @@ def start_message(host: str, port: int) -> str:
 
 
 def check_host(host: str) -> str:
-    """``host`` if it names an address to listen on; ParameterError for an empty one (it would bind every
-    interface while the start line showed none)."""
+    """``host`` if it names an address to listen on; ParameterError for an empty one (it would bind
+    every interface while the start line showed none)."""
     if not host.strip():
         raise ParameterError(
             "--host must name an address to listen on, e.g. 127.0.0.1 (this machine only) or "
@@ -64,12 +65,13 @@ def serve(
     host: str = "127.0.0.1",
     files_folder: Path | None = None,
 ) -> int:
-    """Serve the studio for ``design`` until a signal stops it (blocking); the exit code, 128 + the signal.
+    """Serve the studio for ``design`` until a signal stops it (blocking); the exit code, 128 + the
+    signal.
 
-    ``files_folder``: a folder whose files uploaded designs may name (besides the files uploaded with them).
-    OutputError if the port is in use, ParameterError for an empty ``host``. SIGINT, SIGTERM and SIGHUP
-    stop the server's loop (its handlers, not the server's own, which would end with exit 0); the
-    builds and the studio's folder are removed on the way out.
+    ``files_folder``: a folder whose files uploaded designs may name (besides the files uploaded
+    with them). OutputError if the port is in use, ParameterError for an empty ``host``. SIGINT,
+    SIGTERM and SIGHUP stop the server's loop (its handlers, not the server's own, which would end
+    with exit 0); the builds and the studio's folder are removed on the way out.
     """
     from trame.app import get_server
 

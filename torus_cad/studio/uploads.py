@@ -1,8 +1,8 @@
-"""Designs uploaded to the studio: read from their bytes by the same path as ``torus-cad build FILE``
-(torus_cad.parameters.config_file: byte order mark, nesting and number limits, the TOML reader, the
-schema), and allowed to name only files uploaded with them or files in the folder given with
-``--files``, never another path on the server. Uploaded files are written under the studio's own
-folder by their base names; nothing on the page is ever used as a path.
+"""Designs uploaded to the studio: read from their bytes by the same path as ``torus-cad build
+FILE`` (torus_cad.parameters.config_file: byte order mark, nesting and number limits, the TOML
+reader, the schema), and allowed to name only files uploaded with them or files in the folder given
+with ``--files``, never another path on the server. Uploaded files are written under the studio's
+own folder by their base names; nothing on the page is ever used as a path.
 """
 
 from __future__ import annotations
@@ -73,7 +73,8 @@ def upload_files(uploads: Sequence[Any]) -> dict[str, bytes]:
 def read_upload(
     uploads: Sequence[Any], folder: Path, file_keys: Sequence[str], files_folder: Path | None
 ) -> PropellerParameters:
-    """The design of an upload (one TOML file and the files it names), read as ``torus-cad build FILE`` reads it.
+    """The design of an upload (one TOML file and the files it names), read as ``torus-cad build
+    FILE`` reads it.
 
     The files are written to ``folder`` (new) under their base names; the design may name, in its
     fields ``file_keys`` (dotted keys), only them or files in ``files_folder``. The folder of a
@@ -109,8 +110,8 @@ def _only_uploaded_files(
     file_keys: Sequence[str],
     files_folder: Path | None,
 ) -> dict[str, Any]:
-    """``table`` with each file it names made the path of an uploaded file (or one in ``files_folder``);
-    ParameterError for any other path, before anything opens it."""
+    """``table`` with each file it names made the path of an uploaded file (or one in
+    ``files_folder``); ParameterError for any other path, before anything opens it."""
     table = {**table}
     for key in file_keys:
         *parents, leaf = key.split(".")

@@ -39,7 +39,8 @@ def part_color(part: int, blades: int) -> tuple[float, float, float]:
 
 
 class PropellerView:
-    """A render window, never rendered on the server, holding the propeller's parts and section curves."""
+    """A render window, never rendered on the server, holding the propeller's parts and section
+    curves."""
 
     def __init__(self) -> None:
         self.renderer = vtkRenderer()
@@ -74,7 +75,8 @@ class PropellerView:
             self._framed = True
 
     def show_sections(self, sections: Sequence[NDArray[np.float64]], blades: int) -> None:
-        """Replace the section curves: ``sections[i]`` is blade i's ``(sections, points, 3)`` array."""
+        """Replace the section curves: ``sections[i]`` is blade i's ``(sections, points, 3)``
+        array."""
         curves = [ring for blade in sections for ring in blade]
         counts = [len(blade) for blade in sections]
         colors = (

@@ -1,6 +1,7 @@
 """One operating point of the vortex solver for the studio, in the solve's process
-(torus_cad.studio.performance_card starts it): the numbers and the loading plot ``simulate --solver vortex``
-draws, sent back over a pipe. Runs in the worker process, never in the server: it imports the solver.
+(torus_cad.studio.performance_card starts it): the numbers and the loading plot ``simulate --solver
+vortex`` draws, sent back over a pipe. Runs in the worker process, never in the server: it imports
+the solver.
 """
 
 from __future__ import annotations
@@ -19,8 +20,9 @@ def run_vortex(
     connection: multiprocessing.connection.Connection,
     memory_limit_bytes: int | None = None,
 ) -> None:
-    """Solve ``request`` and send ``("result", id, {"report", "strips", "png"})``, or ``("failed", id, reason)``
-    with the one line of the error (a solve that does not converge raises KernelError).
+    """Solve ``request`` and send ``("result", id, {"report", "strips", "png"})``, or ``("failed",
+    id, reason)`` with the one line of the error (a solve that does not converge raises
+    KernelError).
 
     ``memory_limit_bytes``: the process's memory limit, named when an allocation fails.
     """

@@ -18,9 +18,9 @@ the child, never in the server) and is killed after :data:`BUILD_TIME_LIMIT_S` s
 (a "failed" message says so). Whatever a design asks for, the server only waits on a pipe.
 
 The machinery (one process per request, the newest killing the older, a time and memory limit) is
-:class:`ProcessRunner`'s; the studio's vortex solves (torus_cad.studio.performance_card) run through it too.
-Only the parent side (:class:`ProcessRunner`, :class:`BuildRunner`) runs in the server process; it
-imports no kernel.
+:class:`ProcessRunner`'s; the studio's vortex solves (torus_cad.studio.performance_card) run through
+it too. Only the parent side (:class:`ProcessRunner`, :class:`BuildRunner`) runs in the server
+process; it imports no kernel.
 """
 
 from __future__ import annotations
@@ -46,13 +46,15 @@ BUILD_MEMORY_LIMIT_BYTES = 3 << 30
 
 
 class ProcessRunner:
-    """Runs at most one request at a time, each in its own process; a new request kills the one running.
+    """Runs at most one request at a time, each in its own process; a new request kills the one
+    running.
 
-    ``on_message(kind, request_id, payload)`` is called on the event loop for every message the child
-    sends, and with ``("failed", request_id, reason)`` if the process dies without finishing (a message of
-    one of ``final_kinds``) or outlives ``time_limit_s`` seconds (``time_out_reason(time_limit_s)`` says so).
-    ``target(request, connection, memory_limit_bytes)`` runs in the child: a module-level function that
-    imports what it needs (the server side imports no kernel and no solver).
+    ``on_message(kind, request_id, payload)`` is called on the event loop for every message the
+    child sends, and with ``("failed", request_id, reason)`` if the process dies without finishing
+    (a message of one of ``final_kinds``) or outlives ``time_limit_s`` seconds
+    (``time_out_reason(time_limit_s)`` says so). ``target(request, connection, memory_limit_bytes)``
+    runs in the child: a module-level function that imports what it needs (the server side imports
+    no kernel and no solver).
     """
 
     def __init__(
@@ -153,7 +155,8 @@ class ProcessRunner:
 
 
 class BuildRunner(ProcessRunner):
-    """The exact builds (module doc): ``submit`` a :class:`BuildRequest`; its messages in the module doc's order."""
+    """The exact builds (module doc): ``submit`` a :class:`BuildRequest`; its messages in the module
+    doc's order."""
 
     def __init__(
         self,
@@ -179,7 +182,8 @@ class BuildRunner(ProcessRunner):
 
 
 def time_out_reason(what: str, advice: str) -> Callable[[float], str]:
-    """The page's line for ``what`` ("the exact build") stopped at its time limit (s), with ``advice``."""
+    """The page's line for ``what`` ("the exact build") stopped at its time limit (s), with
+    ``advice``."""
     return lambda limit_s: (
         f"{what} took longer than {limit_s:g} s, the limit in the studio, and was stopped; {advice}"
     )
@@ -207,8 +211,8 @@ def run_bounded(
     connection: multiprocessing.connection.Connection,
     memory_limit_bytes: int,
 ) -> None:
-    """``run(request, connection, memory_limit_bytes)`` in this child process, its data memory bounded to
-    ``memory_limit_bytes`` (bytes) first."""
+    """``run(request, connection, memory_limit_bytes)`` in this child process, its data memory
+    bounded to ``memory_limit_bytes`` (bytes) first."""
     import resource
 
     resource.setrlimit(resource.RLIMIT_DATA, (memory_limit_bytes, memory_limit_bytes))

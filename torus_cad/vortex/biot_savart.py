@@ -1,6 +1,6 @@
-"""Velocity induced by straight vortex segments of unit strength (Biot-Savart), vectorised over points
-and segments. Hand-written: a few lines of numpy, where a vortex-method package would bring a whole
-solver whose wake and rotor model are not this one's."""
+"""Velocity induced by straight vortex segments of unit strength (Biot-Savart), vectorised over
+points and segments. Hand-written: a few lines of numpy, where a vortex-method package would bring a
+whole solver whose wake and rotor model are not this one's."""
 
 from __future__ import annotations
 
@@ -21,10 +21,11 @@ def _kernel(
     ends: NDArray[np.float64],
     core_m: NDArray[np.float64] | None = None,
 ) -> tuple[NDArray[np.float64], ...]:
-    """The three components ``(P, S)`` of r1 x r2 and the factor ``(P, S)`` that scales them into the
-    velocity of unit segments (zero on a segment's line; with ``core_m`` ``(S,)``, a vortex core of that
-    radius: |r1 x r2|^2 + core^2 |r0|^2 in the denominator, so a line passing through a point induces
-    a finite velocity there)."""
+    """The three components ``(P, S)`` of r1 x r2 and the factor ``(P, S)`` that scales them into
+    the velocity of unit segments (zero on a segment's line; with ``core_m`` ``(S,)``, a vortex core
+    of that
+    radius: |r1 x r2|^2 + core^2 |r0|^2 in the denominator, so a line passing through a point
+    induces a finite velocity there)."""
     r1 = [points[:, k, None] - starts[None, :, k] for k in range(3)]
     r2 = [points[:, k, None] - ends[None, :, k] for k in range(3)]
     r0 = ends - starts
@@ -62,7 +63,8 @@ def normal_influence(
     ends: NDArray[np.float64],
     core_m: NDArray[np.float64] | None = None,
 ) -> NDArray[np.float64]:
-    """``(P, S)``: the velocity each unit segment induces at each point along that point's normal."""
+    """``(P, S)``: the velocity each unit segment induces at each point along that point's
+    normal."""
     out = np.empty((len(points), len(starts)))
     size = _chunk(len(points))
     for first in range(0, len(starts), size):
@@ -83,7 +85,8 @@ def induced_velocity(
     circulation: NDArray[np.float64],
     core_m: NDArray[np.float64] | None = None,
 ) -> NDArray[np.float64]:
-    """``(P, 3)``: the velocity at ``points`` induced by segments carrying ``circulation`` ``(S,)``."""
+    """``(P, 3)``: the velocity at ``points`` induced by segments carrying ``circulation``
+    ``(S,)``."""
     out = np.zeros((len(points), 3))
     size = _chunk(len(points))
     for first in range(0, len(starts), size):

@@ -1,21 +1,23 @@
-"""The rotor's vortex lattice: rings on blade 0's camber surface, their images on the other blades, and
-the helical wake shed from the whole trailing edge (SI units: m, s).
+"""The rotor's vortex lattice: rings on blade 0's camber surface, their images on the other blades,
+and the helical wake shed from the whole trailing edge (SI units: m, s).
 
-Rings (Katz and Plotkin, ch. 12): the camber surface's panels, each ring's leading segment a quarter of
-its panel behind the panel's leading edge (the last ring ends on the trailing edge), its collocation
-point at three quarters of the panel, where the flow may not cross the surface. A strip's last ring
-and its wake form a horseshoe: the trailing-edge segment cancels against the wake's first one in a
-steady wake of constant strength, so each strip sheds two helical lines from its trailing-edge nodes. Both ends of a toroidal blade sit in the hub: their rings
-shed into the wake like any other; no image of the hub is modelled.
+Rings (Katz and Plotkin, ch. 12): the camber surface's panels, each ring's leading segment a quarter
+of its panel behind the panel's leading edge (the last ring ends on the trailing edge), its
+collocation point at three quarters of the panel, where the flow may not cross the surface. A
+strip's last ring and its wake form a horseshoe: the trailing-edge segment cancels against the
+wake's first one in a steady wake of constant strength, so each strip sheds two helical lines from
+its trailing-edge nodes. Both ends of a toroidal blade sit in the hub: their rings shed into the
+wake like any other; no image of the hub is modelled.
 
 A strip sheds from the edge its flow leaves by: the trailing edge, or the leading edge where the air
-meets the trailing edge first (a toroidal loop's return leg turns its trailing edge into the rotation);
-each strip sheds its own two lines.
+meets the trailing edge first (a toroidal loop's return leg turns its trailing edge into the
+rotation); each strip sheds its own two lines.
 
 The wake is prescribed: in the blade's frame its lines turn against the rotation at the rotor's rate
 and travel downstream at the free stream plus the induced velocity on the axis of a uniformly loaded
 actuator disk, v (1 + z / sqrt(z^2 + R^2)) (v at the disk, 2 v far downstream), contracting as the
-slipstream's mass flow requires. v comes from the thrust by momentum theory (:mod:`.solver` iterates).
+slipstream's mass flow requires. v comes from the thrust by momentum theory (:mod:`.solver`
+iterates).
 """
 
 from __future__ import annotations
@@ -42,13 +44,14 @@ class WakeShape:
         growth: ... after which each segment is this much longer than the one before ...
         longest_step_deg: ... up to this turn a segment.
         max_turns: turns at most (a still-air wake of small pitch would need very many).
-        core_chords: the wake lines' vortex core radius, in mean chords, reached one mean chord behind
-            the blade: a line that passes a blade downstream (a toroidal loop's return leg) induces a
-            finite velocity there.
-        free_turns: the wake's first turn follows the flow (relaxed, :mod:`.solver`); False (the default)
-            keeps the whole wake prescribed, its pitch from the momentum-theory inflow: measured, the
-            relaxed turn does not settle on every design (a 4-blade toroidal one) and ranks the toroidal
-            designs and the APC 10x7 SF's static thrust worse (docs/explanation/simulation-accuracy.md).
+        core_chords: the wake lines' vortex core radius, in mean chords, reached one mean chord
+            behind the blade: a line that passes a blade downstream (a toroidal loop's return leg)
+            induces a finite velocity there.
+        free_turns: the wake's first turn follows the flow (relaxed, :mod:`.solver`); False (the
+            default) keeps the whole wake prescribed, its pitch from the momentum-theory inflow:
+            measured, the relaxed turn does not settle on every design (a 4-blade toroidal one) and
+            ranks the toroidal designs and the APC 10x7 SF's static thrust worse
+            (docs/explanation/simulation-accuracy.md).
     """
 
     length_diameters: float = 4.0
@@ -65,13 +68,15 @@ class Lattice:
     """Blade 0's rings and every segment of the rotor (all blades, the wake) with its unknown.
 
     Attributes:
-        grid: ``(K - 1, 2, C + 1, 3)`` m, the rings' corners of each strip on blade 0 (C rings a strip).
+        grid: ``(K - 1, 2, C + 1, 3)`` m, the rings' corners of each strip on blade 0 (C rings a
+            strip).
         collocation / normals: ``(1, (K - 1) C, 3)`` the rings' control points and unit normals.
         starts / ends: ``(S, 3)`` m, every segment of the rotor and its wake.
-        incidence: ``(S, rings)`` sparse: the circulation each segment carries is incidence @ the rings'
-            (a wake line carries its strip's last ring's).
+        incidence: ``(S, rings)`` sparse: the circulation each segment carries is incidence @ the
+            rings' (a wake line carries its strip's last ring's).
         bound_segments: the first this many segments are blade 0's bound ones, one ring's each.
-        core_m: ``(S,)`` each segment's vortex core radius (0 on the blades, the wake's core on the wake).
+        core_m: ``(S,)`` each segment's vortex core radius (0 on the blades, the wake's core on the
+            wake).
         on_blades: ``(S,)`` whether each segment is a blade's (bound) rather than the wake's.
     """
 
@@ -92,8 +97,8 @@ class Lattice:
 
 
 def ring_grid(camber_m: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``(K, C + 1, 3)``: the ring corners of a camber grid ``(K, C + 1, 3)``: each panel's quarter line,
-    and the trailing edge."""
+    """``(K, C + 1, 3)``: the ring corners of a camber grid ``(K, C + 1, 3)``: each panel's quarter
+    line, and the trailing edge."""
     grid = camber_m.copy()
     grid[:, :-1] = camber_m[:, :-1] + 0.25 * (camber_m[:, 1:] - camber_m[:, :-1])
     return grid
@@ -102,11 +107,12 @@ def ring_grid(camber_m: NDArray[np.float64]) -> NDArray[np.float64]:
 def control_points(
     camber_m: NDArray[np.float64],
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Each panel's three-quarter point (mean of its two section lines) and unit normal there: ``(K - 1, C, 3)``
-    each. The normal is square to the span and to the camber line's tangent at the point (the derivative of
-    the parabola through the panel's and a neighbour's nodes), not to the panel's chord: on a curved camber
-    line the chord's slope is the slope half way along the panel, and a lattice of chord normals misses a
-    tenth of the camber's lift at 8 panels (a NACA 4412 mean line on an elliptic wing; tested)."""
+    """Each panel's three-quarter point (mean of its two section lines) and unit normal there:
+    ``(K - 1, C, 3)`` each. The normal is square to the span and to the camber line's tangent at the
+    point (the derivative of the parabola through the panel's and a neighbour's nodes), not to the
+    panel's chord: on a curved camber line the chord's slope is the slope half way along the panel,
+    and a lattice of chord normals misses a tenth of the camber's lift at 8 panels (a NACA 4412 mean
+    line on an elliptic wing; tested)."""
     three_quarter = camber_m[:, :-1] + 0.75 * (camber_m[:, 1:] - camber_m[:, :-1])
     points = 0.5 * (three_quarter[:-1] + three_quarter[1:])
     diagonal_normals = np.cross(
@@ -120,8 +126,9 @@ def control_points(
 
 
 def _camber_tangents(line: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``(K - 1, C, 3)``: the tangent of each strip's mean camber line ``(K - 1, C + 1, 3)`` at three quarters of
-    each panel, from the parabola through three neighbouring nodes (parameter: the distance along the line)."""
+    """``(K - 1, C, 3)``: the tangent of each strip's mean camber line ``(K - 1, C + 1, 3)`` at
+    three quarters of each panel, from the parabola through three neighbouring nodes (parameter: the
+    distance along the line)."""
     chordwise = line.shape[1] - 1
     if chordwise < 2:
         return np.diff(line, axis=1)
@@ -150,8 +157,9 @@ def wake_lines(
     radius_m: float,
     shape: WakeShape,
 ) -> NDArray[np.float64]:
-    """``(N, M + 1, 3)``: the helical lines shed from the trailing-edge nodes ``(N, 3)`` (module doc), in
-    the blade's frame; ``spin`` +1 where the air seems to turn the +theta way past the blade (cw)."""
+    """``(N, M + 1, 3)``: the helical lines shed from the trailing-edge nodes ``(N, 3)`` (module
+    doc), in the blade's frame; ``spin`` +1 where the air seems to turn the +theta way past the
+    blade (cw)."""
     length = shape.length_diameters * 2.0 * radius_m
     base = inflow_m_s + induced_m_s
     if omega_rad_s == 0.0 or base <= 0.0:
@@ -174,8 +182,8 @@ def wake_lines(
 
 
 def _wake_angles(turns: float, shape: WakeShape) -> NDArray[np.float64]:
-    """Angles (rad) of a line's nodes over ``turns`` turns: even steps in the first turn, then each step
-    ``shape.growth`` times the one before, up to ``shape.longest_step_deg``."""
+    """Angles (rad) of a line's nodes over ``turns`` turns: even steps in the first turn, then each
+    step ``shape.growth`` times the one before, up to ``shape.longest_step_deg``."""
     first = 2.0 * np.pi / shape.steps_per_turn
     angles, step = [0.0], first
     end = turns * 2.0 * np.pi
@@ -205,9 +213,9 @@ def _travelled(
 def strip_edges(
     camber_m: NDArray[np.float64], downstream_first: NDArray[np.bool_]
 ) -> NDArray[np.float64]:
-    """``(K - 1, 2, C + 1, 3)``: each strip's two section lines ordered from the edge the flow meets first
-    to the edge it leaves (the trailing edge, or the leading edge where ``downstream_first`` says the
-    flow runs from the trailing edge to the leading edge there: a loop's return leg)."""
+    """``(K - 1, 2, C + 1, 3)``: each strip's two section lines ordered from the edge the flow meets
+    first to the edge it leaves (the trailing edge, or the leading edge where ``downstream_first``
+    says the flow runs from the trailing edge to the leading edge there: a loop's return leg)."""
     pairs = np.stack([camber_m[:-1], camber_m[1:]], axis=1)
     return np.where(downstream_first[:, None, None, None], pairs[:, :, ::-1], pairs)
 
@@ -219,11 +227,12 @@ def rotor_lattice(
     core_m: float,
     core_growth_m: float,
 ) -> Lattice:
-    """The lattice of ``blades`` blades whose blade 0 has the strips ``strips_m`` ``(K - 1, 2, C + 1, 3)``
-    (:func:`strip_edges`) and whose strips shed the lines ``wake`` ``(K - 1, 2, M + 1, 3)`` from the
-    last nodes of their two lines (blade 0's; the others are blade 0's turned by 360 / blades degrees
-    about +z), the wake's lines with a vortex core growing from nothing at the blade to ``core_m`` at
-    ``core_growth_m`` along the line (the near wake stays a sheet at the trailing edge)."""
+    """The lattice of ``blades`` blades whose blade 0 has the strips ``strips_m`` ``(K - 1, 2, C +
+    1, 3)`` (:func:`strip_edges`) and whose strips shed the lines ``wake`` ``(K - 1, 2, M + 1, 3)``
+    from the last nodes of their two lines (blade 0's; the others are blade 0's turned by 360 /
+    blades degrees about +z), the wake's lines with a vortex core growing from nothing at the blade
+    to ``core_m`` at ``core_growth_m`` along the line (the near wake stays a sheet at the trailing
+    edge)."""
     strips, chordwise = strips_m.shape[0], strips_m.shape[2] - 1
     grid = np.stack([ring_grid(pair) for pair in strips_m])  # (K - 1, 2, C + 1, 3)
     controls = [control_points(pair) for pair in strips_m]

@@ -1,4 +1,5 @@
-"""The vortex run's files beside its report: the loading along the blade (CSV and picture) and the wake (picture)."""
+"""The vortex run's files beside its report: the loading along the blade (CSV and picture) and the
+wake (picture)."""
 
 from __future__ import annotations
 
@@ -49,7 +50,8 @@ def write_loading_csv(strips: StripLoads, path: Path) -> Path:
 
 
 def write_loading_plot(strips: StripLoads, path: Path, title: str) -> Path:
-    """Circulation (above) and thrust and torque per unit length (below) against s (matplotlib, Agg)."""
+    """Circulation (above) and thrust and torque per unit length (below) against s (matplotlib,
+    Agg)."""
     import matplotlib
 
     matplotlib.use("Agg")

@@ -1,11 +1,12 @@
-"""The rotor as the FW-H code (torus_cad.acoustics) hears it, from the vortex solution: every blade's surface
-for the thickness noise (its faces carry no pressure) and every lattice ring for the loading noise.
+"""The rotor as the FW-H code (torus_cad.acoustics) hears it, from the vortex solution: every
+blade's surface for the thickness noise (its faces carry no pressure) and every lattice ring for the
+loading noise.
 
-A lifting surface has no thickness and carries a pressure jump, not a pressure: each ring becomes two faces
-on the same spot, normals opposite, with pressures -dp/2 and +dp/2 so that the pair pushes the blade with
-the ring's force across the ring (dp = F . n / A, F the ring's Kutta-Joukowski force, viscous-corrected;
-its part along the surface, leading-edge suction, is left out). Their thickness terms cancel, so the
-thickness noise is the blade surface's alone.
+A lifting surface has no thickness and carries a pressure jump, not a pressure: each ring becomes
+two faces on the same spot, normals opposite, with pressures -dp/2 and +dp/2 so that the pair pushes
+the blade with the ring's force across the ring (dp = F . n / A, F the ring's Kutta-Joukowski force,
+viscous-corrected; its part along the surface, leading-edge suction, is left out). Their thickness
+terms cancel, so the thickness noise is the blade surface's alone.
 """
 
 from __future__ import annotations
@@ -25,8 +26,8 @@ THICKNESS_POINT_STRIDE = 4
 def rotor_surface(
     blade: RotorBlade, lattice: Lattice, ring_force_n: NDArray[np.float64]
 ) -> RotatingSurface:
-    """Every blade's surface and lattice (blade 0's ``ring_force_n`` ``(K - 1, C, 3)`` N on its rings, the
-    others' turned round the axis) as FW-H faces; module doc."""
+    """Every blade's surface and lattice (blade 0's ``ring_force_n`` ``(K - 1, C, 3)`` N on its
+    rings, the others' turned round the axis) as FW-H faces; module doc."""
     centroids, normals, areas, pressure = _blade_faces(blade.surface_m[:, ::THICKNESS_POINT_STRIDE])
     ring_centroids, ring_normals, ring_areas = _ring_faces(lattice.grid)
     jump = np.einsum("ik,ik->i", ring_force_n.reshape(-1, 3), ring_normals) / np.maximum(
@@ -52,8 +53,8 @@ def _turned(
 
 
 def _blade_faces(surface_m: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
-    """The quads between neighbouring sections and points of ``surface_m`` ``(K, P, 3)``: centroids, unit
-    normals out of the blade (into the air), areas, zero pressure."""
+    """The quads between neighbouring sections and points of ``surface_m`` ``(K, P, 3)``: centroids,
+    unit normals out of the blade (into the air), areas, zero pressure."""
     a, b = surface_m[:-1], surface_m[1:]
     c, d = np.roll(b, -1, axis=1), np.roll(a, -1, axis=1)
     area_vector = 0.5 * np.cross(c - a, d - b)
@@ -69,7 +70,8 @@ def _blade_faces(surface_m: NDArray[np.float64]) -> tuple[NDArray[np.float64], .
 
 
 def _ring_faces(grid: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
-    """Each ring of ``grid`` ``(K - 1, 2, C + 1, 3)``: centroid, unit normal and area ``((K - 1) C, ...)``."""
+    """Each ring of ``grid`` ``(K - 1, 2, C + 1, 3)``: centroid, unit normal and area ``((K - 1) C,
+    ...)``."""
     a, b = grid[:, 0, :-1], grid[:, 1, :-1]
     c, d = grid[:, 1, 1:], grid[:, 0, 1:]
     area_vector = (0.5 * np.cross(c - a, d - b)).reshape(-1, 3)

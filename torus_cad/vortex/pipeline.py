@@ -1,7 +1,8 @@
-"""``simulate --solver vortex``: a design's operating point (or the rpm for a thrust) in the vortex solver, published
-as the OpenFOAM route publishes a run (torus_cad.simulate.pipeline): ``<name>_performance.json`` with the same
-keys (thrust, torque, power, CT, CP, efficiency or figure of merit, J, converged, rpm, noise), the loading along
-the blade as CSV and picture, a picture of the wake and the tonal noise, written as one set (all or none).
+"""``simulate --solver vortex``: a design's operating point (or the rpm for a thrust) in the vortex
+solver, published as the OpenFOAM route publishes a run (torus_cad.simulate.pipeline):
+``<name>_performance.json`` with the same keys (thrust, torque, power, CT, CP, efficiency or figure
+of merit, J, converged, rpm, noise), the loading along the blade as CSV and picture, a picture of
+the wake and the tonal noise, written as one set (all or none).
 """
 
 from __future__ import annotations
@@ -56,8 +57,8 @@ SPANWISE_RANGE = VORTEX_SPANWISE_RANGE
 
 @dataclass(frozen=True)
 class VortexRequest:
-    """One vortex run: the design, the operating point, the lattice, the noise's observers, and whether the section
-    polars correct the lattice (``viscous``)."""
+    """One vortex run: the design, the operating point, the lattice, the noise's observers, and
+    whether the section polars correct the lattice (``viscous``)."""
 
     params: PropellerParameters
     point: OperatingPoint
@@ -77,14 +78,16 @@ class VortexRun:
 
 
 def tip_diameter_m(params: PropellerParameters) -> float:
-    """The tip diameter of ``params`` with its design targets applied, m: the one the rpm's range is set by."""
+    """The tip diameter of ``params`` with its design targets applied, m: the one the rpm's range is
+    set by."""
     from torus_cad.cfd_domain.sizes import tip_radius
 
     return 2.0 * tip_radius(resolve_design_targets(params).parameters) / 1000.0
 
 
 def check_vortex_request(request: VortexRequest) -> float:
-    """ParameterError (exit 2) naming the option, the value and the range; the design's tip diameter, m."""
+    """ParameterError (exit 2) naming the option, the value and the range; the design's tip
+    diameter, m."""
     check_count("--chordwise", request.discretisation.chordwise, *CHORDWISE_RANGE)
     check_count("--spanwise", request.discretisation.spanwise, *SPANWISE_RANGE)
     diameter_m = tip_diameter_m(request.params)
@@ -99,8 +102,8 @@ def simulate_vortex(
     stage: Callable[[str], None] | None = None,
     search: dict[str, Any] | None = None,
 ) -> VortexRun:
-    """Solve ``request`` and publish its set into ``out_dir`` (module doc); ``search``: a thrust search's record,
-    kept in the report."""
+    """Solve ``request`` and publish its set into ``out_dir`` (module doc); ``search``: a thrust
+    search's record, kept in the report."""
     request = _with_targets_met(request)
     check_vortex_request(request)
     start = time.perf_counter()
@@ -108,15 +111,16 @@ def simulate_vortex(
 
 
 def _induced_share(result: VortexResult, rpm: float) -> float | None:
-    """``result``'s (at ``rpm``) wake inflow as a share of its tip speed: where the next run of a thrust search
-    starts its wake iteration (the share hardly moves with the rpm); None for a rotor at rest."""
+    """``result``'s (at ``rpm``) wake inflow as a share of its tip speed: where the next run of a
+    thrust search starts its wake iteration (the share hardly moves with the rpm); None for a rotor
+    at rest."""
     tip_speed = rpm * math.pi / 30.0 * result.blade.tip_radius_m
     return result.inviscid.induced_m_s / tip_speed if tip_speed > 0.0 else None
 
 
 def _with_targets_met(request: VortexRequest) -> VortexRequest:
-    """``request`` with its design's targets (diameter, pitch, airfoil.naca) applied once, not at every run of a
-    thrust search (the refit takes about a second)."""
+    """``request`` with its design's targets (diameter, pitch, airfoil.naca) applied once, not at
+    every run of a thrust search (the refit takes about a second)."""
     return dataclasses.replace(request, params=resolve_design_targets(request.params).parameters)
 
 
@@ -140,9 +144,10 @@ def vortex_thrust_search(
     tolerance: float = DEFAULT_TOLERANCE,
     max_runs: int = DEFAULT_MAX_RUNS,
 ) -> VortexRun:
-    """The rpm at which ``request``'s design gives ``thrust_n`` N within ``tolerance`` of it, found by the OpenFOAM
-    route's search (torus_cad.simulate.thrust_target: the first rpm from a plausible CT, then secant steps on
-    sqrt(thrust)), published as :func:`simulate_vortex` publishes one run, the search in its report."""
+    """The rpm at which ``request``'s design gives ``thrust_n`` N within ``tolerance`` of it, found
+    by the OpenFOAM route's search (torus_cad.simulate.thrust_target: the first rpm from a plausible
+    CT, then secant steps on sqrt(thrust)), published as :func:`simulate_vortex` publishes one run,
+    the search in its report."""
     request = _with_targets_met(request)
     diameter_m = check_vortex_request(request)
     density = request.point.fluid.density_kg_m3
@@ -352,8 +357,8 @@ def _report(request: VortexRequest, result: VortexResult, start: float) -> dict[
 
 
 def vortex_summary_lines(run: VortexRun) -> list[str]:
-    """The paths written and the designer's numbers, as the OpenFOAM route prints them; a warning line where the
-    polars are out of their confident range."""
+    """The paths written and the designer's numbers, as the OpenFOAM route prints them; a warning
+    line where the polars are out of their confident range."""
     from torus_cad.simulate.cli_output import noise_line, thrust_search_lines
 
     report = run.report

@@ -1,9 +1,9 @@
-"""Section polars at each strip's own Reynolds number, from NeuralFoil (a neural network trained on XFOIL,
-pure numpy: it takes any coordinates and says how confident it is).
+"""Section polars at each strip's own Reynolds number, from NeuralFoil (a neural network trained on
+XFOIL, pure numpy: it takes any coordinates and says how confident it is).
 
-A strip's polar is the mean of its two sections' (each section's shape in its own plane, chord 1). Where a
-strip's flow meets the trailing edge first (a toroidal loop's return leg), its sections are turned round:
-the polar is that of the shape met from its trailing edge.
+A strip's polar is the mean of its two sections' (each section's shape in its own plane, chord 1).
+Where a strip's flow meets the trailing edge first (a toroidal loop's return leg), its sections are
+turned round: the polar is that of the shape met from its trailing edge.
 """
 
 from __future__ import annotations
@@ -53,8 +53,9 @@ class Polar:
 
     @property
     def lift_slope_per_deg(self) -> float:
-        """The slope of cl over the linear range (LINEAR_RANGE_DEG above the zero-lift angle), least squares through
-        the zero-lift angle; at least a tenth of thin-airfoil theory's 2 pi per radian."""
+        """The slope of cl over the linear range (LINEAR_RANGE_DEG above the zero-lift angle), least
+        squares through the zero-lift angle; at least a tenth of thin-airfoil theory's 2 pi per
+        radian."""
         zero = self.zero_lift_deg
         window = (self.alpha_deg >= zero) & (self.alpha_deg <= zero + LINEAR_RANGE_DEG)
         offset = self.alpha_deg[window] - zero

@@ -1,10 +1,10 @@
-"""A design's blade as the vortex solver sees it: its camber surface outside the hub, in metres, and its
-sections' shapes for the polars.
+"""A design's blade as the vortex solver sees it: its camber surface outside the hub, in metres, and
+its sections' shapes for the polars.
 
 A toroidal blade's lattice spans the centerline from where it leaves the hub's cylinder to where it
-enters it again (both ends attached to the hub, no free tip); a conventional blade's, its station table
-from the root station to the tip. A 'ccw' design is the mirror image of the 'cw' one (y -> -y), turning
-the other way.
+enters it again (both ends attached to the hub, no free tip); a conventional blade's, its station
+table from the root station to the tip. A 'ccw' design is the mirror image of the 'cw' one (y ->
+-y), turning the other way.
 """
 
 from __future__ import annotations
@@ -60,7 +60,8 @@ class RotorBlade:
         s: ``(K,)`` the sections' centerline parameters.
         blades: blade count; spin: +1 for 'cw' (clockwise seen from +z), -1 for 'ccw'.
         tip_radius_m: the largest radius of the blade surface.
-        surface_m: ``(K, P, 3)`` the blade's surface (the K sections' P points each), m: its thickness noise.
+        surface_m: ``(K, P, 3)`` the blade's surface (the K sections' P points each), m: its
+            thickness noise.
     """
 
     camber_m: NDArray[np.float64]
@@ -75,7 +76,8 @@ class RotorBlade:
 
 def rotor_blade(params: PropellerParameters, discretisation: Discretisation) -> RotorBlade:
     """Blade 0 of ``params`` sampled for ``discretisation`` (module doc), with its design targets
-    (``diameter``, ``pitch``, ``airfoil.naca``) applied as the build applies them: the blade that is built."""
+    (``diameter``, ``pitch``, ``airfoil.naca``) applied as the build applies them: the blade that is
+    built."""
     params = resolve_design_targets(params).parameters
     sections = discretisation.spanwise + 1
     surface = _surface(params, sections)
@@ -107,7 +109,8 @@ def _surface(params: PropellerParameters, sections: int) -> BladeSurface:
 
 
 def _outside_the_hub(points: object, hub_radius_mm: float) -> tuple[float, float]:
-    """The centerline parameters where the centerline first leaves the hub's cylinder and last enters it."""
+    """The centerline parameters where the centerline first leaves the hub's cylinder and last
+    enters it."""
     s = np.linspace(0.0, 1.0, _HUB_CROSSING_SAMPLES)
 
     def outside(values: NDArray[np.float64]) -> NDArray[np.bool_]:

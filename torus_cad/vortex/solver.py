@@ -1,14 +1,15 @@
 """The steady lifting-surface solve of a rotor in the blade's frame (SI units).
 
-For a prescribed wake (:mod:`.lattice`): the rings' circulations that let no flow through any control
-point, (V_kinematic + v_induced) . n = 0, with V_kinematic = -V_inf z + spin Omega z x r (the air's
-velocity seen from the turning blade); then the Kutta-Joukowski force rho Gamma V x dl on every bound
-bound segment (where two rings share a side, both carry their circulation there), at the velocity the whole lattice induces at its midpoint. The wake's induced
-velocity comes from the thrust by momentum theory, v = -V/2 + sqrt((V/2)^2 + T / (2 rho A)), A the
-tip circle's area; wake and solve are iterated until that velocity changes by less than
-:data:`INDUCED_TOLERANCE` of the tip speed. Between iterations the thrust is the Kutta-Joukowski force at
-the kinematic velocity alone (no Biot-Savart sum) times the ratio of the full force to it on the last wake
-where the full sum was made; the iteration ends only where that ratio holds on the final wake too.
+For a prescribed wake (:mod:`.lattice`): the rings' circulations that let no flow through any
+control point, (V_kinematic + v_induced) . n = 0, with V_kinematic = -V_inf z + spin Omega z x r
+(the air's velocity seen from the turning blade); then the Kutta-Joukowski force rho Gamma V x dl on
+every bound bound segment (where two rings share a side, both carry their circulation there), at the
+velocity the whole lattice induces at its midpoint. The wake's induced velocity comes from the
+thrust by momentum theory, v = -V/2 + sqrt((V/2)^2 + T / (2 rho A)), A the tip circle's area; wake
+and solve are iterated until that velocity changes by less than :data:`INDUCED_TOLERANCE` of the tip
+speed. Between iterations the thrust is the Kutta-Joukowski force at the kinematic velocity alone
+(no Biot-Savart sum) times the ratio of the full force to it on the last wake where the full sum was
+made; the iteration ends only where that ratio holds on the final wake too.
 """
 
 from __future__ import annotations
@@ -55,9 +56,11 @@ class Inviscid:
         circulation: ``(K - 1, C)`` m^2/s, each ring's.
         force_n: ``(K - 1, C, 3)`` N, the force on each ring's bound segments (blade 0).
         moment_nm: ``(K - 1, C, 3)`` N m, their moment about the origin.
-        thrust_n / torque_nm: the rotor's (all blades): thrust along +z, torque resisting the rotation.
+        thrust_n / torque_nm: the rotor's (all blades): thrust along +z, torque resisting the
+            rotation.
         induced_m_s: the wake's induced velocity at the disk (momentum theory).
-        iterations: wake iterations and relaxation sweeps; change: the last change the iteration measured.
+        iterations: wake iterations and relaxation sweeps; change: the last change the iteration
+            measured.
     """
 
     circulation: NDArray[np.float64]
@@ -94,19 +97,21 @@ def solve_inviscid(
     momentum_wake: bool = True,
     induced_guess: float | None = None,
 ) -> Inviscid:
-    """Circulations and forces of the rotor whose blade 0 has the camber grid ``camber_m`` (module doc).
+    """Circulations and forces of the rotor whose blade 0 has the camber grid ``camber_m`` (module
+    doc).
 
     Args:
-        camber_m: ``(K, C + 1, 3)`` blade 0's camber surface, m (sections along the blade, leading to
-            trailing edge across it).
+        camber_m: ``(K, C + 1, 3)`` blade 0's camber surface, m (sections along the blade, leading
+            to trailing edge across it).
         blades: blade count; spin: +1 where the blade turns clockwise seen from +z, -1 otherwise.
         omega_rad_s: rotation rate (>= 0); airspeed_m_s: axial inflow (>= 0), toward -z.
         density: kg/m^3; tip_radius_m: the disk's radius (momentum theory, the wake's length).
         wake: the wake's layout.
         momentum_wake: iterate the wake's induced velocity (a rotor); False leaves it at 0 (a wing).
-        induced_guess: the induced velocity to start that iteration from, as a fraction of the tip speed
-            ``omega_rad_s * tip_radius_m`` (default STATIC_INDUCED_GUESS in still air, else 0): a thrust
-            search passes its last run's, which the next rpm's is close to (the same answer, fewer iterations).
+        induced_guess: the induced velocity to start that iteration from, as a fraction of the tip
+            speed ``omega_rad_s * tip_radius_m`` (default STATIC_INDUCED_GUESS in still air, else
+            0): a thrust search passes its last run's, which the next rpm's is close to (the same
+            answer, fewer iterations).
 
     Raises:
         KernelError: the wake iteration did not converge (naming the change reached).
@@ -197,7 +202,8 @@ def solve_inviscid(
 
 
 def _momentum_inflow(thrust_n: float, airspeed_m_s: float, density: float, area_m2: float) -> float:
-    """Momentum theory's induced velocity at the disk (m/s) for ``thrust_n`` on ``area_m2`` in axial ``airspeed_m_s``."""
+    """Momentum theory's induced velocity at the disk (m/s) for ``thrust_n`` on ``area_m2`` in axial
+    ``airspeed_m_s``."""
     return float(
         -airspeed_m_s / 2.0
         + np.sqrt((airspeed_m_s / 2.0) ** 2 + max(thrust_n, 0.0) / (2.0 * density * area_m2))
@@ -215,13 +221,14 @@ def _relaxed(
     wake: WakeShape,
     mean_chord: float,
 ) -> tuple[Any, ...]:
-    """The solve on a wake whose first turn follows the flow (module doc), from the solve on the prescribed
-    ``lines`` (``prescribed``: its lattice, circulations and the blades' part of the influence matrix): each
-    sweep retraces the first turn as streamlines of the blade frame's velocity (kinematic plus induced, the
-    wake's core on every segment), moves the rest with its end, blends by WAKE_SWEEP_RELAXATION and solves
-    for the circulations again, until the thrust (:func:`_kinematic_thrust`, which needs no Biot-Savart sum)
-    changes by less than RELAXED_THRUST_TOLERANCE of itself; KernelError naming the change after
-    RELAXATION_SWEEPS_MAX sweeps. Returns the circulations, the lattice, the last change and the sweeps."""
+    """The solve on a wake whose first turn follows the flow (module doc), from the solve on the
+    prescribed ``lines`` (``prescribed``: its lattice, circulations and the blades' part of the
+    influence matrix): each sweep retraces the first turn as streamlines of the blade frame's
+    velocity (kinematic plus induced, the wake's core on every segment), moves the rest with its
+    end, blends by WAKE_SWEEP_RELAXATION and solves for the circulations again, until the thrust
+    (:func:`_kinematic_thrust`, which needs no Biot-Savart sum) changes by less than
+    RELAXED_THRUST_TOLERANCE of itself; KernelError naming the change after RELAXATION_SWEEPS_MAX
+    sweeps. Returns the circulations, the lattice, the last change and the sweeps."""
     free = wake.steps_per_turn  # the first turn's even steps
     step_s = 2.0 * np.pi / wake.steps_per_turn / omega
     core = wake.core_chords * mean_chord
@@ -268,8 +275,8 @@ def _relaxed(
 
 
 class BladePart:
-    """The part of the influence matrix that the blades' own segments make: the same for every wake of one
-    solve (only the wake moves), so it is computed once (the rings' rows, ``(P, rings)``)."""
+    """The part of the influence matrix that the blades' own segments make: the same for every wake
+    of one solve (only the wake moves), so it is computed once (the rings' rows, ``(P, rings)``)."""
 
     def __init__(self) -> None:
         self.matrix: NDArray[np.float64] | None = None
@@ -317,9 +324,9 @@ def _forces(
     bound_core_m: float,
     induced: bool = True,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """The Kutta-Joukowski force on each ring's bound segments and its moment about the origin ``(K - 1, C, 3)``
-    (blade 0), at the velocity the whole lattice induces at each segment's middle (the kinematic velocity alone
-    without ``induced``: no Biot-Savart sum)."""
+    """The Kutta-Joukowski force on each ring's bound segments and its moment about the origin
+    ``(K - 1, C, 3)`` (blade 0), at the velocity the whole lattice induces at each segment's middle
+    (the kinematic velocity alone without ``induced``: no Biot-Savart sum)."""
     shape = circulation.shape
     bound = lattice.bound_segments
     starts, ends = lattice.starts[:bound], lattice.ends[:bound]
@@ -350,7 +357,8 @@ def _kinematic_thrust(
     omega: float,
     airspeed: float,
 ) -> float:
-    """The rotor's thrust (per unit density) from the Kutta-Joukowski force at the kinematic velocity alone: no
-    Biot-Savart sum, so it is cheap; the wake iterations and the relaxed wake's sweeps watch it settle."""
+    """The rotor's thrust (per unit density) from the Kutta-Joukowski force at the kinematic
+    velocity alone: no Biot-Savart sum, so it is cheap; the wake iterations and the relaxed wake's
+    sweeps watch it settle."""
     force, _ = _forces(lattice, circulation, spin, omega, airspeed, 1.0, 0.0, induced=False)
     return blades * float(force[..., 2].sum())

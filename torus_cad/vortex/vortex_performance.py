@@ -1,17 +1,19 @@
-"""A design's thrust, torque and coefficients from the vortex lattice with its sections' viscous polars.
+"""A design's thrust, torque and coefficients from the vortex lattice with its sections' viscous
+polars.
 
-The lattice (:mod:`.solver`) gives each strip its circulation and force. At each strip's flow (the mean of
-the velocity at its control points, less its part along the span) the polar (:mod:`.polars`) at the
-strip's Reynolds number takes over where potential flow stops: the strip's effective angle of attack is
-the one at which the polar's linear part gives the lattice's lift coefficient cl (the polar's zero-lift
-angle plus cl over its own lift slope); past the polar's stall angle the strip's force is scaled by the
-polar's lift over the lattice's there (before it the lattice's lift stands: the lift is corrected beyond
-the linear range only), and its profile drag, 1/2 rho V^2 c ds cd along the flow, adds to the torque and
-takes from the thrust.
+The lattice (:mod:`.solver`) gives each strip its circulation and force. At each strip's flow (the
+mean of the velocity at its control points, less its part along the span) the polar (:mod:`.polars`)
+at the strip's Reynolds number takes over where potential flow stops: the strip's effective angle of
+attack is the one at which the polar's linear part gives the lattice's lift coefficient cl (the
+polar's zero-lift angle plus cl over its own lift slope); past the polar's stall angle the strip's
+force is scaled by the polar's lift over the lattice's there (before it the lattice's lift stands:
+the lift is corrected beyond the linear range only), and its profile drag, 1/2 rho V^2 c ds cd along
+the flow, adds to the torque and takes from the thrust.
 
 The coefficients follow UIUC's convention (n in rev/s, D the tip diameter): CT = T / (rho n^2 D^4),
 CP = P / (rho n^3 D^5), J = V / (n D), efficiency J CT / CP, and at J = 0 the figure of merit
-(momentum theory's ideal power over the power), as :mod:`torus_cad.simulate.coefficients` reports them.
+(momentum theory's ideal power over the power), as :mod:`torus_cad.simulate.coefficients` reports
+them.
 """
 
 from __future__ import annotations
@@ -43,7 +45,8 @@ class StripLoads:
         s: centerline parameter; radius_m: radius of the strip's middle.
         circulation_m2_s: the strip's bound circulation.
         thrust_n_per_m / torque_nm_per_m: thrust and torque per unit length of the blade (viscous).
-        reynolds, cl, cd, confidence: the strip's Reynolds number, lift and drag coefficients and NeuralFoil's
+        reynolds, cl, cd, confidence: the strip's Reynolds number, lift and drag coefficients and
+            NeuralFoil's
             confidence.
     """
 
@@ -63,11 +66,13 @@ class VortexResult:
     """The vortex solver's answer at one operating point.
 
     Attributes:
-        report: thrust_n, torque_nm, power_w, advance_ratio, ct, cp, efficiency, figure_of_merit (the simulate
-            report's keys), and inviscid_thrust_n / inviscid_power_w, low_confidence_strips.
+        report: thrust_n, torque_nm, power_w, advance_ratio, ct, cp, efficiency, figure_of_merit
+            (the simulate report's keys), and inviscid_thrust_n / inviscid_power_w,
+            low_confidence_strips.
         strips: the loading along the blade.
         blade: blade 0 as solved; inviscid: the lattice's solution.
-        ring_force_n: ``(K - 1, C, 3)`` N, the force on each of blade 0's rings with its strip's loss of lift.
+        ring_force_n: ``(K - 1, C, 3)`` N, the force on each of blade 0's rings with its strip's
+            loss of lift.
     """
 
     report: dict[str, Any]
@@ -85,8 +90,9 @@ def vortex_performance(
     viscous: bool = True,
     induced_guess: float | None = None,
 ) -> VortexResult:
-    """The performance of ``params`` at ``rpm`` and axial ``airspeed_m_s`` (module doc); ``induced_guess``:
-    where the wake's iteration starts (:func:`~torus_cad.vortex.solver.solve_inviscid`)."""
+    """The performance of ``params`` at ``rpm`` and axial ``airspeed_m_s`` (module doc);
+    ``induced_guess``: where the wake's iteration starts
+    (:func:`~torus_cad.vortex.solver.solve_inviscid`)."""
     point = OperatingPoint(rpm=rpm, airspeed_m_s=airspeed_m_s)
     discretisation = discretisation or Discretisation()
     blade = rotor_blade(params, discretisation)
@@ -133,8 +139,8 @@ def _strip_forces(
     point: OperatingPoint,
     viscous: bool,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], StripLoads, NDArray[np.float64]]:
-    """Each strip's force and moment ``(K - 1, 3)`` on blade 0 with the polars' corrections, its loading, and
-    its lift's ratio to the lattice's ``(K - 1,)``."""
+    """Each strip's force and moment ``(K - 1, 3)`` on blade 0 with the polars' corrections, its
+    loading, and its lift's ratio to the lattice's ``(K - 1,)``."""
     lattice = inviscid.lattice
     strips = inviscid.circulation.shape[0]
     force = inviscid.force_n.sum(axis=1)

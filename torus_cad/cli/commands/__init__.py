@@ -1,11 +1,11 @@
-"""The ``torus-cad`` commands: one module per subcommand (``torus_cad.cli.commands.<name>``), loaded only
-when that command runs, each with ``run(args) -> exit code``.
+"""The ``torus-cad`` commands: one module per subcommand (``torus_cad.cli.commands.<name>``), loaded
+only when that command runs, each with ``run(args) -> exit code``.
 
-The parser gives every subcommand the handler :func:`run_command`, which checks the command's extra (a
-one-line MissingExtraError, exit 2, before anything of it loads), announces its first stage on a terminal
-(``build`` and ``preview``: the seconds of loading the schema and the kernel), then imports the command's
-module and runs it. The signal handlers are installed before (torus_cad.cli.main), so an interrupt while a
-command's modules load ends it with one line too.
+The parser gives every subcommand the handler :func:`run_command`, which checks the command's extra
+(a one-line MissingExtraError, exit 2, before anything of it loads), announces its first stage on a
+terminal (``build`` and ``preview``: the seconds of loading the schema and the kernel), then imports
+the command's module and runs it. The signal handlers are installed before (torus_cad.cli.main), so
+an interrupt while a command's modules load ends it with one line too.
 """
 
 from __future__ import annotations
@@ -53,7 +53,8 @@ COMMANDS: dict[str, Command] = {
 
 
 def run_command(args: argparse.Namespace) -> int:
-    """Run the subcommand ``args.command``: its extra checked, its first stage announced, its module loaded."""
+    """Run the subcommand ``args.command``: its extra checked, its first stage announced, its module
+    loaded."""
     command = COMMANDS[args.command]
     if command.extra is not None:
         require_extra(args.command, command.extra)

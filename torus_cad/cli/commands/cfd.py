@@ -1,4 +1,5 @@
-"""``torus-cad cfd``: the fluid domain and its tetrahedral mesh by gmsh (its extra checked before this loads)."""
+"""``torus-cad cfd``: the fluid domain and its tetrahedral mesh by gmsh (its extra checked before
+this loads)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,5 @@
-"""``torus-cad check``: every refusal the build makes before the kernel, without loading the kernel."""
+"""``torus-cad check``: every refusal the build makes before the kernel, without loading the
+kernel."""
 
 from __future__ import annotations
 
@@ -10,9 +11,10 @@ from torus_cad.parameters.design_checks import check_design
 
 
 def run(args: argparse.Namespace) -> int:
-    """Exit 0 with one line when the design passes every check the build makes before the kernel (and a note line
-    for what only the kernel decides: a root fillet round a knife trailing edge); 2 with the build's own one-line
-    refusal otherwise. OpenCascade is never loaded (torus_cad.parameters.design_checks)."""
+    """Exit 0 with one line when the design passes every check the build makes before the kernel
+    (and a note line for what only the kernel decides: a root fillet round a knife trailing edge); 2
+    with the build's own one-line refusal otherwise. OpenCascade is never loaded
+    (torus_cad.parameters.design_checks)."""
     params = load_parameters(args.config, args.overrides + format_overrides(args.formats))
     feasible = check_design(
         params,

@@ -1,4 +1,5 @@
-"""``torus-cad defaults``: the default design as commented TOML, or a design's resolved spec parameters."""
+"""``torus-cad defaults``: the default design as commented TOML, or a design's resolved spec
+parameters."""
 
 from __future__ import annotations
 

@@ -1,4 +1,5 @@
-"""``torus-cad mesh``: a closed triangle mesh straight from the spec's math (its extra checked before this loads)."""
+"""``torus-cad mesh``: a closed triangle mesh straight from the spec's math (its extra checked
+before this loads)."""
 
 from __future__ import annotations
 

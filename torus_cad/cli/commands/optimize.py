@@ -1,4 +1,5 @@
-"""``torus-cad optimize``: a study of the design space run by optuna (its extra checked before this loads)."""
+"""``torus-cad optimize``: a study of the design space run by optuna (its extra checked before this
+loads)."""
 
 from __future__ import annotations
 
@@ -16,8 +17,9 @@ from torus_cad.optimize.study_file import Sampler
 
 
 def run(args: argparse.Namespace) -> int:
-    """Exit 0 when the study holds its trials (refused or failed designs included), 2 for a bad study file or
-    option, 1 when the storage or the workers cannot be used, 130 / 143 / 129 on a signal (rerun to continue)."""
+    """Exit 0 when the study holds its trials (refused or failed designs included), 2 for a bad
+    study file or option, 1 when the storage or the workers cannot be used, 130 / 143 / 129 on a
+    signal (rerun to continue)."""
     spec = read_study_file(args.study)  # a bad study file raises ParameterError: exit 2
     if spec.sampler is Sampler.CMAES:
         require("optimize (sampler cmaes)", "optimize", ["cmaes"])

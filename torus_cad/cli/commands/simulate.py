@@ -31,8 +31,8 @@ from torus_cad.simulate.settings import (
 
 
 def run(args: argparse.Namespace) -> int:
-    """Exit 0 on success, 2 for bad input or without OpenFOAM, 1 when the mesher or solver fails (diverged:
-    the iteration and residual named, the case kept)."""
+    """Exit 0 on success, 2 for bad input or without OpenFOAM, 1 when the mesher or solver fails
+    (diverged: the iteration and residual named, the case kept)."""
     _check_simulate_options(args)
     params = load_parameters(args.config, args.overrides)
     progress = StageProgress.for_terminal(quiet=args.quiet)
@@ -98,7 +98,8 @@ _VORTEX_ONLY = (("chordwise", "--chordwise"), ("spanwise", "--spanwise"))
 
 
 def _run_vortex(args: argparse.Namespace, params: Any, progress: StageProgress) -> int:
-    """``--solver vortex``: one point, or the rpm for ``--thrust``, published as the OpenFOAM route publishes."""
+    """``--solver vortex``: one point, or the rpm for ``--thrust``, published as the OpenFOAM route
+    publishes."""
     from torus_cad.vortex.pipeline import (
         VortexRequest,
         simulate_vortex,

@@ -1,4 +1,5 @@
-"""``torus-cad studio``: the design page served in the browser (its extra checked before this loads)."""
+"""``torus-cad studio``: the design page served in the browser (its extra checked before this
+loads)."""
 
 from __future__ import annotations
 

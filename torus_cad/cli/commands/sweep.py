@@ -12,8 +12,9 @@ from torus_cad.cli.exits import EXIT_KERNEL_FAILURE, EXIT_OK
 
 
 def run(args: argparse.Namespace) -> int:
-    """Exit 0 when every design is valid or refused, 1 when any failed (errored, crashed, timed out), 2 for a bad
-    sweep file, 130 / 143 on SIGINT / SIGTERM (one line; the table of what finished is written)."""
+    """Exit 0 when every design is valid or refused, 1 when any failed (errored, crashed, timed
+    out), 2 for a bad sweep file, 130 / 143 on SIGINT / SIGTERM (one line; the table of what
+    finished is written)."""
     if args.scheduler:
         require("sweep --scheduler", "sweep")
 

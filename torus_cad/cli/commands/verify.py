@@ -1,4 +1,5 @@
-"""``torus-cad verify``: output sets complete, every file of one build (a study's or sweep's folder whole)."""
+"""``torus-cad verify``: output sets complete, every file of one build (a study's or sweep's folder
+whole)."""
 
 from __future__ import annotations
 
@@ -29,7 +30,8 @@ CASE_ENTRIES = (
 
 
 def run(args: argparse.Namespace) -> int:
-    """Exit 0 when every set is complete, 1 with one line per problem of every set (sub-folders included)."""
+    """Exit 0 when every set is complete, 1 with one line per problem of every set (sub-folders
+    included)."""
     folder = Path(args.folder)
     if not folder.is_dir():
         raise ParameterError(f"verify: {str(folder)!r} is not a folder")
@@ -69,7 +71,8 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _staging_under(folder: Path) -> tuple[list[Path], list[Path]]:
-    """The staging folders at any depth under ``folder``: those left by stopped processes, and the others."""
+    """The staging folders at any depth under ``folder``: those left by stopped processes, and the
+    others."""
     left: list[Path] = []
     running: list[Path] = []
     for where in folders_under(folder):
@@ -80,7 +83,8 @@ def _staging_under(folder: Path) -> tuple[list[Path], list[Path]]:
 
 
 def _debris(left: list[Path], folder: Path) -> list[str]:
-    """A problem for every staging folder in ``left`` (left by a stopped process), named from ``folder``."""
+    """A problem for every staging folder in ``left`` (left by a stopped process), named from
+    ``folder``."""
     return [
         f"staging folder {str(path.relative_to(folder))!r} left by a stopped process (the next run there "
         "removes it)"
@@ -89,8 +93,8 @@ def _debris(left: list[Path], folder: Path) -> list[str]:
 
 
 def _batch_members(folder: Path) -> list[Path] | None:
-    """The trial folders of a study folder (``trials/<number>/``) or the design folders of a sweep folder
-    (``designs/<id>/``); None for any other folder."""
+    """The trial folders of a study folder (``trials/<number>/``) or the design folders of a sweep
+    folder (``designs/<id>/``); None for any other folder."""
     from torus_cad.batch.table import DESIGNS_DIR
 
     # torus_cad.optimize.trial_job.TRIALS_DIR (optuna is not needed here)
@@ -105,9 +109,10 @@ def _batch_members(folder: Path) -> list[Path] | None:
 
 
 def _verify_batch_folder(folder: Path, quiet: bool) -> int:
-    """``verify`` of a study or sweep folder: every output set of its trials or designs and of ``best/``
-    complete, and no staging folder left by a stopped process (the next run of the study or sweep removes
-    them). IncompleteOutputError (exit 1) naming the first problems and their count."""
+    """``verify`` of a study or sweep folder: every output set of its trials or designs and of
+    ``best/`` complete, and no staging folder left by a stopped process (the next run of the study
+    or sweep removes them). IncompleteOutputError (exit 1) naming the first problems and their
+    count."""
     folders = [folder, *(_batch_members(folder) or [])] + (
         [folder / "best"] if (folder / "best").is_dir() else []
     )

@@ -48,10 +48,12 @@ class BladeElements:
         s: centerline parameter of each section.
         radius_mm, axial_mm, position_angle_deg: the chord mid point in cylindrical coordinates.
         chord_mm: chord length.
-        thickness_mm, thickness_ratio: largest thickness perpendicular to the chord, and over the chord.
+        thickness_mm, thickness_ratio: largest thickness perpendicular to the chord, and over the
+            chord.
         beta_deg: blade angle (module docstring), in (-180, 180].
         pitch_mm: geometric pitch 2 pi r tan beta.
-        radial_fraction: |c_r| / h, how radially the chord runs (> NEARLY_RADIAL_FRACTION: beta says little).
+        radial_fraction: |c_r| / h, how radially the chord runs (> NEARLY_RADIAL_FRACTION: beta says
+            little).
         spin: which way the propeller turns seen from +z (cw, the default, or ccw).
     """
 
@@ -88,7 +90,8 @@ class BladeElements:
         ]
 
     def pitch_at_radius(self, radius_mm: float) -> NDArray[np.float64]:
-        """Geometric pitch where r(s) crosses ``radius_mm``, linearly interpolated: ``(c,)``, one per crossing.
+        """Geometric pitch where r(s) crosses ``radius_mm``, linearly interpolated: ``(c,)``, one
+        per crossing.
 
         A loop blade passes each radius twice (out and back), so there are usually two values.
         """
@@ -103,7 +106,8 @@ class BladeElements:
 def chord_lines(
     points: NDArray[np.float64], trailing_edge_index: int, lower_corner_index: int | None
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Leading-edge points and chord vectors (leading -> trailing edge) of sections ``(k, p, 3)``: two ``(k, 3)``."""
+    """Leading-edge points and chord vectors (leading -> trailing edge) of sections ``(k, p, 3)``:
+    two ``(k, 3)``."""
     leading = points[:, 0]
     trailing = points[:, trailing_edge_index]
     if lower_corner_index is not None:
@@ -114,7 +118,8 @@ def chord_lines(
 def blade_angles(
     middle: NDArray[np.float64], chord: NDArray[np.float64], spin: Handedness = Handedness.CW
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """beta (degrees) and the radial fraction |c_r| / h of chords ``(k, 3)`` whose mid points are ``middle``."""
+    """beta (degrees) and the radial fraction |c_r| / h of chords ``(k, 3)`` whose mid points are
+    ``middle``."""
     radial = middle[:, :2] / np.linalg.norm(middle[:, :2], axis=1, keepdims=True)
     tangential = np.stack([-radial[:, 1], radial[:, 0]], axis=1)  # ccw direction
     c_r = np.sum(chord[:, :2] * radial, axis=1)
@@ -142,7 +147,8 @@ def blade_elements(
         s: ``(k,)`` centerline parameters.
         points: ``(k, p, 3)`` mm, closed sections starting at the leading edge, upper surface first.
         origin, normal, binormal: ``(k, 3)`` each section's frame (its plane is spanned by N and B).
-        trailing_edge_index, lower_corner_index: columns of the trailing edge (and a blunt edge's lower corner).
+        trailing_edge_index, lower_corner_index: columns of the trailing edge (and a blunt edge's
+            lower corner).
         spin: which way the propeller turns seen from +z (cw, the default, or ccw).
     """
     leading, chord = chord_lines(points, trailing_edge_index, lower_corner_index)

@@ -1,11 +1,11 @@
 """The blade's camber surface and its sections' own shapes, from the sampled blade (kernel-free).
 
-Each section of a :class:`~torus_cad.geometry.blade.blade_surface.BladeSurface` is a closed curve that starts
-at the leading edge, runs along the upper surface to the trailing edge and back along the lower one.
-Its **chord line** runs from the leading edge to the trailing edge (the middle of a blunt edge's base,
-as :func:`torus_cad.geometry.analysis.blade_elements.chord_lines`). The **camber point** at chord
-fraction x is the mean of the upper and lower surfaces' points at the same fraction of the chord
-(each surface interpolated in its projection on the chord line). The vortex solver
+Each section of a :class:`~torus_cad.geometry.blade.blade_surface.BladeSurface` is a closed curve
+that starts at the leading edge, runs along the upper surface to the trailing edge and back along
+the lower one. Its **chord line** runs from the leading edge to the trailing edge (the middle of a
+blunt edge's base, as :func:`torus_cad.geometry.analysis.blade_elements.chord_lines`). The **camber
+point** at chord fraction x is the mean of the upper and lower surfaces' points at the same fraction
+of the chord (each surface interpolated in its projection on the chord line). The vortex solver
 (:mod:`torus_cad.vortex`) lays its lattice on these points; its section polars take each section's
 shape in its own plane, normalised by the chord (:func:`section_coordinates`).
 """
@@ -26,7 +26,8 @@ class CamberSurface:
     """The camber surface of one blade at given chord fractions.
 
     Attributes:
-        points: ``(sections, fractions, 3)`` mm: the camber point of each section at each chord fraction.
+        points: ``(sections, fractions, 3)`` mm: the camber point of each section at each chord
+            fraction.
         fractions: ``(fractions,)`` chord fractions, 0 (leading edge) to 1 (trailing edge).
         chord_mm: ``(sections,)`` chord lengths.
         s: ``(sections,)`` the sections' centerline parameters.
@@ -39,7 +40,8 @@ class CamberSurface:
 
 
 def cosine_fractions(count: int) -> NDArray[np.float64]:
-    """``(count + 1,)`` chord fractions 0..1, closer together at both edges (x = (1 - cos(pi k / count)) / 2)."""
+    """``(count + 1,)`` chord fractions 0..1, closer together at both edges (x = (1 - cos(pi k /
+    count)) / 2)."""
     return 0.5 * (1.0 - np.cos(np.pi * np.arange(count + 1) / count))
 
 
@@ -59,8 +61,9 @@ def camber_surface(surface: BladeSurface, fractions: NDArray[np.float64]) -> Cam
 
 
 def section_coordinates(surface: BladeSurface, k: int) -> NDArray[np.float64]:
-    """``(p, 2)`` the shape of section ``k`` in its plane, the chord from (0, 0) to (1, 0), in Selig order
-    (upper trailing edge -> leading edge -> lower trailing edge), the upper surface at y > 0."""
+    """``(p, 2)`` the shape of section ``k`` in its plane, the chord from (0, 0) to (1, 0), in Selig
+    order (upper trailing edge -> leading edge -> lower trailing edge), the upper surface at y >
+    0."""
     te = surface.trailing_edge_column
     leading, chord = chord_lines(surface.points, te, surface.lower_corner_index)
     length = float(np.linalg.norm(chord[k]))
@@ -78,7 +81,8 @@ def section_coordinates(surface: BladeSurface, k: int) -> NDArray[np.float64]:
 def _sides(
     section: NDArray[np.float64], te: int, lower_corner: int | None
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """The upper and the lower surface of a closed section, each from the leading edge to the trailing edge."""
+    """The upper and the lower surface of a closed section, each from the leading edge to the
+    trailing edge."""
     upper = section[: te + 1]
     lower = np.concatenate(
         [section[(lower_corner if lower_corner is not None else te) :], section[:1]]

@@ -121,7 +121,8 @@ class _Memo:
 
 
 def _last_sound(radius_at: _Memo, end: float, steps: int = 8) -> float:
-    """The scale nearest ``end`` (between 1 and ``end``, log-bisected) at which the design still evaluates."""
+    """The scale nearest ``end`` (between 1 and ``end``, log-bisected) at which the design still
+    evaluates."""
     if radius_at(end) is not None:
         return end
     good, bad = 0.0, float(np.log(end))

@@ -68,11 +68,11 @@ def _outside_hub(hub: HubGeometry, points: NDArray[np.float64]) -> NDArray[np.bo
 
 
 def check_root_fillet_edge(root_fillet_radius_mm: float, trailing_edge_thickness_mm: float) -> None:
-    """GeometryError for a root fillet round a knife trailing edge: OpenCascade's rolling ball turns round the
-    zero-thickness edge in one degenerate corner face that crosses itself, which the build's strict check
-    refuses (measured: the default at 0.2 and 0.5 mm, cooling_fan_7blade, multirotor_5in_3blade,
-    prop_10x5_2blade and marine_3blade_loop with their edges made sharp, 0.5 mm: every one refused), so it is
-    refused before the kernel, by ``check`` as by the build."""
+    """GeometryError for a root fillet round a knife trailing edge: OpenCascade's rolling ball turns
+    round the zero-thickness edge in one degenerate corner face that crosses itself, which the
+    build's strict check refuses (measured: the default at 0.2 and 0.5 mm, cooling_fan_7blade,
+    multirotor_5in_3blade, prop_10x5_2blade and marine_3blade_loop with their edges made sharp, 0.5
+    mm: every one refused), so it is refused before the kernel, by ``check`` as by the build."""
     if root_fillet_radius_mm > 0.0 and trailing_edge_thickness_mm == 0.0:
         raise GeometryError(
             f"hub.root_fillet_radius = {root_fillet_radius_mm:g} mm round a knife trailing edge "
@@ -83,7 +83,8 @@ def check_root_fillet_edge(root_fillet_radius_mm: float, trailing_edge_thickness
 
 
 def check_ends_inside_hub(hub: HubGeometry, surface: BladeSurface) -> None:
-    """The first and last sections must lie inside the hub (r < R, |z| < L/2) so the fuse hides them."""
+    """The first and last sections must lie inside the hub (r < R, |z| < L/2) so the fuse hides
+    them."""
     radius, half_length = hub.radius_mm, hub.length_mm / 2.0
     for label, section in (
         ("root (s = 0)", surface.points[0]),
@@ -125,7 +126,8 @@ class Tube:
         frames: the ``m`` sections' frames (s, origin, unit tangent, normal, binormal).
         planar: ``(m, p, 2)`` section coordinates (X along N, Y along B), mm.
         points: ``(m, p, 3)`` surface points, mm.
-        curvature: ``(m, 3)`` curvature vectors of the centerline (kappa times the Frenet normal), 1/mm.
+        curvature: ``(m, 3)`` curvature vectors of the centerline (kappa times the Frenet normal),
+            1/mm.
         arc_length: ``(m,)`` centerline arc length from s = 0, mm.
     """
 
@@ -142,7 +144,8 @@ class Tube:
 
 
 def tube_grid(sections: int, at_least: int = CHECK_SECTIONS) -> tuple[NDArray[np.float64], int]:
-    """A uniform s grid that holds every section's s and every midpoint between sections, and its step.
+    """A uniform s grid that holds every section's s and every midpoint between sections, and its
+    step.
 
     Returns ``(s, k)``: section i sits at ``s[k i]``, the midpoint after it at ``s[k i + k / 2]``.
     """
@@ -158,7 +161,8 @@ def sample_tube(
 ) -> Tube:
     """Blade 0's analytic surface at every (s, t) of the grid, with frames and curvature.
 
-    The frames are the blade's own kind (:func:`torus_cad.geometry.blade.blade_surface.blade_frames`).
+    The frames are the blade's own kind
+    (:func:`torus_cad.geometry.blade.blade_surface.blade_frames`).
     """
     derivatives = centerline.derivatives(s, order=2)
     first, second = derivatives[:, 1], derivatives[:, 2]
@@ -193,7 +197,8 @@ def coarsen(tube: Tube, sections: int = CHECK_SECTIONS, points: int = CHECK_POIN
 
 
 def fold_ratio(tube: Tube) -> tuple[float, float]:
-    """Largest kappa . offset over the surface (>= 1: the section reaches the centre of curvature) and its s.
+    """Largest kappa . offset over the surface (>= 1: the section reaches the centre of curvature)
+    and its s.
 
     The sweep C(s) + X N + Y B moves a point at offset o along T at the rate |C'| (1 - k . o),
     where k is the curvature vector: where k . o reaches 1 neighbouring sections cross and
@@ -206,7 +211,8 @@ def fold_ratio(tube: Tube) -> tuple[float, float]:
 
 
 def check_no_fold(tube: Tube, limit: float | None = None) -> None:
-    """Refuse sections that reach past the centerline's centre of curvature (default limit FOLD_LIMIT)."""
+    """Refuse sections that reach past the centerline's centre of curvature (default limit
+    FOLD_LIMIT)."""
     limit = FOLD_LIMIT if limit is None else limit
     ratio, where = fold_ratio(tube)
     if ratio >= limit:
@@ -269,7 +275,8 @@ def check_sections_resolved(
 def _points_inside(
     tube: Tube, query: NDArray[np.float64], allowed: NDArray[np.bool_] | None = None
 ) -> tuple[NDArray[np.bool_], NDArray[np.int64]]:
-    """Which ``(q, 3)`` points lie inside the tube, and in which slab (section k to k + 1) each does.
+    """Which ``(q, 3)`` points lie inside the tube, and in which slab (section k to k + 1) each
+    does.
 
     A point is inside slab k when it lies on the forward side of section k's plane and the
     backward side of section k + 1's, and inside the section interpolated to its position.
@@ -350,7 +357,8 @@ def check_no_self_intersection(hub: HubGeometry, tube: Tube) -> None:
 
 
 def check_leaves_hub(hub: HubGeometry, tube: Tube) -> None:
-    """Refuse a blade that never leaves the hub: the fuse would swallow it (a propeller without blades)."""
+    """Refuse a blade that never leaves the hub: the fuse would swallow it (a propeller without
+    blades)."""
     if not np.any(_outside_hub(hub, tube.points)):
         raise GeometryError(
             "the blade never leaves the hub (all of it lies within r < R and |z| < L/2); raise the centerline's "
@@ -401,9 +409,10 @@ class Margins:
     """How close a blade that passed every check comes to the limits of checks 3 and 4.
 
     Attributes:
-        fold_ratio: the largest kappa . offset over the surface (:func:`fold_ratio`; refused at FOLD_LIMIT).
-        resolution_deviation: the largest sag between neighbouring sections as a fraction of the local
-            chord (:func:`resolution_deviation`; refused above RESOLUTION_DEVIATION_LIMIT).
+        fold_ratio: the largest kappa . offset over the surface (:func:`fold_ratio`; refused at
+            FOLD_LIMIT).
+        resolution_deviation: the largest sag between neighbouring sections as a fraction of the
+            local chord (:func:`resolution_deviation`; refused above RESOLUTION_DEVIATION_LIMIT).
     """
 
     fold_ratio: float
@@ -411,8 +420,8 @@ class Margins:
 
 
 def check_feasible(geometry: PropellerGeometry, surface: BladeSurface) -> Margins:
-    """Run every pre-kernel check on blade 0 (the others are its rotations); GeometryError naming the first
-    that fails, else the margins to the fold and resolution limits."""
+    """Run every pre-kernel check on blade 0 (the others are its rotations); GeometryError naming
+    the first that fails, else the margins to the fold and resolution limits."""
     centerline = geometry.centerline(0)
     check_ends_inside_hub(geometry.hub, surface)
     check_centerline_leaves_through_side(geometry.hub, centerline)

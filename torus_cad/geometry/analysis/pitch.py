@@ -1,8 +1,8 @@
 """Pitch target: fit the alpha(s) quartic so the blade's outer half has a given geometric pitch.
 
 The blade element at s has the geometric pitch P(s) = 2 pi r(s) tan beta(s)
-(:mod:`torus_cad.geometry.analysis.blade_elements`). A pitch P asks for beta*(s) = atan(P / (2 pi r(s)))
-at every section in the outer half of the radius (r >= half the tip radius). alpha(s) turns
+(:mod:`torus_cad.geometry.analysis.blade_elements`). A pitch P asks for beta*(s) = atan(P / (2 pi
+r(s))) at every section in the outer half of the radius (r >= half the tip radius). alpha(s) turns
 each section in its plane, and with it the chord and beta; the spec's alpha stays a quartic
 (§2.4 chose that form), so the quartic is fitted by nonlinear least squares
 (scipy.optimize.least_squares) to
@@ -83,8 +83,10 @@ def chord_model(
     """A function alpha (k,) degrees -> (chord mid points (k, 3), chord vectors (k, 3)) in mm.
 
     Args:
-        origin, normal, binormal: ``(k, 3)`` the section frames (fixed: alpha does not move the centerline).
-        leading, trailing: ``(k, 2)`` chord-unit leading edge and trailing edge (middle of a base) per section.
+        origin, normal, binormal: ``(k, 3)`` the section frames (fixed: alpha does not move the
+            centerline).
+        leading, trailing: ``(k, 2)`` chord-unit leading edge and trailing edge (middle of a base)
+            per section.
         scale_x, scale_y: ``(k,)`` Sx(s), Sy(s) in mm; pivot: chord fraction at the centre of alpha.
     """
     scales = np.stack([np.asarray(scale_x, float), np.asarray(scale_y, float)], axis=-1)
@@ -114,7 +116,8 @@ def fit_pitch(
     tip_radius_mm: float,
     spin: Handedness = Handedness.CW,
 ) -> PitchFit:
-    """Fit alpha(s) (a quartic) so the outer sections' geometric pitch is ``pitch_mm`` (module docstring)."""
+    """Fit alpha(s) (a quartic) so the outer sections' geometric pitch is ``pitch_mm`` (module
+    docstring)."""
     initial = np.asarray(initial_quartic, dtype=float)
     alpha0 = _quartic_at(initial, s)
 
@@ -170,7 +173,8 @@ def pitch_report(
     tip_radius_mm: float,
     spin: Handedness = Handedness.CW,
 ) -> PitchFit:
-    """How well the alpha(s) ``quartic`` meets ``pitch_mm`` (nothing is fitted): a :class:`PitchFit`."""
+    """How well the alpha(s) ``quartic`` meets ``pitch_mm`` (nothing is fitted): a
+    :class:`PitchFit`."""
     coefficients = np.asarray(quartic, dtype=float)
     alpha = _quartic_at(coefficients, s)
     middle, chord = model(alpha)

@@ -20,14 +20,14 @@ Definitions (mm):
   max_u wall(s, u): the thinnest section of the blade. Where it is below the printer's minimum
   wall, no two perimeter lines fit anywhere in that section. Reported with its s and the chord
   fraction (chord units, the middle of the station) of that section's thickest point.
-* **trailing-edge thickness**: the smallest wall(s, u = 1) over the exposed span: 0 for the spec's sharp edge,
-  the base of a blunt edge otherwise. The edges of every section taper below any printer's
-  wall, so the sharp edge's zero is reported here, separately, instead of being the "thinnest
-  wall" of every blade.
+* **trailing-edge thickness**: the smallest wall(s, u = 1) over the exposed span: 0 for the spec's
+  sharp edge, the base of a blunt edge otherwise. The edges of every section taper below any
+  printer's wall, so the sharp edge's zero is reported here, separately, instead of being the
+  "thinnest wall" of every blade.
 * **printable**: both the thinnest wall and the trailing-edge thickness reach ``min_wall``. A blunt
   edge (``airfoil.trailing_edge_thickness``, mm) is that thick at every section, so a blade whose
-  thinnest wall reaches ``min_wall`` is printable with a blunt edge of ``min_wall`` or more, which is
-  what :meth:`Printability.problem` advises.
+  thinnest wall reaches ``min_wall`` is printable with a blunt edge of ``min_wall`` or more, which
+  is what :meth:`Printability.problem` advises.
 
 Both minima are found on a fine grid and polished with a bounded scalar minimisation.
 """
@@ -109,7 +109,8 @@ def wall_mm(blade: BladeGeometry, s: ArrayLike, u: ArrayLike) -> NDArray[np.floa
 
 
 def chord_fraction(blade: BladeGeometry, s: float, u: float) -> float:
-    """Chord position (x in chord units) of the middle of the chord station ``u`` of the section at ``s``."""
+    """Chord position (x in chord units) of the middle of the chord station ``u`` of the section at
+    ``s``."""
     section = sections_along(blade, [s])[0]
     return float(
         0.5 * (section.points_on_half([u], True)[0, 0] + section.points_on_half([u], False)[0, 0])
@@ -117,7 +118,8 @@ def chord_fraction(blade: BladeGeometry, s: float, u: float) -> float:
 
 
 def _section_matrices(laws: SectionLaws, s: NDArray[np.float64]) -> NDArray[np.float64]:
-    """diag(Sx, Sy) R(alpha) for every s: ``(k, 2, 2)`` (the pivot's shift cancels in a difference)."""
+    """diag(Sx, Sy) R(alpha) for every s: ``(k, 2, 2)`` (the pivot's shift cancels in a
+    difference)."""
     scales = np.stack(
         [evaluate_quartic(laws.scale_x_mm, s), evaluate_quartic(laws.scale_y_mm, s)], axis=-1
     )
@@ -125,7 +127,8 @@ def _section_matrices(laws: SectionLaws, s: NDArray[np.float64]) -> NDArray[np.f
 
 
 def exposed_span(geometry: PropellerGeometry) -> tuple[float, float]:
-    """[s_in, s_out] of the module docstring: where blade 0's centerline leaves the hub and comes back.
+    """[s_in, s_out] of the module docstring: where blade 0's centerline leaves the hub and comes
+    back.
 
     (0, 1) for a centerline that never leaves the hub (the kernel then has no blade to print).
     """

@@ -37,7 +37,8 @@ CALIBRATION_FACTOR = 3.0
 def _turns(
     points: NDArray[np.float64], closed: bool
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Turning angle (rad) at each point of polylines along axis 1 and the length (mm) each point stands for.
+    """Turning angle (rad) at each point of polylines along axis 1 and the length (mm) each point
+    stands for.
 
     ``points`` is ``(rows, k, 3)``; open polylines get zero turn at their two ends.
     """
@@ -59,7 +60,8 @@ def _turns(
 def edge_length(
     curvature: NDArray[np.float64], linear_deflection: float, angular_deflection: float
 ) -> NDArray[np.float64]:
-    """The mesher's edge length (mm) where the surface curves by ``curvature`` (1/mm), elementwise."""
+    """The mesher's edge length (mm) where the surface curves by ``curvature`` (1/mm),
+    elementwise."""
     curvature = np.maximum(curvature, 1e-12)
     ideal = np.minimum(
         np.sqrt(8.0 * linear_deflection / curvature),
@@ -109,7 +111,8 @@ def outline_segments(
 
 
 def hub_triangles(radius_mm: float, linear_deflection: float, angular_deflection: float) -> float:
-    """Triangles of the bare cylindrical hub: its lateral face in strips along the axis and its two end discs."""
+    """Triangles of the bare cylindrical hub: its lateral face in strips along the axis and its two
+    end discs."""
     around = (
         2.0
         * math.pi

@@ -39,7 +39,8 @@ class BladeSurface:
             the leading edge, upper surface first (the order of f(t), spec §1.3).
         s: ``(sections,)`` centerline parameters of the sections, 0 and 1 included.
         t: ``(points,)`` closed-curve parameters shared by all sections: in [0, 2) for sharp
-            sections, in [0, 3) for blunt ones (:func:`torus_cad.geometry.section.section.closed_points`).
+            sections, in [0, 3) for blunt ones
+            (:func:`torus_cad.geometry.section.section.closed_points`).
         trailing_edge_index: column of the sharp trailing edge, or of the upper corner of a
             blunt one (None if not sampled exactly).
         frames: the frames the sections sit on.
@@ -58,7 +59,8 @@ class BladeSurface:
 
     @property
     def trailing_edge_column(self) -> int:
-        """The column of the sharp trailing edge, for surfaces sampled with it as a point (mm arrays' axis 1)."""
+        """The column of the sharp trailing edge, for surfaces sampled with it as a point (mm
+        arrays' axis 1)."""
         if self.trailing_edge_index is None:
             raise ValueError("this surface was sampled without the trailing edge as a point")
         return self.trailing_edge_index
@@ -116,7 +118,8 @@ def s_outside_the_hub(
 
 def with_thin_file_edge_closed(geometry: PropellerGeometry) -> PropellerGeometry:
     """``geometry``, with a coordinate file's open trailing edge closed where it is too thin to mesh
-    outside the hub (:func:`.trailing_edge.closed_if_too_thin`); BladeGeometry.closed_file_edge_mm says so."""
+    outside the hub (:func:`.trailing_edge.closed_if_too_thin`); BladeGeometry.closed_file_edge_mm
+    says so."""
     blade = geometry.blade
     if not has_base(blade.airfoil):  # a sharp section (every NACA one): nothing to close
         return geometry
@@ -132,8 +135,8 @@ def with_thin_file_edge_closed(geometry: PropellerGeometry) -> PropellerGeometry
 def check_trailing_edge(
     blade: BladeGeometry, centerline: Centerline, hub_radius_mm: float, hub_length_mm: float
 ) -> None:
-    """Refuse a blunt trailing edge thicker than the blade's sections where the blade is outside the hub
-    (:func:`.trailing_edge.check_trailing_edge_fits`; inside, the hub swallows the sections)."""
+    """Refuse a blunt trailing edge thicker than the blade's sections where the blade is outside the
+    hub (:func:`.trailing_edge.check_trailing_edge_fits`; inside, the hub swallows the sections)."""
     if blade.trailing_edge_thickness_mm <= 0.0:
         return
     s, laws = s_outside_the_hub(centerline, hub_radius_mm, hub_length_mm), blade.laws
@@ -150,7 +153,8 @@ def check_trailing_edge(
 
 
 def sections_at(sections: Sequence[Section], t: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Every section at the closed parameters ``t``: ``(p, 2)`` if they are all one section, else ``(k, p, 2)``."""
+    """Every section at the closed parameters ``t``: ``(p, 2)`` if they are all one section, else
+    ``(k, p, 2)``."""
     if isinstance(sections, BluntSections):
         return sections.points_at(t)
     base = has_base(sections[0])
@@ -229,7 +233,8 @@ def blade_surface_at(
     points: int,
     anchor_trailing_edge: bool = True,
 ) -> BladeSurface:
-    """:func:`blade_surface` with its sections at the centerline parameters ``s`` ``(k,)`` (increasing)."""
+    """:func:`blade_surface` with its sections at the centerline parameters ``s`` ``(k,)``
+    (increasing)."""
     frames = blade_frames(blade, centerline, s)
     along = sections_along(blade, frames.s)
     shared = all(section is along[0] for section in along)

@@ -17,15 +17,16 @@ KNOT_VECTOR = (0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0)
 
 
 def hub_inset_radius_mm(hub_radius_mm: float) -> float:
-    """R_inset = R - R/8 (spec §3.2), mm: the radius at which the blade's ends (frame L's origin) sit in a hub
-    of radius ``hub_radius_mm``. The one place the rule is written."""
+    """R_inset = R - R/8 (spec §3.2), mm: the radius at which the blade's ends (frame L's origin)
+    sit in a hub of radius ``hub_radius_mm``. The one place the rule is written."""
     return hub_radius_mm - hub_radius_mm / 8.0
 
 
 def local_to_cylindrical(
     local: ArrayLike, hub_radius: float, hub_length: float, blade_angle_deg: float
 ) -> NDArray[np.float64]:
-    """Frame L -> global cylindrical (r mm, theta deg, z mm), ``(k, 3)`` (spec §3.3: M . P_L + P1_C)."""
+    """Frame L -> global cylindrical (r mm, theta deg, z mm), ``(k, 3)`` (spec §3.3: M . P_L +
+    P1_C)."""
     local = np.atleast_2d(np.asarray(local, dtype=float))
     change_of_basis = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
     origin = np.array([hub_inset_radius_mm(hub_radius), blade_angle_deg, hub_length / 2.0 - 1.0])
@@ -69,7 +70,8 @@ class Centerline:
         hub_length_mm: float,
         blade_angle_deg: float,
     ) -> "Centerline":
-        """The centerline whose control points ``(4, 3)`` are given in frame L of a blade at ``blade_angle_deg``."""
+        """The centerline whose control points ``(4, 3)`` are given in frame L of a blade at
+        ``blade_angle_deg``."""
         cylindrical = local_to_cylindrical(
             local_control_points, hub_radius_mm, hub_length_mm, blade_angle_deg
         )

@@ -1,4 +1,5 @@
-"""A conventional (open-tip) propeller blade from a station table, sampled as a :class:`BladeSurface`.
+"""A conventional (open-tip) propeller blade from a station table, sampled as a
+:class:`BladeSurface`.
 
 Blade 0 runs along +x (radially out); the spin axis is z. At radius r (mm) the section (the
 design's chord-unit airfoil, its thickness scaled to the station's t/c when given) has chord c(r)
@@ -17,15 +18,17 @@ sweep it lies on the x axis; with a sweep (APC's definition) the section moves a
 leading edge lies ``sweep`` ahead (toward -y) of the x axis.
 
 Root: stations below the table's first radius r_1 hold the first station's beta and thickness; the
-blade continues down to r_0 = :data:`~torus_cad.geometry.blade.conventional_blade.CONVENTIONAL_ROOT_RADIUS_FRACTION` x the
-hub radius, with the chord blended (smoothstep in r on [r_0, max(r_1, R_hub)]) to a root chord that
-fits inside the hub, and the section's mid chord blended onto the x axis there. The hub swallows
-that blend. Tip: the last section (r = R, the table's tip chord) is the blade's open end; the
-kernel caps it with a planar face.
+blade continues down to r_0 =
+:data:`~torus_cad.geometry.blade.conventional_blade.CONVENTIONAL_ROOT_RADIUS_FRACTION` x the hub
+radius, with the chord blended (smoothstep in r on [r_0, max(r_1, R_hub)]) to a root chord that fits
+inside the hub, and the section's mid chord blended onto the x axis there. The hub swallows that
+blend. Tip: the last section (r = R, the table's tip chord) is the blade's open end; the kernel caps
+it with a planar face.
 
 Laws in r are monotone cubic (PCHIP, scipy) through the stations; the sections are spaced in
 r(s) = r_0 + (R - r_0) ((1 - a) s + a sin(pi s / 2)), s uniform in [0, 1], a =
-:data:`~torus_cad.geometry.blade.conventional_blade.CONVENTIONAL_TIP_CLUSTERING`, densest at the tip.
+:data:`~torus_cad.geometry.blade.conventional_blade.CONVENTIONAL_TIP_CLUSTERING`, densest at the
+tip.
 """
 
 from __future__ import annotations
@@ -111,9 +114,10 @@ class ScaledThickness:
 
 
 def thickness_scaled(section: Section, factor: float) -> Section:
-    """``section`` with its thickness times ``factor``: a NACA section with its thickness number scaled (the
-    same as :class:`ScaledThickness` with the thickness normal to the camber line, and analytic), any other
-    section as a :class:`ScaledThickness`; ``section`` itself for a factor of 1."""
+    """``section`` with its thickness times ``factor``: a NACA section with its thickness number
+    scaled (the same as :class:`ScaledThickness` with the thickness normal to the camber line, and
+    analytic), any other section as a :class:`ScaledThickness`; ``section`` itself for a factor of
+    1."""
     if factor == 1.0:
         return section
     if isinstance(section, NacaAirfoil | Naca5Airfoil) and section.camber_normal:
@@ -131,8 +135,10 @@ class ConventionalBlade:
         airfoil: the chord-unit section; its thickness is scaled to the stations' t/c when given.
         stacking: chord fraction of the stacking point (0 = leading edge).
         hub: the hub the root sits in.
-        trailing_edge_thickness_mm: a blunt trailing edge this thick on every section (0 = the airfoil's own edge).
-        round_trailing_edge: that edge ends in a round cap (else a flat base), as the toroidal blade's
+        trailing_edge_thickness_mm: a blunt trailing edge this thick on every section (0 = the
+            airfoil's own edge).
+        round_trailing_edge: that edge ends in a round cap (else a flat base), as the toroidal
+            blade's
             (:mod:`torus_cad.geometry.blade.trailing_edge`).
     """
 
@@ -155,7 +161,8 @@ class ConventionalBlade:
         return max(float(self.stations.r_over_r[0]) * self.tip_radius_mm, self.hub.radius_mm)
 
     def _law(self, values: NDArray[np.float64], r_mm: NDArray[np.float64]) -> NDArray[np.float64]:
-        """A station column interpolated (PCHIP) at ``r_mm``, held constant beyond the table's ends."""
+        """A station column interpolated (PCHIP) at ``r_mm``, held constant beyond the table's
+        ends."""
         stations_mm = self.stations.r_over_r * self.tip_radius_mm
         if len(stations_mm) < 3:
             return np.interp(r_mm, stations_mm, values)
@@ -172,20 +179,23 @@ class ConventionalBlade:
         return self.tip_radius_mm * self._law(self.stations.chord_over_r, r)
 
     def thickness_factor(self, r_mm: ArrayLike) -> NDArray[np.float64]:
-        """The stations' t/c over the airfoil's own maximum thickness at ``r_mm`` ``(k,)`` (1 without t/c)."""
+        """The stations' t/c over the airfoil's own maximum thickness at ``r_mm`` ``(k,)`` (1
+        without t/c)."""
         r = np.atleast_1d(np.asarray(r_mm, dtype=float))
         if self.stations.thickness_ratio is None:
             return np.ones_like(r)
         return self._law(self.stations.thickness_ratio, r) / max_thickness(self.airfoil)
 
     def blend(self, r_mm: ArrayLike) -> NDArray[np.float64]:
-        """The root blend's weight at ``r_mm``: 0 at r_0, 1 from :attr:`blend_end_mm` out (smoothstep)."""
+        """The root blend's weight at ``r_mm``: 0 at r_0, 1 from :attr:`blend_end_mm` out
+        (smoothstep)."""
         r = np.atleast_1d(np.asarray(r_mm, dtype=float))
         x = np.clip((r - self.root_radius_mm) / (self.blend_end_mm - self.root_radius_mm), 0.0, 1.0)
         return x * x * (3.0 - 2.0 * x)
 
     def root_chord_mm(self) -> float:
-        """The largest chord (up to the table's first one) whose section fits inside the hub at r_0, mm."""
+        """The largest chord (up to the table's first one) whose section fits inside the hub at r_0,
+        mm."""
         r0 = self.root_radius_mm
         beta = np.radians(float(self.beta_deg([r0])[0]))
         thickness = float(self.thickness_factor([r0])[0]) * max_thickness(self.airfoil)
@@ -201,7 +211,8 @@ class ConventionalBlade:
         return root + weight * (self.table_chord_mm(r_mm) - root)
 
     def mid_chord_offset_mm(self, r_mm: ArrayLike) -> NDArray[np.float64]:
-        """``(k, 2)`` the (y, z) of the section's mid chord (module docstring's stacking, root blend included), mm."""
+        """``(k, 2)`` the (y, z) of the section's mid chord (module docstring's stacking, root blend
+        included), mm."""
         r = np.atleast_1d(np.asarray(r_mm, dtype=float))
         beta = np.radians(self.beta_deg(r))
         chord = self.chord_mm(r)
@@ -213,14 +224,16 @@ class ConventionalBlade:
         return np.asarray(self.blend(r)[:, None] * offset, dtype=float)
 
     def section_radii_mm(self, sections: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """``(s, r)``, each ``(sections,)``: s uniform in [0, 1], r(s) clustered at the tip (module docstring), mm."""
+        """``(s, r)``, each ``(sections,)``: s uniform in [0, 1], r(s) clustered at the tip (module
+        docstring), mm."""
         s = np.linspace(0.0, 1.0, sections)
         a = CONVENTIONAL_TIP_CLUSTERING
         fraction = (1.0 - a) * s + a * np.sin(0.5 * np.pi * s)
         return s, self.root_radius_mm + (self.tip_radius_mm - self.root_radius_mm) * fraction
 
     def frames(self, s: NDArray[np.float64], r_mm: NDArray[np.float64]) -> Frames:
-        """The sections' frames: origin at the mid chord on the chord line, T = +x, N the chord direction, B = T x N."""
+        """The sections' frames: origin at the mid chord on the chord line, T = +x, N the chord
+        direction, B = T x N."""
         beta = np.radians(self.beta_deg(r_mm))
         offset = self.mid_chord_offset_mm(r_mm)
         zeros, ones = np.zeros_like(beta), np.ones_like(beta)
@@ -231,8 +244,9 @@ class ConventionalBlade:
         return Frames(s, origin, tangent, normal, binormal)
 
     def section_at(self, r_mm: float) -> Section:
-        """The chord-unit section at radius ``r_mm``: the airfoil with its thickness scaled to the station's
-        t/c (itself without t/c), opened to the blunt trailing edge in mm when there is one."""
+        """The chord-unit section at radius ``r_mm``: the airfoil with its thickness scaled to the
+        station's t/c (itself without t/c), opened to the blunt trailing edge in mm when there is
+        one."""
         section = thickness_scaled(self.airfoil, float(self.thickness_factor([r_mm])[0]))
         if self.trailing_edge_thickness_mm <= 0.0:
             return section
@@ -242,8 +256,8 @@ class ConventionalBlade:
         )[0]
 
     def check_trailing_edge(self, r_mm: NDArray[np.float64]) -> None:
-        """GeometryError when the blunt trailing edge is thicker than TRAILING_EDGE_THICKNESS_LIMIT x a
-        section's own largest thickness at the radii ``r_mm`` (mm)."""
+        """GeometryError when the blunt trailing edge is thicker than TRAILING_EDGE_THICKNESS_LIMIT
+        x a section's own largest thickness at the radii ``r_mm`` (mm)."""
         if self.trailing_edge_thickness_mm <= 0.0:
             return
         own_mm = self.chord_mm(r_mm) * self.thickness_factor(r_mm) * max_thickness(self.airfoil)
@@ -288,8 +302,8 @@ def conventional_surface(blade: ConventionalBlade, sections: int, points: int) -
 def check_conventional_feasible(
     blade: ConventionalBlade, surface: BladeSurface, blades: int
 ) -> None:
-    """Refuse a blade whose root section leaves the hub, whose blunt trailing edge is too thick, or whose
-    neighbours would meet outside the hub (``surface``: blade 0, at any angle about the axis).
+    """Refuse a blade whose root section leaves the hub, whose blunt trailing edge is too thick, or
+    whose neighbours would meet outside the hub (``surface``: blade 0, at any angle about the axis).
 
     The root must lie inside the hub (r < R_hub, |z| < L/2) so that the fuse hides it. Blades meet
     when, at some radius outside the hub, one blade's angular extent about the axis exceeds the
@@ -326,7 +340,8 @@ def check_conventional_feasible(
 
 
 def rotated_surface(surface: BladeSurface, angle_deg: float) -> BladeSurface:
-    """``surface`` (points and frames) rotated by ``angle_deg`` about +z (a blade at another angle)."""
+    """``surface`` (points and frames) rotated by ``angle_deg`` about +z (a blade at another
+    angle)."""
     if angle_deg == 0.0:
         return surface
     angle = np.radians(angle_deg)

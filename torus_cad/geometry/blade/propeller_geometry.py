@@ -1,4 +1,5 @@
-"""The propeller's geometry as kernel-free objects: hub, blade (section, laws, centerline, frame), pattern.
+"""The propeller's geometry as kernel-free objects: hub, blade (section, laws, centerline, frame),
+pattern.
 
 The parameter schema (:mod:`torus_cad.parameters`) converts a design into a
 :class:`PropellerGeometry`; every geometry function takes these objects, not the parameter
@@ -40,18 +41,22 @@ class BladeGeometry:
     """One blade: its section, how the section changes along s, and the frame it sits on.
 
     Attributes:
-        airfoil: the chord-unit section (spec §1; any :class:`~torus_cad.geometry.section.section.Section`:
-            NACA 4- or 5-digit, a coordinate file).
+        airfoil: the chord-unit section (spec §1; any
+            :class:`~torus_cad.geometry.section.section.Section`: NACA 4- or 5-digit, a coordinate
+            file).
         laws: alpha(s), Sx(s), Sy(s) and the pivot (spec §2).
         local_control_points: ``(4, 3)`` P1..P4 in the hub's frame L ([deg, mm, mm], spec §3.1).
         frame: the moving frame's kind (spec §4).
         trailing_edge_thickness_mm: a blunt trailing edge this thick on every section (mm; 0 =
-            the section's own edge, sharp for NACA sections; :mod:`torus_cad.geometry.blade.trailing_edge`).
+            the section's own edge, sharp for NACA sections;
+            :mod:`torus_cad.geometry.blade.trailing_edge`).
         round_trailing_edge: a blunt trailing edge (the thickness above, or a coordinate file's open
-            edge) ends in a round cap (True) or a flat base (False; :mod:`torus_cad.geometry.blade.trailing_edge`).
+            edge) ends in a round cap (True) or a flat base (False;
+            :mod:`torus_cad.geometry.blade.trailing_edge`).
         closed_file_edge_mm: (thinnest, thickest) open trailing edge of the coordinate file that was
             closed to the sharp ``airfoil`` because it is too thin to mesh, mm
-            (:func:`torus_cad.geometry.blade.trailing_edge.closed_if_too_thin`); None when nothing was closed.
+            (:func:`torus_cad.geometry.blade.trailing_edge.closed_if_too_thin`); None when nothing
+            was closed.
     """
 
     airfoil: Section

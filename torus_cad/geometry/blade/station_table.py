@@ -10,15 +10,15 @@ File layouts (detected by content):
   rows of three numbers ``r/R c/R beta``.
 * **APC PE0** file (``10x7SF-PERF.PE0``): a header with a ``STATION`` line and a units line, then
   rows ``STATION(in) CHORD(in) PITCH-QUOTED(in) PITCH-LE-TE PITCH-PRATHER SWEEP(in) THICKNESS-RATIO
-  TWIST(deg) MAX-THICK ...`` up to the first blank line, and a ``RADIUS: <in>`` line; the performance
-  tables that follow are ignored. beta = atan(quoted pitch / (2 pi r)); the sweep is APC's, the
-  leading edge's distance ahead of the blade's axis in the plane of rotation.
+  TWIST(deg) MAX-THICK ...`` up to the first blank line, and a ``RADIUS: <in>`` line; the
+  performance tables that follow are ignored. beta = atan(quoted pitch / (2 pi r)); the sweep is
+  APC's, the leading edge's distance ahead of the blade's axis in the plane of rotation.
 
 A station file is untrusted input, read through :mod:`torus_cad.runtime.input_files` (a regular
-file, at most :data:`~torus_cad.geometry.blade.station_table.STATION_FILE_MAX_BYTES`). Malformed tables raise
-ParameterError naming the file and the line, never quoting it: a row that is not numbers, missing
-columns, r/R not increasing or out of (0, 1], a chord <= 0 or absurdly large, a beta out of range,
-too many rows (:data:`~torus_cad.tolerances.STATION_MAX_ROWS`).
+file, at most :data:`~torus_cad.geometry.blade.station_table.STATION_FILE_MAX_BYTES`). Malformed
+tables raise ParameterError naming the file and the line, never quoting it: a row that is not
+numbers, missing columns, r/R not increasing or out of (0, 1], a chord <= 0 or absurdly large, a
+beta out of range, too many rows (:data:`~torus_cad.tolerances.STATION_MAX_ROWS`).
 """
 
 from __future__ import annotations
@@ -73,7 +73,8 @@ class StationTable:
         thickness_ratio: ``(n,)`` t/c, or None (the airfoil's own thickness).
         sweep_over_r: ``(n,)`` the leading edge's distance ahead of the blade's axis in the plane of
             rotation, /R, or None (sections stacked at the design's chord fraction).
-        lines: ``(n,)`` the line of each station in its source (1-based; the index + 1 for an inline table).
+        lines: ``(n,)`` the line of each station in its source (1-based; the index + 1 for an inline
+            table).
         source: where the table came from, for messages.
     """
 
@@ -117,7 +118,8 @@ def read_station_file(path: str | Path) -> StationTable:
 
 
 def _uiuc_table(lines: list[str], source: str) -> StationTable:
-    """``r/R c/R beta`` rows after header lines (the first line starting with a number starts the rows)."""
+    """``r/R c/R beta`` rows after header lines (the first line starting with a number starts the
+    rows)."""
     rows: list[list[float]] = []
     numbers: list[int] = []
     for number, line in enumerate(lines, start=1):
@@ -224,7 +226,8 @@ def checked(table: StationTable) -> StationTable:
 
 
 def _check_station(table: StationTable, index: int) -> None:
-    """ParameterError naming the station's line and the rule it breaks (never its values: a file's content)."""
+    """ParameterError naming the station's line and the rule it breaks (never its values: a file's
+    content)."""
     r, chord, beta = table.r_over_r[index], table.chord_over_r[index], table.beta_deg[index]
     if not 0.0 < r <= 1.0:
         raise _fail(table, index, "r/R is out of range; allowed (0, 1]")

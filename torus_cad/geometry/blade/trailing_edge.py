@@ -2,14 +2,14 @@
 
 Each section kind changes its own thickness law smoothly to open its trailing edge by a
 gap g in chord units (``Section.with_trailing_edge_gap``; NACA: y_t + (g / 2) t^4, see
-:mod:`torus_cad.geometry.section.airfoil`). The section then ends in a *base* between the ends of its
-upper and lower surface, and stays closed (:mod:`torus_cad.geometry.section.section`). The base has one
-of two shapes (``airfoil.trailing_edge_shape``):
+:mod:`torus_cad.geometry.section.airfoil`). The section then ends in a *base* between the ends of
+its upper and lower surface, and stays closed (:mod:`torus_cad.geometry.section.section`). The base
+has one of two shapes (``airfoil.trailing_edge_shape``):
 
 * ``flat``: a straight base between two corners;
 * ``round`` (the default): a round cap, the cubic Bezier curve that leaves each surface along its
-  own tangent (:class:`~torus_cad.geometry.section.section.RoundTrailingEdge`), so the section is one
-  smooth (G1) closed curve and the blade has no sharp trailing-edge edge. Its handles are 2/3 of
+  own tangent (:class:`~torus_cad.geometry.section.section.RoundTrailingEdge`), so the section is
+  one smooth (G1) closed curve and the blade has no sharp trailing-edge edge. Its handles are 2/3 of
   the thickness *in mm* long (:func:`round_cap_handles`): after the section transform the cap is
   the cubic near-half-circle of that diameter (within 1.8 % of its radius; exactly tangent to
   both surfaces, and a little flatter than a half circle where the surfaces converge).
@@ -111,7 +111,8 @@ def own_gap(section: Section) -> float:
 def round_cap_handles(
     ends: NDArray[np.float64], derivatives: NDArray[np.float64], matrices: NDArray[np.float64]
 ) -> NDArray[np.float64]:
-    """Handle lengths h_u, h_l (chord units) of round caps that are near half circles in mm: ``(k, 2)``.
+    """Handle lengths h_u, h_l (chord units) of round caps that are near half circles in mm: ``(k,
+    2)``.
 
     Args:
         ends: ``(k, 2, 2)`` the surfaces' ends U, L of each section, chord units.
@@ -135,7 +136,8 @@ def _family_ends(
     tuple[NDArray[np.float64], NDArray[np.float64]], tuple[NDArray[np.float64], NDArray[np.float64]]
 ]:
     """:func:`half_ends` and :func:`end_derivatives` of ``section`` opened by 0 and by 1, remembered
-    (every call of :func:`torus_cad.geometry.blade.blade_surface.sections_along` makes a new family)."""
+    (every call of :func:`torus_cad.geometry.blade.blade_surface.sections_along` makes a new
+    family)."""
     family = _opened_by_0_and_1(section)
     return (
         (half_ends(family[0]), half_ends(family[1])),
@@ -144,12 +146,13 @@ def _family_ends(
 
 
 class BluntSections(Sequence[Section]):
-    """The sections of a blade with a blunt trailing edge: ``section`` opened by ``gaps[i]`` at the i-th s,
-    flat, or, given the section matrices S(s) R(s) ``(k, 2, 2)`` as ``round_cap_matrices``, with a
-    round cap whose handles (:attr:`handles`) are made in mm by :func:`round_cap_handles`.
+    """The sections of a blade with a blunt trailing edge: ``section`` opened by ``gaps[i]`` at the
+    i-th s, flat, or, given the section matrices S(s) R(s) ``(k, 2, 2)`` as ``round_cap_matrices``,
+    with a round cap whose handles (:attr:`handles`) are made in mm by :func:`round_cap_handles`.
 
     Every section kind opens its trailing edge affinely in the gap (the thickness law changes by
-    g times a fixed shape), so the whole family is evaluated from two sections: see :meth:`points_at`.
+    g times a fixed shape), so the whole family is evaluated from two sections: see
+    :meth:`points_at`.
     """
 
     def __init__(
@@ -165,8 +168,9 @@ class BluntSections(Sequence[Section]):
 
     @property
     def handles(self) -> NDArray[np.float64] | None:
-        """The round caps' handle lengths h_u, h_l, chord units: ``(k, 2)``; None when flat. Made when
-        first asked for (the surfaces alone, e.g. for the printability report, do not need them)."""
+        """The round caps' handle lengths h_u, h_l, chord units: ``(k, 2)``; None when flat. Made
+        when first asked for (the surfaces alone, e.g. for the printability report, do not need
+        them)."""
         if self.round_cap_matrices is None:
             return None
         if self._handles is None:
@@ -181,7 +185,8 @@ class BluntSections(Sequence[Section]):
         return start[None] + self.gaps[:, None, None] * (unit - start)[None]
 
     def end_derivatives(self) -> NDArray[np.float64]:
-        """The surfaces' end derivatives d f / du of every section: ``(k, 2, 2)`` (affine in the gap too)."""
+        """The surfaces' end derivatives d f / du of every section: ``(k, 2, 2)`` (affine in the gap
+        too)."""
         start, unit = _family_ends(self.section)[1]
         return start[None] + self.gaps[:, None, None] * (unit - start)[None]
 
@@ -217,7 +222,8 @@ class BluntSections(Sequence[Section]):
         return RoundTrailingEdge(opened, float(lengths[index, 0]), float(lengths[index, 1]))
 
     def points_at(self, t: ArrayLike) -> NDArray[np.float64]:
-        """Every section at the closed parameters ``t`` (with a base): ``(len(self), len(t), 2)`` chord units."""
+        """Every section at the closed parameters ``t`` (with a base): ``(len(self), len(t), 2)``
+        chord units."""
         t = np.atleast_1d(np.asarray(t, dtype=float))
         start, unit = (
             closed_points(section, t, base=True) for section in _opened_by_0_and_1(self.section)
@@ -239,7 +245,8 @@ def blunt_sections(
     round_cap: bool = False,
 ) -> BluntSections:
     """One section per s whose trailing edge is ``thickness_mm`` thick once transformed (spec §2.3),
-    or, with None, ``section``'s own (a coordinate file's open edge); flat, or round with ``round_cap``."""
+    or, with None, ``section``'s own (a coordinate file's open edge); flat, or round with
+    ``round_cap``."""
     count = len(np.atleast_1d(np.asarray(angle_deg, dtype=float)))
     gaps = (
         np.full(count, own_gap(section))
@@ -277,7 +284,8 @@ def check_trailing_edge_fits(
     s: ArrayLike,
     points: int = 200,
 ) -> None:
-    """Refuse a blunt trailing edge thicker than TRAILING_EDGE_THICKNESS_LIMIT x a section's largest thickness.
+    """Refuse a blunt trailing edge thicker than TRAILING_EDGE_THICKNESS_LIMIT x a section's largest
+    thickness.
 
     The thickness is the section's own (without the base), measured perpendicular to its chord
     in mm, at the s given (``angle_deg``, ``scale_x``, ``scale_y`` are the laws there).
@@ -309,7 +317,8 @@ def closed_if_too_thin(
 ) -> tuple[Section, tuple[float, float] | None]:
     """``section`` itself, or, when its own base (a coordinate file's open trailing edge) is thinner
     than MIN_BLUNT_TRAILING_EDGE_MM at one of the ``s`` given (the sections outside the hub), the
-    section closed to a sharp edge and the (thinnest, thickest) base it had there, mm (module docstring)."""
+    section closed to a sharp edge and the (thinnest, thickest) base it had there, mm (module
+    docstring)."""
     s = np.atleast_1d(np.asarray(s, dtype=float))
     # only a file has its own
     if not isinstance(section, AirfoilFile) or not has_base(section) or not len(s):

@@ -1,4 +1,5 @@
-"""Structured, watertight triangle mesh of one blade, straight from the sampled surface (spec §7.1-7.2).
+"""Structured, watertight triangle mesh of one blade, straight from the sampled surface (spec
+§7.1-7.2).
 
 For users who mesh without the B-rep: the (sections x points) grid is split into triangles
 along quad diagonals, the two end sections are capped by zipping the upper surface to the
@@ -56,14 +57,16 @@ class TriangleMesh:
         return counts
 
     def is_watertight(self) -> bool:
-        """Every edge shared by exactly two triangles, and each directed edge used once (consistent orientation)."""
+        """Every edge shared by exactly two triangles, and each directed edge used once (consistent
+        orientation)."""
         directed = self.faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
         unique_directed = np.unique(directed, axis=0)
         return bool(np.all(self.edge_use_counts() == 2) and len(unique_directed) == len(directed))
 
 
 def _zipper_cap(chord: NDArray[np.float64], trailing_edge_index: int) -> NDArray[np.int64]:
-    """Triangulate a section ring ``(p,)`` between its upper and lower chains, ordered by chord position."""
+    """Triangulate a section ring ``(p,)`` between its upper and lower chains, ordered by chord
+    position."""
     count = len(chord)
     upper = list(range(0, trailing_edge_index + 1))
     lower = [0] + list(range(count - 1, trailing_edge_index - 1, -1))
@@ -121,8 +124,9 @@ def blade_mesh(surface: BladeSurface) -> TriangleMesh:
 
 
 def side_use_counts(faces: NDArray[np.int64]) -> NDArray[np.int64]:
-    """For each side of each triangle of ``faces`` ``(n, 3)``, how many triangles use its undirected edge,
-    ``(3 n,)`` int in the order (0-1, 1-2, 2-0) per triangle; all 2 for a closed mesh (a hole's rim: 1)."""
+    """For each side of each triangle of ``faces`` ``(n, 3)``, how many triangles use its undirected
+    edge, ``(3 n,)`` int in the order (0-1, 1-2, 2-0) per triangle; all 2 for a closed mesh (a
+    hole's rim: 1)."""
     sides = np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
     keys = sides[:, 0] * (int(faces.max()) + 1) + sides[:, 1]  # one integer per side: a 1-D sort
     _, inverse, uses = np.unique(keys, return_inverse=True, return_counts=True)

@@ -1,4 +1,5 @@
-"""Mounting features of the hub: bore, D-flat, set screw, chamfer; where they go and what they may not cut.
+"""Mounting features of the hub: bore, D-flat, set screw, chamfer; where they go and what they may
+not cut.
 
 Kernel-free: the limits come from the blades' sampled surfaces. The hub's parameters check
 what depends on the hub alone (wall thickness, flat depth, ...); here the blades are checked:
@@ -139,7 +140,8 @@ def chamfer_limit_mm(
     hub_radius_mm: float,
     hub_length_mm: float,
 ) -> float:
-    """Largest chamfer (mm) whose cut, (R - r) + (L/2 - |z|) < c, misses every blade point inside the hub."""
+    """Largest chamfer (mm) whose cut, (R - r) + (L/2 - |z|) < c, misses every blade point inside
+    the hub."""
     inside = radius <= hub_radius_mm
     if not np.any(inside):
         return math.inf
@@ -183,7 +185,8 @@ def set_screw_angle_deg(
     diameter_mm: float,
     candidates_deg: Sequence[float] | None = None,
 ) -> tuple[float, float]:
-    """The direction of a radial hole at z = 0 whose line stays farthest from every blade, and that distance.
+    """The direction of a radial hole at z = 0 whose line stays farthest from every blade, and that
+    distance.
 
     The line is the ray from the z axis outward at z = 0: the hole, and the way a screw and
     its key come in from outside, so it must clear the blades beyond the hub too (a toroidal
@@ -228,7 +231,8 @@ def set_screw_angle_deg(
 
 
 def set_screw_arc_deg(mounting: HubMounting, hub_radius_mm: float) -> tuple[float, float] | None:
-    """Angular arc (start, end) degrees the set-screw hole takes on the hub's surface (plus a margin), or None."""
+    """Angular arc (start, end) degrees the set-screw hole takes on the hub's surface (plus a
+    margin), or None."""
     if mounting.set_screw_diameter_mm == 0.0:
         return None
     half = (

@@ -66,7 +66,8 @@ def seam_angle_deg(
 
     Blade i's footprint is blade 0's rotated by 360 i / n (spec §6.1). The seam goes to the
     middle of the widest free gap between the footprints of all ``blades`` blades and the
-    ``reserved_arcs_deg`` (start, end) (e.g. a set-screw hole); None when they cover the whole circle.
+    ``reserved_arcs_deg`` (start, end) (e.g. a set-screw hole); None when they cover the whole
+    circle.
     """
     occupied = np.zeros(_SEAM_SCAN_BINS, dtype=bool)
     bin_deg = 360.0 / _SEAM_SCAN_BINS

@@ -11,8 +11,8 @@ thickness law to y_t(t) + (g / 2) t^4, i.e. the last coefficient of the NACA thi
 polynomial -0.1036 becomes -0.1036 + g / (10 thickness). This is the classical "open
 trailing edge" variant of the four-digit thickness (-0.1015 gives g = 0.0021 x 10 thickness):
 y_t is unchanged at the leading edge with its derivatives up to the third, and changes by
-g / 2 t^4 elsewhere (the half-thickness by 0.004 g at 30 % of the chord, by g / 2 at the trailing edge),
-so the section keeps its shape and gets a base of thickness g, normal to the camber line at
+g / 2 t^4 elsewhere (the half-thickness by 0.004 g at 30 % of the chord, by g / 2 at the trailing
+edge), so the section keeps its shape and gets a base of thickness g, normal to the camber line at
 the trailing edge (along y when camber_normal is False).
 """
 
@@ -49,7 +49,8 @@ class _ThicknessOnCamberLine:
     def _mean_line(
         self, t: NDArray[np.float64], order: int
     ) -> NDArray[np.float64]:  # pragma: no cover - abstract
-        """The ``order``-th t derivative (0, 1 or 2) of the mean camber line y_c at ``t``, shape of ``t``."""
+        """The ``order``-th t derivative (0, 1 or 2) of the mean camber line y_c at ``t``, shape of
+        ``t``."""
         raise NotImplementedError
 
     def camber(self, t: ArrayLike) -> NDArray[np.float64]:
@@ -65,14 +66,16 @@ class _ThicknessOnCamberLine:
         return self._mean_line(np.asarray(t, dtype=float), 2)
 
     def half_thickness(self, t: ArrayLike) -> NDArray[np.float64]:
-        """y_t(t) = 5 thickness [0.2969 sqrt(t) - 0.1260 t - ...] + g/2 t^4, shape of ``t``; zero at t = 0."""
+        """y_t(t) = 5 thickness [0.2969 sqrt(t) - 0.1260 t - ...] + g/2 t^4, shape of ``t``; zero at
+        t = 0."""
         t = np.asarray(t, dtype=float)
         a0, a1, a2, a3, a4 = THICKNESS_COEFFICIENTS
         base = 5 * self.thickness * (a0 * np.sqrt(t) + t * (a1 + t * (a2 + t * (a3 + t * a4))))
         return base + 0.5 * self.trailing_edge_gap * t**4
 
     def with_trailing_edge_gap(self, gap: float) -> Self:
-        """The same section with a base of ``gap`` (chord units) at the trailing edge (module docstring)."""
+        """The same section with a base of ``gap`` (chord units) at the trailing edge (module
+        docstring)."""
         # subclasses are dataclasses
         changed: Self = dataclasses.replace(cast(Any, self), trailing_edge_gap=float(gap))
         return changed
@@ -95,7 +98,8 @@ class _ThicknessOnCamberLine:
     def surfaces(
         self, chord_position: ArrayLike
     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Upper and lower surface points at chord positions ``t``, each ``(len(t), 2)`` (spec §1.2)."""
+        """Upper and lower surface points at chord positions ``t``, each ``(len(t), 2)`` (spec
+        §1.2)."""
         t = np.asarray(chord_position, dtype=float)
         y_c = self.camber(t)
         y_t = self.half_thickness(t)
@@ -148,7 +152,8 @@ class NacaAirfoil(_ThicknessOnCamberLine):
         camber_position: p, fraction of chord in (0, 1) (ignored when m = 0).
         thickness: maximum thickness, fraction of chord.
         camber_normal: apply thickness normal to the camber line (True) or along y (theta_c = 0).
-        trailing_edge_gap: thickness of a blunt trailing edge, fraction of chord (0 = the spec's sharp edge).
+        trailing_edge_gap: thickness of a blunt trailing edge, fraction of chord (0 = the spec's
+            sharp edge).
     """
 
     max_camber: float = 0.02
@@ -171,8 +176,8 @@ class NacaAirfoil(_ThicknessOnCamberLine):
         return ()
 
     def _mean_line(self, t: NDArray[np.float64], order: int) -> NDArray[np.float64]:
-        """Two parabolas meeting at p with zero slope: m/p^2 (2pt - t^2) before, m/(1-p)^2 ((1-2p) + 2pt - t^2)
-        after; the curvature is piecewise constant."""
+        """Two parabolas meeting at p with zero slope: m/p^2 (2pt - t^2) before, m/(1-p)^2 ((1-2p) +
+        2pt - t^2) after; the curvature is piecewise constant."""
         m, p = self.max_camber, self.camber_position
         if m == 0.0:
             return np.zeros_like(t)
@@ -248,7 +253,8 @@ class Naca5Airfoil(_ThicknessOnCamberLine):
 
     @property
     def kinks(self) -> tuple[float, ...]:
-        """u = sqrt(r): the mean line's third derivative jumps there (its curvature is continuous)."""
+        """u = sqrt(r): the mean line's third derivative jumps there (its curvature is
+        continuous)."""
         return (float(np.sqrt(self.r)),)
 
     def _mean_line(self, t: NDArray[np.float64], order: int) -> NDArray[np.float64]:

@@ -32,16 +32,17 @@ trailing-edge ends are ``gap`` apart in y; a file whose trailing edge is open al
 its gap when no thickness is asked for. :meth:`AirfoilFile.sharpened` closes an open edge the
 same way in x and y, so that both ends meet (the spec's sharp trailing edge).
 
-A coordinate file is untrusted input, read by torus_cad.runtime.input_files like a configuration file:
-a regular file only (no device, named pipe, socket or folder), at most
+A coordinate file is untrusted input, read by torus_cad.runtime.input_files like a configuration
+file: a regular file only (no device, named pipe, socket or folder), at most
 :data:`~torus_cad.tolerances.AIRFOIL_FILE_MAX_BYTES`, at most
 :data:`~torus_cad.tolerances.AIRFOIL_FILE_MAX_POINTS` points, and the parsing and the crossing
-checks within :data:`~torus_cad.geometry.section.airfoil_file.AIRFOIL_FILE_TIME_LIMIT_S`. Malformed files raise
-ParameterError naming the file, the line and what was expected there, never quoting the line
-(the path may name any file the user can read): no coordinates, a line that is not two numbers,
-a coordinate that is not finite or beyond :data:`~torus_cad.geometry.section.airfoil_file.AIRFOIL_COORDINATE_LIMIT`,
-one surface only, surfaces that cross, a chord of zero. The crossing test compares only segments whose
-bounding boxes overlap (a sort and sweep over x), O(n log n) for a section, not all O(n^2) pairs.
+checks within :data:`~torus_cad.geometry.section.airfoil_file.AIRFOIL_FILE_TIME_LIMIT_S`. Malformed
+files raise ParameterError naming the file, the line and what was expected there, never quoting the
+line (the path may name any file the user can read): no coordinates, a line that is not two numbers,
+a coordinate that is not finite or beyond
+:data:`~torus_cad.geometry.section.airfoil_file.AIRFOIL_COORDINATE_LIMIT`, one surface only,
+surfaces that cross, a chord of zero. The crossing test compares only segments whose bounding boxes
+overlap (a sort and sweep over x), O(n log n) for a section, not all O(n^2) pairs.
 """
 
 from __future__ import annotations
@@ -97,15 +98,19 @@ _CANDIDATES_PER_SEGMENT = 64
 
 
 class AirfoilFile:
-    """A section read from a coordinate file (implements :class:`~torus_cad.geometry.section.section.Section`).
+    """A section read from a coordinate file (implements
+    :class:`~torus_cad.geometry.section.section.Section`).
 
     Attributes:
         name: the file's first line (or its file name when the file has no name line).
         source: the path it was read from (for messages).
-        loop: ``(n, 2)`` the file's points in Selig order, in chord units (leading edge at the origin).
+        loop: ``(n, 2)`` the file's points in Selig order, in chord units (leading edge at the
+            origin).
         lines: ``(n,)`` the file line of each point of ``loop``.
-        trailing_edge_extra: added trailing-edge thickness Delta (chord units, see the module docstring).
-        trailing_edge_shift_x: the same law's offset in x (chord units; nonzero only once sharpened).
+        trailing_edge_extra: added trailing-edge thickness Delta (chord units, see the module
+            docstring).
+        trailing_edge_shift_x: the same law's offset in x (chord units; nonzero only once
+            sharpened).
     """
 
     def __init__(
@@ -180,7 +185,8 @@ class AirfoilFile:
         return np.linalg.norm(velocity, axis=-1)
 
     def with_trailing_edge_gap(self, gap: float) -> AirfoilFile:
-        """A copy whose trailing-edge ends are ``gap`` apart in y (chord units; the x offset is the file's)."""
+        """A copy whose trailing-edge ends are ``gap`` apart in y (chord units; the x offset is the
+        file's)."""
         result = copy.copy(self)
         result.trailing_edge_extra = 0.0
         ends = [result.points_on_half(np.array([1.0]), side)[0] for side in (True, False)]
@@ -252,7 +258,8 @@ def _load_cached(resolved: str, size: int, modified_ns: int, path: str) -> Airfo
 
 
 def read_airfoil_file(path: str | Path) -> AirfoilFile:
-    """Read a Selig or Lednicer coordinate file; ParameterError naming the file and line if malformed.
+    """Read a Selig or Lednicer coordinate file; ParameterError naming the file and line if
+    malformed.
 
     The file is untrusted: see the module docstring for what is refused and the limits.
     """
@@ -445,7 +452,8 @@ def _segments(
 def _candidate_pairs(
     start: NDArray[np.float64], end: NDArray[np.float64], limit: int
 ) -> NDArray[np.int64]:
-    """Pairs ``(k, 2)`` (i < j) of segments whose bounding boxes overlap: every crossing pair is among them.
+    """Pairs ``(k, 2)`` (i < j) of segments whose bounding boxes overlap: every crossing pair is
+    among them.
 
     Sort and sweep: with the segments sorted by their smallest x, the ones whose x-range overlaps
     segment i's and that start after it are a contiguous run found by binary search, so the pairs
@@ -475,12 +483,13 @@ def _candidate_pairs(
 
 
 def _first_crossing(polygon: NDArray[np.float64], closed: bool) -> tuple[int, int] | None:
-    """Indices (i, j), i < j, of the first pair of non-adjacent segments that properly cross, or None.
+    """Indices (i, j), i < j, of the first pair of non-adjacent segments that properly cross, or
+    None.
 
-    Only the candidate pairs of :func:`_candidate_pairs` are tested exactly. A closed polygon whose last
-    point is its first (within :data:`COINCIDENT_RELATIVE`) closes on that point: its ends, equal but for
-    round-off, would otherwise make a bow-tie of size ~1e-19 whose two sides "cross" (a closed ellipse
-    was refused so). Indices refer to ``polygon`` as given.
+    Only the candidate pairs of :func:`_candidate_pairs` are tested exactly. A closed polygon whose
+    last point is its first (within :data:`COINCIDENT_RELATIVE`) closes on that point: its ends,
+    equal but for round-off, would otherwise make a bow-tie of size ~1e-19 whose two sides "cross"
+    (a closed ellipse was refused so). Indices refer to ``polygon`` as given.
     """
     if (
         closed
@@ -536,7 +545,8 @@ def _check_no_crossing(
 def _check_smooth_section(
     section: AirfoilFile, source: str, budget: TimeBudget, samples: int = 400
 ) -> None:
-    """The spline through the points must not cross itself either (an overshoot between sparse points)."""
+    """The spline through the points must not cross itself either (an overshoot between sparse
+    points)."""
     u = np.linspace(0.0, 1.0, samples)
     upper, lower = section.points_on_half(u, True), section.points_on_half(u, False)
     # trailing edge -> upper -> leading edge -> lower
@@ -558,7 +568,8 @@ def _check_smooth_section(
 
 
 def write_selig_file(path: str | Path, name: str, loop: ArrayLike, digits: int = 7) -> Path:
-    """Write a Selig-layout file: the name line, then one 'x y' line per point of ``loop`` ``(n, 2)``."""
+    """Write a Selig-layout file: the name line, then one 'x y' line per point of ``loop`` ``(n,
+    2)``."""
     path = Path(path)
     lines = [name] + [f"{x: .{digits}f} {y: .{digits}f}" for x, y in np.asarray(loop, dtype=float)]
     path.write_text("\n".join(lines) + "\n")
@@ -568,7 +579,8 @@ def write_selig_file(path: str | Path, name: str, loop: ArrayLike, digits: int =
 def write_lednicer_file(
     path: str | Path, name: str, upper: ArrayLike, lower: ArrayLike, digits: int = 7
 ) -> Path:
-    """Write a Lednicer-layout file: upper and lower ``(k, 2)`` both from the leading edge to the trailing edge."""
+    """Write a Lednicer-layout file: upper and lower ``(k, 2)`` both from the leading edge to the
+    trailing edge."""
     path = Path(path)
     upper, lower = np.asarray(upper, dtype=float), np.asarray(lower, dtype=float)
     lines = [name, f"{len(upper)}. {len(lower)}.", ""]

@@ -15,9 +15,9 @@ t = u^2 (upper) and t = 2 - u^2 (lower).
 
 Any :class:`~torus_cad.geometry.section.section.Section` is sampled this way (NACA 4- and 5-digit,
 .dat files). A section with a blunt trailing edge has a third piece, the base between the two
-surfaces' ends (straight, or a round cap, :mod:`torus_cad.geometry.section.section`); it takes its share
-of the points like the surfaces, equally spaced in its own arc length, so the spacing covers it
-too, and both of its ends are sample points.
+surfaces' ends (straight, or a round cap, :mod:`torus_cad.geometry.section.section`); it takes its
+share of the points like the surfaces, equally spaced in its own arc length, so the spacing covers
+it too, and both of its ends are sample points.
 """
 
 from __future__ import annotations
@@ -90,7 +90,8 @@ class SectionSampling:
 
     Attributes:
         t: ``(n,)`` float, the closed-curve parameter (the spec's, in [0, 2), for a sharp
-            section; in [0, 3) with a base, see :func:`torus_cad.geometry.section.section.closed_points`).
+            section; in [0, 3) with a base, see
+            :func:`torus_cad.geometry.section.section.closed_points`).
         points: ``(n, 2)`` float, chord units, order of f(t): upper surface first.
         perimeter: arc length of the closed section, chord units.
         trailing_edge_index: index of the exact trailing-edge point (the upper corner of a
@@ -140,7 +141,8 @@ def surface_arc_length_table(
 
 @lru_cache(maxsize=4)
 def _gauss_legendre(count: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Gauss-Legendre nodes and weights of ``count`` points on [0, 1] (exact for degree 2 count - 1)."""
+    """Gauss-Legendre nodes and weights of ``count`` points on [0, 1] (exact for degree 2 count -
+    1)."""
     nodes, weights = np.polynomial.legendre.leggauss(count)
     return 0.5 * (nodes + 1.0), 0.5 * weights
 
@@ -235,7 +237,8 @@ def _base_minimum(airfoil: Section) -> int:
 def _shares(
     count: int, lengths: NDArray[np.float64], minimum: NDArray[np.int64]
 ) -> NDArray[np.int64]:
-    """``count`` points split between pieces in proportion to their lengths (largest remainders), each >= its minimum."""
+    """``count`` points split between pieces in proportion to their lengths (largest remainders),
+    each >= its minimum."""
     exact = count * lengths / lengths.sum()
     shares = np.maximum(np.floor(exact).astype(int), minimum)
     while shares.sum() > count:  # the minimums took points: give them back from the largest piece

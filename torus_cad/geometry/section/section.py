@@ -1,4 +1,5 @@
-"""The section protocol: what every 2D blade section (NACA 4- and 5-digit, .dat file, blunt edge) offers.
+"""The section protocol: what every 2D blade section (NACA 4- and 5-digit, .dat file, blunt edge)
+offers.
 
 A section is a closed curve in chord units: the leading edge at (0, 0), the chord along +x
 to the trailing edge near (1, 0). It is made of two *halves*, the upper and the lower
@@ -67,11 +68,13 @@ class Section(Hashable, Protocol):
 
     @property
     def kinks(self) -> tuple[float, ...]:
-        """u values in (0, 1) where the curvature jumps; the arc-length table puts a grid point there."""
+        """u values in (0, 1) where the curvature jumps; the arc-length table puts a grid point
+        there."""
         ...
 
     def with_trailing_edge_gap(self, gap: float) -> Section:
-        """The same section with its thickness law changed so the trailing edge is ``gap`` thick (chord units)."""
+        """The same section with its thickness law changed so the trailing edge is ``gap`` thick
+        (chord units)."""
         ...
 
 
@@ -113,7 +116,8 @@ def closed_points(section: Section, t: ArrayLike, base: bool | None = None) -> N
 
 
 def chord_positions(t: ArrayLike, base: bool) -> NDArray[np.float64]:
-    """Half parameter u^2 of closed parameters ``t`` (the chord position for NACA sections; 1 on the base)."""
+    """Half parameter u^2 of closed parameters ``t`` (the chord position for NACA sections; 1 on the
+    base)."""
     t = np.asarray(t, dtype=float)
     lower_start = 2.0 if base else 1.0
     return np.where(t <= 1.0, t, np.where(t >= lower_start, lower_start + 1.0 - t, 1.0))
@@ -183,7 +187,8 @@ class RoundTrailingEdge:
 def round_cap_poles(
     ends: ArrayLike, tangents: ArrayLike, handles: ArrayLike
 ) -> NDArray[np.float64]:
-    """A round cap's Bezier poles U, U + h_u T_u, L + h_l T_l, L (module docstring): ``(..., 4, d)``.
+    """A round cap's Bezier poles U, U + h_u T_u, L + h_l T_l, L (module docstring): ``(..., 4,
+    d)``.
 
     ``ends`` ``(..., 2, d)`` are U and L, ``tangents`` ``(..., 2, d)`` the unit T_u, T_l (pointing
     aft), ``handles`` ``(..., 2)`` h_u, h_l, all in one unit (chord units or mm)."""
@@ -207,13 +212,15 @@ def end_derivatives(section: Section) -> NDArray[np.float64]:
 
 
 def end_tangents(section: Section) -> NDArray[np.float64]:
-    """Unit tangents T_u, T_l of the halves at their trailing-edge ends, pointing aft: ``(2, 2)``."""
+    """Unit tangents T_u, T_l of the halves at their trailing-edge ends, pointing aft: ``(2,
+    2)``."""
     derivatives = end_derivatives(section)
     return derivatives / np.linalg.norm(derivatives, axis=-1, keepdims=True)
 
 
 def bezier_points(poles: ArrayLike, parameter: ArrayLike) -> NDArray[np.float64]:
-    """A cubic Bezier curve of ``poles`` ``(..., 4, d)`` at ``parameter`` ``(n,)``: ``(..., n, d)``."""
+    """A cubic Bezier curve of ``poles`` ``(..., 4, d)`` at ``parameter`` ``(n,)``: ``(..., n,
+    d)``."""
     poles = np.asarray(poles, dtype=float)
     w = np.atleast_1d(np.asarray(parameter, dtype=float))[:, None]
     bernstein = np.concatenate(
@@ -278,7 +285,8 @@ def section_thickness(
     lower_corner_index: int | None,
     stations: int = THICKNESS_STATIONS,
 ) -> NDArray[np.float64]:
-    """Largest thickness perpendicular to the chord of sections in their planes ``(k, p, 2)``: ``(k,)``.
+    """Largest thickness perpendicular to the chord of sections in their planes ``(k, p, 2)``:
+    ``(k,)``.
 
     The upper surface is points 0..trailing_edge_index, the lower one from the lower corner
     (or the trailing edge) back to point 0; both are read as functions of the position along

@@ -1,4 +1,5 @@
-"""Section curves, kernel-free: each sampled section fitted by one closed cubic B-spline (arrays in, arrays out).
+"""Section curves, kernel-free: each sampled section fitted by one closed cubic B-spline (arrays in,
+arrays out).
 
 The fit and its check of the trailing edge live here, below the kernel, so that a design can be
 refused for them before OpenCascade is imported (:mod:`torus_cad.parameters.design_checks`);
@@ -57,7 +58,8 @@ class SectionFit:
 
 
 def corner_knots(knots: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Interior knots of multiplicity DEGREE: C0 corners of the curve (a blunt trailing edge's lower corner)."""
+    """Interior knots of multiplicity DEGREE: C0 corners of the curve (a blunt trailing edge's lower
+    corner)."""
     distinct, multiplicities = np.unique(knots, return_counts=True)
     return distinct[1:-1][multiplicities[1:-1] >= DEGREE]
 
@@ -73,7 +75,8 @@ def _closed_from_trailing_edge(
 def _fit(
     points: NDArray[np.float64], parameters: NDArray[np.float64], interior_knots: int
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-    """Open clamped cubic least-squares fits of ``(sections, q, 3)`` with pinned ends: poles, knots, errors."""
+    """Open clamped cubic least-squares fits of ``(sections, q, 3)`` with pinned ends: poles, knots,
+    errors."""
     inner = np.quantile(parameters[1:-1], np.linspace(0.0, 1.0, interior_knots + 2)[1:-1])
     knots = np.concatenate(
         [np.full(DEGREE + 1, parameters[0]), inner, np.full(DEGREE + 1, parameters[-1])]
@@ -124,7 +127,8 @@ def _round_cap_poles(
     """The cap's first three poles U, U + h T_u, L + h T_l: ``(sections, 3, 3)`` mm.
 
     ``before_upper`` and ``after_lower`` are the airfoil curve's poles next to U and L, so that
-    T_u, T_l (unit, pointing aft) continue its end tangents: the curve is G1 at both ends of the cap.
+    T_u, T_l (unit, pointing aft) continue its end tangents: the curve is G1 at both ends of the
+    cap.
     """
     handle = ROUND_CAP_HANDLE_FRACTION * np.linalg.norm(upper - lower, axis=-1)
     tangents = np.stack([upper - before_upper, lower - after_lower], axis=1)
@@ -147,7 +151,8 @@ def fit_sections(
     lower_corner_index: int | None = None,
     round_trailing_edge: bool = False,
 ) -> SectionFit:
-    """Fit compatible closed B-splines to sampled sections (kernel-free; the kernel makes wires of them).
+    """Fit compatible closed B-splines to sampled sections (kernel-free; the kernel makes wires of
+    them).
 
     Args:
         section_points: ``(sections, p, 3)`` float, mm; closed rings (last point != first).

@@ -93,7 +93,8 @@ def evaluate(
     degree: int,
     u_derivative: bool = True,
 ) -> tuple[_Array, _Array, _Array]:
-    """Point, d/du (zeros unless ``u_derivative``) and d/dv of line ``rows[i]`` at ``v[i]``, each ``(m, 3)``."""
+    """Point, d/du (zeros unless ``u_derivative``) and d/dv of line ``rows[i]`` at ``v[i]``, each
+    ``(m, 3)``."""
     columns, values = local_basis(v, knots, degree)
     d_columns, d_values = local_basis(v, knots[1:-1], degree - 1)
     point = np.einsum("ml,mlc->mc", values, lines.poles[rows[:, None], columns])
@@ -112,7 +113,8 @@ def _design_matrix(x: NDArray[np.float64], knots: NDArray[np.float64], degree: i
 
 
 def basis(x: NDArray[np.float64], knots: NDArray[np.float64], degree: int) -> NDArray[np.float64]:
-    """Dense ``(len(x), n)`` B-spline basis (scipy's design matrix), x clipped into the knot range."""
+    """Dense ``(len(x), n)`` B-spline basis (scipy's design matrix), x clipped into the knot
+    range."""
     return _design_matrix(x, knots, degree).toarray()
 
 

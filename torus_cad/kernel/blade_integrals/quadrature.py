@@ -331,8 +331,8 @@ def _v_integrals(
     first round evaluates the whole spans as a tensor product (one matrix product per
     quantity, the same v nodes on every line), everything else node by node.
 
-    Returns the ``(U, _INTEGRANDS)`` integrals and the nodes' points ``(n, 3)``, line index and v, or
-    None if some piece needs more than V_MAX_HALVINGS halvings.
+    Returns the ``(U, _INTEGRANDS)`` integrals and the nodes' points ``(n, 3)``, line index and v,
+    or None if some piece needs more than V_MAX_HALVINGS halvings.
     """
     knots, degree = surface.v_knots, surface.v_degree
     spans = np.unique(knots[degree:-degree])

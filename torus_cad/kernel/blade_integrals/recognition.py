@@ -1,7 +1,8 @@
-"""Recognising a hub with blade faces: one solid made of z-axis cylinder faces of one radius (and of a smaller
-one: a plain through-bore), two whole end discs (annuli round the bore) and non-rational B-spline blade faces bounded only by the cylinder's edges, their
-own seam and the edges between two of them; each blade face's untransformed surface and its
-rotation about z."""
+"""Recognising a hub with blade faces: one solid made of z-axis cylinder faces of one radius (and of
+a smaller
+one: a plain through-bore), two whole end discs (annuli round the bore) and non-rational B-spline
+blade faces bounded only by the cylinder's edges, their own seam and the edges between two of them;
+each blade face's untransformed surface and its rotation about z."""
 
 from __future__ import annotations
 
@@ -75,7 +76,8 @@ def recognise(shape: TopoDS_Shape) -> RecognisedHub | None:
 
 
 def _between_blade_faces(edge: TopoDS_Shape, blades: list[TopoDS_Face]) -> bool:
-    """Whether ``edge`` bounds two of the blade faces (the side's faces meet there, inside the blade's boundary)."""
+    """Whether ``edge`` bounds two of the blade faces (the side's faces meet there, inside the
+    blade's boundary)."""
     return (
         sum(1 for face in blades if any(edge.IsSame(own) for own in explore(face, TopAbs_EDGE)))
         == 2
@@ -83,7 +85,8 @@ def _between_blade_faces(edge: TopoDS_Shape, blades: list[TopoDS_Face]) -> bool:
 
 
 def _z_axis_cylinder_radii(faces: list[TopoDS_Face]) -> tuple[float, float] | None:
-    """(the hub's radius, the bore's radius or 0) of z-axis cylinder faces of one or two radii, else None."""
+    """(the hub's radius, the bore's radius or 0) of z-axis cylinder faces of one or two radii, else
+    None."""
     radii = []
     for face in faces:
         cylinder = BRepAdaptor_Surface(face).Cylinder()
@@ -103,8 +106,8 @@ def _z_axis_cylinder_radii(faces: list[TopoDS_Face]) -> tuple[float, float] | No
 
 
 def _end_disc_z(face: TopoDS_Face, radius: float, bore_radius: float = 0.0) -> float | None:
-    """z of a plane face that is a whole disc of ``radius`` about the z axis (an annulus round a bore of
-    ``bore_radius``), else None."""
+    """z of a plane face that is a whole disc of ``radius`` about the z axis (an annulus round a
+    bore of ``bore_radius``), else None."""
     plane = BRepAdaptor_Surface(face).Plane()
     if abs(abs(plane.Axis().Direction().Z()) - 1.0) > 1e-12 or count(face, TopAbs_WIRE) != (
         2 if bore_radius else 1

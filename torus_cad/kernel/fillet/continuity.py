@@ -48,8 +48,8 @@ __all__ = ["c1_fillet"]
 
 def c1_fillet(solid: cq.Solid, face_parts: Sequence[int]) -> tuple[cq.Solid, tuple[int, ...]]:
     """``solid`` (a filleted propeller, its faces' parts ``face_parts``) with its C0 faces and edges
-    split at their kinks and its edge tolerances covering their curves (module doc); the solid, checked
-    (BRepCheck_Analyzer), and its faces' parts. Unchanged when nothing is C0."""
+    split at their kinks and its edge tolerances covering their curves (module doc); the solid,
+    checked (BRepCheck_Analyzer), and its faces' parts. Unchanged when nothing is C0."""
     if not _has_c0(solid.wrapped):
         _cover_deviations(solid.wrapped)
         return solid, tuple(face_parts)
@@ -90,9 +90,9 @@ def _has_c0(shape: TopoDS_Shape) -> bool:
 
 
 def _cover_deviations(shape: TopoDS_Shape) -> None:
-    """Every edge of ``shape`` whose 3D curve leaves its p-curve on a face by more than its tolerance (as
-    BOPAlgo_ArgumentAnalyzer measures) gets that deviation, times FILLET_EDGE_TOLERANCE_MARGIN, as tolerance
-    (its vertices at least as much)."""
+    """Every edge of ``shape`` whose 3D curve leaves its p-curve on a face by more than its
+    tolerance (as BOPAlgo_ArgumentAnalyzer measures) gets that deviation, times
+    FILLET_EDGE_TOLERANCE_MARGIN, as tolerance (its vertices at least as much)."""
     ancestors = TopTools_IndexedDataMapOfShapeListOfShape()
     TopExp.MapShapesAndAncestors_s(shape, TopAbs_EDGE, TopAbs_FACE, ancestors)
     builder = BRep_Builder()

@@ -63,7 +63,8 @@ def fillet_edges(
     edge_radii: Sequence[float] | None = None,
     face_parts: Sequence[int] | None = None,
 ) -> Filleted | None:
-    """The fillet in this process: the checked solid, or None when OpenCascade fails or the result is unsound.
+    """The fillet in this process: the checked solid, or None when OpenCascade fails or the result
+    is unsound.
 
     ``params``: BRepFilletAPI_MakeFillet.SetParams values (default: OpenCascade's). ``edge_radii``:
     a radius per edge (mm) instead of ``radius_mm`` on all; OpenCascade blends the radius between
@@ -122,7 +123,8 @@ def _filleted_face_parts(
     face_parts: Sequence[int],
     result: cq.Solid,
 ) -> tuple[int, ...]:
-    """The part of each face of ``result`` through the fillet's history (and ShapeFix's, if it mended it)."""
+    """The part of each face of ``result`` through the fillet's history (and ShapeFix's, if it
+    mended it)."""
     origins = face_provenance.through_history(
         fillet, face_provenance.labelled_faces(solid.wrapped, face_parts)
     ) + face_provenance.fillet_faces(fillet, solid.wrapped, face_parts)
@@ -140,10 +142,12 @@ def fillet_in_child(
     edge_radii: Sequence[float] | None = None,
     face_parts: Sequence[int] | None = None,
 ) -> Filleted | None:
-    """:func:`fillet_edges` in a forked child (torus_cad.runtime.isolation): a crash or a hang there is
-    a failed fillet, not a dead process. The child sends the solid as a BRep string, with its face parts.
+    """:func:`fillet_edges` in a forked child (torus_cad.runtime.isolation): a crash or a hang there
+    is a failed fillet, not a dead process. The child sends the solid as a BRep string, with its
+    face parts.
 
-    The child gets FILLET_TIME_LIMIT_S, or what is left until ``deadline`` (time.monotonic()) if less."""
+    The child gets FILLET_TIME_LIMIT_S, or what is left until ``deadline`` (time.monotonic()) if
+    less."""
     limit_s = (
         FILLET_TIME_LIMIT_S
         if deadline is None

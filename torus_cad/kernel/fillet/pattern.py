@@ -78,7 +78,8 @@ def fillet_pattern(
     run_out: RunOutHub | None = None,
     reduce_where_tight: bool = False,
 ) -> RootFillet:
-    """The filleted propeller from one filleted blade: blade 0 joined to ``hub``, filleted, patterned.
+    """The filleted propeller from one filleted blade: blade 0 joined to ``hub``, filleted,
+    patterned.
 
     ``blade`` is built at ``angles_deg[0]``; its side face is split as
     :func:`prepare_blade_for_fillet` does, and the fillet made as each of :data:`FILLET_TRIES` says
@@ -89,8 +90,8 @@ def fillet_pattern(
     hub is faced) with the bore and set-screw hole cut at the same time. Where the blade itself
     passes the hub's end plane, the cut-back's end slabs have the blades cut out of them, so the
     blades' parts past the end stay as they are (the fillet still ends flush with the end face).
-    The first try stops at FILLET_TIME_LIMIT_S; each further one at FILLET_RETRY_TIME_LIMIT_S, and all
-    of them together at FILLET_TRIES_TIME_LIMIT_S.
+    The first try stops at FILLET_TIME_LIMIT_S; each further one at FILLET_RETRY_TIME_LIMIT_S, and
+    all of them together at FILLET_TRIES_TIME_LIMIT_S.
 
     When every try fails and a blade face bends too tightly for the ball along some junction edge
     (:func:`reduced_edge_radii`): with ``reduce_where_tight``, the same tries are made once more
@@ -145,10 +146,10 @@ def _first_that_works(
     reduce: bool,
     finish: Callable[[RootFillet], RootFillet] | None = None,
 ) -> RootFillet | None:
-    """The first of ``tries`` (as :data:`FILLET_TRIES`) that works on ``hub``, passed through ``finish``
-    (a KernelError there counts as a failed try; the edges are made readable from STEP after it, not
-    before); None if none does. Each try stops at FILLET_RETRY_TIME_LIMIT_S (one that saves a design
-    does so in under a second), all by ``deadline``."""
+    """The first of ``tries`` (as :data:`FILLET_TRIES`) that works on ``hub``, passed through
+    ``finish`` (a KernelError there counts as a failed try; the edges are made readable from STEP
+    after it, not before); None if none does. Each try stops at FILLET_RETRY_TIME_LIMIT_S (one that
+    saves a design does so in under a second), all by ``deadline``."""
     for index, params in tries:
         try:
             made = _fillet_and_pattern(
@@ -216,7 +217,8 @@ class _RunOut:
         return self.made
 
     def tries(self, split: _LazySplits, deadline: float, reduce: bool) -> RootFillet | None:
-        """The first of :data:`FILLET_TRIES` that works on the run-out hub, cut back; None if none does by ``deadline``."""
+        """The first of :data:`FILLET_TRIES` that works on the run-out hub, cut back; None if none
+        does by ``deadline``."""
         if self.run_out is None or time.monotonic() >= deadline:
             return None
         extended, tools, tool_faces = self._hub_and_tools()
@@ -376,7 +378,8 @@ def _assemble_filleted(
 def _shift_hole_curves(
     holes: Sequence[TopoDS_Wire], lateral: TopoDS_Face, angle_rad: float
 ) -> TopLoc_Location:
-    """The rotation by ``angle_rad`` about +z; the rotated hole edges get their curves on ``lateral`` shifted in u."""
+    """The rotation by ``angle_rad`` about +z; the rotated hole edges get their curves on
+    ``lateral`` shifted in u."""
     rotation = gp_Trsf()
     rotation.SetRotation(gp_Ax1(gp_Pnt(0.0, 0.0, 0.0), gp_Dir(0.0, 0.0, 1.0)), angle_rad)
     # not the empty location even at 0: every copy gets its curves

@@ -61,7 +61,8 @@ _FALLBACK_FRACTIONS = (0.5, 0.25, 0.1)
 
 
 def prepare_blade_for_fillet(blade: cq.Solid, pieces: int = SIDE_FACE_PIECES[0]) -> cq.Solid:
-    """The same blade with its closed side face split into ``pieces`` equal parts in u (the trailing edge becomes an edge)."""
+    """The same blade with its closed side face split into ``pieces`` equal parts in u (the trailing
+    edge becomes an edge)."""
     divide = ShapeUpgrade_ShapeDivideClosed(blade.wrapped)
     divide.SetNbSplitPoints(pieces - 1)
     divide.Perform()
@@ -143,8 +144,8 @@ def fillet_blade_roots(
     smaller radius (:func:`reduced_edge_radii`); without, the fillet has ``radius_mm`` everywhere.
     Raises KernelError ("root fillet failed ...", with a radius that works when one of the
     smaller radii tried does) when OpenCascade cannot make it. ``deadline`` (time.monotonic()
-    seconds) cuts the child's time limit short. With ``readable`` (unless a boolean still changes the
-    solid), its edges are made to read back from STEP as they are (:func:`made_readable`).
+    seconds) cuts the child's time limit short. With ``readable`` (unless a boolean still changes
+    the solid), its edges are made to read back from STEP as they are (:func:`made_readable`).
     """
     edges = junction_edges(solid)
     if not edges:
@@ -175,8 +176,8 @@ def fillet_blade_roots(
 
 
 def _check_tolerance(solid: cq.Solid, radius_mm: float) -> None:
-    """KernelError when ``solid``'s greatest tolerance is over FILLET_TOLERANCE_MAX_MM (the fillet of
-    ``radius_mm`` is then only near its blade and hub: the module's FILLET_TOLERANCE_MAX_MM)."""
+    """KernelError when ``solid``'s greatest tolerance is over FILLET_TOLERANCE_MAX_MM (the fillet
+    of ``radius_mm`` is then only near its blade and hub: the module's FILLET_TOLERANCE_MAX_MM)."""
     greatest = ShapeAnalysis_ShapeTolerance().Tolerance(solid.wrapped, 1)
     if greatest > FILLET_TOLERANCE_MAX_MM:
         raise KernelError(
@@ -188,7 +189,8 @@ def _check_tolerance(solid: cq.Solid, radius_mm: float) -> None:
 def made_readable(solid: cq.Solid, face_parts: Sequence[int]) -> tuple[cq.Solid, tuple[int, ...]]:
     """``solid`` with edges that read back from STEP as they are, and its faces' parts
     (:mod:`torus_cad.kernel.readable_edges`); ``solid`` with its p-curves squared but no edge split
-    if the split would not give a valid solid (the build's read-back check then names what is left)."""
+    if the split would not give a valid solid (the build's read-back check then names what is
+    left)."""
     try:
         readable = readable_edges(solid, face_parts)
     except KernelError:

@@ -1,11 +1,12 @@
-"""Where a blade bends too tightly for the fillet's rolling ball, and the reduced radii that avoid it.
+"""Where a blade bends too tightly for the fillet's rolling ball, and the reduced radii that avoid
+it.
 
 Where a blade face bends concavely (seen from outside) tighter than the radius along a junction
 edge, a ball of that radius cannot stay in contact along the whole bend (its centre path would
 have a cusp). The bend is the design's (the analytic surface bends so, not only the loft), so no
-try of torus_cad.kernel.fillet.root_fillet helps; with ``hub.root_fillet_tight_bends = 'reduce'`` those edges
-get REDUCED_FILLET_FRACTION of the bend's radius and OpenCascade blends it with the requested
-radius along the rest of that junction loop.
+try of torus_cad.kernel.fillet.root_fillet helps; with ``hub.root_fillet_tight_bends = 'reduce'``
+those edges get REDUCED_FILLET_FRACTION of the bend's radius and OpenCascade blends it with the
+requested radius along the rest of that junction loop.
 """
 
 from __future__ import annotations
@@ -39,9 +40,10 @@ def reduced_edge_radii(
     edge, REDUCED_FILLET_FRACTION x the tightest bend's radius there.
 
     A rolling ball of radius r cannot stay in contact along a face that bends concavely tighter
-    than r (its centre path would have a cusp; a short enough bend is bridged). On fuzz designs whose blade sections are a
-    millimetre or two long where they meet the hub, a cambered section's own concave stretch is
-    that tight (the analytic surface, not the loft's fit, bends so: measured against
+    than r (its centre path would have a cusp; a short enough bend is bridged). On fuzz designs
+    whose blade sections are a millimetre or two long where they meet the hub, a cambered section's
+    own concave stretch is that tight (the analytic surface, not the loft's fit, bends so: measured
+    against
     :func:`torus_cad.geometry.blade.blade_surface.surface_points`)."""
     ancestors = TopTools_IndexedDataMapOfShapeListOfShape()
     TopExp.MapShapesAndAncestors_s(solid.wrapped, TopAbs_EDGE, TopAbs_FACE, ancestors)
@@ -85,8 +87,8 @@ def concave_bend_radius_mm(
 
 
 def _tightest_concave_radius_along(edge: TopoDS_Edge, face: TopoDS_Face) -> float:
-    """The smallest radius (mm) of a concave bend (seen from outside) of ``face`` at REDUCED_FILLET_SAMPLES
-    points along ``edge``; inf where it bends only convexly."""
+    """The smallest radius (mm) of a concave bend (seen from outside) of ``face`` at
+    REDUCED_FILLET_SAMPLES points along ``edge``; inf where it bends only convexly."""
     surface = BRepAdaptor_Surface(face)
     projector = ShapeAnalysis_Surface(BRep_Tool.Surface_s(face))
     curve = BRepAdaptor_Curve(edge)

@@ -1,14 +1,15 @@
 """The file writers of the B-rep, together (as CadQuery keeps its exporters), and their registry.
 
-A file format is one module here (``step``, ``stl``, ``threemf``) and one entry of :data:`WRITERS`, keyed
-by its :class:`~torus_cad.formats.ExportFormat`; the build's output set (torus_cad.outputs.output_set)
-writes every format of ``export.formats`` through it. The mesh package keeps its own registry of the
-surface mesh's formats (torus_cad.mesh.writers.WRITERS); the one STEP reader is
-torus_cad.kernel.step_readback. Each writer writes the file it is given atomically: a hidden temp file
-beside the path (torus_cad.runtime.files.atomic_path), checked whole, then renamed onto it. A writer that
-fails says why when it can (torus_cad.runtime.files.write_failure): a full file system or the file size
-limit is an OSError naming the path, anything else a KernelError. A build's files are published
-together by torus_cad.outputs.output_set.
+A file format is one module here (``step``, ``stl``, ``threemf``) and one entry of :data:`WRITERS`,
+keyed by its :class:`~torus_cad.formats.ExportFormat`; the build's output set
+(torus_cad.outputs.output_set) writes every format of ``export.formats`` through it. The mesh
+package keeps its own registry of the surface mesh's formats (torus_cad.mesh.writers.WRITERS); the
+one STEP reader is torus_cad.kernel.step_readback. Each writer writes the file it is given
+atomically: a hidden temp file beside the path (torus_cad.runtime.files.atomic_path), checked whole,
+then renamed onto it. A writer that fails says why when it can
+(torus_cad.runtime.files.write_failure): a full file system or the file size limit is an OSError
+naming the path, anything else a KernelError. A build's files are published together by
+torus_cad.outputs.output_set.
 
 To add a format: a module with its writer, a value of ExportFormat, and an entry below.
 """

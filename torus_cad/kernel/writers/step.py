@@ -1,5 +1,5 @@
-"""STEP writer (AP214 or AP242, with the product's name and author); the reader, and the check of the file
-read back, are torus_cad.kernel.step_readback."""
+"""STEP writer (AP214 or AP242, with the product's name and author); the reader, and the check of
+the file read back, are torus_cad.kernel.step_readback."""
 
 from __future__ import annotations
 
@@ -59,19 +59,21 @@ def write_step(
     program: str = "torus_cad",
     check_readback: bool = True,
 ) -> Path:
-    """Write ``shape`` as STEP (application protocol ``schema``, millimetres, product named ``product_name``).
+    """Write ``shape`` as STEP (application protocol ``schema``, millimetres, product named
+    ``product_name``).
 
     The shape goes through an XCAF document so that the STEP PRODUCT carries exactly the
-    design's name (the plain writer appends a counter to it). With ``check_readback`` (the default) the
-    file is read back by OpenCascade's STEP reader and must pass BOPAlgo_ArgumentAnalyzer's tests (all but
-    self-interference, which the strict check ran on the solid; torus_cad.kernel.step_readback)
-    before it is published. A file that reads back with faults is written again from a copy of ``shape``
-    whose edges are made readable (torus_cad.kernel.readable_edges: p-curves square to their surfaces,
-    edges split where the reader's samples would miss how far their curves part), then up to
-    READABLE_REWRITES - 1 times more from the shape read back from the last file, made readable; then,
-    if it still has faults, the same from a copy whose root fillet's contact edges are rebuilt on the
-    fillet surface's iso-lines (torus_cad.kernel.iso_line_edges); if the file still reads back with
-    faults, KernelError naming the kind of edge and the gap, and no file.
+    design's name (the plain writer appends a counter to it). With ``check_readback`` (the default)
+    the file is read back by OpenCascade's STEP reader and must pass BOPAlgo_ArgumentAnalyzer's
+    tests (all but self-interference, which the strict check ran on the solid;
+    torus_cad.kernel.step_readback) before it is published. A file that reads back with faults is
+    written again from a copy of ``shape`` whose edges are made readable
+    (torus_cad.kernel.readable_edges: p-curves square to their surfaces, edges split where the
+    reader's samples would miss how far their curves part), then up to READABLE_REWRITES - 1 times
+    more from the shape read back from the last file, made readable; then, if it still has faults,
+    the same from a copy whose root fillet's contact edges are rebuilt on the fillet surface's
+    iso-lines (torus_cad.kernel.iso_line_edges); if the file still reads back with faults,
+    KernelError naming the kind of edge and the gap, and no file.
 
     Args:
         shape: the solid (OpenCascade's or cadquery's), mm; not changed.
@@ -178,8 +180,8 @@ def _write(
 
 
 def _name_the_author(writer: STEPCAFControl_Writer, product_name: str, program: str) -> None:
-    """The STEP header's FILE_NAME: the design's name, and ``program`` (torus_cad and its version) as
-    author, organisation and originating system, instead of OpenCascade's placeholders."""
+    """The STEP header's FILE_NAME: the design's name, and ``program`` (torus_cad and its version)
+    as author, organisation and originating system, instead of OpenCascade's placeholders."""
     header = APIHeaderSection_MakeHeader(writer.ChangeWriter().Model())
     header.SetName(TCollection_HAsciiString(product_name))
     header.SetAuthorValue(1, TCollection_HAsciiString(program))

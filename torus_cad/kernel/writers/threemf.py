@@ -69,9 +69,9 @@ def write_3mf(
     version: str,
     mesh: UncrossedMesh | None = None,
 ) -> MeshCheck:
-    """Write the uncrossed tessellation of ``shape`` (``mesh`` if given, else made at the deflections,
-    mm and rad) as a 3MF package with one mesh object named ``name`` (millimetres), checked again with
-    meshlib at the precision written; return its check."""
+    """Write the uncrossed tessellation of ``shape`` (``mesh`` if given, else made at the
+    deflections, mm and rad) as a 3MF package with one mesh object named ``name`` (millimetres),
+    checked again with meshlib at the precision written; return its check."""
     mesh = uncrossed_mesh(shape, linear_deflection, angular_deflection) if mesh is None else mesh
     written = np.round(mesh.vertices, _DECIMALS)
     check = checked(intersecting_pairs(written, mesh.triangles), len(mesh.triangles), "3MF", mesh)
