@@ -39,11 +39,11 @@ from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS, TopoDS_Edge, TopoDS_Face, TopoDS_Shape, TopoDS_Vertex
 from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape
 
-from torus_cad.kernel.edge_curves import distinct_faces
 from torus_cad.kernel.readable_edges import (
     READBACK_MIN_TOLERANCE_MM,
     SquareFit,
     curves_apart,
+    edges_and_faces,
     shifted_pcurve,
 )
 from torus_cad.kernel.topology import copied, explore
@@ -74,24 +74,15 @@ def iso_line_copy(shape: TopoDS_Shape) -> TopoDS_Shape | None:
     """
     copy = copied(shape)
     _extend_surfaces_past_their_ends(copy)
-    rebuilt = [edge for edge, faces in _edges_and_faces(copy) if _rebuilt_on_iso_line(edge, faces)]
+    rebuilt = [
+        edge
+        for edge, faces in edges_and_faces(copy)
+        if len(faces) == 2 and _rebuilt_on_iso_line(edge, faces)
+    ]
     if not rebuilt:
         return None
     _move_vertices_of(copy, rebuilt)
     return copy if BRepCheck_Analyzer(copy).IsValid() else None
-
-
-def _edges_and_faces(shape: TopoDS_Shape) -> list[tuple[TopoDS_Edge, list[TopoDS_Face]]]:
-    """Each edge of ``shape`` between two distinct faces, with them."""
-    ancestors = TopTools_IndexedDataMapOfShapeListOfShape()
-    TopExp.MapShapesAndAncestors_s(shape, TopAbs_EDGE, TopAbs_FACE, ancestors)
-    found = []
-    for index in range(1, ancestors.Extent() + 1):
-        edge = TopoDS.Edge_s(ancestors.FindKey(index))
-        faces = [TopoDS.Face_s(face) for face in distinct_faces(ancestors.FindFromIndex(index))]
-        if len(faces) == 2 and not BRep_Tool.Degenerated_s(edge):
-            found.append((edge, faces))
-    return found
 
 
 def _extend_surfaces_past_their_ends(shape: TopoDS_Shape) -> None:

@@ -157,6 +157,7 @@ __all__ = [
     "ReadableEdges",
     "SquareFit",
     "curves_apart",
+    "edges_and_faces",
     "readable_copy",
     "readable_edges",
     "shifted_pcurve",
@@ -230,7 +231,7 @@ def readable_edges(solid: cq.Solid, face_parts: Sequence[int]) -> ReadableEdges:
     valid solid.
     """
     shape = solid.wrapped
-    edges = _edges_and_faces(shape)
+    edges = edges_and_faces(shape)
     closed = sum(_close_ends(edge) for edge, _ in edges)
     replaced, worst_before, worst_after = 0, 0.0, 0.0
     # (edge, faces, where, the tolerance needed)
@@ -379,7 +380,7 @@ def _without_micro_edges(shape: TopoDS_Shape) -> TopoDS_Shape:
     return fix.Shape() if fix.FixSmallEdges() else shape
 
 
-def _edges_and_faces(shape: TopoDS_Shape) -> list[tuple[TopoDS_Edge, list[TopoDS_Face]]]:
+def edges_and_faces(shape: TopoDS_Shape) -> list[tuple[TopoDS_Edge, list[TopoDS_Face]]]:
     """Each edge of ``shape`` with a 3D curve, not degenerated and no seam, with its distinct
     faces."""
     ancestors = TopTools_IndexedDataMapOfShapeListOfShape()
