@@ -74,16 +74,17 @@ def tally_one(seed: int, folder: str, fillet_share: float) -> dict[str, Any]:
     start = time.perf_counter()
     write_step(propeller.solid, path, f"tally_{seed}", check_readback=False)
     faults = classified_faults(read_step_shape(path))
-    remaining = []
+    remaining: tuple[Any, ...] = ()
+    left: dict[str, int] = {}
     if faults:  # what write_step does with such a file: written again with readable edges
-        rewritten_until_readable(
+        after = rewritten_until_readable(
             propeller.solid.wrapped,
             path,
             lambda shape: write_step(shape, path, f"tally_{seed}", check_readback=False),
         )
-        remaining = classified_faults(read_step_shape(path))
+        remaining, left = after.on_edges, after.counts
     row["readback_s"] = time.perf_counter() - start
-    outcome = "faulty" if remaining else "made readable" if faults else "valid"
+    outcome = "faulty" if left else "made readable" if faults else "valid"
     return {
         **row,
         "outcome": outcome,

@@ -13,7 +13,14 @@ from test_step_readback import _cylinder_with_a_bumped_edge
 
 from studies.step_tally import built_tally_design, tally_design_dict
 from torus_cad.errors import KernelError
-from torus_cad.kernel.step_readback import classified_faults, read_step_shape, step_readback_faults
+from torus_cad.kernel.step_readback import (
+    ArgumentFaults,
+    EdgeFault,
+    classified_faults,
+    read_step_shape,
+    readback_refusal,
+    step_readback_faults,
+)
 from torus_cad.kernel.writers.step import write_step
 from torus_cad.parameters import PropellerParameters
 from torus_cad.propeller import build_propeller
@@ -173,6 +180,41 @@ def test_a_filleted_design_with_askew_contact_edges_reads_back_with_no_fault(
     if FREECADCMD is not None:  # and FreeCAD's own reader and check find nothing either
         verdicts = freecad_verdicts([path], tmp_path / "freecad")
         assert verdicts[str(path)] == {"solids": 1, "valid": True, "faults": ""}
+
+
+#: A seed of studies.step_tally (a root fillet) whose fillet's contact edge on the blade hooks into
+#: the next fillet face at their vertex (2e-5 mm deep, inside the solid's vertex tolerance of 1.9e-5
+#: mm but not the one read back), so that its file, made readable, failed FreeCAD's check with BOP
+#: (SelfIntersect) before the writer cut the hooks off (``python scripts/step_readback_tally.py
+#: --replay 3078 --freecad``).
+HOOKED_BEFORE = 3078
+
+
+def test_a_filleted_design_whose_contact_edge_hooks_into_a_face_reads_back_with_no_fault(
+    tmp_path: Path,
+) -> None:
+    propeller = built_tally_design(HOOKED_BEFORE)
+    path = write_step(propeller.solid, tmp_path / "tally.step", "tally")
+    if FREECADCMD is not None:  # FreeCAD's reader and its check with BOP (self-interference too)
+        verdicts = freecad_verdicts([path], tmp_path / "freecad")
+        assert verdicts[str(path)] == {"solids": 1, "valid": True, "faults": ""}
+    else:
+        assert step_readback_faults(path, self_interference=True).counts == {}
+
+
+def test_a_self_intersection_read_back_is_refused_naming_the_edge_and_its_faces() -> None:
+    faults = ArgumentFaults(
+        {"SelfIntersect": 2},
+        "SelfIntersect on edge (tolerance 1e-07 mm) and BSplineSurface face",
+        0.0,
+        (EdgeFault("SelfIntersect", "root fillet on the blade", "BSplineSurface", 0.0, 1e-7),),
+    )
+    refusal = str(readback_refusal(faults, "tally.step"))
+    assert refusal.startswith("tally.step: the STEP file read back fails BOPAlgo_ArgumentAnalyzer")
+    assert "2 SelfIntersect" in refusal
+    assert "on a root fillet on the blade edge (BSplineSurface), tolerance read back 1e-07 mm" in (
+        refusal
+    )
 
 
 def test_the_writer_writes_a_faulty_file_again_with_readable_edges(tmp_path: Path) -> None:

@@ -71,6 +71,37 @@ ANALYZER_TESTS = (
 
 
 @dataclass(frozen=True)
+class EdgeFault:
+    """One fault of the argument analyzer on an edge, with what kind of edge it is.
+
+    Attributes:
+        status: the analyzer's status name (``InvalidCurveOnSurface``, ...).
+        edge_kind: what the edge is in the propeller (:func:`edge_kind`).
+        surfaces: the surface types on its sides, sorted, joined by ", " ("BSplineSurface,
+            Cylinder").
+        gap_mm: how far the edge's curves part (the analyzer's largest distance), mm; 0 if not
+            measured.
+        tolerance_mm: the edge's tolerance (as the reader gave it, for a file read back), mm.
+    """
+
+    status: str
+    edge_kind: str
+    surfaces: str
+    gap_mm: float
+    tolerance_mm: float
+
+    def as_dict(self) -> dict[str, str | float]:
+        """For a JSON row."""
+        return {
+            "status": self.status,
+            "edge_kind": self.edge_kind,
+            "surfaces": self.surfaces,
+            "gap_mm": self.gap_mm,
+            "tolerance_mm": self.tolerance_mm,
+        }
+
+
+@dataclass(frozen=True)
 class ArgumentFaults:
     """What BOPAlgo_ArgumentAnalyzer (every test) found on a shape.
 
@@ -79,11 +110,13 @@ class ArgumentFaults:
             empty when the shape passes.
         first: one line on the first fault (status, faulty sub-shapes, distance in mm if measured).
         seconds: wall-clock seconds of the analysis.
+        on_edges: the faults that name an edge, each with its edge's kind (:class:`EdgeFault`).
     """
 
     counts: dict[str, int] = field(default_factory=dict)
     first: str = ""
     seconds: float = 0.0
+    on_edges: tuple[EdgeFault, ...] = ()
 
     @property
     def total(self) -> int:
@@ -120,7 +153,12 @@ def argument_faults(shape: TopoDS_Shape, self_interference: bool = True) -> Argu
     results = list(_analyzer(shape, self_interference).GetCheckResult())
     counts = Counter(_status(result) for result in results)
     first = _describe(results[0]) if results else ""
-    return ArgumentFaults(dict(sorted(counts.items())), first, time.perf_counter() - start)
+    return ArgumentFaults(
+        dict(sorted(counts.items())),
+        first,
+        time.perf_counter() - start,
+        tuple(_on_edges(shape, results)),
+    )
 
 
 def _analyzer(shape: TopoDS_Shape, self_interference: bool) -> BOPAlgo_ArgumentAnalyzer:
@@ -151,76 +189,57 @@ def check_step_readback(
     s of CPU, the other tests together 0.2 s): the build runs it, on the blade pattern, on the solid
     the file is written from (torus_cad.kernel.strict), whose faces the file carries unchanged.
     """
-    shape = read_step_shape(path)
-    faults = argument_faults(shape, self_interference)
+    faults = argument_faults(read_step_shape(path), self_interference)
     if faults.counts:
-        listed = ", ".join(f"{count} {status}" for status, count in faults.counts.items())
-        on_edges = [fault for fault in classified_faults(shape) if fault.gap_mm > 0.0]
-        worst = max(
-            on_edges, key=lambda fault: fault.gap_mm / max(fault.tolerance_mm, 1e-300), default=None
-        )
-        where = (
-            f"; worst on a {worst.edge_kind} edge ({worst.surfaces}): curves {worst.gap_mm:.2g} mm apart, "
-            f"tolerance read back {worst.tolerance_mm:.2g} mm"
-            if worst is not None
-            else ""
-        )
-        raise KernelError(
-            f"{what}: the STEP file read back fails BOPAlgo_ArgumentAnalyzer (every test, as "
-            f"FreeCAD's check with BOP): {listed}; first: {faults.first}{where}"
-        )
+        raise readback_refusal(faults, what)
     return faults
 
 
-@dataclass(frozen=True)
-class EdgeFault:
-    """One fault of the argument analyzer on an edge, with what kind of edge it is.
-
-    Attributes:
-        status: the analyzer's status name (``InvalidCurveOnSurface``, ...).
-        edge_kind: what the edge is in the propeller (:func:`edge_kind`).
-        surfaces: the surface types on its sides, sorted, joined by ", " ("BSplineSurface,
-            Cylinder").
-        gap_mm: how far the edge's curves part (the analyzer's largest distance), mm; 0 if not
-            measured.
-        tolerance_mm: the edge's tolerance (as the reader gave it, for a file read back), mm.
-    """
-
-    status: str
-    edge_kind: str
-    surfaces: str
-    gap_mm: float
-    tolerance_mm: float
-
-    def as_dict(self) -> dict[str, str | float]:
-        """For a JSON row."""
-        return {
-            "status": self.status,
-            "edge_kind": self.edge_kind,
-            "surfaces": self.surfaces,
-            "gap_mm": self.gap_mm,
-            "tolerance_mm": self.tolerance_mm,
-        }
+def readback_refusal(faults: ArgumentFaults, what: str) -> KernelError:
+    """The refusal of a STEP file that reads back with ``faults``: the faults by status, the first,
+    and the worst edge (the largest gap against its tolerance; else the first edge named)."""
+    listed = ", ".join(f"{count} {status}" for status, count in faults.counts.items())
+    gapped = [fault for fault in faults.on_edges if fault.gap_mm > 0.0]
+    worst = max(
+        gapped, key=lambda fault: fault.gap_mm / max(fault.tolerance_mm, 1e-300), default=None
+    )
+    if worst is not None:
+        where = (
+            f"; worst on a {worst.edge_kind} edge ({worst.surfaces}): curves {worst.gap_mm:.2g} "
+            f"mm apart, tolerance read back {worst.tolerance_mm:.2g} mm"
+        )
+    elif faults.on_edges:
+        named = faults.on_edges[0]
+        where = (
+            f"; on a {named.edge_kind} edge ({named.surfaces}), tolerance read back "
+            f"{named.tolerance_mm:.2g} mm"
+        )
+    else:
+        where = ""
+    return KernelError(
+        f"{what}: the STEP file read back fails BOPAlgo_ArgumentAnalyzer (every test, as "
+        f"FreeCAD's check with BOP): {listed}; first: {faults.first}{where}"
+    )
 
 
 def classified_faults(shape: TopoDS_Shape) -> list[EdgeFault]:
     """The argument analyzer's faults on ``shape``'s edges (every test but self-interference), each
     with its edge's kind (:func:`edge_kind`)."""
-    analyzer = _analyzer(shape, self_interference=False)
+    return list(argument_faults(shape, self_interference=False).on_edges)
+
+
+def _on_edges(shape: TopoDS_Shape, results: list[object]) -> list[EdgeFault]:
+    """The analyzer's ``results`` that name an edge of ``shape``, each with its edge's kind."""
     ancestors = TopTools_IndexedDataMapOfShapeListOfShape()
     TopExp.MapShapesAndAncestors_s(shape, TopAbs_EDGE, TopAbs_FACE, ancestors)
-    fillet_faces = _fillet_faces(ancestors)
+    fillet_faces = _fillet_faces(ancestors) if results else []
     found = []
-    for result in analyzer.GetCheckResult():
+    for result in results:
+        faulty = [*result.GetFaultyShapes1(), *result.GetFaultyShapes2()]  # type: ignore[attr-defined]
         edge = next(
-            (
-                TopoDS.Edge_s(part)
-                for part in [*result.GetFaultyShapes1(), *result.GetFaultyShapes2()]
-                if part.ShapeType() == TopAbs_EDGE
-            ),
-            None,
+            (TopoDS.Edge_s(part) for part in faulty if part.ShapeType() == TopAbs_EDGE), None
         )
-        if edge is None:
+        if edge is None or not ancestors.Contains(edge):
             continue
         faces = distinct_faces(ancestors.FindFromKey(edge))
         surfaces = ", ".join(sorted(_surface_name(face) for face in faces))
@@ -229,7 +248,7 @@ def classified_faults(shape: TopoDS_Shape) -> list[EdgeFault]:
                 _status(result),
                 edge_kind(edge, faces, fillet_faces),
                 surfaces,
-                max(result.GetMaxDistance1(), result.GetMaxDistance2()),
+                max(result.GetMaxDistance1(), result.GetMaxDistance2()),  # type: ignore[attr-defined]
                 BRep_Tool.Tolerance_s(edge),
             )
         )

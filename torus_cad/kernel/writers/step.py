@@ -23,11 +23,12 @@ from torus_cad.kernel.iso_line_edges import iso_line_copy
 from torus_cad.kernel.readable_edges import readable_copy
 from torus_cad.kernel.step_readback import (
     ArgumentFaults,
-    check_step_readback,
     read_step_shape,
+    readback_refusal,
     step_readback_faults,
 )
 from torus_cad.kernel.topology import AnyShape, occ
+from torus_cad.kernel.vertex_hooks import hook_trimmed_copy
 from torus_cad.runtime.files import atomic_path, file_ends_with, write_failure
 
 #: OpenCascade's write.step.schema value of each protocol.
@@ -72,8 +73,9 @@ def write_step(
     reader's samples would miss how far their curves part), then up to READABLE_REWRITES - 1 times
     more from the shape read back from the last file, made readable; then, if it still has faults,
     the same from a copy whose root fillet's contact edges are rebuilt on the fillet surface's
-    iso-lines (torus_cad.kernel.iso_line_edges); if the file still reads back with faults,
-    KernelError naming the kind of edge and the gap, and no file.
+    iso-lines (torus_cad.kernel.iso_line_edges). A file written again is also put through the
+    self-interference test as read back (its edges are no longer the checked solid's); if the file
+    still reads back with faults, KernelError naming the kind of edge and the gap, and no file.
 
     Args:
         shape: the solid (OpenCascade's or cadquery's), mm; not changed.
@@ -101,9 +103,10 @@ def write_step(
             _write(source, temp, path, product_name, schema, program)
 
         write(occ(shape))
-        if check_readback and rewritten_until_readable(occ(shape), temp, write).counts:
-            # raises, naming the edge
-            check_step_readback(temp, f"{product_name}.step", self_interference=False)
+        if check_readback:
+            faults = rewritten_until_readable(occ(shape), temp, write)
+            if faults.counts:
+                raise readback_refusal(faults, f"{product_name}.step")
     return path
 
 
@@ -123,15 +126,19 @@ def rewritten_until_readable(
         write: writes a given solid as STEP at ``path``.
 
     Returns:
-        The faults BOPAlgo_ArgumentAnalyzer (all tests but self-interference) finds in the last
-        file read back; ``counts`` is empty when it reads back clean.
+        The faults BOPAlgo_ArgumentAnalyzer finds in the last file read back, all tests but
+        self-interference, and that too on a file written again (its edges and the tolerances
+        the reader gives them are no longer the checked solid's: a root fillet's contact edge
+        can cross the next fillet face within the solid's vertex tolerance but outside the one
+        read back); ``counts`` is empty when it reads back clean.
 
     Raises:
         KernelError: OpenCascade cannot read ``path`` back or finds no shape in it; or
             ``write`` failed.
         OSError: ``write`` could not write the file.
     """
-    faults = _rewritten(shape, path, write, step_readback_faults(path, self_interference=False))
+    first = step_readback_faults(path, self_interference=False)
+    faults = _rewritten(shape, path, write, first)
     if faults.counts:  # the fillet's contact edges rebuilt on its surface's iso-lines, and again
         rebuilt = iso_line_copy(shape)
         if rebuilt is not None:
@@ -139,6 +146,13 @@ def rewritten_until_readable(
             faults = _rewritten(
                 rebuilt, path, write, step_readback_faults(path, self_interference=False)
             )
+    if first.counts and not faults.counts:
+        # rewritten: its edges' curves and tolerances are the reader's, not the checked solid's
+        faults = step_readback_faults(path, self_interference=True)
+        trimmed = hook_trimmed_copy(read_step_shape(path)) if faults.counts else None
+        if trimmed is not None:  # an edge hooked into a face at its vertex: cut off, and again
+            write(trimmed)
+            faults = step_readback_faults(path, self_interference=True)
     return faults
 
 
