@@ -99,6 +99,12 @@ def _checked_name(name: str) -> str:
     return name
 
 
+def free_point_z_bounds(hub_radius_mm: float) -> Bounds:
+    """The range of a free control point's z_L (p2, p3), mm: from the hub's axis (z_L = -(R - R/8),
+    frame L's origin sitting at R - R/8) out to a hundred hub radii."""
+    return Bounds(-hub_inset_radius_mm(hub_radius_mm), 100.0 * hub_radius_mm, True)
+
+
 class TightBends(StrEnum):
     """What the root fillet does where a blade face bends concavely, seen from outside, tighter than
     its radius near the hub (a rolling ball of that radius does not fit along it, and OpenCascade
@@ -838,7 +844,7 @@ class PropellerParameters(Document):
         conventional one has none)."""
         if self.kind == DesignKind.CONVENTIONAL:
             return self
-        length, inset = self.hub.length, hub_inset_radius_mm(self.hub.radius)
+        length = self.hub.length
         for key in ("p2", "p3", "p4"):
             point = getattr(self.centerline, key)
             check_in_bounds(f"centerline.{key}[0]", point[0], Bounds(-360.0, 360.0), "deg")
@@ -848,10 +854,7 @@ class PropellerParameters(Document):
                     f"centerline.{key}[1]", point[1], Bounds(-2.0 * length, 2.0 * length), "mm"
                 )
                 check_in_bounds(
-                    f"centerline.{key}[2]",
-                    point[2],
-                    Bounds(-inset, 100.0 * self.hub.radius, True),
-                    "mm",
+                    f"centerline.{key}[2]", point[2], free_point_z_bounds(self.hub.radius), "mm"
                 )
             else:  # P4 is the blade's second end: it must sit between the hub's end faces
                 check_in_bounds(

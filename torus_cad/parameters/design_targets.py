@@ -46,7 +46,8 @@ from torus_cad.geometry.blade.propeller_geometry import PropellerGeometry
 from torus_cad.geometry.blade.transforms import Quartic, evaluate_quartic
 from torus_cad.geometry.section.airfoil import naca4_numbers
 from torus_cad.geometry.section.section import closed_points, parameter_end
-from torus_cad.parameters.schema import Bounds, check_in_bounds
+from torus_cad.parameters.design import free_point_z_bounds
+from torus_cad.parameters.schema import check_in_bounds
 
 #: At most this many rounds of (pitch fit, diameter fit); they stop when the diameter fit no longer
 #: moves.
@@ -157,11 +158,10 @@ def with_radial_scale(
     GeometryError (not reachable) when a scaled point leaves the range the parameters allow it."""
     p1, p2, p3, p4 = geometry.blade.local_control_points
     scaled = [(point[0], point[1], point[2] * scale) for point in (p2, p3)]
-    inset = hub_radius_mm - hub_radius_mm / 8.0  # as PropellerParameters checks the control points
     for name, point in zip(("p2", "p3"), scaled, strict=True):
-        try:
+        try:  # as PropellerParameters checks the control points
             check_in_bounds(
-                f"centerline.{name}[2]", point[2], Bounds(-inset, 100.0 * hub_radius_mm, True), "mm"
+                f"centerline.{name}[2]", point[2], free_point_z_bounds(hub_radius_mm), "mm"
             )
         except ParameterError as error:
             raise GeometryError(str(error)) from None
