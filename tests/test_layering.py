@@ -158,6 +158,7 @@ def test_kernel_imports_no_pipeline_or_app():
                 "torus_cad.errors",
                 "torus_cad.tolerances",
                 "torus_cad.formats",
+                "torus_cad.build_stages",  # the writers' registry times each format as a stage
                 "torus_cad.runtime",
             )
         )
@@ -205,12 +206,13 @@ def test_the_core_imports_no_app():
 
 
 def test_the_package_root_holds_only_the_core_s_face():
-    """The pipeline, the exceptions, the tolerances, the shared enums and colours; the rest lives in
-    packages."""
+    """The pipeline and its stages, the exceptions, the tolerances, the shared enums and colours;
+    the rest lives in packages."""
     loose = sorted(path.name for path in PACKAGE.glob("*.py"))
     assert loose == [
         "__init__.py",
         "__main__.py",
+        "build_stages.py",
         "colors.py",
         "errors.py",
         "formats.py",

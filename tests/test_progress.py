@@ -11,8 +11,8 @@ import pytest
 from terminal import ANSI as _ANSI
 from terminal import terminal_text_until
 
+from torus_cad.build_stages import Stage
 from torus_cad.runtime.progress import BatchProgress, StageProgress
-from torus_cad.runtime.stages import Stage
 
 
 class _Terminal(io.StringIO):

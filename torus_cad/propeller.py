@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 
 from OCP.TopoDS import TopoDS_Shape
 
+from torus_cad.build_stages import Stage
 from torus_cad.colors import HUB_COLOR, blade_color
 from torus_cad.errors import KernelError
 from torus_cad.geometry.analysis.printability import Printability
@@ -41,7 +42,7 @@ from torus_cad.parameters import PropellerParameters, resolve_parameters
 from torus_cad.parameters.design import TightBends
 from torus_cad.parameters.design_checks import placed_mounting, section_chords
 from torus_cad.parameters.design_targets import DesignTargets, resolve_design_targets
-from torus_cad.runtime.stages import Stage, StageTimer
+from torus_cad.runtime.stage_timer import StageTimer
 from torus_cad.tolerances import VOLUME_CHECK_RELATIVE_PRECISION
 
 if TYPE_CHECKING:
@@ -79,7 +80,7 @@ class Propeller:
             the union.
         surface: blade 0's sampled surface from the geometry layer.
         section_curves: blade 0's section B-splines (plain arrays).
-        stage_seconds: seconds per stage (keys: :class:`torus_cad.runtime.stages.Stage` values).
+        stage_seconds: seconds per stage (keys: :class:`torus_cad.build_stages.Stage` values).
         fuse_route: how the blades were joined to the hub.
         design_targets: what the designer's inputs (airfoil.naca, diameter, pitch) resolved to;
             ``parameters`` are already the resolved spec parameters.

@@ -18,7 +18,7 @@ from typing import Any
 from torus_cad.batch.designs import Design
 from torus_cad.batch.job import read_design_status
 from torus_cad.batch.outcome import DesignResult, Outcome
-from torus_cad.runtime.stages import Stage
+from torus_cad.build_stages import Stage
 
 __all__ = [
     "DESIGNS_DIR",

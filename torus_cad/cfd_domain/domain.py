@@ -52,7 +52,7 @@ from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.design import Cfd
 from torus_cad.runtime.cpus import max_cfd_threads
 from torus_cad.runtime.files import file_ends_with, write_failure
-from torus_cad.runtime.stages import StageTimer
+from torus_cad.runtime.stage_timer import StageTimer
 from torus_cad.tolerances import GMSH_REPRODUCIBLE_THREADS
 
 #: Names of the physical groups: surfaces, then volumes.

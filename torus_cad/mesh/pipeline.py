@@ -63,7 +63,7 @@ from torus_cad.mesh.writers import write_mesh_files
 from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.design import Handedness, SectionSpacing
 from torus_cad.runtime.isolation import IsolatedCall, fork_is_safe_for_opencascade
-from torus_cad.runtime.stages import StageTimer
+from torus_cad.runtime.stage_timer import StageTimer
 
 #: Longest wait (s) for the B-rep that ``torus-cad mesh`` compares its mesh with (built in a child
 #: beside the mesh): a build, its strict check (STRICT_CHECK_TIME_LIMIT_S) included, and one

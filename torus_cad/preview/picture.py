@@ -29,6 +29,7 @@ import cadquery as cq
 import numpy as np
 from numpy.typing import NDArray
 
+from torus_cad.build_stages import Stage
 from torus_cad.colors import HUB_COLOR, blade_color
 from torus_cad.errors import TorusCadError
 from torus_cad.geometry.blade.propeller_geometry import HUB_PART
@@ -36,7 +37,6 @@ from torus_cad.kernel.mass_properties import mass_properties
 from torus_cad.parameters import PropellerParameters
 from torus_cad.preview.size import checked_size
 from torus_cad.runtime.files import atomic_path
-from torus_cad.runtime.stages import Stage
 
 if TYPE_CHECKING:  # pragma: no cover
     from vtkmodules.vtkRenderingCore import vtkRenderWindow

@@ -26,8 +26,6 @@ import time
 from collections.abc import Mapping
 from typing import Any, Self, TextIO
 
-from torus_cad.runtime.stages import Stage
-
 __all__ = ["HEARTBEAT_S", "BatchProgress", "StageProgress", "is_terminal"]
 
 #: Seconds without a line after which :meth:`StageProgress.heartbeat` says the stage still runs.
@@ -81,7 +79,7 @@ class StageProgress:
         return time.perf_counter() - self.start
 
     def __call__(self, stage: str) -> None:
-        """Announce that ``stage`` starts now: a :class:`Stage` in its words; another pipeline's
+        """Announce that ``stage`` starts now: a build stage in its words (its ``label``); another pipeline's
         stage (``MeshStage``, ``CfdStage``) or an OpenFOAM command of ``simulate`` as its name, with
         spaces."""
         self.stages.append(stage)
@@ -90,7 +88,8 @@ class StageProgress:
 
     @staticmethod
     def _label(stage: str) -> str:
-        return stage.label if isinstance(stage, Stage) else str(stage).replace("_", " ")
+        label = getattr(stage, "label", None)  # a build stage (torus_cad.build_stages) has words
+        return label if isinstance(label, str) else str(stage).replace("_", " ")
 
     def heartbeat(self, every_s: float = HEARTBEAT_S) -> None:
         """When no line came for ``every_s`` seconds: one line saying the current stage still runs

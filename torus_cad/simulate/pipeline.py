@@ -236,7 +236,7 @@ async def _mesh_and_write(
     if request.mesher == Mesher.SNAPPY:
         return await _layered_and_write(request, case, diameter_m, stage)
     from torus_cad.cfd_domain.domain import CfdStage, write_body_domain, write_cfd_domain
-    from torus_cad.runtime.stages import StageTimer
+    from torus_cad.runtime.stage_timer import StageTimer
     from torus_cad.tolerances import GMSH_REPRODUCIBLE_THREADS
 
     params, step = request.params, request.step

@@ -27,9 +27,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from torus_cad.build_stages import Stage
 from torus_cad.errors import GeometryError, ParameterError
 from torus_cad.parameters import PropellerParameters
-from torus_cad.runtime.stages import Stage
 from torus_cad.studio.messages import BuildRequest, SolidResult
 from torus_cad.studio.panel import (
     PanelField,
@@ -456,7 +456,7 @@ class Studio:
 
 
 def _stage_label(name: str) -> str:
-    """Words for a stage of the build (torus_cad.runtime.stages), or the name of the studio's own
+    """Words for a stage of the build (torus_cad.build_stages), or the name of the studio's own
     step."""
     return Stage(name).label if name in Stage.__members__.values() else name.replace("_", " ")
 

@@ -14,9 +14,9 @@ import argparse
 import importlib
 from dataclasses import dataclass
 
+from torus_cad.build_stages import Stage
 from torus_cad.runtime.extras import require_extra
 from torus_cad.runtime.progress import StageProgress
-from torus_cad.runtime.stages import Stage
 
 
 @dataclass(frozen=True)

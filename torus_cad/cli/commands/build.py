@@ -6,6 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from torus_cad.build_stages import Stage
 from torus_cad.cli.design_input import format_overrides, load_parameters, writes_a_mesh
 from torus_cad.cli.exits import EXIT_OK
 from torus_cad.errors import GeometryError
@@ -14,7 +15,6 @@ from torus_cad.outputs.sections_table import design_sections_table_files
 from torus_cad.parameters.stl_budget import check_stl_budget
 from torus_cad.preview.size import parse_size
 from torus_cad.runtime.isolation import IsolatedCall, prefetch_modules
-from torus_cad.runtime.stages import Stage
 from torus_cad.tolerances import MIN_BLUNT_TRAILING_EDGE_MM
 
 

@@ -21,8 +21,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from torus_cad.build_stages import Stage
 from torus_cad.formats import ExportFormat, StepSchema
-from torus_cad.runtime.stages import Stage
 
 if TYPE_CHECKING:
     from OCP.TopoDS import TopoDS_Shape

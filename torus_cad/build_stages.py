@@ -1,17 +1,14 @@
-"""The pipeline's stages, in the order they run, and a timer that records each one's seconds.
+"""The build's stages, in the order they run, with the words a progress display shows for each.
 
-One list for everything that names a stage: the build's timer, the JSON report's
-``stage_seconds``, the progress display, the sweep table's ``time_<stage>_s`` columns and the
-benchmarks. The timer also times the mesh and CFD pipelines, whose stages are their own enums.
+One list for everything that names a stage of building and writing a propeller: the build's timer
+(torus_cad.runtime.stage_timer), the JSON report's ``stage_seconds``, the progress display, the
+sweep table's ``time_<stage>_s`` columns and the benchmarks. The mesh and CFD pipelines name their
+own stages (``MeshStage``, ``CfdStage``).
 """
 
 from __future__ import annotations
 
-import time
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
 from enum import StrEnum
-from typing import Generic, TypeVar
 
 
 class Stage(StrEnum):
@@ -63,32 +60,3 @@ _LABELS = {
     Stage.PREVIEW_TESSELLATE: "tessellating for the preview",
     Stage.PREVIEW_RENDER: "rendering the preview",
 }
-
-
-StageT = TypeVar("StageT", bound=StrEnum)
-
-
-class StageTimer(Generic[StageT]):
-    """Wall-clock seconds per stage, in the order the stages ran (keys: the stages' values).
-
-    Generic over the stage enum: the build's :class:`Stage`, or another pipeline's own StrEnum
-    (``torus-cad mesh``'s ``MeshStage``, ``torus-cad cfd``'s ``CfdStage``).
-    """
-
-    def __init__(self, on_start: Callable[[StageT], None] | None = None) -> None:
-        self.seconds: dict[str, float] = {}
-        # called with each stage (a str: its value) as it starts (progress display)
-        self.on_start = on_start
-
-    @contextmanager
-    def stage(self, stage: StageT) -> Iterator[None]:
-        """Time the ``with`` block as ``stage`` (seconds add up if the stage runs twice)."""
-        if self.on_start is not None:
-            self.on_start(stage)
-        start = time.perf_counter()
-        try:
-            yield
-        finally:
-            self.seconds[stage.value] = (
-                self.seconds.get(stage.value, 0.0) + time.perf_counter() - start
-            )
