@@ -15,7 +15,8 @@ refusal (a trailing edge too thick for the blade halved, a root fillet given the
 says works); one the build still refuses (ParameterError, GeometryError, or KernelError before the
 STEP file) is not a valid design and is left out of the tally; every other design's STEP file is
 written without the build's own read-back check, read back by OpenCascade's STEP reader, and put
-through BOPAlgo_ArgumentAnalyzer (every test but self-interference, as the build checks it), and
+through BOPAlgo_ArgumentAnalyzer (every test but self-interference, as the build checks it; a file
+the writer wrote again, self-interference too), and
 each fault is classified by the kind of edge it sits on
 (:func:`torus_cad.kernel.step_readback.edge_kind`), the surfaces on its two sides, and its gap
 against the tolerance the reader gave it. With ``--freecad`` each file is also checked by FreeCAD's
@@ -121,7 +122,8 @@ def _run(
                 }
             rows.append(row)
             faults = ", ".join(
-                f"{f['edge_kind']} {f['gap_mm']:.2g}>{f['tolerance_mm']:.2g}"
+                f"{f['status']} on {f['edge_kind']} "
+                + (f"{f['gap_mm']:.2g}>{f['tolerance_mm']:.2g}" if f["gap_mm"] > 0.0 else "")
                 for f in row.get("remaining", [])
             )
             print(
