@@ -52,12 +52,16 @@ def main(argv: list[str] | None = None) -> int:
         chords = np.linalg.norm(np.roll(sampling.points, -1, axis=0) - sampling.points, axis=1)
         line = (
             f"{label:<24} n = {args.points}: arc-length spacing max |d/mean - 1| = "
-            f"{np.abs(gaps / gaps.mean() - 1).max():.2e}, chord-length {spacing_deviation(sampling.points):.2e}"
+            f"{np.abs(gaps / gaps.mean() - 1).max():.2e}, "
+            f"chord-length {spacing_deviation(sampling.points):.2e}"
         )
         if not anchor:  # one chord cuts the sharp trailing-edge corner: report the rest too
             keep = np.ones(len(chords), dtype=bool)
             keep[np.searchsorted(sampling.t, 1.0) - 1] = False
-            line += f" ({np.abs(chords[keep] / chords[keep].mean() - 1).max():.2e} without the corner chord)"
+            line += (
+                f" ({np.abs(chords[keep] / chords[keep].mean() - 1).max():.2e}"
+                " without the corner chord)"
+            )
         print(line + f"; {statistics.median(times) * 1000:.1f} ms per airfoil")
     return 0
 

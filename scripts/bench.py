@@ -269,7 +269,8 @@ def scaling(quick: bool) -> dict[str, Any]:
             print(
                 f"  scaling {axis:<8} {value:4d}: "
                 + (
-                    f"build {result['seconds']['build_total']:.3f} s, fuse {result['seconds']['fuse']:.3f} s, "
+                    f"build {result['seconds']['build_total']:.3f} s, "
+                    f"fuse {result['seconds']['fuse']:.3f} s, "
                     f"peak {result['peak_rss_mb']:.0f} MB"
                     if result.get("status") == "ok"
                     else result["status"]
@@ -637,11 +638,13 @@ def print_report(report: dict[str, Any]) -> None:
     step_ok = median["step_total"] <= TARGETS["step_s"]
     both_ok = median["step_stl_total"] <= TARGETS["step_stl_s"]
     print(
-        f"  valid solid -> STEP    {median['step_total']:.3f} s  (target <= {TARGETS['step_s']:g} s: "
+        f"  valid solid -> STEP    {median['step_total']:.3f} s  "
+        f"(target <= {TARGETS['step_s']:g} s: "
         f"{'met' if step_ok else 'MISSED'})"
     )
     print(
-        f"  valid solid -> STEP+STL {median['step_stl_total']:.3f} s  (target <= {TARGETS['step_stl_s']:g} s: "
+        f"  valid solid -> STEP+STL {median['step_stl_total']:.3f} s  "
+        f"(target <= {TARGETS['step_stl_s']:g} s: "
         f"{'met' if both_ok else 'MISSED'})"
     )
     print(f"  STL {stages['stl_triangles']} triangles, STEP {stages['step_bytes'] / 1024:.0f} KiB")
@@ -649,7 +652,8 @@ def print_report(report: dict[str, Any]) -> None:
         cli = report["cli"]
         print(
             f"  cold CLI 'torus-cad build' (new process): {cli['build_median_s']:.2f} s with STL, "
-            f"{cli['build_no_stl_median_s']:.2f} s without; of which Python + imports {cli['python_and_imports_s']:.2f} s"
+            f"{cli['build_no_stl_median_s']:.2f} s without; of which "
+            f"Python + imports {cli['python_and_imports_s']:.2f} s"
         )
 
     if "scaling" in report:
@@ -678,15 +682,18 @@ def print_report(report: dict[str, Any]) -> None:
                     )
                 )
                 print(
-                    f"  {axis:<9}{row['value']:>6}{cells}{s['step_stl_total']:9.3f}{row['peak_rss_mb']:9.0f}"
+                    f"  {axis:<9}{row['value']:>6}{cells}"
+                    f"{s['step_stl_total']:9.3f}{row['peak_rss_mb']:9.0f}"
                 )
             analysis = block["analysis"]
             if analysis:
                 dominant = analysis["dominant_stage"]
                 print(
-                    f"    -> {dominant} dominates ({analysis['dominant_share']:.0%} of the largest case); "
+                    f"    -> {dominant} dominates "
+                    f"({analysis['dominant_share']:.0%} of the largest case); "
                     f"it grows ~ {axis}^{analysis['exponents'][dominant]:.2f}, the whole build "
-                    f"~ {axis}^{analysis['exponents']['build_total']:.2f}, memory ~ {axis}^{analysis['memory_exponent']:.2f}"
+                    f"~ {axis}^{analysis['exponents']['build_total']:.2f}, "
+                    f"memory ~ {axis}^{analysis['memory_exponent']:.2f}"
                 )
 
     if "mesh_route" in report:
@@ -694,7 +701,8 @@ def print_report(report: dict[str, Any]) -> None:
         sampling = route["sampling"]
         print()
         print(
-            f"== B-rep vs the spec's mesh-boolean route (§7), equal sampling: {sampling['sections']} sections x "
+            "== B-rep vs the spec's mesh-boolean route (§7), "
+            f"equal sampling: {sampling['sections']} sections x "
             f"{sampling['points']} points, {sampling['blades']} blades =="
         )
         print(
@@ -703,7 +711,8 @@ def print_report(report: dict[str, Any]) -> None:
         )
         brep = route["brep"]
         print(
-            f"  {'B-rep (loft, shared-intersection fuse)':<40}{brep['total_s']:8.3f}{'':>13}{'yes':>8}{0:>11}"
+            f"  {'B-rep (loft, shared-intersection fuse)':<40}"
+            f"{brep['total_s']:8.3f}{'':>13}{'yes':>8}{0:>11}"
             f"{brep['distance_max_mm']:12.5f}{brep['distance_mean_mm']:13.5f}"
         )
         labels = {
@@ -715,7 +724,8 @@ def print_report(report: dict[str, Any]) -> None:
             row = route.get(variant, {})
             if row.get("status") != "ok":
                 print(
-                    f"  {label:<40}  {row.get('status', 'not run')} ({row.get('runs', 0)} of {row.get('runs', 0)} runs)"
+                    f"  {label:<40}  {row.get('status', 'not run')} ("
+                    f"{row.get('runs', 0)} of {row.get('runs', 0)} runs)"
                 )
                 continue
             note = (
@@ -724,8 +734,10 @@ def print_report(report: dict[str, Any]) -> None:
                 else ""
             )
             print(
-                f"  {label:<40}{row['total_s']:8.3f}{row['speedup_of_brep']:12.1f}x{'yes' if row['closed_manifold'] else 'NO':>8}"
-                f"{row['open_edges']:>11}{row['distance_max_mm']:12.5f}{row['distance_mean_mm']:13.5f}{note}"
+                f"  {label:<40}{row['total_s']:8.3f}{row['speedup_of_brep']:12.1f}"
+                f"x{'yes' if row['closed_manifold'] else 'NO':>8}"
+                f"{row['open_edges']:>11}{row['distance_max_mm']:12.5f}"
+                f"{row['distance_mean_mm']:13.5f}{note}"
             )
         chord = (
             brep["distance_max_mm"] / brep["distance_max_rel_chord"]
@@ -733,7 +745,8 @@ def print_report(report: dict[str, Any]) -> None:
             else float("nan")
         )
         print(
-            f"  accuracy: {brep['samples']} analytic surface points half-way between sections, away from the hub; "
+            f"  accuracy: {brep['samples']} analytic surface "
+            "points half-way between sections, away from the hub; "
             f"smallest chord {chord:.2f} mm"
         )
         grid = route.get("pyvista_grid", {})
@@ -751,13 +764,17 @@ def print_report(report: dict[str, Any]) -> None:
             f"== Mass properties and balance (JSON report; CPU time, median of {mass['runs']}) =="
         )
         print(
-            f"  {'mass_properties':<14}{mass['default_fast_cpu_s'] * 1e3:10.1f} ms  blade faces alone "
+            f"  {'mass_properties':<14}"
+            f"{mass['default_fast_cpu_s'] * 1e3:10.1f} ms  blade faces alone "
             f"(old route, BRepGProp 1e-6 and 1e-4: {mass['default_old_cpu_s'] * 1e3:.0f} ms; "
-            f"{mass['speedup']:.1f}x faster, target >= 4x: {'met' if mass['speedup'] >= 4.0 else 'MISSED'})"
+            f"{mass['speedup']:.1f}x faster, target >= 4x: "
+            f"{'met' if mass['speedup'] >= 4.0 else 'MISSED'})"
         )
         print(
-            f"  {mass['designs']} designs (default + random): fast route taken by {mass['fast_route_taken']}, "
-            f"speed-up median {mass['speedup_median_over_designs']:.1f}x, min {mass['speedup_min_over_designs']:.1f}x"
+            f"  {mass['designs']} designs (default + random): "
+            f"fast route taken by {mass['fast_route_taken']}, "
+            f"speed-up median {mass['speedup_median_over_designs']:.1f}x, "
+            f"min {mass['speedup_min_over_designs']:.1f}x"
         )
         for route, label in (("fast", "fast route"), ("old", "BRepGProp 1e-6")):
             errors = mass["worst_relative_error"][route]
@@ -815,7 +832,8 @@ def main(argv: list[str] | None = None) -> int:
     report["stage_times"] = stage_times(args.runs)
     if "workshop" not in args.skip:
         print(
-            "workshop scenario (bore, flat, set screw, chamfer, 0.3 mm round edge, 0.5 mm fillet) ...",
+            "workshop scenario (bore, flat, set screw, "
+            "chamfer, 0.3 mm round edge, 0.5 mm fillet) ...",
             flush=True,
         )
         report["workshop"] = workshop_stage_times(max(1, min(args.runs, 3)))

@@ -96,7 +96,8 @@ def main() -> None:
                 else float("nan")
             )
             print(
-                f"{len(loop):>8} {read_s:>9.3f} {kd_s:>10.4f} {reference:>12.3f} {reference / kd_s:>7.0f}  {result}"
+                f"{len(loop):>8} {read_s:>9.3f} {kd_s:>10.4f}"
+                f" {reference:>12.3f} {reference / kd_s:>7.0f}  {result}"
             )
 
 

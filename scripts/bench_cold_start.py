@@ -229,7 +229,9 @@ def main() -> None:
         "--write-reference",
         metavar="FOLDER",
         type=Path,
-        help="only write the reference script and its data into FOLDER (to time it with other tools)",
+        help=(
+            "only write the reference script and its data into FOLDER (to time it with other tools)"
+        ),
     )
     args = parser.parse_args()
     if args.write_reference:
@@ -268,34 +270,42 @@ def main() -> None:
     )
     pairs = statistics.median(b / r for b, r in zip(build_s, reference_s))
     print(
-        f"torus-cad build (default, STEP + STL + sections table + JSON), median of {args.runs}: {build:.2f} s "
+        "torus-cad build (default, STEP + STL + sections "
+        f"table + JSON), median of {args.runs}: {build:.2f} s "
         f"(runs {', '.join(f'{value:.2f}' for value in build_s)})"
     )
     print(
-        f"reference OCP script (the default's sections lofted, fused, STEP + STL), median of {args.runs}: "
+        "reference OCP script (the default's sections "
+        f"lofted, fused, STEP + STL), median of {args.runs}: "
         f"{reference:.2f} s (runs {', '.join(f'{value:.2f}' for value in reference_s)})"
     )
     print(
-        f"ratio build / reference: {build / reference:.2f} of the medians, {pairs:.2f} the median of the pairs "
+        f"ratio build / reference: {build / reference:.2f} of "
+        f"the medians, {pairs:.2f} the median of the pairs "
         "(target <= 1.0)"
     )
     print(
-        f"CPU (user + sys, children included), median of {args.runs}: build {statistics.median(build_cpu):.2f} s "
-        f"(runs {', '.join(f'{value:.2f}' for value in build_cpu)}), reference {statistics.median(reference_cpu):.2f} s "
+        "CPU (user + sys, children included), median of "
+        f"{args.runs}: build {statistics.median(build_cpu):.2f} s "
+        f"(runs {', '.join(f'{value:.2f}' for value in build_cpu)}), "
+        f"reference {statistics.median(reference_cpu):.2f} s "
         f"(runs {', '.join(f'{value:.2f}' for value in reference_cpu)}); ratio "
         f"{statistics.median(build_cpu) / statistics.median(reference_cpu):.2f} of the medians, "
-        f"{statistics.median(b / r for b, r in zip(build_cpu, reference_cpu)):.2f} the median of the pairs"
+        f"{statistics.median(b / r for b, r in zip(build_cpu, reference_cpu)):.2f}"
+        " the median of the pairs"
     )
     print(
         f"floor: the reference script's imports alone, median of {args.runs}: {floor:.2f} s = "
-        f"{floor / reference:.2f} x the reference (runs {', '.join(f'{value:.2f}' for value in floor_s)})"
+        f"{floor / reference:.2f} x the reference (runs "
+        f"{', '.join(f'{value:.2f}' for value in floor_s)})"
     )
     print("heaviest top-level imports of torus-cad build (cumulative s):")
     for seconds, name in imports:
         print(f"  {seconds:6.2f}  {name}")
     runs = [import_cpu_seconds() for _ in range(args.runs)]
     print(
-        f"CPU of the build's imports, each group after the ones before (median of {args.runs}; cadquery loaded: "
+        "CPU of the build's imports, each group after the "
+        f"ones before (median of {args.runs}; cadquery loaded: "
         f"{runs[0][1]}):"
     )
     for name in IMPORT_GROUPS:

@@ -213,7 +213,8 @@ def convergence(levels: int) -> list[dict[str, Any]]:
             row["order"] = float(np.log2(abs(rows[-1]["relative_error"]) / abs(error)))
         rows.append(row)
         print(
-            f"  {sections:4d} x {points:5d}: {len(mesh.faces):>9,} triangles, volume {error:+.3e} of the B-rep's"
+            f"  {sections:4d} x {points:5d}: {len(mesh.faces):>9,}"
+            f" triangles, volume {error:+.3e} of the B-rep's"
             + (f", order {row['order']:.2f}" if "order" in row else ""),
             flush=True,
         )
@@ -263,7 +264,8 @@ def print_report(report: dict[str, Any]) -> None:
         f"load average {report['machine']['load_average']}) =="
     )
     print(
-        f"  {'route':<28}{'sampling':>12}{'wall s':>9}{'cpu s':>8}{'peak MB':>9}{'triangles':>12}  closed"
+        f"  {'route':<28}{'sampling':>12}{'wall s':>9}"
+        f"{'cpu s':>8}{'peak MB':>9}{'triangles':>12}  closed"
     )
     for row in report["mesh"]:
         label = f"{row['sections']} x {row['points']}"
@@ -274,7 +276,8 @@ def print_report(report: dict[str, Any]) -> None:
             name = "torus-cad mesh (manifold3d)" if route == "torus_cad" else "spec route (PyVista)"
             if result["status"] != "ok":
                 print(
-                    f"  {name:<28}{label:>12}{result['wall_s']:9.1f}{'':>8}{_mb(result.get('peak_rss_mb')):>9}"
+                    f"  {name:<28}{label:>12}{result['wall_s']:9.1f}"
+                    f"{'':>8}{_mb(result.get('peak_rss_mb')):>9}"
                     f"{'':>12}  {result['status']}"
                 )
                 continue
@@ -283,9 +286,15 @@ def print_report(report: dict[str, Any]) -> None:
                 closed = (
                     "yes (0 open, 0 non-manifold)"
                     if topology["closed_2_manifold"]
-                    else f"NO ({topology['open_edges']} open, {topology['non_manifold_edges']} non-manifold)"
+                    else (
+                        f"NO ({topology['open_edges']} open, "
+                        f"{topology['non_manifold_edges']} non-manifold)"
+                    )
                 )
-                closed += f", {result['self_intersections']} intersecting pairs ({result['self_intersection_scope']})"
+                closed += (
+                    f", {result['self_intersections']} intersecting "
+                    f"pairs ({result['self_intersection_scope']})"
+                )
             else:
                 closed = "yes" if result["closed"] else f"NO ({result['open_edges']} open edges)"
             print(
@@ -298,9 +307,11 @@ def print_report(report: dict[str, Any]) -> None:
                 f"{key} {value:.1f}" for key, value in result["stage_seconds"].items()
             )
             print(
-                f"    torus-cad stages (s): {stages}; volume vs B-rep {result['volume_relative_difference']:+.4%}; "
+                f"    torus-cad stages (s): {stages}; volume vs "
+                f"B-rep {result['volume_relative_difference']:+.4%}; "
                 f"blade edge ratio {result['blade_edge_ratio']:.1f} (OpenCascade STL "
-                f"{result['opencascade_edge_ratio']:.1f}); worst aspect {result['aspect_ratio_max']:.3g} "
+                f"{result['opencascade_edge_ratio']:.1f}); "
+                f"worst aspect {result['aspect_ratio_max']:.3g} "
                 f"({result['aspect_ratio_max_blades_away']:.1f} on the blades away from the hub)"
             )
     cfd = report.get("cfd")
@@ -310,8 +321,10 @@ def print_report(report: dict[str, Any]) -> None:
             print(f"  {cfd['status']}")
             return
         print(
-            f"  wall {cfd['wall_s']:.1f} s (process), cpu {cfd['cpu_s']:.1f} s, peak {cfd['peak_rss_mb']:.0f} MB; "
-            f"{cfd['tetrahedra_total']:,} tetrahedra ({cfd['tetrahedra']}), {cfd['nodes']:,} nodes; "
+            f"  wall {cfd['wall_s']:.1f} s (process), cpu "
+            f"{cfd['cpu_s']:.1f} s, peak {cfd['peak_rss_mb']:.0f} MB; "
+            f"{cfd['tetrahedra_total']:,} tetrahedra "
+            f"({cfd['tetrahedra']}), {cfd['nodes']:,} nodes; "
             f"worst SICN {cfd['sicn_min']:.3f}, mean {cfd['sicn_mean']:.3f}"
         )
         print(

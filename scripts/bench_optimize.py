@@ -148,7 +148,8 @@ def main() -> None:
             args.workers,
         )
         print(
-            f"warm-up (pool start, kernel import in the fork server): {time.perf_counter() - start:.1f} s"
+            "warm-up (pool start, kernel import in the fork "
+            f"server): {time.perf_counter() - start:.1f} s"
         )
         for repeat in range(args.repeat):
             folder = Path(scratch) / f"pair_{repeat}"
@@ -163,7 +164,8 @@ def main() -> None:
             print(
                 f"pair {repeat + 1}: optimize {study.designs} trials in {study.wall_s:.1f} s = "
                 f"{study.per_minute():.1f}/min, workers busy {100 * study.busy():.1f} %, main CPU "
-                f"{100 * study.cpu_share():.1f} % of their cores ({cpu_ms[-1]:.0f} ms/trial); sweep "
+                f"{100 * study.cpu_share():.1f} % of their "
+                f"cores ({cpu_ms[-1]:.0f} ms/trial); sweep "
                 f"{sweep.per_minute():.1f}/min, busy {100 * sweep.busy():.1f} %, main CPU "
                 f"{100 * sweep.cpu_share():.1f} %; overhead by wall clock {wall[-1]:+.1f} %, "
                 f"from inside the run {inside[-1]:+.1f} %",
@@ -173,19 +175,23 @@ def main() -> None:
                 again = _sweep(spec, designs, folder / "sweep_again", args.workers)
                 print(
                     f"noise floor: the same sweep again {again.per_minute():.1f}/min, "
-                    f"{100.0 * (sweep.per_minute() / again.per_minute() - 1.0):+.1f} % against the first",
+                    f"{100.0 * (sweep.per_minute() / again.per_minute() - 1.0):+.1f} % "
+                    "against the first",
                     flush=True,
                 )
     print(
-        f"optimiser's own CPU (sampler, storage, loop), median: {statistics.median(cpu_ms):.0f} ms per trial"
+        "optimiser's own CPU (sampler, storage, loop), "
+        f"median: {statistics.median(cpu_ms):.0f} ms per trial"
     )
     print(
         f"optimiser overhead from inside the runs (extra main CPU + extra worker idle), median of "
-        f"{args.repeat}: {statistics.median(inside):+.1f} % (range {min(inside):+.1f} to {max(inside):+.1f} %; "
+        f"{args.repeat}: {statistics.median(inside):+.1f} % "
+        f"(range {min(inside):+.1f} to {max(inside):+.1f} %; "
         "target <= 5 %)"
     )
     print(
-        f"optimiser overhead by wall clock, median of {args.repeat}: {statistics.median(wall):+.1f} % "
+        "optimiser overhead by wall clock, median of "
+        f"{args.repeat}: {statistics.median(wall):+.1f} % "
         f"(range {min(wall):+.1f} to {max(wall):+.1f} %)"
     )
     _print_best(spec, trials, args.trials)

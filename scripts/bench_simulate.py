@@ -166,7 +166,8 @@ def main() -> int:
                 *(float(done[level][key]) for level in LEVELS), REFINEMENT_RATIO
             ).report()
     print(
-        f"{'level':<8}{'cells':>9}{'wall s':>9}{'peak GB':>9}{'thrust N':>11}{'torque N m':>12}{'CT':>9}{'CP':>9}  converged"
+        f"{'level':<8}{'cells':>9}{'wall s':>9}{'peak GB':>9}"
+        f"{'thrust N':>11}{'torque N m':>12}{'CT':>9}{'CP':>9}  converged"
     )
     for result in results:
         if result["exit_code"]:
@@ -175,14 +176,17 @@ def main() -> int:
         print(
             f"{result['level']:<8}{result['cells']:>9,}{result['wall_seconds']:>9.0f}"
             f"{result['peak_memory_gb']:>9.2f}{result['thrust_n']:>11.4g}"
-            f"{result['torque_nm']:>12.4g}{result['ct']:>9.4f}{result['cp']:>9.4f}  {result['converged']}"
+            f"{result['torque_nm']:>12.4g}{result['ct']:>9.4f}"
+            f"{result['cp']:>9.4f}  {result['converged']}"
         )
     for key in ("thrust_n", "torque_nm"):
         if key in summary:
             entry = summary[key]
             print(
-                f"{key}: Richardson {entry['extrapolated']}, observed order {entry['observed_order']}, "
-                f"uncertainty of the fine level {entry['uncertainty_fine']} ({entry['uncertainty_method']})"
+                f"{key}: Richardson {entry['extrapolated']}, "
+                f"observed order {entry['observed_order']}, "
+                "uncertainty of the fine level "
+                f"{entry['uncertainty_fine']} ({entry['uncertainty_method']})"
             )
     out = Path(args.out)
     out.mkdir(exist_ok=True)

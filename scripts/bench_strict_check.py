@@ -46,7 +46,8 @@ def _one_run(design: str) -> dict[str, tuple[float, float]]:
     times = {"build without strict check": (wall - strict, float("nan")), "build": (wall, cpu)}
     if propeller.parameters.handedness.value == "ccw":
         print(
-            "  (ccw: the build checks the solid before its mirror; timed here on the mirrored solid)"
+            "  (ccw: the build checks the solid before "
+            "its mirror; timed here on the mirrored solid)"
         )
     _, wall, cpu = _timed(lambda: strict_valid_solid(propeller.solid, "the propeller"))
     times["strict check (build's scope)"] = (wall, cpu)
@@ -98,9 +99,12 @@ def fuzz(count: int) -> None:
     outcomes = fuzz_many(range(count), workers=2)
     built = [outcome for outcome in outcomes if outcome.status == "built"]
     print(
-        f"fuzz seeds 0-{count - 1}: {dict(Counter(outcome.status for outcome in outcomes))}; built and "
-        f"strict-valid (whole-solid BRepAlgoAPI_Check): {sum(outcome.strict_valid for outcome in built)} of "
-        f"{len(built)}; STL with 0 crossing pairs: {sum(outcome.stl_pairs == 0 for outcome in built)}; "
+        f"fuzz seeds 0-{count - 1}: "
+        f"{dict(Counter(outcome.status for outcome in outcomes))}; built and "
+        "strict-valid (whole-solid BRepAlgoAPI_Check): "
+        f"{sum(outcome.strict_valid for outcome in built)} of "
+        f"{len(built)}; STL with 0 crossing pairs: "
+        f"{sum(outcome.stl_pairs == 0 for outcome in built)}; "
         f"{time.perf_counter() - start:.0f} s"
     )
     for outcome in outcomes:
@@ -108,7 +112,8 @@ def fuzz(count: int) -> None:
             print(f"  seed {outcome.seed} failed: {outcome.reason}")
     if built:
         print(
-            f"  median build {statistics.median(o.build_s for o in built):.2f} s, median whole-solid check "
+            f"  median build {statistics.median(o.build_s for o in built):.2f}"
+            " s, median whole-solid check "
             f"{statistics.median(o.check_s for o in built):.2f} s"
         )
 

@@ -48,7 +48,8 @@ def main() -> None:
             times = page.latencies_ms()
             rows.append({"blades": int(blades), **times, "server": page.text("preview-detail")})
             print(
-                f"blades -> {blades}: preview {times['preview']:6.0f} ms, exact solid {times['exact']:6.0f} ms"
+                f"blades -> {blades}: preview {times['preview']:6.0f} ms, "
+                f"exact solid {times['exact']:6.0f} ms"
                 f"   ({page.text('preview-detail')})",
                 flush=True,
             )

@@ -46,7 +46,8 @@ def summarise(out: Path) -> list[str]:
     lines = [
         f"study {summary.get('name', out.name)}: {summary.get('trials', '?')} trials, states "
         f"{summary.get('states', {})}",
-        "level   trials pruned  worker s | per simulation, mean s: mesh  convert   solve   (runs)   noise   wall",
+        "level   trials pruned  worker s | per simulation, "
+        "mean s: mesh  convert   solve   (runs)   noise   wall",
     ]
     noise_share = []
     for level, reports in _reports(out).items():
@@ -62,13 +63,16 @@ def summarise(out: Path) -> list[str]:
         entry = spent.get(level, {"trials": len(reports), "seconds": sum(walls)})
         lines.append(
             f"{level:8s}{entry['trials']:6.0f}{pruned.get(level, 0):7d}{entry['seconds']:10.0f} | "
-            f"{_mean([float(s.get('mesh', 0.0)) for s in stages])}{_mean([float(s.get('convert', 0.0)) for s in stages])}"
-            f"{_mean(solve)}   ({statistics.fmean(runs) if runs else 1:.1f}){_mean(noise)}{_mean(walls)}"
+            f"{_mean([float(s.get('mesh', 0.0)) for s in stages])}"
+            f"{_mean([float(s.get('convert', 0.0)) for s in stages])}"
+            f"{_mean(solve)}   ({statistics.fmean(runs) if runs else 1:.1f}"
+            f"){_mean(noise)}{_mean(walls)}"
         )
         noise_share += [n / w for n, w in zip(noise, walls) if w > 0]
     if noise_share:
         lines.append(
-            f"noise: {100 * statistics.fmean(noise_share):.1f} % of a simulation's wall time on average"
+            f"noise: {100 * statistics.fmean(noise_share):.1f} % "
+            "of a simulation's wall time on average"
         )
     return lines
 

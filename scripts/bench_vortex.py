@@ -137,7 +137,8 @@ def main() -> int:
             else ""
         )
         print(
-            f"{name:34s} {run['wall_s']:7.1f} s wall, {run['peak_gb']:.2f} GB peak, exit {run['exit']}{ratio}"
+            f"{name:34s} {run['wall_s']:7.1f} s wall, "
+            f"{run['peak_gb']:.2f} GB peak, exit {run['exit']}{ratio}"
         )
     print(json.dumps({"stages": stages, "runs": runs}))
     return 0

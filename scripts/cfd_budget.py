@@ -119,9 +119,12 @@ def measure_examples(names: list[str], json_path: str | None) -> None:
         }
         rows.append(row)
         print(
-            f"{row['example']}: estimate {row['estimate']:,}, real {row['tetrahedra']:,} (estimate / real "
-            f"{row['factor']:.2f}), {row['wall_s']:.0f} s wall, {row['cpu_s']:.0f} s CPU, {row['peak_mb']:,.0f} MB, "
-            f"{row['tets_per_cpu_s']:,.0f} tetrahedra per CPU second (load average {row['load']:.1f})",
+            f"{row['example']}: estimate {row['estimate']:,}, "
+            f"real {row['tetrahedra']:,} (estimate / real "
+            f"{row['factor']:.2f}), {row['wall_s']:.0f} s wall, "
+            f"{row['cpu_s']:.0f} s CPU, {row['peak_mb']:,.0f} MB, "
+            f"{row['tets_per_cpu_s']:,.0f} tetrahedra per "
+            f"CPU second (load average {row['load']:.1f})",
             flush=True,
         )
         if json_path:
@@ -131,7 +134,8 @@ def measure_examples(names: list[str], json_path: str | None) -> None:
         factors = [row["factor"] for row in rows]
         rates = [row["tets_per_cpu_s"] for row in rows]
         print(
-            f"estimate / real: {min(factors):.2f} to {max(factors):.2f}; tetrahedra per CPU second: "
+            f"estimate / real: {min(factors):.2f} to "
+            f"{max(factors):.2f}; tetrahedra per CPU second: "
             f"{min(rates):,.0f} to {max(rates):,.0f}"
         )
 
@@ -167,9 +171,12 @@ def main() -> None:
         real = measure(options)
         rows.append((volume_units, triangles, real))
         print(
-            f"{' '.join(options) or '(defaults)'}: integrals {volume_units:,.0f} / {triangles:,} triangles; "
-            f"estimate {estimate.tetrahedra:,} tets, {estimate.memory_mb:,.0f} MB ({estimate_s:.2f} s); real "
-            f"{real['tetrahedra']:,} tets ({estimate.tetrahedra / real['tetrahedra']:.2f}x), {real['peak_mb']:,.0f} MB "
+            f"{' '.join(options) or '(defaults)'}: integrals "
+            f"{volume_units:,.0f} / {triangles:,} triangles; "
+            f"estimate {estimate.tetrahedra:,} tets, "
+            f"{estimate.memory_mb:,.0f} MB ({estimate_s:.2f} s); real "
+            f"{real['tetrahedra']:,} tets "
+            f"({estimate.tetrahedra / real['tetrahedra']:.2f}x), {real['peak_mb']:,.0f} MB "
             f"peak, {real['wall_s']:.1f} s",
             flush=True,
         )

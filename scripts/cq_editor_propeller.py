@@ -74,5 +74,6 @@ else:
         print(f"wrote {path}")
     properties = result.mass_properties(DENSITY_G_CM3)
     print(
-        f"volume {properties.volume_mm3:.3f} mm^3, mass {properties.mass_g:.3f} g at {DENSITY_G_CM3:g} g/cm^3"
+        f"volume {properties.volume_mm3:.3f} mm^3, mass "
+        f"{properties.mass_g:.3f} g at {DENSITY_G_CM3:g} g/cm^3"
     )

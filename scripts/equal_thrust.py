@@ -86,7 +86,8 @@ def search(label: str, design: Path | None, args: argparse.Namespace) -> dict[st
     completed = subprocess.run(command, env=env, capture_output=True, text=True, check=False)
     if completed.returncode != 0:
         raise SystemExit(
-            f"{label}: simulate failed (exit {completed.returncode}): {completed.stderr.strip()[-400:]}"
+            f"{label}: simulate failed (exit {completed.returncode}): "
+            f"{completed.stderr.strip()[-400:]}"
         )
     report = json.loads(next(out.glob("*_performance.json")).read_text(encoding="utf-8"))
     return {**report, "process_wall_seconds": time.perf_counter() - start}

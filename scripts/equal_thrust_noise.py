@@ -77,13 +77,16 @@ def case_noise(report_path: Path, scratch: Path, blades: int) -> None:
         directivity=False,
     )
     print(
-        f"{report['name']}: {report['rpm']:.0f} rpm, {report['thrust_n']:.4g} N, {report['power_w']:.4g} W; surface "
-        f"pressure thrust {noise.report['surface_pressure_thrust_n']:.4g} N; noise {noise.report['seconds']:.1f} s"
+        f"{report['name']}: {report['rpm']:.0f} rpm, "
+        f"{report['thrust_n']:.4g} N, {report['power_w']:.4g} W; surface "
+        f"pressure thrust {noise.report['surface_pressure_thrust_n']:.4g} N; "
+        f"noise {noise.report['seconds']:.1f} s"
     )
     for entry in noise.report["observers"]:
         print(
             f"  {entry['distance_m']:g} m {entry['angle_deg']:g} deg: {entry['oaspl_db']:.1f} dB, "
-            f"{entry['oaspl_dba']:.1f} dB(A), other harmonics {entry['other_harmonics_spl_db']:.1f} dB, "
+            f"{entry['oaspl_dba']:.1f} dB(A), other harmonics "
+            f"{entry['other_harmonics_spl_db']:.1f} dB, "
             f"BPF {entry['harmonics'][0]['frequency_hz']:.0f} Hz"
         )
 

@@ -176,13 +176,15 @@ def main(argv: list[str] | None = None) -> int:
     plt.close(figure)
 
     print(
-        f"{len(points)} designs in {elapsed:.1f} s on {args.workers} processes; check CPU per design median "
+        f"{len(points)} designs in {elapsed:.1f} s on "
+        f"{args.workers} processes; check CPU per design median "
         f"{1000 * statistics.median(cpu):.0f} ms, max {1000 * max(cpu):.0f} ms"
     )
     for index in present:
         times = [seconds for (kind, seconds) in answers if kind == index]
         print(
-            f"  {len(times):5d}  {KINDS[index][0]:<40s} check CPU median {1000 * statistics.median(times):.0f} ms"
+            f"  {len(times):5d}  {KINDS[index][0]:<40s} check "
+            f"CPU median {1000 * statistics.median(times):.0f} ms"
         )
     print(f"wrote {args.out}")
     return 0

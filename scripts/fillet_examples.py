@@ -35,7 +35,8 @@ def outcome(params: PropellerParameters) -> str:
         return f"failed: {error}"
     if made is not None and not made.constant_radius:
         return (
-            f"reduced: down to {made.smallest_radius_mm:.3g} mm along {made.varying_junction_mm:.2f} mm "
+            f"reduced: down to {made.smallest_radius_mm:.3g} mm "
+            f"along {made.varying_junction_mm:.2f} mm "
             "of each blade's junction"
         )
     return "ok"
@@ -59,7 +60,8 @@ def main() -> int:
             start = time.perf_counter()
             result = outcome(params.with_values({"hub.root_fillet_radius": radius}))
             print(
-                f"{name:<28} {radius:4.2f} mm  {result[:110]}  ({time.perf_counter() - start:.1f} s)",
+                f"{name:<28} {radius:4.2f} mm  {result[:110]}  "
+                f"({time.perf_counter() - start:.1f} s)",
                 flush=True,
             )
     return 0

@@ -116,8 +116,10 @@ def main() -> int:
     counted = sum(row["outcome"] in ("ok", "reduced", "failed") for row in rows)
     rate = ok / counted if counted else float("nan")
     print(
-        f"root fillet {args.radius:g} mm: {ok} of {counted} valid designs ({100 * rate:.1f} %) at that radius everywhere, "
-        f"{ok + reduced} ({100 * (ok + reduced) / max(counted, 1):.1f} %) with {reduced} reduced where the blade bends too "
+        f"root fillet {args.radius:g} mm: {ok} of {counted} valid "
+        f"designs ({100 * rate:.1f} %) at that radius everywhere, "
+        f"{ok + reduced} ({100 * (ok + reduced) / max(counted, 1):.1f} %) "
+        f"with {reduced} reduced where the blade bends too "
         "tightly; "
         f"{sum(row['outcome'] == 'refused' for row in rows)} refused, "
         f"{sum(row['outcome'] == 'fuse_failed' for row in rows)} fuse failures not counted"

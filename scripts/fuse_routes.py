@@ -83,15 +83,18 @@ def main(argv: list[str] | None = None) -> int:
     valid = [row for row in rows if row["outcome"] == "valid"]
     shared = [row for row in valid if row["route"] != FuseRoute.GENERAL]
     print(
-        f"{args.count} designs: {len(valid)} built, {sum(r['outcome'] == 'refused' for r in rows)} refused, "
-        f"{sum(r['outcome'] == 'error' for r in rows)} errors ({time.perf_counter() - started:.0f} s)"
+        f"{args.count} designs: {len(valid)} built, "
+        f"{sum(r['outcome'] == 'refused' for r in rows)} refused, "
+        f"{sum(r['outcome'] == 'error' for r in rows)} errors "
+        f"({time.perf_counter() - started:.0f} s)"
     )
     routes = collections.Counter(row["route"] for row in valid)
     print("routes: " + ", ".join(f"{route} {count}" for route, count in sorted(routes.items())))
     for route in sorted(routes):
         if route != FuseRoute.ASSEMBLED:
             print(
-                f"  {route}: seeds {', '.join(str(row['seed']) for row in valid if row['route'] == route)}"
+                f"  {route}: seeds "
+                f"{', '.join(str(row['seed']) for row in valid if row['route'] == route)}"
             )
     bad = [
         row
@@ -101,7 +104,8 @@ def main(argv: list[str] | None = None) -> int:
     if valid:
         worst = max(valid, key=lambda row: row["relative_volume_difference"])
         print(
-            f"largest relative volume difference: {worst['relative_volume_difference']:.2e} (seed {worst['seed']})"
+            "largest relative volume difference: "
+            f"{worst['relative_volume_difference']:.2e} (seed {worst['seed']})"
         )
     if shared:
         route_s = statistics.median(row["route_fuse_s"] for row in shared)

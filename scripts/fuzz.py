@@ -219,7 +219,8 @@ def main(argv: list[str] | None = None) -> int:
                 say(f"  {result.outcome:<9} {task.design_id}: {result.reason}\n{result.detail}")
         elif args.verbose or args.replay:
             say(
-                f"  {result.outcome:<9} {task.design_id} ({result.seconds:.2f} s) {result.reason[:150]}"
+                f"  {result.outcome:<9} {task.design_id} ("
+                f"{result.seconds:.2f} s) {result.reason[:150]}"
             )
 
     args.workers = capped_workers(
@@ -244,10 +245,14 @@ def main(argv: list[str] | None = None) -> int:
     kernel_refusals = sum(1 for r in results if r.outcome is Outcome.REFUSED and not r.prescreened)
     print(f"  valid solid     {counts[Outcome.VALID]:6d}")
     print(
-        f"  clear refusal   {counts[Outcome.REFUSED]:6d}  ({counts[Outcome.REFUSED] - kernel_refusals} pre-screened "
+        f"  clear refusal   {counts[Outcome.REFUSED]:6d}  "
+        f"({counts[Outcome.REFUSED] - kernel_refusals} pre-screened "
         f"without the kernel, {kernel_refusals} by the build)"
         if not args.build_all
-        else f"  clear refusal   {counts[Outcome.REFUSED]:6d}  (by the build; the pre-screen refused {len(screened)})"
+        else (
+            f"  clear refusal   {counts[Outcome.REFUSED]:6d}  (by "
+            f"the build; the pre-screen refused {len(screened)})"
+        )
     )
     others = [
         f"{outcome} {counts[outcome]}"
@@ -257,7 +262,8 @@ def main(argv: list[str] | None = None) -> int:
     print(f"  anything else   {anything_else:6d}" + (f"  ({', '.join(others)})" if others else ""))
     if check_cpu:
         print(
-            f"pre-screen: {len(screened)} of {len(check_cpu)} designs refused; CPU per design median "
+            f"pre-screen: {len(screened)} of "
+            f"{len(check_cpu)} designs refused; CPU per design median "
             f"{1000 * statistics.median(check_cpu):.0f} ms, max {1000 * max(check_cpu):.0f} ms"
         )
     if args.build_all:
@@ -268,7 +274,8 @@ def main(argv: list[str] | None = None) -> int:
             if name not in screened and result.outcome is Outcome.REFUSED
         ]
         print(
-            f"agreement: {same} of the {len(screened)} pre-screened refused by the build with the same line; "
+            f"agreement: {same} of the {len(screened)} pre-screened "
+            "refused by the build with the same line; "
             f"{len(missed)} the pre-screen passed refused by the build"
             + (f" ({', '.join(missed)})" if missed else "")
         )

@@ -21,7 +21,8 @@ from torus_cad.propeller import build_propeller
 
 def main(paths: list[Path]) -> int:
     print(
-        "| design | diameter asked | B-rep diameter | pitch asked | reported at 0.75 R | B-rep at 0.75 R |"
+        "| design | diameter asked | B-rep diameter | pitch "
+        "asked | reported at 0.75 R | B-rep at 0.75 R |"
     )
     print("| --- | --- | --- | --- | --- | --- |")
     for path in paths:
@@ -39,7 +40,8 @@ def main(paths: list[Path]) -> int:
             )
             measured = " / ".join(f"{pitch_on_solid(propeller, s):.1f}" for s, _ in crossings)
         print(
-            f"| {asked.name} | {asked.diameter:g} | {diameter:.3f} | {asked.pitch:g} | {reported} | {measured} |",
+            f"| {asked.name} | {asked.diameter:g} | {diameter:.3f} | "
+            f"{asked.pitch:g} | {reported} | {measured} |",
             flush=True,
         )
     return 0

@@ -123,7 +123,8 @@ def front_table(
             f"| {entry['number']}{mark} | "
             + " | ".join(cells)
             + f" | {row.get('level', study_level)} | "
-            f"{float(row['performance.rpm']):,.0f} | {entry['values'][0]:.2f} | {entry['values'][1]:.1f} |"
+            f"{float(row['performance.rpm']):,.0f} | "
+            f"{entry['values'][0]:.2f} | {entry['values'][1]:.1f} |"
         )
     return "\n".join(lines)
 
@@ -132,12 +133,14 @@ def comparison_table(results: dict[str, dict[str, Any]]) -> str:
     """One row per design at the target thrust, then the chosen design's and the conventional's
     differences from the base design."""
     lines = [
-        "| design | rpm | thrust (N) | power (W) | figure of merit | dB(A) 1 m, 90° | cells | wall (s) |",
+        "| design | rpm | thrust (N) | power (W) | figure "
+        "of merit | dB(A) 1 m, 90° | cells | wall (s) |",
         "|---|---|---|---|---|---|---|---|",
     ]
     for label, report in results.items():
         lines.append(
-            f"| {label} | {report['rpm']:,.0f} | {report['thrust_n']:.4f} | {report['power_w']:.2f} | "
+            f"| {label} | {report['rpm']:,.0f} | "
+            f"{report['thrust_n']:.4f} | {report['power_w']:.2f} | "
             f"{report['figure_of_merit']:.3f} | {dba(report):.1f} | {report.get('cells', 0):,} | "
             f"{report['wall_seconds']:.0f} |"
         )
@@ -166,7 +169,8 @@ def cost_lines(summary: dict[str, Any], results: dict[str, dict[str, Any]]) -> l
         )
     fine_s = sum(report["wall_seconds"] * report.get("processes", 1) for report in results.values())
     lines.append(
-        f"  study: {study_s / 3600:.2f} CPU hours; the {len(results)} re-simulations: {fine_s / 3600:.2f}"
+        f"  study: {study_s / 3600:.2f} CPU hours; the "
+        f"{len(results)} re-simulations: {fine_s / 3600:.2f}"
     )
     return lines
 
@@ -185,7 +189,8 @@ def ranking_lines(by_level: dict[str, dict[str, dict[str, Any]]]) -> list[str]:
                 f"  {key}, {level}: " + " < ".join(label.split(" (")[0] for label in order)
             )
         lines.append(
-            f"  {key}: the levels {'agree' if len({tuple(o) for o in orders.values()}) == 1 else 'disagree'}"
+            f"  {key}: the levels "
+            f"{'agree' if len({tuple(o) for o in orders.values()}) == 1 else 'disagree'}"
         )
     return lines
 

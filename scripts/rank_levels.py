@@ -78,7 +78,8 @@ def run(name: str, overrides: list[str], level: str, args: argparse.Namespace) -
     completed, peak_bytes = run_with_peak_memory(command, env)
     if completed.returncode != 0:
         raise SystemExit(
-            f"{name} at {level} failed (exit {completed.returncode}): {completed.stderr.strip()[-400:]}"
+            f"{name} at {level} failed (exit {completed.returncode}): "
+            f"{completed.stderr.strip()[-400:]}"
         )
     measured = {
         "process_wall_seconds": time.perf_counter() - start,

@@ -85,15 +85,18 @@ def main(argv: list[str] | None = None) -> int:
         rows[name] = report
         print(f"{name}: {time.perf_counter() - start:.1f} s", file=sys.stderr, flush=True)
     print(
-        "| design | thrust N, fine CFD | thrust N, vortex | Δ | inviscid thrust N | Δ | FM, fine CFD | FM, vortex |"
+        "| design | thrust N, fine CFD | thrust N, vortex | Δ "
+        "| inviscid thrust N | Δ | FM, fine CFD | FM, vortex |"
     )
     print("|---|---|---|---|---|---|---|---|")
     for name, report in rows.items():
         thrust, merit = cfd[name]
         inviscid = report["inviscid_thrust_n"]
         print(
-            f"| {name} | {thrust:.5f} | {report['thrust_n']:.5f} | {report['thrust_n'] / thrust - 1:+.1%} | "
-            f"{inviscid:.5f} | {inviscid / thrust - 1:+.1%} | {merit:.4f} | {report['figure_of_merit']:.4f} |"
+            f"| {name} | {thrust:.5f} | {report['thrust_n']:.5f} | "
+            f"{report['thrust_n'] / thrust - 1:+.1%} | "
+            f"{inviscid:.5f} | {inviscid / thrust - 1:+.1%} | "
+            f"{merit:.4f} | {report['figure_of_merit']:.4f} |"
         )
     names = list(rows)
     for label, values in (
@@ -101,7 +104,8 @@ def main(argv: list[str] | None = None) -> int:
         ("thrust (inviscid lattice)", [rows[n]["inviscid_thrust_n"] for n in names]),
     ):
         print(
-            f"Spearman's rho, {label} against fine CFD: {spearmanr(values, [cfd[n][0] for n in names])[0]:.3f}"
+            f"Spearman's rho, {label} against fine CFD: "
+            f"{spearmanr(values, [cfd[n][0] for n in names])[0]:.3f}"
         )
     merit_rho = spearmanr([rows[n]["figure_of_merit"] for n in names], [cfd[n][1] for n in names])[
         0

@@ -42,7 +42,8 @@ def main() -> int:
             print(f"wrote {page}")
     if args.check and stale:
         print(
-            f"stale: {', '.join(str(page) for page in stale)}: run python scripts/reference_pages.py",
+            f"stale: {', '.join(str(page) for page in stale)}: "
+            "run python scripts/reference_pages.py",
             file=sys.stderr,
         )
         return 1

@@ -174,13 +174,15 @@ def main() -> int:
         tighter = radius < args.radius
         tally[outcome, tighter] = tally.get((outcome, tighter), 0) + 1
         print(
-            f"seed {seed:5d}  tightest concave radius {radius:8.3f} mm (analytic blade {analytic:8.3f} mm)  "
+            f"seed {seed:5d}  tightest concave radius "
+            f"{radius:8.3f} mm (analytic blade {analytic:8.3f} mm)  "
             f"fillet {outcome}",
             flush=True,
         )
     for (outcome, tighter), designs in sorted(tally.items()):
         print(
-            f"fillet {outcome}: {designs} designs bend concavely {'tighter' if tighter else 'no tighter'} "
+            f"fillet {outcome}: {designs} designs bend "
+            f"concavely {'tighter' if tighter else 'no tighter'} "
             f"than {args.radius:g} mm near the hub"
         )
     return 0

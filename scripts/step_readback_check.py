@@ -115,7 +115,8 @@ def main(argv: list[str] | None = None) -> int:
             readback = step_readback_faults(path, self_interference=not args.fast)
         rows.append((design, build_s, memory, readback))
         print(
-            f"{design}: build {build_s:.1f} s; in memory {_counts(memory.counts)} ({memory.seconds:.1f} s); "
+            f"{design}: build {build_s:.1f} s; in memory "
+            f"{_counts(memory.counts)} ({memory.seconds:.1f} s); "
             f"read back {_counts(readback.counts)} ({readback.seconds:.1f} s)",
             file=sys.stderr,
             flush=True,

@@ -75,7 +75,8 @@ def main() -> int:
     names = args.design or (QUICK_DESIGNS if args.quick else tuple(DESIGNS))
     settings = QUICK_SETTINGS if args.quick else SETTINGS
     print(
-        f"{'design':<18} {'linear':>7} {'angular':>7} {'estimate':>9} {'real':>9} {'ratio':>6} {'mesh s':>7}"
+        f"{'design':<18} {'linear':>7} {'angular':>7}"
+        f" {'estimate':>9} {'real':>9} {'ratio':>6} {'mesh s':>7}"
     )
     ratios = []
     for name in names:
@@ -92,7 +93,8 @@ def main() -> int:
             count, seconds = real_triangles(propeller.solid, linear, angular)
             ratios.append(estimate / count)
             print(
-                f"{name:<18} {linear:>7g} {angular:>7g} {estimate:>9} {count:>9} {estimate / count:>6.2f} "
+                f"{name:<18} {linear:>7g} {angular:>7g}"
+                f" {estimate:>9} {count:>9} {estimate / count:>6.2f} "
                 f"{seconds:>7.2f}",
                 flush=True,
             )

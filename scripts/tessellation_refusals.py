@@ -47,11 +47,15 @@ def _one(label: str, load) -> str:
     # a checkout before the uncrossed tessellation has none
     pairs = getattr(check, "repaired_pairs", 0)
     repair = (
-        f", {pairs} crossing pairs repaired ({check.repair}, moved <= {check.repair_deviation_mm:.3f} mm)"
+        f", {pairs} crossing pairs repaired ({check.repair}, "
+        f"moved <= {check.repair_deviation_mm:.3f} mm)"
         if pairs
         else ""
     )
-    return f"{label}: written, {check.triangles} triangles{repair}, {time.perf_counter() - start:.1f} s"
+    return (
+        f"{label}: written, {check.triangles} triangles{repair}, "
+        f"{time.perf_counter() - start:.1f} s"
+    )
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -164,16 +164,19 @@ def main() -> None:
     _, wall = _run_pytest(["-m", "fast"])
     modules = {_module(node) for node in durations}
     print(
-        f"fast tier: {len(fast)} tests of {len({_module(node) for node in fast})}/{len(modules)} modules, "
+        f"fast tier: {len(fast)} tests of "
+        f"{len({_module(node) for node in fast})}/{len(modules)} modules, "
         f"{wall:.1f} s wall (limit {FAST_TIER_SECONDS:g} s)"
     )
     print(
-        f"long tier: {len(long)} tests, {sum(durations.get(node, 0.0) for node in long):.0f} s of test time in the "
+        f"long tier: {len(long)} tests, "
+        f"{sum(durations.get(node, 0.0) for node in long):.0f} s of test time in the "
         f"suite run ({len(unfinished)} more that did not finish in it)"
     )
     rest = sum(seconds for node, seconds in durations.items() if node not in long)
     print(
-        f"the rest (CI): {len(durations) - len(long)} tests, {rest:.0f} s of test time in the suite run"
+        f"the rest (CI): {len(durations) - len(long)} tests, "
+        f"{rest:.0f} s of test time in the suite run"
     )
 
 

@@ -222,8 +222,10 @@ def main() -> int:
             }
         )
         print(
-            f"{rpm:.0f} rpm, J = {j:.2f}: CT {comparison.ct:.4f} ({100 * comparison.ct_error:+.1f} %), "
-            f"CP {comparison.cp:.4f} ({100 * comparison.cp_error:+.1f} %), {report['process_wall_seconds']:.0f} s",
+            f"{rpm:.0f} rpm, J = {j:.2f}: CT {comparison.ct:.4f}"
+            f" ({100 * comparison.ct_error:+.1f} %), "
+            f"CP {comparison.cp:.4f} ({100 * comparison.cp_error:+.1f} %), "
+            f"{report['process_wall_seconds']:.0f} s",
             flush=True,
         )
     table = markdown_table(comparisons)

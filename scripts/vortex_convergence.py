@@ -35,7 +35,10 @@ def main(argv: list[str] | None = None) -> int:
         nargs=3,
         default=(4, 15, 12),
         metavar=("CHORDWISE", "SPANWISE", "STEPS"),
-        help="the coarsest lattice: rings across the chord, strips, wake steps a turn (default 4 15 12)",
+        help=(
+            "the coarsest lattice: rings across the chord, "
+            "strips, wake steps a turn (default 4 15 12)"
+        ),
     )
     parser.add_argument(
         "--ratio",
@@ -74,7 +77,8 @@ def main(argv: list[str] | None = None) -> int:
             )
         )
         print(
-            f"| {chordwise} | {spanwise} | {steps} | {report['thrust_n']:.6g} | {report['torque_nm'] * 1000:.6g} | "
+            f"| {chordwise} | {spanwise} | {steps} | "
+            f"{report['thrust_n']:.6g} | {report['torque_nm'] * 1000:.6g} | "
             f"{rows[-1][-1]:.1f} |",
             flush=True,
         )
@@ -82,7 +86,8 @@ def main(argv: list[str] | None = None) -> int:
         study = richardson(rows[0][column], rows[1][column], rows[2][column], args.ratio)
         if study.converges_monotonically:
             print(
-                f"{name}: monotonic, observed order {study.order:.2f}, GCI_fine {study.gci_fine:.2%}"
+                f"{name}: monotonic, observed order "
+                f"{study.order:.2f}, GCI_fine {study.gci_fine:.2%}"
             )
         else:
             print(f"{name}: not monotonic ({', '.join(f'{row[column]:.6g}' for row in rows)})")

@@ -183,7 +183,10 @@ class StudyConfig:
             "random": "3-8 knots at sorted U(0, 1) positions, constant beyond the outer knots",
         }[self.knot_placement]
         start = {
-            "fft": "FFT peak frequency +/- a few trial frequencies, A/C/D solved linearly (sound start)",
+            "fft": (
+                "FFT peak frequency +/- a few trial "
+                "frequencies, A/C/D solved linearly (sound start)"
+            ),
             "ones": "A = B = C = D = 1 (the spec author's start)",
         }[self.sinusoid_start]
         return "\n".join(
@@ -791,7 +794,8 @@ def format_overall_table(result: StudyResult) -> str:
         f"mean norm-SSE {_format_number(converged['mean_range_normalised_sse'])}"
     )
     title = (
-        f"All samples (N = {result.config.samples}, n = {result.config.points}, seed = {result.config.seed}, "
+        f"All samples (N = {result.config.samples}, n = "
+        f"{result.config.points}, seed = {result.config.seed}, "
         f"sinusoid start = {result.config.sinusoid_start}, "
         f"sinusoid fits not converged: {result.sinusoid_not_converged})"
     )
@@ -834,7 +838,8 @@ def format_report(result: StudyResult) -> str:
     return "\n\n".join(
         [
             "Function-space study (spec 2.4-2.5)\n" + result.config.describe(),
-            "MSE = (1/n) sum r^2 (spec 2.4.4); norm-SSE = sum (r / (max y - min y))^2 (what spec Table 1 averages)",
+            "MSE = (1/n) sum r^2 (spec 2.4.4); norm-SSE = sum "
+            "(r / (max y - min y))^2 (what spec Table 1 averages)",
             format_overall_table(result),
             format_generator_table(result),
             f"Timings: {timing}",

@@ -204,7 +204,8 @@ def markdown_table(comparisons: Sequence[Comparison], solver: str = "CFD") -> st
     the computed
     columns."""
     lines = [
-        f"| rpm | J | CT meas. | CT {solver} | ΔCT | CP meas. | CP {solver} | ΔCP | η meas. | η {solver} | Δη | "
+        f"| rpm | J | CT meas. | CT {solver} | ΔCT | CP meas. "
+        f"| CP {solver} | ΔCP | η meas. | η {solver} | Δη | "
         "within |",
         "|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
@@ -216,8 +217,10 @@ def markdown_table(comparisons: Sequence[Comparison], solver: str = "CFD") -> st
             else (f"{measured.efficiency:.3f}", f"{eta:.3f}", f"{eta_error:+.3f}")
         )
         lines.append(
-            f"| {measured.rpm:.0f} | {measured.advance_ratio:.2f} | {measured.ct:.4f} | {item.ct:.4f} | "
-            f"{100 * item.ct_error:+.1f} % | {measured.cp:.4f} | {item.cp:.4f} | {100 * item.cp_error:+.1f} % | "
+            f"| {measured.rpm:.0f} | {measured.advance_ratio:.2f} | "
+            f"{measured.ct:.4f} | {item.ct:.4f} | "
+            f"{100 * item.ct_error:+.1f} % | {measured.cp:.4f} | "
+            f"{item.cp:.4f} | {100 * item.cp_error:+.1f} % | "
             f"{' | '.join(eta_cells)} | {'yes' if item.within_targets else 'no'} |"
         )
     return "\n".join(lines)

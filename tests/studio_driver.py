@@ -206,7 +206,8 @@ class StudioPage:
         try:
             container = self.element(element_id).find_element(
                 By.XPATH,
-                "./ancestor::div[contains(concat(' ', normalize-space(@class), ' '), ' v-input ')][1]",
+                "./ancestor::div[contains(concat(' ', "
+                "normalize-space(@class), ' '), ' v-input ')][1]",
             )
         except NoSuchElementException:
             return ""
@@ -286,7 +287,10 @@ class StudioPage:
         )
         self.driver.execute_script("arguments[0].scrollIntoView({block: 'center'});", control)
         self._click(control)
-        xpath = f"//div[contains(@class, 'v-overlay--active')]//div[@role = 'option'][normalize-space(.) = '{option}']"
+        xpath = (
+            "//div[contains(@class, 'v-overlay--active')]//div[@role "
+            f"= 'option'][normalize-space(.) = '{option}']"
+        )
         item = self.wait(
             lambda: self.driver.find_elements(By.XPATH, xpath), f"the menu item {option!r}"
         )[0]

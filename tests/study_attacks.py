@@ -40,7 +40,8 @@ def study_file(folder: Path, trials: int) -> Path:
     path = folder / "study.toml"
     path.write_text(
         f'[study]\nname = "{NAME}"\nbase = "light_prop.toml"\ntrials = {trials}\nsampler = "tpe"\n'
-        'seed = 0\n\n[vary]\n"airfoil.thickness" = [0.2, 0.6]\n"transforms.scale_x[4]" = [4.0, 6.5]\n\n'
+        'seed = 0\n\n[vary]\n"airfoil.thickness" = [0.2, '
+        '0.6]\n"transforms.scale_x[4]" = [4.0, 6.5]\n\n'
         '[[objective]]\nmetric = "mass_g"\ndirection = "minimize"\n\n'
         '[constraints]\n"printability.thinnest_wall_mm" = { min = 0.8 }\n'
     )

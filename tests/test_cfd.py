@@ -361,7 +361,8 @@ def test_sigterm_at_a_random_moment_leaves_the_old_set_or_the_new_one(tmp_path):
         assert process.returncode in (0, 143), (percent, stderr)
         if process.returncode == 143:
             assert stderr.strip().splitlines() == [
-                "torus-cad: interrupted by SIGTERM; staged files removed, published output sets are complete"
+                "torus-cad: interrupted by SIGTERM; staged files "
+                "removed, published output sets are complete"
             ]
         assert cli("verify", str(tmp_path)).returncode == 0
         blades = _blades(tmp_path)

@@ -41,7 +41,8 @@ def test_every_dependency_is_pinned_within_its_range():
         name = _normalised(requirement.name)
         assert name in pins, f"{requirement.name} (pyproject.toml) is not pinned in constraints.txt"
         assert requirement.specifier.contains(pins[name]), (
-            f"constraints.txt pins {requirement.name}=={pins[name]} outside pyproject's {requirement.specifier}"
+            f"constraints.txt pins {requirement.name}=={pins[name]}"
+            f" outside pyproject's {requirement.specifier}"
         )
 
 

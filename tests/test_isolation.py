@@ -64,7 +64,8 @@ def test_it_runs_in_a_pool_worker_which_is_a_daemonic_process():
 def test_a_killed_parent_leaves_no_child_running():
     script = (
         "import time; from torus_cad.runtime.isolation import run_isolated; "
-        "print('started', flush=True); run_isolated(time.sleep, 120.0, timeout_s=120.0, what='a sleep')"
+        "print('started', flush=True); run_isolated(time.sleep, "
+        "120.0, timeout_s=120.0, what='a sleep')"
     )
     parent = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True)
     try:

@@ -66,7 +66,8 @@ Mesh OK.
 CHECK_MESH_FAILED = CHECK_MESH_OK.replace(
     "    Max skewness = 3.4 OK.\n\nMesh OK.",
     (
-        " ***Max skewness = 4.44769, 2 highly skew faces detected which may impair the quality of the results\n\n"
+        " ***Max skewness = 4.44769, 2 highly skew faces "
+        "detected which may impair the quality of the results\n\n"
         "Failed 1 mesh checks."
     ),
 )
@@ -110,7 +111,8 @@ def test_check_mesh_output_gives_the_verdict_the_cell_types_and_the_failed_check
     )
     failed = parse_check_mesh(CHECK_MESH_FAILED)
     assert not failed.ok and failed.failures == [
-        "***Max skewness = 4.44769, 2 highly skew faces detected which may impair the quality of the results"
+        "***Max skewness = 4.44769, 2 highly skew faces "
+        "detected which may impair the quality of the results"
     ]
 
 
@@ -293,8 +295,8 @@ def test_mesh_from_a_case_of_another_level_or_mesher_exits_2_naming_both(tmp_pat
         == 2
     )
     assert (
-        "mesher 'snappy', level 'fine', surface refinement 0, not 'torus_propeller', 'tet', 'fine', 0"
-        in capsys.readouterr().err
+        "mesher 'snappy', level 'fine', surface refinement "
+        "0, not 'torus_propeller', 'tet', 'fine', 0" in capsys.readouterr().err
     )
     assert (
         main(

@@ -60,8 +60,10 @@ def _study_file(
     shutil.copy(BASE, folder / "light_prop.toml")
     objectives = objectives or '[[objective]]\nmetric = "mass_g"\ndirection = "minimize"\n'
     text = (
-        f'[study]\nname = "light"\nbase = "light_prop.toml"\ntrials = {trials}\nsampler = "{sampler}"\n'
-        f'seed = 0\n{extra}\n[vary]\n"airfoil.thickness" = [0.2, 0.6]\n"transforms.scale_x[4]" = [4.0, 6.5]\n\n'
+        '[study]\nname = "light"\nbase = "light_prop.toml"\ntrials '
+        f'= {trials}\nsampler = "{sampler}"\n'
+        f'seed = 0\n{extra}\n[vary]\n"airfoil.thickness" = '
+        '[0.2, 0.6]\n"transforms.scale_x[4]" = [4.0, 6.5]\n\n'
         f'{objectives}\n[constraints]\n"printability.thinnest_wall_mm" = {{ min = 0.8 }}\n'
     )
     path = folder / "study.toml"
@@ -579,7 +581,10 @@ def test_optuna_dashboard_shows_the_study(tmp_path):
     with socket.socket() as probe:
         probe.bind(("127.0.0.1", 0))
         port = probe.getsockname()[1]
-    command = "import sys; from optuna_dashboard._cli import main; sys.argv[0] = 'optuna-dashboard'; main()"
+    command = (
+        "import sys; from optuna_dashboard._cli import "
+        "main; sys.argv[0] = 'optuna-dashboard'; main()"
+    )
     server = subprocess.Popen(
         [sys.executable, "-c", command, url, "--host", "127.0.0.1", "--port", str(port)],
         stdout=subprocess.DEVNULL,

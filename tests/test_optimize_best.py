@@ -45,7 +45,8 @@ def _run_study(
     8-12 with the thinnest wall >= 0.8 mm."""
     shutil.copy(BASE, folder / "light_prop.toml")
     (folder / "study.toml").write_text(
-        f'[study]\nname = "light"\nbase = "light_prop.toml"\ntrials = {trials}\nsampler = "random"\nseed = 3\n\n'
+        '[study]\nname = "light"\nbase = "light_prop.toml"\ntrials '
+        f'= {trials}\nsampler = "random"\nseed = 3\n\n'
         '[vary]\n"airfoil.thickness" = [0.2, 0.6]\n"hub.radius" = [8.0, 12.0]\n\n'
         '[[objective]]\nmetric = "mass_g"\ndirection = "minimize"\n\n'
         '[constraints]\n"printability.thinnest_wall_mm" = { min = 0.8 }\n'
@@ -112,7 +113,8 @@ def test_a_best_trial_whose_files_are_gone_gives_way_to_the_next_best_with_one_l
         feasible = [row for row in csv.DictReader(handle) if row["feasible"] == "True"]
     if len(feasible) < 2:
         pytest.skip(
-            f"the {TRIALS} trials hold {len(feasible)} feasible design(s): no next best to fall back to"
+            f"the {TRIALS} trials hold {len(feasible)} feasible "
+            "design(s): no next best to fall back to"
         )
     (out / "trials" / str(number) / f"trial_{number}.stl").unlink()
     shutil.rmtree(out / "best")

@@ -157,7 +157,8 @@ def test_the_shipped_quiet_study_reads_with_its_target_thrust_noise_objective_an
         ),
         (
             {"simulate": {"thrust": 1.0, "levels": ["medium", "coarse"]}},
-            "simulate.levels = ['medium', 'coarse'] must name levels from the cheapest to the finest",
+            "simulate.levels = ['medium', 'coarse'] must "
+            "name levels from the cheapest to the finest",
         ),
         (
             {"simulate": {"thrust": 1.0, "levels": ["coarse", "huge"]}},
@@ -188,11 +189,13 @@ def test_the_shipped_quiet_study_reads_with_its_target_thrust_noise_objective_an
                 "pruner": {"kind": "median"},
                 "objective": [{"metric": "performance.power_w"}, {"metric": "mass_g"}],
             },
-            "pruner.kind = 'median' judges one objective (optuna's pruners take one value); with 2 objectives use 'dominated'",
+            "pruner.kind = 'median' judges one objective (optuna's "
+            "pruners take one value); with 2 objectives use 'dominated'",
         ),
         (
             {"objective": [{"metric": "performance.noise[1:190].oaspl_dba"}]},
-            "objective[0].metric = 'performance.noise[1:190].oaspl_dba': the observer '1:190' is out of range",
+            "objective[0].metric = 'performance.noise[1:190].oaspl_dba': "
+            "the observer '1:190' is out of range",
         ),
         (
             {"objective": [{"metric": "performance.noise[1:90].dba"}]},
@@ -339,9 +342,11 @@ def _levels_study(
     )
     path = folder / "study.toml"
     path.write_text(
-        f'[study]\nname = "levels"\nbase = "light_prop.toml"\ntrials = {trials}\nsampler = "random"\n'
+        '[study]\nname = "levels"\nbase = '
+        f'"light_prop.toml"\ntrials = {trials}\nsampler = "random"\n'
         f'seed = {seed}\nstl = false\n\n[vary]\n"airfoil.thickness" = {thickness}\n\n'
-        f'{objectives}\n[simulate]\nthrust = 1.0\nlevels = ["coarse", "medium"]\n\n[pruner]\n{pruner}\n'
+        f"{objectives}\n[simulate]\nthrust = 1.0\nlevels "
+        f'= ["coarse", "medium"]\n\n[pruner]\n{pruner}\n'
     )
     return path
 
@@ -500,7 +505,8 @@ def test_a_target_thrust_trial_carries_the_rpm_found_and_the_thrust_within_toler
         '[vary]\n"airfoil.thickness" = [0.14, 0.16]\n\n'
         '[[objective]]\nmetric = "performance.power_w"\ndirection = "minimize"\n\n'
         '[[objective]]\nmetric = "performance.noise[1:90].oaspl_dba"\ndirection = "minimize"\n\n'
-        "[simulate]\nthrust = 0.05\nthrust_tolerance = 0.05\nthrust_runs = 5\niterations = 60\nprocesses = 1\n"
+        "[simulate]\nthrust = 0.05\nthrust_tolerance = "
+        "0.05\nthrust_runs = 5\niterations = 60\nprocesses = 1\n"
     )
     out = tmp_path / "out"
     run_study(read_study_file(path), out, workers=1)
@@ -535,7 +541,8 @@ def test_with_openfoam_a_pruned_trial_never_reaches_the_medium_level(tmp_path):
         '[study]\nname = "levels"\ntrials = 3\nsampler = "random"\nseed = 2\nstl = false\n\n'
         '[vary]\n"airfoil.thickness" = [0.08, 0.2]\n\n'
         '[[objective]]\nmetric = "performance.thrust_n"\ndirection = "maximize"\n\n'
-        '[simulate]\nrpm = 10000.0\nlevels = ["coarse", "medium"]\niterations = 40\nprocesses = 1\n\n'
+        '[simulate]\nrpm = 10000.0\nlevels = ["coarse", '
+        '"medium"]\niterations = 40\nprocesses = 1\n\n'
         '[pruner]\nkind = "median"\nstartup_trials = 1\n'
     )
     out = tmp_path / "out"

@@ -67,7 +67,8 @@ def _reaches(modules: list[tuple[str, ast.Module]]) -> list[str]:
                     ]
                 elif where not in ADAPTERS and any(_private(part) for part in module.split(".")):
                     found.append(
-                        f"{where}:{node.lineno}: from {module} import ... (a third-party private module)"
+                        f"{where}:{node.lineno}: from {module} import "
+                        "... (a third-party private module)"
                     )
             elif isinstance(node, ast.Import) and where not in ADAPTERS:
                 found += [

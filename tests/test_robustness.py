@@ -450,7 +450,8 @@ def test_the_product_never_imports_the_studies():
     """The fuzz sampler and the function-space study live in studies/, outside the installed
     package."""
     code = (
-        "import sys, torus_cad.cli, torus_cad.batch, torus_cad.propeller, torus_cad.preview.picture; "
+        "import sys, torus_cad.cli, torus_cad.batch, "
+        "torus_cad.propeller, torus_cad.preview.picture; "
         "print(sorted(name for name in sys.modules if name.startswith('studies')))"
     )
     done = subprocess.run(

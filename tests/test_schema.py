@@ -75,7 +75,8 @@ def test_unknown_keys_suggest_the_closest_in_any_table():
         ({"name": "abc\n"}, r"^name = 'abc\\n' must be 1-64 letters"),
         (
             {"centerline.frame": "bishop"},
-            r"^centerline.frame = 'bishop' is not allowed; choose one of frenet, rotation_minimizing$",
+            r"^centerline.frame = 'bishop' is not allowed; "
+            r"choose one of frenet, rotation_minimizing$",
         ),
     ],
 )

@@ -79,7 +79,10 @@ def _assert_clean_end(result: subprocess.CompletedProcess, signum: int, out: Pat
         verify_set(out, "torus_propeller")
     else:
         assert result.returncode == EXIT_CODES[signum], result.stderr
-        expected = f"torus-cad: interrupted by {name}; staged files removed, published output sets are complete"
+        expected = (
+            f"torus-cad: interrupted by {name}; staged files "
+            "removed, published output sets are complete"
+        )
         assert result.stderr.strip().splitlines() == [expected]
     staged = [p.name for p in out.iterdir() if p.name.startswith(".")] if out.exists() else []
     assert staged == [], f"staged files left behind: {staged}"

@@ -531,7 +531,8 @@ def test_a_step_mesh_estimated_over_the_cell_limit_is_refused_with_the_estimate_
     assert error.count("\n") == 1 and not out.exists()
     assert re.search(
         r"the layered mesh would have about [\d,]+ cells and need about [\d.]+ GB of memory \(fine "
-        r"level, --surface-refinement 4, a surface of 1.61 D\^2\), over the limit of 2,000,000 cells; "
+        r"level, --surface-refinement 4, a surface of "
+        r"1.61 D\^2\), over the limit of 2,000,000 cells; "
         r"lower --surface-refinement or --level",
         error,
     )
@@ -590,7 +591,8 @@ def test_validity_flags_a_tiny_part_s_first_layer_and_leaves_the_default_design_
     assert validity_flags(
         2.0, OperatingPoint(1900.0), 1e-5, {"min": 1.0, "mean": 40.0, "max": 300.0}
     ) == [
-        "the mean y+ on the propeller is 40, outside [0.1, 30] around the first layer's target 1: the wall is not "
+        "the mean y+ on the propeller is 40, outside [0.1, 30] "
+        "around the first layer's target 1: the wall is not "
         "resolved as sized"
     ]
 

@@ -440,7 +440,10 @@ def test_a_solve_that_does_not_converge_shows_its_one_line_instead_of_numbers(
     from torus_cad.studio import vortex_run
     from torus_cad.studio.performance_card import NO_NUMBER, Performance, PerformanceRequest
 
-    reason = "the vortex solve did not converge: the thrust still changed by 3.5 % a sweep after 30 sweeps"
+    reason = (
+        "the vortex solve did not converge: the thrust "
+        "still changed by 3.5 % a sweep after 30 sweeps"
+    )
 
     def diverging(*_, **__):
         raise KernelError(reason)

@@ -145,7 +145,8 @@ def test_four_blades_change_the_volume_readout(page):
     latencies = page.latencies_ms()
     print(
         f"\nstudio latency in the browser, 3 -> 4 blades: preview {latencies['preview']:.0f} ms, "
-        f"exact solid {latencies['exact']:.0f} ms ({page.text('timings')}; {page.text('preview-detail')})"
+        f"exact solid {latencies['exact']:.0f} ms "
+        f"({page.text('timings')}; {page.text('preview-detail')})"
     )
 
 
@@ -512,7 +513,8 @@ def test_hostile_uploads_are_refused_and_the_server_keeps_answering(page, studio
             refused_s = time.perf_counter() - start
             time.sleep(0.3)
         print(
-            f"\n{case}: refused on the page after {refused_s:.2f} s; another client's slowest answer "
+            f"\n{case}: refused on the page after "
+            f"{refused_s:.2f} s; another client's slowest answer "
             f"{prober.slowest_s * 1000:.0f} ms ({prober.answers} answers)"
         )
         assert prober.answers > 0 and prober.slowest_s < 1.0, (
@@ -533,7 +535,8 @@ def test_hostile_uploads_are_refused_and_the_server_keeps_answering(page, studio
         f"another client waited {prober.slowest_s:.2f} s"
     )
     print(
-        f"\nthe largest resolution: another client's slowest answer {prober.slowest_s * 1000:.0f} ms"
+        "\nthe largest resolution: another client's "
+        f"slowest answer {prober.slowest_s * 1000:.0f} ms"
     )
     plain = tmp_path / "plain.toml"  # and the page goes on: the largest build is superseded
     plain.write_text("blades = 3\n")

@@ -612,7 +612,8 @@ def _sweep_cli(*args: str, timeout: float = 120.0) -> subprocess.CompletedProces
             "3,000,000 designs",
         ),
         (
-            '"hub.radius" = {start = 5.0, stop = 15.0, step = 0.002}\n"hub.length" = {start = 10.0, stop = 30.0, step = 0.004}',
+            '"hub.radius" = {start = 5.0, stop = 15.0, step = '
+            '0.002}\n"hub.length" = {start = 10.0, stop = 30.0, step = 0.004}',
             "",
             "25,010,001 designs = 5,001 (hub.radius) x 5,001 (hub.length)",
         ),

@@ -214,7 +214,8 @@ def test_a_sweep_stores_the_refusal_of_a_private_file_without_its_content(tmp_pa
     (tmp_path / "ok.dat").write_bytes((AIRFOILS / "clarky.dat").read_bytes())
     sweep = tmp_path / "sweep.toml"
     sweep.write_text(
-        f'[base.resolution]\nsections = 16\npoints = 32\n[vary]\n"airfoil.file" = ["ok.dat", "{secret}"]\n'
+        "[base.resolution]\nsections = 16\npoints = "
+        f'32\n[vary]\n"airfoil.file" = ["ok.dat", "{secret}"]\n'
     )
     out = tmp_path / "out"
     code = main(["sweep", str(sweep), "--out", str(out), "--workers", "1", "--no-stl", "-q"])

@@ -32,9 +32,12 @@ PICTURE_RANGE_DB = 60.0
 #: observer's distance.
 DIRECTIVITY_STEP_DEG = 15.0
 METHOD = (
-    "Ffowcs Williams-Hawkings, Farassat formulation 1A, impermeable rotating blade surface (each face of "
-    "the propeller patch a source on its circle), steady pressure loading of the frozen-rotor solution "
-    "(viscous stress left out), medium at rest relative to the hub; tones only: no broadband, tip-vortex or "
+    "Ffowcs Williams-Hawkings, Farassat formulation 1A, "
+    "impermeable rotating blade surface (each face of "
+    "the propeller patch a source on its circle), steady "
+    "pressure loading of the frozen-rotor solution "
+    "(viscous stress left out), medium at rest relative "
+    "to the hub; tones only: no broadband, tip-vortex or "
     "unsteady-loading noise"
 )
 
@@ -159,7 +162,8 @@ def evaluate_noise(
         "reference_pressure_pa": REFERENCE_PRESSURE_PA,
         "surface_pressure_thrust_n": float(force[2]),
         "conventions": "observer angle from +z (the thrust's direction, ahead of the propeller; 90 = the rotor "
-        "plane) in the plane x-z, distance from the hub; SPL dB re 20 uPa of the rms pressure of each "
+        "plane) in the plane x-z, distance from the hub; "
+        "SPL dB re 20 uPa of the rms pressure of each "
         "blade-passing harmonic; oaspl_db sums every blade-passing harmonic the samples resolve, "
         "oaspl_dba weights each by IEC 61672-1 A-weighting; other_harmonics_spl_db sums the other "
         "harmonics of the rotation frequency (the blades' loads differ: for identical blades, the "
@@ -242,7 +246,8 @@ def write_noise_plot(noise: Noise, path: Path, title: str) -> Path:
                 label=f"{entry['distance_m']:g} m, {entry['angle_deg']:g} deg",
             )
         spectrum.set_xlabel(
-            f"harmonic of the blade-passing frequency ({noise.report['blade_passing_frequency_hz']:.4g} Hz)"
+            "harmonic of the blade-passing frequency "
+            f"({noise.report['blade_passing_frequency_hz']:.4g} Hz)"
         )
         spectrum.set_ylabel("SPL, dB re 20 uPa")
         spectrum.grid(True, alpha=0.3)

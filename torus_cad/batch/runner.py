@@ -129,7 +129,8 @@ def capped_workers(
     if count > cores and not oversubscribe:
         if warn is not None:
             warn(
-                f"--workers {requested} capped at the {cores} core{'s' if cores > 1 else ''} available "
+                f"--workers {requested} capped at the "
+                f"{cores} core{'s' if cores > 1 else ''} available "
                 f"(--oversubscribe to start {count})"
             )
         count = cores
@@ -343,7 +344,8 @@ def _result_of(future: Future[Any], task: DesignTask, check_visible: bool) -> De
             task.design_id,
             Outcome.ERROR,
             f"the worker wrote {task.folder} but it is not visible "
-            "here; the output folder must be on a file system shared by the workers and this machine",
+            "here; the output folder must be on a file "
+            "system shared by the workers and this machine",
         )
     return record_result(task, result) if task.folder is not None else result
 

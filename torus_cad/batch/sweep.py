@@ -118,7 +118,8 @@ class SweepResult:
         (pre-screened)"``)."""
         counts = self.counts()
         text = (
-            f"{counts[Outcome.VALID]} valid, {counts[Outcome.REFUSED]} refused, {counts[Outcome.FAILED]} failed, "
+            f"{counts[Outcome.VALID]} valid, {counts[Outcome.REFUSED]}"
+            f" refused, {counts[Outcome.FAILED]} failed, "
             f"{counts[Outcome.ERROR]} errors"
         )
         others = [
@@ -142,7 +143,8 @@ class SweepResult:
             ),
             f"  {self.counts_text()}",
             (
-                f"  {self.built} built in {_duration(self.seconds)} ({self.designs_per_minute():.1f} designs/min, "
+                f"  {self.built} built in {_duration(self.seconds)}"
+                f" ({self.designs_per_minute():.1f} designs/min, "
                 f"{self.backend}); {self.skipped} already done"
             ),
         ]
@@ -221,7 +223,8 @@ def run_sweep(
         raise ParameterError(f"--workers must be a whole number >= 1, got {workers!r}")
     if time_limit_s is not None and not 0.0 < time_limit_s <= DESIGN_TIME_LIMIT_MAX_S:
         raise ParameterError(
-            f"--time-limit = {time_limit_s!r} is out of range; allowed (0, {DESIGN_TIME_LIMIT_MAX_S:g}] s"
+            f"--time-limit = {time_limit_s!r} is out of "
+            f"range; allowed (0, {DESIGN_TIME_LIMIT_MAX_S:g}] s"
         )
     out_dir = Path(out_dir).resolve()
     stl = spec.stl if stl is None else stl

@@ -290,7 +290,8 @@ def _parse_settings(settings: Any, name: str, fail: Fail) -> dict[str, Any]:
     if table.mode is not SweepMode.GRID:
         if table.samples is None:
             raise fail(
-                f"sweep.samples must be a whole number >= 1 for mode = {table.mode.value!r}, got None"
+                "sweep.samples must be a whole number >= 1 "
+                f"for mode = {table.mode.value!r}, got None"
             )
         _check_budget(table.samples, [], fail)
     return {
@@ -487,7 +488,8 @@ def _parse_axis(key: str, spec: Any, mode: SweepMode, fail: Fail) -> VaryAxis:
         return VaryAxis(key, path, index, values=values, integer=integer)
     if not isinstance(spec, Mapping):
         raise fail(
-            f"{where} must be a list, {{start, stop, step}} / {{start, stop, num}} or {{low, high}}, "
+            f"{where} must be a list, {{start, stop, "
+            f"step}} / {{start, stop, num}} or {{low, high}}, "
             f"got {shown(spec)}"
         )
     keys = set(spec)
@@ -513,7 +515,8 @@ def _parse_axis(key: str, spec: Any, mode: SweepMode, fail: Fail) -> VaryAxis:
             integer=integer,
         )
     raise fail(
-        f"{where} has keys {sorted(keys)}; use {{start, stop, step}}, {{start, stop, num}} or {{low, high}}"
+        f"{where} has keys {sorted(keys)}; use {{start, "
+        f"stop, step}}, {{start, stop, num}} or {{low, high}}"
     )
 
 
@@ -612,7 +615,8 @@ def _checked_type(item: Any, leaf: Leaf, where: str, fail: Fail) -> Any:
             or not all(_is_number(x) and math.isfinite(x) for x in item)
         ):
             raise fail(
-                f"{where} must be a list of {leaf.length} finite numbers (a whole vector), got {shown(item)}"
+                f"{where} must be a list of {leaf.length} finite "
+                f"numbers (a whole vector), got {shown(item)}"
             )
         return [float(x) for x in item]
     raise fail(

@@ -184,7 +184,8 @@ def build_domain(gmsh: Any, step_path: Path, domain: Domain) -> DomainEntities:
         solids = [tag for dim, tag in imported if dim == 3]
         if len(solids) != 1:
             raise KernelError(
-                f"gmsh failed at step 'import the propeller STEP': expected one solid, got {len(solids)}"
+                "gmsh failed at step 'import the propeller "
+                f"STEP': expected one solid, got {len(solids)}"
             )
     with gmsh_step("fragment the domain"):
         zone = occ.addCylinder(
@@ -379,8 +380,10 @@ def mesh_surfaces(
             gmsh.model.mesh.generate(2)
     centre = crossings.centres_mm[0]
     raise KernelError(
-        f"gmsh's surface mesh still crosses itself near ({centre[0]:.2f}, {centre[1]:.2f}, {centre[2]:.2f}) mm "
-        f"({len(crossings)} triangles) after {REFINE_ROUNDS} local refinements; the volume mesh would fail. "
+        "gmsh's surface mesh still crosses itself near "
+        f"({centre[0]:.2f}, {centre[1]:.2f}, {centre[2]:.2f}) mm "
+        f"({len(crossings)} triangles) after {REFINE_ROUNDS} local "
+        "refinements; the volume mesh would fail. "
         f"{CROSSING_ADVICE}"
     )
 
@@ -572,7 +575,8 @@ def write_body_domain(
         or not 0 <= threads <= max_cfd_threads()
     ):
         raise ParameterError(
-            f"threads = {threads!r} is out of range; allowed [0, {max_cfd_threads()}] (0 = one per CPU)"
+            f"threads = {threads!r} is out of range; allowed "
+            f"[0, {max_cfd_threads()}] (0 = one per CPU)"
         )
     gmsh = import_gmsh()
     timer = timer if timer is not None else StageTimer[CfdStage](None)
@@ -675,8 +679,11 @@ def summary_line(report: dict[str, Any]) -> str:
     """One terminal line: element counts, worst SICN, volume check, time."""
     tets = report["tetrahedra"]
     return (
-        f"cfd: {report['tetrahedra_total']:,} tetrahedra (rotating_zone {tets['rotating_zone']:,}, fluid "
-        f"{tets['fluid']:,}), {report['triangles']['propeller']:,} triangles on the propeller; worst SICN "
-        f"{report['sicn_min']:.3f}; fluid volume {report['fluid_total_relative_difference']:+.3%} of the "
+        f"cfd: {report['tetrahedra_total']:,} tetrahedra "
+        f"(rotating_zone {tets['rotating_zone']:,}, fluid "
+        f"{tets['fluid']:,}), {report['triangles']['propeller']:,}"
+        " triangles on the propeller; worst SICN "
+        f"{report['sicn_min']:.3f}; fluid volume "
+        f"{report['fluid_total_relative_difference']:+.3%} of the "
         f"domain minus the propeller; {report['wall_seconds']:.1f} s"
     )

@@ -86,8 +86,10 @@ class CfdEstimate:
         time."""
         low, high = (round(factor * self.tetrahedra, -3) for factor in REAL_OVER_ESTIMATE)
         return (
-            f"estimate: about {self.tetrahedra:,} tetrahedra (real counts {REAL_OVER_ESTIMATE[0]:g}x to "
-            f"{REAL_OVER_ESTIMATE[1]:g}x of it on the shipped examples: {low:,.0f} to {high:,.0f}), "
+            f"estimate: about {self.tetrahedra:,} tetrahedra "
+            f"(real counts {REAL_OVER_ESTIMATE[0]:g}x to "
+            f"{REAL_OVER_ESTIMATE[1]:g}x of it on the "
+            f"shipped examples: {low:,.0f} to {high:,.0f}), "
             f"{self.memory_mb / 1000.0:.1f} GB, about {_duration(self.wall_seconds)} "
             f"(at {TETS_PER_SECOND:,.0f} tetrahedra/s on an idle core)"
             + (
@@ -329,9 +331,11 @@ def check_cfd_budget(params: PropellerParameters, limit: int = CFD_TETRAHEDRA_LI
             "the CFD mesh",
             estimate.tetrahedra,
             "tetrahedra",
-            f"{estimate.memory_mb / 1000.0:.1f} GB of memory and {_duration(estimate.wall_seconds)} "
+            f"{estimate.memory_mb / 1000.0:.1f} GB of "
+            f"memory and {_duration(estimate.wall_seconds)} "
             f"(cfd.cells_per_chord = {cfd.cells_per_chord:g}, "
-            f"cfd.curvature_cells = {cfd.curvature_cells:g}, cfd.growth_rate = {cfd.growth_rate:g}, cfd.far_size = "
+            f"cfd.curvature_cells = {cfd.curvature_cells:g}, "
+            f"cfd.growth_rate = {cfd.growth_rate:g}, cfd.far_size = "
             f"{cfd.far_size:g} D, cfd.domain_radius = {cfd.domain_radius:g} D)",
             limit,
             "lower cfd.cells_per_chord or raise cfd.far_size or cfd.growth_rate",

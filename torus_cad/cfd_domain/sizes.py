@@ -110,8 +110,10 @@ def domain_from_sizes(
     outer_z = (min(inlet_z, outlet_z), max(inlet_z, outlet_z))
     if outer_z[0] >= zone_z[0] - clearance or outer_z[1] <= zone_z[1] + clearance:
         raise ParameterError(
-            f"cfd.upstream = {settings.upstream:g} / cfd.downstream = {settings.downstream:g} put an end of the domain "
-            f"inside the rotating zone (it spans z = {zone_z[0]:.1f} .. {zone_z[1]:.1f} mm, D = {diameter:.1f} mm); "
+            f"cfd.upstream = {settings.upstream:g} / cfd.downstream "
+            f"= {settings.downstream:g} put an end of the domain "
+            f"inside the rotating zone (it spans z = {zone_z[0]:.1f} .. "
+            f"{zone_z[1]:.1f} mm, D = {diameter:.1f} mm); "
             "make them larger"
         )
     return Domain(

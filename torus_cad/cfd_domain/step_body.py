@@ -129,7 +129,8 @@ class StepPropeller:
             "chord_mm": self.body.chord_mm,
             "centroid_mm": list(self.centroid_mm),
             "measures": "D: twice the largest distance from the axis (BRepExtrema); hub: the largest ring about "
-            "the axis through the centroid lying wholly inside the solid, and the axial extent of a "
+            "the axis through the centroid lying wholly "
+            "inside the solid, and the axial extent of a "
             "ring inside its wall; chord: CHORD_PER_DIAMETER x D",
         }
 
@@ -166,7 +167,8 @@ def read_step_solid(path: str | Path) -> Any:
     solids = shape.Solids() if shape is not None and not shape.wrapped.IsNull() else []
     if len(solids) != 1:
         raise ParameterError(
-            f"{_WHAT} {source!r} holds {len(solids)} solids; it must hold exactly one (the propeller)"
+            f"{_WHAT} {source!r} holds {len(solids)} solids; "
+            "it must hold exactly one (the propeller)"
         )
     try:
         return single_valid_solid(solids[0], f"{_WHAT} {source!r}")

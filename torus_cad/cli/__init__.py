@@ -83,7 +83,8 @@ def _run(handler: Callable[[argparse.Namespace], int], args: argparse.Namespace)
         return report_error(f"kernel failure: {error}", EXIT_KERNEL_FAILURE)
     except MemoryError:
         return report_error(
-            "out of memory; lower resolution.sections / resolution.points or raise the STL deflections",
+            "out of memory; lower resolution.sections / "
+            "resolution.points or raise the STL deflections",
             EXIT_KERNEL_FAILURE,
         )
     except OSError as error:
@@ -99,7 +100,8 @@ def _run(handler: Callable[[argparse.Namespace], int], args: argparse.Namespace)
         return report_error(_missing_module_message(args.command, error), EXIT_BAD_INPUT)
     except Exception as error:
         return report_error(
-            f"internal error ({type(error).__name__}): {error}; please report it with the design file",
+            f"internal error ({type(error).__name__}): "
+            f"{error}; please report it with the design file",
             EXIT_KERNEL_FAILURE,
         )
 

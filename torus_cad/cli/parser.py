@@ -208,11 +208,15 @@ def _add_mesh_parser(commands: Any) -> None:
         "mesh",
         help="closed triangle mesh straight from the spec's math (STL, OBJ groups, PLY, VTK)",
         description="Mesh the propeller of CONFIG (or the default) from the spec's math: each blade's structured "
-        "grid at exactly --sections x --points (points equally spaced in arc length, spec §5), the hub as a "
-        "§6.2 grid with its bore, D-flat, set-screw hole and chamfers, united into one closed 2-manifold without "
+        "grid at exactly --sections x --points (points "
+        "equally spaced in arc length, spec §5), the hub as a "
+        "§6.2 grid with its bore, D-flat, set-screw hole and "
+        "chamfers, united into one closed 2-manifold without "
         "intersecting triangles (manifold3d, meshlib). Writes "
-        "<name>_mesh.<format> files and <name>_mesh.json, a quality report. The options override the design's "
-        "[mesh] table. A mesh whose estimated memory is over the limit, a resolution too coarse for the blade "
+        "<name>_mesh.<format> files and <name>_mesh.json, a "
+        "quality report. The options override the design's "
+        "[mesh] table. A mesh whose estimated memory is over "
+        "the limit, a resolution too coarse for the blade "
         "and a root fillet are refused before anything is built.",
     )
     sections = mesh.add_argument(
@@ -254,10 +258,13 @@ def _add_cfd_parser(commands: Any) -> None:
         "cfd",
         help="fluid domain and tetrahedral volume mesh for a rotating-propeller simulation (gmsh)",
         description="Mesh the fluid around the propeller of CONFIG (or the default) with gmsh: an outer "
-        "cylinder, a rotating-zone cylinder around the propeller, conformal at their interface, tetrahedra "
+        "cylinder, a rotating-zone cylinder around the "
+        "propeller, conformal at their interface, tetrahedra "
         "refined near the blades. Writes <name>_cfd.msh (v4.1), <name>_cfd_v2.msh (v2.2 ASCII, for "
-        "OpenFOAM's gmshToFoam), <name>_cfd.step, README.txt and <name>_cfd.json as one output set (see 'torus-cad "
-        "verify'). The options override the design's [cfd] table; D is the tip diameter. A mesh estimated above "
+        "OpenFOAM's gmshToFoam), <name>_cfd.step, README.txt "
+        "and <name>_cfd.json as one output set (see 'torus-cad "
+        "verify'). The options override the design's [cfd] "
+        "table; D is the tip diameter. A mesh estimated above "
         f"{CFD_TETRAHEDRA_LIMIT:,} tetrahedra is refused before any work. Needs the cfd extra: "
         "pip install -c constraints.txt -e '.[cfd]'.",
     )
@@ -272,7 +279,8 @@ def _add_cfd_parser(commands: Any) -> None:
         default=GMSH_REPRODUCIBLE_THREADS,
         metavar="N",
         help=f"gmsh threads, {range_help(threads)} ({_THREADS_NOTE}; default "
-        f"{GMSH_REPRODUCIBLE_THREADS}: the same mesh on every run; 0 = one per CPU, whose meshes differ "
+        f"{GMSH_REPRODUCIBLE_THREADS}: the same mesh on "
+        "every run; 0 = one per CPU, whose meshes differ "
         "slightly from run to run)",
     )
     _add_out_and_quiet(cfd, "cfd_out")
@@ -284,14 +292,21 @@ def _add_simulate_parser(commands: Any) -> None:
         "simulate",
         help="run the propeller in OpenFOAM: thrust, torque, power, CT, CP (simulate extra)",
         description="Mesh the fluid around the propeller of CONFIG (or the default) at --level, write a complete "
-        "OpenFOAM case (<name>_case/: steady MRF, k-omega SST, an Allrun that repeats the run) and run it with "
-        "simpleFoam through foamlib. Writes <name>_performance.json (thrust, torque, power, J, CT, CP, efficiency "
-        "or figure of merit, convergence, tonal noise at --observer positions) and <name>_performance.png (force "
-        "and residual histories), <name>_noise.png and <name>_noise.csv (the noise's directivity, spectrum and "
+        "OpenFOAM case (<name>_case/: steady MRF, k-omega "
+        "SST, an Allrun that repeats the run) and run it with "
+        "simpleFoam through foamlib. Writes <name>_performance.json "
+        "(thrust, torque, power, J, CT, CP, efficiency "
+        "or figure of merit, convergence, tonal noise at "
+        "--observer positions) and <name>_performance.png (force "
+        "and residual histories), <name>_noise.png and "
+        "<name>_noise.csv (the noise's directivity, spectrum and "
         "signals). Needs "
-        "OpenFOAM (v1912) and the simulate extra: pip install -c constraints.txt -e '.[simulate]'. With --solver "
-        "vortex, a lifting-surface vortex lattice on the blade's camber surface with NeuralFoil's section polars "
-        "instead (seconds, no OpenFOAM): the same report, plus <name>_loading.csv and .png (the loading along the "
+        "OpenFOAM (v1912) and the simulate extra: pip install "
+        "-c constraints.txt -e '.[simulate]'. With --solver "
+        "vortex, a lifting-surface vortex lattice on the "
+        "blade's camber surface with NeuralFoil's section polars "
+        "instead (seconds, no OpenFOAM): the same report, plus "
+        "<name>_loading.csv and .png (the loading along the "
         "blade) and <name>_wake.png.",
     )
     from torus_cad.simulate.thrust_target import (
@@ -468,7 +483,8 @@ def _add_simulate_parser(commands: Any) -> None:
         "--convergence",
         action="store_true",
         help="run all three levels into OUT/<level>/ and write <name>_convergence.json: "
-        "Richardson-extrapolated thrust and torque, the observed order and the grid convergence index",
+        "Richardson-extrapolated thrust and torque, the "
+        "observed order and the grid convergence index",
     )
     _add_out_and_quiet(simulate, "simulate_out")
 
@@ -525,7 +541,10 @@ def build_parser_and_commands() -> tuple[
         "--density",
         type=_DENSITY,
         default=1.24,
-        help=f"material density for the mass, {range_help(DENSITY_RANGE, 'g/cm^3')} (default 1.24, PLA)",
+        help=(
+            "material density for the mass, "
+            f"{range_help(DENSITY_RANGE, 'g/cm^3')} (default 1.24, PLA)"
+        ),
     )
     build.add_argument("--no-stl", action="store_true", help="write STEP and JSON only")
     build.add_argument(
@@ -562,11 +581,16 @@ def build_parser_and_commands() -> tuple[
         "check",
         help="check a design before building it: every refusal that needs no kernel, in a second",
         description="Run every check that can refuse the design of CONFIG (or the default) before OpenCascade "
-        "builds anything, as 'torus-cad build' runs them: the parameters, the design targets, the blade's ends "
-        "inside the hub's inset, no fold-over inside a bend, sections dense enough, no self-intersection, blades "
-        "clear of each other, the mounting features, the section fit's trailing edge and the STL's triangle "
-        "budget. Exit 0 with one line (the margins to the fold and resolution limits, the walls against "
-        "manufacturing.min_wall) when it passes; exit 2 with the build's own one-line refusal when it does not. "
+        "builds anything, as 'torus-cad build' runs them: "
+        "the parameters, the design targets, the blade's ends "
+        "inside the hub's inset, no fold-over inside a bend, "
+        "sections dense enough, no self-intersection, blades "
+        "clear of each other, the mounting features, the "
+        "section fit's trailing edge and the STL's triangle "
+        "budget. Exit 0 with one line (the margins to the "
+        "fold and resolution limits, the walls against "
+        "manufacturing.min_wall) when it passes; exit 2 with "
+        "the build's own one-line refusal when it does not. "
         "Writes nothing and never loads the kernel.",
     )
     check.add_argument(
@@ -594,7 +618,8 @@ def build_parser_and_commands() -> tuple[
         "preview",
         help="render a PNG picture: a view from above and a view along the axis",
         description="Build the propeller of CONFIG (or the default) and render a shaded picture of it off-screen: "
-        "a view from above that shows every blade and a view along the spin axis, each blade in its own colour.",
+        "a view from above that shows every blade and a view "
+        "along the spin axis, each blade in its own colour.",
     )
     preview.add_argument(
         "--out", metavar="FILE.png", help="picture to write (default: step_out/<name>.png)"
@@ -707,11 +732,16 @@ def build_parser_and_commands() -> tuple[
         "optimize",
         help="search the design space for the best designs (optuna; local pool or Dask)",
         description="Run the study of STUDY.toml: optuna asks for designs within the [vary] ranges, each is built "
-        "(and simulated for performance.* metrics) into OUT/trials/<number>/, its report's numbers answer the "
-        "objectives and constraints. Writes OUT/results.csv (and .parquet), OUT/<name>_history.png and the best "
-        "designs as TOML with their STEP/STL/JSON in OUT/best/. The study lives in OUT/<name>.db (SQLite) or a "
-        "PostgreSQL server (--storage) shared by processes on many machines; rerunning continues it (--trials is "
-        "the total). Exit codes: 0 done; 1 storage or workers unusable; 2 a bad study file or option; "
+        "(and simulated for performance.* metrics) into "
+        "OUT/trials/<number>/, its report's numbers answer the "
+        "objectives and constraints. Writes OUT/results.csv "
+        "(and .parquet), OUT/<name>_history.png and the best "
+        "designs as TOML with their STEP/STL/JSON in OUT/best/. "
+        "The study lives in OUT/<name>.db (SQLite) or a "
+        "PostgreSQL server (--storage) shared by processes on "
+        "many machines; rerunning continues it (--trials is "
+        "the total). Exit codes: 0 done; 1 storage or "
+        "workers unusable; 2 a bad study file or option; "
         "130 / 143 interrupted (rerun to continue).",
     )
     optimize.add_argument(

@@ -7,7 +7,10 @@ from __future__ import annotations
 
 import argparse
 
-BEGIN = "<!-- BEGIN cli reference: generated from the parser by scripts/reference_pages.py; do not edit -->"
+BEGIN = (
+    "<!-- BEGIN cli reference: generated from the parser "
+    "by scripts/reference_pages.py; do not edit -->"
+)
 END = "<!-- END cli reference -->"
 
 #: Help is wrapped at this width, whatever the terminal, so the page does not depend on who

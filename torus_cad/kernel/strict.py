@@ -330,6 +330,7 @@ def _check_blade_separation(pattern: _Pattern, solid: TopoDS_Shape, what: str) -
             )
         if distance.Value() <= STRICT_BLADE_SEPARATION_MM:
             raise KernelError(
-                f"{what}: blade 0 and blade {k} touch or cross (distance {distance.Value():.2g} mm, "
+                f"{what}: blade 0 and blade {k} touch or "
+                f"cross (distance {distance.Value():.2g} mm, "
                 f"at least {STRICT_BLADE_SEPARATION_MM:g} mm required; self-interference test)"
             )

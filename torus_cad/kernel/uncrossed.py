@@ -104,7 +104,8 @@ def uncrossed_mesh(
         except _TooCoarse as error:
             too_far = error
     raise KernelError(
-        f"{too_far} (also at linear deflection {linear_deflection / 2.0**MESH_REFINE_HALVINGS:g} mm, "
+        f"{too_far} (also at linear deflection "
+        f"{linear_deflection / 2.0**MESH_REFINE_HALVINGS:g} mm, "
         f"{MESH_REFINE_HALVINGS} halvings of {linear_deflection:g} mm)"
     )
 

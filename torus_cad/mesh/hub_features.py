@@ -39,7 +39,8 @@ def check_meshable(params: PropellerParameters) -> None:
     needs a cap)."""
     if params.kind.value == "conventional":
         raise ParameterError(
-            "kind = 'conventional': torus-cad mesh makes the toroidal kind's structured grids only; "
+            "kind = 'conventional': torus-cad mesh makes "
+            "the toroidal kind's structured grids only; "
             "use the STL of 'torus-cad build' or the tetrahedral mesh of 'torus-cad cfd'"
         )
     radius = params.hub.root_fillet_radius

@@ -181,7 +181,10 @@ def check_blade_crossings(
         )
         finer_grid = blade_grid(geometry, *finer, spacing)
         if _blade_check(geometry, finer_grid, mirrored_diagonal_mesh(finer_grid)).pairs == 0:
-            advice = f"use --sections {finer[0]} --points {finer[1]} (mesh.sections, mesh.points) or finer"
+            advice = (
+                f"use --sections {finer[0]} --points "
+                f"{finer[1]} (mesh.sections, mesh.points) or finer"
+            )
             break
     raise ParameterError(
         f"mesh.sections = {sections}, mesh.points = {points} is too coarse for this blade: its "
@@ -219,7 +222,8 @@ def united_crossings(
     return CrossingCheck(
         blade.pairs + pairs,
         blade.checked_triangles + int(near.sum()),
-        f"the hub and every triangle within {margin_mm:.3g} mm of it (the junctions), {blade.scope}",
+        f"the hub and every triangle within {margin_mm:.3g} mm "
+        f"of it (the junctions), {blade.scope}",
     )
 
 
@@ -274,8 +278,10 @@ def build_surface_mesh(
         crossings = united_crossings(mesh, assembled.united_faces, blade_check, geometry, margin)
         if crossings.pairs:
             raise ParameterError(
-                f"mesh.sections = {table.sections}, mesh.points = {table.points}: the united mesh crosses itself at "
-                f"{crossings.pairs} triangle pairs where the blades meet the hub; use finer --sections and --points"
+                f"mesh.sections = {table.sections}, mesh.points = "
+                f"{table.points}: the united mesh crosses itself at "
+                f"{crossings.pairs} triangle pairs where the blades "
+                "meet the hub; use finer --sections and --points"
             )
     return SurfaceMesh(
         params,
@@ -497,9 +503,13 @@ def summary_line(report: dict[str, Any]) -> str:
         f"{away['edge_ratio']:.2f}"
     )
     if "opencascade_stl" in report:
-        line += f" (OpenCascade STL {report['opencascade_stl']['blades_away_from_junctions']['edge_ratio']:.1f})"
+        line += (
+            " (OpenCascade STL "
+            f"{report['opencascade_stl']['blades_away_from_junctions']['edge_ratio']:.1f})"
+        )
     line += (
-        f", worst aspect ratio {report['aspect_ratio_max']:.3g} ({report['triangles_aspect_ratio_over_100']} "
+        f", worst aspect ratio {report['aspect_ratio_max']:.3g}"
+        f" ({report['triangles_aspect_ratio_over_100']} "
         f"triangles over 100), volume {report['volume_mm3']:.2f} mm^3"
     )
     if "brep_volume_mm3" in report:

@@ -86,8 +86,10 @@ def check_mesh_memory(
     if need > limit_bytes:
         fits = math.floor((limit_bytes - mesh_memory_bytes(0, compare)) / MESH_BYTES_PER_TRIANGLE)
         raise BudgetError(
-            f"the mesh would have about {triangles:,} triangles and need about {need / 1e9:.1f} GB of memory, over "
-            f"the limit of {limit_bytes / 1e9:.1f} GB (about {fits:,} triangles); lower mesh.sections or "
+            f"the mesh would have about {triangles:,} triangles "
+            f"and need about {need / 1e9:.1f} GB of memory, over "
+            f"the limit of {limit_bytes / 1e9:.1f} GB (about "
+            f"{fits:,} triangles); lower mesh.sections or "
             "mesh.points (--sections, --points)"
         )
 
@@ -206,7 +208,8 @@ def check_resolution(
             lambda count: around_sag(geometry, count).relative <= limit, points, most_points
         )
         problems.append(
-            f"mesh.points = {points} cuts the sections by {around.relative:.1%} of their thickness near chord "
+            f"mesh.points = {points} cuts the sections by "
+            f"{around.relative:.1%} of their thickness near chord "
             f"position {around.chord_position:.2f} (s = {around.s:.2f}); "
             + (
                 f"use mesh.points >= {needed} (--points)"
@@ -222,7 +225,8 @@ def check_resolution(
             most_sections,
         )
         problems.append(
-            f"mesh.sections = {sections} cuts the blade's bends by {along.relative:.1%} of the section thickness "
+            f"mesh.sections = {sections} cuts the blade's bends "
+            f"by {along.relative:.1%} of the section thickness "
             f"near s = {along.s:.2f}; "
             + (
                 f"use mesh.sections >= {needed} (--sections)"

@@ -97,7 +97,8 @@ def write_obj(mesh: LabeledMesh, path: Path, name: str) -> None:
     indices)."""
     with path.open("w", encoding="ascii") as handle:
         handle.write(
-            f"# torus_cad surface mesh {name}: {len(mesh.vertices)} vertices, {len(mesh.faces)} triangles, "
+            f"# torus_cad surface mesh {name}: "
+            f"{len(mesh.vertices)} vertices, {len(mesh.faces)} triangles, "
             f"mm; groups {' '.join(mesh.part_names)}\n"
         )
         handle.write(f"o {name}\n")
@@ -114,7 +115,8 @@ def write_ply(mesh: LabeledMesh, path: Path, name: str) -> None:
         f"ply\nformat binary_little_endian 1.0\ncomment torus_cad surface mesh {name}, mm; part: "
         + ", ".join(f"{index} = {part_name}" for index, part_name in enumerate(mesh.part_names))
         + f"\nelement vertex {len(mesh.vertices)}\nproperty double x\nproperty double y\nproperty double z\n"
-        f"element face {len(mesh.faces)}\nproperty list uchar int vertex_indices\nproperty int part\n"
+        f"element face {len(mesh.faces)}\nproperty list "
+        "uchar int vertex_indices\nproperty int part\n"
         "end_header\n"
     )
     with path.open("wb") as handle:

@@ -256,7 +256,8 @@ def unvalued_lines(rows: Sequence[dict[str, Any]]) -> list[str]:
     ]
     if len(unvalued) > MAX_UNVALUED_LINES:
         lines.append(
-            f"  and {len(unvalued) - MAX_UNVALUED_LINES} more trials without a value (see results.csv)"
+            f"  and {len(unvalued) - MAX_UNVALUED_LINES} more "
+            "trials without a value (see results.csv)"
         )
     return lines
 

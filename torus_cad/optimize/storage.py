@@ -124,7 +124,8 @@ def storage_url(given: str, out_dir: Path, name: str) -> str:
     scheme = urlsplit(given).scheme.split("+")[0]
     if scheme not in _SCHEMES:
         raise ParameterError(
-            f"storage = {public_url(given)!r} is not allowed; use '' (SQLite in the output folder), "
+            f"storage = {public_url(given)!r} is not "
+            "allowed; use '' (SQLite in the output folder), "
             "sqlite:///path.db or postgresql://user@host/database"
         )
     return given

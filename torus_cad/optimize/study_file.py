@@ -133,7 +133,10 @@ class StudyTable(Section):
 
     name: str = param(
         "",
-        doc="the study's name (files OUT/<name>.db, OUT/best/<name>_best.toml); default: the file's stem",
+        doc=(
+            "the study's name (files OUT/<name>.db, "
+            "OUT/best/<name>_best.toml); default: the file's stem"
+        ),
     )
     base: str = param(
         "",
@@ -400,7 +403,8 @@ def parse_study(
         for key, bound in data["constraints"].items():
             if isinstance(bound, Mapping) and not set(bound) <= {"min", "max"}:
                 raise fail(
-                    f"constraints.{shown(key)} has keys {sorted(bound)}; give min, max or both, e.g. {{ min = 0.8 }}"
+                    f"constraints.{shown(key)} has keys {sorted(bound)}; "
+                    f"give min, max or both, e.g. {{ min = 0.8 }}"
                 )
     try:
         model = StudyFile.model_validate(data)
@@ -411,12 +415,14 @@ def parse_study(
     study_name = table.name or name
     if not _NAME_PATTERN.match(study_name):
         raise fail(
-            f"study.name = {study_name!r} must be 1-100 letters, digits, '_', '.' or '-' (it names files)"
+            f"study.name = {study_name!r} must be 1-100 "
+            "letters, digits, '_', '.' or '-' (it names files)"
         )
     axes = tuple(_axis(key, values, folder, fail) for key, values in model.vary.items())
     if not axes:
         raise fail(
-            '[vary] is empty; name at least one design key to vary, e.g. "airfoil.thickness" = [0.2, 0.6]'
+            "[vary] is empty; name at least one design key "
+            'to vary, e.g. "airfoil.thickness" = [0.2, 0.6]'
         )
     check_distinct_axes(axes, fail)
     objectives, constraints = _goals(model, fail)
@@ -430,8 +436,10 @@ def parse_study(
     if simulate is not None and simulate.get("thrust"):
         if table.sampler is Sampler.CMAES:
             raise fail(
-                "study.sampler = 'cmaes' cannot take [simulate] thrust (each trial's thrust is constrained to "
-                "the target within thrust_tolerance, and optuna's CMA-ES has no constraints_func); use 'tpe'"
+                "study.sampler = 'cmaes' cannot take [simulate] "
+                "thrust (each trial's thrust is constrained to "
+                "the target within thrust_tolerance, and optuna's "
+                "CMA-ES has no constraints_func); use 'tpe'"
             )
         target, tolerance = simulate["thrust"], simulate["thrust_tolerance"]
         constraints += (
@@ -513,7 +521,8 @@ def _axis(key: str, values: list[Any], folder: Path, fail: Any) -> VaryAxis:
         return VaryAxis(key, path, index, low=low, high=high, integer=leaf.kind is int)
     if numbers or not values:
         raise fail(
-            f"{where} must be two numbers (a range) or a list of strings or booleans (a choice), got {shown(values)}"
+            f"{where} must be two numbers (a range) or a list of "
+            f"strings or booleans (a choice), got {shown(values)}"
         )
     checked = tuple(
         checked_value(value, leaf, f"{where} item {i}", fail) for i, value in enumerate(values)
@@ -572,12 +581,14 @@ def _simulate(
         )
     if table.rpm > 0.0 and table.thrust > 0.0:
         raise fail(
-            f"simulate.rpm = {table.rpm:g} and simulate.thrust = {table.thrust:g} N: give one (thrust finds "
+            f"simulate.rpm = {table.rpm:g} and simulate.thrust "
+            f"= {table.thrust:g} N: give one (thrust finds "
             "each trial's rpm)"
         )
     if table.thrust <= 0.0 and keys & set(_THRUST_KEYS):
         raise fail(
-            f"simulate.{sorted(keys & set(_THRUST_KEYS))[0]} applies only with simulate.thrust (a target thrust)"
+            f"simulate.{sorted(keys & set(_THRUST_KEYS))[0]} applies "
+            "only with simulate.thrust (a target thrust)"
         )
     if "level" in keys and "levels" in keys:
         raise fail(
@@ -621,7 +632,8 @@ def _check_rpm(rpm: float, airspeed_m_s: float, base: PropellerParameters, fail:
     limit = rpm_limit(diameter_mm / 1000.0, airspeed_m_s, AIR_15C)
     if rpm > limit:
         raise fail(
-            f"simulate.rpm = {rpm:g} is out of range; allowed (0, {limit:.0f}] rpm (simulate's helical tip "
+            f"simulate.rpm = {rpm:g} is out of range; allowed "
+            f"(0, {limit:.0f}] rpm (simulate's helical tip "
             f"Mach limit for the base's D = {diameter_mm:.1f} mm at {airspeed_m_s:g} m/s)"
         )
 
@@ -651,7 +663,8 @@ def _check_thrust(
     if target_n > ceiling:
         raise fail(
             f"simulate.thrust = {target_n:g} N is out of range; allowed (0, {ceiling:.4g}] N (CT "
-            f"{PLAUSIBLE_CT_LIMIT:g} at the rpm limit {limit:.0f} rpm for the base's D = {base.diameter:g} mm)"
+            f"{PLAUSIBLE_CT_LIMIT:g} at the rpm limit "
+            f"{limit:.0f} rpm for the base's D = {base.diameter:g} mm)"
         )
 
 
@@ -662,13 +675,15 @@ def _check_observers(observers: tuple[str, ...], base: PropellerParameters, fail
 
     if len(observers) > NOISE_MAX_OBSERVERS:
         raise fail(
-            f"the metrics name {len(observers)} noise observers; allowed at most {NOISE_MAX_OBSERVERS}"
+            f"the metrics name {len(observers)} noise "
+            f"observers; allowed at most {NOISE_MAX_OBSERVERS}"
         )
     for text in observers:
         observer = parse_observer(text)
         if base.diameter > 0.0 and observer.distance_m * 1000.0 <= base.diameter / 2.0:
             raise fail(
-                f"performance.noise[{text}]: the observer is inside the rotor; allowed a distance above the "
+                f"performance.noise[{text}]: the observer is "
+                "inside the rotor; allowed a distance above the "
                 f"base's tip radius {base.diameter / 2000.0:g} m"
             )
 
@@ -683,7 +698,8 @@ def _levels(model: StudyFile, simulate: dict[str, Any] | None, fail: Any) -> tup
     order = [level.value for level in StudyLevel]
     if not levels or list(levels) != sorted(set(levels), key=order.index):
         raise fail(
-            f"simulate.levels = {list(levels)!r} must name levels from the cheapest to the finest (vortex, "
+            f"simulate.levels = {list(levels)!r} must name "
+            "levels from the cheapest to the finest (vortex, "
             'coarse, medium, fine), each once, e.g. ["vortex", "medium"]'
         )
     return levels
@@ -696,14 +712,16 @@ def _pruner(model: StudyFile, levels: tuple[str, ...], objectives: int, fail: An
     if len(levels) < 2:
         if "pruner" in model.model_fields_set:
             raise fail(
-                '[pruner] applies only with [simulate] levels of two or more, e.g. levels = ["coarse", '
+                "[pruner] applies only with [simulate] levels "
+                'of two or more, e.g. levels = ["coarse", '
                 '"medium"]'
             )
         return None
     kind = table.kind or (PrunerKind.MEDIAN if objectives == 1 else PrunerKind.DOMINATED)
     if kind in ONE_OBJECTIVE_PRUNERS and objectives > 1:
         raise fail(
-            f"pruner.kind = {kind.value!r} judges one objective (optuna's pruners take one value); with "
+            f"pruner.kind = {kind.value!r} judges one "
+            "objective (optuna's pruners take one value); with "
             f"{objectives} objectives use 'dominated' or 'none'"
         )
     return Pruner(kind, table.startup_trials, table.reduction_factor)
@@ -721,7 +739,8 @@ def _check_sampler(
         )
     if sampler is Sampler.CMAES and constraints:
         raise fail(
-            "study.sampler = 'cmaes' takes no [constraints] (optuna's CMA-ES has no constraints_func); "
+            "study.sampler = 'cmaes' takes no [constraints] "
+            "(optuna's CMA-ES has no constraints_func); "
             "use 'tpe'"
         )
 

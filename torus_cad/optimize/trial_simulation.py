@@ -172,5 +172,8 @@ def simulate_unavailable() -> str:
     except (OSError, subprocess.TimeoutExpired) as error:
         return f"python -m torus_cad simulate --help did not run: {error}"
     if done.returncode != 0:
-        return f"torus-cad simulate is not available (python -m torus_cad simulate --help exits {done.returncode})"
+        return (
+            "torus-cad simulate is not available (python -m "
+            f"torus_cad simulate --help exits {done.returncode})"
+        )
     return ""

@@ -142,7 +142,8 @@ def check_toml_shape(text: str, where: str, key_prefix: str = "", lines: bool = 
             depth += 1
             if depth > TOML_NESTING_LIMIT:
                 raise ParameterError(
-                    f"{where}{f' line {line}' if lines else ''}: {key or 'a value'} is nested more than "
+                    f"{where}{f' line {line}' if lines else ''}: "
+                    f"{key or 'a value'} is nested more than "
                     f"{TOML_NESTING_LIMIT} levels deep (lists or tables within each other)"
                 )
         elif char in "]}":
@@ -153,7 +154,8 @@ def check_toml_shape(text: str, where: str, key_prefix: str = "", lines: bool = 
             digits = len(run.group().replace("_", ""))
             if digits > TOML_NUMBER_DIGITS_LIMIT:
                 raise ParameterError(
-                    f"{where}{f' line {line}' if lines else ''}: {key or 'a value'} holds a number of {digits} digits; "
+                    f"{where}{f' line {line}' if lines else ''}: "
+                    f"{key or 'a value'} holds a number of {digits} digits; "
                     f"at most {TOML_NUMBER_DIGITS_LIMIT} are allowed"
                 )
             index = run.end()

@@ -182,7 +182,8 @@ class Hub(Section):
         bore_radius = self.bore_diameter / 2.0
         if self.bore_flat_depth > 0.0 and self.bore_diameter == 0.0:
             raise ValueError(
-                f"hub.bore_flat_depth = {self.bore_flat_depth:g} mm needs a bore; set hub.bore_diameter"
+                f"hub.bore_flat_depth = {self.bore_flat_depth:g} mm "
+                "needs a bore; set hub.bore_diameter"
             )
         if self.bore_flat_depth >= bore_radius > 0.0:
             raise ValueError(
@@ -268,7 +269,8 @@ class Airfoil(Section):
         TrailingEdgeShape.ROUND,
         strict=False,
         doc="end of a blunt trailing edge (and of a coordinate file's open one): 'round', a cap tangent to both "
-        "surfaces (no sharp edge; the root fillet works with it), or 'flat', a straight base with two corners",
+        "surfaces (no sharp edge; the root fillet works with "
+        "it), or 'flat', a straight base with two corners",
     )
 
     def section(self) -> SectionShape:
@@ -287,7 +289,8 @@ class Airfoil(Section):
         designation, the designation's own value) contradicts them."""
         if self.naca and self.file:
             raise ValueError(
-                f"airfoil.naca = {shown(self.naca)} conflicts with airfoil.file = {shown(self.file)}: "
+                f"airfoil.naca = {shown(self.naca)} conflicts "
+                f"with airfoil.file = {shown(self.file)}: "
                 "give one of them"
             )
         if not (self.naca or self.file):
@@ -307,7 +310,8 @@ class Airfoil(Section):
             value, default = getattr(self, number), type(self).model_fields[number].default
             if value != default and value != implied.get(number, default):
                 raise ValueError(
-                    f"airfoil.{key} = {shown(getattr(self, key))} conflicts with airfoil.{number} = {shown(value)}: "
+                    f"airfoil.{key} = {shown(getattr(self, key))} conflicts "
+                    f"with airfoil.{number} = {shown(value)}: "
                     f"give the section by {key} or by its numbers, not both"
                 )
         return self
@@ -319,7 +323,8 @@ class Airfoil(Section):
         thickness = self.trailing_edge_thickness
         if 0.0 < thickness < MIN_BLUNT_TRAILING_EDGE_MM:
             raise ValueError(
-                f"airfoil.trailing_edge_thickness = {thickness:g} mm is too thin to mesh without crossing "
+                f"airfoil.trailing_edge_thickness = {thickness:g} mm "
+                "is too thin to mesh without crossing "
                 f"triangles; allowed 0 (sharp) or {MIN_BLUNT_TRAILING_EDGE_MM:g} to 50 mm"
             )
         return self
@@ -345,7 +350,8 @@ class Airfoil(Section):
         if ratio >= FOLD_RATIO_LIMIT:
             raise ValueError(
                 f"{where_from}: the lower surface folds over itself near chord "
-                f"{where:.2f} (thickness exceeds the camber line's radius of curvature); reduce the thickness or "
+                f"{where:.2f} (thickness exceeds the camber line's "
+                "radius of curvature); reduce the thickness or "
                 "the camber, move camber_position toward 0.5, or set camber_normal = false"
             )
         return self
@@ -549,7 +555,8 @@ class Cfd(Section):
     def _room_outside_the_zone(self) -> Self:
         if self.domain_radius < 1.5 * self.zone_radius:
             raise ValueError(
-                f"cfd.domain_radius = {self.domain_radius:g} must be at least 1.5 x cfd.zone_radius "
+                f"cfd.domain_radius = {self.domain_radius:g} must "
+                "be at least 1.5 x cfd.zone_radius "
                 f"= {1.5 * self.zone_radius:g} (room for the stationary region)"
             )
         return self
@@ -634,7 +641,8 @@ class Conventional(Section):
                 )
         if self.thickness_r_over_R and len(self.thickness_r_over_R) != len(self.thickness_ratio):
             raise ValueError(
-                "conventional.thickness_r_over_R and conventional.thickness_ratio must have the same "
+                "conventional.thickness_r_over_R and "
+                "conventional.thickness_ratio must have the same "
                 "length"
             )
         if self.stations_file:
@@ -771,7 +779,10 @@ class PropellerParameters(Document):
         ge=0.0,
         le=100000.0,
         fuzz=(0.0, 0.0),
-        doc="tip diameter to reach by scaling z_L of centerline.p2 and p3 (0 = as the control points give)",
+        doc=(
+            "tip diameter to reach by scaling z_L of "
+            "centerline.p2 and p3 (0 = as the control points give)"
+        ),
     )
     pitch: float = param(
         0.0,
@@ -809,7 +820,8 @@ class PropellerParameters(Document):
         if wall < self.manufacturing.min_wall:
             limit = 2.0 * (self.hub.radius - self.hub.chamfer - self.manufacturing.min_wall)
             raise ValueError(
-                f"hub.bore_diameter = {self.hub.bore_diameter:g} mm leaves a hub wall of {wall:.3g} mm, "
+                f"hub.bore_diameter = {self.hub.bore_diameter:g} mm "
+                f"leaves a hub wall of {wall:.3g} mm, "
                 f"thinner than manufacturing.min_wall = {self.manufacturing.min_wall:g} mm; "
                 f"allowed at most {max(limit, 0.0):g} mm"
             )
@@ -822,7 +834,8 @@ class PropellerParameters(Document):
         if self.kind == DesignKind.TOROIDAL:
             if self.conventional.given():
                 raise ValueError(
-                    "[conventional] stations are given but kind = 'toroidal'; set kind = 'conventional'"
+                    "[conventional] stations are given but kind "
+                    "= 'toroidal'; set kind = 'conventional'"
                 )
             return self
         if not self.conventional.given():
@@ -834,7 +847,8 @@ class PropellerParameters(Document):
             if getattr(self, key):
                 raise ValueError(
                     f"{key} = {getattr(self, key):g} mm is a toroidal design target; for kind = "
-                    "'conventional' the station table sets the blade (conventional.diameter the size)"
+                    "'conventional' the station table sets "
+                    "the blade (conventional.diameter the size)"
                 )
         return self
 

@@ -48,7 +48,8 @@ __all__ = ["Feasibility", "check_design", "placed_mounting", "section_chords"]
 #: finds. Round a round blunt edge the fillet's ball may still not fit a thin root or a tight bend
 #: (the APC 10x7 SF's 0.9 mm root takes 0.05 mm).
 EDGE_FILLET_NOTE = (
-    "the root fillet round a {edge} trailing edge is decided by the kernel (build): OpenCascade's fillet "
+    "the root fillet round a {edge} trailing edge is "
+    "decided by the kernel (build): OpenCascade's fillet "
     "{why} on some designs and radii; a round blunt edge (airfoil.trailing_edge_thickness > 0, "
     "airfoil.trailing_edge_shape = 'round') is the one it rolls round"
 )
@@ -112,14 +113,16 @@ class Feasibility:
         if self.margins is not None:
             parts.append(
                 f"fold ratio {self.margins.fold_ratio:.2f} (limit {FOLD_LIMIT:g}), section sag "
-                f"{self.margins.resolution_deviation:.1%} of the chord (limit {RESOLUTION_DEVIATION_LIMIT:.0%})"
+                f"{self.margins.resolution_deviation:.1%} of the "
+                f"chord (limit {RESOLUTION_DEVIATION_LIMIT:.0%})"
             )
         if self.stl_triangles is not None:
             parts.append(f"about {self.stl_triangles:,} STL triangles")
         wall = self.printability
         if wall is not None:
             parts.append(
-                f"walls: thinnest {wall.thinnest_wall_mm:.2f} mm, trailing edge {wall.trailing_edge_thickness_mm:.2f} "
+                f"walls: thinnest {wall.thinnest_wall_mm:.2f} mm, "
+                f"trailing edge {wall.trailing_edge_thickness_mm:.2f} "
                 f"mm (manufacturing.min_wall {wall.min_wall_mm:g} mm"
                 + ("" if wall.printable else ": not printable")
                 + ")"

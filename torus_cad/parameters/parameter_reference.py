@@ -54,7 +54,10 @@ def _allowed_text(spec: ParameterSpec) -> str:
 
 def _row(spec: ParameterSpec) -> str:
     doc = spec.doc.replace("|", "\\|")
-    return f"| `{spec.key}` | {_default_text(spec.default)} | {spec.unit or '–'} | {_allowed_text(spec)} | {doc} |"
+    return (
+        f"| `{spec.key}` | {_default_text(spec.default)} | "
+        f"{spec.unit or '–'} | {_allowed_text(spec)} | {doc} |"
+    )
 
 
 def markdown_table(model: type[BaseModel] = PropellerParameters) -> str:

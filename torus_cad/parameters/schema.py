@@ -89,7 +89,8 @@ def check_in_bounds(dotted: str, value: float, bounds: Bounds, unit: str = "") -
     """Raise ValueError naming the field, the value and the interval when ``value`` lies outside."""
     if not bounds.contains(value):
         raise ValueError(
-            f"{dotted} = {_value_text(value)} is out of range; allowed {bounds}{' ' + unit if unit else ''}"
+            f"{dotted} = {_value_text(value)} is out of range; "
+            f"allowed {bounds}{' ' + unit if unit else ''}"
         )
 
 
@@ -321,7 +322,10 @@ def _message(model: type[BaseModel], error: Any) -> str:
         known = list(parent.model_fields) if parent is not None else []
         prefix = _dotted(location[:-1]) + "." if len(location) > 1 else ""
         if field in _SWEEP_TABLES:  # a sweep file given to a command that reads one design
-            return f"unknown key {field!r}: this looks like a sweep file; run it with 'torus-cad sweep FILE'"
+            return (
+                f"unknown key {field!r}: this looks like a "
+                "sweep file; run it with 'torus-cad sweep FILE'"
+            )
         return f"unknown key {shown(field)}{closest_key(str(location[-1]), known, prefix)}"
     if kind == "value_error":
         cause = error.get("ctx", {}).get("error")

@@ -70,7 +70,8 @@ def check_stl_budget(
         export = params.export
         raise BudgetError(
             f"the STL would have about {estimate:,} triangles (export.stl_linear_deflection = "
-            f"{export.stl_linear_deflection:g} mm, export.stl_angular_deflection = {export.stl_angular_deflection:g} "
+            f"{export.stl_linear_deflection:g} mm, "
+            f"export.stl_angular_deflection = {export.stl_angular_deflection:g} "
             f"rad), over the limit of {limit:,}; raise the deflections or build with --no-stl"
         )
     return estimate

@@ -23,7 +23,10 @@ class Bounds:
     def __str__(self) -> str:
         low = "-inf" if self.low is None else f"{self.low:g}"
         high = "inf" if self.high is None else f"{self.high:g}"
-        return f"{'(' if self.low_open or self.low is None else '['}{low}, {high}{')' if self.high_open or self.high is None else ']'}"
+        return (
+            f"{'(' if self.low_open or self.low is None else '['}{low}, "
+            f"{high}{')' if self.high_open or self.high is None else ']'}"
+        )
 
     def contains(self, value: float) -> bool:
         """Whether ``value`` lies inside (NaN never does)."""

@@ -99,7 +99,8 @@ class StageProgress:
         if not self.stages or now - self._last_line < every_s:
             return
         self._print(
-            f"{self._label(self.stages[-1])}: still running, {now - self._stage_start:.0f} s in this stage"
+            f"{self._label(self.stages[-1])}: still running, "
+            f"{now - self._stage_start:.0f} s in this stage"
         )
 
     def finish(self, message: str = "done") -> None:

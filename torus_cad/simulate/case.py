@@ -386,22 +386,26 @@ def allrun_text(spec: CaseSpec) -> str:
         'cd "${0%/*}" || exit 1',
         "set -e",
         "# Debian's openfoam package: its programs find etc/ through WM_PROJECT_DIR",
-        '[ -n "${WM_PROJECT_DIR:-}" ] || [ ! -d /usr/share/openfoam/etc ] || export WM_PROJECT_DIR=/usr/share/openfoam',
+        '[ -n "${WM_PROJECT_DIR:-}" ] || [ ! -d /usr/share/openfoam/etc '
+        "] || export WM_PROJECT_DIR=/usr/share/openfoam",
     ]
     if spec.processes > 1:
         lines += [
             "# As root (a container), OpenMPI's mpiexec refuses to start without these two",
-            'if [ "$(id -u)" -eq 0 ]; then export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1; fi',
+            'if [ "$(id -u)" -eq 0 ]; then export '
+            "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1; fi",
         ]
     for command in mesh_commands(spec) + solve_commands(spec):
         if command == ["simpleFoam"] and spec.processes > 1:
             command = ["mpiexec", "-n", str(spec.processes), "simpleFoam", "-parallel"]
         lines.append(
-            f"{shlex.join(command)} > log.{command[0] if command[0] != 'mpiexec' else 'simpleFoam'} 2>&1"
+            f"{shlex.join(command)} > log."
+            f"{command[0] if command[0] != 'mpiexec' else 'simpleFoam'} 2>&1"
         )
         if command == ["checkMesh"]:
             lines.append(
-                "grep -q 'Mesh OK' log.checkMesh || { echo 'checkMesh did not report Mesh OK: see log.checkMesh' >&2; "
+                "grep -q 'Mesh OK' log.checkMesh || { echo 'checkMesh "
+                "did not report Mesh OK: see log.checkMesh' >&2; "
                 "exit 1; }"
             )
     return "\n".join(lines) + "\n"

@@ -41,7 +41,8 @@ def status_text(status: Status) -> str:
     """``simpleFoam 120/300  Ux 2.1e-03 ... | force z 0.512 N, moment z 1.23 N mm``"""
     residuals = " ".join(f"{name} {value:.1e}" for name, value in status.residuals.items())
     return (
-        f"simpleFoam {status.iteration}/{status.total}  {residuals} | force z {status.force_n[2]:.4g} N, "
+        f"simpleFoam {status.iteration}/{status.total}  "
+        f"{residuals} | force z {status.force_n[2]:.4g} N, "
         f"moment z {status.moment_nm[2] * 1000:.4g} N mm"
     )
 
@@ -77,7 +78,8 @@ def summary_lines(result: Result, convergence: bool = False) -> list[str]:
         step = report["step"]
         lines.append(
             f"STEP {step['file']}: axis {step['axis']}, turning {step['turning']}; tip diameter "
-            f"{step['tip_diameter_mm']:.2f} mm, hub radius {step['hub_radius_mm']:.2f} mm, hub length "
+            f"{step['tip_diameter_mm']:.2f} mm, hub radius "
+            f"{step['hub_radius_mm']:.2f} mm, hub length "
             f"{step['hub_length_mm']:.2f} mm"
         )
     if "thrust_n" not in report:  # --case-only
@@ -96,10 +98,12 @@ def summary_lines(result: Result, convergence: bool = False) -> list[str]:
     lines.append(
         f"thrust {report['thrust_n']:.4g} N, torque {report['torque_nm'] * 1000.0:.4g} N mm, power "
         f"{report['power_w']:.4g} W at {report['rpm']:g} rpm, {report['airspeed_m_s']:g} m/s (J "
-        f"{_number(report['advance_ratio'], 3)}): CT {_number(report['ct'])}, CP {_number(report['cp'])}, {merit}"
+        f"{_number(report['advance_ratio'], 3)}): CT "
+        f"{_number(report['ct'])}, CP {_number(report['cp'])}, {merit}"
     )
     lines.append(
-        f"{state}: thrust varies {_percent(variation['thrust'])}, torque {_percent(variation['torque'])} "
+        f"{state}: thrust varies {_percent(variation['thrust'])}, "
+        f"torque {_percent(variation['torque'])} "
         f"over the last 10 % of {report['iterations']} iterations; {report['cells']:,} "
         f"cells, level {report['level']}, {report['wall_seconds']:.0f} s; {report['fluid']['name']}"
     )
@@ -114,7 +118,8 @@ def summary_lines(result: Result, convergence: bool = False) -> list[str]:
                 f"{mesh['y_plus_target']} so that the layers meet the surface cells"
             )
         lines.append(
-            f"y+ on the propeller: min {y_plus['min']:.3g}, mean {y_plus['mean']:.3g}, max {y_plus['max']:.3g} "
+            f"y+ on the propeller: min {y_plus['min']:.3g}, "
+            f"mean {y_plus['mean']:.3g}, max {y_plus['max']:.3g} "
             f"({report['mesher']} mesh, {sizing})"
         )
     viscous = report.get("viscous")
@@ -165,11 +170,15 @@ def thrust_search_lines(search: dict[str, Any]) -> list[str]:
     verdict = (
         f"within {_percent(search['tolerance'])}"
         if search["within_tolerance"]
-        else f"NOT within {_percent(search['tolerance'])} after {len(search['runs'])} runs: the closest run"
+        else (
+            f"NOT within {_percent(search['tolerance'])} after "
+            f"{len(search['runs'])} runs: the closest run"
+        )
     )
     return [
         f"thrust search, {len(search['runs'])} runs on one mesh: {runs}",
-        f"rpm for {search['target_thrust_n']:.4g} N: {search['rpm']:.0f} rpm ({search['thrust_n']:.4g} N, "
+        f"rpm for {search['target_thrust_n']:.4g} N: "
+        f"{search['rpm']:.0f} rpm ({search['thrust_n']:.4g} N, "
         f"{verdict})",
     ]
 
@@ -180,8 +189,10 @@ def _spread_bound(entry: dict[str, Any]) -> str:
     if entry.get("uncertainty_fine") is None or entry.get("spread") is None:
         return ""
     return (
-        f"; uncertainty of the fine value {_percent(entry['uncertainty_fine'])} (the levels spread over "
-        f"{_percent(entry['spread'])} of it; {SPREAD_SAFETY_FACTOR:g} times that bounds the error without an "
+        "; uncertainty of the fine value "
+        f"{_percent(entry['uncertainty_fine'])} (the levels spread over "
+        f"{_percent(entry['spread'])} of it; "
+        f"{SPREAD_SAFETY_FACTOR:g} times that bounds the error without an "
         "observed order)"
     )
 
@@ -202,15 +213,19 @@ def convergence_lines(report: dict[str, Any]) -> list[str]:
                 else "NOT in the asymptotic range"
             )
             lines.append(
-                f"{label}: {levels} {unit}; Richardson {_number(entry['extrapolated'] * factor)} {unit}, "
+                f"{label}: {levels} {unit}; Richardson "
+                f"{_number(entry['extrapolated'] * factor)} {unit}, "
                 f"observed order {_number(entry['observed_order'], 3)}; GCI fine "
                 f"{_percent(entry.get('gci_fine'))}, medium {_percent(entry.get('gci_medium'))}, "
-                f"GCI_medium / (r^p GCI_fine) {_number(entry.get('gci_asymptotic_ratio'), 3)} ({asymptotic})"
+                "GCI_medium / (r^p GCI_fine) "
+                f"{_number(entry.get('gci_asymptotic_ratio'), 3)} ({asymptotic})"
             )
         else:
             lines.append(
-                f"{label}: {levels} {unit}; no Richardson extrapolation and no grid convergence index: the "
-                "levels do not converge monotonically (the change from medium to fine is not smaller than "
+                f"{label}: {levels} {unit}; no Richardson "
+                "extrapolation and no grid convergence index: the "
+                "levels do not converge monotonically (the "
+                "change from medium to fine is not smaller than "
                 "from coarse to medium), so they are not in the asymptotic range"
                 + _spread_bound(entry)
             )

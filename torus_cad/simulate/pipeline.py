@@ -418,7 +418,8 @@ def _mesh_source_report(request: Request) -> dict[str, Any]:
         and mesh_report.get("cfd") != request.params.cfd.model_dump(mode="json")
     ):
         raise ParameterError(
-            f"--mesh-from {str(source)!r} was meshed for design {made[0]!r}, mesher {made[1]!r}, level "
+            f"--mesh-from {str(source)!r} was meshed for "
+            f"design {made[0]!r}, mesher {made[1]!r}, level "
             f"{made[2]!r}, surface refinement {made[3]!r}, not {wanted[0]!r}, {wanted[1]!r}, "
             f"{wanted[2]!r}, {wanted[3]!r}"
             + (" (or with other [cfd] settings)" if request.mesher == Mesher.TET else "")
@@ -450,7 +451,8 @@ def _check_budget(cells: int, request: Request, elapsed_s: float) -> None:
     )
     if elapsed_s + estimate > request.time_limit_s:
         raise BudgetError(
-            f"the solver would take about {estimate:.0f} s ({cells:,} cells x {request.run_iterations} "
+            f"the solver would take about {estimate:.0f} s "
+            f"({cells:,} cells x {request.run_iterations} "
             f"iterations on {request.processes} process(es)), over what is left of --time-limit = "
             f"{request.time_limit_s:g} s; raise --time-limit, lower --iterations or use --processes"
         )
@@ -639,7 +641,8 @@ def _publish(
     params, name = request.params, request.params.name
     cells = run.report["cells"]
     title = (
-        f"{name}: {run.report['rpm']:g} rpm, {request.point.airspeed_m_s:g} m/s, {request.level.value} "
+        f"{name}: {run.report['rpm']:g} rpm, "
+        f"{request.point.airspeed_m_s:g} m/s, {request.level.value} "
         f"({cells:,} cells)"
     )
     output.write(
@@ -728,7 +731,8 @@ def _report(
             "inflow_omega_1_s": omega,
         },
         "conventions": "y_plus: min / area-weighted mean / max over the propeller's faces at the last iteration "
-        "(OpenFOAM's yPlus function object); thrust > 0 pushes the fluid toward -z (the design's way); torque > 0 resists the design's "
+        "(OpenFOAM's yPlus function object); thrust > 0 pushes the fluid "
+        "toward -z (the design's way); torque > 0 resists the design's "
         "rotation; CT = T/(rho n^2 D^4), CP = P/(rho n^3 D^5), n in rev/s, D the tip diameter",
     }
 
@@ -777,7 +781,8 @@ def check_thrust_target(request: Request, target: ThrustTarget) -> tuple[float, 
     low, high = TOLERANCE_RANGE
     if not (math.isfinite(target.tolerance) and low <= target.tolerance <= high):
         raise ParameterError(
-            f"--thrust-tolerance = {target.tolerance:g} is out of range; allowed [{low:g}, {high:g}] "
+            f"--thrust-tolerance = {target.tolerance:g} is "
+            f"out of range; allowed [{low:g}, {high:g}] "
             "(a fraction of the target)"
         )
     diameter_m = check_request(request)

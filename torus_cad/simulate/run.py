@@ -219,13 +219,17 @@ def divergence(history: History) -> str | None:
         ]
         if bad:
             return (
-                f"iteration {int(history.residual_iterations[bad[0]])}: {name} residual {values[bad[0]]:.3g} "
+                f"iteration {int(history.residual_iterations[bad[0]])}: "
+                f"{name} residual {values[bad[0]]:.3g} "
                 f"(limit {SIMULATE_DIVERGENCE_RESIDUAL:g})"
             )
     for label, values in (("force", history.force_n), ("moment", history.moment_nm)):
         finite = [bool(row.all()) for row in (abs(values) < 1e30)]
         if not all(finite):
-            return f"iteration {int(history.iterations[finite.index(False)])}: the propeller's {label} is not finite"
+            return (
+                f"iteration {int(history.iterations[finite.index(False)])}: "
+                f"the propeller's {label} is not finite"
+            )
     return None
 
 
@@ -317,7 +321,8 @@ async def run_solver(
             raise watcher.failure from None
         if "floating point" in str(error):
             raise DivergedError(
-                f"simpleFoam diverged at iteration {_log_iteration(path) or history.last_iteration}: "
+                "simpleFoam diverged at iteration "
+                f"{_log_iteration(path) or history.last_iteration}: "
                 f"floating point exception; last residuals {_residual_text(history)}"
             ) from None
         raise

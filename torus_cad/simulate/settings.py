@@ -192,7 +192,8 @@ def check_operating_point(
     limit = rpm_limit(diameter_m, point.airspeed_m_s, point.fluid)
     if not (math.isfinite(point.rpm) and 0.0 <= point.rpm <= limit):
         raise ParameterError(
-            f"--rpm = {point.rpm:g} is out of range; allowed [0, {limit:.0f}] rpm (helical tip Mach "
+            f"--rpm = {point.rpm:g} is out of range; "
+            f"allowed [0, {limit:.0f}] rpm (helical tip Mach "
             f"{SIMULATE_TIP_MACH_LIMIT:g} for D = {diameter_m * 1000:.1f} mm at "
             f"{point.airspeed_m_s:g} m/s; the solver is incompressible)"
         )

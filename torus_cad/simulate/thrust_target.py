@@ -138,7 +138,8 @@ def check_reachable(
     at_limit = [run for run in runs if run.rpm >= rpm_limit * (1.0 - 1e-9)]
     if at_limit and at_limit[-1].thrust_n < target_n * (1.0 - tolerance):
         raise ParameterError(
-            f"--thrust = {target_n:g} N is out of range; allowed (0, {at_limit[-1].thrust_n:.4g}] N "
+            f"--thrust = {target_n:g} N is out of range; "
+            f"allowed (0, {at_limit[-1].thrust_n:.4g}] N "
             f"(the thrust at the rpm limit {rpm_limit:.0f} rpm, simulated)"
         )
 

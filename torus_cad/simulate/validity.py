@@ -158,7 +158,8 @@ def validity_flags(
     chord = REFERENCE_CHORD_D * diameter_m
     if first_layer_m is not None and first_layer_m > FIRST_LAYER_MAX_CHORD_FRACTION * chord:
         flags.append(
-            f"the first prism layer, {first_layer_m * 1e3:.3g} mm, is {first_layer_m / chord:.3g} x the "
+            f"the first prism layer, {first_layer_m * 1e3:.3g} mm, "
+            f"is {first_layer_m / chord:.3g} x the "
             f"chord at {Y_PLUS_REFERENCE_RADIUS:g} R ({chord * 1e3:.3g} mm), over "
             f"{FIRST_LAYER_MAX_CHORD_FRACTION:g}: the layers are not thin against the blade"
         )
@@ -166,13 +167,16 @@ def validity_flags(
     low, high = REYNOLDS_RANGE
     if reynolds > 0.0 and not low <= reynolds <= high:
         flags.append(
-            f"the chord Reynolds number at {Y_PLUS_REFERENCE_RADIUS:g} R is {reynolds:.3g}, outside the "
-            f"turbulence model's [{low:.0e}, {high:.0e}]: forces and y+ are not those of its physics"
+            f"the chord Reynolds number at {Y_PLUS_REFERENCE_RADIUS:g} R "
+            f"is {reynolds:.3g}, outside the "
+            f"turbulence model's [{low:.0e}, {high:.0e}]: "
+            "forces and y+ are not those of its physics"
         )
     low, high = Y_PLUS_MEAN_RANGE
     if y_plus is not None and not low <= y_plus["mean"] <= high:
         flags.append(
-            f"the mean y+ on the propeller is {y_plus['mean']:.3g}, outside [{low:g}, {high:g}] around the "
+            f"the mean y+ on the propeller is {y_plus['mean']:.3g}, "
+            f"outside [{low:g}, {high:g}] around the "
             f"first layer's target {Y_PLUS_TARGET:g}: the wall is not resolved as sized"
         )
     return flags

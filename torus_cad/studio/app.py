@@ -413,7 +413,10 @@ class Studio:
         return self.server.protocol.addAttachment(exact.files[kind].read_bytes())
 
     def _download_toml(self) -> Any:
-        text = "# torus_cad design, saved by torus-cad studio; build it with: torus-cad build <this file>\n"
+        text = (
+            "# torus_cad design, saved by torus-cad studio; "
+            "build it with: torus-cad build <this file>\n"
+        )
         return self.server.protocol.addAttachment((text + self.design.to_toml()).encode())
 
     def _on_upload(self, upload_file: Any, **_: Any) -> None:

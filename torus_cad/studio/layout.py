@@ -41,7 +41,10 @@ _CSS = """
 
 
 #: The status chip's colour: red for a refusal or failure, green once the exact solid is shown.
-_STATUS_COLOR = "['refused', 'failed'].includes(status) ? 'error' : (status === 'exact' ? 'success' : 'primary')"
+_STATUS_COLOR = (
+    "['refused', 'failed'].includes(status) ? 'error' "
+    ": (status === 'exact' ? 'success' : 'primary')"
+)
 
 
 def _js_key(text: str) -> str:
@@ -268,7 +271,10 @@ def _readouts() -> None:
                 size="small",
                 classes="ma-1",
                 id="download-toml",
-                click="utils.download(file_stem + '.toml', trigger('download_toml'), 'application/toml')",
+                click=(
+                    "utils.download(file_stem + '.toml', "
+                    "trigger('download_toml'), 'application/toml')"
+                ),
             )
 
 

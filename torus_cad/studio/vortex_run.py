@@ -38,7 +38,10 @@ def _solved(request: PerformanceRequest) -> dict[str, object]:
     """The report's numbers, the strip count and the loading plot's PNG bytes of ``request``."""
     params = PropellerParameters.from_dict(request.design)
     result = vortex_performance(params, request.rpm, request.airspeed_m_s)
-    title = f"loading, {params.name}: {request.rpm:.0f} rpm, {request.airspeed_m_s:g} m/s, vortex lattice"
+    title = (
+        f"loading, {params.name}: {request.rpm:.0f} rpm, "
+        f"{request.airspeed_m_s:g} m/s, vortex lattice"
+    )
     path = write_loading_plot(
         result.strips, request.out_dir / f"loading_{request.request_id}.png", title
     )

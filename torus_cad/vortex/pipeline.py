@@ -351,7 +351,8 @@ def _report(request: VortexRequest, result: VortexResult, start: float) -> dict[
         "wall_seconds": time.perf_counter() - start,
         "conventions": "thrust > 0 pushes the air toward -z (the design's way); torque > 0 resists the design's "
         "rotation; CT = T/(rho n^2 D^4), CP = P/(rho n^3 D^5), n in rev/s, D the tip diameter; "
-        "polars.low_confidence_strips: the centerline parameters s of strips whose polar NeuralFoil "
+        "polars.low_confidence_strips: the centerline "
+        "parameters s of strips whose polar NeuralFoil "
         "trusts less than low_confidence_below (stall, very low Reynolds number)",
     }
 
@@ -387,7 +388,8 @@ def vortex_summary_lines(run: VortexRun) -> list[str]:
     if doubtful:
         lines.append(
             f"warning: NeuralFoil's polars are not confident on {len(doubtful)} strip(s), at s = "
-            f"{', '.join(f'{s:.2f}' for s in doubtful[:8])}{' ...' if len(doubtful) > 8 else ''} (stall or "
+            f"{', '.join(f'{s:.2f}' for s in doubtful[:8])}"
+            f"{' ...' if len(doubtful) > 8 else ''} (stall or "
             "very low Reynolds number): the numbers there are rough"
         )
     if report.get("noise"):

@@ -268,7 +268,8 @@ def _relaxed(
         if change < RELAXED_THRUST_TOLERANCE:
             return circulation, lattice, change, sweep
     raise KernelError(
-        f"the vortex solve did not converge: with its first wake turn following the flow the thrust "
+        "the vortex solve did not converge: with its "
+        "first wake turn following the flow the thrust "
         f"still changed by {change:.2g} of itself after {RELAXATION_SWEEPS_MAX} sweeps "
         f"(tolerance {RELAXED_THRUST_TOLERANCE:g})"
     )

@@ -75,16 +75,21 @@ def run(args: argparse.Namespace) -> int:
         if fillet is not None and not fillet["constant_radius"]:
             print(
                 f"warning: the root fillet is {fillet['radius_mm']:g} mm except along "
-                f"{fillet['varying_junction_per_blade_mm']:.2f} mm of each blade's junction: a blade bends too tightly "
-                f"there for it, and its radius varies down to {fillet['smallest_radius_mm']:.3g} mm",
+                f"{fillet['varying_junction_per_blade_mm']:.2f} mm "
+                "of each blade's junction: a blade bends too tightly "
+                "there for it, and its radius varies down "
+                f"to {fillet['smallest_radius_mm']:.3g} mm",
                 file=sys.stderr,
             )
         closed = report["closed_file_trailing_edge_mm"]
         if closed is not None:
             print(
-                f"warning: airfoil.file's open trailing edge is only {closed[0]:.3f}-{closed[1]:.3f} mm thick, under "
-                f"the {MIN_BLUNT_TRAILING_EDGE_MM:g} mm a blunt edge needs to mesh without crossing triangles: built "
-                f"sharp; set airfoil.trailing_edge_thickness >= {MIN_BLUNT_TRAILING_EDGE_MM:g} for a base",
+                "warning: airfoil.file's open trailing edge is only "
+                f"{closed[0]:.3f}-{closed[1]:.3f} mm thick, under "
+                f"the {MIN_BLUNT_TRAILING_EDGE_MM:g} mm a blunt edge "
+                "needs to mesh without crossing triangles: built "
+                "sharp; set airfoil.trailing_edge_thickness "
+                f">= {MIN_BLUNT_TRAILING_EDGE_MM:g} for a base",
                 file=sys.stderr,
             )
         if not report["printability"]["printable"]:
@@ -96,7 +101,8 @@ def run(args: argparse.Namespace) -> int:
         if params.blades == 1:
             print(
                 f"warning: a one-blade propeller is out of balance: static imbalance "
-                f"{report['balance']['static_imbalance_g_mm']:.3f} g mm; add a counterweight or use 2 or more blades",
+                f"{report['balance']['static_imbalance_g_mm']:.3f} g "
+                "mm; add a counterweight or use 2 or more blades",
                 file=sys.stderr,
             )
     if args.verbose:

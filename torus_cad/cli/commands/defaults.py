@@ -27,7 +27,8 @@ def run(args: argparse.Namespace) -> int:
     params = load_parameters(args.config, args.overrides)
     targets = resolve_design_targets(params)
     sys.stdout.write(
-        "# torus_cad design file: the spec's parameters that the design's airfoil.naca, diameter and\n"
+        "# torus_cad design file: the spec's parameters "
+        "that the design's airfoil.naca, diameter and\n"
         "# pitch resolved to ("
         + (
             ", ".join(f"{key} = {value!r}" for key, value in targets.requested.items())

@@ -40,7 +40,8 @@ def run(args: argparse.Namespace) -> int:
         )
     except StudyInterrupted as interrupt:
         print(
-            f"torus-cad: optimize interrupted by {interrupt.signal_name}: {interrupt.result.ran} trials finished "
+            f"torus-cad: optimize interrupted by {interrupt.signal_name}: "
+            f"{interrupt.result.ran} trials finished "
             "in this run; rerun the same command to continue",
             file=sys.stderr,
         )

@@ -142,7 +142,8 @@ def _check_simulate_options(args: argparse.Namespace) -> None:
     """ParameterError (exit 2) for options that do not go together."""
     if args.convergence and (args.case_only or args.mesh_from):
         raise ParameterError(
-            "--convergence meshes and runs all three levels; it takes neither --case-only nor --mesh-from"
+            "--convergence meshes and runs all three levels; "
+            "it takes neither --case-only nor --mesh-from"
         )
     if args.thrust is not None and (args.convergence or args.case_only or args.mesh_from):
         raise ParameterError(

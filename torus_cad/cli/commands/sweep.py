@@ -41,7 +41,8 @@ def run(args: argparse.Namespace) -> int:
             else "nothing was built"
         )
         print(
-            f"torus-cad: sweep interrupted by {interrupt.signal_name}: {done}; rerun the same command to resume",
+            f"torus-cad: sweep interrupted by {interrupt.signal_name}: "
+            f"{done}; rerun the same command to resume",
             file=sys.stderr,
         )
         return interrupt.exit_code

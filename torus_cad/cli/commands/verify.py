@@ -50,7 +50,8 @@ def run(args: argparse.Namespace) -> int:
         missing = [entry for entry in CASE_ENTRIES if not (case / entry).exists()]
         if missing:
             problems.append(
-                f"{case.relative_to(folder)}: incomplete OpenFOAM case: {', '.join(missing)} missing"
+                f"{case.relative_to(folder)}: incomplete "
+                f"OpenFOAM case: {', '.join(missing)} missing"
             )
         elif not args.quiet:
             print(f"ok {case}: OpenFOAM case ({', '.join(CASE_ENTRIES)})")
@@ -63,7 +64,8 @@ def run(args: argparse.Namespace) -> int:
             continue
         if not args.quiet:
             print(
-                f"ok {checked.report.parent / name}: {', '.join(path.name for path in checked.files)}"
+                f"ok {checked.report.parent / name}: "
+                f"{', '.join(path.name for path in checked.files)}"
             )
     for problem in problems:
         report_error(f"verify: {problem}", EXIT_KERNEL_FAILURE)
@@ -86,7 +88,8 @@ def _debris(left: list[Path], folder: Path) -> list[str]:
     """A problem for every staging folder in ``left`` (left by a stopped process), named from
     ``folder``."""
     return [
-        f"staging folder {str(path.relative_to(folder))!r} left by a stopped process (the next run there "
+        f"staging folder {str(path.relative_to(folder))!r} left "
+        "by a stopped process (the next run there "
         "removes it)"
         for path in left
     ]
@@ -141,7 +144,8 @@ def _verify_batch_folder(folder: Path, quiet: bool) -> int:
             else ""
         )
         print(
-            f"ok {folder}: {sets} complete output set{'s' if sets != 1 else ''} in {len(folders) - 1} folders, "
+            f"ok {folder}: {sets} complete output "
+            f"set{'s' if sets != 1 else ''} in {len(folders) - 1} folders, "
             f"no staging folder left by a stopped process{busy}"
         )
     return EXIT_OK

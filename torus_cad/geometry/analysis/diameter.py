@@ -75,15 +75,19 @@ def radial_scale_for_diameter(
     radius_at = _Memo(tip_radius_of_scale)
     if radius_at(1.0) is None:
         raise ParameterError(
-            "diameter: the design cannot be evaluated at its own control points; fix the centerline first"
+            "diameter: the design cannot be evaluated at "
+            "its own control points; fix the centerline first"
         )
     low, high = _last_sound(radius_at, scale_range[0]), _last_sound(radius_at, scale_range[1])
     radius_low, radius_high = radius_at.sound(low), radius_at.sound(high)
     if not min(radius_low, radius_high) <= target <= max(radius_low, radius_high):
         raise ParameterError(
-            f"diameter = {diameter_mm:g} mm is out of reach for this design: scaling the radial coordinates z_L "
-            f"of centerline.p2 and p3 by {low:.3g}..{high:.3g} gives tip diameters {2 * radius_low:.2f}.."
-            f"{2 * radius_high:.2f} mm; change the hub radius, the control points or the section sizes"
+            f"diameter = {diameter_mm:g} mm is out of reach for "
+            "this design: scaling the radial coordinates z_L "
+            f"of centerline.p2 and p3 by {low:.3g}..{high:.3g} gives "
+            f"tip diameters {2 * radius_low:.2f}.."
+            f"{2 * radius_high:.2f} mm; change the hub "
+            "radius, the control points or the section sizes"
         )
     return float(
         brentq(

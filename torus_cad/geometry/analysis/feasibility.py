@@ -94,7 +94,8 @@ def check_ends_inside_hub(hub: HubGeometry, surface: BladeSurface) -> None:
         outside_axis = np.abs(section[:, 2]).max()
         if outside_radius >= radius or outside_axis >= half_length:
             raise GeometryError(
-                f"the blade's {label} section leaves the hub's inset (reaches r = {outside_radius:.3f} mm of "
+                f"the blade's {label} section leaves the hub's "
+                f"inset (reaches r = {outside_radius:.3f} mm of "
                 f"R = {radius:g}, |z| = {outside_axis:.3f} mm of L/2 = {half_length:g}); "
                 "make transforms.scale_x / scale_y smaller at that end or the hub larger"
             )
@@ -110,7 +111,8 @@ def check_centerline_leaves_through_side(
     if np.any(crossing):
         where = np.linspace(0.0, 1.0, samples)[np.argmax(crossing)]
         raise GeometryError(
-            f"the centerline leaves the hub through an end face near s = {where:.3f}; it must leave through "
+            "the centerline leaves the hub through an end "
+            f"face near s = {where:.3f}; it must leave through "
             "the hub's side (keep y_L of the control points near the ends between 0 and L - 2)"
         )
 
@@ -219,8 +221,10 @@ def check_no_fold(tube: Tube, limit: float | None = None) -> None:
         index = int(np.argmin(np.abs(tube.frames.s - where)))
         bend_radius = 1.0 / max(float(np.linalg.norm(tube.curvature[index])), 1e-300)
         raise GeometryError(
-            f"the blade folds over itself near s = {where:.3f}: its section reaches {ratio:.2f} x the "
-            f"centerline's bend radius ({bend_radius:.3g} mm) on the inside of the bend (limit {limit:g}); "
+            f"the blade folds over itself near s = {where:.3f}: "
+            f"its section reaches {ratio:.2f} x the "
+            f"centerline's bend radius ({bend_radius:.3g} mm) "
+            f"on the inside of the bend (limit {limit:g}); "
             "make transforms.scale_x / scale_y smaller there or bend the centerline less"
         )
 
@@ -262,7 +266,8 @@ def check_sections_resolved(
         # The sag falls like the square of the spacing: estimate the sections that meet the limit.
         needed = int(np.ceil((sections - 1) * np.sqrt(relative / limit) * 1.05)) + 1
         raise GeometryError(
-            f"resolution.sections = {sections} is too few for this blade: between sections near s = {where:.3f} "
+            f"resolution.sections = {sections} is too few for "
+            f"this blade: between sections near s = {where:.3f} "
             f"it bends, twists or tapers by {relative:.1%} of the chord (limit {limit:.1%}); use "
             f"resolution.sections >= {min(needed, 400)} or make the blade change more gently"
         )
@@ -351,8 +356,10 @@ def check_no_self_intersection(hub: HubGeometry, tube: Tube) -> None:
         place = "outside" if _outside_hub(hub, query[first]) else "inside"
         low, high = sorted((s_point, s_slab))
         raise GeometryError(
-            f"the blade intersects itself: its part near s = {low:.3f} runs into its part near s = {high:.3f} "
-            f"({place} the hub); move the centerline's control points apart or make the sections smaller"
+            "the blade intersects itself: its part near s = "
+            f"{low:.3f} runs into its part near s = {high:.3f} "
+            f"({place} the hub); move the centerline's "
+            "control points apart or make the sections smaller"
         )
 
 
@@ -361,7 +368,8 @@ def check_leaves_hub(hub: HubGeometry, tube: Tube) -> None:
     blades)."""
     if not np.any(_outside_hub(hub, tube.points)):
         raise GeometryError(
-            "the blade never leaves the hub (all of it lies within r < R and |z| < L/2); raise the centerline's "
+            "the blade never leaves the hub (all of it lies "
+            "within r < R and |z| < L/2); raise the centerline's "
             "control points (z_L of p2 / p3) or make the hub smaller"
         )
 
@@ -393,9 +401,12 @@ def check_blades_clear(geometry: PropellerGeometry, tube: Tube) -> None:
             s_here = 0.5 * (tube.frames.s[slab[first]] + tube.frames.s[slab[first] + 1])
             gap = min(blade, geometry.blades - blade)
             raise GeometryError(
-                f"the blades would intersect each other outside the hub: blade 1's part near s = {s_here:.3f} "
-                f"meets blade {1 + blade}'s part near s = {s_other:.3f} ({gap} blade pitch{'es' if gap > 1 else ''}"
-                f" = {360.0 * gap / geometry.blades:.1f} degrees apart); reduce the centerline's angular span x_L, "
+                "the blades would intersect each other outside "
+                f"the hub: blade 1's part near s = {s_here:.3f} "
+                f"meets blade {1 + blade}'s part near s = "
+                f"{s_other:.3f} ({gap} blade pitch{'es' if gap > 1 else ''}"
+                f" = {360.0 * gap / geometry.blades:.1f} degrees "
+                "apart); reduce the centerline's angular span x_L, "
                 "the section sizes or the number of blades"
             )
 

@@ -77,15 +77,18 @@ class Printability:
             return ""
         if self.thinnest_wall_mm < self.min_wall_mm * (1.0 - _ROUNDING):
             return (
-                f"the blade section at s = {self.thinnest_wall_s:.3f} is at most {self.thinnest_wall_mm:.3f} mm "
+                f"the blade section at s = {self.thinnest_wall_s:.3f} is "
+                f"at most {self.thinnest_wall_mm:.3f} mm "
                 f"thick (at chord fraction {self.thinnest_wall_chord_fraction:.3f}), thinner than "
                 f"manufacturing.min_wall = {self.min_wall_mm:g} mm"
             )
         if self.trailing_edge_thickness_mm < self.min_wall_mm * (1.0 - _ROUNDING):
             return (
                 f"the trailing edge of the section at s = {self.trailing_edge_thinnest_s:.3f} is "
-                f"{self.trailing_edge_thickness_mm:.3f} mm thick, thinner than manufacturing.min_wall = "
-                f"{self.min_wall_mm:g} mm (a blunt trailing edge at least as thick makes it printable: "
+                f"{self.trailing_edge_thickness_mm:.3f} mm "
+                "thick, thinner than manufacturing.min_wall = "
+                f"{self.min_wall_mm:g} mm (a blunt trailing "
+                "edge at least as thick makes it printable: "
                 f"airfoil.trailing_edge_thickness = {self.min_wall_mm:g})"
             )
         return ""

@@ -265,7 +265,8 @@ class ConventionalBlade:
         if np.any(thin):
             where = float(r_mm[int(np.argmax(thin))])
             raise GeometryError(
-                f"airfoil.trailing_edge_thickness = {self.trailing_edge_thickness_mm:g} mm is thicker "
+                "airfoil.trailing_edge_thickness = "
+                f"{self.trailing_edge_thickness_mm:g} mm is thicker "
                 f"than {TRAILING_EDGE_THICKNESS_LIMIT:g} x the section's own thickness near r = "
                 f"{where:.1f} mm ({float(own_mm[int(np.argmax(thin))]):.3f} mm); make it thinner"
             )
@@ -317,7 +318,8 @@ def check_conventional_feasible(
     if reach >= blade.hub.radius_mm or height >= blade.hub.length_mm / 2.0:
         raise GeometryError(
             f"the conventional blade's root section leaves the hub (reaches r = {reach:.3f} mm of "
-            f"R = {blade.hub.radius_mm:g}, |z| = {height:.3f} mm of L/2 = {blade.hub.length_mm / 2:g}); "
+            f"R = {blade.hub.radius_mm:g}, |z| = {height:.3f} mm "
+            f"of L/2 = {blade.hub.length_mm / 2:g}); "
             "make the hub larger"
         )
     if blades < 2:
@@ -333,7 +335,8 @@ def check_conventional_feasible(
     if np.any(spans[outside] >= 360.0 / blades):
         where = float(radius_mm[outside][int(np.argmax(spans[outside]))])
         raise GeometryError(
-            f"the conventional blades would meet each other near r = {where:.1f} mm: a section spans "
+            "the conventional blades would meet each other "
+            f"near r = {where:.1f} mm: a section spans "
             f"{spans[outside].max():.1f} degrees about the axis, more than the blade spacing "
             f"{360.0 / blades:.1f} degrees; use fewer blades or smaller chords"
         )

@@ -131,7 +131,8 @@ def check_frenet_defined(centerline: Centerline, samples: int = FRAME_SCAN_SAMPL
     weakest = int(np.argmin(kappa))
     if kappa[weakest] < FRENET_MIN_CURVATURE:
         raise GeometryError(
-            f"the Frenet frame is undefined: the centerline's curvature vanishes near s = {s[weakest]:.3f} "
+            "the Frenet frame is undefined: the centerline's "
+            f"curvature vanishes near s = {s[weakest]:.3f} "
             f"(kappa = {kappa[weakest]:.2e} 1/mm); bend the centerline or set centerline.frame = "
             "'rotation_minimizing'"
         )

@@ -137,7 +137,8 @@ def _uiuc_table(lines: list[str], source: str) -> StationTable:
         _check_row_count(len(rows), source, number)
     if not rows:
         raise ParameterError(
-            f"{_WHAT} {source!r}: no station rows (expected 'r/R c/R beta' rows, or an APC PE0 table)"
+            f"{_WHAT} {source!r}: no station rows (expected "
+            "'r/R c/R beta' rows, or an APC PE0 table)"
         )
     table = np.array(rows)
     return StationTable(
@@ -179,7 +180,8 @@ def _pe0_table(lines: list[str], source: str) -> StationTable:
             continue  # the units line
         if len(fields) < _PE0_COLUMNS:
             raise ParameterError(
-                f"{_where(source, number)}: expected at least {_PE0_COLUMNS} columns (STATION CHORD "
+                f"{_where(source, number)}: expected at "
+                f"least {_PE0_COLUMNS} columns (STATION CHORD "
                 f"PITCH x3 SWEEP THICKNESS-RATIO TWIST), got {len(fields)}"
             )
         rows.append(_numbers(fields[:_PE0_COLUMNS], source, number))

@@ -306,9 +306,12 @@ def check_trailing_edge_fits(
     worst = int(np.argmin(thickest))
     if thickness_mm > TRAILING_EDGE_THICKNESS_LIMIT * thickest[worst]:
         raise GeometryError(
-            f"airfoil.trailing_edge_thickness = {thickness_mm:g} mm is too thick for the blade: near s = "
-            f"{float(np.asarray(s, dtype=float)[worst]):.3f} the section is only {thickest[worst]:.3g} mm thick "
-            f"(limit {TRAILING_EDGE_THICKNESS_LIMIT:g} x that); make the edge thinner or the sections thicker"
+            f"airfoil.trailing_edge_thickness = {thickness_mm:g} mm "
+            "is too thick for the blade: near s = "
+            f"{float(np.asarray(s, dtype=float)[worst]):.3f} the "
+            f"section is only {thickest[worst]:.3g} mm thick "
+            f"(limit {TRAILING_EDGE_THICKNESS_LIMIT:g} x that); "
+            "make the edge thinner or the sections thicker"
         )
 
 

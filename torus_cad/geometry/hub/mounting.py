@@ -118,8 +118,10 @@ def place_mounting(
     if mounting.set_screw_diameter_mm > 0.0 and clearance < needed:
         limit = max(2.0 * (clearance - MOUNTING_CLEARANCE_MM), 0.0)
         raise GeometryError(
-            f"hub.set_screw_diameter = {mounting.set_screw_diameter_mm:g} mm does not fit between the blades at "
-            f"mid-length: the best direction ({angle:.1f} deg) leaves {clearance:.3g} mm from its axis to a blade; "
+            f"hub.set_screw_diameter = {mounting.set_screw_diameter_mm:g} mm "
+            "does not fit between the blades at "
+            f"mid-length: the best direction ({angle:.1f} deg) "
+            f"leaves {clearance:.3g} mm from its axis to a blade; "
             f"allowed less than {limit:.3g} mm"
         )
     return replace(mounting, set_screw_angle_deg=angle)
@@ -129,8 +131,10 @@ def _check_bore(mounting: HubMounting, blade_min_radius_mm: float) -> None:
     limit = 2.0 * (blade_min_radius_mm - MOUNTING_CLEARANCE_MM)
     if mounting.bore_diameter_mm > 0.0 and mounting.bore_diameter_mm >= limit:
         raise GeometryError(
-            f"hub.bore_diameter = {mounting.bore_diameter_mm:g} mm cuts the blade roots buried in the hub, which "
-            f"reach down to radius {blade_min_radius_mm:.3f} mm; allowed less than {max(limit, 0.0):.3f} mm"
+            f"hub.bore_diameter = {mounting.bore_diameter_mm:g} mm "
+            "cuts the blade roots buried in the hub, which "
+            f"reach down to radius {blade_min_radius_mm:.3f} mm; "
+            f"allowed less than {max(limit, 0.0):.3f} mm"
         )
 
 
@@ -167,13 +171,15 @@ def _check_chamfer(
     )
     if mounting.chamfer_mm >= limit:
         fillet = (
-            f" with hub.root_fillet_radius = {root_fillet_radius_mm:g} mm (the fillet spreads about "
+            " with hub.root_fillet_radius = "
+            f"{root_fillet_radius_mm:g} mm (the fillet spreads about "
             f"{fillet_reach:g} mm over the hub)"
             if root_fillet_radius_mm > 0.0
             else ""
         )
         raise GeometryError(
-            f"hub.chamfer = {mounting.chamfer_mm:g} mm cuts into a blade root near the hub's end{fillet}; "
+            f"hub.chamfer = {mounting.chamfer_mm:g} mm cuts "
+            f"into a blade root near the hub's end{fillet}; "
             f"allowed less than {max(limit, 0.0):.3f} mm"
         )
 

@@ -240,7 +240,8 @@ class Naca5Airfoil(_ThicknessOnCamberLine):
         if reflex > 1 or position not in table or lift == 0 or thickness == 0:
             raise ParameterError(
                 f"airfoil.naca = {designation!r} is not a known 5-digit section; allowed: L 1-9, P "
-                f"{min(table)}-{max(table)} ({'reflexed' if reflex else 'standard'} mean line), Q 0 or 1, TT 01-99"
+                f"{min(table)}-{max(table)} ({'reflexed' if reflex else 'standard'}"
+                " mean line), Q 0 or 1, TT 01-99"
             )
         r, k1, *ratio = table[position]
         return cls(

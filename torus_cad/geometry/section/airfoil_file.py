@@ -340,7 +340,8 @@ def _numeric_rows(
         rows.append((number, values))
         if len(rows) > AIRFOIL_FILE_MAX_POINTS:
             raise BudgetError(
-                f"{_WHAT} {source!r} line {number}: more than {AIRFOIL_FILE_MAX_POINTS:,} points, the "
+                f"{_WHAT} {source!r} line {number}: more than "
+                f"{AIRFOIL_FILE_MAX_POINTS:,} points, the "
                 f"limit for a coordinate file (the checks of a section grow with its points)"
             )
         if not len(rows) % 4096:
@@ -369,8 +370,10 @@ def _lednicer_loop(
         have = max(len(data) - upper_count, 0)
         where = data[-1][0] if data else header_line
         raise ParameterError(
-            f"airfoil file {source!r} line {where}: Lednicer layout promises {upper_count} upper and {lower_count} "
-            f"lower points (line {header_line}) but the file ends after {min(len(data), upper_count)} upper and "
+            f"airfoil file {source!r} line {where}: Lednicer "
+            f"layout promises {upper_count} upper and {lower_count} "
+            f"lower points (line {header_line}) but the file "
+            f"ends after {min(len(data), upper_count)} upper and "
             f"{have} lower points" + ("; only one surface is given" if have == 0 else "")
         )
     if len(data) > upper_count + lower_count:
@@ -414,8 +417,10 @@ def _selig_loop(
         or leading > len(loop) - MINIMUM_POINTS_PER_SURFACE
     ):
         raise ParameterError(
-            f"airfoil file {source!r} line {lines[-1]}: only one surface is given (the coordinates end here; a Selig "
-            "loop runs from the trailing edge over one surface to the leading edge and back over the other, "
+            f"airfoil file {source!r} line {lines[-1]}: only one "
+            "surface is given (the coordinates end here; a Selig "
+            "loop runs from the trailing edge over one surface "
+            "to the leading edge and back over the other, "
             f"at least {MINIMUM_POINTS_PER_SURFACE} points on each)"
         )
     return loop, lines

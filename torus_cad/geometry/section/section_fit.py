@@ -223,7 +223,8 @@ def _check_trailing_edge_resolved(
         a, b = (start - centre) @ basis.T, (end - centre) @ basis.T
         if _polylines_cross(a[1:], b[:-1]):  # skip the shared trailing-edge point itself
             raise GeometryError(
-                f"resolution.points = {points} is too few for this airfoil's trailing edge: the section curve "
+                f"resolution.points = {points} is too few for "
+                "this airfoil's trailing edge: the section curve "
                 "crosses itself there (a thin, hooked trailing edge); raise resolution.points "
                 f"(e.g. to {max(2 * points, 48)}), the thickness, or move camber_position forward"
             )

@@ -60,7 +60,8 @@ def c1_fillet(solid: cq.Solid, face_parts: Sequence[int]) -> tuple[cq.Solid, tup
     divide.SetPCurveCriterion(GeomAbs_C0)
     if not divide.Perform():
         raise KernelError(
-            "OpenCascade could not split the root fillet's C0 faces (ShapeUpgrade_ShapeDivideContinuity)"
+            "OpenCascade could not split the root fillet's "
+            "C0 faces (ShapeUpgrade_ShapeDivideContinuity)"
         )
     divided = divide.Result()
     context = divide.GetContext()

@@ -181,8 +181,10 @@ def _check_tolerance(solid: cq.Solid, radius_mm: float) -> None:
     greatest = ShapeAnalysis_ShapeTolerance().Tolerance(solid.wrapped, 1)
     if greatest > FILLET_TOLERANCE_MAX_MM:
         raise KernelError(
-            f"root fillet failed at hub.root_fillet_radius = {radius_mm:g} mm: OpenCascade's fillet "
-            f"parts from the blade or hub by up to {greatest:.2g} mm (over {FILLET_TOLERANCE_MAX_MM:g} mm)"
+            "root fillet failed at hub.root_fillet_radius "
+            f"= {radius_mm:g} mm: OpenCascade's fillet "
+            "parts from the blade or hub by up to "
+            f"{greatest:.2g} mm (over {FILLET_TOLERANCE_MAX_MM:g} mm)"
         )
 
 
@@ -222,7 +224,8 @@ def fillet_failure(
     )
     if tight_bend_mm is not None:
         hint += (
-            f"; a blade bends concavely with a {tight_bend_mm:.3g} mm radius at the hub, too tight for the ball: "
+            f"; a blade bends concavely with a {tight_bend_mm:.3g} mm "
+            "radius at the hub, too tight for the ball: "
             f"hub.root_fillet_tight_bends = 'reduce' makes the fillet smaller there"
         )
     return KernelError(
