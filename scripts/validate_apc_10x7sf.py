@@ -168,7 +168,8 @@ def main() -> int:
         "--geometry",
         default="pe0",
         choices=sorted(DESIGNS),
-        help="the blade from APC's station table with a NACA 4412 (pe0, default) or with the E63 (e63), or "
+        help="the blade from APC's station table with a "
+        "NACA 4412 (pe0, default) or with the E63 (e63), or "
         "UIUC's measured geometry (uiuc)",
     )
     parser.add_argument("--processes", type=int, default=2)

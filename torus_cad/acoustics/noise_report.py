@@ -161,7 +161,8 @@ def evaluate_noise(
         "speed_of_sound_m_s": medium.speed_of_sound_m_s,
         "reference_pressure_pa": REFERENCE_PRESSURE_PA,
         "surface_pressure_thrust_n": float(force[2]),
-        "conventions": "observer angle from +z (the thrust's direction, ahead of the propeller; 90 = the rotor "
+        "conventions": "observer angle from +z (the thrust's "
+        "direction, ahead of the propeller; 90 = the rotor "
         "plane) in the plane x-z, distance from the hub; "
         "SPL dB re 20 uPa of the rms pressure of each "
         "blade-passing harmonic; oaspl_db sums every blade-passing harmonic the samples resolve, "

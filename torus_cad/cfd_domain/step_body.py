@@ -128,7 +128,8 @@ class StepPropeller:
             "hub_length_mm": self.hub_length_mm,
             "chord_mm": self.body.chord_mm,
             "centroid_mm": list(self.centroid_mm),
-            "measures": "D: twice the largest distance from the axis (BRepExtrema); hub: the largest ring about "
+            "measures": "D: twice the largest distance from the "
+            "axis (BRepExtrema); hub: the largest ring about "
             "the axis through the centroid lying wholly "
             "inside the solid, and the axial extent of a "
             "ring inside its wall; chord: CHORD_PER_DIAMETER x D",

@@ -207,7 +207,8 @@ def _add_mesh_parser(commands: Any) -> None:
         commands,
         "mesh",
         help="closed triangle mesh straight from the spec's math (STL, OBJ groups, PLY, VTK)",
-        description="Mesh the propeller of CONFIG (or the default) from the spec's math: each blade's structured "
+        description="Mesh the propeller of CONFIG (or the "
+        "default) from the spec's math: each blade's structured "
         "grid at exactly --sections x --points (points "
         "equally spaced in arc length, spec §5), the hub as a "
         "§6.2 grid with its bore, D-flat, set-screw hole and "
@@ -257,7 +258,8 @@ def _add_cfd_parser(commands: Any) -> None:
         commands,
         "cfd",
         help="fluid domain and tetrahedral volume mesh for a rotating-propeller simulation (gmsh)",
-        description="Mesh the fluid around the propeller of CONFIG (or the default) with gmsh: an outer "
+        description="Mesh the fluid around the propeller "
+        "of CONFIG (or the default) with gmsh: an outer "
         "cylinder, a rotating-zone cylinder around the "
         "propeller, conformal at their interface, tetrahedra "
         "refined near the blades. Writes <name>_cfd.msh (v4.1), <name>_cfd_v2.msh (v2.2 ASCII, for "
@@ -291,7 +293,8 @@ def _add_simulate_parser(commands: Any) -> None:
         commands,
         "simulate",
         help="run the propeller in OpenFOAM: thrust, torque, power, CT, CP (simulate extra)",
-        description="Mesh the fluid around the propeller of CONFIG (or the default) at --level, write a complete "
+        description="Mesh the fluid around the propeller of "
+        "CONFIG (or the default) at --level, write a complete "
         "OpenFOAM case (<name>_case/: steady MRF, k-omega "
         "SST, an Allrun that repeats the run) and run it with "
         "simpleFoam through foamlib. Writes <name>_performance.json "
@@ -324,7 +327,8 @@ def _add_simulate_parser(commands: Any) -> None:
     speed.add_argument(
         "--rpm",
         type=number("--rpm", rpm),
-        help=f"revolutions per minute, {range_help(rpm)} and at most the design's rpm at helical tip "
+        help=f"revolutions per minute, {range_help(rpm)} and "
+        "at most the design's rpm at helical tip "
         "Mach 0.6, in the design's own sense of rotation (a 'cw' design clockwise seen from +z)",
     )
     speed.add_argument(
@@ -552,7 +556,8 @@ def build_parser_and_commands() -> tuple[
         dest="formats",
         action="append",
         metavar="FORMAT[,FORMAT]",
-        help="files to write instead of the design's export.formats, repeatable or comma-separated: "
+        help="files to write instead of the design's "
+        "export.formats, repeatable or comma-separated: "
         "step, stl, 3mf (default step,stl)",
     )
     build.add_argument(
@@ -580,7 +585,8 @@ def build_parser_and_commands() -> tuple[
         commands,
         "check",
         help="check a design before building it: every refusal that needs no kernel, in a second",
-        description="Run every check that can refuse the design of CONFIG (or the default) before OpenCascade "
+        description="Run every check that can refuse the "
+        "design of CONFIG (or the default) before OpenCascade "
         "builds anything, as 'torus-cad build' runs them: "
         "the parameters, the design targets, the blade's ends "
         "inside the hub's inset, no fold-over inside a bend, "
@@ -617,7 +623,8 @@ def build_parser_and_commands() -> tuple[
         commands,
         "preview",
         help="render a PNG picture: a view from above and a view along the axis",
-        description="Build the propeller of CONFIG (or the default) and render a shaded picture of it off-screen: "
+        description="Build the propeller of CONFIG (or the "
+        "default) and render a shaded picture of it off-screen: "
         "a view from above that shows every blade and a view "
         "along the spin axis, each blade in its own colour.",
     )
@@ -711,7 +718,8 @@ def build_parser_and_commands() -> tuple[
         "--density",
         type=_DENSITY,
         default=None,
-        help=f"material density for the mass, {range_help(DENSITY_RANGE, 'g/cm^3')} (default: the sweep "
+        help="material density for the mass, "
+        f"{range_help(DENSITY_RANGE, 'g/cm^3')} (default: the sweep "
         "file's, else 1.24)",
     )
     sweep.add_argument("--no-stl", action="store_true", help="write STEP and JSON only")
@@ -719,7 +727,8 @@ def build_parser_and_commands() -> tuple[
         "--time-limit",
         type=number("--time-limit", DESIGN_TIME_RANGE, "s"),
         metavar="SECONDS",
-        help=f"stop a design that runs longer and record it as 'timeout', {range_help(DESIGN_TIME_RANGE, 's')} "
+        help="stop a design that runs longer and record it "
+        f"as 'timeout', {range_help(DESIGN_TIME_RANGE, 's')} "
         "(default: the sweep file's time_limit_s, else 300; local pool only)",
     )
     sweep.add_argument(
@@ -731,7 +740,8 @@ def build_parser_and_commands() -> tuple[
     optimize = commands.add_parser(
         "optimize",
         help="search the design space for the best designs (optuna; local pool or Dask)",
-        description="Run the study of STUDY.toml: optuna asks for designs within the [vary] ranges, each is built "
+        description="Run the study of STUDY.toml: optuna asks "
+        "for designs within the [vary] ranges, each is built "
         "(and simulated for performance.* metrics) into "
         "OUT/trials/<number>/, its report's numbers answer the "
         "objectives and constraints. Writes OUT/results.csv "
@@ -801,7 +811,8 @@ def build_parser_and_commands() -> tuple[
     studio.add_argument(
         "--files",
         metavar="FOLDER",
-        help="a folder whose files (e.g. airfoil coordinate files) designs uploaded in the page may "
+        help="a folder whose files (e.g. airfoil "
+        "coordinate files) designs uploaded in the page may "
         "name; otherwise they may name only the files uploaded with them",
     )
     studio.set_defaults(handler=run_command)

@@ -114,7 +114,8 @@ def write_ply(mesh: LabeledMesh, path: Path, name: str) -> None:
     header = (
         f"ply\nformat binary_little_endian 1.0\ncomment torus_cad surface mesh {name}, mm; part: "
         + ", ".join(f"{index} = {part_name}" for index, part_name in enumerate(mesh.part_names))
-        + f"\nelement vertex {len(mesh.vertices)}\nproperty double x\nproperty double y\nproperty double z\n"
+        + f"\nelement vertex {len(mesh.vertices)}\nproperty "
+        "double x\nproperty double y\nproperty double z\n"
         f"element face {len(mesh.faces)}\nproperty list "
         "uchar int vertex_indices\nproperty int part\n"
         "end_header\n"

@@ -225,7 +225,8 @@ class SimulateTable(Section):
     levels: list[Annotated[StudyLevel, Field(strict=False)]] = Field(
         default_factory=list,
         json_schema_extra={"unit": ""},
-        description="levels, cheapest first (vortex, coarse, medium, fine): every trial runs the first, those the "
+        description="levels, cheapest first (vortex, coarse, "
+        "medium, fine): every trial runs the first, those the "
         "pruner keeps climb to the next (instead of level)",
     )
     iterations: int = param(

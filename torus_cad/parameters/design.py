@@ -268,7 +268,8 @@ class Airfoil(Section):
     trailing_edge_shape: TrailingEdgeShape = param(
         TrailingEdgeShape.ROUND,
         strict=False,
-        doc="end of a blunt trailing edge (and of a coordinate file's open one): 'round', a cap tangent to both "
+        doc="end of a blunt trailing edge (and of a coordinate "
+        "file's open one): 'round', a cap tangent to both "
         "surfaces (no sharp edge; the root fillet works with "
         "it), or 'flat', a straight base with two corners",
     )

@@ -730,7 +730,8 @@ def _report(
             "inflow_k_m2_s2": k,
             "inflow_omega_1_s": omega,
         },
-        "conventions": "y_plus: min / area-weighted mean / max over the propeller's faces at the last iteration "
+        "conventions": "y_plus: min / area-weighted mean / "
+        "max over the propeller's faces at the last iteration "
         "(OpenFOAM's yPlus function object); thrust > 0 pushes the fluid "
         "toward -z (the design's way); torque > 0 resists the design's "
         "rotation; CT = T/(rho n^2 D^4), CP = P/(rho n^3 D^5), n in rev/s, D the tip diameter",

@@ -349,7 +349,8 @@ def _report(request: VortexRequest, result: VortexResult, start: float) -> dict[
             "viscosity_m2_s": fluid.viscosity_m2_s,
         },
         "wall_seconds": time.perf_counter() - start,
-        "conventions": "thrust > 0 pushes the air toward -z (the design's way); torque > 0 resists the design's "
+        "conventions": "thrust > 0 pushes the air toward -z "
+        "(the design's way); torque > 0 resists the design's "
         "rotation; CT = T/(rho n^2 D^4), CP = P/(rho n^3 D^5), n in rev/s, D the tip diameter; "
         "polars.low_confidence_strips: the centerline "
         "parameters s of strips whose polar NeuralFoil "
