@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Benchmark the generator: stage times, scaling, and the spec's mesh-boolean route side by side.
 
-    python scripts/bench.py                    # full run, a few minutes; table + bench_out/bench.json
+    python scripts/bench.py
+        # full run, a few minutes; table + bench_out/bench.json
     python scripts/bench.py --runs 3 --quick   # fewer runs and scaling points
 
 Never part of the test suite. Sections of the report:

@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 """Benchmark reading an airfoil coordinate file: parse + crossing checks, against the point count.
 
-    python scripts/bench_airfoil_file.py                 # 200 ... 20,000 points, and the all-pairs reference
-    python scripts/bench_airfoil_file.py --points 94000  # one size (above the limit: refused, timed)
+    python scripts/bench_airfoil_file.py        # 200 ... 20,000 points, and the all-pairs reference
+    python scripts/bench_airfoil_file.py --points 94000
+                                                # one size (above the limit: refused, timed)
 
 Each file is a NACA 2412 in Selig order with cosine-spaced stations, written to a temp folder and
 read with :func:`torus_cad.geometry.section.airfoil_file.read_airfoil_file`. The reference column

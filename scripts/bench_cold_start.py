@@ -2,7 +2,8 @@
 against a bare OCP script that makes the same part and writes STEP + STL, in the same run::
 
     python scripts/bench_cold_start.py --runs 5
-    python scripts/bench_cold_start.py --write-reference /tmp/reference   # the script and its data alone
+    python scripts/bench_cold_start.py --write-reference /tmp/reference
+        # the script and its data alone
 
 The reference script (:data:`REFERENCE_SCRIPT`) imports only the OCP modules it uses and lofts the
 default design's own sections: the 25 section B-splines the build lofts (their poles and shared

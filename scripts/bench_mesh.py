@@ -2,7 +2,8 @@
 """Benchmark `torus-cad mesh` against the spec's PyVista route, and `torus-cad cfd`, on the default
 design.
 
-    python scripts/bench_mesh.py              # 100 x 400 and 400 x 2000, PyVista at both, cfd: ~15-40 min
+    python scripts/bench_mesh.py
+        # 100 x 400 and 400 x 2000, PyVista at both, cfd: ~15-40 min
     python scripts/bench_mesh.py --quick      # 100 x 400 only (PyVista too), and cfd
     python scripts/bench_mesh.py --no-pyvista # torus-cad only
 

@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Benchmark `torus-cad simulate` on the default design: each level, then the convergence study.
 
-    python scripts/bench_simulate.py                      # coarse, medium, fine at 10000 rpm in still air
+    python scripts/bench_simulate.py
+        # coarse, medium, fine at 10000 rpm in still air
     python scripts/bench_simulate.py --levels coarse      # one level
     python scripts/bench_simulate.py --iterations 100 --processes 2
     python scripts/bench_simulate.py --design examples/apc_10x7sf_pe0.toml --rpm 5000

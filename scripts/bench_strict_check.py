@@ -1,9 +1,10 @@
 #!/usr/bin/env python3
 """What the strict validity check costs against the build, per design.
 
-    python scripts/bench_strict_check.py                  # default, workshop_motor_mount, workshop_fillet
+    python scripts/bench_strict_check.py            # default, workshop_motor_mount, workshop_fillet
     python scripts/bench_strict_check.py examples/cooling_fan_7blade.toml --runs 3
-    python scripts/bench_strict_check.py --fuzz 100       # fuzz counts: tried / built / refused / strict-valid
+    python scripts/bench_strict_check.py --fuzz 100
+        # fuzz counts: tried / built / refused / strict-valid
 
 For each design (median of ``--runs`` builds): the build's stages without the strict check, the
 strict check as the build runs it (BRepCheck, then BRepAlgoAPI_Check with small edges and

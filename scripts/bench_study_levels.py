@@ -8,7 +8,8 @@ conversion, solver, noise) with the solver runs of a thrust search; then the noi
 simulation::
 
     python scripts/bench_study_levels.py OUT
-    python scripts/bench_study_levels.py OUT --study STUDY.toml --trials 3   # run (or continue) the study first
+    python scripts/bench_study_levels.py OUT --study STUDY.toml --trials 3
+        # run (or continue) the study first
 
 A study run here uses one local worker (one CFD at a time on a shared machine); run it under
 ``nice``.

@@ -1,7 +1,7 @@
 """Benchmark (not a test): designs per minute of a sweep with 1 and 2 local workers and a 2-worker
 Dask LocalCluster.
 
-    python scripts/bench_sweep.py                       # the built-in 12-design sweep, full resolution, STEP + STL
+    python scripts/bench_sweep.py        # the built-in 12-design sweep, full resolution, STEP + STL
     python scripts/bench_sweep.py --sweep examples/sweep_example.toml
 
 Each configuration runs the whole sweep from scratch into its own folder under bench_out/sweep/

@@ -2,8 +2,9 @@
 """Benchmark the vortex solver (``simulate --solver vortex``) on the default design, beside
 OpenFOAM's coarse level.
 
-    python scripts/bench_vortex.py                 # one point, the solver in this process and the whole command
-    python scripts/bench_vortex.py --cfd           # and `torus-cad simulate --level coarse` of the same point
+    python scripts/bench_vortex.py     # one point, the solver in this process and the whole command
+    python scripts/bench_vortex.py --cfd
+                                       # and `torus-cad simulate --level coarse` of the same point
     python scripts/bench_vortex.py --design examples/apc_10x7sf.toml --rpm 5000
 
 Never part of the test suite. Prints, for one operating point at the default lattice: the solver's

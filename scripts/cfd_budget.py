@@ -1,7 +1,8 @@
 """Calibrate and check the CFD budget's estimate (torus_cad/cfd_domain/estimate.py) against real
 runs.
 
-    python scripts/cfd_budget.py                 # the default design at a few [cfd] settings (~10-20 min)
+    python scripts/cfd_budget.py
+        # the default design at a few [cfd] settings (~10-20 min)
     python scripts/cfd_budget.py --quick         # the two coarsest settings only
     python scripts/cfd_budget.py --examples      # every shipped example at its own [cfd] (~30 min)
     python scripts/cfd_budget.py --examples multirotor_5in_3blade cooling_fan_7blade

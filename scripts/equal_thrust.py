@@ -4,7 +4,8 @@ each.
 
     python scripts/equal_thrust.py                          # 0.05 N, coarse level, still air
     python scripts/equal_thrust.py --thrust 0.08 --level medium --out equal_out
-    python scripts/equal_thrust.py --solver vortex --out equal_vortex  # the vortex solver (seconds, no mesh)
+    python scripts/equal_thrust.py --solver vortex --out equal_vortex
+        # the vortex solver (seconds, no mesh)
 
 Runs ``torus-cad simulate --thrust N`` on the default toroidal design (no design file) and on
 ``examples/compare/conventional_45mm_3blade.toml`` (a conventional propeller of the same tip diameter,

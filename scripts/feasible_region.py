@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Map the default design's feasible region over two design variables with the kernel-free check.
 
-    python scripts/feasible_region.py                        # 41 x 41 designs -> docs/images/feasible_region.png
+    python scripts/feasible_region.py           # 41 x 41 designs -> docs/images/feasible_region.png
     python scripts/feasible_region.py --grid 11 --out region.png
 
 Every point of the grid is the default propeller with the centerline's height (z_L of P2 and P3,

@@ -3,7 +3,8 @@
 
     python scripts/fillet_rate.py 160                # seeds 0..159, radius 0.5 mm
     python scripts/fillet_rate.py 160 --radius 1.0 --seed 1000
-    python scripts/fillet_rate.py --seeds 32 55 --fillet-shape polynomial   # another cross-section law
+    python scripts/fillet_rate.py --seeds 32 55 --fillet-shape polynomial
+        # another cross-section law
 
 Each design comes from the fuzz sampler (:func:`studies.fuzz.random_design_dict`, the
 designs ``scripts/fuzz.py`` draws) with ``hub.root_fillet_radius`` set. Designs refused before

@@ -40,7 +40,9 @@ def build_parser() -> argparse.ArgumentParser:
     defaults = study.StudyConfig()
     parser = _OneLineErrorParser(
         prog="function_space_study.py",
-        description="Monte Carlo function-space study of spec 2.4-2.5 (which transform family fits best).",
+        description=(
+            "Monte Carlo function-space study of spec 2.4-2.5 (which transform family fits best)."
+        ),
     )
     parser.add_argument(
         "--samples", type=int, default=defaults.samples, help="N, number of random functions"

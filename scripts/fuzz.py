@@ -1,10 +1,10 @@
 #!/usr/bin/env python3
 """Fuzz the generator: build N random in-range designs and tally what happened.
 
-    python scripts/fuzz.py 1000                 # seeds 0..999, 2 workers, files written and read back
-    python scripts/fuzz.py 200 --seed 5000      # seeds 5000..5199
+    python scripts/fuzz.py 1000               # seeds 0..999, 2 workers, files written and read back
+    python scripts/fuzz.py 200 --seed 5000    # seeds 5000..5199
     python scripts/fuzz.py --replay fuzz_out/fuzz_17.toml [more.toml ...]
-    python scripts/fuzz.py 30 --build-all        # build even what the pre-screen refuses: do they agree?
+    python scripts/fuzz.py 30 --build-all   # build even what the pre-screen refuses: do they agree?
 
 Every design comes from :func:`studies.fuzz.random_design_dict` (the same sampler the
 hypothesis tests use) and runs on the batch runner that sweeps use (:mod:`torus_cad.batch`):

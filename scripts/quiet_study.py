@@ -3,9 +3,10 @@
 against the study's base design and a conventional propeller of the same diameter, all at the
 study's target thrust, and what the study cost.
 
-    torus-cad optimize examples/optimize_quiet.toml --out OUT --workers 2     # the study itself, first
-    python scripts/quiet_study.py OUT                                          # then this
-    python scripts/quiet_study.py OUT --levels vortex medium                   # both solvers side by side
+    torus-cad optimize examples/optimize_quiet.toml --out OUT --workers 2  # the study itself, first
+    python scripts/quiet_study.py OUT                                      # then this
+    python scripts/quiet_study.py OUT --levels vortex medium
+        # both solvers side by side
 
 Reads ``OUT/<name>_study.json`` (the Pareto designs and the worker seconds of each mesh level) and
 ``OUT/results.csv`` (every trial at the level it reached). The chosen design is the Pareto design

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Does the coarse level rank designs as the fine one does? Spearman's rho over toroidal designs.
 
-    python scripts/rank_levels.py                       # 8 designs, coarse and fine, 10000 rpm, still air
+    python scripts/rank_levels.py                 # 8 designs, coarse and fine, 10000 rpm, still air
     python scripts/rank_levels.py --levels coarse medium --processes 2 --out rank_out
     python scripts/rank_levels.py --designs default pitch_low two_blades   # a subset
 

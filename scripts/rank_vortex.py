@@ -2,8 +2,9 @@
 """Does the vortex solver rank toroidal designs as OpenFOAM's fine level does? The eight designs of
 rank_levels.py at 10,000 rpm in still air, Spearman's rho of thrust and of figure of merit.
 
-    python scripts/rank_vortex.py                              # the fine level's figures as the docs give them
-    python scripts/rank_vortex.py --cfd rank_out/rank_levels.json   # or those of your own rank_levels.py run
+    python scripts/rank_vortex.py                   # the fine level's figures as the docs give them
+    python scripts/rank_vortex.py --cfd rank_out/rank_levels.json
+                                                    # or those of your own rank_levels.py run
     python scripts/rank_vortex.py --chordwise 6 --spanwise 20
 
 Prints one markdown table (thrust and figure of merit: fine CFD, the vortex solver with its polars

@@ -2,9 +2,10 @@
 """Faults of every shipped design's STEP file read back, by BOPAlgo_ArgumentAnalyzer with every
 test.
 
-    python scripts/step_readback_check.py                       # the default and every examples/*.toml design
+    python scripts/step_readback_check.py             # the default and every examples/*.toml design
     python scripts/step_readback_check.py examples/workshop_fillet.toml
-    python scripts/step_readback_check.py --fillet 0.5 --fast   # each with a 0.5 mm root fillet, as the build checks
+    python scripts/step_readback_check.py --fillet 0.5 --fast
+        # each with a 0.5 mm root fillet, as the build checks
 
 For each design: the build's wall time, the faults of the solid in memory and of its STEP file as
 OpenCascade's STEP reader gives it back (torus_cad.kernel.step_readback: every test on, as FreeCAD's
@@ -81,7 +82,9 @@ def main(argv: list[str] | None = None) -> int:
         type=float,
         default=None,
         metavar="R",
-        help="build each design with a root fillet of R mm (without its chamfer if that is refused)",
+        help=(
+            "build each design with a root fillet of R mm (without its chamfer if that is refused)"
+        ),
     )
     parser.add_argument(
         "--fast",

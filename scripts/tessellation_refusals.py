@@ -2,7 +2,7 @@
 """Count the designs refused for their tessellation alone: built strictly valid, then their STL
 refused.
 
-    python scripts/tessellation_refusals.py                       # the fuzz seeds of the notes and every example
+    python scripts/tessellation_refusals.py          # the fuzz seeds of the notes and every example
     python scripts/tessellation_refusals.py --seeds 0 1 2 --no-examples
 
 Each design is built (``build_propeller``); a built one has its checked STL written

@@ -1,7 +1,8 @@
 """Measure every test and write the test tiers to ``tests/tiers.json``.
 
-    python3 scripts/test_tiers.py                    # run the suite (pytest -n 2), then the fast tier alone
-    python3 scripts/test_tiers.py --junit run.xml    # take the suite's durations from an earlier run
+    python3 scripts/test_tiers.py
+        # run the suite (pytest -n 2), then the fast tier alone
+    python3 scripts/test_tiers.py --junit run.xml   # take the suite's durations from an earlier run
 
 Tiers (``tests/conftest.py`` marks them):
 

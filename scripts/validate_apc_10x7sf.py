@@ -2,7 +2,7 @@
 """Validate ``torus-cad simulate`` against the wind tunnel: the APC 10x7 Slow Flyer beside UIUC's
 measurements.
 
-    python scripts/validate_apc_10x7sf.py                          # coarse level, every point, 2 processes
+    python scripts/validate_apc_10x7sf.py                   # coarse level, every point, 2 processes
     python scripts/validate_apc_10x7sf.py --level medium --out validation_out
     python scripts/validate_apc_10x7sf.py --static 5000 --advance-ratios   # one static point only
 

@@ -4,7 +4,7 @@ at 4000, 5000 and 5987 rpm (the last static point measured) and the 5000 rpm swe
 and 0.6, as validate_apc_10x7sf.py does for
 OpenFOAM.
 
-    python scripts/validate_vortex_apc.py                                   # UIUC's blade, NACA 4412
+    python scripts/validate_vortex_apc.py                                  # UIUC's blade, NACA 4412
     python scripts/validate_vortex_apc.py --design examples/apc_10x7sf_e63.toml
     python scripts/validate_vortex_apc.py --inviscid --chordwise 8 --spanwise 30
 

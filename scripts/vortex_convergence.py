@@ -4,7 +4,7 @@ in every direction (rings across the chord, strips along the blade, wake steps a
 and torque of each, Richardson's extrapolation and Roache's GCI_fine
 (torus_cad.simulate.coefficients.richardson, as simulate --convergence does for OpenFOAM's levels).
 
-    python scripts/vortex_convergence.py                                   # the default design, 10000 rpm
+    python scripts/vortex_convergence.py                             # the default design, 10000 rpm
     python scripts/vortex_convergence.py --design examples/apc_10x7sf.toml --rpm 5000
     python scripts/vortex_convergence.py --coarsest 4 15 12 --ratio 1.5 --inviscid
 

@@ -651,7 +651,9 @@ class StudyResult:
             "grid": f"numpy.linspace(0, 1, {self.config.points})",
             "metrics": {
                 "mse": "(1/n) sum_i (y_i - f(s_i))^2  (spec 2.4.4)",
-                "range_normalised_sse": "sum_i ((y_i - f(s_i)) / (max y - min y))^2  (what Table 1 averages)",
+                "range_normalised_sse": (
+                    "sum_i ((y_i - f(s_i)) / (max y - min y))^2  (what Table 1 averages)"
+                ),
             },
             "sinusoid_start": self.config.sinusoid_start,
             "sinusoid_not_converged": self.sinusoid_not_converged,

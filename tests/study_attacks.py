@@ -4,8 +4,10 @@ the ``torus-cad verify`` command, the file system).
 
 Used by tests/test_study_signals.py, and as a script for the attack table::
 
-    python3 tests/study_attacks.py optimize startup 2.0 4.5 8     # 8 SIGTERMs, 2.0-4.5 s after the start
-    python3 tests/study_attacks.py optimize finish 0.0 3.0 8      # 0-3 s after the results table appears
+    python3 tests/study_attacks.py optimize startup 2.0 4.5 8
+        # 8 SIGTERMs, 2.0-4.5 s after the start
+    python3 tests/study_attacks.py optimize finish 0.0 3.0 8
+        # 0-3 s after the results table appears
 """
 
 from __future__ import annotations

@@ -15,19 +15,19 @@
     "handedness" = ["cw", "ccw"]         # strings (or true / false): a choice
 
     [[objective]]
-    metric = "mass_g"            # a number of the build report (dotted), or performance.* (runs simulate)
+    metric = "mass_g"  # a number of the build report (dotted), or performance.* (runs simulate)
     direction = "minimize"
 
     [constraints]
     "printability.thinnest_wall_mm" = { min = 0.8 }
 
-    [simulate]                   # only with a performance.* metric
-    rpm = 8000.0                 # or thrust = 1.0 (N): each trial solved to that thrust, as simulate --thrust
-    airspeed = 0.0               # m/s
-    level = "coarse"             # or levels = ["coarse", "medium"]: cheap levels screen, good designs climb
+    [simulate]         # only with a performance.* metric
+    rpm = 8000.0       # or thrust = 1.0 (N): each trial solved to that thrust, as simulate --thrust
+    airspeed = 0.0     # m/s
+    level = "coarse"   # or levels = ["coarse", "medium"]: cheap levels screen, good designs climb
 
-    [pruner]                     # only with two or more levels: which trials climb
-    kind = "median"              # median | halving (one objective) | dominated | none
+    [pruner]           # only with two or more levels: which trials climb
+    kind = "median"    # median | halving (one objective) | dominated | none
 
 The tables are checked by pydantic models of the design schema's kind (strict types, no
 unknown keys, one line naming the key); the varied keys and their ranges by the schema itself,

@@ -4,8 +4,8 @@
 
     from torus_cad.parameters import PropellerParameters, resolve_parameters
     params = resolve_parameters("design.toml", {"blades": 4})
-    params.hub.radius            # mm
-    params.geometry()            # the kernel-free geometry (torus_cad.geometry.blade.propeller_geometry)
+    params.hub.radius       # mm
+    params.geometry()       # the kernel-free geometry (torus_cad.geometry.blade.propeller_geometry)
 """
 
 from __future__ import annotations
