@@ -8,10 +8,10 @@ each.
         # the vortex solver (seconds, no mesh)
 
 Runs ``torus-cad simulate --thrust N`` on the default toroidal design (no design file) and on
-``examples/compare/conventional_45mm_3blade.toml`` (a conventional propeller of the same tip diameter,
-blade count and hub), each as a fresh process; prints a Markdown table (the noise columns: overall
-SPL and dB(A) of the steady-loading and thickness tones at 1 m in the rotor's plane, from the
-report's ``noise``) and writes ``OUT/equal_thrust.json``
+``examples/compare/conventional_45mm_3blade.toml`` (a conventional propeller of the same tip
+diameter, blade count and hub), each as a fresh process; prints a Markdown table (the noise columns:
+overall SPL and dB(A) of the steady-loading and thickness tones at 1 m in the rotor's plane, from
+the report's ``noise``) and writes ``OUT/equal_thrust.json``
 and a bar chart (``--picture``, default ``OUT/equal_thrust.png``). Never part of the test suite
 (two thrust searches, a few solver runs each).
 """

@@ -148,7 +148,8 @@ class StudyConfig:
     sinusoid_start: SinusoidStart = "fft"
     """Start of the sinusoid fit: ``"fft"`` (sound) or ``"ones"`` (the spec author's)."""
     generator_draw: GeneratorDraw = "random"
-    """``"random"``: generator uniform per sample; ``"balanced"``: sample i uses generator i mod 4."""
+    """``"random"``: generator uniform per sample; ``"balanced"``: sample i uses
+    generator i mod 4."""
     knot_placement: KnotPlacement = "even"
     """Piecewise-linear knots: ``"even"`` over [0, 1] or ``"random"`` sorted U(0, 1) positions."""
     sinusoid_max_evaluations: int = 200
@@ -566,7 +567,8 @@ class StudyResult:
     """Per candidate name, the fitted parameters, shape (N, p)."""
     sinusoid: SinusoidFits
     timings: dict[str, float] = field(default_factory=dict)
-    """Wall-clock seconds of the phases (``draw``, ``linear_fits``, ``sinusoid_fits``, ``total``)."""
+    """Wall-clock seconds of the phases
+    (``draw``, ``linear_fits``, ``sinusoid_fits``, ``total``)."""
 
     @property
     def generator_names(self) -> list[str]:

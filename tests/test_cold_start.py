@@ -16,7 +16,7 @@ import json, sys
 from torus_cad.cli import main
 code = main(["build", "--out", sys.argv[1], "-q", "--set", "resolution.sections=12", "--set", "resolution.points=40"])
 print(json.dumps({"code": code, "loaded": sorted({name.split(".")[0] for name in sys.modules})}))
-"""
+"""  # noqa: E501 (code or text written out verbatim)
 
 
 def test_the_build_loads_no_cadquery_and_writes_its_files(tmp_path):

@@ -220,8 +220,8 @@ def test_cli_writes_files_report_and_one_line(tmp_path, capsys):
 
 
 def test_mesh_stages_are_announced_in_order_and_timed_by_the_build_stage_timer(tmp_path):
-    """One StageTimer (torus_cad.runtime.stage_timer) for the build, mesh and CFD pipelines: the mesh's
-    own copy is gone."""
+    """One StageTimer (torus_cad.runtime.stage_timer) for the build, mesh and CFD pipelines: the
+    mesh's own copy is gone."""
     from torus_cad.mesh.pipeline import MeshStage, write_surface_mesh
 
     seen: list[str] = []

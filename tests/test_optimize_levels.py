@@ -209,7 +209,8 @@ def test_the_shipped_quiet_study_reads_with_its_target_thrust_noise_objective_an
             {"study": {"trials": 4, "sampler": "cmaes"}},
             "study.sampler = 'cmaes' cannot take [simulate] thrust",
         ),
-        # a range's NaN or infinite end: the parameter's own range named, not the type the schema tried
+        # a range's NaN or infinite end: the parameter's own range named, not the type the schema
+        # tried
         (
             {"vary": {"hub.length": [math.nan, 140.0]}},
             "vary.'hub.length' low must be a finite number in (2, 2000] mm, got nan",
@@ -226,7 +227,7 @@ def test_bad_new_keys_are_one_line_naming_the_field(tables, message):
     assert message in str(raised.value) and "\n" not in str(raised.value)
 
 
-def test_a_thrust_no_propeller_of_the_bases_diameter_reaches_and_an_observer_inside_the_rotor_are_refused(
+def test_a_thrust_no_propeller_of_the_bases_diameter_reaches_and_an_observer_inside_the_rotor_are_refused(  # noqa: E501 (the test name is its sentence)
     tmp_path,
 ):
     shutil.copy(BASE, tmp_path / "light_prop.toml")  # D = 100 mm
@@ -417,7 +418,7 @@ def test_a_pruned_trial_is_recorded_as_pruned_and_never_reaches_the_finer_level(
     )
 
 
-def test_a_two_objective_study_of_two_levels_prunes_the_trials_another_dominates_and_pictures_its_front(
+def test_a_two_objective_study_of_two_levels_prunes_the_trials_another_dominates_and_pictures_its_front(  # noqa: E501 (the test name is its sentence)
     tmp_path,
 ):
     objectives = (

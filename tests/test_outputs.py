@@ -235,7 +235,7 @@ _KILL_DURING_PUBLISH = textwrap.dedent("""
             os.kill(os.getpid(), getattr(signal, sys.argv[1]))
     os.replace = replace
     sys.exit(main(sys.argv[2:]))
-""")
+""")  # noqa: E501 (code or text written out verbatim)
 
 
 @pytest.mark.parametrize("signal_name", ["SIGKILL", "SIGTERM", "SIGINT"])

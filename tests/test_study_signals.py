@@ -73,11 +73,11 @@ def _assert_no_staging_left(out: Path) -> None:
         pytest.param("trials", 0.0, 2, marks=pytest.mark.long),
         # the table is written; the picture, best/ and
         pytest.param("finish", 0.0, 1, marks=pytest.mark.long),
-        # the summary are being written (34 s: the long tier; the random-moments test there covers it 7
-        # times)
+        # the summary are being written (34 s: the long tier; the random-moments test there covers
+        # it 7 times)
     ],
 )
-def test_a_sigterm_while_the_pool_starts_trials_run_or_the_results_are_written_is_one_line_and_leaves_all_whole(
+def test_a_sigterm_while_the_pool_starts_trials_run_or_the_results_are_written_is_one_line_and_leaves_all_whole(  # noqa: E501 (the test name is its sentence)
     tmp_path, moment, delay_s, trials
 ):
     outcome = attack("optimize", moment, delay_s, tmp_path, trials=trials)
@@ -147,7 +147,7 @@ _STOP_AS_WORKERS_START = textwrap.dedent("""
             pool = LocalPool(2)
             pool.submit(job, 1)  # starts the workers (from the fork server)
             pool.shutdown(wait=False)  # at once, as after a signal: they may still be reading their start-up data
-""")
+""")  # noqa: E501 (code or text written out verbatim)
 
 
 def test_a_pool_stopped_while_its_workers_start_leaves_no_traceback(tmp_path):
@@ -177,7 +177,7 @@ _FILL_STORAGE = textwrap.dedent("""
     with storage_failures_named(url):
         for index in range(100000):
             study.set_user_attr(f"k{index}", "x" * 20000)
-""")
+""")  # noqa: E501 (code or text written out verbatim)
 
 
 def test_a_storage_that_cannot_grow_is_a_storage_error_naming_the_file_and_the_cause(tmp_path):
@@ -241,7 +241,7 @@ _FULL_DISK_STUDY = textwrap.dedent("""
     left = [str(p) for p in out.rglob("*") if ".staging-" in p.name or ".tmp-" in p.name]
     print(json.dumps({"code": run.returncode, "stderr": stderr, "verify": verify.returncode,
                       "verify_stderr": verify.stderr, "left": left}))
-""")
+""")  # noqa: E501 (code or text written out verbatim)
 
 
 @pytest.mark.long

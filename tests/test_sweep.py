@@ -746,7 +746,7 @@ from torus_cad.batch import load_sweep, run_sweep
 
 if __name__ == "__main__":
     run_sweep(load_sweep(sys.argv[1]), sys.argv[2], workers=2, job=announce_and_sleep, progress=False)
-"""
+"""  # noqa: E501 (code or text written out verbatim)
 
 
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads /proc")

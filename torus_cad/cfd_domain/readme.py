@@ -82,7 +82,7 @@ Other tools
   gmsh {name}_cfd.msh                          look at it (Tools > Visibility lists the groups)
   gmsh {name}_cfd.msh -format su2 -o {name}.su2 -save   SU2, groups become markers
   meshio convert {name}_cfd.msh {name}.vtu     ParaView and friends
-"""
+"""  # noqa: E501 (code or text written out verbatim)
 
 
 #: The lines of README.txt's OpenFOAM block lie between these (indented by 4 spaces).

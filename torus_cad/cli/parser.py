@@ -112,7 +112,8 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _announce(text: str, args: list[str]) -> None:
-    """``torus-cad: [   0.0 s] text`` on stderr when it is a terminal and ``args`` do not ask for quiet."""
+    """``torus-cad: [   0.0 s] text`` on stderr when it is a terminal
+    and ``args`` do not ask for quiet."""
     if is_terminal(sys.stderr) and not {"-q", "--quiet"} & set(args):
         sys.stderr.write(f"torus-cad: [{0.0:6.1f} s] {text}\n")
         sys.stderr.flush()

@@ -106,7 +106,8 @@ class FuseRoute(StrEnum):
     """How the blades were joined to the hub (the value is the code the JSON report gives)."""
 
     ASSEMBLED = "assembled"
-    """One blade-hub intersection reused for every blade; the shell put together from known faces."""
+    """One blade-hub intersection reused for every blade;
+    the shell put together from known faces."""
     GLUED = "glued"
     """One blade-hub intersection reused; the copies glued to the hub (a blade cuts an end face)."""
     GENERAL = "general"

@@ -87,8 +87,8 @@ def blade_grid(
     §5).
 
     A blunt trailing edge (flat or round, ``airfoil.trailing_edge_*``) is sampled as
-    ``geometry.blade.surface.blade_surface`` samples it for the solid: every section at the parameters
-    of the middle one, so the mesh and the B-rep have the same edge.
+    ``geometry.blade.surface.blade_surface`` samples it for the solid: every section at the
+    parameters of the middle one, so the mesh and the B-rep have the same edge.
     """
     centerline = geometry.centerline(0)
     frames = blade_frames(

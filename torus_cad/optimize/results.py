@@ -117,8 +117,9 @@ def write_results(
 
 
 def _outcomes_line(rows: Sequence[dict[str, Any]]) -> str:
-    """``"  trials: 9 valid, 5 refused (4 before the kernel, pre-screened), 1 failed"`` and any other outcome;
-    ``"9 valid (6 pruned at a screening level)"`` in a study of several mesh levels."""
+    """``"  trials: 9 valid, 5 refused (4 before the kernel, pre-screened), 1 failed"`` and any
+    other outcome; ``"9 valid (6 pruned at a screening level)"`` in a study of several mesh
+    levels."""
     counts = _count(row["outcome"] for row in rows if row["outcome"])
     screened = sum(1 for row in rows if row["prescreened"])
     pruned = sum(1 for row in rows if row["state"] == "pruned")
@@ -147,8 +148,8 @@ def _level_seconds(trials: Sequence[FrozenTrial]) -> dict[str, dict[str, float]]
 def _level_lines(
     spec: StudySpec, spent: Mapping[str, Mapping[str, float]], pruned: Mapping[str, int]
 ) -> list[str]:
-    """``"  coarse: 12 trials, 1430 s (5 pruned); medium: 7 trials, 2210 s"``: what each mesh level cost
-    (``spent``: :func:`_level_seconds`; ``pruned``: trials stopped at each level)."""
+    """``"  coarse: 12 trials, 1430 s (5 pruned); medium: 7 trials, 2210 s"``: what each mesh level
+    cost (``spent``: :func:`_level_seconds`; ``pruned``: trials stopped at each level)."""
     if len(spec.levels) < 2:
         return []
     parts = []

@@ -189,8 +189,8 @@ class OutputSet:
     ::
 
         with OutputSet(out_dir, "torus_propeller") as output:
-            write_step(solid, output.stage("step"), ...)   # writers write to the path they are given
-            paths = output.publish(report)                 # {kind: final path}, the report last
+            write_step(solid, output.stage("step"), ...)  # writers write to the path they are given
+            paths = output.publish(report)                # {kind: final path}, the report last
 
     Leaving the block without publishing (an error, an interrupt) removes everything staged.
     """

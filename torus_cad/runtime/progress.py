@@ -79,9 +79,9 @@ class StageProgress:
         return time.perf_counter() - self.start
 
     def __call__(self, stage: str) -> None:
-        """Announce that ``stage`` starts now: a build stage in its words (its ``label``); another pipeline's
-        stage (``MeshStage``, ``CfdStage``) or an OpenFOAM command of ``simulate`` as its name, with
-        spaces."""
+        """Announce that ``stage`` starts now: a build stage in its words (its ``label``); another
+        pipeline's stage (``MeshStage``, ``CfdStage``) or an OpenFOAM command of ``simulate`` as its
+        name, with spaces."""
         self.stages.append(stage)
         self._stage_start = time.perf_counter()
         self._print(self._label(stage))

@@ -9,8 +9,10 @@ the builds' forkserver, running :func:`torus_cad.studio.vortex_run.run_vortex`):
 waits on a pipe, a newer request kills the process of the one it supersedes, and a message of an
 older request is dropped, so only the latest point's numbers are ever shown. Its messages::
 
-    ("result", request_id, {"report": {...}, "png": bytes})   the numbers and the loading plot (PNG)
-    ("failed", request_id, "one-line reason")                 e.g. KernelError: the solve did not converge
+    ("result", request_id, {"report": {...}, "png": bytes})
+        the numbers and the loading plot (PNG)
+    ("failed", request_id, "one-line reason")
+        e.g. KernelError: the solve did not converge
 
 The solve starts once the design's exact solid is built (the studio calls
 :meth:`Performance.set_design`), so it never competes with the build for the CPU, and never before

@@ -26,8 +26,8 @@ class Command:
     Attributes:
         extra: the optional dependency group it needs, checked before its
             module loads; None for the core commands.
-        loading: the stage announced (``torus-cad: [   0.0 s] ...`` on a terminal, not with ``-q``) before
-            its module loads; the command then reports its later stages on that same clock
+        loading: the stage announced (``torus-cad: [   0.0 s] ...`` on a terminal, not with ``-q``)
+            before its module loads; the command then reports its later stages on that same clock
             (``args.progress``, a :class:`torus_cad.runtime.progress.StageProgress`).
     """
 

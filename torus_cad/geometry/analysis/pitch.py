@@ -7,7 +7,8 @@ each section in its plane, and with it the chord and beta; the spec's alpha stay
 (§2.4 chose that form), so the quartic is fitted by nonlinear least squares
 (scipy.optimize.least_squares) to
 
-    sum over the outer sections of w_i (beta_i - beta*_i)^2  +  lambda^2 sum over the others of (alpha_i - alpha0_i)^2,
+    sum over the outer sections of w_i (beta_i - beta*_i)^2
+        +  lambda^2 sum over the others of (alpha_i - alpha0_i)^2,
 
 with w_i = 1 - radial_fraction_i^2 (clipped at 0): sections whose chord runs nearly radially,
 where beta says little, barely count; the second term keeps the inner sections, which no target

@@ -32,7 +32,8 @@ class FrameKind(StrEnum):
     FRENET = "frenet"
     """Frenet-Serret (spec §4); undefined where the curvature vanishes."""
     ROTATION_MINIMIZING = "rotation_minimizing"
-    """Double-reflection rotation-minimising frame (beyond the spec); defined on any regular curve."""
+    """Double-reflection rotation-minimising frame (beyond the spec);
+    defined on any regular curve."""
 
 
 @dataclass(frozen=True)
