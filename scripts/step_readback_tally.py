@@ -265,26 +265,33 @@ def main(argv: list[str] | None = None) -> int:
     gmsh = sum(bool(row.get("gmsh")) for row in written)
     build = sorted(row["build_s"] for row in written)
     readback = sorted(row["readback_s"] for row in written)
+    counts = (
+        f"{outcomes['made readable'] + outcomes['faulty']} read back with faults as first "
+        f"written, {outcomes['faulty']} still once made readable"
+    )
+    refusals = (
+        f"{outcomes['refused']} refused, {outcomes['kernel']} kernel failures, "
+        f"{outcomes['timeout']} timeouts, {outcomes['error']} errors"
+    )
+    medians = (
+        f"; median build {build[len(build) // 2]:.1f} s, "
+        f"write + read back {readback[len(readback) // 2]:.2f} s"
+        if build
+        else ""
+    )
     print(
-        f"\n{len(seeds)} designs in {time.perf_counter() - start:.0f} s: {len(written)} valid built "
-        f"({outcomes['made readable'] + outcomes['faulty']} read back with faults as first written, "
-        f"{outcomes['faulty']} still once made readable), {outcomes['refused']} refused, "
-        f"{outcomes['kernel']} kernel failures, {outcomes['timeout']} timeouts, {outcomes['error']} errors; "
+        f"\n{len(seeds)} designs in {time.perf_counter() - start:.0f} s: "
+        f"{len(written)} valid built ({counts}), {refusals}; "
         f"conventional {sum(row.get('kind') == 'conventional' for row in written)}, "
         f"root fillet {sum(bool(row.get('fillet')) for row in written)}"
         + (f"; FreeCAD check(True) faults: {freecad}" if args.freecad else "")
         + (f"; gmsh warnings: {gmsh}" if args.gmsh else "")
-        + (
-            f"; median build {build[len(build) // 2]:.1f} s, write + read back {readback[len(readback) // 2]:.2f} s"
-            if build
-            else ""
-        )
+        + medians
     )
     for row in rows:
         if row.get("freecad") or row.get("gmsh"):
-            print(
-                f"seed {row['seed']}: FreeCAD {row.get('freecad') or 'ok'}; gmsh {row.get('gmsh') or 'ok'}"
-            )
+            freecad_verdict, gmsh_verdict = row.get("freecad") or "ok", row.get("gmsh") or "ok"
+            print(f"seed {row['seed']}: FreeCAD {freecad_verdict}; gmsh {gmsh_verdict}")
     return (
         1
         if outcomes["faulty"] or freecad or gmsh or outcomes["error"] or outcomes["timeout"]
