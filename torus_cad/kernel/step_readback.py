@@ -31,7 +31,7 @@ from __future__ import annotations
 import math
 import time
 from collections import Counter
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -92,13 +92,7 @@ class EdgeFault:
 
     def as_dict(self) -> dict[str, str | float]:
         """For a JSON row."""
-        return {
-            "status": self.status,
-            "edge_kind": self.edge_kind,
-            "surfaces": self.surfaces,
-            "gap_mm": self.gap_mm,
-            "tolerance_mm": self.tolerance_mm,
-        }
+        return asdict(self)
 
 
 @dataclass(frozen=True)

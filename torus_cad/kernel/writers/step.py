@@ -23,6 +23,7 @@ from torus_cad.kernel.iso_line_edges import iso_line_copy
 from torus_cad.kernel.readable_edges import readable_copy
 from torus_cad.kernel.step_readback import (
     ArgumentFaults,
+    argument_faults,
     read_step_shape,
     readback_refusal,
     step_readback_faults,
@@ -148,8 +149,9 @@ def rewritten_until_readable(
             )
     if first.counts and not faults.counts:
         # rewritten: its edges' curves and tolerances are the reader's, not the checked solid's
-        faults = step_readback_faults(path, self_interference=True)
-        trimmed = hook_trimmed_copy(read_step_shape(path)) if faults.counts else None
+        read_back = read_step_shape(path)
+        faults = argument_faults(read_back, self_interference=True)
+        trimmed = hook_trimmed_copy(read_back) if faults.counts else None
         if trimmed is not None:  # an edge hooked into a face at its vertex: cut off, and again
             write(trimmed)
             faults = step_readback_faults(path, self_interference=True)
