@@ -14,11 +14,10 @@ from test_step_readback import _cylinder_with_a_bumped_edge
 from studies.step_tally import built_tally_design, tally_design_dict
 from torus_cad.errors import KernelError
 from torus_cad.kernel.step_readback import (
-    ArgumentFaults,
-    EdgeFault,
     classified_faults,
     read_step_shape,
     readback_refusal,
+    self_intersection_faults,
     step_readback_faults,
 )
 from torus_cad.kernel.writers.step import write_step
@@ -202,19 +201,20 @@ def test_a_filleted_design_whose_contact_edge_hooks_into_a_face_reads_back_with_
         assert step_readback_faults(path, self_interference=True).counts == {}
 
 
-def test_a_self_intersection_read_back_is_refused_naming_the_edge_and_its_faces() -> None:
-    faults = ArgumentFaults(
-        {"SelfIntersect": 2},
-        "SelfIntersect on edge (tolerance 1e-07 mm) and BSplineSurface face",
-        0.0,
-        (EdgeFault("SelfIntersect", "root fillet on the blade", "BSplineSurface", 0.0, 1e-7),),
-    )
-    refusal = str(readback_refusal(faults, "tally.step"))
-    assert refusal.startswith("tally.step: the STEP file read back fails BOPAlgo_ArgumentAnalyzer")
-    assert "2 SelfIntersect" in refusal
-    assert "on a root fillet on the blade edge (BSplineSurface), tolerance read back 1e-07 mm" in (
-        refusal
-    )
+def test_a_self_intersection_is_refused_naming_the_edge_and_its_faces() -> None:
+    import cadquery as cq
+
+    from torus_cad.kernel.vertex_hooks import edge_interference
+
+    crossed = cq.Compound.makeCompound(  # two boxes through each other, not fused
+        [cq.Solid.makeBox(10, 10, 10), cq.Solid.makeBox(10, 10, 10, pnt=cq.Vector(5, 5, 5))]
+    ).wrapped
+    found = edge_interference(crossed)
+    assert found.hooks == () and found.pairs  # no edge of one box shares a vertex with the other
+    refusal = str(readback_refusal(self_intersection_faults(crossed, found.pairs, 0.0), "x.step"))
+    assert refusal.startswith("x.step: the STEP file read back fails BOPAlgo_ArgumentAnalyzer")
+    assert f"{len(found.pairs)} SelfIntersect; first: SelfIntersect on " in refusal
+    assert "hub feature edge (Plane, Plane)" in refusal
 
 
 def test_the_writer_writes_a_faulty_file_again_with_readable_edges(tmp_path: Path) -> None:

@@ -31,6 +31,7 @@ from __future__ import annotations
 import math
 import time
 from collections import Counter
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -144,14 +145,44 @@ def argument_faults(shape: TopoDS_Shape, self_interference: bool = True) -> Argu
     (single-threaded); without the self-interference test if ``self_interference`` is False (see
     :func:`check_step_readback`)."""
     start = time.perf_counter()
-    results = list(_analyzer(shape, self_interference).GetCheckResult())
-    counts = Counter(_status(result) for result in results)
-    first = _describe(results[0]) if results else ""
+    findings = [_finding(result) for result in _analyzer(shape, self_interference).GetCheckResult()]
+    return _faults(shape, findings, time.perf_counter() - start)
+
+
+def self_intersection_faults(
+    shape: TopoDS_Shape, pairs: Sequence[tuple[TopoDS_Shape, TopoDS_Shape]], seconds: float
+) -> ArgumentFaults:
+    """The interfering ``pairs`` of ``shape``'s sub-shapes (BOPAlgo_CheckerSI's, found in
+    ``seconds``) as the analyzer reports them: one ``SelfIntersect`` fault a pair."""
+    return _faults(shape, [_Finding("SelfIntersect", pair, 0.0) for pair in pairs], seconds)
+
+
+@dataclass(frozen=True)
+class _Finding:
+    """One fault: its status name, the faulty sub-shapes, how far apart (mm; 0 if not measured)."""
+
+    status: str
+    shapes: tuple[TopoDS_Shape, ...]
+    distance_mm: float
+
+
+def _finding(result: object) -> _Finding:
+    """An analyzer result (BOPAlgo_CheckResult) as a :class:`_Finding`."""
+    return _Finding(
+        str(result.GetCheckStatus()).rsplit(".", 1)[-1].removeprefix("BOPAlgo_"),  # type: ignore[attr-defined]
+        (*result.GetFaultyShapes1(), *result.GetFaultyShapes2()),  # type: ignore[attr-defined]
+        max(result.GetMaxDistance1(), result.GetMaxDistance2()),  # type: ignore[attr-defined]
+    )
+
+
+def _faults(shape: TopoDS_Shape, findings: list[_Finding], seconds: float) -> ArgumentFaults:
+    """``findings`` on ``shape`` counted by status, the first described, those on edges
+    classified."""
     return ArgumentFaults(
-        dict(sorted(counts.items())),
-        first,
-        time.perf_counter() - start,
-        tuple(_on_edges(shape, results)),
+        dict(sorted(Counter(finding.status for finding in findings).items())),
+        _describe(findings[0]) if findings else "",
+        seconds,
+        tuple(_on_edges(shape, findings)),
     )
 
 
@@ -222,16 +253,16 @@ def classified_faults(shape: TopoDS_Shape) -> list[EdgeFault]:
     return list(argument_faults(shape, self_interference=False).on_edges)
 
 
-def _on_edges(shape: TopoDS_Shape, results: list[object]) -> list[EdgeFault]:
-    """The analyzer's ``results`` that name an edge of ``shape``, each with its edge's kind."""
+def _on_edges(shape: TopoDS_Shape, findings: list[_Finding]) -> list[EdgeFault]:
+    """The ``findings`` that name an edge of ``shape``, each with its edge's kind."""
     ancestors = TopTools_IndexedDataMapOfShapeListOfShape()
     TopExp.MapShapesAndAncestors_s(shape, TopAbs_EDGE, TopAbs_FACE, ancestors)
-    fillet_faces = _fillet_faces(ancestors) if results else []
+    fillet_faces = _fillet_faces(ancestors) if findings else []
     found = []
-    for result in results:
-        faulty = [*result.GetFaultyShapes1(), *result.GetFaultyShapes2()]  # type: ignore[attr-defined]
+    for finding in findings:
         edge = next(
-            (TopoDS.Edge_s(part) for part in faulty if part.ShapeType() == TopAbs_EDGE), None
+            (TopoDS.Edge_s(part) for part in finding.shapes if part.ShapeType() == TopAbs_EDGE),
+            None,
         )
         if edge is None or not ancestors.Contains(edge):
             continue
@@ -239,10 +270,10 @@ def _on_edges(shape: TopoDS_Shape, results: list[object]) -> list[EdgeFault]:
         surfaces = ", ".join(sorted(_surface_name(face) for face in faces))
         found.append(
             EdgeFault(
-                _status(result),
+                finding.status,
                 edge_kind(edge, faces, fillet_faces),
                 surfaces,
-                max(result.GetMaxDistance1(), result.GetMaxDistance2()),  # type: ignore[attr-defined]
+                finding.distance_mm,
                 BRep_Tool.Tolerance_s(edge),
             )
         )
@@ -310,16 +341,11 @@ def _surface_name(face: TopoDS_Face) -> str:
     return str(BRepAdaptor_Surface(face).GetType()).rsplit(".", 1)[-1].removeprefix("GeomAbs_")
 
 
-def _status(result: object) -> str:
-    return str(result.GetCheckStatus()).rsplit(".", 1)[-1].removeprefix("BOPAlgo_")  # type: ignore[attr-defined]
-
-
-def _describe(result: object) -> str:
+def _describe(finding: _Finding) -> str:
     """'InvalidCurveOnSurface: edge (tolerance 1e-07 mm) on a BSplineSurface face, 2.1e-06 mm
     apart'."""
-    shapes = [*result.GetFaultyShapes1(), *result.GetFaultyShapes2()]  # type: ignore[attr-defined]
     parts = []
-    for shape in shapes:
+    for shape in finding.shapes:
         if shape.ShapeType() == TopAbs_EDGE:
             parts.append(f"edge (tolerance {BRep_Tool.Tolerance_s(TopoDS.Edge_s(shape)):.2g} mm)")
         elif shape.ShapeType() == TopAbs_FACE:
@@ -327,6 +353,5 @@ def _describe(result: object) -> str:
             parts.append(f"{kind.removeprefix('GeomAbs_')} face")
         else:
             parts.append(str(shape.ShapeType()).rsplit(".", 1)[-1].removeprefix("TopAbs_").lower())
-    distance = max(result.GetMaxDistance1(), result.GetMaxDistance2())  # type: ignore[attr-defined]
-    apart = f", curves {distance:.2g} mm apart" if distance > 0.0 else ""
-    return f"{_status(result)} on {' and '.join(parts) or 'the shape'}{apart}"
+    apart = f", curves {finding.distance_mm:.2g} mm apart" if finding.distance_mm > 0.0 else ""
+    return f"{finding.status} on {' and '.join(parts) or 'the shape'}{apart}"

@@ -7,11 +7,13 @@ the few 1e-6 mm its curves' ends need, and the self-interference test (FreeCAD's
 finds the edge inside the face: ``SelfIntersect`` (measured on ``python
 scripts/step_readback_tally.py --replay 3078 --freecad``).
 
-:func:`hook_trimmed_copy` finds each such edge with BOPAlgo_CheckerSI (the edge-face interferences
-whose edge and face share a vertex and whose common range ends within :data:`HOOK_LIMIT_MM` of it)
-and cuts the hook off: the edge's 3D curve and p-curves are segmented to start where the edge has
-left the face, and the vertex's tolerance covers the cut. The reader of the file written from it
-closes the cut as it reads (with a tolerance or an edge as short as the cut).
+:func:`edge_interference` is the self-interference test of a file the writer wrote again
+(BOPAlgo_CheckerSI without its face/face half, :data:`EDGE_CHECK_LEVEL`); it finds each such edge
+(an edge-face interference whose edge and face share a vertex and whose common range ends within
+:data:`HOOK_LIMIT_MM` of it), and :func:`hook_trimmed_copy` cuts the hook off: the edge's 3D
+curve and p-curves are segmented to start where the edge has left the face, and the vertex's
+tolerance covers the cut. The reader of the file written from it closes the cut as it reads (with
+a tolerance or an edge as short as the cut).
 """
 
 from __future__ import annotations
@@ -20,7 +22,6 @@ from dataclasses import dataclass
 
 from OCP.BOPAlgo import BOPAlgo_CheckerSI
 from OCP.BRep import BRep_Builder, BRep_Tool
-from OCP.BRepBuilderAPI import BRepBuilderAPI_Copy
 from OCP.BRepTools import BRepTools_ReShape
 from OCP.Geom import Geom_TrimmedCurve
 from OCP.Geom2d import Geom2d_TrimmedCurve
@@ -42,6 +43,13 @@ HOOK_LIMIT_MM = 1e-3
 #: The vertex's tolerance is raised to this times the cut's length.
 CUT_MARGIN = 1.1
 
+#: BOPAlgo_CheckerSI's level of check that tests every pair of sub-shapes but face/face (0 vertex/
+#: vertex ... 4 edge/face, 5 face/face too). A file written again carries the checked solid's
+#: surfaces unchanged, only its edges' curves and tolerances are the reader's: an interference it
+#: gains starts at an edge or a vertex, so face/face, half to two thirds of the check's time,
+#: finds none the lower levels miss.
+EDGE_CHECK_LEVEL = 4
+
 
 @dataclass(frozen=True)
 class Hook:
@@ -49,61 +57,97 @@ class Hook:
 
     Attributes:
         edge: the edge.
+        face: the face it hooks into.
         vertex: its end the hook starts at (shared with the face).
         cut: the edge's parameter where the hook ends (the common range's far end from the vertex).
     """
 
     edge: TopoDS_Edge
+    face: TopoDS_Face
     vertex: TopoDS_Vertex
     cut: float
 
 
-def hook_trimmed_copy(shape: TopoDS_Shape) -> TopoDS_Shape | None:
-    """A copy of ``shape`` with each edge's hook (:func:`hooks`) cut off; None if it has none.
+@dataclass(frozen=True)
+class EdgeInterference:
+    """What BOPAlgo_CheckerSI finds on a shape at :data:`EDGE_CHECK_LEVEL`.
+
+    Attributes:
+        hooks: the edges that hook into a face at a vertex they share with it, one per edge.
+        pairs: every other interfering pair of sub-shapes (vertices, edges, faces): real
+            self-intersections.
+    """
+
+    hooks: tuple[Hook, ...]
+    pairs: tuple[tuple[TopoDS_Shape, TopoDS_Shape], ...]
+
+
+def edge_interference(shape: TopoDS_Shape) -> EdgeInterference:
+    """BOPAlgo_CheckerSI on ``shape`` (single-threaded) with every test but face/face
+    (:data:`EDGE_CHECK_LEVEL`), its interfering pairs split into hooks and the rest.
 
     Args:
         shape: the solid (as read back from a STEP file), mm; not changed.
 
     Returns:
-        The copy, each hooked edge's curves segmented past its hook and its vertex's tolerance
-        raised to cover the cut; None when no edge hooks into a face.
+        The hooks (an edge-face interference whose edge and face share a vertex and whose common
+        range ends within HOOK_LIMIT_MM of it) and the other pairs; both empty when the shape has
+        no self-interference but possibly between faces' interiors.
     """
-    copy = BRepBuilderAPI_Copy(shape, True, False).Shape()
-    found = hooks(copy)
-    if not found:
-        return None
-    ancestors = TopTools_IndexedDataMapOfShapeListOfShape()
-    TopExp.MapShapesAndAncestors_s(copy, TopAbs_EDGE, TopAbs_FACE, ancestors)
-    reshape = BRepTools_ReShape()
-    for hook in found:
-        faces = distinct_faces(ancestors.FindFromKey(hook.edge))
-        if not any(BRep_Tool.IsClosed_s(hook.edge, face) for face in faces):  # not a seam
-            reshape.Replace(hook.edge, _cut(hook, faces))
-    return reshape.Apply(copy)
-
-
-def hooks(shape: TopoDS_Shape) -> list[Hook]:
-    """The edges of ``shape`` that run into a face they do not bound from a vertex they share with
-    it, and end there within HOOK_LIMIT_MM of that vertex (BOPAlgo_CheckerSI's edge-face
-    interferences), one per edge."""
     checker = BOPAlgo_CheckerSI()
     arguments = TopTools_ListOfShape()
     arguments.Append(shape)
     checker.SetArguments(arguments)
     checker.SetRunParallel(False)
     checker.SetNonDestructive(True)
+    checker.SetLevelOfCheck(EDGE_CHECK_LEVEL)
     checker.Perform()
-    found: list[Hook] = []
     data = checker.DS()  # PDS() hands Python a pointer the checker also frees
+    ranges = {}
     interferences = data.InterfEF()
     for index in range(interferences.Length()):
         interference = interferences.Value(index)
-        edge = TopoDS.Edge_s(data.Shape(interference.Index1()))
-        face = TopoDS.Face_s(data.Shape(interference.Index2()))
-        hook = _hook(edge, face, interference.CommonPart().Range1())
-        if hook is not None and not any(hook.edge.IsSame(other.edge) for other in found):
+        ranges[(interference.Index1(), interference.Index2())] = interference.CommonPart().Range1()
+    found: list[Hook] = []
+    pairs = []
+    for pair in data.Interferences():
+        first, second = pair.Indices()
+        hook = None
+        for edge, face in ((first, second), (second, first)):
+            if (edge, face) in ranges:
+                hook = _hook(
+                    TopoDS.Edge_s(data.Shape(edge)),
+                    TopoDS.Face_s(data.Shape(face)),
+                    ranges[(edge, face)],
+                )
+        if hook is None:
+            pairs.append((data.Shape(first), data.Shape(second)))
+        elif not any(hook.edge.IsSame(other.edge) for other in found):
             found.append(hook)
-    return found
+    return EdgeInterference(tuple(found), tuple(pairs))
+
+
+def hook_trimmed_copy(shape: TopoDS_Shape, hooks: tuple[Hook, ...]) -> TopoDS_Shape:
+    """A copy of ``shape`` with each of ``hooks`` (of :func:`edge_interference` on ``shape``) cut
+    off.
+
+    Args:
+        shape: the solid (as read back from a STEP file), mm; the hooked vertices' tolerances are
+            raised in place (they are the copy's too).
+        hooks: the hooks of ``shape``'s edges.
+
+    Returns:
+        The copy, each hooked edge's curves segmented past its hook and its vertex's tolerance
+        raised to cover the cut.
+    """
+    ancestors = TopTools_IndexedDataMapOfShapeListOfShape()
+    TopExp.MapShapesAndAncestors_s(shape, TopAbs_EDGE, TopAbs_FACE, ancestors)
+    reshape = BRepTools_ReShape()
+    for hook in hooks:
+        faces = distinct_faces(ancestors.FindFromKey(hook.edge))
+        if not any(BRep_Tool.IsClosed_s(hook.edge, face) for face in faces):  # not a seam
+            reshape.Replace(hook.edge, _cut(hook, faces))
+    return reshape.Apply(shape)
 
 
 def _hook(edge: TopoDS_Edge, face: TopoDS_Face, common: tuple[float, float]) -> Hook | None:
@@ -117,7 +161,7 @@ def _hook(edge: TopoDS_Edge, face: TopoDS_Face, common: tuple[float, float]) -> 
         if vertex.IsNull() or not face_vertices.Contains(vertex):
             continue
         if BRep_Tool.Pnt_s(vertex).Distance(curve.Value(cut)) <= HOOK_LIMIT_MM:
-            return Hook(edge, vertex, cut)
+            return Hook(edge, face, vertex, cut)
     return None
 
 

@@ -3,6 +3,7 @@ the file read back, are torus_cad.kernel.step_readback."""
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
 from pathlib import Path
 
@@ -26,10 +27,11 @@ from torus_cad.kernel.step_readback import (
     argument_faults,
     read_step_shape,
     readback_refusal,
+    self_intersection_faults,
     step_readback_faults,
 )
 from torus_cad.kernel.topology import AnyShape, occ
-from torus_cad.kernel.vertex_hooks import hook_trimmed_copy
+from torus_cad.kernel.vertex_hooks import edge_interference, hook_trimmed_copy
 from torus_cad.runtime.files import atomic_path, file_ends_with, write_failure
 
 #: OpenCascade's write.step.schema value of each protocol.
@@ -131,7 +133,8 @@ def rewritten_until_readable(
         self-interference, and that too on a file written again (its edges and the tolerances
         the reader gives them are no longer the checked solid's: a root fillet's contact edge
         can cross the next fillet face within the solid's vertex tolerance but outside the one
-        read back); ``counts`` is empty when it reads back clean.
+        read back), every pair of sub-shapes but face/face (vertex_hooks.EDGE_CHECK_LEVEL: the
+        faces' surfaces are the checked solid's); ``counts`` is empty when it reads back clean.
 
     Raises:
         KernelError: OpenCascade cannot read ``path`` back or finds no shape in it; or
@@ -149,13 +152,25 @@ def rewritten_until_readable(
             )
     if first.counts and not faults.counts:
         # rewritten: its edges' curves and tolerances are the reader's, not the checked solid's
-        read_back = read_step_shape(path)
-        faults = argument_faults(read_back, self_interference=True)
-        trimmed = hook_trimmed_copy(read_back) if faults.counts else None
-        if trimmed is not None:  # an edge hooked into a face at its vertex: cut off, and again
-            write(trimmed)
-            faults = step_readback_faults(path, self_interference=True)
+        faults = _self_interference_faults(path, write)
     return faults
+
+
+def _self_interference_faults(path: Path, write: Callable[[TopoDS_Shape], None]) -> ArgumentFaults:
+    """The self-interference faults of the STEP file ``path`` read back (edge_interference), after
+    writing it again with its hooks cut if it has only those; then with the other tests too."""
+    start = time.perf_counter()
+    read_back = read_step_shape(path)
+    found = edge_interference(read_back)
+    if found.hooks and not found.pairs:  # edges hooked into faces at their vertices: cut, again
+        write(hook_trimmed_copy(read_back, found.hooks))
+        read_back = read_step_shape(path)
+        faults = argument_faults(read_back, self_interference=False)
+        if faults.counts:
+            return faults
+        found = edge_interference(read_back)
+    pairs = found.pairs + tuple((hook.edge, hook.face) for hook in found.hooks)
+    return self_intersection_faults(read_back, pairs, time.perf_counter() - start)
 
 
 def _rewritten(
