@@ -16,7 +16,7 @@ says works); one the build still refuses (ParameterError, GeometryError, or Kern
 STEP file) is not a valid design and is left out of the tally; every other design's STEP file is
 written without the build's own read-back check, read back by OpenCascade's STEP reader, and put
 through BOPAlgo_ArgumentAnalyzer (every test but self-interference, as the build checks it; a file
-the writer wrote again, self-interference too), and
+the writer wrote again, self-interference too, every pair but face/face), and
 each fault is classified by the kind of edge it sits on
 (:func:`torus_cad.kernel.step_readback.edge_kind`), the surfaces on its two sides, and its gap
 against the tolerance the reader gave it. With ``--freecad`` each file is also checked by FreeCAD's

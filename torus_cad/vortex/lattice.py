@@ -40,7 +40,12 @@ class WakeShape:
 
     Attributes:
         length_diameters: how far downstream it reaches, in tip diameters.
-        steps_per_turn: segments per turn of each helical line in its first turn ...
+        steps_per_turn: segments per turn of each helical line in its first turn, reached ...
+        first_step_fraction: ... from a first segment this fraction of that step long ...
+        near_growth: ... each next one this much longer: the lattice's answer hangs most on the
+            near wake's straight segments (the first turns the wake's line away from the
+            trailing edge's), so they start about a chord panel long (a relaxed first turn,
+            ``free_turns``, is traced in even steps); then ...
         growth: ... after which each segment is this much longer than the one before ...
         longest_step_deg: ... up to this turn a segment.
         max_turns: turns at most (a still-air wake of small pitch would need very many).
@@ -56,6 +61,8 @@ class WakeShape:
 
     length_diameters: float = 4.0
     steps_per_turn: int = 24
+    first_step_fraction: float = 0.1
+    near_growth: float = 1.3
     growth: float = 1.1
     longest_step_deg: float = 60.0
     max_turns: float = 40.0
@@ -182,15 +189,19 @@ def wake_lines(
 
 
 def _wake_angles(turns: float, shape: WakeShape) -> NDArray[np.float64]:
-    """Angles (rad) of a line's nodes over ``turns`` turns: even steps in the first turn, then each
-    step ``shape.growth`` times the one before, up to ``shape.longest_step_deg``."""
-    first = 2.0 * np.pi / shape.steps_per_turn
-    angles, step = [0.0], first
+    """Angles (rad) of a line's nodes over ``turns`` turns: from a step
+    ``shape.first_step_fraction`` of the first turn's even step (the even step itself if the turn
+    is relaxed), each ``shape.near_growth`` times the last up to the even step, then, past the
+    first turn, each ``shape.growth`` times the last up to ``shape.longest_step_deg``."""
+    even = 2.0 * np.pi / shape.steps_per_turn
+    angles, step = [0.0], even * (1.0 if shape.free_turns else shape.first_step_fraction)
     end = turns * 2.0 * np.pi
     while angles[-1] < end:
-        if angles[-1] >= 2.0 * np.pi - 1e-12:
-            step = min(step * shape.growth, np.radians(shape.longest_step_deg))
         angles.append(min(angles[-1] + step, end))
+        if step < even:
+            step = min(step * shape.near_growth, even)
+        elif angles[-1] >= 2.0 * np.pi - 1e-12:
+            step = min(step * shape.growth, np.radians(shape.longest_step_deg))
     return np.array(angles)
 
 
