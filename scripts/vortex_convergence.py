@@ -8,20 +8,28 @@ and torque of each, Richardson's extrapolation and Roache's GCI_fine
     python scripts/vortex_convergence.py --design examples/apc_10x7sf.toml --rpm 5000
     python scripts/vortex_convergence.py --coarsest 4 15 12 --ratio 1.5 --inviscid
     python scripts/vortex_convergence.py --inviscid --lattices 6,30,24 8,30,24 11,30,24  # one term
-    python scripts/vortex_convergence.py --inviscid --lattices 8,30,24 --first-step-fraction 1
+    python scripts/vortex_convergence.py --inviscid --lattices 8,30,24 --wake first_step_fraction=1
+    python scripts/vortex_convergence.py --inviscid --lattices 8,30,24 16,30,24 --strips
 
 Prints one row a lattice (rings, strips, wake steps, thrust N, torque N mm, CPU seconds) and, for
 thrust and torque, whether they change monotonically, the observed order and GCI_fine (not for
-``--lattices``, which may vary one term at a time); writes nothing.
+``--lattices``, which may vary one term at a time); with ``--strips`` (lattices of one strip count)
+also blade 0's axial force strip by strip, one column a lattice, to find where a change comes from;
+writes nothing.
 """
 
 from __future__ import annotations
 
 import argparse
 import dataclasses
+import json
 import sys
 import time
 from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -56,9 +64,16 @@ def main(argv: list[str] | None = None) -> int:
         help="these lattices (rings, strips, wake steps a turn) instead of three; no GCI",
     )
     parser.add_argument(
-        "--first-step-fraction",
-        type=float,
-        help="the wake's first segment, a fraction of its even step (default the solver's)",
+        "--strips",
+        action="store_true",
+        help="also blade 0's axial force (N) strip by strip, one column a lattice",
+    )
+    parser.add_argument(
+        "--wake",
+        nargs="+",
+        default=[],
+        metavar="FIELD=VALUE",
+        help="the wake's layout changed (torus_cad.vortex.lattice.WakeShape's number fields)",
     )
     args = parser.parse_args(argv)
     from torus_cad.parameters import PropellerParameters
@@ -67,6 +82,9 @@ def main(argv: list[str] | None = None) -> int:
     from torus_cad.vortex.vortex_performance import vortex_performance
 
     params = PropellerParameters.from_toml(args.design) if args.design else PropellerParameters()
+    changes: dict[str, Any] = {  # JSON values: 1 an int, 0.4 a float, true a bool
+        name: json.loads(value) for name, value in (text.split("=") for text in args.wake)
+    }
     if args.lattices:
         lattices = [tuple(int(value) for value in text.split(",")) for text in args.lattices]
     else:
@@ -75,16 +93,17 @@ def main(argv: list[str] | None = None) -> int:
             for level in range(3)
         ]
     rows = []
+    strip_forces = []
     for chordwise, spanwise, steps in lattices:
         lattice = Discretisation(chordwise, spanwise)
-        wake = dataclasses.replace(lattice.wake, steps_per_turn=steps)
-        if args.first_step_fraction is not None:
-            wake = dataclasses.replace(wake, first_step_fraction=args.first_step_fraction)
+        wake = dataclasses.replace(lattice.wake, steps_per_turn=steps, **changes)
         lattice = dataclasses.replace(lattice, wake=wake)
         start = time.process_time()
-        report = vortex_performance(
+        result = vortex_performance(
             params, args.rpm, args.airspeed, lattice, viscous=not args.inviscid
-        ).report
+        )
+        report = result.report
+        strip_forces.append((result.strips.s, result.ring_force_n[..., 2].sum(axis=1)))
         rows.append(
             (
                 chordwise,
@@ -101,6 +120,8 @@ def main(argv: list[str] | None = None) -> int:
             f"{rows[-1][-1]:.1f} |",
             flush=True,
         )
+    if args.strips:
+        _print_strips(strip_forces)
     if args.lattices:
         return 0
     for name, column in (("thrust", 3), ("torque", 4)):
@@ -113,6 +134,15 @@ def main(argv: list[str] | None = None) -> int:
         else:
             print(f"{name}: not monotonic ({', '.join(f'{row[column]:.6g}' for row in rows)})")
     return 0
+
+
+def _print_strips(strip_forces: list[tuple[NDArray[np.float64], NDArray[np.float64]]]) -> None:
+    """One row a strip: its centerline parameter s and blade 0's axial force on it (N) in each
+    lattice (those of the first lattice's strip count)."""
+    s, _ = strip_forces[0]
+    columns = [force for strip_s, force in strip_forces if len(strip_s) == len(s)]
+    for k, value in enumerate(s):
+        print(f"| {value:.3f} | " + " | ".join(f"{column[k]:+.5f}" for column in columns) + " |")
 
 
 if __name__ == "__main__":
