@@ -94,6 +94,7 @@ def main(argv: list[str] | None = None) -> int:
         ]
     rows = []
     strip_forces = []
+    first_result = None
     for chordwise, spanwise, steps in lattices:
         lattice = Discretisation(chordwise, spanwise)
         wake = dataclasses.replace(lattice.wake, steps_per_turn=steps, **changes)
@@ -104,6 +105,7 @@ def main(argv: list[str] | None = None) -> int:
         )
         report = result.report
         strip_forces.append((result.strips.s, result.ring_force_n[..., 2].sum(axis=1)))
+        first_result = first_result or result
         rows.append(
             (
                 chordwise,
@@ -121,7 +123,7 @@ def main(argv: list[str] | None = None) -> int:
             flush=True,
         )
     if args.strips:
-        _print_strips(strip_forces)
+        _print_strips(strip_forces, _flow_across_chord(first_result, args.rpm, args.airspeed))
     if args.lattices:
         return 0
     for name, column in (("thrust", 3), ("torque", 4)):
@@ -136,13 +138,34 @@ def main(argv: list[str] | None = None) -> int:
     return 0
 
 
-def _print_strips(strip_forces: list[tuple[NDArray[np.float64], NDArray[np.float64]]]) -> None:
-    """One row a strip: its centerline parameter s and blade 0's axial force on it (N) in each
-    lattice (those of the first lattice's strip count)."""
+def _print_strips(
+    strip_forces: list[tuple[NDArray[np.float64], NDArray[np.float64]]],
+    flow_chord_cosine: NDArray[np.float64],
+) -> None:
+    """One row a strip: its centerline parameter s, the cosine of the angle between the flow the
+    turning blade meets (rotation and inflow) and its chord (the first lattice's), and blade 0's
+    axial force on it (N) in each lattice (those of the first lattice's strip count)."""
     s, _ = strip_forces[0]
     columns = [force for strip_s, force in strip_forces if len(strip_s) == len(s)]
+    print("| s | cos(flow, chord) | " + " | ".join("axial force N" for _ in columns) + " |")
     for k, value in enumerate(s):
-        print(f"| {value:.3f} | " + " | ".join(f"{column[k]:+.5f}" for column in columns) + " |")
+        forces = " | ".join(f"{column[k]:+.5f}" for column in columns)
+        print(f"| {value:.3f} | {flow_chord_cosine[k]:+.3f} | {forces} |")
+
+
+def _flow_across_chord(result: Any, rpm: float, airspeed: float) -> NDArray[np.float64]:
+    """``(K - 1,)`` each strip's cosine between the kinematic flow at its middle and its chord
+    (leading to trailing edge): near 0 where the chord stands across the flow."""
+    from torus_cad.vortex.solver import kinematic_velocity
+
+    camber = result.blade.camber_m
+    middle = 0.5 * (camber[:-1] + camber[1:]).mean(axis=1)
+    chord = camber[:-1, -1] + camber[1:, -1] - camber[:-1, 0] - camber[1:, 0]
+    flow = kinematic_velocity(middle, rpm * np.pi / 30.0, result.blade.spin, airspeed)
+    along = np.einsum("jk,jk->j", flow, chord)
+    return np.asarray(
+        along / (np.linalg.norm(flow, axis=1) * np.linalg.norm(chord, axis=1)), dtype=np.float64
+    )
 
 
 if __name__ == "__main__":
