@@ -37,7 +37,7 @@ from torus_cad.geometry.blade.blade_surface import (
     blade_surface,
     with_thin_file_edge_closed,
 )
-from torus_cad.geometry.blade.centerline import hub_inset_radius_mm
+from torus_cad.geometry.blade.centerline import free_point_z_range_mm
 from torus_cad.geometry.blade.conventional_blade import (
     ConventionalBlade,
     check_conventional_feasible,
@@ -100,9 +100,9 @@ def _checked_name(name: str) -> str:
 
 
 def free_point_z_bounds(hub_radius_mm: float) -> Bounds:
-    """The range of a free control point's z_L (p2, p3), mm: from the hub's axis (z_L = -(R - R/8),
-    frame L's origin sitting at R - R/8) out to a hundred hub radii."""
-    return Bounds(-hub_inset_radius_mm(hub_radius_mm), 100.0 * hub_radius_mm, True)
+    """The range of a free control point's z_L (p2, p3), mm, as the schema checks it (its ends:
+    torus_cad.geometry.blade.centerline.free_point_z_range_mm)."""
+    return Bounds(*free_point_z_range_mm(hub_radius_mm), True)
 
 
 class TightBends(StrEnum):

@@ -22,6 +22,12 @@ def hub_inset_radius_mm(hub_radius_mm: float) -> float:
     return hub_radius_mm - hub_radius_mm / 8.0
 
 
+def free_point_z_range_mm(hub_radius_mm: float) -> tuple[float, float]:
+    """(low, high), mm: the range of a free control point's z_L (p2, p3), low excluded: from the
+    hub's axis (z_L = -R_inset, frame L's origin sitting at R_inset) out to a hundred hub radii."""
+    return -hub_inset_radius_mm(hub_radius_mm), 100.0 * hub_radius_mm
+
+
 def local_to_cylindrical(
     local: ArrayLike, hub_radius: float, hub_length: float, blade_angle_deg: float
 ) -> NDArray[np.float64]:
