@@ -101,14 +101,13 @@ def reference_design() -> dict[str, Any]:
     rad)."""
     from torus_cad.geometry.section.section_fit import DEGREE, fit_sections
     from torus_cad.parameters import PropellerParameters
-    from torus_cad.parameters.design_checks import section_chords
 
     params = PropellerParameters()
     surface = params.blade_surface()
     fit = fit_sections(
         surface.points,
         surface.trailing_edge_column,
-        section_chords(surface),
+        surface.chords_mm,
         surface.lower_corner_index,
         surface.round_trailing_edge,
     )

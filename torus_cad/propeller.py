@@ -28,6 +28,7 @@ from torus_cad.geometry.blade.blade_surface import BladeSurface
 from torus_cad.geometry.blade.handedness import Handedness, spin_to_push_air_down
 from torus_cad.geometry.hub.mounting import HubMounting, set_screw_arc_deg
 from torus_cad.geometry.hub.seam import seam_angle_deg
+from torus_cad.geometry.section.section_fit import fit_sections
 from torus_cad.kernel.checks import single_valid_solid
 from torus_cad.kernel.fuse import Fused, FuseRoute, fuse_all, fuse_pattern, pattern_blades
 from torus_cad.kernel.hub import hub_shape, run_out_hub
@@ -36,11 +37,11 @@ from torus_cad.kernel.mass_properties import MassProperties, mass_properties, pr
 from torus_cad.kernel.mirror import mirrored
 from torus_cad.kernel.strict import StrictCheck, strict_valid_solid
 from torus_cad.kernel.topology import shape_bytes, shape_from_bytes
-from torus_cad.kernel.wires import SectionCurves, fit_section_curves
+from torus_cad.kernel.wires import SectionCurves, section_curves
 from torus_cad.outputs.output_set import write_output_set
 from torus_cad.parameters import PropellerParameters, resolve_parameters
 from torus_cad.parameters.design import TightBends
-from torus_cad.parameters.design_checks import placed_mounting, section_chords
+from torus_cad.parameters.design_checks import placed_mounting
 from torus_cad.parameters.design_targets import DesignTargets, resolve_design_targets
 from torus_cad.runtime.stage_timer import StageTimer
 from torus_cad.tolerances import VOLUME_CHECK_RELATIVE_PRECISION
@@ -333,13 +334,14 @@ def build_propeller(
             () if screw_arc is None else (screw_arc,),
         )
     with timer.stage(Stage.WIRES):
-        curves = fit_section_curves(
+        fit = fit_sections(
             surface.points,
             surface.trailing_edge_column,
-            section_chords(surface),
+            surface.chords_mm,
             surface.lower_corner_index,
             surface.round_trailing_edge,
         )
+        curves = section_curves(fit)
         fillet_radius = params.hub.root_fillet_radius
         # A round trailing edge leaves the blade's airfoil face open: the fillet needs it in pieces.
         wires = curves.occ_wires(

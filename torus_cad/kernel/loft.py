@@ -46,7 +46,7 @@ def loft_solid(
     OpenCascade's solid, cadquery's a ``cq.Solid``).
 
     The wires must be compatible B-splines (same edges, each with the same degree, knots and
-    pole count, starting at the trailing edge), as :func:`torus_cad.kernel.wires.fit_section_curves`
+    pole count, starting at the trailing edge), as :func:`torus_cad.kernel.wires.section_curves`
     makes them; each edge position gets its own side face (a blunt trailing edge's base and
     the airfoil). The side surface interpolates every pole across the sections with a cubic
     (not-a-knot) spline in the sections' own parameters ``parameters`` (default: uniform in

@@ -52,7 +52,7 @@ from OCP.TColStd import TColStd_Array1OfInteger, TColStd_Array1OfReal
 from OCP.TopoDS import TopoDS_Edge, TopoDS_Wire
 
 from torus_cad.errors import KernelError
-from torus_cad.geometry.section.section_fit import DEGREE, SectionFit, corner_knots, fit_sections
+from torus_cad.geometry.section.section_fit import DEGREE, SectionFit, corner_knots
 
 if TYPE_CHECKING:
     import cadquery as cq
@@ -61,9 +61,9 @@ __all__ = [
     "DEGREE",
     "SectionCurves",
     "bspline_wire",
-    "fit_section_curves",
     "knot_arrays",
     "occ_bspline_wire",
+    "section_curves",
 ]
 
 
@@ -92,18 +92,9 @@ class SectionCurves(SectionFit):
         return [occ_bspline_wire(poles, self.knots, airfoil_pieces, split) for poles in self.poles]
 
 
-def fit_section_curves(
-    section_points: NDArray[np.float64],
-    trailing_edge_index: int,
-    chord_lengths: NDArray[np.float64],
-    lower_corner_index: int | None = None,
-    round_trailing_edge: bool = False,
-) -> SectionCurves:
-    """:func:`torus_cad.geometry.section.section_fit.fit_sections` (its arguments, its
-    GeometryError), as curves that make wires."""
-    fit = fit_sections(
-        section_points, trailing_edge_index, chord_lengths, lower_corner_index, round_trailing_edge
-    )
+def section_curves(fit: SectionFit) -> SectionCurves:
+    """The section curves ``fit`` (torus_cad.geometry.section.section_fit.fit_sections) as curves
+    that make wires."""
     return SectionCurves(**{field.name: getattr(fit, field.name) for field in fields(fit)})
 
 

@@ -27,7 +27,6 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
 
 from torus_cad.errors import GeometryError
 from torus_cad.geometry.analysis.feasibility import FOLD_LIMIT, RESOLUTION_DEVIATION_LIMIT, Margins
@@ -39,7 +38,7 @@ from torus_cad.parameters.design import PropellerParameters, TrailingEdgeShape
 from torus_cad.parameters.design_targets import resolve_design_targets
 from torus_cad.parameters.stl_budget import check_stl_budget
 
-__all__ = ["Feasibility", "check_design", "placed_mounting", "section_chords"]
+__all__ = ["Feasibility", "check_design", "placed_mounting"]
 
 #: What check cannot say without the kernel (a knife edge's fillet is refused before it:
 #: torus_cad.geometry.analysis.feasibility.check_root_fillet_edge): round a flat blunt edge the
@@ -130,21 +129,13 @@ class Feasibility:
         return "; ".join(parts) + f"; checked without the kernel in {self.cpu_seconds:.2f} s of CPU"
 
 
-def section_chords(surface: BladeSurface) -> NDArray[np.float64]:
-    """``(sections,)`` chord of each sampled section, mm: trailing edge to the ring's first
-    point."""
-    return np.linalg.norm(
-        surface.points[:, surface.trailing_edge_column] - surface.points[:, 0], axis=-1
-    )
-
-
 def fitted_sections(surface: BladeSurface) -> SectionFit:
     """The section curves the kernel lofts, as arrays (GeometryError for a trailing edge they cannot
     resolve)."""
     return fit_sections(
         surface.points,
         surface.trailing_edge_column,
-        section_chords(surface),
+        surface.chords_mm,
         surface.lower_corner_index,
         surface.round_trailing_edge,
     )

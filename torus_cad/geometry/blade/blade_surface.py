@@ -65,6 +65,15 @@ class BladeSurface:
             raise ValueError("this surface was sampled without the trailing edge as a point")
         return self.trailing_edge_index
 
+    @property
+    def chords_mm(self) -> NDArray[np.float64]:
+        """``(sections,)`` chord of each sampled section, mm: trailing edge to the ring's first
+        point."""
+        return np.asarray(
+            np.linalg.norm(self.points[:, self.trailing_edge_column] - self.points[:, 0], axis=-1),
+            dtype=np.float64,
+        )
+
 
 def place_on_frames(frames: Frames, planar: NDArray[np.float64]) -> NDArray[np.float64]:
     """X along N, Y along B (spec §4.2): ``(k, p, 2)`` section coordinates -> ``(k, p, 3)`` mm."""
