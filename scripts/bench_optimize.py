@@ -57,8 +57,8 @@ def _sweep(spec, parameter_sets, out: Path, workers: int) -> Run:
     """The sweep's runner on these designs."""
     from torus_cad.batch.designs import Design
     from torus_cad.batch.job import DesignTask
-    from torus_cad.batch.sweep import _run
     from torus_cad.batch.sweep_file import SweepSpec
+    from torus_cad.batch.sweep_run import _run
     from torus_cad.runtime.progress import BatchProgress
 
     sweep = SweepSpec(name="bench", base=spec.base)

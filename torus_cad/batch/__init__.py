@@ -7,7 +7,7 @@
   isolation, workers that die with their parent) or, through :mod:`~torus_cad.batch.cluster`,
   on Dask;
 * :mod:`~torus_cad.batch.table` writes the results as CSV and Parquet;
-* :mod:`~torus_cad.batch.sweep` puts these together for ``torus-cad sweep``.
+* :mod:`~torus_cad.batch.sweep_run` puts these together for ``torus-cad sweep``.
 
 ::
 
@@ -23,8 +23,8 @@ from torus_cad.batch.designs import Design, design_id, generate_designs
 from torus_cad.batch.job import DesignTask, run_design
 from torus_cad.batch.outcome import DesignResult, Outcome
 from torus_cad.batch.runner import BatchError, Interrupted, LocalPool, run_tasks
-from torus_cad.batch.sweep import SweepInterrupted, SweepResult, run_sweep
 from torus_cad.batch.sweep_file import SweepMode, SweepSpec, VaryAxis, load_sweep, parse_sweep
+from torus_cad.batch.sweep_run import SweepInterrupted, SweepResult, run_sweep
 
 __all__ = [
     "BatchError",
