@@ -39,7 +39,9 @@ def assert_faces_come_from_their_parts(
     parts = {HUB_PART: propeller.hub, **dict(enumerate(propeller.blades))}
     for face, part in zip(faces, face_parts, strict=True):
         vertices, _ = face.tessellate(0.2, 0.5)
-        points = np.array([vertex.toTuple() for vertex in vertices])
+        points = np.array([vertex.toTuple() for vertex in vertices]).reshape(-1, 3)
+        if not len(points):  # a face too small to tessellate: the middle of its parameter box
+            points = np.array([face.positionAt(0.5, 0.5).toTuple()])
         points = points[np.linspace(0, len(points) - 1, min(8, len(points))).astype(int)]
         distance = {
             other: float(np.median(distances_to_shape(shape, points)))

@@ -454,7 +454,9 @@ def fillet_stage(monkeypatch):
 
     monkeypatch.setattr("torus_cad.parameters.design.check_root_fillet_edge", lambda *args: None)
 
-    monkeypatch.setattr(pipeline, "_strictly_valid", lambda solid, sharp_edge_fillet: (solid, None))
+    monkeypatch.setattr(
+        pipeline, "strict_valid_propeller", lambda solid, sharp_edge_fillet: (solid, None)
+    )
     return pipeline.build_propeller
 
 

@@ -29,13 +29,12 @@ from torus_cad.geometry.blade.handedness import Handedness, spin_to_push_air_dow
 from torus_cad.geometry.hub.mounting import HubMounting, set_screw_arc_deg
 from torus_cad.geometry.hub.seam import seam_angle_deg
 from torus_cad.geometry.section.section_fit import fit_sections
-from torus_cad.kernel.checks import single_valid_solid
-from torus_cad.kernel.fuse import Fused, FuseRoute, fuse_all, fuse_pattern, pattern_blades
+from torus_cad.kernel.fuse import FuseRoute, joined_propeller, pattern_blades
 from torus_cad.kernel.hub import hub_shape, run_out_hub
 from torus_cad.kernel.loft import loft_solid
-from torus_cad.kernel.mass_properties import MassProperties, mass_properties, precise_volume
+from torus_cad.kernel.mass_properties import MassProperties, mass_properties
 from torus_cad.kernel.mirror import mirrored
-from torus_cad.kernel.strict import StrictCheck, strict_valid_solid
+from torus_cad.kernel.strict import StrictCheck, strict_valid_propeller
 from torus_cad.kernel.topology import shape_bytes, shape_from_bytes
 from torus_cad.kernel.wires import SectionCurves, section_curves
 from torus_cad.outputs.output_set import write_output_set
@@ -44,7 +43,6 @@ from torus_cad.parameters.design import TightBends
 from torus_cad.parameters.design_checks import placed_mounting
 from torus_cad.parameters.design_targets import DesignTargets, resolve_design_targets
 from torus_cad.runtime.stage_timer import StageTimer
-from torus_cad.tolerances import VOLUME_CHECK_RELATIVE_PRECISION
 
 if TYPE_CHECKING:
     import cadquery as cq
@@ -406,11 +404,11 @@ def build_propeller(
             solid, root_fillet = filleted.solid.wrapped, filleted
             route, face_parts = FuseRoute.ASSEMBLED, filleted.face_parts
     else:
-        solid, fused = _join_blades_to_hub(hub, blade, blades, angles_deg, timer)
+        solid, fused = joined_propeller(hub, blade, blades, angles_deg, timer)
         route, face_parts = fused.route, fused.face_parts
     # before the mirror, which copies the faces and loses the pattern
     with timer.stage(Stage.STRICT_CHECK):
-        solid, checks = _strictly_valid(
+        solid, checks = strict_valid_propeller(
             solid, root_fillet is not None and surface.lower_corner_index is None
         )
     # the spec's blade is 'cw'; 'ccw' is its mirror image (an isometry)
@@ -438,71 +436,8 @@ def build_propeller(
     )
 
 
-def _strictly_valid(
-    solid: TopoDS_Shape, fillet_on_sharp_edge: bool
-) -> tuple[TopoDS_Shape, StrictCheck]:
-    """:func:`torus_cad.kernel.strict.strict_valid_solid`, its error with the way out for a filleted
-    knife edge."""
-    try:
-        return strict_valid_solid(solid, "the propeller")
-    except KernelError as error:
-        if not fillet_on_sharp_edge:
-            raise
-        # OpenCascade's rolling ball turns round the zero-thickness edge in one degenerate corner
-        # face.
-        raise KernelError(
-            f"{error}; a root fillet round a sharp trailing edge can leave a self-intersecting "
-            "corner face there: airfoil.trailing_edge_thickness > 0 with "
-            "airfoil.trailing_edge_shape = 'round' takes it"
-        ) from None
-
-
 #: Another name for :func:`build_propeller`, for people who continue in CadQuery.
 propeller_objects = build_propeller
-
-
-def _join_blades_to_hub(
-    hub: TopoDS_Shape,
-    blade: TopoDS_Shape,
-    blades: list[TopoDS_Shape],
-    angles_deg: list[float],
-    timer: StageTimer[Stage],
-) -> tuple[TopoDS_Shape, Fused[TopoDS_Shape]]:
-    """The fused, checked propeller and how it was made (route, each face's part).
-
-    The shared-intersection route's result is checked for validity, which includes every
-    edge's curve on the hub against its 3D curve. Where that route fails, one general fuse
-    is used and its volume is checked as well.
-    """
-    try:
-        with timer.stage(Stage.FUSE):
-            fused = fuse_pattern(hub, blade, angles_deg)
-        with timer.stage(Stage.CHECK):
-            return single_valid_solid(fused.shape, "joining the blades to the hub"), fused
-    except KernelError:
-        pass  # the general fuse below decides
-    with timer.stage(Stage.FUSE):
-        fused = fuse_all(hub, blades)
-    with timer.stage(Stage.CHECK):
-        solid = single_valid_solid(fused.shape, "fusing the blades with the hub")
-        _check_volume(solid, hub, blade, len(blades))
-    return solid, fused
-
-
-def _check_volume(solid: TopoDS_Shape, hub: TopoDS_Shape, blade: TopoDS_Shape, blades: int) -> None:
-    """hub < fused <= hub + n x blade: a fuse that lost or doubled material is an error."""
-    volume, hub_volume, blade_volume = (
-        precise_volume(shape, VOLUME_CHECK_RELATIVE_PRECISION) for shape in (solid, hub, blade)
-    )
-    if (
-        not hub_volume
-        < volume
-        <= (hub_volume + blades * blade_volume) * (1 + 10 * VOLUME_CHECK_RELATIVE_PRECISION)
-    ):
-        raise KernelError(
-            f"the fused volume {volume:.3f} mm^3 is outside (hub {hub_volume:.3f}, "
-            f"hub + {blades} blades {hub_volume + blades * blade_volume:.3f}] mm^3"
-        )
 
 
 def write_outputs(

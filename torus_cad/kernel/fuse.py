@@ -34,10 +34,13 @@ from OCP.TopAbs import TopAbs_FACE, TopAbs_WIRE
 from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Shape, TopoDS_Shell, TopoDS_Solid
 
+from torus_cad.build_stages import Stage
 from torus_cad.errors import KernelError
 from torus_cad.geometry.blade.propeller_geometry import HUB_PART
+from torus_cad.kernel.checks import single_valid_solid
 from torus_cad.kernel.edge_curves import refit_intersection_edges
 from torus_cad.kernel.face_provenance import Origins, face_parts, through_history
+from torus_cad.kernel.mass_properties import precise_volume
 from torus_cad.kernel.topology import (
     AnyShape,
     ShapeT,
@@ -52,6 +55,8 @@ from torus_cad.kernel.topology import (
     result,
     transformed,
 )
+from torus_cad.runtime.stage_timer import StageTimer
+from torus_cad.tolerances import VOLUME_CHECK_RELATIVE_PRECISION
 
 if TYPE_CHECKING:
     import cadquery as cq  # noqa: F401 (the shapes' other kind, in annotations)
@@ -327,3 +332,74 @@ def _modified_faces_of_shape(
     operation: BRepAlgoAPI_BooleanOperation, shape: TopoDS_Shape
 ) -> list[TopoDS_Face]:
     return [piece for face in faces(shape) for piece in _modified_faces(operation, face)]
+
+
+def joined_propeller(
+    hub: TopoDS_Shape,
+    blade: TopoDS_Shape,
+    blades: list[TopoDS_Shape],
+    angles_deg: list[float],
+    timer: StageTimer[Stage],
+) -> tuple[TopoDS_Shape, Fused[TopoDS_Shape]]:
+    """The fused, checked propeller of ``hub`` and ``blades`` (``blade`` turned to ``angles_deg``),
+    and how it was made (route, each face's part), each step timed as a build stage.
+
+    The shared-intersection route's result is checked for validity, which includes every
+    edge's curve on the hub against its 3D curve. Where that route fails, one general fuse
+    is used and its volume is checked as well (:func:`check_fused_volume`).
+
+    Args:
+        hub: the hub solid, mm.
+        blade: blade 0, mm.
+        blades: every blade, ``blade`` turned to each of ``angles_deg``.
+        angles_deg: the blades' angles about +z, degrees.
+        timer: times the FUSE and CHECK stages.
+
+    Returns:
+        The single valid solid and the fuse that made it.
+
+    Raises:
+        KernelError: neither route gives one valid solid, or the general fuse lost or doubled
+            material.
+    """
+    try:
+        with timer.stage(Stage.FUSE):
+            fused = fuse_pattern(hub, blade, angles_deg)
+        with timer.stage(Stage.CHECK):
+            return single_valid_solid(fused.shape, "joining the blades to the hub"), fused
+    except KernelError:
+        pass  # the general fuse below decides
+    with timer.stage(Stage.FUSE):
+        fused = fuse_all(hub, blades)
+    with timer.stage(Stage.CHECK):
+        solid = single_valid_solid(fused.shape, "fusing the blades with the hub")
+        check_fused_volume(solid, hub, blade, len(blades))
+    return solid, fused
+
+
+def check_fused_volume(
+    solid: TopoDS_Shape, hub: TopoDS_Shape, blade: TopoDS_Shape, blades: int
+) -> None:
+    """hub < fused <= hub + n x blade: a fuse that lost or doubled material is an error.
+
+    Args:
+        solid: the fused propeller, mm.
+        hub: the hub, mm.
+        blade: one blade, mm.
+        blades: how many blades were fused.
+
+    Raises:
+        KernelError: the fused volume lies outside that interval (naming the three volumes).
+    """
+    volume, hub_volume, blade_volume = (
+        precise_volume(shape, VOLUME_CHECK_RELATIVE_PRECISION) for shape in (solid, hub, blade)
+    )
+    if (
+        not hub_volume
+        < volume
+        <= (hub_volume + blades * blade_volume) * (1 + 10 * VOLUME_CHECK_RELATIVE_PRECISION)
+    ):
+        raise KernelError(
+            f"the fused volume {volume:.3f} mm^3 is outside (hub {hub_volume:.3f}, "
+            f"hub + {blades} blades {hub_volume + blades * blade_volume:.3f}] mm^3"
+        )

@@ -334,3 +334,22 @@ def _check_blade_separation(pattern: _Pattern, solid: TopoDS_Shape, what: str) -
                 f"cross (distance {distance.Value():.2g} mm, "
                 f"at least {STRICT_BLADE_SEPARATION_MM:g} mm required; self-interference test)"
             )
+
+
+def strict_valid_propeller(
+    solid: TopoDS_Shape, fillet_on_sharp_edge: bool
+) -> tuple[TopoDS_Shape, StrictCheck]:
+    """:func:`strict_valid_solid` on the propeller; its error says the way out when a root fillet
+    (``fillet_on_sharp_edge``) runs round a knife trailing edge."""
+    try:
+        return strict_valid_solid(solid, "the propeller")
+    except KernelError as error:
+        if not fillet_on_sharp_edge:
+            raise
+        # OpenCascade's rolling ball turns round the zero-thickness edge in one degenerate corner
+        # face.
+        raise KernelError(
+            f"{error}; a root fillet round a sharp trailing edge can leave a self-intersecting "
+            "corner face there: airfoil.trailing_edge_thickness > 0 with "
+            "airfoil.trailing_edge_shape = 'round' takes it"
+        ) from None
