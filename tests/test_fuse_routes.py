@@ -14,7 +14,7 @@ from face_measures import assert_faces_come_from_their_parts
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-import torus_cad.propeller as pipeline
+import torus_cad.kernel.fuse as fuse
 from torus_cad.errors import KernelError
 from torus_cad.geometry.hub.seam import footprint_arcs_deg, seam_angle_deg
 from torus_cad.kernel.checks import is_valid_closed_solid, single_valid_solid
@@ -154,7 +154,7 @@ def test_when_the_shared_route_fails_the_general_fuse_builds_it(light_params, mo
     def failing(*_args, **_kwargs):
         raise KernelError("the shared route failed")
 
-    monkeypatch.setattr(pipeline, "fuse_pattern", failing)
+    monkeypatch.setattr(fuse, "fuse_pattern", failing)  # the route joined_propeller takes first
     fallback = build_propeller(light_params)
     assert (shared.fuse_route, fallback.fuse_route) == (FuseRoute.ASSEMBLED, FuseRoute.GENERAL)
     assert is_valid_closed_solid(fallback.solid)
@@ -166,7 +166,6 @@ def test_when_the_shared_route_fails_the_general_fuse_builds_it(light_params, mo
 def test_a_wrong_curve_on_the_hub_is_caught_not_shipped(light_params, monkeypatch):
     # Shift every copied intersection curve off its place on the cylinder: the validity check
     # of the shared route must reject it, and the general fuse must take over.
-    import torus_cad.kernel.fuse as fuse
 
     real_vector = fuse.gp_Vec2d
     monkeypatch.setattr(fuse, "gp_Vec2d", lambda du, dv: real_vector(du + 0.05 if du else du, dv))
