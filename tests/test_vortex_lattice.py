@@ -109,6 +109,42 @@ def test_a_cambered_elliptic_wing_lifts_at_zero_incidence_as_thin_airfoil_theory
     )
 
 
+def _ideally_twisted_rotor(tip_pitch_deg: float, radius_m: float = 0.15) -> np.ndarray:
+    """Blade 0 of a hovering rotor twisted for uniform inflow (blade-element momentum theory: a
+    constant-chord blade's pitch theta(r) = theta_tip R / r): flat, 20 mm chord, from 0.2 R to the
+    tip along +x, the air meeting it from -y, ``(K, C + 1, 3)``."""
+    radius = radius_m * (0.2 + 0.8 * np.sin(np.linspace(0.0, math.pi / 2.0, 31)))  # tip clustered
+    pitch = math.radians(tip_pitch_deg) * radius_m / radius
+    fractions = cosine_fractions(8)
+    grid = np.zeros((len(radius), len(fractions), 3))
+    grid[..., 0] = radius[:, None]
+    grid[..., 1] = (fractions[None, :] - 0.5) * 0.02 * np.cos(pitch)[:, None]
+    grid[..., 2] = (0.5 - fractions[None, :]) * 0.02 * np.sin(pitch)[:, None]
+    return grid
+
+
+@pytest.mark.parametrize(("blades", "tip_pitch_deg"), [(2, 4.0), (2, 8.0), (3, 8.0)])
+def test_a_rotor_twisted_for_uniform_inflow_needs_at_least_the_ideal_induced_power_and_near_it(
+    blades: int, tip_pitch_deg: float
+) -> None:
+    omega, radius = 5000.0 * math.pi / 30.0, 0.15
+    result = solve_inviscid(
+        _ideally_twisted_rotor(tip_pitch_deg, radius),
+        blades,
+        1.0,
+        omega,
+        0.0,
+        1.225,
+        radius,
+        WakeShape(),
+    )
+    # momentum theory's ideal: T^1.5 / sqrt(2 rho A); a real wake needs more (tip loss, the
+    # loading's own spread), a figure of merit above 1 would be a wake that induces too little
+    ideal_w = result.thrust_n**1.5 / math.sqrt(2.0 * 1.225 * math.pi * radius**2)
+    assert result.thrust_n > 0.0
+    assert 1.0 <= result.torque_nm * omega / ideal_w <= 1.15
+
+
 @pytest.fixture(scope="module")
 def apc_blade():
     return rotor_blade(PropellerParameters.from_toml(APC), SMALL)
@@ -163,6 +199,19 @@ def test_the_section_polars_take_thrust_and_add_power_at_every_strips_own_reynol
     # the Reynolds number of a strip is its own: V c / nu with the strip's flow (tens of thousands
     # here)
     assert 5e3 < np.median(strips.reynolds) < 2e5
+
+
+def test_the_apc_10x7sf_static_point_at_5000_rpm_is_within_ten_percent_of_the_wind_tunnel() -> None:
+    pytest.importorskip("neuralfoil", reason="the simulate extra is not installed")
+    from studies.wind_tunnel import read_wind_tunnel
+    from torus_cad.vortex.vortex_performance import vortex_performance
+
+    # APC's own station table, the blade the OpenFOAM validation runs on (docs: simulation accuracy)
+    params = PropellerParameters.from_toml("examples/apc_10x7sf_pe0.toml")
+    measured = read_wind_tunnel().static_point(5000.0)
+    report = vortex_performance(params, 5000.0).report
+    assert report["ct"] == pytest.approx(measured.ct, rel=0.10)
+    assert report["cp"] == pytest.approx(measured.cp, rel=0.10)
 
 
 def test_the_vortex_blade_is_the_built_blade_when_the_design_asks_for_a_diameter_and_pitch() -> (

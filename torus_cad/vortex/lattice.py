@@ -14,10 +14,15 @@ meets the trailing edge first (a toroidal loop's return leg turns its trailing e
 rotation); each strip sheds its own two lines.
 
 The wake is prescribed: in the blade's frame its lines turn against the rotation at the rotor's rate
-and travel downstream at the free stream plus the induced velocity on the axis of a uniformly loaded
-actuator disk, v (1 + z / sqrt(z^2 + R^2)) (v at the disk, 2 v far downstream), contracting as the
-slipstream's mass flow requires. v comes from the thrust by momentum theory (:mod:`.solver`
-iterates).
+and travel downstream at the free stream plus momentum theory's induced velocity at the disk, V + v:
+a rigid helix (Goldstein's and XROTOR's wake), neither speeding up nor contracting. v comes from the
+thrust by momentum theory (:mod:`.solver` iterates). The alternative, ``WakeShape.slipstream``,
+moves the lines as the axis of a uniformly loaded actuator disk's slipstream, V + v (1 + z /
+sqrt(z^2 + R^2)) (2 v far downstream), contracting as its mass flow requires: every line then
+travels at the slipstream's core speed, while the vorticity it stands for, rolled up at the
+slipstream's edge, moves at the mean of the speeds either side (V + v far downstream), so the wake
+leaves too fast and induces too little at the blade; measured, its induced power fell 12 % below
+momentum theory's ideal (docs/explanation/simulation-accuracy.md).
 """
 
 from __future__ import annotations
@@ -52,6 +57,8 @@ class WakeShape:
         core_chords: the wake lines' vortex core radius, in mean chords, reached one mean chord
             behind the blade: a line that passes a blade downstream (a toroidal loop's return leg)
             induces a finite velocity there.
+        slipstream: the lines speed up downstream and contract as an actuator disk's slipstream
+            (module doc); False (the default) keeps the rigid helix.
         free_turns: the wake's first turn follows the flow (relaxed, :mod:`.solver`); False (the
             default) keeps the whole wake prescribed, its pitch from the momentum-theory inflow:
             measured, the relaxed turn does not settle on every design (a 4-blade toroidal one) and
@@ -67,6 +74,7 @@ class WakeShape:
     longest_step_deg: float = 60.0
     max_turns: float = 40.0
     core_chords: float = 0.1
+    slipstream: bool = False
     free_turns: bool = False
 
 
@@ -174,11 +182,11 @@ def wake_lines(
     else:
         turns = min(shape.max_turns, length * omega_rad_s / (2.0 * np.pi * base))
         times = _wake_angles(turns, shape) / omega_rad_s
-    travelled = _travelled(times, inflow_m_s, induced_m_s, radius_m)
-    far = inflow_m_s + induced_m_s * (1.0 + travelled / np.hypot(travelled, radius_m))
-    contraction = (
-        np.sqrt(max(base, 1e-12) / np.maximum(far, 1e-12)) if base > 0.0 else np.ones_like(times)
-    )
+    travelled, contraction = base * times, np.ones_like(times)
+    if shape.slipstream and base > 0.0:
+        travelled = _travelled(times, inflow_m_s, induced_m_s, radius_m)
+        far = inflow_m_s + induced_m_s * (1.0 + travelled / np.hypot(travelled, radius_m))
+        contraction = np.sqrt(max(base, 1e-12) / np.maximum(far, 1e-12))
     angle = spin * omega_rad_s * times
     x, y, z = trailing_edge_m[:, 0:1], trailing_edge_m[:, 1:2], trailing_edge_m[:, 2:3]
     cos, sin = np.cos(angle)[None, :], np.sin(angle)[None, :]

@@ -8,8 +8,9 @@ velocity the whole lattice induces at its midpoint. The wake's induced velocity 
 thrust by momentum theory, v = -V/2 + sqrt((V/2)^2 + T / (2 rho A)), A the tip circle's area; wake
 and solve are iterated until that velocity changes by less than :data:`INDUCED_TOLERANCE` of the tip
 speed. Between iterations the thrust is the Kutta-Joukowski force at the kinematic velocity alone
-(no Biot-Savart sum) times the ratio of the full force to it on the last wake where the full sum was
-made; the iteration ends only where that ratio holds on the final wake too.
+(no Biot-Savart sum) times a ratio of the full force to it: the full sum's on the first wake, then,
+each time the wake settles, a secant step from the full sums made there (:func:`_next_ratio`); the
+iteration ends only where the full sum's ratio holds on the final wake too.
 """
 
 from __future__ import annotations
@@ -135,6 +136,7 @@ def solve_inviscid(
     change, blade_part, bound_core = np.inf, BladePart(), BOUND_CORE_CHORDS * mean_chord
     # the full Kutta-Joukowski thrust over the kinematic one (module doc)
     ratio: float | None = None
+    checks: list[tuple[float, float]] = []  # (ratio used, ratio the full sum gave on its wake)
     for iteration in range(1, MAX_WAKE_ITERATIONS + 1):  # noqa: B007 (the count is reported)
         edges = strips[:, :, -1].reshape(-1, 3)
         lines = wake_lines(edges, omega_rad_s, spin, airspeed_m_s, induced, tip_radius_m, wake)
@@ -166,11 +168,12 @@ def solve_inviscid(
             force, moment = _forces(
                 lattice, circulation, spin, omega_rad_s, airspeed_m_s, density, bound_core
             )
-            ratio = blades * float(force[..., 2].sum()) / kinematic if kinematic else 1.0
-            momentum = _momentum_inflow(kinematic * ratio, airspeed_m_s, density, area)
+            measured = blades * float(force[..., 2].sum()) / kinematic if kinematic else 1.0
+            momentum = _momentum_inflow(kinematic * measured, airspeed_m_s, density, area)
             change = abs(momentum - induced) / scale
             if change < INDUCED_TOLERANCE:  # the full sum's thrust gives this wake's inflow too
                 break
+            ratio = _next_ratio(checks, ratio, measured)
         induced = (1.0 - WAKE_RELAXATION) * induced + WAKE_RELAXATION * momentum
     else:
         raise KernelError(
@@ -199,6 +202,21 @@ def solve_inviscid(
         thrust = blades * float(force[..., 2].sum())
     torque = spin * blades * float(moment[..., 2].sum())
     return Inviscid(circulation, force, moment, thrust, torque, induced, iteration, change, lattice)
+
+
+def _next_ratio(checks: list[tuple[float, float]], used: float, measured: float) -> float:
+    """The ratio of full to kinematic thrust to iterate the wake on next, after the full sum gave
+    ``measured`` on the wake that settled with ``used`` (recorded in ``checks``): the secant step
+    toward the ratio that reproduces itself, from the last two checks (the plain update, the
+    measured ratio, swings round it where the wake lies close to the blade)."""
+    checks.append((used, measured))
+    if len(checks) < 2:
+        return measured
+    (used_0, measured_0), (used_1, measured_1) = checks[-2:]
+    miss_0, miss_1 = measured_0 - used_0, measured_1 - used_1
+    if miss_1 == miss_0:
+        return measured
+    return used_1 - miss_1 * (used_1 - used_0) / (miss_1 - miss_0)
 
 
 def _momentum_inflow(thrust_n: float, airspeed_m_s: float, density: float, area_m2: float) -> float:
