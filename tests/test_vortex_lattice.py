@@ -201,6 +201,21 @@ def test_the_section_polars_take_thrust_and_add_power_at_every_strips_own_reynol
     assert 5e3 < np.median(strips.reynolds) < 2e5
 
 
+def test_the_loops_apex_across_the_flow_carries_no_circulation_at_any_chordwise_count() -> None:
+    # the default toroidal design: at the loop's apex the sections meet the flow broadside, where
+    # a lifting surface's boundary condition is near-singular (one strip moved the thrust by 17 %
+    # from 8 to 16 rings across the chord before such strips were held at zero circulation)
+    params = PropellerParameters()
+    solves = []
+    for chordwise in (8, 16):
+        blade = rotor_blade(params, Discretisation(chordwise=chordwise, spanwise=20))
+        solves.append(_solve(blade, 10000.0))
+    share = solves[0].lifting_share
+    assert share.min() == 0.0 and share[0] == 1.0 and share[-1] == 1.0
+    assert not solves[0].circulation[share == 0.0].any()
+    assert solves[1].thrust_n == pytest.approx(solves[0].thrust_n, rel=0.02)
+
+
 def test_the_apc_10x7sf_static_point_at_5000_rpm_is_within_ten_percent_of_the_wind_tunnel() -> None:
     pytest.importorskip("neuralfoil", reason="the simulate extra is not installed")
     from studies.wind_tunnel import read_wind_tunnel

@@ -32,6 +32,10 @@ from torus_cad.vortex.polars import LOW_CONFIDENCE, strip_polars
 from torus_cad.vortex.rotor import Discretisation, RotorBlade, rotor_blade
 from torus_cad.vortex.solver import Inviscid, kinematic_velocity, solve_inviscid
 
+#: The drag coefficient of a flat plate square to the flow (two-dimensional; Hoerner,
+#: Fluid-Dynamic Drag, 3-16): the share of a strip standing across the flow that the lattice does
+#: not hold.
+CROSS_FLOW_PLATE_DRAG = 1.98
 #: The lattice's lift over the polar's is taken within these bounds (a stalled strip keeps some
 #: lift).
 LIFT_RATIO_BOUNDS = (0.0, 1.5)
@@ -173,12 +177,8 @@ def _strip_forces(
     confidence = np.ones(strips)
     ratios = np.ones(strips)
     if viscous and speed.any():
-        turned = (
-            np.einsum(
-                "jk,jk->j", flow, camber[:-1, -1] + camber[1:, -1] - camber[:-1, 0] - camber[1:, 0]
-            )
-            < 0.0
-        )
+        section_chord = camber[:-1, -1] + camber[1:, -1] - camber[:-1, 0] - camber[1:, 0]
+        turned = np.einsum("jk,jk->j", flow, section_chord) < 0.0
         for j, polar in enumerate(strip_polars(blade.sections, reynolds, turned)):
             alpha = polar.zero_lift_deg + cl[j] / polar.lift_slope_per_deg
             # before stall the lattice's lift stands (module doc)
@@ -189,6 +189,9 @@ def _strip_forces(
             ratio = float(np.clip(viscous_cl / cl[j], *LIFT_RATIO_BOUNDS)) if cl[j] > 0.0 else 1.0
             ratios[j] = ratio
             drag = dynamic[j] * cd[j] * flow[j] / max(speed[j], 1e-300)
+            drag = drag + (1.0 - inviscid.lifting_share[j]) * _plate_force(
+                flow[j], section_chord[j], chord[j] * width[j], density
+            )
             force[j] = ratio * force[j] + drag
             moment[j] = ratio * moment[j] + np.cross(middle[j], drag)
             cl[j] = cl[j] * ratio
@@ -204,6 +207,17 @@ def _strip_forces(
         confidence,
     )
     return force, moment, loads, ratios
+
+
+def _plate_force(
+    flow: NDArray[np.float64], chord: NDArray[np.float64], area_m2: float, density: float
+) -> NDArray[np.float64]:
+    """``(3,)`` N: the drag of a flat plate of ``area_m2`` in the part of ``flow`` ``(3,)`` square
+    to its ``chord`` ``(3,)`` (the cross-flow principle), along that part: a strip the lattice does
+    not hold (:func:`torus_cad.vortex.solver.lifting_share`) stands across the flow like one."""
+    along = chord / max(float(np.linalg.norm(chord)), 1e-300)
+    across = flow - float(flow @ along) * along
+    return 0.5 * density * CROSS_FLOW_PLATE_DRAG * area_m2 * float(np.linalg.norm(across)) * across
 
 
 def _lift(
