@@ -5,6 +5,7 @@ and 0.6, as validate_apc_10x7sf.py does for
 OpenFOAM.
 
     python scripts/validate_vortex_apc.py                                  # UIUC's blade, NACA 4412
+    python scripts/validate_vortex_apc.py --design examples/apc_10x7sf_pe0.toml  # APC's table
     python scripts/validate_vortex_apc.py --design examples/apc_10x7sf_e63.toml
     python scripts/validate_vortex_apc.py --inviscid --chordwise 8 --spanwise 30
 
@@ -23,6 +24,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from studies.wind_tunnel import Comparison, markdown_table, read_wind_tunnel  # noqa: E402
+from torus_cad.tolerances import VORTEX_CHORDWISE_DEFAULT, VORTEX_SPANWISE_DEFAULT  # noqa: E402
 
 POINTS = ((4000.0, 0.0), (5000.0, 0.0), (5987.0, 0.0), (5000.0, 0.2), (5000.0, 0.4), (5000.0, 0.6))
 
@@ -32,8 +34,8 @@ def main(argv: list[str] | None = None) -> int:
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
     parser.add_argument("--design", type=Path, default=ROOT / "examples" / "apc_10x7sf.toml")
-    parser.add_argument("--chordwise", type=int, default=8)
-    parser.add_argument("--spanwise", type=int, default=24)
+    parser.add_argument("--chordwise", type=int, default=VORTEX_CHORDWISE_DEFAULT)
+    parser.add_argument("--spanwise", type=int, default=VORTEX_SPANWISE_DEFAULT)
     parser.add_argument("--inviscid", action="store_true", help="no section polars")
     args = parser.parse_args(argv)
     from torus_cad.parameters import PropellerParameters
