@@ -24,7 +24,7 @@ import numpy as np
 from torus_cad.errors import ParameterError
 from torus_cad.geometry.section.airfoil import NacaAirfoil
 from torus_cad.geometry.section.airfoil_file import (
-    _first_crossing,
+    first_crossing,
     read_airfoil_file,
     write_selig_file,
 )
@@ -38,7 +38,7 @@ def _loop(points: int) -> np.ndarray:
     return np.concatenate([upper[::-1], lower[1:]])
 
 
-def _all_pairs_first_crossing(polygon: np.ndarray, rows: int = 256) -> tuple[int, int] | None:
+def _all_pairs_crossing(polygon: np.ndarray, rows: int = 256) -> tuple[int, int] | None:
     start, end = polygon, np.roll(polygon, -1, axis=0)
     count = len(start)
 
@@ -90,11 +90,9 @@ def main() -> None:
             except ParameterError as error:
                 result = f"refused: {error}"
             read_s = time.perf_counter() - start
-            kd_s = _time(_first_crossing, loop, True)
+            kd_s = _time(first_crossing, loop, True)
             reference = (
-                _time(_all_pairs_first_crossing, loop)
-                if points <= args.reference_max
-                else float("nan")
+                _time(_all_pairs_crossing, loop) if points <= args.reference_max else float("nan")
             )
             print(
                 f"{len(loop):>8} {read_s:>9.3f} {kd_s:>10.4f}"

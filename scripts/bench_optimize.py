@@ -58,7 +58,7 @@ def _sweep(spec, parameter_sets, out: Path, workers: int) -> Run:
     from torus_cad.batch.designs import Design
     from torus_cad.batch.job import DesignTask
     from torus_cad.batch.sweep_file import SweepSpec
-    from torus_cad.batch.sweep_run import _run
+    from torus_cad.batch.sweep_run import run_pending
     from torus_cad.runtime.progress import BatchProgress
 
     sweep = SweepSpec(name="bench", base=spec.base)
@@ -71,7 +71,7 @@ def _sweep(spec, parameter_sets, out: Path, workers: int) -> Run:
         for d in designs
     ]  # the files the trials write
     cpu_start = time.process_time()  # the sweep's own loop, its table included
-    result = _run(
+    result = run_pending(
         sweep,
         out,
         designs,

@@ -44,7 +44,7 @@ from torus_cad.outputs.output_set import remove_stale_staging
 from torus_cad.runtime.progress import BatchProgress
 from torus_cad.tolerances import DESIGN_TIME_LIMIT_MAX_S
 
-__all__ = ["MANIFEST_FILE", "SweepInterrupted", "SweepResult", "run_sweep"]
+__all__ = ["MANIFEST_FILE", "SweepInterrupted", "SweepResult", "run_pending", "run_sweep"]
 
 MANIFEST_FILE = "sweep.json"
 
@@ -241,7 +241,7 @@ def run_sweep(
                     oversubscribe,
                     lambda line: print(f"torus-cad: {line}", file=stream or sys.stderr),
                 )
-            result = _run(
+            result = run_pending(
                 spec,
                 out_dir,
                 designs,
@@ -288,7 +288,7 @@ def _plan(
     return designs, pending
 
 
-def _run(
+def run_pending(
     spec: SweepSpec,
     out_dir: Path,
     designs: list[Design],
@@ -302,7 +302,9 @@ def _run(
     bar: BatchProgress,
     job: Job | None,
 ) -> SweepResult:
-    """Run ``pending`` on the local pool or Dask; the table is written whatever happens."""
+    """Run ``pending`` (the designs not yet built) on the local pool or Dask and gather their
+    results into the sweep's result; the table is written whatever happens
+    (scripts/bench_optimize.py times this)."""
     result = SweepResult(spec, out_dir, designs, skipped=len(designs) - len(pending))
     results: dict[str, DesignResult] = {}
 

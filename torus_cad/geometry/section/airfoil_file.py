@@ -487,7 +487,7 @@ def _candidate_pairs(
     return pairs[overlap_y]
 
 
-def _first_crossing(polygon: NDArray[np.float64], closed: bool) -> tuple[int, int] | None:
+def first_crossing(polygon: NDArray[np.float64], closed: bool) -> tuple[int, int] | None:
     """Indices (i, j), i < j, of the first pair of non-adjacent segments that properly cross, or
     None.
 
@@ -535,7 +535,7 @@ def _check_no_crossing(
     loop: NDArray[np.float64], lines: NDArray[np.int64], source: str, budget: TimeBudget
 ) -> None:
     try:
-        crossing = _first_crossing(loop, closed=True)
+        crossing = first_crossing(loop, closed=True)
     except BudgetError as error:
         raise BudgetError(f"{_WHAT} {source!r}: {error}") from None
     budget.check("checking the surfaces for crossings")
@@ -556,7 +556,7 @@ def _check_smooth_section(
     upper, lower = section.points_on_half(u, True), section.points_on_half(u, False)
     # trailing edge -> upper -> leading edge -> lower
     polygon = np.concatenate([upper[::-1], lower[1:]])
-    crossing = _first_crossing(polygon, closed=True)
+    crossing = first_crossing(polygon, closed=True)
     budget.check("checking the smooth curve for crossings")
     if crossing is not None:
         point = polygon[crossing[0]]
