@@ -6,9 +6,9 @@ mean of the velocity at its control points, less its part along the span) the po
 at the strip's Reynolds number takes over where potential flow stops: the strip's effective angle of
 attack is the one at which the polar's linear part gives the lattice's lift coefficient cl (the
 polar's zero-lift angle plus cl over its own lift slope); past the polar's stall angle the strip's
-force is scaled by the polar's lift over the lattice's there (before it the lattice's lift stands:
-the lift is corrected beyond the linear range only), and its profile drag, 1/2 rho V^2 c ds cd along
-the flow, adds to the torque and takes from the thrust.
+force is scaled toward the polar's lift over the lattice's there, fully STALL_BLEND_DEG past it
+(before it the lattice's lift stands: the lift is corrected beyond the linear range only), and its
+profile drag, 1/2 rho V^2 c ds cd along the flow, adds to the torque and takes from the thrust.
 
 The coefficients follow UIUC's convention (n in rev/s, D the tip diameter): CT = T / (rho n^2 D^4),
 CP = P / (rho n^3 D^5), J = V / (n D), efficiency J CT / CP, and at J = 0 the figure of merit
@@ -36,6 +36,11 @@ from torus_cad.vortex.solver import Inviscid, kinematic_velocity, solve_inviscid
 #: Fluid-Dynamic Drag, 3-16): the share of a strip standing across the flow that the lattice does
 #: not hold.
 CROSS_FLOW_PLATE_DRAG = 1.98
+#: Past the polar's stall angle its lift takes over from the lattice's over this many degrees of
+#: effective angle of attack: at once, a strip crossing stall as the lattice is refined jumped in
+#: force, and the APC 10x7 SF's thrust with its polars changed non-monotonically (measured; with
+#: the blend its three-lattice GCI_fine is 0.05 %).
+STALL_BLEND_DEG = 2.0
 #: The lattice's lift over the polar's is taken within these bounds (a stalled strip keeps some
 #: lift).
 LIFT_RATIO_BOUNDS = (0.0, 1.5)
@@ -182,8 +187,9 @@ def _strip_forces(
         for j, polar in enumerate(strip_polars(blade.sections, reynolds, turned)):
             alpha = polar.zero_lift_deg + cl[j] / polar.lift_slope_per_deg
             # before stall the lattice's lift stands (module doc)
-            past_stall = alpha > polar.stall_deg
-            viscous_cl = float(np.interp(alpha, polar.alpha_deg, polar.cl)) if past_stall else cl[j]
+            # the polar's lift takes over past stall, over STALL_BLEND_DEG (module doc)
+            past = float(np.clip((alpha - polar.stall_deg) / STALL_BLEND_DEG, 0.0, 1.0))
+            viscous_cl = cl[j] + past * (float(np.interp(alpha, polar.alpha_deg, polar.cl)) - cl[j])
             cd[j] = float(np.interp(alpha, polar.alpha_deg, polar.cd))
             confidence[j] = float(np.interp(alpha, polar.alpha_deg, polar.confidence))
             ratio = float(np.clip(viscous_cl / cl[j], *LIFT_RATIO_BOUNDS)) if cl[j] > 0.0 else 1.0
