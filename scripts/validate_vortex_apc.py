@@ -32,6 +32,7 @@ from studies.wind_tunnel import Comparison, markdown_table, read_wind_tunnel  # 
 from torus_cad.simulate.settings import OperatingPoint  # noqa: E402
 from torus_cad.tolerances import VORTEX_CHORDWISE_DEFAULT, VORTEX_SPANWISE_DEFAULT  # noqa: E402
 from torus_cad.vortex.lattice import WakeShape  # noqa: E402
+from torus_cad.vortex.solver import momentum_inflow_m_s  # noqa: E402
 
 POINTS = ((4000.0, 0.0), (5000.0, 0.0), (5987.0, 0.0), (5000.0, 0.2), (5000.0, 0.4), (5000.0, 0.6))
 
@@ -86,14 +87,14 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _over_momentum_ideal(result: Any, airspeed_m_s: float) -> float:
-    """The lattice's inviscid power over momentum theory's ideal for its inviscid thrust,
-    T (V + v) with v = -V/2 + sqrt(V^2/4 + T / (2 rho A)), A the tip circle: at least 1 for any
-    rotor."""
+    """The lattice's inviscid power over momentum theory's ideal for its inviscid thrust, T (V + v)
+    (v the solver's own momentum inflow, A the tip circle): at least 1 for any rotor."""
     thrust = result.report["inviscid_thrust_n"]
-    area = math.pi * result.blade.tip_radius_m**2
-    density = OperatingPoint(rpm=1.0).fluid.density_kg_m3
-    induced = -airspeed_m_s / 2.0 + math.sqrt(
-        airspeed_m_s**2 / 4.0 + max(thrust, 0.0) / (2.0 * density * area)
+    induced = momentum_inflow_m_s(
+        thrust,
+        airspeed_m_s,
+        OperatingPoint(rpm=1.0).fluid.density_kg_m3,
+        math.pi * result.blade.tip_radius_m**2,
     )
     return float(result.report["inviscid_power_w"] / (thrust * (airspeed_m_s + induced)))
 

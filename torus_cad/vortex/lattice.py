@@ -111,6 +111,41 @@ class Lattice:
         return int(self.collocation.shape[1])
 
 
+@dataclass(frozen=True)
+class StripFrame:
+    """Each strip's place and axes on a camber grid ``(K, C + 1, 3)`` (one strip between two
+    sections): what the solve, the apex's lifting share and the polars' step all measure from.
+
+    Attributes:
+        middle: ``(K - 1, 3)`` the mean of the strip's two section lines.
+        chord: ``(K - 1, 3)`` the sum of its two sections' leading-to-trailing-edge vectors.
+        span: ``(K - 1, 3)`` from its first section line's mean to its second's.
+    """
+
+    middle: NDArray[np.float64]
+    chord: NDArray[np.float64]
+    span: NDArray[np.float64]
+
+    @classmethod
+    def of(cls, camber_m: NDArray[np.float64]) -> StripFrame:
+        """The strips of the camber grid ``camber_m`` ``(K, C + 1, 3)``."""
+        return cls(
+            0.5 * (camber_m[:-1] + camber_m[1:]).mean(axis=1),
+            camber_m[:-1, -1] + camber_m[1:, -1] - camber_m[:-1, 0] - camber_m[1:, 0],
+            camber_m[1:].mean(axis=1) - camber_m[:-1].mean(axis=1),
+        )
+
+    @property
+    def width(self) -> NDArray[np.float64]:
+        """``(K - 1,)`` each strip's width along the span."""
+        return np.asarray(np.linalg.norm(self.span, axis=1))
+
+    def across_span(self, vectors: NDArray[np.float64]) -> NDArray[np.float64]:
+        """``vectors`` ``(K - 1, 3)``, one a strip, less their parts along the strip's span."""
+        along = self.span / self.width[:, None]
+        return vectors - np.einsum("jk,jk->j", vectors, along)[:, None] * along
+
+
 def ring_grid(camber_m: NDArray[np.float64]) -> NDArray[np.float64]:
     """``(K, C + 1, 3)``: the ring corners of a camber grid ``(K, C + 1, 3)``: each panel's quarter
     line, and the trailing edge."""

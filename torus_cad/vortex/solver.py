@@ -30,7 +30,14 @@ from numpy.typing import NDArray
 
 from torus_cad.errors import KernelError
 from torus_cad.vortex.biot_savart import induced_velocity, normal_influence
-from torus_cad.vortex.lattice import Lattice, WakeShape, rotor_lattice, strip_edges, wake_lines
+from torus_cad.vortex.lattice import (
+    Lattice,
+    StripFrame,
+    WakeShape,
+    rotor_lattice,
+    strip_edges,
+    wake_lines,
+)
 
 #: The wake iteration stops when its induced velocity changes by less than this fraction of the tip
 #: speed (plus the airspeed).
@@ -136,14 +143,12 @@ def solve_inviscid(
         KernelError: the wake iteration did not converge (naming the change reached).
     """
     area = np.pi * tip_radius_m**2
-    middle = 0.5 * (camber_m[:-1] + camber_m[1:]).mean(axis=1)
-    chord = camber_m[:-1, -1] + camber_m[1:, -1] - camber_m[:-1, 0] - camber_m[1:, 0]
-    downstream_first = (
-        np.einsum("jk,jk->j", kinematic_velocity(middle, omega_rad_s, spin, airspeed_m_s), chord)
-        < 0.0
-    )
+    frame = StripFrame.of(camber_m)
+    chord = frame.chord
+    meeting = kinematic_velocity(frame.middle, omega_rad_s, spin, airspeed_m_s)
+    downstream_first = np.einsum("jk,jk->j", meeting, chord) < 0.0
     strips = strip_edges(camber_m, downstream_first)
-    share = lifting_share(camber_m, omega_rad_s, spin, airspeed_m_s)
+    share = lifting_share(frame, meeting)
     lifting = np.repeat(share, camber_m.shape[1] - 1)
     guess = STATIC_INDUCED_GUESS if airspeed_m_s == 0.0 else 0.0
     induced = (
@@ -181,7 +186,7 @@ def solve_inviscid(
                 lattice, circulation, spin, omega_rad_s, airspeed_m_s, density, bound_core
             )
             ratio = blades * float(force[..., 2].sum()) / kinematic if kinematic else 1.0
-        momentum = _momentum_inflow(kinematic * ratio, airspeed_m_s, density, area)
+        momentum = momentum_inflow_m_s(kinematic * ratio, airspeed_m_s, density, area)
         change = abs(momentum - induced) / scale
         # settled on the ratio of the last full sum: check it on this wake
         if change < INDUCED_TOLERANCE:
@@ -189,7 +194,7 @@ def solve_inviscid(
                 lattice, circulation, spin, omega_rad_s, airspeed_m_s, density, bound_core
             )
             measured = blades * float(force[..., 2].sum()) / kinematic if kinematic else 1.0
-            momentum = _momentum_inflow(kinematic * measured, airspeed_m_s, density, area)
+            momentum = momentum_inflow_m_s(kinematic * measured, airspeed_m_s, density, area)
             change = abs(momentum - induced) / scale
             if change < INDUCED_TOLERANCE:  # the full sum's thrust gives this wake's inflow too
                 break
@@ -241,27 +246,23 @@ def _next_ratio(checks: list[tuple[float, float]], used: float, measured: float)
     return used_1 - miss_1 * (used_1 - used_0) / (miss_1 - miss_0)
 
 
-def lifting_share(
-    camber_m: NDArray[np.float64], omega_rad_s: float, spin: float, airspeed_m_s: float
-) -> NDArray[np.float64]:
-    """``(K - 1,)``: how much of each strip the lattice holds to its boundary condition, from the
-    cosine between its chord and the flow the turning blade meets there (less its part along the
-    span): 1 down to CROSS_FLOW_COSINES[1], 0 below CROSS_FLOW_COSINES[0], a smooth step between
-    (module doc). 1 where there is no flow."""
+def lifting_share(frame: StripFrame, meeting: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``(K - 1,)``: how much of each strip of ``frame`` the lattice holds to its boundary
+    condition, from the cosine between its chord and the flow ``meeting`` it ``(K - 1, 3)`` (the
+    turning blade's kinematic flow, less its part along the span): 1 down to
+    CROSS_FLOW_COSINES[1], 0 below CROSS_FLOW_COSINES[0], a smooth step between (module doc). 1
+    where there is no flow."""
     low, high = CROSS_FLOW_COSINES
-    middle = 0.5 * (camber_m[:-1] + camber_m[1:]).mean(axis=1)
-    chord = camber_m[:-1, -1] + camber_m[1:, -1] - camber_m[:-1, 0] - camber_m[1:, 0]
-    span = camber_m[1:].mean(axis=1) - camber_m[:-1].mean(axis=1)
-    along = span / np.linalg.norm(span, axis=1, keepdims=True)
-    flow = kinematic_velocity(middle, omega_rad_s, spin, airspeed_m_s)
-    flow = flow - np.einsum("jk,jk->j", flow, along)[:, None] * along
-    scale = np.linalg.norm(flow, axis=1) * np.linalg.norm(chord, axis=1)
-    cosine = np.abs(np.einsum("jk,jk->j", flow, chord)) / np.maximum(scale, 1e-300)
+    flow = frame.across_span(meeting)
+    scale = np.linalg.norm(flow, axis=1) * np.linalg.norm(frame.chord, axis=1)
+    cosine = np.abs(np.einsum("jk,jk->j", flow, frame.chord)) / np.maximum(scale, 1e-300)
     step = np.clip((cosine - low) / (high - low), 0.0, 1.0)
     return np.where(scale > 0.0, step * step * (3.0 - 2.0 * step), 1.0)
 
 
-def _momentum_inflow(thrust_n: float, airspeed_m_s: float, density: float, area_m2: float) -> float:
+def momentum_inflow_m_s(
+    thrust_n: float, airspeed_m_s: float, density: float, area_m2: float
+) -> float:
     """Momentum theory's induced velocity at the disk (m/s) for ``thrust_n`` on ``area_m2`` in axial
     ``airspeed_m_s``."""
     return float(
@@ -349,8 +350,8 @@ def _circulation(
     spin: float,
     omega: float,
     airspeed: float,
-    blade_part: BladePart | None = None,
-    lifting: NDArray[np.float64] | None = None,
+    blade_part: BladePart,
+    lifting: NDArray[np.float64],
 ) -> NDArray[np.float64]:
     """The rings' circulations ``(K - 1, C)`` that let no flow through the control points, each
     ring's row blended by its ``lifting`` share ``(rings,)`` with one that holds its circulation at
@@ -358,8 +359,6 @@ def _circulation(
     points = lattice.collocation.reshape(-1, 3)
     normals = lattice.normals.reshape(-1, 3)
     on_blades = lattice.on_blades
-    if blade_part is None:
-        blade_part = BladePart()
     if blade_part.matrix is None:
         influence = normal_influence(
             points,
@@ -375,11 +374,10 @@ def _circulation(
     )
     matrix = blade_part.matrix + np.asarray(influence @ lattice.incidence[wake])
     rhs = -np.einsum("pk,pk->p", kinematic_velocity(points, omega, spin, airspeed), normals)
-    if lifting is not None:
-        diagonal = np.diag(matrix).copy()
-        matrix = lifting[:, None] * matrix
-        matrix[np.diag_indices_from(matrix)] += (1.0 - lifting) * diagonal
-        rhs = lifting * rhs
+    diagonal = np.diag(matrix).copy()
+    matrix = lifting[:, None] * matrix
+    matrix[np.diag_indices_from(matrix)] += (1.0 - lifting) * diagonal
+    rhs = lifting * rhs
     circulation = np.linalg.solve(matrix, rhs) if rhs.any() else np.zeros(lattice.rings)
     return circulation.reshape(-1, lattice.grid.shape[2] - 1)
 

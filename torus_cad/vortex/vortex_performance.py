@@ -28,6 +28,7 @@ from torus_cad.parameters.design import PropellerParameters
 from torus_cad.simulate.coefficients import performance
 from torus_cad.simulate.settings import OperatingPoint
 from torus_cad.vortex.biot_savart import induced_velocity
+from torus_cad.vortex.lattice import StripFrame
 from torus_cad.vortex.polars import LOW_CONFIDENCE, strip_polars
 from torus_cad.vortex.rotor import Discretisation, RotorBlade, rotor_blade
 from torus_cad.vortex.solver import Inviscid, kinematic_velocity, solve_inviscid
@@ -154,11 +155,8 @@ def _strip_forces(
     strips = inviscid.circulation.shape[0]
     force = inviscid.force_n.sum(axis=1)
     moment = inviscid.moment_nm.sum(axis=1)
-    camber = blade.camber_m
-    middle = 0.5 * (camber[:-1] + camber[1:]).mean(axis=1)
-    span = camber[1:].mean(axis=1) - camber[:-1].mean(axis=1)
-    width = np.linalg.norm(span, axis=1)
-    along = span / width[:, None]
+    frame = StripFrame.of(blade.camber_m)
+    middle, width = frame.middle, frame.width
     chord = 0.5 * (blade.chord_m[:-1] + blade.chord_m[1:])
     points = lattice.collocation.reshape(-1, 3)
     velocity = kinematic_velocity(points, omega, blade.spin, airspeed)
@@ -170,8 +168,7 @@ def _strip_forces(
             lattice.incidence @ inviscid.circulation.ravel(),
             lattice.core_m,
         )
-    flow = velocity.reshape(strips, -1, 3).mean(axis=1)
-    flow = flow - np.einsum("jk,jk->j", flow, along)[:, None] * along
+    flow = frame.across_span(velocity.reshape(strips, -1, 3).mean(axis=1))
     speed = np.linalg.norm(flow, axis=1)
     density, viscosity = point.fluid.density_kg_m3, point.fluid.viscosity_m2_s
     reynolds = speed * chord / viscosity
@@ -182,7 +179,7 @@ def _strip_forces(
     confidence = np.ones(strips)
     ratios = np.ones(strips)
     if viscous and speed.any():
-        section_chord = camber[:-1, -1] + camber[1:, -1] - camber[:-1, 0] - camber[1:, 0]
+        section_chord = frame.chord
         turned = np.einsum("jk,jk->j", flow, section_chord) < 0.0
         for j, polar in enumerate(strip_polars(blade.sections, reynolds, turned)):
             alpha = polar.zero_lift_deg + cl[j] / polar.lift_slope_per_deg
