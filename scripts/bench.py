@@ -44,6 +44,8 @@ from typing import Any
 
 import numpy as np
 
+from torus_cad.design.described_geometry import propeller_geometry, sampled_blade_surface
+
 STAGES = ("parameters", "section_math", "wires", "loft", "fuse", "check", "step_write", "stl_write")
 BUILD_STAGES = STAGES[:6]
 
@@ -310,12 +312,12 @@ def accuracy_samples(params, per_gap: int = 3, limit: int = 400) -> np.ndarray:
     hub."""
     from torus_cad.geometry.blade.blade_surface import surface_points
 
-    surface = params.blade_surface()
+    surface = sampled_blade_surface(params)
     s = 0.5 * (surface.s[:-1] + surface.s[1:])
     t = np.sort(np.concatenate([surface.t, 0.5 * (surface.t[:-1] + surface.t[1:])]))[::per_gap]
-    points = surface_points(params.geometry().blade, params.geometry().centerline(), s, t).reshape(
-        -1, 3
-    )
+    points = surface_points(
+        propeller_geometry(params).blade, propeller_geometry(params).centerline(), s, t
+    ).reshape(-1, 3)
     margin = 0.05 * params.hub.radius
     away = (np.hypot(points[:, 0], points[:, 1]) > params.hub.radius + margin) | (
         np.abs(points[:, 2]) > params.hub.length / 2 + margin
@@ -380,7 +382,7 @@ def child_mesh_route(payload: dict[str, Any]) -> dict[str, Any]:
     params = _params(payload.get("changes"))
     variant = payload["variant"]
     start = time.perf_counter()
-    blades = [blade_mesh(params.blade_surface(index)) for index in range(params.blades)]
+    blades = [blade_mesh(sampled_blade_surface(params, index)) for index in range(params.blades)]
     if variant in ("pyvista_spec", "pyvista_grid"):
         bodies = [_polydata(mesh.vertices, mesh.faces) for mesh in blades]
         if variant == "pyvista_spec":

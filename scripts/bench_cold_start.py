@@ -99,11 +99,12 @@ def reference_design() -> dict[str, Any]:
     """What the reference script builds, as JSON data: the default design's section B-splines (the
     fit the build lofts, from the geometry layer), its blade count, hub and STL deflections (mm,
     rad)."""
+    from torus_cad.design.described_geometry import sampled_blade_surface
     from torus_cad.geometry.section.section_fit import DEGREE, fit_sections
     from torus_cad.parameters import PropellerParameters
 
     params = PropellerParameters()
-    surface = params.blade_surface()
+    surface = sampled_blade_surface(params)
     fit = fit_sections(
         surface.points,
         surface.trailing_edge_column,

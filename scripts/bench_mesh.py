@@ -36,6 +36,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+from torus_cad.design.described_geometry import sampled_blade_surface
+
 ROOT = Path(__file__).resolve().parent.parent
 
 
@@ -144,7 +146,9 @@ def child_pyvista(sections: int, points: int) -> None:
 
     params = PropellerParameters()
     start = time.perf_counter()
-    surfaces = [params.blade_surface(index, sections, points) for index in range(params.blades)]
+    surfaces = [
+        sampled_blade_surface(params, index, sections, points) for index in range(params.blades)
+    ]
     bodies = [
         polydata(*(lambda mesh: (mesh.vertices, mesh.faces))(blade_mesh(surface)))
         for surface in surfaces

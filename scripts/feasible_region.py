@@ -8,7 +8,7 @@ Every point of the grid is the default propeller with the centerline's height (z
 mm: how far the blade reaches out from the hub) and the chord law's constant term
 (``transforms.scale_x[4]``, mm: the chord at the blade's two ends, which the mid-span chord
 exceeds by 4 mm) set to the point's values, checked by
-:func:`torus_cad.parameters.design_checks.check_design` (what ``torus-cad check`` and the sweep's
+:func:`torus_cad.design.design_checks.check_design` (what ``torus-cad check`` and the sweep's
 and study's pre-screen run; no kernel). Each point is coloured by the first check that refuses it,
 the default design is marked, and the command prints the counts and the check's CPU time per design.
 """
@@ -25,9 +25,9 @@ from pathlib import Path
 
 import numpy as np
 
+from torus_cad.design.design_checks import check_design
 from torus_cad.errors import GeometryError, ParameterError
 from torus_cad.parameters import PropellerParameters
-from torus_cad.parameters.design_checks import check_design
 
 ROOT = Path(__file__).resolve().parent.parent
 X_KEY, Y_KEY = "centerline height (z_L of P2 and P3)", "transforms.scale_x[4]"

@@ -16,9 +16,10 @@ from pathlib import Path
 
 import numpy as np
 
+from torus_cad.design.described_geometry import sampled_blade_surface
+from torus_cad.design.design_targets import tip_radius_mm
 from torus_cad.geometry.analysis.blade_elements import NEARLY_RADIAL_FRACTION
 from torus_cad.outputs.sections_table import elements_of
-from torus_cad.parameters.design_targets import tip_radius_mm
 from torus_cad.preview.picture import render_preview, write_png
 from torus_cad.preview.size import parse_size
 from torus_cad.propeller import build_propeller
@@ -43,7 +44,7 @@ def caption(propeller) -> str:
     """Name, blades, tip diameter and pitch at 75 % radius (mm), as the designer reads them."""
     params = propeller.parameters
     diameter = 2.0 * tip_radius_mm(params)
-    elements = elements_of(params.blade_surface(sections=201))
+    elements = elements_of(sampled_blade_surface(params, sections=201))
     radius = 0.375 * diameter
     pitch = elements.pitch_at_radius(radius)
     radial = np.interp(

@@ -37,6 +37,7 @@ from OCP.BRepTools import BRepTools
 from OCP.gp import gp_Pnt2d
 from OCP.TopAbs import TopAbs_IN
 
+from torus_cad.design.described_geometry import propeller_geometry
 from torus_cad.errors import GeometryError, KernelError, ParameterError
 from torus_cad.geometry.blade.blade_surface import surface_points
 from torus_cad.kernel.fillet.tight_bends import concave_bend_radius_mm
@@ -86,7 +87,7 @@ def analytic_tightest_concave_radius_mm(
     """The smallest concave radius (mm, seen from outside) of blade 0's analytic surface where it
     lies within ``band_mm`` above the hub's cylinder and between the hub's end planes; inf when
     none."""
-    geometry = params.geometry()
+    geometry = propeller_geometry(params)
     blade, centerline = geometry.blade, geometry.centerline(0)
     s = np.linspace(step_s, 1.0 - step_s, samples)
     t = np.linspace(0.0, 2.0, samples, endpoint=False) + 1e-3 / samples

@@ -5,7 +5,7 @@
     python scripts/stl_budget.py --design thin --design "1 blade"
 
 For each design and (linear, angular) deflection it prints the estimate that the build checks
-against the limit before tessellating (torus_cad.parameters.stl_budget), the triangles BRepMesh
+against the limit before tessellating (torus_cad.design.stl_budget), the triangles BRepMesh
 really makes, their ratio and the tessellation time. Settings whose estimate is above --max-estimate
 are skipped (BRepMesh's time grows faster than its triangle count on the lofted blades).
 """
@@ -68,8 +68,8 @@ def main() -> int:
         "--max-estimate", type=float, default=400_000, help="skip settings estimated above this"
     )
     args = parser.parse_args()
+    from torus_cad.design.stl_budget import estimated_stl_triangles
     from torus_cad.parameters import PropellerParameters
-    from torus_cad.parameters.stl_budget import estimated_stl_triangles
     from torus_cad.propeller import build_propeller
 
     names = args.design or (QUICK_DESIGNS if args.quick else tuple(DESIGNS))

@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+from torus_cad.design.described_geometry import propeller_geometry
 from torus_cad.errors import GeometryError
 from torus_cad.geometry.blade.centerline import Centerline, local_to_cylindrical
 from torus_cad.geometry.blade.frames import frenet_frames, rotation_minimizing_frames
@@ -15,7 +16,7 @@ def test_p1_sits_at_the_spec_position():
     params = PropellerParameters().with_values(
         {"hub.radius": 16.0, "hub.length": 30.0, "phase_deg": 30.0}
     )
-    p1 = params.geometry().centerline().control_points[0]
+    p1 = propeller_geometry(params).centerline().control_points[0]
     inset = 16.0 - 16.0 / 8.0
     np.testing.assert_allclose(
         p1, [inset * np.cos(np.radians(30)), inset * np.sin(np.radians(30)), 14.0]
@@ -31,16 +32,18 @@ def test_frame_l_maps_like_the_change_of_basis_matrix():
 
 
 def test_curve_starts_at_p1_and_ends_at_p4(default_params):
-    centerline = default_params.geometry().centerline()
+    centerline = propeller_geometry(default_params).centerline()
     ends = centerline.points([0.0, 1.0])
-    points = default_params.geometry().centerline().control_points
+    points = propeller_geometry(default_params).centerline().control_points
     np.testing.assert_allclose(ends, points[[0, 3]], atol=1e-12)
     # z_L = 0 for P4
-    assert np.hypot(*ends[1, :2]) == pytest.approx(default_params.geometry().hub.inset_radius_mm)
+    assert np.hypot(*ends[1, :2]) == pytest.approx(
+        propeller_geometry(default_params).hub.inset_radius_mm
+    )
 
 
 def test_curve_is_the_cubic_bezier_of_its_control_points(default_params):
-    points = default_params.geometry().centerline().control_points
+    points = propeller_geometry(default_params).centerline().control_points
     s = S[:, None]
     bezier = (
         (1 - s) ** 3 * points[0]
@@ -53,7 +56,7 @@ def test_curve_is_the_cubic_bezier_of_its_control_points(default_params):
 
 @pytest.mark.parametrize("frames_of", [frenet_frames, rotation_minimizing_frames])
 def test_frames_are_orthonormal_and_right_handed(default_params, frames_of):
-    frames = frames_of(default_params.geometry().centerline(), S)
+    frames = frames_of(propeller_geometry(default_params).centerline(), S)
     basis = np.stack([frames.tangent, frames.normal, frames.binormal], axis=1)
     np.testing.assert_allclose(
         basis @ basis.transpose(0, 2, 1), np.broadcast_to(np.eye(3), basis.shape), atol=1e-12
@@ -62,7 +65,7 @@ def test_frames_are_orthonormal_and_right_handed(default_params, frames_of):
 
 
 def test_frenet_normal_points_along_the_turning_tangent(default_params):
-    centerline = default_params.geometry().centerline()
+    centerline = propeller_geometry(default_params).centerline()
     frames = frenet_frames(centerline, S)
     tangent = np.gradient(frames.tangent, S, axis=0)
     expected = tangent / np.linalg.norm(tangent, axis=1, keepdims=True)
@@ -92,7 +95,7 @@ def test_rotation_minimizing_frame_handles_straight_and_inflecting_curves():
 
 
 def test_rotation_minimizing_frame_starts_like_frenet(default_params):
-    centerline = default_params.geometry().centerline()
+    centerline = propeller_geometry(default_params).centerline()
     np.testing.assert_allclose(
         rotation_minimizing_frames(centerline, [0.0]).normal,
         frenet_frames(centerline, [0.0]).normal,

@@ -146,7 +146,7 @@ def _memory_after_imports_kb(env: dict[str, str]) -> int:
     """Address space of a torus-cad process once everything is imported (VmPeak, kB)."""
     code = (
         "import torus_cad.propeller, torus_cad.outputs.output_set, torus_cad.cli, "
-        "torus_cad.parameters.stl_budget\n"
+        "torus_cad.design.stl_budget\n"
         "print([l for l in open('/proc/self/status') if l.startswith('VmPeak')][0].split()[1])"
     )
     return int(

@@ -16,6 +16,12 @@ from conftest import EXAMPLES_DIR, read_binary_stl
 from OCP.BRepCheck import BRepCheck_Analyzer
 from scipy.spatial import ConvexHull
 
+from torus_cad.design.described_geometry import (
+    check_design_feasible,
+    conventional_blade,
+    sampled_blade_surface,
+    wall_printability,
+)
 from torus_cad.errors import ParameterError
 from torus_cad.geometry.blade.station_table import read_station_file
 from torus_cad.kernel.mass_properties import precise_volume
@@ -197,7 +203,7 @@ def test_a_bad_station_table_exits_2_naming_the_line_and_writes_nothing(tmp_path
 
 
 def test_a_good_table_and_its_inline_copy_give_the_same_blade(tmp_path):
-    from_file = PropellerParameters.from_toml(_design(tmp_path, _GOOD)).blade_surface()
+    from_file = sampled_blade_surface(PropellerParameters.from_toml(_design(tmp_path, _GOOD)))
     inline = PropellerParameters.from_dict(
         {
             "kind": "conventional",
@@ -210,7 +216,7 @@ def test_a_good_table_and_its_inline_copy_give_the_same_blade(tmp_path):
             },
         }
     )
-    np.testing.assert_allclose(inline.blade_surface().points, from_file.points, atol=1e-12)
+    np.testing.assert_allclose(sampled_blade_surface(inline).points, from_file.points, atol=1e-12)
 
 
 def test_the_kinds_refuse_each_others_inputs():
@@ -285,7 +291,7 @@ def test_a_blunt_round_trailing_edge_is_in_every_section():
     params = PropellerParameters.from_toml(DESIGN).with_values(
         {"airfoil.trailing_edge_thickness": 0.2}
     )
-    surface = params.blade_surface()
+    surface = sampled_blade_surface(params)
     assert surface.round_trailing_edge and surface.lower_corner_index is not None
     gaps = np.linalg.norm(
         surface.points[:, surface.trailing_edge_column]
@@ -293,7 +299,7 @@ def test_a_blunt_round_trailing_edge_is_in_every_section():
         axis=-1,
     )
     np.testing.assert_allclose(gaps, 0.2, rtol=1e-6)
-    assert params.printability().trailing_edge_thickness_mm == pytest.approx(0.2)
+    assert wall_printability(params).trailing_edge_thickness_mm == pytest.approx(0.2)
 
 
 def test_a_station_file_is_read_as_untrusted_input(tmp_path):
@@ -311,7 +317,7 @@ def test_apc_sweep_puts_the_leading_edge_ahead_of_the_axis():
             "conventional.thickness_ratio": [],
         }
     )
-    table, surface = read_station_file(PE0), params.blade_surface(sections=60)
+    table, surface = read_station_file(PE0), sampled_blade_surface(params, sections=60)
     radius = surface.frames.origin[:, 0]
     outboard = (radius > 40.0) & (radius < 120.0)
     # column 0: the leading edge; 'cw' blade 0 moves toward -y
@@ -354,14 +360,14 @@ def test_the_pre_kernel_checks_hold_at_any_phase_and_refuse_crowded_blades():
     params = PropellerParameters.from_toml(DESIGN)
     for phase_deg in (180.0, -170.0):
         turned = params.with_values({"phase_deg": phase_deg})
-        turned.check_feasible(turned.blade_surface())
+        check_design_feasible(turned, sampled_blade_surface(turned))
     crowded = params.with_values({"blades": 12})
     with pytest.raises(GeometryError, match="blades would meet each other"):
-        crowded.check_feasible(crowded.blade_surface())
+        check_design_feasible(crowded, sampled_blade_surface(crowded))
     small_hub = params.with_values({"hub.radius": 4.0, "hub.length": 3.0, "hub.bore_diameter": 0.0})
     # the root's chord is blended down to fit the hub
-    small_hub.check_feasible(small_hub.blade_surface())
-    blade = small_hub.conventional_blade()
+    check_design_feasible(small_hub, sampled_blade_surface(small_hub))
+    blade = conventional_blade(small_hub)
     assert blade.root_chord_mm() < 0.5 * blade.table_chord_mm([blade.blend_end_mm])[0]
 
 
@@ -370,8 +376,8 @@ def test_the_comparison_propeller_has_the_default_designs_tip_diameter_blades_an
     the comparison is fair only while both have the same tip diameter, blade count and hub. The
     conventional one's D = 45.1 mm is the tip station's radius; the ends of its 4.5 mm tip chord lie
     off the radial line, so the circle its tips sweep is 1.1 % larger (45.59 mm)."""
+    from torus_cad.design.design_targets import tip_radius_mm
     from torus_cad.parameters import PropellerParameters, resolve_parameters
-    from torus_cad.parameters.design_targets import tip_radius_mm
 
     toroidal = PropellerParameters()
     conventional = resolve_parameters(EXAMPLES_DIR / "compare" / "conventional_45mm_3blade.toml")
@@ -389,8 +395,8 @@ def test_the_quiet_studys_conventional_reference_has_its_base_designs_diameter_b
     """scripts/quiet_study.py compares the quiet study's chosen design with its base and with this
     conventional propeller at the same thrust (docs/how-to/optimize.md): fair only with the same tip
     diameter, blade count and hub, bore included."""
+    from torus_cad.design.design_targets import resolve_design_targets, tip_radius_mm
     from torus_cad.parameters import resolve_parameters
-    from torus_cad.parameters.design_targets import resolve_design_targets, tip_radius_mm
 
     toroidal = resolve_design_targets(
         resolve_parameters(EXAMPLES_DIR / "optimize" / "quiet_prop.toml")

@@ -9,6 +9,8 @@ import pytest
 
 from torus_cad.cli import main
 from torus_cad.cli.design_input import load_parameters
+from torus_cad.design.described_geometry import propeller_geometry, sampled_blade_surface
+from torus_cad.design.design_targets import resolve_design_targets
 from torus_cad.geometry.analysis.diameter import DIAMETER_TOLERANCE_MM
 from torus_cad.geometry.blade.blade_surface import blade_frames
 from torus_cad.kernel.measure import (
@@ -20,7 +22,6 @@ from torus_cad.kernel.measure import (
 )
 from torus_cad.outputs.measured_targets import pitch_on_solid, radius_crossings
 from torus_cad.parameters import PropellerParameters
-from torus_cad.parameters.design_targets import resolve_design_targets
 from torus_cad.propeller import build_propeller
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
@@ -154,7 +155,7 @@ def test_a_naca_designation_builds_the_numbers_solid():
     )
     resolved = resolve_design_targets(by_name).parameters
     np.testing.assert_array_equal(
-        resolved.blade_surface().points, by_numbers.blade_surface().points
+        sampled_blade_surface(resolved).points, sampled_blade_surface(by_numbers).points
     )
 
 
@@ -186,7 +187,7 @@ def test_blunt_trailing_edge_measured_on_the_solid():
     # each blade's side is two faces either way: the sharp edge's lower and upper, the blunt one's
     # base and airfoil
     assert len(propeller.solid.Faces()) == sharp_faces
-    geometry = params.geometry()
+    geometry = propeller_geometry(params)
     s_values = [0.5, 0.5 + 0.5 / 15.0]  # on a section, and half-way between two sections
     frames = blade_frames(geometry.blade, geometry.centerline(0), s_values)
     for origin, tangent in zip(frames.origin, frames.tangent):
@@ -236,24 +237,24 @@ def test_sections_table_is_written_beside_the_step(tmp_path):
 def test_targets_are_fitted_on_geometry_objects_with_few_validations(monkeypatch):
     """A diameter + pitch design validates its document at most 3 times while its targets are
     fitted, and builds its geometry a few times, not once per step of the fits."""
+    from torus_cad.design import design_targets
     from torus_cad.parameters import PropellerParameters
-    from torus_cad.parameters.design_targets import resolve_design_targets
 
     params = load_parameters(str(EXAMPLES / "cooling_fan_7blade.toml"))
     calls = {"with_values": 0, "geometry": 0}
-    with_values, geometry = PropellerParameters.with_values, PropellerParameters.geometry
+    with_values, geometry = PropellerParameters.with_values, design_targets.propeller_geometry
 
     def counted_with_values(self, *args, **kwargs):
         calls["with_values"] += 1
         return with_values(self, *args, **kwargs)
 
-    def counted_geometry(self, *args, **kwargs):
+    def counted_geometry(*args, **kwargs):
         calls["geometry"] += 1
-        return geometry(self, *args, **kwargs)
+        return geometry(*args, **kwargs)
 
     monkeypatch.setattr(PropellerParameters, "with_values", counted_with_values)
-    monkeypatch.setattr(PropellerParameters, "geometry", counted_geometry)
-    resolved = resolve_design_targets(params)
+    monkeypatch.setattr(design_targets, "propeller_geometry", counted_geometry)
+    resolved = design_targets.resolve_design_targets(params)
     assert resolved.tip_diameter_mm == pytest.approx(120.0, abs=1e-6)
     assert calls["with_values"] <= 3
     assert calls["geometry"] <= 3

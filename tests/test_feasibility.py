@@ -26,9 +26,9 @@ from torus_cad.batch import (
 from torus_cad.batch.job import REFUSAL_FILE
 from torus_cad.batch.table import DESIGNS_DIR
 from torus_cad.cli import main
+from torus_cad.design.design_checks import check_design
 from torus_cad.errors import GeometryError, ParameterError
 from torus_cad.parameters import PropellerParameters
-from torus_cad.parameters.design_checks import check_design
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -149,7 +149,7 @@ def test_check_never_loads_the_kernel_and_answers_in_under_a_second():
         "from torus_cad.cli import main\n"
         "start = time.perf_counter(); assert main(['check', '-q']) == 0\n"
         "from torus_cad.parameters import PropellerParameters\n"
-        "from torus_cad.parameters.design_checks import check_design\n"
+        "from torus_cad.design.design_checks import check_design\n"
         "cpu = time.process_time(); check_design(PropellerParameters(), mesh=True)\n"
         "print(time.process_time() - cpu)\n"
         "print(sorted(m for m in sys.modules if m.split('.')[0] in {'OCP', 'cadquery'}))\n"

@@ -237,9 +237,10 @@ def test_the_sections_picture_plots_beta_without_the_jump_at_the_tip(default_par
     """The default blade's beta jumps from about -5 to -172 degrees at the tip (the chord line turns
     back): the picture's curve continues instead, the same line's angle (mod 180), and spans tens of
     degrees."""
+    from torus_cad.design.described_geometry import sampled_blade_surface
     from torus_cad.outputs.sections_table import elements_of, plotted_beta_deg
 
-    elements = elements_of(default_params.blade_surface(points=400))
+    elements = elements_of(sampled_blade_surface(default_params, points=400))
     raw, plotted = np.asarray(elements.beta_deg), plotted_beta_deg(elements)
     # the table's raw angle does jump (else this proves nothing)
     assert np.max(np.abs(np.diff(raw))) > 150.0

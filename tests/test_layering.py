@@ -173,6 +173,24 @@ def test_parameters_import_no_kernel():
     assert _offenders(_sources("parameters"), forbidden) == []
 
 
+def test_the_design_s_front_door_imports_no_kernel():
+    """torus_cad.design turns parameters into kernel-free geometry: ``torus-cad check`` and the
+    studies' pre-screen run it without OpenCascade."""
+
+    def forbidden(name: str) -> bool:
+        return name.split(".")[0] in KERNEL_PACKAGES or name.startswith("torus_cad.kernel")
+
+    assert _offenders(_sources("design"), forbidden) == []
+
+
+def test_the_schema_stands_apart_from_the_geometry_it_describes():
+    """The parameters are the validated schema: what turns them into geometry (torus_cad.design)
+    sits above them, and they never reach up to it."""
+    assert (
+        _offenders(_sources("parameters"), lambda name: name.startswith("torus_cad.design")) == []
+    )
+
+
 def test_nothing_imports_the_cli():
     sources = [
         path
@@ -222,7 +240,7 @@ def test_the_package_root_holds_only_the_core_s_face():
 
 
 # mesh: without --compare, no kernel
-@pytest.mark.parametrize("package", ["geometry", "parameters", "mesh"])
+@pytest.mark.parametrize("package", ["geometry", "parameters", "design", "mesh"])
 def test_importing_a_kernel_free_layer_loads_no_kernel_module(package):
     modules = [_module_name(path) for path in _sources(package)]
     code = (

@@ -12,6 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from torus_cad.cli import main
+from torus_cad.design.described_geometry import propeller_geometry
 from torus_cad.errors import ParameterError
 from torus_cad.geometry.blade.triangle_mesh import TriangleMesh
 from torus_cad.mesh.cleanup import collapse_junction_needles
@@ -111,7 +112,7 @@ def test_part_index_survives_ply_and_vtk(coarse_mesh, tmp_path):
 
 
 def test_sections_spacing_in_arc_length_or_in_s():
-    geometry = PropellerParameters().geometry()
+    geometry = propeller_geometry(PropellerParameters())
     centerline = geometry.centerline(0)
     in_s = section_parameters(centerline, 30, SectionSpacing.PARAMETER)
     assert np.allclose(np.diff(in_s), 1.0 / 29)
@@ -134,7 +135,7 @@ def test_hub_grid_is_closed_and_even(radius, length, cells):
 
 
 def test_resolution_too_coarse_names_the_minimum_that_works():
-    geometry = PropellerParameters().geometry()
+    geometry = propeller_geometry(PropellerParameters())
     with pytest.raises(ParameterError, match=r"mesh.sections >= (\d+)") as refused:
         check_resolution(geometry, 6, 64, SectionSpacing.ARC_LENGTH)
     minimum = int(refused.value.args[0].split("mesh.sections >= ")[1].split()[0])
@@ -145,8 +146,8 @@ def test_resolution_too_coarse_names_the_minimum_that_works():
 
 def test_thin_sections_need_more_points():
     # equal arc-length points (spec §5) are sparse at a thin section's small leading-edge radius
-    check_resolution(PropellerParameters().geometry(), 400, 16, SectionSpacing.ARC_LENGTH)
-    thin = PropellerParameters().with_values({"airfoil.thickness": 0.06}).geometry()
+    check_resolution(propeller_geometry(PropellerParameters()), 400, 16, SectionSpacing.ARC_LENGTH)
+    thin = propeller_geometry(PropellerParameters().with_values({"airfoil.thickness": 0.06}))
     with pytest.raises(ParameterError, match=r"mesh.points >= \d+") as refused:
         check_resolution(thin, 400, 16, SectionSpacing.ARC_LENGTH)
     minimum = int(refused.value.args[0].split("mesh.points >= ")[1].split()[0])
@@ -155,7 +156,7 @@ def test_thin_sections_need_more_points():
 
 
 def test_cleanup_collapses_the_junction_needles_and_keeps_the_surface_closed():
-    geometry = PropellerParameters().geometry()
+    geometry = propeller_geometry(PropellerParameters())
     grid = blade_grid(geometry, 48, 120, SectionSpacing.ARC_LENGTH)
     parts = [hub_mesh(10.0, 20.0, cell_size(grid).matched), *blade_meshes(geometry, grid)]
     united, _ = unite(parts, PARTS)

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from torus_cad.cli import main
+from torus_cad.design.described_geometry import propeller_geometry
 
 trimesh = pytest.importorskip("trimesh")
 mr = pytest.importorskip("meshlib.mrmeshpy")
@@ -199,7 +200,7 @@ def test_a_resolution_whose_blade_crosses_itself_is_refused_naming_one_that_does
     error = capsys.readouterr().err
     assert error.count("\n") == 1 and "crosses itself at" in error and "triangle pairs" in error
     sections, points = (int(word) for word in error.split("use --sections ")[1].split()[:3:2])
-    geometry = PropellerParameters().geometry()
+    geometry = propeller_geometry(PropellerParameters())
     blade = grids.mirrored_diagonal_mesh(
         grids.blade_grid(geometry, sections, points, SectionSpacing.ARC_LENGTH)
     )

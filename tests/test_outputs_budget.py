@@ -14,9 +14,10 @@ import time
 
 import pytest
 
+from torus_cad.design.described_geometry import sampled_blade_surface
+from torus_cad.design.stl_budget import estimated_stl_triangles
 from torus_cad.errors import BudgetError
 from torus_cad.parameters import PropellerParameters
-from torus_cad.parameters.stl_budget import estimated_stl_triangles
 from torus_cad.tolerances import STL_TRIANGLE_LIMIT
 
 
@@ -96,7 +97,7 @@ def test_the_estimate_does_not_depend_on_how_the_surface_is_sampled():
     params = _with_deflections(0.05, 0.1)
     estimates = [
         estimated_stl_triangles(
-            params, params.blade_surface(sections=sections, points=points), (25, 52)
+            params, sampled_blade_surface(params, sections=sections, points=points), (25, 52)
         )
         for sections, points in ((4, 16), (25, 80), (60, 200))
     ]

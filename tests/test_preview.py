@@ -14,6 +14,7 @@ from PIL import Image
 
 from torus_cad.cli import EXIT_BAD_INPUT, EXIT_OK, main
 from torus_cad.colors import HUB_COLOR, blade_color
+from torus_cad.design.described_geometry import propeller_geometry
 from torus_cad.errors import ParameterError
 from torus_cad.geometry.blade.propeller_geometry import HUB_PART
 from torus_cad.kernel.mass_properties import mass_properties
@@ -309,7 +310,7 @@ def test_the_oblique_view_faces_every_blades_window(default_propeller):
     # A second measure of "not edge-on": each blade's window (its centerline loop closed through
     # the hub) faces the camera by a fifth of its area or more, where the classic (1, 1, 1)
     # isometric direction shows one default blade at ~6 % of its window, nearly as a line.
-    geometry = default_propeller.parameters.geometry()
+    geometry = propeller_geometry(default_propeller.parameters)
     s = np.linspace(0.0, 1.0, 64)
     loops = [geometry.centerline(index).points(s) for index in range(geometry.blades)]
     areas = np.array(

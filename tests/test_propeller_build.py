@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 from conftest import assert_same_volume_as_general_fuse, read_binary_stl
 
+from torus_cad.design.described_geometry import propeller_geometry
 from torus_cad.geometry.blade.blade_surface import surface_points
 from torus_cad.kernel.checks import distances_to_shape, is_valid_closed_solid
 from torus_cad.kernel.fuse import FuseRoute
@@ -67,14 +68,23 @@ def test_analytic_surface_lies_on_the_brep(default_propeller, default_params):
     s = (np.arange(4, sections - 5) + 0.5) / (sections - 1)
     t = np.linspace(0.03, 1.97, 9)
     points = surface_points(
-        default_params.geometry().blade, default_params.geometry().centerline(), s, t
+        propeller_geometry(default_params).blade,
+        propeller_geometry(default_params).centerline(),
+        s,
+        t,
     )
     chord = np.linalg.norm(
         surface_points(
-            default_params.geometry().blade, default_params.geometry().centerline(), s, [1.0]
+            propeller_geometry(default_params).blade,
+            propeller_geometry(default_params).centerline(),
+            s,
+            [1.0],
         )[:, 0]
         - surface_points(
-            default_params.geometry().blade, default_params.geometry().centerline(), s, [0.0]
+            propeller_geometry(default_params).blade,
+            propeller_geometry(default_params).centerline(),
+            s,
+            [0.0],
         )[:, 0],
         axis=-1,
     )

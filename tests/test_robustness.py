@@ -36,6 +36,7 @@ from studies.fuzz import (
 )
 from torus_cad.batch import DesignResult, DesignTask, LocalPool, Outcome, run_design, run_tasks
 from torus_cad.cli import main
+from torus_cad.design.described_geometry import propeller_geometry, sampled_blade_surface
 from torus_cad.errors import GeometryError, ParameterError
 from torus_cad.geometry.analysis import feasibility
 from torus_cad.geometry.blade.frames import Frames
@@ -300,11 +301,11 @@ def test_refused_design_exits_2_with_one_line_and_no_files(tmp_path, capsys):
 
 def test_default_design_passes_every_check_with_margin():
     params = PropellerParameters()
-    surface = params.blade_surface()
-    feasibility.check_feasible(params.geometry(), surface)
+    surface = sampled_blade_surface(params)
+    feasibility.check_feasible(propeller_geometry(params), surface)
     grid, step = feasibility.tube_grid(len(surface.s))
     fine = feasibility.sample_tube(
-        params.geometry(), params.geometry().centerline(), grid, surface.t
+        propeller_geometry(params), propeller_geometry(params).centerline(), grid, surface.t
     )
     assert feasibility.fold_ratio(fine)[0] < 0.95
     assert (
@@ -317,7 +318,7 @@ def test_interleaved_blades_are_not_refused():
     """Toroidal blades nest: six default blades clear each other although each spans 100 > 60
     degrees."""
     params = PropellerParameters().with_values({"blades": 6})
-    feasibility.check_feasible(params.geometry(), params.blade_surface())
+    feasibility.check_feasible(propeller_geometry(params), sampled_blade_surface(params))
 
 
 def _circle_tube(centers: np.ndarray, radius: float, points: int = 24) -> feasibility.Tube:
@@ -346,12 +347,12 @@ def test_self_intersection_is_found():
     helix = np.stack([30 * np.cos(turns), 30 * np.sin(turns), 0.5 * turns], -1)
     with pytest.raises(GeometryError, match="intersects itself"):
         feasibility.check_no_self_intersection(
-            PropellerParameters().geometry().hub, _circle_tube(helix, 3.0)
+            propeller_geometry(PropellerParameters()).hub, _circle_tube(helix, 3.0)
         )
     # well apart per turn
     apart = np.stack([30 * np.cos(turns), 30 * np.sin(turns), 8.0 * turns], -1)
     feasibility.check_no_self_intersection(
-        PropellerParameters().geometry().hub, _circle_tube(apart, 3.0)
+        propeller_geometry(PropellerParameters()).hub, _circle_tube(apart, 3.0)
     )
 
 
@@ -361,9 +362,9 @@ def test_blades_running_into_each_other_are_found():
     # 30 degrees apart: axes 6.2 mm apart at r = 12
     crowded = PropellerParameters().with_values({"blades": 12})
     with pytest.raises(GeometryError, match="intersect each other"):
-        feasibility.check_blades_clear(crowded.geometry(), _circle_tube(rod, 4.0))
+        feasibility.check_blades_clear(propeller_geometry(crowded), _circle_tube(rod, 4.0))
     feasibility.check_blades_clear(
-        PropellerParameters().with_values({"blades": 3}).geometry(), _circle_tube(rod, 4.0)
+        propeller_geometry(PropellerParameters().with_values({"blades": 3})), _circle_tube(rod, 4.0)
     )
 
 

@@ -9,6 +9,7 @@ import pytest
 from face_measures import principal_curvatures
 from scipy.interpolate import BSpline
 
+from torus_cad.design.described_geometry import propeller_geometry
 from torus_cad.geometry.blade.blade_surface import blade_frames
 from torus_cad.kernel.checks import is_valid_closed_solid
 from torus_cad.kernel.measure import (
@@ -49,7 +50,7 @@ def test_section_curves_are_g1_at_the_round_cap():
 
 def _cap_chords_mm(propeller, s_values):
     """Distance between the ends of the round cap's cut in the section planes at ``s_values``."""
-    geometry = propeller.parameters.geometry()
+    geometry = propeller_geometry(propeller.parameters)
     frames = blade_frames(geometry.blade, geometry.centerline(0), s_values)
     chords = []
     for origin, tangent in zip(frames.origin, frames.tangent):

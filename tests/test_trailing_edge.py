@@ -9,6 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from torus_cad.design.described_geometry import propeller_geometry, sampled_blade_surface
 from torus_cad.geometry.analysis.printability import printability
 from torus_cad.geometry.blade.blade_surface import sections_along
 from torus_cad.geometry.blade.trailing_edge import (
@@ -117,7 +118,7 @@ ANGLE, SCALE_X, SCALE_Y = [20.0, 35.0], [12.0, 6.0], [4.0, 2.0]
 
 
 def _round_sections(thickness_mm=0.4):
-    airfoil = PropellerParameters().geometry().blade.airfoil
+    airfoil = propeller_geometry(PropellerParameters()).blade.airfoil
     return blunt_sections(airfoil, thickness_mm, ANGLE, SCALE_X, SCALE_Y, round_cap=True)
 
 
@@ -178,9 +179,9 @@ def test_equal_arc_length_sampling_covers_the_cap():
 
 
 def test_sharp_default_is_the_same_whatever_the_shape():
-    round_surface = PropellerParameters().blade_surface()
-    flat_surface = (
-        PropellerParameters().with_values({"airfoil.trailing_edge_shape": "flat"}).blade_surface()
+    round_surface = sampled_blade_surface(PropellerParameters())
+    flat_surface = sampled_blade_surface(
+        PropellerParameters().with_values({"airfoil.trailing_edge_shape": "flat"})
     )
     assert np.array_equal(round_surface.points, flat_surface.points)
     assert round_surface.lower_corner_index is None and not round_surface.round_trailing_edge
@@ -205,18 +206,18 @@ def test_coordinate_file_with_an_open_edge_gets_a_round_cap(tmp_path):
         {"airfoil.trailing_edge_thickness": 0.0, "airfoil.file": str(tmp_path / "open.dat")}
     )
     # over 0.05 mm thick everywhere: kept
-    assert params.geometry().blade.closed_file_edge_mm is None
-    blade = params.geometry().blade
+    assert propeller_geometry(params).blade.closed_file_edge_mm is None
+    blade = propeller_geometry(params).blade
     sections = sections_along(blade, [0.2, 0.5])
     assert all(isinstance(section, RoundTrailingEdge) for section in sections)
     # the cap closes the file's own gap: the surfaces are the file's
     np.testing.assert_allclose(half_ends(sections[0]), half_ends(blade.airfoil), atol=1e-12)
-    assert params.blade_surface().round_trailing_edge
+    assert sampled_blade_surface(params).round_trailing_edge
 
 
 def test_printability_reports_the_round_edge_thickness():
-    geometry = (
-        PropellerParameters().with_values({"airfoil.trailing_edge_thickness": 0.9}).geometry()
+    geometry = propeller_geometry(
+        PropellerParameters().with_values({"airfoil.trailing_edge_thickness": 0.9})
     )
     assert geometry.blade.round_trailing_edge
     result = printability(geometry, 0.8)

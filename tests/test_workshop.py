@@ -15,6 +15,11 @@ from OCP.GeomAbs import GeomAbs_Cylinder
 
 from torus_cad import __version__
 from torus_cad.cli import main
+from torus_cad.design.described_geometry import (
+    propeller_geometry,
+    sampled_blade_surface,
+    wall_printability,
+)
 from torus_cad.geometry.analysis.printability import printability, wall_mm
 from torus_cad.geometry.blade.handedness import Handedness, air_push_z
 from torus_cad.geometry.hub.mounting import HubMounting
@@ -81,11 +86,8 @@ def test_set_screw_line_clears_every_blade(mounted):
     angle = math.radians(mounted.mounting.set_screw_angle_deg)
     ray = np.array([math.cos(angle), math.sin(angle), 0.0])
     for blade in range(3):
-        points = (
-            PropellerParameters()
-            .blade_surface(blade, sections=200, points=160)
-            .points.reshape(-1, 3)
-        )
+        surface = sampled_blade_surface(PropellerParameters(), blade, sections=200, points=160)
+        points = surface.points.reshape(-1, 3)
         along = np.clip(points @ ray, 0.0, None)
         assert np.linalg.norm(points - along[:, None] * ray, axis=1).min() > 1.5
 
@@ -129,7 +131,7 @@ def test_ccw_is_the_exact_mirror_image_of_cw(plain):
 
 
 def test_mirror_turns_the_air_push_around():
-    surface = PropellerParameters().blade_surface(sections=100)
+    surface = sampled_blade_surface(PropellerParameters(), sections=100)
     image = surface.points * [1.0, -1.0, 1.0]
     assert air_push_z(surface.points, surface.trailing_edge_column) == pytest.approx(
         -air_push_z(image, surface.trailing_edge_column), rel=1e-12
@@ -138,18 +140,20 @@ def test_mirror_turns_the_air_push_around():
 
 def test_wall_is_the_distance_between_the_surfaces_at_a_chord_station():
     params = PropellerParameters()
-    blade = params.geometry().blade
+    blade = propeller_geometry(params).blade
     from torus_cad.geometry.blade.blade_surface import surface_points
 
     for s, x in ((0.0, 0.3), (0.37, 0.6), (0.8, 0.95)):
-        upper, lower = surface_points(blade, params.geometry().centerline(0), [s], [x, 2.0 - x])[0]
+        upper, lower = surface_points(
+            blade, propeller_geometry(params).centerline(0), [s], [x, 2.0 - x]
+        )[0]
         assert wall_mm(blade, [s], [math.sqrt(x)])[0, 0] == pytest.approx(
             np.linalg.norm(upper - lower), rel=1e-9
         )
 
 
 def test_printability_of_the_default_and_require_printable(tmp_path, capsys):
-    geometry = PropellerParameters().geometry()
+    geometry = propeller_geometry(PropellerParameters())
     result = printability(geometry, 0.8)
     s_in, s_out = result.exposed_s
     walls = wall_mm(geometry.blade, np.linspace(s_in, s_out, 101), np.linspace(0, 1, 1001)).max(
@@ -168,7 +172,9 @@ def test_printability_of_the_default_and_require_printable(tmp_path, capsys):
 def test_printability_looks_only_at_the_blade_outside_the_hub(example):
     """The buried ends (R_inset < r < R) are not printed as blade: the exposed span starts and ends
     where the centerline crosses the hub's surface, and the thinnest wall lies inside it."""
-    geometry = PropellerParameters.from_toml(Path("examples") / f"{example}.toml").geometry()
+    geometry = propeller_geometry(
+        PropellerParameters.from_toml(Path("examples") / f"{example}.toml")
+    )
     result = printability(geometry, 0.8)
     s_in, s_out = result.exposed_s
     assert 0.0 < s_in < s_out < 1.0
@@ -191,8 +197,8 @@ def test_printability_looks_only_at_the_blade_outside_the_hub(example):
 
 
 def test_blunt_trailing_edge_is_the_reported_trailing_edge_thickness():
-    geometry = (
-        PropellerParameters().with_values({"airfoil.trailing_edge_thickness": 0.9}).geometry()
+    geometry = propeller_geometry(
+        PropellerParameters().with_values({"airfoil.trailing_edge_thickness": 0.9})
     )
     result = printability(geometry, 0.8)
     assert result.trailing_edge_thickness_mm == pytest.approx(0.9, rel=1e-6)
@@ -214,19 +220,16 @@ def test_the_trailing_edge_hint_names_the_thickness_that_makes_it_printable(min_
     params = PropellerParameters().with_values(
         {"airfoil.trailing_edge_thickness": 0.3, "manufacturing.min_wall": min_wall}
     )
-    problem = params.printability().problem()
+    problem = wall_printability(params).problem()
     thickness = float(
         re.search(r"airfoil\.trailing_edge_thickness = ([\d.]+)\)$", problem).group(1)
     )
     assert thickness == min_wall
-    assert (
-        params.with_values({"airfoil.trailing_edge_thickness": thickness}).printability().printable
-    )
-    assert (
-        not params.with_values({"airfoil.trailing_edge_thickness": 0.98 * thickness})
-        .printability()
-        .printable
-    )
+    assert wall_printability(
+        params.with_values({"airfoil.trailing_edge_thickness": thickness})
+    ).printable
+    thinner = params.with_values({"airfoil.trailing_edge_thickness": 0.98 * thickness})
+    assert not wall_printability(thinner).printable
 
 
 def test_report_3mf_and_stl_read_back_closed_with_the_same_volume(tmp_path, capsys):
@@ -452,7 +455,9 @@ def fillet_stage(monkeypatch):
     here."""
     import torus_cad.propeller as pipeline
 
-    monkeypatch.setattr("torus_cad.parameters.design.check_root_fillet_edge", lambda *args: None)
+    monkeypatch.setattr(
+        "torus_cad.design.described_geometry.check_root_fillet_edge", lambda *args: None
+    )
 
     monkeypatch.setattr(
         pipeline, "strict_valid_propeller", lambda solid, sharp_edge_fillet: (solid, None)
@@ -559,7 +564,7 @@ def _tightest_analytic_concave_bend_mm(params, s, t, step=1e-4):
     (mm)."""
     from torus_cad.geometry.blade.blade_surface import surface_points
 
-    geometry = params.geometry()
+    geometry = propeller_geometry(params)
     rings = surface_points(
         geometry.blade, geometry.centerline(0), s, np.concatenate([t - step, t, t + step])
     )
@@ -614,7 +619,9 @@ def test_tight_bend_fails_naming_the_reduce_choice(tmp_path, capsys, monkeypatch
     """By default a fillet that cannot have its radius everywhere is not made (exit 1, nothing
     written, the message says why and names the choice). The design's knife edge, refused before the
     kernel since issue 47, is let through: the fillet stage's own refusal is tested."""
-    monkeypatch.setattr("torus_cad.parameters.design.check_root_fillet_edge", lambda *args: None)
+    monkeypatch.setattr(
+        "torus_cad.design.described_geometry.check_root_fillet_edge", lambda *args: None
+    )
     design = tmp_path / "tight.toml"
     design.write_text(PropellerParameters.from_dict({**TIGHT_BEND, "name": "tight"}).to_toml())
     assert (
@@ -682,7 +689,9 @@ def test_a_knife_edge_fillet_the_check_cannot_certify_is_not_published(
         monkeypatch.setattr("torus_cad.kernel.strict.STRICT_CHECK_TIME_LIMIT_S", check_limit_s)
     # the kernel's own refusal, behind the one before the kernel
     # (test_a_knife_edge_fillet_is_refused_before_the_kernel)
-    monkeypatch.setattr("torus_cad.parameters.design.check_root_fillet_edge", lambda *args: None)
+    monkeypatch.setattr(
+        "torus_cad.design.described_geometry.check_root_fillet_edge", lambda *args: None
+    )
     path = tmp_path / "knife.toml"
     path.write_text(PropellerParameters.from_dict({**design, "name": "knife"}).to_toml())
     assert (

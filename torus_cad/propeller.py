@@ -22,13 +22,16 @@ from OCP.TopoDS import TopoDS_Shape
 
 from torus_cad.build_stages import Stage
 from torus_cad.colors import HUB_COLOR, blade_color
+from torus_cad.design.described_geometry import (
+    wall_printability,
+)
+from torus_cad.design.design_targets import DesignTargets
+from torus_cad.design.prepared_design import prepare_design
 from torus_cad.errors import KernelError
 from torus_cad.geometry.analysis.printability import Printability
 from torus_cad.geometry.blade.blade_surface import BladeSurface
 from torus_cad.geometry.blade.handedness import Handedness, spin_to_push_air_down
-from torus_cad.geometry.hub.mounting import HubMounting, set_screw_arc_deg
-from torus_cad.geometry.hub.seam import seam_angle_deg
-from torus_cad.geometry.section.section_fit import fit_sections
+from torus_cad.geometry.hub.mounting import HubMounting
 from torus_cad.kernel.fuse import FuseRoute, joined_propeller, pattern_blades
 from torus_cad.kernel.hub import hub_shape, run_out_hub
 from torus_cad.kernel.loft import loft_solid
@@ -38,10 +41,8 @@ from torus_cad.kernel.strict import StrictCheck, strict_valid_propeller
 from torus_cad.kernel.topology import shape_bytes, shape_from_bytes
 from torus_cad.kernel.wires import SectionCurves, section_curves
 from torus_cad.outputs.output_set import write_output_set
-from torus_cad.parameters import PropellerParameters, resolve_parameters
+from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.design import TightBends
-from torus_cad.parameters.design_checks import placed_mounting
-from torus_cad.parameters.design_targets import DesignTargets, resolve_design_targets
 from torus_cad.runtime.stage_timer import StageTimer
 
 if TYPE_CHECKING:
@@ -283,7 +284,7 @@ _CADQUERY_VIEWS = ("solid", "hub", "blades")
 def design_printability(params: PropellerParameters) -> Printability:
     """The blade's printability from the analytic section alone (no kernel): see
     torus_cad.geometry.analysis.printability."""
-    return params.printability()
+    return wall_printability(params)
 
 
 def build_propeller(
@@ -311,35 +312,11 @@ def build_propeller(
         KernelError: OpenCascade failed to loft, fuse, fillet or check the solid.
     """
     timer = StageTimer[Stage](progress)
-    with timer.stage(Stage.PARAMETERS):
-        params = resolve_parameters(design, overrides)
-    with timer.stage(Stage.DESIGN_TARGETS):
-        # airfoil.naca, diameter, pitch -> the spec's parameters
-        targets = resolve_design_targets(params)
-        params = targets.parameters
-        hub_geometry = params.hub_geometry()
-    with timer.stage(Stage.SECTION_MATH):
-        surface = params.blade_surface()
-        params.check_feasible(surface)
-        mounting = placed_mounting(params)
-        # The hub is symmetric about its axis; its seam goes where it crosses no blade root (nor the
-        # set screw).
-        screw_arc = set_screw_arc_deg(mounting, hub_geometry.radius_mm)
-        seam_deg = seam_angle_deg(
-            surface.points,
-            hub_geometry.radius_mm,
-            params.blades,
-            () if screw_arc is None else (screw_arc,),
-        )
+    prepared = prepare_design(design, overrides, timer)
+    params, surface, mounting = prepared.parameters, prepared.surface, prepared.mounting
+    seam_deg = 0.0 if prepared.seam_deg is None else prepared.seam_deg
     with timer.stage(Stage.WIRES):
-        fit = fit_sections(
-            surface.points,
-            surface.trailing_edge_column,
-            surface.chords_mm,
-            surface.lower_corner_index,
-            surface.round_trailing_edge,
-        )
-        curves = section_curves(fit)
+        curves = section_curves(prepared.fit)
         fillet_radius = params.hub.root_fillet_radius
         # A round trailing edge leaves the blade's airfoil face open: the fillet needs it in pieces.
         wires = curves.occ_wires(
@@ -347,12 +324,7 @@ def build_propeller(
         )
     with timer.stage(Stage.LOFT):
         blade = loft_solid(wires, surface.s)
-        hub = hub_shape(
-            hub_geometry.radius_mm,
-            hub_geometry.length_mm,
-            0.0 if seam_deg is None else seam_deg,
-            mounting,
-        )
+        hub = hub_shape(params.hub.radius, params.hub.length, seam_deg, mounting)
         angles_deg = [params.blade_angle_deg(i) for i in range(params.blades)]
         blades = pattern_blades(blade, angles_deg)
     root_fillet: RootFillet | None = None
@@ -364,11 +336,11 @@ def build_propeller(
                 if mounting.chamfer_mm > 0.0
                 else functools.partial(
                     run_out_hub,
-                    hub_geometry.radius_mm,
-                    hub_geometry.length_mm,
-                    0.0 if seam_deg is None else seam_deg,
+                    params.hub.radius,
+                    params.hub.length,
+                    seam_deg,
                     mounting,
-                    reach=hub_geometry.radius_mm + 4.0 * fillet_radius,
+                    reach=params.hub.radius + 4.0 * fillet_radius,
                 )
             )
             # A sharp edge's side as one closed face: the fillet splits it in its own pieces
@@ -428,7 +400,7 @@ def build_propeller(
         curves,
         timer.seconds,
         route,
-        targets,
+        prepared.targets,
         mounting,
         face_parts,
         root_fillet,

@@ -102,12 +102,12 @@ def run_design(task: DesignTask) -> DesignResult:
 def prescreen(task: DesignTask) -> DesignResult | None:
     """The design's refusal by the checks the build makes before the kernel, run here, in the
     batch's own process, before a worker is given it
-    (:func:`torus_cad.parameters.design_checks.check_design`, tens of ms, no kernel); None when it
+    (:func:`torus_cad.design.design_checks.check_design`, tens of ms, no kernel); None when it
     passes, and the worker builds it. The refusal is recorded in the task's folder
     (``refusal.json``, ``"prescreened": true``) as a worker records one. Never raises for a bad
     design: an unexpected exception is left for the worker to meet and classify."""
+    from torus_cad.design.design_checks import check_design
     from torus_cad.parameters.design import ExportFormat
-    from torus_cad.parameters.design_checks import check_design
 
     start = time.perf_counter()
     try:

@@ -530,8 +530,8 @@ def write_cfd_domain(
     ParameterError / GeometryError for bad input (nothing written), KernelError naming the step when
     OpenCascade or gmsh fails, OutputError naming the file when it cannot be written.
     """
+    from torus_cad.design.design_targets import resolve_design_targets
     from torus_cad.kernel.mesh_check import import_meshlib
-    from torus_cad.parameters.design_targets import resolve_design_targets
 
     import_gmsh()
     import_meshlib()

@@ -33,9 +33,10 @@ from torus_cad.cfd_domain.sizes import (
     domain_for,
     trailing_edges,
 )
+from torus_cad.design.described_geometry import sampled_blade_surface
+from torus_cad.design.design_targets import resolve_design_targets
 from torus_cad.errors import BudgetError
 from torus_cad.parameters import PropellerParameters
-from torus_cad.parameters.design_targets import resolve_design_targets
 from torus_cad.tolerances import CFD_TETRAHEDRA_LIMIT
 
 #: Blade samples (sections, points around) and hub samples per mm for the surface cloud.
@@ -127,7 +128,7 @@ def _blade_cloud(
     """Points ``(n, 3)``, outward normals ``(n, 3)`` and curvature ``(n,)`` of every blade."""
     clouds = []
     for index in range(params.blades):
-        points = params.blade_surface(index, *CLOUD_GRID).points
+        points = sampled_blade_surface(params, index, *CLOUD_GRID).points
         along = np.gradient(points, axis=0)
         around = np.roll(points, -1, axis=1) - np.roll(points, 1, axis=1)
         normals = np.cross(along, around)

@@ -10,6 +10,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from torus_cad.design.described_geometry import (
+    conventional_blade,
+    propeller_geometry,
+    sampled_blade_surface,
+)
 from torus_cad.errors import ParameterError
 from torus_cad.geometry.blade.transforms import evaluate_quartic
 from torus_cad.parameters import PropellerParameters
@@ -69,7 +74,7 @@ TIP_RADIUS_GRID = (201, 200)
 def tip_radius(params: PropellerParameters) -> float:
     """Largest distance of the blade surface from the spin axis, mm (analytic surface, sampled
     densely)."""
-    points = params.blade_surface(0, *TIP_RADIUS_GRID).points
+    points = sampled_blade_surface(params, 0, *TIP_RADIUS_GRID).points
     return float(max(np.hypot(points[..., 0], points[..., 1]).max(), params.hub.radius))
 
 
@@ -77,10 +82,12 @@ def smallest_chord(params: PropellerParameters) -> float:
     """Smallest chord over the blade, mm: Sx(s) of a toroidal blade, c(r) of a conventional one
     (root blend included)."""
     if params.kind == DesignKind.CONVENTIONAL:
-        blade = params.conventional_blade()
+        blade = conventional_blade(params)
         return float(blade.chord_mm(blade.section_radii_mm(201)[1]).min())
     return float(
-        evaluate_quartic(params.geometry().blade.laws.scale_x_mm, np.linspace(0.0, 1.0, 201)).min()
+        evaluate_quartic(
+            propeller_geometry(params).blade.laws.scale_x_mm, np.linspace(0.0, 1.0, 201)
+        ).min()
     )
 
 
@@ -148,7 +155,7 @@ def trailing_edges(params: PropellerParameters) -> TrailingEdges:
     'ccw')."""
     curves = []
     for index in range(params.blades):
-        surface = params.blade_surface(index, sections=TRAILING_EDGE_SECTIONS)
+        surface = sampled_blade_surface(params, index, sections=TRAILING_EDGE_SECTIONS)
         columns = [surface.trailing_edge_index, surface.lower_corner_index]
         for column in (c for c in columns if c is not None):
             curve = surface.points[:, column, :].copy()

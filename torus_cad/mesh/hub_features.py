@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 
 from torus_cad.errors import ParameterError
 from torus_cad.geometry.blade.triangle_mesh import TriangleMesh
-from torus_cad.geometry.hub.mounting import SET_SCREW_OVERSHOOT_MM, HubMounting, place_mounting
+from torus_cad.geometry.hub.mounting import SET_SCREW_OVERSHOOT_MM, HubMounting
 from torus_cad.parameters import PropellerParameters
 
 #: Fewest sides of the bore's polygon (its area is then within 0.16 % of the circle's).
@@ -29,8 +29,6 @@ SET_SCREW_MIN_SEGMENTS = 32
 #: Bit of the face IDs that marks the hub grid's own triangles through the cuts (manifold3d keeps
 #: face IDs as 32-bit ints; the tools' primitives number theirs from 0).
 _GRID_BIT = 30
-#: Sampling of the blade surface for the mounting checks: the B-rep's (torus_cad.propeller).
-MOUNTING_SAMPLES = (200, 160)
 
 
 def check_meshable(params: PropellerParameters) -> None:
@@ -50,26 +48,6 @@ def check_meshable(params: PropellerParameters) -> None:
             "(its surface is OpenCascade's, not the spec's); set hub.root_fillet_radius = 0 for "
             "the mesh, or use the STL of 'torus-cad build'"
         )
-
-
-def placed_mounting(params: PropellerParameters) -> HubMounting:
-    """The hub's features checked against the blades and the set screw's direction chosen, as for
-    the B-rep (GeometryError naming the field when a feature reaches a blade)."""
-    mounting = params.hub.mounting()
-    if not mounting.any:
-        return mounting
-    dense = params.blade_surface(
-        sections=max(params.resolution.sections, MOUNTING_SAMPLES[0]),
-        points=max(params.resolution.points, MOUNTING_SAMPLES[1]),
-    )
-    return place_mounting(
-        mounting,
-        dense.points,
-        params.blades,
-        params.hub.radius,
-        params.hub.length,
-        params.hub.root_fillet_radius,
-    )
 
 
 def _segments(radius_mm: float, cell_mm: float, minimum: int) -> int:
@@ -203,5 +181,4 @@ __all__ = [
     "check_meshable",
     "cut_features",
     "feature_surface_distance",
-    "placed_mounting",
 ]

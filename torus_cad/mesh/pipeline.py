@@ -21,6 +21,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from torus_cad.design.described_geometry import propeller_geometry, sampled_blade_surface
+from torus_cad.design.prepared_design import placed_mounting
 from torus_cad.errors import ParameterError
 from torus_cad.geometry.analysis import feasibility
 from torus_cad.geometry.blade.blade_surface import (
@@ -54,7 +56,6 @@ from torus_cad.mesh.hub_features import (
     check_meshable,
     cut_features,
     feature_surface_distance,
-    placed_mounting,
 )
 from torus_cad.mesh.mesh_formats import MeshFormat, selected_formats
 from torus_cad.mesh.resolution import check_budget, check_resolution, estimate_triangles
@@ -119,14 +120,14 @@ class SurfaceMesh:
 
     @property
     def geometry(self) -> PropellerGeometry:
-        return self.parameters.geometry()
+        return propeller_geometry(self.parameters)
 
 
 def check_design(params: PropellerParameters) -> None:
     """The pre-kernel design checks of ``geometry.feasibility`` about the shape (not the loft's
     resolution)."""
-    geometry = params.geometry()
-    surface = params.blade_surface()
+    geometry = propeller_geometry(params)
+    surface = sampled_blade_surface(params)
     centerline = geometry.centerline(0)
     feasibility.check_ends_inside_hub(geometry.hub, surface)
     feasibility.check_centerline_leaves_through_side(geometry.hub, centerline)
@@ -240,14 +241,14 @@ def build_surface_mesh(
     Raises ParameterError (memory budget, resolution, a crossing mesh, the root fillet),
     GeometryError (design, hub features), MeshBooleanError (union).
     """
-    from torus_cad.parameters.design_targets import resolve_design_targets
+    from torus_cad.design.design_targets import resolve_design_targets
 
     timer = StageTimer[MeshStage](progress)
     with timer.stage(MeshStage.CHECKS):
         # airfoil.naca, diameter, pitch, as the B-rep's
         params = resolve_design_targets(params).parameters
         check_meshable(params)
-        geometry, table = params.geometry(), params.mesh
+        geometry, table = propeller_geometry(params), params.mesh
         estimate = estimate_triangles(geometry, table.sections, table.points, table.spacing)
         check_budget(estimate, compare)
         check_resolution(geometry, table.sections, table.points, table.spacing)

@@ -57,6 +57,7 @@ from torus_cad.batch.sweep_file import (
     flatten_vary,
     resolve_leaf,
 )
+from torus_cad.design.described_geometry import sampled_blade_surface
 from torus_cad.errors import ParameterError, shown
 from torus_cad.optimize.metrics import (
     PERFORMANCE_PREFIX,
@@ -643,7 +644,7 @@ def _tip_diameter_mm(base: PropellerParameters) -> float:
     """Twice the largest radius of the base design's blade surface (kernel-free)."""
     import numpy as np
 
-    points = base.blade_surface().points
+    points = sampled_blade_surface(base).points
     return 2.0 * float(np.hypot(points[..., 0], points[..., 1]).max())
 
 

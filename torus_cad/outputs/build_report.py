@@ -11,12 +11,14 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any, Protocol
 
+from torus_cad.design.described_geometry import propeller_geometry
 from torus_cad.geometry.blade.handedness import Handedness
 from torus_cad.kernel.mass_properties import balance
 
 if TYPE_CHECKING:
     from OCP.TopoDS import TopoDS_Shape
 
+    from torus_cad.design.design_targets import DesignTargets
     from torus_cad.geometry.analysis.printability import Printability
     from torus_cad.geometry.blade.blade_surface import BladeSurface
     from torus_cad.geometry.hub.mounting import HubMounting
@@ -26,7 +28,6 @@ if TYPE_CHECKING:
     from torus_cad.kernel.strict import StrictCheck
     from torus_cad.kernel.wires import SectionCurves
     from torus_cad.parameters import PropellerParameters
-    from torus_cad.parameters.design_targets import DesignTargets
 
 
 class BuiltPropeller(Protocol):
@@ -97,7 +98,7 @@ def _closed_file_edge_mm(params: PropellerParameters) -> tuple[float, float] | N
     otherwise)."""
     if params.kind.value != "toroidal":
         return None
-    return params.geometry().blade.closed_file_edge_mm
+    return propeller_geometry(params).blade.closed_file_edge_mm
 
 
 def _set_screw_angle_on_the_part_deg(propeller: BuiltPropeller) -> float | None:

@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from torus_cad.design.described_geometry import propeller_geometry, sampled_blade_surface
 from torus_cad.geometry.analysis.blade_elements import blade_angles
 from torus_cad.geometry.blade.blade_surface import blade_frames
 from torus_cad.geometry.blade.handedness import Handedness
@@ -20,7 +21,7 @@ def radius_crossings(
 ) -> list[tuple[float, float]]:
     """``(s, geometric pitch mm)`` where blade 0 passes ``radius_mm`` (analytic, ``sections``
     samples)."""
-    fine = elements_of(params.blade_surface(sections=sections, points=48))
+    fine = elements_of(sampled_blade_surface(params, sections=sections, points=48))
     found = []
     for i in np.flatnonzero(np.diff(np.sign(fine.radius_mm - radius_mm))):
         w = (radius_mm - fine.radius_mm[i]) / (fine.radius_mm[i + 1] - fine.radius_mm[i])
@@ -51,7 +52,7 @@ def pitch_on_solid(propeller: Any, s: float, spin: Handedness = Handedness.CW) -
         straight_edges,
     )
 
-    geometry = propeller.parameters.geometry()
+    geometry = propeller_geometry(propeller.parameters)
     frames = blade_frames(geometry.blade, geometry.centerline(0), [s])
     # A ccw solid is the spec's blade mirrored (y -> -y, kernel/mirror.py): cut it in the mirrored
     # plane, and mirror what is measured back, so the pitch is the spec blade's, as designed.

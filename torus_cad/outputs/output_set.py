@@ -519,12 +519,12 @@ def write_output_set(
     """
     from torus_cad import __version__
     from torus_cad.build_stages import Stage
+    from torus_cad.design.stl_budget import check_stl_budget
     from torus_cad.kernel.uncrossed import UncrossedMesh, uncrossed_mesh
     from torus_cad.kernel.writers import WRITERS, ExportJob
     from torus_cad.outputs.build_report import build_report
     from torus_cad.outputs.sections_table import sections_table_files, write_files
     from torus_cad.parameters.design import ExportFormat
-    from torus_cad.parameters.stl_budget import check_stl_budget
     from torus_cad.runtime.isolation import IsolatedCall
     from torus_cad.runtime.stage_timer import StageTimer
 

@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from torus_cad.design.described_geometry import propeller_geometry, sampled_blade_surface
 from torus_cad.geometry.analysis.blade_elements import (
     NEARLY_RADIAL_FRACTION,
     BladeElements,
@@ -149,7 +150,7 @@ def trailing_edge_of(params: Any, s: NDArray[np.float64]) -> NDArray[np.float64]
     blade's is sharp)."""
     if str(getattr(params, "kind", "toroidal")) == "conventional":
         return np.zeros(len(s))
-    blade = params.geometry().blade
+    blade = propeller_geometry(params).blade
     laws = blade.laws
     sections = sections_along(blade, s)
     if not any(has_base(section) for section in sections):
@@ -196,10 +197,10 @@ def design_sections_table_files(params: Any) -> dict[str, tuple[str, bytes]]:
     parameters
     alone: ``torus-cad build`` starts it in a child before the kernel loads, so that the picture is
     drawn on the second core while this process loads OpenCascade and builds."""
-    from torus_cad.parameters.design_targets import resolve_design_targets
+    from torus_cad.design.design_targets import resolve_design_targets
 
     resolved = resolve_design_targets(params).parameters
-    return sections_table_files(resolved.blade_surface(), resolved)
+    return sections_table_files(sampled_blade_surface(resolved), resolved)
 
 
 def write_files(files: dict[str, tuple[str, bytes]], out_dir: Path) -> dict[str, Path]:

@@ -5,7 +5,8 @@
     from torus_cad.parameters import PropellerParameters, resolve_parameters
     params = resolve_parameters("design.toml", {"blades": 4})
     params.hub.radius       # mm
-    params.geometry()       # the kernel-free geometry (torus_cad.geometry.blade.propeller_geometry)
+
+The schema only: the geometry the parameters describe is :mod:`torus_cad.design`'s.
 """
 
 from __future__ import annotations

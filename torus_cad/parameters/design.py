@@ -24,36 +24,13 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import AfterValidator, BeforeValidator, Field, model_validator
 
-from torus_cad.errors import GeometryError, ParameterError, shown
+from torus_cad.errors import ParameterError, shown
 from torus_cad.formats import ExportFormat, StepSchema
-from torus_cad.geometry.analysis.feasibility import Margins, check_feasible, check_root_fillet_edge
-from torus_cad.geometry.analysis.printability import (
-    Printability,
-    conventional_printability,
-    printability,
-)
-from torus_cad.geometry.blade.blade_surface import (
-    BladeSurface,
-    blade_surface,
-    with_thin_file_edge_closed,
-)
 from torus_cad.geometry.blade.centerline import free_point_z_range_mm
-from torus_cad.geometry.blade.conventional_blade import (
-    ConventionalBlade,
-    check_conventional_feasible,
-    conventional_surface,
-    rotated_surface,
-)
 from torus_cad.geometry.blade.frames import FrameKind
 from torus_cad.geometry.blade.handedness import Handedness
-from torus_cad.geometry.blade.propeller_geometry import (
-    BladeGeometry,
-    HubGeometry,
-    PropellerGeometry,
-)
 from torus_cad.geometry.blade.station_table import StationTable, checked, read_station_file
-from torus_cad.geometry.blade.transforms import SectionLaws, quartic_minimum
-from torus_cad.geometry.hub.mounting import HubMounting
+from torus_cad.geometry.blade.transforms import quartic_minimum
 from torus_cad.geometry.section.airfoil import (
     Naca5Airfoil,
     NacaAirfoil,
@@ -206,13 +183,6 @@ class Hub(Section):
                 f"[0, {min(self.radius, self.length / 2.0):g}) mm"
             )
         return self
-
-    def mounting(self) -> HubMounting:
-        """The mounting features as geometry (the set screw's direction is chosen later, from the
-        blades)."""
-        return HubMounting(
-            self.bore_diameter, self.bore_flat_depth, self.set_screw_diameter, self.chamfer
-        )
 
 
 #: The spec's section numbers, which airfoil.naca and airfoil.file replace.
@@ -891,124 +861,9 @@ class PropellerParameters(Document):
                 }
         return data
 
-    def blade_surface(
-        self, blade_index: int = 0, sections: int | None = None, points: int | None = None
-    ) -> BladeSurface:
-        """Blade ``blade_index`` sampled at ``sections`` x ``points`` (default: ``resolution``):
-        a :class:`~torus_cad.geometry.blade.blade_surface.BladeSurface`, whose ``points`` are
-        ``(sections, points, 3)`` mm.
-
-        A conventional blade is blade 0 rotated about +z to blade ``blade_index``'s angle.
-
-        Args:
-            blade_index: which blade, 0 to ``blades - 1``; blade i sits at
-                ``phase_deg + 360 i / n`` degrees.
-            sections: sections along the blade (s uniform in [0, 1]); None for
-                ``resolution.sections``.
-            points: points around each section, equally spaced in arc length, at least 8;
-                None for ``resolution.points``.
-
-        Returns:
-            The sampled surface: ``points`` ``(sections, points, 3)`` float array, mm; ``s``
-            ``(sections,)``; ``t`` ``(points,)``; the frames and the trailing edge's columns.
-
-        Raises:
-            GeometryError: the blade's frames are undefined (a Frenet frame where the
-                centerline's curvature vanishes or its normal flips).
-            ParameterError: ``points`` is below 8, or a blunt trailing edge is thinner than the
-                coordinate file's own trailing-edge offset.
-        """
-        sections = self.resolution.sections if sections is None else sections
-        points = self.resolution.points if points is None else points
-        if self.kind == DesignKind.CONVENTIONAL:
-            surface = conventional_surface(self.conventional_blade(), sections, points)
-            return rotated_surface(surface, self.blade_angle_deg(blade_index))
-        geometry = self.geometry()
-        return blade_surface(geometry.blade, geometry.centerline(blade_index), sections, points)
-
-    def printability(self) -> Printability:
-        """The blade's thinnest wall and trailing edge against ``manufacturing.min_wall``, from the
-        analytic section (:mod:`torus_cad.geometry.analysis.printability`), of either kind."""
-        if self.kind == DesignKind.CONVENTIONAL:
-            return conventional_printability(self.conventional_blade(), self.manufacturing.min_wall)
-        return printability(self.geometry(), self.manufacturing.min_wall)
-
-    def check_feasible(self, surface: BladeSurface) -> Margins | None:
-        """The pre-kernel checks of the design's kind on blade 0's ``surface`` (GeometryError naming
-        the problem): :func:`torus_cad.geometry.analysis.feasibility.check_feasible` (its margins to
-        the fold and resolution limits returned) or
-        :func:`torus_cad.geometry.blade.conventional_blade.check_conventional_feasible` (None);
-        first, a root fillet round a knife trailing edge
-        (:func:`torus_cad.geometry.analysis.feasibility.check_root_fillet_edge`)."""
-        check_root_fillet_edge(self.hub.root_fillet_radius, self.airfoil.trailing_edge_thickness)
-        if self.kind == DesignKind.CONVENTIONAL:
-            check_conventional_feasible(self.conventional_blade(), surface, self.blades)
-            return None
-        return check_feasible(self.geometry(), surface)
-
     def blade_angle_deg(self, blade_index: int) -> float:
         """theta_i = theta_0 + 360 i / n (spec §6.1), degrees, of either kind."""
         return self.phase_deg + 360.0 * blade_index / self.blades
-
-    def hub_geometry(self) -> HubGeometry:
-        """The hub's cylinder (mm), of either kind."""
-        return HubGeometry(self.hub.radius, self.hub.length)
-
-    def conventional_blade(self) -> ConventionalBlade:
-        """The conventional blade these parameters describe (kind = 'conventional'; mm, degrees)."""
-        return ConventionalBlade(
-            self.conventional.stations(),
-            self.conventional.diameter / 2.0,
-            self.airfoil.section(),
-            self.conventional.stacking,
-            self.hub_geometry(),
-            self.airfoil.trailing_edge_thickness,
-            self.airfoil.trailing_edge_shape == TrailingEdgeShape.ROUND,
-        )
-
-    def geometry(self) -> PropellerGeometry:
-        """The kernel-free geometry these parameters describe (mm, degrees); toroidal designs only
-        (a conventional one has :meth:`conventional_blade`).
-
-        A coordinate file's open trailing edge that is too thin to mesh outside the hub is
-        closed here (``BladeGeometry.closed_file_edge_mm`` says so).
-
-        Returns:
-            The hub (mm), the blade (section, quartic laws, control points in frame L, frame
-            kind, trailing edge in mm), the number of blades and the phase (degrees).
-
-        Raises:
-            GeometryError: ``kind`` is 'conventional' (it has no centerline).
-        """
-        if self.kind == DesignKind.CONVENTIONAL:
-            raise GeometryError(
-                "this step is toroidal-only (it needs the blade's centerline); "
-                "kind = 'conventional' has none"
-            )
-        line = self.centerline
-        laws = SectionLaws(
-            self.transforms.angle_of_attack,
-            self.transforms.scale_x,
-            self.transforms.scale_y,
-            self.airfoil.pivot,
-        )
-        local = ((0.0, 0.0, 0.0), line.p2, line.p3, (*line.p4, 0.0))
-        blade = BladeGeometry(
-            self.airfoil.section(),
-            laws,
-            local,
-            line.frame,
-            self.airfoil.trailing_edge_thickness,
-            self.airfoil.trailing_edge_shape == TrailingEdgeShape.ROUND,
-        )
-        geometry = PropellerGeometry(
-            HubGeometry(self.hub.radius, self.hub.length), blade, self.blades, self.phase_deg
-        )
-        return (
-            geometry
-            if self.airfoil.trailing_edge_thickness > 0.0
-            else with_thin_file_edge_closed(geometry)
-        )
 
 
 # ParameterError is what every caller catches; keep it importable from here.

@@ -16,7 +16,7 @@ handlers are installed, so one that arrived during the start is handled then, wi
 A signal that arrives while an output set is being published (:func:`deferred`) waits until the
 set is complete. Python runs signal handlers between bytecodes, so a signal during one long
 OpenCascade call takes effect when that call returns (the budgets checked before the work starts,
-such as torus_cad.parameters.stl_budget, keep such calls short).
+such as torus_cad.design.stl_budget, keep such calls short).
 """
 
 from __future__ import annotations

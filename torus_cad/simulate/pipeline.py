@@ -167,7 +167,7 @@ def check_request(request: Request) -> float:
     mesh's estimate, torus_cad.simulate.validity); returns the tip diameter in m (of the design as
     built: its ``diameter`` / ``pitch`` / ``airfoil.naca`` targets applied)."""
     from torus_cad.cfd_domain.sizes import tip_radius
-    from torus_cad.parameters.design_targets import resolve_design_targets
+    from torus_cad.design.design_targets import resolve_design_targets
 
     check_count("--iterations", request.run_iterations, 1, MAX_ITERATIONS)
     check_count("--processes", request.processes, 1, max_processes())

@@ -16,11 +16,16 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from torus_cad.design.described_geometry import (
+    check_design_feasible,
+    hub_geometry,
+    sampled_blade_surface,
+)
+from torus_cad.design.design_targets import resolve_design_targets
 from torus_cad.geometry.blade.propeller_geometry import HUB_PART
 from torus_cad.geometry.blade.triangle_mesh import blade_mesh
 from torus_cad.parameters import PropellerParameters
 from torus_cad.parameters.design import Handedness
-from torus_cad.parameters.design_targets import resolve_design_targets
 
 #: Segments around the preview hub cylinder.
 HUB_SEGMENTS = 96
@@ -111,9 +116,9 @@ def preview_scene(params: PropellerParameters) -> PreviewScene:
     fillet are left to the exact solid: the preview hub is the plain cylinder.
     """
     params = resolve_design_targets(params).parameters
-    hub = params.hub_geometry()
-    surface = params.blade_surface()
-    params.check_feasible(surface)
+    hub = hub_geometry(params)
+    surface = sampled_blade_surface(params)
+    check_design_feasible(params, surface)
     tip = _tip_diameter(surface.points)  # at the design's sampling (a mirror keeps the radii)
     sections, points = (
         min(wanted, most)
@@ -122,7 +127,7 @@ def preview_scene(params: PropellerParameters) -> PreviewScene:
         )
     )
     if (sections, points) != (params.resolution.sections, params.resolution.points):
-        surface = params.blade_surface(sections=sections, points=points)
+        surface = sampled_blade_surface(params, sections=sections, points=points)
     mesh = blade_mesh(surface)
     section_points, vertices, faces = surface.points, mesh.vertices, mesh.faces
     if params.handedness == Handedness.CCW:  # the mirror image: reflect, and keep the faces outward
@@ -145,4 +150,6 @@ def _tip_diameter(points: NDArray[np.float64]) -> float:
 def tip_diameter_mm(params: PropellerParameters, samples: tuple[int, int] = TIP_SAMPLES) -> float:
     """Twice the largest distance of the blade surface from the spin axis, mm (sampled ``samples``);
     ``params`` with its design targets applied (``Propeller.parameters``)."""
-    return _tip_diameter(params.blade_surface(sections=samples[0], points=samples[1]).points)
+    return _tip_diameter(
+        sampled_blade_surface(params, sections=samples[0], points=samples[1]).points
+    )

@@ -25,9 +25,9 @@ from torus_cad.acoustics.noise_report import (
     write_noise_plot,
 )
 from torus_cad.acoustics.observers import DEFAULT_OBSERVERS, Observer, check_observers
+from torus_cad.design.design_targets import resolve_design_targets
 from torus_cad.outputs.output_set import OutputSet
 from torus_cad.parameters.design import PropellerParameters
-from torus_cad.parameters.design_targets import resolve_design_targets
 from torus_cad.simulate.settings import (
     OperatingPoint,
     check_count,

@@ -14,6 +14,12 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from torus_cad.design.described_geometry import (
+    hub_geometry,
+    propeller_geometry,
+    sampled_blade_surface,
+)
+from torus_cad.design.design_targets import resolve_design_targets
 from torus_cad.geometry.analysis.camber_surface import (
     camber_surface,
     cosine_fractions,
@@ -22,7 +28,6 @@ from torus_cad.geometry.analysis.camber_surface import (
 from torus_cad.geometry.blade.blade_surface import BladeSurface, blade_surface_at
 from torus_cad.geometry.blade.handedness import Handedness
 from torus_cad.parameters.design import DesignKind, PropellerParameters
-from torus_cad.parameters.design_targets import resolve_design_targets
 from torus_cad.tolerances import VORTEX_CHORDWISE_DEFAULT, VORTEX_SPANWISE_DEFAULT
 from torus_cad.vortex.lattice import WakeShape
 
@@ -98,10 +103,10 @@ def rotor_blade(params: PropellerParameters, discretisation: Discretisation) -> 
 
 def _surface(params: PropellerParameters, sections: int) -> BladeSurface:
     if params.kind == DesignKind.CONVENTIONAL:
-        return params.blade_surface(0, sections, SECTION_POINTS)
-    geometry = params.geometry()
+        return sampled_blade_surface(params, 0, sections, SECTION_POINTS)
+    geometry = propeller_geometry(params)
     centerline = geometry.centerline(0)
-    hub = params.hub_geometry()
+    hub = hub_geometry(params)
     first, last = _outside_the_hub(centerline.points, hub.radius_mm)
     return blade_surface_at(
         geometry.blade, centerline, np.linspace(first, last, sections), SECTION_POINTS

@@ -9,10 +9,11 @@ from pathlib import Path
 from torus_cad.build_stages import Stage
 from torus_cad.cli.design_input import format_overrides, load_parameters, writes_a_mesh
 from torus_cad.cli.exits import EXIT_OK
+from torus_cad.design.described_geometry import wall_printability
+from torus_cad.design.stl_budget import check_stl_budget
 from torus_cad.errors import GeometryError
 from torus_cad.outputs.output_set import check_writable_folder, write_output_set
 from torus_cad.outputs.sections_table import design_sections_table_files
-from torus_cad.parameters.stl_budget import check_stl_budget
 from torus_cad.preview.size import parse_size
 from torus_cad.runtime.isolation import IsolatedCall, prefetch_modules
 from torus_cad.tolerances import MIN_BLUNT_TRAILING_EDGE_MM
@@ -24,7 +25,7 @@ def run(args: argparse.Namespace) -> int:
     params = load_parameters(args.config, args.overrides + format_overrides(args.formats))
     size = parse_size(args.preview_size, "--preview-size") if args.preview else None
     if args.require_printable:  # decided from the analytic section, before any work or file
-        problem = params.printability().problem()
+        problem = wall_printability(params).problem()
         if problem:
             raise GeometryError(f"not printable (--require-printable): {problem}")
     if writes_a_mesh(params, args.no_stl):

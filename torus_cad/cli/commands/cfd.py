@@ -12,9 +12,9 @@ from torus_cad.cfd_domain.estimate import check_cfd_budget
 from torus_cad.cfd_domain.interruptible import run_in_worker
 from torus_cad.cli.design_input import load_parameters, table_overrides
 from torus_cad.cli.exits import print_written
+from torus_cad.design.design_targets import resolve_design_targets
 from torus_cad.kernel.mesh_check import import_meshlib
 from torus_cad.outputs.output_set import check_writable_folder
-from torus_cad.parameters.design_targets import resolve_design_targets
 from torus_cad.runtime.progress import StageProgress
 
 

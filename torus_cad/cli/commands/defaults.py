@@ -8,9 +8,9 @@ import sys
 
 from torus_cad.cli.design_input import load_parameters
 from torus_cad.cli.exits import EXIT_OK
+from torus_cad.design.design_targets import resolve_design_targets
 from torus_cad.errors import ParameterError
 from torus_cad.parameters import PropellerParameters
-from torus_cad.parameters.design_targets import resolve_design_targets
 
 
 def run(args: argparse.Namespace) -> int:

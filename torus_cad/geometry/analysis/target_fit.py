@@ -3,7 +3,7 @@
 The designer's ``diameter`` scales the radial coordinates z_L of the free control points p2 and p3
 until the tip diameter is met (:mod:`.diameter`); ``pitch`` refits alpha(s) so the outer half has
 that geometric pitch (:mod:`.pitch`). :func:`fitted_to_targets` alternates the two fits on the
-geometry objects, as :func:`torus_cad.parameters.design_targets.resolve_design_targets` asks, which
+geometry objects, as :func:`torus_cad.design.design_targets.resolve_design_targets` asks, which
 turns the fitted geometry back into validated parameters.
 """
 

@@ -2,7 +2,7 @@
 arrays out).
 
 The fit and its check of the trailing edge live here, below the kernel, so that a design can be
-refused for them before OpenCascade is imported (:mod:`torus_cad.parameters.design_checks`);
+refused for them before OpenCascade is imported (:mod:`torus_cad.design.design_checks`);
 :mod:`torus_cad.kernel.wires` makes the section wires from the same arrays and describes the
 curves (sharp and blunt trailing edges, the round cap) in its module docstring.
 

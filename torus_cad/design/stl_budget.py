@@ -11,6 +11,7 @@ itself is bounded by the resolution ranges.)
 
 from __future__ import annotations
 
+from torus_cad.design.described_geometry import sampled_blade_surface
 from torus_cad.errors import BudgetError
 from torus_cad.geometry.analysis.triangle_estimate import estimate_stl_triangles
 from torus_cad.geometry.blade.blade_surface import BladeSurface
@@ -42,7 +43,9 @@ def estimated_stl_triangles(
     if surface is None or any(
         have < need for have, need in zip(surface.points.shape, _ESTIMATE_MIN_SAMPLES)
     ):
-        surface = params.blade_surface(sections=_ESTIMATE_SAMPLES[0], points=_ESTIMATE_SAMPLES[1])
+        surface = sampled_blade_surface(
+            params, sections=_ESTIMATE_SAMPLES[0], points=_ESTIMATE_SAMPLES[1]
+        )
     if pole_grid is None:
         pole_grid = (params.resolution.sections, min(params.resolution.points, _USUAL_POLES_AROUND))
     export = params.export

@@ -28,17 +28,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from torus_cad.design.described_geometry import (
+    wall_printability,
+)
+from torus_cad.design.prepared_design import prepare_design
+from torus_cad.design.stl_budget import check_stl_budget
 from torus_cad.errors import GeometryError
 from torus_cad.geometry.analysis.feasibility import FOLD_LIMIT, RESOLUTION_DEVIATION_LIMIT, Margins
 from torus_cad.geometry.analysis.printability import Printability
 from torus_cad.geometry.blade.blade_surface import BladeSurface
-from torus_cad.geometry.hub.mounting import HubMounting, place_mounting
-from torus_cad.geometry.section.section_fit import SectionFit, fit_sections
 from torus_cad.parameters.design import PropellerParameters, TrailingEdgeShape
-from torus_cad.parameters.design_targets import resolve_design_targets
-from torus_cad.parameters.stl_budget import check_stl_budget
 
-__all__ = ["Feasibility", "check_design", "placed_mounting"]
+__all__ = ["Feasibility", "check_design"]
 
 #: What check cannot say without the kernel (a knife edge's fillet is refused before it:
 #: torus_cad.geometry.analysis.feasibility.check_root_fillet_edge): round a flat blunt edge the
@@ -57,9 +58,6 @@ ROUND_EDGE_FILLET_NOTE = (
     "blade roots (a thin root, a tight bend) is known only when the build makes it; the build "
     "names a radius that fits if this one does not"
 )
-
-#: Sampling of the blade surface for the mounting checks (the check uses the points as they are).
-MOUNTING_SECTIONS, MOUNTING_POINTS = 200, 160
 
 
 @dataclass(frozen=True)
@@ -129,39 +127,6 @@ class Feasibility:
         return "; ".join(parts) + f"; checked without the kernel in {self.cpu_seconds:.2f} s of CPU"
 
 
-def fitted_sections(surface: BladeSurface) -> SectionFit:
-    """The section curves the kernel lofts, as arrays (GeometryError for a trailing edge they cannot
-    resolve)."""
-    return fit_sections(
-        surface.points,
-        surface.trailing_edge_column,
-        surface.chords_mm,
-        surface.lower_corner_index,
-        surface.round_trailing_edge,
-    )
-
-
-def placed_mounting(params: PropellerParameters) -> HubMounting:
-    """The hub's mounting features checked against the blades (densely sampled), the set screw
-    placed."""
-    mounting = params.hub.mounting()
-    if not mounting.any:
-        return mounting
-    resolution = params.resolution
-    dense = params.blade_surface(
-        sections=max(resolution.sections, MOUNTING_SECTIONS),
-        points=max(resolution.points, MOUNTING_POINTS),
-    )
-    return place_mounting(
-        mounting,
-        dense.points,
-        params.blades,
-        params.hub.radius,
-        params.hub.length,
-        params.hub.root_fillet_radius,
-    )
-
-
 def check_design(
     params: PropellerParameters,
     *,
@@ -190,21 +155,18 @@ def check_design(
     """
     start = time.process_time()
     # first, as the build command
-    printability = params.printability() if require_printable else None
+    printability = wall_printability(params) if require_printable else None
     if printability is not None and printability.problem():
         raise GeometryError(f"not printable (--require-printable): {printability.problem()}")
     if mesh and estimate_mesh_first:
         check_stl_budget(params)
-    params = resolve_design_targets(params).parameters
-    surface = params.blade_surface()
-    margins = params.check_feasible(surface)
-    placed_mounting(params)
-    fit = fitted_sections(surface)
+    prepared = prepare_design(params)
+    params, surface = prepared.parameters, prepared.surface
     triangles = None
     if mesh:
-        triangles = check_stl_budget(params, surface, fit.poles.shape[:2])
+        triangles = check_stl_budget(params, surface, prepared.fit.poles.shape[:2])
     if walls and printability is None:
-        printability = params.printability()
+        printability = wall_printability(params)
     return Feasibility(
-        params, surface, margins, printability, triangles, time.process_time() - start
+        params, surface, prepared.margins, printability, triangles, time.process_time() - start
     )

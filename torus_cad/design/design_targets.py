@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from torus_cad.design.described_geometry import propeller_geometry, sampled_blade_surface
 from torus_cad.geometry.analysis.pitch import PitchFit
 from torus_cad.geometry.analysis.target_fit import achieved, fitted_to_targets, tip_radius_of
 from torus_cad.geometry.blade.handedness import Handedness
@@ -89,9 +90,11 @@ def tip_radius_mm(params: Any) -> float:
     blade's sampled densely (its sections are planar, x = r: the tip section's points are the
     farthest)."""
     if str(params.kind) == "conventional":
-        points = params.blade_surface(0, CONVENTIONAL_TIP_GRID[0], CONVENTIONAL_TIP_GRID[1]).points
+        points = sampled_blade_surface(
+            params, 0, CONVENTIONAL_TIP_GRID[0], CONVENTIONAL_TIP_GRID[1]
+        ).points
         return float(np.hypot(points[..., 0], points[..., 1]).max())
-    return tip_radius_of(params.geometry())
+    return tip_radius_of(propeller_geometry(params))
 
 
 #: Sections and points of a conventional blade's sampling for its tip radius.
@@ -138,8 +141,8 @@ def resolve_design_targets(params: Any, spin: Handedness = Handedness.CW) -> Des
         return DesignTargets(params, requested=requested)
     # fitted on the geometry objects, validated once as parameters
     geometry, scale = fitted_to_targets(
-        params.geometry(), diameter_mm, pitch_mm, spin, params.hub.radius
+        propeller_geometry(params), diameter_mm, pitch_mm, spin, params.hub.radius
     )
     params = _without_targets(params, geometry)
-    fit, diameter = achieved(params.geometry(), pitch_mm, spin)
+    fit, diameter = achieved(propeller_geometry(params), pitch_mm, spin)
     return DesignTargets(params, scale if diameter_mm else None, diameter, fit, requested)
