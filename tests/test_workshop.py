@@ -456,7 +456,7 @@ def fillet_stage(monkeypatch):
     import torus_cad.propeller as pipeline
 
     monkeypatch.setattr(
-        "torus_cad.design.described_geometry.check_root_fillet_edge", lambda *args: None
+        "torus_cad.design.prepared_design.check_root_fillet_edge", lambda *args: None
     )
 
     monkeypatch.setattr(
@@ -620,7 +620,7 @@ def test_tight_bend_fails_naming_the_reduce_choice(tmp_path, capsys, monkeypatch
     written, the message says why and names the choice). The design's knife edge, refused before the
     kernel since issue 47, is let through: the fillet stage's own refusal is tested."""
     monkeypatch.setattr(
-        "torus_cad.design.described_geometry.check_root_fillet_edge", lambda *args: None
+        "torus_cad.design.prepared_design.check_root_fillet_edge", lambda *args: None
     )
     design = tmp_path / "tight.toml"
     design.write_text(PropellerParameters.from_dict({**TIGHT_BEND, "name": "tight"}).to_toml())
@@ -690,7 +690,7 @@ def test_a_knife_edge_fillet_the_check_cannot_certify_is_not_published(
     # the kernel's own refusal, behind the one before the kernel
     # (test_a_knife_edge_fillet_is_refused_before_the_kernel)
     monkeypatch.setattr(
-        "torus_cad.design.described_geometry.check_root_fillet_edge", lambda *args: None
+        "torus_cad.design.prepared_design.check_root_fillet_edge", lambda *args: None
     )
     path = tmp_path / "knife.toml"
     path.write_text(PropellerParameters.from_dict({**design, "name": "knife"}).to_toml())

@@ -13,23 +13,16 @@ turns them into the geometry layer's objects (:mod:`torus_cad.geometry`), for ei
 from __future__ import annotations
 
 from torus_cad.errors import GeometryError
-from torus_cad.geometry.analysis.feasibility import Margins, check_feasible, check_root_fillet_edge
-from torus_cad.geometry.analysis.printability import (
-    Printability,
-    conventional_printability,
-    printability,
+from torus_cad.geometry.analysis.either_kind import (
+    DescribedPropeller,
+    feasibility_margins,
+    propeller_printability,
+    sampled_surface,
 )
-from torus_cad.geometry.blade.blade_surface import (
-    BladeSurface,
-    blade_surface,
-    with_thin_file_edge_closed,
-)
-from torus_cad.geometry.blade.conventional_blade import (
-    ConventionalBlade,
-    check_conventional_feasible,
-    conventional_surface,
-    rotated_surface,
-)
+from torus_cad.geometry.analysis.feasibility import Margins, check_root_fillet_edge
+from torus_cad.geometry.analysis.printability import Printability
+from torus_cad.geometry.blade.blade_surface import BladeSurface, with_thin_file_edge_closed
+from torus_cad.geometry.blade.conventional_blade import ConventionalBlade, ConventionalPropeller
 from torus_cad.geometry.blade.propeller_geometry import (
     BladeGeometry,
     HubGeometry,
@@ -42,6 +35,7 @@ from torus_cad.parameters.design import DesignKind, PropellerParameters, Trailin
 __all__ = [
     "check_design_feasible",
     "conventional_blade",
+    "described_propeller",
     "hub_geometry",
     "hub_mounting",
     "propeller_geometry",
@@ -57,20 +51,22 @@ def hub_geometry(params: PropellerParameters) -> HubGeometry:
 
 def hub_mounting(params: PropellerParameters) -> HubMounting:
     """The hub's bore, flat, set screw and chamfer as geometry (mm); the set screw's direction is
-    chosen later, from the blades (:func:`torus_cad.geometry.hub.mounting.place_mounting`)."""
+    chosen later, from the blades (:func:`torus_cad.geometry.analysis.either_kind.mounting_placed`).
+    """
     hub = params.hub
     return HubMounting(hub.bore_diameter, hub.bore_flat_depth, hub.set_screw_diameter, hub.chamfer)
 
 
 def conventional_blade(params: PropellerParameters) -> ConventionalBlade:
     """The conventional blade ``params`` describe (kind = 'conventional'; mm, degrees)."""
-    airfoil = params.airfoil
+    hub = hub_geometry(params)
+    airfoil, conventional = params.airfoil, params.conventional
     return ConventionalBlade(
-        params.conventional.stations(),
-        params.conventional.diameter / 2.0,
+        conventional.stations(),
+        conventional.diameter / 2.0,
         airfoil.section(),
-        params.conventional.stacking,
-        hub_geometry(params),
+        conventional.stacking,
+        hub,
         airfoil.trailing_edge_thickness,
         airfoil.trailing_edge_shape == TrailingEdgeShape.ROUND,
     )
@@ -98,23 +94,41 @@ def propeller_geometry(params: PropellerParameters) -> PropellerGeometry:
             "this step is toroidal-only (it needs the blade's centerline); "
             "kind = 'conventional' has none"
         )
+    hub = hub_geometry(params)
     line, transforms, airfoil = params.centerline, params.transforms, params.airfoil
+    section = airfoil.section()
     laws = SectionLaws(
         transforms.angle_of_attack, transforms.scale_x, transforms.scale_y, airfoil.pivot
     )
     local = ((0.0, 0.0, 0.0), line.p2, line.p3, (*line.p4, 0.0))
     blade = BladeGeometry(
-        airfoil.section(),
+        section,
         laws,
         local,
         line.frame,
         airfoil.trailing_edge_thickness,
         airfoil.trailing_edge_shape == TrailingEdgeShape.ROUND,
     )
-    geometry = PropellerGeometry(hub_geometry(params), blade, params.blades, params.phase_deg)
+    geometry = PropellerGeometry(hub, blade, params.blades, params.phase_deg)
     if airfoil.trailing_edge_thickness > 0.0:
         return geometry
     return with_thin_file_edge_closed(geometry)
+
+
+def described_propeller(params: PropellerParameters) -> DescribedPropeller:
+    """The propeller ``params`` describe, of its kind: made once, then sampled, checked and measured
+    through :mod:`torus_cad.geometry.analysis.either_kind`.
+
+    Args:
+        params: the validated design.
+
+    Returns:
+        A :class:`~torus_cad.geometry.blade.propeller_geometry.PropellerGeometry` (toroidal) or a
+        :class:`~torus_cad.geometry.blade.conventional_blade.ConventionalPropeller` (mm, degrees).
+    """
+    if params.kind == DesignKind.CONVENTIONAL:
+        return ConventionalPropeller(conventional_blade(params), params.blades, params.phase_deg)
+    return propeller_geometry(params)
 
 
 def sampled_blade_surface(
@@ -147,13 +161,11 @@ def sampled_blade_surface(
         ParameterError: ``points`` is below 8, or a blunt trailing edge is thinner than the
             coordinate file's own trailing-edge offset.
     """
-    sections = params.resolution.sections if sections is None else sections
-    points = params.resolution.points if points is None else points
-    if params.kind == DesignKind.CONVENTIONAL:
-        surface = conventional_surface(conventional_blade(params), sections, points)
-        return rotated_surface(surface, params.blade_angle_deg(blade_index))
-    geometry = propeller_geometry(params)
-    return blade_surface(geometry.blade, geometry.centerline(blade_index), sections, points)
+    propeller = described_propeller(params)
+    resolution = params.resolution
+    sections = resolution.sections if sections is None else sections
+    points = resolution.points if points is None else points
+    return sampled_surface(propeller, blade_index, sections, points)
 
 
 def wall_printability(params: PropellerParameters) -> Printability:
@@ -167,19 +179,16 @@ def wall_printability(params: PropellerParameters) -> Printability:
         The thinnest wall and trailing edge (mm), where along the blade (s) they are, and whether
         they reach ``manufacturing.min_wall``.
     """
-    min_wall_mm = params.manufacturing.min_wall
-    if params.kind == DesignKind.CONVENTIONAL:
-        return conventional_printability(conventional_blade(params), min_wall_mm)
-    return printability(propeller_geometry(params), min_wall_mm)
+    propeller = described_propeller(params)
+    return propeller_printability(propeller, params.manufacturing.min_wall)
 
 
 def check_design_feasible(params: PropellerParameters, surface: BladeSurface) -> Margins | None:
     """The pre-kernel checks of the design's kind on blade 0's ``surface``.
 
     First a root fillet round a knife trailing edge
-    (:func:`torus_cad.geometry.analysis.feasibility.check_root_fillet_edge`), then
-    :func:`torus_cad.geometry.analysis.feasibility.check_feasible` (toroidal) or
-    :func:`torus_cad.geometry.blade.conventional_blade.check_conventional_feasible`.
+    (:func:`torus_cad.geometry.analysis.feasibility.check_root_fillet_edge`), then the kind's own
+    (:func:`torus_cad.geometry.analysis.either_kind.feasibility_margins`).
 
     Args:
         params: the validated design.
@@ -192,7 +201,4 @@ def check_design_feasible(params: PropellerParameters, surface: BladeSurface) ->
         GeometryError: the design describes no sound propeller (the line names the check).
     """
     check_root_fillet_edge(params.hub.root_fillet_radius, params.airfoil.trailing_edge_thickness)
-    if params.kind == DesignKind.CONVENTIONAL:
-        check_conventional_feasible(conventional_blade(params), surface, params.blades)
-        return None
-    return check_feasible(propeller_geometry(params), surface)
+    return feasibility_margins(described_propeller(params), surface)

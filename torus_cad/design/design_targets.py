@@ -20,12 +20,18 @@ from typing import Any
 
 import numpy as np
 
-from torus_cad.design.described_geometry import propeller_geometry, sampled_blade_surface
+from torus_cad.design.described_geometry import (
+    described_propeller,
+    propeller_geometry,
+    sampled_blade_surface,
+)
+from torus_cad.geometry.analysis.either_kind import DescribedPropeller
 from torus_cad.geometry.analysis.pitch import PitchFit
 from torus_cad.geometry.analysis.target_fit import achieved, fitted_to_targets, tip_radius_of
 from torus_cad.geometry.blade.handedness import Handedness
 from torus_cad.geometry.blade.propeller_geometry import PropellerGeometry
 from torus_cad.geometry.section.airfoil import naca4_numbers
+from torus_cad.parameters import PropellerParameters
 
 
 @dataclass(frozen=True)
@@ -34,6 +40,8 @@ class DesignTargets:
 
     Attributes:
         parameters: the resolved spec parameters (targets removed).
+        propeller: the kernel-free propeller they describe, fitted to the targets (made once: the
+            build samples and checks it through :mod:`torus_cad.geometry.analysis.either_kind`).
         radial_scale: factor applied to z_L of p2 and p3 (None without a diameter target).
         tip_diameter_mm: the tip diameter of the resolved design (analytic surface; None when
             no diameter or pitch was asked for: not computed, to keep the default build fast).
@@ -41,7 +49,8 @@ class DesignTargets:
         requested: the targets as given (``{"diameter": mm, "pitch": mm, "naca": "2412", ...}``).
     """
 
-    parameters: Any
+    parameters: PropellerParameters
+    propeller: DescribedPropeller
     radial_scale: float | None = None
     tip_diameter_mm: float | None = None
     pitch_fit: PitchFit | None = None
@@ -101,35 +110,38 @@ def tip_radius_mm(params: Any) -> float:
 CONVENTIONAL_TIP_GRID = (21, 400)
 
 
-def _without_targets(params: Any, geometry: PropellerGeometry) -> Any:
-    """``params`` with the fitted control points and alpha(s) of ``geometry``, and the targets
-    removed."""
-    _, p2, p3, _ = geometry.blade.local_control_points
-    changes: dict[str, Any] = {
-        "centerline.p2": list(p2),
-        "centerline.p3": list(p3),
-        "transforms.angle_of_attack": list(geometry.blade.laws.angle_of_attack_deg),
-    }
-    for key, empty in (("diameter", 0.0), ("pitch", 0.0)):
-        if _value(params, key, None):
-            changes[key] = empty
-    return params.with_values(changes)
-
-
-def resolve_design_targets(params: Any, spin: Handedness = Handedness.CW) -> DesignTargets:
+def resolve_design_targets(
+    params: PropellerParameters, spin: Handedness = Handedness.CW
+) -> DesignTargets:
     """Apply ``airfoil.naca`` (4-digit), ``diameter`` and ``pitch`` (module docstring) to
-    ``params``."""
+    ``params``.
+
+    The propeller is described once, from ``params`` as given (a NACA designation describes the
+    same section as its numbers), and the fits run on it; the parameters take the fitted values and
+    are validated again.
+
+    Args:
+        params: the validated design.
+        spin: the rotation the pitch is meant for.
+
+    Returns:
+        The resolved parameters (targets removed: they build the same propeller without solving
+        again), the propeller they describe, and what each fit achieved.
+
+    Raises:
+        ParameterError: a target that cannot be met, or a fitted value out of its range.
+    """
     requested = requested_targets(params)
-    if not requested:
-        return DesignTargets(params)
-    naca = requested.get("airfoil.naca", "")
-    if naca and len(str(naca).strip()) == 4:
+    propeller = described_propeller(params)
+    naca = str(requested.get("airfoil.naca", "")).strip()
+    if len(naca) == 4:
         m, p, thickness = naca4_numbers(naca)
+        camber_position = p if m > 0 else params.airfoil.camber_position
         params = params.with_values(
             {
                 "airfoil.naca": "",
                 "airfoil.max_camber": m,
-                "airfoil.camber_position": p if m > 0 else params.airfoil.camber_position,
+                "airfoil.camber_position": camber_position,
                 "airfoil.thickness": thickness,
             }
         )
@@ -137,12 +149,19 @@ def resolve_design_targets(params: Any, spin: Handedness = Handedness.CW) -> Des
         float(requested.get("diameter", 0.0)),
         float(requested.get("pitch", 0.0)),
     )
-    if not (diameter_mm or pitch_mm):
-        return DesignTargets(params, requested=requested)
+    if not (diameter_mm or pitch_mm) or not isinstance(propeller, PropellerGeometry):
+        return DesignTargets(params, propeller, requested=requested)
     # fitted on the geometry objects, validated once as parameters
-    geometry, scale = fitted_to_targets(
-        propeller_geometry(params), diameter_mm, pitch_mm, spin, params.hub.radius
+    fitted, scale = fitted_to_targets(propeller, diameter_mm, pitch_mm, spin, params.hub.radius)
+    _, p2, p3, _ = fitted.blade.local_control_points
+    changes: dict[str, Any] = {
+        "centerline.p2": list(p2),
+        "centerline.p3": list(p3),
+        "transforms.angle_of_attack": list(fitted.blade.laws.angle_of_attack_deg),
+    }
+    # the targets removed: the resolved parameters build the same propeller without solving again
+    params = params.with_values(
+        changes | {key: 0.0 for key in ("diameter", "pitch") if key in requested}
     )
-    params = _without_targets(params, geometry)
-    fit, diameter = achieved(propeller_geometry(params), pitch_mm, spin)
-    return DesignTargets(params, scale if diameter_mm else None, diameter, fit, requested)
+    fit, diameter = achieved(fitted, pitch_mm, spin)
+    return DesignTargets(params, fitted, scale if diameter_mm else None, diameter, fit, requested)

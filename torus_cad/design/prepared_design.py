@@ -20,15 +20,16 @@ from pathlib import Path
 from typing import Any
 
 from torus_cad.build_stages import Stage
-from torus_cad.design.described_geometry import (
-    check_design_feasible,
-    hub_mounting,
-    sampled_blade_surface,
-)
+from torus_cad.design.described_geometry import described_propeller, hub_mounting
 from torus_cad.design.design_targets import DesignTargets, resolve_design_targets
-from torus_cad.geometry.analysis.feasibility import Margins
+from torus_cad.geometry.analysis.either_kind import (
+    feasibility_margins,
+    mounting_placed,
+    sampled_surface,
+)
+from torus_cad.geometry.analysis.feasibility import Margins, check_root_fillet_edge
 from torus_cad.geometry.blade.blade_surface import BladeSurface
-from torus_cad.geometry.hub.mounting import HubMounting, place_mounting, set_screw_arc_deg
+from torus_cad.geometry.hub.mounting import HubMounting, set_screw_arc_deg
 from torus_cad.geometry.hub.seam import seam_angle_deg
 from torus_cad.geometry.section.section_fit import SectionFit, fit_sections
 from torus_cad.parameters import PropellerParameters, resolve_parameters
@@ -66,6 +67,15 @@ class PreparedDesign:
     fit: SectionFit
 
 
+def _mounting_samples(params: PropellerParameters) -> tuple[int, int]:
+    """The blade's sampling for the mounting checks: the design's, or MOUNTING_SAMPLES if denser."""
+    resolution = params.resolution
+    return (
+        max(resolution.sections, MOUNTING_SAMPLES[0]),
+        max(resolution.points, MOUNTING_SAMPLES[1]),
+    )
+
+
 def placed_mounting(params: PropellerParameters) -> HubMounting:
     """The hub's mounting features checked against the blades, the set screw placed.
 
@@ -79,18 +89,9 @@ def placed_mounting(params: PropellerParameters) -> HubMounting:
     Raises:
         GeometryError: a feature reaches a blade (the line names the field).
     """
-    mounting = hub_mounting(params)
-    if not mounting.any:
-        return mounting
-    resolution, hub = params.resolution, params.hub
-    dense = sampled_blade_surface(
-        params,
-        sections=max(resolution.sections, MOUNTING_SAMPLES[0]),
-        points=max(resolution.points, MOUNTING_SAMPLES[1]),
-    )
-    return place_mounting(
-        mounting, dense.points, params.blades, hub.radius, hub.length, hub.root_fillet_radius
-    )
+    samples = _mounting_samples(params)
+    mounting, propeller = hub_mounting(params), described_propeller(params)
+    return mounting_placed(mounting, propeller, samples, params.hub.root_fillet_radius)
 
 
 def prepare_design(
@@ -99,6 +100,9 @@ def prepare_design(
     timer: StageTimer[Stage] | None = None,
 ) -> PreparedDesign:
     """Every step of the build before the kernel, in its order; the first refusal raises.
+
+    The propeller is described once (:func:`resolve_design_targets`); every later step takes that
+    description (:mod:`torus_cad.geometry.analysis.either_kind`), not the parameters again.
 
     Args:
         design: a :class:`PropellerParameters`, the path of a TOML design file, or None for the
@@ -119,21 +123,21 @@ def prepare_design(
     with timer.stage(Stage.PARAMETERS):
         params = resolve_parameters(design, overrides)
     with timer.stage(Stage.DESIGN_TARGETS):
-        # airfoil.naca, diameter, pitch -> the spec's parameters
+        samples, mounting = _mounting_samples(params), hub_mounting(params)
+        # airfoil.naca, diameter, pitch -> the spec's parameters, and the propeller they describe
         targets = resolve_design_targets(params)
-        params = targets.parameters
+        params, propeller = targets.parameters, targets.propeller
     with timer.stage(Stage.SECTION_MATH):
-        surface = sampled_blade_surface(params)
-        margins = check_design_feasible(params, surface)
-        mounting = placed_mounting(params)
+        hub, resolution = params.hub, params.resolution
+        surface = sampled_surface(propeller, 0, resolution.sections, resolution.points)
+        check_root_fillet_edge(hub.root_fillet_radius, params.airfoil.trailing_edge_thickness)
+        margins = feasibility_margins(propeller, surface)
+        mounting = mounting_placed(mounting, propeller, samples, hub.root_fillet_radius)
         # The hub is symmetric about its axis; its seam goes where it crosses no blade root (nor
         # the set screw).
-        screw_arc = set_screw_arc_deg(mounting, params.hub.radius)
+        screw_arc = set_screw_arc_deg(mounting, hub.radius)
         seam_deg = seam_angle_deg(
-            surface.points,
-            params.hub.radius,
-            params.blades,
-            () if screw_arc is None else (screw_arc,),
+            surface.points, hub.radius, params.blades, () if screw_arc is None else (screw_arc,)
         )
         fit = fit_sections(
             surface.points,

@@ -52,7 +52,7 @@ from OCP.TColStd import TColStd_Array1OfInteger, TColStd_Array1OfReal
 from OCP.TopoDS import TopoDS_Edge, TopoDS_Wire
 
 from torus_cad.errors import KernelError
-from torus_cad.geometry.section.section_fit import DEGREE, SectionFit, corner_knots
+from torus_cad.geometry.section.section_fit import DEGREE, SectionFit
 
 if TYPE_CHECKING:
     import cadquery as cq
@@ -89,7 +89,10 @@ class SectionCurves(SectionFit):
         the latter split into ``airfoil_pieces`` equal ranges.
         """
         split = self.leading_edge_parameter if split_sharp else None
-        return [occ_bspline_wire(poles, self.knots, airfoil_pieces, split) for poles in self.poles]
+        return [
+            occ_bspline_wire(poles, self.knots, self.corners, airfoil_pieces, split)
+            for poles in self.poles
+        ]
 
 
 def section_curves(fit: SectionFit) -> SectionCurves:
@@ -137,32 +140,35 @@ def _edge(curve: Geom_BSplineCurve) -> TopoDS_Edge:
 def bspline_wire(
     poles: NDArray[np.float64],
     knots: NDArray[np.float64],
+    corners: NDArray[np.float64],
     last_pieces: int = 1,
     closed_split: float | None = 0.5,
 ) -> cq.Wire:
     """:func:`occ_bspline_wire` as cadquery's wire."""
     import cadquery as cq
 
-    return cq.Wire(occ_bspline_wire(poles, knots, last_pieces, closed_split))
+    return cq.Wire(occ_bspline_wire(poles, knots, corners, last_pieces, closed_split))
 
 
 def occ_bspline_wire(
     poles: NDArray[np.float64],
     knots: NDArray[np.float64],
+    corners: NDArray[np.float64],
     last_pieces: int = 1,
     closed_split: float | None = 0.5,
 ) -> TopoDS_Wire:
     """A closed wire (OpenCascade's) from ``(m, 3)`` poles and a full knot vector of a non-rational
     cubic B-spline.
 
-    One edge per piece between C0 corner knots (see :func:`_corner_knots`), so that each piece
+    One edge per piece between the C0 corner knots ``corners`` (``SectionFit.corners``), so that
+    each piece
     lofts into its own face; the last piece (the airfoil) is further split into ``last_pieces``
     equal parameter ranges. A curve without corners (a sharp trailing edge, whose crease is the
     curve's start and end) is never left as one closed edge: with ``last_pieces`` 1 it is split
     at the parameter ``closed_split`` (the leading edge) into two (None: one closed edge).
     """
     builder = BRepBuilderAPI_MakeWire()
-    pieces = _pieces(np.asarray(poles, float), np.asarray(knots, float))
+    pieces = _pieces(np.asarray(poles, float), np.asarray(knots, float), corners)
     for index, (piece_poles, piece_knots) in enumerate(pieces):
         edge_curve = _bspline_curve(piece_poles, piece_knots)
         count = last_pieces if index == len(pieces) - 1 else 1
@@ -180,13 +186,13 @@ def occ_bspline_wire(
 
 
 def _pieces(
-    poles: NDArray[np.float64], knots: NDArray[np.float64]
+    poles: NDArray[np.float64], knots: NDArray[np.float64], corners: NDArray[np.float64]
 ) -> list[tuple[NDArray[np.float64], NDArray[np.float64]]]:
     """The curve split at its C0 corner knots: ``(poles, knots)`` per piece, pieces share their
     corner pole."""
     pieces = []
     start_pole, start_knot = 0, knots[0]
-    for corner in corner_knots(knots):
+    for corner in corners:
         first = int(np.searchsorted(knots, corner, side="left"))  # index of the corner's first copy
         pole = first - 1  # the one basis function alive at a knot of multiplicity DEGREE
         inner = knots[(knots > start_knot) & (knots < corner)]

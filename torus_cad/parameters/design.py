@@ -29,6 +29,7 @@ from torus_cad.formats import ExportFormat, StepSchema
 from torus_cad.geometry.blade.centerline import free_point_z_range_mm
 from torus_cad.geometry.blade.frames import FrameKind
 from torus_cad.geometry.blade.handedness import Handedness
+from torus_cad.geometry.blade.propeller_geometry import blade_angle_deg
 from torus_cad.geometry.blade.station_table import StationTable, checked, read_station_file
 from torus_cad.geometry.blade.transforms import quartic_minimum
 from torus_cad.geometry.section.airfoil import (
@@ -863,7 +864,7 @@ class PropellerParameters(Document):
 
     def blade_angle_deg(self, blade_index: int) -> float:
         """theta_i = theta_0 + 360 i / n (spec §6.1), degrees, of either kind."""
-        return self.phase_deg + 360.0 * blade_index / self.blades
+        return blade_angle_deg(self.phase_deg, blade_index, self.blades)
 
 
 # ParameterError is what every caller catches; keep it importable from here.

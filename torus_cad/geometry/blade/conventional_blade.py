@@ -43,7 +43,7 @@ from scipy.interpolate import PchipInterpolator
 from torus_cad.errors import GeometryError
 from torus_cad.geometry.blade.blade_surface import BladeSurface, place_on_frames
 from torus_cad.geometry.blade.frames import Frames
-from torus_cad.geometry.blade.propeller_geometry import HubGeometry
+from torus_cad.geometry.blade.propeller_geometry import HubGeometry, blade_angle_deg
 from torus_cad.geometry.blade.station_table import StationTable
 from torus_cad.geometry.blade.trailing_edge import TRAILING_EDGE_THICKNESS_LIMIT, blunt_sections
 from torus_cad.geometry.section.airfoil import Naca5Airfoil, NacaAirfoil
@@ -298,6 +298,31 @@ def conventional_surface(blade: ConventionalBlade, sections: int, points: int) -
         sampling.lower_corner_index,
         isinstance(reference, RoundTrailingEdge),
     )
+
+
+@dataclass(frozen=True)
+class ConventionalPropeller:
+    """A conventional propeller: its blade and the pattern, as the toroidal kind's
+    :class:`~torus_cad.geometry.blade.propeller_geometry.PropellerGeometry`.
+
+    Attributes:
+        blade: blade 0 (its hub, stations, section; mm, degrees).
+        blades: the number of blades, n.
+        phase_deg: theta_0, blade 0's angle about +z, degrees.
+    """
+
+    blade: ConventionalBlade
+    blades: int
+    phase_deg: float = 0.0
+
+    @property
+    def hub(self) -> HubGeometry:
+        """The hub the blades' roots sit in (mm)."""
+        return self.blade.hub
+
+    def blade_angle_deg(self, blade_index: int) -> float:
+        """theta_i = theta_0 + 360 i / n (spec §6.1), degrees."""
+        return blade_angle_deg(self.phase_deg, blade_index, self.blades)
 
 
 def check_conventional_feasible(

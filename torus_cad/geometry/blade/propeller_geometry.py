@@ -68,6 +68,12 @@ class BladeGeometry:
     closed_file_edge_mm: tuple[float, float] | None = None
 
 
+def blade_angle_deg(phase_deg: float, blade_index: int, blades: int) -> float:
+    """theta_i = theta_0 + 360 i / n (spec §6.1), degrees: where blade ``blade_index`` of
+    ``blades`` sits about +z, of either kind."""
+    return phase_deg + 360.0 * blade_index / blades
+
+
 @dataclass(frozen=True)
 class PropellerGeometry:
     """Hub, blade and pattern: blade i sits at theta_0 + 360 i / n degrees (spec §6.1)."""
@@ -79,7 +85,7 @@ class PropellerGeometry:
 
     def blade_angle_deg(self, blade_index: int) -> float:
         """theta_i = theta_0 + 360 i / n (spec §6.1), degrees."""
-        return self.phase_deg + 360.0 * blade_index / self.blades
+        return blade_angle_deg(self.phase_deg, blade_index, self.blades)
 
     def centerline(self, blade_index: int = 0) -> Centerline:
         """Blade ``blade_index``'s centerline in global Cartesian coordinates (mm)."""

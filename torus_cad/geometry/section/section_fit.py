@@ -44,6 +44,8 @@ class SectionFit:
             upper corner when blunt; the lower corner is pole 3, the base poles 0-3).
         knots: ``(m + 4,)`` float, clamped knot vector on [0, 1] shared by every section;
             a blunt edge's lower corner is an interior knot of multiplicity 3.
+        corners: ``(c,)`` float, the curves' C0 corners (:func:`corner_knots` of ``knots``): a
+            blunt edge's lower corner, none for a sharp edge; the kernel splits the wires there.
         fit_error: largest distance (mm) from a sampled point to its section's curve.
         round_trailing_edge: whether the base (poles 0-3) is a round cap, G1 with the airfoil.
         leading_edge_parameter: the curves' parameter (in [0, 1]) at the leading edge, where a
@@ -52,6 +54,7 @@ class SectionFit:
 
     poles: NDArray[np.float64]
     knots: NDArray[np.float64]
+    corners: NDArray[np.float64]
     fit_error: float
     round_trailing_edge: bool = False
     leading_edge_parameter: float = 0.5
@@ -195,6 +198,7 @@ def fit_sections(
             return SectionFit(
                 poles,
                 knots,
+                corner_knots(knots),
                 float(error.max()),
                 corner is not None and round_trailing_edge,
                 leading_edge,
