@@ -99,19 +99,11 @@ def reference_design() -> dict[str, Any]:
     """What the reference script builds, as JSON data: the default design's section B-splines (the
     fit the build lofts, from the geometry layer), its blade count, hub and STL deflections (mm,
     rad)."""
-    from torus_cad.design.described_geometry import sampled_blade_surface
-    from torus_cad.geometry.section.section_fit import DEGREE, fit_sections
-    from torus_cad.parameters import PropellerParameters
+    from torus_cad.design.prepared_design import prepare_design
+    from torus_cad.geometry.section.section_fit import DEGREE
 
-    params = PropellerParameters()
-    surface = sampled_blade_surface(params)
-    fit = fit_sections(
-        surface.points,
-        surface.trailing_edge_column,
-        surface.chords_mm,
-        surface.lower_corner_index,
-        surface.round_trailing_edge,
-    )
+    prepared = prepare_design()
+    params, surface, fit = prepared.parameters, prepared.surface, prepared.fit
     return {
         "poles_mm": fit.poles.tolist(),
         "knots": fit.knots.tolist(),

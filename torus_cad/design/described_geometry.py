@@ -152,8 +152,8 @@ def sampled_blade_surface(
             ``resolution.points``.
 
     Returns:
-        The sampled surface: ``points`` ``(sections, points, 3)`` float array, mm; ``s``
-        ``(sections,)``; ``t`` ``(points,)``; the frames and the trailing edge's columns.
+        The sampled surface, as :func:`torus_cad.geometry.analysis.either_kind.sampled_surface`
+        gives it (``points`` ``(sections, points, 3)``, mm).
 
     Raises:
         GeometryError: the blade's frames are undefined (a Frenet frame where the centerline's
