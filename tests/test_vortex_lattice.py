@@ -216,6 +216,19 @@ def test_the_loops_apex_across_the_flow_carries_no_circulation_at_any_chordwise_
     assert solves[1].thrust_n == pytest.approx(solves[0].thrust_n, rel=0.02)
 
 
+def test_the_loading_noise_sees_every_force_the_thrust_counts_the_apex_plate_s_too() -> None:
+    pytest.importorskip("neuralfoil", reason="the simulate extra is not installed")
+    from torus_cad.vortex.vortex_performance import vortex_performance
+
+    # the default toroidal design: its apex strips stand across the flow as plates, whose drag
+    # counts in the thrust; the rings' forces, which the FW-H loading noise takes, hold it too
+    result = vortex_performance(PropellerParameters(), 10000.0, 0.0, SMALL)
+    assert (result.inviscid.lifting_share < 1.0).any()
+    rings_thrust = result.blade.blades * result.ring_force_n[..., 2].sum()
+    assert rings_thrust == pytest.approx(result.report["thrust_n"], rel=1e-9)
+    assert rings_thrust != pytest.approx(result.report["inviscid_thrust_n"], rel=0.01)
+
+
 def test_the_apc_10x7sf_static_point_at_5000_rpm_is_within_ten_percent_of_the_wind_tunnel() -> None:
     pytest.importorskip("neuralfoil", reason="the simulate extra is not installed")
     from studies.wind_tunnel import read_wind_tunnel

@@ -82,7 +82,7 @@ class VortexResult:
         strips: the loading along the blade.
         blade: blade 0 as solved; inviscid: the lattice's solution.
         ring_force_n: ``(K - 1, C, 3)`` N, the force on each of blade 0's rings with its strip's
-            loss of lift.
+            loss of lift and its share of the strip's drag (they add up to the thrust and torque).
     """
 
     report: dict[str, Any]
@@ -138,7 +138,19 @@ def vortex_performance(
         "inviscid_power_w": inviscid.torque_nm * omega,
         "low_confidence_strips": int((strips.confidence < LOW_CONFIDENCE).sum()),
     }
-    return VortexResult(report, strips, blade, inviscid, inviscid.force_n * ratio[:, None, None])
+    return VortexResult(report, strips, blade, inviscid, _ring_forces(inviscid, force, ratio))
+
+
+def _ring_forces(
+    inviscid: Inviscid, strip_force_n: NDArray[np.float64], ratio: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """``(K - 1, C, 3)`` N: each ring's lattice force scaled by its strip's loss of lift, and the
+    strip's drag (its profile drag and, across the flow, its plate's) shared equally among its rings:
+    the rings' forces add up to the strips' ``strip_force_n`` ``(K - 1, 3)``, so the loading noise
+    sees every force the thrust and torque count."""
+    lifting = inviscid.force_n * ratio[:, None, None]
+    drag = strip_force_n - lifting.sum(axis=1)
+    return lifting + drag[:, None, :] / inviscid.force_n.shape[1]
 
 
 def _strip_forces(
