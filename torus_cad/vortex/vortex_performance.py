@@ -145,9 +145,9 @@ def _ring_forces(
     inviscid: Inviscid, strip_force_n: NDArray[np.float64], ratio: NDArray[np.float64]
 ) -> NDArray[np.float64]:
     """``(K - 1, C, 3)`` N: each ring's lattice force scaled by its strip's loss of lift, and the
-    strip's drag (its profile drag and, across the flow, its plate's) shared equally among its rings:
-    the rings' forces add up to the strips' ``strip_force_n`` ``(K - 1, 3)``, so the loading noise
-    sees every force the thrust and torque count."""
+    strip's drag (its profile drag and, across the flow, its plate's) shared equally among its
+    rings: the rings' forces add up to the strips' ``strip_force_n`` ``(K - 1, 3)``, so the loading
+    noise sees every force the thrust and torque count."""
     lifting = inviscid.force_n * ratio[:, None, None]
     drag = strip_force_n - lifting.sum(axis=1)
     return lifting + drag[:, None, :] / inviscid.force_n.shape[1]
