@@ -146,7 +146,7 @@ def solve_inviscid(
     frame = StripFrame.of(camber_m)
     chord = frame.chord
     meeting = kinematic_velocity(frame.middle, omega_rad_s, spin, airspeed_m_s)
-    downstream_first = np.einsum("jk,jk->j", meeting, chord) < 0.0
+    downstream_first = np.einsum("jk,jk->j", frame.across_span(meeting), chord) < 0.0
     strips = strip_edges(camber_m, downstream_first)
     share = lifting_share(frame, meeting)
     lifting = np.repeat(share, camber_m.shape[1] - 1)
