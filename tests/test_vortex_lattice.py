@@ -216,6 +216,25 @@ def test_the_loops_apex_across_the_flow_carries_no_circulation_at_any_chordwise_
     assert solves[1].thrust_n == pytest.approx(solves[0].thrust_n, rel=0.02)
 
 
+def test_a_blade_pitched_the_other_way_pushes_the_air_up_with_the_same_thrust_and_power() -> None:
+    from torus_cad.vortex.vortex_performance import vortex_performance
+
+    # a symmetric section at every beta negated: the mirror image of the flow, whose wake leaves
+    # upward (before, momentum theory gave it no inflow and the iteration never settled)
+    base = PropellerParameters.from_toml(
+        "examples/compare/conventional_127mm_3blade.toml"
+    ).with_values({"airfoil.naca": "0012"})
+    solves = []
+    for sign in (1.0, -1.0):
+        params = base.with_values({"conventional.beta": [sign * b for b in base.conventional.beta]})
+        solves.append(vortex_performance(params, 6000.0, 0.0, SMALL, viscous=False))
+    up, down = solves[1], solves[0]
+    assert down.report["thrust_n"] > 0.0 > up.report["thrust_n"]
+    assert up.inviscid.induced_m_s < 0.0
+    assert -up.report["thrust_n"] == pytest.approx(down.report["thrust_n"], rel=1e-3)
+    assert up.report["power_w"] == pytest.approx(down.report["power_w"], rel=1e-3)
+
+
 def test_the_loading_noise_sees_every_force_the_thrust_counts_the_apex_plate_s_too() -> None:
     pytest.importorskip("neuralfoil", reason="the simulate extra is not installed")
     from torus_cad.vortex.vortex_performance import vortex_performance

@@ -16,8 +16,9 @@ rotation); each strip sheds its own two lines.
 The wake is prescribed: in the blade's frame its lines turn against the rotation at the rotor's rate
 and travel downstream at the free stream plus momentum theory's induced velocity at the disk, V + v:
 a rigid helix (Goldstein's and XROTOR's wake), neither speeding up nor contracting. v comes from the
-thrust by momentum theory (:mod:`.solver` iterates). The alternative, ``WakeShape.slipstream``,
-moves the lines as the axis of a uniformly loaded actuator disk's slipstream, V + v (1 + z /
+thrust by momentum theory (:mod:`.solver` iterates); in still air behind a rotor that pushes the air
+up (a negative thrust) it is negative and the wake leaves toward +z. The alternative,
+``WakeShape.slipstream``, moves the lines as the axis of a uniformly loaded actuator disk's slipstream, V + v (1 + z /
 sqrt(z^2 + R^2)) (2 v far downstream), contracting as its mass flow requires: every line then
 travels at the slipstream's core speed, while the vorticity it stands for, rolled up at the
 slipstream's edge, moves at the mean of the speeds either side (V + v far downstream), so the wake
@@ -211,13 +212,15 @@ def wake_lines(
     doc), in the blade's frame; ``spin`` +1 where the air seems to turn the +theta way past the
     blade (cw)."""
     length = shape.length_diameters * 2.0 * radius_m
+    # negative in still air behind a rotor that pushes the air up: its wake leaves toward +z
     base = inflow_m_s + induced_m_s
-    if omega_rad_s == 0.0 or base <= 0.0:
-        times = np.linspace(0.0, length / max(base, 1e-9), shape.steps_per_turn * 4 + 1)
+    speed = max(abs(base), 1e-9 * max(omega_rad_s * radius_m, 1.0))
+    if omega_rad_s == 0.0:
+        times = np.linspace(0.0, length / speed, shape.steps_per_turn * 4 + 1)
     else:
-        turns = min(shape.max_turns, length * omega_rad_s / (2.0 * np.pi * base))
+        turns = min(shape.max_turns, length * omega_rad_s / (2.0 * np.pi * speed))
         times = _wake_angles(turns, shape) / omega_rad_s
-    travelled, contraction = base * times, np.ones_like(times)
+    travelled, contraction = np.copysign(speed, base) * times, np.ones_like(times)
     if shape.slipstream and base > 0.0:
         travelled = _travelled(times, inflow_m_s, induced_m_s, radius_m)
         far = inflow_m_s + induced_m_s * (1.0 + travelled / np.hypot(travelled, radius_m))

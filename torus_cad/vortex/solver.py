@@ -46,6 +46,10 @@ INDUCED_TOLERANCE = 1e-5
 MAX_WAKE_ITERATIONS = 40
 #: Under-relaxation of the wake's induced velocity between iterations.
 WAKE_RELAXATION = 1.0
+#: A secant step of the wake iteration goes at most this many plain steps: where momentum theory's
+#: answers creep toward the root from one side (a toroidal loop whose return leg sits in its
+#: front leg's wake: 0.64 of the way a step, measured), the secant reaches it in a few.
+SECANT_REACH = 4.0
 #: The blade's own segments get a vortex core of this many mean chords where the force on a bound
 #: segment is evaluated: where a loop's flow turns round, two strips' rings meet on one section line
 #: at different nodes, and a segment's midpoint lies a hair from its neighbour's segment.
@@ -162,6 +166,7 @@ def solve_inviscid(
     # the full Kutta-Joukowski thrust over the kinematic one (module doc)
     ratio: float | None = None
     checks: list[tuple[float, float]] = []  # (ratio used, ratio the full sum gave on its wake)
+    bracket = _InflowBracket()
     for iteration in range(1, MAX_WAKE_ITERATIONS + 1):  # noqa: B007 (the count is reported)
         edges = strips[:, :, -1].reshape(-1, 3)
         lines = wake_lines(edges, omega_rad_s, spin, airspeed_m_s, induced, tip_radius_m, wake)
@@ -199,7 +204,7 @@ def solve_inviscid(
             if change < INDUCED_TOLERANCE:  # the full sum's thrust gives this wake's inflow too
                 break
             ratio = _next_ratio(checks, ratio, measured)
-        induced = (1.0 - WAKE_RELAXATION) * induced + WAKE_RELAXATION * momentum
+        induced = bracket.next(induced, momentum, ratio)
     else:
         raise KernelError(
             f"the vortex solve did not converge: the wake's induced velocity still changed by "
@@ -229,6 +234,57 @@ def solve_inviscid(
     return Inviscid(
         circulation, force, moment, thrust, torque, induced, iteration, change, share, lattice
     )
+
+
+class _InflowBracket:
+    """The wake iteration's next induced velocity: momentum theory's answer on the last wake, or,
+    once two wakes on one thrust ratio have given answers on either side of their own induced
+    velocities, the Illinois method's step inside that bracket (the plain update swings between two
+    wakes where the thrust falls steeply with the induced velocity, as on a blade set near its
+    zero-lift angle)."""
+
+    def __init__(self) -> None:
+        self.low: tuple[float, float] | None = None  # (induced, momentum - induced) below the root
+        self.high: tuple[float, float] | None = None  # ... above it
+        self.last: tuple[float, float] | None = None
+        self.ratio: float | None = None
+        self.side = 0  # which end the last step moved: -1 low, +1 high
+
+    def next(self, induced: float, momentum: float, ratio: float | None) -> float:
+        """The induced velocity (m/s) to try next after ``induced`` gave ``momentum``."""
+        if ratio != self.ratio:  # another thrust ratio, another residual
+            self.low = self.high = self.last = None
+            self.ratio, self.side = ratio, 0
+        residual = momentum - induced
+        last, self.last = self.last, (induced, residual)
+        if residual > 0.0:
+            self.low, moved = (induced, residual), -1
+        else:
+            self.high, moved = (induced, residual), 1
+        if self.low is None or self.high is None:
+            return self._unbracketed(induced, residual, last)
+        (x_low, r_low), (x_high, r_high) = self.low, self.high
+        if moved == self.side:  # the same end moved twice: halve the other's residual (Illinois)
+            if moved < 0:
+                r_high *= 0.5
+                self.high = (x_high, r_high)
+            else:
+                r_low *= 0.5
+                self.low = (x_low, r_low)
+        self.side = moved
+        return x_low - r_low * (x_high - x_low) / (r_high - r_low)
+
+    @staticmethod
+    def _unbracketed(induced: float, residual: float, last: tuple[float, float] | None) -> float:
+        """Momentum theory's answer, or, where the answers creep toward the root from one side, the
+        secant step through the last two residuals, at most SECANT_REACH plain steps long."""
+        plain = WAKE_RELAXATION * residual
+        if last is None or last[1] == residual or last[0] == induced:
+            return induced + plain
+        step = -residual * (induced - last[0]) / (residual - last[1])
+        if step * plain <= 0.0:  # the secant points away from the root: the plain step
+            return induced + plain
+        return induced + float(np.clip(step, -SECANT_REACH * abs(plain), SECANT_REACH * abs(plain)))
 
 
 def _next_ratio(checks: list[tuple[float, float]], used: float, measured: float) -> float:
@@ -263,8 +319,15 @@ def lifting_share(frame: StripFrame, meeting: NDArray[np.float64]) -> NDArray[np
 def momentum_inflow_m_s(
     thrust_n: float, airspeed_m_s: float, density: float, area_m2: float
 ) -> float:
-    """Momentum theory's induced velocity at the disk (m/s) for ``thrust_n`` on ``area_m2`` in axial
-    ``airspeed_m_s``."""
+    """Momentum theory's induced velocity at the disk (m/s, toward -z) for ``thrust_n`` on
+    ``area_m2`` in axial ``airspeed_m_s``.
+
+    In still air a negative thrust (a rotor that pushes the air toward +z: turned the other way
+    round, or its blades set so) drives the air up as a positive one drives it down: the same
+    speed, negative. In axial inflow a negative thrust gives none (its wake leaves at the airspeed).
+    """
+    if airspeed_m_s == 0.0 and thrust_n < 0.0:
+        return -float(np.sqrt(-thrust_n / (2.0 * density * area_m2)))
     return float(
         -airspeed_m_s / 2.0
         + np.sqrt((airspeed_m_s / 2.0) ** 2 + max(thrust_n, 0.0) / (2.0 * density * area_m2))
