@@ -18,12 +18,12 @@ and travel downstream at the free stream plus momentum theory's induced velocity
 a rigid helix (Goldstein's and XROTOR's wake), neither speeding up nor contracting. v comes from the
 thrust by momentum theory (:mod:`.solver` iterates); in still air behind a rotor that pushes the air
 up (a negative thrust) it is negative and the wake leaves toward +z. The alternative,
-``WakeShape.slipstream``, moves the lines as the axis of a uniformly loaded actuator disk's slipstream, V + v (1 + z /
-sqrt(z^2 + R^2)) (2 v far downstream), contracting as its mass flow requires: every line then
-travels at the slipstream's core speed, while the vorticity it stands for, rolled up at the
-slipstream's edge, moves at the mean of the speeds either side (V + v far downstream), so the wake
-leaves too fast and induces too little at the blade; measured, its induced power fell 12 % below
-momentum theory's ideal (docs/explanation/simulation-accuracy.md).
+``WakeShape.slipstream``, moves the lines as the axis of a uniformly loaded actuator disk's
+slipstream, V + v (1 + z / sqrt(z^2 + R^2)) (2 v far downstream), contracting as its mass flow
+requires: every line then travels at the slipstream's core speed, while the vorticity it stands for,
+rolled up at the slipstream's edge, moves at the mean of the speeds either side (V + v far
+downstream), so the wake leaves too fast and induces too little at the blade; measured, its induced
+power fell 12 % below momentum theory's ideal (docs/explanation/simulation-accuracy.md).
 """
 
 from __future__ import annotations
