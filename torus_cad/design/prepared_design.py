@@ -2,10 +2,10 @@
 is handed, checked, with no OpenCascade.
 
 :func:`prepare_design` runs, in order, each step the build takes before the kernel: the parameters
-and their cross-field rules (:mod:`torus_cad.parameters`), the design targets
-(:mod:`torus_cad.design.design_targets`), blade 0's sampled surface and the geometric checks
-(:mod:`torus_cad.design.described_geometry`), the hub's mounting features placed against the blades
-(:mod:`torus_cad.geometry.hub.mounting`), the hub's seam, and the section fit
+and their cross-field rules (:mod:`torus_cad.parameters`), the design targets and the propeller the
+parameters describe, made once (:mod:`torus_cad.design.design_targets`), then on that description
+(:mod:`torus_cad.geometry.analysis.either_kind`) blade 0's sampled surface, the geometric checks and
+the hub's mounting features placed against the blades, the hub's seam, and the section fit
 (:mod:`torus_cad.geometry.section.section_fit`). ``torus-cad build``
 (:func:`torus_cad.propeller.build_propeller`) hands the result to the kernel; ``torus-cad
 check`` (:func:`torus_cad.design.design_checks.check_design`) stops there, so the two refuse the
