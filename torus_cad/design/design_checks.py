@@ -28,9 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from torus_cad.design.described_geometry import (
-    wall_printability,
-)
+from torus_cad.design.described_geometry import wall_printability
 from torus_cad.design.prepared_design import prepare_design
 from torus_cad.design.stl_budget import check_stl_budget
 from torus_cad.errors import GeometryError

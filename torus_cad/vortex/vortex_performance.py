@@ -191,8 +191,7 @@ def _strip_forces(
     confidence = np.ones(strips)
     ratios = np.ones(strips)
     if viscous and speed.any():
-        section_chord = frame.chord
-        turned = np.einsum("jk,jk->j", flow, section_chord) < 0.0
+        turned = np.einsum("jk,jk->j", flow, frame.chord) < 0.0
         for j, polar in enumerate(strip_polars(blade.sections, reynolds, turned)):
             alpha = polar.zero_lift_deg + cl[j] / polar.lift_slope_per_deg
             # before stall the lattice's lift stands (module doc)
@@ -205,7 +204,7 @@ def _strip_forces(
             ratios[j] = ratio
             drag = dynamic[j] * cd[j] * flow[j] / max(speed[j], 1e-300)
             drag = drag + (1.0 - inviscid.lifting_share[j]) * _plate_force(
-                flow[j], section_chord[j], chord[j] * width[j], density
+                flow[j], frame.chord[j], chord[j] * width[j], density
             )
             force[j] = ratio * force[j] + drag
             moment[j] = ratio * moment[j] + np.cross(middle[j], drag)
