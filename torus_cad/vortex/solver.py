@@ -7,10 +7,12 @@ every bound segment (where two rings share a side, both carry their circulation 
 velocity the whole lattice induces at its midpoint. The wake's induced velocity comes from the
 thrust by momentum theory, v = -V/2 + sqrt((V/2)^2 + T / (2 rho A)), A the tip circle's area; wake
 and solve are iterated until that velocity changes by less than :data:`INDUCED_TOLERANCE` of the tip
-speed. Between iterations the thrust is the Kutta-Joukowski force at the kinematic velocity alone
-(no Biot-Savart sum) times a ratio of the full force to it: the full sum's on the first wake, then,
-each time the wake settles, a secant step from the full sums made there (:func:`_next_ratio`); the
-iteration ends only where the full sum's ratio holds on the final wake too.
+speed, each wake's thrust the full Kutta-Joukowski sum: the induced velocity is the root of one
+smooth function (momentum theory's answer on a wake less the wake's own), found by secant steps
+until two wakes bracket it, then by the Illinois method (:class:`_InflowBracket`). (A cheaper
+thrust, the force at the kinematic velocity alone scaled by the full sum's ratio to it, left the
+wake iteration swinging on loops whose return leg sits in the front leg's wake, where that ratio
+changes sign from one wake to the next.)
 
 Where a strip's chord stands across the flow (a toroidal loop's apex, where the sections turn from
 meeting the flow with their leading edge to meeting it with their trailing edge), no lifting
@@ -43,7 +45,7 @@ from torus_cad.vortex.lattice import (
 #: speed (plus the airspeed).
 INDUCED_TOLERANCE = 1e-5
 #: Wake iterations at most; a solve that has not converged then raises.
-MAX_WAKE_ITERATIONS = 40
+MAX_WAKE_ITERATIONS = 20
 #: Under-relaxation of the wake's induced velocity between iterations.
 WAKE_RELAXATION = 1.0
 #: A secant step of the wake iteration goes at most this many plain steps: where momentum theory's
@@ -163,9 +165,6 @@ def solve_inviscid(
     scale = airspeed_m_s + omega_rad_s * tip_radius_m
     mean_chord = float(np.linalg.norm(chord, axis=1).mean()) / 2.0
     change, blade_part, bound_core = np.inf, BladePart(), BOUND_CORE_CHORDS * mean_chord
-    # the full Kutta-Joukowski thrust over the kinematic one (module doc)
-    ratio: float | None = None
-    checks: list[tuple[float, float]] = []  # (ratio used, ratio the full sum gave on its wake)
     bracket = _InflowBracket()
     for iteration in range(1, MAX_WAKE_ITERATIONS + 1):  # noqa: B007 (the count is reported)
         edges = strips[:, :, -1].reshape(-1, 3)
@@ -178,33 +177,17 @@ def solve_inviscid(
             mean_chord,
         )
         circulation = _circulation(lattice, spin, omega_rad_s, airspeed_m_s, blade_part, lifting)
-        if scale == 0.0 or not momentum_wake:
-            force, moment = _forces(
-                lattice, circulation, spin, omega_rad_s, airspeed_m_s, density, bound_core
-            )
-            break
-        kinematic = density * _kinematic_thrust(
-            lattice, circulation, blades, spin, omega_rad_s, airspeed_m_s
+        force, moment = _forces(
+            lattice, circulation, spin, omega_rad_s, airspeed_m_s, density, bound_core
         )
-        if ratio is None:
-            force, moment = _forces(
-                lattice, circulation, spin, omega_rad_s, airspeed_m_s, density, bound_core
-            )
-            ratio = blades * float(force[..., 2].sum()) / kinematic if kinematic else 1.0
-        momentum = momentum_inflow_m_s(kinematic * ratio, airspeed_m_s, density, area)
+        if scale == 0.0 or not momentum_wake:
+            break
+        thrust = blades * float(force[..., 2].sum())
+        momentum = momentum_inflow_m_s(thrust, airspeed_m_s, density, area)
         change = abs(momentum - induced) / scale
-        # settled on the ratio of the last full sum: check it on this wake
         if change < INDUCED_TOLERANCE:
-            force, moment = _forces(
-                lattice, circulation, spin, omega_rad_s, airspeed_m_s, density, bound_core
-            )
-            measured = blades * float(force[..., 2].sum()) / kinematic if kinematic else 1.0
-            momentum = momentum_inflow_m_s(kinematic * measured, airspeed_m_s, density, area)
-            change = abs(momentum - induced) / scale
-            if change < INDUCED_TOLERANCE:  # the full sum's thrust gives this wake's inflow too
-                break
-            ratio = _next_ratio(checks, ratio, measured)
-        induced = bracket.next(induced, momentum, ratio)
+            break
+        induced = bracket.next(induced, momentum)
     else:
         raise KernelError(
             f"the vortex solve did not converge: the wake's induced velocity still changed by "
@@ -237,24 +220,21 @@ def solve_inviscid(
 
 
 class _InflowBracket:
-    """The wake iteration's next induced velocity: momentum theory's answer on the last wake, or,
-    once two wakes on one thrust ratio have given answers on either side of their own induced
-    velocities, the Illinois method's step inside that bracket (the plain update swings between two
-    wakes where the thrust falls steeply with the induced velocity, as on a blade set near its
-    zero-lift angle)."""
+    """The wake iteration's next induced velocity: momentum theory's answer on the last wake (or a
+    secant step toward its root), or, once two wakes have given answers on either side of their own
+    induced velocities, the Illinois method's step inside that bracket (the plain update swings
+    between two wakes where the thrust falls steeply with the induced velocity, as on a blade set
+    near its zero-lift angle). Hand-written: scipy's root finders need the bracket before the first
+    step, and this iteration has to find it."""
 
     def __init__(self) -> None:
         self.low: tuple[float, float] | None = None  # (induced, momentum - induced) below the root
         self.high: tuple[float, float] | None = None  # ... above it
         self.last: tuple[float, float] | None = None
-        self.ratio: float | None = None
         self.side = 0  # which end the last step moved: -1 low, +1 high
 
-    def next(self, induced: float, momentum: float, ratio: float | None) -> float:
+    def next(self, induced: float, momentum: float) -> float:
         """The induced velocity (m/s) to try next after ``induced`` gave ``momentum``."""
-        if ratio != self.ratio:  # another thrust ratio, another residual
-            self.low = self.high = self.last = None
-            self.ratio, self.side = ratio, 0
         residual = momentum - induced
         last, self.last = self.last, (induced, residual)
         if residual > 0.0:
@@ -285,21 +265,6 @@ class _InflowBracket:
         if step * plain <= 0.0:  # the secant points away from the root: the plain step
             return induced + plain
         return induced + float(np.clip(step, -SECANT_REACH * abs(plain), SECANT_REACH * abs(plain)))
-
-
-def _next_ratio(checks: list[tuple[float, float]], used: float, measured: float) -> float:
-    """The ratio of full to kinematic thrust to iterate the wake on next, after the full sum gave
-    ``measured`` on the wake that settled with ``used`` (recorded in ``checks``): the secant step
-    toward the ratio that reproduces itself, from the last two checks (the plain update, the
-    measured ratio, swings round it where the wake lies close to the blade)."""
-    checks.append((used, measured))
-    if len(checks) < 2:
-        return measured
-    (used_0, measured_0), (used_1, measured_1) = checks[-2:]
-    miss_0, miss_1 = measured_0 - used_0, measured_1 - used_1
-    if miss_1 == miss_0:
-        return measured
-    return used_1 - miss_1 * (used_1 - used_0) / (miss_1 - miss_0)
 
 
 def lifting_share(frame: StripFrame, meeting: NDArray[np.float64]) -> NDArray[np.float64]:
