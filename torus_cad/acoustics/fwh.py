@@ -42,12 +42,17 @@ FACE_CHUNK = 2048
 @dataclass(frozen=True)
 class RotatingSurface:
     """Flat faces at rotor angle 0: centroids (N, 3) m, unit normals (N, 3) pointing into the fluid,
-    areas (N,) m^2, gauge pressure (N,) Pa (steady in the rotating frame)."""
+    areas (N,) m^2, gauge pressure (N,) Pa (steady in the rotating frame); ``blade_copies``: the
+    faces are one blade's of that many identical blades evenly spaced about +z (1: the faces are the
+    whole rotor's). Blade k's signal is blade 0's a k-th of a blade passage later, so the rotor's is
+    blade 0's with every harmonic of the rotation that is not a blade-passing one removed, times the
+    blade count: the FW-H sum over one blade's faces instead of every blade's."""
 
     centroids_m: Array
     normals: Array
     areas_m2: Array
     pressure_pa: Array
+    blade_copies: int = 1
 
     def __post_init__(self) -> None:
         count = len(self.areas_m2)
@@ -57,11 +62,22 @@ class RotatingSurface:
             or self.pressure_pa.shape != (count,)
         ):
             raise ValueError("centroids and normals must be (N, 3), areas and pressure (N,)")
+        if self.blade_copies < 1:
+            raise ValueError(f"blade_copies = {self.blade_copies}: at least 1")
 
     @property
     def pressure_force_n(self) -> Array:
-        """The force the surface's pressure exerts on the body (N, 3): minus the sum of p n A."""
-        return np.asarray(-(self.pressure_pa * self.areas_m2) @ self.normals, dtype=float)
+        """The force the surface's pressure exerts on the body (N, 3): minus the sum of p n A (over
+        every copy: evenly spaced copies' side forces cancel)."""
+        force = np.asarray(-(self.pressure_pa * self.areas_m2) @ self.normals, dtype=float)
+        if self.blade_copies == 1:
+            return force
+        return np.array([0.0, 0.0, self.blade_copies * force[2]])
+
+    @property
+    def face_count(self) -> int:
+        """The rotor's faces, every copy's."""
+        return len(self.areas_m2) * self.blade_copies
 
 
 @dataclass(frozen=True)
@@ -176,4 +192,18 @@ def observer_signal(
         thickness += np.sum(thickness_terms * areas, axis=0)
         loading += np.sum(loading_terms * areas, axis=0)
     scale = 1.0 / (4.0 * math.pi)
-    return ObserverSignal(time_s, thickness * scale, loading * scale)
+    copies = surface.blade_copies
+    return ObserverSignal(
+        time_s, _every_blade(thickness, copies) * scale, _every_blade(loading, copies) * scale
+    )
+
+
+def _every_blade(signal: Array, copies: int) -> Array:
+    """The rotor's signal from one blade's ``signal`` over a revolution, ``copies`` identical
+    blades evenly spaced (:class:`RotatingSurface`): its blade-passing harmonics (and the mean)
+    times ``copies``, the others removed."""
+    if copies == 1:
+        return signal
+    spectrum = np.fft.rfft(signal)
+    spectrum[np.arange(len(spectrum)) % copies != 0] = 0.0
+    return np.fft.irfft(copies * spectrum, n=len(signal))

@@ -156,7 +156,7 @@ def evaluate_noise(
         "rotation_hz": rotation_hz,
         "blade_passing_frequency_hz": blades * rotation_hz,
         "samples_per_revolution": samples,
-        "faces": len(surface.areas_m2),
+        "faces": surface.face_count,
         "density_kg_m3": medium.density_kg_m3,
         "speed_of_sound_m_s": medium.speed_of_sound_m_s,
         "reference_pressure_pa": REFERENCE_PRESSURE_PA,

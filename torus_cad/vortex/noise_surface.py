@@ -1,6 +1,6 @@
-"""The rotor as the FW-H code (torus_cad.acoustics) hears it, from the vortex solution: every
-blade's surface for the thickness noise (its faces carry no pressure) and every lattice ring for the
-loading noise.
+"""The rotor as the FW-H code (torus_cad.acoustics) hears it, from the vortex solution: the blade's
+surface for the thickness noise (its faces carry no pressure) and every lattice ring for the loading
+noise, on blade 0, the others identical copies of it.
 
 A lifting surface has no thickness and carries a pressure jump, not a pressure: each ring becomes
 two faces on the same spot, normals opposite, with pressures -dp/2 and +dp/2 so that the pair pushes
@@ -26,8 +26,9 @@ THICKNESS_POINT_STRIDE = 4
 def rotor_surface(
     blade: RotorBlade, lattice: Lattice, ring_force_n: NDArray[np.float64]
 ) -> RotatingSurface:
-    """Every blade's surface and lattice (blade 0's ``ring_force_n`` ``(K - 1, C, 3)`` N on its
-    rings, the others' turned round the axis) as FW-H faces; module doc."""
+    """Blade 0's surface and lattice (``ring_force_n`` ``(K - 1, C, 3)`` N on its rings) as FW-H
+    faces, the other blades its copies (:class:`~torus_cad.acoustics.fwh.RotatingSurface`); module
+    doc."""
     centroids, normals, areas, pressure = _blade_faces(blade.surface_m[:, ::THICKNESS_POINT_STRIDE])
     ring_centroids, ring_normals, ring_areas = _ring_faces(lattice.grid)
     jump = np.einsum("ik,ik->i", ring_force_n.reshape(-1, 3), ring_normals) / np.maximum(
@@ -39,17 +40,7 @@ def rotor_surface(
         np.concatenate([areas, ring_areas, ring_areas]),
         np.concatenate([pressure, -0.5 * jump, 0.5 * jump]),
     )
-    blades = [_turned(one_blade, 2.0 * np.pi * k / blade.blades) for k in range(blade.blades)]
-    return RotatingSurface(*(np.concatenate([part[i] for part in blades]) for i in range(4)))
-
-
-def _turned(
-    faces: tuple[NDArray[np.float64], ...], angle: float
-) -> tuple[NDArray[np.float64], ...]:
-    """``faces`` turned by ``angle`` (rad) about +z."""
-    cos, sin = np.cos(angle), np.sin(angle)
-    rotation = np.array([[cos, -sin, 0.0], [sin, cos, 0.0], [0.0, 0.0, 1.0]])
-    return faces[0] @ rotation.T, faces[1] @ rotation.T, faces[2], faces[3]
+    return RotatingSurface(*one_blade, blade_copies=blade.blades)
 
 
 def _blade_faces(surface_m: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
