@@ -180,9 +180,9 @@ def solve_inviscid(
         force, moment = _forces(
             lattice, circulation, spin, omega_rad_s, airspeed_m_s, density, bound_core
         )
+        thrust = blades * float(force[..., 2].sum())
         if scale == 0.0 or not momentum_wake:
             break
-        thrust = blades * float(force[..., 2].sum())
         momentum = momentum_inflow_m_s(thrust, airspeed_m_s, density, area)
         change = abs(momentum - induced) / scale
         if change < INDUCED_TOLERANCE:
@@ -194,7 +194,6 @@ def solve_inviscid(
             f"{change:.2g} of the tip speed after {MAX_WAKE_ITERATIONS} wake iterations "
             f"(tolerance {INDUCED_TOLERANCE:g})"
         )
-    thrust = blades * float(force[..., 2].sum())
     if momentum_wake and omega_rad_s > 0.0 and wake.free_turns:
         relaxed = _relaxed(
             strips,
