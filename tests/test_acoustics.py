@@ -10,6 +10,7 @@ import math
 import numpy as np
 import pytest
 from cli_exit import exit_code
+from rotations import rotation_about_z
 from scipy.spatial import ConvexHull
 from scipy.special import jv
 
@@ -180,14 +181,7 @@ def test_one_blade_and_its_copies_sound_as_every_blade_s_faces_do(blades):
     one = RotatingSurface(centroids, normals, areas, pressure, blade_copies=blades)
     turned = []
     for k in range(blades):
-        angle = 2.0 * math.pi * k / blades
-        rotation = np.array(
-            [
-                [math.cos(angle), -math.sin(angle), 0.0],
-                [math.sin(angle), math.cos(angle), 0.0],
-                [0, 0, 1],
-            ]
-        )
+        rotation = rotation_about_z(360.0 * k / blades)
         turned.append((centroids @ rotation.T, normals @ rotation.T))
     every = RotatingSurface(
         np.concatenate([c for c, _ in turned]),

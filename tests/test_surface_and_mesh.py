@@ -4,16 +4,12 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from rotations import rotation_about_z
 
 from torus_cad.design.described_geometry import propeller_geometry, sampled_blade_surface
 from torus_cad.geometry.blade.blade_surface import surface_points
 from torus_cad.geometry.blade.triangle_mesh import blade_mesh
 from torus_cad.parameters import PropellerParameters
-
-
-def rotation_about_z(angle_deg: float) -> np.ndarray:
-    c, s = np.cos(np.radians(angle_deg)), np.sin(np.radians(angle_deg))
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
 @pytest.mark.parametrize("blades", [2, 3, 5])
