@@ -2,7 +2,9 @@
 """The vortex solver's discretisation study: three lattices, each finer than the last by one ratio
 in every direction (rings across the chord, strips along the blade, wake steps a turn), the thrust
 and torque of each, Richardson's extrapolation and Roache's GCI_fine
-(torus_cad.simulate.coefficients.richardson, as simulate --convergence does for OpenFOAM's levels).
+(torus_cad.simulate.coefficients.richardson). ``torus-cad simulate --solver vortex --convergence``
+runs the same study on a design and publishes it; this script also varies one term at a time
+(``--lattices``), prints blade 0's force strip by strip and takes the inviscid lattice alone.
 
     python scripts/vortex_convergence.py                             # the default design, 10000 rpm
     python scripts/vortex_convergence.py --design examples/apc_10x7sf.toml --rpm 5000
@@ -78,6 +80,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     from torus_cad.parameters import PropellerParameters
     from torus_cad.simulate.coefficients import richardson
+    from torus_cad.vortex.pipeline import refined_lattice
     from torus_cad.vortex.rotor import Discretisation
     from torus_cad.vortex.vortex_performance import vortex_performance
 
@@ -87,10 +90,15 @@ def main(argv: list[str] | None = None) -> int:
     }
     if args.lattices:
         lattices = [tuple(int(value) for value in text.split(",")) for text in args.lattices]
-    else:
+    else:  # as simulate --solver vortex --convergence refines its lattice
+        chordwise, spanwise, steps = args.coarsest
+        coarsest = Discretisation(chordwise, spanwise)
+        coarsest = dataclasses.replace(
+            coarsest, wake=dataclasses.replace(coarsest.wake, steps_per_turn=steps)
+        )
         lattices = [
-            tuple(max(2, round(value * args.ratio**level)) for value in args.coarsest)
-            for level in range(3)
+            (lattice.chordwise, lattice.spanwise, lattice.wake.steps_per_turn)
+            for lattice in (refined_lattice(coarsest, level, args.ratio) for level in range(3))
         ]
     rows = []
     strip_forces = []

@@ -105,6 +105,11 @@ def test_both_solvers_answer_a_study_through_the_same_report_keys(vortex_run):
         (["--solver", "vortex", "--rpm", "10000", "--chordwise", "40"], "--chordwise = 40"),
         (["--solver", "vortex", "--rpm", "-5"], "--rpm"),
         (["--rpm", "10000", "--spanwise", "20"], "--spanwise"),
+        (
+            ["--solver", "vortex", "--rpm", "10000", "--convergence", "--spanwise", "61"],
+            "--spanwise = 61 is out of range with --convergence, whose finest lattice has 2 times "
+            "as many; allowed [6, 60]",
+        ),
     ],
 )
 def test_bad_vortex_options_exit_2_naming_the_option_and_write_nothing(tmp_path, args, named):
@@ -112,6 +117,35 @@ def test_bad_vortex_options_exit_2_naming_the_option_and_write_nothing(tmp_path,
     assert done.returncode == 2 and named in done.stderr, done.stderr
     assert len(done.stderr.strip().splitlines()) == 1
     assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())
+
+
+def test_the_vortex_convergence_study_runs_three_finer_lattices_and_bounds_the_fine_value(
+    tmp_path,
+):
+    """--solver vortex --convergence: the given lattice and two each sqrt 2 finer in every count,
+    each run a whole set of its own, and the OpenFOAM study's report, whose uncertainty of the fine
+    value covers Richardson's extrapolation, or every level where there is none."""
+    out = tmp_path / "out"
+    done = _simulate(out, "--solver", "vortex", "--rpm", "10000", "--convergence", *SMALL)
+    assert done.returncode == 0, done.stderr
+    study = json.loads((out / "torus_propeller_convergence.json").read_text())
+    lattices = []
+    for level in ("coarse", "medium", "fine"):
+        run = json.loads((out / level / "torus_propeller_performance.json").read_text())
+        lattice = run["lattice"]
+        lattices.append((lattice["chordwise"], lattice["spanwise"], lattice["wake_steps_per_turn"]))
+        assert study["levels"][level]["thrust_n"] == run["thrust_n"]
+        assert study["levels"][level]["torque_nm"] == run["torque_nm"]
+    assert lattices == [(4, 12, 24), (6, 17, 34), (8, 24, 48)]
+    for key in ("thrust_n", "torque_nm"):
+        entry, fine = study[key], study["levels"]["fine"][key]
+        if entry["converges_monotonically"]:
+            covered = [entry["extrapolated"]]
+        else:
+            covered = [values[key] for values in study["levels"].values()]
+        for value in covered:
+            assert abs(value - fine) <= entry["uncertainty_fine"] * abs(fine) * (1 + 1e-9)
+    assert "thrust: coarse" in done.stdout and "torque: coarse" in done.stdout
 
 
 def test_the_vortex_thrust_search_finds_the_rpm_for_the_thrust(tmp_path):

@@ -488,7 +488,8 @@ def _add_simulate_parser(commands: Any) -> None:
         action="store_true",
         help="run all three levels into OUT/<level>/ and write <name>_convergence.json: "
         "Richardson-extrapolated thrust and torque, the "
-        "observed order and the grid convergence index",
+        "observed order and the grid convergence index; with --solver vortex the three levels "
+        "are lattices, the given one and two each sqrt(2) finer in every count",
     )
     _add_out_and_quiet(simulate, "simulate_out")
 

@@ -222,6 +222,36 @@ class Extrapolation:
         }
 
 
+def convergence_report(
+    name: str, point: OperatingPoint, ratio: float, levels: dict[str, dict[str, Any]]
+) -> dict[str, Any]:
+    """A convergence study's report (``<name>_convergence.json``), the same for either solver.
+
+    Args:
+        name: the design's name.
+        point: the operating point every level ran at.
+        ratio: the refinement ratio between two levels.
+        levels: each level's entry by its name, coarsest first, each with ``thrust_n`` (N) and
+            ``torque_nm`` (N m).
+
+    Returns:
+        The point, the ratio, ``levels``, and for thrust and torque Richardson's extrapolation and
+        Roache's GCI (:meth:`Extrapolation.report`).
+    """
+    report: dict[str, Any] = {
+        "name": name,
+        "rpm": point.rpm,
+        "gci_safety_factor": GCI_SAFETY_FACTOR,
+        "airspeed_m_s": point.airspeed_m_s,
+        "refinement_ratio": ratio,
+        "levels": levels,
+    }
+    for key in ("thrust_n", "torque_nm"):
+        coarse, medium, fine = (float(level[key]) for level in levels.values())
+        report[key] = richardson(coarse, medium, fine, ratio).report()
+    return report
+
+
 def richardson(coarse: float, medium: float, fine: float, ratio: float) -> Extrapolation:
     """Observed order p = ln((f_c - f_m) / (f_m - f_f)) / ln r, f = f_f + (f_f - f_m) / (r^p - 1),
     and Roache's GCI: GCI_fine = Fs |(f_m - f_f) / f_f| / (r^p - 1), GCI_medium = Fs |(f_c - f_m) /

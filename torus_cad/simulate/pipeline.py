@@ -47,7 +47,7 @@ from torus_cad.simulate.case import (
     solve_commands,
     write_case,
 )
-from torus_cad.simulate.coefficients import GCI_SAFETY_FACTOR, richardson, run_summary
+from torus_cad.simulate.coefficients import convergence_report, run_summary
 from torus_cad.simulate.history import History, momentum_balance_force_n, read_y_plus
 from torus_cad.simulate.plot import write_history_plot
 from torus_cad.simulate.run import (
@@ -968,33 +968,24 @@ def convergence_study(
     for level in Level:
         level_request = dataclasses.replace(request, level=level, case_only=False, mesh_from=None)
         runs[level] = simulate(level_request, out / level.value, progress, stage)
-    report: dict[str, Any] = {
-        "name": request.params.name,
-        "rpm": request.point.rpm,
-        "gci_safety_factor": GCI_SAFETY_FACTOR,
-        "airspeed_m_s": request.point.airspeed_m_s,
-        "refinement_ratio": REFINEMENT_RATIO,
-        "levels": {
-            level.value: {
-                key: run.report[key]
-                for key in (
-                    "cells",
-                    "thrust_n",
-                    "torque_nm",
-                    "ct",
-                    "cp",
-                    "converged",
-                    "y_plus",
-                    "validity",
-                    "wall_seconds",
-                )
-            }
-            for level, run in runs.items()
-        },
+    levels = {
+        level.value: {
+            key: run.report[key]
+            for key in (
+                "cells",
+                "thrust_n",
+                "torque_nm",
+                "ct",
+                "cp",
+                "converged",
+                "y_plus",
+                "validity",
+                "wall_seconds",
+            )
+        }
+        for level, run in runs.items()
     }
-    for key in ("thrust_n", "torque_nm"):
-        coarse, medium, fine = (float(runs[level].report[key]) for level in Level)
-        report[key] = richardson(coarse, medium, fine, REFINEMENT_RATIO).report()
+    report = convergence_report(request.params.name, request.point, REFINEMENT_RATIO, levels)
     with OutputSet(out, f"{request.params.name}_convergence") as output:
         paths = output.publish(report)
     return Result(paths, report)

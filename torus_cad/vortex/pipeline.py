@@ -2,7 +2,10 @@
 solver, published as the OpenFOAM route publishes a run (torus_cad.simulate.pipeline):
 ``<name>_performance.json`` with the same keys (thrust, torque, power, CT, CP, efficiency or figure
 of merit, J, converged, rpm, noise), the loading along the blade as CSV and picture, a picture of
-the wake and the tonal noise, written as one set (all or none).
+the wake and the tonal noise, written as one set (all or none); and with ``--convergence`` three
+lattices, each finer than the last by :data:`REFINEMENT_RATIO` in every count, and
+``<name>_convergence.json`` in the OpenFOAM study's schema (Richardson, GCI, or the spread where the
+lattices do not converge monotonically).
 """
 
 from __future__ import annotations
@@ -26,8 +29,10 @@ from torus_cad.acoustics.noise_report import (
 )
 from torus_cad.acoustics.observers import DEFAULT_OBSERVERS, Observer, check_observers
 from torus_cad.design.design_targets import resolve_design_targets
+from torus_cad.errors import ParameterError
 from torus_cad.outputs.output_set import OutputSet
 from torus_cad.parameters.design import PropellerParameters
+from torus_cad.simulate.coefficients import convergence_report
 from torus_cad.simulate.settings import (
     OperatingPoint,
     check_count,
@@ -53,6 +58,11 @@ from torus_cad.vortex.vortex_performance import LIFT_RATIO_BOUNDS, VortexResult,
 #: Rings across the chord, and strips along the blade, a run may ask for (--chordwise, --spanwise).
 CHORDWISE_RANGE = VORTEX_CHORDWISE_RANGE
 SPANWISE_RANGE = VORTEX_SPANWISE_RANGE
+#: ``--convergence``: each lattice's rings across the chord, strips and wake steps a turn are the
+#: last's times this, rounded (the OpenFOAM levels' ratio; scripts/vortex_convergence.py's default).
+REFINEMENT_RATIO = math.sqrt(2.0)
+#: The study's lattices, coarsest first: the request's own, then two finer.
+STUDY_LEVELS = ("coarse", "medium", "fine")
 
 
 @dataclass(frozen=True)
@@ -208,6 +218,74 @@ def vortex_thrust_search(
         stage,
         search,
     )
+
+
+def refined_lattice(
+    discretisation: Discretisation, steps: int, ratio: float = REFINEMENT_RATIO
+) -> Discretisation:
+    """``discretisation`` refined ``steps`` times by ``ratio``: its rings across the chord, strips
+    and wake steps a turn each times ``ratio ** steps``, rounded, at least 2."""
+
+    def scaled(count: int) -> int:
+        return max(2, round(count * ratio**steps))
+
+    wake = dataclasses.replace(
+        discretisation.wake, steps_per_turn=scaled(discretisation.wake.steps_per_turn)
+    )
+    return Discretisation(scaled(discretisation.chordwise), scaled(discretisation.spanwise), wake)
+
+
+def check_study_lattice(discretisation: Discretisation) -> None:
+    """ParameterError (exit 2) where the study's finest lattice would leave the counts' ranges:
+    names the option, its value and the range that keeps the finest lattice within them."""
+    finest = len(STUDY_LEVELS) - 1
+    for option, value, (low, high) in (
+        ("--chordwise", discretisation.chordwise, CHORDWISE_RANGE),
+        ("--spanwise", discretisation.spanwise, SPANWISE_RANGE),
+    ):
+        largest = max(
+            count
+            for count in range(low, high + 1)
+            if round(count * REFINEMENT_RATIO**finest) <= high
+        )
+        if not low <= value <= largest:
+            raise ParameterError(
+                f"{option} = {value} is out of range with --convergence, whose finest lattice "
+                f"has {REFINEMENT_RATIO**finest:.0f} times as many; allowed [{low}, {largest}]"
+            )
+
+
+def vortex_convergence_study(
+    request: VortexRequest, out_dir: str | Path, stage: Callable[[str], None] | None = None
+) -> VortexRun:
+    """``request`` on three lattices (its own and two finer: :func:`refined_lattice`), each run
+    published whole into ``OUT/<level>/`` (:data:`STUDY_LEVELS`), and ``<name>_convergence.json``:
+    each lattice's forces, and for thrust and torque Richardson's extrapolation, the observed order
+    and Roache's GCI, or the spread where the lattices do not converge monotonically
+    (:func:`torus_cad.simulate.coefficients.convergence_report`, as the OpenFOAM study reports)."""
+    check_study_lattice(request.discretisation)
+    request = _with_targets_met(request)
+    check_vortex_request(request)
+    out = Path(out_dir)
+    levels: dict[str, dict[str, Any]] = {}
+    for steps, level in enumerate(STUDY_LEVELS):
+        lattice = refined_lattice(request.discretisation, steps)
+        if stage:
+            stage(f"{level} lattice, {lattice.chordwise} x {lattice.spanwise}")
+        run = simulate_vortex(
+            dataclasses.replace(request, discretisation=lattice), out / level, stage
+        )
+        levels[level] = {
+            "lattice": run.report["lattice"],
+            **{
+                key: run.report[key]
+                for key in ("thrust_n", "torque_nm", "ct", "cp", "converged", "wall_seconds")
+            },
+        }
+    report = convergence_report(request.params.name, request.point, REFINEMENT_RATIO, levels)
+    with OutputSet(out, f"{request.params.name}_convergence") as output:
+        paths = output.publish(report)
+        return VortexRun(paths, output.sealed_report)
 
 
 def _solved(request: VortexRequest, stage: Callable[[str], None] | None) -> VortexResult:
