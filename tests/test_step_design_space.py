@@ -198,9 +198,9 @@ def test_a_filleted_design_whose_contact_edge_hooks_into_a_face_reads_back_with_
     """Read back by OpenCascade (cadquery-ocp's) with every test, no fault; by FreeCAD's check with
     BOP, none but the slivers its older OpenCascade (Debian's 7.6) finds between two faces that
     meet tangentially: each a piece of their section off their shared edges, shorter than the
-    file's uncertainty and within it of those edges (the build's last bits differ between CPUs,
-    and on some this design's fillet has one: measured on an AMD EPYC with AVX-512, faces 93 and
-    99, a 1.4e-5 mm piece 1.1e-5 mm off their edges, their normals 0.016 deg apart)."""
+    file's uncertainty and within it of those edges (the file differs in its last bits between
+    machines; on an AMD EPYC with AVX-512 this design's fillet has one: faces 93 and 99, a 1.4e-5
+    mm piece 1.1e-5 mm off their edges, their normals 0.016 deg apart)."""
     propeller = built_tally_design(HOOKED_BEFORE)
     path = write_step(propeller.solid, tmp_path / "tally.step", "tally")
     assert step_readback_faults(path, self_interference=True).counts == {}
