@@ -59,7 +59,8 @@ from torus_cad.vortex.vortex_performance import LIFT_RATIO_BOUNDS, VortexResult,
 CHORDWISE_RANGE = VORTEX_CHORDWISE_RANGE
 SPANWISE_RANGE = VORTEX_SPANWISE_RANGE
 #: ``--convergence``: each lattice's rings across the chord, strips and wake steps a turn are the
-#: last's times this, rounded (the OpenFOAM levels' ratio; scripts/vortex_convergence.py's default).
+#: last's times this, rounded (scripts/vortex_convergence.py's default; OpenFOAM's levels divide
+#: their element sizes by 2^(1/3), torus_cad.simulate.settings.REFINEMENT_RATIO).
 REFINEMENT_RATIO = math.sqrt(2.0)
 #: The study's lattices, coarsest first: the request's own, then two finer.
 STUDY_LEVELS = ("coarse", "medium", "fine")
@@ -220,19 +221,26 @@ def vortex_thrust_search(
     )
 
 
+def _refined_count(count: int, steps: int, ratio: float = REFINEMENT_RATIO) -> int:
+    """``count`` refined ``steps`` times by ``ratio``: times ``ratio ** steps``, rounded, at least
+    2."""
+    return max(2, round(count * ratio**steps))
+
+
 def refined_lattice(
     discretisation: Discretisation, steps: int, ratio: float = REFINEMENT_RATIO
 ) -> Discretisation:
     """``discretisation`` refined ``steps`` times by ``ratio``: its rings across the chord, strips
-    and wake steps a turn each times ``ratio ** steps``, rounded, at least 2."""
-
-    def scaled(count: int) -> int:
-        return max(2, round(count * ratio**steps))
-
+    and wake steps a turn each :func:`_refined_count`."""
     wake = dataclasses.replace(
-        discretisation.wake, steps_per_turn=scaled(discretisation.wake.steps_per_turn)
+        discretisation.wake,
+        steps_per_turn=_refined_count(discretisation.wake.steps_per_turn, steps, ratio),
     )
-    return Discretisation(scaled(discretisation.chordwise), scaled(discretisation.spanwise), wake)
+    return Discretisation(
+        _refined_count(discretisation.chordwise, steps, ratio),
+        _refined_count(discretisation.spanwise, steps, ratio),
+        wake,
+    )
 
 
 def check_study_lattice(discretisation: Discretisation) -> None:
@@ -244,9 +252,7 @@ def check_study_lattice(discretisation: Discretisation) -> None:
         ("--spanwise", discretisation.spanwise, SPANWISE_RANGE),
     ):
         largest = max(
-            count
-            for count in range(low, high + 1)
-            if round(count * REFINEMENT_RATIO**finest) <= high
+            count for count in range(low, high + 1) if _refined_count(count, finest) <= high
         )
         if not low <= value <= largest:
             raise ParameterError(

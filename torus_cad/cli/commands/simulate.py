@@ -121,18 +121,18 @@ def _run_vortex(args: argparse.Namespace, params: Any, progress: StageProgress) 
         result = vortex_convergence_study(request, Path(args.out), stage=progress)
         lines = [f"wrote {path}" for path in result.paths.values()]
         lines += convergence_lines(result.report)
+    elif args.thrust is not None:
+        result = vortex_thrust_search(
+            request,
+            args.thrust,
+            Path(args.out),
+            stage=progress,
+            tolerance=args.thrust_tolerance,
+            max_runs=args.thrust_runs,
+        )
+        lines = vortex_summary_lines(result)
     else:
-        if args.thrust is not None:
-            result = vortex_thrust_search(
-                request,
-                args.thrust,
-                Path(args.out),
-                stage=progress,
-                tolerance=args.thrust_tolerance,
-                max_runs=args.thrust_runs,
-            )
-        else:
-            result = simulate_vortex(request, Path(args.out), stage=progress)
+        result = simulate_vortex(request, Path(args.out), stage=progress)
         lines = vortex_summary_lines(result)
     progress.finish()
     if not args.quiet:
